@@ -1,0 +1,1 @@
+//! drivemap code generator
