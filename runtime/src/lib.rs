@@ -10,5 +10,5 @@ pub mod register;
 pub mod scale;
 
 pub use profile::Profile;
-pub use register::{Readable, Register, Table, Writable};
+pub use register::{Access, DriveSettings, Readable, Register, RegisterInfo, Table, Writable};
 pub use scale::ValueError;

@@ -6,6 +6,7 @@
 //! `Unknown(u16)` fallback, `f64` engineering values for scaled quantities, `u16`/`i16` for plain
 //! words.
 
+use crate::profile::TransportKind;
 use crate::scale::ValueError;
 
 /// Which Modbus table a register lives in.
@@ -48,6 +49,15 @@ pub trait Register {
     /// `file:line` of the row in the manual.
     const SOURCE: &'static str;
 
+    /// The communication address to use with these settings on this transport. Most registers
+    /// live at [`Register::ADDRESS`]; a few move with a setting (GPD 515 o2-09), a model variant
+    /// or the transport (V7 Modbus TCP option card). The client adds the profile's per-transport
+    /// offset on top of this.
+    fn address(settings: &Self::Settings, transport: TransportKind) -> u16 {
+        let _ = (settings, transport);
+        Self::ADDRESS
+    }
+
     /// Decodes a raw word read from the drive. Data from the drive never makes this panic;
     /// it fails only when a conversion needs a setting that `settings` does not hold.
     fn decode(raw: u16, settings: &Self::Settings) -> Result<Self::Value, ValueError>;
@@ -86,4 +96,49 @@ pub trait Code: Copy {
     fn from_code(code: u16) -> Self;
     /// Whether the code is one the manual lists.
     fn is_known(&self) -> bool;
+}
+
+/// Access as the manual states it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Access {
+    Read,
+    Write,
+    ReadWrite,
+}
+
+impl Access {
+    pub const fn readable(self) -> bool {
+        matches!(self, Access::Read | Access::ReadWrite)
+    }
+    pub const fn writable(self) -> bool {
+        matches!(self, Access::Write | Access::ReadWrite)
+    }
+}
+
+/// Static description of one register, for code that works over a whole drive (read planner,
+/// pollers, tools). Generated modules emit `pub static REGISTERS: &[RegisterInfo]` sorted by
+/// address.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RegisterInfo {
+    pub id: &'static str,
+    pub param: Option<&'static str>,
+    pub name: &'static str,
+    pub address: u16,
+    pub access: Access,
+    pub table: Table,
+    /// Only reachable as a broadcast (slave 0) write, in its own bit layout.
+    pub broadcast_only: bool,
+    pub source: &'static str,
+}
+
+/// The settings type of a drive: the values that conversions depend on (variant, scale
+/// selectors such as V7 n152, reference quantities such as TDS-V8 Cn-02).
+pub trait DriveSettings {
+    /// Communication addresses of the parameters that conversions depend on, in the order a
+    /// client should read them.
+    const DEPENDENCIES: &'static [u16];
+
+    /// Records a raw word read from one of [`DriveSettings::DEPENDENCIES`]. Words from other
+    /// addresses are ignored. Returns whether the word was used.
+    fn absorb(&mut self, address: u16, raw: u16) -> bool;
 }
