@@ -1,0 +1,399 @@
+//! Reading map files: YAML text → located tree → (variant merged onto its base) → model.
+//!
+//! A variant map (`drive.extends: yaskawa-v7`) is merged onto its base before deserializing:
+//! `drive` keys override (manuals are united), `protocol` is merged key by key recursively,
+//! `variants` are replaced when given, `groups` are merged by `id` and their `registers` by `id`
+//! (a register entry in the variant replaces the base register's keys it names and keeps the
+//! others), `conflicts` and `gaps` are concatenated, and the registers listed under `removed` are
+//! dropped. Every node keeps the file and line it was written at, so errors in inherited rows
+//! point at the base map and errors in overrides at the variant.
+
+use std::path::{Path as FsPath, PathBuf};
+use std::sync::Arc;
+
+use serde_yaml::Value;
+
+use crate::diagnostic::{Diagnostic, Loc};
+use crate::model::MapFile;
+use crate::source::{self, Node, NodeKind, Path, Seg};
+
+/// A map read from disk: the model and the tree it was deserialized from.
+#[derive(Debug, Clone)]
+pub struct LoadedMap {
+    /// The file that was asked for.
+    pub path: PathBuf,
+    pub model: MapFile,
+    /// The merged tree, for locating findings.
+    pub tree: Node,
+}
+
+impl LoadedMap {
+    /// The location of a path in the (merged) map.
+    pub fn locate(&self, path: &Path) -> Loc {
+        self.tree.locate(path)
+    }
+}
+
+/// How a file is named in diagnostics: relative to the current directory when possible.
+pub fn display_name(path: &FsPath) -> Arc<str> {
+    let shown = std::env::current_dir()
+        .ok()
+        .and_then(|cwd| path.strip_prefix(&cwd).ok().map(FsPath::to_path_buf))
+        .unwrap_or_else(|| path.to_path_buf());
+    Arc::from(shown.to_string_lossy().as_ref())
+}
+
+/// Reads one map file, resolving `extends` against maps in the same directory
+/// (`<id>.yaml`). Returns every problem found while reading.
+pub fn load(path: &FsPath) -> Result<LoadedMap, Vec<Diagnostic>> {
+    let tree = load_tree(path, &mut Vec::new())?;
+    let model = deserialize(&tree)?;
+    Ok(LoadedMap {
+        path: path.to_path_buf(),
+        model,
+        tree,
+    })
+}
+
+/// Parses a map from text (for tests and tools that hold YAML in memory). `extends` is not
+/// resolved.
+pub fn load_str(name: &str, text: &str) -> Result<LoadedMap, Vec<Diagnostic>> {
+    let file: Arc<str> = Arc::from(name);
+    let tree = source::parse(&file, text).map_err(|d| vec![d])?;
+    if let Some(base) = tree.get("drive").and_then(|d| d.get("extends")) {
+        return Err(vec![Diagnostic::new(
+            base.loc.clone(),
+            None,
+            "`extends` needs the map to be read from a file beside its base",
+        )]);
+    }
+    let model = deserialize(&tree)?;
+    Ok(LoadedMap {
+        path: PathBuf::from(name),
+        model,
+        tree,
+    })
+}
+
+fn read_tree(path: &FsPath) -> Result<Node, Vec<Diagnostic>> {
+    let file = display_name(path);
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        vec![Diagnostic::new(
+            Loc::new(file.clone(), 1, 1),
+            None,
+            format!("cannot read map: {e}"),
+        )]
+    })?;
+    source::parse(&file, &text).map_err(|d| vec![d])
+}
+
+fn load_tree(path: &FsPath, chain: &mut Vec<PathBuf>) -> Result<Node, Vec<Diagnostic>> {
+    let tree = read_tree(path)?;
+    let Some(extends) = tree.get("drive").and_then(|d| d.get("extends")) else {
+        return Ok(tree);
+    };
+    let NodeKind::Scalar(Value::String(base_id)) = &extends.kind else {
+        return Err(vec![Diagnostic::new(
+            extends.loc.clone(),
+            None,
+            "`drive.extends` must name the base drive's id",
+        )]);
+    };
+    let base_path = path
+        .parent()
+        .unwrap_or_else(|| FsPath::new("."))
+        .join(format!("{base_id}.yaml"));
+    let canonical = base_path.canonicalize().unwrap_or_else(|_| base_path.clone());
+    if chain.contains(&canonical) {
+        return Err(vec![Diagnostic::new(
+            extends.loc.clone(),
+            None,
+            format!("`extends: {base_id}` makes a cycle of variant maps"),
+        )]);
+    }
+    if !base_path.is_file() {
+        return Err(vec![Diagnostic::new(
+            extends.loc.clone(),
+            None,
+            format!("base map `{}` not found", base_path.display()),
+        )]);
+    }
+    chain.push(canonical);
+    let base = load_tree(&base_path, chain)?;
+    chain.pop();
+    merge_variant(base, tree)
+}
+
+fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {
+    let value = tree.to_value();
+    serde_path_to_error::deserialize::<_, MapFile>(value).map_err(|e| {
+        let mut path = Path::root();
+        for seg in e.path().iter() {
+            match seg {
+                serde_path_to_error::Segment::Seq { index } => path = path.index(*index),
+                serde_path_to_error::Segment::Map { key } => path = path.key(key),
+                serde_path_to_error::Segment::Enum { .. } | serde_path_to_error::Segment::Unknown => {}
+            }
+        }
+        let message = e.inner().to_string();
+        // Point at an unknown key itself rather than at the mapping holding it.
+        let loc = unknown_field(&message)
+            .map(|k| tree.locate(&path.key(k)))
+            .unwrap_or_else(|| tree.locate(&path));
+        let shown = if path.0.is_empty() {
+            message
+        } else {
+            format!("{path}: {message}")
+        };
+        vec![Diagnostic::new(loc, register_at(tree, &path).as_deref(), shown)]
+    })
+}
+
+fn unknown_field(message: &str) -> Option<&str> {
+    let rest = message.strip_prefix("unknown field `")?;
+    rest.split('`').next()
+}
+
+/// The id of the register a path points into, if any.
+pub fn register_at(tree: &Node, path: &Path) -> Option<String> {
+    let pos = path.0.iter().position(|s| *s == Seg::Key("registers".into()))?;
+    let reg_path = Path(path.0[..(pos + 2).min(path.0.len())].to_vec());
+    let mut node = tree;
+    for seg in &reg_path.0 {
+        node = match (seg, &node.kind) {
+            (Seg::Key(k), _) => node.get(k)?,
+            (Seg::Index(i), NodeKind::Seq(items)) => items.get(*i)?,
+            _ => return None,
+        };
+    }
+    match &node.get("id")?.kind {
+        NodeKind::Scalar(Value::String(s)) => Some(s.clone()),
+        _ => None,
+    }
+}
+
+fn scalar_str(node: &Node) -> Option<&str> {
+    match &node.kind {
+        NodeKind::Scalar(Value::String(s)) => Some(s),
+        _ => None,
+    }
+}
+
+fn entries(node: Node) -> Vec<(String, Loc, Node)> {
+    match node.kind {
+        NodeKind::Map(e) => e,
+        _ => Vec::new(),
+    }
+}
+
+/// Overrides `base`'s keys with `child`'s, recursing into mappings on both sides.
+fn merge_deep(base: Node, child: Node) -> Node {
+    match (base.kind, child.kind) {
+        (NodeKind::Map(mut b), NodeKind::Map(c)) => {
+            for (k, kloc, v) in c {
+                match b.iter().position(|(bk, _, _)| *bk == k) {
+                    Some(i) => {
+                        let (_, _, old) = b.remove(i);
+                        b.insert(i, (k, kloc, merge_deep(old, v)));
+                    }
+                    None => b.push((k, kloc, v)),
+                }
+            }
+            Node {
+                loc: child.loc,
+                kind: NodeKind::Map(b),
+            }
+        }
+        (_, kind) => Node { loc: child.loc, kind },
+    }
+}
+
+/// Overrides `base`'s keys with `child`'s, one level deep.
+fn merge_shallow(base: Node, child: Node) -> Node {
+    let mut b = entries(base);
+    for (k, kloc, v) in entries(child.clone()) {
+        match b.iter().position(|(bk, _, _)| *bk == k) {
+            Some(i) => b[i] = (k, kloc, v),
+            None => b.push((k, kloc, v)),
+        }
+    }
+    Node {
+        loc: child.loc,
+        kind: NodeKind::Map(b),
+    }
+}
+
+/// Merges two sequences of mappings keyed by `id`; `merge` combines items with equal ids.
+fn merge_by_id(
+    base: Node,
+    child: Node,
+    merge: &dyn Fn(Node, Node) -> Result<Node, Vec<Diagnostic>>,
+) -> Result<Node, Vec<Diagnostic>> {
+    let NodeKind::Seq(mut items) = base.kind else {
+        return Ok(child);
+    };
+    let NodeKind::Seq(child_items) = child.kind else {
+        return Err(vec![Diagnostic::new(child.loc, None, "expected a list")]);
+    };
+    for item in child_items {
+        let id = item.get("id").and_then(scalar_str).map(str::to_owned);
+        let existing = id.as_ref().and_then(|id| {
+            items
+                .iter()
+                .position(|b| b.get("id").and_then(scalar_str) == Some(id.as_str()))
+        });
+        match existing {
+            Some(i) => {
+                let old = items.remove(i);
+                items.insert(i, merge(old, item)?);
+            }
+            None => items.push(item),
+        }
+    }
+    Ok(Node {
+        loc: base.loc,
+        kind: NodeKind::Seq(items),
+    })
+}
+
+fn concat(base: Node, child: Node) -> Node {
+    match (base.kind, child.kind) {
+        (NodeKind::Seq(mut b), NodeKind::Seq(c)) => {
+            b.extend(c);
+            Node {
+                loc: child.loc,
+                kind: NodeKind::Seq(b),
+            }
+        }
+        (_, kind) => Node { loc: child.loc, kind },
+    }
+}
+
+fn merge_group(base: Node, child: Node) -> Result<Node, Vec<Diagnostic>> {
+    let mut b = entries(base);
+    let child_loc = child.loc.clone();
+    for (k, kloc, v) in entries(child) {
+        let pos = b.iter().position(|(bk, _, _)| *bk == k);
+        match (k.as_str(), pos) {
+            ("registers", Some(i)) => {
+                let (_, _, old) = b.remove(i);
+                let merged = merge_by_id(old, v, &|a, c| Ok(merge_shallow(a, c)))?;
+                b.insert(i, (k, kloc, merged));
+            }
+            (_, Some(i)) => b[i] = (k, kloc, v),
+            (_, None) => b.push((k, kloc, v)),
+        }
+    }
+    Ok(Node {
+        loc: child_loc,
+        kind: NodeKind::Map(b),
+    })
+}
+
+/// Merges a variant map onto its base (see the module documentation).
+fn merge_variant(base: Node, child: Node) -> Result<Node, Vec<Diagnostic>> {
+    let child_loc = child.loc.clone();
+    let mut out = entries(base);
+    let mut removed: Vec<(String, Loc)> = Vec::new();
+    for (key, kloc, value) in entries(child) {
+        let pos = out.iter().position(|(k, _, _)| *k == key);
+        let merged = match (key.as_str(), pos) {
+            (_, None) => value,
+            ("drive", Some(i)) => {
+                let old = out[i].2.clone();
+                let manuals = match (old.get("manuals"), value.get("manuals")) {
+                    (Some(a), Some(b)) => Some(unite_manuals(a.clone(), b.clone())),
+                    _ => None,
+                };
+                let mut m = merge_shallow(old, value);
+                if let (Some(manuals), NodeKind::Map(e)) = (manuals, &mut m.kind) {
+                    if let Some(slot) = e.iter_mut().find(|(k, _, _)| k == "manuals") {
+                        slot.2 = manuals;
+                    }
+                }
+                m
+            }
+            ("protocol", Some(i)) => merge_deep(out[i].2.clone(), value),
+            ("groups", Some(i)) => merge_by_id(out[i].2.clone(), value, &merge_group)?,
+            ("conflicts" | "gaps", Some(i)) => concat(out[i].2.clone(), value),
+            ("removed", _) => {
+                if let NodeKind::Seq(items) = &value.kind {
+                    for item in items {
+                        if let Some(id) = item.get("id").and_then(scalar_str) {
+                            removed.push((id.to_owned(), item.loc.clone()));
+                        }
+                    }
+                }
+                value
+            }
+            (_, Some(_)) => value,
+        };
+        match pos {
+            Some(i) => out[i] = (key, kloc, merged),
+            None => out.push((key, kloc, merged)),
+        }
+    }
+    let mut errors = Vec::new();
+    for (id, loc) in removed {
+        if !drop_register(&mut out, &id) {
+            errors.push(Diagnostic::new(
+                loc,
+                Some(&id),
+                format!("`removed` names `{id}`, which the base map does not have"),
+            ));
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    Ok(Node {
+        loc: child_loc,
+        kind: NodeKind::Map(out),
+    })
+}
+
+fn unite_manuals(base: Node, child: Node) -> Node {
+    let NodeKind::Seq(mut items) = base.kind else {
+        return child;
+    };
+    if let NodeKind::Seq(extra) = child.kind {
+        for m in extra {
+            let file = m.get("file").and_then(scalar_str).map(str::to_owned);
+            let dup = items
+                .iter()
+                .any(|b| b.get("file").and_then(scalar_str).map(str::to_owned) == file);
+            if !dup {
+                items.push(m);
+            }
+        }
+    }
+    Node {
+        loc: child.loc,
+        kind: NodeKind::Seq(items),
+    }
+}
+
+fn drop_register(root: &mut [(String, Loc, Node)], id: &str) -> bool {
+    let Some((_, _, groups)) = root.iter_mut().find(|(k, _, _)| k == "groups") else {
+        return false;
+    };
+    let NodeKind::Seq(groups) = &mut groups.kind else {
+        return false;
+    };
+    for group in groups {
+        let NodeKind::Map(entries) = &mut group.kind else {
+            continue;
+        };
+        let Some((_, _, regs)) = entries.iter_mut().find(|(k, _, _)| k == "registers") else {
+            continue;
+        };
+        if let NodeKind::Seq(items) = &mut regs.kind {
+            let before = items.len();
+            items.retain(|r| r.get("id").and_then(scalar_str) != Some(id));
+            if items.len() != before {
+                return true;
+            }
+        }
+    }
+    false
+}

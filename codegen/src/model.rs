@@ -1,0 +1,656 @@
+//! The map schema as written in YAML: serde types, one per construct, nothing derived.
+//!
+//! Every struct rejects unknown keys, so a misspelt key is an error with its location rather than
+//! a silently ignored line. `maps/README.md` documents each construct with an example; this file
+//! is its precise definition. Semantic checks live in [`crate::validate`]; the checked form the
+//! generator consumes is [`crate::ir`].
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// One map file: a drive, or a variant of another drive (`drive.extends`).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapFile {
+    pub drive: DriveMeta,
+    /// Model variants selectable at run time, by axis (voltage class, firmware).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub variants: Vec<VariantAxis>,
+    pub protocol: Protocol,
+    /// Registers, grouped as the manual groups them.
+    #[serde(default)]
+    pub groups: Vec<Group>,
+    /// Contradictions that concern the whole map or several registers.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub conflicts: Vec<Conflict>,
+    /// Address ranges or parameters the manual does not make legible.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub gaps: Vec<Gap>,
+    /// In a variant map: registers of the base map this drive does not have.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub removed: Vec<Removed>,
+}
+
+/// Who the drive is and where the map comes from.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveMeta {
+    /// Lower-case, dash-separated identifier (`ptlk-tds-v8`); the generated module is the same
+    /// with underscores.
+    pub id: String,
+    /// Identifier of the base map this one inherits from and overrides (`yaskawa-v7`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extends: Option<String>,
+    pub vendor: String,
+    pub models: Vec<String>,
+    /// The manuals the map was transcribed from. Every citation must name one of them.
+    pub manuals: Vec<Manual>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manual {
+    /// File name under the manuals directory (`002_661580cce154f322.txt`).
+    pub file: String,
+    pub title: String,
+}
+
+/// One axis of model variants, e.g. voltage class.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct VariantAxis {
+    pub id: String,
+    pub name: String,
+    /// The first option is the base variant: top-level limits and defaults describe it.
+    pub options: Vec<VariantOption>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct VariantOption {
+    pub id: String,
+    pub name: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+/// How the drive speaks Modbus.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Protocol {
+    /// Transports the drive (or its option card) offers natively.
+    pub transports: Vec<TransportName>,
+    pub function_codes: Vec<u8>,
+    /// Maximum registers per read (03h/04h).
+    pub max_read: u16,
+    /// Maximum registers per write (10h).
+    pub max_write: u16,
+    pub slave_address: SlaveAddress,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub broadcast: Option<Broadcast>,
+    #[serde(default)]
+    pub exceptions: Vec<ExceptionCode>,
+    /// ENTER / ACCEPT / save commands.
+    #[serde(default)]
+    pub commands: Vec<Command>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eeprom: Option<Eeprom>,
+    /// Transport-dependent mapping from the manual's addresses to PDU addresses.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub addressing: Option<Addressing>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timing: Option<Timing>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub serial: Option<Serial>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TransportName {
+    /// Modbus RTU on a serial line (also carried over TCP by a gateway).
+    Rtu,
+    /// Modbus TCP.
+    Tcp,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlaveAddress {
+    pub min: u8,
+    pub max: u8,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub default: Option<u8>,
+    /// Parameter that sets it (`Sn-36`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub param: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Broadcast {
+    /// Function codes executed when addressed to slave 0 (never answered).
+    pub functions: Vec<u8>,
+    /// Register ids a broadcast may write. Registers of a `broadcast: true` group are implied.
+    #[serde(default)]
+    pub registers: Vec<String>,
+    pub source: String,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExceptionCode {
+    pub code: u8,
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    pub source: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CommandKind {
+    /// Activates written data without storing it.
+    Accept,
+    /// Stores data in non-volatile memory; wears the EEPROM.
+    Persist,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Command {
+    pub id: String,
+    pub name: String,
+    pub kind: CommandKind,
+    /// Writes in order.
+    pub writes: Vec<CommandWrite>,
+    pub source: String,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CommandWrite {
+    pub address: u16,
+    pub value: u16,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Eeprom {
+    /// Writes the manual says the memory endures.
+    pub endurance: u32,
+    pub source: String,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Addressing {
+    /// PDU address = manual address + `rtu_offset` on RTU (and RTU over TCP).
+    #[serde(default)]
+    pub rtu_offset: i32,
+    /// PDU address = manual address + `tcp_offset` on Modbus TCP.
+    #[serde(default)]
+    pub tcp_offset: i32,
+    pub description: String,
+    pub source: String,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Timing {
+    /// Silence between frames in character times.
+    #[serde(default = "default_frame_gap")]
+    pub frame_gap_chars: f64,
+    /// Longest gap between two characters of a frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inter_char_timeout: Option<Interval>,
+    /// How long the drive takes to answer, if the manual says.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub response_time: Option<Interval>,
+    /// Parameter that adds a configurable delay before the drive answers (V7 n156).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub response_delay_param: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+}
+
+fn default_frame_gap() -> f64 {
+    3.5
+}
+
+/// A duration in milliseconds, in bit times or in character times.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Interval {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ms: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bits: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chars: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Serial {
+    pub baud_rates: Vec<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub default_baud: Option<u32>,
+    pub parities: Vec<Parity>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub default_parity: Option<Parity>,
+    #[serde(default = "default_data_bits")]
+    pub data_bits: u8,
+    #[serde(default = "default_stop_bits")]
+    pub stop_bits: u8,
+    pub source: String,
+}
+
+fn default_data_bits() -> u8 {
+    8
+}
+
+fn default_stop_bits() -> u8 {
+    1
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Parity {
+    None,
+    Even,
+    Odd,
+}
+
+/// Registers as the manual groups them (command, monitor, one parameter group...).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Group {
+    pub id: String,
+    pub name: String,
+    /// The manual's table name ("Table 4.3 Monitor Registers").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub table: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+    /// Default access of the group's registers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub access: Option<Access>,
+    /// Default Modbus table of the group's registers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub modbus_table: Option<ModbusTable>,
+    /// Default write restriction of the group's registers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub write_restriction: Option<WriteRestriction>,
+    /// Registers of this group exist only on these transports (V7 Modbus TCP option card).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transports: Option<Vec<TransportName>>,
+    /// Broadcast registers: written to slave 0 only, in their own layout and address space.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub broadcast: bool,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+    pub registers: Vec<Register>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
+pub enum Access {
+    #[serde(rename = "r")]
+    Read,
+    #[serde(rename = "w")]
+    Write,
+    #[serde(rename = "rw")]
+    ReadWrite,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModbusTable {
+    Holding,
+    Input,
+}
+
+/// When the drive accepts a write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WriteRestriction {
+    /// Any time.
+    None,
+    /// Only while the motor is stopped (exception 22h otherwise).
+    Stopped,
+    /// Only in program (PRG) mode (TDS-V8).
+    PrgMode,
+}
+
+/// One register (one 16-bit word), or a block of them with `repeat`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Register {
+    /// snake_case identifier; becomes the generated type name in PascalCase.
+    pub id: String,
+    /// Parameter number exactly as printed (`Bn-01`, `n019`, `CM.03`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub param: Option<String>,
+    /// Name as printed.
+    pub name: String,
+    /// Communication address as the manual prints it.
+    pub address: u16,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub access: Option<Access>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub modbus_table: Option<ModbusTable>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit: Option<String>,
+    /// `0.1`, `{relative_to: .., full_scale: ..}` or `{selected_by: .., cases: [..]}`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<Scale>,
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub signed: bool,
+    /// Lower limit in engineering units, for the base variant.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    /// Upper limit in engineering units, for the base variant.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub default: Option<DefaultValue>,
+    /// Limits and defaults of other variants, keyed by variant option id.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub by_variant: BTreeMap<String, VariantOverride>,
+    /// Addresses the register moves to under some condition.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub address_alternatives: Vec<AddressAlternative>,
+    /// Enumeration codes (sparse codes allowed).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub values: Vec<EnumValue>,
+    /// Bit fields and multi-bit fields. Bits no field covers are reserved and written as 0.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fields: Vec<Field>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub write_restriction: Option<WriteRestriction>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transports: Option<Vec<TransportName>>,
+    /// Keypad resolution bands ("0.0 - 999.9 or 1000 - 6000 s"): documentation of what the
+    /// operator shows; the register carries `scale` throughout.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub display_steps: Vec<DisplayStep>,
+    /// A block of `count` registers generated from this template.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeat: Option<Repeat>,
+    /// `file:line` of the row in the manual.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub conflicts: Vec<Conflict>,
+    /// What the manual leaves unknown about this register (range, default, unit...).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unknown: Vec<Unknown>,
+}
+
+/// How a raw word becomes an engineering value.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum Scale {
+    /// engineering = raw × factor.
+    Factor(f64),
+    /// `full_scale` raw = 100 % of the reference ("30000 = 100 % of Cn-02").
+    Relative(RelativeScale),
+    /// The scale follows the setting of another parameter (V7 n152, n018).
+    Selected(SelectedScale),
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RelativeScale {
+    /// A register id or parameter number (`max_output_frequency`, `Cn-02`), or an external
+    /// quantity the application supplies.
+    pub relative_to: Reference,
+    /// The raw value that means 100 % of the reference.
+    pub full_scale: f64,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum Reference {
+    Register(String),
+    External(ExternalQuantity),
+}
+
+/// A quantity that is not a register of the drive ("drive rating").
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExternalQuantity {
+    /// snake_case name; becomes a field of the generated `Settings`.
+    pub external: String,
+    pub unit: String,
+    pub description: String,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SelectedScale {
+    /// A register id or parameter number whose value selects the case.
+    pub selected_by: String,
+    pub cases: Vec<ScaleCase>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScaleCase {
+    /// The selector's codes for which this case applies.
+    pub when: Vec<u16>,
+    /// A factor or a relative scale (not another selection).
+    pub scale: Scale,
+    /// Limits in engineering units under this case (base variant).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+/// A default value, or why there is none to give.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum DefaultValue {
+    Value(f64),
+    Depends(DependentDefault),
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DependentDefault {
+    pub depends_on: Dependency,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Dependency {
+    /// Drive capacity (kVA, rated current).
+    Capacity,
+    /// Control method (V/f, vector).
+    ControlMethod,
+    /// Model variant (voltage class) without a value printed.
+    Variant,
+    /// Another parameter's setting.
+    Setting,
+    /// The manual prints no legible default.
+    Unknown,
+}
+
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct VariantOverride {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub default: Option<DefaultValue>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AddressAlternative {
+    pub address: u16,
+    pub when: Condition,
+    pub source: String,
+}
+
+/// A condition on a setting's value, a model variant, or the transport.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Condition {
+    /// Register id or parameter number.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub setting: Option<String>,
+    /// The setting's codes for which the condition holds.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub is: Vec<u16>,
+    /// A variant option id.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variant: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transport: Option<TransportName>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnumValue {
+    pub value: u16,
+    /// snake_case identifier; becomes the enum variant in PascalCase.
+    pub id: String,
+    /// Meaning as printed.
+    pub name: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Field {
+    pub id: String,
+    /// Meaning as printed.
+    pub name: String,
+    /// A single bit (0..=15).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bit: Option<u8>,
+    /// A multi-bit field, lowest and highest bit inclusive (`[12, 15]`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bits: Option<[u8; 2]>,
+    /// Codes of a multi-bit field.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub values: Vec<EnumValue>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DisplayStep {
+    /// Lowest value shown with this step.
+    pub from: f64,
+    pub step: f64,
+}
+
+/// Expands a register into `count` registers. In `id`, `param`, `name`, the placeholder `{n}`
+/// is the instance number (from `start`, default 1) and `{p}` is `param_start + index`;
+/// `{n:02}` pads to two digits. Addresses advance by `address_step`, citations by `line_step`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Repeat {
+    pub count: u16,
+    #[serde(default = "one_u16")]
+    pub start: u16,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub param_start: Option<u16>,
+    #[serde(default = "one_u16")]
+    pub address_step: u16,
+    #[serde(default = "one_u16")]
+    pub line_step: u16,
+}
+
+fn one_u16() -> u16 {
+    1
+}
+
+/// A place where the manual contradicts itself or another manual, and the reading taken.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Conflict {
+    pub topic: String,
+    pub readings: Vec<Reading>,
+    pub chosen: String,
+    pub reason: String,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Reading {
+    pub source: String,
+    pub says: String,
+}
+
+/// Something the manual leaves unknown about a register.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Unknown {
+    pub what: UnknownItem,
+    pub reason: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UnknownItem {
+    Range,
+    Default,
+    Unit,
+    Scale,
+    Values,
+    Fields,
+    Access,
+}
+
+/// Addresses or parameters the manual leaves illegible or missing.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Gap {
+    /// First and last address covered, inclusive.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub addresses: Option<[u16; 2]>,
+    /// Parameter numbers covered, as printed ("U1-15 .. U1-18").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub params: Option<String>,
+    pub description: String,
+    pub source: String,
+}
+
+/// A register of the base map that a variant map does not have.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Removed {
+    pub id: String,
+    pub reason: String,
+    pub source: String,
+}

@@ -1,0 +1,715 @@
+//! Protocol data units (function code + data) of the five functions these drives implement, with
+//! no I/O and no heap: requests are encoded into caller buffers and responses are decoded as views
+//! of the received bytes.
+//!
+//! Every response is checked against the request that it answers: function echo, byte count,
+//! address and quantity echo (10h), address and value echo (06h), sub-function and data echo
+//! (08h). A response that fails any check is a [`FrameError`], never a value.
+
+use std::fmt;
+
+/// Function codes.
+pub mod function {
+    /// Read holding registers.
+    pub const READ_HOLDING: u8 = 0x03;
+    /// Read input registers.
+    pub const READ_INPUT: u8 = 0x04;
+    /// Write single register.
+    pub const WRITE_SINGLE: u8 = 0x06;
+    /// Diagnostics; only sub-function 0000h (return query data, "loop-back") is used.
+    pub const LOOP_BACK: u8 = 0x08;
+    /// Write multiple registers.
+    pub const WRITE_MULTIPLE: u8 = 0x10;
+    /// Set in the function code of an exception response.
+    pub const EXCEPTION_BIT: u8 = 0x80;
+}
+
+/// Largest PDU the Modbus specification allows (256-byte RTU frame less address and CRC).
+pub const MAX_PDU: usize = 253;
+/// Most registers one 03h/04h request may read (Modbus specification).
+pub const MAX_READ: u16 = 125;
+/// Most registers one 10h request may write (Modbus specification).
+pub const MAX_WRITE: u16 = 123;
+
+/// A sequence of 16-bit register words: either native words to send, or big-endian bytes as
+/// received. Comparing two `Words` compares the register values.
+#[derive(Clone, Copy)]
+pub enum Words<'a> {
+    /// Words in memory.
+    Native(&'a [u16]),
+    /// Big-endian words on the wire (always an even number of bytes).
+    Wire(&'a [u8]),
+}
+
+impl<'a> Words<'a> {
+    /// Number of registers.
+    pub fn len(&self) -> usize {
+        match self {
+            Words::Native(w) => w.len(),
+            Words::Wire(b) => b.len() / 2,
+        }
+    }
+
+    /// Whether there are no registers.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The register at `index`.
+    pub fn get(&self, index: usize) -> Option<u16> {
+        match self {
+            Words::Native(w) => w.get(index).copied(),
+            Words::Wire(b) => {
+                let i = index.checked_mul(2)?;
+                Some(u16::from_be_bytes([*b.get(i)?, *b.get(i + 1)?]))
+            }
+        }
+    }
+
+    /// The registers in order.
+    pub fn iter(&self) -> impl Iterator<Item = u16> + 'a {
+        let words = *self;
+        (0..words.len()).filter_map(move |i| words.get(i))
+    }
+
+    /// Copies the registers into `out`; returns how many were copied (the shorter length).
+    pub fn copy_to(&self, out: &mut [u16]) -> usize {
+        let n = self.len().min(out.len());
+        for (i, slot) in out.iter_mut().take(n).enumerate() {
+            *slot = self.get(i).unwrap_or(0);
+        }
+        n
+    }
+
+    fn write_be(&self, out: &mut [u8]) {
+        for (i, w) in self.iter().enumerate() {
+            out[2 * i..2 * i + 2].copy_from_slice(&w.to_be_bytes());
+        }
+    }
+}
+
+impl PartialEq for Words<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        self.len() == other.len() && self.iter().eq(other.iter())
+    }
+}
+
+impl Eq for Words<'_> {}
+
+impl fmt::Debug for Words<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list()
+            .entries(self.iter().map(|w| format_args!("{w:04X}h")))
+            .finish()
+    }
+}
+
+/// A request as it goes on the wire (PDU addresses, not the manual's communication addresses).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Request<'a> {
+    /// 03h: read `quantity` holding registers from `address`.
+    ReadHolding { address: u16, quantity: u16 },
+    /// 04h: read `quantity` input registers from `address`.
+    ReadInput { address: u16, quantity: u16 },
+    /// 06h: write one register.
+    WriteSingle { address: u16, value: u16 },
+    /// 08h sub-function 0000h: the drive returns `data` unchanged.
+    LoopBack { data: u16 },
+    /// 10h: write consecutive registers from `address`.
+    WriteMultiple { address: u16, values: Words<'a> },
+}
+
+/// Why a request cannot be encoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum RequestError {
+    /// Zero registers, or more than the Modbus limit for the function.
+    #[error("{function:02X}h with {quantity} registers: Modbus allows 1 ..= {max}")]
+    Quantity { function: u8, quantity: usize, max: u16 },
+    /// The registers would run past address FFFFh.
+    #[error("{quantity} registers from {address:04X}h run past FFFFh")]
+    AddressOverflow { address: u16, quantity: usize },
+    /// The output buffer is too small for the frame.
+    #[error("frame of {needed} bytes does not fit a buffer of {available}")]
+    Buffer { needed: usize, available: usize },
+}
+
+impl Request<'_> {
+    /// The function code.
+    pub fn function(&self) -> u8 {
+        match self {
+            Request::ReadHolding { .. } => function::READ_HOLDING,
+            Request::ReadInput { .. } => function::READ_INPUT,
+            Request::WriteSingle { .. } => function::WRITE_SINGLE,
+            Request::LoopBack { .. } => function::LOOP_BACK,
+            Request::WriteMultiple { .. } => function::WRITE_MULTIPLE,
+        }
+    }
+
+    /// First register address, if the function addresses registers.
+    pub fn address(&self) -> Option<u16> {
+        match *self {
+            Request::ReadHolding { address, .. }
+            | Request::ReadInput { address, .. }
+            | Request::WriteSingle { address, .. }
+            | Request::WriteMultiple { address, .. } => Some(address),
+            Request::LoopBack { .. } => None,
+        }
+    }
+
+    /// Number of registers read or written (0 for loop-back).
+    pub fn quantity(&self) -> usize {
+        match self {
+            Request::ReadHolding { quantity, .. } | Request::ReadInput { quantity, .. } => {
+                usize::from(*quantity)
+            }
+            Request::WriteSingle { .. } => 1,
+            Request::LoopBack { .. } => 0,
+            Request::WriteMultiple { values, .. } => values.len(),
+        }
+    }
+
+    /// Whether the request reads (03h/04h).
+    pub fn is_read(&self) -> bool {
+        matches!(
+            self,
+            Request::ReadHolding { .. } | Request::ReadInput { .. }
+        )
+    }
+
+    /// Length of the encoded PDU.
+    pub fn pdu_len(&self) -> usize {
+        match self {
+            Request::WriteMultiple { values, .. } => 6 + 2 * values.len(),
+            _ => 5,
+        }
+    }
+
+    /// Length of the normal response PDU this request must get.
+    pub fn response_pdu_len(&self) -> usize {
+        match self {
+            Request::ReadHolding { quantity, .. } | Request::ReadInput { quantity, .. } => {
+                2 + 2 * usize::from(*quantity)
+            }
+            _ => 5,
+        }
+    }
+
+    /// Checks the quantity and address range against the Modbus limits.
+    pub fn validate(&self) -> Result<(), RequestError> {
+        let (max, quantity) = match self {
+            Request::ReadHolding { quantity, .. } | Request::ReadInput { quantity, .. } => {
+                (MAX_READ, usize::from(*quantity))
+            }
+            Request::WriteMultiple { values, .. } => (MAX_WRITE, values.len()),
+            Request::WriteSingle { .. } | Request::LoopBack { .. } => return Ok(()),
+        };
+        if quantity == 0 || quantity > usize::from(max) {
+            return Err(RequestError::Quantity {
+                function: self.function(),
+                quantity,
+                max,
+            });
+        }
+        let address = self.address().unwrap_or(0);
+        if usize::from(address) + quantity > 0x1_0000 {
+            return Err(RequestError::AddressOverflow { address, quantity });
+        }
+        Ok(())
+    }
+
+    /// Encodes the PDU into `out`; returns its length.
+    pub fn encode(&self, out: &mut [u8]) -> Result<usize, RequestError> {
+        self.validate()?;
+        let len = self.pdu_len();
+        if out.len() < len {
+            return Err(RequestError::Buffer {
+                needed: len,
+                available: out.len(),
+            });
+        }
+        out[0] = self.function();
+        match *self {
+            Request::ReadHolding { address, quantity } | Request::ReadInput { address, quantity } => {
+                put(out, 1, address);
+                put(out, 3, quantity);
+            }
+            Request::WriteSingle { address, value } => {
+                put(out, 1, address);
+                put(out, 3, value);
+            }
+            Request::LoopBack { data } => {
+                put(out, 1, 0x0000);
+                put(out, 3, data);
+            }
+            Request::WriteMultiple { address, values } => {
+                put(out, 1, address);
+                put(out, 3, values.len() as u16);
+                out[5] = (2 * values.len()) as u8;
+                values.write_be(&mut out[6..len]);
+            }
+        }
+        Ok(len)
+    }
+}
+
+fn put(out: &mut [u8], at: usize, word: u16) {
+    out[at..at + 2].copy_from_slice(&word.to_be_bytes());
+}
+
+fn word(bytes: &[u8], at: usize) -> Option<u16> {
+    Some(u16::from_be_bytes([*bytes.get(at)?, *bytes.get(at + 1)?]))
+}
+
+/// A decoded response.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Response<'a> {
+    /// 03h/04h: the registers read.
+    Registers(Words<'a>),
+    /// 06h: the echo of the written register.
+    WriteSingle { address: u16, value: u16 },
+    /// 08h: the echoed data.
+    LoopBack { data: u16 },
+    /// 10h: the echo of the start address and quantity.
+    WriteMultiple { address: u16, quantity: u16 },
+    /// An exception response: the request's function and the drive's own code.
+    Exception { function: u8, code: u8 },
+}
+
+impl Response<'_> {
+    /// Length of the encoded PDU.
+    pub fn pdu_len(&self) -> usize {
+        match self {
+            Response::Registers(w) => 2 + 2 * w.len(),
+            Response::Exception { .. } => 2,
+            _ => 5,
+        }
+    }
+
+    /// Encodes the response PDU for the request function `function` (slave side, tests).
+    pub fn encode(&self, function: u8, out: &mut [u8]) -> Result<usize, RequestError> {
+        let len = self.pdu_len();
+        if len > MAX_PDU || out.len() < len {
+            return Err(RequestError::Buffer {
+                needed: len,
+                available: out.len().min(MAX_PDU),
+            });
+        }
+        out[0] = function;
+        match *self {
+            Response::Registers(words) => {
+                out[1] = (2 * words.len()) as u8;
+                words.write_be(&mut out[2..len]);
+            }
+            Response::WriteSingle { address, value } => {
+                put(out, 1, address);
+                put(out, 3, value);
+            }
+            Response::LoopBack { data } => {
+                put(out, 1, 0);
+                put(out, 3, data);
+            }
+            Response::WriteMultiple { address, quantity } => {
+                put(out, 1, address);
+                put(out, 3, quantity);
+            }
+            Response::Exception { function, code } => {
+                out[0] = function | function::EXCEPTION_BIT;
+                out[1] = code;
+            }
+        }
+        Ok(len)
+    }
+}
+
+/// Why a received frame is not the answer to the request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum FrameError {
+    /// The frame is shorter or longer than its function code says.
+    #[error("frame of {got} bytes, expected {expected}")]
+    Length { expected: usize, got: usize },
+    /// The CRC does not match the frame.
+    #[error("CRC {received:04X}h received, {computed:04X}h computed")]
+    Crc { computed: u16, received: u16 },
+    /// The reply comes from another slave.
+    #[error("reply from slave {got}, expected slave {expected}")]
+    Slave { expected: u8, got: u8 },
+    /// The function code is neither the request's nor its exception code.
+    #[error("function {got:02X}h in reply, expected {expected:02X}h")]
+    Function { expected: u8, got: u8 },
+    /// A function code the runtime does not implement.
+    #[error("unknown function code {0:02X}h")]
+    UnknownFunction(u8),
+    /// The byte count of a read reply does not match the quantity requested.
+    #[error("byte count {got} in reply, expected {expected}")]
+    ByteCount { expected: usize, got: usize },
+    /// The address echo differs from the request.
+    #[error("address {got:04X}h echoed, {expected:04X}h sent")]
+    AddressEcho { expected: u16, got: u16 },
+    /// The quantity echo differs from the request.
+    #[error("quantity {got} echoed, {expected} sent")]
+    QuantityEcho { expected: u16, got: u16 },
+    /// The value echo (06h, 08h) differs from the request.
+    #[error("value {got:04X}h echoed, {expected:04X}h sent")]
+    ValueEcho { expected: u16, got: u16 },
+    /// The loop-back reply carries a sub-function other than 0000h.
+    #[error("loop-back sub-function {0:04X}h, expected 0000h")]
+    SubFunction(u16),
+    /// Modbus TCP: the reply carries another transaction id (a late reply to an earlier request).
+    #[error("transaction {got} in reply, expected {expected}")]
+    Transaction { expected: u16, got: u16 },
+    /// Modbus TCP: the protocol identifier is not 0.
+    #[error("protocol identifier {0}, expected 0")]
+    Protocol(u16),
+    /// Modbus TCP: the MBAP length field is outside 2 ..= 254.
+    #[error("MBAP length {0} outside 2 ..= 254")]
+    MbapLength(u16),
+    /// Modbus TCP: the reply's unit identifier differs from the request's.
+    #[error("unit {got} in reply, expected unit {expected}")]
+    Unit { expected: u8, got: u8 },
+}
+
+/// Length of a response PDU as its own header says, given at least its first two bytes.
+/// `Ok(None)` when more bytes are needed to know.
+pub fn response_pdu_len(pdu: &[u8]) -> Result<Option<usize>, FrameError> {
+    let Some(&f) = pdu.first() else {
+        return Ok(None);
+    };
+    if f & function::EXCEPTION_BIT != 0 {
+        return Ok(Some(2));
+    }
+    match f {
+        function::READ_HOLDING | function::READ_INPUT => {
+            Ok(pdu.get(1).map(|&count| 2 + usize::from(count)))
+        }
+        function::WRITE_SINGLE | function::LOOP_BACK | function::WRITE_MULTIPLE => Ok(Some(5)),
+        other => Err(FrameError::UnknownFunction(other)),
+    }
+}
+
+/// Length of a request PDU as its own header says. `Ok(None)` when more bytes are needed.
+pub fn request_pdu_len(pdu: &[u8]) -> Result<Option<usize>, FrameError> {
+    let Some(&f) = pdu.first() else {
+        return Ok(None);
+    };
+    match f {
+        function::READ_HOLDING
+        | function::READ_INPUT
+        | function::WRITE_SINGLE
+        | function::LOOP_BACK => Ok(Some(5)),
+        function::WRITE_MULTIPLE => Ok(pdu.get(5).map(|&count| 6 + usize::from(count))),
+        other => Err(FrameError::UnknownFunction(other)),
+    }
+}
+
+/// Decodes the response PDU `pdu` to `request`, checking every echo.
+pub fn decode_response<'a>(request: &Request<'_>, pdu: &'a [u8]) -> Result<Response<'a>, FrameError> {
+    let expected_function = request.function();
+    let Some(&f) = pdu.first() else {
+        return Err(FrameError::Length {
+            expected: request.response_pdu_len(),
+            got: 0,
+        });
+    };
+    if f == expected_function | function::EXCEPTION_BIT {
+        let [_, code] = *pdu else {
+            return Err(FrameError::Length {
+                expected: 2,
+                got: pdu.len(),
+            });
+        };
+        return Ok(Response::Exception {
+            function: expected_function,
+            code,
+        });
+    }
+    if f != expected_function {
+        return Err(FrameError::Function {
+            expected: expected_function,
+            got: f,
+        });
+    }
+    match *request {
+        Request::ReadHolding { quantity, .. } | Request::ReadInput { quantity, .. } => {
+            let expected = 2 * usize::from(quantity);
+            let count = usize::from(*pdu.get(1).ok_or(FrameError::Length {
+                expected: 2 + expected,
+                got: pdu.len(),
+            })?);
+            if count != expected {
+                return Err(FrameError::ByteCount {
+                    expected,
+                    got: count,
+                });
+            }
+            if pdu.len() != 2 + count {
+                return Err(FrameError::Length {
+                    expected: 2 + count,
+                    got: pdu.len(),
+                });
+            }
+            Ok(Response::Registers(Words::Wire(&pdu[2..])))
+        }
+        Request::WriteSingle { address, value } => {
+            let (a, v) = two_words(pdu)?;
+            echo(address, a, value, v)?;
+            Ok(Response::WriteSingle {
+                address: a,
+                value: v,
+            })
+        }
+        Request::LoopBack { data } => {
+            let (sub, d) = two_words(pdu)?;
+            if sub != 0 {
+                return Err(FrameError::SubFunction(sub));
+            }
+            if d != data {
+                return Err(FrameError::ValueEcho {
+                    expected: data,
+                    got: d,
+                });
+            }
+            Ok(Response::LoopBack { data: d })
+        }
+        Request::WriteMultiple { address, values } => {
+            let (a, q) = two_words(pdu)?;
+            if a != address {
+                return Err(FrameError::AddressEcho {
+                    expected: address,
+                    got: a,
+                });
+            }
+            let quantity = values.len() as u16;
+            if q != quantity {
+                return Err(FrameError::QuantityEcho {
+                    expected: quantity,
+                    got: q,
+                });
+            }
+            Ok(Response::WriteMultiple {
+                address: a,
+                quantity: q,
+            })
+        }
+    }
+}
+
+fn two_words(pdu: &[u8]) -> Result<(u16, u16), FrameError> {
+    if pdu.len() != 5 {
+        return Err(FrameError::Length {
+            expected: 5,
+            got: pdu.len(),
+        });
+    }
+    Ok((word(pdu, 1).unwrap_or(0), word(pdu, 3).unwrap_or(0)))
+}
+
+fn echo(address: u16, got_address: u16, value: u16, got_value: u16) -> Result<(), FrameError> {
+    if address != got_address {
+        return Err(FrameError::AddressEcho {
+            expected: address,
+            got: got_address,
+        });
+    }
+    if value != got_value {
+        return Err(FrameError::ValueEcho {
+            expected: value,
+            got: got_value,
+        });
+    }
+    Ok(())
+}
+
+/// Why a slave rejects a request PDU (slave side: simulators and tests).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum RequestDecodeError {
+    /// The function is not one of 03h, 04h, 06h, 08h, 10h: answer exception 01h.
+    #[error("function {0:02X}h not implemented")]
+    Function(u8),
+    /// A malformed request: answer exception 03h.
+    #[error("malformed {0:02X}h request")]
+    Malformed(u8),
+    /// Loop-back with a sub-function other than 0000h: answer exception 01h.
+    #[error("loop-back sub-function {0:04X}h not implemented")]
+    SubFunction(u16),
+    /// Empty PDU.
+    #[error("empty request")]
+    Empty,
+}
+
+/// Decodes a request PDU (slave side).
+pub fn decode_request(pdu: &[u8]) -> Result<Request<'_>, RequestDecodeError> {
+    let &f = pdu.first().ok_or(RequestDecodeError::Empty)?;
+    let malformed = RequestDecodeError::Malformed(f);
+    let request = match f {
+        function::READ_HOLDING | function::READ_INPUT | function::WRITE_SINGLE | function::LOOP_BACK => {
+            let (a, b) = two_words(pdu).map_err(|_| malformed)?;
+            match f {
+                function::READ_HOLDING => Request::ReadHolding {
+                    address: a,
+                    quantity: b,
+                },
+                function::READ_INPUT => Request::ReadInput {
+                    address: a,
+                    quantity: b,
+                },
+                function::WRITE_SINGLE => Request::WriteSingle {
+                    address: a,
+                    value: b,
+                },
+                _ if a != 0 => return Err(RequestDecodeError::SubFunction(a)),
+                _ => Request::LoopBack { data: b },
+            }
+        }
+        function::WRITE_MULTIPLE => {
+            let address = word(pdu, 1).ok_or(malformed)?;
+            let quantity = word(pdu, 3).ok_or(malformed)?;
+            let count = usize::from(*pdu.get(5).ok_or(malformed)?);
+            if count != 2 * usize::from(quantity) || pdu.len() != 6 + count {
+                return Err(malformed);
+            }
+            Request::WriteMultiple {
+                address,
+                values: Words::Wire(&pdu[6..]),
+            }
+        }
+        other => return Err(RequestDecodeError::Function(other)),
+    };
+    request.validate().map_err(|_| malformed)?;
+    Ok(request)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn read_round_trip_and_echo_checks() {
+        let req = Request::ReadHolding {
+            address: 0x20,
+            quantity: 2,
+        };
+        let mut buf = [0u8; MAX_PDU];
+        let n = req.encode(&mut buf).unwrap();
+        assert_eq!(&buf[..n], &[0x03, 0x00, 0x20, 0x00, 0x02]);
+        let pdu = [0x03, 0x04, 0x12, 0x34, 0xAB, 0xCD];
+        let Response::Registers(words) = decode_response(&req, &pdu).unwrap() else {
+            panic!("not registers");
+        };
+        assert_eq!(words, Words::Native(&[0x1234, 0xABCD]));
+        assert_eq!(
+            decode_response(&req, &[0x03, 0x02, 0x12, 0x34]),
+            Err(FrameError::ByteCount {
+                expected: 4,
+                got: 2
+            })
+        );
+        assert_eq!(
+            decode_response(&req, &[0x04, 0x04, 0, 0, 0, 0]),
+            Err(FrameError::Function {
+                expected: 3,
+                got: 4
+            })
+        );
+        assert_eq!(
+            decode_response(&req, &[0x83, 0x02]),
+            Ok(Response::Exception {
+                function: 3,
+                code: 2
+            })
+        );
+        assert!(decode_response(&req, &[0x83]).is_err());
+        assert!(decode_response(&req, &[]).is_err());
+    }
+
+    #[test]
+    fn write_echoes_are_checked() {
+        let req = Request::WriteSingle {
+            address: 1,
+            value: 3,
+        };
+        assert!(decode_response(&req, &[0x06, 0, 1, 0, 3]).is_ok());
+        assert_eq!(
+            decode_response(&req, &[0x06, 0, 2, 0, 3]),
+            Err(FrameError::AddressEcho {
+                expected: 1,
+                got: 2
+            })
+        );
+        assert_eq!(
+            decode_response(&req, &[0x06, 0, 1, 0, 4]),
+            Err(FrameError::ValueEcho {
+                expected: 3,
+                got: 4
+            })
+        );
+        let req = Request::WriteMultiple {
+            address: 1,
+            values: Words::Native(&[1, 2]),
+        };
+        assert!(decode_response(&req, &[0x10, 0, 1, 0, 2]).is_ok());
+        assert_eq!(
+            decode_response(&req, &[0x10, 0, 1, 0, 3]),
+            Err(FrameError::QuantityEcho {
+                expected: 2,
+                got: 3
+            })
+        );
+        let req = Request::LoopBack { data: 0xA537 };
+        assert_eq!(
+            decode_response(&req, &[0x08, 0, 1, 0xA5, 0x37]),
+            Err(FrameError::SubFunction(1))
+        );
+    }
+
+    #[test]
+    fn limits_are_refused() {
+        let mut buf = [0u8; MAX_PDU];
+        for quantity in [0, 126] {
+            assert!(matches!(
+                Request::ReadInput {
+                    address: 0,
+                    quantity
+                }
+                .encode(&mut buf),
+                Err(RequestError::Quantity { .. })
+            ));
+        }
+        assert!(matches!(
+            Request::ReadHolding {
+                address: 0xFFFF,
+                quantity: 2
+            }
+            .encode(&mut buf),
+            Err(RequestError::AddressOverflow { .. })
+        ));
+        assert!(matches!(
+            Request::WriteMultiple {
+                address: 0,
+                values: Words::Native(&[0; 124])
+            }
+            .encode(&mut buf),
+            Err(RequestError::Quantity { .. })
+        ));
+        assert!(matches!(
+            Request::LoopBack { data: 0 }.encode(&mut buf[..3]),
+            Err(RequestError::Buffer { .. })
+        ));
+    }
+
+    #[test]
+    fn request_decoding_rejects_malformed_pdus() {
+        assert_eq!(
+            decode_request(&[0x10, 0, 1, 0, 2, 3, 0, 0, 0]),
+            Err(RequestDecodeError::Malformed(0x10))
+        );
+        assert_eq!(decode_request(&[0x07]), Err(RequestDecodeError::Function(7)));
+        assert_eq!(
+            decode_request(&[0x08, 0, 4, 0, 0]),
+            Err(RequestDecodeError::SubFunction(4))
+        );
+        assert_eq!(
+            decode_request(&[0x03, 0, 0, 0, 0]),
+            Err(RequestDecodeError::Malformed(3))
+        );
+    }
+}
