@@ -4,11 +4,23 @@
 //! This crate does not depend on the generator. Generated modules implement the traits of
 //! [`register`], describe their drive with a [`profile::Profile`], and convert values with the
 //! helpers of [`scale`].
+//!
+//! Layers, bottom up:
+//! - protocol core without I/O: [`crc`], [`pdu`], [`rtu`], [`tcp`], [`exception`];
+//! - links: the [`transport::Transport`] trait and its serial, TCP, RTU-over-TCP and in-memory
+//!   implementations;
+//! - [`client::Client`]: checked transactions with timeouts, retries, broadcast, typed register
+//!   access and counted EEPROM writes ([`persist`]).
 
+pub mod crc;
+pub mod exception;
+pub mod pdu;
 pub mod profile;
 pub mod register;
+pub mod rtu;
 pub mod scale;
+pub mod tcp;
 
 pub use profile::Profile;
-pub use register::{Access, DriveSettings, Readable, Register, RegisterInfo, Table, Writable};
+pub use register::{Readable, Register, Table, Writable};
 pub use scale::ValueError;

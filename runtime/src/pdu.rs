@@ -98,9 +98,13 @@ impl Eq for Words<'_> {}
 
 impl fmt::Debug for Words<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_list()
-            .entries(self.iter().map(|w| format_args!("{w:04X}h")))
-            .finish()
+        struct Hex(u16);
+        impl fmt::Debug for Hex {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "{:04X}h", self.0)
+            }
+        }
+        f.debug_list().entries(self.iter().map(Hex)).finish()
     }
 }
 
