@@ -22,5 +22,5 @@ pub mod scale;
 pub mod tcp;
 
 pub use profile::Profile;
-pub use register::{Readable, Register, Table, Writable};
+pub use register::{Access, DriveSettings, Readable, Register, RegisterInfo, Table, Writable};
 pub use scale::ValueError;
