@@ -1,1 +1,65 @@
-//! drivemap code generator
+//! drivemap code generator: YAML register maps of AC drives → validated IR → typed Rust.
+//!
+//! Data flows one way: [`source`] reads YAML into a located tree, [`load`] merges variant maps
+//! onto their base and deserializes the [`model`], [`ir`] expands it, [`validate`] checks it one
+//! concern per pass, [`generate`] emits Rust and [`export`] emits JSON. [`Config`] drives it all
+//! from a `build.rs`.
+
+pub mod diagnostic;
+pub mod export;
+pub mod ir;
+pub mod load;
+pub mod model;
+pub mod names;
+pub mod numbers;
+pub mod source;
+pub mod validate;
+
+use std::path::{Path, PathBuf};
+
+pub use diagnostic::{Diagnostic, Diagnostics};
+pub use ir::Drive;
+
+/// Reads, expands and validates one map file. All problems of the file are returned at once.
+pub fn read_map(path: &Path, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
+    let loaded = load::load(path).map_err(Diagnostics::from)?;
+    finish(&loaded, ctx)
+}
+
+/// Like [`read_map`] for YAML held in memory (`extends` is not available).
+pub fn read_map_str(name: &str, text: &str, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
+    let loaded = load::load_str(name, text).map_err(Diagnostics::from)?;
+    finish(&loaded, ctx)
+}
+
+fn finish(loaded: &load::LoadedMap, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
+    let drive = ir::expand(loaded).map_err(Diagnostics::from)?;
+    let errors = validate::validate(&drive, ctx);
+    if errors.is_empty() {
+        Ok(drive)
+    } else {
+        Err(errors.into())
+    }
+}
+
+/// The `*.yaml` files of a directory, sorted by name.
+pub fn find_maps(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut maps: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "yaml" || e == "yml") && p.is_file())
+        .collect();
+    maps.sort();
+    Ok(maps)
+}
+
+/// The manuals directory: `$DRIVEMAP_MANUALS`, else `../shared/manuals` beside the repository
+/// that holds `maps_dir`, if it exists. Citations are checked against it when found.
+pub fn default_manuals_dir(maps_dir: &Path) -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os("DRIVEMAP_MANUALS") {
+        return Some(PathBuf::from(dir));
+    }
+    let abs = maps_dir.canonicalize().ok()?;
+    abs.ancestors()
+        .map(|a| a.join("shared").join("manuals"))
+        .find(|p| p.is_dir())
+}

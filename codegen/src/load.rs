@@ -103,7 +103,9 @@ fn load_tree(path: &FsPath, chain: &mut Vec<PathBuf>) -> Result<Node, Vec<Diagno
         .parent()
         .unwrap_or_else(|| FsPath::new("."))
         .join(format!("{base_id}.yaml"));
-    let canonical = base_path.canonicalize().unwrap_or_else(|_| base_path.clone());
+    let canonical = base_path
+        .canonicalize()
+        .unwrap_or_else(|_| base_path.clone());
     if chain.contains(&canonical) {
         return Err(vec![Diagnostic::new(
             extends.loc.clone(),
@@ -132,7 +134,8 @@ fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {
             match seg {
                 serde_path_to_error::Segment::Seq { index } => path = path.index(*index),
                 serde_path_to_error::Segment::Map { key } => path = path.key(key),
-                serde_path_to_error::Segment::Enum { .. } | serde_path_to_error::Segment::Unknown => {}
+                serde_path_to_error::Segment::Enum { .. }
+                | serde_path_to_error::Segment::Unknown => {}
             }
         }
         let message = e.inner().to_string();
@@ -145,7 +148,11 @@ fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {
         } else {
             format!("{path}: {message}")
         };
-        vec![Diagnostic::new(loc, register_at(tree, &path).as_deref(), shown)]
+        vec![Diagnostic::new(
+            loc,
+            register_at(tree, &path).as_deref(),
+            shown,
+        )]
     })
 }
 
@@ -156,7 +163,10 @@ fn unknown_field(message: &str) -> Option<&str> {
 
 /// The id of the register a path points into, if any.
 pub fn register_at(tree: &Node, path: &Path) -> Option<String> {
-    let pos = path.0.iter().position(|s| *s == Seg::Key("registers".into()))?;
+    let pos = path
+        .0
+        .iter()
+        .position(|s| *s == Seg::Key("registers".into()))?;
     let reg_path = Path(path.0[..(pos + 2).min(path.0.len())].to_vec());
     let mut node = tree;
     for seg in &reg_path.0 {
@@ -204,7 +214,10 @@ fn merge_deep(base: Node, child: Node) -> Node {
                 kind: NodeKind::Map(b),
             }
         }
-        (_, kind) => Node { loc: child.loc, kind },
+        (_, kind) => Node {
+            loc: child.loc,
+            kind,
+        },
     }
 }
 
@@ -265,7 +278,10 @@ fn concat(base: Node, child: Node) -> Node {
                 kind: NodeKind::Seq(b),
             }
         }
-        (_, kind) => Node { loc: child.loc, kind },
+        (_, kind) => Node {
+            loc: child.loc,
+            kind,
+        },
     }
 }
 

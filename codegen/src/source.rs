@@ -128,16 +128,6 @@ impl Node {
 
 /// Parses YAML text into a located tree. `file` names the file in locations.
 pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
-    // yaml_serde first: it is the parser the schema types are defined against, and its syntax
-    // errors carry positions.
-    if let Err(e) = serde_yaml::from_str::<Value>(text) {
-        let (line, col) = e.location().map(|l| (l.line(), l.column())).unwrap_or((1, 1));
-        return Err(Diagnostic::new(
-            Loc::new(file.clone(), line, col),
-            None,
-            format!("YAML syntax: {e}"),
-        ));
-    }
     let mut builder = Builder {
         file: file.clone(),
         stack: Vec::new(),
@@ -146,6 +136,18 @@ pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
     };
     for event in Parser::new_from_str(text) {
         let (event, span) = event.map_err(|e| {
+            // yaml_serde is the parser the schema is defined against; prefer its wording.
+            if let Err(e) = serde_yaml::from_str::<Value>(text) {
+                let (line, col) = e
+                    .location()
+                    .map(|l| (l.line(), l.column()))
+                    .unwrap_or((1, 1));
+                return Diagnostic::new(
+                    Loc::new(file.clone(), line, col),
+                    None,
+                    format!("YAML syntax: {e}"),
+                );
+            }
             let m = e.marker();
             Diagnostic::new(
                 Loc::new(file.clone(), m.line(), m.col() + 1),
@@ -189,7 +191,8 @@ impl Builder {
             Event::Scalar(text, style, anchor, _tag) => {
                 let value = if style == ScalarStyle::Plain {
                     // Let yaml_serde resolve plain scalars (ints incl. 0x.., floats, bools, null).
-                    serde_yaml::from_str::<Value>(&text).unwrap_or_else(|_| Value::String(text.to_string()))
+                    serde_yaml::from_str::<Value>(&text)
+                        .unwrap_or_else(|_| Value::String(text.to_string()))
                 } else {
                     Value::String(text.to_string())
                 };
@@ -235,7 +238,10 @@ impl Builder {
                         anchor,
                     ),
                     Some(Frame::Map {
-                        loc, anchor, entries, ..
+                        loc,
+                        anchor,
+                        entries,
+                        ..
                     }) => (
                         Node {
                             loc,
@@ -244,7 +250,11 @@ impl Builder {
                         anchor,
                     ),
                     None => {
-                        return Err(Diagnostic::new(loc, None, "YAML: unbalanced collection end"));
+                        return Err(Diagnostic::new(
+                            loc,
+                            None,
+                            "YAML: unbalanced collection end",
+                        ));
                     }
                 };
                 if anchor != 0 {
@@ -267,7 +277,9 @@ impl Builder {
                 Ok(())
             }
             Some(Frame::Map {
-                entries, pending_key, ..
+                entries,
+                pending_key,
+                ..
             }) => {
                 match pending_key.take() {
                     None => {
@@ -284,7 +296,11 @@ impl Builder {
                             }
                         };
                         if entries.iter().any(|(k, _, _)| *k == key) {
-                            return Err(Diagnostic::new(node.loc, None, format!("duplicate key `{key}`")));
+                            return Err(Diagnostic::new(
+                                node.loc,
+                                None,
+                                format!("duplicate key `{key}`"),
+                            ));
                         }
                         *pending_key = Some((key, node.loc));
                     }

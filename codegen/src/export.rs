@@ -1,0 +1,185 @@
+//! The JSON export (`drivemap-export/1`) that other tools and review checks consume.
+//!
+//! Registers are listed by address (broadcast registers after the others). `min`, `max` and
+//! `default` are engineering values of the base variant; `scale` is null where it depends on a
+//! setting (`scale_selected_by` names the parameter) or on another quantity
+//! (`scale_relative_to`). Keys beyond the documented shape carry the rest of the map.
+
+use serde_json::{Value, json};
+
+use crate::ir::{Drive, Register, ValueKind};
+use crate::model::{self, Access, DefaultValue, Reference, Scale};
+use crate::validate::field_span;
+
+pub const FORMAT: &str = "drivemap-export/1";
+
+fn access(a: Access) -> &'static str {
+    match a {
+        Access::Read => "r",
+        Access::Write => "w",
+        Access::ReadWrite => "rw",
+    }
+}
+
+fn values(list: &[model::EnumValue]) -> Value {
+    Value::Array(
+        list.iter()
+            .map(|v| json!({"value": v.value, "id": v.id, "name": v.name}))
+            .collect(),
+    )
+}
+
+fn reference_name(drive: &Drive, reference: &Reference) -> Value {
+    match reference {
+        Reference::Register(name) => {
+            let shown = drive
+                .find(name)
+                .map(|r| r.def.param.clone().unwrap_or_else(|| r.def.id.clone()))
+                .unwrap_or_else(|| name.clone());
+            json!(shown)
+        }
+        Reference::External(q) => json!({"external": q.external, "unit": q.unit}),
+    }
+}
+
+fn scale_json(drive: &Drive, scale: &Scale) -> Value {
+    match scale {
+        Scale::Factor(f) => json!(f),
+        Scale::Relative(rel) => {
+            json!({"relative_to": reference_name(drive, &rel.relative_to), "full_scale": rel.full_scale})
+        }
+        Scale::Selected(_) => Value::Null,
+    }
+}
+
+fn default_json(d: &Option<DefaultValue>) -> (Value, Value) {
+    match d {
+        Some(DefaultValue::Value(v)) => (json!(v), Value::Null),
+        Some(DefaultValue::Depends(dep)) => (
+            Value::Null,
+            serde_json::to_value(dep.depends_on).unwrap_or(Value::Null),
+        ),
+        None => (Value::Null, Value::Null),
+    }
+}
+
+fn register(drive: &Drive, r: &Register) -> Value {
+    let d = &r.def;
+    let (scale, selected_by, relative_to, cases) = match r.kind() {
+        ValueKind::Quantity(Scale::Factor(f)) => (json!(f), Value::Null, Value::Null, Value::Null),
+        ValueKind::Quantity(Scale::Relative(rel)) => (
+            Value::Null,
+            Value::Null,
+            json!({"reference": reference_name(drive, &rel.relative_to), "full_scale": rel.full_scale}),
+            Value::Null,
+        ),
+        ValueKind::Quantity(Scale::Selected(sel)) => {
+            let selector = drive
+                .find(&sel.selected_by)
+                .map(|s| s.def.param.clone().unwrap_or_else(|| s.def.id.clone()))
+                .unwrap_or_else(|| sel.selected_by.clone());
+            let cases = sel
+                .cases
+                .iter()
+                .map(|c| json!({"when": c.when, "scale": scale_json(drive, &c.scale), "min": c.min, "max": c.max}))
+                .collect::<Vec<_>>();
+            (Value::Null, json!(selector), Value::Null, json!(cases))
+        }
+        ValueKind::Word | ValueKind::UnitQuantity => {
+            (json!(1.0), Value::Null, Value::Null, Value::Null)
+        }
+        ValueKind::Enum(_) | ValueKind::Bits(_) => {
+            (Value::Null, Value::Null, Value::Null, Value::Null)
+        }
+    };
+    let fields: Vec<Value> = d
+        .fields
+        .iter()
+        .map(|f| {
+            let (lsb, width) = field_span(f).unwrap_or((0, 0));
+            json!({"id": f.id, "name": f.name, "lsb": lsb, "width": width, "values": values(&f.values)})
+        })
+        .collect();
+    let (default, depends_on) = default_json(&d.default);
+    let by_variant: serde_json::Map<String, Value> = d
+        .by_variant
+        .iter()
+        .map(|(k, o)| {
+            let (min, max) = r.limits_for(k);
+            let (dv, dep) = default_json(&o.default);
+            (
+                k.clone(),
+                json!({"min": min, "max": max, "default": dv, "default_depends_on": dep}),
+            )
+        })
+        .collect();
+    let group = drive.group_of(r);
+    json!({
+        "id": d.id,
+        "param": d.param,
+        "name": d.name,
+        "address": d.address,
+        "access": access(r.access),
+        "unit": d.unit,
+        "scale": scale,
+        "scale_selected_by": selected_by,
+        "scale_cases": cases,
+        "scale_relative_to": relative_to,
+        "signed": d.signed,
+        "min": if selected_by.is_null() { json!(d.min) } else { Value::Null },
+        "max": if selected_by.is_null() { json!(d.max) } else { Value::Null },
+        "default": default,
+        "default_depends_on": depends_on,
+        "by_variant": by_variant,
+        "fields": fields,
+        "values": values(&d.values),
+        "source": d.source,
+        "group": group.id,
+        "table": match r.table { model::ModbusTable::Holding => "holding", model::ModbusTable::Input => "input" },
+        "broadcast": r.broadcast,
+        "write_restriction": serde_json::to_value(r.write_restriction).unwrap_or(Value::Null),
+        "transports": r.transports,
+        "address_alternatives": d.address_alternatives,
+        "display_steps": d.display_steps,
+        "notes": d.notes,
+        "conflicts": d.conflicts,
+        "unknown": d.unknown,
+    })
+}
+
+/// The export of one drive.
+pub fn export(drive: &Drive) -> Value {
+    let p = &drive.protocol;
+    let mut regs: Vec<&Register> = drive.registers.iter().collect();
+    regs.sort_by_key(|r| (r.broadcast, r.def.address));
+    json!({
+        "format": FORMAT,
+        "drive": {
+            "id": drive.meta.id,
+            "vendor": drive.meta.vendor,
+            "models": drive.meta.models,
+            "manuals": drive.meta.manuals.iter().map(|m| m.file.clone()).collect::<Vec<_>>(),
+            "extends": drive.meta.extends,
+        },
+        "variants": drive.variants,
+        "protocol": {
+            "transports": p.transports,
+            "function_codes": p.function_codes,
+            "max_read": p.max_read,
+            "max_write": p.max_write,
+            "slave_address": p.slave_address,
+            "broadcast": p.broadcast,
+            "exceptions": p.exceptions,
+            "commands": p.commands,
+            "eeprom": p.eeprom,
+            "addressing": p.addressing,
+            "timing": p.timing,
+            "serial": p.serial,
+        },
+        "groups": drive.groups.iter().map(|g| json!({"id": g.id, "name": g.name, "table": g.table, "source": g.source, "broadcast": g.broadcast})).collect::<Vec<_>>(),
+        "registers": regs.into_iter().map(|r| register(drive, r)).collect::<Vec<_>>(),
+        "conflicts": drive.conflicts,
+        "gaps": drive.gaps,
+        "removed": drive.removed,
+    })
+}

@@ -1,0 +1,472 @@
+//! The intermediate representation: the model with group defaults applied, blocks expanded and
+//! every register located, plus the lookups that validation, emission and tools share.
+//!
+//! [`expand`] builds it from a loaded map; [`crate::validate`] checks it; once it is valid, the
+//! accessors here (value kind, raw ranges, references) cannot fail on well-formed input and the
+//! generator, the exporter and the simulator all read the same answers.
+
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+
+use crate::diagnostic::{Diagnostic, Loc};
+use crate::load::LoadedMap;
+use crate::model::{
+    self, Access, Conflict, DefaultValue, EnumValue, Field, Gap, ModbusTable, Reference, Removed,
+    Scale, TransportName, VariantAxis, WriteRestriction,
+};
+use crate::numbers::{Dec, raw_of};
+use crate::source::{Node, Path};
+
+/// A drive map, expanded and located.
+#[derive(Debug, Clone)]
+pub struct Drive {
+    pub meta: model::DriveMeta,
+    /// Rust module name (`ptlk_tds_v8`).
+    pub module: String,
+    pub variants: Vec<VariantAxis>,
+    pub protocol: model::Protocol,
+    pub groups: Vec<Group>,
+    /// All registers in document order (group by group).
+    pub registers: Vec<Register>,
+    pub conflicts: Vec<Conflict>,
+    pub gaps: Vec<Gap>,
+    pub removed: Vec<Removed>,
+    /// The file the map was read from.
+    pub file: PathBuf,
+    /// The merged YAML tree, for locating findings.
+    pub tree: Node,
+}
+
+#[derive(Debug, Clone)]
+pub struct Group {
+    pub id: String,
+    pub name: String,
+    pub table: Option<String>,
+    pub source: Option<String>,
+    pub broadcast: bool,
+    pub notes: Vec<String>,
+    pub path: Path,
+}
+
+/// One register (blocks already expanded), with group defaults applied.
+#[derive(Debug, Clone)]
+pub struct Register {
+    /// The register as written, with `repeat` placeholders substituted and `repeat` removed.
+    pub def: model::Register,
+    pub access: Access,
+    pub table: ModbusTable,
+    pub write_restriction: WriteRestriction,
+    pub transports: Option<Vec<TransportName>>,
+    /// Member of a broadcast group: written to slave 0 only, in its own address space.
+    pub broadcast: bool,
+    /// Index into [`Drive::groups`].
+    pub group: usize,
+    /// Where the register (or its block template) is written.
+    pub path: Path,
+}
+
+/// What a register's word means.
+#[derive(Debug, Clone, Copy)]
+pub enum ValueKind<'a> {
+    /// A plain `u16` / `i16`.
+    Word,
+    /// An engineering value: `f64` in `unit`.
+    Quantity(&'a Scale),
+    /// A quantity with a unit but no scale: factor 1.
+    UnitQuantity,
+    Enum(&'a [EnumValue]),
+    Bits(&'a [Field]),
+}
+
+/// A limit pair in raw integers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RawLimits {
+    pub min: i128,
+    pub max: i128,
+}
+
+impl RawLimits {
+    pub fn word(signed: bool) -> RawLimits {
+        if signed {
+            RawLimits {
+                min: i16::MIN as i128,
+                max: i16::MAX as i128,
+            }
+        } else {
+            RawLimits {
+                min: 0,
+                max: u16::MAX as i128,
+            }
+        }
+    }
+}
+
+impl Register {
+    pub fn id(&self) -> &str {
+        &self.def.id
+    }
+
+    pub fn kind(&self) -> ValueKind<'_> {
+        if !self.def.fields.is_empty() {
+            ValueKind::Bits(&self.def.fields)
+        } else if !self.def.values.is_empty() {
+            ValueKind::Enum(&self.def.values)
+        } else if let Some(scale) = &self.def.scale {
+            ValueKind::Quantity(scale)
+        } else if self.def.unit.is_some() {
+            ValueKind::UnitQuantity
+        } else {
+            ValueKind::Word
+        }
+    }
+
+    pub fn readable(&self) -> bool {
+        matches!(self.access, Access::Read | Access::ReadWrite)
+    }
+
+    pub fn writable(&self) -> bool {
+        matches!(self.access, Access::Write | Access::ReadWrite)
+    }
+
+    /// The decimal factor of a fixed-scale register (scale 1 for unit quantities and words).
+    pub fn factor(&self) -> Option<Dec> {
+        match self.kind() {
+            ValueKind::Quantity(Scale::Factor(f)) => Dec::from_f64(*f),
+            ValueKind::Quantity(_) => None,
+            _ => Some(Dec {
+                mantissa: 1,
+                exponent: 0,
+            }),
+        }
+    }
+
+    /// Raw limits for given engineering limits at a fixed decimal factor; missing limits are
+    /// the word's own. `None` when a limit is not a whole number of increments.
+    pub fn raw_limits(&self, factor: Dec, min: Option<f64>, max: Option<f64>) -> Option<RawLimits> {
+        let word = RawLimits::word(self.def.signed);
+        let min = match min {
+            Some(m) => raw_of(m, factor)?,
+            None => word.min,
+        };
+        let max = match max {
+            Some(m) => raw_of(m, factor)?,
+            None => word.max,
+        };
+        Some(RawLimits { min, max })
+    }
+
+    /// Limits of the base variant in engineering units.
+    pub fn limits(&self) -> (Option<f64>, Option<f64>) {
+        (self.def.min, self.def.max)
+    }
+
+    /// Limits for a variant option: its override where given, else the base.
+    pub fn limits_for(&self, option: &str) -> (Option<f64>, Option<f64>) {
+        match self.def.by_variant.get(option) {
+            Some(o) => (o.min.or(self.def.min), o.max.or(self.def.max)),
+            None => (self.def.min, self.def.max),
+        }
+    }
+
+    /// The base variant's default as a number, if the manual prints one.
+    pub fn default_value(&self) -> Option<f64> {
+        match &self.def.default {
+            Some(DefaultValue::Value(v)) => Some(*v),
+            _ => None,
+        }
+    }
+
+    /// Location of a key of this register.
+    pub fn key_path(&self, key: &str) -> Path {
+        self.path.key(key)
+    }
+}
+
+impl Drive {
+    /// Locates a path in the merged tree.
+    pub fn locate(&self, path: &Path) -> Loc {
+        self.tree.locate(path)
+    }
+
+    /// A diagnostic at `path`, naming `register`.
+    pub fn error(
+        &self,
+        path: &Path,
+        register: Option<&str>,
+        message: impl Into<String>,
+    ) -> Diagnostic {
+        Diagnostic::new(self.locate(path), register, message)
+    }
+
+    /// A register by id, or else by parameter number as printed.
+    pub fn find(&self, name: &str) -> Option<&Register> {
+        self.registers
+            .iter()
+            .find(|r| r.def.id == name)
+            .or_else(|| {
+                self.registers
+                    .iter()
+                    .find(|r| r.def.param.as_deref() == Some(name))
+            })
+    }
+
+    /// The registers whose values select scales or addresses, in first-use order.
+    pub fn selectors(&self) -> Vec<&Register> {
+        let mut names = Vec::new();
+        for r in &self.registers {
+            if let Some(Scale::Selected(s)) = &r.def.scale {
+                names.push(s.selected_by.as_str());
+            }
+            for alt in &r.def.address_alternatives {
+                if let Some(s) = &alt.when.setting {
+                    names.push(s.as_str());
+                }
+            }
+        }
+        self.unique_registers(names)
+    }
+
+    /// The registers other registers are scaled relative to, in first-use order.
+    pub fn references(&self) -> Vec<&Register> {
+        let mut names = Vec::new();
+        for r in &self.registers {
+            for scale in scales_of(r) {
+                if let Scale::Relative(rel) = scale {
+                    if let Reference::Register(name) = &rel.relative_to {
+                        names.push(name.as_str());
+                    }
+                }
+            }
+        }
+        self.unique_registers(names)
+    }
+
+    /// External quantities (not registers) that relative scales refer to, by name.
+    pub fn externals(&self) -> Vec<&model::ExternalQuantity> {
+        let mut seen = BTreeSet::new();
+        let mut out = Vec::new();
+        for r in &self.registers {
+            for scale in scales_of(r) {
+                if let Scale::Relative(rel) = scale {
+                    if let Reference::External(q) = &rel.relative_to {
+                        if seen.insert(q.external.clone()) {
+                            out.push(q);
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    fn unique_registers<'a>(&'a self, names: Vec<&str>) -> Vec<&'a Register> {
+        let mut seen = BTreeSet::new();
+        let mut out = Vec::new();
+        for name in names {
+            if let Some(r) = self.find(name) {
+                if seen.insert(r.def.id.clone()) {
+                    out.push(r);
+                }
+            }
+        }
+        out
+    }
+
+    /// The variant axis and option for an option id.
+    pub fn variant_option(&self, option: &str) -> Option<(&VariantAxis, &model::VariantOption)> {
+        self.variants
+            .iter()
+            .find_map(|a| a.options.iter().find(|o| o.id == option).map(|o| (a, o)))
+    }
+
+    /// The group of a register.
+    pub fn group_of(&self, r: &Register) -> &Group {
+        &self.groups[r.group]
+    }
+}
+
+/// The scales of a register: its own, and those of each selected case.
+pub fn scales_of(r: &Register) -> Vec<&Scale> {
+    match &r.def.scale {
+        Some(Scale::Selected(sel)) => sel.cases.iter().map(|c| &c.scale).collect(),
+        Some(s) => vec![s],
+        None => Vec::new(),
+    }
+}
+
+/// The Rust module name of a drive id.
+pub fn module_name(id: &str) -> String {
+    id.replace(['-', '.'], "_")
+}
+
+/// Builds the IR from a loaded map. Errors are only those of block expansion; everything else
+/// is left to [`crate::validate`].
+pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
+    let model = &map.model;
+    let mut errors = Vec::new();
+    let mut groups = Vec::new();
+    let mut registers = Vec::new();
+    for (gi, g) in model.groups.iter().enumerate() {
+        let gpath = Path::root().key("groups").index(gi);
+        groups.push(Group {
+            id: g.id.clone(),
+            name: g.name.clone(),
+            table: g.table.clone(),
+            source: g.source.clone(),
+            broadcast: g.broadcast,
+            notes: g.notes.clone(),
+            path: gpath.clone(),
+        });
+        for (ri, r) in g.registers.iter().enumerate() {
+            let path = gpath.key("registers").index(ri);
+            let instances = match &r.repeat {
+                None => vec![r.clone()],
+                Some(rep) => match expand_block(r, rep) {
+                    Ok(list) => list,
+                    Err(message) => {
+                        errors.push(Diagnostic::new(
+                            map.locate(&path.key("repeat")),
+                            Some(&r.id),
+                            message,
+                        ));
+                        continue;
+                    }
+                },
+            };
+            for def in instances {
+                registers.push(Register {
+                    access: def.access.or(g.access).unwrap_or(Access::ReadWrite),
+                    table: def
+                        .modbus_table
+                        .or(g.modbus_table)
+                        .unwrap_or(ModbusTable::Holding),
+                    write_restriction: def
+                        .write_restriction
+                        .or(g.write_restriction)
+                        .unwrap_or(WriteRestriction::None),
+                    transports: def.transports.clone().or_else(|| g.transports.clone()),
+                    broadcast: g.broadcast,
+                    group: gi,
+                    path: path.clone(),
+                    def,
+                });
+            }
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    Ok(Drive {
+        module: module_name(&model.drive.id),
+        meta: model.drive.clone(),
+        variants: model.variants.clone(),
+        protocol: model.protocol.clone(),
+        groups,
+        registers,
+        conflicts: model.conflicts.clone(),
+        gaps: model.gaps.clone(),
+        removed: model.removed.clone(),
+        file: map.path.clone(),
+        tree: map.tree.clone(),
+    })
+}
+
+fn expand_block(r: &model::Register, rep: &model::Repeat) -> Result<Vec<model::Register>, String> {
+    if rep.count == 0 {
+        return Err("`repeat.count` must be at least 1".into());
+    }
+    if !r.id.contains("{n}")
+        && !r.id.contains("{p}")
+        && !r.id.contains("{n:")
+        && !r.id.contains("{p:")
+    {
+        return Err(
+            "a block's `id` must contain `{n}` or `{p}` so each register gets its own id".into(),
+        );
+    }
+    let mut out = Vec::new();
+    for k in 0..rep.count {
+        let n = rep.start as u32 + k as u32;
+        let p = rep.param_start.map(|s| s as u32 + k as u32);
+        let mut def = r.clone();
+        def.repeat = None;
+        def.id = substitute(&r.id, n, p)?;
+        def.name = substitute(&r.name, n, p)?;
+        def.param = r
+            .param
+            .as_deref()
+            .map(|s| substitute(s, n, p))
+            .transpose()?;
+        let address = r.address as u32 + k as u32 * rep.address_step as u32;
+        def.address = u16::try_from(address)
+            .map_err(|_| format!("block runs past address FFFFh at instance {n}"))?;
+        def.source = r
+            .source
+            .as_deref()
+            .map(|s| shift_line(s, k as usize * rep.line_step as usize))
+            .transpose()?;
+        out.push(def);
+    }
+    Ok(out)
+}
+
+/// Replaces `{n}`, `{p}`, `{n:02}`, `{p:03}` in a block template.
+fn substitute(template: &str, n: u32, p: Option<u32>) -> Result<String, String> {
+    let mut out = String::new();
+    let mut rest = template;
+    while let Some(open) = rest.find('{') {
+        out.push_str(&rest[..open]);
+        let close = rest[open..]
+            .find('}')
+            .ok_or_else(|| format!("unclosed placeholder in `{template}`"))?
+            + open;
+        let spec = &rest[open + 1..close];
+        let (name, width) = match spec.split_once(':') {
+            Some((name, w)) => (
+                name,
+                w.parse::<usize>()
+                    .map_err(|_| format!("bad width `{w}` in `{template}`"))?,
+            ),
+            None => (spec, 0),
+        };
+        let value = match name {
+            "n" => n,
+            "p" => {
+                p.ok_or_else(|| format!("`{{p}}` in `{template}` needs `repeat.param_start`"))?
+            }
+            other => return Err(format!("unknown placeholder `{{{other}}}` in `{template}`")),
+        };
+        out.push_str(&format!("{value:0width$}"));
+        rest = &rest[close + 1..];
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+fn shift_line(source: &str, by: usize) -> Result<String, String> {
+    let (file, line) = source
+        .rsplit_once(':')
+        .ok_or_else(|| format!("citation `{source}` is not `file:line`"))?;
+    let line: usize = line
+        .parse()
+        .map_err(|_| format!("citation `{source}` is not `file:line`"))?;
+    Ok(format!("{file}:{}", line + by))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn placeholders() {
+        assert_eq!(substitute("An-{n:02}", 3, None).unwrap(), "An-03");
+        assert_eq!(
+            substitute("step_{n}_time", 12, None).unwrap(),
+            "step_12_time"
+        );
+        assert_eq!(substitute("Bn-{p}", 1, Some(22)).unwrap(), "Bn-22");
+        assert!(substitute("x{q}", 1, None).is_err());
+        assert!(substitute("x{p}", 1, None).is_err());
+        assert_eq!(shift_line("a.txt:10", 3).unwrap(), "a.txt:13");
+    }
+}

@@ -1,0 +1,61 @@
+//! Access agrees with the rest: write restrictions only on writable registers, input registers
+//! read-only, broadcast registers write-only, and the drive has the function codes the access
+//! needs.
+
+use crate::diagnostic::Diagnostic;
+use crate::ir::Drive;
+use crate::model::{Access, ModbusTable, WriteRestriction};
+
+pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    let fc = &drive.protocol.function_codes;
+    for r in &drive.registers {
+        let rid = Some(r.id());
+        if !r.writable()
+            && r.write_restriction != WriteRestriction::None
+            && r.def.write_restriction.is_some()
+        {
+            out.push(drive.error(
+                &r.key_path("write_restriction"),
+                rid,
+                "a read-only register has no write restriction",
+            ));
+        }
+        if r.table == ModbusTable::Input && r.writable() {
+            out.push(drive.error(
+                &r.key_path("access"),
+                rid,
+                "input registers (04h) are read-only",
+            ));
+        }
+        if r.broadcast && r.access != Access::Write {
+            out.push(drive.error(
+                &r.key_path("access"),
+                rid,
+                "broadcast registers are write-only (`access: w`)",
+            ));
+        }
+        if r.readable() && !r.broadcast {
+            let needed = match r.table {
+                ModbusTable::Holding => 0x03,
+                ModbusTable::Input => 0x04,
+            };
+            if !fc.contains(&needed) {
+                out.push(drive.error(
+                    &r.path,
+                    rid,
+                    format!(
+                        "readable {} register, but the protocol lacks function {needed:02X}h",
+                        if needed == 3 { "holding" } else { "input" }
+                    ),
+                ));
+            }
+        }
+        if r.writable() && !fc.contains(&0x06) && !fc.contains(&0x10) {
+            out.push(drive.error(
+                &r.path,
+                rid,
+                "writable register, but the protocol has neither 06h nor 10h",
+            ));
+        }
+    }
+}

@@ -1,0 +1,296 @@
+//! Every register cites its row in a manual as `file:line`; every citation anywhere names one of
+//! the map's manuals and, when the manuals are at hand, a line inside the file.
+
+use crate::diagnostic::Diagnostic;
+use crate::ir::Drive;
+use crate::source::Path;
+use crate::validate::Context;
+
+/// Splits `file:line`.
+pub fn parse_citation(s: &str) -> Option<(&str, usize)> {
+    let (file, line) = s.rsplit_once(':')?;
+    let line: usize = line.trim().parse().ok()?;
+    (!file.is_empty() && line > 0).then_some((file, line))
+}
+
+fn cite(
+    drive: &Drive,
+    ctx: &Context,
+    out: &mut Vec<Diagnostic>,
+    source: &str,
+    path: Path,
+    register: Option<&str>,
+) {
+    let Some((file, line)) = parse_citation(source) else {
+        out.push(drive.error(
+            &path,
+            register,
+            format!("citation `{source}` is not `file:line`"),
+        ));
+        return;
+    };
+    if !drive.meta.manuals.iter().any(|m| m.file == file) {
+        out.push(drive.error(
+            &path,
+            register,
+            format!("citation `{source}` names `{file}`, which is not among `drive.manuals`"),
+        ));
+        return;
+    }
+    if let Some(&lines) = ctx.manual_lines.get(file) {
+        if line > lines {
+            out.push(drive.error(
+                &path,
+                register,
+                format!("citation `{source}` points past the end of `{file}` ({lines} lines)"),
+            ));
+        }
+    }
+}
+
+fn opt(
+    drive: &Drive,
+    ctx: &Context,
+    out: &mut Vec<Diagnostic>,
+    source: &Option<String>,
+    path: Path,
+    register: Option<&str>,
+) {
+    if let Some(s) = source {
+        cite(drive, ctx, out, s, path, register);
+    }
+}
+
+pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
+    if drive.meta.manuals.is_empty() {
+        out.push(drive.error(
+            &Path::root().key("drive").key("manuals"),
+            None,
+            "a map must name the manuals it was transcribed from",
+        ));
+    }
+    let proto = Path::root().key("protocol");
+    let p = &drive.protocol;
+    opt(drive, ctx, out, &p.source, proto.key("source"), None);
+    opt(
+        drive,
+        ctx,
+        out,
+        &p.slave_address.source,
+        proto.key("slave_address").key("source"),
+        None,
+    );
+    if let Some(b) = &p.broadcast {
+        cite(
+            drive,
+            ctx,
+            out,
+            &b.source,
+            proto.key("broadcast").key("source"),
+            None,
+        );
+    }
+    for (i, e) in p.exceptions.iter().enumerate() {
+        cite(
+            drive,
+            ctx,
+            out,
+            &e.source,
+            proto.key("exceptions").index(i).key("source"),
+            None,
+        );
+    }
+    for (i, c) in p.commands.iter().enumerate() {
+        cite(
+            drive,
+            ctx,
+            out,
+            &c.source,
+            proto.key("commands").index(i).key("source"),
+            None,
+        );
+    }
+    if let Some(e) = &p.eeprom {
+        cite(
+            drive,
+            ctx,
+            out,
+            &e.source,
+            proto.key("eeprom").key("source"),
+            None,
+        );
+    }
+    if let Some(a) = &p.addressing {
+        cite(
+            drive,
+            ctx,
+            out,
+            &a.source,
+            proto.key("addressing").key("source"),
+            None,
+        );
+    }
+    if let Some(s) = &p.serial {
+        cite(
+            drive,
+            ctx,
+            out,
+            &s.source,
+            proto.key("serial").key("source"),
+            None,
+        );
+    }
+    if let Some(t) = &p.timing {
+        let tp = proto.key("timing");
+        opt(drive, ctx, out, &t.source, tp.key("source"), None);
+        if let Some(i) = &t.inter_char_timeout {
+            opt(
+                drive,
+                ctx,
+                out,
+                &i.source,
+                tp.key("inter_char_timeout").key("source"),
+                None,
+            );
+        }
+        if let Some(i) = &t.response_time {
+            opt(
+                drive,
+                ctx,
+                out,
+                &i.source,
+                tp.key("response_time").key("source"),
+                None,
+            );
+        }
+    }
+    for (ai, axis) in drive.variants.iter().enumerate() {
+        for (oi, o) in axis.options.iter().enumerate() {
+            opt(
+                drive,
+                ctx,
+                out,
+                &o.source,
+                Path::root()
+                    .key("variants")
+                    .index(ai)
+                    .key("options")
+                    .index(oi)
+                    .key("source"),
+                None,
+            );
+        }
+    }
+    for g in &drive.groups {
+        opt(drive, ctx, out, &g.source, g.path.key("source"), None);
+    }
+    for (i, g) in drive.gaps.iter().enumerate() {
+        cite(
+            drive,
+            ctx,
+            out,
+            &g.source,
+            Path::root().key("gaps").index(i).key("source"),
+            None,
+        );
+    }
+    for (i, r) in drive.removed.iter().enumerate() {
+        cite(
+            drive,
+            ctx,
+            out,
+            &r.source,
+            Path::root().key("removed").index(i).key("source"),
+            Some(&r.id),
+        );
+    }
+    for (ci, c) in drive.conflicts.iter().enumerate() {
+        for (ri, reading) in c.readings.iter().enumerate() {
+            let rp = Path::root()
+                .key("conflicts")
+                .index(ci)
+                .key("readings")
+                .index(ri)
+                .key("source");
+            cite(drive, ctx, out, &reading.source, rp, None);
+        }
+    }
+    for r in &drive.registers {
+        let rid = Some(r.id());
+        match &r.def.source {
+            None => out.push(drive.error(
+                &r.path,
+                rid,
+                "missing citation: add `source: <manual file>:<line>` pointing at the register's row",
+            )),
+            Some(s) => cite(drive, ctx, out, s, r.key_path("source"), rid),
+        }
+        for (fi, f) in r.def.fields.iter().enumerate() {
+            let fp = r.key_path("fields").index(fi);
+            opt(drive, ctx, out, &f.source, fp.key("source"), rid);
+            for (vi, v) in f.values.iter().enumerate() {
+                opt(
+                    drive,
+                    ctx,
+                    out,
+                    &v.source,
+                    fp.key("values").index(vi).key("source"),
+                    rid,
+                );
+            }
+        }
+        for (vi, v) in r.def.values.iter().enumerate() {
+            opt(
+                drive,
+                ctx,
+                out,
+                &v.source,
+                r.key_path("values").index(vi).key("source"),
+                rid,
+            );
+        }
+        for (k, o) in &r.def.by_variant {
+            opt(
+                drive,
+                ctx,
+                out,
+                &o.source,
+                r.key_path("by_variant").key(k).key("source"),
+                rid,
+            );
+        }
+        for (ai, a) in r.def.address_alternatives.iter().enumerate() {
+            cite(
+                drive,
+                ctx,
+                out,
+                &a.source,
+                r.key_path("address_alternatives").index(ai).key("source"),
+                rid,
+            );
+        }
+        if let Some(crate::model::Scale::Selected(sel)) = &r.def.scale {
+            for (ci, c) in sel.cases.iter().enumerate() {
+                opt(
+                    drive,
+                    ctx,
+                    out,
+                    &c.source,
+                    r.key_path("scale").key("cases").index(ci).key("source"),
+                    rid,
+                );
+            }
+        }
+        for (ci, c) in r.def.conflicts.iter().enumerate() {
+            for (ri, reading) in c.readings.iter().enumerate() {
+                let rp = r
+                    .key_path("conflicts")
+                    .index(ci)
+                    .key("readings")
+                    .index(ri)
+                    .key("source");
+                cite(drive, ctx, out, &reading.source, rp, rid);
+            }
+        }
+    }
+}

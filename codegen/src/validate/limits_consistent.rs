@@ -1,0 +1,245 @@
+//! Limits and defaults: min <= max, the default inside them, each a whole number of increments
+//! that fits the word, for the base variant, every variant override and every selected case.
+
+use crate::diagnostic::Diagnostic;
+use crate::ir::{Drive, RawLimits, Register, ValueKind};
+use crate::model::{DefaultValue, Scale};
+use crate::numbers::{Dec, raw_of};
+use crate::source::Path;
+
+struct Checker<'a> {
+    drive: &'a Drive,
+    r: &'a Register,
+    out: &'a mut Vec<Diagnostic>,
+}
+
+impl Checker<'_> {
+    fn err(&mut self, path: Path, message: String) {
+        let d = self.drive.error(&path, Some(self.r.id()), message);
+        self.out.push(d);
+    }
+
+    /// Checks one value against the word at a factor; returns its raw integer.
+    fn raw(&mut self, what: &str, value: f64, factor: Dec, path: Path) -> Option<i128> {
+        let word = RawLimits::word(self.r.def.signed);
+        match raw_of(value, factor) {
+            None => {
+                self.err(
+                    path,
+                    format!("{what} {value} is not a whole number of increments of {factor}"),
+                );
+                None
+            }
+            Some(raw) if raw < word.min || raw > word.max => {
+                self.err(
+                    path,
+                    format!(
+                        "{what} {value} is raw {raw}, outside a {} word ({}..={})",
+                        if self.r.def.signed {
+                            "signed"
+                        } else {
+                            "16-bit"
+                        },
+                        word.min,
+                        word.max
+                    ),
+                );
+                None
+            }
+            Some(raw) => Some(raw),
+        }
+    }
+
+    fn set(
+        &mut self,
+        min: Option<f64>,
+        max: Option<f64>,
+        default: Option<&DefaultValue>,
+        factor: Dec,
+        path: &Path,
+        label: &str,
+    ) {
+        let lo = min.and_then(|v| self.raw(&format!("{label}min"), v, factor, path.key("min")));
+        let hi = max.and_then(|v| self.raw(&format!("{label}max"), v, factor, path.key("max")));
+        if let (Some(lo), Some(hi)) = (lo, hi) {
+            if lo > hi {
+                self.err(
+                    path.key("min"),
+                    format!(
+                        "{label}min {} is above max {}",
+                        min.unwrap_or_default(),
+                        max.unwrap_or_default()
+                    ),
+                );
+            }
+        }
+        if let Some(DefaultValue::Value(d)) = default {
+            if let Some(raw) = self.raw(&format!("{label}default"), *d, factor, path.key("default"))
+            {
+                let below = lo.is_some_and(|lo| raw < lo);
+                let above = hi.is_some_and(|hi| raw > hi);
+                if below || above {
+                    self.err(
+                        path.key("default"),
+                        format!(
+                            "{label}default {d} is outside {}..={}",
+                            min.map(|v| v.to_string()).unwrap_or("-".into()),
+                            max.map(|v| v.to_string()).unwrap_or("-".into())
+                        ),
+                    );
+                }
+            }
+        }
+    }
+
+    fn no_limits(&mut self, why: &str) {
+        let d = &self.r.def;
+        if d.min.is_some() || d.max.is_some() {
+            let key = if d.min.is_some() { "min" } else { "max" };
+            self.err(
+                self.r.key_path(key),
+                format!("`min`/`max` are not allowed here: {why}"),
+            );
+        }
+        for (k, o) in &d.by_variant {
+            if o.min.is_some() || o.max.is_some() {
+                self.err(
+                    self.r.key_path("by_variant").key(k),
+                    format!("`min`/`max` are not allowed here: {why}"),
+                );
+            }
+        }
+    }
+}
+
+pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    for r in &drive.registers {
+        let mut c = Checker { drive, r, out };
+        let d = &r.def;
+        match r.kind() {
+            ValueKind::Word | ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_)) => {
+                let factor = match &d.scale {
+                    Some(Scale::Factor(f)) => match Dec::from_f64(*f) {
+                        Some(dec) if dec.is_positive() => dec,
+                        _ => {
+                            c.err(
+                                r.key_path("scale"),
+                                format!("scale {f} must be a positive decimal"),
+                            );
+                            continue;
+                        }
+                    },
+                    _ => Dec {
+                        mantissa: 1,
+                        exponent: 0,
+                    },
+                };
+                c.set(d.min, d.max, d.default.as_ref(), factor, &r.path, "");
+                for (k, o) in &d.by_variant {
+                    let (min, max) = r.limits_for(k);
+                    let label = format!("{k} ");
+                    c.set(
+                        min,
+                        max,
+                        o.default.as_ref(),
+                        factor,
+                        &r.key_path("by_variant").key(k),
+                        &label,
+                    );
+                }
+            }
+            ValueKind::Quantity(Scale::Relative(rel)) => {
+                c.no_limits("the manual states relative values as a fraction of another quantity; record limits in a note");
+                if !(rel.full_scale.is_finite() && rel.full_scale > 0.0) {
+                    c.err(
+                        r.key_path("scale").key("full_scale"),
+                        format!("full_scale {} must be positive", rel.full_scale),
+                    );
+                }
+                if let Some(DefaultValue::Value(_)) = &d.default {
+                    c.err(
+                        r.key_path("default"),
+                        "a relative value has no default in engineering units; note it instead"
+                            .into(),
+                    );
+                }
+            }
+            ValueKind::Quantity(Scale::Selected(sel)) => {
+                c.no_limits(
+                    "the scale is selected by another parameter; give `min`/`max` in each case",
+                );
+                for (ci, case) in sel.cases.iter().enumerate() {
+                    let cp = r.key_path("scale").key("cases").index(ci);
+                    match &case.scale {
+                        Scale::Factor(f) => match Dec::from_f64(*f) {
+                            Some(dec) if dec.is_positive() => {
+                                let label = format!("case {:?} ", case.when);
+                                c.set(case.min, case.max, None, dec, &cp, &label);
+                            }
+                            _ => c.err(
+                                cp.key("scale"),
+                                format!("scale {f} must be a positive decimal"),
+                            ),
+                        },
+                        Scale::Relative(rel) => {
+                            if case.min.is_some() || case.max.is_some() {
+                                c.err(
+                                    cp.key("min"),
+                                    "limits of a relative case are not supported; note them".into(),
+                                );
+                            }
+                            if !(rel.full_scale.is_finite() && rel.full_scale > 0.0) {
+                                c.err(
+                                    cp.key("scale").key("full_scale"),
+                                    format!("full_scale {} must be positive", rel.full_scale),
+                                );
+                            }
+                        }
+                        Scale::Selected(_) => c.err(
+                            cp.key("scale"),
+                            "a selected case cannot select again".into(),
+                        ),
+                    }
+                }
+            }
+            ValueKind::Enum(values) => {
+                c.no_limits("an enumeration's range is its list of `values`");
+                let mut defaults: Vec<(Path, f64)> = Vec::new();
+                if let Some(DefaultValue::Value(v)) = &d.default {
+                    defaults.push((r.key_path("default"), *v));
+                }
+                for (k, o) in &d.by_variant {
+                    if let Some(DefaultValue::Value(v)) = &o.default {
+                        defaults.push((r.key_path("by_variant").key(k).key("default"), *v));
+                    }
+                }
+                for (path, v) in defaults {
+                    if !values.iter().any(|e| f64::from(e.value) == v) {
+                        c.err(path, format!("default {v} is not one of the listed codes"));
+                    }
+                }
+            }
+            ValueKind::Bits(_) => {
+                c.no_limits("a bit-field register has no range");
+                if let Some(DefaultValue::Value(v)) = &d.default {
+                    if !(v.fract() == 0.0 && (0.0..=65535.0).contains(v)) {
+                        c.err(
+                            r.key_path("default"),
+                            format!("default {v} is not a 16-bit word"),
+                        );
+                    }
+                }
+            }
+        }
+        let mut prev: Option<f64> = None;
+        for (i, s) in d.display_steps.iter().enumerate() {
+            if !(s.step > 0.0) || prev.is_some_and(|p| s.from <= p) {
+                c.err(
+                    r.key_path("display_steps").index(i),
+                    "display steps need a positive `step` and increasing `from`".into(),
+                );
+            }
+            prev = Some(s.from);
+        }
+    }
+}

@@ -1,0 +1,74 @@
+//! Validation: one concern per file, every finding located, all findings of a map at once.
+//!
+//! Each pass reads the [`Drive`] and appends [`Diagnostic`]s; none stops the others, so a user
+//! fixing a map sees everything wrong with it in one run.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use crate::diagnostic::Diagnostic;
+use crate::ir::Drive;
+
+mod access_consistent;
+mod addresses_non_overlapping;
+mod bit_fields_valid;
+mod citations_present;
+mod conflicts_recorded;
+mod enum_codes_fit;
+mod identifiers_unique;
+mod identifiers_valid;
+mod limits_consistent;
+mod protocol_valid;
+mod references_resolve;
+mod value_kind_single;
+
+pub use bit_fields_valid::span as field_span;
+pub use identifiers_valid::{is_identifier, pascal_case};
+
+/// What validation may consult beyond the map itself.
+#[derive(Debug, Clone, Default)]
+pub struct Context {
+    /// Line count of each manual file, when the manuals directory is available; citations are
+    /// then checked to fall inside the file.
+    pub manual_lines: HashMap<String, usize>,
+}
+
+impl Context {
+    /// Reads the line counts of the `*.txt` manuals in `dir`. A missing directory gives an
+    /// empty context (citations are then checked for form and manual name only).
+    pub fn with_manuals(dir: &Path) -> Context {
+        let mut manual_lines = HashMap::new();
+        if let Ok(entries) = std::fs::read_dir(dir) {
+            for entry in entries.flatten() {
+                let path = entry.path();
+                if path.extension().is_some_and(|e| e == "txt") {
+                    if let (Some(name), Ok(text)) =
+                        (path.file_name(), std::fs::read_to_string(&path))
+                    {
+                        manual_lines
+                            .insert(name.to_string_lossy().into_owned(), text.lines().count());
+                    }
+                }
+            }
+        }
+        Context { manual_lines }
+    }
+}
+
+/// Runs every pass over a drive and returns all findings.
+pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    identifiers_valid::check(drive, &mut out);
+    identifiers_unique::check(drive, &mut out);
+    citations_present::check(drive, ctx, &mut out);
+    value_kind_single::check(drive, &mut out);
+    addresses_non_overlapping::check(drive, &mut out);
+    bit_fields_valid::check(drive, &mut out);
+    enum_codes_fit::check(drive, &mut out);
+    limits_consistent::check(drive, &mut out);
+    references_resolve::check(drive, &mut out);
+    access_consistent::check(drive, &mut out);
+    protocol_valid::check(drive, &mut out);
+    conflicts_recorded::check(drive, &mut out);
+    out
+}

@@ -1,0 +1,173 @@
+//! The protocol profile is one the runtime can honour: known function codes, quantities within
+//! the Modbus limits, a sane slave range, broadcast only for writes, well-formed timing and
+//! serial settings, commands that write something.
+
+use crate::diagnostic::Diagnostic;
+use crate::ir::Drive;
+use crate::model::Interval;
+use crate::source::Path;
+
+const KNOWN: &[u8] = &[0x03, 0x04, 0x06, 0x08, 0x10];
+
+fn interval(drive: &Drive, out: &mut Vec<Diagnostic>, i: &Interval, path: Path) {
+    let n = usize::from(i.ms.is_some())
+        + usize::from(i.bits.is_some())
+        + usize::from(i.chars.is_some());
+    if n != 1 {
+        out.push(drive.error(&path, None, "give exactly one of `ms`, `bits`, `chars`"));
+    }
+    if i.ms.is_some_and(|v| !(v >= 0.0)) || i.chars.is_some_and(|v| !(v >= 0.0)) {
+        out.push(drive.error(&path, None, "an interval cannot be negative"));
+    }
+}
+
+pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    let p = &drive.protocol;
+    let pp = Path::root().key("protocol");
+    if p.transports.is_empty() {
+        out.push(drive.error(
+            &pp.key("transports"),
+            None,
+            "name at least one transport (rtu, tcp)",
+        ));
+    }
+    if p.function_codes.is_empty() {
+        out.push(drive.error(
+            &pp.key("function_codes"),
+            None,
+            "name the function codes the drive implements",
+        ));
+    }
+    for (i, f) in p.function_codes.iter().enumerate() {
+        if !KNOWN.contains(f) {
+            out.push(drive.error(
+                &pp.key("function_codes").index(i),
+                None,
+                format!("function {f:02X}h is not one drivemap speaks (03h, 04h, 06h, 08h, 10h)"),
+            ));
+        }
+        if p.function_codes[..i].contains(f) {
+            out.push(drive.error(
+                &pp.key("function_codes").index(i),
+                None,
+                format!("function {f:02X}h listed twice"),
+            ));
+        }
+    }
+    if !(1..=125).contains(&p.max_read) {
+        out.push(drive.error(
+            &pp.key("max_read"),
+            None,
+            format!("max_read {} must be 1..=125", p.max_read),
+        ));
+    }
+    if !(1..=123).contains(&p.max_write) {
+        out.push(drive.error(
+            &pp.key("max_write"),
+            None,
+            format!("max_write {} must be 1..=123", p.max_write),
+        ));
+    }
+    let s = &p.slave_address;
+    if s.min == 0 || s.max > 247 || s.min > s.max {
+        out.push(drive.error(
+            &pp.key("slave_address"),
+            None,
+            format!("slave addresses {}..={} must lie in 1..=247", s.min, s.max),
+        ));
+    }
+    if let Some(d) = s.default {
+        if d < s.min || d > s.max {
+            out.push(drive.error(
+                &pp.key("slave_address").key("default"),
+                None,
+                format!("default slave {d} is outside {}..={}", s.min, s.max),
+            ));
+        }
+    }
+    if let Some(b) = &p.broadcast {
+        for (i, f) in b.functions.iter().enumerate() {
+            if !matches!(f, 0x06 | 0x10) || !p.function_codes.contains(f) {
+                out.push(drive.error(
+                    &pp.key("broadcast").key("functions").index(i),
+                    None,
+                    format!(
+                        "broadcast function {f:02X}h must be a write (06h/10h) the drive implements"
+                    ),
+                ));
+            }
+        }
+    }
+    for (i, e) in p.exceptions.iter().enumerate() {
+        if e.code == 0 || e.code >= 0x80 {
+            out.push(drive.error(
+                &pp.key("exceptions").index(i).key("code"),
+                None,
+                format!("exception code {:02X}h must be 01h..7Fh", e.code),
+            ));
+        }
+    }
+    for (i, c) in p.commands.iter().enumerate() {
+        if c.writes.is_empty() {
+            out.push(drive.error(
+                &pp.key("commands").index(i),
+                None,
+                format!("command `{}` writes nothing", c.id),
+            ));
+        }
+    }
+    if let Some(e) = &p.eeprom {
+        if e.endurance == 0 {
+            out.push(drive.error(
+                &pp.key("eeprom").key("endurance"),
+                None,
+                "endurance must be positive",
+            ));
+        }
+    }
+    if let Some(t) = &p.timing {
+        let tp = pp.key("timing");
+        if !(t.frame_gap_chars > 0.0) {
+            out.push(drive.error(
+                &tp.key("frame_gap_chars"),
+                None,
+                "the frame gap must be positive",
+            ));
+        }
+        if let Some(i) = &t.inter_char_timeout {
+            interval(drive, out, i, tp.key("inter_char_timeout"));
+        }
+        if let Some(i) = &t.response_time {
+            interval(drive, out, i, tp.key("response_time"));
+        }
+    }
+    if let Some(ser) = &p.serial {
+        let sp = pp.key("serial");
+        if ser
+            .default_baud
+            .is_some_and(|b| !ser.baud_rates.contains(&b))
+        {
+            out.push(drive.error(
+                &sp.key("default_baud"),
+                None,
+                "default_baud is not among baud_rates",
+            ));
+        }
+        if ser
+            .default_parity
+            .is_some_and(|b| !ser.parities.contains(&b))
+        {
+            out.push(drive.error(
+                &sp.key("default_parity"),
+                None,
+                "default_parity is not among parities",
+            ));
+        }
+        if !matches!(ser.data_bits, 7 | 8) {
+            out.push(drive.error(&sp.key("data_bits"), None, "data_bits must be 7 or 8"));
+        }
+        if !matches!(ser.stop_bits, 1 | 2) {
+            out.push(drive.error(&sp.key("stop_bits"), None, "stop_bits must be 1 or 2"));
+        }
+    }
+}

@@ -1,0 +1,241 @@
+//! Names that point elsewhere resolve: scale selectors and references, variant options,
+//! address-alternative conditions, broadcast registers, command addresses, protocol parameters.
+
+use std::collections::BTreeSet;
+
+use crate::diagnostic::Diagnostic;
+use crate::ir::{Drive, Register, ValueKind};
+use crate::model::{Reference, Scale};
+use crate::source::Path;
+
+fn resolve<'a>(
+    drive: &'a Drive,
+    out: &mut Vec<Diagnostic>,
+    name: &str,
+    path: Path,
+    register: Option<&str>,
+    what: &str,
+) -> Option<&'a Register> {
+    let found = drive.find(name);
+    if found.is_none() {
+        out.push(drive.error(
+            &path,
+            register,
+            format!("{what} `{name}` names no register of this map (by id or parameter number)"),
+        ));
+    }
+    found
+}
+
+fn relative(
+    drive: &Drive,
+    out: &mut Vec<Diagnostic>,
+    r: &Register,
+    reference: &Reference,
+    path: Path,
+) {
+    let Reference::Register(name) = reference else {
+        return;
+    };
+    let Some(target) = resolve(drive, out, name, path.clone(), Some(r.id()), "relative_to") else {
+        return;
+    };
+    let fixed = matches!(
+        target.kind(),
+        ValueKind::Quantity(Scale::Factor(_)) | ValueKind::UnitQuantity | ValueKind::Word
+    );
+    if !fixed || !target.readable() {
+        out.push(drive.error(
+            &path,
+            Some(r.id()),
+            format!("relative_to `{name}` must be a readable register with a fixed scale"),
+        ));
+    }
+}
+
+pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    for (ai, axis) in drive.variants.iter().enumerate() {
+        if axis.options.is_empty() {
+            out.push(drive.error(
+                &Path::root().key("variants").index(ai),
+                None,
+                format!("variant axis `{}` has no options", axis.id),
+            ));
+        }
+    }
+    for r in &drive.registers {
+        let rid = Some(r.id());
+        match &r.def.scale {
+            Some(Scale::Relative(rel)) => relative(
+                drive,
+                out,
+                r,
+                &rel.relative_to,
+                r.key_path("scale").key("relative_to"),
+            ),
+            Some(Scale::Selected(sel)) => {
+                let sp = r.key_path("scale");
+                let selector = resolve(
+                    drive,
+                    out,
+                    &sel.selected_by,
+                    sp.key("selected_by"),
+                    rid,
+                    "selected_by",
+                );
+                if let Some(s) = selector {
+                    if !s.readable() {
+                        out.push(drive.error(
+                            &sp.key("selected_by"),
+                            rid,
+                            format!("selector `{}` is not readable", sel.selected_by),
+                        ));
+                    }
+                }
+                if sel.cases.is_empty() {
+                    out.push(drive.error(&sp, rid, "a selected scale needs at least one case"));
+                }
+                let mut seen = BTreeSet::new();
+                for (ci, case) in sel.cases.iter().enumerate() {
+                    let cp = sp.key("cases").index(ci);
+                    if case.when.is_empty() {
+                        out.push(drive.error(
+                            &cp.key("when"),
+                            rid,
+                            "a case needs the selector codes it applies to",
+                        ));
+                    }
+                    for code in &case.when {
+                        if !seen.insert(*code) {
+                            out.push(drive.error(
+                                &cp.key("when"),
+                                rid,
+                                format!("selector code {code} appears in two cases"),
+                            ));
+                        }
+                        if let Some(ValueKind::Enum(values)) = selector.map(Register::kind) {
+                            if !values.iter().any(|v| v.value == *code) {
+                                out.push(drive.error(
+                                    &cp.key("when"),
+                                    rid,
+                                    format!("selector `{}` lists no code {code}", sel.selected_by),
+                                ));
+                            }
+                        }
+                    }
+                    if let Scale::Relative(rel) = &case.scale {
+                        relative(
+                            drive,
+                            out,
+                            r,
+                            &rel.relative_to,
+                            cp.key("scale").key("relative_to"),
+                        );
+                    }
+                }
+            }
+            _ => {}
+        }
+        let mut axes = BTreeSet::new();
+        for k in r.def.by_variant.keys() {
+            match drive.variant_option(k) {
+                None => out.push(drive.error(
+                    &r.key_path("by_variant").key(k),
+                    rid,
+                    format!("`{k}` is not a variant option of this map"),
+                )),
+                Some((axis, _)) => {
+                    axes.insert(axis.id.clone());
+                }
+            }
+        }
+        if axes.len() > 1 {
+            out.push(drive.error(
+                &r.key_path("by_variant"),
+                rid,
+                "overrides of one register must belong to one variant axis",
+            ));
+        }
+        for (ai, alt) in r.def.address_alternatives.iter().enumerate() {
+            let ap = r.key_path("address_alternatives").index(ai).key("when");
+            let w = &alt.when;
+            let n = usize::from(w.setting.is_some())
+                + usize::from(w.variant.is_some())
+                + usize::from(w.transport.is_some());
+            if n != 1 {
+                out.push(drive.error(
+                    &ap,
+                    rid,
+                    "a condition names exactly one of `setting`, `variant`, `transport`",
+                ));
+            }
+            if let Some(s) = &w.setting {
+                resolve(drive, out, s, ap.key("setting"), rid, "condition setting");
+                if w.is.is_empty() {
+                    out.push(drive.error(&ap, rid, "a setting condition needs `is: [codes]`"));
+                }
+            }
+            if let Some(v) = &w.variant {
+                if drive.variant_option(v).is_none() {
+                    out.push(drive.error(
+                        &ap.key("variant"),
+                        rid,
+                        format!("`{v}` is not a variant option of this map"),
+                    ));
+                }
+            }
+        }
+    }
+    let proto = Path::root().key("protocol");
+    if let Some(b) = &drive.protocol.broadcast {
+        for (i, name) in b.registers.iter().enumerate() {
+            let path = proto.key("broadcast").key("registers").index(i);
+            if let Some(r) = resolve(drive, out, name, path.clone(), None, "broadcast register") {
+                if !r.writable() {
+                    out.push(drive.error(
+                        &path,
+                        Some(r.id()),
+                        "a broadcast register must be writable",
+                    ));
+                }
+            }
+        }
+    }
+    for (ci, c) in drive.protocol.commands.iter().enumerate() {
+        for (wi, w) in c.writes.iter().enumerate() {
+            let ok = drive
+                .registers
+                .iter()
+                .any(|r| !r.broadcast && r.def.address == w.address && r.writable());
+            if !ok {
+                out.push(drive.error(
+                    &proto.key("commands").index(ci).key("writes").index(wi).key("address"),
+                    None,
+                    format!("command `{}` writes {:04X}h, which no writable register of the map describes", c.id, w.address),
+                ));
+            }
+        }
+    }
+    if let Some(p) = &drive.protocol.slave_address.param {
+        resolve(
+            drive,
+            out,
+            p,
+            proto.key("slave_address").key("param"),
+            None,
+            "slave address parameter",
+        );
+    }
+    if let Some(t) = &drive.protocol.timing {
+        if let Some(p) = &t.response_delay_param {
+            resolve(
+                drive,
+                out,
+                p,
+                proto.key("timing").key("response_delay_param"),
+                None,
+                "response delay parameter",
+            );
+        }
+    }
+}
