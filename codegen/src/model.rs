@@ -255,6 +255,10 @@ pub struct Serial {
     pub data_bits: u8,
     #[serde(default = "default_stop_bits")]
     pub stop_bits: u8,
+    /// Bits per character on the wire when the manual fixes it regardless of parity (TDS-V8:
+    /// always 11 — without parity the parity slot is sent as a second stop bit).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub char_bits: Option<u8>,
     pub source: String,
 }
 
@@ -500,6 +504,9 @@ pub enum Dependency {
 pub struct VariantOverride {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min: Option<f64>,
+    /// What the manual leaves unknown for this variant only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unknown: Vec<Unknown>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

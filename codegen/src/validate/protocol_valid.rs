@@ -166,6 +166,11 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         if !matches!(ser.data_bits, 7 | 8) {
             out.push(drive.error(&sp.key("data_bits"), None, "data_bits must be 7 or 8"));
         }
+        if let Some(c) = ser.char_bits {
+            if !(9..=12).contains(&c) || c < 1 + ser.data_bits + ser.stop_bits {
+                out.push(drive.error(&sp.key("char_bits"), None, "char_bits must cover start, data and stop bits (9..=12)"));
+            }
+        }
         if !matches!(ser.stop_bits, 1 | 2) {
             out.push(drive.error(&sp.key("stop_bits"), None, "stop_bits must be 1 or 2"));
         }
