@@ -127,15 +127,73 @@ fn load_tree(path: &FsPath, chain: &mut Vec<PathBuf>) -> Result<Node, Vec<Diagno
 }
 
 fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {
-    let value = tree.to_value();
-    serde_path_to_error::deserialize::<_, MapFile>(value).map_err(|e| {
-        let mut path = Path::root();
+    let first = match deserialize_at::<MapFile>(tree, tree, &Path::root()) {
+        Ok(map) => return Ok(map),
+        Err(d) => d,
+    };
+    // serde stops at the first error; deserialize each part on its own to report them all.
+    let mut errors = vec![first];
+    if let NodeKind::Map(entries) = &tree.kind {
+        for (key, _, node) in entries {
+            let path = Path::root().key(key);
+            let err = match key.as_str() {
+                "drive" => deserialize_at::<crate::model::DriveMeta>(tree, node, &path).err(),
+                "protocol" => deserialize_at::<crate::model::Protocol>(tree, node, &path).err(),
+                "variants" => deserialize_at::<Vec<crate::model::VariantAxis>>(tree, node, &path).err(),
+                "conflicts" => deserialize_at::<Vec<crate::model::Conflict>>(tree, node, &path).err(),
+                "gaps" => deserialize_at::<Vec<crate::model::Gap>>(tree, node, &path).err(),
+                "removed" => deserialize_at::<Vec<crate::model::Removed>>(tree, node, &path).err(),
+                "groups" => {
+                    if let NodeKind::Seq(groups) = &node.kind {
+                        for (gi, group) in groups.iter().enumerate() {
+                            group_errors(tree, group, &path.index(gi), &mut errors);
+                        }
+                    }
+                    None
+                }
+                _ => None,
+            };
+            errors.extend(err);
+        }
+    }
+    errors.sort();
+    errors.dedup();
+    Err(errors)
+}
+
+fn group_errors(tree: &Node, group: &Node, path: &Path, errors: &mut Vec<Diagnostic>) {
+    let NodeKind::Map(entries) = &group.kind else {
+        errors.extend(deserialize_at::<crate::model::Group>(tree, group, path).err());
+        return;
+    };
+    let mut shell = entries.clone();
+    for (key, _, value) in shell.iter_mut() {
+        if key == "registers" {
+            if let NodeKind::Seq(regs) = &value.kind {
+                for (ri, reg) in regs.iter().enumerate() {
+                    let rp = path.key("registers").index(ri);
+                    errors.extend(deserialize_at::<crate::model::Register>(tree, reg, &rp).err());
+                }
+                value.kind = NodeKind::Seq(Vec::new());
+            }
+        }
+    }
+    let shell = Node {
+        loc: group.loc.clone(),
+        kind: NodeKind::Map(shell),
+    };
+    errors.extend(deserialize_at::<crate::model::Group>(tree, &shell, path).err());
+}
+
+/// Deserializes `node` (found at `base` in `tree`) and locates a failure in the tree.
+fn deserialize_at<T: serde::de::DeserializeOwned>(tree: &Node, node: &Node, base: &Path) -> Result<T, Diagnostic> {
+    serde_path_to_error::deserialize::<_, T>(node.to_value()).map_err(|e| {
+        let mut path = base.clone();
         for seg in e.path().iter() {
             match seg {
                 serde_path_to_error::Segment::Seq { index } => path = path.index(*index),
                 serde_path_to_error::Segment::Map { key } => path = path.key(key),
-                serde_path_to_error::Segment::Enum { .. }
-                | serde_path_to_error::Segment::Unknown => {}
+                serde_path_to_error::Segment::Enum { .. } | serde_path_to_error::Segment::Unknown => {}
             }
         }
         let message = e.inner().to_string();
@@ -148,11 +206,7 @@ fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {
         } else {
             format!("{path}: {message}")
         };
-        vec![Diagnostic::new(
-            loc,
-            register_at(tree, &path).as_deref(),
-            shown,
-        )]
+        Diagnostic::new(loc, register_at(tree, &path).as_deref(), shown)
     })
 }
 
