@@ -142,7 +142,10 @@ mod tests {
     #[test]
     fn drive_codes_are_kept_and_named_from_the_profile() {
         let e = Exception::new(&TDS, 0x06, 0x21);
-        assert_eq!((e.code, e.name, e.from_profile), (0x21, "Device Busy", true));
+        assert_eq!(
+            (e.code, e.name, e.from_profile),
+            (0x21, "Device Busy", true)
+        );
         assert!(e.is_busy());
         let e = Exception::new(&TDS, 0x03, 0x04);
         assert_eq!(e.name, "CRC_16 Error");

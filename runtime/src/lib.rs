@@ -12,15 +12,23 @@
 //! - [`client::Client`]: checked transactions with timeouts, retries, broadcast, typed register
 //!   access and counted EEPROM writes ([`persist`]).
 
+pub mod client;
 pub mod crc;
+pub mod error;
 pub mod exception;
 pub mod pdu;
+pub mod persist;
 pub mod profile;
 pub mod register;
+pub mod reply;
 pub mod rtu;
 pub mod scale;
 pub mod tcp;
+pub mod transport;
+pub mod typed;
 
+pub use client::{Client, ClientOptions};
+pub use error::{Error, Refusal};
 pub use profile::Profile;
 pub use register::{Access, DriveSettings, Readable, Register, RegisterInfo, Table, Writable};
 pub use scale::ValueError;

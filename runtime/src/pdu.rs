@@ -128,7 +128,11 @@ pub enum Request<'a> {
 pub enum RequestError {
     /// Zero registers, or more than the Modbus limit for the function.
     #[error("{function:02X}h with {quantity} registers: Modbus allows 1 ..= {max}")]
-    Quantity { function: u8, quantity: usize, max: u16 },
+    Quantity {
+        function: u8,
+        quantity: usize,
+        max: u16,
+    },
     /// The registers would run past address FFFFh.
     #[error("{quantity} registers from {address:04X}h run past FFFFh")]
     AddressOverflow { address: u16, quantity: usize },
@@ -233,7 +237,8 @@ impl Request<'_> {
         }
         out[0] = self.function();
         match *self {
-            Request::ReadHolding { address, quantity } | Request::ReadInput { address, quantity } => {
+            Request::ReadHolding { address, quantity }
+            | Request::ReadInput { address, quantity } => {
                 put(out, 1, address);
                 put(out, 3, quantity);
             }
@@ -406,7 +411,10 @@ pub fn request_pdu_len(pdu: &[u8]) -> Result<Option<usize>, FrameError> {
 }
 
 /// Decodes the response PDU `pdu` to `request`, checking every echo.
-pub fn decode_response<'a>(request: &Request<'_>, pdu: &'a [u8]) -> Result<Response<'a>, FrameError> {
+pub fn decode_response<'a>(
+    request: &Request<'_>,
+    pdu: &'a [u8],
+) -> Result<Response<'a>, FrameError> {
     let expected_function = request.function();
     let Some(&f) = pdu.first() else {
         return Err(FrameError::Length {
@@ -545,7 +553,10 @@ pub fn decode_request(pdu: &[u8]) -> Result<Request<'_>, RequestDecodeError> {
     let &f = pdu.first().ok_or(RequestDecodeError::Empty)?;
     let malformed = RequestDecodeError::Malformed(f);
     let request = match f {
-        function::READ_HOLDING | function::READ_INPUT | function::WRITE_SINGLE | function::LOOP_BACK => {
+        function::READ_HOLDING
+        | function::READ_INPUT
+        | function::WRITE_SINGLE
+        | function::LOOP_BACK => {
             let (a, b) = two_words(pdu).map_err(|_| malformed)?;
             match f {
                 function::READ_HOLDING => Request::ReadHolding {
@@ -706,7 +717,10 @@ mod tests {
             decode_request(&[0x10, 0, 1, 0, 2, 3, 0, 0, 0]),
             Err(RequestDecodeError::Malformed(0x10))
         );
-        assert_eq!(decode_request(&[0x07]), Err(RequestDecodeError::Function(7)));
+        assert_eq!(
+            decode_request(&[0x07]),
+            Err(RequestDecodeError::Function(7))
+        );
         assert_eq!(
             decode_request(&[0x08, 0, 4, 0, 0]),
             Err(RequestDecodeError::SubFunction(4))

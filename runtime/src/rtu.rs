@@ -15,7 +15,11 @@ pub const MAX_FRAME: usize = 256;
 pub const BROADCAST: u8 = 0;
 
 /// Encodes `request` to `slave` into `out`; returns the frame length.
-pub fn encode_request(slave: u8, request: &Request<'_>, out: &mut [u8]) -> Result<usize, RequestError> {
+pub fn encode_request(
+    slave: u8,
+    request: &Request<'_>,
+    out: &mut [u8],
+) -> Result<usize, RequestError> {
     let needed = request.pdu_len() + 3;
     if out.len() < needed {
         return Err(RequestError::Buffer {
@@ -97,7 +101,8 @@ pub fn decode_response<'a>(
             got: frame.len(),
         });
     }
-    let body = crc::check(frame).map_err(|(computed, received)| FrameError::Crc { computed, received })?;
+    let body =
+        crc::check(frame).map_err(|(computed, received)| FrameError::Crc { computed, received })?;
     if body[0] != slave {
         return Err(FrameError::Slave {
             expected: slave,
@@ -115,7 +120,10 @@ pub enum RequestFrameError {
     Frame(#[from] FrameError),
     /// The frame is intact but the request is not acceptable: the slave answers an exception.
     #[error("slave {slave}: {error}")]
-    Request { slave: u8, error: RequestDecodeError },
+    Request {
+        slave: u8,
+        error: RequestDecodeError,
+    },
 }
 
 /// Checks and decodes a complete request frame (slave side). Returns the slave address and the
@@ -128,9 +136,11 @@ pub fn decode_request(frame: &[u8]) -> Result<(u8, Request<'_>), RequestFrameErr
         }
         .into());
     }
-    let body = crc::check(frame).map_err(|(computed, received)| FrameError::Crc { computed, received })?;
+    let body =
+        crc::check(frame).map_err(|(computed, received)| FrameError::Crc { computed, received })?;
     let slave = body[0];
-    let request = pdu::decode_request(&body[1..]).map_err(|error| RequestFrameError::Request { slave, error })?;
+    let request = pdu::decode_request(&body[1..])
+        .map_err(|error| RequestFrameError::Request { slave, error })?;
     Ok((slave, request))
 }
 
@@ -141,7 +151,9 @@ mod tests {
 
     #[test]
     fn bytes_needed_follow_the_function_code() {
-        let frame = [0x02, 0x03, 0x08, 0x17, 0x70, 0x17, 0x70, 0x01, 0x09, 0x00, 0x00, 0x38, 0xAC];
+        let frame = [
+            0x02, 0x03, 0x08, 0x17, 0x70, 0x17, 0x70, 0x01, 0x09, 0x00, 0x00, 0x38, 0xAC,
+        ];
         assert_eq!(response_bytes_needed(&[]), Ok(3));
         assert_eq!(response_bytes_needed(&frame[..1]), Ok(2));
         assert_eq!(response_bytes_needed(&frame[..2]), Ok(1));
@@ -169,7 +181,9 @@ mod tests {
         let n = encode_request(1, &req, &mut buf).unwrap();
         assert_eq!(
             &buf[..n],
-            &[0x01, 0x10, 0x00, 0x01, 0x00, 0x02, 0x04, 0x00, 0x01, 0x02, 0x58, 0x63, 0x39]
+            &[
+                0x01, 0x10, 0x00, 0x01, 0x00, 0x02, 0x04, 0x00, 0x01, 0x02, 0x58, 0x63, 0x39
+            ]
         );
         assert_eq!(decode_request(&buf[..n]), Ok((1, req)));
         assert!(matches!(

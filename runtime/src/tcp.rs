@@ -96,7 +96,9 @@ pub fn encode_request(
     request: &Request<'_>,
     out: &mut [u8],
 ) -> Result<usize, RequestError> {
-    encode_with(transaction, unit, request.pdu_len(), out, |o| request.encode(o))
+    encode_with(transaction, unit, request.pdu_len(), out, |o| {
+        request.encode(o)
+    })
 }
 
 /// Encodes a response frame (server side).

@@ -1,0 +1,687 @@
+//! The blocking client: checked Modbus transactions over any [`Transport`].
+//!
+//! Per request the client
+//! 1. refuses what the drive cannot serve, before sending: a function the profile lacks, more
+//!    registers than the drive's maximum, a read or loop-back to broadcast, a broadcast the
+//!    drive does not execute, a plain write to an ENTER/ACCEPT/save register;
+//! 2. maps the manual's communication address to the PDU address for the transport kind
+//!    ([`crate::profile::AddressOffsets::pdu_address`]);
+//! 3. discards stale input, sends, and for broadcast (slave 0) returns at once;
+//! 4. waits at most [`ClientOptions::timeout`] for a reply that passes every check, discarding
+//!    everything else (see [`crate::reply`]), and retries up to [`ClientOptions::retries`] times
+//!    after a timeout. Exceptions are not retried: the drive answered.
+//!
+//! A transaction allocates nothing: frames are built and received in fixed buffers owned by the
+//! client, and read results go to caller slices.
+
+use std::time::{Duration, Instant};
+
+use crate::error::{Error, Refusal, Sent};
+use crate::exception::Exception;
+use crate::pdu::{FrameError, Request, Response, Words, function};
+use crate::persist::PersistBudget;
+use crate::profile::{CommandInfo, CommandKind, Profile, TransportKind};
+use crate::register::{BitRegister, Bits, Readable, Table, Writable};
+use crate::reply::{Framing, ReplyBuffer};
+use crate::transport::Transport;
+use crate::typed::{ReadSet, WriteSet};
+use crate::{rtu, tcp};
+
+/// Per-client settings (not part of a drive's profile).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClientOptions {
+    /// How long to wait for a reply to one attempt.
+    pub timeout: Duration,
+    /// Further attempts after a timeout (not after an exception, and never for a command that
+    /// writes EEPROM, which could then be written twice).
+    pub retries: u8,
+    /// Least time between the end of one transaction and the next request, on top of the
+    /// transport's frame gap. The V7 and J7 need 24 bit times + 10 ms
+    /// (`003_8bcf5d50afb8e230.txt:284`).
+    pub request_gap: Duration,
+    /// EEPROM writes ([`CommandKind::Persist`] commands) allowed in any rolling hour.
+    pub eeprom_writes_per_hour: u32,
+}
+
+impl Default for ClientOptions {
+    fn default() -> Self {
+        ClientOptions {
+            timeout: Duration::from_secs(1),
+            retries: 2,
+            request_gap: Duration::ZERO,
+            eeprom_writes_per_hour: 10,
+        }
+    }
+}
+
+/// The transport-independent part of a client: checks, framing, reply matching, EEPROM budget.
+/// Shared by the blocking and the async client.
+pub(crate) struct Core {
+    pub(crate) profile: &'static Profile,
+    pub(crate) options: ClientOptions,
+    pub(crate) kind: TransportKind,
+    next_transaction: u16,
+    tx: [u8; tcp::MAX_FRAME],
+    tx_len: usize,
+    pub(crate) rx: ReplyBuffer,
+    budget: PersistBudget,
+    idle_since: Option<Instant>,
+}
+
+/// A request checked and mapped to the wire.
+pub(crate) struct Checked<'a> {
+    pub(crate) request: Request<'a>,
+    pub(crate) sent: Sent,
+}
+
+impl Core {
+    pub(crate) fn new(
+        profile: &'static Profile,
+        kind: TransportKind,
+        options: ClientOptions,
+    ) -> Core {
+        Core {
+            profile,
+            options,
+            kind,
+            next_transaction: 1,
+            tx: [0; tcp::MAX_FRAME],
+            tx_len: 0,
+            rx: ReplyBuffer::new(),
+            budget: PersistBudget::new(options.eeprom_writes_per_hour),
+            idle_since: None,
+        }
+    }
+
+    /// Checks `request` (communication addresses) against the profile and maps it to the PDU.
+    pub(crate) fn check<'a>(
+        &self,
+        slave: u8,
+        request: Request<'a>,
+        command: bool,
+    ) -> Result<Checked<'a>, Refusal> {
+        let p = self.profile;
+        let f = request.function();
+        if !p.supports(f) {
+            return Err(Refusal::UnsupportedFunction {
+                drive: p.drive_id,
+                function: f,
+            });
+        }
+        if slave != rtu::BROADCAST && !(p.slave_min..=p.slave_max).contains(&slave) {
+            return Err(Refusal::Slave {
+                drive: p.drive_id,
+                slave,
+                min: p.slave_min,
+                max: p.slave_max,
+            });
+        }
+        let quantity = request.quantity();
+        let max = match f {
+            function::READ_HOLDING | function::READ_INPUT => Some(p.max_read),
+            function::WRITE_MULTIPLE => Some(p.max_write),
+            _ => None,
+        };
+        if let Some(max) = max {
+            if quantity == 0 {
+                return Err(Refusal::NoRegisters { function: f });
+            }
+            if quantity > usize::from(max) {
+                return Err(Refusal::TooManyRegisters {
+                    drive: p.drive_id,
+                    function: f,
+                    quantity,
+                    max,
+                });
+            }
+        }
+        let address = request.address();
+        if let Some(a) = address
+            && usize::from(a) + quantity.max(1) > 0x1_0000
+        {
+            return Err(Refusal::AddressOverflow {
+                address: a,
+                quantity,
+            });
+        }
+        if slave == rtu::BROADCAST {
+            self.check_broadcast(&request)?;
+        }
+        if !command
+            && let Some(a) = address
+            && !request.is_read()
+        {
+            for c in p.commands {
+                if let Some(&(ca, _)) = c.writes.iter().find(|(ca, _)| {
+                    (usize::from(a)..usize::from(a) + quantity).contains(&usize::from(*ca))
+                }) {
+                    return Err(Refusal::CommandRegister {
+                        address: ca,
+                        command: c.id,
+                        name: c.name,
+                    });
+                }
+            }
+        }
+        let pdu_address = match address {
+            None => None,
+            Some(a) => {
+                let offset = p.address_offsets.for_kind(self.kind);
+                let mapped = p
+                    .address_offsets
+                    .pdu_address(a, self.kind)
+                    .ok_or(Refusal::AddressMapping { address: a, offset })?;
+                if usize::from(mapped) + quantity.max(1) > 0x1_0000 {
+                    return Err(Refusal::AddressOverflow {
+                        address: mapped,
+                        quantity,
+                    });
+                }
+                Some(mapped)
+            }
+        };
+        let mapped = match request {
+            Request::ReadHolding { quantity, .. } => Request::ReadHolding {
+                address: pdu_address.unwrap_or(0),
+                quantity,
+            },
+            Request::ReadInput { quantity, .. } => Request::ReadInput {
+                address: pdu_address.unwrap_or(0),
+                quantity,
+            },
+            Request::WriteSingle { value, .. } => Request::WriteSingle {
+                address: pdu_address.unwrap_or(0),
+                value,
+            },
+            Request::WriteMultiple { values, .. } => Request::WriteMultiple {
+                address: pdu_address.unwrap_or(0),
+                values,
+            },
+            r @ Request::LoopBack { .. } => r,
+        };
+        let value = match request {
+            Request::WriteSingle { value, .. } => Some(value),
+            Request::LoopBack { data } => Some(data),
+            _ => None,
+        };
+        Ok(Checked {
+            request: mapped,
+            sent: Sent {
+                slave,
+                function: f,
+                address,
+                pdu_address,
+                quantity,
+                value,
+            },
+        })
+    }
+
+    fn check_broadcast(&self, request: &Request<'_>) -> Result<(), Refusal> {
+        let f = request.function();
+        if request.is_read() {
+            return Err(Refusal::BroadcastRead { function: f });
+        }
+        if f == function::LOOP_BACK {
+            return Err(Refusal::BroadcastLoopBack);
+        }
+        let drive = self.profile.drive_id;
+        let Some(b) = self.profile.broadcast else {
+            return Err(Refusal::BroadcastFunction { drive, function: f });
+        };
+        if !b.functions.contains(&f) {
+            return Err(Refusal::BroadcastFunction { drive, function: f });
+        }
+        if !b.addresses.is_empty()
+            && let Some(a) = request.address()
+        {
+            for i in 0..request.quantity() {
+                let address = a.wrapping_add(i as u16);
+                if !b.addresses.contains(&address) {
+                    return Err(Refusal::BroadcastAddress { drive, address });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Encodes one attempt into the transmit buffer; returns how its reply is framed, or `None`
+    /// for a broadcast. Each attempt gets a new transaction id.
+    pub(crate) fn encode(&mut self, checked: &Checked<'_>) -> Result<Option<Framing>, Error> {
+        let slave = checked.sent.slave;
+        let encoded = if self.kind.is_rtu_framed() {
+            rtu::encode_request(slave, &checked.request, &mut self.tx)
+                .map(|n| (n, Framing::Rtu { slave }))
+        } else {
+            let transaction = self.next_transaction;
+            self.next_transaction = self.next_transaction.wrapping_add(1);
+            tcp::encode_request(transaction, slave, &checked.request, &mut self.tx).map(|n| {
+                (
+                    n,
+                    Framing::Tcp {
+                        transaction,
+                        unit: slave,
+                    },
+                )
+            })
+        };
+        // The checks above leave nothing for the encoder to refuse; keep the error anyway.
+        let (n, framing) = encoded.map_err(|e| match e {
+            crate::pdu::RequestError::AddressOverflow { address, quantity } => {
+                Refusal::AddressOverflow { address, quantity }
+            }
+            _ => Refusal::TooManyRegisters {
+                drive: self.profile.drive_id,
+                function: checked.sent.function,
+                quantity: checked.sent.quantity,
+                max: crate::pdu::MAX_WRITE,
+            },
+        })?;
+        self.tx_len = n;
+        self.rx.clear();
+        Ok((slave != rtu::BROADCAST).then_some(framing))
+    }
+
+    pub(crate) fn frame(&self) -> &[u8] {
+        &self.tx[..self.tx_len]
+    }
+
+    /// When the next request may be sent.
+    pub(crate) fn ready_at(&self) -> Option<Instant> {
+        self.idle_since.map(|t| t + self.options.request_gap)
+    }
+
+    pub(crate) fn mark_idle(&mut self) {
+        self.idle_since = Some(Instant::now());
+    }
+
+    /// Decodes the located reply; copies read registers into `out`.
+    pub(crate) fn finish(
+        &self,
+        framing: Framing,
+        range: std::ops::Range<usize>,
+        checked: &Checked<'_>,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        let frame = self.rx.frame(range);
+        let decoded: Result<Response<'_>, FrameError> = match framing {
+            Framing::Rtu { slave } => rtu::decode_response(slave, &checked.request, frame),
+            Framing::Tcp { transaction, unit } => {
+                tcp::decode_response(transaction, unit, &checked.request, frame)
+            }
+        };
+        match decoded {
+            Ok(Response::Registers(words)) => {
+                words.copy_to(out);
+                Ok(())
+            }
+            Ok(Response::Exception { function, code }) => Err(Error::Exception {
+                sent: checked.sent,
+                exception: Exception::new(self.profile, function, code),
+            }),
+            Ok(_) => Ok(()),
+            // scan() only locates frames that decode; report it as a timeout if that ever breaks.
+            Err(_) => Err(self.timeout(checked, 1)),
+        }
+    }
+
+    pub(crate) fn timeout(&self, checked: &Checked<'_>, attempts: u8) -> Error {
+        Error::Timeout {
+            sent: checked.sent,
+            waited: self.options.timeout,
+            attempts,
+            discarded: self.rx.discarded(),
+        }
+    }
+
+    /// The command `id`, with one EEPROM write taken from the budget if it persists.
+    pub(crate) fn command(&mut self, id: &str) -> Result<&'static CommandInfo, Refusal> {
+        let profile: &'static Profile = self.profile;
+        let command = profile.command(id).ok_or_else(|| Refusal::UnknownCommand {
+            drive: profile.drive_id,
+            id: id.to_string(),
+        })?;
+        if command.kind == CommandKind::Persist {
+            self.budget.take(Instant::now())?;
+        }
+        Ok(command)
+    }
+
+    pub(crate) fn budget(&self) -> &PersistBudget {
+        &self.budget
+    }
+
+    /// The request for writing one register: 06h, or 10h with one register where the drive has
+    /// no 06h (VS mini J7: 03h/08h/10h only, `003_8bcf5d50afb8e230.txt:226-231`).
+    pub(crate) fn single_write<'a>(&self, address: u16, value: &'a [u16; 1]) -> Request<'a> {
+        if self.profile.supports(function::WRITE_SINGLE)
+            || !self.profile.supports(function::WRITE_MULTIPLE)
+        {
+            Request::WriteSingle {
+                address,
+                value: value[0],
+            }
+        } else {
+            Request::WriteMultiple {
+                address,
+                values: Words::Native(value),
+            }
+        }
+    }
+}
+
+pub(crate) fn read_request(table: Table, address: u16, quantity: usize) -> Request<'static> {
+    let quantity = u16::try_from(quantity).unwrap_or(u16::MAX);
+    match table {
+        Table::Holding => Request::ReadHolding { address, quantity },
+        Table::Input => Request::ReadInput { address, quantity },
+    }
+}
+
+pub(crate) fn io_error(checked: &Checked<'_>, source: std::io::Error) -> Error {
+    Error::Io {
+        sent: checked.sent,
+        source,
+    }
+}
+
+/// Largest number of registers a typed multi-register call handles in one request.
+pub const MAX_SET: usize = 8;
+
+/// A blocking Modbus client for drives described by a [`Profile`].
+pub struct Client<T: Transport> {
+    transport: T,
+    core: Core,
+}
+
+impl<T: Transport> Client<T> {
+    /// A client for a drive with `profile` over `transport`, with default options.
+    pub fn new(transport: T, profile: &'static Profile) -> Client<T> {
+        Self::with_options(transport, profile, ClientOptions::default())
+    }
+
+    /// A client with explicit options.
+    pub fn with_options(
+        transport: T,
+        profile: &'static Profile,
+        options: ClientOptions,
+    ) -> Client<T> {
+        let kind = transport.kind();
+        Client {
+            transport,
+            core: Core::new(profile, kind, options),
+        }
+    }
+
+    /// The drive's profile.
+    pub fn profile(&self) -> &'static Profile {
+        self.core.profile
+    }
+
+    /// The options in force.
+    pub fn options(&self) -> &ClientOptions {
+        &self.core.options
+    }
+
+    /// The transport.
+    pub fn transport(&mut self) -> &mut T {
+        &mut self.transport
+    }
+
+    /// Gives the transport back.
+    pub fn into_transport(self) -> T {
+        self.transport
+    }
+
+    /// The EEPROM write budget and count.
+    pub fn eeprom(&self) -> &PersistBudget {
+        self.core.budget()
+    }
+
+    fn transact(
+        &mut self,
+        slave: u8,
+        request: Request<'_>,
+        out: &mut [u16],
+        command: bool,
+        retries: u8,
+    ) -> Result<(), Error> {
+        let checked = self.core.check(slave, request, command)?;
+        let attempts = retries.saturating_add(1);
+        for attempt in 1..=attempts {
+            let framing = self.core.encode(&checked)?;
+            if let Some(at) = self.core.ready_at() {
+                let now = Instant::now();
+                if at > now {
+                    std::thread::sleep(at - now);
+                }
+            }
+            let sent = self
+                .transport
+                .discard_input()
+                .and_then(|_| self.transport.send(self.core.frame()));
+            if let Err(e) = sent {
+                self.core.mark_idle();
+                return Err(io_error(&checked, e));
+            }
+            let Some(framing) = framing else {
+                self.core.mark_idle();
+                return Ok(());
+            };
+            let result = self.receive(framing, &checked, out);
+            self.core.mark_idle();
+            match result {
+                Ok(Some(())) => return Ok(()),
+                Ok(None) if attempt < attempts => continue,
+                Ok(None) => return Err(self.core.timeout(&checked, attempts)),
+                Err(e) => return Err(e),
+            }
+        }
+        Err(self.core.timeout(&checked, attempts))
+    }
+
+    /// Waits for the answer; `Ok(None)` on timeout.
+    fn receive(
+        &mut self,
+        framing: Framing,
+        checked: &Checked<'_>,
+        out: &mut [u16],
+    ) -> Result<Option<()>, Error> {
+        let deadline = Instant::now() + self.core.options.timeout;
+        let gap = self.transport.inter_char_timeout();
+        let mut last_byte = Instant::now();
+        loop {
+            let until = match gap {
+                Some(g) if self.core.rx.pending() > 0 => deadline.min(last_byte + g),
+                _ => deadline,
+            };
+            let n = self
+                .transport
+                .recv(self.core.rx.space(), until)
+                .map_err(|e| io_error(checked, e))?;
+            let now = Instant::now();
+            if n == 0 {
+                if now >= deadline {
+                    return Ok(None);
+                }
+                if now >= until {
+                    self.core.rx.break_off();
+                }
+                continue;
+            }
+            last_byte = now;
+            self.core.rx.filled(n);
+            if let Some(range) = self.core.rx.scan(framing, &checked.request) {
+                return self.core.finish(framing, range, checked, out).map(Some);
+            }
+        }
+    }
+
+    /// Reads consecutive holding registers (03h) from communication address `address` into
+    /// `out`; the quantity is `out.len()`.
+    pub fn read_holding(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
+        self.read_table(slave, Table::Holding, address, out)
+    }
+
+    /// Reads consecutive input registers (04h).
+    pub fn read_input(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
+        self.read_table(slave, Table::Input, address, out)
+    }
+
+    fn read_table(
+        &mut self,
+        slave: u8,
+        table: Table,
+        address: u16,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        let retries = self.core.options.retries;
+        self.transact(
+            slave,
+            read_request(table, address, out.len()),
+            out,
+            false,
+            retries,
+        )
+    }
+
+    /// Writes one register (06h, or 10h where the drive lacks 06h). Slave 0 broadcasts.
+    pub fn write_register(&mut self, slave: u8, address: u16, value: u16) -> Result<(), Error> {
+        let value = [value];
+        let request = self.core.single_write(address, &value);
+        let retries = self.core.options.retries;
+        self.transact(slave, request, &mut [], false, retries)
+    }
+
+    /// Writes consecutive registers (10h). Slave 0 broadcasts.
+    pub fn write_registers(
+        &mut self,
+        slave: u8,
+        address: u16,
+        values: &[u16],
+    ) -> Result<(), Error> {
+        let request = Request::WriteMultiple {
+            address,
+            values: Words::Native(values),
+        };
+        let retries = self.core.options.retries;
+        self.transact(slave, request, &mut [], false, retries)
+    }
+
+    /// Loop-back test (08h, sub-function 0000h): the drive must return `data`.
+    pub fn loop_back(&mut self, slave: u8, data: u16) -> Result<(), Error> {
+        let retries = self.core.options.retries;
+        self.transact(slave, Request::LoopBack { data }, &mut [], false, retries)
+    }
+
+    /// Reads a register as its typed value.
+    pub fn read<R: Readable>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+    ) -> Result<R::Value, Error> {
+        let address = R::address(settings, self.core.kind);
+        let mut raw = [0u16; 1];
+        self.read_table(slave, R::TABLE, address, &mut raw)?;
+        Ok(R::decode(raw[0], settings)?)
+    }
+
+    /// Writes a typed value. The value is range-checked first; nothing out of range is sent.
+    pub fn write<R: Writable>(
+        &mut self,
+        slave: u8,
+        value: &R::Value,
+        settings: &R::Settings,
+    ) -> Result<(), Error> {
+        let raw = R::encode(value, settings)?;
+        let address = R::address(settings, self.core.kind);
+        self.write_register(slave, address, raw)
+    }
+
+    /// Read-modify-write: reads the register, lets `change` edit the typed value, writes it back.
+    /// Returns the value written.
+    pub fn update<R: Readable + Writable>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+        change: impl FnOnce(&mut R::Value),
+    ) -> Result<R::Value, Error> {
+        let mut value = self.read::<R>(slave, settings)?;
+        change(&mut value);
+        self.write::<R>(slave, &value, settings)?;
+        Ok(value)
+    }
+
+    /// Read-modify-write of a bit-field register: sets the bits of `set` and clears those of
+    /// `clear`, keeping the other fields as read. Reserved bits are refused in the masks and
+    /// written as 0.
+    pub fn modify_bits<R>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+        set: u16,
+        clear: u16,
+    ) -> Result<R::Value, Error>
+    where
+        R: BitRegister + Readable + Writable,
+        R::Value: Bits,
+    {
+        let reserved = (set | clear) & !R::FIELD_MASK;
+        if reserved != 0 {
+            return Err(Refusal::ReservedBits {
+                register: R::ID,
+                bits: reserved,
+            }
+            .into());
+        }
+        self.update::<R>(slave, settings, |v| {
+            let raw = ((v.bits() & !clear) | set) & R::FIELD_MASK;
+            *v = R::Value::from_bits(raw);
+        })
+    }
+
+    /// Reads consecutive registers in one request: `client.read_many::<(A, B, C)>(1, &s)`.
+    pub fn read_many<S: ReadSet>(
+        &mut self,
+        slave: u8,
+        settings: &S::Settings,
+    ) -> Result<S::Values, Error> {
+        let (address, table) = S::layout(settings, self.core.kind)?;
+        let mut raw = [0u16; MAX_SET];
+        let raw = &mut raw[..S::LEN.min(MAX_SET)];
+        self.read_table(slave, table, address, raw)?;
+        Ok(S::decode(raw, settings)?)
+    }
+
+    /// Writes consecutive registers in one 10h request, each value range-checked first.
+    pub fn write_many<S: WriteSet>(
+        &mut self,
+        slave: u8,
+        values: &S::Values,
+        settings: &S::Settings,
+    ) -> Result<(), Error> {
+        let (address, _) = S::layout(settings, self.core.kind)?;
+        let mut raw = [0u16; MAX_SET];
+        let raw = &mut raw[..S::LEN.min(MAX_SET)];
+        S::encode(values, settings, raw)?;
+        self.write_registers(slave, address, raw)
+    }
+
+    /// Runs a command of the profile (ENTER, ACCEPT, save parameters) by its map id. A command
+    /// that stores to EEPROM ([`CommandKind::Persist`]) takes one write from the hourly budget,
+    /// or is refused when the budget is spent; it is never retried, since a lost reply may
+    /// follow a completed write. Plain writes to these registers are refused.
+    pub fn persist(&mut self, slave: u8, id: &str) -> Result<(), Error> {
+        let command = self.core.command(id)?;
+        let retries = match command.kind {
+            CommandKind::Persist => 0,
+            CommandKind::Accept => self.core.options.retries,
+        };
+        for &(address, value) in command.writes {
+            let value = [value];
+            let request = self.core.single_write(address, &value);
+            self.transact(slave, request, &mut [], true, retries)?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,222 @@
+//! Errors of the clients. Each names what was sent and what was waited for.
+
+use std::fmt;
+use std::io;
+use std::time::Duration;
+
+use crate::exception::Exception;
+use crate::pdu::function;
+use crate::reply::Discarded;
+use crate::scale::ValueError;
+
+/// A request as the user asked for it: the manual's communication address and, where the
+/// profile maps it elsewhere, the PDU address that went on the wire.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sent {
+    /// Slave address (0: broadcast).
+    pub slave: u8,
+    /// Function code.
+    pub function: u8,
+    /// Communication address as printed in the manual.
+    pub address: Option<u16>,
+    /// Address in the PDU after the profile's per-transport offset.
+    pub pdu_address: Option<u16>,
+    /// Registers read or written.
+    pub quantity: usize,
+    /// Value written (06h) or looped back (08h).
+    pub value: Option<u16>,
+}
+
+impl fmt::Display for Sent {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let what = match self.function {
+            function::READ_HOLDING => "read",
+            function::READ_INPUT => "read of input",
+            function::WRITE_SINGLE | function::WRITE_MULTIPLE => "write",
+            function::LOOP_BACK => "loop-back",
+            _ => "request",
+        };
+        write!(f, "{:02X}h {what}", self.function)?;
+        if let Some(a) = self.address {
+            write!(f, " of {a:04X}h")?;
+            if let Some(p) = self.pdu_address.filter(|&p| p != a) {
+                write!(f, " (PDU {p:04X}h)")?;
+            }
+        }
+        match (self.function, self.value) {
+            (function::LOOP_BACK, Some(v)) => write!(f, " of {v:04X}h"),
+            (_, Some(v)) => write!(f, " = {v:04X}h"),
+            _ => write!(f, " x{}", self.quantity),
+        }
+    }
+}
+
+/// Why a request was not sent at all.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum Refusal {
+    /// The drive does not implement the function.
+    #[error("{drive} does not implement function {function:02X}h")]
+    UnsupportedFunction { drive: &'static str, function: u8 },
+    /// More registers than the drive accepts in one request.
+    #[error(
+        "{drive} accepts at most {max} registers per {function:02X}h request; {quantity} asked"
+    )]
+    TooManyRegisters {
+        drive: &'static str,
+        function: u8,
+        quantity: usize,
+        max: u16,
+    },
+    /// A request for zero registers.
+    #[error("{function:02X}h request for no registers")]
+    NoRegisters { function: u8 },
+    /// A slave address outside the drive's range.
+    #[error("slave address {slave} is outside {drive}'s range {min} ..= {max} (0 is broadcast)")]
+    Slave {
+        drive: &'static str,
+        slave: u8,
+        min: u8,
+        max: u8,
+    },
+    /// Broadcast cannot read: nobody replies to slave 0.
+    #[error("broadcast (slave 0) gets no reply, so it cannot read ({function:02X}h)")]
+    BroadcastRead { function: u8 },
+    /// Broadcast cannot loop back: nobody replies to slave 0.
+    #[error("broadcast (slave 0) gets no reply, so loop-back (08h) is meaningless")]
+    BroadcastLoopBack,
+    /// The drive has no broadcast, or not for this function.
+    #[error("{drive} does not execute function {function:02X}h as a broadcast")]
+    BroadcastFunction { drive: &'static str, function: u8 },
+    /// The drive does not accept this register in a broadcast.
+    #[error("{drive} does not accept register {address:04X}h in a broadcast")]
+    BroadcastAddress { drive: &'static str, address: u16 },
+    /// The address cannot be mapped to a PDU address on this transport.
+    #[error("communication address {address:04X}h with offset {offset} is outside 0000h ..= FFFFh")]
+    AddressMapping { address: u16, offset: i32 },
+    /// The registers would run past FFFFh.
+    #[error("{quantity} registers from {address:04X}h run past FFFFh")]
+    AddressOverflow { address: u16, quantity: usize },
+    /// A plain write to a command register (ENTER, ACCEPT, save) that must go through
+    /// [`Client::persist`](crate::client::Client::persist).
+    #[error(
+        "{address:04X}h is the command register of {command:?} ({name}); use persist(slave, {command:?}), which counts EEPROM writes"
+    )]
+    CommandRegister {
+        address: u16,
+        command: &'static str,
+        name: &'static str,
+    },
+    /// The profile has no command of that id.
+    #[error("{drive} has no command {id:?}")]
+    UnknownCommand { drive: &'static str, id: String },
+    /// The EEPROM write budget for the last hour is spent.
+    #[error(
+        "EEPROM write budget spent: {used} of {budget} writes in the last hour; the next is allowed in {} s",
+        next_in.as_secs()
+    )]
+    EepromBudget {
+        used: u32,
+        budget: u32,
+        next_in: Duration,
+    },
+    /// Registers requested together are not consecutive or not in one table.
+    #[error(
+        "{register} is at {got:04X}h, not {expected:04X}h right after {first}: they cannot be read in one request"
+    )]
+    NotContiguous {
+        first: &'static str,
+        register: &'static str,
+        expected: u16,
+        got: u16,
+    },
+    /// Bits outside a bit-field register's fields.
+    #[error("{register}: bits {bits:04X}h are reserved")]
+    ReservedBits { register: &'static str, bits: u16 },
+}
+
+/// An error of a client call.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// No acceptable reply arrived in time, on any attempt.
+    #[error(
+        "no reply from slave {} to {sent} within {} ms{}{}",
+        sent.slave,
+        waited.as_millis(),
+        if *attempts > 1 { format!(" ({attempts} attempts)") } else { String::new() },
+        if discarded.is_empty() { String::new() } else { format!("; {discarded}") }
+    )]
+    Timeout {
+        sent: Sent,
+        /// Time waited on each attempt.
+        waited: Duration,
+        attempts: u8,
+        /// What arrived but was not the answer, on the last attempt.
+        discarded: Discarded,
+    },
+    /// The drive answered with an exception.
+    #[error("slave {} answered {sent} with {exception}", sent.slave)]
+    Exception { sent: Sent, exception: Exception },
+    /// The link failed.
+    #[error("{sent} to slave {}: {source}", sent.slave)]
+    Io {
+        sent: Sent,
+        #[source]
+        source: io::Error,
+    },
+    /// The request was refused before anything was sent.
+    #[error("refused before sending: {0}")]
+    Refused(#[from] Refusal),
+    /// A value could not be converted (out of range before writing, or a missing setting).
+    #[error(transparent)]
+    Value(#[from] ValueError),
+}
+
+impl Error {
+    /// The exception, if the drive answered with one.
+    pub fn exception(&self) -> Option<&Exception> {
+        match self {
+            Error::Exception { exception, .. } => Some(exception),
+            _ => None,
+        }
+    }
+
+    /// Whether nothing was sent.
+    pub fn is_refusal(&self) -> bool {
+        matches!(self, Error::Refused(_) | Error::Value(_))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timeout_names_what_was_sent_and_waited_for() {
+        let e = Error::Timeout {
+            sent: Sent {
+                slave: 1,
+                function: 3,
+                address: Some(0x20),
+                pdu_address: Some(0x20),
+                quantity: 1,
+                value: None,
+            },
+            waited: Duration::from_millis(200),
+            attempts: 1,
+            discarded: Discarded::default(),
+        };
+        assert_eq!(
+            e.to_string(),
+            "no reply from slave 1 to 03h read of 0020h x1 within 200 ms"
+        );
+        let s = Sent {
+            slave: 1,
+            function: 0x10,
+            address: Some(0x1103),
+            pdu_address: Some(0x1102),
+            quantity: 2,
+            value: None,
+        };
+        assert_eq!(s.to_string(), "10h write of 1103h (PDU 1102h) x2");
+    }
+}

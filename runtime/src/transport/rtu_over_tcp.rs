@@ -1,0 +1,41 @@
+//! RTU frames (address + PDU + CRC) carried over TCP, as serial gateways in transparent mode
+//! forward them. There is no transaction id: late replies are told apart by discarding stale
+//! input before each request and by the echo checks, as on a serial line.
+
+use std::io;
+use std::net::{TcpStream, ToSocketAddrs};
+use std::time::{Duration, Instant};
+
+use super::Transport;
+use super::tcp::TcpTransport;
+use crate::profile::TransportKind;
+
+/// A TCP connection to a transparent RTU gateway.
+pub struct RtuOverTcpTransport(TcpTransport);
+
+impl RtuOverTcpTransport {
+    /// Connects to the gateway, waiting at most `timeout`.
+    pub fn connect(addr: impl ToSocketAddrs, timeout: Duration) -> io::Result<Self> {
+        TcpTransport::connect_as(addr, timeout, TransportKind::RtuOverTcp).map(Self)
+    }
+
+    /// Wraps a connected stream.
+    pub fn from_stream(stream: TcpStream) -> io::Result<Self> {
+        TcpTransport::from_stream_as(stream, TransportKind::RtuOverTcp).map(Self)
+    }
+}
+
+impl Transport for RtuOverTcpTransport {
+    fn kind(&self) -> TransportKind {
+        TransportKind::RtuOverTcp
+    }
+    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
+        self.0.send(frame)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        self.0.recv(buf, deadline)
+    }
+    fn discard_input(&mut self) -> io::Result<()> {
+        self.0.discard_input()
+    }
+}

@@ -1,0 +1,367 @@
+//! Modbus RTU on a serial line, through the `serialport` crate.
+//!
+//! What the transport adds to moving bytes:
+//! - the silence of 3.5 characters between frames (11 bits a character, whatever the parity
+//!   setting, as the Modbus specification counts; 1.75 ms above 19 200 baud), measured from the
+//!   last byte sent or received;
+//! - stale bytes (a late reply, noise) discarded before each request, and the request held back
+//!   until the line has been silent for the whole gap;
+//! - the inter-character timeout, which the client uses to discard frames broken off mid-way;
+//! - RS-485 direction control: the Linux kernel's own (`TIOCSRS485`), or RTS toggled by the
+//!   transport around each frame where the kernel offers nothing.
+
+use std::io::{self, Read, Write};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use serialport::{ClearBuffer, DataBits, FlowControl, SerialPort};
+
+use super::Transport;
+use crate::profile::{Profile, TransportKind};
+
+pub use serialport::{Parity, StopBits};
+
+/// Bits in one RTU character for timing purposes: start, 8 data, parity or second stop, stop.
+pub const BITS_PER_CHAR: u32 = 11;
+
+/// How the RS-485 transceiver's driver is switched between sending and receiving.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Rs485 {
+    /// No direction control: RS-232, RS-422 / 4-wire RS-485, or an adapter that switches by
+    /// itself (most USB RS-485 adapters).
+    #[default]
+    None,
+    /// The Linux kernel drives RTS (`TIOCSRS485`). Opening fails where the driver does not
+    /// support it, rather than silently sending with the transmitter off.
+    Kernel {
+        /// RTS level while sending (true: high).
+        rts_on_send: bool,
+        /// Delay between raising RTS and the first bit, in milliseconds.
+        delay_before_send_ms: u32,
+        /// Delay between the last bit and dropping RTS, in milliseconds.
+        delay_after_send_ms: u32,
+    },
+    /// The transport sets RTS before writing a frame and clears it once the UART has sent the
+    /// last bit (`tcdrain`). Portable, but timing depends on the OS scheduler.
+    SoftwareRts {
+        /// RTS level while sending (true: asserted).
+        rts_on_send: bool,
+    },
+}
+
+/// Settings of a serial line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SerialOptions {
+    /// Device path (`/dev/ttyUSB0`, `COM3`).
+    pub path: String,
+    /// Bits per second.
+    pub baud: u32,
+    /// Parity (the drives offer none, even and odd).
+    pub parity: Parity,
+    /// Stop bits.
+    pub stop_bits: StopBits,
+    /// Silence between frames in character times (3.5 per the Modbus specification and every
+    /// manual here).
+    pub frame_gap_chars: f64,
+    /// Longest gap allowed between two bytes of a reply; a reply broken off by a longer gap is
+    /// discarded. [`SerialOptions::new`] sets 1.5 characters plus [`USB_LATENCY`].
+    pub inter_char_timeout: Duration,
+    /// Direction control.
+    pub rs485: Rs485,
+}
+
+/// Allowance added to the inter-character timeout for adapters that deliver received bytes
+/// in batches (a USB serial adapter's latency timer is 16 ms by default).
+pub const USB_LATENCY: Duration = Duration::from_millis(16);
+
+impl SerialOptions {
+    /// 8 data bits, no parity, 1 stop bit at `baud`; 3.5-character frame gap.
+    pub fn new(path: impl Into<String>, baud: u32) -> SerialOptions {
+        SerialOptions {
+            path: path.into(),
+            baud,
+            parity: Parity::None,
+            stop_bits: StopBits::One,
+            frame_gap_chars: 3.5,
+            inter_char_timeout: char_times(1.5, baud) + USB_LATENCY,
+            rs485: Rs485::None,
+        }
+    }
+
+    /// Takes the frame gap the drive's manual prescribes.
+    pub fn with_profile(mut self, profile: &Profile) -> SerialOptions {
+        self.frame_gap_chars = profile.timing.frame_gap_chars;
+        self
+    }
+
+    /// Sets the parity.
+    pub fn parity(mut self, parity: Parity) -> SerialOptions {
+        self.parity = parity;
+        self
+    }
+
+    /// Sets the stop bits.
+    pub fn stop_bits(mut self, stop_bits: StopBits) -> SerialOptions {
+        self.stop_bits = stop_bits;
+        self
+    }
+
+    /// Sets RS-485 direction control.
+    pub fn rs485(mut self, rs485: Rs485) -> SerialOptions {
+        self.rs485 = rs485;
+        self
+    }
+
+    /// The silence kept between frames.
+    pub fn frame_gap(&self) -> Duration {
+        frame_gap(self.frame_gap_chars, self.baud)
+    }
+}
+
+/// Duration of `chars` characters of 11 bits at `baud`.
+pub fn char_times(chars: f64, baud: u32) -> Duration {
+    let baud = f64::from(baud.max(1));
+    Duration::from_secs_f64(chars * f64::from(BITS_PER_CHAR) / baud)
+}
+
+/// The inter-frame silence: `chars` characters, but a fixed 1.75 ms above 19 200 baud (Modbus
+/// over serial line specification, 2.5.1.1), where the character time is too short to time.
+pub fn frame_gap(chars: f64, baud: u32) -> Duration {
+    if baud > 19_200 {
+        Duration::from_micros(1750)
+    } else {
+        char_times(chars, baud)
+    }
+}
+
+/// A serial port speaking Modbus RTU.
+pub struct SerialTransport {
+    port: Box<dyn SerialPort>,
+    options: SerialOptions,
+    gap: Duration,
+    last_activity: Instant,
+}
+
+impl SerialTransport {
+    /// Opens and configures the port.
+    pub fn open(options: SerialOptions) -> io::Result<SerialTransport> {
+        let builder = serialport::new(&options.path, options.baud)
+            .data_bits(DataBits::Eight)
+            .parity(options.parity)
+            .stop_bits(options.stop_bits)
+            .flow_control(FlowControl::None)
+            .timeout(Duration::from_millis(10));
+        #[cfg(unix)]
+        let port: Box<dyn SerialPort> = {
+            let port = builder.open_native().map_err(io::Error::from)?;
+            if let Rs485::Kernel {
+                rts_on_send,
+                delay_before_send_ms,
+                delay_after_send_ms,
+            } = options.rs485
+            {
+                kernel_rs485(
+                    &port,
+                    rts_on_send,
+                    delay_before_send_ms,
+                    delay_after_send_ms,
+                )?;
+            }
+            Box::new(port)
+        };
+        #[cfg(not(unix))]
+        let port: Box<dyn SerialPort> = {
+            if matches!(options.rs485, Rs485::Kernel { .. }) {
+                return Err(io::Error::new(
+                    io::ErrorKind::Unsupported,
+                    "kernel RS-485 direction control needs Linux; use Rs485::SoftwareRts",
+                ));
+            }
+            builder.open().map_err(io::Error::from)?
+        };
+        Self::from_port(port, options)
+    }
+
+    /// Uses an already opened port (its line settings are left as they are).
+    pub fn from_port(mut port: Box<dyn SerialPort>, options: SerialOptions) -> io::Result<Self> {
+        if let Rs485::SoftwareRts { rts_on_send } = options.rs485 {
+            port.write_request_to_send(!rts_on_send)
+                .map_err(io::Error::from)?;
+        }
+        let gap = options.frame_gap();
+        Ok(SerialTransport {
+            port,
+            options,
+            gap,
+            last_activity: Instant::now(),
+        })
+    }
+
+    /// The options in force.
+    pub fn options(&self) -> &SerialOptions {
+        &self.options
+    }
+
+    /// Waits until the line has been silent for the frame gap, discarding whatever arrives in
+    /// the meantime. Gives up waiting for silence after 64 gaps of continuous noise.
+    fn wait_for_silence(&mut self) -> io::Result<()> {
+        for _ in 0..64 {
+            let quiet_at = self.last_activity + self.gap;
+            let now = Instant::now();
+            if quiet_at > now {
+                thread::sleep(quiet_at - now);
+            }
+            if self.port.bytes_to_read().map_err(io::Error::from)? == 0 {
+                return Ok(());
+            }
+            self.port
+                .clear(ClearBuffer::Input)
+                .map_err(io::Error::from)?;
+            self.last_activity = Instant::now();
+        }
+        Ok(())
+    }
+}
+
+impl Transport for SerialTransport {
+    fn kind(&self) -> TransportKind {
+        TransportKind::Rtu
+    }
+
+    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
+        self.wait_for_silence()?;
+        let rts = match self.options.rs485 {
+            Rs485::SoftwareRts { rts_on_send } => Some(rts_on_send),
+            _ => None,
+        };
+        if let Some(level) = rts {
+            self.port
+                .write_request_to_send(level)
+                .map_err(io::Error::from)?;
+        }
+        // One write for the whole frame, so no gap opens between its characters.
+        let written = self.port.write_all(frame).and_then(|_| self.port.flush());
+        if let Some(level) = rts {
+            self.port
+                .write_request_to_send(!level)
+                .map_err(io::Error::from)?;
+        }
+        self.last_activity = Instant::now();
+        written
+    }
+
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        let Some(wait) = super::remaining(deadline) else {
+            return Ok(0);
+        };
+        self.port.set_timeout(wait).map_err(io::Error::from)?;
+        match self.port.read(buf) {
+            Ok(n) => {
+                if n > 0 {
+                    self.last_activity = Instant::now();
+                }
+                Ok(n)
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
+                ) =>
+            {
+                Ok(0)
+            }
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => Ok(0),
+            Err(e) => Err(e),
+        }
+    }
+
+    fn discard_input(&mut self) -> io::Result<()> {
+        self.port.clear(ClearBuffer::Input).map_err(io::Error::from)
+    }
+
+    fn inter_char_timeout(&self) -> Option<Duration> {
+        Some(self.options.inter_char_timeout)
+    }
+}
+
+/// Switches the Linux kernel's RS-485 mode on for `port` (`TIOCSRS485`, see the kernel's
+/// Documentation/driver-api/serial/serial-rs485.rst).
+#[cfg(target_os = "linux")]
+fn kernel_rs485(
+    port: &serialport::TTYPort,
+    rts_on_send: bool,
+    delay_before_send_ms: u32,
+    delay_after_send_ms: u32,
+) -> io::Result<()> {
+    use std::os::fd::AsRawFd;
+
+    /// `struct serial_rs485` of `<linux/serial.h>`.
+    #[repr(C)]
+    struct SerialRs485 {
+        flags: u32,
+        delay_rts_before_send: u32,
+        delay_rts_after_send: u32,
+        padding: [u32; 5],
+    }
+    const SER_RS485_ENABLED: u32 = 1 << 0;
+    const SER_RS485_RTS_ON_SEND: u32 = 1 << 1;
+    const SER_RS485_RTS_AFTER_SEND: u32 = 1 << 2;
+
+    let flags = SER_RS485_ENABLED
+        | if rts_on_send {
+            SER_RS485_RTS_ON_SEND
+        } else {
+            SER_RS485_RTS_AFTER_SEND
+        };
+    let config = SerialRs485 {
+        flags,
+        delay_rts_before_send: delay_before_send_ms,
+        delay_rts_after_send: delay_after_send_ms,
+        padding: [0; 5],
+    };
+    // SAFETY: the only `unsafe` in the project. `fd` is the open descriptor owned by `port`,
+    // which outlives the call; TIOCSRS485 reads exactly one `struct serial_rs485`, which
+    // `config` is (same layout, `repr(C)`), and the kernel does not keep the pointer.
+    let rc = unsafe {
+        libc::ioctl(
+            port.as_raw_fd(),
+            libc::TIOCSRS485 as _,
+            &config as *const SerialRs485,
+        )
+    };
+    if rc < 0 {
+        let e = io::Error::last_os_error();
+        return Err(io::Error::new(
+            e.kind(),
+            format!("the serial driver refuses kernel RS-485 mode (TIOCSRS485): {e}"),
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(all(unix, not(target_os = "linux")))]
+fn kernel_rs485(_: &serialport::TTYPort, _: bool, _: u32, _: u32) -> io::Result<()> {
+    Err(io::Error::new(
+        io::ErrorKind::Unsupported,
+        "kernel RS-485 direction control needs Linux; use Rs485::SoftwareRts",
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_gap_follows_the_specification() {
+        // 9600 baud: 3.5 × 11 / 9600 s = 4.0104 ms.
+        let g = frame_gap(3.5, 9600);
+        assert!(
+            g > Duration::from_micros(4010) && g < Duration::from_micros(4011),
+            "{g:?}"
+        );
+        assert_eq!(frame_gap(3.5, 38_400), Duration::from_micros(1750));
+        assert_eq!(frame_gap(3.5, 115_200), Duration::from_micros(1750));
+        // 19 200 is not above 19 200: 2.005 ms.
+        assert!(frame_gap(3.5, 19_200) > Duration::from_micros(2000));
+    }
+}

@@ -1,0 +1,130 @@
+//! Several consecutive registers in one request: tuples of register types.
+//!
+//! `(FrequencyReference, OutputFrequency, OutputCurrent)` reads three typed values with one 03h
+//! request when the three registers are consecutive and in one table for the settings and
+//! transport in use (registers can move with a setting, so this is checked at run time, before
+//! anything is sent). Tuples of 1 to 8 registers sharing one `Settings` type are supported.
+
+use crate::error::Refusal;
+use crate::profile::TransportKind;
+use crate::register::{Readable, Register, Table, Writable};
+use crate::scale::ValueError;
+
+/// Consecutive registers handled in one request.
+pub trait RegisterSet {
+    /// The drive's settings type, common to all members.
+    type Settings;
+    /// The typed values, one per member, in address order.
+    type Values;
+    /// Number of registers.
+    const LEN: usize;
+
+    /// Address of the first register and the table, after checking that the members are
+    /// consecutive and in one table for these settings and this transport.
+    fn layout(settings: &Self::Settings, kind: TransportKind) -> Result<(u16, Table), Refusal>;
+}
+
+/// A set whose members can all be read.
+pub trait ReadSet: RegisterSet {
+    /// Decodes `raw` (exactly [`RegisterSet::LEN`] words) into typed values.
+    fn decode(raw: &[u16], settings: &Self::Settings) -> Result<Self::Values, ValueError>;
+}
+
+/// A set whose members can all be written.
+pub trait WriteSet: RegisterSet {
+    /// Encodes the values into `out` (exactly [`RegisterSet::LEN`] words), checking each range.
+    fn encode(
+        values: &Self::Values,
+        settings: &Self::Settings,
+        out: &mut [u16],
+    ) -> Result<(), ValueError>;
+}
+
+fn check_next<R: Register>(
+    first: &'static str,
+    start: u16,
+    table: Table,
+    index: u16,
+    settings: &R::Settings,
+    kind: TransportKind,
+) -> Result<(), Refusal> {
+    let expected = start.wrapping_add(index);
+    let got = R::address(settings, kind);
+    if got != expected || R::TABLE != table {
+        return Err(Refusal::NotContiguous {
+            first,
+            register: R::ID,
+            expected,
+            got,
+        });
+    }
+    Ok(())
+}
+
+macro_rules! register_set {
+    ($len:expr; $first:ident $fv:ident $(, $rest:ident $rv:ident)*) => {
+        impl<$first: Register, $($rest: Register<Settings = $first::Settings>),*> RegisterSet
+            for ($first, $($rest,)*)
+        {
+            type Settings = $first::Settings;
+            type Values = ($first::Value, $($rest::Value,)*);
+            const LEN: usize = $len;
+
+            #[allow(unused_assignments, unused_mut, unused_variables)]
+            fn layout(settings: &Self::Settings, kind: TransportKind) -> Result<(u16, Table), Refusal> {
+                let start = $first::address(settings, kind);
+                let mut index = 0u16;
+                $(
+                    index += 1;
+                    check_next::<$rest>($first::ID, start, $first::TABLE, index, settings, kind)?;
+                )*
+                Ok((start, $first::TABLE))
+            }
+        }
+
+        impl<$first: Readable, $($rest: Readable<Settings = $first::Settings>),*> ReadSet
+            for ($first, $($rest,)*)
+        {
+            #[allow(unused_mut)]
+            fn decode(raw: &[u16], settings: &Self::Settings) -> Result<Self::Values, ValueError> {
+                let mut words = raw.iter().copied();
+                Ok((
+                    $first::decode(words.next().unwrap_or(0), settings)?,
+                    $($rest::decode(words.next().unwrap_or(0), settings)?,)*
+                ))
+            }
+        }
+
+        impl<$first: Writable, $($rest: Writable<Settings = $first::Settings>),*> WriteSet
+            for ($first, $($rest,)*)
+        {
+            #[allow(unused_mut)]
+            fn encode(
+                values: &Self::Values,
+                settings: &Self::Settings,
+                out: &mut [u16],
+            ) -> Result<(), ValueError> {
+                let ($fv, $($rv,)*) = values;
+                let mut slots = out.iter_mut();
+                if let Some(slot) = slots.next() {
+                    *slot = $first::encode($fv, settings)?;
+                }
+                $(
+                    if let Some(slot) = slots.next() {
+                        *slot = $rest::encode($rv, settings)?;
+                    }
+                )*
+                Ok(())
+            }
+        }
+    };
+}
+
+register_set!(1; A a);
+register_set!(2; A a, B b);
+register_set!(3; A a, B b, C c);
+register_set!(4; A a, B b, C c, D d);
+register_set!(5; A a, B b, C c, D d, E e);
+register_set!(6; A a, B b, C c, D d, E e, F f);
+register_set!(7; A a, B b, C c, D d, E e, F f, G g);
+register_set!(8; A a, B b, C c, D d, E e, F f, G g, H h);
