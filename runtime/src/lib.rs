@@ -30,5 +30,7 @@ pub mod typed;
 pub use client::{Client, ClientOptions};
 pub use error::{Error, Refusal};
 pub use profile::Profile;
-pub use register::{Access, DriveSettings, Readable, Register, RegisterInfo, Table, Writable};
+pub use register::{
+    Access, BitRegister, Bits, Code, DriveSettings, Readable, Register, RegisterInfo, Table, Writable, WriteRestriction,
+};
 pub use scale::ValueError;

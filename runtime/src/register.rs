@@ -68,10 +68,25 @@ pub trait Readable: Register {}
 
 /// A register the drive lets you write.
 pub trait Writable: Register {
+    /// When the drive accepts a write (exception 22h otherwise). Informational: the client
+    /// cannot know the drive's state; the simulator enforces it.
+    const WRITE_RESTRICTION: WriteRestriction = WriteRestriction::None;
+
     /// Encodes a value for the wire, checking it against the register's range first. A value
     /// that is out of range, not finite, or an unknown enumeration code is refused here and never
     /// reaches the wire.
     fn encode(value: &Self::Value, settings: &Self::Settings) -> Result<u16, ValueError>;
+}
+
+/// When a drive accepts writes to a register.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum WriteRestriction {
+    /// Any time.
+    None,
+    /// Only while the motor is stopped.
+    Stopped,
+    /// Only in program (PRG) mode (TDS-V8).
+    PrgMode,
 }
 
 /// A register whose value is a set of bit fields; reserved bits are kept 0 by the value type.
