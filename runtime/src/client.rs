@@ -502,6 +502,7 @@ impl<T: Transport> Client<T> {
             let now = Instant::now();
             if n == 0 {
                 if now >= deadline {
+                    self.core.rx.break_off();
                     return Ok(None);
                 }
                 if now >= until {

@@ -6,7 +6,7 @@
 //! request (CRC or MBAP header, slave or unit, transaction id, function echo, byte count, address,
 //! quantity and value echoes), discards whole frames that are valid but not the answer, and
 //! skips garbage byte by byte until it is back in step (resynchronisation). What it discarded is
-//! counted and the last reason kept, so a timeout can say what was seen instead.
+//! counted and the first reason kept (the cause; what follows it is usually debris), so a timeout can say what was seen instead.
 
 use std::ops::Range;
 
@@ -33,8 +33,8 @@ pub struct Discarded {
     pub frames: u32,
     /// Bytes skipped to get back in step (noise, damaged frames, broken-off frames).
     pub bytes: u32,
-    /// Why the last thing was discarded.
-    pub last: Option<Discard>,
+    /// Why the first thing was discarded.
+    pub first: Option<Discard>,
 }
 
 /// Why something was discarded.
@@ -42,19 +42,20 @@ pub struct Discarded {
 pub enum Discard {
     /// A frame or byte that failed a check.
     Frame(FrameError),
-    /// A frame broken off by a gap longer than the inter-character timeout.
+    /// A frame left incomplete: broken off by a gap longer than the inter-character timeout,
+    /// or still incomplete when the reply timed out.
     Gap { bytes: usize },
 }
 
 impl Discarded {
     fn frame(&mut self, e: FrameError) {
         self.frames = self.frames.saturating_add(1);
-        self.last = Some(Discard::Frame(e));
+        self.first.get_or_insert(Discard::Frame(e));
     }
 
     fn bytes(&mut self, n: usize, why: Discard) {
         self.bytes = self.bytes.saturating_add(n as u32);
-        self.last = Some(why);
+        self.first.get_or_insert(why);
     }
 
     /// Whether nothing was discarded.
@@ -70,13 +71,10 @@ impl std::fmt::Display for Discarded {
             "discarded {} frame(s) and {} byte(s)",
             self.frames, self.bytes
         )?;
-        match self.last {
-            Some(Discard::Frame(e)) => write!(f, ", last: {e}"),
+        match self.first {
+            Some(Discard::Frame(e)) => write!(f, ", first: {e}"),
             Some(Discard::Gap { bytes }) => {
-                write!(
-                    f,
-                    ", last: {bytes} byte(s) broken off by an inter-character gap"
-                )
+                write!(f, ", first: an incomplete frame of {bytes} byte(s)")
             }
             None => Ok(()),
         }
@@ -116,7 +114,7 @@ impl ReplyBuffer {
             discarded: Discarded {
                 frames: 0,
                 bytes: 0,
-                last: None,
+                first: None,
             },
         }
     }
@@ -358,7 +356,7 @@ mod tests {
         let d = rx.discarded();
         assert_eq!((d.frames, d.bytes), (1, 0));
         assert_eq!(
-            d.last,
+            d.first,
             Some(Discard::Frame(FrameError::Slave {
                 expected: 2,
                 got: 1
@@ -396,7 +394,7 @@ mod tests {
         let r = rx.scan(f, &req).unwrap();
         assert_eq!(rx.frame(r), &[0, 8, 0, 0, 0, 5, 1, 3, 2, 0, 0x22]);
         assert_eq!(
-            rx.discarded().last,
+            rx.discarded().first,
             Some(Discard::Frame(FrameError::Transaction {
                 expected: 8,
                 got: 7

@@ -1,0 +1,156 @@
+//! A link with a simulated drive behind it that damages replies on request: fault injection for
+//! testing how a client copes with what real lines do.
+
+use std::collections::VecDeque;
+use std::io;
+use std::thread;
+use std::time::{Duration, Instant};
+
+use crate::profile::TransportKind;
+use crate::slave::SimulatedSlave;
+use crate::transport::Transport;
+use crate::{crc, tcp};
+
+/// What happens to the reply to the next request.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Fault {
+    /// The reply is lost.
+    Drop,
+    /// Only the first `keep` bytes arrive.
+    Truncate { keep: usize },
+    /// The reply's CRC (RTU) is damaged; on TCP the last byte is.
+    CorruptCrc,
+    /// The reply arrives after `delay`.
+    Delay(Duration),
+    /// The reply arrives twice.
+    Duplicate,
+    /// The reply claims to come from slave `slave` (CRC recomputed, so it is intact).
+    WrongSlave(u8),
+    /// The reply is held back and arrives after the next request has been sent, just before
+    /// the reply to that request: a late reply to the previous request.
+    LateReply,
+    /// These bytes arrive before the reply (line noise).
+    Noise(Vec<u8>),
+}
+
+/// The client's end of a link to a [`SimulatedSlave`], with faults applied in order, one per
+/// request.
+pub struct FaultyLink {
+    kind: TransportKind,
+    /// The drive behind the link.
+    pub slave: SimulatedSlave,
+    faults: VecDeque<Fault>,
+    deliveries: VecDeque<(Instant, Vec<u8>)>,
+    held: Option<Vec<u8>>,
+    /// Requests received.
+    pub requests: u32,
+}
+
+impl FaultyLink {
+    /// A link of `kind` to `slave`.
+    pub fn new(kind: TransportKind, slave: SimulatedSlave) -> FaultyLink {
+        FaultyLink {
+            kind,
+            slave,
+            faults: VecDeque::new(),
+            deliveries: VecDeque::new(),
+            held: None,
+            requests: 0,
+        }
+    }
+
+    /// Applies `fault` to the reply to the next request without a fault yet.
+    pub fn inject(&mut self, fault: Fault) {
+        self.faults.push_back(fault);
+    }
+
+    fn deliver(&mut self, at: Instant, bytes: Vec<u8>) {
+        let i = self.deliveries.iter().position(|(t, _)| *t > at).unwrap_or(self.deliveries.len());
+        self.deliveries.insert(i, (at, bytes));
+    }
+}
+
+impl Transport for FaultyLink {
+    fn kind(&self) -> TransportKind {
+        self.kind
+    }
+
+    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
+        self.requests += 1;
+        let now = Instant::now();
+        if let Some(late) = self.held.take() {
+            self.deliver(now, late);
+        }
+        let mut out = [0u8; tcp::MAX_FRAME];
+        let Some(n) = self.slave.respond(self.kind, frame, &mut out) else {
+            self.faults.pop_front();
+            return Ok(());
+        };
+        let mut reply = out[..n].to_vec();
+        match self.faults.pop_front() {
+            None => self.deliver(now, reply),
+            Some(Fault::Drop) => {}
+            Some(Fault::Truncate { keep }) => {
+                reply.truncate(keep);
+                self.deliver(now, reply);
+            }
+            Some(Fault::CorruptCrc) => {
+                if let Some(last) = reply.last_mut() {
+                    *last ^= 0x5A;
+                }
+                self.deliver(now, reply);
+            }
+            Some(Fault::Delay(d)) => self.deliver(now + d, reply),
+            Some(Fault::Duplicate) => {
+                self.deliver(now, reply.clone());
+                self.deliver(now, reply);
+            }
+            Some(Fault::WrongSlave(s)) => {
+                if self.kind.is_rtu_framed() {
+                    reply[0] = s;
+                    let body = reply.len() - 2;
+                    let c = crc::crc_bytes(&reply[..body]);
+                    reply[body..].copy_from_slice(&c);
+                } else {
+                    reply[6] = s;
+                }
+                self.deliver(now, reply);
+            }
+            Some(Fault::LateReply) => self.held = Some(reply),
+            Some(Fault::Noise(mut noise)) => {
+                noise.extend_from_slice(&reply);
+                self.deliver(now, noise);
+            }
+        }
+        Ok(())
+    }
+
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        loop {
+            let now = Instant::now();
+            if let Some((at, bytes)) = self.deliveries.front_mut() {
+                if *at <= now {
+                    let n = buf.len().min(bytes.len());
+                    buf[..n].copy_from_slice(&bytes[..n]);
+                    bytes.drain(..n);
+                    if bytes.is_empty() {
+                        self.deliveries.pop_front();
+                    }
+                    return Ok(n);
+                }
+            }
+            let next = self.deliveries.front().map(|(at, _)| *at);
+            let wake = next.map_or(deadline, |at| at.min(deadline));
+            if now >= deadline {
+                return Ok(0);
+            }
+            thread::sleep(wake.saturating_duration_since(now));
+        }
+    }
+
+    fn discard_input(&mut self) -> io::Result<()> {
+        let now = Instant::now();
+        self.deliveries.retain(|(at, _)| *at > now);
+        Ok(())
+    }
+}
