@@ -44,6 +44,8 @@ pub struct FaultyLink {
     held: Option<Vec<u8>>,
     /// Requests received.
     pub requests: u32,
+    /// Every frame sent over the link, in order (broadcasts included).
+    pub sent: Vec<Vec<u8>>,
 }
 
 impl FaultyLink {
@@ -56,6 +58,7 @@ impl FaultyLink {
             deliveries: VecDeque::new(),
             held: None,
             requests: 0,
+            sent: Vec::new(),
         }
     }
 
@@ -77,6 +80,7 @@ impl Transport for FaultyLink {
 
     fn send(&mut self, frame: &[u8]) -> io::Result<()> {
         self.requests += 1;
+        self.sent.push(frame.to_vec());
         let now = Instant::now();
         if let Some(late) = self.held.take() {
             self.deliver(now, late);
