@@ -84,8 +84,13 @@ impl SimulatedSlave {
             exception(code)
         } else {
             match *request {
-                Request::ReadHolding { address, quantity } | Request::ReadInput { address, quantity } => {
-                    let table = if f == function::READ_HOLDING { &self.holding } else { &self.input };
+                Request::ReadHolding { address, quantity }
+                | Request::ReadInput { address, quantity } => {
+                    let table = if f == function::READ_HOLDING {
+                        &self.holding
+                    } else {
+                        &self.input
+                    };
                     let (a, q) = (usize::from(address), usize::from(quantity));
                     words[..q].copy_from_slice(&table[a..a + q]);
                     Response::Registers(Words::Native(&words[..q]))
@@ -129,7 +134,12 @@ impl SimulatedSlave {
             Err(rtu::RequestFrameError::Frame(_)) => return None,
             Err(rtu::RequestFrameError::Request { slave, error }) => {
                 let (f, code) = Self::reject(error)?;
-                (slave, Response::Exception { function: f, code }.encode(f, &mut pdu).ok()?)
+                (
+                    slave,
+                    Response::Exception { function: f, code }
+                        .encode(f, &mut pdu)
+                        .ok()?,
+                )
             }
             Ok((slave, request)) => {
                 if slave != self.address && slave != rtu::BROADCAST {
@@ -155,7 +165,12 @@ impl SimulatedSlave {
             Err(tcp::RequestFrameError::Frame(_)) => return None,
             Err(tcp::RequestFrameError::Request { header, error }) => {
                 let (f, code) = Self::reject(error)?;
-                (header, Response::Exception { function: f, code }.encode(f, &mut pdu).ok()?)
+                (
+                    header,
+                    Response::Exception { function: f, code }
+                        .encode(f, &mut pdu)
+                        .ok()?,
+                )
             }
             Ok((header, request)) => {
                 if header.unit != self.address && header.unit != 0 {
@@ -185,7 +200,8 @@ impl SimulatedSlave {
     }
 
     /// Serves requests arriving on `link` until `until`, answering each; returns the number of
-    /// requests answered. Bytes that do not start a request are skipped one at a time.
+    /// requests answered. Bytes that do not start a request are skipped one at a time. Ends
+    /// early when the master closes the link.
     pub fn serve(&mut self, link: &mut impl Transport, until: Instant) -> io::Result<u32> {
         let kind = link.kind();
         let mut buf = [0u8; 2 * tcp::MAX_FRAME];
@@ -193,7 +209,12 @@ impl SimulatedSlave {
         let mut out = [0u8; tcp::MAX_FRAME];
         let mut answered = 0;
         loop {
-            let n = link.recv(&mut buf[len..], until)?;
+            let n = match link.recv(&mut buf[len..], until) {
+                Ok(n) => n,
+                // The master hung up: serving is over.
+                Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => 0,
+                Err(e) => return Err(e),
+            };
             if n == 0 {
                 return Ok(answered);
             }
@@ -220,7 +241,11 @@ impl SimulatedSlave {
                         total
                     }
                     // Not a request, or a damaged one: step over one byte to resynchronise.
-                    None if total == 0 || (kind.is_rtu_framed() && crate::crc::check(&buf[..total]).is_err()) => 1,
+                    None if total == 0
+                        || (kind.is_rtu_framed() && crate::crc::check(&buf[..total]).is_err()) =>
+                    {
+                        1
+                    }
                     None => total,
                 };
                 buf.copy_within(skip..len, 0);
