@@ -5,8 +5,10 @@
 //! concern per pass, [`generate`] emits Rust and [`export`] emits JSON. [`Config`] drives it all
 //! from a `build.rs`.
 
+pub mod config;
 pub mod diagnostic;
 pub mod export;
+pub mod generate;
 pub mod ir;
 pub mod load;
 pub mod model;
@@ -17,6 +19,7 @@ pub mod validate;
 
 use std::path::{Path, PathBuf};
 
+pub use config::{Config, Error, Generated};
 pub use diagnostic::{Diagnostic, Diagnostics};
 pub use ir::Drive;
 

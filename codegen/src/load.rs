@@ -139,8 +139,12 @@ fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {
             let err = match key.as_str() {
                 "drive" => deserialize_at::<crate::model::DriveMeta>(tree, node, &path).err(),
                 "protocol" => deserialize_at::<crate::model::Protocol>(tree, node, &path).err(),
-                "variants" => deserialize_at::<Vec<crate::model::VariantAxis>>(tree, node, &path).err(),
-                "conflicts" => deserialize_at::<Vec<crate::model::Conflict>>(tree, node, &path).err(),
+                "variants" => {
+                    deserialize_at::<Vec<crate::model::VariantAxis>>(tree, node, &path).err()
+                }
+                "conflicts" => {
+                    deserialize_at::<Vec<crate::model::Conflict>>(tree, node, &path).err()
+                }
                 "gaps" => deserialize_at::<Vec<crate::model::Gap>>(tree, node, &path).err(),
                 "removed" => deserialize_at::<Vec<crate::model::Removed>>(tree, node, &path).err(),
                 "groups" => {
@@ -186,14 +190,19 @@ fn group_errors(tree: &Node, group: &Node, path: &Path, errors: &mut Vec<Diagnos
 }
 
 /// Deserializes `node` (found at `base` in `tree`) and locates a failure in the tree.
-fn deserialize_at<T: serde::de::DeserializeOwned>(tree: &Node, node: &Node, base: &Path) -> Result<T, Diagnostic> {
+fn deserialize_at<T: serde::de::DeserializeOwned>(
+    tree: &Node,
+    node: &Node,
+    base: &Path,
+) -> Result<T, Diagnostic> {
     serde_path_to_error::deserialize::<_, T>(node.to_value()).map_err(|e| {
         let mut path = base.clone();
         for seg in e.path().iter() {
             match seg {
                 serde_path_to_error::Segment::Seq { index } => path = path.index(*index),
                 serde_path_to_error::Segment::Map { key } => path = path.key(key),
-                serde_path_to_error::Segment::Enum { .. } | serde_path_to_error::Segment::Unknown => {}
+                serde_path_to_error::Segment::Enum { .. }
+                | serde_path_to_error::Segment::Unknown => {}
             }
         }
         let message = e.inner().to_string();

@@ -56,9 +56,17 @@ fn values(
 ) {
     let mut ids = Seen::new("value id");
     let mut codes = Seen::new("value code");
+    let mut variants = Seen::new("enum variant name (ids differing only in underscores)");
     for (i, v) in list.iter().enumerate() {
         let p = path.index(i);
         ids.add(drive, out, &v.id, p.key("id"), Some(register));
+        variants.add(
+            drive,
+            out,
+            &crate::validate::pascal_case(&v.id),
+            p.key("id"),
+            Some(register),
+        );
         codes.add(
             drive,
             out,

@@ -150,7 +150,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             }
             ValueKind::Quantity(Scale::Relative(rel)) => {
                 c.no_limits("the manual states relative values as a fraction of another quantity; record limits in a note");
-                if !(rel.full_scale.is_finite() && rel.full_scale > 0.0) {
+                if !rel.full_scale.is_finite() || rel.full_scale <= 0.0 {
                     c.err(
                         r.key_path("scale").key("full_scale"),
                         format!("full_scale {} must be positive", rel.full_scale),
@@ -188,7 +188,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                                     "limits of a relative case are not supported; note them".into(),
                                 );
                             }
-                            if !(rel.full_scale.is_finite() && rel.full_scale > 0.0) {
+                            if !rel.full_scale.is_finite() || rel.full_scale <= 0.0 {
                                 c.err(
                                     cp.key("scale").key("full_scale"),
                                     format!("full_scale {} must be positive", rel.full_scale),
@@ -203,7 +203,30 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 }
             }
             ValueKind::Enum(values) => {
-                c.no_limits("an enumeration's range is its list of `values`");
+                // A partial enumeration: the manual prints a range of codes but names only some.
+                let one = Dec {
+                    mantissa: 1,
+                    exponent: 0,
+                };
+                c.set(d.min, d.max, None, one, &r.path, "");
+                for (k, o) in &d.by_variant {
+                    if o.min.is_some() || o.max.is_some() {
+                        c.err(
+                            r.key_path("by_variant").key(k),
+                            "an enumeration's code range cannot vary by variant".into(),
+                        );
+                    }
+                }
+                for (vi, v) in values.iter().enumerate() {
+                    let below = d.min.is_some_and(|m| f64::from(v.value) < m);
+                    let above = d.max.is_some_and(|m| f64::from(v.value) > m);
+                    if below || above {
+                        c.err(
+                            r.key_path("values").index(vi).key("value"),
+                            format!("listed code {} lies outside the printed range", v.value),
+                        );
+                    }
+                }
                 let mut defaults: Vec<(Path, f64)> = Vec::new();
                 if let Some(DefaultValue::Value(v)) = &d.default {
                     defaults.push((r.key_path("default"), *v));
@@ -214,7 +237,10 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                     }
                 }
                 for (path, v) in defaults {
-                    if !values.iter().any(|e| f64::from(e.value) == v) {
+                    let in_range = d.min.is_some_and(|m| v >= m)
+                        && d.max.is_some_and(|m| v <= m)
+                        && v.fract() == 0.0;
+                    if !in_range && !values.iter().any(|e| f64::from(e.value) == v) {
                         c.err(path, format!("default {v} is not one of the listed codes"));
                     }
                 }
@@ -233,7 +259,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         }
         let mut prev: Option<f64> = None;
         for (i, s) in d.display_steps.iter().enumerate() {
-            if !(s.step > 0.0) || prev.is_some_and(|p| s.from <= p) {
+            if s.step.is_nan() || s.step <= 0.0 || prev.is_some_and(|p| s.from <= p) {
                 c.err(
                     r.key_path("display_steps").index(i),
                     "display steps need a positive `step` and increasing `from`".into(),

@@ -16,7 +16,8 @@ fn interval(drive: &Drive, out: &mut Vec<Diagnostic>, i: &Interval, path: Path) 
     if n != 1 {
         out.push(drive.error(&path, None, "give exactly one of `ms`, `bits`, `chars`"));
     }
-    if i.ms.is_some_and(|v| !(v >= 0.0)) || i.chars.is_some_and(|v| !(v >= 0.0)) {
+    if i.ms.is_some_and(|v| v.is_nan() || v < 0.0) || i.chars.is_some_and(|v| v.is_nan() || v < 0.0)
+    {
         out.push(drive.error(&path, None, "an interval cannot be negative"));
     }
 }
@@ -127,7 +128,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     }
     if let Some(t) = &p.timing {
         let tp = pp.key("timing");
-        if !(t.frame_gap_chars > 0.0) {
+        if t.frame_gap_chars.is_nan() || t.frame_gap_chars <= 0.0 {
             out.push(drive.error(
                 &tp.key("frame_gap_chars"),
                 None,
@@ -168,7 +169,11 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         }
         if let Some(c) = ser.char_bits {
             if !(9..=12).contains(&c) || c < 1 + ser.data_bits + ser.stop_bits {
-                out.push(drive.error(&sp.key("char_bits"), None, "char_bits must cover start, data and stop bits (9..=12)"));
+                out.push(drive.error(
+                    &sp.key("char_bits"),
+                    None,
+                    "char_bits must cover start, data and stop bits (9..=12)",
+                ));
             }
         }
         if !matches!(ser.stop_bits, 1 | 2) {

@@ -1,0 +1,279 @@
+//! The `build.rs` entry point, in the style of `prost-build`.
+//!
+//! ```no_run
+//! // build.rs of a crate with its own maps under `maps/`
+//! drivemap_codegen::Config::new()
+//!     .maps_dir("maps")
+//!     .compile()
+//!     .unwrap_or_else(|e| panic!("{e}"));
+//! ```
+//!
+//! and in `src/lib.rs`:
+//!
+//! ```ignore
+//! include!(concat!(env!("OUT_DIR"), "/drivemap.rs"));
+//! ```
+//!
+//! Each map becomes `OUT_DIR/<module>.rs` and a `pub mod <module>` in `OUT_DIR/drivemap.rs`.
+//! Files are written only when their content changed, and `cargo:rerun-if-changed` is printed
+//! for every map and map directory, so adding a YAML file to the directory adds a module with
+//! no other edit. The generated code refers to the runtime as `::drivemap_runtime` unless told
+//! otherwise ([`Config::runtime_crate`]); the crate must depend on it.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use crate::diagnostic::Diagnostics;
+use crate::generate::{self, Options};
+use crate::ir::Drive;
+use crate::validate::Context;
+
+/// Builder for generating drive modules from maps.
+#[derive(Debug, Clone)]
+pub struct Config {
+    maps: Vec<PathBuf>,
+    dirs: Vec<PathBuf>,
+    out_dir: Option<PathBuf>,
+    manuals_dir: Option<PathBuf>,
+    runtime: String,
+    index_file: String,
+    cargo_directives: bool,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config::new()
+    }
+}
+
+/// Why generation failed.
+#[derive(Debug)]
+pub enum Error {
+    /// One or more maps are invalid; every finding is listed.
+    Invalid(Diagnostics),
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    /// `OUT_DIR` is not set and no output directory was given.
+    NoOutDir,
+    Generate(String),
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Invalid(d) => write!(f, "invalid drive maps:\n{d}"),
+            Error::Io { path, error } => write!(f, "{}: {error}", path.display()),
+            Error::NoOutDir => write!(f, "OUT_DIR is not set; call Config::out_dir"),
+            Error::Generate(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// What a run produced.
+#[derive(Debug, Clone)]
+pub struct Generated {
+    /// Per drive: (drive id, module name, output file).
+    pub modules: Vec<(String, String, PathBuf)>,
+    /// The index file to `include!`.
+    pub index: PathBuf,
+    /// Files actually rewritten (unchanged files are left alone).
+    pub written: Vec<PathBuf>,
+    /// Lines of generated Rust, all modules.
+    pub lines: usize,
+}
+
+impl Config {
+    pub fn new() -> Self {
+        Config {
+            maps: Vec::new(),
+            dirs: Vec::new(),
+            out_dir: None,
+            manuals_dir: None,
+            runtime: "::drivemap_runtime".into(),
+            index_file: "drivemap.rs".into(),
+            cargo_directives: true,
+        }
+    }
+
+    /// Adds one map file.
+    pub fn map(&mut self, path: impl Into<PathBuf>) -> &mut Self {
+        self.maps.push(path.into());
+        self
+    }
+
+    /// Adds every `*.yaml` map of a directory (read at [`Config::compile`] time).
+    pub fn maps_dir(&mut self, dir: impl Into<PathBuf>) -> &mut Self {
+        self.dirs.push(dir.into());
+        self
+    }
+
+    /// Where to write the modules (default: `$OUT_DIR`).
+    pub fn out_dir(&mut self, dir: impl Into<PathBuf>) -> &mut Self {
+        self.out_dir = Some(dir.into());
+        self
+    }
+
+    /// Where the manuals are, to check that citations point inside them. Default: the
+    /// `DRIVEMAP_MANUALS` variable, else `shared/manuals` beside an ancestor of the maps.
+    pub fn manuals_dir(&mut self, dir: impl Into<PathBuf>) -> &mut Self {
+        self.manuals_dir = Some(dir.into());
+        self
+    }
+
+    /// Path of the runtime crate in generated code (`::drivemap_runtime`, or
+    /// `crate::runtime` when re-exported).
+    pub fn runtime_crate(&mut self, path: &str) -> &mut Self {
+        self.runtime = path.into();
+        self
+    }
+
+    /// Name of the index file in the output directory (default `drivemap.rs`).
+    pub fn index_file(&mut self, name: &str) -> &mut Self {
+        self.index_file = name.into();
+        self
+    }
+
+    /// Whether to print `cargo:rerun-if-changed` lines (default true; off outside build.rs).
+    pub fn cargo_directives(&mut self, on: bool) -> &mut Self {
+        self.cargo_directives = on;
+        self
+    }
+
+    fn map_files(&self) -> Result<Vec<PathBuf>, Error> {
+        let mut files = self.maps.clone();
+        for dir in &self.dirs {
+            let found = crate::find_maps(dir).map_err(|error| Error::Io {
+                path: dir.clone(),
+                error,
+            })?;
+            files.extend(found);
+        }
+        files.sort();
+        files.dedup();
+        Ok(files)
+    }
+
+    fn context(&self, files: &[PathBuf]) -> Context {
+        let dir = self.manuals_dir.clone().or_else(|| {
+            files
+                .first()
+                .and_then(|f| crate::default_manuals_dir(f.parent().unwrap_or(Path::new("."))))
+        });
+        match dir {
+            Some(d) => Context::with_manuals(&d),
+            None => Context::default(),
+        }
+    }
+
+    /// Reads and validates every map without writing anything.
+    pub fn check(&self) -> Result<Vec<Drive>, Error> {
+        let files = self.map_files()?;
+        let ctx = self.context(&files);
+        let mut drives = Vec::new();
+        let mut errors = Vec::new();
+        for f in &files {
+            match crate::read_map(f, &ctx) {
+                Ok(d) => drives.push(d),
+                Err(d) => errors.extend(d.0),
+            }
+        }
+        if errors.is_empty() {
+            Ok(drives)
+        } else {
+            Err(Error::Invalid(errors.into()))
+        }
+    }
+
+    /// Validates every map and writes the modules and the index.
+    pub fn compile(&self) -> Result<Generated, Error> {
+        let out_dir = match &self.out_dir {
+            Some(d) => d.clone(),
+            None => std::env::var_os("OUT_DIR")
+                .map(PathBuf::from)
+                .ok_or(Error::NoOutDir)?,
+        };
+        let files = self.map_files()?;
+        if self.cargo_directives {
+            for dir in &self.dirs {
+                println!("cargo:rerun-if-changed={}", dir.display());
+            }
+            for f in &files {
+                println!("cargo:rerun-if-changed={}", f.display());
+            }
+            println!("cargo:rerun-if-env-changed=DRIVEMAP_MANUALS");
+        }
+        let drives = self.check()?;
+        let runtime: proc_macro2::TokenStream = self
+            .runtime
+            .parse()
+            .map_err(|e| Error::Generate(format!("runtime path `{}`: {e}", self.runtime)))?;
+        std::fs::create_dir_all(&out_dir).map_err(|error| Error::Io {
+            path: out_dir.clone(),
+            error,
+        })?;
+        let mut generated = Generated {
+            modules: Vec::new(),
+            index: out_dir.join(&self.index_file),
+            written: Vec::new(),
+            lines: 0,
+        };
+        let mut index = String::from("// @generated by drivemap-codegen. Do not edit.\n\n");
+        let mut ids = Vec::new();
+        for drive in &drives {
+            let options = Options {
+                runtime: runtime.clone(),
+                source_name: drive
+                    .file
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+            };
+            let code = generate::drive_module(drive, &options).map_err(Error::Generate)?;
+            generated.lines += code.lines().count();
+            let path = out_dir.join(format!("{}.rs", drive.module));
+            if write_if_changed(&path, &code)? {
+                generated.written.push(path.clone());
+            }
+            let title = format!(
+                "{} {} (`{}`).",
+                drive.meta.vendor,
+                drive.meta.models.join(" / "),
+                drive.meta.id
+            );
+            index += &format!(
+                "#[doc = {title:?}]\n#[path = {:?}]\npub mod {};\n\n",
+                path.display().to_string(),
+                drive.module
+            );
+            ids.push((drive.meta.id.clone(), drive.module.clone()));
+            generated
+                .modules
+                .push((drive.meta.id.clone(), drive.module.clone(), path));
+        }
+        index += "/// Every generated drive: (drive id, module name).\npub const DRIVES: &[(&str, &str)] = &[\n";
+        for (id, module) in &ids {
+            index += &format!("    ({id:?}, {module:?}),\n");
+        }
+        index += "];\n";
+        if write_if_changed(&generated.index, &index)? {
+            generated.written.push(generated.index.clone());
+        }
+        Ok(generated)
+    }
+}
+
+/// Writes `content` unless the file already holds exactly it. Returns whether it wrote.
+fn write_if_changed(path: &Path, content: &str) -> Result<bool, Error> {
+    if std::fs::read_to_string(path).is_ok_and(|old| old == content) {
+        return Ok(false);
+    }
+    std::fs::write(path, content).map_err(|error| Error::Io {
+        path: path.to_path_buf(),
+        error,
+    })?;
+    Ok(true)
+}

@@ -1,0 +1,135 @@
+//! Bit-field value types: a getter and setter per field, reserved bits kept 0.
+
+use proc_macro2::TokenStream;
+use quote::{format_ident, quote};
+
+use super::{docs, enums, ident};
+use crate::ir::Register;
+use crate::model::Field;
+use crate::names;
+use crate::validate::field_span;
+
+pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
+    let ty = ident(&names::bits_type(r));
+    let reg_id = r.id();
+    let mut mask: u16 = 0;
+    let mut methods = Vec::new();
+    let mut field_enums = Vec::new();
+    let mut debug_fields = Vec::new();
+    for f in fields {
+        let Some((lo, width)) = field_span(f) else {
+            continue;
+        };
+        let fmask: u16 = (((1u32 << width) - 1) << lo) as u16;
+        mask |= fmask;
+        let fm = super::hex(fmask);
+        let get = ident(&f.id);
+        let set = format_ident!("set_{}", f.id);
+        let with = format_ident!("with_{}", f.id);
+        let fname = &f.id;
+        let where_ = if width == 1 {
+            format!("bit {lo}")
+        } else {
+            format!("bits {lo}..={}", lo + width - 1)
+        };
+        let mut text = format!("{where_}: {}", f.name);
+        if let Some(s) = &f.source {
+            text += &format!(" (`{s}`)");
+        }
+        for n in &f.notes {
+            text += &format!("\n\nNote: {n}");
+        }
+        let doc = docs::item(&text);
+        if width == 1 && f.values.is_empty() {
+            methods.push(quote! {
+                #doc
+                pub const fn #get(&self) -> bool { self.0 & #fm != 0 }
+                #[doc = concat!("Sets `", #fname, "`.")]
+                pub fn #set(&mut self, on: bool) -> &mut Self {
+                    if on { self.0 |= #fm } else { self.0 &= !#fm }
+                    self
+                }
+                #[doc = concat!("This value with `", #fname, "` set to `on`.")]
+                pub const fn #with(self, on: bool) -> Self {
+                    Self(if on { self.0 | #fm } else { self.0 & !#fm })
+                }
+            });
+            debug_fields.push(quote!(.field(#fname, &self.#get())));
+        } else if f.values.is_empty() {
+            let max = ((1u32 << width) - 1) as u16;
+            methods.push(quote! {
+                #doc
+                pub const fn #get(&self) -> u16 { (self.0 & #fm) >> #lo }
+                #[doc = concat!("Sets `", #fname, "`; a value wider than the field is refused.")]
+                pub fn #set(&mut self, value: u16) -> Result<&mut Self, #rt::ValueError> {
+                    if value > #max {
+                        return Err(#rt::ValueError::OutOfRange { register: #reg_id, value: value as f64, min: 0.0, max: #max as f64, unit: "" });
+                    }
+                    self.0 = (self.0 & !#fm) | (value << #lo);
+                    Ok(self)
+                }
+            });
+            debug_fields.push(quote!(.field(#fname, &self.#get())));
+        } else {
+            let ety = ident(&names::field_enum(r, f));
+            field_enums.push(enums::emit(
+                &ety,
+                &f.values,
+                &format!("field `{}` of `{}`", f.id, reg_id),
+                rt,
+            ));
+            let max = ((1u32 << width) - 1) as u16;
+            methods.push(quote! {
+                #doc
+                pub fn #get(&self) -> #ety { <#ety as #rt::Code>::from_code((self.0 & #fm) >> #lo) }
+                #[doc = concat!("Sets `", #fname, "`; an unknown or too wide code is refused.")]
+                pub fn #set(&mut self, value: #ety) -> Result<&mut Self, #rt::ValueError> {
+                    let code = #rt::Code::code(&value);
+                    if !#rt::Code::is_known(&value) || code > #max {
+                        return Err(#rt::ValueError::UnknownCode { register: #reg_id, code });
+                    }
+                    self.0 = (self.0 & !#fm) | (code << #lo);
+                    Ok(self)
+                }
+            });
+            debug_fields.push(quote!(.field(#fname, &self.#get())));
+        }
+    }
+    let doc = docs::item(&format!(
+        "Bit fields of `{}`; bits outside `{mask:#06x}` are reserved and always 0.",
+        r.def.name
+    ));
+    let ty_name = ty.to_string();
+    let mask_lit = super::hex(mask);
+    quote! {
+        #(#field_enums)*
+
+        #doc
+        #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
+        pub struct #ty(u16);
+
+        impl #ty {
+            /// Bits that carry a field.
+            pub const MASK: u16 = #mask_lit;
+
+            /// All fields 0.
+            pub const fn new() -> Self { Self(0) }
+
+            /// The raw word (reserved bits 0).
+            pub const fn raw(&self) -> u16 { self.0 }
+
+            #(#methods)*
+        }
+
+        impl #rt::Bits for #ty {
+            fn bits(&self) -> u16 { self.0 }
+            fn from_bits(raw: u16) -> Self { Self(raw & Self::MASK) }
+        }
+
+        impl core::fmt::Debug for #ty {
+            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.debug_struct(#ty_name)#(#debug_fields)*.finish()
+            }
+        }
+    }
+}

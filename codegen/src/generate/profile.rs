@@ -1,0 +1,118 @@
+//! The drive's protocol profile as a `static PROFILE: Profile`.
+
+use proc_macro2::TokenStream;
+use quote::quote;
+
+use super::hex;
+use crate::ir::Drive;
+use crate::model::CommandKind;
+
+pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
+    let p = &drive.protocol;
+    let id = &drive.meta.id;
+    let fcs = p.function_codes.iter().map(|f| hex2(*f));
+    let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read);
+    let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write);
+    let slave_min = proc_macro2::Literal::u8_unsuffixed(p.slave_address.min);
+    let slave_max = proc_macro2::Literal::u8_unsuffixed(p.slave_address.max);
+    let broadcast = match &p.broadcast {
+        None => quote!(None),
+        Some(b) => {
+            let mut addrs: Vec<u16> = b
+                .registers
+                .iter()
+                .filter_map(|name| drive.find(name).map(|r| r.def.address))
+                .chain(
+                    drive
+                        .registers
+                        .iter()
+                        .filter(|r| r.broadcast)
+                        .map(|r| r.def.address),
+                )
+                .collect();
+            addrs.sort_unstable();
+            addrs.dedup();
+            let addrs = addrs.into_iter().map(hex);
+            let fns = b.functions.iter().map(|f| hex2(*f));
+            quote!(Some(#rt::profile::BroadcastInfo { functions: &[#(#fns),*], addresses: &[#(#addrs),*] }))
+        }
+    };
+    let exceptions = p.exceptions.iter().map(|e| {
+        let (code, name, desc) = (hex2(e.code), &e.name, &e.description);
+        quote!(#rt::profile::ExceptionInfo { code: #code, name: #name, description: #desc })
+    });
+    let commands = p.commands.iter().map(|c| {
+        let (cid, name, source) = (&c.id, &c.name, &c.source);
+        let kind = match c.kind {
+            CommandKind::Accept => quote!(#rt::profile::CommandKind::Accept),
+            CommandKind::Persist => quote!(#rt::profile::CommandKind::Persist),
+        };
+        let writes = c.writes.iter().map(|w| {
+            let (a, v) = (hex(w.address), hex(w.value));
+            quote!((#a, #v))
+        });
+        quote!(#rt::profile::CommandInfo { id: #cid, name: #name, kind: #kind, writes: &[#(#writes),*], source: #source })
+    });
+    let (rtu_off, tcp_off) = p
+        .addressing
+        .as_ref()
+        .map(|a| (a.rtu_offset, a.tcp_offset))
+        .unwrap_or((0, 0));
+    let timing = p.timing.as_ref();
+    let gap = super::float(timing.map(|t| t.frame_gap_chars).unwrap_or(3.5));
+    let ict = timing.and_then(|t| t.inter_char_timeout.as_ref());
+    let ict_us = opt_u32(
+        ict.and_then(|i| i.ms)
+            .map(|ms| (ms * 1000.0).round() as u32),
+    );
+    let ict_bits = opt_u32(ict.and_then(|i| i.bits.or(i.chars.map(|c| (c * 11.0).round() as u32))));
+    let resp = opt_u32(
+        timing
+            .and_then(|t| t.response_time.as_ref())
+            .and_then(|i| i.ms)
+            .map(|ms| (ms * 1000.0).round() as u32),
+    );
+    let resp_param = super::opt_str(&timing.and_then(|t| t.response_delay_param.clone()));
+    let endurance = opt_u32(p.eeprom.as_ref().map(|e| e.endurance));
+    quote! {
+        /// The protocol profile: what the drive accepts on the wire, per its manual.
+        pub static PROFILE: #rt::Profile = #rt::Profile {
+            drive_id: #id,
+            function_codes: &[#(#fcs),*],
+            max_read: #max_read,
+            max_write: #max_write,
+            slave_min: #slave_min,
+            slave_max: #slave_max,
+            broadcast: #broadcast,
+            exceptions: &[#(#exceptions),*],
+            commands: &[#(#commands),*],
+            address_offsets: #rt::profile::AddressOffsets { rtu: #rtu_off, tcp: #tcp_off },
+            timing: #rt::profile::Timing {
+                frame_gap_chars: #gap,
+                inter_char_timeout_us: #ict_us,
+                inter_char_timeout_bits: #ict_bits,
+                response_delay_us: #resp,
+                response_delay_param: #resp_param,
+            },
+            eeprom_write_endurance: #endurance,
+        };
+    }
+}
+
+/// `0x03`-style literal for function and exception codes.
+fn hex2(v: u8) -> TokenStream {
+    let lit: proc_macro2::Literal = format!("0x{v:02X}")
+        .parse()
+        .unwrap_or_else(|_| proc_macro2::Literal::u8_unsuffixed(v));
+    quote!(#lit)
+}
+
+fn opt_u32(v: Option<u32>) -> TokenStream {
+    match v {
+        Some(v) => {
+            let v = proc_macro2::Literal::u32_unsuffixed(v);
+            quote!(Some(#v))
+        }
+        None => quote!(None),
+    }
+}
