@@ -388,6 +388,182 @@ pub(crate) fn io_error(checked: &Checked<'_>, source: std::io::Error) -> Error {
 /// Largest number of registers a typed multi-register call handles in one request.
 pub const MAX_SET: usize = 8;
 
+/// The public request methods, written once for the blocking and the async client: `$asy` is
+/// empty or `async`, `$aw` empty or `.await`. Each client supplies `transact`.
+macro_rules! client_methods {
+    ([$($asy:tt)*] [$($aw:tt)*]) => {
+    /// Reads consecutive holding registers (03h) from communication address `address` into
+    /// `out`; the quantity is `out.len()`.
+    pub $($asy)* fn read_holding(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
+        self.read_table(slave, Table::Holding, address, out) $($aw)*
+    }
+
+    /// Reads consecutive input registers (04h).
+    pub $($asy)* fn read_input(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
+        self.read_table(slave, Table::Input, address, out) $($aw)*
+    }
+
+    $($asy)* fn read_table(
+        &mut self,
+        slave: u8,
+        table: Table,
+        address: u16,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        let retries = self.core.options.retries;
+        self.transact(
+            slave,
+            read_request(table, address, out.len()),
+            out,
+            false,
+            retries,
+        ) $($aw)*
+    }
+
+    /// Writes one register (06h, or 10h where the drive lacks 06h). Slave 0 broadcasts.
+    pub $($asy)* fn write_register(&mut self, slave: u8, address: u16, value: u16) -> Result<(), Error> {
+        let value = [value];
+        let request = self.core.single_write(address, &value);
+        let retries = self.core.options.retries;
+        self.transact(slave, request, &mut [], false, retries) $($aw)*
+    }
+
+    /// Writes consecutive registers (10h). Slave 0 broadcasts.
+    pub $($asy)* fn write_registers(
+        &mut self,
+        slave: u8,
+        address: u16,
+        values: &[u16],
+    ) -> Result<(), Error> {
+        let request = Request::WriteMultiple {
+            address,
+            values: Words::Native(values),
+        };
+        let retries = self.core.options.retries;
+        self.transact(slave, request, &mut [], false, retries) $($aw)*
+    }
+
+    /// Loop-back test (08h, sub-function 0000h): the drive must return `data`.
+    pub $($asy)* fn loop_back(&mut self, slave: u8, data: u16) -> Result<(), Error> {
+        let retries = self.core.options.retries;
+        self.transact(slave, Request::LoopBack { data }, &mut [], false, retries) $($aw)*
+    }
+
+    /// Reads a register as its typed value.
+    pub $($asy)* fn read<R: Readable>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+    ) -> Result<R::Value, Error> {
+        let address = R::address(settings, self.core.kind);
+        let mut raw = [0u16; 1];
+        self.read_table(slave, R::TABLE, address, &mut raw) $($aw)*?;
+        Ok(R::decode(raw[0], settings)?)
+    }
+
+    /// Writes a typed value. The value is range-checked first; nothing out of range is sent.
+    pub $($asy)* fn write<R: Writable>(
+        &mut self,
+        slave: u8,
+        value: &R::Value,
+        settings: &R::Settings,
+    ) -> Result<(), Error> {
+        let raw = R::encode(value, settings)?;
+        let address = R::address(settings, self.core.kind);
+        self.write_register(slave, address, raw) $($aw)*
+    }
+
+    /// Read-modify-write: reads the register, lets `change` edit the typed value, writes it back.
+    /// Returns the value written.
+    pub $($asy)* fn update<R: Readable + Writable>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+        change: impl FnOnce(&mut R::Value),
+    ) -> Result<R::Value, Error> {
+        let mut value = self.read::<R>(slave, settings) $($aw)*?;
+        change(&mut value);
+        self.write::<R>(slave, &value, settings) $($aw)*?;
+        Ok(value)
+    }
+
+    /// Read-modify-write of a bit-field register: sets the bits of `set` and clears those of
+    /// `clear`, keeping the other fields as read. Reserved bits are refused in the masks and
+    /// written as 0.
+    pub $($asy)* fn modify_bits<R>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+        set: u16,
+        clear: u16,
+    ) -> Result<R::Value, Error>
+    where
+        R: BitRegister + Readable + Writable,
+        R::Value: Bits,
+    {
+        let reserved = (set | clear) & !R::FIELD_MASK;
+        if reserved != 0 {
+            return Err(Refusal::ReservedBits {
+                register: R::ID,
+                bits: reserved,
+            }
+            .into());
+        }
+        self.update::<R>(slave, settings, |v| {
+            let raw = ((v.bits() & !clear) | set) & R::FIELD_MASK;
+            *v = R::Value::from_bits(raw);
+        }) $($aw)*
+    }
+
+    /// Reads consecutive registers in one request: `client.read_many::<(A, B, C)>(1, &s)`.
+    pub $($asy)* fn read_many<S: ReadSet>(
+        &mut self,
+        slave: u8,
+        settings: &S::Settings,
+    ) -> Result<S::Values, Error> {
+        let (address, table) = S::layout(settings, self.core.kind)?;
+        let mut raw = [0u16; MAX_SET];
+        let raw = &mut raw[..S::LEN.min(MAX_SET)];
+        self.read_table(slave, table, address, raw) $($aw)*?;
+        Ok(S::decode(raw, settings)?)
+    }
+
+    /// Writes consecutive registers in one 10h request, each value range-checked first.
+    pub $($asy)* fn write_many<S: WriteSet>(
+        &mut self,
+        slave: u8,
+        values: &S::Values,
+        settings: &S::Settings,
+    ) -> Result<(), Error> {
+        let (address, _) = S::layout(settings, self.core.kind)?;
+        let mut raw = [0u16; MAX_SET];
+        let raw = &mut raw[..S::LEN.min(MAX_SET)];
+        S::encode(values, settings, raw)?;
+        self.write_registers(slave, address, raw) $($aw)*
+    }
+
+    /// Runs a command of the profile (ENTER, ACCEPT, save parameters) by its map id. A command
+    /// that stores to EEPROM ([`CommandKind::Persist`]) takes one write from the hourly budget,
+    /// or is refused when the budget is spent; it is never retried, since a lost reply may
+    /// follow a completed write. Plain writes to these registers are refused.
+    pub $($asy)* fn persist(&mut self, slave: u8, id: &str) -> Result<(), Error> {
+        let command = self.core.command(id)?;
+        let retries = match command.kind {
+            CommandKind::Persist => 0,
+            CommandKind::Accept => self.core.options.retries,
+        };
+        for &(address, value) in command.writes {
+            let value = [value];
+            let request = self.core.single_write(address, &value);
+            self.transact(slave, request, &mut [], true, retries) $($aw)*?;
+        }
+        Ok(())
+    }
+    };
+}
+#[cfg(feature = "tokio")]
+pub(crate) use client_methods;
+
 /// A blocking Modbus client for drives described by a [`Profile`].
 pub struct Client<T: Transport> {
     transport: T,
@@ -518,171 +694,5 @@ impl<T: Transport> Client<T> {
         }
     }
 
-    /// Reads consecutive holding registers (03h) from communication address `address` into
-    /// `out`; the quantity is `out.len()`.
-    pub fn read_holding(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
-        self.read_table(slave, Table::Holding, address, out)
-    }
-
-    /// Reads consecutive input registers (04h).
-    pub fn read_input(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
-        self.read_table(slave, Table::Input, address, out)
-    }
-
-    fn read_table(
-        &mut self,
-        slave: u8,
-        table: Table,
-        address: u16,
-        out: &mut [u16],
-    ) -> Result<(), Error> {
-        let retries = self.core.options.retries;
-        self.transact(
-            slave,
-            read_request(table, address, out.len()),
-            out,
-            false,
-            retries,
-        )
-    }
-
-    /// Writes one register (06h, or 10h where the drive lacks 06h). Slave 0 broadcasts.
-    pub fn write_register(&mut self, slave: u8, address: u16, value: u16) -> Result<(), Error> {
-        let value = [value];
-        let request = self.core.single_write(address, &value);
-        let retries = self.core.options.retries;
-        self.transact(slave, request, &mut [], false, retries)
-    }
-
-    /// Writes consecutive registers (10h). Slave 0 broadcasts.
-    pub fn write_registers(
-        &mut self,
-        slave: u8,
-        address: u16,
-        values: &[u16],
-    ) -> Result<(), Error> {
-        let request = Request::WriteMultiple {
-            address,
-            values: Words::Native(values),
-        };
-        let retries = self.core.options.retries;
-        self.transact(slave, request, &mut [], false, retries)
-    }
-
-    /// Loop-back test (08h, sub-function 0000h): the drive must return `data`.
-    pub fn loop_back(&mut self, slave: u8, data: u16) -> Result<(), Error> {
-        let retries = self.core.options.retries;
-        self.transact(slave, Request::LoopBack { data }, &mut [], false, retries)
-    }
-
-    /// Reads a register as its typed value.
-    pub fn read<R: Readable>(
-        &mut self,
-        slave: u8,
-        settings: &R::Settings,
-    ) -> Result<R::Value, Error> {
-        let address = R::address(settings, self.core.kind);
-        let mut raw = [0u16; 1];
-        self.read_table(slave, R::TABLE, address, &mut raw)?;
-        Ok(R::decode(raw[0], settings)?)
-    }
-
-    /// Writes a typed value. The value is range-checked first; nothing out of range is sent.
-    pub fn write<R: Writable>(
-        &mut self,
-        slave: u8,
-        value: &R::Value,
-        settings: &R::Settings,
-    ) -> Result<(), Error> {
-        let raw = R::encode(value, settings)?;
-        let address = R::address(settings, self.core.kind);
-        self.write_register(slave, address, raw)
-    }
-
-    /// Read-modify-write: reads the register, lets `change` edit the typed value, writes it back.
-    /// Returns the value written.
-    pub fn update<R: Readable + Writable>(
-        &mut self,
-        slave: u8,
-        settings: &R::Settings,
-        change: impl FnOnce(&mut R::Value),
-    ) -> Result<R::Value, Error> {
-        let mut value = self.read::<R>(slave, settings)?;
-        change(&mut value);
-        self.write::<R>(slave, &value, settings)?;
-        Ok(value)
-    }
-
-    /// Read-modify-write of a bit-field register: sets the bits of `set` and clears those of
-    /// `clear`, keeping the other fields as read. Reserved bits are refused in the masks and
-    /// written as 0.
-    pub fn modify_bits<R>(
-        &mut self,
-        slave: u8,
-        settings: &R::Settings,
-        set: u16,
-        clear: u16,
-    ) -> Result<R::Value, Error>
-    where
-        R: BitRegister + Readable + Writable,
-        R::Value: Bits,
-    {
-        let reserved = (set | clear) & !R::FIELD_MASK;
-        if reserved != 0 {
-            return Err(Refusal::ReservedBits {
-                register: R::ID,
-                bits: reserved,
-            }
-            .into());
-        }
-        self.update::<R>(slave, settings, |v| {
-            let raw = ((v.bits() & !clear) | set) & R::FIELD_MASK;
-            *v = R::Value::from_bits(raw);
-        })
-    }
-
-    /// Reads consecutive registers in one request: `client.read_many::<(A, B, C)>(1, &s)`.
-    pub fn read_many<S: ReadSet>(
-        &mut self,
-        slave: u8,
-        settings: &S::Settings,
-    ) -> Result<S::Values, Error> {
-        let (address, table) = S::layout(settings, self.core.kind)?;
-        let mut raw = [0u16; MAX_SET];
-        let raw = &mut raw[..S::LEN.min(MAX_SET)];
-        self.read_table(slave, table, address, raw)?;
-        Ok(S::decode(raw, settings)?)
-    }
-
-    /// Writes consecutive registers in one 10h request, each value range-checked first.
-    pub fn write_many<S: WriteSet>(
-        &mut self,
-        slave: u8,
-        values: &S::Values,
-        settings: &S::Settings,
-    ) -> Result<(), Error> {
-        let (address, _) = S::layout(settings, self.core.kind)?;
-        let mut raw = [0u16; MAX_SET];
-        let raw = &mut raw[..S::LEN.min(MAX_SET)];
-        S::encode(values, settings, raw)?;
-        self.write_registers(slave, address, raw)
-    }
-
-    /// Runs a command of the profile (ENTER, ACCEPT, save parameters) by its map id. A command
-    /// that stores to EEPROM ([`CommandKind::Persist`]) takes one write from the hourly budget,
-    /// or is refused when the budget is spent; it is never retried, since a lost reply may
-    /// follow a completed write. Plain writes to these registers are refused.
-    pub fn persist(&mut self, slave: u8, id: &str) -> Result<(), Error> {
-        let command = self.core.command(id)?;
-        let retries = match command.kind {
-            CommandKind::Persist => 0,
-            CommandKind::Accept => self.core.options.retries,
-        };
-        for &(address, value) in command.writes {
-            let value = [value];
-            let request = self.core.single_write(address, &value);
-            self.transact(slave, request, &mut [], true, retries)?;
-        }
-        Ok(())
-    }
+    client_methods!([] []);
 }

@@ -68,7 +68,11 @@ impl FaultyLink {
     }
 
     fn deliver(&mut self, at: Instant, bytes: Vec<u8>) {
-        let i = self.deliveries.iter().position(|(t, _)| *t > at).unwrap_or(self.deliveries.len());
+        let i = self
+            .deliveries
+            .iter()
+            .position(|(t, _)| *t > at)
+            .unwrap_or(self.deliveries.len());
         self.deliveries.insert(i, (at, bytes));
     }
 }

@@ -12,6 +12,8 @@
 //! - [`client::Client`]: checked transactions with timeouts, retries, broadcast, typed register
 //!   access and counted EEPROM writes ([`persist`]).
 
+#[cfg(feature = "tokio")]
+pub mod async_client;
 pub mod client;
 pub mod crc;
 pub mod error;
@@ -33,6 +35,7 @@ pub use client::{Client, ClientOptions};
 pub use error::{Error, Refusal};
 pub use profile::Profile;
 pub use register::{
-    Access, BitRegister, Bits, Code, DriveSettings, Readable, Register, RegisterInfo, Table, Writable, WriteRestriction,
+    Access, BitRegister, Bits, Code, DriveSettings, Readable, Register, RegisterInfo, Table,
+    Writable, WriteRestriction,
 };
 pub use scale::ValueError;

@@ -72,7 +72,13 @@ impl Bits for Command {
     }
 }
 
-register!(OperationCommand, "operation_command", 0x0001, Command, |raw, _| Ok(Command::from_bits(raw)));
+register!(
+    OperationCommand,
+    "operation_command",
+    0x0001,
+    Command,
+    |raw, _| Ok(Command::from_bits(raw))
+);
 impl Writable for OperationCommand {
     fn encode(value: &Command, _: &Settings) -> Result<u16, ValueError> {
         Ok(value.bits() & 0x07FF)
@@ -82,9 +88,19 @@ impl BitRegister for OperationCommand {
     const FIELD_MASK: u16 = 0x07FF;
 }
 
-register!(FrequencyReference, "frequency_reference", 0x0002, f64, |raw, s| {
-    Ok(scale::decode_decimal(raw, false, frequency_scale("frequency_reference", s)?))
-});
+register!(
+    FrequencyReference,
+    "frequency_reference",
+    0x0002,
+    f64,
+    |raw, s| {
+        Ok(scale::decode_decimal(
+            raw,
+            false,
+            frequency_scale("frequency_reference", s)?,
+        ))
+    }
+);
 impl Writable for FrequencyReference {
     fn encode(value: &f64, s: &Settings) -> Result<u16, ValueError> {
         let scale = frequency_scale(Self::ID, s)?;
@@ -94,12 +110,32 @@ impl Writable for FrequencyReference {
     }
 }
 
-register!(FrequencyMonitor, "frequency_monitor", 0x0023, f64, |raw, s| {
-    Ok(scale::decode_decimal(raw, false, frequency_scale("frequency_monitor", s)?))
-});
-register!(OutputFrequency, "output_frequency", 0x0024, f64, |raw, s| {
-    Ok(scale::decode_decimal(raw, false, frequency_scale("output_frequency", s)?))
-});
+register!(
+    FrequencyMonitor,
+    "frequency_monitor",
+    0x0023,
+    f64,
+    |raw, s| {
+        Ok(scale::decode_decimal(
+            raw,
+            false,
+            frequency_scale("frequency_monitor", s)?,
+        ))
+    }
+);
+register!(
+    OutputFrequency,
+    "output_frequency",
+    0x0024,
+    f64,
+    |raw, s| {
+        Ok(scale::decode_decimal(
+            raw,
+            false,
+            frequency_scale("output_frequency", s)?,
+        ))
+    }
+);
 register!(OutputCurrent, "output_current", 0x0027, f64, |raw, _| {
     Ok(scale::decode_decimal(raw, false, Decimal::new(1, 1)))
 });
@@ -127,8 +163,16 @@ fn typed_read_converts_with_the_settings() {
     let mut c = v7(strict());
     assert_eq!(c.read::<FrequencyMonitor>(1, &HZ_001).unwrap(), 60.0);
     assert_eq!(c.read::<OutputCurrent>(1, &HZ_001).unwrap(), 12.3);
-    let e = c.read::<FrequencyMonitor>(1, &Settings::default()).unwrap_err();
-    assert!(matches!(e, Error::Value(ValueError::MissingSetting { setting: "n152", .. })));
+    let e = c
+        .read::<FrequencyMonitor>(1, &Settings::default())
+        .unwrap_err();
+    assert!(matches!(
+        e,
+        Error::Value(ValueError::MissingSetting {
+            setting: "n152",
+            ..
+        })
+    ));
 }
 
 #[test]
@@ -141,7 +185,11 @@ fn typed_write_checks_the_range_before_anything_is_sent() {
         assert!(matches!(e, Error::Value(_)), "{e}");
         assert!(e.is_refusal());
     }
-    assert_eq!(c.transport().requests, 1, "nothing out of range reached the wire");
+    assert_eq!(
+        c.transport().requests,
+        1,
+        "nothing out of range reached the wire"
+    );
 }
 
 #[test]
@@ -149,13 +197,23 @@ fn bit_fields_are_read_modified_and_written_keeping_the_other_fields() {
     let mut c = v7(strict());
     // Forward/reverse (bit 1) and S7 (bit A) set, plus a reserved bit the drive reports.
     c.transport().slave.set_holding(0x0001, 0x8402);
-    let v = c.modify_bits::<OperationCommand>(1, &HZ_001, 0x0001, 0x0002).unwrap();
+    let v = c
+        .modify_bits::<OperationCommand>(1, &HZ_001, 0x0001, 0x0002)
+        .unwrap();
     assert_eq!(v, Command(0x0401));
-    assert_eq!(c.transport().slave.holding(0x0001), 0x0401, "reserved bit written as 0");
-    let v = c.update::<OperationCommand>(1, &HZ_001, |v| v.0 |= 0x0008).unwrap();
+    assert_eq!(
+        c.transport().slave.holding(0x0001),
+        0x0401,
+        "reserved bit written as 0"
+    );
+    let v = c
+        .update::<OperationCommand>(1, &HZ_001, |v| v.0 |= 0x0008)
+        .unwrap();
     assert_eq!(v, Command(0x0409));
     let before = c.transport().requests;
-    let e = c.modify_bits::<OperationCommand>(1, &HZ_001, 0x8000, 0).unwrap_err();
+    let e = c
+        .modify_bits::<OperationCommand>(1, &HZ_001, 0x8000, 0)
+        .unwrap_err();
     assert!(matches!(
         e,
         Error::Refused(Refusal::ReservedBits { bits: 0x8000, .. })
@@ -203,7 +261,11 @@ fn broadcast_returns_without_waiting_and_is_refused_where_the_manual_forbids_it(
     c.write_register(0, 0x0002, 0x1000).unwrap();
     c.write_registers(0, 0x0001, &[1, 0x1000]).unwrap();
     assert!(t.elapsed() < Duration::from_secs(1), "waited for a reply");
-    assert_eq!(c.transport().slave.holding(0x0001), 1, "the drive executed the broadcast");
+    assert_eq!(
+        c.transport().slave.holding(0x0001),
+        1,
+        "the drive executed the broadcast"
+    );
     assert_eq!(sent(&mut c)[0][0], 0, "sent to slave 0");
 
     let mut r = [0u16; 1];
@@ -212,11 +274,20 @@ fn broadcast_returns_without_waiting_and_is_refused_where_the_manual_forbids_it(
         c.loop_back(0, 0x1234).unwrap_err(),
         c.write_register(0, 0x0101, 5).unwrap_err(),
     ];
-    assert!(matches!(refused[0], Error::Refused(Refusal::BroadcastRead { function: 3 })));
-    assert!(matches!(refused[1], Error::Refused(Refusal::BroadcastLoopBack)));
+    assert!(matches!(
+        refused[0],
+        Error::Refused(Refusal::BroadcastRead { function: 3 })
+    ));
+    assert!(matches!(
+        refused[1],
+        Error::Refused(Refusal::BroadcastLoopBack)
+    ));
     assert!(matches!(
         refused[2],
-        Error::Refused(Refusal::BroadcastAddress { address: 0x0101, .. })
+        Error::Refused(Refusal::BroadcastAddress {
+            address: 0x0101,
+            ..
+        })
     ));
     assert_eq!(c.transport().requests, 2, "nothing refused was sent");
 
@@ -226,7 +297,10 @@ fn broadcast_returns_without_waiting_and_is_refused_where_the_manual_forbids_it(
         strict(),
     );
     let e = acn.write_register(0, 0x0382, 1).unwrap_err();
-    assert!(matches!(e, Error::Refused(Refusal::BroadcastFunction { .. })), "{e}");
+    assert!(
+        matches!(e, Error::Refused(Refusal::BroadcastFunction { .. })),
+        "{e}"
+    );
 }
 
 #[test]
@@ -239,14 +313,20 @@ fn requests_the_drive_cannot_serve_are_refused_before_sending() {
         "refused before sending: yaskawa-v7 accepts at most 8 registers per 03h request; 9 asked"
     );
     let e = c.write_registers(1, 0x0001, &[0; 17]).unwrap_err();
-    assert!(matches!(e, Error::Refused(Refusal::TooManyRegisters { max: 16, .. })));
+    assert!(matches!(
+        e,
+        Error::Refused(Refusal::TooManyRegisters { max: 16, .. })
+    ));
     let e = c.read_input(1, 0x0020, &mut [0; 1]).unwrap_err();
     assert!(matches!(
         e,
         Error::Refused(Refusal::UnsupportedFunction { function: 4, .. })
     ));
     let e = c.read_holding(33, 0x0020, &mut [0; 1]).unwrap_err();
-    assert!(matches!(e, Error::Refused(Refusal::Slave { slave: 33, .. })));
+    assert!(matches!(
+        e,
+        Error::Refused(Refusal::Slave { slave: 33, .. })
+    ));
     let e = c.read_holding(1, 0x0020, &mut []).unwrap_err();
     assert!(matches!(e, Error::Refused(Refusal::NoRegisters { .. })));
     let e = c.read_holding(1, 0xFFFF, &mut [0; 2]).unwrap_err();
@@ -310,14 +390,22 @@ fn persisting_goes_through_the_budget() {
             ..
         })
     ));
-    assert!(e.to_string().contains("EEPROM write budget spent: 2 of 2"), "{e}");
+    assert!(
+        e.to_string().contains("EEPROM write budget spent: 2 of 2"),
+        "{e}"
+    );
     // ACCEPT does not write EEPROM: not counted.
     for _ in 0..5 {
         c.persist(1, "accept").unwrap();
     }
     assert_eq!(c.eeprom().total(), 2);
     assert_eq!(
-        c.transport().slave.writes.iter().filter(|w| w.0 == 0x0900).count(),
+        c.transport()
+            .slave
+            .writes
+            .iter()
+            .filter(|w| w.0 == 0x0900)
+            .count(),
         2
     );
     // The command registers cannot be written around the budget.
@@ -346,7 +434,11 @@ fn an_eeprom_write_is_never_retried() {
     let e = c.persist(1, "enter").unwrap_err();
     assert!(matches!(e, Error::Timeout { attempts: 1, .. }), "{e}");
     assert_eq!(c.transport().requests, 1);
-    assert_eq!(c.eeprom().total(), 1, "the write that may have happened is counted");
+    assert_eq!(
+        c.eeprom().total(),
+        1,
+        "the write that may have happened is counted"
+    );
 }
 
 #[test]

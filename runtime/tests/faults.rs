@@ -16,7 +16,11 @@ use drivemap_runtime::slave::SimulatedSlave;
 
 use common::{V7, strict};
 
-const KINDS: [TransportKind; 3] = [TransportKind::Rtu, TransportKind::RtuOverTcp, TransportKind::Tcp];
+const KINDS: [TransportKind; 3] = [
+    TransportKind::Rtu,
+    TransportKind::RtuOverTcp,
+    TransportKind::Tcp,
+];
 
 fn client(kind: TransportKind, options: ClientOptions) -> Client<FaultyLink> {
     let mut slave = SimulatedSlave::new(1, &V7);
@@ -29,10 +33,12 @@ fn client(kind: TransportKind, options: ClientOptions) -> Client<FaultyLink> {
 /// holds (a stale reply to a read of 0020h would give 1234h).
 fn assert_recovers(c: &mut Client<FaultyLink>) {
     let mut r = [0u16; 1];
-    c.read_holding(1, 0x21, &mut r).expect("transaction after the fault");
+    c.read_holding(1, 0x21, &mut r)
+        .expect("transaction after the fault");
     assert_eq!(r, [0x5678]);
     let mut r = [0u16; 2];
-    c.read_holding(1, 0x20, &mut r).expect("second transaction after the fault");
+    c.read_holding(1, 0x20, &mut r)
+        .expect("second transaction after the fault");
     assert_eq!(r, [0x1234, 0x5678]);
 }
 
@@ -67,7 +73,13 @@ fn dropped_reply_times_out_naming_the_request() {
 #[test]
 fn dropped_reply_is_recovered_by_a_retry() {
     for kind in KINDS {
-        let mut c = client(kind, ClientOptions { retries: 1, ..strict() });
+        let mut c = client(
+            kind,
+            ClientOptions {
+                retries: 1,
+                ..strict()
+            },
+        );
         c.transport().inject(Fault::Drop);
         assert_eq!(read_0020(&mut c).unwrap(), 0x1234);
         assert_eq!(c.transport().requests, 2, "{kind:?}");
@@ -81,7 +93,10 @@ fn truncated_reply_times_out_with_the_incomplete_frame_reported() {
         let mut c = client(kind, strict());
         c.transport().inject(Fault::Truncate { keep: 4 });
         let e = read_0020(&mut c).unwrap_err();
-        assert!(e.to_string().contains("incomplete frame of 4 byte(s)"), "{e}");
+        assert!(
+            e.to_string().contains("incomplete frame of 4 byte(s)"),
+            "{e}"
+        );
         assert_eq!(timeout_of(e), Some(Discard::Gap { bytes: 4 }), "{kind:?}");
         assert_recovers(&mut c);
     }
@@ -107,7 +122,8 @@ fn corrupt_crc_is_rejected() {
 fn reply_after_the_timeout_is_a_timeout_and_is_not_taken_later() {
     for kind in KINDS {
         let mut c = client(kind, strict());
-        c.transport().inject(Fault::Delay(Duration::from_millis(150)));
+        c.transport()
+            .inject(Fault::Delay(Duration::from_millis(150)));
         let e = read_0020(&mut c).unwrap_err();
         assert!(matches!(e, Error::Timeout { .. }), "{e}");
         // The late reply arrives while the link is idle; it is flushed before the next request.
@@ -133,9 +149,15 @@ fn reply_from_another_slave_is_discarded() {
         c.transport().inject(Fault::WrongSlave(2));
         let e = read_0020(&mut c).unwrap_err();
         let expected = if kind == TransportKind::Tcp {
-            FrameError::Unit { expected: 1, got: 2 }
+            FrameError::Unit {
+                expected: 1,
+                got: 2,
+            }
         } else {
-            FrameError::Slave { expected: 1, got: 2 }
+            FrameError::Slave {
+                expected: 1,
+                got: 2,
+            }
         };
         assert!(e.to_string().contains("discarded 1 frame(s)"), "{e}");
         assert_eq!(timeout_of(e), Some(Discard::Frame(expected)), "{kind:?}");
@@ -175,7 +197,10 @@ fn late_write_echo_is_not_taken_for_another_write() {
     for kind in [TransportKind::Rtu, TransportKind::RtuOverTcp] {
         let mut c = client(kind, strict());
         c.transport().inject(Fault::LateReply);
-        assert!(matches!(c.write_register(1, 0x0001, 1), Err(Error::Timeout { .. })));
+        assert!(matches!(
+            c.write_register(1, 0x0001, 1),
+            Err(Error::Timeout { .. })
+        ));
         c.write_register(1, 0x0002, 600).unwrap();
         assert_eq!(c.transport().slave.holding(0x0002), 600);
         assert_recovers(&mut c);
@@ -186,7 +211,8 @@ fn late_write_echo_is_not_taken_for_another_write() {
 fn garbage_before_the_reply_is_skipped() {
     for kind in KINDS {
         let mut c = client(kind, strict());
-        c.transport().inject(Fault::Noise(vec![0xFF, 0x01, 0x03, 0xFA, 0x00, 0x13]));
+        c.transport()
+            .inject(Fault::Noise(vec![0xFF, 0x01, 0x03, 0xFA, 0x00, 0x13]));
         assert_eq!(read_0020(&mut c).unwrap(), 0x1234, "{kind:?}");
         assert_recovers(&mut c);
     }
@@ -199,7 +225,10 @@ fn exception_keeps_the_drive_code_and_names_it_from_the_profile() {
         c.transport().slave.fail_at(0x0101, 0x21);
         let e = c.write_register(1, 0x0101, 9999).unwrap_err();
         let ex = *e.exception().expect("an exception");
-        assert_eq!((ex.function, ex.code, ex.name), (0x06, 0x21, "Data Limits Exceeded"));
+        assert_eq!(
+            (ex.function, ex.code, ex.name),
+            (0x06, 0x21, "Data Limits Exceeded")
+        );
         assert!(ex.from_profile);
         assert_eq!(
             e.to_string(),

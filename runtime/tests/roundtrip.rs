@@ -9,18 +9,42 @@ use proptest::prelude::*;
 
 #[derive(Debug, Clone)]
 enum Case {
-    Read { input: bool, address: u16, values: Vec<u16> },
-    WriteSingle { address: u16, value: u16 },
-    LoopBack { data: u16 },
-    WriteMultiple { address: u16, values: Vec<u16> },
-    Exception { which: u8, code: u8 },
+    Read {
+        input: bool,
+        address: u16,
+        values: Vec<u16>,
+    },
+    WriteSingle {
+        address: u16,
+        value: u16,
+    },
+    LoopBack {
+        data: u16,
+    },
+    WriteMultiple {
+        address: u16,
+        values: Vec<u16>,
+    },
+    Exception {
+        which: u8,
+        code: u8,
+    },
 }
 
 fn case() -> impl Strategy<Value = Case> {
     prop_oneof![
-        (any::<bool>(), 0u16..=0xFF00, prop::collection::vec(any::<u16>(), 1..=125))
-            .prop_map(|(input, address, values)| Case::Read { input, address, values }),
-        (any::<u16>(), any::<u16>()).prop_map(|(address, value)| Case::WriteSingle { address, value }),
+        (
+            any::<bool>(),
+            0u16..=0xFF00,
+            prop::collection::vec(any::<u16>(), 1..=125)
+        )
+            .prop_map(|(input, address, values)| Case::Read {
+                input,
+                address,
+                values
+            }),
+        (any::<u16>(), any::<u16>())
+            .prop_map(|(address, value)| Case::WriteSingle { address, value }),
         any::<u16>().prop_map(|data| Case::LoopBack { data }),
         (0u16..=0xFF00, prop::collection::vec(any::<u16>(), 1..=123))
             .prop_map(|(address, values)| Case::WriteMultiple { address, values }),
@@ -30,7 +54,11 @@ fn case() -> impl Strategy<Value = Case> {
 
 fn parts(case: &Case) -> (Request<'_>, Response<'_>) {
     match case {
-        Case::Read { input, address, values } => {
+        Case::Read {
+            input,
+            address,
+            values,
+        } => {
             let quantity = values.len() as u16;
             let address = *address;
             let request = if *input {
@@ -41,24 +69,57 @@ fn parts(case: &Case) -> (Request<'_>, Response<'_>) {
             (request, Response::Registers(Words::Native(values)))
         }
         Case::WriteSingle { address, value } => (
-            Request::WriteSingle { address: *address, value: *value },
-            Response::WriteSingle { address: *address, value: *value },
+            Request::WriteSingle {
+                address: *address,
+                value: *value,
+            },
+            Response::WriteSingle {
+                address: *address,
+                value: *value,
+            },
         ),
-        Case::LoopBack { data } => (Request::LoopBack { data: *data }, Response::LoopBack { data: *data }),
+        Case::LoopBack { data } => (
+            Request::LoopBack { data: *data },
+            Response::LoopBack { data: *data },
+        ),
         Case::WriteMultiple { address, values } => (
-            Request::WriteMultiple { address: *address, values: Words::Native(values) },
-            Response::WriteMultiple { address: *address, quantity: values.len() as u16 },
+            Request::WriteMultiple {
+                address: *address,
+                values: Words::Native(values),
+            },
+            Response::WriteMultiple {
+                address: *address,
+                quantity: values.len() as u16,
+            },
         ),
         Case::Exception { which, code } => {
             let request = match which {
-                0 => Request::ReadHolding { address: 0, quantity: 1 },
-                1 => Request::ReadInput { address: 0, quantity: 1 },
-                2 => Request::WriteSingle { address: 0, value: 0 },
+                0 => Request::ReadHolding {
+                    address: 0,
+                    quantity: 1,
+                },
+                1 => Request::ReadInput {
+                    address: 0,
+                    quantity: 1,
+                },
+                2 => Request::WriteSingle {
+                    address: 0,
+                    value: 0,
+                },
                 3 => Request::LoopBack { data: 0 },
-                _ => Request::WriteMultiple { address: 0, values: Words::Native(&[0]) },
+                _ => Request::WriteMultiple {
+                    address: 0,
+                    values: Words::Native(&[0]),
+                },
             };
             let function = request.function();
-            (request, Response::Exception { function, code: *code })
+            (
+                request,
+                Response::Exception {
+                    function,
+                    code: *code,
+                },
+            )
         }
     }
 }
