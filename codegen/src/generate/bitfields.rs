@@ -27,6 +27,11 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
         let set = format_ident!("set_{}", f.id);
         let with = format_ident!("with_{}", f.id);
         let fname = &f.id;
+        let lo_lit = proc_macro2::Literal::u8_unsuffixed(lo);
+        let set_doc = format!("Sets `{fname}`.");
+        let with_doc = format!("This value with `{fname}` set to `on`.");
+        let set_wide_doc = format!("Sets `{fname}`; a value wider than the field is refused.");
+        let set_enum_doc = format!("Sets `{fname}`; an unknown or too wide code is refused.");
         let where_ = if width == 1 {
             format!("bit {lo}")
         } else {
@@ -44,28 +49,28 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
             methods.push(quote! {
                 #doc
                 pub const fn #get(&self) -> bool { self.0 & #fm != 0 }
-                #[doc = concat!("Sets `", #fname, "`.")]
+                #[doc = #set_doc]
                 pub fn #set(&mut self, on: bool) -> &mut Self {
                     if on { self.0 |= #fm } else { self.0 &= !#fm }
                     self
                 }
-                #[doc = concat!("This value with `", #fname, "` set to `on`.")]
+                #[doc = #with_doc]
                 pub const fn #with(self, on: bool) -> Self {
                     Self(if on { self.0 | #fm } else { self.0 & !#fm })
                 }
             });
             debug_fields.push(quote!(.field(#fname, &self.#get())));
         } else if f.values.is_empty() {
-            let max = ((1u32 << width) - 1) as u16;
+            let max = proc_macro2::Literal::u16_unsuffixed(((1u32 << width) - 1) as u16);
             methods.push(quote! {
                 #doc
-                pub const fn #get(&self) -> u16 { (self.0 & #fm) >> #lo }
-                #[doc = concat!("Sets `", #fname, "`; a value wider than the field is refused.")]
+                pub const fn #get(&self) -> u16 { (self.0 & #fm) >> #lo_lit }
+                #[doc = #set_wide_doc]
                 pub fn #set(&mut self, value: u16) -> Result<&mut Self, #rt::ValueError> {
                     if value > #max {
                         return Err(#rt::ValueError::OutOfRange { register: #reg_id, value: value as f64, min: 0.0, max: #max as f64, unit: "" });
                     }
-                    self.0 = (self.0 & !#fm) | (value << #lo);
+                    self.0 = (self.0 & !#fm) | (value << #lo_lit);
                     Ok(self)
                 }
             });
@@ -78,17 +83,17 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
                 &format!("field `{}` of `{}`", f.id, reg_id),
                 rt,
             ));
-            let max = ((1u32 << width) - 1) as u16;
+            let max = proc_macro2::Literal::u16_unsuffixed(((1u32 << width) - 1) as u16);
             methods.push(quote! {
                 #doc
-                pub fn #get(&self) -> #ety { <#ety as #rt::Code>::from_code((self.0 & #fm) >> #lo) }
-                #[doc = concat!("Sets `", #fname, "`; an unknown or too wide code is refused.")]
+                pub fn #get(&self) -> #ety { <#ety as #rt::Code>::from_code((self.0 & #fm) >> #lo_lit) }
+                #[doc = #set_enum_doc]
                 pub fn #set(&mut self, value: #ety) -> Result<&mut Self, #rt::ValueError> {
                     let code = #rt::Code::code(&value);
                     if !#rt::Code::is_known(&value) || code > #max {
                         return Err(#rt::ValueError::UnknownCode { register: #reg_id, code });
                     }
-                    self.0 = (self.0 & !#fm) | (code << #lo);
+                    self.0 = (self.0 & !#fm) | (code << #lo_lit);
                     Ok(self)
                 }
             });

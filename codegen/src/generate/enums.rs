@@ -10,7 +10,10 @@ use crate::validate::pascal_case;
 /// An enum type named `ty` for `values`; `what` describes it in rustdoc.
 pub fn emit(ty: &Ident, values: &[EnumValue], what: &str, rt: &TokenStream) -> TokenStream {
     let variants: Vec<Ident> = values.iter().map(|v| ident(&pascal_case(&v.id))).collect();
-    let codes: Vec<u16> = values.iter().map(|v| v.value).collect();
+    let codes: Vec<proc_macro2::Literal> = values
+        .iter()
+        .map(|v| proc_macro2::Literal::u16_unsuffixed(v.value))
+        .collect();
     let names: Vec<&str> = values.iter().map(|v| v.name.as_str()).collect();
     let decls = values.iter().zip(&variants).map(|(v, var)| {
         let text = match &v.source {

@@ -58,7 +58,8 @@ fn space_items(code: &str) -> String {
 }
 
 fn drive_tokens(drive: &Drive, options: &Options) -> TokenStream {
-    let rt = &options.runtime;
+    let runtime = &options.runtime;
+    let rt = &quote!(rt);
     let module_doc = docs::lines(&docs::module(drive));
     let profile = profile::emit(drive, rt);
     let settings = settings::emit(drive, rt);
@@ -67,7 +68,8 @@ fn drive_tokens(drive: &Drive, options: &Options) -> TokenStream {
         #module_doc
         #![allow(clippy::all, clippy::pedantic, unused_imports, unused_variables, unreachable_patterns)]
 
-        use #rt::Code as _;
+        use #runtime as rt;
+        use rt::{Code as _, Register as _};
 
         #profile
         #settings

@@ -58,6 +58,10 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
         .as_ref()
         .map(|a| (a.rtu_offset, a.tcp_offset))
         .unwrap_or((0, 0));
+    let (rtu_off, tcp_off) = (
+        proc_macro2::Literal::i32_unsuffixed(rtu_off),
+        proc_macro2::Literal::i32_unsuffixed(tcp_off),
+    );
     let timing = p.timing.as_ref();
     let gap = super::float(timing.map(|t| t.frame_gap_chars).unwrap_or(3.5));
     let ict = timing.and_then(|t| t.inter_char_timeout.as_ref());

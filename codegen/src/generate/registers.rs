@@ -180,7 +180,11 @@ fn bodies(drive: &Drive, r: &Register, rt: &TokenStream) -> Bodies {
             let mut dec_arms = Vec::new();
             let mut enc_arms = Vec::new();
             for case in &sel.cases {
-                let codes = &case.when;
+                let codes: Vec<Literal> = case
+                    .when
+                    .iter()
+                    .map(|c| Literal::u16_unsuffixed(*c))
+                    .collect();
                 match &case.scale {
                     Scale::Factor(f) => {
                         let factor = Dec::from_f64(*f).unwrap_or(one);
@@ -255,7 +259,7 @@ fn condition(drive: &Drive, w: &Condition, rt: &TokenStream) -> TokenStream {
     if let Some(s) = &w.setting {
         if let Some(sel) = drive.find(s) {
             let code = selector_code(sel);
-            let is = &w.is;
+            let is = w.is.iter().map(|c| Literal::u16_unsuffixed(*c));
             return quote!(matches!(#code, Some(#(#is)|*)));
         }
     }

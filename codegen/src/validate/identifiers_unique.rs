@@ -139,6 +139,11 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     }
     for r in &drive.registers {
         let rid = r.id();
+        if ids.first.contains_key(rid) {
+            // Reported once as a duplicate id; its type names would only repeat that.
+            ids.add(drive, out, rid, r.key_path("id"), Some(rid));
+            continue;
+        }
         ids.add(drive, out, rid, r.key_path("id"), Some(rid));
         if let Some(p) = &r.def.param {
             // A broadcast register may repeat a command register's parameter; it lives in its own space.

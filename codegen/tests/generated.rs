@@ -1,0 +1,60 @@
+//! Golden output: the generated module and the export of a small map using every construct.
+
+use std::path::Path;
+
+use drivemap_codegen::generate::{Options, drive_module};
+use drivemap_codegen::validate::Context;
+
+fn fixture() -> drivemap_codegen::Drive {
+    drivemap_codegen::read_map(
+        Path::new("tests/fixtures/mini-drive.yaml"),
+        &Context::default(),
+    )
+    .unwrap_or_else(|d| panic!("{d}"))
+}
+
+#[test]
+fn generated_module_snapshot() {
+    let drive = fixture();
+    let options = Options {
+        runtime: "::drivemap_runtime".parse().unwrap(),
+        source_name: "mini-drive.yaml".into(),
+    };
+    let code = drive_module(&drive, &options).unwrap();
+    assert!(code.starts_with("// @generated"));
+    insta::assert_snapshot!("mini_drive_module", code);
+}
+
+#[test]
+fn export_snapshot() {
+    let drive = fixture();
+    let json = serde_json::to_string_pretty(&drivemap_codegen::export::export(&drive)).unwrap();
+    insta::assert_snapshot!("mini_drive_export", json);
+}
+
+#[test]
+fn config_writes_only_when_changed() {
+    let out = std::env::temp_dir().join(format!("drivemap-config-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let mut config = drivemap_codegen::Config::new();
+    config
+        .map("tests/fixtures/mini-drive.yaml")
+        .out_dir(&out)
+        .cargo_directives(false);
+    let first = config.compile().unwrap();
+    assert_eq!(
+        first.written.len(),
+        2,
+        "module and index written on the first run"
+    );
+    assert!(first.index.is_file());
+    let index = std::fs::read_to_string(&first.index).unwrap();
+    assert!(index.contains("pub mod mini_drive;"), "{index}");
+    let second = config.compile().unwrap();
+    assert!(
+        second.written.is_empty(),
+        "nothing rewritten when nothing changed: {:?}",
+        second.written
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+}

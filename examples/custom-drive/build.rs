@@ -1,0 +1,11 @@
+//! A downstream crate's build script: its own map, generated into OUT_DIR.
+//!
+//! The map is the codegen's golden fixture, which uses every construct of the schema, so this
+//! crate also proves that everything the generator can emit compiles.
+
+fn main() {
+    drivemap_codegen::Config::new()
+        .map("../../codegen/tests/fixtures/mini-drive.yaml")
+        .compile()
+        .unwrap_or_else(|e| panic!("{e}"));
+}

@@ -1,0 +1,11 @@
+//! An application crate with its own drive map (`mini-drive`), generated at build time.
+//!
+//! ```
+//! use custom_drive::mini_drive as md;
+//! use drivemap_runtime::{Register, Writable};
+//!
+//! let settings = md::Settings { frequency_units: Some(md::FrequencyUnitsValue::HundredthHz), ..Default::default() };
+//! assert_eq!(md::FrequencyReference::encode(&50.0, &settings), Ok(5000));
+//! ```
+
+include!(concat!(env!("OUT_DIR"), "/drivemap.rs"));
