@@ -377,6 +377,16 @@ fn merge_variant(base: Node, child: Node) -> Result<Node, Vec<Diagnostic>> {
     for (key, kloc, value) in entries(child) {
         let pos = out.iter().position(|(k, _, _)| *k == key);
         let merged = match (key.as_str(), pos) {
+            ("removed", _) => {
+                if let NodeKind::Seq(items) = &value.kind {
+                    for item in items {
+                        if let Some(id) = item.get("id").and_then(scalar_str) {
+                            removed.push((id.to_owned(), item.loc.clone()));
+                        }
+                    }
+                }
+                value
+            }
             (_, None) => value,
             ("drive", Some(i)) => {
                 let old = out[i].2.clone();
@@ -395,16 +405,6 @@ fn merge_variant(base: Node, child: Node) -> Result<Node, Vec<Diagnostic>> {
             ("protocol", Some(i)) => merge_deep(out[i].2.clone(), value),
             ("groups", Some(i)) => merge_by_id(out[i].2.clone(), value, &merge_group)?,
             ("conflicts" | "gaps", Some(i)) => concat(out[i].2.clone(), value),
-            ("removed", _) => {
-                if let NodeKind::Seq(items) = &value.kind {
-                    for item in items {
-                        if let Some(id) = item.get("id").and_then(scalar_str) {
-                            removed.push((id.to_owned(), item.loc.clone()));
-                        }
-                    }
-                }
-                value
-            }
             (_, Some(_)) => value,
         };
         match pos {
