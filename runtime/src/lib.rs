@@ -39,3 +39,8 @@ pub use register::{
     Writable, WriteRestriction,
 };
 pub use scale::ValueError;
+
+/// The examples of `README.md`, compiled as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
