@@ -1,0 +1,104 @@
+//! The runtime [`Profile`] of a map loaded at run time.
+//!
+//! The client takes `&'static Profile` (generated code has statics). A tool that loads a map
+//! makes one profile per drive for the life of the process, so leaking it is the honest
+//! lifetime: [`leak_profile`] is called once per loaded map.
+
+use drivemap_codegen::ir::Drive;
+use drivemap_codegen::model::CommandKind;
+use drivemap_runtime::profile::{
+    AddressOffsets, BroadcastInfo, CommandInfo, CommandKind as RtCommandKind, ExceptionInfo,
+    Profile, Timing,
+};
+
+use crate::intern::intern as leak_str;
+
+fn leak_slice<T>(v: Vec<T>) -> &'static [T] {
+    Box::leak(v.into_boxed_slice())
+}
+
+/// Builds the runtime profile of `drive` with `'static` lifetime (see the module docs).
+pub fn leak_profile(drive: &Drive) -> &'static Profile {
+    let p = &drive.protocol;
+    let broadcast = p.broadcast.as_ref().map(|b| {
+        let mut addresses: Vec<u16> = b
+            .registers
+            .iter()
+            .filter_map(|name| drive.find(name).map(|r| r.def.address))
+            .chain(
+                drive
+                    .registers
+                    .iter()
+                    .filter(|r| r.broadcast)
+                    .map(|r| r.def.address),
+            )
+            .collect();
+        addresses.sort_unstable();
+        addresses.dedup();
+        BroadcastInfo {
+            functions: leak_slice(b.functions.clone()),
+            addresses: leak_slice(addresses),
+        }
+    });
+    let exceptions = p
+        .exceptions
+        .iter()
+        .map(|e| ExceptionInfo {
+            code: e.code,
+            name: leak_str(&e.name),
+            description: leak_str(&e.description),
+        })
+        .collect();
+    let commands = p
+        .commands
+        .iter()
+        .map(|c| CommandInfo {
+            id: leak_str(&c.id),
+            name: leak_str(&c.name),
+            kind: match c.kind {
+                CommandKind::Accept => RtCommandKind::Accept,
+                CommandKind::Persist => RtCommandKind::Persist,
+            },
+            writes: leak_slice(c.writes.iter().map(|w| (w.address, w.value)).collect()),
+            source: leak_str(&c.source),
+        })
+        .collect();
+    let timing = p.timing.as_ref();
+    let ict = timing.and_then(|t| t.inter_char_timeout.as_ref());
+    let profile = Profile {
+        drive_id: leak_str(&drive.meta.id),
+        function_codes: leak_slice(p.function_codes.clone()),
+        max_read: p.max_read,
+        max_write: p.max_write,
+        slave_min: p.slave_address.min,
+        slave_max: p.slave_address.max,
+        broadcast,
+        exceptions: leak_slice(exceptions),
+        commands: leak_slice(commands),
+        address_offsets: p
+            .addressing
+            .as_ref()
+            .map(|a| AddressOffsets {
+                rtu: a.rtu_offset,
+                tcp: a.tcp_offset,
+            })
+            .unwrap_or_default(),
+        timing: Timing {
+            frame_gap_chars: timing.map(|t| t.frame_gap_chars).unwrap_or(3.5),
+            inter_char_timeout_us: ict
+                .and_then(|i| i.ms)
+                .map(|ms| (ms * 1000.0).round() as u32),
+            inter_char_timeout_bits: ict
+                .and_then(|i| i.bits.or(i.chars.map(|c| (c * 11.0).round() as u32))),
+            response_delay_us: timing
+                .and_then(|t| t.response_time.as_ref())
+                .and_then(|i| i.ms)
+                .map(|ms| (ms * 1000.0).round() as u32),
+            response_delay_param: timing
+                .and_then(|t| t.response_delay_param.as_deref())
+                .map(leak_str),
+        },
+        eeprom_write_endurance: p.eeprom.as_ref().map(|e| e.endurance),
+    };
+    Box::leak(Box::new(profile))
+}
