@@ -123,11 +123,11 @@ fn reply_after_the_timeout_is_a_timeout_and_is_not_taken_later() {
     for kind in KINDS {
         let mut c = client(kind, strict());
         c.transport()
-            .inject(Fault::Delay(Duration::from_millis(150)));
+            .inject(Fault::Delay(Duration::from_millis(250)));
         let e = read_0020(&mut c).unwrap_err();
         assert!(matches!(e, Error::Timeout { .. }), "{e}");
         // The late reply arrives while the link is idle; it is flushed before the next request.
-        thread::sleep(Duration::from_millis(80));
+        thread::sleep(Duration::from_millis(200));
         assert_recovers(&mut c);
     }
 }
