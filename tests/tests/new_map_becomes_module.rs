@@ -1,0 +1,79 @@
+//! Dropping a YAML file into the maps directory adds a module to `drivemap-drives` with no other
+//! edit: a throwaway application depends on the drives crate, built against a copy of `maps/`
+//! plus one new map, and uses the new module by name.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+#[test]
+fn a_new_yaml_file_becomes_a_module() {
+    let root = workspace();
+    let tmp = std::env::temp_dir().join(format!("drivemap-new-map-{}", std::process::id()));
+    let maps = tmp.join("maps");
+    let app = tmp.join("app");
+    std::fs::create_dir_all(&maps).unwrap();
+    std::fs::create_dir_all(app.join("src")).unwrap();
+    for map in drivemap_codegen::find_maps(&root.join("maps")).unwrap() {
+        std::fs::copy(&map, maps.join(map.file_name().unwrap())).unwrap();
+    }
+    // Same dependency versions as the workspace, so the offline build needs nothing new.
+    std::fs::copy(root.join("Cargo.lock"), app.join("Cargo.lock")).unwrap();
+    // The new drive: nothing else in the repository mentions it.
+    std::fs::copy(
+        root.join("codegen/tests/fixtures/mini-drive.yaml"),
+        maps.join("mini-drive.yaml"),
+    )
+    .unwrap();
+    std::fs::write(
+        app.join("Cargo.toml"),
+        format!(
+            "[package]\nname = \"new-map-app\"\nversion = \"0.0.0\"\nedition = \"2024\"\n\n[workspace]\n\n[dependencies]\ndrivemap-drives = {{ path = {:?} }}\n",
+            root.join("drives").display().to_string()
+        ),
+    )
+    .unwrap();
+    std::fs::write(
+        app.join("src/main.rs"),
+        "fn main() {\n    let ids: Vec<&str> = drivemap_drives::DRIVES.iter().map(|(id, _)| *id).collect();\n    println!(\"{} {}\", drivemap_drives::mini_drive::PROFILE.drive_id, ids.join(\",\"));\n}\n",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO"))
+        .args(["run", "--quiet", "--offline", "--manifest-path"])
+        .arg(app.join("Cargo.toml"))
+        .env("DRIVEMAP_MAPS_DIR", &maps)
+        .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
+        .env(
+            "DRIVEMAP_MANUALS",
+            root.join("target/new-map-probe/no-manuals"),
+        )
+        .output()
+        .expect("cargo runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "build failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut words = stdout.split_whitespace();
+    assert_eq!(words.next(), Some("mini-drive"));
+    let ids: Vec<&str> = words.next().unwrap_or_default().split(',').collect();
+    assert!(
+        ids.contains(&"mini-drive") && ids.contains(&"ptlk-tds-v8"),
+        "{ids:?}"
+    );
+    assert_eq!(
+        ids.len(),
+        drivemap_codegen::find_maps(&root.join("maps"))
+            .unwrap()
+            .len()
+            + 1
+    );
+    std::fs::remove_dir_all(&tmp).unwrap();
+}
