@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 
 use crate::client::{
-    Checked, ClientOptions, Core, MAX_SET, client_methods, io_error, read_request,
+    Checked, ClientOptions, Core, MAX_SET, Wait, client_methods, io_error, read_request,
 };
 use crate::error::{Error, Refusal};
 use crate::pdu::{Request, Words};
@@ -265,34 +265,22 @@ impl<T: AsyncTransport> AsyncClient<T> {
         checked: &Checked<'_>,
         out: &mut [u16],
     ) -> Result<Option<()>, Error> {
-        let deadline = Instant::now() + self.core.options.timeout;
-        let gap = self.transport.inter_char_timeout();
-        let mut last_byte = Instant::now();
+        let mut wait = Wait::new(
+            self.core.options.timeout,
+            self.transport.inter_char_timeout(),
+        );
         loop {
-            let until = match gap {
-                Some(g) if self.core.rx.pending() > 0 => deadline.min(last_byte + g),
-                _ => deadline,
-            };
+            let until = self.core.receive_until(&wait);
             let n = self
                 .transport
                 .recv(self.core.rx.space(), until)
                 .await
                 .map_err(|e| io_error(checked, e))?;
-            let now = Instant::now();
-            if n == 0 {
-                if now >= deadline {
-                    self.core.rx.break_off();
-                    return Ok(None);
-                }
-                if now >= until {
-                    self.core.rx.break_off();
-                }
-                continue;
-            }
-            last_byte = now;
-            self.core.rx.filled(n);
-            if let Some(range) = self.core.rx.scan(framing, &checked.request) {
-                return self.core.finish(framing, range, checked, out).map(Some);
+            if let Some(outcome) = self
+                .core
+                .received(n, until, &mut wait, framing, checked, out)
+            {
+                return outcome;
             }
         }
     }

@@ -370,6 +370,64 @@ impl Core {
     }
 }
 
+/// Where waiting for one reply stands: the deadline, the inter-character gap, the last byte.
+pub(crate) struct Wait {
+    deadline: Instant,
+    gap: Option<Duration>,
+    last_byte: Instant,
+}
+
+impl Wait {
+    pub(crate) fn new(timeout: Duration, gap: Option<Duration>) -> Wait {
+        let now = Instant::now();
+        Wait {
+            deadline: now + timeout,
+            gap,
+            last_byte: now,
+        }
+    }
+}
+
+impl Core {
+    /// How long the next receive may wait: the reply deadline, or sooner while a frame is
+    /// partly received and the link keeps byte timing.
+    pub(crate) fn receive_until(&self, wait: &Wait) -> Instant {
+        match wait.gap {
+            Some(g) if self.rx.pending() > 0 => wait.deadline.min(wait.last_byte + g),
+            _ => wait.deadline,
+        }
+    }
+
+    /// Takes `n` bytes just received (0: the wait until `until` ended empty). Returns the
+    /// outcome when the reply is complete (`Some(Ok(Some(())))`) or the deadline has passed
+    /// (`Some(Ok(None))`), `None` to keep receiving.
+    pub(crate) fn received(
+        &mut self,
+        n: usize,
+        until: Instant,
+        wait: &mut Wait,
+        framing: Framing,
+        checked: &Checked<'_>,
+        out: &mut [u16],
+    ) -> Option<Result<Option<()>, Error>> {
+        let now = Instant::now();
+        if n == 0 {
+            if now >= wait.deadline {
+                self.rx.break_off();
+                return Some(Ok(None));
+            }
+            if now >= until {
+                self.rx.break_off();
+            }
+            return None;
+        }
+        wait.last_byte = now;
+        self.rx.filled(n);
+        let range = self.rx.scan(framing, &checked.request)?;
+        Some(self.finish(framing, range, checked, out).map(Some))
+    }
+}
+
 pub(crate) fn read_request(table: Table, address: u16, quantity: usize) -> Request<'static> {
     let quantity = u16::try_from(quantity).unwrap_or(u16::MAX);
     match table {
@@ -663,33 +721,21 @@ impl<T: Transport> Client<T> {
         checked: &Checked<'_>,
         out: &mut [u16],
     ) -> Result<Option<()>, Error> {
-        let deadline = Instant::now() + self.core.options.timeout;
-        let gap = self.transport.inter_char_timeout();
-        let mut last_byte = Instant::now();
+        let mut wait = Wait::new(
+            self.core.options.timeout,
+            self.transport.inter_char_timeout(),
+        );
         loop {
-            let until = match gap {
-                Some(g) if self.core.rx.pending() > 0 => deadline.min(last_byte + g),
-                _ => deadline,
-            };
+            let until = self.core.receive_until(&wait);
             let n = self
                 .transport
                 .recv(self.core.rx.space(), until)
                 .map_err(|e| io_error(checked, e))?;
-            let now = Instant::now();
-            if n == 0 {
-                if now >= deadline {
-                    self.core.rx.break_off();
-                    return Ok(None);
-                }
-                if now >= until {
-                    self.core.rx.break_off();
-                }
-                continue;
-            }
-            last_byte = now;
-            self.core.rx.filled(n);
-            if let Some(range) = self.core.rx.scan(framing, &checked.request) {
-                return self.core.finish(framing, range, checked, out).map(Some);
+            if let Some(outcome) = self
+                .core
+                .received(n, until, &mut wait, framing, checked, out)
+            {
+                return outcome;
             }
         }
     }
