@@ -16,7 +16,7 @@ use crate::pdu::{Request, Words};
 use crate::persist::PersistBudget;
 use crate::profile::{CommandKind, Profile, TransportKind};
 use crate::register::{BitRegister, Bits, Readable, Table, Writable};
-use crate::reply::Framing;
+use crate::reply::{Discarded, Framing};
 use crate::transport::Transport;
 use crate::typed::{ReadSet, WriteSet};
 
@@ -218,6 +218,11 @@ impl<T: AsyncTransport> AsyncClient<T> {
     /// The EEPROM write budget and count.
     pub fn eeprom(&self) -> &PersistBudget {
         self.core.budget()
+    }
+
+    /// What arrived during the last transaction but was not its answer.
+    pub fn discarded(&self) -> Discarded {
+        self.core.rx.discarded()
     }
 
     async fn transact(

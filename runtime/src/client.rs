@@ -22,7 +22,7 @@ use crate::pdu::{FrameError, Request, Response, Words, function};
 use crate::persist::PersistBudget;
 use crate::profile::{CommandInfo, CommandKind, Profile, TransportKind};
 use crate::register::{BitRegister, Bits, Readable, Table, Writable};
-use crate::reply::{Framing, ReplyBuffer};
+use crate::reply::{Discarded, Framing, ReplyBuffer};
 use crate::transport::Transport;
 use crate::typed::{ReadSet, WriteSet};
 use crate::{rtu, tcp};
@@ -670,6 +670,11 @@ impl<T: Transport> Client<T> {
     /// The EEPROM write budget and count.
     pub fn eeprom(&self) -> &PersistBudget {
         self.core.budget()
+    }
+
+    /// What arrived during the last transaction but was not its answer.
+    pub fn discarded(&self) -> Discarded {
+        self.core.rx.discarded()
     }
 
     fn transact(

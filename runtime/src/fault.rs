@@ -31,6 +31,9 @@ pub enum Fault {
     LateReply,
     /// These bytes arrive before the reply (line noise).
     Noise(Vec<u8>),
+    /// The first `keep` bytes arrive, then nothing for `pause`, then the rest of the reply and
+    /// the whole reply again (a transmitter that stalled mid-frame and repeated it).
+    Gap { keep: usize, pause: Duration },
 }
 
 /// The client's end of a link to a [`SimulatedSlave`], with faults applied in order, one per
@@ -46,6 +49,8 @@ pub struct FaultyLink {
     pub requests: u32,
     /// Every frame sent over the link, in order (broadcasts included).
     pub sent: Vec<Vec<u8>>,
+    /// The inter-character timeout the link reports to the client (`None`: no byte timing).
+    pub inter_char_timeout: Option<Duration>,
 }
 
 impl FaultyLink {
@@ -59,6 +64,7 @@ impl FaultyLink {
             held: None,
             requests: 0,
             sent: Vec::new(),
+            inter_char_timeout: None,
         }
     }
 
@@ -129,6 +135,13 @@ impl Transport for FaultyLink {
                 noise.extend_from_slice(&reply);
                 self.deliver(now, noise);
             }
+            Some(Fault::Gap { keep, pause }) => {
+                let keep = keep.min(reply.len());
+                let mut rest = reply[keep..].to_vec();
+                rest.extend_from_slice(&reply);
+                self.deliver(now, reply[..keep].to_vec());
+                self.deliver(now + pause, rest);
+            }
         }
         Ok(())
     }
@@ -154,6 +167,10 @@ impl Transport for FaultyLink {
             }
             thread::sleep(wake.saturating_duration_since(now));
         }
+    }
+
+    fn inter_char_timeout(&self) -> Option<Duration> {
+        self.inter_char_timeout
     }
 
     fn discard_input(&mut self) -> io::Result<()> {

@@ -239,3 +239,35 @@ fn exception_keeps_the_drive_code_and_names_it_from_the_profile() {
         assert_recovers(&mut c);
     }
 }
+
+#[test]
+fn frame_broken_off_by_an_inter_character_gap_is_discarded() {
+    for kind in [TransportKind::Rtu, TransportKind::RtuOverTcp] {
+        let mut c = client(kind, strict());
+        c.transport().inter_char_timeout = Some(Duration::from_millis(15));
+        c.transport().inject(Fault::Gap {
+            keep: 4,
+            pause: Duration::from_millis(50),
+        });
+        // The 4 bytes before the pause are thrown away when the gap exceeds 15 ms; the rest of
+        // that frame is then garbage, and the repeated reply is the answer. Without the
+        // inter-character timeout, the two halves would have been joined.
+        assert_eq!(read_0020(&mut c).unwrap(), 0x1234);
+        assert_eq!(
+            c.discarded().first,
+            Some(Discard::Gap { bytes: 4 }),
+            "{kind:?}"
+        );
+        assert!(c.discarded().bytes >= 4 + 3);
+        assert_recovers(&mut c);
+
+        // The same stall within the allowed gap is one frame.
+        c.transport().inject(Fault::Gap {
+            keep: 4,
+            pause: Duration::from_millis(3),
+        });
+        c.transport().inter_char_timeout = Some(Duration::from_millis(40));
+        assert_eq!(read_0020(&mut c).unwrap(), 0x1234);
+        assert!(c.discarded().is_empty(), "{:?}", c.discarded());
+    }
+}
