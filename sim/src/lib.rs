@@ -1,0 +1,53 @@
+//! A Modbus drive simulator driven by any drivemap map, with no code per drive.
+//!
+//! [`Simulator`] holds one word per register of the map, starting from the map's defaults
+//! (encoded through the live codec; registers without a numeric default start at 0), laid out
+//! per transport with address alternatives resolved by the drive's own settings. It answers only
+//! the functions the drive's profile lists and enforces the manual's rules with the drive's own
+//! exception codes ([`ExceptionPlan`]): unknown function, unknown or write-only register,
+//! quantity 0 or above the drive's maximum, a value the generated `encode` would refuse, a write
+//! to a read-only register or to a parameter the drive's state forbids (stopped-only while
+//! running, TDS-V8 PRG-only in DRV mode). It stays silent on broadcasts, damaged frames and
+//! other slaves' addresses, executes broadcasts only on the registers the profile allows, and
+//! counts the persist commands of the map (ENTER, save).
+//!
+//! A drive listed in the roles table ([`roles`], `sim/roles.yaml`) also gets a drive model: the
+//! run and direction bits of its command register make the status register show running and the
+//! output frequency ramp towards the reference at the accel/decel time's rate, converted through
+//! the map's scales (including relative and selected scales, whose settings come from the
+//! simulator's own registers). Time comes from a [`Clock`], so tests are deterministic.
+//!
+//! ```
+//! use std::sync::Arc;
+//! use std::time::Duration;
+//! use drivemap_sim::{ManualClock, SimOptions, Simulator};
+//!
+//! let maps = concat!(env!("CARGO_MANIFEST_DIR"), "/../maps/ptlk-tds-v8.yaml");
+//! let drive = drivemap_codegen::read_map(maps.as_ref(), &Default::default()).unwrap();
+//! let clock = ManualClock::new();
+//! let mut sim = Simulator::new(drive, SimOptions::new().clock(Arc::new(clock.clone()))).unwrap();
+//! sim.set("frequency_command", 30.0).unwrap(); // Hz, 50 % of Cn-02 = 60 Hz
+//! sim.set_raw("operation_command", 0x0001).unwrap(); // run forward
+//! clock.advance(Duration::from_secs(2)); // Bn-01 10 s to 60 Hz: 6 Hz/s
+//! sim.tick();
+//! assert_eq!(sim.value("output_frequency").unwrap().as_f64(), Some(12.0));
+//! ```
+
+pub mod clock;
+pub mod exceptions;
+pub mod model;
+pub mod roles;
+pub mod server;
+pub mod simulator;
+
+pub use clock::{Clock, ManualClock, SystemClock};
+pub use exceptions::ExceptionPlan;
+pub use model::DriveState;
+pub use roles::{Roles, RolesError};
+pub use server::{SharedSim, TcpFraming, TcpServer, serve_link, shared};
+pub use simulator::{
+    Handled, Outcome, RequestRecord, RolesChoice, SimError, SimOptions, Simulator, Stats,
+};
+
+#[cfg(feature = "serial")]
+pub use server::SerialServer;
