@@ -6,6 +6,11 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod commands;
+mod describe;
+mod diff;
+mod drive_doc;
+mod duration;
+mod live;
 mod maps;
 
 #[derive(Parser)]
@@ -25,6 +30,16 @@ enum Command {
     Check(commands::check::Args),
     /// Print a map as JSON (drivemap-export/1).
     Export(commands::export::Args),
+    /// Write a drive's Markdown reference: protocol, register tables by group, codes, bits, citations.
+    Doc(commands::doc::Args),
+    /// Compare two maps: every change classified breaking or compatible, with citations; exit 1 if any breaks.
+    Diff(commands::diff::Args),
+    /// Read registers of a live drive by name, decoded by its map.
+    Read(commands::read::Args),
+    /// Write registers of a live drive by name, in engineering units, range-checked first.
+    Write(commands::write::Args),
+    /// Poll registers of a live drive by name as a live-updating table.
+    Poll(commands::poll::Args),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +47,11 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check(a) => commands::check::run(a),
         Command::Export(a) => commands::export::run(a),
+        Command::Doc(a) => commands::doc::run(a),
+        Command::Diff(a) => commands::diff::run(a),
+        Command::Read(a) => commands::read::run(a),
+        Command::Write(a) => commands::write::run(a),
+        Command::Poll(a) => commands::poll::run(a),
     };
     match result {
         Ok(code) => code,

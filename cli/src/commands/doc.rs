@@ -1,0 +1,50 @@
+//! `drivemap doc (<map.yaml> | --drive <id>) [-o file.md]`
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Args as ClapArgs;
+
+use crate::drive_doc;
+use crate::maps::MapsDir;
+
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// Map file to document.
+    #[arg(conflicts_with = "drive", required_unless_present = "drive")]
+    pub file: Option<PathBuf>,
+    /// Drive id, looked up as `<maps>/<id>.yaml`.
+    #[arg(long)]
+    pub drive: Option<String>,
+    /// Write the Markdown here instead of standard output.
+    #[arg(short = 'o', long = "output")]
+    pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub dir: MapsDir,
+}
+
+pub fn run(args: Args) -> Result<ExitCode, String> {
+    let path = match (&args.file, &args.drive) {
+        (Some(f), _) => f.clone(),
+        (None, Some(id)) => args.dir.path_of(id)?,
+        (None, None) => return Err("give a map file or --drive <id>".into()),
+    };
+    let drive = match args.dir.read(&path) {
+        Ok(drive) => drive,
+        Err(diags) => {
+            eprintln!("{diags}");
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    let name = path
+        .file_name()
+        .map(|n| format!("maps/{}", n.to_string_lossy()))
+        .unwrap_or_else(|| path.display().to_string());
+    let mut text = drive_doc::render(&drive, &name);
+    text.push('\n');
+    match &args.output {
+        Some(out) => std::fs::write(out, text).map_err(|e| format!("{}: {e}", out.display()))?,
+        None => print!("{text}"),
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,130 @@
+//! `drivemap poll --drive <id> [register...] --interval 500ms (--tcp | --rtu-tcp | --serial) ...`
+
+use std::io::{IsTerminal, Write};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use clap::Args as ClapArgs;
+use drivemap_codegen::Drive;
+use drivemap_codegen::ir::Register;
+use drivemap_codegen::model::Access;
+
+use crate::live::Target;
+use crate::live::session::{Session, find_all};
+use crate::live::table::{self, Row};
+
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub target: Target,
+    /// Registers by id, parameter number or printed name (default: the read-only registers,
+    /// i.e. the monitor groups, or those of --group).
+    #[arg(value_name = "REGISTER")]
+    pub names: Vec<String>,
+    /// Poll the readable registers of this group (its id in the map).
+    #[arg(long, conflicts_with = "names")]
+    pub group: Option<String>,
+    /// Time between polls.
+    #[arg(long, default_value = "500ms", value_parser = crate::duration::parse)]
+    pub interval: Duration,
+    /// Stop after this many polls (default: until interrupted).
+    #[arg(long)]
+    pub count: Option<u64>,
+}
+
+fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, String> {
+    if !args.names.is_empty() {
+        return find_all(drive, &args.names);
+    }
+    let regs: Vec<&Register> = match &args.group {
+        Some(id) => {
+            let Some(gi) = drive.groups.iter().position(|g| &g.id == id) else {
+                let ids: Vec<&str> = drive.groups.iter().map(|g| g.id.as_str()).collect();
+                return Err(format!(
+                    "{} has no group `{id}`; groups: {}",
+                    drive.meta.id,
+                    ids.join(", ")
+                ));
+            };
+            drive
+                .registers
+                .iter()
+                .filter(|r| r.group == gi && r.readable() && !r.broadcast)
+                .collect()
+        }
+        None => drive
+            .registers
+            .iter()
+            .filter(|r| r.access == Access::Read && !r.broadcast)
+            .collect(),
+    };
+    if regs.is_empty() {
+        return Err("no readable registers to poll; name some or give --group".into());
+    }
+    Ok(regs)
+}
+
+pub fn run(args: Args) -> Result<ExitCode, String> {
+    let drive = args.target.load()?;
+    let regs = registers(&drive, &args)?;
+    let given = args.target.settings.resolve(&drive)?;
+    let mut session = Session::open(&drive, &args.target.link, given.settings)?;
+    for w in session.load_dependencies(&regs, &given.fixed) {
+        eprintln!("warning: {w}");
+    }
+    let tty = std::io::stdout().is_terminal();
+    let started = Instant::now();
+    let mut previous: Vec<String> = Vec::new();
+    let mut any_failed = false;
+    let mut n: u64 = 0;
+    loop {
+        let began = Instant::now();
+        n += 1;
+        let words = session.read_words(&regs);
+        let rows: Vec<Row> = regs
+            .iter()
+            .zip(&words)
+            .map(|(r, w)| Row::of(&session, r, w, false))
+            .collect();
+        any_failed |= rows.iter().any(|r| r.failed);
+        let changed: Vec<bool> = if tty && !previous.is_empty() {
+            rows.iter()
+                .zip(&previous)
+                .map(|(r, p)| &r.value != p)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let header = format!(
+            "{} over {} — poll {n} at {:.1} s, every {} ms",
+            drive.meta.id,
+            session.link,
+            started.elapsed().as_secs_f64(),
+            args.interval.as_millis()
+        );
+        let body = table::render(&rows, &changed);
+        let mut out = std::io::stdout().lock();
+        let written = if tty {
+            write!(out, "\x1b[H\x1b[2J{header}\n\n{body}")
+        } else {
+            write!(out, "{header}\n{body}\n")
+        };
+        if written.and_then(|_| out.flush()).is_err() {
+            // Standard output closed (a pipe ended): stop quietly.
+            break;
+        }
+        drop(out);
+        previous = rows.into_iter().map(|r| r.value).collect();
+        if args.count.is_some_and(|c| n >= c) {
+            break;
+        }
+        if let Some(rest) = args.interval.checked_sub(began.elapsed()) {
+            std::thread::sleep(rest);
+        }
+    }
+    Ok(if any_failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}

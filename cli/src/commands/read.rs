@@ -1,0 +1,40 @@
+//! `drivemap read --drive <id> <register|param>... (--tcp | --rtu-tcp | --serial) ...`
+
+use std::process::ExitCode;
+
+use clap::Args as ClapArgs;
+
+use crate::live::Target;
+use crate::live::session::{Session, find_all};
+use crate::live::table::{self, Row};
+
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub target: Target,
+    /// Registers by id, parameter number or printed name.
+    #[arg(required = true, value_name = "REGISTER")]
+    pub names: Vec<String>,
+}
+
+pub fn run(args: Args) -> Result<ExitCode, String> {
+    let drive = args.target.load()?;
+    let regs = find_all(&drive, &args.names)?;
+    let given = args.target.settings.resolve(&drive)?;
+    let mut session = Session::open(&drive, &args.target.link, given.settings)?;
+    for w in session.load_dependencies(&regs, &given.fixed) {
+        eprintln!("warning: {w}");
+    }
+    let words = session.read_words(&regs);
+    let rows: Vec<Row> = regs
+        .iter()
+        .zip(&words)
+        .map(|(r, w)| Row::of(&session, r, w, true))
+        .collect();
+    print!("{}", table::render(&rows, &[]));
+    Ok(if rows.iter().any(|r| r.failed) {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}

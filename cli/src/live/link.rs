@@ -1,0 +1,149 @@
+//! The link to a live drive: which transport, which slave, how long to wait.
+
+use std::time::Duration;
+
+use clap::{ArgGroup, Args as ClapArgs, ValueEnum};
+use drivemap_codegen::Drive;
+use drivemap_codegen::model::Parity as MapParity;
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::transport::Transport;
+use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
+use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport, StopBits};
+use drivemap_runtime::transport::tcp::TcpTransport;
+use drivemap_runtime::{Client, ClientOptions, Profile};
+
+/// Parity of a serial line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LineParity {
+    None,
+    Even,
+    Odd,
+}
+
+/// How to reach the drive.
+#[derive(ClapArgs, Debug, Clone)]
+#[command(group(ArgGroup::new("link").required(true).args(["tcp", "rtu_tcp", "serial"])))]
+pub struct LinkArgs {
+    /// Modbus TCP server (`192.168.1.10:502`).
+    #[arg(long, value_name = "ADDR")]
+    pub tcp: Option<String>,
+    /// RTU frames over TCP through a transparent serial gateway (`192.168.1.20:4001`).
+    #[arg(long = "rtu-tcp", value_name = "ADDR")]
+    pub rtu_tcp: Option<String>,
+    /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`).
+    #[arg(long, value_name = "PATH")]
+    pub serial: Option<String>,
+    /// Baud rate (default: the map's default, else 9600).
+    #[arg(long)]
+    pub baud: Option<u32>,
+    /// Parity (default: the map's default, else none).
+    #[arg(long, value_enum)]
+    pub parity: Option<LineParity>,
+    /// Stop bits (default 1; 2 without parity where the map fixes 11-bit characters).
+    #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
+    pub stop_bits: Option<u8>,
+    /// Slave address (default: the map's default, else 1; 0 broadcasts a write).
+    #[arg(long)]
+    pub slave: Option<u8>,
+    /// How long to wait for each reply.
+    #[arg(long, default_value = "1s", value_parser = crate::duration::parse)]
+    pub timeout: Duration,
+    /// Further attempts after a timeout.
+    #[arg(long, default_value_t = 2)]
+    pub retries: u8,
+    /// Least pause between a reply and the next request (V7/J7: 24 bit times + 10 ms).
+    #[arg(long = "request-gap", default_value = "0ms", value_parser = crate::duration::parse)]
+    pub request_gap: Duration,
+}
+
+/// A client over whichever transport was chosen.
+pub type LiveClient = Client<Box<dyn Transport>>;
+
+impl LinkArgs {
+    /// The slave address to talk to.
+    pub fn slave(&self, drive: &Drive) -> u8 {
+        self.slave
+            .or(drive.protocol.slave_address.default)
+            .unwrap_or(1)
+    }
+
+    /// The transport kind the link will have, before connecting.
+    pub fn kind(&self) -> TransportKind {
+        if self.tcp.is_some() {
+            TransportKind::Tcp
+        } else if self.rtu_tcp.is_some() {
+            TransportKind::RtuOverTcp
+        } else {
+            TransportKind::Rtu
+        }
+    }
+
+    /// Opens the link and makes a client for `profile`. Returns the client and a description
+    /// of the link for headers.
+    pub fn connect(
+        &self,
+        drive: &Drive,
+        profile: &'static Profile,
+    ) -> Result<(LiveClient, String), String> {
+        let connect_timeout = self.timeout.max(Duration::from_secs(1));
+        let (transport, what): (Box<dyn Transport>, String) = if let Some(addr) = &self.tcp {
+            let t = TcpTransport::connect(addr.as_str(), connect_timeout)
+                .map_err(|e| format!("cannot connect to Modbus TCP server {addr}: {e}"))?;
+            (Box::new(t), format!("Modbus TCP {addr}"))
+        } else if let Some(addr) = &self.rtu_tcp {
+            let t = RtuOverTcpTransport::connect(addr.as_str(), connect_timeout)
+                .map_err(|e| format!("cannot connect to RTU gateway {addr}: {e}"))?;
+            (Box::new(t), format!("RTU over TCP {addr}"))
+        } else if let Some(path) = &self.serial {
+            let serial = drive.protocol.serial.as_ref();
+            let baud = self
+                .baud
+                .or(serial.and_then(|s| s.default_baud))
+                .unwrap_or(9600);
+            let parity = match self.parity {
+                Some(p) => p,
+                None => match serial.and_then(|s| s.default_parity) {
+                    Some(MapParity::Even) => LineParity::Even,
+                    Some(MapParity::Odd) => LineParity::Odd,
+                    _ => LineParity::None,
+                },
+            };
+            let eleven_bits = serial.and_then(|s| s.char_bits) == Some(11);
+            let stop_bits = match self.stop_bits {
+                Some(2) => StopBits::Two,
+                Some(_) => StopBits::One,
+                None if eleven_bits && parity == LineParity::None => StopBits::Two,
+                None => StopBits::One,
+            };
+            let options = SerialOptions::new(path.as_str(), baud)
+                .parity(match parity {
+                    LineParity::None => Parity::None,
+                    LineParity::Even => Parity::Even,
+                    LineParity::Odd => Parity::Odd,
+                })
+                .stop_bits(stop_bits)
+                .with_profile(profile);
+            let t = SerialTransport::open(options)
+                .map_err(|e| format!("cannot open serial port {path}: {e}"))?;
+            let parity = format!("{parity:?}").to_lowercase();
+            let stops = if stop_bits == StopBits::Two { 2 } else { 1 };
+            (
+                Box::new(t),
+                format!("RTU {path} {baud} baud, parity {parity}, {stops} stop bit(s)"),
+            )
+        } else {
+            return Err("give --tcp, --rtu-tcp or --serial".into());
+        };
+        let client = Client::with_options(
+            transport,
+            profile,
+            ClientOptions {
+                timeout: self.timeout,
+                retries: self.retries,
+                request_gap: self.request_gap,
+                ..ClientOptions::default()
+            },
+        );
+        Ok((client, format!("{what}, slave {}", self.slave(drive))))
+    }
+}

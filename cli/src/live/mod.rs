@@ -1,0 +1,34 @@
+//! Live drives by register name (`drivemap read`, `write`, `poll`): the map is loaded at run
+//! time ([`drivemap_live`]) and spoken over the runtime's transports.
+
+pub mod link;
+pub mod planner;
+pub mod session;
+pub mod table;
+
+use clap::Args as ClapArgs;
+use drivemap_codegen::Drive;
+
+use crate::maps::MapsDir;
+
+/// The drive to talk to: its map and how to reach it.
+#[derive(ClapArgs, Debug, Clone)]
+pub struct Target {
+    /// Drive id, looked up as `<maps>/<id>.yaml`.
+    #[arg(long)]
+    pub drive: String,
+    #[command(flatten)]
+    pub dir: MapsDir,
+    #[command(flatten)]
+    pub link: link::LinkArgs,
+    #[command(flatten)]
+    pub settings: session::SettingsArgs,
+}
+
+impl Target {
+    /// Reads and validates the drive's map.
+    pub fn load(&self) -> Result<Drive, String> {
+        let path = self.dir.path_of(&self.drive)?;
+        self.dir.read(&path).map_err(|d| format!("{d}"))
+    }
+}

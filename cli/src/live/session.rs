@@ -1,0 +1,459 @@
+//! A live drive by its map: names resolved, settings gathered, addresses chosen, words read in
+//! planned requests and decoded.
+
+use std::collections::BTreeSet;
+
+use clap::Args as ClapArgs;
+use drivemap_codegen::Drive;
+use drivemap_codegen::ir::{Register, ValueKind};
+use drivemap_codegen::model::{ModbusTable, Reference, Scale, TransportName};
+use drivemap_live::codec::{self, Value};
+use drivemap_live::{LiveSettings, leak_profile, lookup};
+use drivemap_runtime::ValueError;
+use drivemap_runtime::profile::TransportKind;
+
+use super::link::{LinkArgs, LiveClient};
+use super::planner;
+use crate::describe;
+
+/// What conversions depend on, given on the command line.
+#[derive(ClapArgs, Debug, Clone, Default)]
+pub struct SettingsArgs {
+    /// Model variant: `axis=option` (e.g. `voltage_class=v440`), or just the option.
+    #[arg(long = "variant", value_name = "AXIS=OPTION")]
+    pub variants: Vec<String>,
+    /// A value conversions depend on: an external quantity (`drive_rated_current=12.5`) or a
+    /// parameter that selects a scale or serves as reference (`n152=1`); given ones are not
+    /// read from the drive.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub sets: Vec<String>,
+}
+
+/// Settings from the command line, and which register ids they fix.
+pub struct Given {
+    pub settings: LiveSettings,
+    /// Register ids whose value was given with `--set`.
+    pub fixed: BTreeSet<String>,
+}
+
+fn split_assignment<'a>(text: &'a str, what: &str) -> Result<(&'a str, &'a str), String> {
+    text.split_once('=')
+        .map(|(a, b)| (a.trim(), b.trim()))
+        .filter(|(a, b)| !a.is_empty() && !b.is_empty())
+        .ok_or_else(|| format!("`{text}` is not {what}"))
+}
+
+impl SettingsArgs {
+    /// Checks the options against the map and builds the settings.
+    pub fn resolve(&self, drive: &Drive) -> Result<Given, String> {
+        let mut settings = LiveSettings::default();
+        for v in &self.variants {
+            let (axis, option) = match v.split_once('=') {
+                Some((a, o)) => (a.trim(), o.trim()),
+                None => match drive.variant_option(v.trim()) {
+                    Some((axis, _)) => (axis.id.as_str(), v.trim()),
+                    None => ("", v.trim()),
+                },
+            };
+            let Some(ax) = drive.variants.iter().find(|a| a.id == axis) else {
+                let known: Vec<String> = drive
+                    .variants
+                    .iter()
+                    .map(|a| {
+                        let opts: Vec<&str> = a.options.iter().map(|o| o.id.as_str()).collect();
+                        format!("{}={}", a.id, opts.join("|"))
+                    })
+                    .collect();
+                return Err(if known.is_empty() {
+                    format!("{} has no model variants (`--variant {v}`)", drive.meta.id)
+                } else {
+                    format!(
+                        "`--variant {v}`: {} has no such variant; choose from {}",
+                        drive.meta.id,
+                        known.join(", ")
+                    )
+                });
+            };
+            if !ax.options.iter().any(|o| o.id == option) {
+                let opts: Vec<&str> = ax.options.iter().map(|o| o.id.as_str()).collect();
+                return Err(format!(
+                    "`--variant {v}`: {} has options {}",
+                    ax.id,
+                    opts.join(", ")
+                ));
+            }
+            settings.variants.insert(ax.id.clone(), option.to_owned());
+        }
+        let mut fixed = BTreeSet::new();
+        for s in &self.sets {
+            let (name, value) = split_assignment(s, "NAME=VALUE")?;
+            if let Some(q) = drive.externals().into_iter().find(|q| q.external == name) {
+                let v = number(value, &q.unit).ok_or_else(|| {
+                    format!("`--set {s}`: `{value}` is not a number of {}", q.unit)
+                })?;
+                settings.references.insert(q.external.clone(), v);
+                continue;
+            }
+            let r = lookup::find(drive, name).map_err(|e| {
+                format!(
+                    "`--set {s}`: {e}{}",
+                    settable_hint(drive)
+                        .map(|h| format!(" (settable: {h})"))
+                        .unwrap_or_default()
+                )
+            })?;
+            let is_selector = drive.selectors().iter().any(|x| x.def.id == r.def.id);
+            let is_reference = drive.references().iter().any(|x| x.def.id == r.def.id);
+            if is_selector {
+                let code = codec::parse_value(drive, r, value, &settings)
+                    .map_err(|e| format!("`--set {s}`: {e}"))?;
+                settings.selectors.insert(r.def.id.clone(), code);
+            }
+            if is_reference {
+                let v = number(value, r.def.unit.as_deref().unwrap_or(""))
+                    .ok_or_else(|| format!("`--set {s}`: `{value}` is not a number"))?;
+                settings.references.insert(r.def.id.clone(), v);
+            }
+            if !(is_selector || is_reference) {
+                return Err(format!(
+                    "`--set {s}`: no conversion depends on {}{}",
+                    describe::register(r),
+                    settable_hint(drive)
+                        .map(|h| format!("; settable: {h}"))
+                        .unwrap_or_default()
+                ));
+            }
+            fixed.insert(r.def.id.clone());
+        }
+        Ok(Given { settings, fixed })
+    }
+}
+
+/// The names `--set` accepts for this drive.
+fn settable_hint(drive: &Drive) -> Option<String> {
+    let mut names: Vec<String> = drive
+        .externals()
+        .iter()
+        .map(|q| q.external.clone())
+        .collect();
+    for r in drive.selectors().into_iter().chain(drive.references()) {
+        let n = r.def.param.clone().unwrap_or_else(|| r.def.id.clone());
+        if !names.contains(&n) {
+            names.push(n);
+        }
+    }
+    (!names.is_empty()).then(|| names.join(", "))
+}
+
+fn number(text: &str, unit: &str) -> Option<f64> {
+    let t = text.trim();
+    let t = if unit.is_empty() {
+        t
+    } else {
+        t.strip_suffix(unit).unwrap_or(t).trim()
+    };
+    t.parse::<f64>().ok().filter(|v| v.is_finite())
+}
+
+/// Resolves register names (id, parameter number or printed name); all unknown names are
+/// reported at once, each with the nearest names.
+pub fn find_all<'a>(drive: &'a Drive, names: &[String]) -> Result<Vec<&'a Register>, String> {
+    let mut found = Vec::new();
+    let mut errors = Vec::new();
+    for n in names {
+        match lookup::find(drive, n) {
+            Ok(r) => found.push(r),
+            Err(e) => errors.push(e.to_string()),
+        }
+    }
+    if errors.is_empty() {
+        Ok(found)
+    } else {
+        Err(errors.join("\n"))
+    }
+}
+
+/// The registers whose values a register's conversion or address depends on.
+pub fn dependencies<'a>(drive: &'a Drive, r: &Register) -> Vec<&'a Register> {
+    let mut names: Vec<&str> = Vec::new();
+    let mut scales: Vec<&Scale> = Vec::new();
+    match &r.def.scale {
+        Some(Scale::Selected(sel)) => {
+            names.push(&sel.selected_by);
+            scales.extend(sel.cases.iter().map(|c| &c.scale));
+        }
+        Some(s) => scales.push(s),
+        None => {}
+    }
+    for s in scales {
+        if let Scale::Relative(rel) = s {
+            if let Reference::Register(name) = &rel.relative_to {
+                names.push(name);
+            }
+        }
+    }
+    for alt in &r.def.address_alternatives {
+        if let Some(s) = &alt.when.setting {
+            names.push(s);
+        }
+    }
+    let mut out: Vec<&Register> = Vec::new();
+    for n in names {
+        if let Some(d) = drive.find(n) {
+            if !out.iter().any(|x| x.def.id == d.def.id) {
+                out.push(d);
+            }
+        }
+    }
+    out
+}
+
+/// Whether a register exists on a transport kind.
+pub fn on_transport(r: &Register, kind: TransportKind) -> bool {
+    match &r.transports {
+        None => true,
+        Some(list) => list.contains(&if kind == TransportKind::Tcp {
+            TransportName::Tcp
+        } else {
+            TransportName::Rtu
+        }),
+    }
+}
+
+/// The communication address of a register under `settings` on `kind`, as the generated code
+/// chooses it: the first alternative whose condition holds, else the register's address.
+pub fn address_of(
+    drive: &Drive,
+    r: &Register,
+    settings: &LiveSettings,
+    kind: TransportKind,
+) -> u16 {
+    for alt in &r.def.address_alternatives {
+        let w = &alt.when;
+        let holds = if let Some(sel) = w.setting.as_deref().and_then(|s| drive.find(s)) {
+            settings
+                .selectors
+                .get(&sel.def.id)
+                .is_some_and(|c| w.is.contains(c))
+        } else if let Some(option) = w
+            .variant
+            .as_deref()
+            .filter(|v| drive.variant_option(v).is_some())
+        {
+            settings.has_variant(drive, option)
+        } else {
+            match w.transport {
+                Some(TransportName::Tcp) => kind == TransportKind::Tcp,
+                Some(TransportName::Rtu) => kind != TransportKind::Tcp,
+                None => false,
+            }
+        };
+        if holds {
+            return alt.address;
+        }
+    }
+    r.def.address
+}
+
+/// A conversion error, with what to do about a missing setting.
+pub fn value_error(e: &ValueError) -> String {
+    match e {
+        ValueError::MissingSetting { register, setting } => format!(
+            "{register}: converting needs the value of {setting}, which could not be read; \
+             give it with --set {setting}=<value>"
+        ),
+        other => other.to_string(),
+    }
+}
+
+/// A connected drive with its settings.
+pub struct Session<'d> {
+    pub drive: &'d Drive,
+    pub client: LiveClient,
+    pub slave: u8,
+    pub kind: TransportKind,
+    pub settings: LiveSettings,
+    /// The link, for headers.
+    pub link: String,
+}
+
+impl<'d> Session<'d> {
+    /// Connects to the drive described by `drive`.
+    pub fn open(drive: &'d Drive, link: &LinkArgs, settings: LiveSettings) -> Result<Self, String> {
+        let profile = leak_profile(drive);
+        let (client, text) = link.connect(drive, profile)?;
+        Ok(Session {
+            drive,
+            client,
+            slave: link.slave(drive),
+            kind: link.kind(),
+            settings,
+            link: text,
+        })
+    }
+
+    /// The address of `r` on this link under the current settings.
+    pub fn address(&self, r: &Register) -> u16 {
+        address_of(self.drive, r, &self.settings, self.kind)
+    }
+
+    /// Reads what the conversions and addresses of `regs` depend on, except what `fixed` gives.
+    /// Selectors are read before references (a reference's address may depend on a selector).
+    /// Returns a warning per dependency that could not be read.
+    pub fn load_dependencies(
+        &mut self,
+        regs: &[&Register],
+        fixed: &BTreeSet<String>,
+    ) -> Vec<String> {
+        let drive = self.drive;
+        let mut deps: Vec<&Register> = Vec::new();
+        for r in regs {
+            for d in dependencies(drive, r) {
+                if !fixed.contains(&d.def.id) && !deps.iter().any(|x| x.def.id == d.def.id) {
+                    deps.push(d);
+                }
+            }
+        }
+        let selectors = drive.selectors();
+        deps.sort_by_key(|d| !selectors.iter().any(|s| s.def.id == d.def.id));
+        let mut warnings = Vec::new();
+        for d in deps {
+            if !d.readable() || d.broadcast || !on_transport(d, self.kind) {
+                warnings.push(format!(
+                    "cannot read {} ({}), which conversions depend on; give it with --set",
+                    describe::register(d),
+                    describe::address(d.def.address)
+                ));
+                continue;
+            }
+            let address = self.address(d);
+            match self.read_one(d.table, address) {
+                Ok(raw) => {
+                    self.settings.absorb(drive, d.def.address, raw);
+                }
+                Err(e) => warnings.push(format!(
+                    "reading {}, which conversions depend on: {e}",
+                    describe::register(d)
+                )),
+            }
+        }
+        warnings
+    }
+
+    fn read_one(&mut self, table: ModbusTable, address: u16) -> Result<u16, String> {
+        let mut w = [0u16; 1];
+        self.read_into(table, address, &mut w)
+            .map_err(|e| e.to_string())?;
+        Ok(w[0])
+    }
+
+    fn read_into(
+        &mut self,
+        table: ModbusTable,
+        address: u16,
+        out: &mut [u16],
+    ) -> Result<(), drivemap_runtime::Error> {
+        match table {
+            ModbusTable::Holding => self.client.read_holding(self.slave, address, out),
+            ModbusTable::Input => self.client.read_input(self.slave, address, out),
+        }
+    }
+
+    /// Why a register cannot be read on this link, if it cannot.
+    pub fn unreadable(&self, r: &Register) -> Option<String> {
+        if r.broadcast {
+            Some(format!(
+                "{} is broadcast-only: it can be written to slave 0, never read",
+                describe::register(r)
+            ))
+        } else if !r.readable() {
+            Some(format!("{} is write-only", describe::register(r)))
+        } else if !on_transport(r, self.kind) {
+            Some(format!(
+                "{} exists only on {}",
+                describe::register(r),
+                describe::transports(r.transports.as_deref())
+            ))
+        } else {
+            None
+        }
+    }
+
+    /// Reads the raw words of `regs` in as few requests as `max_read` allows. A request that
+    /// draws an exception is retried register by register, so one refused register does not
+    /// hide the others.
+    pub fn read_words(&mut self, regs: &[&Register]) -> Vec<Result<u16, String>> {
+        let mut out: Vec<Result<u16, String>> =
+            regs.iter().map(|_| Err("not read".to_owned())).collect();
+        let mut wanted = Vec::new();
+        let mut index = Vec::new();
+        for (i, r) in regs.iter().enumerate() {
+            match self.unreadable(r) {
+                Some(why) => out[i] = Err(why),
+                None => {
+                    wanted.push((r.table, self.address(r)));
+                    index.push(i);
+                }
+            }
+        }
+        let fillers: BTreeSet<(u8, u16)> = self
+            .drive
+            .registers
+            .iter()
+            .filter(|r| r.def.address_alternatives.is_empty() && self.unreadable(r).is_none())
+            .map(|r| (u8::from(r.table == ModbusTable::Input), r.def.address))
+            .collect();
+        let max_read = self.client.profile().max_read;
+        for batch in planner::plan(&wanted, max_read, &fillers) {
+            let mut words = vec![0u16; usize::from(batch.count)];
+            match self.read_into(batch.table, batch.address, &mut words) {
+                Ok(()) => {
+                    for (w, offset) in &batch.members {
+                        out[index[*w]] = Ok(words[usize::from(*offset)]);
+                    }
+                }
+                Err(e) if batch.count > 1 && e.exception().is_some() => {
+                    for (w, offset) in &batch.members {
+                        let address = batch.address.wrapping_add(*offset);
+                        out[index[*w]] = self.read_one(batch.table, address);
+                    }
+                }
+                Err(e) => {
+                    let e = e.to_string();
+                    for (w, _) in &batch.members {
+                        out[index[*w]] = Err(e.clone());
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Decodes a raw word of `r`.
+    pub fn decode(&self, r: &Register, raw: u16) -> Result<Value, String> {
+        codec::decode(self.drive, r, raw, &self.settings).map_err(|e| value_error(&e))
+    }
+}
+
+/// The lines that describe each field of a bit-field value.
+pub fn field_lines(r: &Register, value: &Value) -> Vec<String> {
+    let (Value::Bits { fields, .. }, ValueKind::Bits(_)) = (value, r.kind()) else {
+        return Vec::new();
+    };
+    fields
+        .iter()
+        .map(|f| {
+            let bits = if f.width == 1 {
+                format!("bit {}", f.lsb)
+            } else {
+                format!("bits {}–{}", f.lsb, f.lsb + f.width - 1)
+            };
+            let label = f
+                .label
+                .as_deref()
+                .map(|l| format!(" ({l})"))
+                .unwrap_or_default();
+            format!("{} = {}{label}   [{bits}: {}]", f.id, f.value, f.name)
+        })
+        .collect()
+}

@@ -1,0 +1,157 @@
+//! Register values as an aligned terminal table.
+
+use drivemap_codegen::ir::Register;
+
+use super::session::{Session, field_lines};
+use crate::describe;
+
+/// One register's line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    /// `accel_time_1 (Bn-01)`.
+    pub register: String,
+    /// `0200h`.
+    pub address: String,
+    /// Decoded value, or the error.
+    pub value: String,
+    /// Raw word in hex, when read.
+    pub raw: String,
+    /// Lines shown under the row (bit fields).
+    pub details: Vec<String>,
+    /// Whether the value failed.
+    pub failed: bool,
+}
+
+impl Row {
+    /// The row of a register read as `word` (or its error).
+    pub fn of(
+        session: &Session<'_>,
+        r: &Register,
+        word: &Result<u16, String>,
+        details: bool,
+    ) -> Row {
+        let register = describe::register(r);
+        let address = describe::address(session.address(r));
+        match word {
+            Err(e) => Row {
+                register,
+                address,
+                value: format!("error: {e}"),
+                raw: String::new(),
+                details: Vec::new(),
+                failed: true,
+            },
+            Ok(raw) => match session.decode(r, *raw) {
+                Ok(v) => Row {
+                    register,
+                    address,
+                    details: if details {
+                        field_lines(r, &v)
+                    } else {
+                        Vec::new()
+                    },
+                    value: v.to_string(),
+                    raw: format!("{raw:04X}h"),
+                    failed: false,
+                },
+                Err(e) => Row {
+                    register,
+                    address,
+                    value: format!("error: {e}"),
+                    raw: format!("{raw:04X}h"),
+                    details: Vec::new(),
+                    failed: true,
+                },
+            },
+        }
+    }
+}
+
+fn width(s: &str) -> usize {
+    s.chars().count()
+}
+
+fn pad(s: &str, w: usize) -> String {
+    format!("{s}{}", " ".repeat(w.saturating_sub(width(s))))
+}
+
+/// Renders rows under a header. `highlight[i]` shows row `i`'s value in bold (changed since
+/// the last poll); pass an empty slice for none.
+pub fn render(rows: &[Row], highlight: &[bool]) -> String {
+    let head = ["REGISTER", "ADDRESS", "VALUE", "RAW"];
+    let w0 = rows
+        .iter()
+        .map(|r| width(&r.register))
+        .chain([width(head[0])])
+        .max()
+        .unwrap_or(0);
+    let w1 = rows
+        .iter()
+        .map(|r| width(&r.address))
+        .chain([width(head[1])])
+        .max()
+        .unwrap_or(0);
+    let w2 = rows
+        .iter()
+        .map(|r| width(&r.value))
+        .chain([width(head[2])])
+        .max()
+        .unwrap_or(0)
+        .min(60);
+    let mut out = format!(
+        "{}  {}  {}  {}\n",
+        pad(head[0], w0),
+        pad(head[1], w1),
+        pad(head[2], w2),
+        head[3]
+    );
+    for (i, r) in rows.iter().enumerate() {
+        let value = pad(&r.value, w2);
+        let value = if highlight.get(i).copied().unwrap_or(false) {
+            format!("\x1b[1m{value}\x1b[0m")
+        } else {
+            value
+        };
+        let line = format!(
+            "{}  {}  {value}  {}",
+            pad(&r.register, w0),
+            pad(&r.address, w1),
+            r.raw
+        );
+        out += line.trim_end();
+        out.push('\n');
+        for d in &r.details {
+            out += &format!("{}  {d}\n", " ".repeat(w0 + w1 + 2));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(register: &str, value: &str) -> Row {
+        Row {
+            register: register.into(),
+            address: "0001h".into(),
+            value: value.into(),
+            raw: "5DC0h".into(),
+            details: vec!["run = 1".into()],
+            failed: false,
+        }
+    }
+
+    #[test]
+    fn columns_align_and_highlight_marks_only_the_value() {
+        let rows = [row("frequency_command", "48.00 Hz"), row("x", "1")];
+        let plain = render(&rows, &[]);
+        let lines: Vec<&str> = plain.lines().collect();
+        assert_eq!(lines[0].find("ADDRESS"), lines[1].find("0001h"));
+        assert_eq!(lines[1].find("48.00 Hz"), lines[3].find("1 "));
+        assert!(lines[2].trim_start().starts_with("run = 1"));
+        let bold = render(&rows, &[false, true]);
+        assert!(!bold.lines().nth(1).unwrap().contains("\x1b[1m"));
+        assert!(bold.lines().nth(3).unwrap().contains("\x1b[1m1"));
+    }
+}
