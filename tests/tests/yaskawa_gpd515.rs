@@ -331,6 +331,21 @@ fn operation_signal_and_frequency_reference_move_with_o2_09_and_flash() {
         0x0001
     );
 
+    // o2-09 not read yet: the layout of its default 0, never the o2-09 = 1 layout, so a client
+    // that has not loaded its settings cannot write the run command into the frequency slot.
+    let unread = gpd::Settings {
+        initial_mode_select: None,
+        ..settings(100.0)
+    };
+    assert_eq!(
+        gpd::OperationCommand::address(&unread, TransportKind::Rtu),
+        0x0000
+    );
+    assert_eq!(
+        gpd::FrequencyReference::address(&unread, TransportKind::Rtu),
+        0x0001
+    );
+
     // o2-09 itself is at 50Dh (line 394).
     assert_eq!(gpd::InitialModeSelect::ADDRESS, 0x050D);
 }
