@@ -30,6 +30,10 @@ enum Command {
     Check(commands::check::Args),
     /// Print a map as JSON (drivemap-export/1).
     Export(commands::export::Args),
+    /// Serve a simulated drive built from its map over Modbus TCP, RTU over TCP or a serial port.
+    Simulate(commands::simulate::Args),
+    /// Run a simulated drive on loopback and drive it through the generated typed API.
+    Demo(commands::demo::Args),
     /// Write a drive's Markdown reference: protocol, register tables by group, codes, bits, citations.
     Doc(commands::doc::Args),
     /// Compare two maps: every change classified breaking or compatible, with citations; exit 1 if any breaks.
@@ -47,6 +51,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check(a) => commands::check::run(a),
         Command::Export(a) => commands::export::run(a),
+        Command::Simulate(a) => commands::simulate::run(a),
+        Command::Demo(a) => commands::demo::run(a),
         Command::Doc(a) => commands::doc::run(a),
         Command::Diff(a) => commands::diff::run(a),
         Command::Read(a) => commands::read::run(a),

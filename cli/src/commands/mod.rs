@@ -1,7 +1,9 @@
 pub mod check;
+pub mod demo;
 pub mod diff;
 pub mod doc;
 pub mod export;
 pub mod poll;
 pub mod read;
+pub mod simulate;
 pub mod write;

@@ -1,0 +1,288 @@
+//! `drivemap simulate --drive <id> (--tcp ADDR | --rtu-tcp ADDR | --serial PATH) [--slave N]`
+//!
+//! Serves a simulated drive (crate `drivemap-sim`) built from the drive's map, logging each
+//! request in one line: time, slave, function, address, quantity, result or exception.
+
+use std::io::Write;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use clap::{ArgGroup, Args as ClapArgs, ValueEnum};
+use drivemap_codegen::Drive;
+use drivemap_codegen::model::Parity as MapParity;
+use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
+use drivemap_sim::server::Logger;
+use drivemap_sim::{
+    RequestRecord, SerialServer, SimOptions, Simulator, SystemClock, TcpFraming, TcpServer,
+};
+
+use crate::maps::MapsDir;
+
+/// Parity of the simulated serial line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LineParity {
+    None,
+    Even,
+    Odd,
+}
+
+#[derive(ClapArgs, Debug)]
+#[command(group(ArgGroup::new("link").required(true).args(["tcp", "rtu_tcp", "serial"])))]
+pub struct Args {
+    /// Drive id, looked up as `<maps>/<id>.yaml`.
+    #[arg(long)]
+    pub drive: String,
+    /// Serve Modbus TCP here: `PORT` (binds 127.0.0.1) or `HOST:PORT` (binds where told).
+    #[arg(long, value_name = "ADDR")]
+    pub tcp: Option<String>,
+    /// Serve RTU frames over TCP, as a transparent serial gateway does: `PORT` or `HOST:PORT`.
+    #[arg(long = "rtu-tcp", value_name = "ADDR")]
+    pub rtu_tcp: Option<String>,
+    /// Serve Modbus RTU on a serial port or pseudo-terminal.
+    #[arg(long, value_name = "PATH")]
+    pub serial: Option<PathBuf>,
+    /// Baud rate for --serial (default: the map's default, else 9600).
+    #[arg(long)]
+    pub baud: Option<u32>,
+    /// Parity for --serial (default: the map's default, else none).
+    #[arg(long, value_enum)]
+    pub parity: Option<LineParity>,
+    /// Slave address (default: the map's default, else 1).
+    #[arg(long)]
+    pub slave: Option<u8>,
+    /// Power-on value of a register, in engineering units: `--set n152=1`.
+    #[arg(long = "set", value_name = "REGISTER=VALUE")]
+    pub set: Vec<String>,
+    /// Model variant: `--variant voltage_class=v440`.
+    #[arg(long, value_name = "AXIS=OPTION")]
+    pub variant: Vec<String>,
+    /// External quantity of the map: `--external drive_rated_current=9.6`.
+    #[arg(long, value_name = "NAME=VALUE")]
+    pub external: Vec<String>,
+    /// Simulated time runs this many times faster than real time (ramps finish sooner).
+    #[arg(long = "time-scale", default_value_t = 1.0)]
+    pub time_scale: f64,
+    /// Do not log requests.
+    #[arg(long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub dir: MapsDir,
+}
+
+/// The map of a drive id: under `--maps`, else (when the default `maps` is not here) in the
+/// source tree this binary was built from.
+pub(crate) fn load_drive(dir: &MapsDir, id: &str) -> Result<Drive, String> {
+    let path = match dir.path_of(id) {
+        Ok(p) => p,
+        Err(e) => {
+            let built = Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("..")
+                .join("maps")
+                .join(format!("{id}.yaml"));
+            if dir.maps == Path::new("maps") && built.is_file() {
+                built
+            } else {
+                return Err(e);
+            }
+        }
+    };
+    dir.read(&path)
+        .map_err(|d| format!("{} does not validate:\n{d}", path.display()))
+}
+
+fn pair(text: &str, what: &str) -> Result<(String, String), String> {
+    text.split_once('=')
+        .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+        .filter(|(k, v)| !k.is_empty() && !v.is_empty())
+        .ok_or_else(|| format!("`{text}` is not {what}"))
+}
+
+fn number(text: &str, v: &str) -> Result<f64, String> {
+    v.parse::<f64>()
+        .map_err(|_| format!("`{text}`: `{v}` is not a number"))
+}
+
+/// Simulator options from the command line.
+pub(crate) fn options(
+    slave: Option<u8>,
+    set: &[String],
+    variant: &[String],
+    external: &[String],
+    time_scale: f64,
+) -> Result<SimOptions, String> {
+    if !(time_scale.is_finite() && time_scale > 0.0) {
+        return Err(format!("--time-scale {time_scale}: give a positive number"));
+    }
+    let mut o = SimOptions::new().clock(Arc::new(SystemClock::scaled(time_scale)));
+    o.slave = slave;
+    for s in set {
+        let (k, v) = pair(s, "REGISTER=VALUE")?;
+        o = o.set(&k, number(s, &v)?);
+    }
+    for s in variant {
+        let (k, v) = pair(s, "AXIS=OPTION")?;
+        o = o.variant(&k, &v);
+    }
+    for s in external {
+        let (k, v) = pair(s, "NAME=VALUE")?;
+        o = o.external(&k, number(s, &v)?);
+    }
+    Ok(o)
+}
+
+/// `PORT` binds loopback; `HOST:PORT` binds where told.
+fn bind_address(text: &str) -> Result<String, String> {
+    if let Ok(port) = text.parse::<u16>() {
+        return Ok(format!("127.0.0.1:{port}"));
+    }
+    if text.parse::<SocketAddr>().is_ok() || text.rsplit_once(':').is_some() {
+        return Ok(text.to_string());
+    }
+    Err(format!("`{text}` is neither PORT nor HOST:PORT"))
+}
+
+/// Wall-clock time of day (UTC) with milliseconds.
+pub(crate) fn time_of_day() -> String {
+    let now = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .unwrap_or_default();
+    let s = now.as_secs() % 86_400;
+    format!(
+        "{:02}:{:02}:{:02}.{:03}",
+        s / 3600,
+        s / 60 % 60,
+        s % 60,
+        now.subsec_millis()
+    )
+}
+
+fn logger() -> Logger {
+    Arc::new(|r: &RequestRecord| {
+        let mut out = std::io::stdout().lock();
+        let _ = writeln!(out, "{}  {r}", time_of_day());
+        let _ = out.flush();
+    })
+}
+
+pub fn run(args: Args) -> Result<ExitCode, String> {
+    let drive = load_drive(&args.dir, &args.drive)?;
+    let options = options(
+        args.slave,
+        &args.set,
+        &args.variant,
+        &args.external,
+        args.time_scale,
+    )?;
+    let serial = drive.protocol.serial.clone();
+    let sim = Simulator::new(drive, options).map_err(|e| e.to_string())?;
+    for w in sim.warnings() {
+        eprintln!("warning: {w}");
+    }
+    let id = sim.drive().meta.id.clone();
+    let slave = sim.slave();
+    let model = if sim.has_model() {
+        "drive model on"
+    } else {
+        "no drive model (the roles table does not list this drive)"
+    };
+    let profile = sim.profile();
+    let shared = drivemap_sim::shared(sim);
+    let log = (!args.quiet).then(logger);
+    let time = if args.time_scale == 1.0 {
+        String::new()
+    } else {
+        format!(", time x{}", args.time_scale)
+    };
+    if let Some(addr) = args.tcp.as_deref().or(args.rtu_tcp.as_deref()) {
+        let framing = if args.tcp.is_some() {
+            TcpFraming::ModbusTcp
+        } else {
+            TcpFraming::RtuOverTcp
+        };
+        let addr = bind_address(addr)?;
+        let server = TcpServer::spawn(shared, addr.as_str(), framing, log)
+            .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
+        let what = match framing {
+            TcpFraming::ModbusTcp => "Modbus TCP",
+            TcpFraming::RtuOverTcp => "RTU over TCP",
+        };
+        println!(
+            "simulating {id} at slave {slave} on {what} {} ({model}{time}); Ctrl-C stops",
+            server.local_addr()
+        );
+        server.wait();
+        return Ok(ExitCode::SUCCESS);
+    }
+    let Some(path) = &args.serial else {
+        return Err("give --tcp, --rtu-tcp or --serial".into());
+    };
+    let baud = args
+        .baud
+        .or(serial.as_ref().and_then(|s| s.default_baud))
+        .unwrap_or(9600);
+    let parity = match args.parity {
+        Some(p) => p,
+        None => match serial.as_ref().and_then(|s| s.default_parity) {
+            Some(MapParity::Even) => LineParity::Even,
+            Some(MapParity::Odd) => LineParity::Odd,
+            _ => LineParity::None,
+        },
+    };
+    let eleven_bits = serial.as_ref().and_then(|s| s.char_bits) == Some(11);
+    let options = SerialOptions::new(path.to_string_lossy(), baud)
+        .parity(match parity {
+            LineParity::None => Parity::None,
+            LineParity::Even => Parity::Even,
+            LineParity::Odd => Parity::Odd,
+        })
+        .stop_bits(if eleven_bits && parity == LineParity::None {
+            StopBits::Two
+        } else {
+            StopBits::One
+        })
+        .with_profile(profile);
+    let server = SerialServer::spawn(shared, options, log)
+        .map_err(|e| format!("cannot open serial port {}: {e}", path.display()))?;
+    println!(
+        "simulating {id} at slave {slave} on RTU {} {baud} baud, parity {} ({model}{time}); Ctrl-C stops",
+        path.display(),
+        format!("{parity:?}").to_lowercase()
+    );
+    server
+        .wait()
+        .map_err(|e| format!("serial port {}: {e}", path.display()))?;
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bare_port_binds_loopback() {
+        assert_eq!(bind_address("5020").unwrap(), "127.0.0.1:5020");
+        assert_eq!(bind_address("0.0.0.0:502").unwrap(), "0.0.0.0:502");
+        assert!(bind_address("nonsense").is_err());
+    }
+
+    #[test]
+    fn options_are_parsed_with_clear_errors() {
+        assert!(options(None, &["n152=1".into()], &[], &[], 1.0).is_ok());
+        let e = options(None, &["n152".into()], &[], &[], 1.0).unwrap_err();
+        assert_eq!(e, "`n152` is not REGISTER=VALUE");
+        let e = options(None, &["n152=x".into()], &[], &[], 1.0).unwrap_err();
+        assert_eq!(e, "`n152=x`: `x` is not a number");
+        assert!(options(None, &[], &[], &[], 0.0).is_err());
+    }
+
+    #[test]
+    fn time_of_day_is_hh_mm_ss_mmm() {
+        let t = time_of_day();
+        assert_eq!(t.len(), 12, "{t}");
+        assert_eq!(&t[2..3], ":");
+        assert_eq!(&t[8..9], ".");
+    }
+}
