@@ -15,7 +15,7 @@ use crate::error::{Error, Refusal};
 use crate::pdu::{Request, Words};
 use crate::persist::PersistBudget;
 use crate::profile::{CommandKind, Profile, TransportKind};
-use crate::register::{BitRegister, Bits, Readable, Table, Writable};
+use crate::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
 use crate::reply::{Discarded, Framing};
 use crate::transport::Transport;
 use crate::typed::{ReadSet, WriteSet};

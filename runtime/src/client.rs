@@ -21,7 +21,7 @@ use crate::exception::Exception;
 use crate::pdu::{FrameError, Request, Response, Words, function};
 use crate::persist::PersistBudget;
 use crate::profile::{CommandInfo, CommandKind, Profile, TransportKind};
-use crate::register::{BitRegister, Bits, Readable, Table, Writable};
+use crate::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
 use crate::reply::{Discarded, Framing, ReplyBuffer};
 use crate::transport::Transport;
 use crate::typed::{ReadSet, WriteSet};
@@ -505,6 +505,22 @@ macro_rules! client_methods {
     pub $($asy)* fn loop_back(&mut self, slave: u8, data: u16) -> Result<(), Error> {
         let retries = self.core.options.retries;
         self.transact(slave, Request::LoopBack { data }, &mut [], false, retries) $($aw)*
+    }
+
+    /// Reads the parameters the drive's conversions depend on (`S::DEPENDENCIES`: scale
+    /// selectors such as V7 n152, reference quantities such as TDS-V8 Cn-02) and records them in
+    /// `settings`, one holding register at a time.
+    pub $($asy)* fn load_settings<S: DriveSettings>(
+        &mut self,
+        slave: u8,
+        settings: &mut S,
+    ) -> Result<(), Error> {
+        for &address in S::DEPENDENCIES {
+            let mut raw = [0u16; 1];
+            self.read_table(slave, Table::Holding, address, &mut raw) $($aw)*?;
+            settings.absorb(address, raw[0]);
+        }
+        Ok(())
     }
 
     /// Reads a register as its typed value.

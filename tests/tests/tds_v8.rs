@@ -146,3 +146,36 @@ fn profile_matches_the_manual() {
         .expect("EEPROM save command");
     assert_eq!(save.kind, drivemap_runtime::profile::CommandKind::Persist);
 }
+
+#[test]
+fn client_loads_settings_then_writes_in_hz() {
+    use drivemap_runtime::profile::TransportKind;
+    use drivemap_runtime::slave::SimulatedSlave;
+    use drivemap_runtime::transport::memory::MemoryTransport;
+    use drivemap_runtime::{Client, DriveSettings};
+    use std::time::{Duration, Instant};
+
+    let (master, mut link) = MemoryTransport::pair(TransportKind::Rtu);
+    let mut slave = SimulatedSlave::new(1, &tds::PROFILE);
+    slave.set_holding(0x0301, 500); // Cn-02 = 50.0 Hz
+    let drive = std::thread::spawn(move || {
+        slave
+            .serve(&mut link, Instant::now() + Duration::from_secs(2))
+            .unwrap();
+        slave
+    });
+    let mut client = Client::new(master, &tds::PROFILE);
+    let mut s = tds::Settings::new();
+    assert_eq!(tds::Settings::DEPENDENCIES, &[0x0301]);
+    client.load_settings(1, &mut s).unwrap();
+    assert_eq!(s.max_output_frequency, Some(50.0));
+    client.write::<tds::FrequencyCommand>(1, &40.0, &s).unwrap(); // 80 % of 50 Hz
+    assert!(
+        client
+            .write::<tds::FrequencyCommand>(1, &f64::NAN, &s)
+            .is_err()
+    );
+    drop(client);
+    let slave = drive.join().unwrap();
+    assert_eq!(slave.holding(0x0001), 0x5DC0);
+}
