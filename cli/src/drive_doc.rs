@@ -89,9 +89,9 @@ pub fn render(drive: &Drive, file_name: &str) -> String {
     unknowns(&mut out, drive);
     gaps(&mut out, drive);
     removed(&mut out, drive);
-    while out.ends_with("\n\n") {
-        out.pop();
-    }
+    let end = out.trim_end().len();
+    out.truncate(end);
+    out.push('\n');
     out
 }
 
@@ -125,9 +125,9 @@ fn header(out: &mut String, drive: &Drive, file_name: &str) {
     }
     let _ = writeln!(
         out,
-        "\n{} registers in {} groups.\n",
-        drive.registers.len(),
-        drive.groups.len()
+        "\n{} in {}.\n",
+        plural(drive.registers.len(), "register"),
+        plural(drive.groups.len(), "group")
     );
 }
 
@@ -441,9 +441,9 @@ fn registers(out: &mut String, drive: &Drive) {
             intro.push(format!("`{s}`"));
         }
         if g.broadcast {
-            intro.push("broadcast registers: written to slave 0 only".into());
+            intro.push("Broadcast registers: written to slave 0 only".into());
         }
-        intro.push(format!("{} registers", members.len()));
+        intro.push(plural(members.len(), "register"));
         let _ = writeln!(out, "{}.\n", intro.join(" · "));
         if members.is_empty() {
             continue;
@@ -604,7 +604,15 @@ fn notes(out: &mut String, drive: &Drive) {
         let _ = writeln!(body, "### Registers\n\n{regs}");
     }
     if !body.is_empty() {
-        let _ = writeln!(out, "## Notes\n\n{body}");
+        let _ = write!(out, "## Notes\n\n{body}");
+    }
+}
+
+fn plural(n: usize, what: &str) -> String {
+    if n == 1 {
+        format!("1 {what}")
+    } else {
+        format!("{n} {what}s")
     }
 }
 

@@ -36,12 +36,21 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             return Ok(ExitCode::FAILURE);
         }
     };
-    let name = path
+    // A stable name for the header: the file name, under `maps/` when it lives there.
+    let file = path
         .file_name()
-        .map(|n| format!("maps/{}", n.to_string_lossy()))
+        .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| path.display().to_string());
-    let mut text = drive_doc::render(&drive, &name);
-    text.push('\n');
+    let in_maps = path
+        .parent()
+        .and_then(|p| p.file_name())
+        .is_some_and(|d| d == "maps");
+    let name = if in_maps {
+        format!("maps/{file}")
+    } else {
+        file
+    };
+    let text = drive_doc::render(&drive, &name);
     match &args.output {
         Some(out) => std::fs::write(out, text).map_err(|e| format!("{}: {e}", out.display()))?,
         None => print!("{text}"),

@@ -6,6 +6,8 @@
 pub mod classify;
 pub mod git;
 pub mod render;
+#[cfg(test)]
+mod tests;
 
 use std::collections::{BTreeMap, BTreeSet};
 

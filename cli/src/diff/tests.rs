@@ -1,0 +1,211 @@
+//! The classifier over crafted before/after maps: `cli/tests/fixtures/diff/<case>.yaml` lists
+//! text edits to `cli/tests/fixtures/example-drive.yaml` and the change kinds they must produce,
+//! no more and no fewer.
+
+use std::path::{Path, PathBuf};
+
+use drivemap_codegen::validate::Context;
+use serde::Deserialize;
+
+use super::git::TempDir;
+use super::*;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Case {
+    /// Labels of the expected change kinds (`scale changed`), with repetition.
+    expect: Vec<String>,
+    /// The edits give the "before" map and the base is "after".
+    #[serde(default)]
+    swap: bool,
+    edits: Vec<Edit>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Edit {
+    from: String,
+    to: String,
+}
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
+}
+
+fn base() -> String {
+    std::fs::read_to_string(fixtures().join("example-drive.yaml")).unwrap()
+}
+
+fn read(dir: &TempDir, name: &str, text: &str) -> Result<Drive, String> {
+    let sub = dir.path().join(name);
+    std::fs::create_dir_all(&sub).unwrap();
+    let path = sub.join("example-drive.yaml");
+    std::fs::write(&path, text).unwrap();
+    drivemap_codegen::read_map(&path, &Context::default())
+        .map_err(|d| format!("the {name} map does not validate:\n{d}"))
+}
+
+fn kind_of(label: &str) -> Result<ChangeKind, String> {
+    ChangeKind::ALL
+        .iter()
+        .find(|k| k.label() == label)
+        .copied()
+        .ok_or_else(|| format!("no change kind labelled `{label}`"))
+}
+
+/// Runs one case; returns the kinds it produced, or what went wrong.
+fn run(case: &Case) -> Result<Vec<ChangeKind>, String> {
+    let base = base();
+    let mut edited = base.clone();
+    for e in &case.edits {
+        let n = edited.matches(e.from.as_str()).count();
+        if n != 1 {
+            return Err(format!("`{}` occurs {n} times, not once", e.from));
+        }
+        edited = edited.replace(e.from.as_str(), &e.to);
+    }
+    let (before, after) = if case.swap {
+        (edited, base)
+    } else {
+        (base, edited)
+    };
+    let dir = TempDir::new("drivemap-diff-case").unwrap();
+    let old = read(&dir, "before", &before)?;
+    let new = read(&dir, "after", &after)?;
+    let diff = compare(&old, &new);
+    let mut got: Vec<ChangeKind> = diff.changes.iter().map(|c| c.kind).collect();
+    let mut want = case
+        .expect
+        .iter()
+        .map(|l| kind_of(l))
+        .collect::<Result<Vec<_>, _>>()?;
+    got.sort_by_key(|k| k.label());
+    want.sort_by_key(|k| k.label());
+    if got != want {
+        return Err(format!(
+            "expected {want:?}, got {got:?}:\n{:#?}",
+            diff.changes
+        ));
+    }
+    for c in &diff.changes {
+        let register_change = !matches!(
+            c.subject.as_str(),
+            "protocol" | "variants" | "example-drive"
+        );
+        // Register changes cite each side that exists.
+        let old_exists = c.kind != ChangeKind::RegisterAdded;
+        let new_exists = c.kind != ChangeKind::RegisterRemoved;
+        if register_change
+            && (c.old_source.is_some() != old_exists || c.new_source.is_some() != new_exists)
+        {
+            return Err(format!("citations missing or extra: {c:?}"));
+        }
+    }
+    if !compare(&new, &new).changes.is_empty() {
+        return Err("a map differs from itself".into());
+    }
+    Ok(got)
+}
+
+#[test]
+fn each_case_yields_exactly_its_changes_and_every_kind_has_a_case() {
+    let dir = fixtures().join("diff");
+    let mut covered = std::collections::HashSet::new();
+    let mut cases = 0;
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "yaml"))
+        .collect();
+    entries.sort();
+    let mut failures = Vec::new();
+    for path in entries {
+        let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+        let case: Case = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        match run(&case) {
+            Ok(kinds) => covered.extend(kinds),
+            Err(e) => failures.push(format!("{name}: {e}")),
+        }
+        cases += 1;
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+    assert!(cases > 50, "only {cases} cases");
+    // Drive added/removed are whole-map changes, exercised by `drivemap diff --git`.
+    let missing: Vec<&str> = ChangeKind::ALL
+        .iter()
+        .filter(|k| !matches!(k, ChangeKind::DriveAdded | ChangeKind::DriveRemoved))
+        .filter(|k| !covered.contains(k))
+        .map(|k| k.label())
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "change kinds without a case: {missing:?}"
+    );
+}
+
+#[test]
+fn scale_change_carries_both_citations_and_the_values() {
+    let case = Case {
+        expect: vec!["scale changed".into()],
+        swap: false,
+        edits: vec![Edit {
+            from: "scale: 0.1, min: 50.0".into(),
+            to: "scale: 0.01, min: 50.0".into(),
+        }],
+    };
+    assert_eq!(run(&case), Ok(vec![ChangeKind::ScaleChanged]));
+    let dir = TempDir::new("drivemap-diff-case").unwrap();
+    let old = read(&dir, "before", &base()).unwrap();
+    let new = read(
+        &dir,
+        "after",
+        &base().replace("scale: 0.1, min: 50.0", "scale: 0.01, min: 50.0"),
+    )
+    .unwrap();
+    let d = compare(&old, &new);
+    assert_eq!(d.breaking(), 1);
+    assert_eq!(d.compatible(), 0);
+    let c = &d.changes[0];
+    assert_eq!(c.subject, "max_frequency (P-01)");
+    assert_eq!(c.old.as_deref(), Some("0.1"));
+    assert_eq!(c.new.as_deref(), Some("0.01"));
+    assert_eq!(c.old_source.as_deref(), Some("manual.txt:40"));
+    assert_eq!(c.new_source.as_deref(), Some("manual.txt:40"));
+    assert_eq!(c.severity(), Severity::Breaking);
+}
+
+#[test]
+fn drives_added_and_removed() {
+    let dir = TempDir::new("drivemap-diff-case").unwrap();
+    let d = read(&dir, "x", &base()).unwrap();
+    let a = added(&d);
+    assert_eq!(a.changes[0].kind, ChangeKind::DriveAdded);
+    assert_eq!(a.breaking(), 0);
+    let r = removed(&d);
+    assert_eq!(r.changes[0].kind, ChangeKind::DriveRemoved);
+    assert_eq!(r.breaking(), 1);
+}
+
+#[test]
+fn ranges_narrow_or_widen() {
+    let r = |a: (Option<f64>, Option<f64>), b| range_change(a, b);
+    assert_eq!(
+        r((Some(0.0), Some(10.0)), (Some(0.0), Some(5.0))),
+        (true, false)
+    );
+    assert_eq!(
+        r((Some(0.0), Some(10.0)), (Some(-1.0), Some(10.0))),
+        (false, true)
+    );
+    assert_eq!(
+        r((Some(0.0), Some(10.0)), (Some(1.0), Some(20.0))),
+        (true, true)
+    );
+    assert_eq!(r((None, None), (Some(0.0), None)), (true, false));
+    assert_eq!(r((Some(0.0), Some(1.0)), (None, None)), (false, true));
+    assert_eq!(
+        r((Some(0.0), Some(1.0)), (Some(0.0), Some(1.0))),
+        (false, false)
+    );
+}

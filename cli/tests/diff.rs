@@ -1,0 +1,258 @@
+//! `drivemap diff` end to end: golden output in both formats, exit codes, a scale edit of a
+//! shipped map, and `--git` with a variant map whose base changed.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// A directory of its own under the system's temporary directory, removed on drop.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let p = std::env::temp_dir().join(format!("drivemap-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        Scratch(p)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn drivemap(dir: &Path, args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DRIVEMAP_MAPS")
+        .output()
+        .expect("run drivemap");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn edit(text: &str, from: &str, to: &str) -> String {
+    assert_eq!(text.matches(from).count(), 1, "`{from}` must occur once");
+    text.replace(from, to)
+}
+
+/// The fixture map with one change of several kinds.
+fn fixture_pair(s: &Scratch) -> (String, String) {
+    let base =
+        std::fs::read_to_string(repo().join("cli/tests/fixtures/example-drive.yaml")).unwrap();
+    let mut new = edit(&base, "scale: 0.1, min: 50.0", "scale: 0.01, min: 50.0");
+    new = edit(
+        &new,
+        "{id: fault_count, name: Fault count",
+        "{id: fault_counter, name: Fault count",
+    );
+    new = edit(
+        &new,
+        "          - {value: 2, id: percent_of_max",
+        "          - {value: 3, id: rpm, name: r/min, source: \"manual.txt:42\"}\n          - {value: 2, id: percent_of_max",
+    );
+    new = edit(&new, "max: 510.0", "max: 520.0");
+    new = edit(
+        &new,
+        "    - {code: 0x22, name: Write mode error, description: Written while running, source: \"manual.txt:17\"}\n",
+        "",
+    );
+    new = edit(
+        &new,
+        "source: \"manual.txt:47\"",
+        "source: \"manual.txt:50\"",
+    );
+    std::fs::create_dir_all(s.0.join("old")).unwrap();
+    std::fs::create_dir_all(s.0.join("new")).unwrap();
+    std::fs::write(s.0.join("old/example-drive.yaml"), base).unwrap();
+    std::fs::write(s.0.join("new/example-drive.yaml"), new).unwrap();
+    (
+        "old/example-drive.yaml".to_owned(),
+        "new/example-drive.yaml".to_owned(),
+    )
+}
+
+#[test]
+fn golden_text_and_markdown() {
+    let s = Scratch::new("diff-golden");
+    let (old, new) = fixture_pair(&s);
+    let (code, text, err) = drivemap(&s.0, &["diff", &old, &new]);
+    assert_eq!(code, 1, "breaking changes exit 1: {err}");
+    insta::assert_snapshot!("example_drive_diff_text", text);
+    let (code, md, err) = drivemap(&s.0, &["diff", "--format", "md", &old, &new]);
+    assert_eq!(code, 1, "{err}");
+    insta::assert_snapshot!("example_drive_diff_md", md);
+}
+
+#[test]
+fn compatible_only_exits_0_and_identical_maps_report_no_changes() {
+    let s = Scratch::new("diff-compatible");
+    let base =
+        std::fs::read_to_string(repo().join("cli/tests/fixtures/example-drive.yaml")).unwrap();
+    let new = edit(&base, "max: 510.0", "max: 520.0");
+    for dir in ["old", "new"] {
+        std::fs::create_dir_all(s.0.join(dir)).unwrap();
+    }
+    std::fs::write(s.0.join("old/example-drive.yaml"), &base).unwrap();
+    std::fs::write(s.0.join("new/example-drive.yaml"), new).unwrap();
+    let (old, new) = ("old/example-drive.yaml", "new/example-drive.yaml");
+    let (code, out, err) = drivemap(&s.0, &["diff", old, new]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.starts_with("example-drive: 0 breaking, 1 compatible\n"),
+        "{out}"
+    );
+    assert!(out.contains("range widened — range (v400)"), "{out}");
+    let (code, out, _) = drivemap(&s.0, &["diff", old, old]);
+    assert_eq!(code, 0);
+    assert_eq!(out, "example-drive: no changes\n");
+}
+
+#[test]
+fn one_scale_edit_of_a_shipped_map_is_exactly_one_breaking_change_with_both_citations() {
+    let s = Scratch::new("diff-tds");
+    let original = std::fs::read_to_string(repo().join("maps/ptlk-tds-v8.yaml")).unwrap();
+    let from = "{id: accel_time_1, param: Bn-01, name: Acceleration time 1, address: 0x0200, unit: s, scale: 0.1,";
+    let edited = edit(&original, from, &from.replace("scale: 0.1,", "scale: 1,"));
+    std::fs::write(s.0.join("ptlk-tds-v8.yaml"), edited).unwrap();
+    let old = repo().join("maps/ptlk-tds-v8.yaml");
+    let (code, out, err) = drivemap(&s.0, &["diff", old.to_str().unwrap(), "ptlk-tds-v8.yaml"]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(
+        out,
+        "ptlk-tds-v8: 1 breaking, 0 compatible\n\
+         \x20 breaking    accel_time_1 (Bn-01): scale changed\n\
+         \x20             0.1 → 1\n\
+         \x20             old: 002_661580cce154f322.txt:455 · new: 002_661580cce154f322.txt:455\n\
+         \x20             why: the same engineering value becomes another raw word (or needs other settings)\n"
+    );
+}
+
+fn git(dir: &Path, args: &[&str]) {
+    let ok = Command::new("git")
+        .args([
+            "-c",
+            "user.name=drivemap test",
+            "-c",
+            "user.email=test@invalid",
+        ])
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("git is needed for `drivemap diff --git`");
+    assert!(
+        ok.status.success(),
+        "git {args:?}: {}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+}
+
+#[test]
+fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
+    let s = Scratch::new("diff-git");
+    let maps = s.0.join("maps");
+    std::fs::create_dir_all(&maps).unwrap();
+    for m in ["yaskawa-v7.yaml", "yaskawa-j7.yaml", "ptlk-tds-v8.yaml"] {
+        std::fs::copy(repo().join("maps").join(m), maps.join(m)).unwrap();
+    }
+    git(&s.0, &["init", "-q"]);
+    git(&s.0, &["add", "."]);
+    git(&s.0, &["commit", "-q", "-m", "maps"]);
+    // Edit the base map: the J7 inherits the register, so it changes too.
+    let v7 = std::fs::read_to_string(maps.join("yaskawa-v7.yaml")).unwrap();
+    let from =
+        "name: Output Voltage (U-04)\n        address: 0x0028\n        unit: V\n        scale: 1\n";
+    std::fs::write(
+        maps.join("yaskawa-v7.yaml"),
+        edit(&v7, from, &from.replace("scale: 1\n", "scale: 2\n")),
+    )
+    .unwrap();
+    std::fs::remove_file(maps.join("ptlk-tds-v8.yaml")).unwrap();
+    std::fs::copy(
+        repo().join("cli/tests/fixtures/example-drive.yaml"),
+        maps.join("example-drive.yaml"),
+    )
+    .unwrap();
+
+    let (code, out, err) = drivemap(&s.0, &["diff", "--git", "HEAD", "--maps", "maps"]);
+    assert_eq!(code, 1, "{err}");
+    let headings: Vec<&str> = out.lines().filter(|l| !l.starts_with(' ')).collect();
+    assert_eq!(
+        headings,
+        [
+            "example-drive: 0 breaking, 1 compatible",
+            "ptlk-tds-v8: 1 breaking, 0 compatible",
+            "yaskawa-j7: 1 breaking, 0 compatible",
+            "yaskawa-v7: 1 breaking, 0 compatible",
+            "4 maps compared: 3 breaking, 1 compatible",
+        ],
+        "{out}"
+    );
+    assert!(
+        out.contains("  compatible  example-drive: drive added\n"),
+        "{out}"
+    );
+    assert!(
+        out.contains("  breaking    ptlk-tds-v8: drive removed\n"),
+        "{out}"
+    );
+    assert_eq!(
+        out.matches("output_voltage: scale changed\n              1 → 2\n")
+            .count(),
+        2,
+        "{out}"
+    );
+
+    // One map, by drive id; Markdown.
+    let (code, md, err) = drivemap(
+        &s.0,
+        &[
+            "diff",
+            "--git",
+            "HEAD",
+            "yaskawa-j7",
+            "--maps",
+            "maps",
+            "--format",
+            "md",
+        ],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        md.starts_with("### yaskawa-j7: 1 breaking, 0 compatible\n"),
+        "{md}"
+    );
+    assert!(
+        md.contains("| **breaking** | `output_voltage` | scale changed | 1 | 2 |"),
+        "{md}"
+    );
+
+    // A map by path, unchanged since the revision.
+    let (code, out, err) = drivemap(&s.0, &["diff", "--git", "HEAD", "maps/yaskawa-j7.yaml"]);
+    assert_eq!((code, err.as_str()), (1, ""));
+    assert!(out.starts_with("yaskawa-j7: 1 breaking"), "{out}");
+
+    // A revision that does not exist.
+    let (code, _, err) = drivemap(&s.0, &["diff", "--git", "no-such-rev", "--maps", "maps"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("git ls-tree"), "{err}");
+}
+
+#[test]
+fn kinds_table_lists_every_kind() {
+    let (code, out, _) = drivemap(&repo(), &["diff", "--kinds", "--format", "md"]);
+    assert_eq!(code, 0);
+    assert!(out.starts_with("| Change | Severity | Why |\n|---|---|---|\n"));
+    assert!(out.contains("| scale changed | breaking |"));
+    assert!(out.contains("| register added | compatible |"));
+    assert!(out.lines().count() > 60);
+}
