@@ -272,6 +272,53 @@ impl Drive {
         out
     }
 
+    /// Communication addresses a broadcast may write: the protocol's broadcast registers and
+    /// every register of a broadcast group, sorted.
+    pub fn broadcast_addresses(&self) -> Vec<u16> {
+        let named = self
+            .protocol
+            .broadcast
+            .iter()
+            .flat_map(|b| b.registers.iter())
+            .filter_map(|name| self.find(name).map(|r| r.def.address));
+        let grouped = self
+            .registers
+            .iter()
+            .filter(|r| r.broadcast)
+            .map(|r| r.def.address);
+        let mut addresses: Vec<u16> = named.chain(grouped).collect();
+        addresses.sort_unstable();
+        addresses.dedup();
+        addresses
+    }
+
+    /// The protocol's timing in the runtime's units (microseconds, bit times).
+    pub fn timing_figures(&self) -> TimingFigures {
+        let timing = self.protocol.timing.as_ref();
+        let ict = timing.and_then(|t| t.inter_char_timeout.as_ref());
+        let us = |ms: f64| (ms * 1000.0).round() as u32;
+        TimingFigures {
+            frame_gap_chars: timing.map(|t| t.frame_gap_chars).unwrap_or(3.5),
+            inter_char_timeout_us: ict.and_then(|i| i.ms).map(us),
+            inter_char_timeout_bits: ict
+                .and_then(|i| i.bits.or(i.chars.map(|c| (c * 11.0).round() as u32))),
+            response_delay_us: timing
+                .and_then(|t| t.response_time.as_ref())
+                .and_then(|i| i.ms)
+                .map(us),
+            response_delay_param: timing.and_then(|t| t.response_delay_param.clone()),
+        }
+    }
+
+    /// PDU address offsets (RTU, TCP).
+    pub fn address_offsets(&self) -> (i32, i32) {
+        self.protocol
+            .addressing
+            .as_ref()
+            .map(|a| (a.rtu_offset, a.tcp_offset))
+            .unwrap_or((0, 0))
+    }
+
     /// The variant axis and option for an option id.
     pub fn variant_option(&self, option: &str) -> Option<(&VariantAxis, &model::VariantOption)> {
         self.variants
@@ -283,6 +330,17 @@ impl Drive {
     pub fn group_of(&self, r: &Register) -> &Group {
         &self.groups[r.group]
     }
+}
+
+/// Protocol timing in the runtime's units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimingFigures {
+    pub frame_gap_chars: f64,
+    pub inter_char_timeout_us: Option<u32>,
+    /// Inter-character limit in bit times (`chars` are counted at 11 bits).
+    pub inter_char_timeout_bits: Option<u32>,
+    pub response_delay_us: Option<u32>,
+    pub response_delay_param: Option<String>,
 }
 
 /// The scales of a register: its own, and those of each selected case.

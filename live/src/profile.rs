@@ -20,25 +20,9 @@ fn leak_slice<T>(v: Vec<T>) -> &'static [T] {
 /// Builds the runtime profile of `drive` with `'static` lifetime (see the module docs).
 pub fn leak_profile(drive: &Drive) -> &'static Profile {
     let p = &drive.protocol;
-    let broadcast = p.broadcast.as_ref().map(|b| {
-        let mut addresses: Vec<u16> = b
-            .registers
-            .iter()
-            .filter_map(|name| drive.find(name).map(|r| r.def.address))
-            .chain(
-                drive
-                    .registers
-                    .iter()
-                    .filter(|r| r.broadcast)
-                    .map(|r| r.def.address),
-            )
-            .collect();
-        addresses.sort_unstable();
-        addresses.dedup();
-        BroadcastInfo {
-            functions: leak_slice(b.functions.clone()),
-            addresses: leak_slice(addresses),
-        }
+    let broadcast = p.broadcast.as_ref().map(|b| BroadcastInfo {
+        functions: leak_slice(b.functions.clone()),
+        addresses: leak_slice(drive.broadcast_addresses()),
     });
     let exceptions = p
         .exceptions
@@ -63,8 +47,8 @@ pub fn leak_profile(drive: &Drive) -> &'static Profile {
             source: leak_str(&c.source),
         })
         .collect();
-    let timing = p.timing.as_ref();
-    let ict = timing.and_then(|t| t.inter_char_timeout.as_ref());
+    let t = drive.timing_figures();
+    let (rtu, tcp) = drive.address_offsets();
     let profile = Profile {
         drive_id: leak_str(&drive.meta.id),
         function_codes: leak_slice(p.function_codes.clone()),
@@ -75,28 +59,13 @@ pub fn leak_profile(drive: &Drive) -> &'static Profile {
         broadcast,
         exceptions: leak_slice(exceptions),
         commands: leak_slice(commands),
-        address_offsets: p
-            .addressing
-            .as_ref()
-            .map(|a| AddressOffsets {
-                rtu: a.rtu_offset,
-                tcp: a.tcp_offset,
-            })
-            .unwrap_or_default(),
+        address_offsets: AddressOffsets { rtu, tcp },
         timing: Timing {
-            frame_gap_chars: timing.map(|t| t.frame_gap_chars).unwrap_or(3.5),
-            inter_char_timeout_us: ict
-                .and_then(|i| i.ms)
-                .map(|ms| (ms * 1000.0).round() as u32),
-            inter_char_timeout_bits: ict
-                .and_then(|i| i.bits.or(i.chars.map(|c| (c * 11.0).round() as u32))),
-            response_delay_us: timing
-                .and_then(|t| t.response_time.as_ref())
-                .and_then(|i| i.ms)
-                .map(|ms| (ms * 1000.0).round() as u32),
-            response_delay_param: timing
-                .and_then(|t| t.response_delay_param.as_deref())
-                .map(leak_str),
+            frame_gap_chars: t.frame_gap_chars,
+            inter_char_timeout_us: t.inter_char_timeout_us,
+            inter_char_timeout_bits: t.inter_char_timeout_bits,
+            response_delay_us: t.response_delay_us,
+            response_delay_param: t.response_delay_param.as_deref().map(leak_str),
         },
         eeprom_write_endurance: p.eeprom.as_ref().map(|e| e.endurance),
     };

@@ -18,21 +18,7 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
     let broadcast = match &p.broadcast {
         None => quote!(None),
         Some(b) => {
-            let mut addrs: Vec<u16> = b
-                .registers
-                .iter()
-                .filter_map(|name| drive.find(name).map(|r| r.def.address))
-                .chain(
-                    drive
-                        .registers
-                        .iter()
-                        .filter(|r| r.broadcast)
-                        .map(|r| r.def.address),
-                )
-                .collect();
-            addrs.sort_unstable();
-            addrs.dedup();
-            let addrs = addrs.into_iter().map(hex);
+            let addrs = drive.broadcast_addresses().into_iter().map(hex);
             let fns = b.functions.iter().map(|f| hex2(*f));
             quote!(Some(#rt::profile::BroadcastInfo { functions: &[#(#fns),*], addresses: &[#(#addrs),*] }))
         }
@@ -53,30 +39,17 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
         });
         quote!(#rt::profile::CommandInfo { id: #cid, name: #name, kind: #kind, writes: &[#(#writes),*], source: #source })
     });
-    let (rtu_off, tcp_off) = p
-        .addressing
-        .as_ref()
-        .map(|a| (a.rtu_offset, a.tcp_offset))
-        .unwrap_or((0, 0));
+    let (rtu_off, tcp_off) = drive.address_offsets();
     let (rtu_off, tcp_off) = (
         proc_macro2::Literal::i32_unsuffixed(rtu_off),
         proc_macro2::Literal::i32_unsuffixed(tcp_off),
     );
-    let timing = p.timing.as_ref();
-    let gap = super::float(timing.map(|t| t.frame_gap_chars).unwrap_or(3.5));
-    let ict = timing.and_then(|t| t.inter_char_timeout.as_ref());
-    let ict_us = opt_u32(
-        ict.and_then(|i| i.ms)
-            .map(|ms| (ms * 1000.0).round() as u32),
-    );
-    let ict_bits = opt_u32(ict.and_then(|i| i.bits.or(i.chars.map(|c| (c * 11.0).round() as u32))));
-    let resp = opt_u32(
-        timing
-            .and_then(|t| t.response_time.as_ref())
-            .and_then(|i| i.ms)
-            .map(|ms| (ms * 1000.0).round() as u32),
-    );
-    let resp_param = super::opt_str(&timing.and_then(|t| t.response_delay_param.clone()));
+    let t = drive.timing_figures();
+    let gap = super::float(t.frame_gap_chars);
+    let ict_us = opt_u32(t.inter_char_timeout_us);
+    let ict_bits = opt_u32(t.inter_char_timeout_bits);
+    let resp = opt_u32(t.response_delay_us);
+    let resp_param = super::opt_str(&t.response_delay_param);
     let endurance = opt_u32(p.eeprom.as_ref().map(|e| e.endurance));
     quote! {
         /// The protocol profile: what the drive accepts on the wire, per its manual.
