@@ -10,7 +10,7 @@
 //!
 //! and in `src/lib.rs`:
 //!
-//! ```ignore
+//! ```text
 //! include!(concat!(env!("OUT_DIR"), "/drivemap.rs"));
 //! ```
 //!
