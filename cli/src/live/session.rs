@@ -173,30 +173,55 @@ pub fn find_all<'a>(drive: &'a Drive, names: &[String]) -> Result<Vec<&'a Regist
     }
 }
 
-/// The registers whose values a register's conversion or address depends on.
-pub fn dependencies<'a>(drive: &'a Drive, r: &Register) -> Vec<&'a Register> {
+/// The parameters that select a register's scale or address.
+pub fn selectors_of<'a>(drive: &'a Drive, r: &Register) -> Vec<&'a Register> {
     let mut names: Vec<&str> = Vec::new();
-    let mut scales: Vec<&Scale> = Vec::new();
-    match &r.def.scale {
-        Some(Scale::Selected(sel)) => {
-            names.push(&sel.selected_by);
-            scales.extend(sel.cases.iter().map(|c| &c.scale));
-        }
-        Some(s) => scales.push(s),
-        None => {}
-    }
-    for s in scales {
-        if let Scale::Relative(rel) = s {
-            if let Reference::Register(name) = &rel.relative_to {
-                names.push(name);
-            }
-        }
+    if let Some(Scale::Selected(sel)) = &r.def.scale {
+        names.push(&sel.selected_by);
     }
     for alt in &r.def.address_alternatives {
         if let Some(s) = &alt.when.setting {
             names.push(s);
         }
     }
+    unique(drive, names)
+}
+
+/// The registers a register's value is relative to under `settings`: for a selected scale, only
+/// the case the selector's known code picks (every case while it is unknown).
+pub fn references_of<'a>(
+    drive: &'a Drive,
+    r: &Register,
+    settings: &LiveSettings,
+) -> Vec<&'a Register> {
+    let scales: Vec<&Scale> = match &r.def.scale {
+        Some(Scale::Selected(sel)) => {
+            let code = drive
+                .find(&sel.selected_by)
+                .and_then(|s| settings.selectors.get(&s.def.id));
+            sel.cases
+                .iter()
+                .filter(|c| code.is_none_or(|code| c.when.contains(code)))
+                .map(|c| &c.scale)
+                .collect()
+        }
+        Some(s) => vec![s],
+        None => Vec::new(),
+    };
+    let names = scales
+        .into_iter()
+        .filter_map(|s| match s {
+            Scale::Relative(rel) => match &rel.relative_to {
+                Reference::Register(name) => Some(name.as_str()),
+                Reference::External(_) => None,
+            },
+            _ => None,
+        })
+        .collect();
+    unique(drive, names)
+}
+
+fn unique<'a>(drive: &'a Drive, names: Vec<&str>) -> Vec<&'a Register> {
     let mut out: Vec<&Register> = Vec::new();
     for n in names {
         if let Some(d) = drive.find(n) {
@@ -297,39 +322,54 @@ impl<'d> Session<'d> {
         address_of(self.drive, r, &self.settings, self.kind)
     }
 
-    /// Reads what the conversions and addresses of `regs` depend on, except what `fixed` gives.
-    /// Selectors are read before references (a reference's address may depend on a selector).
-    /// Returns a warning per dependency that could not be read.
+    /// Reads what the conversions and addresses of `regs` depend on, except what `fixed` gives:
+    /// first the parameters that select scales and addresses, then the references the selected
+    /// scales need. Returns a warning per dependency that could not be read.
     pub fn load_dependencies(
         &mut self,
         regs: &[&Register],
         fixed: &BTreeSet<String>,
     ) -> Vec<String> {
         let drive = self.drive;
-        let mut deps: Vec<&Register> = Vec::new();
-        for r in regs {
-            for d in dependencies(drive, r) {
-                if !fixed.contains(&d.def.id) && !deps.iter().any(|x| x.def.id == d.def.id) {
-                    deps.push(d);
-                }
-            }
-        }
-        let selectors = drive.selectors();
-        deps.sort_by_key(|d| !selectors.iter().any(|s| s.def.id == d.def.id));
+        // Registers that do not exist on this link need nothing.
+        let regs: Vec<&Register> = regs
+            .iter()
+            .copied()
+            .filter(|r| on_transport(r, self.kind))
+            .collect();
         let mut warnings = Vec::new();
+        let mut done: BTreeSet<String> = fixed.clone();
+        let selectors: Vec<&Register> = regs.iter().flat_map(|r| selectors_of(drive, r)).collect();
+        self.read_dependencies(&selectors, &mut done, &mut warnings);
+        let references: Vec<&Register> = regs
+            .iter()
+            .flat_map(|r| references_of(drive, r, &self.settings))
+            .collect();
+        self.read_dependencies(&references, &mut done, &mut warnings);
+        warnings
+    }
+
+    fn read_dependencies(
+        &mut self,
+        deps: &[&Register],
+        done: &mut BTreeSet<String>,
+        warnings: &mut Vec<String>,
+    ) {
         for d in deps {
-            if !d.readable() || d.broadcast || !on_transport(d, self.kind) {
+            if !done.insert(d.def.id.clone()) {
+                continue;
+            }
+            if let Some(why) = self.unreadable(d) {
                 warnings.push(format!(
-                    "cannot read {} ({}), which conversions depend on; give it with --set",
-                    describe::register(d),
-                    describe::address(d.def.address)
+                    "{why}, and conversions depend on it; give it with --set {}=<value>",
+                    d.def.param.as_deref().unwrap_or(&d.def.id)
                 ));
                 continue;
             }
             let address = self.address(d);
             match self.read_one(d.table, address) {
                 Ok(raw) => {
-                    self.settings.absorb(drive, d.def.address, raw);
+                    self.settings.absorb(self.drive, d.def.address, raw);
                 }
                 Err(e) => warnings.push(format!(
                     "reading {}, which conversions depend on: {e}",
@@ -337,7 +377,6 @@ impl<'d> Session<'d> {
                 )),
             }
         }
-        warnings
     }
 
     fn read_one(&mut self, table: ModbusTable, address: u16) -> Result<u16, String> {

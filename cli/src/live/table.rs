@@ -106,11 +106,11 @@ pub fn render(rows: &[Row], highlight: &[bool]) -> String {
         head[3]
     );
     for (i, r) in rows.iter().enumerate() {
-        let value = pad(&r.value, w2);
         let value = if highlight.get(i).copied().unwrap_or(false) {
-            format!("\x1b[1m{value}\x1b[0m")
+            let fill = " ".repeat(w2.saturating_sub(width(&r.value)));
+            format!("\x1b[1m{}\x1b[0m{fill}", r.value)
         } else {
-            value
+            pad(&r.value, w2)
         };
         let line = format!(
             "{}  {}  {value}  {}",

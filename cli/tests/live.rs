@@ -1,0 +1,509 @@
+//! `drivemap read`, `write` and `poll` end to end: the binary talks over loopback TCP (Modbus TCP
+//! or RTU frames over TCP) to a `SimulatedSlave` of the runtime served in a thread of the test.
+//! Addresses in the slave are PDU addresses, so the map's per-transport offsets are checked too.
+
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::{Arc, Mutex};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use drivemap_codegen::validate::Context;
+use drivemap_runtime::slave::SimulatedSlave;
+use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
+use drivemap_runtime::transport::tcp::TcpTransport;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Framing {
+    Tcp,
+    RtuOverTcp,
+}
+
+/// A simulated drive listening on loopback.
+struct Drive {
+    addr: String,
+    flag: &'static str,
+    slave: Arc<Mutex<SimulatedSlave>>,
+}
+
+impl Drive {
+    fn start(id: &str, framing: Framing, setup: impl FnOnce(&mut SimulatedSlave)) -> Drive {
+        let path = repo().join("maps").join(format!("{id}.yaml"));
+        let map = drivemap_codegen::read_map(&path, &Context::default()).expect("shipped map");
+        let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
+        setup(&mut slave);
+        let slave = Arc::new(Mutex::new(slave));
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        let shared = Arc::clone(&slave);
+        thread::spawn(move || {
+            for stream in listener.incoming() {
+                let Ok(stream) = stream else { continue };
+                let until = Instant::now() + Duration::from_secs(30);
+                let mut s = shared.lock().unwrap();
+                let _ = match framing {
+                    Framing::Tcp => s.serve(&mut TcpTransport::from_stream(stream).unwrap(), until),
+                    Framing::RtuOverTcp => s.serve(
+                        &mut RtuOverTcpTransport::from_stream(stream).unwrap(),
+                        until,
+                    ),
+                };
+            }
+        });
+        Drive {
+            addr,
+            flag: match framing {
+                Framing::Tcp => "--tcp",
+                Framing::RtuOverTcp => "--rtu-tcp",
+            },
+            slave,
+        }
+    }
+
+    /// Runs `drivemap <command> --drive <id> <link> <args...>`.
+    fn run(&self, command: &str, id: &str, args: &[&str]) -> (i32, String, String) {
+        let mut all = vec![command, "--drive", id, self.flag, &self.addr];
+        all.extend_from_slice(&["--timeout", "2s"]);
+        all.extend_from_slice(args);
+        drivemap(&all)
+    }
+
+    fn requests(&self) -> u32 {
+        self.slave.lock().unwrap().executed
+    }
+
+    fn holding(&self, pdu: u16) -> u16 {
+        self.slave.lock().unwrap().holding(pdu)
+    }
+
+    fn writes(&self) -> Vec<(u16, u16)> {
+        self.slave.lock().unwrap().writes.clone()
+    }
+}
+
+fn drivemap(args: &[&str]) -> (i32, String, String) {
+    let maps = repo().join("maps");
+    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(args)
+        .arg("--maps")
+        .arg(&maps)
+        .output()
+        .expect("run drivemap");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The row of `register` in a read table, with runs of spaces collapsed.
+fn row(out: &str, register: &str) -> String {
+    let line = out
+        .lines()
+        .find(|l| l.starts_with(&format!("{register} ")))
+        .unwrap_or_else(|| panic!("no row for {register} in:\n{out}"));
+    line.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+fn tds() -> Drive {
+    Drive::start("ptlk-tds-v8", Framing::Tcp, |s| {
+        s.set_holding(0x0301, 600); // Cn-02 max output frequency 60.0 Hz
+        s.set_holding(0x0001, 24000); // frequency command: 80 % of Cn-02
+        s.set_holding(0x0020, 0x0019); // running, ready, DRV mode
+        s.set_holding(0x0024, 15000); // frequency command monitor: 50 %
+        s.set_holding(0x0025, 30000); // output frequency: 100 %
+        s.set_holding(0x0027, 123); // output current 12.3 A
+        s.set_holding(0x0200, 100); // Bn-01 10.0 s
+    })
+}
+
+#[test]
+fn read_decodes_scaled_relative_and_bit_values_by_name_and_parameter() {
+    let d = tds();
+    let (code, out, err) = d.run(
+        "read",
+        "ptlk-tds-v8",
+        &[
+            "frequency_command",
+            "Bn-01",
+            "inverter_status",
+            "output current",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        out.lines()
+            .next()
+            .map(|l| l.split_whitespace().collect::<Vec<_>>()),
+        Some(vec!["REGISTER", "ADDRESS", "VALUE", "RAW"])
+    );
+    assert_eq!(
+        row(&out, "frequency_command"),
+        "frequency_command 0001h 48.00 Hz 5DC0h"
+    );
+    assert_eq!(
+        row(&out, "accel_time_1"),
+        "accel_time_1 (Bn-01) 0200h 10.0 s 0064h"
+    );
+    assert_eq!(
+        row(&out, "output_current"),
+        "output_current 0027h 12.3 A 007Bh"
+    );
+    assert_eq!(
+        row(&out, "inverter_status"),
+        "inverter_status 0020h 0019h [running, ready, drv_mode] 0019h"
+    );
+    // Every field of a bit register is listed by name under its row.
+    assert!(
+        out.contains("running = 1   [bit 0: 0: STOP; 1: RUNNING]"),
+        "{out}"
+    );
+    assert!(
+        out.contains("zero_speed = 0   [bit 1: 1: Zero Speed]"),
+        "{out}"
+    );
+    assert!(
+        out.contains("setting_error = 0   [bits 12–15: Parameter setting error code]"),
+        "{out}"
+    );
+}
+
+#[test]
+fn reads_are_planned_into_few_requests_and_dependencies_read_once() {
+    let d = tds();
+    let (code, out, err) = d.run(
+        "read",
+        "ptlk-tds-v8",
+        &[
+            "frequency_command_monitor",
+            "output_frequency",
+            "output_current",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        row(&out, "frequency_command_monitor"),
+        "frequency_command_monitor 0024h 30.00 Hz 3A98h"
+    );
+    assert_eq!(
+        row(&out, "output_frequency"),
+        "output_frequency 0025h 60.00 Hz 7530h"
+    );
+    // Cn-02 once, then 0024h..0027h in one request (0026h is a readable register between).
+    assert_eq!(d.requests(), 2);
+}
+
+#[test]
+fn poll_reads_the_monitor_group_in_one_request_per_cycle() {
+    let d = tds();
+    let (code, out, err) = d.run(
+        "poll",
+        "ptlk-tds-v8",
+        &["--interval", "50ms", "--count", "3"],
+    );
+    assert_eq!(code, 0, "{err}");
+    for n in 1..=3 {
+        assert!(out.contains(&format!("— poll {n} at ")), "{out}");
+    }
+    assert_eq!(out.matches("output_frequency ").count(), 3, "{out}");
+    assert!(out.contains("every 50 ms"), "{out}");
+    // 16 monitor registers 0020h..002Fh, max_read 16: one request a cycle, after Cn-02.
+    assert_eq!(d.requests(), 1 + 3);
+    let last = out.rsplit("— poll 3").next().unwrap();
+    assert_eq!(
+        row(last, "output_frequency"),
+        "output_frequency 0025h 60.00 Hz 7530h"
+    );
+}
+
+#[test]
+fn write_converts_engineering_units_enumerations_and_bits() {
+    let d = tds();
+    let (code, out, err) = d.run(
+        "write",
+        "ptlk-tds-v8",
+        &[
+            "frequency_command=30",
+            "Bn-01=12.5 s",
+            "operation_command=run,reverse",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(d.holding(0x0001), 15000);
+    assert_eq!(d.holding(0x0200), 125);
+    assert_eq!(d.holding(0x0000), 0x0003);
+    assert!(
+        out.contains("wrote frequency_command = 30.00 Hz (3A98h) at 0001h"),
+        "{out}"
+    );
+    assert!(
+        out.contains("wrote accel_time_1 (Bn-01) = 12.5 s (007Dh) at 0200h"),
+        "{out}"
+    );
+    assert!(
+        out.contains("wrote operation_command = 0003h [run, reverse] (0003h) at 0000h"),
+        "{out}"
+    );
+}
+
+#[test]
+fn out_of_range_is_refused_before_connecting_and_prints_the_range() {
+    let d = tds();
+    let (code, out, err) = d.run("write", "ptlk-tds-v8", &["Bn-01=7000"]);
+    assert_eq!(code, 2);
+    assert!(out.is_empty());
+    assert!(
+        err.contains("accel_time_1: 7000 s is out of range 0 ..= 6000 s"),
+        "{err}"
+    );
+    assert_eq!(d.requests(), 0);
+    assert!(d.writes().is_empty());
+}
+
+#[test]
+fn variant_selects_the_range() {
+    let d = tds();
+    // Cn-01 input voltage: 150..255 V on the 220 V class, 300..510 V on the 440 V class.
+    let (code, _, err) = d.run("write", "ptlk-tds-v8", &["Cn-01=400"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("input_voltage: 400 V is out of range 150 ..= 255 V"),
+        "{err}"
+    );
+    let (code, out, err) = d.run(
+        "write",
+        "ptlk-tds-v8",
+        &["--variant", "voltage_class=v440", "Cn-01=400"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("(0FA0h) at 0300h"), "{out}");
+    assert_eq!(d.holding(0x0300), 4000);
+    let (code, _, err) = d.run(
+        "write",
+        "ptlk-tds-v8",
+        &["--variant", "voltage_class=v380", "Cn-01=400"],
+    );
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("voltage_class has options v220, v440"),
+        "{err}"
+    );
+}
+
+#[test]
+fn unknown_names_suggest_the_nearest_and_read_only_registers_are_not_written() {
+    let d = tds();
+    let (code, _, err) = d.run("read", "ptlk-tds-v8", &["accel_tme_1", "Bn-99"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains(
+            "ptlk-tds-v8 has no register `accel_tme_1`; did you mean accel_time_1 (Bn-01)"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("ptlk-tds-v8 has no register `Bn-99`"), "{err}");
+    let (code, _, err) = d.run("write", "ptlk-tds-v8", &["inverter_status=1"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("inverter_status is read-only"), "{err}");
+    let (code, _, err) = d.run("write", "ptlk-tds-v8", &["Sn-04=rs232"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("is not a code of"), "{err}");
+    assert_eq!(d.requests(), 0);
+}
+
+#[test]
+fn a_timeout_says_what_was_sent_and_waited_for() {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    // Accepts and never answers.
+    thread::spawn(move || {
+        let mut held: Vec<TcpStream> = Vec::new();
+        for s in listener.incoming().flatten() {
+            held.push(s);
+        }
+    });
+    let (code, out, _) = drivemap(&[
+        "read",
+        "--drive",
+        "ptlk-tds-v8",
+        "--tcp",
+        &addr,
+        "--timeout",
+        "200ms",
+        "--retries",
+        "0",
+        "inverter_status",
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        out.contains("error: no reply from slave 1 to 03h read of 0020h x1 within 200 ms"),
+        "{out}"
+    );
+}
+
+#[test]
+fn nothing_listening_is_a_connection_error() {
+    let port = {
+        let l = TcpListener::bind("127.0.0.1:0").unwrap();
+        l.local_addr().unwrap().port()
+    };
+    let (code, _, err) = drivemap(&[
+        "read",
+        "--drive",
+        "ptlk-tds-v8",
+        "--tcp",
+        &format!("127.0.0.1:{port}"),
+        "inverter_status",
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("cannot connect to Modbus TCP server 127.0.0.1:"),
+        "{err}"
+    );
+}
+
+#[test]
+fn rtu_over_tcp_applies_the_maps_rtu_offset() {
+    // ACN: PDU address = manual address - 1 on RTU (the manual's 1103h example sends 1102h).
+    let d = Drive::start("automationdirect-acn", Framing::RtuOverTcp, |s| {
+        s.set_holding(0x1102, 50)
+    });
+    let (code, out, err) = d.run("read", "automationdirect-acn", &["dr.03"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(row(&out, "acc_time"), "acc_time (dr.03) 1103h 5.0 s 0032h");
+    let (code, _, err) = d.run("write", "automationdirect-acn", &["acc_time=7.5"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(d.writes(), vec![(0x1102, 75)]);
+}
+
+#[test]
+fn a_selector_read_from_the_drive_picks_the_scale_unless_set() {
+    // V7 n152 (0198h) selects the unit of the frequency reference (0002h, RTU only).
+    let d = Drive::start("yaskawa-v7", Framing::RtuOverTcp, |s| {
+        s.set_holding(0x0198, 1);
+        s.set_holding(0x0002, 3575);
+    });
+    let (code, out, err) = d.run("read", "yaskawa-v7", &["frequency_reference"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        row(&out, "frequency_reference"),
+        "frequency_reference 0002h 35.75 Hz 0DF7h"
+    );
+    assert_eq!(d.requests(), 2, "n152, then the register");
+    let (code, out, err) = d.run(
+        "read",
+        "yaskawa-v7",
+        &["--set", "n152=0", "frequency_reference"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        row(&out, "frequency_reference"),
+        "frequency_reference 0002h 357.5 Hz 0DF7h"
+    );
+    assert_eq!(d.requests(), 3, "n152 given, not read");
+    // Over Modbus TCP the register does not exist: nothing is sent.
+    let (code, out, err) = drivemap(&[
+        "read",
+        "--drive",
+        "yaskawa-v7",
+        "--tcp",
+        &d.addr,
+        "frequency_reference",
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        out.contains("error: frequency_reference exists only on RTU"),
+        "{out}"
+    );
+    assert_eq!(d.requests(), 3);
+}
+
+#[test]
+fn an_external_reference_is_given_with_set() {
+    // J7: n69 = 2 scales the frequency reference relative to the maximum output frequency,
+    // which no register holds.
+    let d = Drive::start("yaskawa-j7", Framing::RtuOverTcp, |s| {
+        s.set_holding(0x0198, 2);
+        s.set_holding(0x0002, 15000);
+    });
+    let (code, out, err) = d.run("read", "yaskawa-j7", &["frequency_reference"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        out.contains("give it with --set max_output_frequency=<value>"),
+        "{out}"
+    );
+    let (code, out, err) = d.run(
+        "read",
+        "yaskawa-j7",
+        &["--set", "max_output_frequency=60", "frequency_reference"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        row(&out, "frequency_reference"),
+        "frequency_reference 0002h 30.00 Hz 3A98h"
+    );
+    // The J7 has no 06h: a single write goes out as 10h.
+    let (code, _, err) = d.run(
+        "write",
+        "yaskawa-j7",
+        &["--set", "max_output_frequency=60", "frequency_reference=45"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(d.holding(0x0002), 22500);
+    let (code, _, err) = d.run(
+        "read",
+        "yaskawa-j7",
+        &["--set", "rated_power=3", "frequency_reference"],
+    );
+    assert_eq!(code, 2);
+    assert!(err.contains("settable: max_output_frequency"), "{err}");
+}
+
+#[test]
+fn persist_runs_the_maps_save_command() {
+    let d = tds();
+    let (code, out, err) = d.run(
+        "write",
+        "ptlk-tds-v8",
+        &["Bn-01=20", "--persist", "save_parameters"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("ran command save_parameters"), "{out}");
+    assert_eq!(d.writes(), vec![(0x0200, 200), (0x0500, 0)]);
+    let (code, _, err) = d.run("write", "ptlk-tds-v8", &["Bn-01=20", "--persist", "enter"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("ptlk-tds-v8 has no command `enter`; commands: save_parameters"),
+        "{err}"
+    );
+}
+
+#[test]
+fn broadcast_writes_go_to_slave_0_without_reply() {
+    let d = tds();
+    // Slave 0 answers nothing, so Cn-02 cannot be read: it is given.
+    let (code, out, err) = d.run(
+        "write",
+        "ptlk-tds-v8",
+        &["--slave", "0", "--set", "Cn-02=60", "frequency_command=30"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("wrote frequency_command = 30.00 Hz (3A98h) at 0001h"),
+        "{out}"
+    );
+    assert_eq!(d.writes(), vec![(0x0001, 15000)]);
+    // The drive refuses other registers in a broadcast; the runtime says so before sending.
+    let (code, _, err) = d.run("write", "ptlk-tds-v8", &["--slave", "0", "Bn-01=20"]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("does not accept register 0200h in a broadcast"),
+        "{err}"
+    );
+    assert_eq!(d.writes().len(), 1);
+}
