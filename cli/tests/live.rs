@@ -507,3 +507,98 @@ fn broadcast_writes_go_to_slave_0_without_reply() {
     );
     assert_eq!(d.writes().len(), 1);
 }
+
+/// A running `socat` linking two pseudo-terminals; killed on drop. Needs `socat` (Debian
+/// package `socat`), as the runtime's own serial tests do; without it the test fails.
+struct PtyPair {
+    child: std::process::Child,
+    paths: [String; 2],
+}
+
+impl PtyPair {
+    fn new() -> PtyPair {
+        use std::io::{BufRead, BufReader};
+        let mut child = Command::new("socat")
+            .args(["-d", "-d", "pty,raw,echo=0", "pty,raw,echo=0"])
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("socat is required for this test: apt-get install socat");
+        let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+        let mut paths = Vec::new();
+        while paths.len() < 2 {
+            let line = lines
+                .next()
+                .expect("socat exited early")
+                .expect("socat log");
+            if let Some(at) = line.find("PTY is ") {
+                paths.push(line[at + "PTY is ".len()..].trim().to_string());
+            }
+        }
+        thread::spawn(move || for _ in lines.by_ref() {});
+        PtyPair {
+            child,
+            paths: [paths[0].clone(), paths[1].clone()],
+        }
+    }
+}
+
+impl Drop for PtyPair {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[test]
+fn serial_line_through_a_pseudo_terminal_pair() {
+    use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport};
+    let pty = PtyPair::new();
+    let map = drivemap_codegen::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
+        .unwrap();
+    let profile = drivemap_live::leak_profile(&map);
+    let mut link = SerialTransport::open(
+        SerialOptions::new(pty.paths[1].as_str(), 19_200)
+            .parity(Parity::Even)
+            .with_profile(profile),
+    )
+    .expect("opening the drive's end");
+    let drive = thread::spawn(move || {
+        let mut slave = SimulatedSlave::new(1, profile);
+        slave.set_holding(0x0198, 1);
+        slave.set_holding(0x0002, 3575);
+        slave
+            .serve(&mut link, Instant::now() + Duration::from_secs(4))
+            .expect("serving");
+        slave
+    });
+    let serial = [
+        "--serial",
+        pty.paths[0].as_str(),
+        "--baud",
+        "19200",
+        "--parity",
+        "even",
+    ];
+    let mut args = vec!["read", "--drive", "yaskawa-v7"];
+    args.extend_from_slice(&serial);
+    args.push("frequency_reference");
+    let (code, out, err) = drivemap(&args);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        row(&out, "frequency_reference"),
+        "frequency_reference 0002h 35.75 Hz 0DF7h"
+    );
+    let mut args = vec!["write", "--drive", "yaskawa-v7"];
+    args.extend_from_slice(&serial);
+    args.push("frequency_reference=40");
+    let (code, out, err) = drivemap(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("wrote frequency_reference = 40.00 Hz (0FA0h) at 0002h"),
+        "{out}"
+    );
+    let slave = drive.join().unwrap();
+    assert_eq!(slave.holding(0x0002), 4000);
+}

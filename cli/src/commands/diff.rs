@@ -12,6 +12,7 @@ use drivemap_codegen::validate::Context;
 use crate::diff::{self, DriveDiff, render::Format};
 use crate::maps::{MapsDir, context_for};
 
+/// Arguments of `drivemap diff`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// The old map file; with `--git`, the map to compare (a file or a drive id; every map of
@@ -37,6 +38,7 @@ fn read(path: &Path, ctx: &Context) -> Result<Drive, String> {
     drivemap_codegen::read_map(path, ctx).map_err(|d| format!("{d}"))
 }
 
+/// Compares maps and prints the changes; exits 1 when any is breaking.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     if args.kinds {
         print!("{}", diff::render::kinds(args.format));

@@ -8,6 +8,7 @@ use clap::Args as ClapArgs;
 use crate::drive_doc;
 use crate::maps::MapsDir;
 
+/// Arguments of `drivemap doc`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Map file to document.
@@ -23,6 +24,7 @@ pub struct Args {
     pub dir: MapsDir,
 }
 
+/// Writes the Markdown reference of one map.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let path = match (&args.file, &args.drive) {
         (Some(f), _) => f.clone(),

@@ -13,6 +13,7 @@ use crate::live::Target;
 use crate::live::session::{Session, find_all};
 use crate::live::table::{self, Row};
 
+/// Arguments of `drivemap poll`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     #[command(flatten)]
@@ -64,6 +65,7 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Str
     Ok(regs)
 }
 
+/// Reads the registers every interval and redraws the table; exits 1 when any read failed.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let drive = args.target.load()?;
     let regs = registers(&drive, &args)?;

@@ -8,6 +8,7 @@ use crate::live::Target;
 use crate::live::session::{Session, find_all};
 use crate::live::table::{self, Row};
 
+/// Arguments of `drivemap read`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     #[command(flatten)]
@@ -17,6 +18,7 @@ pub struct Args {
     pub names: Vec<String>,
 }
 
+/// Reads the named registers and prints them decoded; exits 1 when any failed.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let drive = args.target.load()?;
     let regs = find_all(&drive, &args.names)?;

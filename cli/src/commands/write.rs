@@ -11,6 +11,7 @@ use crate::describe;
 use crate::live::Target;
 use crate::live::session::{Session, value_error};
 
+/// Arguments of `drivemap write`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     #[command(flatten)]
@@ -32,6 +33,7 @@ fn input_error(e: &InputError) -> String {
     }
 }
 
+/// Checks every assignment, then writes them in order; exits 1 when the drive refused one.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let drive = args.target.load()?;
     let mut pairs: Vec<(&Register, String)> = Vec::new();

@@ -25,6 +25,7 @@ use crate::describe;
 /// One change between the old and the new map.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Change {
+    /// What kind of change; decides the severity.
     pub kind: ChangeKind,
     /// What changed: a register (`accel_time_1 (Bn-01)`), `protocol`, `variants`, the drive.
     pub subject: String,
@@ -59,6 +60,7 @@ impl Change {
 pub struct DriveDiff {
     /// Drive id (the new map's, or the old one's when removed).
     pub drive: String,
+    /// Changes in order: drive and protocol, then registers by address, then map documentation.
     pub changes: Vec<Change>,
 }
 

@@ -12,6 +12,7 @@ use drivemap_codegen::model::ModbusTable;
 /// One read request of the plan.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Batch {
+    /// Holding (03h) or input (04h) registers.
     pub table: ModbusTable,
     /// First communication address.
     pub address: u16,

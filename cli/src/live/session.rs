@@ -31,6 +31,7 @@ pub struct SettingsArgs {
 
 /// Settings from the command line, and which register ids they fix.
 pub struct Given {
+    /// Variants, selector codes and reference values given.
     pub settings: LiveSettings,
     /// Register ids whose value was given with `--set`.
     pub fixed: BTreeSet<String>,
@@ -293,10 +294,15 @@ pub fn value_error(e: &ValueError) -> String {
 
 /// A connected drive with its settings.
 pub struct Session<'d> {
+    /// The drive's map.
     pub drive: &'d Drive,
+    /// The client over the chosen transport.
     pub client: LiveClient,
+    /// The slave address talked to (0: broadcast).
     pub slave: u8,
+    /// The transport kind, which picks addresses and address offsets.
     pub kind: TransportKind,
+    /// What conversions depend on: given, then read from the drive.
     pub settings: LiveSettings,
     /// The link, for headers.
     pub link: String,
