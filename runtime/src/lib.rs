@@ -14,6 +14,7 @@
 
 #[cfg(feature = "tokio")]
 pub mod async_client;
+pub mod bus_time;
 pub mod client;
 pub mod crc;
 pub mod error;
@@ -21,6 +22,7 @@ pub mod exception;
 pub mod fault;
 pub mod pdu;
 pub mod persist;
+pub mod planner;
 pub mod profile;
 pub mod register;
 pub mod reply;
