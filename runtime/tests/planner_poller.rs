@@ -1,0 +1,340 @@
+//! The poller against a simulated drive: planned requests, values per register, splitting of
+//! merged requests the drive refuses, and what it remembers for later cycles.
+
+use std::io;
+use std::time::Instant;
+
+use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::planner::{Learned, PlanError, PolledError, Poller, Read, wanted};
+use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::slave::SimulatedSlave;
+use drivemap_runtime::transport::Transport;
+use drivemap_runtime::{Access, Client, Readable, Register, RegisterInfo, Table, ValueError};
+
+/// A link to a simulated drive that answers each request as it is sent.
+struct Link {
+    drive: SimulatedSlave,
+    reply: Vec<u8>,
+    requests: Vec<(u8, u16, u16)>,
+}
+
+impl Transport for Link {
+    fn kind(&self) -> TransportKind {
+        TransportKind::Rtu
+    }
+    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
+        self.requests.push((
+            frame[1],
+            u16::from_be_bytes([frame[2], frame[3]]),
+            u16::from_be_bytes([frame[4], frame[5]]),
+        ));
+        let mut out = [0u8; 256];
+        let n = self.drive.respond_rtu(frame, &mut out).unwrap_or(0);
+        self.reply = out[..n].to_vec();
+        Ok(())
+    }
+    fn recv(&mut self, buf: &mut [u8], _: Instant) -> io::Result<usize> {
+        let n = self.reply.len().min(buf.len());
+        buf[..n].copy_from_slice(&self.reply[..n]);
+        self.reply.drain(..n);
+        Ok(n)
+    }
+}
+
+static PROFILE: Profile = Profile {
+    drive_id: "test-drive",
+    max_read: 8,
+    ..Profile::GENERIC
+};
+
+const fn info(address: u16, access: Access, table: Table) -> RegisterInfo {
+    RegisterInfo {
+        id: "r",
+        param: None,
+        name: "r",
+        address,
+        access,
+        table,
+        broadcast_only: false,
+        source: "",
+    }
+}
+
+/// Holding 0020h-002Fh readable except 0028h (write-only); 0030h broadcast-only; input
+/// 0100h-0103h readable.
+static REGISTERS: &[RegisterInfo] = &[
+    info(0x20, Access::Read, Table::Holding),
+    info(0x21, Access::Read, Table::Holding),
+    info(0x22, Access::Read, Table::Holding),
+    info(0x23, Access::Read, Table::Holding),
+    info(0x24, Access::Read, Table::Holding),
+    info(0x25, Access::Read, Table::Holding),
+    info(0x26, Access::ReadWrite, Table::Holding),
+    info(0x27, Access::Read, Table::Holding),
+    info(0x28, Access::Write, Table::Holding),
+    info(0x29, Access::Read, Table::Holding),
+    RegisterInfo {
+        broadcast_only: true,
+        ..info(0x30, Access::ReadWrite, Table::Holding)
+    },
+    info(0x100, Access::Read, Table::Input),
+    info(0x101, Access::Read, Table::Input),
+    info(0x102, Access::Read, Table::Input),
+    info(0x103, Access::Read, Table::Input),
+];
+
+fn client() -> Client<Link> {
+    let mut drive = SimulatedSlave::new(1, &PROFILE);
+    for a in 0x20..=0x30 {
+        drive.set_holding(a, 1000 + a);
+    }
+    for a in 0x100..=0x103 {
+        drive.set_input(a, 2000 + a);
+    }
+    Client::new(
+        Link {
+            drive,
+            reply: Vec::new(),
+            requests: Vec::new(),
+        },
+        &PROFILE,
+    )
+}
+
+fn holding(addresses: &[u16]) -> Vec<(Table, u16)> {
+    addresses.iter().map(|&a| (Table::Holding, a)).collect()
+}
+
+fn plan(p: &Poller) -> Vec<(Table, Read)> {
+    p.plan().collect()
+}
+
+fn read(address: u16, quantity: u16) -> Read {
+    Read { address, quantity }
+}
+
+#[test]
+fn one_planned_request_serves_every_wanted_register() {
+    let mut wanted = holding(&[0x24, 0x20, 0x22, 0x20]);
+    wanted.push((Table::Input, 0x103));
+    wanted.push((Table::Input, 0x100));
+    let mut poller = Poller::new(&PROFILE, REGISTERS, wanted).unwrap();
+    assert_eq!(
+        plan(&poller),
+        vec![
+            (Table::Holding, read(0x20, 5)),
+            (Table::Input, read(0x100, 4))
+        ]
+    );
+    assert!(poller.value(0).is_none(), "nothing before the first poll");
+    let mut c = client();
+    let stats = poller.poll(&mut c, 1);
+    assert_eq!(stats.requests, 2);
+    assert_eq!(stats.splits, 0);
+    assert_eq!(stats.bus_ns, poller.plan_ns());
+    let values: Vec<u16> = (0..6)
+        .map(|i| *poller.value(i).unwrap().as_ref().unwrap())
+        .collect();
+    assert_eq!(values, vec![1036, 1032, 1034, 1032, 2259, 2256]);
+    assert_eq!(
+        c.transport().requests,
+        vec![(0x03, 0x20, 5), (0x04, 0x100, 4)]
+    );
+    assert!(poller.learned().is_empty());
+}
+
+#[test]
+fn write_only_and_broadcast_registers_are_neither_wanted_nor_bridged() {
+    for address in [0x28, 0x30, 0x2A, 0x1F] {
+        assert_eq!(
+            Poller::new(&PROFILE, REGISTERS, holding(&[address])).unwrap_err(),
+            PlanError::NotReadable {
+                table: Table::Holding,
+                address
+            }
+        );
+    }
+    // 0027h and 0029h: 0028h is write-only, so two requests.
+    let poller = Poller::new(&PROFILE, REGISTERS, holding(&[0x27, 0x29])).unwrap();
+    assert_eq!(
+        plan(&poller),
+        vec![
+            (Table::Holding, read(0x27, 1)),
+            (Table::Holding, read(0x29, 1))
+        ]
+    );
+}
+
+#[test]
+fn a_refused_bridge_is_split_and_not_bridged_again() {
+    let mut poller = Poller::new(&PROFILE, REGISTERS, holding(&[0x20, 0x22, 0x24])).unwrap();
+    assert_eq!(plan(&poller), vec![(Table::Holding, read(0x20, 5))]);
+    let mut c = client();
+    // The map says 0021h is readable, the drive says otherwise.
+    c.transport().drive.fail_at(0x21, 0x02);
+    let stats = poller.poll(&mut c, 1);
+    assert_eq!((stats.requests, stats.splits), (4, 1));
+    for (i, a) in [0x20u16, 0x22, 0x24].into_iter().enumerate() {
+        assert_eq!(poller.value(i).unwrap().unwrap(), 1000 + a);
+    }
+    assert_eq!(
+        poller.learned(),
+        &[
+            (Table::Holding, 0x21, Learned::NotBridged),
+            (Table::Holding, 0x23, Learned::NotBridged)
+        ]
+    );
+    // Next cycle: three requests, no exception.
+    c.transport().requests.clear();
+    let stats = poller.poll(&mut c, 1);
+    assert_eq!((stats.requests, stats.splits), (3, 0));
+    assert_eq!(
+        c.transport().requests,
+        vec![(0x03, 0x20, 1), (0x03, 0x22, 1), (0x03, 0x24, 1)]
+    );
+    // Forgetting restores the merged plan.
+    poller.forget();
+    assert!(poller.learned().is_empty());
+    assert_eq!(plan(&poller), vec![(Table::Holding, read(0x20, 5))]);
+}
+
+#[test]
+fn a_wanted_register_refused_alone_is_found_by_halving_and_then_read_alone() {
+    let mut poller = Poller::new(&PROFILE, REGISTERS, holding(&[0x20, 0x21, 0x22, 0x23])).unwrap();
+    let mut c = client();
+    c.transport().drive.fail_at(0x22, 0x21);
+    let stats = poller.poll(&mut c, 1);
+    // 0020h x4 refused; halves 0020h x2 (fine) and 0022h x2 (refused); 0022h x1 refused,
+    // 0023h x1 fine.
+    assert_eq!(
+        c.transport().requests,
+        vec![
+            (0x03, 0x20, 4),
+            (0x03, 0x20, 2),
+            (0x03, 0x22, 2),
+            (0x03, 0x22, 1),
+            (0x03, 0x23, 1)
+        ]
+    );
+    assert_eq!((stats.requests, stats.splits), (5, 2));
+    assert_eq!(poller.value(0).unwrap().unwrap(), 0x20 + 1000);
+    assert_eq!(poller.value(1).unwrap().unwrap(), 0x21 + 1000);
+    let e = poller.value(2).unwrap().unwrap_err();
+    assert_eq!(e.exception().map(|x| x.code), Some(0x21));
+    assert_eq!(poller.value(3).unwrap().unwrap(), 0x23 + 1000);
+    assert_eq!(
+        poller.learned(),
+        &[(Table::Holding, 0x22, Learned::Refused)]
+    );
+    // From now on 0022h is read alone and never bridged; its error is still reported.
+    c.transport().requests.clear();
+    let stats = poller.poll(&mut c, 1);
+    assert_eq!(
+        c.transport().requests,
+        vec![(0x03, 0x20, 2), (0x03, 0x22, 1), (0x03, 0x23, 1)]
+    );
+    assert_eq!((stats.requests, stats.splits), (3, 0));
+    assert!(poller.value(2).unwrap().is_err());
+    assert_eq!(poller.value(3).unwrap().unwrap(), 0x23 + 1000);
+}
+
+#[test]
+fn other_errors_are_reported_for_every_member_without_splitting() {
+    let mut poller = Poller::new(&PROFILE, REGISTERS, holding(&[0x20, 0x22])).unwrap();
+    let mut c = client();
+    c.transport().drive.fail_at(0x21, 0x04);
+    let stats = poller.poll(&mut c, 1);
+    assert_eq!((stats.requests, stats.splits), (1, 0));
+    for i in 0..2 {
+        let e = poller.value(i).unwrap().unwrap_err();
+        assert_eq!(e.exception().map(|x| x.code), Some(0x04));
+    }
+    assert!(poller.learned().is_empty());
+    assert_eq!(plan(&poller), vec![(Table::Holding, read(0x20, 3))]);
+}
+
+struct OutputFrequency;
+
+impl Register for OutputFrequency {
+    type Value = f64;
+    type Settings = ();
+    const ID: &'static str = "output_frequency";
+    const PARAM: Option<&'static str> = None;
+    const NAME: &'static str = "Output frequency";
+    const ADDRESS: u16 = 0x23;
+    const TABLE: Table = Table::Holding;
+    const SOURCE: &'static str = "";
+    fn decode(raw: u16, _: &()) -> Result<f64, ValueError> {
+        Ok(f64::from(raw) / 100.0)
+    }
+}
+
+impl Readable for OutputFrequency {}
+
+#[test]
+fn typed_values_of_generated_registers() {
+    let mut poller = Poller::new(
+        &PROFILE,
+        REGISTERS,
+        [wanted::<OutputFrequency>(), (Table::Holding, 0x20)],
+    )
+    .unwrap();
+    assert!(poller.register::<OutputFrequency>(&()).is_none());
+    let mut c = client();
+    poller.poll(&mut c, 1);
+    assert_eq!(
+        poller.register::<OutputFrequency>(&()).unwrap().unwrap(),
+        10.35
+    );
+    c.transport().drive.fail_at(0x23, 0x02);
+    poller.poll(&mut c, 1);
+    match poller.register::<OutputFrequency>(&()).unwrap() {
+        Err(PolledError::Read(e)) => assert_eq!(e.exception().map(|x| x.code), Some(0x02)),
+        other => panic!("expected the read error, got {other:?}"),
+    }
+    assert_eq!(poller.get(Table::Holding, 0x20).unwrap().unwrap(), 1032);
+}
+
+static V7_LIKE: Profile = Profile {
+    drive_id: "yaskawa-v7",
+    max_read: 125,
+    ..Profile::GENERIC
+};
+
+static RUN: &[RegisterInfo] = &{
+    let mut all = [info(0, Access::Read, Table::Holding); 64];
+    let mut i = 0;
+    while i < 64 {
+        all[i].address = i as u16;
+        i += 1;
+    }
+    all
+};
+
+#[test]
+fn the_model_decides_whether_a_hole_is_bridged() {
+    // 0000h and 001Ah: bridging 25 registers costs 50 characters. At 9600 8N1 (1.04 ms a
+    // character) that is 52 ms, more than a second request (15 bytes, 24 bits + 10 ms before
+    // and after the reply: 40.6 ms). At 19 200 baud it is 26 ms against 30.3 ms.
+    let wanted = holding(&[0x00, 0x1A]);
+    let at_9600 = Poller::new(&V7_LIKE, RUN, wanted.clone()).unwrap();
+    assert_eq!(
+        plan(&at_9600),
+        vec![
+            (Table::Holding, read(0x00, 1)),
+            (Table::Holding, read(0x1A, 1))
+        ]
+    );
+    let model = BusModel::new(&V7_LIKE, SerialConfig::new(19_200));
+    let at_19200 = Poller::new(&V7_LIKE, RUN, wanted.clone())
+        .unwrap()
+        .with_model(model);
+    assert_eq!(plan(&at_19200), vec![(Table::Holding, read(0x00, 27))]);
+    // A longer n156 makes each request dearer: bridged at 9600 baud too.
+    let slow_drive = BusModel::new(&V7_LIKE, SerialConfig::new(9600))
+        .with_delay_param(std::time::Duration::from_millis(65));
+    let bridged = Poller::new(&V7_LIKE, RUN, wanted)
+        .unwrap()
+        .with_model(slow_drive);
+    assert_eq!(plan(&bridged), vec![(Table::Holding, read(0x00, 27))]);
+}
