@@ -241,6 +241,16 @@ fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
     assert_eq!((code, err.as_str()), (1, ""));
     assert!(out.starts_with("yaskawa-j7: 1 breaking"), "{out}");
 
+    // A map by path that is gone from the working tree.
+    let (code, out, err) = drivemap(&s.0, &["diff", "--git", "HEAD", "maps/ptlk-tds-v8.yaml"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        out.starts_with(
+            "ptlk-tds-v8: 1 breaking, 0 compatible\n  breaking    ptlk-tds-v8: drive removed\n"
+        ),
+        "{out}"
+    );
+
     // A revision that does not exist.
     let (code, _, err) = drivemap(&s.0, &["diff", "--git", "no-such-rev", "--maps", "maps"]);
     assert_eq!(code, 2);

@@ -79,27 +79,26 @@ fn yaml_names(dir: &Path) -> BTreeSet<String> {
 }
 
 fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, String> {
+    // A map is named by path (it may be gone from the working tree) or by drive id.
     let (dir, names): (PathBuf, Option<Vec<String>>) = match &args.old {
-        Some(map) if map.is_file() => {
-            let dir = map
-                .parent()
-                .filter(|p| !p.as_os_str().is_empty())
-                .unwrap_or(Path::new("."))
-                .to_path_buf();
-            let name = map
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .ok_or_else(|| format!("{}: not a map file", map.display()))?;
-            (dir, Some(vec![name]))
-        }
-        Some(id) => {
-            let id = id.to_string_lossy();
-            let name = if id.ends_with(".yaml") || id.ends_with(".yml") {
-                id.into_owned()
+        Some(map) => {
+            let text = map.to_string_lossy();
+            let is_path =
+                map.components().count() > 1 || text.ends_with(".yaml") || text.ends_with(".yml");
+            if is_path {
+                let dir = map
+                    .parent()
+                    .filter(|p| !p.as_os_str().is_empty())
+                    .unwrap_or(Path::new("."))
+                    .to_path_buf();
+                let name = map
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .ok_or_else(|| format!("{}: not a map file", map.display()))?;
+                (dir, Some(vec![name]))
             } else {
-                format!("{id}.yaml")
-            };
-            (args.dir.maps.clone(), Some(vec![name]))
+                (args.dir.maps.clone(), Some(vec![format!("{text}.yaml")]))
+            }
         }
         None => (args.dir.maps.clone(), None),
     };

@@ -8,6 +8,7 @@ use drivemap_codegen::validate::Context;
 use serde::Deserialize;
 
 use super::git::TempDir;
+use super::registers::range_change;
 use super::*;
 
 #[derive(Deserialize)]

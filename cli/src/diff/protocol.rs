@@ -1,0 +1,516 @@
+//! Differences outside the registers: drive metadata, variant axes, the protocol profile.
+
+use std::collections::BTreeSet;
+
+use drivemap_codegen::ir::Drive;
+use drivemap_codegen::model::TransportName;
+
+use super::{ChangeKind, Collector, HEAD, json, same};
+use crate::describe;
+
+pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
+    let (a, b) = (&old.meta, &new.meta);
+    let id = &b.id;
+    let mut parts = Vec::new();
+    if a.id != b.id {
+        parts.push("id");
+    }
+    if a.extends != b.extends {
+        parts.push("extends");
+    }
+    if a.vendor != b.vendor {
+        parts.push("vendor");
+    }
+    if a.models != b.models {
+        parts.push("models");
+    }
+    if a.description != b.description {
+        parts.push("description");
+    }
+    if !same(&a.manuals, &b.manuals) {
+        parts.push("manuals");
+    }
+    if !parts.is_empty() {
+        let text = |m: &drivemap_codegen::model::DriveMeta| {
+            format!(
+                "{} {} ({} manual(s))",
+                m.vendor,
+                m.models.join(" / "),
+                m.manuals.len()
+            )
+        };
+        c.push(
+            ChangeKind::DriveMetaChanged,
+            id,
+            &parts.join(", "),
+            (Some(text(a)), None),
+            (Some(text(b)), None),
+            HEAD,
+        );
+    }
+}
+
+pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
+    let subject = "variants";
+    for a in &old.variants {
+        let Some(b) = new.variants.iter().find(|b| b.id == a.id) else {
+            let opts: Vec<&str> = a.options.iter().map(|o| o.id.as_str()).collect();
+            c.push(
+                ChangeKind::VariantAxisRemoved,
+                subject,
+                &a.id,
+                (
+                    Some(opts.join(", ")),
+                    a.options.first().and_then(|o| o.source.clone()),
+                ),
+                (None, None),
+                HEAD,
+            );
+            continue;
+        };
+        for o in &a.options {
+            if !b.options.iter().any(|p| p.id == o.id) {
+                c.push(
+                    ChangeKind::VariantOptionRemoved,
+                    subject,
+                    &format!("{} option {}", a.id, o.id),
+                    (Some(o.name.clone()), o.source.clone()),
+                    (None, None),
+                    HEAD,
+                );
+            }
+        }
+        for o in &b.options {
+            if !a.options.iter().any(|p| p.id == o.id) {
+                c.push(
+                    ChangeKind::VariantOptionAdded,
+                    subject,
+                    &format!("{} option {}", b.id, o.id),
+                    (None, None),
+                    (Some(o.name.clone()), o.source.clone()),
+                    HEAD,
+                );
+            }
+        }
+        if let (Some(x), Some(y)) = (a.options.first(), b.options.first()) {
+            if x.id != y.id {
+                c.push(
+                    ChangeKind::VariantBaseChanged,
+                    subject,
+                    &a.id,
+                    (Some(x.id.clone()), x.source.clone()),
+                    (Some(y.id.clone()), y.source.clone()),
+                    HEAD,
+                );
+            }
+        }
+    }
+    for b in &new.variants {
+        if !old.variants.iter().any(|a| a.id == b.id) {
+            let opts: Vec<&str> = b.options.iter().map(|o| o.id.as_str()).collect();
+            c.push(
+                ChangeKind::VariantAxisAdded,
+                subject,
+                &b.id,
+                (None, None),
+                (
+                    Some(opts.join(", ")),
+                    b.options.first().and_then(|o| o.source.clone()),
+                ),
+                HEAD,
+            );
+        }
+    }
+}
+
+fn list<T: ToString>(items: impl IntoIterator<Item = T>) -> String {
+    items
+        .into_iter()
+        .map(|i| i.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn functions(f: &[u8]) -> String {
+    list(f.iter().map(|f| describe::function(*f)))
+}
+
+pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
+    let (a, b) = (&old.protocol, &new.protocol);
+    let s = "protocol";
+    let src = (a.source.clone(), b.source.clone());
+
+    let ta: BTreeSet<TransportName> = a.transports.iter().copied().collect();
+    let tb: BTreeSet<TransportName> = b.transports.iter().copied().collect();
+    for t in ta.difference(&tb) {
+        c.push(
+            ChangeKind::TransportRemoved,
+            s,
+            "transports",
+            (Some(describe::transport(*t).into()), src.0.clone()),
+            (None, src.1.clone()),
+            HEAD,
+        );
+    }
+    for t in tb.difference(&ta) {
+        c.push(
+            ChangeKind::TransportAdded,
+            s,
+            "transports",
+            (None, src.0.clone()),
+            (Some(describe::transport(*t).into()), src.1.clone()),
+            HEAD,
+        );
+    }
+
+    let fa: BTreeSet<u8> = a.function_codes.iter().copied().collect();
+    let fb: BTreeSet<u8> = b.function_codes.iter().copied().collect();
+    let removed: Vec<u8> = fa.difference(&fb).copied().collect();
+    let added: Vec<u8> = fb.difference(&fa).copied().collect();
+    if !removed.is_empty() {
+        c.push(
+            ChangeKind::FunctionCodeRemoved,
+            s,
+            &format!("function codes: {}", functions(&removed)),
+            (Some(functions(&a.function_codes)), src.0.clone()),
+            (Some(functions(&b.function_codes)), src.1.clone()),
+            HEAD,
+        );
+    }
+    if !added.is_empty() {
+        c.push(
+            ChangeKind::FunctionCodeAdded,
+            s,
+            &format!("function codes: {}", functions(&added)),
+            (Some(functions(&a.function_codes)), src.0.clone()),
+            (Some(functions(&b.function_codes)), src.1.clone()),
+            HEAD,
+        );
+    }
+
+    for (what, x, y) in [
+        ("max_read", a.max_read, b.max_read),
+        ("max_write", a.max_write, b.max_write),
+    ] {
+        if x != y {
+            let kind = if y < x {
+                ChangeKind::MaxRequestLowered
+            } else {
+                ChangeKind::MaxRequestRaised
+            };
+            c.push(
+                kind,
+                s,
+                what,
+                (Some(x.to_string()), src.0.clone()),
+                (Some(y.to_string()), src.1.clone()),
+                HEAD,
+            );
+        }
+    }
+
+    let (sa, sb) = (&a.slave_address, &b.slave_address);
+    if sa.min != sb.min || sa.max != sb.max {
+        let kind = if sb.min > sa.min || sb.max < sa.max {
+            ChangeKind::SlaveRangeNarrowed
+        } else {
+            ChangeKind::SlaveRangeWidened
+        };
+        c.push(
+            kind,
+            s,
+            "slave address",
+            (
+                Some(format!("{} ..= {}", sa.min, sa.max)),
+                sa.source.clone(),
+            ),
+            (
+                Some(format!("{} ..= {}", sb.min, sb.max)),
+                sb.source.clone(),
+            ),
+            HEAD,
+        );
+    } else if sa.default != sb.default || sa.param != sb.param {
+        c.push(
+            ChangeKind::DocumentationChanged,
+            s,
+            "slave address default or parameter",
+            (Some(json(sa)), sa.source.clone()),
+            (Some(json(sb)), sb.source.clone()),
+            HEAD,
+        );
+    } else if sa.source != sb.source {
+        c.push(
+            ChangeKind::CitationChanged,
+            s,
+            "slave address",
+            (None, sa.source.clone()),
+            (None, sb.source.clone()),
+            HEAD,
+        );
+    }
+
+    broadcast(c, old, new);
+    exceptions(c, a, b);
+    commands(c, a, b);
+
+    let offsets = |p: &drivemap_codegen::model::Protocol| {
+        p.addressing
+            .as_ref()
+            .map(|x| (x.rtu_offset, x.tcp_offset))
+            .unwrap_or((0, 0))
+    };
+    let asrc =
+        |p: &drivemap_codegen::model::Protocol| p.addressing.as_ref().map(|x| x.source.clone());
+    let text = |(r, t): (i32, i32)| format!("RTU {r:+}, TCP {t:+}");
+    if offsets(a) != offsets(b) {
+        c.push(
+            ChangeKind::AddressingChanged,
+            s,
+            "address offsets",
+            (Some(text(offsets(a))), asrc(a)),
+            (Some(text(offsets(b))), asrc(b)),
+            HEAD,
+        );
+    } else if !same(&a.addressing, &b.addressing) {
+        c.push(
+            ChangeKind::DocumentationChanged,
+            s,
+            "addressing description",
+            (None, asrc(a)),
+            (None, asrc(b)),
+            HEAD,
+        );
+    }
+
+    if !same(&a.timing, &b.timing) {
+        let src = |p: &drivemap_codegen::model::Protocol| {
+            p.timing.as_ref().and_then(|t| t.source.clone())
+        };
+        c.push(
+            ChangeKind::TimingChanged,
+            s,
+            "timing",
+            (a.timing.as_ref().map(json), src(a)),
+            (b.timing.as_ref().map(json), src(b)),
+            HEAD,
+        );
+    }
+    if !same(&a.serial, &b.serial) {
+        let src =
+            |p: &drivemap_codegen::model::Protocol| p.serial.as_ref().map(|t| t.source.clone());
+        c.push(
+            ChangeKind::LineSettingsChanged,
+            s,
+            "serial line",
+            (a.serial.as_ref().map(json), src(a)),
+            (b.serial.as_ref().map(json), src(b)),
+            HEAD,
+        );
+    }
+    if !same(&a.eeprom, &b.eeprom) {
+        let src =
+            |p: &drivemap_codegen::model::Protocol| p.eeprom.as_ref().map(|t| t.source.clone());
+        let text = |p: &drivemap_codegen::model::Protocol| {
+            p.eeprom.as_ref().map(|e| format!("{} writes", e.endurance))
+        };
+        c.push(
+            ChangeKind::LineSettingsChanged,
+            s,
+            "EEPROM endurance",
+            (text(a), src(a)),
+            (text(b), src(b)),
+            HEAD,
+        );
+    }
+    if a.notes != b.notes {
+        c.push(
+            ChangeKind::DocumentationChanged,
+            s,
+            "notes",
+            (Some(format!("{} note(s)", a.notes.len())), src.0.clone()),
+            (Some(format!("{} note(s)", b.notes.len())), src.1.clone()),
+            HEAD,
+        );
+    }
+    if a.source != b.source {
+        c.push(
+            ChangeKind::CitationChanged,
+            s,
+            "",
+            (None, src.0),
+            (None, src.1),
+            HEAD,
+        );
+    }
+}
+
+fn broadcast(c: &mut Collector, old: &Drive, new: &Drive) {
+    let (a, b) = (&old.protocol.broadcast, &new.protocol.broadcast);
+    if same(a, b) {
+        return;
+    }
+    let set = |d: &Drive| -> (BTreeSet<u8>, BTreeSet<String>) {
+        match &d.protocol.broadcast {
+            None => (BTreeSet::new(), BTreeSet::new()),
+            Some(x) => (
+                x.functions.iter().copied().collect(),
+                x.registers.iter().cloned().collect(),
+            ),
+        }
+    };
+    let text = |x: &Option<drivemap_codegen::model::Broadcast>| {
+        x.as_ref().map(|x| {
+            let mut t = functions(&x.functions);
+            if !x.registers.is_empty() {
+                t += &format!(" to {}", x.registers.join(", "));
+            }
+            t
+        })
+    };
+    let src = |x: &Option<drivemap_codegen::model::Broadcast>| x.as_ref().map(|x| x.source.clone());
+    let (fa, ra) = set(old);
+    let (fb, rb) = set(new);
+    // An empty register list means "any writable register".
+    let registers_lost = match (ra.is_empty(), rb.is_empty()) {
+        (true, true) => false,
+        (true, false) => a.is_some(),
+        (false, true) => false,
+        (false, false) => !ra.is_subset(&rb),
+    };
+    let lost = (a.is_some() && b.is_none()) || !fa.is_subset(&fb) || registers_lost;
+    let gained = (a.is_none() && b.is_some())
+        || !fb.is_subset(&fa)
+        || (!ra.is_empty() && (rb.is_empty() || !rb.is_subset(&ra)));
+    let kind = if lost {
+        ChangeKind::BroadcastRestricted
+    } else if gained {
+        ChangeKind::BroadcastExtended
+    } else {
+        ChangeKind::CitationChanged
+    };
+    c.push(
+        kind,
+        "protocol",
+        "broadcast",
+        (text(a), src(a)),
+        (text(b), src(b)),
+        HEAD,
+    );
+}
+
+fn exceptions(
+    c: &mut Collector,
+    a: &drivemap_codegen::model::Protocol,
+    b: &drivemap_codegen::model::Protocol,
+) {
+    let s = "protocol";
+    for x in &a.exceptions {
+        let what = format!("exception {}", describe::function(x.code));
+        match b.exceptions.iter().find(|y| y.code == x.code) {
+            None => c.push(
+                ChangeKind::ExceptionRemoved,
+                s,
+                &what,
+                (Some(x.name.clone()), Some(x.source.clone())),
+                (None, None),
+                HEAD,
+            ),
+            Some(y) if x.name != y.name || x.description != y.description => c.push(
+                ChangeKind::ExceptionReworded,
+                s,
+                &what,
+                (Some(x.name.clone()), Some(x.source.clone())),
+                (Some(y.name.clone()), Some(y.source.clone())),
+                HEAD,
+            ),
+            Some(y) if x.source != y.source => c.push(
+                ChangeKind::CitationChanged,
+                s,
+                &what,
+                (None, Some(x.source.clone())),
+                (None, Some(y.source.clone())),
+                HEAD,
+            ),
+            Some(_) => {}
+        }
+    }
+    for y in &b.exceptions {
+        if !a.exceptions.iter().any(|x| x.code == y.code) {
+            c.push(
+                ChangeKind::ExceptionAdded,
+                s,
+                &format!("exception {}", describe::function(y.code)),
+                (None, None),
+                (Some(y.name.clone()), Some(y.source.clone())),
+                HEAD,
+            );
+        }
+    }
+}
+
+fn commands(
+    c: &mut Collector,
+    a: &drivemap_codegen::model::Protocol,
+    b: &drivemap_codegen::model::Protocol,
+) {
+    let s = "protocol";
+    let text = |x: &drivemap_codegen::model::Command| {
+        let writes: Vec<String> = x
+            .writes
+            .iter()
+            .map(|w| format!("{} ← {:04X}h", describe::address(w.address), w.value))
+            .collect();
+        format!("{} ({:?})", writes.join(", "), x.kind).to_lowercase()
+    };
+    for x in &a.commands {
+        let what = format!("command {}", x.id);
+        match b.commands.iter().find(|y| y.id == x.id) {
+            None => c.push(
+                ChangeKind::CommandRemoved,
+                s,
+                &what,
+                (Some(text(x)), Some(x.source.clone())),
+                (None, None),
+                HEAD,
+            ),
+            Some(y) if !same(&x.writes, &y.writes) || x.kind != y.kind => c.push(
+                ChangeKind::CommandChanged,
+                s,
+                &what,
+                (Some(text(x)), Some(x.source.clone())),
+                (Some(text(y)), Some(y.source.clone())),
+                HEAD,
+            ),
+            Some(y) if x.name != y.name => c.push(
+                ChangeKind::CommandReworded,
+                s,
+                &what,
+                (Some(x.name.clone()), Some(x.source.clone())),
+                (Some(y.name.clone()), Some(y.source.clone())),
+                HEAD,
+            ),
+            Some(y) if x.source != y.source => c.push(
+                ChangeKind::CitationChanged,
+                s,
+                &what,
+                (None, Some(x.source.clone())),
+                (None, Some(y.source.clone())),
+                HEAD,
+            ),
+            Some(_) => {}
+        }
+    }
+    for y in &b.commands {
+        if !a.commands.iter().any(|x| x.id == y.id) {
+            c.push(
+                ChangeKind::CommandAdded,
+                s,
+                &format!("command {}", y.id),
+                (None, None),
+                (Some(text(y)), Some(y.source.clone())),
+                HEAD,
+            );
+        }
+    }
+}
