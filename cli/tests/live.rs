@@ -602,3 +602,35 @@ fn serial_line_through_a_pseudo_terminal_pair() {
     let slave = drive.join().unwrap();
     assert_eq!(slave.holding(0x0002), 4000);
 }
+
+#[test]
+fn a_refused_bridge_is_split_and_not_bridged_again() {
+    let d = tds();
+    // 0026h answers 02h: reading 0024h..0027h in one request fails.
+    d.slave.lock().unwrap().fail_at(0x0026, 0x02);
+    let (code, out, err) = d.run(
+        "poll",
+        "ptlk-tds-v8",
+        &[
+            "frequency_command_monitor",
+            "output_current",
+            "--interval",
+            "10ms",
+            "--count",
+            "2",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    for cycle in out.split("— poll ").skip(1) {
+        assert_eq!(
+            row(cycle, "frequency_command_monitor"),
+            "frequency_command_monitor 0024h 30.00 Hz 3A98h"
+        );
+        assert_eq!(
+            row(cycle, "output_current"),
+            "output_current 0027h 12.3 A 007Bh"
+        );
+    }
+    // Cn-02; cycle 1: 0024h..0027h refused, then 0024h and 0027h; cycle 2: 0024h and 0027h.
+    assert_eq!(d.requests(), 1 + 3 + 2);
+}

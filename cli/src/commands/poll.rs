@@ -74,6 +74,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     for w in session.load_dependencies(&regs, &given.fixed) {
         eprintln!("warning: {w}");
     }
+    let mut plan = session.plan(&regs)?;
     let tty = std::io::stdout().is_terminal();
     let started = Instant::now();
     let mut previous: Vec<String> = Vec::new();
@@ -82,7 +83,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     loop {
         let began = Instant::now();
         n += 1;
-        let words = session.read_words(&regs);
+        let words = session.poll(&mut plan);
         let rows: Vec<Row> = regs
             .iter()
             .zip(&words)

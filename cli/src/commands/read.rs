@@ -27,7 +27,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     for w in session.load_dependencies(&regs, &given.fixed) {
         eprintln!("warning: {w}");
     }
-    let words = session.read_words(&regs);
+    let words = session.read_words(&regs)?;
     let rows: Vec<Row> = regs
         .iter()
         .zip(&words)

@@ -5,6 +5,7 @@ use std::time::Duration;
 use clap::{ArgGroup, Args as ClapArgs, ValueEnum};
 use drivemap_codegen::Drive;
 use drivemap_codegen::model::Parity as MapParity;
+use drivemap_runtime::bus_time::{Parity as BusParity, SerialConfig};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
@@ -78,6 +79,52 @@ impl LinkArgs {
         }
     }
 
+    /// Baud rate, parity and stop bits of the serial line: as given, else the map's defaults
+    /// (9600, no parity); 2 stop bits without parity where the map fixes 11-bit characters.
+    pub fn line(&self, drive: &Drive) -> (u32, LineParity, u8) {
+        let serial = drive.protocol.serial.as_ref();
+        let baud = self
+            .baud
+            .or(serial.and_then(|s| s.default_baud))
+            .unwrap_or(9600);
+        let parity = match self.parity {
+            Some(p) => p,
+            None => match serial.and_then(|s| s.default_parity) {
+                Some(MapParity::Even) => LineParity::Even,
+                Some(MapParity::Odd) => LineParity::Odd,
+                _ => LineParity::None,
+            },
+        };
+        let eleven_bits = serial.and_then(|s| s.char_bits) == Some(11);
+        let stop_bits = match self.stop_bits {
+            Some(n) => n,
+            None if eleven_bits && parity == LineParity::None => 2,
+            None => 1,
+        };
+        (baud, parity, stop_bits)
+    }
+
+    /// The line as the bus-time model of the runtime's read planner sees it (serial links; a
+    /// TCP link is planned as the default 9600 baud line, which only the relative costs matter
+    /// for).
+    pub fn bus_line(&self, drive: &Drive) -> SerialConfig {
+        if self.serial.is_none() {
+            return SerialConfig::default();
+        }
+        let (baud, parity, stop_bits) = self.line(drive);
+        let mut config = SerialConfig::new(baud)
+            .parity(match parity {
+                LineParity::None => BusParity::None,
+                LineParity::Even => BusParity::Even,
+                LineParity::Odd => BusParity::Odd,
+            })
+            .stop_bits(stop_bits);
+        if let Some(bits) = drive.protocol.serial.as_ref().and_then(|s| s.char_bits) {
+            config = config.fixed_char_bits(bits);
+        }
+        config
+    }
+
     /// Opens the link and makes a client for `profile`. Returns the client and a description
     /// of the link for headers.
     pub fn connect(
@@ -95,25 +142,11 @@ impl LinkArgs {
                 .map_err(|e| format!("cannot connect to RTU gateway {addr}: {e}"))?;
             (Box::new(t), format!("RTU over TCP {addr}"))
         } else if let Some(path) = &self.serial {
-            let serial = drive.protocol.serial.as_ref();
-            let baud = self
-                .baud
-                .or(serial.and_then(|s| s.default_baud))
-                .unwrap_or(9600);
-            let parity = match self.parity {
-                Some(p) => p,
-                None => match serial.and_then(|s| s.default_parity) {
-                    Some(MapParity::Even) => LineParity::Even,
-                    Some(MapParity::Odd) => LineParity::Odd,
-                    _ => LineParity::None,
-                },
-            };
-            let eleven_bits = serial.and_then(|s| s.char_bits) == Some(11);
-            let stop_bits = match self.stop_bits {
-                Some(2) => StopBits::Two,
-                Some(_) => StopBits::One,
-                None if eleven_bits && parity == LineParity::None => StopBits::Two,
-                None => StopBits::One,
+            let (baud, parity, stops) = self.line(drive);
+            let stop_bits = if stops == 2 {
+                StopBits::Two
+            } else {
+                StopBits::One
             };
             let options = SerialOptions::new(path.as_str(), baud)
                 .parity(match parity {
@@ -126,7 +159,6 @@ impl LinkArgs {
             let t = SerialTransport::open(options)
                 .map_err(|e| format!("cannot open serial port {path}: {e}"))?;
             let parity = format!("{parity:?}").to_lowercase();
-            let stops = if stop_bits == StopBits::Two { 2 } else { 1 };
             (
                 Box::new(t),
                 format!("RTU {path} {baud} baud, parity {parity}, {stops} stop bit(s)"),

@@ -1,8 +1,8 @@
 //! Live drives by register name (`drivemap read`, `write`, `poll`): the map is loaded at run
-//! time ([`drivemap_live`]) and spoken over the runtime's transports.
+//! time ([`drivemap_live`]) and spoken over the runtime's transports; reads are planned by the
+//! runtime's read planner ([`drivemap_runtime::planner`]).
 
 pub mod link;
-pub mod planner;
 pub mod session;
 pub mod table;
 

@@ -6,14 +6,15 @@ use std::collections::BTreeSet;
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::{Register, ValueKind};
-use drivemap_codegen::model::{ModbusTable, Reference, Scale, TransportName};
+use drivemap_codegen::model::{Access, ModbusTable, Reference, Scale, TransportName};
 use drivemap_live::codec::{self, Value};
 use drivemap_live::{LiveSettings, leak_profile, lookup};
-use drivemap_runtime::ValueError;
+use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::{Access as RtAccess, RegisterInfo, Table, ValueError};
 
 use super::link::{LinkArgs, LiveClient};
-use super::planner;
 use crate::describe;
 
 /// What conversions depend on, given on the command line.
@@ -292,6 +293,27 @@ pub fn value_error(e: &ValueError) -> String {
     }
 }
 
+/// The planned reads of a set of registers, kept across poll cycles (the planner remembers
+/// what the drive refused).
+pub struct Polling {
+    poller: Poller,
+    /// Per register asked for: its index among the planned registers, or why it is not read.
+    slots: Vec<Result<usize, String>>,
+}
+
+fn table(t: ModbusTable) -> Table {
+    match t {
+        ModbusTable::Holding => Table::Holding,
+        ModbusTable::Input => Table::Input,
+    }
+}
+
+/// A `'static` copy of a map string for the runtime's register table. A command builds one
+/// table per run, so the leak is bounded by the size of one map.
+fn leak(s: &str) -> &'static str {
+    Box::leak(s.to_owned().into_boxed_str())
+}
+
 /// A connected drive with its settings.
 pub struct Session<'d> {
     /// The drive's map.
@@ -306,6 +328,8 @@ pub struct Session<'d> {
     pub settings: LiveSettings,
     /// The link, for headers.
     pub link: String,
+    /// The serial line, for the planner's bus-time model.
+    line: SerialConfig,
 }
 
 impl<'d> Session<'d> {
@@ -320,6 +344,7 @@ impl<'d> Session<'d> {
             kind: link.kind(),
             settings,
             link: text,
+            line: link.bus_line(drive),
         })
     }
 
@@ -424,54 +449,70 @@ impl<'d> Session<'d> {
         }
     }
 
-    /// Reads the raw words of `regs` in as few requests as `max_read` allows. A request that
-    /// draws an exception is retried register by register, so one refused register does not
-    /// hide the others.
-    pub fn read_words(&mut self, regs: &[&Register]) -> Vec<Result<u16, String>> {
-        let mut out: Vec<Result<u16, String>> =
-            regs.iter().map(|_| Err("not read".to_owned())).collect();
-        let mut wanted = Vec::new();
-        let mut index = Vec::new();
-        for (i, r) in regs.iter().enumerate() {
-            match self.unreadable(r) {
-                Some(why) => out[i] = Err(why),
-                None => {
-                    wanted.push((r.table, self.address(r)));
-                    index.push(i);
-                }
-            }
-        }
-        let fillers: BTreeSet<(u8, u16)> = self
-            .drive
+    /// Plans the reads of `regs` with the runtime's read planner: the requests that read them in
+    /// the least bus time, bridging only addresses of readable registers of the map, at most
+    /// `max_read` per request. Registers this link cannot read get their reason instead.
+    pub fn plan(&self, regs: &[&Register]) -> Result<Polling, String> {
+        let drive = self.drive;
+        let infos: Vec<RegisterInfo> = drive
             .registers
             .iter()
-            .filter(|r| r.def.address_alternatives.is_empty() && self.unreadable(r).is_none())
-            .map(|r| (u8::from(r.table == ModbusTable::Input), r.def.address))
+            .filter(|r| on_transport(r, self.kind))
+            .map(|r| RegisterInfo {
+                id: leak(&r.def.id),
+                param: r.def.param.as_deref().map(leak),
+                name: leak(&r.def.name),
+                address: self.address(r),
+                access: match r.access {
+                    Access::Read => RtAccess::Read,
+                    Access::Write => RtAccess::Write,
+                    Access::ReadWrite => RtAccess::ReadWrite,
+                },
+                table: table(r.table),
+                broadcast_only: r.broadcast,
+                source: leak(r.def.source.as_deref().unwrap_or("")),
+            })
             .collect();
-        let max_read = self.client.profile().max_read;
-        for batch in planner::plan(&wanted, max_read, &fillers) {
-            let mut words = vec![0u16; usize::from(batch.count)];
-            match self.read_into(batch.table, batch.address, &mut words) {
-                Ok(()) => {
-                    for (w, offset) in &batch.members {
-                        out[index[*w]] = Ok(words[usize::from(*offset)]);
-                    }
-                }
-                Err(e) if batch.count > 1 && e.exception().is_some() => {
-                    for (w, offset) in &batch.members {
-                        let address = batch.address.wrapping_add(*offset);
-                        out[index[*w]] = self.read_one(batch.table, address);
-                    }
-                }
-                Err(e) => {
-                    let e = e.to_string();
-                    for (w, _) in &batch.members {
-                        out[index[*w]] = Err(e.clone());
-                    }
+        let mut wanted = Vec::new();
+        let mut slots = Vec::new();
+        for r in regs {
+            match self.unreadable(r) {
+                Some(why) => slots.push(Err(why)),
+                None => {
+                    wanted.push((table(r.table), self.address(r)));
+                    slots.push(Ok(wanted.len() - 1));
                 }
             }
         }
-        out
+        let profile = self.client.profile();
+        let poller = Poller::new(profile, &infos, wanted)
+            .map_err(|e| e.to_string())?
+            .with_model(BusModel::new(profile, self.line));
+        Ok(Polling { poller, slots })
+    }
+
+    /// Reads every register of a plan once; returns the raw word or the error of each, in the
+    /// order the plan was made for. A request that the drive refuses with 02h or 21h is split
+    /// so each register gets its own value or error.
+    pub fn poll(&mut self, plan: &mut Polling) -> Vec<Result<u16, String>> {
+        plan.poller.poll(&mut self.client, self.slave);
+        plan.slots
+            .iter()
+            .map(|slot| match slot {
+                Err(why) => Err(why.clone()),
+                Ok(i) => match plan.poller.value(*i) {
+                    Some(Ok(w)) => Ok(w),
+                    Some(Err(e)) => Err(e.to_string()),
+                    None => Err("not read".into()),
+                },
+            })
+            .collect()
+    }
+
+    /// Reads the raw words of `regs` once, planned (see [`Session::plan`]).
+    pub fn read_words(&mut self, regs: &[&Register]) -> Result<Vec<Result<u16, String>>, String> {
+        let mut plan = self.plan(regs)?;
+        Ok(self.poll(&mut plan))
     }
 
     /// Decodes a raw word of `r`.
