@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs the third-party Modbus peers the interop tests (tests/tests/interop_*.rs) talk to.
+# Idempotent: installs only what is missing.
+#
+# - Debian packages mbpoll and socat, with apt-get when running as root (otherwise prints the
+#   command to run);
+# - Python packages pymodbus, minimalmodbus and pyserial in a venv at target/interop-venv.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+
+missing=()
+for tool in mbpoll socat; do
+  command -v "$tool" >/dev/null 2>&1 || missing+=("$tool")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  if [ "$(id -u)" = 0 ]; then
+    echo "== apt-get install -y ${missing[*]}"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
+  else
+    echo "missing ${missing[*]}: run as root: apt-get install -y ${missing[*]}" >&2
+  fi
+fi
+
+venv=target/interop-venv
+python=${PYTHON:-python3}
+if [ ! -x "$venv/bin/python" ]; then
+  echo "== $python -m venv $venv"
+  "$python" -m venv "$venv"
+fi
+if ! "$venv/bin/python" -c 'import pymodbus, minimalmodbus, serial' >/dev/null 2>&1; then
+  echo "== $venv/bin/pip install pymodbus minimalmodbus pyserial"
+  "$venv/bin/pip" install --quiet --disable-pip-version-check pymodbus minimalmodbus pyserial
+fi
+"$venv/bin/python" -c 'import pymodbus, minimalmodbus, serial; print("interop peers: pymodbus", pymodbus.__version__, "minimalmodbus", minimalmodbus.__version__, "pyserial", serial.__version__)'
+echo "interop peers: $(command -v mbpoll || echo 'mbpoll MISSING') $(command -v socat || echo 'socat MISSING')"
