@@ -10,7 +10,7 @@ use drivemap_codegen::ir::Register;
 use drivemap_codegen::model::Access;
 
 use crate::live::Target;
-use crate::live::session::{Session, find_all};
+use crate::live::session::{Session, find_all, on_transport};
 use crate::live::table::{self, Row};
 
 /// Arguments of `drivemap poll`.
@@ -37,6 +37,9 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Str
     if !args.names.is_empty() {
         return find_all(drive, &args.names);
     }
+    // Registers chosen for the user: those this link can read.
+    let kind = args.target.link.kind();
+    let pollable = |r: &Register| r.readable() && !r.broadcast && on_transport(r, kind);
     let regs: Vec<&Register> = match &args.group {
         Some(id) => {
             let Some(gi) = drive.groups.iter().position(|g| &g.id == id) else {
@@ -50,13 +53,13 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Str
             drive
                 .registers
                 .iter()
-                .filter(|r| r.group == gi && r.readable() && !r.broadcast)
+                .filter(|r| r.group == gi && pollable(r))
                 .collect()
         }
         None => drive
             .registers
             .iter()
-            .filter(|r| r.access == Access::Read && !r.broadcast)
+            .filter(|r| r.access == Access::Read && pollable(r))
             .collect(),
     };
     if regs.is_empty() {

@@ -3,6 +3,7 @@
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
+use drivemap_codegen::Drive;
 use drivemap_codegen::ir::Register;
 use drivemap_live::codec::{self, InputError};
 use drivemap_runtime::ValueError;
@@ -26,9 +27,9 @@ pub struct Args {
     pub persist: Option<String>,
 }
 
-fn input_error(e: &InputError) -> String {
+fn input_error(drive: &Drive, e: &InputError) -> String {
     match e {
-        InputError::Value(v) => value_error(v),
+        InputError::Value(v) => value_error(drive, v),
         InputError::Parse(m) => m.clone(),
     }
 }
@@ -88,7 +89,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     for (r, value) in &pairs {
         match codec::parse_value(&drive, r, value, &given.settings) {
             Ok(_) | Err(InputError::Value(ValueError::MissingSetting { .. })) => {}
-            Err(e) => return Err(input_error(&e)),
+            Err(e) => return Err(input_error(&drive, &e)),
         }
     }
     let regs: Vec<&Register> = pairs.iter().map(|(r, _)| *r).collect();
@@ -99,7 +100,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let mut raws = Vec::new();
     for (r, value) in &pairs {
         let raw = codec::parse_value(&drive, r, value, &session.settings)
-            .map_err(|e| format!("{}; nothing written", input_error(&e)))?;
+            .map_err(|e| format!("{}; nothing written", input_error(&drive, &e)))?;
         raws.push(raw);
     }
     for ((r, _), raw) in pairs.iter().zip(raws) {

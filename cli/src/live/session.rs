@@ -283,12 +283,21 @@ pub fn address_of(
 }
 
 /// A conversion error, with what to do about a missing setting.
-pub fn value_error(e: &ValueError) -> String {
+pub fn value_error(drive: &Drive, e: &ValueError) -> String {
     match e {
-        ValueError::MissingSetting { register, setting } => format!(
-            "{register}: converting needs the value of {setting}, which could not be read; \
-             give it with --set {setting}=<value>"
-        ),
+        ValueError::MissingSetting { register, setting } => {
+            match drive.externals().iter().find(|q| q.external == *setting) {
+                Some(q) => format!(
+                    "{register}: converting needs {setting} ({}, in {}), which is not a register \
+                     of the drive; give it with --set {setting}=<value>",
+                    q.description, q.unit
+                ),
+                None => format!(
+                    "{register}: converting needs the value of {setting}, which could not be \
+                     read; give it with --set {setting}=<value>"
+                ),
+            }
+        }
         other => other.to_string(),
     }
 }
@@ -517,7 +526,7 @@ impl<'d> Session<'d> {
 
     /// Decodes a raw word of `r`.
     pub fn decode(&self, r: &Register, raw: u16) -> Result<Value, String> {
-        codec::decode(self.drive, r, raw, &self.settings).map_err(|e| value_error(&e))
+        codec::decode(self.drive, r, raw, &self.settings).map_err(|e| value_error(self.drive, &e))
     }
 }
 
