@@ -4,7 +4,9 @@
 #
 # - Debian packages mbpoll and socat, with apt-get when running as root (otherwise prints the
 #   command to run);
-# - Python packages pymodbus, minimalmodbus and pyserial in a venv at target/interop-venv.
+# - Python packages pymodbus, minimalmodbus and pyserial in a venv at target/interop-venv, at the
+#   versions the scripts in tests/interop/ are written for (pymodbus changes its API between
+#   minor versions).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -28,9 +30,12 @@ if [ ! -x "$venv/bin/python" ]; then
   echo "== $python -m venv $venv"
   "$python" -m venv "$venv"
 fi
-if ! "$venv/bin/python" -c 'import pymodbus, minimalmodbus, serial' >/dev/null 2>&1; then
-  echo "== $venv/bin/pip install pymodbus minimalmodbus pyserial"
-  "$venv/bin/pip" install --quiet --disable-pip-version-check pymodbus minimalmodbus pyserial
+pins=(pymodbus==3.16.1 minimalmodbus==2.1.1 pyserial==3.5)
+check='import pymodbus, minimalmodbus, serial
+assert (pymodbus.__version__, minimalmodbus.__version__, serial.__version__) == ("3.16.1", "2.1.1", "3.5")'
+if ! "$venv/bin/python" -c "$check" >/dev/null 2>&1; then
+  echo "== $venv/bin/pip install ${pins[*]}"
+  "$venv/bin/pip" install --quiet --disable-pip-version-check "${pins[@]}"
 fi
 "$venv/bin/python" -c 'import pymodbus, minimalmodbus, serial; print("interop peers: pymodbus", pymodbus.__version__, "minimalmodbus", minimalmodbus.__version__, "pyserial", serial.__version__)'
 echo "interop peers: $(command -v mbpoll || echo 'mbpoll MISSING') $(command -v socat || echo 'socat MISSING')"
