@@ -634,3 +634,14 @@ fn a_refused_bridge_is_split_and_not_bridged_again() {
     // Cn-02; cycle 1: 0024h..0027h refused, then 0024h and 0027h; cycle 2: 0024h and 0027h.
     assert_eq!(d.requests(), 1 + 3 + 2);
 }
+
+#[test]
+fn poll_by_default_reads_the_monitors_this_link_has() {
+    // The V7's Modbus TCP option card registers (2000h..) exist only on TCP.
+    let d = Drive::start("yaskawa-v7", Framing::RtuOverTcp, |_| {});
+    let (code, out, err) = d.run("poll", "yaskawa-v7", &["--count", "1"]);
+    assert_eq!(code, 0, "{err}\n{out}");
+    assert!(out.contains("output_current "), "{out}");
+    assert!(!out.contains("tcp_status_word"), "{out}");
+    assert!(!out.contains("error: "), "{out}");
+}
