@@ -639,3 +639,60 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     );
     Ok(ExitCode::SUCCESS)
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::PathBuf;
+
+    use super::*;
+
+    fn args(drive: &str) -> Args {
+        Args {
+            drive: drive.into(),
+            frequency: 30.0,
+            ramp: 2.0,
+            reverse: false,
+            time_scale: 50.0,
+            step: 0.5,
+            dir: MapsDir {
+                maps: PathBuf::from("maps"),
+            },
+        }
+    }
+
+    #[test]
+    fn the_demo_runs_every_drive_through_its_generated_module() {
+        for id in [
+            "ptlk-tds-v8",
+            "yaskawa-v7",
+            "yaskawa-j7",
+            "yaskawa-gpd515",
+            "automationdirect-acn",
+        ] {
+            assert_eq!(run(args(id)).unwrap(), ExitCode::SUCCESS, "{id}");
+        }
+        let reverse = Args {
+            reverse: true,
+            ..args("automationdirect-acn")
+        };
+        assert_eq!(run(reverse).unwrap(), ExitCode::SUCCESS);
+    }
+
+    #[test]
+    fn what_the_demo_cannot_do_is_said() {
+        let e = run(Args {
+            reverse: true,
+            ..args("yaskawa-gpd515")
+        })
+        .unwrap_err();
+        assert!(e.contains("forward run bit"), "{e}");
+        let e = run(args("no-such-drive")).unwrap_err();
+        assert!(e.contains("no map for drive `no-such-drive`"), "{e}");
+        let e = run(Args {
+            time_scale: 0.0,
+            ..args("ptlk-tds-v8")
+        })
+        .unwrap_err();
+        assert!(e.contains("--time-scale"), "{e}");
+    }
+}
