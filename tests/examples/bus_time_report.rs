@@ -1,0 +1,337 @@
+//! Bus time of reading every readable monitor register of every shipped drive, planned against
+//! one request per register and against contiguous runs only (what Telegraf's Modbus input and
+//! Home Assistant's modbus integration do: merge strictly consecutive wanted addresses, split at
+//! the drive's maximum). A model, not a measurement: `drivemap_runtime::bus_time`.
+//!
+//! Run: `cargo run -p drivemap-tests --example bus_time_report [--release] [BAUD]`
+//!
+//! - **Drives**: every entry of `drivemap_drives::DRIVES`, with the generated `PROFILE` and
+//!   `REGISTERS` of its module; the map (`maps/<id>.yaml`, read with `drivemap_codegen::read_map`)
+//!   supplies what the generated code does not carry: groups, transports, the fixed character
+//!   length.
+//! - **Monitor registers**: the registers of the map's *monitor groups*, the groups whose every
+//!   register is read-only (`access: r`) — the manuals' status/monitor tables (V7/J7/GPD 515
+//!   "Monitor Registers", TDS-V8 "Monitor data registers", ACN "Drive monitoring area"). Of those,
+//!   the ones readable on Modbus RTU and not broadcast-only.
+//! - **May be read**: a register of the map that is readable on RTU and not broadcast-only;
+//!   reserved, unmapped and write-only addresses are never read.
+//! - **Line**: 9600 baud, 8N1 (10-bit characters), or the drive's fixed character (TDS-V8: 11
+//!   bits); the response-delay parameters at their manual defaults.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use drivemap_codegen::model::{Access, ModbusTable, TransportName};
+use drivemap_codegen::validate::Context;
+use drivemap_drives as drives;
+use drivemap_runtime::bus_time::{BusModel, SerialConfig, turnaround_rule};
+use drivemap_runtime::planner::{
+    Read, ReadableSet, plan_contiguous, plan_cost, plan_reads, plan_single,
+};
+use drivemap_runtime::{Profile, RegisterInfo, Table};
+
+/// The generated profile and register table of a module of `drivemap_drives`.
+fn generated(module: &str) -> Option<(&'static Profile, &'static [RegisterInfo])> {
+    macro_rules! modules {
+        ($($m:ident),* $(,)?) => {
+            match module {
+                $(stringify!($m) => Some((&drives::$m::PROFILE, drives::$m::REGISTERS)),)*
+                _ => None,
+            }
+        };
+    }
+    modules!(
+        automationdirect_acn,
+        ptlk_tds_v8,
+        yaskawa_gpd515,
+        yaskawa_j7,
+        yaskawa_v7,
+    )
+}
+
+/// Random subsets per drive for the second table.
+const SUBSETS: usize = 1000;
+
+/// SplitMix64, for reproducible subsets.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+}
+
+/// Requests and bus time (ns) of the three strategies for one set of wanted registers.
+#[derive(Debug, Default, Clone, Copy)]
+struct Outcome {
+    registers: usize,
+    planned: (usize, u64),
+    bridged: usize,
+    contiguous: (usize, u64),
+    single: (usize, u64),
+}
+
+impl Outcome {
+    fn add(&mut self, o: &Outcome) {
+        self.registers += o.registers;
+        self.planned = (self.planned.0 + o.planned.0, self.planned.1 + o.planned.1);
+        self.bridged += o.bridged;
+        self.contiguous = (
+            self.contiguous.0 + o.contiguous.0,
+            self.contiguous.1 + o.contiguous.1,
+        );
+        self.single = (self.single.0 + o.single.0, self.single.1 + o.single.1);
+    }
+}
+
+fn evaluate(
+    wanted: &BTreeMap<u8, Vec<u16>>,
+    readable: &BTreeMap<u8, ReadableSet>,
+    max_read: u16,
+    model: &BusModel,
+) -> Outcome {
+    let cost = |q: u16| model.read_ns(q);
+    let mut o = Outcome::default();
+    for (t, w) in wanted {
+        let p =
+            plan_reads(w, &readable[t], max_read, cost).expect("monitor registers are readable");
+        let s = plan_single(w);
+        let c = plan_contiguous(w, max_read);
+        let read: usize = p.iter().map(|r: &Read| usize::from(r.quantity)).sum();
+        o.add(&Outcome {
+            registers: s.len(),
+            planned: (p.len(), plan_cost(&p, cost)),
+            bridged: read - s.len(),
+            contiguous: (c.len(), plan_cost(&c, cost)),
+            single: (s.len(), plan_cost(&s, cost)),
+        });
+    }
+    o
+}
+
+struct Row {
+    drive: String,
+    groups: Vec<String>,
+    max_read: u16,
+    char_bits: u32,
+    request_ms: f64,
+    all: Outcome,
+    subsets: Outcome,
+}
+
+fn table_of(t: ModbusTable) -> Table {
+    match t {
+        ModbusTable::Holding => Table::Holding,
+        ModbusTable::Input => Table::Input,
+    }
+}
+
+fn ms(ns: u64) -> f64 {
+    ns as f64 / 1e6
+}
+
+fn main() {
+    let baud: u32 = std::env::args()
+        .nth(1)
+        .map(|b| b.parse().expect("BAUD must be a number"))
+        .unwrap_or(9600);
+    let maps_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps");
+    let ctx = Context::with_manuals(
+        &drivemap_codegen::default_manuals_dir(&maps_dir).unwrap_or_default(),
+    );
+    let mut rows = Vec::new();
+    let mut notes = Vec::new();
+    for &(drive_id, module) in drives::DRIVES {
+        let Some((profile, registers)) = generated(module) else {
+            eprintln!(
+                "error: module `{module}` of drivemap_drives::DRIVES is not listed in this report"
+            );
+            std::process::exit(1);
+        };
+        let path = maps_dir.join(format!("{drive_id}.yaml"));
+        let drive = drivemap_codegen::read_map(&path, &ctx).unwrap_or_else(|e| {
+            eprintln!("error: {}: {e}", path.display());
+            std::process::exit(1);
+        });
+        assert_eq!(drive.meta.id, drive_id);
+
+        let on_rtu = |r: &drivemap_codegen::ir::Register| {
+            r.transports
+                .as_ref()
+                .is_none_or(|t| t.contains(&TransportName::Rtu))
+        };
+        // Monitor groups: the groups the map declares read-only (`access: r`).
+        let loaded = drivemap_codegen::load::load(&path).unwrap_or_else(|_| {
+            eprintln!("error: {}: cannot load", path.display());
+            std::process::exit(1);
+        });
+        let read_only: Vec<&str> = loaded
+            .model
+            .groups
+            .iter()
+            .filter(|g| g.access == Some(Access::Read))
+            .map(|g| g.id.as_str())
+            .collect();
+        let monitor: Vec<usize> = (0..drive.groups.len())
+            .filter(|&g| read_only.contains(&drive.groups[g].id.as_str()))
+            .collect();
+        let generated_readable = [
+            ReadableSet::from_registers(registers, Table::Holding),
+            ReadableSet::from_registers(registers, Table::Input),
+        ];
+        let mut readable: BTreeMap<u8, Vec<u16>> = BTreeMap::new();
+        let mut wanted: BTreeMap<u8, Vec<u16>> = BTreeMap::new();
+        for r in &drive.registers {
+            if !(r.readable() && !r.broadcast && on_rtu(r)) {
+                continue;
+            }
+            let t = table_of(r.table);
+            let ti = u8::from(t == Table::Input);
+            assert!(
+                generated_readable[usize::from(ti)].contains(r.def.address),
+                "{drive_id}: {} at {:04X}h is readable in the map but not in REGISTERS",
+                r.id(),
+                r.def.address
+            );
+            readable.entry(ti).or_default().push(r.def.address);
+            if monitor.contains(&r.group) {
+                wanted.entry(ti).or_default().push(r.def.address);
+            }
+        }
+
+        let protocol = &drive.protocol;
+        let mut serial = SerialConfig::new(baud);
+        if let Some(bits) = protocol.serial.as_ref().and_then(|s| s.char_bits) {
+            serial = serial.fixed_char_bits(bits);
+        }
+        let model = BusModel::new(profile, serial);
+        let sets: BTreeMap<u8, ReadableSet> = readable
+            .iter()
+            .map(|(&t, a)| (t, ReadableSet::new(a.iter().copied())))
+            .collect();
+        let all = evaluate(&wanted, &sets, profile.max_read, &model);
+        // Subsets: each monitor register wanted with probability 1/2, fixed seed.
+        let mut rng = SplitMix(0xB05_7173);
+        let mut sum = Outcome::default();
+        for _ in 0..SUBSETS {
+            let subset: BTreeMap<u8, Vec<u16>> = wanted
+                .iter()
+                .map(|(&t, w)| {
+                    (
+                        t,
+                        w.iter().copied().filter(|_| rng.next() & 1 == 1).collect(),
+                    )
+                })
+                .collect();
+            sum.add(&evaluate(&subset, &sets, profile.max_read, &model));
+        }
+        // The runtime's turnaround rules against what the map says.
+        if let Some(rule) = turnaround_rule(drive_id) {
+            let timing = protocol.timing.as_ref();
+            let map_bits = timing
+                .and_then(|t| t.response_time.as_ref())
+                .and_then(|i| i.bits)
+                .unwrap_or(0);
+            let param = timing.and_then(|t| t.response_delay_param.as_deref());
+            let map_default = param
+                .and_then(|p| {
+                    drive
+                        .registers
+                        .iter()
+                        .find(|r| r.def.param.as_deref() == Some(p))
+                })
+                .and_then(|r| r.default_value());
+            let rule_default = rule.delay_param.map(|d| f64::from(d.default_us) / 1000.0);
+            let verdict = match map_default {
+                None => "  (the map gives the parameter no default)",
+                Some(_) if map_bits == rule.response_bits && map_default == rule_default => "",
+                Some(_) => "  <-- differs from the map",
+            };
+            notes.push(format!(
+                "{drive_id}: {} bits + {} ({} ms by default) before the reply, {} bits + {} ms after it; map: {map_bits} bits + {} (default {}){verdict}",
+                rule.response_bits,
+                rule.delay_param.map_or("-", |d| d.param),
+                rule_default.map_or("-".into(), |d| d.to_string()),
+                rule.request_gap_bits,
+                f64::from(rule.request_gap_us) / 1000.0,
+                param.unwrap_or("-"),
+                map_default.map_or("none".into(), |d| format!("{d} ms")),
+            ));
+        }
+        let mut groups: Vec<String> = monitor
+            .iter()
+            .map(|&g| drive.groups[g].id.clone())
+            .collect();
+        groups.sort();
+        rows.push(Row {
+            drive: drive_id.to_string(),
+            groups,
+            max_read: profile.max_read,
+            char_bits: serial.bits_per_char(),
+            request_ms: ms(model.read_ns(1)),
+            all,
+            subsets: sum,
+        });
+    }
+
+    println!(
+        "All readable monitor registers, one poll, {baud} baud, 8N1 or the drive's fixed character (model: drivemap_runtime::bus_time)\n"
+    );
+    print_table(&rows, |r| r.all, 1);
+    println!(
+        "\nRandom halves of the monitor registers ({SUBSETS} subsets per drive, each register wanted with probability 1/2, fixed seed), mean per poll\n"
+    );
+    print_table(&rows, |r| r.subsets, SUBSETS);
+    println!("\nTurnaround rules of the runtime (bus_time::TURNAROUND_RULES) against the maps:");
+    for n in notes {
+        println!("- {n}");
+    }
+}
+
+fn print_table(rows: &[Row], pick: impl Fn(&Row) -> Outcome, n: usize) {
+    let n = n as f64;
+    println!(
+        "| drive | monitor groups | registers | max_read | bits/char | 1-register read | planned: requests (bridged registers) | planned | contiguous runs: requests | contiguous runs | one per register: requests | one per register | contiguous ÷ planned | one per register ÷ planned |"
+    );
+    println!("|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|");
+    let mut total = Outcome::default();
+    for r in rows {
+        let o = pick(r);
+        println!(
+            "| {} | {} | {:.1} | {} | {} | {:.1} ms | {:.1} ({:.1}) | {:.1} ms | {:.1} | {:.1} ms | {:.1} | {:.1} ms | {:.2} | {:.2} |",
+            r.drive,
+            r.groups.join(", "),
+            o.registers as f64 / n,
+            r.max_read,
+            r.char_bits,
+            r.request_ms,
+            o.planned.0 as f64 / n,
+            o.bridged as f64 / n,
+            ms(o.planned.1) / n,
+            o.contiguous.0 as f64 / n,
+            ms(o.contiguous.1) / n,
+            o.single.0 as f64 / n,
+            ms(o.single.1) / n,
+            o.contiguous.1 as f64 / o.planned.1 as f64,
+            o.single.1 as f64 / o.planned.1 as f64,
+        );
+        total.add(&o);
+    }
+    println!(
+        "| **all drives** | | {:.1} | | | | {:.1} ({:.1}) | {:.1} ms | {:.1} | {:.1} ms | {:.1} | {:.1} ms | {:.2} | {:.2} |",
+        total.registers as f64 / n,
+        total.planned.0 as f64 / n,
+        total.bridged as f64 / n,
+        ms(total.planned.1) / n,
+        total.contiguous.0 as f64 / n,
+        ms(total.contiguous.1) / n,
+        total.single.0 as f64 / n,
+        ms(total.single.1) / n,
+        total.contiguous.1 as f64 / total.planned.1 as f64,
+        total.single.1 as f64 / total.planned.1 as f64,
+    );
+}
