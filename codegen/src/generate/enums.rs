@@ -27,6 +27,7 @@ pub fn emit(ty: &Ident, values: &[EnumValue], what: &str, rt: &TokenStream) -> T
     quote! {
         #doc
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[non_exhaustive]
         pub enum #ty {
             #(#decls)*
             /// A code the manual does not list (as read from the device). Refused when written.
