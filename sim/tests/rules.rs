@@ -510,6 +510,8 @@ fn acn_offsets_save_sequence_and_codes() {
         [0x01, 0x10, 0x11, 0x02, 0x00, 0x02, 0xE5, 0x34]
     );
     assert_eq!(hz(&sim, "dr.03"), 5.0);
+    // Identity monitors hold the roles table's constants: drive model 0006h at 0h0300.
+    assert_eq!(read(&mut sim, 0x02FF, 1), Ok(vec![6]));
     // Forward run 0003h at 0h0382 (PDU 0381h on RTU), 30 Hz at 0h0380.
     assert_eq!(write(&mut sim, 0x037F, &[3000]), Ok(()));
     assert_eq!(write(&mut sim, 0x0381, &[0x0003]), Ok(()));
