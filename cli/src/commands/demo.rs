@@ -442,7 +442,7 @@ impl DemoDrive for Acn {
             Dir::OperatingForward => "forward".into(),
             Dir::OperatingReverse => "reverse".into(),
             Dir::DcOperating => "dc_operating".into(),
-            Dir::Unknown(c) => format!("direction={c}"),
+            other => format!("direction={}", drivemap_runtime::Code::code(&other)),
         };
         let operation = match st.operation_state() {
             Op::Accelerating => "accelerating".to_string(),
