@@ -263,11 +263,11 @@ fn plan_table(
             if w[i] < start {
                 break;
             }
-            let span = w[j] - w[i] + 1;
-            if span > room {
+            let span = u32::from(w[j]) - u32::from(w[i]) + 1;
+            if span > u32::from(room) {
                 break;
             }
-            let (c, l) = table_u[usize::from(span)];
+            let (c, l) = table_u[span as usize];
             let candidate = best[i].saturating_add(c);
             if candidate < best[j + 1] {
                 best[j + 1] = candidate;
@@ -947,6 +947,21 @@ mod tests {
                 address: 0xFFFE,
                 quantity: 2
             }]
+        );
+    }
+
+    #[test]
+    fn the_whole_address_space_readable() {
+        let all = ReadableSet::new(0..=u16::MAX);
+        assert_eq!(all.run(0x1234), Some((0, 0xFFFF)));
+        let plan = plan_reads(&[0xFFFF, 0, 0x8000], &all, 125, affine).unwrap();
+        assert_eq!(plan.len(), 3);
+        assert_eq!(
+            plan[2],
+            Read {
+                address: 0xFFFF,
+                quantity: 1
+            }
         );
     }
 
