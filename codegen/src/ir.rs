@@ -297,16 +297,33 @@ impl Drive {
         let timing = self.protocol.timing.as_ref();
         let ict = timing.and_then(|t| t.inter_char_timeout.as_ref());
         let us = |ms: f64| (ms * 1000.0).round() as u32;
+        // Character counts are converted at 11 bits per character, the RTU character with parity.
+        let bits = |i: &crate::model::Interval| match (i.bits, i.chars) {
+            (None, None) => None,
+            (b, c) => Some(b.unwrap_or(0) + c.map_or(0, |c| (c * 11.0).round() as u32)),
+        };
+        let response = timing.and_then(|t| t.response_time.as_ref());
+        let gap = timing.and_then(|t| t.request_gap.as_ref());
+        let param = timing.and_then(|t| t.response_delay_param.clone());
+        let param_default_us = param.as_deref().and_then(|p| self.find(p)).and_then(|r| {
+            let per_unit_us = match r.def.unit.as_deref()? {
+                "ms" => 1000.0,
+                "s" => 1_000_000.0,
+                _ => return None,
+            };
+            r.default_value().map(|v| (v * per_unit_us).round() as u32)
+        });
         TimingFigures {
             frame_gap_chars: timing.map(|t| t.frame_gap_chars).unwrap_or(3.5),
             inter_char_timeout_us: ict.and_then(|i| i.ms).map(us),
-            inter_char_timeout_bits: ict
-                .and_then(|i| i.bits.or(i.chars.map(|c| (c * 11.0).round() as u32))),
-            response_delay_us: timing
-                .and_then(|t| t.response_time.as_ref())
-                .and_then(|i| i.ms)
-                .map(us),
-            response_delay_param: timing.and_then(|t| t.response_delay_param.clone()),
+            inter_char_timeout_bits: ict.and_then(bits),
+            response_delay_us: response.and_then(|i| i.ms).map(us),
+            response_delay_bits: response.and_then(bits),
+            response_delay_param: param,
+            response_delay_param_default_us: param_default_us,
+            request_gap_bits: gap.and_then(bits),
+            request_gap_us: gap.and_then(|i| i.ms).map(us),
+            char_bits: self.protocol.serial.as_ref().and_then(|s| s.char_bits),
         }
     }
 
@@ -340,7 +357,13 @@ pub struct TimingFigures {
     /// Inter-character limit in bit times (`chars` are counted at 11 bits).
     pub inter_char_timeout_bits: Option<u32>,
     pub response_delay_us: Option<u32>,
+    pub response_delay_bits: Option<u32>,
     pub response_delay_param: Option<String>,
+    /// The delay parameter's default, when the map prints it in ms or s.
+    pub response_delay_param_default_us: Option<u32>,
+    pub request_gap_bits: Option<u32>,
+    pub request_gap_us: Option<u32>,
+    pub char_bits: Option<u8>,
 }
 
 /// The scales of a register: its own, and those of each selected case.

@@ -218,6 +218,10 @@ pub struct Timing {
     /// Parameter that adds a configurable delay before the drive answers (V7 n156).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub response_delay_param: Option<String>,
+    /// Least time the master must leave after a reply before its next request (V7/J7:
+    /// 24 bits + 10 ms).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub request_gap: Option<Interval>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -228,7 +232,7 @@ fn default_frame_gap() -> f64 {
     3.5
 }
 
-/// A duration in milliseconds, in bit times or in character times.
+/// A duration: milliseconds, bit times, character times, or a sum of them (`{bits: 24, ms: 10}`).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Interval {

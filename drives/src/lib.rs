@@ -16,6 +16,37 @@
 //! assert_eq!(tds::FrequencyCommand::encode(&48.0, &settings), Ok(0x5DC0));
 //! ```
 
+//! Talking to a V7 on a serial line (compiled, not run: it needs the port):
+//!
+//! ```no_run
+//! use std::time::Duration;
+//! use drivemap_drives::runtime::{Client, ClientOptions};
+//! use drivemap_drives::runtime::transport::serial::{Parity, SerialOptions, SerialTransport};
+//! use drivemap_drives::yaskawa_v7::{self as v7, Settings};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let link = SerialTransport::open(
+//!     SerialOptions::new("/dev/ttyUSB0", 9600).parity(Parity::Even).with_profile(&v7::PROFILE),
+//! )?;
+//! let mut drive = Client::with_options(link, &v7::PROFILE, ClientOptions {
+//!     timeout: Duration::from_millis(200),
+//!     request_gap: Duration::from_millis(13), // V7/J7: 24 bits + 10 ms between messages
+//!     ..ClientOptions::default()
+//! });
+//! let mut settings = Settings::default();
+//! drive.load_settings(1, &mut settings)?; // reads n152 (frequency units) and n011
+//! let hz: f64 = drive.read::<v7::OutputFrequency>(1, &settings)?;
+//! drive.write::<v7::FrequencyReference>(1, &35.75, &settings)?; // refused if out of range
+//! drive.modify_bits::<v7::DigitalInputCommand>(1, &settings, 0x0001, 0)?; // run
+//! let (reference, output) =
+//!     drive.read_many::<(v7::FrequencyReferenceMonitor, v7::OutputFrequency)>(1, &settings)?;
+//! drive.write::<v7::BroadcastFrequencyReference>(0, &50.0, &settings)?; // slave 0, no reply
+//! drive.persist(1, "enter")?; // counted EEPROM write
+//! # let _ = (hz, reference, output);
+//! # Ok(())
+//! # }
+//! ```
+
 pub use drivemap_runtime as runtime;
 
 include!(concat!(env!("OUT_DIR"), "/drivemap.rs"));

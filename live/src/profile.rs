@@ -65,7 +65,12 @@ pub fn leak_profile(drive: &Drive) -> &'static Profile {
             inter_char_timeout_us: t.inter_char_timeout_us,
             inter_char_timeout_bits: t.inter_char_timeout_bits,
             response_delay_us: t.response_delay_us,
+            response_delay_bits: t.response_delay_bits,
             response_delay_param: t.response_delay_param.as_deref().map(leak_str),
+            response_delay_param_default_us: t.response_delay_param_default_us,
+            request_gap_bits: t.request_gap_bits,
+            request_gap_us: t.request_gap_us,
+            char_bits: t.char_bits,
         },
         eeprom_write_endurance: p.eeprom.as_ref().map(|e| e.endurance),
     };

@@ -18,8 +18,8 @@
 //! **Character length.** A character is 1 start bit, 8 data bits, the parity bit if any, and the
 //! stop bits: 10 bits for 8N1, 11 for 8E1, 8O1 and 8N2. Where a map fixes the character length
 //! whatever the parity (TDS-V8: always 11 bits, a second stop bit taking the parity slot,
-//! `002_661580cce154f322.txt:81`, `:91`; the map's `serial.char_bits`), set it with
-//! [`SerialConfig::fixed_char_bits`]. The serial transport times its silences with 11-bit
+//! `002_661580cce154f322.txt:81`, `:91`; the map's `serial.char_bits`), [`BusModel::new`] takes
+//! it from the profile unless [`SerialConfig::fixed_char_bits`] says otherwise. The serial transport times its silences with 11-bit
 //! characters whatever the framing; the model uses the real character, so it is the physical
 //! lower bound that the planner optimises for.
 //!
@@ -36,11 +36,12 @@
 //!
 //! **Response time.** Where the profile names a response-delay parameter (V7 n156, J7 n73, ACN
 //! CM.05) the delay is the value configured in the drive: give it with
-//! [`BusModel::with_delay_param`]; otherwise the manual's default from [`TURNAROUND_RULES`] is
-//! assumed. Where the profile states a fixed response time
+//! [`BusModel::with_delay_param`]; otherwise the parameter's default from the map
+//! ([`Timing::response_delay_param_default_us`](crate::profile::Timing::response_delay_param_default_us))
+//! is assumed, or none where the map prints no default. Where the profile states a fixed response time
 //! ([`Timing::response_delay_us`](crate::profile::Timing::response_delay_us), TDS-V8 5 ms) it is
 //! used. The V7/J7 "24 bits" before the delay and the master's "24 bits + 10 ms" after a reply
-//! are not fields of [`Profile`]; they come from [`TURNAROUND_RULES`], keyed by drive id. A drive
+//! come from the map's `timing.response_time` and `timing.request_gap`. A drive
 //! whose manual prints nothing (GPD 515: it defers to PI-MBUS-300, `001_ef66da56d29a05af.txt:1-3`)
 //! is modelled with the frame gap alone, a lower bound.
 
@@ -136,84 +137,6 @@ impl Default for SerialConfig {
     }
 }
 
-/// A drive's response-delay parameter and its default, as the manual prints them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct DelayParam {
-    /// The parameter as printed (`n156`), equal to the profile's `response_delay_param`.
-    pub param: &'static str,
-    /// The factory setting, in microseconds.
-    pub default_us: u32,
-    /// `file:line` of the default.
-    pub source: &'static str,
-}
-
-/// Turnaround rules of one drive's manual that [`Profile`] has no field for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct TurnaroundRule {
-    /// The drive id (`Profile::drive_id`).
-    pub drive_id: &'static str,
-    /// Bit times the drive takes before its configured delay starts.
-    pub response_bits: u32,
-    /// The delay parameter and its default.
-    pub delay_param: Option<DelayParam>,
-    /// Least bit times the master leaves after a reply before the next request.
-    pub request_gap_bits: u32,
-    /// Least time, in microseconds, the master leaves after a reply, on top of
-    /// `request_gap_bits`.
-    pub request_gap_us: u32,
-    /// `file:line` of the rule.
-    pub source: &'static str,
-}
-
-/// The turnaround rules of the manuals, per drive id. A drive that is not listed is modelled
-/// from its [`Profile`] alone.
-pub const TURNAROUND_RULES: &[TurnaroundRule] = &[
-    TurnaroundRule {
-        drive_id: "yaskawa-v7",
-        response_bits: 24,
-        delay_param: Some(DelayParam {
-            param: "n156",
-            // 000 Table 4.4 prints range 0-65 ms, default 10; 003 prints 10-65 ms, default 10
-            // ms. 000:202 says "5ms being the default"; the map takes 10 (its recorded
-            // conflict on n156).
-            default_us: 10_000,
-            source: "000_032dced3a1e91a75.txt:1357",
-        }),
-        request_gap_bits: 24,
-        request_gap_us: 10_000,
-        source: "003_8bcf5d50afb8e230.txt:282-284",
-    },
-    TurnaroundRule {
-        drive_id: "yaskawa-j7",
-        response_bits: 24,
-        delay_param: Some(DelayParam {
-            param: "n73",
-            default_us: 10_000,
-            source: "003_8bcf5d50afb8e230.txt:106",
-        }),
-        request_gap_bits: 24,
-        request_gap_us: 10_000,
-        source: "003_8bcf5d50afb8e230.txt:282-284",
-    },
-    TurnaroundRule {
-        drive_id: "automationdirect-acn",
-        response_bits: 0,
-        delay_param: Some(DelayParam {
-            param: "CM.05",
-            default_us: 5_000,
-            source: "004_c5cbf92472673495.txt:231",
-        }),
-        request_gap_bits: 0,
-        request_gap_us: 0,
-        source: "004_c5cbf92472673495.txt:266-278",
-    },
-];
-
-/// The rule for `drive_id`, if its manual prints one the profile cannot carry.
-pub fn turnaround_rule(drive_id: &str) -> Option<&'static TurnaroundRule> {
-    TURNAROUND_RULES.iter().find(|r| r.drive_id == drive_id)
-}
-
 /// Bytes of an RTU request with `function` carrying `quantity` registers, or `None` for a
 /// function the model does not know.
 pub const fn request_bytes(function: u8, quantity: u16) -> Option<u32> {
@@ -286,18 +209,20 @@ impl BusModel {
     /// for any delay parameter.
     pub fn new(profile: &Profile, serial: SerialConfig) -> BusModel {
         let timing = &profile.timing;
-        let rule = turnaround_rule(profile.drive_id);
-        let param_default = rule.and_then(|r| r.delay_param).map(|d| d.default_us);
+        let mut serial = serial;
+        if serial.char_bits.is_none() {
+            serial.char_bits = timing.char_bits;
+        }
         BusModel {
             serial,
             frame_gap_chars: timing.frame_gap_chars,
-            response_bits: rule.map_or(0, |r| r.response_bits),
+            response_bits: timing.response_delay_bits.unwrap_or(0),
             response_delay_us: timing
                 .response_delay_us
                 .unwrap_or(0)
-                .max(param_default.unwrap_or(0)),
-            request_gap_bits: rule.map_or(0, |r| r.request_gap_bits),
-            request_gap_us: rule.map_or(0, |r| r.request_gap_us),
+                .max(timing.response_delay_param_default_us.unwrap_or(0)),
+            request_gap_bits: timing.request_gap_bits.unwrap_or(0),
+            request_gap_us: timing.request_gap_us.unwrap_or(0),
         }
     }
 
@@ -438,9 +363,21 @@ mod tests {
         assert_eq!(request_bytes(0x2B, 1), None);
     }
 
+    /// The V7's timing as its map states it: 24 bits + n156 (default 10 ms) before the reply,
+    /// 24 bits + 10 ms after it (`003_8bcf5d50afb8e230.txt:282-284`).
+    fn v7() -> Profile {
+        let mut p = profile("yaskawa-v7", None);
+        p.timing.response_delay_bits = Some(24);
+        p.timing.response_delay_param = Some("n156");
+        p.timing.response_delay_param_default_us = Some(10_000);
+        p.timing.request_gap_bits = Some(24);
+        p.timing.request_gap_us = Some(10_000);
+        p
+    }
+
     #[test]
     fn v7_read_at_9600_8n1_follows_the_24_bit_and_10_ms_rules() {
-        let model = BusModel::new(&profile("yaskawa-v7", None), SerialConfig::new(9600));
+        let model = BusModel::new(&v7(), SerialConfig::new(9600));
         let b = model.exchange(0x03, 8).unwrap();
         // 8 bytes of 10 bits at 9600 baud.
         assert_eq!(b.request_ns, 8_333_333);
@@ -459,11 +396,12 @@ mod tests {
 
     #[test]
     fn fixed_response_time_and_frame_gap() {
-        // TDS-V8: 5 ms response, 11-bit characters; the gap after the reply is 3.5 characters.
-        let tds = BusModel::new(
-            &profile("ptlk-tds-v8", Some(5000)),
-            SerialConfig::new(9600).fixed_char_bits(11),
-        );
+        // TDS-V8: 5 ms response, 11-bit characters (taken from the profile); the gap after the
+        // reply is 3.5 characters.
+        let mut tds_profile = profile("ptlk-tds-v8", Some(5000));
+        tds_profile.timing.char_bits = Some(11);
+        let tds = BusModel::new(&tds_profile, SerialConfig::new(9600));
+        assert_eq!(tds.serial.bits_per_char(), 11);
         let b = tds.exchange(0x03, 16).unwrap();
         assert_eq!(b.latency_ns, 5_000_000);
         assert_eq!(
@@ -485,15 +423,15 @@ mod tests {
     }
 
     #[test]
-    fn acn_delay_parameter_default_and_setting() {
-        let acn = BusModel::new(
-            &profile("automationdirect-acn", None),
-            SerialConfig::new(9600),
-        );
-        assert_eq!(acn.exchange(0x04, 1).unwrap().latency_ns, 5_000_000);
-        // CM.05 = 0: the frame gap remains.
-        let zero = acn.with_delay_param(Duration::ZERO);
-        assert_eq!(zero.exchange(0x04, 1).unwrap().latency_ns, 3_645_833);
+    fn acn_delay_parameter_without_a_printed_default() {
+        // The ACN map names CM.05 but prints no default: the frame gap is the lower bound.
+        let mut p = profile("automationdirect-acn", None);
+        p.timing.response_delay_param = Some("CM.05");
+        let acn = BusModel::new(&p, SerialConfig::new(9600));
+        assert_eq!(acn.exchange(0x04, 1).unwrap().latency_ns, 3_645_833);
+        // CM.05 configured to 5 ms lengthens the latency.
+        let set = acn.with_delay_param(Duration::from_millis(5));
+        assert_eq!(set.exchange(0x04, 1).unwrap().latency_ns, 5_000_000);
     }
 
     #[test]

@@ -109,19 +109,40 @@ pub struct Timing {
     pub inter_char_timeout_bits: Option<u32>,
     /// The drive's typical or minimum delay before answering, in microseconds, if stated.
     pub response_delay_us: Option<u32>,
+    /// Bit times the drive takes before answering, on top of the delay (V7/J7: 24 bits, then
+    /// the n156/n73 delay).
+    pub response_delay_bits: Option<u32>,
     /// The parameter that adds a configurable response delay (V7 n156, ACN CM.05), if any.
     pub response_delay_param: Option<&'static str>,
+    /// That parameter's factory setting, in microseconds, when the map prints it.
+    pub response_delay_param_default_us: Option<u32>,
+    /// Least time the master leaves after a reply before the next request: bit times plus
+    /// microseconds (V7/J7: 24 bits + 10 ms).
+    pub request_gap_bits: Option<u32>,
+    pub request_gap_us: Option<u32>,
+    /// Bits per character when the manual fixes it whatever the parity (TDS-V8: 11).
+    pub char_bits: Option<u8>,
+}
+
+impl Timing {
+    /// The Modbus RTU rule alone: 3.5 characters between frames, nothing else stated.
+    pub const MODBUS: Timing = Timing {
+        frame_gap_chars: 3.5,
+        inter_char_timeout_us: None,
+        inter_char_timeout_bits: None,
+        response_delay_us: None,
+        response_delay_bits: None,
+        response_delay_param: None,
+        response_delay_param_default_us: None,
+        request_gap_bits: None,
+        request_gap_us: None,
+        char_bits: None,
+    };
 }
 
 impl Default for Timing {
     fn default() -> Self {
-        Timing {
-            frame_gap_chars: 3.5,
-            inter_char_timeout_us: None,
-            inter_char_timeout_bits: None,
-            response_delay_us: None,
-            response_delay_param: None,
-        }
+        Timing::MODBUS
     }
 }
 
@@ -165,13 +186,7 @@ impl Profile {
         exceptions: &[],
         commands: &[],
         address_offsets: AddressOffsets { rtu: 0, tcp: 0 },
-        timing: Timing {
-            frame_gap_chars: 3.5,
-            inter_char_timeout_us: None,
-            inter_char_timeout_bits: None,
-            response_delay_us: None,
-            response_delay_param: None,
-        },
+        timing: Timing::MODBUS,
         eeprom_write_endurance: None,
     };
 

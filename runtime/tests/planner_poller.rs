@@ -295,9 +295,19 @@ fn typed_values_of_generated_registers() {
     assert_eq!(poller.get(Table::Holding, 0x20).unwrap().unwrap(), 1032);
 }
 
+/// The V7's timing as its map states it (24 bits + n156 default 10 ms before a reply, 24 bits +
+/// 10 ms after it), with a generous max_read.
 static V7_LIKE: Profile = Profile {
     drive_id: "yaskawa-v7",
     max_read: 125,
+    timing: drivemap_runtime::profile::Timing {
+        response_delay_bits: Some(24),
+        response_delay_param: Some("n156"),
+        response_delay_param_default_us: Some(10_000),
+        request_gap_bits: Some(24),
+        request_gap_us: Some(10_000),
+        ..drivemap_runtime::profile::Timing::MODBUS
+    },
     ..Profile::GENERIC
 };
 

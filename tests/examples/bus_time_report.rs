@@ -24,7 +24,7 @@ use std::path::PathBuf;
 use drivemap_codegen::model::{Access, ModbusTable, TransportName};
 use drivemap_codegen::validate::Context;
 use drivemap_drives as drives;
-use drivemap_runtime::bus_time::{BusModel, SerialConfig, turnaround_rule};
+use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::planner::{
     Read, ReadableSet, plan_contiguous, plan_cost, plan_reads, plan_single,
 };
@@ -229,39 +229,18 @@ fn main() {
                 .collect();
             sum.add(&evaluate(&subset, &sets, profile.max_read, &model));
         }
-        // The runtime's turnaround rules against what the map says.
-        if let Some(rule) = turnaround_rule(drive_id) {
-            let timing = protocol.timing.as_ref();
-            let map_bits = timing
-                .and_then(|t| t.response_time.as_ref())
-                .and_then(|i| i.bits)
-                .unwrap_or(0);
-            let param = timing.and_then(|t| t.response_delay_param.as_deref());
-            let map_default = param
-                .and_then(|p| {
-                    drive
-                        .registers
-                        .iter()
-                        .find(|r| r.def.param.as_deref() == Some(p))
-                })
-                .and_then(|r| r.default_value());
-            let rule_default = rule.delay_param.map(|d| f64::from(d.default_us) / 1000.0);
-            let verdict = match map_default {
-                None => "  (the map gives the parameter no default)",
-                Some(_) if map_bits == rule.response_bits && map_default == rule_default => "",
-                Some(_) => "  <-- differs from the map",
-            };
-            notes.push(format!(
-                "{drive_id}: {} bits + {} ({} ms by default) before the reply, {} bits + {} ms after it; map: {map_bits} bits + {} (default {}){verdict}",
-                rule.response_bits,
-                rule.delay_param.map_or("-", |d| d.param),
-                rule_default.map_or("-".into(), |d| d.to_string()),
-                rule.request_gap_bits,
-                f64::from(rule.request_gap_us) / 1000.0,
-                param.unwrap_or("-"),
-                map_default.map_or("none".into(), |d| format!("{d} ms")),
-            ));
-        }
+        // The turnaround terms the model takes from the map.
+        let t = &profile.timing;
+        let opt = |v: Option<u32>| v.map_or("-".to_string(), |v| v.to_string());
+        notes.push(format!(
+            "{drive_id}: before the reply {} bits + {} µs + {} ({} µs by default); after it {} bits + {} µs",
+            opt(t.response_delay_bits),
+            opt(t.response_delay_us),
+            t.response_delay_param.unwrap_or("no delay parameter"),
+            opt(t.response_delay_param_default_us),
+            opt(t.request_gap_bits),
+            opt(t.request_gap_us),
+        ));
         let mut groups: Vec<String> = monitor
             .iter()
             .map(|&g| drive.groups[g].id.clone())
@@ -286,7 +265,7 @@ fn main() {
         "\nRandom halves of the monitor registers ({SUBSETS} subsets per drive, each register wanted with probability 1/2, fixed seed), mean per poll\n"
     );
     print_table(&rows, |r| r.subsets, SUBSETS);
-    println!("\nTurnaround rules of the runtime (bus_time::TURNAROUND_RULES) against the maps:");
+    println!("\nTurnaround terms from each map's protocol timing:");
     for n in notes {
         println!("- {n}");
     }

@@ -50,6 +50,17 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
     let ict_bits = opt_u32(t.inter_char_timeout_bits);
     let resp = opt_u32(t.response_delay_us);
     let resp_param = super::opt_str(&t.response_delay_param);
+    let resp_bits = opt_u32(t.response_delay_bits);
+    let resp_param_default = opt_u32(t.response_delay_param_default_us);
+    let gap_bits = opt_u32(t.request_gap_bits);
+    let gap_us = opt_u32(t.request_gap_us);
+    let char_bits = match t.char_bits {
+        Some(c) => {
+            let c = proc_macro2::Literal::u8_unsuffixed(c);
+            quote!(Some(#c))
+        }
+        None => quote!(None),
+    };
     let endurance = opt_u32(p.eeprom.as_ref().map(|e| e.endurance));
     quote! {
         /// The protocol profile: what the drive accepts on the wire, per its manual.
@@ -69,7 +80,12 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
                 inter_char_timeout_us: #ict_us,
                 inter_char_timeout_bits: #ict_bits,
                 response_delay_us: #resp,
+                response_delay_bits: #resp_bits,
                 response_delay_param: #resp_param,
+                response_delay_param_default_us: #resp_param_default,
+                request_gap_bits: #gap_bits,
+                request_gap_us: #gap_us,
+                char_bits: #char_bits,
             },
             eeprom_write_endurance: #endurance,
         };

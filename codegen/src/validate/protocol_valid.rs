@@ -10,11 +10,8 @@ use crate::source::Path;
 const KNOWN: &[u8] = &[0x03, 0x04, 0x06, 0x08, 0x10];
 
 fn interval(drive: &Drive, out: &mut Vec<Diagnostic>, i: &Interval, path: Path) {
-    let n = usize::from(i.ms.is_some())
-        + usize::from(i.bits.is_some())
-        + usize::from(i.chars.is_some());
-    if n != 1 {
-        out.push(drive.error(&path, None, "give exactly one of `ms`, `bits`, `chars`"));
+    if i.ms.is_none() && i.bits.is_none() && i.chars.is_none() {
+        out.push(drive.error(&path, None, "give `ms`, `bits` or `chars` (several add up)"));
     }
     if i.ms.is_some_and(|v| v.is_nan() || v < 0.0) || i.chars.is_some_and(|v| v.is_nan() || v < 0.0)
     {
@@ -140,6 +137,9 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         }
         if let Some(i) = &t.response_time {
             interval(drive, out, i, tp.key("response_time"));
+        }
+        if let Some(i) = &t.request_gap {
+            interval(drive, out, i, tp.key("request_gap"));
         }
     }
     if let Some(ser) = &p.serial {

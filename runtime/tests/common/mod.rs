@@ -63,6 +63,7 @@ pub static V7: Profile = Profile {
         inter_char_timeout_bits: None,
         response_delay_us: None,
         response_delay_param: Some("n156"),
+        ..Timing::MODBUS
     },
     eeprom_write_endurance: Some(100_000),
 };
@@ -97,6 +98,7 @@ pub static ACN: Profile = Profile {
         inter_char_timeout_bits: None,
         response_delay_us: None,
         response_delay_param: Some("CM.05"),
+        ..Timing::MODBUS
     },
     eeprom_write_endurance: None,
 };
