@@ -44,13 +44,21 @@ fn tcp_client(addr: SocketAddr, profile: &'static Profile) -> Client<TcpTranspor
     Client::with_options(link, profile, options())
 }
 
-/// Reads every parameter the drive's conversions depend on, as an application does.
-fn load<T: Transport, S: DriveSettings>(c: &mut Client<T>, slave: u8, s: &mut S) {
+/// Reads every parameter the drive's conversions depend on, as an application does, and checks
+/// that each one was taken.
+fn load<T: Transport, S: DriveSettings + Clone + PartialEq + std::fmt::Debug>(
+    c: &mut Client<T>,
+    slave: u8,
+    s: &mut S,
+) {
+    c.load_settings(slave, s)
+        .unwrap_or_else(|e| panic!("reading the settings: {e}"));
     for &address in S::DEPENDENCIES {
         let mut w = [0u16; 1];
-        c.read_holding(slave, address, &mut w)
-            .unwrap_or_else(|e| panic!("reading dependency {address:04X}h: {e}"));
-        assert!(s.absorb(address, w[0]), "{address:04X}h absorbed");
+        c.read_holding(slave, address, &mut w).unwrap();
+        let mut again = s.clone();
+        assert!(again.absorb(address, w[0]), "{address:04X}h absorbed");
+        assert_eq!(&again, s, "{address:04X}h already loaded");
     }
 }
 

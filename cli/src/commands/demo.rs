@@ -466,20 +466,6 @@ impl DemoDrive for Acn {
     }
 }
 
-/// Reads the parameters the drive's scales and addresses depend on.
-fn load_settings<T: Transport, S: DriveSettings>(
-    c: &mut Client<T>,
-    slave: u8,
-    s: &mut S,
-) -> Result<(), Error> {
-    for &address in S::DEPENDENCIES {
-        let mut w = [0u16; 1];
-        c.read_holding(slave, address, &mut w)?;
-        s.absorb(address, w[0]);
-    }
-    Ok(())
-}
-
 struct Plan {
     frequency: f64,
     ramp: f64,
@@ -519,7 +505,8 @@ fn drive_it<D: DemoDrive>(
     );
     let fail = |what: &str, e: Error| format!("{what}: {e}");
     let mut s = D::settings(externals);
-    load_settings(&mut c, slave, &mut s).map_err(|e| fail("reading settings", e))?;
+    c.load_settings(slave, &mut s)
+        .map_err(|e| fail("reading settings", e))?;
     let prepared =
         D::prepare(&mut c, slave, &s, plan.ramp).map_err(|e| fail("writing ramp times", e))?;
     D::reference(&mut c, slave, &s, plan.frequency)
