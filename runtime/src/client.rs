@@ -353,6 +353,18 @@ impl Core {
 
     /// The request for writing one register: 06h, or 10h with one register where the drive has
     /// no 06h (VS mini J7: 03h/08h/10h only, `003_8bcf5d50afb8e230.txt:226-231`).
+    /// Refuses a register the map does not list on this client's transport.
+    pub(crate) fn on_transport<R: crate::register::Register>(&self) -> Result<(), Refusal> {
+        if R::on_transport(self.kind) {
+            Ok(())
+        } else {
+            Err(Refusal::NotOnTransport {
+                register: R::ID,
+                transport: self.kind,
+            })
+        }
+    }
+
     pub(crate) fn single_write<'a>(&self, address: u16, value: &'a [u16; 1]) -> Request<'a> {
         if self.profile.supports(function::WRITE_SINGLE)
             || !self.profile.supports(function::WRITE_MULTIPLE)
@@ -529,6 +541,7 @@ macro_rules! client_methods {
         slave: u8,
         settings: &R::Settings,
     ) -> Result<R::Value, Error> {
+        self.core.on_transport::<R>()?;
         let address = R::address(settings, self.core.kind);
         let mut raw = [0u16; 1];
         self.read_table(slave, R::TABLE, address, &mut raw) $($aw)*?;
@@ -542,6 +555,7 @@ macro_rules! client_methods {
         value: &R::Value,
         settings: &R::Settings,
     ) -> Result<(), Error> {
+        self.core.on_transport::<R>()?;
         let raw = R::encode(value, settings)?;
         let address = R::address(settings, self.core.kind);
         self.write_register(slave, address, raw) $($aw)*

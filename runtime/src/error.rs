@@ -129,6 +129,14 @@ pub enum Refusal {
         expected: u16,
         got: u16,
     },
+    /// The register does not exist on the client's transport (the map's `transports`).
+    #[error(
+        "{register} does not exist on {transport:?}: the map lists it for other transports only"
+    )]
+    NotOnTransport {
+        register: &'static str,
+        transport: crate::profile::TransportKind,
+    },
     /// Bits outside a bit-field register's fields.
     #[error("{register}: bits {bits:04X}h are reserved")]
     ReservedBits { register: &'static str, bits: u16 },

@@ -58,6 +58,14 @@ pub trait Register {
         Self::ADDRESS
     }
 
+    /// Whether the register exists on this transport. Most do; the V7's Modbus TCP option card
+    /// has command registers of its own, and its RTU command registers are absent there. The
+    /// client refuses a register on a transport it does not exist on.
+    fn on_transport(transport: TransportKind) -> bool {
+        let _ = transport;
+        true
+    }
+
     /// Decodes a raw word read from the drive. Data from the drive never makes this panic;
     /// it fails only when a conversion needs a setting that `settings` does not hold.
     fn decode(raw: u16, settings: &Self::Settings) -> Result<Self::Value, ValueError>;

@@ -48,6 +48,12 @@ fn check_next<R: Register>(
     settings: &R::Settings,
     kind: TransportKind,
 ) -> Result<(), Refusal> {
+    if !R::on_transport(kind) {
+        return Err(Refusal::NotOnTransport {
+            register: R::ID,
+            transport: kind,
+        });
+    }
     let expected = start.wrapping_add(index);
     let got = R::address(settings, kind);
     if got != expected || R::TABLE != table {
@@ -72,6 +78,9 @@ macro_rules! register_set {
 
             #[allow(unused_assignments, unused_mut, unused_variables)]
             fn layout(settings: &Self::Settings, kind: TransportKind) -> Result<(u16, Table), Refusal> {
+                if !$first::on_transport(kind) {
+                    return Err(Refusal::NotOnTransport { register: $first::ID, transport: kind });
+                }
                 let start = $first::address(settings, kind);
                 let mut index = 0u16;
                 $(

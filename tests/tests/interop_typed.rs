@@ -126,8 +126,18 @@ fn v7_run_and_stop<T: Transport>(c: &mut Client<T>, sim: &Sim, s: &v7::Settings,
         c.write::<v7::TcpFrequencyReference>(1, &45.0, s).unwrap();
     } else {
         c.write::<v7::FrequencyReference>(1, &45.0, s).unwrap();
-        // The option card's status word exists only on Modbus TCP: 02h here.
-        assert_eq!(code(c.read::<v7::TcpStatusWord>(1, s).unwrap_err()), 0x02);
+        // The option card's status word exists only on Modbus TCP: the typed API refuses it
+        // here before sending, and the drive would answer a raw read of its address with 02h.
+        assert!(matches!(
+            c.read::<v7::TcpStatusWord>(1, s).unwrap_err(),
+            Error::Refused(drivemap_runtime::Refusal::NotOnTransport { .. })
+        ));
+        let mut raw = [0u16; 1];
+        let address = <v7::TcpStatusWord as drivemap_runtime::Register>::ADDRESS;
+        assert_eq!(
+            code(c.read_holding(1, address, &mut raw).unwrap_err()),
+            0x02
+        );
     }
     if tcp {
         let bits = v7::TcpDigitalInputCommandBits::new().with_terminal_s1(true);

@@ -307,6 +307,20 @@ fn register(drive: &Drive, r: &Register, rt: &TokenStream) -> TokenStream {
             }
         }
     };
+    let on_transport = match &r.transports {
+        None => quote!(),
+        Some(list) => {
+            let kinds = list.iter().map(|t| match t {
+                TransportName::Rtu => quote!(#rt::profile::TransportKind::Rtu | #rt::profile::TransportKind::RtuOverTcp),
+                TransportName::Tcp => quote!(#rt::profile::TransportKind::Tcp),
+            });
+            quote! {
+                fn on_transport(transport: #rt::profile::TransportKind) -> bool {
+                    matches!(transport, #(#kinds)|*)
+                }
+            }
+        }
+    };
     let readable = if r.readable() {
         quote!(impl #rt::Readable for #marker {})
     } else {
@@ -366,6 +380,7 @@ fn register(drive: &Drive, r: &Register, rt: &TokenStream) -> TokenStream {
             const SOURCE: &'static str = #source;
 
             #address_fn
+            #on_transport
 
             fn decode(raw: u16, settings: &Settings) -> Result<#value, #rt::ValueError> {
                 #decode
