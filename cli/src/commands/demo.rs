@@ -173,6 +173,57 @@ impl DemoDrive for Tds {
     }
 }
 
+/// Frequency reference, run command and status of the V7 family: the J7 map inherits the V7's
+/// register ids, so the same code drives both through their own generated modules.
+macro_rules! v7_family_io {
+    ($m:ident) => {
+        fn reference<T: Transport>(
+            c: &mut Client<T>,
+            slave: u8,
+            s: &$m::Settings,
+            hz: f64,
+        ) -> Result<(), Error> {
+            c.write::<$m::FrequencyReference>(slave, &hz, s)
+        }
+        fn run<T: Transport>(
+            c: &mut Client<T>,
+            slave: u8,
+            s: &$m::Settings,
+            run: bool,
+            reverse: bool,
+        ) -> Result<(), String> {
+            let bits = $m::DigitalInputCommandBits::new()
+                .with_run_command(run)
+                .with_reverse(reverse);
+            c.write::<$m::DigitalInputCommand>(slave, &bits, s)
+                .map_err(|e| e.to_string())
+        }
+        fn sample<T: Transport>(
+            c: &mut Client<T>,
+            slave: u8,
+            s: &$m::Settings,
+        ) -> Result<Sample, Error> {
+            let st = c.read::<$m::StatusSignal1>(slave, s)?;
+            let (reference, output) =
+                c.read_many::<($m::FrequencyReferenceMonitor, $m::OutputFrequency)>(slave, s)?;
+            let (current, voltage) =
+                c.read_many::<($m::OutputCurrent, $m::OutputVoltage)>(slave, s)?;
+            Ok(Sample {
+                status: names(&[
+                    ("during_run", st.during_run()),
+                    ("reverse_direction", st.reverse_direction()),
+                    ("inverter_ready", st.inverter_ready()),
+                    ("fault", st.fault()),
+                ]),
+                reference,
+                output,
+                current,
+                voltage,
+            })
+        }
+    };
+}
+
 struct V7;
 
 impl DemoDrive for V7 {
@@ -194,49 +245,7 @@ impl DemoDrive for V7 {
             "n019 accel time {ramp:.1} s, n020 decel time {ramp:.1} s, ACCEPT"
         ))
     }
-    fn reference<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &v7::Settings,
-        hz: f64,
-    ) -> Result<(), Error> {
-        c.write::<v7::FrequencyReference>(slave, &hz, s)
-    }
-    fn run<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &v7::Settings,
-        run: bool,
-        reverse: bool,
-    ) -> Result<(), String> {
-        let bits = v7::DigitalInputCommandBits::new()
-            .with_run_command(run)
-            .with_reverse(reverse);
-        c.write::<v7::DigitalInputCommand>(slave, &bits, s)
-            .map_err(|e| e.to_string())
-    }
-    fn sample<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &v7::Settings,
-    ) -> Result<Sample, Error> {
-        let st = c.read::<v7::StatusSignal1>(slave, s)?;
-        let (reference, output) =
-            c.read_many::<(v7::FrequencyReferenceMonitor, v7::OutputFrequency)>(slave, s)?;
-        let (current, voltage) = c.read_many::<(v7::OutputCurrent, v7::OutputVoltage)>(slave, s)?;
-        Ok(Sample {
-            status: names(&[
-                ("during_run", st.during_run()),
-                ("reverse_direction", st.reverse_direction()),
-                ("inverter_ready", st.inverter_ready()),
-                ("fault", st.fault()),
-            ]),
-            reference,
-            output,
-            current,
-            voltage,
-        })
-    }
+    v7_family_io!(v7);
 }
 
 struct J7;
@@ -263,49 +272,7 @@ impl DemoDrive for J7 {
     ) -> Result<String, Error> {
         Ok("the J7's accel/decel times have no register in the sources: the simulator ramps 10 s to max frequency".into())
     }
-    fn reference<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &j7::Settings,
-        hz: f64,
-    ) -> Result<(), Error> {
-        c.write::<j7::FrequencyReference>(slave, &hz, s)
-    }
-    fn run<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &j7::Settings,
-        run: bool,
-        reverse: bool,
-    ) -> Result<(), String> {
-        let bits = j7::DigitalInputCommandBits::new()
-            .with_run_command(run)
-            .with_reverse(reverse);
-        c.write::<j7::DigitalInputCommand>(slave, &bits, s)
-            .map_err(|e| e.to_string())
-    }
-    fn sample<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &j7::Settings,
-    ) -> Result<Sample, Error> {
-        let st = c.read::<j7::StatusSignal1>(slave, s)?;
-        let (reference, output) =
-            c.read_many::<(j7::FrequencyReferenceMonitor, j7::OutputFrequency)>(slave, s)?;
-        let (current, voltage) = c.read_many::<(j7::OutputCurrent, j7::OutputVoltage)>(slave, s)?;
-        Ok(Sample {
-            status: names(&[
-                ("during_run", st.during_run()),
-                ("reverse_direction", st.reverse_direction()),
-                ("inverter_ready", st.inverter_ready()),
-                ("fault", st.fault()),
-            ]),
-            reference,
-            output,
-            current,
-            voltage,
-        })
-    }
+    v7_family_io!(j7);
 }
 
 struct Gpd;
