@@ -508,48 +508,9 @@ fn broadcast_writes_go_to_slave_0_without_reply() {
     assert_eq!(d.writes().len(), 1);
 }
 
-/// A running `socat` linking two pseudo-terminals; killed on drop. Needs `socat` (Debian
-/// package `socat`), as the runtime's own serial tests do; without it the test fails.
-struct PtyPair {
-    child: std::process::Child,
-    paths: [String; 2],
-}
-
-impl PtyPair {
-    fn new() -> PtyPair {
-        use std::io::{BufRead, BufReader};
-        let mut child = Command::new("socat")
-            .args(["-d", "-d", "pty,raw,echo=0", "pty,raw,echo=0"])
-            .stdin(std::process::Stdio::null())
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .expect("socat is required for this test: apt-get install socat");
-        let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
-        let mut paths = Vec::new();
-        while paths.len() < 2 {
-            let line = lines
-                .next()
-                .expect("socat exited early")
-                .expect("socat log");
-            if let Some(at) = line.find("PTY is ") {
-                paths.push(line[at + "PTY is ".len()..].trim().to_string());
-            }
-        }
-        thread::spawn(move || for _ in lines.by_ref() {});
-        PtyPair {
-            child,
-            paths: [paths[0].clone(), paths[1].clone()],
-        }
-    }
-}
-
-impl Drop for PtyPair {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+#[path = "../../runtime/tests/support/pty_pair.rs"]
+mod pty_pair;
+use pty_pair::PtyPair;
 
 #[test]
 fn serial_line_through_a_pseudo_terminal_pair() {

@@ -5,8 +5,7 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader, Write};
-use std::process::{Child, Command, Stdio};
+use std::io::Write;
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -18,49 +17,9 @@ use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport
 
 use common::V7;
 
-/// A running `socat` linking two pseudo-terminals; killed on drop.
-struct PtyPair {
-    child: Child,
-    paths: [String; 2],
-}
-
-impl PtyPair {
-    fn new() -> PtyPair {
-        let mut child = Command::new("socat")
-            .args(["-d", "-d", "pty,raw,echo=0", "pty,raw,echo=0"])
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("socat is required for this test: apt-get install socat");
-        let stderr = child.stderr.take().expect("socat stderr");
-        let mut lines = BufReader::new(stderr).lines();
-        let mut paths = Vec::new();
-        // socat -d -d logs "... N PTY is /dev/pts/7" once per side, then the transfer loop.
-        while paths.len() < 2 {
-            let line = lines
-                .next()
-                .expect("socat exited before naming both pseudo-terminals")
-                .expect("reading socat's log");
-            if let Some(at) = line.find("PTY is ") {
-                paths.push(line[at + "PTY is ".len()..].trim().to_string());
-            }
-        }
-        // Keep draining socat's log so it never blocks on a full pipe.
-        thread::spawn(move || for _ in lines.by_ref() {});
-        PtyPair {
-            child,
-            paths: [paths[0].clone(), paths[1].clone()],
-        }
-    }
-}
-
-impl Drop for PtyPair {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+#[path = "support/pty_pair.rs"]
+mod pty_pair;
+use pty_pair::PtyPair;
 
 fn options(path: &str) -> SerialOptions {
     SerialOptions::new(path, 19_200)

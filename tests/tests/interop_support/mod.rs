@@ -70,49 +70,10 @@ pub fn python(modules: &[&str]) -> PathBuf {
     python
 }
 
-/// A running `socat` linking two pseudo-terminals; killed on drop.
-pub struct PtyPair {
-    child: Child,
-    pub paths: [String; 2],
-}
-
-impl PtyPair {
-    pub fn new() -> PtyPair {
-        require_tool("socat", &["-V"]);
-        let mut child = Command::new("socat")
-            .args(["-d", "-d", "pty,raw,echo=0", "pty,raw,echo=0"])
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap_or_else(|e| panic!("starting socat: {e}; {INSTALL}"));
-        let stderr = child.stderr.take().expect("socat stderr");
-        let mut lines = BufReader::new(stderr).lines();
-        let mut paths = Vec::new();
-        // socat -d -d logs "... N PTY is /dev/pts/7" once per side, then the transfer loop.
-        while paths.len() < 2 {
-            let line = lines
-                .next()
-                .expect("socat exited before naming both pseudo-terminals")
-                .expect("reading socat's log");
-            if let Some(at) = line.find("PTY is ") {
-                paths.push(line[at + "PTY is ".len()..].trim().to_string());
-            }
-        }
-        thread::spawn(move || for _ in lines.by_ref() {});
-        PtyPair {
-            child,
-            paths: [paths[0].clone(), paths[1].clone()],
-        }
-    }
-}
-
-impl Drop for PtyPair {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+#[path = "../../../runtime/tests/support/pty_pair.rs"]
+mod pty_pair;
+#[allow(unused_imports)] // not every test binary that includes this module uses it
+pub use pty_pair::PtyPair;
 
 /// A child process killed on drop (a Python server, say).
 pub struct Peer(pub Child);
