@@ -498,11 +498,13 @@ fn broadcast_writes_go_to_slave_0_without_reply() {
         "{out}"
     );
     assert_eq!(d.writes(), vec![(0x0001, 15000)]);
-    // The drive refuses other registers in a broadcast; the runtime says so before sending.
+    // The drive refuses other registers in a broadcast; the write gate says so before
+    // connecting.
     let (code, _, err) = d.run("write", "ptlk-tds-v8", &["--slave", "0", "Bn-01=20"]);
-    assert_eq!(code, 1);
+    assert_eq!(code, 2);
     assert!(
-        err.contains("does not accept register 0200h in a broadcast"),
+        err.contains("ptlk-tds-v8 does not accept accel_time_1 in a broadcast")
+            && err.contains("nothing written"),
         "{err}"
     );
     assert_eq!(d.writes().len(), 1);

@@ -366,6 +366,147 @@ pub struct TimingFigures {
     pub char_bits: Option<u8>,
 }
 
+/// Whether a register may be written as a broadcast (slave 0); see the runtime's
+/// `gate::Broadcast`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BroadcastUse {
+    No,
+    /// Named in `protocol.broadcast.registers`: written to one slave or to all.
+    Also,
+    /// A member of a broadcast group: slave 0 only, in the broadcast address space.
+    Only,
+}
+
+/// What the map allows on the wire when writing one register: the data of the runtime's
+/// write gate (`drivemap_runtime::gate::WriteRule`), decided here once for the generator and
+/// for tools that interpret a map at run time.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WriteRuleFigures {
+    pub broadcast: BroadcastUse,
+    /// Exists on RTU framing (serial, RTU over TCP).
+    pub rtu: bool,
+    /// Exists on Modbus TCP.
+    pub tcp: bool,
+    /// Its own address first, then every address it moves to, without repeats.
+    pub addresses: Vec<u16>,
+    /// The envelope of its raw ranges over every variant and selector case.
+    pub raw: RawLimits,
+    /// Bits that carry no field (bit-field registers), which must be written as 0.
+    pub reserved: u16,
+}
+
+impl Drive {
+    /// The write gate's data for `r` (see [`WriteRuleFigures`]).
+    pub fn write_rule(&self, r: &Register) -> WriteRuleFigures {
+        let named = self.protocol.broadcast.iter().any(|b| {
+            b.registers
+                .iter()
+                .any(|n| self.find(n).is_some_and(|x| x.def.id == r.def.id))
+        });
+        let broadcast = if r.broadcast {
+            BroadcastUse::Only
+        } else if named {
+            BroadcastUse::Also
+        } else {
+            BroadcastUse::No
+        };
+        let (rtu, tcp) = match &r.transports {
+            None => (true, true),
+            Some(list) => (
+                list.contains(&TransportName::Rtu),
+                list.contains(&TransportName::Tcp),
+            ),
+        };
+        let mut addresses = vec![r.def.address];
+        for alt in &r.def.address_alternatives {
+            if !addresses.contains(&alt.address) {
+                addresses.push(alt.address);
+            }
+        }
+        let reserved = match r.kind() {
+            ValueKind::Bits(fields) => {
+                let mask = fields
+                    .iter()
+                    .filter_map(crate::validate::field_span)
+                    .fold(0u16, |m, (lsb, width)| {
+                        m | ((((1u32 << width) - 1) << lsb) as u16)
+                    });
+                !mask
+            }
+            _ => 0,
+        };
+        WriteRuleFigures {
+            broadcast,
+            rtu,
+            tcp,
+            addresses,
+            raw: r.raw_envelope(),
+            reserved,
+        }
+    }
+}
+
+impl Register {
+    /// The union of the raw ranges the map gives this register under any model variant and
+    /// any case of a selected scale; the word's range where a conversion has none (relative
+    /// scales, bit fields, limits that are not whole increments).
+    pub fn raw_envelope(&self) -> RawLimits {
+        let word = RawLimits::word(self.def.signed);
+        let one = Dec {
+            mantissa: 1,
+            exponent: 0,
+        };
+        let mut ranges = Vec::new();
+        let variant_ranges = |factor: Dec, ranges: &mut Vec<RawLimits>| {
+            ranges.push(
+                self.raw_limits(factor, self.def.min, self.def.max)
+                    .unwrap_or(word),
+            );
+            for k in self.def.by_variant.keys() {
+                let (min, max) = self.limits_for(k);
+                ranges.push(self.raw_limits(factor, min, max).unwrap_or(word));
+            }
+        };
+        match self.kind() {
+            ValueKind::Bits(_) | ValueKind::Quantity(Scale::Relative(_)) => ranges.push(word),
+            ValueKind::Enum(values) => {
+                for v in values {
+                    let code = i128::from(v.value);
+                    ranges.push(RawLimits {
+                        min: code,
+                        max: code,
+                    });
+                }
+                if self.def.min.is_some() || self.def.max.is_some() {
+                    ranges.push(RawLimits {
+                        min: self.def.min.map_or(0, |m| m as i128),
+                        max: self.def.max.map_or(i128::from(u16::MAX), |m| m as i128),
+                    });
+                }
+            }
+            ValueKind::Quantity(Scale::Selected(sel)) => {
+                for case in &sel.cases {
+                    match &case.scale {
+                        Scale::Factor(f) => {
+                            let factor = Dec::from_f64(*f).unwrap_or(one);
+                            ranges
+                                .push(self.raw_limits(factor, case.min, case.max).unwrap_or(word));
+                        }
+                        _ => ranges.push(word),
+                    }
+                }
+            }
+            _ => variant_ranges(self.factor().unwrap_or(one), &mut ranges),
+        }
+        let min = ranges.iter().map(|l| l.min).min().unwrap_or(word.min);
+        let max = ranges.iter().map(|l| l.max).max().unwrap_or(word.max);
+        RawLimits {
+            min: min.max(word.min),
+            max: max.min(word.max),
+        }
+    }
+}
+
 /// The scales of a register: its own, and those of each selected case.
 pub fn scales_of(r: &Register) -> Vec<&Scale> {
     match &r.def.scale {

@@ -6,7 +6,7 @@
 //! [`drivemap_runtime::scale`]; a test in `tests/` compares them register by register.
 
 pub mod codec;
-mod intern;
+pub mod intern;
 pub mod lookup;
 pub mod profile;
 pub mod settings;

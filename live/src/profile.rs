@@ -4,12 +4,14 @@
 //! makes one profile per drive for the life of the process, so leaking it is the honest
 //! lifetime: [`leak_profile`] is called once per loaded map.
 
-use drivemap_codegen::ir::Drive;
-use drivemap_codegen::model::CommandKind;
+use drivemap_codegen::ir::{BroadcastUse, Drive};
+use drivemap_codegen::model::{Access, CommandKind};
 use drivemap_runtime::profile::{
     AddressOffsets, BroadcastInfo, CommandInfo, CommandKind as RtCommandKind, ExceptionInfo,
     Profile, Timing,
 };
+use drivemap_runtime::scale::RawRange;
+use drivemap_runtime::{Access as RtAccess, Broadcast, Transports, WriteRule};
 
 use crate::intern::intern as leak_str;
 
@@ -47,6 +49,37 @@ pub fn leak_profile(drive: &Drive) -> &'static Profile {
             source: leak_str(&c.source),
         })
         .collect();
+    let writes = drive
+        .registers
+        .iter()
+        .filter(|r| r.writable())
+        .map(|r| {
+            let w = drive.write_rule(r);
+            WriteRule {
+                register: leak_str(r.id()),
+                access: match r.access {
+                    Access::Read => RtAccess::Read,
+                    Access::Write => RtAccess::Write,
+                    Access::ReadWrite => RtAccess::ReadWrite,
+                },
+                broadcast: match w.broadcast {
+                    BroadcastUse::No => Broadcast::No,
+                    BroadcastUse::Also => Broadcast::Also,
+                    BroadcastUse::Only => Broadcast::Only,
+                },
+                transports: Transports {
+                    rtu: w.rtu,
+                    tcp: w.tcp,
+                },
+                addresses: leak_slice(w.addresses),
+                raw: RawRange {
+                    min: w.raw.min as i64,
+                    max: w.raw.max as i64,
+                },
+                reserved: w.reserved,
+            }
+        })
+        .collect();
     let t = drive.timing_figures();
     let (rtu, tcp) = drive.address_offsets();
     let profile = Profile {
@@ -73,6 +106,7 @@ pub fn leak_profile(drive: &Drive) -> &'static Profile {
             char_bits: t.char_bits,
         },
         eeprom_write_endurance: p.eeprom.as_ref().map(|e| e.endurance),
+        writes: leak_slice(writes),
     };
     Box::leak(Box::new(profile))
 }

@@ -9,9 +9,10 @@ use std::time::{Duration, Instant};
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 
 use crate::client::{
-    Checked, ClientOptions, Core, MAX_SET, Wait, client_methods, io_error, read_request,
+    Checked, ClientOptions, Core, MAX_SET, Purpose, Wait, client_methods, io_error, read_request,
 };
 use crate::error::{Error, Refusal};
+use crate::gate::{WriteRule, WriteTarget};
 use crate::pdu::{Request, Words};
 use crate::persist::PersistBudget;
 use crate::profile::{CommandKind, Profile, TransportKind};
@@ -230,10 +231,10 @@ impl<T: AsyncTransport> AsyncClient<T> {
         slave: u8,
         request: Request<'_>,
         out: &mut [u16],
-        command: bool,
+        purpose: Purpose<'_>,
         retries: u8,
     ) -> Result<(), Error> {
-        let checked = self.core.check(slave, request, command)?;
+        let checked = self.core.check(slave, request, purpose)?;
         let attempts = retries.saturating_add(1);
         for attempt in 1..=attempts {
             let framing = self.core.encode(&checked)?;

@@ -18,6 +18,7 @@ use std::time::{Duration, Instant};
 
 use crate::error::{Error, Refusal, Sent};
 use crate::exception::Exception;
+use crate::gate::{self, WriteRule, WriteTarget};
 use crate::pdu::{FrameError, Request, Response, Words, function};
 use crate::persist::PersistBudget;
 use crate::profile::{CommandInfo, CommandKind, Profile, TransportKind};
@@ -68,6 +69,18 @@ pub(crate) struct Core {
     idle_since: Option<Instant>,
 }
 
+/// Why a request is sent: what [`Core::check`] checks it against.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Purpose<'a> {
+    /// A read or a loop-back: the profile's protocol rules.
+    Read,
+    /// A write: the protocol rules and the write gate.
+    Write(WriteTarget<'a>),
+    /// A write of a profile command (ENTER, ACCEPT, save): the protocol rules; the command's
+    /// registers are the profile's.
+    Command,
+}
+
 /// A request checked and mapped to the wire.
 pub(crate) struct Checked<'a> {
     pub(crate) request: Request<'a>,
@@ -93,13 +106,16 @@ impl Core {
         }
     }
 
-    /// Checks `request` (communication addresses) against the profile and maps it to the PDU.
+    /// Checks `request` (communication addresses) against the profile, and a write against the
+    /// map's rule for its register ([`gate::check`]), and maps it to the PDU. Every request of
+    /// both clients passes here.
     pub(crate) fn check<'a>(
         &self,
         slave: u8,
         request: Request<'a>,
-        command: bool,
+        purpose: Purpose<'_>,
     ) -> Result<Checked<'a>, Refusal> {
+        let command = matches!(purpose, Purpose::Command);
         let p = self.profile;
         let f = request.function();
         if !p.supports(f) {
@@ -161,6 +177,17 @@ impl Core {
                         name: c.name,
                     });
                 }
+            }
+        }
+        if let (Purpose::Write(target), Some(a)) = (purpose, address) {
+            match &request {
+                Request::WriteSingle { value, .. } => {
+                    gate::check(p, self.kind, slave, target, a, [*value])?
+                }
+                Request::WriteMultiple { values, .. } => {
+                    gate::check(p, self.kind, slave, target, a, values.iter())?
+                }
+                _ => {}
             }
         }
         let pdu_address = match address {
@@ -485,17 +512,42 @@ macro_rules! client_methods {
             slave,
             read_request(table, address, out.len()),
             out,
-            false,
+            Purpose::Read,
             retries,
         ) $($aw)*
     }
 
-    /// Writes one register (06h, or 10h where the drive lacks 06h). Slave 0 broadcasts.
+    /// Writes one register by communication address (06h, or 10h where the drive lacks 06h).
+    /// Slave 0 broadcasts. The address must hold a writable register of the profile's write
+    /// table that allows `value` on this link ([`gate`](crate::gate)).
     pub $($asy)* fn write_register(&mut self, slave: u8, address: u16, value: u16) -> Result<(), Error> {
+        self.write_single(slave, WriteTarget::Addresses, address, value) $($aw)*
+    }
+
+    /// Writes the raw word of the register `rule` describes at `address` (its address under
+    /// the settings in force), through the write gate: for tools that interpret a map at run
+    /// time. Applications use [`write`](Self::write), which encodes and finds the rule itself.
+    pub $($asy)* fn write_rule(
+        &mut self,
+        slave: u8,
+        rule: &WriteRule,
+        address: u16,
+        raw: u16,
+    ) -> Result<(), Error> {
+        self.write_single(slave, WriteTarget::Rule(rule), address, raw) $($aw)*
+    }
+
+    $($asy)* fn write_single(
+        &mut self,
+        slave: u8,
+        target: WriteTarget<'_>,
+        address: u16,
+        value: u16,
+    ) -> Result<(), Error> {
         let value = [value];
         let request = self.core.single_write(address, &value);
         let retries = self.core.options.retries;
-        self.transact(slave, request, &mut [], false, retries) $($aw)*
+        self.transact(slave, request, &mut [], Purpose::Write(target), retries) $($aw)*
     }
 
     /// Writes consecutive registers (10h). Slave 0 broadcasts.
@@ -510,13 +562,13 @@ macro_rules! client_methods {
             values: Words::Native(values),
         };
         let retries = self.core.options.retries;
-        self.transact(slave, request, &mut [], false, retries) $($aw)*
+        self.transact(slave, request, &mut [], Purpose::Write(WriteTarget::Addresses), retries) $($aw)*
     }
 
     /// Loop-back test (08h, sub-function 0000h): the drive must return `data`.
     pub $($asy)* fn loop_back(&mut self, slave: u8, data: u16) -> Result<(), Error> {
         let retries = self.core.options.retries;
-        self.transact(slave, Request::LoopBack { data }, &mut [], false, retries) $($aw)*
+        self.transact(slave, Request::LoopBack { data }, &mut [], Purpose::Read, retries) $($aw)*
     }
 
     /// Reads the parameters the drive's conversions depend on (`S::DEPENDENCIES`: scale
@@ -555,10 +607,9 @@ macro_rules! client_methods {
         value: &R::Value,
         settings: &R::Settings,
     ) -> Result<(), Error> {
-        self.core.on_transport::<R>()?;
         let raw = R::encode(value, settings)?;
         let address = R::address(settings, self.core.kind);
-        self.write_register(slave, address, raw) $($aw)*
+        self.write_rule(slave, &R::RULE, address, raw) $($aw)*
     }
 
     /// Read-modify-write: reads the register, lets `change` edit the typed value, writes it back.
@@ -643,7 +694,7 @@ macro_rules! client_methods {
         for &(address, value) in command.writes {
             let value = [value];
             let request = self.core.single_write(address, &value);
-            self.transact(slave, request, &mut [], true, retries) $($aw)*?;
+            self.transact(slave, request, &mut [], Purpose::Command, retries) $($aw)*?;
         }
         Ok(())
     }
@@ -712,10 +763,10 @@ impl<T: Transport> Client<T> {
         slave: u8,
         request: Request<'_>,
         out: &mut [u16],
-        command: bool,
+        purpose: Purpose<'_>,
         retries: u8,
     ) -> Result<(), Error> {
-        let checked = self.core.check(slave, request, command)?;
+        let checked = self.core.check(slave, request, purpose)?;
         let attempts = retries.saturating_add(1);
         for attempt in 1..=attempts {
             let framing = self.core.encode(&checked)?;

@@ -140,6 +140,45 @@ pub enum Refusal {
     /// Bits outside a bit-field register's fields.
     #[error("{register}: bits {bits:04X}h are reserved")]
     ReservedBits { register: &'static str, bits: u16 },
+    /// A write to a register the manual makes read-only.
+    #[error("{register} is read-only")]
+    ReadOnly { register: &'static str },
+    /// A broadcast-only register addressed to one slave.
+    #[error("{register} is a broadcast register: it is written to slave 0 only")]
+    BroadcastOnly { register: &'static str },
+    /// A register a broadcast may not write, addressed to slave 0.
+    #[error(
+        "{drive} does not accept {register} in a broadcast: slave 0 addresses the broadcast registers, which have their own layout"
+    )]
+    NotBroadcast {
+        drive: &'static str,
+        register: &'static str,
+    },
+    /// A register written at an address it does not occupy.
+    #[error("{register} is not at {address:04X}h")]
+    NotAtAddress {
+        register: &'static str,
+        address: u16,
+    },
+    /// A raw write to an address where the map has no writable register on this link.
+    #[error(
+        "{drive} has no writable register at {address:04X}h on {transport:?}{}",
+        if *broadcast { " in the broadcast space" } else { "" }
+    )]
+    NoWritableRegister {
+        drive: &'static str,
+        address: u16,
+        transport: crate::profile::TransportKind,
+        broadcast: bool,
+    },
+    /// A word outside every range the map gives the register.
+    #[error("{register}: raw value {raw} is outside {min} ..= {max}, the map's range for it")]
+    RawOutOfRange {
+        register: &'static str,
+        raw: i64,
+        min: i64,
+        max: i64,
+    },
 }
 
 /// An error of a client call.

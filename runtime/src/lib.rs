@@ -20,6 +20,7 @@ pub mod crc;
 pub mod error;
 pub mod exception;
 pub mod fault;
+pub mod gate;
 pub mod pdu;
 pub mod persist;
 pub mod planner;
@@ -35,6 +36,7 @@ pub mod typed;
 
 pub use client::{Client, ClientOptions};
 pub use error::{Error, Refusal};
+pub use gate::{Broadcast, Transports, WriteRule};
 pub use profile::Profile;
 pub use register::{
     Access, BitRegister, Bits, Code, DriveSettings, Readable, Register, RegisterInfo, Table,

@@ -5,6 +5,8 @@
 //! a register the manual does not allow), to name the drive's own exception codes, and to map the
 //! manual's communication addresses to PDU addresses per transport.
 
+use crate::gate::WriteRule;
+
 /// How a transport frames Modbus PDUs. Address offsets and some rules differ per kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum TransportKind {
@@ -167,6 +169,9 @@ pub struct Profile {
     pub timing: Timing,
     /// Manufacturer's stated endurance of the parameter memory, in writes, if given.
     pub eeprom_write_endurance: Option<u32>,
+    /// What the map allows for each writable register, for the write gate
+    /// ([`crate::gate`]). Empty: no register table, only the protocol is checked.
+    pub writes: &'static [WriteRule],
 }
 
 impl Profile {
@@ -188,6 +193,7 @@ impl Profile {
         address_offsets: AddressOffsets { rtu: 0, tcp: 0 },
         timing: Timing::MODBUS,
         eeprom_write_endurance: None,
+        writes: &[],
     };
 
     /// Whether the drive implements `function`.
@@ -198,6 +204,11 @@ impl Profile {
     /// The drive's own description of an exception code, if its manual defines one.
     pub fn exception(&self, code: u8) -> Option<&ExceptionInfo> {
         self.exceptions.iter().find(|e| e.code == code)
+    }
+
+    /// The write rule of a register by its map identifier.
+    pub fn write_rule(&self, register: &str) -> Option<&WriteRule> {
+        self.writes.iter().find(|w| w.register == register)
     }
 
     /// A command by its map identifier.

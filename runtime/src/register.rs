@@ -80,6 +80,10 @@ pub trait Writable: Register {
     /// cannot know the drive's state; the simulator enforces it.
     const WRITE_RESTRICTION: WriteRestriction = WriteRestriction::None;
 
+    /// What the map allows on the wire for this register: transports, broadcast space,
+    /// addresses, raw range, reserved bits. Every write passes [`crate::gate::check`] with it.
+    const RULE: crate::gate::WriteRule;
+
     /// Encodes a value for the wire, checking it against the register's range first. A value
     /// that is out of range, not finite, or an unknown enumeration code is refused here and never
     /// reaches the wire.

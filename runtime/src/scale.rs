@@ -124,7 +124,7 @@ pub const fn int_to_word(raw: i64) -> u16 {
 }
 
 /// Limits of a register in raw integers, with the engineering values for messages.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RawRange {
     pub min: i64,
     pub max: i64,

@@ -9,9 +9,10 @@ use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::fault::{Fault, FaultyLink};
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::register::{BitRegister, Bits, Readable, Register, Table, Writable};
+use drivemap_runtime::register::{Access, BitRegister, Bits, Readable, Register, Table, Writable};
 use drivemap_runtime::scale::{self, Decimal, RawRange, ValueError};
 use drivemap_runtime::slave::SimulatedSlave;
+use drivemap_runtime::{Broadcast, Transports, WriteRule};
 
 use common::{ACN, J7, V7, strict};
 
@@ -80,6 +81,18 @@ register!(
     |raw, _| Ok(Command::from_bits(raw))
 );
 impl Writable for OperationCommand {
+    const RULE: WriteRule = WriteRule {
+        register: "operation_command",
+        access: Access::ReadWrite,
+        broadcast: Broadcast::No,
+        transports: Transports::ALL,
+        addresses: &[0x0001],
+        raw: RawRange {
+            min: 0,
+            max: 0xFFFF,
+        },
+        reserved: 0xF800,
+    };
     fn encode(value: &Command, _: &Settings) -> Result<u16, ValueError> {
         Ok(value.bits() & 0x07FF)
     }
@@ -102,6 +115,15 @@ register!(
     }
 );
 impl Writable for FrequencyReference {
+    const RULE: WriteRule = WriteRule {
+        register: "frequency_reference",
+        access: Access::ReadWrite,
+        broadcast: Broadcast::No,
+        transports: Transports::ALL,
+        addresses: &[0x0002],
+        raw: RawRange { min: 0, max: 40000 },
+        reserved: 0,
+    };
     fn encode(value: &f64, s: &Settings) -> Result<u16, ValueError> {
         let scale = frequency_scale(Self::ID, s)?;
         // 0-400 Hz in either unit.

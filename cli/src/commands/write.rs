@@ -6,7 +6,9 @@ use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::Register;
 use drivemap_live::codec::{self, InputError};
-use drivemap_runtime::ValueError;
+use drivemap_live::intern::intern;
+use drivemap_runtime::gate;
+use drivemap_runtime::{Profile, Refusal, ValueError};
 
 use crate::describe;
 use crate::live::Target;
@@ -27,6 +29,16 @@ pub struct Args {
     pub persist: Option<String>,
 }
 
+/// A refusal of the write gate, naming the register as the map prints it; nothing was sent.
+fn refused(r: &Register, e: &Refusal) -> String {
+    let hint = match e {
+        Refusal::BroadcastOnly { .. } => "; write it with --slave 0",
+        Refusal::NotOnTransport { .. } => "; it is not on this link",
+        _ => "",
+    };
+    format!("{}: {e}{hint}; nothing written", describe::register(r))
+}
+
 fn input_error(drive: &Drive, e: &InputError) -> String {
     match e {
         InputError::Value(v) => value_error(drive, v),
@@ -37,6 +49,12 @@ fn input_error(drive: &Drive, e: &InputError) -> String {
 /// Checks every assignment, then writes them in order; exits 1 when the drive refused one.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let drive = args.target.load()?;
+    let profile = drivemap_live::leak_profile(&drive);
+    execute(&drive, profile, &args)
+}
+
+/// [`run`] with the map loaded and its run-time profile built.
+pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<ExitCode, String> {
     let mut pairs: Vec<(&Register, String)> = Vec::new();
     let mut errors = Vec::new();
     for a in &args.assignments {
@@ -44,7 +62,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             errors.push(format!("`{a}` is not REGISTER=VALUE"));
             continue;
         };
-        match drivemap_live::lookup::find(&drive, name.trim()) {
+        match drivemap_live::lookup::find(drive, name.trim()) {
             Ok(r) => pairs.push((r, value.trim().to_owned())),
             Err(e) => errors.push(e.to_string()),
         }
@@ -52,17 +70,14 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     if !errors.is_empty() {
         return Err(errors.join("\n"));
     }
-    let slave = args.target.link.slave(&drive);
+    let slave = args.target.link.slave(drive);
+    let kind = args.target.link.kind();
+    // The write gate's link checks (access, transport, broadcast space), before connecting;
+    // the client repeats the whole gate before each write is framed.
     for (r, _) in &pairs {
-        if !r.writable() {
-            return Err(format!("{} is read-only", describe::register(r)));
-        }
-        if r.broadcast && slave != 0 {
-            return Err(format!(
-                "{} is broadcast-only: write it with --slave 0",
-                describe::register(r)
-            ));
-        }
+        gate::rule(profile, intern(r.id()))
+            .and_then(|rule| gate::check_link(profile, kind, slave, rule))
+            .map_err(|e| refused(r, &e))?;
     }
     if let Some(id) = &args.persist {
         if !drive.protocol.commands.iter().any(|c| &c.id == id) {
@@ -83,35 +98,57 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             ));
         }
     }
-    let given = args.target.settings.resolve(&drive)?;
+    let given = args.target.settings.resolve(drive)?;
     // Refuse what cannot be written before connecting; values that need settings from the
     // drive are checked once those are read.
     for (r, value) in &pairs {
-        match codec::parse_value(&drive, r, value, &given.settings) {
+        match codec::parse_value(drive, r, value, &given.settings) {
             Ok(_) | Err(InputError::Value(ValueError::MissingSetting { .. })) => {}
-            Err(e) => return Err(input_error(&drive, &e)),
+            Err(e) => return Err(input_error(drive, &e)),
         }
     }
     let regs: Vec<&Register> = pairs.iter().map(|(r, _)| *r).collect();
-    let mut session = Session::open(&drive, &args.target.link, given.settings)?;
+    let mut session = Session::open_with(drive, profile, &args.target.link, given.settings)?;
     for w in session.load_dependencies(&regs, &given.fixed) {
         eprintln!("warning: {w}");
     }
     let mut raws = Vec::new();
     for (r, value) in &pairs {
-        let raw = codec::parse_value(&drive, r, value, &session.settings)
-            .map_err(|e| format!("{}; nothing written", input_error(&drive, &e)))?;
+        let raw = codec::parse_value(drive, r, value, &session.settings)
+            .map_err(|e| format!("{}; nothing written", input_error(drive, &e)))?;
         raws.push(raw);
     }
+    // The whole gate for every assignment before the first is sent: all or nothing.
+    let mut writes = Vec::new();
     for ((r, _), raw) in pairs.iter().zip(raws) {
         let address = session.address(r);
+        let rule = gate::rule(profile, intern(r.id()))
+            .and_then(|rule| {
+                gate::check(
+                    profile,
+                    kind,
+                    slave,
+                    gate::WriteTarget::Rule(rule),
+                    address,
+                    [raw],
+                )
+                .map(|()| rule)
+            })
+            .map_err(|e| refused(r, &e))?;
+        writes.push((*r, rule, address, raw));
+    }
+    for (r, rule, address, raw) in writes {
         let shown = session
             .decode(r, raw)
             .map(|v| v.to_string())
             .unwrap_or_else(|_| format!("{raw}"));
-        if let Err(e) = session.client.write_register(session.slave, address, raw) {
-            eprintln!("drivemap: {e}");
-            return Ok(ExitCode::FAILURE);
+        match session.client.write_rule(session.slave, rule, address, raw) {
+            Ok(()) => {}
+            Err(drivemap_runtime::Error::Refused(e)) => return Err(refused(r, &e)),
+            Err(e) => {
+                eprintln!("drivemap: {e}");
+                return Ok(ExitCode::FAILURE);
+            }
         }
         println!(
             "wrote {} = {shown} ({raw:04X}h) at {}",

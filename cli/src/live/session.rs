@@ -12,7 +12,7 @@ use drivemap_live::{LiveSettings, leak_profile, lookup};
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Access as RtAccess, RegisterInfo, Table, ValueError};
+use drivemap_runtime::{Access as RtAccess, Profile, RegisterInfo, Table, ValueError};
 
 use super::link::{LinkArgs, LiveClient};
 use crate::describe;
@@ -344,7 +344,17 @@ pub struct Session<'d> {
 impl<'d> Session<'d> {
     /// Connects to the drive described by `drive`.
     pub fn open(drive: &'d Drive, link: &LinkArgs, settings: LiveSettings) -> Result<Self, String> {
-        let profile = leak_profile(drive);
+        Self::open_with(drive, leak_profile(drive), link, settings)
+    }
+
+    /// [`Session::open`] with the drive's run-time profile already built (it is leaked: build
+    /// it once per map).
+    pub fn open_with(
+        drive: &'d Drive,
+        profile: &'static Profile,
+        link: &LinkArgs,
+        settings: LiveSettings,
+    ) -> Result<Self, String> {
         let (client, text) = link.connect(drive, profile)?;
         Ok(Session {
             drive,

@@ -62,6 +62,10 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
         None => quote!(None),
     };
     let endurance = opt_u32(p.eeprom.as_ref().map(|e| e.endurance));
+    let writes = drive.registers.iter().filter(|r| r.writable()).map(|r| {
+        let marker = super::ident(&crate::names::register_type(r));
+        quote!(<#marker as #rt::Writable>::RULE)
+    });
     quote! {
         /// The protocol profile: what the drive accepts on the wire, per its manual.
         pub static PROFILE: #rt::Profile = #rt::Profile {
@@ -88,6 +92,7 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
                 char_bits: #char_bits,
             },
             eeprom_write_endurance: #endurance,
+            writes: &[#(#writes),*],
         };
     }
 }

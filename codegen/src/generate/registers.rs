@@ -7,7 +7,7 @@ use quote::quote;
 
 use super::settings::{selector_code, setting_label};
 use super::{bitfields, docs, enums, hex, ident, opt_str};
-use crate::ir::{Drive, RawLimits, Register, ValueKind};
+use crate::ir::{BroadcastUse, Drive, RawLimits, Register, ValueKind};
 use crate::model::{
     Access, Condition, ModbusTable, Reference, Scale, TransportName, WriteRestriction,
 };
@@ -48,6 +48,37 @@ fn info(r: &Register, rt: &TokenStream) -> TokenStream {
     let t = table(r.table, rt);
     let b = r.broadcast;
     quote!(#rt::RegisterInfo { id: #id, param: #param, name: #name, address: #addr, access: #access, table: #t, broadcast_only: #b, source: #source })
+}
+
+/// The register's [`WriteRule`](crate::ir::WriteRuleFigures), as decided by the IR.
+fn write_rule(drive: &Drive, r: &Register, rt: &TokenStream) -> TokenStream {
+    let w = drive.write_rule(r);
+    let id = &r.def.id;
+    let access = match r.access {
+        Access::Read => quote!(#rt::Access::Read),
+        Access::Write => quote!(#rt::Access::Write),
+        Access::ReadWrite => quote!(#rt::Access::ReadWrite),
+    };
+    let broadcast = match w.broadcast {
+        BroadcastUse::No => quote!(#rt::Broadcast::No),
+        BroadcastUse::Also => quote!(#rt::Broadcast::Also),
+        BroadcastUse::Only => quote!(#rt::Broadcast::Only),
+    };
+    let (rtu, tcp) = (w.rtu, w.tcp);
+    let addresses = w.addresses.iter().map(|a| hex(*a));
+    let raw = raw_range(w.raw, rt);
+    let reserved = hex(w.reserved);
+    quote! {
+        #rt::WriteRule {
+            register: #id,
+            access: #access,
+            broadcast: #broadcast,
+            transports: #rt::Transports { rtu: #rtu, tcp: #tcp },
+            addresses: &[#(#addresses),*],
+            raw: #raw,
+            reserved: #reserved,
+        }
+    }
 }
 
 fn lit_i(v: i128) -> Literal {
@@ -332,9 +363,11 @@ fn register(drive: &Drive, r: &Register, rt: &TokenStream) -> TokenStream {
             WriteRestriction::Stopped => quote!(#rt::WriteRestriction::Stopped),
             WriteRestriction::PrgMode => quote!(#rt::WriteRestriction::PrgMode),
         };
+        let rule = write_rule(drive, r, rt);
         quote! {
             impl #rt::Writable for #marker {
                 const WRITE_RESTRICTION: #rt::WriteRestriction = #restriction;
+                const RULE: #rt::WriteRule = #rule;
 
                 fn encode(value: &#value, settings: &Settings) -> Result<u16, #rt::ValueError> {
                     #encode

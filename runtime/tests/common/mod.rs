@@ -66,6 +66,7 @@ pub static V7: Profile = Profile {
         ..Timing::MODBUS
     },
     eeprom_write_endurance: Some(100_000),
+    writes: &[],
 };
 
 /// The ACN's addressing: RTU PDU address = communication address - 1 (its example writes
@@ -101,6 +102,7 @@ pub static ACN: Profile = Profile {
         ..Timing::MODBUS
     },
     eeprom_write_endurance: None,
+    writes: &[],
 };
 
 /// The VS mini J7: no 06h (`003_8bcf5d50afb8e230.txt:226-231`).

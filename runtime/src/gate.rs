@@ -1,0 +1,237 @@
+//! The one gate before the wire for writes.
+//!
+//! Every write a client sends — typed ([`Client::write`](crate::Client::write)), by rule from a
+//! map interpreted at run time ([`Client::write_rule`](crate::Client::write_rule)), by raw
+//! address ([`Client::write_register`](crate::Client::write_register)), from the blocking or the
+//! async client — is checked by [`check`] after the protocol checks of the profile (function,
+//! slave range, quantity, broadcast function and addresses, command registers) and before a byte
+//! is framed. A tool can call [`check`] itself to refuse early; the client calls it again anyway.
+//!
+//! What the map allows for one register is a [`WriteRule`]: generated as
+//! [`Writable::RULE`](crate::Writable::RULE) for every writable register and collected in
+//! [`Profile::writes`](crate::Profile::writes). The gate refuses
+//! - a register that is read-only ([`Refusal::ReadOnly`]);
+//! - a register the map lists for other transports only ([`Refusal::NotOnTransport`]): the V7's
+//!   RTU command register 0001h is the Modbus TCP option card's digital-input register;
+//! - a broadcast-only register sent to one slave, or a register the drive does not let a
+//!   broadcast write sent to slave 0 (on the V7 that address is, in the broadcast space, another
+//!   register with another bit layout) ([`Refusal::BroadcastOnly`], [`Refusal::NotBroadcast`]);
+//! - an address the register does not occupy ([`Refusal::NotAtAddress`]), or, for a raw write,
+//!   an address where no writable register of the map is ([`Refusal::NoWritableRegister`]);
+//! - a word outside every range the map gives the register, or with reserved bits set
+//!   ([`Refusal::RawOutOfRange`], [`Refusal::ReservedBits`]).
+//!
+//! The raw range of a rule is the envelope of the register's ranges over every model variant
+//! and every case of a selected scale. The exact range for the settings in force is checked when
+//! a value is encoded ([`Writable::encode`](crate::Writable::encode), or the run-time codec), so
+//! a value is checked twice and the gate alone never lets through a word the map allows for no
+//! setting at all.
+
+use crate::error::Refusal;
+use crate::profile::{Profile, TransportKind};
+use crate::register::Access;
+use crate::rtu;
+use crate::scale::RawRange;
+
+/// The transports a register exists on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Transports {
+    /// Modbus RTU framing: serial lines and RTU over TCP.
+    pub rtu: bool,
+    /// Modbus TCP (MBAP).
+    pub tcp: bool,
+}
+
+impl Transports {
+    /// Every transport.
+    pub const ALL: Transports = Transports {
+        rtu: true,
+        tcp: true,
+    };
+
+    /// Whether a register with these transports exists on `kind`.
+    pub const fn contains(self, kind: TransportKind) -> bool {
+        match kind {
+            TransportKind::Rtu | TransportKind::RtuOverTcp => self.rtu,
+            TransportKind::Tcp => self.tcp,
+        }
+    }
+}
+
+/// Whether a register may be written to slave 0 (broadcast).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Broadcast {
+    /// An ordinary register. Where the drive lists the registers a broadcast may write
+    /// ([`BroadcastInfo::addresses`](crate::profile::BroadcastInfo::addresses) not empty), it is
+    /// not one of them; where the list is empty, any writable register may be broadcast.
+    No,
+    /// An ordinary register that the manual also lets a broadcast write (TDS-V8 0001h/0002h).
+    Also,
+    /// Only reachable as a broadcast, in the drive's broadcast address space with its own
+    /// layout (V7 and GPD 515 broadcast registers 0001h/0002h).
+    Only,
+}
+
+/// What the map allows when writing one register.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WriteRule {
+    /// Register id in the map.
+    pub register: &'static str,
+    /// Access as the manual states it.
+    pub access: Access,
+    /// Whether the register may be written as a broadcast (slave 0).
+    pub broadcast: Broadcast,
+    /// Transports the register exists on.
+    pub transports: Transports,
+    /// Every communication address the register may occupy (its own first, then those it
+    /// moves to with a setting, a variant or the transport).
+    pub addresses: &'static [u16],
+    /// Raw values the map allows under some variant and selector case (a signed register's
+    /// words are read as `i16`).
+    pub raw: RawRange,
+    /// Bits that must be 0 (reserved bits of a bit-field register).
+    pub reserved: u16,
+}
+
+/// What a write is addressed to.
+#[derive(Debug, Clone, Copy)]
+pub enum WriteTarget<'a> {
+    /// A register whose rule the caller has: the typed API and map interpreters.
+    Rule(&'a WriteRule),
+    /// Raw addresses: each must be a writable register of [`Profile::writes`] that allows its
+    /// word. A profile with no write table (such as [`Profile::GENERIC`]) checks only the
+    /// protocol.
+    Addresses,
+}
+
+/// Checks a write of `words` starting at communication address `address` to `slave` over
+/// `kind` against the map. Nothing is sent; see the module documentation for what is refused.
+pub fn check(
+    profile: &Profile,
+    kind: TransportKind,
+    slave: u8,
+    target: WriteTarget<'_>,
+    address: u16,
+    words: impl IntoIterator<Item = u16>,
+) -> Result<(), Refusal> {
+    for (i, word) in words.into_iter().enumerate() {
+        let at = address.wrapping_add(i as u16);
+        match target {
+            WriteTarget::Rule(rule) => check_rule(profile, kind, slave, rule, at, word)?,
+            WriteTarget::Addresses if profile.writes.is_empty() => {}
+            WriteTarget::Addresses => check_address(profile, kind, slave, at, word)?,
+        }
+    }
+    Ok(())
+}
+
+/// Whether a broadcast to this drive writes only the registers it lists.
+fn listed_broadcast(profile: &Profile) -> bool {
+    profile.broadcast.is_some_and(|b| !b.addresses.is_empty())
+}
+
+/// Whether `rule`'s register may be addressed as `slave`.
+fn space(profile: &Profile, slave: u8, rule: &WriteRule) -> Result<(), Refusal> {
+    let register = rule.register;
+    match (slave == rtu::BROADCAST, rule.broadcast) {
+        (false, Broadcast::Only) => Err(Refusal::BroadcastOnly { register }),
+        (true, Broadcast::No) if listed_broadcast(profile) => Err(Refusal::NotBroadcast {
+            drive: profile.drive_id,
+            register,
+        }),
+        _ => Ok(()),
+    }
+}
+
+fn check_address(
+    profile: &Profile,
+    kind: TransportKind,
+    slave: u8,
+    address: u16,
+    word: u16,
+) -> Result<(), Refusal> {
+    let mut first_refusal = None;
+    for rule in profile.writes.iter().filter(|r| {
+        r.addresses.contains(&address)
+            && r.transports.contains(kind)
+            && space(profile, slave, r).is_ok()
+    }) {
+        match check_rule(profile, kind, slave, rule, address, word) {
+            Ok(()) => return Ok(()),
+            Err(e) => {
+                first_refusal.get_or_insert(e);
+            }
+        }
+    }
+    Err(first_refusal.unwrap_or(Refusal::NoWritableRegister {
+        drive: profile.drive_id,
+        address,
+        transport: kind,
+        broadcast: slave == rtu::BROADCAST,
+    }))
+}
+
+/// The write rule of the map's register `register`, or why it cannot be written at all (it is
+/// not in the write table: read-only).
+pub fn rule<'p>(profile: &'p Profile, register: &'static str) -> Result<&'p WriteRule, Refusal> {
+    profile
+        .write_rule(register)
+        .ok_or(Refusal::ReadOnly { register })
+}
+
+/// The part of the gate that does not depend on the address or the word: access, transport,
+/// broadcast space. A tool calls it before connecting to refuse early; [`check`] repeats it.
+pub fn check_link(
+    profile: &Profile,
+    kind: TransportKind,
+    slave: u8,
+    rule: &WriteRule,
+) -> Result<(), Refusal> {
+    let register = rule.register;
+    if !rule.access.writable() {
+        return Err(Refusal::ReadOnly { register });
+    }
+    if !rule.transports.contains(kind) {
+        return Err(Refusal::NotOnTransport {
+            register,
+            transport: kind,
+        });
+    }
+    space(profile, slave, rule)
+}
+
+fn check_rule(
+    profile: &Profile,
+    kind: TransportKind,
+    slave: u8,
+    rule: &WriteRule,
+    address: u16,
+    word: u16,
+) -> Result<(), Refusal> {
+    check_link(profile, kind, slave, rule)?;
+    let register = rule.register;
+    if !rule.addresses.contains(&address) {
+        return Err(Refusal::NotAtAddress { register, address });
+    }
+    let reserved = word & rule.reserved;
+    if reserved != 0 {
+        return Err(Refusal::ReservedBits {
+            register,
+            bits: reserved,
+        });
+    }
+    let raw = if rule.raw.min < 0 {
+        i64::from(word as i16)
+    } else {
+        i64::from(word)
+    };
+    if !rule.raw.contains(raw) {
+        return Err(Refusal::RawOutOfRange {
+            register,
+            raw,
+            min: rule.raw.min,
+            max: rule.raw.max,
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,272 @@
+//! The write gate: every write of the client, typed, by rule or by raw address, is checked
+//! against the map's rule for its register before anything is framed.
+//!
+//! The profile is a V7-like drive (`000_032dced3a1e91a75.txt`): the RTU run command at 0001h
+//! (Table 4.1), the Modbus TCP option card's digital-input command at 0001h on TCP only
+//! (Table 4.5), the broadcast operation signal at 0001h in the broadcast space (Table 4.2), the
+//! frequency reference at 0002h, and n001 at 0101h (0-4).
+
+mod common;
+
+use drivemap_runtime::client::Client;
+use drivemap_runtime::error::{Error, Refusal};
+use drivemap_runtime::fault::FaultyLink;
+use drivemap_runtime::gate::{self, WriteTarget};
+use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::register::Access;
+use drivemap_runtime::scale::RawRange;
+use drivemap_runtime::slave::SimulatedSlave;
+use drivemap_runtime::{Broadcast, Transports, WriteRule};
+
+const RUN_COMMAND: WriteRule = WriteRule {
+    register: "operation_command",
+    access: Access::ReadWrite,
+    broadcast: Broadcast::No,
+    transports: Transports {
+        rtu: true,
+        tcp: false,
+    },
+    addresses: &[0x0001],
+    raw: RawRange { min: 0, max: 65535 },
+    reserved: 0xF800,
+};
+const TCP_INPUTS: WriteRule = WriteRule {
+    register: "tcp_digital_input_command",
+    access: Access::ReadWrite,
+    broadcast: Broadcast::No,
+    transports: Transports {
+        rtu: false,
+        tcp: true,
+    },
+    addresses: &[0x0001],
+    raw: RawRange { min: 0, max: 65535 },
+    reserved: 0xFF80,
+};
+const BROADCAST_SIGNAL: WriteRule = WriteRule {
+    register: "broadcast_operation_signal",
+    access: Access::Write,
+    broadcast: Broadcast::Only,
+    transports: Transports::ALL,
+    addresses: &[0x0001],
+    raw: RawRange { min: 0, max: 65535 },
+    reserved: 0xCFC0,
+};
+const FREQUENCY: WriteRule = WriteRule {
+    register: "frequency_reference",
+    access: Access::ReadWrite,
+    broadcast: Broadcast::No,
+    transports: Transports::ALL,
+    addresses: &[0x0002],
+    raw: RawRange { min: 0, max: 40000 },
+    reserved: 0,
+};
+const N001: WriteRule = WriteRule {
+    register: "n001",
+    access: Access::ReadWrite,
+    broadcast: Broadcast::No,
+    transports: Transports::ALL,
+    addresses: &[0x0101],
+    raw: RawRange { min: 0, max: 4 },
+    reserved: 0,
+};
+
+static V7: Profile = Profile {
+    writes: &[RUN_COMMAND, TCP_INPUTS, BROADCAST_SIGNAL, FREQUENCY, N001],
+    ..common::V7
+};
+
+fn client(kind: TransportKind) -> Client<FaultyLink> {
+    Client::with_options(
+        FaultyLink::new(kind, SimulatedSlave::new(1, &V7)),
+        &V7,
+        common::strict(),
+    )
+}
+
+fn refusal(e: Error) -> Refusal {
+    match e {
+        Error::Refused(r) => r,
+        other => panic!("expected a refusal, got {other}"),
+    }
+}
+
+#[test]
+fn a_register_of_another_transport_is_refused_before_sending() {
+    let mut rtu = client(TransportKind::RtuOverTcp);
+    let e = refusal(rtu.write_rule(1, &TCP_INPUTS, 0x0001, 0x0001).unwrap_err());
+    assert_eq!(
+        e,
+        Refusal::NotOnTransport {
+            register: "tcp_digital_input_command",
+            transport: TransportKind::RtuOverTcp
+        }
+    );
+    let mut tcp = client(TransportKind::Tcp);
+    let e = refusal(tcp.write_rule(1, &RUN_COMMAND, 0x0001, 0x0001).unwrap_err());
+    assert!(matches!(
+        e,
+        Refusal::NotOnTransport {
+            register: "operation_command",
+            ..
+        }
+    ));
+    assert_eq!(rtu.transport().requests + tcp.transport().requests, 0);
+
+    // Each on its own transport goes through.
+    rtu.write_rule(1, &RUN_COMMAND, 0x0001, 0x0001).unwrap();
+    tcp.write_rule(1, &TCP_INPUTS, 0x0001, 0x0010).unwrap();
+    assert_eq!(rtu.transport().slave.holding(0x0001), 1);
+    assert_eq!(tcp.transport().slave.holding(0x0001), 0x0010);
+}
+
+#[test]
+fn broadcast_space_and_unicast_space_do_not_mix() {
+    let mut c = client(TransportKind::Rtu);
+    let e = refusal(c.write_rule(0, &RUN_COMMAND, 0x0001, 0x0001).unwrap_err());
+    assert_eq!(
+        e,
+        Refusal::NotBroadcast {
+            drive: "yaskawa-v7",
+            register: "operation_command"
+        }
+    );
+    let e = refusal(
+        c.write_rule(1, &BROADCAST_SIGNAL, 0x0001, 0x0001)
+            .unwrap_err(),
+    );
+    assert_eq!(
+        e,
+        Refusal::BroadcastOnly {
+            register: "broadcast_operation_signal"
+        }
+    );
+    assert_eq!(c.transport().requests, 0, "nothing refused was sent");
+    c.write_rule(0, &BROADCAST_SIGNAL, 0x0001, 0x0001).unwrap();
+    assert_eq!(c.transport().requests, 1);
+}
+
+#[test]
+fn words_outside_the_map_and_reserved_bits_are_refused() {
+    let mut c = client(TransportKind::Rtu);
+    let e = refusal(c.write_rule(1, &N001, 0x0101, 5).unwrap_err());
+    assert_eq!(
+        e,
+        Refusal::RawOutOfRange {
+            register: "n001",
+            raw: 5,
+            min: 0,
+            max: 4
+        }
+    );
+    let e = refusal(c.write_rule(1, &RUN_COMMAND, 0x0001, 0x8001).unwrap_err());
+    assert_eq!(
+        e,
+        Refusal::ReservedBits {
+            register: "operation_command",
+            bits: 0x8000
+        }
+    );
+    let e = refusal(c.write_rule(1, &N001, 0x0102, 1).unwrap_err());
+    assert_eq!(
+        e,
+        Refusal::NotAtAddress {
+            register: "n001",
+            address: 0x0102
+        }
+    );
+    assert_eq!(c.transport().requests, 0, "nothing refused was sent");
+    c.write_rule(1, &N001, 0x0101, 4).unwrap();
+    assert_eq!(c.transport().slave.holding(0x0101), 4);
+}
+
+#[test]
+fn raw_addresses_must_be_writable_registers_of_the_link() {
+    let mut tcp = client(TransportKind::Tcp);
+    // 0003h holds nothing writable; 0101h refuses 9; 10h over 0001h-0002h checks each word.
+    let e = refusal(tcp.write_register(1, 0x0003, 1).unwrap_err());
+    assert_eq!(
+        e,
+        Refusal::NoWritableRegister {
+            drive: "yaskawa-v7",
+            address: 0x0003,
+            transport: TransportKind::Tcp,
+            broadcast: false
+        }
+    );
+    let e = refusal(tcp.write_register(1, 0x0101, 9).unwrap_err());
+    assert!(matches!(
+        e,
+        Refusal::RawOutOfRange {
+            register: "n001",
+            raw: 9,
+            ..
+        }
+    ));
+    let e = refusal(
+        tcp.write_registers(1, 0x0001, &[0x0001, 40001])
+            .unwrap_err(),
+    );
+    assert!(matches!(
+        e,
+        Refusal::RawOutOfRange {
+            register: "frequency_reference",
+            ..
+        }
+    ));
+    // On TCP, 0001h is the option card's digital inputs, whose bit 7 up are reserved.
+    let e = refusal(tcp.write_register(1, 0x0001, 0x0100).unwrap_err());
+    assert!(matches!(
+        e,
+        Refusal::ReservedBits {
+            register: "tcp_digital_input_command",
+            ..
+        }
+    ));
+    assert_eq!(tcp.transport().requests, 0, "nothing refused was sent");
+    tcp.write_registers(1, 0x0001, &[0x0001, 6000]).unwrap();
+    assert_eq!(tcp.transport().requests, 1);
+
+    // Slave 0 addresses the broadcast space, where 0002h holds no register of this map.
+    let mut rtu = client(TransportKind::Rtu);
+    let e = refusal(rtu.write_register(0, 0x0002, 6000).unwrap_err());
+    assert!(matches!(
+        e,
+        Refusal::NoWritableRegister {
+            address: 2,
+            broadcast: true,
+            ..
+        }
+    ));
+    rtu.write_register(0, 0x0001, 0x0001).unwrap();
+}
+
+#[test]
+fn a_profile_without_a_write_table_checks_the_protocol_only() {
+    assert!(
+        gate::check(
+            &Profile::GENERIC,
+            TransportKind::Tcp,
+            1,
+            WriteTarget::Addresses,
+            0x1234,
+            [0xFFFF]
+        )
+        .is_ok()
+    );
+    assert_eq!(
+        gate::check(
+            &Profile::GENERIC,
+            TransportKind::Tcp,
+            1,
+            WriteTarget::Rule(&N001),
+            0x0101,
+            [7]
+        ),
+        Err(Refusal::RawOutOfRange {
+            register: "n001",
+            raw: 7,
+            min: 0,
+            max: 4
+        })
+    );
+}
