@@ -1,0 +1,537 @@
+//! Nothing reaches the wire that the map does not allow there, whatever `drivemap write` is
+//! asked.
+//!
+//! Every register of every shipped map, by every name form the CLI accepts (id, parameter
+//! number, printed name) and every value form (number, number with unit, enumeration id, code
+//! and printed meaning, bit fields by name, `field=value`, raw hex), legal and illegal values,
+//! to slave 1 and to slave 0 (broadcast), over Modbus TCP and RTU over TCP, through the CLI's own
+//! write command in-process (the same code as the binary; one map load per map instead of one
+//! per case). A simulated drive that executes every write it receives records what arrived; each
+//! arrival is checked against the map by rules written here from the IR, not by the gate, and
+//! so is each refusal: a write the map allows on that link and that needs no setting from the
+//! drive must arrive, exactly once.
+//!
+//! `write_gate_repros_as_reported` runs the binary itself on the three cases of the report.
+
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use clap::Parser;
+use drivemap_cli::commands::write;
+use drivemap_cli::{Cli, Command as Cmd};
+use drivemap_codegen::ir::{Drive, Register, ValueKind};
+use drivemap_codegen::model::{Scale, TransportName};
+use drivemap_codegen::validate::{Context, field_span};
+use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::slave::SimulatedSlave;
+use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
+use drivemap_runtime::transport::tcp::TcpTransport;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn shipped_maps() -> Vec<PathBuf> {
+    let maps = drivemap_codegen::find_maps(&repo().join("maps")).expect("maps/");
+    assert!(maps.len() >= 5, "the five shipped maps: {maps:?}");
+    maps
+}
+
+/// A simulated drive on loopback that executes every write it receives, legal or not.
+struct Wire {
+    addr: String,
+    kind: TransportKind,
+    slave: Arc<Mutex<SimulatedSlave>>,
+    /// Connections served to their end, in order of arrival.
+    served: Arc<AtomicUsize>,
+}
+
+impl Wire {
+    fn start(profile: &'static Profile, kind: TransportKind) -> Wire {
+        let slave = Arc::new(Mutex::new(SimulatedSlave::new(1, profile)));
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        let shared = Arc::clone(&slave);
+        let served = Arc::new(AtomicUsize::new(0));
+        let count = Arc::clone(&served);
+        thread::spawn(move || {
+            for stream in listener.incoming() {
+                let _done = Done(&count);
+                let Ok(stream) = stream else { continue };
+                let until = Instant::now() + Duration::from_secs(30);
+                let mut s = shared.lock().unwrap();
+                let _ = match kind {
+                    TransportKind::Tcp => {
+                        s.serve(&mut TcpTransport::from_stream(stream).unwrap(), until)
+                    }
+                    _ => s.serve(
+                        &mut RtuOverTcpTransport::from_stream(stream).unwrap(),
+                        until,
+                    ),
+                };
+            }
+        });
+        Wire {
+            addr,
+            kind,
+            slave,
+            served,
+        }
+    }
+
+    /// Waits until every connection made so far has been served: a broadcast gets no reply, so
+    /// the client may return before the drive has read it. Connections are served in order,
+    /// so an empty connection served means all before it were.
+    fn settle(&self) {
+        let target = self.served.load(Ordering::SeqCst) + 1;
+        drop(std::net::TcpStream::connect(&self.addr).unwrap());
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while self.served.load(Ordering::SeqCst) < target {
+            assert!(
+                Instant::now() < deadline,
+                "the simulated drive stopped serving"
+            );
+            thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    fn flag(&self) -> &'static str {
+        match self.kind {
+            TransportKind::Tcp => "--tcp",
+            _ => "--rtu-tcp",
+        }
+    }
+
+    fn writes(&self) -> usize {
+        self.slave.lock().unwrap().writes.len()
+    }
+
+    fn writes_since(&self, n: usize) -> Vec<(u16, u16)> {
+        self.slave.lock().unwrap().writes[n..].to_vec()
+    }
+}
+
+/// Counts a connection as served when dropped, whatever happened to it.
+struct Done<'a>(&'a AtomicUsize);
+
+impl Drop for Done<'_> {
+    fn drop(&mut self) {
+        self.0.fetch_add(1, Ordering::SeqCst);
+    }
+}
+
+/// `drivemap write` in-process: the arguments parsed by the binary's own parser.
+fn run_write(
+    drive: &Drive,
+    profile: &'static Profile,
+    wire: &Wire,
+    slave: u8,
+    assignment: &str,
+) -> Result<ExitCode, String> {
+    let maps = repo().join("maps");
+    let slave = slave.to_string();
+    let argv = [
+        "drivemap",
+        "write",
+        "--drive",
+        &drive.meta.id,
+        "--maps",
+        maps.to_str().unwrap(),
+        wire.flag(),
+        &wire.addr,
+        "--slave",
+        &slave,
+        "--timeout",
+        "500ms",
+        "--retries",
+        "0",
+        assignment,
+    ];
+    let cli = Cli::try_parse_from(argv).map_err(|e| format!("arguments: {e}"))?;
+    let Cmd::Write(args) = cli.command else {
+        unreachable!()
+    };
+    write::execute(drive, profile, &args)
+}
+
+fn on_transport(r: &Register, kind: TransportKind) -> bool {
+    let name = if kind == TransportKind::Tcp {
+        TransportName::Tcp
+    } else {
+        TransportName::Rtu
+    };
+    r.transports
+        .as_ref()
+        .is_none_or(|list| list.contains(&name))
+}
+
+/// Whether the map lets `r` be written to `slave` (0: broadcast) on `kind`, from the IR.
+fn allowed_on_link(drive: &Drive, r: &Register, kind: TransportKind, slave: u8) -> bool {
+    if !r.writable() || !on_transport(r, kind) {
+        return false;
+    }
+    let commands = drive
+        .protocol
+        .commands
+        .iter()
+        .flat_map(|c| c.writes.iter().map(|w| w.address));
+    if commands.clone().any(|a| a == r.def.address) {
+        return false; // ENTER/ACCEPT/save: only through --persist
+    }
+    if slave != 0 {
+        return !r.broadcast;
+    }
+    let Some(b) = &drive.protocol.broadcast else {
+        return false;
+    };
+    let named = b
+        .registers
+        .iter()
+        .any(|n| drive.find(n).is_some_and(|x| x.def.id == r.def.id));
+    r.broadcast || named || drive.broadcast_addresses().is_empty()
+}
+
+/// Whether a conversion of `r` needs a setting read from the drive (a selected or relative
+/// scale, an address chosen by a setting, limits per variant).
+fn needs_settings(r: &Register) -> bool {
+    matches!(
+        r.kind(),
+        ValueKind::Quantity(Scale::Selected(_) | Scale::Relative(_))
+    ) || r
+        .def
+        .address_alternatives
+        .iter()
+        .any(|a| a.when.setting.is_some())
+        || !r.def.by_variant.is_empty()
+}
+
+fn field_mask(r: &Register) -> Option<u16> {
+    match r.kind() {
+        ValueKind::Bits(fields) => Some(
+            fields
+                .iter()
+                .filter_map(field_span)
+                .fold(0u16, |m, (lsb, w)| m | ((((1u32 << w) - 1) << lsb) as u16)),
+        ),
+        _ => None,
+    }
+}
+
+/// Whether a word that arrived at PDU address `pdu` is one the map allows for `r` on this link.
+fn legal_arrival(
+    drive: &Drive,
+    r: &Register,
+    kind: TransportKind,
+    slave: u8,
+    pdu: u16,
+    word: u16,
+) -> Result<(), String> {
+    if !allowed_on_link(drive, r, kind, slave) {
+        return Err("the map does not allow this register on this link".into());
+    }
+    let (rtu, tcp) = drive.address_offsets();
+    let offset = if kind == TransportKind::Tcp { tcp } else { rtu };
+    let address = i32::from(pdu) - offset;
+    let addresses: Vec<i32> = std::iter::once(r.def.address)
+        .chain(r.def.address_alternatives.iter().map(|a| a.address))
+        .map(i32::from)
+        .collect();
+    if !addresses.contains(&address) {
+        return Err(format!(
+            "arrived at {address:04X}h, the register is at {addresses:04X?}"
+        ));
+    }
+    if let Some(mask) = field_mask(r) {
+        if word & !mask != 0 {
+            return Err(format!("reserved bits {:04X}h set", word & !mask));
+        }
+    }
+    let plain = matches!(
+        r.kind(),
+        ValueKind::Word | ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_))
+    );
+    if plain && r.def.by_variant.is_empty() {
+        let raw = if r.def.signed {
+            i128::from(word as i16)
+        } else {
+            i128::from(word)
+        };
+        let factor = r.factor().expect("fixed factor");
+        if let Some(l) = r.raw_limits(factor, r.def.min, r.def.max) {
+            if raw < l.min || raw > l.max {
+                return Err(format!("raw {raw} outside {} ..= {}", l.min, l.max));
+            }
+        }
+    }
+    if let ValueKind::Enum(values) = r.kind() {
+        let listed = values.iter().any(|v| v.value == word);
+        let in_range = (r.def.min.is_some() || r.def.max.is_some())
+            && r.def.min.is_none_or(|m| f64::from(word) >= m)
+            && r.def.max.is_none_or(|m| f64::from(word) <= m);
+        if !listed && !in_range {
+            return Err(format!("code {word} not listed"));
+        }
+    }
+    Ok(())
+}
+
+/// The names the CLI accepts for `r` that resolve to it.
+fn names(drive: &Drive, r: &Register) -> Vec<String> {
+    let mut out = vec![r.def.id.clone()];
+    for n in [r.def.param.clone(), Some(r.def.name.clone())]
+        .into_iter()
+        .flatten()
+    {
+        if !out.contains(&n)
+            && drivemap_live::lookup::find(drive, &n).is_ok_and(|x| x.def.id == r.def.id)
+        {
+            out.push(n);
+        }
+    }
+    out
+}
+
+fn number(v: f64) -> String {
+    format!("{v}")
+}
+
+/// Values in every form the CLI accepts: `(text, legal)`. Legal ones are in range for the base
+/// variant; illegal ones are out of range, unlisted codes or reserved bits.
+fn values(r: &Register) -> Vec<(String, bool)> {
+    let unit = r.def.unit.clone().unwrap_or_default();
+    match r.kind() {
+        ValueKind::Bits(fields) => {
+            let mask = field_mask(r).unwrap_or(0);
+            let f = &fields[0];
+            let (lsb, _) = field_span(f).unwrap_or((0, 1));
+            let mut v = vec![
+                (f.id.clone(), true),
+                (format!("{}=1", f.id), true),
+                (format!("0x{:04X}", 1u16 << lsb), true),
+            ];
+            if mask != 0xFFFF {
+                v.push(("0xFFFF".to_owned(), false));
+            }
+            v
+        }
+        ValueKind::Enum(list) => {
+            let first = &list[0];
+            let mut v = vec![
+                (first.id.clone(), true),
+                (first.value.to_string(), true),
+                (first.name.clone(), true),
+                (format!("0x{:04X}", first.value), true),
+            ];
+            let unlisted = (0..=u16::MAX).rev().find(|c| {
+                !list.iter().any(|e| e.value == *c) && r.def.max.is_none_or(|m| f64::from(*c) > m)
+            });
+            if let Some(c) = unlisted {
+                v.push((c.to_string(), false));
+            }
+            v
+        }
+        _ => {
+            let legal = r
+                .default_value()
+                .filter(|d| r.def.min.is_none_or(|m| *d >= m) && r.def.max.is_none_or(|m| *d <= m))
+                .or(r.def.min)
+                .unwrap_or(0.0);
+            let mut v = vec![(number(legal), true)];
+            if !unit.is_empty() {
+                v.push((format!("{} {unit}", number(legal)), true));
+            }
+            if let (Some(max), Some(factor)) = (r.def.max, r.factor()) {
+                let step = factor.mantissa as f64 / 10f64.powi(factor.exponent as i32);
+                v.push((number(max + 10.0 * step), false));
+            }
+            if let (Some(min), Some(factor)) = (r.def.min, r.factor()) {
+                let step = factor.mantissa as f64 / 10f64.powi(factor.exponent as i32);
+                if !r.def.signed && min - 10.0 * step < 0.0 {
+                    v.push((number(min - 10.0 * step), false));
+                }
+            }
+            v
+        }
+    }
+}
+
+#[derive(Default)]
+struct Tally {
+    cases: usize,
+    arrived: usize,
+    refused: usize,
+}
+
+fn sweep(path: &Path, kind: TransportKind) -> Tally {
+    let drive = drivemap_codegen::read_map(path, &Context::default()).expect("shipped map");
+    let profile = drivemap_live::leak_profile(&drive);
+    let wire = Wire::start(profile, kind);
+    let mut tally = Tally::default();
+    let mut failures = Vec::new();
+    for r in &drive.registers {
+        let names = names(&drive, r);
+        for slave in [1u8, 0] {
+            for (ni, name) in names.iter().enumerate() {
+                for (vi, (value, legal)) in values(r).into_iter().enumerate() {
+                    // Every name form with the first value form; every value form by id.
+                    if ni > 0 && vi > 0 {
+                        continue;
+                    }
+                    let case =
+                        format!("{} {:?} slave {slave}: {name}={value}", drive.meta.id, kind);
+                    tally.cases += 1;
+                    let before = wire.writes();
+                    let result =
+                        run_write(&drive, profile, &wire, slave, &format!("{name}={value}"));
+                    let arrived = wire.writes_since(before);
+                    if arrived.len() > 1 {
+                        failures.push(format!("{case}: {} writes arrived", arrived.len()));
+                    }
+                    for &(pdu, word) in &arrived {
+                        if let Err(why) = legal_arrival(&drive, r, kind, slave, pdu, word) {
+                            failures.push(format!(
+                                "{case}: {pdu:04X}h = {word:04X}h reached the wire: {why}"
+                            ));
+                        }
+                    }
+                    let sent = !arrived.is_empty();
+                    match (&result, sent) {
+                        (Ok(code), true) if *code == ExitCode::SUCCESS => tally.arrived += 1,
+                        (Ok(_), true) | (Err(_), true) => {
+                            failures.push(format!("{case}: reported failure but a write arrived"))
+                        }
+                        (Ok(code), false) if *code == ExitCode::SUCCESS && slave != 0 => {
+                            failures.push(format!("{case}: reported success but nothing arrived"))
+                        }
+                        _ => tally.refused += 1,
+                    }
+                    let must_arrive = legal
+                        && allowed_on_link(&drive, r, kind, slave)
+                        && !needs_settings(r)
+                        && !r
+                            .def
+                            .address_alternatives
+                            .iter()
+                            .any(|a| a.when.variant.is_some() || a.when.transport.is_some());
+                    if must_arrive && !sent {
+                        failures.push(format!(
+                            "{case}: allowed by the map but not written: {result:?}"
+                        ));
+                    }
+                    if !legal && sent {
+                        failures.push(format!("{case}: an illegal value was written"));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} cases wrong:\n{}",
+        failures.len(),
+        tally.cases,
+        failures
+            .iter()
+            .take(40)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+    assert!(
+        tally.arrived > 0 && tally.refused > 0,
+        "the sweep exercised both outcomes"
+    );
+    tally
+}
+
+#[test]
+fn every_register_of_every_map_over_modbus_tcp() {
+    for map in shipped_maps() {
+        let t = sweep(&map, TransportKind::Tcp);
+        eprintln!(
+            "{}: {} cases, {} written, {} refused",
+            map.display(),
+            t.cases,
+            t.arrived,
+            t.refused
+        );
+    }
+}
+
+#[test]
+fn every_register_of_every_map_over_rtu_over_tcp() {
+    for map in shipped_maps() {
+        let t = sweep(&map, TransportKind::RtuOverTcp);
+        eprintln!(
+            "{}: {} cases, {} written, {} refused",
+            map.display(),
+            t.cases,
+            t.arrived,
+            t.refused
+        );
+    }
+}
+
+/// The three writes of the report, with the binary: each is refused before connecting and
+/// nothing reaches the simulated V7.
+#[test]
+fn write_gate_repros_as_reported() {
+    let path = repo().join("maps/yaskawa-v7.yaml");
+    let drive = drivemap_codegen::read_map(&path, &Context::default()).unwrap();
+    let profile = drivemap_live::leak_profile(&drive);
+    let cases: [(TransportKind, &[&str], &str); 3] = [
+        // The TCP option card's digital inputs over an RTU link: 0001h there is the run command.
+        (
+            TransportKind::RtuOverTcp,
+            &["tcp_digital_input_command=terminal_s1"],
+            "does not exist on RtuOverTcp",
+        ),
+        // The RTU run command over Modbus TCP: 0001h there switches terminal S5.
+        (
+            TransportKind::Tcp,
+            &["digital_input_command=run_command"],
+            "does not exist on Tcp",
+        ),
+        // An ordinary register to slave 0 lands in the broadcast space (bit 2: external fault).
+        (
+            TransportKind::RtuOverTcp,
+            &["--slave", "0", "digital_input_command=0x0004"],
+            "does not accept digital_input_command in a broadcast",
+        ),
+    ];
+    for (kind, args, expected) in cases {
+        let wire = Wire::start(profile, kind);
+        let mut all = vec![
+            "write",
+            "--drive",
+            "yaskawa-v7",
+            wire.flag(),
+            wire.addr.as_str(),
+        ];
+        all.extend_from_slice(args);
+        let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+            .args(&all)
+            .arg("--maps")
+            .arg(repo().join("maps"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(expected) && err.contains("nothing written"),
+            "{args:?}: {err}"
+        );
+        wire.settle();
+        assert_eq!(wire.writes(), 0, "{args:?} reached the wire");
+        assert_eq!(
+            wire.slave.lock().unwrap().executed,
+            0,
+            "{args:?} sent a request"
+        );
+    }
+}
