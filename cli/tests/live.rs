@@ -608,3 +608,45 @@ fn poll_by_default_reads_the_monitors_this_link_has() {
     assert!(!out.contains("tcp_status_word"), "{out}");
     assert!(!out.contains("error: "), "{out}");
 }
+
+/// Naming some fields of a bit-field register changes those fields only: the others keep the
+/// value read from the drive (V7 0001h, Table 4.1, `000_032dced3a1e91a75.txt:853-867`).
+#[test]
+fn writing_one_field_keeps_the_others() {
+    let d = Drive::start("yaskawa-v7", Framing::RtuOverTcp, |s| {
+        s.set_holding(0x0001, 0x0003); // running in reverse
+    });
+    let (code, out, err) = d.run(
+        "write",
+        "yaskawa-v7",
+        &["digital_input_command=fault_reset"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(d.holding(0x0001), 0x000B, "{out}");
+    let (code, _, err) = d.run(
+        "write",
+        "yaskawa-v7",
+        &["digital_input_command=reverse=off,fault_reset=0"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        d.holding(0x0001),
+        0x0001,
+        "run kept, reverse and reset cleared"
+    );
+    // A number is the whole word.
+    let (code, _, err) = d.run("write", "yaskawa-v7", &["digital_input_command=0x0000"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        d.writes(),
+        vec![(0x0001, 0x000B), (0x0001, 0x0001), (0x0001, 0x0000)]
+    );
+    // A one-bit field by on/off, in any case.
+    let (code, _, err) = d.run(
+        "write",
+        "yaskawa-v7",
+        &["digital_input_command=run_command=On"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(d.holding(0x0001), 0x0001);
+}

@@ -16,7 +16,6 @@
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
@@ -47,8 +46,8 @@ struct Wire {
     addr: String,
     kind: TransportKind,
     slave: Arc<Mutex<SimulatedSlave>>,
-    /// Connections served to their end, in order of arrival.
-    served: Arc<AtomicUsize>,
+    /// Client ports of the connections served to their end, in order of arrival.
+    served: Arc<Mutex<Vec<u16>>>,
 }
 
 impl Wire {
@@ -57,12 +56,12 @@ impl Wire {
         let listener = TcpListener::bind("127.0.0.1:0").unwrap();
         let addr = listener.local_addr().unwrap().to_string();
         let shared = Arc::clone(&slave);
-        let served = Arc::new(AtomicUsize::new(0));
-        let count = Arc::clone(&served);
+        let served = Arc::new(Mutex::new(Vec::new()));
+        let done = Arc::clone(&served);
         thread::spawn(move || {
             for stream in listener.incoming() {
-                let _done = Done(&count);
                 let Ok(stream) = stream else { continue };
+                let port = stream.peer_addr().map(|a| a.port()).unwrap_or(0);
                 let until = Instant::now() + Duration::from_secs(30);
                 let mut s = shared.lock().unwrap();
                 let _ = match kind {
@@ -74,6 +73,8 @@ impl Wire {
                         until,
                     ),
                 };
+                drop(s);
+                done.lock().unwrap().push(port);
             }
         });
         Wire {
@@ -86,12 +87,13 @@ impl Wire {
 
     /// Waits until every connection made so far has been served: a broadcast gets no reply, so
     /// the client may return before the drive has read it. Connections are served in order,
-    /// so an empty connection served means all before it were.
+    /// so once an empty connection made now is served, all before it were.
     fn settle(&self) {
-        let target = self.served.load(Ordering::SeqCst) + 1;
-        drop(std::net::TcpStream::connect(&self.addr).unwrap());
+        let barrier = std::net::TcpStream::connect(&self.addr).unwrap();
+        let port = barrier.local_addr().unwrap().port();
+        drop(barrier);
         let deadline = Instant::now() + Duration::from_secs(10);
-        while self.served.load(Ordering::SeqCst) < target {
+        while !self.served.lock().unwrap().contains(&port) {
             assert!(
                 Instant::now() < deadline,
                 "the simulated drive stopped serving"
@@ -113,15 +115,6 @@ impl Wire {
 
     fn writes_since(&self, n: usize) -> Vec<(u16, u16)> {
         self.slave.lock().unwrap().writes[n..].to_vec()
-    }
-}
-
-/// Counts a connection as served when dropped, whatever happened to it.
-struct Done<'a>(&'a AtomicUsize);
-
-impl Drop for Done<'_> {
-    fn drop(&mut self) {
-        self.0.fetch_add(1, Ordering::SeqCst);
     }
 }
 
@@ -388,6 +381,7 @@ fn sweep(path: &Path, kind: TransportKind) -> Tally {
                     let before = wire.writes();
                     let result =
                         run_write(&drive, profile, &wire, slave, &format!("{name}={value}"));
+                    wire.settle();
                     let arrived = wire.writes_since(before);
                     if arrived.len() > 1 {
                         failures.push(format!("{case}: {} writes arrived", arrived.len()));

@@ -449,6 +449,78 @@ fn parse_number(text: &str) -> Option<f64> {
     t.parse::<f64>().ok()
 }
 
+/// Fields of a bit-field register as a user names them: the bits they set and the bits they
+/// cover. Bits outside `mask` were not named.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FieldInput {
+    pub value: u16,
+    pub mask: u16,
+}
+
+/// Parses `run,reverse` or `run=1,direction=reverse` (a field's value by number, id or printed
+/// meaning, `on`/`off`, `true`/`false`) for a bit-field register; `None` for a plain number,
+/// which is the whole word.
+pub fn field_input(r: &Register, text: &str) -> Result<Option<FieldInput>, InputError> {
+    match r.kind() {
+        ValueKind::Bits(fields) if parse_number(text).is_none() => {
+            parse_fields(r, fields, text.trim()).map(Some)
+        }
+        _ => Ok(None),
+    }
+}
+
+fn parse_fields(r: &Register, fields: &[Field], text: &str) -> Result<FieldInput, InputError> {
+    let mut input = FieldInput { value: 0, mask: 0 };
+    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let (name, v) = part.split_once('=').unwrap_or((part, "1"));
+        let name = name.trim();
+        let f = fields.iter().find(|f| f.id == name).ok_or_else(|| {
+            let ids: Vec<&str> = fields.iter().map(|f| f.id.as_str()).collect();
+            InputError::Parse(format!(
+                "`{name}` is not a field of {}; fields: {}",
+                r.id(),
+                ids.join(", ")
+            ))
+        })?;
+        let (lsb, width) = field_span(f).unwrap_or((0, 1));
+        let v = v.trim();
+        let code = f
+            .values
+            .iter()
+            .find(|e| e.id == v || e.name.eq_ignore_ascii_case(v))
+            .map(|e| e.value)
+            .or_else(|| match v.to_ascii_lowercase().as_str() {
+                "true" | "on" => Some(1),
+                "false" | "off" => Some(0),
+                _ => v.parse::<u16>().ok(),
+            })
+            .ok_or_else(|| {
+                let known: Vec<String> = f
+                    .values
+                    .iter()
+                    .map(|e| format!("{} ({})", e.id, e.name))
+                    .collect();
+                InputError::Parse(if known.is_empty() {
+                    format!("`{v}` is not a value of field {name}; give a number, on or off")
+                } else {
+                    format!(
+                        "`{v}` is not a value of field {name}; values: {}",
+                        known.join(", ")
+                    )
+                })
+            })?;
+        if u32::from(code) >= 1u32 << width {
+            return Err(InputError::Parse(format!(
+                "{code} does not fit field {name} ({width} bit(s))"
+            )));
+        }
+        let mask = (((1u32 << width) - 1) << lsb) as u16;
+        input.value = (input.value & !mask) | (code << lsb);
+        input.mask |= mask;
+    }
+    Ok(input)
+}
+
 /// Parses a value as a user types it — `48`, `48.5 Hz`, an enumeration code, id or printed
 /// meaning, bit fields as `run,reverse` or `run=1,mode=2`, or a raw `0x0003` — and encodes it.
 pub fn parse_value(
@@ -478,42 +550,7 @@ pub fn parse_value(
         }
         ValueKind::Bits(fields) => match parse_number(text) {
             Some(n) => n,
-            None => {
-                let mut raw: u16 = 0;
-                for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-                    let (name, v) = part.split_once('=').unwrap_or((part, "1"));
-                    let f = fields.iter().find(|f| f.id == name.trim()).ok_or_else(|| {
-                        let ids: Vec<&str> = fields.iter().map(|f| f.id.as_str()).collect();
-                        InputError::Parse(format!(
-                            "`{name}` is not a field of {}; fields: {}",
-                            r.id(),
-                            ids.join(", ")
-                        ))
-                    })?;
-                    let (lsb, width) = field_span(f).unwrap_or((0, 1));
-                    let v = v.trim();
-                    let code = f
-                        .values
-                        .iter()
-                        .find(|e| e.id == v)
-                        .map(|e| e.value)
-                        .or_else(|| match v {
-                            "true" | "on" => Some(1),
-                            "false" | "off" => Some(0),
-                            _ => v.parse::<u16>().ok(),
-                        })
-                        .ok_or_else(|| {
-                            InputError::Parse(format!("`{v}` is not a value of field {name}"))
-                        })?;
-                    if u32::from(code) >= 1u32 << width {
-                        return Err(InputError::Parse(format!(
-                            "{code} does not fit field {name} ({width} bit(s))"
-                        )));
-                    }
-                    raw |= code << lsb;
-                }
-                f64::from(raw)
-            }
+            None => f64::from(parse_fields(r, fields, text)?.value),
         },
         _ => {
             let unit = r.def.unit.as_deref().unwrap_or("");

@@ -428,3 +428,81 @@ fn j7_frequency_unit_follows_n69_and_its_reserved_bits_stay_zero() {
     assert!(faults.ground_fault());
     assert_eq!(j7::PROFILE.commands.len(), 1);
 }
+
+// ---- The write gate on the typed API (000 Tables 4.1, 4.2, 4.5) -------------------------------
+
+/// The V7's 0001h is three registers: the RTU run command (Table 4.1, :853), the broadcast
+/// operation signal in the broadcast space (Table 4.2, :882), and the Modbus TCP option card's
+/// digital inputs (Table 4.5, :1403). The typed API writes each only where it exists.
+#[test]
+fn typed_writes_reach_0001h_only_as_the_register_of_that_link() {
+    use drivemap_drives::runtime::fault::FaultyLink;
+    use drivemap_drives::runtime::profile::TransportKind;
+    use drivemap_drives::runtime::slave::SimulatedSlave;
+    use drivemap_drives::runtime::{Client, ClientOptions, Error, Refusal};
+
+    let s = settings(Unit::Unit01Hz, 60.0);
+    let client = |kind| {
+        Client::with_options(
+            FaultyLink::new(kind, SimulatedSlave::new(1, &v7::PROFILE)),
+            &v7::PROFILE,
+            ClientOptions {
+                retries: 0,
+                ..ClientOptions::default()
+            },
+        )
+    };
+    let run = v7::DigitalInputCommandBits::new().with_run_command(true);
+    let broadcast_run = v7::BroadcastDigitalInputCommandBits::new().with_run_command(true);
+    let s1 = v7::TcpDigitalInputCommandBits::new().with_terminal_s1(true);
+
+    let mut rtu = client(TransportKind::Rtu);
+    let refused = [
+        rtu.write::<v7::TcpDigitalInputCommand>(1, &s1, &s),
+        rtu.write::<v7::DigitalInputCommand>(0, &run, &s),
+        rtu.write::<v7::BroadcastDigitalInputCommand>(1, &broadcast_run, &s),
+    ];
+    let refused: Vec<Refusal> = refused
+        .into_iter()
+        .map(|r| match r {
+            Err(Error::Refused(e)) => e,
+            other => panic!("expected a refusal, got {other:?}"),
+        })
+        .collect();
+    assert!(matches!(
+        refused[0],
+        Refusal::NotOnTransport {
+            register: "tcp_digital_input_command",
+            transport: TransportKind::Rtu
+        }
+    ));
+    assert!(matches!(
+        refused[1],
+        Refusal::NotBroadcast {
+            register: "digital_input_command",
+            ..
+        }
+    ));
+    assert!(matches!(
+        refused[2],
+        Refusal::BroadcastOnly {
+            register: "broadcast_digital_input_command"
+        }
+    ));
+    assert_eq!(rtu.transport().requests, 0, "nothing refused was sent");
+    rtu.write::<v7::DigitalInputCommand>(1, &run, &s).unwrap();
+    rtu.write::<v7::BroadcastDigitalInputCommand>(0, &broadcast_run, &s)
+        .unwrap();
+    assert_eq!(rtu.transport().requests, 2);
+
+    let mut tcp = client(TransportKind::Tcp);
+    let e = tcp
+        .write::<v7::DigitalInputCommand>(1, &run, &s)
+        .unwrap_err();
+    assert!(
+        matches!(e, Error::Refused(Refusal::NotOnTransport { .. })),
+        "{e}"
+    );
+    tcp.write::<v7::TcpDigitalInputCommand>(1, &s1, &s).unwrap();
+    assert_eq!(tcp.transport().requests, 1);
+}

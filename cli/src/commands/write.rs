@@ -4,7 +4,7 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
-use drivemap_codegen::ir::Register;
+use drivemap_codegen::ir::{Register, ValueKind};
 use drivemap_live::codec::{self, InputError};
 use drivemap_live::intern::intern;
 use drivemap_runtime::gate;
@@ -44,6 +44,46 @@ fn input_error(drive: &Drive, e: &InputError) -> String {
         InputError::Value(v) => value_error(drive, v),
         InputError::Parse(m) => m.clone(),
     }
+}
+
+/// The word for an assignment that names some fields of a bit-field register (`run`,
+/// `direction=reverse`): the fields not named keep the value read from the drive, so writing
+/// one field never changes another. A register that cannot be read here (write-only, or a
+/// broadcast) gets the named fields and 0 elsewhere, and a warning says so. `None` when the
+/// value is not a field list (a number is the whole word).
+fn field_word(
+    drive: &Drive,
+    session: &mut Session<'_>,
+    r: &Register,
+    text: &str,
+) -> Result<Option<u16>, String> {
+    let Some(input) = codec::field_input(r, text).map_err(|e| input_error(drive, &e))? else {
+        return Ok(None);
+    };
+    let ValueKind::Bits(fields) = r.kind() else {
+        return Ok(None);
+    };
+    let fields_mask = codec::field_mask(fields);
+    let word = if input.mask & fields_mask == fields_mask {
+        input.value
+    } else if session.slave == 0 || session.unreadable(r).is_some() {
+        eprintln!(
+            "warning: {} cannot be read here, so the fields not named are written as 0",
+            describe::register(r)
+        );
+        input.value
+    } else {
+        let current = session.read_word(r).map_err(|e| {
+            format!(
+                "reading {} to keep its other fields: {e}; nothing written",
+                r.id()
+            )
+        })?;
+        ((current & !input.mask) | input.value) & fields_mask
+    };
+    codec::encode(drive, r, f64::from(word), &session.settings)
+        .map(Some)
+        .map_err(|e| format!("{}; nothing written", value_error(drive, &e)))
 }
 
 /// Checks every assignment, then writes them in order; exits 1 when the drive refused one.
@@ -114,8 +154,11 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
     }
     let mut raws = Vec::new();
     for (r, value) in &pairs {
-        let raw = codec::parse_value(drive, r, value, &session.settings)
-            .map_err(|e| format!("{}; nothing written", input_error(drive, &e)))?;
+        let raw = match field_word(drive, &mut session, r, value)? {
+            Some(raw) => raw,
+            None => codec::parse_value(drive, r, value, &session.settings)
+                .map_err(|e| format!("{}; nothing written", input_error(drive, &e)))?,
+        };
         raws.push(raw);
     }
     // The whole gate for every assignment before the first is sent: all or nothing.

@@ -429,6 +429,15 @@ impl<'d> Session<'d> {
         }
     }
 
+    /// Reads the raw word of `r` at its address on this link.
+    pub fn read_word(&mut self, r: &Register) -> Result<u16, String> {
+        if let Some(why) = self.unreadable(r) {
+            return Err(why);
+        }
+        let address = self.address(r);
+        self.read_one(r.table, address)
+    }
+
     fn read_one(&mut self, table: ModbusTable, address: u16) -> Result<u16, String> {
         let mut w = [0u16; 1];
         self.read_into(table, address, &mut w)
