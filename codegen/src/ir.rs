@@ -387,8 +387,9 @@ pub struct WriteRuleFigures {
     pub rtu: bool,
     /// Exists on Modbus TCP.
     pub tcp: bool,
-    /// Its own address first, then every address it moves to, without repeats.
-    pub addresses: Vec<u16>,
+    /// The addresses it moves to (with a setting, variant or transport), without repeats and
+    /// without its own.
+    pub also_at: Vec<u16>,
     /// The envelope of its raw ranges over every variant and selector case.
     pub raw: RawLimits,
     /// Bits that carry no field (bit-field registers), which must be written as 0.
@@ -417,10 +418,10 @@ impl Drive {
                 list.contains(&TransportName::Tcp),
             ),
         };
-        let mut addresses = vec![r.def.address];
+        let mut also_at = Vec::new();
         for alt in &r.def.address_alternatives {
-            if !addresses.contains(&alt.address) {
-                addresses.push(alt.address);
+            if alt.address != r.def.address && !also_at.contains(&alt.address) {
+                also_at.push(alt.address);
             }
         }
         let reserved = match r.kind() {
@@ -439,7 +440,7 @@ impl Drive {
             broadcast,
             rtu,
             tcp,
-            addresses,
+            also_at,
             raw: r.raw_envelope(),
             reserved,
         }

@@ -71,7 +71,8 @@ pub fn leak_profile(drive: &Drive) -> &'static Profile {
                     rtu: w.rtu,
                     tcp: w.tcp,
                 },
-                addresses: leak_slice(w.addresses),
+                address: r.def.address,
+                also_at: leak_slice(w.also_at),
                 raw: RawRange {
                     min: w.raw.min as i64,
                     max: w.raw.max as i64,

@@ -49,6 +49,18 @@ impl Transports {
         tcp: true,
     };
 
+    /// RTU framing only (serial lines, RTU over TCP).
+    pub const RTU: Transports = Transports {
+        rtu: true,
+        tcp: false,
+    };
+
+    /// Modbus TCP only (the V7's CM091/CM092 option card registers).
+    pub const TCP: Transports = Transports {
+        rtu: false,
+        tcp: true,
+    };
+
     /// Whether a register with these transports exists on `kind`.
     pub const fn contains(self, kind: TransportKind) -> bool {
         match kind {
@@ -83,14 +95,65 @@ pub struct WriteRule {
     pub broadcast: Broadcast,
     /// Transports the register exists on.
     pub transports: Transports,
-    /// Every communication address the register may occupy (its own first, then those it
-    /// moves to with a setting, a variant or the transport).
-    pub addresses: &'static [u16],
+    /// The register's communication address as the manual prints it.
+    pub address: u16,
+    /// The addresses it moves to with a setting, a variant or the transport.
+    pub also_at: &'static [u16],
     /// Raw values the map allows under some variant and selector case (a signed register's
     /// words are read as `i16`).
     pub raw: RawRange,
     /// Bits that must be 0 (reserved bits of a bit-field register).
     pub reserved: u16,
+}
+
+impl WriteRule {
+    /// A read/write register at `address` on every transport, no broadcast, no reserved bits,
+    /// raw values `min ..= max`.
+    pub const fn rw(register: &'static str, address: u16, min: i64, max: i64) -> WriteRule {
+        WriteRule {
+            register,
+            access: Access::ReadWrite,
+            broadcast: Broadcast::No,
+            transports: Transports::ALL,
+            address,
+            also_at: &[],
+            raw: RawRange { min, max },
+            reserved: 0,
+        }
+    }
+
+    /// [`WriteRule::rw`] for a write-only register.
+    pub const fn write_only(register: &'static str, address: u16, min: i64, max: i64) -> WriteRule {
+        WriteRule {
+            access: Access::Write,
+            ..WriteRule::rw(register, address, min, max)
+        }
+    }
+
+    /// The rule with broadcast use `broadcast`.
+    pub const fn broadcast(self, broadcast: Broadcast) -> WriteRule {
+        WriteRule { broadcast, ..self }
+    }
+
+    /// The rule for a register that exists only on `transports`.
+    pub const fn on(self, transports: Transports) -> WriteRule {
+        WriteRule { transports, ..self }
+    }
+
+    /// The rule for a register that also occupies `addresses`.
+    pub const fn also_at(self, also_at: &'static [u16]) -> WriteRule {
+        WriteRule { also_at, ..self }
+    }
+
+    /// The rule with reserved bits `reserved`, which must be written as 0.
+    pub const fn reserved(self, reserved: u16) -> WriteRule {
+        WriteRule { reserved, ..self }
+    }
+
+    /// Whether the register occupies `address` (under some setting, variant or transport).
+    pub fn occupies(&self, address: u16) -> bool {
+        self.address == address || self.also_at.contains(&address)
+    }
 }
 
 /// What a write is addressed to.
@@ -152,9 +215,7 @@ fn check_address(
 ) -> Result<(), Refusal> {
     let mut first_refusal = None;
     for rule in profile.writes.iter().filter(|r| {
-        r.addresses.contains(&address)
-            && r.transports.contains(kind)
-            && space(profile, slave, r).is_ok()
+        r.occupies(address) && r.transports.contains(kind) && space(profile, slave, r).is_ok()
     }) {
         match check_rule(profile, kind, slave, rule, address, word) {
             Ok(()) => return Ok(()),
@@ -210,7 +271,7 @@ fn check_rule(
 ) -> Result<(), Refusal> {
     check_link(profile, kind, slave, rule)?;
     let register = rule.register;
-    if !rule.addresses.contains(&address) {
+    if !rule.occupies(address) {
         return Err(Refusal::NotAtAddress { register, address });
     }
     let reserved = word & rule.reserved;

@@ -86,7 +86,8 @@ impl Writable for OperationCommand {
         access: Access::ReadWrite,
         broadcast: Broadcast::No,
         transports: Transports::ALL,
-        addresses: &[0x0001],
+        address: 0x0001,
+        also_at: &[],
         raw: RawRange {
             min: 0,
             max: 0xFFFF,
@@ -120,7 +121,8 @@ impl Writable for FrequencyReference {
         access: Access::ReadWrite,
         broadcast: Broadcast::No,
         transports: Transports::ALL,
-        addresses: &[0x0002],
+        address: 0x0002,
+        also_at: &[],
         raw: RawRange { min: 0, max: 40000 },
         reserved: 0,
     };

@@ -26,7 +26,8 @@ const RUN_COMMAND: WriteRule = WriteRule {
         rtu: true,
         tcp: false,
     },
-    addresses: &[0x0001],
+    address: 0x0001,
+    also_at: &[],
     raw: RawRange { min: 0, max: 65535 },
     reserved: 0xF800,
 };
@@ -38,7 +39,8 @@ const TCP_INPUTS: WriteRule = WriteRule {
         rtu: false,
         tcp: true,
     },
-    addresses: &[0x0001],
+    address: 0x0001,
+    also_at: &[],
     raw: RawRange { min: 0, max: 65535 },
     reserved: 0xFF80,
 };
@@ -47,7 +49,8 @@ const BROADCAST_SIGNAL: WriteRule = WriteRule {
     access: Access::Write,
     broadcast: Broadcast::Only,
     transports: Transports::ALL,
-    addresses: &[0x0001],
+    address: 0x0001,
+    also_at: &[],
     raw: RawRange { min: 0, max: 65535 },
     reserved: 0xCFC0,
 };
@@ -56,7 +59,8 @@ const FREQUENCY: WriteRule = WriteRule {
     access: Access::ReadWrite,
     broadcast: Broadcast::No,
     transports: Transports::ALL,
-    addresses: &[0x0002],
+    address: 0x0002,
+    also_at: &[],
     raw: RawRange { min: 0, max: 40000 },
     reserved: 0,
 };
@@ -65,7 +69,8 @@ const N001: WriteRule = WriteRule {
     access: Access::ReadWrite,
     broadcast: Broadcast::No,
     transports: Transports::ALL,
-    addresses: &[0x0101],
+    address: 0x0101,
+    also_at: &[],
     raw: RawRange { min: 0, max: 4 },
     reserved: 0,
 };

@@ -50,35 +50,35 @@ fn info(r: &Register, rt: &TokenStream) -> TokenStream {
     quote!(#rt::RegisterInfo { id: #id, param: #param, name: #name, address: #addr, access: #access, table: #t, broadcast_only: #b, source: #source })
 }
 
-/// The register's [`WriteRule`](crate::ir::WriteRuleFigures), as decided by the IR.
+/// The register's [`WriteRule`](crate::ir::WriteRuleFigures), as decided by the IR: a
+/// constructor call, with builder calls only for what differs from the common case.
 fn write_rule(drive: &Drive, r: &Register, rt: &TokenStream) -> TokenStream {
     let w = drive.write_rule(r);
-    let id = &r.def.id;
-    let access = match r.access {
-        Access::Read => quote!(#rt::Access::Read),
-        Access::Write => quote!(#rt::Access::Write),
-        Access::ReadWrite => quote!(#rt::Access::ReadWrite),
+    let (min, max) = (lit_i(w.raw.min), lit_i(w.raw.max));
+    let mut rule = match r.access {
+        Access::Write => quote!(#rt::WriteRule::write_only(Self::ID, Self::ADDRESS, #min, #max)),
+        _ => quote!(#rt::WriteRule::rw(Self::ID, Self::ADDRESS, #min, #max)),
     };
-    let broadcast = match w.broadcast {
-        BroadcastUse::No => quote!(#rt::Broadcast::No),
-        BroadcastUse::Also => quote!(#rt::Broadcast::Also),
-        BroadcastUse::Only => quote!(#rt::Broadcast::Only),
-    };
-    let (rtu, tcp) = (w.rtu, w.tcp);
-    let addresses = w.addresses.iter().map(|a| hex(*a));
-    let raw = raw_range(w.raw, rt);
-    let reserved = hex(w.reserved);
-    quote! {
-        #rt::WriteRule {
-            register: #id,
-            access: #access,
-            broadcast: #broadcast,
-            transports: #rt::Transports { rtu: #rtu, tcp: #tcp },
-            addresses: &[#(#addresses),*],
-            raw: #raw,
-            reserved: #reserved,
-        }
+    match w.broadcast {
+        BroadcastUse::No => {}
+        BroadcastUse::Also => rule = quote!(#rule.broadcast(#rt::Broadcast::Also)),
+        BroadcastUse::Only => rule = quote!(#rule.broadcast(#rt::Broadcast::Only)),
     }
+    match (w.rtu, w.tcp) {
+        (true, true) => {}
+        (true, false) => rule = quote!(#rule.on(#rt::Transports::RTU)),
+        (false, true) => rule = quote!(#rule.on(#rt::Transports::TCP)),
+        (false, false) => rule = quote!(#rule.on(#rt::Transports { rtu: false, tcp: false })),
+    }
+    if !w.also_at.is_empty() {
+        let also = w.also_at.iter().map(|a| hex(*a));
+        rule = quote!(#rule.also_at(&[#(#also),*]));
+    }
+    if w.reserved != 0 {
+        let reserved = hex(w.reserved);
+        rule = quote!(#rule.reserved(#reserved));
+    }
+    rule
 }
 
 fn lit_i(v: i128) -> Literal {
