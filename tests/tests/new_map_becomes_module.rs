@@ -1,6 +1,7 @@
 //! Dropping a YAML file into the maps directory adds a module to `drivemap-drives` with no other
 //! edit: a throwaway application depends on the drives crate, built against a copy of `maps/`
-//! plus one new map, and uses the new module by name.
+//! plus one new map, and uses the new module by name. With one drive's feature, the crate has that
+//! drive's module alone.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -47,7 +48,7 @@ fn a_new_yaml_file_becomes_a_module() {
     let out = Command::new(env!("CARGO"))
         .args(["run", "--quiet", "--offline", "--manifest-path"])
         .arg(app.join("Cargo.toml"))
-        .env("DRIVEMAP_MAPS_DIR", &maps)
+        .env("DRIVEMAP_MAPS", &maps)
         .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
         .env(
             "DRIVEMAP_MANUALS",
@@ -74,6 +75,42 @@ fn a_new_yaml_file_becomes_a_module() {
             .unwrap()
             .len()
             + 1
+    );
+
+    // An application that enables one drive's feature gets that module alone.
+    std::fs::write(
+        app.join("Cargo.toml"),
+        format!(
+            "[package]\nname = \"new-map-app\"\nversion = \"0.0.0\"\nedition = \"2024\"\n\n[workspace]\n\n[dependencies]\ndrivemap-drives = {{ path = {:?}, default-features = false, features = [\"yaskawa-v7\"] }}\n",
+            root.join("drives").display().to_string()
+        ),
+    )
+    .unwrap();
+    std::fs::write(
+        app.join("src/main.rs"),
+        "fn main() {\n    let ids: Vec<&str> = drivemap_drives::DRIVES.iter().map(|(id, _)| *id).collect();\n    println!(\"{} {}\", drivemap_drives::yaskawa_v7::PROFILE.drive_id, ids.join(\",\"));\n}\n",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO"))
+        .args(["run", "--quiet", "--offline", "--manifest-path"])
+        .arg(app.join("Cargo.toml"))
+        .env("DRIVEMAP_MAPS", &maps)
+        .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
+        .env(
+            "DRIVEMAP_MANUALS",
+            root.join("target/new-map-probe/no-manuals"),
+        )
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "build failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        "yaskawa-v7 yaskawa-v7",
+        "only the V7 module is generated"
     );
     std::fs::remove_dir_all(&tmp).unwrap();
 }
