@@ -25,6 +25,17 @@ pub enum ValueError {
         max: f64,
         unit: &'static str,
     },
+    /// The manual prints no range for the register, and the value does not fit its 16-bit word.
+    #[error(
+        "{register}: {value} {unit} does not fit the register's 16-bit word ({min} ..= {max} {unit}); the manual prints no range for it"
+    )]
+    WordOverflow {
+        register: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+        unit: &'static str,
+    },
     /// NaN or infinite.
     #[error("{register}: {value} is not a finite number")]
     NotFinite { register: &'static str, value: f64 },
@@ -130,6 +141,36 @@ pub struct RawRange {
     pub max: i64,
 }
 
+/// The refusal of `value` outside `range`, whose limits are `min` and `max` in engineering
+/// units: [`ValueError::WordOverflow`] when the range is the word's own (the manual printed none),
+/// else [`ValueError::OutOfRange`].
+fn outside(
+    register: &'static str,
+    unit: &'static str,
+    value: f64,
+    range: RawRange,
+    min: f64,
+    max: f64,
+) -> ValueError {
+    if range == RawRange::word(true) || range == RawRange::word(false) {
+        ValueError::WordOverflow {
+            register,
+            value,
+            min,
+            max,
+            unit,
+        }
+    } else {
+        ValueError::OutOfRange {
+            register,
+            value,
+            min,
+            max,
+            unit,
+        }
+    }
+}
+
 impl RawRange {
     /// The whole range of an unsigned or signed 16-bit word.
     pub const fn word(signed: bool) -> RawRange {
@@ -163,13 +204,8 @@ pub fn encode_decimal(
         return Err(ValueError::NotFinite { register, value });
     };
     if !range.contains(raw) {
-        return Err(ValueError::OutOfRange {
-            register,
-            value,
-            min: scale.decode(range.min),
-            max: scale.decode(range.max),
-            unit,
-        });
+        let (min, max) = (scale.decode(range.min), scale.decode(range.max));
+        return Err(outside(register, unit, value, range, min, max));
     }
     Ok(int_to_word(raw))
 }
@@ -207,13 +243,9 @@ pub fn encode_relative(
     }
     let raw = (value * full_scale / reference).round();
     if !(raw >= range.min as f64 && raw <= range.max as f64) {
-        return Err(ValueError::OutOfRange {
-            register,
-            value,
-            min: range.min as f64 * reference / full_scale,
-            max: range.max as f64 * reference / full_scale,
-            unit,
-        });
+        let min = range.min as f64 * reference / full_scale;
+        let max = range.max as f64 * reference / full_scale;
+        return Err(outside(register, unit, value, range, min, max));
     }
     Ok(int_to_word(raw as i64))
 }
@@ -226,13 +258,8 @@ pub fn encode_int(
     range: RawRange,
 ) -> Result<u16, ValueError> {
     if !range.contains(raw) {
-        return Err(ValueError::OutOfRange {
-            register,
-            value: raw as f64,
-            min: range.min as f64,
-            max: range.max as f64,
-            unit,
-        });
+        let (min, max) = (range.min as f64, range.max as f64);
+        return Err(outside(register, unit, raw as f64, range, min, max));
     }
     Ok(int_to_word(raw))
 }
@@ -274,6 +301,24 @@ mod tests {
             Ok(6000)
         );
         assert_eq!(decode_decimal(60000, false, s), 6000.0);
+    }
+
+    #[test]
+    fn a_value_beyond_the_word_is_not_called_out_of_the_printed_range() {
+        // A register with no printed range at 0.01 Hz per count: the word's own limit.
+        let e = encode_decimal("f", "Hz", 700.0, Decimal::new(1, 2), RawRange::word(false));
+        assert_eq!(
+            e.unwrap_err().to_string(),
+            "f: 700 Hz does not fit the register's 16-bit word (0 ..= 655.35 Hz); the manual prints no range for it"
+        );
+        let e = encode_decimal(
+            "f",
+            "Hz",
+            700.0,
+            Decimal::new(1, 2),
+            RawRange { min: 0, max: 40000 },
+        );
+        assert!(matches!(e, Err(ValueError::OutOfRange { .. })));
     }
 
     #[test]
