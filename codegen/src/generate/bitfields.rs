@@ -1,4 +1,5 @@
-//! Bit-field value types: a getter and setter per field, reserved bits kept 0.
+//! Bit-field value types: a getter per field and, for registers that can be written, a setter and
+//! a `with_*` builder per field; reserved bits kept 0.
 
 use proc_macro2::TokenStream;
 use quote::{format_ident, quote};
@@ -12,6 +13,7 @@ use crate::validate::field_span;
 pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
     let ty = ident(&names::bits_type(r));
     let reg_id = r.id();
+    let writable = r.writable();
     let mut mask: u16 = 0;
     let mut methods = Vec::new();
     let mut field_enums = Vec::new();
@@ -30,6 +32,12 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
         let lo_lit = proc_macro2::Literal::u8_unsuffixed(lo);
         let set_doc = format!("Sets `{fname}`.");
         let with_doc = format!("This value with `{fname}` set to `on`.");
+        let with_wide_doc = format!(
+            "This value with `{fname}` set to `value`; a value wider than the field is refused."
+        );
+        let with_enum_doc = format!(
+            "This value with `{fname}` set to `value`; an unknown or too wide code is refused."
+        );
         let set_wide_doc = format!("Sets `{fname}`; a value wider than the field is refused.");
         let set_enum_doc = format!("Sets `{fname}`; an unknown or too wide code is refused.");
         let where_ = if width == 1 {
@@ -49,22 +57,29 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
             methods.push(quote! {
                 #doc
                 pub const fn #get(&self) -> bool { self.0 & #fm != 0 }
-                #[doc = #set_doc]
-                pub fn #set(&mut self, on: bool) -> &mut Self {
-                    if on { self.0 |= #fm } else { self.0 &= !#fm }
-                    self
-                }
-                #[doc = #with_doc]
-                pub const fn #with(self, on: bool) -> Self {
-                    Self(if on { self.0 | #fm } else { self.0 & !#fm })
-                }
             });
+            if writable {
+                methods.push(quote! {
+                    #[doc = #set_doc]
+                    pub fn #set(&mut self, on: bool) -> &mut Self {
+                        if on { self.0 |= #fm } else { self.0 &= !#fm }
+                        self
+                    }
+                    #[doc = #with_doc]
+                    pub const fn #with(self, on: bool) -> Self {
+                        Self(if on { self.0 | #fm } else { self.0 & !#fm })
+                    }
+                });
+            }
             debug_fields.push(quote!(.field(#fname, &self.#get())));
         } else if f.values.is_empty() {
             let max = proc_macro2::Literal::u16_unsuffixed(((1u32 << width) - 1) as u16);
             methods.push(quote! {
                 #doc
                 pub const fn #get(&self) -> u16 { (self.0 & #fm) >> #lo_lit }
+            });
+            if writable {
+                methods.push(quote! {
                 #[doc = #set_wide_doc]
                 pub fn #set(&mut self, value: u16) -> Result<&mut Self, #rt::ValueError> {
                     if value > #max {
@@ -73,7 +88,13 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
                     self.0 = (self.0 & !#fm) | (value << #lo_lit);
                     Ok(self)
                 }
+                #[doc = #with_wide_doc]
+                pub fn #with(mut self, value: u16) -> Result<Self, #rt::ValueError> {
+                    self.#set(value)?;
+                    Ok(self)
+                }
             });
+            }
             debug_fields.push(quote!(.field(#fname, &self.#get())));
         } else {
             let ety = ident(&names::field_enum(r, f));
@@ -87,16 +108,25 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
             methods.push(quote! {
                 #doc
                 pub fn #get(&self) -> #ety { <#ety as #rt::Code>::from_code((self.0 & #fm) >> #lo_lit) }
-                #[doc = #set_enum_doc]
-                pub fn #set(&mut self, value: #ety) -> Result<&mut Self, #rt::ValueError> {
-                    let code = #rt::Code::code(&value);
-                    if !#rt::Code::is_known(&value) || code > #max {
-                        return Err(#rt::ValueError::UnknownCode { register: #reg_id, code });
-                    }
-                    self.0 = (self.0 & !#fm) | (code << #lo_lit);
-                    Ok(self)
-                }
             });
+            if writable {
+                methods.push(quote! {
+                    #[doc = #set_enum_doc]
+                    pub fn #set(&mut self, value: #ety) -> Result<&mut Self, #rt::ValueError> {
+                        let code = #rt::Code::code(&value);
+                        if !#rt::Code::is_known(&value) || code > #max {
+                            return Err(#rt::ValueError::UnknownCode { register: #reg_id, code });
+                        }
+                        self.0 = (self.0 & !#fm) | (code << #lo_lit);
+                        Ok(self)
+                    }
+                    #[doc = #with_enum_doc]
+                    pub fn #with(mut self, value: #ety) -> Result<Self, #rt::ValueError> {
+                        self.#set(value)?;
+                        Ok(self)
+                    }
+                });
+            }
             debug_fields.push(quote!(.field(#fname, &self.#get())));
         }
     }

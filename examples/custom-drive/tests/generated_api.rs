@@ -25,6 +25,27 @@ fn bit_fields_keep_reserved_bits_zero() {
 }
 
 #[test]
+fn every_field_has_a_builder_and_read_only_values_have_none() {
+    // Multi-bit fields build like one-bit fields; a value wider than the field is refused.
+    let c = md::CommandBits::new()
+        .with_run(true)
+        .with_mode(md::CommandMode::Remote)
+        .and_then(|c| c.with_step(5))
+        .unwrap();
+    assert_eq!(c.raw(), 0x0521);
+    assert_eq!(c.step(), 5);
+    assert!(matches!(
+        md::CommandBits::new().with_step(8),
+        Err(ValueError::OutOfRange { max, .. }) if max == 7.0
+    ));
+    // A read-only register's value is read, never built: getters only
+    // (compile-fail/set_read_only_bits.rs shows that a setter does not exist).
+    let status = md::StatusBits::from_bits(0xA001);
+    assert!(status.running());
+    assert_eq!(status.error_code(), 0xA);
+}
+
+#[test]
 fn enumerations_fall_back_to_unknown_and_refuse_it_on_write() {
     let s = md::Settings::new();
     assert_eq!(
@@ -141,7 +162,7 @@ fn profile_and_register_table() {
     let mut sorted = addrs.clone();
     sorted.sort_unstable();
     assert_eq!(addrs, sorted);
-    assert_eq!(md::REGISTERS.len(), 14);
+    assert_eq!(md::REGISTERS.len(), 15);
     assert_eq!(
         <md::MaxFrequency as Writable>::WRITE_RESTRICTION,
         drivemap_runtime::WriteRestriction::Stopped
