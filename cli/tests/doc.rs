@@ -82,6 +82,10 @@ fn output_file_and_unknown_drive() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(out.is_empty(), "with -o nothing goes to stdout");
+    assert!(
+        err.starts_with(&format!("wrote {}: 187 registers, ", file.display())),
+        "{err}"
+    );
     let text = std::fs::read_to_string(&file).unwrap();
     assert!(text.starts_with("# PTLK TDS-V8 / TEK-DRIVE — `ptlk-tds-v8`\n"));
     assert!(text.contains(

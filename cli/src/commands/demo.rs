@@ -443,7 +443,7 @@ struct Plan {
 
 fn row(t: f64, s: &Sample) {
     println!(
-        "{t:>7.1} s  {:<38} {:>7.2} {:>7.2} {:>8.1} {:>8.1}",
+        "{t:>7.1} s  {:<38} {:>7.2} {:>7.2} {:>9.1} {:>9.1}",
         s.status, s.reference, s.output, s.current, s.voltage
     );
 }
@@ -486,8 +486,8 @@ fn drive_it<D: DemoDrive>(
     );
     println!();
     println!(
-        "{:>9}  {:<38} {:>7} {:>7} {:>8} {:>8}",
-        "time", "status bits", "ref Hz", "out Hz", "current", "voltage"
+        "{:>9}  {:<38} {:>7} {:>7} {:>9} {:>9}",
+        "time", "status bits", "ref Hz", "out Hz", "current A", "voltage V"
     );
     let start = Instant::now();
     let sim_time = || start.elapsed().as_secs_f64() * plan.time_scale;

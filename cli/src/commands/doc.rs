@@ -54,7 +54,15 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     };
     let text = drive_doc::render(&drive, &name);
     match &args.output {
-        Some(out) => std::fs::write(out, text).map_err(|e| format!("{}: {e}", out.display()))?,
+        Some(out) => {
+            std::fs::write(out, &text).map_err(|e| format!("{}: {e}", out.display()))?;
+            eprintln!(
+                "wrote {}: {} registers, {} lines",
+                out.display(),
+                drive.registers.len(),
+                text.lines().count()
+            );
+        }
         None => print!("{text}"),
     }
     Ok(ExitCode::SUCCESS)
