@@ -44,6 +44,7 @@ fn unknown_item(u: UnknownItem) -> &'static str {
         UnknownItem::Default => "default",
         UnknownItem::Unit => "unit",
         UnknownItem::Scale => "scale",
+        UnknownItem::Signed => "signedness",
         UnknownItem::Values => "values",
         UnknownItem::Fields => "fields",
         UnknownItem::Access => "access",

@@ -638,6 +638,8 @@ pub enum UnknownItem {
     Default,
     Unit,
     Scale,
+    /// Whether the word is signed (two's complement) or unsigned.
+    Signed,
     Values,
     Fields,
     Access,
