@@ -1,5 +1,5 @@
 //! The protocol profile is one the runtime can honour: known function codes, quantities within
-//! the Modbus limits, a sane slave range, broadcast only for writes, well-formed timing and
+//! the Modbus limits, a slave range that excludes broadcast, broadcast only for writes, well-formed timing and
 //! serial settings, commands that write something.
 
 use crate::diagnostic::Diagnostic;
@@ -67,11 +67,16 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         ));
     }
     let s = &p.slave_address;
-    if s.min == 0 || s.max > 247 || s.min > s.max {
+    // The map records the range the manual gives: the Modbus serial-line specification's 1..=247
+    // is not every drive's (some manuals print 01H-FEH). 0 is broadcast, never a slave.
+    if s.min == 0 || s.min > s.max {
         out.push(drive.error(
             &pp.key("slave_address"),
             None,
-            format!("slave addresses {}..={} must lie in 1..=247", s.min, s.max),
+            format!(
+                "slave addresses {}..={} must lie in 1..=255 with min <= max (0 is broadcast)",
+                s.min, s.max
+            ),
         ));
     }
     if let Some(d) = s.default {
