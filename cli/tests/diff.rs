@@ -135,6 +135,11 @@ fn one_scale_edit_of_a_shipped_map_is_exactly_one_breaking_change_with_both_cita
          \x20             old: 002_661580cce154f322.txt:455 · new: 002_661580cce154f322.txt:455\n\
          \x20             why: the same engineering value becomes another raw word (or needs other settings)\n"
     );
+    // Two versions of one map compare under any file names.
+    std::fs::rename(s.0.join("ptlk-tds-v8.yaml"), s.0.join("tds-edited.yaml")).unwrap();
+    let (code, renamed, err) = drivemap(&s.0, &["diff", old.to_str().unwrap(), "tds-edited.yaml"]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(renamed, out);
 }
 
 fn git(dir: &Path, args: &[&str]) {

@@ -35,6 +35,22 @@ pub fn read_map_str(name: &str, text: &str, ctx: &validate::Context) -> Result<D
     finish(&loaded, ctx)
 }
 
+/// Like [`read_map`] for one version of a map kept under any file name (`old.yaml`,
+/// `tds-before.yaml`): the rule that a map's file is named `<drive id>.yaml`, which matters for a
+/// maps directory, is not applied. `drivemap diff old.yaml new.yaml` reads maps so.
+pub fn read_map_version(path: &Path, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
+    let loaded = load::load(path).map_err(Diagnostics::from)?;
+    let mut drive = ir::expand(&loaded).map_err(Diagnostics::from)?;
+    drive.file = path.with_file_name(format!("{}.yaml", drive.meta.id));
+    let errors = validate::validate(&drive, ctx);
+    if errors.is_empty() {
+        drive.file = path.to_path_buf();
+        Ok(drive)
+    } else {
+        Err(errors.into())
+    }
+}
+
 fn finish(loaded: &load::LoadedMap, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
     let drive = ir::expand(loaded).map_err(Diagnostics::from)?;
     let errors = validate::validate(&drive, ctx);

@@ -51,7 +51,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                 return Err("give two map files, or --git <rev> [map]".into());
             };
             let ctx = context_for(new);
-            vec![diff::compare(&read(old, &ctx)?, &read(new, &ctx)?)]
+            let read = |path: &Path| {
+                drivemap_codegen::read_map_version(path, &ctx).map_err(|d| format!("{d}"))
+            };
+            vec![diff::compare(&read(old)?, &read(new)?)]
         }
     };
     let out = match args.format {
