@@ -247,6 +247,28 @@ fn protocol(out: &mut String, drive: &Drive) {
         if let Some(param) = &t.response_delay_param {
             parts.push(format!("response delay set by {param}"));
         }
+        if let Some(g) = &t.request_gap {
+            // The master's pause after a reply: its parts add up (V7/J7: 24 bits + 10 ms).
+            let mut gap = Vec::new();
+            if let Some(b) = g.bits {
+                gap.push(format!("{b} bit times"));
+            }
+            if let Some(ms) = g.ms {
+                gap.push(format!("{} ms", num(ms)));
+            }
+            if let Some(c) = g.chars {
+                gap.push(format!("{} characters", num(c)));
+            }
+            let src = g
+                .source
+                .as_ref()
+                .map(|s| format!(" (`{s}`)"))
+                .unwrap_or_default();
+            parts.push(format!(
+                "master waits {} after each reply{src}",
+                gap.join(" + ")
+            ));
+        }
         row("Timing", parts.join("; "), t.source.as_deref());
     }
     if let Some(s) = &p.serial {
