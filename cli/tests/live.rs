@@ -562,8 +562,22 @@ fn serial_line_through_a_pseudo_terminal_pair() {
         out.contains("wrote frequency_reference = 40.00 Hz (0FA0h) at 0002h"),
         "{out}"
     );
+    // The write gate on a serial line: the TCP option card's register and an ordinary
+    // register sent as a broadcast are refused; nothing else reaches the drive.
+    for refused in [
+        &["tcp_digital_input_command=terminal_s1"][..],
+        &["--slave", "0", "digital_input_command=run_command"][..],
+    ] {
+        let mut args = vec!["write", "--drive", "yaskawa-v7"];
+        args.extend_from_slice(&serial);
+        args.extend_from_slice(refused);
+        let (code, _, err) = drivemap(&args);
+        assert_eq!(code, 2, "{refused:?}: {err}");
+        assert!(err.contains("nothing written"), "{err}");
+    }
     let slave = drive.join().unwrap();
     assert_eq!(slave.holding(0x0002), 4000);
+    assert_eq!(slave.writes, vec![(0x0002, 4000)], "only the legal write arrived");
 }
 
 #[test]
