@@ -577,7 +577,11 @@ fn serial_line_through_a_pseudo_terminal_pair() {
     }
     let slave = drive.join().unwrap();
     assert_eq!(slave.holding(0x0002), 4000);
-    assert_eq!(slave.writes, vec![(0x0002, 4000)], "only the legal write arrived");
+    assert_eq!(
+        slave.writes,
+        vec![(0x0002, 4000)],
+        "only the legal write arrived"
+    );
 }
 
 #[test]

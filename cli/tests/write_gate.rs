@@ -443,10 +443,10 @@ fn sweep(path: &Path, kind: TransportKind) -> Tally {
     tally
 }
 
-#[test]
-fn every_register_of_every_map_over_modbus_tcp() {
+/// The sweep over every shipped map on one transport.
+fn sweep_all(kind: TransportKind) {
     for map in shipped_maps() {
-        let t = sweep(&map, TransportKind::Tcp);
+        let t = sweep(&map, kind);
         eprintln!(
             "{}: {} cases, {} written, {} refused",
             map.display(),
@@ -458,17 +458,13 @@ fn every_register_of_every_map_over_modbus_tcp() {
 }
 
 #[test]
+fn every_register_of_every_map_over_modbus_tcp() {
+    sweep_all(TransportKind::Tcp);
+}
+
+#[test]
 fn every_register_of_every_map_over_rtu_over_tcp() {
-    for map in shipped_maps() {
-        let t = sweep(&map, TransportKind::RtuOverTcp);
-        eprintln!(
-            "{}: {} cases, {} written, {} refused",
-            map.display(),
-            t.cases,
-            t.arrived,
-            t.refused
-        );
-    }
+    sweep_all(TransportKind::RtuOverTcp);
 }
 
 /// The three writes of the report, with the binary: each is refused before connecting and

@@ -5,14 +5,14 @@ mod common;
 
 use std::time::{Duration, Instant};
 
+use drivemap_runtime::WriteRule;
 use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::fault::{Fault, FaultyLink};
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::register::{Access, BitRegister, Bits, Readable, Register, Table, Writable};
+use drivemap_runtime::register::{BitRegister, Bits, Readable, Register, Table, Writable};
 use drivemap_runtime::scale::{self, Decimal, RawRange, ValueError};
 use drivemap_runtime::slave::SimulatedSlave;
-use drivemap_runtime::{Broadcast, Transports, WriteRule};
 
 use common::{ACN, J7, V7, strict};
 
@@ -81,19 +81,7 @@ register!(
     |raw, _| Ok(Command::from_bits(raw))
 );
 impl Writable for OperationCommand {
-    const RULE: WriteRule = WriteRule {
-        register: "operation_command",
-        access: Access::ReadWrite,
-        broadcast: Broadcast::No,
-        transports: Transports::ALL,
-        address: 0x0001,
-        also_at: &[],
-        raw: RawRange {
-            min: 0,
-            max: 0xFFFF,
-        },
-        reserved: 0xF800,
-    };
+    const RULE: WriteRule = WriteRule::rw("operation_command", 0x0001, 0, 65535).reserved(0xF800);
     fn encode(value: &Command, _: &Settings) -> Result<u16, ValueError> {
         Ok(value.bits() & 0x07FF)
     }
@@ -116,16 +104,7 @@ register!(
     }
 );
 impl Writable for FrequencyReference {
-    const RULE: WriteRule = WriteRule {
-        register: "frequency_reference",
-        access: Access::ReadWrite,
-        broadcast: Broadcast::No,
-        transports: Transports::ALL,
-        address: 0x0002,
-        also_at: &[],
-        raw: RawRange { min: 0, max: 40000 },
-        reserved: 0,
-    };
+    const RULE: WriteRule = WriteRule::rw("frequency_reference", 0x0002, 0, 40000);
     fn encode(value: &f64, s: &Settings) -> Result<u16, ValueError> {
         let scale = frequency_scale(Self::ID, s)?;
         // 0-400 Hz in either unit.

@@ -13,67 +13,21 @@ use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::fault::FaultyLink;
 use drivemap_runtime::gate::{self, WriteTarget};
 use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::register::Access;
-use drivemap_runtime::scale::RawRange;
 use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::{Broadcast, Transports, WriteRule};
 
-const RUN_COMMAND: WriteRule = WriteRule {
-    register: "operation_command",
-    access: Access::ReadWrite,
-    broadcast: Broadcast::No,
-    transports: Transports {
-        rtu: true,
-        tcp: false,
-    },
-    address: 0x0001,
-    also_at: &[],
-    raw: RawRange { min: 0, max: 65535 },
-    reserved: 0xF800,
-};
-const TCP_INPUTS: WriteRule = WriteRule {
-    register: "tcp_digital_input_command",
-    access: Access::ReadWrite,
-    broadcast: Broadcast::No,
-    transports: Transports {
-        rtu: false,
-        tcp: true,
-    },
-    address: 0x0001,
-    also_at: &[],
-    raw: RawRange { min: 0, max: 65535 },
-    reserved: 0xFF80,
-};
-const BROADCAST_SIGNAL: WriteRule = WriteRule {
-    register: "broadcast_operation_signal",
-    access: Access::Write,
-    broadcast: Broadcast::Only,
-    transports: Transports::ALL,
-    address: 0x0001,
-    also_at: &[],
-    raw: RawRange { min: 0, max: 65535 },
-    reserved: 0xCFC0,
-};
-const FREQUENCY: WriteRule = WriteRule {
-    register: "frequency_reference",
-    access: Access::ReadWrite,
-    broadcast: Broadcast::No,
-    transports: Transports::ALL,
-    address: 0x0002,
-    also_at: &[],
-    raw: RawRange { min: 0, max: 40000 },
-    reserved: 0,
-};
-const N001: WriteRule = WriteRule {
-    register: "n001",
-    access: Access::ReadWrite,
-    broadcast: Broadcast::No,
-    transports: Transports::ALL,
-    address: 0x0101,
-    also_at: &[],
-    raw: RawRange { min: 0, max: 4 },
-    reserved: 0,
-};
+const RUN_COMMAND: WriteRule = WriteRule::rw("operation_command", 0x0001, 0, 65535)
+    .on(Transports::RTU)
+    .reserved(0xF800);
+const TCP_INPUTS: WriteRule = WriteRule::rw("tcp_digital_input_command", 0x0001, 0, 65535)
+    .on(Transports::TCP)
+    .reserved(0xFF80);
+const BROADCAST_SIGNAL: WriteRule =
+    WriteRule::write_only("broadcast_operation_signal", 0x0001, 0, 65535)
+        .broadcast(Broadcast::Only)
+        .reserved(0xCFC0);
+const FREQUENCY: WriteRule = WriteRule::rw("frequency_reference", 0x0002, 0, 40000);
+const N001: WriteRule = WriteRule::rw("n001", 0x0101, 0, 4);
 
 static V7: Profile = Profile {
     writes: &[RUN_COMMAND, TCP_INPUTS, BROADCAST_SIGNAL, FREQUENCY, N001],

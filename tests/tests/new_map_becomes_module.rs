@@ -13,6 +13,49 @@ fn workspace() -> PathBuf {
         .to_path_buf()
 }
 
+/// Builds and runs the application in `app` whose `drivemap-drives` dependency has `features`
+/// (Cargo's `default-features = false` when given) and whose `main` prints the module `module`'s
+/// drive id and `DRIVES`; returns what it printed.
+fn run_app(app: &Path, maps: &Path, features: Option<&str>, module: &str) -> String {
+    let root = workspace();
+    let drives = root.join("drives").display().to_string();
+    let dependency = match features {
+        None => format!("{{ path = {drives:?} }}"),
+        Some(f) => format!("{{ path = {drives:?}, default-features = false, features = [{f:?}] }}"),
+    };
+    std::fs::write(
+        app.join("Cargo.toml"),
+        format!(
+            "[package]\nname = \"new-map-app\"\nversion = \"0.0.0\"\nedition = \"2024\"\n\n[workspace]\n\n[dependencies]\ndrivemap-drives = {dependency}\n"
+        ),
+    )
+    .unwrap();
+    std::fs::write(
+        app.join("src/main.rs"),
+        format!(
+            "fn main() {{\n    let ids: Vec<&str> = drivemap_drives::DRIVES.iter().map(|(id, _)| *id).collect();\n    println!(\"{{}} {{}}\", drivemap_drives::{module}::PROFILE.drive_id, ids.join(\",\"));\n}}\n"
+        ),
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO"))
+        .args(["run", "--quiet", "--offline", "--manifest-path"])
+        .arg(app.join("Cargo.toml"))
+        .env("DRIVEMAP_MAPS", maps)
+        .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
+        .env(
+            "DRIVEMAP_MANUALS",
+            root.join("target/new-map-probe/no-manuals"),
+        )
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "build failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).trim().to_owned()
+}
+
 #[test]
 fn a_new_yaml_file_becomes_a_module() {
     let root = workspace();
@@ -32,36 +75,8 @@ fn a_new_yaml_file_becomes_a_module() {
         maps.join("mini-drive.yaml"),
     )
     .unwrap();
-    std::fs::write(
-        app.join("Cargo.toml"),
-        format!(
-            "[package]\nname = \"new-map-app\"\nversion = \"0.0.0\"\nedition = \"2024\"\n\n[workspace]\n\n[dependencies]\ndrivemap-drives = {{ path = {:?} }}\n",
-            root.join("drives").display().to_string()
-        ),
-    )
-    .unwrap();
-    std::fs::write(
-        app.join("src/main.rs"),
-        "fn main() {\n    let ids: Vec<&str> = drivemap_drives::DRIVES.iter().map(|(id, _)| *id).collect();\n    println!(\"{} {}\", drivemap_drives::mini_drive::PROFILE.drive_id, ids.join(\",\"));\n}\n",
-    )
-    .unwrap();
-    let out = Command::new(env!("CARGO"))
-        .args(["run", "--quiet", "--offline", "--manifest-path"])
-        .arg(app.join("Cargo.toml"))
-        .env("DRIVEMAP_MAPS", &maps)
-        .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
-        .env(
-            "DRIVEMAP_MANUALS",
-            root.join("target/new-map-probe/no-manuals"),
-        )
-        .output()
-        .expect("cargo runs");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "build failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+
+    let stdout = run_app(&app, &maps, None, "mini_drive");
     let mut words = stdout.split_whitespace();
     assert_eq!(words.next(), Some("mini-drive"));
     let ids: Vec<&str> = words.next().unwrap_or_default().split(',').collect();
@@ -78,37 +93,8 @@ fn a_new_yaml_file_becomes_a_module() {
     );
 
     // An application that enables one drive's feature gets that module alone.
-    std::fs::write(
-        app.join("Cargo.toml"),
-        format!(
-            "[package]\nname = \"new-map-app\"\nversion = \"0.0.0\"\nedition = \"2024\"\n\n[workspace]\n\n[dependencies]\ndrivemap-drives = {{ path = {:?}, default-features = false, features = [\"yaskawa-v7\"] }}\n",
-            root.join("drives").display().to_string()
-        ),
-    )
-    .unwrap();
-    std::fs::write(
-        app.join("src/main.rs"),
-        "fn main() {\n    let ids: Vec<&str> = drivemap_drives::DRIVES.iter().map(|(id, _)| *id).collect();\n    println!(\"{} {}\", drivemap_drives::yaskawa_v7::PROFILE.drive_id, ids.join(\",\"));\n}\n",
-    )
-    .unwrap();
-    let out = Command::new(env!("CARGO"))
-        .args(["run", "--quiet", "--offline", "--manifest-path"])
-        .arg(app.join("Cargo.toml"))
-        .env("DRIVEMAP_MAPS", &maps)
-        .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
-        .env(
-            "DRIVEMAP_MANUALS",
-            root.join("target/new-map-probe/no-manuals"),
-        )
-        .output()
-        .expect("cargo runs");
-    assert!(
-        out.status.success(),
-        "build failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     assert_eq!(
-        String::from_utf8_lossy(&out.stdout).trim(),
+        run_app(&app, &maps, Some("yaskawa-v7"), "yaskawa_v7"),
         "yaskawa-v7 yaskawa-v7",
         "only the V7 module is generated"
     );
