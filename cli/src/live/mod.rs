@@ -3,6 +3,7 @@
 //! runtime's read planner ([`drivemap_runtime::planner`]).
 
 pub mod link;
+pub mod output;
 pub mod session;
 pub mod table;
 
