@@ -174,12 +174,14 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
                 register: id.clone(),
                 parameter: r.def.param.clone(),
                 role,
-                value: value.unwrap_or_else(|| "not read".into()),
                 origin: if given.fixed.contains(id) {
                     "given with --set"
-                } else {
+                } else if value.is_some() {
                     "read from the drive"
+                } else {
+                    "not read: no scale selected needs it, or see the warnings"
                 },
+                value: value.unwrap_or_default(),
             });
         }
     }
@@ -193,8 +195,8 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
                 .references
                 .get(&q.external)
                 .map(|v| format!("{v} {}", q.unit))
-                .unwrap_or_else(|| "not given".into()),
-            origin: "given with --set (not a register)",
+                .unwrap_or_default(),
+            origin: "external quantity, not a register: given with --set, else unknown",
         });
     }
     let mut plan = session.plan(&readable)?;
@@ -394,7 +396,7 @@ fn label(f: &Finding) -> String {
 /// The report for eyes.
 pub fn summary(r: &Report) -> String {
     let mut out = format!("probe of {} over {} at {}\n", r.drive, r.link, r.time);
-    for s in &r.settings {
+    for s in r.settings.iter().filter(|s| !s.value.is_empty()) {
         let p = s
             .parameter
             .as_deref()
