@@ -366,10 +366,11 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         link.request_gap = request_gap(&profiles, link.baud);
         timeout_used = timeout_used.max(link.timeout);
         let (mut client, text) = link.connect(first, &Profile::GENERIC)?;
-        link_text = text
-            .rsplit_once(", slave")
-            .map(|(a, _)| a.to_string())
-            .unwrap_or(text);
+        link_text = match (&args.serial, text.rsplit_once(", slave")) {
+            (Some(path), _) => format!("RTU {path}"),
+            (None, Some((a, _))) => a.to_string(),
+            (None, None) => text,
+        };
         let shown = line
             .map(|l| line_text(serial, l, first, &base))
             .unwrap_or_else(|| "-".into());
@@ -467,7 +468,7 @@ fn table(r: &Report) -> String {
     if r.found.is_empty() {
         return out;
     }
-    out += "SLAVE  LINE      ANSWER     MAPS (monitor reads consistent with the map / read)\n";
+    out += "SLAVE  LINE       ANSWER     MAPS (monitor reads consistent with the map / read)\n";
     for f in &r.found {
         let maps: Vec<String> = f
             .maps
@@ -476,7 +477,7 @@ fn table(r: &Report) -> String {
             .map(|m| format!("{} {}/{}", m.drive, m.consistent, m.tried))
             .collect();
         out += &format!(
-            "{:<5}  {:<8}  {:<9}  {}\n",
+            "{:<5}  {:<9}  {:<9}  {}\n",
             f.slave,
             f.line,
             f.answer,
