@@ -125,20 +125,21 @@ impl MapsDir {
     /// else by id among the maps this finds (the built-in ones too).
     pub fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
         let ctx = context_for(path);
-        let text = match std::fs::read_to_string(path) {
-            Ok(t) => t,
-            // Let the file reader say what is wrong with the path.
-            Err(_) => return drivemap_codegen::read_map(path, &ctx),
+        let direct = drivemap_codegen::read_map(path, &ctx);
+        let base_missing = |d: &Diagnostics| {
+            d.iter()
+                .any(|x| x.message.starts_with("base map `") && x.message.ends_with("not found"))
         };
-        let beside = path.parent().unwrap_or(Path::new("."));
+        match &direct {
+            Err(d) if base_missing(d) => {}
+            _ => return direct,
+        }
+        // The base is not beside the file: look it up by id.
+        let Ok(text) = std::fs::read_to_string(path) else {
+            return direct;
+        };
         let name = drivemap_codegen::load::display_name(path);
-        drivemap_codegen::read_map_str_with(&name, &text, &ctx, &|base| {
-            let file = beside.join(format!("{base}.yaml"));
-            match std::fs::read_to_string(&file) {
-                Ok(t) => Some((drivemap_codegen::load::display_name(&file).to_string(), t)),
-                Err(_) => self.base_text(base),
-            }
-        })
+        drivemap_codegen::read_map_str_with(&name, &text, &ctx, &|base| self.base_text(base))
     }
 }
 
@@ -201,6 +202,14 @@ mod tests {
         assert_eq!(dir.load("my-v7").unwrap().meta.id, "my-v7");
         // The built-in j7 extends the v7 of the directory.
         assert!(dir.load("yaskawa-j7").is_ok());
+        // A j7 file alone in a directory extends the built-in v7.
+        let lone = tmp.join("lone");
+        std::fs::create_dir_all(&lone).unwrap();
+        std::fs::write(lone.join("yaskawa-j7.yaml"), builtin("yaskawa-j7").unwrap()).unwrap();
+        let j7 = MapsDir::default()
+            .read(&lone.join("yaskawa-j7.yaml"))
+            .unwrap();
+        assert_eq!(j7.meta.id, "yaskawa-j7");
         let e = MapsDir::default().source_of("nope").unwrap_err();
         assert!(
             e.contains("known: automationdirect-acn, ptlk-tds-v8"),

@@ -154,6 +154,20 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
             readable.push(r);
         }
     }
+    // One read first: a drive that is not there is reported after one timeout, not one per
+    // planned request.
+    if let Some(first) = readable.first() {
+        let mut plan = session.plan(std::slice::from_ref(first))?;
+        let (words, _) = session.poll_detailed(&mut plan);
+        if let Some(Err(f)) = words.first() {
+            if f.sent && f.exception.is_none() {
+                return Err(format!(
+                    "{} did not answer; nothing checked ({})",
+                    session.link, f.message
+                ));
+            }
+        }
+    }
     let warnings = session.load_dependencies(&readable, &given.fixed);
     let mut settings = Vec::new();
     for (role, regs) in [
