@@ -50,6 +50,20 @@ pub enum Command {
     Write(commands::write::Args),
     /// Poll registers of a live drive by name as a live-updating table.
     Poll(commands::poll::Args),
+    /// Read every readable register of a drive against its map (never writes); report what disagrees; exit 1 if anything does.
+    Probe(commands::probe::Args),
+    /// Find the slaves on a line: which addresses answer, at which baud rate and parity, and which maps fit them.
+    Scan(commands::scan::Args),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
+    Completions(Completions),
+}
+
+/// Arguments of `drivemap completions`.
+#[derive(clap::Args, Debug)]
+pub struct Completions {
+    /// The shell.
+    #[arg(value_enum)]
+    pub shell: clap_complete::Shell,
 }
 
 /// Parses the command line and runs the command; errors go to standard error, exit status 2.
@@ -65,6 +79,14 @@ pub fn main() -> ExitCode {
         Command::Read(a) => commands::read::run(a),
         Command::Write(a) => commands::write::run(a),
         Command::Poll(a) => commands::poll::run(a),
+        Command::Probe(a) => commands::probe::run(a),
+        Command::Scan(a) => commands::scan::run(a),
+        Command::Completions(a) => {
+            use clap::CommandFactory;
+            let mut cmd = Cli::command();
+            clap_complete::generate(a.shell, &mut cmd, "drivemap", &mut std::io::stdout());
+            Ok(ExitCode::SUCCESS)
+        }
     };
     match result {
         Ok(code) => code,

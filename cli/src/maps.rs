@@ -1,41 +1,145 @@
-//! Finding maps: by file, or by drive id under the maps directory.
+//! Finding maps: the shipped maps are built into the binary; `--maps DIR` (or `DRIVEMAP_MAPS`)
+//! adds maps to them or replaces them by drive id; a map file can also be named directly.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Args as ClapArgs;
 use drivemap_codegen::{Diagnostics, Drive, validate::Context};
 
+include!(concat!(env!("OUT_DIR"), "/builtin_maps.rs"));
+
 /// Where maps are looked up.
-#[derive(ClapArgs, Debug, Clone)]
+#[derive(ClapArgs, Debug, Clone, Default)]
 pub struct MapsDir {
-    /// Directory holding `<drive id>.yaml` maps.
-    #[arg(long, default_value = "maps", env = "DRIVEMAP_MAPS")]
-    pub maps: PathBuf,
+    /// Directory of `<drive id>.yaml` maps that add to the built-in maps or replace them by id.
+    #[arg(long, value_name = "DIR", env = "DRIVEMAP_MAPS")]
+    pub maps: Option<PathBuf>,
+}
+
+/// Where a drive's map comes from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum MapSource {
+    /// A file of the maps directory.
+    File(PathBuf),
+    /// Built into the binary.
+    Builtin(&'static str),
+}
+
+/// The YAML of a built-in map.
+pub fn builtin(id: &str) -> Option<&'static str> {
+    BUILTIN_MAPS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t)
 }
 
 impl MapsDir {
-    pub fn path_of(&self, id: &str) -> Result<PathBuf, String> {
-        let path = self.maps.join(format!("{id}.yaml"));
-        if path.is_file() {
-            return Ok(path);
+    /// The directory given, else `maps` (for commands that work on a directory of files:
+    /// `check` without files, `diff --git`).
+    pub fn dir(&self) -> PathBuf {
+        self.maps.clone().unwrap_or_else(|| PathBuf::from("maps"))
+    }
+
+    /// Every drive id known and where its map comes from: built in, then the maps directory.
+    pub fn known(&self) -> BTreeMap<String, MapSource> {
+        let mut all: BTreeMap<String, MapSource> = BUILTIN_MAPS
+            .iter()
+            .map(|(id, text)| (id.to_string(), MapSource::Builtin(text)))
+            .collect();
+        if let Some(dir) = &self.maps {
+            for p in drivemap_codegen::find_maps(dir).unwrap_or_default() {
+                if let Some(id) = p.file_stem().map(|s| s.to_string_lossy().into_owned()) {
+                    all.insert(id, MapSource::File(p));
+                }
+            }
         }
-        let known = drivemap_codegen::find_maps(&self.maps)
-            .map(|v| {
-                v.iter()
-                    .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            })
-            .unwrap_or_default();
+        all
+    }
+
+    /// Where the map of `id` comes from: `<maps>/<id>.yaml` when there, else built in.
+    pub fn source_of(&self, id: &str) -> Result<MapSource, String> {
+        if let Some(dir) = &self.maps {
+            for ext in ["yaml", "yml"] {
+                let path = dir.join(format!("{id}.{ext}"));
+                if path.is_file() {
+                    return Ok(MapSource::File(path));
+                }
+            }
+        }
+        if let Some(text) = builtin(id) {
+            return Ok(MapSource::Builtin(text));
+        }
+        let known: Vec<String> = self.known().into_keys().collect();
         Err(format!(
-            "no map for drive `{id}` in {} (known: {known})",
-            self.maps.display()
+            "no map for drive `{id}` (known: {}{})",
+            known.join(", "),
+            match &self.maps {
+                Some(d) => format!("; looked in {} and the built-in maps", d.display()),
+                None => "; add maps with --maps DIR or DRIVEMAP_MAPS".into(),
+            }
         ))
     }
 
-    /// Reads, expands and validates a map.
+    /// The path of a drive's map file, for commands that need a file (built-in maps have none).
+    pub fn path_of(&self, id: &str) -> Result<PathBuf, String> {
+        match self.source_of(id)? {
+            MapSource::File(p) => Ok(p),
+            MapSource::Builtin(_) => Err(format!(
+                "drive `{id}` is built in, not a file; give --maps DIR for a map file"
+            )),
+        }
+    }
+
+    /// Reads, expands and validates the map of a drive id; `extends` is resolved by id the
+    /// same way (the maps directory first, then the built-in maps).
+    pub fn load(&self, id: &str) -> Result<Drive, String> {
+        match self.source_of(id)? {
+            MapSource::File(p) => self
+                .read(&p)
+                .map_err(|d| format!("{} does not validate:\n{d}", p.display())),
+            MapSource::Builtin(text) => self
+                .read_builtin(id, text)
+                .map_err(|d| format!("built-in map {id} does not validate:\n{d}")),
+        }
+    }
+
+    /// Reads, expands and validates a built-in map (its base too is looked up by id).
+    pub fn read_builtin(&self, id: &str, text: &str) -> Result<Drive, Diagnostics> {
+        drivemap_codegen::read_map_str_with(
+            &format!("<built-in>/{id}.yaml"),
+            text,
+            &Context::default(),
+            &|base| self.base_text(base),
+        )
+    }
+
+    fn base_text(&self, id: &str) -> Option<(String, String)> {
+        match self.source_of(id).ok()? {
+            MapSource::File(p) => {
+                let text = std::fs::read_to_string(&p).ok()?;
+                Some((p.display().to_string(), text))
+            }
+            MapSource::Builtin(text) => Some((format!("<built-in>/{id}.yaml"), text.to_owned())),
+        }
+    }
+
+    /// Reads, expands and validates a map file. Its base (`extends`) is looked up beside it,
+    /// else by id among the maps this finds (the built-in ones too).
     pub fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
-        drivemap_codegen::read_map(path, &context_for(path))
+        let ctx = context_for(path);
+        let direct = drivemap_codegen::read_map(path, &ctx);
+        let base_missing = |d: &Diagnostics| {
+            d.iter()
+                .any(|x| x.message.starts_with("base map `") && x.message.ends_with("not found"))
+        };
+        match &direct {
+            Err(d) if base_missing(d) => {}
+            _ => return direct,
+        }
+        // The base is not beside the file: look it up by id.
+        let Ok(text) = std::fs::read_to_string(path) else {
+            return direct;
+        };
+        let name = drivemap_codegen::load::display_name(path);
+        drivemap_codegen::read_map_str_with(&name, &text, &ctx, &|base| self.base_text(base))
     }
 }
 
@@ -45,5 +149,72 @@ pub fn context_for(path: &Path) -> Context {
     match drivemap_codegen::default_manuals_dir(dir) {
         Some(m) => Context::with_manuals(&m),
         None => Context::default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_shipped_map_is_built_in_and_loads_without_files() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps");
+        let shipped: Vec<String> = drivemap_codegen::find_maps(&dir)
+            .unwrap()
+            .iter()
+            .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+            .collect();
+        let built: Vec<&str> = BUILTIN_MAPS.iter().map(|(id, _)| *id).collect();
+        assert_eq!(built, shipped);
+        for id in &shipped {
+            let drive = MapsDir::default().load(id).unwrap();
+            assert_eq!(&drive.meta.id, id);
+        }
+        // yaskawa-j7 extends yaskawa-v7: the base is found among the built-in maps.
+        let j7 = MapsDir::default().load("yaskawa-j7").unwrap();
+        let from_file =
+            drivemap_codegen::read_map(&dir.join("yaskawa-j7.yaml"), &Context::default()).unwrap();
+        assert_eq!(j7.registers.len(), from_file.registers.len());
+    }
+
+    #[test]
+    fn a_maps_directory_overrides_by_id_and_adds() {
+        let tmp = std::env::temp_dir().join(format!("drivemap-maps-{}", std::process::id()));
+        std::fs::create_dir_all(&tmp).unwrap();
+        let v7 = builtin("yaskawa-v7").unwrap();
+        std::fs::write(tmp.join("yaskawa-v7.yaml"), v7).unwrap();
+        std::fs::write(
+            tmp.join("my-v7.yaml"),
+            v7.replacen("id: yaskawa-v7", "id: my-v7", 1),
+        )
+        .unwrap();
+        let dir = MapsDir {
+            maps: Some(tmp.clone()),
+        };
+        assert_eq!(
+            dir.source_of("yaskawa-v7").unwrap(),
+            MapSource::File(tmp.join("yaskawa-v7.yaml"))
+        );
+        assert!(matches!(
+            dir.source_of("ptlk-tds-v8").unwrap(),
+            MapSource::Builtin(_)
+        ));
+        assert_eq!(dir.load("my-v7").unwrap().meta.id, "my-v7");
+        // The built-in j7 extends the v7 of the directory.
+        assert!(dir.load("yaskawa-j7").is_ok());
+        // A j7 file alone in a directory extends the built-in v7.
+        let lone = tmp.join("lone");
+        std::fs::create_dir_all(&lone).unwrap();
+        std::fs::write(lone.join("yaskawa-j7.yaml"), builtin("yaskawa-j7").unwrap()).unwrap();
+        let j7 = MapsDir::default()
+            .read(&lone.join("yaskawa-j7.yaml"))
+            .unwrap();
+        assert_eq!(j7.meta.id, "yaskawa-j7");
+        let e = MapsDir::default().source_of("nope").unwrap_err();
+        assert!(
+            e.contains("known: automationdirect-acn, ptlk-tds-v8"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&tmp).unwrap();
     }
 }

@@ -51,6 +51,18 @@ pub fn read_map_version(path: &Path, ctx: &validate::Context) -> Result<Drive, D
     }
 }
 
+/// Like [`read_map_str`], resolving `extends` through `base`, which gives the name and YAML text
+/// of a base map by drive id (maps built into a program).
+pub fn read_map_str_with(
+    name: &str,
+    text: &str,
+    ctx: &validate::Context,
+    base: &load::BaseResolver<'_>,
+) -> Result<Drive, Diagnostics> {
+    let loaded = load::load_str_with(name, text, base).map_err(Diagnostics::from)?;
+    finish(&loaded, ctx)
+}
+
 fn finish(loaded: &load::LoadedMap, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
     let drive = ir::expand(loaded).map_err(Diagnostics::from)?;
     let errors = validate::validate(&drive, ctx);

@@ -476,3 +476,61 @@ fn drop_register(root: &mut [(String, Loc, Node)], id: &str) -> bool {
     }
     false
 }
+
+/// Finds the text of a base map by drive id, for maps held in memory: `(name shown in
+/// diagnostics, YAML text)`.
+pub type BaseResolver<'a> = dyn Fn(&str) -> Option<(String, String)> + 'a;
+
+/// Like [`load_str`], resolving `extends` through `base` (by drive id) instead of refusing it:
+/// for maps built into a program, or a map file whose base is built in.
+pub fn load_str_with(
+    name: &str,
+    text: &str,
+    base: &BaseResolver<'_>,
+) -> Result<LoadedMap, Vec<Diagnostic>> {
+    let tree = load_tree_str(name, text, base, &mut Vec::new())?;
+    let model = deserialize(&tree)?;
+    Ok(LoadedMap {
+        path: PathBuf::from(name),
+        model,
+        tree,
+    })
+}
+
+fn load_tree_str(
+    name: &str,
+    text: &str,
+    base: &BaseResolver<'_>,
+    chain: &mut Vec<String>,
+) -> Result<Node, Vec<Diagnostic>> {
+    let file: Arc<str> = Arc::from(name);
+    let tree = source::parse(&file, text).map_err(|d| vec![d])?;
+    let Some(extends) = tree.get("drive").and_then(|d| d.get("extends")) else {
+        return Ok(tree);
+    };
+    let NodeKind::Scalar(Value::String(base_id)) = &extends.kind else {
+        return Err(vec![Diagnostic::new(
+            extends.loc.clone(),
+            None,
+            "`drive.extends` must name the base drive's id",
+        )]);
+    };
+    if chain.iter().any(|c| c == base_id) || chain.len() > 16 {
+        return Err(vec![Diagnostic::new(
+            extends.loc.clone(),
+            None,
+            format!("`extends: {base_id}` makes a cycle of variant maps"),
+        )]);
+    }
+    let Some((base_name, base_text)) = base(base_id) else {
+        return Err(vec![Diagnostic::new(
+            extends.loc.clone(),
+            None,
+            format!("base map `{base_id}` not found"),
+        )]);
+    };
+    chain.push(base_id.clone());
+    let base_tree = load_tree_str(&base_name, &base_text, base, chain)?;
+    chain.pop();
+    merge_variant(base_tree, tree)
+}

@@ -100,10 +100,10 @@ fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, String> {
                     .ok_or_else(|| format!("{}: not a map file", map.display()))?;
                 (dir, Some(vec![name]))
             } else {
-                (args.dir.maps.clone(), Some(vec![format!("{text}.yaml")]))
+                (args.dir.dir(), Some(vec![format!("{text}.yaml")]))
             }
         }
-        None => (args.dir.maps.clone(), None),
+        None => (args.dir.dir(), None),
     };
     let then = diff::git::maps_at(&dir, rev)?;
     let names: Vec<String> = match names {

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::Args as ClapArgs;
 
 use crate::drive_doc;
-use crate::maps::MapsDir;
+use crate::maps::{MapSource, MapsDir};
 
 /// Arguments of `drivemap doc`.
 #[derive(ClapArgs, Debug)]
@@ -14,7 +14,7 @@ pub struct Args {
     /// Map file to document.
     #[arg(conflicts_with = "drive", required_unless_present = "drive")]
     pub file: Option<PathBuf>,
-    /// Drive id, looked up as `<maps>/<id>.yaml`.
+    /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
     #[arg(long)]
     pub drive: Option<String>,
     /// Write the Markdown here instead of standard output.
@@ -26,17 +26,23 @@ pub struct Args {
 
 /// Writes the Markdown reference of one map.
 pub fn run(args: Args) -> Result<ExitCode, String> {
-    let path = match (&args.file, &args.drive) {
-        (Some(f), _) => f.clone(),
-        (None, Some(id)) => args.dir.path_of(id)?,
-        (None, None) => return Err("give a map file or --drive <id>".into()),
-    };
-    let drive = match args.dir.read(&path) {
-        Ok(drive) => drive,
-        Err(diags) => {
-            eprintln!("{diags}");
-            return Ok(ExitCode::FAILURE);
+    let (path, drive) = match (&args.file, &args.drive) {
+        (Some(f), _) => match args.dir.read(f) {
+            Ok(drive) => (f.clone(), drive),
+            Err(diags) => {
+                eprintln!("{diags}");
+                return Ok(ExitCode::FAILURE);
+            }
+        },
+        (None, Some(id)) => {
+            let path = match args.dir.source_of(id)? {
+                MapSource::File(p) => p,
+                // Built-in maps are the repository's `maps/<id>.yaml`.
+                MapSource::Builtin(_) => PathBuf::from("maps").join(format!("{id}.yaml")),
+            };
+            (path, args.dir.load(id)?)
         }
+        (None, None) => return Err("give a map file or --drive <id>".into()),
     };
     // A stable name for the header: the file name, under `maps/` when it lives there.
     let file = path

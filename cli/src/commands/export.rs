@@ -12,7 +12,7 @@ pub struct Args {
     /// Map file to export.
     #[arg(conflicts_with = "drive", required_unless_present = "drive")]
     pub file: Option<PathBuf>,
-    /// Drive id, looked up as `<maps>/<id>.yaml`.
+    /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
     #[arg(long)]
     pub drive: Option<String>,
     #[command(flatten)]
@@ -20,12 +20,15 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
-    let path = match (&args.file, &args.drive) {
-        (Some(f), _) => f.clone(),
-        (None, Some(id)) => args.dir.path_of(id)?,
+    let read = match (&args.file, &args.drive) {
+        (Some(f), _) => args.dir.read(f),
+        (None, Some(id)) => match args.dir.load(id) {
+            Ok(d) => Ok(d),
+            Err(e) => return Err(e),
+        },
         (None, None) => return Err("give a map file or --drive <id>".into()),
     };
-    match args.dir.read(&path) {
+    match read {
         Ok(drive) => {
             let json = drivemap_codegen::export::export(&drive);
             println!(

@@ -4,6 +4,8 @@ pub mod diff;
 pub mod doc;
 pub mod export;
 pub mod poll;
+pub mod probe;
 pub mod read;
+pub mod scan;
 pub mod simulate;
 pub mod write;

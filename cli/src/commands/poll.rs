@@ -10,6 +10,7 @@ use drivemap_codegen::ir::Register;
 use drivemap_codegen::model::Access;
 
 use crate::live::Target;
+use crate::live::output::{Emitter, Format, Reading, now_rfc3339};
 use crate::live::session::{Session, find_all, on_transport};
 use crate::live::table::{self, Row};
 
@@ -31,6 +32,9 @@ pub struct Args {
     /// Stop after this many polls (default: until interrupted).
     #[arg(long)]
     pub count: Option<u64>,
+    /// Output: a live table, JSON lines (one record per register and poll) or CSV rows.
+    #[arg(long, value_enum, default_value = "table")]
+    pub format: Format,
 }
 
 fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, String> {
@@ -83,10 +87,36 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let mut previous: Vec<String> = Vec::new();
     let mut any_failed = false;
     let mut n: u64 = 0;
+    let mut emitter = Emitter::new(args.format);
     loop {
         let began = Instant::now();
         n += 1;
         let words = session.poll(&mut plan);
+        if args.format != Format::Table {
+            let time = now_rfc3339();
+            let records: Vec<Reading> = regs
+                .iter()
+                .zip(&words)
+                .map(|(r, w)| Reading::of(&session, r, w, &time))
+                .collect();
+            any_failed |= records.iter().any(|r| r.status != "ok");
+            let mut out = std::io::stdout().lock();
+            if emitter
+                .write(&mut out, &records, true)
+                .and_then(|_| out.flush())
+                .is_err()
+            {
+                break;
+            }
+            drop(out);
+            if args.count.is_some_and(|c| n >= c) {
+                break;
+            }
+            if let Some(rest) = args.interval.checked_sub(began.elapsed()) {
+                std::thread::sleep(rest);
+            }
+            continue;
+        }
         let rows: Vec<Row> = regs
             .iter()
             .zip(&words)

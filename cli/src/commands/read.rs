@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use clap::Args as ClapArgs;
 
 use crate::live::Target;
+use crate::live::output::{Emitter, Format, Reading, now_rfc3339};
 use crate::live::session::{Session, find_all};
 use crate::live::table::{self, Row};
 
@@ -16,6 +17,9 @@ pub struct Args {
     /// Registers by id, parameter number or printed name.
     #[arg(required = true, value_name = "REGISTER")]
     pub names: Vec<String>,
+    /// Output: an aligned table, JSON (an array of records) or CSV.
+    #[arg(long, value_enum, default_value = "table")]
+    pub format: Format,
 }
 
 /// Reads the named registers and prints them decoded; exits 1 when any failed.
@@ -28,6 +32,23 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         eprintln!("warning: {w}");
     }
     let words = session.read_words(&regs)?;
+    if args.format != Format::Table {
+        let time = now_rfc3339();
+        let records: Vec<Reading> = regs
+            .iter()
+            .zip(&words)
+            .map(|(r, w)| Reading::of(&session, r, w, &time))
+            .collect();
+        let mut out = std::io::stdout().lock();
+        Emitter::new(args.format)
+            .write(&mut out, &records, false)
+            .map_err(|e| format!("writing standard output: {e}"))?;
+        return Ok(if records.iter().any(|r| r.status != "ok") {
+            ExitCode::FAILURE
+        } else {
+            ExitCode::SUCCESS
+        });
+    }
     let rows: Vec<Row> = regs
         .iter()
         .zip(&words)

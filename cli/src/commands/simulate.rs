@@ -5,7 +5,7 @@
 
 use std::io::Write;
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -32,7 +32,7 @@ pub enum LineParity {
 #[derive(ClapArgs, Debug)]
 #[command(group(ArgGroup::new("link").required(true).args(["tcp", "rtu_tcp", "serial"])))]
 pub struct Args {
-    /// Drive id, looked up as `<maps>/<id>.yaml`.
+    /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
     #[arg(long)]
     pub drive: String,
     /// Serve Modbus TCP here: `PORT` (binds 127.0.0.1) or `HOST:PORT` (binds where told).
@@ -72,25 +72,9 @@ pub struct Args {
     pub dir: MapsDir,
 }
 
-/// The map of a drive id: under `--maps`, else (when the default `maps` is not here) in the
-/// source tree this binary was built from.
+/// The map of a drive id: under `--maps` when there, else built in.
 pub(crate) fn load_drive(dir: &MapsDir, id: &str) -> Result<Drive, String> {
-    let path = match dir.path_of(id) {
-        Ok(p) => p,
-        Err(e) => {
-            let built = Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("..")
-                .join("maps")
-                .join(format!("{id}.yaml"));
-            if dir.maps == Path::new("maps") && built.is_file() {
-                built
-            } else {
-                return Err(e);
-            }
-        }
-    };
-    dir.read(&path)
-        .map_err(|d| format!("{} does not validate:\n{d}", path.display()))
+    dir.load(id)
 }
 
 fn pair(text: &str, what: &str) -> Result<(String, String), String> {

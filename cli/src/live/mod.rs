@@ -3,6 +3,7 @@
 //! runtime's read planner ([`drivemap_runtime::planner`]).
 
 pub mod link;
+pub mod output;
 pub mod session;
 pub mod table;
 
@@ -14,7 +15,7 @@ use crate::maps::MapsDir;
 /// The drive to talk to: its map and how to reach it.
 #[derive(ClapArgs, Debug, Clone)]
 pub struct Target {
-    /// Drive id, looked up as `<maps>/<id>.yaml`.
+    /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
     #[arg(long)]
     pub drive: String,
     #[command(flatten)]
@@ -28,7 +29,6 @@ pub struct Target {
 impl Target {
     /// Reads and validates the drive's map.
     pub fn load(&self) -> Result<Drive, String> {
-        let path = self.dir.path_of(&self.drive)?;
-        self.dir.read(&path).map_err(|d| format!("{d}"))
+        self.dir.load(&self.drive)
     }
 }

@@ -302,6 +302,17 @@ pub fn value_error(drive: &Drive, e: &ValueError) -> String {
     }
 }
 
+/// Why a planned register has no value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Failure {
+    /// What happened, as the runtime says it.
+    pub message: String,
+    /// The exception code the drive answered with, if it answered with one.
+    pub exception: Option<u8>,
+    /// Whether a request was sent (false: this link cannot read the register).
+    pub sent: bool,
+}
+
 /// The planned reads of a set of registers, kept across poll cycles (the planner remembers
 /// what the drive refused).
 pub struct Polling {
@@ -535,6 +546,36 @@ impl<'d> Session<'d> {
                 },
             })
             .collect()
+    }
+
+    /// [`Session::poll`] keeping the exception code of each refusal, and the requests sent.
+    pub fn poll_detailed(&mut self, plan: &mut Polling) -> (Vec<Result<u16, Failure>>, u32) {
+        let stats = plan.poller.poll(&mut self.client, self.slave);
+        let words = plan
+            .slots
+            .iter()
+            .map(|slot| match slot {
+                Err(why) => Err(Failure {
+                    message: why.clone(),
+                    exception: None,
+                    sent: false,
+                }),
+                Ok(i) => match plan.poller.value(*i) {
+                    Some(Ok(w)) => Ok(w),
+                    Some(Err(e)) => Err(Failure {
+                        message: e.to_string(),
+                        exception: e.exception().map(|x| x.code),
+                        sent: !e.is_refusal(),
+                    }),
+                    None => Err(Failure {
+                        message: "not read".into(),
+                        exception: None,
+                        sent: false,
+                    }),
+                },
+            })
+            .collect();
+        (words, stats.requests)
     }
 
     /// Reads the raw words of `regs` once, planned (see [`Session::plan`]).

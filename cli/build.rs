@@ -1,0 +1,33 @@
+//! Builds the shipped maps into the binary: every `maps/*.yaml` of the repository becomes an
+//! entry `(drive id, YAML text)` of `BUILTIN_MAPS` (`$OUT_DIR/builtin_maps.rs`), so `drivemap`
+//! works from any directory once installed, and a new map needs no edit here.
+
+use std::path::{Path, PathBuf};
+
+fn main() {
+    let maps = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("maps");
+    println!("cargo::rerun-if-changed={}", maps.display());
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&maps)
+        .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_default();
+    files.retain(|p| p.extension().is_some_and(|e| e == "yaml") && p.is_file());
+    files.sort();
+    let mut out = String::from(
+        "/// The shipped maps, `(drive id, YAML text)`, sorted by id.\n\
+         pub static BUILTIN_MAPS: &[(&str, &str)] = &[\n",
+    );
+    for f in &files {
+        println!("cargo::rerun-if-changed={}", f.display());
+        let id = f.file_stem().expect("a file name").to_string_lossy();
+        let abs = f.canonicalize().expect("a map path");
+        out += &format!(
+            "    ({id:?}, include_str!({:?})),\n",
+            abs.display().to_string()
+        );
+    }
+    out += "];\n";
+    let dest = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("builtin_maps.rs");
+    std::fs::write(dest, out).expect("writing builtin_maps.rs");
+}

@@ -1,0 +1,554 @@
+//! `drivemap scan (--serial PATH | --tcp ADDR | --rtu-tcp ADDR) [--slaves 1-247] [--baud ...]
+//! [--parity ...]`: what is on this line?
+//!
+//! For each baud rate and parity asked (serial only), sends one read of one register to every
+//! slave address asked, waiting at most the drives' response time (from the maps' timing, or
+//! `--timeout`): any reply — values or an exception — means a slave is there. The register is
+//! the one readable in the most candidate maps. Then, for each slave that answered, reads the
+//! monitor (read-only) registers of every candidate map and ranks the maps by how many of those
+//! reads the slave answers with a value the map allows. Never writes.
+
+use std::io::IsTerminal;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use clap::{ArgGroup, Args as ClapArgs};
+use drivemap_codegen::Drive;
+use drivemap_codegen::ir::Register;
+use drivemap_codegen::model::Access;
+use drivemap_live::LiveSettings;
+use drivemap_runtime::transport::serial::char_times;
+use drivemap_runtime::{Error, Profile};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde::Serialize;
+
+use super::probe::{Check, check_value};
+use crate::live::link::{LineParity, LinkArgs};
+use crate::live::output::Format;
+use crate::live::session::{Session, on_transport};
+use crate::maps::MapsDir;
+
+/// Monitor registers read per candidate map when identifying a slave.
+const MAX_IDENTIFY_REGISTERS: usize = 48;
+
+/// Arguments of `drivemap scan`.
+#[derive(ClapArgs, Debug)]
+#[command(group(ArgGroup::new("link").required(true).args(["tcp", "rtu_tcp", "serial"])))]
+pub struct Args {
+    /// Modbus TCP server or gateway (`192.168.1.10:502`).
+    #[arg(long, value_name = "ADDR")]
+    pub tcp: Option<String>,
+    /// RTU frames over TCP through a transparent serial gateway (`192.168.1.20:4001`).
+    #[arg(long = "rtu-tcp", value_name = "ADDR")]
+    pub rtu_tcp: Option<String>,
+    /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`).
+    #[arg(long, value_name = "PATH")]
+    pub serial: Option<String>,
+    /// Slave addresses to try: `1-247`, `1,2,5`, `1-10,31`.
+    #[arg(long, default_value = "1-247", value_parser = parse_slaves)]
+    pub slaves: SlaveList,
+    /// Baud rates to try on --serial, comma-separated (default: the candidate maps' defaults).
+    #[arg(long, value_delimiter = ',')]
+    pub baud: Vec<u32>,
+    /// Parities to try on --serial, comma-separated (default: the candidate maps' defaults).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub parity: Vec<LineParity>,
+    /// Longest wait for each probe (default: from the maps' timing and the line speed).
+    #[arg(long, value_parser = crate::duration::parse)]
+    pub timeout: Option<Duration>,
+    /// Candidate maps by drive id (default: every map known).
+    #[arg(long = "drive", value_name = "ID")]
+    pub drives: Vec<String>,
+    /// Output: a table for eyes, JSON, or CSV (one row per slave and candidate map).
+    #[arg(long, value_enum, default_value = "table")]
+    pub format: Format,
+    #[command(flatten)]
+    pub dir: MapsDir,
+}
+
+/// Slave addresses, in order, without repeats.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SlaveList(pub Vec<u8>);
+
+/// Parses `1-247`, `1,2,5`, `1-10,31`.
+pub fn parse_slaves(text: &str) -> Result<SlaveList, String> {
+    let mut out: Vec<u8> = Vec::new();
+    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let num = |s: &str| -> Result<u8, String> {
+            match s.trim().parse::<u8>() {
+                Ok(n) if (1..=247).contains(&n) => Ok(n),
+                _ => Err(format!("`{s}` is not a slave address 1-247")),
+            }
+        };
+        let (a, b) = match part.split_once('-') {
+            Some((a, b)) => (num(a)?, num(b)?),
+            None => (num(part)?, num(part)?),
+        };
+        if a > b {
+            return Err(format!("`{part}`: the range runs backwards"));
+        }
+        for n in a..=b {
+            if !out.contains(&n) {
+                out.push(n);
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err("no slave address given".into());
+    }
+    Ok(SlaveList(out))
+}
+
+/// The JSON report (`drivemap-scan/1`).
+#[derive(Debug, Serialize)]
+pub struct Report {
+    pub format: &'static str,
+    pub link: String,
+    /// Line settings tried (serial), e.g. `9600 8E1`; `-` on TCP.
+    pub lines: Vec<String>,
+    pub slaves_tried: usize,
+    pub probe_timeout_ms: u64,
+    /// The register every slave was asked for.
+    pub probe: String,
+    pub elapsed_ms: u64,
+    pub found: Vec<Found>,
+}
+
+/// A slave that answered.
+#[derive(Debug, Serialize)]
+pub struct Found {
+    pub slave: u8,
+    pub line: String,
+    /// What it answered to the probe: the word, or the exception.
+    pub answer: String,
+    /// Candidate maps, best first.
+    pub maps: Vec<Candidate>,
+}
+
+/// How a slave answered one map's monitor registers.
+#[derive(Debug, Serialize)]
+pub struct Candidate {
+    pub drive: String,
+    /// Monitor registers read.
+    pub tried: usize,
+    /// Answered with a value the map allows.
+    pub consistent: usize,
+    /// Answered with a value outside the map's range or codes.
+    pub inconsistent: usize,
+    /// Refused with an exception.
+    pub refused: usize,
+    /// No reply, or not converted.
+    pub unanswered: usize,
+    /// `consistent / tried`.
+    pub score: f64,
+}
+
+#[derive(Clone, Copy)]
+struct Line {
+    baud: u32,
+    parity: LineParity,
+}
+
+fn line_text(kind_serial: bool, line: Line, drive: &Drive, base: &LinkArgs) -> String {
+    if !kind_serial {
+        return "-".into();
+    }
+    let mut l = base.clone();
+    l.baud = Some(line.baud);
+    l.parity = Some(line.parity);
+    let (baud, parity, stops) = l.line(drive);
+    let p = match parity {
+        LineParity::None => 'N',
+        LineParity::Even => 'E',
+        LineParity::Odd => 'O',
+    };
+    format!("{baud} 8{p}{stops}")
+}
+
+/// The longest time any candidate drive takes to answer a one-register read at `baud`:
+/// request and reply on the wire (11 bits a character), the drive's response delay from its
+/// map (bit times, microseconds, the delay parameter's factory setting), plus 20 ms for USB
+/// adapters and scheduling.
+pub fn probe_timeout(profiles: &[&Profile], baud: Option<u32>) -> Duration {
+    let baud = baud.unwrap_or(9600).max(300);
+    let wire = char_times(8.0 + 7.0, baud);
+    let bit = Duration::from_secs_f64(1.0 / f64::from(baud));
+    let delay = profiles
+        .iter()
+        .map(|p| {
+            let t = &p.timing;
+            bit * t.response_delay_bits.unwrap_or(0)
+                + Duration::from_micros(u64::from(t.response_delay_us.unwrap_or(0)))
+                + Duration::from_micros(u64::from(t.response_delay_param_default_us.unwrap_or(0)))
+        })
+        .max()
+        .unwrap_or_default();
+    wire + delay + Duration::from_millis(20)
+}
+
+/// The least pause between requests any candidate drive asks for.
+fn request_gap(profiles: &[&Profile], baud: Option<u32>) -> Duration {
+    let bit = Duration::from_secs_f64(1.0 / f64::from(baud.unwrap_or(9600).max(300)));
+    profiles
+        .iter()
+        .map(|p| {
+            bit * p.timing.request_gap_bits.unwrap_or(0)
+                + Duration::from_micros(u64::from(p.timing.request_gap_us.unwrap_or(0)))
+        })
+        .max()
+        .unwrap_or_default()
+}
+
+/// The holding register readable in the most candidate maps on this link (lowest address on
+/// a tie), as a PDU address.
+fn probe_address(drives: &[Drive], base: &LinkArgs) -> u16 {
+    let kind = base.kind();
+    let mut counts: std::collections::BTreeMap<u16, usize> = Default::default();
+    for d in drives {
+        let settings = LiveSettings::default();
+        let profile = drivemap_live::leak_profile(d);
+        let mut seen = std::collections::BTreeSet::new();
+        for r in readable_monitors(d, kind, usize::MAX) {
+            if r.table != drivemap_codegen::model::ModbusTable::Holding {
+                continue;
+            }
+            let a = crate::live::session::address_of(d, r, &settings, kind);
+            let Some(pdu) = profile.address_offsets.pdu_address(a, kind) else {
+                continue;
+            };
+            if seen.insert(pdu) {
+                *counts.entry(pdu).or_default() += 1;
+            }
+        }
+    }
+    counts
+        .iter()
+        .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+        .map(|(a, _)| *a)
+        .unwrap_or(0)
+}
+
+/// Read-only registers this link can read, at most `max`.
+fn readable_monitors(
+    d: &Drive,
+    kind: drivemap_runtime::profile::TransportKind,
+    max: usize,
+) -> Vec<&Register> {
+    d.registers
+        .iter()
+        .filter(|r| r.access == Access::Read && r.readable() && !r.broadcast)
+        .filter(|r| on_transport(r, kind))
+        .take(max)
+        .collect()
+}
+
+/// Reads a map's monitors from a slave and counts how the answers fit the map.
+fn identify(drive: &Drive, link: &LinkArgs) -> Candidate {
+    let mut c = Candidate {
+        drive: drive.meta.id.clone(),
+        tried: 0,
+        consistent: 0,
+        inconsistent: 0,
+        refused: 0,
+        unanswered: 0,
+        score: 0.0,
+    };
+    let regs = readable_monitors(drive, link.kind(), MAX_IDENTIFY_REGISTERS);
+    c.tried = regs.len();
+    let Ok(mut session) = Session::open(drive, link, LiveSettings::default()) else {
+        c.unanswered = c.tried;
+        return c;
+    };
+    let _ = session.load_dependencies(&regs, &Default::default());
+    let Ok(mut plan) = session.plan(&regs) else {
+        c.unanswered = c.tried;
+        return c;
+    };
+    let (words, _) = session.poll_detailed(&mut plan);
+    for (r, w) in regs.iter().zip(&words) {
+        match w {
+            Ok(raw) => match check_value(drive, r, *raw, &session) {
+                Check::Agrees => c.consistent += 1,
+                Check::Disagrees(..) => c.inconsistent += 1,
+                Check::Unchecked(_) => c.unanswered += 1,
+            },
+            Err(f) if f.exception.is_some() => c.refused += 1,
+            Err(_) => c.unanswered += 1,
+        }
+    }
+    if c.tried > 0 {
+        c.score = c.consistent as f64 / c.tried as f64;
+    }
+    c
+}
+
+/// Scans and prints; exit status 0 when any slave answered, 1 when none did.
+pub fn run(args: Args) -> Result<ExitCode, String> {
+    let ids: Vec<String> = if args.drives.is_empty() {
+        args.dir.known().into_keys().collect()
+    } else {
+        args.drives.clone()
+    };
+    let drives: Vec<Drive> = ids
+        .iter()
+        .map(|id| args.dir.load(id))
+        .collect::<Result<_, _>>()?;
+    let Some(first) = drives.first() else {
+        return Err("no candidate maps".into());
+    };
+    let profiles: Vec<&'static Profile> = drives.iter().map(drivemap_live::leak_profile).collect();
+    let base = LinkArgs {
+        tcp: args.tcp.clone(),
+        rtu_tcp: args.rtu_tcp.clone(),
+        serial: args.serial.clone(),
+        baud: None,
+        parity: None,
+        stop_bits: None,
+        slave: None,
+        timeout: Duration::from_secs(1),
+        retries: 0,
+        request_gap: Duration::ZERO,
+    };
+    let serial = args.serial.is_some();
+    let mut bauds = args.baud.clone();
+    let mut parities = args.parity.clone();
+    if serial {
+        for d in &drives {
+            let (b, p, _) = base.line(d);
+            if args.baud.is_empty() && !bauds.contains(&b) {
+                bauds.push(b);
+            }
+            if args.parity.is_empty() && !parities.contains(&p) {
+                parities.push(p);
+            }
+        }
+    }
+    let lines: Vec<Option<Line>> = if serial {
+        bauds
+            .iter()
+            .flat_map(|&baud| {
+                parities
+                    .iter()
+                    .map(move |&parity| Some(Line { baud, parity }))
+            })
+            .collect()
+    } else {
+        vec![None]
+    };
+    let slaves = &args.slaves.0;
+    let probe_pdu = probe_address(&drives, &base);
+    let total = (lines.len() * slaves.len()) as u64;
+    let bar = ProgressBar::with_draw_target(
+        Some(total),
+        if std::io::stderr().is_terminal() {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
+    );
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed}] {bar:30} {pos}/{len} {msg}")
+            .map_err(|e| e.to_string())?,
+    );
+    let started = Instant::now();
+    let mut found: Vec<(u8, Option<Line>, String)> = Vec::new();
+    let mut timeout_used = Duration::ZERO;
+    let mut link_text = String::new();
+    for line in &lines {
+        let mut link = base.clone();
+        if let Some(l) = line {
+            link.baud = Some(l.baud);
+            link.parity = Some(l.parity);
+        }
+        link.timeout = args
+            .timeout
+            .unwrap_or_else(|| probe_timeout(&profiles, link.baud));
+        link.request_gap = request_gap(&profiles, link.baud);
+        timeout_used = timeout_used.max(link.timeout);
+        let (mut client, text) = link.connect(first, &Profile::GENERIC)?;
+        link_text = match (&args.serial, text.rsplit_once(", slave")) {
+            (Some(path), _) => format!("RTU {path}"),
+            (None, Some((a, _))) => a.to_string(),
+            (None, None) => text,
+        };
+        let shown = line
+            .map(|l| line_text(serial, l, first, &base))
+            .unwrap_or_else(|| "-".into());
+        bar.set_message(shown.clone());
+        for &slave in slaves {
+            let mut w = [0u16; 1];
+            let answer = match client.read_holding(slave, probe_pdu, &mut w) {
+                Ok(()) => Some(format!("{:04X}h", w[0])),
+                Err(Error::Exception { exception, .. }) => Some(format!(
+                    "exception {:02X}h ({})",
+                    exception.code, exception.name
+                )),
+                Err(_) => None,
+            };
+            if let Some(a) = answer {
+                bar.println(format!("slave {slave} answered at {shown}: {a}"));
+                found.push((slave, *line, a));
+            }
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    let mut report_found = Vec::new();
+    for (slave, line, answer) in found {
+        let mut link = base.clone();
+        link.slave = Some(slave);
+        if let Some(l) = line {
+            link.baud = Some(l.baud);
+            link.parity = Some(l.parity);
+        }
+        link.timeout = args
+            .timeout
+            .unwrap_or_else(|| probe_timeout(&profiles, link.baud));
+        link.request_gap = request_gap(&profiles, link.baud);
+        let mut maps: Vec<Candidate> = drives.iter().map(|d| identify(d, &link)).collect();
+        maps.sort_by(|a, b| {
+            b.score
+                .total_cmp(&a.score)
+                .then(b.consistent.cmp(&a.consistent))
+                .then(a.inconsistent.cmp(&b.inconsistent))
+                .then(a.drive.cmp(&b.drive))
+        });
+        report_found.push(Found {
+            slave,
+            line: line
+                .map(|l| line_text(serial, l, first, &base))
+                .unwrap_or_else(|| "-".into()),
+            answer,
+            maps,
+        });
+    }
+    let report = Report {
+        format: "drivemap-scan/1",
+        link: link_text,
+        lines: lines
+            .iter()
+            .map(|l| {
+                l.map(|l| line_text(serial, l, first, &base))
+                    .unwrap_or_else(|| "-".into())
+            })
+            .collect(),
+        slaves_tried: slaves.len(),
+        probe_timeout_ms: timeout_used.as_millis() as u64,
+        probe: format!("03h read of PDU {probe_pdu:04X}h x1"),
+        elapsed_ms: started.elapsed().as_millis() as u64,
+        found: report_found,
+    };
+    match args.format {
+        Format::Table => print!("{}", table(&report)),
+        Format::Json => println!(
+            "{}",
+            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
+        ),
+        Format::Csv => print!("{}", csv_rows(&report)?),
+    }
+    Ok(if report.found.is_empty() {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn table(r: &Report) -> String {
+    let mut out = format!(
+        "scan of {}: {} slave address(es) x {} line setting(s) ({}), {} each, at most {} ms a probe: {} answered in {:.1} s\n",
+        r.link,
+        r.slaves_tried,
+        r.lines.len(),
+        r.lines.join(", "),
+        r.probe,
+        r.probe_timeout_ms,
+        r.found.len(),
+        r.elapsed_ms as f64 / 1000.0
+    );
+    if r.found.is_empty() {
+        return out;
+    }
+    out += "SLAVE  LINE       ANSWER     MAPS (monitor reads consistent with the map / read)\n";
+    for f in &r.found {
+        let maps: Vec<String> = f
+            .maps
+            .iter()
+            .filter(|m| m.consistent > 0)
+            .map(|m| format!("{} {}/{}", m.drive, m.consistent, m.tried))
+            .collect();
+        out += &format!(
+            "{:<5}  {:<9}  {:<9}  {}\n",
+            f.slave,
+            f.line,
+            f.answer,
+            if maps.is_empty() {
+                "no map fits".into()
+            } else {
+                maps.join(", ")
+            }
+        );
+    }
+    out
+}
+
+fn csv_rows(r: &Report) -> Result<String, String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let err = |e: csv::Error| e.to_string();
+    w.write_record([
+        "slave",
+        "line",
+        "answer",
+        "rank",
+        "drive",
+        "score",
+        "consistent",
+        "inconsistent",
+        "refused",
+        "unanswered",
+        "tried",
+    ])
+    .map_err(err)?;
+    for f in &r.found {
+        for (i, m) in f.maps.iter().enumerate() {
+            w.write_record([
+                f.slave.to_string(),
+                f.line.clone(),
+                f.answer.clone(),
+                (i + 1).to_string(),
+                m.drive.clone(),
+                format!("{:.3}", m.score),
+                m.consistent.to_string(),
+                m.inconsistent.to_string(),
+                m.refused.to_string(),
+                m.unanswered.to_string(),
+                m.tried.to_string(),
+            ])
+            .map_err(err)?;
+        }
+    }
+    let bytes = w.into_inner().map_err(|e| e.to_string())?;
+    String::from_utf8(bytes).map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slave_lists() {
+        assert_eq!(parse_slaves("1-3,7,2").unwrap().0, vec![1, 2, 3, 7]);
+        assert_eq!(parse_slaves("1-247").unwrap().0.len(), 247);
+        assert!(parse_slaves("0").is_err());
+        assert!(parse_slaves("5-2").is_err());
+        assert!(parse_slaves("248").is_err());
+    }
+
+    #[test]
+    fn the_probe_timeout_follows_the_line_speed_and_the_slowest_drive() {
+        let fast = probe_timeout(&[&Profile::GENERIC], Some(19200));
+        let slow = probe_timeout(&[&Profile::GENERIC], Some(1200));
+        assert!(fast < slow, "{fast:?} {slow:?}");
+        // 15 characters at 1200 baud is 137.5 ms on the wire.
+        assert!(slow >= Duration::from_millis(150), "{slow:?}");
+    }
+}

@@ -1,0 +1,264 @@
+//! Register values for other tools: JSON and CSV (`--format json|csv` of `read` and `poll`).
+//!
+//! One record per register read, the same fields in both formats:
+//!
+//! | field | what |
+//! |---|---|
+//! | `time` | when the value was read, UTC, RFC 3339 with milliseconds |
+//! | `register` | the map's register id |
+//! | `parameter` | the manual's parameter number (`Bn-01`), or empty |
+//! | `name` | the printed name |
+//! | `address` | the address on this link, `0001h` |
+//! | `value` | the number: engineering value, plain word, enumeration code, or the raw bits |
+//! | `unit` | the unit of `value`, or empty |
+//! | `text` | the value as the table shows it (`48.00 Hz`, `2: Remote`, `0019h [running, ready]`) |
+//! | `raw` | the word read, as a decimal number |
+//! | `status` | `ok` or `error` |
+//! | `error` | why the value is missing or could not be decoded |
+//!
+//! JSON adds `fields` for bit registers (`{"running": 1, ...}`).
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use clap::ValueEnum;
+use drivemap_codegen::ir::Register;
+use drivemap_live::codec::Value;
+use serde::Serialize;
+
+use super::session::Session;
+use crate::describe;
+
+/// How values are printed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum Format {
+    /// An aligned table for eyes.
+    #[default]
+    Table,
+    /// JSON (`read`: an array; `poll`: one object a line).
+    Json,
+    /// CSV with a header line.
+    Csv,
+}
+
+/// One register's value as a record.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Reading {
+    pub time: String,
+    pub register: String,
+    pub parameter: Option<String>,
+    pub name: String,
+    pub address: String,
+    pub value: Option<f64>,
+    pub unit: Option<String>,
+    pub text: Option<String>,
+    pub raw: Option<u16>,
+    pub status: &'static str,
+    pub error: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fields: Option<BTreeMap<String, u16>>,
+}
+
+/// The CSV header, in record order.
+pub const CSV_HEADER: [&str; 11] = [
+    "time",
+    "register",
+    "parameter",
+    "name",
+    "address",
+    "value",
+    "unit",
+    "text",
+    "raw",
+    "status",
+    "error",
+];
+
+impl Reading {
+    /// The record of a register read as `word` (or its error) at `time`.
+    pub fn of(
+        session: &Session<'_>,
+        r: &Register,
+        word: &Result<u16, String>,
+        time: &str,
+    ) -> Reading {
+        let mut rec = Reading {
+            time: time.to_owned(),
+            register: r.def.id.clone(),
+            parameter: r.def.param.clone(),
+            name: r.def.name.clone(),
+            address: describe::address(session.address(r)),
+            value: None,
+            unit: None,
+            text: None,
+            raw: None,
+            status: "error",
+            error: None,
+            fields: None,
+        };
+        match word {
+            Err(e) => rec.error = Some(e.clone()),
+            Ok(raw) => {
+                rec.raw = Some(*raw);
+                match session.decode(r, *raw) {
+                    Err(e) => rec.error = Some(e),
+                    Ok(v) => {
+                        rec.status = "ok";
+                        rec.value = v.as_f64();
+                        rec.text = Some(v.to_string());
+                        match &v {
+                            Value::Quantity { unit, .. } if !unit.is_empty() => {
+                                rec.unit = Some(unit.clone())
+                            }
+                            Value::Bits { fields, .. } => {
+                                rec.fields =
+                                    Some(fields.iter().map(|f| (f.id.clone(), f.value)).collect())
+                            }
+                            _ => {}
+                        }
+                    }
+                }
+            }
+        }
+        rec
+    }
+
+    fn csv_record(&self) -> [String; 11] {
+        let opt = |o: &Option<String>| o.clone().unwrap_or_default();
+        [
+            self.time.clone(),
+            self.register.clone(),
+            opt(&self.parameter),
+            self.name.clone(),
+            self.address.clone(),
+            self.value.map(|v| v.to_string()).unwrap_or_default(),
+            opt(&self.unit),
+            opt(&self.text),
+            self.raw.map(|v| v.to_string()).unwrap_or_default(),
+            self.status.to_owned(),
+            opt(&self.error),
+        ]
+    }
+}
+
+/// Writes records as JSON (an array, or one object a line) or CSV (the header once).
+pub struct Emitter {
+    format: Format,
+    header_written: bool,
+}
+
+impl Emitter {
+    pub fn new(format: Format) -> Emitter {
+        Emitter {
+            format,
+            header_written: false,
+        }
+    }
+
+    /// Writes `records`: JSON lines when `lines`, else one JSON array; CSV rows after the
+    /// header (written before the first batch).
+    pub fn write(
+        &mut self,
+        out: &mut impl Write,
+        records: &[Reading],
+        lines: bool,
+    ) -> std::io::Result<()> {
+        match self.format {
+            Format::Table => Ok(()),
+            Format::Json if lines => {
+                for r in records {
+                    serde_json::to_writer(&mut *out, r)?;
+                    out.write_all(b"\n")?;
+                }
+                Ok(())
+            }
+            Format::Json => {
+                serde_json::to_writer_pretty(&mut *out, records)?;
+                out.write_all(b"\n")
+            }
+            Format::Csv => {
+                let mut w = csv::WriterBuilder::new().from_writer(&mut *out);
+                if !self.header_written {
+                    w.write_record(CSV_HEADER)?;
+                    self.header_written = true;
+                }
+                for r in records {
+                    w.write_record(r.csv_record())?;
+                }
+                w.flush()
+            }
+        }
+    }
+}
+
+/// Now, UTC, RFC 3339 with milliseconds: `2026-11-25T07:47:01.123Z`.
+pub fn now_rfc3339() -> String {
+    let now = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .unwrap_or_default();
+    rfc3339(now.as_secs(), now.subsec_millis())
+}
+
+/// Seconds since 1970 as an RFC 3339 UTC time (days to civil date: H. Hinnant's algorithm).
+pub fn rfc3339(secs: u64, millis: u32) -> String {
+    let days = (secs / 86_400) as i64;
+    let s = secs % 86_400;
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}.{millis:03}Z",
+        s / 3600,
+        s / 60 % 60,
+        s % 60
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rfc3339_dates() {
+        assert_eq!(rfc3339(0, 0), "1970-01-01T00:00:00.000Z");
+        assert_eq!(rfc3339(951_782_400, 5), "2000-02-29T00:00:00.005Z");
+        assert_eq!(rfc3339(1_795_599_999, 999), "2026-11-25T09:46:39.999Z");
+    }
+
+    #[test]
+    fn csv_quotes_and_writes_the_header_once() {
+        let r = Reading {
+            time: "t".into(),
+            register: "inverter_status".into(),
+            parameter: None,
+            name: "Inverter status".into(),
+            address: "0020h".into(),
+            value: Some(25.0),
+            unit: None,
+            text: Some("0019h [running, ready]".into()),
+            raw: Some(25),
+            status: "ok",
+            error: None,
+            fields: None,
+        };
+        let mut e = Emitter::new(Format::Csv);
+        let mut out = Vec::new();
+        e.write(&mut out, std::slice::from_ref(&r), true).unwrap();
+        e.write(&mut out, &[r], true).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 3);
+        assert_eq!(lines[0], CSV_HEADER.join(","));
+        assert_eq!(
+            lines[1],
+            "t,inverter_status,,Inverter status,0020h,25,,\"0019h [running, ready]\",25,ok,"
+        );
+    }
+}
