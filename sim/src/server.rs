@@ -5,10 +5,17 @@
 //! frame left incomplete for longer than the silence limit is dropped, as a drive does after the
 //! 3.5-character gap. A frame with an unknown function code is taken whole when the CRC of the
 //! usual 8-byte request matches, or after the silence otherwise, and answered 01h.
+//!
+//! On a network the simulator is a server among hostile peers, so a TCP listener has [`Limits`]:
+//! at most [`Limits::max_connections`] connections served at once (one more is accepted and
+//! closed at once, so nothing piles up in the kernel's backlog), each closed after
+//! [`Limits::idle_timeout`] without a byte, or when a frame it started is not complete within
+//! [`Limits::frame_timeout`] (a peer that trickles a byte at a time never holds a connection).
+//! A master that keeps asking keeps its connection whatever the others do.
 
 use std::io;
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
@@ -40,6 +47,40 @@ pub fn lock(sim: &SharedSim) -> MutexGuard<'_, Simulator> {
     }
 }
 
+/// What a listener allows its peers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// Connections served at once; one more is closed as soon as it is accepted.
+    pub max_connections: usize,
+    /// A connection that sends nothing for this long is closed (`None`: never).
+    pub idle_timeout: Option<Duration>,
+    /// A frame whose first byte arrived this long ago and that is still incomplete closes its
+    /// connection (`None`: no limit beyond the RTU silence).
+    pub frame_timeout: Option<Duration>,
+}
+
+impl Limits {
+    /// No limit: for a serial line, which has one master and no connections.
+    pub const NONE: Limits = Limits {
+        max_connections: usize::MAX,
+        idle_timeout: None,
+        frame_timeout: None,
+    };
+}
+
+impl Default for Limits {
+    /// 64 connections, 60 s idle, 2 s to complete a frame: a plant network's few masters poll
+    /// far more often than once a minute, and a Modbus frame of at most 260 bytes takes
+    /// milliseconds to arrive.
+    fn default() -> Self {
+        Limits {
+            max_connections: 64,
+            idle_timeout: Some(Duration::from_secs(60)),
+            frame_timeout: Some(Duration::from_secs(2)),
+        }
+    }
+}
+
 /// How often a serving loop looks at its stop flag.
 const POLL: Duration = Duration::from_millis(25);
 
@@ -61,29 +102,45 @@ fn rtu_frame(buf: &[u8]) -> Result<Option<usize>, ()> {
     }
 }
 
-/// Serves requests arriving on `link` until `stop` is set or the peer hangs up. `silence` is
-/// how long an incomplete RTU frame may wait for its remaining bytes before it is dropped.
+/// Serves requests arriving on `link` until `stop` is set, the peer hangs up, or it breaks
+/// `limits` (idle too long, a frame not completed in time). `silence` is how long an incomplete
+/// RTU frame may wait for its remaining bytes before it is dropped.
 pub fn serve_link<T: Transport>(
     sim: &SharedSim,
     link: &mut T,
     stop: &AtomicBool,
     log: Option<&Logger>,
     silence: Duration,
+    limits: &Limits,
 ) -> io::Result<()> {
     let kind = link.kind();
     let mut buf: Vec<u8> = Vec::with_capacity(2 * tcp::MAX_FRAME);
     let mut chunk = [0u8; tcp::MAX_FRAME];
     let mut out = [0u8; tcp::MAX_FRAME];
     let mut last_byte = Instant::now();
+    // When the oldest byte still waiting in `buf` arrived.
+    let mut frame_started: Option<Instant> = None;
     while !stop.load(Ordering::Relaxed) {
         let n = match link.recv(&mut chunk, Instant::now() + POLL) {
             Ok(n) => n,
             Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => return Ok(()),
             Err(e) => return Err(e),
         };
+        let now = Instant::now();
         if n > 0 {
             buf.extend_from_slice(&chunk[..n]);
-            last_byte = Instant::now();
+            last_byte = now;
+            frame_started.get_or_insert(now);
+        } else if limits
+            .idle_timeout
+            .is_some_and(|idle| now.duration_since(last_byte) >= idle)
+        {
+            return Ok(());
+        }
+        if let (Some(start), Some(limit)) = (frame_started, limits.frame_timeout) {
+            if now.duration_since(start) >= limit {
+                return Ok(());
+            }
         }
         let quiet = last_byte.elapsed() >= silence;
         loop {
@@ -114,6 +171,8 @@ pub fn serve_link<T: Transport>(
                 link.send(&out[..m])?;
             }
             buf.drain(..len);
+            // The bytes left over start the next frame.
+            frame_started = (!buf.is_empty()).then_some(now);
         }
         if buf.len() > 4 * tcp::MAX_FRAME {
             buf.clear();
@@ -136,29 +195,49 @@ pub struct TcpServer {
     local_addr: SocketAddr,
     stop: Arc<AtomicBool>,
     accept: Option<JoinHandle<()>>,
+    live: Arc<AtomicUsize>,
 }
 
 impl TcpServer {
-    /// Binds `addr` and serves `sim` there, one thread per connection.
+    /// Binds `addr` and serves `sim` there, one thread per connection, with the default
+    /// [`Limits`].
     pub fn spawn(
         sim: SharedSim,
         addr: impl ToSocketAddrs,
         framing: TcpFraming,
         log: Option<Logger>,
     ) -> io::Result<TcpServer> {
+        Self::spawn_with(sim, addr, framing, log, Limits::default())
+    }
+
+    /// [`TcpServer::spawn`] with explicit limits.
+    pub fn spawn_with(
+        sim: SharedSim,
+        addr: impl ToSocketAddrs,
+        framing: TcpFraming,
+        log: Option<Logger>,
+        limits: Limits,
+    ) -> io::Result<TcpServer> {
         let listener = TcpListener::bind(addr)?;
         listener.set_nonblocking(true)?;
         let local_addr = listener.local_addr()?;
         let stop = Arc::new(AtomicBool::new(false));
-        let flag = stop.clone();
+        let live = Arc::new(AtomicUsize::new(0));
+        let (flag, count) = (stop.clone(), live.clone());
         let accept = thread::Builder::new()
             .name(format!("sim-accept-{local_addr}"))
-            .spawn(move || accept_loop(listener, sim, framing, log, flag))?;
+            .spawn(move || accept_loop(listener, sim, framing, log, flag, limits, count))?;
         Ok(TcpServer {
             local_addr,
             stop,
             accept: Some(accept),
+            live,
         })
+    }
+
+    /// Connections being served now.
+    pub fn connections(&self) -> usize {
+        self.live.load(Ordering::Relaxed)
     }
 
     /// The address the server listens on (the port chosen when binding port 0).
@@ -192,28 +271,48 @@ impl Drop for TcpServer {
     }
 }
 
+/// Decrements the live-connection count when a connection's thread ends, however it ends.
+struct Live(Arc<AtomicUsize>);
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::Relaxed);
+    }
+}
+
 fn accept_loop(
     listener: TcpListener,
     sim: SharedSim,
     framing: TcpFraming,
     log: Option<Logger>,
     stop: Arc<AtomicBool>,
+    limits: Limits,
+    live: Arc<AtomicUsize>,
 ) {
     let mut connections: Vec<JoinHandle<()>> = Vec::new();
     while !stop.load(Ordering::Relaxed) {
         match listener.accept() {
             Ok((stream, _)) => {
+                connections.retain(|h| !h.is_finished());
+                if live.load(Ordering::Relaxed) >= limits.max_connections {
+                    // Full: close at once rather than leave the peer waiting in the backlog.
+                    drop(stream);
+                    continue;
+                }
+                live.fetch_add(1, Ordering::Relaxed);
+                let guard = Live(live.clone());
                 let (sim, log, stop) = (sim.clone(), log.clone(), stop.clone());
                 let spawned =
                     thread::Builder::new()
                         .name("sim-connection".into())
                         .spawn(move || {
-                            let _ = serve_stream(stream, &sim, framing, log.as_ref(), &stop);
+                            let _guard = guard;
+                            let _ =
+                                serve_stream(stream, &sim, framing, log.as_ref(), &stop, &limits);
                         });
                 if let Ok(h) = spawned {
                     connections.push(h);
                 }
-                connections.retain(|h| !h.is_finished());
             }
             Err(e) if e.kind() == io::ErrorKind::WouldBlock => thread::sleep(POLL / 2),
             Err(_) => thread::sleep(POLL),
@@ -230,16 +329,31 @@ fn serve_stream(
     framing: TcpFraming,
     log: Option<&Logger>,
     stop: &AtomicBool,
+    limits: &Limits,
 ) -> io::Result<()> {
     stream.set_nonblocking(false)?;
     match framing {
         TcpFraming::ModbusTcp => {
             let mut link = TcpTransport::from_stream(stream)?;
-            serve_link(sim, &mut link, stop, log, Duration::from_millis(500))
+            serve_link(
+                sim,
+                &mut link,
+                stop,
+                log,
+                Duration::from_millis(500),
+                limits,
+            )
         }
         TcpFraming::RtuOverTcp => {
             let mut link = RtuOverTcpTransport::from_stream(stream)?;
-            serve_link(sim, &mut link, stop, log, Duration::from_millis(100))
+            serve_link(
+                sim,
+                &mut link,
+                stop,
+                log,
+                Duration::from_millis(100),
+                limits,
+            )
         }
     }
 }
@@ -266,7 +380,9 @@ impl SerialServer {
         let flag = stop.clone();
         let thread = thread::Builder::new()
             .name("sim-serial".into())
-            .spawn(move || serve_link(&sim, &mut link, &flag, log.as_ref(), silence))?;
+            .spawn(move || {
+                serve_link(&sim, &mut link, &flag, log.as_ref(), silence, &Limits::NONE)
+            })?;
         Ok(SerialServer {
             stop,
             thread: Some(thread),

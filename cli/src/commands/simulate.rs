@@ -68,6 +68,16 @@ pub struct Args {
     /// Do not log requests.
     #[arg(long)]
     pub quiet: bool,
+    /// TCP: connections served at once; one more is closed as soon as it is accepted.
+    #[arg(long = "max-connections", default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..))]
+    pub max_connections: u16,
+    /// TCP: a connection that sends nothing this long is closed.
+    #[arg(long = "idle-timeout", default_value = "60s", value_parser = crate::duration::parse)]
+    pub idle_timeout: std::time::Duration,
+    /// TCP: a connection whose started frame is not complete this long after its first byte is
+    /// closed (a peer trickling bytes cannot hold it).
+    #[arg(long = "frame-timeout", default_value = "2s", value_parser = crate::duration::parse)]
+    pub frame_timeout: std::time::Duration,
     #[command(flatten)]
     pub dir: MapsDir,
 }
@@ -187,7 +197,12 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             TcpFraming::RtuOverTcp
         };
         let addr = bind_address(addr)?;
-        let server = TcpServer::spawn(shared, addr.as_str(), framing, log)
+        let limits = drivemap_sim::Limits {
+            max_connections: usize::from(args.max_connections),
+            idle_timeout: Some(args.idle_timeout),
+            frame_timeout: Some(args.frame_timeout),
+        };
+        let server = TcpServer::spawn_with(shared, addr.as_str(), framing, log, limits)
             .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
         let what = match framing {
             TcpFraming::ModbusTcp => "Modbus TCP",
