@@ -16,10 +16,37 @@ pub struct Dec {
 
 impl Dec {
     /// The decimal a float was written as (its shortest round-trip form).
+    ///
+    /// Without allocating for numbers below 2^53 (every scale and limit of a drive map): the
+    /// fewest decimal places `e` at which an integer `m` gives back `x` as `m / 10^e` (both exact
+    /// in `f64`, so the division is correctly rounded, as parsing the decimal text is) is the
+    /// shortest form. The run-time interpreter converts scales on every request with it.
     pub fn from_f64(x: f64) -> Option<Dec> {
         if !x.is_finite() {
             return None;
         }
+        const EXACT: f64 = 9_007_199_254_740_992.0; // 2^53
+        if x.abs() < EXACT {
+            let mut power = 1.0f64;
+            for exponent in 0..=22u32 {
+                let m = (x * power).round();
+                if m.abs() < EXACT && m / power == x {
+                    return Some(
+                        Dec {
+                            mantissa: m as i128,
+                            exponent,
+                        }
+                        .normalized(),
+                    );
+                }
+                power *= 10.0;
+            }
+        }
+        Self::from_text(x)
+    }
+
+    /// [`Dec::from_f64`] through the float's shortest `Display` text.
+    fn from_text(x: f64) -> Option<Dec> {
         let text = format!("{x}");
         let (neg, digits) = match text.strip_prefix('-') {
             Some(rest) => (true, rest),
@@ -100,6 +127,26 @@ pub fn raw_of(value: f64, scale: Dec) -> Option<i128> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn from_f64_agrees_with_the_shortest_text() {
+        let mut values = vec![0.0, -0.0, 1e-7, 0.3, 2.675, 655.35, 1e15 + 0.5, 123456.789];
+        for e in 0..7 {
+            for k in (-20_000i64..20_000).step_by(7) {
+                values.push(k as f64 / 10f64.powi(e));
+            }
+        }
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            values.push((x >> 11) as f64 / (1u64 << 20) as f64 - 4096.0);
+        }
+        for v in values {
+            assert_eq!(Dec::from_f64(v), Dec::from_text(v), "{v}");
+        }
+    }
 
     #[test]
     fn decimals_are_exact() {

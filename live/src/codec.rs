@@ -155,17 +155,17 @@ fn relative(
     full_scale: f64,
     settings: &LiveSettings,
 ) -> Result<Conversion, ValueError> {
-    let (key, setting) = match reference {
+    let (key, setting): (&str, &'static str) = match reference {
         Reference::Register(name) => match drive.find(name) {
-            Some(t) => (t.def.id.clone(), label(t)),
-            None => (name.clone(), intern(name)),
+            Some(t) => (t.id(), label(t)),
+            None => (name, intern(name)),
         },
-        Reference::External(q) => (q.external.clone(), intern(&q.external)),
+        Reference::External(q) => (&q.external, intern(&q.external)),
     };
     let reference = *settings
         .references
-        .get(&key)
-        .ok_or(ValueError::MissingSetting {
+        .get(key)
+        .ok_or_else(|| ValueError::MissingSetting {
             register: intern(r.id()),
             setting,
         })?;
@@ -198,17 +198,19 @@ fn conversion(
             let code = selector
                 .and_then(|s| settings.selectors.get(&s.def.id))
                 .copied()
-                .ok_or(ValueError::MissingSetting {
+                .ok_or_else(|| ValueError::MissingSetting {
                     register: intern(r.id()),
                     setting,
                 })?;
-            let case = sel.cases.iter().find(|c| c.when.contains(&code)).ok_or(
-                ValueError::UnsupportedSetting {
+            let case = sel
+                .cases
+                .iter()
+                .find(|c| c.when.contains(&code))
+                .ok_or_else(|| ValueError::UnsupportedSetting {
                     register: intern(r.id()),
                     setting,
                     code,
-                },
-            )?;
+                })?;
             match &case.scale {
                 Scale::Factor(f) => {
                     let dec = Dec::from_f64(*f).unwrap_or(one);
@@ -324,6 +326,32 @@ pub fn decode(
             })
         }
     }
+}
+
+/// The number a raw word stands for — what [`decode`] returns, as [`Value::as_f64`] reads it,
+/// with the bit-field word for bit fields — without building the value (no allocation): for
+/// code that only computes with it, such as the simulator's drive model.
+pub fn decode_number(
+    drive: &Drive,
+    r: &Register,
+    raw: u16,
+    settings: &LiveSettings,
+) -> Result<f64, ValueError> {
+    Ok(match r.kind() {
+        ValueKind::Word => scale::word_to_int(raw, r.def.signed) as f64,
+        ValueKind::Enum(_) => f64::from(raw),
+        ValueKind::Bits(fields) => f64::from(raw & field_mask(fields)),
+        ValueKind::Quantity(_) | ValueKind::UnitQuantity => {
+            match conversion(drive, r, settings)?.0 {
+                Conversion::Decimal { scale: s, .. } => scale::decode_decimal(raw, r.def.signed, s),
+                Conversion::Relative {
+                    full_scale,
+                    reference,
+                    ..
+                } => scale::decode_relative(raw, r.def.signed, full_scale, reference),
+            }
+        }
+    })
 }
 
 /// Encodes an engineering number (a value in the register's unit, a code, or a raw word for

@@ -277,6 +277,11 @@ pub struct Simulator {
     externals: BTreeMap<String, f64>,
     selectors: Vec<usize>,
     references: Vec<usize>,
+    /// [`Simulator::settings`] as last computed, and the words of the selector and reference
+    /// registers it was computed from: recomputed only when one of them changes, so a request
+    /// that changes none allocates nothing.
+    cached: LiveSettings,
+    cached_from: Option<Vec<u16>>,
     commands: Vec<CommandTrack>,
     warnings: Vec<String>,
     stats: Stats,
@@ -390,6 +395,8 @@ impl Simulator {
             externals,
             selectors,
             references,
+            cached: LiveSettings::default(),
+            cached_from: None,
             commands,
             warnings: Vec::new(),
             stats: Stats::default(),
@@ -553,6 +560,29 @@ impl Simulator {
         s
     }
 
+    /// Brings the cached settings up to date and lends them out (put them back with
+    /// [`Simulator::restore_settings`]); allocates only when a selector or reference changed.
+    fn take_settings(&mut self) -> LiveSettings {
+        let current = self
+            .selectors
+            .iter()
+            .chain(&self.references)
+            .map(|&i| self.raw[i]);
+        let fresh = self
+            .cached_from
+            .as_ref()
+            .is_some_and(|from| current.clone().eq(from.iter().copied()));
+        if !fresh {
+            self.cached = self.settings();
+            self.cached_from = Some(current.collect());
+        }
+        std::mem::take(&mut self.cached)
+    }
+
+    fn restore_settings(&mut self, settings: LiveSettings) {
+        self.cached = settings;
+    }
+
     fn default_of(&self, r: &Register, settings: &LiveSettings) -> Option<f64> {
         let by_variant = r
             .def
@@ -686,18 +716,19 @@ impl Simulator {
     /// Whether the generated `encode` of this register would produce `raw`: decode it, encode
     /// the value back. Conversions that need a setting the drive cannot supply are accepted.
     fn accepts(&self, r: &Register, raw: u16, settings: &LiveSettings) -> bool {
-        let value = match codec::decode(&self.drive, r, raw, settings) {
-            Ok(Value::Bits { .. }) => f64::from(raw),
-            Ok(v) => match v.as_f64() {
-                Some(v) => v,
-                None => return true,
+        // Bit fields are encoded from the whole word, so reserved bits set are refused.
+        let value = match r.kind() {
+            ValueKind::Bits(_) => f64::from(raw),
+            _ => match codec::decode_number(&self.drive, r, raw, settings) {
+                Ok(v) => v,
+                Err(_) => return true,
             },
-            Err(_) => return true,
         };
         match codec::encode(&self.drive, r, value, settings) {
             Ok(_) => true,
             Err(
                 ValueError::OutOfRange { .. }
+                | ValueError::WordOverflow { .. }
                 | ValueError::UnknownCode { .. }
                 | ValueError::NotFinite { .. },
             ) => false,
@@ -706,9 +737,7 @@ impl Simulator {
     }
 
     fn decode_f64(&self, i: usize, settings: &LiveSettings) -> Option<f64> {
-        codec::decode(&self.drive, &self.drive.registers[i], self.raw[i], settings)
-            .ok()
-            .and_then(|v| v.as_f64())
+        codec::decode_number(&self.drive, &self.drive.registers[i], self.raw[i], settings).ok()
     }
 
     fn source_value(&self, s: &Source, settings: &LiveSettings) -> Option<f64> {
@@ -772,7 +801,7 @@ impl Simulator {
         let Some(roles) = self.roles.clone() else {
             return;
         };
-        let settings = self.settings();
+        let settings = self.take_settings();
         let max_f = self
             .source_value(&roles.max_frequency, &settings)
             .filter(|v| v.is_finite() && *v > 0.0)
@@ -793,6 +822,7 @@ impl Simulator {
         self.model.aim(reference, max_f);
         self.model.advance(dt, max_f, accel, decel);
         self.publish(&roles, &settings, max_f);
+        self.restore_settings(settings);
     }
 
     fn store(&mut self, i: usize, value: f64, settings: &LiveSettings) {
@@ -1096,7 +1126,35 @@ impl Simulator {
         values: &[u16],
         broadcast: bool,
     ) -> Result<(), u8> {
-        let settings = self.settings();
+        let mut targets = [(0u16, None::<usize>, 0u16); pdu::MAX_WRITE as usize];
+        let settings = self.take_settings();
+        let checked = self.check_write(kind, address, values, broadcast, &settings, &mut targets);
+        self.restore_settings(settings);
+        for &(comm, i, v) in &targets[..checked?] {
+            if let Some(i) = i {
+                self.raw[i] = v;
+                self.after_write(i);
+            }
+            self.track_commands(comm, v);
+        }
+        self.tick();
+        Ok(())
+    }
+
+    /// The registers a write reaches, into `targets`: (communication address, register, word)
+    /// each; their number, or the exception code that refuses the whole write.
+    fn check_write(
+        &self,
+        kind: TransportKind,
+        address: u16,
+        values: &[u16],
+        broadcast: bool,
+        settings: &LiveSettings,
+        targets: &mut [(u16, Option<usize>, u16)],
+    ) -> Result<usize, u8> {
+        if values.len() > targets.len() {
+            return Err(self.plan.illegal_quantity);
+        }
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
         let broadcast_space = broadcast && !layout.broadcast.is_empty();
         let allowed = self
@@ -1104,7 +1162,6 @@ impl Simulator {
             .broadcast
             .map(|b| b.addresses)
             .unwrap_or_default();
-        let mut targets = Vec::with_capacity(values.len());
         for (k, &v) in values.iter().enumerate() {
             let comm = self.communication_address(kind, u32::from(address) + k as u32)?;
             let found = if broadcast_space {
@@ -1112,7 +1169,7 @@ impl Simulator {
             } else {
                 layout.holding.get(&comm)
             };
-            match found {
+            targets[k] = match found {
                 Some(&i) => {
                     if broadcast
                         && !broadcast_space
@@ -1128,24 +1185,16 @@ impl Simulator {
                     if !self.may_write_now(r) {
                         return Err(self.plan.refused_now);
                     }
-                    if !self.accepts(r, v, &settings) {
+                    if !self.accepts(r, v, settings) {
                         return Err(self.plan.out_of_range);
                     }
-                    targets.push((comm, Some(i), v));
+                    (comm, Some(i), v)
                 }
-                None if !broadcast && v == 0 && self.in_gap(comm) => targets.push((comm, None, v)),
+                None if !broadcast && v == 0 && self.in_gap(comm) => (comm, None, v),
                 None => return Err(self.plan.illegal_address),
-            }
+            };
         }
-        for (comm, i, v) in targets {
-            if let Some(i) = i {
-                self.raw[i] = v;
-                self.after_write(i);
-            }
-            self.track_commands(comm, v);
-        }
-        self.tick();
-        Ok(())
+        Ok(values.len())
     }
 }
 
