@@ -42,7 +42,7 @@ enum Command {
     Read(commands::read::Args),
     /// Write registers of a live drive by name, in engineering units, range-checked first.
     Write(commands::write::Args),
-    /// Poll registers of a live drive by name as a live-updating table.
+    /// Poll registers of a live drive by name as a live-updating table (reconnects over TCP).
     Poll(commands::poll::Args),
 }
 
