@@ -65,10 +65,18 @@ const QUANTITY: u16 = 16;
 /// Reads per client per round.
 const READS: usize = 1_000;
 const ROUNDS: usize = 61;
+/// The server's core: the clients run on CPU 0. `CLIENTS_TCP_SERVER_CPU=1` puts the server on
+/// the other core.
+static SERVER_CPU: std::sync::LazyLock<usize> = std::sync::LazyLock::new(|| {
+    env("CLIENTS_TCP_SERVER_CPU")
+        .and_then(|c| c.parse().ok())
+        .unwrap_or(0)
+});
 
 /// The minimal server: answers every 03h request with 16 registers (6000 + i), nothing else.
 /// One thread per connection; each connection ends when the client closes it.
 fn serve(listener: TcpListener, lifetime: Duration) {
+    pin(*SERVER_CPU);
     let until = Instant::now() + lifetime;
     listener.set_nonblocking(true).unwrap();
     while Instant::now() < until {
@@ -81,7 +89,26 @@ fn serve(listener: TcpListener, lifetime: Duration) {
     }
 }
 
+/// Pins the calling thread to `cpu` where the machine has more than one, so every client meets
+/// the server the same way. Left to the scheduler, some connections got their server thread on
+/// the client's core and others on the other core, and ran at 20 or 50 µs a read for a whole
+/// run, whichever client that was. By default the clients and the server share CPU 0 (a
+/// request is a switch between two threads of one core; on this 2-vCPU machine, waking the
+/// other core costs more than the whole exchange); `CLIENTS_TCP_SERVER_CPU=1` gives the server
+/// CPU 1.
+fn pin(cpu: usize) {
+    #[cfg(target_os = "linux")]
+    if thread::available_parallelism().is_ok_and(|n| n.get() > 1) {
+        let mut set = rustix::thread::CpuSet::new();
+        set.set(cpu);
+        let _ = rustix::thread::sched_setaffinity(None, &set);
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = cpu;
+}
+
 fn connection(mut s: TcpStream) {
+    pin(*SERVER_CPU);
     s.set_nonblocking(false).unwrap();
     s.set_nodelay(true).unwrap();
     let mut answer = [0u8; 9 + 2 * QUANTITY as usize];
@@ -278,6 +305,7 @@ fn main() {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     let addr = listener.local_addr().unwrap();
     thread::spawn(move || serve(listener, Duration::from_secs(600)));
+    pin(0);
     let mut peers: Vec<Peer> = (0..NAMES.len()).map(|i| connect(i, addr)).collect();
     for p in &mut peers {
         p.reads(500); // warm up
@@ -308,7 +336,8 @@ fn main() {
     let medians: Vec<f64> = per_read.iter_mut().map(|v| median(v)).collect();
     let reference = medians[2];
     println!(
-        "16-register reads (03h) over loopback TCP, one in-process server; {ROUNDS} interleaved rounds of {READS} reads per client"
+        "16-register reads (03h) over loopback TCP, one in-process server; {ROUNDS} interleaved rounds of {READS} reads per client; clients on CPU 0, server on CPU {}",
+        *SERVER_CPU
     );
     println!();
     println!(

@@ -137,6 +137,8 @@ pub struct AsyncTcpTransport {
     kind: TransportKind,
     peer: Vec<SocketAddr>,
     connect_timeout: Duration,
+    /// The reply deadline's timer, kept armed across requests (see `recv`).
+    timer: Pin<Box<tokio::time::Sleep>>,
 }
 
 impl AsyncTcpTransport {
@@ -154,6 +156,7 @@ impl AsyncTcpTransport {
             kind,
             peer,
             connect_timeout,
+            timer: Box::pin(tokio::time::sleep(Duration::ZERO)),
         })
     }
 
@@ -196,12 +199,53 @@ impl AsyncTransport for AsyncTcpTransport {
         self.stream.write_all(frame).await
     }
 
+    /// Waits for bytes until `deadline` on one timer kept across requests: it stays armed as
+    /// long as it fires no later than the deadline asked for, so consecutive requests (whose
+    /// deadlines only move forward) do not insert a timer each into tokio's timer wheel and
+    /// take it out again. When it fires before the deadline (armed for an earlier request),
+    /// it is re-armed once for this one.
     async fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
-        recv_by(&mut self.stream, buf, deadline).await
+        let at = tokio::time::Instant::from_std(deadline);
+        if self.timer.is_elapsed() || self.timer.deadline() > at {
+            self.timer.as_mut().reset(at);
+        }
+        let stream = &mut self.stream;
+        let timer = &mut self.timer;
+        std::future::poll_fn(|cx| {
+            let mut rb = ReadBuf::new(&mut *buf);
+            match Pin::new(&mut *stream).poll_read(cx, &mut rb) {
+                Poll::Ready(Ok(())) if rb.filled().is_empty() => return Poll::Ready(Err(closed())),
+                Poll::Ready(Ok(())) => return Poll::Ready(Ok(rb.filled().len())),
+                Poll::Ready(Err(e)) => return Poll::Ready(Err(e)),
+                Poll::Pending => {}
+            }
+            while timer.as_mut().poll(cx).is_ready() {
+                if tokio::time::Instant::now() >= at {
+                    return Poll::Ready(Ok(0));
+                }
+                timer.as_mut().reset(at);
+            }
+            Poll::Pending
+        })
+        .await
     }
 
+    /// `try_read` until the socket is empty, at most [`DISCARD_BUDGET`] bytes: where tokio
+    /// already knows it is empty (the usual case after a reply) this is neither a system call
+    /// nor a lock.
     async fn discard_input(&mut self) -> io::Result<()> {
-        drain(&mut self.stream)
+        let mut scratch = [0u8; 512];
+        let mut taken = 0usize;
+        while taken < DISCARD_BUDGET {
+            match self.stream.try_read(&mut scratch) {
+                Ok(0) => return Err(closed()),
+                Ok(n) => taken += n,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
     }
 
     async fn reconnect(&mut self) -> io::Result<()> {

@@ -293,6 +293,30 @@ fn a_reset_mid_reply_is_retried_on_a_new_connection() {
     assert!(c.reconnects() >= 2, "{}", c.reconnects());
 }
 
+/// The receive timeout is set only when it changes: after many quick requests, a timeout
+/// still waits the whole time, neither less nor much more.
+#[test]
+fn blocking_timeout_after_quick_requests_is_neither_early_nor_late() {
+    let kind = TransportKind::Tcp;
+    let peer = HostilePeer::start(kind, &PROFILE, Script::Answer);
+    let mut c = Client::with_options(blocking_link(kind, &peer), &PROFILE, options());
+    let mut words = [0u16; 2];
+    for _ in 0..50 {
+        c.read_holding(1, 2, &mut words).unwrap();
+    }
+    thread::sleep(Duration::from_millis(200));
+    for _ in 0..5 {
+        c.read_holding(1, 2, &mut words).unwrap();
+    }
+    peer.set_script(Script::Unfinished);
+    let t = Instant::now();
+    let e = c.read_holding(1, 2, &mut words).unwrap_err();
+    let took = t.elapsed();
+    assert!(took >= TIMEOUT * 2, "returned early: {took:?}");
+    assert!(took <= bound(), "{took:?}");
+    expect(Script::Unfinished, kind, &e);
+}
+
 #[cfg(feature = "tokio")]
 mod async_client {
     use super::*;
@@ -360,6 +384,35 @@ mod async_client {
             })
         });
         expect(Script::Flood, TransportKind::Tcp, &e);
+    }
+
+    /// `AsyncTcpTransport` keeps one timer armed across requests: after many quick requests,
+    /// a timeout still waits the whole time, neither less nor much more.
+    #[test]
+    fn async_timeout_after_quick_requests_is_neither_early_nor_late() {
+        let kind = TransportKind::Tcp;
+        let peer = HostilePeer::start(kind, &PROFILE, Script::Answer);
+        runtime().block_on(async {
+            let link = AsyncTcpTransport::connect(peer.addr, kind, TIMEOUT)
+                .await
+                .unwrap();
+            let mut c = AsyncClient::with_options(link, &PROFILE, options());
+            let mut words = [0u16; 2];
+            for _ in 0..50 {
+                c.read_holding(1, 2, &mut words).await.unwrap();
+            }
+            tokio::time::sleep(Duration::from_millis(200)).await;
+            for _ in 0..5 {
+                c.read_holding(1, 2, &mut words).await.unwrap();
+            }
+            peer.set_script(Script::Unfinished);
+            let t = Instant::now();
+            let e = c.read_holding(1, 2, &mut words).await.unwrap_err();
+            let took = t.elapsed();
+            assert!(took >= TIMEOUT * 2, "returned early: {took:?}");
+            assert!(took <= bound(), "{took:?}");
+            expect(Script::Unfinished, kind, &e);
+        });
     }
 
     #[test]
