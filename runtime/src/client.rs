@@ -100,7 +100,7 @@ impl Default for Reconnect {
 
 /// Most bytes taken in one attempt without finding the answer before the attempt gives up
 /// with [`Error::Overrun`]: against a peer that floods the link, the client returns long before
-/// the timeout instead of scanning for it. No drive sends that much unasked (64 KiB is 6.8 s of
+/// the timeout instead of scanning for it. No drive sends that much unasked (64 KiB is 6 s of
 /// a 115 200-baud line without a pause).
 pub const MAX_UNANSWERED_BYTES: usize = 64 * 1024;
 
