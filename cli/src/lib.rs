@@ -48,7 +48,7 @@ pub enum Command {
     Read(commands::read::Args),
     /// Write registers of a live drive by name, in engineering units, range-checked first.
     Write(commands::write::Args),
-    /// Poll registers of a live drive by name as a live-updating table.
+    /// Poll registers of a live drive by name as a live-updating table (reconnects over TCP).
     Poll(commands::poll::Args),
     /// Read every readable register of a drive against its map (never writes); report what disagrees; exit 1 if anything does.
     Probe(commands::probe::Args),

@@ -3,10 +3,13 @@
 //! [`AsyncTransport`].
 
 use std::io;
+use std::net::SocketAddr;
+use std::pin::Pin;
 use std::sync::{Arc, Mutex};
+use std::task::{Context, Poll, Waker};
 use std::time::{Duration, Instant};
 
-use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
+use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt, ReadBuf};
 
 use crate::client::{
     Checked, ClientOptions, Core, MAX_SET, Purpose, Wait, client_methods, io_error, read_request,
@@ -18,7 +21,7 @@ use crate::persist::PersistBudget;
 use crate::profile::{CommandKind, Profile, TransportKind};
 use crate::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
 use crate::reply::{Discarded, Framing};
-use crate::transport::Transport;
+use crate::transport::{DISCARD_BUDGET, Transport};
 use crate::typed::{ReadSet, WriteSet};
 
 /// A link for the [`AsyncClient`]; see [`Transport`] for the meaning of each method.
@@ -31,9 +34,14 @@ pub trait AsyncTransport {
     /// Receives available bytes, waiting until at least one arrives or `deadline` passes
     /// (then returns 0).
     async fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize>;
-    /// Throws away bytes received but not yet read.
+    /// Throws away bytes received but not yet read, without waiting for more and stopping
+    /// after about [`DISCARD_BUDGET`] bytes.
     async fn discard_input(&mut self) -> io::Result<()> {
         Ok(())
+    }
+    /// Re-establishes a connection the peer closed or reset; see [`Transport::reconnect`].
+    async fn reconnect(&mut self) -> io::Result<()> {
+        Err(io::ErrorKind::Unsupported.into())
     }
     /// The longest gap allowed between two bytes of one frame, if the link keeps byte timing.
     fn inter_char_timeout(&self) -> Option<Duration> {
@@ -62,7 +70,8 @@ impl<S: AsyncRead + AsyncWrite + Unpin> AsyncStreamTransport<S> {
 
 impl AsyncStreamTransport<tokio::net::TcpStream> {
     /// Connects to a Modbus TCP server (`TransportKind::Tcp`) or a transparent RTU gateway
-    /// (`TransportKind::RtuOverTcp`).
+    /// (`TransportKind::RtuOverTcp`). A stream cannot be re-established: use
+    /// [`AsyncTcpTransport`] to reconnect after the peer closes the connection.
     pub async fn connect(
         addr: impl tokio::net::ToSocketAddrs,
         kind: TransportKind,
@@ -91,25 +100,173 @@ impl<S: AsyncRead + AsyncWrite + Unpin> AsyncTransport for AsyncStreamTransport<
     }
 
     async fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
-        let at = tokio::time::Instant::from_std(deadline);
-        match tokio::time::timeout_at(at, self.stream.read(buf)).await {
-            Err(_) => Ok(0),
-            Ok(Ok(0)) => Err(closed()),
-            Ok(result) => result,
-        }
+        recv_by(&mut self.stream, buf, deadline).await
     }
 
     async fn discard_input(&mut self) -> io::Result<()> {
-        let mut scratch = [0u8; 256];
-        loop {
-            // A zero timeout polls the read once: it takes what is there and does not wait.
-            match tokio::time::timeout(Duration::ZERO, self.stream.read(&mut scratch)).await {
-                Err(_) => return Ok(()),
-                Ok(Ok(0)) => return Err(closed()),
-                Ok(Ok(_)) => continue,
-                Ok(Err(e)) => return Err(e),
+        drain(&mut self.stream)
+    }
+}
+
+/// Reads and drops what `stream` holds without waiting, up to [`DISCARD_BUDGET`] bytes: the
+/// read is polled once with a waker that does nothing, so no timer is registered, and where
+/// tokio already knows the socket has nothing (the usual case after a reply) no system call
+/// is made either.
+fn drain<S: AsyncRead + Unpin>(stream: &mut S) -> io::Result<()> {
+    let mut scratch = [0u8; 512];
+    let mut cx = Context::from_waker(Waker::noop());
+    let mut taken = 0usize;
+    while taken < DISCARD_BUDGET {
+        let mut buf = ReadBuf::new(&mut scratch);
+        match Pin::new(&mut *stream).poll_read(&mut cx, &mut buf) {
+            Poll::Pending => return Ok(()),
+            Poll::Ready(Ok(())) if buf.filled().is_empty() => return Err(closed()),
+            Poll::Ready(Ok(())) => taken += buf.filled().len(),
+            Poll::Ready(Err(e)) if e.kind() == io::ErrorKind::Interrupted => {}
+            Poll::Ready(Err(e)) => return Err(e),
+        }
+    }
+    Ok(())
+}
+
+/// A Modbus TCP connection (or RTU frames through a transparent gateway) over tokio that
+/// re-establishes itself when the peer closes it ([`AsyncTransport::reconnect`], driven by
+/// [`ClientOptions::reconnect`]). The same as [`AsyncStreamTransport`] over a `TcpStream`
+/// otherwise.
+pub struct AsyncTcpTransport {
+    stream: tokio::net::TcpStream,
+    kind: TransportKind,
+    peer: Vec<SocketAddr>,
+    connect_timeout: Duration,
+    /// The reply deadline's timer, kept armed across requests (see `recv`).
+    timer: Pin<Box<tokio::time::Sleep>>,
+}
+
+impl AsyncTcpTransport {
+    /// Connects to `addr` (every address it resolves to, in turn), waiting at most
+    /// `connect_timeout`, which later reconnects wait at most too.
+    pub async fn connect(
+        addr: impl tokio::net::ToSocketAddrs,
+        kind: TransportKind,
+        connect_timeout: Duration,
+    ) -> io::Result<Self> {
+        let peer: Vec<SocketAddr> = tokio::net::lookup_host(addr).await?.collect();
+        let stream = connect_any(&peer, connect_timeout).await?;
+        Ok(AsyncTcpTransport {
+            stream,
+            kind,
+            peer,
+            connect_timeout,
+            timer: Box::pin(tokio::time::sleep(Duration::ZERO)),
+        })
+    }
+
+    /// The stream (a new one after a reconnect).
+    pub fn get_mut(&mut self) -> &mut tokio::net::TcpStream {
+        &mut self.stream
+    }
+}
+
+async fn connect_any(peer: &[SocketAddr], timeout: Duration) -> io::Result<tokio::net::TcpStream> {
+    let mut last = io::Error::new(io::ErrorKind::InvalidInput, "no address to connect to");
+    for a in peer {
+        match tokio::time::timeout(timeout, tokio::net::TcpStream::connect(a)).await {
+            Ok(Ok(stream)) => {
+                stream.set_nodelay(true)?;
+                return Ok(stream);
+            }
+            Ok(Err(e)) => last = e,
+            Err(_) => {
+                last = io::Error::new(
+                    io::ErrorKind::TimedOut,
+                    format!(
+                        "connecting to {a} took longer than {} ms",
+                        timeout.as_millis()
+                    ),
+                )
             }
         }
+    }
+    Err(last)
+}
+
+impl AsyncTransport for AsyncTcpTransport {
+    fn kind(&self) -> TransportKind {
+        self.kind
+    }
+
+    async fn send(&mut self, frame: &[u8]) -> io::Result<()> {
+        // TCP_NODELAY and no buffering: write_all is the whole send.
+        self.stream.write_all(frame).await
+    }
+
+    /// Waits for bytes until `deadline` on one timer kept across requests: it stays armed as
+    /// long as it fires no later than the deadline asked for, so consecutive requests (whose
+    /// deadlines only move forward) do not insert a timer each into tokio's timer wheel and
+    /// take it out again. When it fires before the deadline (armed for an earlier request),
+    /// it is re-armed once for this one.
+    async fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        let at = tokio::time::Instant::from_std(deadline);
+        if self.timer.is_elapsed() || self.timer.deadline() > at {
+            self.timer.as_mut().reset(at);
+        }
+        let stream = &mut self.stream;
+        let timer = &mut self.timer;
+        std::future::poll_fn(|cx| {
+            let mut rb = ReadBuf::new(&mut *buf);
+            match Pin::new(&mut *stream).poll_read(cx, &mut rb) {
+                Poll::Ready(Ok(())) if rb.filled().is_empty() => return Poll::Ready(Err(closed())),
+                Poll::Ready(Ok(())) => return Poll::Ready(Ok(rb.filled().len())),
+                Poll::Ready(Err(e)) => return Poll::Ready(Err(e)),
+                Poll::Pending => {}
+            }
+            while timer.as_mut().poll(cx).is_ready() {
+                if tokio::time::Instant::now() >= at {
+                    return Poll::Ready(Ok(0));
+                }
+                timer.as_mut().reset(at);
+            }
+            Poll::Pending
+        })
+        .await
+    }
+
+    /// `try_read` until the socket is empty, at most [`DISCARD_BUDGET`] bytes: where tokio
+    /// already knows it is empty (the usual case after a reply) this is neither a system call
+    /// nor a lock.
+    async fn discard_input(&mut self) -> io::Result<()> {
+        let mut scratch = [0u8; 512];
+        let mut taken = 0usize;
+        while taken < DISCARD_BUDGET {
+            match self.stream.try_read(&mut scratch) {
+                Ok(0) => return Err(closed()),
+                Ok(n) => taken += n,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
+    }
+
+    async fn reconnect(&mut self) -> io::Result<()> {
+        self.stream = connect_any(&self.peer, self.connect_timeout).await?;
+        Ok(())
+    }
+}
+
+/// Reads what arrives until `deadline`. The timer is only registered if the first poll of the
+/// read finds nothing (`timeout_at` polls the read first).
+async fn recv_by<S: AsyncRead + Unpin>(
+    stream: &mut S,
+    buf: &mut [u8],
+    deadline: Instant,
+) -> io::Result<usize> {
+    let at = tokio::time::Instant::from_std(deadline);
+    match tokio::time::timeout_at(at, stream.read(buf)).await {
+        Err(_) => Ok(0),
+        Ok(Ok(0)) => Err(closed()),
+        Ok(result) => result,
     }
 }
 
@@ -180,6 +337,10 @@ impl<T: Transport + Send + 'static> AsyncTransport for BlockingTransport<T> {
         self.run(|t| t.discard_input()).await
     }
 
+    async fn reconnect(&mut self) -> io::Result<()> {
+        self.run(|t| t.reconnect()).await
+    }
+
     fn inter_char_timeout(&self) -> Option<Duration> {
         self.gap
     }
@@ -238,15 +399,20 @@ impl<T: AsyncTransport> AsyncClient<T> {
         let attempts = retries.saturating_add(1);
         for attempt in 1..=attempts {
             let framing = self.core.encode(&checked)?;
+            // Only when the gap is still to come: a sleep registers a timer even for an instant
+            // that has passed, and tokio's timer rounds it up to its 1 ms tick.
             if let Some(at) = self.core.ready_at() {
                 tokio::time::sleep_until(tokio::time::Instant::from_std(at)).await;
             }
-            let mut sent = self.transport.discard_input().await;
-            if sent.is_ok() {
-                sent = self.transport.send(self.core.frame()).await;
-            }
-            if let Err(e) = sent {
+            if let Err(e) = self.prepare().await {
                 self.core.mark_idle();
+                return Err(io_error(&checked, e));
+            }
+            if let Err(e) = self.transport.send(self.core.frame()).await {
+                self.core.mark_idle();
+                if self.core.lost(&e) && attempt < attempts {
+                    continue;
+                }
                 return Err(io_error(&checked, e));
             }
             let Some(framing) = framing else {
@@ -259,10 +425,37 @@ impl<T: AsyncTransport> AsyncClient<T> {
                 Ok(Some(())) => return Ok(()),
                 Ok(None) if attempt < attempts => continue,
                 Ok(None) => return Err(self.core.timeout(&checked, attempts)),
+                Err(Error::Io { source, .. }) if self.core.lost(&source) && attempt < attempts => {
+                    continue;
+                }
                 Err(e) => return Err(e),
             }
         }
         Err(self.core.timeout(&checked, attempts))
+    }
+
+    /// As [`Client`](crate::client::Client)'s: re-establishes a lost connection and flushes
+    /// stale input before sending.
+    async fn prepare(&mut self) -> io::Result<()> {
+        let mut reconnected = false;
+        loop {
+            if self.core.link_lost() {
+                self.core.may_reconnect()?;
+                let outcome = self.transport.reconnect().await;
+                self.core.reconnected(outcome)?;
+                reconnected = true;
+            }
+            match self.transport.discard_input().await {
+                Err(e) if !reconnected && self.core.lost(&e) => continue,
+                other => return other,
+            }
+        }
+    }
+
+    /// Connections re-established after the peer closed or reset them
+    /// ([`ClientOptions::reconnect`]).
+    pub fn reconnects(&self) -> u32 {
+        self.core.reconnects()
     }
 
     async fn receive(

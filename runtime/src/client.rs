@@ -14,6 +14,7 @@
 //! A transaction allocates nothing: frames are built and received in fixed buffers owned by the
 //! client, and read results go to caller slices.
 
+use std::io;
 use std::time::{Duration, Instant};
 
 use crate::error::{Error, Refusal, Sent};
@@ -42,6 +43,9 @@ pub struct ClientOptions {
     pub request_gap: Duration,
     /// EEPROM writes ([`CommandKind::Persist`] commands) allowed in any rolling hour.
     pub eeprom_writes_per_hour: u32,
+    /// What to do when the peer closes or resets the connection (TCP transports): reconnect
+    /// with back-off (the default) or never.
+    pub reconnect: Reconnect,
 }
 
 impl Default for ClientOptions {
@@ -51,8 +55,69 @@ impl Default for ClientOptions {
             retries: 2,
             request_gap: Duration::ZERO,
             eeprom_writes_per_hour: 10,
+            reconnect: Reconnect::default(),
         }
     }
+}
+
+/// Whether and how often a client re-establishes a connection that the peer closed or reset,
+/// through [`Transport::reconnect`] (TCP and RTU over TCP; a serial line has nothing to
+/// re-establish and ignores it).
+///
+/// With [`Reconnect::Backoff`] a connection found closed *before* a request is sent (the
+/// peer restarted between two requests) is re-established at once and the request goes out on
+/// the new connection, unnoticed by the caller. A connection lost *after* the request went out
+/// fails that attempt; the next attempt (within [`ClientOptions::retries`]) or the next
+/// request reconnects. A reconnect that fails makes the request fail at once with the I/O
+/// error, and no new attempt is made before the back-off has passed (the first wait, doubled
+/// after each failure up to the longest); requests in between fail at once, without waiting,
+/// saying when the next attempt is due. This is libmodbus's `MODBUS_ERROR_RECOVERY_LINK`,
+/// without its unbounded retry of the send; tokio-modbus leaves reconnecting to the caller,
+/// which [`Reconnect::Never`] does too.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reconnect {
+    /// Never reconnect: once the peer has closed the connection, every request fails with the
+    /// I/O error.
+    Never,
+    /// Reconnect when the connection is found lost; after a failed attempt wait `first`, then
+    /// twice as long after each further failure, at most `max`.
+    Backoff {
+        /// Wait after the first failed reconnect.
+        first: Duration,
+        /// Longest wait between two reconnect attempts.
+        max: Duration,
+    },
+}
+
+impl Default for Reconnect {
+    /// Back-off from 100 ms to 5 s.
+    fn default() -> Self {
+        Reconnect::Backoff {
+            first: Duration::from_millis(100),
+            max: Duration::from_secs(5),
+        }
+    }
+}
+
+/// Most bytes taken in one attempt without finding the answer before the attempt gives up
+/// with [`Error::Overrun`]: against a peer that floods the link, the client returns long before
+/// the timeout instead of scanning for it. No drive sends that much unasked (64 KiB is 6 s of
+/// a 115 200-baud line without a pause).
+pub const MAX_UNANSWERED_BYTES: usize = 64 * 1024;
+
+/// The state of the connection, for reconnecting.
+#[derive(Debug, Default)]
+pub(crate) struct Link {
+    /// The connection was found closed or reset and not yet re-established.
+    lost: bool,
+    /// No reconnect attempt before this instant (after a failed one).
+    next_try: Option<Instant>,
+    /// Wait after the next failed attempt.
+    backoff: Duration,
+    /// Why the last reconnect failed.
+    last_failure: Option<io::ErrorKind>,
+    /// Connections re-established.
+    reconnects: u32,
 }
 
 /// The transport-independent part of a client: checks, framing, reply matching, EEPROM budget.
@@ -67,6 +132,7 @@ pub(crate) struct Core {
     pub(crate) rx: ReplyBuffer,
     budget: PersistBudget,
     idle_since: Option<Instant>,
+    link: Link,
 }
 
 /// Why a request is sent: what [`Core::check`] checks it against.
@@ -103,6 +169,7 @@ impl Core {
             rx: ReplyBuffer::new(),
             budget: PersistBudget::new(options.eeprom_writes_per_hour),
             idle_since: None,
+            link: Link::default(),
         }
     }
 
@@ -313,9 +380,14 @@ impl Core {
         &self.tx[..self.tx_len]
     }
 
-    /// When the next request may be sent.
+    /// When the next request may be sent, if that is still to come (no clock read when there is
+    /// no gap to keep).
     pub(crate) fn ready_at(&self) -> Option<Instant> {
-        self.idle_since.map(|t| t + self.options.request_gap)
+        if self.options.request_gap.is_zero() {
+            return None;
+        }
+        let at = self.idle_since? + self.options.request_gap;
+        (at > Instant::now()).then_some(at)
     }
 
     pub(crate) fn mark_idle(&mut self) {
@@ -414,6 +486,8 @@ pub(crate) struct Wait {
     deadline: Instant,
     gap: Option<Duration>,
     last_byte: Instant,
+    /// Bytes received in this attempt.
+    bytes: usize,
 }
 
 impl Wait {
@@ -423,6 +497,7 @@ impl Wait {
             deadline: now + timeout,
             gap,
             last_byte: now,
+            bytes: 0,
         }
     }
 }
@@ -461,9 +536,108 @@ impl Core {
             return None;
         }
         wait.last_byte = now;
+        wait.bytes = wait.bytes.saturating_add(n);
         self.rx.filled(n);
-        let range = self.rx.scan(framing, &checked.request)?;
-        Some(self.finish(framing, range, checked, out).map(Some))
+        if let Some(range) = self.rx.scan(framing, &checked.request) {
+            return Some(self.finish(framing, range, checked, out).map(Some));
+        }
+        // A peer that keeps sending must not hold the client past its deadline (the transport
+        // may hand out bytes without looking at the clock), nor make it scan without end.
+        if wait.bytes > MAX_UNANSWERED_BYTES {
+            return Some(Err(Error::Overrun {
+                sent: checked.sent,
+                bytes: wait.bytes,
+                discarded: self.rx.discarded(),
+            }));
+        }
+        if now >= wait.deadline {
+            self.rx.break_off();
+            return Some(Ok(None));
+        }
+        None
+    }
+
+    /// Whether the connection must be re-established before the next request.
+    pub(crate) fn link_lost(&self) -> bool {
+        self.link.lost
+    }
+
+    /// Connections re-established so far.
+    pub(crate) fn reconnects(&self) -> u32 {
+        self.link.reconnects
+    }
+
+    /// Records an I/O error; returns whether it means the connection is lost and the options
+    /// reconnect, in which case the next attempt or request re-establishes it.
+    pub(crate) fn lost(&mut self, e: &io::Error) -> bool {
+        if self.options.reconnect == Reconnect::Never || !crate::transport::is_connection_loss(e) {
+            return false;
+        }
+        self.link.lost = true;
+        true
+    }
+
+    /// Whether the back-off allows a reconnect attempt now; the error says when it will.
+    pub(crate) fn may_reconnect(&self) -> io::Result<()> {
+        let Some(at) = self.link.next_try else {
+            return Ok(());
+        };
+        let now = Instant::now();
+        if now >= at {
+            return Ok(());
+        }
+        let why = self
+            .link
+            .last_failure
+            .map(|k| format!(" (last attempt: {})", io::Error::from(k)))
+            .unwrap_or_default();
+        Err(io::Error::new(
+            io::ErrorKind::NotConnected,
+            format!(
+                "the connection was lost; next reconnect attempt in {} ms{why}",
+                (at - now).as_millis().max(1)
+            ),
+        ))
+    }
+
+    /// Takes the outcome of [`Transport::reconnect`]. `Ok(())` when the connection is back, or
+    /// when the transport has none to re-establish (then the request goes on and fails as it
+    /// would have).
+    pub(crate) fn reconnected(&mut self, outcome: io::Result<()>) -> io::Result<()> {
+        let (first, max) = match self.options.reconnect {
+            Reconnect::Never => return outcome,
+            Reconnect::Backoff { first, max } => (first, max),
+        };
+        match outcome {
+            Ok(()) => {
+                self.link = Link {
+                    reconnects: self.link.reconnects.saturating_add(1),
+                    ..Link::default()
+                };
+                Ok(())
+            }
+            Err(e) if e.kind() == io::ErrorKind::Unsupported => {
+                self.link.lost = false;
+                Ok(())
+            }
+            Err(e) => {
+                let wait = if self.link.backoff.is_zero() {
+                    first
+                } else {
+                    self.link.backoff
+                };
+                self.link.next_try = Some(Instant::now() + wait);
+                self.link.backoff = (wait * 2).min(max.max(first));
+                self.link.last_failure = Some(e.kind());
+                Err(io::Error::new(
+                    e.kind(),
+                    format!(
+                        "the connection was lost and reconnecting failed: {e}; next attempt in {} ms",
+                        wait.as_millis()
+                    ),
+                ))
+            }
+        }
     }
 }
 
@@ -771,17 +945,17 @@ impl<T: Transport> Client<T> {
         for attempt in 1..=attempts {
             let framing = self.core.encode(&checked)?;
             if let Some(at) = self.core.ready_at() {
-                let now = Instant::now();
-                if at > now {
-                    std::thread::sleep(at - now);
-                }
+                std::thread::sleep(at.saturating_duration_since(Instant::now()));
             }
-            let sent = self
-                .transport
-                .discard_input()
-                .and_then(|_| self.transport.send(self.core.frame()));
-            if let Err(e) = sent {
+            if let Err(e) = self.prepare() {
                 self.core.mark_idle();
+                return Err(io_error(&checked, e));
+            }
+            if let Err(e) = self.transport.send(self.core.frame()) {
+                self.core.mark_idle();
+                if self.core.lost(&e) && attempt < attempts {
+                    continue;
+                }
                 return Err(io_error(&checked, e));
             }
             let Some(framing) = framing else {
@@ -794,10 +968,38 @@ impl<T: Transport> Client<T> {
                 Ok(Some(())) => return Ok(()),
                 Ok(None) if attempt < attempts => continue,
                 Ok(None) => return Err(self.core.timeout(&checked, attempts)),
+                Err(Error::Io { source, .. }) if self.core.lost(&source) && attempt < attempts => {
+                    continue;
+                }
                 Err(e) => return Err(e),
             }
         }
         Err(self.core.timeout(&checked, attempts))
+    }
+
+    /// Before sending: re-establishes a lost connection and flushes stale input. Nothing has
+    /// been sent yet, so a connection found closed here is re-established once and the request
+    /// goes on over the new one.
+    fn prepare(&mut self) -> std::io::Result<()> {
+        let mut reconnected = false;
+        loop {
+            if self.core.link_lost() {
+                self.core.may_reconnect()?;
+                let outcome = self.transport.reconnect();
+                self.core.reconnected(outcome)?;
+                reconnected = true;
+            }
+            match self.transport.discard_input() {
+                Err(e) if !reconnected && self.core.lost(&e) => continue,
+                other => return other,
+            }
+        }
+    }
+
+    /// Connections re-established after the peer closed or reset them
+    /// ([`ClientOptions::reconnect`]).
+    pub fn reconnects(&self) -> u32 {
+        self.core.reconnects()
     }
 
     /// Waits for the answer; `Ok(None)` on timeout.

@@ -216,6 +216,19 @@ pub enum Error {
     /// A value could not be converted (out of range before writing, or a missing setting).
     #[error(transparent)]
     Value(#[from] ValueError),
+    /// More than [`MAX_UNANSWERED_BYTES`](crate::client::MAX_UNANSWERED_BYTES) arrived in one
+    /// attempt without the answer among them: the peer floods the link. Not retried.
+    #[error(
+        "no answer from slave {} to {sent} in {bytes} byte(s) received: the peer floods the link; {discarded}",
+        sent.slave
+    )]
+    Overrun {
+        sent: Sent,
+        /// Bytes received in the attempt.
+        bytes: usize,
+        /// What was skipped.
+        discarded: Discarded,
+    },
 }
 
 impl Error {

@@ -34,7 +34,7 @@ pub mod tcp;
 pub mod transport;
 pub mod typed;
 
-pub use client::{Client, ClientOptions};
+pub use client::{Client, ClientOptions, Reconnect};
 pub use error::{Error, Refusal};
 pub use gate::{Broadcast, Transports, WriteRule};
 pub use profile::Profile;

@@ -73,6 +73,9 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Str
 }
 
 /// Reads the registers every interval and redraws the table; exits 1 when any read failed.
+/// Over TCP a connection the drive or gateway closes is re-established before the next request
+/// (back-off from 100 ms to 5 s between failed attempts, `ClientOptions::reconnect`); the
+/// header counts the reconnects.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let drive = args.target.load()?;
     let regs = registers(&drive, &args)?;
@@ -131,12 +134,18 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         } else {
             Vec::new()
         };
+        let reconnects = session.client.reconnects();
         let header = format!(
-            "{} over {} — poll {n} at {:.1} s, every {} ms",
+            "{} over {} — poll {n} at {:.1} s, every {} ms{}",
             drive.meta.id,
             session.link,
             started.elapsed().as_secs_f64(),
-            args.interval.as_millis()
+            args.interval.as_millis(),
+            if reconnects > 0 {
+                format!(", reconnected {reconnects} time(s)")
+            } else {
+                String::new()
+            }
         );
         let body = table::render(&rows, &changed);
         let mut out = std::io::stdout().lock();

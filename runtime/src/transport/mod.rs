@@ -30,9 +30,19 @@ pub trait Transport {
     fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize>;
 
     /// Throws away bytes received but not yet read: stale or late replies. Called before each
-    /// request. The default does nothing.
+    /// request. It must not wait for more input, and should stop after about
+    /// [`DISCARD_BUDGET`] bytes against a peer that keeps sending (the reply matching skips the
+    /// rest, within the reply's deadline). The default does nothing.
     fn discard_input(&mut self) -> io::Result<()> {
         Ok(())
+    }
+
+    /// Re-establishes a connection the peer closed or reset (see
+    /// [`ClientOptions::reconnect`](crate::client::ClientOptions::reconnect)); waits at most the
+    /// transport's connect timeout. The default returns [`io::ErrorKind::Unsupported`]: links
+    /// without connections (serial lines) have nothing to re-establish.
+    fn reconnect(&mut self) -> io::Result<()> {
+        Err(io::ErrorKind::Unsupported.into())
     }
 
     /// The longest gap allowed between two bytes of one frame; a frame broken off by a longer
@@ -55,9 +65,29 @@ impl<T: Transport + ?Sized> Transport for Box<T> {
     fn discard_input(&mut self) -> io::Result<()> {
         (**self).discard_input()
     }
+    fn reconnect(&mut self) -> io::Result<()> {
+        (**self).reconnect()
+    }
     fn inter_char_timeout(&self) -> Option<Duration> {
         (**self).inter_char_timeout()
     }
+}
+
+/// Most bytes a transport's [`Transport::discard_input`] takes before a request: a peer that
+/// sends without pause is not drained for ever.
+pub const DISCARD_BUDGET: usize = 64 * 1024;
+
+/// Whether an I/O error means the connection is gone (closed or reset by the peer), so that
+/// only a new connection can carry the next request.
+pub fn is_connection_loss(e: &io::Error) -> bool {
+    matches!(
+        e.kind(),
+        io::ErrorKind::UnexpectedEof
+            | io::ErrorKind::ConnectionReset
+            | io::ErrorKind::ConnectionAborted
+            | io::ErrorKind::BrokenPipe
+            | io::ErrorKind::NotConnected
+    )
 }
 
 /// Time remaining until `deadline`, or `None` when it has passed.

@@ -23,6 +23,11 @@ impl RtuOverTcpTransport {
     pub fn from_stream(stream: TcpStream) -> io::Result<Self> {
         TcpTransport::from_stream_as(stream, TransportKind::RtuOverTcp).map(Self)
     }
+
+    /// The TCP connection.
+    pub fn tcp(&mut self) -> &mut TcpTransport {
+        &mut self.0
+    }
 }
 
 impl Transport for RtuOverTcpTransport {
@@ -37,5 +42,8 @@ impl Transport for RtuOverTcpTransport {
     }
     fn discard_input(&mut self) -> io::Result<()> {
         self.0.discard_input()
+    }
+    fn reconnect(&mut self) -> io::Result<()> {
+        self.0.reconnect()
     }
 }

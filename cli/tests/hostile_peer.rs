@@ -1,0 +1,237 @@
+//! `drivemap read` and `drivemap poll` as subprocesses against the runtime's hostile peer
+//! (`runtime/tests/support/hostile_peer.rs`): each must end within timeout × attempts + 2 s
+//! (per request) with an error that says what happened; `poll` must come back after the server
+//! restarts. A subprocess still running past its bound is killed and the test fails.
+
+#[path = "../../runtime/tests/support/hostile_peer.rs"]
+mod hostile_peer;
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use drivemap_codegen::validate::Context;
+use drivemap_runtime::profile::{Profile, TransportKind};
+
+use hostile_peer::{HostilePeer, Script};
+
+const DRIVE: &str = "ptlk-tds-v8";
+/// 0027h, 0.1 A, no dependency: the peer holds 0027h = 39.
+const REGISTER: &str = "output_current";
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn profile() -> &'static Profile {
+    let map = drivemap_codegen::read_map(
+        &repo().join("maps").join(format!("{DRIVE}.yaml")),
+        &Context::default(),
+    )
+    .expect("shipped map");
+    drivemap_live::leak_profile(&map)
+}
+
+/// Runs `drivemap <args> --maps maps`, killing it after `bound`. Returns exit code, stdout,
+/// stderr and the time it took.
+fn drivemap(args: &[&str], bound: Duration) -> (i32, String, String, Duration) {
+    let started = Instant::now();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(args)
+        .arg("--maps")
+        .arg(repo().join("maps"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run drivemap");
+    let mut stdout = child.stdout.take().unwrap();
+    let mut stderr = child.stderr.take().unwrap();
+    let out = thread::spawn(move || {
+        let mut s = String::new();
+        let _ = stdout.read_to_string(&mut s);
+        s
+    });
+    let err = thread::spawn(move || {
+        let mut s = String::new();
+        let _ = stderr.read_to_string(&mut s);
+        s
+    });
+    let code = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status.code().unwrap_or(-1);
+        }
+        if started.elapsed() > bound + Duration::from_secs(1) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!(
+                "drivemap {}: still running after {:?} (bound {bound:?}); killed\nstdout: {}",
+                args.join(" "),
+                started.elapsed(),
+                out.join().unwrap()
+            );
+        }
+        thread::sleep(Duration::from_millis(10));
+    };
+    let took = started.elapsed();
+    (code, out.join().unwrap(), err.join().unwrap(), took)
+}
+
+fn flag(kind: TransportKind) -> &'static str {
+    if kind == TransportKind::Tcp {
+        "--tcp"
+    } else {
+        "--rtu-tcp"
+    }
+}
+
+/// What each script's error must say in the output of `read`.
+fn expected(script: Script, kind: TransportKind) -> &'static str {
+    match script {
+        Script::Flood => "the peer floods the link",
+        Script::Trickle | Script::LyingLength => "within 500 ms (2 attempts); discarded",
+        Script::Unfinished => "an incomplete frame",
+        Script::ResetMidFrame => "reset",
+        Script::OtherTransaction if kind == TransportKind::Tcp => "transaction",
+        Script::OtherUnit if kind == TransportKind::Tcp => "unit 2 in reply, expected unit 1",
+        _ => "reply from slave 2, expected slave 1",
+    }
+}
+
+const SCRIPTS: [Script; 7] = [
+    Script::Flood,
+    Script::Trickle,
+    Script::Unfinished,
+    Script::ResetMidFrame,
+    Script::LyingLength,
+    Script::OtherTransaction,
+    Script::OtherUnit,
+];
+
+fn read_against(kind: TransportKind) {
+    let profile = profile();
+    // timeout × attempts + 2 s.
+    let bound = Duration::from_millis(500) * 2 + Duration::from_secs(2);
+    for script in SCRIPTS {
+        let peer = HostilePeer::start(kind, profile, script);
+        let addr = peer.addr.to_string();
+        let (code, out, err, took) = drivemap(
+            &[
+                "read",
+                "--drive",
+                DRIVE,
+                flag(kind),
+                &addr,
+                "--timeout",
+                "500ms",
+                "--retries",
+                "1",
+                REGISTER,
+            ],
+            bound,
+        );
+        assert!(took <= bound, "{script:?}: took {took:?}");
+        assert_eq!(code, 1, "{script:?}: {out}{err}");
+        let want = expected(script, kind);
+        assert!(
+            out.contains("error: ") && out.contains(want),
+            "{kind:?} {script:?}: wanted `{want}` in\n{out}{err}"
+        );
+    }
+}
+
+#[test]
+fn read_over_modbus_tcp_against_each_hostile_script() {
+    read_against(TransportKind::Tcp);
+}
+
+#[test]
+fn read_over_rtu_over_tcp_against_each_hostile_script() {
+    read_against(TransportKind::RtuOverTcp);
+}
+
+#[test]
+fn poll_against_a_flooding_and_a_trickling_peer_is_bounded() {
+    let profile = profile();
+    for script in [Script::Flood, Script::Trickle] {
+        let peer = HostilePeer::start(TransportKind::Tcp, profile, script);
+        let addr = peer.addr.to_string();
+        // Two cycles of one request each: 2 × (timeout × attempts) + 2 s.
+        let bound = Duration::from_millis(500) * 2 * 2 + Duration::from_secs(2);
+        let (code, out, err, took) = drivemap(
+            &[
+                "poll",
+                "--drive",
+                DRIVE,
+                "--tcp",
+                &addr,
+                "--timeout",
+                "500ms",
+                "--retries",
+                "1",
+                "--interval",
+                "100ms",
+                "--count",
+                "2",
+                REGISTER,
+            ],
+            bound,
+        );
+        assert!(took <= bound, "{script:?}: took {took:?}");
+        assert_eq!(code, 1, "{script:?}: {out}{err}");
+        assert!(out.contains("— poll 2 at "), "{script:?}: {out}");
+        assert!(
+            out.contains(expected(script, TransportKind::Tcp)),
+            "{script:?}: {out}"
+        );
+    }
+}
+
+/// The server goes away and comes back on the same port while `poll` runs: polling resumes on
+/// a new connection (before, every later cycle failed with "the server closed the
+/// connection").
+#[test]
+fn poll_reconnects_after_the_server_restarts() {
+    let profile = profile();
+    for kind in [TransportKind::Tcp, TransportKind::RtuOverTcp] {
+        let peer = HostilePeer::start(kind, profile, Script::Answer);
+        let addr = peer.addr;
+        let restart = thread::spawn(move || {
+            thread::sleep(Duration::from_millis(700));
+            let addr = peer.shut_down();
+            thread::sleep(Duration::from_millis(400));
+            let again = HostilePeer::start_at(addr, kind, profile, Script::Answer);
+            thread::sleep(Duration::from_secs(4));
+            drop(again);
+        });
+        let (_, out, err, _) = drivemap(
+            &[
+                "poll",
+                "--drive",
+                DRIVE,
+                flag(kind),
+                &addr.to_string(),
+                "--timeout",
+                "300ms",
+                "--retries",
+                "1",
+                "--interval",
+                "200ms",
+                "--count",
+                "12",
+                REGISTER,
+            ],
+            Duration::from_secs(15),
+        );
+        restart.join().unwrap();
+        let cycles: Vec<&str> = out.split("— poll ").skip(1).collect();
+        assert_eq!(cycles.len(), 12, "{out}{err}");
+        assert!(cycles[0].contains("3.9 A"), "{kind:?}: first cycle:\n{out}");
+        let last = cycles[11];
+        assert!(
+            last.contains("3.9 A") && last.contains("reconnected 1 time(s)"),
+            "{kind:?}: after the restart:\n{out}{err}"
+        );
+    }
+}
