@@ -1,9 +1,10 @@
-//! `drivemap check <map>...`
+//! `drivemap check <map>...`: validation, then review of every citation against the manuals.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
+use drivemap_codegen::review::{self, Manuals, Verdict};
 
 use crate::maps::MapsDir;
 
@@ -13,6 +14,48 @@ pub struct Args {
     pub files: Vec<PathBuf>,
     #[command(flatten)]
     pub dir: MapsDir,
+    /// Treat citations whose line does not mention the cited item as errors.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+/// Counts of a map's citation review.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct CitationCounts {
+    pub verified: usize,
+    pub indirect: usize,
+    pub unverified: usize,
+    pub unchecked: usize,
+}
+
+impl CitationCounts {
+    pub fn of(checks: &[review::CitationCheck]) -> CitationCounts {
+        let mut c = CitationCounts::default();
+        for check in checks {
+            match check.verdict {
+                Verdict::Verified | Verdict::VerifiedRow(_) => c.verified += 1,
+                Verdict::Indirect(_) => c.indirect += 1,
+                Verdict::Unverified { .. } => c.unverified += 1,
+                Verdict::Unchecked => c.unchecked += 1,
+            }
+        }
+        c
+    }
+}
+
+impl std::fmt::Display for CitationCounts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let total = self.verified + self.indirect + self.unverified + self.unchecked;
+        write!(
+            f,
+            "citations: {} of {total} verified, {} indirect, {} unverified",
+            self.verified, self.indirect, self.unverified
+        )?;
+        if self.unchecked > 0 {
+            write!(f, ", {} unchecked (manual not at hand)", self.unchecked)?;
+        }
+        Ok(())
+    }
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
@@ -26,12 +69,40 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let mut errors = 0;
     for file in &files {
         match args.dir.read(file) {
-            Ok(drive) => println!(
-                "ok   {} ({}: {} registers)",
-                file.display(),
-                drive.meta.id,
-                drive.registers.len()
-            ),
+            Ok(drive) => {
+                let mut summary = format!(
+                    "{} ({}: {} registers",
+                    file.display(),
+                    drive.meta.id,
+                    drive.registers.len()
+                );
+                let mut unverified = 0;
+                if let Some(dir) = crate::maps::manuals_dir_for(file) {
+                    let mut manuals = Manuals::new(&dir);
+                    manuals.load_for(&drive);
+                    if manuals.any() {
+                        let checks = review::verify_citations(&drive, &manuals);
+                        let counts = CitationCounts::of(&checks);
+                        for w in checks.iter().filter_map(|c| c.warning()) {
+                            if args.strict {
+                                eprintln!("{}", w.to_string().replacen(": warning", ": error", 1));
+                            } else {
+                                eprintln!("{w}");
+                            }
+                        }
+                        unverified = counts.unverified;
+                        summary.push_str(&format!("; {counts}"));
+                    }
+                }
+                summary.push(')');
+                if args.strict && unverified > 0 {
+                    failed += 1;
+                    errors += unverified;
+                    println!("FAIL {summary}");
+                } else {
+                    println!("ok   {summary}");
+                }
+            }
             Err(diags) => {
                 failed += 1;
                 errors += diags.len();
