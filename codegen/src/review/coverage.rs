@@ -40,7 +40,8 @@ pub struct TableSummary {
     pub rows: usize,
     /// Keys a register of the map has.
     pub cited: usize,
-    /// Keys covered by `gaps`, `removed` or a citation of the line (conflicts, notes).
+    /// Keys covered by `gaps`, `removed`, a citation of the line (conflicts, notes), or printed
+    /// as reserved or not used.
     pub gaps: usize,
     /// Keys nothing covers.
     pub uncited: usize,
@@ -96,6 +97,10 @@ fn is_hex_word(s: &str) -> bool {
 /// The address a word prints, with what follows it: `0200H`, `0x0300`, `0h03E7`, `1E08`,
 /// `31Ah…`. OCR `O`/`Q` are read as `0`.
 fn address_prefix(word: &str) -> Option<(u16, &str)> {
+    // An address prints at least one digit (`CODE` is not C0DEh).
+    if !word.chars().any(|c| c.is_ascii_digit()) {
+        return None;
+    }
     let fixed: String = word
         .chars()
         .map(|c| match c {
@@ -116,8 +121,13 @@ fn address_prefix(word: &str) -> Option<(u16, &str)> {
         }
         return None;
     }
+    // `0200H`, `31Ah`; two digits (`10H`, a function code) only glued to a parameter number.
     for len in (2..=4).rev() {
-        if fixed.len() > len && fixed.as_bytes()[len] == b'H' && is_hex_word(&fixed[..len]) {
+        if fixed.len() > len
+            && fixed.as_bytes()[len] == b'H'
+            && is_hex_word(&fixed[..len])
+            && (len >= 3 || fixed.len() > len + 1)
+        {
             return Some((parse(&fixed[..len])?, &word[len + 1..]));
         }
     }
@@ -164,7 +174,8 @@ fn line_shape(line: &str, shapes: &HashSet<String>) -> (Class, Class) {
 fn row_keys(line: &str, shapes: &HashSet<String>) -> Vec<(Option<String>, Option<u16>)> {
     let mut keys: Vec<(Option<String>, Option<u16>)> = Vec::new();
     let mut addresses = Vec::new();
-    for w in line.split_whitespace() {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    for (i, w) in words.iter().enumerate() {
         if let Some((a, rest)) = address_prefix(w) {
             addresses.push(a);
             if let Some(last) = keys.last_mut() {
@@ -176,7 +187,12 @@ fn row_keys(line: &str, shapes: &HashSet<String>) -> Vec<(Option<String>, Option
                 keys.push((Some(p.to_owned()), Some(a)));
             }
         } else if let Some(p) = param_prefix(w, shapes) {
-            if p.len() == w.len() {
+            // A parameter number is a key at the start of the row, or when its address follows
+            // it (two-column tables); elsewhere it is a reference in the text.
+            let next_is_address = words
+                .get(i + 1)
+                .is_some_and(|n| address_prefix(n).is_some_and(|(_, r)| r.is_empty()));
+            if p.len() == w.len() && (i <= 1 || next_is_address) {
                 keys.push((Some(p.to_owned()), None));
             }
         }
@@ -190,14 +206,44 @@ fn row_keys(line: &str, shapes: &HashSet<String>) -> Vec<(Option<String>, Option
     if keys.len() == 1 && keys[0].1.is_none() {
         keys[0].1 = addresses.first().copied();
     }
+    let mut seen = HashSet::new();
+    keys.retain(|k| seen.insert(k.clone()));
     keys
 }
 
-fn norm_param(p: &str) -> String {
-    p.chars()
+/// A row the manual prints as reserved or unused (OCR breaks tolerated: `Re served`,
+/// `Not us sed`): nothing to map.
+fn reserved(text: &str) -> bool {
+    let t: String = text
+        .chars()
         .filter(|c| c.is_alphanumeric())
-        .flat_map(char::to_uppercase)
-        .collect()
+        .flat_map(char::to_lowercase)
+        .collect();
+    t.contains("eserv") || t.contains("notus")
+}
+
+/// The row ends a reserved range printed over three lines (`0004H (Reserved)` / `to` / `0008H`).
+fn ends_reserved_range(lines: &[String], i: usize) -> bool {
+    i >= 2 && lines[i - 1].trim_start().to_lowercase().starts_with("to") && reserved(&lines[i - 2])
+}
+
+/// A parameter number compared: letters and digits, upper case, leading zeros of numbers
+/// dropped (`CM.05` = `CM.5`).
+fn norm_param(p: &str) -> String {
+    let mut out = String::new();
+    let mut in_number = false;
+    for c in p.chars() {
+        if !c.is_alphanumeric() {
+            in_number = false;
+            continue;
+        }
+        if c == '0' && !in_number {
+            continue;
+        }
+        in_number = c.is_ascii_digit();
+        out.extend(c.to_uppercase());
+    }
+    out
 }
 
 /// Every `source:` string of the map (the merged tree), plus the expanded registers'.
@@ -255,8 +301,9 @@ fn gap_covers_param(text: &str, param: &str) -> bool {
 }
 
 /// Learns the row shapes from the registers' verified citations and lists the rows of each
-/// cited manual, the tables they form, and the rows nothing covers.
-pub fn coverage(drive: &Drive, manuals: &Manuals) -> CoverageReport {
+/// cited manual (but those in `skip`: a variant map's base manuals, covered by the base's
+/// report), the tables they form, and the rows nothing covers.
+pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageReport {
     let shapes: HashSet<String> = drive
         .registers
         .iter()
@@ -318,7 +365,7 @@ pub fn coverage(drive: &Drive, manuals: &Manuals) -> CoverageReport {
     };
     let mut files: Vec<&str> = drive.meta.manuals.iter().map(|m| m.file.as_str()).collect();
     files.dedup();
-    for file in files {
+    for file in files.into_iter().filter(|f| !skip.iter().any(|s| s == f)) {
         let Some(lines) = manuals.lines(file) else {
             report.missing_manuals.push(file.to_owned());
             continue;
@@ -333,6 +380,7 @@ pub fn coverage(drive: &Drive, manuals: &Manuals) -> CoverageReport {
             .map(|(s, _)| *s)
             .collect();
         let mut table: Option<(TableSummary, BTreeMap<usize, usize>)> = None;
+        let mut last_group: Option<usize> = None;
         let finish = |t: Option<(TableSummary, BTreeMap<usize, usize>)>,
                       out: &mut Vec<TableSummary>| {
             if let Some((mut t, groups)) = t {
@@ -352,7 +400,15 @@ pub fn coverage(drive: &Drive, manuals: &Manuals) -> CoverageReport {
             if keys.is_empty() {
                 continue;
             }
-            if table.as_ref().is_some_and(|(t, _)| n > t.last_line + 12) {
+            // A table ends after a dozen lines without rows, or where the rows start being
+            // another group's.
+            let group_here = group_of_line.get(&(file.to_owned(), n)).copied();
+            if table.as_ref().is_some_and(|(t, groups)| {
+                n > t.last_line + 12
+                    || group_here.is_some_and(|g| {
+                        last_group.is_some_and(|l| l != g) && !groups.contains_key(&g)
+                    })
+            }) {
                 finish(table.take(), &mut report.tables);
             }
             let (t, groups) = table.get_or_insert_with(|| {
@@ -371,8 +427,9 @@ pub fn coverage(drive: &Drive, manuals: &Manuals) -> CoverageReport {
                 )
             });
             t.last_line = n;
-            if let Some(&g) = group_of_line.get(&(file.to_owned(), n)) {
+            if let Some(g) = group_here {
                 *groups.entry(g).or_default() += 1;
+                last_group = Some(g);
             }
             let line_cited = cited.contains(&(file.to_owned(), n));
             for (param, address) in keys {
@@ -390,13 +447,15 @@ pub fn coverage(drive: &Drive, manuals: &Manuals) -> CoverageReport {
                 }) || param
                     .as_deref()
                     .is_some_and(|p| removed.contains(&norm_param(p)))
-                    || drive
-                        .removed
-                        .iter()
-                        .any(|r| parse_citation(&r.source) == Some((file, n)));
+                    // A removed register's citation on the row (which may span the lines
+                    // around the address).
+                    || drive.removed.iter().any(|r| {
+                        parse_citation(&r.source)
+                            .is_some_and(|(f, l)| f == file && l + 1 >= n && l <= n + 1)
+                    });
                 if by_register {
                     t.cited += 1;
-                } else if by_gap || line_cited {
+                } else if by_gap || line_cited || reserved(text) || ends_reserved_range(lines, i) {
                     t.gaps += 1;
                 } else {
                     t.uncited += 1;
@@ -456,5 +515,8 @@ mod tests {
         assert!(gap_covers_param("U1-15 .. U1-18", "U1-16"));
         assert!(!gap_covers_param("U1-15 .. U1-18", "U1-19"));
         assert!(gap_covers_param("n150, n160", "n160"));
+        assert_eq!(norm_param("CM.05"), norm_param("CM.5"));
+        assert_ne!(norm_param("E4-03"), norm_param("E40-3"));
+        assert!(reserved("0025H | Not us | sed"));
     }
 }

@@ -56,7 +56,8 @@ impl Manuals {
         }
     }
 
-    fn load(&mut self, file: &str) {
+    /// Reads one manual by file name, if not read yet.
+    pub fn load(&mut self, file: &str) {
         if self.files.contains_key(file) {
             return;
         }
