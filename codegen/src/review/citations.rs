@@ -336,12 +336,15 @@ fn register_verdict(
         .map(|list| {
             let lo = list.partition_point(|&(l, _)| l + WINDOW < n);
             let hi = list.partition_point(|&(l, _)| l <= n + WINDOW);
-            list[lo..hi]
+            // Nearest first: the register cited on the line itself names the row.
+            let mut near: Vec<(usize, usize)> = list[lo..hi]
                 .iter()
-                .map(|&(_, j)| j)
-                .filter(|&j| j != i)
-                .filter(|&j| drive.registers[j].def.address != r.def.address)
-                .collect()
+                .filter(|&&(_, j)| j != i)
+                .filter(|&&(_, j)| drive.registers[j].def.address != r.def.address)
+                .map(|&(l, j)| (l.abs_diff(n), j))
+                .collect();
+            near.sort_unstable();
+            near.into_iter().map(|(_, j)| j).collect()
         })
         .unwrap_or_default();
     // Whose row a line is, other than this register's.
