@@ -362,6 +362,10 @@ fn register_verdict(
         return Verdict::Unchecked;
     };
     let line = line.clone();
+    if line.words.is_empty() {
+        // A blank line is no row, even beside the right one.
+        return Verdict::Unverified { row_of: None };
+    }
     let (ok, other) = matches(&line);
     if ok {
         return Verdict::Verified;

@@ -60,12 +60,15 @@ impl AddressForms {
     /// Whether `line` (see [`Line`]) prints the address.
     pub fn found_in(&self, line: &Line) -> bool {
         let texts = [line.upper.as_str(), line.ocr.as_str()];
+        // The PLC decimals count only all together: with RTU and TCP numbering one apart, the
+        // TCP number of one register is the RTU number of the next.
         texts.iter().any(|t| {
             self.hex.iter().any(|(f, b)| find_bounded(t, f, *b))
-                || self
-                    .decimal
-                    .iter()
-                    .any(|d| find_bounded(t, d, Boundary::Word))
+                || (!self.decimal.is_empty()
+                    && self
+                        .decimal
+                        .iter()
+                        .all(|d| find_bounded(t, d, Boundary::Word)))
         })
     }
 }
@@ -341,6 +344,8 @@ mod tests {
         assert!(ocr.found_in(&Line::new("UF.10 1EOA 47690 47691")));
         let plc = AddressForms::new(0x1E0A, Some((-1, 0)));
         assert!(plc.found_in(&Line::new("UF.10 ---- 47690 47691")));
+        // The next register's RTU number is this one's TCP number: both are needed.
+        assert!(!plc.found_in(&Line::new("UF.11 ---- 47691 47692")));
         assert!(!plc.found_in(&Line::new("UF.10 ---- 476900")));
     }
 
