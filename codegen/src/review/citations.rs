@@ -394,3 +394,98 @@ fn crate_describe(r: &Register) -> String {
         None => r.def.id.clone(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::validate::Context;
+
+    const MANUAL: &str = "Table 1\n\
+        0200H\tBn-01\tAcceleration time 1\t0.1s\n\
+        0201H\tBn-02\tDeceleration time 1\t0.1s\n\
+        \n\
+        0202H\tBn-03\tRun source\t0: Operator 1: Terminals\n";
+
+    fn map(accel: usize, decel: usize, indirect: &str) -> Drive {
+        let text = format!(
+            "drive: {{id: t, vendor: T, models: [T], manuals: [{{file: m.txt, title: M}}]}}\n\
+             protocol: {{transports: [rtu], function_codes: [0x03, 0x06], max_read: 1, max_write: 1, slave_address: {{min: 1, max: 31}}}}\n\
+             groups:\n\
+             \x20 - id: g\n\
+             \x20   name: G\n\
+             \x20   registers:\n\
+             \x20     - {{id: accel, param: Bn-01, name: Acceleration time 1, address: 0x0200, source: \"m.txt:{accel}\"}}\n\
+             \x20     - {{id: decel, param: Bn-02, name: Deceleration time 1, address: 0x0201, {indirect}source: \"m.txt:{decel}\"}}\n\
+             \x20     - id: run_source\n\
+             \x20       param: Bn-03\n\
+             \x20       name: Run source\n\
+             \x20       address: 0x0202\n\
+             \x20       values:\n\
+             \x20         - {{value: 0, id: operator, name: Operator, source: \"m.txt:5\"}}\n\
+             \x20         - {{value: 1, id: terminals, name: Terminals, source: \"m.txt:5\"}}\n\
+             \x20         - {{value: 2, id: network, name: Network, source: \"m.txt:5\"}}\n\
+             \x20       source: \"m.txt:5\"\n"
+        );
+        crate::read_map_str("t.yaml", &text, &Context::default()).unwrap()
+    }
+
+    fn verdicts(drive: &Drive) -> Vec<(String, Verdict)> {
+        let manuals = Manuals::from_texts([("m.txt", MANUAL)]);
+        verify_citations(drive, &manuals)
+            .into_iter()
+            .map(|c| (c.source.clone(), c.verdict))
+            .collect()
+    }
+
+    #[test]
+    fn right_rows_verify_and_a_swapped_one_names_the_row_it_points_at() {
+        let ok = verdicts(&map(2, 3, ""));
+        assert!(
+            ok[..2].iter().all(|(_, v)| *v == Verdict::Verified),
+            "{ok:?}"
+        );
+        let swapped = verdicts(&map(3, 3, ""));
+        assert_eq!(
+            swapped[0].1,
+            Verdict::Unverified {
+                row_of: Some("decel (Bn-02)".into())
+            }
+        );
+        // The blank line beside the right row is not the row.
+        let blank = verdicts(&map(2, 4, ""));
+        assert_eq!(blank[1].1, Verdict::Unverified { row_of: None });
+    }
+
+    #[test]
+    fn an_indirect_citation_is_not_checked_and_codes_need_their_label() {
+        let v = verdicts(&map(2, 4, "indirect: \"printed on the next page\", "));
+        assert_eq!(v[1].1, Verdict::Indirect("printed on the next page".into()));
+        let codes: Vec<&Verdict> = v[3..].iter().map(|(_, v)| v).collect();
+        assert_eq!(
+            codes,
+            [
+                &Verdict::Verified,
+                &Verdict::Verified,
+                &Verdict::Unverified { row_of: None }
+            ]
+        );
+    }
+
+    #[test]
+    fn odd_text_does_not_panic() {
+        for text in [
+            "",
+            "é",
+            "12éH",
+            "0xé",
+            "ÀH12 Bn-0é",
+            "ΩE4-03",
+            "\u{0}\u{ffff}h0200",
+            "0h",
+        ] {
+            let manuals = Manuals::from_texts([("m.txt", text)]);
+            let _ = verify_citations(&map(1, 2, ""), &manuals);
+            let _ = super::super::coverage(&map(1, 2, ""), &manuals, &[]);
+        }
+    }
+}
