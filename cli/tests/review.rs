@@ -324,3 +324,22 @@ fn the_coverage_documents_are_the_tools_report() {
         assert_eq!(code, 0, "{m}: {out}{err}");
     }
 }
+
+#[test]
+fn strict_without_the_manuals_fails_and_plain_check_does_not() {
+    let s = Scratch::new("review-no-manuals");
+    std::fs::write(s.0.join("example-drive.yaml"), fixture()).unwrap();
+    let (code, out, err) = drivemap(&s.0, None, &["check", "--strict", "example-drive.yaml"]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        err.starts_with(
+            "example-drive.yaml: error: --strict, but none of the map's manuals is at hand"
+        ),
+        "{err}"
+    );
+    let (code, out, _) = drivemap(&s.0, None, &["check", "example-drive.yaml"]);
+    assert_eq!(
+        (code, out.as_str()),
+        (0, "ok   example-drive.yaml (example-drive: 19 registers)\n")
+    );
+}

@@ -77,22 +77,31 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                     drive.registers.len()
                 );
                 let mut unverified = 0;
-                if let Some(dir) = crate::maps::manuals_dir_for(file) {
-                    let mut manuals = Manuals::new(&dir);
-                    manuals.load_for(&drive);
-                    if manuals.any() {
-                        let checks = review::verify_citations(&drive, &manuals);
-                        let counts = CitationCounts::of(&checks);
-                        for w in checks.iter().filter_map(|c| c.warning()) {
-                            if args.strict {
-                                eprintln!("{}", w.to_string().replacen(": warning", ": error", 1));
-                            } else {
-                                eprintln!("{w}");
-                            }
+                let mut manuals = crate::maps::manuals_dir_for(file).map(|d| Manuals::new(&d));
+                if let Some(m) = manuals.as_mut() {
+                    m.load_for(&drive);
+                }
+                let manuals = manuals.filter(Manuals::any);
+                if manuals.is_none() && args.strict {
+                    // Strict means every citation read against its manual.
+                    eprintln!(
+                        "{}: error: --strict, but none of the map's manuals is at hand (set DRIVEMAP_MANUALS)",
+                        file.display()
+                    );
+                    unverified += 1;
+                }
+                if let Some(manuals) = manuals {
+                    let checks = review::verify_citations(&drive, &manuals);
+                    let counts = CitationCounts::of(&checks);
+                    for w in checks.iter().filter_map(|c| c.warning()) {
+                        if args.strict {
+                            eprintln!("{}", w.to_string().replacen(": warning", ": error", 1));
+                        } else {
+                            eprintln!("{w}");
                         }
-                        unverified = counts.unverified;
-                        summary.push_str(&format!("; {counts}"));
                     }
+                    unverified = counts.unverified;
+                    summary.push_str(&format!("; {counts}"));
                 }
                 summary.push(')');
                 if args.strict && unverified > 0 {
