@@ -152,6 +152,16 @@ pub fn context_for(path: &Path) -> Context {
     }
 }
 
+/// The manuals directory for a map file: `$DRIVEMAP_MANUALS`, else `shared/manuals` beside an
+/// ancestor of the map's directory.
+pub fn manuals_dir_for(path: &Path) -> Option<PathBuf> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    drivemap_codegen::default_manuals_dir(dir)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -14,6 +14,7 @@ pub mod load;
 pub mod model;
 pub mod names;
 pub mod numbers;
+pub mod review;
 pub mod source;
 pub mod validate;
 

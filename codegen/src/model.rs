@@ -400,6 +400,10 @@ pub struct Register {
     /// `file:line` of the row in the manual.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+    /// The citation is deliberately indirect (the item has no row of its own there); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -554,6 +558,10 @@ pub struct EnumValue {
     pub name: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+    /// The citation is deliberately indirect (the item has no row of its own there); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -573,6 +581,10 @@ pub struct Field {
     pub values: Vec<EnumValue>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+    /// The citation is deliberately indirect (the item has no row of its own there); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }

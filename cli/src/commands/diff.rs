@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
+use drivemap_codegen::review::Manuals;
 use drivemap_codegen::validate::Context;
 
 use crate::diff::{self, DriveDiff, render::Format};
@@ -57,12 +58,14 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             vec![diff::compare(&read(old)?, &read(new)?)]
         }
     };
+    let manuals = manuals_for(&args, &diffs);
     let out = match args.format {
         Format::Text => {
             let color = std::io::stdout().is_terminal() && std::env::var_os("NO_COLOR").is_none();
             diff::render::text(&diffs, color)
         }
-        Format::Md => diff::render::markdown(&diffs),
+        Format::Md => diff::render::markdown(&diffs, manuals.as_ref()),
+        Format::Github => diff::render::github(&diffs, manuals.as_ref()),
     };
     print!("{out}");
     let breaking = diffs.iter().any(|d| d.breaking() > 0);
@@ -71,6 +74,30 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// The manuals the changes cite, read from the manuals directory found from the new map, the
+/// old map or the maps directory, when there is one.
+fn manuals_for(args: &Args, diffs: &[DriveDiff]) -> Option<Manuals> {
+    let maps = args.dir.maps.join("x.yaml");
+    let candidates = [
+        args.new.as_deref(),
+        args.old.as_deref(),
+        Some(maps.as_path()),
+    ];
+    let dir = candidates
+        .into_iter()
+        .flatten()
+        .find_map(crate::maps::manuals_dir_for)?;
+    let mut manuals = Manuals::new(&dir);
+    for c in diffs.iter().flat_map(|d| d.changes.iter()) {
+        for s in [&c.old_source, &c.new_source].into_iter().flatten() {
+            if let Some((file, _)) = drivemap_codegen::validate::parse_citation(s) {
+                manuals.load(file);
+            }
+        }
+    }
+    Some(manuals)
 }
 
 fn yaml_names(dir: &Path) -> BTreeSet<String> {

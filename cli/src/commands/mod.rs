@@ -1,4 +1,5 @@
 pub mod check;
+pub mod coverage;
 pub mod demo;
 pub mod diff;
 pub mod doc;

@@ -6,6 +6,7 @@
 
 pub mod classify;
 pub mod git;
+mod locate;
 mod protocol;
 mod registers;
 pub mod render;
@@ -34,6 +35,9 @@ pub struct Change {
     pub old_source: Option<String>,
     /// Citation of the new side.
     pub new_source: Option<String>,
+    /// Where the change is in the new map (a variant map's inherited register is in its base's
+    /// file), for annotations; `None` when the new map does not have it.
+    pub at: Option<drivemap_codegen::diagnostic::Loc>,
     /// Address, for ordering register changes as the manual lists them.
     order: u32,
 }
@@ -104,6 +108,7 @@ impl Collector {
             new: new.0,
             old_source: old.1,
             new_source: new.1,
+            at: None,
             order,
         });
     }
@@ -133,6 +138,9 @@ pub fn added(new: &Drive) -> DriveDiff {
         ),
         HEAD,
     );
+    for ch in &mut c.changes {
+        ch.at = Some(new.locate(&drivemap_codegen::source::Path::root().key("drive")));
+    }
     DriveDiff {
         drive: new.meta.id.clone(),
         changes: c.changes,
@@ -172,6 +180,9 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
     registers::registers(&mut c, old, new);
     map_documentation(&mut c, old, new);
     c.changes.sort_by_key(|ch| ch.order);
+    for ch in &mut c.changes {
+        ch.at = locate::at(ch, old, new);
+    }
     DriveDiff {
         drive: new.meta.id.clone(),
         changes: c.changes,

@@ -652,6 +652,9 @@ fn documentation(c: &mut Collector, r: &Register, n: &Register, subject: &str, o
     if !same(&a.display_steps, &b.display_steps) {
         parts.push("display steps");
     }
+    if a.indirect != b.indirect {
+        parts.push("indirect citation");
+    }
     let variant_docs = |d: &drivemap_codegen::model::Register| {
         d.by_variant
             .iter()

@@ -1,6 +1,9 @@
-//! Printing a diff: plain text for a terminal (optionally coloured) or Markdown for a review.
+//! Printing a diff: plain text for a terminal (optionally coloured), Markdown for a review
+//! (quoting the manual line each side cites), or GitHub workflow annotations on the map's lines.
 
 use std::fmt::Write as _;
+
+use drivemap_codegen::review::Manuals;
 
 use super::{Change, ChangeKind, DriveDiff, Severity, classify};
 
@@ -9,8 +12,11 @@ use super::{Change, ChangeKind, DriveDiff, Severity, classify};
 pub enum Format {
     /// Plain text for a terminal.
     Text,
-    /// Markdown, for pasting into a review.
+    /// Markdown, for pasting into a review; quotes the manual line each side cites.
     Md,
+    /// GitHub workflow annotations on the changed lines of the map (`::error` for breaking
+    /// changes, `::warning` for the rest).
+    Github,
 }
 
 fn heading(d: &DriveDiff) -> String {
@@ -89,12 +95,19 @@ fn cell(s: &str) -> String {
         .replace(['\n', '\r'], " ")
 }
 
-fn cite(s: Option<&str>) -> String {
-    s.map(|s| format!("`{s}`")).unwrap_or_else(|| "—".into())
+fn cite(s: Option<&str>, manuals: Option<&Manuals>) -> String {
+    match s {
+        None => "—".into(),
+        Some(s) => match manuals.and_then(|m| m.quote(s)) {
+            Some(q) => format!("`{s}`: “{}”", cell(&q)),
+            None => format!("`{s}`"),
+        },
+    }
 }
 
-/// Markdown: a section per drive with a table of changes.
-pub fn markdown(diffs: &[DriveDiff]) -> String {
+/// Markdown: a section per drive with a table of changes; each citation is followed by the
+/// manual line it points at when the manuals are at hand.
+pub fn markdown(diffs: &[DriveDiff], manuals: Option<&Manuals>) -> String {
     let mut out = String::new();
     for d in diffs {
         let _ = writeln!(out, "### {}\n", heading(d));
@@ -118,8 +131,8 @@ pub fn markdown(diffs: &[DriveDiff]) -> String {
                 c.subject,
                 c.old.as_deref().map(cell).unwrap_or_else(|| "—".into()),
                 c.new.as_deref().map(cell).unwrap_or_else(|| "—".into()),
-                cite(c.old_source.as_deref()),
-                cite(c.new_source.as_deref()),
+                cite(c.old_source.as_deref(), manuals),
+                cite(c.new_source.as_deref(), manuals),
                 c.reason()
             );
         }
@@ -154,12 +167,76 @@ pub fn kinds(format: Format) -> String {
                 let _ = writeln!(out, "{label}{pad}  {:<10}  {why}", sev.to_string());
             }
         }
-        Format::Md => {
+        Format::Md | Format::Github => {
             let _ = writeln!(out, "| Change | Severity | Why |\n|---|---|---|");
             for &k in ChangeKind::ALL {
                 let (sev, why) = classify(k);
                 let _ = writeln!(out, "| {} | {sev} | {why} |", k.label());
             }
+        }
+    }
+    out
+}
+
+/// Escapes an annotation's message (`%`, CR, LF).
+fn escape_data(s: &str) -> String {
+    s.replace('%', "%25")
+        .replace('\r', "%0D")
+        .replace('\n', "%0A")
+}
+
+/// Escapes an annotation's property (`%`, CR, LF, `:`, `,`).
+fn escape_property(s: &str) -> String {
+    escape_data(s).replace(':', "%3A").replace(',', "%2C")
+}
+
+/// GitHub workflow annotations: one per change, on its line of the map; the message gives the
+/// change, both sides, why, and the manual line each side cites.
+pub fn github(diffs: &[DriveDiff], manuals: Option<&Manuals>) -> String {
+    let mut out = String::new();
+    for d in diffs {
+        for c in &d.changes {
+            let level = match c.severity() {
+                Severity::Breaking => "error",
+                Severity::Compatible => "warning",
+            };
+            let mut props = Vec::new();
+            if let Some(at) = &c.at {
+                props.push(format!("file={}", escape_property(&at.file)));
+                props.push(format!("line={}", at.line));
+            }
+            props.push(format!(
+                "title={}",
+                escape_property(&format!("drivemap diff: {} {}", d.drive, c.severity()))
+            ));
+            let mut message = title(c);
+            if c.old.is_some() || c.new.is_some() {
+                let _ = write!(
+                    message,
+                    ": {} → {}",
+                    c.old.as_deref().unwrap_or("(none)"),
+                    c.new.as_deref().unwrap_or("(none)")
+                );
+            }
+            let _ = write!(message, "\nwhy: {}", c.reason());
+            for (side, source) in [("old", &c.old_source), ("new", &c.new_source)] {
+                if let Some(s) = source {
+                    match manuals.and_then(|m| m.quote(s)) {
+                        Some(q) => {
+                            let _ = write!(message, "\n{side}: {s}: “{q}”");
+                        }
+                        None => {
+                            let _ = write!(message, "\n{side}: {s}");
+                        }
+                    }
+                }
+            }
+            let _ = writeln!(
+                out,
+                "::{level} {}::{}",
+                props.join(","),
+                escape_data(&message)
+            );
         }
     }
     out

@@ -48,6 +48,31 @@ fn cite(
     }
 }
 
+/// `indirect: <reason>` marks a citation as deliberately indirect: it needs the citation it
+/// qualifies and a reason.
+fn indirect(
+    drive: &Drive,
+    out: &mut Vec<Diagnostic>,
+    reason: &Option<String>,
+    source: &Option<String>,
+    path: Path,
+    register: Option<&str>,
+) {
+    match (reason, source) {
+        (Some(r), _) if r.trim().is_empty() => out.push(drive.error(
+            &path,
+            register,
+            "`indirect` needs a reason: why the cited line does not show the item itself",
+        )),
+        (Some(_), None) => out.push(drive.error(
+            &path,
+            register,
+            "`indirect` qualifies a citation, but there is no `source`",
+        )),
+        _ => {}
+    }
+}
+
 fn opt(
     drive: &Drive,
     ctx: &Context,
@@ -225,10 +250,21 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             )),
             Some(s) => cite(drive, ctx, out, s, r.key_path("source"), rid),
         }
+        indirect(
+            drive,
+            out,
+            &r.def.indirect,
+            &r.def.source,
+            r.key_path("indirect"),
+            rid,
+        );
         for (fi, f) in r.def.fields.iter().enumerate() {
             let fp = r.key_path("fields").index(fi);
             opt(drive, ctx, out, &f.source, fp.key("source"), rid);
+            indirect(drive, out, &f.indirect, &f.source, fp.key("indirect"), rid);
             for (vi, v) in f.values.iter().enumerate() {
+                let vp = fp.key("values").index(vi);
+                indirect(drive, out, &v.indirect, &v.source, vp.key("indirect"), rid);
                 opt(
                     drive,
                     ctx,
@@ -240,6 +276,14 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             }
         }
         for (vi, v) in r.def.values.iter().enumerate() {
+            indirect(
+                drive,
+                out,
+                &v.indirect,
+                &v.source,
+                r.key_path("values").index(vi).key("indirect"),
+                rid,
+            );
             opt(
                 drive,
                 ctx,

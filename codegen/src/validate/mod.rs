@@ -23,6 +23,7 @@ mod references_resolve;
 mod value_kind_single;
 
 pub use bit_fields_valid::span as field_span;
+pub use citations_present::parse_citation;
 pub use identifiers_valid::{is_identifier, pascal_case};
 
 /// What validation may consult beyond the map itself.

@@ -1,0 +1,345 @@
+//! Review against the manual: citations checked by content (`drivemap check`), uncited rows
+//! (`drivemap coverage`), the manual's words in `drivemap diff` (Markdown and GitHub
+//! annotations). The fixture map `fixtures/example-drive.yaml` cites `fixtures/manuals/manual.txt`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn fixture_manuals() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/manuals")
+}
+
+/// A directory of its own under the system's temporary directory, removed on drop.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let p = std::env::temp_dir().join(format!("drivemap-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        Scratch(p)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Runs drivemap in `dir`; `manuals` sets `DRIVEMAP_MANUALS`.
+fn drivemap(dir: &Path, manuals: Option<&Path>, args: &[&str]) -> (i32, String, String) {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_drivemap"));
+    cmd.args(args)
+        .current_dir(dir)
+        .env_remove("DRIVEMAP_MAPS")
+        .env_remove("DRIVEMAP_MANUALS");
+    if let Some(m) = manuals {
+        cmd.env("DRIVEMAP_MANUALS", m);
+    }
+    let out = cmd.output().expect("run drivemap");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn edit(text: &str, from: &str, to: &str) -> String {
+    assert_eq!(text.matches(from).count(), 1, "`{from}` must occur once");
+    text.replace(from, to)
+}
+
+fn fixture() -> String {
+    std::fs::read_to_string(repo().join("cli/tests/fixtures/example-drive.yaml")).unwrap()
+}
+
+const MAX_VOLTAGE_SOURCE: &str = "        source: \"manual.txt:41\"\n      - id: frequency_units";
+
+#[test]
+fn the_fixture_map_verifies_against_its_manual() {
+    let (code, out, err) = drivemap(
+        &repo(),
+        Some(&fixture_manuals()),
+        &["check", "--strict", "cli/tests/fixtures/example-drive.yaml"],
+    );
+    assert_eq!((code, err.as_str()), (0, ""), "{out}");
+    assert_eq!(
+        out,
+        "ok   cli/tests/fixtures/example-drive.yaml (example-drive: 19 registers; \
+         citations: 29 of 29 verified, 0 indirect, 0 unverified)\n"
+    );
+}
+
+#[test]
+fn a_citation_moved_to_the_next_row_is_reported_with_the_line_and_whose_row_it_is() {
+    let s = Scratch::new("review-moved");
+    let moved = edit(
+        &fixture(),
+        MAX_VOLTAGE_SOURCE,
+        &MAX_VOLTAGE_SOURCE.replace(":41", ":42"),
+    );
+    std::fs::write(s.0.join("example-drive.yaml"), moved).unwrap();
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &["check", "example-drive.yaml"],
+    );
+    assert_eq!(code, 0, "unverified citations are warnings: {err}");
+    assert_eq!(
+        err,
+        "example-drive.yaml:132:9: warning in register `max_voltage`: citation `manual.txt:42` \
+         does not mention P-02, 0101h, \"Maximum voltage\": \
+         `P-03 | 0102H | Frequency units | 0: 0.1 Hz 1: 0.01 Hz 2: 30000 = 100 % | 0` \
+         (the row of `frequency_units (P-03)`); fix the line, or mark it `indirect: <reason>`\n"
+    );
+    assert!(
+        out.contains("28 of 29 verified, 0 indirect, 1 unverified"),
+        "{out}"
+    );
+
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &["check", "--strict", "example-drive.yaml"],
+    );
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        err.starts_with(
+            "example-drive.yaml:132:9: error in register `max_voltage`: citation `manual.txt:42`"
+        ),
+        "{err}"
+    );
+    assert!(out.starts_with("FAIL example-drive.yaml"), "{out}");
+}
+
+#[test]
+fn an_indirect_citation_with_its_reason_is_accepted_and_counted() {
+    let s = Scratch::new("review-indirect");
+    let marked = edit(
+        &fixture(),
+        MAX_VOLTAGE_SOURCE,
+        &MAX_VOLTAGE_SOURCE.replace(
+            "        source: \"manual.txt:41\"",
+            "        indirect: \"the fixture's deliberate example of an indirect citation\"\n        source: \"manual.txt:42\"",
+        ),
+    );
+    std::fs::write(s.0.join("example-drive.yaml"), &marked).unwrap();
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &["check", "--strict", "example-drive.yaml"],
+    );
+    assert_eq!((code, err.as_str()), (0, ""), "{out}");
+    assert!(
+        out.contains("28 of 29 verified, 1 indirect, 0 unverified"),
+        "{out}"
+    );
+
+    // Without a reason it is a validation error.
+    let empty = marked.replace(
+        "\"the fixture's deliberate example of an indirect citation\"",
+        "\"\"",
+    );
+    std::fs::write(s.0.join("example-drive.yaml"), empty).unwrap();
+    let (code, _, err) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &["check", "example-drive.yaml"],
+    );
+    assert_eq!(code, 1);
+    assert!(
+        err.contains(
+            "example-drive.yaml:132:9: error in register `max_voltage`: `indirect` needs a reason"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_row_the_map_leaves_out_is_reported_with_its_table() {
+    let s = Scratch::new("review-coverage");
+    let text = fixture();
+    let start = text.find("      - id: carrier_frequency\n").unwrap();
+    let end = text[start..].find("  - id: commands\n").unwrap() + start;
+    let without = format!("{}{}", &text[..start], &text[end..]);
+    std::fs::write(s.0.join("example-drive.yaml"), without).unwrap();
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &["coverage", "example-drive.yaml"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.starts_with("example-drive: 5 tables, 18 rows, 16 cited, 1 gaps, 1 uncited\n"),
+        "{out}"
+    );
+    assert!(
+        out.contains("  manual.txt:40-48  Parameters                               rows    9  cited    8  gaps   0  uncited   1\n"),
+        "{out}"
+    );
+    assert!(
+        out.ends_with(
+            "uncited manual.txt:48  P-10  `P-10 | 0109H | Carrier frequency | 1.0 to 15.0 kHz`\n"
+        ),
+        "{out}"
+    );
+    // The whole map covers every row; the page-missing line is a gap.
+    std::fs::write(s.0.join("example-drive.yaml"), fixture()).unwrap();
+    let (_, out, _) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &["coverage", "example-drive.yaml"],
+    );
+    assert!(
+        out.starts_with("example-drive: 5 tables, 18 rows, 17 cited, 1 gaps, 0 uncited\n"),
+        "{out}"
+    );
+}
+
+/// The fixture with a scale edit and a citation moved to the next row.
+fn diff_pair(s: &Scratch) {
+    let base = fixture();
+    let mut new = edit(&base, "scale: 0.1, min: 50.0", "scale: 0.01, min: 50.0");
+    new = edit(
+        &new,
+        "source: \"manual.txt:47\"",
+        "source: \"manual.txt:48\"",
+    );
+    for dir in ["old", "new"] {
+        std::fs::create_dir_all(s.0.join(dir)).unwrap();
+    }
+    std::fs::write(s.0.join("old/example-drive.yaml"), base).unwrap();
+    std::fs::write(s.0.join("new/example-drive.yaml"), new).unwrap();
+}
+
+#[test]
+fn diff_markdown_quotes_the_manual_line_of_both_sides() {
+    let s = Scratch::new("review-diff-md");
+    diff_pair(&s);
+    let (code, md, err) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &[
+            "diff",
+            "--format",
+            "md",
+            "old/example-drive.yaml",
+            "new/example-drive.yaml",
+        ],
+    );
+    assert_eq!(code, 1, "a breaking change still exits 1: {err}");
+    assert!(
+        md.contains(
+            "| compatible | `accel_time (P-08)` | citation changed | — | — | \
+             `manual.txt:47`: “P-08 \\| 0107H \\| Acceleration time \\| 0.0 to 600.0 s (whole seconds from 100 s) \\| 10.0” | \
+             `manual.txt:48`: “P-10 \\| 0109H \\| Carrier frequency \\| 1.0 to 15.0 kHz” |"
+        ),
+        "{md}"
+    );
+    assert!(
+        md.contains(
+            "| **breaking** | `max_frequency (P-01)` | scale changed | 0.1 | 0.01 | \
+             `manual.txt:40`: “P-01 \\| 0100H \\| Maximum frequency \\| 50.0 to 400.0 Hz \\| 0.1 Hz \\| 60.0” | \
+             `manual.txt:40`: “P-01 \\| 0100H \\| Maximum frequency \\| 50.0 to 400.0 Hz \\| 0.1 Hz \\| 60.0” |"
+        ),
+        "{md}"
+    );
+}
+
+#[test]
+fn diff_github_annotations_are_exact() {
+    let s = Scratch::new("review-diff-github");
+    diff_pair(&s);
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &[
+            "diff",
+            "--format",
+            "github",
+            "old/example-drive.yaml",
+            "new/example-drive.yaml",
+        ],
+    );
+    assert_eq!(code, 1, "{err}");
+    insta::assert_snapshot!("example_drive_diff_github", out);
+    // Only compatible changes: warnings, exit 0.
+    let base = fixture();
+    std::fs::write(
+        s.0.join("new/example-drive.yaml"),
+        edit(
+            &base,
+            "source: \"manual.txt:47\"",
+            "source: \"manual.txt:48\"",
+        ),
+    )
+    .unwrap();
+    let (code, out, _) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &[
+            "diff",
+            "--format",
+            "github",
+            "old/example-drive.yaml",
+            "new/example-drive.yaml",
+        ],
+    );
+    assert_eq!(code, 0);
+    assert!(
+        out.starts_with("::warning file=new/example-drive.yaml,line="),
+        "{out}"
+    );
+    assert_eq!(out.lines().count(), 1, "{out}");
+}
+
+const SHIPPED: [&str; 5] = [
+    "ptlk-tds-v8",
+    "yaskawa-v7",
+    "yaskawa-j7",
+    "yaskawa-gpd515",
+    "automationdirect-acn",
+];
+
+#[test]
+fn every_citation_of_the_shipped_maps_verifies_or_is_marked_indirect() {
+    let files: Vec<String> = SHIPPED.iter().map(|m| format!("maps/{m}.yaml")).collect();
+    let mut args = vec!["check", "--strict"];
+    args.extend(files.iter().map(String::as_str));
+    let (code, out, err) = drivemap(&repo(), None, &args);
+    assert_eq!((code, err.as_str()), (0, ""), "{out}");
+    assert_eq!(out.matches(", 0 unverified)").count(), 5, "{out}");
+}
+
+#[test]
+fn the_coverage_documents_are_the_tools_report() {
+    for m in SHIPPED {
+        let doc = format!("docs/coverage/{m}.md");
+        let (code, out, err) = drivemap(&repo(), None, &["coverage", m, "--check", &doc]);
+        assert_eq!(code, 0, "{m}: {out}{err}");
+    }
+}
+
+#[test]
+fn strict_without_the_manuals_fails_and_plain_check_does_not() {
+    let s = Scratch::new("review-no-manuals");
+    std::fs::write(s.0.join("example-drive.yaml"), fixture()).unwrap();
+    let (code, out, err) = drivemap(&s.0, None, &["check", "--strict", "example-drive.yaml"]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        err.starts_with(
+            "example-drive.yaml: error: --strict, but none of the map's manuals is at hand"
+        ),
+        "{err}"
+    );
+    let (code, out, _) = drivemap(&s.0, None, &["check", "example-drive.yaml"]);
+    assert_eq!(
+        (code, out.as_str()),
+        (0, "ok   example-drive.yaml (example-drive: 19 registers)\n")
+    );
+}

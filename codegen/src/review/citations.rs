@@ -1,0 +1,491 @@
+//! Citations checked by content: the cited line (or the row it belongs to) must mention the item.
+//!
+//! - a **register**: its address in a notation the manual uses, its parameter number, or its
+//!   printed name (two of its words). A name alone does not verify a line that is another
+//!   register's row (it prints that register's address or parameter number and not this one's):
+//!   "Acceleration time 2" is not the row of "Acceleration time 1".
+//! - a **value**: its code and its label; a **field**: its bit or its name.
+//!
+//! A row may span two OCR lines: when the cited line is not another register's row, the lines
+//! just before and after count as the row. A citation marked `indirect` (with its reason) is not
+//! checked.
+
+use std::collections::HashMap;
+
+use super::Manuals;
+use super::matching::{
+    AddressForms, Line, code_found, label_text, name_found, number_found, param_found,
+};
+use crate::diagnostic::Loc;
+use crate::ir::{Drive, Register};
+use crate::model::{EnumValue, Field};
+use crate::source::Path;
+use crate::validate::parse_citation;
+
+/// What a citation is the citation of.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Item {
+    Register,
+    /// A code of the register or of one of its fields.
+    Value {
+        code: u16,
+        label: String,
+    },
+    Field {
+        bit: String,
+        name: String,
+    },
+}
+
+/// The outcome of checking one citation.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Verdict {
+    /// The cited line mentions the item.
+    Verified,
+    /// The row the line belongs to (the line before or after) mentions it.
+    VerifiedRow(usize),
+    /// Marked indirect in the map, with this reason.
+    Indirect(String),
+    /// The line does not mention it. `row_of`: the register whose row the line is instead.
+    Unverified { row_of: Option<String> },
+    /// The manual is not at hand or the line does not exist.
+    Unchecked,
+}
+
+/// One citation and what review found.
+#[derive(Debug, Clone)]
+pub struct CitationCheck {
+    pub loc: Loc,
+    pub register: String,
+    pub item: Item,
+    /// `file:line`
+    pub source: String,
+    /// What the item is expected to show (`Bn-01, 0200h, "Acceleration time 1"`).
+    pub expected: String,
+    /// The cited line, quoted.
+    pub quote: Option<String>,
+    pub verdict: Verdict,
+}
+
+impl CitationCheck {
+    pub fn verified(&self) -> bool {
+        matches!(self.verdict, Verdict::Verified | Verdict::VerifiedRow(_))
+    }
+
+    /// The warning for an unverified citation.
+    pub fn warning(&self) -> Option<super::Warning> {
+        let Verdict::Unverified { row_of } = &self.verdict else {
+            return None;
+        };
+        let what = match &self.item {
+            Item::Register => String::new(),
+            Item::Value { code, .. } => format!(" of code {code}"),
+            Item::Field { bit, .. } => format!(" of bit {bit}"),
+        };
+        let mut message = format!(
+            "citation{what} `{}` does not mention {}: `{}`",
+            self.source,
+            self.expected,
+            self.quote.as_deref().unwrap_or("")
+        );
+        if let Some(other) = row_of {
+            message.push_str(&format!(" (the row of `{other}`)"));
+        }
+        message.push_str("; fix the line, or mark it `indirect: <reason>`");
+        Some(super::Warning {
+            loc: self.loc.clone(),
+            register: Some(self.register.clone()),
+            message,
+        })
+    }
+}
+
+struct Keys {
+    forms: AddressForms,
+    alternatives: Vec<AddressForms>,
+    param: Option<String>,
+}
+
+impl Keys {
+    fn of(r: &Register, offsets: Option<(i32, i32)>) -> Keys {
+        Keys {
+            forms: AddressForms::new(r.def.address, offsets),
+            alternatives: r
+                .def
+                .address_alternatives
+                .iter()
+                .map(|a| AddressForms::new(a.address, offsets))
+                .collect(),
+            param: r.def.param.clone(),
+        }
+    }
+
+    /// The line prints the register's parameter number or one of its addresses.
+    fn strong(&self, line: &Line) -> bool {
+        self.param.as_deref().is_some_and(|p| param_found(p, line))
+            || self.forms.found_in(line)
+            || self.alternatives.iter().any(|f| f.found_in(line))
+    }
+}
+
+/// Lines prepared once per manual line asked for.
+struct Cache<'m> {
+    manuals: &'m Manuals,
+    lines: HashMap<(String, usize), Option<Line>>,
+}
+
+impl Cache<'_> {
+    fn get(&mut self, file: &str, n: usize) -> Option<&Line> {
+        let manuals = self.manuals;
+        self.lines
+            .entry((file.to_owned(), n))
+            .or_insert_with(|| manuals.line(file, n).map(Line::new))
+            .as_ref()
+    }
+}
+
+/// How far around a line other registers are looked for when deciding whose row it is.
+const WINDOW: usize = 80;
+
+/// Checks every register, value and field citation of a drive against the manuals.
+pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> {
+    let offsets = drive
+        .protocol
+        .addressing
+        .as_ref()
+        .map(|a| (a.rtu_offset, a.tcp_offset));
+    let keys: Vec<Keys> = drive
+        .registers
+        .iter()
+        .map(|r| Keys::of(r, offsets))
+        .collect();
+    // Registers by manual, sorted by cited line, to find the neighbours of a line.
+    let mut by_file: HashMap<&str, Vec<(usize, usize)>> = HashMap::new();
+    for (i, r) in drive.registers.iter().enumerate() {
+        if let Some((file, line)) = r.def.source.as_deref().and_then(parse_citation) {
+            by_file.entry(file).or_default().push((line, i));
+        }
+    }
+    for list in by_file.values_mut() {
+        list.sort_unstable();
+    }
+    let mut cache = Cache {
+        manuals,
+        lines: HashMap::new(),
+    };
+    let mut out = Vec::new();
+    for (i, r) in drive.registers.iter().enumerate() {
+        let Some(source) = r.def.source.as_deref() else {
+            continue;
+        };
+        let mut expected = Vec::new();
+        if let Some(p) = &r.def.param {
+            expected.push(p.clone());
+        }
+        expected.push(AddressForms::display(r.def.address));
+        expected.push(format!("\"{}\"", r.def.name));
+        let verdict = match &r.def.indirect {
+            Some(reason) => Verdict::Indirect(reason.clone()),
+            None => register_verdict(drive, &keys, &by_file, &mut cache, i, source),
+        };
+        out.push(check(
+            drive,
+            manuals,
+            r,
+            r.key_path("source"),
+            Item::Register,
+            source,
+            expected.join(", "),
+            verdict,
+        ));
+        let values = |list: &[EnumValue], base: Path, out: &mut Vec<CitationCheck>| {
+            for (vi, v) in list.iter().enumerate() {
+                let Some(src) = v.source.as_deref() else {
+                    continue;
+                };
+                let verdict = match &v.indirect {
+                    Some(reason) => Verdict::Indirect(reason.clone()),
+                    None => near(manuals, src, |l| value_found(v, l)),
+                };
+                out.push(check(
+                    drive,
+                    manuals,
+                    r,
+                    base.index(vi).key("source"),
+                    Item::Value {
+                        code: v.value,
+                        label: v.name.clone(),
+                    },
+                    src,
+                    format!("code {} \"{}\"", v.value, v.name),
+                    verdict,
+                ));
+            }
+        };
+        values(&r.def.values, r.key_path("values"), &mut out);
+        for (fi, f) in r.def.fields.iter().enumerate() {
+            let fp = r.key_path("fields").index(fi);
+            if let Some(src) = f.source.as_deref() {
+                let verdict = match &f.indirect {
+                    Some(reason) => Verdict::Indirect(reason.clone()),
+                    None => near(manuals, src, |l| field_found(f, l)),
+                };
+                let bit = match (f.bit, f.bits) {
+                    (Some(b), _) => b.to_string(),
+                    (None, Some([lo, hi])) => format!("{lo}-{hi}"),
+                    _ => String::new(),
+                };
+                out.push(check(
+                    drive,
+                    manuals,
+                    r,
+                    fp.key("source"),
+                    Item::Field {
+                        bit: bit.clone(),
+                        name: f.name.clone(),
+                    },
+                    src,
+                    format!("bit {bit} or \"{}\"", f.name),
+                    verdict,
+                ));
+            }
+            values(&f.values, fp.key("values"), &mut out);
+        }
+    }
+    out
+}
+
+#[allow(clippy::too_many_arguments)]
+fn check(
+    drive: &Drive,
+    manuals: &Manuals,
+    r: &Register,
+    path: Path,
+    item: Item,
+    source: &str,
+    expected: String,
+    verdict: Verdict,
+) -> CitationCheck {
+    CitationCheck {
+        loc: drive.locate(&path),
+        register: r.def.id.clone(),
+        item,
+        source: source.to_owned(),
+        expected,
+        quote: manuals.quote(source),
+        verdict,
+    }
+}
+
+fn value_found(v: &EnumValue, line: &Line) -> bool {
+    let label = label_text(&v.name);
+    name_found(&label, line) && code_found(v.value, &label, line)
+}
+
+fn field_found(f: &Field, line: &Line) -> bool {
+    let bit = f.bit.or(f.bits.map(|b| b[0]));
+    if let Some([lo, hi]) = f.bits {
+        // `B0-B7`, OCR `BO-B7`
+        let ocr = line.upper.replace('O', "0");
+        if ocr.contains(&format!("B{lo}-B{hi}")) || ocr.contains(&format!("B{lo}~B{hi}")) {
+            return true;
+        }
+    }
+    bit.is_some_and(|b| number_found(u16::from(b), line)) || name_found(&label_text(&f.name), line)
+}
+
+/// A value's or field's citation: the line, else the row it belongs to (the line joined with
+/// the one after or before it: a label broken over two OCR lines).
+fn near(manuals: &Manuals, source: &str, found: impl Fn(&Line) -> bool) -> Verdict {
+    let Some((file, n)) = parse_citation(source) else {
+        return Verdict::Unchecked;
+    };
+    let Some(text) = manuals.line(file, n) else {
+        return Verdict::Unchecked;
+    };
+    if found(&Line::new(text)) {
+        return Verdict::Verified;
+    }
+    if let Some(next) = manuals.line(file, n + 1) {
+        if found(&Line::new(&format!("{text} {next}"))) {
+            return Verdict::VerifiedRow(n + 1);
+        }
+    }
+    if let Some(prev) = n.checked_sub(1).and_then(|m| manuals.line(file, m)) {
+        if found(&Line::new(&format!("{prev} {text}"))) {
+            return Verdict::VerifiedRow(n - 1);
+        }
+    }
+    Verdict::Unverified { row_of: None }
+}
+
+fn register_verdict(
+    drive: &Drive,
+    keys: &[Keys],
+    by_file: &HashMap<&str, Vec<(usize, usize)>>,
+    cache: &mut Cache<'_>,
+    i: usize,
+    source: &str,
+) -> Verdict {
+    let Some((file, n)) = parse_citation(source) else {
+        return Verdict::Unchecked;
+    };
+    let r = &drive.registers[i];
+    let neighbours: Vec<usize> = by_file
+        .get(file)
+        .map(|list| {
+            let lo = list.partition_point(|&(l, _)| l + WINDOW < n);
+            let hi = list.partition_point(|&(l, _)| l <= n + WINDOW);
+            // Nearest first: the register cited on the line itself names the row.
+            let mut near: Vec<(usize, usize)> = list[lo..hi]
+                .iter()
+                .filter(|&&(_, j)| j != i)
+                .filter(|&&(_, j)| drive.registers[j].def.address != r.def.address)
+                .map(|&(l, j)| (l.abs_diff(n), j))
+                .collect();
+            near.sort_unstable();
+            near.into_iter().map(|(_, j)| j).collect()
+        })
+        .unwrap_or_default();
+    // Whose row a line is, other than this register's.
+    let other_row = |line: &Line| -> Option<usize> {
+        neighbours.iter().copied().find(|&j| keys[j].strong(line))
+    };
+    let matches = |line: &Line| -> (bool, Option<usize>) {
+        if keys[i].strong(line) {
+            return (true, None);
+        }
+        let other = other_row(line);
+        (other.is_none() && name_found(&r.def.name, line), other)
+    };
+    let Some(line) = cache.get(file, n) else {
+        return Verdict::Unchecked;
+    };
+    let line = line.clone();
+    if line.words.is_empty() {
+        // A blank line is no row, even beside the right one.
+        return Verdict::Unverified { row_of: None };
+    }
+    let (ok, other) = matches(&line);
+    if ok {
+        return Verdict::Verified;
+    }
+    if let Some(j) = other {
+        return Verdict::Unverified {
+            row_of: Some(crate_describe(&drive.registers[j])),
+        };
+    }
+    for m in [n.saturating_sub(1), n + 1] {
+        if m == 0 {
+            continue;
+        }
+        if let Some(l) = cache.get(file, m).cloned() {
+            if matches(&l).0 {
+                return Verdict::VerifiedRow(m);
+            }
+        }
+    }
+    Verdict::Unverified { row_of: None }
+}
+
+fn crate_describe(r: &Register) -> String {
+    match &r.def.param {
+        Some(p) => format!("{} ({p})", r.def.id),
+        None => r.def.id.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::validate::Context;
+
+    const MANUAL: &str = "Table 1\n\
+        0200H\tBn-01\tAcceleration time 1\t0.1s\n\
+        0201H\tBn-02\tDeceleration time 1\t0.1s\n\
+        \n\
+        0202H\tBn-03\tRun source\t0: Operator 1: Terminals\n";
+
+    fn map(accel: usize, decel: usize, indirect: &str) -> Drive {
+        let text = format!(
+            "drive: {{id: t, vendor: T, models: [T], manuals: [{{file: m.txt, title: M}}]}}\n\
+             protocol: {{transports: [rtu], function_codes: [0x03, 0x06], max_read: 1, max_write: 1, slave_address: {{min: 1, max: 31}}}}\n\
+             groups:\n\
+             \x20 - id: g\n\
+             \x20   name: G\n\
+             \x20   registers:\n\
+             \x20     - {{id: accel, param: Bn-01, name: Acceleration time 1, address: 0x0200, source: \"m.txt:{accel}\"}}\n\
+             \x20     - {{id: decel, param: Bn-02, name: Deceleration time 1, address: 0x0201, {indirect}source: \"m.txt:{decel}\"}}\n\
+             \x20     - id: run_source\n\
+             \x20       param: Bn-03\n\
+             \x20       name: Run source\n\
+             \x20       address: 0x0202\n\
+             \x20       values:\n\
+             \x20         - {{value: 0, id: operator, name: Operator, source: \"m.txt:5\"}}\n\
+             \x20         - {{value: 1, id: terminals, name: Terminals, source: \"m.txt:5\"}}\n\
+             \x20         - {{value: 2, id: network, name: Network, source: \"m.txt:5\"}}\n\
+             \x20       source: \"m.txt:5\"\n"
+        );
+        crate::read_map_str("t.yaml", &text, &Context::default()).unwrap()
+    }
+
+    fn verdicts(drive: &Drive) -> Vec<(String, Verdict)> {
+        let manuals = Manuals::from_texts([("m.txt", MANUAL)]);
+        verify_citations(drive, &manuals)
+            .into_iter()
+            .map(|c| (c.source.clone(), c.verdict))
+            .collect()
+    }
+
+    #[test]
+    fn right_rows_verify_and_a_swapped_one_names_the_row_it_points_at() {
+        let ok = verdicts(&map(2, 3, ""));
+        assert!(
+            ok[..2].iter().all(|(_, v)| *v == Verdict::Verified),
+            "{ok:?}"
+        );
+        let swapped = verdicts(&map(3, 3, ""));
+        assert_eq!(
+            swapped[0].1,
+            Verdict::Unverified {
+                row_of: Some("decel (Bn-02)".into())
+            }
+        );
+        // The blank line beside the right row is not the row.
+        let blank = verdicts(&map(2, 4, ""));
+        assert_eq!(blank[1].1, Verdict::Unverified { row_of: None });
+    }
+
+    #[test]
+    fn an_indirect_citation_is_not_checked_and_codes_need_their_label() {
+        let v = verdicts(&map(2, 4, "indirect: \"printed on the next page\", "));
+        assert_eq!(v[1].1, Verdict::Indirect("printed on the next page".into()));
+        let codes: Vec<&Verdict> = v[3..].iter().map(|(_, v)| v).collect();
+        assert_eq!(
+            codes,
+            [
+                &Verdict::Verified,
+                &Verdict::Verified,
+                &Verdict::Unverified { row_of: None }
+            ]
+        );
+    }
+
+    #[test]
+    fn odd_text_does_not_panic() {
+        for text in [
+            "",
+            "é",
+            "12éH",
+            "0xé",
+            "ÀH12 Bn-0é",
+            "ΩE4-03",
+            "\u{0}\u{ffff}h0200",
+            "0h",
+        ] {
+            let manuals = Manuals::from_texts([("m.txt", text)]);
+            let _ = verify_citations(&map(1, 2, ""), &manuals);
+            let _ = super::super::coverage(&map(1, 2, ""), &manuals, &[]);
+        }
+    }
+}

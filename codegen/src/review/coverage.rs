@@ -1,0 +1,522 @@
+//! Rows of the manual that no item of the map cites.
+//!
+//! The shapes of register rows are learnt from the lines the map's registers cite: the classes
+//! of the first two words of each such line (an address such as `0200H` or `0x0300`, a parameter
+//! number shaped like the map's own — `Bn-01`, `n001`, `E4-03`, `UF.8` — or anything else). A
+//! manual line of a learnt shape is a row; each parameter number on it (several in two-column
+//! tables) is a row key, with the address that follows it, or the address alone when the row
+//! prints no parameter number. A key is covered when a register has that parameter number or
+//! address, a `gaps` entry covers the address or names the parameter, a `removed` entry names it,
+//! or any citation of the map points at the line. The rest are uncited rows.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
+
+use super::Manuals;
+use super::citations::{Verdict, verify_citations};
+use crate::ir::Drive;
+use crate::source::{Node, NodeKind};
+use crate::validate::parse_citation;
+
+/// A row of a manual table no item of the map covers.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UncitedRow {
+    pub file: String,
+    pub line: usize,
+    /// The parameter number or address as printed.
+    pub key: String,
+    /// The line, quoted.
+    pub text: String,
+}
+
+/// One table of a manual: a run of rows of a learnt shape.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TableSummary {
+    pub file: String,
+    pub first_line: usize,
+    pub last_line: usize,
+    /// The map group citing most of its rows, if any.
+    pub group: Option<String>,
+    /// Row keys in the manual.
+    pub rows: usize,
+    /// Keys a register of the map has.
+    pub cited: usize,
+    /// Keys covered by `gaps`, `removed`, a citation of the line (conflicts, notes), or printed
+    /// as reserved or not used.
+    pub gaps: usize,
+    /// Keys nothing covers.
+    pub uncited: usize,
+}
+
+/// What `drivemap coverage` reports for one map.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CoverageReport {
+    pub drive: String,
+    pub tables: Vec<TableSummary>,
+    pub uncited: Vec<UncitedRow>,
+    /// Manuals named by the map that are not at hand.
+    pub missing_manuals: Vec<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+enum Class {
+    Address,
+    Param,
+    /// An address glued to a parameter number (`31AhE4-03Motor`).
+    AddressParam,
+    Other,
+}
+
+/// A parameter number's shape: upper-case letter runs `A`, lower-case `a`, digit runs `9`,
+/// other characters kept (`Bn-01` → `Aa-9`, `n001` → `a9`, `UF.8` → `A.9`).
+fn shape(s: &str) -> String {
+    let mut out = String::new();
+    for c in s.chars() {
+        let k = if c.is_ascii_digit() {
+            '9'
+        } else if c.is_uppercase() {
+            'A'
+        } else if c.is_lowercase() {
+            'a'
+        } else {
+            c
+        };
+        if out.ends_with(k) && matches!(k, '9' | 'A' | 'a') {
+            continue;
+        }
+        out.push(k);
+    }
+    out
+}
+
+fn is_hex_word(s: &str) -> bool {
+    !s.is_empty()
+        && s.chars().all(|c| c.is_ascii_hexdigit())
+        && s.chars().any(|c| c.is_ascii_digit())
+}
+
+/// The address a word prints, with what follows it: `0200H`, `0x0300`, `0h03E7`, `1E08`,
+/// `31Ah…`. OCR `O`/`Q` are read as `0`.
+fn address_prefix(word: &str) -> Option<(u16, &str)> {
+    // An address prints at least one digit (`CODE` is not C0DEh).
+    if !word.chars().any(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    let fixed: String = word
+        .chars()
+        .map(|c| match c {
+            'O' | 'Q' | 'o' => '0',
+            c => c.to_ascii_uppercase(),
+        })
+        .collect();
+    if fixed.len() != word.len() {
+        return None;
+    }
+    let parse = |h: &str| u16::from_str_radix(h, 16).ok();
+    if let Some(h) = fixed
+        .strip_prefix("0X")
+        .or_else(|| fixed.strip_prefix("0H"))
+    {
+        if (1..=4).contains(&h.len()) && is_hex_word(h) {
+            return Some((parse(h)?, ""));
+        }
+        return None;
+    }
+    // `0200H`, `31Ah`; two digits (`10H`, a function code) only glued to a parameter number.
+    for len in (2..=4).rev() {
+        if fixed.len() > len
+            && fixed.as_bytes()[len] == b'H'
+            && is_hex_word(&fixed[..len])
+            && (len >= 3 || fixed.len() > len + 1)
+        {
+            return Some((parse(&fixed[..len])?, &word[len + 1..]));
+        }
+    }
+    if fixed.len() == 4 && is_hex_word(&fixed) {
+        return Some((parse(&fixed)?, ""));
+    }
+    None
+}
+
+/// The parameter number a word starts with, if its shape is one of the map's.
+fn param_prefix<'a>(word: &'a str, shapes: &HashSet<String>) -> Option<&'a str> {
+    let bytes = word.as_bytes();
+    (1..=word.len())
+        .rev()
+        .filter(|&end| word.is_char_boundary(end))
+        .filter(|&end| bytes[end - 1].is_ascii_digit())
+        .filter(|&end| end == word.len() || !bytes[end].is_ascii_digit())
+        .map(|end| &word[..end])
+        .find(|p| shapes.contains(&shape(p)))
+}
+
+fn classify(word: &str, shapes: &HashSet<String>) -> Class {
+    if let Some((_, rest)) = address_prefix(word) {
+        if !rest.is_empty() && param_prefix(rest, shapes).is_some() {
+            return Class::AddressParam;
+        }
+        return Class::Address;
+    }
+    if param_prefix(word, shapes).is_some_and(|p| p.len() == word.len()) {
+        return Class::Param;
+    }
+    Class::Other
+}
+
+fn line_shape(line: &str, shapes: &HashSet<String>) -> (Class, Class) {
+    let mut words = line.split_whitespace();
+    let a = words.next().map_or(Class::Other, |w| classify(w, shapes));
+    let b = words.next().map_or(Class::Other, |w| classify(w, shapes));
+    (a, b)
+}
+
+/// The row keys of a line: each parameter number with the address after it (or the only
+/// address of the line), or the address alone.
+fn row_keys(line: &str, shapes: &HashSet<String>) -> Vec<(Option<String>, Option<u16>)> {
+    let mut keys: Vec<(Option<String>, Option<u16>)> = Vec::new();
+    let mut addresses = Vec::new();
+    let words: Vec<&str> = line.split_whitespace().collect();
+    for (i, w) in words.iter().enumerate() {
+        if let Some((a, rest)) = address_prefix(w) {
+            addresses.push(a);
+            if let Some(last) = keys.last_mut() {
+                if last.1.is_none() {
+                    last.1 = Some(a);
+                }
+            }
+            if let Some(p) = param_prefix(rest, shapes) {
+                keys.push((Some(p.to_owned()), Some(a)));
+            }
+        } else if let Some(p) = param_prefix(w, shapes) {
+            // A parameter number is a key at the start of the row, or when its address follows
+            // it (two-column tables); elsewhere it is a reference in the text.
+            let next_is_address = words
+                .get(i + 1)
+                .is_some_and(|n| address_prefix(n).is_some_and(|(_, r)| r.is_empty()));
+            if p.len() == w.len() && (i <= 1 || next_is_address) {
+                keys.push((Some(p.to_owned()), None));
+            }
+        }
+    }
+    if keys.is_empty() {
+        return addresses
+            .first()
+            .map(|&a| vec![(None, Some(a))])
+            .unwrap_or_default();
+    }
+    if keys.len() == 1 && keys[0].1.is_none() {
+        keys[0].1 = addresses.first().copied();
+    }
+    let mut seen = HashSet::new();
+    keys.retain(|k| seen.insert(k.clone()));
+    keys
+}
+
+/// A row the manual prints as reserved or unused (OCR breaks tolerated: `Re served`,
+/// `Not us sed`): nothing to map.
+fn reserved(text: &str) -> bool {
+    let t: String = text
+        .chars()
+        .filter(|c| c.is_alphanumeric())
+        .flat_map(char::to_lowercase)
+        .collect();
+    t.contains("eserv") || t.contains("notus")
+}
+
+/// The row ends a reserved range printed over three lines (`0004H (Reserved)` / `to` / `0008H`).
+fn ends_reserved_range(lines: &[String], i: usize) -> bool {
+    i >= 2 && lines[i - 1].trim_start().to_lowercase().starts_with("to") && reserved(&lines[i - 2])
+}
+
+/// A parameter number compared: letters and digits, upper case, leading zeros of numbers
+/// dropped (`CM.05` = `CM.5`).
+fn norm_param(p: &str) -> String {
+    let mut out = String::new();
+    let mut in_number = false;
+    for c in p.chars() {
+        if !c.is_alphanumeric() {
+            in_number = false;
+            continue;
+        }
+        if c == '0' && !in_number {
+            continue;
+        }
+        in_number = c.is_ascii_digit();
+        out.extend(c.to_uppercase());
+    }
+    out
+}
+
+/// Every `source:` string of the map (the merged tree), plus the expanded registers'.
+fn all_citations(drive: &Drive) -> HashSet<(String, usize)> {
+    let mut out = HashSet::new();
+    let mut stack: Vec<&Node> = vec![&drive.tree];
+    while let Some(node) = stack.pop() {
+        match &node.kind {
+            NodeKind::Scalar(_) => {}
+            NodeKind::Seq(items) => stack.extend(items.iter()),
+            NodeKind::Map(entries) => {
+                for (k, _, v) in entries {
+                    if let (true, NodeKind::Scalar(serde_yaml::Value::String(s))) =
+                        (k == "source", &v.kind)
+                    {
+                        if let Some((f, l)) = parse_citation(s) {
+                            out.insert((f.to_owned(), l));
+                        }
+                    }
+                    stack.push(v);
+                }
+            }
+        }
+    }
+    for r in &drive.registers {
+        if let Some((f, l)) = r.def.source.as_deref().and_then(parse_citation) {
+            out.insert((f.to_owned(), l));
+        }
+    }
+    out
+}
+
+/// Parameter numbers a `gaps` entry names: `U1-15 .. U1-18` covers U1-15 to U1-18; any other
+/// text covers the numbers it prints.
+fn gap_covers_param(text: &str, param: &str) -> bool {
+    let p = norm_param(param);
+    let parts: Vec<&str> = text.split("..").map(str::trim).collect();
+    if parts.len() == 2 {
+        let split = |s: &str| {
+            let n = norm_param(s);
+            let digits = n.len() - n.chars().rev().take_while(|c| c.is_ascii_digit()).count();
+            (n[..digits].to_owned(), n[digits..].parse::<u32>().ok())
+        };
+        let (pa, lo) = split(parts[0]);
+        let (pb, hi) = split(parts[1]);
+        let (pp, n) = split(param);
+        if let (Some(lo), Some(hi), Some(n)) = (lo, hi, n) {
+            if pa == pb && pa == pp && (lo..=hi).contains(&n) {
+                return true;
+            }
+        }
+    }
+    text.split(|c: char| c.is_whitespace() || c == ',')
+        .any(|w| norm_param(w) == p)
+}
+
+/// Learns the row shapes from the registers' verified citations and lists the rows of each
+/// cited manual (but those in `skip`: a variant map's base manuals, covered by the base's
+/// report), the tables they form, and the rows nothing covers.
+pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageReport {
+    let shapes: HashSet<String> = drive
+        .registers
+        .iter()
+        .filter_map(|r| r.def.param.as_deref())
+        .map(shape)
+        .collect();
+    let checks = verify_citations(drive, manuals);
+    // Row shapes per manual, from lines that verify by themselves.
+    let mut learnt: HashMap<String, BTreeMap<(Class, Class), usize>> = HashMap::new();
+    for c in checks.iter().filter(|c| {
+        matches!(c.item, super::Item::Register) && matches!(c.verdict, Verdict::Verified)
+    }) {
+        if let Some((file, n)) = parse_citation(&c.source) {
+            if let Some(text) = manuals.line(file, n) {
+                let s = line_shape(text, &shapes);
+                if s.0 != Class::Other || s.1 != Class::Other {
+                    *learnt
+                        .entry(file.to_owned())
+                        .or_default()
+                        .entry(s)
+                        .or_default() += 1;
+                }
+            }
+        }
+    }
+    let cited = all_citations(drive);
+    let params: HashMap<String, &str> = drive
+        .registers
+        .iter()
+        .filter_map(|r| {
+            r.def
+                .param
+                .as_deref()
+                .map(|p| (norm_param(p), r.def.id.as_str()))
+        })
+        .collect();
+    let addresses: HashSet<u16> = drive
+        .registers
+        .iter()
+        .flat_map(|r| {
+            std::iter::once(r.def.address)
+                .chain(r.def.address_alternatives.iter().map(|a| a.address))
+        })
+        .collect();
+    let removed: HashSet<String> = drive.removed.iter().map(|r| norm_param(&r.id)).collect();
+    // The group citing each line, for naming tables.
+    let mut group_of_line: HashMap<(String, usize), usize> = HashMap::new();
+    for r in &drive.registers {
+        if let Some((f, l)) = r.def.source.as_deref().and_then(parse_citation) {
+            group_of_line.insert((f.to_owned(), l), r.group);
+        }
+    }
+
+    let mut report = CoverageReport {
+        drive: drive.meta.id.clone(),
+        tables: Vec::new(),
+        uncited: Vec::new(),
+        missing_manuals: Vec::new(),
+    };
+    let mut files: Vec<&str> = drive.meta.manuals.iter().map(|m| m.file.as_str()).collect();
+    files.dedup();
+    for file in files.into_iter().filter(|f| !skip.iter().any(|s| s == f)) {
+        let Some(lines) = manuals.lines(file) else {
+            report.missing_manuals.push(file.to_owned());
+            continue;
+        };
+        let Some(row_shapes) = learnt.get(file) else {
+            continue;
+        };
+        // A shape seen on at least two cited rows (or the only one seen).
+        let keep: BTreeSet<(Class, Class)> = row_shapes
+            .iter()
+            .filter(|(_, n)| **n >= 2 || row_shapes.len() == 1)
+            .map(|(s, _)| *s)
+            .collect();
+        let mut table: Option<(TableSummary, BTreeMap<usize, usize>)> = None;
+        let mut last_group: Option<usize> = None;
+        let finish = |t: Option<(TableSummary, BTreeMap<usize, usize>)>,
+                      out: &mut Vec<TableSummary>| {
+            if let Some((mut t, groups)) = t {
+                t.group = groups
+                    .iter()
+                    .max_by_key(|(g, n)| (**n, std::cmp::Reverse(**g)))
+                    .map(|(g, _)| drive.groups[*g].name.clone());
+                out.push(t);
+            }
+        };
+        for (i, text) in lines.iter().enumerate() {
+            let n = i + 1;
+            if !keep.contains(&line_shape(text, &shapes)) {
+                continue;
+            }
+            let keys = row_keys(text, &shapes);
+            if keys.is_empty() {
+                continue;
+            }
+            // A table ends after a dozen lines without rows, or where the rows start being
+            // another group's.
+            let group_here = group_of_line.get(&(file.to_owned(), n)).copied();
+            if table.as_ref().is_some_and(|(t, groups)| {
+                n > t.last_line + 12
+                    || group_here.is_some_and(|g| {
+                        last_group.is_some_and(|l| l != g) && !groups.contains_key(&g)
+                    })
+            }) {
+                finish(table.take(), &mut report.tables);
+            }
+            let (t, groups) = table.get_or_insert_with(|| {
+                (
+                    TableSummary {
+                        file: file.to_owned(),
+                        first_line: n,
+                        last_line: n,
+                        group: None,
+                        rows: 0,
+                        cited: 0,
+                        gaps: 0,
+                        uncited: 0,
+                    },
+                    BTreeMap::new(),
+                )
+            });
+            t.last_line = n;
+            if let Some(g) = group_here {
+                *groups.entry(g).or_default() += 1;
+                last_group = Some(g);
+            }
+            let line_cited = cited.contains(&(file.to_owned(), n));
+            for (param, address) in keys {
+                t.rows += 1;
+                let by_register = match &param {
+                    Some(p) => params.contains_key(&norm_param(p)),
+                    None => address.is_some_and(|a| addresses.contains(&a)),
+                };
+                let by_gap = drive.gaps.iter().any(|g| {
+                    address
+                        .is_some_and(|a| g.addresses.is_some_and(|[lo, hi]| (lo..=hi).contains(&a)))
+                        || param.as_deref().is_some_and(|p| {
+                            g.params.as_deref().is_some_and(|t| gap_covers_param(t, p))
+                        })
+                }) || param
+                    .as_deref()
+                    .is_some_and(|p| removed.contains(&norm_param(p)))
+                    // A removed register's citation on the row (which may span the lines
+                    // around the address).
+                    || drive.removed.iter().any(|r| {
+                        parse_citation(&r.source)
+                            .is_some_and(|(f, l)| f == file && l + 1 >= n && l <= n + 1)
+                    });
+                if by_register {
+                    t.cited += 1;
+                } else if by_gap || line_cited || reserved(text) || ends_reserved_range(lines, i) {
+                    t.gaps += 1;
+                } else {
+                    t.uncited += 1;
+                    report.uncited.push(UncitedRow {
+                        file: file.to_owned(),
+                        line: n,
+                        key: param.unwrap_or_else(|| {
+                            address
+                                .map(super::matching::AddressForms::display)
+                                .unwrap_or_default()
+                        }),
+                        text: super::quote_text(text),
+                    });
+                }
+            }
+        }
+        finish(table.take(), &mut report.tables);
+    }
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shapes_and_keys() {
+        assert_eq!(shape("Bn-01"), "Aa-9");
+        assert_eq!(shape("n001"), "a9");
+        assert_eq!(shape("UF.8"), "A.9");
+        let shapes: HashSet<String> = ["Aa-9", "A9-9", "A.9", "a9"].map(String::from).into();
+        assert_eq!(address_prefix("0200H"), Some((0x0200, "")));
+        assert_eq!(
+            address_prefix("31AhE4-03Motor"),
+            Some((0x031A, "E4-03Motor"))
+        );
+        assert_eq!(address_prefix("1EOA"), Some((0x1E0A, "")));
+        assert_eq!(address_prefix("6000"), Some((0x6000, "")));
+        assert_eq!(address_prefix("Motor"), None);
+        assert_eq!(classify("31AhE4-03Motor", &shapes), Class::AddressParam);
+        assert_eq!(classify("Bn-01", &shapes), Class::Param);
+        assert_eq!(
+            row_keys("UF.8 1E08 47688 47689 UF.53 1E35 47733 47734", &shapes),
+            vec![
+                (Some("UF.8".to_owned()), Some(0x1E08)),
+                (Some("UF.53".to_owned()), Some(0x1E35))
+            ]
+        );
+        assert_eq!(
+            row_keys("0200H\tBn-01\tAcceleration time 1", &shapes),
+            vec![(Some("Bn-01".to_owned()), Some(0x0200))]
+        );
+        assert_eq!(
+            row_keys("0020H\tStatus", &shapes),
+            vec![(None, Some(0x0020))]
+        );
+        assert!(gap_covers_param("U1-15 .. U1-18", "U1-16"));
+        assert!(!gap_covers_param("U1-15 .. U1-18", "U1-19"));
+        assert!(gap_covers_param("n150, n160", "n160"));
+        assert_eq!(norm_param("CM.05"), norm_param("CM.5"));
+        assert_ne!(norm_param("E4-03"), norm_param("E40-3"));
+        assert!(reserved("0025H | Not us | sed"));
+    }
+}
