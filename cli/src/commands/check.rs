@@ -26,7 +26,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let mut errors = 0;
     for file in &files {
         match args.dir.read(file) {
-            Ok(drive) => println!(
+            Ok(drive) => outln!(
                 "ok   {} ({}: {} registers)",
                 file.display(),
                 drive.meta.id,
@@ -38,7 +38,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                 for d in diags.iter() {
                     eprintln!("{d}");
                 }
-                println!(
+                outln!(
                     "FAIL {} ({} error{})",
                     file.display(),
                     diags.len(),

@@ -55,7 +55,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let text = drive_doc::render(&drive, &name);
     match &args.output {
         Some(out) => std::fs::write(out, text).map_err(|e| format!("{}: {e}", out.display()))?,
-        None => print!("{text}"),
+        None => out!("{text}"),
     }
     Ok(ExitCode::SUCCESS)
 }
