@@ -1,9 +1,43 @@
 //! Durations as users type them: `500ms`, `2s`, `1.5s`, `250us`; a bare number is milliseconds.
+//! Every duration and number option is range-checked here, when clap parses it, so no command
+//! meets an infinite, negative or absurd value (`Duration::from_secs_f64` and `Instant + d`
+//! panic on those; a zero time scale loops for ever).
 
 use std::time::Duration;
 
-/// Parses a duration for a command-line option.
+/// The longest duration an option takes: one hour (timeouts, poll intervals, request gaps).
+pub const MAX: Duration = Duration::from_secs(3600);
+
+/// Parses a duration for a command-line option: at most [`MAX`].
 pub fn parse(text: &str) -> Result<Duration, String> {
+    let d = parse_any(text)?;
+    if d > MAX {
+        return Err(format!(
+            "`{text}` is longer than the 1 hour an option allows"
+        ));
+    }
+    Ok(d)
+}
+
+/// A value parser for a number option in `min..=max` (finite; `inf`, `nan` refused).
+pub fn number(
+    min: f64,
+    max: f64,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |text: &str| {
+        let v: f64 = text
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{text}` is not a number"))?;
+        if v.is_finite() && (min..=max).contains(&v) {
+            Ok(v)
+        } else {
+            Err(format!("`{text}` is outside {min}..={max}"))
+        }
+    }
+}
+
+fn parse_any(text: &str) -> Result<Duration, String> {
     let t = text.trim();
     let (number, unit) = match t.find(|c: char| !(c.is_ascii_digit() || c == '.')) {
         Some(i) => t.split_at(i),
@@ -23,6 +57,11 @@ pub fn parse(text: &str) -> Result<Duration, String> {
             ));
         }
     };
+    if seconds > MAX.as_secs_f64() {
+        return Err(format!(
+            "`{text}` is longer than the 1 hour an option allows"
+        ));
+    }
     Duration::try_from_secs_f64(seconds).map_err(|_| format!("`{text}` is out of range"))
 }
 
@@ -40,5 +79,29 @@ mod tests {
         assert!(parse("fast").is_err());
         assert!(parse("5 parsecs").is_err());
         assert!(parse("").is_err());
+        assert_eq!(
+            parse("1h").unwrap_err(),
+            "`h` is not a unit of time in `1h` (use us, ms, s or min)"
+        );
+        assert_eq!(parse("60min").unwrap(), MAX);
+        assert!(
+            parse("61min")
+                .unwrap_err()
+                .contains("longer than the 1 hour")
+        );
+        assert!(parse("1e300s").is_err());
+        assert!(parse(&"9".repeat(400)).unwrap_err().contains("longer than"));
+    }
+
+    #[test]
+    fn numbers_are_finite_and_in_range() {
+        let p = number(0.01, 1000.0);
+        assert_eq!(p("4"), Ok(4.0));
+        assert_eq!(p("1e-300").unwrap_err(), "`1e-300` is outside 0.01..=1000");
+        assert!(p("1e308").is_err());
+        assert!(p("inf").is_err());
+        assert!(p("NaN").is_err());
+        assert!(p("-1").is_err());
+        assert!(p("fast").is_err());
     }
 }

@@ -673,7 +673,10 @@ fn shift_line(source: &str, by: usize) -> Result<String, String> {
     let line: usize = line
         .parse()
         .map_err(|_| format!("citation `{source}` is not `file:line`"))?;
-    Ok(format!("{file}:{}", line + by))
+    let shifted = line
+        .checked_add(by)
+        .ok_or_else(|| format!("citation `{source}` shifted by {by} lines overflows"))?;
+    Ok(format!("{file}:{shifted}"))
 }
 
 #[cfg(test)]

@@ -8,6 +8,7 @@
 //! dropped. Every node keeps the file and line it was written at, so errors in inherited rows
 //! point at the base map and errors in overrides at the variant.
 
+use std::io::Read;
 use std::path::{Path as FsPath, PathBuf};
 use std::sync::Arc;
 
@@ -77,12 +78,30 @@ pub fn load_str(name: &str, text: &str) -> Result<LoadedMap, Vec<Diagnostic>> {
 
 fn read_tree(path: &FsPath) -> Result<Node, Vec<Diagnostic>> {
     let file = display_name(path);
-    let text = std::fs::read_to_string(path).map_err(|e| {
+    let cannot = |e: std::io::Error| {
         vec![Diagnostic::new(
             Loc::new(file.clone(), 1, 1),
             None,
             format!("cannot read map: {e}"),
         )]
+    };
+    // Read at most one byte past the limit, so a huge file (or a device) is never read whole.
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| {
+            f.take(source::MAX_MAP_BYTES as u64 + 1)
+                .read_to_end(&mut bytes)
+        })
+        .map_err(cannot)?;
+    if bytes.len() > source::MAX_MAP_BYTES {
+        let len = std::fs::metadata(path).map_or(bytes.len(), |m| m.len() as usize);
+        return Err(vec![source::too_large(&file, len)]);
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        cannot(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("not UTF-8 text ({e})"),
+        ))
     })?;
     source::parse(&file, &text).map_err(|d| vec![d])
 }

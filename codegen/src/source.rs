@@ -6,7 +6,7 @@
 //! path into the tree ([`Path`]) turns any later finding back into `file:line:column`, also
 //! after a variant map has been merged onto its base (each node keeps the file it came from).
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::sync::Arc;
 
@@ -126,28 +126,45 @@ impl Node {
     }
 }
 
+/// The largest map file read, in bytes: 4 MiB. The largest shipped map
+/// (`maps/automationdirect-acn.yaml`, 1,300 registers) is 377 KB, so this leaves room for a drive
+/// ten times larger while bounding what a contributed file can make the loader hold (the tree is
+/// a few times the text).
+pub const MAX_MAP_BYTES: usize = 4 * 1024 * 1024;
+
+/// The deepest nesting of collections. Shipped maps nest 8 levels; every recursive step after
+/// parsing (merging a variant, `to_value`, deserializing, dropping the tree) is bounded by this.
+pub const MAX_DEPTH: usize = 64;
+
+/// The most aliases (`*name`) a map may use.
+pub const MAX_ALIASES: usize = 1_000;
+
+/// The most nodes all aliases of a map may expand to together (aliases are copied into the
+/// tree, so this bounds the work and memory a "billion laughs" file can cause).
+pub const MAX_ALIAS_NODES: usize = 100_000;
+
 /// Parses YAML text into a located tree. `file` names the file in locations.
+///
+/// Safe for untrusted text: the size, the nesting depth and alias expansion are bounded (see the
+/// constants above), nothing recurses while parsing, every step is linear in the input, and
+/// exactly one YAML document is accepted.
 pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
+    if text.len() > MAX_MAP_BYTES {
+        return Err(too_large(file, text.len()));
+    }
     let mut builder = Builder {
         file: file.clone(),
+        text,
+        line_starts: None,
         stack: Vec::new(),
         anchors: HashMap::new(),
         root: None,
+        documents: 0,
+        aliases: 0,
+        alias_nodes: 0,
     };
     for event in Parser::new_from_str(text) {
         let (event, span) = event.map_err(|e| {
-            // yaml_serde is the parser the schema is defined against; prefer its wording.
-            if let Err(e) = serde_yaml::from_str::<Value>(text) {
-                let (line, col) = e
-                    .location()
-                    .map(|l| (l.line(), l.column()))
-                    .unwrap_or((1, 1));
-                return Diagnostic::new(
-                    Loc::new(file.clone(), line, col),
-                    None,
-                    format!("YAML syntax: {e}"),
-                );
-            }
             let m = e.marker();
             Diagnostic::new(
                 Loc::new(file.clone(), m.line(), m.col() + 1),
@@ -164,30 +181,68 @@ pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
     }))
 }
 
+/// The error for a file over [`MAX_MAP_BYTES`].
+pub fn too_large(file: &Arc<str>, len: usize) -> Diagnostic {
+    Diagnostic::new(
+        Loc::new(file.clone(), 1, 1),
+        None,
+        format!(
+            "map file is {len} bytes; a map may be at most {MAX_MAP_BYTES} bytes (4 MiB, ten \
+             times the largest shipped map)"
+        ),
+    )
+}
+
 enum Frame {
     Seq {
         loc: Loc,
         anchor: usize,
         items: Vec<Node>,
+        nodes: usize,
     },
     Map {
         loc: Loc,
         anchor: usize,
         entries: Vec<(String, Loc, Node)>,
+        keys: HashSet<String>,
         pending_key: Option<(String, Loc)>,
+        nodes: usize,
     },
 }
 
-struct Builder {
-    file: Arc<str>,
-    stack: Vec<Frame>,
-    anchors: HashMap<usize, Node>,
-    root: Option<Node>,
+/// An anchored node: the node, how many nodes it holds, where its anchor was written.
+struct Anchored {
+    node: Node,
+    nodes: usize,
 }
 
-impl Builder {
+struct Builder<'t> {
+    file: Arc<str>,
+    text: &'t str,
+    /// Byte offset of each line start, computed when an alias needs its name.
+    line_starts: Option<Vec<usize>>,
+    stack: Vec<Frame>,
+    anchors: HashMap<usize, Anchored>,
+    root: Option<Node>,
+    documents: usize,
+    aliases: usize,
+    alias_nodes: usize,
+}
+
+impl Builder<'_> {
     fn event(&mut self, event: Event<'_>, loc: Loc) -> Result<(), Diagnostic> {
         match event {
+            Event::DocumentStart(_) => {
+                self.documents += 1;
+                if self.documents > 1 {
+                    return Err(Diagnostic::new(
+                        loc,
+                        None,
+                        "a second YAML document: a map file holds exactly one",
+                    ));
+                }
+                Ok(())
+            }
             Event::Scalar(text, style, anchor, _tag) => {
                 let value = if style == ScalarStyle::Plain {
                     // Let yaml_serde resolve plain scalars (ints incl. 0x.., floats, bools, null).
@@ -201,46 +256,89 @@ impl Builder {
                     kind: NodeKind::Scalar(value),
                 };
                 if anchor != 0 {
-                    self.anchors.insert(anchor, node.clone());
+                    self.anchors.insert(
+                        anchor,
+                        Anchored {
+                            node: node.clone(),
+                            nodes: 1,
+                        },
+                    );
                 }
-                self.push(node)
+                self.push(node, 1)
             }
             Event::Alias(id) => {
-                let node = self.anchors.get(&id).cloned().ok_or_else(|| {
-                    Diagnostic::new(loc.clone(), None, "YAML alias to an unknown anchor")
-                })?;
-                self.push(node)
+                let Some(anchored) = self.anchors.get(&id) else {
+                    return Err(Diagnostic::new(
+                        loc,
+                        None,
+                        "YAML alias to an unknown anchor",
+                    ));
+                };
+                let nodes = anchored.nodes;
+                let anchor_loc = anchored.node.loc.clone();
+                self.aliases += 1;
+                self.alias_nodes = self.alias_nodes.saturating_add(nodes);
+                if self.aliases > MAX_ALIASES || self.alias_nodes > MAX_ALIAS_NODES {
+                    let name = self.alias_name(&loc);
+                    let what = if self.aliases > MAX_ALIASES {
+                        format!("a map may use at most {MAX_ALIASES} aliases")
+                    } else {
+                        format!(
+                            "aliases may expand to at most {MAX_ALIAS_NODES} nodes in all; this \
+                             one copies {nodes}"
+                        )
+                    };
+                    return Err(Diagnostic::new(
+                        loc,
+                        None,
+                        format!("YAML alias `*{name}` (anchor at {anchor_loc}): {what}"),
+                    ));
+                }
+                let node = anchored.node.clone();
+                self.push(node, nodes)
             }
             Event::SequenceStart(anchor, _) => {
+                self.check_depth(&loc)?;
                 self.stack.push(Frame::Seq {
                     loc,
                     anchor,
                     items: Vec::new(),
+                    nodes: 1,
                 });
                 Ok(())
             }
             Event::MappingStart(anchor, _) => {
+                self.check_depth(&loc)?;
                 self.stack.push(Frame::Map {
                     loc,
                     anchor,
                     entries: Vec::new(),
+                    keys: HashSet::new(),
                     pending_key: None,
+                    nodes: 1,
                 });
                 Ok(())
             }
             Event::SequenceEnd | Event::MappingEnd => {
-                let (node, anchor) = match self.stack.pop() {
-                    Some(Frame::Seq { loc, anchor, items }) => (
+                let (node, anchor, nodes) = match self.stack.pop() {
+                    Some(Frame::Seq {
+                        loc,
+                        anchor,
+                        items,
+                        nodes,
+                    }) => (
                         Node {
                             loc,
                             kind: NodeKind::Seq(items),
                         },
                         anchor,
+                        nodes,
                     ),
                     Some(Frame::Map {
                         loc,
                         anchor,
                         entries,
+                        nodes,
                         ..
                     }) => (
                         Node {
@@ -248,6 +346,7 @@ impl Builder {
                             kind: NodeKind::Map(entries),
                         },
                         anchor,
+                        nodes,
                     ),
                     None => {
                         return Err(Diagnostic::new(
@@ -258,29 +357,71 @@ impl Builder {
                     }
                 };
                 if anchor != 0 {
-                    self.anchors.insert(anchor, node.clone());
+                    self.anchors.insert(
+                        anchor,
+                        Anchored {
+                            node: node.clone(),
+                            nodes,
+                        },
+                    );
                 }
-                self.push(node)
+                self.push(node, nodes)
             }
             _ => Ok(()),
         }
     }
 
-    fn push(&mut self, node: Node) -> Result<(), Diagnostic> {
+    /// Refuses a collection that would nest deeper than [`MAX_DEPTH`], before it is opened.
+    fn check_depth(&self, loc: &Loc) -> Result<(), Diagnostic> {
+        if self.stack.len() >= MAX_DEPTH {
+            return Err(Diagnostic::new(
+                loc.clone(),
+                None,
+                format!("YAML nests deeper than {MAX_DEPTH} levels"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The name of the alias written at `loc` (`*name`), read back from the text.
+    fn alias_name(&mut self, loc: &Loc) -> String {
+        let text = self.text;
+        let starts = self.line_starts.get_or_insert_with(|| {
+            std::iter::once(0)
+                .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+                .collect()
+        });
+        let Some(&start) = starts.get(loc.line.saturating_sub(1)) else {
+            return String::from("?");
+        };
+        let line = text[start..].lines().next().unwrap_or("");
+        let rest: String = line.chars().skip(loc.col.saturating_sub(1)).collect();
+        let rest = rest.strip_prefix('*').unwrap_or(&rest);
+        rest.chars()
+            .take_while(|c| !c.is_whitespace() && !",[]{}".contains(*c))
+            .take(100)
+            .collect()
+    }
+
+    fn push(&mut self, node: Node, size: usize) -> Result<(), Diagnostic> {
         match self.stack.last_mut() {
             None => {
                 self.root = Some(node);
                 Ok(())
             }
-            Some(Frame::Seq { items, .. }) => {
+            Some(Frame::Seq { items, nodes, .. }) => {
+                *nodes = nodes.saturating_add(size);
                 items.push(node);
                 Ok(())
             }
             Some(Frame::Map {
                 entries,
+                keys,
                 pending_key,
+                nodes,
                 ..
             }) => {
+                *nodes = nodes.saturating_add(size);
                 match pending_key.take() {
                     None => {
                         let key = match &node.kind {
@@ -295,7 +436,7 @@ impl Builder {
                                 ));
                             }
                         };
-                        if entries.iter().any(|(k, _, _)| *k == key) {
+                        if !keys.insert(key.clone()) {
                             return Err(Diagnostic::new(
                                 node.loc,
                                 None,

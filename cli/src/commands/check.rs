@@ -109,7 +109,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                 let manuals = manuals.filter(Manuals::any);
                 if manuals.is_none() && args.strict {
                     // Strict means every citation read against its manual.
-                    eprintln!(
+                    eoutln!(
                         "{file}: error: --strict, but none of the map's manuals is at hand (set DRIVEMAP_MANUALS)"
                     );
                     unverified += 1;
@@ -119,9 +119,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                     let counts = CitationCounts::of(&checks);
                     for w in checks.iter().filter_map(|c| c.warning()) {
                         if args.strict {
-                            eprintln!("{}", w.to_string().replacen(": warning", ": error", 1));
+                            eoutln!("{}", w.to_string().replacen(": warning", ": error", 1));
                         } else {
-                            eprintln!("{w}");
+                            eoutln!("{w}");
                         }
                     }
                     unverified = counts.unverified;
@@ -131,18 +131,18 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                 if args.strict && unverified > 0 {
                     failed += 1;
                     errors += unverified;
-                    println!("FAIL {summary}");
+                    outln!("FAIL {summary}");
                 } else {
-                    println!("ok   {summary}");
+                    outln!("ok   {summary}");
                 }
             }
             Err(diags) => {
                 failed += 1;
                 errors += diags.len();
                 for d in diags.iter() {
-                    eprintln!("{d}");
+                    eoutln!("{d}");
                 }
-                println!(
+                outln!(
                     "FAIL {} ({} error{})",
                     file,
                     diags.len(),
@@ -152,7 +152,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         }
     }
     if failed > 0 {
-        eprintln!(
+        eoutln!(
             "{failed} of {} map(s) failed with {errors} error(s)",
             files.len()
         );

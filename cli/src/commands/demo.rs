@@ -29,20 +29,20 @@ pub struct Args {
     /// Drive to simulate: ptlk-tds-v8, yaskawa-v7, yaskawa-j7, yaskawa-gpd515, automationdirect-acn.
     #[arg(long, default_value = "ptlk-tds-v8")]
     pub drive: String,
-    /// Frequency reference to run at (Hz).
-    #[arg(long, default_value_t = 48.0)]
+    /// Frequency reference to run at (Hz, 0 to 1000).
+    #[arg(long, default_value_t = 48.0, value_parser = crate::duration::number(0.0, 1000.0))]
     pub frequency: f64,
-    /// Accel and decel time written before running (s), where the map has the registers.
-    #[arg(long, default_value_t = 4.0)]
+    /// Accel and decel time written before running (s, 0 to 6000), where the map has the registers.
+    #[arg(long, default_value_t = 4.0, value_parser = crate::duration::number(0.0, 6000.0))]
     pub ramp: f64,
     /// Run in reverse.
     #[arg(long)]
     pub reverse: bool,
-    /// Simulated time runs this many times faster than real time.
-    #[arg(long = "time-scale", default_value_t = 4.0)]
+    /// Simulated time runs this many times faster than real time (0.1 to 1000).
+    #[arg(long = "time-scale", default_value_t = 4.0, value_parser = crate::duration::number(0.1, 1000.0))]
     pub time_scale: f64,
-    /// Simulated seconds between rows of the table.
-    #[arg(long, default_value_t = 0.5)]
+    /// Simulated seconds between rows of the table (0.01 to 5).
+    #[arg(long, default_value_t = 0.5, value_parser = crate::duration::number(0.01, 5.0))]
     pub step: f64,
     #[command(flatten)]
     pub dir: MapsDir,
@@ -442,9 +442,13 @@ struct Plan {
 }
 
 fn row(t: f64, s: &Sample) {
-    println!(
+    outln!(
         "{t:>7.1} s  {:<38} {:>7.2} {:>7.2} {:>9.1} {:>9.1}",
-        s.status, s.reference, s.output, s.current, s.voltage
+        s.status,
+        s.reference,
+        s.output,
+        s.current,
+        s.voltage
     );
 }
 
@@ -478,16 +482,21 @@ fn drive_it<D: DemoDrive>(
         D::prepare(&mut c, slave, &s, plan.ramp).map_err(|e| fail("writing ramp times", e))?;
     D::reference(&mut c, slave, &s, plan.frequency)
         .map_err(|e| fail("writing the frequency reference", e))?;
-    println!("written: {prepared}");
-    println!(
+    outln!("written: {prepared}");
+    outln!(
         "written: frequency reference {:.2} Hz, then run {}",
         plan.frequency,
         if plan.reverse { "reverse" } else { "forward" }
     );
-    println!();
-    println!(
+    outln!();
+    outln!(
         "{:>9}  {:<38} {:>7} {:>7} {:>9} {:>9}",
-        "time", "status bits", "ref Hz", "out Hz", "current A", "voltage V"
+        "time",
+        "status bits",
+        "ref Hz",
+        "out Hz",
+        "current A",
+        "voltage V"
     );
     let start = Instant::now();
     let sim_time = || start.elapsed().as_secs_f64() * plan.time_scale;
@@ -508,7 +517,7 @@ fn drive_it<D: DemoDrive>(
         thread::sleep(pause);
     }
     D::run(&mut c, slave, &s, false, plan.reverse).map_err(|e| format!("stop: {e}"))?;
-    println!("{:>9}  stop", "");
+    outln!("{:>9}  stop", "");
     loop {
         let x = D::sample(&mut c, slave, &s).map_err(|e| fail("reading status", e))?;
         row(sim_time(), &x);
@@ -556,11 +565,12 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let server = TcpServer::spawn(shared.clone(), "127.0.0.1:0", TcpFraming::RtuOverTcp, None)
         .map_err(|e| format!("cannot start the simulator on loopback: {e}"))?;
     let addr = server.local_addr();
-    println!(
+    outln!(
         "drivemap demo: simulated {} ({title}), slave {slave}, RTU frames over TCP {addr}, time x{}",
-        args.drive, args.time_scale
+        args.drive,
+        args.time_scale
     );
-    println!(
+    outln!(
         "driven through drivemap_drives::{} (the generated typed API)",
         drivemap_codegen::ir::module_name(&args.drive)
     );
@@ -584,8 +594,8 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     server.stop();
     result?;
     let stats = drivemap_sim::server::lock(&shared).stats();
-    println!();
-    println!(
+    outln!();
+    outln!(
         "done in {:.1} s: {} requests served, {} exceptions",
         started.elapsed().as_secs_f64(),
         stats.requests,
@@ -596,6 +606,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
 
 #[cfg(test)]
 mod tests {
+    use std::path::PathBuf;
 
     use super::*;
 
@@ -607,7 +618,9 @@ mod tests {
             reverse: false,
             time_scale: 50.0,
             step: 0.5,
-            dir: MapsDir::default(),
+            dir: MapsDir {
+                maps: PathBuf::from("maps"),
+            },
         }
     }
 

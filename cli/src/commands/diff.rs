@@ -42,7 +42,7 @@ fn read(path: &Path, ctx: &Context) -> Result<Drive, String> {
 /// Compares maps and prints the changes; exits 1 when any is breaking.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     if args.kinds {
-        print!("{}", diff::render::kinds(args.format));
+        out!("{}", diff::render::kinds(args.format));
         return Ok(ExitCode::SUCCESS);
     }
     let diffs = match &args.git {
@@ -67,7 +67,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         Format::Md => diff::render::markdown(&diffs, manuals.as_ref()),
         Format::Github => diff::render::github(&diffs, manuals.as_ref()),
     };
-    print!("{out}");
+    out!("{out}");
     let breaking = diffs.iter().any(|d| d.breaking() > 0);
     Ok(if breaking {
         ExitCode::FAILURE

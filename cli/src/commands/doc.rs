@@ -69,7 +69,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                 text.lines().count()
             );
         }
-        None => print!("{text}"),
+        None => out!("{text}"),
     }
     Ok(ExitCode::SUCCESS)
 }

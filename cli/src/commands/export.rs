@@ -31,7 +31,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     match read {
         Ok(drive) => {
             let json = drivemap_codegen::export::export(&drive);
-            println!(
+            outln!(
                 "{}",
                 serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?
             );

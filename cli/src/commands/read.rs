@@ -54,7 +54,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         .zip(&words)
         .map(|(r, w)| Row::of(&session, r, w, true))
         .collect();
-    print!("{}", table::render(&rows, &[]));
+    out!("{}", table::render(&rows, &[]));
     Ok(if rows.iter().any(|r| r.failed) {
         ExitCode::FAILURE
     } else {

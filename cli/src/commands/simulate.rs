@@ -62,8 +62,8 @@ pub struct Args {
     /// External quantity of the map: `--external drive_rated_current=9.6`.
     #[arg(long, value_name = "NAME=VALUE")]
     pub external: Vec<String>,
-    /// Simulated time runs this many times faster than real time (ramps finish sooner).
-    #[arg(long = "time-scale", default_value_t = 1.0)]
+    /// Simulated time runs this many times faster than real time (ramps finish sooner; 0.1 to 1000).
+    #[arg(long = "time-scale", default_value_t = 1.0, value_parser = crate::duration::number(0.1, 1000.0))]
     pub time_scale: f64,
     /// Do not log requests.
     #[arg(long)]
@@ -208,7 +208,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             TcpFraming::ModbusTcp => "Modbus TCP",
             TcpFraming::RtuOverTcp => "RTU over TCP",
         };
-        println!(
+        outln!(
             "simulating {id} at slave {slave} on {what} {} ({model}{time}); Ctrl-C stops",
             server.local_addr()
         );
@@ -245,7 +245,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         .with_profile(profile);
     let server = SerialServer::spawn(shared, options, log)
         .map_err(|e| format!("cannot open serial port {}: {e}", path.display()))?;
-    println!(
+    outln!(
         "simulating {id} at slave {slave} on RTU {} {baud} baud, parity {} ({model}{time}); Ctrl-C stops",
         path.display(),
         format!("{parity:?}").to_lowercase()

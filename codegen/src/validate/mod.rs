@@ -18,6 +18,7 @@ mod enum_codes_fit;
 mod identifiers_unique;
 mod identifiers_valid;
 mod limits_consistent;
+mod numbers_finite;
 mod protocol_valid;
 mod references_resolve;
 mod value_kind_single;
@@ -70,6 +71,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     references_resolve::check(drive, &mut out);
     access_consistent::check(drive, &mut out);
     protocol_valid::check(drive, &mut out);
+    numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);
     out
 }

@@ -1,0 +1,101 @@
+//! Hostile command lines and closed pipes: every number and duration option is range-checked
+//! by clap (exit 2 with a message, no panic, no endless loop), and a command whose output pipe
+//! closes ends quietly with status 141, as `cat` would.
+
+use std::io::Read;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn drivemap(args: &[&str]) -> (i32, String) {
+    let started = Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(args)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .output()
+        .expect("drivemap runs");
+    assert!(started.elapsed() < Duration::from_secs(30), "{args:?} hung");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn out_of_range_numbers_and_durations_are_refused_by_the_parser() {
+    let read = ["read", "--drive", "ptlk-tds-v8", "--tcp", "127.0.0.1:9"];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["demo", "--step", "1e300"], "outside 0.01..=5"),
+        (vec!["demo", "--step", "nan"], "outside 0.01..=5"),
+        (vec!["demo", "--time-scale", "1e-300"], "outside 0.1..=1000"),
+        (vec!["demo", "--time-scale", "1e308"], "outside 0.1..=1000"),
+        (vec!["demo", "--frequency", "inf"], "outside 0..=1000"),
+        (vec!["demo", "--ramp=-1"], "outside 0..=6000"),
+        (
+            vec![
+                "simulate",
+                "--drive",
+                "ptlk-tds-v8",
+                "--tcp",
+                "5020",
+                "--time-scale",
+                "0",
+            ],
+            "outside 0.1..=1000",
+        ),
+        (
+            [&read[..], &["--timeout", "99999999999999999999s", "Bn-01"]].concat(),
+            "longer than the 1 hour",
+        ),
+        (
+            [&read[..], &["--request-gap", "1e300s", "Bn-01"]].concat(),
+            "is not a unit of time",
+        ),
+        (
+            vec![
+                "poll",
+                "--drive",
+                "ptlk-tds-v8",
+                "--tcp",
+                "127.0.0.1:9",
+                "--interval",
+                "90min",
+            ],
+            "longer than the 1 hour",
+        ),
+    ];
+    for (args, message) in cases {
+        let (code, stderr) = drivemap(&args);
+        assert_eq!(code, 2, "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn a_closed_output_pipe_ends_quietly() {
+    for args in [
+        &["export", "--drive", "automationdirect-acn"][..],
+        &["doc", "--drive", "automationdirect-acn"],
+        &["check"],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+            .args(args)
+            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Close the reading end before the command has loaded its map and printed anything.
+        drop(child.stdout.take());
+        let mut stderr = String::new();
+        child
+            .stderr
+            .take()
+            .unwrap()
+            .read_to_string(&mut stderr)
+            .unwrap();
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(141), "{args:?}: {stderr}");
+        assert!(stderr.is_empty(), "{args:?}: {stderr}");
+    }
+}

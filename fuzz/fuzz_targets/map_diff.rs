@@ -1,0 +1,35 @@
+//! The semantic diff (`drivemap diff`) of two maps. The diff lives in the CLI binary crate; its
+//! modules are compiled here from their source files (`#[path]`), which needs no change to the
+//! CLI: the input is two maps separated by a line `#---8<---`; when both validate, they are
+//! compared both ways and rendered as text and Markdown. It must never panic.
+#![no_main]
+#![allow(dead_code, unused_imports)]
+
+#[path = "../../cli/src/describe.rs"]
+mod describe;
+#[path = "../../cli/src/diff/mod.rs"]
+mod diff;
+
+use drivemap_codegen::validate::Context;
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Some((old, new)) = text.split_once("#---8<---\n") else {
+        return;
+    };
+    let ctx = Context::default();
+    let (Ok(old), Ok(new)) = (
+        drivemap_codegen::read_map_str("old.yaml", old, &ctx),
+        drivemap_codegen::read_map_str("new.yaml", new, &ctx),
+    ) else {
+        return;
+    };
+    let diffs = [diff::compare(&old, &new), diff::compare(&new, &old)];
+    let _ = diff::render::text(&diffs, false);
+    let _ = diff::render::markdown(&diffs);
+    let same = diff::compare(&old, &old);
+    assert_eq!(same.breaking() + same.compatible(), 0, "a map differs from itself");
+});

@@ -1,0 +1,17 @@
+//! Any text as a map: load → validate → export must return an error or a value, never panic,
+//! overflow the stack or run away (libFuzzer's -rss_limit_mb and -timeout catch the latter).
+#![no_main]
+
+use drivemap_codegen::validate::Context;
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok(drive) = drivemap_codegen::read_map_str("fuzz.yaml", text, &Context::default()) {
+        let json = drivemap_codegen::export::export(&drive);
+        let out = serde_json::to_string(&json).expect("export serializes");
+        assert!(!out.contains("null,\"max_read\""), "timing exported as null");
+    }
+});
