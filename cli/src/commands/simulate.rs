@@ -16,7 +16,8 @@ use drivemap_codegen::model::Parity as MapParity;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
-    RequestRecord, SerialServer, SimOptions, Simulator, SystemClock, TcpFraming, TcpServer,
+    RequestRecord, SerialServer, ServerOptions, SimOptions, Simulator, SystemClock, TcpFraming,
+    TcpServer,
 };
 
 use crate::maps::MapsDir;
@@ -65,6 +66,16 @@ pub struct Args {
     /// Simulated time runs this many times faster than real time (ramps finish sooner).
     #[arg(long = "time-scale", default_value_t = 1.0)]
     pub time_scale: f64,
+    /// TCP: connections served at once; one more is accepted and closed at once.
+    #[arg(long = "max-connections", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub max_connections: u32,
+    /// TCP: close a connection that sent no well-formed request for this long.
+    #[arg(long = "idle-timeout", default_value = "60s", value_parser = crate::duration::parse)]
+    pub idle_timeout: std::time::Duration,
+    /// TCP: a frame must arrive whole this long after its first byte, else the connection is
+    /// closed (Modbus TCP) or the partial frame dropped (RTU over TCP).
+    #[arg(long = "frame-timeout", default_value = "1s", value_parser = crate::duration::parse)]
+    pub frame_timeout: std::time::Duration,
     /// Do not log requests.
     #[arg(long)]
     pub quiet: bool,
@@ -203,7 +214,12 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             TcpFraming::RtuOverTcp
         };
         let addr = bind_address(addr)?;
-        let server = TcpServer::spawn(shared, addr.as_str(), framing, log)
+        let options = ServerOptions {
+            max_connections: args.max_connections as usize,
+            idle_timeout: args.idle_timeout,
+            frame_deadline: args.frame_timeout,
+        };
+        let server = TcpServer::spawn_with(shared, addr.as_str(), framing, log, options)
             .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
         let what = match framing {
             TcpFraming::ModbusTcp => "Modbus TCP",
