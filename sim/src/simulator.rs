@@ -280,6 +280,26 @@ pub struct Simulator {
     commands: Vec<CommandTrack>,
     warnings: Vec<String>,
     stats: Stats,
+    cache: TickCache,
+}
+
+/// What `tick` needs, resolved once and refreshed only when a register it depends on changes,
+/// so a request allocates nothing and converts nothing while the drive model is steady.
+#[derive(Debug, Default)]
+struct TickCache {
+    /// Registers whose raw word the settings and the model's inputs come from.
+    inputs: Vec<usize>,
+    /// Their words when `settings` and `params` were computed.
+    seen: Vec<u16>,
+    /// The frequency reference register when `params` were computed.
+    reference_register: Option<usize>,
+    settings: LiveSettings,
+    /// The settings are not yet built or out of date.
+    stale: bool,
+    /// max frequency, accel, decel, reference (Hz); `None`: to compute.
+    params: Option<[f64; 4]>,
+    /// The model as last published into the registers; `None`: publish at the next tick.
+    published: Option<Model>,
 }
 
 fn known_list(items: impl IntoIterator<Item = String>) -> String {
@@ -393,7 +413,11 @@ impl Simulator {
             commands,
             warnings: Vec::new(),
             stats: Stats::default(),
+            cache: TickCache::default(),
         };
+        sim.cache.inputs = sim.tick_inputs();
+        sim.cache.seen = vec![0; sim.cache.inputs.len()];
+        sim.cache.stale = true;
         sim.apply_defaults();
         if let Some(r) = sim.roles.clone() {
             for &(i, v) in &r.initial {
@@ -497,6 +521,7 @@ impl Simulator {
         self.tick();
         self.set_index(i, value)?;
         self.after_write(i);
+        self.invalidate();
         self.tick();
         Ok(())
     }
@@ -507,6 +532,7 @@ impl Simulator {
         self.tick();
         self.raw[i] = raw;
         self.after_write(i);
+        self.invalidate();
         self.tick();
         Ok(())
     }
@@ -764,6 +790,61 @@ impl Simulator {
         }
     }
 
+    /// Registers the settings and the model's inputs are read from.
+    fn tick_inputs(&self) -> Vec<usize> {
+        let mut v: Vec<usize> = self
+            .selectors
+            .iter()
+            .chain(&self.references)
+            .copied()
+            .collect();
+        if let Some(r) = &self.roles {
+            for s in [
+                Some(&r.max_frequency),
+                Some(&r.accel_time),
+                r.decel_time.as_ref(),
+            ]
+            .into_iter()
+            .flatten()
+            {
+                if let Source::Register(i) = s {
+                    v.push(*i);
+                }
+            }
+            v.extend(&r.frequency_reference);
+        }
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+
+    /// Everything cached is recomputed at the next tick (after a write by hand).
+    fn invalidate(&mut self) {
+        self.cache.stale = true;
+        self.cache.params = None;
+        self.cache.published = None;
+    }
+
+    /// Brings the cached settings up to date with the registers; allocates only when a
+    /// register they depend on changed.
+    fn refresh_settings(&mut self) {
+        let c = &mut self.cache;
+        let mut changed = c.stale || c.reference_register != self.model.reference_register;
+        for (k, &i) in c.inputs.iter().enumerate() {
+            if c.seen[k] != self.raw[i] {
+                c.seen[k] = self.raw[i];
+                changed = true;
+            }
+        }
+        if changed {
+            c.reference_register = self.model.reference_register;
+            c.stale = false;
+            c.params = None;
+            c.published = None;
+            self.cache.settings = self.settings();
+        }
+    }
+
     /// Advances the drive model to the clock's time and updates the registers it drives.
     pub fn tick(&mut self) {
         let now = self.clock.now();
@@ -772,27 +853,42 @@ impl Simulator {
         let Some(roles) = self.roles.clone() else {
             return;
         };
-        let settings = self.settings();
-        let max_f = self
-            .source_value(&roles.max_frequency, &settings)
-            .filter(|v| v.is_finite() && *v > 0.0)
-            .unwrap_or(60.0);
-        let accel = self
-            .source_value(&roles.accel_time, &settings)
-            .unwrap_or(0.0);
-        let decel = roles
-            .decel_time
-            .as_ref()
-            .and_then(|s| self.source_value(s, &settings))
-            .unwrap_or(accel);
-        let reference = self
-            .model
-            .reference_register
-            .and_then(|i| self.decode_f64(i, &settings))
-            .unwrap_or(0.0);
+        self.refresh_settings();
+        let settings = std::mem::take(&mut self.cache.settings);
+        let [max_f, accel, decel, reference] = match self.cache.params {
+            Some(p) => p,
+            None => {
+                let max_f = self
+                    .source_value(&roles.max_frequency, &settings)
+                    .filter(|v| v.is_finite() && *v > 0.0)
+                    .unwrap_or(60.0);
+                let accel = self
+                    .source_value(&roles.accel_time, &settings)
+                    .unwrap_or(0.0);
+                let decel = roles
+                    .decel_time
+                    .as_ref()
+                    .and_then(|s| self.source_value(s, &settings))
+                    .unwrap_or(accel);
+                let reference = self
+                    .model
+                    .reference_register
+                    .and_then(|i| self.decode_f64(i, &settings))
+                    .unwrap_or(0.0);
+                let p = [max_f, accel, decel, reference];
+                self.cache.params = Some(p);
+                p
+            }
+        };
         self.model.aim(reference, max_f);
         self.model.advance(dt, max_f, accel, decel);
-        self.publish(&roles, &settings, max_f);
+        // The registers the model drives are a function of the model, the settings and the
+        // maximum frequency: published again only when one of them changed.
+        if self.cache.published.as_ref() != Some(&self.model) {
+            self.publish(&roles, &settings, max_f);
+            self.cache.published = Some(self.model.clone());
+        }
+        self.cache.settings = settings;
     }
 
     fn store(&mut self, i: usize, value: f64, settings: &LiveSettings) {
@@ -1096,7 +1192,8 @@ impl Simulator {
         values: &[u16],
         broadcast: bool,
     ) -> Result<(), u8> {
-        let settings = self.settings();
+        self.refresh_settings();
+        let settings = &self.cache.settings;
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
         let broadcast_space = broadcast && !layout.broadcast.is_empty();
         let allowed = self
@@ -1104,7 +1201,10 @@ impl Simulator {
             .broadcast
             .map(|b| b.addresses)
             .unwrap_or_default();
-        let mut targets = Vec::with_capacity(values.len());
+        let mut targets = [(0u16, None, 0u16); pdu::MAX_WRITE as usize];
+        if values.len() > targets.len() {
+            return Err(self.plan.illegal_quantity);
+        }
         for (k, &v) in values.iter().enumerate() {
             let comm = self.communication_address(kind, u32::from(address) + k as u32)?;
             let found = if broadcast_space {
@@ -1128,16 +1228,16 @@ impl Simulator {
                     if !self.may_write_now(r) {
                         return Err(self.plan.refused_now);
                     }
-                    if !self.accepts(r, v, &settings) {
+                    if !self.accepts(r, v, settings) {
                         return Err(self.plan.out_of_range);
                     }
-                    targets.push((comm, Some(i), v));
+                    targets[k] = (comm, Some(i), v);
                 }
-                None if !broadcast && v == 0 && self.in_gap(comm) => targets.push((comm, None, v)),
+                None if !broadcast && v == 0 && self.in_gap(comm) => targets[k] = (comm, None, v),
                 None => return Err(self.plan.illegal_address),
             }
         }
-        for (comm, i, v) in targets {
+        for &(comm, i, v) in &targets[..values.len()] {
             if let Some(i) = i {
                 self.raw[i] = v;
                 self.after_write(i);
