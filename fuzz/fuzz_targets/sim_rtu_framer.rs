@@ -10,9 +10,10 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     // Byte 0: framing. Then chunks: [gap in 10 ms steps, length, bytes...].
-    let [sel, mut rest @ ..] = data else {
+    let [sel, rest @ ..] = data else {
         return;
     };
+    let mut rest = rest;
     let kind = match sel % 3 {
         0 => TransportKind::Rtu,
         1 => TransportKind::RtuOverTcp,
