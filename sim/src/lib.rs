@@ -44,7 +44,10 @@ pub use clock::{Clock, ManualClock, SystemClock};
 pub use exceptions::ExceptionPlan;
 pub use model::DriveState;
 pub use roles::{Roles, RolesError};
-pub use server::{Limits, SharedSim, TcpFraming, TcpServer, serve_link, shared};
+pub use server::{
+    FrameLimits, ServerOptions, SharedSim, TcpFraming, TcpServer, serve_link, serve_link_with,
+    shared,
+};
 pub use simulator::{
     Handled, Outcome, RequestRecord, RolesChoice, SimError, SimOptions, Simulator, Stats,
 };

@@ -28,7 +28,7 @@ pub struct DriveState {
     pub mode: Option<Mode>,
 }
 
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct Model {
     pub run: bool,
     pub reverse: bool,

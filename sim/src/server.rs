@@ -5,13 +5,6 @@
 //! frame left incomplete for longer than the silence limit is dropped, as a drive does after the
 //! 3.5-character gap. A frame with an unknown function code is taken whole when the CRC of the
 //! usual 8-byte request matches, or after the silence otherwise, and answered 01h.
-//!
-//! On a network the simulator is a server among hostile peers, so a TCP listener has [`Limits`]:
-//! at most [`Limits::max_connections`] connections served at once (one more is accepted and
-//! closed at once, so nothing piles up in the kernel's backlog), each closed after
-//! [`Limits::idle_timeout`] without a byte, or when a frame it started is not complete within
-//! [`Limits::frame_timeout`] (a peer that trickles a byte at a time never holds a connection).
-//! A master that keeps asking keeps its connection whatever the others do.
 
 use std::io;
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
@@ -26,7 +19,7 @@ use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::{crc, rtu, tcp};
 
-use crate::simulator::{RequestRecord, Simulator};
+use crate::simulator::{Outcome, RequestRecord, Simulator};
 
 /// A simulator shared between connections.
 pub type SharedSim = Arc<Mutex<Simulator>>;
@@ -44,40 +37,6 @@ pub fn lock(sim: &SharedSim) -> MutexGuard<'_, Simulator> {
     match sim.lock() {
         Ok(g) => g,
         Err(poisoned) => poisoned.into_inner(),
-    }
-}
-
-/// What a listener allows its peers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Limits {
-    /// Connections served at once; one more is closed as soon as it is accepted.
-    pub max_connections: usize,
-    /// A connection that sends nothing for this long is closed (`None`: never).
-    pub idle_timeout: Option<Duration>,
-    /// A frame whose first byte arrived this long ago and that is still incomplete closes its
-    /// connection (`None`: no limit beyond the RTU silence).
-    pub frame_timeout: Option<Duration>,
-}
-
-impl Limits {
-    /// No limit: for a serial line, which has one master and no connections.
-    pub const NONE: Limits = Limits {
-        max_connections: usize::MAX,
-        idle_timeout: None,
-        frame_timeout: None,
-    };
-}
-
-impl Default for Limits {
-    /// 64 connections, 60 s idle, 2 s to complete a frame: a plant network's few masters poll
-    /// far more often than once a minute, and a Modbus frame of at most 260 bytes takes
-    /// milliseconds to arrive.
-    fn default() -> Self {
-        Limits {
-            max_connections: 64,
-            idle_timeout: Some(Duration::from_secs(60)),
-            frame_timeout: Some(Duration::from_secs(2)),
-        }
     }
 }
 
@@ -102,80 +61,192 @@ fn rtu_frame(buf: &[u8]) -> Result<Option<usize>, ()> {
     }
 }
 
-/// Serves requests arriving on `link` until `stop` is set, the peer hangs up, or it breaks
-/// `limits` (idle too long, a frame not completed in time). `silence` is how long an incomplete
-/// RTU frame may wait for its remaining bytes before it is dropped.
+/// Limits on how a connection or line may hold a partial frame or sit idle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameLimits {
+    /// How long an incomplete RTU frame may wait for its next byte before it is dropped (the
+    /// 3.5-character silence, plus transport latency).
+    pub silence: Duration,
+    /// How long a frame, once its first byte arrived, may take to arrive whole. Past it an RTU
+    /// frame is dropped (as after a silence) and a Modbus TCP connection is closed (its stream
+    /// cannot be put back in step).
+    pub frame_deadline: Duration,
+    /// A connection that sent no well-formed request for this long is closed (`None`: never;
+    /// serial lines). Damaged frames and partial bytes do not count as activity, so a peer
+    /// trickling bytes (slowloris) or garbage is closed too.
+    pub idle_timeout: Option<Duration>,
+}
+
+impl Default for FrameLimits {
+    /// 100 ms silence, 1 s per frame, 60 s idle.
+    fn default() -> FrameLimits {
+        FrameLimits {
+            silence: Duration::from_millis(100),
+            frame_deadline: Duration::from_secs(1),
+            idle_timeout: Some(Duration::from_secs(60)),
+        }
+    }
+}
+
+/// The most bytes a framer holds: a partial frame cannot be longer than one frame, so more than
+/// this is garbage and is dropped.
+const BUF_BUDGET: usize = 2 * tcp::MAX_FRAME;
+
+/// What a [`Framer`] has found in the bytes received so far.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Next {
+    /// The first `n` bytes are one frame (or, on RTU, bytes to hand over whole as a damaged
+    /// frame after a silence or the frame deadline): answer it, then [`Framer::consume`] it.
+    Frame(usize),
+    /// More bytes are needed.
+    Wait,
+    /// The stream is out of step (bad MBAP header, or a Modbus TCP frame past its deadline):
+    /// close the connection.
+    Close,
+}
+
+/// Cuts a byte stream into request frames: RTU by length and CRC, Modbus TCP by the MBAP
+/// header; holds at most [`BUF_BUDGET`] bytes; time is passed in, so it can be tested and
+/// fuzzed without waiting.
+#[derive(Debug)]
+pub struct Framer {
+    rtu: bool,
+    limits: FrameLimits,
+    buf: Vec<u8>,
+    last_byte: Instant,
+    frame_start: Instant,
+}
+
+impl Framer {
+    /// A framer for `kind`, empty.
+    pub fn new(kind: TransportKind, limits: FrameLimits, now: Instant) -> Framer {
+        Framer {
+            rtu: kind.is_rtu_framed(),
+            limits,
+            buf: Vec::with_capacity(BUF_BUDGET + tcp::MAX_FRAME),
+            last_byte: now,
+            frame_start: now,
+        }
+    }
+
+    /// Bytes received at `now`. Past the budget, what is held is garbage and is dropped.
+    pub fn push(&mut self, bytes: &[u8], now: Instant) {
+        if bytes.is_empty() {
+            return;
+        }
+        if self.buf.is_empty() {
+            self.frame_start = now;
+        }
+        if self.buf.len() + bytes.len() > BUF_BUDGET {
+            self.buf.clear();
+            self.frame_start = now;
+        }
+        let take = bytes.len().min(BUF_BUDGET);
+        self.buf.extend_from_slice(&bytes[bytes.len() - take..]);
+        self.last_byte = now;
+    }
+
+    /// The next frame, if any, at `now`.
+    pub fn next(&self, now: Instant) -> Next {
+        if self.buf.is_empty() {
+            return Next::Wait;
+        }
+        let late = now.saturating_duration_since(self.frame_start) >= self.limits.frame_deadline;
+        if self.rtu {
+            let quiet =
+                late || now.saturating_duration_since(self.last_byte) >= self.limits.silence;
+            match rtu_frame(&self.buf) {
+                Ok(Some(len)) => Next::Frame(len),
+                Ok(None) | Err(()) if quiet => Next::Frame(self.buf.len()),
+                Ok(None) | Err(()) => Next::Wait,
+            }
+        } else {
+            match tcp::Header::parse(&self.buf) {
+                Ok(Some(h)) if h.frame_len() <= self.buf.len() => Next::Frame(h.frame_len()),
+                Ok(_) if late => Next::Close,
+                Ok(_) => Next::Wait,
+                Err(_) => Next::Close,
+            }
+        }
+    }
+
+    /// The bytes held, from the start of the current frame.
+    pub fn bytes(&self) -> &[u8] {
+        &self.buf
+    }
+
+    /// Drops the first `n` bytes (a frame answered); what follows starts a new frame at `now`.
+    pub fn consume(&mut self, n: usize, now: Instant) {
+        self.buf.drain(..n.min(self.buf.len()));
+        self.frame_start = now;
+    }
+}
+
+/// Serves requests arriving on `link` until `stop` is set or the peer hangs up. `silence` is
+/// how long an incomplete RTU frame may wait for its remaining bytes before it is dropped; no
+/// idle timeout, a frame deadline of `max(silence, 1 s)`.
 pub fn serve_link<T: Transport>(
     sim: &SharedSim,
     link: &mut T,
     stop: &AtomicBool,
     log: Option<&Logger>,
     silence: Duration,
-    limits: &Limits,
+) -> io::Result<()> {
+    let limits = FrameLimits {
+        silence,
+        frame_deadline: silence.max(Duration::from_secs(1)),
+        idle_timeout: None,
+    };
+    serve_link_with(sim, link, stop, log, limits)
+}
+
+/// [`serve_link`] with every limit given. Returns `Ok` when the peer hangs up, the stream is
+/// out of step, a frame misses its deadline (Modbus TCP) or the link stays idle too long.
+pub fn serve_link_with<T: Transport>(
+    sim: &SharedSim,
+    link: &mut T,
+    stop: &AtomicBool,
+    log: Option<&Logger>,
+    limits: FrameLimits,
 ) -> io::Result<()> {
     let kind = link.kind();
-    let mut buf: Vec<u8> = Vec::with_capacity(2 * tcp::MAX_FRAME);
+    let mut framer = Framer::new(kind, limits, Instant::now());
     let mut chunk = [0u8; tcp::MAX_FRAME];
     let mut out = [0u8; tcp::MAX_FRAME];
-    let mut last_byte = Instant::now();
-    // When the oldest byte still waiting in `buf` arrived.
-    let mut frame_started: Option<Instant> = None;
+    let mut last_request = Instant::now();
     while !stop.load(Ordering::Relaxed) {
-        let n = match link.recv(&mut chunk, Instant::now() + POLL) {
+        let mut wait = POLL;
+        if let Some(idle) = limits.idle_timeout {
+            let left = idle.saturating_sub(last_request.elapsed());
+            if left.is_zero() {
+                return Ok(());
+            }
+            wait = wait.min(left);
+        }
+        let n = match link.recv(&mut chunk, Instant::now() + wait) {
             Ok(n) => n,
             Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => return Ok(()),
             Err(e) => return Err(e),
         };
-        let now = Instant::now();
-        if n > 0 {
-            buf.extend_from_slice(&chunk[..n]);
-            last_byte = now;
-            frame_started.get_or_insert(now);
-        } else if limits
-            .idle_timeout
-            .is_some_and(|idle| now.duration_since(last_byte) >= idle)
-        {
-            return Ok(());
-        }
-        if let (Some(start), Some(limit)) = (frame_started, limits.frame_timeout) {
-            if now.duration_since(start) >= limit {
-                return Ok(());
-            }
-        }
-        let quiet = last_byte.elapsed() >= silence;
+        framer.push(&chunk[..n], Instant::now());
         loop {
-            let len = if kind.is_rtu_framed() {
-                match rtu_frame(&buf) {
-                    Ok(Some(len)) => len,
-                    Ok(None) if quiet && !buf.is_empty() => buf.len(),
-                    Ok(None) => break,
-                    Err(()) if quiet => buf.len(),
-                    Err(()) => break,
-                }
-            } else {
-                match tcp::Header::parse(&buf) {
-                    Ok(Some(h)) if h.frame_len() <= buf.len() => h.frame_len(),
-                    Ok(_) => break,
-                    // The stream is out of step: a Modbus TCP server closes the connection.
-                    Err(_) => return Ok(()),
-                }
+            let now = Instant::now();
+            let len = match framer.next(now) {
+                Next::Frame(len) => len,
+                Next::Wait => break,
+                Next::Close => return Ok(()),
             };
-            if len == 0 {
-                break;
+            let handled = lock(sim).handle(kind, &framer.bytes()[..len], &mut out);
+            if handled.record.outcome != Outcome::Damaged {
+                last_request = now;
             }
-            let handled = lock(sim).handle(kind, &buf[..len], &mut out);
             if let Some(log) = log {
                 log(&handled.record);
             }
             if let Some(m) = handled.reply {
                 link.send(&out[..m])?;
             }
-            buf.drain(..len);
-            // The bytes left over start the next frame.
-            frame_started = (!buf.is_empty()).then_some(now);
-        }
-        if buf.len() > 4 * tcp::MAX_FRAME {
-            buf.clear();
+            framer.consume(len, now);
         }
     }
     Ok(())
@@ -190,59 +261,89 @@ pub enum TcpFraming {
     RtuOverTcp,
 }
 
+/// Limits of a TCP listener, as a server on a plant network needs them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ServerOptions {
+    /// Connections served at once; one more is accepted and closed at once.
+    pub max_connections: usize,
+    /// A connection with no well-formed request for this long is closed.
+    pub idle_timeout: Duration,
+    /// A frame must arrive whole this long after its first byte: else a Modbus TCP connection is
+    /// closed, an RTU-over-TCP partial frame dropped.
+    pub frame_deadline: Duration,
+}
+
+impl Default for ServerOptions {
+    /// 64 connections, 60 s idle, 1 s per frame.
+    fn default() -> ServerOptions {
+        ServerOptions {
+            max_connections: 64,
+            idle_timeout: Duration::from_secs(60),
+            frame_deadline: Duration::from_secs(1),
+        }
+    }
+}
+
 /// A listening TCP server; stops when dropped.
 pub struct TcpServer {
     local_addr: SocketAddr,
     stop: Arc<AtomicBool>,
+    active: Arc<AtomicUsize>,
     accept: Option<JoinHandle<()>>,
-    live: Arc<AtomicUsize>,
 }
 
 impl TcpServer {
     /// Binds `addr` and serves `sim` there, one thread per connection, with the default
-    /// [`Limits`].
+    /// [`ServerOptions`].
     pub fn spawn(
         sim: SharedSim,
         addr: impl ToSocketAddrs,
         framing: TcpFraming,
         log: Option<Logger>,
     ) -> io::Result<TcpServer> {
-        Self::spawn_with(sim, addr, framing, log, Limits::default())
+        TcpServer::spawn_with(sim, addr, framing, log, ServerOptions::default())
     }
 
-    /// [`TcpServer::spawn`] with explicit limits.
+    /// [`TcpServer::spawn`] with the connection cap and timeouts given.
     pub fn spawn_with(
         sim: SharedSim,
         addr: impl ToSocketAddrs,
         framing: TcpFraming,
         log: Option<Logger>,
-        limits: Limits,
+        options: ServerOptions,
     ) -> io::Result<TcpServer> {
         let listener = TcpListener::bind(addr)?;
         listener.set_nonblocking(true)?;
         let local_addr = listener.local_addr()?;
         let stop = Arc::new(AtomicBool::new(false));
-        let live = Arc::new(AtomicUsize::new(0));
-        let (flag, count) = (stop.clone(), live.clone());
+        let active = Arc::new(AtomicUsize::new(0));
+        let shared = Accept {
+            sim,
+            framing,
+            log,
+            options,
+            stop: stop.clone(),
+            active: active.clone(),
+        };
         let accept = thread::Builder::new()
             .name(format!("sim-accept-{local_addr}"))
-            .spawn(move || accept_loop(listener, sim, framing, log, flag, limits, count))?;
+            .spawn(move || accept_loop(listener, shared))?;
         Ok(TcpServer {
             local_addr,
             stop,
+            active,
             accept: Some(accept),
-            live,
         })
-    }
-
-    /// Connections being served now.
-    pub fn connections(&self) -> usize {
-        self.live.load(Ordering::Relaxed)
     }
 
     /// The address the server listens on (the port chosen when binding port 0).
     pub fn local_addr(&self) -> SocketAddr {
         self.local_addr
+    }
+
+    /// Connections being served now.
+    pub fn connections(&self) -> usize {
+        self.active.load(Ordering::Relaxed)
     }
 
     /// Serves until the process ends.
@@ -271,50 +372,52 @@ impl Drop for TcpServer {
     }
 }
 
-/// Decrements the live-connection count when a connection's thread ends, however it ends.
-struct Live(Arc<AtomicUsize>);
-
-impl Drop for Live {
-    fn drop(&mut self) {
-        self.0.fetch_sub(1, Ordering::Relaxed);
-    }
-}
-
-fn accept_loop(
-    listener: TcpListener,
+struct Accept {
     sim: SharedSim,
     framing: TcpFraming,
     log: Option<Logger>,
+    options: ServerOptions,
     stop: Arc<AtomicBool>,
-    limits: Limits,
-    live: Arc<AtomicUsize>,
-) {
+    active: Arc<AtomicUsize>,
+}
+
+/// Counts a connection while its thread lives.
+struct Slot(Arc<AtomicUsize>);
+
+impl Drop for Slot {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+fn accept_loop(listener: TcpListener, a: Accept) {
     let mut connections: Vec<JoinHandle<()>> = Vec::new();
-    while !stop.load(Ordering::Relaxed) {
+    while !a.stop.load(Ordering::Relaxed) {
         match listener.accept() {
             Ok((stream, _)) => {
                 connections.retain(|h| !h.is_finished());
-                if live.load(Ordering::Relaxed) >= limits.max_connections {
-                    // Full: close at once rather than leave the peer waiting in the backlog.
-                    drop(stream);
+                if a.active.load(Ordering::Acquire) >= a.options.max_connections {
+                    // Full: refuse by closing at once, as a gateway at its connection limit does.
+                    let _ = stream.shutdown(std::net::Shutdown::Both);
                     continue;
                 }
-                live.fetch_add(1, Ordering::Relaxed);
-                let guard = Live(live.clone());
-                let (sim, log, stop) = (sim.clone(), log.clone(), stop.clone());
+                a.active.fetch_add(1, Ordering::AcqRel);
+                let slot = Slot(a.active.clone());
+                let (sim, log, stop) = (a.sim.clone(), a.log.clone(), a.stop.clone());
+                let (framing, options) = (a.framing, a.options);
                 let spawned =
                     thread::Builder::new()
                         .name("sim-connection".into())
                         .spawn(move || {
-                            let _guard = guard;
+                            let _slot = slot;
                             let _ =
-                                serve_stream(stream, &sim, framing, log.as_ref(), &stop, &limits);
+                                serve_stream(stream, &sim, framing, options, log.as_ref(), &stop);
                         });
                 if let Ok(h) = spawned {
                     connections.push(h);
                 }
             }
-            Err(e) if e.kind() == io::ErrorKind::WouldBlock => thread::sleep(POLL / 2),
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => thread::sleep(POLL / 5),
             Err(_) => thread::sleep(POLL),
         }
     }
@@ -327,32 +430,36 @@ fn serve_stream(
     stream: TcpStream,
     sim: &SharedSim,
     framing: TcpFraming,
+    options: ServerOptions,
     log: Option<&Logger>,
     stop: &AtomicBool,
-    limits: &Limits,
 ) -> io::Result<()> {
     stream.set_nonblocking(false)?;
+    let _ = stream.set_nodelay(true);
+    let limits = |silence| FrameLimits {
+        silence,
+        frame_deadline: options.frame_deadline,
+        idle_timeout: Some(options.idle_timeout),
+    };
     match framing {
         TcpFraming::ModbusTcp => {
             let mut link = TcpTransport::from_stream(stream)?;
-            serve_link(
+            serve_link_with(
                 sim,
                 &mut link,
                 stop,
                 log,
-                Duration::from_millis(500),
-                limits,
+                limits(Duration::from_millis(500)),
             )
         }
         TcpFraming::RtuOverTcp => {
             let mut link = RtuOverTcpTransport::from_stream(stream)?;
-            serve_link(
+            serve_link_with(
                 sim,
                 &mut link,
                 stop,
                 log,
-                Duration::from_millis(100),
-                limits,
+                limits(Duration::from_millis(100)),
             )
         }
     }
@@ -380,9 +487,7 @@ impl SerialServer {
         let flag = stop.clone();
         let thread = thread::Builder::new()
             .name("sim-serial".into())
-            .spawn(move || {
-                serve_link(&sim, &mut link, &flag, log.as_ref(), silence, &Limits::NONE)
-            })?;
+            .spawn(move || serve_link(&sim, &mut link, &flag, log.as_ref(), silence))?;
         Ok(SerialServer {
             stop,
             thread: Some(thread),

@@ -277,14 +277,29 @@ pub struct Simulator {
     externals: BTreeMap<String, f64>,
     selectors: Vec<usize>,
     references: Vec<usize>,
-    /// [`Simulator::settings`] as last computed, and the words of the selector and reference
-    /// registers it was computed from: recomputed only when one of them changes, so a request
-    /// that changes none allocates nothing.
-    cached: LiveSettings,
-    cached_from: Option<Vec<u16>>,
     commands: Vec<CommandTrack>,
     warnings: Vec<String>,
     stats: Stats,
+    cache: TickCache,
+}
+
+/// What `tick` needs, resolved once and refreshed only when a register it depends on changes,
+/// so a request allocates nothing and converts nothing while the drive model is steady.
+#[derive(Debug, Default)]
+struct TickCache {
+    /// Registers whose raw word the settings and the model's inputs come from.
+    inputs: Vec<usize>,
+    /// Their words when `settings` and `params` were computed.
+    seen: Vec<u16>,
+    /// The frequency reference register when `params` were computed.
+    reference_register: Option<usize>,
+    settings: LiveSettings,
+    /// The settings are not yet built or out of date.
+    stale: bool,
+    /// max frequency, accel, decel, reference (Hz); `None`: to compute.
+    params: Option<[f64; 4]>,
+    /// The model as last published into the registers; `None`: publish at the next tick.
+    published: Option<Model>,
 }
 
 fn known_list(items: impl IntoIterator<Item = String>) -> String {
@@ -395,12 +410,14 @@ impl Simulator {
             externals,
             selectors,
             references,
-            cached: LiveSettings::default(),
-            cached_from: None,
             commands,
             warnings: Vec::new(),
             stats: Stats::default(),
+            cache: TickCache::default(),
         };
+        sim.cache.inputs = sim.tick_inputs();
+        sim.cache.seen = vec![0; sim.cache.inputs.len()];
+        sim.cache.stale = true;
         sim.apply_defaults();
         if let Some(r) = sim.roles.clone() {
             for &(i, v) in &r.initial {
@@ -504,6 +521,7 @@ impl Simulator {
         self.tick();
         self.set_index(i, value)?;
         self.after_write(i);
+        self.invalidate();
         self.tick();
         Ok(())
     }
@@ -514,6 +532,7 @@ impl Simulator {
         self.tick();
         self.raw[i] = raw;
         self.after_write(i);
+        self.invalidate();
         self.tick();
         Ok(())
     }
@@ -558,29 +577,6 @@ impl Simulator {
             }
         }
         s
-    }
-
-    /// Brings the cached settings up to date and lends them out (put them back with
-    /// [`Simulator::restore_settings`]); allocates only when a selector or reference changed.
-    fn take_settings(&mut self) -> LiveSettings {
-        let current = self
-            .selectors
-            .iter()
-            .chain(&self.references)
-            .map(|&i| self.raw[i]);
-        let fresh = self
-            .cached_from
-            .as_ref()
-            .is_some_and(|from| current.clone().eq(from.iter().copied()));
-        if !fresh {
-            self.cached = self.settings();
-            self.cached_from = Some(current.collect());
-        }
-        std::mem::take(&mut self.cached)
-    }
-
-    fn restore_settings(&mut self, settings: LiveSettings) {
-        self.cached = settings;
     }
 
     fn default_of(&self, r: &Register, settings: &LiveSettings) -> Option<f64> {
@@ -716,13 +712,13 @@ impl Simulator {
     /// Whether the generated `encode` of this register would produce `raw`: decode it, encode
     /// the value back. Conversions that need a setting the drive cannot supply are accepted.
     fn accepts(&self, r: &Register, raw: u16, settings: &LiveSettings) -> bool {
-        // Bit fields are encoded from the whole word, so reserved bits set are refused.
-        let value = match r.kind() {
-            ValueKind::Bits(_) => f64::from(raw),
-            _ => match codec::decode_number(&self.drive, r, raw, settings) {
-                Ok(v) => v,
-                Err(_) => return true,
+        let value = match codec::decode(&self.drive, r, raw, settings) {
+            Ok(Value::Bits { .. }) => f64::from(raw),
+            Ok(v) => match v.as_f64() {
+                Some(v) => v,
+                None => return true,
             },
+            Err(_) => return true,
         };
         match codec::encode(&self.drive, r, value, settings) {
             Ok(_) => true,
@@ -737,7 +733,9 @@ impl Simulator {
     }
 
     fn decode_f64(&self, i: usize, settings: &LiveSettings) -> Option<f64> {
-        codec::decode_number(&self.drive, &self.drive.registers[i], self.raw[i], settings).ok()
+        codec::decode(&self.drive, &self.drive.registers[i], self.raw[i], settings)
+            .ok()
+            .and_then(|v| v.as_f64())
     }
 
     fn source_value(&self, s: &Source, settings: &LiveSettings) -> Option<f64> {
@@ -793,6 +791,61 @@ impl Simulator {
         }
     }
 
+    /// Registers the settings and the model's inputs are read from.
+    fn tick_inputs(&self) -> Vec<usize> {
+        let mut v: Vec<usize> = self
+            .selectors
+            .iter()
+            .chain(&self.references)
+            .copied()
+            .collect();
+        if let Some(r) = &self.roles {
+            for s in [
+                Some(&r.max_frequency),
+                Some(&r.accel_time),
+                r.decel_time.as_ref(),
+            ]
+            .into_iter()
+            .flatten()
+            {
+                if let Source::Register(i) = s {
+                    v.push(*i);
+                }
+            }
+            v.extend(&r.frequency_reference);
+        }
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+
+    /// Everything cached is recomputed at the next tick (after a write by hand).
+    fn invalidate(&mut self) {
+        self.cache.stale = true;
+        self.cache.params = None;
+        self.cache.published = None;
+    }
+
+    /// Brings the cached settings up to date with the registers; allocates only when a
+    /// register they depend on changed.
+    fn refresh_settings(&mut self) {
+        let c = &mut self.cache;
+        let mut changed = c.stale || c.reference_register != self.model.reference_register;
+        for (k, &i) in c.inputs.iter().enumerate() {
+            if c.seen[k] != self.raw[i] {
+                c.seen[k] = self.raw[i];
+                changed = true;
+            }
+        }
+        if changed {
+            c.reference_register = self.model.reference_register;
+            c.stale = false;
+            c.params = None;
+            c.published = None;
+            self.cache.settings = self.settings();
+        }
+    }
+
     /// Advances the drive model to the clock's time and updates the registers it drives.
     pub fn tick(&mut self) {
         let now = self.clock.now();
@@ -801,28 +854,42 @@ impl Simulator {
         let Some(roles) = self.roles.clone() else {
             return;
         };
-        let settings = self.take_settings();
-        let max_f = self
-            .source_value(&roles.max_frequency, &settings)
-            .filter(|v| v.is_finite() && *v > 0.0)
-            .unwrap_or(60.0);
-        let accel = self
-            .source_value(&roles.accel_time, &settings)
-            .unwrap_or(0.0);
-        let decel = roles
-            .decel_time
-            .as_ref()
-            .and_then(|s| self.source_value(s, &settings))
-            .unwrap_or(accel);
-        let reference = self
-            .model
-            .reference_register
-            .and_then(|i| self.decode_f64(i, &settings))
-            .unwrap_or(0.0);
+        self.refresh_settings();
+        let settings = std::mem::take(&mut self.cache.settings);
+        let [max_f, accel, decel, reference] = match self.cache.params {
+            Some(p) => p,
+            None => {
+                let max_f = self
+                    .source_value(&roles.max_frequency, &settings)
+                    .filter(|v| v.is_finite() && *v > 0.0)
+                    .unwrap_or(60.0);
+                let accel = self
+                    .source_value(&roles.accel_time, &settings)
+                    .unwrap_or(0.0);
+                let decel = roles
+                    .decel_time
+                    .as_ref()
+                    .and_then(|s| self.source_value(s, &settings))
+                    .unwrap_or(accel);
+                let reference = self
+                    .model
+                    .reference_register
+                    .and_then(|i| self.decode_f64(i, &settings))
+                    .unwrap_or(0.0);
+                let p = [max_f, accel, decel, reference];
+                self.cache.params = Some(p);
+                p
+            }
+        };
         self.model.aim(reference, max_f);
         self.model.advance(dt, max_f, accel, decel);
-        self.publish(&roles, &settings, max_f);
-        self.restore_settings(settings);
+        // The registers the model drives are a function of the model, the settings and the
+        // maximum frequency: published again only when one of them changed.
+        if self.cache.published.as_ref() != Some(&self.model) {
+            self.publish(&roles, &settings, max_f);
+            self.cache.published = Some(self.model.clone());
+        }
+        self.cache.settings = settings;
     }
 
     fn store(&mut self, i: usize, value: f64, settings: &LiveSettings) {
@@ -1126,35 +1193,8 @@ impl Simulator {
         values: &[u16],
         broadcast: bool,
     ) -> Result<(), u8> {
-        let mut targets = [(0u16, None::<usize>, 0u16); pdu::MAX_WRITE as usize];
-        let settings = self.take_settings();
-        let checked = self.check_write(kind, address, values, broadcast, &settings, &mut targets);
-        self.restore_settings(settings);
-        for &(comm, i, v) in &targets[..checked?] {
-            if let Some(i) = i {
-                self.raw[i] = v;
-                self.after_write(i);
-            }
-            self.track_commands(comm, v);
-        }
-        self.tick();
-        Ok(())
-    }
-
-    /// The registers a write reaches, into `targets`: (communication address, register, word)
-    /// each; their number, or the exception code that refuses the whole write.
-    fn check_write(
-        &self,
-        kind: TransportKind,
-        address: u16,
-        values: &[u16],
-        broadcast: bool,
-        settings: &LiveSettings,
-        targets: &mut [(u16, Option<usize>, u16)],
-    ) -> Result<usize, u8> {
-        if values.len() > targets.len() {
-            return Err(self.plan.illegal_quantity);
-        }
+        self.refresh_settings();
+        let settings = &self.cache.settings;
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
         let broadcast_space = broadcast && !layout.broadcast.is_empty();
         let allowed = self
@@ -1162,6 +1202,10 @@ impl Simulator {
             .broadcast
             .map(|b| b.addresses)
             .unwrap_or_default();
+        let mut targets = [(0u16, None, 0u16); pdu::MAX_WRITE as usize];
+        if values.len() > targets.len() {
+            return Err(self.plan.illegal_quantity);
+        }
         for (k, &v) in values.iter().enumerate() {
             let comm = self.communication_address(kind, u32::from(address) + k as u32)?;
             let found = if broadcast_space {
@@ -1169,7 +1213,7 @@ impl Simulator {
             } else {
                 layout.holding.get(&comm)
             };
-            targets[k] = match found {
+            match found {
                 Some(&i) => {
                     if broadcast
                         && !broadcast_space
@@ -1188,13 +1232,21 @@ impl Simulator {
                     if !self.accepts(r, v, settings) {
                         return Err(self.plan.out_of_range);
                     }
-                    (comm, Some(i), v)
+                    targets[k] = (comm, Some(i), v);
                 }
-                None if !broadcast && v == 0 && self.in_gap(comm) => (comm, None, v),
+                None if !broadcast && v == 0 && self.in_gap(comm) => targets[k] = (comm, None, v),
                 None => return Err(self.plan.illegal_address),
-            };
+            }
         }
-        Ok(values.len())
+        for &(comm, i, v) in &targets[..values.len()] {
+            if let Some(i) = i {
+                self.raw[i] = v;
+                self.after_write(i);
+            }
+            self.track_commands(comm, v);
+        }
+        self.tick();
+        Ok(())
     }
 }
 

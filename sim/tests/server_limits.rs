@@ -1,232 +1,242 @@
-//! The simulator as a server among hostile peers on loopback: a connection cap, an idle
-//! timeout, a deadline for a started frame, and a well-behaved master served throughout a flood
-//! of connections and a slowloris. Every loop here is bounded in count and time.
+//! The simulator as a server on a plant network: a connection cap, an idle timeout and a
+//! per-frame deadline, and a well-behaved master still served while connections flood in and
+//! slowloris peers trickle bytes. Loopback only; every loop bounded in count and time.
 
-use std::io::{Read, Write};
+use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, ClientOptions};
-use drivemap_sim::{Limits, SimOptions, Simulator, TcpFraming, TcpServer, shared};
+use drivemap_sim::{ManualClock, ServerOptions, SimOptions, Simulator, TcpFraming, TcpServer};
 
-fn server(limits: Limits) -> (TcpServer, &'static drivemap_runtime::Profile) {
+/// Generous bound for anything the server must do "soon".
+const SOON: Duration = Duration::from_secs(10);
+
+fn server(framing: TcpFraming, options: ServerOptions) -> TcpServer {
     let path = format!("{}/../maps/ptlk-tds-v8.yaml", env!("CARGO_MANIFEST_DIR"));
     let drive = drivemap_codegen::read_map(path.as_ref(), &Default::default()).unwrap();
-    let profile = drivemap_live::leak_profile(&drive);
-    let sim = Simulator::new(drive, SimOptions::default()).unwrap();
-    let server = TcpServer::spawn_with(
-        shared(sim),
+    let clock = ManualClock::new();
+    let sim = Simulator::new(drive, SimOptions::new().clock(Arc::new(clock))).unwrap();
+    TcpServer::spawn_with(
+        drivemap_sim::shared(sim),
         "127.0.0.1:0",
-        TcpFraming::ModbusTcp,
+        framing,
         None,
-        limits,
+        options,
     )
-    .unwrap();
-    (server, profile)
+    .unwrap()
 }
 
-/// Whether the server closed `stream` within `within` (reads EOF or a reset).
-fn closed_within(stream: &mut TcpStream, within: Duration) -> bool {
-    stream
-        .set_read_timeout(Some(Duration::from_millis(50)))
-        .unwrap();
-    let deadline = Instant::now() + within;
-    let mut buf = [0u8; 64];
-    while Instant::now() < deadline {
-        match stream.read(&mut buf) {
+/// Modbus TCP: read 16 monitor registers from 0020h, unit 1.
+fn read16(tid: u16) -> [u8; 12] {
+    let t = tid.to_be_bytes();
+    [t[0], t[1], 0, 0, 0, 6, 1, 0x03, 0x00, 0x20, 0x00, 0x10]
+}
+
+fn connect(addr: SocketAddr) -> TcpStream {
+    let s = TcpStream::connect_timeout(&addr, SOON).unwrap();
+    s.set_read_timeout(Some(SOON)).unwrap();
+    s.set_nodelay(true).unwrap();
+    s
+}
+
+/// One request, its whole 41-byte reply.
+fn exchange(s: &mut TcpStream, tid: u16) -> std::io::Result<[u8; 41]> {
+    s.write_all(&read16(tid))?;
+    let mut reply = [0u8; 41];
+    s.read_exact(&mut reply)?;
+    assert_eq!(&reply[..2], &tid.to_be_bytes());
+    assert_eq!(reply[7], 0x03, "a normal reply");
+    Ok(reply)
+}
+
+/// True when the server closed `s` within `within` (a read returns end of stream or a reset).
+fn closed_by_server(s: &mut TcpStream, within: Duration) -> bool {
+    s.set_read_timeout(Some(within)).unwrap();
+    let mut b = [0u8; 64];
+    let end = Instant::now() + within;
+    while Instant::now() < end {
+        match s.read(&mut b) {
             Ok(0) => return true,
-            Ok(_) => {}
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                ) => {}
+            Ok(_) => continue,
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {
+                return false;
+            }
             Err(_) => return true,
         }
     }
     false
 }
 
-/// A read of 0020h (inverter status), as a master polls it.
-const READ_STATUS: [u8; 12] = [
-    0x00, 0x01, 0x00, 0x00, 0x00, 0x06, 0x01, 0x03, 0x00, 0x20, 0x00, 0x01,
-];
-
 #[test]
-fn connections_beyond_the_cap_are_closed_at_once() {
-    let (server, _) = server(Limits {
+fn connections_over_the_cap_are_closed_at_once_and_the_others_served() {
+    let options = ServerOptions {
         max_connections: 4,
-        ..Limits::default()
-    });
-    let addr = server.local_addr();
-    let held: Vec<TcpStream> = (0..4).map(|_| TcpStream::connect(addr).unwrap()).collect();
-    let deadline = Instant::now() + Duration::from_secs(5);
-    while server.connections() < 4 {
-        assert!(Instant::now() < deadline, "4 connections not served");
-        thread::sleep(Duration::from_millis(5));
+        ..ServerOptions::default()
+    };
+    let srv = server(TcpFraming::ModbusTcp, options);
+    let mut held: Vec<TcpStream> = (0..4).map(|_| connect(srv.local_addr())).collect();
+    for (i, s) in held.iter_mut().enumerate() {
+        exchange(s, i as u16).unwrap();
     }
-    let mut fifth = TcpStream::connect(addr).unwrap();
+    assert_eq!(srv.connections(), 4);
+    let mut extra = connect(srv.local_addr());
     assert!(
-        closed_within(&mut fifth, Duration::from_secs(2)),
-        "the fifth connection was kept"
+        closed_by_server(&mut extra, SOON),
+        "the fifth connection is refused"
     );
-    assert_eq!(server.connections(), 4);
-    // A slot freed is a slot served.
-    drop(held);
-    let deadline = Instant::now() + Duration::from_secs(5);
-    while server.connections() > 0 {
-        assert!(
-            Instant::now() < deadline,
-            "closed connections still counted"
-        );
-        thread::sleep(Duration::from_millis(5));
+    assert!(
+        exchange(&mut held[0], 99).is_ok(),
+        "the first four are still served"
+    );
+    // Once one leaves, a new one is served.
+    drop(held.pop());
+    let end = Instant::now() + SOON;
+    while srv.connections() > 3 && Instant::now() < end {
+        thread::sleep(Duration::from_millis(10));
     }
-    let mut again = TcpStream::connect(addr).unwrap();
-    again.write_all(&READ_STATUS).unwrap();
-    again
-        .set_read_timeout(Some(Duration::from_secs(2)))
-        .unwrap();
-    let mut reply = [0u8; 11];
-    again.read_exact(&mut reply).unwrap();
-    assert_eq!(&reply[..2], &[0x00, 0x01], "answered transaction 1");
+    let mut late = connect(srv.local_addr());
+    assert!(exchange(&mut late, 7).is_ok());
 }
 
 #[test]
 fn an_idle_connection_is_closed_after_the_idle_timeout() {
-    let (server, _) = server(Limits {
-        idle_timeout: Some(Duration::from_millis(300)),
-        ..Limits::default()
-    });
-    let mut idle = TcpStream::connect(server.local_addr()).unwrap();
-    let t = Instant::now();
-    assert!(closed_within(&mut idle, Duration::from_secs(3)));
-    assert!(
-        t.elapsed() >= Duration::from_millis(250),
-        "closed too early"
-    );
+    let options = ServerOptions {
+        idle_timeout: Duration::from_millis(300),
+        ..ServerOptions::default()
+    };
+    let srv = server(TcpFraming::ModbusTcp, options);
+    let mut s = connect(srv.local_addr());
+    exchange(&mut s, 1).unwrap();
+    assert!(closed_by_server(&mut s, SOON));
+    let end = Instant::now() + SOON;
+    while srv.connections() > 0 && Instant::now() < end {
+        thread::sleep(Duration::from_millis(10));
+    }
+    assert_eq!(srv.connections(), 0, "its thread is gone");
 }
 
 #[test]
-fn a_frame_left_half_sent_closes_its_connection() {
-    let (server, _) = server(Limits {
-        frame_timeout: Some(Duration::from_millis(500)),
-        ..Limits::default()
-    });
-    let mut half = TcpStream::connect(server.local_addr()).unwrap();
-    half.write_all(&READ_STATUS[..7]).unwrap();
-    assert!(closed_within(&mut half, Duration::from_secs(3)));
-    // Trickling one byte per 100 ms never completes a frame in time either.
-    let mut trickle = TcpStream::connect(server.local_addr()).unwrap();
-    let t = Instant::now();
+fn a_modbus_tcp_frame_not_finished_within_the_deadline_closes_the_connection() {
+    let options = ServerOptions {
+        frame_deadline: Duration::from_millis(400),
+        ..ServerOptions::default()
+    };
+    let srv = server(TcpFraming::ModbusTcp, options);
+    let mut s = connect(srv.local_addr());
+    // Slowloris: a header announcing 254 bytes, then one byte every 100 ms: the frame would
+    // take 26 s to complete; the loop gives up after 100 bytes (10 s).
+    let header = [0x00, 0x05, 0x00, 0x00, 0x00, 0xFE];
+    let started = Instant::now();
     let mut closed = false;
-    for b in READ_STATUS.iter().cycle().take(60) {
-        if trickle.write_all(&[*b]).is_err() {
+    for i in 0..100 {
+        if s.write_all(&[header.get(i).copied().unwrap_or(0x01)])
+            .is_err()
+        {
             closed = true;
             break;
         }
-        thread::sleep(Duration::from_millis(100));
-        if t.elapsed() > Duration::from_secs(3) {
+        if closed_by_server(&mut s, Duration::from_millis(100)) {
+            closed = true;
             break;
         }
     }
-    assert!(
-        closed || closed_within(&mut trickle, Duration::from_secs(1)),
-        "a trickling peer held its connection for {:?}",
-        t.elapsed()
-    );
+    assert!(closed, "the connection trickling one frame is closed");
+    assert!(started.elapsed() < SOON);
 }
 
-/// 5,000 connection attempts and 100 slowloris peers against a server with the default limits,
-/// while a master that connected first polls every 20 ms: every poll is answered, none waits
-/// long, and the server never serves more connections than its cap.
 #[test]
-fn a_master_is_served_through_a_connection_flood_and_a_slowloris() {
-    let limits = Limits::default();
-    let (server, profile) = server(limits);
-    let addr: SocketAddr = server.local_addr();
-    let link = TcpTransport::connect(addr, Duration::from_secs(1)).unwrap();
-    let mut master = Client::with_options(
-        link,
-        profile,
-        ClientOptions {
-            timeout: Duration::from_millis(500),
-            retries: 0,
-            ..ClientOptions::default()
-        },
-    );
-    let stop = Arc::new(AtomicBool::new(false));
-    let flood = {
-        let stop = stop.clone();
-        thread::spawn(move || {
-            let mut held = Vec::new();
-            for i in 0..5_000 {
-                if stop.load(Ordering::Relaxed) {
-                    break;
-                }
-                if let Ok(s) = TcpStream::connect_timeout(&addr, Duration::from_millis(200)) {
-                    // Keep some open to fill the cap; let the rest go.
-                    if i % 50 == 0 {
-                        held.push(s);
-                    }
-                }
-            }
-            held.len()
-        })
+fn rtu_over_tcp_garbage_trickled_forever_is_closed_by_the_idle_timeout() {
+    let options = ServerOptions {
+        idle_timeout: Duration::from_millis(800),
+        frame_deadline: Duration::from_millis(400),
+        ..ServerOptions::default()
     };
-    let slowloris: Vec<_> = (0..100)
-        .map(|_| {
+    let srv = server(TcpFraming::RtuOverTcp, options);
+    let mut s = connect(srv.local_addr());
+    // One byte each 50 ms (inside the 100 ms silence), never a whole frame: the partial frame
+    // is dropped at the deadline, and since nothing well-formed ever comes, the link goes.
+    let mut closed = false;
+    for i in 0..200u32 {
+        if s.write_all(&[0x01, 0x03][i as usize % 2..][..1]).is_err() {
+            closed = true;
+            break;
+        }
+        if closed_by_server(&mut s, Duration::from_millis(50)) {
+            closed = true;
+            break;
+        }
+    }
+    assert!(closed, "closed within 200 bytes (10 s)");
+}
+
+#[test]
+fn a_master_is_served_through_a_flood_of_connections_and_slowloris_peers() {
+    let options = ServerOptions {
+        max_connections: 32,
+        idle_timeout: Duration::from_secs(2),
+        frame_deadline: Duration::from_secs(1),
+    };
+    let srv = server(TcpFraming::ModbusTcp, options);
+    let addr = srv.local_addr();
+    let mut master = connect(addr);
+    exchange(&mut master, 0).unwrap();
+    let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let attackers: Vec<_> = (0..2)
+        .map(|k| {
             let stop = stop.clone();
             thread::spawn(move || {
-                let Ok(mut s) = TcpStream::connect_timeout(&addr, Duration::from_millis(200))
-                else {
-                    return;
-                };
-                for b in READ_STATUS.iter().cycle().take(100) {
-                    if stop.load(Ordering::Relaxed) || s.write_all(&[*b]).is_err() {
-                        return;
+                let mut slow: Vec<TcpStream> = Vec::new();
+                let mut attempts = 0u32;
+                let end = Instant::now() + Duration::from_secs(20);
+                while !stop.load(std::sync::atomic::Ordering::Relaxed) && Instant::now() < end {
+                    // Floods: connection attempts, half of them kept open trickling one byte
+                    // per 100 ms; 2,500 attempts per thread, 5,000 in all.
+                    for _ in 0..25 {
+                        if attempts >= 2500 {
+                            break;
+                        }
+                        attempts += 1;
+                        if let Ok(s) = TcpStream::connect_timeout(&addr, Duration::from_secs(1)) {
+                            if (attempts + k) % 2 == 0 && slow.len() < 100 {
+                                slow.push(s);
+                            }
+                        }
                     }
+                    slow.retain_mut(|s| s.write_all(&[0x00]).is_ok());
                     thread::sleep(Duration::from_millis(100));
                 }
+                attempts
             })
         })
         .collect();
-    let mut worst = Duration::ZERO;
+    let mut latencies = Vec::new();
     let mut most = 0;
-    let until = Instant::now() + Duration::from_secs(6);
-    let mut polls = 0;
-    while Instant::now() < until {
-        let mut words = [0u16; 1];
+    for tid in 1..=1000u16 {
         let t = Instant::now();
-        master
-            .read_holding(1, 0x0020, &mut words)
-            .unwrap_or_else(|e| panic!("poll {polls} during the attack: {e}"));
-        worst = worst.max(t.elapsed());
-        most = most.max(server.connections());
-        polls += 1;
+        exchange(&mut master, tid).expect("the master is answered during the attack");
+        latencies.push(t.elapsed());
+        most = most.max(srv.connections());
+        if attackers.iter().all(|h| h.is_finished()) {
+            break;
+        }
         thread::sleep(Duration::from_millis(20));
     }
-    stop.store(true, Ordering::Relaxed);
-    let held = flood.join().unwrap();
-    for s in slowloris {
-        s.join().unwrap();
-    }
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let attempts: u32 = attackers.into_iter().map(|h| h.join().unwrap()).sum();
+    latencies.sort();
+    let at = |q: usize| latencies[(latencies.len() - 1) * q / 100];
     eprintln!(
-        "{polls} polls answered, worst {worst:?}; at most {most} connections served; flood held {held}"
+        "master under attack ({attempts} connection attempts, {} requests): latency median {:?}, \
+         p99 {:?}, max {:?}; at most {most} connections served at once",
+        latencies.len(),
+        at(50),
+        at(99),
+        at(100)
     );
-    assert!(polls > 100, "only {polls} polls in 6 s");
     assert!(
-        worst < Duration::from_millis(400),
-        "a poll waited {worst:?}"
+        most <= 32,
+        "{most} connections served at once, over the cap"
     );
-    assert!(
-        most <= limits.max_connections,
-        "{most} connections served, cap {}",
-        limits.max_connections
-    );
-    let _ = TransportKind::Tcp;
 }
