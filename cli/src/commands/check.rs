@@ -109,7 +109,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                 let manuals = manuals.filter(Manuals::any);
                 if manuals.is_none() && args.strict {
                     // Strict means every citation read against its manual.
-                    eoutln!(
+                    eprintln!(
                         "{file}: error: --strict, but none of the map's manuals is at hand (set DRIVEMAP_MANUALS)"
                     );
                     unverified += 1;
@@ -119,9 +119,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                     let counts = CitationCounts::of(&checks);
                     for w in checks.iter().filter_map(|c| c.warning()) {
                         if args.strict {
-                            eoutln!("{}", w.to_string().replacen(": warning", ": error", 1));
+                            eprintln!("{}", w.to_string().replacen(": warning", ": error", 1));
                         } else {
-                            eoutln!("{w}");
+                            eprintln!("{w}");
                         }
                     }
                     unverified = counts.unverified;
@@ -140,7 +140,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                 failed += 1;
                 errors += diags.len();
                 for d in diags.iter() {
-                    eoutln!("{d}");
+                    eprintln!("{d}");
                 }
                 outln!(
                     "FAIL {} ({} error{})",
@@ -152,7 +152,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         }
     }
     if failed > 0 {
-        eoutln!(
+        eprintln!(
             "{failed} of {} map(s) failed with {errors} error(s)",
             files.len()
         );

@@ -606,7 +606,6 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
 
 #[cfg(test)]
 mod tests {
-    use std::path::PathBuf;
 
     use super::*;
 
@@ -618,9 +617,7 @@ mod tests {
             reverse: false,
             time_scale: 50.0,
             step: 0.5,
-            dir: MapsDir {
-                maps: PathBuf::from("maps"),
-            },
+            dir: MapsDir { maps: None },
         }
     }
 

@@ -79,7 +79,12 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
 /// The manuals the changes cite, read from the manuals directory found from the new map, the
 /// old map or the maps directory, when there is one.
 fn manuals_for(args: &Args, diffs: &[DriveDiff]) -> Option<Manuals> {
-    let maps = args.dir.maps.join("x.yaml");
+    let maps = args
+        .dir
+        .maps
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("maps"))
+        .join("x.yaml");
     let candidates = [
         args.new.as_deref(),
         args.old.as_deref(),

@@ -5,7 +5,7 @@
 
 use std::io::Write;
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -16,8 +16,7 @@ use drivemap_codegen::model::Parity as MapParity;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
-    RequestRecord, SerialServer, ServerOptions, SimOptions, Simulator, SystemClock, TcpFraming,
-    TcpServer,
+    RequestRecord, SerialServer, SimOptions, Simulator, SystemClock, TcpFraming, TcpServer,
 };
 
 use crate::maps::MapsDir;
@@ -33,7 +32,7 @@ pub enum LineParity {
 #[derive(ClapArgs, Debug)]
 #[command(group(ArgGroup::new("link").required(true).args(["tcp", "rtu_tcp", "serial"])))]
 pub struct Args {
-    /// Drive id, looked up as `<maps>/<id>.yaml`.
+    /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
     #[arg(long)]
     pub drive: String,
     /// Serve Modbus TCP here: `PORT` (binds 127.0.0.1) or `HOST:PORT` (binds where told).
@@ -63,45 +62,29 @@ pub struct Args {
     /// External quantity of the map: `--external drive_rated_current=9.6`.
     #[arg(long, value_name = "NAME=VALUE")]
     pub external: Vec<String>,
-    /// Simulated time runs this many times faster than real time (ramps finish sooner).
-    #[arg(long = "time-scale", default_value_t = 1.0)]
+    /// Simulated time runs this many times faster than real time (ramps finish sooner; 0.1 to 1000).
+    #[arg(long = "time-scale", default_value_t = 1.0, value_parser = crate::duration::number(0.1, 1000.0))]
     pub time_scale: f64,
-    /// TCP: connections served at once; one more is accepted and closed at once.
-    #[arg(long = "max-connections", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=100_000))]
-    pub max_connections: u32,
-    /// TCP: close a connection that sent no well-formed request for this long.
-    #[arg(long = "idle-timeout", default_value = "60s", value_parser = crate::duration::parse)]
-    pub idle_timeout: std::time::Duration,
-    /// TCP: a frame must arrive whole this long after its first byte, else the connection is
-    /// closed (Modbus TCP) or the partial frame dropped (RTU over TCP).
-    #[arg(long = "frame-timeout", default_value = "1s", value_parser = crate::duration::parse)]
-    pub frame_timeout: std::time::Duration,
     /// Do not log requests.
     #[arg(long)]
     pub quiet: bool,
+    /// TCP: connections served at once; one more is closed as soon as it is accepted.
+    #[arg(long = "max-connections", default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..))]
+    pub max_connections: u16,
+    /// TCP: a connection that sends no well-formed request this long is closed.
+    #[arg(long = "idle-timeout", default_value = "60s", value_parser = crate::duration::parse)]
+    pub idle_timeout: std::time::Duration,
+    /// TCP: a connection whose started frame is not complete this long after its first byte is
+    /// closed (a peer trickling bytes cannot hold it).
+    #[arg(long = "frame-timeout", default_value = "1s", value_parser = crate::duration::parse)]
+    pub frame_timeout: std::time::Duration,
     #[command(flatten)]
     pub dir: MapsDir,
 }
 
-/// The map of a drive id: under `--maps`, else (when the default `maps` is not here) in the
-/// source tree this binary was built from.
+/// The map of a drive id: under `--maps` when there, else built in.
 pub(crate) fn load_drive(dir: &MapsDir, id: &str) -> Result<Drive, String> {
-    let path = match dir.path_of(id) {
-        Ok(p) => p,
-        Err(e) => {
-            let built = Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("..")
-                .join("maps")
-                .join(format!("{id}.yaml"));
-            if dir.maps == Path::new("maps") && built.is_file() {
-                built
-            } else {
-                return Err(e);
-            }
-        }
-    };
-    dir.read(&path)
-        .map_err(|d| format!("{} does not validate:\n{d}", path.display()))
+    dir.load(id)
 }
 
 fn pair(text: &str, what: &str) -> Result<(String, String), String> {
@@ -214,18 +197,18 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             TcpFraming::RtuOverTcp
         };
         let addr = bind_address(addr)?;
-        let options = ServerOptions {
-            max_connections: args.max_connections as usize,
+        let limits = drivemap_sim::server::ServerOptions {
+            max_connections: usize::from(args.max_connections),
             idle_timeout: args.idle_timeout,
             frame_deadline: args.frame_timeout,
         };
-        let server = TcpServer::spawn_with(shared, addr.as_str(), framing, log, options)
+        let server = TcpServer::spawn_with(shared, addr.as_str(), framing, log, limits)
             .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
         let what = match framing {
             TcpFraming::ModbusTcp => "Modbus TCP",
             TcpFraming::RtuOverTcp => "RTU over TCP",
         };
-        println!(
+        outln!(
             "simulating {id} at slave {slave} on {what} {} ({model}{time}); Ctrl-C stops",
             server.local_addr()
         );
@@ -262,7 +245,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         .with_profile(profile);
     let server = SerialServer::spawn(shared, options, log)
         .map_err(|e| format!("cannot open serial port {}: {e}", path.display()))?;
-    println!(
+    outln!(
         "simulating {id} at slave {slave} on RTU {} {baud} baud, parity {} ({model}{time}); Ctrl-C stops",
         path.display(),
         format!("{parity:?}").to_lowercase()
