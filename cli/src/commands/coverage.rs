@@ -205,10 +205,23 @@ pub fn splice(doc: &str, section: &str) -> String {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<ExitCode, String> {
+    let id = args.map.to_string_lossy();
     let path = if args.map.is_file() {
         args.map.clone()
     } else {
-        args.dir.path_of(&args.map.to_string_lossy())?
+        // Coverage reads the map's own text beside its manuals: a built-in map is taken from the
+        // `maps/` of the repository it is run in.
+        match args.dir.path_of(&id) {
+            Ok(p) => p,
+            Err(e) => {
+                let local = PathBuf::from("maps").join(format!("{id}.yaml"));
+                if local.is_file() {
+                    local
+                } else {
+                    return Err(e);
+                }
+            }
+        }
     };
     let report = report_for(&path, &args.dir)?;
     if let Some(doc) = &args.update {
@@ -217,7 +230,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         if new != old {
             std::fs::write(doc, new).map_err(|e| format!("{}: {e}", doc.display()))?;
         }
-        println!("{}: {}", doc.display(), totals(&report));
+        outln!("{}: {}", doc.display(), totals(&report));
         return Ok(ExitCode::SUCCESS);
     }
     if let Some(doc) = &args.check {
@@ -231,10 +244,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             );
             return Ok(ExitCode::FAILURE);
         }
-        println!("{}: up to date ({})", doc.display(), totals(&report));
+        outln!("{}: up to date ({})", doc.display(), totals(&report));
         return Ok(ExitCode::SUCCESS);
     }
-    print!(
+    out!(
         "{}",
         if args.md {
             markdown(&report)

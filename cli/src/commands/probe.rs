@@ -100,9 +100,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             .map_err(|e| format!("writing {}: {e}", path.display()))?;
     }
     match args.format {
-        Format::Table => print!("{}", summary(&report)),
-        Format::Json => println!("{json}"),
-        Format::Csv => print!("{}", csv_rows(&report)?),
+        Format::Table => out!("{}", summary(&report)),
+        Format::Json => outln!("{json}"),
+        Format::Csv => out!("{}", csv_rows(&report)?),
     }
     Ok(if report.disagreements.is_empty() {
         ExitCode::SUCCESS

@@ -439,12 +439,12 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         found: report_found,
     };
     match args.format {
-        Format::Table => print!("{}", table(&report)),
-        Format::Json => println!(
+        Format::Table => out!("{}", table(&report)),
+        Format::Json => outln!(
             "{}",
             serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
         ),
-        Format::Csv => print!("{}", csv_rows(&report)?),
+        Format::Csv => out!("{}", csv_rows(&report)?),
     }
     Ok(if report.found.is_empty() {
         ExitCode::FAILURE

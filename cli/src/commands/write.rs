@@ -193,7 +193,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
                 return Ok(ExitCode::FAILURE);
             }
         }
-        println!(
+        outln!(
             "wrote {} = {shown} ({raw:04X}h) at {}",
             describe::register(r),
             describe::address(address)
@@ -204,7 +204,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             eprintln!("drivemap: {e}");
             return Ok(ExitCode::FAILURE);
         }
-        println!("ran command {id}");
+        outln!("ran command {id}");
     }
     Ok(ExitCode::SUCCESS)
 }
