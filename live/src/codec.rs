@@ -328,32 +328,6 @@ pub fn decode(
     }
 }
 
-/// The number a raw word stands for — what [`decode`] returns, as [`Value::as_f64`] reads it,
-/// with the bit-field word for bit fields — without building the value (no allocation): for
-/// code that only computes with it, such as the simulator's drive model.
-pub fn decode_number(
-    drive: &Drive,
-    r: &Register,
-    raw: u16,
-    settings: &LiveSettings,
-) -> Result<f64, ValueError> {
-    Ok(match r.kind() {
-        ValueKind::Word => scale::word_to_int(raw, r.def.signed) as f64,
-        ValueKind::Enum(_) => f64::from(raw),
-        ValueKind::Bits(fields) => f64::from(raw & field_mask(fields)),
-        ValueKind::Quantity(_) | ValueKind::UnitQuantity => {
-            match conversion(drive, r, settings)?.0 {
-                Conversion::Decimal { scale: s, .. } => scale::decode_decimal(raw, r.def.signed, s),
-                Conversion::Relative {
-                    full_scale,
-                    reference,
-                    ..
-                } => scale::decode_relative(raw, r.def.signed, full_scale, reference),
-            }
-        }
-    })
-}
-
 /// Encodes an engineering number (a value in the register's unit, a code, or a raw word for
 /// words and bit fields), checking the range first.
 pub fn encode(
