@@ -428,7 +428,7 @@ impl Drive {
             ValueKind::Bits(fields) => {
                 let mask = fields
                     .iter()
-                    .filter_map(crate::validate::field_span)
+                    .filter_map(crate::names::field_span)
                     .fold(0u16, |m, (lsb, width)| {
                         m | ((((1u32 << width) - 1) << lsb) as u16)
                     });

@@ -2,7 +2,8 @@
 //!
 //! Data flows one way: [`source`] reads YAML into a located tree, [`load`] merges variant maps
 //! onto their base and deserializes the [`model`], [`ir`] expands it, [`validate`] checks it one
-//! concern per pass, [`generate`] emits Rust and [`export`] emits JSON. [`Config`] drives it all
+//! concern per pass, [`lower`] decides what every register means (the drive plan), [`generate`]
+//! prints the plan as Rust and [`export`] emits JSON. [`Config`] drives it all
 //! from a `build.rs`.
 
 pub mod config;
@@ -11,6 +12,7 @@ pub mod export;
 pub mod generate;
 pub mod ir;
 pub mod load;
+pub mod lower;
 pub mod model;
 pub mod names;
 pub mod numbers;

@@ -1,9 +1,9 @@
-//! The Rust names the generator gives to map items. Validation uses the same functions to find
-//! collisions before emission.
+//! The Rust names the generator gives to map items, and the spans of bit fields. Validation uses
+//! the same functions to find collisions and bad spans before emission; they live here, below
+//! both, so neither depends on the other.
 
 use crate::ir::Register;
 use crate::model::{Field, VariantAxis};
-use crate::validate::pascal_case;
 
 /// The zero-sized type of a register: `accel_time_1` → `AccelTime1`.
 pub fn register_type(r: &Register) -> String {
@@ -31,4 +31,34 @@ pub fn axis_enum(axis: &VariantAxis) -> String {
 }
 
 /// Type names the generator always emits.
-pub const FIXED_TYPES: &[&str] = &["Settings"];
+pub const FIXED_TYPES: &[&str] = &[
+    "Settings",
+    "Drive",
+    "Reg",
+    "ReadOnly",
+    "ReadWrite",
+    "WriteOnly",
+];
+
+/// `accel_time_1` → `AccelTime1`.
+pub fn pascal_case(s: &str) -> String {
+    s.split('_')
+        .filter(|p| !p.is_empty())
+        .map(|p| {
+            let mut c = p.chars();
+            match c.next() {
+                Some(first) => first.to_ascii_uppercase().to_string() + c.as_str(),
+                None => String::new(),
+            }
+        })
+        .collect()
+}
+
+/// (lowest bit, width) of a field, if it is well formed.
+pub fn field_span(f: &Field) -> Option<(u8, u8)> {
+    match (f.bit, f.bits) {
+        (Some(b), None) if b <= 15 => Some((b, 1)),
+        (None, Some([lo, hi])) if lo <= hi && hi <= 15 => Some((lo, hi - lo + 1)),
+        _ => None,
+    }
+}

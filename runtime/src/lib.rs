@@ -35,12 +35,15 @@ pub mod transport;
 pub mod typed;
 
 pub use client::{Client, ClientOptions, Reconnect};
+pub use drivemap_core as core;
+pub use drivemap_core::plan;
 pub use error::{Error, Refusal};
 pub use gate::{Broadcast, Transports, WriteRule};
 pub use profile::Profile;
 pub use register::{
-    Access, BitRegister, Bits, Code, DriveSettings, Readable, Register, RegisterInfo, Table,
-    Writable, WriteRestriction,
+    Access, BitRegister, Bits, Code, DrivePlan, DriveSettings, Enumeration, ReadOnly, ReadWrite,
+    Readable, Reg, Register, RegisterInfo, RegisterPlan, SettingsView, Table, Value, Writable,
+    WriteOnly, WriteRestriction,
 };
 pub use scale::ValueError;
 

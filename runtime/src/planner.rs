@@ -100,10 +100,11 @@ impl ReadableSet {
 
     /// The addresses of `table` that a register of `registers` lets you read: readable and not
     /// broadcast-only. Reserved, unmapped and write-only addresses are left out.
-    pub fn from_registers(registers: &[RegisterInfo], table: Table) -> ReadableSet {
+    pub fn from_registers<R: AsRef<RegisterInfo>>(registers: &[R], table: Table) -> ReadableSet {
         ReadableSet::new(
             registers
                 .iter()
+                .map(AsRef::as_ref)
                 .filter(|r| r.table == table && r.access.readable() && !r.broadcast_only)
                 .map(|r| r.address),
         )
@@ -487,9 +488,9 @@ impl Poller {
     ///
     /// With generated code: `Poller::new(&v7::PROFILE, v7::REGISTERS, [wanted::<v7::OutputFrequency>(), …])`,
     /// or from the table: `v7::REGISTERS.iter().filter(…).map(|r| (r.table, r.address))`.
-    pub fn new(
+    pub fn new<R: AsRef<RegisterInfo>>(
         profile: &'static Profile,
-        registers: &[RegisterInfo],
+        registers: &[R],
         wanted: impl IntoIterator<Item = (Table, u16)>,
     ) -> Result<Poller, PlanError> {
         let mut poller = Poller {

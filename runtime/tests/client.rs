@@ -10,7 +10,7 @@ use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::fault::{Fault, FaultyLink};
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::register::{BitRegister, Bits, Readable, Register, Table, Writable};
+use drivemap_runtime::register::{BitRegister, Bits, Code, Readable, Register, Table, Writable};
 use drivemap_runtime::scale::{self, Decimal, RawRange, ValueError};
 use drivemap_runtime::slave::SimulatedSlave;
 
@@ -64,13 +64,19 @@ macro_rules! register {
 /// Operation command bits 0-A (`000_032dced3a1e91a75.txt:855-867`); B-F reserved.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Command(u16);
-impl Bits for Command {
-    fn bits(&self) -> u16 {
+impl Code for Command {
+    fn code(&self) -> u16 {
         self.0
     }
-    fn from_bits(raw: u16) -> Self {
+    fn from_code(raw: u16) -> Self {
         Command(raw & 0x07FF)
     }
+    fn is_known(&self) -> bool {
+        true
+    }
+}
+impl Bits for Command {
+    const MASK: u16 = 0x07FF;
 }
 
 register!(

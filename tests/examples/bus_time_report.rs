@@ -28,10 +28,10 @@ use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::planner::{
     Read, ReadableSet, plan_contiguous, plan_cost, plan_reads, plan_single,
 };
-use drivemap_runtime::{Profile, RegisterInfo, Table};
+use drivemap_runtime::{Profile, RegisterPlan, Table};
 
 /// The generated profile and register table of a module of `drivemap_drives`.
-fn generated(module: &str) -> Option<(&'static Profile, &'static [RegisterInfo])> {
+fn generated(module: &str) -> Option<(&'static Profile, &'static [RegisterPlan])> {
     macro_rules! modules {
         ($($m:ident),* $(,)?) => {
             match module {

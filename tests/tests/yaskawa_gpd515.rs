@@ -10,6 +10,7 @@ use drivemap_drives::runtime::pdu::{Request, Response, Words};
 use drivemap_drives::runtime::profile::{CommandKind, TransportKind};
 use drivemap_drives::runtime::{Register, ValueError, Writable, crc, rtu};
 use drivemap_drives::yaskawa_gpd515 as gpd;
+use drivemap_runtime::Enumeration;
 
 /// Settings of a drive whose flash is 1024 or later with o2-09 = 1 (Chapter 6 layout: operation
 /// command at 01h, frequency reference at 02h) and, for the current scale, a drive rating.

@@ -10,7 +10,9 @@ use crate::model::Field;
 use crate::names;
 use crate::validate::field_span;
 
-pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
+pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> TokenStream {
+    let row = proc_macro2::Literal::usize_unsuffixed(index);
+    let mut field_index = 0usize;
     let ty = ident(&names::bits_type(r));
     let reg_id = r.id();
     let writable = r.writable();
@@ -22,6 +24,8 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
         let Some((lo, width)) = field_span(f) else {
             continue;
         };
+        let fi = proc_macro2::Literal::usize_unsuffixed(field_index);
+        field_index += 1;
         let fmask: u16 = (((1u32 << width) - 1) << lo) as u16;
         mask |= fmask;
         let fm = super::hex(fmask);
@@ -102,6 +106,7 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
                 &ety,
                 &f.values,
                 &format!("field `{}` of `{}`", f.id, reg_id),
+                quote!(plan::REGISTERS[#row].field_labels(#fi)),
                 rt,
             ));
             let max = proc_macro2::Literal::u16_unsuffixed(((1u32 << width) - 1) as u16);
@@ -156,9 +161,14 @@ pub fn emit(r: &Register, fields: &[Field], rt: &TokenStream) -> TokenStream {
             #(#methods)*
         }
 
+        impl #rt::Code for #ty {
+            fn code(&self) -> u16 { self.0 }
+            fn from_code(code: u16) -> Self { Self(code & Self::MASK) }
+            fn is_known(&self) -> bool { true }
+        }
+
         impl #rt::Bits for #ty {
-            fn bits(&self) -> u16 { self.0 }
-            fn from_bits(raw: u16) -> Self { Self(raw & Self::MASK) }
+            const MASK: u16 = #mask_lit;
         }
 
         impl core::fmt::Debug for #ty {

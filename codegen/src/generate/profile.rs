@@ -5,9 +5,10 @@ use quote::quote;
 
 use super::hex;
 use crate::ir::Drive;
+use crate::lower::DrivePlan;
 use crate::model::CommandKind;
 
-pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
+pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     let p = &drive.protocol;
     let id = &drive.meta.id;
     let fcs = p.function_codes.iter().map(|f| hex2(*f));
@@ -62,10 +63,15 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
         None => quote!(None),
     };
     let endurance = opt_u32(p.eeprom.as_ref().map(|e| e.endurance));
-    let writes = drive.registers.iter().filter(|r| r.writable()).map(|r| {
-        let marker = super::ident(&crate::names::register_type(r));
-        quote!(<#marker as #rt::Writable>::RULE)
-    });
+    let writes = plan
+        .registers
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.info.access.writable())
+        .map(|(i, _)| {
+            let i = proc_macro2::Literal::usize_unsuffixed(i);
+            quote!(plan::REGISTERS[#i].write_rule())
+        });
     quote! {
         /// The protocol profile: what the drive accepts on the wire, per its manual.
         pub static PROFILE: #rt::Profile = #rt::Profile {

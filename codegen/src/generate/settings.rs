@@ -1,46 +1,39 @@
 //! `Settings`: what conversions depend on — the model variant, the parameters that select a
-//! scale or an address, the quantities values are relative to — and the variant enums.
+//! scale or an address, the quantities values are relative to — and the variant enums. The
+//! slots come from the plan ([`SettingsPlan`]); `Settings` answers them by name.
 
-use std::collections::BTreeSet;
-
-use proc_macro2::TokenStream;
+use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 
 use super::{docs, hex, ident};
-use crate::ir::{Drive, Register, ValueKind};
-use crate::names;
-use crate::validate::pascal_case;
+use crate::ir::{Drive, ValueKind};
+use crate::lower::{DrivePlan, Quantity, SettingsPlan};
+use crate::names::{self, pascal_case};
 
-/// Expression of type `Option<u16>`: the selector's code held in `settings`.
-pub fn selector_code(selector: &Register) -> TokenStream {
-    let field = ident(selector.id());
-    match selector.kind() {
-        ValueKind::Enum(_) => quote!(settings.#field.map(|v| v.code())),
-        _ => quote!(settings.#field),
-    }
-}
-
-/// How a selector's code or a reference is named in errors: the parameter number if printed.
-pub fn setting_label(r: &Register) -> String {
-    r.def.param.clone().unwrap_or_else(|| r.def.id.clone())
-}
-
-pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
+pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
+    let SettingsPlan {
+        codes,
+        quantities,
+        axes: _,
+    } = &plan.settings;
     let mut fields = Vec::new();
     let mut absorb = Vec::new();
-    let mut deps = Vec::new();
-    let mut seen = BTreeSet::new();
     let mut axes = Vec::new();
+    let mut variant_arms = Vec::new();
+    let mut code_arms = Vec::new();
+    let mut quantity_arms = Vec::new();
+    let by_index = |i: usize| &drive.registers[plan_to_map(plan, i)];
 
-    for axis in &drive.variants {
+    for (a, axis) in drive.variants.iter().enumerate() {
         let ty = ident(&names::axis_enum(axis));
         let field = ident(&axis.id);
-        seen.insert(axis.id.clone());
         let doc = docs::item(&format!(
             "{} of the drive (base: {}).",
             axis.name, axis.options[0].name
         ));
         fields.push(quote!(#doc pub #field: #ty,));
+        let slot = Literal::u8_unsuffixed(a as u8);
+        variant_arms.push(quote!(#slot => self.#field as u8,));
         let variants = axis.options.iter().enumerate().map(|(i, o)| {
             let v = ident(&pascal_case(&o.id));
             let doc = docs::item(&match &o.source {
@@ -60,65 +53,114 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
             pub enum #ty { #(#variants)* }
         });
     }
-    for sel in drive.selectors() {
-        if !seen.insert(sel.def.id.clone()) {
-            continue;
-        }
+    let mut selector_fields = Vec::new();
+    for (slot, &i) in codes.iter().enumerate() {
+        let sel = by_index(i);
         let field = ident(sel.id());
-        let marker = ident(&names::register_type(sel));
         let addr = hex(sel.def.address);
-        deps.push(addr.clone());
         let doc = docs::item(&format!(
             "{} (`{:04X}h`), which selects a scale or an address. `None` until read or set.",
             label(sel),
             sel.def.address
         ));
+        let slot = Literal::u8_unsuffixed(slot as u8);
         match sel.kind() {
             ValueKind::Enum(_) => {
                 let ty = ident(&names::value_enum(sel));
                 fields.push(quote!(#doc pub #field: Option<#ty>,));
-                absorb.push(quote!(#addr => { self.#field = Some(<#ty as #rt::Code>::from_code(raw)); true }));
+                absorb
+                    .push(quote!(#addr => self.#field = Some(<#ty as #rt::Code>::from_code(raw)),));
+                code_arms.push(quote!(#slot => self.#field.map(|v| #rt::Code::code(&v)),));
             }
             _ => {
                 fields.push(quote!(#doc pub #field: Option<u16>,));
-                absorb.push(quote!(#addr => { self.#field = Some(raw); true }));
+                absorb.push(quote!(#addr => self.#field = Some(raw),));
+                code_arms.push(quote!(#slot => self.#field,));
             }
         }
-        let _ = marker;
+        selector_fields.push(sel.def.id.clone());
     }
-    for reference in drive.references() {
-        if !seen.insert(reference.def.id.clone()) {
-            continue;
+    for (slot, q) in quantities.iter().enumerate() {
+        let slot_lit = Literal::u8_unsuffixed(slot as u8);
+        match q {
+            Quantity::Register(i) => {
+                let reference = by_index(*i);
+                let field = ident(reference.id());
+                if selector_fields.contains(&reference.def.id) {
+                    // Also a selector: its code is the quantity.
+                    quantity_arms.push(quote!(#slot_lit => #rt::SettingsView::code(self, #slot_lit).map(f64::from),));
+                    continue;
+                }
+                let addr = hex(reference.def.address);
+                let unit = reference.def.unit.clone().unwrap_or_default();
+                let doc = docs::item(&format!(
+                    "{} (`{:04X}h`) in {unit}: other values are scaled relative to it. `None` until read or set.",
+                    label(reference),
+                    reference.def.address
+                ));
+                fields.push(quote!(#doc pub #field: Option<f64>,));
+                let index = Literal::usize_unsuffixed(*i);
+                absorb.push(quote!(#addr => self.#field = plan::REGISTERS[#index].decode_number(raw, self).ok(),));
+                quantity_arms.push(quote!(#slot_lit => self.#field,));
+            }
+            Quantity::External {
+                id,
+                description,
+                unit,
+            } => {
+                let field = ident(id);
+                let doc = docs::item(&format!(
+                    "{description} in {unit}: not a register; the application supplies it (nameplate or drive rating)."
+                ));
+                fields.push(quote!(#doc pub #field: Option<f64>,));
+                quantity_arms.push(quote!(#slot_lit => self.#field,));
+            }
         }
-        let field = ident(reference.id());
-        let marker = ident(&names::register_type(reference));
-        let addr = hex(reference.def.address);
-        deps.push(addr.clone());
-        let unit = reference.def.unit.clone().unwrap_or_default();
-        let doc = docs::item(&format!(
-            "{} (`{:04X}h`) in {unit}: other values are scaled relative to it. `None` until read or set.",
-            label(reference),
-            reference.def.address
-        ));
-        fields.push(quote!(#doc pub #field: Option<f64>,));
-        let value = match reference.kind() {
-            ValueKind::Word if reference.def.signed => quote!(Some(f64::from(raw as i16))),
-            ValueKind::Word => quote!(Some(f64::from(raw))),
-            _ => quote!(<#marker as #rt::Register>::decode(raw, self).ok()),
-        };
-        absorb.push(quote!(#addr => { self.#field = #value; true }));
     }
-    for q in drive.externals() {
-        if !seen.insert(q.external.clone()) {
-            continue;
+    let deps = plan.dependencies().into_iter().map(hex);
+    let absorb_body = if absorb.is_empty() {
+        quote!(let _ = (address, raw); false)
+    } else {
+        quote! {
+            match address {
+                #(#absorb)*
+                _ => return false,
+            }
+            true
         }
-        let field = ident(&q.external);
-        let doc = docs::item(&format!(
-            "{} in {}: not a register; the application supplies it (nameplate or drive rating).",
-            q.description, q.unit
-        ));
-        fields.push(quote!(#doc pub #field: Option<f64>,));
-    }
+    };
+    let method = |name: TokenStream,
+                  arg: TokenStream,
+                  ret: TokenStream,
+                  arms: &[TokenStream],
+                  none: TokenStream| {
+        if arms.is_empty() {
+            quote!(fn #name(&self, _: u8) -> #ret { #none })
+        } else {
+            quote!(fn #name(&self, #arg: u8) -> #ret { match #arg { #(#arms)* _ => #none } })
+        }
+    };
+    let code = method(
+        quote!(code),
+        quote!(slot),
+        quote!(Option<u16>),
+        &code_arms,
+        quote!(None),
+    );
+    let quantity = method(
+        quote!(quantity),
+        quote!(slot),
+        quote!(Option<f64>),
+        &quantity_arms,
+        quote!(None),
+    );
+    let variant = method(
+        quote!(variant),
+        quote!(axis),
+        quote!(u8),
+        &variant_arms,
+        quote!(0),
+    );
     quote! {
         #(#axes)*
 
@@ -140,16 +182,24 @@ pub fn emit(drive: &Drive, rt: &TokenStream) -> TokenStream {
             const DEPENDENCIES: &'static [u16] = &[#(#deps),*];
 
             fn absorb(&mut self, address: u16, raw: u16) -> bool {
-                match address {
-                    #(#absorb)*
-                    _ => false,
-                }
+                #absorb_body
             }
+        }
+
+        impl #rt::SettingsView for Settings {
+            #code
+            #quantity
+            #variant
         }
     }
 }
 
-fn label(r: &Register) -> String {
+/// The map index of the register at `index` of the plan's table.
+fn plan_to_map(plan: &DrivePlan, index: usize) -> usize {
+    plan.order.iter().position(|&p| p == index).unwrap_or(0)
+}
+
+fn label(r: &crate::ir::Register) -> String {
     match &r.def.param {
         Some(p) => format!("{p} {}", r.def.name),
         None => r.def.name.clone(),

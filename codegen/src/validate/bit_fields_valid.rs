@@ -3,16 +3,8 @@
 
 use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
-use crate::model::Field;
 
-/// (lowest bit, width) of a field, if it is well formed.
-pub fn span(f: &Field) -> Option<(u8, u8)> {
-    match (f.bit, f.bits) {
-        (Some(b), None) if b <= 15 => Some((b, 1)),
-        (None, Some([lo, hi])) if lo <= hi && hi <= 15 => Some((lo, hi - lo + 1)),
-        _ => None,
-    }
-}
+use crate::names::field_span as span;
 
 pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {

@@ -2,7 +2,7 @@
 
 use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
-use crate::validate::bit_fields_valid::span;
+use crate::names::field_span as span;
 
 pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {

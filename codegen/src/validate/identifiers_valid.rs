@@ -23,20 +23,6 @@ pub fn is_identifier(s: &str) -> bool {
         && !KEYWORDS.contains(&s)
 }
 
-/// `accel_time_1` → `AccelTime1`.
-pub fn pascal_case(s: &str) -> String {
-    s.split('_')
-        .filter(|p| !p.is_empty())
-        .map(|p| {
-            let mut c = p.chars();
-            match c.next() {
-                Some(first) => first.to_ascii_uppercase().to_string() + c.as_str(),
-                None => String::new(),
-            }
-        })
-        .collect()
-}
-
 fn need(
     drive: &Drive,
     out: &mut Vec<Diagnostic>,
@@ -157,6 +143,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::names::pascal_case;
 
     #[test]
     fn identifiers() {

@@ -23,9 +23,10 @@ mod protocol_valid;
 mod references_resolve;
 mod value_kind_single;
 
-pub use bit_fields_valid::span as field_span;
+pub use crate::names::field_span;
+pub use crate::names::pascal_case;
 pub use citations_present::parse_citation;
-pub use identifiers_valid::{is_identifier, pascal_case};
+pub use identifiers_valid::is_identifier;
 
 /// What validation may consult beyond the map itself.
 #[derive(Debug, Clone, Default)]

@@ -2,7 +2,7 @@
 
 use custom_drive::mini_drive as md;
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Bits, Code, DriveSettings, Register, ValueError, Writable};
+use drivemap_runtime::{Bits, Code, DriveSettings, Enumeration, Register, ValueError, Writable};
 
 #[test]
 fn bit_fields_keep_reserved_bits_zero() {

@@ -6,7 +6,7 @@ use std::path::Path;
 use custom_drive::mini_drive as md;
 use drivemap_codegen::validate::Context;
 use drivemap_live::{LiveSettings, Value};
-use drivemap_runtime::{Bits, Code, Register, Writable};
+use drivemap_runtime::{Bits, Code, Enumeration, Register, Writable};
 
 fn drive() -> drivemap_codegen::Drive {
     drivemap_codegen::read_map(

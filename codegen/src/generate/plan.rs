@@ -1,0 +1,314 @@
+//! The drive plan printed as `const` data: one row per register, in the order of
+//! [`DrivePlan::registers`](crate::lower::DrivePlan::registers).
+//!
+//! Rows are printed here rather than through `prettyplease`, which would spread each row over
+//! a dozen lines: a table reads better one register per line, and the generated module stays
+//! small. Every value printed is a plain literal of the vocabulary crate's types, so a row is
+//! exactly the plan the lowering pass decided.
+
+use std::fmt::Write as _;
+
+use drivemap_core::plan::{
+    Case, CaseScale, Condition, Conversion, Field, Label, Move, Ranges, RegisterPlan, Relative,
+    Setting, VariantOption,
+};
+use drivemap_core::register::{Access, Table, WriteRestriction};
+use drivemap_core::rule::{Broadcast, Transports};
+use drivemap_core::scale::{Decimal, RawRange};
+
+use crate::lower::DrivePlan;
+
+/// The `plan` module of a drive: `pub const REGISTERS: &[RegisterPlan]`.
+pub fn module(plan: &DrivePlan) -> String {
+    let mut rows = String::new();
+    for (i, r) in plan.registers.iter().enumerate() {
+        let _ = writeln!(rows, "        /* {i} */ {},", row(r));
+    }
+    let used = |names: &[&'static str]| -> String {
+        let found: Vec<&str> = names
+            .iter()
+            .copied()
+            .filter(|n| {
+                [" {", "::", "("]
+                    .iter()
+                    .any(|end| rows.contains(&format!("{n}{end}")))
+            })
+            .collect();
+        match found.len() {
+            0 => String::new(),
+            1 => found[0].to_owned(),
+            _ => format!("{{{}}}", found.join(", ")),
+        }
+    };
+    let mut out = String::from(
+        "/// The plan of every register: what the lowering pass decided, as data. Sorted by\n\
+         /// address, broadcast-only registers last; the register types index it.\n\
+         pub mod plan {\n",
+    );
+    for (path, names) in [
+        (
+            "rt::plan",
+            &[
+                "Case",
+                "CaseScale",
+                "Condition",
+                "Conversion",
+                "Field",
+                "Label",
+                "Move",
+                "Ranges",
+                "Relative",
+                "Setting",
+                "VariantOption",
+            ][..],
+        ),
+        ("rt::scale", &["Decimal", "RawRange"][..]),
+        (
+            "rt",
+            &[
+                "Access",
+                "Broadcast",
+                "RegisterInfo",
+                "RegisterPlan",
+                "Table",
+                "Transports",
+                "WriteRestriction",
+            ][..],
+        ),
+    ] {
+        let names = used(names);
+        if !names.is_empty() {
+            let _ = writeln!(out, "    use super::{path}::{names};");
+        }
+    }
+    out.push_str("\n    /// Every register's plan.\n    pub const REGISTERS: &[super::rt::RegisterPlan] = &[\n");
+    out.push_str(&rows);
+    out.push_str("    ];\n}\n");
+    out
+}
+
+fn string(s: &str) -> String {
+    format!("{s:?}")
+}
+
+fn hex(v: u16) -> String {
+    format!("0x{v:04X}")
+}
+
+fn range(r: RawRange) -> String {
+    format!("RawRange::new({}, {})", r.min, r.max)
+}
+
+fn float(v: f64) -> String {
+    let s = format!("{v:?}");
+    if s.contains('.') || s.contains('e') {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+fn list<T>(items: &[T], f: impl Fn(&T) -> String) -> String {
+    let parts: Vec<String> = items.iter().map(f).collect();
+    format!("&[{}]", parts.join(", "))
+}
+
+fn setting(s: &Setting) -> String {
+    format!("Setting {{ slot: {}, label: {} }}", s.slot, string(s.label))
+}
+
+fn variant(v: &VariantOption) -> String {
+    format!("VariantOption {{ axis: {}, option: {} }}", v.axis, v.option)
+}
+
+fn decimal(d: Decimal) -> String {
+    format!("Decimal::new({}, {})", d.mantissa, d.exponent)
+}
+
+fn ranges(r: &Ranges) -> String {
+    if r.by_variant.is_empty() {
+        format!("Ranges::fixed({})", range(r.base))
+    } else {
+        format!(
+            "Ranges {{ base: {}, by_variant: {} }}",
+            range(r.base),
+            list(r.by_variant, |(v, r)| format!(
+                "({}, {})",
+                variant(v),
+                range(*r)
+            ))
+        )
+    }
+}
+
+fn relative(r: &Relative) -> String {
+    format!(
+        "Relative {{ full_scale: {}, reference: {} }}",
+        float(r.full_scale),
+        setting(&r.reference)
+    )
+}
+
+fn label(l: &Label) -> String {
+    format!(
+        "Label {{ code: {}, id: {}, name: {} }}",
+        l.code,
+        string(l.id),
+        string(l.name)
+    )
+}
+
+fn field(f: &Field) -> String {
+    format!(
+        "Field {{ id: {}, name: {}, lsb: {}, width: {}, values: {}, source: {} }}",
+        string(f.id),
+        string(f.name),
+        f.lsb,
+        f.width,
+        list(f.values, label),
+        string(f.source)
+    )
+}
+
+fn case(c: &Case) -> String {
+    let scale = match &c.scale {
+        CaseScale::Decimal { scale, range: r } => format!(
+            "CaseScale::Decimal {{ scale: {}, range: {} }}",
+            decimal(*scale),
+            range(*r)
+        ),
+        CaseScale::Relative(r) => format!("CaseScale::Relative({})", relative(r)),
+    };
+    format!(
+        "Case {{ codes: {}, scale: {scale} }}",
+        list(c.codes, |c| c.to_string())
+    )
+}
+
+fn conversion(c: &Conversion) -> String {
+    match c {
+        Conversion::Word { signed, range: r } => {
+            format!(
+                "Conversion::Word {{ signed: {signed}, range: {} }}",
+                ranges(r)
+            )
+        }
+        Conversion::Decimal {
+            signed,
+            scale,
+            range: r,
+        } => format!(
+            "Conversion::Decimal {{ signed: {signed}, scale: {}, range: {} }}",
+            decimal(*scale),
+            ranges(r)
+        ),
+        Conversion::Relative {
+            signed,
+            relative: r,
+        } => format!(
+            "Conversion::Relative {{ signed: {signed}, relative: {} }}",
+            relative(r)
+        ),
+        Conversion::Selected {
+            signed,
+            selector,
+            cases,
+        } => format!(
+            "Conversion::Selected {{ signed: {signed}, selector: {}, cases: {} }}",
+            setting(selector),
+            list(cases, case)
+        ),
+        Conversion::Enum { values, unlisted } => format!(
+            "Conversion::Enum {{ values: {}, unlisted: {} }}",
+            list(values, label),
+            match unlisted {
+                Some(r) => format!("Some({})", range(*r)),
+                None => "None".into(),
+            }
+        ),
+        Conversion::Bits { mask, fields } => format!(
+            "Conversion::Bits {{ mask: {}, fields: {} }}",
+            hex(*mask),
+            list(fields, field)
+        ),
+    }
+}
+
+fn transports(t: Transports) -> &'static str {
+    match (t.rtu, t.tcp) {
+        (true, true) => "Transports::ALL",
+        (true, false) => "Transports::RTU",
+        (false, true) => "Transports::TCP",
+        (false, false) => "Transports { rtu: false, tcp: false }",
+    }
+}
+
+fn condition(c: &Condition) -> String {
+    match c {
+        Condition::Setting { selector, codes } => format!(
+            "Condition::Setting {{ selector: {}, codes: {} }}",
+            setting(selector),
+            list(codes, |c| c.to_string())
+        ),
+        Condition::Variant(v) => format!("Condition::Variant({})", variant(v)),
+        Condition::Transport(t) => format!("Condition::Transport({})", transports(*t)),
+    }
+}
+
+fn access(a: Access) -> &'static str {
+    match a {
+        Access::Read => "Access::Read",
+        Access::Write => "Access::Write",
+        Access::ReadWrite => "Access::ReadWrite",
+    }
+}
+
+/// One register's plan as a Rust expression.
+pub fn row(r: &RegisterPlan) -> String {
+    let i = &r.info;
+    let mut s = format!(
+        "RegisterPlan::new(RegisterInfo {{ id: {}, param: {}, name: {}, address: {}, access: {}, \
+         table: {}, broadcast_only: {}, source: {} }}, {}, {}, {})",
+        string(i.id),
+        match i.param {
+            Some(p) => format!("Some({})", string(p)),
+            None => "None".into(),
+        },
+        string(i.name),
+        hex(i.address),
+        access(i.access),
+        match i.table {
+            Table::Holding => "Table::Holding",
+            Table::Input => "Table::Input",
+        },
+        i.broadcast_only,
+        string(i.source),
+        string(r.unit),
+        conversion(&r.conversion),
+        range(r.envelope),
+    );
+    if !r.moves.is_empty() || !r.also_at.is_empty() {
+        let moves = list(r.moves, |m: &Move| {
+            format!(
+                "Move {{ when: {}, address: {} }}",
+                condition(&m.when),
+                hex(m.address)
+            )
+        });
+        let _ = write!(s, ".moves({moves}, {})", list(r.also_at, |a| hex(*a)));
+    }
+    if r.transports != Transports::ALL {
+        let _ = write!(s, ".on({})", transports(r.transports));
+    }
+    match r.broadcast {
+        Broadcast::No => {}
+        Broadcast::Also => s.push_str(".broadcast(Broadcast::Also)"),
+        Broadcast::Only => s.push_str(".broadcast(Broadcast::Only)"),
+    }
+    match r.restriction {
+        WriteRestriction::None => {}
+        WriteRestriction::Stopped => s.push_str(".restricted(WriteRestriction::Stopped)"),
+        WriteRestriction::PrgMode => s.push_str(".restricted(WriteRestriction::PrgMode)"),
+    }
+    s
+}

@@ -1,0 +1,525 @@
+//! Lowering: a validated [`Drive`] → a [`DrivePlan`], where everything a register means is
+//! decided once — its conversion with the raw range for every variant and selector case, its
+//! addresses under each setting, variant and transport, its access, table, transports and
+//! broadcast use, the settings it depends on — and the drive's runtime [`Profile`].
+//!
+//! The plan is made of the vocabulary crate's types ([`drivemap_core::plan`]). The generator
+//! prints it as `const` data; the run-time interpreter (`drivemap-interp`) uses it as it is.
+//! Nothing downstream of this pass reads the serde model again: **a register's scale is decided
+//! in [`conversion`] below.**
+//!
+//! The plan's tables and strings have `'static` lifetime, as generated code's have. Lowering
+//! leaks them: a process lowers each map once (a build script, a tool loading its maps), so the
+//! memory is bounded by the maps it was given.
+
+use drivemap_core::plan::{
+    Case, CaseScale, Condition, Conversion, Field, Label, Move, Ranges, RegisterPlan, Relative,
+    Setting, VariantOption,
+};
+use drivemap_core::profile::{
+    AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, Timing,
+};
+use drivemap_core::register::{Access, RegisterInfo, Table, WriteRestriction};
+use drivemap_core::rule::{Broadcast, Transports, WriteRule};
+use drivemap_core::scale::{Decimal, RawRange};
+
+use crate::ir::{BroadcastUse, Drive, RawLimits, Register, ValueKind};
+use crate::model::{self, Reference, Scale, TransportName};
+use crate::names::field_span;
+use crate::numbers::Dec;
+
+/// A drive, lowered.
+#[derive(Debug, Clone)]
+pub struct DrivePlan {
+    /// Every register's plan, sorted by address with broadcast-only registers last (stable:
+    /// registers at one address keep the map's order). Generated code indexes this table.
+    pub registers: &'static [RegisterPlan],
+    /// For each register of [`Drive::registers`] (map order), its index in `registers`.
+    pub order: Vec<usize>,
+    /// What conversions and addresses depend on.
+    pub settings: SettingsPlan,
+    /// The drive's protocol profile, with one write rule per writable register.
+    pub profile: &'static Profile,
+}
+
+/// The slots of a drive's settings: what a `SettingsView` answers.
+#[derive(Debug, Clone, Default)]
+pub struct SettingsPlan {
+    /// Selecting parameters, by code slot: the register's index in `DrivePlan::registers`.
+    pub codes: Vec<usize>,
+    /// Reference quantities, by quantity slot.
+    pub quantities: Vec<Quantity>,
+    /// Variant axes, by axis slot: (id, option ids; option 0 is the base).
+    pub axes: Vec<(String, Vec<String>)>,
+}
+
+/// A quantity other values are relative to.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Quantity {
+    /// A register (index in `DrivePlan::registers`), read from the drive and decoded.
+    Register(usize),
+    /// Not a register: the application supplies it.
+    External {
+        id: String,
+        description: String,
+        unit: String,
+    },
+}
+
+impl DrivePlan {
+    /// The plan of the register with map id `id`.
+    pub fn register(&self, id: &str) -> Option<&'static RegisterPlan> {
+        self.registers.iter().find(|r| r.info.id == id)
+    }
+
+    /// Communication addresses of the registers conversions depend on, in slot order (codes,
+    /// then register quantities): what a client reads to fill the settings.
+    pub fn dependencies(&self) -> Vec<u16> {
+        let mut out: Vec<u16> = self
+            .settings
+            .codes
+            .iter()
+            .map(|&i| self.registers[i].info.address)
+            .collect();
+        for q in &self.settings.quantities {
+            if let Quantity::Register(i) = q {
+                let a = self.registers[*i].info.address;
+                if !out.contains(&a) {
+                    out.push(a);
+                }
+            }
+        }
+        out
+    }
+}
+
+fn leak<T>(v: Vec<T>) -> &'static [T] {
+    Box::leak(v.into_boxed_slice())
+}
+
+fn text(s: &str) -> &'static str {
+    Box::leak(s.to_owned().into_boxed_str())
+}
+
+/// Lowers a validated drive.
+pub fn lower(drive: &Drive) -> DrivePlan {
+    let mut order: Vec<usize> = (0..drive.registers.len()).collect();
+    order.sort_by_key(|&i| {
+        let r = &drive.registers[i];
+        (r.broadcast, r.def.address)
+    });
+    // position[i] = index in the sorted table of map register i
+    let mut position = vec![0; order.len()];
+    for (sorted, &i) in order.iter().enumerate() {
+        position[i] = sorted;
+    }
+    let index_of = |r: &Register| -> usize {
+        let i = drive
+            .registers
+            .iter()
+            .position(|x| std::ptr::eq(x, r))
+            .unwrap_or(0);
+        position[i]
+    };
+    let settings = SettingsPlan {
+        codes: drive.selectors().into_iter().map(index_of).collect(),
+        quantities: drive
+            .references()
+            .into_iter()
+            .map(|r| Quantity::Register(index_of(r)))
+            .chain(drive.externals().into_iter().map(|q| Quantity::External {
+                id: q.external.clone(),
+                description: q.description.clone(),
+                unit: q.unit.clone(),
+            }))
+            .collect(),
+        axes: drive
+            .variants
+            .iter()
+            .map(|a| {
+                (
+                    a.id.clone(),
+                    a.options.iter().map(|o| o.id.clone()).collect(),
+                )
+            })
+            .collect(),
+    };
+    let lowering = Lowering {
+        drive,
+        settings: &settings,
+        sorted: &order,
+    };
+    let registers = leak(
+        order
+            .iter()
+            .map(|&i| lowering.register(&drive.registers[i]))
+            .collect(),
+    );
+    let profile = Box::leak(Box::new(profile(drive, registers)));
+    DrivePlan {
+        registers,
+        order: position,
+        settings,
+        profile,
+    }
+}
+
+struct Lowering<'a> {
+    drive: &'a Drive,
+    settings: &'a SettingsPlan,
+    sorted: &'a [usize],
+}
+
+/// The label a setting has in errors: the parameter number when printed, else the id.
+pub fn setting_label(r: &Register) -> String {
+    r.def.param.clone().unwrap_or_else(|| r.def.id.clone())
+}
+
+fn decimal(d: Dec) -> Decimal {
+    Decimal::new(d.mantissa as i64, d.exponent)
+}
+
+fn raw(l: RawLimits) -> RawRange {
+    RawRange {
+        min: l.min as i64,
+        max: l.max as i64,
+    }
+}
+
+const ONE: Dec = Dec {
+    mantissa: 1,
+    exponent: 0,
+};
+
+impl Lowering<'_> {
+    fn map_index(&self, sorted_index: usize) -> &Register {
+        &self.drive.registers[self.sorted[sorted_index]]
+    }
+
+    /// The code slot of a selecting register named `name`.
+    fn selector(&self, name: &str) -> Option<Setting> {
+        let target = self.drive.find(name)?;
+        let slot = self
+            .settings
+            .codes
+            .iter()
+            .position(|&i| self.map_index(i).def.id == target.def.id)?;
+        Some(Setting {
+            slot: slot as u8,
+            label: text(&setting_label(target)),
+        })
+    }
+
+    /// The quantity slot of a reference.
+    fn reference(&self, reference: &Reference) -> Setting {
+        let (slot, label) = match reference {
+            Reference::Register(name) => {
+                let target = self.drive.find(name);
+                let slot = self.settings.quantities.iter().position(|q| match q {
+                    Quantity::Register(i) => {
+                        target.is_some_and(|t| self.map_index(*i).def.id == t.def.id)
+                    }
+                    Quantity::External { .. } => false,
+                });
+                (slot, target.map_or(name.clone(), setting_label))
+            }
+            Reference::External(q) => (
+                self.settings
+                    .quantities
+                    .iter()
+                    .position(|x| matches!(x, Quantity::External { id, .. } if *id == q.external)),
+                q.external.clone(),
+            ),
+        };
+        Setting {
+            slot: slot.unwrap_or(u8::MAX as usize) as u8,
+            label: text(&label),
+        }
+    }
+
+    fn variant(&self, option: &str) -> Option<VariantOption> {
+        self.settings
+            .axes
+            .iter()
+            .enumerate()
+            .find_map(|(a, (_, options))| {
+                options
+                    .iter()
+                    .position(|o| o == option)
+                    .map(|o| VariantOption {
+                        axis: a as u8,
+                        option: o as u8,
+                    })
+            })
+    }
+
+    /// Raw ranges per variant at a fixed decimal factor: the map's overrides in map order.
+    fn ranges(&self, r: &Register, factor: Dec) -> Ranges {
+        let word = RawLimits::word(r.def.signed);
+        let base = r.raw_limits(factor, r.def.min, r.def.max).unwrap_or(word);
+        let mut by_variant = Vec::new();
+        for k in r.def.by_variant.keys() {
+            let Some(v) = self.variant(k) else { continue };
+            let (min, max) = r.limits_for(k);
+            let lim = r.raw_limits(factor, min, max).unwrap_or(word);
+            if lim != base {
+                by_variant.push((v, raw(lim)));
+            }
+        }
+        Ranges {
+            base: raw(base),
+            by_variant: leak(by_variant),
+        }
+    }
+
+    fn relative(&self, rel: &model::RelativeScale) -> Relative {
+        Relative {
+            full_scale: rel.full_scale,
+            reference: self.reference(&rel.relative_to),
+        }
+    }
+
+    /// How the register's word converts: decided here and nowhere else.
+    fn conversion(&self, r: &Register) -> Conversion {
+        let signed = r.def.signed;
+        match r.kind() {
+            ValueKind::Word => Conversion::Word {
+                signed,
+                range: self.ranges(r, ONE),
+            },
+            ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_)) => {
+                let factor = r.factor().unwrap_or(ONE);
+                Conversion::Decimal {
+                    signed,
+                    scale: decimal(factor),
+                    range: self.ranges(r, factor),
+                }
+            }
+            ValueKind::Quantity(Scale::Relative(rel)) => Conversion::Relative {
+                signed,
+                relative: self.relative(rel),
+            },
+            ValueKind::Quantity(Scale::Selected(sel)) => {
+                let cases = sel
+                    .cases
+                    .iter()
+                    .filter_map(|case| {
+                        let scale = match &case.scale {
+                            Scale::Factor(f) => {
+                                let factor = Dec::from_f64(*f).unwrap_or(ONE);
+                                let lim = r
+                                    .raw_limits(factor, case.min, case.max)
+                                    .unwrap_or(RawLimits::word(signed));
+                                CaseScale::Decimal {
+                                    scale: decimal(factor),
+                                    range: raw(lim),
+                                }
+                            }
+                            Scale::Relative(rel) => CaseScale::Relative(self.relative(rel)),
+                            Scale::Selected(_) => return None,
+                        };
+                        Some(Case {
+                            codes: leak(case.when.clone()),
+                            scale,
+                        })
+                    })
+                    .collect();
+                let selector = self.selector(&sel.selected_by).unwrap_or(Setting {
+                    slot: u8::MAX,
+                    label: text(&sel.selected_by),
+                });
+                Conversion::Selected {
+                    signed,
+                    selector,
+                    cases: leak(cases),
+                }
+            }
+            ValueKind::Enum(values) => Conversion::Enum {
+                values: labels(values),
+                unlisted: match (r.def.min, r.def.max) {
+                    (None, None) => None,
+                    (min, max) => Some(RawRange {
+                        min: min.map_or(0, |m| m as i64),
+                        max: max.map_or(65535, |m| m as i64),
+                    }),
+                },
+            },
+            ValueKind::Bits(fields) => {
+                let fields: Vec<Field> = fields
+                    .iter()
+                    .filter_map(|f| {
+                        let (lsb, width) = field_span(f)?;
+                        Some(Field {
+                            id: text(&f.id),
+                            name: text(&f.name),
+                            lsb,
+                            width,
+                            values: labels(&f.values),
+                            source: text(f.source.as_deref().unwrap_or_default()),
+                        })
+                    })
+                    .collect();
+                Conversion::Bits {
+                    mask: fields.iter().fold(0, |m, f| m | f.mask()),
+                    fields: leak(fields),
+                }
+            }
+        }
+    }
+
+    fn condition(&self, w: &model::Condition) -> Option<Condition> {
+        if let Some(s) = &w.setting {
+            if let Some(selector) = self.selector(s) {
+                return Some(Condition::Setting {
+                    selector,
+                    codes: leak(w.is.clone()),
+                });
+            }
+        }
+        if let Some(v) = &w.variant {
+            if let Some(v) = self.variant(v) {
+                return Some(Condition::Variant(v));
+            }
+        }
+        w.transport.map(|t| {
+            Condition::Transport(match t {
+                TransportName::Rtu => Transports::RTU,
+                TransportName::Tcp => Transports::TCP,
+            })
+        })
+    }
+
+    fn register(&self, r: &Register) -> RegisterPlan {
+        let d = &r.def;
+        let w = self.drive.write_rule(r);
+        RegisterPlan {
+            info: RegisterInfo {
+                id: text(&d.id),
+                param: d.param.as_deref().map(text),
+                name: text(&d.name),
+                address: d.address,
+                access: access(r.access),
+                table: match r.table {
+                    model::ModbusTable::Holding => Table::Holding,
+                    model::ModbusTable::Input => Table::Input,
+                },
+                broadcast_only: r.broadcast,
+                source: text(d.source.as_deref().unwrap_or_default()),
+            },
+            unit: text(d.unit.as_deref().unwrap_or_default()),
+            conversion: self.conversion(r),
+            moves: leak(
+                d.address_alternatives
+                    .iter()
+                    .filter_map(|a| {
+                        Some(Move {
+                            when: self.condition(&a.when)?,
+                            address: a.address,
+                        })
+                    })
+                    .collect(),
+            ),
+            transports: Transports {
+                rtu: w.rtu,
+                tcp: w.tcp,
+            },
+            broadcast: match w.broadcast {
+                BroadcastUse::No => Broadcast::No,
+                BroadcastUse::Also => Broadcast::Also,
+                BroadcastUse::Only => Broadcast::Only,
+            },
+            restriction: match r.write_restriction {
+                model::WriteRestriction::None => WriteRestriction::None,
+                model::WriteRestriction::Stopped => WriteRestriction::Stopped,
+                model::WriteRestriction::PrgMode => WriteRestriction::PrgMode,
+            },
+            envelope: raw(w.raw),
+            also_at: leak(w.also_at),
+        }
+    }
+}
+
+fn access(a: model::Access) -> Access {
+    match a {
+        model::Access::Read => Access::Read,
+        model::Access::Write => Access::Write,
+        model::Access::ReadWrite => Access::ReadWrite,
+    }
+}
+
+fn labels(values: &[model::EnumValue]) -> &'static [Label] {
+    leak(
+        values
+            .iter()
+            .map(|v| Label {
+                code: v.value,
+                id: text(&v.id),
+                name: text(&v.name),
+            })
+            .collect(),
+    )
+}
+
+/// The drive's runtime profile; `registers` gives the write rules.
+fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
+    let p = &drive.protocol;
+    let t = drive.timing_figures();
+    let (rtu, tcp) = drive.address_offsets();
+    let writes: Vec<WriteRule> = registers
+        .iter()
+        .filter(|r| r.info.access.writable())
+        .map(RegisterPlan::write_rule)
+        .collect();
+    Profile {
+        drive_id: text(&drive.meta.id),
+        function_codes: leak(p.function_codes.clone()),
+        max_read: p.max_read,
+        max_write: p.max_write,
+        slave_min: p.slave_address.min,
+        slave_max: p.slave_address.max,
+        broadcast: p.broadcast.as_ref().map(|b| BroadcastInfo {
+            functions: leak(b.functions.clone()),
+            addresses: leak(drive.broadcast_addresses()),
+        }),
+        exceptions: leak(
+            p.exceptions
+                .iter()
+                .map(|e| ExceptionInfo {
+                    code: e.code,
+                    name: text(&e.name),
+                    description: text(&e.description),
+                })
+                .collect(),
+        ),
+        commands: leak(
+            p.commands
+                .iter()
+                .map(|c| CommandInfo {
+                    id: text(&c.id),
+                    name: text(&c.name),
+                    kind: match c.kind {
+                        model::CommandKind::Accept => CommandKind::Accept,
+                        model::CommandKind::Persist => CommandKind::Persist,
+                    },
+                    writes: leak(c.writes.iter().map(|w| (w.address, w.value)).collect()),
+                    source: text(&c.source),
+                })
+                .collect(),
+        ),
+        address_offsets: AddressOffsets { rtu, tcp },
+        timing: Timing {
+            frame_gap_chars: t.frame_gap_chars,
+            inter_char_timeout_us: t.inter_char_timeout_us,
+            inter_char_timeout_bits: t.inter_char_timeout_bits,
+            response_delay_us: t.response_delay_us,
+            response_delay_bits: t.response_delay_bits,
+            response_delay_param: t.response_delay_param.as_deref().map(text),
+            response_delay_param_default_us: t.response_delay_param_default_us,
+            request_gap_bits: t.request_gap_bits,
+            request_gap_us: t.request_gap_us,
+            char_bits: t.char_bits,
+        },
+        eeprom_write_endurance: p.eeprom.as_ref().map(|e| e.endurance),
+        writes: leak(writes),
+    }
+}

@@ -1,0 +1,29 @@
+//! The vocabulary of drivemap, shared by the generator, the generated drive modules, the
+//! run-time interpreter and the clients: what a register is ([`register`]), how its word converts
+//! ([`scale`], [`plan`]), what may be written to it ([`rule`]) and what a drive accepts on the
+//! wire ([`profile`]).
+//!
+//! `#![no_std]` and free of allocation: a generated drive module and the protocol layer built on
+//! this crate can run on a microcontroller. Data flows one way: the generator's lowering pass
+//! (`drivemap_codegen::lower`) decides a [`plan::RegisterPlan`] per register; generated code
+//! prints it as `const` data, the interpreter builds it at run time, and both convert with
+//! [`plan::RegisterPlan::decode_number`] and its siblings.
+#![no_std]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod plan;
+pub mod profile;
+pub mod register;
+pub mod rule;
+pub mod scale;
+
+pub use plan::{RegisterPlan, SettingsView, Value};
+pub use profile::Profile;
+pub use register::{
+    Access, BitRegister, Bits, Code, DrivePlan, DriveSettings, Enumeration, ReadOnly, ReadWrite,
+    Readable, Reg, Register, RegisterInfo, Table, Writable, WriteOnly, WriteRestriction,
+};
+pub use rule::{Broadcast, Transports, WriteRule};
+pub use scale::ValueError;

@@ -1,0 +1,600 @@
+//! The drive plan: what every register of a map means, decided once by the generator's lowering
+//! pass (`drivemap_codegen::lower`) and then only read.
+//!
+//! Generated drive modules hold their plan as `const` data and implement the typed API on it
+//! ([`crate::register::Reg`]); the run-time interpreter (`drivemap-interp`) builds the same plan
+//! from a map file. Both convert words with the one implementation below, so the generated code
+//! and a map loaded at run time cannot disagree about a scale, a range or an address.
+//!
+//! Where a register's scale is decided: [`Conversion`], built in `codegen/src/lower.rs`.
+
+use crate::profile::TransportKind;
+use crate::register::{RegisterInfo, WriteRestriction};
+use crate::rule::{Broadcast, Transports, WriteRule};
+use crate::scale::{self, Decimal, RawRange, ValueError};
+
+/// One register of a drive, fully decided.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RegisterPlan {
+    /// Identity, address as printed, access, table, citation.
+    pub info: RegisterInfo,
+    /// Engineering unit (`""` for none).
+    pub unit: &'static str,
+    /// How its word converts.
+    pub conversion: Conversion,
+    /// Where it lives under other settings, variants or transports.
+    pub moves: &'static [Move],
+    /// The transports it exists on.
+    pub transports: Transports,
+    /// Whether it may, or must, be written as a broadcast.
+    pub broadcast: Broadcast,
+    /// When the drive accepts a write.
+    pub restriction: WriteRestriction,
+    /// Raw values the map allows under some variant and selector case: the gate's envelope.
+    pub envelope: RawRange,
+    /// Every other address it may occupy (the targets of [`RegisterPlan::moves`]).
+    pub also_at: &'static [u16],
+}
+
+impl core::ops::Deref for RegisterPlan {
+    type Target = RegisterInfo;
+    fn deref(&self) -> &RegisterInfo {
+        &self.info
+    }
+}
+
+impl AsRef<RegisterInfo> for RegisterPlan {
+    fn as_ref(&self) -> &RegisterInfo {
+        &self.info
+    }
+}
+
+/// An alternative address: the register is at `address` when `when` holds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Move {
+    pub when: Condition,
+    pub address: u16,
+}
+
+/// A condition on the drive's settings, its variant or the link.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Condition {
+    /// A selecting parameter holds one of `codes`.
+    Setting {
+        selector: Setting,
+        codes: &'static [u16],
+    },
+    /// The drive is of this variant.
+    Variant(VariantOption),
+    /// The link is of one of these transports.
+    Transport(Transports),
+}
+
+/// A setting a conversion or an address depends on: its slot in the drive's settings and the
+/// name errors give it (the parameter number when printed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Setting {
+    pub slot: u8,
+    pub label: &'static str,
+}
+
+/// One option of one variant axis (option 0 is the base variant).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VariantOption {
+    pub axis: u8,
+    pub option: u8,
+}
+
+/// How a register's word converts to a value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Conversion {
+    /// A plain `u16` / `i16` word.
+    Word { signed: bool, range: Ranges },
+    /// An engineering value: raw × a decimal factor.
+    Decimal {
+        signed: bool,
+        scale: Decimal,
+        range: Ranges,
+    },
+    /// An engineering value relative to a reference: `full_scale` raw = 100 % of it.
+    Relative { signed: bool, relative: Relative },
+    /// The scale chosen by a parameter's code.
+    Selected {
+        signed: bool,
+        selector: Setting,
+        cases: &'static [Case],
+    },
+    /// An enumeration: the listed codes, and the range of codes the manual admits without
+    /// listing their meaning.
+    Enum {
+        values: &'static [Label],
+        unlisted: Option<RawRange>,
+    },
+    /// Bit fields; bits outside `mask` are reserved and kept 0.
+    Bits { mask: u16, fields: &'static [Field] },
+}
+
+/// A relative scale: `full_scale` raw counts are 100 % of the quantity in `reference`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Relative {
+    pub full_scale: f64,
+    pub reference: Setting,
+}
+
+/// One case of a selected scale.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Case {
+    /// The selector codes that choose it.
+    pub codes: &'static [u16],
+    pub scale: CaseScale,
+}
+
+/// The scale of one case.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CaseScale {
+    Decimal { scale: Decimal, range: RawRange },
+    Relative(Relative),
+}
+
+/// A raw range with overrides per variant: the first override whose variant the settings hold
+/// applies, else `base`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ranges {
+    pub base: RawRange,
+    pub by_variant: &'static [(VariantOption, RawRange)],
+}
+
+impl Ranges {
+    /// One range for every variant.
+    pub const fn fixed(base: RawRange) -> Ranges {
+        Ranges {
+            base,
+            by_variant: &[],
+        }
+    }
+
+    /// The range in force with `settings`.
+    pub fn select(&self, settings: &impl SettingsView) -> RawRange {
+        self.by_variant
+            .iter()
+            .find(|(v, _)| settings.variant(v.axis) == v.option)
+            .map_or(self.base, |(_, r)| *r)
+    }
+}
+
+/// A listed code: enumeration value or value of a multi-bit field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Label {
+    pub code: u16,
+    pub id: &'static str,
+    pub name: &'static str,
+}
+
+/// A field of a bit-field register.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Field {
+    pub id: &'static str,
+    pub name: &'static str,
+    pub lsb: u8,
+    pub width: u8,
+    /// Meanings of a multi-bit field's codes, when listed.
+    pub values: &'static [Label],
+    pub source: &'static str,
+}
+
+impl Field {
+    /// The field's bits in the word.
+    pub const fn mask(&self) -> u16 {
+        let ones = if self.width >= 16 {
+            u16::MAX
+        } else {
+            (1u16 << self.width) - 1
+        };
+        ones << self.lsb
+    }
+
+    /// The field's value in `word`.
+    pub const fn get(&self, word: u16) -> u16 {
+        (word & self.mask()) >> self.lsb
+    }
+
+    /// `word` with the field set to `value`; `None` if `value` does not fit the field.
+    pub const fn set(&self, word: u16, value: u16) -> Option<u16> {
+        if value > self.mask() >> self.lsb {
+            return None;
+        }
+        Some((word & !self.mask()) | (value << self.lsb))
+    }
+}
+
+/// What a drive's settings tell a conversion. Generated `Settings` types implement it over
+/// their named fields; the run-time interpreter over slots filled from the drive.
+pub trait SettingsView {
+    /// The code a selecting parameter holds, if known.
+    fn code(&self, slot: u8) -> Option<u16>;
+    /// A reference quantity in its engineering unit, if known.
+    fn quantity(&self, slot: u8) -> Option<f64>;
+    /// The option of variant axis `axis` (0, the base, unless set).
+    fn variant(&self, axis: u8) -> u8;
+}
+
+/// Settings of a drive whose conversions depend on nothing.
+impl SettingsView for () {
+    fn code(&self, _: u8) -> Option<u16> {
+        None
+    }
+    fn quantity(&self, _: u8) -> Option<f64> {
+        None
+    }
+    fn variant(&self, _: u8) -> u8 {
+        0
+    }
+}
+
+impl Condition {
+    /// Whether the condition holds.
+    pub fn holds(&self, settings: &impl SettingsView, transport: TransportKind) -> bool {
+        match self {
+            Condition::Setting { selector, codes } => settings
+                .code(selector.slot)
+                .is_some_and(|c| codes.contains(&c)),
+            Condition::Variant(v) => settings.variant(v.axis) == v.option,
+            Condition::Transport(t) => t.contains(transport),
+        }
+    }
+}
+
+/// The scale of a quantity once the settings have chosen it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Scale {
+    Decimal {
+        scale: Decimal,
+        range: RawRange,
+    },
+    Relative {
+        full_scale: f64,
+        reference: f64,
+        label: &'static str,
+    },
+}
+
+impl Scale {
+    /// Digits after the decimal point worth showing.
+    pub fn decimals(&self) -> usize {
+        match self {
+            Scale::Decimal { scale, .. } => scale.exponent as usize,
+            Scale::Relative { .. } => 2,
+        }
+    }
+}
+
+impl RegisterPlan {
+    /// A register on every transport, never broadcast, writable at any time, at its printed
+    /// address only; `envelope` is the union of its raw ranges (see [`RegisterPlan::envelope`]).
+    pub const fn new(
+        info: RegisterInfo,
+        unit: &'static str,
+        conversion: Conversion,
+        envelope: RawRange,
+    ) -> RegisterPlan {
+        RegisterPlan {
+            info,
+            unit,
+            conversion,
+            moves: &[],
+            transports: Transports::ALL,
+            broadcast: Broadcast::No,
+            restriction: WriteRestriction::None,
+            envelope,
+            also_at: &[],
+        }
+    }
+
+    /// The plan of a register that moves to other addresses (`also_at`: every target once).
+    pub const fn moves(self, moves: &'static [Move], also_at: &'static [u16]) -> RegisterPlan {
+        RegisterPlan {
+            moves,
+            also_at,
+            ..self
+        }
+    }
+
+    /// The plan of a register that exists only on `transports`.
+    pub const fn on(self, transports: Transports) -> RegisterPlan {
+        RegisterPlan { transports, ..self }
+    }
+
+    /// The plan of a register with broadcast use `broadcast`.
+    pub const fn broadcast(self, broadcast: Broadcast) -> RegisterPlan {
+        RegisterPlan { broadcast, ..self }
+    }
+
+    /// The plan of a register the drive accepts writes to only in some states.
+    pub const fn restricted(self, restriction: WriteRestriction) -> RegisterPlan {
+        RegisterPlan {
+            restriction,
+            ..self
+        }
+    }
+
+    /// The communication address with these settings on this transport (before the profile's
+    /// per-transport offset): the first move whose condition holds, else the printed address.
+    pub fn address_for(&self, settings: &impl SettingsView, transport: TransportKind) -> u16 {
+        self.moves
+            .iter()
+            .find(|m| m.when.holds(settings, transport))
+            .map_or(self.info.address, |m| m.address)
+    }
+
+    /// What the map allows when writing it, for the write gate.
+    pub const fn write_rule(&self) -> WriteRule {
+        WriteRule {
+            register: self.info.id,
+            access: self.info.access,
+            broadcast: self.broadcast,
+            transports: self.transports,
+            address: self.info.address,
+            also_at: self.also_at,
+            raw: self.envelope,
+            reserved: match self.conversion {
+                Conversion::Bits { mask, .. } => !mask,
+                _ => 0,
+            },
+        }
+    }
+
+    fn signed(&self) -> bool {
+        match self.conversion {
+            Conversion::Word { signed, .. }
+            | Conversion::Decimal { signed, .. }
+            | Conversion::Relative { signed, .. }
+            | Conversion::Selected { signed, .. } => signed,
+            Conversion::Enum { .. } | Conversion::Bits { .. } => false,
+        }
+    }
+
+    fn missing(&self, setting: Setting) -> ValueError {
+        ValueError::MissingSetting {
+            register: self.info.id,
+            setting: setting.label,
+        }
+    }
+
+    fn relative(&self, r: &Relative, settings: &impl SettingsView) -> Result<Scale, ValueError> {
+        let reference = settings
+            .quantity(r.reference.slot)
+            .ok_or(self.missing(r.reference))?;
+        Ok(Scale::Relative {
+            full_scale: r.full_scale,
+            reference,
+            label: r.reference.label,
+        })
+    }
+
+    /// The scale of a quantity in force with `settings`; `None` for words, codes and bits.
+    pub fn scale(&self, settings: &impl SettingsView) -> Option<Result<Scale, ValueError>> {
+        Some(match &self.conversion {
+            Conversion::Decimal { scale, range, .. } => Ok(Scale::Decimal {
+                scale: *scale,
+                range: range.select(settings),
+            }),
+            Conversion::Relative { relative, .. } => self.relative(relative, settings),
+            Conversion::Selected {
+                selector, cases, ..
+            } => self.case(*selector, cases, settings),
+            _ => return None,
+        })
+    }
+
+    fn case(
+        &self,
+        selector: Setting,
+        cases: &[Case],
+        settings: &impl SettingsView,
+    ) -> Result<Scale, ValueError> {
+        let code = settings.code(selector.slot).ok_or(self.missing(selector))?;
+        let case = cases.iter().find(|c| c.codes.contains(&code)).ok_or(
+            ValueError::UnsupportedSetting {
+                register: self.info.id,
+                setting: selector.label,
+                code,
+            },
+        )?;
+        match &case.scale {
+            CaseScale::Decimal { scale, range } => Ok(Scale::Decimal {
+                scale: *scale,
+                range: *range,
+            }),
+            CaseScale::Relative(r) => self.relative(r, settings),
+        }
+    }
+
+    /// The engineering value of a word of a quantity register.
+    pub fn decode_number(&self, raw: u16, settings: &impl SettingsView) -> Result<f64, ValueError> {
+        let signed = self.signed();
+        match self.scale(settings) {
+            Some(Ok(Scale::Decimal { scale, .. })) => Ok(scale::decode_decimal(raw, signed, scale)),
+            Some(Ok(Scale::Relative {
+                full_scale,
+                reference,
+                ..
+            })) => Ok(scale::decode_relative(raw, signed, full_scale, reference)),
+            Some(Err(e)) => Err(e),
+            None => Ok(scale::word_to_int(raw, signed) as f64),
+        }
+    }
+
+    /// The word for an engineering value, checked against the range in force.
+    pub fn encode_number(
+        &self,
+        value: f64,
+        settings: &impl SettingsView,
+    ) -> Result<u16, ValueError> {
+        let (id, unit, signed) = (self.info.id, self.unit, self.signed());
+        match self.scale(settings) {
+            Some(Ok(Scale::Decimal { scale, range })) => {
+                scale::encode_decimal(id, unit, value, scale, range)
+            }
+            Some(Ok(Scale::Relative {
+                full_scale,
+                reference,
+                label,
+            })) => scale::encode_relative(
+                id,
+                label,
+                unit,
+                value,
+                full_scale,
+                reference,
+                RawRange::word(signed),
+            ),
+            Some(Err(e)) => Err(e),
+            None => {
+                if !value.is_finite() {
+                    return Err(ValueError::NotFinite {
+                        register: id,
+                        value,
+                    });
+                }
+                match scale::round(value) {
+                    Some(raw) if raw as f64 == value => self.encode_word(raw, settings),
+                    _ => Err(ValueError::NotWhole {
+                        register: id,
+                        value,
+                    }),
+                }
+            }
+        }
+    }
+
+    /// The word for a plain integer, checked against the range in force.
+    pub fn encode_word(&self, raw: i64, settings: &impl SettingsView) -> Result<u16, ValueError> {
+        let range = match &self.conversion {
+            Conversion::Word { range, .. } => range.select(settings),
+            Conversion::Enum { .. } => return self.encode_code(u16::try_from(raw).ok(), raw),
+            Conversion::Bits { mask, .. } => {
+                let word = u16::try_from(raw).map_err(|_| ValueError::OutOfRange {
+                    register: self.info.id,
+                    value: raw as f64,
+                    min: 0.0,
+                    max: 65535.0,
+                    unit: "",
+                })?;
+                return Ok(word & mask);
+            }
+            _ => return self.encode_number(raw as f64, settings),
+        };
+        scale::encode_int(self.info.id, self.unit, raw, range)
+    }
+
+    fn encode_code(&self, code: Option<u16>, raw: i64) -> Result<u16, ValueError> {
+        match code {
+            Some(code) if self.code_allowed(code) => Ok(code),
+            _ => Err(ValueError::UnknownCode {
+                register: self.info.id,
+                code: raw.clamp(0, i64::from(u16::MAX)) as u16,
+            }),
+        }
+    }
+
+    /// Whether an enumeration code may be written: listed, or inside the printed code range.
+    pub fn code_allowed(&self, code: u16) -> bool {
+        match &self.conversion {
+            Conversion::Enum { values, unlisted } => {
+                values.iter().any(|v| v.code == code)
+                    || unlisted.is_some_and(|r| r.contains(i64::from(code)))
+            }
+            _ => true,
+        }
+    }
+
+    /// The listed meaning of an enumeration code.
+    pub fn label(&self, code: u16) -> Option<&'static Label> {
+        match &self.conversion {
+            Conversion::Enum { values, .. } => values.iter().find(|v| v.code == code),
+            _ => None,
+        }
+    }
+
+    /// The listed codes of an enumeration register (none for other kinds).
+    pub const fn labels(&self) -> &'static [Label] {
+        match self.conversion {
+            Conversion::Enum { values, .. } => values,
+            _ => &[],
+        }
+    }
+
+    /// The listed codes of field `index` of a bit-field register (none for other kinds).
+    pub const fn field_labels(&self, index: usize) -> &'static [Label] {
+        match self.conversion {
+            Conversion::Bits { fields, .. } if index < fields.len() => fields[index].values,
+            _ => &[],
+        }
+    }
+
+    /// A field of a bit-field register by id.
+    pub fn field(&self, id: &str) -> Option<&'static Field> {
+        match &self.conversion {
+            Conversion::Bits { fields, .. } => fields.iter().find(|f| f.id == id),
+            _ => None,
+        }
+    }
+}
+
+/// A drive's typed value of one register: `f64`, `u16`, `i16`, or a generated enumeration or
+/// bit-field type. Conversions follow the register's [`RegisterPlan`].
+pub trait Value: Sized {
+    /// The value of a word read from the drive.
+    fn decode(
+        raw: u16,
+        plan: &RegisterPlan,
+        settings: &impl SettingsView,
+    ) -> Result<Self, ValueError>;
+    /// The word for the value, checked against the plan.
+    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u16, ValueError>;
+}
+
+impl Value for f64 {
+    fn decode(
+        raw: u16,
+        plan: &RegisterPlan,
+        settings: &impl SettingsView,
+    ) -> Result<Self, ValueError> {
+        plan.decode_number(raw, settings)
+    }
+    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u16, ValueError> {
+        plan.encode_number(*self, settings)
+    }
+}
+
+impl Value for u16 {
+    fn decode(raw: u16, _: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
+        Ok(raw)
+    }
+    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u16, ValueError> {
+        plan.encode_word(i64::from(*self), settings)
+    }
+}
+
+impl Value for i16 {
+    fn decode(raw: u16, _: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
+        Ok(raw as i16)
+    }
+    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u16, ValueError> {
+        plan.encode_word(i64::from(*self), settings)
+    }
+}
+
+/// Enumeration and bit-field types: their word is their code.
+impl<T: crate::register::Code> Value for T {
+    fn decode(raw: u16, _: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
+        Ok(T::from_code(raw))
+    }
+    fn encode(&self, plan: &RegisterPlan, _: &impl SettingsView) -> Result<u16, ValueError> {
+        let code = self.code();
+        plan.encode_code(
+            Some(code).filter(|c| plan.code_allowed(*c)),
+            i64::from(code),
+        )
+    }
+}

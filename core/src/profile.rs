@@ -1,0 +1,218 @@
+//! A drive's protocol profile: what the manual says the drive accepts on the wire.
+//!
+//! Generated modules emit one `static PROFILE: Profile` per drive. The client consults it to
+//! refuse requests the drive cannot serve (unsupported function, too many registers, broadcast to
+//! a register the manual does not allow), to name the drive's own exception codes, and to map the
+//! manual's communication addresses to PDU addresses per transport.
+
+use crate::rule::WriteRule;
+
+/// How a transport frames Modbus PDUs. Address offsets and some rules differ per kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum TransportKind {
+    /// Modbus RTU on a serial line.
+    Rtu,
+    /// Modbus RTU frames carried over a TCP stream (a serial gateway in transparent mode).
+    RtuOverTcp,
+    /// Modbus TCP (MBAP header).
+    Tcp,
+}
+
+impl TransportKind {
+    /// Whether frames of this transport carry RTU framing (slave address + CRC).
+    pub const fn is_rtu_framed(self) -> bool {
+        matches!(self, TransportKind::Rtu | TransportKind::RtuOverTcp)
+    }
+}
+
+/// One exception code as the drive's manual defines it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ExceptionInfo {
+    /// The code in the exception response (byte after `0x80 | function`).
+    pub code: u8,
+    /// Short name as printed ("Data setting error").
+    pub name: &'static str,
+    /// What the manual says causes it.
+    pub description: &'static str,
+}
+
+/// What an explicit command does to the drive's memory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CommandKind {
+    /// Makes written parameters active without storing them (V7 ACCEPT 0910h).
+    Accept,
+    /// Stores parameters in non-volatile memory (EEPROM); wears it.
+    Persist,
+}
+
+/// An explicit command made of register writes (ENTER, ACCEPT, save to EEPROM).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CommandInfo {
+    /// Identifier from the map (`enter`, `save_parameters`).
+    pub id: &'static str,
+    /// Name as printed in the manual.
+    pub name: &'static str,
+    pub kind: CommandKind,
+    /// The writes in order: (communication address, value). ACN writes 0 then 1 to 0x03E0.
+    pub writes: &'static [(u16, u16)],
+    /// `file:line` of the manual passage.
+    pub source: &'static str,
+}
+
+/// Broadcast (slave address 0) rules.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BroadcastInfo {
+    /// Function codes the drive executes when addressed as slave 0.
+    pub functions: &'static [u8],
+    /// Communication addresses a broadcast may write. Empty: any writable register.
+    pub addresses: &'static [u16],
+}
+
+/// PDU address = communication address + offset, per transport kind.
+///
+/// The AutomationDirect ACN quotes "communication addresses" but its RTU example writes 0x1102 to
+/// reach 0x1103 (offset -1), while its TCP decimals are one higher (offset 0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct AddressOffsets {
+    pub rtu: i32,
+    pub tcp: i32,
+}
+
+impl AddressOffsets {
+    /// The offset for a transport kind. RTU over TCP carries RTU frames and uses the RTU offset.
+    pub const fn for_kind(&self, kind: TransportKind) -> i32 {
+        match kind {
+            TransportKind::Rtu | TransportKind::RtuOverTcp => self.rtu,
+            TransportKind::Tcp => self.tcp,
+        }
+    }
+
+    /// Maps a communication address to the PDU address for `kind`, or `None` when the result
+    /// falls outside 0..=0xFFFF.
+    pub fn pdu_address(&self, address: u16, kind: TransportKind) -> Option<u16> {
+        u16::try_from(i32::from(address) + self.for_kind(kind)).ok()
+    }
+
+    /// Maps a PDU address received on `kind` back to the manual's communication address.
+    pub fn communication_address(&self, pdu: u16, kind: TransportKind) -> Option<u16> {
+        u16::try_from(i32::from(pdu) - self.for_kind(kind)).ok()
+    }
+}
+
+/// RTU timing the manual prescribes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Timing {
+    /// Silence between frames, in character times (3.5 on every drive here).
+    pub frame_gap_chars: f64,
+    /// Maximum gap between characters of one frame, in microseconds, if the manual gives one
+    /// (V7: 3.5 ms; J7: 24 bit times, converted at the configured baud by the transport).
+    pub inter_char_timeout_us: Option<u32>,
+    /// The same limit expressed in bit times, when the manual gives it that way.
+    pub inter_char_timeout_bits: Option<u32>,
+    /// The drive's typical or minimum delay before answering, in microseconds, if stated.
+    pub response_delay_us: Option<u32>,
+    /// Bit times the drive takes before answering, on top of the delay (V7/J7: 24 bits, then
+    /// the n156/n73 delay).
+    pub response_delay_bits: Option<u32>,
+    /// The parameter that adds a configurable response delay (V7 n156, ACN CM.05), if any.
+    pub response_delay_param: Option<&'static str>,
+    /// That parameter's factory setting, in microseconds, when the map prints it.
+    pub response_delay_param_default_us: Option<u32>,
+    /// Least time the master leaves after a reply before the next request: bit times plus
+    /// microseconds (V7/J7: 24 bits + 10 ms).
+    pub request_gap_bits: Option<u32>,
+    pub request_gap_us: Option<u32>,
+    /// Bits per character when the manual fixes it whatever the parity (TDS-V8: 11).
+    pub char_bits: Option<u8>,
+}
+
+impl Timing {
+    /// The Modbus RTU rule alone: 3.5 characters between frames, nothing else stated.
+    pub const MODBUS: Timing = Timing {
+        frame_gap_chars: 3.5,
+        inter_char_timeout_us: None,
+        inter_char_timeout_bits: None,
+        response_delay_us: None,
+        response_delay_bits: None,
+        response_delay_param: None,
+        response_delay_param_default_us: None,
+        request_gap_bits: None,
+        request_gap_us: None,
+        char_bits: None,
+    };
+}
+
+impl Default for Timing {
+    fn default() -> Self {
+        Timing::MODBUS
+    }
+}
+
+/// Everything the runtime needs to know about a drive's protocol.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Profile {
+    /// Drive identifier from the map (`ptlk-tds-v8`).
+    pub drive_id: &'static str,
+    /// Function codes the drive implements.
+    pub function_codes: &'static [u8],
+    /// Maximum registers per read (03h/04h).
+    pub max_read: u16,
+    /// Maximum registers per write (10h).
+    pub max_write: u16,
+    /// Valid slave addresses (excluding broadcast 0).
+    pub slave_min: u8,
+    pub slave_max: u8,
+    pub broadcast: Option<BroadcastInfo>,
+    pub exceptions: &'static [ExceptionInfo],
+    pub commands: &'static [CommandInfo],
+    pub address_offsets: AddressOffsets,
+    pub timing: Timing,
+    /// Manufacturer's stated endurance of the parameter memory, in writes, if given.
+    pub eeprom_write_endurance: Option<u32>,
+    /// What the map allows for each writable register, for the write gate
+    /// (the write gate of `drivemap_runtime::gate`). Empty: no register table, only the protocol is checked.
+    pub writes: &'static [WriteRule],
+}
+
+impl Profile {
+    /// A permissive profile for generic Modbus devices: all five function codes, 125/123
+    /// registers per request, standard exception names only.
+    pub const GENERIC: Profile = Profile {
+        drive_id: "generic",
+        function_codes: &[0x03, 0x04, 0x06, 0x08, 0x10],
+        max_read: 125,
+        max_write: 123,
+        slave_min: 1,
+        slave_max: 247,
+        broadcast: Some(BroadcastInfo {
+            functions: &[0x06, 0x10],
+            addresses: &[],
+        }),
+        exceptions: &[],
+        commands: &[],
+        address_offsets: AddressOffsets { rtu: 0, tcp: 0 },
+        timing: Timing::MODBUS,
+        eeprom_write_endurance: None,
+        writes: &[],
+    };
+
+    /// Whether the drive implements `function`.
+    pub fn supports(&self, function: u8) -> bool {
+        self.function_codes.contains(&function)
+    }
+
+    /// The drive's own description of an exception code, if its manual defines one.
+    pub fn exception(&self, code: u8) -> Option<&ExceptionInfo> {
+        self.exceptions.iter().find(|e| e.code == code)
+    }
+
+    /// The write rule of a register by its map identifier.
+    pub fn write_rule(&self, register: &str) -> Option<&WriteRule> {
+        self.writes.iter().find(|w| w.register == register)
+    }
+
+    /// A command by its map identifier.
+    pub fn command(&self, id: &str) -> Option<&CommandInfo> {
+        self.commands.iter().find(|c| c.id == id)
+    }
+}

@@ -1,0 +1,344 @@
+//! The seam between generated register types and the clients.
+//!
+//! Every register of a map becomes a zero-sized type implementing [`Register`]. Whether it may be
+//! read or written is a trait ([`Readable`], [`Writable`]), so writing a read-only register is a
+//! compile error, not a runtime one. Values are typed: bit-field structs, enums with an
+//! `Unknown(u16)` fallback, `f64` engineering values for scaled quantities, `u16`/`i16` for plain
+//! words.
+
+use core::marker::PhantomData;
+
+use crate::plan::{Label, RegisterPlan, SettingsView, Value};
+use crate::profile::TransportKind;
+use crate::rule::WriteRule;
+use crate::scale::ValueError;
+
+/// Which Modbus table a register lives in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Table {
+    /// Holding registers: read with 03h, written with 06h/10h.
+    Holding,
+    /// Input registers: read with 04h.
+    Input,
+}
+
+impl Table {
+    /// The function code that reads this table.
+    pub const fn read_function(self) -> u8 {
+        match self {
+            Table::Holding => 0x03,
+            Table::Input => 0x04,
+        }
+    }
+}
+
+/// A register of a drive, as the map describes it.
+pub trait Register {
+    /// The typed value: a bit-field struct, an enum, `f64` in engineering units, `u16` or `i16`.
+    type Value;
+    /// The drive's settings that conversions depend on (variant, scale selectors, reference
+    /// quantities). One type per drive, generated.
+    type Settings;
+
+    /// Identifier in the map (`accel_time_1`).
+    const ID: &'static str;
+    /// Parameter number exactly as printed (`Bn-01`), if the manual gives one.
+    const PARAM: Option<&'static str>;
+    /// Name as printed in the manual.
+    const NAME: &'static str;
+    /// Communication address as printed in the manual.
+    const ADDRESS: u16;
+    /// Modbus table.
+    const TABLE: Table;
+    /// `file:line` of the row in the manual.
+    const SOURCE: &'static str;
+
+    /// The communication address to use with these settings on this transport. Most registers
+    /// live at [`Register::ADDRESS`]; a few move with a setting (GPD 515 o2-09), a model variant
+    /// or the transport (V7 Modbus TCP option card). The client adds the profile's per-transport
+    /// offset on top of this.
+    fn address(settings: &Self::Settings, transport: TransportKind) -> u16 {
+        let _ = (settings, transport);
+        Self::ADDRESS
+    }
+
+    /// Whether the register exists on this transport. Most do; the V7's Modbus TCP option card
+    /// has command registers of its own, and its RTU command registers are absent there. The
+    /// client refuses a register on a transport it does not exist on.
+    fn on_transport(transport: TransportKind) -> bool {
+        let _ = transport;
+        true
+    }
+
+    /// Decodes a raw word read from the drive. Data from the drive never makes this panic;
+    /// it fails only when a conversion needs a setting that `settings` does not hold.
+    fn decode(raw: u16, settings: &Self::Settings) -> Result<Self::Value, ValueError>;
+}
+
+/// A register the drive lets you read.
+#[diagnostic::on_unimplemented(
+    message = "`{Self}` cannot be read: the manual makes it write-only",
+    label = "write-only register"
+)]
+pub trait Readable: Register {}
+
+/// A register the drive lets you write.
+#[diagnostic::on_unimplemented(
+    message = "`{Self}` cannot be written: the manual makes it read-only",
+    label = "read-only register"
+)]
+pub trait Writable: Register {
+    /// When the drive accepts a write (exception 22h otherwise). Informational: the client
+    /// cannot know the drive's state; the simulator enforces it.
+    const WRITE_RESTRICTION: WriteRestriction = WriteRestriction::None;
+
+    /// What the map allows on the wire for this register: transports, broadcast space,
+    /// addresses, raw range, reserved bits. Every write passes [`crate::gate::check`] with it.
+    const RULE: WriteRule;
+
+    /// Encodes a value for the wire, checking it against the register's range first. A value
+    /// that is out of range, not finite, or an unknown enumeration code is refused here and never
+    /// reaches the wire.
+    fn encode(value: &Self::Value, settings: &Self::Settings) -> Result<u16, ValueError>;
+}
+
+/// When a drive accepts writes to a register.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum WriteRestriction {
+    /// Any time.
+    None,
+    /// Only while the motor is stopped.
+    Stopped,
+    /// Only in program (PRG) mode (TDS-V8).
+    PrgMode,
+}
+
+/// A register whose value is a set of bit fields; reserved bits are kept 0 by the value type.
+pub trait BitRegister: Register {
+    /// Mask of the bits that carry a field. Bits outside it are reserved.
+    const FIELD_MASK: u16;
+}
+
+/// Typed value of a bit-field register. Its [`Code`] is the word, reserved bits 0.
+pub trait Bits: Code {
+    /// Mask of the bits that carry a field.
+    const MASK: u16;
+    /// The raw word, reserved bits 0.
+    fn bits(&self) -> u16 {
+        self.code()
+    }
+    /// Builds the value from a raw word; reserved bits are dropped.
+    fn from_bits(raw: u16) -> Self {
+        Self::from_code(raw & Self::MASK)
+    }
+}
+
+/// Typed value of an enumeration register or field, and the word of a bit-field value.
+pub trait Code: Copy {
+    /// The code on the wire.
+    fn code(&self) -> u16;
+    /// The value for a code; codes the map does not list become `Unknown`.
+    fn from_code(code: u16) -> Self;
+    /// Whether the code is one the manual lists.
+    fn is_known(&self) -> bool;
+}
+
+/// A generated enumeration of the codes a manual lists, with an `Unknown(u16)` fallback. Its
+/// [`Code`] comes from [`Enumeration::ALL`] and [`Enumeration::LABELS`], which pair variants with
+/// the plan's labels in order; the generated type only lists them.
+pub trait Enumeration: Copy + PartialEq + 'static {
+    /// Every listed variant, in the manual's order.
+    const ALL: &'static [Self];
+    /// The code, id and printed meaning of each variant of [`Enumeration::ALL`], in order.
+    const LABELS: &'static [Label];
+    /// The value of a code the manual does not list.
+    fn unknown(code: u16) -> Self;
+    /// The code of an `Unknown` value, `None` for a listed one.
+    fn unknown_code(&self) -> Option<u16>;
+
+    /// The plan's label of a listed value.
+    fn label(&self) -> Option<&'static Label> {
+        let i = Self::ALL.iter().position(|v| v == self)?;
+        Self::LABELS.get(i)
+    }
+
+    /// The meaning as printed in the manual, or `None` for an unknown code.
+    fn name(&self) -> Option<&'static str> {
+        self.label().map(|l| l.name)
+    }
+
+    /// Writes the meaning, or `unknown code N`: the `Display` of generated enumerations.
+    fn describe(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self.label() {
+            Some(l) => f.write_str(l.name),
+            None => write!(f, "unknown code {}", self.code()),
+        }
+    }
+}
+
+impl<T: Enumeration> Code for T {
+    fn code(&self) -> u16 {
+        match self.unknown_code() {
+            Some(code) => code,
+            None => self.label().map_or(0, |l| l.code),
+        }
+    }
+
+    fn from_code(code: u16) -> Self {
+        match T::LABELS.iter().position(|l| l.code == code) {
+            Some(i) => T::ALL[i],
+            None => T::unknown(code),
+        }
+    }
+
+    fn is_known(&self) -> bool {
+        self.unknown_code().is_none()
+    }
+}
+
+/// Access as the manual states it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Access {
+    Read,
+    Write,
+    ReadWrite,
+}
+
+impl Access {
+    pub const fn readable(self) -> bool {
+        matches!(self, Access::Read | Access::ReadWrite)
+    }
+    pub const fn writable(self) -> bool {
+        matches!(self, Access::Write | Access::ReadWrite)
+    }
+}
+
+/// Static description of one register, for code that works over a whole drive (read planner,
+/// pollers, tools). Generated modules emit `pub static REGISTERS: &[RegisterInfo]` sorted by
+/// address.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RegisterInfo {
+    pub id: &'static str,
+    pub param: Option<&'static str>,
+    pub name: &'static str,
+    pub address: u16,
+    pub access: Access,
+    pub table: Table,
+    /// Only reachable as a broadcast (slave 0) write, in its own bit layout.
+    pub broadcast_only: bool,
+    pub source: &'static str,
+}
+
+impl AsRef<RegisterInfo> for RegisterInfo {
+    fn as_ref(&self) -> &RegisterInfo {
+        self
+    }
+}
+
+/// The settings type of a drive: the values that conversions depend on (variant, scale
+/// selectors such as V7 n152, reference quantities such as TDS-V8 Cn-02).
+pub trait DriveSettings {
+    /// Communication addresses of the parameters that conversions depend on, in the order a
+    /// client should read them.
+    const DEPENDENCIES: &'static [u16];
+
+    /// Records a raw word read from one of [`DriveSettings::DEPENDENCIES`]. Words from other
+    /// addresses are ignored. Returns whether the word was used.
+    fn absorb(&mut self, address: u16, raw: u16) -> bool;
+}
+
+/// A generated drive: its settings type and the plan of every register, by address.
+pub trait DrivePlan {
+    /// What conversions depend on.
+    type Settings: SettingsView;
+    /// Every register's plan, sorted by address (broadcast-only registers last).
+    const REGISTERS: &'static [RegisterPlan];
+}
+
+/// Access marker of a register the manual makes read-only.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct ReadOnly;
+/// Access marker of a register the manual makes write-only.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct WriteOnly;
+/// Access marker of a register the manual lets you read and write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct ReadWrite;
+
+/// The register at index `I` of drive `D`'s plan, with value type `V` and access `A`.
+///
+/// Generated modules name each register with a type alias of it
+/// (`pub type OutputFrequency = Reg<Drive, f64, ReadOnly, 12>;`): every behaviour is in the
+/// generic impls below and the data in [`DrivePlan::REGISTERS`], so a drive module is consts,
+/// aliases and value types, and all drives share one conversion code.
+pub struct Reg<D, V, A, const I: usize>(PhantomData<fn() -> (D, V, A)>);
+
+impl<D, V, A, const I: usize> Clone for Reg<D, V, A, I> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<D, V, A, const I: usize> Copy for Reg<D, V, A, I> {}
+impl<D, V, A, const I: usize> Default for Reg<D, V, A, I> {
+    fn default() -> Self {
+        Reg(PhantomData)
+    }
+}
+impl<D: DrivePlan, V, A, const I: usize> core::fmt::Debug for Reg<D, V, A, I> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(Self::PLAN.info.id)
+    }
+}
+
+impl<D: DrivePlan, V, A, const I: usize> Reg<D, V, A, I> {
+    /// The register's plan.
+    pub const PLAN: &'static RegisterPlan = &D::REGISTERS[I];
+    /// Engineering unit of the value (`""` for none).
+    pub const UNIT: &'static str = Self::PLAN.unit;
+}
+
+impl<D: DrivePlan, V: Value, A, const I: usize> Register for Reg<D, V, A, I> {
+    type Value = V;
+    type Settings = D::Settings;
+    const ID: &'static str = Self::PLAN.info.id;
+    const PARAM: Option<&'static str> = Self::PLAN.info.param;
+    const NAME: &'static str = Self::PLAN.info.name;
+    const ADDRESS: u16 = Self::PLAN.info.address;
+    const TABLE: Table = Self::PLAN.info.table;
+    const SOURCE: &'static str = Self::PLAN.info.source;
+
+    fn address(settings: &D::Settings, transport: TransportKind) -> u16 {
+        Self::PLAN.address_for(settings, transport)
+    }
+
+    fn on_transport(transport: TransportKind) -> bool {
+        Self::PLAN.transports.contains(transport)
+    }
+
+    fn decode(raw: u16, settings: &D::Settings) -> Result<V, ValueError> {
+        V::decode(raw, Self::PLAN, settings)
+    }
+}
+
+impl<D: DrivePlan, V: Value, const I: usize> Readable for Reg<D, V, ReadOnly, I> {}
+impl<D: DrivePlan, V: Value, const I: usize> Readable for Reg<D, V, ReadWrite, I> {}
+
+impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, WriteOnly, I> {
+    const WRITE_RESTRICTION: WriteRestriction = Self::PLAN.restriction;
+    const RULE: WriteRule = Self::PLAN.write_rule();
+    fn encode(value: &V, settings: &D::Settings) -> Result<u16, ValueError> {
+        value.encode(Self::PLAN, settings)
+    }
+}
+
+impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, ReadWrite, I> {
+    const WRITE_RESTRICTION: WriteRestriction = Self::PLAN.restriction;
+    const RULE: WriteRule = Self::PLAN.write_rule();
+    fn encode(value: &V, settings: &D::Settings) -> Result<u16, ValueError> {
+        value.encode(Self::PLAN, settings)
+    }
+}
+
+impl<D: DrivePlan, V: Value + Bits, A, const I: usize> BitRegister for Reg<D, V, A, I> {
+    const FIELD_MASK: u16 = V::MASK;
+}

@@ -1,0 +1,129 @@
+//! What the map allows when writing one register: the data of the write gate. The gate itself
+//! (`drivemap_runtime::gate`) checks requests against it.
+
+use crate::profile::TransportKind;
+use crate::register::Access;
+use crate::scale::RawRange;
+
+/// The transports a register exists on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Transports {
+    /// Modbus RTU framing: serial lines and RTU over TCP.
+    pub rtu: bool,
+    /// Modbus TCP (MBAP).
+    pub tcp: bool,
+}
+
+impl Transports {
+    /// Every transport.
+    pub const ALL: Transports = Transports {
+        rtu: true,
+        tcp: true,
+    };
+
+    /// RTU framing only (serial lines, RTU over TCP).
+    pub const RTU: Transports = Transports {
+        rtu: true,
+        tcp: false,
+    };
+
+    /// Modbus TCP only (the V7's CM091/CM092 option card registers).
+    pub const TCP: Transports = Transports {
+        rtu: false,
+        tcp: true,
+    };
+
+    /// Whether a register with these transports exists on `kind`.
+    pub const fn contains(self, kind: TransportKind) -> bool {
+        match kind {
+            TransportKind::Rtu | TransportKind::RtuOverTcp => self.rtu,
+            TransportKind::Tcp => self.tcp,
+        }
+    }
+}
+
+/// Whether a register may be written to slave 0 (broadcast).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Broadcast {
+    /// An ordinary register. Where the drive lists the registers a broadcast may write
+    /// ([`BroadcastInfo::addresses`](crate::profile::BroadcastInfo::addresses) not empty), it is
+    /// not one of them; where the list is empty, any writable register may be broadcast.
+    No,
+    /// An ordinary register that the manual also lets a broadcast write (TDS-V8 0001h/0002h).
+    Also,
+    /// Only reachable as a broadcast, in the drive's broadcast address space with its own
+    /// layout (V7 and GPD 515 broadcast registers 0001h/0002h).
+    Only,
+}
+
+/// What the map allows when writing one register.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WriteRule {
+    /// Register id in the map.
+    pub register: &'static str,
+    /// Access as the manual states it.
+    pub access: Access,
+    /// Whether the register may be written as a broadcast (slave 0).
+    pub broadcast: Broadcast,
+    /// Transports the register exists on.
+    pub transports: Transports,
+    /// The register's communication address as the manual prints it.
+    pub address: u16,
+    /// The addresses it moves to with a setting, a variant or the transport.
+    pub also_at: &'static [u16],
+    /// Raw values the map allows under some variant and selector case (a signed register's
+    /// words are read as `i16`).
+    pub raw: RawRange,
+    /// Bits that must be 0 (reserved bits of a bit-field register).
+    pub reserved: u16,
+}
+
+impl WriteRule {
+    /// A read/write register at `address` on every transport, no broadcast, no reserved bits,
+    /// raw values `min ..= max`.
+    pub const fn rw(register: &'static str, address: u16, min: i64, max: i64) -> WriteRule {
+        WriteRule {
+            register,
+            access: Access::ReadWrite,
+            broadcast: Broadcast::No,
+            transports: Transports::ALL,
+            address,
+            also_at: &[],
+            raw: RawRange { min, max },
+            reserved: 0,
+        }
+    }
+
+    /// [`WriteRule::rw`] for a write-only register.
+    pub const fn write_only(register: &'static str, address: u16, min: i64, max: i64) -> WriteRule {
+        WriteRule {
+            access: Access::Write,
+            ..WriteRule::rw(register, address, min, max)
+        }
+    }
+
+    /// The rule with broadcast use `broadcast`.
+    pub const fn broadcast(self, broadcast: Broadcast) -> WriteRule {
+        WriteRule { broadcast, ..self }
+    }
+
+    /// The rule for a register that exists only on `transports`.
+    pub const fn on(self, transports: Transports) -> WriteRule {
+        WriteRule { transports, ..self }
+    }
+
+    /// The rule for a register that also occupies `addresses`.
+    pub const fn also_at(self, also_at: &'static [u16]) -> WriteRule {
+        WriteRule { also_at, ..self }
+    }
+
+    /// The rule with reserved bits `reserved`, which must be written as 0.
+    pub const fn reserved(self, reserved: u16) -> WriteRule {
+        WriteRule { reserved, ..self }
+    }
+
+    /// Whether the register occupies `address` (under some setting, variant or transport).
+    pub fn occupies(&self, address: u16) -> bool {
+        self.address == address || self.also_at.contains(&address)
+    }
+}

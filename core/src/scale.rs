@@ -1,0 +1,402 @@
+//! Conversions between raw register words and engineering values.
+//!
+//! Engineering values are `f64`. Raw words are integers in units of the register's increment
+//! ("n019 reads 600 for 60.0 s"). Decimal scales are kept as an integer mantissa and a power of
+//! ten, never as a binary fraction: decoding divides an exact integer by an exact power of ten
+//! (one correctly rounded operation), encoding multiplies back and rounds to the nearest integer.
+//! Every raw value of a 16-bit register therefore round-trips exactly (6000 × 0.1 s decodes to
+//! the `f64` nearest 600.0 and encodes back to 6000); the test below checks all 65536 words for
+//! every decimal scale the maps use.
+//!
+//! Range checks compare raw integers: the generator converts the manual's limits to raw words
+//! with exact decimal arithmetic, so a limit is never missed by a rounding error.
+
+use core::fmt;
+
+/// Why a value cannot be converted.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ValueError {
+    /// The value lies outside the register's range for the drive's variant.
+    #[error("{register}: {value} {unit} is out of range {min} ..= {max} {unit}")]
+    OutOfRange {
+        register: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+        unit: &'static str,
+    },
+    /// The manual prints no range for the register, and the value does not fit its 16-bit word.
+    #[error(
+        "{register}: {value} {unit} does not fit the register's 16-bit word ({min} ..= {max} {unit}); the manual prints no range for it"
+    )]
+    WordOverflow {
+        register: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+        unit: &'static str,
+    },
+    /// A plain word given a fraction.
+    #[error("{register}: {value} is not a whole number")]
+    NotWhole { register: &'static str, value: f64 },
+    /// NaN or infinite.
+    #[error("{register}: {value} is not a finite number")]
+    NotFinite { register: &'static str, value: f64 },
+    /// An enumeration value that the manual does not list cannot be written.
+    #[error("{register}: code {code} is not one of the codes the manual lists")]
+    UnknownCode { register: &'static str, code: u16 },
+    /// The conversion depends on a setting the caller has not provided.
+    #[error(
+        "{register}: converting needs the value of {setting}; read it from the drive or set it in Settings"
+    )]
+    MissingSetting {
+        register: &'static str,
+        setting: &'static str,
+    },
+    /// A selecting parameter holds a code for which the map defines no scale.
+    #[error("{register}: {setting} = {code} selects no scale the manual defines")]
+    UnsupportedSetting {
+        register: &'static str,
+        setting: &'static str,
+        code: u16,
+    },
+    /// A reference quantity is zero or negative, so a relative value cannot be computed.
+    #[error("{register}: reference {setting} = {value} cannot scale a relative value")]
+    BadReference {
+        register: &'static str,
+        setting: &'static str,
+        value: f64,
+    },
+}
+
+/// A decimal scale factor: engineering = raw × `mantissa` / 10^`exponent`.
+///
+/// `0.1` is `Decimal { mantissa: 1, exponent: 1 }`; `5` is `Decimal { mantissa: 5, exponent: 0 }`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Decimal {
+    pub mantissa: i64,
+    pub exponent: u32,
+}
+
+impl Decimal {
+    pub const ONE: Decimal = Decimal {
+        mantissa: 1,
+        exponent: 0,
+    };
+
+    /// A scale of `mantissa` × 10^-`exponent`.
+    pub const fn new(mantissa: i64, exponent: u32) -> Self {
+        Decimal { mantissa, exponent }
+    }
+
+    fn power(self) -> f64 {
+        // Powers of ten up to 10^22 are exact in f64; the maps use at most 10^4.
+        const POWERS: [f64; 23] = [
+            1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+            1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+        ];
+        match POWERS.get(self.exponent as usize) {
+            Some(p) => *p,
+            None => f64::INFINITY,
+        }
+    }
+
+    /// The factor as an `f64` (for display only; conversions do not use it).
+    pub fn as_f64(self) -> f64 {
+        self.mantissa as f64 / self.power()
+    }
+
+    /// Engineering value of a raw integer.
+    pub fn decode(self, raw: i64) -> f64 {
+        (raw * self.mantissa) as f64 / self.power()
+    }
+
+    /// Nearest raw integer for an engineering value; `None` if not finite or out of `i64`.
+    pub fn encode(self, value: f64) -> Option<i64> {
+        if !value.is_finite() {
+            return None;
+        }
+        round(value * self.power() / self.mantissa as f64)
+    }
+}
+
+impl fmt::Display for Decimal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.as_f64())
+    }
+}
+
+/// The nearest integer, halves away from zero (`f64::round`, which needs `std`); `None` when
+/// not finite or beyond ±9·10^15, where every `f64` is already an integer and `i64` arithmetic on
+/// scales could overflow.
+pub fn round(x: f64) -> Option<i64> {
+    if !(-9.0e15..=9.0e15).contains(&x) {
+        return None;
+    }
+    // Exact: below 2^53 a float minus its truncation loses nothing.
+    let whole = x as i64;
+    let fraction = x - whole as f64;
+    Some(if fraction >= 0.5 {
+        whole + 1
+    } else if fraction <= -0.5 {
+        whole - 1
+    } else {
+        whole
+    })
+}
+
+/// Interprets a raw word as signed (two's complement) or unsigned.
+pub const fn word_to_int(raw: u16, signed: bool) -> i64 {
+    if signed {
+        raw as i16 as i64
+    } else {
+        raw as i64
+    }
+}
+
+/// Converts an integer already checked against the register's raw range to a word.
+pub const fn int_to_word(raw: i64) -> u16 {
+    raw as u16
+}
+
+/// Limits of a register in raw integers, with the engineering values for messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RawRange {
+    pub min: i64,
+    pub max: i64,
+}
+
+/// The refusal of `value` outside `range`, whose limits are `min` and `max` in engineering
+/// units: [`ValueError::WordOverflow`] when the range is the word's own (the manual printed none),
+/// else [`ValueError::OutOfRange`].
+fn outside(
+    register: &'static str,
+    unit: &'static str,
+    value: f64,
+    range: RawRange,
+    min: f64,
+    max: f64,
+) -> ValueError {
+    if range == RawRange::word(true) || range == RawRange::word(false) {
+        ValueError::WordOverflow {
+            register,
+            value,
+            min,
+            max,
+            unit,
+        }
+    } else {
+        ValueError::OutOfRange {
+            register,
+            value,
+            min,
+            max,
+            unit,
+        }
+    }
+}
+
+impl RawRange {
+    /// `min ..= max`.
+    pub const fn new(min: i64, max: i64) -> RawRange {
+        RawRange { min, max }
+    }
+
+    /// The whole range of an unsigned or signed 16-bit word.
+    pub const fn word(signed: bool) -> RawRange {
+        if signed {
+            RawRange {
+                min: i16::MIN as i64,
+                max: i16::MAX as i64,
+            }
+        } else {
+            RawRange {
+                min: 0,
+                max: u16::MAX as i64,
+            }
+        }
+    }
+
+    pub const fn contains(&self, raw: i64) -> bool {
+        raw >= self.min && raw <= self.max
+    }
+}
+
+/// Encodes an engineering value with a decimal scale, checking the raw range.
+pub fn encode_decimal(
+    register: &'static str,
+    unit: &'static str,
+    value: f64,
+    scale: Decimal,
+    range: RawRange,
+) -> Result<u16, ValueError> {
+    let Some(raw) = scale.encode(value) else {
+        return Err(ValueError::NotFinite { register, value });
+    };
+    if !range.contains(raw) {
+        let (min, max) = (scale.decode(range.min), scale.decode(range.max));
+        return Err(outside(register, unit, value, range, min, max));
+    }
+    Ok(int_to_word(raw))
+}
+
+/// Decodes a raw word with a decimal scale.
+pub fn decode_decimal(raw: u16, signed: bool, scale: Decimal) -> f64 {
+    scale.decode(word_to_int(raw, signed))
+}
+
+/// Engineering value of a word scaled relative to a reference quantity:
+/// `full_scale` raw = 100 % of `reference` ("30000 = 100 % of Cn-02").
+pub fn decode_relative(raw: u16, signed: bool, full_scale: f64, reference: f64) -> f64 {
+    word_to_int(raw, signed) as f64 * reference / full_scale
+}
+
+/// Encodes a value relative to a reference quantity, checking the raw range.
+pub fn encode_relative(
+    register: &'static str,
+    setting: &'static str,
+    unit: &'static str,
+    value: f64,
+    full_scale: f64,
+    reference: f64,
+    range: RawRange,
+) -> Result<u16, ValueError> {
+    if !value.is_finite() {
+        return Err(ValueError::NotFinite { register, value });
+    }
+    if !(reference.is_finite() && reference > 0.0) {
+        return Err(ValueError::BadReference {
+            register,
+            setting,
+            value: reference,
+        });
+    }
+    let raw = round(value * full_scale / reference).map_or(f64::NAN, |r| r as f64);
+    if !(raw >= range.min as f64 && raw <= range.max as f64) {
+        let min = range.min as f64 * reference / full_scale;
+        let max = range.max as f64 * reference / full_scale;
+        return Err(outside(register, unit, value, range, min, max));
+    }
+    Ok(int_to_word(raw as i64))
+}
+
+/// Encodes a plain integer word, checking the raw range.
+pub fn encode_int(
+    register: &'static str,
+    unit: &'static str,
+    raw: i64,
+    range: RawRange,
+) -> Result<u16, ValueError> {
+    if !range.contains(raw) {
+        let (min, max) = (range.min as f64, range.max as f64);
+        return Err(outside(register, unit, raw as f64, range, min, max));
+    }
+    Ok(int_to_word(raw))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::string::ToString;
+
+    #[test]
+    fn every_word_round_trips_through_decimal_scales() {
+        for scale in [
+            Decimal::new(1, 0),
+            Decimal::new(1, 1),
+            Decimal::new(1, 2),
+            Decimal::new(1, 3),
+            Decimal::new(5, 1),
+            Decimal::new(10, 0),
+        ] {
+            for signed in [false, true] {
+                for raw in 0..=u16::MAX {
+                    let value = decode_decimal(raw, signed, scale);
+                    let range = RawRange::word(signed);
+                    let back = encode_decimal("t", "", value, scale, range).unwrap();
+                    assert_eq!(
+                        back, raw,
+                        "scale {scale} signed {signed} raw {raw} value {value}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn six_thousand_tenths_is_exactly_six_hundred_seconds() {
+        let s = Decimal::new(1, 1);
+        assert_eq!(decode_decimal(6000, false, s), 600.0);
+        assert_eq!(
+            encode_decimal("t", "s", 600.0, s, RawRange { min: 0, max: 60000 }),
+            Ok(6000)
+        );
+        assert_eq!(decode_decimal(60000, false, s), 6000.0);
+    }
+
+    #[test]
+    fn a_value_beyond_the_word_is_not_called_out_of_the_printed_range() {
+        // A register with no printed range at 0.01 Hz per count: the word's own limit.
+        let e = encode_decimal("f", "Hz", 700.0, Decimal::new(1, 2), RawRange::word(false));
+        assert_eq!(
+            e.unwrap_err().to_string(),
+            "f: 700 Hz does not fit the register's 16-bit word (0 ..= 655.35 Hz); the manual prints no range for it"
+        );
+        let e = encode_decimal(
+            "f",
+            "Hz",
+            700.0,
+            Decimal::new(1, 2),
+            RawRange { min: 0, max: 40000 },
+        );
+        assert!(matches!(e, Err(ValueError::OutOfRange { .. })));
+    }
+
+    #[test]
+    fn out_of_range_and_nan_are_refused() {
+        let s = Decimal::new(1, 1);
+        let r = RawRange { min: 0, max: 60000 };
+        assert!(matches!(
+            encode_decimal("accel", "s", 6000.1, s, r),
+            Err(ValueError::OutOfRange { max, .. }) if max == 6000.0
+        ));
+        assert!(matches!(
+            encode_decimal("accel", "s", f64::NAN, s, r),
+            Err(ValueError::NotFinite { .. })
+        ));
+        assert!(matches!(
+            encode_decimal("accel", "s", -0.1, s, r),
+            Err(ValueError::OutOfRange { .. })
+        ));
+    }
+
+    #[test]
+    fn relative_scale_matches_the_tds_v8_example() {
+        // 5DC0h = 24000 = 80 % of Cn-02; with Cn-02 = 60 Hz that is 48 Hz.
+        assert_eq!(decode_relative(0x5DC0, false, 30000.0, 60.0), 48.0);
+        assert_eq!(
+            encode_relative(
+                "f",
+                "Cn-02",
+                "Hz",
+                48.0,
+                30000.0,
+                60.0,
+                RawRange::word(false)
+            ),
+            Ok(0x5DC0)
+        );
+        assert!(matches!(
+            encode_relative(
+                "f",
+                "Cn-02",
+                "Hz",
+                48.0,
+                30000.0,
+                0.0,
+                RawRange::word(false)
+            ),
+            Err(ValueError::BadReference { .. })
+        ));
+    }
+}
