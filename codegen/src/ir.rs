@@ -7,9 +7,11 @@
 
 use std::collections::BTreeSet;
 use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
 
 use crate::diagnostic::{Diagnostic, Loc};
 use crate::load::LoadedMap;
+use crate::lower::DrivePlan;
 use crate::model::{
     self, Access, Conflict, DefaultValue, EnumValue, Field, Gap, ModbusTable, Reference, Removed,
     Scale, TransportName, VariantAxis, WriteRestriction,
@@ -35,6 +37,8 @@ pub struct Drive {
     pub file: PathBuf,
     /// The merged YAML tree, for locating findings.
     pub tree: Node,
+    /// The drive plan, lowered on first use ([`Drive::plan`]).
+    pub plan: OnceLock<Arc<DrivePlan>>,
 }
 
 #[derive(Debug, Clone)]
@@ -183,6 +187,25 @@ impl Register {
 }
 
 impl Drive {
+    /// What every register means, decided once ([`crate::lower`]): lowered on first use and
+    /// kept for the life of this value. Call it on a validated drive.
+    pub fn plan(&self) -> &DrivePlan {
+        self.plan
+            .get_or_init(|| Arc::new(crate::lower::lower(self)))
+    }
+
+    /// The plan of register `r` of this drive.
+    pub fn register_plan(&self, r: &Register) -> &'static drivemap_core::RegisterPlan {
+        let plan = self.plan();
+        let index = self
+            .registers
+            .iter()
+            .position(|x| std::ptr::eq(x, r))
+            .or_else(|| self.registers.iter().position(|x| x.def.id == r.def.id))
+            .unwrap_or(0);
+        &plan.registers[plan.order[index]]
+    }
+
     /// Locates a path in the merged tree.
     pub fn locate(&self, path: &Path) -> Loc {
         self.tree.locate(path)
@@ -591,6 +614,7 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
         removed: model.removed.clone(),
         file: map.path.clone(),
         tree: map.tree.clone(),
+        plan: OnceLock::new(),
     })
 }
 

@@ -473,14 +473,16 @@ impl RegisterPlan {
             Conversion::Word { range, .. } => range.select(settings),
             Conversion::Enum { .. } => return self.encode_code(u16::try_from(raw).ok(), raw),
             Conversion::Bits { mask, .. } => {
-                let word = u16::try_from(raw).map_err(|_| ValueError::OutOfRange {
-                    register: self.info.id,
-                    value: raw as f64,
-                    min: 0.0,
-                    max: 65535.0,
-                    unit: "",
-                })?;
-                return Ok(word & mask);
+                return match u16::try_from(raw) {
+                    Ok(word) if word & !mask == 0 => Ok(word),
+                    _ => Err(ValueError::OutOfRange {
+                        register: self.info.id,
+                        value: raw as f64,
+                        min: 0.0,
+                        max: f64::from(*mask),
+                        unit: "(reserved bits set)",
+                    }),
+                };
             }
             _ => return self.encode_number(raw as f64, settings),
         };

@@ -1,21 +1,18 @@
 //! Raw words ↔ engineering values by the map, at run time.
 //!
-//! The same rules the generated code compiles in: decimal scales and raw range checks from the
-//! IR, relative scales through the reference's value, selected scales through the selector's
-//! code, enumeration codes (listed, or inside a printed code range), bit fields with reserved
-//! bits kept 0. Conversions call [`drivemap_runtime::scale`], as generated code does.
+//! The same plan the generated code holds as `const` data ([`Drive::plan`], lowered once per
+//! map), converted by the same implementation ([`RegisterPlan::decode_number`] and its
+//! siblings in the vocabulary crate): this module only turns the results into values a tool
+//! prints and parses what a user types.
 
 use std::fmt;
 
-use drivemap_codegen::ir::{Drive, RawLimits, Register, ValueKind};
-use drivemap_codegen::model::{Field, Reference, Scale};
-use drivemap_codegen::numbers::Dec;
-use drivemap_codegen::validate::field_span;
+use drivemap_codegen::ir::{Drive, Register};
 use drivemap_runtime::ValueError;
-use drivemap_runtime::scale::{self, Decimal, RawRange};
+use drivemap_runtime::plan::{Conversion, Field, RegisterPlan};
+use drivemap_runtime::scale;
 
-use crate::intern::intern;
-use crate::settings::LiveSettings;
+use crate::settings::{LiveSettings, View};
 
 /// A decoded register value.
 #[derive(Debug, Clone, PartialEq)]
@@ -105,223 +102,70 @@ impl fmt::Display for Value {
     }
 }
 
-/// How a register's word converts under given settings.
-enum Conversion {
-    Decimal {
-        scale: Decimal,
-        range: RawRange,
-    },
-    Relative {
-        full_scale: f64,
-        reference: f64,
-        setting: &'static str,
-    },
-}
-
-fn decimal_of(dec: Dec) -> Decimal {
-    Decimal::new(dec.mantissa as i64, dec.exponent)
-}
-
-fn raw_range(l: RawLimits) -> RawRange {
-    RawRange {
-        min: l.min as i64,
-        max: l.max as i64,
-    }
-}
-
-/// The raw range of a fixed-scale register for the chosen variant.
-fn variant_range(drive: &Drive, r: &Register, factor: Dec, settings: &LiveSettings) -> RawRange {
-    let word = RawLimits::word(r.def.signed);
-    let option = r
-        .def
-        .by_variant
-        .keys()
-        .find(|k| settings.has_variant(drive, k));
-    let (min, max) = match option {
-        Some(k) => r.limits_for(k),
-        None => r.limits(),
-    };
-    raw_range(r.raw_limits(factor, min, max).unwrap_or(word))
-}
-
-fn label(r: &Register) -> &'static str {
-    intern(r.def.param.as_deref().unwrap_or(&r.def.id))
-}
-
-fn relative(
-    drive: &Drive,
+/// The plan of `r` and a view of `settings` in the plan's slots.
+fn planned<'a>(
+    drive: &'a Drive,
     r: &Register,
-    reference: &Reference,
-    full_scale: f64,
-    settings: &LiveSettings,
-) -> Result<Conversion, ValueError> {
-    let (key, setting): (&str, &'static str) = match reference {
-        Reference::Register(name) => match drive.find(name) {
-            Some(t) => (t.id(), label(t)),
-            None => (name, intern(name)),
-        },
-        Reference::External(q) => (&q.external, intern(&q.external)),
-    };
-    let reference = *settings
-        .references
-        .get(key)
-        .ok_or_else(|| ValueError::MissingSetting {
-            register: intern(r.id()),
-            setting,
-        })?;
-    Ok(Conversion::Relative {
-        full_scale,
-        reference,
-        setting,
-    })
-}
-
-fn conversion(
-    drive: &Drive,
-    r: &Register,
-    settings: &LiveSettings,
-) -> Result<(Conversion, usize), ValueError> {
-    let one = Dec {
-        mantissa: 1,
-        exponent: 0,
-    };
-    match r.kind() {
-        ValueKind::Quantity(Scale::Relative(rel)) => Ok((
-            relative(drive, r, &rel.relative_to, rel.full_scale, settings)?,
-            2,
-        )),
-        ValueKind::Quantity(Scale::Selected(sel)) => {
-            let selector = drive.find(&sel.selected_by);
-            let setting = selector
-                .map(label)
-                .unwrap_or_else(|| intern(&sel.selected_by));
-            let code = selector
-                .and_then(|s| settings.selectors.get(&s.def.id))
-                .copied()
-                .ok_or_else(|| ValueError::MissingSetting {
-                    register: intern(r.id()),
-                    setting,
-                })?;
-            let case = sel
-                .cases
-                .iter()
-                .find(|c| c.when.contains(&code))
-                .ok_or_else(|| ValueError::UnsupportedSetting {
-                    register: intern(r.id()),
-                    setting,
-                    code,
-                })?;
-            match &case.scale {
-                Scale::Factor(f) => {
-                    let dec = Dec::from_f64(*f).unwrap_or(one);
-                    let range = raw_range(
-                        r.raw_limits(dec, case.min, case.max)
-                            .unwrap_or(RawLimits::word(r.def.signed)),
-                    );
-                    Ok((
-                        Conversion::Decimal {
-                            scale: decimal_of(dec),
-                            range,
-                        },
-                        dec.exponent as usize,
-                    ))
-                }
-                Scale::Relative(rel) => Ok((
-                    relative(drive, r, &rel.relative_to, rel.full_scale, settings)?,
-                    2,
-                )),
-                Scale::Selected(_) => Err(ValueError::UnsupportedSetting {
-                    register: intern(r.id()),
-                    setting,
-                    code,
-                }),
-            }
-        }
-        _ => {
-            let dec = r.factor().unwrap_or(one);
-            Ok((
-                Conversion::Decimal {
-                    scale: decimal_of(dec),
-                    range: variant_range(drive, r, dec, settings),
-                },
-                dec.exponent as usize,
-            ))
-        }
-    }
+    settings: &'a LiveSettings,
+) -> (&'static RegisterPlan, View<'a>) {
+    (drive.register_plan(r), settings.view(drive))
 }
 
 fn field_values(fields: &[Field], raw: u16) -> Vec<FieldValue> {
     fields
         .iter()
-        .filter_map(|f| {
-            let (lsb, width) = field_span(f)?;
-            let mask = ((1u32 << width) - 1) as u16;
-            let value = (raw >> lsb) & mask;
-            let label = f
-                .values
-                .iter()
-                .find(|v| v.value == value)
-                .map(|v| v.name.clone());
-            Some(FieldValue {
-                id: f.id.clone(),
-                name: f.name.clone(),
-                lsb,
-                width,
+        .map(|f| {
+            let value = f.get(raw);
+            FieldValue {
+                id: f.id.to_owned(),
+                name: f.name.to_owned(),
+                lsb: f.lsb,
+                width: f.width,
                 value,
-                label,
-            })
+                label: f
+                    .values
+                    .iter()
+                    .find(|v| v.code == value)
+                    .map(|v| v.name.to_owned()),
+            }
         })
         .collect()
 }
 
-/// The mask of bits that carry a field.
-pub fn field_mask(fields: &[Field]) -> u16 {
-    fields
-        .iter()
-        .filter_map(field_span)
-        .fold(0u16, |m, (lsb, width)| {
-            m | ((((1u32 << width) - 1) << lsb) as u16)
-        })
-}
-
-/// Decodes a raw word read from the drive.
+/// Decodes a raw word read from the drive, by the register's plan.
 pub fn decode(
     drive: &Drive,
     r: &Register,
     raw: u16,
     settings: &LiveSettings,
 ) -> Result<Value, ValueError> {
-    match r.kind() {
-        ValueKind::Word => Ok(Value::Word(scale::word_to_int(raw, r.def.signed))),
-        ValueKind::Enum(values) => {
-            let v = values.iter().find(|v| v.value == raw);
+    let (plan, view) = planned(drive, r, settings);
+    match &plan.conversion {
+        Conversion::Word { signed, .. } => Ok(Value::Word(scale::word_to_int(raw, *signed))),
+        Conversion::Enum { .. } => {
+            let label = plan.label(raw);
             Ok(Value::Code {
                 code: raw,
-                id: v.map(|v| v.id.clone()),
-                name: v.map(|v| v.name.clone()),
+                id: label.map(|l| l.id.to_owned()),
+                name: label.map(|l| l.name.to_owned()),
             })
         }
-        ValueKind::Bits(fields) => {
-            let raw = raw & field_mask(fields);
+        Conversion::Bits { mask, fields } => {
+            let raw = raw & mask;
             Ok(Value::Bits {
                 raw,
                 fields: field_values(fields, raw),
             })
         }
-        ValueKind::Quantity(_) | ValueKind::UnitQuantity => {
-            let unit = r.def.unit.clone().unwrap_or_default();
-            let (conv, decimals) = conversion(drive, r, settings)?;
-            let value = match conv {
-                Conversion::Decimal { scale: s, .. } => scale::decode_decimal(raw, r.def.signed, s),
-                Conversion::Relative {
-                    full_scale,
-                    reference,
-                    ..
-                } => scale::decode_relative(raw, r.def.signed, full_scale, reference),
+        Conversion::Decimal { .. } | Conversion::Relative { .. } | Conversion::Selected { .. } => {
+            let decimals = match plan.scale(&view) {
+                Some(Ok(s)) => s.decimals(),
+                Some(Err(e)) => return Err(e),
+                None => 0,
             };
             Ok(Value::Quantity {
-                value,
-                unit,
+                value: plan.decode_number(raw, &view)?,
+                unit: plan.unit.to_owned(),
                 decimals,
             })
         }
@@ -329,93 +173,15 @@ pub fn decode(
 }
 
 /// Encodes an engineering number (a value in the register's unit, a code, or a raw word for
-/// words and bit fields), checking the range first.
+/// words and bit fields), checking the range first, by the register's plan.
 pub fn encode(
     drive: &Drive,
     r: &Register,
     value: f64,
     settings: &LiveSettings,
 ) -> Result<u16, ValueError> {
-    let id = intern(r.id());
-    let unit = intern(r.def.unit.as_deref().unwrap_or(""));
-    match r.kind() {
-        ValueKind::Word => {
-            let one = Dec {
-                mantissa: 1,
-                exponent: 0,
-            };
-            if value.fract() != 0.0 || !value.is_finite() {
-                return Err(ValueError::NotFinite {
-                    register: id,
-                    value,
-                });
-            }
-            scale::encode_int(
-                id,
-                unit,
-                value as i64,
-                variant_range(drive, r, one, settings),
-            )
-        }
-        ValueKind::Enum(values) => {
-            let listed = values.iter().any(|v| f64::from(v.value) == value);
-            let in_range = value.fract() == 0.0
-                && (r.def.min.is_some() || r.def.max.is_some())
-                && r.def.min.is_none_or(|m| value >= m)
-                && r.def.max.is_none_or(|m| value <= m);
-            if listed || in_range {
-                Ok(value as u16)
-            } else {
-                Err(ValueError::UnknownCode {
-                    register: id,
-                    code: if (0.0..=65535.0).contains(&value) {
-                        value as u16
-                    } else {
-                        u16::MAX
-                    },
-                })
-            }
-        }
-        ValueKind::Bits(fields) => {
-            let mask = field_mask(fields);
-            if value.fract() != 0.0 || !(0.0..=65535.0).contains(&value) {
-                return Err(ValueError::NotFinite {
-                    register: id,
-                    value,
-                });
-            }
-            let raw = value as u16;
-            if raw & !mask != 0 {
-                return Err(ValueError::OutOfRange {
-                    register: id,
-                    value,
-                    min: 0.0,
-                    max: f64::from(mask),
-                    unit: "(reserved bits set)",
-                });
-            }
-            Ok(raw)
-        }
-        ValueKind::Quantity(_) | ValueKind::UnitQuantity => match conversion(drive, r, settings)?.0
-        {
-            Conversion::Decimal { scale: s, range } => {
-                scale::encode_decimal(id, unit, value, s, range)
-            }
-            Conversion::Relative {
-                full_scale,
-                reference,
-                setting,
-            } => scale::encode_relative(
-                id,
-                setting,
-                unit,
-                value,
-                full_scale,
-                reference,
-                RawRange::word(r.def.signed),
-            ),
-        },
-    }
+    let (plan, view) = planned(drive, r, settings);
+    plan.encode_number(value, &view)
 }
 
 /// Why a value typed by a user cannot be written.
@@ -462,9 +228,13 @@ pub struct FieldInput {
 /// Parses `run,reverse` or `run=1,direction=reverse` (a field's value by number, id or printed
 /// meaning, `on`/`off`, `true`/`false`) for a bit-field register; `None` for a plain number,
 /// which is the whole word.
-pub fn field_input(r: &Register, text: &str) -> Result<Option<FieldInput>, InputError> {
-    match r.kind() {
-        ValueKind::Bits(fields) if parse_number(text).is_none() => {
+pub fn field_input(
+    drive: &Drive,
+    r: &Register,
+    text: &str,
+) -> Result<Option<FieldInput>, InputError> {
+    match &drive.register_plan(r).conversion {
+        Conversion::Bits { fields, .. } if parse_number(text).is_none() => {
             parse_fields(r, fields, text.trim()).map(Some)
         }
         _ => Ok(None),
@@ -477,20 +247,20 @@ fn parse_fields(r: &Register, fields: &[Field], text: &str) -> Result<FieldInput
         let (name, v) = part.split_once('=').unwrap_or((part, "1"));
         let name = name.trim();
         let f = fields.iter().find(|f| f.id == name).ok_or_else(|| {
-            let ids: Vec<&str> = fields.iter().map(|f| f.id.as_str()).collect();
+            let ids: Vec<&str> = fields.iter().map(|f| f.id).collect();
             InputError::Parse(format!(
                 "`{name}` is not a field of {}; fields: {}",
                 r.id(),
                 ids.join(", ")
             ))
         })?;
-        let (lsb, width) = field_span(f).unwrap_or((0, 1));
+        let (lsb, width) = (f.lsb, f.width);
         let v = v.trim();
         let code = f
             .values
             .iter()
             .find(|e| e.id == v || e.name.eq_ignore_ascii_case(v))
-            .map(|e| e.value)
+            .map(|e| e.code)
             .or_else(|| match v.to_ascii_lowercase().as_str() {
                 "true" | "on" => Some(1),
                 "false" | "off" => Some(0),
@@ -532,16 +302,17 @@ pub fn parse_value(
     settings: &LiveSettings,
 ) -> Result<u16, InputError> {
     let text = text.trim();
-    let value = match r.kind() {
-        ValueKind::Enum(values) => {
+    let plan = drive.register_plan(r);
+    let value = match &plan.conversion {
+        Conversion::Enum { values, .. } => {
             let lower = text.to_ascii_lowercase();
             match values
                 .iter()
                 .find(|v| v.id == lower || v.name.eq_ignore_ascii_case(text))
             {
-                Some(v) => f64::from(v.value),
+                Some(v) => f64::from(v.code),
                 None => parse_number(text).ok_or_else(|| {
-                    let ids: Vec<&str> = values.iter().map(|v| v.id.as_str()).collect();
+                    let ids: Vec<&str> = values.iter().map(|v| v.id).collect();
                     InputError::Parse(format!(
                         "`{text}` is not a code of {}; expected a number or one of: {}",
                         r.id(),
@@ -550,12 +321,12 @@ pub fn parse_value(
                 })?,
             }
         }
-        ValueKind::Bits(fields) => match parse_number(text) {
+        Conversion::Bits { fields, .. } => match parse_number(text) {
             Some(n) => n,
             None => f64::from(parse_fields(r, fields, text)?.value),
         },
         _ => {
-            let unit = r.def.unit.as_deref().unwrap_or("");
+            let unit = plan.unit;
             let number = text
                 .strip_suffix(unit)
                 .filter(|_| !unit.is_empty())

@@ -1,12 +1,11 @@
 //! What conversions depend on, for a map loaded at run time: the generated `Settings`, keyed by
-//! name instead of typed fields.
+//! name instead of typed fields, and seen through the plan's slots ([`View`]).
 
 use std::collections::BTreeMap;
 
-use drivemap_codegen::ir::{Drive, ValueKind};
-use drivemap_codegen::model::Scale;
-
-use crate::codec;
+use drivemap_codegen::ir::Drive;
+use drivemap_codegen::lower::{DrivePlan, Quantity};
+use drivemap_runtime::SettingsView;
 
 /// Variant choices, selector codes, reference values and external quantities.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -19,7 +18,51 @@ pub struct LiveSettings {
     pub references: BTreeMap<String, f64>,
 }
 
+/// [`LiveSettings`] answering the plan's slots, as generated `Settings` do.
+#[derive(Debug, Clone, Copy)]
+pub struct View<'a> {
+    plan: &'a DrivePlan,
+    settings: &'a LiveSettings,
+}
+
+impl SettingsView for View<'_> {
+    fn code(&self, slot: u8) -> Option<u16> {
+        let i = *self.plan.settings.codes.get(usize::from(slot))?;
+        self.settings
+            .selectors
+            .get(self.plan.registers[i].info.id)
+            .copied()
+    }
+
+    fn quantity(&self, slot: u8) -> Option<f64> {
+        let key = match self.plan.settings.quantities.get(usize::from(slot))? {
+            Quantity::Register(i) => self.plan.registers[*i].info.id,
+            Quantity::External { id, .. } => id.as_str(),
+        };
+        self.settings.references.get(key).copied()
+    }
+
+    fn variant(&self, axis: u8) -> u8 {
+        let Some((id, options)) = self.plan.settings.axes.get(usize::from(axis)) else {
+            return 0;
+        };
+        self.settings
+            .variants
+            .get(id)
+            .and_then(|chosen| options.iter().position(|o| o == chosen))
+            .map_or(0, |i| i as u8)
+    }
+}
+
 impl LiveSettings {
+    /// These settings seen through `drive`'s plan.
+    pub fn view<'a>(&'a self, drive: &'a Drive) -> View<'a> {
+        View {
+            plan: drive.plan(),
+            settings: self,
+        }
+    }
+
     /// The option chosen on `axis`, or the axis's base option.
     pub fn variant<'a>(&'a self, drive: &'a Drive, axis: &str) -> Option<&'a str> {
         self.variants.get(axis).map(String::as_str).or_else(|| {
@@ -40,40 +83,28 @@ impl LiveSettings {
 
     /// Addresses of the parameters conversions depend on, for a client to read.
     pub fn dependencies(drive: &Drive) -> Vec<u16> {
-        let mut out: Vec<u16> = drive.selectors().iter().map(|r| r.def.address).collect();
-        for r in drive.references() {
-            if !out.contains(&r.def.address) {
-                out.push(r.def.address);
-            }
-        }
-        out
+        drive.plan().dependencies()
     }
 
     /// Records a raw word read from one of the dependencies; returns whether it was used.
     pub fn absorb(&mut self, drive: &Drive, address: u16, raw: u16) -> bool {
+        let plan = drive.plan();
         let mut used = false;
-        for sel in drive.selectors() {
-            if sel.def.address == address {
-                self.selectors.insert(sel.def.id.clone(), raw);
+        for &i in &plan.settings.codes {
+            let r = &plan.registers[i];
+            if r.info.address == address {
+                self.selectors.insert(r.info.id.to_owned(), raw);
                 used = true;
             }
         }
-        for r in drive.references() {
-            if r.def.address == address {
-                let value = match r.kind() {
-                    ValueKind::Word => {
-                        Some(drivemap_runtime::scale::word_to_int(raw, r.def.signed) as f64)
+        for q in &plan.settings.quantities {
+            if let Quantity::Register(i) = q {
+                let r = &plan.registers[*i];
+                if r.info.address == address {
+                    if let Ok(v) = r.decode_number(raw, &self.view(drive)) {
+                        self.references.insert(r.info.id.to_owned(), v);
+                        used = true;
                     }
-                    ValueKind::Quantity(Scale::Factor(_)) | ValueKind::UnitQuantity => {
-                        codec::decode(drive, r, raw, self)
-                            .ok()
-                            .and_then(|v| v.as_f64())
-                    }
-                    _ => None,
-                };
-                if let Some(v) = value {
-                    self.references.insert(r.def.id.clone(), v);
-                    used = true;
                 }
             }
         }

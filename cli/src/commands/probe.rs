@@ -9,6 +9,7 @@
 //! bits set; the scale selectors and references read first; and what it could not check.
 //! Exit status: 0 when everything read agrees, 1 when anything disagrees, 2 on an error.
 
+use drivemap_runtime::plan::Conversion;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -293,8 +294,8 @@ pub(crate) enum Check {
 /// Whether a word read is a value the map allows: decoded and encoded back as a write would
 /// be (range under the selected scale and variant, listed codes), and no reserved bit set.
 pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u16, session: &Session<'_>) -> Check {
-    if let ValueKind::Bits(fields) = r.kind() {
-        let reserved = raw & !codec::field_mask(fields);
+    if let Conversion::Bits { mask, .. } = drive.register_plan(r).conversion {
+        let reserved = raw & !mask;
         return if reserved == 0 {
             Check::Agrees
         } else {

@@ -1,10 +1,11 @@
 //! `drivemap write --drive <id> <register>=<value>... (--tcp | --rtu-tcp | --serial) ...`
 
+use drivemap_runtime::plan::Conversion;
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
-use drivemap_codegen::ir::{Register, ValueKind};
+use drivemap_codegen::ir::Register;
 use drivemap_live::codec::{self, InputError};
 use drivemap_live::intern::intern;
 use drivemap_runtime::gate;
@@ -57,13 +58,16 @@ fn field_word(
     r: &Register,
     text: &str,
 ) -> Result<Option<u16>, String> {
-    let Some(input) = codec::field_input(r, text).map_err(|e| input_error(drive, &e))? else {
+    let Some(input) = codec::field_input(drive, r, text).map_err(|e| input_error(drive, &e))?
+    else {
         return Ok(None);
     };
-    let ValueKind::Bits(fields) = r.kind() else {
+    let Conversion::Bits {
+        mask: fields_mask, ..
+    } = drive.register_plan(r).conversion
+    else {
         return Ok(None);
     };
-    let fields_mask = codec::field_mask(fields);
     let word = if input.mask & fields_mask == fields_mask {
         input.value
     } else if session.slave == 0 || session.unreadable(r).is_some() {
