@@ -238,16 +238,15 @@ impl Config {
             if write_if_changed(&path, &code)? {
                 generated.written.push(path.clone());
             }
-            let title = format!(
-                "{} {} (`{}`).",
-                drive.meta.vendor,
-                drive.meta.models.join(" / "),
-                drive.meta.id
-            );
+            // The index and the modules lie side by side in the output directory; `include!`
+            // resolves a relative path against the file it is written in, so the index works
+            // wherever that directory is (prost-build's include file does the same).
+            for line in generate::module_doc(drive) {
+                index += &format!("#[doc = {line:?}]\n");
+            }
             index += &format!(
-                "#[doc = {title:?}]\n#[path = {:?}]\npub mod {};\n\n",
-                path.display().to_string(),
-                drive.module
+                "pub mod {module} {{\n    include!(\"{module}.rs\");\n}}\n\n",
+                module = drive.module,
             );
             ids.push((drive.meta.id.clone(), drive.module.clone()));
             generated

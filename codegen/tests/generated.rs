@@ -49,7 +49,17 @@ fn config_writes_only_when_changed() {
     );
     assert!(first.index.is_file());
     let index = std::fs::read_to_string(&first.index).unwrap();
-    assert!(index.contains("pub mod mini_drive;"), "{index}");
+    // The module is included by a path relative to the index, so the pair works from any
+    // directory (OUT_DIR or a path of the user's choosing), and no absolute path is baked in.
+    assert!(
+        index.contains("pub mod mini_drive {\n    include!(\"mini_drive.rs\");\n}"),
+        "{index}"
+    );
+    assert!(!index.contains(&*out.to_string_lossy()), "{index}");
+    assert!(
+        index.contains("#[doc = \" Example MD-1 — register map `mini-drive`.\"]"),
+        "{index}"
+    );
     let second = config.compile().unwrap();
     assert!(
         second.written.is_empty(),

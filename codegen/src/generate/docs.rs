@@ -8,7 +8,7 @@ use crate::model::{Access, DefaultValue, Reference, Scale, WriteRestriction};
 
 /// Brackets of the manual's text (`Drive Read[y]`, `[1]`) escaped so that rustdoc does not
 /// read them as links; a link the generator writes (``[`Name`]``) and code spans stay as they are.
-fn escape_brackets(line: &str) -> String {
+pub fn escape_brackets(line: &str) -> String {
     let chars: Vec<char> = line.chars().collect();
     let mut out = String::with_capacity(line.len());
     let mut in_code = false;
@@ -22,15 +22,6 @@ fn escape_brackets(line: &str) -> String {
         out.push(c);
     }
     out
-}
-
-/// `#[doc]` attributes, one per line (outer).
-pub fn lines(text: &str) -> TokenStream {
-    let attrs = text.lines().map(|l| {
-        let l = format!(" {}", escape_brackets(l));
-        quote!(#![doc = #l])
-    });
-    quote!(#(#attrs)*)
 }
 
 /// `#[doc]` attributes, one per line (outer, for items).

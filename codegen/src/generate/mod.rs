@@ -25,7 +25,24 @@ pub struct Options {
     pub source_name: String,
 }
 
-/// The formatted Rust source of one drive module.
+/// The module's documentation (what drive, which manuals, how many registers), one line per
+/// `#[doc]` attribute, to put on the `mod` item that includes [`drive_module`]'s source (an
+/// `include!`d file cannot carry inner attributes).
+pub fn module_doc(drive: &Drive) -> Vec<String> {
+    docs::module(drive)
+        .lines()
+        .map(|l| {
+            if l.is_empty() {
+                String::new()
+            } else {
+                format!(" {}", docs::escape_brackets(l))
+            }
+        })
+        .collect()
+}
+
+/// The formatted Rust source of one drive module: items only, made to be `include!`d inside
+/// `pub mod <module> { }` (its documentation is [`module_doc`]).
 pub fn drive_module(drive: &Drive, options: &Options) -> Result<String, String> {
     let lowered = crate::lower::lower(drive);
     let tokens = drive_tokens(drive, &lowered, options);
@@ -66,7 +83,6 @@ fn space_items(code: &str) -> String {
 fn drive_tokens(drive: &Drive, plan: &DrivePlan, options: &Options) -> TokenStream {
     let runtime = &options.runtime;
     let rt = &quote!(rt);
-    let module_doc = docs::lines(&docs::module(drive));
     let mut used = Vec::new();
     for (access, name) in [
         (crate::model::Access::Read, "ReadOnly"),
@@ -89,7 +105,6 @@ fn drive_tokens(drive: &Drive, plan: &DrivePlan, options: &Options) -> TokenStre
     let settings = settings::emit(drive, plan, rt);
     let registers = registers::emit(drive, plan, rt);
     quote! {
-        #module_doc
 
         use #runtime as rt;
         #markers
