@@ -257,7 +257,16 @@ impl Config {
         for (id, module) in &ids {
             index += &format!("    ({id:?}, {module:?}),\n");
         }
-        index += "];\n";
+        index += "];\n\n";
+        // Code generic over the drives compiled in (a tool, a test over every map) cannot name
+        // modules by string; this macro hands each module to the caller's macro.
+        index += "/// Calls `$m!(module, \"drive-id\")` once for every generated drive module, for code that\n\
+                  /// is generic over the drives compiled in.\n\
+                  #[macro_export]\nmacro_rules! for_each_drive {\n    ($m:ident) => {\n";
+        for (id, module) in &ids {
+            index += &format!("        $m!({module}, {id:?});\n");
+        }
+        index += "    };\n}\n";
         if write_if_changed(&generated.index, &index)? {
             generated.written.push(generated.index.clone());
         }
