@@ -5,16 +5,12 @@ use std::fmt;
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_codegen::ir::{Drive, Register, ValueKind};
-use drivemap_codegen::model::{
-    CommandKind, Condition as MapCondition, DefaultValue, ModbusTable, Scale, TransportName,
-    WriteRestriction,
-};
+use drivemap_codegen::ir::{Drive, Register};
+use drivemap_codegen::model::{CommandKind, DefaultValue, ModbusTable, WriteRestriction};
 use drivemap_live::{LiveSettings, Value, codec, leak_profile};
 use drivemap_runtime::ValueError;
 use drivemap_runtime::pdu::{self, Request, RequestDecodeError, Response, Words, function};
 use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::scale::word_to_int;
 use drivemap_runtime::{crc, rtu, tcp};
 
 use crate::clock::{Clock, SystemClock};
@@ -554,27 +550,14 @@ impl Simulator {
             variants: self.variants.clone(),
             ..LiveSettings::default()
         };
-        for &i in &self.selectors {
-            s.selectors
-                .insert(self.drive.registers[i].def.id.clone(), self.raw[i]);
-        }
         for (k, v) in &self.externals {
             s.references.insert(k.clone(), *v);
         }
-        for &i in &self.references {
+        // Selectors first: a reference's conversion may depend on one. `absorb` converts each
+        // word by the plan, as the generated `Settings::absorb` does.
+        for &i in self.selectors.iter().chain(&self.references) {
             let r = &self.drive.registers[i];
-            let v = match r.kind() {
-                ValueKind::Word => Some(word_to_int(self.raw[i], r.def.signed) as f64),
-                ValueKind::Quantity(Scale::Factor(_)) | ValueKind::UnitQuantity => {
-                    codec::decode(&self.drive, r, self.raw[i], &s)
-                        .ok()
-                        .and_then(|v| v.as_f64())
-                }
-                _ => None,
-            };
-            if let Some(v) = v {
-                s.references.insert(r.def.id.clone(), v);
-            }
+            s.absorb(&self.drive, r.def.address, self.raw[i]);
         }
         s
     }
@@ -631,47 +614,25 @@ impl Simulator {
         Ok(())
     }
 
-    fn condition(&self, w: &MapCondition, tcp: bool, settings: &LiveSettings) -> bool {
-        if let Some(s) = &w.setting {
-            if let Some(i) = self
-                .drive
-                .find(s)
-                .and_then(|r| self.index.get(r.id()).copied())
-            {
-                return w.is.contains(&self.raw[i]);
-            }
-        }
-        if let Some(v) = &w.variant {
-            if self.drive.variant_option(v).is_some() {
-                return settings.has_variant(&self.drive, v);
-            }
-        }
-        match w.transport {
-            Some(TransportName::Tcp) => tcp,
-            Some(TransportName::Rtu) => !tcp,
-            None => false,
-        }
-    }
-
+    /// Where each register lies on this link, as the plan places it: registers that do not exist
+    /// on the transport are left out, and a register that moves (by setting, variant or
+    /// transport) is at the address `RegisterPlan::address_for` gives, the same one the clients
+    /// and the generated code use.
     fn layout(&self, tcp: bool) -> Layout {
         let settings = self.settings();
-        let mut layout = Layout::default();
+        let view = settings.view(&self.drive);
         let here = if tcp {
-            TransportName::Tcp
+            TransportKind::Tcp
         } else {
-            TransportName::Rtu
+            TransportKind::Rtu
         };
+        let mut layout = Layout::default();
         for (i, r) in self.drive.registers.iter().enumerate() {
-            if r.transports.as_ref().is_some_and(|t| !t.contains(&here)) {
+            let plan = self.drive.register_plan(r);
+            if !plan.transports.contains(here) {
                 continue;
             }
-            let address = r
-                .def
-                .address_alternatives
-                .iter()
-                .find(|a| self.condition(&a.when, tcp, &settings))
-                .map(|a| a.address)
-                .unwrap_or(r.def.address);
+            let address = plan.address_for(&view, here);
             let space = if r.broadcast {
                 &mut layout.broadcast
             } else {
