@@ -43,7 +43,7 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Str
     }
     // Registers chosen for the user: those this link can read.
     let kind = args.target.link.kind();
-    let pollable = |r: &Register| r.readable() && !r.broadcast && on_transport(r, kind);
+    let pollable = |r: &Register| r.readable() && !r.broadcast && on_transport(drive, r, kind);
     let regs: Vec<&Register> = match &args.group {
         Some(id) => {
             let Some(gi) = drive.groups.iter().position(|g| &g.id == id) else {

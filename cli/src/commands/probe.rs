@@ -141,7 +141,7 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
             ));
         } else if !r.readable() {
             unchecked.push(finding(&session, r, "write_only", "write-only".into()));
-        } else if !on_transport(r, session.kind) {
+        } else if !on_transport(session.drive, r, session.kind) {
             unchecked.push(finding(
                 &session,
                 r,

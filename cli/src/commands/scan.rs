@@ -237,7 +237,7 @@ fn readable_monitors(
     d.registers
         .iter()
         .filter(|r| r.access == Access::Read && r.readable() && !r.broadcast)
-        .filter(|r| on_transport(r, kind))
+        .filter(|r| on_transport(d, r, kind))
         .take(max)
         .collect()
 }

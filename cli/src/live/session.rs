@@ -6,7 +6,7 @@ use std::collections::BTreeSet;
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::{Register, ValueKind};
-use drivemap_codegen::model::{Access, ModbusTable, Reference, Scale, TransportName};
+use drivemap_codegen::model::{Access, ModbusTable, Reference, Scale};
 use drivemap_live::codec::{self, Value};
 use drivemap_live::{LiveSettings, leak_profile, lookup};
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
@@ -235,51 +235,22 @@ fn unique<'a>(drive: &'a Drive, names: Vec<&str>) -> Vec<&'a Register> {
     out
 }
 
-/// Whether a register exists on a transport kind.
-pub fn on_transport(r: &Register, kind: TransportKind) -> bool {
-    match &r.transports {
-        None => true,
-        Some(list) => list.contains(&if kind == TransportKind::Tcp {
-            TransportName::Tcp
-        } else {
-            TransportName::Rtu
-        }),
-    }
+/// Whether a register exists on a transport kind, as its plan says.
+pub fn on_transport(drive: &Drive, r: &Register, kind: TransportKind) -> bool {
+    drive.register_plan(r).transports.contains(kind)
 }
 
-/// The communication address of a register under `settings` on `kind`, as the generated code
-/// chooses it: the first alternative whose condition holds, else the register's address.
+/// The communication address of a register under `settings` on `kind`: the plan's answer
+/// (`RegisterPlan::address_for`), the same the generated code and the simulator give.
 pub fn address_of(
     drive: &Drive,
     r: &Register,
     settings: &LiveSettings,
     kind: TransportKind,
 ) -> u16 {
-    for alt in &r.def.address_alternatives {
-        let w = &alt.when;
-        let holds = if let Some(sel) = w.setting.as_deref().and_then(|s| drive.find(s)) {
-            settings
-                .selectors
-                .get(&sel.def.id)
-                .is_some_and(|c| w.is.contains(c))
-        } else if let Some(option) = w
-            .variant
-            .as_deref()
-            .filter(|v| drive.variant_option(v).is_some())
-        {
-            settings.has_variant(drive, option)
-        } else {
-            match w.transport {
-                Some(TransportName::Tcp) => kind == TransportKind::Tcp,
-                Some(TransportName::Rtu) => kind != TransportKind::Tcp,
-                None => false,
-            }
-        };
-        if holds {
-            return alt.address;
-        }
-    }
-    r.def.address
+    drive
+        .register_plan(r)
+        .address_for(&settings.view(drive), kind)
 }
 
 /// A conversion error, with what to do about a missing setting.
@@ -396,7 +367,7 @@ impl<'d> Session<'d> {
         let regs: Vec<&Register> = regs
             .iter()
             .copied()
-            .filter(|r| on_transport(r, self.kind))
+            .filter(|r| on_transport(self.drive, r, self.kind))
             .collect();
         let mut warnings = Vec::new();
         let mut done: BTreeSet<String> = fixed.clone();
@@ -477,7 +448,7 @@ impl<'d> Session<'d> {
             ))
         } else if !r.readable() {
             Some(format!("{} is write-only", describe::register(r)))
-        } else if !on_transport(r, self.kind) {
+        } else if !on_transport(self.drive, r, self.kind) {
             Some(format!(
                 "{} exists only on {}",
                 describe::register(r),
@@ -496,7 +467,7 @@ impl<'d> Session<'d> {
         let infos: Vec<RegisterInfo> = drive
             .registers
             .iter()
-            .filter(|r| on_transport(r, self.kind))
+            .filter(|r| on_transport(self.drive, r, self.kind))
             .map(|r| RegisterInfo {
                 id: leak(&r.def.id),
                 param: r.def.param.as_deref().map(leak),
