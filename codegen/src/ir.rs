@@ -194,6 +194,12 @@ impl Drive {
             .get_or_init(|| Arc::new(crate::lower::lower(self)))
     }
 
+    /// The register of row `row` of the plan (`plan().registers[row]`).
+    pub fn register_of_row(&self, row: usize) -> Option<&Register> {
+        let m = self.plan().order.iter().position(|&r| r == row)?;
+        self.registers.get(m)
+    }
+
     /// The plan of register `r` of this drive.
     pub fn register_plan(&self, r: &Register) -> &'static drivemap_core::RegisterPlan {
         let plan = self.plan();

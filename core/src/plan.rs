@@ -70,6 +70,15 @@ pub enum Condition {
     Transport(Transports),
 }
 
+/// A setting a register depends on (see [`RegisterPlan::depends_on`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dependency {
+    /// A selecting parameter's code (a code slot).
+    Code(Setting),
+    /// A reference quantity (a quantity slot).
+    Quantity(Setting),
+}
+
 /// A setting a conversion or an address depends on: its slot in the drive's settings and the
 /// name errors give it (the parameter number when printed).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -324,6 +333,35 @@ impl RegisterPlan {
             .iter()
             .find(|m| m.when.holds(settings, transport))
             .map_or(self.info.address, |m| m.address)
+    }
+
+    /// Calls `each` with every setting this register's conversion and address read: the
+    /// selecting parameters ([`Dependency::Code`]) and the quantities a relative scale refers to
+    /// ([`Dependency::Quantity`]). For a selected scale only the case `settings` choose counts
+    /// (every case while the selector's code is unknown). A setting may be reported twice.
+    pub fn depends_on(&self, settings: &impl SettingsView, mut each: impl FnMut(Dependency)) {
+        match &self.conversion {
+            Conversion::Relative { relative, .. } => each(Dependency::Quantity(relative.reference)),
+            Conversion::Selected {
+                selector, cases, ..
+            } => {
+                each(Dependency::Code(*selector));
+                let code = settings.code(selector.slot);
+                for case in cases.iter() {
+                    if let (CaseScale::Relative(r), true) =
+                        (&case.scale, code.is_none_or(|c| case.codes.contains(&c)))
+                    {
+                        each(Dependency::Quantity(r.reference));
+                    }
+                }
+            }
+            _ => {}
+        }
+        for m in self.moves {
+            if let Condition::Setting { selector, .. } = m.when {
+                each(Dependency::Code(selector));
+            }
+        }
     }
 
     /// What the map allows when writing it, for the write gate.

@@ -6,10 +6,12 @@ use std::collections::BTreeSet;
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::{Register, ValueKind};
-use drivemap_codegen::model::{Access, ModbusTable, Reference, Scale};
+use drivemap_codegen::lower::Quantity;
+use drivemap_codegen::model::{Access, ModbusTable};
 use drivemap_live::codec::{self, Value};
 use drivemap_live::{LiveSettings, leak_profile, lookup};
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::plan::Dependency;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Access as RtAccess, Profile, RegisterInfo, Table, ValueError};
@@ -175,18 +177,9 @@ pub fn find_all<'a>(drive: &'a Drive, names: &[String]) -> Result<Vec<&'a Regist
     }
 }
 
-/// The parameters that select a register's scale or address.
+/// The parameters that select a register's scale or address, as its plan lists them.
 pub fn selectors_of<'a>(drive: &'a Drive, r: &Register) -> Vec<&'a Register> {
-    let mut names: Vec<&str> = Vec::new();
-    if let Some(Scale::Selected(sel)) = &r.def.scale {
-        names.push(&sel.selected_by);
-    }
-    for alt in &r.def.address_alternatives {
-        if let Some(s) = &alt.when.setting {
-            names.push(s);
-        }
-    }
-    unique(drive, names)
+    dependencies(drive, r, &LiveSettings::default(), true)
 }
 
 /// The registers a register's value is relative to under `settings`: for a selected scale, only
@@ -196,37 +189,37 @@ pub fn references_of<'a>(
     r: &Register,
     settings: &LiveSettings,
 ) -> Vec<&'a Register> {
-    let scales: Vec<&Scale> = match &r.def.scale {
-        Some(Scale::Selected(sel)) => {
-            let code = drive
-                .find(&sel.selected_by)
-                .and_then(|s| settings.selectors.get(&s.def.id));
-            sel.cases
-                .iter()
-                .filter(|c| code.is_none_or(|code| c.when.contains(code)))
-                .map(|c| &c.scale)
-                .collect()
-        }
-        Some(s) => vec![s],
-        None => Vec::new(),
-    };
-    let names = scales
-        .into_iter()
-        .filter_map(|s| match s {
-            Scale::Relative(rel) => match &rel.relative_to {
-                Reference::Register(name) => Some(name.as_str()),
-                Reference::External(_) => None,
-            },
-            _ => None,
-        })
-        .collect();
-    unique(drive, names)
+    dependencies(drive, r, settings, false)
 }
 
-fn unique<'a>(drive: &'a Drive, names: Vec<&str>) -> Vec<&'a Register> {
+/// The registers behind a register's settings dependencies (`RegisterPlan::depends_on`):
+/// selectors (`codes`) or reference registers; external quantities are not registers.
+fn dependencies<'a>(
+    drive: &'a Drive,
+    r: &Register,
+    settings: &LiveSettings,
+    codes: bool,
+) -> Vec<&'a Register> {
+    let plan = drive.plan();
+    let mut rows = Vec::new();
+    drive
+        .register_plan(r)
+        .depends_on(&settings.view(drive), |d| match d {
+            Dependency::Code(s) if codes => {
+                rows.extend(plan.settings.codes.get(usize::from(s.slot)))
+            }
+            Dependency::Quantity(s) if !codes => {
+                if let Some(Quantity::Register(row)) =
+                    plan.settings.quantities.get(usize::from(s.slot))
+                {
+                    rows.push(*row);
+                }
+            }
+            _ => {}
+        });
     let mut out: Vec<&Register> = Vec::new();
-    for n in names {
-        if let Some(d) = drive.find(n) {
+    for row in rows {
+        if let Some(d) = drive.register_of_row(row) {
             if !out.iter().any(|x| x.def.id == d.def.id) {
                 out.push(d);
             }
