@@ -6,7 +6,7 @@
 //! (`002_661580cce154f322.txt:635`). The code is always kept as received; its name comes from the
 //! drive's [`Profile`] when the manual defines it, and from the Modbus specification otherwise.
 
-use std::fmt;
+use ::core::fmt;
 
 use crate::profile::Profile;
 
@@ -97,7 +97,11 @@ impl Exception {
     /// (standard 06h, or a code the drive's manual names "busy", such as the TDS-V8's 21h).
     pub fn is_busy(&self) -> bool {
         if self.from_profile {
-            self.name.to_ascii_lowercase().contains("busy")
+            // "busy", "Busy", "BUSY" anywhere in the name, without allocating.
+            self.name
+                .as_bytes()
+                .windows(4)
+                .any(|w| w.eq_ignore_ascii_case(b"busy"))
         } else {
             self.code == 0x06
         }

@@ -12,33 +12,51 @@
 //! - [`client::Client`]: checked transactions with timeouts, retries, broadcast, typed register
 //!   access and counted EEPROM writes ([`persist`]).
 
-#[cfg(feature = "tokio")]
-pub mod async_client;
-pub mod bus_time;
-pub mod client;
+#![cfg_attr(not(feature = "std"), no_std)]
+
+// The protocol core: no I/O, no allocation, and no `std` (`--no-default-features` builds it for
+// a microcontroller; `scripts/test` checks that on the host target).
 pub mod crc;
-pub mod error;
 pub mod exception;
-pub mod fault;
-pub mod gate;
 pub mod pdu;
-pub mod persist;
-pub mod planner;
 pub mod profile;
 pub mod register;
 pub mod reply;
 pub mod rtu;
 pub mod scale;
-pub mod slave;
 pub mod tcp;
+
+// Links, clients and tools: need `std`.
+#[cfg(feature = "tokio")]
+pub mod async_client;
+#[cfg(feature = "std")]
+pub mod bus_time;
+#[cfg(feature = "std")]
+pub mod client;
+#[cfg(feature = "std")]
+pub mod error;
+#[cfg(feature = "std")]
+pub mod fault;
+#[cfg(feature = "std")]
+pub mod gate;
+#[cfg(feature = "std")]
+pub mod persist;
+#[cfg(feature = "std")]
+pub mod planner;
+#[cfg(feature = "std")]
+pub mod slave;
+#[cfg(feature = "std")]
 pub mod transport;
+#[cfg(feature = "std")]
 pub mod typed;
 
+#[cfg(feature = "std")]
 pub use client::{Client, ClientOptions, Reconnect};
 pub use drivemap_core as core;
 pub use drivemap_core::plan;
+pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
+#[cfg(feature = "std")]
 pub use error::{Error, Refusal};
-pub use gate::{Broadcast, Transports, WriteRule};
 pub use profile::Profile;
 pub use register::{
     Access, BitRegister, Bits, Code, DrivePlan, DriveSettings, Enumeration, ReadOnly, ReadWrite,

@@ -6,7 +6,7 @@
 //! address and quantity echo (10h), address and value echo (06h), sub-function and data echo
 //! (08h). A response that fails any check is a [`FrameError`], never a value.
 
-use std::fmt;
+use ::core::fmt;
 
 /// Function codes.
 pub mod function {

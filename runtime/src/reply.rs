@@ -8,7 +8,7 @@
 //! skips garbage byte by byte until it is back in step (resynchronisation). What it discarded is
 //! counted and the first reason kept (the cause; what follows it is usually debris), so a timeout can say what was seen instead.
 
-use std::ops::Range;
+use ::core::ops::Range;
 
 use crate::pdu::{self, FrameError, Request};
 use crate::{crc, rtu, tcp};
@@ -64,8 +64,8 @@ impl Discarded {
     }
 }
 
-impl std::fmt::Display for Discarded {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl ::core::fmt::Display for Discarded {
+    fn fmt(&self, f: &mut ::core::fmt::Formatter<'_>) -> ::core::fmt::Result {
         write!(
             f,
             "discarded {} frame(s) and {} byte(s)",
