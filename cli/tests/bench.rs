@@ -19,8 +19,7 @@ use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport};
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
-#[path = "../../runtime/tests/support/pty_pair.rs"]
-mod pty_pair;
+use drivemap_test_support::pty_pair;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,10 +1,9 @@
 //! `drivemap read` and `drivemap poll` as subprocesses against the runtime's hostile peer
-//! (`runtime/tests/support/hostile_peer.rs`): each must end within timeout × attempts + 2 s
+//! (`drivemap_test_support::hostile_peer`): each must end within timeout × attempts + 2 s
 //! (per request) with an error that says what happened; `poll` must come back after the server
 //! restarts. A subprocess still running past its bound is killed and the test fails.
 
-#[path = "../../runtime/tests/support/hostile_peer.rs"]
-mod hostile_peer;
+use drivemap_test_support::hostile_peer;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};

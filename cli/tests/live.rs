@@ -510,8 +510,7 @@ fn broadcast_writes_go_to_slave_0_without_reply() {
     assert_eq!(d.writes().len(), 1);
 }
 
-#[path = "../../runtime/tests/support/pty_pair.rs"]
-mod pty_pair;
+use drivemap_test_support::pty_pair;
 use pty_pair::PtyPair;
 
 #[test]

@@ -12,10 +12,9 @@
 //!
 //! Run: `cargo bench -p drivemap-runtime --bench poll_cycle`
 
-use std::alloc::{GlobalAlloc, Layout, System};
+use drivemap_test_support::alloc_count::{self, Counting};
 use std::hint::black_box;
 use std::io;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -24,27 +23,6 @@ use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{Access, Client, RegisterInfo, Table};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -121,11 +99,11 @@ fn client() -> Client<Link> {
 
 fn allocations_per(iterations: usize, mut f: impl FnMut()) -> f64 {
     f(); // warm up: buffers that grow once are not per cycle.
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = alloc_count::all_threads();
     for _ in 0..iterations {
         f();
     }
-    (ALLOCATIONS.load(Ordering::Relaxed) - before) as f64 / iterations as f64
+    (alloc_count::all_threads() - before) as f64 / iterations as f64
 }
 
 /// A cycle of raw reads following `reads` (for the baselines), values summed.

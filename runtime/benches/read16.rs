@@ -9,10 +9,9 @@
 //!
 //! Run: `cargo bench -p drivemap-runtime --bench read16`
 
-use std::alloc::{GlobalAlloc, Layout, System};
+use drivemap_test_support::alloc_count::{self, Counting};
 use std::hint::black_box;
 use std::io;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -23,27 +22,6 @@ use drivemap_runtime::reply::{Framing, ReplyBuffer};
 use drivemap_runtime::rtu;
 use drivemap_runtime::scale::{Decimal, decode_decimal};
 use drivemap_runtime::transport::Transport;
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -141,11 +119,11 @@ fn client_read(client: &mut Client<Instant16>, out: &mut [f64; 16]) {
 
 fn allocations_per(iterations: usize, mut f: impl FnMut()) -> f64 {
     f(); // warm up: buffers that grow once are not per-transaction.
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = alloc_count::all_threads();
     for _ in 0..iterations {
         f();
     }
-    (ALLOCATIONS.load(Ordering::Relaxed) - before) as f64 / iterations as f64
+    (alloc_count::all_threads() - before) as f64 / iterations as f64
 }
 
 fn bench(c: &mut Criterion) {

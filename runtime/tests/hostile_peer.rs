@@ -7,8 +7,7 @@
 //! Each call runs in a thread of its own and the test fails, rather than hangs, when the call
 //! is still running past the bound.
 
-#[path = "support/hostile_peer.rs"]
-mod hostile_peer;
+use drivemap_test_support::hostile_peer;
 
 use std::sync::mpsc;
 use std::thread;

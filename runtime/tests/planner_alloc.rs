@@ -1,8 +1,7 @@
 //! A planned poll cycle allocates nothing once its buffers exist: counted with a global
 //! allocator that counts the allocations of the current thread.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+use drivemap_test_support::alloc_count::{self, Counting};
 use std::io;
 use std::time::Instant;
 
@@ -12,34 +11,11 @@ use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{Access, Client, RegisterInfo, Table};
 
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
 fn allocations() -> usize {
-    ALLOCATIONS.with(Cell::get)
+    alloc_count::this_thread()
 }
 
 /// Answers each request as it is sent, into a fixed buffer.

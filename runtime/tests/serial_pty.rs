@@ -17,8 +17,7 @@ use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport
 
 use common::V7;
 
-#[path = "support/pty_pair.rs"]
-mod pty_pair;
+use drivemap_test_support::pty_pair;
 use pty_pair::PtyPair;
 
 fn options(path: &str) -> SerialOptions {

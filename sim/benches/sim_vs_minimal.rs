@@ -9,10 +9,10 @@
 //!
 //! Environment: `SIM_BENCH_ROUNDS` (default 5), `SIM_BENCH_SECS` per round (default 1.5).
 
-use std::alloc::{GlobalAlloc, Layout, System};
+use drivemap_test_support::alloc_count::{self, Counting};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Barrier, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
@@ -21,27 +21,6 @@ use drivemap_runtime::pdu::Request;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::tcp;
 use drivemap_sim::{SimOptions, Simulator, SystemClock, TcpFraming, TcpServer};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -192,14 +171,14 @@ fn main() {
     for _ in 0..100 {
         sim.handle(TransportKind::Tcp, &frame[..n], &mut out);
     }
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = alloc_count::all_threads();
     let calls = 100_000;
     let t = Instant::now();
     for _ in 0..calls {
         sim.handle(TransportKind::Tcp, &frame[..n], &mut out);
     }
     let handle_ns = t.elapsed().as_nanos() as f64 / f64::from(calls);
-    let handle_allocs = (ALLOCATIONS.load(Ordering::Relaxed) - before) as f64 / f64::from(calls);
+    let handle_allocs = (alloc_count::all_threads() - before) as f64 / f64::from(calls);
 
     let server = TcpServer::spawn(
         drivemap_sim::shared(sim),
@@ -218,9 +197,9 @@ fn main() {
         for r in 0..rounds {
             // Interleaved, and the order alternates so neither always runs first.
             let (s, m) = if r % 2 == 0 {
-                let a0 = ALLOCATIONS.load(Ordering::Relaxed);
+                let a0 = alloc_count::all_threads();
                 let s = round(server.local_addr(), conns, secs);
-                tcp_allocs.0 += ALLOCATIONS.load(Ordering::Relaxed) - a0;
+                tcp_allocs.0 += alloc_count::all_threads() - a0;
                 tcp_allocs.1 += s.1;
                 (s.0, round(minimal.addr, conns, secs).0)
             } else {

@@ -70,10 +70,8 @@ pub fn python(modules: &[&str]) -> PathBuf {
     python
 }
 
-#[path = "../../../runtime/tests/support/pty_pair.rs"]
-mod pty_pair;
 #[allow(unused_imports)] // not every test binary that includes this module uses it
-pub use pty_pair::PtyPair;
+pub use drivemap_test_support::pty_pair::PtyPair;
 
 /// A child process killed on drop (a Python server, say).
 pub struct Peer(pub Child);

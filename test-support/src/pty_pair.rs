@@ -1,6 +1,5 @@
 //! A pair of linked pseudo-terminals made by `socat`, for tests that drive a real serial line.
-//! Shared by the runtime's, the CLI's and the interop tests (`#[path]`-included); the test fails,
-//! not skips, when socat is missing.
+//! A test using it fails, not skips, when socat is missing.
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
@@ -13,6 +12,7 @@ pub struct PtyPair {
 }
 
 impl PtyPair {
+    #[allow(clippy::new_without_default)] // it starts a process: not a default value
     pub fn new() -> PtyPair {
         let mut child = Command::new("socat")
             .args(["-d", "-d", "pty,raw,echo=0", "pty,raw,echo=0"])

@@ -1,10 +1,9 @@
 //! A scripted Modbus server on 127.0.0.1 that misbehaves on purpose: it floods, trickles, never
 //! ends a frame, resets the connection mid-frame, announces an MBAP length of 65535, or answers
-//! another transaction or unit. Shared by the runtime's and the CLI's tests (`#[path]`-included).
+//! another transaction or unit.
 //!
 //! Bounded like every load test here: each connection is served for at most [`LIFETIME`], stops
 //! when the client closes it or the `HostilePeer` is dropped, and only talks to loopback.
-#![allow(dead_code)]
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};

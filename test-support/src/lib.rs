@@ -1,0 +1,10 @@
+//! What the workspace's tests and benches share, from one place instead of `#[path]` includes:
+//!
+//! - [`pty_pair::PtyPair`]: two linked pseudo-terminals made by `socat`, a real serial line;
+//! - [`hostile_peer::HostilePeer`]: a Modbus TCP server that misbehaves on purpose;
+//! - [`alloc_count::Counting`]: a global allocator that counts heap allocations, per thread and
+//!   in all, for the tests and benches that promise none per request.
+
+pub mod alloc_count;
+pub mod hostile_peer;
+pub mod pty_pair;
