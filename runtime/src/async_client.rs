@@ -111,7 +111,10 @@ impl<S: AsyncRead + AsyncWrite + Unpin> AsyncTransport for AsyncStreamTransport<
 /// Reads and drops what `stream` holds without waiting, up to [`DISCARD_BUDGET`] bytes: the
 /// read is polled once with a waker that does nothing, so no timer is registered, and where
 /// tokio already knows the socket has nothing (the usual case after a reply) no system call
-/// is made either.
+/// is made either. It flushes only what the stream has reported: over a tokio `TcpStream`,
+/// bytes that arrived since the reactor's last turn stay, and reach the reply matching (which
+/// discards a late Modbus TCP reply by its transaction id, but cannot tell a late RTU reply
+/// from the answer). [`AsyncTcpTransport`] asks the kernel instead.
 fn drain<S: AsyncRead + Unpin>(stream: &mut S) -> io::Result<()> {
     let mut scratch = [0u8; 512];
     let mut cx = Context::from_waker(Waker::noop());
@@ -231,22 +234,34 @@ impl AsyncTransport for AsyncTcpTransport {
         .await
     }
 
-    /// `try_read` until the socket is empty, at most [`DISCARD_BUDGET`] bytes: where tokio
-    /// already knows it is empty (the usual case after a reply) this is neither a system call
-    /// nor a lock.
+    /// Reads and drops what the socket holds, without waiting, at most [`DISCARD_BUDGET`]
+    /// bytes: one `recv(MSG_DONTWAIT)` when nothing is there, the same flush as the blocking
+    /// [`TcpTransport`](crate::transport::tcp::TcpTransport)'s. It asks the kernel, not
+    /// tokio: tokio's readiness of the socket dates from the reactor's last turn, so a
+    /// `try_read` (free when tokio believes the socket empty) misses a late reply that arrived
+    /// since then, and a reply without a transaction id (RTU over TCP) would then be taken as
+    /// the next request's answer. Bytes read here behind tokio's back cost at most one empty
+    /// read later, when tokio learns of them and finds them gone.
     async fn discard_input(&mut self) -> io::Result<()> {
-        let mut scratch = [0u8; 512];
-        let mut taken = 0usize;
-        while taken < DISCARD_BUDGET {
-            match self.stream.try_read(&mut scratch) {
-                Ok(0) => return Err(closed()),
-                Ok(n) => taken += n,
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e),
-            }
+        #[cfg(unix)]
+        {
+            crate::transport::tcp::drain_socket(&self.stream)
         }
-        Ok(())
+        #[cfg(not(unix))]
+        {
+            let mut scratch = [0u8; 512];
+            let mut taken = 0usize;
+            while taken < DISCARD_BUDGET {
+                match self.stream.try_read(&mut scratch) {
+                    Ok(0) => return Err(closed()),
+                    Ok(n) => taken += n,
+                    Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
+                    Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                    Err(e) => return Err(e),
+                }
+            }
+            Ok(())
+        }
     }
 
     async fn reconnect(&mut self) -> io::Result<()> {
