@@ -294,10 +294,11 @@ type Connect = fn(TransportKind, SocketAddr, Duration) -> Under;
 
 /// The connectors of every client this build has.
 fn clients() -> Vec<(&'static str, Connect)> {
-    let mut v: Vec<(&'static str, Connect)> = vec![("blocking", Under::blocking)];
-    #[cfg(feature = "tokio")]
-    v.push(("async", Under::asynchronous));
-    v
+    vec![
+        ("blocking", Under::blocking),
+        #[cfg(feature = "tokio")]
+        ("async", Under::asynchronous),
+    ]
 }
 
 /// A request times out; its reply arrives afterwards and sits in the socket when the next
