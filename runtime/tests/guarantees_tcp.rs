@@ -1,6 +1,7 @@
 //! The guarantees the clients keep while being fast, over real loopback sockets, for the
 //! blocking client (`TcpTransport`, `RtuOverTcpTransport`) and the async client
-//! (`AsyncTcpTransport`), Modbus TCP and RTU over TCP:
+//! (`AsyncTcpTransport`, and `AsyncStreamTransport` over a TCP stream), Modbus TCP and RTU over
+//! TCP:
 //!
 //! - a late reply to a timed-out request, already in the socket when the next request is
 //!   sent, is flushed before that request (not taken as its answer, not even seen by the
@@ -247,6 +248,13 @@ enum Under {
             drivemap_runtime::async_client::AsyncTcpTransport,
         >,
     ),
+    #[cfg(feature = "tokio")]
+    AsyncStream(
+        tokio::runtime::Runtime,
+        drivemap_runtime::async_client::AsyncClient<
+            drivemap_runtime::async_client::AsyncStreamTransport<tokio::net::TcpStream>,
+        >,
+    ),
 }
 
 impl Under {
@@ -271,12 +279,27 @@ impl Under {
         Under::Async(rt, AsyncClient::with_options(link, &PROFILE, options(gap)))
     }
 
+    #[cfg(feature = "tokio")]
+    fn asynchronous_stream(kind: TransportKind, addr: SocketAddr, gap: Duration) -> Under {
+        use drivemap_runtime::async_client::{AsyncClient, AsyncStreamTransport};
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .unwrap();
+        let link = rt
+            .block_on(AsyncStreamTransport::connect(addr, kind))
+            .unwrap();
+        Under::AsyncStream(rt, AsyncClient::with_options(link, &PROFILE, options(gap)))
+    }
+
     fn read(&mut self) -> Result<[u16; QUANTITY], Error> {
         let mut words = [0u16; QUANTITY];
         match self {
             Under::Blocking(c) => c.read_holding(SLAVE, ADDRESS, &mut words)?,
             #[cfg(feature = "tokio")]
             Under::Async(rt, c) => rt.block_on(c.read_holding(SLAVE, ADDRESS, &mut words))?,
+            #[cfg(feature = "tokio")]
+            Under::AsyncStream(rt, c) => rt.block_on(c.read_holding(SLAVE, ADDRESS, &mut words))?,
         }
         Ok(words)
     }
@@ -286,6 +309,8 @@ impl Under {
             Under::Blocking(c) => c.discarded(),
             #[cfg(feature = "tokio")]
             Under::Async(_, c) => c.discarded(),
+            #[cfg(feature = "tokio")]
+            Under::AsyncStream(_, c) => c.discarded(),
         }
     }
 }
@@ -298,6 +323,8 @@ fn clients() -> Vec<(&'static str, Connect)> {
         ("blocking", Under::blocking),
         #[cfg(feature = "tokio")]
         ("async", Under::asynchronous),
+        #[cfg(feature = "tokio")]
+        ("async stream", Under::asynchronous_stream),
     ]
 }
 
