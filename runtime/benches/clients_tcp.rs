@@ -9,7 +9,8 @@
 //! Run: `cargo bench -p drivemap-runtime --features tokio --bench clients_tcp`
 //!
 //! System calls per request (`strace -c -f`), one client at a time against a server in
-//! another process:
+//! another process: `scripts/clients-syscalls` (prints the calls per request of each client),
+//! or by hand:
 //!
 //! ```sh
 //! B=$(ls -t target/release/deps/clients_tcp-* | grep -v '\.d$' | head -1)

@@ -54,12 +54,21 @@ pub trait AsyncTransport {
 pub struct AsyncStreamTransport<S> {
     stream: S,
     kind: TransportKind,
+    /// How stale input is flushed: [`drain`] for any stream, the kernel's socket for a TCP
+    /// stream made by [`AsyncStreamTransport::tcp`] or [`AsyncStreamTransport::connect`].
+    flush: fn(&mut S) -> io::Result<()>,
 }
 
 impl<S: AsyncRead + AsyncWrite + Unpin> AsyncStreamTransport<S> {
-    /// Wraps `stream`.
+    /// Wraps `stream`. Stale input is flushed as far as the stream reports it readable (see
+    /// [`AsyncTransport::discard_input`]); wrap a `TcpStream` with
+    /// [`AsyncStreamTransport::tcp`] instead, whose flush asks the kernel.
     pub fn new(stream: S, kind: TransportKind) -> Self {
-        AsyncStreamTransport { stream, kind }
+        AsyncStreamTransport {
+            stream,
+            kind,
+            flush: drain::<S>,
+        }
     }
 
     /// The stream.
@@ -78,7 +87,41 @@ impl AsyncStreamTransport<tokio::net::TcpStream> {
     ) -> io::Result<Self> {
         let stream = tokio::net::TcpStream::connect(addr).await?;
         stream.set_nodelay(true)?;
-        Ok(Self::new(stream, kind))
+        Ok(Self::tcp(stream, kind))
+    }
+
+    /// Wraps a connected TCP stream. Its flush of stale input asks the kernel, as
+    /// [`AsyncTcpTransport`]'s does, rather than tokio, whose readiness of the socket misses
+    /// what arrived since the reactor last looked.
+    pub fn tcp(stream: tokio::net::TcpStream, kind: TransportKind) -> Self {
+        AsyncStreamTransport {
+            stream,
+            kind,
+            flush: flush_socket,
+        }
+    }
+}
+
+/// The flush of a tokio TCP stream: what [`AsyncTcpTransport`] does.
+fn flush_socket(stream: &mut tokio::net::TcpStream) -> io::Result<()> {
+    #[cfg(unix)]
+    {
+        crate::transport::tcp::drain_socket(&*stream)
+    }
+    #[cfg(not(unix))]
+    {
+        let mut scratch = [0u8; 512];
+        let mut taken = 0usize;
+        while taken < DISCARD_BUDGET {
+            match stream.try_read(&mut scratch) {
+                Ok(0) => return Err(closed()),
+                Ok(n) => taken += n,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
     }
 }
 
@@ -104,14 +147,18 @@ impl<S: AsyncRead + AsyncWrite + Unpin> AsyncTransport for AsyncStreamTransport<
     }
 
     async fn discard_input(&mut self) -> io::Result<()> {
-        drain(&mut self.stream)
+        (self.flush)(&mut self.stream)
     }
 }
 
 /// Reads and drops what `stream` holds without waiting, up to [`DISCARD_BUDGET`] bytes: the
 /// read is polled once with a waker that does nothing, so no timer is registered, and where
 /// tokio already knows the socket has nothing (the usual case after a reply) no system call
-/// is made either.
+/// is made either. It flushes only what the stream has reported: over a tokio `TcpStream`,
+/// bytes that arrived since the reactor's last turn stay, and reach the reply matching (which
+/// discards a late Modbus TCP reply by its transaction id, but cannot tell a late RTU reply
+/// from the answer). [`AsyncTcpTransport`] and [`AsyncStreamTransport::tcp`] ask the kernel
+/// instead.
 fn drain<S: AsyncRead + Unpin>(stream: &mut S) -> io::Result<()> {
     let mut scratch = [0u8; 512];
     let mut cx = Context::from_waker(Waker::noop());
@@ -231,22 +278,16 @@ impl AsyncTransport for AsyncTcpTransport {
         .await
     }
 
-    /// `try_read` until the socket is empty, at most [`DISCARD_BUDGET`] bytes: where tokio
-    /// already knows it is empty (the usual case after a reply) this is neither a system call
-    /// nor a lock.
+    /// Reads and drops what the socket holds, without waiting, at most [`DISCARD_BUDGET`]
+    /// bytes: one `recv(MSG_DONTWAIT)` when nothing is there, the same flush as the blocking
+    /// [`TcpTransport`](crate::transport::tcp::TcpTransport)'s. It asks the kernel, not
+    /// tokio: tokio's readiness of the socket dates from the reactor's last turn, so a
+    /// `try_read` (free when tokio believes the socket empty) misses a late reply that arrived
+    /// since then, and a reply without a transaction id (RTU over TCP) would then be taken as
+    /// the next request's answer. Bytes read here behind tokio's back cost at most one empty
+    /// read later, when tokio learns of them and finds them gone.
     async fn discard_input(&mut self) -> io::Result<()> {
-        let mut scratch = [0u8; 512];
-        let mut taken = 0usize;
-        while taken < DISCARD_BUDGET {
-            match self.stream.try_read(&mut scratch) {
-                Ok(0) => return Err(closed()),
-                Ok(n) => taken += n,
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e),
-            }
-        }
-        Ok(())
+        flush_socket(&mut self.stream)
     }
 
     async fn reconnect(&mut self) -> io::Result<()> {

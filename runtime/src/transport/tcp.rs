@@ -119,14 +119,21 @@ fn connect_any(peer: &[SocketAddr], timeout: Duration) -> io::Result<TcpStream> 
 }
 
 /// Reads and drops what the socket holds, without waiting, up to [`DISCARD_BUDGET`] bytes.
-/// One `recv(MSG_DONTWAIT)` when nothing is there.
+/// One `recv(MSG_DONTWAIT)` when nothing is there. It asks the kernel, whatever mode the socket
+/// is in, so it also serves the async transport: tokio's idea of whether a socket is readable
+/// dates from the reactor's last turn and misses what arrived since.
 #[cfg(unix)]
 fn drain(stream: &TcpStream) -> io::Result<()> {
+    drain_socket(stream)
+}
+
+#[cfg(unix)]
+pub(crate) fn drain_socket(socket: impl std::os::fd::AsFd) -> io::Result<()> {
     use rustix::net::{RecvFlags, recv};
     let mut scratch = [0u8; 512];
     let mut taken = 0usize;
     while taken < DISCARD_BUDGET {
-        match recv(stream, &mut scratch[..], RecvFlags::DONTWAIT) {
+        match recv(&socket, &mut scratch[..], RecvFlags::DONTWAIT) {
             Ok((0, _)) => return Err(closed()),
             Ok((n, _)) => taken += n,
             Err(rustix::io::Errno::INTR) => continue,
