@@ -19,10 +19,10 @@
 //!     strace -c -f $B
 //! ```
 
-use std::alloc::{GlobalAlloc, Layout, System};
+use drivemap_test_support::alloc_count::{self, Counting};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::sync::atomic::{AtomicUsize, Ordering};
+
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -30,27 +30,6 @@ use drivemap_runtime::async_client::{AsyncClient, AsyncTcpTransport};
 use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::transport::tcp::TcpTransport;
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -261,9 +240,9 @@ fn median(v: &mut [f64]) -> f64 {
 
 fn allocations_per(peer: &mut Peer, n: usize) -> f64 {
     peer.reads(100); // warm up: buffers that grow once are not per request.
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = alloc_count::all_threads();
     peer.reads(n);
-    (ALLOCATIONS.load(Ordering::Relaxed) - before) as f64 / n as f64
+    (alloc_count::all_threads() - before) as f64 / n as f64
 }
 
 fn env(name: &str) -> Option<String> {
