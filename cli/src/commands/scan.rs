@@ -305,9 +305,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         parity: None,
         stop_bits: None,
         slave: None,
-        timeout: Duration::from_secs(1),
+        timeout: Some(Duration::from_secs(1)),
         retries: 0,
-        request_gap: Duration::ZERO,
+        request_gap: Some(Duration::ZERO),
     };
     let serial = args.serial.is_some();
     let mut bauds = args.baud.clone();
@@ -360,11 +360,12 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             link.baud = Some(l.baud);
             link.parity = Some(l.parity);
         }
-        link.timeout = args
+        let timeout = args
             .timeout
             .unwrap_or_else(|| probe_timeout(&profiles, link.baud));
-        link.request_gap = request_gap(&profiles, link.baud);
-        timeout_used = timeout_used.max(link.timeout);
+        link.timeout = Some(timeout);
+        link.request_gap = Some(request_gap(&profiles, link.baud));
+        timeout_used = timeout_used.max(timeout);
         let (mut client, text) = link.connect(first, &Profile::GENERIC)?;
         link_text = match (&args.serial, text.rsplit_once(", slave")) {
             (Some(path), _) => format!("RTU {path}"),
@@ -401,10 +402,11 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             link.baud = Some(l.baud);
             link.parity = Some(l.parity);
         }
-        link.timeout = args
-            .timeout
-            .unwrap_or_else(|| probe_timeout(&profiles, link.baud));
-        link.request_gap = request_gap(&profiles, link.baud);
+        link.timeout = Some(
+            args.timeout
+                .unwrap_or_else(|| probe_timeout(&profiles, link.baud)),
+        );
+        link.request_gap = Some(request_gap(&profiles, link.baud));
         let mut maps: Vec<Candidate> = drives.iter().map(|d| identify(d, &link)).collect();
         maps.sort_by(|a, b| {
             b.score
