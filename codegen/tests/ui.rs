@@ -56,6 +56,22 @@ fn slave_ranges_are_recorded_as_the_manual_prints_them() {
     )
     .expect("01H-FEH is valid");
     assert_eq!(drive.protocol.slave_address.max, 254);
+    // Not refused, but a word about the serial-line specification's 247, at the range.
+    let warnings = drivemap_codegen::review::protocol_warnings(&drive);
+    assert_eq!(warnings.len(), 1);
+    let w = warnings[0].to_string();
+    assert!(w.starts_with("mini-drive.yaml:19:"), "{w}");
+    assert!(
+        w.contains("warning: slave addresses 248..=254 are the manual's, but the Modbus serial-line specification reserves 248-255"),
+        "{w}"
+    );
+    let standard = drivemap_codegen::read_map_str(
+        "mini-drive.yaml",
+        &with("{min: 1, max: 247}"),
+        &Context::default(),
+    )
+    .unwrap();
+    assert!(drivemap_codegen::review::protocol_warnings(&standard).is_empty());
     let e = drivemap_codegen::read_map_str(
         "mini-drive.yaml",
         &with("{min: 0, max: 31}"),

@@ -143,6 +143,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                     drive.registers.len()
                 );
                 let mut map_errors = 0;
+                for w in review::protocol_warnings(drive) {
+                    eprintln!("{w}");
+                }
                 let mut manuals = manuals_dir.as_deref().map(Manuals::new);
                 if let Some(m) = manuals.as_mut() {
                     m.load_for(drive);
