@@ -49,11 +49,8 @@ pub fn write_restriction(w: WriteRestriction) -> &'static str {
 }
 
 /// A transport name.
-pub fn transport(t: TransportName) -> &'static str {
-    match t {
-        TransportName::Rtu => "RTU",
-        TransportName::Tcp => "TCP",
-    }
+pub fn transport(t: TransportName) -> String {
+    t.to_string()
 }
 
 /// A list of transports, or `all` when unrestricted.
@@ -176,17 +173,9 @@ pub fn bits(f: &Field) -> String {
     }
 }
 
-/// The condition under which an alternative address applies.
+/// The condition under which an alternative address applies, in the library's one wording.
 pub fn condition(c: &Condition) -> String {
-    if let Some(s) = &c.setting {
-        format!("{s} is {}", codes(&c.is))
-    } else if let Some(v) = &c.variant {
-        format!("variant {v}")
-    } else if let Some(t) = c.transport {
-        format!("transport {}", transport(t))
-    } else {
-        "never".into()
-    }
+    c.to_string()
 }
 
 #[cfg(test)]

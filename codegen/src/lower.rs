@@ -6,7 +6,7 @@
 //! The plan is made of the vocabulary crate's types ([`drivemap_core::plan`]). The generator
 //! prints it as `const` data; the run-time interpreter (`drivemap-interp`) uses it as it is.
 //! Nothing downstream of this pass reads the serde model again: **a register's scale is decided
-//! in [`conversion`] below.**
+//! in `Lowering::conversion` below.**
 //!
 //! The plan's tables and strings have `'static` lifetime, as generated code's have. Lowering
 //! leaks them: a process lowers each map once (a build script, a tool loading its maps), so the

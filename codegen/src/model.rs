@@ -135,6 +135,15 @@ pub enum TransportName {
     Tcp,
 }
 
+impl std::fmt::Display for TransportName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            TransportName::Rtu => "RTU",
+            TransportName::Tcp => "TCP",
+        })
+    }
+}
+
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SlaveAddress {
@@ -561,6 +570,29 @@ pub struct Condition {
     pub variant: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transport: Option<TransportName>,
+}
+
+/// The one wording of a condition, shared by rustdoc, `drivemap doc`, `describe` and `diff`:
+/// `o2-09 is 1`, `o2-09 is 0, 2`, `variant 400v`, `transport RTU`.
+impl std::fmt::Display for Condition {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some(s) = &self.setting {
+            write!(f, "{s} is ")?;
+            for (i, code) in self.is.iter().enumerate() {
+                if i > 0 {
+                    f.write_str(", ")?;
+                }
+                write!(f, "{code}")?;
+            }
+            Ok(())
+        } else if let Some(v) = &self.variant {
+            write!(f, "variant {v}")
+        } else if let Some(t) = self.transport {
+            write!(f, "transport {t}")
+        } else {
+            f.write_str("never")
+        }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]

@@ -93,7 +93,7 @@ pub trait Writable: Register {
     const WRITE_RESTRICTION: WriteRestriction = WriteRestriction::None;
 
     /// What the map allows on the wire for this register: transports, broadcast space,
-    /// addresses, raw range, reserved bits. Every write passes [`crate::gate::check`] with it.
+    /// addresses, raw range, reserved bits. Every write passes the runtime's `gate::check` with it.
     const RULE: WriteRule;
 
     /// Encodes a value for the wire, checking it against the register's range first. A value
@@ -271,7 +271,10 @@ pub struct ReadWrite;
 /// (`pub type OutputFrequency = Reg<Drive, f64, ReadOnly, 12>;`): every behaviour is in the
 /// generic impls below and the data in [`DrivePlan::REGISTERS`], so a drive module is consts,
 /// aliases and value types, and all drives share one conversion code.
-pub struct Reg<D, V, A, const I: usize>(PhantomData<fn() -> (D, V, A)>);
+pub struct Reg<D, V, A, const I: usize>(PhantomData<Marker<D, V, A>>);
+
+/// `Reg`'s phantom: a function type, so `Reg` is `Send`, `Sync` and `Copy` whatever its parameters.
+type Marker<D, V, A> = fn() -> (D, V, A);
 
 impl<D, V, A, const I: usize> Clone for Reg<D, V, A, I> {
     fn clone(&self) -> Self {

@@ -106,7 +106,7 @@ pub enum Next {
 }
 
 /// Cuts a byte stream into request frames: RTU by length and CRC, Modbus TCP by the MBAP
-/// header; holds at most [`BUF_BUDGET`] bytes; time is passed in, so it can be tested and
+/// header; holds at most `BUF_BUDGET` bytes; time is passed in, so it can be tested and
 /// fuzzed without waiting.
 #[derive(Debug)]
 pub struct Framer {

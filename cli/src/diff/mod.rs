@@ -1,5 +1,5 @@
 //! Semantic diff of two maps: compares the validated IR of the old and the new map and lists
-//! every change with its kind, both sides and the citation of each side. [`classify`] says
+//! every change with its kind, both sides and the citation of each side. [`classify`](mod@classify) says
 //! which kinds break applications built on the generated code; [`render`] prints the result
 //! for a terminal or as Markdown; [`git`] fetches the old maps from a revision. The comparisons
 //! themselves are in `protocol` (metadata, variants, protocol profile) and `registers`.

@@ -147,7 +147,7 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             ChangeKind::TransportRemoved,
             s,
             "transports",
-            (Some(describe::transport(*t).into()), src.0.clone()),
+            (Some(describe::transport(*t)), src.0.clone()),
             (None, src.1.clone()),
             HEAD,
         );
@@ -158,7 +158,7 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             s,
             "transports",
             (None, src.0.clone()),
-            (Some(describe::transport(*t).into()), src.1.clone()),
+            (Some(describe::transport(*t)), src.1.clone()),
             HEAD,
         );
     }

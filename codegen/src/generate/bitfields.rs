@@ -34,6 +34,16 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
         let with = format_ident!("with_{}", f.id);
         let fname = &f.id;
         let lo_lit = proc_macro2::Literal::u8_unsuffixed(lo);
+        // The field's bits brought down to bit 0 and a value put up in place, written without
+        // a shift by zero for a field that starts at bit 0.
+        let down = if lo == 0 {
+            quote!(self.0 & #fm)
+        } else {
+            quote!((self.0 & #fm) >> #lo_lit)
+        };
+        let up = |v: TokenStream| if lo == 0 { v } else { quote!((#v << #lo_lit)) };
+        let up_value = up(quote!(value));
+        let up_code = up(quote!(code));
         let set_doc = format!("Sets `{fname}`.");
         let with_doc = format!("This value with `{fname}` set to `on`.");
         let with_wide_doc = format!(
@@ -78,18 +88,19 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
             debug_fields.push(quote!(.field(#fname, &self.#get())));
         } else if f.values.is_empty() {
             let max = proc_macro2::Literal::u16_unsuffixed(((1u32 << width) - 1) as u16);
+            let max_f = proc_macro2::Literal::f64_unsuffixed(((1u32 << width) - 1) as f64);
             methods.push(quote! {
                 #doc
-                pub const fn #get(&self) -> u16 { (self.0 & #fm) >> #lo_lit }
+                pub const fn #get(&self) -> u16 { #down }
             });
             if writable {
                 methods.push(quote! {
                 #[doc = #set_wide_doc]
                 pub fn #set(&mut self, value: u16) -> Result<&mut Self, #rt::ValueError> {
                     if value > #max {
-                        return Err(#rt::ValueError::OutOfRange { register: #reg_id, value: value as f64, min: 0.0, max: #max as f64, unit: "" });
+                        return Err(#rt::ValueError::OutOfRange { register: #reg_id, value: value as f64, min: 0.0, max: #max_f, unit: "" });
                     }
-                    self.0 = (self.0 & !#fm) | (value << #lo_lit);
+                    self.0 = (self.0 & !#fm) | #up_value;
                     Ok(self)
                 }
                 #[doc = #with_wide_doc]
@@ -112,7 +123,7 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
             let max = proc_macro2::Literal::u16_unsuffixed(((1u32 << width) - 1) as u16);
             methods.push(quote! {
                 #doc
-                pub fn #get(&self) -> #ety { <#ety as #rt::Code>::from_code((self.0 & #fm) >> #lo_lit) }
+                pub fn #get(&self) -> #ety { <#ety as #rt::Code>::from_code(#down) }
             });
             if writable {
                 methods.push(quote! {
@@ -122,7 +133,7 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
                         if !#rt::Code::is_known(&value) || code > #max {
                             return Err(#rt::ValueError::UnknownCode { register: #reg_id, code });
                         }
-                        self.0 = (self.0 & !#fm) | (code << #lo_lit);
+                        self.0 = (self.0 & !#fm) | #up_code;
                         Ok(self)
                     }
                     #[doc = #with_enum_doc]

@@ -6,10 +6,28 @@ use quote::quote;
 use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{Access, DefaultValue, Reference, Scale, WriteRestriction};
 
+/// Brackets of the manual's text (`Drive Read[y]`, `[1]`) escaped so that rustdoc does not
+/// read them as links; a link the generator writes (``[`Name`]``) and code spans stay as they are.
+fn escape_brackets(line: &str) -> String {
+    let chars: Vec<char> = line.chars().collect();
+    let mut out = String::with_capacity(line.len());
+    let mut in_code = false;
+    for (i, &c) in chars.iter().enumerate() {
+        match c {
+            '`' => in_code = !in_code,
+            '[' if !in_code && chars.get(i + 1) != Some(&'`') => out.push('\\'),
+            ']' if !in_code && (i == 0 || chars[i - 1] != '`') => out.push('\\'),
+            _ => {}
+        }
+        out.push(c);
+    }
+    out
+}
+
 /// `#[doc]` attributes, one per line (outer).
 pub fn lines(text: &str) -> TokenStream {
     let attrs = text.lines().map(|l| {
-        let l = format!(" {l}");
+        let l = format!(" {}", escape_brackets(l));
         quote!(#![doc = #l])
     });
     quote!(#(#attrs)*)
@@ -21,7 +39,7 @@ pub fn item(text: &str) -> TokenStream {
         let l = if l.is_empty() {
             String::new()
         } else {
-            format!(" {l}")
+            format!(" {}", escape_brackets(l))
         };
         quote!(#[doc = #l])
     });
@@ -192,16 +210,7 @@ pub fn register(drive: &Drive, r: &Register) -> String {
         WriteRestriction::PrgMode => s += "\nWritable only in PRG (program) mode.\n",
     }
     for alt in &d.address_alternatives {
-        let w = &alt.when;
-        let cond = if let Some(set) = &w.setting {
-            format!("{set} is {:?}", w.is)
-        } else if let Some(v) = &w.variant {
-            format!("variant {v}")
-        } else if let Some(t) = &w.transport {
-            format!("transport {t:?}").to_lowercase()
-        } else {
-            String::new()
-        };
+        let cond = &alt.when;
         s += &format!(
             "\nAt `{:04X}h` when {cond} (`{}`).\n",
             alt.address, alt.source
@@ -242,4 +251,17 @@ pub fn register(drive: &Drive, r: &Register) -> String {
         s += &format!("\nSource: `{src}`.");
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::escape_brackets;
+
+    #[test]
+    fn brackets_of_the_manual_are_escaped_but_links_and_code_are_not() {
+        assert_eq!(
+            escape_brackets("Drive Read[y] (see [`Settings`], `a[0]`)"),
+            "Drive Read\\[y\\] (see [`Settings`], `a[0]`)"
+        );
+    }
 }

@@ -1,5 +1,5 @@
 //! Reviewing a map against its manuals: citations checked by what the cited line says
-//! ([`citations`]), manual rows no item cites ([`coverage`]), the text of a cited line
+//! ([`citations`](mod@citations)), manual rows no item cites ([`coverage`](mod@coverage)), the text of a cited line
 //! ([`Manuals::quote`]).
 //!
 //! Validation ([`crate::validate`]) decides whether a map can be built; review decides whether
