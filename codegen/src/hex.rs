@@ -167,6 +167,15 @@ fn decide(text: &str, slot: Slot, decimal_addresses: bool) -> Result<u64, String
         Slot::ExceptionCode => "exception code",
         Slot::FunctionCode => "function code",
     };
+    if text.len() > 20 {
+        // No address or code has this many digits; a hostile map's megabyte of them is not
+        // repeated in the message.
+        let head: String = text.chars().take(20).collect();
+        return Err(format!(
+            "{what} `{head}…` is too long ({} digits)",
+            text.len()
+        ));
+    }
     if !text.bytes().all(|b| b.is_ascii_digit()) {
         // Hex digits with a letter (`1E08`, which YAML would read as 1.0e8).
         return Err(format!(
@@ -230,9 +239,12 @@ mod tests {
                 .contains("0x10 for 10H, or 0x16 for 16H")
         );
         assert!(
-            decide("99999999999999999999999", Slot::Address, true)
+            decide("99999999999999999999", Slot::Address, true)
                 .unwrap_err()
                 .contains("too large")
         );
+        let long = "7".repeat(1 << 20);
+        let e = decide(&long, Slot::Address, false).unwrap_err();
+        assert!(e.len() < 100 && e.contains("1048576 digits"), "{e}");
     }
 }

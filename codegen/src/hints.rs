@@ -92,6 +92,9 @@ fn number_hint(message: &str) -> Option<String> {
         return None;
     }
     let t = text.trim();
+    if t.len() > 40 {
+        return Some("write a number: decimal (`12`), or hexadecimal as `0x0C`".to_owned());
+    }
     let hex_digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_hexdigit());
     let hex = t
         .strip_prefix("0x")

@@ -297,6 +297,24 @@ impl Builder<'_> {
                 self.push(node, 1)
             }
             Event::Alias(id) => {
+                // An address or code is decided from how it is written (`crate::hex`); an alias
+                // copies a node resolved elsewhere, so it may not stand for one.
+                let items_slot = matches!(
+                    self.stack.last(),
+                    Some(Frame::Map { pending_key: Some((k, _)), .. })
+                        if crate::hex::Slot::of_items(k).is_some()
+                );
+                if self.hex_slot().is_some() || items_slot {
+                    let name = self.alias_name(&loc);
+                    return Err(Diagnostic::new(
+                        loc,
+                        None,
+                        format!(
+                            "YAML alias `*{name}` where an address or code goes: write the \
+                             number itself, as the manual prints it"
+                        ),
+                    ));
+                }
                 let Some(anchored) = self.anchors.get(&id) else {
                     return Err(Diagnostic::new(
                         loc,
