@@ -96,6 +96,11 @@ fn a_closed_output_pipe_ends_quietly() {
             .unwrap();
         let status = child.wait().unwrap();
         assert_eq!(status.code(), Some(141), "{args:?}: {stderr}");
-        assert!(stderr.is_empty(), "{args:?}: {stderr}");
+        // The map's own warnings (ACN's slave range beyond 247) may come first; nothing else.
+        let noise: Vec<&str> = stderr
+            .lines()
+            .filter(|l| !l.contains(": warning: "))
+            .collect();
+        assert!(noise.is_empty(), "{args:?}: {stderr}");
     }
 }

@@ -405,7 +405,37 @@ fn altered_v7() -> String {
         }
     }
     assert_eq!(hits, 3);
+    write_hex(&mut map, false);
     serde_yaml::to_string(&map).unwrap()
+}
+
+/// Writes the numbers the manuals print in hex (addresses, exception and function codes) as
+/// `XXXXH` strings again: serializing a parsed map prints them as decimals, which a map refuses.
+fn write_hex(value: &mut serde_yaml::Value, hex: bool) {
+    use serde_yaml::Value;
+    match value {
+        Value::Number(n) if hex => {
+            if let Some(n) = n.as_u64() {
+                *value = Value::String(format!("{n:02X}H"));
+            }
+        }
+        Value::Sequence(items) => items.iter_mut().for_each(|v| write_hex(v, hex)),
+        Value::Mapping(m) => {
+            for (k, v) in m.iter_mut() {
+                let key = k.as_str().unwrap_or("");
+                let hex = matches!(key, "address" | "code")
+                    || matches!(
+                        (key, &*v),
+                        (
+                            "addresses" | "function_codes" | "functions",
+                            Value::Sequence(_)
+                        )
+                    );
+                write_hex(v, hex);
+            }
+        }
+        _ => {}
+    }
 }
 
 /// Serves `sim` on Modbus TCP and runs `drivemap probe` with the shipped map against it.

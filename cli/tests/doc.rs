@@ -97,3 +97,20 @@ fn output_file_and_unknown_drive() {
     assert_eq!(code, 2);
     assert!(err.contains("no map for drive `ptlk-tds-v9`"), "{err}");
 }
+
+/// The timing row states the master's wait after a reply, which the client keeps by default.
+#[test]
+fn the_timing_row_states_the_request_gap() {
+    let (code, out, err) = drivemap(&["doc", "--maps", "maps", "--drive", "yaskawa-v7"]);
+    assert_eq!(code, 0, "{err}");
+    let row = out
+        .lines()
+        .find(|l| l.starts_with("| Timing |"))
+        .expect("a timing row");
+    assert!(
+        row.contains(
+            "master waits 24 bit times + 10 ms after each reply (`003_8bcf5d50afb8e230.txt:284`)"
+        ),
+        "{row}"
+    );
+}

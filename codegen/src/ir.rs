@@ -23,6 +23,8 @@ use crate::source::{Node, Path};
 #[derive(Debug, Clone)]
 pub struct Drive {
     pub meta: model::DriveMeta,
+    /// How the manual numbers registers (`address_format`; hex unless the map says decimal).
+    pub address_format: model::AddressFormat,
     /// Rust module name (`ptlk_tds_v8`).
     pub module: String,
     pub variants: Vec<VariantAxis>,
@@ -611,6 +613,7 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
     Ok(Drive {
         module: module_name(&model.drive.id),
         meta: model.drive.clone(),
+        address_format: model.address_format.unwrap_or(model::AddressFormat::Hex),
         variants: model.variants.clone(),
         protocol: model.protocol.clone(),
         groups,

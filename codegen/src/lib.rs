@@ -10,6 +10,8 @@ pub mod config;
 pub mod diagnostic;
 pub mod export;
 pub mod generate;
+pub mod hex;
+pub mod hints;
 pub mod ir;
 pub mod load;
 pub mod lower;

@@ -60,7 +60,7 @@ pub fn load(path: &FsPath) -> Result<LoadedMap, Vec<Diagnostic>> {
 /// resolved.
 pub fn load_str(name: &str, text: &str) -> Result<LoadedMap, Vec<Diagnostic>> {
     let file: Arc<str> = Arc::from(name);
-    let tree = source::parse(&file, text).map_err(|d| vec![d])?;
+    let tree = source::parse_map(&file, text)?;
     if let Some(base) = tree.get("drive").and_then(|d| d.get("extends")) {
         return Err(vec![Diagnostic::new(
             base.loc.clone(),
@@ -103,7 +103,7 @@ fn read_tree(path: &FsPath) -> Result<Node, Vec<Diagnostic>> {
             format!("not UTF-8 text ({e})"),
         ))
     })?;
-    source::parse(&file, &text).map_err(|d| vec![d])
+    source::parse_map(&file, &text)
 }
 
 fn load_tree(path: &FsPath, chain: &mut Vec<PathBuf>) -> Result<Node, Vec<Diagnostic>> {
@@ -229,6 +229,8 @@ fn deserialize_at<T: serde::de::DeserializeOwned>(
         let loc = unknown_field(&message)
             .map(|k| tree.locate(&path.key(k)))
             .unwrap_or_else(|| tree.locate(&path));
+        let written = tree.at(&path).map(Node::to_value);
+        let message = crate::hints::explain(&message, written.as_ref());
         let shown = if path.0.is_empty() {
             message
         } else {
@@ -523,7 +525,7 @@ fn load_tree_str(
     chain: &mut Vec<String>,
 ) -> Result<Node, Vec<Diagnostic>> {
     let file: Arc<str> = Arc::from(name);
-    let tree = source::parse(&file, text).map_err(|d| vec![d])?;
+    let tree = source::parse_map(&file, text)?;
     let Some(extends) = tree.get("drive").and_then(|d| d.get("extends")) else {
         return Ok(tree);
     };

@@ -13,6 +13,11 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MapFile {
+    /// How the manual numbers its registers: `hex` (the default: addresses are written `0x2001`
+    /// or `2001H`, and a bare decimal is refused) or `decimal` (bare decimals are addresses as
+    /// written). Decided per file while reading, see [`crate::hex`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub address_format: Option<AddressFormat>,
     pub drive: DriveMeta,
     /// Model variants selectable at run time, by axis (voltage class, firmware).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -30,6 +35,16 @@ pub struct MapFile {
     /// In a variant map: registers of the base map this drive does not have.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub removed: Vec<Removed>,
+}
+
+/// How a manual numbers its registers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AddressFormat {
+    /// Hexadecimal, as most drive manuals print communication addresses ("2001H").
+    Hex,
+    /// Decimal register numbers.
+    Decimal,
 }
 
 /// Who the drive is and where the map comes from.

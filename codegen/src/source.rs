@@ -81,6 +81,19 @@ impl Node {
         }
     }
 
+    /// The node at `path`, if there is one.
+    pub fn at(&self, path: &Path) -> Option<&Node> {
+        let mut node = self;
+        for seg in &path.0 {
+            node = match (seg, &node.kind) {
+                (Seg::Key(k), _) => node.get(k)?,
+                (Seg::Index(i), NodeKind::Seq(items)) => items.get(*i)?,
+                _ => return None,
+            };
+        }
+        Some(node)
+    }
+
     /// The best location for `path`: the key of the last mapping entry on the path, the start
     /// of the last sequence item, or the deepest node that exists.
     pub fn locate(&self, path: &Path) -> Loc {
@@ -181,6 +194,18 @@ pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
     }))
 }
 
+/// [`parse`], then the decision on every address and code written without a hex marker (see
+/// [`crate::hex`]): the tree of one map file as the loader uses it.
+pub fn parse_map(file: &Arc<str>, text: &str) -> Result<Node, Vec<Diagnostic>> {
+    let mut tree = parse(file, text).map_err(|d| vec![d])?;
+    let errors = crate::hex::resolve(&mut tree);
+    if errors.is_empty() {
+        Ok(tree)
+    } else {
+        Err(errors)
+    }
+}
+
 /// The error for a file over [`MAX_MAP_BYTES`].
 pub fn too_large(file: &Arc<str>, len: usize) -> Diagnostic {
     Diagnostic::new(
@@ -244,7 +269,12 @@ impl Builder<'_> {
                 Ok(())
             }
             Event::Scalar(text, style, anchor, _tag) => {
-                let value = if style == ScalarStyle::Plain {
+                let hex = self
+                    .hex_slot()
+                    .and_then(|slot| crate::hex::literal(&text, slot));
+                let value = if let Some(value) = hex {
+                    value
+                } else if style == ScalarStyle::Plain {
                     // Let yaml_serde resolve plain scalars (ints incl. 0x.., floats, bools, null).
                     serde_yaml::from_str::<Value>(&text)
                         .unwrap_or_else(|_| Value::String(text.to_string()))
@@ -267,6 +297,24 @@ impl Builder<'_> {
                 self.push(node, 1)
             }
             Event::Alias(id) => {
+                // An address or code is decided from how it is written (`crate::hex`); an alias
+                // copies a node resolved elsewhere, so it may not stand for one.
+                let items_slot = matches!(
+                    self.stack.last(),
+                    Some(Frame::Map { pending_key: Some((k, _)), .. })
+                        if crate::hex::Slot::of_items(k).is_some()
+                );
+                if self.hex_slot().is_some() || items_slot {
+                    let name = self.alias_name(&loc);
+                    return Err(Diagnostic::new(
+                        loc,
+                        None,
+                        format!(
+                            "YAML alias `*{name}` where an address or code goes: write the \
+                             number itself, as the manual prints it"
+                        ),
+                    ));
+                }
                 let Some(anchored) = self.anchors.get(&id) else {
                     return Err(Diagnostic::new(
                         loc,
@@ -368,6 +416,32 @@ impl Builder<'_> {
                 self.push(node, nodes)
             }
             _ => Ok(()),
+        }
+    }
+
+    /// Whether the scalar about to be pushed is a value whose number the manuals print in hex
+    /// (see [`crate::hex`]).
+    fn hex_slot(&self) -> Option<crate::hex::Slot> {
+        fn key_of(frame: Option<&Frame>) -> Option<&str> {
+            match frame {
+                Some(Frame::Map {
+                    pending_key: Some((key, _)),
+                    ..
+                }) => Some(key),
+                _ => None,
+            }
+        }
+        match self.stack.last() {
+            Some(Frame::Map { .. }) => key_of(self.stack.last()).and_then(crate::hex::Slot::of_key),
+            Some(Frame::Seq { .. }) => {
+                let below = self
+                    .stack
+                    .len()
+                    .checked_sub(2)
+                    .and_then(|i| self.stack.get(i));
+                key_of(below).and_then(crate::hex::Slot::of_items)
+            }
+            None => None,
         }
     }
 

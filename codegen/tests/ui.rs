@@ -56,6 +56,22 @@ fn slave_ranges_are_recorded_as_the_manual_prints_them() {
     )
     .expect("01H-FEH is valid");
     assert_eq!(drive.protocol.slave_address.max, 254);
+    // Not refused, but a word about the serial-line specification's 247, at the range.
+    let warnings = drivemap_codegen::review::protocol_warnings(&drive);
+    assert_eq!(warnings.len(), 1);
+    let w = warnings[0].to_string();
+    assert!(w.starts_with("mini-drive.yaml:19:"), "{w}");
+    assert!(
+        w.contains("warning: slave addresses 248..=254 are the manual's, but the Modbus serial-line specification reserves 248-255"),
+        "{w}"
+    );
+    let standard = drivemap_codegen::read_map_str(
+        "mini-drive.yaml",
+        &with("{min: 1, max: 247}"),
+        &Context::default(),
+    )
+    .unwrap();
+    assert!(drivemap_codegen::review::protocol_warnings(&standard).is_empty());
     let e = drivemap_codegen::read_map_str(
         "mini-drive.yaml",
         &with("{min: 0, max: 31}"),
@@ -63,4 +79,39 @@ fn slave_ranges_are_recorded_as_the_manual_prints_them() {
     )
     .unwrap_err();
     assert!(e.to_string().contains("0 is broadcast"), "{e}");
+}
+
+/// Addresses and codes are read in the manual's notations (`0x2001`, `2001H`, `2001h`, quoted or
+/// not) as hexadecimal; a map whose manual numbers registers in decimal says so with
+/// `address_format: decimal`, and then `address: 2001` is register 2001 (07D1H).
+#[test]
+fn addresses_are_read_in_the_manuals_notation() {
+    let text = std::fs::read_to_string("tests/fixtures/mini-drive.yaml").unwrap();
+    let first = "        address: 0x0001\n";
+    assert!(text.contains(first), "the fixture's first register moved");
+    let read = |text: &str| {
+        drivemap_codegen::read_map_str("mini-drive.yaml", text, &Context::default())
+            .map(|d| {
+                let r = d.registers.iter().find(|r| r.def.id == "command").unwrap();
+                (r.def.address, d.protocol.exceptions[0].code)
+            })
+            .map_err(|e| e.to_string())
+    };
+    let hex_exception = text.replace("{code: 0x21,", "{code: 21h,");
+    for written in ["2001H", "2001h", "\"0x2001\"", "'2001H'"] {
+        let map = hex_exception.replace(first, &format!("        address: {written}\n"));
+        assert_eq!(read(&map), Ok((0x2001, 0x21)), "{written}");
+    }
+    let decimal = text.replace(first, "        address: 2001\n");
+    let e = read(&decimal).unwrap_err();
+    assert!(e.contains("mini-drive.yaml:42:18"), "{e}");
+    assert!(e.contains("address 2001 is decimal (07D1H)"), "{e}");
+    let declared = format!("address_format: decimal\n{decimal}");
+    assert_eq!(read(&declared), Ok((2001, 0x21)));
+    // Hex notations stay hex in a decimal map; a wrong format value is refused by name.
+    let both = declared.replace("address: 0x0900", "address: 900H");
+    assert_eq!(read(&both), Ok((2001, 0x21)));
+    let wrong = format!("address_format: octal\n{text}");
+    let e = read(&wrong).unwrap_err();
+    assert!(e.contains("unknown variant `octal`"), "{e}");
 }

@@ -163,3 +163,32 @@ fn every_shipped_map_is_within_the_limits() {
         drivemap_codegen::load::load(&map).unwrap_or_else(|e| panic!("{e:?}"));
     }
 }
+
+/// Addresses and codes are decided from their raw text (`crate::hex`): a megabyte of digits, an
+/// address anchored and aliased ten thousand times, or a hex string that overflows are refused
+/// with short messages, without a panic.
+#[test]
+fn hostile_addresses_are_refused_briefly() {
+    let long = format!("address: {}\n", "9".repeat(1 << 20));
+    let err = on_small_stack(move || first_error(&long));
+    assert!(
+        err.len() < 200 && err.contains("digits"),
+        "{}",
+        &err[..err.len().min(300)]
+    );
+    // An alias would carry a decimal resolved elsewhere into an address: refused where it stands.
+    for (text, at) in [
+        ("x: &a 2001\ny: {address: *a}\n", "m.yaml:2:14"),
+        ("x: &p [0x10, 20]\ngaps: [{addresses: *p}]\n", "m.yaml:2:20"),
+        (
+            "x: &c 16\nprotocol: {function_codes: [0x03, *c]}\n",
+            "m.yaml:2:35",
+        ),
+    ] {
+        let err = first_error(text);
+        assert!(err.starts_with(at), "{err}");
+        assert!(err.contains("where an address or code goes"), "{err}");
+    }
+    let huge_hex = "address: 0x1FFFFFFFFFFFFFFFFFFFFFFFF\n";
+    assert!(!first_error(huge_hex).is_empty());
+}

@@ -28,10 +28,10 @@
 //! let link = SerialTransport::open(
 //!     SerialOptions::new("/dev/ttyUSB0", 9600).parity(Parity::Even).with_profile(&v7::PROFILE),
 //! )?;
+//! // The map's timing (V7/J7: 24 bits + 10 ms after each reply), with a shorter timeout.
 //! let mut drive = Client::with_options(link, &v7::PROFILE, ClientOptions {
 //!     timeout: Duration::from_millis(200),
-//!     request_gap: Duration::from_millis(13), // V7/J7: 24 bits + 10 ms between messages
-//!     ..ClientOptions::default()
+//!     ..ClientOptions::for_profile(&v7::PROFILE)
 //! });
 //! let mut settings = Settings::default();
 //! drive.load_settings(1, &mut settings)?; // reads n152 (frequency units) and n011

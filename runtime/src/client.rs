@@ -17,6 +17,7 @@
 use std::io;
 use std::time::{Duration, Instant};
 
+use crate::bus_time::{BusModel, SerialConfig};
 use crate::error::{Error, Refusal, Sent};
 use crate::exception::Exception;
 use crate::gate::{self, WriteRule, WriteTarget};
@@ -56,6 +57,38 @@ impl Default for ClientOptions {
             request_gap: Duration::ZERO,
             eeprom_writes_per_hour: 10,
             reconnect: Reconnect::default(),
+        }
+    }
+}
+
+impl ClientOptions {
+    /// The defaults with the timing the drive's manual prescribes, counted on a 9600 baud 8N1
+    /// line (the default line of every shipped map; see [`ClientOptions::for_line`] for
+    /// another):
+    ///
+    /// - [`request_gap`](ClientOptions::request_gap): the wait the manual asks of the master
+    ///   after a reply (`timing.request_gap`; V7/J7 24 bit times + 10 ms,
+    ///   `003_8bcf5d50afb8e230.txt:284`), or the frame gap (`timing.frame_gap_chars`, 3.5
+    ///   characters) where that is longer or the manual prints no wait;
+    /// - [`timeout`](ClientOptions::timeout): the default second plus the drive's stated time
+    ///   to answer (`timing.response_time`, and the default of its response-delay parameter,
+    ///   V7 n156).
+    ///
+    /// Override any field after: `ClientOptions { retries: 0, ..ClientOptions::for_profile(p) }`.
+    pub fn for_profile(profile: &Profile) -> ClientOptions {
+        ClientOptions::for_line(profile, SerialConfig::default())
+    }
+
+    /// [`ClientOptions::for_profile`] with bit and character times counted on `line` (its baud
+    /// rate, parity and stop bits).
+    pub fn for_line(profile: &Profile, line: SerialConfig) -> ClientOptions {
+        let model = BusModel::new(profile, line);
+        let ns = |ns: f64| Duration::from_nanos(ns.ceil() as u64);
+        let defaults = ClientOptions::default();
+        ClientOptions {
+            request_gap: ns(model.turnaround_ns()),
+            timeout: defaults.timeout + ns(model.latency_ns()),
+            ..defaults
         }
     }
 }
@@ -1029,4 +1062,43 @@ impl<T: Transport> Client<T> {
     }
 
     client_methods!([] []);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bus_time::Parity;
+
+    /// The V7's timing as its map states it (`003_8bcf5d50afb8e230.txt:282-284`).
+    fn v7() -> Profile {
+        let mut p = Profile::GENERIC;
+        p.timing.response_delay_bits = Some(24);
+        p.timing.response_delay_param = Some("n156");
+        p.timing.response_delay_param_default_us = Some(10_000);
+        p.timing.request_gap_bits = Some(24);
+        p.timing.request_gap_us = Some(10_000);
+        p
+    }
+
+    #[test]
+    fn options_for_a_profile_keep_its_timing() {
+        let o = ClientOptions::for_profile(&v7());
+        // 24 bits at 9600 baud (2.5 ms) + 10 ms after each reply.
+        assert_eq!(o.request_gap, Duration::from_micros(12_500));
+        // The drive answers after 24 bits + n156's default 10 ms: the timeout allows for it.
+        assert_eq!(
+            o.timeout,
+            Duration::from_secs(1) + Duration::from_micros(12_500)
+        );
+        assert_eq!(o.retries, ClientOptions::default().retries);
+        // At 1200 baud the bit times are eight times longer.
+        let slow = ClientOptions::for_line(&v7(), SerialConfig::new(1200));
+        assert_eq!(slow.request_gap, Duration::from_millis(30));
+        // A manual that prints no wait: the frame gap, 3.5 characters (8E1: 11 bits).
+        let g = ClientOptions::for_line(
+            &Profile::GENERIC,
+            SerialConfig::new(9600).parity(Parity::Even),
+        );
+        assert_eq!(g.request_gap, Duration::from_nanos(4_010_417));
+    }
 }

@@ -506,3 +506,81 @@ fn typed_writes_reach_0001h_only_as_the_register_of_that_link() {
     tcp.write::<v7::TcpDigitalInputCommand>(1, &s1, &s).unwrap();
     assert_eq!(tcp.transport().requests, 1);
 }
+
+// ---- Timing on the wire: the request gap (003 7.1, line 284) ------------------------------------
+
+/// A transport that notes when each request leaves and each reply byte arrives.
+struct Stamped {
+    link: drivemap_drives::runtime::transport::memory::MemoryTransport,
+    sent: Vec<std::time::Instant>,
+    received: Vec<std::time::Instant>,
+}
+
+impl drivemap_drives::runtime::transport::Transport for Stamped {
+    fn kind(&self) -> drivemap_drives::runtime::profile::TransportKind {
+        self.link.kind()
+    }
+    fn send(&mut self, frame: &[u8]) -> std::io::Result<()> {
+        self.sent.push(std::time::Instant::now());
+        self.link.send(frame)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: std::time::Instant) -> std::io::Result<usize> {
+        let n = self.link.recv(buf, deadline)?;
+        if n > 0 {
+            self.received.push(std::time::Instant::now());
+        }
+        Ok(n)
+    }
+}
+
+/// With `ClientOptions::for_profile` (what the CLI uses by default) a V7 master leaves the
+/// manual's 24 bit times + 10 ms after each reply before its next request
+/// (`003_8bcf5d50afb8e230.txt:284`; 24 bits at 9600 baud are 2.5 ms). Measured on the
+/// transport: from the last byte of the first reply to the second request.
+#[test]
+fn two_requests_to_a_v7_keep_the_manuals_request_gap() {
+    use drivemap_drives::runtime::profile::TransportKind;
+    use drivemap_drives::runtime::slave::SimulatedSlave;
+    use drivemap_drives::runtime::transport::memory::MemoryTransport;
+    use drivemap_drives::runtime::{Client, ClientOptions};
+    use std::time::{Duration, Instant};
+
+    let manual_gap = Duration::from_micros(2_500) + Duration::from_millis(10);
+    let options = ClientOptions::for_profile(&v7::PROFILE);
+    assert!(
+        options.request_gap >= manual_gap,
+        "{:?}",
+        options.request_gap
+    );
+    // The default (no profile) keeps no gap: the reason `for_profile` exists.
+    assert_eq!(ClientOptions::default().request_gap, Duration::ZERO);
+
+    let (master, mut link) = MemoryTransport::pair(TransportKind::Rtu);
+    let mut slave = SimulatedSlave::new(1, &v7::PROFILE);
+    let drive = std::thread::spawn(move || {
+        slave
+            .serve(&mut link, Instant::now() + Duration::from_secs(2))
+            .unwrap();
+    });
+    let stamped = Stamped {
+        link: master,
+        sent: Vec::new(),
+        received: Vec::new(),
+    };
+    let mut client = Client::with_options(stamped, &v7::PROFILE, options);
+    let mut word = [0u16; 1];
+    client.read_holding(1, 0x0020, &mut word).unwrap();
+    client.read_holding(1, 0x0020, &mut word).unwrap();
+    let t = client.into_transport();
+    drop(t.link);
+    drive.join().unwrap();
+    assert_eq!(t.sent.len(), 2);
+    let first_reply_end = *t
+        .received
+        .iter()
+        .filter(|&&r| r < t.sent[1])
+        .max()
+        .expect("the first reply arrived before the second request");
+    let gap = t.sent[1] - first_reply_end;
+    assert!(gap >= manual_gap, "second request {gap:?} after the reply");
+}

@@ -18,6 +18,47 @@ pub struct Args {
     /// Treat citations whose line does not mention the cited item as errors.
     #[arg(long)]
     pub strict: bool,
+    /// Fail when a map's citations cannot be verified: the manuals directory is not found
+    /// (DRIVEMAP_MANUALS, or shared/manuals beside the repository) or lacks a manual the map
+    /// names.
+    #[arg(long)]
+    pub require_manuals: bool,
+}
+
+/// Why some of a map's citations cannot be read against their manual, or `None` when every
+/// manual the map names is at hand.
+fn not_verified(dir: Option<&Path>, manuals: &Manuals, drive: &Drive) -> Option<String> {
+    let Some(dir) = dir else {
+        return Some(
+            "no manuals directory found (set DRIVEMAP_MANUALS, or put the manuals in \
+             shared/manuals beside the repository)"
+                .to_owned(),
+        );
+    };
+    if !dir.is_dir() {
+        let from_env = std::env::var_os("DRIVEMAP_MANUALS").is_some_and(|v| Path::new(&v) == dir);
+        return Some(if from_env {
+            format!("DRIVEMAP_MANUALS={} is not a directory", dir.display())
+        } else {
+            format!("manuals directory {} not found", dir.display())
+        });
+    }
+    let missing: Vec<&str> = drive
+        .meta
+        .manuals
+        .iter()
+        .map(|m| m.file.as_str())
+        .filter(|f| manuals.lines(f).is_none())
+        .collect();
+    match missing.len() {
+        0 => None,
+        n if n == drive.meta.manuals.len() => Some(format!(
+            "none of the map's manuals ({}) is in {}",
+            missing.join(", "),
+            dir.display()
+        )),
+        _ => Some(format!("{} not in {}", missing.join(", "), dir.display())),
+    }
 }
 
 /// Counts of a map's citation review.
@@ -101,18 +142,32 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                     drive.meta.id,
                     drive.registers.len()
                 );
-                let mut unverified = 0;
+                let mut map_errors = 0;
+                for w in review::protocol_warnings(drive) {
+                    eprintln!("{w}");
+                }
                 let mut manuals = manuals_dir.as_deref().map(Manuals::new);
                 if let Some(m) = manuals.as_mut() {
                     m.load_for(drive);
                 }
+                let why = not_verified(
+                    manuals_dir.as_deref(),
+                    manuals.as_ref().unwrap_or(&Manuals::default()),
+                    drive,
+                );
+                if let (Some(why), true) = (&why, args.require_manuals) {
+                    eprintln!(
+                        "{file}: error: --require-manuals, but citations not verified: {why}"
+                    );
+                    map_errors += 1;
+                }
                 let manuals = manuals.filter(Manuals::any);
-                if manuals.is_none() && args.strict {
+                if manuals.is_none() && args.strict && !args.require_manuals {
                     // Strict means every citation read against its manual.
                     eprintln!(
                         "{file}: error: --strict, but none of the map's manuals is at hand (set DRIVEMAP_MANUALS)"
                     );
-                    unverified += 1;
+                    map_errors += 1;
                 }
                 if let Some(manuals) = manuals {
                     let checks = review::verify_citations(drive, &manuals);
@@ -124,13 +179,18 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                             eprintln!("{w}");
                         }
                     }
-                    unverified = counts.unverified;
+                    if args.strict {
+                        map_errors += counts.unverified;
+                    }
                     summary.push_str(&format!("; {counts}"));
                 }
+                if let Some(why) = &why {
+                    summary.push_str(&format!("; citations not verified: {why}"));
+                }
                 summary.push(')');
-                if args.strict && unverified > 0 {
+                if map_errors > 0 {
                     failed += 1;
-                    errors += unverified;
+                    errors += map_errors;
                     outln!("FAIL {summary}");
                 } else {
                     outln!("ok   {summary}");

@@ -44,7 +44,8 @@ pub struct Args {
     /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`).
     #[arg(long, value_name = "PATH")]
     pub serial: Option<String>,
-    /// Slave addresses to try: `1-247`, `1,2,5`, `1-10,31`.
+    /// Slave addresses to try: `1-247` (the Modbus serial-line range, the default), `1,2,5`,
+    /// `1-10,31`; up to 255 where a manual gives more (ACN CM.01: 1-250).
     #[arg(long, default_value = "1-247", value_parser = parse_slaves)]
     pub slaves: SlaveList,
     /// Baud rates to try on --serial, comma-separated (default: the candidate maps' defaults).
@@ -70,14 +71,21 @@ pub struct Args {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SlaveList(pub Vec<u8>);
 
-/// Parses `1-247`, `1,2,5`, `1-10,31`.
+/// The profile of the probe reads: generic Modbus, with every slave address a manual may give
+/// (the ACN's CM.01 goes to 250; some manuals print 01H-FEH), not only the standard's 1-247.
+static PROBE: Profile = Profile {
+    slave_max: 255,
+    ..Profile::GENERIC
+};
+
+/// Parses `1-247`, `1,2,5`, `1-10,31`: addresses 1-255 (0 is broadcast, which nobody answers).
 pub fn parse_slaves(text: &str) -> Result<SlaveList, String> {
     let mut out: Vec<u8> = Vec::new();
     for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let num = |s: &str| -> Result<u8, String> {
             match s.trim().parse::<u8>() {
-                Ok(n) if (1..=247).contains(&n) => Ok(n),
-                _ => Err(format!("`{s}` is not a slave address 1-247")),
+                Ok(n) if n >= 1 => Ok(n),
+                _ => Err(format!("`{s}` is not a slave address 1-255")),
             }
         };
         let (a, b) = match part.split_once('-') {
@@ -305,9 +313,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         parity: None,
         stop_bits: None,
         slave: None,
-        timeout: Duration::from_secs(1),
+        timeout: Some(Duration::from_secs(1)),
         retries: 0,
-        request_gap: Duration::ZERO,
+        request_gap: Some(Duration::ZERO),
     };
     let serial = args.serial.is_some();
     let mut bauds = args.baud.clone();
@@ -360,12 +368,13 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             link.baud = Some(l.baud);
             link.parity = Some(l.parity);
         }
-        link.timeout = args
+        let timeout = args
             .timeout
             .unwrap_or_else(|| probe_timeout(&profiles, link.baud));
-        link.request_gap = request_gap(&profiles, link.baud);
-        timeout_used = timeout_used.max(link.timeout);
-        let (mut client, text) = link.connect(first, &Profile::GENERIC)?;
+        link.timeout = Some(timeout);
+        link.request_gap = Some(request_gap(&profiles, link.baud));
+        timeout_used = timeout_used.max(timeout);
+        let (mut client, text) = link.connect(first, &PROBE)?;
         link_text = match (&args.serial, text.rsplit_once(", slave")) {
             (Some(path), _) => format!("RTU {path}"),
             (None, Some((a, _))) => a.to_string(),
@@ -401,10 +410,11 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             link.baud = Some(l.baud);
             link.parity = Some(l.parity);
         }
-        link.timeout = args
-            .timeout
-            .unwrap_or_else(|| probe_timeout(&profiles, link.baud));
-        link.request_gap = request_gap(&profiles, link.baud);
+        link.timeout = Some(
+            args.timeout
+                .unwrap_or_else(|| probe_timeout(&profiles, link.baud)),
+        );
+        link.request_gap = Some(request_gap(&profiles, link.baud));
         let mut maps: Vec<Candidate> = drives.iter().map(|d| identify(d, &link)).collect();
         maps.sort_by(|a, b| {
             b.score
@@ -538,9 +548,12 @@ mod tests {
     fn slave_lists() {
         assert_eq!(parse_slaves("1-3,7,2").unwrap().0, vec![1, 2, 3, 7]);
         assert_eq!(parse_slaves("1-247").unwrap().0.len(), 247);
+        // Beyond the serial-line standard where a manual allows it (ACN 1-250), never 0 or 256.
+        assert_eq!(parse_slaves("248-250").unwrap().0, vec![248, 249, 250]);
         assert!(parse_slaves("0").is_err());
+        assert!(parse_slaves("250-256").is_err());
+        assert_eq!(PROBE.slave_max, 255);
         assert!(parse_slaves("5-2").is_err());
-        assert!(parse_slaves("248").is_err());
     }
 
     #[test]

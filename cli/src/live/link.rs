@@ -46,15 +46,18 @@ pub struct LinkArgs {
     /// Slave address (default: the map's default, else 1; 0 broadcasts a write).
     #[arg(long)]
     pub slave: Option<u8>,
-    /// How long to wait for each reply.
-    #[arg(long, default_value = "1s", value_parser = crate::duration::parse)]
-    pub timeout: Duration,
+    /// How long to wait for each reply (default: 1 s plus the map's response time and
+    /// response-delay default).
+    #[arg(long, value_parser = crate::duration::parse)]
+    pub timeout: Option<Duration>,
     /// Further attempts after a timeout.
     #[arg(long, default_value_t = 2)]
     pub retries: u8,
-    /// Least pause between a reply and the next request (V7/J7: 24 bit times + 10 ms).
-    #[arg(long = "request-gap", default_value = "0ms", value_parser = crate::duration::parse)]
-    pub request_gap: Duration,
+    /// Least pause between a reply and the next request (default on RTU links: the map's
+    /// `timing.request_gap`, V7/J7 24 bit times + 10 ms, at least the 3.5-character frame gap;
+    /// none on Modbus TCP).
+    #[arg(long = "request-gap", value_parser = crate::duration::parse)]
+    pub request_gap: Option<Duration>,
 }
 
 /// A client over whichever transport was chosen.
@@ -111,6 +114,12 @@ impl LinkArgs {
         if self.serial.is_none() {
             return SerialConfig::default();
         }
+        self.serial_config(drive)
+    }
+
+    /// The serial line's baud rate and framing ([`LinkArgs::line`]) as the runtime counts bit
+    /// and character times.
+    fn serial_config(&self, drive: &Drive) -> SerialConfig {
         let (baud, parity, stop_bits) = self.line(drive);
         let mut config = SerialConfig::new(baud)
             .parity(match parity {
@@ -125,6 +134,29 @@ impl LinkArgs {
         config
     }
 
+    /// The client's options: the map's timing ([`ClientOptions::for_line`] on the line's baud
+    /// rate and framing), with what was given on the command line in its place. On Modbus TCP
+    /// the serial line's request gap does not apply (the drive's network card keeps its own
+    /// line), so none is kept unless given.
+    pub fn client_options(&self, drive: &Drive, profile: &Profile) -> ClientOptions {
+        let mut options = if self.kind().is_rtu_framed() {
+            ClientOptions::for_line(profile, self.serial_config(drive))
+        } else {
+            ClientOptions {
+                request_gap: Duration::ZERO,
+                ..ClientOptions::for_profile(profile)
+            }
+        };
+        if let Some(t) = self.timeout {
+            options.timeout = t;
+        }
+        if let Some(g) = self.request_gap {
+            options.request_gap = g;
+        }
+        options.retries = self.retries;
+        options
+    }
+
     /// Opens the link and makes a client for `profile`. Returns the client and a description
     /// of the link for headers.
     pub fn connect(
@@ -132,7 +164,8 @@ impl LinkArgs {
         drive: &Drive,
         profile: &'static Profile,
     ) -> Result<(LiveClient, String), String> {
-        let connect_timeout = self.timeout.max(Duration::from_secs(1));
+        let options = self.client_options(drive, profile);
+        let connect_timeout = options.timeout.max(Duration::from_secs(1));
         let (transport, what): (Box<dyn Transport>, String) = if let Some(addr) = &self.tcp {
             let t = TcpTransport::connect(addr.as_str(), connect_timeout)
                 .map_err(|e| format!("cannot connect to Modbus TCP server {addr}: {e}"))?;
@@ -166,16 +199,54 @@ impl LinkArgs {
         } else {
             return Err("give --tcp, --rtu-tcp or --serial".into());
         };
-        let client = Client::with_options(
-            transport,
-            profile,
-            ClientOptions {
-                timeout: self.timeout,
-                retries: self.retries,
-                request_gap: self.request_gap,
-                ..ClientOptions::default()
-            },
-        );
+        let client = Client::with_options(transport, profile, options);
         Ok((client, format!("{what}, slave {}", self.slave(drive))))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use drivemap_drives::yaskawa_v7 as v7;
+
+    fn args(link: &str) -> LinkArgs {
+        LinkArgs {
+            tcp: (link == "tcp").then(|| "127.0.0.1:502".to_owned()),
+            rtu_tcp: (link == "rtu-tcp").then(|| "127.0.0.1:4001".to_owned()),
+            serial: (link == "serial").then(|| "/dev/null".to_owned()),
+            baud: None,
+            parity: None,
+            stop_bits: None,
+            slave: None,
+            timeout: None,
+            retries: 2,
+            request_gap: None,
+        }
+    }
+
+    /// The request gap defaults to the map's (V7: 24 bits at its default 9600 baud + 10 ms) on
+    /// RTU links, follows `--baud`, and `--request-gap`/`--timeout` override it.
+    #[test]
+    fn client_timing_defaults_come_from_the_map() {
+        let drive = crate::maps::MapsDir::default().load("yaskawa-v7").unwrap();
+        let gap = |a: &LinkArgs| a.client_options(&drive, &v7::PROFILE).request_gap;
+        assert_eq!(gap(&args("serial")), Duration::from_micros(12_500));
+        assert_eq!(gap(&args("rtu-tcp")), Duration::from_micros(12_500));
+        assert_eq!(gap(&args("tcp")), Duration::ZERO);
+        let slow = LinkArgs {
+            baud: Some(4800),
+            ..args("serial")
+        };
+        assert_eq!(gap(&slow), Duration::from_millis(15));
+        let given = LinkArgs {
+            request_gap: Some(Duration::from_millis(50)),
+            timeout: Some(Duration::from_millis(300)),
+            ..args("serial")
+        };
+        let o = given.client_options(&drive, &v7::PROFILE);
+        assert_eq!(
+            (o.request_gap, o.timeout),
+            (Duration::from_millis(50), Duration::from_millis(300))
+        );
     }
 }

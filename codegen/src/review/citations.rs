@@ -107,14 +107,18 @@ struct Keys {
 }
 
 impl Keys {
-    fn of(r: &Register, offsets: Option<(i32, i32)>) -> Keys {
+    fn of(r: &Register, offsets: Option<(i32, i32)>, decimal: bool) -> Keys {
+        let forms = |address: u16| {
+            let f = AddressForms::new(address, offsets);
+            if decimal { f.with_decimal(address) } else { f }
+        };
         Keys {
-            forms: AddressForms::new(r.def.address, offsets),
+            forms: forms(r.def.address),
             alternatives: r
                 .def
                 .address_alternatives
                 .iter()
-                .map(|a| AddressForms::new(a.address, offsets))
+                .map(|a| forms(a.address))
                 .collect(),
             param: r.def.param.clone(),
         }
@@ -149,6 +153,7 @@ const WINDOW: usize = 80;
 
 /// Checks every register, value and field citation of a drive against the manuals.
 pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> {
+    let decimal = drive.address_format == crate::model::AddressFormat::Decimal;
     let offsets = drive
         .protocol
         .addressing
@@ -157,7 +162,7 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
     let keys: Vec<Keys> = drive
         .registers
         .iter()
-        .map(|r| Keys::of(r, offsets))
+        .map(|r| Keys::of(r, offsets, decimal))
         .collect();
     // Registers by manual, sorted by cited line, to find the neighbours of a line.
     let mut by_file: HashMap<&str, Vec<(usize, usize)>> = HashMap::new();
@@ -435,6 +440,27 @@ mod tests {
             .into_iter()
             .map(|c| (c.source.clone(), c.verdict))
             .collect()
+    }
+
+    /// A manual that numbers registers in decimal: with `address_format: decimal` its rows are
+    /// found by the decimal number (no parameter number, no name on the line).
+    #[test]
+    fn a_decimal_map_finds_its_registers_by_their_decimal_number() {
+        let text = |format: &str| {
+            format!(
+                "{format}drive: {{id: t, vendor: T, models: [T], manuals: [{{file: d.txt, title: D}}]}}\n\
+                 protocol: {{transports: [rtu], function_codes: [0x03], max_read: 1, max_write: 1, slave_address: {{min: 1, max: 31}}}}\n\
+                 groups:\n\
+                 \x20 - {{id: g, name: G, registers: [{{id: speed, name: Speed reference, access: r, address: 0x07D1, source: \"d.txt:1\"}}]}}\n"
+            )
+        };
+        let manuals = Manuals::from_texts([("d.txt", "2001\tReference\tHz\n")]);
+        let verdict = |format: &str| {
+            let drive = crate::read_map_str("t.yaml", &text(format), &Context::default()).unwrap();
+            verify_citations(&drive, &manuals)[0].verdict.clone()
+        };
+        assert_eq!(verdict("address_format: decimal\n"), Verdict::Verified);
+        assert_eq!(verdict(""), Verdict::Unverified { row_of: None });
     }
 
     #[test]

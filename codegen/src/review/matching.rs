@@ -12,6 +12,9 @@ pub struct AddressForms {
     /// Upper-case hexadecimal forms with their boundary rule.
     hex: Vec<(String, Boundary)>,
     decimal: Vec<String>,
+    /// The register number in decimal, for a manual that numbers registers so
+    /// (`address_format: decimal`).
+    register_number: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -49,7 +52,18 @@ impl AddressForms {
             decimal.sort();
             decimal.dedup();
         }
-        AddressForms { hex, decimal }
+        AddressForms {
+            hex,
+            decimal,
+            register_number: None,
+        }
+    }
+
+    /// Also finds the address printed as a decimal register number (`2001` for 07D1H), for a
+    /// map with `address_format: decimal`.
+    pub fn with_decimal(mut self, address: u16) -> AddressForms {
+        self.register_number = Some(address.to_string());
+        self
     }
 
     /// The manual's preferred spelling, for messages.
@@ -64,6 +78,10 @@ impl AddressForms {
         // TCP number of one register is the RTU number of the next.
         texts.iter().any(|t| {
             self.hex.iter().any(|(f, b)| find_bounded(t, f, *b))
+                || self
+                    .register_number
+                    .as_ref()
+                    .is_some_and(|d| find_bounded(t, d, Boundary::Word))
                 || (!self.decimal.is_empty()
                     && self
                         .decimal
@@ -342,6 +360,10 @@ mod tests {
         assert!(glued.found_in(&Line::new("31AhE4-03Motor 2 Max. Voltage")));
         let ocr = AddressForms::new(0x1E0A, Some((-1, 0)));
         assert!(ocr.found_in(&Line::new("UF.10 1EOA 47690 47691")));
+        let decimal = AddressForms::new(2001, None).with_decimal(2001);
+        assert!(decimal.found_in(&Line::new("2001 Speed reference")));
+        assert!(!decimal.found_in(&Line::new("12001 Speed reference")));
+        assert!(!AddressForms::new(2001, None).found_in(&Line::new("2001 Speed reference")));
         let plc = AddressForms::new(0x1E0A, Some((-1, 0)));
         assert!(plc.found_in(&Line::new("UF.10 ---- 47690 47691")));
         // The next register's RTU number is this one's TCP number: both are needed.

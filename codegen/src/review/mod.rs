@@ -120,6 +120,33 @@ fn split_lines(text: &str) -> Vec<String> {
     text.lines().map(str::to_owned).collect()
 }
 
+/// Findings about a map's protocol that are worth a word but never refuse the map: a slave range
+/// the manual gives beyond the Modbus serial-line specification's unicast addresses 1-247 (ACN
+/// CM.01 1-250; some manuals print 01H-FEH). The map records the manual's range; the warning
+/// says what a standard master or gateway may do with 248-255.
+pub fn protocol_warnings(drive: &crate::Drive) -> Vec<Warning> {
+    let s = &drive.protocol.slave_address;
+    let mut out = Vec::new();
+    if s.max > 247 {
+        let path = crate::source::Path::root()
+            .key("protocol")
+            .key("slave_address")
+            .key("max");
+        let above = if s.min > 247 { s.min } else { 248 };
+        out.push(Warning {
+            loc: drive.locate(&path),
+            register: None,
+            message: format!(
+                "slave addresses {above}..={} are the manual's, but the Modbus serial-line \
+                 specification reserves 248-255 (unicast 1-247): a standard master or gateway \
+                 may not reach them",
+                s.max
+            ),
+        });
+    }
+    out
+}
+
 /// A warning of review: where, which register, what.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
 pub struct Warning {

@@ -1,0 +1,250 @@
+//! Register addresses and protocol codes as the manuals print them: in hexadecimal.
+//!
+//! A manual prints "2001H"; YAML reads `address: 2001` as the decimal 2001 = 07D1H, a silently
+//! wrong register. So the keys whose numbers the manuals print in hex — `address` (registers,
+//! `address_alternatives`, command writes), `addresses` (gaps), `code` (exceptions),
+//! `function_codes` and `broadcast.functions` — accept the manual's notations `0x2001`, `2001H`
+//! and `2001h` (quoted or not), and refuse a bare decimal, naming the hex it would mean. A map
+//! whose manual numbers its registers in decimal declares `address_format: decimal` at the top;
+//! then a decimal address is taken as written. Codes 0-9 read the same in both bases and are
+//! accepted as decimals.
+//!
+//! The work is split in two because the decision needs the scalar's raw text, which only the
+//! parser sees, and the map's `address_format`, which may come after the addresses: while
+//! parsing, [`literal`] turns hex notations into integers and marks the doubtful ones (decimal
+//! digits, hex digits without a marker) with a private YAML tag; [`resolve`] then decides each
+//! marked scalar once the whole file is read.
+
+use serde_yaml::Value;
+use serde_yaml::value::{Tag, TaggedValue};
+
+use crate::diagnostic::Diagnostic;
+use crate::source::{Node, NodeKind, Path, Seg};
+
+/// What a hexadecimal number at this place is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Slot {
+    /// A register address.
+    Address,
+    /// An exception code.
+    ExceptionCode,
+    /// A Modbus function code.
+    FunctionCode,
+}
+
+impl Slot {
+    /// The slot of a value written under mapping key `key`.
+    pub fn of_key(key: &str) -> Option<Slot> {
+        match key {
+            "address" => Some(Slot::Address),
+            "code" => Some(Slot::ExceptionCode),
+            _ => None,
+        }
+    }
+
+    /// The slot of an item of a sequence written under mapping key `key`.
+    pub fn of_items(key: &str) -> Option<Slot> {
+        match key {
+            "addresses" => Some(Slot::Address),
+            "function_codes" | "functions" => Some(Slot::FunctionCode),
+            _ => None,
+        }
+    }
+
+    fn tag(self) -> &'static str {
+        match self {
+            Slot::Address => "drivemap-address",
+            Slot::ExceptionCode => "drivemap-exception-code",
+            Slot::FunctionCode => "drivemap-function-code",
+        }
+    }
+
+    fn from_tag(tag: &Tag) -> Option<Slot> {
+        [Slot::Address, Slot::ExceptionCode, Slot::FunctionCode]
+            .into_iter()
+            .find(|s| *tag == Tag::new(s.tag()))
+    }
+}
+
+/// The value of a scalar written as `text` at `slot`: an integer for the hex notations
+/// (`0x2001`, `2001H`, `2001h`), a marked scalar for digits without a hex marker (decided by
+/// [`resolve`]), or `None` to let YAML resolve it as usual (and the schema refuse it).
+pub fn literal(text: &str, slot: Slot) -> Option<Value> {
+    let t = text.trim();
+    let hex_digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_hexdigit());
+    let digits = t
+        .strip_prefix("0x")
+        .or_else(|| t.strip_prefix("0X"))
+        .or_else(|| t.strip_suffix(['h', 'H']));
+    if let Some(digits) = digits {
+        return hex_digits(digits)
+            .then(|| u64::from_str_radix(digits, 16).ok())
+            .flatten()
+            .map(Value::from);
+    }
+    hex_digits(t).then(|| {
+        Value::Tagged(Box::new(TaggedValue {
+            tag: Tag::new(slot.tag()),
+            value: Value::String(t.to_owned()),
+        }))
+    })
+}
+
+/// Decides every scalar [`literal`] marked in one file's tree (before a variant is merged onto
+/// its base, so each file's own `address_format` applies to its own addresses). Returns the
+/// errors; the tree is left with plain values either way.
+pub fn resolve(tree: &mut Node) -> Vec<Diagnostic> {
+    let decimal = matches!(
+        tree.get("address_format").map(|n| &n.kind),
+        Some(NodeKind::Scalar(Value::String(s))) if s == "decimal"
+    );
+    let mut marked = Vec::new();
+    collect(tree, &mut Path::root(), &mut marked);
+    let mut errors = Vec::new();
+    for (path, slot, text) in marked {
+        let decided = decide(&text, slot, decimal);
+        let register = crate::load::register_at(tree, &path);
+        let Some(node) = node_mut(tree, &path) else {
+            continue;
+        };
+        match decided {
+            Ok(n) => node.kind = NodeKind::Scalar(Value::from(n)),
+            Err(message) => {
+                errors.push(Diagnostic::new(
+                    node.loc.clone(),
+                    register.as_deref(),
+                    format!("{path}: {message}"),
+                ));
+                node.kind = NodeKind::Scalar(Value::String(text));
+            }
+        }
+    }
+    errors
+}
+
+fn collect(node: &Node, path: &mut Path, out: &mut Vec<(Path, Slot, String)>) {
+    match &node.kind {
+        NodeKind::Scalar(Value::Tagged(t)) => {
+            if let (Some(slot), Value::String(text)) = (Slot::from_tag(&t.tag), &t.value) {
+                out.push((path.clone(), slot, text.clone()));
+            }
+        }
+        NodeKind::Scalar(_) => {}
+        NodeKind::Seq(items) => {
+            for (i, item) in items.iter().enumerate() {
+                path.0.push(Seg::Index(i));
+                collect(item, path, out);
+                path.0.pop();
+            }
+        }
+        NodeKind::Map(entries) => {
+            for (k, _, v) in entries {
+                path.0.push(Seg::Key(k.clone()));
+                collect(v, path, out);
+                path.0.pop();
+            }
+        }
+    }
+}
+
+fn node_mut<'a>(mut node: &'a mut Node, path: &Path) -> Option<&'a mut Node> {
+    for seg in &path.0 {
+        node = match (seg, &mut node.kind) {
+            (Seg::Key(k), NodeKind::Map(entries)) => {
+                &mut entries.iter_mut().find(|(key, _, _)| key == k)?.2
+            }
+            (Seg::Index(i), NodeKind::Seq(items)) => items.get_mut(*i)?,
+            _ => return None,
+        };
+    }
+    Some(node)
+}
+
+/// The number a marked scalar stands for, or why it is refused.
+fn decide(text: &str, slot: Slot, decimal_addresses: bool) -> Result<u64, String> {
+    let what = match slot {
+        Slot::Address => "address",
+        Slot::ExceptionCode => "exception code",
+        Slot::FunctionCode => "function code",
+    };
+    if text.len() > 20 {
+        // No address or code has this many digits; a hostile map's megabyte of them is not
+        // repeated in the message.
+        let head: String = text.chars().take(20).collect();
+        return Err(format!(
+            "{what} `{head}…` is too long ({} digits)",
+            text.len()
+        ));
+    }
+    if !text.bytes().all(|b| b.is_ascii_digit()) {
+        // Hex digits with a letter (`1E08`, which YAML would read as 1.0e8).
+        return Err(format!(
+            "{what} `{text}` has no hexadecimal marker; write it as 0x{text} or {text}H"
+        ));
+    }
+    let Ok(n) = text.parse::<u64>() else {
+        return Err(format!("{what} {text} is too large"));
+    };
+    match slot {
+        Slot::Address if decimal_addresses => Ok(n),
+        Slot::Address => Err(format!(
+            "address {n} is decimal ({n:04X}H); write it as the manual prints it: 0x{text} or \
+             {text}H, or declare `address_format: decimal` at the top of the map if the manual \
+             numbers registers in decimal"
+        )),
+        _ if n <= 9 => Ok(n),
+        Slot::ExceptionCode | Slot::FunctionCode => Err(format!(
+            "{what} {n} is decimal ({n:02X}H); write codes in hex as the manual prints them: \
+             0x{n:02X} for {n:02X}H, or 0x{text} for {text}H"
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hex_notations_are_integers() {
+        for text in ["0x2001", "0X2001", "2001H", "2001h", " 2001h "] {
+            assert_eq!(
+                literal(text, Slot::Address),
+                Some(Value::from(0x2001u64)),
+                "{text}"
+            );
+        }
+        assert_eq!(literal("twelve", Slot::Address), None);
+        assert_eq!(literal("0xZZ", Slot::Address), None);
+        assert_eq!(literal("h", Slot::Address), None);
+        assert_eq!(literal("0x1FFFFFFFFFFFFFFFFF", Slot::Address), None);
+    }
+
+    #[test]
+    fn decimals_are_decided_by_the_map() {
+        assert!(
+            decide("2001", Slot::Address, false)
+                .unwrap_err()
+                .contains("address 2001 is decimal (07D1H)")
+        );
+        assert_eq!(decide("2001", Slot::Address, true), Ok(2001));
+        assert!(
+            decide("1E08", Slot::Address, true)
+                .unwrap_err()
+                .contains("0x1E08 or 1E08H")
+        );
+        assert_eq!(decide("3", Slot::FunctionCode, false), Ok(3));
+        assert!(
+            decide("16", Slot::FunctionCode, true)
+                .unwrap_err()
+                .contains("0x10 for 10H, or 0x16 for 16H")
+        );
+        assert!(
+            decide("99999999999999999999", Slot::Address, true)
+                .unwrap_err()
+                .contains("too large")
+        );
+        let long = "7".repeat(1 << 20);
+        let e = decide(&long, Slot::Address, false).unwrap_err();
+        assert!(e.len() < 100 && e.contains("1048576 digits"), "{e}");
+    }
+}
