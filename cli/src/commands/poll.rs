@@ -7,7 +7,6 @@ use std::time::{Duration, Instant};
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::Register;
-use drivemap_codegen::model::Access;
 
 use crate::live::Target;
 use crate::live::output::{Emitter, Format, Reading, now_rfc3339};
@@ -63,7 +62,7 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Str
         None => drive
             .registers
             .iter()
-            .filter(|r| r.access == Access::Read && pollable(r))
+            .filter(|r| !r.writable() && pollable(r))
             .collect(),
     };
     if regs.is_empty() {

@@ -15,7 +15,6 @@ use std::time::{Duration, Instant};
 use clap::{ArgGroup, Args as ClapArgs};
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::Register;
-use drivemap_codegen::model::Access;
 use drivemap_live::LiveSettings;
 use drivemap_runtime::transport::serial::char_times;
 use drivemap_runtime::{Error, Profile};
@@ -217,7 +216,7 @@ fn probe_address(drives: &[Drive], base: &LinkArgs) -> u16 {
         let profile = drivemap_live::leak_profile(d);
         let mut seen = std::collections::BTreeSet::new();
         for r in readable_monitors(d, kind, usize::MAX) {
-            if r.table != drivemap_codegen::model::ModbusTable::Holding {
+            if d.register_plan(r).info.table != drivemap_runtime::Table::Holding {
                 continue;
             }
             let a = crate::live::session::address_of(d, r, &settings, kind);
@@ -244,7 +243,7 @@ fn readable_monitors(
 ) -> Vec<&Register> {
     d.registers
         .iter()
-        .filter(|r| r.access == Access::Read && r.readable() && !r.broadcast)
+        .filter(|r| r.readable() && !r.writable() && !r.broadcast)
         .filter(|r| on_transport(d, r, kind))
         .take(max)
         .collect()

@@ -10,9 +10,9 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
 
-use clap::{ArgGroup, Args as ClapArgs, ValueEnum};
+use crate::live::link::LineParity;
+use clap::{ArgGroup, Args as ClapArgs};
 use drivemap_codegen::Drive;
-use drivemap_codegen::model::Parity as MapParity;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
@@ -20,14 +20,6 @@ use drivemap_sim::{
 };
 
 use crate::maps::MapsDir;
-
-/// Parity of the simulated serial line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum LineParity {
-    None,
-    Even,
-    Odd,
-}
 
 #[derive(ClapArgs, Debug)]
 #[command(group(ArgGroup::new("link").required(true).args(["tcp", "rtu_tcp", "serial"])))]
@@ -170,7 +162,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         &args.external,
         args.time_scale,
     )?;
-    let serial = drive.protocol.serial.clone();
+    // The serial line, should --serial be chosen: the flags, else the map's defaults.
+    let (baud, parity, stop_bits) =
+        crate::live::link::serial_line(&drive, args.baud, args.parity, None);
     let sim = Simulator::new(drive, options).map_err(|e| e.to_string())?;
     for w in sim.warnings() {
         eprintln!("warning: {w}");
@@ -218,26 +212,13 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let Some(path) = &args.serial else {
         return Err("give --tcp, --rtu-tcp or --serial".into());
     };
-    let baud = args
-        .baud
-        .or(serial.as_ref().and_then(|s| s.default_baud))
-        .unwrap_or(9600);
-    let parity = match args.parity {
-        Some(p) => p,
-        None => match serial.as_ref().and_then(|s| s.default_parity) {
-            Some(MapParity::Even) => LineParity::Even,
-            Some(MapParity::Odd) => LineParity::Odd,
-            _ => LineParity::None,
-        },
-    };
-    let eleven_bits = serial.as_ref().and_then(|s| s.char_bits) == Some(11);
     let options = SerialOptions::new(path.to_string_lossy(), baud)
         .parity(match parity {
             LineParity::None => Parity::None,
             LineParity::Even => Parity::Even,
             LineParity::Odd => Parity::Odd,
         })
-        .stop_bits(if eleven_bits && parity == LineParity::None {
+        .stop_bits(if stop_bits == 2 {
             StopBits::Two
         } else {
             StopBits::One

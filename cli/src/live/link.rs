@@ -85,26 +85,7 @@ impl LinkArgs {
     /// Baud rate, parity and stop bits of the serial line: as given, else the map's defaults
     /// (9600, no parity); 2 stop bits without parity where the map fixes 11-bit characters.
     pub fn line(&self, drive: &Drive) -> (u32, LineParity, u8) {
-        let serial = drive.protocol.serial.as_ref();
-        let baud = self
-            .baud
-            .or(serial.and_then(|s| s.default_baud))
-            .unwrap_or(9600);
-        let parity = match self.parity {
-            Some(p) => p,
-            None => match serial.and_then(|s| s.default_parity) {
-                Some(MapParity::Even) => LineParity::Even,
-                Some(MapParity::Odd) => LineParity::Odd,
-                _ => LineParity::None,
-            },
-        };
-        let eleven_bits = serial.and_then(|s| s.char_bits) == Some(11);
-        let stop_bits = match self.stop_bits {
-            Some(n) => n,
-            None if eleven_bits && parity == LineParity::None => 2,
-            None => 1,
-        };
-        (baud, parity, stop_bits)
+        serial_line(drive, self.baud, self.parity, self.stop_bits)
     }
 
     /// The line as the bus-time model of the runtime's read planner sees it (serial links; a
@@ -202,6 +183,35 @@ impl LinkArgs {
         let client = Client::with_options(transport, profile, options);
         Ok((client, format!("{what}, slave {}", self.slave(drive))))
     }
+}
+
+/// Baud rate, parity and stop bits of a serial line to `drive`: what is given, else the map's
+/// defaults (9600, no parity), with 2 stop bits without parity where the map fixes 11-bit
+/// characters. The one reading of the map's serial defaults, for `read`/`write`/`poll` and for
+/// `simulate --serial`.
+pub fn serial_line(
+    drive: &Drive,
+    baud: Option<u32>,
+    parity: Option<LineParity>,
+    stop_bits: Option<u8>,
+) -> (u32, LineParity, u8) {
+    let serial = drive.protocol.serial.as_ref();
+    let baud = baud.or(serial.and_then(|s| s.default_baud)).unwrap_or(9600);
+    let parity = match parity {
+        Some(p) => p,
+        None => match serial.and_then(|s| s.default_parity) {
+            Some(MapParity::Even) => LineParity::Even,
+            Some(MapParity::Odd) => LineParity::Odd,
+            _ => LineParity::None,
+        },
+    };
+    let eleven_bits = serial.and_then(|s| s.char_bits) == Some(11);
+    let stop_bits = match stop_bits {
+        Some(n) => n,
+        None if eleven_bits && parity == LineParity::None => 2,
+        None => 1,
+    };
+    (baud, parity, stop_bits)
 }
 
 #[cfg(test)]

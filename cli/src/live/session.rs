@@ -7,14 +7,13 @@ use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::{Register, ValueKind};
 use drivemap_codegen::lower::Quantity;
-use drivemap_codegen::model::{Access, ModbusTable};
 use drivemap_live::codec::{self, Value};
 use drivemap_live::{LiveSettings, leak_profile, lookup};
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::plan::Dependency;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Access as RtAccess, Profile, RegisterInfo, Table, ValueError};
+use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError};
 
 use super::link::{LinkArgs, LiveClient};
 use crate::describe;
@@ -285,19 +284,6 @@ pub struct Polling {
     slots: Vec<Result<usize, String>>,
 }
 
-fn table(t: ModbusTable) -> Table {
-    match t {
-        ModbusTable::Holding => Table::Holding,
-        ModbusTable::Input => Table::Input,
-    }
-}
-
-/// A `'static` copy of a map string for the runtime's register table. A command builds one
-/// table per run, so the leak is bounded by the size of one map.
-fn leak(s: &str) -> &'static str {
-    Box::leak(s.to_owned().into_boxed_str())
-}
-
 /// A connected drive with its settings.
 pub struct Session<'d> {
     /// The drive's map.
@@ -392,7 +378,7 @@ impl<'d> Session<'d> {
                 continue;
             }
             let address = self.address(d);
-            match self.read_one(d.table, address) {
+            match self.read_one(self.drive.register_plan(d).info.table, address) {
                 Ok(raw) => {
                     self.settings.absorb(self.drive, d.def.address, raw);
                 }
@@ -410,10 +396,10 @@ impl<'d> Session<'d> {
             return Err(why);
         }
         let address = self.address(r);
-        self.read_one(r.table, address)
+        self.read_one(self.drive.register_plan(r).info.table, address)
     }
 
-    fn read_one(&mut self, table: ModbusTable, address: u16) -> Result<u16, String> {
+    fn read_one(&mut self, table: Table, address: u16) -> Result<u16, String> {
         let mut w = [0u16; 1];
         self.read_into(table, address, &mut w)
             .map_err(|e| e.to_string())?;
@@ -422,13 +408,13 @@ impl<'d> Session<'d> {
 
     fn read_into(
         &mut self,
-        table: ModbusTable,
+        table: Table,
         address: u16,
         out: &mut [u16],
     ) -> Result<(), drivemap_runtime::Error> {
         match table {
-            ModbusTable::Holding => self.client.read_holding(self.slave, address, out),
-            ModbusTable::Input => self.client.read_input(self.slave, address, out),
+            Table::Holding => self.client.read_holding(self.slave, address, out),
+            Table::Input => self.client.read_input(self.slave, address, out),
         }
     }
 
@@ -461,19 +447,10 @@ impl<'d> Session<'d> {
             .registers
             .iter()
             .filter(|r| on_transport(self.drive, r, self.kind))
+            // The plan's own row, at the address this link and these settings put it.
             .map(|r| RegisterInfo {
-                id: leak(&r.def.id),
-                param: r.def.param.as_deref().map(leak),
-                name: leak(&r.def.name),
                 address: self.address(r),
-                access: match r.access {
-                    Access::Read => RtAccess::Read,
-                    Access::Write => RtAccess::Write,
-                    Access::ReadWrite => RtAccess::ReadWrite,
-                },
-                table: table(r.table),
-                broadcast_only: r.broadcast,
-                source: leak(r.def.source.as_deref().unwrap_or("")),
+                ..drive.register_plan(r).info
             })
             .collect();
         let mut wanted = Vec::new();
@@ -482,7 +459,7 @@ impl<'d> Session<'d> {
             match self.unreadable(r) {
                 Some(why) => slots.push(Err(why)),
                 None => {
-                    wanted.push((table(r.table), self.address(r)));
+                    wanted.push((drive.register_plan(r).info.table, self.address(r)));
                     slots.push(Ok(wanted.len() - 1));
                 }
             }
