@@ -6,11 +6,13 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_codegen::ir::{Drive, Register};
-use drivemap_codegen::model::{CommandKind, DefaultValue, ModbusTable, WriteRestriction};
+use drivemap_codegen::model::DefaultValue;
 use drivemap_live::{LiveSettings, Value, codec, leak_profile};
 use drivemap_runtime::ValueError;
 use drivemap_runtime::pdu::{self, Request, RequestDecodeError, Response, Words, function};
+use drivemap_runtime::profile::CommandKind;
 use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::{Table, WriteRestriction};
 use drivemap_runtime::{crc, rtu, tcp};
 
 use crate::clock::{Clock, SystemClock};
@@ -247,9 +249,9 @@ struct Layout {
 
 #[derive(Debug, Clone)]
 struct CommandTrack {
-    id: String,
+    id: &'static str,
     kind: CommandKind,
-    writes: Vec<(u16, u16)>,
+    writes: &'static [(u16, u16)],
     progress: usize,
     count: u32,
 }
@@ -378,14 +380,13 @@ impl Simulator {
         };
         let selectors = ids(drive.selectors());
         let references = ids(drive.references());
-        let commands = drive
-            .protocol
+        let commands = profile
             .commands
             .iter()
             .map(|c| CommandTrack {
-                id: c.id.clone(),
+                id: c.id,
                 kind: c.kind,
-                writes: c.writes.iter().map(|w| (w.address, w.value)).collect(),
+                writes: c.writes,
                 progress: 0,
                 count: 0,
             })
@@ -636,9 +637,9 @@ impl Simulator {
             let space = if r.broadcast {
                 &mut layout.broadcast
             } else {
-                match r.table {
-                    ModbusTable::Holding => &mut layout.holding,
-                    ModbusTable::Input => &mut layout.input,
+                match plan.info.table {
+                    Table::Holding => &mut layout.holding,
+                    Table::Input => &mut layout.input,
                 }
             };
             space.entry(address).or_insert(i);
@@ -660,7 +661,7 @@ impl Simulator {
 
     /// Whether the drive's state allows writing `r` now.
     fn may_write_now(&self, r: &Register) -> bool {
-        match r.write_restriction {
+        match self.drive.register_plan(r).restriction {
             WriteRestriction::None => true,
             WriteRestriction::Stopped => !self.running(),
             WriteRestriction::PrgMode => match self.model.mode {
@@ -1084,9 +1085,9 @@ impl Simulator {
                     return Err(self.plan.illegal_quantity);
                 }
                 let table = if f == function::READ_HOLDING {
-                    ModbusTable::Holding
+                    Table::Holding
                 } else {
-                    ModbusTable::Input
+                    Table::Input
                 };
                 for (k, w) in words.iter_mut().take(q).enumerate() {
                     *w = self.read_one(kind, table, u32::from(address) + k as u32, k == 0)?;
@@ -1128,20 +1129,20 @@ impl Simulator {
     fn read_one(
         &self,
         kind: TransportKind,
-        table: ModbusTable,
+        table: Table,
         pdu: u32,
         first: bool,
     ) -> Result<u16, u8> {
         let address = self.communication_address(kind, pdu)?;
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
         let map = match table {
-            ModbusTable::Holding => &layout.holding,
-            ModbusTable::Input => &layout.input,
+            Table::Holding => &layout.holding,
+            Table::Input => &layout.input,
         };
         match map.get(&address) {
             Some(&i) if self.drive.registers[i].readable() => Ok(self.raw[i]),
             Some(_) => Err(self.plan.illegal_address),
-            None if !first || (table == ModbusTable::Holding && self.in_gap(address)) => Ok(0),
+            None if !first || (table == Table::Holding && self.in_gap(address)) => Ok(0),
             None => Err(self.plan.illegal_address),
         }
     }
