@@ -22,7 +22,7 @@
 //! Retrieval / Writing"); a write refused because of the drive's state is a value the drive cannot
 //! take now (03h). `sim/README.md` lists the resulting codes per drive.
 
-use drivemap_codegen::model::ExceptionCode;
+use drivemap_runtime::profile::ExceptionInfo;
 
 /// The exception code for each rule.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,7 +58,7 @@ const WRITE_WORDS: &[&str] = &[
     "disabled",
 ];
 
-fn find(exceptions: &[ExceptionCode], words: &[&str], except: Option<u8>) -> Option<u8> {
+fn find(exceptions: &[ExceptionInfo], words: &[&str], except: Option<u8>) -> Option<u8> {
     exceptions
         .iter()
         .filter(|e| Some(e.code) != except)
@@ -70,8 +70,8 @@ fn find(exceptions: &[ExceptionCode], words: &[&str], except: Option<u8>) -> Opt
 }
 
 impl ExceptionPlan {
-    /// The plan for a drive's exception list.
-    pub fn from_exceptions(exceptions: &[ExceptionCode]) -> ExceptionPlan {
+    /// The plan for a drive's exception list (its profile's `exceptions`).
+    pub fn from_exceptions(exceptions: &[ExceptionInfo]) -> ExceptionPlan {
         let range = find(exceptions, RANGE_WORDS, None);
         let write = find(exceptions, WRITE_WORDS, range);
         ExceptionPlan {
@@ -89,12 +89,11 @@ impl ExceptionPlan {
 mod tests {
     use super::*;
 
-    fn code(code: u8, name: &str, description: &str) -> ExceptionCode {
-        ExceptionCode {
+    fn code(code: u8, name: &'static str, description: &'static str) -> ExceptionInfo {
+        ExceptionInfo {
             code,
-            name: name.into(),
-            description: description.into(),
-            source: "x.txt:1".into(),
+            name,
+            description,
         }
     }
 

@@ -393,7 +393,7 @@ impl Simulator {
             .collect();
         let mut sim = Simulator {
             raw: vec![0; drive.registers.len()],
-            plan: ExceptionPlan::from_exceptions(&drive.protocol.exceptions),
+            plan: ExceptionPlan::from_exceptions(profile.exceptions),
             drive,
             profile,
             slave,
