@@ -136,6 +136,15 @@ fn did_you_mean(message: &str, rest: &str) -> Option<String> {
     ))
 }
 
+/// The candidate closest to `given`, if it is close enough to be a typo of it.
+pub fn closest<'a>(given: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let (d, best) = candidates
+        .into_iter()
+        .map(|c| (distance(&given.to_lowercase(), &c.to_lowercase()), c))
+        .min_by_key(|(d, _)| *d)?;
+    (d <= (given.chars().count() / 3).max(1)).then_some(best)
+}
+
 /// Edit distance with adjacent transpositions counted as one edit (`scael` → `scale` is 1).
 fn distance(a: &str, b: &str) -> usize {
     let a: Vec<char> = a.chars().collect();

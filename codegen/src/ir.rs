@@ -35,6 +35,8 @@ pub struct Drive {
     pub conflicts: Vec<Conflict>,
     pub gaps: Vec<Gap>,
     pub removed: Vec<Removed>,
+    /// Roles by id, as written (checked by `validate::roles_valid`, lowered in `lower`).
+    pub roles: std::collections::BTreeMap<String, Vec<model::RolePlace>>,
     /// The file the map was read from.
     pub file: PathBuf,
     /// The merged YAML tree, for locating findings.
@@ -621,6 +623,7 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
         conflicts: model.conflicts.clone(),
         gaps: model.gaps.clone(),
         removed: model.removed.clone(),
+        roles: model.roles.clone(),
         file: map.path.clone(),
         tree: map.tree.clone(),
         plan: OnceLock::new(),

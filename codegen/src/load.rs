@@ -4,7 +4,8 @@
 //! `drive` keys override (manuals are united), `protocol` is merged key by key recursively,
 //! `variants` are replaced when given, `groups` are merged by `id` and their `registers` by `id`
 //! (a register entry in the variant replaces the base register's keys it names and keeps the
-//! others), `conflicts` and `gaps` are concatenated, and the registers listed under `removed` are
+//! others), `roles` are merged role by role (a role the variant gives replaces the base's places for
+//! it), `conflicts` and `gaps` are concatenated, and the registers listed under `removed` are
 //! dropped. Every node keeps the file and line it was written at, so errors in inherited rows
 //! point at the base map and errors in overrides at the variant.
 
@@ -166,6 +167,10 @@ fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {
                 }
                 "gaps" => deserialize_at::<Vec<crate::model::Gap>>(tree, node, &path).err(),
                 "removed" => deserialize_at::<Vec<crate::model::Removed>>(tree, node, &path).err(),
+                "roles" => deserialize_at::<
+                    std::collections::BTreeMap<String, Vec<crate::model::RolePlace>>,
+                >(tree, node, &path)
+                .err(),
                 "groups" => {
                     if let NodeKind::Seq(groups) = &node.kind {
                         for (gi, group) in groups.iter().enumerate() {
@@ -424,6 +429,7 @@ fn merge_variant(base: Node, child: Node) -> Result<Node, Vec<Diagnostic>> {
                 m
             }
             ("protocol", Some(i)) => merge_deep(out[i].2.clone(), value),
+            ("roles", Some(i)) => merge_shallow(out[i].2.clone(), value),
             ("groups", Some(i)) => merge_by_id(out[i].2.clone(), value, &merge_group)?,
             ("conflicts" | "gaps", Some(i)) => concat(out[i].2.clone(), value),
             (_, Some(_)) => value,

@@ -20,6 +20,7 @@ use drivemap_core::profile::{
     AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, Timing,
 };
 use drivemap_core::register::{Access, RegisterInfo, Table, WriteRestriction};
+use drivemap_core::roles::{FieldRole, Place, Role, Roles, Target};
 use drivemap_core::rule::{Broadcast, Transports, WriteRule};
 use drivemap_core::scale::{Decimal, RawRange};
 
@@ -40,6 +41,8 @@ pub struct DrivePlan {
     pub settings: SettingsPlan,
     /// The drive's protocol profile, with one write rule per writable register.
     pub profile: &'static Profile,
+    /// Which registers and fields play the standard parts of a drive.
+    pub roles: Roles,
 }
 
 /// The slots of a drive's settings: what a `SettingsView` answers.
@@ -156,12 +159,81 @@ pub fn lower(drive: &Drive) -> DrivePlan {
             .collect(),
     );
     let profile = Box::leak(Box::new(profile(drive, registers)));
+    let roles = roles(drive, &position, &settings);
     DrivePlan {
         registers,
         order: position,
         settings,
         profile,
+        roles,
     }
+}
+
+/// The map's roles as plan rows, bit positions and codes, in the order of [`Role::ALL`]. Places
+/// that do not resolve are left out: validation has reported them.
+fn roles(drive: &Drive, position: &[usize], settings: &SettingsPlan) -> Roles {
+    let mut places = Vec::new();
+    for &role in Role::ALL {
+        for p in drive.roles.get(role.id()).into_iter().flatten() {
+            if let Some(target) = role_target(drive, position, settings, p) {
+                places.push(Place {
+                    role,
+                    target,
+                    source: text(p.source.as_deref().unwrap_or_default()),
+                });
+            }
+        }
+    }
+    Roles {
+        places: leak(places),
+    }
+}
+
+fn role_target(
+    drive: &Drive,
+    position: &[usize],
+    settings: &SettingsPlan,
+    p: &model::RolePlace,
+) -> Option<Target> {
+    if let Some(name) = &p.external {
+        let slot = settings
+            .quantities
+            .iter()
+            .position(|q| matches!(q, Quantity::External { id, .. } if id == name))?;
+        return Some(Target::External {
+            slot: slot as u8,
+            name: text(name),
+        });
+    }
+    let r = drive.find(p.register.as_deref()?)?;
+    let i = drive.registers.iter().position(|x| std::ptr::eq(x, r))?;
+    let row = position[i] as u16;
+    let Some(field_id) = &p.field else {
+        return Some(Target::Register(row));
+    };
+    let f = r.def.fields.iter().find(|f| f.id == *field_id)?;
+    let (lsb, width) = field_span(f)?;
+    let code = |c: &model::CodeRef| match c {
+        model::CodeRef::Number(n) => Some(*n),
+        model::CodeRef::Id(id) => f.values.iter().find(|v| v.id == *id).map(|v| v.value),
+    };
+    let on: Vec<u16> = match &p.on {
+        Some(codes) => codes.list().into_iter().filter_map(code).collect(),
+        None => vec![1],
+    };
+    let off = match &p.off {
+        Some(c) => code(c),
+        None if width == 1 => Some(if on == [0] { 1 } else { 0 }),
+        None => None,
+    };
+    Some(Target::Field(FieldRole {
+        row,
+        lsb,
+        width,
+        on: leak(on),
+        off,
+        edge: p.edge,
+    }))
 }
 
 struct Lowering<'a> {

@@ -35,6 +35,66 @@ pub struct MapFile {
     /// In a variant map: registers of the base map this drive does not have.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub removed: Vec<Removed>,
+    /// Which registers and fields play the standard parts of a drive (run, direction, reference,
+    /// monitors, status), by role id (`drivemap_core::roles::Role::id`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub roles: BTreeMap<String, Vec<RolePlace>>,
+}
+
+/// One place a role lives: a register, a field of one, or an external quantity.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RolePlace {
+    /// Register id (or parameter number).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub register: Option<String>,
+    /// Field id of `register`, for command and status roles.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub field: Option<String>,
+    /// An external quantity of the map (`max_frequency` only), instead of a register.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub external: Option<String>,
+    /// The field's code(s) meaning the role holds (default 1 for a 1-bit field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub on: Option<Codes>,
+    /// The code releasing a command (stop, forward) or shown when a status does not hold
+    /// (default 0 for a 1-bit field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub off: Option<CodeRef>,
+    /// The drive acts on the off → on transition only.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub edge: bool,
+    /// The manual line that says this register or field plays the role.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+}
+
+/// A code of a field: its number, or its `id` among the field's `values`.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum CodeRef {
+    Number(u16),
+    Id(String),
+}
+
+/// One code or a list of codes.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum Codes {
+    One(CodeRef),
+    Many(Vec<CodeRef>),
+}
+
+impl Codes {
+    /// The codes, in order.
+    pub fn list(&self) -> Vec<&CodeRef> {
+        match self {
+            Codes::One(c) => vec![c],
+            Codes::Many(v) => v.iter().collect(),
+        }
+    }
 }
 
 /// How a manual numbers its registers.

@@ -1,7 +1,7 @@
 //! The vocabulary of drivemap, shared by the generator, the generated drive modules, the
 //! run-time interpreter and the clients: what a register is ([`register`]), how its word converts
 //! ([`scale`], [`plan`]), what may be written to it ([`rule`]) and what a drive accepts on the
-//! wire ([`profile`]).
+//! wire ([`profile`]) and which registers play the standard parts of a drive ([`roles`]).
 //!
 //! `#![no_std]` and free of allocation: a generated drive module and the protocol layer built on
 //! this crate can run on a microcontroller. Data flows one way: the generator's lowering pass
@@ -16,6 +16,7 @@ extern crate std;
 pub mod plan;
 pub mod profile;
 pub mod register;
+pub mod roles;
 pub mod rule;
 pub mod scale;
 
@@ -25,5 +26,6 @@ pub use register::{
     Access, BitRegister, Bits, Code, DrivePlan, DriveSettings, Enumeration, ReadOnly, ReadWrite,
     Readable, Reg, Register, RegisterInfo, Table, Writable, WriteOnly, WriteRestriction,
 };
+pub use roles::{Role, Roles};
 pub use rule::{Broadcast, Transports, WriteRule};
 pub use scale::ValueError;

@@ -253,6 +253,13 @@ pub trait DrivePlan {
     type Settings: SettingsView;
     /// Every register's plan, sorted by address (broadcast-only registers last).
     const REGISTERS: &'static [RegisterPlan];
+    /// What the drive accepts on the wire.
+    const PROFILE: &'static crate::Profile;
+    /// Which registers and fields play the standard parts of a drive ([`Roles::NONE`] when the
+    /// map gives none).
+    ///
+    /// [`Roles::NONE`]: crate::Roles::NONE
+    const ROLES: crate::Roles;
 }
 
 /// Access marker of a register the manual makes read-only.

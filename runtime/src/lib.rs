@@ -54,6 +54,7 @@ pub mod typed;
 pub use client::{Client, ClientOptions, Reconnect};
 pub use drivemap_core as core;
 pub use drivemap_core::plan;
+pub use drivemap_core::roles::{self, Role, Roles};
 pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
 #[cfg(feature = "std")]
 pub use error::{Error, Refusal};

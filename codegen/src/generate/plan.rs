@@ -13,6 +13,7 @@ use drivemap_core::plan::{
     Setting, VariantOption,
 };
 use drivemap_core::register::{Access, Table, WriteRestriction};
+use drivemap_core::roles::Target;
 use drivemap_core::rule::{Broadcast, Transports};
 use drivemap_core::scale::{Decimal, RawRange};
 
@@ -24,14 +25,16 @@ pub fn module(plan: &DrivePlan) -> String {
     for (i, r) in plan.registers.iter().enumerate() {
         let _ = writeln!(rows, "        /* {i} */ {},", row(r));
     }
+    let roles = roles(plan);
     let used = |names: &[&'static str]| -> String {
         let found: Vec<&str> = names
             .iter()
             .copied()
             .filter(|n| {
-                [" {", "::", "("]
-                    .iter()
-                    .any(|end| rows.contains(&format!("{n}{end}")))
+                [" {", "::", "("].iter().any(|end| {
+                    let used = format!("{n}{end}");
+                    rows.contains(&used) || roles.contains(&used)
+                })
             })
             .collect();
         match found.len() {
@@ -63,6 +66,7 @@ pub fn module(plan: &DrivePlan) -> String {
             ][..],
         ),
         ("rt::scale", &["Decimal", "RawRange"][..]),
+        ("rt::roles", &["FieldRole", "Place", "Role", "Target"][..]),
         (
             "rt",
             &[
@@ -83,7 +87,55 @@ pub fn module(plan: &DrivePlan) -> String {
     }
     out.push_str("\n    /// Every register's plan.\n    pub const REGISTERS: &[super::rt::RegisterPlan] = &[\n");
     out.push_str(&rows);
-    out.push_str("    ];\n}\n");
+    out.push_str("    ];\n");
+    out.push_str(&roles);
+    out.push_str("}\n");
+    out
+}
+
+/// `pub const ROLES`: one place per line, the register's id in a comment.
+fn roles(plan: &DrivePlan) -> String {
+    let mut out = String::from(
+        "\n    /// Which registers and fields play the standard parts of a drive (the map's `roles`).\n",
+    );
+    if plan.roles.is_empty() {
+        out.push_str("    pub const ROLES: super::rt::Roles = super::rt::Roles::NONE;\n");
+        return out;
+    }
+    out.push_str(
+        "    pub const ROLES: super::rt::Roles = super::rt::Roles {\n        places: &[\n",
+    );
+    for p in plan.roles.places {
+        let target = match p.target {
+            Target::Register(row) => format!("Target::Register({row})"),
+            Target::Field(f) => format!(
+                "Target::Field(FieldRole {{ row: {}, lsb: {}, width: {}, on: {}, off: {:?}, edge: {} }})",
+                f.row,
+                f.lsb,
+                f.width,
+                list(f.on, |c| c.to_string()),
+                f.off,
+                f.edge
+            ),
+            Target::External { slot, name } => {
+                format!(
+                    "Target::External {{ slot: {slot}, name: {} }}",
+                    string(name)
+                )
+            }
+        };
+        let what = match p.target.row() {
+            Some(row) => plan.registers[usize::from(row)].info.id,
+            None => "external quantity",
+        };
+        let _ = writeln!(
+            out,
+            "            /* {what} */ Place {{ role: Role::{:?}, target: {target}, source: {} }},",
+            p.role,
+            string(p.source)
+        );
+    }
+    out.push_str("        ],\n    };\n");
     out
 }
 

@@ -27,6 +27,8 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
         impl #rt::DrivePlan for Drive {
             type Settings = Settings;
             const REGISTERS: &'static [#rt::RegisterPlan] = plan::REGISTERS;
+            const PROFILE: &'static #rt::Profile = &PROFILE;
+            const ROLES: #rt::Roles = plan::ROLES;
         }
 
         /// Every register of the map, by address (broadcast-only registers last).

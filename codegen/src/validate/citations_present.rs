@@ -209,6 +209,12 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
     for g in &drive.groups {
         opt(drive, ctx, out, &g.source, g.path.key("source"), None);
     }
+    for (id, places) in &drive.roles {
+        for (i, p) in places.iter().enumerate() {
+            let path = Path::root().key("roles").key(id).index(i).key("source");
+            opt(drive, ctx, out, &p.source, path, p.register.as_deref());
+        }
+    }
     for (i, g) in drive.gaps.iter().enumerate() {
         cite(
             drive,

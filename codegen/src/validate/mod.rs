@@ -21,6 +21,7 @@ mod limits_consistent;
 mod numbers_finite;
 mod protocol_valid;
 mod references_resolve;
+mod roles_valid;
 mod value_kind_single;
 
 pub use crate::names::field_span;
@@ -72,6 +73,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     references_resolve::check(drive, &mut out);
     access_consistent::check(drive, &mut out);
     protocol_valid::check(drive, &mut out);
+    roles_valid::check(drive, &mut out);
     numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);
     out

@@ -1,0 +1,356 @@
+//! Roles name what they may: a known role, an existing register (or, for the maximum frequency,
+//! an external quantity of the map), of a fitting kind and access — a command or status role a
+//! field, a setpoint a writable number register in the role's unit, a monitor a readable one —
+//! and codes the field has. Citations of roles are checked with the others
+//! (`citations_present`).
+
+use drivemap_core::roles::{Role, RoleKind};
+
+use crate::diagnostic::Diagnostic;
+use crate::ir::{Drive, Register, ValueKind};
+use crate::model::{CodeRef, Field, RolePlace};
+use crate::names::field_span;
+use crate::source::Path;
+
+struct Check<'a> {
+    drive: &'a Drive,
+    out: &'a mut Vec<Diagnostic>,
+}
+
+impl Check<'_> {
+    fn error(&mut self, path: &Path, register: Option<&str>, message: String) {
+        self.out.push(self.drive.error(path, register, message));
+    }
+}
+
+pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    let mut c = Check { drive, out };
+    for (id, places) in &drive.roles {
+        let path = Path::root().key("roles").key(id);
+        let Some(role) = Role::from_id(id) else {
+            let hint = crate::hints::closest(id, Role::ALL.iter().map(|r| r.id()))
+                .map(|b| format!(" (did you mean `{b}`?)"))
+                .unwrap_or_default();
+            let all: Vec<&str> = Role::ALL.iter().map(|r| r.id()).collect();
+            c.error(
+                &path,
+                None,
+                format!(
+                    "`{id}` is not a role{hint}; the roles are {}",
+                    all.join(", ")
+                ),
+            );
+            continue;
+        };
+        for (i, place) in places.iter().enumerate() {
+            c.place(role, place, &path.index(i));
+        }
+    }
+}
+
+impl Check<'_> {
+    fn place(&mut self, role: Role, p: &RolePlace, path: &Path) {
+        let id = role.id();
+        if p.source.is_none() {
+            self.error(
+                path,
+                None,
+                format!("role `{id}` needs a `source`: the manual line that says so"),
+            );
+        }
+        let register = match (&p.register, &p.external) {
+            (Some(_), Some(_)) | (None, None) => {
+                self.error(
+                    path,
+                    None,
+                    format!("role `{id}` names either a `register` or an `external` quantity"),
+                );
+                return;
+            }
+            (None, Some(name)) => {
+                self.external(role, p, name, path);
+                return;
+            }
+            (Some(name), None) => match self.drive.find(name) {
+                Some(r) => r,
+                None => {
+                    self.error(
+                        &path.key("register"),
+                        None,
+                        format!(
+                            "role `{id}`: `{name}` names no register of this map (by id or parameter number)"
+                        ),
+                    );
+                    return;
+                }
+            },
+        };
+        let rid = Some(register.id());
+        if p.edge && role.kind() != RoleKind::Command {
+            self.error(
+                &path.key("edge"),
+                rid,
+                format!("`edge` says how a command acts; `{id}` is not a command role"),
+            );
+        }
+        match role.kind() {
+            RoleKind::Command | RoleKind::Status => {
+                let command = role.kind() == RoleKind::Command;
+                if command && !register.writable() {
+                    self.error(
+                        path,
+                        rid,
+                        format!(
+                            "role `{id}` is a command, but `{}` is not writable",
+                            register.id()
+                        ),
+                    );
+                }
+                if !command && !register.readable() {
+                    self.error(
+                        path,
+                        rid,
+                        format!(
+                            "role `{id}` is a status, but `{}` is not readable",
+                            register.id()
+                        ),
+                    );
+                }
+                let Some(field_id) = &p.field else {
+                    self.error(
+                        path,
+                        rid,
+                        format!(
+                            "role `{id}` is a {} and needs the `field` of `{}` that plays it",
+                            if command { "command" } else { "status" },
+                            register.id()
+                        ),
+                    );
+                    return;
+                };
+                let Some(field) = register.def.fields.iter().find(|f| f.id == *field_id) else {
+                    let hint = crate::hints::closest(
+                        field_id,
+                        register.def.fields.iter().map(|f| f.id.as_str()),
+                    )
+                    .map(|b| format!(" (did you mean `{b}`?)"))
+                    .unwrap_or_default();
+                    self.error(
+                        &path.key("field"),
+                        rid,
+                        format!(
+                            "register `{}` has no field `{field_id}`{hint}",
+                            register.id()
+                        ),
+                    );
+                    return;
+                };
+                self.codes(role, p, register, field, path);
+            }
+            RoleKind::Setpoint | RoleKind::Monitor => {
+                if p.field.is_some() || p.on.is_some() || p.off.is_some() {
+                    self.error(
+                        path,
+                        rid,
+                        format!(
+                            "role `{id}` is a whole register: it takes no `field`, `on` or `off`"
+                        ),
+                    );
+                }
+                let setpoint = role.kind() == RoleKind::Setpoint;
+                if setpoint && !register.writable() && role != Role::MaxFrequency {
+                    self.error(
+                        path,
+                        rid,
+                        format!(
+                            "role `{id}` is written, but `{}` is not writable",
+                            register.id()
+                        ),
+                    );
+                }
+                if (!setpoint || role == Role::MaxFrequency) && !register.readable() {
+                    self.error(
+                        path,
+                        rid,
+                        format!(
+                            "role `{id}` is read, but `{}` is not readable",
+                            register.id()
+                        ),
+                    );
+                }
+                self.number(role, register, path);
+            }
+        }
+    }
+
+    /// A number role names a number register in the role's unit.
+    fn number(&mut self, role: Role, r: &Register, path: &Path) {
+        let Some(unit) = role.unit() else {
+            // The fault code: a code register or a plain word.
+            if matches!(r.kind(), ValueKind::Bits(_)) {
+                self.error(
+                    path,
+                    Some(r.id()),
+                    format!(
+                        "role `{}` is a code; `{}` is a bit-field register",
+                        role.id(),
+                        r.id()
+                    ),
+                );
+            }
+            return;
+        };
+        let numeric = matches!(r.kind(), ValueKind::Quantity(_) | ValueKind::UnitQuantity);
+        let got = r.def.unit.as_deref().unwrap_or("");
+        if !numeric || got != unit {
+            self.error(
+                path,
+                Some(r.id()),
+                format!(
+                    "role `{}` is a quantity in {unit}; `{}` is {}",
+                    role.id(),
+                    r.id(),
+                    if numeric {
+                        format!("in `{got}`")
+                    } else {
+                        "not a quantity with a unit".into()
+                    }
+                ),
+            );
+        }
+    }
+
+    fn external(&mut self, role: Role, p: &RolePlace, name: &str, path: &Path) {
+        if role != Role::MaxFrequency {
+            self.error(
+                &path.key("external"),
+                None,
+                format!(
+                    "only `max_frequency` may be an external quantity; `{}` names a register",
+                    role.id()
+                ),
+            );
+            return;
+        }
+        if p.field.is_some() || p.on.is_some() || p.off.is_some() || p.edge {
+            self.error(
+                path,
+                None,
+                "an external quantity takes no `field`, `on`, `off` or `edge`".into(),
+            );
+        }
+        match self.drive.externals().iter().find(|q| q.external == name) {
+            Some(q) if q.unit == "Hz" => {}
+            Some(q) => self.error(
+                &path.key("external"),
+                None,
+                format!("external quantity `{name}` is in `{}`, not Hz", q.unit),
+            ),
+            None => self.error(
+                &path.key("external"),
+                None,
+                format!("the map has no external quantity `{name}` (a `relative_to: {{external: ..}}` of some register)"),
+            ),
+        }
+    }
+
+    /// `on` and `off` name codes the field has; a multi-bit command says both.
+    fn codes(&mut self, role: Role, p: &RolePlace, r: &Register, f: &Field, path: &Path) {
+        let Some((_, width)) = field_span(f) else {
+            return; // bit_fields_valid reports it
+        };
+        let rid = Some(r.id());
+        let max = (1u32 << width) - 1;
+        let resolve = |c: &CodeRef, key: &str, this: &mut Self| -> Option<u16> {
+            match c {
+                CodeRef::Number(n) if u32::from(*n) <= max => Some(*n),
+                CodeRef::Number(n) => {
+                    this.error(
+                        &path.key(key),
+                        rid,
+                        format!(
+                            "code {n} does not fit field `{}.{}` ({width} bit{}, 0 ..= {max})",
+                            r.id(),
+                            f.id,
+                            if width == 1 { "" } else { "s" }
+                        ),
+                    );
+                    None
+                }
+                CodeRef::Id(id) => match f.values.iter().find(|v| v.id == *id) {
+                    Some(v) => Some(v.value),
+                    None => {
+                        let listed: Vec<&str> = f.values.iter().map(|v| v.id.as_str()).collect();
+                        this.error(
+                            &path.key(key),
+                            rid,
+                            format!(
+                                "field `{}.{}` has no code `{id}`{}",
+                                r.id(),
+                                f.id,
+                                if listed.is_empty() {
+                                    " (it lists no codes: write the number)".to_owned()
+                                } else {
+                                    format!("; its codes are {}", listed.join(", "))
+                                }
+                            ),
+                        );
+                        None
+                    }
+                },
+            }
+        };
+        let on: Vec<Option<u16>> =
+            p.on.iter()
+                .flat_map(|c| c.list())
+                .map(|c| resolve(c, "on", self))
+                .collect();
+        let off = p.off.as_ref().and_then(|c| resolve(c, "off", self));
+        let command = role.kind() == RoleKind::Command;
+        if width > 1 {
+            if p.on.is_none() {
+                self.error(
+                    path,
+                    rid,
+                    format!(
+                        "field `{}.{}` is {width} bits wide: say which code means `{}` with `on`",
+                        r.id(),
+                        f.id,
+                        role.id()
+                    ),
+                );
+            }
+            if command && p.off.is_none() {
+                self.error(
+                    path,
+                    rid,
+                    format!(
+                        "field `{}.{}` is {width} bits wide: say which code releases `{}` with `off` (the stop code, for `run`)",
+                        r.id(),
+                        f.id,
+                        role.id()
+                    ),
+                );
+            }
+        }
+        if command && on.len() > 1 {
+            self.error(
+                &path.key("on"),
+                rid,
+                format!(
+                    "a command writes one code: give `{}` one `on` code",
+                    role.id()
+                ),
+            );
+        }
+        if let Some(off) = off {
+            if on.contains(&Some(off)) {
+                self.error(
+                    &path.key("off"),
+                    rid,
+                    format!("code {off} is both `on` and `off`"),
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,377 @@
+//! Roles: which register or field of a drive plays each standard part of a variable-frequency
+//! drive — the run command, the direction, the fault reset, the frequency reference, the output
+//! monitors, the status bits — as the map says, with the manual's line.
+//!
+//! Ids differ from drive to drive (`run`, `run_command`, `forward_run`; the ACN says *forward*
+//! where others say *reverse*; some drives report state as codes of a multi-bit field, others as
+//! bits), so a map names, per role, its own register and field and, for a multi-bit field, the
+//! codes that mean "on" and "off". The lowering pass turns that into [`Roles`]: plan rows and bit
+//! positions, decided once. The drive trait of the runtime, the simulator and the demo all read
+//! these places; none of them knows a drive by name.
+
+/// A standard part of a variable-frequency drive.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Role {
+    // Commands: fields the master writes.
+    /// Run (on) / stop (off), in the direction the direction role gives.
+    Run,
+    /// Run forward (on) / stop (off): a 2-wire terminal that runs in one direction.
+    RunForward,
+    /// Run reverse (on) / stop (off): a 2-wire terminal that runs in one direction.
+    RunReverse,
+    /// Direction: reverse (on) / forward (off).
+    Reverse,
+    /// Fault reset (on), released (off); `edge` when the drive acts on the off → on transition.
+    FaultReset,
+    /// Switches to the drive's operating (DRV) mode, where it accepts run commands.
+    ToDriveMode,
+    /// Switches to the drive's program (PRG) mode, where parameters are writable.
+    ToProgramMode,
+    // Setpoints and parameters: whole registers the master writes.
+    /// Frequency reference (Hz).
+    FrequencyReference,
+    /// Acceleration time (s, from 0 to the maximum frequency).
+    AccelTime,
+    /// Deceleration time (s, from the maximum frequency to 0).
+    DecelTime,
+    /// Maximum output frequency (Hz): what accel and decel times are measured against.
+    MaxFrequency,
+    // Monitors: whole registers the master reads.
+    /// Output frequency (Hz).
+    OutputFrequency,
+    /// The frequency reference in force (Hz).
+    ReferenceMonitor,
+    /// Output current (A).
+    OutputCurrent,
+    /// Output voltage (V).
+    OutputVoltage,
+    /// DC bus voltage (V).
+    DcBusVoltage,
+    /// The code of the present (or last) fault.
+    FaultCode,
+    // Status: fields the master reads.
+    /// Running (output live or run commanded).
+    Running,
+    /// Turning, or about to turn, in reverse.
+    Reversing,
+    /// A fault has tripped the drive.
+    Fault,
+    /// An alarm (warning) without a trip.
+    Alarm,
+    /// Ready to run.
+    Ready,
+    /// Output frequency zero.
+    ZeroSpeed,
+    /// Output frequency at the reference.
+    SpeedAgree,
+    /// Ramping up towards the reference.
+    Accelerating,
+    /// Ramping down towards a lower reference.
+    Decelerating,
+    /// Ramping down after a stop command.
+    Stopping,
+    /// In operating (DRV) mode.
+    DriveMode,
+}
+
+/// What a role is, and so what it may name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RoleKind {
+    /// A field the master writes: a 1-bit field (1 = on) or a multi-bit field with its `on` code
+    /// and `off` code.
+    Command,
+    /// A number register the master writes (or an external quantity, for the maximum frequency).
+    Setpoint,
+    /// A register the master reads.
+    Monitor,
+    /// A field the master reads: a 1-bit field (1 = on) or the codes of a multi-bit field that
+    /// mean "on".
+    Status,
+}
+
+impl Role {
+    /// Every role, in the order of the schema documentation.
+    pub const ALL: &'static [Role] = &[
+        Role::Run,
+        Role::RunForward,
+        Role::RunReverse,
+        Role::Reverse,
+        Role::FaultReset,
+        Role::ToDriveMode,
+        Role::ToProgramMode,
+        Role::FrequencyReference,
+        Role::AccelTime,
+        Role::DecelTime,
+        Role::MaxFrequency,
+        Role::OutputFrequency,
+        Role::ReferenceMonitor,
+        Role::OutputCurrent,
+        Role::OutputVoltage,
+        Role::DcBusVoltage,
+        Role::FaultCode,
+        Role::Running,
+        Role::Reversing,
+        Role::Fault,
+        Role::Alarm,
+        Role::Ready,
+        Role::ZeroSpeed,
+        Role::SpeedAgree,
+        Role::Accelerating,
+        Role::Decelerating,
+        Role::Stopping,
+        Role::DriveMode,
+    ];
+
+    /// The key of this role under `roles:` in a map.
+    pub const fn id(self) -> &'static str {
+        match self {
+            Role::Run => "run",
+            Role::RunForward => "run_forward",
+            Role::RunReverse => "run_reverse",
+            Role::Reverse => "reverse",
+            Role::FaultReset => "fault_reset",
+            Role::ToDriveMode => "to_drive_mode",
+            Role::ToProgramMode => "to_program_mode",
+            Role::FrequencyReference => "frequency_reference",
+            Role::AccelTime => "accel_time",
+            Role::DecelTime => "decel_time",
+            Role::MaxFrequency => "max_frequency",
+            Role::OutputFrequency => "output_frequency",
+            Role::ReferenceMonitor => "reference_monitor",
+            Role::OutputCurrent => "output_current",
+            Role::OutputVoltage => "output_voltage",
+            Role::DcBusVoltage => "dc_bus_voltage",
+            Role::FaultCode => "fault_code",
+            Role::Running => "running",
+            Role::Reversing => "reversing",
+            Role::Fault => "fault",
+            Role::Alarm => "alarm",
+            Role::Ready => "ready",
+            Role::ZeroSpeed => "zero_speed",
+            Role::SpeedAgree => "speed_agree",
+            Role::Accelerating => "accelerating",
+            Role::Decelerating => "decelerating",
+            Role::Stopping => "stopping",
+            Role::DriveMode => "drive_mode",
+        }
+    }
+
+    /// The role with this key.
+    pub fn from_id(id: &str) -> Option<Role> {
+        Role::ALL.iter().copied().find(|r| r.id() == id)
+    }
+
+    /// What the role is.
+    pub const fn kind(self) -> RoleKind {
+        match self {
+            Role::Run
+            | Role::RunForward
+            | Role::RunReverse
+            | Role::Reverse
+            | Role::FaultReset
+            | Role::ToDriveMode
+            | Role::ToProgramMode => RoleKind::Command,
+            Role::FrequencyReference | Role::AccelTime | Role::DecelTime | Role::MaxFrequency => {
+                RoleKind::Setpoint
+            }
+            Role::OutputFrequency
+            | Role::ReferenceMonitor
+            | Role::OutputCurrent
+            | Role::OutputVoltage
+            | Role::DcBusVoltage
+            | Role::FaultCode => RoleKind::Monitor,
+            Role::Running
+            | Role::Reversing
+            | Role::Fault
+            | Role::Alarm
+            | Role::Ready
+            | Role::ZeroSpeed
+            | Role::SpeedAgree
+            | Role::Accelerating
+            | Role::Decelerating
+            | Role::Stopping
+            | Role::DriveMode => RoleKind::Status,
+        }
+    }
+
+    /// The unit a number role is in, where it has one: a register playing it must convert to
+    /// this unit.
+    pub const fn unit(self) -> Option<&'static str> {
+        match self {
+            Role::FrequencyReference
+            | Role::MaxFrequency
+            | Role::OutputFrequency
+            | Role::ReferenceMonitor => Some("Hz"),
+            Role::AccelTime | Role::DecelTime => Some("s"),
+            Role::OutputCurrent => Some("A"),
+            Role::OutputVoltage | Role::DcBusVoltage => Some("V"),
+            _ => None,
+        }
+    }
+}
+
+/// A field of a register playing a command or status role.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FieldRole {
+    /// The register's row in the drive's plan (`REGISTERS`).
+    pub row: u16,
+    /// Lowest bit of the field.
+    pub lsb: u8,
+    /// Width in bits.
+    pub width: u8,
+    /// Codes that mean the role holds. A command writes the first; a status holds while the
+    /// field shows any of them.
+    pub on: &'static [u16],
+    /// The code that releases a command (stop, forward, reset released); for a status, the code
+    /// the field shows when the role does not hold, where the map says.
+    pub off: Option<u16>,
+    /// The drive acts on the off → on transition only (a reset must be released before the next).
+    pub edge: bool,
+}
+
+impl FieldRole {
+    /// The field's bits in the register's word.
+    pub const fn mask(&self) -> u16 {
+        ((((1u32 << self.width) - 1) << self.lsb) & 0xFFFF) as u16
+    }
+
+    /// The field's code in `word`.
+    pub const fn get(&self, word: u16) -> u16 {
+        (word & self.mask()) >> self.lsb
+    }
+
+    /// `word` with the field set to `code`.
+    pub const fn put(&self, word: u16, code: u16) -> u16 {
+        (word & !self.mask()) | ((code << self.lsb) & self.mask())
+    }
+
+    /// Whether `word` shows the role holding.
+    pub fn holds(&self, word: u16) -> bool {
+        self.on.contains(&self.get(word))
+    }
+
+    /// The code a command writes to set (`true`) or release (`false`) the role. A release with
+    /// no `off` code writes 0.
+    pub fn code(&self, on: bool) -> u16 {
+        if on {
+            self.on.first().copied().unwrap_or(1)
+        } else {
+            self.off.unwrap_or(0)
+        }
+    }
+}
+
+/// Where a role lives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Target {
+    /// A whole register: its row in the drive's plan.
+    Register(u16),
+    /// A field of a register.
+    Field(FieldRole),
+    /// An external quantity of the map (a setting the application supplies, such as a maximum
+    /// frequency with no register): its quantity slot in the drive's settings.
+    External {
+        /// Quantity slot ([`SettingsView::quantity`](crate::SettingsView::quantity)).
+        slot: u8,
+        /// The quantity's name in the map.
+        name: &'static str,
+    },
+}
+
+impl Target {
+    /// The plan row the role reads or writes, if it is a register or a field.
+    pub const fn row(&self) -> Option<u16> {
+        match self {
+            Target::Register(row) => Some(*row),
+            Target::Field(f) => Some(f.row),
+            Target::External { .. } => None,
+        }
+    }
+}
+
+/// One place a role lives. A role may have several (the serial register, the broadcast one, the
+/// TCP option card's); users take the first that is usable on their link.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Place {
+    /// The role.
+    pub role: Role,
+    /// Where.
+    pub target: Target,
+    /// The manual line that says so (`file:line`).
+    pub source: &'static str,
+}
+
+/// The roles of a drive, as its map gives them: every place, in the order of [`Role::ALL`] and,
+/// within a role, of the map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Roles {
+    /// Every place.
+    pub places: &'static [Place],
+}
+
+impl Roles {
+    /// A drive whose map gives no roles.
+    pub const NONE: Roles = Roles { places: &[] };
+
+    /// The places of `role`, in the map's order.
+    pub fn of(&self, role: Role) -> impl Iterator<Item = &'static Place> + '_ {
+        self.places.iter().filter(move |p| p.role == role)
+    }
+
+    /// Whether the map gives `role`.
+    pub fn has(&self, role: Role) -> bool {
+        self.of(role).next().is_some()
+    }
+
+    /// Whether the map gives any role.
+    pub fn is_empty(&self) -> bool {
+        self.places.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_round_trip_and_are_unique() {
+        for (i, r) in Role::ALL.iter().enumerate() {
+            assert_eq!(Role::from_id(r.id()), Some(*r));
+            assert!(Role::ALL[..i].iter().all(|o| o.id() != r.id()));
+        }
+        assert_eq!(Role::from_id("runn"), None);
+    }
+
+    #[test]
+    fn a_multi_bit_field_is_read_and_written_in_place() {
+        // A 2-bit run code in bits 4-5: 01b stop, 10b run.
+        let f = FieldRole {
+            row: 0,
+            lsb: 4,
+            width: 2,
+            on: &[2],
+            off: Some(1),
+            edge: false,
+        };
+        assert_eq!(f.mask(), 0x0030);
+        assert_eq!(f.put(0xFFFF, f.code(true)), 0xFFEF);
+        assert_eq!(f.put(0x0000, f.code(false)), 0x0010);
+        assert!(f.holds(0x0020));
+        assert!(!f.holds(0x0010));
+        assert!(!f.holds(0x0030));
+    }
+
+    #[test]
+    fn a_bit_defaults_to_one_on_zero_off() {
+        let f = FieldRole {
+            row: 3,
+            lsb: 15,
+            width: 1,
+            on: &[1],
+            off: Some(0),
+            edge: true,
+        };
+        assert_eq!(f.put(0, f.code(true)), 0x8000);
+        assert_eq!(f.put(0xFFFF, f.code(false)), 0x7FFF);
+    }
+}
