@@ -245,6 +245,13 @@ pub trait DriveSettings {
     /// Records a raw word read from one of [`DriveSettings::DEPENDENCIES`]. Words from other
     /// addresses are ignored. Returns whether the word was used.
     fn absorb(&mut self, address: u16, raw: u16) -> bool;
+
+    /// Sets the external quantity `name` of the map (a value the application supplies, such as
+    /// a drive rating). Returns false when the drive has no external quantity of that name.
+    fn set_external(&mut self, name: &str, value: f64) -> bool {
+        let _ = (name, value);
+        false
+    }
 }
 
 /// A generated drive: its settings type and the plan of every register, by address.

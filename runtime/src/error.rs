@@ -137,6 +137,22 @@ pub enum Refusal {
         register: &'static str,
         transport: crate::profile::TransportKind,
     },
+    /// The drive's map gives no register or field for a role of the drive trait (on this link).
+    #[error("{drive}'s map gives no {what} for `{role}`{}", match transport { Some(t) => format!(" usable on {t:?}"), None => String::new() })]
+    NoRole {
+        drive: &'static str,
+        role: &'static str,
+        /// What was looked for: "register", "field", "way to run in reverse".
+        what: &'static str,
+        /// Set when the map gives the role on other transports only.
+        transport: Option<crate::profile::TransportKind>,
+    },
+    /// An external quantity the map does not have, or one not supplied.
+    #[error("{drive} has no external quantity {name}")]
+    UnknownExternal { drive: &'static str, name: String },
+    /// An external quantity the application has not supplied.
+    #[error("{drive}: the external quantity {name} is not set; the application supplies it (Vfd::connect's externals)")]
+    ExternalNotSet { drive: &'static str, name: &'static str },
     /// Bits outside a bit-field register's fields.
     #[error("{register}: bits {bits:04X}h are reserved")]
     ReservedBits { register: &'static str, bits: u16 },

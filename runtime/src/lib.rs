@@ -49,6 +49,8 @@ pub mod slave;
 pub mod transport;
 #[cfg(feature = "std")]
 pub mod typed;
+#[cfg(feature = "std")]
+pub mod vfd;
 
 #[cfg(feature = "std")]
 pub use client::{Client, ClientOptions, Reconnect};

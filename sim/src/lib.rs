@@ -43,7 +43,7 @@ pub mod simulator;
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use exceptions::ExceptionPlan;
 pub use model::DriveState;
-pub use roles::{Roles, RolesError};
+pub use roles::{Mode, Plausible};
 pub use server::{
     FrameLimits, ServerOptions, SharedSim, TcpFraming, TcpServer, serve_link, serve_link_with,
     shared,

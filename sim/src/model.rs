@@ -126,6 +126,7 @@ impl Model {
             && (self.output == 0.0 || self.output.signum() == self.target.signum());
         match c {
             Condition::Always => true,
+            Condition::Never => false,
             Condition::Running => self.running(),
             Condition::Stopped => !self.running(),
             Condition::Forward => self.running() && !self.reverse_now(),

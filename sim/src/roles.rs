@@ -1,122 +1,23 @@
-//! Which register or field of a map plays each part of the drive model: run command, direction,
-//! frequency reference, output frequency, accel/decel time, status bits.
+//! The drive model's view of a map's roles: which registers and fields it reads commands from and
+//! writes its state to, resolved once from the drive plan (`roles:` of the map, lowered by
+//! `drivemap_codegen::lower`) to register indices, bit positions and codes.
 //!
-//! The map schema has no notion of roles, and the ids differ between drives (see the comment at
-//! the top of `sim/roles.yaml`), so a small table names the map's own ids per drive. It is
-//! checked against the map when a simulator starts: a table naming a register, field or code the
-//! map does not have is refused with every problem listed.
+//! Nothing here knows a drive by name, and nothing here is a second reading of the map: the
+//! places are the plan's. What the map cannot say because the manual does not print it — the
+//! power-on value of a register without a printed default, the output current of an unknown
+//! motor — the simulator fills with plausible values, the same for every drive, listed in
+//! [`Plausible`] and `sim/README.md`.
 
-use std::collections::{BTreeMap, HashMap};
-use std::fmt;
+use drivemap_codegen::ir::Drive;
+use drivemap_runtime::core::roles::{FieldRole, Role, RoleKind, Target};
 
-use drivemap_codegen::ir::{Drive, ValueKind};
-use drivemap_codegen::model::Reference;
-use drivemap_codegen::validate::field_span;
-use serde::Deserialize;
-
-/// The built-in table: `sim/roles.yaml`.
-pub const BUILTIN: &str = include_str!("../roles.yaml");
-
-/// The roles of one drive, as written in the table (names not yet checked against the map).
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct Roles {
-    /// Registers whose writes command the drive.
-    #[serde(default)]
-    pub commands: Vec<CommandRole>,
-    /// Registers whose value (Hz) is the frequency reference; the last one written wins.
-    #[serde(default)]
-    pub frequency_reference: Vec<String>,
-    /// Registers that show the output frequency (Hz).
-    #[serde(default)]
-    pub output_frequency: Vec<String>,
-    /// Registers that show the frequency reference in force (Hz).
-    #[serde(default)]
-    pub reference_monitor: Vec<String>,
-    /// The frequency that accel/decel times are measured to (Hz). Default 60 Hz.
-    #[serde(default)]
-    pub max_frequency: Option<Quantity>,
-    /// Time from 0 to `max_frequency` (s). Default 0: the output jumps to the reference.
-    #[serde(default)]
-    pub accel_time: Option<Quantity>,
-    /// Time from `max_frequency` to 0 (s). Default: the accel time.
-    #[serde(default)]
-    pub decel_time: Option<Quantity>,
-    /// Status fields the model drives.
-    #[serde(default)]
-    pub status: Vec<StatusRole>,
-    /// PRG/DRV mode (TDS-V8).
-    #[serde(default)]
-    pub mode: Option<ModeRole>,
-    /// Monitors that follow the output frequency.
-    #[serde(default)]
-    pub follow: Vec<FollowRole>,
-    /// Power-on values (engineering units) where the map prints no default.
-    #[serde(default)]
-    pub initial: BTreeMap<String, f64>,
-    /// Read-only monitors held at a plausible value.
-    #[serde(default)]
-    pub constants: BTreeMap<String, f64>,
-    /// Values of the map's external quantities.
-    #[serde(default)]
-    pub externals: BTreeMap<String, f64>,
-}
-
-/// A register that commands the drive, and which of its fields mean what.
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct CommandRole {
-    /// Register id.
-    pub register: String,
-    /// Field: 1 = run.
-    #[serde(default)]
-    pub run: Option<String>,
-    /// Field: 1 = run forward (2-wire terminal).
-    #[serde(default)]
-    pub run_forward: Option<String>,
-    /// Field: 1 = run reverse (2-wire terminal).
-    #[serde(default)]
-    pub run_reverse: Option<String>,
-    /// Field: 1 = reverse.
-    #[serde(default)]
-    pub reverse: Option<String>,
-    /// Field: 1 = forward, 0 = reverse.
-    #[serde(default)]
-    pub forward: Option<String>,
-}
-
-/// A number, or the name of a register or external quantity holding it.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(untagged)]
-pub enum Quantity {
-    /// A fixed value.
-    Number(f64),
-    /// A register id (or parameter number), or an external quantity of the map.
-    Name(String),
-}
-
-/// A status field and when it is set.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct StatusRole {
-    /// `register.field`.
-    pub field: String,
-    /// For a 1-bit field: 1 while this holds.
-    #[serde(default)]
-    pub when: Option<Condition>,
-    /// For a multi-bit field: condition → code id of the field; the first condition that holds
-    /// (in [`Condition`] order) gives the code, none gives 0.
-    #[serde(default)]
-    pub codes: BTreeMap<Condition, String>,
-}
-
-/// What the drive model is doing, as status fields report it. The order is the priority order
-/// of `codes`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize)]
-#[serde(rename_all = "snake_case")]
+/// What the drive model is doing, as status fields report it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Condition {
     /// Always.
     Always,
+    /// Never (the simulated drive has no faults or alarms).
+    Never,
     /// Run commanded, or the output frequency not yet 0.
     Running,
     /// Not running.
@@ -137,28 +38,32 @@ pub enum Condition {
     Stopping,
     /// Run commanded and the output at the reference (same as `speed_agree`).
     Steady,
-    /// TDS-V8 DRV mode.
+    /// Operating (DRV) mode.
     DrvMode,
-    /// TDS-V8 PRG mode.
+    /// Program (PRG) mode.
     PrgMode,
 }
 
-/// PRG/DRV mode switching.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct ModeRole {
-    /// `register.field` that switches to DRV mode (clears itself).
-    pub to_drv: String,
-    /// `register.field` that switches to PRG mode (clears itself).
-    pub to_prg: String,
-    /// Mode at power-on.
-    #[serde(default)]
-    pub initial: Mode,
+impl Condition {
+    /// The condition a status role reports.
+    pub fn of(role: Role) -> Condition {
+        match role {
+            Role::Running => Condition::Running,
+            Role::Reversing => Condition::Reverse,
+            Role::Ready => Condition::Always,
+            Role::ZeroSpeed => Condition::ZeroSpeed,
+            Role::SpeedAgree => Condition::SpeedAgree,
+            Role::Accelerating => Condition::Accelerating,
+            Role::Decelerating => Condition::Decelerating,
+            Role::Stopping => Condition::Stopping,
+            Role::DriveMode => Condition::DrvMode,
+            _ => Condition::Never,
+        }
+    }
 }
 
-/// TDS-V8 operating mode.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
+/// Operating mode of a drive with mode switching (TDS-V8 PRG/DRV).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum Mode {
     /// Program mode: parameters writable.
     #[default]
@@ -167,58 +72,41 @@ pub enum Mode {
     Drv,
 }
 
-/// A monitor proportional to the output frequency.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct FollowRole {
-    /// Register id.
-    pub register: String,
-    /// Value at 0 Hz while running.
-    #[serde(default)]
-    pub at_zero: f64,
-    /// Value at the max frequency.
-    pub at_max: f64,
-    /// Value while stopped (default `at_zero`).
-    #[serde(default)]
-    pub stopped: Option<f64>,
+/// Values the manuals do not print, used for every drive alike.
+#[derive(Debug, Clone, Copy)]
+pub struct Plausible;
+
+impl Plausible {
+    /// Maximum frequency (Hz) where the map has no `max_frequency` role, or its register has no
+    /// printed default, or its external quantity is not supplied.
+    pub const MAX_FREQUENCY: f64 = 60.0;
+    /// Accel and decel time (s) of a role register with no printed default.
+    pub const RAMP_TIME: f64 = 10.0;
+    /// Output voltage at the maximum frequency (V/f), V.
+    pub const RATED_VOLTAGE: f64 = 230.0;
+    /// Output current (A) at 0 Hz and at the maximum frequency while running; 0 when stopped.
+    pub const CURRENT: (f64, f64) = (1.0, 2.5);
+    /// DC bus voltage (V): the peak of a 230 V line.
+    pub const DC_BUS: f64 = 325.0;
+    /// Any other external quantity not supplied (in its own unit).
+    pub const EXTERNAL: f64 = 1.0;
 }
 
-/// Parses a roles table (drive id → roles).
-pub fn parse_table(text: &str) -> Result<BTreeMap<String, Roles>, String> {
-    serde_yaml::from_str(text).map_err(|e| format!("roles table: {e}"))
-}
-
-/// The built-in roles of a drive id, if the table has them.
-pub fn builtin(drive_id: &str) -> Result<Option<Roles>, String> {
-    Ok(parse_table(BUILTIN)?.remove(drive_id))
-}
-
-/// The drive ids the built-in table covers.
-pub fn builtin_drives() -> Vec<String> {
-    parse_table(BUILTIN)
-        .map(|t| t.into_keys().collect())
-        .unwrap_or_default()
-}
-
-/// A field located in the register list.
+/// A field in the simulator's register list (map order), with its role codes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Bit {
+    /// Map index of the register.
     pub register: usize,
-    pub lsb: u8,
-    pub width: u8,
+    pub field: FieldRole,
 }
 
 impl Bit {
-    pub fn mask(self) -> u16 {
-        ((((1u32 << self.width) - 1) << self.lsb) & 0xFFFF) as u16
+    pub fn holds(self, raw: u16) -> bool {
+        self.field.holds(raw)
     }
 
-    pub fn get(self, raw: u16) -> u16 {
-        (raw & self.mask()) >> self.lsb
-    }
-
-    pub fn put(self, raw: u16, value: u16) -> u16 {
-        (raw & !self.mask()) | ((value << self.lsb) & self.mask())
+    pub fn put(self, raw: u16, code: u16) -> u16 {
+        self.field.put(raw, code)
     }
 }
 
@@ -229,412 +117,242 @@ pub(crate) enum Source {
     Value(f64),
 }
 
-#[derive(Debug, Clone)]
-pub(crate) struct ResolvedCommand {
-    pub register: usize,
-    pub run: Option<Bit>,
-    pub run_forward: Option<Bit>,
-    pub run_reverse: Option<Bit>,
-    pub reverse: Option<Bit>,
-    pub forward: Option<Bit>,
-}
-
-#[derive(Debug, Clone)]
-pub(crate) enum Rule {
-    When(Condition),
-    Codes(Vec<(Condition, u16)>),
-}
-
-#[derive(Debug, Clone)]
-pub(crate) struct ResolvedStatus {
+/// A command field and what it commands.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Command {
+    pub role: Role,
     pub bit: Bit,
-    pub rule: Rule,
 }
 
+/// The status fields of one register field (several roles may share a multi-bit field): the
+/// code shown is the first consistent with every role's condition.
 #[derive(Debug, Clone)]
-pub(crate) struct ResolvedMode {
-    pub to_drv: Bit,
-    pub to_prg: Bit,
-    pub initial: Mode,
-}
-
-#[derive(Debug, Clone)]
-pub(crate) struct ResolvedFollow {
+pub(crate) struct StatusField {
     pub register: usize,
-    pub at_zero: f64,
-    pub at_max: f64,
-    pub stopped: f64,
+    pub lsb: u8,
+    pub width: u8,
+    /// (condition, codes meaning it holds, code shown when it does not).
+    pub roles: Vec<(Condition, &'static [u16], Option<u16>)>,
+    /// Candidate codes in order: every `on` code, every `off` code, then 0.
+    pub candidates: Vec<u16>,
 }
 
-/// Roles with every name located in the drive's register list.
+impl StatusField {
+    /// The code to show, given which conditions hold; `None` when no code is consistent.
+    pub fn code(&self, holds: impl Fn(Condition) -> bool) -> Option<u16> {
+        self.candidates.iter().copied().find(|&c| {
+            self.roles.iter().all(|&(cond, on, off)| {
+                if holds(cond) {
+                    on.contains(&c)
+                } else {
+                    !on.contains(&c) && off.is_none_or(|off| off == c || on.is_empty())
+                }
+            })
+        })
+    }
+
+    pub fn put(&self, raw: u16, code: u16) -> u16 {
+        let mask = ((((1u32 << self.width) - 1) << self.lsb) & 0xFFFF) as u16;
+        (raw & !mask) | ((code << self.lsb) & mask)
+    }
+}
+
+/// A monitor the model drives, and what it shows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Follow {
+    /// The output frequency.
+    Output,
+    /// The reference in force.
+    Reference,
+    /// Output voltage: V/f up to [`Plausible::RATED_VOLTAGE`].
+    Voltage,
+    /// Output current: [`Plausible::CURRENT`], 0 when stopped.
+    Current,
+    /// DC bus voltage: [`Plausible::DC_BUS`].
+    DcBus,
+}
+
+/// The roles of a map, resolved to the simulator's register indices.
 #[derive(Debug, Clone)]
 pub(crate) struct Resolved {
-    pub commands: Vec<ResolvedCommand>,
+    pub commands: Vec<Command>,
     pub frequency_reference: Vec<usize>,
-    pub output_frequency: Vec<usize>,
-    pub reference_monitor: Vec<usize>,
+    pub follow: Vec<(usize, Follow)>,
     pub max_frequency: Source,
     pub accel_time: Source,
     pub decel_time: Option<Source>,
-    pub status: Vec<ResolvedStatus>,
-    pub mode: Option<ResolvedMode>,
-    pub follow: Vec<ResolvedFollow>,
-    /// Register index → engineering value, initial then constants.
+    pub status: Vec<StatusField>,
+    /// The drive has mode switching: it powers on in program mode.
+    pub modes: bool,
+    /// Register index → plausible power-on value, for role registers without a printed default.
     pub initial: Vec<(usize, f64)>,
 }
 
-/// Every problem found checking a roles table against a map.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct RolesError {
-    /// The drive.
-    pub drive: String,
-    /// One line per problem.
-    pub problems: Vec<String>,
+/// The map index of the register at plan row `row`.
+fn map_index(drive: &Drive, row: u16) -> Option<usize> {
+    drive
+        .plan()
+        .order
+        .iter()
+        .position(|&p| p == usize::from(row))
 }
 
-impl fmt::Display for RolesError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "the simulator's roles for {} do not match its map: {}",
-            self.drive,
-            self.problems.join("; ")
-        )
+/// Resolves the plan's roles of `drive`; `None` when the map gives none (a register store).
+pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) -> Option<Resolved> {
+    let roles = drive.plan().roles;
+    if roles.is_empty() {
+        return None;
     }
-}
-
-impl std::error::Error for RolesError {}
-
-struct Resolver<'a> {
-    drive: &'a Drive,
-    index: &'a HashMap<String, usize>,
-    problems: Vec<String>,
-}
-
-impl Resolver<'_> {
-    fn register(&mut self, role: &str, name: &str) -> Option<usize> {
-        let found = self.index.get(name).copied().or_else(|| {
-            self.drive
-                .find(name)
-                .and_then(|r| self.index.get(r.id()).copied())
-        });
-        if found.is_none() {
-            self.problems
-                .push(format!("{role}: the map has no register `{name}`"));
-        }
-        found
-    }
-
-    fn field(&mut self, role: &str, path: &str) -> Option<Bit> {
-        let Some((reg, field)) = path.split_once('.') else {
-            self.problems
-                .push(format!("{role}: `{path}` is not `register.field`"));
+    let mut r = Resolved {
+        commands: Vec::new(),
+        frequency_reference: Vec::new(),
+        follow: Vec::new(),
+        max_frequency: Source::Value(Plausible::MAX_FREQUENCY),
+        accel_time: Source::Value(0.0),
+        decel_time: None,
+        status: Vec::new(),
+        modes: false,
+        initial: Vec::new(),
+    };
+    let quantity = |role: Role, fallback: f64, initial: &mut Vec<(usize, f64)>| {
+        let Some(p) = roles.of(role).next() else {
             return None;
         };
-        let register = self.register(role, reg)?;
-        self.field_of(role, register, field)
-    }
-
-    fn field_of(&mut self, role: &str, register: usize, field: &str) -> Option<Bit> {
-        let r = &self.drive.registers[register];
-        match r.def.fields.iter().find(|f| f.id == field) {
-            Some(f) => match field_span(f) {
-                Some((lsb, width)) => Some(Bit {
-                    register,
-                    lsb,
-                    width,
-                }),
-                None => {
-                    self.problems
-                        .push(format!("{role}: field `{}.{field}` has no bits", r.id()));
-                    None
+        Some(match p.target {
+            Target::Register(row) => match map_index(drive, row) {
+                Some(i) => {
+                    if drive.registers[i].default_value().is_none() {
+                        initial.push((i, fallback));
+                    }
+                    Source::Register(i)
                 }
+                None => Source::Value(fallback),
             },
-            None => {
-                self.problems.push(format!(
-                    "{role}: register `{}` has no field `{field}`",
-                    r.id()
-                ));
-                None
-            }
-        }
-    }
-
-    fn quantity(&mut self, role: &str, q: &Quantity, externals: &BTreeMap<String, f64>) -> Source {
-        match q {
-            Quantity::Number(v) => Source::Value(*v),
-            Quantity::Name(name) => {
-                if let Some(&i) = self.index.get(name) {
-                    return Source::Register(i);
-                }
-                if let Some(r) = self.drive.find(name) {
-                    if let Some(&i) = self.index.get(r.id()) {
-                        return Source::Register(i);
-                    }
-                }
-                let is_external = self.drive.externals().iter().any(|e| e.external == *name);
-                match externals.get(name) {
-                    Some(v) if is_external => Source::Value(*v),
-                    _ if is_external => {
-                        self.problems.push(format!(
-                            "{role}: external quantity `{name}` needs a value under `externals`"
-                        ));
-                        Source::Value(0.0)
-                    }
-                    _ => {
-                        self.problems.push(format!(
-                            "{role}: `{name}` is neither a register nor an external quantity of the map"
-                        ));
-                        Source::Value(0.0)
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// Whether a register converts to engineering units (so it can hold a frequency or a time).
-fn is_quantity(drive: &Drive, i: usize) -> bool {
-    matches!(
-        drive.registers[i].kind(),
-        ValueKind::Quantity(_) | ValueKind::UnitQuantity | ValueKind::Word
-    )
-}
-
-/// Names of the external quantities the map uses (for messages and defaults).
-pub(crate) fn external_names(drive: &Drive) -> Vec<String> {
-    let mut out = Vec::new();
-    for r in &drive.registers {
-        for s in drivemap_codegen::ir::scales_of(r) {
-            if let drivemap_codegen::model::Scale::Relative(rel) = s {
-                if let Reference::External(q) = &rel.relative_to {
-                    if !out.contains(&q.external) {
-                        out.push(q.external.clone());
-                    }
-                }
-            }
-        }
-    }
-    out
-}
-
-/// Checks `roles` against `drive` and locates every name.
-pub(crate) fn resolve(
-    drive: &Drive,
-    index: &HashMap<String, usize>,
-    roles: &Roles,
-    externals: &BTreeMap<String, f64>,
-) -> Result<Resolved, RolesError> {
-    let mut rv = Resolver {
-        drive,
-        index,
-        problems: Vec::new(),
-    };
-    let mut commands = Vec::new();
-    for c in &roles.commands {
-        let Some(register) = rv.register("commands", &c.register) else {
-            continue;
-        };
-        let mut field = |name: &Option<String>| {
-            name.as_deref()
-                .and_then(|n| rv.field_of("commands", register, n))
-        };
-        let rc = ResolvedCommand {
-            register,
-            run: field(&c.run),
-            run_forward: field(&c.run_forward),
-            run_reverse: field(&c.run_reverse),
-            reverse: field(&c.reverse),
-            forward: field(&c.forward),
-        };
-        if c.run.is_none() && c.run_forward.is_none() && c.run_reverse.is_none() {
-            rv.problems.push(format!(
-                "commands: `{}` names no run field (run, run_forward or run_reverse)",
-                c.register
-            ));
-        }
-        commands.push(rc);
-    }
-    let list = |role: &str, names: &[String], rv: &mut Resolver<'_>| -> Vec<usize> {
-        let mut out = Vec::new();
-        for n in names {
-            let Some(i) = rv.register(role, n) else {
-                continue;
-            };
-            if !is_quantity(drive, i) {
-                rv.problems.push(format!(
-                    "{role}: `{}` is not a number register",
-                    drive.registers[i].id()
-                ));
-            }
-            out.push(i);
-        }
-        out
-    };
-    let frequency_reference = list("frequency_reference", &roles.frequency_reference, &mut rv);
-    let output_frequency = list("output_frequency", &roles.output_frequency, &mut rv);
-    let reference_monitor = list("reference_monitor", &roles.reference_monitor, &mut rv);
-    let max_frequency = match &roles.max_frequency {
-        Some(q) => rv.quantity("max_frequency", q, externals),
-        None => Source::Value(60.0),
-    };
-    let accel_time = match &roles.accel_time {
-        Some(q) => rv.quantity("accel_time", q, externals),
-        None => Source::Value(0.0),
-    };
-    let decel_time = roles
-        .decel_time
-        .as_ref()
-        .map(|q| rv.quantity("decel_time", q, externals));
-    let mut status = Vec::new();
-    for s in &roles.status {
-        let Some(bit) = rv.field("status", &s.field) else {
-            continue;
-        };
-        let rule = match (s.when, s.codes.is_empty()) {
-            (Some(c), true) => {
-                if bit.width != 1 {
-                    rv.problems.push(format!(
-                        "status: `{}` is {} bits wide; use `codes`",
-                        s.field, bit.width
-                    ));
-                }
-                Rule::When(c)
-            }
-            (None, false) => {
-                let r = &drive.registers[bit.register];
-                let field_id = s.field.split_once('.').map(|(_, f)| f).unwrap_or("");
-                let field = r.def.fields.iter().find(|f| f.id == field_id);
-                let mut codes = Vec::new();
-                for (cond, id) in &s.codes {
-                    match field.and_then(|f| f.values.iter().find(|v| v.id == *id)) {
-                        Some(v) => codes.push((*cond, v.value)),
-                        None => rv
-                            .problems
-                            .push(format!("status: `{}` has no code `{id}`", s.field)),
-                    }
-                }
-                Rule::Codes(codes)
-            }
-            _ => {
-                rv.problems.push(format!(
-                    "status: `{}` needs exactly one of `when` and `codes`",
-                    s.field
-                ));
-                continue;
-            }
-        };
-        status.push(ResolvedStatus { bit, rule });
-    }
-    let mode = roles.mode.as_ref().and_then(|m| {
-        let to_drv = rv.field("mode.to_drv", &m.to_drv);
-        let to_prg = rv.field("mode.to_prg", &m.to_prg);
-        Some(ResolvedMode {
-            to_drv: to_drv?,
-            to_prg: to_prg?,
-            initial: m.initial,
+            Target::External { name, .. } => Source::Value(externals(name).unwrap_or(fallback)),
+            Target::Field(_) => Source::Value(fallback),
         })
-    });
-    let mut follow = Vec::new();
-    for f in &roles.follow {
-        if let Some(register) = rv.register("follow", &f.register) {
-            follow.push(ResolvedFollow {
-                register,
-                at_zero: f.at_zero,
-                at_max: f.at_max,
-                stopped: f.stopped.unwrap_or(f.at_zero),
-            });
-        }
+    };
+    if let Some(s) = quantity(Role::MaxFrequency, Plausible::MAX_FREQUENCY, &mut r.initial) {
+        r.max_frequency = s;
     }
-    let mut initial = Vec::new();
-    for (name, v) in &roles.initial {
-        if let Some(i) = rv.register("initial", name) {
-            initial.push((i, *v));
-        }
+    if let Some(s) = quantity(Role::AccelTime, Plausible::RAMP_TIME, &mut r.initial) {
+        r.accel_time = s;
     }
-    for (name, v) in &roles.constants {
-        if let Some(i) = rv.register("constants", name) {
-            if drive.registers[i].writable() {
-                rv.problems.push(format!(
-                    "constants: `{name}` is writable; constants are for read-only monitors (use `initial`)"
-                ));
+    r.decel_time = quantity(Role::DecelTime, Plausible::RAMP_TIME, &mut r.initial);
+    for p in roles.places {
+        let row_index = p.target.row().and_then(|row| map_index(drive, row));
+        match (p.role.kind(), p.target, row_index) {
+            (RoleKind::Command, Target::Field(field), Some(register)) => {
+                r.modes |= matches!(p.role, Role::ToDriveMode | Role::ToProgramMode);
+                r.commands.push(Command {
+                    role: p.role,
+                    bit: Bit { register, field },
+                });
             }
-            initial.push((i, *v));
+            (RoleKind::Status, Target::Field(f), Some(register)) => {
+                let cond = Condition::of(p.role);
+                match r
+                    .status
+                    .iter_mut()
+                    .find(|s| s.register == register && s.lsb == f.lsb && s.width == f.width)
+                {
+                    Some(s) => s.roles.push((cond, f.on, f.off)),
+                    None => r.status.push(StatusField {
+                        register,
+                        lsb: f.lsb,
+                        width: f.width,
+                        roles: vec![(cond, f.on, f.off)],
+                        candidates: Vec::new(),
+                    }),
+                }
+            }
+            (_, Target::Register(_), Some(i)) => match p.role {
+                Role::FrequencyReference => r.frequency_reference.push(i),
+                Role::OutputFrequency => r.follow.push((i, Follow::Output)),
+                Role::ReferenceMonitor => r.follow.push((i, Follow::Reference)),
+                Role::OutputVoltage => r.follow.push((i, Follow::Voltage)),
+                Role::OutputCurrent => r.follow.push((i, Follow::Current)),
+                Role::DcBusVoltage => r.follow.push((i, Follow::DcBus)),
+                _ => {}
+            },
+            _ => {}
         }
     }
-    let known = external_names(drive);
-    for name in roles.externals.keys() {
-        if !known.contains(name) {
-            rv.problems.push(format!(
-                "externals: the map has no external quantity `{name}`"
-            ));
+    for s in &mut r.status {
+        let mut c: Vec<u16> = Vec::new();
+        for (_, on, _) in &s.roles {
+            c.extend(on.iter().filter(|x| !c.contains(x)).collect::<Vec<_>>());
         }
+        for (_, _, off) in &s.roles {
+            if let Some(off) = off {
+                if !c.contains(off) {
+                    c.push(*off);
+                }
+            }
+        }
+        if !c.contains(&0) {
+            c.push(0);
+        }
+        s.candidates = c;
     }
-    if rv.problems.is_empty() {
-        Ok(Resolved {
-            commands,
-            frequency_reference,
-            output_frequency,
-            reference_monitor,
-            max_frequency,
-            accel_time,
-            decel_time,
-            status,
-            mode,
-            follow,
-            initial,
-        })
-    } else {
-        Err(RolesError {
-            drive: drive.meta.id.clone(),
-            problems: rv.problems,
-        })
-    }
+    Some(r)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[test]
-    fn the_builtin_table_parses_and_names_every_shipped_drive() {
-        let table = parse_table(BUILTIN).unwrap();
-        for id in [
-            "ptlk-tds-v8",
-            "yaskawa-v7",
-            "yaskawa-j7",
-            "yaskawa-gpd515",
-            "automationdirect-acn",
-        ] {
-            assert!(table.contains_key(id), "{id}");
-        }
-        let acn = &table["automationdirect-acn"];
-        assert_eq!(acn.commands[0].forward.as_deref(), Some("forward"));
-        assert_eq!(acn.max_frequency, Some(Quantity::Number(60.0)));
-        assert_eq!(
-            acn.status[0]
-                .codes
-                .get(&Condition::Forward)
-                .map(String::as_str),
-            Some("operating_forward")
-        );
-    }
-
-    #[test]
-    fn unknown_keys_are_refused() {
-        let e = parse_table("x:\n  comands: []\n").unwrap_err();
-        assert!(e.contains("comands"), "{e}");
-    }
-
-    #[test]
-    fn bits_are_read_and_written_in_place() {
-        let b = Bit {
+    fn field(roles: Vec<(Condition, &'static [u16], Option<u16>)>) -> StatusField {
+        let mut s = StatusField {
             register: 0,
-            lsb: 4,
+            lsb: 0,
             width: 4,
+            roles,
+            candidates: Vec::new(),
         };
-        assert_eq!(b.mask(), 0x00F0);
-        assert_eq!(b.get(0x1234), 3);
-        assert_eq!(b.put(0x1234, 0xA), 0x12A4);
+        let mut c = Vec::new();
+        for (_, on, _) in &s.roles {
+            for x in on.iter() {
+                if !c.contains(x) {
+                    c.push(*x);
+                }
+            }
+        }
+        for (_, _, off) in &s.roles {
+            if let Some(o) = off {
+                if !c.contains(o) {
+                    c.push(*o);
+                }
+            }
+        }
+        c.push(0);
+        s.candidates = c;
+        s
+    }
+
+    #[test]
+    fn a_shared_code_field_shows_the_code_consistent_with_every_role() {
+        // ACN run_direction_state: 0 stopped, 1 forward, 2 reverse.
+        let s = field(vec![
+            (Condition::Running, &[1, 2], Some(0)),
+            (Condition::Reverse, &[2], None),
+        ]);
+        let at = |running: bool, reverse: bool| {
+            s.code(|c| match c {
+                Condition::Running => running,
+                Condition::Reverse => reverse,
+                _ => false,
+            })
+        };
+        assert_eq!(at(false, false), Some(0));
+        assert_eq!(at(true, false), Some(1));
+        assert_eq!(at(true, true), Some(2));
+    }
+
+    #[test]
+    fn a_bit_is_one_while_its_condition_holds() {
+        let s = field(vec![(Condition::ZeroSpeed, &[1], Some(0))]);
+        assert_eq!(s.code(|_| true), Some(1));
+        assert_eq!(s.code(|_| false), Some(0));
     }
 }

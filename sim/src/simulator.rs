@@ -19,16 +19,14 @@ use drivemap_runtime::{crc, rtu, tcp};
 use crate::clock::{Clock, SystemClock};
 use crate::exceptions::ExceptionPlan;
 use crate::model::{DriveState, Model};
-use crate::roles::{self, Resolved, Roles, RolesError, Rule, Source};
+use crate::roles::{self, Follow, Plausible, Resolved, Source};
 
-/// Which roles table the simulator uses.
-#[derive(Debug, Clone, Default)]
+/// Whether the simulator runs a drive model.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum RolesChoice {
-    /// The built-in table (`sim/roles.yaml`); a drive it does not list gets no drive model.
+    /// The drive model the map's `roles:` describe; a map without roles gets none.
     #[default]
-    Builtin,
-    /// A table given by the caller.
-    Custom(Box<Roles>),
+    FromMap,
     /// No drive model: registers only.
     NoModel,
 }
@@ -40,7 +38,8 @@ pub struct SimOptions {
     pub slave: Option<u8>,
     /// Variant axis id → option id; axes not named take their first option.
     pub variants: BTreeMap<String, String>,
-    /// External quantities (drive rating...), over the roles table's values.
+    /// External quantities (drive rating...); one not given is [`Plausible::EXTERNAL`], or
+    /// [`Plausible::MAX_FREQUENCY`] for the maximum frequency.
     pub externals: BTreeMap<String, f64>,
     /// Power-on values, applied last: register id, parameter number or name → engineering
     /// value (a code for enumerations, the raw word for bit fields and plain words).
@@ -58,7 +57,7 @@ impl Default for SimOptions {
             variants: BTreeMap::new(),
             externals: BTreeMap::new(),
             initial: Vec::new(),
-            roles: RolesChoice::Builtin,
+            roles: RolesChoice::FromMap,
             clock: Arc::new(SystemClock::new()),
         }
     }
@@ -100,7 +99,7 @@ impl SimOptions {
         self
     }
 
-    /// Chooses the roles table.
+    /// Chooses whether to run the drive model.
     pub fn roles(mut self, roles: RolesChoice) -> SimOptions {
         self.roles = roles;
         self
@@ -110,12 +109,6 @@ impl SimOptions {
 /// Why a simulator cannot start, or a register cannot be set.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
-    /// The roles table names what the map does not have.
-    #[error(transparent)]
-    Roles(#[from] RolesError),
-    /// The roles table does not parse.
-    #[error("{0}")]
-    RolesTable(String),
     /// No register by that name.
     #[error(transparent)]
     NotFound(#[from] drivemap_live::NotFound),
@@ -365,16 +358,28 @@ impl Simulator {
                 });
             }
         }
-        let table = match &options.roles {
-            RolesChoice::Builtin => roles::builtin(&drive.meta.id).map_err(SimError::RolesTable)?,
-            RolesChoice::Custom(r) => Some((**r).clone()),
-            RolesChoice::NoModel => None,
-        };
-        let known_externals = roles::external_names(&drive);
-        let mut externals = table
-            .as_ref()
-            .map(|r| r.externals.clone())
-            .unwrap_or_default();
+        let known_externals: Vec<String> = drive
+            .externals()
+            .iter()
+            .map(|q| q.external.clone())
+            .collect();
+        let max_external = drive.plan().roles.of(drivemap_runtime::core::Role::MaxFrequency).find_map(|p| {
+            match p.target {
+                drivemap_runtime::core::roles::Target::External { name, .. } => Some(name),
+                _ => None,
+            }
+        });
+        let mut externals: BTreeMap<String, f64> = known_externals
+            .iter()
+            .map(|name| {
+                let v = if Some(name.as_str()) == max_external {
+                    Plausible::MAX_FREQUENCY
+                } else {
+                    Plausible::EXTERNAL
+                };
+                (name.clone(), v)
+            })
+            .collect();
         for (name, v) in &options.externals {
             if !known_externals.contains(name) {
                 return Err(SimError::External {
@@ -385,9 +390,11 @@ impl Simulator {
             }
             externals.insert(name.clone(), *v);
         }
-        let resolved = match &table {
-            Some(t) => Some(Arc::new(roles::resolve(&drive, &index, t, &externals)?)),
-            None => None,
+        let resolved = match options.roles {
+            RolesChoice::FromMap => {
+                roles::resolve(&drive, &|name: &str| externals.get(name).copied()).map(Arc::new)
+            }
+            RolesChoice::NoModel => None,
         };
         let sa = &drive.protocol.slave_address;
         let slave = options.slave.or(sa.default).unwrap_or(1);
@@ -453,7 +460,7 @@ impl Simulator {
         }
         sim.layouts = [sim.layout(false), sim.layout(true)];
         if let Some(r) = sim.roles.clone() {
-            sim.model.mode = r.mode.as_ref().map(|m| m.initial);
+            sim.model.mode = r.modes.then_some(roles::Mode::Prg);
             sim.model.reference_register = r.frequency_reference.first().copied();
         }
         sim.tick();
@@ -480,7 +487,13 @@ impl Simulator {
         self.plan
     }
 
-    /// Whether a roles table gives this drive a model (run, ramp, status).
+    /// The values of the map's external quantities the simulator converts with (given, or
+    /// plausible: [`Plausible`]).
+    pub fn externals(&self) -> &BTreeMap<String, f64> {
+        &self.externals
+    }
+
+    /// Whether the simulator runs a drive model (the map gives roles).
     pub fn has_model(&self) -> bool {
         self.roles.is_some()
     }
@@ -738,22 +751,36 @@ impl Simulator {
         let Some(roles) = self.roles.clone() else {
             return;
         };
-        if let Some(m) = &roles.mode {
-            for (bit, mode) in [(m.to_drv, roles::Mode::Drv), (m.to_prg, roles::Mode::Prg)] {
-                if bit.register == i && bit.get(self.raw[i]) != 0 {
-                    self.model.mode = Some(mode);
-                    self.raw[i] = bit.put(self.raw[i], 0);
+        use drivemap_runtime::core::Role;
+        let raw = self.raw[i];
+        let (mut run, mut fwd, mut rev, mut reverse) = (None, None, None, None);
+        for c in roles.commands.iter().filter(|c| c.bit.register == i) {
+            let on = c.bit.holds(raw);
+            match c.role {
+                Role::Run => run = Some(on),
+                Role::RunForward => fwd = Some(on),
+                Role::RunReverse => rev = Some(on),
+                Role::Reverse => reverse = Some(on),
+                Role::ToDriveMode | Role::ToProgramMode if on => {
+                    // Mode switches act once and clear themselves.
+                    self.model.mode = Some(if c.role == Role::ToDriveMode {
+                        roles::Mode::Drv
+                    } else {
+                        roles::Mode::Prg
+                    });
+                    self.raw[i] = c.bit.put(self.raw[i], c.bit.field.code(false));
                 }
+                // The simulated drive has no faults: a reset has nothing to clear.
+                _ => {}
             }
         }
-        let raw = self.raw[i];
-        for c in roles.commands.iter().filter(|c| c.register == i) {
-            let on = |b: Option<roles::Bit>| b.map(|b| b.get(raw) != 0);
-            let (fwd, rev) = (on(c.run_forward), on(c.run_reverse));
-            self.model.run = on(c.run).unwrap_or(false) || fwd == Some(true) || rev == Some(true);
-            self.model.reverse = on(c.reverse)
-                .or(on(c.forward).map(|f| !f))
-                .unwrap_or(rev == Some(true) && fwd != Some(true));
+        if run.is_some() || fwd.is_some() || rev.is_some() {
+            self.model.run = run == Some(true) || fwd == Some(true) || rev == Some(true);
+        }
+        if let Some(r) = reverse {
+            self.model.reverse = r;
+        } else if fwd.is_some() || rev.is_some() {
+            self.model.reverse = rev == Some(true) && fwd != Some(true);
         }
         if roles.frequency_reference.contains(&i) {
             self.model.reference_register = Some(i);
@@ -888,32 +915,26 @@ impl Simulator {
 
     fn publish(&mut self, roles: &Resolved, settings: &LiveSettings, max_f: f64) {
         let out = self.model.output.abs();
-        for &i in &roles.output_frequency {
-            self.store(i, out, settings);
-        }
-        for &i in &roles.reference_monitor {
-            self.store(i, self.model.reference, settings);
-        }
         for s in &roles.status {
-            let v = match &s.rule {
-                Rule::When(c) => u16::from(self.model.holds(*c)),
-                Rule::Codes(codes) => codes
-                    .iter()
-                    .find(|(c, _)| self.model.holds(*c))
-                    .map(|&(_, code)| code)
-                    .unwrap_or(0),
-            };
-            let r = s.bit.register;
-            self.raw[r] = s.bit.put(self.raw[r], v);
+            if let Some(code) = s.code(|c| self.model.holds(c)) {
+                self.raw[s.register] = s.put(self.raw[s.register], code);
+            }
         }
         let running = self.model.running();
-        for f in &roles.follow {
-            let v = if running {
-                f.at_zero + (f.at_max - f.at_zero) * out / max_f
-            } else {
-                f.stopped
+        let fraction = if max_f > 0.0 { out / max_f } else { 0.0 };
+        for &(i, follow) in &roles.follow {
+            let v = match follow {
+                Follow::Output => out,
+                Follow::Reference => self.model.reference,
+                Follow::Voltage => Plausible::RATED_VOLTAGE * fraction,
+                Follow::Current if running => {
+                    let (at_zero, at_max) = Plausible::CURRENT;
+                    at_zero + (at_max - at_zero) * fraction
+                }
+                Follow::Current => 0.0,
+                Follow::DcBus => Plausible::DC_BUS,
             };
-            self.store(f.register, v, settings);
+            self.store(i, v, settings);
         }
     }
 

@@ -1,11 +1,13 @@
-//! `drivemap demo`: a simulated drive on loopback, driven through the generated typed API.
+//! `drivemap demo`: a simulated drive on loopback, driven through the one drive API.
 //!
-//! Starts a `drivemap-sim` simulator of the chosen drive (TDS-V8 by default) in this process,
-//! serving RTU frames over loopback TCP as a serial gateway would, then uses the generated
-//! module of `drivemap-drives` exactly as an application does: reads the settings the scales
-//! depend on, writes accel/decel times and the frequency reference, sets the run bit, reads the
-//! status bits by name and the monitors while the output ramps, stops, and prints the ramp down.
-//! Simulated time runs `--time-scale` times faster than real time.
+//! Starts a `drivemap-sim` simulator of the chosen drive in this process, serving RTU frames over
+//! loopback TCP as a serial gateway would, then runs one routine written against
+//! [`VariableFrequencyDrive`] — set the ramp times and the reference, choose the direction, run,
+//! watch the status and monitors while the output ramps, stop, watch it ramp down — exactly as an
+//! application would. Every drive whose map has `roles:` runs it with no code of its own: a drive
+//! compiled into `drivemap-drives` through its generated module ([`Vfd::connect`]), any other map
+//! through the plan lowered at run time ([`Vfd::from_plan`]). Simulated time runs `--time-scale`
+//! times faster than real time.
 
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -13,20 +15,18 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use clap::Args as ClapArgs;
-use drivemap_drives::{
-    automationdirect_acn as acn, ptlk_tds_v8 as tds, yaskawa_gpd515 as gpd, yaskawa_j7 as j7,
-    yaskawa_v7 as v7,
-};
+use drivemap_runtime::roles::Role;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
-use drivemap_runtime::{Client, ClientOptions, DriveSettings, Error, Profile};
+use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
+use drivemap_runtime::{Client, ClientOptions, Error};
 use drivemap_sim::{SimOptions, Simulator, SystemClock, TcpFraming, TcpServer};
 
 use crate::maps::MapsDir;
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Drive to simulate: ptlk-tds-v8, yaskawa-v7, yaskawa-j7, yaskawa-gpd515, automationdirect-acn.
+    /// Drive to simulate: the id of any map with `roles:` (see `drivemap list`).
     #[arg(long, default_value = "ptlk-tds-v8")]
     pub drive: String,
     /// Frequency reference to run at (Hz, 0 to 1000).
@@ -48,441 +48,60 @@ pub struct Args {
     pub dir: MapsDir,
 }
 
-/// One row of the table.
-struct Sample {
-    status: String,
-    reference: f64,
-    output: f64,
-    current: f64,
-    voltage: f64,
+/// What the routine does.
+pub struct Plan {
+    pub frequency: f64,
+    pub ramp: f64,
+    pub reverse: bool,
+    pub step: Duration,
+    pub time_scale: f64,
 }
 
-/// What the demo does with one drive, through its generated module.
-trait DemoDrive {
-    type Settings: DriveSettings + Default;
-    /// Whether the map has a way to command reverse.
-    const REVERSE: bool = true;
-    fn profile() -> &'static Profile;
-    /// Settings the application supplies (external quantities); the rest is read from the drive.
-    fn settings(externals: &[(String, f64)]) -> Self::Settings {
-        let _ = externals;
-        Self::Settings::default()
-    }
-    /// Writes accel/decel times; returns what was written, for the header.
-    fn prepare<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &Self::Settings,
-        ramp: f64,
-    ) -> Result<String, Error>;
-    fn reference<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &Self::Settings,
-        hz: f64,
-    ) -> Result<(), Error>;
-    fn run<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &Self::Settings,
-        run: bool,
-        reverse: bool,
-    ) -> Result<(), String>;
-    fn sample<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &Self::Settings,
-    ) -> Result<Sample, Error>;
-}
-
-fn names(bits: &[(&str, bool)]) -> String {
-    let on: Vec<&str> = bits.iter().filter(|(_, b)| *b).map(|(n, _)| *n).collect();
-    if on.is_empty() {
-        "-".into()
-    } else {
-        on.join(" ")
-    }
-}
-
-struct Tds;
-
-impl DemoDrive for Tds {
-    type Settings = tds::Settings;
-    fn profile() -> &'static Profile {
-        &tds::PROFILE
-    }
-    fn prepare<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &tds::Settings,
-        ramp: f64,
-    ) -> Result<String, Error> {
-        c.write::<tds::AccelTime1>(slave, &ramp, s)?;
-        c.write::<tds::DecelTime1>(slave, &ramp, s)?;
-        Ok(format!(
-            "Bn-01 accel time {ramp:.1} s, Bn-02 decel time {ramp:.1} s"
-        ))
-    }
-    fn reference<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &tds::Settings,
-        hz: f64,
-    ) -> Result<(), Error> {
-        c.write::<tds::FrequencyCommand>(slave, &hz, s)
-    }
-    fn run<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &tds::Settings,
-        run: bool,
-        reverse: bool,
-    ) -> Result<(), String> {
-        let bits = tds::OperationCommandBits::new()
-            .with_run(run)
-            .with_reverse(reverse);
-        c.write::<tds::OperationCommand>(slave, &bits, s)
-            .map_err(|e| e.to_string())
-    }
-    fn sample<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &tds::Settings,
-    ) -> Result<Sample, Error> {
-        let st = c.read::<tds::InverterStatus>(slave, s)?;
-        let (reference, output, voltage, current) = c.read_many::<(
-            tds::FrequencyCommandMonitor,
-            tds::OutputFrequency,
-            tds::OutputVoltage,
-            tds::OutputCurrent,
-        )>(slave, s)?;
-        Ok(Sample {
-            status: names(&[
-                ("running", st.running()),
-                ("zero_speed", st.zero_speed()),
-                ("reverse", st.reverse()),
-                ("drv_mode", st.drv_mode()),
-                ("alarm", st.alarm()),
-                ("fault", st.fault()),
-            ]),
-            reference,
-            output,
-            current,
-            voltage,
-        })
-    }
-}
-
-/// Frequency reference, run command and status of the V7 family: the J7 map inherits the V7's
-/// register ids, so the same code drives both through their own generated modules.
-macro_rules! v7_family_io {
-    ($m:ident) => {
-        fn reference<T: Transport>(
-            c: &mut Client<T>,
-            slave: u8,
-            s: &$m::Settings,
-            hz: f64,
-        ) -> Result<(), Error> {
-            c.write::<$m::FrequencyReference>(slave, &hz, s)
-        }
-        fn run<T: Transport>(
-            c: &mut Client<T>,
-            slave: u8,
-            s: &$m::Settings,
-            run: bool,
-            reverse: bool,
-        ) -> Result<(), String> {
-            let bits = $m::DigitalInputCommandBits::new()
-                .with_run_command(run)
-                .with_reverse(reverse);
-            c.write::<$m::DigitalInputCommand>(slave, &bits, s)
-                .map_err(|e| e.to_string())
-        }
-        fn sample<T: Transport>(
-            c: &mut Client<T>,
-            slave: u8,
-            s: &$m::Settings,
-        ) -> Result<Sample, Error> {
-            let st = c.read::<$m::StatusSignal1>(slave, s)?;
-            let (reference, output) =
-                c.read_many::<($m::FrequencyReferenceMonitor, $m::OutputFrequency)>(slave, s)?;
-            let (current, voltage) =
-                c.read_many::<($m::OutputCurrent, $m::OutputVoltage)>(slave, s)?;
-            Ok(Sample {
-                status: names(&[
-                    ("during_run", st.during_run()),
-                    ("reverse_direction", st.reverse_direction()),
-                    ("inverter_ready", st.inverter_ready()),
-                    ("fault", st.fault()),
-                ]),
-                reference,
-                output,
-                current,
-                voltage,
-            })
-        }
+/// One row of the table: a reading the drive does not support is shown as `-`.
+fn row(t: f64, status: &str, values: [Result<f64, Error>; 4]) {
+    let cell = |v: &Result<f64, Error>, width: usize, decimals: usize| match v {
+        Ok(v) => format!("{v:>width$.decimals$}"),
+        Err(_) => format!("{:>width$}", "-"),
     };
-}
-
-struct V7;
-
-impl DemoDrive for V7 {
-    type Settings = v7::Settings;
-    fn profile() -> &'static Profile {
-        &v7::PROFILE
-    }
-    fn prepare<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &v7::Settings,
-        ramp: f64,
-    ) -> Result<String, Error> {
-        c.write::<v7::AccelTime1>(slave, &ramp, s)?;
-        c.write::<v7::DecelTime1>(slave, &ramp, s)?;
-        // Written parameters take effect after ACCEPT (RAM only; ENTER would wear the EEPROM).
-        c.persist(slave, "accept")?;
-        Ok(format!(
-            "n019 accel time {ramp:.1} s, n020 decel time {ramp:.1} s, ACCEPT"
-        ))
-    }
-    v7_family_io!(v7);
-}
-
-struct J7;
-
-impl DemoDrive for J7 {
-    type Settings = j7::Settings;
-    fn profile() -> &'static Profile {
-        &j7::PROFILE
-    }
-    fn settings(externals: &[(String, f64)]) -> j7::Settings {
-        j7::Settings {
-            max_output_frequency: externals
-                .iter()
-                .find(|(k, _)| k == "max_output_frequency")
-                .map(|(_, v)| *v),
-            ..j7::Settings::default()
-        }
-    }
-    fn prepare<T: Transport>(
-        _: &mut Client<T>,
-        _: u8,
-        _: &j7::Settings,
-        _: f64,
-    ) -> Result<String, Error> {
-        Ok("the J7's accel/decel times have no register in the sources: the simulator ramps 10 s to max frequency".into())
-    }
-    v7_family_io!(j7);
-}
-
-struct Gpd;
-
-impl DemoDrive for Gpd {
-    type Settings = gpd::Settings;
-    const REVERSE: bool = false;
-    fn profile() -> &'static Profile {
-        &gpd::PROFILE
-    }
-    fn settings(externals: &[(String, f64)]) -> gpd::Settings {
-        gpd::Settings {
-            drive_rated_current: externals
-                .iter()
-                .find(|(k, _)| k == "drive_rated_current")
-                .map(|(_, v)| *v),
-            ..gpd::Settings::default()
-        }
-    }
-    fn prepare<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &gpd::Settings,
-        ramp: f64,
-    ) -> Result<String, Error> {
-        c.write::<gpd::AccelTime1>(slave, &ramp, s)?;
-        c.write::<gpd::DecelTime1>(slave, &ramp, s)?;
-        c.persist(slave, "accept")?;
-        Ok(format!(
-            "C1-01 accel time {ramp:.1} s, C1-02 decel time {ramp:.1} s, ACCEPT"
-        ))
-    }
-    fn reference<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &gpd::Settings,
-        hz: f64,
-    ) -> Result<(), Error> {
-        c.write::<gpd::FrequencyReference>(slave, &hz, s)
-    }
-    fn run<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &gpd::Settings,
-        run: bool,
-        reverse: bool,
-    ) -> Result<(), String> {
-        if reverse {
-            return Err("the GPD 515 map knows only the forward run bit".into());
-        }
-        let bits = gpd::OperationCommandBits::new().with_forward_run(run);
-        c.write::<gpd::OperationCommand>(slave, &bits, s)
-            .map_err(|e| e.to_string())
-    }
-    fn sample<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &gpd::Settings,
-    ) -> Result<Sample, Error> {
-        let st = c.read::<gpd::StatusSignal>(slave, s)?;
-        let (reference, output, current) = c.read_many::<(
-            gpd::MonitorFrequencyReference,
-            gpd::OutputFrequency,
-            gpd::OutputCurrent,
-        )>(slave, s)?;
-        let voltage = c.read::<gpd::OutputVoltage>(slave, s)?;
-        Ok(Sample {
-            status: names(&[
-                ("run_command", st.run_command()),
-                ("at_zero_speed", st.at_zero_speed()),
-                ("reverse_operation", st.reverse_operation()),
-                ("speed_agreed", st.speed_agreed()),
-                ("drive_ready", st.drive_ready()),
-                ("major_fault", st.major_fault()),
-            ]),
-            reference,
-            output,
-            current,
-            voltage,
-        })
-    }
-}
-
-struct Acn;
-
-impl DemoDrive for Acn {
-    type Settings = acn::Settings;
-    fn profile() -> &'static Profile {
-        &acn::PROFILE
-    }
-    fn prepare<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &acn::Settings,
-        ramp: f64,
-    ) -> Result<String, Error> {
-        c.write::<acn::AccelerationTime>(slave, &ramp, s)?;
-        c.write::<acn::DecelerationTime>(slave, &ramp, s)?;
-        Ok(format!(
-            "0h0383 acceleration time {ramp:.1} s, 0h0384 deceleration time {ramp:.1} s"
-        ))
-    }
-    fn reference<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &acn::Settings,
-        hz: f64,
-    ) -> Result<(), Error> {
-        c.write::<acn::FrequencyCommand>(slave, &hz, s)
-    }
-    fn run<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &acn::Settings,
-        run: bool,
-        reverse: bool,
-    ) -> Result<(), String> {
-        let bits = acn::OperationCommandBits::new()
-            .with_run(run)
-            .with_forward(!reverse);
-        c.write::<acn::OperationCommand>(slave, &bits, s)
-            .map_err(|e| e.to_string())
-    }
-    fn sample<T: Transport>(
-        c: &mut Client<T>,
-        slave: u8,
-        s: &acn::Settings,
-    ) -> Result<Sample, Error> {
-        use acn::DriveOperationStateOperationState as Op;
-        use acn::DriveOperationStateRunDirectionState as Dir;
-        let st = c.read::<acn::DriveOperationState>(slave, s)?;
-        let direction = match st.run_direction_state() {
-            Dir::Stopped => "stopped".to_string(),
-            Dir::OperatingForward => "forward".into(),
-            Dir::OperatingReverse => "reverse".into(),
-            Dir::DcOperating => "dc_operating".into(),
-            other => format!("direction={}", drivemap_runtime::Code::code(&other)),
-        };
-        let operation = match st.operation_state() {
-            Op::Accelerating => "accelerating".to_string(),
-            Op::ConstantRate => "constant_rate".into(),
-            Op::Decelerating => "decelerating".into(),
-            Op::DeceleratingToStop => "decelerating_to_stop".into(),
-            Op::Unknown(0) => String::new(),
-            other => format!("{other}"),
-        };
-        let (current, output) =
-            c.read_many::<(acn::OutputCurrent, acn::OutputFrequency)>(slave, s)?;
-        let voltage = c.read::<acn::OutputVoltage>(slave, s)?;
-        let reference = c.read::<acn::FrequencyCommand>(slave, s)?;
-        Ok(Sample {
-            status: format!("{direction} {operation}").trim().to_string(),
-            reference,
-            output,
-            current,
-            voltage,
-        })
-    }
-}
-
-struct Plan {
-    frequency: f64,
-    ramp: f64,
-    reverse: bool,
-    step: Duration,
-    time_scale: f64,
-}
-
-fn row(t: f64, s: &Sample) {
     outln!(
-        "{t:>7.1} s  {:<38} {:>7.2} {:>7.2} {:>9.1} {:>9.1}",
-        s.status,
-        s.reference,
-        s.output,
-        s.current,
-        s.voltage
+        "{t:>7.1} s  {status:<44} {} {} {} {}",
+        cell(&values[0], 7, 2),
+        cell(&values[1], 7, 2),
+        cell(&values[2], 9, 2),
+        cell(&values[3], 9, 1),
     );
 }
 
-/// The demo proper, through drive `D`'s generated module.
-fn drive_it<D: DemoDrive>(
-    addr: std::net::SocketAddr,
-    slave: u8,
-    externals: &[(String, f64)],
-    plan: &Plan,
-) -> Result<(), String> {
-    if plan.reverse && !D::REVERSE {
-        return Err(
-            "the GPD 515 map knows only the forward run bit of its command register; run without --reverse".into(),
-        );
+/// A reading the drive lacks is `Err(NoRole)`; any other error ends the demo.
+fn optional(v: Result<f64, Error>) -> Result<Result<f64, Error>, String> {
+    match v {
+        Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. })) | Ok(_) => Ok(v),
+        Err(e) => Err(format!("reading the drive: {e}")),
     }
-    let link = RtuOverTcpTransport::connect(addr, Duration::from_secs(2))
-        .map_err(|e| format!("cannot connect to the simulator at {addr}: {e}"))?;
-    let mut c = Client::with_options(
-        link,
-        D::profile(),
-        ClientOptions {
-            timeout: Duration::from_millis(500),
-            ..ClientOptions::default()
-        },
-    );
+}
+
+/// The demo proper: one routine for every drive, through the drive trait only.
+pub fn drive_it(d: &mut impl VariableFrequencyDrive, plan: &Plan) -> Result<(), String> {
     let fail = |what: &str, e: Error| format!("{what}: {e}");
-    let mut s = D::settings(externals);
-    c.load_settings(slave, &mut s)
-        .map_err(|e| fail("reading settings", e))?;
-    let prepared =
-        D::prepare(&mut c, slave, &s, plan.ramp).map_err(|e| fail("writing ramp times", e))?;
-    D::reference(&mut c, slave, &s, plan.frequency)
+    if d.supports(Role::AccelTime) && d.supports(Role::DecelTime) {
+        d.set_ramp(plan.ramp, plan.ramp)
+            .map_err(|e| fail("writing ramp times", e))?;
+        outln!(
+            "written: accel and decel time {:.1} s (roles accel_time, decel_time)",
+            plan.ramp
+        );
+    } else {
+        outln!("the map gives no accel/decel time registers: the drive ramps at its own setting");
+    }
+    d.set_reference(plan.frequency)
         .map_err(|e| fail("writing the frequency reference", e))?;
-    outln!("written: {prepared}");
+    let direction = if plan.reverse {
+        Direction::Reverse
+    } else {
+        Direction::Forward
+    };
+    d.set_direction(direction)
+        .map_err(|e| fail("setting the direction", e))?;
     outln!(
         "written: frequency reference {:.2} Hz, then run {}",
         plan.frequency,
@@ -490,9 +109,9 @@ fn drive_it<D: DemoDrive>(
     );
     outln!();
     outln!(
-        "{:>9}  {:<38} {:>7} {:>7} {:>9} {:>9}",
+        "{:>9}  {:<44} {:>7} {:>7} {:>9} {:>9}",
         "time",
-        "status bits",
+        "status (roles that hold)",
         "ref Hz",
         "out Hz",
         "current A",
@@ -502,13 +121,18 @@ fn drive_it<D: DemoDrive>(
     let sim_time = || start.elapsed().as_secs_f64() * plan.time_scale;
     let pause = Duration::from_secs_f64(plan.step.as_secs_f64() / plan.time_scale);
     let deadline = start + Duration::from_secs(45);
-    D::run(&mut c, slave, &s, true, plan.reverse).map_err(|e| format!("run: {e}"))?;
+    let sample = |d: &mut _| -> Result<Option<f64>, String> {
+        let (status, values) = read_row(d, plan)?;
+        let out = values[1].as_ref().ok().copied();
+        row(sim_time(), &status, values);
+        Ok(out)
+    };
+    d.run().map_err(|e| fail("run", e))?;
     // Up the ramp, then two rows at the reference.
     let mut steady = 0;
     while steady < 3 {
-        let x = D::sample(&mut c, slave, &s).map_err(|e| fail("reading status", e))?;
-        row(sim_time(), &x);
-        if (x.output - x.reference).abs() < 0.05 {
+        let out = sample(d)?;
+        if out.is_some_and(|o| (o - plan.frequency).abs() < 0.05) {
             steady += 1;
         }
         if Instant::now() > deadline {
@@ -516,12 +140,11 @@ fn drive_it<D: DemoDrive>(
         }
         thread::sleep(pause);
     }
-    D::run(&mut c, slave, &s, false, plan.reverse).map_err(|e| format!("stop: {e}"))?;
+    d.stop().map_err(|e| fail("stop", e))?;
     outln!("{:>9}  stop", "");
     loop {
-        let x = D::sample(&mut c, slave, &s).map_err(|e| fail("reading status", e))?;
-        row(sim_time(), &x);
-        if x.output == 0.0 {
+        let out = sample(d)?;
+        if out == Some(0.0) {
             break;
         }
         if Instant::now() > deadline {
@@ -530,6 +153,67 @@ fn drive_it<D: DemoDrive>(
         thread::sleep(pause);
     }
     Ok(())
+}
+
+fn read_row(
+    d: &mut impl VariableFrequencyDrive,
+    plan: &Plan,
+) -> Result<(String, [Result<f64, Error>; 4]), String> {
+    let fail = |what: &str, e: Error| format!("{what}: {e}");
+    let status = d.status().map_err(|e| fail("reading the status", e))?;
+    let reference = if d.supports(Role::ReferenceMonitor) {
+        optional(d.reference())?
+    } else {
+        Ok(plan.frequency)
+    };
+    let output = d
+        .output_frequency()
+        .map_err(|e| fail("reading the output frequency", e))?;
+    let current = optional(d.output_current())?;
+    let voltage = optional(d.output_voltage())?;
+    Ok((status.flags(), [reference, Ok(output), current, voltage]))
+}
+
+/// Runs the routine on the drive compiled in as module `$m`, if `$id` is the one asked for.
+macro_rules! through_module {
+    ($m:ident, $id:literal) => {
+        fn $m<T: Transport>(
+            c: &mut Client<T>,
+            slave: u8,
+            externals: &[(&str, f64)],
+            plan: &Plan,
+        ) -> Result<(), String> {
+            use drivemap_drives::$m as module;
+            let mut d = Vfd::connect::<module::Drive>(
+                c,
+                slave,
+                module::Settings::default(),
+                externals,
+            )
+            .map_err(|e| format!("reading settings: {e}"))?;
+            drive_it(&mut d, plan)
+        }
+    };
+}
+drivemap_drives::for_each_drive!(through_module);
+
+/// The routine through the generated module of `id`, if it is compiled in.
+fn compiled<T: Transport>(
+    id: &str,
+    c: &mut Client<T>,
+    slave: u8,
+    externals: &[(&str, f64)],
+    plan: &Plan,
+) -> Option<Result<(), String>> {
+    macro_rules! pick {
+        ($m:ident, $id:literal) => {
+            if id == $id {
+                return Some($m(c, slave, externals, plan));
+            }
+        };
+    }
+    drivemap_drives::for_each_drive!(pick);
+    None
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
@@ -541,26 +225,24 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     }
     let started = Instant::now();
     let drive = super::simulate::load_drive(&args.dir, &args.drive)?;
-    let clock = Arc::new(SystemClock::scaled(args.time_scale));
-    let sim = Simulator::new(drive, SimOptions::new().clock(clock)).map_err(|e| e.to_string())?;
-    if !sim.has_model() {
+    if drive.plan().roles.is_empty() {
         return Err(format!(
-            "{} has no drive model in the simulator's roles table; choose one of: {}",
-            args.drive,
-            drivemap_sim::roles::builtin_drives().join(", ")
+            "the map of {} gives no `roles:`, so there is no drive to run; add them (maps/README.md, \"Roles\")",
+            args.drive
         ));
     }
+    let clock = Arc::new(SystemClock::scaled(args.time_scale));
+    let sim = Simulator::new(drive, SimOptions::new().clock(clock)).map_err(|e| e.to_string())?;
     let slave = sim.slave();
     let title = format!(
         "{} {}",
         sim.drive().meta.vendor,
         sim.drive().meta.models.join(" / ")
     );
-    let externals: Vec<(String, f64)> = drivemap_sim::roles::builtin(&args.drive)
-        .ok()
-        .flatten()
-        .map(|r| r.externals.into_iter().collect())
-        .unwrap_or_default();
+    // The simulator's values of the map's external quantities, told to the client as an
+    // application would (a nameplate, a drive setting).
+    let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
+    let drive = sim.drive().clone();
     let shared = drivemap_sim::shared(sim);
     let server = TcpServer::spawn(shared.clone(), "127.0.0.1:0", TcpFraming::RtuOverTcp, None)
         .map_err(|e| format!("cannot start the simulator on loopback: {e}"))?;
@@ -570,10 +252,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         args.drive,
         args.time_scale
     );
-    outln!(
-        "driven through drivemap_drives::{} (the generated typed API)",
-        drivemap_codegen::ir::module_name(&args.drive)
-    );
+    for (name, v) in &externals {
+        outln!("external quantity {name} = {v} (supplied by the application)");
+    }
     let plan = Plan {
         frequency: args.frequency,
         ramp: args.ramp,
@@ -581,16 +262,45 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         step: Duration::from_secs_f64(args.step),
         time_scale: args.time_scale,
     };
-    let result = match args.drive.as_str() {
-        "ptlk-tds-v8" => drive_it::<Tds>(addr, slave, &externals, &plan),
-        "yaskawa-v7" => drive_it::<V7>(addr, slave, &externals, &plan),
-        "yaskawa-j7" => drive_it::<J7>(addr, slave, &externals, &plan),
-        "yaskawa-gpd515" => drive_it::<Gpd>(addr, slave, &externals, &plan),
-        "automationdirect-acn" => drive_it::<Acn>(addr, slave, &externals, &plan),
-        other => Err(format!(
-            "the demo has no typed-API script for {other}; choose one of: ptlk-tds-v8, yaskawa-v7, yaskawa-j7, yaskawa-gpd515, automationdirect-acn"
-        )),
-    };
+    let result = (|| {
+        let link = RtuOverTcpTransport::connect(addr, Duration::from_secs(2))
+            .map_err(|e| format!("cannot connect to the simulator at {addr}: {e}"))?;
+        let profile = drive.plan().profile;
+        let mut c = Client::with_options(
+            link,
+            profile,
+            ClientOptions {
+                timeout: Duration::from_millis(500),
+                ..ClientOptions::for_profile(profile)
+            },
+        );
+        let ext: Vec<(&str, f64)> = externals.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+        if let Some(done) = compiled(&args.drive, &mut c, slave, &ext, &plan) {
+            outln!(
+                "driven through drivemap_drives::{} (the generated module) and the VariableFrequencyDrive trait",
+                drive.module
+            );
+            return done;
+        }
+        outln!(
+            "{} is not compiled into drivemap-drives: driven through its plan lowered at run time and the VariableFrequencyDrive trait",
+            args.drive
+        );
+        let mut settings = drivemap_live::LiveSettings::default();
+        for (k, v) in &externals {
+            settings.references.insert(k.clone(), *v);
+        }
+        for address in drivemap_live::LiveSettings::dependencies(&drive) {
+            let mut raw = [0u16];
+            c.read_holding(slave, address, &mut raw)
+                .map_err(|e| format!("reading settings: {e}"))?;
+            settings.absorb(&drive, address, raw[0]);
+        }
+        let view = settings.view(&drive);
+        let p = drive.plan();
+        let mut d = Vfd::from_plan(&mut c, slave, view, p.registers, p.roles);
+        drive_it(&mut d, &plan)
+    })();
     server.stop();
     result?;
     let stats = drivemap_sim::server::lock(&shared).stats();
@@ -622,14 +332,8 @@ mod tests {
     }
 
     #[test]
-    fn the_demo_runs_every_drive_through_its_generated_module() {
-        for id in [
-            "ptlk-tds-v8",
-            "yaskawa-v7",
-            "yaskawa-j7",
-            "yaskawa-gpd515",
-            "automationdirect-acn",
-        ] {
+    fn the_demo_runs_every_compiled_drive_through_the_trait() {
+        for (id, _) in drivemap_drives::DRIVES {
             assert_eq!(run(args(id)).unwrap(), ExitCode::SUCCESS, "{id}");
         }
         let reverse = Args {
@@ -641,12 +345,6 @@ mod tests {
 
     #[test]
     fn what_the_demo_cannot_do_is_said() {
-        let e = run(Args {
-            reverse: true,
-            ..args("yaskawa-gpd515")
-        })
-        .unwrap_err();
-        assert!(e.contains("forward run bit"), "{e}");
         let e = run(args("no-such-drive")).unwrap_err();
         assert!(e.contains("no map for drive `no-such-drive`"), "{e}");
         let e = run(Args {

@@ -174,7 +174,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let model = if sim.has_model() {
         "drive model on"
     } else {
-        "no drive model (the roles table does not list this drive)"
+        "no drive model: the map gives no `roles:`, so this is a register store"
     };
     let profile = sim.profile();
     let shared = drivemap_sim::shared(sim);

@@ -18,6 +18,7 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     } = &plan.settings;
     let mut fields = Vec::new();
     let mut absorb = Vec::new();
+    let mut external_arms = Vec::new();
     let mut axes = Vec::new();
     let mut variant_arms = Vec::new();
     let mut code_arms = Vec::new();
@@ -114,9 +115,23 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
                 ));
                 fields.push(quote!(#doc pub #field: Option<f64>,));
                 quantity_arms.push(quote!(#slot_lit => self.#field,));
+                external_arms.push(quote!(#id => self.#field = Some(value),));
             }
         }
     }
+    let set_external = if external_arms.is_empty() {
+        quote!()
+    } else {
+        quote! {
+            fn set_external(&mut self, name: &str, value: f64) -> bool {
+                match name {
+                    #(#external_arms)*
+                    _ => return false,
+                }
+                true
+            }
+        }
+    };
     let deps = plan.dependencies().into_iter().map(hex);
     let absorb_body = if absorb.is_empty() {
         quote!(let _ = (address, raw); false)
@@ -184,6 +199,8 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
             fn absorb(&mut self, address: u16, raw: u16) -> bool {
                 #absorb_body
             }
+
+            #set_external
         }
 
         impl #rt::SettingsView for Settings {
