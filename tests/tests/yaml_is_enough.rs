@@ -1,0 +1,192 @@
+//! A new drive is a YAML file and nothing else. With a copy of `maps/` plus the map of a fictional
+//! drive (`tests/fixtures/acme-vf1/`: a 2-bit run/stop code, a 2-bit direction code, an operating
+//! state reported as codes, an edge-triggered reset, a drive-specific exception code) and no
+//! other edit:
+//!
+//! - `drivemap check --require-manuals` passes on the new map;
+//! - the `drivemap` tool built with it has the generated module and its drive trait, and
+//!   `drivemap demo --drive acme-vf1` completes through them;
+//! - `drivemap simulate` runs its drive model, and an application written once against the drive
+//!   trait (`tests/fixtures/any-drive-app/main.rs`, which names no register and no drive) ramps
+//!   it to the reference and stops it.
+//!
+//! Builds share `target/new-map-probe` with `new_map_becomes_module.rs`.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+fn fixture() -> PathBuf {
+    workspace().join("tests/fixtures/acme-vf1")
+}
+
+fn target() -> PathBuf {
+    workspace().join("target/new-map-probe")
+}
+
+fn cargo(args: &[&str], maps: &Path) -> std::process::Output {
+    Command::new(env!("CARGO"))
+        .args(args)
+        .env("DRIVEMAP_MAPS", maps)
+        .env("CARGO_TARGET_DIR", target())
+        .env("DRIVEMAP_MANUALS", fixture().join("manuals"))
+        .output()
+        .expect("cargo runs")
+}
+
+fn ok(out: &std::process::Output, what: &str) -> String {
+    assert!(
+        out.status.success(),
+        "{what} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Stops the child process when dropped, so a failing assertion leaves no simulator behind.
+struct Child(std::process::Child);
+
+impl Drop for Child {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[test]
+fn a_drive_of_another_vendor_needs_only_its_yaml() {
+    let root = workspace();
+    let tmp = root
+        .join("target/new-map-probe")
+        .join(format!("yaml-is-enough-{}", std::process::id()));
+    let maps = tmp.join("maps");
+    let app = tmp.join("app");
+    std::fs::create_dir_all(&maps).unwrap();
+    std::fs::create_dir_all(app.join("src")).unwrap();
+    for map in drivemap_codegen::find_maps(&root.join("maps")).unwrap() {
+        std::fs::copy(&map, maps.join(map.file_name().unwrap())).unwrap();
+    }
+    std::fs::copy(
+        fixture().join("acme-vf1.yaml"),
+        maps.join("acme-vf1.yaml"),
+    )
+    .unwrap();
+
+    // The tool, built with the new map among its drives.
+    ok(
+        &cargo(
+            &["build", "--quiet", "--offline", "-p", "drivemap", "--bin", "drivemap"],
+            &maps,
+        ),
+        "building drivemap with the new map",
+    );
+    let drivemap = target().join("debug/drivemap");
+    let tool = |args: &[&str]| {
+        Command::new(&drivemap)
+            .args(args)
+            .env("DRIVEMAP_MAPS", &maps)
+            .env("DRIVEMAP_MANUALS", fixture().join("manuals"))
+            .output()
+            .expect("drivemap runs")
+    };
+
+    let checked = ok(
+        &tool(&[
+            "check",
+            "--require-manuals",
+            maps.join("acme-vf1.yaml").to_str().unwrap(),
+        ]),
+        "drivemap check",
+    );
+    assert!(checked.contains("ok") && checked.contains("acme-vf1"), "{checked}");
+
+    let demo = ok(
+        &tool(&["demo", "--drive", "acme-vf1", "--time-scale", "50", "--reverse"]),
+        "drivemap demo",
+    );
+    assert!(
+        demo.contains("drivemap_drives::acme_vf1 (the generated module)"),
+        "{demo}"
+    );
+    assert!(demo.contains("running reversing ready accelerating"), "{demo}");
+    assert!(demo.contains("stopping"), "{demo}");
+    let last = demo
+        .lines()
+        .rev()
+        .find(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+        .unwrap();
+    assert!(last.contains(" 0.00 "), "the demo ends at 0 Hz: {last}\n{demo}");
+
+    // The simulator of the new drive, and the generic application against it.
+    let mut sim = Child(
+        Command::new(&drivemap)
+            .args([
+                "simulate",
+                "--drive",
+                "acme-vf1",
+                "--tcp",
+                "127.0.0.1:0",
+                "--time-scale",
+                "10",
+                "--quiet",
+            ])
+            .env("DRIVEMAP_MAPS", &maps)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("drivemap simulate starts"),
+    );
+    let mut line = String::new();
+    BufReader::new(sim.0.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    assert!(line.contains("drive model on"), "{line}");
+    let addr = line
+        .split_whitespace()
+        .find(|w| w.starts_with("127.0.0.1:"))
+        .unwrap_or_else(|| panic!("no address in {line:?}"))
+        .to_owned();
+
+    std::fs::copy(root.join("Cargo.lock"), app.join("Cargo.lock")).unwrap();
+    std::fs::copy(
+        root.join("tests/fixtures/any-drive-app/main.rs"),
+        app.join("src/main.rs"),
+    )
+    .unwrap();
+    let path = |c: &str| root.join(c).display().to_string();
+    std::fs::write(
+        app.join("Cargo.toml"),
+        format!(
+            "[package]\nname = \"any-drive-app\"\nversion = \"0.0.0\"\nedition = \"2024\"\n\n[workspace]\n\n\
+             [dependencies]\ndrivemap-drives = {{ path = {:?} }}\ndrivemap-runtime = {{ path = {:?} }}\n",
+            path("drives"),
+            path("runtime")
+        ),
+    )
+    .unwrap();
+    let out = cargo(
+        &[
+            "run",
+            "--quiet",
+            "--offline",
+            "--manifest-path",
+            app.join("Cargo.toml").to_str().unwrap(),
+            "--",
+            "acme-vf1",
+            &addr,
+        ],
+        &maps,
+    );
+    let said = ok(&out, "the generic application");
+    assert!(said.contains("at reference 30.00 Hz"), "{said}");
+    assert!(said.contains("stopped, status ready"), "{said}");
+    let _ = std::fs::remove_dir_all(&tmp);
+}
