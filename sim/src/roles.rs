@@ -80,7 +80,8 @@ impl Plausible {
     /// Maximum frequency (Hz) where the map has no `max_frequency` role, or its register has no
     /// printed default, or its external quantity is not supplied.
     pub const MAX_FREQUENCY: f64 = 60.0;
-    /// Accel and decel time (s) of a role register with no printed default.
+    /// Accel and decel time (s) of a role register with no printed default, or of a drive whose
+    /// map gives no accel/decel time role (the J7's n16/n17 have no register in its sources).
     pub const RAMP_TIME: f64 = 10.0;
     /// Output voltage at the maximum frequency (V/f), V.
     pub const RATED_VOLTAGE: f64 = 230.0;
@@ -208,7 +209,7 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
         frequency_reference: Vec::new(),
         follow: Vec::new(),
         max_frequency: Source::Value(Plausible::MAX_FREQUENCY),
-        accel_time: Source::Value(0.0),
+        accel_time: Source::Value(Plausible::RAMP_TIME),
         decel_time: None,
         status: Vec::new(),
         modes: false,
