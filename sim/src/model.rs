@@ -127,6 +127,7 @@ impl Model {
         match c {
             Condition::Always => true,
             Condition::Never => false,
+            Condition::Ready => self.mode != Some(Mode::Prg),
             Condition::Running => self.running(),
             Condition::Stopped => !self.running(),
             Condition::Forward => self.running() && !self.reverse_now(),

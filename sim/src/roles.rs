@@ -18,6 +18,9 @@ pub enum Condition {
     Always,
     /// Never (the simulated drive has no faults or alarms).
     Never,
+    /// Ready to run: always, except in program (PRG) mode, where a drive with mode switching
+    /// takes no run command (the TDS-V8's example reply shows Ready clear in PRG mode).
+    Ready,
     /// Run commanded, or the output frequency not yet 0.
     Running,
     /// Not running.
@@ -50,7 +53,7 @@ impl Condition {
         match role {
             Role::Running => Condition::Running,
             Role::Reversing => Condition::Reverse,
-            Role::Ready => Condition::Always,
+            Role::Ready => Condition::Ready,
             Role::ZeroSpeed => Condition::ZeroSpeed,
             Role::SpeedAgree => Condition::SpeedAgree,
             Role::Accelerating => Condition::Accelerating,
