@@ -151,8 +151,13 @@ pub enum Refusal {
     #[error("{drive} has no external quantity {name}")]
     UnknownExternal { drive: &'static str, name: String },
     /// An external quantity the application has not supplied.
-    #[error("{drive}: the external quantity {name} is not set; the application supplies it (Vfd::connect's externals)")]
-    ExternalNotSet { drive: &'static str, name: &'static str },
+    #[error(
+        "{drive}: the external quantity {name} is not set; the application supplies it (Vfd::connect's externals)"
+    )]
+    ExternalNotSet {
+        drive: &'static str,
+        name: &'static str,
+    },
     /// Bits outside a bit-field register's fields.
     #[error("{register}: bits {bits:04X}h are reserved")]
     ReservedBits { register: &'static str, bits: u16 },

@@ -348,12 +348,12 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
                 Ok(self.row(row).decode_number(raw, &self.settings)?)
             }
             Target::External { slot, name } => self.settings.quantity(slot).ok_or_else(|| {
-                    Refusal::ExternalNotSet {
-                        drive: self.drive(),
-                        name,
-                    }
-                    .into()
-                }),
+                Refusal::ExternalNotSet {
+                    drive: self.drive(),
+                    name,
+                }
+                .into()
+            }),
             Target::Field(_) => Err(self.misplaced(role, "register")),
         }
     }

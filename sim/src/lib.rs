@@ -11,9 +11,9 @@
 //! other slaves' addresses, executes broadcasts only on the registers the profile allows, and
 //! counts the persist commands of the map (ENTER, save).
 //!
-//! A drive listed in the roles table ([`roles`], `sim/roles.yaml`) also gets a drive model: the
-//! run and direction bits of its command register make the status register show running and the
-//! output frequency ramp towards the reference at the accel/decel time's rate, converted through
+//! A map that gives `roles:` also gets a drive model ([`roles`]): the run and direction fields of
+//! its command registers make the status fields show running and the output frequency ramp
+//! towards the reference at the accel/decel time's rate, converted through
 //! the map's scales (including relative and selected scales, whose settings come from the
 //! simulator's own registers). Time comes from a [`Clock`], so tests are deterministic.
 //!

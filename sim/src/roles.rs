@@ -219,9 +219,7 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
         initial: Vec::new(),
     };
     let quantity = |role: Role, fallback: f64, initial: &mut Vec<(usize, f64)>| {
-        let Some(p) = roles.of(role).next() else {
-            return None;
-        };
+        let p = roles.of(role).next()?;
         Some(match p.target {
             Target::Register(row) => match map_index(drive, row) {
                 Some(i) => {

@@ -363,12 +363,14 @@ impl Simulator {
             .iter()
             .map(|q| q.external.clone())
             .collect();
-        let max_external = drive.plan().roles.of(drivemap_runtime::core::Role::MaxFrequency).find_map(|p| {
-            match p.target {
+        let max_external = drive
+            .plan()
+            .roles
+            .of(drivemap_runtime::core::Role::MaxFrequency)
+            .find_map(|p| match p.target {
                 drivemap_runtime::core::roles::Target::External { name, .. } => Some(name),
                 _ => None,
-            }
-        });
+            });
         let mut externals: BTreeMap<String, f64> = known_externals
             .iter()
             .map(|name| {

@@ -107,7 +107,10 @@ fn every_map_starts_with_its_roles_and_defaults() {
 fn tds_v8_manual_frames() {
     // The example's drive has its LCD operator connected (bit 11, not a role the model drives):
     // the bench sets it.
-    let (mut sim, clock) = start("ptlk-tds-v8", SimOptions::new().set("inverter_status", 2048.0));
+    let (mut sim, clock) = start(
+        "ptlk-tds-v8",
+        SimOptions::new().set("inverter_status", 2048.0),
+    );
     // 03h example: 0802h, stopped in PRG mode (002_661580cce154f322.txt:183-208): zero speed
     // and the LCD operator set, Ready clear (no run command is taken in PRG mode).
     let reply = send(&mut sim, &[0x01, 0x03, 0x00, 0x20, 0x00, 0x01, 0x85, 0xC0]);
@@ -578,7 +581,10 @@ fn acn_offsets_save_sequence_and_codes() {
 /// model run it, and the stop code stops it.
 #[test]
 fn a_two_bit_run_code_runs_and_its_stop_code_stops() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/acme-vf1/acme-vf1.yaml");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/fixtures/acme-vf1/acme-vf1.yaml"
+    );
     let clock = ManualClock::new();
     let mut sim = Simulator::new(
         drivemap_codegen::read_map(path.as_ref(), &Default::default()).unwrap(),

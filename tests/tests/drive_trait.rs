@@ -9,9 +9,9 @@ use std::time::Duration;
 
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::Role;
+use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::transport::Transport;
 use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, DrivePlan, DriveSettings, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
@@ -39,9 +39,16 @@ fn exercise(
     // 2 s to the maximum frequency (60 Hz or more): 0.2 s is part of the way to 30 Hz.
     wait(0.2);
     let status = d.status()?;
-    assert_eq!(status.running, Some(true), "{id}: running after run: {status}");
+    assert_eq!(
+        status.running,
+        Some(true),
+        "{id}: running after run: {status}"
+    );
     let rising = d.output_frequency()?;
-    assert!(rising > 0.0 && rising < 30.0, "{id}: ramping, at {rising} Hz");
+    assert!(
+        rising > 0.0 && rising < 30.0,
+        "{id}: ramping, at {rising} Hz"
+    );
     wait(60.0);
     let hz = d.output_frequency()?;
     assert!((hz - 30.0).abs() <= 0.1, "{id}: at the reference, {hz} Hz");
@@ -87,12 +94,7 @@ where
     let addr = server.local_addr();
     let ext: Vec<(&str, f64)> = externals.iter().map(|(k, v)| (k.as_str(), *v)).collect();
     let wait = |s: f64| clock.advance(Duration::from_secs_f64(s));
-    fn go<D, T>(
-        link: T,
-        slave: u8,
-        ext: &[(&str, f64)],
-        wait: &dyn Fn(f64),
-    ) -> Result<(), Error>
+    fn go<D, T>(link: T, slave: u8, ext: &[(&str, f64)], wait: &dyn Fn(f64)) -> Result<(), Error>
     where
         D: DrivePlan,
         D::Settings: DriveSettings + Default,
@@ -107,13 +109,18 @@ where
         } else {
             // No way to reverse on this link: refused, and nothing sent.
             match d.set_direction(Direction::Reverse) {
-                Err(Error::Refused(Refusal::NoRole { role: "reverse", .. })) => {}
+                Err(Error::Refused(Refusal::NoRole {
+                    role: "reverse", ..
+                })) => {}
                 other => panic!("{}: reverse without a way: {other:?}", D::PROFILE.drive_id),
             }
         }
         // A role the map lacks is refused before anything is sent.
         for (role, call) in [
-            (Role::DcBusVoltage, VariableFrequencyDrive::dc_bus_voltage as fn(&mut _) -> _),
+            (
+                Role::DcBusVoltage,
+                VariableFrequencyDrive::dc_bus_voltage as fn(&mut _) -> _,
+            ),
             (Role::OutputVoltage, VariableFrequencyDrive::output_voltage),
             (Role::OutputCurrent, VariableFrequencyDrive::output_current),
         ] {

@@ -74,16 +74,20 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
     for map in drivemap_codegen::find_maps(&root.join("maps")).unwrap() {
         std::fs::copy(&map, maps.join(map.file_name().unwrap())).unwrap();
     }
-    std::fs::copy(
-        fixture().join("acme-vf1.yaml"),
-        maps.join("acme-vf1.yaml"),
-    )
-    .unwrap();
+    std::fs::copy(fixture().join("acme-vf1.yaml"), maps.join("acme-vf1.yaml")).unwrap();
 
     // The tool, built with the new map among its drives.
     ok(
         &cargo(
-            &["build", "--quiet", "--offline", "-p", "drivemap", "--bin", "drivemap"],
+            &[
+                "build",
+                "--quiet",
+                "--offline",
+                "-p",
+                "drivemap",
+                "--bin",
+                "drivemap",
+            ],
             &maps,
         ),
         "building drivemap with the new map",
@@ -106,24 +110,40 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
         ]),
         "drivemap check",
     );
-    assert!(checked.contains("ok") && checked.contains("acme-vf1"), "{checked}");
+    assert!(
+        checked.contains("ok") && checked.contains("acme-vf1"),
+        "{checked}"
+    );
 
     let demo = ok(
-        &tool(&["demo", "--drive", "acme-vf1", "--time-scale", "50", "--reverse"]),
+        &tool(&[
+            "demo",
+            "--drive",
+            "acme-vf1",
+            "--time-scale",
+            "50",
+            "--reverse",
+        ]),
         "drivemap demo",
     );
     assert!(
         demo.contains("drivemap_drives::acme_vf1 (the generated module)"),
         "{demo}"
     );
-    assert!(demo.contains("running reversing ready accelerating"), "{demo}");
+    assert!(
+        demo.contains("running reversing ready accelerating"),
+        "{demo}"
+    );
     assert!(demo.contains("stopping"), "{demo}");
     let last = demo
         .lines()
         .rev()
         .find(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
         .unwrap();
-    assert!(last.contains(" 0.00 "), "the demo ends at 0 Hz: {last}\n{demo}");
+    assert!(
+        last.contains(" 0.00 "),
+        "the demo ends at 0 Hz: {last}\n{demo}"
+    );
 
     // The simulator of the new drive, and the generic application against it.
     let mut sim = Child(

@@ -184,13 +184,9 @@ macro_rules! through_module {
             plan: &Plan,
         ) -> Result<(), String> {
             use drivemap_drives::$m as module;
-            let mut d = Vfd::connect::<module::Drive>(
-                c,
-                slave,
-                module::Settings::default(),
-                externals,
-            )
-            .map_err(|e| format!("reading settings: {e}"))?;
+            let mut d =
+                Vfd::connect::<module::Drive>(c, slave, module::Settings::default(), externals)
+                    .map_err(|e| format!("reading settings: {e}"))?;
             drive_it(&mut d, plan)
         }
     };
