@@ -181,5 +181,6 @@ pub fn export(drive: &Drive) -> Value {
         "conflicts": drive.conflicts,
         "gaps": drive.gaps,
         "removed": drive.removed,
+        "roles": drive.roles,
     })
 }
