@@ -1,0 +1,144 @@
+//! Roles are lowered to plan rows, bit positions and codes: `tests/fixtures/roles-drive.yaml`
+//! read, validated and lowered, and every place of its `DrivePlan::roles` checked. The errors of
+//! `validate::roles_valid` are in `tests/ui/e46-*` .. `e56-*`.
+
+use std::path::Path;
+
+use drivemap_codegen::lower::DrivePlan;
+use drivemap_codegen::validate::Context;
+use drivemap_core::roles::{FieldRole, Role, Target};
+
+fn drive() -> drivemap_codegen::Drive {
+    drivemap_codegen::read_map(
+        Path::new("tests/fixtures/roles-drive.yaml"),
+        &Context::default(),
+    )
+    .unwrap_or_else(|d| panic!("{d}"))
+}
+
+/// The plan row of register `id`.
+fn row(plan: &DrivePlan, id: &str) -> u16 {
+    let i = plan
+        .registers
+        .iter()
+        .position(|r| r.info.id == id)
+        .unwrap_or_else(|| panic!("no register `{id}` in the plan"));
+    u16::try_from(i).unwrap()
+}
+
+fn targets(plan: &DrivePlan, role: Role) -> Vec<Target> {
+    plan.roles.of(role).map(|p| p.target).collect()
+}
+
+#[test]
+fn a_two_bit_run_code_lowers_to_its_row_bits_and_codes() {
+    let drive = drive();
+    let plan = drive.plan();
+    let command = row(plan, "operation_command");
+    let run = targets(plan, Role::Run);
+    assert_eq!(
+        run,
+        [
+            Target::Field(FieldRole {
+                row: command,
+                lsb: 4,
+                width: 2,
+                on: &[2],
+                off: Some(1),
+                edge: false,
+            }),
+            Target::Field(FieldRole {
+                row: row(plan, "broadcast_command"),
+                lsb: 0,
+                width: 1,
+                on: &[1],
+                off: Some(0),
+                edge: false,
+            }),
+        ]
+    );
+    let Target::Field(f) = run[0] else {
+        unreachable!()
+    };
+    // Run writes 10b into bits 4-5 and keeps the other bits; stop writes 01b.
+    assert_eq!(f.put(0x0005, f.code(true)), 0x0025);
+    assert_eq!(f.put(0x0025, f.code(false)), 0x0015);
+    let first = plan.roles.of(Role::Run).next().unwrap();
+    assert_eq!(first.source, "manual.txt:20");
+}
+
+#[test]
+fn every_role_of_the_fixture_lowers_to_its_place() {
+    let drive = drive();
+    let plan = drive.plan();
+    let command = row(plan, "operation_command");
+    let state = row(plan, "state");
+    // A 1-bit field whose 1 means forward: reverse is on at 0, off at 1.
+    assert_eq!(
+        targets(plan, Role::Reverse),
+        [Target::Field(FieldRole {
+            row: command,
+            lsb: 0,
+            width: 1,
+            on: &[0],
+            off: Some(1),
+            edge: false,
+        })]
+    );
+    assert_eq!(
+        targets(plan, Role::FaultReset),
+        [Target::Field(FieldRole {
+            row: command,
+            lsb: 2,
+            width: 1,
+            on: &[1],
+            off: Some(0),
+            edge: true,
+        })]
+    );
+    assert_eq!(
+        targets(plan, Role::FrequencyReference),
+        [Target::Register(row(plan, "frequency_reference"))]
+    );
+    assert_eq!(
+        targets(plan, Role::OutputCurrent),
+        [Target::Register(row(plan, "output_current"))]
+    );
+    // A status listed by code ids: the codes' numbers.
+    assert_eq!(
+        targets(plan, Role::Running),
+        [Target::Field(FieldRole {
+            row: state,
+            lsb: 0,
+            width: 2,
+            on: &[1, 2],
+            off: Some(0),
+            edge: false,
+        })]
+    );
+    assert_eq!(
+        targets(plan, Role::Fault),
+        [Target::Field(FieldRole {
+            row: state,
+            lsb: 3,
+            width: 1,
+            on: &[1],
+            off: Some(0),
+            edge: false,
+        })]
+    );
+    match targets(plan, Role::MaxFrequency)[..] {
+        [Target::External { slot, name }] => {
+            assert_eq!(name, "max_output_frequency");
+            assert!(usize::from(slot) < plan.settings.quantities.len());
+        }
+        ref other => panic!("max_frequency lowered to {other:?}"),
+    }
+    // Roles the map does not give have no place; places come in the order of `Role::ALL`.
+    assert!(!plan.roles.has(Role::OutputFrequency));
+    assert_eq!(plan.roles.places.len(), 9);
+    let order: Vec<Role> = plan.roles.places.iter().map(|p| p.role).collect();
+    let mut sorted = order.clone();
+    sorted.sort_by_key(|r| Role::ALL.iter().position(|a| a == r));
+    assert_eq!(order, sorted);
+}
