@@ -3,7 +3,9 @@
 //!
 //! Cargo features have to be declared in `Cargo.toml`, so a map added to `maps/` has none of its
 //! own until a line is added there; until then it is built with `all-drives` (the default), and
-//! this script says so in a warning.
+//! this script says so in a warning. Any map, declared or not, can also be selected by id in the
+//! environment variable `DRIVEMAP_DRIVES` (comma-separated, e.g. in an application's
+//! `.cargo/config.toml` under `[env]`), which needs no edit of this crate.
 
 use std::path::{Path, PathBuf};
 
@@ -38,6 +40,13 @@ fn main() {
         .map(PathBuf::from)
         .unwrap_or_else(|| manifest.join("../maps"));
     println!("cargo:rerun-if-env-changed=DRIVEMAP_MAPS");
+    println!("cargo:rerun-if-env-changed=DRIVEMAP_DRIVES");
+    let selected: Vec<String> = std::env::var("DRIVEMAP_DRIVES")
+        .unwrap_or_default()
+        .split(',')
+        .map(|s| s.trim().to_owned())
+        .filter(|s| !s.is_empty())
+        .collect();
     println!("cargo:rerun-if-changed={}", dir.display());
     println!("cargo:rerun-if-changed=Cargo.toml");
     let maps = match drivemap_codegen::find_maps(&dir) {
@@ -58,12 +67,22 @@ fn main() {
         if !declared.contains(&id) {
             println!(
                 "cargo:warning={} has no feature of its own in drives/Cargo.toml; it is built with \
-                 `all-drives` only (add `{id} = []` under [features] to select it alone)",
+                 `all-drives` only (add `{id} = []` under [features] to select it alone, or \
+                 select it with DRIVEMAP_DRIVES={id})",
                 map.display()
             );
         }
-        if all || std::env::var_os(feature_env(&id)).is_some() {
+        if all || selected.contains(&id) || std::env::var_os(feature_env(&id)).is_some() {
             config.map(map);
+        }
+    }
+    for id in &selected {
+        if !maps.iter().any(|m| m.file_stem().is_some_and(|s| s == id.as_str())) {
+            eprintln!(
+                "DRIVEMAP_DRIVES names `{id}`, which has no map in {}",
+                dir.display()
+            );
+            std::process::exit(1);
         }
     }
     if let Err(e) = config.compile() {

@@ -1,7 +1,7 @@
 //! Dropping a YAML file into the maps directory adds a module to `drivemap-drives` with no other
 //! edit: a throwaway application depends on the drives crate, built against a copy of `maps/`
 //! plus one new map, and uses the new module by name. With one drive's feature, the crate has that
-//! drive's module alone.
+//! drive's module alone; with `DRIVEMAP_DRIVES=<id>`, the new drive's module alone.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -16,11 +16,18 @@ fn workspace() -> PathBuf {
 /// Builds and runs the application in `app` whose `drivemap-drives` dependency has `features`
 /// (Cargo's `default-features = false` when given) and whose `main` prints the module `module`'s
 /// drive id and `DRIVES`; returns what it printed.
-fn run_app(app: &Path, maps: &Path, features: Option<&str>, module: &str) -> String {
+fn run_app(
+    app: &Path,
+    maps: &Path,
+    features: Option<&str>,
+    drives: Option<&str>,
+    module: &str,
+) -> String {
     let root = workspace();
     let drives = root.join("drives").display().to_string();
     let dependency = match features {
         None => format!("{{ path = {drives:?} }}"),
+        Some("") => format!("{{ path = {drives:?}, default-features = false }}"),
         Some(f) => format!("{{ path = {drives:?}, default-features = false, features = [{f:?}] }}"),
     };
     std::fs::write(
@@ -37,7 +44,12 @@ fn run_app(app: &Path, maps: &Path, features: Option<&str>, module: &str) -> Str
         ),
     )
     .unwrap();
-    let out = Command::new(env!("CARGO"))
+    let mut cargo = Command::new(env!("CARGO"));
+    match drives {
+        Some(ids) => cargo.env("DRIVEMAP_DRIVES", ids),
+        None => cargo.env_remove("DRIVEMAP_DRIVES"),
+    };
+    let out = cargo
         .args(["run", "--quiet", "--offline", "--manifest-path"])
         .arg(app.join("Cargo.toml"))
         .env("DRIVEMAP_MAPS", maps)
@@ -76,7 +88,7 @@ fn a_new_yaml_file_becomes_a_module() {
     )
     .unwrap();
 
-    let stdout = run_app(&app, &maps, None, "mini_drive");
+    let stdout = run_app(&app, &maps, None, None, "mini_drive");
     let mut words = stdout.split_whitespace();
     assert_eq!(words.next(), Some("mini-drive"));
     let ids: Vec<&str> = words.next().unwrap_or_default().split(',').collect();
@@ -94,9 +106,16 @@ fn a_new_yaml_file_becomes_a_module() {
 
     // An application that enables one drive's feature gets that module alone.
     assert_eq!(
-        run_app(&app, &maps, Some("yaskawa-v7"), "yaskawa_v7"),
+        run_app(&app, &maps, Some("yaskawa-v7"), None, "yaskawa_v7"),
         "yaskawa-v7 yaskawa-v7",
         "only the V7 module is generated"
+    );
+    // The new map has no feature (Cargo features are declared in Cargo.toml), but an
+    // application selects it alone by id, with no edit of the drives crate.
+    assert_eq!(
+        run_app(&app, &maps, Some(""), Some("mini-drive"), "mini_drive"),
+        "mini-drive mini-drive",
+        "only the new module is generated"
     );
     std::fs::remove_dir_all(&tmp).unwrap();
 }
