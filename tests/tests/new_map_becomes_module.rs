@@ -20,7 +20,7 @@ fn run_app(
     app: &Path,
     maps: &Path,
     features: Option<&str>,
-    drives: Option<&str>,
+    selected: Option<&str>,
     module: &str,
 ) -> String {
     let root = workspace();
@@ -45,7 +45,7 @@ fn run_app(
     )
     .unwrap();
     let mut cargo = Command::new(env!("CARGO"));
-    match drives {
+    match selected {
         Some(ids) => cargo.env("DRIVEMAP_DRIVES", ids),
         None => cargo.env_remove("DRIVEMAP_DRIVES"),
     };
