@@ -41,7 +41,7 @@ pub enum Command {
     Export(commands::export::Args),
     /// Serve a simulated drive built from its map over Modbus TCP, RTU over TCP or a serial port.
     Simulate(commands::simulate::Args),
-    /// Run a simulated drive on loopback and drive it through the generated typed API.
+    /// Run a simulated drive on loopback and drive it through the one drive API (any map with roles).
     Demo(commands::demo::Args),
     /// Write a drive's Markdown reference: protocol, register tables by group, codes, bits, citations.
     Doc(commands::doc::Args),

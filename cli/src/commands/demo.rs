@@ -26,7 +26,7 @@ use crate::maps::MapsDir;
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Drive to simulate: the id of any map with `roles:` (see `drivemap list`).
+    /// Drive to simulate: the id of any map with `roles:` (shipped, or in --maps DIR).
     #[arg(long, default_value = "ptlk-tds-v8")]
     pub drive: String,
     /// Frequency reference to run at (Hz, 0 to 1000).
