@@ -160,7 +160,6 @@ fn read_row(
     plan: &Plan,
 ) -> Result<(String, [Result<f64, Error>; 4]), String> {
     let fail = |what: &str, e: Error| format!("{what}: {e}");
-    let status = d.status().map_err(|e| fail("reading the status", e))?;
     let reference = if d.supports(Role::ReferenceMonitor) {
         optional(d.reference())?
     } else {
@@ -171,6 +170,8 @@ fn read_row(
         .map_err(|e| fail("reading the output frequency", e))?;
     let current = optional(d.output_current())?;
     let voltage = optional(d.output_voltage())?;
+    // Last, so that the status is never older than the output frequency beside it.
+    let status = d.status().map_err(|e| fail("reading the status", e))?;
     Ok((status.flags(), [reference, Ok(output), current, voltage]))
 }
 
@@ -204,6 +205,10 @@ fn compiled<T: Transport>(
     macro_rules! pick {
         ($m:ident, $id:literal) => {
             if id == $id {
+                outln!(
+                    "driven through drivemap_drives::{} (the generated module) and the VariableFrequencyDrive trait",
+                    stringify!($m)
+                );
                 return Some($m(c, slave, externals, plan));
             }
         };
@@ -249,7 +254,13 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         args.time_scale
     );
     for (name, v) in &externals {
-        outln!("external quantity {name} = {v} (supplied by the application)");
+        let unit = drive
+            .externals()
+            .iter()
+            .find(|q| q.external == *name)
+            .map(|q| q.unit.clone())
+            .unwrap_or_default();
+        outln!("external quantity {name} = {v} {unit} (supplied by the application)");
     }
     let plan = Plan {
         frequency: args.frequency,
@@ -272,10 +283,6 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         );
         let ext: Vec<(&str, f64)> = externals.iter().map(|(k, v)| (k.as_str(), *v)).collect();
         if let Some(done) = compiled(&args.drive, &mut c, slave, &ext, &plan) {
-            outln!(
-                "driven through drivemap_drives::{} (the generated module) and the VariableFrequencyDrive trait",
-                drive.module
-            );
             return done;
         }
         outln!(
