@@ -35,13 +35,16 @@
 
 pub mod clock;
 pub mod exceptions;
+pub mod fault;
 pub mod model;
 pub mod roles;
 pub mod server;
 pub mod simulator;
+pub mod slave;
 
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use exceptions::ExceptionPlan;
+pub use fault::{Fault, FaultyLink};
 pub use model::DriveState;
 pub use roles::{Roles, RolesError};
 pub use server::{
@@ -51,6 +54,7 @@ pub use server::{
 pub use simulator::{
     Handled, Outcome, RequestRecord, RolesChoice, SimError, SimOptions, Simulator, Stats,
 };
+pub use slave::SimulatedSlave;
 
 #[cfg(feature = "serial")]
 pub use server::SerialServer;

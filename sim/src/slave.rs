@@ -1,14 +1,17 @@
-//! A simulated drive: the slave side of the protocol, answering from register memory as the
-//! profile says the drive would. For tests, demonstrations, and the fault-injection link in
-//! [`crate::fault`].
+//! A bare simulated drive for the runtime's tests and benches: the slave side of the protocol,
+//! answering from plain register memory as a [`Profile`] says the drive would, with no map.
+//! The fault-injection link of [`crate::fault`] puts one behind a client. (A drive simulated
+//! from its map, with its rules and its model, is [`crate::Simulator`].)
 
 use std::io;
 use std::time::Instant;
 
-use crate::pdu::{self, FrameError, Request, RequestDecodeError, Response, Words, function};
-use crate::profile::{Profile, TransportKind};
-use crate::transport::Transport;
-use crate::{rtu, tcp};
+use drivemap_runtime::pdu::{
+    self, FrameError, Request, RequestDecodeError, Response, Words, function,
+};
+use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::transport::Transport;
+use drivemap_runtime::{crc, rtu, tcp};
 
 /// A drive simulated in memory. Addresses are PDU addresses.
 pub struct SimulatedSlave {
@@ -153,7 +156,7 @@ impl SimulatedSlave {
         }
         out[0] = slave;
         out[1..=n].copy_from_slice(&pdu[..n]);
-        let crc = crate::crc::crc_bytes(&out[..=n]);
+        let crc = crc::crc_bytes(&out[..=n]);
         out[n + 1..n + 3].copy_from_slice(&crc);
         Some(n + 3)
     }
@@ -242,7 +245,7 @@ impl SimulatedSlave {
                     }
                     // Not a request, or a damaged one: step over one byte to resynchronise.
                     None if total == 0
-                        || (kind.is_rtu_framed() && crate::crc::check(&buf[..total]).is_err()) =>
+                        || (kind.is_rtu_framed() && crc::check(&buf[..total]).is_err()) =>
                     {
                         1
                     }

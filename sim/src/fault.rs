@@ -6,10 +6,11 @@ use std::io;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use crate::profile::TransportKind;
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::transport::Transport;
+use drivemap_runtime::{crc, tcp};
+
 use crate::slave::SimulatedSlave;
-use crate::transport::Transport;
-use crate::{crc, tcp};
 
 /// What happens to the reply to the next request.
 #[derive(Debug, Clone, PartialEq, Eq)]
