@@ -36,6 +36,7 @@
 pub mod clock;
 pub mod exceptions;
 pub mod fault;
+pub mod framing;
 pub mod model;
 pub mod roles;
 pub mod server;

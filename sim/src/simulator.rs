@@ -14,10 +14,11 @@ use drivemap_runtime::pdu::{self, Request, RequestDecodeError, Response, Words, 
 use drivemap_runtime::profile::CommandKind;
 use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::{Table, WriteRestriction};
-use drivemap_runtime::{crc, rtu, tcp};
+use drivemap_runtime::{rtu, tcp};
 
 use crate::clock::{Clock, SystemClock};
 use crate::exceptions::ExceptionPlan;
+use crate::framing::{self, Decoded, Origin};
 use crate::model::{DriveState, Model};
 use crate::roles::{self, Resolved, Roles, RolesError, Rule, Source};
 
@@ -918,10 +919,11 @@ impl Simulator {
     }
 
     /// Answers one complete frame of `kind`. Returns the reply length written to `out` (at least
-    /// [`tcp::MAX_FRAME`] bytes), or `None` when the drive stays silent.
+    /// [`tcp::MAX_FRAME`] bytes), or `None` when the drive stays silent. The frame is decoded
+    /// and the reply framed by [`crate::framing`], the runtime's `decode_request` and
+    /// `encode_response`.
     pub fn handle(&mut self, kind: TransportKind, frame: &[u8], out: &mut [u8]) -> Handled {
         self.stats.requests += 1;
-        let mut pdu_out = [0u8; pdu::MAX_PDU];
         let mut record = RequestRecord {
             transport: kind,
             slave: 0,
@@ -930,36 +932,22 @@ impl Simulator {
             quantity: 0,
             outcome: Outcome::Damaged,
         };
-        let (slave, header, n) = if kind.is_rtu_framed() {
+        if kind.is_rtu_framed() {
             record.slave = frame.first().copied().unwrap_or(0);
             record.function = frame.get(1).copied();
-            match rtu::decode_request(frame) {
-                Err(rtu::RequestFrameError::Frame(_)) => (record.slave, None, 0),
-                Err(rtu::RequestFrameError::Request { slave, error }) => {
-                    let n = self.reject(slave, error, &mut record, &mut pdu_out);
-                    (slave, None, n)
-                }
-                Ok((slave, request)) => {
-                    describe(&request, &mut record);
-                    let n = self.dispatch(kind, slave, &request, &mut record, &mut pdu_out);
-                    (slave, None, n)
-                }
-            }
         } else {
             record.function = frame.get(tcp::HEADER_LEN).copied();
-            match tcp::decode_request(frame) {
-                Err(tcp::RequestFrameError::Frame(_)) => (0, None, 0),
-                Err(tcp::RequestFrameError::Request { header, error }) => {
-                    record.slave = header.unit;
-                    let n = self.reject(header.unit, error, &mut record, &mut pdu_out);
-                    (header.unit, Some(header), n)
-                }
-                Ok((header, request)) => {
-                    record.slave = header.unit;
-                    describe(&request, &mut record);
-                    let n = self.dispatch(kind, header.unit, &request, &mut record, &mut pdu_out);
-                    (header.unit, Some(header), n)
-                }
+        }
+        let reply = match framing::decode(kind, frame) {
+            Decoded::Damaged => None,
+            Decoded::Refused { origin, error } => {
+                record.slave = origin.slave();
+                self.reject(origin, error, &mut record, out)
+            }
+            Decoded::Request { origin, request } => {
+                record.slave = origin.slave();
+                describe(&request, &mut record);
+                self.dispatch(kind, origin, &request, &mut record, out)
             }
         };
         match record.outcome {
@@ -970,28 +958,6 @@ impl Simulator {
             Outcome::NotAddressed => self.stats.not_addressed += 1,
             Outcome::Damaged => self.stats.damaged += 1,
         }
-        let reply = if n == 0 {
-            None
-        } else if kind.is_rtu_framed() {
-            (out.len() >= n + 3).then(|| {
-                out[0] = slave;
-                out[1..=n].copy_from_slice(&pdu_out[..n]);
-                let c = crc::crc_bytes(&out[..=n]);
-                out[n + 1..n + 3].copy_from_slice(&c);
-                n + 3
-            })
-        } else {
-            header
-                .filter(|_| out.len() >= n + tcp::HEADER_LEN)
-                .map(|h| {
-                    out[..2].copy_from_slice(&h.transaction.to_be_bytes());
-                    out[2..4].copy_from_slice(&[0, 0]);
-                    out[4..6].copy_from_slice(&((n + 1) as u16).to_be_bytes());
-                    out[6] = h.unit;
-                    out[7..7 + n].copy_from_slice(&pdu_out[..n]);
-                    tcp::HEADER_LEN + n
-                })
-        };
         Handled { reply, record }
     }
 
@@ -1005,53 +971,53 @@ impl Simulator {
         Outcome::Exception { code, name }
     }
 
+    /// A request the PDU decoder refused: an exception when addressed to this drive.
     fn reject(
         &mut self,
-        slave: u8,
+        origin: Origin,
         error: RequestDecodeError,
         record: &mut RequestRecord,
-        pdu_out: &mut [u8],
-    ) -> usize {
+        out: &mut [u8],
+    ) -> Option<usize> {
+        let slave = origin.slave();
         if slave == rtu::BROADCAST {
             record.outcome = Outcome::Broadcast { executed: false };
-            return 0;
+            return None;
         }
         if slave != self.slave {
             record.outcome = Outcome::NotAddressed;
-            return 0;
+            return None;
         }
-        let (f, code) = match error {
-            RequestDecodeError::Function(f) => (f, self.plan.illegal_function),
-            RequestDecodeError::SubFunction(_) => (function::LOOP_BACK, self.plan.illegal_function),
-            RequestDecodeError::Malformed(f) => (f, self.plan.illegal_quantity),
-            RequestDecodeError::Empty => {
-                record.outcome = Outcome::Damaged;
-                return 0;
-            }
+        let Some((f, code)) = framing::refusal(
+            error,
+            self.plan.illegal_function,
+            self.plan.illegal_quantity,
+        ) else {
+            record.outcome = Outcome::Damaged;
+            return None;
         };
         record.function = Some(f);
         record.outcome = self.exception(code);
-        Response::Exception { function: f, code }
-            .encode(f, pdu_out)
-            .unwrap_or(0)
+        origin.reply(f, &Response::Exception { function: f, code }, out)
     }
 
     fn dispatch(
         &mut self,
         kind: TransportKind,
-        slave: u8,
+        origin: Origin,
         request: &Request<'_>,
         record: &mut RequestRecord,
-        pdu_out: &mut [u8],
-    ) -> usize {
+        out: &mut [u8],
+    ) -> Option<usize> {
+        let slave = origin.slave();
         if slave == rtu::BROADCAST {
             let executed = self.broadcast(kind, request);
             record.outcome = Outcome::Broadcast { executed };
-            return 0;
+            return None;
         }
         if slave != self.slave {
             record.outcome = Outcome::NotAddressed;
-            return 0;
+            return None;
         }
         let f = request.function();
         let mut words = [0u16; pdu::MAX_READ as usize];
@@ -1065,7 +1031,7 @@ impl Simulator {
                 Response::Exception { function: f, code }
             }
         };
-        response.encode(f, pdu_out).unwrap_or(0)
+        origin.reply(f, &response, out)
     }
 
     fn broadcast(&mut self, kind: TransportKind, request: &Request<'_>) -> bool {

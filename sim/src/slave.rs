@@ -4,14 +4,16 @@
 //! from its map, with its rules and its model, is [`crate::Simulator`].)
 
 use std::io;
-use std::time::Instant;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
 
-use drivemap_runtime::pdu::{
-    self, FrameError, Request, RequestDecodeError, Response, Words, function,
-};
+use drivemap_runtime::pdu::{self, Request, Response, Words, function};
 use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::rtu;
 use drivemap_runtime::transport::Transport;
-use drivemap_runtime::{crc, rtu, tcp};
+
+use crate::framing::{self, Decoded, Origin};
+use crate::server::{self, Answer, FrameLimits};
 
 /// A drive simulated in memory. Addresses are PDU addresses.
 pub struct SimulatedSlave {
@@ -70,8 +72,15 @@ impl SimulatedSlave {
             .map(|&(_, code)| code)
     }
 
-    /// Executes `request` and encodes the response PDU into `out`; returns its length.
-    fn execute(&mut self, request: &Request<'_>, out: &mut [u8]) -> usize {
+    /// Executes `request` (a broadcast too) and frames the response for `origin` into `out`:
+    /// `None` when nothing is to be sent (a broadcast).
+    fn execute(
+        &mut self,
+        origin: Origin,
+        request: &Request<'_>,
+        out: &mut [u8],
+        reply_as: Option<u8>,
+    ) -> Option<usize> {
         self.executed += 1;
         let f = request.function();
         let exception = |code| Response::Exception { function: f, code };
@@ -117,146 +126,83 @@ impl SimulatedSlave {
                 }
             }
         };
-        response.encode(f, out).unwrap_or(0)
-    }
-
-    fn reject(error: RequestDecodeError) -> Option<(u8, u8)> {
-        match error {
-            RequestDecodeError::Function(f) => Some((f, 0x01)),
-            RequestDecodeError::SubFunction(_) => Some((function::LOOP_BACK, 0x01)),
-            RequestDecodeError::Malformed(f) => Some((f, 0x03)),
-            RequestDecodeError::Empty => None,
+        if origin.slave() != self.address {
+            return None;
         }
+        origin.from(reply_as).reply(f, &response, out)
     }
 
-    /// Answers an RTU request frame: `Some(length)` of the reply written to `out`, or `None`
-    /// when a drive stays silent (damaged frame, another slave, broadcast).
-    pub fn respond_rtu(&mut self, frame: &[u8], out: &mut [u8]) -> Option<usize> {
-        let mut pdu = [0u8; pdu::MAX_PDU];
-        let (slave, n) = match rtu::decode_request(frame) {
-            Err(rtu::RequestFrameError::Frame(_)) => return None,
-            Err(rtu::RequestFrameError::Request { slave, error }) => {
-                let (f, code) = Self::reject(error)?;
-                (
-                    slave,
-                    Response::Exception { function: f, code }
-                        .encode(f, &mut pdu)
-                        .ok()?,
-                )
+    /// Answers a complete request frame of `kind`: `Some(length)` of the reply written to `out`
+    /// (framed by the runtime's `encode_response`, see [`crate::framing`]), or `None` when a
+    /// drive stays silent (damaged frame, another slave, broadcast).
+    pub fn respond(&mut self, kind: TransportKind, frame: &[u8], out: &mut [u8]) -> Option<usize> {
+        self.answer(kind, frame, out, None)
+    }
+
+    /// [`SimulatedSlave::respond`], the reply framed as if slave (unit) `reply_as` sent it when
+    /// given: the wrong-slave fault of [`crate::fault`].
+    pub(crate) fn answer(
+        &mut self,
+        kind: TransportKind,
+        frame: &[u8],
+        out: &mut [u8],
+        reply_as: Option<u8>,
+    ) -> Option<usize> {
+        match framing::decode(kind, frame) {
+            Decoded::Damaged => None,
+            Decoded::Refused { origin, error } => {
+                let (f, code) = framing::refusal(error, 0x01, 0x03)?;
+                if origin.slave() != self.address {
+                    return None;
+                }
+                let response = Response::Exception { function: f, code };
+                origin.from(reply_as).reply(f, &response, out)
             }
-            Ok((slave, request)) => {
+            Decoded::Request { origin, request } => {
+                let slave = origin.slave();
                 if slave != self.address && slave != rtu::BROADCAST {
                     return None;
                 }
-                (slave, self.execute(&request, &mut pdu))
+                self.execute(origin, &request, out, reply_as)
             }
-        };
-        if slave != self.address || n == 0 || out.len() < n + 3 {
-            return None;
         }
-        out[0] = slave;
-        out[1..=n].copy_from_slice(&pdu[..n]);
-        let crc = crc::crc_bytes(&out[..=n]);
-        out[n + 1..n + 3].copy_from_slice(&crc);
-        Some(n + 3)
     }
 
-    /// Answers a Modbus TCP request frame (the unit id must be this slave's address).
+    /// Answers an RTU request frame ([`SimulatedSlave::respond`] on an RTU link).
+    pub fn respond_rtu(&mut self, frame: &[u8], out: &mut [u8]) -> Option<usize> {
+        self.respond(TransportKind::Rtu, frame, out)
+    }
+
+    /// Answers a Modbus TCP request frame (the unit id must be this slave's address; unit 0 is
+    /// executed as a broadcast).
     pub fn respond_tcp(&mut self, frame: &[u8], out: &mut [u8]) -> Option<usize> {
-        let mut pdu = [0u8; pdu::MAX_PDU];
-        let (header, n) = match tcp::decode_request(frame) {
-            Err(tcp::RequestFrameError::Frame(_)) => return None,
-            Err(tcp::RequestFrameError::Request { header, error }) => {
-                let (f, code) = Self::reject(error)?;
-                (
-                    header,
-                    Response::Exception { function: f, code }
-                        .encode(f, &mut pdu)
-                        .ok()?,
-                )
-            }
-            Ok((header, request)) => {
-                if header.unit != self.address && header.unit != 0 {
-                    return None;
-                }
-                (header, self.execute(&request, &mut pdu))
-            }
-        };
-        if header.unit != self.address || n == 0 || out.len() < n + tcp::HEADER_LEN {
-            return None;
-        }
-        out[..2].copy_from_slice(&header.transaction.to_be_bytes());
-        out[2..4].copy_from_slice(&[0, 0]);
-        out[4..6].copy_from_slice(&((n + 1) as u16).to_be_bytes());
-        out[6] = header.unit;
-        out[7..7 + n].copy_from_slice(&pdu[..n]);
-        Some(tcp::HEADER_LEN + n)
+        self.respond(TransportKind::Tcp, frame, out)
     }
 
-    /// Answers a frame of `kind`.
-    pub fn respond(&mut self, kind: TransportKind, frame: &[u8], out: &mut [u8]) -> Option<usize> {
-        if kind.is_rtu_framed() {
-            self.respond_rtu(frame, out)
-        } else {
-            self.respond_tcp(frame, out)
-        }
-    }
-
-    /// Serves requests arriving on `link` until `until`, answering each; returns the number of
-    /// requests answered. Bytes that do not start a request are skipped one at a time. Ends
-    /// early when the master closes the link.
+    /// Serves requests arriving on `link` until `until` or until the master closes the link,
+    /// answering each; returns the number of replies sent. The loop is the simulator's own
+    /// ([`crate::server::serve_link_with`]): frames cut by the same framer, an incomplete RTU
+    /// frame dropped after [`SERVE_LIMITS`]' silence, a frame that does not arrive whole within
+    /// its deadline dropped (RTU) or the link left (Modbus TCP, out of step).
     pub fn serve(&mut self, link: &mut impl Transport, until: Instant) -> io::Result<u32> {
-        let kind = link.kind();
-        let mut buf = [0u8; 2 * tcp::MAX_FRAME];
-        let mut len = 0usize;
-        let mut out = [0u8; tcp::MAX_FRAME];
-        let mut answered = 0;
-        loop {
-            let n = match link.recv(&mut buf[len..], until) {
-                Ok(n) => n,
-                // The master hung up: serving is over.
-                Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => 0,
-                Err(e) => return Err(e),
-            };
-            if n == 0 {
-                return Ok(answered);
-            }
-            len += n;
-            loop {
-                let needed: Result<Option<usize>, FrameError> = if kind.is_rtu_framed() {
-                    rtu::request_frame_len(&buf[..len])
-                } else {
-                    tcp::Header::parse(&buf[..len]).map(|h| h.map(|h| h.frame_len()))
-                };
-                let total = match needed {
-                    Ok(Some(total)) if total <= len => total,
-                    Ok(_) => break,
-                    Err(_) => 0,
-                };
-                let answer = match total {
-                    0 => None,
-                    _ => self.respond(kind, &buf[..total], &mut out),
-                };
-                let skip = match answer {
-                    Some(m) => {
-                        link.send(&out[..m])?;
-                        answered += 1;
-                        total
-                    }
-                    // Not a request, or a damaged one: step over one byte to resynchronise.
-                    None if total == 0
-                        || (kind.is_rtu_framed() && crc::check(&buf[..total]).is_err()) =>
-                    {
-                        1
-                    }
-                    None => total,
-                };
-                buf.copy_within(skip..len, 0);
-                len -= skip;
-            }
-            if len == buf.len() {
-                len = 0;
-            }
-        }
+        let stop = AtomicBool::new(false);
+        server::serve_frames(
+            link,
+            SERVE_LIMITS,
+            &stop,
+            Some(until),
+            |kind, frame, out| Answer {
+                reply: self.respond(kind, frame, out),
+                request: true,
+            },
+        )
     }
 }
+
+/// The limits [`SimulatedSlave::serve`] serves a link with: 100 ms silence (as RTU over TCP),
+/// 1 s per frame, no idle timeout (the caller's `until` ends serving).
+pub const SERVE_LIMITS: FrameLimits = FrameLimits {
+    silence: Duration::from_millis(100),
+    frame_deadline: Duration::from_secs(1),
+    idle_timeout: None,
+};
