@@ -46,6 +46,9 @@ pub(super) struct TickCache {
     pub(super) published: Option<Model>,
 }
 
+/// External quantities by name (drive rating...).
+type Externals = BTreeMap<String, f64>;
+
 impl Simulator {
     /// The roles table `options` choose, checked against the map with the external quantities
     /// (the table's, then the options'), and those quantities.
@@ -53,7 +56,7 @@ impl Simulator {
         drive: &Drive,
         index: &HashMap<String, usize>,
         options: &SimOptions,
-    ) -> Result<(Option<Arc<Resolved>>, BTreeMap<String, f64>), SimError> {
+    ) -> Result<(Option<Arc<Resolved>>, Externals), SimError> {
         let table = match &options.roles {
             RolesChoice::Builtin => roles::builtin(&drive.meta.id).map_err(SimError::RolesTable)?,
             RolesChoice::Custom(r) => Some((**r).clone()),
