@@ -25,7 +25,8 @@ pub enum Fault {
     Delay(Duration),
     /// The reply arrives twice.
     Duplicate,
-    /// The reply claims to come from slave `slave` (CRC recomputed, so it is intact).
+    /// The reply claims to come from slave (unit) `slave`: framed as that slave would send it,
+    /// so it is intact (RTU: its CRC matches).
     WrongSlave(u8),
     /// The reply is held back and arrives after the next request has been sent, just before
     /// the reply to that request: a late reply to the previous request.
