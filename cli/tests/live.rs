@@ -10,9 +10,9 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_codegen::validate::Context;
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
+use drivemap_sim::slave::SimulatedSlave;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")

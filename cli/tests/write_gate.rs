@@ -27,9 +27,9 @@ use drivemap_codegen::ir::{Drive, Register, ValueKind};
 use drivemap_codegen::model::{Scale, TransportName};
 use drivemap_codegen::validate::{Context, field_span};
 use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
+use drivemap_sim::slave::SimulatedSlave;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")

@@ -20,9 +20,9 @@ use std::time::{Duration, Instant};
 use criterion::{Criterion, criterion_group, criterion_main};
 use drivemap_runtime::planner::{Poller, ReadableSet, plan_contiguous, plan_reads, plan_single};
 use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{Access, Client, RegisterInfo, Table};
+use drivemap_sim::slave::SimulatedSlave;
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;

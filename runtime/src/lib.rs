@@ -36,15 +36,11 @@ pub mod client;
 #[cfg(feature = "std")]
 pub mod error;
 #[cfg(feature = "std")]
-pub mod fault;
-#[cfg(feature = "std")]
 pub mod gate;
 #[cfg(feature = "std")]
 pub mod persist;
 #[cfg(feature = "std")]
 pub mod planner;
-#[cfg(feature = "std")]
-pub mod slave;
 #[cfg(feature = "std")]
 pub mod transport;
 #[cfg(feature = "std")]

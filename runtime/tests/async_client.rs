@@ -8,12 +8,12 @@ use std::time::{Duration, Instant};
 
 use drivemap_runtime::async_client::{AsyncClient, AsyncStreamTransport, BlockingTransport};
 use drivemap_runtime::error::{Error, Refusal};
-use drivemap_runtime::fault::{Fault, FaultyLink};
 use drivemap_runtime::pdu::FrameError;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::reply::Discard;
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::{rtu, tcp};
+use drivemap_sim::fault::{Fault, FaultyLink};
+use drivemap_sim::slave::SimulatedSlave;
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 
 use common::{V7, strict};

@@ -8,11 +8,11 @@ use std::time::{Duration, Instant};
 use drivemap_runtime::WriteRule;
 use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::error::{Error, Refusal};
-use drivemap_runtime::fault::{Fault, FaultyLink};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::register::{BitRegister, Bits, Code, Readable, Register, Table, Writable};
 use drivemap_runtime::scale::{self, Decimal, RawRange, ValueError};
-use drivemap_runtime::slave::SimulatedSlave;
+use drivemap_sim::fault::{Fault, FaultyLink};
+use drivemap_sim::slave::SimulatedSlave;
 
 use common::{ACN, J7, V7, strict};
 

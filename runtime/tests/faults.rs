@@ -8,11 +8,11 @@ use std::time::Duration;
 
 use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::error::Error;
-use drivemap_runtime::fault::{Fault, FaultyLink};
 use drivemap_runtime::pdu::FrameError;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::reply::Discard;
-use drivemap_runtime::slave::SimulatedSlave;
+use drivemap_sim::fault::{Fault, FaultyLink};
+use drivemap_sim::slave::SimulatedSlave;
 
 use common::{V7, strict};
 

@@ -10,11 +10,11 @@ mod common;
 
 use drivemap_runtime::client::Client;
 use drivemap_runtime::error::{Error, Refusal};
-use drivemap_runtime::fault::FaultyLink;
 use drivemap_runtime::gate::{self, WriteTarget};
 use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::{Broadcast, Transports, WriteRule};
+use drivemap_sim::fault::FaultyLink;
+use drivemap_sim::slave::SimulatedSlave;
 
 const RUN_COMMAND: WriteRule = WriteRule::rw("operation_command", 0x0001, 0, 65535)
     .on(Transports::RTU)

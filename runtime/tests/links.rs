@@ -9,10 +9,10 @@ use std::time::{Duration, Instant};
 
 use drivemap_runtime::client::Client;
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::transport::memory::MemoryTransport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
+use drivemap_sim::slave::SimulatedSlave;
 
 use common::{ACN, V7, strict};
 

@@ -19,11 +19,11 @@ mod common;
 
 use drivemap_runtime::Client;
 use drivemap_runtime::crc;
-use drivemap_runtime::fault::FaultyLink;
 use drivemap_runtime::pdu::{FrameError, Request, Response, Words};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::rtu;
-use drivemap_runtime::slave::SimulatedSlave;
+use drivemap_sim::fault::FaultyLink;
+use drivemap_sim::slave::SimulatedSlave;
 
 use common::{ACN, strict};
 

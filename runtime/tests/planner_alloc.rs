@@ -7,9 +7,9 @@ use std::time::Instant;
 
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{Access, Client, RegisterInfo, Table};
+use drivemap_sim::slave::SimulatedSlave;
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;

@@ -7,9 +7,9 @@ use std::time::Instant;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::planner::{Learned, PlanError, PolledError, Poller, Read, wanted};
 use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{Access, Client, Readable, Register, RegisterInfo, Table, ValueError};
+use drivemap_sim::slave::SimulatedSlave;
 
 /// A link to a simulated drive that answers each request as it is sent.
 struct Link {

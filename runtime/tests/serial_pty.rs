@@ -11,9 +11,9 @@ use std::time::{Duration, Instant};
 
 use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::error::Error;
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport};
+use drivemap_sim::slave::SimulatedSlave;
 
 use common::V7;
 

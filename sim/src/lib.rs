@@ -17,6 +17,13 @@
 //! the map's scales (including relative and selected scales, whose settings come from the
 //! simulator's own registers). Time comes from a [`Clock`], so tests are deterministic.
 //!
+//! Every reply any drive of this crate sends is framed by [`framing`] (the runtime's
+//! `encode_response`), and every link is read by one serve loop ([`server`]).
+//!
+//! For the runtime's own tests, benches and doctests, [`slave::SimulatedSlave`] is a bare drive
+//! built from a [`Profile`](drivemap_runtime::Profile) alone (plain register memory, no map),
+//! and [`fault::FaultyLink`] an in-memory link to one that damages replies on request.
+//!
 //! ```
 //! use std::sync::Arc;
 //! use std::time::Duration;
@@ -35,13 +42,17 @@
 
 pub mod clock;
 pub mod exceptions;
+pub mod fault;
+pub mod framing;
 pub mod model;
 pub mod roles;
 pub mod server;
 pub mod simulator;
+pub mod slave;
 
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use exceptions::ExceptionPlan;
+pub use fault::{Fault, FaultyLink};
 pub use model::DriveState;
 pub use roles::{Mode, Plausible};
 pub use server::{
@@ -51,6 +62,7 @@ pub use server::{
 pub use simulator::{
     Handled, Outcome, RequestRecord, RolesChoice, SimError, SimOptions, Simulator, Stats,
 };
+pub use slave::SimulatedSlave;
 
 #[cfg(feature = "serial")]
 pub use server::SerialServer;

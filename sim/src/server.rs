@@ -209,23 +209,70 @@ pub fn serve_link_with<T: Transport>(
     log: Option<&Logger>,
     limits: FrameLimits,
 ) -> io::Result<()> {
+    serve_frames(link, limits, stop, None, |kind, frame, out| {
+        let handled = lock(sim).handle(kind, frame, out);
+        if let Some(log) = log {
+            log(&handled.record);
+        }
+        Answer {
+            reply: handled.reply,
+            request: handled.record.outcome != Outcome::Damaged,
+        }
+    })?;
+    Ok(())
+}
+
+/// What a drive made of one frame, for [`serve_frames`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Answer {
+    /// Length of the reply written to the output buffer, or `None`: silence.
+    pub reply: Option<usize>,
+    /// The frame was a well-formed request (it counts as activity against the idle timeout).
+    pub request: bool,
+}
+
+/// The one serve loop of this crate, behind [`serve_link_with`], [`TcpServer`],
+/// [`SerialServer`](crate::SerialServer) and [`SimulatedSlave::serve`]: reads `link` in waits
+/// of at most `POLL`, cuts the bytes into frames with a [`Framer`] (its byte budget, silence
+/// and frame deadline), hands each frame to `answer` with an output buffer of
+/// [`tcp::MAX_FRAME`] bytes and sends the reply it wrote. Ends, with the number of replies sent,
+/// when `stop` is set, at `until`, when the peer hangs up, when the stream is out of step or
+/// misses a frame deadline (Modbus TCP), or after `limits.idle_timeout` without a request.
+/// Allocates nothing per frame.
+///
+/// [`SimulatedSlave::serve`]: crate::SimulatedSlave::serve
+pub(crate) fn serve_frames<T: Transport>(
+    link: &mut T,
+    limits: FrameLimits,
+    stop: &AtomicBool,
+    until: Option<Instant>,
+    mut answer: impl FnMut(TransportKind, &[u8], &mut [u8]) -> Answer,
+) -> io::Result<u32> {
     let kind = link.kind();
     let mut framer = Framer::new(kind, limits, Instant::now());
     let mut chunk = [0u8; tcp::MAX_FRAME];
     let mut out = [0u8; tcp::MAX_FRAME];
     let mut last_request = Instant::now();
+    let mut answered = 0u32;
     while !stop.load(Ordering::Relaxed) {
         let mut wait = POLL;
+        if let Some(until) = until {
+            let left = until.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Ok(answered);
+            }
+            wait = wait.min(left);
+        }
         if let Some(idle) = limits.idle_timeout {
             let left = idle.saturating_sub(last_request.elapsed());
             if left.is_zero() {
-                return Ok(());
+                return Ok(answered);
             }
             wait = wait.min(left);
         }
         let n = match link.recv(&mut chunk, Instant::now() + wait) {
             Ok(n) => n,
-            Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => return Ok(()),
+            Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => return Ok(answered),
             Err(e) => return Err(e),
         };
         framer.push(&chunk[..n], Instant::now());
@@ -234,22 +281,20 @@ pub fn serve_link_with<T: Transport>(
             let len = match framer.next(now) {
                 Next::Frame(len) => len,
                 Next::Wait => break,
-                Next::Close => return Ok(()),
+                Next::Close => return Ok(answered),
             };
-            let handled = lock(sim).handle(kind, &framer.bytes()[..len], &mut out);
-            if handled.record.outcome != Outcome::Damaged {
+            let a = answer(kind, &framer.bytes()[..len], &mut out);
+            if a.request {
                 last_request = now;
             }
-            if let Some(log) = log {
-                log(&handled.record);
-            }
-            if let Some(m) = handled.reply {
+            if let Some(m) = a.reply {
                 link.send(&out[..m])?;
+                answered = answered.saturating_add(1);
             }
             framer.consume(len, now);
         }
     }
-    Ok(())
+    Ok(answered)
 }
 
 /// Framing of a TCP listener.

@@ -13,8 +13,8 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::slave::SimulatedSlave;
 use drivemap_runtime::{rtu, tcp};
+use drivemap_sim::slave::SimulatedSlave;
 
 /// Longest a connection is served.
 pub const LIFETIME: Duration = Duration::from_secs(20);

@@ -5,11 +5,11 @@
 
 use drivemap_drives::automationdirect_acn as acn;
 use drivemap_drives::runtime::client::Client;
-use drivemap_drives::runtime::fault::FaultyLink;
 use drivemap_drives::runtime::pdu::{Request, Response, Words};
 use drivemap_drives::runtime::profile::TransportKind;
-use drivemap_drives::runtime::slave::SimulatedSlave;
 use drivemap_drives::runtime::{Register, Writable, crc, rtu, tcp};
+use drivemap_sim::fault::FaultyLink;
+use drivemap_sim::slave::SimulatedSlave;
 
 /// Request printed at 004_c5cbf92472673495.txt:616: station 01, function 10h, starting address
 /// 0x1102 ("0x1103-1"), 2 registers, 4 bytes, 0x0032 (Acc 5.0 s), 0x0064 (Dec 10.0 s), CRC

@@ -150,9 +150,9 @@ fn profile_matches_the_manual() {
 #[test]
 fn client_loads_settings_then_writes_in_hz() {
     use drivemap_runtime::profile::TransportKind;
-    use drivemap_runtime::slave::SimulatedSlave;
     use drivemap_runtime::transport::memory::MemoryTransport;
     use drivemap_runtime::{Client, DriveSettings};
+    use drivemap_sim::slave::SimulatedSlave;
     use std::time::{Duration, Instant};
 
     let (master, mut link) = MemoryTransport::pair(TransportKind::Rtu);

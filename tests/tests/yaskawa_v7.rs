@@ -436,10 +436,10 @@ fn j7_frequency_unit_follows_n69_and_its_reserved_bits_stay_zero() {
 /// digital inputs (Table 4.5, :1403). The typed API writes each only where it exists.
 #[test]
 fn typed_writes_reach_0001h_only_as_the_register_of_that_link() {
-    use drivemap_drives::runtime::fault::FaultyLink;
     use drivemap_drives::runtime::profile::TransportKind;
-    use drivemap_drives::runtime::slave::SimulatedSlave;
     use drivemap_drives::runtime::{Client, ClientOptions, Error, Refusal};
+    use drivemap_sim::fault::FaultyLink;
+    use drivemap_sim::slave::SimulatedSlave;
 
     let s = settings(Unit::Unit01Hz, 60.0);
     let client = |kind| {
@@ -540,9 +540,9 @@ impl drivemap_drives::runtime::transport::Transport for Stamped {
 #[test]
 fn two_requests_to_a_v7_keep_the_manuals_request_gap() {
     use drivemap_drives::runtime::profile::TransportKind;
-    use drivemap_drives::runtime::slave::SimulatedSlave;
     use drivemap_drives::runtime::transport::memory::MemoryTransport;
     use drivemap_drives::runtime::{Client, ClientOptions};
+    use drivemap_sim::slave::SimulatedSlave;
     use std::time::{Duration, Instant};
 
     let manual_gap = Duration::from_micros(2_500) + Duration::from_millis(10);

@@ -92,7 +92,8 @@ enum Slot {
 /// ```
 /// use drivemap_runtime::planner::Poller;
 /// use drivemap_runtime::{Access, Client, Profile, RegisterInfo, Table};
-/// # use drivemap_runtime::{profile::TransportKind, slave::SimulatedSlave, transport::Transport};
+/// # use drivemap_runtime::{profile::TransportKind, transport::Transport};
+/// use drivemap_sim::slave::SimulatedSlave; // a bare simulated drive (dev-dependency)
 /// # struct Link(SimulatedSlave, Vec<u8>);
 /// # impl Transport for Link {
 /// #     fn kind(&self) -> TransportKind { TransportKind::Rtu }

@@ -6,10 +6,11 @@ use std::io;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use crate::profile::TransportKind;
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::tcp;
+use drivemap_runtime::transport::Transport;
+
 use crate::slave::SimulatedSlave;
-use crate::transport::Transport;
-use crate::{crc, tcp};
 
 /// What happens to the reply to the next request.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -24,7 +25,8 @@ pub enum Fault {
     Delay(Duration),
     /// The reply arrives twice.
     Duplicate,
-    /// The reply claims to come from slave `slave` (CRC recomputed, so it is intact).
+    /// The reply claims to come from slave (unit) `slave`: framed as that slave would send it,
+    /// so it is intact (RTU: its CRC matches).
     WrongSlave(u8),
     /// The reply is held back and arrives after the next request has been sent, just before
     /// the reply to that request: a late reply to the previous request.
@@ -95,13 +97,18 @@ impl Transport for FaultyLink {
         if let Some(late) = self.held.take() {
             self.deliver(now, late);
         }
+        let fault = self.faults.pop_front();
+        // A reply from another slave is framed as that slave sends it (RTU: a matching CRC).
+        let reply_as = match fault {
+            Some(Fault::WrongSlave(s)) => Some(s),
+            _ => None,
+        };
         let mut out = [0u8; tcp::MAX_FRAME];
-        let Some(n) = self.slave.respond(self.kind, frame, &mut out) else {
-            self.faults.pop_front();
+        let Some(n) = self.slave.answer(self.kind, frame, &mut out, reply_as) else {
             return Ok(());
         };
         let mut reply = out[..n].to_vec();
-        match self.faults.pop_front() {
+        match fault {
             None => self.deliver(now, reply),
             Some(Fault::Drop) => {}
             Some(Fault::Truncate { keep }) => {
@@ -119,17 +126,7 @@ impl Transport for FaultyLink {
                 self.deliver(now, reply.clone());
                 self.deliver(now, reply);
             }
-            Some(Fault::WrongSlave(s)) => {
-                if self.kind.is_rtu_framed() {
-                    reply[0] = s;
-                    let body = reply.len() - 2;
-                    let c = crc::crc_bytes(&reply[..body]);
-                    reply[body..].copy_from_slice(&c);
-                } else {
-                    reply[6] = s;
-                }
-                self.deliver(now, reply);
-            }
+            Some(Fault::WrongSlave(_)) => self.deliver(now, reply),
             Some(Fault::LateReply) => self.held = Some(reply),
             Some(Fault::Noise(mut noise)) => {
                 noise.extend_from_slice(&reply);

@@ -1,0 +1,100 @@
+//! Where each register lies on a link: the address layout per transport, as the plan places it.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use drivemap_runtime::Table;
+use drivemap_runtime::profile::TransportKind;
+
+use super::Simulator;
+
+/// Hashes a communication address by one multiplication (Fibonacci hashing), so that the
+/// request path's lookups cost a few nanoseconds instead of SipHash's tens. The keys are the
+/// map's addresses; a peer only chooses which key to look up, so hash flooding does not apply.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct AddressHasher(u64);
+
+impl Hasher for AddressHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+    fn write_u16(&mut self, n: u16) {
+        // The multiplication spreads the address into the high bits, which the table's
+        // control bytes use.
+        self.0 = u64::from(n).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+}
+
+/// Communication address → register index.
+pub(super) type AddressMap = HashMap<u16, usize, BuildHasherDefault<AddressHasher>>;
+
+#[derive(Debug, Clone, Default)]
+pub(super) struct Layout {
+    pub(super) holding: AddressMap,
+    pub(super) input: AddressMap,
+    pub(super) broadcast: AddressMap,
+}
+
+impl Simulator {
+    /// The communication address of a register on a transport, as laid out at power-on (address
+    /// alternatives resolved by the drive's own settings), if the register exists there.
+    pub fn address_of(&self, name: &str, kind: TransportKind) -> Option<u16> {
+        let i = self.index_of(name).ok()?;
+        let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
+        [&layout.holding, &layout.input, &layout.broadcast]
+            .iter()
+            .find_map(|m| m.iter().find(|(_, v)| **v == i).map(|(a, _)| *a))
+    }
+
+    /// Where each register lies on this link, as the plan places it: registers that do not exist
+    /// on the transport are left out, and a register that moves (by setting, variant or
+    /// transport) is at the address `RegisterPlan::address_for` gives, the same one the clients
+    /// and the generated code use.
+    pub(super) fn layout(&self, tcp: bool) -> Layout {
+        let settings = self.settings();
+        let view = settings.view(&self.drive);
+        let here = if tcp {
+            TransportKind::Tcp
+        } else {
+            TransportKind::Rtu
+        };
+        let mut layout = Layout::default();
+        for (i, r) in self.drive.registers.iter().enumerate() {
+            let plan = self.drive.register_plan(r);
+            if !plan.transports.contains(here) {
+                continue;
+            }
+            let address = plan.address_for(&view, here);
+            let space = if r.broadcast {
+                &mut layout.broadcast
+            } else {
+                match plan.info.table {
+                    Table::Holding => &mut layout.holding,
+                    Table::Input => &mut layout.input,
+                }
+            };
+            space.entry(address).or_insert(i);
+        }
+        layout
+    }
+
+    pub(super) fn in_gap(&self, address: u16) -> bool {
+        self.drive
+            .gaps
+            .iter()
+            .filter_map(|g| g.addresses)
+            .any(|[lo, hi]| (lo..=hi).contains(&address))
+    }
+
+    pub(super) fn communication_address(&self, kind: TransportKind, pdu: u32) -> Result<u16, u8> {
+        u16::try_from(pdu)
+            .ok()
+            .and_then(|p| self.profile.address_offsets.communication_address(p, kind))
+            .ok_or(self.plan.illegal_address)
+    }
+}

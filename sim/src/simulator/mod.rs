@@ -1,0 +1,264 @@
+//! The simulated drive: register memory laid out by the map, the manual's rules, the drive model.
+//!
+//! By concern, one module each: `options` ([`SimOptions`], [`SimError`]), `defaults` (the map's
+//! power-on values), `layout` (where each register lies per transport), `rules` (what a read or
+//! a write may do, persist commands), `state` (the drive model from the map's roles: the only
+//! module that reads them; the others name their type only, in the `roles` field), `dispatch`
+//! (one frame in, one reply out, [`RequestRecord`], [`Stats`]).
+
+mod defaults;
+mod dispatch;
+mod layout;
+mod options;
+mod rules;
+mod state;
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+use std::time::Duration;
+
+use drivemap_codegen::ir::{Drive, Register};
+use drivemap_live::{LiveSettings, Value, codec, leak_profile};
+use drivemap_runtime::profile::Profile;
+
+use crate::clock::Clock;
+use crate::exceptions::ExceptionPlan;
+use crate::model::Model;
+use crate::roles::Resolved;
+
+pub use dispatch::{Handled, Outcome, RequestRecord, Stats};
+use layout::Layout;
+use options::known_list;
+pub use options::{SimError, SimOptions};
+use rules::CommandTrack;
+pub use state::RolesChoice;
+use state::TickCache;
+
+/// A drive simulated from its map.
+#[derive(Debug)]
+pub struct Simulator {
+    drive: Arc<Drive>,
+    profile: &'static Profile,
+    slave: u8,
+    index: HashMap<String, usize>,
+    raw: Vec<u16>,
+    /// [RTU-framed, Modbus TCP].
+    layouts: [Layout; 2],
+    plan: ExceptionPlan,
+    roles: Option<Arc<Resolved>>,
+    model: Model,
+    clock: Arc<dyn Clock>,
+    last_tick: Duration,
+    variants: BTreeMap<String, String>,
+    externals: BTreeMap<String, f64>,
+    selectors: Vec<usize>,
+    references: Vec<usize>,
+    commands: Vec<CommandTrack>,
+    warnings: Vec<String>,
+    stats: Stats,
+    cache: TickCache,
+}
+
+impl Simulator {
+    /// Starts a simulated drive: registers at the map's defaults (then plausible values for role
+    /// registers without one, then the options' power-on values), the model stopped.
+    pub fn new(drive: Drive, options: SimOptions) -> Result<Simulator, SimError> {
+        let drive = Arc::new(drive);
+        let profile = leak_profile(&drive);
+        let index: HashMap<String, usize> = drive
+            .registers
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (r.def.id.clone(), i))
+            .collect();
+        for (axis, option) in &options.variants {
+            let ok = drive
+                .variants
+                .iter()
+                .any(|a| a.id == *axis && a.options.iter().any(|o| o.id == *option));
+            if !ok {
+                return Err(SimError::Variant {
+                    drive: drive.meta.id.clone(),
+                    axis: axis.clone(),
+                    option: option.clone(),
+                    known: known_list(
+                        drive.variants.iter().flat_map(|a| {
+                            a.options.iter().map(move |o| format!("{}={}", a.id, o.id))
+                        }),
+                    ),
+                });
+            }
+        }
+        let (resolved, externals) = Simulator::resolve_roles(&drive, &index, &options)?;
+        let sa = &drive.protocol.slave_address;
+        let slave = options.slave.or(sa.default).unwrap_or(1);
+        if !(sa.min..=sa.max).contains(&slave) {
+            return Err(SimError::Slave {
+                drive: drive.meta.id.clone(),
+                slave,
+                min: sa.min,
+                max: sa.max,
+            });
+        }
+        let ids = |list: Vec<&Register>| -> Vec<usize> {
+            list.iter()
+                .filter_map(|r| index.get(r.id()).copied())
+                .collect()
+        };
+        let selectors = ids(drive.selectors());
+        let references = ids(drive.references());
+        let commands = profile
+            .commands
+            .iter()
+            .map(|c| CommandTrack {
+                id: c.id,
+                kind: c.kind,
+                writes: c.writes,
+                progress: 0,
+                count: 0,
+            })
+            .collect();
+        let mut sim = Simulator {
+            raw: vec![0; drive.registers.len()],
+            plan: ExceptionPlan::from_exceptions(profile.exceptions),
+            drive,
+            profile,
+            slave,
+            index,
+            layouts: [Layout::default(), Layout::default()],
+            roles: resolved,
+            model: Model::default(),
+            last_tick: options.clock.now(),
+            clock: options.clock.clone(),
+            variants: options.variants.clone(),
+            externals,
+            selectors,
+            references,
+            commands,
+            warnings: Vec::new(),
+            stats: Stats::default(),
+            cache: TickCache::default(),
+        };
+        sim.cache.inputs = sim.tick_inputs();
+        sim.cache.seen = vec![0; sim.cache.inputs.len()];
+        sim.cache.stale = true;
+        sim.apply_defaults();
+        sim.apply_role_values()?;
+        for (name, v) in &options.initial {
+            let i = sim.index_of(name)?;
+            sim.set_index(i, *v)?;
+        }
+        sim.layouts = [sim.layout(false), sim.layout(true)];
+        sim.start_model();
+        sim.tick();
+        Ok(sim)
+    }
+
+    /// The map.
+    pub fn drive(&self) -> &Drive {
+        &self.drive
+    }
+
+    /// The runtime profile built from the map (the same a client of this drive uses).
+    pub fn profile(&self) -> &'static Profile {
+        self.profile
+    }
+
+    /// The slave address the drive answers to.
+    pub fn slave(&self) -> u8 {
+        self.slave
+    }
+
+    /// The exception code for each rule.
+    pub fn exceptions(&self) -> ExceptionPlan {
+        self.plan
+    }
+
+    /// Map defaults that could not be encoded at start (the register then starts at 0).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Counters since start.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    pub(super) fn index_of(&self, name: &str) -> Result<usize, SimError> {
+        let r = drivemap_live::find(&self.drive, name)?;
+        Ok(self.index[r.id()])
+    }
+
+    /// A register's raw word, by id, parameter number or name.
+    pub fn raw(&self, name: &str) -> Result<u16, SimError> {
+        Ok(self.raw[self.index_of(name)?])
+    }
+
+    /// A register's value decoded by the map under the drive's own settings.
+    pub fn value(&self, name: &str) -> Result<Value, SimError> {
+        let i = self.index_of(name)?;
+        let r = &self.drive.registers[i];
+        codec::decode(&self.drive, r, self.raw[i], &self.settings()).map_err(|error| {
+            SimError::Value {
+                register: r.id().into(),
+                value: f64::from(self.raw[i]),
+                error,
+            }
+        })
+    }
+
+    /// Sets a register as if a master had written it (engineering units), without the
+    /// protocol's checks of access and state. The drive model reacts as to a write.
+    pub fn set(&mut self, name: &str, value: f64) -> Result<(), SimError> {
+        let i = self.index_of(name)?;
+        self.tick();
+        self.set_index(i, value)?;
+        self.after_write(i);
+        self.invalidate();
+        self.tick();
+        Ok(())
+    }
+
+    /// Sets a register's raw word, without any check.
+    pub fn set_raw(&mut self, name: &str, raw: u16) -> Result<(), SimError> {
+        let i = self.index_of(name)?;
+        self.tick();
+        self.raw[i] = raw;
+        self.after_write(i);
+        self.invalidate();
+        self.tick();
+        Ok(())
+    }
+
+    /// The settings conversions depend on, from the drive's own registers: selector codes,
+    /// reference values, variants and external quantities.
+    pub fn settings(&self) -> LiveSettings {
+        let mut s = LiveSettings {
+            variants: self.variants.clone(),
+            ..LiveSettings::default()
+        };
+        for (k, v) in &self.externals {
+            s.references.insert(k.clone(), *v);
+        }
+        // Selectors first: a reference's conversion may depend on one. `absorb` converts each
+        // word by the plan, as the generated `Settings::absorb` does.
+        for &i in self.selectors.iter().chain(&self.references) {
+            let r = &self.drive.registers[i];
+            s.absorb(&self.drive, r.def.address, self.raw[i]);
+        }
+        s
+    }
+
+    pub(super) fn set_index(&mut self, i: usize, value: f64) -> Result<(), SimError> {
+        let r = &self.drive.registers[i];
+        let raw = codec::encode(&self.drive, r, value, &self.settings()).map_err(|error| {
+            SimError::Value {
+                register: r.id().into(),
+                value,
+                error,
+            }
+        })?;
+        self.raw[i] = raw;
+        Ok(())
+    }
+}

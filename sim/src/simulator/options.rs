@@ -1,0 +1,135 @@
+//! How a simulator is started ([`SimOptions`]) and why it cannot be ([`SimError`]).
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use drivemap_runtime::ValueError;
+
+use crate::clock::{Clock, SystemClock};
+
+use super::RolesChoice;
+
+/// How to start a simulator.
+#[derive(Debug, Clone)]
+pub struct SimOptions {
+    /// Slave address; default: the map's default slave address, else 1.
+    pub slave: Option<u8>,
+    /// Variant axis id → option id; axes not named take their first option.
+    pub variants: BTreeMap<String, String>,
+    /// External quantities (drive rating...); one not given is [`Plausible::EXTERNAL`], or
+    /// [`Plausible::MAX_FREQUENCY`] for the maximum frequency.
+    ///
+    /// [`Plausible::EXTERNAL`]: crate::Plausible::EXTERNAL
+    /// [`Plausible::MAX_FREQUENCY`]: crate::Plausible::MAX_FREQUENCY
+    pub externals: BTreeMap<String, f64>,
+    /// Power-on values, applied last: register id, parameter number or name → engineering
+    /// value (a code for enumerations, the raw word for bit fields and plain words).
+    pub initial: Vec<(String, f64)>,
+    /// Whether to run the drive model the map's roles describe.
+    pub roles: RolesChoice,
+    /// Time for the drive model.
+    pub clock: Arc<dyn Clock>,
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        SimOptions {
+            slave: None,
+            variants: BTreeMap::new(),
+            externals: BTreeMap::new(),
+            initial: Vec::new(),
+            roles: RolesChoice::FromMap,
+            clock: Arc::new(SystemClock::new()),
+        }
+    }
+}
+
+impl SimOptions {
+    /// Defaults: the map's slave address, base variants, the drive model from the map's roles, the system clock.
+    pub fn new() -> SimOptions {
+        SimOptions::default()
+    }
+
+    /// Sets the slave address.
+    pub fn slave(mut self, slave: u8) -> SimOptions {
+        self.slave = Some(slave);
+        self
+    }
+
+    /// Sets the clock.
+    pub fn clock(mut self, clock: Arc<dyn Clock>) -> SimOptions {
+        self.clock = clock;
+        self
+    }
+
+    /// Chooses a variant option on an axis.
+    pub fn variant(mut self, axis: &str, option: &str) -> SimOptions {
+        self.variants.insert(axis.into(), option.into());
+        self
+    }
+
+    /// Sets an external quantity.
+    pub fn external(mut self, name: &str, value: f64) -> SimOptions {
+        self.externals.insert(name.into(), value);
+        self
+    }
+
+    /// Sets a register's power-on value (engineering units).
+    pub fn set(mut self, register: &str, value: f64) -> SimOptions {
+        self.initial.push((register.into(), value));
+        self
+    }
+
+    /// Chooses whether to run the drive model.
+    pub fn roles(mut self, roles: RolesChoice) -> SimOptions {
+        self.roles = roles;
+        self
+    }
+}
+
+/// Why a simulator cannot start, or a register cannot be set.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// No register by that name.
+    #[error(transparent)]
+    NotFound(#[from] drivemap_live::NotFound),
+    /// A value the register cannot hold.
+    #[error("cannot set {register} to {value}: {error}")]
+    Value {
+        register: String,
+        value: f64,
+        error: ValueError,
+    },
+    /// A slave address outside the drive's range.
+    #[error("slave address {slave} is outside {drive}'s range {min} ..= {max}")]
+    Slave {
+        drive: String,
+        slave: u8,
+        min: u8,
+        max: u8,
+    },
+    /// A variant the map does not define.
+    #[error("{drive} has no variant `{option}` on axis `{axis}`; known: {known}")]
+    Variant {
+        drive: String,
+        axis: String,
+        option: String,
+        known: String,
+    },
+    /// An external quantity the map does not use.
+    #[error("{drive} has no external quantity `{name}`; known: {known}")]
+    External {
+        drive: String,
+        name: String,
+        known: String,
+    },
+}
+
+pub(super) fn known_list(items: impl IntoIterator<Item = String>) -> String {
+    let v: Vec<String> = items.into_iter().collect();
+    if v.is_empty() {
+        "none".into()
+    } else {
+        v.join(", ")
+    }
+}

@@ -1,0 +1,166 @@
+//! The manual's rules on reads and writes: readable and writable registers, reserved addresses
+//! and gaps, values the generated `encode` would refuse, broadcast addresses, and the persist
+//! commands a sequence of writes completes.
+
+use drivemap_codegen::ir::Register;
+use drivemap_live::{LiveSettings, Value, codec};
+use drivemap_runtime::profile::{CommandKind, TransportKind};
+use drivemap_runtime::{Table, ValueError, pdu};
+
+use super::Simulator;
+
+#[derive(Debug, Clone)]
+pub(super) struct CommandTrack {
+    pub(super) id: &'static str,
+    pub(super) kind: CommandKind,
+    pub(super) writes: &'static [(u16, u16)],
+    pub(super) progress: usize,
+    pub(super) count: u32,
+}
+
+impl Simulator {
+    /// Persist commands (`protocol.commands` of kind persist: ENTER, save) executed.
+    pub fn persist_count(&self) -> u32 {
+        self.commands
+            .iter()
+            .filter(|c| c.kind == CommandKind::Persist)
+            .map(|c| c.count)
+            .sum()
+    }
+
+    /// How often the command with this map id was executed, if the map has it.
+    pub fn command_count(&self, id: &str) -> Option<u32> {
+        self.commands.iter().find(|c| c.id == id).map(|c| c.count)
+    }
+
+    /// Whether the generated `encode` of this register would produce `raw`: decode it, encode
+    /// the value back. Conversions that need a setting the drive cannot supply are accepted.
+    pub(super) fn accepts(&self, r: &Register, raw: u16, settings: &LiveSettings) -> bool {
+        let value = match codec::decode(&self.drive, r, raw, settings) {
+            Ok(Value::Bits { .. }) => f64::from(raw),
+            Ok(v) => match v.as_f64() {
+                Some(v) => v,
+                None => return true,
+            },
+            Err(_) => return true,
+        };
+        match codec::encode(&self.drive, r, value, settings) {
+            Ok(_) => true,
+            Err(
+                ValueError::OutOfRange { .. }
+                | ValueError::WordOverflow { .. }
+                | ValueError::UnknownCode { .. }
+                | ValueError::NotFinite { .. },
+            ) => false,
+            Err(_) => true,
+        }
+    }
+
+    /// One word of a read. The first address must hold a readable register (or lie in a gap the
+    /// map records); further addresses without a register are reserved and read 0 ("Reserved
+    /// registers and data are meaningless", `000_032dced3a1e91a75.txt:908`). A write-only
+    /// register answers 02h wherever it is.
+    pub(super) fn read_one(
+        &self,
+        kind: TransportKind,
+        table: Table,
+        pdu: u32,
+        first: bool,
+    ) -> Result<u16, u8> {
+        let address = self.communication_address(kind, pdu)?;
+        let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
+        let map = match table {
+            Table::Holding => &layout.holding,
+            Table::Input => &layout.input,
+        };
+        match map.get(&address) {
+            Some(&i) if self.drive.registers[i].readable() => Ok(self.raw[i]),
+            Some(_) => Err(self.plan.illegal_address),
+            None if !first || (table == Table::Holding && self.in_gap(address)) => Ok(0),
+            None => Err(self.plan.illegal_address),
+        }
+    }
+
+    /// Checks every register of a write, then writes them all; a refused register writes none.
+    pub(super) fn write(
+        &mut self,
+        kind: TransportKind,
+        address: u16,
+        values: &[u16],
+        broadcast: bool,
+    ) -> Result<(), u8> {
+        self.refresh_settings();
+        let settings = &self.cache.settings;
+        let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
+        let broadcast_space = broadcast && !layout.broadcast.is_empty();
+        let allowed = self
+            .profile
+            .broadcast
+            .map(|b| b.addresses)
+            .unwrap_or_default();
+        let mut targets = [(0u16, None, 0u16); pdu::MAX_WRITE as usize];
+        if values.len() > targets.len() {
+            return Err(self.plan.illegal_quantity);
+        }
+        for (k, &v) in values.iter().enumerate() {
+            let comm = self.communication_address(kind, u32::from(address) + k as u32)?;
+            let found = if broadcast_space {
+                layout.broadcast.get(&comm)
+            } else {
+                layout.holding.get(&comm)
+            };
+            match found {
+                Some(&i) => {
+                    if broadcast
+                        && !broadcast_space
+                        && !allowed.is_empty()
+                        && !allowed.contains(&comm)
+                    {
+                        return Err(self.plan.illegal_address);
+                    }
+                    let r = &self.drive.registers[i];
+                    if !r.writable() {
+                        return Err(self.plan.read_only);
+                    }
+                    if !self.may_write_now(r) {
+                        return Err(self.plan.refused_now);
+                    }
+                    if !self.accepts(r, v, settings) {
+                        return Err(self.plan.out_of_range);
+                    }
+                    targets[k] = (comm, Some(i), v);
+                }
+                None if !broadcast && v == 0 && self.in_gap(comm) => targets[k] = (comm, None, v),
+                None => return Err(self.plan.illegal_address),
+            }
+        }
+        for &(comm, i, v) in &targets[..values.len()] {
+            if let Some(i) = i {
+                self.raw[i] = v;
+                self.after_write(i);
+            }
+            self.track_commands(comm, v);
+        }
+        self.tick();
+        Ok(())
+    }
+
+    pub(super) fn track_commands(&mut self, address: u16, value: u16) {
+        for c in &mut self.commands {
+            if !c.writes.iter().any(|&(a, _)| a == address) {
+                continue;
+            }
+            if c.writes.get(c.progress) == Some(&(address, value)) {
+                c.progress += 1;
+            } else if c.writes.first() == Some(&(address, value)) {
+                c.progress = 1;
+            } else {
+                c.progress = 0;
+            }
+            if c.progress == c.writes.len() {
+                c.count += 1;
+                c.progress = 0;
+            }
+        }
+    }
+}

@@ -1,0 +1,341 @@
+//! The drive model and the map's roles behind it: which registers run the drive, ramp its
+//! output and show its status. Everything that reads the roles is here.
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+
+use drivemap_codegen::ir::{Drive, Register};
+use drivemap_live::{LiveSettings, codec};
+use drivemap_runtime::WriteRestriction;
+
+use crate::model::{DriveState, Model};
+use crate::roles::{self, Follow, Plausible, Resolved, Source};
+
+use super::options::known_list;
+use super::{SimError, SimOptions, Simulator};
+
+/// Whether the simulator runs a drive model.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum RolesChoice {
+    /// The drive model the map's `roles:` describe; a map without roles gets none.
+    #[default]
+    FromMap,
+    /// No drive model: registers only.
+    NoModel,
+}
+
+/// What `tick` needs, resolved once and refreshed only when a register it depends on changes,
+/// so a request allocates nothing and converts nothing while the drive model is steady.
+#[derive(Debug, Default)]
+pub(super) struct TickCache {
+    /// Registers whose raw word the settings and the model's inputs come from.
+    pub(super) inputs: Vec<usize>,
+    /// Their words when `settings` and `params` were computed.
+    pub(super) seen: Vec<u16>,
+    /// The frequency reference register when `params` were computed.
+    pub(super) reference_register: Option<usize>,
+    pub(super) settings: LiveSettings,
+    /// The settings are not yet built or out of date.
+    pub(super) stale: bool,
+    /// max frequency, accel, decel, reference (Hz); `None`: to compute.
+    pub(super) params: Option<[f64; 4]>,
+    /// The model as last published into the registers; `None`: publish at the next tick.
+    pub(super) published: Option<Model>,
+}
+
+/// External quantities by name (drive rating...).
+type Externals = BTreeMap<String, f64>;
+
+impl Simulator {
+    /// The map's roles, resolved, and the external quantities: the options', else plausible
+    /// values ([`Plausible`]).
+    pub(super) fn resolve_roles(
+        drive: &Drive,
+        _index: &HashMap<String, usize>,
+        options: &SimOptions,
+    ) -> Result<(Option<Arc<Resolved>>, Externals), SimError> {
+        use drivemap_runtime::core::Role;
+        use drivemap_runtime::core::roles::Target;
+        let known_externals: Vec<String> = drive
+            .externals()
+            .iter()
+            .map(|q| q.external.clone())
+            .collect();
+        let max_external = drive
+            .plan()
+            .roles
+            .of(Role::MaxFrequency)
+            .find_map(|p| match p.target {
+                Target::External { name, .. } => Some(name),
+                _ => None,
+            });
+        let mut externals: Externals = known_externals
+            .iter()
+            .map(|name| {
+                let v = if Some(name.as_str()) == max_external {
+                    Plausible::MAX_FREQUENCY
+                } else {
+                    Plausible::EXTERNAL
+                };
+                (name.clone(), v)
+            })
+            .collect();
+        for (name, v) in &options.externals {
+            if !known_externals.contains(name) {
+                return Err(SimError::External {
+                    drive: drive.meta.id.clone(),
+                    name: name.clone(),
+                    known: known_list(known_externals.clone()),
+                });
+            }
+            externals.insert(name.clone(), *v);
+        }
+        let resolved = match options.roles {
+            RolesChoice::FromMap => {
+                roles::resolve(drive, &|name: &str| externals.get(name).copied()).map(Arc::new)
+            }
+            RolesChoice::NoModel => None,
+        };
+        Ok((resolved, externals))
+    }
+
+    /// Plausible power-on values of role registers the map prints no default for (after the
+    /// map's defaults, before the options').
+    pub(super) fn apply_role_values(&mut self) -> Result<(), SimError> {
+        if let Some(r) = self.roles.clone() {
+            for &(i, v) in &r.initial {
+                self.set_index(i, v)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The model at power-on: program mode where the map has mode roles, the first frequency
+    /// reference.
+    pub(super) fn start_model(&mut self) {
+        if let Some(r) = self.roles.clone() {
+            self.model.mode = r.modes.then_some(roles::Mode::Prg);
+            self.model.reference_register = r.frequency_reference.first().copied();
+        }
+    }
+}
+
+impl Simulator {
+    /// The values of the map's external quantities the simulator converts with (given, or
+    /// plausible: [`Plausible`]).
+    pub fn externals(&self) -> &BTreeMap<String, f64> {
+        &self.externals
+    }
+
+    /// Whether the simulator runs a drive model (the map gives roles).
+    pub fn has_model(&self) -> bool {
+        self.roles.is_some()
+    }
+
+    /// The drive model's state, if it has one.
+    pub fn state(&self) -> Option<DriveState> {
+        self.roles.as_ref().map(|_| self.model.state())
+    }
+
+    pub(super) fn running(&self) -> bool {
+        self.roles.is_some() && self.model.running()
+    }
+
+    /// Whether the drive's state allows writing `r` now.
+    pub(super) fn may_write_now(&self, r: &Register) -> bool {
+        match self.drive.register_plan(r).restriction {
+            WriteRestriction::None => true,
+            WriteRestriction::Stopped => !self.running(),
+            WriteRestriction::PrgMode => match self.model.mode {
+                Some(m) => m == roles::Mode::Prg,
+                None => !self.running(),
+            },
+        }
+    }
+
+    pub(super) fn decode_f64(&self, i: usize, settings: &LiveSettings) -> Option<f64> {
+        codec::decode(&self.drive, &self.drive.registers[i], self.raw[i], settings)
+            .ok()
+            .and_then(|v| v.as_f64())
+    }
+
+    pub(super) fn source_value(&self, s: &Source, settings: &LiveSettings) -> Option<f64> {
+        match s {
+            Source::Register(i) => self.decode_f64(*i, settings),
+            Source::Value(v) => Some(*v),
+        }
+    }
+
+    /// Reacts to a write of register `i`: mode switches, run/direction commands, reference.
+    pub(super) fn after_write(&mut self, i: usize) {
+        let Some(roles) = self.roles.clone() else {
+            return;
+        };
+        use drivemap_runtime::core::Role;
+        let raw = self.raw[i];
+        let (mut run, mut fwd, mut rev, mut reverse) = (None, None, None, None);
+        for c in roles.commands.iter().filter(|c| c.bit.register == i) {
+            let on = c.bit.holds(raw);
+            match c.role {
+                Role::Run => run = Some(on),
+                Role::RunForward => fwd = Some(on),
+                Role::RunReverse => rev = Some(on),
+                Role::Reverse => reverse = Some(on),
+                Role::ToDriveMode | Role::ToProgramMode if on => {
+                    // Mode switches act once and clear themselves.
+                    self.model.mode = Some(if c.role == Role::ToDriveMode {
+                        roles::Mode::Drv
+                    } else {
+                        roles::Mode::Prg
+                    });
+                    self.raw[i] = c.bit.put(self.raw[i], c.bit.field.code(false));
+                }
+                // The simulated drive has no faults: a reset has nothing to clear.
+                _ => {}
+            }
+        }
+        if run.is_some() || fwd.is_some() || rev.is_some() {
+            self.model.run = run == Some(true) || fwd == Some(true) || rev == Some(true);
+        }
+        if let Some(r) = reverse {
+            self.model.reverse = r;
+        } else if fwd.is_some() || rev.is_some() {
+            self.model.reverse = rev == Some(true) && fwd != Some(true);
+        }
+        if roles.frequency_reference.contains(&i) {
+            self.model.reference_register = Some(i);
+        }
+    }
+
+    /// Registers the settings and the model's inputs are read from.
+    pub(super) fn tick_inputs(&self) -> Vec<usize> {
+        let mut v: Vec<usize> = self
+            .selectors
+            .iter()
+            .chain(&self.references)
+            .copied()
+            .collect();
+        if let Some(r) = &self.roles {
+            for s in [
+                Some(&r.max_frequency),
+                Some(&r.accel_time),
+                r.decel_time.as_ref(),
+            ]
+            .into_iter()
+            .flatten()
+            {
+                if let Source::Register(i) = s {
+                    v.push(*i);
+                }
+            }
+            v.extend(&r.frequency_reference);
+        }
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+
+    /// Everything cached is recomputed at the next tick (after a write by hand).
+    pub(super) fn invalidate(&mut self) {
+        self.cache.stale = true;
+        self.cache.params = None;
+        self.cache.published = None;
+    }
+
+    /// Brings the cached settings up to date with the registers; allocates only when a
+    /// register they depend on changed.
+    pub(super) fn refresh_settings(&mut self) {
+        let c = &mut self.cache;
+        let mut changed = c.stale || c.reference_register != self.model.reference_register;
+        for (k, &i) in c.inputs.iter().enumerate() {
+            if c.seen[k] != self.raw[i] {
+                c.seen[k] = self.raw[i];
+                changed = true;
+            }
+        }
+        if changed {
+            c.reference_register = self.model.reference_register;
+            c.stale = false;
+            c.params = None;
+            c.published = None;
+            self.cache.settings = self.settings();
+        }
+    }
+
+    /// Advances the drive model to the clock's time and updates the registers it drives.
+    pub fn tick(&mut self) {
+        let now = self.clock.now();
+        let dt = now.saturating_sub(self.last_tick).as_secs_f64();
+        self.last_tick = self.last_tick.max(now);
+        let Some(roles) = self.roles.clone() else {
+            return;
+        };
+        self.refresh_settings();
+        let settings = std::mem::take(&mut self.cache.settings);
+        let [max_f, accel, decel, reference] = match self.cache.params {
+            Some(p) => p,
+            None => {
+                let max_f = self
+                    .source_value(&roles.max_frequency, &settings)
+                    .filter(|v| v.is_finite() && *v > 0.0)
+                    .unwrap_or(60.0);
+                let accel = self
+                    .source_value(&roles.accel_time, &settings)
+                    .unwrap_or(0.0);
+                let decel = roles
+                    .decel_time
+                    .as_ref()
+                    .and_then(|s| self.source_value(s, &settings))
+                    .unwrap_or(accel);
+                let reference = self
+                    .model
+                    .reference_register
+                    .and_then(|i| self.decode_f64(i, &settings))
+                    .unwrap_or(0.0);
+                let p = [max_f, accel, decel, reference];
+                self.cache.params = Some(p);
+                p
+            }
+        };
+        self.model.aim(reference, max_f);
+        self.model.advance(dt, max_f, accel, decel);
+        // The registers the model drives are a function of the model, the settings and the
+        // maximum frequency: published again only when one of them changed.
+        if self.cache.published.as_ref() != Some(&self.model) {
+            self.publish(&roles, &settings, max_f);
+            self.cache.published = Some(self.model.clone());
+        }
+        self.cache.settings = settings;
+    }
+
+    pub(super) fn store(&mut self, i: usize, value: f64, settings: &LiveSettings) {
+        if let Ok(raw) = codec::encode(&self.drive, &self.drive.registers[i], value, settings) {
+            self.raw[i] = raw;
+        }
+    }
+
+    pub(super) fn publish(&mut self, roles: &Resolved, settings: &LiveSettings, max_f: f64) {
+        let out = self.model.output.abs();
+        for s in &roles.status {
+            if let Some(code) = s.code(|c| self.model.holds(c)) {
+                self.raw[s.register] = s.put(self.raw[s.register], code);
+            }
+        }
+        let running = self.model.running();
+        let fraction = if max_f > 0.0 { out / max_f } else { 0.0 };
+        for &(i, follow) in &roles.follow {
+            let v = match follow {
+                Follow::Output => out,
+                Follow::Reference => self.model.reference,
+                Follow::Voltage => Plausible::RATED_VOLTAGE * fraction,
+                Follow::Current if running => {
+                    let (at_zero, at_max) = Plausible::CURRENT;
+                    at_zero + (at_max - at_zero) * fraction
+                }
+                Follow::Current => 0.0,
+                Follow::DcBus => Plausible::DC_BUS,
+            };
+            self.store(i, v, settings);
+        }
+    }
+}
