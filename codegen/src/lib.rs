@@ -7,7 +7,9 @@
 //! from a `build.rs`.
 
 pub mod config;
+pub mod describe;
 pub mod diagnostic;
+pub mod diff;
 pub mod export;
 pub mod generate;
 pub mod hex;
@@ -18,6 +20,7 @@ pub mod lower;
 pub mod model;
 pub mod names;
 pub mod numbers;
+pub mod reference;
 pub mod review;
 pub mod source;
 pub mod validate;

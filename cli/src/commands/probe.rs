@@ -22,10 +22,10 @@ use drivemap_live::codec;
 use drivemap_runtime::ValueError;
 use serde::Serialize;
 
-use crate::describe;
 use crate::live::Target;
 use crate::live::output::{Format, now_rfc3339};
 use crate::live::session::{Failure, Session, on_transport};
+use drivemap_codegen::describe;
 
 /// Arguments of `drivemap probe`.
 #[derive(ClapArgs, Debug)]
@@ -148,7 +148,7 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
                 "not_on_link",
                 format!(
                     "exists only on {}",
-                    describe::transports(r.transports.as_deref())
+                    describe::transports(session.drive.register_plan(r).transports)
                 ),
             ));
         } else {

@@ -16,7 +16,7 @@ use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError};
 
 use super::link::{LinkArgs, LiveClient};
-use crate::describe;
+use drivemap_codegen::describe;
 
 /// What conversions depend on, given on the command line.
 #[derive(ClapArgs, Debug, Clone, Default)]
@@ -431,7 +431,7 @@ impl<'d> Session<'d> {
             Some(format!(
                 "{} exists only on {}",
                 describe::register(r),
-                describe::transports(r.transports.as_deref())
+                describe::transports(self.drive.register_plan(r).transports)
             ))
         } else {
             None

@@ -3,7 +3,7 @@
 use drivemap_codegen::ir::Register;
 
 use super::session::{Session, field_lines};
-use crate::describe;
+use drivemap_codegen::describe;
 
 /// One register's line.
 #[derive(Debug, Clone, PartialEq)]
