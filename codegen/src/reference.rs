@@ -408,7 +408,7 @@ fn range_cell(drive: &Drive, r: &Register) -> String {
             parts.push(format!("{}: unknown", option));
         }
     }
-    if d.unknown.iter().any(|u| u.what == UnknownItem::Range) {
+    if r.range_unknown() {
         parts.push("unknown".into());
     }
     if let Some(Scale::Selected(sel)) = &d.scale {

@@ -17,7 +17,6 @@ use std::process::ExitCode;
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::{Register, ValueKind};
-use drivemap_codegen::model::UnknownItem;
 use drivemap_live::codec;
 use drivemap_runtime::ValueError;
 use serde::Serialize;
@@ -350,7 +349,7 @@ fn not_checkable(drive: &Drive, readable: &[&Register], session: &Session<'_>) -
     }
     let unknown_range: Vec<String> = readable
         .iter()
-        .filter(|r| r.def.unknown.iter().any(|u| u.what == UnknownItem::Range))
+        .filter(|r| r.range_unknown())
         .map(|r| describe::register(r))
         .collect();
     if !unknown_range.is_empty() {
