@@ -5,6 +5,10 @@
 //! concern per pass, [`lower`] decides what every register means (the drive plan), [`generate`]
 //! prints the plan as Rust and [`export`] emits JSON. [`Config`] drives it all
 //! from a `build.rs`.
+//!
+//! Text about a map has one wording, [`describe`], shared by the generated rustdoc, the
+//! Markdown reference ([`reference`](mod@reference), `drivemap doc`) and the semantic diff of two maps
+//! ([`diff`], `drivemap diff`).
 
 pub mod config;
 pub mod describe;
