@@ -33,6 +33,28 @@ pub fn function(f: u8) -> String {
     format!("{f:02X}h")
 }
 
+/// Function codes: `03h, 06h, 10h`.
+pub fn functions(f: &[u8]) -> String {
+    f.iter()
+        .map(|f| function(*f))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A span of addresses: `0100h`, or `0100h – 0105h`.
+pub fn address_span(first: u16, last: u16) -> String {
+    if first == last {
+        address(first)
+    } else {
+        format!("{} – {}", address(first), address(last))
+    }
+}
+
+/// The registers one request may carry: `at most 16 per read, 16 per write`.
+pub fn per_request(max_read: u16, max_write: u16) -> String {
+    format!("at most {max_read} per read, {max_write} per write")
+}
+
 /// Access: `read-only`, `write-only`, `read/write`.
 pub fn access(a: Access) -> &'static str {
     match a {
@@ -236,6 +258,9 @@ mod tests {
         assert_eq!(range(None, Some(5.0), ""), "… ..= 5");
         assert_eq!(range(None, None, "Hz"), "");
         assert_eq!(codes(&[1, 2]), "1, 2");
+        assert_eq!(functions(&[3, 0x10]), "03h, 10h");
+        assert_eq!(address_span(0x100, 0x100), "0100h");
+        assert_eq!(address_span(0x100, 0x105), "0100h – 0105h");
         assert_eq!(transports(Transports::RTU), "RTU");
         assert_eq!(transports(Transports::ALL), "all");
         assert_eq!(access(Access::ReadWrite), "read/write");

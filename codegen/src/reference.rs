@@ -171,16 +171,12 @@ fn protocol(out: &mut String, drive: &Drive) {
     );
     row(
         "Function codes",
-        p.function_codes
-            .iter()
-            .map(|f| describe::function(*f))
-            .collect::<Vec<_>>()
-            .join(", "),
+        describe::functions(&p.function_codes),
         None,
     );
     row(
         "Registers per request",
-        format!("at most {} per read, {} per write", p.max_read, p.max_write),
+        describe::per_request(p.max_read, p.max_write),
         None,
     );
     let s = &p.slave_address;
@@ -195,11 +191,7 @@ fn protocol(out: &mut String, drive: &Drive) {
     if let Some(b) = &p.broadcast {
         let mut text = format!(
             "slave 0 executes {} without reply",
-            b.functions
-                .iter()
-                .map(|f| describe::function(*f))
-                .collect::<Vec<_>>()
-                .join(", ")
+            describe::functions(&b.functions)
         );
         if !b.registers.is_empty() {
             let regs: Vec<String> = b
@@ -729,13 +721,7 @@ fn gaps(out: &mut String, drive: &Drive) {
     for g in &drive.gaps {
         let addresses = g
             .addresses
-            .map(|[a, b]| {
-                if a == b {
-                    describe::address(a)
-                } else {
-                    format!("{} – {}", describe::address(a), describe::address(b))
-                }
-            })
+            .map(|[a, b]| describe::address_span(a, b))
             .unwrap_or_default();
         let _ = writeln!(
             out,

@@ -341,7 +341,7 @@ fn not_checkable(drive: &Drive, readable: &[&Register], session: &Session<'_>) -
     let mut out = Vec::new();
     for g in &drive.gaps {
         let at = match (&g.addresses, &g.params) {
-            (Some([a, b]), _) => format!("{a:04X}h-{b:04X}h"),
+            (Some([a, b]), _) => describe::address_span(*a, *b),
             (None, Some(p)) => p.clone(),
             (None, None) => String::new(),
         };

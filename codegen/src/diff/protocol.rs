@@ -123,18 +123,6 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
     }
 }
 
-fn list<T: ToString>(items: impl IntoIterator<Item = T>) -> String {
-    items
-        .into_iter()
-        .map(|i| i.to_string())
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-fn functions(f: &[u8]) -> String {
-    list(f.iter().map(|f| describe::function(*f)))
-}
-
 pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
     let (a, b) = (&old.protocol, &new.protocol);
     let s = "protocol";
@@ -171,9 +159,9 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         c.push(
             ChangeKind::FunctionCodeRemoved,
             s,
-            &format!("function codes: {}", functions(&removed)),
-            (Some(functions(&a.function_codes)), src.0.clone()),
-            (Some(functions(&b.function_codes)), src.1.clone()),
+            &format!("function codes: {}", describe::functions(&removed)),
+            (Some(describe::functions(&a.function_codes)), src.0.clone()),
+            (Some(describe::functions(&b.function_codes)), src.1.clone()),
             HEAD,
         );
     }
@@ -181,9 +169,9 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         c.push(
             ChangeKind::FunctionCodeAdded,
             s,
-            &format!("function codes: {}", functions(&added)),
-            (Some(functions(&a.function_codes)), src.0.clone()),
-            (Some(functions(&b.function_codes)), src.1.clone()),
+            &format!("function codes: {}", describe::functions(&added)),
+            (Some(describe::functions(&a.function_codes)), src.0.clone()),
+            (Some(describe::functions(&b.function_codes)), src.1.clone()),
             HEAD,
         );
     }
@@ -356,7 +344,7 @@ fn broadcast(c: &mut Collector, old: &Drive, new: &Drive) {
     };
     let text = |x: &Option<crate::model::Broadcast>| {
         x.as_ref().map(|x| {
-            let mut t = functions(&x.functions);
+            let mut t = describe::functions(&x.functions);
             if !x.registers.is_empty() {
                 t += &format!(" to {}", x.registers.join(", "));
             }

@@ -333,7 +333,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             _ => {}
         }
     }
-    ranges(c, r, n, &subject, order);
+    ranges(c, new, r, n, &subject, order);
     defaults(c, r, n, &subject, order);
     documentation(c, r, n, &subject, order);
     if a.source != b.source {
@@ -416,7 +416,7 @@ fn scale(
         return;
     }
     // Both selected by the same parameter: compare code by code.
-    let selector = sa.unwrap_or_default();
+    let selector = describe::setting(new, sa.unwrap_or_default());
     for (code, (x, _, _, xs)) in &ca {
         let what = format!(
             "scale when {selector} = {}",
@@ -526,7 +526,7 @@ fn range_push(
     );
 }
 
-fn ranges(c: &mut Collector, r: &Register, n: &Register, subject: &str, order: u32) {
+fn ranges(c: &mut Collector, new: &Drive, r: &Register, n: &Register, subject: &str, order: u32) {
     let (a, b) = (&r.def, &n.def);
     let unit = (
         a.unit.as_deref().unwrap_or(""),
@@ -587,7 +587,8 @@ fn ranges(c: &mut Collector, r: &Register, n: &Register, subject: &str, order: u
                         c,
                         subject,
                         &format!(
-                            "range when {sa} = {}",
+                            "range when {} = {}",
+                            describe::setting(new, sa),
                             code.map(|c| c.to_string()).unwrap_or_default()
                         ),
                         unit,

@@ -59,17 +59,10 @@ pub fn module(drive: &Drive) -> String {
         s += &format!("- `{}` — {}\n", manual.file, manual.title);
     }
     s += &format!(
-        "\n{} registers; at most {} per read, {} per write; function codes {}.",
+        "\n{} registers; {}; function codes {}.",
         drive.registers.len(),
-        drive.protocol.max_read,
-        drive.protocol.max_write,
-        drive
-            .protocol
-            .function_codes
-            .iter()
-            .map(|f| describe::function(*f))
-            .collect::<Vec<_>>()
-            .join(", ")
+        describe::per_request(drive.protocol.max_read, drive.protocol.max_write),
+        describe::functions(&drive.protocol.function_codes)
     );
     s
 }
