@@ -17,6 +17,7 @@ use crate::ir::{Drive, Register};
 use crate::model::{
     Condition, DefaultValue, Dependency, DisplayStep, Field, Reference, Scale, UnknownItem,
 };
+use crate::names::field_span;
 
 /// A number as the manual prints it (`6000`, `0.1`, `-100`).
 pub fn num(v: f64) -> String {
@@ -208,10 +209,18 @@ pub fn default(d: &DefaultValue) -> String {
 
 /// The bits of a field: `bit 3` or `bits 12–15`.
 pub fn bits(f: &Field) -> String {
-    match (f.bit, f.bits) {
-        (Some(b), _) => format!("bit {b}"),
-        (None, Some([lo, hi])) => format!("bits {lo}–{hi}"),
-        (None, None) => "no bits".into(),
+    match field_span(f) {
+        Some((lsb, width)) => bit_span(lsb, width),
+        None => "no bits".into(),
+    }
+}
+
+/// `width` bits from `lsb`: `bit 3` or `bits 12–15`.
+pub fn bit_span(lsb: u8, width: u8) -> String {
+    if width == 1 {
+        format!("bit {lsb}")
+    } else {
+        format!("bits {lsb}–{}", u16::from(lsb) + u16::from(width) - 1)
     }
 }
 
@@ -264,5 +273,7 @@ mod tests {
         assert_eq!(transports(Transports::RTU), "RTU");
         assert_eq!(transports(Transports::ALL), "all");
         assert_eq!(access(Access::ReadWrite), "read/write");
+        assert_eq!(bit_span(3, 1), "bit 3");
+        assert_eq!(bit_span(12, 4), "bits 12–15");
     }
 }

@@ -16,7 +16,7 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
-use drivemap_codegen::ir::{Register, ValueKind};
+use drivemap_codegen::ir::Register;
 use drivemap_live::codec;
 use drivemap_runtime::ValueError;
 use serde::Serialize;
@@ -317,10 +317,12 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u16, session: &Sessi
     match codec::encode(drive, r, number, &session.settings) {
         Ok(_) => Check::Agrees,
         Err(ValueError::UnknownCode { .. }) => {
-            let listed: Vec<String> = match r.kind() {
-                ValueKind::Enum(values) => values.iter().map(|v| v.value.to_string()).collect(),
-                _ => Vec::new(),
-            };
+            let listed: Vec<String> = drive
+                .register_plan(r)
+                .labels()
+                .iter()
+                .map(|l| l.code.to_string())
+                .collect();
             Check::Disagrees(
                 "unlisted_code",
                 format!(
