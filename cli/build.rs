@@ -5,9 +5,10 @@
 use std::path::{Path, PathBuf};
 
 fn main() {
-    let maps = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("maps");
+    // The manifest directory at run time: `env!` would bake in the directory the build script
+    // was compiled in, so a target directory copied from another checkout embeds its maps.
+    let manifest = std::env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
+    let maps = Path::new(&manifest).join("..").join("maps");
     println!("cargo::rerun-if-changed={}", maps.display());
     let mut files: Vec<PathBuf> = std::fs::read_dir(&maps)
         .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())

@@ -12,10 +12,8 @@ use clap::{Parser, Subcommand};
 mod output;
 
 pub mod commands;
-pub mod describe;
-pub mod diff;
-mod drive_doc;
 pub mod duration;
+pub mod git;
 pub mod live;
 pub mod maps;
 

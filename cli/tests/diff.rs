@@ -131,7 +131,7 @@ fn one_scale_edit_of_a_shipped_map_is_exactly_one_breaking_change_with_both_cita
         out,
         "ptlk-tds-v8: 1 breaking, 0 compatible\n\
          \x20 breaking    accel_time_1 (Bn-01): scale changed\n\
-         \x20             0.1 → 1\n\
+         \x20             0.1 s → 1 s\n\
          \x20             old: 002_661580cce154f322.txt:455 · new: 002_661580cce154f322.txt:455\n\
          \x20             why: the same engineering value becomes another raw word (or needs other settings)\n"
     );
@@ -211,7 +211,7 @@ fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
         "{out}"
     );
     assert_eq!(
-        out.matches("output_voltage: scale changed\n              1 → 2\n")
+        out.matches("output_voltage: scale changed\n              1 V → 2 V\n")
             .count(),
         2,
         "{out}"
@@ -237,7 +237,7 @@ fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
         "{md}"
     );
     assert!(
-        md.contains("| **breaking** | `output_voltage` | scale changed | 1 | 2 |"),
+        md.contains("| **breaking** | `output_voltage` | scale changed | 1 V | 2 V |"),
         "{md}"
     );
 

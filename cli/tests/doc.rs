@@ -89,7 +89,7 @@ fn output_file_and_unknown_drive() {
     let text = std::fs::read_to_string(&file).unwrap();
     assert!(text.starts_with("# PTLK TDS-V8 / TEK-DRIVE — `ptlk-tds-v8`\n"));
     assert!(text.contains(
-        "| 0200h | Bn-01 | Acceleration time 1 | `accel_time_1` | rw | s | 0.1 | 0 ..= 6000 s |"
+        "| 0200h | Bn-01 | Acceleration time 1 | `accel_time_1` | read/write | s | 0.1 s | 0 ..= 6000 s |"
     ));
     std::fs::remove_dir_all(&dir).unwrap();
 

@@ -243,7 +243,7 @@ fn diff_markdown_quotes_the_manual_line_of_both_sides() {
     );
     assert!(
         md.contains(
-            "| **breaking** | `max_frequency (P-01)` | scale changed | 0.1 | 0.01 | \
+            "| **breaking** | `max_frequency (P-01)` | scale changed | 0.1 Hz | 0.01 Hz | \
              `manual.txt:40`: “P-01 \\| 0100H \\| Maximum frequency \\| 50.0 to 400.0 Hz \\| 0.1 Hz \\| 60.0” | \
              `manual.txt:40`: “P-01 \\| 0100H \\| Maximum frequency \\| 50.0 to 400.0 Hz \\| 0.1 Hz \\| 60.0” |"
         ),

@@ -715,6 +715,67 @@ fn shift_line(source: &str, by: usize) -> Result<String, String> {
     Ok(format!("{file}:{shifted}"))
 }
 
+/// The parity of a serial line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LineParity {
+    None,
+    Even,
+    Odd,
+}
+
+/// A drive's serial line as its map gives the defaults (`protocol.serial`), with the fallbacks
+/// of a map that gives none: 9600 baud, no parity. The one reading of the map's serial
+/// defaults, for a client's link and for a simulated drive's port.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SerialDefaults {
+    /// The default baud rate.
+    pub baud: u32,
+    /// The default parity.
+    pub parity: LineParity,
+    /// Bits per character on the wire when the manual fixes it regardless of parity (TDS-V8:
+    /// always 11 — without parity the parity slot is sent as a second stop bit).
+    pub char_bits: Option<u8>,
+}
+
+impl SerialDefaults {
+    /// Stop bits: 2 without parity (`with_parity` false) where the map fixes 11-bit
+    /// characters, else 1.
+    pub fn stop_bits(&self, with_parity: bool) -> u8 {
+        if self.char_bits == Some(11) && !with_parity {
+            2
+        } else {
+            1
+        }
+    }
+}
+
+impl Drive {
+    /// The serial line's defaults (see [`SerialDefaults`]).
+    pub fn serial_defaults(&self) -> SerialDefaults {
+        let serial = self.protocol.serial.as_ref();
+        SerialDefaults {
+            baud: serial.and_then(|s| s.default_baud).unwrap_or(9600),
+            parity: match serial.and_then(|s| s.default_parity) {
+                Some(model::Parity::Even) => LineParity::Even,
+                Some(model::Parity::Odd) => LineParity::Odd,
+                Some(model::Parity::None) | None => LineParity::None,
+            },
+            char_bits: serial.and_then(|s| s.char_bits),
+        }
+    }
+}
+
+impl Register {
+    /// Whether the manual leaves the register's range unknown (outside any variant), so that
+    /// a value read cannot be range-checked.
+    pub fn range_unknown(&self) -> bool {
+        self.def
+            .unknown
+            .iter()
+            .any(|u| u.what == model::UnknownItem::Range)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

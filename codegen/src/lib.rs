@@ -5,9 +5,15 @@
 //! concern per pass, [`lower`] decides what every register means (the drive plan), [`generate`]
 //! prints the plan as Rust and [`export`] emits JSON. [`Config`] drives it all
 //! from a `build.rs`.
+//!
+//! Text about a map has one wording, [`describe`], shared by the generated rustdoc, the
+//! Markdown reference ([`reference`](mod@reference), `drivemap doc`) and the semantic diff of two maps
+//! ([`diff`], `drivemap diff`).
 
 pub mod config;
+pub mod describe;
 pub mod diagnostic;
+pub mod diff;
 pub mod export;
 pub mod generate;
 pub mod hex;
@@ -18,6 +24,7 @@ pub mod lower;
 pub mod model;
 pub mod names;
 pub mod numbers;
+pub mod reference;
 pub mod review;
 pub mod source;
 pub mod validate;

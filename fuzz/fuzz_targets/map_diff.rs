@@ -1,15 +1,9 @@
-//! The semantic diff (`drivemap diff`) of two maps. The diff lives in the CLI binary crate; its
-//! modules are compiled here from their source files (`#[path]`), which needs no change to the
-//! CLI: the input is two maps separated by a line `#---8<---`; when both validate, they are
-//! compared both ways and rendered as text and Markdown. It must never panic.
+//! The semantic diff (`drivemap diff`, `drivemap_codegen::diff`) of two maps: the input is two
+//! maps separated by a line `#---8<---`; when both validate, they are compared both ways and
+//! rendered as text, Markdown and annotations. It must never panic.
 #![no_main]
-#![allow(dead_code, unused_imports)]
 
-#[path = "../../cli/src/describe.rs"]
-mod describe;
-#[path = "../../cli/src/diff/mod.rs"]
-mod diff;
-
+use drivemap_codegen::diff;
 use drivemap_codegen::validate::Context;
 use libfuzzer_sys::fuzz_target;
 
@@ -29,7 +23,8 @@ fuzz_target!(|data: &[u8]| {
     };
     let diffs = [diff::compare(&old, &new), diff::compare(&new, &old)];
     let _ = diff::render::text(&diffs, false);
-    let _ = diff::render::markdown(&diffs);
+    let _ = diff::render::markdown(&diffs, None);
+    let _ = diff::render::github(&diffs, None);
     let same = diff::compare(&old, &old);
     assert_eq!(same.breaking() + same.compatible(), 0, "a map differs from itself");
 });

@@ -7,11 +7,34 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
+use drivemap_codegen::diff::{self, DriveDiff, render};
 use drivemap_codegen::review::Manuals;
 use drivemap_codegen::validate::Context;
 
-use crate::diff::{self, DriveDiff, render::Format};
+use crate::git;
 use crate::maps::{MapsDir, context_for};
+
+/// Output format of `drivemap diff` (see [`render::Format`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Plain text for a terminal.
+    Text,
+    /// Markdown, for pasting into a review; quotes the manual line each side cites.
+    Md,
+    /// GitHub workflow annotations on the changed lines of the map (`::error` for breaking
+    /// changes, `::warning` for the rest).
+    Github,
+}
+
+impl From<Format> for render::Format {
+    fn from(f: Format) -> render::Format {
+        match f {
+            Format::Text => render::Format::Text,
+            Format::Md => render::Format::Md,
+            Format::Github => render::Format::Github,
+        }
+    }
+}
 
 /// Arguments of `drivemap diff`.
 #[derive(ClapArgs, Debug)]
@@ -42,7 +65,7 @@ fn read(path: &Path, ctx: &Context) -> Result<Drive, String> {
 /// Compares maps and prints the changes; exits 1 when any is breaking.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     if args.kinds {
-        out!("{}", diff::render::kinds(args.format));
+        out!("{}", render::kinds(args.format.into()));
         return Ok(ExitCode::SUCCESS);
     }
     let diffs = match &args.git {
@@ -62,10 +85,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let out = match args.format {
         Format::Text => {
             let color = std::io::stdout().is_terminal() && std::env::var_os("NO_COLOR").is_none();
-            diff::render::text(&diffs, color)
+            render::text(&diffs, color)
         }
-        Format::Md => diff::render::markdown(&diffs, manuals.as_ref()),
-        Format::Github => diff::render::github(&diffs, manuals.as_ref()),
+        Format::Md => render::markdown(&diffs, manuals.as_ref()),
+        Format::Github => render::github(&diffs, manuals.as_ref()),
     };
     out!("{out}");
     let breaking = diffs.iter().any(|d| d.breaking() > 0);
@@ -137,7 +160,7 @@ fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, String> {
         }
         None => (args.dir.dir(), None),
     };
-    let then = diff::git::maps_at(&dir, rev)?;
+    let then = git::maps_at(&dir, rev)?;
     let names: Vec<String> = match names {
         Some(n) => n,
         None => yaml_names(&dir)

@@ -5,8 +5,8 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 
-use crate::drive_doc;
 use crate::maps::{MapSource, MapsDir};
+use drivemap_codegen::reference;
 
 /// Arguments of `drivemap doc`.
 #[derive(ClapArgs, Debug)]
@@ -58,7 +58,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     } else {
         file
     };
-    let text = drive_doc::render(&drive, &name);
+    let text = reference::render(&drive, &name);
     match &args.output {
         Some(out) => {
             std::fs::write(out, &text).map_err(|e| format!("{}: {e}", out.display()))?;

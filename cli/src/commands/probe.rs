@@ -16,16 +16,15 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
-use drivemap_codegen::ir::{Register, ValueKind};
-use drivemap_codegen::model::UnknownItem;
+use drivemap_codegen::ir::Register;
 use drivemap_live::codec;
 use drivemap_runtime::ValueError;
 use serde::Serialize;
 
-use crate::describe;
 use crate::live::Target;
 use crate::live::output::{Format, now_rfc3339};
 use crate::live::session::{Failure, Session, on_transport};
+use drivemap_codegen::describe;
 
 /// Arguments of `drivemap probe`.
 #[derive(ClapArgs, Debug)]
@@ -148,7 +147,7 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
                 "not_on_link",
                 format!(
                     "exists only on {}",
-                    describe::transports(r.transports.as_deref())
+                    describe::transports(session.drive.register_plan(r).transports)
                 ),
             ));
         } else {
@@ -318,10 +317,12 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u16, session: &Sessi
     match codec::encode(drive, r, number, &session.settings) {
         Ok(_) => Check::Agrees,
         Err(ValueError::UnknownCode { .. }) => {
-            let listed: Vec<String> = match r.kind() {
-                ValueKind::Enum(values) => values.iter().map(|v| v.value.to_string()).collect(),
-                _ => Vec::new(),
-            };
+            let listed: Vec<String> = drive
+                .register_plan(r)
+                .labels()
+                .iter()
+                .map(|l| l.code.to_string())
+                .collect();
             Check::Disagrees(
                 "unlisted_code",
                 format!(
@@ -342,7 +343,7 @@ fn not_checkable(drive: &Drive, readable: &[&Register], session: &Session<'_>) -
     let mut out = Vec::new();
     for g in &drive.gaps {
         let at = match (&g.addresses, &g.params) {
-            (Some([a, b]), _) => format!("{a:04X}h-{b:04X}h"),
+            (Some([a, b]), _) => describe::address_span(*a, *b),
             (None, Some(p)) => p.clone(),
             (None, None) => String::new(),
         };
@@ -350,7 +351,7 @@ fn not_checkable(drive: &Drive, readable: &[&Register], session: &Session<'_>) -
     }
     let unknown_range: Vec<String> = readable
         .iter()
-        .filter(|r| r.def.unknown.iter().any(|u| u.what == UnknownItem::Range))
+        .filter(|r| r.range_unknown())
         .map(|r| describe::register(r))
         .collect();
     if !unknown_range.is_empty() {

@@ -11,9 +11,9 @@ use drivemap_live::intern::intern;
 use drivemap_runtime::gate;
 use drivemap_runtime::{Profile, Refusal, ValueError};
 
-use crate::describe;
 use crate::live::Target;
 use crate::live::session::{Session, value_error};
+use drivemap_codegen::describe;
 
 /// Arguments of `drivemap write`.
 #[derive(ClapArgs, Debug)]

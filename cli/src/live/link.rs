@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use clap::{ArgGroup, Args as ClapArgs, ValueEnum};
 use drivemap_codegen::Drive;
-use drivemap_codegen::model::Parity as MapParity;
+use drivemap_codegen::ir::LineParity as MapParity;
 use drivemap_runtime::bus_time::{Parity as BusParity, SerialConfig};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
@@ -109,7 +109,7 @@ impl LinkArgs {
                 LineParity::Odd => BusParity::Odd,
             })
             .stop_bits(stop_bits);
-        if let Some(bits) = drive.protocol.serial.as_ref().and_then(|s| s.char_bits) {
+        if let Some(bits) = drive.serial_defaults().char_bits {
             config = config.fixed_char_bits(bits);
         }
         config
@@ -186,32 +186,23 @@ impl LinkArgs {
 }
 
 /// Baud rate, parity and stop bits of a serial line to `drive`: what is given, else the map's
-/// defaults (9600, no parity), with 2 stop bits without parity where the map fixes 11-bit
-/// characters. The one reading of the map's serial defaults, for `read`/`write`/`poll` and for
-/// `simulate --serial`.
+/// defaults ([`drivemap_codegen::ir::SerialDefaults`]: 9600, no parity unless the map says
+/// otherwise, 2 stop bits without parity where the map fixes 11-bit characters). For
+/// `read`/`write`/`poll` and for `simulate --serial`.
 pub fn serial_line(
     drive: &Drive,
     baud: Option<u32>,
     parity: Option<LineParity>,
     stop_bits: Option<u8>,
 ) -> (u32, LineParity, u8) {
-    let serial = drive.protocol.serial.as_ref();
-    let baud = baud.or(serial.and_then(|s| s.default_baud)).unwrap_or(9600);
-    let parity = match parity {
-        Some(p) => p,
-        None => match serial.and_then(|s| s.default_parity) {
-            Some(MapParity::Even) => LineParity::Even,
-            Some(MapParity::Odd) => LineParity::Odd,
-            _ => LineParity::None,
-        },
-    };
-    let eleven_bits = serial.and_then(|s| s.char_bits) == Some(11);
-    let stop_bits = match stop_bits {
-        Some(n) => n,
-        None if eleven_bits && parity == LineParity::None => 2,
-        None => 1,
-    };
-    (baud, parity, stop_bits)
+    let defaults = drive.serial_defaults();
+    let parity = parity.unwrap_or(match defaults.parity {
+        MapParity::None => LineParity::None,
+        MapParity::Even => LineParity::Even,
+        MapParity::Odd => LineParity::Odd,
+    });
+    let stop_bits = stop_bits.unwrap_or(defaults.stop_bits(parity != LineParity::None));
+    (baud.unwrap_or(defaults.baud), parity, stop_bits)
 }
 
 #[cfg(test)]

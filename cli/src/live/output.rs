@@ -28,7 +28,7 @@ use drivemap_live::codec::Value;
 use serde::Serialize;
 
 use super::session::Session;
-use crate::describe;
+use drivemap_codegen::describe;
 
 /// How values are printed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]

@@ -5,7 +5,7 @@ use std::collections::BTreeSet;
 
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
-use drivemap_codegen::ir::{Register, ValueKind};
+use drivemap_codegen::ir::Register;
 use drivemap_codegen::lower::Quantity;
 use drivemap_live::codec::{self, Value};
 use drivemap_live::{LiveSettings, leak_profile, lookup};
@@ -16,7 +16,7 @@ use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError};
 
 use super::link::{LinkArgs, LiveClient};
-use crate::describe;
+use drivemap_codegen::describe;
 
 /// What conversions depend on, given on the command line.
 #[derive(ClapArgs, Debug, Clone, Default)]
@@ -431,7 +431,7 @@ impl<'d> Session<'d> {
             Some(format!(
                 "{} exists only on {}",
                 describe::register(r),
-                describe::transports(r.transports.as_deref())
+                describe::transports(self.drive.register_plan(r).transports)
             ))
         } else {
             None
@@ -532,18 +532,14 @@ impl<'d> Session<'d> {
 }
 
 /// The lines that describe each field of a bit-field value.
-pub fn field_lines(r: &Register, value: &Value) -> Vec<String> {
-    let (Value::Bits { fields, .. }, ValueKind::Bits(_)) = (value, r.kind()) else {
+pub fn field_lines(value: &Value) -> Vec<String> {
+    let Value::Bits { fields, .. } = value else {
         return Vec::new();
     };
     fields
         .iter()
         .map(|f| {
-            let bits = if f.width == 1 {
-                format!("bit {}", f.lsb)
-            } else {
-                format!("bits {}–{}", f.lsb, f.lsb + f.width - 1)
-            };
+            let bits = describe::bit_span(f.lsb, f.width);
             let label = f
                 .label
                 .as_deref()

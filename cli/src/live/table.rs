@@ -3,7 +3,7 @@
 use drivemap_codegen::ir::Register;
 
 use super::session::{Session, field_lines};
-use crate::describe;
+use drivemap_codegen::describe;
 
 /// One register's line.
 #[derive(Debug, Clone, PartialEq)]
@@ -45,11 +45,7 @@ impl Row {
                 Ok(v) => Row {
                     register,
                     address,
-                    details: if details {
-                        field_lines(r, &v)
-                    } else {
-                        Vec::new()
-                    },
+                    details: if details { field_lines(&v) } else { Vec::new() },
                     value: v.to_string(),
                     raw: format!("{raw:04X}h"),
                     failed: false,

@@ -3,8 +3,11 @@
 use proc_macro2::TokenStream;
 use quote::quote;
 
+use drivemap_core::register::WriteRestriction;
+
+use crate::describe;
 use crate::ir::{Drive, Register, ValueKind};
-use crate::model::{Access, DefaultValue, Reference, Scale, WriteRestriction};
+use crate::model::Scale;
 
 /// Brackets of the manual's text (`Drive Read[y]`, `[1]`) escaped so that rustdoc does not
 /// read them as links; a link the generator writes (``[`Name`]``) and code spans stay as they are.
@@ -56,118 +59,59 @@ pub fn module(drive: &Drive) -> String {
         s += &format!("- `{}` — {}\n", manual.file, manual.title);
     }
     s += &format!(
-        "\n{} registers; at most {} per read, {} per write; function codes {}.",
+        "\n{} registers; {}; function codes {}.",
         drive.registers.len(),
-        drive.protocol.max_read,
-        drive.protocol.max_write,
-        drive
-            .protocol
-            .function_codes
-            .iter()
-            .map(|f| format!("{f:02X}h"))
-            .collect::<Vec<_>>()
-            .join(", ")
+        describe::per_request(drive.protocol.max_read, drive.protocol.max_write),
+        describe::functions(&drive.protocol.function_codes)
     );
     s
 }
 
-fn num(v: f64) -> String {
-    format!("{v}")
-}
-
-fn reference(drive: &Drive, r: &Reference) -> String {
-    match r {
-        Reference::Register(name) => drive
-            .find(name)
-            .map(|t| match &t.def.param {
-                Some(p) => format!("{p} ({})", t.def.name),
-                None => t.def.name.clone(),
-            })
-            .unwrap_or_else(|| name.clone()),
-        Reference::External(q) => format!("{} ({})", q.description, q.unit),
-    }
-}
-
-fn scale_text(drive: &Drive, scale: &Scale, unit: &str) -> String {
-    match scale {
-        Scale::Factor(f) => format!("{} {unit} per count", num(*f)),
-        Scale::Relative(rel) => format!(
-            "{} = 100 % of {}",
-            num(rel.full_scale),
-            reference(drive, &rel.relative_to)
-        ),
-        Scale::Selected(_) => String::new(),
-    }
-}
-
 pub fn register(drive: &Drive, r: &Register) -> String {
     let d = &r.def;
+    let plan = drive.register_plan(r);
     let title = match &d.param {
         Some(p) => format!("**{p} — {}**", d.name),
         None => format!("**{}**", d.name),
     };
-    let access = match r.access {
-        Access::Read => "read-only",
-        Access::Write => "write-only",
-        Access::ReadWrite => "read/write",
-    };
-    let mut facts = vec![format!("address `{:04X}h`", d.address), access.to_owned()];
+    let mut facts = vec![
+        format!("address `{}`", describe::address(d.address)),
+        describe::access(plan.info.access).to_owned(),
+    ];
     if r.broadcast {
         facts.push("broadcast only (slave 0)".into());
     }
     let unit = d.unit.clone().unwrap_or_default();
     match r.kind() {
-        ValueKind::Quantity(Scale::Selected(sel)) => {
-            let selector = drive
-                .find(&sel.selected_by)
-                .map(|t| t.def.param.clone().unwrap_or_else(|| t.def.id.clone()))
-                .unwrap_or_else(|| sel.selected_by.clone());
-            facts.push(format!("unit {unit}, scale selected by {selector}"));
+        ValueKind::Quantity(Scale::Selected(sel)) => facts.push(format!(
+            "unit {unit}, scale {}",
+            describe::selected_by(drive, &sel.selected_by)
+        )),
+        ValueKind::Quantity(scale) => {
+            facts.push(format!("scale {}", describe::scale(drive, scale, &unit)))
         }
-        ValueKind::Quantity(scale) => facts.push(scale_text(drive, scale, &unit)),
-        ValueKind::UnitQuantity => facts.push(format!("1 {unit} per count")),
+        ValueKind::UnitQuantity => facts.push(format!(
+            "scale {}",
+            describe::scale(drive, &Scale::Factor(1.0), &unit)
+        )),
         _ => {}
     }
-    if d.min.is_some() || d.max.is_some() {
-        let min = d.min.map(num).unwrap_or_else(|| "…".into());
-        let max = d.max.map(num).unwrap_or_else(|| "…".into());
-        facts.push(
-            format!("range {min} ..= {max} {unit}")
-                .trim_end()
-                .to_owned(),
-        );
+    let range = describe::range(d.min, d.max, &unit);
+    if !range.is_empty() {
+        facts.push(format!("range {range}"));
     }
-    match &d.default {
-        Some(DefaultValue::Value(v)) => facts.push(format!("default {}", num(*v))),
-        Some(DefaultValue::Depends(dep)) => facts.push(format!(
-            "default depends on {}",
-            serde_json::to_value(dep.depends_on)
-                .ok()
-                .and_then(|v| v.as_str().map(|s| s.replace('_', " ")))
-                .unwrap_or_default()
-        )),
-        None => {}
+    if let Some(v) = &d.default {
+        facts.push(format!("default {}", describe::default(v)));
     }
     let mut s = format!("{title}\n\n{}.\n", facts.join(" · "));
-    if let Scale::Selected(sel) = d.scale.as_ref().unwrap_or(&Scale::Factor(1.0)) {
+    if let Some(Scale::Selected(sel)) = &d.scale {
         s += "\n| selector | scale | range |\n|---|---|---|\n";
         for c in &sel.cases {
-            let range = match (c.min, c.max) {
-                (None, None) => String::new(),
-                (a, b) => format!(
-                    "{} ..= {} {unit}",
-                    a.map(num).unwrap_or_else(|| "…".into()),
-                    b.map(num).unwrap_or_else(|| "…".into())
-                ),
-            };
             s += &format!(
-                "| {} | {} | {range} |\n",
-                c.when
-                    .iter()
-                    .map(u16::to_string)
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                scale_text(drive, &c.scale, &unit)
+                "| {} | {} | {} |\n",
+                describe::codes(&c.when),
+                describe::scale(drive, &c.scale, &unit),
+                describe::range(c.min, c.max, &unit)
             );
         }
     }
@@ -179,42 +123,41 @@ pub fn register(drive: &Drive, r: &Register) -> String {
             .unwrap_or_else(|| k.clone());
         let mut parts = Vec::new();
         if o.min.is_some() || o.max.is_some() {
-            parts.push(format!(
-                "range {} ..= {} {unit}",
-                min.map(num).unwrap_or_else(|| "…".into()),
-                max.map(num).unwrap_or_else(|| "…".into())
-            ));
+            parts.push(format!("range {}", describe::range(min, max, &unit)));
         }
-        if let Some(DefaultValue::Value(v)) = &o.default {
-            parts.push(format!("default {}", num(*v)));
+        if let Some(v) = &o.default {
+            parts.push(format!("default {}", describe::default(v)));
         }
         for u in &o.unknown {
-            parts.push(format!("{:?} unknown: {}", u.what, u.reason).to_lowercase());
+            parts.push(format!(
+                "{} unknown: {}",
+                describe::unknown_item(u.what),
+                u.reason
+            ));
         }
         if !parts.is_empty() {
             s += &format!("\n{name}: {}.\n", parts.join(", "));
         }
     }
-    match r.write_restriction {
-        WriteRestriction::None => {}
-        WriteRestriction::Stopped => s += "\nWritable only while the motor is stopped.\n",
-        WriteRestriction::PrgMode => s += "\nWritable only in PRG (program) mode.\n",
+    if plan.restriction != WriteRestriction::None {
+        s += &format!(
+            "\nWritable {}.\n",
+            describe::write_restriction(plan.restriction)
+        );
     }
     for alt in &d.address_alternatives {
-        let cond = &alt.when;
         s += &format!(
-            "\nAt `{:04X}h` when {cond} (`{}`).\n",
-            alt.address, alt.source
+            "\nAt `{}` when {} (`{}`).\n",
+            describe::address(alt.address),
+            describe::condition(&alt.when),
+            alt.source
         );
     }
     if !d.display_steps.is_empty() {
-        let bands = d
-            .display_steps
-            .iter()
-            .map(|b| format!("from {} in steps of {}", num(b.from), num(b.step)))
-            .collect::<Vec<_>>()
-            .join(", ");
-        s += &format!("\nThe keypad shows it {bands}; the register carries the full resolution.\n");
+        s += &format!(
+            "\n{}.\n",
+            capitalized(&describe::display_steps(&d.display_steps))
+        );
     }
     for n in &d.notes {
         s += &format!("\nNote: {n}\n");
@@ -234,7 +177,7 @@ pub fn register(drive: &Drive, r: &Register) -> String {
     for u in &d.unknown {
         s += &format!(
             "\nUnknown {}: {}\n",
-            format!("{:?}", u.what).to_lowercase(),
+            describe::unknown_item(u.what),
             u.reason
         );
     }
@@ -242,6 +185,14 @@ pub fn register(drive: &Drive, r: &Register) -> String {
         s += &format!("\nSource: `{src}`.");
     }
     s
+}
+
+fn capitalized(s: &str) -> String {
+    let mut c = s.chars();
+    match c.next() {
+        Some(f) => f.to_uppercase().chain(c).collect(),
+        None => String::new(),
+    }
 }
 
 #[cfg(test)]

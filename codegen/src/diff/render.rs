@@ -3,12 +3,12 @@
 
 use std::fmt::Write as _;
 
-use drivemap_codegen::review::Manuals;
+use crate::review::Manuals;
 
 use super::{Change, ChangeKind, DriveDiff, Severity, classify};
 
 /// Output format of `drivemap diff`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
     /// Plain text for a terminal.
     Text,

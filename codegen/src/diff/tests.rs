@@ -1,13 +1,12 @@
-//! The classifier over crafted before/after maps: `cli/tests/fixtures/diff/<case>.yaml` lists
-//! text edits to `cli/tests/fixtures/example-drive.yaml` and the change kinds they must produce,
-//! no more and no fewer.
+//! The classifier over crafted before/after maps: `codegen/tests/fixtures/diff/<case>.yaml`
+//! lists text edits to `cli/tests/fixtures/example-drive.yaml` (the map of the command line's
+//! golden tests) and the change kinds they must produce, no more and no fewer.
 
 use std::path::{Path, PathBuf};
 
-use drivemap_codegen::validate::Context;
+use crate::validate::Context;
 use serde::Deserialize;
 
-use super::git::TempDir;
 use super::registers::range_change;
 use super::*;
 
@@ -34,15 +33,13 @@ fn fixtures() -> PathBuf {
 }
 
 fn base() -> String {
-    std::fs::read_to_string(fixtures().join("example-drive.yaml")).unwrap()
+    let cli = Path::new(env!("CARGO_MANIFEST_DIR")).join("../cli/tests/fixtures");
+    std::fs::read_to_string(cli.join("example-drive.yaml")).unwrap()
 }
 
-fn read(dir: &TempDir, name: &str, text: &str) -> Result<Drive, String> {
-    let sub = dir.path().join(name);
-    std::fs::create_dir_all(&sub).unwrap();
-    let path = sub.join("example-drive.yaml");
-    std::fs::write(&path, text).unwrap();
-    drivemap_codegen::read_map(&path, &Context::default())
+/// Reads a version of the example map from memory (no temporary files).
+fn read(name: &str, text: &str) -> Result<Drive, String> {
+    crate::read_map_str("example-drive.yaml", text, &Context::default())
         .map_err(|d| format!("the {name} map does not validate:\n{d}"))
 }
 
@@ -70,9 +67,8 @@ fn run(case: &Case) -> Result<Vec<ChangeKind>, String> {
     } else {
         (base, edited)
     };
-    let dir = TempDir::new("drivemap-diff-case").unwrap();
-    let old = read(&dir, "before", &before)?;
-    let new = read(&dir, "after", &after)?;
+    let old = read("before", &before)?;
+    let new = read("after", &after)?;
     let diff = compare(&old, &new);
     let mut got: Vec<ChangeKind> = diff.changes.iter().map(|c| c.kind).collect();
     let mut want = case
@@ -156,10 +152,8 @@ fn scale_change_carries_both_citations_and_the_values() {
         }],
     };
     assert_eq!(run(&case), Ok(vec![ChangeKind::ScaleChanged]));
-    let dir = TempDir::new("drivemap-diff-case").unwrap();
-    let old = read(&dir, "before", &base()).unwrap();
+    let old = read("before", &base()).unwrap();
     let new = read(
-        &dir,
         "after",
         &base().replace("scale: 0.1, min: 50.0", "scale: 0.01, min: 50.0"),
     )
@@ -169,8 +163,8 @@ fn scale_change_carries_both_citations_and_the_values() {
     assert_eq!(d.compatible(), 0);
     let c = &d.changes[0];
     assert_eq!(c.subject, "max_frequency (P-01)");
-    assert_eq!(c.old.as_deref(), Some("0.1"));
-    assert_eq!(c.new.as_deref(), Some("0.01"));
+    assert_eq!(c.old.as_deref(), Some("0.1 Hz"));
+    assert_eq!(c.new.as_deref(), Some("0.01 Hz"));
     assert_eq!(c.old_source.as_deref(), Some("manual.txt:40"));
     assert_eq!(c.new_source.as_deref(), Some("manual.txt:40"));
     assert_eq!(c.severity(), Severity::Breaking);
@@ -178,8 +172,7 @@ fn scale_change_carries_both_citations_and_the_values() {
 
 #[test]
 fn drives_added_and_removed() {
-    let dir = TempDir::new("drivemap-diff-case").unwrap();
-    let d = read(&dir, "x", &base()).unwrap();
+    let d = read("x", &base()).unwrap();
     let a = added(&d);
     assert_eq!(a.changes[0].kind, ChangeKind::DriveAdded);
     assert_eq!(a.breaking(), 0);

@@ -1,11 +1,17 @@
-//! Semantic diff of two maps: compares the validated IR of the old and the new map and lists
-//! every change with its kind, both sides and the citation of each side. [`classify`](mod@classify) says
-//! which kinds break applications built on the generated code; [`render`] prints the result
-//! for a terminal or as Markdown; [`git`] fetches the old maps from a revision. The comparisons
-//! themselves are in `protocol` (metadata, variants, protocol profile) and `registers`.
+//! Semantic diff of two maps (`drivemap diff`): compares the old and the new map and lists
+//! every change with its kind, both sides and the citation of each side. What the lowering pass
+//! decides about a register (access, table, transports, write restriction) is compared on the
+//! two [`drivemap_core::RegisterPlan`]s; what the manual prints (scales, limits, defaults, codes,
+//! fields, citations) on the validated IR. Both sides are written in the library's one wording
+//! ([`crate::describe`]), the wording of the rustdoc and of `drivemap doc`.
+//!
+//! [`classify`](mod@classify) says which kinds break applications built on the generated code;
+//! [`render`] prints the result for a terminal, as Markdown or as GitHub annotations. The
+//! comparisons themselves are in `protocol` (metadata, variants, protocol profile) and
+//! `registers`. Fetching the old maps from a git revision is the command line's
+//! (`cli/src/git.rs`).
 
 pub mod classify;
-pub mod git;
 mod locate;
 mod protocol;
 mod registers;
@@ -13,7 +19,7 @@ pub mod render;
 #[cfg(test)]
 mod tests;
 
-use drivemap_codegen::ir::Drive;
+use crate::ir::Drive;
 use serde::Serialize;
 
 pub use classify::{ChangeKind, Severity, classify};
@@ -37,7 +43,7 @@ pub struct Change {
     pub new_source: Option<String>,
     /// Where the change is in the new map (a variant map's inherited register is in its base's
     /// file), for annotations; `None` when the new map does not have it.
-    pub at: Option<drivemap_codegen::diagnostic::Loc>,
+    pub at: Option<crate::diagnostic::Loc>,
     /// Address, for ordering register changes as the manual lists them.
     order: u32,
 }
@@ -139,7 +145,7 @@ pub fn added(new: &Drive) -> DriveDiff {
         HEAD,
     );
     for ch in &mut c.changes {
-        ch.at = Some(new.locate(&drivemap_codegen::source::Path::root().key("drive")));
+        ch.at = Some(new.locate(&crate::source::Path::root().key("drive")));
     }
     DriveDiff {
         drive: new.meta.id.clone(),

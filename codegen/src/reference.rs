@@ -4,12 +4,15 @@
 
 use std::fmt::Write as _;
 
-use drivemap_codegen::ir::{Drive, Register, ValueKind};
-use drivemap_codegen::model::{
-    CommandKind, Conflict, DefaultValue, EnumValue, Interval, Parity, Scale, UnknownItem,
-};
+use drivemap_core::register::{Table, WriteRestriction};
+use drivemap_core::rule::Transports;
 
 use crate::describe::{self, num};
+use crate::ir::{Drive, Register, ValueKind};
+use crate::model::{
+    CommandKind, Conflict, DefaultValue, Dependency, EnumValue, Interval, Parity, Scale,
+    UnknownItem,
+};
 
 /// Text safe inside a Markdown table cell.
 fn cell(s: &str) -> String {
@@ -36,19 +39,6 @@ fn join_cells(parts: &[String]) -> String {
         .map(|p| cell(p))
         .collect::<Vec<_>>()
         .join("<br>")
-}
-
-fn unknown_item(u: UnknownItem) -> &'static str {
-    match u {
-        UnknownItem::Range => "range",
-        UnknownItem::Default => "default",
-        UnknownItem::Unit => "unit",
-        UnknownItem::Scale => "scale",
-        UnknownItem::Signed => "signedness",
-        UnknownItem::Values => "values",
-        UnknownItem::Fields => "fields",
-        UnknownItem::Access => "access",
-    }
 }
 
 fn interval(i: &Interval) -> String {
@@ -174,23 +164,19 @@ fn protocol(out: &mut String, drive: &Drive) {
         "Transports",
         p.transports
             .iter()
-            .map(|t| describe::transport(*t))
+            .map(|t| t.to_string())
             .collect::<Vec<_>>()
             .join(", "),
         p.source.as_deref(),
     );
     row(
         "Function codes",
-        p.function_codes
-            .iter()
-            .map(|f| describe::function(*f))
-            .collect::<Vec<_>>()
-            .join(", "),
+        describe::functions(&p.function_codes),
         None,
     );
     row(
         "Registers per request",
-        format!("at most {} per read, {} per write", p.max_read, p.max_write),
+        describe::per_request(p.max_read, p.max_write),
         None,
     );
     let s = &p.slave_address;
@@ -205,11 +191,7 @@ fn protocol(out: &mut String, drive: &Drive) {
     if let Some(b) = &p.broadcast {
         let mut text = format!(
             "slave 0 executes {} without reply",
-            b.functions
-                .iter()
-                .map(|f| describe::function(*f))
-                .collect::<Vec<_>>()
-                .join(", ")
+            describe::functions(&b.functions)
         );
         if !b.registers.is_empty() {
             let regs: Vec<String> = b
@@ -367,19 +349,20 @@ fn address_cell(r: &Register) -> String {
     join_cells(&parts)
 }
 
-fn access_cell(r: &Register) -> String {
-    let mut parts = vec![describe::access(r.access).to_owned()];
-    if r.table == drivemap_codegen::model::ModbusTable::Input {
+fn access_cell(drive: &Drive, r: &Register) -> String {
+    let plan = drive.register_plan(r);
+    let mut parts = vec![describe::access(plan.info.access).to_owned()];
+    if plan.info.table == Table::Input {
         parts.push("input table (04h)".into());
     }
-    if r.writable() {
-        match r.write_restriction {
-            drivemap_codegen::model::WriteRestriction::None => {}
-            w => parts.push(format!("write {}", describe::write_restriction(w))),
-        }
+    if plan.info.access.writable() && plan.restriction != WriteRestriction::None {
+        parts.push(format!(
+            "write {}",
+            describe::write_restriction(plan.restriction)
+        ));
     }
-    if let Some(t) = &r.transports {
-        parts.push(format!("{} only", describe::transports(Some(t))));
+    if plan.transports != Transports::ALL {
+        parts.push(format!("{} only", describe::transports(plan.transports)));
     }
     if r.broadcast {
         parts.push("broadcast only".into());
@@ -388,19 +371,23 @@ fn access_cell(r: &Register) -> String {
 }
 
 fn scale_cell(drive: &Drive, r: &Register) -> String {
+    let unit = r.def.unit.as_deref().unwrap_or("");
     match r.kind() {
         ValueKind::Word => "—".into(),
-        ValueKind::UnitQuantity => "1".into(),
+        ValueKind::UnitQuantity => cell(&describe::scale(drive, &Scale::Factor(1.0), unit)),
         ValueKind::Quantity(Scale::Selected(sel)) => {
-            format!("selected by {} (below)", cell(&sel.selected_by))
+            format!(
+                "{} (below)",
+                cell(&describe::selected_by(drive, &sel.selected_by))
+            )
         }
-        ValueKind::Quantity(s) => cell(&describe::scale(drive, s)),
+        ValueKind::Quantity(s) => cell(&describe::scale(drive, s, unit)),
         ValueKind::Enum(_) => "codes (below)".into(),
         ValueKind::Bits(_) => "bit fields (below)".into(),
     }
 }
 
-fn range_cell(r: &Register) -> String {
+fn range_cell(drive: &Drive, r: &Register) -> String {
     let d = &r.def;
     let unit = d.unit.as_deref().unwrap_or("");
     let mut parts = vec![describe::range(d.min, d.max, unit)];
@@ -413,7 +400,7 @@ fn range_cell(r: &Register) -> String {
             parts.push(format!("{}: unknown", option));
         }
     }
-    if d.unknown.iter().any(|u| u.what == UnknownItem::Range) {
+    if r.range_unknown() {
         parts.push("unknown".into());
     }
     if let Some(Scale::Selected(sel)) = &d.scale {
@@ -421,7 +408,7 @@ fn range_cell(r: &Register) -> String {
             if c.min.is_some() || c.max.is_some() {
                 parts.push(format!(
                     "{}={}: {}",
-                    sel.selected_by,
+                    describe::setting(drive, &sel.selected_by),
                     describe::codes(&c.when),
                     describe::range(c.min, c.max, unit)
                 ));
@@ -485,10 +472,10 @@ fn registers(out: &mut String, drive: &Drive) {
                 cell(d.param.as_deref().unwrap_or("")),
                 cell(&d.name),
                 code(&d.id),
-                access_cell(r),
+                access_cell(drive, r),
                 cell(d.unit.as_deref().unwrap_or("")),
                 scale_cell(drive, r),
-                range_cell(r),
+                range_cell(drive, r),
                 default_cell(r),
                 cite(d.source.as_deref())
             );
@@ -559,15 +546,15 @@ fn details(out: &mut String, drive: &Drive, r: &Register) {
             let unit = d.unit.as_deref().unwrap_or("");
             let _ = writeln!(
                 out,
-                "| {} | Scale ({unit}) | Range | Source |\n|---|---|---|---|",
-                cell(&sel.selected_by)
+                "| {} | Scale | Range | Source |\n|---|---|---|---|",
+                cell(&describe::setting(drive, &sel.selected_by))
             );
             for c in &sel.cases {
                 let _ = writeln!(
                     out,
                     "| {} | {} | {} | {} |",
                     describe::codes(&c.when),
-                    cell(&describe::scale(drive, &c.scale)),
+                    cell(&describe::scale(drive, &c.scale, unit)),
                     cell(&describe::range(c.min, c.max, unit)),
                     cite(c.source.as_deref())
                 );
@@ -611,15 +598,10 @@ fn notes(out: &mut String, drive: &Drive) {
             }
         }
         if !d.display_steps.is_empty() {
-            let bands: Vec<String> = d
-                .display_steps
-                .iter()
-                .map(|b| format!("from {} in steps of {}", num(b.from), num(b.step)))
-                .collect();
             let _ = writeln!(
                 regs,
-                "- {who}: the keypad shows it {}; the register carries the full resolution.",
-                bands.join(", ")
+                "- {who}: {}.",
+                describe::display_steps(&d.display_steps)
             );
         }
     }
@@ -696,7 +678,7 @@ fn unknowns(out: &mut String, drive: &Drive) {
             let _ = writeln!(
                 body,
                 "- {who}, {}: {}",
-                unknown_item(u.what),
+                describe::unknown_item(u.what),
                 one_line(&u.reason)
             );
         }
@@ -705,13 +687,13 @@ fn unknowns(out: &mut String, drive: &Drive) {
                 let _ = writeln!(
                     body,
                     "- {who}, {} for {option}: {}",
-                    unknown_item(u.what),
+                    describe::unknown_item(u.what),
                     one_line(&u.reason)
                 );
             }
         }
         if let Some(DefaultValue::Depends(dep)) = &r.def.default {
-            if dep.depends_on == drivemap_codegen::model::Dependency::Unknown {
+            if dep.depends_on == Dependency::Unknown {
                 let _ = writeln!(
                     body,
                     "- {who}, default: {}",
@@ -739,13 +721,7 @@ fn gaps(out: &mut String, drive: &Drive) {
     for g in &drive.gaps {
         let addresses = g
             .addresses
-            .map(|[a, b]| {
-                if a == b {
-                    describe::address(a)
-                } else {
-                    format!("{} – {}", describe::address(a), describe::address(b))
-                }
-            })
+            .map(|[a, b]| describe::address_span(a, b))
             .unwrap_or_default();
         let _ = writeln!(
             out,

@@ -1,14 +1,16 @@
 //! Differences of registers: matching old and new registers (by id, then renames by address and
 //! parameter number), then comparing address, access, value kind, scale, unit, ranges per variant
 //! and per selected case, defaults, enumeration codes, bit fields, documentation and citations.
+//! Access, table, write restriction and transports are compared on the lowered plans
+//! ([`Drive::register_plan`]): what the generated code and the write gate act on.
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use drivemap_codegen::ir::{Drive, Register, ValueKind};
-use drivemap_codegen::model::{
-    Access, DefaultValue, EnumValue, Field, Scale, TransportName, WriteRestriction,
-};
-use drivemap_codegen::validate::field_span;
+use crate::ir::{Drive, Register, ValueKind};
+use drivemap_core::register::{Access, WriteRestriction};
+
+use crate::model::{DefaultValue, EnumValue, Field, Scale};
+use crate::validate::field_span;
 
 use super::{ChangeKind, Collector, json, same};
 use crate::describe;
@@ -79,18 +81,22 @@ pub(super) fn registers(c: &mut Collector, old: &Drive, new: &Drive) {
 
 /// A one-line description of a register.
 fn summary(drive: &Drive, r: &Register) -> String {
+    let plan = drive.register_plan(r);
     let mut s = format!(
         "{} {} at {}, {}",
         r.def.name,
-        describe::kind(r),
+        describe::kind(plan),
         describe::address(r.def.address),
-        describe::access(r.access)
+        describe::access(plan.info.access)
     );
     if let Some(u) = &r.def.unit {
         s += &format!(", {u}");
     }
     if let Some(sc) = &r.def.scale {
-        s += &format!(", scale {}", describe::scale(drive, sc));
+        s += &format!(
+            ", scale {}",
+            describe::scale(drive, sc, r.def.unit.as_deref().unwrap_or(""))
+        );
     }
     let range = describe::range(r.def.min, r.def.max, r.def.unit.as_deref().unwrap_or(""));
     if !range.is_empty() {
@@ -113,11 +119,7 @@ fn same_kind(a: &Register, b: &Register) -> bool {
 }
 
 fn can(a: Access) -> (bool, bool) {
-    match a {
-        Access::Read => (true, false),
-        Access::Write => (false, true),
-        Access::ReadWrite => (true, true),
-    }
+    (a.readable(), a.writable())
 }
 
 fn strictness(w: WriteRestriction) -> u8 {
@@ -131,6 +133,7 @@ fn strictness(w: WriteRestriction) -> u8 {
 fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Register) {
     let subject = describe::register(n);
     let order = u32::from(n.def.address) + 1;
+    let (pr, pn) = (old.register_plan(r), new.register_plan(n));
     let (a, b) = (&r.def, &n.def);
     let src = (a.source.clone(), b.source.clone());
     let push = |c: &mut Collector, kind, what: &str, x: Option<String>, y: Option<String>| {
@@ -154,7 +157,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
         );
     }
     if !same(&a.address_alternatives, &b.address_alternatives) {
-        let text = |d: &drivemap_codegen::model::Register| {
+        let text = |d: &crate::model::Register| {
             let alts: Vec<String> = d
                 .address_alternatives
                 .iter()
@@ -172,7 +175,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
                 alts.join("; ")
             }
         };
-        let addresses = |d: &drivemap_codegen::model::Register| {
+        let addresses = |d: &crate::model::Register| {
             d.address_alternatives
                 .iter()
                 .map(|x| json(&(x.address, &x.when)))
@@ -214,13 +217,13 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             b.param.clone(),
         );
     }
-    if r.table != n.table {
+    if pr.info.table != pn.info.table {
         push(
             c,
             ChangeKind::TableChanged,
             "table",
-            Some(describe::table(r.table).into()),
-            Some(describe::table(n.table).into()),
+            Some(describe::table(pr.info.table).into()),
+            Some(describe::table(pn.info.table).into()),
         );
     }
     let (ga, gb) = (&old.group_of(r).id, &new.group_of(n).id);
@@ -243,8 +246,8 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             Some(t(n.broadcast)),
         );
     }
-    if r.access != n.access {
-        let ((ra, wa), (rb, wb)) = (can(r.access), can(n.access));
+    if pr.info.access != pn.info.access {
+        let ((ra, wa), (rb, wb)) = (can(pr.info.access), can(pn.info.access));
         let kind = if (ra && !rb) || (wa && !wb) {
             ChangeKind::AccessNarrowed
         } else {
@@ -254,14 +257,14 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             c,
             kind,
             "access",
-            Some(describe::access(r.access).into()),
-            Some(describe::access(n.access).into()),
+            Some(describe::access(pr.info.access).into()),
+            Some(describe::access(pn.info.access).into()),
         );
     }
-    if r.write_restriction != n.write_restriction {
-        let kind = if strictness(n.write_restriction) > strictness(r.write_restriction)
-            || (r.write_restriction != WriteRestriction::None
-                && n.write_restriction != WriteRestriction::None)
+    let (wr, wn) = (pr.restriction, pn.restriction);
+    if wr != wn {
+        let kind = if strictness(wn) > strictness(wr)
+            || (wr != WriteRestriction::None && wn != WriteRestriction::None)
         {
             ChangeKind::WriteRestrictionTightened
         } else {
@@ -271,33 +274,25 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             c,
             kind,
             "write restriction",
-            Some(describe::write_restriction(r.write_restriction).into()),
-            Some(describe::write_restriction(n.write_restriction).into()),
+            Some(describe::write_restriction(wr).into()),
+            Some(describe::write_restriction(wn).into()),
         );
     }
-    if r.transports != n.transports {
-        let all = [TransportName::Rtu, TransportName::Tcp];
-        let set = |t: &Option<Vec<TransportName>>| -> BTreeSet<TransportName> {
-            t.clone()
-                .unwrap_or_else(|| all.to_vec())
-                .into_iter()
-                .collect()
+    let (ta, tb) = (pr.transports, pn.transports);
+    if ta != tb {
+        let widened = (!ta.rtu || tb.rtu) && (!ta.tcp || tb.tcp);
+        let kind = if widened {
+            ChangeKind::TransportsWidened
+        } else {
+            ChangeKind::TransportsNarrowed
         };
-        let (sa, sb) = (set(&r.transports), set(&n.transports));
-        if sa != sb {
-            let kind = if sa.is_subset(&sb) {
-                ChangeKind::TransportsWidened
-            } else {
-                ChangeKind::TransportsNarrowed
-            };
-            push(
-                c,
-                kind,
-                "transports",
-                Some(describe::transports(r.transports.as_deref())),
-                Some(describe::transports(n.transports.as_deref())),
-            );
-        }
+        push(
+            c,
+            kind,
+            "transports",
+            Some(describe::transports(ta)),
+            Some(describe::transports(tb)),
+        );
     }
     if a.signed != b.signed {
         let t = |s: bool| if s { "signed" } else { "unsigned" }.to_owned();
@@ -338,7 +333,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             _ => {}
         }
     }
-    ranges(c, r, n, &subject, order);
+    ranges(c, new, r, n, &subject, order);
     defaults(c, r, n, &subject, order);
     documentation(c, r, n, &subject, order);
     if a.source != b.source {
@@ -394,17 +389,21 @@ fn scale(
         return;
     }
     let src = (r.def.source.clone(), n.def.source.clone());
-    let text = |d: &Drive, s: &Option<Scale>| match s {
+    let units = (
+        r.def.unit.as_deref().unwrap_or(""),
+        n.def.unit.as_deref().unwrap_or(""),
+    );
+    let text = |d: &Drive, s: &Option<Scale>, unit: &str| match s {
         None => "none".to_owned(),
-        Some(s) => describe::scale(d, s),
+        Some(s) => describe::scale(d, s, unit),
     };
     let whole = |c: &mut Collector| {
         c.push(
             ChangeKind::ScaleChanged,
             subject,
             "scale",
-            (Some(text(old, a)), src.0.clone()),
-            (Some(text(new, b)), src.1.clone()),
+            (Some(text(old, a, units.0)), src.0.clone()),
+            (Some(text(new, b, units.1)), src.1.clone()),
             order,
         )
     };
@@ -417,7 +416,7 @@ fn scale(
         return;
     }
     // Both selected by the same parameter: compare code by code.
-    let selector = sa.unwrap_or_default();
+    let selector = describe::setting(new, sa.unwrap_or_default());
     for (code, (x, _, _, xs)) in &ca {
         let what = format!(
             "scale when {selector} = {}",
@@ -428,7 +427,10 @@ fn scale(
                 ChangeKind::ScaleChanged,
                 subject,
                 &what,
-                (Some(describe::scale(old, x)), xs.clone().or(src.0.clone())),
+                (
+                    Some(describe::scale(old, x, units.0)),
+                    xs.clone().or(src.0.clone()),
+                ),
                 (Some("none".into()), src.1.clone()),
                 order,
             ),
@@ -436,8 +438,14 @@ fn scale(
                 ChangeKind::ScaleChanged,
                 subject,
                 &what,
-                (Some(describe::scale(old, x)), xs.clone().or(src.0.clone())),
-                (Some(describe::scale(new, y)), ys.clone().or(src.1.clone())),
+                (
+                    Some(describe::scale(old, x, units.0)),
+                    xs.clone().or(src.0.clone()),
+                ),
+                (
+                    Some(describe::scale(new, y, units.1)),
+                    ys.clone().or(src.1.clone()),
+                ),
                 order,
             ),
             Some((_, _, _, ys)) if xs != ys => c.push(
@@ -461,7 +469,10 @@ fn scale(
                     code.map(|c| c.to_string()).unwrap_or_default()
                 ),
                 (None, src.0.clone()),
-                (Some(describe::scale(new, y)), ys.clone().or(src.1.clone())),
+                (
+                    Some(describe::scale(new, y, units.1)),
+                    ys.clone().or(src.1.clone()),
+                ),
                 order,
             );
         }
@@ -515,7 +526,7 @@ fn range_push(
     );
 }
 
-fn ranges(c: &mut Collector, r: &Register, n: &Register, subject: &str, order: u32) {
+fn ranges(c: &mut Collector, new: &Drive, r: &Register, n: &Register, subject: &str, order: u32) {
     let (a, b) = (&r.def, &n.def);
     let unit = (
         a.unit.as_deref().unwrap_or(""),
@@ -535,7 +546,7 @@ fn ranges(c: &mut Collector, r: &Register, n: &Register, subject: &str, order: u
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
         let (oa, ob) = (a.by_variant.get(option), b.by_variant.get(option));
-        let overrides = |o: Option<&drivemap_codegen::model::VariantOverride>| {
+        let overrides = |o: Option<&crate::model::VariantOverride>| {
             o.map(|o| (o.min, o.max)).unwrap_or((None, None))
         };
         let ((mina, maxa), (minb, maxb)) = (overrides(oa), overrides(ob));
@@ -576,7 +587,8 @@ fn ranges(c: &mut Collector, r: &Register, n: &Register, subject: &str, order: u
                         c,
                         subject,
                         &format!(
-                            "range when {sa} = {}",
+                            "range when {} = {}",
+                            describe::setting(new, sa),
                             code.map(|c| c.to_string()).unwrap_or_default()
                         ),
                         unit,
@@ -655,7 +667,7 @@ fn documentation(c: &mut Collector, r: &Register, n: &Register, subject: &str, o
     if a.indirect != b.indirect {
         parts.push("indirect citation");
     }
-    let variant_docs = |d: &drivemap_codegen::model::Register| {
+    let variant_docs = |d: &crate::model::Register| {
         d.by_variant
             .iter()
             .map(|(k, o)| (k.clone(), json(&o.unknown)))

@@ -2,8 +2,8 @@
 
 use std::collections::BTreeSet;
 
-use drivemap_codegen::ir::Drive;
-use drivemap_codegen::model::TransportName;
+use crate::ir::Drive;
+use crate::model::TransportName;
 
 use super::{ChangeKind, Collector, HEAD, json, same};
 use crate::describe;
@@ -31,7 +31,7 @@ pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
         parts.push("manuals");
     }
     if !parts.is_empty() {
-        let text = |m: &drivemap_codegen::model::DriveMeta| {
+        let text = |m: &crate::model::DriveMeta| {
             format!(
                 "{} {} ({} manual(s))",
                 m.vendor,
@@ -123,18 +123,6 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
     }
 }
 
-fn list<T: ToString>(items: impl IntoIterator<Item = T>) -> String {
-    items
-        .into_iter()
-        .map(|i| i.to_string())
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-fn functions(f: &[u8]) -> String {
-    list(f.iter().map(|f| describe::function(*f)))
-}
-
 pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
     let (a, b) = (&old.protocol, &new.protocol);
     let s = "protocol";
@@ -147,7 +135,7 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             ChangeKind::TransportRemoved,
             s,
             "transports",
-            (Some(describe::transport(*t)), src.0.clone()),
+            (Some(t.to_string()), src.0.clone()),
             (None, src.1.clone()),
             HEAD,
         );
@@ -158,7 +146,7 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             s,
             "transports",
             (None, src.0.clone()),
-            (Some(describe::transport(*t)), src.1.clone()),
+            (Some(t.to_string()), src.1.clone()),
             HEAD,
         );
     }
@@ -171,9 +159,9 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         c.push(
             ChangeKind::FunctionCodeRemoved,
             s,
-            &format!("function codes: {}", functions(&removed)),
-            (Some(functions(&a.function_codes)), src.0.clone()),
-            (Some(functions(&b.function_codes)), src.1.clone()),
+            &format!("function codes: {}", describe::functions(&removed)),
+            (Some(describe::functions(&a.function_codes)), src.0.clone()),
+            (Some(describe::functions(&b.function_codes)), src.1.clone()),
             HEAD,
         );
     }
@@ -181,9 +169,9 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         c.push(
             ChangeKind::FunctionCodeAdded,
             s,
-            &format!("function codes: {}", functions(&added)),
-            (Some(functions(&a.function_codes)), src.0.clone()),
-            (Some(functions(&b.function_codes)), src.1.clone()),
+            &format!("function codes: {}", describe::functions(&added)),
+            (Some(describe::functions(&a.function_codes)), src.0.clone()),
+            (Some(describe::functions(&b.function_codes)), src.1.clone()),
             HEAD,
         );
     }
@@ -254,14 +242,13 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
     exceptions(c, a, b);
     commands(c, a, b);
 
-    let offsets = |p: &drivemap_codegen::model::Protocol| {
+    let offsets = |p: &crate::model::Protocol| {
         p.addressing
             .as_ref()
             .map(|x| (x.rtu_offset, x.tcp_offset))
             .unwrap_or((0, 0))
     };
-    let asrc =
-        |p: &drivemap_codegen::model::Protocol| p.addressing.as_ref().map(|x| x.source.clone());
+    let asrc = |p: &crate::model::Protocol| p.addressing.as_ref().map(|x| x.source.clone());
     let text = |(r, t): (i32, i32)| format!("RTU {r:+}, TCP {t:+}");
     if offsets(a) != offsets(b) {
         c.push(
@@ -284,9 +271,7 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
     }
 
     if !same(&a.timing, &b.timing) {
-        let src = |p: &drivemap_codegen::model::Protocol| {
-            p.timing.as_ref().and_then(|t| t.source.clone())
-        };
+        let src = |p: &crate::model::Protocol| p.timing.as_ref().and_then(|t| t.source.clone());
         c.push(
             ChangeKind::TimingChanged,
             s,
@@ -297,8 +282,7 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         );
     }
     if !same(&a.serial, &b.serial) {
-        let src =
-            |p: &drivemap_codegen::model::Protocol| p.serial.as_ref().map(|t| t.source.clone());
+        let src = |p: &crate::model::Protocol| p.serial.as_ref().map(|t| t.source.clone());
         c.push(
             ChangeKind::LineSettingsChanged,
             s,
@@ -309,9 +293,8 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         );
     }
     if !same(&a.eeprom, &b.eeprom) {
-        let src =
-            |p: &drivemap_codegen::model::Protocol| p.eeprom.as_ref().map(|t| t.source.clone());
-        let text = |p: &drivemap_codegen::model::Protocol| {
+        let src = |p: &crate::model::Protocol| p.eeprom.as_ref().map(|t| t.source.clone());
+        let text = |p: &crate::model::Protocol| {
             p.eeprom.as_ref().map(|e| format!("{} writes", e.endurance))
         };
         c.push(
@@ -359,16 +342,16 @@ fn broadcast(c: &mut Collector, old: &Drive, new: &Drive) {
             ),
         }
     };
-    let text = |x: &Option<drivemap_codegen::model::Broadcast>| {
+    let text = |x: &Option<crate::model::Broadcast>| {
         x.as_ref().map(|x| {
-            let mut t = functions(&x.functions);
+            let mut t = describe::functions(&x.functions);
             if !x.registers.is_empty() {
                 t += &format!(" to {}", x.registers.join(", "));
             }
             t
         })
     };
-    let src = |x: &Option<drivemap_codegen::model::Broadcast>| x.as_ref().map(|x| x.source.clone());
+    let src = |x: &Option<crate::model::Broadcast>| x.as_ref().map(|x| x.source.clone());
     let (fa, ra) = set(old);
     let (fb, rb) = set(new);
     // An empty register list means "any writable register".
@@ -399,11 +382,7 @@ fn broadcast(c: &mut Collector, old: &Drive, new: &Drive) {
     );
 }
 
-fn exceptions(
-    c: &mut Collector,
-    a: &drivemap_codegen::model::Protocol,
-    b: &drivemap_codegen::model::Protocol,
-) {
+fn exceptions(c: &mut Collector, a: &crate::model::Protocol, b: &crate::model::Protocol) {
     let s = "protocol";
     for x in &a.exceptions {
         let what = format!("exception {}", describe::function(x.code));
@@ -449,13 +428,9 @@ fn exceptions(
     }
 }
 
-fn commands(
-    c: &mut Collector,
-    a: &drivemap_codegen::model::Protocol,
-    b: &drivemap_codegen::model::Protocol,
-) {
+fn commands(c: &mut Collector, a: &crate::model::Protocol, b: &crate::model::Protocol) {
     let s = "protocol";
-    let text = |x: &drivemap_codegen::model::Command| {
+    let text = |x: &crate::model::Command| {
         let writes: Vec<String> = x
             .writes
             .iter()

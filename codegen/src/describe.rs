@@ -1,0 +1,279 @@
+//! How map items are written in text: numbers, addresses, access, scales, ranges, defaults,
+//! conditions, bit spans. The one wording of each, used by the rustdoc of generated items
+//! (`generate/docs.rs`), the Markdown reference of `drivemap doc` ([`crate::reference`]),
+//! the semantic diff of `drivemap diff` ([`crate::diff`]) and the command line's messages, so
+//! that all of them print an item the same way (a scale as `0.01 Hz`, a condition as
+//! `o2-09 is 1`, a range as `0 ..= 400 Hz`).
+//!
+//! What the lowered plan decides (access, table, transports, write restriction, value kind) is
+//! described from the plan's [`drivemap_core`] types; scales, limits and defaults as the manual
+//! prints them (decimal, in engineering units, with their citations) from the map.
+
+use drivemap_core::plan::{Conversion, RegisterPlan};
+use drivemap_core::register::{Access, Table, WriteRestriction};
+use drivemap_core::rule::Transports;
+
+use crate::ir::{Drive, Register};
+use crate::model::{
+    Condition, DefaultValue, Dependency, DisplayStep, Field, Reference, Scale, UnknownItem,
+};
+use crate::names::field_span;
+
+/// A number as the manual prints it (`6000`, `0.1`, `-100`).
+pub fn num(v: f64) -> String {
+    format!("{v}")
+}
+
+/// A communication address (`0200h`).
+pub fn address(a: u16) -> String {
+    format!("{a:04X}h")
+}
+
+/// A function code (`03h`).
+pub fn function(f: u8) -> String {
+    format!("{f:02X}h")
+}
+
+/// Function codes: `03h, 06h, 10h`.
+pub fn functions(f: &[u8]) -> String {
+    f.iter()
+        .map(|f| function(*f))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A span of addresses: `0100h`, or `0100h – 0105h`.
+pub fn address_span(first: u16, last: u16) -> String {
+    if first == last {
+        address(first)
+    } else {
+        format!("{} – {}", address(first), address(last))
+    }
+}
+
+/// The registers one request may carry: `at most 16 per read, 16 per write`.
+pub fn per_request(max_read: u16, max_write: u16) -> String {
+    format!("at most {max_read} per read, {max_write} per write")
+}
+
+/// Access: `read-only`, `write-only`, `read/write`.
+pub fn access(a: Access) -> &'static str {
+    match a {
+        Access::Read => "read-only",
+        Access::Write => "write-only",
+        Access::ReadWrite => "read/write",
+    }
+}
+
+/// The Modbus table.
+pub fn table(t: Table) -> &'static str {
+    match t {
+        Table::Holding => "holding",
+        Table::Input => "input",
+    }
+}
+
+/// When writes are accepted.
+pub fn write_restriction(w: WriteRestriction) -> &'static str {
+    match w {
+        WriteRestriction::None => "any time",
+        WriteRestriction::Stopped => "only while the motor is stopped",
+        WriteRestriction::PrgMode => "only in PRG (program) mode",
+    }
+}
+
+/// The transports a register exists on: `RTU`, `TCP`, or `all`.
+pub fn transports(t: Transports) -> String {
+    match (t.rtu, t.tcp) {
+        (true, true) => "all".into(),
+        (true, false) => "RTU".into(),
+        (false, true) => "TCP".into(),
+        (false, false) => "none".into(),
+    }
+}
+
+/// What kind of value a register holds.
+pub fn kind(plan: &RegisterPlan) -> &'static str {
+    match plan.conversion {
+        Conversion::Word { signed: true, .. } => "signed word",
+        Conversion::Word { .. } => "word",
+        Conversion::Decimal { .. } | Conversion::Relative { .. } | Conversion::Selected { .. } => {
+            "quantity"
+        }
+        Conversion::Enum { .. } => "enumeration",
+        Conversion::Bits { .. } => "bit fields",
+    }
+}
+
+/// A register as a user names it: id, and the parameter number when printed.
+pub fn register(r: &Register) -> String {
+    match &r.def.param {
+        Some(p) => format!("{} ({p})", r.def.id),
+        None => r.def.id.clone(),
+    }
+}
+
+/// A register named in a map (a selector, a reference): its parameter number when printed,
+/// else its id; the name as given when no register has it.
+pub fn setting(drive: &Drive, name: &str) -> String {
+    drive
+        .find(name)
+        .map(|t| t.def.param.clone().unwrap_or_else(|| t.def.id.clone()))
+        .unwrap_or_else(|| name.to_owned())
+}
+
+/// The register or quantity a relative scale refers to: `Cn-02 (Max output frequency)`, or an
+/// external quantity's description and unit.
+pub fn reference(drive: &Drive, r: &Reference) -> String {
+    match r {
+        Reference::Register(name) => match drive.find(name) {
+            Some(t) => format!("{} ({})", setting(drive, name), t.def.name),
+            None => name.clone(),
+        },
+        Reference::External(q) => format!("{} ({}, external)", q.description, q.unit),
+    }
+}
+
+/// A scale in engineering units: `0.01 Hz` (per count), `30000 = 100 % of Cn-02 (…)`, or a
+/// selected scale with its cases (`selected by C6-01: 0 → 0.01 Hz; 1 → 0.1 Hz`).
+pub fn scale(drive: &Drive, s: &Scale, unit: &str) -> String {
+    match s {
+        Scale::Factor(f) => format!("{} {unit}", num(*f)).trim_end().to_owned(),
+        Scale::Relative(rel) => format!(
+            "{} = 100 % of {}",
+            num(rel.full_scale),
+            reference(drive, &rel.relative_to)
+        ),
+        Scale::Selected(sel) => {
+            let cases: Vec<String> = sel
+                .cases
+                .iter()
+                .map(|c| format!("{} → {}", codes(&c.when), scale(drive, &c.scale, unit)))
+                .collect();
+            format!(
+                "{}: {}",
+                selected_by(drive, &sel.selected_by),
+                cases.join("; ")
+            )
+        }
+    }
+}
+
+/// Who selects a scale: `selected by C6-01`.
+pub fn selected_by(drive: &Drive, selector: &str) -> String {
+    format!("selected by {}", setting(drive, selector))
+}
+
+/// Selector codes: `0`, `1, 2`.
+pub fn codes(when: &[u16]) -> String {
+    when.iter()
+        .map(u16::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A range in engineering units (`0 ..= 6000 s`); empty when neither limit is given.
+pub fn range(min: Option<f64>, max: Option<f64>, unit: &str) -> String {
+    if min.is_none() && max.is_none() {
+        return String::new();
+    }
+    let s = format!(
+        "{} ..= {} {unit}",
+        min.map(num).unwrap_or_else(|| "…".into()),
+        max.map(num).unwrap_or_else(|| "…".into())
+    );
+    s.trim_end().to_owned()
+}
+
+/// What a default depends on.
+pub fn dependency(d: Dependency) -> &'static str {
+    match d {
+        Dependency::Capacity => "capacity",
+        Dependency::ControlMethod => "control method",
+        Dependency::Variant => "variant",
+        Dependency::Setting => "setting",
+        Dependency::Unknown => "unknown",
+    }
+}
+
+/// A default value, or what it depends on.
+pub fn default(d: &DefaultValue) -> String {
+    match d {
+        DefaultValue::Value(v) => num(*v),
+        DefaultValue::Depends(dep) => match &dep.note {
+            Some(n) => format!("depends on {} ({n})", dependency(dep.depends_on)),
+            None => format!("depends on {}", dependency(dep.depends_on)),
+        },
+    }
+}
+
+/// The bits of a field: `bit 3` or `bits 12–15`.
+pub fn bits(f: &Field) -> String {
+    match field_span(f) {
+        Some((lsb, width)) => bit_span(lsb, width),
+        None => "no bits".into(),
+    }
+}
+
+/// `width` bits from `lsb`: `bit 3` or `bits 12–15`.
+pub fn bit_span(lsb: u8, width: u8) -> String {
+    if width == 1 {
+        format!("bit {lsb}")
+    } else {
+        format!("bits {lsb}–{}", u16::from(lsb) + u16::from(width) - 1)
+    }
+}
+
+/// The condition under which an alternative address applies (`o2-09 is 1`, `variant v440`,
+/// `transport TCP`).
+pub fn condition(c: &Condition) -> String {
+    c.to_string()
+}
+
+/// What the manual leaves unknown about an item.
+pub fn unknown_item(u: UnknownItem) -> &'static str {
+    match u {
+        UnknownItem::Range => "range",
+        UnknownItem::Default => "default",
+        UnknownItem::Unit => "unit",
+        UnknownItem::Scale => "scale",
+        UnknownItem::Signed => "signedness",
+        UnknownItem::Values => "values",
+        UnknownItem::Fields => "fields",
+        UnknownItem::Access => "access",
+    }
+}
+
+/// How the keypad shows a value whose register carries more resolution.
+pub fn display_steps(steps: &[DisplayStep]) -> String {
+    let bands = steps
+        .iter()
+        .map(|b| format!("from {} in steps of {}", num(b.from), num(b.step)))
+        .collect::<Vec<_>>()
+        .join(", ");
+    format!("the keypad shows it {bands}; the register carries the full resolution")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_and_ranges_read_like_the_manual() {
+        assert_eq!(num(6000.0), "6000");
+        assert_eq!(num(0.1), "0.1");
+        assert_eq!(address(0x20), "0020h");
+        assert_eq!(range(Some(0.0), Some(400.0), "Hz"), "0 ..= 400 Hz");
+        assert_eq!(range(None, Some(5.0), ""), "… ..= 5");
+        assert_eq!(range(None, None, "Hz"), "");
+        assert_eq!(codes(&[1, 2]), "1, 2");
+        assert_eq!(functions(&[3, 0x10]), "03h, 10h");
+        assert_eq!(address_span(0x100, 0x100), "0100h");
+        assert_eq!(address_span(0x100, 0x105), "0100h – 0105h");
+        assert_eq!(transports(Transports::RTU), "RTU");
+        assert_eq!(transports(Transports::ALL), "all");
+        assert_eq!(access(Access::ReadWrite), "read/write");
+        assert_eq!(bit_span(3, 1), "bit 3");
+        assert_eq!(bit_span(12, 4), "bits 12–15");
+    }
+}

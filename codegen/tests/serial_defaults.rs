@@ -1,0 +1,39 @@
+//! The map's serial defaults as the command line's link and the simulator read them
+//! (`Drive::serial_defaults`), without the serde model.
+
+use std::path::Path;
+
+use drivemap_codegen::ir::{LineParity, SerialDefaults};
+use drivemap_codegen::validate::Context;
+
+fn defaults(map: &str) -> SerialDefaults {
+    let ctx = Context::default();
+    drivemap_codegen::read_map(Path::new(map), &ctx)
+        .unwrap_or_else(|d| panic!("{d}"))
+        .serial_defaults()
+}
+
+#[test]
+fn tds_v8_fixes_eleven_bit_characters_so_no_parity_means_two_stop_bits() {
+    let d = defaults("../maps/ptlk-tds-v8.yaml");
+    assert_eq!(
+        d,
+        SerialDefaults {
+            baud: 9600,
+            parity: LineParity::None,
+            char_bits: Some(11),
+        }
+    );
+    assert_eq!(d.stop_bits(false), 2);
+    assert_eq!(d.stop_bits(true), 1);
+}
+
+#[test]
+fn v7_defaults_come_from_the_map_with_one_stop_bit() {
+    let d = defaults("../maps/yaskawa-v7.yaml");
+    assert_eq!(
+        (d.baud, d.parity, d.char_bits),
+        (9600, LineParity::None, None)
+    );
+    assert_eq!(d.stop_bits(false), 1);
+}
