@@ -24,7 +24,6 @@ use clap::Parser;
 use drivemap_cli::commands::write;
 use drivemap_cli::{Cli, Command as Cmd};
 use drivemap_codegen::ir::{Drive, Register, ValueKind};
-use drivemap_codegen::model::{Scale, TransportName};
 use drivemap_codegen::validate::{Context, field_span};
 use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
@@ -152,15 +151,28 @@ fn run_write(
     write::execute(drive, profile, &args)
 }
 
+/// The register's `transports` as written in the map (`rtu`, `tcp`): this oracle reads the
+/// map's text form, not the plan the gate is built from.
 fn on_transport(r: &Register, kind: TransportKind) -> bool {
-    let name = if kind == TransportKind::Tcp {
-        TransportName::Tcp
+    let name = if kind == TransportKind::Tcp { "tcp" } else { "rtu" };
+    r.transports.as_ref().is_none_or(|list| {
+        serde_json::to_value(list)
+            .ok()
+            .and_then(|v| v.as_array().cloned())
+            .is_some_and(|names| names.iter().any(|n| n == name))
+    })
+}
+
+/// The form of the register's `scale` as written: `factor`, `relative` or `selected`.
+fn scale_form(r: &Register) -> Option<&'static str> {
+    let v = serde_json::to_value(r.def.scale.as_ref()?).ok()?;
+    Some(if v.get("selected_by").is_some() {
+        "selected"
+    } else if v.get("relative_to").is_some() {
+        "relative"
     } else {
-        TransportName::Rtu
-    };
-    r.transports
-        .as_ref()
-        .is_none_or(|list| list.contains(&name))
+        "factor"
+    })
 }
 
 /// Whether the map lets `r` be written to `slave` (0: broadcast) on `kind`, from the IR.
@@ -192,10 +204,7 @@ fn allowed_on_link(drive: &Drive, r: &Register, kind: TransportKind, slave: u8) 
 /// Whether a conversion of `r` needs a setting read from the drive (a selected or relative
 /// scale, an address chosen by a setting, limits per variant).
 fn needs_settings(r: &Register) -> bool {
-    matches!(
-        r.kind(),
-        ValueKind::Quantity(Scale::Selected(_) | Scale::Relative(_))
-    ) || r
+    matches!(scale_form(r), Some("selected" | "relative")) || r
         .def
         .address_alternatives
         .iter()
@@ -244,10 +253,8 @@ fn legal_arrival(
             return Err(format!("reserved bits {:04X}h set", word & !mask));
         }
     }
-    let plain = matches!(
-        r.kind(),
-        ValueKind::Word | ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_))
-    );
+    let plain = matches!(r.kind(), ValueKind::Word | ValueKind::UnitQuantity)
+        || (matches!(r.kind(), ValueKind::Quantity(_)) && scale_form(r) == Some("factor"));
     if plain && r.def.by_variant.is_empty() {
         let raw = if r.def.signed {
             i128::from(word as i16)

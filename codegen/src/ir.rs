@@ -184,6 +184,22 @@ impl Register {
         }
     }
 
+    /// The printed numeric default for the first variant option `chosen` accepts that overrides
+    /// it (`by_variant.<option>.default`), else the base default; `None` where the default is
+    /// not a number (it depends on another setting) or not printed.
+    pub fn default_for(&self, chosen: impl Fn(&str) -> bool) -> Option<f64> {
+        let by_variant = self
+            .def
+            .by_variant
+            .iter()
+            .find(|(option, _)| chosen(option))
+            .and_then(|(_, o)| o.default.as_ref());
+        match by_variant.or(self.def.default.as_ref()) {
+            Some(DefaultValue::Value(v)) => Some(*v),
+            _ => None,
+        }
+    }
+
     /// Location of a key of this register.
     pub fn key_path(&self, key: &str) -> Path {
         self.path.key(key)

@@ -1,25 +1,14 @@
-//! The map's defaults at power-on. The only use of the serde model (`DefaultValue`): a variant's
-//! default (`by_variant`) is in neither `drivemap_codegen::ir` nor the plan (`ir::Register::
-//! default_value` gives the base variant's only).
+//! The map's defaults at power-on, for the variant options in force
+//! (`ir::Register::default_for`).
 
 use drivemap_codegen::ir::Register;
-use drivemap_codegen::model::DefaultValue;
 use drivemap_live::{LiveSettings, codec};
 
 use super::Simulator;
 
 impl Simulator {
     pub(super) fn default_of(&self, r: &Register, settings: &LiveSettings) -> Option<f64> {
-        let by_variant = r
-            .def
-            .by_variant
-            .iter()
-            .find(|(k, _)| settings.has_variant(&self.drive, k))
-            .and_then(|(_, o)| o.default.as_ref());
-        match by_variant.or(r.def.default.as_ref()) {
-            Some(DefaultValue::Value(v)) => Some(*v),
-            _ => None,
-        }
+        r.default_for(|option| settings.has_variant(&self.drive, option))
     }
 
     /// Map defaults: selectors and references first (other registers' scales depend on them).
