@@ -77,7 +77,10 @@ fn main() {
         }
     }
     for id in &selected {
-        if !maps.iter().any(|m| m.file_stem().is_some_and(|s| s == id.as_str())) {
+        if !maps
+            .iter()
+            .any(|m| m.file_stem().is_some_and(|s| s == id.as_str()))
+        {
             eprintln!(
                 "DRIVEMAP_DRIVES names `{id}`, which has no map in {}",
                 dir.display()

@@ -154,7 +154,11 @@ fn run_write(
 /// The register's `transports` as written in the map (`rtu`, `tcp`): this oracle reads the
 /// map's text form, not the plan the gate is built from.
 fn on_transport(r: &Register, kind: TransportKind) -> bool {
-    let name = if kind == TransportKind::Tcp { "tcp" } else { "rtu" };
+    let name = if kind == TransportKind::Tcp {
+        "tcp"
+    } else {
+        "rtu"
+    };
     r.transports.as_ref().is_none_or(|list| {
         serde_json::to_value(list)
             .ok()
@@ -204,11 +208,11 @@ fn allowed_on_link(drive: &Drive, r: &Register, kind: TransportKind, slave: u8) 
 /// Whether a conversion of `r` needs a setting read from the drive (a selected or relative
 /// scale, an address chosen by a setting, limits per variant).
 fn needs_settings(r: &Register) -> bool {
-    matches!(scale_form(r), Some("selected" | "relative")) || r
-        .def
-        .address_alternatives
-        .iter()
-        .any(|a| a.when.setting.is_some())
+    matches!(scale_form(r), Some("selected" | "relative"))
+        || r.def
+            .address_alternatives
+            .iter()
+            .any(|a| a.when.setting.is_some())
         || !r.def.by_variant.is_empty()
 }
 

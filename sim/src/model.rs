@@ -38,6 +38,8 @@ pub(crate) struct Model {
     pub mode: Option<Mode>,
     /// Register index of the frequency reference last written.
     pub reference_register: Option<usize>,
+    /// The fault code the drive tripped with, until reset.
+    pub fault: Option<u16>,
 }
 
 fn rate(max_frequency: f64, seconds: f64) -> f64 {
@@ -127,7 +129,8 @@ impl Model {
         match c {
             Condition::Always => true,
             Condition::Never => false,
-            Condition::Ready => self.mode != Some(Mode::Prg),
+            Condition::Fault => self.fault.is_some(),
+            Condition::Ready => self.mode != Some(Mode::Prg) && self.fault.is_none(),
             Condition::Running => self.running(),
             Condition::Stopped => !self.running(),
             Condition::Forward => self.running() && !self.reverse_now(),

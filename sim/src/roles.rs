@@ -16,11 +16,14 @@ use drivemap_runtime::core::roles::{FieldRole, Role, RoleKind, Target};
 pub enum Condition {
     /// Always.
     Always,
-    /// Never (the simulated drive has no faults or alarms).
+    /// Never (the simulated drive raises no alarms).
     Never,
-    /// Ready to run: always, except in program (PRG) mode, where a drive with mode switching
-    /// takes no run command (the TDS-V8's example reply shows Ready clear in PRG mode).
+    /// Ready to run: always, except when tripped or in program (PRG) mode, where a drive with
+    /// mode switching takes no run command (the TDS-V8's example reply shows Ready clear in PRG
+    /// mode).
     Ready,
+    /// Tripped ([`Simulator::trip`](crate::Simulator::trip)) and not yet reset.
+    Fault,
     /// Run commanded, or the output frequency not yet 0.
     Running,
     /// Not running.
@@ -60,6 +63,7 @@ impl Condition {
             Role::Decelerating => Condition::Decelerating,
             Role::Stopping => Condition::Stopping,
             Role::DriveMode => Condition::DrvMode,
+            Role::Fault => Condition::Fault,
             _ => Condition::Never,
         }
     }
@@ -174,6 +178,8 @@ pub(crate) enum Follow {
     Current,
     /// DC bus voltage: [`Plausible::DC_BUS`].
     DcBus,
+    /// The fault code while tripped, the register's power-on word otherwise.
+    FaultCode,
 }
 
 /// The roles of a map, resolved to the simulator's register indices.
@@ -275,6 +281,7 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
                 Role::OutputVoltage => r.follow.push((i, Follow::Voltage)),
                 Role::OutputCurrent => r.follow.push((i, Follow::Current)),
                 Role::DcBusVoltage => r.follow.push((i, Follow::DcBus)),
+                Role::FaultCode => r.follow.push((i, Follow::FaultCode)),
                 _ => {}
             },
             _ => {}

@@ -620,6 +620,56 @@ fn a_two_bit_run_code_runs_and_its_stop_code_stops() {
     assert!(!sim.state().unwrap().running);
 }
 
+/// A trip and an edge-triggered reset: the fixture's fault_reset (bit 7) acts on its 0 -> 1
+/// transition only, and a tripped drive takes no run command.
+#[test]
+fn a_trip_holds_until_the_reset_edge() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/fixtures/acme-vf1/acme-vf1.yaml"
+    );
+    let clock = ManualClock::new();
+    let mut sim = Simulator::new(
+        drivemap_codegen::read_map(path.as_ref(), &Default::default()).unwrap(),
+        SimOptions::new().clock(Arc::new(clock.clone())),
+    )
+    .unwrap();
+    let status = |sim: &mut Simulator| read(sim, 0x2100, 1).unwrap()[0];
+    assert_eq!(status(&mut sim) & 0x0030, 0x0010, "ready, no fault");
+    assert_eq!(write(&mut sim, 0x2001, &[3000]), Ok(()));
+    assert_eq!(write(&mut sim, 0x2000, &[0b0110]), Ok(())); // run forward
+    clock.advance(Duration::from_secs(2));
+    assert!(hz_after_read(&mut sim) > 0.0);
+    sim.trip(2); // overvoltage
+    assert_eq!(
+        status(&mut sim) & 0x0037,
+        0x0020,
+        "fault, not ready, stopped"
+    );
+    assert_eq!(read(&mut sim, 0x2105, 1), Ok(vec![2]));
+    assert_eq!(hz(&sim, "output_frequency"), 0.0);
+    // Run is ignored while tripped.
+    assert_eq!(write(&mut sim, 0x2000, &[0b0110]), Ok(()));
+    clock.advance(Duration::from_secs(1));
+    assert_eq!(hz_after_read(&mut sim), 0.0);
+    // The reset bit held at 1 from before does not reset: it acts on the transition.
+    assert_eq!(write(&mut sim, 0x2000, &[0b1000_0101]), Ok(()));
+    assert_eq!(status(&mut sim) & 0x0020, 0, "reset on the 0 -> 1 edge");
+    sim.trip(1);
+    assert_eq!(write(&mut sim, 0x2000, &[0b1000_0101]), Ok(())); // still 1: no edge
+    assert_eq!(status(&mut sim) & 0x0020, 0x0020, "no edge, still tripped");
+    assert_eq!(read(&mut sim, 0x2105, 1), Ok(vec![1]));
+    assert_eq!(write(&mut sim, 0x2000, &[0b0000_0101]), Ok(()));
+    assert_eq!(write(&mut sim, 0x2000, &[0b1000_0101]), Ok(()));
+    assert_eq!(status(&mut sim) & 0x0030, 0x0010, "reset: ready again");
+    assert_eq!(read(&mut sim, 0x2105, 1), Ok(vec![0]), "no fault");
+}
+
+fn hz_after_read(sim: &mut Simulator) -> f64 {
+    let _ = read(sim, 0x2101, 1);
+    hz(sim, "output_frequency")
+}
+
 #[test]
 fn without_a_model_registers_still_work_and_nothing_runs() {
     let (mut sim, _) = start("ptlk-tds-v8", SimOptions::new().roles(RolesChoice::NoModel));

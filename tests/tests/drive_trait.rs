@@ -192,3 +192,74 @@ fn one_routine_runs_every_drive_over_modbus_tcp() {
     drivemap_drives::for_each_drive!(each);
     assert!(ran.contains(&"yaskawa-v7"), "{ran:?}");
 }
+
+/// A trip shows through the trait on every drive whose map gives a fault status, and
+/// `reset_fault` clears it where the map gives a reset usable on the link (an edge-triggered one
+/// included: the trait releases it first if it was left set); elsewhere it is refused.
+#[test]
+fn a_trip_is_seen_and_reset_through_the_trait() {
+    fn check<D>(id: &str) -> Option<bool>
+    where
+        D: DrivePlan,
+        D::Settings: DriveSettings + Default,
+    {
+        if !D::ROLES.has(Role::Fault) {
+            return None;
+        }
+        let clock = ManualClock::new();
+        let sim =
+            Simulator::new(map(id), SimOptions::new().clock(Arc::new(clock.clone()))).unwrap();
+        let slave = sim.slave();
+        let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
+        let shared = drivemap_sim::shared(sim);
+        let server =
+            TcpServer::spawn(shared.clone(), "127.0.0.1:0", TcpFraming::RtuOverTcp, None).unwrap();
+        let link =
+            RtuOverTcpTransport::connect(server.local_addr(), Duration::from_secs(2)).unwrap();
+        let mut c = Client::new(link, D::PROFILE);
+        let ext: Vec<(&str, f64)> = externals.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+        let mut d = Vfd::connect::<D>(&mut c, slave, D::Settings::default(), &ext).unwrap();
+        assert_eq!(d.status().unwrap().fault, Some(false), "{id}");
+        drivemap_sim::server::lock(&shared).trip(1);
+        let status = d.status().unwrap();
+        assert_eq!(status.fault, Some(true), "{id}: {status}");
+        if status.ready.is_some() {
+            assert_eq!(status.ready, Some(false), "{id}: not ready while tripped");
+        }
+        if d.supports(Role::FaultCode) {
+            assert_eq!(d.fault_code().unwrap().code, 1, "{id}");
+        }
+        let reset = d.supports(Role::FaultReset);
+        if reset {
+            d.reset_fault().unwrap();
+            // A second trip and reset: an edge-triggered reset must have been released.
+            drivemap_sim::server::lock(&shared).trip(1);
+            d.reset_fault().unwrap();
+            assert_eq!(d.status().unwrap().fault, Some(false), "{id}: reset");
+        } else {
+            match d.reset_fault() {
+                Err(Error::Refused(Refusal::NoRole {
+                    role: "fault_reset",
+                    ..
+                })) => {}
+                other => panic!("{id}: no reset on this link, got {other:?}"),
+            }
+        }
+        drop(d);
+        server.stop();
+        Some(reset)
+    }
+    let mut reset = Vec::new();
+    macro_rules! each {
+        ($m:ident, $id:literal) => {
+            if let Some(r) = check::<drivemap_drives::$m::Drive>($id) {
+                reset.push(($id, r));
+            }
+        };
+    }
+    drivemap_drives::for_each_drive!(each);
+    assert!(
+        reset.iter().any(|(_, r)| *r),
+        "some shipped drive resets: {reset:?}"
+    );
+}

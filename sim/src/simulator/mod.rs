@@ -55,6 +55,8 @@ pub struct Simulator {
     references: Vec<usize>,
     commands: Vec<CommandTrack>,
     warnings: Vec<String>,
+    /// The fault code registers' words before the drive tripped, restored by a reset.
+    fault_words: Vec<(usize, u16)>,
     stats: Stats,
     cache: TickCache,
 }
@@ -136,6 +138,7 @@ impl Simulator {
             references,
             commands,
             warnings: Vec::new(),
+            fault_words: Vec::new(),
             stats: Stats::default(),
             cache: TickCache::default(),
         };
@@ -212,8 +215,9 @@ impl Simulator {
     pub fn set(&mut self, name: &str, value: f64) -> Result<(), SimError> {
         let i = self.index_of(name)?;
         self.tick();
+        let before = self.raw[i];
         self.set_index(i, value)?;
-        self.after_write(i);
+        self.after_write(i, before);
         self.invalidate();
         self.tick();
         Ok(())
@@ -223,8 +227,9 @@ impl Simulator {
     pub fn set_raw(&mut self, name: &str, raw: u16) -> Result<(), SimError> {
         let i = self.index_of(name)?;
         self.tick();
+        let before = self.raw[i];
         self.raw[i] = raw;
-        self.after_write(i);
+        self.after_write(i, before);
         self.invalidate();
         self.tick();
         Ok(())

@@ -136,8 +136,9 @@ impl Simulator {
         }
         for &(comm, i, v) in &targets[..values.len()] {
             if let Some(i) = i {
+                let before = self.raw[i];
                 self.raw[i] = v;
-                self.after_write(i);
+                self.after_write(i, before);
             }
             self.track_commands(comm, v);
         }

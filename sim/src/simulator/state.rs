@@ -166,8 +166,34 @@ impl Simulator {
         }
     }
 
-    /// Reacts to a write of register `i`: mode switches, run/direction commands, reference.
-    pub(super) fn after_write(&mut self, i: usize) {
+    /// Trips the drive with fault `code`, as a drive does on overcurrent: the output stops at
+    /// once (coasting), the run command is dropped, the `fault` status roles hold, `ready` does
+    /// not, and the `fault_code` registers show `code` until a `fault_reset` command clears it
+    /// (on its off → on transition where the map says `edge`). Run commands are ignored while
+    /// tripped. Without a drive model, nothing happens.
+    pub fn trip(&mut self, code: u16) {
+        self.tick();
+        let Some(roles) = self.roles.clone() else {
+            return;
+        };
+        if self.model.fault.is_none() {
+            self.fault_words = roles
+                .follow
+                .iter()
+                .filter(|(_, f)| *f == Follow::FaultCode)
+                .map(|&(i, _)| (i, self.raw[i]))
+                .collect();
+        }
+        self.model.fault = Some(code);
+        self.model.run = false;
+        self.model.output = 0.0;
+        self.invalidate();
+        self.tick();
+    }
+
+    /// Reacts to a write of register `i` (its word was `before`): mode switches, run/direction
+    /// commands, fault reset, reference.
+    pub(super) fn after_write(&mut self, i: usize, before: u16) {
         let Some(roles) = self.roles.clone() else {
             return;
         };
@@ -190,9 +216,26 @@ impl Simulator {
                     });
                     self.raw[i] = c.bit.put(self.raw[i], c.bit.field.code(false));
                 }
-                // The simulated drive has no faults: a reset has nothing to clear.
+                Role::FaultReset => {
+                    let acts = if c.bit.field.edge {
+                        on && !c.bit.holds(before)
+                    } else {
+                        on
+                    };
+                    if acts && self.model.fault.take().is_some() {
+                        for (r, word) in std::mem::take(&mut self.fault_words) {
+                            self.raw[r] = word;
+                        }
+                    }
+                }
                 _ => {}
             }
+        }
+        if self.model.fault.is_some() {
+            // A tripped drive takes no run command until reset.
+            run = None;
+            fwd = None;
+            rev = None;
         }
         if run.is_some() || fwd.is_some() || rev.is_some() {
             self.model.run = run == Some(true) || fwd == Some(true) || rev == Some(true);
@@ -334,6 +377,12 @@ impl Simulator {
                 }
                 Follow::Current => 0.0,
                 Follow::DcBus => Plausible::DC_BUS,
+                Follow::FaultCode => {
+                    if let Some(code) = self.model.fault {
+                        self.raw[i] = code;
+                    }
+                    continue;
+                }
             };
             self.store(i, v, settings);
         }
