@@ -74,6 +74,7 @@ pub fn render(drive: &Drive, file_name: &str) -> String {
     header(&mut out, drive, file_name);
     variants(&mut out, drive);
     protocol(&mut out, drive);
+    roles(&mut out, drive);
     registers(&mut out, drive);
     notes(&mut out, drive);
     conflicts(&mut out, drive);
@@ -335,6 +336,77 @@ fn protocol(out: &mut String, drive: &Drive) {
         }
         out.push('\n');
     }
+}
+
+/// The roles, from the plan: what plays each standard part of a drive (the drive trait, the
+/// simulator and the demo use exactly these).
+fn roles(out: &mut String, drive: &Drive) {
+    use drivemap_core::plan::Conversion;
+    use drivemap_core::roles::Target;
+    let plan = drive.plan();
+    if plan.roles.is_empty() {
+        let _ = writeln!(
+            out,
+            "## Roles\n\nThe map gives no `roles:`: no drive trait; the simulator is a register store.\n"
+        );
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "## Roles\n\nWhich register or field plays each standard part of a drive: what \
+         `drivemap_runtime::vfd::VariableFrequencyDrive`, the simulator and `drivemap demo` use.\n\n\
+         | Role | Register | Field | On | Off | Source |\n|---|---|---|---|---|---|"
+    );
+    for p in plan.roles.places {
+        let (register, field, on, off) = match p.target {
+            Target::Register(row) => (
+                code(plan.registers[usize::from(row)].info.id),
+                String::new(),
+                String::new(),
+                String::new(),
+            ),
+            Target::External { name, .. } => (
+                format!("{} (external quantity)", code(name)),
+                String::new(),
+                String::new(),
+                String::new(),
+            ),
+            Target::Field(f) => {
+                let r = &plan.registers[usize::from(f.row)];
+                let field = match &r.conversion {
+                    Conversion::Bits { fields, .. } => {
+                        fields.iter().find(|x| x.lsb == f.lsb && x.width == f.width)
+                    }
+                    _ => None,
+                };
+                let label = |c: u16| -> String {
+                    let name = field
+                        .and_then(|x| x.values.iter().find(|v| v.code == c))
+                        .map(|v| format!(" ({})", v.id))
+                        .unwrap_or_default();
+                    format!("{c}{name}")
+                };
+                let on: Vec<String> = f.on.iter().map(|&c| label(c)).collect();
+                let mut off = f.off.map(label).unwrap_or_default();
+                if f.edge {
+                    off.push_str(" (acts on the off → on edge)");
+                }
+                (
+                    code(r.info.id),
+                    field.map(|x| code(x.id)).unwrap_or_default(),
+                    cell(&on.join(", ")),
+                    cell(off.trim()),
+                )
+            }
+        };
+        let _ = writeln!(
+            out,
+            "| `{}` | {register} | {field} | {on} | {off} | {} |",
+            p.role.id(),
+            cite(Some(p.source))
+        );
+    }
+    let _ = writeln!(out);
 }
 
 fn address_cell(r: &Register) -> String {
