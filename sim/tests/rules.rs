@@ -576,21 +576,27 @@ fn acn_offsets_save_sequence_and_codes() {
     assert_eq!(hz(&sim, "frequency_command"), 30.0);
 }
 
-/// The fictional drive of `tests/fixtures/acme-vf1/` has a 2-bit run/stop code (01b stop,
-/// 10b run) and reports its state as codes of a 3-bit field: its map's roles alone make the
-/// model run it, and the stop code stops it.
-#[test]
-fn a_two_bit_run_code_runs_and_its_stop_code_stops() {
+/// The fictional drive of `tests/fixtures/acme-vf1/` (not a shipped map), with a manual clock.
+fn acme() -> (Simulator, ManualClock) {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../tests/fixtures/acme-vf1/acme-vf1.yaml"
     );
     let clock = ManualClock::new();
-    let mut sim = Simulator::new(
+    let sim = Simulator::new(
         drivemap_codegen::read_map(path.as_ref(), &Default::default()).unwrap(),
         SimOptions::new().clock(Arc::new(clock.clone())),
     )
     .unwrap();
+    (sim, clock)
+}
+
+/// The fictional drive of `tests/fixtures/acme-vf1/` has a 2-bit run/stop code (01b stop,
+/// 10b run) and reports its state as codes of a 3-bit field: its map's roles alone make the
+/// model run it, and the stop code stops it.
+#[test]
+fn a_two_bit_run_code_runs_and_its_stop_code_stops() {
+    let (mut sim, clock) = acme();
     assert!(sim.has_model());
     let state = |sim: &mut Simulator| read(sim, 0x2100, 1).unwrap()[0] & 0x0007;
     assert_eq!(write(&mut sim, 0x2001, &[3000]), Ok(())); // 30.00 Hz
@@ -624,16 +630,7 @@ fn a_two_bit_run_code_runs_and_its_stop_code_stops() {
 /// transition only, and a tripped drive takes no run command.
 #[test]
 fn a_trip_holds_until_the_reset_edge() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../tests/fixtures/acme-vf1/acme-vf1.yaml"
-    );
-    let clock = ManualClock::new();
-    let mut sim = Simulator::new(
-        drivemap_codegen::read_map(path.as_ref(), &Default::default()).unwrap(),
-        SimOptions::new().clock(Arc::new(clock.clone())),
-    )
-    .unwrap();
+    let (mut sim, clock) = acme();
     let status = |sim: &mut Simulator| read(sim, 0x2100, 1).unwrap()[0];
     assert_eq!(status(&mut sim) & 0x0030, 0x0010, "ready, no fault");
     assert_eq!(write(&mut sim, 0x2001, &[3000]), Ok(()));

@@ -3,15 +3,10 @@
 //! plus one new map, and uses the new module by name. With one drive's feature, the crate has that
 //! drive's module alone; with `DRIVEMAP_DRIVES=<id>`, the new drive's module alone.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
+use drivemap_tests::workspace;
 
 /// Builds and runs the application in `app` whose `drivemap-drives` dependency has `features`
 /// (Cargo's `default-features = false` when given) and whose `main` prints the module `module`'s
@@ -72,21 +67,9 @@ fn run_app(
 fn a_new_yaml_file_becomes_a_module() {
     let root = workspace();
     let tmp = std::env::temp_dir().join(format!("drivemap-new-map-{}", std::process::id()));
-    let maps = tmp.join("maps");
-    let app = tmp.join("app");
-    std::fs::create_dir_all(&maps).unwrap();
-    std::fs::create_dir_all(app.join("src")).unwrap();
-    for map in drivemap_codegen::find_maps(&root.join("maps")).unwrap() {
-        std::fs::copy(&map, maps.join(map.file_name().unwrap())).unwrap();
-    }
-    // Same dependency versions as the workspace, so the offline build needs nothing new.
-    std::fs::copy(root.join("Cargo.lock"), app.join("Cargo.lock")).unwrap();
     // The new drive: nothing else in the repository mentions it.
-    std::fs::copy(
-        root.join("codegen/tests/fixtures/mini-drive.yaml"),
-        maps.join("mini-drive.yaml"),
-    )
-    .unwrap();
+    let (maps, app) =
+        drivemap_tests::maps_and_app(&tmp, &root.join("codegen/tests/fixtures/mini-drive.yaml"));
 
     let stdout = run_app(&app, &maps, None, None, "mini_drive");
     let mut words = stdout.split_whitespace();

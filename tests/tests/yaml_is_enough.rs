@@ -16,12 +16,7 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
+use drivemap_tests::workspace;
 
 fn fixture() -> PathBuf {
     workspace().join("tests/fixtures/acme-vf1")
@@ -67,14 +62,7 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
     let tmp = root
         .join("target/new-map-probe")
         .join(format!("yaml-is-enough-{}", std::process::id()));
-    let maps = tmp.join("maps");
-    let app = tmp.join("app");
-    std::fs::create_dir_all(&maps).unwrap();
-    std::fs::create_dir_all(app.join("src")).unwrap();
-    for map in drivemap_codegen::find_maps(&root.join("maps")).unwrap() {
-        std::fs::copy(&map, maps.join(map.file_name().unwrap())).unwrap();
-    }
-    std::fs::copy(fixture().join("acme-vf1.yaml"), maps.join("acme-vf1.yaml")).unwrap();
+    let (maps, app) = drivemap_tests::maps_and_app(&tmp, &fixture().join("acme-vf1.yaml"));
 
     // The tool, built with the new map among its drives.
     ok(
@@ -175,7 +163,6 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
         .unwrap_or_else(|| panic!("no address in {line:?}"))
         .to_owned();
 
-    std::fs::copy(root.join("Cargo.lock"), app.join("Cargo.lock")).unwrap();
     std::fs::copy(
         root.join("tests/fixtures/any-drive-app/main.rs"),
         app.join("src/main.rs"),
