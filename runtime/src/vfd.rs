@@ -403,14 +403,17 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         }
     }
 
-    /// The command fields that run (`true`) or stop in the direction set.
+    /// The command fields that run (`true`) or stop in the direction set, the direction first
+    /// (registers are written in this order).
     fn run_fields(&self, run: bool) -> Result<Vec<(FieldRole, bool)>, Error> {
         let reverse = self.direction == Direction::Reverse;
         let mut out = Vec::new();
         if let Some(f) = self.field(Role::Run)? {
             out.push((f, run));
             match (reverse, self.field(Role::Reverse)?) {
-                (_, Some(r)) => out.push((r, reverse)),
+                // The direction goes first: where it is a register of its own, the drive must
+                // not start in the old direction.
+                (_, Some(r)) => out.insert(0, (r, reverse)),
                 (true, None) => {
                     if let Some(rr) = self.field(Role::RunReverse)? {
                         // Run with the reverse terminal instead.
