@@ -2,8 +2,9 @@
 //!
 //! Registers are listed by address (broadcast registers after the others). `min`, `max` and
 //! `default` are engineering values of the base variant; `scale` is null where it depends on a
-//! setting (`scale_selected_by` names the parameter) or on another quantity
-//! (`scale_relative_to`). Keys beyond the documented shape carry the rest of the map.
+//! setting (`scale_selected_by` names the parameter, or `<parameter>.<field>` for a field of it)
+//! or on another quantity (`scale_relative_to`). Keys beyond the documented shape carry the rest
+//! of the map.
 
 use serde_json::{Value, json};
 
@@ -75,9 +76,8 @@ fn register(drive: &Drive, r: &Register) -> Value {
         ),
         ValueKind::Quantity(Scale::Selected(sel)) => {
             let selector = drive
-                .find(&sel.selected_by)
-                .map(|s| s.def.param.clone().unwrap_or_else(|| s.def.id.clone()))
-                .unwrap_or_else(|| sel.selected_by.clone());
+                .selector(&sel.selected_by)
+                .map_or_else(|| sel.selected_by.clone(), |s| s.label());
             let cases = sel
                 .cases
                 .iter()

@@ -119,9 +119,8 @@ pub fn register(drive: &Drive, r: &Register) -> String {
     match r.kind() {
         ValueKind::Quantity(Scale::Selected(sel)) => {
             let selector = drive
-                .find(&sel.selected_by)
-                .map(|t| t.def.param.clone().unwrap_or_else(|| t.def.id.clone()))
-                .unwrap_or_else(|| sel.selected_by.clone());
+                .selector(&sel.selected_by)
+                .map_or_else(|| sel.selected_by.clone(), |s| s.prose());
             facts.push(format!("unit {unit}, scale selected by {selector}"));
         }
         ValueKind::Quantity(scale) => facts.push(scale_text(drive, scale, &unit)),
