@@ -53,7 +53,7 @@ pub fn module(drive: &Drive) -> String {
     }
     s += "Transcribed from:\n";
     for manual in &m.manuals {
-        s += &format!("- `{}` — {}\n", manual.file, manual.title);
+        s += &format!("- {}\n", manual.describe());
     }
     s += &format!(
         "\n{} registers; at most {} per read, {} per write; function codes {}.",
