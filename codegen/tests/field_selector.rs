@@ -165,3 +165,44 @@ fn docs_and_export_name_the_field() {
         .unwrap();
     assert_eq!(current["scale_selected_by"], "status_word.current_decimals");
 }
+
+/// The same form in an address alternative's condition: a 1-bit field moves a register.
+#[test]
+fn a_field_moves_a_register() {
+    let text = std::fs::read_to_string("tests/fixtures/field-selector.yaml").unwrap();
+    let cited = "        source: \"manual.txt:23\"\n";
+    assert_eq!(text.matches(cited).count(), 1);
+    let moved = text.replace(
+        cited,
+        &format!(
+            "        address_alternatives:\n          - {{address: 0x0014, when: {{setting: status_word.running, is: [1]}}, source: \"manual.txt:24\"}}\n{cited}"
+        ),
+    );
+    let drive = drivemap_codegen::read_map_str("field-selector.yaml", &moved, &Context::default())
+        .unwrap_or_else(|d| panic!("{d}"));
+    let plan = lower::lower(&drive);
+    assert_eq!(plan.settings.codes.len(), 3, "running is a third slot");
+    assert_eq!(plan.dependencies(), [0x0010], "still one word to read");
+    let speed = plan.register("speed_monitor").unwrap();
+    let at = |status| {
+        speed.address_for(
+            &Words {
+                plan: &plan,
+                status: Some(status),
+            },
+            drivemap_core::profile::TransportKind::Rtu,
+        )
+    };
+    assert_eq!((at(0x0200), at(0x0201)), (0x0013, 0x0014));
+
+    let wide = moved.replace("is: [1]", "is: [2]");
+    let err = drivemap_codegen::read_map_str("field-selector.yaml", &wide, &Context::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains(
+            "selector `status_word.running` is a 1-bit field: code 2 does not fit (0..=1)"
+        ),
+        "{err}"
+    );
+}

@@ -117,6 +117,38 @@ fn codes_fit(
     }
 }
 
+/// A field selector becomes the generated `Settings` field `<register>_<field>`: it must not be the
+/// name of another of its fields (a selector or reference register, an external quantity, a
+/// variant axis).
+fn settings_field_free(
+    drive: &Drive,
+    out: &mut Vec<Diagnostic>,
+    register: &Register,
+    field: &crate::model::Field,
+    path: &Path,
+    rid: Option<&str>,
+) {
+    let name = format!("{}_{}", register.id(), field.id);
+    let taken = drive
+        .selectors()
+        .into_iter()
+        .chain(drive.references())
+        .any(|r| r.id() == name)
+        || drive.externals().iter().any(|q| q.external == name)
+        || drive.variants.iter().any(|a| a.id == name);
+    if taken {
+        out.push(drive.error(
+            path,
+            rid,
+            format!(
+                "selector `{}.{}` would be the `Settings` field `{name}`, which another setting already names; rename the field",
+                register.id(),
+                field.id
+            ),
+        ));
+    }
+}
+
 fn relative(
     drive: &Drive,
     out: &mut Vec<Diagnostic>,
@@ -173,6 +205,13 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                     rid,
                     "selected_by",
                 );
+                if let Some(SelectorRef {
+                    register: s,
+                    field: Some(f),
+                }) = selector
+                {
+                    settings_field_free(drive, out, s, f, &sp.key("selected_by"), rid);
+                }
                 if sel.cases.is_empty() {
                     out.push(drive.error(&sp, rid, "a selected scale needs at least one case"));
                 }
