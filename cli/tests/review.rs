@@ -427,3 +427,104 @@ fn check_says_when_citations_are_not_verified_and_require_manuals_fails() {
         "{err}"
     );
 }
+
+fn paged_fixture() -> String {
+    std::fs::read_to_string(repo().join("cli/tests/fixtures/paged-manual.yaml")).unwrap()
+}
+
+/// A manual with no text at hand (`id`, `document`, `url`) is cited by page, `acme-um:p42`:
+/// `check` verifies the line citations of the text manual and counts the page citations as not
+/// verifiable by content, even with `--strict` and `--require-manuals`.
+#[test]
+fn page_citations_are_counted_not_verified_by_content() {
+    let (code, out, err) = drivemap(
+        &repo(),
+        Some(&fixture_manuals()),
+        &[
+            "check",
+            "--strict",
+            "--require-manuals",
+            "cli/tests/fixtures/paged-manual.yaml",
+        ],
+    );
+    assert_eq!((code, err.as_str()), (0, ""), "{out}");
+    assert_eq!(
+        out,
+        "ok   cli/tests/fixtures/paged-manual.yaml (paged-manual: 2 registers; \
+         citations: 2 of 4 verified, 0 indirect, 0 unverified, \
+         2 page citations (not verifiable by content))\n"
+    );
+}
+
+/// A map citing only manuals with no text needs no manuals directory: `--require-manuals` and
+/// `--strict` pass where no manual is at hand.
+#[test]
+fn a_map_citing_only_pages_needs_no_manuals_directory() {
+    let s = Scratch::new("review-pages-only");
+    let text = paged_fixture()
+        .replace("    - {file: manual.txt, title: Example manual}\n", "")
+        .replace("manual.txt:19", "acme-um:p40")
+        .replace("manual.txt:20", "acme-um:p41");
+    assert!(!text.contains("manual.txt:"), "{text}");
+    std::fs::write(s.0.join("paged-manual.yaml"), text).unwrap();
+    let (code, out, err) = drivemap(
+        &s.0,
+        None,
+        &[
+            "check",
+            "--strict",
+            "--require-manuals",
+            "paged-manual.yaml",
+        ],
+    );
+    assert_eq!((code, err.as_str()), (0, ""), "{out}");
+    assert_eq!(
+        out,
+        "ok   paged-manual.yaml (paged-manual: 2 registers; citations: 0 of 4 verified, \
+         0 indirect, 0 unverified, 4 page citations (not verifiable by content))\n"
+    );
+}
+
+/// A page citation of a manual the map does not declare, or of a text manual, is an error at
+/// the citation; the export carries each manual's title, document number and address.
+#[test]
+fn page_citations_name_a_declared_manual_and_the_export_describes_it() {
+    let s = Scratch::new("review-pages-wrong");
+    let text = paged_fixture().replace("acme-um:p42", "manual.txt:p42");
+    std::fs::write(s.0.join("paged-manual.yaml"), text).unwrap();
+    let (code, _, err) = drivemap(&s.0, None, &["check", "paged-manual.yaml"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(
+            "paged-manual.yaml:40:9: error in register `acceleration_time`: citation \
+             `manual.txt:p42` cites a page of `manual.txt`, a text manual: cite its line, \
+             `manual.txt:<line>`"
+        ),
+        "{err}"
+    );
+
+    let (code, out, err) = drivemap(
+        &repo(),
+        None,
+        &["export", "cli/tests/fixtures/paged-manual.yaml"],
+    );
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(
+        json["drive"]["manuals"],
+        serde_json::json!(["manual.txt", "acme-um"])
+    );
+    assert_eq!(
+        json["drive"]["manual_details"][1],
+        serde_json::json!({
+            "id": "acme-um",
+            "title": "VF-1 User Manual",
+            "document": "UM-1234 rev C",
+            "url": "https://example.com/manuals/um-1234c.pdf"
+        })
+    );
+    assert_eq!(
+        json["drive"]["manual_details"][0],
+        serde_json::json!({"file": "manual.txt", "title": "Example manual"})
+    );
+}

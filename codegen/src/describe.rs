@@ -117,8 +117,8 @@ pub fn register(r: &Register) -> String {
 /// else its id; the name as given when no register has it.
 pub fn setting(drive: &Drive, name: &str) -> String {
     drive
-        .find(name)
-        .map(|t| t.def.param.clone().unwrap_or_else(|| t.def.id.clone()))
+        .selector(name)
+        .map(|s| s.prose())
         .unwrap_or_else(|| name.to_owned())
 }
 

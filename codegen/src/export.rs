@@ -2,8 +2,10 @@
 //!
 //! Registers are listed by address (broadcast registers after the others). `min`, `max` and
 //! `default` are engineering values of the base variant; `scale` is null where it depends on a
-//! setting (`scale_selected_by` names the parameter) or on another quantity
-//! (`scale_relative_to`). Keys beyond the documented shape carry the rest of the map.
+//! setting (`scale_selected_by` names the parameter, or `<parameter>.<field>` for a field of it)
+//! or on another quantity (`scale_relative_to`). `drive.manuals` lists the names citations use;
+//! `drive.manual_details` gives each manual's `file` or `id`, `title`, `document` and `url`. Keys
+//! beyond the documented shape carry the rest of the map.
 
 use serde_json::{Value, json};
 
@@ -75,9 +77,8 @@ fn register(drive: &Drive, r: &Register) -> Value {
         ),
         ValueKind::Quantity(Scale::Selected(sel)) => {
             let selector = drive
-                .find(&sel.selected_by)
-                .map(|s| s.def.param.clone().unwrap_or_else(|| s.def.id.clone()))
-                .unwrap_or_else(|| sel.selected_by.clone());
+                .selector(&sel.selected_by)
+                .map_or_else(|| sel.selected_by.clone(), |s| s.label());
             let cases = sel
                 .cases
                 .iter()
@@ -158,7 +159,10 @@ pub fn export(drive: &Drive) -> Value {
             "id": drive.meta.id,
             "vendor": drive.meta.vendor,
             "models": drive.meta.models,
-            "manuals": drive.meta.manuals.iter().map(|m| m.file.clone()).collect::<Vec<_>>(),
+            // Names as citations give them (a text manual's file, a paged manual's id).
+            "manuals": drive.meta.manuals.iter().map(|m| m.name()).collect::<Vec<_>>(),
+            // Each manual in full: `file` or `id`, `title`, and `document`/`url` when given.
+            "manual_details": drive.meta.manuals,
             "extends": drive.meta.extends,
         },
         "variants": drive.variants,

@@ -13,6 +13,9 @@ pub fn explain(message: &str, value: Option<&Value>) -> String {
     {
         return did_you_mean(message, rest).unwrap_or_else(|| message.to_owned());
     }
+    if let Some(hint) = value.and_then(|v| page_citation_mapping(message, v)) {
+        return format!("{message}: {hint}");
+    }
     if let Some(inner) = value.and_then(|v| untagged_inner(message, v)) {
         return format!("{message}: {}", explain(&inner, None));
     }
@@ -29,6 +32,29 @@ pub fn explain(message: &str, value: Option<&Value>) -> String {
         return format!("{message}: {hint}");
     }
     message.to_owned()
+}
+
+/// `source: {manual: acme-um, page: 42}`: a page citation is one string, `acme-um:p42`.
+fn page_citation_mapping(message: &str, value: &Value) -> Option<String> {
+    if !message.starts_with("invalid type: map, expected a string") {
+        return None;
+    }
+    let Value::Mapping(m) = value else {
+        return None;
+    };
+    let page = m.get("page")?;
+    let page = match page {
+        Value::Number(n) => n.to_string(),
+        Value::String(s) => s.clone(),
+        _ => "<page>".to_owned(),
+    };
+    let manual = match m.get("manual") {
+        Some(Value::String(s)) => s.as_str(),
+        _ => "<manual id>",
+    };
+    Some(format!(
+        "a page citation is one string, `<manual id>:p<page>`: write `source: \"{manual}:p{page}\"`"
+    ))
 }
 
 /// The error of the one form a mapping's keys select (`relative_to` → a relative scale), which

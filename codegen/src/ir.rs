@@ -259,8 +259,42 @@ impl Drive {
             })
     }
 
-    /// The registers whose values select scales or addresses, in first-use order.
-    pub fn selectors(&self) -> Vec<&Register> {
+    /// What a `selected_by` (or a `setting` condition) names: a register by id or parameter
+    /// number, or `<register>.<field>`, a field of a bit-field register. A whole name that is a
+    /// register wins (parameter numbers such as `UF.11` contain dots); otherwise the name is
+    /// split at its last dot.
+    pub fn selector(&self, name: &str) -> Option<SelectorRef<'_>> {
+        if let Some(register) = self.find(name) {
+            return Some(SelectorRef {
+                register,
+                field: None,
+            });
+        }
+        let (register, field) = name.rsplit_once('.')?;
+        let register = self.find(register)?;
+        let field = register.def.fields.iter().find(|f| f.id == field)?;
+        Some(SelectorRef {
+            register,
+            field: Some(field),
+        })
+    }
+
+    /// The code slots of the drive's settings: every distinct selector (a register, or a field
+    /// of one) that a scale or an address condition names, in first-use order. Names that do not
+    /// resolve are left out (validation reports them).
+    pub fn selector_slots(&self) -> Vec<SelectorRef<'_>> {
+        let mut out: Vec<SelectorRef<'_>> = Vec::new();
+        for name in self.selector_names() {
+            if let Some(s) = self.selector(name) {
+                if !out.iter().any(|o| o.same(&s)) {
+                    out.push(s);
+                }
+            }
+        }
+        out
+    }
+
+    fn selector_names(&self) -> Vec<&str> {
         let mut names = Vec::new();
         for r in &self.registers {
             if let Some(Scale::Selected(s)) = &r.def.scale {
@@ -272,7 +306,19 @@ impl Drive {
                 }
             }
         }
-        self.unique_registers(names)
+        names
+    }
+
+    /// The registers whose values (or a field of whose values) select scales or addresses, in
+    /// first-use order, each once.
+    pub fn selectors(&self) -> Vec<&Register> {
+        let mut out: Vec<&Register> = Vec::new();
+        for s in self.selector_slots() {
+            if !out.iter().any(|r| r.def.id == s.register.def.id) {
+                out.push(s.register);
+            }
+        }
+        out
     }
 
     /// The registers other registers are scaled relative to, in first-use order.
@@ -563,6 +609,69 @@ pub fn scales_of(r: &Register) -> Vec<&Scale> {
         Some(Scale::Selected(sel)) => sel.cases.iter().map(|c| &c.scale).collect(),
         Some(s) => vec![s],
         None => Vec::new(),
+    }
+}
+
+/// A selector resolved: a register, or one field of a bit-field register.
+#[derive(Debug, Clone, Copy)]
+pub struct SelectorRef<'a> {
+    pub register: &'a Register,
+    /// The field whose code selects, when the selector names one (`status.decimals`).
+    pub field: Option<&'a Field>,
+}
+
+impl SelectorRef<'_> {
+    /// Whether both name the same register and field.
+    pub fn same(&self, other: &SelectorRef<'_>) -> bool {
+        self.register.def.id == other.register.def.id
+            && self.field.map(|f| &f.id) == other.field.map(|f| &f.id)
+    }
+
+    /// The name the plan's code slot gives it (errors, exports): the register's parameter number
+    /// (else its id), with `.<field>` for a field.
+    pub fn label(&self) -> String {
+        let r = &self.register.def;
+        let name = r.param.clone().unwrap_or_else(|| r.id.clone());
+        match self.field {
+            Some(f) => format!("{name}.{}", f.id),
+            None => name,
+        }
+    }
+
+    /// How documentation names it, after "scale selected by": `n152`, or
+    /// `field current_decimals (bits 8-15) of status_word`.
+    pub fn prose(&self) -> String {
+        let r = &self.register.def;
+        let name = r.param.clone().unwrap_or_else(|| r.id.clone());
+        match (self.field, self.field.and_then(crate::names::field_span)) {
+            (Some(f), Some((lsb, 1))) => format!("field {} (bit {lsb}) of {name}", f.id),
+            (Some(f), Some((lsb, width))) => {
+                format!("field {} (bits {lsb}-{}) of {name}", f.id, lsb + width - 1)
+            }
+            (Some(f), None) => format!("field {} of {name}", f.id),
+            (None, _) => name,
+        }
+    }
+
+    /// The largest code the selector can hold: the field's all-ones value, or `u16::MAX`.
+    pub fn max_code(&self) -> u16 {
+        match self.field.and_then(crate::names::field_span) {
+            Some((_, width)) if width < 16 => (1u16 << width) - 1,
+            _ => u16::MAX,
+        }
+    }
+
+    /// The codes the selector lists, if it lists any: an enumeration's values or a multi-bit
+    /// field's values.
+    pub fn listed(&self) -> Option<&[EnumValue]> {
+        let values = match self.field {
+            Some(f) => f.values.as_slice(),
+            None => match self.register.kind() {
+                ValueKind::Enum(values) => values,
+                _ => return None,
+            },
+        };
+        (!values.is_empty()).then_some(values)
     }
 }
 

@@ -464,10 +464,15 @@ fn unite_manuals(base: Node, child: Node) -> Node {
     };
     if let NodeKind::Seq(extra) = child.kind {
         for m in extra {
-            let file = m.get("file").and_then(scalar_str).map(str::to_owned);
-            let dup = items
-                .iter()
-                .any(|b| b.get("file").and_then(scalar_str).map(str::to_owned) == file);
+            // A manual is known by its file (cited by line) or its id (cited by page).
+            let name = |n: &Node| {
+                n.get("file")
+                    .or_else(|| n.get("id"))
+                    .and_then(scalar_str)
+                    .map(str::to_owned)
+            };
+            let file = name(&m);
+            let dup = file.is_some() && items.iter().any(|b| name(b) == file);
             if !dup {
                 items.push(m);
             }

@@ -48,12 +48,32 @@ pub struct DrivePlan {
 /// The slots of a drive's settings: what a `SettingsView` answers.
 #[derive(Debug, Clone, Default)]
 pub struct SettingsPlan {
-    /// Selecting parameters, by code slot: the register's index in `DrivePlan::registers`.
-    pub codes: Vec<usize>,
+    /// Selecting parameters, by code slot: the register and, for a `<register>.<field>`
+    /// selector, the field whose value is the code.
+    pub codes: Vec<CodeSlot>,
     /// Reference quantities, by quantity slot.
     pub quantities: Vec<Quantity>,
     /// Variant axes, by axis slot: (id, option ids; option 0 is the base).
     pub axes: Vec<(String, Vec<String>)>,
+}
+
+/// One code slot: what a selector's word read from the drive makes of the code.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CodeSlot {
+    /// The selecting register's index in `DrivePlan::registers`.
+    pub register: usize,
+    /// The field of that register whose value is the code; `None`: the whole word is.
+    pub field: Option<Field>,
+}
+
+impl CodeSlot {
+    /// The code this slot holds when its register reads `word`.
+    pub const fn code(&self, word: u16) -> u16 {
+        match &self.field {
+            Some(f) => f.get(word),
+            None => word,
+        }
+    }
 }
 
 /// A quantity other values are relative to.
@@ -78,12 +98,13 @@ impl DrivePlan {
     /// Communication addresses of the registers conversions depend on, in slot order (codes,
     /// then register quantities): what a client reads to fill the settings.
     pub fn dependencies(&self) -> Vec<u16> {
-        let mut out: Vec<u16> = self
-            .settings
-            .codes
-            .iter()
-            .map(|&i| self.registers[i].info.address)
-            .collect();
+        let mut out: Vec<u16> = Vec::new();
+        for c in &self.settings.codes {
+            let a = self.registers[c.register].info.address;
+            if !out.contains(&a) {
+                out.push(a);
+            }
+        }
         for q in &self.settings.quantities {
             if let Quantity::Register(i) = q {
                 let a = self.registers[*i].info.address;
@@ -125,7 +146,14 @@ pub fn lower(drive: &Drive) -> DrivePlan {
         position[i]
     };
     let settings = SettingsPlan {
-        codes: drive.selectors().into_iter().map(index_of).collect(),
+        codes: drive
+            .selector_slots()
+            .into_iter()
+            .map(|s| CodeSlot {
+                register: index_of(s.register),
+                field: s.field.and_then(lower_field),
+            })
+            .collect(),
         quantities: drive
             .references()
             .into_iter()
@@ -268,17 +296,17 @@ impl Lowering<'_> {
         &self.drive.registers[self.sorted[sorted_index]]
     }
 
-    /// The code slot of a selecting register named `name`.
+    /// The code slot of a selector named `name` (a register, or `<register>.<field>`).
     fn selector(&self, name: &str) -> Option<Setting> {
-        let target = self.drive.find(name)?;
-        let slot = self
-            .settings
-            .codes
-            .iter()
-            .position(|&i| self.map_index(i).def.id == target.def.id)?;
+        let target = self.drive.selector(name)?;
+        let field = target.field.map(|f| f.id.as_str());
+        let slot = self.settings.codes.iter().position(|c| {
+            self.map_index(c.register).def.id == target.register.def.id
+                && c.field.map(|f| f.id) == field
+        })?;
         Some(Setting {
             slot: slot as u8,
-            label: text(&setting_label(target)),
+            label: text(&target.label()),
         })
     }
 
@@ -417,20 +445,7 @@ impl Lowering<'_> {
                 },
             },
             ValueKind::Bits(fields) => {
-                let fields: Vec<Field> = fields
-                    .iter()
-                    .filter_map(|f| {
-                        let (lsb, width) = field_span(f)?;
-                        Some(Field {
-                            id: text(&f.id),
-                            name: text(&f.name),
-                            lsb,
-                            width,
-                            values: labels(&f.values),
-                            source: text(f.source.as_deref().unwrap_or_default()),
-                        })
-                    })
-                    .collect();
+                let fields: Vec<Field> = fields.iter().filter_map(lower_field).collect();
                 Conversion::Bits {
                     mask: fields.iter().fold(0, |m, f| m | f.mask()),
                     fields: leak(fields),
@@ -509,6 +524,19 @@ impl Lowering<'_> {
             also_at: leak(w.also_at),
         }
     }
+}
+
+/// A field of a bit-field register; `None` if its span is malformed (validation reports it).
+fn lower_field(f: &model::Field) -> Option<Field> {
+    let (lsb, width) = field_span(f)?;
+    Some(Field {
+        id: text(&f.id),
+        name: text(&f.name),
+        lsb,
+        width,
+        values: labels(&f.values),
+        source: text(f.source.as_deref().unwrap_or_default()),
+    })
 }
 
 fn access(a: model::Access) -> Access {

@@ -125,12 +125,66 @@ pub struct DriveMeta {
     pub description: Option<String>,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A manual the map was transcribed from: an OCR text file in the manuals directory, cited by
+/// line (`file:line`), or a document with no text at hand, cited by page (`<id>:p<page>`).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Manual {
-    /// File name under the manuals directory (`002_661580cce154f322.txt`).
-    pub file: String,
+    /// File name under the manuals directory (`002_661580cce154f322.txt`): a text manual.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// Name page citations use (`acme-um` in `acme-um:p42`): a manual with no text at hand.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub id: Option<String>,
     pub title: String,
+    /// The vendor's document number and revision as printed (`UM-1234 rev C`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub document: Option<String>,
+    /// Where the document is published.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub url: Option<String>,
+}
+
+impl Manual {
+    /// The text file of a manual cited by line; `None` for a manual cited by page.
+    pub fn text_file(&self) -> Option<&str> {
+        self.file.as_deref()
+    }
+
+    /// The name citations give it: its file, or its id.
+    pub fn name(&self) -> &str {
+        self.file.as_deref().or(self.id.as_deref()).unwrap_or("")
+    }
+
+    /// One line naming it for a reader: "`file` — title", or "title (document, url)".
+    pub fn describe(&self) -> String {
+        match &self.file {
+            Some(f) => format!("`{f}` — {}", self.title),
+            None => {
+                let more: Vec<&str> = [self.document.as_deref(), self.url.as_deref()]
+                    .into_iter()
+                    .flatten()
+                    .collect();
+                let id = self.id.as_deref().unwrap_or("");
+                if more.is_empty() {
+                    format!("`{id}` — {}", self.title)
+                } else {
+                    format!(
+                        "`{id}` — {} ({}; cited by page)",
+                        self.title,
+                        more.join(", ")
+                    )
+                }
+            }
+        }
+    }
+}
+
+impl DriveMeta {
+    /// The text files of the manuals cited by line (the ones `--require-manuals` expects).
+    pub fn text_manuals(&self) -> impl Iterator<Item = &str> {
+        self.manuals.iter().filter_map(Manual::text_file)
+    }
 }
 
 /// One axis of model variants, e.g. voltage class.

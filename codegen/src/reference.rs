@@ -113,7 +113,7 @@ fn header(out: &mut String, drive: &Drive, file_name: &str) {
     }
     let _ = writeln!(out, "Transcribed from:\n");
     for manual in &m.manuals {
-        let _ = writeln!(out, "- `{}` — {}", manual.file, manual.title);
+        let _ = writeln!(out, "- {}", manual.describe());
     }
     let _ = writeln!(
         out,

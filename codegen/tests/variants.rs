@@ -13,7 +13,7 @@ fn variant_inherits_overrides_and_removes() {
     .unwrap_or_else(|d| panic!("{d}"));
     assert_eq!(child.meta.id, "child-drive");
     assert_eq!(child.meta.extends.as_deref(), Some("base-drive"));
-    let manuals: Vec<&str> = child.meta.manuals.iter().map(|m| m.file.as_str()).collect();
+    let manuals: Vec<&str> = child.meta.manuals.iter().map(|m| m.name()).collect();
     assert_eq!(manuals, ["base.txt", "child.txt"], "manuals are united");
     // protocol merged key by key
     assert_eq!(child.protocol.function_codes, [0x03, 0x10]);

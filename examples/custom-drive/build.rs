@@ -1,11 +1,13 @@
 //! A downstream crate's build script: its own map, generated into OUT_DIR.
 //!
 //! The map is the codegen's golden fixture, which uses every construct of the schema, so this
-//! crate also proves that everything the generator can emit compiles.
+//! crate also proves that everything the generator can emit compiles. The second map selects
+//! scales by a field of a status word (`selected_by: <register>.<field>`).
 
 fn main() {
     drivemap_codegen::Config::new()
         .map("../../codegen/tests/fixtures/mini-drive.yaml")
+        .map("../../codegen/tests/fixtures/field-selector.yaml")
         .compile()
         .unwrap_or_else(|e| panic!("{e}"));
 }

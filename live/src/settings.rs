@@ -12,7 +12,9 @@ use drivemap_runtime::SettingsView;
 pub struct LiveSettings {
     /// Variant axis id → option id. Missing axes use their first option.
     pub variants: BTreeMap<String, String>,
-    /// Selector register id → raw code read from the drive.
+    /// Selector register id → raw word read from the drive (or set). A slot that selects by a
+    /// field of the register (`selected_by: status.decimals`) takes the field's value from it,
+    /// as the generated `Settings::absorb` does.
     pub selectors: BTreeMap<String, u16>,
     /// Reference register id or external quantity name → engineering value.
     pub references: BTreeMap<String, f64>,
@@ -27,11 +29,11 @@ pub struct View<'a> {
 
 impl SettingsView for View<'_> {
     fn code(&self, slot: u8) -> Option<u16> {
-        let i = *self.plan.settings.codes.get(usize::from(slot))?;
+        let c = self.plan.settings.codes.get(usize::from(slot))?;
         self.settings
             .selectors
-            .get(self.plan.registers[i].info.id)
-            .copied()
+            .get(self.plan.registers[c.register].info.id)
+            .map(|&word| c.code(word))
     }
 
     fn quantity(&self, slot: u8) -> Option<f64> {
@@ -90,8 +92,8 @@ impl LiveSettings {
     pub fn absorb(&mut self, drive: &Drive, address: u16, raw: u16) -> bool {
         let plan = drive.plan();
         let mut used = false;
-        for &i in &plan.settings.codes {
-            let r = &plan.registers[i];
+        for c in &plan.settings.codes {
+            let r = &plan.registers[c.register];
             if r.info.address == address {
                 self.selectors.insert(r.info.id.to_owned(), raw);
                 used = true;

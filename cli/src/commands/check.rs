@@ -19,15 +19,17 @@ pub struct Args {
     #[arg(long)]
     pub strict: bool,
     /// Fail when a map's citations cannot be verified: the manuals directory is not found
-    /// (DRIVEMAP_MANUALS, or shared/manuals beside the repository) or lacks a manual the map
-    /// names.
+    /// (DRIVEMAP_MANUALS, or shared/manuals beside the repository) or lacks a text manual the
+    /// map names (manuals cited by page are not expected there).
     #[arg(long)]
     pub require_manuals: bool,
 }
 
 /// Why some of a map's citations cannot be read against their manual, or `None` when every
-/// manual the map names is at hand.
+/// text manual the map names is at hand (manuals cited by page have no text to read, so a map
+/// citing only those needs no manuals directory).
 fn not_verified(dir: Option<&Path>, manuals: &Manuals, drive: &Drive) -> Option<String> {
+    drive.meta.text_manuals().next()?;
     let Some(dir) = dir else {
         return Some(
             "no manuals directory found (set DRIVEMAP_MANUALS, or put the manuals in \
@@ -45,14 +47,12 @@ fn not_verified(dir: Option<&Path>, manuals: &Manuals, drive: &Drive) -> Option<
     }
     let missing: Vec<&str> = drive
         .meta
-        .manuals
-        .iter()
-        .map(|m| m.file.as_str())
+        .text_manuals()
         .filter(|f| manuals.lines(f).is_none())
         .collect();
     match missing.len() {
         0 => None,
-        n if n == drive.meta.manuals.len() => Some(format!(
+        n if n == drive.meta.text_manuals().count() => Some(format!(
             "none of the map's manuals ({}) is in {}",
             missing.join(", "),
             dir.display()
@@ -68,6 +68,8 @@ pub struct CitationCounts {
     pub indirect: usize,
     pub unverified: usize,
     pub unchecked: usize,
+    /// Page citations of manuals with no text at hand: not verifiable by content.
+    pub pages: usize,
 }
 
 impl CitationCounts {
@@ -79,6 +81,7 @@ impl CitationCounts {
                 Verdict::Indirect(_) => c.indirect += 1,
                 Verdict::Unverified { .. } => c.unverified += 1,
                 Verdict::Unchecked => c.unchecked += 1,
+                Verdict::Page => c.pages += 1,
             }
         }
         c
@@ -87,7 +90,7 @@ impl CitationCounts {
 
 impl std::fmt::Display for CitationCounts {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let total = self.verified + self.indirect + self.unverified + self.unchecked;
+        let total = self.verified + self.indirect + self.unverified + self.unchecked + self.pages;
         write!(
             f,
             "citations: {} of {total} verified, {} indirect, {} unverified",
@@ -95,6 +98,13 @@ impl std::fmt::Display for CitationCounts {
         )?;
         if self.unchecked > 0 {
             write!(f, ", {} unchecked (manual not at hand)", self.unchecked)?;
+        }
+        if self.pages > 0 {
+            write!(
+                f,
+                ", {} page citations (not verifiable by content)",
+                self.pages
+            )?;
         }
         Ok(())
     }
@@ -161,7 +171,11 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                     );
                     map_errors += 1;
                 }
-                let manuals = manuals.filter(Manuals::any);
+                let text_manuals = drive.meta.text_manuals().next().is_some();
+                // A map citing only pages is reviewed with no text: its citations are counted.
+                let manuals = manuals
+                    .filter(Manuals::any)
+                    .or_else(|| (!text_manuals).then(Manuals::default));
                 if manuals.is_none() && args.strict && !args.require_manuals {
                     // Strict means every citation read against its manual.
                     eprintln!(

@@ -59,10 +59,9 @@ pub fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<CoverageRepor
             let base = dir.read(&base_path).map_err(|d| format!("{d}"))?;
             let own = own_manuals(path)?;
             base.meta
-                .manuals
-                .iter()
-                .map(|m| m.file.clone())
-                .filter(|f| !own.contains(f))
+                .text_manuals()
+                .filter(|f| !own.iter().any(|o| o == f))
+                .map(str::to_owned)
                 .collect()
         }
         None => Vec::new(),

@@ -204,9 +204,12 @@ fn dependencies<'a>(
     drive
         .register_plan(r)
         .depends_on(&settings.view(drive), |d| match d {
-            Dependency::Code(s) if codes => {
-                rows.extend(plan.settings.codes.get(usize::from(s.slot)))
-            }
+            Dependency::Code(s) if codes => rows.extend(
+                plan.settings
+                    .codes
+                    .get(usize::from(s.slot))
+                    .map(|c| c.register),
+            ),
             Dependency::Quantity(s) if !codes => {
                 if let Some(Quantity::Register(row)) =
                     plan.settings.quantities.get(usize::from(s.slot))

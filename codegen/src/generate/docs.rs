@@ -56,7 +56,7 @@ pub fn module(drive: &Drive) -> String {
     }
     s += "Transcribed from:\n";
     for manual in &m.manuals {
-        s += &format!("- `{}` — {}\n", manual.file, manual.title);
+        s += &format!("- {}\n", manual.describe());
     }
     s += &format!(
         "\n{} registers; {}; function codes {}.",

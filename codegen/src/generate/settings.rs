@@ -55,27 +55,53 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
         });
     }
     let mut selector_fields = Vec::new();
-    for (slot, &i) in codes.iter().enumerate() {
-        let sel = by_index(i);
-        let field = ident(sel.id());
-        let addr = hex(sel.def.address);
-        let doc = docs::item(&format!(
-            "{} (`{:04X}h`), which selects a scale or an address. `None` until read or set.",
-            label(sel),
-            sel.def.address
-        ));
+    for (slot, code) in codes.iter().enumerate() {
+        let sel = by_index(code.register);
+        let addr = sel.def.address;
         let slot = Literal::u8_unsuffixed(slot as u8);
+        if let Some(f) = &code.field {
+            // A field of the selector's word: the code is the field's value.
+            let field = ident(&format!("{}_{}", sel.id(), f.id));
+            let last = f.lsb + f.width - 1;
+            let bits = if f.width == 1 {
+                format!("bit {}", f.lsb)
+            } else {
+                format!("bits {}-{last}", f.lsb)
+            };
+            let doc = docs::item(&format!(
+                "Field `{}` ({bits}) of {} (`{addr:04X}h`), which selects a scale or an address. `None` until read or set.",
+                f.id,
+                label(sel),
+            ));
+            fields.push(quote!(#doc pub #field: Option<u16>,));
+            let (lsb, mask) = (Literal::u8_unsuffixed(f.lsb), hex(f.mask() >> f.lsb));
+            let value = if f.lsb == 0 {
+                quote!(raw & #mask)
+            } else {
+                quote!((raw >> #lsb) & #mask)
+            };
+            absorb.push((addr, quote!(self.#field = Some(#value))));
+            code_arms.push(quote!(#slot => self.#field,));
+            continue;
+        }
+        let field = ident(sel.id());
+        let doc = docs::item(&format!(
+            "{} (`{addr:04X}h`), which selects a scale or an address. `None` until read or set.",
+            label(sel),
+        ));
         match sel.kind() {
             ValueKind::Enum(_) => {
                 let ty = ident(&names::value_enum(sel));
                 fields.push(quote!(#doc pub #field: Option<#ty>,));
-                absorb
-                    .push(quote!(#addr => self.#field = Some(<#ty as #rt::Code>::from_code(raw)),));
+                absorb.push((
+                    addr,
+                    quote!(self.#field = Some(<#ty as #rt::Code>::from_code(raw))),
+                ));
                 code_arms.push(quote!(#slot => self.#field.map(|v| #rt::Code::code(&v)),));
             }
             _ => {
                 fields.push(quote!(#doc pub #field: Option<u16>,));
-                absorb.push(quote!(#addr => self.#field = Some(raw),));
+                absorb.push((addr, quote!(self.#field = Some(raw))));
                 code_arms.push(quote!(#slot => self.#field,));
             }
         }
@@ -92,7 +118,7 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
                     quantity_arms.push(quote!(#slot_lit => #rt::SettingsView::code(self, #slot_lit).map(f64::from),));
                     continue;
                 }
-                let addr = hex(reference.def.address);
+                let addr = reference.def.address;
                 let unit = reference.def.unit.clone().unwrap_or_default();
                 let doc = docs::item(&format!(
                     "{} (`{:04X}h`) in {unit}: other values are scaled relative to it. `None` until read or set.",
@@ -101,7 +127,10 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
                 ));
                 fields.push(quote!(#doc pub #field: Option<f64>,));
                 let index = Literal::usize_unsuffixed(*i);
-                absorb.push(quote!(#addr => self.#field = plan::REGISTERS[#index].decode_number(raw, self).ok(),));
+                absorb.push((
+                    addr,
+                    quote!(self.#field = plan::REGISTERS[#index].decode_number(raw, self).ok()),
+                ));
                 quantity_arms.push(quote!(#slot_lit => self.#field,));
             }
             Quantity::External {
@@ -133,6 +162,24 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
         }
     };
     let deps = plan.dependencies().into_iter().map(hex);
+    // One arm per address: a word may fill several slots (the register and fields of it).
+    let mut by_address: Vec<(u16, Vec<TokenStream>)> = Vec::new();
+    for (addr, statement) in absorb {
+        match by_address.iter_mut().find(|(a, _)| *a == addr) {
+            Some((_, statements)) => statements.push(statement),
+            None => by_address.push((addr, vec![statement])),
+        }
+    }
+    let absorb: Vec<TokenStream> = by_address
+        .into_iter()
+        .map(|(addr, statements)| {
+            let addr = hex(addr);
+            match statements.as_slice() {
+                [one] => quote!(#addr => #one,),
+                many => quote!(#addr => { #(#many;)* }),
+            }
+        })
+        .collect();
     let absorb_body = if absorb.is_empty() {
         quote!(let _ = (address, raw); false)
     } else {

@@ -8,7 +8,8 @@
 //!
 //! A row may span two OCR lines: when the cited line is not another register's row, the lines
 //! just before and after count as the row. A citation marked `indirect` (with its reason) is not
-//! checked.
+//! checked, and a page citation (`<manual id>:p<page>`, a manual with no text at hand) is
+//! reported as not verifiable by content ([`Verdict::Page`]).
 
 use std::collections::HashMap;
 
@@ -20,7 +21,7 @@ use crate::diagnostic::Loc;
 use crate::ir::{Drive, Register};
 use crate::model::{EnumValue, Field};
 use crate::source::Path;
-use crate::validate::parse_citation;
+use crate::validate::{parse_citation, parse_page_citation};
 
 /// What a citation is the citation of.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -50,6 +51,8 @@ pub enum Verdict {
     Unverified { row_of: Option<String> },
     /// The manual is not at hand or the line does not exist.
     Unchecked,
+    /// A page of a manual with no text at hand (`<id>:p<page>`): not verifiable by content.
+    Page,
 }
 
 /// One citation and what review found.
@@ -302,6 +305,9 @@ fn field_found(f: &Field, line: &Line) -> bool {
 /// A value's or field's citation: the line, else the row it belongs to (the line joined with
 /// the one after or before it: a label broken over two OCR lines).
 fn near(manuals: &Manuals, source: &str, found: impl Fn(&Line) -> bool) -> Verdict {
+    if parse_page_citation(source).is_some() {
+        return Verdict::Page;
+    }
     let Some((file, n)) = parse_citation(source) else {
         return Verdict::Unchecked;
     };
@@ -332,6 +338,9 @@ fn register_verdict(
     i: usize,
     source: &str,
 ) -> Verdict {
+    if parse_page_citation(source).is_some() {
+        return Verdict::Page;
+    }
     let Some((file, n)) = parse_citation(source) else {
         return Verdict::Unchecked;
     };

@@ -363,7 +363,7 @@ pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageRe
         uncited: Vec::new(),
         missing_manuals: Vec::new(),
     };
-    let mut files: Vec<&str> = drive.meta.manuals.iter().map(|m| m.file.as_str()).collect();
+    let mut files: Vec<&str> = drive.meta.text_manuals().collect();
     files.dedup();
     for file in files.into_iter().filter(|f| !skip.iter().any(|s| s == f)) {
         let Some(lines) = manuals.lines(file) else {

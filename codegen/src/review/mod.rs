@@ -51,8 +51,8 @@ impl Manuals {
 
     /// Reads the manuals a map names; the ones missing stay missing.
     pub fn load_for(&mut self, drive: &crate::Drive) {
-        for m in &drive.meta.manuals {
-            self.load(&m.file);
+        for file in drive.meta.text_manuals() {
+            self.load(file);
         }
     }
 

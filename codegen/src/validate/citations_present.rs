@@ -1,16 +1,29 @@
-//! Every register cites its row in a manual as `file:line`; every citation anywhere names one of
-//! the map's manuals and, when the manuals are at hand, a line inside the file.
+//! Every register cites its row in a manual: `file:line` for a text manual, `<manual id>:p<page>`
+//! for a manual with no text at hand; every citation anywhere names one of the map's manuals of
+//! the matching kind and, when the text manuals are at hand, a line inside the file.
 
 use crate::diagnostic::Diagnostic;
+use crate::hints::closest;
 use crate::ir::Drive;
 use crate::source::Path;
 use crate::validate::Context;
 
-/// Splits `file:line`.
+/// Splits `file:line` (a line of a text manual).
 pub fn parse_citation(s: &str) -> Option<(&str, usize)> {
     let (file, line) = s.rsplit_once(':')?;
     let line: usize = line.trim().parse().ok()?;
     (!file.is_empty() && line > 0).then_some((file, line))
+}
+
+/// Splits `<manual id>:p<page>` (a page of a manual with no text at hand).
+pub fn parse_page_citation(s: &str) -> Option<(&str, u32)> {
+    let (manual, page) = s.rsplit_once(':')?;
+    let page = page.trim().strip_prefix('p')?;
+    if !page.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let page: u32 = page.parse().ok()?;
+    (!manual.is_empty() && page > 0).then_some((manual, page))
 }
 
 fn cite(
@@ -21,21 +34,50 @@ fn cite(
     path: Path,
     register: Option<&str>,
 ) {
+    let manuals = &drive.meta.manuals;
+    let unlisted = |name: &str| {
+        let hint = closest(name, manuals.iter().map(|m| m.name()))
+            .map(|c| format!(" (did you mean `{c}`?)"))
+            .unwrap_or_default();
+        format!("citation `{source}` names `{name}`, which is not among `drive.manuals`{hint}")
+    };
+    if let Some((id, _)) = parse_page_citation(source) {
+        let message = match manuals.iter().find(|m| m.name() == id) {
+            Some(m) if m.text_file().is_some() => format!(
+                "citation `{source}` cites a page of `{id}`, a text manual: cite its line, `{id}:<line>`"
+            ),
+            Some(_) => return,
+            None => unlisted(id),
+        };
+        out.push(drive.error(&path, register, message));
+        return;
+    }
     let Some((file, line)) = parse_citation(source) else {
         out.push(drive.error(
             &path,
             register,
-            format!("citation `{source}` is not `file:line`"),
+            format!(
+                "citation `{source}` is neither `file:line` (a text manual) nor `<manual id>:p<page>` (a manual cited by page)"
+            ),
         ));
         return;
     };
-    if !drive.meta.manuals.iter().any(|m| m.file == file) {
-        out.push(drive.error(
-            &path,
-            register,
-            format!("citation `{source}` names `{file}`, which is not among `drive.manuals`"),
-        ));
-        return;
+    match manuals.iter().find(|m| m.name() == file) {
+        Some(m) if m.text_file().is_none() => {
+            out.push(drive.error(
+                &path,
+                register,
+                format!(
+                    "citation `{source}` cites a line of `{file}`, a manual with no text at hand: cite its page, `{file}:p<page>`"
+                ),
+            ));
+            return;
+        }
+        Some(_) => {}
+        None => {
+            out.push(drive.error(&path, register, unlisted(file)));
+            return;
+        }
     }
     if let Some(&lines) = ctx.manual_lines.get(file) {
         if line > lines {

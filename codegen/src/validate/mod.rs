@@ -18,6 +18,7 @@ mod enum_codes_fit;
 mod identifiers_unique;
 mod identifiers_valid;
 mod limits_consistent;
+mod manuals_declared;
 mod numbers_finite;
 mod protocol_valid;
 mod references_resolve;
@@ -26,7 +27,7 @@ mod value_kind_single;
 
 pub use crate::names::field_span;
 pub use crate::names::pascal_case;
-pub use citations_present::parse_citation;
+pub use citations_present::{parse_citation, parse_page_citation};
 pub use identifiers_valid::is_identifier;
 
 /// What validation may consult beyond the map itself.
@@ -64,6 +65,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     let mut out = Vec::new();
     identifiers_valid::check(drive, &mut out);
     identifiers_unique::check(drive, &mut out);
+    manuals_declared::check(drive, &mut out);
     citations_present::check(drive, ctx, &mut out);
     value_kind_single::check(drive, &mut out);
     addresses_non_overlapping::check(drive, &mut out);

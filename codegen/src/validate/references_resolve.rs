@@ -1,10 +1,12 @@
-//! Names that point elsewhere resolve: scale selectors and references, variant options,
-//! address-alternative conditions, broadcast registers, command addresses, protocol parameters.
+//! Names that point elsewhere resolve: scale selectors (a register, or `<register>.<field>`) and
+//! references, variant options, address-alternative conditions, broadcast registers, command
+//! addresses, protocol parameters.
 
 use std::collections::BTreeSet;
 
 use crate::diagnostic::Diagnostic;
-use crate::ir::{Drive, Register, ValueKind};
+use crate::hints::closest;
+use crate::ir::{Drive, Register, SelectorRef, ValueKind};
 use crate::model::{Reference, Scale};
 use crate::source::Path;
 
@@ -25,6 +27,126 @@ fn resolve<'a>(
         ));
     }
     found
+}
+
+/// Resolves a selector name (`selected_by`, a condition's `setting`): a readable register, or a
+/// field of a readable bit-field register named `<register>.<field>`.
+fn selector<'a>(
+    drive: &'a Drive,
+    out: &mut Vec<Diagnostic>,
+    name: &str,
+    path: &Path,
+    register: Option<&str>,
+    what: &str,
+) -> Option<SelectorRef<'a>> {
+    if let Some(s) = drive.selector(name) {
+        if !s.register.readable() {
+            out.push(drive.error(path, register, format!("selector `{name}` is not readable")));
+        }
+        return Some(s);
+    }
+    let split = name
+        .rsplit_once('.')
+        .and_then(|(r, f)| Some((drive.find(r)?, f)));
+    let message = match split {
+        Some((r, _)) if r.def.fields.is_empty() => format!(
+            "{what} `{name}`: register `{}` has no fields; `<register>.<field>` names a field of a bit-field register",
+            r.id()
+        ),
+        Some((r, field)) => {
+            let hint = closest(field, r.def.fields.iter().map(|f| f.id.as_str()))
+                .map(|c| format!(" (did you mean `{}.{c}`?)", r.id()))
+                .unwrap_or_default();
+            let ids: Vec<String> = r.def.fields.iter().map(|f| format!("`{}`", f.id)).collect();
+            format!(
+                "{what} `{name}`: register `{}` has no field `{field}`{hint}; its fields: {}",
+                r.id(),
+                ids.join(", ")
+            )
+        }
+        None => {
+            let candidates = drive
+                .registers
+                .iter()
+                .flat_map(|r| std::iter::once(r.id()).chain(r.def.param.as_deref()));
+            // `stauts.decimals`: the register part misspelt, the field kept.
+            let hint = match name.rsplit_once('.') {
+                Some((head, field)) => closest(head, candidates).map(|c| format!("{c}.{field}")),
+                None => closest(name, candidates).map(str::to_owned),
+            }
+            .map(|c| format!(" (did you mean `{c}`?)"))
+            .unwrap_or_default();
+            format!(
+                "{what} `{name}` names no register of this map (by id or parameter number){hint}"
+            )
+        }
+    };
+    out.push(drive.error(path, register, message));
+    None
+}
+
+/// The selector's codes in `codes` fit it: a field's width, and the values it lists.
+fn codes_fit(
+    drive: &Drive,
+    out: &mut Vec<Diagnostic>,
+    name: &str,
+    selector: Option<SelectorRef<'_>>,
+    code: u16,
+    path: &Path,
+    register: Option<&str>,
+) {
+    let Some(s) = selector else { return };
+    if code > s.max_code() {
+        out.push(drive.error(
+            path,
+            register,
+            format!(
+                "selector `{name}` is a {}-bit field: code {code} does not fit (0..={})",
+                s.max_code().count_ones(),
+                s.max_code()
+            ),
+        ));
+    } else if let Some(values) = s.listed() {
+        if !values.iter().any(|v| v.value == code) {
+            out.push(drive.error(
+                path,
+                register,
+                format!("selector `{name}` lists no code {code}"),
+            ));
+        }
+    }
+}
+
+/// A field selector becomes the generated `Settings` field `<register>_<field>`: it must not be the
+/// name of another of its fields (a selector or reference register, an external quantity, a
+/// variant axis).
+fn settings_field_free(
+    drive: &Drive,
+    out: &mut Vec<Diagnostic>,
+    register: &Register,
+    field: &crate::model::Field,
+    path: &Path,
+    rid: Option<&str>,
+) {
+    let name = format!("{}_{}", register.id(), field.id);
+    let taken = drive
+        .selectors()
+        .into_iter()
+        .chain(drive.references())
+        .any(|r| r.id() == name)
+        || drive.externals().iter().any(|q| q.external == name)
+        || drive.variants.iter().any(|a| a.id == name);
+    if taken {
+        out.push(drive.error(
+            path,
+            rid,
+            format!(
+                "selector `{}.{}` would be the `Settings` field `{name}`, which another setting already names; rename the field",
+                register.id(),
+                field.id
+            ),
+        ));
+    }
 }
 
 fn relative(
@@ -75,22 +197,20 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             ),
             Some(Scale::Selected(sel)) => {
                 let sp = r.key_path("scale");
-                let selector = resolve(
+                let selector = selector(
                     drive,
                     out,
                     &sel.selected_by,
-                    sp.key("selected_by"),
+                    &sp.key("selected_by"),
                     rid,
                     "selected_by",
                 );
-                if let Some(s) = selector {
-                    if !s.readable() {
-                        out.push(drive.error(
-                            &sp.key("selected_by"),
-                            rid,
-                            format!("selector `{}` is not readable", sel.selected_by),
-                        ));
-                    }
+                if let Some(SelectorRef {
+                    register: s,
+                    field: Some(f),
+                }) = selector
+                {
+                    settings_field_free(drive, out, s, f, &sp.key("selected_by"), rid);
                 }
                 if sel.cases.is_empty() {
                     out.push(drive.error(&sp, rid, "a selected scale needs at least one case"));
@@ -113,15 +233,15 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                                 format!("selector code {code} appears in two cases"),
                             ));
                         }
-                        if let Some(ValueKind::Enum(values)) = selector.map(Register::kind) {
-                            if !values.iter().any(|v| v.value == *code) {
-                                out.push(drive.error(
-                                    &cp.key("when"),
-                                    rid,
-                                    format!("selector `{}` lists no code {code}", sel.selected_by),
-                                ));
-                            }
-                        }
+                        codes_fit(
+                            drive,
+                            out,
+                            &sel.selected_by,
+                            selector,
+                            *code,
+                            &cp.key("when"),
+                            rid,
+                        );
                     }
                     if let Scale::Relative(rel) = &case.scale {
                         relative(
@@ -170,7 +290,10 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 ));
             }
             if let Some(s) = &w.setting {
-                resolve(drive, out, s, ap.key("setting"), rid, "condition setting");
+                let found = selector(drive, out, s, &ap.key("setting"), rid, "condition setting");
+                for code in &w.is {
+                    codes_fit(drive, out, s, found, *code, &ap.key("is"), rid);
+                }
                 if w.is.is_empty() {
                     out.push(drive.error(&ap, rid, "a setting condition needs `is: [codes]`"));
                 }

@@ -1,4 +1,5 @@
-//! An application crate with its own drive map (`mini-drive`), generated at build time.
+//! An application crate with its own drive maps (`mini-drive`, and `field-selector` for scales
+//! selected by a field of a status word), generated at build time.
 //!
 //! ```
 //! use custom_drive::mini_drive as md;
