@@ -91,7 +91,7 @@ impl Simulator {
                 });
             }
         }
-        let (resolved, externals) = Simulator::resolve_roles(&drive, &index, &options)?;
+        let (resolved, externals) = Simulator::resolve_roles(&drive, &options)?;
         let sa = &drive.protocol.slave_address;
         let slave = options.slave.or(sa.default).unwrap_or(1);
         if !(sa.min..=sa.max).contains(&slave) {

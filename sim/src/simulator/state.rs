@@ -1,7 +1,7 @@
 //! The drive model and the map's roles behind it: which registers run the drive, ramp its
 //! output and show its status. Everything that reads the roles is here.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use drivemap_codegen::ir::{Drive, Register};
@@ -51,7 +51,6 @@ impl Simulator {
     /// values ([`Plausible`]).
     pub(super) fn resolve_roles(
         drive: &Drive,
-        _index: &HashMap<String, usize>,
         options: &SimOptions,
     ) -> Result<(Option<Arc<Resolved>>, Externals), SimError> {
         use drivemap_runtime::core::Role;
