@@ -44,16 +44,16 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
         let up = |v: TokenStream| if lo == 0 { v } else { quote!((#v << #lo_lit)) };
         let up_value = up(quote!(value));
         let up_code = up(quote!(code));
-        let set_doc = format!("Sets `{fname}`.");
-        let with_doc = format!("This value with `{fname}` set to `on`.");
+        let set_doc = format!(" Sets `{fname}`.");
+        let with_doc = format!(" This value with `{fname}` set to `on`.");
         let with_wide_doc = format!(
-            "This value with `{fname}` set to `value`; a value wider than the field is refused."
+            " This value with `{fname}` set to `value`; a value wider than the field is refused."
         );
         let with_enum_doc = format!(
-            "This value with `{fname}` set to `value`; an unknown or too wide code is refused."
+            " This value with `{fname}` set to `value`; an unknown or too wide code is refused."
         );
-        let set_wide_doc = format!("Sets `{fname}`; a value wider than the field is refused.");
-        let set_enum_doc = format!("Sets `{fname}`; an unknown or too wide code is refused.");
+        let set_wide_doc = format!(" Sets `{fname}`; a value wider than the field is refused.");
+        let set_enum_doc = format!(" Sets `{fname}`; an unknown or too wide code is refused.");
         let where_ = if width == 1 {
             format!("bit {lo}")
         } else {
@@ -70,16 +70,19 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
         if width == 1 && f.values.is_empty() {
             methods.push(quote! {
                 #doc
+                #[inline]
                 pub const fn #get(&self) -> bool { self.0 & #fm != 0 }
             });
             if writable {
                 methods.push(quote! {
                     #[doc = #set_doc]
+                    #[inline]
                     pub fn #set(&mut self, on: bool) -> &mut Self {
                         if on { self.0 |= #fm } else { self.0 &= !#fm }
                         self
                     }
                     #[doc = #with_doc]
+                    #[inline]
                     pub const fn #with(self, on: bool) -> Self {
                         Self(if on { self.0 | #fm } else { self.0 & !#fm })
                     }
@@ -91,11 +94,13 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
             let max_f = proc_macro2::Literal::f64_unsuffixed(((1u32 << width) - 1) as f64);
             methods.push(quote! {
                 #doc
+                #[inline]
                 pub const fn #get(&self) -> u16 { #down }
             });
             if writable {
                 methods.push(quote! {
                 #[doc = #set_wide_doc]
+                #[inline]
                 pub fn #set(&mut self, value: u16) -> Result<&mut Self, #rt::ValueError> {
                     if value > #max {
                         return Err(#rt::ValueError::OutOfRange { register: #reg_id, value: value as f64, min: 0.0, max: #max_f, unit: "" });
@@ -104,6 +109,7 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
                     Ok(self)
                 }
                 #[doc = #with_wide_doc]
+                #[inline]
                 pub fn #with(mut self, value: u16) -> Result<Self, #rt::ValueError> {
                     self.#set(value)?;
                     Ok(self)
@@ -123,11 +129,13 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
             let max = proc_macro2::Literal::u16_unsuffixed(((1u32 << width) - 1) as u16);
             methods.push(quote! {
                 #doc
+                #[inline]
                 pub fn #get(&self) -> #ety { <#ety as #rt::Code>::from_code(#down) }
             });
             if writable {
                 methods.push(quote! {
                     #[doc = #set_enum_doc]
+                    #[inline]
                     pub fn #set(&mut self, value: #ety) -> Result<&mut Self, #rt::ValueError> {
                         let code = #rt::Code::code(&value);
                         if !#rt::Code::is_known(&value) || code > #max {
@@ -137,6 +145,7 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
                         Ok(self)
                     }
                     #[doc = #with_enum_doc]
+                    #[inline]
                     pub fn #with(mut self, value: #ety) -> Result<Self, #rt::ValueError> {
                         self.#set(value)?;
                         Ok(self)
@@ -164,17 +173,22 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
             pub const MASK: u16 = #mask_lit;
 
             /// All fields 0.
+            #[inline]
             pub const fn new() -> Self { Self(0) }
 
             /// The raw word (reserved bits 0).
+            #[inline]
             pub const fn raw(&self) -> u16 { self.0 }
 
             #(#methods)*
         }
 
         impl #rt::Code for #ty {
+            #[inline]
             fn code(&self) -> u16 { self.0 }
+            #[inline]
             fn from_code(code: u16) -> Self { Self(code & Self::MASK) }
+            #[inline]
             fn is_known(&self) -> bool { true }
         }
 
@@ -183,6 +197,7 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
         }
 
         impl core::fmt::Debug for #ty {
+            #[inline]
             fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
                 f.debug_struct(#ty_name)#(#debug_fields)*.finish()
             }
