@@ -147,6 +147,14 @@ pub enum Refusal {
         /// Set when the map gives the role on other transports only.
         transport: Option<crate::profile::TransportKind>,
     },
+    /// A drive's plan used with a client made for another drive's profile.
+    #[error(
+        "the client speaks to {client}, not to {drive}: build the client with {drive}'s profile"
+    )]
+    OtherDrive {
+        client: &'static str,
+        drive: &'static str,
+    },
     /// An external quantity the map does not have, or one not supplied.
     #[error("{drive} has no external quantity {name}")]
     UnknownExternal { drive: &'static str, name: String },

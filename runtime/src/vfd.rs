@@ -24,7 +24,8 @@
 //!
 //! Command words are composed from a copy the [`Vfd`] keeps of what it last wrote to each command
 //! register, starting from every command role released (stopped, forward, no reset): the run
-//! command of a drive is owned by one master.
+//! command of a drive is owned by one master. The copy changes only when a write succeeds, so a
+//! command the drive refused (or that was lost) is not sent again by a later one.
 
 use std::fmt;
 
@@ -255,6 +256,13 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     where
         S: DriveSettings,
     {
+        if client.profile().drive_id != D::PROFILE.drive_id {
+            return Err(Refusal::OtherDrive {
+                client: client.profile().drive_id,
+                drive: D::PROFILE.drive_id,
+            }
+            .into());
+        }
         for (name, value) in externals {
             if !settings.set_external(name, *value) {
                 return Err(Refusal::UnknownExternal {
@@ -368,25 +376,25 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         self.write_word(row, raw)
     }
 
-    /// Sets the command fields of `changes` in their registers' words and writes each word once.
+    /// Sets the command fields of `changes` in their registers' words and writes each word once,
+    /// in the order of `changes`. The copy of what was written is updated only after a write
+    /// succeeds: a refused run is never sent again by a later, unrelated command.
     fn command(&mut self, changes: &[(FieldRole, bool)]) -> Result<(), Error> {
-        let mut rows: Vec<u16> = Vec::new();
+        let mut words: Vec<(u16, u16)> = Vec::new();
         for (f, on) in changes {
-            let Some((_, word)) = self.shadow.iter_mut().find(|(row, _)| *row == f.row) else {
+            let Some(&(_, written)) = self.shadow.iter().find(|(row, _)| *row == f.row) else {
                 continue;
             };
-            *word = f.put(*word, f.code(*on));
-            if !rows.contains(&f.row) {
-                rows.push(f.row);
+            match words.iter_mut().find(|(row, _)| *row == f.row) {
+                Some((_, word)) => *word = f.put(*word, f.code(*on)),
+                None => words.push((f.row, f.put(written, f.code(*on)))),
             }
         }
-        for row in rows {
-            let word = self
-                .shadow
-                .iter()
-                .find(|(r, _)| *r == row)
-                .map_or(0, |(_, w)| *w);
+        for (row, word) in words {
             self.write_word(row, word)?;
+            if let Some((_, written)) = self.shadow.iter_mut().find(|(r, _)| *r == row) {
+                *written = word;
+            }
         }
         Ok(())
     }

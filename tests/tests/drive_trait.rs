@@ -263,3 +263,57 @@ fn a_trip_is_seen_and_reset_through_the_trait() {
         "some shipped drive resets: {reset:?}"
     );
 }
+
+/// A run whose reply is lost is not sent again by a later, unrelated command: the `Vfd`'s copy
+/// of the command word changes only when a write succeeds, so setting the direction afterwards
+/// writes the word with run released (a master that does not know whether the drive started
+/// errs towards stop). And a client made for another drive is refused.
+#[test]
+fn a_command_that_failed_is_not_resent_by_the_next() {
+    use drivemap_drives::ptlk_tds_v8 as tds;
+    use drivemap_runtime::ClientOptions;
+    use drivemap_sim::{Fault, FaultyLink, SimulatedSlave};
+
+    let options = ClientOptions {
+        retries: 0,
+        timeout: Duration::from_millis(50),
+        ..ClientOptions::default()
+    };
+    let link = FaultyLink::new(TransportKind::Rtu, SimulatedSlave::new(1, &tds::PROFILE));
+    let mut c = Client::with_options(link, &tds::PROFILE, options);
+    let mut d = Vfd::new::<tds::Drive>(&mut c, 1, tds::Settings::default());
+    let address = <tds::OperationCommand as drivemap_runtime::Register>::address(
+        &tds::Settings::default(),
+        TransportKind::Rtu,
+    );
+    d.client().transport().inject(Fault::Drop);
+    assert!(matches!(d.run(), Err(Error::Timeout { .. })));
+    // The drive did get it: the reply alone was lost.
+    assert_eq!(
+        d.client().transport().slave.holding(address) & 0x0001,
+        0x0001
+    );
+    d.set_direction(Direction::Reverse).unwrap();
+    let word = d.client().transport().slave.holding(address);
+    assert_eq!(word & 0x0001, 0, "run not re-sent: {word:04X}h");
+    assert_eq!(word & 0x0002, 0x0002, "reverse set: {word:04X}h");
+    d.run().unwrap();
+    assert_eq!(
+        d.client().transport().slave.holding(address) & 0x0003,
+        0x0003
+    );
+    drop(d);
+
+    let mut other = Client::new(
+        FaultyLink::new(
+            TransportKind::Rtu,
+            SimulatedSlave::new(1, &drivemap_drives::yaskawa_v7::PROFILE),
+        ),
+        &drivemap_drives::yaskawa_v7::PROFILE,
+    );
+    match Vfd::connect::<tds::Drive>(&mut other, 1, tds::Settings::default(), &[]) {
+        Err(Error::Refused(Refusal::OtherDrive { .. })) => {}
+        Err(e) => panic!("expected OtherDrive, got {e}"),
+        Ok(_) => panic!("expected OtherDrive, got a Vfd"),
+    }
+}
