@@ -18,9 +18,9 @@ pub enum Condition {
     Always,
     /// Never (the simulated drive raises no alarms).
     Never,
-    /// Ready to run: always, except when tripped or in program (PRG) mode, where a drive with
-    /// mode switching takes no run command (the TDS-V8's example reply shows Ready clear in PRG
-    /// mode).
+    /// Ready: always, except when tripped or in program (PRG) mode (the TDS-V8's example reply
+    /// shows Ready clear for a stopped drive in PRG mode; the simulator still takes a run
+    /// command there, as the manual does not say it refuses one).
     Ready,
     /// Tripped ([`Simulator::trip`](crate::Simulator::trip)) and not yet reset.
     Fault,
