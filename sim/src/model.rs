@@ -127,21 +127,17 @@ impl Model {
             && self.target.abs() > self.output.abs()
             && (self.output == 0.0 || self.output.signum() == self.target.signum());
         match c {
-            Condition::Always => true,
             Condition::Never => false,
             Condition::Fault => self.fault.is_some(),
             Condition::Ready => self.mode != Some(Mode::Prg) && self.fault.is_none(),
             Condition::Running => self.running(),
-            Condition::Stopped => !self.running(),
-            Condition::Forward => self.running() && !self.reverse_now(),
             Condition::Reverse => self.running() && self.reverse_now(),
             Condition::ZeroSpeed => self.output == 0.0,
-            Condition::SpeedAgree | Condition::Steady => self.at_reference(),
+            Condition::SpeedAgree => self.at_reference(),
             Condition::Accelerating => accelerating,
             Condition::Decelerating => self.run && moving && !accelerating,
             Condition::Stopping => !self.run && self.output != 0.0,
             Condition::DrvMode => self.mode == Some(Mode::Drv),
-            Condition::PrgMode => self.mode == Some(Mode::Prg),
         }
     }
 
@@ -180,7 +176,7 @@ mod tests {
         assert!(m.holds(Condition::Accelerating) && !m.holds(Condition::SpeedAgree));
         m.advance(100.0, 60.0, 10.0, 10.0);
         assert_eq!(m.output, 48.0);
-        assert!(m.holds(Condition::SpeedAgree) && m.holds(Condition::Steady));
+        assert!(m.holds(Condition::SpeedAgree));
     }
 
     #[test]
@@ -207,7 +203,7 @@ mod tests {
         assert!(m.holds(Condition::Running) && m.holds(Condition::Stopping));
         m.advance(100.0, 60.0, 10.0, 20.0);
         assert_eq!(m.output, 0.0);
-        assert!(m.holds(Condition::Stopped) && m.holds(Condition::ZeroSpeed));
+        assert!(!m.holds(Condition::Running) && m.holds(Condition::ZeroSpeed));
     }
 
     #[test]

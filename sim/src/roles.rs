@@ -14,8 +14,6 @@ use drivemap_runtime::core::roles::{FieldRole, Role, RoleKind, Target};
 /// What the drive model is doing, as status fields report it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Condition {
-    /// Always.
-    Always,
     /// Never (the simulated drive raises no alarms).
     Never,
     /// Ready: always, except when tripped or in program (PRG) mode (the TDS-V8's example reply
@@ -26,10 +24,6 @@ pub enum Condition {
     Fault,
     /// Run commanded, or the output frequency not yet 0.
     Running,
-    /// Not running.
-    Stopped,
-    /// Running, not in reverse.
-    Forward,
     /// Running in reverse (or about to, at 0 Hz).
     Reverse,
     /// Output frequency 0.
@@ -42,12 +36,8 @@ pub enum Condition {
     Decelerating,
     /// Stop commanded, the output ramping down.
     Stopping,
-    /// Run commanded and the output at the reference (same as `speed_agree`).
-    Steady,
     /// Operating (DRV) mode.
     DrvMode,
-    /// Program (PRG) mode.
-    PrgMode,
 }
 
 impl Condition {
