@@ -609,6 +609,7 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
         address_offsets: AddressOffsets { rtu, tcp },
         timing: Timing {
             frame_gap_chars: t.frame_gap_chars,
+            frame_gap_us: t.frame_gap_us,
             inter_char_timeout_us: t.inter_char_timeout_us,
             inter_char_timeout_bits: t.inter_char_timeout_bits,
             response_delay_us: t.response_delay_us,

@@ -347,6 +347,11 @@ pub struct Timing {
     /// Silence between frames in character times.
     #[serde(default = "default_frame_gap")]
     pub frame_gap_chars: f64,
+    /// Silence between frames in milliseconds, when the manual states it so ("at least 10 ms"):
+    /// `frame_gap: {ms: 10, source: ...}`. Only `ms` is taken (a gap in characters is
+    /// `frame_gap_chars`); the runtime keeps the larger of the two at the line's baud rate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_gap: Option<Interval>,
     /// Longest gap between two characters of a frame.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inter_char_timeout: Option<Interval>,

@@ -220,7 +220,17 @@ fn protocol(out: &mut String, drive: &Drive) {
         );
     }
     if let Some(t) = &p.timing {
-        let mut parts = vec![format!("frame gap {} characters", num(t.frame_gap_chars))];
+        let mut gap = format!("frame gap {} characters", num(t.frame_gap_chars));
+        if let Some(ms) = t.frame_gap.as_ref().and_then(|g| g.ms) {
+            let src = t
+                .frame_gap
+                .as_ref()
+                .and_then(|g| g.source.as_ref())
+                .map(|s| format!(" (`{s}`)"))
+                .unwrap_or_default();
+            gap += &format!(", at least {} ms{src}", num(ms));
+        }
+        let mut parts = vec![gap];
         if let Some(i) = &t.inter_char_timeout {
             parts.push(format!("inter-character timeout {}", interval(i)));
         }

@@ -47,6 +47,7 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     );
     let t = drive.timing_figures();
     let gap = super::float(t.frame_gap_chars);
+    let gap_min_us = opt_u32(t.frame_gap_us);
     let ict_us = opt_u32(t.inter_char_timeout_us);
     let ict_bits = opt_u32(t.inter_char_timeout_bits);
     let resp = opt_u32(t.response_delay_us);
@@ -87,6 +88,7 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
             address_offsets: #rt::profile::AddressOffsets { rtu: #rtu_off, tcp: #tcp_off },
             timing: #rt::profile::Timing {
                 frame_gap_chars: #gap,
+                frame_gap_us: #gap_min_us,
                 inter_char_timeout_us: #ict_us,
                 inter_char_timeout_bits: #ict_bits,
                 response_delay_us: #resp,

@@ -137,6 +137,33 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 "the frame gap must be positive",
             ));
         }
+        if let Some(g) = &t.frame_gap {
+            // Only milliseconds: a gap in characters is `frame_gap_chars`, and the two are not
+            // contradictory (the larger at the line's baud rate is kept).
+            let gp = tp.key("frame_gap");
+            let other = g.bits.is_some() || g.chars.is_some();
+            match g.ms {
+                None if other => {}
+                None => out.push(drive.error(
+                    &gp,
+                    None,
+                    "give the frame gap in `ms` (a gap in characters is `frame_gap_chars`)",
+                )),
+                Some(ms) if !ms.is_finite() || ms <= 0.0 => out.push(drive.error(
+                    &gp.key("ms"),
+                    None,
+                    "the frame gap in ms must be finite and positive",
+                )),
+                Some(_) => {}
+            }
+            if other {
+                out.push(drive.error(
+                    &gp,
+                    None,
+                    "`frame_gap` takes `ms` only; write a gap in characters as `frame_gap_chars`",
+                ));
+            }
+        }
         if let Some(i) = &t.inter_char_timeout {
             interval(drive, out, i, tp.key("inter_char_timeout"));
         }
