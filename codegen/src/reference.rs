@@ -175,11 +175,11 @@ fn protocol(out: &mut String, drive: &Drive) {
         describe::functions(&p.function_codes),
         None,
     );
-    row(
-        "Registers per request",
-        describe::per_request(p.max_read, p.max_write),
-        None,
-    );
+    let mut per_request = describe::per_request(p.max_read.value, p.max_write.value);
+    for (name, l) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
+        per_request += &describe::limit_citation(name, l);
+    }
+    row("Registers per request", per_request, None);
     let s = &p.slave_address;
     let mut slave = format!("{} ..= {}", s.min, s.max);
     if let Some(d) = s.default {

@@ -12,8 +12,8 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     let p = &drive.protocol;
     let id = &drive.meta.id;
     let fcs = p.function_codes.iter().map(|f| hex2(*f));
-    let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read);
-    let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write);
+    let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read.value);
+    let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write.value);
     let slave_min = proc_macro2::Literal::u8_unsuffixed(p.slave_address.min);
     let slave_max = proc_macro2::Literal::u8_unsuffixed(p.slave_address.max);
     let broadcast = match &p.broadcast {

@@ -207,6 +207,16 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             None,
         );
     }
+    for (name, limit) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
+        opt(
+            drive,
+            ctx,
+            out,
+            &limit.source,
+            proto.key(name).key("source"),
+            None,
+        );
+    }
     if let Some(t) = &p.timing {
         let tp = proto.key("timing");
         opt(drive, ctx, out, &t.source, tp.key("source"), None);

@@ -52,18 +52,18 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             ));
         }
     }
-    if !(1..=125).contains(&p.max_read) {
+    if !(1..=125).contains(&p.max_read.value) {
         out.push(drive.error(
             &pp.key("max_read"),
             None,
-            format!("max_read {} must be 1..=125", p.max_read),
+            format!("max_read {} must be 1..=125", p.max_read.value),
         ));
     }
-    if !(1..=123).contains(&p.max_write) {
+    if !(1..=123).contains(&p.max_write.value) {
         out.push(drive.error(
             &pp.key("max_write"),
             None,
-            format!("max_write {} must be 1..=123", p.max_write),
+            format!("max_write {} must be 1..=123", p.max_write.value),
         ));
     }
     let s = &p.slave_address;
@@ -99,6 +99,18 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                     ),
                 ));
             }
+        }
+    }
+    for (name, limit) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
+        if limit.unknown.as_ref().is_some_and(|r| r.trim().is_empty()) {
+            out.push(drive.error(
+                &pp.key(name).key("unknown"),
+                None,
+                format!(
+                    "`{name}` marked unknown needs its reason: why the manual prints none and where {} comes from",
+                    limit.value
+                ),
+            ));
         }
     }
     for (i, e) in p.exceptions.iter().enumerate() {
