@@ -56,6 +56,21 @@ pub fn per_request(max_read: u16, max_write: u16) -> String {
     format!("at most {max_read} per read, {max_write} per write")
 }
 
+/// What a limit's map entry says beyond its number: `. max_read 8 not printed: <why>
+/// (`file:line`)`, `. max_read: `file:line``, or nothing for a plain number.
+pub fn limit_citation(name: &str, l: &crate::model::Limit) -> String {
+    let src = l
+        .source
+        .as_ref()
+        .map(|s| format!(" (`{s}`)"))
+        .unwrap_or_default();
+    match &l.unknown {
+        Some(why) => format!(". {name} {} not printed: {}{src}", l.value, why.trim()),
+        None if l.source.is_some() => format!(". {name}{src}"),
+        None => String::new(),
+    }
+}
+
 /// Access: `read-only`, `write-only`, `read/write`.
 pub fn access(a: Access) -> &'static str {
     match a {

@@ -149,11 +149,16 @@ fn register(drive: &Drive, r: &Register) -> Value {
 }
 
 /// The export of one drive.
+/// A per-request limit: its value, its citation and, when the manual prints none, the reason.
+fn limit_json(l: &model::Limit) -> Value {
+    json!({"value": l.value, "source": l.source, "not_printed": l.unknown})
+}
+
 pub fn export(drive: &Drive) -> Value {
     let p = &drive.protocol;
     let mut regs: Vec<&Register> = drive.registers.iter().collect();
     regs.sort_by_key(|r| (r.broadcast, r.def.address));
-    json!({
+    let mut out = json!({
         "format": FORMAT,
         "drive": {
             "id": drive.meta.id,
@@ -169,8 +174,10 @@ pub fn export(drive: &Drive) -> Value {
         "protocol": {
             "transports": p.transports,
             "function_codes": p.function_codes,
-            "max_read": p.max_read,
-            "max_write": p.max_write,
+            // The working numbers; `limits` (when one is cited or not printed) says more.
+            "max_read": p.max_read.value,
+            "max_write": p.max_write.value,
+
             "slave_address": p.slave_address,
             "broadcast": p.broadcast,
             "exceptions": p.exceptions,
@@ -186,5 +193,13 @@ pub fn export(drive: &Drive) -> Value {
         "gaps": drive.gaps,
         "removed": drive.removed,
         "roles": drive.roles,
-    })
+    });
+    let stated = |l: &model::Limit| l.source.is_some() || l.unknown.is_some();
+    if stated(&p.max_read) || stated(&p.max_write) {
+        out["protocol"]["limits"] = json!({
+            "max_read": limit_json(&p.max_read),
+            "max_write": limit_json(&p.max_write),
+        });
+    }
+    out
 }

@@ -410,6 +410,10 @@ impl Drive {
         });
         TimingFigures {
             frame_gap_chars: timing.map(|t| t.frame_gap_chars).unwrap_or(3.5),
+            frame_gap_us: timing
+                .and_then(|t| t.frame_gap.as_ref())
+                .and_then(|i| i.ms)
+                .map(us),
             inter_char_timeout_us: ict.and_then(|i| i.ms).map(us),
             inter_char_timeout_bits: ict.and_then(bits),
             response_delay_us: response.and_then(|i| i.ms).map(us),
@@ -448,6 +452,8 @@ impl Drive {
 #[derive(Debug, Clone, PartialEq)]
 pub struct TimingFigures {
     pub frame_gap_chars: f64,
+    /// The stated least frame gap in microseconds (`timing.frame_gap.ms`).
+    pub frame_gap_us: Option<u32>,
     pub inter_char_timeout_us: Option<u32>,
     /// Inter-character limit in bit times (`chars` are counted at 11 bits).
     pub inter_char_timeout_bits: Option<u32>,

@@ -573,8 +573,8 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
     Profile {
         drive_id: text(&drive.meta.id),
         function_codes: leak(p.function_codes.clone()),
-        max_read: p.max_read,
-        max_write: p.max_write,
+        max_read: p.max_read.value,
+        max_write: p.max_write.value,
         slave_min: p.slave_address.min,
         slave_max: p.slave_address.max,
         broadcast: p.broadcast.as_ref().map(|b| BroadcastInfo {
@@ -609,6 +609,7 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
         address_offsets: AddressOffsets { rtu, tcp },
         timing: Timing {
             frame_gap_chars: t.frame_gap_chars,
+            frame_gap_us: t.frame_gap_us,
             inter_char_timeout_us: t.inter_char_timeout_us,
             inter_char_timeout_bits: t.inter_char_timeout_bits,
             response_delay_us: t.response_delay_us,

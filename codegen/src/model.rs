@@ -214,9 +214,9 @@ pub struct Protocol {
     pub transports: Vec<TransportName>,
     pub function_codes: Vec<u8>,
     /// Maximum registers per read (03h/04h).
-    pub max_read: u16,
+    pub max_read: Limit,
     /// Maximum registers per write (10h).
-    pub max_write: u16,
+    pub max_write: Limit,
     pub slave_address: SlaveAddress,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub broadcast: Option<Broadcast>,
@@ -347,6 +347,11 @@ pub struct Timing {
     /// Silence between frames in character times.
     #[serde(default = "default_frame_gap")]
     pub frame_gap_chars: f64,
+    /// Silence between frames in milliseconds, when the manual states it so ("at least 10 ms"):
+    /// `frame_gap: {ms: 10, source: ...}`. Only `ms` is taken (a gap in characters is
+    /// `frame_gap_chars`); the runtime keeps the larger of the two at the line's baud rate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_gap: Option<Interval>,
     /// Longest gap between two characters of a frame.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inter_char_timeout: Option<Interval>,
@@ -839,4 +844,85 @@ pub struct Removed {
     pub id: String,
     pub reason: String,
     pub source: String,
+}
+
+/// A per-request limit (`max_read`, `max_write`): a plain number (`8`), the number with its
+/// citation (`{value: 8, source: "..."}`), or a number the manual does not print, with why it
+/// was chosen (`{value: 8, unknown: "the chapter prints no limit; ..."}`). The runtime always
+/// uses `value`: an unknown limit keeps the value the map gives as its working value.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Limit {
+    pub value: u16,
+    pub source: Option<String>,
+    /// Why the manual prints no such limit and where `value` comes from.
+    pub unknown: Option<String>,
+}
+
+impl Limit {
+    /// A plain number, neither cited nor marked unknown.
+    pub fn plain(value: u16) -> Limit {
+        Limit {
+            value,
+            source: None,
+            unknown: None,
+        }
+    }
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct LimitForm {
+    value: u16,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    source: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    unknown: Option<String>,
+}
+
+impl<'de> Deserialize<'de> for Limit {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Limit, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Limit;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "a number of registers, `{value: N, source: ..}` or `{value: N, unknown: <why>}`",
+                )
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Limit, E> {
+                u16::try_from(v).map(Limit::plain).map_err(|_| {
+                    E::invalid_value(serde::de::Unexpected::Unsigned(v), &"a number of registers")
+                })
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Limit, E> {
+                u16::try_from(v).map(Limit::plain).map_err(|_| {
+                    E::invalid_value(serde::de::Unexpected::Signed(v), &"a number of registers")
+                })
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Limit, A::Error> {
+                let f = LimitForm::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(Limit {
+                    value: f.value,
+                    source: f.source,
+                    unknown: f.unknown,
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl Serialize for Limit {
+    /// A plain limit as its number (as shipped maps and exports always had it), else the mapping.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        if self.source.is_none() && self.unknown.is_none() {
+            return s.serialize_u16(self.value);
+        }
+        LimitForm {
+            value: self.value,
+            source: self.source.clone(),
+            unknown: self.unknown.clone(),
+        }
+        .serialize(s)
+    }
 }

@@ -175,11 +175,11 @@ fn protocol(out: &mut String, drive: &Drive) {
         describe::functions(&p.function_codes),
         None,
     );
-    row(
-        "Registers per request",
-        describe::per_request(p.max_read, p.max_write),
-        None,
-    );
+    let mut per_request = describe::per_request(p.max_read.value, p.max_write.value);
+    for (name, l) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
+        per_request += &describe::limit_citation(name, l);
+    }
+    row("Registers per request", per_request, None);
     let s = &p.slave_address;
     let mut slave = format!("{} ..= {}", s.min, s.max);
     if let Some(d) = s.default {
@@ -220,7 +220,17 @@ fn protocol(out: &mut String, drive: &Drive) {
         );
     }
     if let Some(t) = &p.timing {
-        let mut parts = vec![format!("frame gap {} characters", num(t.frame_gap_chars))];
+        let mut gap = format!("frame gap {} characters", num(t.frame_gap_chars));
+        if let Some(ms) = t.frame_gap.as_ref().and_then(|g| g.ms) {
+            let src = t
+                .frame_gap
+                .as_ref()
+                .and_then(|g| g.source.as_ref())
+                .map(|s| format!(" (`{s}`)"))
+                .unwrap_or_default();
+            gap += &format!(", at least {} ms{src}", num(ms));
+        }
+        let mut parts = vec![gap];
         if let Some(i) = &t.inter_char_timeout {
             parts.push(format!("inter-character timeout {}", interval(i)));
         }

@@ -104,6 +104,10 @@ impl AddressOffsets {
 pub struct Timing {
     /// Silence between frames, in character times (3.5 on every drive here).
     pub frame_gap_chars: f64,
+    /// Least silence between frames in microseconds, when the manual states it in time ("at
+    /// least 10 ms"); the gap kept is the larger of this and `frame_gap_chars` characters at the
+    /// line's baud rate.
+    pub frame_gap_us: Option<u32>,
     /// Maximum gap between characters of one frame, in microseconds, if the manual gives one
     /// (V7: 3.5 ms; J7: 24 bit times, converted at the configured baud by the transport).
     pub inter_char_timeout_us: Option<u32>,
@@ -130,6 +134,7 @@ impl Timing {
     /// The Modbus RTU rule alone: 3.5 characters between frames, nothing else stated.
     pub const MODBUS: Timing = Timing {
         frame_gap_chars: 3.5,
+        frame_gap_us: None,
         inter_char_timeout_us: None,
         inter_char_timeout_bits: None,
         response_delay_us: None,

@@ -194,6 +194,9 @@ pub struct BusModel {
     pub serial: SerialConfig,
     /// Silence between frames, in characters.
     pub frame_gap_chars: f64,
+    /// Least silence between frames in microseconds, when the manual states it in time (0 when
+    /// it does not): the gap is the larger of this and `frame_gap_chars` characters.
+    pub frame_gap_us: u32,
     /// Bit times the drive takes before its response delay.
     pub response_bits: u32,
     /// The drive's response delay, in microseconds (fixed, or the delay parameter's value).
@@ -216,6 +219,7 @@ impl BusModel {
         BusModel {
             serial,
             frame_gap_chars: timing.frame_gap_chars,
+            frame_gap_us: timing.frame_gap_us.unwrap_or(0),
             response_bits: timing.response_delay_bits.unwrap_or(0),
             response_delay_us: timing
                 .response_delay_us
@@ -234,13 +238,14 @@ impl BusModel {
     }
 
     /// The silence between frames, in nanoseconds: `frame_gap_chars` characters, 1.75 ms above
-    /// 19 200 baud.
+    /// 19 200 baud, or `frame_gap_us` where the manual states a longer gap in time.
     pub fn frame_gap_ns(&self) -> f64 {
-        if self.serial.baud > 19_200 {
+        let chars = if self.serial.baud > 19_200 {
             1_750_000.0
         } else {
             self.frame_gap_chars * self.serial.char_ns()
-        }
+        };
+        chars.max(f64::from(self.frame_gap_us) * 1e3)
     }
 
     /// From the end of a request to the first byte of the reply, in nanoseconds.
@@ -420,6 +425,22 @@ mod tests {
         // Above 19 200 baud the gap is 1.75 ms.
         let fast = BusModel::new(&Profile::GENERIC, SerialConfig::new(115_200));
         assert_eq!(fast.exchange(0x03, 1).unwrap().turnaround_ns, 1_750_000);
+    }
+
+    #[test]
+    fn a_frame_gap_stated_in_ms_is_kept_when_longer_than_the_characters() {
+        // "Silence of at least 10 ms": longer than 3.5 characters at 9600 (3.65 ms) and the
+        // 1.75 ms above 19 200 baud, so it rules at both.
+        let mut p = Profile::GENERIC;
+        p.timing.frame_gap_us = Some(10_000);
+        let slow = BusModel::new(&p, SerialConfig::new(9600));
+        assert_eq!(slow.frame_gap_ns(), 10_000_000.0);
+        assert_eq!(slow.exchange(0x03, 1).unwrap().turnaround_ns, 10_000_000);
+        let fast = BusModel::new(&p, SerialConfig::new(115_200));
+        assert_eq!(fast.exchange(0x03, 1).unwrap().latency_ns, 10_000_000);
+        // At 1200 baud 3.5 characters (32 ms) are longer than the 10 ms: the characters rule.
+        let crawl = BusModel::new(&p, SerialConfig::new(1200));
+        assert_eq!(crawl.frame_gap_ns().round(), 29_166_667.0);
     }
 
     #[test]

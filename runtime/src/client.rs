@@ -1100,5 +1100,14 @@ mod tests {
             SerialConfig::new(9600).parity(Parity::Even),
         );
         assert_eq!(g.request_gap, Duration::from_nanos(4_010_417));
+        // A frame gap stated as at least 10 ms: the request gap and the timeout keep it.
+        let mut ten = Profile::GENERIC;
+        ten.timing.frame_gap_us = Some(10_000);
+        let t = ClientOptions::for_profile(&ten);
+        assert_eq!(t.request_gap, Duration::from_millis(10));
+        assert_eq!(
+            t.timeout,
+            ClientOptions::default().timeout + Duration::from_millis(10)
+        );
     }
 }

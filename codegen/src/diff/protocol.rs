@@ -177,8 +177,8 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
     }
 
     for (what, x, y) in [
-        ("max_read", a.max_read, b.max_read),
-        ("max_write", a.max_write, b.max_write),
+        ("max_read", a.max_read.value, b.max_read.value),
+        ("max_write", a.max_write.value, b.max_write.value),
     ] {
         if x != y {
             let kind = if y < x {

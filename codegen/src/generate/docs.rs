@@ -61,7 +61,10 @@ pub fn module(drive: &Drive) -> String {
     s += &format!(
         "\n{} registers; {}; function codes {}.",
         drive.registers.len(),
-        describe::per_request(drive.protocol.max_read, drive.protocol.max_write),
+        describe::per_request(
+            drive.protocol.max_read.value,
+            drive.protocol.max_write.value
+        ),
         describe::functions(&drive.protocol.function_codes)
     );
     s

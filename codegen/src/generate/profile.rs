@@ -12,8 +12,8 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     let p = &drive.protocol;
     let id = &drive.meta.id;
     let fcs = p.function_codes.iter().map(|f| hex2(*f));
-    let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read);
-    let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write);
+    let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read.value);
+    let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write.value);
     let slave_min = proc_macro2::Literal::u8_unsuffixed(p.slave_address.min);
     let slave_max = proc_macro2::Literal::u8_unsuffixed(p.slave_address.max);
     let broadcast = match &p.broadcast {
@@ -47,6 +47,7 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     );
     let t = drive.timing_figures();
     let gap = super::float(t.frame_gap_chars);
+    let gap_min_us = opt_u32(t.frame_gap_us);
     let ict_us = opt_u32(t.inter_char_timeout_us);
     let ict_bits = opt_u32(t.inter_char_timeout_bits);
     let resp = opt_u32(t.response_delay_us);
@@ -87,6 +88,7 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
             address_offsets: #rt::profile::AddressOffsets { rtu: #rtu_off, tcp: #tcp_off },
             timing: #rt::profile::Timing {
                 frame_gap_chars: #gap,
+                frame_gap_us: #gap_min_us,
                 inter_char_timeout_us: #ict_us,
                 inter_char_timeout_bits: #ict_bits,
                 response_delay_us: #resp,

@@ -207,9 +207,29 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             None,
         );
     }
+    for (name, limit) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
+        opt(
+            drive,
+            ctx,
+            out,
+            &limit.source,
+            proto.key(name).key("source"),
+            None,
+        );
+    }
     if let Some(t) = &p.timing {
         let tp = proto.key("timing");
         opt(drive, ctx, out, &t.source, tp.key("source"), None);
+        if let Some(i) = &t.frame_gap {
+            opt(
+                drive,
+                ctx,
+                out,
+                &i.source,
+                tp.key("frame_gap").key("source"),
+                None,
+            );
+        }
         if let Some(i) = &t.inter_char_timeout {
             opt(
                 drive,

@@ -52,18 +52,18 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             ));
         }
     }
-    if !(1..=125).contains(&p.max_read) {
+    if !(1..=125).contains(&p.max_read.value) {
         out.push(drive.error(
             &pp.key("max_read"),
             None,
-            format!("max_read {} must be 1..=125", p.max_read),
+            format!("max_read {} must be 1..=125", p.max_read.value),
         ));
     }
-    if !(1..=123).contains(&p.max_write) {
+    if !(1..=123).contains(&p.max_write.value) {
         out.push(drive.error(
             &pp.key("max_write"),
             None,
-            format!("max_write {} must be 1..=123", p.max_write),
+            format!("max_write {} must be 1..=123", p.max_write.value),
         ));
     }
     let s = &p.slave_address;
@@ -101,6 +101,18 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             }
         }
     }
+    for (name, limit) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
+        if limit.unknown.as_ref().is_some_and(|r| r.trim().is_empty()) {
+            out.push(drive.error(
+                &pp.key(name).key("unknown"),
+                None,
+                format!(
+                    "`{name}` marked unknown needs its reason: why the manual prints none and where {} comes from",
+                    limit.value
+                ),
+            ));
+        }
+    }
     for (i, e) in p.exceptions.iter().enumerate() {
         if e.code == 0 || e.code >= 0x80 {
             out.push(drive.error(
@@ -136,6 +148,33 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 None,
                 "the frame gap must be positive",
             ));
+        }
+        if let Some(g) = &t.frame_gap {
+            // Only milliseconds: a gap in characters is `frame_gap_chars`, and the two are not
+            // contradictory (the larger at the line's baud rate is kept).
+            let gp = tp.key("frame_gap");
+            let other = g.bits.is_some() || g.chars.is_some();
+            match g.ms {
+                None if other => {}
+                None => out.push(drive.error(
+                    &gp,
+                    None,
+                    "give the frame gap in `ms` (a gap in characters is `frame_gap_chars`)",
+                )),
+                Some(ms) if !ms.is_finite() || ms <= 0.0 => out.push(drive.error(
+                    &gp.key("ms"),
+                    None,
+                    "the frame gap in ms must be finite and positive",
+                )),
+                Some(_) => {}
+            }
+            if other {
+                out.push(drive.error(
+                    &gp,
+                    None,
+                    "`frame_gap` takes `ms` only; write a gap in characters as `frame_gap_chars`",
+                ));
+            }
         }
         if let Some(i) = &t.inter_char_timeout {
             interval(drive, out, i, tp.key("inter_char_timeout"));

@@ -63,6 +63,10 @@ pub struct SerialOptions {
     /// Silence between frames in character times (3.5 per the Modbus specification and every
     /// manual here).
     pub frame_gap_chars: f64,
+    /// Least silence between frames whatever the baud rate, when the manual states the gap in
+    /// time (`timing.frame_gap_us`, "at least 10 ms"); zero when it does not. The gap kept is
+    /// the larger of this and `frame_gap_chars` characters.
+    pub frame_gap_min: Duration,
     /// Longest gap allowed between two bytes of a reply; a reply broken off by a longer gap is
     /// discarded. [`SerialOptions::new`] sets 1.5 characters plus [`USB_LATENCY`].
     pub inter_char_timeout: Duration,
@@ -83,14 +87,18 @@ impl SerialOptions {
             parity: Parity::None,
             stop_bits: StopBits::One,
             frame_gap_chars: 3.5,
+            frame_gap_min: Duration::ZERO,
             inter_char_timeout: char_times(1.5, baud) + USB_LATENCY,
             rs485: Rs485::None,
         }
     }
 
-    /// Takes the frame gap the drive's manual prescribes.
+    /// Takes the frame gap the drive's manual prescribes (in characters, and its least time
+    /// when stated in milliseconds).
     pub fn with_profile(mut self, profile: &Profile) -> SerialOptions {
         self.frame_gap_chars = profile.timing.frame_gap_chars;
+        self.frame_gap_min =
+            Duration::from_micros(u64::from(profile.timing.frame_gap_us.unwrap_or(0)));
         self
     }
 
@@ -112,9 +120,10 @@ impl SerialOptions {
         self
     }
 
-    /// The silence kept between frames.
+    /// The silence kept between frames: the larger of the gap in characters at the baud rate
+    /// and [`frame_gap_min`](SerialOptions::frame_gap_min).
     pub fn frame_gap(&self) -> Duration {
-        frame_gap(self.frame_gap_chars, self.baud)
+        frame_gap(self.frame_gap_chars, self.baud).max(self.frame_gap_min)
     }
 }
 
@@ -363,5 +372,12 @@ mod tests {
         assert_eq!(frame_gap(3.5, 115_200), Duration::from_micros(1750));
         // 19 200 is not above 19 200: 2.005 ms.
         assert!(frame_gap(3.5, 19_200) > Duration::from_micros(2000));
+        // A gap the manual states in ms is kept where it is the longer.
+        let mut p = crate::profile::Profile::GENERIC;
+        p.timing.frame_gap_us = Some(10_000);
+        let o = SerialOptions::new("/dev/null", 115_200).with_profile(&p);
+        assert_eq!(o.frame_gap(), Duration::from_millis(10));
+        let o = SerialOptions::new("/dev/null", 1200).with_profile(&p);
+        assert_eq!(o.frame_gap(), frame_gap(3.5, 1200));
     }
 }
