@@ -318,7 +318,7 @@ impl BusModel {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn profile(drive_id: &'static str, response_delay_us: Option<u32>) -> Profile {
@@ -369,8 +369,9 @@ mod tests {
     }
 
     /// The V7's timing as its map states it: 24 bits + n156 (default 10 ms) before the reply,
-    /// 24 bits + 10 ms after it (`003_8bcf5d50afb8e230.txt:282-284`).
-    fn v7() -> Profile {
+    /// 24 bits + 10 ms after it (`003_8bcf5d50afb8e230.txt:282-284`). Shared with the client's
+    /// tests.
+    pub(crate) fn v7() -> Profile {
         let mut p = profile("yaskawa-v7", None);
         p.timing.response_delay_bits = Some(24);
         p.timing.response_delay_param = Some("n156");

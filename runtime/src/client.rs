@@ -1068,17 +1068,7 @@ impl<T: Transport> Client<T> {
 mod tests {
     use super::*;
     use crate::bus_time::Parity;
-
-    /// The V7's timing as its map states it (`003_8bcf5d50afb8e230.txt:282-284`).
-    fn v7() -> Profile {
-        let mut p = Profile::GENERIC;
-        p.timing.response_delay_bits = Some(24);
-        p.timing.response_delay_param = Some("n156");
-        p.timing.response_delay_param_default_us = Some(10_000);
-        p.timing.request_gap_bits = Some(24);
-        p.timing.request_gap_us = Some(10_000);
-        p
-    }
+    use crate::bus_time::tests::v7;
 
     #[test]
     fn options_for_a_profile_keep_its_timing() {
