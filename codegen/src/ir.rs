@@ -18,6 +18,7 @@ use crate::model::{
 };
 use crate::numbers::{Dec, raw_of};
 use crate::source::{Node, Path};
+use drivemap_core::width::{Width, WordOrder};
 
 /// A drive map, expanded and located.
 #[derive(Debug, Clone)]
@@ -94,6 +95,15 @@ pub struct RawLimits {
 }
 
 impl RawLimits {
+    /// The whole range of the register's value: one word, or a 32-bit pair.
+    pub fn of(width: Width, signed: bool) -> RawLimits {
+        let r = width.range(signed);
+        RawLimits {
+            min: i128::from(r.min),
+            max: i128::from(r.max),
+        }
+    }
+
     pub fn word(signed: bool) -> RawLimits {
         if signed {
             RawLimits {
@@ -112,6 +122,22 @@ impl RawLimits {
 impl Register {
     pub fn id(&self) -> &str {
         &self.def.id
+    }
+
+    /// One register, or a 32-bit pair in the map's word order.
+    pub fn width(&self) -> Width {
+        match &self.def.pair {
+            None => Width::Word,
+            Some(p) => Width::Pair(match p.order {
+                model::WordOrder::HighFirst => WordOrder::HighFirst,
+                model::WordOrder::LowFirst => WordOrder::LowFirst,
+            }),
+        }
+    }
+
+    /// The whole range of the register's word or pair, signed or not.
+    pub fn full_limits(&self) -> RawLimits {
+        RawLimits::of(self.width(), self.def.signed)
     }
 
     pub fn kind(&self) -> ValueKind<'_> {
@@ -151,7 +177,7 @@ impl Register {
     /// Raw limits for given engineering limits at a fixed decimal factor; missing limits are
     /// the word's own. `None` when a limit is not a whole number of increments.
     pub fn raw_limits(&self, factor: Dec, min: Option<f64>, max: Option<f64>) -> Option<RawLimits> {
-        let word = RawLimits::word(self.def.signed);
+        let word = self.full_limits();
         let min = match min {
             Some(m) => raw_of(m, factor)?,
             None => word.min,
@@ -553,7 +579,7 @@ impl Register {
     /// any case of a selected scale; the word's range where a conversion has none (relative
     /// scales, bit fields, limits that are not whole increments).
     pub fn raw_envelope(&self) -> RawLimits {
-        let word = RawLimits::word(self.def.signed);
+        let word = self.full_limits();
         let one = Dec {
             mantissa: 1,
             exponent: 0,

@@ -355,7 +355,7 @@ impl Lowering<'_> {
 
     /// Raw ranges per variant at a fixed decimal factor: the map's overrides in map order.
     fn ranges(&self, r: &Register, factor: Dec) -> Ranges {
-        let word = RawLimits::word(r.def.signed);
+        let word = r.full_limits();
         let base = r.raw_limits(factor, r.def.min, r.def.max).unwrap_or(word);
         let mut by_variant = Vec::new();
         for k in r.def.by_variant.keys() {
@@ -409,7 +409,7 @@ impl Lowering<'_> {
                                 let factor = Dec::from_f64(*f).unwrap_or(ONE);
                                 let lim = r
                                     .raw_limits(factor, case.min, case.max)
-                                    .unwrap_or(RawLimits::word(signed));
+                                    .unwrap_or(r.full_limits());
                                 CaseScale::Decimal {
                                     scale: decimal(factor),
                                     range: raw(lim),
@@ -490,6 +490,7 @@ impl Lowering<'_> {
                     model::ModbusTable::Holding => Table::Holding,
                     model::ModbusTable::Input => Table::Input,
                 },
+                width: r.width(),
                 broadcast_only: r.broadcast,
                 source: text(d.source.as_deref().unwrap_or_default()),
             },

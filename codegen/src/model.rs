@@ -485,7 +485,7 @@ pub enum WriteRestriction {
     PrgMode,
 }
 
-/// One register (one 16-bit word), or a block of them with `repeat`.
+/// One register (one 16-bit word, or a 32-bit pair with `pair`), or a block of them with `repeat`.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Register {
@@ -509,6 +509,10 @@ pub struct Register {
     pub scale: Option<Scale>,
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub signed: bool,
+    /// A 32-bit value in this register and the next (`{order: high_first, source: ..}`):
+    /// read in one request, written whole with 10h. Absent: one 16-bit register.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pair: Option<Pair>,
     /// Lower limit in engineering units, for the base variant.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min: Option<f64>,
@@ -554,6 +558,27 @@ pub struct Register {
     /// What the manual leaves unknown about this register (range, default, unit...).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub unknown: Vec<Unknown>,
+}
+
+/// A 32-bit value held in two consecutive registers.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct Pair {
+    /// Which word sits at the register's own (lower) address.
+    pub order: WordOrder,
+    /// `file:line` where the manual states the word order, when not on the register's row.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+/// Which half of a 32-bit pair comes first (at the lower address).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum WordOrder {
+    /// High word at the register's address, low word at the next.
+    HighFirst,
+    /// Low word at the register's address, high word at the next.
+    LowFirst,
 }
 
 /// How a raw word becomes an engineering value.

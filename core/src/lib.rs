@@ -19,6 +19,7 @@ pub mod register;
 pub mod roles;
 pub mod rule;
 pub mod scale;
+pub mod width;
 
 pub use plan::{RegisterPlan, SettingsView, Value};
 pub use profile::Profile;
@@ -29,3 +30,4 @@ pub use register::{
 pub use roles::{Role, Roles};
 pub use rule::{Broadcast, Transports, WriteRule};
 pub use scale::ValueError;
+pub use width::{Width, WordOrder};

@@ -378,10 +378,22 @@ impl RegisterPlan {
                 Conversion::Bits { mask, .. } => !mask,
                 _ => 0,
             },
+            width: self.info.width,
         }
     }
 
-    fn signed(&self) -> bool {
+    /// The integer a raw value read from the drive stands for (signed or not, one word or two).
+    pub const fn int(&self, raw: u32) -> i64 {
+        self.info.width.to_int(raw, self.signed())
+    }
+
+    /// The whole range of the register's word or pair: its limits where the manual prints none.
+    pub const fn full_range(&self) -> RawRange {
+        self.info.width.range(self.signed())
+    }
+
+    /// Whether the raw value is two's complement.
+    pub const fn signed(&self) -> bool {
         match self.conversion {
             Conversion::Word { signed, .. }
             | Conversion::Decimal { signed, .. }
@@ -447,31 +459,31 @@ impl RegisterPlan {
         }
     }
 
-    /// The engineering value of a word of a quantity register.
-    pub fn decode_number(&self, raw: u16, settings: &impl SettingsView) -> Result<f64, ValueError> {
-        let signed = self.signed();
+    /// The engineering value of a raw value (a word, or a pair joined) of a quantity register.
+    pub fn decode_number(&self, raw: u32, settings: &impl SettingsView) -> Result<f64, ValueError> {
+        let int = self.int(raw);
         match self.scale(settings) {
-            Some(Ok(Scale::Decimal { scale, .. })) => Ok(scale::decode_decimal(raw, signed, scale)),
+            Some(Ok(Scale::Decimal { scale, .. })) => Ok(scale.decode(int)),
             Some(Ok(Scale::Relative {
                 full_scale,
                 reference,
                 ..
-            })) => Ok(scale::decode_relative(raw, signed, full_scale, reference)),
+            })) => Ok(scale::decode_relative(int, full_scale, reference)),
             Some(Err(e)) => Err(e),
-            None => Ok(scale::word_to_int(raw, signed) as f64),
+            None => Ok(int as f64),
         }
     }
 
-    /// The word for an engineering value, checked against the range in force.
+    /// The raw value (word, or pair) for an engineering value, checked against the range in force.
     pub fn encode_number(
         &self,
         value: f64,
         settings: &impl SettingsView,
-    ) -> Result<u16, ValueError> {
-        let (id, unit, signed) = (self.info.id, self.unit, self.signed());
+    ) -> Result<u32, ValueError> {
+        let (id, unit, words) = (self.info.id, self.unit, self.info.width);
         match self.scale(settings) {
             Some(Ok(Scale::Decimal { scale, range })) => {
-                scale::encode_decimal(id, unit, value, scale, range)
+                scale::encode_decimal(id, unit, value, scale, range).map(|i| words.from_int(i))
             }
             Some(Ok(Scale::Relative {
                 full_scale,
@@ -484,8 +496,9 @@ impl RegisterPlan {
                 value,
                 full_scale,
                 reference,
-                RawRange::word(signed),
-            ),
+                self.full_range(),
+            )
+            .map(|i| words.from_int(i)),
             Some(Err(e)) => Err(e),
             None => {
                 if !value.is_finite() {
@@ -505,14 +518,14 @@ impl RegisterPlan {
         }
     }
 
-    /// The word for a plain integer, checked against the range in force.
-    pub fn encode_word(&self, raw: i64, settings: &impl SettingsView) -> Result<u16, ValueError> {
+    /// The raw value (word, or pair) for a plain integer, checked against the range in force.
+    pub fn encode_word(&self, raw: i64, settings: &impl SettingsView) -> Result<u32, ValueError> {
         let range = match &self.conversion {
             Conversion::Word { range, .. } => range.select(settings),
             Conversion::Enum { .. } => return self.encode_code(u16::try_from(raw).ok(), raw),
             Conversion::Bits { mask, .. } => {
                 return match u16::try_from(raw) {
-                    Ok(word) if word & !mask == 0 => Ok(word),
+                    Ok(word) if word & !mask == 0 => Ok(u32::from(word)),
                     _ => Err(ValueError::OutOfRange {
                         register: self.info.id,
                         value: raw as f64,
@@ -524,12 +537,12 @@ impl RegisterPlan {
             }
             _ => return self.encode_number(raw as f64, settings),
         };
-        scale::encode_int(self.info.id, self.unit, raw, range)
+        scale::encode_int(self.info.id, self.unit, raw, range).map(|i| self.info.width.from_int(i))
     }
 
-    fn encode_code(&self, code: Option<u16>, raw: i64) -> Result<u16, ValueError> {
+    fn encode_code(&self, code: Option<u16>, raw: i64) -> Result<u32, ValueError> {
         match code {
-            Some(code) if self.code_allowed(code) => Ok(code),
+            Some(code) if self.code_allowed(code) => Ok(u32::from(code)),
             _ => Err(ValueError::UnknownCode {
                 register: self.info.id,
                 code: raw.clamp(0, i64::from(u16::MAX)) as u16,
@@ -581,56 +594,59 @@ impl RegisterPlan {
     }
 }
 
-/// A drive's typed value of one register: `f64`, `u16`, `i16`, or a generated enumeration or
-/// bit-field type. Conversions follow the register's [`RegisterPlan`].
+/// A drive's typed value of one register: `f64`, `u16`, `i16`, `u32`, `i32`, or a generated
+/// enumeration or bit-field type. Conversions follow the register's [`RegisterPlan`]; the raw
+/// value is the word, or a 32-bit pair's words joined in the map's order.
 pub trait Value: Sized {
-    /// The value of a word read from the drive.
+    /// The value of a raw value read from the drive.
     fn decode(
-        raw: u16,
+        raw: u32,
         plan: &RegisterPlan,
         settings: &impl SettingsView,
     ) -> Result<Self, ValueError>;
-    /// The word for the value, checked against the plan.
-    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u16, ValueError>;
+    /// The raw value for the value, checked against the plan.
+    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u32, ValueError>;
 }
 
 impl Value for f64 {
     fn decode(
-        raw: u16,
+        raw: u32,
         plan: &RegisterPlan,
         settings: &impl SettingsView,
     ) -> Result<Self, ValueError> {
         plan.decode_number(raw, settings)
     }
-    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u16, ValueError> {
+    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u32, ValueError> {
         plan.encode_number(*self, settings)
     }
 }
 
-impl Value for u16 {
-    fn decode(raw: u16, _: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
-        Ok(raw)
-    }
-    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u16, ValueError> {
-        plan.encode_word(i64::from(*self), settings)
-    }
+/// Plain integers: `u16`/`i16` for one word, `u32`/`i32` for a pair. Decoding takes the raw
+/// bits at the type's width (the generator picks the type from the register's width and sign).
+macro_rules! plain_value {
+    ($($t:ty),*) => {$(
+        impl Value for $t {
+            fn decode(raw: u32, _: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
+                Ok(raw as $t)
+            }
+            fn encode(
+                &self,
+                plan: &RegisterPlan,
+                settings: &impl SettingsView,
+            ) -> Result<u32, ValueError> {
+                plan.encode_word(i64::from(*self), settings)
+            }
+        }
+    )*};
 }
+plain_value!(u16, i16, u32, i32);
 
-impl Value for i16 {
-    fn decode(raw: u16, _: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
-        Ok(raw as i16)
-    }
-    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u16, ValueError> {
-        plan.encode_word(i64::from(*self), settings)
-    }
-}
-
-/// Enumeration and bit-field types: their word is their code.
+/// Enumeration and bit-field types: their word is their code (one register only).
 impl<T: crate::register::Code> Value for T {
-    fn decode(raw: u16, _: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
-        Ok(T::from_code(raw))
+    fn decode(raw: u32, _: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
+        Ok(T::from_code(raw as u16))
     }
-    fn encode(&self, plan: &RegisterPlan, _: &impl SettingsView) -> Result<u16, ValueError> {
+    fn encode(&self, plan: &RegisterPlan, _: &impl SettingsView) -> Result<u32, ValueError> {
         let code = self.code();
         plan.encode_code(
             Some(code).filter(|c| plan.code_allowed(*c)),

@@ -12,6 +12,7 @@ use crate::plan::{Label, RegisterPlan, SettingsView, Value};
 use crate::profile::TransportKind;
 use crate::rule::WriteRule;
 use crate::scale::ValueError;
+use crate::width::Width;
 
 /// Which Modbus table a register lives in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -52,6 +53,8 @@ pub trait Register {
     const TABLE: Table;
     /// `file:line` of the row in the manual.
     const SOURCE: &'static str;
+    /// The registers the value occupies: one word, or a 32-bit pair read and written whole.
+    const WIDTH: Width = Width::Word;
 
     /// The communication address to use with these settings on this transport. Most registers
     /// live at [`Register::ADDRESS`]; a few move with a setting (GPD 515 o2-09), a model variant
@@ -70,9 +73,11 @@ pub trait Register {
         true
     }
 
-    /// Decodes a raw word read from the drive. Data from the drive never makes this panic;
-    /// it fails only when a conversion needs a setting that `settings` does not hold.
-    fn decode(raw: u16, settings: &Self::Settings) -> Result<Self::Value, ValueError>;
+    /// Decodes a raw value read from the drive: the word, or a pair's words joined in the map's
+    /// order ([`Width::join`]). Data from the drive never makes this panic; it fails only when a
+    /// conversion needs a setting that `settings` does not hold. A one-word register takes its
+    /// word widened: `R::decode(word.into(), &settings)`.
+    fn decode(raw: u32, settings: &Self::Settings) -> Result<Self::Value, ValueError>;
 }
 
 /// A register the drive lets you read.
@@ -98,8 +103,9 @@ pub trait Writable: Register {
 
     /// Encodes a value for the wire, checking it against the register's range first. A value
     /// that is out of range, not finite, or an unknown enumeration code is refused here and never
-    /// reaches the wire.
-    fn encode(value: &Self::Value, settings: &Self::Settings) -> Result<u16, ValueError>;
+    /// reaches the wire. A pair's raw value goes out as its words in the map's order
+    /// ([`Width::split`]).
+    fn encode(value: &Self::Value, settings: &Self::Settings) -> Result<u32, ValueError>;
 }
 
 /// When a drive accepts writes to a register.
@@ -224,6 +230,8 @@ pub struct RegisterInfo {
     pub address: u16,
     pub access: Access,
     pub table: Table,
+    /// One register, or two holding one 32-bit value.
+    pub width: Width,
     /// Only reachable as a broadcast (slave 0) write, in its own bit layout.
     pub broadcast_only: bool,
     pub source: &'static str,
@@ -242,7 +250,7 @@ pub trait DriveSettings {
     /// client should read them.
     const DEPENDENCIES: &'static [u16];
 
-    /// Records a raw word read from one of [`DriveSettings::DEPENDENCIES`]. Words from other
+    /// Records a raw word read from one of [`DriveSettings::DEPENDENCIES`]. Width from other
     /// addresses are ignored. Returns whether the word was used.
     fn absorb(&mut self, address: u16, raw: u16) -> bool;
 
@@ -323,6 +331,7 @@ impl<D: DrivePlan, V: Value, A, const I: usize> Register for Reg<D, V, A, I> {
     const ADDRESS: u16 = Self::PLAN.info.address;
     const TABLE: Table = Self::PLAN.info.table;
     const SOURCE: &'static str = Self::PLAN.info.source;
+    const WIDTH: Width = Self::PLAN.info.width;
 
     fn address(settings: &D::Settings, transport: TransportKind) -> u16 {
         Self::PLAN.address_for(settings, transport)
@@ -332,7 +341,7 @@ impl<D: DrivePlan, V: Value, A, const I: usize> Register for Reg<D, V, A, I> {
         Self::PLAN.transports.contains(transport)
     }
 
-    fn decode(raw: u16, settings: &D::Settings) -> Result<V, ValueError> {
+    fn decode(raw: u32, settings: &D::Settings) -> Result<V, ValueError> {
         V::decode(raw, Self::PLAN, settings)
     }
 }
@@ -343,7 +352,7 @@ impl<D: DrivePlan, V: Value, const I: usize> Readable for Reg<D, V, ReadWrite, I
 impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, WriteOnly, I> {
     const WRITE_RESTRICTION: WriteRestriction = Self::PLAN.restriction;
     const RULE: WriteRule = Self::PLAN.write_rule();
-    fn encode(value: &V, settings: &D::Settings) -> Result<u16, ValueError> {
+    fn encode(value: &V, settings: &D::Settings) -> Result<u32, ValueError> {
         value.encode(Self::PLAN, settings)
     }
 }
@@ -351,7 +360,7 @@ impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, WriteOnly, I
 impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, ReadWrite, I> {
     const WRITE_RESTRICTION: WriteRestriction = Self::PLAN.restriction;
     const RULE: WriteRule = Self::PLAN.write_rule();
-    fn encode(value: &V, settings: &D::Settings) -> Result<u16, ValueError> {
+    fn encode(value: &V, settings: &D::Settings) -> Result<u32, ValueError> {
         value.encode(Self::PLAN, settings)
     }
 }

@@ -4,6 +4,7 @@
 use crate::profile::TransportKind;
 use crate::register::Access;
 use crate::scale::RawRange;
+use crate::width::{Width, WordOrder};
 
 /// The transports a register exists on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -76,6 +77,8 @@ pub struct WriteRule {
     pub raw: RawRange,
     /// Bits that must be 0 (reserved bits of a bit-field register).
     pub reserved: u16,
+    /// One register, or a 32-bit pair that is only written whole, both words in one request.
+    pub width: Width,
 }
 
 impl WriteRule {
@@ -91,6 +94,7 @@ impl WriteRule {
             also_at: &[],
             raw: RawRange { min, max },
             reserved: 0,
+            width: Width::Word,
         }
     }
 
@@ -122,8 +126,30 @@ impl WriteRule {
         WriteRule { reserved, ..self }
     }
 
-    /// Whether the register occupies `address` (under some setting, variant or transport).
+    /// The rule for a 32-bit pair whose words go in `order`.
+    pub const fn pair(self, order: WordOrder) -> WriteRule {
+        WriteRule {
+            width: Width::Pair(order),
+            ..self
+        }
+    }
+
+    /// Whether the register starts at `address` (under some setting, variant or transport).
     pub fn occupies(&self, address: u16) -> bool {
         self.address == address || self.also_at.contains(&address)
+    }
+}
+
+impl WriteRule {
+    /// Where `address` falls in the register: `Some(0)` for its first (or only) word, `Some(1)`
+    /// for the second word of a pair, `None` outside it.
+    pub fn word_index(&self, address: u16) -> Option<u16> {
+        if self.occupies(address) {
+            return Some(0);
+        }
+        match self.width {
+            Width::Pair(_) if self.occupies(address.wrapping_sub(1)) => Some(1),
+            _ => None,
+        }
     }
 }

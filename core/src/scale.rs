@@ -13,6 +13,8 @@
 
 use core::fmt;
 
+use crate::width::Width;
+
 /// Why a value cannot be converted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ValueError {
@@ -25,12 +27,15 @@ pub enum ValueError {
         max: f64,
         unit: &'static str,
     },
-    /// The manual prints no range for the register, and the value does not fit its 16-bit word.
+    /// The manual prints no range for the register, and the value does not fit its word (or
+    /// its pair of words: `bits` is 16 or 32).
     #[error(
-        "{register}: {value} {unit} does not fit the register's 16-bit word ({min} ..= {max} {unit}); the manual prints no range for it"
+        "{register}: {value} {unit} does not fit the register's {bits}-bit {} ({min} ..= {max} {unit}); the manual prints no range for it",
+        word_or_value(*.bits)
     )]
     WordOverflow {
         register: &'static str,
+        bits: u32,
         value: f64,
         min: f64,
         max: f64,
@@ -67,6 +72,10 @@ pub enum ValueError {
         setting: &'static str,
         value: f64,
     },
+}
+
+fn word_or_value(bits: u32) -> &'static str {
+    if bits > 16 { "value" } else { "word" }
 }
 
 /// A decimal scale factor: engineering = raw × `mantissa` / 10^`exponent`.
@@ -154,11 +163,6 @@ pub const fn word_to_int(raw: u16, signed: bool) -> i64 {
     }
 }
 
-/// Converts an integer already checked against the register's raw range to a word.
-pub const fn int_to_word(raw: i64) -> u16 {
-    raw as u16
-}
-
 /// Limits of a register in raw integers, with the engineering values for messages.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RawRange {
@@ -177,9 +181,12 @@ fn outside(
     min: f64,
     max: f64,
 ) -> ValueError {
-    if range == RawRange::word(true) || range == RawRange::word(false) {
+    let full = |w: Width| range == w.range(true) || range == w.range(false);
+    let pair = Width::Pair(crate::width::WordOrder::HighFirst);
+    if full(Width::Word) || full(pair) {
         ValueError::WordOverflow {
             register,
+            bits: if full(pair) { 32 } else { 16 },
             value,
             min,
             max,
@@ -222,14 +229,15 @@ impl RawRange {
     }
 }
 
-/// Encodes an engineering value with a decimal scale, checking the raw range.
+/// Encodes an engineering value with a decimal scale, checking the raw range: the raw integer
+/// ([`Width::from_int`] makes it the register's bits).
 pub fn encode_decimal(
     register: &'static str,
     unit: &'static str,
     value: f64,
     scale: Decimal,
     range: RawRange,
-) -> Result<u16, ValueError> {
+) -> Result<i64, ValueError> {
     let Some(raw) = scale.encode(value) else {
         return Err(ValueError::NotFinite { register, value });
     };
@@ -237,7 +245,7 @@ pub fn encode_decimal(
         let (min, max) = (scale.decode(range.min), scale.decode(range.max));
         return Err(outside(register, unit, value, range, min, max));
     }
-    Ok(int_to_word(raw))
+    Ok(raw)
 }
 
 /// Decodes a raw word with a decimal scale.
@@ -245,13 +253,13 @@ pub fn decode_decimal(raw: u16, signed: bool, scale: Decimal) -> f64 {
     scale.decode(word_to_int(raw, signed))
 }
 
-/// Engineering value of a word scaled relative to a reference quantity:
+/// Engineering value of a raw integer scaled relative to a reference quantity:
 /// `full_scale` raw = 100 % of `reference` ("30000 = 100 % of Cn-02").
-pub fn decode_relative(raw: u16, signed: bool, full_scale: f64, reference: f64) -> f64 {
-    word_to_int(raw, signed) as f64 * reference / full_scale
+pub fn decode_relative(raw: i64, full_scale: f64, reference: f64) -> f64 {
+    raw as f64 * reference / full_scale
 }
 
-/// Encodes a value relative to a reference quantity, checking the raw range.
+/// Encodes a value relative to a reference quantity, checking the raw range; the raw integer.
 pub fn encode_relative(
     register: &'static str,
     setting: &'static str,
@@ -260,7 +268,7 @@ pub fn encode_relative(
     full_scale: f64,
     reference: f64,
     range: RawRange,
-) -> Result<u16, ValueError> {
+) -> Result<i64, ValueError> {
     if !value.is_finite() {
         return Err(ValueError::NotFinite { register, value });
     }
@@ -277,21 +285,21 @@ pub fn encode_relative(
         let max = range.max as f64 * reference / full_scale;
         return Err(outside(register, unit, value, range, min, max));
     }
-    Ok(int_to_word(raw as i64))
+    Ok(raw as i64)
 }
 
-/// Encodes a plain integer word, checking the raw range.
+/// Checks a plain integer against the raw range.
 pub fn encode_int(
     register: &'static str,
     unit: &'static str,
     raw: i64,
     range: RawRange,
-) -> Result<u16, ValueError> {
+) -> Result<i64, ValueError> {
     if !range.contains(raw) {
         let (min, max) = (range.min as f64, range.max as f64);
         return Err(outside(register, unit, raw as f64, range, min, max));
     }
-    Ok(int_to_word(raw))
+    Ok(raw)
 }
 
 #[cfg(test)]
@@ -315,7 +323,8 @@ mod tests {
                     let range = RawRange::word(signed);
                     let back = encode_decimal("t", "", value, scale, range).unwrap();
                     assert_eq!(
-                        back, raw,
+                        Width::Word.from_int(back),
+                        u32::from(raw),
                         "scale {scale} signed {signed} raw {raw} value {value}"
                     );
                 }
@@ -373,7 +382,7 @@ mod tests {
     #[test]
     fn relative_scale_matches_the_tds_v8_example() {
         // 5DC0h = 24000 = 80 % of Cn-02; with Cn-02 = 60 Hz that is 48 Hz.
-        assert_eq!(decode_relative(0x5DC0, false, 30000.0, 60.0), 48.0);
+        assert_eq!(decode_relative(0x5DC0, 30000.0, 60.0), 48.0);
         assert_eq!(
             encode_relative(
                 "f",

@@ -10,7 +10,6 @@ use std::fmt;
 use drivemap_codegen::ir::{Drive, Register};
 use drivemap_runtime::ValueError;
 use drivemap_runtime::plan::{Conversion, Field, RegisterPlan};
-use drivemap_runtime::scale;
 
 use crate::settings::{LiveSettings, View};
 
@@ -132,17 +131,19 @@ fn field_values(fields: &[Field], raw: u16) -> Vec<FieldValue> {
         .collect()
 }
 
-/// Decodes a raw word read from the drive, by the register's plan.
+/// Decodes a raw value read from the drive (its word, or a 32-bit pair's words joined in the
+/// map's order: `plan.info.width.join(words)`), by the register's plan.
 pub fn decode(
     drive: &Drive,
     r: &Register,
-    raw: u16,
+    raw: u32,
     settings: &LiveSettings,
 ) -> Result<Value, ValueError> {
     let (plan, view) = planned(drive, r, settings);
     match &plan.conversion {
-        Conversion::Word { signed, .. } => Ok(Value::Word(scale::word_to_int(raw, *signed))),
+        Conversion::Word { .. } => Ok(Value::Word(plan.int(raw))),
         Conversion::Enum { .. } => {
+            let raw = raw as u16;
             let label = plan.label(raw);
             Ok(Value::Code {
                 code: raw,
@@ -151,7 +152,7 @@ pub fn decode(
             })
         }
         Conversion::Bits { mask, fields } => {
-            let raw = raw & mask;
+            let raw = raw as u16 & mask;
             Ok(Value::Bits {
                 raw,
                 fields: field_values(fields, raw),
@@ -173,13 +174,14 @@ pub fn decode(
 }
 
 /// Encodes an engineering number (a value in the register's unit, a code, or a raw word for
-/// words and bit fields), checking the range first, by the register's plan.
+/// words and bit fields), checking the range first, by the register's plan: the raw value (a
+/// pair's goes out as `plan.info.width.split(raw)`).
 pub fn encode(
     drive: &Drive,
     r: &Register,
     value: f64,
     settings: &LiveSettings,
-) -> Result<u16, ValueError> {
+) -> Result<u32, ValueError> {
     let (plan, view) = planned(drive, r, settings);
     plan.encode_number(value, &view)
 }
@@ -207,11 +209,11 @@ impl std::error::Error for InputError {}
 fn parse_number(text: &str) -> Option<f64> {
     let t = text.trim();
     if let Some(hex) = t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
-        return u16::from_str_radix(hex, 16).ok().map(f64::from);
+        return u32::from_str_radix(hex, 16).ok().map(f64::from);
     }
     if let Some(hex) = t.strip_suffix('h').or_else(|| t.strip_suffix('H')) {
         if hex.chars().all(|c| c.is_ascii_hexdigit()) && !hex.is_empty() {
-            return u16::from_str_radix(hex, 16).ok().map(f64::from);
+            return u32::from_str_radix(hex, 16).ok().map(f64::from);
         }
     }
     t.parse::<f64>().ok()
@@ -300,7 +302,7 @@ pub fn parse_value(
     r: &Register,
     text: &str,
     settings: &LiveSettings,
-) -> Result<u16, InputError> {
+) -> Result<u32, InputError> {
     let text = text.trim();
     let plan = drive.register_plan(r);
     let value = match &plan.conversion {

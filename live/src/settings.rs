@@ -103,7 +103,7 @@ impl LiveSettings {
             if let Quantity::Register(i) = q {
                 let r = &plan.registers[*i];
                 if r.info.address == address {
-                    if let Ok(v) = r.decode_number(raw, &self.view(drive)) {
+                    if let Ok(v) = r.decode_number(u32::from(raw), &self.view(drive)) {
                         self.references.insert(r.info.id.to_owned(), v);
                         used = true;
                     }

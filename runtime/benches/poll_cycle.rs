@@ -70,6 +70,7 @@ fn registers() -> Vec<RegisterInfo> {
             address,
             access: Access::Read,
             table: Table::Holding,
+            width: drivemap_runtime::Width::Word,
             broadcast_only: false,
             source: "",
         })

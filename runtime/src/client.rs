@@ -689,8 +689,9 @@ pub(crate) fn io_error(checked: &Checked<'_>, source: std::io::Error) -> Error {
     }
 }
 
-/// Largest number of registers a typed multi-register call handles in one request.
-pub const MAX_SET: usize = 8;
+/// Largest number of words a typed multi-register call handles in one request (8 registers,
+/// each of which may be a 32-bit pair).
+pub const MAX_SET: usize = 16;
 
 /// The public request methods, written once for the blocking and the async client: `$asy` is
 /// empty or `async`, `$aw` empty or `.await`. Each client supplies `transact`.
@@ -731,17 +732,30 @@ macro_rules! client_methods {
         self.write_single(slave, WriteTarget::Addresses, address, value) $($aw)*
     }
 
-    /// Writes the raw word of the register `rule` describes at `address` (its address under
+    /// Writes the raw value of the register `rule` describes at `address` (its address under
     /// the settings in force), through the write gate: for tools that interpret a map at run
     /// time. Applications use [`write`](Self::write), which encodes and finds the rule itself.
+    /// A word goes out with 06h (10h where the drive lacks 06h); a 32-bit pair as its two words
+    /// in the map's order in one 10h request, so the drive never holds half a value.
     pub $($asy)* fn write_rule(
         &mut self,
         slave: u8,
         rule: &WriteRule,
         address: u16,
-        raw: u16,
+        raw: u32,
     ) -> Result<(), Error> {
-        self.write_single(slave, WriteTarget::Rule(rule), address, raw) $($aw)*
+        match rule.width {
+            crate::register::Width::Word => self.write_single(slave, WriteTarget::Rule(rule), address, raw as u16) $($aw)*,
+            crate::register::Width::Pair(_) => {
+                let words = rule.width.split(raw);
+                let request = Request::WriteMultiple {
+                    address,
+                    values: Words::Native(&words),
+                };
+                let retries = self.core.options.retries;
+                self.transact(slave, request, &mut [], Purpose::Write(WriteTarget::Rule(rule)), retries) $($aw)*
+            }
+        }
     }
 
     $($asy)* fn write_single(
@@ -802,9 +816,10 @@ macro_rules! client_methods {
     ) -> Result<R::Value, Error> {
         self.core.on_transport::<R>()?;
         let address = R::address(settings, self.core.kind);
-        let mut raw = [0u16; 1];
-        self.read_table(slave, R::TABLE, address, &mut raw) $($aw)*?;
-        Ok(R::decode(raw[0], settings)?)
+        let mut raw = [0u16; 2];
+        let raw = &mut raw[..usize::from(R::WIDTH.count())];
+        self.read_table(slave, R::TABLE, address, raw) $($aw)*?;
+        Ok(R::decode(R::WIDTH.join(raw), settings)?)
     }
 
     /// Writes a typed value. The value is range-checked first; nothing out of range is sent.

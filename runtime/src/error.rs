@@ -183,6 +183,15 @@ pub enum Refusal {
         drive: &'static str,
         register: &'static str,
     },
+    /// A write that covers one word of a 32-bit pair without the other: the drive would take
+    /// half a value.
+    #[error(
+        "{register} is a 32-bit value in two registers: write both words in one request, from its first address (not from {address:04X}h)"
+    )]
+    SplitPair {
+        register: &'static str,
+        address: u16,
+    },
     /// A register written at an address it does not occupy.
     #[error("{register} is not at {address:04X}h")]
     NotAtAddress {

@@ -31,6 +31,7 @@ use crate::error::Refusal;
 use crate::profile::{Profile, TransportKind};
 use crate::rtu;
 pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
+use drivemap_core::width::Width;
 
 /// What a write is addressed to.
 #[derive(Debug, Clone, Copy)]
@@ -45,6 +46,8 @@ pub enum WriteTarget<'a> {
 
 /// Checks a write of `words` starting at communication address `address` to `slave` over
 /// `kind` against the map. Nothing is sent; see the module documentation for what is refused.
+/// A 32-bit pair is checked as one value, and only whole: a write that covers one of its words
+/// without the other is refused ([`Refusal::SplitPair`]).
 pub fn check(
     profile: &Profile,
     kind: TransportKind,
@@ -53,13 +56,20 @@ pub fn check(
     address: u16,
     words: impl IntoIterator<Item = u16>,
 ) -> Result<(), Refusal> {
-    for (i, word) in words.into_iter().enumerate() {
-        let at = address.wrapping_add(i as u16);
-        match target {
-            WriteTarget::Rule(rule) => check_rule(profile, kind, slave, rule, at, word)?,
-            WriteTarget::Addresses if profile.writes.is_empty() => {}
-            WriteTarget::Addresses => check_address(profile, kind, slave, at, word)?,
+    let mut words = words.into_iter().peekable();
+    let mut at = address;
+    while let Some(word) = words.next() {
+        let used = match target {
+            WriteTarget::Rule(rule) => {
+                check_rule(profile, kind, slave, rule, at, word, words.peek())?
+            }
+            WriteTarget::Addresses if profile.writes.is_empty() => 1,
+            WriteTarget::Addresses => check_address(profile, kind, slave, at, word, words.peek())?,
+        };
+        if used == 2 {
+            words.next();
         }
+        at = at.wrapping_add(used);
     }
     Ok(())
 }
@@ -82,19 +92,24 @@ fn space(profile: &Profile, slave: u8, rule: &WriteRule) -> Result<(), Refusal> 
     }
 }
 
+/// Checks the write at `address` against the writable registers there; the number of words
+/// the register that accepts it takes (2 for a pair, whose second word is `next`).
 fn check_address(
     profile: &Profile,
     kind: TransportKind,
     slave: u8,
     address: u16,
     word: u16,
-) -> Result<(), Refusal> {
+    next: Option<&u16>,
+) -> Result<u16, Refusal> {
     let mut first_refusal = None;
     for rule in profile.writes.iter().filter(|r| {
-        r.occupies(address) && r.transports.contains(kind) && space(profile, slave, r).is_ok()
+        r.word_index(address).is_some()
+            && r.transports.contains(kind)
+            && space(profile, slave, r).is_ok()
     }) {
-        match check_rule(profile, kind, slave, rule, address, word) {
-            Ok(()) => return Ok(()),
+        match check_rule(profile, kind, slave, rule, address, word, next) {
+            Ok(used) => return Ok(used),
             Err(e) => {
                 first_refusal.get_or_insert(e);
             }
@@ -137,6 +152,8 @@ pub fn check_link(
     space(profile, slave, rule)
 }
 
+/// Checks the write of `word` (and, for a pair, `next`) at `address` against `rule`; the number
+/// of words the register takes.
 fn check_rule(
     profile: &Profile,
     kind: TransportKind,
@@ -144,24 +161,24 @@ fn check_rule(
     rule: &WriteRule,
     address: u16,
     word: u16,
-) -> Result<(), Refusal> {
+    next: Option<&u16>,
+) -> Result<u16, Refusal> {
     check_link(profile, kind, slave, rule)?;
     let register = rule.register;
-    if !rule.occupies(address) {
-        return Err(Refusal::NotAtAddress { register, address });
-    }
-    let reserved = word & rule.reserved;
+    let raw = match (rule.width, rule.word_index(address), next) {
+        (_, None, _) => return Err(Refusal::NotAtAddress { register, address }),
+        (Width::Word, _, _) => u32::from(word),
+        (Width::Pair(_), Some(0), Some(&second)) => rule.width.join(&[word, second]),
+        (Width::Pair(_), _, _) => return Err(Refusal::SplitPair { register, address }),
+    };
+    let reserved = (raw as u16) & rule.reserved;
     if reserved != 0 {
         return Err(Refusal::ReservedBits {
             register,
             bits: reserved,
         });
     }
-    let raw = if rule.raw.min < 0 {
-        i64::from(word as i16)
-    } else {
-        i64::from(word)
-    };
+    let raw = rule.width.to_int(raw, rule.raw.min < 0);
     if !rule.raw.contains(raw) {
         return Err(Refusal::RawOutOfRange {
             register,
@@ -170,5 +187,5 @@ fn check_rule(
             max: rule.raw.max,
         });
     }
-    Ok(())
+    Ok(rule.width.count())
 }

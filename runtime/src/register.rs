@@ -3,3 +3,4 @@
 
 pub use drivemap_core::plan::*;
 pub use drivemap_core::register::*;
+pub use drivemap_core::width::{Width, WordOrder};

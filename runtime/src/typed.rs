@@ -7,7 +7,7 @@
 
 use crate::error::Refusal;
 use crate::profile::TransportKind;
-use crate::register::{Readable, Register, Table, Writable};
+use crate::register::{Readable, Register, Table, Width, Writable};
 use crate::scale::ValueError;
 
 /// Consecutive registers handled in one request.
@@ -16,7 +16,7 @@ pub trait RegisterSet {
     type Settings;
     /// The typed values, one per member, in address order.
     type Values;
-    /// Number of registers.
+    /// Number of words: one per register, two per 32-bit pair.
     const LEN: usize;
 
     /// Address of the first register and the table, after checking that the members are
@@ -26,13 +26,15 @@ pub trait RegisterSet {
 
 /// A set whose members can all be read.
 pub trait ReadSet: RegisterSet {
-    /// Decodes `raw` (exactly [`RegisterSet::LEN`] words) into typed values.
+    /// Decodes `raw` (exactly [`RegisterSet::LEN`] words) into typed values; a pair's words are
+    /// joined in the map's order.
     fn decode(raw: &[u16], settings: &Self::Settings) -> Result<Self::Values, ValueError>;
 }
 
 /// A set whose members can all be written.
 pub trait WriteSet: RegisterSet {
-    /// Encodes the values into `out` (exactly [`RegisterSet::LEN`] words), checking each range.
+    /// Encodes the values into `out` (exactly [`RegisterSet::LEN`] words), checking each range;
+    /// a pair's value becomes its two words in the map's order.
     fn encode(
         values: &Self::Values,
         settings: &Self::Settings,
@@ -68,13 +70,13 @@ fn check_next<R: Register>(
 }
 
 macro_rules! register_set {
-    ($len:expr; $first:ident $fv:ident $(, $rest:ident $rv:ident)*) => {
+    ($first:ident $fv:ident $(, $rest:ident $rv:ident)*) => {
         impl<$first: Register, $($rest: Register<Settings = $first::Settings>),*> RegisterSet
             for ($first, $($rest,)*)
         {
             type Settings = $first::Settings;
             type Values = ($first::Value, $($rest::Value,)*);
-            const LEN: usize = $len;
+            const LEN: usize = $first::WIDTH.count() as usize $(+ $rest::WIDTH.count() as usize)*;
 
             #[allow(unused_assignments, unused_mut, unused_variables)]
             fn layout(settings: &Self::Settings, kind: TransportKind) -> Result<(u16, Table), Refusal> {
@@ -82,10 +84,10 @@ macro_rules! register_set {
                     return Err(Refusal::NotOnTransport { register: $first::ID, transport: kind });
                 }
                 let start = $first::address(settings, kind);
-                let mut index = 0u16;
+                let mut index = $first::WIDTH.count();
                 $(
-                    index += 1;
                     check_next::<$rest>($first::ID, start, $first::TABLE, index, settings, kind)?;
+                    index += $rest::WIDTH.count();
                 )*
                 Ok((start, $first::TABLE))
             }
@@ -96,10 +98,16 @@ macro_rules! register_set {
         {
             #[allow(unused_mut)]
             fn decode(raw: &[u16], settings: &Self::Settings) -> Result<Self::Values, ValueError> {
-                let mut words = raw.iter().copied();
+                let mut rest = raw;
+                let mut take = |width: Width| {
+                    let n = usize::from(width.count()).min(rest.len());
+                    let (these, after) = rest.split_at(n);
+                    rest = after;
+                    width.join(these)
+                };
                 Ok((
-                    $first::decode(words.next().unwrap_or(0), settings)?,
-                    $($rest::decode(words.next().unwrap_or(0), settings)?,)*
+                    $first::decode(take($first::WIDTH), settings)?,
+                    $($rest::decode(take($rest::WIDTH), settings)?,)*
                 ))
             }
         }
@@ -115,25 +123,26 @@ macro_rules! register_set {
             ) -> Result<(), ValueError> {
                 let ($fv, $($rv,)*) = values;
                 let mut slots = out.iter_mut();
-                if let Some(slot) = slots.next() {
-                    *slot = $first::encode($fv, settings)?;
-                }
-                $(
-                    if let Some(slot) = slots.next() {
-                        *slot = $rest::encode($rv, settings)?;
+                let mut put = |width: Width, raw: u32| {
+                    for word in &width.split(raw)[..usize::from(width.count())] {
+                        if let Some(slot) = slots.next() {
+                            *slot = *word;
+                        }
                     }
-                )*
+                };
+                put($first::WIDTH, $first::encode($fv, settings)?);
+                $(put($rest::WIDTH, $rest::encode($rv, settings)?);)*
                 Ok(())
             }
         }
     };
 }
 
-register_set!(1; A a);
-register_set!(2; A a, B b);
-register_set!(3; A a, B b, C c);
-register_set!(4; A a, B b, C c, D d);
-register_set!(5; A a, B b, C c, D d, E e);
-register_set!(6; A a, B b, C c, D d, E e, F f);
-register_set!(7; A a, B b, C c, D d, E e, F f, G g);
-register_set!(8; A a, B b, C c, D d, E e, F f, G g, H h);
+register_set!(A a);
+register_set!(A a, B b);
+register_set!(A a, B b, C c);
+register_set!(A a, B b, C c, D d);
+register_set!(A a, B b, C c, D d, E e);
+register_set!(A a, B b, C c, D d, E e, F f);
+register_set!(A a, B b, C c, D d, E e, F f, G g);
+register_set!(A a, B b, C c, D d, E e, F f, G g, H h);

@@ -329,18 +329,25 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         .into())
     }
 
-    fn read_word(&mut self, row: u16) -> Result<u16, Error> {
+    /// The raw value of plan row `row`: its word, or a 32-bit pair read in one request.
+    fn read_raw(&mut self, row: u16) -> Result<u32, Error> {
         let r = self.row(row);
         let address = r.address_for(&self.settings, self.kind);
-        let mut raw = [0u16; 1];
+        let mut raw = [0u16; 2];
+        let words = &mut raw[..usize::from(r.info.width.count())];
         match r.info.table {
-            Table::Input => self.client.read_input(self.slave, address, &mut raw)?,
-            Table::Holding => self.client.read_holding(self.slave, address, &mut raw)?,
+            Table::Input => self.client.read_input(self.slave, address, words)?,
+            Table::Holding => self.client.read_holding(self.slave, address, words)?,
         }
-        Ok(raw[0])
+        Ok(r.info.width.join(words))
     }
 
-    fn write_word(&mut self, row: u16, raw: u16) -> Result<(), Error> {
+    /// The word of a one-register row (bit fields and codes: the map keeps them in one word).
+    fn read_word(&mut self, row: u16) -> Result<u16, Error> {
+        Ok(self.read_raw(row)? as u16)
+    }
+
+    fn write_word(&mut self, row: u16, raw: u32) -> Result<(), Error> {
         let r = self.row(row);
         let address = r.address_for(&self.settings, self.kind);
         let rule = r.write_rule();
@@ -352,7 +359,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         let p = self.place(role, "register")?;
         match p.target {
             Target::Register(row) => {
-                let raw = self.read_word(row)?;
+                let raw = self.read_raw(row)?;
                 Ok(self.row(row).decode_number(raw, &self.settings)?)
             }
             Target::External { slot, name } => self.settings.quantity(slot).ok_or_else(|| {
@@ -391,7 +398,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             }
         }
         for (row, word) in words {
-            self.write_word(row, word)?;
+            self.write_word(row, u32::from(word))?;
             if let Some((_, written)) = self.shadow.iter_mut().find(|(r, _)| *r == row) {
                 *written = word;
             }

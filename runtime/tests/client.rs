@@ -52,9 +52,9 @@ macro_rules! register {
             const ADDRESS: u16 = $addr;
             const TABLE: Table = Table::Holding;
             const SOURCE: &'static str = "000_032dced3a1e91a75.txt:853";
-            fn decode(raw: u16, settings: &Settings) -> Result<$value, ValueError> {
+            fn decode(raw: u32, settings: &Settings) -> Result<$value, ValueError> {
                 let f: fn(u16, &Settings) -> Result<$value, ValueError> = $decode;
-                f(raw, settings)
+                f(raw as u16, settings)
             }
         }
         impl Readable for $ty {}
@@ -88,8 +88,8 @@ register!(
 );
 impl Writable for OperationCommand {
     const RULE: WriteRule = WriteRule::rw("operation_command", 0x0001, 0, 65535).reserved(0xF800);
-    fn encode(value: &Command, _: &Settings) -> Result<u16, ValueError> {
-        Ok(value.bits() & 0x07FF)
+    fn encode(value: &Command, _: &Settings) -> Result<u32, ValueError> {
+        Ok(u32::from(value.bits() & 0x07FF))
     }
 }
 impl BitRegister for OperationCommand {
@@ -111,11 +111,12 @@ register!(
 );
 impl Writable for FrequencyReference {
     const RULE: WriteRule = WriteRule::rw("frequency_reference", 0x0002, 0, 40000);
-    fn encode(value: &f64, s: &Settings) -> Result<u16, ValueError> {
+    fn encode(value: &f64, s: &Settings) -> Result<u32, ValueError> {
         let scale = frequency_scale(Self::ID, s)?;
         // 0-400 Hz in either unit.
         let max = scale.encode(400.0).unwrap_or(0);
         scale::encode_decimal(Self::ID, "Hz", *value, scale, RawRange { min: 0, max })
+            .map(|raw| raw as u32)
     }
 }
 

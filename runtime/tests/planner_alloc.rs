@@ -55,6 +55,7 @@ static REGISTERS: &[RegisterInfo] = &{
         address: 0,
         access: Access::Read,
         table: Table::Holding,
+        width: drivemap_runtime::Width::Word,
         broadcast_only: false,
         source: "",
     }; 40];

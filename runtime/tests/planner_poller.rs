@@ -55,6 +55,7 @@ const fn info(address: u16, access: Access, table: Table) -> RegisterInfo {
         address,
         access,
         table,
+        width: drivemap_runtime::Width::Word,
         broadcast_only: false,
         source: "",
     }
@@ -264,7 +265,7 @@ impl Register for OutputFrequency {
     const ADDRESS: u16 = 0x23;
     const TABLE: Table = Table::Holding;
     const SOURCE: &'static str = "";
-    fn decode(raw: u16, _: &()) -> Result<f64, ValueError> {
+    fn decode(raw: u32, _: &()) -> Result<f64, ValueError> {
         Ok(f64::from(raw) / 100.0)
     }
 }

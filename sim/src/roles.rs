@@ -99,12 +99,15 @@ pub(crate) struct Bit {
 }
 
 impl Bit {
-    pub fn holds(self, raw: u16) -> bool {
-        self.field.holds(raw)
+    /// Whether the field holds its `on` code in the register's raw value (a bit-field
+    /// register: one word).
+    pub fn holds(self, raw: u32) -> bool {
+        self.field.holds(raw as u16)
     }
 
-    pub fn put(self, raw: u16, code: u16) -> u16 {
-        self.field.put(raw, code)
+    /// The register's raw value with the field set to `code`.
+    pub fn put(self, raw: u32, code: u16) -> u32 {
+        u32::from(self.field.put(raw as u16, code))
     }
 }
 
@@ -149,9 +152,10 @@ impl StatusField {
         })
     }
 
-    pub fn put(&self, raw: u16, code: u16) -> u16 {
+    /// The register's raw value (one word) with the field set to `code`.
+    pub fn put(&self, raw: u32, code: u16) -> u32 {
         let mask = ((((1u32 << self.width) - 1) << self.lsb) & 0xFFFF) as u16;
-        (raw & !mask) | ((code << self.lsb) & mask)
+        u32::from((raw as u16 & !mask) | ((code << self.lsb) & mask))
     }
 }
 

@@ -67,8 +67,8 @@ fn addressing_is_minus_one_on_rtu_and_zero_on_tcp() {
 fn printed_frames_are_the_example_encoded() {
     let s = settings();
     let values = [
-        acn::AccTime::encode(&5.0, &s).unwrap(),
-        acn::DecTime::encode(&10.0, &s).unwrap(),
+        acn::AccTime::encode(&5.0, &s).unwrap() as u16,
+        acn::DecTime::encode(&10.0, &s).unwrap() as u16,
     ];
     let address = acn::PROFILE
         .address_offsets

@@ -81,12 +81,12 @@ fn live_number(plan: &RegisterPlan, value: Result<Value, String>) -> Result<f64,
 /// What the generated code reads from a word: a number, a code, or the bits the map defines.
 fn generated_number(
     plan: &RegisterPlan,
-    raw: u16,
+    raw: u32,
     settings: &impl SettingsView,
 ) -> Result<f64, String> {
     match plan.conversion {
-        Conversion::Enum { .. } => Ok(f64::from(raw)),
-        Conversion::Bits { mask, .. } => Ok(f64::from(raw & mask)),
+        Conversion::Enum { .. } => Ok(f64::from(raw as u16)),
+        Conversion::Bits { mask, .. } => Ok(f64::from(raw as u16 & mask)),
         _ => plan.decode_number(raw, settings).map_err(|e| e.to_string()),
     }
 }
@@ -96,7 +96,9 @@ struct Case {
     variants: Vec<u8>,
     dependencies: Vec<u16>,
     externals: Vec<Option<f64>>,
-    raws: Vec<u16>,
+    /// Raw values: words, or a 32-bit pair's joined words (a one-word register reads the low
+    /// word, on both sides).
+    raws: Vec<u32>,
     values: Vec<f64>,
 }
 
@@ -108,6 +110,7 @@ fn case_strategy(axes: &[usize], dependencies: usize, quantities: usize) -> Boxe
     let value = prop_oneof![
         -1000.0f64..70000.0,
         (-10i64..70000).prop_map(|v| v as f64),
+        (-5_000_000_000i64..5_000_000_000).prop_map(|v| v as f64),
         Just(f64::NAN),
         Just(f64::INFINITY),
         (0u16..16).prop_map(f64::from),
@@ -119,7 +122,10 @@ fn case_strategy(axes: &[usize], dependencies: usize, quantities: usize) -> Boxe
             dependencies,
         ),
         prop::collection::vec(prop::option::of(0.1f64..1000.0), quantities),
-        prop::collection::vec(any::<u16>(), 3),
+        prop::collection::vec(
+            prop_oneof![any::<u16>().prop_map(u32::from), any::<u32>()],
+            3,
+        ),
         prop::collection::vec(value, 3),
     )
         .prop_map(|(variants, dependencies, externals, raws, values)| Case {

@@ -48,9 +48,9 @@ fn step_frame(
 ) -> Vec<u8> {
     let s = settings();
     let mut words = [0u16; 8];
-    words[0] = tds::OperationCommand::encode(&run, &s).unwrap();
-    words[1] = tds::FrequencyCommand::encode(&hz, &s).unwrap();
-    words[7] = tds::OutputTerminalCommand::encode(&terminals, &s).unwrap();
+    words[0] = tds::OperationCommand::encode(&run, &s).unwrap() as u16;
+    words[1] = tds::FrequencyCommand::encode(&hz, &s).unwrap() as u16;
+    words[7] = tds::OutputTerminalCommand::encode(&terminals, &s).unwrap() as u16;
     let request = Request::WriteMultiple {
         address: tds::OperationCommand::ADDRESS,
         values: Words::Native(&words),

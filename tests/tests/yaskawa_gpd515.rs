@@ -72,15 +72,18 @@ fn read_response_decodes_to_the_stated_values() {
     assert_eq!(w, [0x1770, 0x1770, 0x0109, 0x0000]);
 
     // 20h Frequency Reference: 1770h = 6000 dec. (60.00 Hz), lines 552-555.
-    assert_eq!(gpd::MonitorFrequencyReference::decode(w[0], &s), Ok(60.0));
+    assert_eq!(
+        gpd::MonitorFrequencyReference::decode(w[0].into(), &s),
+        Ok(60.0)
+    );
     // 21h Output Frequency: 1770h = 6000 dec. (60.00 Hz), lines 556-559.
-    assert_eq!(gpd::OutputFrequency::decode(w[1], &s), Ok(60.0));
+    assert_eq!(gpd::OutputFrequency::decode(w[1].into(), &s), Ok(60.0));
     // 22h Output Current: 109h = 265 dec. (drive rating / 8192), lines 560-577.
-    let amps = gpd::OutputCurrent::decode(w[2], &s).unwrap();
+    let amps = gpd::OutputCurrent::decode(w[2].into(), &s).unwrap();
     assert!((amps - 265.0 * rated / 8192.0).abs() < 1e-12, "{amps}");
     // 23h Control Method: 00h = 0 (V/f Control), lines 585-594.
     assert_eq!(
-        gpd::ControlMethod::decode(w[3], &s),
+        gpd::ControlMethod::decode(w[3].into(), &s),
         Ok(gpd::ControlMethodValue::VFControl)
     );
     assert_eq!(
@@ -199,7 +202,7 @@ fn write_command_is_built_from_typed_values() {
     let hz_word = gpd::FrequencyReference::encode(&60.0, &s).unwrap();
     assert_eq!(hz_word, 0x1770);
 
-    let values = [run_word, hz_word];
+    let values = [run_word as u16, hz_word as u16];
     let request = Request::WriteMultiple {
         address: start,
         values: Words::Native(&values),
@@ -216,9 +219,9 @@ fn write_command_is_built_from_typed_values() {
     };
     assert_eq!(address, 0x0001);
     let v: Vec<u16> = values.iter().collect();
-    let bits = gpd::OperationCommand::decode(v[0], &s).unwrap();
+    let bits = gpd::OperationCommand::decode(v[0].into(), &s).unwrap();
     assert!(bits.forward_run());
-    assert_eq!(gpd::FrequencyReference::decode(v[1], &s), Ok(60.0));
+    assert_eq!(gpd::FrequencyReference::decode(v[1].into(), &s), Ok(60.0));
 }
 
 #[test]

@@ -71,7 +71,7 @@ fn memobus_read_response_decodes() {
     assert_eq!(w, [0x0065, 0x0000, 0x0000, 0x01F4]);
     let s = settings(Unit::Unit01Hz, 60.0);
 
-    let status = v7::StatusSignal1::decode(w[0], &s).unwrap();
+    let status = v7::StatusSignal1::decode(w[0].into(), &s).unwrap();
     assert!(status.during_run());
     assert!(!status.reverse_direction());
     assert!(status.inverter_ready());
@@ -81,12 +81,21 @@ fn memobus_read_response_decodes() {
     assert!(status.output_p1_pc());
     assert!(!status.output_p2_pc());
 
-    assert_eq!(v7::FaultContent1::decode(w[1], &s).unwrap().raw(), 0);
-    assert_eq!(v7::DataLinkStatus::decode(w[2], &s).unwrap().raw(), 0);
+    assert_eq!(v7::FaultContent1::decode(w[1].into(), &s).unwrap().raw(), 0);
+    assert_eq!(
+        v7::DataLinkStatus::decode(w[2].into(), &s).unwrap().raw(),
+        0
+    );
     // 01F4h = 500: 50.0 Hz at n152 = 0 (0.1 Hz), 5.00 Hz at n152 = 1 (0.01 Hz).
-    assert_eq!(v7::FrequencyReferenceMonitor::decode(w[3], &s), Ok(50.0));
+    assert_eq!(
+        v7::FrequencyReferenceMonitor::decode(w[3].into(), &s),
+        Ok(50.0)
+    );
     let s1 = settings(Unit::Unit001Hz, 60.0);
-    assert_eq!(v7::FrequencyReferenceMonitor::decode(w[3], &s1), Ok(5.0));
+    assert_eq!(
+        v7::FrequencyReferenceMonitor::decode(w[3].into(), &s1),
+        Ok(5.0)
+    );
 }
 
 #[test]
@@ -103,7 +112,7 @@ fn tm_v7_read_response_is_a_framing_vector() {
     };
     let w = words(rtu::decode_response(2, &request, &response).unwrap());
     assert_eq!(w, [0x1770, 0x1770, 0x0109, 0x0000]);
-    let status = v7::StatusSignal1::decode(w[0], &v7::Settings::default()).unwrap();
+    let status = v7::StatusSignal1::decode(w[0].into(), &v7::Settings::default()).unwrap();
     assert_eq!(status.raw(), 0x1770 & 0x00FF);
 }
 
@@ -146,7 +155,7 @@ fn write_single_sets_run_and_reverse() {
         .with_run_command(true)
         .with_reverse(true);
     let s = v7::Settings::default();
-    let value = v7::DigitalInputCommand::encode(&bits, &s).unwrap();
+    let value = v7::DigitalInputCommand::encode(&bits, &s).unwrap() as u16;
     assert_eq!(value, 0x0003);
     let request = Request::WriteSingle {
         address: v7::DigitalInputCommand::ADDRESS,
@@ -212,8 +221,8 @@ fn write_multiple_forward_run_at_60_hz() {
     let s = settings(Unit::Unit01Hz, 60.0);
     let run = v7::DigitalInputCommandBits::new().with_run_command(true);
     let values = [
-        v7::DigitalInputCommand::encode(&run, &s).unwrap(),
-        v7::FrequencyReference::encode(&60.0, &s).unwrap(),
+        v7::DigitalInputCommand::encode(&run, &s).unwrap() as u16,
+        v7::FrequencyReference::encode(&60.0, &s).unwrap() as u16,
     ];
     assert_eq!(values, [0x0001, 0x0258]);
     assert_eq!(

@@ -83,7 +83,7 @@ pub struct Finding {
     pub register: String,
     pub parameter: Option<String>,
     pub address: String,
-    pub raw: Option<u16>,
+    pub raw: Option<u32>,
     pub exception: Option<u8>,
     pub detail: String,
     /// Where the map says what it says.
@@ -292,9 +292,9 @@ pub(crate) enum Check {
 
 /// Whether a word read is a value the map allows: decoded and encoded back as a write would
 /// be (range under the selected scale and variant, listed codes), and no reserved bit set.
-pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u16, session: &Session<'_>) -> Check {
+pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Session<'_>) -> Check {
     if let Conversion::Bits { mask, .. } = drive.register_plan(r).conversion {
-        let reserved = raw & !mask;
+        let reserved = raw & !u32::from(mask);
         return if reserved == 0 {
             Check::Agrees
         } else {

@@ -57,7 +57,7 @@ fn field_word(
     session: &mut Session<'_>,
     r: &Register,
     text: &str,
-) -> Result<Option<u16>, String> {
+) -> Result<Option<u32>, String> {
     let Some(input) = codec::field_input(drive, r, text).map_err(|e| input_error(drive, &e))?
     else {
         return Ok(None);
@@ -77,7 +77,7 @@ fn field_word(
         );
         input.value
     } else {
-        let current = session.read_word(r).map_err(|e| {
+        let current = session.read_raw(r).map(|raw| raw as u16).map_err(|e| {
             format!(
                 "reading {} to keep its other fields: {e}; nothing written",
                 r.id()
@@ -171,13 +171,14 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
         let address = session.address(r);
         let rule = gate::rule(profile, intern(r.id()))
             .and_then(|rule| {
+                let words = rule.width.split(raw);
                 gate::check(
                     profile,
                     kind,
                     slave,
                     gate::WriteTarget::Rule(rule),
                     address,
-                    [raw],
+                    words[..usize::from(rule.width.count())].iter().copied(),
                 )
                 .map(|()| rule)
             })
@@ -197,8 +198,9 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
                 return Ok(ExitCode::FAILURE);
             }
         }
+        let digits = 4 * usize::from(rule.width.count());
         outln!(
-            "wrote {} = {shown} ({raw:04X}h) at {}",
+            "wrote {} = {shown} ({raw:0digits$X}h) at {}",
             describe::register(r),
             describe::address(address)
         );

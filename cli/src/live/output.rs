@@ -53,7 +53,7 @@ pub struct Reading {
     pub value: Option<f64>,
     pub unit: Option<String>,
     pub text: Option<String>,
-    pub raw: Option<u16>,
+    pub raw: Option<u32>,
     pub status: &'static str,
     pub error: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -80,7 +80,7 @@ impl Reading {
     pub fn of(
         session: &Session<'_>,
         r: &Register,
-        word: &Result<u16, String>,
+        word: &Result<u32, String>,
         time: &str,
     ) -> Reading {
         let mut rec = Reading {

@@ -13,7 +13,7 @@ use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::plan::Dependency;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError};
+use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError, Width};
 
 use super::link::{LinkArgs, LiveClient};
 use drivemap_codegen::describe;
@@ -110,7 +110,7 @@ impl SettingsArgs {
             if is_selector {
                 let code = codec::parse_value(drive, r, value, &settings)
                     .map_err(|e| format!("`--set {s}`: {e}"))?;
-                settings.selectors.insert(r.def.id.clone(), code);
+                settings.selectors.insert(r.def.id.clone(), code as u16);
             }
             if is_reference {
                 let v = number(value, r.def.unit.as_deref().unwrap_or(""))
@@ -283,8 +283,9 @@ pub struct Failure {
 /// what the drive refused).
 pub struct Polling {
     poller: Poller,
-    /// Per register asked for: its index among the planned registers, or why it is not read.
-    slots: Vec<Result<usize, String>>,
+    /// Per register asked for: its index among the planned registers and its width, or why it
+    /// is not read.
+    slots: Vec<Result<(usize, Width), String>>,
 }
 
 /// A connected drive with its settings.
@@ -380,10 +381,10 @@ impl<'d> Session<'d> {
                 ));
                 continue;
             }
-            let address = self.address(d);
-            match self.read_one(self.drive.register_plan(d).info.table, address) {
+            match self.read_raw(d) {
                 Ok(raw) => {
-                    self.settings.absorb(self.drive, d.def.address, raw);
+                    // Selectors and references are one-word registers (the map's validation).
+                    self.settings.absorb(self.drive, d.def.address, raw as u16);
                 }
                 Err(e) => warnings.push(format!(
                     "reading {}, which conversions depend on: {e}",
@@ -393,20 +394,19 @@ impl<'d> Session<'d> {
         }
     }
 
-    /// Reads the raw word of `r` at its address on this link.
-    pub fn read_word(&mut self, r: &Register) -> Result<u16, String> {
+    /// Reads the raw value of `r` at its address on this link: its word, or a 32-bit pair's
+    /// two words in one request, joined in the map's order.
+    pub fn read_raw(&mut self, r: &Register) -> Result<u32, String> {
         if let Some(why) = self.unreadable(r) {
             return Err(why);
         }
         let address = self.address(r);
-        self.read_one(self.drive.register_plan(r).info.table, address)
-    }
-
-    fn read_one(&mut self, table: Table, address: u16) -> Result<u16, String> {
-        let mut w = [0u16; 1];
-        self.read_into(table, address, &mut w)
+        let info = self.drive.register_plan(r).info;
+        let mut w = [0u16; 2];
+        let words = &mut w[..usize::from(info.width.count())];
+        self.read_into(info.table, address, words)
             .map_err(|e| e.to_string())?;
-        Ok(w[0])
+        Ok(info.width.join(words))
     }
 
     fn read_into(
@@ -462,8 +462,9 @@ impl<'d> Session<'d> {
             match self.unreadable(r) {
                 Some(why) => slots.push(Err(why)),
                 None => {
-                    wanted.push((drive.register_plan(r).info.table, self.address(r)));
-                    slots.push(Ok(wanted.len() - 1));
+                    let info = drive.register_plan(r).info;
+                    wanted.push((info.table, self.address(r)));
+                    slots.push(Ok((wanted.len() - 1, info.width)));
                 }
             }
         }
@@ -474,16 +475,17 @@ impl<'d> Session<'d> {
         Ok(Polling { poller, slots })
     }
 
-    /// Reads every register of a plan once; returns the raw word or the error of each, in the
-    /// order the plan was made for. A request that the drive refuses with 02h or 21h is split
-    /// so each register gets its own value or error.
-    pub fn poll(&mut self, plan: &mut Polling) -> Vec<Result<u16, String>> {
+    /// Reads every register of a plan once; returns the raw value (a word, or a pair's words
+    /// joined) or the error of each, in the order the plan was made for. A request that the
+    /// drive refuses with 02h or 21h is split so each register gets its own value or error;
+    /// a pair is never split.
+    pub fn poll(&mut self, plan: &mut Polling) -> Vec<Result<u32, String>> {
         plan.poller.poll(&mut self.client, self.slave);
         plan.slots
             .iter()
             .map(|slot| match slot {
                 Err(why) => Err(why.clone()),
-                Ok(i) => match plan.poller.value(*i) {
+                Ok((i, width)) => match plan.poller.raw(*i, *width) {
                     Some(Ok(w)) => Ok(w),
                     Some(Err(e)) => Err(e.to_string()),
                     None => Err("not read".into()),
@@ -493,7 +495,7 @@ impl<'d> Session<'d> {
     }
 
     /// [`Session::poll`] keeping the exception code of each refusal, and the requests sent.
-    pub fn poll_detailed(&mut self, plan: &mut Polling) -> (Vec<Result<u16, Failure>>, u32) {
+    pub fn poll_detailed(&mut self, plan: &mut Polling) -> (Vec<Result<u32, Failure>>, u32) {
         let stats = plan.poller.poll(&mut self.client, self.slave);
         let words = plan
             .slots
@@ -504,7 +506,7 @@ impl<'d> Session<'d> {
                     exception: None,
                     sent: false,
                 }),
-                Ok(i) => match plan.poller.value(*i) {
+                Ok((i, width)) => match plan.poller.raw(*i, *width) {
                     Some(Ok(w)) => Ok(w),
                     Some(Err(e)) => Err(Failure {
                         message: e.to_string(),
@@ -522,14 +524,20 @@ impl<'d> Session<'d> {
         (words, stats.requests)
     }
 
-    /// Reads the raw words of `regs` once, planned (see [`Session::plan`]).
-    pub fn read_words(&mut self, regs: &[&Register]) -> Result<Vec<Result<u16, String>>, String> {
+    /// Reads the raw values of `regs` once, planned (see [`Session::plan`]).
+    pub fn read_words(&mut self, regs: &[&Register]) -> Result<Vec<Result<u32, String>>, String> {
         let mut plan = self.plan(regs)?;
         Ok(self.poll(&mut plan))
     }
 
-    /// Decodes a raw word of `r`.
-    pub fn decode(&self, r: &Register, raw: u16) -> Result<Value, String> {
+    /// A raw value of `r` in hex as the manuals write it: four digits, eight for a pair.
+    pub fn raw_text(&self, r: &Register, raw: u32) -> String {
+        let digits = 4 * usize::from(self.drive.register_plan(r).info.width.count());
+        format!("{raw:0digits$X}h")
+    }
+
+    /// Decodes a raw value of `r`.
+    pub fn decode(&self, r: &Register, raw: u32) -> Result<Value, String> {
         codec::decode(self.drive, r, raw, &self.settings).map_err(|e| value_error(self.drive, &e))
     }
 }

@@ -27,7 +27,7 @@ impl Row {
     pub fn of(
         session: &Session<'_>,
         r: &Register,
-        word: &Result<u16, String>,
+        word: &Result<u32, String>,
         details: bool,
     ) -> Row {
         let register = describe::register(r);
@@ -47,14 +47,14 @@ impl Row {
                     address,
                     details: if details { field_lines(&v) } else { Vec::new() },
                     value: v.to_string(),
-                    raw: format!("{raw:04X}h"),
+                    raw: session.raw_text(r, *raw),
                     failed: false,
                 },
                 Err(e) => Row {
                     register,
                     address,
                     value: format!("error: {e}"),
-                    raw: format!("{raw:04X}h"),
+                    raw: session.raw_text(r, *raw),
                     details: Vec::new(),
                     failed: true,
                 },

@@ -16,6 +16,7 @@ use drivemap_core::register::{Access, Table, WriteRestriction};
 use drivemap_core::roles::Target;
 use drivemap_core::rule::{Broadcast, Transports};
 use drivemap_core::scale::{Decimal, RawRange};
+use drivemap_core::width::{Width, WordOrder};
 
 use crate::lower::DrivePlan;
 
@@ -76,6 +77,8 @@ pub fn module(plan: &DrivePlan) -> String {
                 "RegisterPlan",
                 "Table",
                 "Transports",
+                "Width",
+                "WordOrder",
                 "WriteRestriction",
             ][..],
         ),
@@ -320,7 +323,7 @@ pub fn row(r: &RegisterPlan) -> String {
     let i = &r.info;
     let mut s = format!(
         "RegisterPlan::new(RegisterInfo {{ id: {}, param: {}, name: {}, address: {}, access: {}, \
-         table: {}, broadcast_only: {}, source: {} }}, {}, {}, {})",
+         table: {}, width: {}, broadcast_only: {}, source: {} }}, {}, {}, {})",
         string(i.id),
         match i.param {
             Some(p) => format!("Some({})", string(p)),
@@ -332,6 +335,11 @@ pub fn row(r: &RegisterPlan) -> String {
         match i.table {
             Table::Holding => "Table::Holding",
             Table::Input => "Table::Input",
+        },
+        match i.width {
+            Width::Word => "Width::Word",
+            Width::Pair(WordOrder::HighFirst) => "Width::Pair(WordOrder::HighFirst)",
+            Width::Pair(WordOrder::LowFirst) => "Width::Pair(WordOrder::LowFirst)",
         },
         i.broadcast_only,
         string(i.source),

@@ -42,8 +42,12 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
 fn value(r: &Register, index: usize, rt: &TokenStream) -> (TokenStream, TokenStream) {
     let row = Literal::usize_unsuffixed(index);
     match r.kind() {
-        ValueKind::Word if r.def.signed => (quote!(i16), quote!()),
-        ValueKind::Word => (quote!(u16), quote!()),
+        ValueKind::Word => match (r.def.pair.is_some(), r.def.signed) {
+            (false, true) => (quote!(i16), quote!()),
+            (false, false) => (quote!(u16), quote!()),
+            (true, true) => (quote!(i32), quote!()),
+            (true, false) => (quote!(u32), quote!()),
+        },
         ValueKind::UnitQuantity | ValueKind::Quantity(_) => (quote!(f64), quote!()),
         ValueKind::Enum(values) => {
             let ty = ident(&names::value_enum(r));

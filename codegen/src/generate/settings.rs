@@ -129,7 +129,7 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
                 let index = Literal::usize_unsuffixed(*i);
                 absorb.push((
                     addr,
-                    quote!(self.#field = plan::REGISTERS[#index].decode_number(raw, self).ok()),
+                    quote!(self.#field = plan::REGISTERS[#index].decode_number(u32::from(raw), self).ok()),
                 ));
                 quantity_arms.push(quote!(#slot_lit => self.#field,));
             }

@@ -2,7 +2,7 @@
 //! that fits the word, for the base variant, every variant override and every selected case.
 
 use crate::diagnostic::Diagnostic;
-use crate::ir::{Drive, RawLimits, Register, ValueKind};
+use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{DefaultValue, Scale};
 use crate::numbers::{Dec, raw_of};
 use crate::source::Path;
@@ -21,7 +21,7 @@ impl Checker<'_> {
 
     /// Checks one value against the word at a factor; returns its raw integer.
     fn raw(&mut self, what: &str, value: f64, factor: Dec, path: Path) -> Option<i128> {
-        let word = RawLimits::word(self.r.def.signed);
+        let word = self.r.full_limits();
         match raw_of(value, factor) {
             None => {
                 self.err(
@@ -34,11 +34,12 @@ impl Checker<'_> {
                 self.err(
                     path,
                     format!(
-                        "{what} {value} is raw {raw}, outside a {} word ({}..={})",
-                        if self.r.def.signed {
-                            "signed"
-                        } else {
-                            "16-bit"
+                        "{what} {value} is raw {raw}, outside a {} ({}..={})",
+                        match (self.r.def.pair.is_some(), self.r.def.signed) {
+                            (false, true) => "signed word",
+                            (false, false) => "16-bit word",
+                            (true, true) => "signed 32-bit pair",
+                            (true, false) => "32-bit pair",
                         },
                         word.min,
                         word.max

@@ -17,7 +17,7 @@ fn drive() -> drivemap_codegen::Drive {
     .unwrap()
 }
 
-fn live_number(d: &drivemap_codegen::Drive, id: &str, raw: u16, l: &LiveSettings) -> f64 {
+fn live_number(d: &drivemap_codegen::Drive, id: &str, raw: u32, l: &LiveSettings) -> f64 {
     match drivemap_live::decode(d, d.find(id).unwrap(), raw, l) {
         Ok(Value::Quantity { value, .. }) => value,
         other => panic!("{id} {raw}: {other:?}"),

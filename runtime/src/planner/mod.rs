@@ -73,6 +73,9 @@ pub struct ReadableSet {
     run_start: Vec<u32>,
     /// For each address, the index of the last address of its run.
     run_end: Vec<u32>,
+    /// Second addresses of 32-bit pairs, sorted: a request may not begin there while the
+    /// pair's first word is read too (see [`ReadableSet::pair_second`]).
+    pair_seconds: Vec<u16>,
 }
 
 impl ReadableSet {
@@ -85,21 +88,50 @@ impl ReadableSet {
             addresses,
             run_start: Vec::new(),
             run_end: Vec::new(),
+            pair_seconds: Vec::new(),
         };
         set.index_runs();
         set
     }
 
     /// The addresses of `table` that a register of `registers` lets you read: readable and not
-    /// broadcast-only. Reserved, unmapped and write-only addresses are left out.
+    /// broadcast-only, both words of a 32-bit pair. Reserved, unmapped and write-only addresses
+    /// are left out. Pairs are kept whole by the plans made over the set.
     pub fn from_registers<R: AsRef<RegisterInfo>>(registers: &[R], table: Table) -> ReadableSet {
-        ReadableSet::new(
+        let readable = || {
             registers
                 .iter()
                 .map(AsRef::as_ref)
                 .filter(|r| r.table == table && r.access.readable() && !r.broadcast_only)
-                .map(|r| r.address),
-        )
+        };
+        let mut set = ReadableSet::new(
+            readable().flat_map(|r| (0..r.width.count()).filter_map(|i| r.address.checked_add(i))),
+        );
+        set.pair_seconds = readable()
+            .filter(|r| r.width.count() == 2)
+            .filter_map(|r| r.address.checked_add(1))
+            .collect();
+        set.pair_seconds.sort_unstable();
+        set.pair_seconds.dedup();
+        set
+    }
+
+    /// Whether `address` is the second word of a 32-bit pair: a read of the pair's first word
+    /// must take it in the same request.
+    pub fn pair_second(&self, address: u16) -> bool {
+        self.pair_seconds.binary_search(&address).is_ok()
+    }
+
+    /// `wanted` with the second word of every wanted pair added (sorted, unique).
+    pub fn whole_pairs(&self, wanted: &[u16]) -> Vec<u16> {
+        let mut w = sorted_unique(wanted);
+        let seconds: Vec<u16> = w
+            .iter()
+            .filter_map(|a| a.checked_add(1))
+            .filter(|a| self.pair_second(*a))
+            .collect();
+        w.extend(seconds);
+        sorted_unique(&w)
     }
 
     fn index_runs(&mut self) {
@@ -127,6 +159,14 @@ impl ReadableSet {
     /// Whether `address` may be read.
     pub fn contains(&self, address: u16) -> bool {
         self.addresses.binary_search(&address).is_ok()
+    }
+
+    /// Puts `address` (back) into the set.
+    pub fn insert(&mut self, address: u16) {
+        if let Err(i) = self.addresses.binary_search(&address) {
+            self.addresses.insert(i, address);
+            self.index_runs();
+        }
     }
 
     /// Takes `address` out of the set; returns whether it was in it.
@@ -183,6 +223,17 @@ pub enum PlanError {
     /// The drive reads no register per request (`max_read` is 0).
     #[error("the drive's max_read is 0: nothing can be read")]
     NoReadQuantity,
+    /// A 32-bit pair cannot be read in one request (`max_read` is 1).
+    #[error(
+        "{table:?} registers {address:04X}h-{:04X}h hold one 32-bit value, but the drive's max_read of 1 cannot read both words in one request",
+        address.wrapping_add(1)
+    )]
+    SplitPair {
+        /// The table.
+        table: Table,
+        /// The pair's first address.
+        address: u16,
+    },
 }
 
 fn sorted_unique(wanted: &[u16]) -> Vec<u16> {
@@ -194,7 +245,8 @@ fn sorted_unique(wanted: &[u16]) -> Vec<u16> {
 
 /// The requests that read every address of `wanted` (one table, any order, duplicates allowed)
 /// in the least total `cost`, reading only addresses of `readable`, at most `max_read` (and at
-/// most 125, the Modbus limit) per request. `cost(q)` is the cost of one request for `q`
+/// most 125, the Modbus limit) per request. A wanted 32-bit pair of `readable` is read whole: its
+/// second word is added and no request boundary falls between its words. `cost(q)` is the cost of one request for `q`
 /// registers, `1 <= q <= max_read`, for example [`BusModel::read_ns`](crate::bus_time::BusModel::read_ns); any non-negative function
 /// gives an optimal plan. Requests are returned in ascending address order. See the module
 /// documentation for the algorithm.
@@ -218,7 +270,7 @@ pub(super) fn plan_table(
     if max_read == 0 {
         return Err(PlanError::NoReadQuantity);
     }
-    let w = sorted_unique(wanted);
+    let w = readable.whole_pairs(wanted);
     let k = w.len();
     let mut runs = Vec::with_capacity(k);
     for &address in &w {
@@ -260,6 +312,9 @@ pub(super) fn plan_table(
             if span > u32::from(room) {
                 break;
             }
+            if i > 0 && w[i - 1].wrapping_add(1) == w[i] && readable.pair_second(w[i]) {
+                continue; // a request may not begin between the words of a pair
+            }
             let (c, l) = table_u[span as usize];
             let candidate = best[i].saturating_add(c);
             if candidate < best[j + 1] {
@@ -267,6 +322,13 @@ pub(super) fn plan_table(
                 choice[j + 1] = (i, l);
             }
         }
+    }
+    if best[k] == u64::MAX {
+        let address = w
+            .iter()
+            .find(|a| readable.pair_second(a.wrapping_add(1)))
+            .map_or(0, |a| *a);
+        return Err(PlanError::SplitPair { table, address });
     }
     let mut reads = Vec::new();
     let mut j = k;

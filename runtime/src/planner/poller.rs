@@ -6,12 +6,12 @@ use crate::client::Client;
 use crate::error::Error;
 use crate::pdu;
 use crate::profile::{Profile, TransportKind};
-use crate::register::{Readable, RegisterInfo, Table};
+use crate::register::{Readable, RegisterInfo, Table, Width};
 use crate::scale::ValueError;
 use crate::transport::Transport;
 use std::fmt;
 
-use super::{PlanError, Read, ReadableSet, plan_contiguous, plan_single, plan_table};
+use super::{PlanError, Read, ReadableSet, plan_single, plan_table};
 
 /// Whether an exception answering a multi-register read is a reason to split it: 02h (invalid
 /// register address) or 21h (data setting error on the Yaskawa drives, busy on the TDS-V8).
@@ -62,7 +62,8 @@ impl fmt::Display for PolledError<'_> {
     }
 }
 
-/// The `(table, address)` of a generated register type, for [`Poller::new`].
+/// The `(table, address)` of a generated register type, for [`Poller::new`] (a 32-bit pair's
+/// second word is added by the poller).
 pub fn wanted<R: Readable>() -> (Table, u16) {
     (R::TABLE, R::ADDRESS)
 }
@@ -91,7 +92,7 @@ enum Slot {
 ///
 /// ```
 /// use drivemap_runtime::planner::Poller;
-/// use drivemap_runtime::{Access, Client, Profile, RegisterInfo, Table};
+/// use drivemap_runtime::{Access, Client, Profile, RegisterInfo, Table, Width};
 /// # use drivemap_runtime::{profile::TransportKind, transport::Transport};
 /// use drivemap_sim::slave::SimulatedSlave; // a bare simulated drive (dev-dependency)
 /// # struct Link(SimulatedSlave, Vec<u8>);
@@ -114,7 +115,7 @@ enum Slot {
 /// static PROFILE: Profile = Profile { max_read: 8, ..Profile::GENERIC };
 /// const fn monitor(id: &'static str, address: u16) -> RegisterInfo {
 ///     RegisterInfo { id, param: None, name: id, address, access: Access::Read,
-///                    table: Table::Holding, broadcast_only: false, source: "" }
+///                    table: Table::Holding, width: Width::Word, broadcast_only: false, source: "" }
 /// }
 /// static REGISTERS: &[RegisterInfo] =
 ///     &[monitor("a", 0x20), monitor("b", 0x21), monitor("c", 0x22), monitor("d", 0x24)];
@@ -187,6 +188,19 @@ impl Poller {
             kind: TransportKind::Rtu,
             replan: false,
         };
+        // A wanted 32-bit pair is read whole: its second word is wanted too (after the
+        // caller's entries, so their indices stay).
+        let seconds: Vec<(Table, u16)> = poller
+            .wanted
+            .iter()
+            .filter_map(|&(t, a)| Some((t, a.checked_add(1)?)))
+            .filter(|&(t, a)| poller.readable[table_index(t)].pair_second(a))
+            .collect();
+        for second in seconds {
+            if !poller.wanted.contains(&second) {
+                poller.wanted.push(second);
+            }
+        }
         poller.make_plan()?;
         Ok(poller)
     }
@@ -230,10 +244,7 @@ impl Poller {
     /// Forgets what exceptions taught and plans from the register table again.
     pub fn forget(&mut self) {
         for &(table, address, _) in &self.learned {
-            let set = &mut self.readable[table_index(table)];
-            let mut all = set.addresses().to_vec();
-            all.push(address);
-            *set = ReadableSet::new(all);
+            self.readable[table_index(table)].insert(address);
         }
         self.learned.clear();
         self.replan = true;
@@ -280,7 +291,17 @@ impl Poller {
                 max_read,
                 |q| model.read_ns(q),
             )?;
-            reads.extend(plan_single(&alone));
+            // Read alone, but a pair still in one request.
+            let set = &self.readable[table_index(table)];
+            reads.extend(plan_single(&alone).into_iter().filter_map(|mut r| {
+                if set.pair_second(r.address) && alone.contains(&r.address.wrapping_sub(1)) {
+                    return None;
+                }
+                if r.address.checked_add(1).is_some_and(|a| set.pair_second(a)) {
+                    r.quantity = 2;
+                }
+                Some(r)
+            }));
             reads.sort_unstable();
             plan.extend(reads.into_iter().map(|read| Planned {
                 table,
@@ -426,19 +447,25 @@ impl Poller {
         results: &mut Vec<(u16, Result<u16, usize>)>,
         stats: &mut CycleStats,
     ) -> bool {
-        let runs = plan_contiguous(addresses, self.profile.max_read);
-        let parts: Vec<&[u16]> = if runs.len() == 1 && runs[0] == failed {
-            let mid = addresses.len() / 2;
-            vec![&addresses[..mid], &addresses[mid..]]
-        } else {
-            let mut parts = Vec::with_capacity(runs.len());
-            let mut rest = addresses;
-            for r in &runs {
-                let n = usize::from(r.quantity);
-                parts.push(&rest[..n]);
-                rest = &rest[n..];
+        let runs = self.runs_whole(table, addresses);
+        let whole = |&(from, to): &(usize, usize)| {
+            let (first, last) = (addresses[from], addresses[to - 1]);
+            failed.address == first && failed.quantity == last - first + 1
+        };
+        let parts: Vec<&[u16]> = if runs.len() == 1 && whole(&runs[0]) {
+            // Halve near the middle, never between the words of a pair; a lone pair is not split.
+            let n = addresses.len();
+            let mid = (n / 2..n)
+                .chain((1..n / 2).rev())
+                .find(|&m| m > 0 && !self.splits_pair(table, addresses, m));
+            match mid {
+                Some(mid) => vec![&addresses[..mid], &addresses[mid..]],
+                None => vec![addresses],
             }
-            parts
+        } else {
+            runs.iter()
+                .map(|&(from, to)| &addresses[from..to])
+                .collect()
         };
         let mut refused = false;
         let mut words = [0u16; pdu::MAX_READ as usize];
@@ -459,7 +486,7 @@ impl Poller {
                         results.push((a, Ok(words[usize::from(a - first)])));
                     }
                 }
-                Err(e) if splits_on(&e) && part.len() > 1 => {
+                Err(e) if splits_on(&e) && part.len() > 1 && part != addresses => {
                     stats.splits += 1;
                     refused |=
                         self.read_apart(client, slave, table, read_part, part, results, stats);
@@ -490,6 +517,23 @@ impl Poller {
         }
     }
 
+    /// [`Poller::value`] of a register of `width`: a 32-bit pair's two words joined in its
+    /// order (the poller reads both in one request).
+    pub fn raw(&self, index: usize, width: Width) -> Option<Result<u32, &Error>> {
+        let (table, address) = *self.wanted.get(index)?;
+        let first = match self.value(index)? {
+            Ok(w) => w,
+            Err(e) => return Some(Err(e)),
+        };
+        Some(match width {
+            Width::Word => Ok(u32::from(first)),
+            Width::Pair(_) => match self.get(table, address.wrapping_add(1))? {
+                Ok(second) => Ok(width.join(&[first, second])),
+                Err(e) => Err(e),
+            },
+        })
+    }
+
     /// The outcome of the last poll for the register at `address` of `table`, if wanted.
     pub fn get(&self, table: Table, address: u16) -> Option<Result<u16, &Error>> {
         let i = self.wanted.iter().position(|&w| w == (table, address))?;
@@ -503,10 +547,53 @@ impl Poller {
         settings: &R::Settings,
     ) -> Option<Result<R::Value, PolledError<'_>>> {
         let address = R::address(settings, self.kind);
-        Some(match self.get(R::TABLE, address)? {
-            Ok(raw) => R::decode(raw, settings).map_err(PolledError::Value),
-            Err(e) => Err(PolledError::Read(e)),
-        })
+        let mut words = [0u16; 2];
+        for (i, word) in words
+            .iter_mut()
+            .enumerate()
+            .take(usize::from(R::WIDTH.count()))
+        {
+            match self.get(R::TABLE, address.wrapping_add(i as u16))? {
+                Ok(w) => *word = w,
+                Err(e) => return Some(Err(PolledError::Read(e))),
+            }
+        }
+        Some(R::decode(R::WIDTH.join(&words), settings).map_err(PolledError::Value))
+    }
+
+    /// Whether a boundary before `addresses[at]` falls between the words of a pair.
+    fn splits_pair(&self, table: Table, addresses: &[u16], at: usize) -> bool {
+        at > 0
+            && at < addresses.len()
+            && addresses[at - 1].wrapping_add(1) == addresses[at]
+            && self.readable[table_index(table)].pair_second(addresses[at])
+    }
+
+    /// `addresses` (sorted, unique) cut into runs of consecutive addresses of at most
+    /// `max_read`, never between the words of a pair: index ranges.
+    fn runs_whole(&self, table: Table, addresses: &[u16]) -> Vec<(usize, usize)> {
+        let max = usize::from(self.profile.max_read.clamp(2, pdu::MAX_READ));
+        let n = addresses.len();
+        let mut runs = Vec::new();
+        let (mut start, mut i) = (0, 0);
+        while i < n {
+            let unit = if self.splits_pair(table, addresses, i + 1) {
+                2
+            } else {
+                1
+            };
+            let end = (i + unit).min(n);
+            let span = usize::from(addresses[end - 1] - addresses[start]) + 1;
+            if i > start && (addresses[i - 1].wrapping_add(1) != addresses[i] || span > max) {
+                runs.push((start, i));
+                start = i;
+            }
+            i = end;
+        }
+        if start < n {
+            runs.push((start, n));
+        }
+        runs
     }
 }
 

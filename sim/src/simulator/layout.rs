@@ -30,8 +30,9 @@ impl Hasher for AddressHasher {
     }
 }
 
-/// Communication address → register index.
-pub(super) type AddressMap = HashMap<u16, usize, BuildHasherDefault<AddressHasher>>;
+/// Communication address → register index and which of its words (1 for the second word of a
+/// 32-bit pair).
+pub(super) type AddressMap = HashMap<u16, (usize, u16), BuildHasherDefault<AddressHasher>>;
 
 #[derive(Debug, Clone, Default)]
 pub(super) struct Layout {
@@ -48,7 +49,7 @@ impl Simulator {
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
         [&layout.holding, &layout.input, &layout.broadcast]
             .iter()
-            .find_map(|m| m.iter().find(|(_, v)| **v == i).map(|(a, _)| *a))
+            .find_map(|m| m.iter().find(|(_, v)| **v == (i, 0)).map(|(a, _)| *a))
     }
 
     /// Where each register lies on this link, as the plan places it: registers that do not exist
@@ -78,7 +79,9 @@ impl Simulator {
                     Table::Input => &mut layout.input,
                 }
             };
-            space.entry(address).or_insert(i);
+            for word in 0..plan.info.width.count() {
+                space.entry(address.wrapping_add(word)).or_insert((i, word));
+            }
         }
         layout
     }

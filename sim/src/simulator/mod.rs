@@ -41,7 +41,8 @@ pub struct Simulator {
     profile: &'static Profile,
     slave: u8,
     index: HashMap<String, usize>,
-    raw: Vec<u16>,
+    /// Each register's raw value: its word, or a 32-bit pair's value.
+    raw: Vec<u32>,
     /// [RTU-framed, Modbus TCP].
     layouts: [Layout; 2],
     plan: ExceptionPlan,
@@ -56,7 +57,7 @@ pub struct Simulator {
     commands: Vec<CommandTrack>,
     warnings: Vec<String>,
     /// The fault code registers' words before the drive tripped, restored by a reset.
-    fault_words: Vec<(usize, u16)>,
+    fault_words: Vec<(usize, u32)>,
     stats: Stats,
     cache: TickCache,
 }
@@ -192,8 +193,8 @@ impl Simulator {
         Ok(self.index[r.id()])
     }
 
-    /// A register's raw word, by id, parameter number or name.
-    pub fn raw(&self, name: &str) -> Result<u16, SimError> {
+    /// A register's raw word (a 32-bit pair's value), by id, parameter number or name.
+    pub fn raw(&self, name: &str) -> Result<u32, SimError> {
         Ok(self.raw[self.index_of(name)?])
     }
 
@@ -223,8 +224,8 @@ impl Simulator {
         Ok(())
     }
 
-    /// Sets a register's raw word, without any check.
-    pub fn set_raw(&mut self, name: &str, raw: u16) -> Result<(), SimError> {
+    /// Sets a register's raw word (a 32-bit pair's value), without any check.
+    pub fn set_raw(&mut self, name: &str, raw: u32) -> Result<(), SimError> {
         let i = self.index_of(name)?;
         self.tick();
         let before = self.raw[i];
@@ -249,7 +250,7 @@ impl Simulator {
         // word by the plan, as the generated `Settings::absorb` does.
         for &i in self.selectors.iter().chain(&self.references) {
             let r = &self.drive.registers[i];
-            s.absorb(&self.drive, r.def.address, self.raw[i]);
+            s.absorb(&self.drive, r.def.address, self.raw[i] as u16);
         }
         s
     }

@@ -35,7 +35,7 @@ impl Simulator {
 
     /// Whether the generated `encode` of this register would produce `raw`: decode it, encode
     /// the value back. Conversions that need a setting the drive cannot supply are accepted.
-    pub(super) fn accepts(&self, r: &Register, raw: u16, settings: &LiveSettings) -> bool {
+    pub(super) fn accepts(&self, r: &Register, raw: u32, settings: &LiveSettings) -> bool {
         let value = match codec::decode(&self.drive, r, raw, settings) {
             Ok(Value::Bits { .. }) => f64::from(raw),
             Ok(v) => match v.as_f64() {
@@ -74,7 +74,14 @@ impl Simulator {
             Table::Input => &layout.input,
         };
         match map.get(&address) {
-            Some(&i) if self.drive.registers[i].readable() => Ok(self.raw[i]),
+            Some(&(i, word)) if self.drive.registers[i].readable() => {
+                let width = self
+                    .drive
+                    .register_plan(&self.drive.registers[i])
+                    .info
+                    .width;
+                Ok(width.split(self.raw[i])[usize::from(word)])
+            }
             Some(_) => Err(self.plan.illegal_address),
             None if !first || (table == Table::Holding && self.in_gap(address)) => Ok(0),
             None => Err(self.plan.illegal_address),
@@ -98,11 +105,15 @@ impl Simulator {
             .broadcast
             .map(|b| b.addresses)
             .unwrap_or_default();
-        let mut targets = [(0u16, None, 0u16); pdu::MAX_WRITE as usize];
+        let mut targets = [(0u16, None, 0u32); pdu::MAX_WRITE as usize];
         if values.len() > targets.len() {
             return Err(self.plan.illegal_quantity);
         }
-        for (k, &v) in values.iter().enumerate() {
+        let mut pair_second = false;
+        for (k, &word) in values.iter().enumerate() {
+            if std::mem::take(&mut pair_second) {
+                continue; // taken with the pair's first word
+            }
             let comm = self.communication_address(kind, u32::from(address) + k as u32)?;
             let found = if broadcast_space {
                 layout.broadcast.get(&comm)
@@ -110,7 +121,21 @@ impl Simulator {
                 layout.holding.get(&comm)
             };
             match found {
-                Some(&i) => {
+                Some(&(i, half)) => {
+                    // A 32-bit pair is written whole: both words, in one request.
+                    let width = self
+                        .drive
+                        .register_plan(&self.drive.registers[i])
+                        .info
+                        .width;
+                    let v = match (width.count(), half, values.get(k + 1)) {
+                        (1, _, _) => u32::from(word),
+                        (_, 0, Some(&second)) => {
+                            pair_second = true;
+                            width.join(&[word, second])
+                        }
+                        _ => return Err(self.plan.illegal_address),
+                    };
                     if broadcast
                         && !broadcast_space
                         && !allowed.is_empty()
@@ -130,17 +155,19 @@ impl Simulator {
                     }
                     targets[k] = (comm, Some(i), v);
                 }
-                None if !broadcast && v == 0 && self.in_gap(comm) => targets[k] = (comm, None, v),
+                None if !broadcast && word == 0 && self.in_gap(comm) => {
+                    targets[k] = (comm, None, 0)
+                }
                 None => return Err(self.plan.illegal_address),
             }
         }
-        for &(comm, i, v) in &targets[..values.len()] {
+        for (k, &(comm, i, v)) in targets[..values.len()].iter().enumerate() {
             if let Some(i) = i {
                 let before = self.raw[i];
                 self.raw[i] = v;
                 self.after_write(i, before);
             }
-            self.track_commands(comm, v);
+            self.track_commands(comm, values[k]);
         }
         self.tick();
         Ok(())

@@ -31,7 +31,7 @@ pub(super) struct TickCache {
     /// Registers whose raw word the settings and the model's inputs come from.
     pub(super) inputs: Vec<usize>,
     /// Their words when `settings` and `params` were computed.
-    pub(super) seen: Vec<u16>,
+    pub(super) seen: Vec<u32>,
     /// The frequency reference register when `params` were computed.
     pub(super) reference_register: Option<usize>,
     pub(super) settings: LiveSettings,
@@ -192,7 +192,7 @@ impl Simulator {
 
     /// Reacts to a write of register `i` (its word was `before`): mode switches, run/direction
     /// commands, fault reset, reference.
-    pub(super) fn after_write(&mut self, i: usize, before: u16) {
+    pub(super) fn after_write(&mut self, i: usize, before: u32) {
         let Some(roles) = self.roles.clone() else {
             return;
         };
@@ -378,7 +378,7 @@ impl Simulator {
                 Follow::DcBus => Plausible::DC_BUS,
                 Follow::FaultCode => {
                     if let Some(code) = self.model.fault {
-                        self.raw[i] = code;
+                        self.raw[i] = u32::from(code);
                     }
                     continue;
                 }
