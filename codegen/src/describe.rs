@@ -12,6 +12,7 @@
 use drivemap_core::plan::{Conversion, RegisterPlan};
 use drivemap_core::register::{Access, Table, WriteRestriction};
 use drivemap_core::rule::Transports;
+use drivemap_core::width::{Width, WordOrder};
 
 use crate::ir::{Drive, Register};
 use crate::model::{
@@ -107,11 +108,28 @@ pub fn transports(t: Transports) -> String {
     }
 }
 
+/// How many registers a value takes: `one register`, or a 32-bit pair and its word order.
+pub fn width(w: Width) -> String {
+    match w {
+        Width::Word => "one register".into(),
+        Width::Pair(WordOrder::HighFirst) => "32-bit pair, high word first".into(),
+        Width::Pair(WordOrder::LowFirst) => "32-bit pair, low word first".into(),
+    }
+}
+
 /// What kind of value a register holds.
 pub fn kind(plan: &RegisterPlan) -> &'static str {
+    let pair = plan.info.width != Width::Word;
     match plan.conversion {
+        Conversion::Word { signed: true, .. } if pair => "signed 32-bit pair",
+        Conversion::Word { .. } if pair => "32-bit pair",
         Conversion::Word { signed: true, .. } => "signed word",
         Conversion::Word { .. } => "word",
+        Conversion::Decimal { .. } | Conversion::Relative { .. } | Conversion::Selected { .. }
+            if pair =>
+        {
+            "32-bit quantity"
+        }
         Conversion::Decimal { .. } | Conversion::Relative { .. } | Conversion::Selected { .. } => {
             "quantity"
         }

@@ -4,8 +4,10 @@
 //! `default` are engineering values of the base variant; `scale` is null where it depends on a
 //! setting (`scale_selected_by` names the parameter, or `<parameter>.<field>` for a field of it)
 //! or on another quantity (`scale_relative_to`). `drive.manuals` lists the names citations use;
-//! `drive.manual_details` gives each manual's `file` or `id`, `title`, `document` and `url`. Keys
-//! beyond the documented shape carry the rest of the map.
+//! `drive.manual_details` gives each manual's `file` or `id`, `title`, `document` and `url`.
+//! `words` is 1, or 2 for a 32-bit value in two registers, whose `word_order` (`high_first` or
+//! `low_first`) says which word sits at `address`; `min`/`max` are then limits of the 32-bit
+//! value. Keys beyond the documented shape carry the rest of the map.
 
 use serde_json::{Value, json};
 
@@ -127,6 +129,9 @@ fn register(drive: &Drive, r: &Register) -> Value {
         "scale_cases": cases,
         "scale_relative_to": relative_to,
         "signed": d.signed,
+        "words": r.width().count(),
+        "word_order": d.pair.as_ref().map(|p| p.order),
+        "word_order_source": d.pair.as_ref().and_then(|p| p.source.as_deref()),
         "min": if selected_by.is_null() { json!(d.min) } else { Value::Null },
         "max": if selected_by.is_null() { json!(d.max) } else { Value::Null },
         "default": default,

@@ -420,7 +420,20 @@ fn roles(out: &mut String, drive: &Drive) {
 }
 
 fn address_cell(r: &Register) -> String {
-    let mut parts = vec![describe::address(r.def.address)];
+    let mut parts = vec![match &r.def.pair {
+        None => describe::address(r.def.address),
+        Some(p) => {
+            let pair = format!(
+                "{} ({}",
+                describe::address_span(r.def.address, r.def.address.wrapping_add(1)),
+                describe::width(r.width())
+            );
+            match &p.source {
+                Some(s) => format!("{pair}, `{s}`)"),
+                None => format!("{pair})"),
+            }
+        }
+    }];
     for alt in &r.def.address_alternatives {
         parts.push(format!(
             "{} if {}",

@@ -12,7 +12,7 @@ use drivemap_runtime::client::Client;
 use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::gate::{self, WriteTarget};
 use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::{Broadcast, Transports, WriteRule};
+use drivemap_runtime::{Broadcast, Transports, WordOrder, WriteRule};
 use drivemap_sim::fault::FaultyLink;
 use drivemap_sim::slave::SimulatedSlave;
 
@@ -28,9 +28,24 @@ const BROADCAST_SIGNAL: WriteRule =
         .reserved(0xCFC0);
 const FREQUENCY: WriteRule = WriteRule::rw("frequency_reference", 0x0002, 0, 40000);
 const N001: WriteRule = WriteRule::rw("n001", 0x0101, 0, 4);
+/// A signed 32-bit value in 0200h-0201h, high word first (not a V7 register: the gate's pair
+/// rules on the same profile).
+const POSITION: WriteRule =
+    WriteRule::rw("position_setpoint", 0x0200, -1_000_000, 1_000_000).pair(WordOrder::HighFirst);
+/// An unsigned 32-bit value in 0300h-0301h, low word first.
+const COUNTER: WriteRule =
+    WriteRule::rw("preset_counter", 0x0300, 0, 4_000_000_000).pair(WordOrder::LowFirst);
 
 static V7: Profile = Profile {
-    writes: &[RUN_COMMAND, TCP_INPUTS, BROADCAST_SIGNAL, FREQUENCY, N001],
+    writes: &[
+        RUN_COMMAND,
+        TCP_INPUTS,
+        BROADCAST_SIGNAL,
+        FREQUENCY,
+        N001,
+        POSITION,
+        COUNTER,
+    ],
     ..common::V7
 };
 
@@ -228,4 +243,71 @@ fn a_profile_without_a_write_table_checks_the_protocol_only() {
             max: 4
         })
     );
+}
+
+#[test]
+fn a_pair_is_written_whole_in_one_request_in_its_word_order() {
+    let mut c = client(TransportKind::Rtu);
+    c.write_rule(1, &POSITION, 0x0200, -5i32 as u32).unwrap();
+    assert_eq!(c.transport().requests, 1, "both words in one 10h request");
+    assert_eq!(
+        c.transport().slave.holding(0x0200),
+        0xFFFF,
+        "high word first"
+    );
+    assert_eq!(c.transport().slave.holding(0x0201), 0xFFFB);
+    c.write_rule(1, &COUNTER, 0x0300, 3_000_000_000).unwrap();
+    assert_eq!(
+        c.transport().slave.holding(0x0300),
+        0x5E00,
+        "low word first"
+    );
+    assert_eq!(c.transport().slave.holding(0x0301), 0xB2D0);
+    // Raw writes that cover the whole pair pass the gate and its range as one value.
+    c.write_registers(1, 0x0200, &[0x000F, 0x4240]).unwrap(); // 1,000,000
+    assert_eq!(c.transport().requests, 3);
+}
+
+#[test]
+fn half_a_pair_and_a_pair_out_of_range_are_refused_before_sending() {
+    let mut c = client(TransportKind::Rtu);
+    let split = |address| Refusal::SplitPair {
+        register: "position_setpoint",
+        address,
+    };
+    // Its first word alone, by 06h or 10h.
+    assert_eq!(
+        refusal(c.write_register(1, 0x0200, 1).unwrap_err()),
+        split(0x0200)
+    );
+    assert_eq!(
+        refusal(c.write_registers(1, 0x0200, &[0]).unwrap_err()),
+        split(0x0200)
+    );
+    // Starting at its second word, even with a word after it.
+    assert_eq!(
+        refusal(c.write_registers(1, 0x0201, &[0, 1]).unwrap_err()),
+        split(0x0201)
+    );
+    // Checked as one 32-bit value: 000Fh 4241h is 1,000,001.
+    assert_eq!(
+        refusal(c.write_registers(1, 0x0200, &[0x000F, 0x4241]).unwrap_err()),
+        Refusal::RawOutOfRange {
+            register: "position_setpoint",
+            raw: 1_000_001,
+            min: -1_000_000,
+            max: 1_000_000
+        }
+    );
+    assert_eq!(
+        refusal(c.write_rule(1, &POSITION, 0x0200, 2_000_000).unwrap_err()),
+        Refusal::RawOutOfRange {
+            register: "position_setpoint",
+            raw: 2_000_000,
+            min: -1_000_000,
+            max: 1_000_000
+        }
+    );
+    assert_eq!(c.transport().requests, 0, "nothing refused was sent");
+    assert_eq!(c.transport().slave.holding(0x0200), 0);
 }

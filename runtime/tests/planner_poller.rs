@@ -349,3 +349,119 @@ fn the_model_decides_whether_a_hole_is_bridged() {
         .with_model(slow_drive);
     assert_eq!(plan(&bridged), vec![(Table::Holding, read(0x00, 27))]);
 }
+
+/// 0040h a word, 0041h-0042h a 32-bit pair (high word first), 0043h a word, 0044h-0045h a pair
+/// (low word first).
+static PAIRS: &[RegisterInfo] = &[
+    info(0x40, Access::Read, Table::Holding),
+    RegisterInfo {
+        width: drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::HighFirst),
+        ..info(0x41, Access::Read, Table::Holding)
+    },
+    info(0x43, Access::Read, Table::Holding),
+    RegisterInfo {
+        width: drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::LowFirst),
+        ..info(0x44, Access::Read, Table::Holding)
+    },
+];
+
+fn pair_client(profile: &'static Profile) -> Client<Link> {
+    let mut drive = SimulatedSlave::new(1, profile);
+    for a in 0x40..=0x45 {
+        drive.set_holding(a, 0x100 + a);
+    }
+    Client::new(
+        Link {
+            drive,
+            reply: Vec::new(),
+            requests: Vec::new(),
+        },
+        profile,
+    )
+}
+
+/// Whether any request sent reads one word of the pair at `first` without the other.
+fn split_a_pair(requests: &[(u8, u16, u16)], first: u16) -> bool {
+    requests.iter().any(|&(_, a, q)| {
+        let last = a + q - 1;
+        (a..=last).contains(&first) != (a..=last).contains(&(first + 1))
+    })
+}
+
+#[test]
+fn a_pair_is_never_split_by_the_plan_and_reads_as_one_value() {
+    static TWO: Profile = Profile {
+        drive_id: "test-drive",
+        max_read: 2,
+        ..Profile::GENERIC
+    };
+    // With two registers per request, 0040h-0041h + 0042h-0043h would be as cheap as any plan,
+    // but it cuts the pair: the plan reads the pair in a request of its own.
+    let mut p = Poller::new(&TWO, PAIRS, holding(&[0x40, 0x41, 0x43, 0x44])).unwrap();
+    let reads: Vec<Read> = plan(&p).into_iter().map(|(_, r)| r).collect();
+    assert_eq!(
+        reads,
+        [
+            Read {
+                address: 0x40,
+                quantity: 1
+            },
+            Read {
+                address: 0x41,
+                quantity: 2
+            },
+            Read {
+                address: 0x43,
+                quantity: 1
+            },
+            Read {
+                address: 0x44,
+                quantity: 2
+            },
+        ]
+    );
+    let mut c = pair_client(&TWO);
+    p.poll(&mut c, 1);
+    let high_first = drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::HighFirst);
+    let low_first = drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::LowFirst);
+    assert_eq!(p.raw(1, high_first).unwrap().unwrap(), 0x0141_0142);
+    assert_eq!(p.raw(3, low_first).unwrap().unwrap(), 0x0145_0144);
+    assert!(!split_a_pair(&c.transport().requests, 0x41));
+    assert!(!split_a_pair(&c.transport().requests, 0x44));
+
+    // A drive that reads one register per request cannot give a pair whole.
+    static ONE: Profile = Profile {
+        drive_id: "test-drive",
+        max_read: 1,
+        ..Profile::GENERIC
+    };
+    assert_eq!(
+        Poller::new(&ONE, PAIRS, holding(&[0x41])).unwrap_err(),
+        PlanError::SplitPair {
+            table: Table::Holding,
+            address: 0x41
+        }
+    );
+}
+
+#[test]
+fn splitting_a_refused_request_keeps_pairs_whole() {
+    let mut c = pair_client(&PROFILE);
+    // 0043h refuses: the merged request 0040h-0045h is split, without cutting either pair.
+    c.transport().drive.fail_at(0x43, 0x02);
+    let mut p = Poller::new(&PROFILE, PAIRS, holding(&[0x40, 0x41, 0x43, 0x44])).unwrap();
+    assert_eq!(plan(&p).len(), 1, "one merged request");
+    p.poll(&mut c, 1);
+    let requests = &c.transport().requests;
+    assert!(requests.len() > 1, "{requests:?}");
+    assert!(!split_a_pair(requests, 0x41), "{requests:?}");
+    assert!(!split_a_pair(requests, 0x44), "{requests:?}");
+    let high_first = drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::HighFirst);
+    assert_eq!(p.raw(1, high_first).unwrap().unwrap(), 0x0141_0142);
+    assert!(p.value(2).unwrap().is_err(), "0043h got its own error");
+    // Next cycle: 0043h is read alone, the pairs still whole.
+    c.transport().requests.clear();
+    p.poll(&mut c, 1);
+    assert!(!split_a_pair(&c.transport().requests, 0x41));
+    assert!(!split_a_pair(&c.transport().requests, 0x44));
+}

@@ -113,6 +113,8 @@ pub enum ChangeKind {
     UnitChanged,
     /// Signed ↔ unsigned.
     SignednessChanged,
+    /// One register ↔ a 32-bit pair, or the pair's word order.
+    WidthChanged,
     /// A limit is stricter (higher minimum, lower maximum, a limit where there was none).
     RangeNarrowed,
     /// Limits are looser only.
@@ -202,6 +204,7 @@ impl ChangeKind {
         ChangeKind::ScaleCaseAdded,
         ChangeKind::UnitChanged,
         ChangeKind::SignednessChanged,
+        ChangeKind::WidthChanged,
         ChangeKind::RangeNarrowed,
         ChangeKind::RangeWidened,
         ChangeKind::DefaultChanged,
@@ -271,6 +274,7 @@ impl ChangeKind {
             ScaleCaseAdded => "scale case added",
             UnitChanged => "unit changed",
             SignednessChanged => "signedness changed",
+            WidthChanged => "width or word order changed",
             RangeNarrowed => "range narrowed",
             RangeWidened => "range widened",
             DefaultChanged => "default changed",
@@ -370,6 +374,10 @@ pub fn classify(kind: ChangeKind) -> (Severity, &'static str) {
         ScaleCaseAdded => (C, "a selector code that had no scale now converts"),
         UnitChanged => (B, "the f64 the application passes means something else"),
         SignednessChanged => (B, "raw words above 7FFFh decode to other values"),
+        WidthChanged => (
+            B,
+            "the value takes another number of registers or its words swap: every read and write of it changes",
+        ),
         RangeNarrowed => (B, "values that were accepted are refused before sending"),
         RangeWidened => (C, "values that were accepted still are"),
         DefaultChanged => (
@@ -424,6 +432,7 @@ mod tests {
             CodeRemoved,
             FieldRemoved,
             SignednessChanged,
+            WidthChanged,
         ] {
             assert_eq!(classify(k).0, Severity::Breaking, "{k:?}");
         }

@@ -20,6 +20,7 @@ fn register_key(kind: ChangeKind) -> Option<&'static str> {
         ScaleChanged | ScaleCaseAdded => "scale",
         UnitChanged => "unit",
         SignednessChanged => "signed",
+        WidthChanged => "pair",
         DefaultChanged => "default",
         AccessNarrowed | AccessWidened => "access",
         WriteRestrictionTightened | WriteRestrictionRelaxed => "write_restriction",

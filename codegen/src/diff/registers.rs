@@ -304,6 +304,15 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             Some(t(b.signed)),
         );
     }
+    if r.width() != n.width() {
+        push(
+            c,
+            ChangeKind::WidthChanged,
+            "width",
+            Some(describe::width(r.width())),
+            Some(describe::width(n.width())),
+        );
+    }
     if !same_kind(r, n) {
         push(
             c,

@@ -77,10 +77,19 @@ pub fn register(drive: &Drive, r: &Register) -> String {
         Some(p) => format!("**{p} — {}**", d.name),
         None => format!("**{}**", d.name),
     };
-    let mut facts = vec![
-        format!("address `{}`", describe::address(d.address)),
-        describe::access(plan.info.access).to_owned(),
-    ];
+    let mut facts = vec![match &d.pair {
+        None => format!("address `{}`", describe::address(d.address)),
+        Some(p) => format!(
+            "addresses `{}` ({}{}, read and written whole)",
+            describe::address_span(d.address, d.address.wrapping_add(1)),
+            describe::width(r.width()),
+            p.source
+                .as_deref()
+                .map(|s| format!(", `{s}`"))
+                .unwrap_or_default()
+        ),
+    }];
+    facts.push(describe::access(plan.info.access).to_owned());
     if r.broadcast {
         facts.push("broadcast only (slave 0)".into());
     }

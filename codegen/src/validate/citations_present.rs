@@ -326,6 +326,10 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             r.key_path("indirect"),
             rid,
         );
+        if let Some(pair) = &r.def.pair {
+            let path = r.key_path("pair").key("source");
+            opt(drive, ctx, out, &pair.source, path, rid);
+        }
         for (fi, f) in r.def.fields.iter().enumerate() {
             let fp = r.key_path("fields").index(fi);
             opt(drive, ctx, out, &f.source, fp.key("source"), rid);

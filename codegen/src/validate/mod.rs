@@ -20,6 +20,7 @@ mod identifiers_valid;
 mod limits_consistent;
 mod manuals_declared;
 mod numbers_finite;
+mod pairs_valid;
 mod protocol_valid;
 mod references_resolve;
 mod roles_valid;
@@ -69,6 +70,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     citations_present::check(drive, ctx, &mut out);
     value_kind_single::check(drive, &mut out);
     addresses_non_overlapping::check(drive, &mut out);
+    pairs_valid::check(drive, &mut out);
     bit_fields_valid::check(drive, &mut out);
     enum_codes_fit::check(drive, &mut out);
     limits_consistent::check(drive, &mut out);

@@ -1,0 +1,97 @@
+//! 32-bit values in two registers (`pair:`): the pair holds a plain or scaled number, its second
+//! address is free and exists, the drive can read it (and write it, when writable) in one
+//! request, and no conversion or address depends on it.
+
+use crate::diagnostic::Diagnostic;
+use crate::ir::{Drive, Register};
+
+/// 10h, the only function that writes both words of a pair in one request.
+const WRITE_MULTIPLE: u8 = 0x10;
+
+fn shares_space(a: &Register, b: &Register) -> bool {
+    let transports = match (&a.transports, &b.transports) {
+        (Some(x), Some(y)) => x.iter().any(|t| y.contains(t)),
+        _ => true,
+    };
+    a.broadcast == b.broadcast && a.table == b.table && transports
+}
+
+pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    let depended_on: Vec<&str> = drive
+        .selectors()
+        .iter()
+        .chain(drive.references().iter())
+        .map(|r| r.id())
+        .collect();
+    for r in drive.registers.iter().filter(|r| r.def.pair.is_some()) {
+        let path = r.key_path("pair");
+        let mut err = |message: String| out.push(drive.error(&path, Some(r.id()), message));
+        if !r.def.values.is_empty() || !r.def.fields.is_empty() {
+            err(format!(
+                "`{}` is a pair with {}: enumerations and bit fields in two registers are not supported; give the value as a number (the manuals read so far keep codes and bits in one word)",
+                r.id(),
+                if r.def.fields.is_empty() {
+                    "`values`"
+                } else {
+                    "`fields`"
+                }
+            ));
+        }
+        if !r.def.address_alternatives.is_empty() {
+            err(format!(
+                "`{}` is a pair with `address_alternatives`: a pair that moves is not supported",
+                r.id()
+            ));
+        }
+        let Some(second) = r.def.address.checked_add(1) else {
+            err(format!(
+                "`{}` is a pair at FFFFh: its second word would be past the last address",
+                r.id()
+            ));
+            continue;
+        };
+        if let Some(other) = drive
+            .registers
+            .iter()
+            .find(|o| o.def.address == second && shares_space(o, r))
+        {
+            let at = drive.locate(&other.path);
+            err(format!(
+                "`{}` is a pair at {:04X}h-{second:04X}h, but {second:04X}h is `{}` (line {}): a pair takes both addresses",
+                r.id(),
+                r.def.address,
+                other.id(),
+                at.line
+            ));
+        }
+        if depended_on.contains(&r.id()) {
+            err(format!(
+                "`{}` is a pair, but a scale, reference or address depends on it: settings are read one word at a time; a selector or reference must be one register",
+                r.id()
+            ));
+        }
+        let p = &drive.protocol;
+        if r.readable() && p.max_read.value < 2 {
+            err(format!(
+                "`{}` is a pair, but `protocol.max_read` is {}: both words must be read in one request",
+                r.id(),
+                p.max_read.value
+            ));
+        }
+        if r.writable() {
+            if p.max_write.value < 2 {
+                err(format!(
+                    "`{}` is a writable pair, but `protocol.max_write` is {}: both words must be written in one request",
+                    r.id(),
+                    p.max_write.value
+                ));
+            }
+            if !p.function_codes.is_empty() && !p.function_codes.contains(&WRITE_MULTIPLE) {
+                err(format!(
+                    "`{}` is a writable pair, but `protocol.function_codes` lacks 10h: only 10h writes both words in one request",
+                    r.id()
+                ));
+            }
+        }
+    }
+}
