@@ -37,6 +37,11 @@ impl Drive {
         let map = drivemap_codegen::read_map(&path, &Context::default()).expect("shipped map");
         let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
         setup(&mut slave);
+        Drive::serve(slave, framing)
+    }
+
+    /// Serves `slave` on loopback.
+    fn serve(slave: SimulatedSlave, framing: Framing) -> Drive {
         let slave = Arc::new(Mutex::new(slave));
         let listener = TcpListener::bind("127.0.0.1:0").unwrap();
         let addr = listener.local_addr().unwrap().to_string();
@@ -87,7 +92,11 @@ impl Drive {
 }
 
 fn drivemap(args: &[&str]) -> (i32, String, String) {
-    let maps = repo().join("maps");
+    drivemap_with(&repo().join("maps"), args)
+}
+
+/// Runs `drivemap` with `maps` as its maps directory.
+fn drivemap_with(maps: &Path, args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
         .args(args)
         .arg("--maps")
@@ -666,4 +675,82 @@ fn writing_one_field_keeps_the_others() {
     );
     assert_eq!(code, 0, "{err}");
     assert_eq!(d.holding(0x0001), 0x0001);
+}
+
+/// The fixture drive of another vendor (`tests/fixtures/acme-vf1`, its own fictional manual):
+/// 32-bit values in two registers in both word orders and decimals chosen by a field of another
+/// register, read and written at slave 254 through the tool.
+#[test]
+fn pairs_and_field_selected_decimals_of_another_vendor_at_slave_254() {
+    let fixture = repo().join("tests/fixtures/acme-vf1");
+    let map = drivemap_codegen::read_map(&fixture.join("acme-vf1.yaml"), &Context::default())
+        .expect("fixture map");
+    let mut slave = SimulatedSlave::new(254, drivemap_live::leak_profile(&map));
+    slave.set_holding(0x2200, 0x0001); // energy counter 0001E240h = 123456: 12345.6 kWh
+    slave.set_holding(0x2201, 0xE240);
+    slave.set_holding(0x2202, 0x0002); // running hours 00020000h = 131072 h, beyond a word
+    slave.set_holding(0x2203, 0x0000);
+    slave.set_holding(0x2206, 0xCFC7); // motor speed, low word first: FFFFCFC7h = -12345
+    slave.set_holding(0x2207, 0xFFFF);
+    slave.set_holding(0x2300, 0x0200); // current decimals: 2 (bits 8-15)
+    slave.set_holding(0x2301, 1234);
+    let d = Drive::serve(slave, Framing::Tcp);
+    let link = [
+        "--tcp",
+        d.addr.as_str(),
+        "--slave",
+        "254",
+        "--timeout",
+        "2s",
+    ];
+    let run = |command: &str, args: &[&str]| {
+        let mut all = vec![command, "--drive", "acme-vf1"];
+        all.extend_from_slice(&link);
+        all.extend_from_slice(args);
+        drivemap_with(&fixture, &all)
+    };
+    let (code, out, err) = run(
+        "read",
+        &[
+            "energy_counter",
+            "running_hours",
+            "motor_speed",
+            "motor_current",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        row(&out, "energy_counter").contains("12345.6 kWh 0001E240h"),
+        "{out}"
+    );
+    assert!(row(&out, "running_hours").contains("131072 h"), "{out}");
+    assert!(
+        row(&out, "motor_speed").contains("-1234.5 rpm FFFFCFC7h"),
+        "{out}"
+    );
+    assert!(row(&out, "motor_current").contains("12.34 A"), "{out}");
+    let reads: Vec<(u16, u16)> = d.slave.lock().unwrap().reads.clone();
+    for (address, quantity) in &reads {
+        for first in [0x2200u16, 0x2202, 0x2206] {
+            let covers = |a: u16| (*address..address + quantity).contains(&a);
+            assert_eq!(
+                covers(first),
+                covers(first + 1),
+                "a pair split by {reads:?}"
+            );
+        }
+    }
+
+    // A signed pair written whole, high word first, in one 10h request.
+    let (code, out, err) = run("write", &["position_setpoint=-123456"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("FFFE1DC0h"), "{out}");
+    assert_eq!(d.holding(0x2204), 0xFFFE);
+    assert_eq!(d.holding(0x2205), 0x1DC0);
+    // Out of the 32-bit range the manual prints: refused, nothing sent.
+    let before = d.requests();
+    let (code, _, err) = run("write", &["position_setpoint=1000001"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("out of range -1000000 ..= 1000000"), "{err}");
+    assert_eq!(d.requests(), before);
 }

@@ -27,6 +27,8 @@ pub struct SimulatedSlave {
     pub executed: u32,
     /// Register writes executed, for tests.
     pub writes: Vec<(u16, u16)>,
+    /// Reads executed (first address, quantity), for tests.
+    pub reads: Vec<(u16, u16)>,
 }
 
 impl SimulatedSlave {
@@ -40,6 +42,7 @@ impl SimulatedSlave {
             faults: Vec::new(),
             executed: 0,
             writes: Vec::new(),
+            reads: Vec::new(),
         }
     }
 
@@ -105,6 +108,7 @@ impl SimulatedSlave {
                     };
                     let (a, q) = (usize::from(address), usize::from(quantity));
                     words[..q].copy_from_slice(&table[a..a + q]);
+                    self.reads.push((address, quantity));
                     Response::Registers(Words::Native(&words[..q]))
                 }
                 Request::WriteSingle { address, value } => {

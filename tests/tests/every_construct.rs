@@ -1,0 +1,238 @@
+//! The fixture drive of another vendor (`tests/fixtures/acme-vf1/`, with its own fictional
+//! manual) uses what the shipped maps do not: 32-bit values in two registers (both word orders,
+//! signed and unsigned, read-only and writable), decimals chosen by a field of another register,
+//! slave addresses up to 254 and a frame gap stated in milliseconds. Here it goes through the
+//! export, the reference document, the semantic diff, the simulator and the client over a real
+//! socket; `yaml_is_enough.rs` compiles its generated module and runs the demo on it, and
+//! `cli/tests/live.rs` reads and writes its pairs with the tool.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use drivemap_codegen::diff::ChangeKind;
+use drivemap_codegen::validate::Context;
+use drivemap_live::{LiveSettings, Value};
+use drivemap_runtime::planner::Poller;
+use drivemap_runtime::transport::tcp::TcpTransport;
+use drivemap_runtime::{Client, Error, Profile, Refusal, Width, WordOrder};
+use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
+
+fn fixture() -> PathBuf {
+    drivemap_tests::workspace().join("tests/fixtures/acme-vf1/acme-vf1.yaml")
+}
+
+fn map() -> drivemap_codegen::Drive {
+    drivemap_codegen::read_map(&fixture(), &Context::default()).expect("fixture map")
+}
+
+#[test]
+fn export_doc_and_diff_say_what_the_pairs_are() {
+    let d = map();
+    let export = drivemap_codegen::export::export(&d);
+    let register = |id: &str| {
+        export["registers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["id"] == id)
+            .unwrap_or_else(|| panic!("{id} exported"))
+            .clone()
+    };
+    let energy = register("energy_counter");
+    assert_eq!(energy["words"], 2);
+    assert_eq!(energy["word_order"], "high_first");
+    assert_eq!(energy["word_order_source"], "acme-vf1.txt:34");
+    assert_eq!(register("motor_speed")["word_order"], "low_first");
+    assert_eq!(register("output_frequency")["words"], 1);
+    assert!(register("output_frequency")["word_order"].is_null());
+    assert_eq!(
+        register("motor_current")["scale_selected_by"],
+        "display_status.current_decimals"
+    );
+    assert_eq!(export["protocol"]["slave_address"]["max"], 254);
+
+    let doc = drivemap_codegen::reference::render(&d, "acme-vf1.yaml");
+    assert!(
+        doc.contains("| 2200h – 2201h (32-bit pair, high word first, `acme-vf1.txt:34`) |"),
+        "{doc}"
+    );
+    assert!(
+        doc.contains("2206h – 2207h (32-bit pair, low word first"),
+        "{doc}"
+    );
+    assert!(doc.contains("at least 10 ms (`acme-vf1.txt:44`)"), "{doc}");
+    assert!(doc.contains("1 ..= 254"), "{doc}");
+
+    // Swapping a pair's word order, or making it one register, is a breaking change.
+    let text = std::fs::read_to_string(fixture()).unwrap();
+    let swapped = text.replace(
+        "pair: {order: low_first, source: \"acme-vf1.txt:38\"}",
+        "pair: {order: high_first, source: \"acme-vf1.txt:38\"}",
+    );
+    let single = swapped.replacen(
+        "        pair: {order: high_first, source: \"acme-vf1.txt:34\"}\n",
+        "",
+        1,
+    );
+    assert_ne!(single, swapped);
+    let ctx = Context::default();
+    let new = drivemap_codegen::read_map_str("acme-vf1.yaml", &single, &ctx).unwrap();
+    let diff = drivemap_codegen::diff::compare(&d, &new);
+    let widths: Vec<(&str, Option<&str>, Option<&str>)> = diff
+        .changes
+        .iter()
+        .filter(|c| c.kind == ChangeKind::WidthChanged)
+        .map(|c| (c.subject.as_str(), c.old.as_deref(), c.new.as_deref()))
+        .collect();
+    assert_eq!(
+        widths,
+        [
+            (
+                "energy_counter",
+                Some("32-bit pair, high word first"),
+                Some("one register")
+            ),
+            (
+                "motor_speed",
+                Some("32-bit pair, low word first"),
+                Some("32-bit pair, high word first")
+            ),
+        ]
+    );
+    assert!(diff.breaking() >= 2);
+}
+
+/// The simulator serving the fixture at slave 254 over Modbus TCP, and a client with the map's
+/// profile (lowered at run time).
+struct Bench {
+    server: TcpServer,
+    client: Client<TcpTransport>,
+    map: drivemap_codegen::Drive,
+    sim: drivemap_sim::SharedSim,
+}
+
+fn bench() -> Bench {
+    let map = map();
+    let mut sim = Simulator::new(
+        map.clone(),
+        SimOptions::new()
+            .slave(254)
+            .clock(Arc::new(ManualClock::new())),
+    )
+    .unwrap();
+    sim.set("energy_counter", 12345.6).unwrap();
+    sim.set_raw("running_hours", 131_072).unwrap();
+    sim.set("motor_speed", -1234.5).unwrap();
+    sim.set_raw("display_status", 0x0200).unwrap(); // two decimals
+    sim.set_raw("motor_current", 1234).unwrap();
+    let sim = drivemap_sim::shared(sim);
+    let server =
+        TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();
+    let link =
+        TcpTransport::connect(&server.local_addr().to_string(), Duration::from_secs(2)).unwrap();
+    let client = Client::new(link, drivemap_live::leak_profile(&map));
+    Bench {
+        server,
+        client,
+        map,
+        sim,
+    }
+}
+
+#[test]
+fn the_simulator_serves_pairs_whole_and_the_client_reads_them_as_one_value() {
+    let mut b = bench();
+    let rows = |id: &str| b.map.register_plan(b.map.find(id).unwrap());
+    assert_eq!(
+        rows("energy_counter").info.width,
+        Width::Pair(WordOrder::HighFirst)
+    );
+    assert_eq!(b.client.profile().timing.frame_gap_us, Some(10_000));
+
+    // Planned reads: the monitors and the pairs, at slave 254.
+    let ids = [
+        "energy_counter",
+        "running_hours",
+        "motor_speed",
+        "display_status",
+        "motor_current",
+    ];
+    let infos: Vec<_> = b
+        .map
+        .registers
+        .iter()
+        .map(|r| b.map.register_plan(r).info)
+        .collect();
+    let wanted = ids
+        .iter()
+        .map(|id| (rows(id).info.table, rows(id).info.address));
+    let mut poller = Poller::new(b.client.profile(), &infos, wanted).unwrap();
+    poller.poll(&mut b.client, 254);
+    let raw = |i: usize| poller.raw(i, rows(ids[i]).info.width).unwrap().unwrap();
+    assert_eq!(raw(0), 123_456);
+    assert_eq!(
+        rows("energy_counter").decode_number(raw(0), &()),
+        Ok(12345.6)
+    );
+    assert_eq!(raw(1), 131_072, "beyond one word");
+    assert_eq!(rows("motor_speed").decode_number(raw(2), &()), Ok(-1234.5));
+    // The current's decimals follow the display status's high byte.
+    let mut settings = LiveSettings::default();
+    settings.absorb(&b.map, 0x2300, raw(3) as u16);
+    match drivemap_live::decode(
+        &b.map,
+        b.map.find("motor_current").unwrap(),
+        raw(4),
+        &settings,
+    ) {
+        Ok(Value::Quantity { value, .. }) => assert_eq!(value, 12.34),
+        other => panic!("{other:?}"),
+    }
+
+    // A signed pair written whole through the gate; the simulated drive holds the value.
+    let position = rows("position_setpoint");
+    let word = position.encode_number(-123_456.0, &()).unwrap();
+    b.client
+        .write_rule(254, &position.write_rule(), 0x2204, word)
+        .unwrap();
+    let held = b.sim.lock().unwrap().value("position_setpoint").unwrap();
+    assert_eq!(held.as_f64(), Some(-123_456.0));
+    assert!(matches!(
+        position.encode_number(1_000_001.0, &()),
+        Err(drivemap_runtime::ValueError::OutOfRange { .. })
+    ));
+    // Half of it is refused by the gate before anything is sent.
+    match b.client.write_register(254, 0x2205, 1) {
+        Err(Error::Refused(Refusal::SplitPair { register, address })) => {
+            assert_eq!((register, address), ("position_setpoint", 0x2205))
+        }
+        other => panic!("{other:?}"),
+    }
+    b.server.stop();
+}
+
+#[test]
+fn the_simulator_refuses_half_a_pair_from_a_master_without_the_map() {
+    let b = bench();
+    // A generic master (no write table, so no gate of the map) sends the first word alone.
+    static GENERIC: Profile = Profile {
+        slave_min: 1,
+        slave_max: 254,
+        ..Profile::GENERIC
+    };
+    let link =
+        TcpTransport::connect(&b.server.local_addr().to_string(), Duration::from_secs(2)).unwrap();
+    let mut generic = Client::new(link, &GENERIC);
+    match generic.write_registers(254, 0x2204, &[0x0001]) {
+        Err(e) => assert_eq!(e.exception().map(|x| x.code), Some(0x02), "{e}"),
+        Ok(()) => panic!("half a pair was written"),
+    }
+    // Both words in one request are taken.
+    generic
+        .write_registers(254, 0x2204, &[0x0001, 0xE240])
+        .unwrap();
+    let held = b.sim.lock().unwrap().value("position_setpoint").unwrap();
+    assert_eq!(held.as_f64(), Some(123_456.0));
+    b.server.stop();
+}
