@@ -100,7 +100,7 @@ fn drivemap_with(maps: &Path, args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
         .args(args)
         .arg("--maps")
-        .arg(&maps)
+        .arg(maps)
         .output()
         .expect("run drivemap");
     (
