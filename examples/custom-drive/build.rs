@@ -2,12 +2,14 @@
 //!
 //! The map is the codegen's golden fixture, which uses every construct of the schema, so this
 //! crate also proves that everything the generator can emit compiles. The second map selects
-//! scales by a field of a status word (`selected_by: <register>.<field>`).
+//! scales by a field of a status word (`selected_by: <register>.<field>`); the third, the
+//! fictional drive of `tests/fixtures/acme-vf1`, has 32-bit values in two registers.
 
 fn main() {
     drivemap_codegen::Config::new()
         .map("../../codegen/tests/fixtures/mini-drive.yaml")
         .map("../../codegen/tests/fixtures/field-selector.yaml")
+        .map("../../tests/fixtures/acme-vf1/acme-vf1.yaml")
         .compile()
         .unwrap_or_else(|e| panic!("{e}"));
 }

@@ -130,7 +130,7 @@ fn bench() -> Bench {
     let server =
         TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();
     let link =
-        TcpTransport::connect(&server.local_addr().to_string(), Duration::from_secs(2)).unwrap();
+        TcpTransport::connect(server.local_addr().to_string(), Duration::from_secs(2)).unwrap();
     let client = Client::new(link, drivemap_live::leak_profile(&map));
     Bench {
         server,
@@ -222,7 +222,7 @@ fn the_simulator_refuses_half_a_pair_from_a_master_without_the_map() {
         ..Profile::GENERIC
     };
     let link =
-        TcpTransport::connect(&b.server.local_addr().to_string(), Duration::from_secs(2)).unwrap();
+        TcpTransport::connect(b.server.local_addr().to_string(), Duration::from_secs(2)).unwrap();
     let mut generic = Client::new(link, &GENERIC);
     match generic.write_registers(254, 0x2204, &[0x0001]) {
         Err(e) => assert_eq!(e.exception().map(|x| x.code), Some(0x02), "{e}"),
