@@ -174,6 +174,8 @@ pub fn export(drive: &Drive) -> Value {
             // Each manual in full: `file` or `id`, `title`, and `document`/`url` when given.
             "manual_details": drive.meta.manuals,
             "extends": drive.meta.extends,
+            // How the manual numbers registers; `address` values are numbers either way.
+            "address_format": drive.address_format,
         },
         "variants": drive.variants,
         "protocol": {

@@ -199,7 +199,7 @@ fn protocol(out: &mut String, drive: &Drive) {
                 .registers
                 .iter()
                 .map(|name| match drive.find(name) {
-                    Some(r) => format!("{name} ({})", describe::address(r.def.address)),
+                    Some(r) => format!("{name} ({})", addr(drive, r.def.address)),
                     None => name.clone(),
                 })
                 .collect();
@@ -333,7 +333,7 @@ fn protocol(out: &mut String, drive: &Drive) {
             let writes: Vec<String> = c
                 .writes
                 .iter()
-                .map(|w| format!("{} ← {:04X}h", describe::address(w.address), w.value))
+                .map(|w| format!("{} ← {:04X}h", addr(drive, w.address), w.value))
                 .collect();
             let _ = writeln!(
                 out,
@@ -419,13 +419,27 @@ fn roles(out: &mut String, drive: &Drive) {
     let _ = writeln!(out);
 }
 
-fn address_cell(r: &Register) -> String {
+/// An address as the manual prints it: hex (`2001h`), or for a manual that numbers registers in
+/// decimal (`address_format: decimal`) the decimal number with its hex (`2001 (07D1h)`).
+fn addr(drive: &Drive, a: u16) -> String {
+    match drive.address_format {
+        crate::model::AddressFormat::Hex => describe::address(a),
+        crate::model::AddressFormat::Decimal => format!("{a} ({})", describe::address(a)),
+    }
+}
+
+/// Two addresses as the manual prints them (see [`addr`]).
+fn span(drive: &Drive, first: u16, last: u16) -> String {
+    format!("{} – {}", addr(drive, first), addr(drive, last))
+}
+
+fn address_cell(drive: &Drive, r: &Register) -> String {
     let mut parts = vec![match &r.def.pair {
-        None => describe::address(r.def.address),
+        None => addr(drive, r.def.address),
         Some(p) => {
             let pair = format!(
                 "{} ({}",
-                describe::address_span(r.def.address, r.def.address.wrapping_add(1)),
+                span(drive, r.def.address, r.def.address.wrapping_add(1)),
                 describe::width(r.width())
             );
             match &p.source {
@@ -437,7 +451,7 @@ fn address_cell(r: &Register) -> String {
     for alt in &r.def.address_alternatives {
         parts.push(format!(
             "{} if {}",
-            describe::address(alt.address),
+            addr(drive, alt.address),
             describe::condition(&alt.when)
         ));
     }
@@ -563,7 +577,7 @@ fn registers(out: &mut String, drive: &Drive) {
             let _ = writeln!(
                 out,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                address_cell(r),
+                address_cell(drive, r),
                 cell(d.param.as_deref().unwrap_or("")),
                 cell(&d.name),
                 code(&d.id),
@@ -602,7 +616,7 @@ fn details(out: &mut String, drive: &Drive, r: &Register) {
     let d = &r.def;
     let title = format!(
         "#### {} {} — {}",
-        describe::address(d.address),
+        addr(drive, d.address),
         describe::register(r),
         d.name.replace('\n', " ")
     );
@@ -683,7 +697,7 @@ fn notes(out: &mut String, drive: &Drive) {
     let mut regs = String::new();
     for r in &drive.registers {
         let d = &r.def;
-        let who = format!("{} {}", describe::address(d.address), describe::register(r));
+        let who = format!("{} {}", addr(drive, d.address), describe::register(r));
         for n in &d.notes {
             let _ = writeln!(regs, "- {who}: {}", one_line(n));
         }
@@ -743,11 +757,7 @@ fn conflicts(out: &mut String, drive: &Drive) {
         conflict(&mut body, c, None);
     }
     for r in &drive.registers {
-        let who = format!(
-            "{} {}",
-            describe::address(r.def.address),
-            describe::register(r)
-        );
+        let who = format!("{} {}", addr(drive, r.def.address), describe::register(r));
         for c in &r.def.conflicts {
             conflict(&mut body, c, Some(&who));
         }
@@ -764,11 +774,7 @@ fn conflicts(out: &mut String, drive: &Drive) {
 fn unknowns(out: &mut String, drive: &Drive) {
     let mut body = String::new();
     for r in &drive.registers {
-        let who = format!(
-            "{} {}",
-            describe::address(r.def.address),
-            describe::register(r)
-        );
+        let who = format!("{} {}", addr(drive, r.def.address), describe::register(r));
         for u in &r.def.unknown {
             let _ = writeln!(
                 body,

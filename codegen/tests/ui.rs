@@ -114,4 +114,19 @@ fn addresses_are_read_in_the_manuals_notation() {
     let wrong = format!("address_format: octal\n{text}");
     let e = read(&wrong).unwrap_err();
     assert!(e.contains("unknown variant `octal`"), "{e}");
+    // The reference document shows a decimal manual's numbers as printed, with their hex; the
+    // export says how the manual numbers registers.
+    let d =
+        drivemap_codegen::read_map_str("mini-drive.yaml", &declared, &Context::default()).unwrap();
+    let doc = drivemap_codegen::reference::render(&d, "mini-drive.yaml");
+    assert!(doc.contains("| 2001 (07D1h) |"), "{doc}");
+    let export = drivemap_codegen::export::export(&d);
+    assert_eq!(export["drive"]["address_format"], "decimal");
+    let hex =
+        drivemap_codegen::read_map_str("mini-drive.yaml", &text, &Context::default()).unwrap();
+    assert_eq!(
+        drivemap_codegen::export::export(&hex)["drive"]["address_format"],
+        "hex"
+    );
+    assert!(drivemap_codegen::reference::render(&hex, "mini-drive.yaml").contains("| 0001h |"));
 }
