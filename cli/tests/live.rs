@@ -694,6 +694,7 @@ fn pairs_and_field_selected_decimals_of_another_vendor_at_slave_254() {
     slave.set_holding(0x2207, 0xFFFF);
     slave.set_holding(0x2300, 0x0200); // current decimals: 2 (bits 8-15)
     slave.set_holding(0x2301, 1234);
+    slave.reads = Some(Vec::new());
     let d = Drive::serve(slave, Framing::Tcp);
     let link = [
         "--tcp",
@@ -729,7 +730,7 @@ fn pairs_and_field_selected_decimals_of_another_vendor_at_slave_254() {
         "{out}"
     );
     assert!(row(&out, "motor_current").contains("12.34 A"), "{out}");
-    let reads: Vec<(u16, u16)> = d.slave.lock().unwrap().reads.clone();
+    let reads: Vec<(u16, u16)> = d.slave.lock().unwrap().reads.clone().unwrap();
     for (address, quantity) in &reads {
         for first in [0x2200u16, 0x2202, 0x2206] {
             let covers = |a: u16| (*address..address + quantity).contains(&a);

@@ -27,8 +27,9 @@ pub struct SimulatedSlave {
     pub executed: u32,
     /// Register writes executed, for tests.
     pub writes: Vec<(u16, u16)>,
-    /// Reads executed (first address, quantity), for tests.
-    pub reads: Vec<(u16, u16)>,
+    /// Reads executed (first address, quantity), for tests: `None` (the default) records
+    /// nothing, so a long-running slave does not grow; set `Some(Vec::new())` to record.
+    pub reads: Option<Vec<(u16, u16)>>,
 }
 
 impl SimulatedSlave {
@@ -42,7 +43,7 @@ impl SimulatedSlave {
             faults: Vec::new(),
             executed: 0,
             writes: Vec::new(),
-            reads: Vec::new(),
+            reads: None,
         }
     }
 
@@ -108,7 +109,9 @@ impl SimulatedSlave {
                     };
                     let (a, q) = (usize::from(address), usize::from(quantity));
                     words[..q].copy_from_slice(&table[a..a + q]);
-                    self.reads.push((address, quantity));
+                    if let Some(reads) = &mut self.reads {
+                        reads.push((address, quantity));
+                    }
                     Response::Registers(Words::Native(&words[..q]))
                 }
                 Request::WriteSingle { address, value } => {
