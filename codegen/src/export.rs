@@ -173,7 +173,8 @@ pub fn export(drive: &Drive) -> Value {
         "variants": drive.variants,
         "protocol": {
             "transports": p.transports,
-            "function_codes": p.function_codes,
+            // The working list; `limits.function_codes` (when cited or not printed) says more.
+            "function_codes": p.function_codes.codes,
             // The working numbers; `limits` (when one is cited or not printed) says more.
             "max_read": p.max_read.value,
             "max_write": p.max_write.value,
@@ -194,12 +195,23 @@ pub fn export(drive: &Drive) -> Value {
         "removed": drive.removed,
         "roles": drive.roles,
     });
+    // What the protocol's working figures rest on, when a map says more than the number:
+    // a citation, or "not printed" with the reason.
+    let mut limits = serde_json::Map::new();
+    let fc = &p.function_codes;
+    if fc.stated() {
+        limits.insert(
+            "function_codes".into(),
+            json!({"codes": fc.codes, "source": fc.source, "not_printed": fc.unknown}),
+        );
+    }
     let stated = |l: &model::Limit| l.source.is_some() || l.unknown.is_some();
     if stated(&p.max_read) || stated(&p.max_write) {
-        out["protocol"]["limits"] = json!({
-            "max_read": limit_json(&p.max_read),
-            "max_write": limit_json(&p.max_write),
-        });
+        limits.insert("max_read".into(), limit_json(&p.max_read));
+        limits.insert("max_write".into(), limit_json(&p.max_write));
+    }
+    if !limits.is_empty() {
+        out["protocol"]["limits"] = Value::Object(limits);
     }
     out
 }

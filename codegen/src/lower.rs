@@ -572,7 +572,7 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
         .collect();
     Profile {
         drive_id: text(&drive.meta.id),
-        function_codes: leak(p.function_codes.clone()),
+        function_codes: leak(p.function_codes.codes.clone()),
         max_read: p.max_read.value,
         max_write: p.max_write.value,
         slave_min: p.slave_address.min,

@@ -170,11 +170,12 @@ fn protocol(out: &mut String, drive: &Drive) {
             .join(", "),
         p.source.as_deref(),
     );
-    row(
-        "Function codes",
-        describe::functions(&p.function_codes),
-        None,
-    );
+    let fc = &p.function_codes;
+    let mut functions = describe::functions(&fc.codes);
+    if let Some(why) = &fc.unknown {
+        functions += &format!(". List not printed: {}", why.trim());
+    }
+    row("Function codes", functions, fc.source.as_deref());
     let mut per_request = describe::per_request(p.max_read.value, p.max_write.value);
     for (name, l) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
         per_request += &describe::limit_citation(name, l);

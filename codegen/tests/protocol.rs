@@ -94,3 +94,91 @@ fn a_limit_not_printed_keeps_its_value_and_says_why() {
     .unwrap_err();
     assert!(e.to_string().contains("missing field `value`"), "{e}");
 }
+
+/// `function_codes` takes a plain list, `{codes, source}` or `{codes, unknown: <why>, source}`;
+/// the profile keeps the codes, the reference and the export say where they come from.
+#[test]
+fn function_codes_carry_their_citation_or_why_they_are_not_printed() {
+    let plain_line = "  function_codes: [0x03, 0x06, 0x08, 0x10]\n";
+    assert!(
+        fixture().contains(plain_line),
+        "the fixture's function codes moved"
+    );
+    let with = |form: &str| fixture().replace(plain_line, &format!("  function_codes: {form}\n"));
+    let text = with(
+        "{codes: [03h, 0x06, 0x08, 0x10], unknown: \"no list printed; the codes of its examples\", source: \"manual.txt:9\"}",
+    );
+    let drive =
+        drivemap_codegen::read_map_str("mini-drive.yaml", &text, &Context::default()).unwrap();
+    assert_eq!(
+        drive.protocol.function_codes.codes,
+        [0x03, 0x06, 0x08, 0x10]
+    );
+    let plan = lower::lower(&drive);
+    assert_eq!(plan.profile.function_codes, &[0x03, 0x06, 0x08, 0x10]);
+    let md = drivemap_codegen::reference::render(&drive, "mini-drive.yaml");
+    assert!(
+        md.contains(
+            "| Function codes | 03h, 06h, 08h, 10h. List not printed: no list printed; the codes of its examples | `manual.txt:9` |"
+        ),
+        "{md}"
+    );
+    let json = drivemap_codegen::export::export(&drive);
+    assert_eq!(
+        json["protocol"]["function_codes"],
+        serde_json::json!([3, 6, 8, 16])
+    );
+    let l = &json["protocol"]["limits"]["function_codes"];
+    assert_eq!(
+        l["not_printed"],
+        "no list printed; the codes of its examples"
+    );
+    assert_eq!(l["source"], "manual.txt:9");
+    assert_eq!(l["codes"], serde_json::json!([3, 6, 8, 16]));
+    // The per-request limits are plain: only the function codes are in `limits`.
+    assert!(json["protocol"]["limits"].get("max_read").is_none());
+
+    // Cited only: the citation in the source column, no "not printed".
+    let cited = drivemap_codegen::read_map_str(
+        "mini-drive.yaml",
+        &with("{codes: [0x03, 0x06, 0x08, 0x10], source: \"manual.txt:9\"}"),
+        &Context::default(),
+    )
+    .unwrap();
+    let md = drivemap_codegen::reference::render(&cited, "mini-drive.yaml");
+    assert!(
+        md.contains("| Function codes | 03h, 06h, 08h, 10h | `manual.txt:9` |"),
+        "{md}"
+    );
+    // The codes are required: they are the working list.
+    let e = drivemap_codegen::read_map_str(
+        "mini-drive.yaml",
+        &with("{unknown: \"not printed\", source: \"manual.txt:9\"}"),
+        &Context::default(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("missing field `codes`"), "{e}");
+    // A code of the mapping form is read in hex and located in `codes`.
+    let e = drivemap_codegen::read_map_str(
+        "mini-drive.yaml",
+        &with("{codes: [0x03, 0x05, 0x06, 0x08, 0x10], source: \"manual.txt:9\"}"),
+        &Context::default(),
+    )
+    .unwrap_err();
+    let e = e.to_string();
+    assert!(
+        e.contains("mini-drive.yaml:16:34: error: function 05h is not one drivemap speaks"),
+        "{e}"
+    );
+    let e = drivemap_codegen::read_map_str(
+        "mini-drive.yaml",
+        &with("{codes: [3, 16], source: \"manual.txt:9\"}"),
+        &Context::default(),
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("function_codes.codes[1]: function code 16 is decimal (10H)"),
+        "{e}"
+    );
+}

@@ -11,7 +11,7 @@ use crate::model::CommandKind;
 pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     let p = &drive.protocol;
     let id = &drive.meta.id;
-    let fcs = p.function_codes.iter().map(|f| hex2(*f));
+    let fcs = p.function_codes.codes.iter().map(|f| hex2(*f));
     let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read.value);
     let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write.value);
     let slave_min = proc_macro2::Literal::u8_unsuffixed(p.slave_address.min);

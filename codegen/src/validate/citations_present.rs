@@ -207,6 +207,14 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             None,
         );
     }
+    opt(
+        drive,
+        ctx,
+        out,
+        &p.function_codes.source,
+        proto.key("function_codes").key("source"),
+        None,
+    );
     for (name, limit) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
         opt(
             drive,

@@ -29,24 +29,42 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             "name at least one transport (rtu, tcp)",
         ));
     }
-    if p.function_codes.is_empty() {
+    // The list itself, or the `codes` of `{codes: [...], source: ...}`.
+    let fcp = {
+        let p = pp.key("function_codes");
+        if drive.tree.at(&p.key("codes")).is_some() {
+            p.key("codes")
+        } else {
+            p
+        }
+    };
+    let fcs = &p.function_codes.codes;
+    if fcs.is_empty() {
+        out.push(drive.error(&fcp, None, "name the function codes the drive implements"));
+    }
+    if let Some(why) = &p.function_codes.unknown
+        && why.trim().is_empty()
+    {
         out.push(drive.error(
-            &pp.key("function_codes"),
+            &pp.key("function_codes").key("unknown"),
             None,
-            "name the function codes the drive implements",
+            format!(
+                "`function_codes` marked unknown needs its reason: why the manual prints no list and where {} come from",
+                crate::describe::functions(fcs)
+            ),
         ));
     }
-    for (i, f) in p.function_codes.iter().enumerate() {
+    for (i, f) in fcs.iter().enumerate() {
         if !KNOWN.contains(f) {
             out.push(drive.error(
-                &pp.key("function_codes").index(i),
+                &fcp.index(i),
                 None,
                 format!("function {f:02X}h is not one drivemap speaks (03h, 04h, 06h, 08h, 10h)"),
             ));
         }
-        if p.function_codes[..i].contains(f) {
+        if fcs[..i].contains(f) {
             out.push(drive.error(
-                &pp.key("function_codes").index(i),
+                &fcp.index(i),
                 None,
                 format!("function {f:02X}h listed twice"),
             ));
@@ -90,7 +108,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     }
     if let Some(b) = &p.broadcast {
         for (i, f) in b.functions.iter().enumerate() {
-            if !matches!(f, 0x06 | 0x10) || !p.function_codes.contains(f) {
+            if !matches!(f, 0x06 | 0x10) || !fcs.contains(f) {
                 out.push(drive.error(
                     &pp.key("broadcast").key("functions").index(i),
                     None,
