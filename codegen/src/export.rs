@@ -5,7 +5,9 @@
 //! setting (`scale_selected_by` names the parameter, or `<parameter>.<field>` for a field of it)
 //! or on another quantity (`scale_relative_to`). `drive.manuals` lists the names citations use;
 //! `drive.manual_details` gives each manual's `file` or `id`, `title`, `document` and `url`. Keys
-//! beyond the documented shape carry the rest of the map.
+//! beyond the documented shape carry the rest of the map. `protocol.limits` (when cited or not
+//! printed) gives `function_codes`, `max_read` and `max_write` with `source` and `not_printed`;
+//! a broadcast whose rules are not printed has `broadcast.not_printed` and `broadcast.text`.
 
 use serde_json::{Value, json};
 
@@ -209,6 +211,18 @@ pub fn export(drive: &Drive) -> Value {
     if stated(&p.max_read) || stated(&p.max_write) {
         limits.insert("max_read".into(), limit_json(&p.max_read));
         limits.insert("max_write".into(), limit_json(&p.max_write));
+    }
+    // A broadcast whose rules are not printed: says so in the words of `doc`, with the reason.
+    if let Some(b) = &p.broadcast
+        && let Some(why) = &b.unknown
+    {
+        out["protocol"]["broadcast"] = json!({
+            "functions": b.functions,
+            "registers": b.registers,
+            "source": b.source,
+            "not_printed": why.trim(),
+            "text": format!("{} ({})", crate::describe::broadcast_not_printed(why), b.source),
+        });
     }
     if !limits.is_empty() {
         out["protocol"]["limits"] = Value::Object(limits);

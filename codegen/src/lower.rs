@@ -577,9 +577,11 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
         max_write: p.max_write.value,
         slave_min: p.slave_address.min,
         slave_max: p.slave_address.max,
-        broadcast: p.broadcast.as_ref().map(|b| BroadcastInfo {
-            functions: leak(b.functions.clone()),
-            addresses: leak(drive.broadcast_addresses()),
+        broadcast: p.broadcast.as_ref().map(|b| match &b.unknown {
+            Some(why) => BroadcastInfo::not_printed(text(why.trim())),
+            None => {
+                BroadcastInfo::new(leak(b.functions.clone()), leak(drive.broadcast_addresses()))
+            }
         }),
         exceptions: leak(
             p.exceptions

@@ -277,11 +277,18 @@ pub struct SlaveAddress {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Broadcast {
-    /// Function codes executed when addressed to slave 0 (never answered).
+    /// Function codes executed when addressed to slave 0 (never answered). Required unless the
+    /// rules are `unknown`.
+    #[serde(default)]
     pub functions: Vec<u8>,
     /// Register ids a broadcast may write. Registers of a `broadcast: true` group are implied.
     #[serde(default)]
     pub registers: Vec<String>,
+    /// The manual says the drive has a broadcast but does not print its rules (which
+    /// functions, which registers): why, as `broadcast: {unknown: "<why>", source: ...}`. Then
+    /// `functions` and `registers` are not given, and the runtime sends no broadcast at all.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unknown: Option<String>,
     pub source: String,
 }
 

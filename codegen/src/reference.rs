@@ -190,7 +190,18 @@ fn protocol(out: &mut String, drive: &Drive) {
         slave += &format!(", set by {param}");
     }
     row("Slave address", slave, s.source.as_deref());
-    if let Some(b) = &p.broadcast {
+    if let Some(b) = &p.broadcast
+        && let Some(why) = &b.unknown
+    {
+        row(
+            "Broadcast",
+            format!(
+                "{}. The runtime sends no broadcast to this drive.",
+                describe::broadcast_not_printed(why)
+            ),
+            Some(&b.source),
+        );
+    } else if let Some(b) = &p.broadcast {
         let mut text = format!(
             "slave 0 executes {} without reply",
             describe::functions(&b.functions)

@@ -182,3 +182,68 @@ fn function_codes_carry_their_citation_or_why_they_are_not_printed() {
         "{e}"
     );
 }
+
+/// `broadcast: {unknown: <why>, source}`: the drive has a broadcast whose rules the manual does
+/// not print. The profile says so (no functions, no addresses, the reason), and the reference
+/// and the export say "broadcast exists, rules not printed".
+#[test]
+fn a_broadcast_whose_rules_are_not_printed_is_lowered_as_such() {
+    let known = "  broadcast:\n    functions: [0x06, 0x10]\n    registers: [command]\n    source: \"manual.txt:11\"\n";
+    assert!(fixture().contains(known), "the fixture's broadcast moved");
+    // The fixture's broadcast group goes too: with rules not printed there is none.
+    let group = "  - id: broadcast\n    name: Broadcast registers\n    broadcast: true\n    access: w\n    registers:\n      - id: broadcast_frequency\n        name: Broadcast frequency\n        address: 0x0002\n        unit: Hz\n        scale: {relative_to: max_frequency, full_scale: 30000}\n        source: \"manual.txt:25\"\n";
+    assert!(
+        fixture().contains(group),
+        "the fixture's broadcast group moved"
+    );
+    let text = fixture().replace(group, "").replace(
+        known,
+        "  broadcast: {unknown: \"slave 0 is broadcast; no functions or registers printed\", source: \"manual.txt:11\"}\n",
+    );
+    let drive =
+        drivemap_codegen::read_map_str("mini-drive.yaml", &text, &Context::default()).unwrap();
+    let plan = lower::lower(&drive);
+    let b = plan.profile.broadcast.expect("the broadcast exists");
+    assert_eq!(
+        b.not_printed,
+        Some("slave 0 is broadcast; no functions or registers printed")
+    );
+    assert!(b.functions.is_empty() && b.addresses.is_empty());
+    // A known broadcast keeps its rules and no reason.
+    let plain =
+        drivemap_codegen::read_map_str("mini-drive.yaml", &fixture(), &Context::default()).unwrap();
+    let b = lower::lower(&plain).profile.broadcast.unwrap();
+    assert_eq!((b.functions, b.not_printed), (&[0x06u8, 0x10][..], None));
+
+    let md = drivemap_codegen::reference::render(&drive, "mini-drive.yaml");
+    assert!(
+        md.contains(
+            "| Broadcast | broadcast exists, rules not printed: slave 0 is broadcast; no functions or registers printed. The runtime sends no broadcast to this drive. | `manual.txt:11` |"
+        ),
+        "{md}"
+    );
+    let json = drivemap_codegen::export::export(&drive);
+    let b = &json["protocol"]["broadcast"];
+    assert_eq!(
+        b["not_printed"],
+        "slave 0 is broadcast; no functions or registers printed"
+    );
+    assert_eq!(
+        b["text"],
+        "broadcast exists, rules not printed: slave 0 is broadcast; no functions or registers printed (manual.txt:11)"
+    );
+    assert_eq!(b["functions"], serde_json::json!([]));
+    // The generated profile carries the reason too.
+    let options = drivemap_codegen::generate::Options {
+        runtime: "::drivemap_runtime".parse().unwrap(),
+        source_name: "mini-drive.yaml".into(),
+    };
+    let code = drivemap_codegen::generate::drive_module(&drive, &options).unwrap();
+    let squeezed: String = code.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        squeezed.contains(
+            "BroadcastInfo::not_printed( \"slave 0 is broadcast; no functions or registers printed\", )"
+        ),
+        "the generated PROFILE carries the reason"
+    );
+}

@@ -66,6 +66,30 @@ pub struct BroadcastInfo {
     pub functions: &'static [u8],
     /// Communication addresses a broadcast may write. Empty: any writable register.
     pub addresses: &'static [u16],
+    /// Set when the drive has a broadcast whose rules its manual does not print: why (the
+    /// map's `broadcast.unknown`). `functions` and `addresses` are empty then, and the client's
+    /// write gate refuses every broadcast: it cannot tell what the drives would do with one.
+    pub not_printed: Option<&'static str>,
+}
+
+impl BroadcastInfo {
+    /// Rules known: the given functions, to the given addresses (empty: any writable one).
+    pub const fn new(functions: &'static [u8], addresses: &'static [u16]) -> BroadcastInfo {
+        BroadcastInfo {
+            functions,
+            addresses,
+            not_printed: None,
+        }
+    }
+
+    /// A broadcast that exists but whose rules the manual does not print (`why`).
+    pub const fn not_printed(why: &'static str) -> BroadcastInfo {
+        BroadcastInfo {
+            functions: &[],
+            addresses: &[],
+            not_printed: Some(why),
+        }
+    }
 }
 
 /// PDU address = communication address + offset, per transport kind.
@@ -189,10 +213,7 @@ impl Profile {
         max_write: 123,
         slave_min: 1,
         slave_max: 247,
-        broadcast: Some(BroadcastInfo {
-            functions: &[0x06, 0x10],
-            addresses: &[],
-        }),
+        broadcast: Some(BroadcastInfo::new(&[0x06, 0x10], &[])),
         exceptions: &[],
         commands: &[],
         address_offsets: AddressOffsets { rtu: 0, tcp: 0 },

@@ -356,6 +356,9 @@ fn broadcast(c: &mut Collector, old: &Drive, new: &Drive) {
     };
     let text = |x: &Option<crate::model::Broadcast>| {
         x.as_ref().map(|x| {
+            if let Some(why) = &x.unknown {
+                return describe::broadcast_not_printed(why);
+            }
             let mut t = describe::functions(&x.functions);
             if !x.registers.is_empty() {
                 t += &format!(" to {}", x.registers.join(", "));

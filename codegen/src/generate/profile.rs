@@ -18,11 +18,17 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     let slave_max = proc_macro2::Literal::u8_unsuffixed(p.slave_address.max);
     let broadcast = match &p.broadcast {
         None => quote!(None),
-        Some(b) => {
-            let addrs = drive.broadcast_addresses().into_iter().map(hex);
-            let fns = b.functions.iter().map(|f| hex2(*f));
-            quote!(Some(#rt::profile::BroadcastInfo { functions: &[#(#fns),*], addresses: &[#(#addrs),*] }))
-        }
+        Some(b) => match &b.unknown {
+            Some(why) => {
+                let why = why.trim();
+                quote!(Some(#rt::profile::BroadcastInfo::not_printed(#why)))
+            }
+            None => {
+                let addrs = drive.broadcast_addresses().into_iter().map(hex);
+                let fns = b.functions.iter().map(|f| hex2(*f));
+                quote!(Some(#rt::profile::BroadcastInfo::new(&[#(#fns),*], &[#(#addrs),*])))
+            }
+        },
     };
     let exceptions = p.exceptions.iter().map(|e| {
         let (code, name, desc) = (hex2(e.code), &e.name, &e.description);

@@ -107,6 +107,44 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         }
     }
     if let Some(b) = &p.broadcast {
+        let bp = pp.key("broadcast");
+        match &b.unknown {
+            Some(why) if why.trim().is_empty() => out.push(drive.error(
+                &bp.key("unknown"),
+                None,
+                "a broadcast marked unknown needs its reason: what the manual says of it and which rules it does not print",
+            )),
+            Some(_) => {
+                // Rules not printed are all unknown: a list beside them would be half a rule
+                // the runtime does not use (it sends no broadcast then).
+                let given = [
+                    ("functions", !b.functions.is_empty()),
+                    ("registers", !b.registers.is_empty()),
+                ];
+                for (key, _) in given.iter().filter(|(_, g)| *g) {
+                    out.push(drive.error(
+                        &bp.key(key),
+                        None,
+                        format!(
+                            "a broadcast whose rules are not printed (`unknown`) lists no `{key}`; say what the manual prints in `unknown`, or drop `unknown` and give the rules"
+                        ),
+                    ));
+                }
+                if let Some(r) = drive.registers.iter().find(|r| r.broadcast) {
+                    out.push(drive.error(
+                        &bp.key("unknown"),
+                        Some(r.id()),
+                        "a broadcast whose rules are not printed has no broadcast registers; a `broadcast: true` group prints them",
+                    ));
+                }
+            }
+            None if b.functions.is_empty() => out.push(drive.error(
+                &bp,
+                None,
+                "list the `functions` a broadcast executes (06h, 10h), or say `unknown: <why>` when the manual prints no rules for it",
+            )),
+            None => {}
+        }
         for (i, f) in b.functions.iter().enumerate() {
             if !matches!(f, 0x06 | 0x10) || !fcs.contains(f) {
                 out.push(drive.error(
