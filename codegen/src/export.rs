@@ -7,7 +7,10 @@
 //! `drive.manual_details` gives each manual's `file` or `id`, `title`, `document` and `url`. Keys
 //! beyond the documented shape carry the rest of the map. `protocol.limits` (when cited or not
 //! printed) gives `function_codes`, `max_read` and `max_write` with `source` and `not_printed`;
-//! a broadcast whose rules are not printed has `broadcast.not_printed` and `broadcast.text`.
+//! a broadcast whose rules are not printed has `broadcast.not_printed` and `broadcast.text`;
+//! `serial.formats` (`selected_by`, `source`, `cases`: `when`, `data_bits`, `parity`,
+//! `stop_bits`, `format` such as `8E1`, `source`) replaces `serial.stop_bits` when the map lists
+//! the formats a parameter selects.
 
 use serde_json::{Value, json};
 
@@ -222,6 +225,36 @@ pub fn export(drive: &Drive) -> Value {
             "source": b.source,
             "not_printed": why.trim(),
             "text": format!("{} ({})", crate::describe::broadcast_not_printed(why), b.source),
+        });
+    }
+    // Serial formats chosen by a parameter: each case with its data bits and its notation
+    // (`8E1`); the line's single `stop_bits` does not apply then.
+    if let Some(s) = &p.serial
+        && let Some(f) = &s.formats
+    {
+        let cases: Vec<Value> = f
+            .cases
+            .iter()
+            .zip(drive.serial_format_list())
+            .map(|(c, x)| {
+                json!({
+                    "when": c.when,
+                    "data_bits": x.data_bits,
+                    "parity": c.parity,
+                    "stop_bits": c.stop_bits,
+                    "format": x.to_string(),
+                    "source": c.source,
+                })
+            })
+            .collect();
+        let serial = &mut out["protocol"]["serial"];
+        if let Some(m) = serial.as_object_mut() {
+            m.remove("stop_bits");
+        }
+        serial["formats"] = json!({
+            "selected_by": f.selected_by,
+            "source": f.source,
+            "cases": cases,
         });
     }
     if !limits.is_empty() {

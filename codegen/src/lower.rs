@@ -17,7 +17,8 @@ use drivemap_core::plan::{
     Setting, VariantOption,
 };
 use drivemap_core::profile::{
-    AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, Timing,
+    AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, SerialFormats,
+    Timing,
 };
 use drivemap_core::register::{Access, RegisterInfo, Table, WriteRestriction};
 use drivemap_core::roles::{FieldRole, Place, Role, Roles, Target};
@@ -622,6 +623,15 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
             request_gap_us: t.request_gap_us,
             char_bits: t.char_bits,
         },
+        serial_formats: p
+            .serial
+            .as_ref()
+            .and_then(|s| s.formats.as_ref())
+            .map(|f| SerialFormats {
+                selected_by: text(&f.selected_by),
+                formats: leak(drive.serial_format_list()),
+                source: text(&f.source),
+            }),
         eeprom_write_endurance: p.eeprom.as_ref().map(|e| e.endurance),
         writes: leak(writes),
     }

@@ -415,7 +415,38 @@ pub struct Serial {
     /// always 11 — without parity the parity slot is sent as a second stop bit).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub char_bits: Option<u8>,
+    /// The only character formats the line offers, chosen on the drive by a parameter (ACN
+    /// CM.04: 8N1, 8N2, 8E1, 8O1). With them, `stop_bits` is not given (each format has its
+    /// own), `parities` lists exactly the formats' parities, and `char_bits`, if given, is the
+    /// length of every format.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formats: Option<SerialFormats>,
     pub source: String,
+}
+
+/// `serial.formats`: the formats a parameter selects.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SerialFormats {
+    /// The parameter (register id or parameter number) whose code selects the format.
+    pub selected_by: String,
+    pub cases: Vec<SerialFormatCase>,
+    pub source: String,
+}
+
+/// One format: the selecting parameter's code and the character it gives.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SerialFormatCase {
+    /// The code of `selected_by` that selects this format.
+    pub when: u16,
+    /// Data bits; the line's `data_bits` when not given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data_bits: Option<u8>,
+    pub parity: Parity,
+    pub stop_bits: u8,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
 }
 
 fn default_data_bits() -> u8 {

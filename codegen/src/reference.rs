@@ -299,7 +299,22 @@ fn protocol(out: &mut String, drive: &Drive) {
         if let Some(d) = s.default_parity {
             text += &format!(" (default {})", parity(d));
         }
-        text += &format!("; {} data bits, {} stop bit(s)", s.data_bits, s.stop_bits);
+        match &s.formats {
+            None => text += &format!("; {} data bits, {} stop bit(s)", s.data_bits, s.stop_bits),
+            Some(f) => {
+                let list: Vec<String> = drive
+                    .serial_format_list()
+                    .iter()
+                    .map(|x| format!("{} = {x}", x.code))
+                    .collect();
+                text += &format!(
+                    "; only the formats {} selects: {} (`{}`)",
+                    f.selected_by,
+                    list.join(", "),
+                    f.source
+                );
+            }
+        }
         if let Some(c) = s.char_bits {
             text += &format!("; always {c} bits per character");
         }

@@ -247,3 +247,77 @@ fn a_broadcast_whose_rules_are_not_printed_is_lowered_as_such() {
         "the generated PROFILE carries the reason"
     );
 }
+
+/// `serial.formats`: the formats a parameter selects, lowered into the profile (the runtime's
+/// serial configuration holds the line to them), shown by the reference and carried by the
+/// export.
+#[test]
+fn serial_formats_chosen_by_a_parameter_reach_the_profile() {
+    let serial = "  serial: {baud_rates: [9600, 19200], default_baud: 9600, parities: [none, even], source: \"manual.txt:16\"}\n";
+    assert!(
+        fixture().contains(serial),
+        "the fixture's serial line moved"
+    );
+    let text = fixture().replace(
+        serial,
+        "  serial:\n    baud_rates: [9600, 19200]\n    parities: [none, even]\n    formats:\n      selected_by: response_delay\n      source: \"manual.txt:17\"\n      cases:\n        - {when: 0, parity: none, stop_bits: 2, source: \"manual.txt:18\"}\n        - {when: 1, parity: even, stop_bits: 1}\n        - {when: 2, data_bits: 7, parity: even, stop_bits: 1}\n    source: \"manual.txt:16\"\n",
+    );
+    let drive = drivemap_codegen::read_map_str("mini-drive.yaml", &text, &Context::default())
+        .unwrap_or_else(|d| panic!("{d}"));
+    let plan = lower::lower(&drive);
+    let f = plan.profile.serial_formats.expect("formats lowered");
+    assert_eq!(
+        (f.selected_by, f.source),
+        ("response_delay", "manual.txt:17")
+    );
+    let listed: Vec<(u16, String)> = f.formats.iter().map(|x| (x.code, x.to_string())).collect();
+    assert_eq!(
+        listed,
+        [(0, "8N2".into()), (1, "8E1".into()), (2, "7E1".into())]
+    );
+    use drivemap_core::profile::Parity;
+    assert_eq!(f.stop_bits_for(Parity::None), Some(2));
+    assert!(f.check("mini-drive", 8, Parity::None, 1).is_err());
+    assert_eq!(f.check("mini-drive", 7, Parity::Even, 1).unwrap().code, 2);
+    assert_eq!(
+        lower::lower(
+            &drivemap_codegen::read_map_str("mini-drive.yaml", &fixture(), &Context::default())
+                .unwrap()
+        )
+        .profile
+        .serial_formats,
+        None
+    );
+
+    let md = drivemap_codegen::reference::render(&drive, "mini-drive.yaml");
+    assert!(
+        md.contains(
+            "parity none, even; only the formats response_delay selects: 0 = 8N2, 1 = 8E1, 2 = 7E1 (`manual.txt:17`) | `manual.txt:16` |"
+        ),
+        "{md}"
+    );
+    let json = drivemap_codegen::export::export(&drive);
+    let s = &json["protocol"]["serial"];
+    assert!(
+        s.get("stop_bits").is_none(),
+        "each format gives its stop bits"
+    );
+    assert_eq!(s["formats"]["selected_by"], "response_delay");
+    assert_eq!(s["formats"]["cases"][0]["format"], "8N2");
+    assert_eq!(s["formats"]["cases"][0]["source"], "manual.txt:18");
+    assert_eq!(s["formats"]["cases"][2]["data_bits"], 7);
+    assert_eq!(s["formats"]["cases"][1]["parity"], "even");
+    // The generated PROFILE carries them.
+    let options = drivemap_codegen::generate::Options {
+        runtime: "::drivemap_runtime".parse().unwrap(),
+        source_name: "mini-drive.yaml".into(),
+    };
+    let code = drivemap_codegen::generate::drive_module(&drive, &options).unwrap();
+    let squeezed: String = code.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        squeezed.contains(
+            "serial_formats: Some(rt::profile::SerialFormats { selected_by: \"response_delay\""
+        ),
+        "the generated PROFILE carries the formats"
+    );
+}

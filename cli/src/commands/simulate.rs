@@ -42,6 +42,11 @@ pub struct Args {
     /// Parity for --serial (default: the map's default, else none).
     #[arg(long, value_enum)]
     pub parity: Option<LineParity>,
+    /// Stop bits for --serial (default: the map's for the parity when its formats give only
+    /// one, else 1; 2 without parity where the map fixes 11-bit characters). A map that lists
+    /// its serial formats refuses any other parity and stop bits.
+    #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
+    pub stop_bits: Option<u8>,
     /// Slave address (default: the map's default, else 1).
     #[arg(long)]
     pub slave: Option<u8>,
@@ -164,7 +169,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     )?;
     // The serial line, should --serial be chosen: the flags, else the map's defaults.
     let (baud, parity, stop_bits) =
-        crate::live::link::serial_line(&drive, args.baud, args.parity, None);
+        crate::live::link::serial_line(&drive, args.baud, args.parity, args.stop_bits);
     let sim = Simulator::new(drive, options).map_err(|e| e.to_string())?;
     for w in sim.warnings() {
         eprintln!("warning: {w}");
@@ -224,10 +229,11 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             StopBits::One
         })
         .with_profile(profile);
+    options.check_format().map_err(|e| e.to_string())?;
     let server = SerialServer::spawn(shared, options, log)
         .map_err(|e| format!("cannot open serial port {}: {e}", path.display()))?;
     outln!(
-        "simulating {id} at slave {slave} on RTU {} {baud} baud, parity {} ({model}{time}); Ctrl-C stops",
+        "simulating {id} at slave {slave} on RTU {} {baud} baud, parity {}, {stop_bits} stop bit(s) ({model}{time}); Ctrl-C stops",
         path.display(),
         format!("{parity:?}").to_lowercase()
     );

@@ -206,6 +206,20 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             proto.key("serial").key("source"),
             None,
         );
+        if let Some(f) = &s.formats {
+            let fp = proto.key("serial").key("formats");
+            cite(drive, ctx, out, &f.source, fp.key("source"), None);
+            for (i, c) in f.cases.iter().enumerate() {
+                opt(
+                    drive,
+                    ctx,
+                    out,
+                    &c.source,
+                    fp.key("cases").index(i).key("source"),
+                    None,
+                );
+            }
+        }
     }
     opt(
         drive,

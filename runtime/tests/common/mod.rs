@@ -62,6 +62,7 @@ pub static V7: Profile = Profile {
         response_delay_param: Some("n156"),
         ..Timing::MODBUS
     },
+    serial_formats: None,
     eeprom_write_endurance: Some(100_000),
     writes: &[],
 };
@@ -98,6 +99,7 @@ pub static ACN: Profile = Profile {
         response_delay_param: Some("CM.05"),
         ..Timing::MODBUS
     },
+    serial_formats: None,
     eeprom_write_endurance: None,
     writes: &[],
 };
