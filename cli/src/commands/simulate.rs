@@ -115,7 +115,30 @@ pub(crate) fn options(
     let externals = drive.externals();
     for s in set {
         let (k, v) = pair(s, "NAME=VALUE")?;
-        let value = number(s, &v)?;
+        let value = match number(s, &v) {
+            Ok(n) => n,
+            // An enumeration's code or a bit-field word may be given as `read --set` takes
+            // it (`run_source=rs485`, `command=run,reverse`): its word is its value.
+            Err(e) => match drivemap_live::lookup::find(drive, &k) {
+                Ok(r)
+                    if matches!(
+                        drive.register_plan(r).conversion,
+                        drivemap_runtime::plan::Conversion::Enum { .. }
+                            | drivemap_runtime::plan::Conversion::Bits { .. }
+                    ) =>
+                {
+                    drivemap_live::codec::parse_value(
+                        drive,
+                        r,
+                        &v,
+                        &drivemap_live::LiveSettings::default(),
+                    )
+                    .map(f64::from)
+                    .map_err(|e| format!("`{s}`: {e}"))?
+                }
+                _ => return Err(e),
+            },
+        };
         o = if externals.iter().any(|q| q.external == k) {
             o.external(&k, value)
         } else {
@@ -266,7 +289,12 @@ mod tests {
         let e = options(&v7, None, &["n152".into()], &[], 1.0).unwrap_err();
         assert_eq!(e, "`n152` is not NAME=VALUE");
         let e = options(&v7, None, &["n152=x".into()], &[], 1.0).unwrap_err();
-        assert_eq!(e, "`n152=x`: `x` is not a number");
+        assert_eq!(
+            e,
+            "`n152=x`: `x` is not a code of modbus_frequency_reference_unit_selection; expected a number or one of: unit_0_1_hz, unit_0_01_hz, full_scale_30000, unit_0_1_percent"
+        );
+        let e = options(&v7, None, &["n019=x".into()], &[], 1.0).unwrap_err();
+        assert_eq!(e, "`n019=x`: `x` is not a number");
         assert!(options(&v7, None, &[], &[], 0.0).is_err());
     }
 
@@ -286,6 +314,10 @@ mod tests {
         let sim = Simulator::new(gpd, o).unwrap();
         assert_eq!(sim.externals().get("drive_rated_current"), Some(&12.5));
         assert_eq!(sim.raw("b1-01").unwrap(), 2);
+        // An enumeration's id, as `read --set` takes it.
+        let gpd = MapsDir::default().load("yaskawa-gpd515").unwrap();
+        let o = options(&gpd, None, &["b1-01=option_board".into()], &[], 1.0).unwrap();
+        assert_eq!(Simulator::new(gpd, o).unwrap().raw("b1-01").unwrap(), 3);
         // The older `--external` still parses, as `--set`.
         use clap::Parser;
         #[derive(Parser)]
