@@ -104,3 +104,56 @@ fn a_closed_output_pipe_ends_quietly() {
         assert!(noise.is_empty(), "{args:?}: {stderr}");
     }
 }
+
+/// The ACN's map lists the formats CM.04 selects (8N1, 8N2, 8E1, 8O1): a link or a simulated
+/// port set to another (8E2) is refused with the map's list before the port is opened, and a
+/// listed one gets as far as opening it.
+#[test]
+fn a_serial_format_the_map_does_not_list_is_refused() {
+    let refused = "automationdirect-acn's serial line offers only the formats its map lists (CM.04: 0 = 8N1, 1 = 8N2, 2 = 8E1, 3 = 8O1); 8E2 is not one of them (`004_c5cbf92472673495.txt:262`)";
+    let line = [
+        "--serial",
+        "/dev/null",
+        "--parity",
+        "even",
+        "--stop-bits",
+        "2",
+    ];
+    let read = [
+        &["read", "--drive", "automationdirect-acn"][..],
+        &line,
+        &["CM.04"],
+    ]
+    .concat();
+    let (code, err) = drivemap(&read);
+    assert_ne!(code, 0, "{err}");
+    assert!(err.contains(refused), "{err}");
+    let simulate = [&["simulate", "--drive", "automationdirect-acn"][..], &line].concat();
+    let (code, err) = drivemap(&simulate);
+    assert_ne!(code, 0, "{err}");
+    assert!(err.contains(refused), "{err}");
+    // 8E1 (even parity takes its only stop bits, 1) and 8N2 are listed: the port is opened
+    // (and /dev/null is no serial port).
+    for line in [
+        &["--serial", "/dev/null", "--parity", "even"][..],
+        &[
+            "--serial",
+            "/dev/null",
+            "--parity",
+            "none",
+            "--stop-bits",
+            "2",
+        ],
+    ] {
+        let args = [
+            &["read", "--drive", "automationdirect-acn"][..],
+            line,
+            &["CM.04"],
+        ]
+        .concat();
+        let (code, err) = drivemap(&args);
+        assert_ne!(code, 0, "{err}");
+        assert!(!err.contains("offers only the formats"), "{err}");
+        assert!(err.contains("cannot open serial port /dev/null"), "{err}");
+    }
+}

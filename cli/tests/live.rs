@@ -470,7 +470,107 @@ fn an_external_reference_is_given_with_set() {
         &["--set", "rated_power=3", "frequency_reference"],
     );
     assert_eq!(code, 2);
-    assert!(err.contains("settable: max_output_frequency"), "{err}");
+    assert!(
+        err.contains("(external quantities and what conversions depend on: max_output_frequency"),
+        "{err}"
+    );
+    // `--external`, the simulator's older name, is the same option.
+    let (code, out, err) = d.run(
+        "read",
+        "yaskawa-j7",
+        &[
+            "--external",
+            "max_output_frequency=60",
+            "frequency_reference",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        row(&out, "frequency_reference"),
+        "frequency_reference 0002h 45.00 Hz 57E4h"
+    );
+}
+
+/// `--set NAME=VALUE` is the drive's value of a register or external quantity everywhere: the
+/// simulator starts with it, and read takes it as known. One command line's `--set`s serve both.
+#[test]
+fn set_means_the_drives_value_for_simulate_and_read() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let sets = [
+        "--set",
+        "max_output_frequency=60",
+        "--set",
+        "n69=2",
+        "--set",
+        "frequency_reference=30",
+    ];
+    let mut sim = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args([
+            "simulate",
+            "--drive",
+            "yaskawa-j7",
+            "--rtu-tcp",
+            "0",
+            "--quiet",
+        ])
+        .args(sets)
+        .arg("--maps")
+        .arg(repo().join("maps"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(sim.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    let addr = first
+        .split_whitespace()
+        .find(|w| w.starts_with("127.0.0.1:"))
+        .map(str::to_owned);
+    let read = |extra: &[&str]| {
+        let addr = addr
+            .clone()
+            .unwrap_or_else(|| panic!("no address in {first:?}"));
+        let mut args = vec!["read", "--drive", "yaskawa-j7", "--rtu-tcp", addr.as_str()];
+        args.extend_from_slice(extra);
+        drivemap(&args)
+    };
+    // The simulator started with n69 = 2 and 30 Hz of 60 Hz (15000); read, told the same
+    // external quantity, converts it back; n69 given is not read (and agrees).
+    let (code, out, err) = read(&[&sets[..], &["frequency_reference"]].concat());
+    let (code_n69, out_n69, _) = read(&[
+        "--set",
+        "max_output_frequency=60",
+        "n69",
+        "frequency_reference",
+    ]);
+    let _ = sim.kill();
+    let _ = sim.wait();
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        row(&out, "frequency_reference"),
+        "frequency_reference 0002h 30.00 Hz 3A98h"
+    );
+    assert_eq!(code_n69, 0);
+    assert_eq!(
+        row(&out_n69, "modbus_frequency_reference_unit_selection"),
+        "modbus_frequency_reference_unit_selection (n69) 0198h 2: 30,000 = n011 0002h"
+    );
+    // A register no conversion depends on is accepted as the drive's value, but must be one.
+    let (code, _, err) = drivemap(&[
+        "read",
+        "--drive",
+        "yaskawa-j7",
+        "--tcp",
+        "127.0.0.1:9",
+        "--set",
+        "n69=x",
+        "n69",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("`--set n69=x`"), "{err}");
 }
 
 #[test]
@@ -506,6 +606,12 @@ fn broadcast_writes_go_to_slave_0_without_reply() {
         out.contains("wrote frequency_command = 30.00 Hz (3A98h) at 0001h"),
         "{out}"
     );
+    // Nothing answers a broadcast, so the command may end before the slave's thread has
+    // taken the frame: wait for it a little.
+    let until = Instant::now() + Duration::from_secs(2);
+    while d.writes().is_empty() && Instant::now() < until {
+        thread::sleep(Duration::from_millis(10));
+    }
     assert_eq!(d.writes(), vec![(0x0001, 15000)]);
     // The drive refuses other registers in a broadcast; the write gate says so before
     // connecting.

@@ -72,6 +72,12 @@ pub fn limit_citation(name: &str, l: &crate::model::Limit) -> String {
     }
 }
 
+/// A broadcast whose rules the manual does not print: `broadcast exists, rules not printed:
+/// <why>`.
+pub fn broadcast_not_printed(why: &str) -> String {
+    format!("broadcast exists, rules not printed: {}", why.trim())
+}
+
 /// Access: `read-only`, `write-only`, `read/write`.
 pub fn access(a: Access) -> &'static str {
     match a {

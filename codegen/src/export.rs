@@ -7,7 +7,12 @@
 //! `drive.manual_details` gives each manual's `file` or `id`, `title`, `document` and `url`.
 //! `words` is 1, or 2 for a 32-bit value in two registers, whose `word_order` (`high_first` or
 //! `low_first`) says which word sits at `address`; `min`/`max` are then limits of the 32-bit
-//! value. Keys beyond the documented shape carry the rest of the map.
+//! value. Keys beyond the documented shape carry the rest of the map. `protocol.limits` (when
+//! cited or not printed) gives `function_codes`, `max_read` and `max_write` with `source` and
+//! `not_printed`; a broadcast whose rules are not printed has `broadcast.not_printed` and
+//! `broadcast.text`; `serial.formats` (`selected_by`, `source`, `cases`: `when`, `data_bits`,
+//! `parity`, `stop_bits`, `format` such as `8E1`, `source`) replaces `serial.stop_bits` when the
+//! map lists the formats a parameter selects.
 
 use serde_json::{Value, json};
 
@@ -180,7 +185,8 @@ pub fn export(drive: &Drive) -> Value {
         "variants": drive.variants,
         "protocol": {
             "transports": p.transports,
-            "function_codes": p.function_codes,
+            // The working list; `limits.function_codes` (when cited or not printed) says more.
+            "function_codes": p.function_codes.codes,
             // The working numbers; `limits` (when one is cited or not printed) says more.
             "max_read": p.max_read.value,
             "max_write": p.max_write.value,
@@ -201,12 +207,65 @@ pub fn export(drive: &Drive) -> Value {
         "removed": drive.removed,
         "roles": drive.roles,
     });
+    // What the protocol's working figures rest on, when a map says more than the number:
+    // a citation, or "not printed" with the reason.
+    let mut limits = serde_json::Map::new();
+    let fc = &p.function_codes;
+    if fc.stated() {
+        limits.insert(
+            "function_codes".into(),
+            json!({"codes": fc.codes, "source": fc.source, "not_printed": fc.unknown}),
+        );
+    }
     let stated = |l: &model::Limit| l.source.is_some() || l.unknown.is_some();
     if stated(&p.max_read) || stated(&p.max_write) {
-        out["protocol"]["limits"] = json!({
-            "max_read": limit_json(&p.max_read),
-            "max_write": limit_json(&p.max_write),
+        limits.insert("max_read".into(), limit_json(&p.max_read));
+        limits.insert("max_write".into(), limit_json(&p.max_write));
+    }
+    // A broadcast whose rules are not printed: says so in the words of `doc`, with the reason.
+    if let Some(b) = &p.broadcast
+        && let Some(why) = &b.unknown
+    {
+        out["protocol"]["broadcast"] = json!({
+            "functions": b.functions,
+            "registers": b.registers,
+            "source": b.source,
+            "not_printed": why.trim(),
+            "text": format!("{} ({})", crate::describe::broadcast_not_printed(why), b.source),
         });
+    }
+    // Serial formats chosen by a parameter: each case with its data bits and its notation
+    // (`8E1`); the line's single `stop_bits` does not apply then.
+    if let Some(s) = &p.serial
+        && let Some(f) = &s.formats
+    {
+        let cases: Vec<Value> = f
+            .cases
+            .iter()
+            .zip(drive.serial_format_list())
+            .map(|(c, x)| {
+                json!({
+                    "when": c.when,
+                    "data_bits": x.data_bits,
+                    "parity": c.parity,
+                    "stop_bits": c.stop_bits,
+                    "format": x.to_string(),
+                    "source": c.source,
+                })
+            })
+            .collect();
+        let serial = &mut out["protocol"]["serial"];
+        if let Some(m) = serial.as_object_mut() {
+            m.remove("stop_bits");
+        }
+        serial["formats"] = json!({
+            "selected_by": f.selected_by,
+            "source": f.source,
+            "cases": cases,
+        });
+    }
+    if !limits.is_empty() {
+        out["protocol"]["limits"] = Value::Object(limits);
     }
     out
 }

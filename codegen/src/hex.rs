@@ -3,7 +3,7 @@
 //! A manual prints "2001H"; YAML reads `address: 2001` as the decimal 2001 = 07D1H, a silently
 //! wrong register. So the keys whose numbers the manuals print in hex — `address` (registers,
 //! `address_alternatives`, command writes), `addresses` (gaps), `code` (exceptions),
-//! `function_codes` and `broadcast.functions` — accept the manual's notations `0x2001`, `2001H`
+//! `function_codes` (or its `codes`) and `broadcast.functions` — accept the manual's notations `0x2001`, `2001H`
 //! and `2001h` (quoted or not), and refuse a bare decimal, naming the hex it would mean. A map
 //! whose manual numbers its registers in decimal declares `address_format: decimal` at the top;
 //! then a decimal address is taken as written. Codes 0-9 read the same in both bases and are
@@ -46,7 +46,7 @@ impl Slot {
     pub fn of_items(key: &str) -> Option<Slot> {
         match key {
             "addresses" => Some(Slot::Address),
-            "function_codes" | "functions" => Some(Slot::FunctionCode),
+            "function_codes" | "codes" | "functions" => Some(Slot::FunctionCode),
             _ => None,
         }
     }

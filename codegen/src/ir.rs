@@ -892,9 +892,24 @@ pub struct SerialDefaults {
     /// Bits per character on the wire when the manual fixes it regardless of parity (TDS-V8:
     /// always 11 — without parity the parity slot is sent as a second stop bit).
     pub char_bits: Option<u8>,
+    /// When the map lists the formats a parameter selects (`serial.formats`): the stop bits of
+    /// the formats with no, even and odd parity, where they all agree (ACN: none for no
+    /// parity, which has 8N1 and 8N2; 1 for even and odd).
+    pub format_stop_bits: [Option<u8>; 3],
 }
 
 impl SerialDefaults {
+    /// Stop bits for `parity`: the map's formats', when only one stop-bit count goes with that
+    /// parity, else [`SerialDefaults::stop_bits`].
+    pub fn stop_bits_for(&self, parity: LineParity) -> u8 {
+        let i = match parity {
+            LineParity::None => 0,
+            LineParity::Even => 1,
+            LineParity::Odd => 2,
+        };
+        self.format_stop_bits[i].unwrap_or_else(|| self.stop_bits(parity != LineParity::None))
+    }
+
     /// Stop bits: 2 without parity (`with_parity` false) where the map fixes 11-bit
     /// characters, else 1.
     pub fn stop_bits(&self, with_parity: bool) -> u8 {
@@ -907,6 +922,32 @@ impl SerialDefaults {
 }
 
 impl Drive {
+    /// The character formats of `serial.formats`, in the runtime's words (a case without
+    /// `data_bits` has the line's); empty when the map lists none.
+    pub fn serial_format_list(&self) -> Vec<drivemap_core::profile::SerialFormat> {
+        use drivemap_core::profile::{Parity, SerialFormat};
+        let Some(serial) = self.protocol.serial.as_ref() else {
+            return Vec::new();
+        };
+        let Some(formats) = serial.formats.as_ref() else {
+            return Vec::new();
+        };
+        formats
+            .cases
+            .iter()
+            .map(|c| SerialFormat {
+                code: c.when,
+                data_bits: c.data_bits.unwrap_or(serial.data_bits),
+                parity: match c.parity {
+                    model::Parity::None => Parity::None,
+                    model::Parity::Even => Parity::Even,
+                    model::Parity::Odd => Parity::Odd,
+                },
+                stop_bits: c.stop_bits,
+            })
+            .collect()
+    }
+
     /// The serial line's defaults (see [`SerialDefaults`]).
     pub fn serial_defaults(&self) -> SerialDefaults {
         let serial = self.protocol.serial.as_ref();
@@ -918,6 +959,11 @@ impl Drive {
                 Some(model::Parity::None) | None => LineParity::None,
             },
             char_bits: serial.and_then(|s| s.char_bits),
+            format_stop_bits: {
+                use drivemap_core::profile::{Parity, only_stop_bits};
+                let list = self.serial_format_list();
+                [Parity::None, Parity::Even, Parity::Odd].map(|p| only_stop_bits(&list, p))
+            },
         }
     }
 }

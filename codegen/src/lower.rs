@@ -17,7 +17,8 @@ use drivemap_core::plan::{
     Setting, VariantOption,
 };
 use drivemap_core::profile::{
-    AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, Timing,
+    AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, SerialFormats,
+    Timing,
 };
 use drivemap_core::register::{Access, RegisterInfo, Table, WriteRestriction};
 use drivemap_core::roles::{FieldRole, Place, Role, Roles, Target};
@@ -573,14 +574,16 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
         .collect();
     Profile {
         drive_id: text(&drive.meta.id),
-        function_codes: leak(p.function_codes.clone()),
+        function_codes: leak(p.function_codes.codes.clone()),
         max_read: p.max_read.value,
         max_write: p.max_write.value,
         slave_min: p.slave_address.min,
         slave_max: p.slave_address.max,
-        broadcast: p.broadcast.as_ref().map(|b| BroadcastInfo {
-            functions: leak(b.functions.clone()),
-            addresses: leak(drive.broadcast_addresses()),
+        broadcast: p.broadcast.as_ref().map(|b| match &b.unknown {
+            Some(why) => BroadcastInfo::not_printed(text(why.trim())),
+            None => {
+                BroadcastInfo::new(leak(b.functions.clone()), leak(drive.broadcast_addresses()))
+            }
         }),
         exceptions: leak(
             p.exceptions
@@ -621,6 +624,15 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
             request_gap_us: t.request_gap_us,
             char_bits: t.char_bits,
         },
+        serial_formats: p
+            .serial
+            .as_ref()
+            .and_then(|s| s.formats.as_ref())
+            .map(|f| SerialFormats {
+                selected_by: text(&f.selected_by),
+                formats: leak(drive.serial_format_list()),
+                source: text(&f.source),
+            }),
         eeprom_write_endurance: p.eeprom.as_ref().map(|e| e.endurance),
         writes: leak(writes),
     }

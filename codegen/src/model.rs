@@ -212,7 +212,9 @@ pub struct VariantOption {
 pub struct Protocol {
     /// Transports the drive (or its option card) offers natively.
     pub transports: Vec<TransportName>,
-    pub function_codes: Vec<u8>,
+    /// The function codes the drive implements: a plain list, or with its citation, or marked
+    /// not printed (see [`FunctionCodes`]).
+    pub function_codes: FunctionCodes,
     /// Maximum registers per read (03h/04h).
     pub max_read: Limit,
     /// Maximum registers per write (10h).
@@ -275,11 +277,18 @@ pub struct SlaveAddress {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Broadcast {
-    /// Function codes executed when addressed to slave 0 (never answered).
+    /// Function codes executed when addressed to slave 0 (never answered). Required unless the
+    /// rules are `unknown`.
+    #[serde(default)]
     pub functions: Vec<u8>,
     /// Register ids a broadcast may write. Registers of a `broadcast: true` group are implied.
     #[serde(default)]
     pub registers: Vec<String>,
+    /// The manual says the drive has a broadcast but does not print its rules (which
+    /// functions, which registers): why, as `broadcast: {unknown: "<why>", source: ...}`. Then
+    /// `functions` and `registers` are not given, and the runtime sends no broadcast at all.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unknown: Option<String>,
     pub source: String,
 }
 
@@ -406,7 +415,38 @@ pub struct Serial {
     /// always 11 — without parity the parity slot is sent as a second stop bit).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub char_bits: Option<u8>,
+    /// The only character formats the line offers, chosen on the drive by a parameter (ACN
+    /// CM.04: 8N1, 8N2, 8E1, 8O1). With them, `stop_bits` is not given (each format has its
+    /// own), `parities` lists exactly the formats' parities, and `char_bits`, if given, is the
+    /// length of every format.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formats: Option<SerialFormats>,
     pub source: String,
+}
+
+/// `serial.formats`: the formats a parameter selects.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SerialFormats {
+    /// The parameter (register id or parameter number) whose code selects the format.
+    pub selected_by: String,
+    pub cases: Vec<SerialFormatCase>,
+    pub source: String,
+}
+
+/// One format: the selecting parameter's code and the character it gives.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SerialFormatCase {
+    /// The code of `selected_by` that selects this format.
+    pub when: u16,
+    /// Data bits; the line's `data_bits` when not given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data_bits: Option<u8>,
+    pub parity: Parity,
+    pub stop_bits: u8,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
 }
 
 fn default_data_bits() -> u8 {
@@ -945,6 +985,94 @@ impl Serialize for Limit {
         }
         LimitForm {
             value: self.value,
+            source: self.source.clone(),
+            unknown: self.unknown.clone(),
+        }
+        .serialize(s)
+    }
+}
+
+/// The function codes a drive implements (`protocol.function_codes`): a plain list (`[0x03,
+/// 0x06]`), the list with its citation (`{codes: [...], source: "file:line"}`), or a list the
+/// manual does not print as such, with why it is the working list (`{codes: [...], unknown:
+/// "<why>", source: ...}`). `codes` is always required: the runtime refuses any other function.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct FunctionCodes {
+    pub codes: Vec<u8>,
+    pub source: Option<String>,
+    /// Why the manual prints no list of function codes and where `codes` come from.
+    pub unknown: Option<String>,
+}
+
+impl FunctionCodes {
+    /// A plain list, neither cited nor marked unknown.
+    pub fn plain(codes: Vec<u8>) -> FunctionCodes {
+        FunctionCodes {
+            codes,
+            source: None,
+            unknown: None,
+        }
+    }
+
+    /// Whether the list carries more than its codes (a citation or a reason).
+    pub fn stated(&self) -> bool {
+        self.source.is_some() || self.unknown.is_some()
+    }
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct FunctionCodesForm {
+    codes: Vec<u8>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    source: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    unknown: Option<String>,
+}
+
+impl<'de> Deserialize<'de> for FunctionCodes {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<FunctionCodes, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = FunctionCodes;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "a list of function codes, `{codes: [..], source: ..}` or `{codes: [..], unknown: <why>}`",
+                )
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                seq: A,
+            ) -> Result<FunctionCodes, A::Error> {
+                Vec::<u8>::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))
+                    .map(FunctionCodes::plain)
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<FunctionCodes, A::Error> {
+                let f = FunctionCodesForm::deserialize(
+                    serde::de::value::MapAccessDeserializer::new(map),
+                )?;
+                Ok(FunctionCodes {
+                    codes: f.codes,
+                    source: f.source,
+                    unknown: f.unknown,
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl Serialize for FunctionCodes {
+    /// A plain list as the list (as shipped maps and exports always had it), else the mapping.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        if !self.stated() {
+            return self.codes.serialize(s);
+        }
+        FunctionCodesForm {
+            codes: self.codes.clone(),
             source: self.source.clone(),
             unknown: self.unknown.clone(),
         }

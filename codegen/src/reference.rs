@@ -170,11 +170,12 @@ fn protocol(out: &mut String, drive: &Drive) {
             .join(", "),
         p.source.as_deref(),
     );
-    row(
-        "Function codes",
-        describe::functions(&p.function_codes),
-        None,
-    );
+    let fc = &p.function_codes;
+    let mut functions = describe::functions(&fc.codes);
+    if let Some(why) = &fc.unknown {
+        functions += &format!(". List not printed: {}", why.trim());
+    }
+    row("Function codes", functions, fc.source.as_deref());
     let mut per_request = describe::per_request(p.max_read.value, p.max_write.value);
     for (name, l) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
         per_request += &describe::limit_citation(name, l);
@@ -189,7 +190,18 @@ fn protocol(out: &mut String, drive: &Drive) {
         slave += &format!(", set by {param}");
     }
     row("Slave address", slave, s.source.as_deref());
-    if let Some(b) = &p.broadcast {
+    if let Some(b) = &p.broadcast
+        && let Some(why) = &b.unknown
+    {
+        row(
+            "Broadcast",
+            format!(
+                "{}. The runtime sends no broadcast to this drive.",
+                describe::broadcast_not_printed(why)
+            ),
+            Some(&b.source),
+        );
+    } else if let Some(b) = &p.broadcast {
         let mut text = format!(
             "slave 0 executes {} without reply",
             describe::functions(&b.functions)
@@ -287,7 +299,22 @@ fn protocol(out: &mut String, drive: &Drive) {
         if let Some(d) = s.default_parity {
             text += &format!(" (default {})", parity(d));
         }
-        text += &format!("; {} data bits, {} stop bit(s)", s.data_bits, s.stop_bits);
+        match &s.formats {
+            None => text += &format!("; {} data bits, {} stop bit(s)", s.data_bits, s.stop_bits),
+            Some(f) => {
+                let list: Vec<String> = drive
+                    .serial_format_list()
+                    .iter()
+                    .map(|x| format!("{} = {x}", x.code))
+                    .collect();
+                text += &format!(
+                    "; only the formats {} selects: {} (`{}`)",
+                    f.selected_by,
+                    list.join(", "),
+                    f.source
+                );
+            }
+        }
         if let Some(c) = s.char_bits {
             text += &format!("; always {c} bits per character");
         }

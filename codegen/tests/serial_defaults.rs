@@ -22,6 +22,7 @@ fn tds_v8_fixes_eleven_bit_characters_so_no_parity_means_two_stop_bits() {
             baud: 9600,
             parity: LineParity::None,
             char_bits: Some(11),
+            format_stop_bits: [None; 3],
         }
     );
     assert_eq!(d.stop_bits(false), 2);
@@ -36,4 +37,14 @@ fn v7_defaults_come_from_the_map_with_one_stop_bit() {
         (9600, LineParity::None, None)
     );
     assert_eq!(d.stop_bits(false), 1);
+}
+
+/// The ACN lists the formats CM.04 selects (8N1, 8N2, 8E1, 8O1): even and odd parity go with
+/// 1 stop bit only; no parity has two formats, so the usual 1 stays the default.
+#[test]
+fn acn_formats_give_the_stop_bits_of_a_parity() {
+    let d = defaults("../maps/automationdirect-acn.yaml");
+    assert_eq!(d.format_stop_bits, [None, Some(1), Some(1)]);
+    assert_eq!(d.stop_bits_for(LineParity::Even), 1);
+    assert_eq!(d.stop_bits_for(LineParity::None), 1);
 }

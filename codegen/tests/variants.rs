@@ -16,7 +16,7 @@ fn variant_inherits_overrides_and_removes() {
     let manuals: Vec<&str> = child.meta.manuals.iter().map(|m| m.name()).collect();
     assert_eq!(manuals, ["base.txt", "child.txt"], "manuals are united");
     // protocol merged key by key
-    assert_eq!(child.protocol.function_codes, [0x03, 0x10]);
+    assert_eq!(child.protocol.function_codes.codes, [0x03, 0x10]);
     assert_eq!(child.protocol.max_read.value, 16);
     assert_eq!(child.protocol.max_write.value, 8, "inherited");
     let ict = child

@@ -66,6 +66,179 @@ pub struct BroadcastInfo {
     pub functions: &'static [u8],
     /// Communication addresses a broadcast may write. Empty: any writable register.
     pub addresses: &'static [u16],
+    /// Set when the drive has a broadcast whose rules its manual does not print: why (the
+    /// map's `broadcast.unknown`). `functions` and `addresses` are empty then, and the client's
+    /// write gate refuses every broadcast: it cannot tell what the drives would do with one.
+    pub not_printed: Option<&'static str>,
+}
+
+impl BroadcastInfo {
+    /// Rules known: the given functions, to the given addresses (empty: any writable one).
+    pub const fn new(functions: &'static [u8], addresses: &'static [u16]) -> BroadcastInfo {
+        BroadcastInfo {
+            functions,
+            addresses,
+            not_printed: None,
+        }
+    }
+
+    /// A broadcast that exists but whose rules the manual does not print (`why`).
+    pub const fn not_printed(why: &'static str) -> BroadcastInfo {
+        BroadcastInfo {
+            functions: &[],
+            addresses: &[],
+            not_printed: Some(why),
+        }
+    }
+}
+
+/// Parity of a serial line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Parity {
+    /// No parity bit.
+    #[default]
+    None,
+    /// Even parity.
+    Even,
+    /// Odd parity.
+    Odd,
+}
+
+impl Parity {
+    /// The letter of the usual notation (`8N1`, `8E1`, `8O1`).
+    pub const fn letter(self) -> char {
+        match self {
+            Parity::None => 'N',
+            Parity::Even => 'E',
+            Parity::Odd => 'O',
+        }
+    }
+}
+
+/// One character format a drive's serial line offers, and the code of the parameter that
+/// selects it on the drive (ACN CM.04 = 2: 8 data bits, even parity, 1 stop bit).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SerialFormat {
+    /// The selecting parameter's code for this format.
+    pub code: u16,
+    pub data_bits: u8,
+    pub parity: Parity,
+    pub stop_bits: u8,
+}
+
+impl SerialFormat {
+    /// Whether this is the format `data_bits`, `parity`, `stop_bits`.
+    pub fn is(&self, data_bits: u8, parity: Parity, stop_bits: u8) -> bool {
+        (self.data_bits, self.parity, self.stop_bits) == (data_bits, parity, stop_bits)
+    }
+}
+
+impl core::fmt::Display for SerialFormat {
+    /// `8N1`, `8E1`.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "{}{}{}",
+            self.data_bits,
+            self.parity.letter(),
+            self.stop_bits
+        )
+    }
+}
+
+/// The only character formats a drive's serial line offers, chosen on the drive by a parameter
+/// (the map's `serial.formats`; ACN CM.04: 0 = 8N1, 1 = 8N2, 2 = 8E1, 3 = 8O1). A line set to
+/// any other combination (8E2, 8O2 on the ACN) is refused by the runtime's serial
+/// configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SerialFormats {
+    /// The parameter that selects the format, as the map names it (`CM.04`).
+    pub selected_by: &'static str,
+    /// The formats, in the map's order.
+    pub formats: &'static [SerialFormat],
+    /// `file:line` of the manual's list.
+    pub source: &'static str,
+}
+
+impl SerialFormats {
+    /// The listed format `data_bits`, `parity`, `stop_bits`, if there is one.
+    pub fn find(
+        &self,
+        data_bits: u8,
+        parity: Parity,
+        stop_bits: u8,
+    ) -> Option<&'static SerialFormat> {
+        self.formats
+            .iter()
+            .find(|f| f.is(data_bits, parity, stop_bits))
+    }
+
+    /// The stop bits of the formats with `parity`, when they all have the same (ACN: 1 with
+    /// even or odd parity; none with no parity, which has 8N1 and 8N2).
+    pub fn stop_bits_for(&self, parity: Parity) -> Option<u8> {
+        only_stop_bits(self.formats, parity)
+    }
+
+    /// The listed format the line `data_bits`, `parity`, `stop_bits` uses, or why there is none.
+    pub fn check(
+        &self,
+        drive: &'static str,
+        data_bits: u8,
+        parity: Parity,
+        stop_bits: u8,
+    ) -> Result<&'static SerialFormat, FormatNotListed> {
+        self.find(data_bits, parity, stop_bits)
+            .ok_or(FormatNotListed {
+                drive,
+                data_bits,
+                parity,
+                stop_bits,
+                formats: *self,
+            })
+    }
+}
+
+/// The stop bits the formats with `parity` share, if any format has it and they all agree.
+pub fn only_stop_bits(formats: &[SerialFormat], parity: Parity) -> Option<u8> {
+    let mut with = formats.iter().filter(|f| f.parity == parity);
+    let first = with.next()?.stop_bits;
+    with.all(|f| f.stop_bits == first).then_some(first)
+}
+
+/// A serial line set to a character format the drive's map does not list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FormatNotListed {
+    pub drive: &'static str,
+    pub data_bits: u8,
+    pub parity: Parity,
+    pub stop_bits: u8,
+    /// What the map lists.
+    pub formats: SerialFormats,
+}
+
+impl core::fmt::Display for FormatNotListed {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let asked = SerialFormat {
+            code: 0,
+            data_bits: self.data_bits,
+            parity: self.parity,
+            stop_bits: self.stop_bits,
+        };
+        write!(
+            f,
+            "{}'s serial line offers only the formats its map lists ({}:",
+            self.drive, self.formats.selected_by
+        )?;
+        for (i, x) in self.formats.formats.iter().enumerate() {
+            let sep = if i == 0 { " " } else { ", " };
+            write!(f, "{sep}{} = {x}", x.code)?;
+        }
+        write!(
+            f,
+            "); {asked} is not one of them (`{}`)",
+            self.formats.source
+        )
+    }
 }
 
 /// PDU address = communication address + offset, per transport kind.
@@ -172,6 +345,9 @@ pub struct Profile {
     pub commands: &'static [CommandInfo],
     pub address_offsets: AddressOffsets,
     pub timing: Timing,
+    /// The only serial character formats the drive offers, when its map lists them (a
+    /// parameter selects one on the drive); `None`: any parity and stop bits.
+    pub serial_formats: Option<SerialFormats>,
     /// Manufacturer's stated endurance of the parameter memory, in writes, if given.
     pub eeprom_write_endurance: Option<u32>,
     /// What the map allows for each writable register, for the write gate
@@ -189,14 +365,12 @@ impl Profile {
         max_write: 123,
         slave_min: 1,
         slave_max: 247,
-        broadcast: Some(BroadcastInfo {
-            functions: &[0x06, 0x10],
-            addresses: &[],
-        }),
+        broadcast: Some(BroadcastInfo::new(&[0x06, 0x10], &[])),
         exceptions: &[],
         commands: &[],
         address_offsets: AddressOffsets { rtu: 0, tcp: 0 },
         timing: Timing::MODBUS,
+        serial_formats: None,
         eeprom_write_endurance: None,
         writes: &[],
     };

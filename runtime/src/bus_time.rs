@@ -47,20 +47,12 @@
 
 use std::time::Duration;
 
+use crate::error::Refusal;
 use crate::pdu::function;
 use crate::profile::Profile;
 
-/// Parity of a serial line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum Parity {
-    /// No parity bit.
-    #[default]
-    None,
-    /// Even parity.
-    Even,
-    /// Odd parity.
-    Odd,
-}
+/// Parity of a serial line (the vocabulary crate's).
+pub use crate::profile::Parity;
 
 /// The settings of a serial line that decide the length of a character.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -105,6 +97,50 @@ impl SerialConfig {
     pub const fn fixed_char_bits(mut self, bits: u8) -> SerialConfig {
         self.char_bits = Some(bits);
         self
+    }
+
+    /// The line to a drive with `profile` at `baud` and `parity`: `stop_bits` as given, else
+    /// the stop bits of the map's formats for that parity when they have only one (the map's
+    /// `serial.formats`), else 1 (2 without parity where the map fixes 11-bit characters);
+    /// refused when the map lists its formats and this is not one of them.
+    pub fn for_profile(
+        profile: &Profile,
+        baud: u32,
+        parity: Parity,
+        stop_bits: Option<u8>,
+    ) -> Result<SerialConfig, Refusal> {
+        let stop_bits = stop_bits
+            .or_else(|| profile.serial_formats.and_then(|f| f.stop_bits_for(parity)))
+            .unwrap_or(
+                if profile.timing.char_bits == Some(11) && parity == Parity::None {
+                    2
+                } else {
+                    1
+                },
+            );
+        let config = SerialConfig {
+            char_bits: profile.timing.char_bits,
+            ..SerialConfig::new(baud).parity(parity).stop_bits(stop_bits)
+        };
+        config.check_format(profile)?;
+        Ok(config)
+    }
+
+    /// Refuses a line whose data bits, parity and stop bits are not one of the formats the
+    /// map lists for the drive (`Profile::serial_formats`); any line passes when it lists none.
+    pub fn check_format(&self, profile: &Profile) -> Result<(), Refusal> {
+        match profile.serial_formats {
+            Some(f) => f
+                .check(
+                    profile.drive_id,
+                    self.data_bits,
+                    self.parity,
+                    self.stop_bits,
+                )
+                .map(|_| ())
+                .map_err(Refusal::SerialFormat),
+            None => Ok(()),
+        }
     }
 
     /// Bits per character on the wire: start, data, parity, stop; or the fixed length.

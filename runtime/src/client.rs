@@ -353,6 +353,7 @@ impl Core {
             return Err(Refusal::BroadcastLoopBack);
         }
         let drive = self.profile.drive_id;
+        gate::broadcast_known(self.profile, rtu::BROADCAST)?;
         let Some(b) = self.profile.broadcast else {
             return Err(Refusal::BroadcastFunction { drive, function: f });
         };

@@ -87,6 +87,19 @@ pub enum Refusal {
     /// The drive has no broadcast, or not for this function.
     #[error("{drive} does not execute function {function:02X}h as a broadcast")]
     BroadcastFunction { drive: &'static str, function: u8 },
+    /// A serial line set to a character format the drive's map does not list (`serial.formats`:
+    /// the ACN offers 8N1, 8N2, 8E1 and 8O1 only).
+    #[error("{0}")]
+    SerialFormat(crate::profile::FormatNotListed),
+    /// The drive has a broadcast, but its manual does not print the rules (which functions,
+    /// which registers): nothing is broadcast, since no one can say what the drives would do.
+    #[error(
+        "{drive} has a broadcast whose rules its manual does not print ({why}): drivemap sends it no broadcast; address each slave instead"
+    )]
+    BroadcastRulesNotPrinted {
+        drive: &'static str,
+        why: &'static str,
+    },
     /// The drive does not accept this register in a broadcast.
     #[error("{drive} does not accept register {address:04X}h in a broadcast")]
     BroadcastAddress { drive: &'static str, address: u16 },

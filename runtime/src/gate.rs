@@ -13,6 +13,8 @@
 //! - a register that is read-only ([`Refusal::ReadOnly`]);
 //! - a register the map lists for other transports only ([`Refusal::NotOnTransport`]): the V7's
 //!   RTU command register 0001h is the Modbus TCP option card's digital-input register;
+//! - any broadcast when the drive's broadcast rules are not printed (the map's
+//!   `broadcast: {unknown: ..}`) ([`Refusal::BroadcastRulesNotPrinted`]);
 //! - a broadcast-only register sent to one slave, or a register the drive does not let a
 //!   broadcast write sent to slave 0 (on the V7 that address is, in the broadcast space, another
 //!   register with another bit layout) ([`Refusal::BroadcastOnly`], [`Refusal::NotBroadcast`]);
@@ -56,6 +58,7 @@ pub fn check(
     address: u16,
     words: impl IntoIterator<Item = u16>,
 ) -> Result<(), Refusal> {
+    broadcast_known(profile, slave)?;
     let mut words = words.into_iter().peekable();
     let mut at = address;
     while let Some(word) = words.next() {
@@ -77,6 +80,21 @@ pub fn check(
 /// Whether a broadcast to this drive writes only the registers it lists.
 fn listed_broadcast(profile: &Profile) -> bool {
     profile.broadcast.is_some_and(|b| !b.addresses.is_empty())
+}
+
+/// Refuses a broadcast (slave 0) to a drive whose broadcast rules the manual does not print:
+/// the map cannot say which functions and registers the drives would execute.
+pub fn broadcast_known(profile: &Profile, slave: u8) -> Result<(), Refusal> {
+    match profile.broadcast {
+        Some(b) if slave == rtu::BROADCAST => match b.not_printed {
+            Some(why) => Err(Refusal::BroadcastRulesNotPrinted {
+                drive: profile.drive_id,
+                why,
+            }),
+            None => Ok(()),
+        },
+        _ => Ok(()),
+    }
 }
 
 /// Whether `rule`'s register may be addressed as `slave`.
@@ -143,6 +161,7 @@ pub fn check_link(
     if !rule.access.writable() {
         return Err(Refusal::ReadOnly { register });
     }
+    broadcast_known(profile, slave)?;
     if !rule.transports.contains(kind) {
         return Err(Refusal::NotOnTransport {
             register,

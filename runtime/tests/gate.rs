@@ -311,3 +311,77 @@ fn half_a_pair_and_a_pair_out_of_range_are_refused_before_sending() {
     assert_eq!(c.transport().requests, 0, "nothing refused was sent");
     assert_eq!(c.transport().slave.holding(0x0200), 0);
 }
+
+/// A drive whose manual says it has a broadcast but prints no rules for it (the map's
+/// `broadcast: {unknown: ..}`): the gate refuses every broadcast, by rule, by raw address and
+/// from [`gate::check`] itself, while writes to one slave go on.
+#[test]
+fn a_broadcast_whose_rules_are_not_printed_is_never_sent() {
+    static UNPRINTED: Profile = Profile {
+        broadcast: Some(drivemap_runtime::profile::BroadcastInfo::not_printed(
+            "slave 0 is named broadcast; no functions or registers printed",
+        )),
+        writes: &[FREQUENCY, N001],
+        ..common::V7
+    };
+    let refused = Refusal::BroadcastRulesNotPrinted {
+        drive: "yaskawa-v7",
+        why: "slave 0 is named broadcast; no functions or registers printed",
+    };
+    let e = gate::check(
+        &UNPRINTED,
+        TransportKind::Rtu,
+        0,
+        WriteTarget::Rule(&FREQUENCY),
+        0x0002,
+        [6000],
+    )
+    .unwrap_err();
+    assert_eq!(e, refused);
+    assert_eq!(
+        gate::check_link(&UNPRINTED, TransportKind::Rtu, 0, &FREQUENCY).unwrap_err(),
+        refused
+    );
+    assert!(
+        e.to_string()
+            .contains("has a broadcast whose rules its manual does not print (slave 0 is named broadcast; no functions or registers printed): drivemap sends it no broadcast"),
+        "{e}"
+    );
+    let mut c = Client::with_options(
+        FaultyLink::new(TransportKind::Rtu, SimulatedSlave::new(1, &UNPRINTED)),
+        &UNPRINTED,
+        common::strict(),
+    );
+    assert_eq!(
+        refusal(c.write_rule(0, &FREQUENCY, 0x0002, 6000).unwrap_err()),
+        refused
+    );
+    assert_eq!(
+        refusal(c.write_register(0, 0x0002, 6000).unwrap_err()),
+        refused
+    );
+    assert_eq!(
+        refusal(c.write_registers(0, 0x0101, &[1]).unwrap_err()),
+        refused
+    );
+    assert_eq!(c.transport().requests, 0, "no broadcast was sent");
+    // One slave at a time is the way.
+    c.write_rule(1, &FREQUENCY, 0x0002, 6000).unwrap();
+    assert_eq!(c.transport().slave.holding(0x0002), 6000);
+    // Known rules: the same broadcast goes out.
+    static PRINTED: Profile = Profile {
+        broadcast: Some(drivemap_runtime::profile::BroadcastInfo::new(&[0x06], &[])),
+        ..UNPRINTED
+    };
+    assert!(
+        gate::check(
+            &PRINTED,
+            TransportKind::Rtu,
+            0,
+            WriteTarget::Rule(&FREQUENCY),
+            0x0002,
+            [6000]
+        )
+        .is_ok()
+    );
+}

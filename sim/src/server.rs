@@ -519,13 +519,20 @@ pub struct SerialServer {
 
 #[cfg(feature = "serial")]
 impl SerialServer {
-    /// Opens the port and serves `sim` on it.
+    /// Opens the port and serves `sim` on it. The line must be one of the character formats
+    /// the drive's map lists, if it lists them (`Profile::serial_formats`): another is refused
+    /// (`InvalidInput`) before the port is opened.
     pub fn spawn(
         sim: SharedSim,
-        options: drivemap_runtime::transport::serial::SerialOptions,
+        mut options: drivemap_runtime::transport::serial::SerialOptions,
         log: Option<Logger>,
     ) -> io::Result<SerialServer> {
         use drivemap_runtime::transport::serial::{SerialTransport, USB_LATENCY};
+        if options.formats.is_none() {
+            let profile = lock(&sim).profile();
+            options.formats = profile.serial_formats;
+            options.drive_id = profile.drive_id;
+        }
         let silence = options.frame_gap() + USB_LATENCY;
         let mut link = SerialTransport::open(options)?;
         let stop = Arc::new(AtomicBool::new(false));

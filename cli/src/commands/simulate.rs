@@ -42,18 +42,23 @@ pub struct Args {
     /// Parity for --serial (default: the map's default, else none).
     #[arg(long, value_enum)]
     pub parity: Option<LineParity>,
+    /// Stop bits for --serial (default: the map's for the parity when its formats give only
+    /// one, else 1; 2 without parity where the map fixes 11-bit characters). A map that lists
+    /// its serial formats refuses any other parity and stop bits.
+    #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
+    pub stop_bits: Option<u8>,
     /// Slave address (default: the map's default, else 1).
     #[arg(long)]
     pub slave: Option<u8>,
-    /// Power-on value of a register, in engineering units: `--set n152=1`.
-    #[arg(long = "set", value_name = "REGISTER=VALUE")]
+    /// The drive's value of a register or an external quantity of the map, in engineering units
+    /// (`--set n152=1`, `--set drive_rated_current=9.6`): a register starts with it, an
+    /// external quantity is the drive's. The same `--set` tells read/write/poll the value
+    /// instead of reading it. (`--external` is an older name for it.)
+    #[arg(long = "set", alias = "external", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
     /// Model variant: `--variant voltage_class=v440`.
     #[arg(long, value_name = "AXIS=OPTION")]
     pub variant: Vec<String>,
-    /// External quantity of the map: `--external drive_rated_current=9.6`.
-    #[arg(long, value_name = "NAME=VALUE")]
-    pub external: Vec<String>,
     /// Simulated time runs this many times faster than real time (ramps finish sooner; 0.1 to 1000).
     #[arg(long = "time-scale", default_value_t = 1.0, value_parser = crate::duration::number(0.1, 1000.0))]
     pub time_scale: f64,
@@ -91,12 +96,15 @@ fn number(text: &str, v: &str) -> Result<f64, String> {
         .map_err(|_| format!("`{text}`: `{v}` is not a number"))
 }
 
-/// Simulator options from the command line.
+/// Simulator options from the command line. Each `--set NAME=VALUE` is the drive's value:
+/// of an external quantity of the map when `NAME` is one (as `read --set` takes it first),
+/// else the power-on value of the register `NAME` (an unknown register is refused when the
+/// simulator starts).
 pub(crate) fn options(
+    drive: &Drive,
     slave: Option<u8>,
     set: &[String],
     variant: &[String],
-    external: &[String],
     time_scale: f64,
 ) -> Result<SimOptions, String> {
     if !(time_scale.is_finite() && time_scale > 0.0) {
@@ -104,17 +112,42 @@ pub(crate) fn options(
     }
     let mut o = SimOptions::new().clock(Arc::new(SystemClock::scaled(time_scale)));
     o.slave = slave;
+    let externals = drive.externals();
     for s in set {
-        let (k, v) = pair(s, "REGISTER=VALUE")?;
-        o = o.set(&k, number(s, &v)?);
+        let (k, v) = pair(s, "NAME=VALUE")?;
+        let value = match number(s, &v) {
+            Ok(n) => n,
+            // An enumeration's code or a bit-field word may be given as `read --set` takes
+            // it (`run_source=rs485`, `command=run,reverse`): its word is its value.
+            Err(e) => match drivemap_live::lookup::find(drive, &k) {
+                Ok(r)
+                    if matches!(
+                        drive.register_plan(r).conversion,
+                        drivemap_runtime::plan::Conversion::Enum { .. }
+                            | drivemap_runtime::plan::Conversion::Bits { .. }
+                    ) =>
+                {
+                    drivemap_live::codec::parse_value(
+                        drive,
+                        r,
+                        &v,
+                        &drivemap_live::LiveSettings::default(),
+                    )
+                    .map(f64::from)
+                    .map_err(|e| format!("`{s}`: {e}"))?
+                }
+                _ => return Err(e),
+            },
+        };
+        o = if externals.iter().any(|q| q.external == k) {
+            o.external(&k, value)
+        } else {
+            o.set(&k, value)
+        };
     }
     for s in variant {
         let (k, v) = pair(s, "AXIS=OPTION")?;
         o = o.variant(&k, &v);
-    }
-    for s in external {
-        let (k, v) = pair(s, "NAME=VALUE")?;
-        o = o.external(&k, number(s, &v)?);
     }
     Ok(o)
 }
@@ -156,15 +189,15 @@ fn logger() -> Logger {
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let drive = load_drive(&args.dir, &args.drive)?;
     let options = options(
+        &drive,
         args.slave,
         &args.set,
         &args.variant,
-        &args.external,
         args.time_scale,
     )?;
     // The serial line, should --serial be chosen: the flags, else the map's defaults.
     let (baud, parity, stop_bits) =
-        crate::live::link::serial_line(&drive, args.baud, args.parity, None);
+        crate::live::link::serial_line(&drive, args.baud, args.parity, args.stop_bits);
     let sim = Simulator::new(drive, options).map_err(|e| e.to_string())?;
     for w in sim.warnings() {
         eprintln!("warning: {w}");
@@ -224,10 +257,11 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             StopBits::One
         })
         .with_profile(profile);
+    options.check_format().map_err(|e| e.to_string())?;
     let server = SerialServer::spawn(shared, options, log)
         .map_err(|e| format!("cannot open serial port {}: {e}", path.display()))?;
     outln!(
-        "simulating {id} at slave {slave} on RTU {} {baud} baud, parity {} ({model}{time}); Ctrl-C stops",
+        "simulating {id} at slave {slave} on RTU {} {baud} baud, parity {}, {stop_bits} stop bit(s) ({model}{time}); Ctrl-C stops",
         path.display(),
         format!("{parity:?}").to_lowercase()
     );
@@ -250,12 +284,60 @@ mod tests {
 
     #[test]
     fn options_are_parsed_with_clear_errors() {
-        assert!(options(None, &["n152=1".into()], &[], &[], 1.0).is_ok());
-        let e = options(None, &["n152".into()], &[], &[], 1.0).unwrap_err();
-        assert_eq!(e, "`n152` is not REGISTER=VALUE");
-        let e = options(None, &["n152=x".into()], &[], &[], 1.0).unwrap_err();
-        assert_eq!(e, "`n152=x`: `x` is not a number");
-        assert!(options(None, &[], &[], &[], 0.0).is_err());
+        let v7 = MapsDir::default().load("yaskawa-v7").unwrap();
+        assert!(options(&v7, None, &["n152=1".into()], &[], 1.0).is_ok());
+        let e = options(&v7, None, &["n152".into()], &[], 1.0).unwrap_err();
+        assert_eq!(e, "`n152` is not NAME=VALUE");
+        let e = options(&v7, None, &["n152=x".into()], &[], 1.0).unwrap_err();
+        assert_eq!(
+            e,
+            "`n152=x`: `x` is not a code of modbus_frequency_reference_unit_selection; expected a number or one of: unit_0_1_hz, unit_0_01_hz, full_scale_30000, unit_0_1_percent"
+        );
+        let e = options(&v7, None, &["n019=x".into()], &[], 1.0).unwrap_err();
+        assert_eq!(e, "`n019=x`: `x` is not a number");
+        assert!(options(&v7, None, &[], &[], 0.0).is_err());
+    }
+
+    /// `--set` is the drive's value of a register (its power-on value) or of an external
+    /// quantity of the map (the drive's), as `read --set` takes it.
+    #[test]
+    fn set_gives_registers_and_external_quantities() {
+        let gpd = MapsDir::default().load("yaskawa-gpd515").unwrap();
+        let o = options(
+            &gpd,
+            None,
+            &["drive_rated_current=12.5".into(), "b1-01=2".into()],
+            &[],
+            1.0,
+        )
+        .unwrap();
+        let sim = Simulator::new(gpd, o).unwrap();
+        assert_eq!(sim.externals().get("drive_rated_current"), Some(&12.5));
+        assert_eq!(sim.raw("b1-01").unwrap(), 2);
+        // An enumeration's id, as `read --set` takes it.
+        let gpd = MapsDir::default().load("yaskawa-gpd515").unwrap();
+        let o = options(&gpd, None, &["b1-01=option_board".into()], &[], 1.0).unwrap();
+        assert_eq!(Simulator::new(gpd, o).unwrap().raw("b1-01").unwrap(), 3);
+        // The older `--external` still parses, as `--set`.
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: Args,
+        }
+        let cli = Cli::try_parse_from([
+            "simulate",
+            "--drive",
+            "yaskawa-gpd515",
+            "--tcp",
+            "5020",
+            "--external",
+            "drive_rated_current=9.6",
+            "--set",
+            "b1-01=2",
+        ])
+        .unwrap();
+        assert_eq!(cli.args.set, ["drive_rated_current=9.6", "b1-01=2"]);
     }
 
     #[test]

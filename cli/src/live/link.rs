@@ -40,7 +40,9 @@ pub struct LinkArgs {
     /// Parity (default: the map's default, else none).
     #[arg(long, value_enum)]
     pub parity: Option<LineParity>,
-    /// Stop bits (default 1; 2 without parity where the map fixes 11-bit characters).
+    /// Stop bits (default: the map's for the parity when its formats give only one, else 1;
+    /// 2 without parity where the map fixes 11-bit characters). A map that lists its serial
+    /// formats (`serial.formats`) refuses any other parity and stop bits.
     #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
     pub stop_bits: Option<u8>,
     /// Slave address (default: the map's default, else 1; 0 broadcasts a write).
@@ -170,6 +172,7 @@ impl LinkArgs {
                 })
                 .stop_bits(stop_bits)
                 .with_profile(profile);
+            options.check_format().map_err(|e| e.to_string())?;
             let t = SerialTransport::open(options)
                 .map_err(|e| format!("cannot open serial port {path}: {e}"))?;
             let parity = format!("{parity:?}").to_lowercase();
@@ -187,8 +190,10 @@ impl LinkArgs {
 
 /// Baud rate, parity and stop bits of a serial line to `drive`: what is given, else the map's
 /// defaults ([`drivemap_codegen::ir::SerialDefaults`]: 9600, no parity unless the map says
-/// otherwise, 2 stop bits without parity where the map fixes 11-bit characters). For
-/// `read`/`write`/`poll` and for `simulate --serial`.
+/// otherwise; the stop bits of the map's formats for the parity when they give only one, else
+/// 2 without parity where the map fixes 11-bit characters, else 1). For `read`/`write`/`poll`
+/// and for `simulate --serial`; whether the map lists the combination is checked when the port
+/// is opened ([`SerialOptions::check_format`]).
 pub fn serial_line(
     drive: &Drive,
     baud: Option<u32>,
@@ -201,7 +206,11 @@ pub fn serial_line(
         MapParity::Even => LineParity::Even,
         MapParity::Odd => LineParity::Odd,
     });
-    let stop_bits = stop_bits.unwrap_or(defaults.stop_bits(parity != LineParity::None));
+    let stop_bits = stop_bits.unwrap_or(defaults.stop_bits_for(match parity {
+        LineParity::None => MapParity::None,
+        LineParity::Even => MapParity::Even,
+        LineParity::Odd => MapParity::Odd,
+    }));
     (baud.unwrap_or(defaults.baud), parity, stop_bits)
 }
 

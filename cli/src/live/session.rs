@@ -24,10 +24,11 @@ pub struct SettingsArgs {
     /// Model variant: `axis=option` (e.g. `voltage_class=v440`), or just the option.
     #[arg(long = "variant", value_name = "AXIS=OPTION")]
     pub variants: Vec<String>,
-    /// A value conversions depend on: an external quantity (`drive_rated_current=12.5`) or a
-    /// parameter that selects a scale or serves as reference (`n152=1`); given ones are not
-    /// read from the drive.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
+    /// The drive's value of a register or an external quantity of the map (`n152=1`,
+    /// `drive_rated_current=12.5`), taken as known instead of read: a parameter that selects a
+    /// scale or serves as a reference is not read from the drive, an external quantity is the
+    /// drive's. The same `--set` gives `simulate` its values. (`--external` is an older name.)
+    #[arg(long = "set", alias = "external", value_name = "NAME=VALUE")]
     pub sets: Vec<String>,
 }
 
@@ -101,7 +102,9 @@ impl SettingsArgs {
                 format!(
                     "`--set {s}`: {e}{}",
                     settable_hint(drive)
-                        .map(|h| format!(" (settable: {h})"))
+                        .map(|h| format!(
+                            " (external quantities and what conversions depend on: {h})"
+                        ))
                         .unwrap_or_default()
                 )
             })?;
@@ -118,13 +121,19 @@ impl SettingsArgs {
                 settings.references.insert(r.def.id.clone(), v);
             }
             if !(is_selector || is_reference) {
-                return Err(format!(
-                    "`--set {s}`: no conversion depends on {}{}",
-                    describe::register(r),
-                    settable_hint(drive)
-                        .map(|h| format!("; settable: {h}"))
-                        .unwrap_or_default()
-                ));
+                // The drive's value of a register no conversion depends on: nothing here reads
+                // it in place of the drive, but it must be a value of the register (as
+                // `simulate --set` takes it), so a mistyped value is not passed over.
+                use drivemap_runtime::ValueError as V;
+                match codec::parse_value(drive, r, value, &settings) {
+                    Ok(_)
+                    | Err(codec::InputError::Value(
+                        V::MissingSetting { .. }
+                        | V::UnsupportedSetting { .. }
+                        | V::BadReference { .. },
+                    )) => {}
+                    Err(e) => return Err(format!("`--set {s}`: {e}")),
+                }
             }
             fixed.insert(r.def.id.clone());
         }
@@ -132,7 +141,8 @@ impl SettingsArgs {
     }
 }
 
-/// The names `--set` accepts for this drive.
+/// The names whose `--set` matters to conversions: external quantities, selecting parameters
+/// and references (any register may be given).
 fn settable_hint(drive: &Drive) -> Option<String> {
     let mut names: Vec<String> = drive
         .externals()

@@ -151,8 +151,8 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         );
     }
 
-    let fa: BTreeSet<u8> = a.function_codes.iter().copied().collect();
-    let fb: BTreeSet<u8> = b.function_codes.iter().copied().collect();
+    let fa: BTreeSet<u8> = a.function_codes.codes.iter().copied().collect();
+    let fb: BTreeSet<u8> = b.function_codes.codes.iter().copied().collect();
     let removed: Vec<u8> = fa.difference(&fb).copied().collect();
     let added: Vec<u8> = fb.difference(&fa).copied().collect();
     if !removed.is_empty() {
@@ -160,8 +160,14 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             ChangeKind::FunctionCodeRemoved,
             s,
             &format!("function codes: {}", describe::functions(&removed)),
-            (Some(describe::functions(&a.function_codes)), src.0.clone()),
-            (Some(describe::functions(&b.function_codes)), src.1.clone()),
+            (
+                Some(describe::functions(&a.function_codes.codes)),
+                src.0.clone(),
+            ),
+            (
+                Some(describe::functions(&b.function_codes.codes)),
+                src.1.clone(),
+            ),
             HEAD,
         );
     }
@@ -170,8 +176,14 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             ChangeKind::FunctionCodeAdded,
             s,
             &format!("function codes: {}", describe::functions(&added)),
-            (Some(describe::functions(&a.function_codes)), src.0.clone()),
-            (Some(describe::functions(&b.function_codes)), src.1.clone()),
+            (
+                Some(describe::functions(&a.function_codes.codes)),
+                src.0.clone(),
+            ),
+            (
+                Some(describe::functions(&b.function_codes.codes)),
+                src.1.clone(),
+            ),
             HEAD,
         );
     }
@@ -344,6 +356,9 @@ fn broadcast(c: &mut Collector, old: &Drive, new: &Drive) {
     };
     let text = |x: &Option<crate::model::Broadcast>| {
         x.as_ref().map(|x| {
+            if let Some(why) = &x.unknown {
+                return describe::broadcast_not_printed(why);
+            }
             let mut t = describe::functions(&x.functions);
             if !x.registers.is_empty() {
                 t += &format!(" to {}", x.registers.join(", "));

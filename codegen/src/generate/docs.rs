@@ -65,7 +65,7 @@ pub fn module(drive: &Drive) -> String {
             drive.protocol.max_read.value,
             drive.protocol.max_write.value
         ),
-        describe::functions(&drive.protocol.function_codes)
+        describe::functions(&drive.protocol.function_codes.codes)
     );
     s
 }

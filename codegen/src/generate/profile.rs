@@ -11,18 +11,24 @@ use crate::model::CommandKind;
 pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     let p = &drive.protocol;
     let id = &drive.meta.id;
-    let fcs = p.function_codes.iter().map(|f| hex2(*f));
+    let fcs = p.function_codes.codes.iter().map(|f| hex2(*f));
     let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read.value);
     let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write.value);
     let slave_min = proc_macro2::Literal::u8_unsuffixed(p.slave_address.min);
     let slave_max = proc_macro2::Literal::u8_unsuffixed(p.slave_address.max);
     let broadcast = match &p.broadcast {
         None => quote!(None),
-        Some(b) => {
-            let addrs = drive.broadcast_addresses().into_iter().map(hex);
-            let fns = b.functions.iter().map(|f| hex2(*f));
-            quote!(Some(#rt::profile::BroadcastInfo { functions: &[#(#fns),*], addresses: &[#(#addrs),*] }))
-        }
+        Some(b) => match &b.unknown {
+            Some(why) => {
+                let why = why.trim();
+                quote!(Some(#rt::profile::BroadcastInfo::not_printed(#why)))
+            }
+            None => {
+                let addrs = drive.broadcast_addresses().into_iter().map(hex);
+                let fns = b.functions.iter().map(|f| hex2(*f));
+                quote!(Some(#rt::profile::BroadcastInfo::new(&[#(#fns),*], &[#(#addrs),*])))
+            }
+        },
     };
     let exceptions = p.exceptions.iter().map(|e| {
         let (code, name, desc) = (hex2(e.code), &e.name, &e.description);
@@ -64,6 +70,24 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
         None => quote!(None),
     };
     let endurance = opt_u32(p.eeprom.as_ref().map(|e| e.endurance));
+    let serial_formats = match &plan.profile.serial_formats {
+        None => quote!(None),
+        Some(f) => {
+            let (by, source) = (f.selected_by, f.source);
+            let formats = f.formats.iter().map(|x| {
+                let code = proc_macro2::Literal::u16_unsuffixed(x.code);
+                let data = proc_macro2::Literal::u8_unsuffixed(x.data_bits);
+                let stop = proc_macro2::Literal::u8_unsuffixed(x.stop_bits);
+                let parity = match x.parity {
+                    drivemap_core::profile::Parity::None => quote!(None),
+                    drivemap_core::profile::Parity::Even => quote!(Even),
+                    drivemap_core::profile::Parity::Odd => quote!(Odd),
+                };
+                quote!(#rt::profile::SerialFormat { code: #code, data_bits: #data, parity: #rt::profile::Parity::#parity, stop_bits: #stop })
+            });
+            quote!(Some(#rt::profile::SerialFormats { selected_by: #by, formats: &[#(#formats),*], source: #source }))
+        }
+    };
     let writes = plan
         .registers
         .iter()
@@ -99,6 +123,7 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
                 request_gap_us: #gap_us,
                 char_bits: #char_bits,
             },
+            serial_formats: #serial_formats,
             eeprom_write_endurance: #endurance,
             writes: &[#(#writes),*],
         };

@@ -206,7 +206,29 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             proto.key("serial").key("source"),
             None,
         );
+        if let Some(f) = &s.formats {
+            let fp = proto.key("serial").key("formats");
+            cite(drive, ctx, out, &f.source, fp.key("source"), None);
+            for (i, c) in f.cases.iter().enumerate() {
+                opt(
+                    drive,
+                    ctx,
+                    out,
+                    &c.source,
+                    fp.key("cases").index(i).key("source"),
+                    None,
+                );
+            }
+        }
     }
+    opt(
+        drive,
+        ctx,
+        out,
+        &p.function_codes.source,
+        proto.key("function_codes").key("source"),
+        None,
+    );
     for (name, limit) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
         opt(
             drive,

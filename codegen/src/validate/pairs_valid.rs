@@ -86,7 +86,9 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                     p.max_write.value
                 ));
             }
-            if !p.function_codes.is_empty() && !p.function_codes.contains(&WRITE_MULTIPLE) {
+            if !p.function_codes.codes.is_empty()
+                && !p.function_codes.codes.contains(&WRITE_MULTIPLE)
+            {
                 err(format!(
                     "`{}` is a writable pair, but `protocol.function_codes` lacks 10h: only 10h writes both words in one request",
                     r.id()

@@ -4,7 +4,7 @@
 
 use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
-use crate::model::Interval;
+use crate::model::{Interval, Parity, Serial, SerialFormats};
 use crate::source::Path;
 
 const KNOWN: &[u8] = &[0x03, 0x04, 0x06, 0x08, 0x10];
@@ -29,24 +29,42 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             "name at least one transport (rtu, tcp)",
         ));
     }
-    if p.function_codes.is_empty() {
+    // The list itself, or the `codes` of `{codes: [...], source: ...}`.
+    let fcp = {
+        let p = pp.key("function_codes");
+        if drive.tree.at(&p.key("codes")).is_some() {
+            p.key("codes")
+        } else {
+            p
+        }
+    };
+    let fcs = &p.function_codes.codes;
+    if fcs.is_empty() {
+        out.push(drive.error(&fcp, None, "name the function codes the drive implements"));
+    }
+    if let Some(why) = &p.function_codes.unknown
+        && why.trim().is_empty()
+    {
         out.push(drive.error(
-            &pp.key("function_codes"),
+            &pp.key("function_codes").key("unknown"),
             None,
-            "name the function codes the drive implements",
+            format!(
+                "`function_codes` marked unknown needs its reason: why the manual prints no list and where {} come from",
+                crate::describe::functions(fcs)
+            ),
         ));
     }
-    for (i, f) in p.function_codes.iter().enumerate() {
+    for (i, f) in fcs.iter().enumerate() {
         if !KNOWN.contains(f) {
             out.push(drive.error(
-                &pp.key("function_codes").index(i),
+                &fcp.index(i),
                 None,
                 format!("function {f:02X}h is not one drivemap speaks (03h, 04h, 06h, 08h, 10h)"),
             ));
         }
-        if p.function_codes[..i].contains(f) {
+        if fcs[..i].contains(f) {
             out.push(drive.error(
-                &pp.key("function_codes").index(i),
+                &fcp.index(i),
                 None,
                 format!("function {f:02X}h listed twice"),
             ));
@@ -89,8 +107,46 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         }
     }
     if let Some(b) = &p.broadcast {
+        let bp = pp.key("broadcast");
+        match &b.unknown {
+            Some(why) if why.trim().is_empty() => out.push(drive.error(
+                &bp.key("unknown"),
+                None,
+                "a broadcast marked unknown needs its reason: what the manual says of it and which rules it does not print",
+            )),
+            Some(_) => {
+                // Rules not printed are all unknown: a list beside them would be half a rule
+                // the runtime does not use (it sends no broadcast then).
+                let given = [
+                    ("functions", !b.functions.is_empty()),
+                    ("registers", !b.registers.is_empty()),
+                ];
+                for (key, _) in given.iter().filter(|(_, g)| *g) {
+                    out.push(drive.error(
+                        &bp.key(key),
+                        None,
+                        format!(
+                            "a broadcast whose rules are not printed (`unknown`) lists no `{key}`; say what the manual prints in `unknown`, or drop `unknown` and give the rules"
+                        ),
+                    ));
+                }
+                if let Some(r) = drive.registers.iter().find(|r| r.broadcast) {
+                    out.push(drive.error(
+                        &bp.key("unknown"),
+                        Some(r.id()),
+                        "a broadcast whose rules are not printed has no broadcast registers; a `broadcast: true` group prints them",
+                    ));
+                }
+            }
+            None if b.functions.is_empty() => out.push(drive.error(
+                &bp,
+                None,
+                "list the `functions` a broadcast executes (06h, 10h), or say `unknown: <why>` when the manual prints no rules for it",
+            )),
+            None => {}
+        }
         for (i, f) in b.functions.iter().enumerate() {
-            if !matches!(f, 0x06 | 0x10) || !p.function_codes.contains(f) {
+            if !matches!(f, 0x06 | 0x10) || !fcs.contains(f) {
                 out.push(drive.error(
                     &pp.key("broadcast").key("functions").index(i),
                     None,
@@ -223,5 +279,134 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         if !matches!(ser.stop_bits, 1 | 2) {
             out.push(drive.error(&sp.key("stop_bits"), None, "stop_bits must be 1 or 2"));
         }
+        if let Some(f) = &ser.formats {
+            formats(drive, out, ser, f, &sp);
+        }
+    }
+}
+
+/// `serial.formats`: the selector is a register of the map and each `when` one of its codes,
+/// once; each format is a valid character; the line's `parities`, `stop_bits` and
+/// `char_bits` agree with the formats (the formats are the whole truth: `parities` lists
+/// exactly their parities, `stop_bits` is not given, `char_bits` is every format's length).
+fn formats(drive: &Drive, out: &mut Vec<Diagnostic>, ser: &Serial, f: &SerialFormats, sp: &Path) {
+    let fp = sp.key("formats");
+    let selector = drive.find(&f.selected_by);
+    if selector.is_none() {
+        {
+            let candidates = drive
+                .registers
+                .iter()
+                .flat_map(|r| std::iter::once(r.id()).chain(r.def.param.as_deref()));
+            let hint = crate::hints::closest(&f.selected_by, candidates)
+                .map(|c| format!(" (did you mean `{c}`?)"))
+                .unwrap_or_default();
+            out.push(drive.error(
+                &fp.key("selected_by"),
+                None,
+                format!(
+                    "serial formats selected by `{}`, which names no register of this map (by id or parameter number){hint}",
+                    f.selected_by
+                ),
+            ));
+        }
+    }
+    if f.cases.is_empty() {
+        out.push(drive.error(
+            &fp.key("cases"),
+            None,
+            "list the formats: `{when: <code>, parity: .., stop_bits: ..}` per code",
+        ));
+    }
+    // An enumeration's codes; a plain word takes any code.
+    let codes: Option<Vec<u16>> = selector
+        .filter(|r| !r.def.values.is_empty())
+        .map(|r| r.def.values.iter().map(|v| v.value).collect());
+    for (i, c) in f.cases.iter().enumerate() {
+        let cp = fp.key("cases").index(i);
+        if let (Some(codes), Some(r)) = (&codes, selector)
+            && !codes.contains(&c.when)
+        {
+            let listed: Vec<String> = codes.iter().map(u16::to_string).collect();
+            out.push(drive.error(
+                &cp.key("when"),
+                None,
+                format!(
+                    "code {} is not one of `{}`'s values ({})",
+                    c.when,
+                    r.def.param.as_deref().unwrap_or(r.id()),
+                    listed.join(", ")
+                ),
+            ));
+        }
+        if let Some(j) = f.cases[..i].iter().position(|x| x.when == c.when) {
+            out.push(drive.error(
+                &cp.key("when"),
+                None,
+                format!(
+                    "code {} is listed twice: format {} already has it",
+                    c.when,
+                    j + 1
+                ),
+            ));
+        }
+        if !matches!(c.stop_bits, 1 | 2) {
+            out.push(drive.error(&cp.key("stop_bits"), None, "stop_bits must be 1 or 2"));
+        }
+        let data_bits = c.data_bits.unwrap_or(ser.data_bits);
+        if !matches!(data_bits, 7 | 8) {
+            out.push(drive.error(&cp.key("data_bits"), None, "data_bits must be 7 or 8"));
+        }
+        if !ser.parities.contains(&c.parity) {
+            out.push(drive.error(
+                &cp.key("parity"),
+                None,
+                format!(
+                    "parity {} is not among the line's `parities`",
+                    parity_name(c.parity)
+                ),
+            ));
+        }
+        if let Some(bits) = ser.char_bits {
+            let length = 1 + data_bits + u8::from(c.parity != Parity::None) + c.stop_bits;
+            if length != bits {
+                out.push(drive.error(
+                    &cp,
+                    None,
+                    format!(
+                        "this format has {length} bits per character, but `char_bits` says every character has {bits}"
+                    ),
+                ));
+            }
+        }
+    }
+    for (i, parity) in ser.parities.iter().enumerate() {
+        if !f.cases.is_empty() && !f.cases.iter().any(|c| c.parity == *parity) {
+            out.push(drive.error(
+                &sp.key("parities").index(i),
+                None,
+                format!(
+                    "parity {} is in `parities` but no format has it",
+                    parity_name(*parity)
+                ),
+            ));
+        }
+    }
+    // `stop_bits` has a default of 1, so only a written one contradicts the formats.
+    let stop_path = sp.key("stop_bits");
+    if drive.tree.at(&stop_path).is_some() {
+        out.push(drive.error(
+            &stop_path,
+            None,
+            "with `formats`, each format gives its stop bits: remove `stop_bits`",
+        ));
+    }
+}
+
+fn parity_name(p: Parity) -> &'static str {
+    match p {
+        Parity::None => "none",
+        Parity::Even => "even",
+        Parity::Odd => "odd",
     }
 }

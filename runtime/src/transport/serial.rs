@@ -17,7 +17,9 @@ use std::time::{Duration, Instant};
 use serialport::{ClearBuffer, DataBits, FlowControl, SerialPort};
 
 use super::Transport;
-use crate::profile::{Profile, TransportKind};
+use crate::bus_time::SerialConfig;
+use crate::error::Refusal;
+use crate::profile::{Profile, SerialFormats, TransportKind};
 
 pub use serialport::{Parity, StopBits};
 
@@ -72,6 +74,12 @@ pub struct SerialOptions {
     pub inter_char_timeout: Duration,
     /// Direction control.
     pub rs485: Rs485,
+    /// The only character formats the drive offers, when its map lists them (set by
+    /// [`SerialOptions::with_profile`]): [`SerialTransport::open`] refuses any other parity
+    /// and stop bits. `None`: any.
+    pub formats: Option<SerialFormats>,
+    /// The drive the formats are those of, for the refusal.
+    pub drive_id: &'static str,
 }
 
 /// Allowance added to the inter-character timeout for adapters that deliver received bytes
@@ -90,16 +98,66 @@ impl SerialOptions {
             frame_gap_min: Duration::ZERO,
             inter_char_timeout: char_times(1.5, baud) + USB_LATENCY,
             rs485: Rs485::None,
+            formats: None,
+            drive_id: "",
         }
     }
 
     /// Takes the frame gap the drive's manual prescribes (in characters, and its least time
-    /// when stated in milliseconds).
+    /// when stated in milliseconds), and the character formats its map lists, if any, which
+    /// [`SerialTransport::open`] then holds the line to.
     pub fn with_profile(mut self, profile: &Profile) -> SerialOptions {
         self.frame_gap_chars = profile.timing.frame_gap_chars;
         self.frame_gap_min =
             Duration::from_micros(u64::from(profile.timing.frame_gap_us.unwrap_or(0)));
+        self.formats = profile.serial_formats;
+        self.drive_id = profile.drive_id;
         self
+    }
+
+    /// The line to a drive with `profile`: [`with_profile`](SerialOptions::with_profile),
+    /// `parity`, and `stop_bits` as given, else the stop bits of the map's formats for that
+    /// parity when they have only one (ACN: 1 with even or odd parity), else 1 (2 without
+    /// parity where the map fixes 11-bit characters). Refused when the map lists its formats
+    /// and this is not one of them.
+    pub fn line(
+        self,
+        profile: &Profile,
+        parity: Parity,
+        stop_bits: Option<StopBits>,
+    ) -> Result<SerialOptions, Refusal> {
+        let config = SerialConfig::for_profile(
+            profile,
+            self.baud,
+            bus_parity(parity),
+            stop_bits.map(stop_count),
+        )?;
+        let stop_bits = if config.stop_bits == 2 {
+            StopBits::Two
+        } else {
+            StopBits::One
+        };
+        Ok(self
+            .with_profile(profile)
+            .parity(parity)
+            .stop_bits(stop_bits))
+    }
+
+    /// Refuses a parity and stop bits that are not one of the formats of
+    /// [`formats`](SerialOptions::formats) (8 data bits, as the transport opens the port).
+    pub fn check_format(&self) -> Result<(), Refusal> {
+        match self.formats {
+            Some(f) => f
+                .check(
+                    self.drive_id,
+                    8,
+                    bus_parity(self.parity),
+                    stop_count(self.stop_bits),
+                )
+                .map(|_| ())
+                .map_err(Refusal::SerialFormat),
+            None => Ok(()),
+        }
     }
 
     /// Sets the parity.
@@ -124,6 +182,22 @@ impl SerialOptions {
     /// and [`frame_gap_min`](SerialOptions::frame_gap_min).
     pub fn frame_gap(&self) -> Duration {
         frame_gap(self.frame_gap_chars, self.baud).max(self.frame_gap_min)
+    }
+}
+
+/// The vocabulary crate's parity for the `serialport` crate's.
+pub fn bus_parity(parity: Parity) -> crate::bus_time::Parity {
+    match parity {
+        Parity::None => crate::bus_time::Parity::None,
+        Parity::Even => crate::bus_time::Parity::Even,
+        Parity::Odd => crate::bus_time::Parity::Odd,
+    }
+}
+
+fn stop_count(stop_bits: StopBits) -> u8 {
+    match stop_bits {
+        StopBits::One => 1,
+        StopBits::Two => 2,
     }
 }
 
@@ -154,6 +228,10 @@ pub struct SerialTransport {
 impl SerialTransport {
     /// Opens and configures the port.
     pub fn open(options: SerialOptions) -> io::Result<SerialTransport> {
+        // A format the drive's map does not list is refused before the port is touched.
+        options
+            .check_format()
+            .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e.to_string()))?;
         let builder = serialport::new(&options.path, options.baud)
             .data_bits(DataBits::Eight)
             .parity(options.parity)
@@ -379,5 +457,109 @@ mod tests {
         assert_eq!(o.frame_gap(), Duration::from_millis(10));
         let o = SerialOptions::new("/dev/null", 1200).with_profile(&p);
         assert_eq!(o.frame_gap(), frame_gap(3.5, 1200));
+    }
+
+    /// A drive whose map lists the formats a parameter selects (the ACN's CM.04: 8N1, 8N2,
+    /// 8E1, 8O1), and one whose only format without parity has 2 stop bits.
+    fn acn() -> Profile {
+        use crate::profile::{Parity as P, SerialFormat, SerialFormats};
+        const fn f(code: u16, parity: P, stop_bits: u8) -> SerialFormat {
+            SerialFormat {
+                code,
+                data_bits: 8,
+                parity,
+                stop_bits,
+            }
+        }
+        static FORMATS: [SerialFormat; 4] = [
+            f(0, P::None, 1),
+            f(1, P::None, 2),
+            f(2, P::Even, 1),
+            f(3, P::Odd, 1),
+        ];
+        Profile {
+            drive_id: "automationdirect-acn",
+            serial_formats: Some(SerialFormats {
+                selected_by: "CM.04",
+                formats: &FORMATS,
+                source: "004_c5cbf92472673495.txt:262",
+            }),
+            ..Profile::GENERIC
+        }
+    }
+
+    #[test]
+    fn a_format_the_map_does_not_list_is_refused() {
+        let p = acn();
+        let e = SerialOptions::new("/dev/null", 9600)
+            .line(&p, Parity::Even, Some(StopBits::Two))
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "automationdirect-acn's serial line offers only the formats its map lists (CM.04: 0 = 8N1, 1 = 8N2, 2 = 8E1, 3 = 8O1); 8E2 is not one of them (`004_c5cbf92472673495.txt:262`)"
+        );
+        // Set by hand past `line`: `open` refuses it before touching the port.
+        let o = SerialOptions::new("/nonexistent/tty", 9600)
+            .with_profile(&p)
+            .parity(Parity::Odd)
+            .stop_bits(StopBits::Two);
+        let e = SerialTransport::open(o).err().expect("refused");
+        assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
+        assert!(e.to_string().contains("8O2 is not one of them"), "{e}");
+        // Listed formats pass; even parity takes its only stop bits, none keeps 1 or 2.
+        let o = SerialOptions::new("/dev/null", 9600)
+            .line(&p, Parity::Even, None)
+            .unwrap();
+        assert_eq!((o.parity, o.stop_bits), (Parity::Even, StopBits::One));
+        assert!(o.check_format().is_ok());
+        for stop in [StopBits::One, StopBits::Two] {
+            let o = SerialOptions::new("/dev/null", 9600)
+                .line(&p, Parity::None, Some(stop))
+                .unwrap();
+            assert_eq!(o.stop_bits, stop);
+        }
+        // A profile without formats takes any line.
+        let o = SerialOptions::new("/dev/null", 9600)
+            .line(&Profile::GENERIC, Parity::Even, Some(StopBits::Two))
+            .unwrap();
+        assert!(o.check_format().is_ok());
+    }
+
+    #[test]
+    fn the_stop_bits_of_a_parity_with_one_format_are_the_maps() {
+        use crate::profile::{Parity as P, SerialFormat, SerialFormats};
+        // 8N2 is the only format without parity (as on a drive with 11-bit characters).
+        static FORMATS: [SerialFormat; 2] = [
+            SerialFormat {
+                code: 0,
+                data_bits: 8,
+                parity: P::None,
+                stop_bits: 2,
+            },
+            SerialFormat {
+                code: 1,
+                data_bits: 8,
+                parity: P::Even,
+                stop_bits: 1,
+            },
+        ];
+        let p = Profile {
+            serial_formats: Some(SerialFormats {
+                selected_by: "P-10",
+                formats: &FORMATS,
+                source: "manual.txt:1",
+            }),
+            ..Profile::GENERIC
+        };
+        let o = SerialOptions::new("/dev/null", 9600)
+            .line(&p, Parity::None, None)
+            .unwrap();
+        assert_eq!(o.stop_bits, StopBits::Two);
+        let c = SerialConfig::for_profile(&p, 9600, crate::bus_time::Parity::None, None).unwrap();
+        assert_eq!((c.stop_bits, c.bits_per_char()), (2, 11));
+        assert!(matches!(
+            SerialConfig::for_profile(&p, 9600, crate::bus_time::Parity::Odd, None),
+            Err(Refusal::SerialFormat(_))
+        ));
     }
 }

@@ -19,10 +19,7 @@ pub static V7: Profile = Profile {
     max_write: 16,
     slave_min: 1,
     slave_max: 32,
-    broadcast: Some(BroadcastInfo {
-        functions: &[0x06, 0x10],
-        addresses: &[0x0001, 0x0002],
-    }),
+    broadcast: Some(BroadcastInfo::new(&[0x06, 0x10], &[0x0001, 0x0002])),
     exceptions: &[
         ExceptionInfo {
             code: 0x01,
@@ -65,6 +62,7 @@ pub static V7: Profile = Profile {
         response_delay_param: Some("n156"),
         ..Timing::MODBUS
     },
+    serial_formats: None,
     eeprom_write_endurance: Some(100_000),
     writes: &[],
 };
@@ -101,6 +99,7 @@ pub static ACN: Profile = Profile {
         response_delay_param: Some("CM.05"),
         ..Timing::MODBUS
     },
+    serial_formats: None,
     eeprom_write_endurance: None,
     writes: &[],
 };
