@@ -21,7 +21,9 @@ mod limits_consistent;
 mod manuals_declared;
 mod numbers_finite;
 mod protocol_valid;
+mod read_values_valid;
 mod references_resolve;
+mod repeat_needs_change_valid;
 mod roles_valid;
 mod value_kind_single;
 
@@ -76,6 +78,8 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     access_consistent::check(drive, &mut out);
     protocol_valid::check(drive, &mut out);
     roles_valid::check(drive, &mut out);
+    repeat_needs_change_valid::check(drive, &mut out);
+    read_values_valid::check(drive, &mut out);
     numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);
     out
