@@ -845,7 +845,8 @@ macro_rules! client_methods {
         raw: u16,
     ) -> Result<(), Error> {
         if raw != between {
-            gate::check(self.core.profile, self.core.kind, slave, WriteTarget::Rule(rule), address, [raw])?;
+            let target = WriteTarget::Rule(rule);
+            crate::gate::check(self.core.profile, self.core.kind, slave, target, address, [raw])?;
             self.write_rule(slave, rule, address, between) $($aw)*?;
         }
         self.write_rule(slave, rule, address, raw) $($aw)*
