@@ -717,3 +717,34 @@ fn a_password_is_written_after_the_intermediate_and_read_as_the_lock_state() {
     assert_ne!(code, 0);
     assert!(err.contains("is not a number"), "{err}");
 }
+
+/// `probe` checks a word read from a register with `read_values` against the read codes (0
+/// Unlock, 1 Lock), not against what a write would encode.
+#[test]
+fn probe_checks_a_read_meaning_against_its_read_codes() {
+    let d = Drive::start("automationdirect-acn", Framing::Tcp, |s| {
+        s.set_holding(0x03E7, 1); // hide parameter mode: Lock
+        s.set_holding(0x03E8, 244); // lock parameter mode: not a read code
+    });
+    let (code, out, err) = d.run("probe", "automationdirect-acn", &["--format", "json"]);
+    assert!(code == 0 || code == 1, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&out).expect("JSON report");
+    let found = |id: &str| {
+        report["disagreements"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["register"] == id)
+            .cloned()
+    };
+    assert_eq!(found("hide_parameter_mode"), None, "1 is Lock");
+    let lock = found("lock_parameter_mode").expect("244 is no read code");
+    assert_eq!(lock["kind"], "unlisted_code");
+    assert!(
+        lock["detail"]
+            .as_str()
+            .unwrap()
+            .contains("read_values do not list (listed: 0, 1)"),
+        "{lock}"
+    );
+}
