@@ -861,3 +861,84 @@ fn pairs_and_field_selected_decimals_of_another_vendor_at_slave_254() {
     assert!(err.contains("out of range -1000000 ..= 1000000"), "{err}");
     assert_eq!(d.requests(), before);
 }
+
+/// ACN 0h03E8 (Lock parameter mode): `write` takes a number, the password, and writes the
+/// map's intermediate 0 first, since the drive executes only a changed value ("244 > 0 > 244",
+/// `004_c5cbf92472673495.txt:1113`-`:1115`); `read` shows what a read means (0 Unlock, 1 Lock),
+/// not the number written.
+#[test]
+fn a_password_is_written_after_the_intermediate_and_read_as_the_lock_state() {
+    let d = Drive::start("automationdirect-acn", Framing::Tcp, |s| {
+        s.set_holding(0x03E8, 1); // locked (TCP: PDU address = communication address)
+    });
+    let (code, out, err) = d.run(
+        "write",
+        "automationdirect-acn",
+        &["lock_parameter_mode=244"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(d.writes(), vec![(0x03E8, 0), (0x03E8, 244)]);
+    assert!(
+        out.contains("wrote lock_parameter_mode = 244 (00F4h) at 03E8h after 0 (0000h)"),
+        "{out}"
+    );
+    // The same password again is executed again: 0 then 244 once more.
+    let (code, _, err) = d.run(
+        "write",
+        "automationdirect-acn",
+        &["lock_parameter_mode=244"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(d.writes().len(), 4);
+    // Writing the intermediate itself is one write.
+    let (code, _, err) = d.run("write", "automationdirect-acn", &["lock_parameter_mode=0"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(d.writes()[4..], [(0x03E8, 0)]);
+    // A read gives the read meaning of the word the drive holds.
+    d.slave.lock().unwrap().set_holding(0x03E8, 1);
+    let (code, out, err) = d.run("read", "automationdirect-acn", &["lock_parameter_mode"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        row(&out, "lock_parameter_mode").contains("1: Lock"),
+        "{out}"
+    );
+    // A password is a number: the read meaning is not a write value.
+    let (code, _, err) = d.run(
+        "write",
+        "automationdirect-acn",
+        &["lock_parameter_mode=lock"],
+    );
+    assert_ne!(code, 0);
+    assert!(err.contains("is not a number"), "{err}");
+}
+
+/// `probe` checks a word read from a register with `read_values` against the read codes (0
+/// Unlock, 1 Lock), not against what a write would encode.
+#[test]
+fn probe_checks_a_read_meaning_against_its_read_codes() {
+    let d = Drive::start("automationdirect-acn", Framing::Tcp, |s| {
+        s.set_holding(0x03E7, 1); // hide parameter mode: Lock
+        s.set_holding(0x03E8, 244); // lock parameter mode: not a read code
+    });
+    let (code, out, err) = d.run("probe", "automationdirect-acn", &["--format", "json"]);
+    assert!(code == 0 || code == 1, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&out).expect("JSON report");
+    let found = |id: &str| {
+        report["disagreements"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["register"] == id)
+            .cloned()
+    };
+    assert_eq!(found("hide_parameter_mode"), None, "1 is Lock");
+    let lock = found("lock_parameter_mode").expect("244 is no read code");
+    assert_eq!(lock["kind"], "unlisted_code");
+    assert!(
+        lock["detail"]
+            .as_str()
+            .unwrap()
+            .contains("read_values do not list (listed: 0, 1)"),
+        "{lock}"
+    );
+}

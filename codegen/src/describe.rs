@@ -20,6 +20,26 @@ use crate::model::{
 };
 use crate::names::field_span;
 
+/// A register whose drive executes a written value only when it differs from the previous
+/// write: `a value is executed only when it differs from the previous write, so 0 is written
+/// before any other value (`004_...:1115`)`.
+pub fn repeat_needs_change(rule: &crate::model::RepeatNeedsChange) -> String {
+    format!(
+        "a value is executed only when it differs from the previous write, so {} is written before any other value (`{}`)",
+        num(rule.between),
+        rule.source
+    )
+}
+
+/// What a word read means when it differs from what a write means: `0 Unlock, 1 Lock`.
+pub fn read_values(values: &[crate::model::EnumValue]) -> String {
+    values
+        .iter()
+        .map(|v| format!("{} {}", v.value, v.name))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// A number as the manual prints it (`6000`, `0.1`, `-100`).
 pub fn num(v: f64) -> String {
     format!("{v}")

@@ -144,6 +144,12 @@ fn register(drive: &Drive, r: &Register) -> Value {
         "by_variant": by_variant,
         "fields": fields,
         "values": values(&d.values),
+        "read_values": values(&d.read_values),
+        "repeat_needs_change": r.repeat_needs_change.as_ref().map(|(rule, _)| json!({
+            "between": rule.between,
+            "between_raw": drive.register_plan(r).repeat_needs_change.map(|x| x.between),
+            "source": rule.source,
+        })),
         "source": d.source,
         "group": group.id,
         "table": match r.table { model::ModbusTable::Holding => "holding", model::ModbusTable::Input => "input" },

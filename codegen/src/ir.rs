@@ -72,6 +72,8 @@ pub struct Register {
     pub group: usize,
     /// Where the register (or its block template) is written.
     pub path: Path,
+    /// The register's `repeat_needs_change`, else its group's, with where it is written.
+    pub repeat_needs_change: Option<(model::RepeatNeedsChange, Path)>,
 }
 
 /// What a register's word means.
@@ -760,6 +762,11 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                     transports: def.transports.clone().or_else(|| g.transports.clone()),
                     broadcast: g.broadcast,
                     group: gi,
+                    repeat_needs_change: match (&def.repeat_needs_change, &g.repeat_needs_change) {
+                        (Some(x), _) => Some((x.clone(), path.key("repeat_needs_change"))),
+                        (None, Some(x)) => Some((x.clone(), gpath.key("repeat_needs_change"))),
+                        (None, None) => None,
+                    },
                     path: path.clone(),
                     def,
                 });

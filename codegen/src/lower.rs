@@ -14,7 +14,7 @@
 
 use drivemap_core::plan::{
     Case, CaseScale, Condition, Conversion, Field, Label, Move, Ranges, RegisterPlan, Relative,
-    Setting, VariantOption,
+    RepeatNeedsChange, Setting, VariantOption,
 };
 use drivemap_core::profile::{
     AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, SerialFormats,
@@ -524,7 +524,24 @@ impl Lowering<'_> {
             },
             envelope: raw(w.raw),
             also_at: leak(w.also_at),
+            repeat_needs_change: r.repeat_needs_change.as_ref().map(|(rule, _)| {
+                RepeatNeedsChange {
+                    between: between_word(r, rule.between),
+                    source: text(&rule.source),
+                }
+            }),
+            read_values: labels(&d.read_values),
         }
+    }
+}
+
+/// The word of a `repeat_needs_change.between` value (validated legal): the value in raw
+/// increments of a fixed scale, two's complement when signed; 0 where the scale depends on a
+/// setting (validation admits only 0 there).
+fn between_word(r: &Register, value: f64) -> u32 {
+    match r.factor().and_then(|f| crate::numbers::raw_of(value, f)) {
+        Some(raw) => r.width().from_int(raw as i64),
+        None => 0,
     }
 }
 

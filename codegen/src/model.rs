@@ -491,9 +491,26 @@ pub struct Group {
     /// Broadcast registers: written to slave 0 only, in their own layout and address space.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub broadcast: bool,
+    /// Default of the group's registers: the drive executes a written value only when it
+    /// differs from the previous write.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeat_needs_change: Option<RepeatNeedsChange>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
     pub registers: Vec<Register>,
+}
+
+/// The drive executes a written value only when it differs from the previous write ("if you
+/// want to enter 244 twice, enter it in the following order: 244 > 0 > 244"): writers write
+/// `between` first, then the value.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RepeatNeedsChange {
+    /// The value written in between, in the register's engineering units (a code for an
+    /// enumeration, the word for a plain word); it must be a value the register accepts.
+    pub between: f64,
+    /// `file:line` of the manual's rule.
+    pub source: String,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
@@ -573,6 +590,14 @@ pub struct Register {
     /// Bit fields and multi-bit fields. Bits no field covers are reserved and written as 0.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub fields: Vec<Field>,
+    /// What a word read from the register means, when it differs from what a write means
+    /// (ACN 0h03E7: a password is written, 0 Unlock / 1 Lock is read). The register's own
+    /// description (a plain word, `min`/`max`) is its write side.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub read_values: Vec<EnumValue>,
+    /// The drive executes a written value only when it differs from the previous write.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeat_needs_change: Option<RepeatNeedsChange>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub write_restriction: Option<WriteRestriction>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

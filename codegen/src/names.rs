@@ -15,6 +15,12 @@ pub fn value_enum(r: &Register) -> String {
     format!("{}Value", pascal_case(r.id()))
 }
 
+/// The enumeration of what a register's word means when read (`read_values`):
+/// `hide_parameter_mode` → `HideParameterModeRead`.
+pub fn read_enum(r: &Register) -> String {
+    format!("{}Read", pascal_case(r.id()))
+}
+
 /// The bit-field struct of a register: `inverter_status` → `InverterStatusBits`.
 pub fn bits_type(r: &Register) -> String {
     format!("{}Bits", pascal_case(r.id()))

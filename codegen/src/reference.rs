@@ -503,12 +503,21 @@ fn access_cell(drive: &Drive, r: &Register) -> String {
     if r.broadcast {
         parts.push("broadcast only".into());
     }
+    if let Some((rule, _)) = &r.repeat_needs_change {
+        parts.push(format!(
+            "repeat needs a change: {} between",
+            describe::num(rule.between)
+        ));
+    }
     join_cells(&parts)
 }
 
 fn scale_cell(drive: &Drive, r: &Register) -> String {
     let unit = r.def.unit.as_deref().unwrap_or("");
     match r.kind() {
+        ValueKind::Word if !r.def.read_values.is_empty() => {
+            "written as a word, read as codes (below)".into()
+        }
         ValueKind::Word => "—".into(),
         ValueKind::UnitQuantity => cell(&describe::scale(drive, &Scale::Factor(1.0), unit)),
         ValueKind::Quantity(Scale::Selected(sel)) => {
@@ -698,6 +707,32 @@ fn details(out: &mut String, drive: &Drive, r: &Register) {
             out.push('\n');
         }
         _ => {}
+    }
+    let shown = matches!(
+        r.kind(),
+        ValueKind::Enum(_) | ValueKind::Bits(_) | ValueKind::Quantity(Scale::Selected(_))
+    );
+    let mut more = String::new();
+    if !d.read_values.is_empty() {
+        let _ = writeln!(
+            more,
+            "Read and written with different meanings: a write takes the word (range in the \
+             table above); a read means:\n"
+        );
+        enum_rows(&mut more, &d.read_values);
+    }
+    if let Some((rule, _)) = &r.repeat_needs_change {
+        let _ = writeln!(
+            more,
+            "Repeat needs a change: {}. `drivemap write` and `Client::write` do so.\n",
+            describe::repeat_needs_change(rule)
+        );
+    }
+    if !more.is_empty() {
+        if !shown {
+            let _ = writeln!(out, "{title}\n");
+        }
+        out.push_str(&more);
     }
 }
 

@@ -25,7 +25,8 @@ pub use plan::{RegisterPlan, SettingsView, Value};
 pub use profile::Profile;
 pub use register::{
     Access, BitRegister, Bits, Code, DrivePlan, DriveSettings, Enumeration, ReadOnly, ReadWrite,
-    Readable, Reg, Register, RegisterInfo, Table, Writable, WriteOnly, WriteRestriction,
+    ReadWriteAs, Readable, Reg, Register, RegisterInfo, Table, Writable, WriteOnly,
+    WriteRestriction,
 };
 pub use roles::{Role, Roles};
 pub use rule::{Broadcast, Transports, WriteRule};

@@ -34,6 +34,24 @@ pub struct RegisterPlan {
     pub envelope: RawRange,
     /// Every other address it may occupy (the targets of [`RegisterPlan::moves`]).
     pub also_at: &'static [u16],
+    /// The drive executes a written value only when it differs from the previous write (ACN
+    /// memory-control registers): writers put [`RepeatNeedsChange::between`] first.
+    pub repeat_needs_change: Option<RepeatNeedsChange>,
+    /// What a word read from it means when that differs from what a write means (ACN 0h03E7:
+    /// a password is written, 0 Unlock / 1 Lock is read); empty for other registers. The
+    /// write side is [`RegisterPlan::conversion`].
+    pub read_values: &'static [Label],
+}
+
+/// A register whose drive executes a written value only when it differs from the previous
+/// write ("if you want to enter 244 twice, enter it in the following order: 244 > 0 > 244").
+/// Writers write `between` first, then the value, so a repeated command is executed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RepeatNeedsChange {
+    /// The raw value written first; the map checks it is a legal value of the register.
+    pub between: u32,
+    /// `file:line` of the manual's rule.
+    pub source: &'static str,
 }
 
 impl core::ops::Deref for RegisterPlan {
@@ -296,6 +314,8 @@ impl RegisterPlan {
             restriction: WriteRestriction::None,
             envelope,
             also_at: &[],
+            repeat_needs_change: None,
+            read_values: &[],
         }
     }
 
@@ -323,6 +343,34 @@ impl RegisterPlan {
         RegisterPlan {
             restriction,
             ..self
+        }
+    }
+
+    /// The plan of a register whose drive executes a value only when it differs from the
+    /// previous write.
+    pub const fn repeat_needs_change(self, rule: RepeatNeedsChange) -> RegisterPlan {
+        RegisterPlan {
+            repeat_needs_change: Some(rule),
+            ..self
+        }
+    }
+
+    /// The plan of a register whose words read mean `read_values`, while writes follow its
+    /// conversion.
+    pub const fn read_as(self, read_values: &'static [Label]) -> RegisterPlan {
+        RegisterPlan {
+            read_values,
+            ..self
+        }
+    }
+
+    /// The listed meaning of a word read from the register: by [`RegisterPlan::read_values`]
+    /// when it has them, else by its conversion ([`RegisterPlan::label`]).
+    pub fn read_label(&self, code: u16) -> Option<&'static Label> {
+        if self.read_values.is_empty() {
+            self.label(code)
+        } else {
+            self.read_values.iter().find(|v| v.code == code)
         }
     }
 

@@ -8,7 +8,7 @@
 
 use core::marker::PhantomData;
 
-use crate::plan::{Label, RegisterPlan, SettingsView, Value};
+use crate::plan::{Label, RegisterPlan, RepeatNeedsChange, SettingsView, Value};
 use crate::profile::TransportKind;
 use crate::rule::WriteRule;
 use crate::scale::ValueError;
@@ -93,6 +93,11 @@ pub trait Readable: Register {}
     label = "read-only register"
 )]
 pub trait Writable: Register {
+    /// What a write takes: [`Register::Value`] for most registers; the write form (a plain
+    /// word) for a register whose read meaning differs ([`ReadWriteAs`]), so the value read
+    /// cannot be written back by mistake.
+    type Input;
+
     /// When the drive accepts a write (exception 22h otherwise). Informational: the client
     /// cannot know the drive's state; the simulator enforces it.
     const WRITE_RESTRICTION: WriteRestriction = WriteRestriction::None;
@@ -101,11 +106,16 @@ pub trait Writable: Register {
     /// addresses, raw range, reserved bits. Every write passes the runtime's `gate::check` with it.
     const RULE: WriteRule;
 
+    /// Set when the drive executes a written value only if it differs from the previous write:
+    /// the client's `write` then writes [`RepeatNeedsChange::between`] first, so a repeated
+    /// command is executed, not silently ignored.
+    const REPEAT_NEEDS_CHANGE: Option<RepeatNeedsChange> = None;
+
     /// Encodes a value for the wire, checking it against the register's range first. A value
     /// that is out of range, not finite, or an unknown enumeration code is refused here and never
     /// reaches the wire. A pair's raw value goes out as its words in the map's order
     /// ([`Width::split`]).
-    fn encode(value: &Self::Value, settings: &Self::Settings) -> Result<u32, ValueError>;
+    fn encode(value: &Self::Input, settings: &Self::Settings) -> Result<u32, ValueError>;
 }
 
 /// When a drive accepts writes to a register.
@@ -286,6 +296,10 @@ pub struct WriteOnly;
 /// Access marker of a register the manual lets you read and write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct ReadWrite;
+/// Access marker of a register read and written with different meanings (ACN 0h03E7: a
+/// password is written, 0 Unlock / 1 Lock is read): reads give the register's value type (the
+/// read enumeration), writes take `W` (the write form, a plain word).
+pub struct ReadWriteAs<W>(PhantomData<fn() -> W>);
 
 /// The register at index `I` of drive `D`'s plan, with value type `V` and access `A`.
 ///
@@ -349,18 +363,35 @@ impl<D: DrivePlan, V: Value, A, const I: usize> Register for Reg<D, V, A, I> {
 impl<D: DrivePlan, V: Value, const I: usize> Readable for Reg<D, V, ReadOnly, I> {}
 impl<D: DrivePlan, V: Value, const I: usize> Readable for Reg<D, V, ReadWrite, I> {}
 
+impl<D: DrivePlan, V: Value, W: Value, const I: usize> Readable for Reg<D, V, ReadWriteAs<W>, I> {}
+
 impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, WriteOnly, I> {
+    type Input = V;
     const WRITE_RESTRICTION: WriteRestriction = Self::PLAN.restriction;
     const RULE: WriteRule = Self::PLAN.write_rule();
+    const REPEAT_NEEDS_CHANGE: Option<RepeatNeedsChange> = Self::PLAN.repeat_needs_change;
     fn encode(value: &V, settings: &D::Settings) -> Result<u32, ValueError> {
         value.encode(Self::PLAN, settings)
     }
 }
 
 impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, ReadWrite, I> {
+    type Input = V;
     const WRITE_RESTRICTION: WriteRestriction = Self::PLAN.restriction;
     const RULE: WriteRule = Self::PLAN.write_rule();
+    const REPEAT_NEEDS_CHANGE: Option<RepeatNeedsChange> = Self::PLAN.repeat_needs_change;
     fn encode(value: &V, settings: &D::Settings) -> Result<u32, ValueError> {
+        value.encode(Self::PLAN, settings)
+    }
+}
+
+/// Writes take the write form `W`, encoded by the register's conversion; reads decode to `V`.
+impl<D: DrivePlan, V: Value, W: Value, const I: usize> Writable for Reg<D, V, ReadWriteAs<W>, I> {
+    type Input = W;
+    const WRITE_RESTRICTION: WriteRestriction = Self::PLAN.restriction;
+    const RULE: WriteRule = Self::PLAN.write_rule();
+    const REPEAT_NEEDS_CHANGE: Option<RepeatNeedsChange> = Self::PLAN.repeat_needs_change;
+    fn encode(value: &W, settings: &D::Settings) -> Result<u32, ValueError> {
         value.encode(Self::PLAN, settings)
     }
 }

@@ -132,8 +132,32 @@ fn field_values(fields: &[Field], raw: u16) -> Vec<FieldValue> {
 }
 
 /// Decodes a raw value read from the drive (its word, or a 32-bit pair's words joined in the
-/// map's order: `plan.info.width.join(words)`), by the register's plan.
+/// map's order: `plan.info.width.join(words)`), by the register's plan. A register whose read
+/// meaning differs from its write form (`read_values`, [`RegisterPlan::read_values`]) gives its
+/// read code and meaning; [`decode_written`] gives the write form of a value.
 pub fn decode(
+    drive: &Drive,
+    r: &Register,
+    raw: u32,
+    settings: &LiveSettings,
+) -> Result<Value, ValueError> {
+    let plan = drive.register_plan(r);
+    if !plan.read_values.is_empty() {
+        // Read meanings are codes of one word (validation refuses them on a pair).
+        let raw = raw as u16;
+        let label = plan.read_label(raw);
+        return Ok(Value::Code {
+            code: raw,
+            id: label.map(|l| l.id.to_owned()),
+            name: label.map(|l| l.name.to_owned()),
+        });
+    }
+    decode_written(drive, r, raw, settings)
+}
+
+/// Decodes a word as a write means it (the register's conversion): what `drivemap write`
+/// reports it wrote. The same as [`decode`] except for registers with `read_values`.
+pub fn decode_written(
     drive: &Drive,
     r: &Register,
     raw: u32,

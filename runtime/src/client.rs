@@ -824,20 +824,56 @@ macro_rules! client_methods {
     }
 
     /// Writes a typed value. The value is range-checked first; nothing out of range is sent.
+    ///
+    /// A register whose drive executes a value only when it differs from the previous write
+    /// ([`Writable::REPEAT_NEEDS_CHANGE`], the ACN's password registers) is written twice: its
+    /// intermediate value, then `value` ([`write_changed`](Self::write_changed)). The client
+    /// cannot know what was written last (another master, a power cycle), so it always changes
+    /// the word first: otherwise writing the same command twice would be silently ignored.
     pub $($asy)* fn write<R: Writable>(
         &mut self,
         slave: u8,
-        value: &R::Value,
+        value: &R::Input,
         settings: &R::Settings,
     ) -> Result<(), Error> {
         let raw = R::encode(value, settings)?;
         let address = R::address(settings, self.core.kind);
-        self.write_rule(slave, &R::RULE, address, raw) $($aw)*
+        match R::REPEAT_NEEDS_CHANGE {
+            Some(rule) => {
+                self.write_changed(slave, &R::RULE, address, rule.between, raw) $($aw)*
+            }
+            None => self.write_rule(slave, &R::RULE, address, raw) $($aw)*,
+        }
+    }
+
+    /// Writes `raw` to a register whose drive executes a value only when it differs from the
+    /// previous write: `between` first (unless `raw` is `between` itself, which the drive then
+    /// takes as it takes any other value), then `raw`, each through the write gate with `rule`.
+    /// The manual's example: "if you want to enter 244 twice, enter it in the following order:
+    /// 244 > 0 > 244" (`004_c5cbf92472673495.txt:1113`). Nothing is sent when the gate refuses
+    /// either word.
+    pub $($asy)* fn write_changed(
+        &mut self,
+        slave: u8,
+        rule: &WriteRule,
+        address: u16,
+        between: u32,
+        raw: u32,
+    ) -> Result<(), Error> {
+        if raw != between {
+            let target = WriteTarget::Rule(rule);
+            let words = rule.width.split(raw);
+            let words = words[..usize::from(rule.width.count())].iter().copied();
+            crate::gate::check(self.core.profile, self.core.kind, slave, target, address, words)?;
+            self.write_rule(slave, rule, address, between) $($aw)*?;
+        }
+        self.write_rule(slave, rule, address, raw) $($aw)*
     }
 
     /// Read-modify-write: reads the register, lets `change` edit the typed value, writes it back.
-    /// Returns the value written.
-    pub $($asy)* fn update<R: Readable + Writable>(
+    /// Returns the value written. Not for a register whose read meaning differs from its write
+    /// form ([`ReadWriteAs`](crate::register::ReadWriteAs)): what it reads cannot be written.
+    pub $($asy)* fn update<R: Readable + Writable<Input = <R as crate::register::Register>::Value>>(
         &mut self,
         slave: u8,
         settings: &R::Settings,
@@ -860,7 +896,7 @@ macro_rules! client_methods {
         clear: u16,
     ) -> Result<R::Value, Error>
     where
-        R: BitRegister + Readable + Writable,
+        R: BitRegister + Readable + Writable<Input = <R as crate::register::Register>::Value>,
         R::Value: Bits,
     {
         let reserved = (set | clear) & !R::FIELD_MASK;

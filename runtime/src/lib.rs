@@ -59,8 +59,8 @@ pub use error::{Error, Refusal};
 pub use profile::Profile;
 pub use register::{
     Access, BitRegister, Bits, Code, DrivePlan, DriveSettings, Enumeration, ReadOnly, ReadWrite,
-    Readable, Reg, Register, RegisterInfo, RegisterPlan, SettingsView, Table, Value, Width,
-    WordOrder, Writable, WriteOnly, WriteRestriction,
+    ReadWriteAs, Readable, Reg, Register, RegisterInfo, RegisterPlan, SettingsView, Table, Value,
+    Width, WordOrder, Writable, WriteOnly, WriteRestriction,
 };
 pub use scale::ValueError;
 

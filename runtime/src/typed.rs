@@ -112,7 +112,10 @@ macro_rules! register_set {
             }
         }
 
-        impl<$first: Writable, $($rest: Writable<Settings = $first::Settings>),*> WriteSet
+        impl<
+            $first: Writable<Input = <$first as Register>::Value>,
+            $($rest: Writable<Settings = $first::Settings, Input = <$rest as Register>::Value>),*
+        > WriteSet
             for ($first, $($rest,)*)
         {
             #[allow(unused_mut)]

@@ -351,7 +351,13 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         let r = self.row(row);
         let address = r.address_for(&self.settings, self.kind);
         let rule = r.write_rule();
-        self.client.write_rule(self.slave, &rule, address, raw)
+        match r.repeat_needs_change {
+            // A role register whose drive executes only a changed value: its intermediate first.
+            Some(x) => self
+                .client
+                .write_changed(self.slave, &rule, address, x.between, raw),
+            None => self.client.write_rule(self.slave, &rule, address, raw),
+        }
     }
 
     /// Reads the number role `role` in its unit.

@@ -87,6 +87,7 @@ register!(
     |raw, _| Ok(Command::from_bits(raw))
 );
 impl Writable for OperationCommand {
+    type Input = Command;
     const RULE: WriteRule = WriteRule::rw("operation_command", 0x0001, 0, 65535).reserved(0xF800);
     fn encode(value: &Command, _: &Settings) -> Result<u32, ValueError> {
         Ok(u32::from(value.bits() & 0x07FF))
@@ -110,6 +111,7 @@ register!(
     }
 );
 impl Writable for FrequencyReference {
+    type Input = f64;
     const RULE: WriteRule = WriteRule::rw("frequency_reference", 0x0002, 0, 40000);
     fn encode(value: &f64, s: &Settings) -> Result<u32, ValueError> {
         let scale = frequency_scale(Self::ID, s)?;

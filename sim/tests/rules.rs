@@ -732,3 +732,54 @@ fn garbage_never_panics() {
     );
     assert_eq!(h.reply, None);
 }
+
+/// ACN 0h03E8 Lock parameter mode: "When the same parameter value is entered continuously, the
+/// parameter is executed just once" (004_c5cbf92472673495.txt:1111-1112). The simulator counts a
+/// write equal to the previous one as not executed; reads keep the lock state (0 Unlock / 1 Lock,
+/// :1076-1080), which a password write does not change here: the simulator has no password.
+#[test]
+fn acn_memory_control_executes_only_a_changed_value_and_reads_the_lock_state() {
+    let (mut sim, _clock) = start("automationdirect-acn", SimOptions::new());
+    // RTU: communication address 0x03E8 is PDU 0x03E7.
+    let lock = 0x03E7;
+    assert_eq!(sim.executed("lock_parameter_mode").unwrap(), 0);
+    write(&mut sim, lock, &[244]).unwrap();
+    write(&mut sim, lock, &[244]).unwrap();
+    assert_eq!(
+        sim.executed("lock_parameter_mode").unwrap(),
+        1,
+        "a repeat is ignored"
+    );
+    write(&mut sim, lock, &[0]).unwrap();
+    write(&mut sim, lock, &[244]).unwrap();
+    assert_eq!(
+        sim.executed("lock_parameter_mode").unwrap(),
+        3,
+        "244 > 0 > 244"
+    );
+    assert_eq!(sim.last_written("lock_parameter_mode").unwrap(), Some(244));
+    // A read is the lock state, not the password written.
+    assert_eq!(read(&mut sim, lock, 1), Ok(vec![0]));
+    match sim.value("lock_parameter_mode").unwrap() {
+        drivemap_live::Value::Code { code, name, .. } => {
+            assert_eq!((code, name.as_deref()), (0, Some("Unlock")));
+        }
+        other => panic!("a read gives the read meaning: {other:?}"),
+    }
+    sim.set_raw("lock_parameter_mode", 1).unwrap();
+    assert_eq!(read(&mut sim, lock, 1), Ok(vec![1]));
+    // A register without the rule executes every write (0x03E9 Easy start on, PDU 0x03E8).
+    write(&mut sim, 0x03E8, &[1]).unwrap();
+    write(&mut sim, 0x03E8, &[1]).unwrap();
+    assert_eq!(sim.executed("easy_start_on").unwrap(), 2);
+    // 0x03E0 carries the rule too: 1 written twice is one execution, and the save command
+    // counts only the 0 -> 1 sequence.
+    write(&mut sim, 0x03DF, &[1]).unwrap();
+    write(&mut sim, 0x03DF, &[1]).unwrap();
+    assert_eq!(sim.executed("save_parameters").unwrap(), 1);
+    assert_eq!(sim.command_count("save_parameters"), Some(0));
+    write(&mut sim, 0x03DF, &[0]).unwrap();
+    write(&mut sim, 0x03DF, &[1]).unwrap();
+    assert_eq!(sim.executed("save_parameters").unwrap(), 3);
+    assert_eq!(sim.command_count("save_parameters"), Some(1));
+}

@@ -207,3 +207,69 @@ fn operation_command_examples() {
     assert_eq!(acn::OperationCommand::encode(&forward, &s), Ok(0x0003));
     assert_eq!(acn::OperationCommand::encode(&reverse, &s), Ok(0x0001));
 }
+
+/// 0h03E8 Lock parameter mode through the generated module: a write takes the password (a
+/// word), a read gives the read enumeration (0 Unlock, 1 Lock; 004_c5cbf92472673495.txt:1076-1080),
+/// and every write of a value other than 0 is preceded by 0, because "when the same parameter
+/// value is entered continuously, the parameter is executed just once" (:1111-1115).
+#[test]
+fn lock_parameter_mode_writes_a_password_after_zero_and_reads_the_lock_state() {
+    use drivemap_drives::runtime::plan::RepeatNeedsChange;
+    assert_eq!(
+        <acn::LockParameterMode as Writable>::REPEAT_NEEDS_CHANGE,
+        Some(RepeatNeedsChange {
+            between: 0,
+            source: "004_c5cbf92472673495.txt:1115"
+        })
+    );
+    let s = settings();
+    assert_eq!(acn::LockParameterMode::encode(&244u16, &s), Ok(244));
+    assert_eq!(
+        acn::LockParameterMode::decode(1, &s),
+        Ok(acn::LockParameterModeRead::Lock)
+    );
+    assert_eq!(
+        acn::HideParameterMode::decode(0, &s),
+        Ok(acn::HideParameterModeRead::Unlock)
+    );
+    let link = FaultyLink::new(TransportKind::Rtu, SimulatedSlave::new(1, &acn::PROFILE));
+    let mut client = Client::new(link, &acn::PROFILE);
+    client.write::<acn::LockParameterMode>(1, &244, &s).unwrap();
+    client.write::<acn::LockParameterMode>(1, &244, &s).unwrap();
+    // RTU: 0x03E8 is PDU 0x03E7. The intermediate goes first each time, so the drive sees a
+    // change and executes the password twice.
+    assert_eq!(
+        client.transport().slave.writes,
+        vec![(0x03E7, 0), (0x03E7, 244), (0x03E7, 0), (0x03E7, 244)]
+    );
+    // The intermediate value itself is written once.
+    client.write::<acn::LockParameterMode>(1, &0, &s).unwrap();
+    assert_eq!(client.transport().slave.writes.len(), 5);
+    // A read means the lock state, whatever was written.
+    client.transport().slave.set_holding(0x03E7, 1);
+    let state: acn::LockParameterModeRead = client.read::<acn::LockParameterMode>(1, &s).unwrap();
+    assert_eq!(state, acn::LockParameterModeRead::Lock);
+    assert_eq!(state.to_string(), "Lock");
+    // A register without the rule is written once.
+    client
+        .write::<acn::EasyStartOn>(1, &acn::EasyStartOnValue::Yes, &s)
+        .unwrap();
+    assert_eq!(client.transport().slave.writes[5..], [(0x03E8, 1)]);
+}
+
+/// `Client::write_changed` passes the value through the write gate before it sends the
+/// intermediate: a value the rule refuses sends nothing at all.
+#[test]
+fn a_refused_value_sends_no_intermediate() {
+    use drivemap_drives::runtime::WriteRule;
+    let link = FaultyLink::new(TransportKind::Rtu, SimulatedSlave::new(1, &acn::PROFILE));
+    let mut client = Client::new(link, &acn::PROFILE);
+    // The map's rule with a narrower raw range, as a tool interpreting another map would pass.
+    let rule = WriteRule {
+        raw: drivemap_drives::runtime::scale::RawRange { min: 0, max: 100 },
+        ..<acn::LockParameterMode as Writable>::RULE
+    };
+    let e = client.write_changed(1, &rule, 0x03E8, 0, 244).unwrap_err();
+    assert!(e.to_string().contains("244"), "{e}");
+    assert!(client.transport().slave.writes.is_empty());
+}

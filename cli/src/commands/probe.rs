@@ -307,6 +307,29 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Sessi
             )
         };
     }
+    let plan = drive.register_plan(r);
+    if !plan.read_values.is_empty() {
+        // A word read means a read code (`read_values`), not a value a write would encode.
+        if u16::try_from(raw)
+            .ok()
+            .and_then(|code| plan.read_label(code))
+            .is_some()
+        {
+            return Check::Agrees;
+        }
+        let listed: Vec<String> = plan
+            .read_values
+            .iter()
+            .map(|l| l.code.to_string())
+            .collect();
+        return Check::Disagrees(
+            "unlisted_code",
+            format!(
+                "read code {raw} ({raw:04X}h), which the map's read_values do not list (listed: {})",
+                listed.join(", ")
+            ),
+        );
+    }
     let value = match codec::decode(drive, r, raw, &session.settings) {
         Ok(v) => v,
         Err(e) => return Check::Unchecked(crate::live::session::value_error(drive, &e)),

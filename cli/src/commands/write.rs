@@ -186,11 +186,25 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
         writes.push((*r, rule, address, raw));
     }
     for (r, rule, address, raw) in writes {
-        let shown = session
-            .decode(r, raw)
+        let shown = codec::decode_written(drive, r, raw, &session.settings)
             .map(|v| v.to_string())
             .unwrap_or_else(|_| format!("{raw}"));
-        match session.client.write_rule(session.slave, rule, address, raw) {
+        // A register whose drive executes only a changed value gets its intermediate value
+        // first (`Client::write_changed`, through the same gate), so writing the same value
+        // twice executes it twice.
+        let between = drive
+            .register_plan(r)
+            .repeat_needs_change
+            .map(|x| x.between);
+        let result = match between {
+            Some(between) => {
+                session
+                    .client
+                    .write_changed(session.slave, rule, address, between, raw)
+            }
+            None => session.client.write_rule(session.slave, rule, address, raw),
+        };
+        match result {
             Ok(()) => {}
             Err(drivemap_runtime::Error::Refused(e)) => return Err(refused(r, &e)),
             Err(e) => {
@@ -199,8 +213,14 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             }
         }
         let digits = 4 * usize::from(rule.width.count());
+        let first = match between {
+            Some(b) if b != raw => {
+                format!(" after {b} ({b:0digits$X}h): it executes only a changed value")
+            }
+            _ => String::new(),
+        };
         outln!(
-            "wrote {} = {shown} ({raw:0digits$X}h) at {}",
+            "wrote {} = {shown} ({raw:0digits$X}h) at {}{first}",
             describe::register(r),
             describe::address(address)
         );

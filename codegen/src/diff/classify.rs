@@ -129,6 +129,10 @@ pub enum ChangeKind {
     WriteRestrictionTightened,
     /// Writes accepted in more states.
     WriteRestrictionRelaxed,
+    /// `repeat_needs_change` added, removed, or another value written in between.
+    RepeatNeedsChangeChanged,
+    /// `read_values` (what a read means beside the write form) added, removed or changed.
+    ReadMeaningChanged,
     /// Available on fewer transports.
     TransportsNarrowed,
     /// Available on more transports.
@@ -212,6 +216,8 @@ impl ChangeKind {
         ChangeKind::AccessWidened,
         ChangeKind::WriteRestrictionTightened,
         ChangeKind::WriteRestrictionRelaxed,
+        ChangeKind::RepeatNeedsChangeChanged,
+        ChangeKind::ReadMeaningChanged,
         ChangeKind::TransportsNarrowed,
         ChangeKind::TransportsWidened,
         ChangeKind::BroadcastMembershipChanged,
@@ -282,6 +288,8 @@ impl ChangeKind {
             AccessWidened => "access widened",
             WriteRestrictionTightened => "write restriction tightened",
             WriteRestrictionRelaxed => "write restriction relaxed",
+            RepeatNeedsChangeChanged => "repeat-needs-change rule changed",
+            ReadMeaningChanged => "read meaning changed",
             TransportsNarrowed => "transports narrowed",
             TransportsWidened => "transports widened",
             BroadcastMembershipChanged => "broadcast membership changed",
@@ -388,6 +396,14 @@ pub fn classify(kind: ChangeKind) -> (Severity, &'static str) {
         AccessWidened => (C, "a new capability; existing calls unchanged"),
         WriteRestrictionTightened => (B, "writes the drive accepted may now be refused by it"),
         WriteRestrictionRelaxed => (C, "writes that were accepted still are"),
+        RepeatNeedsChangeChanged => (
+            B,
+            "a write sends another sequence of words (an intermediate value first, or no longer)",
+        ),
+        ReadMeaningChanged => (
+            B,
+            "reads decode to another type or other codes, and writes may take another type",
+        ),
         TransportsNarrowed => (B, "the register is missing on a transport it had"),
         TransportsWidened => (C, "available on more transports"),
         BroadcastMembershipChanged => (B, "slave-0 rules and address space change"),

@@ -25,6 +25,8 @@ fn register_key(kind: ChangeKind) -> Option<&'static str> {
         AccessNarrowed | AccessWidened => "access",
         WriteRestrictionTightened | WriteRestrictionRelaxed => "write_restriction",
         TransportsNarrowed | TransportsWidened => "transports",
+        RepeatNeedsChangeChanged => "repeat_needs_change",
+        ReadMeaningChanged => "read_values",
         CodeAdded | CodeRemoved | CodeRenamed | CodeReworded => "values",
         FieldAdded | FieldRemoved | FieldMoved | FieldRenamed | FieldReworded => "fields",
         CitationChanged => "source",

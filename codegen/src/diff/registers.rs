@@ -278,6 +278,37 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             Some(describe::write_restriction(wn).into()),
         );
     }
+    let repeat = |x: &Register| {
+        x.repeat_needs_change
+            .as_ref()
+            .map(|(rule, _)| describe::repeat_needs_change(rule))
+    };
+    let (ra, rb) = (repeat(r), repeat(n));
+    if pr.repeat_needs_change.map(|x| x.between) != pn.repeat_needs_change.map(|x| x.between) {
+        push(
+            c,
+            ChangeKind::RepeatNeedsChangeChanged,
+            "repeat needs change",
+            Some(ra.unwrap_or_else(|| "none".into())),
+            Some(rb.unwrap_or_else(|| "none".into())),
+        );
+    }
+    if pr.read_values != pn.read_values {
+        let shown = |x: &Register| {
+            if x.def.read_values.is_empty() {
+                "as written".to_owned()
+            } else {
+                describe::read_values(&x.def.read_values)
+            }
+        };
+        push(
+            c,
+            ChangeKind::ReadMeaningChanged,
+            "read meaning",
+            Some(shown(r)),
+            Some(shown(n)),
+        );
+    }
     let (ta, tb) = (pr.transports, pn.transports);
     if ta != tb {
         let widened = (!ta.rtu || tb.rtu) && (!ta.tcp || tb.tcp);

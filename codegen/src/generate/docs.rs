@@ -157,6 +157,20 @@ pub fn register(drive: &Drive, r: &Register) -> String {
             describe::write_restriction(plan.restriction)
         );
     }
+    if let Some((rule, _)) = &r.repeat_needs_change {
+        s += &format!(
+            "\nRepeat needs a change: {}. `Client::write` does so, and writing the same value \
+             twice executes it twice.\n",
+            describe::repeat_needs_change(rule)
+        );
+    }
+    if !d.read_values.is_empty() {
+        s += &format!(
+            "\nRead and written with different meanings: a read gives the read enumeration ({}); \
+             a write takes the word described above.\n",
+            describe::read_values(&d.read_values)
+        );
+    }
     for alt in &d.address_alternatives {
         s += &format!(
             "\nAt `{}` when {} (`{}`).\n",

@@ -88,7 +88,11 @@ fn drive_tokens(drive: &Drive, plan: &DrivePlan, options: &Options) -> TokenStre
         (crate::model::Access::Read, "ReadOnly"),
         (crate::model::Access::ReadWrite, "ReadWrite"),
     ] {
-        if drive.registers.iter().any(|r| r.access == access) {
+        if drive
+            .registers
+            .iter()
+            .any(|r| r.access == access && (name != "ReadWrite" || r.def.read_values.is_empty()))
+        {
             used.push(ident(name));
         }
     }

@@ -62,6 +62,7 @@ pub fn module(plan: &DrivePlan) -> String {
                 "Move",
                 "Ranges",
                 "Relative",
+                "RepeatNeedsChange",
                 "Setting",
                 "VariantOption",
             ][..],
@@ -369,6 +370,17 @@ pub fn row(r: &RegisterPlan) -> String {
         WriteRestriction::None => {}
         WriteRestriction::Stopped => s.push_str(".restricted(WriteRestriction::Stopped)"),
         WriteRestriction::PrgMode => s.push_str(".restricted(WriteRestriction::PrgMode)"),
+    }
+    if let Some(rule) = &r.repeat_needs_change {
+        let _ = write!(
+            s,
+            ".repeat_needs_change(RepeatNeedsChange {{ between: {}, source: {} }})",
+            rule.between,
+            string(rule.source)
+        );
+    }
+    if !r.read_values.is_empty() {
+        let _ = write!(s, ".read_as({})", list(r.read_values, label));
     }
     s
 }

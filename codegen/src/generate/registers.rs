@@ -69,12 +69,26 @@ fn value(r: &Register, index: usize, rt: &TokenStream) -> (TokenStream, TokenStr
 fn register(drive: &Drive, r: &Register, index: usize, rt: &TokenStream) -> TokenStream {
     let marker = ident(&names::register_type(r));
     let doc = docs::item(&docs::register(drive, r));
-    let (value, extra) = value(r, index, rt);
-    let access = match r.access {
+    let (mut value, mut extra) = value(r, index, rt);
+    let mut access = match r.access {
         Access::Read => quote!(ReadOnly),
         Access::Write => quote!(WriteOnly),
         Access::ReadWrite => quote!(ReadWrite),
     };
+    if !r.def.read_values.is_empty() {
+        // Reads decode to the read enumeration; writes take the word (`ReadWriteAs`).
+        let ty = ident(&names::read_enum(r));
+        let row = Literal::usize_unsuffixed(index);
+        let what = match &r.def.param {
+            Some(p) => format!("{p} {} as read", r.def.name),
+            None => format!("{} as read", r.def.name),
+        };
+        let labels = quote!(plan::REGISTERS[#row].read_values);
+        let read = enums::emit(&ty, &r.def.read_values, &what, labels, rt);
+        access = quote!(#rt::ReadWriteAs<#value>);
+        value = quote!(#ty);
+        extra = quote!(#extra #read);
+    }
     let index = Literal::usize_unsuffixed(index);
     quote! {
         #extra

@@ -231,6 +231,7 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
             }
         };
         values(&r.def.values, r.key_path("values"), &mut out);
+        values(&r.def.read_values, r.key_path("read_values"), &mut out);
         for (fi, f) in r.def.fields.iter().enumerate() {
             let fp = r.key_path("fields").index(fi);
             if let Some(src) = f.source.as_deref() {

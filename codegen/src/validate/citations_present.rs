@@ -369,23 +369,19 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
                 );
             }
         }
-        for (vi, v) in r.def.values.iter().enumerate() {
-            indirect(
-                drive,
-                out,
-                &v.indirect,
-                &v.source,
-                r.key_path("values").index(vi).key("indirect"),
-                rid,
-            );
-            opt(
-                drive,
-                ctx,
-                out,
-                &v.source,
-                r.key_path("values").index(vi).key("source"),
-                rid,
-            );
+        for key in ["values", "read_values"] {
+            let list = match key {
+                "values" => &r.def.values,
+                _ => &r.def.read_values,
+            };
+            for (vi, v) in list.iter().enumerate() {
+                let vp = r.key_path(key).index(vi);
+                indirect(drive, out, &v.indirect, &v.source, vp.key("indirect"), rid);
+                opt(drive, ctx, out, &v.source, vp.key("source"), rid);
+            }
+        }
+        if let Some((rule, path)) = &r.repeat_needs_change {
+            cite(drive, ctx, out, &rule.source, path.key("source"), rid);
         }
         for (k, o) in &r.def.by_variant {
             opt(

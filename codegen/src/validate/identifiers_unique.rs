@@ -158,6 +158,22 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             r.key_path("id"),
             Some(rid),
         );
+        if !r.def.read_values.is_empty() {
+            types.add(
+                drive,
+                out,
+                &names::read_enum(r),
+                r.key_path("read_values"),
+                Some(rid),
+            );
+            values(
+                drive,
+                out,
+                &r.def.read_values,
+                &r.key_path("read_values"),
+                rid,
+            );
+        }
         match r.kind() {
             ValueKind::Enum(list) => {
                 types.add(

@@ -115,6 +115,16 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 );
             }
         }
+        for (vi, v) in r.def.read_values.iter().enumerate() {
+            need(
+                drive,
+                out,
+                r.key_path("read_values").index(vi).key("id"),
+                Some(rid),
+                "value id",
+                &v.id,
+            );
+        }
         for (vi, v) in r.def.values.iter().enumerate() {
             need(
                 drive,

@@ -22,7 +22,9 @@ mod manuals_declared;
 mod numbers_finite;
 mod pairs_valid;
 mod protocol_valid;
+mod read_values_valid;
 mod references_resolve;
+mod repeat_needs_change_valid;
 mod roles_valid;
 mod value_kind_single;
 
@@ -78,6 +80,8 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     access_consistent::check(drive, &mut out);
     protocol_valid::check(drive, &mut out);
     roles_valid::check(drive, &mut out);
+    repeat_needs_change_valid::check(drive, &mut out);
+    read_values_valid::check(drive, &mut out);
     numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);
     out

@@ -26,15 +26,15 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in drive.registers.iter().filter(|r| r.def.pair.is_some()) {
         let path = r.key_path("pair");
         let mut err = |message: String| out.push(drive.error(&path, Some(r.id()), message));
-        if !r.def.values.is_empty() || !r.def.fields.is_empty() {
+        let codes = [
+            ("values", !r.def.values.is_empty()),
+            ("fields", !r.def.fields.is_empty()),
+            ("read_values", !r.def.read_values.is_empty()),
+        ];
+        if let Some((key, _)) = codes.iter().find(|(_, given)| *given) {
             err(format!(
-                "`{}` is a pair with {}: enumerations and bit fields in two registers are not supported; give the value as a number (the manuals read so far keep codes and bits in one word)",
+                "`{}` is a pair with `{key}`: enumerations, bit fields and read codes in two registers are not supported; give the value as a number (the manuals read so far keep codes and bits in one word)",
                 r.id(),
-                if r.def.fields.is_empty() {
-                    "`values`"
-                } else {
-                    "`fields`"
-                }
             ));
         }
         if !r.def.address_alternatives.is_empty() {

@@ -162,11 +162,41 @@ fn profile_and_register_table() {
     let mut sorted = addrs.clone();
     sorted.sort_unstable();
     assert_eq!(addrs, sorted);
-    assert_eq!(md::REGISTERS.len(), 15);
+    assert_eq!(md::REGISTERS.len(), 17);
     assert_eq!(
         <md::MaxFrequency as Writable>::WRITE_RESTRICTION,
         drivemap_runtime::WriteRestriction::Stopped
     );
     assert_eq!(md::FrequencyUnitsValue::ALL.len(), 3);
     let _ = md::FrequencyUnitsValue::TenthHz.code();
+}
+
+/// `read_values`: a read decodes to the read enumeration, a write takes the word; the group's
+/// `repeat_needs_change` reaches both of its registers (`tests/tests/automationdirect_acn.rs`
+/// shows `Client::write` sending the intermediate value first).
+#[test]
+fn read_meanings_and_repeated_values() {
+    use drivemap_runtime::Readable;
+    use drivemap_runtime::plan::RepeatNeedsChange;
+    fn readable<R: Readable>() {}
+    readable::<md::Password>();
+    let s = md::Settings::new();
+    assert_eq!(md::Password::decode(1, &s), Ok(md::PasswordRead::Locked));
+    assert_eq!(
+        md::Password::decode(7, &s),
+        Ok(md::PasswordRead::Unknown(7))
+    );
+    assert_eq!(md::PasswordRead::Unlocked.name(), Some("Unlocked"));
+    assert_eq!(md::Password::encode(&1234u16, &s), Ok(1234));
+    assert!(
+        md::Password::encode(&10000u16, &s).is_err(),
+        "the write range is 0-9999"
+    );
+    let rule = Some(RepeatNeedsChange {
+        between: 0,
+        source: "manual.txt:50",
+    });
+    assert_eq!(<md::Password as Writable>::REPEAT_NEEDS_CHANGE, rule);
+    assert_eq!(<md::ClearHistory as Writable>::REPEAT_NEEDS_CHANGE, rule);
+    assert_eq!(<md::MaxFrequency as Writable>::REPEAT_NEEDS_CHANGE, None);
 }

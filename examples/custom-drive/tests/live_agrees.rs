@@ -50,7 +50,7 @@ fn combos() -> Vec<(md::Settings, LiveSettings)> {
 const RAWS: [u32; 9] = [0, 1, 2, 3, 600, 4000, 30000, 0x8000, 0xFFFF];
 const VALUES: [f64; 10] = [-1.0, 0.0, 0.1, 1.0, 2.0, 50.0, 255.0, 300.0, 400.0, 600.5];
 
-fn quantity<R: Register<Settings = md::Settings, Value = f64> + Writable>(
+fn quantity<R: Register<Settings = md::Settings, Value = f64> + Writable<Input = f64>>(
     d: &drivemap_codegen::Drive,
 ) {
     let r = d.find(R::ID).unwrap();

@@ -43,6 +43,13 @@ pub struct Simulator {
     index: HashMap<String, usize>,
     /// Each register's raw value: its word, or a 32-bit pair's value.
     raw: Vec<u32>,
+    /// The last value a master wrote to each register (none since power-on), to tell a changed
+    /// value from a repeated one (`repeat_needs_change`), and for registers whose reads mean
+    /// something else (`read_values`), whose `raw` value is the read state.
+    last_written: Vec<Option<u32>>,
+    /// Writes the drive executed, per register: every accepted write, except that a register
+    /// with `repeat_needs_change` executes only a value that differs from the previous write.
+    executed: Vec<u32>,
     /// [RTU-framed, Modbus TCP].
     layouts: [Layout; 2],
     plan: ExceptionPlan,
@@ -123,6 +130,8 @@ impl Simulator {
             .collect();
         let mut sim = Simulator {
             raw: vec![0; drive.registers.len()],
+            last_written: vec![None; drive.registers.len()],
+            executed: vec![0; drive.registers.len()],
             plan: ExceptionPlan::from_exceptions(profile.exceptions),
             drive,
             profile,
@@ -196,6 +205,22 @@ impl Simulator {
     /// A register's raw word (a 32-bit pair's value), by id, parameter number or name.
     pub fn raw(&self, name: &str) -> Result<u32, SimError> {
         Ok(self.raw[self.index_of(name)?])
+    }
+
+    /// How many writes of this register the drive executed (see `repeat_needs_change` in the
+    /// schema): every write the drive accepted, except that a register whose drive executes
+    /// only a changed value ("244 > 0 > 244") counts a write equal to the previous one as not
+    /// executed, and its drive model does not react to it.
+    pub fn executed(&self, name: &str) -> Result<u32, SimError> {
+        Ok(self.executed[self.index_of(name)?])
+    }
+
+    /// The last raw value a master wrote to this register since power-on. For a register whose
+    /// reads mean something else (`read_values`) this is the only trace of a write: the
+    /// simulator does not know the drive's password, so a write does not change what reads
+    /// give (set that with [`Simulator::set_raw`]).
+    pub fn last_written(&self, name: &str) -> Result<Option<u32>, SimError> {
+        Ok(self.last_written[self.index_of(name)?])
     }
 
     /// A register's value decoded by the map under the drive's own settings.

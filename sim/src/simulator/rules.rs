@@ -36,7 +36,7 @@ impl Simulator {
     /// Whether the generated `encode` of this register would produce `raw`: decode it, encode
     /// the value back. Conversions that need a setting the drive cannot supply are accepted.
     pub(super) fn accepts(&self, r: &Register, raw: u32, settings: &LiveSettings) -> bool {
-        let value = match codec::decode(&self.drive, r, raw, settings) {
+        let value = match codec::decode_written(&self.drive, r, raw, settings) {
             Ok(Value::Bits { .. }) => f64::from(raw),
             Ok(v) => match v.as_f64() {
                 Some(v) => v,
@@ -163,9 +163,24 @@ impl Simulator {
         }
         for (k, &(comm, i, v)) in targets[..values.len()].iter().enumerate() {
             if let Some(i) = i {
-                let before = self.raw[i];
-                self.raw[i] = v;
-                self.after_write(i, before);
+                let plan = self.drive.register_plan(&self.drive.registers[i]);
+                // "When the same parameter value is entered continuously, the parameter is
+                // executed just once" (`004_c5cbf92472673495.txt:1111`).
+                let executes =
+                    plan.repeat_needs_change.is_none() || self.last_written[i] != Some(v);
+                self.last_written[i] = Some(v);
+                // A register read with other meanings keeps its read word: what a password
+                // write does to the lock state depends on a password the simulator lacks.
+                if plan.read_values.is_empty() {
+                    let before = self.raw[i];
+                    self.raw[i] = v;
+                    if executes {
+                        self.after_write(i, before);
+                    }
+                }
+                if executes {
+                    self.executed[i] += 1;
+                }
             }
             self.track_commands(comm, values[k]);
         }
