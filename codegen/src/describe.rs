@@ -78,16 +78,16 @@ pub fn per_request(max_read: u16, max_write: u16) -> String {
 }
 
 /// What a limit's map entry says beyond its number: `. max_read 8 not printed: <why>
-/// (`file:line`)`, `. max_read: `file:line``, or nothing for a plain number.
-pub fn limit_citation(name: &str, l: &crate::model::Limit) -> String {
-    let src = l
-        .source
-        .as_ref()
-        .map(|s| format!(" (`{s}`)"))
-        .unwrap_or_default();
+/// (`file:line`)`, `. max_read (`file:line`)`, or nothing for a plain number; without the
+/// citation when `with_source` is false (the caller gives it elsewhere).
+pub fn limit_citation(name: &str, l: &crate::model::Limit, with_source: bool) -> String {
+    let src = match &l.source {
+        Some(s) if with_source => format!(" (`{s}`)"),
+        _ => String::new(),
+    };
     match &l.unknown {
         Some(why) => format!(". {name} {} not printed: {}{src}", l.value, why.trim()),
-        None if l.source.is_some() => format!(". {name}{src}"),
+        None if !src.is_empty() => format!(". {name}{src}"),
         None => String::new(),
     }
 }

@@ -177,10 +177,20 @@ fn protocol(out: &mut String, drive: &Drive) {
     }
     row("Function codes", functions, fc.source.as_deref());
     let mut per_request = describe::per_request(p.max_read.value, p.max_write.value);
+    let mut sources: Vec<&str> = [&p.max_read, &p.max_write]
+        .iter()
+        .filter_map(|l| l.source.as_deref())
+        .collect();
+    sources.dedup();
+    // One citation for both limits goes in the source column; two are given beside each limit.
+    let column = match sources[..] {
+        [one] => Some(one),
+        _ => None,
+    };
     for (name, l) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
-        per_request += &describe::limit_citation(name, l);
+        per_request += &describe::limit_citation(name, l, column.is_none());
     }
-    row("Registers per request", per_request, None);
+    row("Registers per request", per_request, column);
     let s = &p.slave_address;
     let mut slave = format!("{} ..= {}", s.min, s.max);
     if let Some(d) = s.default {

@@ -1,7 +1,10 @@
 //! The fixture drive of another vendor (`tests/fixtures/acme-vf1/`, with its own fictional
 //! manual) uses what the shipped maps do not: 32-bit values in two registers (both word orders,
 //! signed and unsigned, read-only and writable), decimals chosen by a field of another register,
-//! slave addresses up to 254 and a frame gap stated in milliseconds. Here it goes through the
+//! slave addresses up to 254, a frame gap stated in milliseconds, protocol limits with their own
+//! citations, a broadcast whose rules are not printed, serial formats chosen by a parameter, a
+//! password read as a lock state and executed only when it changes, and a signedness the manual
+//! leaves open. Here it goes through the
 //! export, the reference document, the semantic diff, the simulator and the client over a real
 //! socket; `yaml_is_enough.rs` compiles its generated module and runs the demo on it, and
 //! `cli/tests/live.rs` reads and writes its pairs with the tool.
@@ -234,5 +237,146 @@ fn the_simulator_refuses_half_a_pair_from_a_master_without_the_map() {
         .unwrap();
     let held = b.sim.lock().unwrap().value("position_setpoint").unwrap();
     assert_eq!(held.as_f64(), Some(123_456.0));
+    b.server.stop();
+}
+
+/// The protocol and register constructs besides pairs, through export, doc, diff, the simulator
+/// and the client: function codes and request limits with their own citations, a broadcast whose
+/// rules are not printed (never sent), serial formats chosen by a parameter (a format it does not
+/// list is refused before a port is opened), a password read as a lock state and executed only
+/// when it changes (the client writes the intermediate), and a signedness the manual leaves open.
+#[test]
+fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
+    let d = map();
+    let export = drivemap_codegen::export::export(&d);
+    let limits = &export["protocol"]["limits"];
+    assert_eq!(limits["function_codes"]["source"], "acme-vf1.txt:7");
+    assert_eq!(limits["max_read"]["source"], "acme-vf1.txt:8");
+    let broadcast = &export["protocol"]["broadcast"];
+    assert_eq!(
+        broadcast["not_printed"],
+        "slave 0 is named a broadcast; no functions or registers are printed for it"
+    );
+    let formats: Vec<&str> = export["protocol"]["serial"]["formats"]["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["format"].as_str().unwrap())
+        .collect();
+    assert_eq!(formats, ["8N1", "8E1", "8N2"]);
+    let register = |id: &str| {
+        export["registers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["id"] == id)
+            .unwrap_or_else(|| panic!("{id} exported"))
+            .clone()
+    };
+    let password = register("keypad_password");
+    assert_eq!(password["repeat_needs_change"]["between_raw"], 0);
+    assert_eq!(password["read_values"][1]["id"], "locked");
+    assert_eq!(
+        register("heatsink_temperature")["unknown"][0]["what"],
+        "signed"
+    );
+
+    let doc = drivemap_codegen::reference::render(&d, "acme-vf1.yaml");
+    for expected in [
+        "| Function codes | 03h, 06h, 10h | `acme-vf1.txt:7` |",
+        "| Registers per request | at most 16 per read, 16 per write | `acme-vf1.txt:8` |",
+        "broadcast exists, rules not printed: slave 0 is named a broadcast",
+        "only the formats communication_format selects: 0 = 8N1, 1 = 8E1, 2 = 8N2",
+        "repeat needs a change: 0 between",
+        "written as a word, read as codes",
+        "heatsink_temperature, signedness: the manual gives the unit only",
+    ] {
+        assert!(doc.contains(expected), "{expected:?} not in\n{doc}");
+    }
+
+    // Changing what a read means or the repeat rule is a breaking change.
+    let text = std::fs::read_to_string(fixture()).unwrap();
+    let changed = text
+        .replace(
+            "repeat_needs_change: {between: 0, source: \"acme-vf1.txt:51\"}",
+            "repeat_needs_change: {between: 1, source: \"acme-vf1.txt:51\"}",
+        )
+        .replace(
+            "{value: 1, id: locked, name: Locked,",
+            "{value: 2, id: locked, name: Locked,",
+        );
+    let new =
+        drivemap_codegen::read_map_str("acme-vf1.yaml", &changed, &Context::default()).unwrap();
+    let diff = drivemap_codegen::diff::compare(&d, &new);
+    let kinds: Vec<ChangeKind> = diff
+        .changes
+        .iter()
+        .filter(|c| c.subject == "keypad_password")
+        .map(|c| c.kind)
+        .collect();
+    assert!(
+        kinds.contains(&ChangeKind::RepeatNeedsChangeChanged),
+        "{kinds:?}"
+    );
+    assert!(kinds.contains(&ChangeKind::ReadMeaningChanged), "{kinds:?}");
+    assert!(diff.breaking() >= 2);
+
+    // The simulator and the client over TCP at slave 254.
+    let mut b = bench();
+    let plan = b.map.register_plan(b.map.find("keypad_password").unwrap());
+    let rule = plan.write_rule();
+    let repeat = plan.repeat_needs_change.expect("the map's rule");
+    b.sim.lock().unwrap().set_raw("keypad_password", 1).unwrap(); // locked
+    for _ in 0..2 {
+        b.client
+            .write_changed(254, &rule, 0x2011, repeat.between, 1234)
+            .unwrap();
+    }
+    let sim = b.sim.lock().unwrap();
+    assert_eq!(
+        sim.executed("keypad_password").unwrap(),
+        4,
+        "0, 1234, 0, 1234: each write changed the value"
+    );
+    assert_eq!(sim.last_written("keypad_password").unwrap(), Some(1234));
+    drop(sim);
+    let mut word = [0u16; 1];
+    b.client.read_holding(254, 0x2011, &mut word).unwrap();
+    match drivemap_live::decode(
+        &b.map,
+        b.map.find("keypad_password").unwrap(),
+        u32::from(word[0]),
+        &LiveSettings::default(),
+    ) {
+        Ok(Value::Code { id, .. }) => assert_eq!(id.as_deref(), Some("locked")),
+        other => panic!("read as the lock state: {other:?}"),
+    }
+
+    // No broadcast reaches the wire: the manual does not print what one may do.
+    match b.client.write_rule(0, &rule, 0x2011, 5) {
+        Err(Error::Refused(Refusal::BroadcastRulesNotPrinted { drive, .. })) => {
+            assert_eq!(drive, "acme-vf1")
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(
+        b.sim
+            .lock()
+            .unwrap()
+            .last_written("keypad_password")
+            .unwrap(),
+        Some(1234)
+    );
+
+    // Serial formats: 8E1 and 8N2 are listed, 8E2 is not.
+    use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
+    let profile = b.client.profile();
+    let line = |parity, stop| SerialOptions::new("/dev/null", 19200).line(profile, parity, stop);
+    assert_eq!(line(Parity::Even, None).unwrap().stop_bits, StopBits::One);
+    assert!(line(Parity::None, Some(StopBits::Two)).is_ok());
+    match line(Parity::Even, Some(StopBits::Two)) {
+        Err(Refusal::SerialFormat(f)) => assert_eq!(f.formats.selected_by, "communication_format"),
+        other => panic!("{other:?}"),
+    }
     b.server.stop();
 }
