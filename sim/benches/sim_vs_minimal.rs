@@ -7,7 +7,11 @@
 //! simulator's request path (`Simulator::handle`), counted by a global allocator, and of a whole
 //! TCP round (every thread of the process: clients, server, simulator).
 //!
-//! Environment: `SIM_BENCH_ROUNDS` (default 5), `SIM_BENCH_SECS` per round (default 1.5).
+//! Environment: `SIM_BENCH_ROUNDS` (default 5), `SIM_BENCH_SECS` per round (default 1.5),
+//! `SIM_BENCH_CPU=<n>`: every thread of the process (servers and clients) on CPU n, as the
+//! clients' bench runs them, so a request is a switch between two threads of one core and the
+//! scheduler's placement of threads on the two cores (which moved single rounds at 1 connection
+//! by up to ±30 %) is out of the figure. Left unset, threads go where the scheduler puts them.
 
 use drivemap_test_support::alloc_count::{self, Counting};
 use std::io::{Read, Write};
@@ -149,7 +153,35 @@ fn simulator() -> Simulator {
     Simulator::new(drive, SimOptions::new().clock(Arc::new(SystemClock::new()))).unwrap()
 }
 
+/// Pins the calling thread, and so every thread it starts afterwards, to CPU `cpu`.
+fn pin(cpu: usize) {
+    #[cfg(target_os = "linux")]
+    {
+        let mut set = rustix::thread::CpuSet::new();
+        set.set(cpu);
+        rustix::thread::sched_setaffinity(None, &set).expect("pin to the CPU given");
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = cpu;
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+    }
+}
+
 fn main() {
+    if let Some(cpu) = std::env::var("SIM_BENCH_CPU")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        pin(cpu);
+        println!("every thread on CPU {cpu}");
+    }
     // `cargo bench` passes `--bench`; `cargo test --benches` runs it once, briefly.
     let quick = !std::env::args().any(|a| a == "--bench");
     let rounds: usize = if quick { 1 } else { env("SIM_BENCH_ROUNDS", 5) };
@@ -194,6 +226,7 @@ fn main() {
     let mut tcp_allocs = (0usize, 0u64);
     for conns in [1usize, 8] {
         let (mut sim_total, mut min_total) = (0.0, 0.0);
+        let mut ratios = Vec::new();
         for r in 0..rounds {
             // Interleaved, and the order alternates so neither always runs first.
             let (s, m) = if r % 2 == 0 {
@@ -207,18 +240,24 @@ fn main() {
                 (round(server.local_addr(), conns, secs).0, m)
             };
             println!("| {conns} | {} | {s:.0} | {m:.0} | {:.2} |", r + 1, s / m);
+            ratios.push(s / m);
             sim_total += s;
             min_total += m;
         }
-        summary.push((conns, sim_total / rounds as f64, min_total / rounds as f64));
+        summary.push((
+            conns,
+            sim_total / rounds as f64,
+            min_total / rounds as f64,
+            median(ratios),
+        ));
     }
     println!();
     println!(
-        "| connections | simulator req/s (mean) | minimal req/s (mean) | simulator ÷ minimal |"
+        "| connections | simulator req/s (mean) | minimal req/s (mean) | simulator ÷ minimal (means) | median of per-round ratios |"
     );
-    println!("|--:|--:|--:|--:|");
-    for (c, s, m) in summary {
-        println!("| {c} | {s:.0} | {m:.0} | {:.2} |", s / m);
+    println!("|--:|--:|--:|--:|--:|");
+    for (c, s, m, r) in summary {
+        println!("| {c} | {s:.0} | {m:.0} | {:.2} | {r:.2} |", s / m);
     }
     println!();
     println!(

@@ -3,8 +3,8 @@
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
-use drivemap_runtime::Table;
 use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::{Table, Width};
 
 use super::Simulator;
 
@@ -30,9 +30,19 @@ impl Hasher for AddressHasher {
     }
 }
 
-/// Communication address → register index and which of its words (1 for the second word of a
-/// 32-bit pair).
-pub(super) type AddressMap = HashMap<u16, (usize, u16), BuildHasherDefault<AddressHasher>>;
+/// What lies at one communication address: the register's index, which of its words (1 for
+/// the second word of a 32-bit pair), and what a read needs, copied here so that serving a word
+/// touches this entry and the register's raw value only.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Slot {
+    pub(super) index: usize,
+    pub(super) word: u16,
+    pub(super) readable: bool,
+    pub(super) width: Width,
+}
+
+/// Communication address → what lies there.
+pub(super) type AddressMap = HashMap<u16, Slot, BuildHasherDefault<AddressHasher>>;
 
 #[derive(Debug, Clone, Default)]
 pub(super) struct Layout {
@@ -49,7 +59,11 @@ impl Simulator {
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
         [&layout.holding, &layout.input, &layout.broadcast]
             .iter()
-            .find_map(|m| m.iter().find(|(_, v)| **v == (i, 0)).map(|(a, _)| *a))
+            .find_map(|m| {
+                m.iter()
+                    .find(|(_, s)| s.index == i && s.word == 0)
+                    .map(|(a, _)| *a)
+            })
     }
 
     /// Where each register lies on this link, as the plan places it: registers that do not exist
@@ -80,7 +94,12 @@ impl Simulator {
                 }
             };
             for word in 0..plan.info.width.count() {
-                space.entry(address.wrapping_add(word)).or_insert((i, word));
+                space.entry(address.wrapping_add(word)).or_insert(Slot {
+                    index: i,
+                    word,
+                    readable: r.readable(),
+                    width: plan.info.width,
+                });
             }
         }
         layout

@@ -74,14 +74,7 @@ impl Simulator {
             Table::Input => &layout.input,
         };
         match map.get(&address) {
-            Some(&(i, word)) if self.drive.registers[i].readable() => {
-                let width = self
-                    .drive
-                    .register_plan(&self.drive.registers[i])
-                    .info
-                    .width;
-                Ok(width.split(self.raw[i])[usize::from(word)])
-            }
+            Some(s) if s.readable => Ok(s.width.split(self.raw[s.index])[usize::from(s.word)]),
             Some(_) => Err(self.plan.illegal_address),
             None if !first || (table == Table::Holding && self.in_gap(address)) => Ok(0),
             None => Err(self.plan.illegal_address),
@@ -121,13 +114,13 @@ impl Simulator {
                 layout.holding.get(&comm)
             };
             match found {
-                Some(&(i, half)) => {
+                Some(&super::layout::Slot {
+                    index: i,
+                    word: half,
+                    width,
+                    ..
+                }) => {
                     // A 32-bit pair is written whole: both words, in one request.
-                    let width = self
-                        .drive
-                        .register_plan(&self.drive.registers[i])
-                        .info
-                        .width;
                     let v = match (width.count(), half, values.get(k + 1)) {
                         (1, _, _) => u32::from(word),
                         (_, 0, Some(&second)) => {
