@@ -29,19 +29,22 @@ fn map() -> drivemap_codegen::Drive {
     drivemap_codegen::read_map(&fixture(), &Context::default()).expect("fixture map")
 }
 
+/// The exported register `id`.
+fn exported(export: &serde_json::Value, id: &str) -> serde_json::Value {
+    export["registers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["id"] == id)
+        .unwrap_or_else(|| panic!("{id} exported"))
+        .clone()
+}
+
 #[test]
 fn export_doc_and_diff_say_what_the_pairs_are() {
     let d = map();
     let export = drivemap_codegen::export::export(&d);
-    let register = |id: &str| {
-        export["registers"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|r| r["id"] == id)
-            .unwrap_or_else(|| panic!("{id} exported"))
-            .clone()
-    };
+    let register = |id: &str| exported(&export, id);
     let energy = register("energy_counter");
     assert_eq!(energy["words"], 2);
     assert_eq!(energy["word_order"], "high_first");
@@ -264,15 +267,7 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
         .map(|c| c["format"].as_str().unwrap())
         .collect();
     assert_eq!(formats, ["8N1", "8E1", "8N2"]);
-    let register = |id: &str| {
-        export["registers"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|r| r["id"] == id)
-            .unwrap_or_else(|| panic!("{id} exported"))
-            .clone()
-    };
+    let register = |id: &str| exported(&export, id);
     let password = register("keypad_password");
     assert_eq!(password["repeat_needs_change"]["between_raw"], 0);
     assert_eq!(password["read_values"][1]["id"], "locked");
