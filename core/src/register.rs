@@ -365,6 +365,8 @@ impl<D: DrivePlan, V: Value, const I: usize> Readable for Reg<D, V, ReadWrite, I
 
 impl<D: DrivePlan, V: Value, W: Value, const I: usize> Readable for Reg<D, V, ReadWriteAs<W>, I> {}
 
+// One impl per access marker, written out rather than by a macro: a write to a read-only
+// register fails to compile, and rustc's message then points at these impls, not into a macro.
 impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, WriteOnly, I> {
     type Input = V;
     const WRITE_RESTRICTION: WriteRestriction = Self::PLAN.restriction;
