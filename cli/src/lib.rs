@@ -45,6 +45,8 @@ pub enum Command {
     Doc(commands::doc::Args),
     /// Compare two maps: every change classified breaking or compatible, with citations; exit 1 if any breaks.
     Diff(commands::diff::Args),
+    /// Rewrite maps of an earlier schema version in the current one, keeping their meaning.
+    Migrate(commands::migrate::Args),
     /// List the rows of a map's manuals that no item cites, with a summary per table.
     Coverage(commands::coverage::Args),
     /// Read registers of a live drive by name, decoded by its map.
@@ -80,6 +82,7 @@ pub fn main() -> ExitCode {
         Command::Doc(a) => commands::doc::run(a),
         Command::Diff(a) => commands::diff::run(a),
         Command::Coverage(a) => commands::coverage::run(a),
+        Command::Migrate(a) => commands::migrate::run(a),
         Command::Read(a) => commands::read::run(a),
         Command::Write(a) => commands::write::run(a),
         Command::Poll(a) => commands::poll::run(a),

@@ -42,6 +42,15 @@ impl Diagnostic {
     }
 }
 
+impl Diagnostic {
+    /// The same finding printed as a warning (`file:line:col: warning: ...`), for what is
+    /// reported but does not stop a map from loading (an earlier schema version read by its
+    /// meaning).
+    pub fn as_warning(&self) -> String {
+        self.to_string().replacen(": error", ": warning", 1)
+    }
+}
+
 impl fmt::Display for Diagnostic {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}: error", self.loc)?;

@@ -18,7 +18,7 @@
 use serde_yaml::Value;
 use serde_yaml::value::{Tag, TaggedValue};
 
-use crate::diagnostic::Diagnostic;
+use crate::diagnostic::{Diagnostic, Loc};
 use crate::source::{Node, NodeKind, Path, Seg};
 
 /// What a hexadecimal number at this place is.
@@ -90,19 +90,92 @@ pub fn literal(text: &str, slot: Slot) -> Option<Value> {
     })
 }
 
+/// A bare decimal read as its decimal value because the file is written in schema 1, where
+/// schema 2 would refuse it: where it is, how it is written, what it means, what kind of number.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Reread {
+    pub loc: Loc,
+    pub register: Option<String>,
+    pub path: Path,
+    pub text: String,
+    pub value: u64,
+    pub slot: Slot,
+}
+
+impl Reread {
+    /// How the current schema writes the same number.
+    pub fn hex(&self) -> String {
+        match self.slot {
+            Slot::Address => format!("0x{:04X}", self.value),
+            Slot::ExceptionCode | Slot::FunctionCode => format!("0x{:02X}", self.value),
+        }
+    }
+
+    /// The warning naming what changed for this value.
+    pub fn warning(&self) -> Diagnostic {
+        let what = match self.slot {
+            Slot::Address => "address",
+            Slot::ExceptionCode => "exception code",
+            Slot::FunctionCode => "function code",
+        };
+        Diagnostic::new(
+            self.loc.clone(),
+            self.register.as_deref(),
+            format!(
+                "{}: {what} {} is decimal {} ({:02X}H), as schema 1 reads it; schema {} writes it {}",
+                self.path,
+                self.text,
+                self.value,
+                self.value,
+                crate::schema::CURRENT,
+                self.hex(),
+            ),
+        )
+    }
+}
+
+/// What [`resolve`] decided: the errors, and the numbers read as schema 1 reads them.
+#[derive(Debug, Default)]
+pub struct Resolved {
+    pub errors: Vec<Diagnostic>,
+    pub reread: Vec<Reread>,
+}
+
 /// Decides every scalar [`literal`] marked in one file's tree (before a variant is merged onto
-/// its base, so each file's own `address_format` applies to its own addresses). Returns the
-/// errors; the tree is left with plain values either way.
-pub fn resolve(tree: &mut Node) -> Vec<Diagnostic> {
+/// its base, so each file's own `address_format` applies to its own addresses), as schema
+/// `version` reads them (see [`crate::schema`]): in schema 1 a bare decimal is the decimal
+/// number. The tree is left with plain values either way.
+pub fn resolve(tree: &mut Node, version: u32) -> Resolved {
     let decimal = matches!(
         tree.get("address_format").map(|n| &n.kind),
         Some(NodeKind::Scalar(Value::String(s))) if s == "decimal"
     );
     let mut marked = Vec::new();
     collect(tree, &mut Path::root(), &mut marked);
-    let mut errors = Vec::new();
+    let mut out = Resolved::default();
     for (path, slot, text) in marked {
-        let decided = decide(&text, slot, decimal);
+        let mut decided = decide(&text, slot, decimal);
+        if version < 2
+            && decided.is_err()
+            && text.len() <= 20
+            && text.bytes().all(|b| b.is_ascii_digit())
+        {
+            // Schema 1: YAML's reading, a decimal number.
+            if let Ok(value) = text.parse::<u64>() {
+                decided = Ok(value);
+                let register = crate::load::register_at(tree, &path);
+                if let Some(node) = tree.at(&path) {
+                    out.reread.push(Reread {
+                        loc: node.loc.clone(),
+                        register,
+                        path: path.clone(),
+                        text: text.clone(),
+                        value,
+                        slot,
+                    });
+                }
+            }
+        }
         let register = crate::load::register_at(tree, &path);
         let Some(node) = node_mut(tree, &path) else {
             continue;
@@ -110,7 +183,7 @@ pub fn resolve(tree: &mut Node) -> Vec<Diagnostic> {
         match decided {
             Ok(n) => node.kind = NodeKind::Scalar(Value::from(n)),
             Err(message) => {
-                errors.push(Diagnostic::new(
+                out.errors.push(Diagnostic::new(
                     node.loc.clone(),
                     register.as_deref(),
                     format!("{path}: {message}"),
@@ -119,7 +192,7 @@ pub fn resolve(tree: &mut Node) -> Vec<Diagnostic> {
             }
         }
     }
-    errors
+    out
 }
 
 fn collect(node: &Node, path: &mut Path, out: &mut Vec<(Path, Slot, String)>) {

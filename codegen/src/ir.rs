@@ -44,6 +44,9 @@ pub struct Drive {
     pub tree: Node,
     /// The drive plan, lowered on first use ([`Drive::plan`]).
     pub plan: OnceLock<Arc<DrivePlan>>,
+    /// What reading a file of the map in an earlier schema version changed
+    /// ([`crate::schema`]): printed by `check`, `diff` and the build, never an error.
+    pub warnings: Vec<Diagnostic>,
 }
 
 #[derive(Debug, Clone)]
@@ -793,6 +796,7 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
         file: map.path.clone(),
         tree: map.tree.clone(),
         plan: OnceLock::new(),
+        warnings: map.warnings.clone(),
     })
 }
 

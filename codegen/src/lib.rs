@@ -26,6 +26,7 @@ pub mod names;
 pub mod numbers;
 pub mod reference;
 pub mod review;
+pub mod schema;
 pub mod source;
 pub mod validate;
 

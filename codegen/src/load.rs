@@ -27,6 +27,9 @@ pub struct LoadedMap {
     pub model: MapFile,
     /// The merged tree, for locating findings.
     pub tree: Node,
+    /// What reading the file (and its base) in an earlier schema version changed
+    /// ([`crate::schema`]); empty for maps in the current schema.
+    pub warnings: Vec<Diagnostic>,
 }
 
 impl LoadedMap {
@@ -48,12 +51,14 @@ pub fn display_name(path: &FsPath) -> Arc<str> {
 /// Reads one map file, resolving `extends` against maps in the same directory
 /// (`<id>.yaml`). Returns every problem found while reading.
 pub fn load(path: &FsPath) -> Result<LoadedMap, Vec<Diagnostic>> {
-    let tree = load_tree(path, &mut Vec::new())?;
+    let mut warnings = Vec::new();
+    let tree = load_tree(path, &mut Vec::new(), &mut warnings)?;
     let model = deserialize(&tree)?;
     Ok(LoadedMap {
         path: path.to_path_buf(),
         model,
         tree,
+        warnings,
     })
 }
 
@@ -61,7 +66,8 @@ pub fn load(path: &FsPath) -> Result<LoadedMap, Vec<Diagnostic>> {
 /// resolved.
 pub fn load_str(name: &str, text: &str) -> Result<LoadedMap, Vec<Diagnostic>> {
     let file: Arc<str> = Arc::from(name);
-    let tree = source::parse_map(&file, text)?;
+    let parsed = source::parse_map(&file, text)?;
+    let tree = parsed.tree;
     if let Some(base) = tree.get("drive").and_then(|d| d.get("extends")) {
         return Err(vec![Diagnostic::new(
             base.loc.clone(),
@@ -74,10 +80,11 @@ pub fn load_str(name: &str, text: &str) -> Result<LoadedMap, Vec<Diagnostic>> {
         path: PathBuf::from(name),
         model,
         tree,
+        warnings: parsed.warnings,
     })
 }
 
-fn read_tree(path: &FsPath) -> Result<Node, Vec<Diagnostic>> {
+fn read_tree(path: &FsPath) -> Result<source::Parsed, Vec<Diagnostic>> {
     let file = display_name(path);
     let cannot = |e: std::io::Error| {
         vec![Diagnostic::new(
@@ -107,8 +114,14 @@ fn read_tree(path: &FsPath) -> Result<Node, Vec<Diagnostic>> {
     source::parse_map(&file, &text)
 }
 
-fn load_tree(path: &FsPath, chain: &mut Vec<PathBuf>) -> Result<Node, Vec<Diagnostic>> {
-    let tree = read_tree(path)?;
+fn load_tree(
+    path: &FsPath,
+    chain: &mut Vec<PathBuf>,
+    warnings: &mut Vec<Diagnostic>,
+) -> Result<Node, Vec<Diagnostic>> {
+    let parsed = read_tree(path)?;
+    warnings.extend(parsed.warnings);
+    let tree = parsed.tree;
     let Some(extends) = tree.get("drive").and_then(|d| d.get("extends")) else {
         return Ok(tree);
     };
@@ -141,7 +154,7 @@ fn load_tree(path: &FsPath, chain: &mut Vec<PathBuf>) -> Result<Node, Vec<Diagno
         )]);
     }
     chain.push(canonical);
-    let base = load_tree(&base_path, chain)?;
+    let base = load_tree(&base_path, chain, warnings)?;
     chain.pop();
     merge_variant(base, tree)
 }
@@ -520,12 +533,14 @@ pub fn load_str_with(
     text: &str,
     base: &BaseResolver<'_>,
 ) -> Result<LoadedMap, Vec<Diagnostic>> {
-    let tree = load_tree_str(name, text, base, &mut Vec::new())?;
+    let mut warnings = Vec::new();
+    let tree = load_tree_str(name, text, base, &mut Vec::new(), &mut warnings)?;
     let model = deserialize(&tree)?;
     Ok(LoadedMap {
         path: PathBuf::from(name),
         model,
         tree,
+        warnings,
     })
 }
 
@@ -534,9 +549,12 @@ fn load_tree_str(
     text: &str,
     base: &BaseResolver<'_>,
     chain: &mut Vec<String>,
+    warnings: &mut Vec<Diagnostic>,
 ) -> Result<Node, Vec<Diagnostic>> {
     let file: Arc<str> = Arc::from(name);
-    let tree = source::parse_map(&file, text)?;
+    let parsed = source::parse_map(&file, text)?;
+    warnings.extend(parsed.warnings);
+    let tree = parsed.tree;
     let Some(extends) = tree.get("drive").and_then(|d| d.get("extends")) else {
         return Ok(tree);
     };
@@ -562,7 +580,7 @@ fn load_tree_str(
         )]);
     };
     chain.push(base_id.clone());
-    let base_tree = load_tree_str(&base_name, &base_text, base, chain)?;
+    let base_tree = load_tree_str(&base_name, &base_text, base, chain, warnings)?;
     chain.pop();
     merge_variant(base_tree, tree)
 }

@@ -13,6 +13,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MapFile {
+    /// The schema version the file is written in (`schema: 2`); a file without it is read as
+    /// schema 1. Each file of a variant map is read in its own version ([`crate::schema`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub schema: Option<u32>,
     /// How the manual numbers its registers: `hex` (the default: addresses are written `0x2001`
     /// or `2001H`, and a bare decimal is refused) or `decimal` (bare decimals are addresses as
     /// written). Decided per file while reading, see [`crate::hex`].

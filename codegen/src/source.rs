@@ -194,16 +194,38 @@ pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
     }))
 }
 
-/// [`parse`], then the decision on every address and code written without a hex marker (see
-/// [`crate::hex`]): the tree of one map file as the loader uses it.
-pub fn parse_map(file: &Arc<str>, text: &str) -> Result<Node, Vec<Diagnostic>> {
+/// One map file read as the loader uses it.
+#[derive(Debug, Clone)]
+pub struct Parsed {
+    pub tree: Node,
+    /// The schema version the file is written in ([`crate::schema`]).
+    pub version: u32,
+    /// What reading an earlier schema version changed (the file's warning, then one per value).
+    pub warnings: Vec<Diagnostic>,
+    /// The numbers read as schema 1 reads them, which [`crate::schema::migrate`] rewrites.
+    pub reread: Vec<crate::hex::Reread>,
+}
+
+/// [`parse`], then the file's schema version and the decision on every address and code
+/// written without a hex marker (see [`crate::hex`]): the tree of one map file as the loader
+/// uses it.
+pub fn parse_map(file: &Arc<str>, text: &str) -> Result<Parsed, Vec<Diagnostic>> {
     let mut tree = parse(file, text).map_err(|d| vec![d])?;
-    let errors = crate::hex::resolve(&mut tree);
-    if errors.is_empty() {
-        Ok(tree)
-    } else {
-        Err(errors)
+    let version = crate::schema::version_of(&tree).map_err(|d| vec![d])?;
+    let resolved = crate::hex::resolve(&mut tree, version);
+    if !resolved.errors.is_empty() {
+        return Err(resolved.errors);
     }
+    let mut warnings: Vec<Diagnostic> = crate::schema::file_warning(file, &tree, version)
+        .into_iter()
+        .collect();
+    warnings.extend(resolved.reread.iter().map(crate::hex::Reread::warning));
+    Ok(Parsed {
+        tree,
+        version,
+        warnings,
+        reread: resolved.reread,
+    })
 }
 
 /// The error for a file over [`MAX_MAP_BYTES`].

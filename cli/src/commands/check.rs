@@ -153,6 +153,16 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                     drive.registers.len()
                 );
                 let mut map_errors = 0;
+                // A map in an earlier schema version is read by its meaning, with warnings;
+                // `--strict` wants it in the current one.
+                for w in &drive.warnings {
+                    if args.strict {
+                        eprintln!("{w} (--strict: run `drivemap migrate`)");
+                        map_errors += 1;
+                    } else {
+                        eprintln!("{}", w.as_warning());
+                    }
+                }
                 for w in review::protocol_warnings(drive) {
                     eprintln!("{w}");
                 }

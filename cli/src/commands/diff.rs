@@ -59,7 +59,39 @@ pub struct Args {
 }
 
 fn read(path: &Path, ctx: &Context) -> Result<Drive, String> {
-    drivemap_codegen::read_map(path, ctx).map_err(|d| format!("{d}"))
+    let drive = drivemap_codegen::read_map(path, ctx).map_err(|d| format!("{d}"))?;
+    warn_schema(&drive, None);
+    Ok(drive)
+}
+
+/// Prints what reading a map of an earlier schema version changed (the map is compared by its
+/// meaning all the same); `rename` shows a temporary directory as the revision it holds.
+fn warn_schema(drive: &Drive, rename: Option<(&Path, &str)>) {
+    let show = |text: String| match rename {
+        Some((tmp, shown)) => text.replace(&tmp.display().to_string(), shown),
+        None => text,
+    };
+    // The file's warning says what changed; the values read so are listed by `check`.
+    if let Some(first) = drive.warnings.first() {
+        eprintln!("{}", show(first.as_warning()));
+    }
+    if drive.warnings.len() > 1 {
+        eprintln!(
+            "{}: note: {} address(es) and code(s) of it are written in decimal; `drivemap check` \
+             lists them",
+            show(drive.file.display().to_string()),
+            drive.warnings.len() - 1
+        );
+    }
+}
+
+/// Reads a map of revision `rev` written to the temporary directory `tmp`, naming it
+/// `rev:dir/name` in errors and warnings instead of the temporary path.
+fn read_at_rev(path: &Path, ctx: &Context, tmp: &Path, shown: &str) -> Result<Drive, String> {
+    let drive = drivemap_codegen::read_map(path, ctx)
+        .map_err(|d| format!("{d}").replace(&tmp.display().to_string(), shown))?;
+    warn_schema(&drive, Some((tmp, shown)));
+    Ok(drive)
 }
 
 /// Compares maps and prints the changes; exits 1 when any is breaking.
@@ -76,7 +108,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             };
             let ctx = context_for(new);
             let read = |path: &Path| {
-                drivemap_codegen::read_map_version(path, &ctx).map_err(|d| format!("{d}"))
+                let drive =
+                    drivemap_codegen::read_map_version(path, &ctx).map_err(|d| format!("{d}"))?;
+                warn_schema(&drive, None);
+                Ok::<_, String>(drive)
             };
             vec![diff::compare(&read(old)?, &read(new)?)]
         }
@@ -169,13 +204,15 @@ fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, String> {
             .collect(),
     };
     let ctx = context_for(&dir.join("x.yaml"));
+    let shown = format!("{rev}:{}", dir.display());
+    let old_read = |p: &Path| read_at_rev(p, &ctx, then.path(), &shown);
     let mut diffs = Vec::new();
     for name in names {
         let (old, new) = (then.path().join(&name), dir.join(&name));
         let diff = match (old.is_file(), new.is_file()) {
-            (true, true) => diff::compare(&read(&old, &ctx)?, &read(&new, &ctx)?),
+            (true, true) => diff::compare(&old_read(&old)?, &read(&new, &ctx)?),
             (false, true) => diff::added(&read(&new, &ctx)?),
-            (true, false) => diff::removed(&read(&old, &ctx)?),
+            (true, false) => diff::removed(&old_read(&old)?),
             (false, false) => {
                 return Err(format!(
                     "{name} is neither in {} nor at revision {rev}",

@@ -4,6 +4,7 @@ pub mod demo;
 pub mod diff;
 pub mod doc;
 pub mod export;
+pub mod migrate;
 pub mod poll;
 pub mod probe;
 pub mod read;
