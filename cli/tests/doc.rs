@@ -28,29 +28,28 @@ fn fixture_reference_golden() {
     insta::assert_snapshot!("example_drive_doc", out);
 }
 
-#[test]
-fn shipped_map_references_are_current() {
-    let maps = repo().join("maps");
-    let docs = repo().join("docs").join("drives");
+mod new_map;
+
+type Run<'a> = &'a dyn Fn(&[&str]) -> (i32, String, String);
+
+/// Every map of `root/maps` has its reference `root/docs/drives/<id>.md` as `drivemap doc`
+/// makes it (run in `root`), and every reference documents a map. Returns the ids.
+fn every_reference_is_current(root: &Path, run: Run<'_>) -> Vec<String> {
+    let docs = root.join("docs").join("drives");
     let mut ids = Vec::new();
     let mut stale = Vec::new();
-    for entry in std::fs::read_dir(&maps).expect("maps directory") {
-        let path = entry.expect("entry").path();
-        if path.extension().is_none_or(|e| e != "yaml") {
-            continue;
-        }
+    for path in drivemap_codegen::find_maps(&root.join("maps")).expect("maps directory") {
         let id = path.file_stem().unwrap().to_string_lossy().into_owned();
-        let (code, fresh, err) = drivemap(&["doc", "--maps", "maps", "--drive", &id]);
+        let (code, fresh, err) = run(&["doc", "--maps", "maps", "--drive", &id]);
         assert_eq!(code, 0, "drivemap doc --drive {id} failed: {err}");
         let committed = std::fs::read_to_string(docs.join(format!("{id}.md"))).unwrap_or_default();
         if committed != fresh {
             stale.push(format!(
-                "docs/drives/{id}.md is stale: run `cargo run -p drivemap -- doc --drive {id} -o docs/drives/{id}.md`"
+                "docs/drives/{id}.md is stale: run `drivemap doc --maps maps --drive {id} --docs docs`"
             ));
         }
         ids.push(id);
     }
-    assert!(ids.len() >= 5, "expected the shipped maps, found {ids:?}");
     for entry in std::fs::read_dir(&docs).expect("docs/drives") {
         let name = entry
             .expect("entry")
@@ -64,6 +63,31 @@ fn shipped_map_references_are_current() {
         }
     }
     assert!(stale.is_empty(), "{}", stale.join("\n"));
+    ids
+}
+
+#[test]
+fn shipped_map_references_are_current() {
+    let ids = every_reference_is_current(&repo(), &drivemap);
+    assert!(ids.len() >= 5, "expected the shipped maps, found {ids:?}");
+}
+
+/// A map added to `maps/` has its reference compared by the same test once `drivemap doc
+/// --docs` made it; before, the test names the command to run.
+#[test]
+fn a_new_map_is_documented_with_no_test_edit() {
+    let n = new_map::NewMap::new("doc");
+    let ids = every_reference_is_current(&n.root, &|a| n.drivemap(a));
+    assert!(ids.iter().any(|i| i == n.id), "{ids:?}");
+    std::fs::remove_file(n.root.join(format!("docs/drives/{}.md", n.id))).unwrap();
+    let stale =
+        std::panic::catch_unwind(|| every_reference_is_current(&n.root, &|a| n.drivemap(a)))
+            .expect_err("a missing reference is stale");
+    let message = stale.downcast_ref::<String>().cloned().unwrap_or_default();
+    assert!(
+        message.contains("docs/drives/acme-vf1.md is stale: run `drivemap doc --maps maps --drive acme-vf1 --docs docs`"),
+        "{message}"
+    );
 }
 
 #[test]

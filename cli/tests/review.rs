@@ -298,42 +298,85 @@ fn diff_github_annotations_are_exact() {
     assert_eq!(out.lines().count(), 1, "{out}");
 }
 
-const SHIPPED: [&str; 5] = [
-    "ptlk-tds-v8",
-    "yaskawa-v7",
-    "yaskawa-j7",
-    "yaskawa-gpd515",
-    "automationdirect-acn",
-];
+mod new_map;
+
+type Run<'a> = &'a dyn Fn(&[&str]) -> (i32, String, String);
+
+/// The drive ids of the maps in `root/maps`.
+fn map_ids(root: &Path) -> Vec<String> {
+    drivemap_codegen::find_maps(&root.join("maps"))
+        .expect("maps/")
+        .iter()
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect()
+}
+
+/// `check --strict` on every map of `root/maps` (run in `root`): all pass, none with an
+/// unverified citation. Returns the standard error.
+fn every_map_checks_strictly(root: &Path, run: Run<'_>) -> String {
+    let files: Vec<String> = map_ids(root)
+        .iter()
+        .map(|m| format!("maps/{m}.yaml"))
+        .collect();
+    let mut args = vec!["check", "--strict"];
+    args.extend(files.iter().map(String::as_str));
+    let (code, out, err) = run(&args);
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(out.matches(", 0 unverified)").count(), files.len(), "{out}");
+    err
+}
+
+/// Every map of `root/maps` has a coverage document `root/docs/coverage/<id>.md` whose
+/// generated section is the tool's report.
+fn every_coverage_document_is_current(root: &Path, run: Run<'_>) {
+    for m in map_ids(root) {
+        let doc = format!("docs/coverage/{m}.md");
+        let (code, out, err) = run(&["coverage", &m, "--maps", "maps", "--check", &doc]);
+        assert_eq!(code, 0, "{m}: {out}{err}");
+    }
+}
 
 #[test]
 fn every_citation_of_the_shipped_maps_verifies_or_is_marked_indirect() {
-    let files: Vec<String> = SHIPPED.iter().map(|m| format!("maps/{m}.yaml")).collect();
-    let mut args = vec!["check", "--strict"];
-    args.extend(files.iter().map(String::as_str));
-    let (code, out, err) = drivemap(&repo(), None, &args);
+    let err = every_map_checks_strictly(&repo(), &|a| drivemap(&repo(), None, a));
     // The one word on stderr: the ACN's printed station IDs 1-250 go beyond Modbus's 247, which
     // is warned about, never refused (`--strict` included).
     assert_eq!(
-        (code, err.as_str()),
-        (
-            0,
-            "maps/automationdirect-acn.yaml:33:27: warning: slave addresses 248..=250 are the \
-             manual's, but the Modbus serial-line specification reserves 248-255 (unicast \
-             1-247): a standard master or gateway may not reach them\n"
-        ),
-        "{out}"
+        err.as_str(),
+        "maps/automationdirect-acn.yaml:33:27: warning: slave addresses 248..=250 are the \
+         manual's, but the Modbus serial-line specification reserves 248-255 (unicast \
+         1-247): a standard master or gateway may not reach them\n"
     );
-    assert_eq!(out.matches(", 0 unverified)").count(), 5, "{out}");
 }
 
 #[test]
 fn the_coverage_documents_are_the_tools_report() {
-    for m in SHIPPED {
-        let doc = format!("docs/coverage/{m}.md");
-        let (code, out, err) = drivemap(&repo(), None, &["coverage", m, "--check", &doc]);
-        assert_eq!(code, 0, "{m}: {out}{err}");
-    }
+    every_coverage_document_is_current(&repo(), &|a| drivemap(&repo(), None, a));
+}
+
+/// A map added to `maps/` (and its documents made by `drivemap doc --docs`) is checked and its
+/// coverage compared by the same tests, with no edit of them.
+#[test]
+fn a_new_map_is_checked_and_its_coverage_compared_with_no_test_edit() {
+    let n = new_map::NewMap::new("review");
+    let run = |a: &[&str]| n.drivemap(a);
+    assert!(map_ids(&n.root).iter().any(|m| m == n.id));
+    every_map_checks_strictly(&n.root, &run);
+    every_coverage_document_is_current(&n.root, &run);
+    // And the documents are the command's: a stale one fails.
+    let doc = n.root.join(format!("docs/coverage/{}.md", n.id));
+    let text = std::fs::read_to_string(&doc).unwrap();
+    assert!(text.contains("Total: "), "{text}");
+    std::fs::write(&doc, text.replacen("Total: ", "Total: 1 ", 1)).unwrap();
+    let (code, _, err) = n.drivemap(&[
+        "coverage",
+        n.id,
+        "--maps",
+        "maps",
+        "--check",
+        &format!("docs/coverage/{}.md", n.id),
+    ]);
+    assert_eq!(code, 1, "{err}");
 }
 
 #[test]

@@ -120,7 +120,8 @@ pub fn text(r: &CoverageReport) -> String {
     out
 }
 
-fn totals(r: &CoverageReport) -> String {
+/// The one-line summary of a report (`3 tables, 40 rows, ...`).
+pub fn totals(r: &CoverageReport) -> String {
     let sum = |f: fn(&review::TableSummary) -> usize| r.tables.iter().map(f).sum::<usize>();
     format!(
         "{} tables, {} rows, {} cited, {} gaps, {} uncited",

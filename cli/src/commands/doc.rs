@@ -20,6 +20,12 @@ pub struct Args {
     /// Write the Markdown here instead of standard output.
     #[arg(short = 'o', long = "output")]
     pub output: Option<PathBuf>,
+    /// Regenerate every generated document of the map under DIR (the repository's `docs`): the
+    /// reference `DIR/drives/<id>.md` and the generated section of `DIR/coverage/<id>.md`
+    /// (created with a title when new; the text around the section is kept). The tests compare
+    /// both with the map.
+    #[arg(long, value_name = "DIR", conflicts_with = "output")]
+    pub docs: Option<PathBuf>,
     #[command(flatten)]
     pub dir: MapsDir,
 }
@@ -59,6 +65,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         file
     };
     let text = reference::render(&drive, &name);
+    if let Some(docs) = &args.docs {
+        return write_docs(docs, &path, &drive, &text, &args);
+    }
     match &args.output {
         Some(out) => {
             std::fs::write(out, &text).map_err(|e| format!("{}: {e}", out.display()))?;
@@ -71,5 +80,55 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         }
         None => out!("{text}"),
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--docs DIR`: the reference and the coverage section of one map.
+fn write_docs(
+    docs: &std::path::Path,
+    path: &std::path::Path,
+    drive: &drivemap_codegen::Drive,
+    reference: &str,
+    args: &Args,
+) -> Result<ExitCode, String> {
+    use crate::commands::coverage;
+    let id = &drive.meta.id;
+    if !path.is_file() {
+        return Err(format!(
+            "{}: not a file; the coverage document is made from the map's text beside its \
+             manuals (give --maps DIR)",
+            path.display()
+        ));
+    }
+    let write = |file: PathBuf, text: &str| -> Result<PathBuf, String> {
+        if let Some(dir) = file.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        }
+        if std::fs::read_to_string(&file).ok().as_deref() != Some(text) {
+            std::fs::write(&file, text).map_err(|e| format!("{}: {e}", file.display()))?;
+        }
+        Ok(file)
+    };
+    let refpath = write(docs.join("drives").join(format!("{id}.md")), reference)?;
+    outln!(
+        "{}: {} registers, {} lines",
+        refpath.display(),
+        drive.registers.len(),
+        reference.lines().count()
+    );
+    let report = coverage::report_for(path, &args.dir)?;
+    let covpath = docs.join("coverage").join(format!("{id}.md"));
+    let old = std::fs::read_to_string(&covpath).unwrap_or_else(|_| {
+        format!(
+            "# Coverage: {} {} (`maps/{id}.yaml`)\n\n",
+            drive.meta.vendor,
+            drive.meta.models.join(" / ")
+        )
+    });
+    let covpath = write(
+        covpath,
+        &coverage::splice(&old, &coverage::markdown(&report)),
+    )?;
+    outln!("{}: {}", covpath.display(), coverage::totals(&report));
     Ok(ExitCode::SUCCESS)
 }
