@@ -19,6 +19,18 @@ pub fn parse(text: &str) -> Result<Duration, String> {
     Ok(d)
 }
 
+/// Parses a duration that must be longer than zero: a timeout of 0 would give up before any
+/// reply could arrive (or close every connection at once), so it is refused with what it means.
+pub fn positive(text: &str) -> Result<Duration, String> {
+    let d = parse(text)?;
+    if d.is_zero() {
+        return Err(format!(
+            "`{text}` is zero: a timeout of 0 expires before anything can arrive; give a duration longer than 0 (e.g. 500ms or 2s)"
+        ));
+    }
+    Ok(d)
+}
+
 /// A value parser for a number option in `min..=max` (finite; `inf`, `nan` refused).
 pub fn number(
     min: f64,
@@ -91,6 +103,15 @@ mod tests {
         );
         assert!(parse("1e300s").is_err());
         assert!(parse(&"9".repeat(400)).unwrap_err().contains("longer than"));
+    }
+
+    #[test]
+    fn zero_is_not_a_timeout() {
+        assert!(positive("0s").unwrap_err().contains("is zero"));
+        assert!(positive("0").unwrap_err().contains("is zero"));
+        assert!(positive("0.0ms").unwrap_err().contains("is zero"));
+        assert_eq!(positive("1ms").unwrap(), Duration::from_millis(1));
+        assert!(positive("61min").unwrap_err().contains("longer than"));
     }
 
     #[test]

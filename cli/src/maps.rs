@@ -124,8 +124,18 @@ impl MapsDir {
     /// Reads, expands and validates a map file. Its base (`extends`) is looked up beside it,
     /// else by id among the maps this finds (the built-in ones too).
     pub fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
+        self.read_cached(path, &drivemap_codegen::load::TreeCache::new())
+    }
+
+    /// Like [`MapsDir::read`], taking the files already read (a map's bases) from `cache`:
+    /// checking a directory reads each file once, however long its chains of `extends`.
+    pub fn read_cached(
+        &self,
+        path: &Path,
+        cache: &drivemap_codegen::load::TreeCache,
+    ) -> Result<Drive, Diagnostics> {
         let ctx = context_for(path);
-        let direct = drivemap_codegen::read_map(path, &ctx);
+        let direct = drivemap_codegen::read_map_cached(path, &ctx, cache);
         let base_missing = |d: &Diagnostics| {
             d.iter()
                 .any(|x| x.message.starts_with("base map `") && x.message.ends_with("not found"))

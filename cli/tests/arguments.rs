@@ -62,6 +62,40 @@ fn out_of_range_numbers_and_durations_are_refused_by_the_parser() {
             ],
             "longer than the 1 hour",
         ),
+        // A zero timeout gives up before any reply can arrive; a zero idle timeout closes
+        // every connection at once: both are refused, not accepted and useless.
+        (
+            [&read[..], &["--timeout", "0s", "Bn-01"]].concat(),
+            "`0s` is zero",
+        ),
+        (
+            vec!["scan", "--tcp", "127.0.0.1:9", "--timeout", "0ms"],
+            "`0ms` is zero",
+        ),
+        (
+            vec![
+                "simulate",
+                "--drive",
+                "ptlk-tds-v8",
+                "--tcp",
+                "5020",
+                "--idle-timeout",
+                "0s",
+            ],
+            "`0s` is zero",
+        ),
+        (
+            vec![
+                "simulate",
+                "--drive",
+                "ptlk-tds-v8",
+                "--tcp",
+                "5020",
+                "--frame-timeout",
+                "0",
+            ],
+            "`0` is zero",
+        ),
     ];
     for (args, message) in cases {
         let (code, stderr) = drivemap(&args);

@@ -571,3 +571,21 @@ fn page_citations_name_a_declared_manual_and_the_export_describes_it() {
         serde_json::json!({"file": "manual.txt", "title": "Example manual"})
     );
 }
+
+/// `check --maps DIR` on a directory with no map is an error naming the directory, not a
+/// silent success that checked nothing.
+#[test]
+fn check_of_an_empty_maps_directory_is_an_error() {
+    let s = Scratch::new("empty-maps");
+    std::fs::write(s.0.join("notes.txt"), "not a map").unwrap();
+    let dir = s.0.display().to_string();
+    let (code, out, err) = drivemap(&s.0, None, &["check", "--maps", &dir]);
+    assert_ne!(code, 0, "{out}{err}");
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        err.contains(&format!(
+            "{dir}: no maps to check (no *.yaml or *.yml file in the directory)"
+        )),
+        "{err}"
+    );
+}

@@ -42,6 +42,18 @@ pub fn read_map(path: &Path, ctx: &validate::Context) -> Result<Drive, Diagnosti
     finish(&loaded, ctx)
 }
 
+/// Like [`read_map`], sharing the trees of map files already read (and their bases) through
+/// `cache`: reading every map of a directory with one cache reads each file once, however
+/// long its chain of `extends`.
+pub fn read_map_cached(
+    path: &Path,
+    ctx: &validate::Context,
+    cache: &load::TreeCache,
+) -> Result<Drive, Diagnostics> {
+    let loaded = load::load_cached(path, cache).map_err(Diagnostics::from)?;
+    finish(&loaded, ctx)
+}
+
 /// Like [`read_map`] for YAML held in memory (`extends` is not available).
 pub fn read_map_str(name: &str, text: &str, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
     let loaded = load::load_str(name, text).map_err(Diagnostics::from)?;

@@ -9,6 +9,8 @@
 //! dropped. Every node keeps the file and line it was written at, so errors in inherited rows
 //! point at the base map and errors in overrides at the variant.
 
+use std::cell::{Cell, RefCell};
+use std::collections::{HashMap, HashSet};
 use std::io::Read;
 use std::path::{Path as FsPath, PathBuf};
 use std::sync::Arc;
@@ -48,11 +50,41 @@ pub fn display_name(path: &FsPath) -> Arc<str> {
     Arc::from(shown.to_string_lossy().as_ref())
 }
 
+/// A merged tree and the warnings of reading it (and its bases), or why it cannot be read.
+type Merged = Result<(Node, Vec<Diagnostic>), Vec<Diagnostic>>;
+
+/// The merged trees of the map files read so far, by canonical path: reading every map of a
+/// directory with one cache parses and merges each file once, so a chain of `extends` costs
+/// time in proportion to its length (each variant is merged onto its base's cached tree),
+/// not to the square of it.
+#[derive(Debug, Default)]
+pub struct TreeCache {
+    trees: RefCell<HashMap<PathBuf, Merged>>,
+    read: Cell<usize>,
+}
+
+impl TreeCache {
+    /// An empty cache.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// How many map files were read and parsed through this cache.
+    pub fn files_read(&self) -> usize {
+        self.read.get()
+    }
+}
+
 /// Reads one map file, resolving `extends` against maps in the same directory
 /// (`<id>.yaml`). Returns every problem found while reading.
 pub fn load(path: &FsPath) -> Result<LoadedMap, Vec<Diagnostic>> {
-    let mut warnings = Vec::new();
-    let tree = load_tree(path, &mut Vec::new(), &mut warnings)?;
+    load_cached(path, &TreeCache::new())
+}
+
+/// Like [`load`], taking the merged tree of every file (the map and its bases) from `cache`
+/// when it was read before, and keeping what it reads there.
+pub fn load_cached(path: &FsPath, cache: &TreeCache) -> Result<LoadedMap, Vec<Diagnostic>> {
+    let (tree, warnings) = load_tree(path, cache)?;
     let model = deserialize(&tree)?;
     Ok(LoadedMap {
         path: path.to_path_buf(),
@@ -114,16 +146,64 @@ fn read_tree(path: &FsPath) -> Result<source::Parsed, Vec<Diagnostic>> {
     source::parse_map(&file, &text)
 }
 
-fn load_tree(
+/// The merged tree of `path`: the file merged onto its chain of bases, with the warnings of
+/// reading them. Walks the chain up to the first file without `extends` (or the first one
+/// already in `cache`) in a loop, then merges back down, caching every level: a long chain
+/// neither recurses nor reads a file twice.
+fn load_tree(path: &FsPath, cache: &TreeCache) -> Merged {
+    let canonical = |p: &FsPath| p.canonicalize().unwrap_or_else(|_| p.to_path_buf());
+    // Files read on the way up, each waiting for its base's merged tree.
+    let mut pending: Vec<(PathBuf, source::Parsed)> = Vec::new();
+    let mut seen: HashSet<PathBuf> = HashSet::new();
+    let mut current = path.to_path_buf();
+    let mut merged: Merged = loop {
+        let key = canonical(&current);
+        if let Some(done) = cache.trees.borrow().get(&key) {
+            break done.clone();
+        }
+        seen.insert(key.clone());
+        cache.read.set(cache.read.get() + 1);
+        let step = read_tree(&current).and_then(|parsed| {
+            let base = base_of(&current, &parsed.tree, &seen)?;
+            Ok((parsed, base))
+        });
+        match step {
+            Ok((parsed, None)) => {
+                let done = Ok((parsed.tree, parsed.warnings));
+                cache.trees.borrow_mut().insert(key, done.clone());
+                break done;
+            }
+            Ok((parsed, Some(base_path))) => {
+                pending.push((key, parsed));
+                current = base_path;
+            }
+            Err(e) => {
+                cache.trees.borrow_mut().insert(key, Err(e.clone()));
+                break Err(e);
+            }
+        }
+    };
+    while let Some((key, parsed)) = pending.pop() {
+        merged = merged.and_then(|(base, base_warnings)| {
+            // The variant's warnings, then its bases' (the order they are read in).
+            let mut warnings = parsed.warnings;
+            warnings.extend(base_warnings);
+            Ok((merge_variant(base, parsed.tree)?, warnings))
+        });
+        cache.trees.borrow_mut().insert(key, merged.clone());
+    }
+    merged
+}
+
+/// The path of the base map that `tree` (read from `path`) names with `extends`, if any;
+/// refused when the base is missing or already on the chain (`seen`).
+fn base_of(
     path: &FsPath,
-    chain: &mut Vec<PathBuf>,
-    warnings: &mut Vec<Diagnostic>,
-) -> Result<Node, Vec<Diagnostic>> {
-    let parsed = read_tree(path)?;
-    warnings.extend(parsed.warnings);
-    let tree = parsed.tree;
+    tree: &Node,
+    seen: &HashSet<PathBuf>,
+) -> Result<Option<PathBuf>, Vec<Diagnostic>> {
     let Some(extends) = tree.get("drive").and_then(|d| d.get("extends")) else {
-        return Ok(tree);
+        return Ok(None);
     };
     let NodeKind::Scalar(Value::String(base_id)) = &extends.kind else {
         return Err(vec![Diagnostic::new(
@@ -139,7 +219,7 @@ fn load_tree(
     let canonical = base_path
         .canonicalize()
         .unwrap_or_else(|_| base_path.clone());
-    if chain.contains(&canonical) {
+    if seen.contains(&canonical) {
         return Err(vec![Diagnostic::new(
             extends.loc.clone(),
             None,
@@ -153,10 +233,7 @@ fn load_tree(
             format!("base map `{}` not found", base_path.display()),
         )]);
     }
-    chain.push(canonical);
-    let base = load_tree(&base_path, chain, warnings)?;
-    chain.pop();
-    merge_variant(base, tree)
+    Ok(Some(base_path))
 }
 
 fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {

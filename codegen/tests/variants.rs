@@ -74,3 +74,78 @@ fn removing_an_unknown_register_is_an_error() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A chain of `extends` (each map the variant of the one before) read with one cache: every
+/// file is read and parsed once, however deep the chain (without the cache, the map at depth
+/// k reads k files, and checking the directory reads n²/2), and a deep chain is walked without
+/// recursion (1,000 levels on a 256 KiB stack).
+#[test]
+fn a_chain_of_variants_reads_each_file_once() {
+    let dir = std::env::temp_dir().join(format!("drivemap-chain-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = std::fs::read_to_string("tests/fixtures/mini-drive.yaml")
+        .unwrap()
+        .replace("id: mini-drive", "id: c0000");
+    std::fs::write(dir.join("c0000.yaml"), base).unwrap();
+    const N: usize = 1000;
+    for i in 1..N {
+        std::fs::write(
+            dir.join(format!("c{i:04}.yaml")),
+            format!(
+                "drive:\n  id: c{i:04}\n  extends: c{:04}\n  vendor: Example\n  models: [MD-{i}]\n  manuals: [{{file: manual.txt, title: Example manual}}]\n",
+                i - 1
+            ),
+        )
+        .unwrap();
+    }
+    let files = drivemap_codegen::find_maps(&dir).unwrap();
+    assert_eq!(files.len(), N);
+    let (read, last_models) = std::thread::Builder::new()
+        .stack_size(256 * 1024)
+        .spawn(move || {
+            let cache = drivemap_codegen::load::TreeCache::new();
+            let mut last = Vec::new();
+            for f in &files {
+                let d = drivemap_codegen::read_map_cached(f, &Context::default(), &cache)
+                    .unwrap_or_else(|d| panic!("{d}"));
+                assert_eq!(d.registers.len(), 17, "{}", f.display());
+                last = d.meta.models.clone();
+            }
+            (cache.files_read(), last)
+        })
+        .unwrap()
+        .join()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(read, N, "each file of the chain is read once");
+    assert_eq!(last_models, ["MD-999"]);
+}
+
+/// A cycle of `extends` is an error for every map on it, and each file is read once.
+#[test]
+fn a_cycle_of_variants_is_still_refused() {
+    let dir = std::env::temp_dir().join(format!("drivemap-cycle-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (id, base) in [("a", "b"), ("b", "a")] {
+        std::fs::write(
+            dir.join(format!("{id}.yaml")),
+            format!("drive:\n  id: {id}\n  extends: {base}\n"),
+        )
+        .unwrap();
+    }
+    let cache = drivemap_codegen::load::TreeCache::new();
+    for id in ["a", "b"] {
+        let e = drivemap_codegen::read_map_cached(
+            &dir.join(format!("{id}.yaml")),
+            &Context::default(),
+            &cache,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("makes a cycle of variant maps"), "{e}");
+    }
+    assert_eq!(cache.files_read(), 2);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -113,21 +113,27 @@ impl std::fmt::Display for CitationCounts {
 pub fn run(args: Args) -> Result<ExitCode, String> {
     // (name shown, map read, manuals directory for its citations)
     type Checked = (String, Result<Drive, Diagnostics>, Option<PathBuf>);
+    // One cache for every file: a map's bases are read once, not once per variant.
+    let cache = drivemap_codegen::load::TreeCache::new();
     let from_file = |f: &PathBuf| -> Checked {
         (
             f.display().to_string(),
-            args.dir.read(f),
+            args.dir.read_cached(f, &cache),
             crate::maps::manuals_dir_for(f),
         )
     };
     let files: Vec<Checked> = if !args.files.is_empty() {
         args.files.iter().map(from_file).collect()
     } else if let Some(dir) = &args.dir.maps {
-        drivemap_codegen::find_maps(dir)
-            .map_err(|e| format!("{}: {e}", dir.display()))?
-            .iter()
-            .map(from_file)
-            .collect()
+        let found =
+            drivemap_codegen::find_maps(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        if found.is_empty() {
+            return Err(format!(
+                "{}: no maps to check (no *.yaml or *.yml file in the directory)",
+                dir.display()
+            ));
+        }
+        found.iter().map(from_file).collect()
     } else {
         // The built-in maps; their manuals are found from the current directory.
         crate::maps::BUILTIN_MAPS

@@ -54,7 +54,7 @@ pub struct Args {
     #[arg(long, value_enum, value_delimiter = ',')]
     pub parity: Vec<LineParity>,
     /// Longest wait for each probe (default: from the maps' timing and the line speed).
-    #[arg(long, value_parser = crate::duration::parse)]
+    #[arg(long, value_parser = crate::duration::positive)]
     pub timeout: Option<Duration>,
     /// Candidate maps by drive id (default: every map known).
     #[arg(long = "drive", value_name = "ID")]

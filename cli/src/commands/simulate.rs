@@ -69,11 +69,11 @@ pub struct Args {
     #[arg(long = "max-connections", default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..))]
     pub max_connections: u16,
     /// TCP: a connection that sends no well-formed request this long is closed.
-    #[arg(long = "idle-timeout", default_value = "60s", value_parser = crate::duration::parse)]
+    #[arg(long = "idle-timeout", default_value = "60s", value_parser = crate::duration::positive)]
     pub idle_timeout: std::time::Duration,
     /// TCP: a connection whose started frame is not complete this long after its first byte is
     /// closed (a peer trickling bytes cannot hold it).
-    #[arg(long = "frame-timeout", default_value = "1s", value_parser = crate::duration::parse)]
+    #[arg(long = "frame-timeout", default_value = "1s", value_parser = crate::duration::positive)]
     pub frame_timeout: std::time::Duration,
     #[command(flatten)]
     pub dir: MapsDir,

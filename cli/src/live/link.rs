@@ -50,7 +50,7 @@ pub struct LinkArgs {
     pub slave: Option<u8>,
     /// How long to wait for each reply (default: 1 s plus the map's response time and
     /// response-delay default).
-    #[arg(long, value_parser = crate::duration::parse)]
+    #[arg(long, value_parser = crate::duration::positive)]
     pub timeout: Option<Duration>,
     /// Further attempts after a timeout.
     #[arg(long, default_value_t = 2)]

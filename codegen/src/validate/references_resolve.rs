@@ -212,6 +212,16 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 {
                     settings_field_free(drive, out, s, f, &sp.key("selected_by"), rid);
                 }
+                if selector.is_some_and(|s| s.register.id() == r.id()) {
+                    out.push(drive.error(
+                        &sp.key("selected_by"),
+                        rid,
+                        format!(
+                            "selected_by `{}` is this register itself: its word cannot both be the value and choose the value's scale; name the parameter that selects it",
+                            sel.selected_by
+                        ),
+                    ));
+                }
                 if sel.cases.is_empty() {
                     out.push(drive.error(&sp, rid, "a selected scale needs at least one case"));
                 }
@@ -291,6 +301,15 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             }
             if let Some(s) = &w.setting {
                 let found = selector(drive, out, s, &ap.key("setting"), rid, "condition setting");
+                if found.is_some_and(|f| f.register.id() == r.id()) {
+                    out.push(drive.error(
+                        &ap.key("setting"),
+                        rid,
+                        format!(
+                            "condition setting `{s}` is this register itself: its address cannot depend on its own value"
+                        ),
+                    ));
+                }
                 for code in &w.is {
                     codes_fit(drive, out, s, found, *code, &ap.key("is"), rid);
                 }
