@@ -39,6 +39,9 @@ fn main() {
     let dir = std::env::var_os("DRIVEMAP_MAPS")
         .map(PathBuf::from)
         .unwrap_or_else(|| manifest.join("../maps"));
+    // Errors name `/…/maps/<id>.yaml`, as `drivemap check` does for that path, not
+    // `drives/../maps/<id>.yaml`.
+    let dir = dir.canonicalize().unwrap_or(dir);
     println!("cargo:rerun-if-env-changed=DRIVEMAP_MAPS");
     println!("cargo:rerun-if-env-changed=DRIVEMAP_DRIVES");
     let selected: Vec<String> = std::env::var("DRIVEMAP_DRIVES")

@@ -207,6 +207,14 @@ impl Config {
             println!("cargo:rerun-if-env-changed=DRIVEMAP_MANUALS");
         }
         let drives = self.check()?;
+        if self.cargo_directives {
+            // A map of an earlier schema version builds, by its meaning; say so once per map.
+            for d in &drives {
+                if let Some(first) = d.warnings.first() {
+                    println!("cargo:warning={}", first.as_warning());
+                }
+            }
+        }
         let runtime: proc_macro2::TokenStream = self
             .runtime
             .parse()

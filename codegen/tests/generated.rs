@@ -68,3 +68,34 @@ fn config_writes_only_when_changed() {
     );
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// Rustdoc search finds a register by the manual's own words: `#[doc(alias)]` on its type for
+/// its id, its parameter number and its address as the manual prints it (hex with its marker, or
+/// the register number of a manual numbering registers in decimal).
+#[test]
+fn rustdoc_search_finds_a_register_by_the_manuals_words() {
+    let module = |path: &str| {
+        let drive = drivemap_codegen::read_map(Path::new(path), &Context::default())
+            .unwrap_or_else(|d| panic!("{d}"));
+        let options = Options {
+            runtime: "::drivemap_runtime".parse().unwrap(),
+            source_name: "x.yaml".into(),
+        };
+        drive_module(&drive, &options).unwrap()
+    };
+    let tds = module("../maps/ptlk-tds-v8.yaml");
+    assert!(
+        tds.contains(
+            "#[doc(alias = \"max_output_frequency\")]\n#[doc(alias = \"Cn-02\")]\n#[doc(alias = \"0301H\")]\n#[doc(alias = \"0x0301\")]\npub type MaxOutputFrequency ="
+        ),
+        "{}",
+        &tds[tds.find("pub type MaxOutputFrequency").unwrap_or(0).saturating_sub(400)..][..600]
+    );
+    let z3 = module("../tests/fixtures/zenith-z3/zenith-z3.yaml");
+    assert!(
+        z3.contains(
+            "#[doc(alias = \"acceleration_time\")]\n#[doc(alias = \"P-01\")]\n#[doc(alias = \"45\")]\npub type AccelerationTime ="
+        ),
+        "{z3}"
+    );
+}

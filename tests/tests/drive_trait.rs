@@ -16,8 +16,14 @@ use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, DrivePlan, DriveSettings, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 
+/// The map of a compiled drive, from the directory the drives crate was generated from
+/// (`DRIVEMAP_MAPS` when it was set for the build, else `maps/`).
 fn map(id: &str) -> drivemap_codegen::Drive {
-    let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
+    let dir = option_env!("DRIVEMAP_MAPS").map_or_else(
+        || format!("{}/../maps", env!("CARGO_MANIFEST_DIR")),
+        str::to_owned,
+    );
+    let path = format!("{dir}/{id}.yaml");
     drivemap_codegen::read_map(path.as_ref(), &Default::default()).unwrap()
 }
 

@@ -102,3 +102,39 @@ fn a_new_yaml_file_becomes_a_module() {
     );
     std::fs::remove_dir_all(&tmp).unwrap();
 }
+
+/// A broken map in the maps directory fails the drives build with the diagnostics
+/// `drivemap check` prints for it, every one of them at once (`file:line:col`, the register, the
+/// message), not a panic or the first error alone.
+#[test]
+fn a_broken_map_fails_the_build_with_every_error_as_check_prints_it() {
+    let root = workspace();
+    let tmp = std::env::temp_dir().join(format!("drivemap-broken-map-{}", std::process::id()));
+    // Four errors in one file: decimal addresses in a register, an alternative, a command, a gap.
+    let broken = root.join("codegen/tests/ui/e41-decimal-address.yaml");
+    let (maps, _) = drivemap_tests::maps_and_app(&tmp, &broken);
+    let map = maps.join("e41-decimal-address.yaml");
+    let expected = drivemap_codegen::read_map(&map, &Default::default())
+        .expect_err("the map is broken")
+        .to_string();
+    assert!(expected.ends_with("4 errors"), "{expected}");
+    let out = Command::new(env!("CARGO"))
+        .args(["build", "--quiet", "--offline", "-p", "drivemap-drives"])
+        .current_dir(&root)
+        .env("DRIVEMAP_MAPS", &maps)
+        .env_remove("DRIVEMAP_DRIVES")
+        .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
+        .env(
+            "DRIVEMAP_MANUALS",
+            root.join("target/new-map-probe/no-manuals"),
+        )
+        .output()
+        .expect("cargo runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    for line in expected.lines() {
+        assert!(stderr.contains(line), "missing `{line}` in:\n{stderr}");
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    std::fs::remove_dir_all(&tmp).unwrap();
+}

@@ -66,7 +66,28 @@ pub fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<CoverageRepor
         }
         None => Vec::new(),
     };
-    Ok(review::coverage(&drive, &manuals, &skip))
+    let report = review::coverage(&drive, &manuals, &skip);
+    if report.tables.is_empty() {
+        // Nothing recognised is not "everything covered": say so, never report success.
+        let read: Vec<&str> = drive
+            .meta
+            .text_manuals()
+            .filter(|f| !skip.iter().any(|s| s == f) && manuals.lines(f).is_some())
+            .collect();
+        return Err(format!(
+            "{}: no register rows found in {} (coverage learns a row's shape from the lines the \
+             registers cite: an address as the manual prints it, 2001H or 0x2001, a register \
+             number of a manual numbering registers in decimal, declared with \
+             `address_format: decimal`, or a parameter number); nothing to compare",
+            path.display(),
+            if read.is_empty() {
+                "its manuals".to_owned()
+            } else {
+                read.join(", ")
+            }
+        ));
+    }
+    Ok(report)
 }
 
 /// The manuals a map file names itself (a variant map's list before its base's is merged in).

@@ -221,6 +221,36 @@ fn capitalized(s: &str) -> String {
     }
 }
 
+/// What rustdoc search finds a register by besides its type's name (`#[doc(alias)]`): its id,
+/// its parameter number as printed (`Cn-02`, `n011`) and its address in the manual's notation
+/// (`2101H` and `0x2101`, or the register number of a manual numbering them in decimal).
+pub fn aliases(drive: &Drive, r: &Register, type_name: &str) -> Vec<String> {
+    let mut out = vec![r.def.id.clone()];
+    out.extend(r.def.param.clone());
+    let addresses =
+        std::iter::once(r.def.address).chain(r.def.address_alternatives.iter().map(|a| a.address));
+    for a in addresses {
+        match drive.address_format {
+            crate::model::AddressFormat::Decimal => out.push(a.to_string()),
+            crate::model::AddressFormat::Hex => {
+                out.push(format!("{a:04X}H"));
+                out.push(format!("0x{a:04X}"));
+            }
+        }
+    }
+    // rustdoc refuses an alias that is empty, the item's own name, has quotes, tabs or line
+    // breaks, or starts or ends with a space.
+    let mut seen = std::collections::HashSet::new();
+    out.retain(|a| {
+        !a.is_empty()
+            && a != type_name
+            && a.trim() == a
+            && !a.contains(['"', '\'', '\t', '\n', '\r'])
+            && seen.insert(a.clone())
+    });
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::escape_brackets;

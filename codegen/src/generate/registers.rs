@@ -67,8 +67,11 @@ fn value(r: &Register, index: usize, rt: &TokenStream) -> (TokenStream, TokenStr
 }
 
 fn register(drive: &Drive, r: &Register, index: usize, rt: &TokenStream) -> TokenStream {
-    let marker = ident(&names::register_type(r));
+    let type_name = names::register_type(r);
+    let marker = ident(&type_name);
     let doc = docs::item(&docs::register(drive, r));
+    let aliases = docs::aliases(drive, r, &type_name);
+    let aliases = aliases.iter().map(|a| quote!(#[doc(alias = #a)]));
     let (mut value, mut extra) = value(r, index, rt);
     let mut access = match r.access {
         Access::Read => quote!(ReadOnly),
@@ -94,6 +97,7 @@ fn register(drive: &Drive, r: &Register, index: usize, rt: &TokenStream) -> Toke
         #extra
 
         #doc
+        #(#aliases)*
         pub type #marker = Reg<Drive, #value, #access, #index>;
     }
 }

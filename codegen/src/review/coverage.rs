@@ -96,7 +96,13 @@ fn is_hex_word(s: &str) -> bool {
 
 /// The address a word prints, with what follows it: `0200H`, `0x0300`, `0h03E7`, `1E08`,
 /// `31Ah…`. OCR `O`/`Q` are read as `0`.
-fn address_prefix(word: &str) -> Option<(u16, &str)> {
+///
+/// In a manual that numbers registers in decimal (`decimal`: the map's `address_format`), a word
+/// of decimal digits alone is a register number (`45`).
+fn address_prefix(word: &str, decimal: bool) -> Option<(u16, &str)> {
+    if decimal && (1..=5).contains(&word.len()) && word.bytes().all(|b| b.is_ascii_digit()) {
+        return word.parse().ok().map(|n| (n, ""));
+    }
     // An address prints at least one digit (`CODE` is not C0DEh).
     if !word.chars().any(|c| c.is_ascii_digit()) {
         return None;
@@ -149,8 +155,8 @@ fn param_prefix<'a>(word: &'a str, shapes: &HashSet<String>) -> Option<&'a str> 
         .find(|p| shapes.contains(&shape(p)))
 }
 
-fn classify(word: &str, shapes: &HashSet<String>) -> Class {
-    if let Some((_, rest)) = address_prefix(word) {
+fn classify(word: &str, shapes: &HashSet<String>, decimal: bool) -> Class {
+    if let Some((_, rest)) = address_prefix(word, decimal) {
         if !rest.is_empty() && param_prefix(rest, shapes).is_some() {
             return Class::AddressParam;
         }
@@ -162,21 +168,29 @@ fn classify(word: &str, shapes: &HashSet<String>) -> Class {
     Class::Other
 }
 
-fn line_shape(line: &str, shapes: &HashSet<String>) -> (Class, Class) {
+fn line_shape(line: &str, shapes: &HashSet<String>, decimal: bool) -> (Class, Class) {
     let mut words = line.split_whitespace();
-    let a = words.next().map_or(Class::Other, |w| classify(w, shapes));
-    let b = words.next().map_or(Class::Other, |w| classify(w, shapes));
+    let a = words
+        .next()
+        .map_or(Class::Other, |w| classify(w, shapes, decimal));
+    let b = words
+        .next()
+        .map_or(Class::Other, |w| classify(w, shapes, decimal));
     (a, b)
 }
 
 /// The row keys of a line: each parameter number with the address after it (or the only
 /// address of the line), or the address alone.
-fn row_keys(line: &str, shapes: &HashSet<String>) -> Vec<(Option<String>, Option<u16>)> {
+fn row_keys(
+    line: &str,
+    shapes: &HashSet<String>,
+    decimal: bool,
+) -> Vec<(Option<String>, Option<u16>)> {
     let mut keys: Vec<(Option<String>, Option<u16>)> = Vec::new();
     let mut addresses = Vec::new();
     let words: Vec<&str> = line.split_whitespace().collect();
     for (i, w) in words.iter().enumerate() {
-        if let Some((a, rest)) = address_prefix(w) {
+        if let Some((a, rest)) = address_prefix(w, decimal) {
             addresses.push(a);
             if let Some(last) = keys.last_mut() {
                 if last.1.is_none() {
@@ -191,7 +205,7 @@ fn row_keys(line: &str, shapes: &HashSet<String>) -> Vec<(Option<String>, Option
             // it (two-column tables); elsewhere it is a reference in the text.
             let next_is_address = words
                 .get(i + 1)
-                .is_some_and(|n| address_prefix(n).is_some_and(|(_, r)| r.is_empty()));
+                .is_some_and(|n| address_prefix(n, decimal).is_some_and(|(_, r)| r.is_empty()));
             if p.len() == w.len() && (i <= 1 || next_is_address) {
                 keys.push((Some(p.to_owned()), None));
             }
@@ -304,6 +318,7 @@ fn gap_covers_param(text: &str, param: &str) -> bool {
 /// cited manual (but those in `skip`: a variant map's base manuals, covered by the base's
 /// report), the tables they form, and the rows nothing covers.
 pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageReport {
+    let decimal = drive.address_format == crate::model::AddressFormat::Decimal;
     let shapes: HashSet<String> = drive
         .registers
         .iter()
@@ -318,7 +333,7 @@ pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageRe
     }) {
         if let Some((file, n)) = parse_citation(&c.source) {
             if let Some(text) = manuals.line(file, n) {
-                let s = line_shape(text, &shapes);
+                let s = line_shape(text, &shapes, decimal);
                 if s.0 != Class::Other || s.1 != Class::Other {
                     *learnt
                         .entry(file.to_owned())
@@ -393,10 +408,10 @@ pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageRe
         };
         for (i, text) in lines.iter().enumerate() {
             let n = i + 1;
-            if !keep.contains(&line_shape(text, &shapes)) {
+            if !keep.contains(&line_shape(text, &shapes, decimal)) {
                 continue;
             }
-            let keys = row_keys(text, &shapes);
+            let keys = row_keys(text, &shapes, decimal);
             if keys.is_empty() {
                 continue;
             }
@@ -487,29 +502,40 @@ mod tests {
         assert_eq!(shape("n001"), "a9");
         assert_eq!(shape("UF.8"), "A.9");
         let shapes: HashSet<String> = ["Aa-9", "A9-9", "A.9", "a9"].map(String::from).into();
-        assert_eq!(address_prefix("0200H"), Some((0x0200, "")));
+        assert_eq!(address_prefix("0200H", false), Some((0x0200, "")));
         assert_eq!(
-            address_prefix("31AhE4-03Motor"),
+            address_prefix("31AhE4-03Motor", false),
             Some((0x031A, "E4-03Motor"))
         );
-        assert_eq!(address_prefix("1EOA"), Some((0x1E0A, "")));
-        assert_eq!(address_prefix("6000"), Some((0x6000, "")));
-        assert_eq!(address_prefix("Motor"), None);
-        assert_eq!(classify("31AhE4-03Motor", &shapes), Class::AddressParam);
-        assert_eq!(classify("Bn-01", &shapes), Class::Param);
+        assert_eq!(address_prefix("1EOA", false), Some((0x1E0A, "")));
+        assert_eq!(address_prefix("6000", false), Some((0x6000, "")));
+        assert_eq!(address_prefix("Motor", false), None);
+        // A decimal manual's register number; in a hex manual, digits alone are not one.
+        assert_eq!(address_prefix("45", true), Some((45, "")));
+        assert_eq!(address_prefix("45", false), None);
+        assert_eq!(address_prefix("2.", true), None);
         assert_eq!(
-            row_keys("UF.8 1E08 47688 47689 UF.53 1E35 47733 47734", &shapes),
+            classify("31AhE4-03Motor", &shapes, false),
+            Class::AddressParam
+        );
+        assert_eq!(classify("Bn-01", &shapes, false), Class::Param);
+        assert_eq!(
+            row_keys(
+                "UF.8 1E08 47688 47689 UF.53 1E35 47733 47734",
+                &shapes,
+                false
+            ),
             vec![
                 (Some("UF.8".to_owned()), Some(0x1E08)),
                 (Some("UF.53".to_owned()), Some(0x1E35))
             ]
         );
         assert_eq!(
-            row_keys("0200H\tBn-01\tAcceleration time 1", &shapes),
+            row_keys("0200H\tBn-01\tAcceleration time 1", &shapes, false),
             vec![(Some("Bn-01".to_owned()), Some(0x0200))]
         );
         assert_eq!(
-            row_keys("0020H\tStatus", &shapes),
+            row_keys("0020H\tStatus", &shapes, false),
             vec![(None, Some(0x0020))]
         );
         assert!(gap_covers_param("U1-15 .. U1-18", "U1-16"));
