@@ -21,6 +21,8 @@ fn repo() -> PathBuf {
 #[derive(Clone, Copy, PartialEq)]
 enum Framing {
     Tcp,
+    /// Modbus TCP to a gateway with the drive on its serial line (`--gateway`).
+    Gateway,
     RtuOverTcp,
 }
 
@@ -53,6 +55,10 @@ impl Drive {
                 let mut s = shared.lock().unwrap();
                 let _ = match framing {
                     Framing::Tcp => s.serve(&mut TcpTransport::from_stream(stream).unwrap(), until),
+                    Framing::Gateway => s.serve(
+                        &mut TcpTransport::from_gateway_stream(stream).unwrap(),
+                        until,
+                    ),
                     Framing::RtuOverTcp => s.serve(
                         &mut RtuOverTcpTransport::from_stream(stream).unwrap(),
                         until,
@@ -64,6 +70,7 @@ impl Drive {
             addr,
             flag: match framing {
                 Framing::Tcp => "--tcp",
+                Framing::Gateway => "--gateway",
                 Framing::RtuOverTcp => "--rtu-tcp",
             },
             slave,
@@ -119,8 +126,9 @@ fn row(out: &str, register: &str) -> String {
     line.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// The TDS-V8 speaks RTU only: it is reached through a Modbus TCP gateway.
 fn tds() -> Drive {
-    Drive::start("ptlk-tds-v8", Framing::Tcp, |s| {
+    Drive::start("ptlk-tds-v8", Framing::Gateway, |s| {
         s.set_holding(0x0301, 600); // Cn-02 max output frequency 60.0 Hz
         s.set_holding(0x0001, 24000); // frequency command: 80 % of Cn-02
         s.set_holding(0x0020, 0x0019); // running, ready, DRV mode
@@ -340,7 +348,7 @@ fn a_timeout_says_what_was_sent_and_waited_for() {
         "read",
         "--drive",
         "ptlk-tds-v8",
-        "--tcp",
+        "--gateway",
         &addr,
         "--timeout",
         "200ms",
@@ -365,13 +373,13 @@ fn nothing_listening_is_a_connection_error() {
         "read",
         "--drive",
         "ptlk-tds-v8",
-        "--tcp",
+        "--gateway",
         &format!("127.0.0.1:{port}"),
         "inverter_status",
     ]);
     assert_eq!(code, 2);
     assert!(
-        err.contains("cannot connect to Modbus TCP server 127.0.0.1:"),
+        err.contains("cannot connect to Modbus TCP gateway 127.0.0.1:"),
         "{err}"
     );
 }
@@ -563,7 +571,7 @@ fn set_means_the_drives_value_for_simulate_and_read() {
         "read",
         "--drive",
         "yaskawa-j7",
-        "--tcp",
+        "--rtu-tcp",
         "127.0.0.1:9",
         "--set",
         "n69=x",

@@ -14,14 +14,38 @@ pub enum TransportKind {
     Rtu,
     /// Modbus RTU frames carried over a TCP stream (a serial gateway in transparent mode).
     RtuOverTcp,
-    /// Modbus TCP (MBAP header).
+    /// Modbus TCP (MBAP header) to a drive with a Modbus TCP interface of its own.
     Tcp,
+    /// Modbus TCP (MBAP header) to a Modbus TCP to RTU gateway, behind which the drive sits on
+    /// a serial line: Modbus TCP framing (the gateway turns each request into an RTU frame and
+    /// matches the answer to its transaction id), but the drive's RTU side — the map's RTU
+    /// address offset, the registers it lists for RTU, the drive's RTU timing. A link of its
+    /// own: a drive's `tcp` registers and addresses are those of a Modbus TCP interface it
+    /// would have itself, never what a gateway reaches.
+    TcpGateway,
 }
 
 impl TransportKind {
     /// Whether frames of this transport carry RTU framing (slave address + CRC).
     pub const fn is_rtu_framed(self) -> bool {
         matches!(self, TransportKind::Rtu | TransportKind::RtuOverTcp)
+    }
+
+    /// Whether the drive at the far end of the link is reached on its serial (RTU) side:
+    /// serial lines, RTU over TCP, and a Modbus TCP gateway to a serial line. These links use
+    /// the map's RTU addressing, RTU registers and RTU timing.
+    pub const fn reaches_rtu_side(self) -> bool {
+        !matches!(self, TransportKind::Tcp)
+    }
+
+    /// A short name for messages: `RTU`, `RTU over TCP`, `Modbus TCP`, `Modbus TCP gateway`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            TransportKind::Rtu => "RTU",
+            TransportKind::RtuOverTcp => "RTU over TCP",
+            TransportKind::Tcp => "Modbus TCP",
+            TransportKind::TcpGateway => "Modbus TCP gateway to RTU",
+        }
     }
 }
 
@@ -252,10 +276,11 @@ pub struct AddressOffsets {
 }
 
 impl AddressOffsets {
-    /// The offset for a transport kind. RTU over TCP carries RTU frames and uses the RTU offset.
+    /// The offset for a transport kind. RTU over TCP and a Modbus TCP gateway reach the drive's
+    /// serial side and use the RTU offset.
     pub const fn for_kind(&self, kind: TransportKind) -> i32 {
         match kind {
-            TransportKind::Rtu | TransportKind::RtuOverTcp => self.rtu,
+            TransportKind::Rtu | TransportKind::RtuOverTcp | TransportKind::TcpGateway => self.rtu,
             TransportKind::Tcp => self.tcp,
         }
     }

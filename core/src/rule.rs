@@ -9,9 +9,10 @@ use crate::width::{Width, WordOrder};
 /// The transports a register exists on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Transports {
-    /// Modbus RTU framing: serial lines and RTU over TCP.
+    /// The drive's serial (RTU) side: serial lines, RTU over TCP, and a Modbus TCP gateway to
+    /// the serial line ([`TransportKind::TcpGateway`]).
     pub rtu: bool,
-    /// Modbus TCP (MBAP).
+    /// The drive's own Modbus TCP interface (MBAP).
     pub tcp: bool,
 }
 
@@ -37,7 +38,7 @@ impl Transports {
     /// Whether a register with these transports exists on `kind`.
     pub const fn contains(self, kind: TransportKind) -> bool {
         match kind {
-            TransportKind::Rtu | TransportKind::RtuOverTcp => self.rtu,
+            TransportKind::Rtu | TransportKind::RtuOverTcp | TransportKind::TcpGateway => self.rtu,
             TransportKind::Tcp => self.tcp,
         }
     }

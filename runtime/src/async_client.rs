@@ -394,9 +394,12 @@ pub struct AsyncClient<T: AsyncTransport> {
 }
 
 impl<T: AsyncTransport> AsyncClient<T> {
-    /// A client with default options.
+    /// A client with the drive's timing, as [`Client::new`](crate::client::Client::new)
+    /// ([`ClientOptions::for_link`]); `AsyncClient::with_options(transport, profile,
+    /// ClientOptions::generic())` is a client that ignores it.
     pub fn new(transport: T, profile: &'static Profile) -> Self {
-        Self::with_options(transport, profile, ClientOptions::default())
+        let options = ClientOptions::for_link(profile, transport.kind());
+        Self::with_options(transport, profile, options)
     }
 
     /// A client with explicit options.
@@ -437,6 +440,7 @@ impl<T: AsyncTransport> AsyncClient<T> {
         retries: u8,
     ) -> Result<(), Error> {
         let checked = self.core.check(slave, request, purpose)?;
+        self.core.begin_call();
         let attempts = retries.saturating_add(1);
         for attempt in 1..=attempts {
             let framing = self.core.encode(&checked)?;
@@ -448,6 +452,10 @@ impl<T: AsyncTransport> AsyncClient<T> {
             if let Err(e) = self.prepare().await {
                 self.core.mark_idle();
                 return Err(io_error(&checked, e));
+            }
+            if let Err(e) = self.settle(&checked).await {
+                self.core.mark_idle();
+                return Err(e);
             }
             if let Err(e) = self.transport.send(self.core.frame()).await {
                 self.core.mark_idle();
@@ -462,6 +470,10 @@ impl<T: AsyncTransport> AsyncClient<T> {
             };
             let result = self.receive(framing, &checked, out).await;
             self.core.mark_idle();
+            self.core.attempt_ended(matches!(
+                result,
+                Ok(Some(())) | Err(Error::Exception { .. })
+            ));
             match result {
                 Ok(Some(())) => return Ok(()),
                 Ok(None) if attempt < attempts => continue,
@@ -493,10 +505,35 @@ impl<T: AsyncTransport> AsyncClient<T> {
         }
     }
 
+    /// As [`Client`](crate::client::Client)'s: on an RTU-framed link after an attempt that
+    /// was not answered cleanly, waits until the line has been silent for the reply timeout.
+    async fn settle(&mut self, checked: &Checked<'_>) -> Result<(), Error> {
+        let Some(mut settle) = self.core.settle_start() else {
+            return Ok(());
+        };
+        loop {
+            let until = self.core.settle_until(&settle);
+            let n = self
+                .transport
+                .recv(self.core.rx.space(), until)
+                .await
+                .map_err(|e| io_error(checked, e))?;
+            if let Some(outcome) = self.core.settle_step(&mut settle, n, checked) {
+                return outcome;
+            }
+        }
+    }
+
     /// Connections re-established after the peer closed or reset them
     /// ([`ClientOptions::reconnect`]).
     pub fn reconnects(&self) -> u32 {
         self.core.reconnects()
+    }
+
+    /// The wait for silence before the last call's request, if it needed one; see
+    /// [`Client::settled`](crate::client::Client::settled).
+    pub fn settled(&self) -> Option<crate::client::Settled> {
+        self.core.settled()
     }
 
     async fn receive(

@@ -6,8 +6,14 @@
 //!    drive does not execute, a plain write to an ENTER/ACCEPT/save register;
 //! 2. maps the manual's communication address to the PDU address for the transport kind
 //!    ([`crate::profile::AddressOffsets::pdu_address`]);
-//! 3. discards stale input, sends, and for broadcast (slave 0) returns at once;
-//! 4. waits at most [`ClientOptions::timeout`] for a reply that passes every check, discarding
+//! 3. on an RTU-framed link (serial, RTU over TCP) after an attempt that timed out or met a
+//!    frame that was not its answer, waits until the line has been silent for the reply
+//!    timeout (at least the drive's response time), so
+//!    that a late reply is never taken for the next request's answer: RTU frames carry no
+//!    transaction id, and two replies of the same shape cannot be told apart
+//!    ([`Client::settled`] says what that wait took; [`Error::Timeout`] says it will come);
+//! 4. discards stale input, sends, and for broadcast (slave 0) returns at once;
+//! 5. waits at most [`ClientOptions::timeout`] for a reply that passes every check, discarding
 //!    everything else (see [`crate::reply`]), and retries up to [`ClientOptions::retries`] times
 //!    after a timeout. Exceptions are not retried: the drive answered.
 //!
@@ -62,6 +68,31 @@ impl Default for ClientOptions {
 }
 
 impl ClientOptions {
+    /// Options that know nothing of the drive: a 1 s timeout, two retries, no request gap.
+    /// The same as [`ClientOptions::default`]; [`Client::with_options`] with these is the
+    /// explicit choice of a client that ignores the drive's timing ([`Client::new`] applies
+    /// it).
+    pub fn generic() -> ClientOptions {
+        ClientOptions::default()
+    }
+
+    /// The options [`Client::new`] takes for a link of `kind` to a drive with `profile`: on a
+    /// link that reaches the drive's serial side (serial, RTU over TCP, a Modbus TCP gateway)
+    /// [`ClientOptions::for_profile`], the manual's request gap and frame gap, and its response
+    /// time in the timeout; on the drive's own Modbus TCP interface the same timeout but no
+    /// request gap (the drive's network card keeps its own line), as the CLI does.
+    pub fn for_link(profile: &Profile, kind: TransportKind) -> ClientOptions {
+        let options = ClientOptions::for_profile(profile);
+        if kind.reaches_rtu_side() {
+            options
+        } else {
+            ClientOptions {
+                request_gap: Duration::ZERO,
+                ..options
+            }
+        }
+    }
+
     /// The defaults with the timing the drive's manual prescribes, counted on a 9600 baud 8N1
     /// line (the default line of every shipped map; see [`ClientOptions::for_line`] for
     /// another):
@@ -153,6 +184,46 @@ pub(crate) struct Link {
     reconnects: u32,
 }
 
+/// What a client did before a request to make sure that no late reply to an earlier attempt
+/// was still on its way ([`Client::settled`]): it waited until the line had been silent for
+/// `quiet`, throwing away what arrived meanwhile.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Settled {
+    /// Time spent waiting, over every attempt of the call.
+    pub waited: Duration,
+    /// The silence waited for.
+    pub quiet: Duration,
+    /// Bytes that arrived while waiting and were thrown away (a late reply, noise).
+    pub bytes: u32,
+}
+
+impl std::fmt::Display for Settled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "waited {} ms for the line to be silent for {} ms after an unanswered request",
+            self.waited.as_millis(),
+            self.quiet.as_millis()
+        )?;
+        if self.bytes > 0 {
+            write!(
+                f,
+                " and discarded {} byte(s) that arrived meanwhile (a late reply?)",
+                self.bytes
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Where a wait for silence stands.
+pub(crate) struct Settle {
+    started: Instant,
+    last_byte: Instant,
+    quiet: Duration,
+    bytes: usize,
+}
+
 /// The transport-independent part of a client: checks, framing, reply matching, EEPROM budget.
 /// Shared by the blocking and the async client.
 pub(crate) struct Core {
@@ -166,6 +237,11 @@ pub(crate) struct Core {
     budget: PersistBudget,
     idle_since: Option<Instant>,
     link: Link,
+    /// The line may still carry a reply to an earlier attempt (RTU framing only): the next
+    /// attempt waits for silence first.
+    unsettled: bool,
+    /// What the waits for silence of the current call took.
+    settled: Option<Settled>,
 }
 
 /// Why a request is sent: what [`Core::check`] checks it against.
@@ -203,7 +279,102 @@ impl Core {
             budget: PersistBudget::new(options.eeprom_writes_per_hour),
             idle_since: None,
             link: Link::default(),
+            unsettled: false,
+            settled: None,
         }
+    }
+
+    /// The silence that proves no reply to an earlier attempt is still on its way: the reply
+    /// timeout (no drive that keeps its timing answers later), and at least the drive's own
+    /// response time on the default line should the timeout be set shorter.
+    pub(crate) fn settle_quiet(&self) -> Duration {
+        let model = BusModel::new(self.profile, SerialConfig::default());
+        let response = Duration::from_nanos(model.latency_ns().ceil() as u64);
+        self.options.timeout.max(response)
+    }
+
+    /// Called at the start of a call: forgets the previous call's wait for silence.
+    pub(crate) fn begin_call(&mut self) {
+        self.settled = None;
+    }
+
+    /// Records how an attempt ended: on an RTU-framed link, an attempt that timed out, failed
+    /// mid-reply or met anything that was not its answer may leave a reply on its way.
+    pub(crate) fn attempt_ended(&mut self, answered: bool) {
+        if self.kind.is_rtu_framed() && (!answered || !self.rx.discarded().is_empty()) {
+            self.unsettled = true;
+        }
+    }
+
+    /// The wait for silence to run before the next send, if one is needed.
+    pub(crate) fn settle_start(&self) -> Option<Settle> {
+        let now = Instant::now();
+        self.unsettled.then(|| Settle {
+            started: now,
+            last_byte: now,
+            quiet: self.settle_quiet(),
+            bytes: 0,
+        })
+    }
+
+    /// How long the next receive of a wait for silence may wait.
+    pub(crate) fn settle_until(&self, settle: &Settle) -> Instant {
+        (settle.last_byte + settle.quiet).min(settle.started + settle.quiet * 2)
+    }
+
+    /// Takes `n` bytes received while waiting for silence (0: none until the wait's deadline).
+    /// Returns the outcome once the line has been silent for the whole quiet time, or the wait
+    /// has to give up: after twice the quiet time (the line never falls silent) or
+    /// [`MAX_UNANSWERED_BYTES`] (a peer that floods the link). Nothing is sent then.
+    pub(crate) fn settle_step(
+        &mut self,
+        settle: &mut Settle,
+        n: usize,
+        checked: &Checked<'_>,
+    ) -> Option<Result<(), Error>> {
+        let now = Instant::now();
+        if n > 0 {
+            settle.bytes = settle.bytes.saturating_add(n);
+            settle.last_byte = now;
+        }
+        self.rx.clear();
+        let silent = now.saturating_duration_since(settle.last_byte) >= settle.quiet;
+        let record = |core: &mut Core| {
+            let s = core.settled.get_or_insert(Settled {
+                quiet: settle.quiet,
+                ..Settled::default()
+            });
+            s.waited += now.saturating_duration_since(settle.started);
+            s.bytes = s.bytes.saturating_add(settle.bytes as u32);
+        };
+        if silent {
+            record(self);
+            self.unsettled = false;
+            return Some(Ok(()));
+        }
+        if settle.bytes > MAX_UNANSWERED_BYTES {
+            record(self);
+            return Some(Err(Error::Overrun {
+                sent: checked.sent,
+                bytes: settle.bytes,
+                discarded: self.rx.discarded(),
+            }));
+        }
+        if now >= settle.started + settle.quiet * 2 {
+            record(self);
+            return Some(Err(Error::Unsettled {
+                sent: checked.sent,
+                quiet: settle.quiet,
+                waited: now.saturating_duration_since(settle.started),
+                bytes: settle.bytes,
+            }));
+        }
+        None
+    }
+
+    /// What the waits for silence of the current call took.
+    pub(crate) fn settled(&self) -> Option<Settled> {
+        self.settled
     }
 
     /// Checks `request` (communication addresses) against the profile, and a write against the
@@ -464,6 +635,7 @@ impl Core {
             waited: self.options.timeout,
             attempts,
             discarded: self.rx.discarded(),
+            settle: self.kind.is_rtu_framed().then(|| self.settle_quiet()),
         }
     }
 
@@ -969,9 +1141,14 @@ pub struct Client<T: Transport> {
 }
 
 impl<T: Transport> Client<T> {
-    /// A client for a drive with `profile` over `transport`, with default options.
+    /// A client for a drive with `profile` over `transport`, with the drive's timing
+    /// ([`ClientOptions::for_link`]: on a link to its serial side the manual's request gap and
+    /// frame gap between requests, and its response time added to the 1 s timeout). A client
+    /// that ignores the drive's timing is an explicit choice:
+    /// `Client::with_options(transport, profile, ClientOptions::generic())`.
     pub fn new(transport: T, profile: &'static Profile) -> Client<T> {
-        Self::with_options(transport, profile, ClientOptions::default())
+        let options = ClientOptions::for_link(profile, transport.kind());
+        Self::with_options(transport, profile, options)
     }
 
     /// A client with explicit options.
@@ -1026,6 +1203,7 @@ impl<T: Transport> Client<T> {
         retries: u8,
     ) -> Result<(), Error> {
         let checked = self.core.check(slave, request, purpose)?;
+        self.core.begin_call();
         let attempts = retries.saturating_add(1);
         for attempt in 1..=attempts {
             let framing = self.core.encode(&checked)?;
@@ -1035,6 +1213,10 @@ impl<T: Transport> Client<T> {
             if let Err(e) = self.prepare() {
                 self.core.mark_idle();
                 return Err(io_error(&checked, e));
+            }
+            if let Err(e) = self.settle(&checked) {
+                self.core.mark_idle();
+                return Err(e);
             }
             if let Err(e) = self.transport.send(self.core.frame()) {
                 self.core.mark_idle();
@@ -1049,6 +1231,10 @@ impl<T: Transport> Client<T> {
             };
             let result = self.receive(framing, &checked, out);
             self.core.mark_idle();
+            self.core.attempt_ended(matches!(
+                result,
+                Ok(Some(())) | Err(Error::Exception { .. })
+            ));
             match result {
                 Ok(Some(())) => return Ok(()),
                 Ok(None) if attempt < attempts => continue,
@@ -1081,10 +1267,37 @@ impl<T: Transport> Client<T> {
         }
     }
 
+    /// On an RTU-framed link after an attempt that was not answered cleanly: waits until the
+    /// line has been silent for the reply timeout, throwing away what arrives.
+    fn settle(&mut self, checked: &Checked<'_>) -> Result<(), Error> {
+        let Some(mut settle) = self.core.settle_start() else {
+            return Ok(());
+        };
+        loop {
+            let until = self.core.settle_until(&settle);
+            let n = self
+                .transport
+                .recv(self.core.rx.space(), until)
+                .map_err(|e| io_error(checked, e))?;
+            if let Some(outcome) = self.core.settle_step(&mut settle, n, checked) {
+                return outcome;
+            }
+        }
+    }
+
     /// Connections re-established after the peer closed or reset them
     /// ([`ClientOptions::reconnect`]).
     pub fn reconnects(&self) -> u32 {
         self.core.reconnects()
+    }
+
+    /// The wait for silence before the last call's request, if it needed one: after an
+    /// attempt on an RTU-framed link timed out or met a frame that was not its answer, the
+    /// next attempt or call first waits until the line has been silent for the reply timeout,
+    /// so that a late reply is never taken for another request's answer. `None` when the last
+    /// call sent at once.
+    pub fn settled(&self) -> Option<Settled> {
+        self.core.settled()
     }
 
     /// Waits for the answer; `Ok(None)` on timeout.

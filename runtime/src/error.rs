@@ -237,11 +237,12 @@ pub enum Refusal {
 pub enum Error {
     /// No acceptable reply arrived in time, on any attempt.
     #[error(
-        "no reply from slave {} to {sent} within {} ms{}{}",
+        "no reply from slave {} to {sent} within {} ms{}{}{}",
         sent.slave,
         waited.as_millis(),
         if *attempts > 1 { format!(" ({attempts} attempts)") } else { String::new() },
-        if discarded.is_empty() { String::new() } else { format!("; {discarded}") }
+        if discarded.is_empty() { String::new() } else { format!("; {discarded}") },
+        match settle { Some(q) => format!("; the next request waits until the line has been silent for {} ms, so that a late reply is not taken for its answer", q.as_millis()), None => String::new() }
     )]
     Timeout {
         sent: Sent,
@@ -250,6 +251,26 @@ pub enum Error {
         attempts: u8,
         /// What arrived but was not the answer, on the last attempt.
         discarded: Discarded,
+        /// On an RTU-framed link (no transaction id): the silence the next request waits for
+        /// first, so that a late reply to this one is not taken for its answer.
+        settle: Option<Duration>,
+    },
+    /// On an RTU-framed link after an unanswered request, the line did not fall silent long
+    /// enough to be sure no late reply was still on its way; the request was not sent.
+    #[error(
+        "{sent} to slave {}: held back because the line never fell silent: after an unanswered request it must be silent for {} ms before the next request, so that a late reply is not taken for its answer, but bytes kept arriving for {} ms ({bytes} byte(s) discarded)",
+        sent.slave,
+        quiet.as_millis(),
+        waited.as_millis()
+    )]
+    Unsettled {
+        sent: Sent,
+        /// The silence waited for.
+        quiet: Duration,
+        /// Time waited.
+        waited: Duration,
+        /// Bytes that arrived meanwhile.
+        bytes: usize,
     },
     /// The drive answered with an exception.
     #[error("slave {} answered {sent} with {exception}", sent.slave)]
@@ -315,6 +336,7 @@ mod tests {
             waited: Duration::from_millis(200),
             attempts: 1,
             discarded: Discarded::default(),
+            settle: None,
         };
         assert_eq!(
             e.to_string(),

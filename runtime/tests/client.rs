@@ -379,7 +379,7 @@ fn retries_are_bounded_and_reported() {
     let e = c.read_holding(1, 0x0020, &mut [0; 1]).unwrap_err();
     assert_eq!(
         e.to_string(),
-        "no reply from slave 1 to 03h read of 0020h x1 within 100 ms (3 attempts)"
+        "no reply from slave 1 to 03h read of 0020h x1 within 100 ms (3 attempts); the next request waits until the line has been silent for 100 ms, so that a late reply is not taken for its answer"
     );
     assert_eq!(c.transport().requests, 3);
     assert_eq!(c.read::<FrequencyMonitor>(1, &HZ_001).unwrap(), 60.0);
@@ -483,4 +483,71 @@ fn busy_exception_from_the_profile() {
     assert_eq!((ex.code, ex.name), (0x06, "SLAVE DEVICE BUSY"));
     assert!(ex.is_busy());
     let _ = v7_on(TransportKind::Tcp, strict());
+}
+
+/// A drive whose manual asks the master for 24 bit times + 10 ms after each reply (as the
+/// V7/J7's, `003_8bcf5d50afb8e230.txt:284`) and answers within 24 bits + 10 ms.
+static TIMED: drivemap_runtime::Profile = drivemap_runtime::Profile {
+    timing: drivemap_runtime::profile::Timing {
+        request_gap_bits: Some(24),
+        request_gap_us: Some(10_000),
+        response_delay_bits: Some(24),
+        response_delay_us: Some(10_000),
+        ..drivemap_runtime::profile::Timing::MODBUS
+    },
+    ..drivemap_runtime::Profile::GENERIC
+};
+
+/// `Client::new(link, &PROFILE)`, the README's first example, keeps the drive's timing (issue
+/// 23, item 8): on a link to the drive's serial side the manual's request gap between a reply
+/// and the next request and its response time in the timeout; on the drive's own Modbus TCP
+/// interface the timeout but no request gap. A client that ignores the timing is the explicit
+/// `ClientOptions::generic()`.
+#[test]
+fn client_new_applies_the_profile_timing() {
+    let gap = Duration::from_micros(12_500); // 24 bits at 9600 baud + 10 ms
+    for kind in [
+        TransportKind::Rtu,
+        TransportKind::RtuOverTcp,
+        TransportKind::TcpGateway,
+    ] {
+        let link = FaultyLink::new(kind, SimulatedSlave::new(1, &TIMED));
+        let mut c = Client::new(link, &TIMED);
+        assert_eq!(*c.options(), ClientOptions::for_profile(&TIMED), "{kind:?}");
+        assert_eq!(c.options().request_gap, gap, "{kind:?}");
+        assert_eq!(
+            c.options().timeout,
+            Duration::from_secs(1) + gap,
+            "{kind:?}"
+        );
+        // On the wire: five reads keep four gaps between them.
+        let started = Instant::now();
+        for _ in 0..5 {
+            c.read_holding(1, 0x0020, &mut [0; 1]).unwrap();
+        }
+        assert!(
+            started.elapsed() >= gap * 4,
+            "{kind:?}: {:?}",
+            started.elapsed()
+        );
+        // The async client's constructor takes the same options.
+        assert_eq!(
+            ClientOptions::for_link(&TIMED, kind),
+            ClientOptions::for_profile(&TIMED)
+        );
+    }
+    let tcp = Client::new(
+        FaultyLink::new(TransportKind::Tcp, SimulatedSlave::new(1, &TIMED)),
+        &TIMED,
+    );
+    assert_eq!(tcp.options().request_gap, Duration::ZERO);
+    assert_eq!(tcp.options().timeout, Duration::from_secs(1) + gap);
+    // The generic client is a choice made in writing.
+    let generic = Client::with_options(
+        FaultyLink::new(TransportKind::Rtu, SimulatedSlave::new(1, &TIMED)),
+        &TIMED,
+        ClientOptions::generic(),
+    );
+    assert_eq!(generic.options().request_gap, Duration::ZERO);
+    assert_eq!(generic.options().timeout, Duration::from_secs(1));
 }

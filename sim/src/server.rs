@@ -304,6 +304,11 @@ pub enum TcpFraming {
     ModbusTcp,
     /// RTU frames over TCP, as a transparent serial gateway forwards them.
     RtuOverTcp,
+    /// Modbus TCP (MBAP header) served as a Modbus TCP to RTU gateway with the drive on its
+    /// serial line ([`TransportKind::TcpGateway`]): the drive's RTU addressing (its map's RTU
+    /// address offset) and only the registers its map lists for RTU, answered under the
+    /// request's transaction and unit id.
+    Gateway,
 }
 
 /// Limits of a TCP listener, as a server on a plant network needs them.
@@ -497,6 +502,16 @@ fn serve_stream(
                 limits(Duration::from_millis(500)),
             )
         }
+        TcpFraming::Gateway => {
+            let mut link = TcpTransport::from_gateway_stream(stream)?;
+            serve_link_with(
+                sim,
+                &mut link,
+                stop,
+                log,
+                limits(Duration::from_millis(500)),
+            )
+        }
         TcpFraming::RtuOverTcp => {
             let mut link = RtuOverTcpTransport::from_stream(stream)?;
             serve_link_with(
@@ -581,6 +596,7 @@ pub fn kind_of(framing: TcpFraming) -> TransportKind {
     match framing {
         TcpFraming::ModbusTcp => TransportKind::Tcp,
         TcpFraming::RtuOverTcp => TransportKind::RtuOverTcp,
+        TcpFraming::Gateway => TransportKind::TcpGateway,
     }
 }
 

@@ -40,6 +40,15 @@ pub enum Script {
     OtherTransaction,
     /// The correct answer from another unit id / slave address, twice, 50 ms apart.
     OtherUnit,
+    /// The correct answer, but every `every`-th request of a connection (the 1st, the
+    /// `every + 1`-th, ...) is answered `by_us` microseconds late: a slave answering just after
+    /// the client's timeout. Requests that arrive meanwhile are answered after it, in order.
+    Late {
+        /// One request in this many is answered late.
+        every: u32,
+        /// How late, in microseconds.
+        by_us: u64,
+    },
 }
 
 /// A scripted server; stops serving when dropped.
@@ -186,6 +195,7 @@ fn connection(
     let mut buf: Vec<u8> = Vec::new();
     let mut chunk = [0u8; 512];
     let live = || !stop.load(Ordering::Relaxed) && Instant::now() < until;
+    let mut served = 0u32;
     while live() {
         let Some(total) = request_len(kind, &buf).filter(|&t| t <= buf.len()) else {
             match stream.read(&mut chunk) {
@@ -202,8 +212,15 @@ fn connection(
         let n = slave.respond(kind, &frame, &mut out).unwrap_or(0);
         let answer = out[..n].to_vec();
         let script = *script.lock().unwrap();
+        served += 1;
         let ok = match script {
             Script::Answer => stream.write_all(&answer).is_ok(),
+            Script::Late { every, by_us } => {
+                if (served - 1) % every.max(1) == 0 {
+                    thread::sleep(Duration::from_micros(by_us));
+                }
+                stream.write_all(&answer).is_ok()
+            }
             Script::Flood => {
                 // Large writes, so the peer sends faster than a client reading a few hundred
                 // bytes a call can take them.

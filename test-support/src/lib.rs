@@ -2,9 +2,12 @@
 //!
 //! - [`pty_pair::PtyPair`]: two linked pseudo-terminals made by `socat`, a real serial line;
 //! - [`hostile_peer::HostilePeer`]: a Modbus TCP server that misbehaves on purpose;
+//! - [`late_slave::serve_late`]: a slave on any transport (a pseudo-terminal) that answers
+//!   some requests just after the client's timeout;
 //! - [`alloc_count::Counting`]: a global allocator that counts heap allocations, per thread and
 //!   in all, for the tests and benches that promise none per request.
 
 pub mod alloc_count;
 pub mod hostile_peer;
+pub mod late_slave;
 pub mod pty_pair;

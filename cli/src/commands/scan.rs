@@ -306,6 +306,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let profiles: Vec<&'static Profile> = drives.iter().map(drivemap_live::leak_profile).collect();
     let base = LinkArgs {
         tcp: args.tcp.clone(),
+        gateway: None,
         rtu_tcp: args.rtu_tcp.clone(),
         serial: args.serial.clone(),
         baud: None,

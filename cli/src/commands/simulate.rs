@@ -1,4 +1,4 @@
-//! `drivemap simulate --drive <id> (--tcp ADDR | --rtu-tcp ADDR | --serial PATH) [--slave N]`
+//! `drivemap simulate --drive <id> (--tcp ADDR | --gateway ADDR | --rtu-tcp ADDR | --serial PATH) [--slave N]`
 //!
 //! Serves a simulated drive (crate `drivemap-sim`) built from the drive's map, logging each
 //! request in one line: time, slave, function, address, quantity, result or exception.
@@ -22,7 +22,7 @@ use drivemap_sim::{
 use crate::maps::MapsDir;
 
 #[derive(ClapArgs, Debug)]
-#[command(group(ArgGroup::new("link").required(true).args(["tcp", "rtu_tcp", "serial"])))]
+#[command(group(ArgGroup::new("link").required(true).args(["tcp", "gateway", "rtu_tcp", "serial"])))]
 pub struct Args {
     /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
     #[arg(long)]
@@ -30,6 +30,11 @@ pub struct Args {
     /// Serve Modbus TCP here: `PORT` (binds 127.0.0.1) or `HOST:PORT` (binds where told).
     #[arg(long, value_name = "ADDR")]
     pub tcp: Option<String>,
+    /// Serve Modbus TCP as a Modbus TCP to RTU gateway with the drive on its serial line:
+    /// the map's RTU addressing and RTU registers (`read --gateway` talks to it). `PORT` or
+    /// `HOST:PORT`.
+    #[arg(long, value_name = "ADDR")]
+    pub gateway: Option<String>,
     /// Serve RTU frames over TCP, as a transparent serial gateway does: `PORT` or `HOST:PORT`.
     #[arg(long = "rtu-tcp", value_name = "ADDR")]
     pub rtu_tcp: Option<String>,
@@ -217,9 +222,16 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     } else {
         format!(", time x{}", args.time_scale)
     };
-    if let Some(addr) = args.tcp.as_deref().or(args.rtu_tcp.as_deref()) {
+    if let Some(addr) = args
+        .tcp
+        .as_deref()
+        .or(args.gateway.as_deref())
+        .or(args.rtu_tcp.as_deref())
+    {
         let framing = if args.tcp.is_some() {
             TcpFraming::ModbusTcp
+        } else if args.gateway.is_some() {
+            TcpFraming::Gateway
         } else {
             TcpFraming::RtuOverTcp
         };
@@ -234,6 +246,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         let what = match framing {
             TcpFraming::ModbusTcp => "Modbus TCP",
             TcpFraming::RtuOverTcp => "RTU over TCP",
+            TcpFraming::Gateway => "Modbus TCP gateway to RTU",
         };
         outln!(
             "simulating {id} at slave {slave} on {what} {} ({model}{time}); Ctrl-C stops",
@@ -243,7 +256,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         return Ok(ExitCode::SUCCESS);
     }
     let Some(path) = &args.serial else {
-        return Err("give --tcp, --rtu-tcp or --serial".into());
+        return Err("give --tcp, --gateway, --rtu-tcp or --serial".into());
     };
     let options = SerialOptions::new(path.to_string_lossy(), baud)
         .parity(match parity {

@@ -23,11 +23,17 @@ pub enum LineParity {
 
 /// How to reach the drive.
 #[derive(ClapArgs, Debug, Clone)]
-#[command(group(ArgGroup::new("link").required(true).args(["tcp", "rtu_tcp", "serial"])))]
+#[command(group(ArgGroup::new("link").required(true).args(["tcp", "gateway", "rtu_tcp", "serial"])))]
 pub struct LinkArgs {
-    /// Modbus TCP server (`192.168.1.10:502`).
+    /// The drive's own Modbus TCP interface (`192.168.1.10:502`); refused for a map whose
+    /// `protocol.transports` lacks `tcp` (reach such a drive with --gateway or --rtu-tcp).
     #[arg(long, value_name = "ADDR")]
     pub tcp: Option<String>,
+    /// A Modbus TCP to RTU gateway with the drive on its serial line (`192.168.1.20:502`):
+    /// Modbus TCP frames, the map's RTU addressing, RTU registers and RTU timing (--baud and
+    /// --parity are the serial line's behind the gateway, for the timing).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub gateway: Option<String>,
     /// RTU frames over TCP through a transparent serial gateway (`192.168.1.20:4001`).
     #[arg(long = "rtu-tcp", value_name = "ADDR")]
     pub rtu_tcp: Option<String>,
@@ -77,6 +83,8 @@ impl LinkArgs {
     pub fn kind(&self) -> TransportKind {
         if self.tcp.is_some() {
             TransportKind::Tcp
+        } else if self.gateway.is_some() {
+            TransportKind::TcpGateway
         } else if self.rtu_tcp.is_some() {
             TransportKind::RtuOverTcp
         } else {
@@ -94,7 +102,7 @@ impl LinkArgs {
     /// TCP link is planned as the default 9600 baud line, which only the relative costs matter
     /// for).
     pub fn bus_line(&self, drive: &Drive) -> SerialConfig {
-        if self.serial.is_none() {
+        if self.serial.is_none() && self.gateway.is_none() {
             return SerialConfig::default();
         }
         self.serial_config(drive)
@@ -120,9 +128,10 @@ impl LinkArgs {
     /// The client's options: the map's timing ([`ClientOptions::for_line`] on the line's baud
     /// rate and framing), with what was given on the command line in its place. On Modbus TCP
     /// the serial line's request gap does not apply (the drive's network card keeps its own
-    /// line), so none is kept unless given.
+    /// line), so none is kept unless given; through a gateway (`--gateway`) the drive is on a
+    /// serial line and its timing applies.
     pub fn client_options(&self, drive: &Drive, profile: &Profile) -> ClientOptions {
-        let mut options = if self.kind().is_rtu_framed() {
+        let mut options = if self.kind().reaches_rtu_side() {
             ClientOptions::for_line(profile, self.serial_config(drive))
         } else {
             ClientOptions {
@@ -140,6 +149,34 @@ impl LinkArgs {
         options
     }
 
+    /// Refuses `--tcp` for a drive whose map does not list Modbus TCP among its transports: a
+    /// serial drive behind a Modbus TCP gateway is addressed on its RTU side, which `--gateway`
+    /// does (Modbus TCP addressing would put every register of a drive with an RTU address
+    /// offset one off).
+    pub fn check_transport(&self, drive: &Drive) -> Result<(), String> {
+        use drivemap_codegen::model::TransportName;
+        let Some(addr) = &self.tcp else {
+            return Ok(());
+        };
+        if drive.protocol.transports.contains(&TransportName::Tcp) {
+            return Ok(());
+        }
+        Err(format!(
+            "{} has no Modbus TCP interface (its map's protocol.transports is [{}]), so --tcp {addr} cannot reach it: for the drive on the serial line of a Modbus TCP to RTU gateway give --gateway {addr} (Modbus TCP frames, the drive's RTU addressing and timing), for a transparent gateway --rtu-tcp {addr}",
+            drive.meta.id,
+            drive
+                .protocol
+                .transports
+                .iter()
+                .map(|t| match t {
+                    TransportName::Rtu => "rtu",
+                    TransportName::Tcp => "tcp",
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    }
+
     /// Opens the link and makes a client for `profile`. Returns the client and a description
     /// of the link for headers.
     pub fn connect(
@@ -153,6 +190,13 @@ impl LinkArgs {
             let t = TcpTransport::connect(addr.as_str(), connect_timeout)
                 .map_err(|e| format!("cannot connect to Modbus TCP server {addr}: {e}"))?;
             (Box::new(t), format!("Modbus TCP {addr}"))
+        } else if let Some(addr) = &self.gateway {
+            let t = TcpTransport::connect_gateway(addr.as_str(), connect_timeout)
+                .map_err(|e| format!("cannot connect to Modbus TCP gateway {addr}: {e}"))?;
+            (
+                Box::new(t),
+                format!("Modbus TCP gateway {addr} (drive on RTU)"),
+            )
         } else if let Some(addr) = &self.rtu_tcp {
             let t = RtuOverTcpTransport::connect(addr.as_str(), connect_timeout)
                 .map_err(|e| format!("cannot connect to RTU gateway {addr}: {e}"))?;
@@ -181,7 +225,7 @@ impl LinkArgs {
                 format!("RTU {path} {baud} baud, parity {parity}, {stops} stop bit(s)"),
             )
         } else {
-            return Err("give --tcp, --rtu-tcp or --serial".into());
+            return Err("give --tcp, --gateway, --rtu-tcp or --serial".into());
         };
         let client = Client::with_options(transport, profile, options);
         Ok((client, format!("{what}, slave {}", self.slave(drive))))
@@ -222,6 +266,7 @@ mod tests {
     fn args(link: &str) -> LinkArgs {
         LinkArgs {
             tcp: (link == "tcp").then(|| "127.0.0.1:502".to_owned()),
+            gateway: (link == "gateway").then(|| "127.0.0.1:5020".to_owned()),
             rtu_tcp: (link == "rtu-tcp").then(|| "127.0.0.1:4001".to_owned()),
             serial: (link == "serial").then(|| "/dev/null".to_owned()),
             baud: None,
@@ -242,6 +287,8 @@ mod tests {
         let gap = |a: &LinkArgs| a.client_options(&drive, &v7::PROFILE).request_gap;
         assert_eq!(gap(&args("serial")), Duration::from_micros(12_500));
         assert_eq!(gap(&args("rtu-tcp")), Duration::from_micros(12_500));
+        // Behind a Modbus TCP gateway the drive is on a serial line: its timing applies.
+        assert_eq!(gap(&args("gateway")), Duration::from_micros(12_500));
         assert_eq!(gap(&args("tcp")), Duration::ZERO);
         let slow = LinkArgs {
             baud: Some(4800),

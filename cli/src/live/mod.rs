@@ -27,8 +27,12 @@ pub struct Target {
 }
 
 impl Target {
-    /// Reads and validates the drive's map.
+    /// Reads and validates the drive's map, and refuses a link the drive does not have
+    /// (`--tcp` to a drive without Modbus TCP: [`link::LinkArgs::check_transport`]) before
+    /// anything else is looked at.
     pub fn load(&self) -> Result<Drive, String> {
-        self.dir.load(&self.drive)
+        let drive = self.dir.load(&self.drive)?;
+        self.link.check_transport(&drive)?;
+        Ok(drive)
     }
 }

@@ -330,6 +330,7 @@ impl<'d> Session<'d> {
         link: &LinkArgs,
         settings: LiveSettings,
     ) -> Result<Self, String> {
+        link.check_transport(drive)?;
         let (client, text) = link.connect(drive, profile)?;
         Ok(Session {
             drive,
@@ -442,9 +443,10 @@ impl<'d> Session<'d> {
             Some(format!("{} is write-only", describe::register(r)))
         } else if !on_transport(self.drive, r, self.kind) {
             Some(format!(
-                "{} exists only on {}",
+                "{} exists only on {}, not on this link ({})",
                 describe::register(r),
-                describe::transports(self.drive.register_plan(r).transports)
+                describe::transports(self.drive.register_plan(r).transports),
+                self.kind.name()
             ))
         } else {
             None

@@ -43,6 +43,22 @@ impl TcpTransport {
         Self::connect_as(addr, timeout, TransportKind::Tcp)
     }
 
+    /// Connects to a Modbus TCP to RTU gateway with a serial drive behind it
+    /// ([`TransportKind::TcpGateway`]): Modbus TCP frames, but the client addresses the drive
+    /// as its map's RTU side (RTU address offset, RTU registers, RTU timing).
+    pub fn connect_gateway(
+        addr: impl ToSocketAddrs,
+        timeout: Duration,
+    ) -> io::Result<TcpTransport> {
+        Self::connect_as(addr, timeout, TransportKind::TcpGateway)
+    }
+
+    /// Wraps a connected stream to a Modbus TCP to RTU gateway
+    /// ([`TcpTransport::connect_gateway`]).
+    pub fn from_gateway_stream(stream: TcpStream) -> io::Result<TcpTransport> {
+        Self::from_stream_as(stream, TransportKind::TcpGateway)
+    }
+
     pub(crate) fn connect_as(
         addr: impl ToSocketAddrs,
         timeout: Duration,

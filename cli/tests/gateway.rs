@@ -1,0 +1,209 @@
+//! The link's topology (issue 23, item 6): a serial drive behind a Modbus TCP to RTU gateway is
+//! a link of its own. `drivemap read --gateway` sends Modbus TCP frames with the map's RTU
+//! addressing, RTU registers and RTU timing; `--tcp` on a map whose transports lack `tcp` is
+//! refused, naming `--gateway`. Through the binary, against `drivemap simulate --gateway`.
+
+use std::io::{BufRead, BufReader};
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::thread;
+use std::time::Duration;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn drivemap(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(args)
+        .arg("--maps")
+        .arg(repo().join("maps"))
+        .output()
+        .expect("run drivemap");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// `drivemap simulate` in a child process; killed on drop.
+struct Sim {
+    child: Child,
+    addr: String,
+    first: String,
+}
+
+impl Sim {
+    fn start(id: &str, link: &str, sets: &[&str]) -> Sim {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+            .args(["simulate", "--drive", id, link, "0", "--quiet"])
+            .args(sets.iter().flat_map(|s| ["--set", s]))
+            .arg("--maps")
+            .arg(repo().join("maps"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let mut first = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut first)
+            .unwrap();
+        let addr = first
+            .split_whitespace()
+            .find(|w| w.starts_with("127.0.0.1:"))
+            .unwrap_or_else(|| panic!("no address in {first:?}"))
+            .to_owned();
+        Sim { child, addr, first }
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The row of `register` in a read table, with runs of spaces collapsed.
+fn row(out: &str, register: &str) -> String {
+    let line = out
+        .lines()
+        .find(|l| l.starts_with(&format!("{register} ")))
+        .unwrap_or_else(|| panic!("no row for {register} in:\n{out}"));
+    line.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// A listener that counts the connections it accepts.
+fn counting_listener() -> (String, Arc<AtomicU32>) {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let count = Arc::new(AtomicU32::new(0));
+    let seen = Arc::clone(&count);
+    thread::spawn(move || {
+        for s in listener.incoming().flatten() {
+            seen.fetch_add(1, Ordering::Relaxed);
+            drop(s);
+        }
+    });
+    (addr, count)
+}
+
+/// The J7 speaks RTU only (`protocol.transports: [rtu]`): `--tcp` is refused before connecting,
+/// with a message that names `--gateway`, for every live command.
+#[test]
+fn tcp_to_a_drive_without_modbus_tcp_is_refused_naming_the_gateway_option() {
+    let (addr, connections) = counting_listener();
+    for command in [
+        vec!["read", "status_signal_1"],
+        vec!["write", "digital_input_command=0"],
+        vec!["poll", "--count", "1"],
+        vec!["probe"],
+    ] {
+        let mut args = vec![command[0], "--drive", "yaskawa-j7", "--tcp", addr.as_str()];
+        args.extend_from_slice(&command[1..]);
+        let (code, out, err) = drivemap(&args);
+        assert_eq!(code, 2, "{command:?}: {out}{err}");
+        assert!(
+            err.contains("yaskawa-j7 has no Modbus TCP interface")
+                && err.contains(&format!("--gateway {addr}"))
+                && err.contains("protocol.transports is [rtu]"),
+            "{command:?}: {err}"
+        );
+    }
+    thread::sleep(Duration::from_millis(50));
+    assert_eq!(connections.load(Ordering::Relaxed), 0, "nothing connected");
+}
+
+/// `--gateway` reaches the J7 behind a simulated Modbus TCP to RTU gateway and reads its
+/// registers where the map puts them on RTU.
+#[test]
+fn gateway_reads_a_serial_only_drive() {
+    let sim = Sim::start("yaskawa-j7", "--gateway", &["n69=2"]);
+    assert!(
+        sim.first
+            .contains("on Modbus TCP gateway to RTU 127.0.0.1:"),
+        "{}",
+        sim.first
+    );
+    let (code, out, err) = drivemap(&[
+        "read",
+        "--drive",
+        "yaskawa-j7",
+        "--gateway",
+        &sim.addr,
+        "n69",
+        "status_signal_1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        row(&out, "modbus_frequency_reference_unit_selection"),
+        "modbus_frequency_reference_unit_selection (n69) 0198h 2: 30,000 = n011 0002h"
+    );
+    assert!(row(&out, "status_signal_1").starts_with("status_signal_1 0020h"));
+}
+
+/// A drive with an RTU address offset (the ACN: PDU address = communication address - 1 on
+/// RTU, 0 on its own Modbus TCP interface) behind a gateway: `--gateway` addresses it with the
+/// RTU offset and reads acc_time (dr.03, 1103h) as set; Modbus TCP addressing through the same
+/// gateway lands one register off (dec_time's word): the reason the link must be named.
+#[test]
+fn gateway_applies_the_maps_rtu_address_offset() {
+    let sim = Sim::start(
+        "automationdirect-acn",
+        "--gateway",
+        &["acc_time=5", "dec_time=7"],
+    );
+    let read = |flag: &str| {
+        drivemap(&[
+            "read",
+            "--drive",
+            "automationdirect-acn",
+            flag,
+            &sim.addr,
+            "acc_time",
+            "dec_time",
+        ])
+    };
+    let (code, out, err) = read("--gateway");
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(row(&out, "acc_time"), "acc_time (dr.03) 1103h 5.0 s 0032h");
+    assert_eq!(row(&out, "dec_time"), "dec_time (dr.04) 1104h 7.0 s 0046h");
+    // The same gateway addressed as the drive's own Modbus TCP interface: one off.
+    let (code, out, err) = read("--tcp");
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(row(&out, "acc_time"), "acc_time (dr.03) 1103h 7.0 s 0046h");
+}
+
+/// The V7 has both: through a gateway its RTU-only command register is reachable and its
+/// Modbus TCP option card's registers are not.
+#[test]
+fn gateway_has_the_rtu_registers_of_a_drive_with_both_transports() {
+    let sim = Sim::start("yaskawa-v7", "--gateway", &[]);
+    let (code, out, err) = drivemap(&[
+        "read",
+        "--drive",
+        "yaskawa-v7",
+        "--gateway",
+        &sim.addr,
+        "digital_input_command",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(row(&out, "digital_input_command").starts_with("digital_input_command 0001h"));
+    let (code, out, _) = drivemap(&[
+        "read",
+        "--drive",
+        "yaskawa-v7",
+        "--gateway",
+        &sim.addr,
+        "tcp_digital_input_command",
+    ]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        out.contains("error: tcp_digital_input_command exists only on TCP, not on this link (Modbus TCP gateway to RTU)"),
+        "{out}"
+    );
+}
