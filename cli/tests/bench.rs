@@ -247,8 +247,9 @@ fn installed_anywhere_every_command_works_from_outside_the_repository() {
     assert!(out.contains("done in"), "{out}");
 
     // The live commands against `drivemap simulate`.
-    let sim = SimProcess::start(&bin, dir, &["--drive", "ptlk-tds-v8", "--tcp", "0"]);
-    let link = ["--drive", "ptlk-tds-v8", "--tcp", sim.addr.as_str()];
+    // The TDS-V8 speaks RTU only: served and reached as a drive behind a Modbus TCP gateway.
+    let sim = SimProcess::start(&bin, dir, &["--drive", "ptlk-tds-v8", "--gateway", "0"]);
+    let link = ["--drive", "ptlk-tds-v8", "--gateway", sim.addr.as_str()];
     let live = |cmd: &str, extra: &[&str]| {
         let mut all = vec![cmd];
         all.extend_from_slice(&link);
@@ -327,9 +328,15 @@ fn installed_anywhere_every_command_works_from_outside_the_repository() {
         &report,
     );
     assert_eq!(got, "drivemap-probe/1 ptlk-tds-v8 186 186\n");
-    // scan over Modbus TCP.
+    // scan through the Modbus TCP gateway.
     let (code, out, err) = run(&[
-        "scan", "--tcp", &sim.addr, "--slaves", "1-3", "--format", "json",
+        "scan",
+        "--gateway",
+        &sim.addr,
+        "--slaves",
+        "1-3",
+        "--format",
+        "json",
     ]);
     assert_eq!(code, 0, "{err}");
     let got = python(

@@ -568,7 +568,7 @@ fn a_new_map_is_swept_with_no_test_edit() {
 /// registers.
 #[test]
 fn every_register_of_every_map_through_a_modbus_tcp_gateway() {
-    sweep_all(TransportKind::TcpGateway);
+    sweep_all(&repo().join("maps"), TransportKind::TcpGateway);
 }
 
 /// The three writes of the report, with the binary: each is refused before connecting and

@@ -32,11 +32,16 @@ const MAX_IDENTIFY_REGISTERS: usize = 48;
 
 /// Arguments of `drivemap scan`.
 #[derive(ClapArgs, Debug)]
-#[command(group(ArgGroup::new("link").required(true).args(["tcp", "rtu_tcp", "serial"])))]
+#[command(group(ArgGroup::new("link").required(true).args(["tcp", "gateway", "rtu_tcp", "serial"])))]
 pub struct Args {
-    /// Modbus TCP server or gateway (`192.168.1.10:502`).
+    /// Modbus TCP server (`192.168.1.10:502`): drives with a Modbus TCP interface of their own
+    /// (candidate maps without `tcp` in `protocol.transports` are not identified here).
     #[arg(long, value_name = "ADDR")]
     pub tcp: Option<String>,
+    /// Modbus TCP to RTU gateway with the drives on its serial line (`192.168.1.20:502`):
+    /// candidates are identified by their RTU addresses and registers.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub gateway: Option<String>,
     /// RTU frames over TCP through a transparent serial gateway (`192.168.1.20:4001`).
     #[arg(long = "rtu-tcp", value_name = "ADDR")]
     pub rtu_tcp: Option<String>,
@@ -306,7 +311,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let profiles: Vec<&'static Profile> = drives.iter().map(drivemap_live::leak_profile).collect();
     let base = LinkArgs {
         tcp: args.tcp.clone(),
-        gateway: None,
+        gateway: args.gateway.clone(),
         rtu_tcp: args.rtu_tcp.clone(),
         serial: args.serial.clone(),
         baud: None,
