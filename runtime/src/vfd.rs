@@ -22,14 +22,39 @@
 //! drive's own errors). A role the map does not give is refused with [`Refusal::NoRole`] before
 //! anything is sent, never skipped: [`VariableFrequencyDrive::supports`] tells beforehand.
 //!
-//! Command words are composed from a copy the [`Vfd`] keeps of what it last wrote to each command
-//! register, starting from every command role released (stopped, forward, no reset): the run
-//! command of a drive is owned by one master. The copy changes only when a write succeeds, so a
-//! command the drive refused (or that was lost) is not sent again by a later one.
+//! Command words are composed from what the [`Vfd`] last told the drive, never from hope: the
+//! run command of a drive is owned by one master, and every command register starts released
+//! (stopped, forward, no reset). See [the safety contract](#safety-contract).
+//!
+//! # Safety contract
+//!
+//! Each guarantee is proved by the test named after it (in `tests/tests/`); the fault-injection
+//! property test `drive_contract::the_contract_holds_under_faults` checks the first three on
+//! random call sequences with lost, late and refused replies and reconnects, on every map of
+//! `maps/` and the `acme-vf1` fixture, over RTU framing and Modbus TCP.
+//!
+//! - A run bit or run code is written only by [`VariableFrequencyDrive::run`], or by a later call
+//!   while the last of `run()` and `stop()` called was a `run()` that succeeded (which keeps the
+//!   drive running, in the direction set): `drive_contract::the_contract_holds_under_faults`.
+//! - After a [`VariableFrequencyDrive::stop`] call, successful or not, no call but `run()` makes
+//!   the drive run again, whatever became of the stop's frames:
+//!   `drive_contract::a_stop_whose_replies_were_lost_stays_a_stop`.
+//! - A run that failed is not sent again by a later, unrelated command (a master that does not
+//!   know whether the drive started errs towards stop):
+//!   `drive_trait::a_command_that_failed_is_not_resent_by_the_next`.
+//! - After a failed write of a command register, the register is unknown: the next command
+//!   re-reads it where the map lets it be read on the link (keeping the drive's other bits),
+//!   and composes from the released state (stop, no reset, the direction set) where it cannot:
+//!   `drive_contract::an_unknown_command_register_is_read_again_or_released`.
+//! - Every value goes out through the register's conversion and the client's write gate, or
+//!   not at all: `drive_contract::the_contract_holds_under_faults` checks every word that
+//!   reached the wire against the limits in force.
+//! - A role the map does not give on the link is refused ([`Refusal::NoRole`]) before anything
+//!   is sent: `drive_trait::one_routine_runs_every_drive_over_serial_framing`.
 
 use std::fmt;
 
-use drivemap_core::plan::RegisterPlan;
+use drivemap_core::plan::{Conversion, RegisterPlan};
 use drivemap_core::register::{DrivePlan, DriveSettings, Table};
 use drivemap_core::roles::{FieldRole, Place, Role, RoleKind, Target};
 use drivemap_core::rule::Broadcast;
@@ -194,8 +219,23 @@ pub struct Vfd<'c, S: SettingsView, T: Transport> {
     roles: Roles,
     kind: TransportKind,
     direction: Direction,
-    /// What this master last wrote to each command register: (plan row, word).
-    shadow: Vec<(u16, u16)>,
+    /// The direction of the last `run()`, if it succeeded and was the last of `run()` and
+    /// `stop()` called.
+    running: Option<Direction>,
+    /// Every command register, with what this master last told it.
+    commands: Vec<CommandWord>,
+}
+
+/// A command register and what this master last told it.
+#[derive(Debug, Clone, Copy)]
+struct CommandWord {
+    /// The plan row.
+    row: u16,
+    /// Every command role of the register released (stop, forward, no reset), other bits 0.
+    released: u16,
+    /// The word last written, or `None` before the first write and after a write that failed
+    /// (the drive may hold the new word, the old one, or anything in between).
+    told: Option<u16>,
 }
 
 impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
@@ -220,18 +260,26 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         roles: Roles,
     ) -> Self {
         let kind = client.transport().kind();
-        let mut shadow: Vec<(u16, u16)> = Vec::new();
+        let mut commands: Vec<CommandWord> = Vec::new();
         for p in roles.places {
             if let (RoleKind::Command, Target::Field(f)) = (p.role.kind(), p.target) {
-                let word = match shadow.iter_mut().find(|(row, _)| *row == f.row) {
-                    Some((_, w)) => w,
+                let c = match commands.iter_mut().find(|c| c.row == f.row) {
+                    Some(c) => c,
                     None => {
-                        shadow.push((f.row, 0));
-                        &mut shadow.last_mut().expect("just pushed").1
+                        commands.push(CommandWord {
+                            row: f.row,
+                            released: 0,
+                            told: None,
+                        });
+                        commands.last_mut().expect("just pushed")
                     }
                 };
-                *word = f.put(*word, f.code(false));
+                c.released = f.put(c.released, f.code(false));
             }
+        }
+        // At the start the drive is taken as released: the first command composes from that.
+        for c in &mut commands {
+            c.told = Some(c.released);
         }
         Vfd {
             client,
@@ -241,7 +289,8 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             roles,
             kind,
             direction: Direction::Forward,
-            shadow,
+            running: None,
+            commands,
         }
     }
 
@@ -390,26 +439,99 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     }
 
     /// Sets the command fields of `changes` in their registers' words and writes each word once,
-    /// in the order of `changes`. The copy of what was written is updated only after a write
-    /// succeeds: a refused run is never sent again by a later, unrelated command.
+    /// in the order of `changes`. Each word is composed from what this master last told the
+    /// register ([`Vfd::base`]) with the run and direction fields as the last successful `run()`
+    /// or `stop()` and the direction set say, then `changes` on top. A write that fails makes
+    /// its register unknown.
     fn command(&mut self, changes: &[(FieldRole, bool)]) -> Result<(), Error> {
         let mut words: Vec<(u16, u16)> = Vec::new();
         for (f, on) in changes {
-            let Some(&(_, written)) = self.shadow.iter().find(|(row, _)| *row == f.row) else {
+            if !self.commands.iter().any(|c| c.row == f.row) {
                 continue;
-            };
-            match words.iter_mut().find(|(row, _)| *row == f.row) {
-                Some((_, word)) => *word = f.put(*word, f.code(*on)),
-                None => words.push((f.row, f.put(written, f.code(*on)))),
             }
+            let word = match words.iter().position(|(row, _)| *row == f.row) {
+                Some(i) => &mut words[i].1,
+                None => {
+                    let base = self.base(f.row)?;
+                    words.push((f.row, base));
+                    &mut words.last_mut().expect("just pushed").1
+                }
+            };
+            *word = f.put(*word, f.code(*on));
         }
         for (row, word) in words {
-            self.write_word(row, u32::from(word))?;
-            if let Some((_, written)) = self.shadow.iter_mut().find(|(r, _)| *r == row) {
-                *written = word;
+            let result = self.write_word(row, u32::from(word));
+            if let Some(c) = self.commands.iter_mut().find(|c| c.row == row) {
+                c.told = result.is_ok().then_some(word);
             }
+            result?;
         }
         Ok(())
+    }
+
+    /// The word a command to register `row` starts from: what this master last told it, or,
+    /// when that is unknown, the word read back from the drive where the map lets it be read
+    /// here (its defined bits only) and the released word where it cannot; then every command
+    /// role of the register released except the run and direction fields, which follow the last
+    /// successful `run()` / `stop()` and the direction set. So no word carries a run code unless
+    /// `run()` asks for it or succeeded last.
+    fn base(&mut self, row: u16) -> Result<u16, Error> {
+        let Some(c) = self.commands.iter().find(|c| c.row == row).copied() else {
+            return Ok(0);
+        };
+        let mut word = match c.told {
+            Some(w) => w,
+            None => match self.read_back(row) {
+                Some(read) => read,
+                None => c.released,
+            },
+        };
+        for p in self.roles.places {
+            if let (RoleKind::Command, Target::Field(f)) = (p.role.kind(), p.target) {
+                if f.row == row {
+                    word = f.put(word, f.code(false));
+                }
+            }
+        }
+        // Run fields can be refused only when the map has none: then there is nothing to keep.
+        // A drive run by terminals keeps the terminal of the direction it was run in.
+        let (run, direction) = match self.running {
+            Some(d) => (true, d),
+            None => (false, self.direction),
+        };
+        if let Ok(fields) = self.run_fields(run, direction) {
+            for (f, on) in fields {
+                if f.row == row {
+                    word = f.put(word, f.code(on));
+                }
+            }
+        }
+        if let Ok(Some(r)) = self.field(Role::Reverse) {
+            if r.row == row {
+                word = r.put(word, r.code(self.direction == Direction::Reverse));
+            }
+        }
+        Ok(word)
+    }
+
+    /// The word of command register `row` read from the drive, where the map lets it be read
+    /// on this link and reads mean what writes do; only the bits of its fields are kept. `None`
+    /// when it cannot be read or the read fails (the caller composes from the released state).
+    fn read_back(&mut self, row: u16) -> Option<u16> {
+        let r = self.row(row);
+        let readable = r.info.access.readable()
+            && r.read_values.is_empty()
+            && r.transports.contains(self.kind)
+            && r.broadcast != Broadcast::Only
+            && self.slave != 0;
+        if !readable {
+            return None;
+        }
+        let mask = match r.conversion {
+            Conversion::Bits { mask, .. } => mask,
+            _ => u16::MAX,
+        };
+        self.read_word(row).ok().map(|w| w & mask)
     }
 
     fn field(&self, role: Role) -> Result<Option<FieldRole>, Error> {
@@ -424,10 +546,10 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         }
     }
 
-    /// The command fields that run (`true`) or stop in the direction set, the direction first
+    /// The command fields that run (`true`) or stop in `direction`, the direction first
     /// (registers are written in this order).
-    fn run_fields(&self, run: bool) -> Result<Vec<(FieldRole, bool)>, Error> {
-        let reverse = self.direction == Direction::Reverse;
+    fn run_fields(&self, run: bool, direction: Direction) -> Result<Vec<(FieldRole, bool)>, Error> {
+        let reverse = direction == Direction::Reverse;
         let mut out = Vec::new();
         if let Some(f) = self.field(Role::Run)? {
             out.push((f, run));
@@ -502,12 +624,19 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
     }
 
     fn run(&mut self) -> Result<(), Error> {
-        let fields = self.run_fields(true)?;
-        self.command(&fields)
+        let fields = self.run_fields(true, self.direction)?;
+        // Until the run is confirmed, every other command composes with run released.
+        self.running = None;
+        self.command(&fields)?;
+        self.running = Some(self.direction);
+        Ok(())
     }
 
     fn stop(&mut self) -> Result<(), Error> {
-        let fields = self.run_fields(false)?;
+        // From now on no word carries a run code until the next run(), whatever becomes of
+        // this one.
+        self.running = None;
+        let fields = self.run_fields(false, self.direction)?;
         self.command(&fields)
     }
 
@@ -608,11 +737,12 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
         let Target::Field(f) = p.target else {
             return Err(self.misplaced(Role::FaultReset, "field"));
         };
+        // An unknown register may hold the reset: released first too.
         let set = self
-            .shadow
+            .commands
             .iter()
-            .find(|(row, _)| *row == f.row)
-            .is_some_and(|(_, w)| f.holds(*w));
+            .find(|c| c.row == f.row)
+            .is_some_and(|c| c.told.is_none_or(|w| f.holds(w)));
         if f.edge && set {
             self.command(&[(f, false)])?;
         }

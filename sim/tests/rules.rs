@@ -783,3 +783,29 @@ fn acn_memory_control_executes_only_a_changed_value_and_reads_the_lock_state() {
     assert_eq!(sim.executed("save_parameters").unwrap(), 3);
     assert_eq!(sim.command_count("save_parameters"), Some(1));
 }
+
+/// A clone is the same drive going on on its own: what one is told, the other is not; with
+/// its own clock (`set_clock`) its model ramps by that clock only.
+#[test]
+fn a_clone_goes_on_on_its_own_clock() {
+    let (mut a, clock_a) = start("ptlk-tds-v8", SimOptions::new());
+    a.set("frequency_command", 30.0).unwrap();
+    let mut b = a.clone();
+    let clock_b = ManualClock::new();
+    b.set_clock(Arc::new(clock_b.clone()));
+    b.set_raw("operation_command", 0x0001).unwrap(); // run forward
+    assert!(b.state().unwrap().run_command);
+    assert!(
+        !a.state().unwrap().run_command,
+        "the original was not told to run"
+    );
+    // Bn-01 10 s to 60 Hz: 6 Hz/s. Time passes on the original's clock only: b stands still.
+    clock_a.advance(Duration::from_secs(2));
+    b.tick();
+    assert_eq!(hz(&b, "output_frequency"), 0.0);
+    clock_b.advance(Duration::from_secs(2));
+    b.tick();
+    a.tick();
+    assert_eq!(hz(&b, "output_frequency"), 12.0);
+    assert_eq!(hz(&a, "output_frequency"), 0.0);
+}

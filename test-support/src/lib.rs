@@ -4,6 +4,8 @@
 //! - [`hostile_peer::HostilePeer`]: a Modbus TCP server that misbehaves on purpose;
 //! - [`late_slave::serve_late`]: a slave on any transport (a pseudo-terminal) that answers
 //!   some requests just after the client's timeout;
+//! - [`sim_link::SimLink`]: an in-memory link to a simulated drive that loses, delays and refuses
+//!   frames on request and records what reached the wire;
 //! - [`alloc_count::Counting`]: a global allocator that counts heap allocations, per thread and
 //!   in all, for the tests and benches that promise none per request.
 
@@ -11,3 +13,4 @@ pub mod alloc_count;
 pub mod hostile_peer;
 pub mod late_slave;
 pub mod pty_pair;
+pub mod sim_link;

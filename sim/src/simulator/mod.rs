@@ -35,7 +35,11 @@ pub use state::RolesChoice;
 use state::TickCache;
 
 /// A drive simulated from its map.
-#[derive(Debug)]
+///
+/// A clone is the same drive in the same state, going on on its own from there (starting one is
+/// far dearer: a test that needs many fresh drives clones one); it keeps the clock until
+/// [`Simulator::set_clock`] gives it another.
+#[derive(Debug, Clone)]
 pub struct Simulator {
     drive: Arc<Drive>,
     profile: &'static Profile,
@@ -165,6 +169,14 @@ impl Simulator {
         sim.start_model();
         sim.tick();
         Ok(sim)
+    }
+
+    /// Takes its time from `clock` from now on: the drive model stands still between the last
+    /// tick on the old clock and `clock`'s present time.
+    pub fn set_clock(&mut self, clock: Arc<dyn Clock>) {
+        self.tick();
+        self.last_tick = clock.now();
+        self.clock = clock;
     }
 
     /// The map.

@@ -26,7 +26,7 @@ pub enum RolesChoice {
 
 /// What `tick` needs, resolved once and refreshed only when a register it depends on changes,
 /// so a request allocates nothing and converts nothing while the drive model is steady.
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 pub(super) struct TickCache {
     /// Registers whose raw word the settings and the model's inputs come from.
     pub(super) inputs: Vec<usize>,

@@ -1,0 +1,605 @@
+//! The drive trait's safety contract (`runtime/src/vfd.rs`, "Safety contract"), each guarantee
+//! by a test against a drive simulated from its map, with faults injected at the transport
+//! ([`SimLink`]): replies lost, late, refused, connections reset.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use drivemap_codegen::Drive;
+use drivemap_live::LiveSettings;
+use drivemap_runtime::pdu::Request;
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::roles::Role;
+use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
+use drivemap_runtime::{Client, ClientOptions, Error};
+use drivemap_sim::framing::{self, Decoded};
+use drivemap_sim::{ManualClock, SimOptions, Simulator};
+use drivemap_test_support::sim_link::{LinkFault, SimLink};
+
+fn map(path: &str) -> Drive {
+    let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
+    drivemap_codegen::read_map(path.as_ref(), &Default::default())
+        .unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+/// Options that make a lost reply cheap: the link answers at once or never.
+fn options(retries: u8) -> ClientOptions {
+    ClientOptions {
+        timeout: Duration::from_micros(20),
+        retries,
+        request_gap: Duration::ZERO,
+        ..ClientOptions::default()
+    }
+}
+
+/// A client over `kind` to a simulator of `drive`, the settings the simulator holds and its
+/// slave address.
+fn connect(drive: &Drive, kind: TransportKind, retries: u8) -> (Client<SimLink>, LiveSettings, u8) {
+    let clock = ManualClock::new();
+    let sim = Simulator::new(drive.clone(), SimOptions::new().clock(Arc::new(clock))).unwrap();
+    let settings = sim.settings();
+    let slave = sim.slave();
+    let link = SimLink::new(kind, sim);
+    (
+        Client::with_options(link, drive.plan().profile, options(retries)),
+        settings,
+        slave,
+    )
+}
+
+fn run_command(c: &mut Client<SimLink>) -> bool {
+    c.transport()
+        .sim
+        .state()
+        .expect("a drive model")
+        .run_command
+}
+
+/// The sequences: run succeeds, the three replies of stop are lost (the drive did
+/// stop), then an unrelated command. On the old code the V7 ran again: over RTU framing
+/// `reset_fault` wrote 0001h = 0009h then 0001h, and `set_direction(Reverse)` wrote 0003h;
+/// over Modbus TCP `reset_fault` wrote S1 (run forward) back with the reset.
+#[test]
+fn a_stop_whose_replies_were_lost_stays_a_stop() {
+    let v7 = map("maps/yaskawa-v7.yaml");
+    type Call = fn(&mut dyn VariableFrequencyDrive) -> Result<(), Error>;
+    let calls: [(&str, Call); 2] = [
+        ("reset_fault", |d| d.reset_fault()),
+        ("set_direction(Reverse)", |d| {
+            d.set_direction(Direction::Reverse)
+        }),
+    ];
+    for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
+        for (what, call) in calls {
+            let (mut c, settings, slave) = connect(&v7, kind, 2);
+            let view = settings.view(&v7);
+            let p = v7.plan();
+            let mut d = Vfd::from_plan(&mut c, slave, view, p.registers, p.roles);
+            if !d.supports(Role::Reverse) && what.starts_with("set_direction") {
+                // Over Modbus TCP the direction is the choice of run terminal: nothing to write.
+                continue;
+            }
+            d.set_reference(30.0).unwrap();
+            d.run().unwrap();
+            assert!(run_command(d.client()), "{kind:?}: running after run()");
+            for _ in 0..3 {
+                d.client().transport().inject(LinkFault::LoseReply);
+            }
+            assert!(
+                matches!(d.stop(), Err(Error::Timeout { .. })),
+                "{kind:?}: stop's replies lost"
+            );
+            assert!(!run_command(d.client()), "{kind:?}: the drive got stop");
+            let _ = call(&mut d);
+            assert!(
+                !run_command(d.client()),
+                "{kind:?}: {what} after a stop whose replies were lost restarted the drive: {}",
+                wire(d.client())
+            );
+        }
+    }
+}
+
+/// The frames written, for messages.
+fn wire(c: &mut Client<SimLink>) -> String {
+    c.transport()
+        .log
+        .iter()
+        .map(|s| {
+            s.frame
+                .iter()
+                .map(|b| format!("{b:02X}"))
+                .collect::<String>()
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The function, PDU address and (first) word written of every frame on the wire (RTU
+/// framing).
+fn requests(c: &mut Client<SimLink>) -> Vec<(u8, u16, Option<u16>)> {
+    c.transport()
+        .log
+        .iter()
+        .map(|s| {
+            let f = &s.frame;
+            let value = match f[1] {
+                0x06 => Some(u16::from_be_bytes([f[4], f[5]])),
+                0x10 => Some(u16::from_be_bytes([f[7], f[8]])),
+                _ => None,
+            };
+            (f[1], u16::from_be_bytes([f[2], f[3]]), value)
+        })
+        .collect()
+}
+
+/// After a write of a command register fails, the next command reads the register back where
+/// the map lets it be read (the V7's 0001h over RTU) and keeps the drive's other bits; where the
+/// read fails too, or the register cannot be read (the GPD 515's operation command is
+/// write-only), it composes from the released state: stop unless `run()` succeeded last, no
+/// reset, the direction set.
+#[test]
+fn an_unknown_command_register_is_read_again_or_released() {
+    let v7 = map("maps/yaskawa-v7.yaml");
+    let p = v7.plan();
+    // Read back: the drive got reverse (the reply was lost) and shows an external fault bit.
+    let (mut c, settings, slave) = connect(&v7, TransportKind::RtuOverTcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&v7), p.registers, p.roles);
+    d.run().unwrap();
+    d.client().transport().inject(LinkFault::LoseReply);
+    assert!(d.set_direction(Direction::Reverse).is_err());
+    let sim = &mut d.client().transport().sim;
+    assert_eq!(sim.raw("digital_input_command").unwrap(), 0x0003);
+    sim.set_raw("digital_input_command", 0x0007).unwrap();
+    d.client().transport().log.clear();
+    d.reset_fault().unwrap();
+    // 03h 0001h x1, then reset set and released (the V7's reset is not edge-triggered), running
+    // forward as the last run() said (the reverse was not confirmed), the external fault bit
+    // kept.
+    assert_eq!(
+        requests(d.client()),
+        [
+            (0x03, 0x0001, None),
+            (0x06, 0x0001, Some(0x000D)),
+            (0x06, 0x0001, Some(0x0005)),
+        ],
+        "{}",
+        wire(d.client())
+    );
+    drop(d);
+
+    // The read back fails too: the released state, with run as the last run() left it.
+    let (mut c, settings, slave) = connect(&v7, TransportKind::RtuOverTcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&v7), p.registers, p.roles);
+    d.run().unwrap();
+    d.client().transport().inject(LinkFault::LoseReply);
+    assert!(d.set_direction(Direction::Reverse).is_err());
+    d.client()
+        .transport()
+        .sim
+        .set_raw("digital_input_command", 0x0007)
+        .unwrap();
+    d.client().transport().log.clear();
+    d.client().transport().inject(LinkFault::LoseReply);
+    d.client().transport().inject(LinkFault::LoseReply);
+    assert!(
+        d.reset_fault().is_err(),
+        "the reset's write after the failed read is lost"
+    );
+    assert_eq!(
+        requests(d.client()),
+        [(0x03, 0x0001, None), (0x06, 0x0001, Some(0x0009))],
+        "{}",
+        wire(d.client())
+    );
+    drop(d);
+
+    // Write-only: the GPD 515's operation command. A run whose reply is lost, then stop: no
+    // read, the released word.
+    let gpd = map("maps/yaskawa-gpd515.yaml");
+    let p = gpd.plan();
+    let (mut c, settings, slave) = connect(&gpd, TransportKind::RtuOverTcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&gpd), p.registers, p.roles);
+    d.client().transport().inject(LinkFault::LoseReply);
+    let e = d.run().unwrap_err();
+    assert!(
+        run_command(d.client()),
+        "the drive got the run: {e}; {}",
+        wire(d.client())
+    );
+    d.client().transport().log.clear();
+    d.stop().unwrap();
+    assert!(!run_command(d.client()));
+    let written: Vec<_> = requests(d.client());
+    assert!(
+        written.iter().all(|(f, _, _)| *f != 0x03) && written.len() == 1,
+        "{}",
+        wire(d.client())
+    );
+    assert_eq!(written[0].2, Some(0x0000));
+}
+
+// ------------------------------------------------------------------------------------------
+// The fault-injection property test.
+
+/// One step of a sequence: a trait call, or something that happens to the drive.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Step {
+    Run,
+    Stop,
+    Direction(Direction),
+    Reference(f64),
+    Ramp(f64, f64),
+    ResetFault,
+    Status,
+    OutputFrequency,
+    /// The drive trips (not a call: the simulated drive faults).
+    Trip,
+    /// Simulated time passes (s).
+    Wait(f64),
+}
+
+/// A sequence and what happens on the link: the fault of each request in turn (`None`:
+/// delivered and answered), and the client's retries.
+#[derive(Debug, Clone)]
+struct Case {
+    steps: Vec<Step>,
+    faults: Vec<Option<LinkFault>>,
+    retries: u8,
+}
+
+fn step() -> impl proptest::strategy::Strategy<Value = Step> {
+    use proptest::prelude::*;
+    let direction = prop_oneof![Just(Direction::Forward), Just(Direction::Reverse)];
+    prop_oneof![
+        4 => Just(Step::Run),
+        4 => Just(Step::Stop),
+        2 => direction.prop_map(Step::Direction),
+        2 => (-10.0f64..150.0).prop_map(|hz| Step::Reference((hz * 100.0).round() / 100.0)),
+        1 => (0.0f64..120.0, 0.0f64..120.0, any::<bool>()).prop_map(|(a, d, same)| {
+            let (a, d) = ((a * 10.0).round() / 10.0, (d * 10.0).round() / 10.0);
+            Step::Ramp(a, if same { a } else { d })
+        }),
+        2 => Just(Step::ResetFault),
+        1 => Just(Step::Status),
+        1 => Just(Step::OutputFrequency),
+        1 => Just(Step::Trip),
+        1 => (0.0f64..30.0).prop_map(Step::Wait),
+    ]
+}
+
+fn fault() -> impl proptest::strategy::Strategy<Value = Option<LinkFault>> {
+    use proptest::prelude::*;
+    prop_oneof![
+        12 => Just(None),
+        2 => Just(Some(LinkFault::LoseReply)),
+        1 => Just(Some(LinkFault::LoseRequest)),
+        2 => Just(Some(LinkFault::LateReply)),
+        1 => prop_oneof![Just(4u8), Just(6u8)].prop_map(|c| Some(LinkFault::Exception(c))),
+        1 => any::<bool>().prop_map(|executed| Some(LinkFault::Disconnect { executed })),
+    ]
+}
+
+fn case() -> impl proptest::strategy::Strategy<Value = Case> {
+    use proptest::prelude::*;
+    (
+        proptest::collection::vec(step(), 1..14),
+        proptest::collection::vec(fault(), 0..40),
+        0u8..3,
+    )
+        .prop_map(|(steps, faults, retries)| Case {
+            steps,
+            faults,
+            retries,
+        })
+}
+
+/// What a sequence left to check: each step with its outcome, the drive's run command before
+/// and after it, and the frames on the wire.
+struct Trace {
+    steps: Vec<(Step, Result<(), String>)>,
+    /// Run command of the drive model before and after each step.
+    run_command: Vec<(bool, bool)>,
+    log: Vec<drivemap_test_support::sim_link::Sent>,
+}
+
+/// Plays `case` on a copy of `drive`'s simulator `template` (at power-on) over `kind`.
+fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -> Trace {
+    let clock = ManualClock::new();
+    let mut sim = template.clone();
+    sim.set_clock(Arc::new(clock.clone()));
+    let settings = sim.settings();
+    let slave = sim.slave();
+    let mut link = SimLink::new(kind, sim);
+    link.record_settings = true;
+    link.script(case.faults.iter().copied());
+    let p = drive.plan();
+    let mut c = Client::with_options(link, p.profile, options(case.retries));
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(drive), p.registers, p.roles);
+    let mut trace = Trace {
+        steps: Vec::new(),
+        run_command: Vec::new(),
+        log: Vec::new(),
+    };
+    for (i, &s) in case.steps.iter().enumerate() {
+        d.client().transport().tag = i as u32;
+        let before = run_command(d.client());
+        let result = match s {
+            Step::Run => d.run(),
+            Step::Stop => d.stop(),
+            Step::Direction(dir) => d.set_direction(dir),
+            Step::Reference(hz) => d.set_reference(hz),
+            Step::Ramp(a, dec) => d.set_ramp(a, dec),
+            Step::ResetFault => d.reset_fault(),
+            Step::Status => d.status().map(|_| ()),
+            Step::OutputFrequency => d.output_frequency().map(|_| ()),
+            Step::Trip => {
+                d.client().transport().sim.trip(1);
+                Ok(())
+            }
+            Step::Wait(s) => {
+                clock.advance(Duration::from_secs_f64(s));
+                d.client().transport().sim.tick();
+                Ok(())
+            }
+        };
+        let after = run_command(d.client());
+        trace.steps.push((s, result.map_err(|e| e.to_string())));
+        trace.run_command.push((before, after));
+    }
+    drop(d);
+    trace.log = std::mem::take(&mut c.transport().log);
+    trace
+}
+
+/// Whether `raw` is a value the map allows register `r` to take with `settings`: the plan's
+/// own conversion accepts it (its ranges, codes and reserved bits in force) and gives it back
+/// unchanged.
+fn within_limits(
+    r: &drivemap_runtime::RegisterPlan,
+    raw: u32,
+    settings: &impl drivemap_runtime::SettingsView,
+) -> Result<(), String> {
+    use drivemap_runtime::core::plan::Conversion;
+    let again = match r.conversion {
+        Conversion::Word { .. } | Conversion::Enum { .. } | Conversion::Bits { .. } => {
+            r.encode_word(r.int(raw), settings)
+        }
+        _ => r
+            .decode_number(raw, settings)
+            .and_then(|v| r.encode_number(v, settings)),
+    };
+    match again {
+        Ok(back) if back == raw => Ok(()),
+        Ok(back) => Err(format!(
+            "{}: {raw:#X} does not encode back ({back:#X})",
+            r.info.id
+        )),
+        Err(e) => Err(format!("{}: {raw:#X}: {e}", r.info.id)),
+    }
+}
+
+/// The invariants of the safety contract on one trace; `Err` says which failed and where.
+fn check(drive: &Drive, kind: TransportKind, trace: &Trace) -> Result<(), String> {
+    use drivemap_runtime::core::roles::Target;
+    let p = drive.plan();
+    let run_roles: Vec<_> = [Role::Run, Role::RunForward, Role::RunReverse]
+        .into_iter()
+        .flat_map(|role| p.roles.of(role))
+        .filter_map(|place| match place.target {
+            Target::Field(f) => Some(f),
+            _ => None,
+        })
+        .collect();
+    // Whether step `t` may write a run code: it is run(), or the last of run() and stop()
+    // before it is a run() that succeeded.
+    let may_run = |t: usize| -> bool {
+        if trace.steps[t].0 == Step::Run {
+            return true;
+        }
+        trace.steps[..t]
+            .iter()
+            .rev()
+            .find(|(s, _)| matches!(s, Step::Run | Step::Stop))
+            .is_some_and(|(s, r)| *s == Step::Run && r.is_ok())
+    };
+    for sent in &trace.log {
+        let t = sent.tag as usize;
+        let step = &trace.steps[t].0;
+        let frame = hex(&sent.frame);
+        let Decoded::Request { origin, request } = framing::decode(kind, &sent.frame) else {
+            return Err(format!("step {t} ({step:?}): undecodable frame {frame}"));
+        };
+        let (address, words): (u16, Vec<u16>) = match request {
+            Request::WriteSingle { address, value } => (address, vec![value]),
+            Request::WriteMultiple { address, values } => (
+                address,
+                (0..values.len()).filter_map(|i| values.get(i)).collect(),
+            ),
+            _ => continue,
+        };
+        if origin.slave() == 0 {
+            return Err(format!("step {t} ({step:?}): a broadcast {frame}"));
+        }
+        let settings = sent.settings.as_ref().expect("recorded");
+        let view = settings.view(drive);
+        let mut at = 0usize;
+        while at < words.len() {
+            let pdu = address.wrapping_add(at as u16);
+            let rows: Vec<usize> = p
+                .registers
+                .iter()
+                .enumerate()
+                .filter(|(_, r)| {
+                    r.transports.contains(kind)
+                        && r.broadcast != drivemap_runtime::Broadcast::Only
+                        && p.profile
+                            .address_offsets
+                            .pdu_address(r.address_for(&view, kind), kind)
+                            == Some(pdu)
+                })
+                .map(|(i, _)| i)
+                .collect();
+            let [row] = rows[..] else {
+                return Err(format!(
+                    "step {t} ({step:?}): {frame} writes {pdu:04X}h, where {} registers of the map are",
+                    rows.len()
+                ));
+            };
+            let r = &p.registers[row];
+            let n = usize::from(r.info.width.count());
+            let Some(mine) = words.get(at..at + n) else {
+                return Err(format!("step {t} ({step:?}): {frame} splits {}", r.info.id));
+            };
+            let raw = r.info.width.join(mine);
+            within_limits(r, raw, &view).map_err(|e| {
+                format!("step {t} ({step:?}): {frame}: outside the map's limits: {e}")
+            })?;
+            let runs = run_roles
+                .iter()
+                .any(|f| usize::from(f.row) == row && f.holds(raw as u16));
+            if runs && !may_run(t) {
+                return Err(format!(
+                    "step {t} ({step:?}) wrote a run code ({frame}: {} = {raw:#06X}) although the last of run() and stop() before it was not a successful run()",
+                    r.info.id
+                ));
+            }
+            at += n;
+        }
+    }
+    // After stop(), once the drive's run command is off it stays off until the next run().
+    let mut frames = trace.log.iter().peekable();
+    let mut stopped = false;
+    for (t, (step, _)) in trace.steps.iter().enumerate() {
+        let (before, after) = trace.run_command[t];
+        match step {
+            Step::Run => stopped = false,
+            Step::Stop => stopped = !before,
+            _ if stopped && before => {
+                return Err(format!("the drive ran again before step {t} ({step:?})"));
+            }
+            _ => {}
+        }
+        let stop_window = *step == Step::Stop
+            || (*step != Step::Run
+                && trace.steps[..t]
+                    .iter()
+                    .rev()
+                    .find(|(s, _)| matches!(s, Step::Run | Step::Stop))
+                    .is_some_and(|(s, _)| *s == Step::Stop));
+        while let Some(sent) = frames.next_if(|s| s.tag as usize == t) {
+            let Some(on) = sent.run_command else { continue };
+            if stop_window && stopped && on {
+                return Err(format!(
+                    "step {t} ({step:?}): {} made the drive run again after stop()",
+                    hex(&sent.frame)
+                ));
+            }
+            stopped |= stop_window && !on;
+        }
+        if stop_window && stopped && after {
+            return Err(format!("the drive ran again during step {t} ({step:?})"));
+        }
+        stopped |= stop_window && !after;
+    }
+    Ok(())
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02X}")).collect()
+}
+
+/// Every map of `maps/` (the directory, not a list) and the acme-vf1 fixture.
+fn every_map() -> Vec<(String, Drive)> {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let mut paths: Vec<std::path::PathBuf> = std::fs::read_dir(format!("{root}/../maps"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "yaml"))
+        .collect();
+    paths.sort();
+    paths.push(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml").into());
+    paths
+        .into_iter()
+        .map(|p| {
+            let d = drivemap_codegen::read_map(&p, &Default::default())
+                .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            (d.meta.id.clone(), d)
+        })
+        .collect()
+}
+
+/// The links a map is driven over: RTU framing (RTU over TCP, which can reconnect) always,
+/// Modbus TCP where the map lists it.
+fn links(drive: &Drive) -> Vec<TransportKind> {
+    let mut kinds = vec![TransportKind::RtuOverTcp];
+    if drive
+        .protocol
+        .transports
+        .contains(&drivemap_codegen::model::TransportName::Tcp)
+    {
+        kinds.push(TransportKind::Tcp);
+    }
+    kinds
+}
+
+/// Sequences in all (`DRIVEMAP_CONTRACT_CASES`; 100,000 by default, split evenly over every
+/// map and link).
+fn total_cases() -> u32 {
+    match std::env::var("DRIVEMAP_CONTRACT_CASES") {
+        Ok(v) => v
+            .parse()
+            .unwrap_or_else(|_| panic!("DRIVEMAP_CONTRACT_CASES={v}: give a number of sequences")),
+        Err(_) => 100_000,
+    }
+}
+
+/// Random sequences of trait calls, with reply loss, late replies, exceptions and reconnects
+/// injected at the transport, against the simulator of every map and the acme-vf1 fixture over
+/// RTU framing and Modbus TCP. Invariants, on what reached the wire and on the drive: a run code
+/// is written only by `run()` (or while a successful `run()` was the last of `run()` and
+/// `stop()`); after `stop()`, successful or not, the drive never runs again until the next
+/// `run()`; every word written is within the map's limits in force.
+#[test]
+fn the_contract_holds_under_faults() {
+    use proptest::test_runner::{Config, TestError, TestRunner};
+    let maps = every_map();
+    let targets: Vec<(&str, &Drive, TransportKind)> = maps
+        .iter()
+        .filter(|(_, d)| !d.plan().roles.is_empty())
+        .flat_map(|(id, d)| links(d).into_iter().map(move |k| (id.as_str(), d, k)))
+        .collect();
+    assert!(
+        maps.iter().any(|(id, _)| id == "acme-vf1") && targets.len() >= maps.len(),
+        "every map with roles, and the fixture"
+    );
+    let per_target = total_cases().div_ceil(targets.len() as u32);
+    let started = std::time::Instant::now();
+    let mut failures = Vec::new();
+    for (id, drive, kind) in &targets {
+        let mut runner = TestRunner::new(Config {
+            cases: per_target,
+            failure_persistence: None,
+            ..Config::default()
+        });
+        let template = Simulator::new((*drive).clone(), SimOptions::new()).unwrap();
+        let result = runner.run(&case(), |case| {
+            let trace = play(drive, &template, *kind, &case);
+            check(drive, *kind, &trace).map_err(proptest::test_runner::TestCaseError::fail)
+        });
+        match result {
+            Ok(()) => {}
+            Err(TestError::Fail(why, case)) => failures.push(format!(
+                "{id} over {kind:?}: {why}\n  shrunk case: {case:?}"
+            )),
+            Err(e) => failures.push(format!("{id} over {kind:?}: {e}")),
+        }
+    }
+    eprintln!(
+        "{} sequences ({per_target} on each of {} maps x links) in {:.1} s",
+        u64::from(per_target) * targets.len() as u64,
+        targets.len(),
+        started.elapsed().as_secs_f64()
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
