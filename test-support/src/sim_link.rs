@@ -9,8 +9,8 @@
 //! and on the drive.
 //!
 //! Time does not pass here: a lost reply times out as soon as the client's deadline has passed
-//! (give the client a short timeout), and a late reply arrives right after the next request
-//! is sent, before that request's own reply.
+//! (give the client a short timeout), and a late reply arrives as soon as the client listens
+//! again after giving up on it.
 
 use std::collections::VecDeque;
 use std::io;
@@ -31,8 +31,10 @@ pub enum LinkFault {
     LoseRequest,
     /// The drive executes the request; its reply is lost.
     LoseReply,
-    /// The drive executes the request; its reply arrives after the next request was sent,
-    /// before that request's reply.
+    /// The drive executes the request; its reply arrives after the client stopped waiting for
+    /// it: when the client next listens with another deadline (its wait for silence on an RTU
+    /// link, or the next request's receive, before that request's reply), or with the next
+    /// frame sent if it does not listen before.
     LateReply,
     /// The drive does not execute the request and answers with exception `code` (a busy
     /// drive, a gateway that cannot reach it).
@@ -70,8 +72,10 @@ pub struct SimLink {
     script: VecDeque<Option<LinkFault>>,
     /// Bytes that arrived and were not yet read.
     pending: VecDeque<Vec<u8>>,
-    /// A late reply, delivered after the next request.
-    held: Option<Vec<u8>>,
+    /// A late reply, and the deadline of the receive it missed (set at that receive's first
+    /// call): it arrives when the client listens again with another deadline (a wait for
+    /// silence, the next request's receive), or with the next frame sent.
+    held: Option<(Vec<u8>, Option<Instant>)>,
     /// The connection is broken until [`Transport::reconnect`].
     broken: bool,
     /// Tag recorded with each frame sent.
@@ -148,7 +152,7 @@ impl Transport for SimLink {
         if self.broken {
             return Err(io::ErrorKind::ConnectionReset.into());
         }
-        if let Some(late) = self.held.take() {
+        if let Some((late, _)) = self.held.take() {
             self.pending.push_back(late);
         }
         let fault = self.script.pop_front().flatten();
@@ -172,7 +176,7 @@ impl Transport for SimLink {
         match fault {
             None => self.pending.extend(reply),
             Some(LinkFault::LoseRequest | LinkFault::LoseReply) => {}
-            Some(LinkFault::LateReply) => self.held = reply,
+            Some(LinkFault::LateReply) => self.held = reply.map(|r| (r, None)),
             Some(LinkFault::Exception(code)) => {
                 let reply = self.exception(frame, code);
                 self.pending.extend(reply);
@@ -183,6 +187,14 @@ impl Transport for SimLink {
     }
 
     fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        match &mut self.held {
+            Some((_, missed @ None)) => *missed = Some(deadline),
+            Some((_, Some(missed))) if *missed != deadline => {
+                let (late, _) = self.held.take().expect("held");
+                self.pending.push_back(late);
+            }
+            _ => {}
+        }
         if let Some(bytes) = self.pending.front_mut() {
             let n = buf.len().min(bytes.len());
             buf[..n].copy_from_slice(&bytes[..n]);
@@ -195,12 +207,11 @@ impl Transport for SimLink {
         if self.broken {
             return Err(io::ErrorKind::ConnectionReset.into());
         }
-        // Nothing will arrive: let the deadline pass (the client's timeout is short).
+        // Nothing arrives before the deadline: sleep until then (at most 100 ms a call), so that
+        // many links can wait side by side.
         let now = Instant::now();
-        if deadline > now + Duration::from_millis(1) {
-            std::thread::sleep(Duration::from_millis(1));
-        } else {
-            std::thread::yield_now();
+        if deadline > now {
+            std::thread::sleep((deadline - now).min(Duration::from_millis(100)));
         }
         Ok(0)
     }

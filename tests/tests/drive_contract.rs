@@ -556,6 +556,11 @@ fn total_cases() -> u32 {
     }
 }
 
+/// Runners per map and link, side by side: on RTU framing the client waits for the line to
+/// be silent for the drive's response time after every unanswered request (real time, spent
+/// asleep), so sequences are played by many threads at once.
+const SHARDS: u32 = 8;
+
 /// Random sequences of trait calls, with reply loss, late replies, exceptions and reconnects
 /// injected at the transport, against the simulator of every map and the acme-vf1 fixture over
 /// RTU framing and Modbus TCP. Invariants, on what reached the wire and on the drive: a run code
@@ -564,7 +569,7 @@ fn total_cases() -> u32 {
 /// `run()`; every word written is within the map's limits in force.
 #[test]
 fn the_contract_holds_under_faults() {
-    use proptest::test_runner::{Config, TestError, TestRunner};
+    use proptest::test_runner::{Config, TestCaseError, TestError, TestRunner};
     let maps = every_map();
     let targets: Vec<(&str, &Drive, TransportKind)> = maps
         .iter()
@@ -575,31 +580,41 @@ fn the_contract_holds_under_faults() {
         maps.iter().any(|(id, _)| id == "acme-vf1") && targets.len() >= maps.len(),
         "every map with roles, and the fixture"
     );
-    let per_target = total_cases().div_ceil(targets.len() as u32);
+    let per_shard = total_cases().div_ceil(targets.len() as u32 * SHARDS);
     let started = std::time::Instant::now();
-    let mut failures = Vec::new();
-    for (id, drive, kind) in &targets {
-        let mut runner = TestRunner::new(Config {
-            cases: per_target,
-            failure_persistence: None,
-            ..Config::default()
-        });
-        let template = Simulator::new((*drive).clone(), SimOptions::new()).unwrap();
-        let result = runner.run(&case(), |case| {
-            let trace = play(drive, &template, *kind, &case);
-            check(drive, *kind, &trace).map_err(proptest::test_runner::TestCaseError::fail)
-        });
-        match result {
-            Ok(()) => {}
-            Err(TestError::Fail(why, case)) => failures.push(format!(
-                "{id} over {kind:?}: {why}\n  shrunk case: {case:?}"
-            )),
-            Err(e) => failures.push(format!("{id} over {kind:?}: {e}")),
-        }
-    }
+    let failures: Vec<String> = std::thread::scope(|scope| {
+        let runs: Vec<_> = targets
+            .iter()
+            .flat_map(|t| std::iter::repeat_n(t, SHARDS as usize))
+            .map(|&(id, drive, kind)| {
+                scope.spawn(move || {
+                    let template = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
+                    let mut runner = TestRunner::new(Config {
+                        cases: per_shard,
+                        failure_persistence: None,
+                        ..Config::default()
+                    });
+                    let result = runner.run(&case(), |case| {
+                        let trace = play(drive, &template, kind, &case);
+                        check(drive, kind, &trace).map_err(TestCaseError::fail)
+                    });
+                    match result {
+                        Ok(()) => None,
+                        Err(TestError::Fail(why, case)) => Some(format!(
+                            "{id} over {kind:?}: {why}\n  shrunk case: {case:?}"
+                        )),
+                        Err(e) => Some(format!("{id} over {kind:?}: {e}")),
+                    }
+                })
+            })
+            .collect();
+        runs.into_iter()
+            .filter_map(|r| r.join().expect("a runner panicked"))
+            .collect()
+    });
     eprintln!(
-        "{} sequences ({per_target} on each of {} maps x links) in {:.1} s",
-        u64::from(per_target) * targets.len() as u64,
+        "{} sequences ({per_shard} x {SHARDS} on each of {} maps x links) in {:.1} s",
+        u64::from(per_shard * SHARDS) * targets.len() as u64,
         targets.len(),
         started.elapsed().as_secs_f64()
     );
