@@ -240,3 +240,68 @@ fn poll_reconnects_after_the_server_restarts() {
         );
     }
 }
+
+/// The report's reproduction (issue 23, item 2), scaled down: a V7 over RTU over TCP that
+/// answers every request just after the timeout (250 ms for a 200 ms timeout, one retry),
+/// `read max_output_frequency accel_time_1`. Before, the late answer to n011 (010Bh = 600) was
+/// printed as accel_time_1 (0113h), "60.0 s", exit 1 only for the first register. Now no value
+/// is printed for either, and each error says that the next request waits for silence.
+#[test]
+fn read_never_prints_a_late_reply_as_another_registers_value() {
+    use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
+    use drivemap_sim::slave::SimulatedSlave;
+    use drivemap_test_support::late_slave::serve_late;
+    use std::net::TcpListener;
+
+    let map = drivemap_codegen::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
+        .expect("shipped map");
+    let profile = drivemap_live::leak_profile(&map);
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    thread::spawn(move || {
+        for stream in listener.incoming().flatten() {
+            let mut slave = SimulatedSlave::new(1, profile);
+            slave.set_holding(0x010B, 600); // n011 60.0 Hz
+            slave.set_holding(0x0113, 100); // n019 10.0 s
+            let mut link = RtuOverTcpTransport::from_stream(stream).unwrap();
+            let until = Instant::now() + Duration::from_secs(20);
+            serve_late(&mut link, &mut slave, 1, Duration::from_millis(250), until);
+        }
+    });
+    let (code, out, err, _) = drivemap(
+        &[
+            "read",
+            "--drive",
+            "yaskawa-v7",
+            "--rtu-tcp",
+            &addr,
+            "--timeout",
+            "200ms",
+            "--retries",
+            "1",
+            "--set",
+            "n018=0",
+            "max_output_frequency",
+            "accel_time_1",
+        ],
+        Duration::from_secs(15),
+    );
+    assert_eq!(code, 1, "{out}{err}");
+    for register in ["max_output_frequency", "accel_time_1"] {
+        let row = out
+            .lines()
+            .find(|l| l.starts_with(register))
+            .unwrap_or_else(|| panic!("no row for {register}:\n{out}"));
+        assert!(
+            row.contains("error: no reply from slave 1")
+                && row.contains(
+                    "the next request to slave 1 waits until the line has been silent for 200 ms"
+                ),
+            "{register}: {row}\n{out}"
+        );
+    }
+    assert!(
+        !out.contains("60.0 s"),
+        "n011's word printed as accel_time_1:\n{out}"
+    );
+}

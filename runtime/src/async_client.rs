@@ -470,10 +470,10 @@ impl<T: AsyncTransport> AsyncClient<T> {
             };
             let result = self.receive(framing, &checked, out).await;
             self.core.mark_idle();
-            self.core.attempt_ended(matches!(
-                result,
-                Ok(Some(())) | Err(Error::Exception { .. })
-            ));
+            self.core.attempt_ended(
+                checked.sent.slave,
+                matches!(result, Ok(Some(())) | Err(Error::Exception { .. })),
+            );
             match result {
                 Ok(Some(())) => return Ok(()),
                 Ok(None) if attempt < attempts => continue,
@@ -508,7 +508,7 @@ impl<T: AsyncTransport> AsyncClient<T> {
     /// As [`Client`](crate::client::Client)'s: on an RTU-framed link after an attempt that
     /// was not answered cleanly, waits until the line has been silent for the reply timeout.
     async fn settle(&mut self, checked: &Checked<'_>) -> Result<(), Error> {
-        let Some(mut settle) = self.core.settle_start() else {
+        let Some(mut settle) = self.core.settle_start(checked.sent.slave) else {
             return Ok(());
         };
         loop {

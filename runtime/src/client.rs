@@ -216,6 +216,17 @@ impl std::fmt::Display for Settled {
     }
 }
 
+/// An attempt that may still be answered late.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Unsettled {
+    /// The slave it was addressed to: only its reply could pass for the answer to a later
+    /// request (an RTU reply names its slave), so only a request to it, or a broadcast that
+    /// nobody confirms, waits.
+    slave: u8,
+    /// When the attempt ended: the silence is counted from here.
+    since: Instant,
+}
+
 /// Where a wait for silence stands.
 pub(crate) struct Settle {
     started: Instant,
@@ -238,8 +249,8 @@ pub(crate) struct Core {
     idle_since: Option<Instant>,
     link: Link,
     /// The line may still carry a reply to an earlier attempt (RTU framing only): the next
-    /// attempt waits for silence first.
-    unsettled: bool,
+    /// attempt to that slave (or a broadcast) waits for silence first.
+    unsettled: Option<Unsettled>,
     /// What the waits for silence of the current call took.
     settled: Option<Settled>,
 }
@@ -279,7 +290,7 @@ impl Core {
             budget: PersistBudget::new(options.eeprom_writes_per_hour),
             idle_since: None,
             link: Link::default(),
-            unsettled: false,
+            unsettled: None,
             settled: None,
         }
     }
@@ -298,20 +309,30 @@ impl Core {
         self.settled = None;
     }
 
-    /// Records how an attempt ended: on an RTU-framed link, an attempt that timed out, failed
-    /// mid-reply or met anything that was not its answer may leave a reply on its way.
-    pub(crate) fn attempt_ended(&mut self, answered: bool) {
+    /// Records how an attempt to `slave` ended: on an RTU-framed link, an attempt that timed
+    /// out, failed mid-reply or met anything that was not its answer may leave a reply on its
+    /// way.
+    pub(crate) fn attempt_ended(&mut self, slave: u8, answered: bool) {
         if self.kind.is_rtu_framed() && (!answered || !self.rx.discarded().is_empty()) {
-            self.unsettled = true;
+            self.unsettled = Some(Unsettled {
+                slave,
+                since: Instant::now(),
+            });
         }
     }
 
-    /// The wait for silence to run before the next send, if one is needed.
-    pub(crate) fn settle_start(&self) -> Option<Settle> {
-        let now = Instant::now();
-        self.unsettled.then(|| Settle {
-            started: now,
-            last_byte: now,
+    /// The wait for silence to run before sending to `slave`, if one is needed: after an
+    /// unanswered attempt to the same slave, or before a broadcast (which no reply confirms).
+    /// The silence is counted from the end of that attempt, so a caller that paused as long
+    /// does not wait again.
+    pub(crate) fn settle_start(&self, slave: u8) -> Option<Settle> {
+        let u = self.unsettled?;
+        if u.slave != slave && slave != rtu::BROADCAST {
+            return None;
+        }
+        Some(Settle {
+            started: Instant::now(),
+            last_byte: u.since,
             quiet: self.settle_quiet(),
             bytes: 0,
         })
@@ -349,7 +370,7 @@ impl Core {
         };
         if silent {
             record(self);
-            self.unsettled = false;
+            self.unsettled = None;
             return Some(Ok(()));
         }
         if settle.bytes > MAX_UNANSWERED_BYTES {
@@ -1231,10 +1252,10 @@ impl<T: Transport> Client<T> {
             };
             let result = self.receive(framing, &checked, out);
             self.core.mark_idle();
-            self.core.attempt_ended(matches!(
-                result,
-                Ok(Some(())) | Err(Error::Exception { .. })
-            ));
+            self.core.attempt_ended(
+                checked.sent.slave,
+                matches!(result, Ok(Some(())) | Err(Error::Exception { .. })),
+            );
             match result {
                 Ok(Some(())) => return Ok(()),
                 Ok(None) if attempt < attempts => continue,
@@ -1270,7 +1291,7 @@ impl<T: Transport> Client<T> {
     /// On an RTU-framed link after an attempt that was not answered cleanly: waits until the
     /// line has been silent for the reply timeout, throwing away what arrives.
     fn settle(&mut self, checked: &Checked<'_>) -> Result<(), Error> {
-        let Some(mut settle) = self.core.settle_start() else {
+        let Some(mut settle) = self.core.settle_start(checked.sent.slave) else {
             return Ok(());
         };
         loop {

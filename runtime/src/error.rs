@@ -242,7 +242,7 @@ pub enum Error {
         waited.as_millis(),
         if *attempts > 1 { format!(" ({attempts} attempts)") } else { String::new() },
         if discarded.is_empty() { String::new() } else { format!("; {discarded}") },
-        match settle { Some(q) => format!("; the next request waits until the line has been silent for {} ms, so that a late reply is not taken for its answer", q.as_millis()), None => String::new() }
+        match settle { Some(q) => format!("; the next request to slave {} waits until the line has been silent for {} ms, so that a late reply is not taken for its answer", sent.slave, q.as_millis()), None => String::new() }
     )]
     Timeout {
         sent: Sent,
@@ -251,8 +251,9 @@ pub enum Error {
         attempts: u8,
         /// What arrived but was not the answer, on the last attempt.
         discarded: Discarded,
-        /// On an RTU-framed link (no transaction id): the silence the next request waits for
-        /// first, so that a late reply to this one is not taken for its answer.
+        /// On an RTU-framed link (no transaction id): the silence the next request to the same
+        /// slave (or a broadcast) waits for first, counted from the end of this attempt, so that
+        /// a late reply to this one is not taken for its answer.
         settle: Option<Duration>,
     },
     /// On an RTU-framed link after an unanswered request, the line did not fall silent long

@@ -97,7 +97,7 @@ fn async_client_over_a_duplex_pipe() {
             // silence first, so that a late reply is not taken for its answer.
             let e = c.read_holding(2, 0x0020, &mut [0; 1]).await.unwrap_err();
             let settle = if kind.is_rtu_framed() {
-                "; the next request waits until the line has been silent for 100 ms, so that a late reply is not taken for its answer"
+                "; the next request to slave 2 waits until the line has been silent for 100 ms, so that a late reply is not taken for its answer"
             } else {
                 ""
             };

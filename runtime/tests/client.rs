@@ -379,7 +379,7 @@ fn retries_are_bounded_and_reported() {
     let e = c.read_holding(1, 0x0020, &mut [0; 1]).unwrap_err();
     assert_eq!(
         e.to_string(),
-        "no reply from slave 1 to 03h read of 0020h x1 within 100 ms (3 attempts); the next request waits until the line has been silent for 100 ms, so that a late reply is not taken for its answer"
+        "no reply from slave 1 to 03h read of 0020h x1 within 100 ms (3 attempts); the next request to slave 1 waits until the line has been silent for 100 ms, so that a late reply is not taken for its answer"
     );
     assert_eq!(c.transport().requests, 3);
     assert_eq!(c.read::<FrequencyMonitor>(1, &HZ_001).unwrap(), 60.0);
@@ -550,4 +550,53 @@ fn client_new_applies_the_profile_timing() {
     );
     assert_eq!(generic.options().request_gap, Duration::ZERO);
     assert_eq!(generic.options().timeout, Duration::from_secs(1));
+}
+
+/// After an unanswered request on RTU framing, the next request to the same slave and any
+/// broadcast wait until the line has been silent for the timeout, counted from the end of the
+/// unanswered attempt; a request to another slave does not (its reply names it, so a late reply
+/// of the first is discarded by the slave check), nor does one after a pause that long.
+#[test]
+fn after_a_timeout_the_same_slave_and_broadcasts_wait_for_silence() {
+    let quiet = strict().timeout;
+    let mut c = v7(strict());
+    let mut w = [0u16; 1];
+    c.transport().inject(Fault::Drop);
+    let e = c.read_holding(1, 0x0023, &mut w).unwrap_err();
+    assert!(
+        matches!(e, Error::Timeout { settle: Some(q), .. } if q == quiet),
+        "{e}"
+    );
+    // A broadcast waits: no reply would show it was lost in a collision.
+    c.write_register(0, 0x0001, 0).unwrap();
+    let s = c.settled().expect("the broadcast waited for silence");
+    assert!(s.waited >= quiet - Duration::from_millis(5), "{s}");
+    assert_eq!(s.quiet, quiet);
+
+    // The same slave after a pause as long as the timeout: no further wait.
+    c.transport().inject(Fault::Drop);
+    c.read_holding(1, 0x0023, &mut w).unwrap_err();
+    std::thread::sleep(quiet + Duration::from_millis(20));
+    c.read_holding(1, 0x0023, &mut w).unwrap();
+    assert_eq!(w, [6000]);
+    assert!(
+        c.settled()
+            .is_none_or(|s| s.waited < Duration::from_millis(20)),
+        "{:?}",
+        c.settled()
+    );
+
+    // Another slave at once: no wait.
+    c.transport().inject(Fault::Drop);
+    c.read_holding(1, 0x0023, &mut w).unwrap_err();
+    let e = c.read_holding(2, 0x0023, &mut w).unwrap_err();
+    assert!(matches!(e, Error::Timeout { .. }), "{e}");
+    assert_eq!(c.settled(), None);
+    // Modbus TCP never waits: the transaction id tells replies apart.
+    let mut t = v7_on(TransportKind::Tcp, strict());
+    t.transport().inject(Fault::Drop);
+    let e = t.read_holding(1, 0x0023, &mut w).unwrap_err();
+    assert!(matches!(e, Error::Timeout { settle: None, .. }), "{e}");
+    t.read_holding(1, 0x0023, &mut w).unwrap();
+    assert_eq!(t.settled(), None);
 }

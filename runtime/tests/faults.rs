@@ -61,7 +61,7 @@ fn dropped_reply_times_out_naming_the_request() {
         c.transport().inject(Fault::Drop);
         let e = read_0020(&mut c).unwrap_err();
         let settle = if kind.is_rtu_framed() {
-            "; the next request waits until the line has been silent for 100 ms, so that a late reply is not taken for its answer"
+            "; the next request to slave 1 waits until the line has been silent for 100 ms, so that a late reply is not taken for its answer"
         } else {
             ""
         };

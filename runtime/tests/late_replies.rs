@@ -63,7 +63,7 @@ impl Tally {
             Err(e @ Error::Timeout { .. }) => {
                 self.timeouts += 1;
                 if e.to_string().contains(&format!(
-                    "the next request waits until the line has been silent for {} ms",
+                    "the next request to slave 1 waits until the line has been silent for {} ms",
                     TIMEOUT.as_millis()
                 )) {
                     self.timeouts_saying_they_wait += 1;
@@ -170,7 +170,7 @@ fn blocking_modbus_tcp_gateway_never_takes_a_late_reply_for_the_next_answer() {
 mod serial {
     use super::*;
     use drivemap_runtime::transport::serial::{SerialOptions, SerialTransport};
-    use drivemap_test_support::late_slave::serve_late;
+    use drivemap_test_support::late_slave::{numbered, serve_late};
     use drivemap_test_support::pty_pair::PtyPair;
     use std::thread;
 
@@ -184,7 +184,7 @@ mod serial {
         thread::spawn(move || {
             serve_late(
                 &mut link,
-                &PROFILE,
+                &mut numbered(&PROFILE),
                 EVERY,
                 LATE,
                 Instant::now() + for_how_long,

@@ -69,7 +69,7 @@ fn client_talks_to_a_drive_over_a_pseudo_terminal_pair() {
     assert!(matches!(e, Error::Timeout { .. }), "{e}");
     assert_eq!(
         e.to_string(),
-        "no reply from slave 2 to 03h read of 0020h x1 within 500 ms; the next request waits until the line has been silent for 500 ms, so that a late reply is not taken for its answer"
+        "no reply from slave 2 to 03h read of 0020h x1 within 500 ms; the next request to slave 2 waits until the line has been silent for 500 ms, so that a late reply is not taken for its answer"
     );
     let mut r = [0u16; 2];
     client.read_holding(1, 0x0001, &mut r).unwrap();

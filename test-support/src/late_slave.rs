@@ -1,7 +1,7 @@
 //! A slave on any [`Transport`] (one end of a pseudo-terminal pair, a socket) that answers
 //! like [`hostile_peer::Script::Late`](crate::hostile_peer::Script::Late): correctly, but every
-//! `every`-th request just after the client's timeout. Holding register `a` holds `a`, so an
-//! answer misattributed to another register's request shows as a wrong value.
+//! `every`-th request just after the client's timeout. With [`numbered`], holding register `a`
+//! holds `a`, so an answer misattributed to another register's request shows as a wrong value.
 
 use std::time::{Duration, Instant};
 
@@ -10,21 +10,26 @@ use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{rtu, tcp};
 use drivemap_sim::slave::SimulatedSlave;
 
-/// Serves `link` as slave 1 of `profile` until `until`; every `every`-th request (the 1st, the
-/// `every + 1`-th, ...) is answered `late` after it arrived. Returns the requests answered.
-pub fn serve_late(
-    link: &mut impl Transport,
-    profile: &'static Profile,
-    every: u32,
-    late: Duration,
-    until: Instant,
-) -> u32 {
-    let kind = link.kind();
+/// Slave 1 of `profile` whose holding and input register `a` hold `a` (0..64).
+pub fn numbered(profile: &'static Profile) -> SimulatedSlave {
     let mut slave = SimulatedSlave::new(1, profile);
     for a in 0..64u16 {
         slave.set_holding(a, a);
         slave.set_input(a, a);
     }
+    slave
+}
+
+/// Serves `link` as `slave` until `until`; every `every`-th request (the 1st, the
+/// `every + 1`-th, ...) is answered `late` after it arrived. Returns the requests answered.
+pub fn serve_late(
+    link: &mut impl Transport,
+    slave: &mut SimulatedSlave,
+    every: u32,
+    late: Duration,
+    until: Instant,
+) -> u32 {
+    let kind = link.kind();
     let mut buf: Vec<u8> = Vec::new();
     let mut chunk = [0u8; 512];
     let mut served = 0u32;
