@@ -9,7 +9,12 @@
 //! per case). A simulated drive that executes every write it receives records what arrived; each
 //! arrival is checked against the map by rules written here from the IR, not by the gate, and
 //! so is each refusal: a write the map allows on that link and that needs no setting from the
-//! drive must arrive, exactly once.
+//! drive must arrive, exactly once. The rules cover every construct the schema documents: a
+//! 32-bit pair arrives as its two words at its address and the next, its 32-bit value in range;
+//! an address chosen by a setting, the transport or the variant arrives at the one the drive's
+//! settings select (as the simulated drive holds them); `broadcast: {unknown}` sends nothing to
+//! slave 0. Every map of `maps/` is swept, and `a_new_map_is_swept_with_no_test_edit` sweeps a
+//! copy with a map added.
 //!
 //! `write_gate_repros_as_reported` runs the binary itself on the three cases of the report.
 
@@ -24,6 +29,7 @@ use clap::Parser;
 use drivemap_cli::commands::write;
 use drivemap_cli::{Cli, Command as Cmd};
 use drivemap_codegen::ir::{Drive, Register, ValueKind};
+use drivemap_codegen::model::TransportName;
 use drivemap_codegen::validate::{Context, field_span};
 use drivemap_runtime::core::width::{Width, WordOrder};
 use drivemap_runtime::profile::{Profile, TransportKind};
@@ -122,6 +128,42 @@ impl Wire {
     fn writes_since(&self, n: usize) -> Vec<(u16, u16)> {
         self.slave.lock().unwrap().writes[n..].to_vec()
     }
+
+    /// The word the drive holds at a PDU address.
+    fn holding(&self, pdu: u16) -> u16 {
+        self.slave.lock().unwrap().holding(pdu)
+    }
+}
+
+/// The address at which the map puts `r` on this link, given the settings the drive holds
+/// now (`address_alternatives` chosen by a setting's code, the transport or the model variant,
+/// which is the base one here), from the IR: the first alternative whose condition holds, else
+/// its own address.
+fn selected_address(drive: &Drive, r: &Register, kind: TransportKind, wire: &Wire) -> i32 {
+    let (rtu, tcp) = drive.address_offsets();
+    let offset = if kind == TransportKind::Tcp { tcp } else { rtu };
+    for alt in &r.def.address_alternatives {
+        let when = &alt.when;
+        // The sweep writes as the base variant: the first option of every axis.
+        let in_variant = when.variant.as_ref().is_none_or(|v| {
+            drive
+                .variants
+                .iter()
+                .any(|axis| axis.options.first().is_some_and(|o| o.id == *v))
+        });
+        let on_transport = when
+            .transport
+            .is_none_or(|t| (t == TransportName::Tcp) == (kind == TransportKind::Tcp));
+        let setting_holds = when.setting.as_deref().is_none_or(|s| {
+            let setting = drive.find(s).expect("the setting is a register of the map");
+            let pdu = i32::from(setting.def.address) + offset;
+            when.is.contains(&wire.holding(pdu as u16))
+        });
+        if in_variant && on_transport && setting_holds {
+            return i32::from(alt.address);
+        }
+    }
+    i32::from(r.def.address)
 }
 
 /// `drivemap write` in-process: the arguments parsed by the binary's own parser.
@@ -257,6 +299,7 @@ fn legal_arrival(
     r: &Register,
     kind: TransportKind,
     slave: u8,
+    wire: &Wire,
     arrived: &[(u16, u16)],
 ) -> Result<(), String> {
     if !allowed_on_link(drive, r, kind, slave) {
@@ -276,13 +319,10 @@ fn legal_arrival(
     let (rtu, tcp) = drive.address_offsets();
     let offset = if kind == TransportKind::Tcp { tcp } else { rtu };
     let address = i32::from(arrived[0].0) - offset;
-    let addresses: Vec<i32> = std::iter::once(r.def.address)
-        .chain(r.def.address_alternatives.iter().map(|a| a.address))
-        .map(i32::from)
-        .collect();
-    if !addresses.contains(&address) {
+    let selected = selected_address(drive, r, kind, wire);
+    if address != selected {
         return Err(format!(
-            "arrived at {address:04X}h, the register is at {addresses:04X?}"
+            "arrived at {address:04X}h, the map puts the register at {selected:04X}h now"
         ));
     }
     if words == 2 && arrived[1].0 != arrived[0].0.wrapping_add(1) {
@@ -463,7 +503,7 @@ fn sweep(path: &Path, kind: TransportKind) -> Tally {
                     wire.settle();
                     let arrived = wire.writes_since(before);
                     if !arrived.is_empty() {
-                        if let Err(why) = legal_arrival(&drive, r, kind, slave, &arrived) {
+                        if let Err(why) = legal_arrival(&drive, r, kind, slave, &wire, &arrived) {
                             let words: Vec<String> = arrived
                                 .iter()
                                 .map(|(pdu, word)| format!("{pdu:04X}h = {word:04X}h"))
