@@ -163,7 +163,8 @@ pub fn migrate(file: &Arc<str>, text: &str) -> Result<Migrated, Vec<Diagnostic>>
                 .iter()
                 .position(|l| l.starts_with(|c: char| c.is_ascii_alphabetic()))
                 .unwrap_or(lines.len());
-            lines.insert(at, format!("{stamp}\n"));
+            let eol = if text.contains("\r\n") { "\r\n" } else { "\n" };
+            lines.insert(at, format!("{stamp}{eol}"));
         }
     }
     let migrated: String = lines.concat();
@@ -246,6 +247,9 @@ mod tests {
         assert!(p.warnings.is_empty() && p.version == CURRENT);
         // Migrating twice changes nothing.
         assert_eq!(migrate(&file, &m.text).unwrap().text, m.text);
+        // Windows line ends are kept.
+        let crlf = migrate(&file, &OLD.replace('\n', "\r\n")).unwrap();
+        assert_eq!(crlf.text, m.text.replace('\n', "\r\n"));
         // `schema: 1` stated is rewritten in place.
         let stated = OLD.replace("drive:", "schema: 1\ndrive:");
         let m1 = migrate(&file, &stated).unwrap();
