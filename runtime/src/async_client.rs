@@ -416,6 +416,11 @@ impl<T: AsyncTransport> AsyncClient<T> {
         self.core.profile
     }
 
+    /// The options in force.
+    pub fn options(&self) -> &ClientOptions {
+        &self.core.options
+    }
+
     /// The transport.
     pub fn transport(&mut self) -> &mut T {
         &mut self.transport

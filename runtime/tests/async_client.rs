@@ -185,3 +185,47 @@ fn async_client_faults_and_recovery() {
 fn inject_into(c: &mut AsyncClient<BlockingTransport<FaultyLink>>, fault: Fault) {
     c.transport().with(|link| link.inject(fault));
 }
+
+/// `AsyncClient::new` keeps the drive's timing as `Client::new` does (issue 23, item 8): the
+/// manual's request gap and response time on a link to the serial side, no request gap on the
+/// drive's own Modbus TCP interface; `ClientOptions::generic()` is the explicit opt-out.
+#[test]
+fn async_client_new_applies_the_profile_timing() {
+    use drivemap_runtime::ClientOptions;
+    use drivemap_runtime::profile::Timing;
+    static TIMED: drivemap_runtime::Profile = drivemap_runtime::Profile {
+        timing: Timing {
+            request_gap_bits: Some(24),
+            request_gap_us: Some(10_000),
+            ..Timing::MODBUS
+        },
+        ..drivemap_runtime::Profile::GENERIC
+    };
+    let gap = Duration::from_micros(12_500); // 24 bits at 9600 baud + 10 ms
+    for kind in [
+        TransportKind::Rtu,
+        TransportKind::RtuOverTcp,
+        TransportKind::TcpGateway,
+        TransportKind::Tcp,
+    ] {
+        let (a, _b) = tokio::io::duplex(64);
+        let c = AsyncClient::new(AsyncStreamTransport::new(a, kind), &TIMED);
+        let want = if kind == TransportKind::Tcp {
+            Duration::ZERO
+        } else {
+            gap
+        };
+        assert_eq!(c.options().request_gap, want, "{kind:?}");
+        assert_eq!(
+            c.options().timeout,
+            ClientOptions::for_profile(&TIMED).timeout
+        );
+    }
+    let (a, _b) = tokio::io::duplex(64);
+    let generic = AsyncClient::with_options(
+        AsyncStreamTransport::new(a, TransportKind::Rtu),
+        &TIMED,
+        ClientOptions::generic(),
+    );
+    assert_eq!(generic.options().request_gap, Duration::ZERO);
+}
