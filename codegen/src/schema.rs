@@ -11,7 +11,7 @@
 //! | version | since | change |
 //! |---|---|---|
 //! | 1 | — | a bare number where an address or code goes is decimal (YAML's reading) |
-//! | 2 | 2026-11-25 (commit abfacec) | addresses and codes are written as the manual prints them, in hex (`0x2001`, `2001H`); a bare decimal is refused unless the map declares `address_format: decimal` (addresses), or is 0-9 (codes) |
+//! | 2 | 2026-11-25 (commits abfacec, ff42287) | addresses and codes are written as the manual prints them, in hex (`0x2001`, `2001H`); a bare decimal is refused unless the map declares `address_format: decimal` (addresses), or is 0-9 (codes); a YAML alias there is refused |
 
 use std::sync::Arc;
 
@@ -29,7 +29,8 @@ pub const CURRENT: u32 = 2;
 pub const CHANGES: &[(u32, &str)] = &[(
     2,
     "schema 2 reads addresses and codes as the manual prints them, in hex (0x2001, 2001H), and \
-     refuses a bare decimal (unless `address_format: decimal`, or a code 0-9)",
+     refuses a bare decimal (unless `address_format: decimal`, or a code 0-9) and a YAML alias \
+     there",
 )];
 
 /// The version a file is written in: its `schema:` (1 when it states none), or why it is refused.
@@ -111,6 +112,21 @@ pub fn migrate(file: &Arc<str>, text: &str) -> Result<Migrated, Vec<Diagnostic>>
             from: parsed.version,
             rewritten: Vec::new(),
         });
+    }
+    if !parsed.slot_aliases.is_empty() {
+        // An alias stands for a number written elsewhere; only its author knows which
+        // notation it meant there.
+        return Err(parsed
+            .slot_aliases
+            .iter()
+            .map(|a| {
+                Diagnostic::new(
+                    a.loc.clone(),
+                    None,
+                    format!("migrate: {}; then migrate", a.message),
+                )
+            })
+            .collect());
     }
     let mut lines: Vec<String> = text.split_inclusive('\n').map(str::to_owned).collect();
     let mut edits: Vec<&Reread> = parsed.reread.iter().collect();
@@ -254,6 +270,38 @@ mod tests {
         let stated = OLD.replace("drive:", "schema: 1\ndrive:");
         let m1 = migrate(&file, &stated).unwrap();
         assert_eq!(m1.text, m.text);
+    }
+
+    #[test]
+    fn an_alias_where_an_address_goes_is_read_in_schema_1_and_refused_in_schema_2() {
+        let file: Arc<str> = Arc::from("a.yaml");
+        let text = "x: &a 8192\ngroups:\n  - registers:\n      - {id: a, address: *a}\n";
+        let p = crate::source::parse_map(&file, text).unwrap();
+        assert_eq!(
+            p.tree.to_value()["groups"][0]["registers"][0]["address"],
+            Value::from(8192u64)
+        );
+        let w = p.warnings.last().unwrap();
+        assert_eq!((w.loc.line, w.loc.col), (4, 26));
+        assert!(
+            w.message.contains(
+                "YAML alias `*a` where an address or code goes; schema 1 reads the anchored value"
+            ),
+            "{}",
+            w.message
+        );
+        let e = migrate(&file, text).unwrap_err();
+        assert!(
+            e[0].message.starts_with("migrate: YAML alias `*a`"),
+            "{}",
+            e[0].message
+        );
+        let e = crate::source::parse_map(&file, &format!("schema: 2\n{text}")).unwrap_err();
+        assert!(
+            e[0].message.contains("write the number itself"),
+            "{}",
+            e[0].message
+        );
     }
 
     #[test]

@@ -162,6 +162,16 @@ pub const MAX_ALIAS_NODES: usize = 100_000;
 /// constants above), nothing recurses while parsing, every step is linear in the input, and
 /// exactly one YAML document is accepted.
 pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
+    let (tree, slot_aliases) = parse_tree(file, text)?;
+    match slot_aliases.into_iter().next() {
+        Some(alias) => Err(alias),
+        None => Ok(tree),
+    }
+}
+
+/// [`parse`], returning the YAML aliases written where an address or code goes beside the
+/// tree instead of refusing them (schema 1 read them; schema 2 refuses them).
+fn parse_tree(file: &Arc<str>, text: &str) -> Result<(Node, Vec<Diagnostic>), Diagnostic> {
     if text.len() > MAX_MAP_BYTES {
         return Err(too_large(file, text.len()));
     }
@@ -175,6 +185,7 @@ pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
         documents: 0,
         aliases: 0,
         alias_nodes: 0,
+        slot_aliases: Vec::new(),
     };
     for event in Parser::new_from_str(text) {
         let (event, span) = event.map_err(|e| {
@@ -188,10 +199,11 @@ pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
         let loc = Loc::new(file.clone(), span.start.line(), span.start.col() + 1);
         builder.event(event, loc)?;
     }
-    Ok(builder.root.unwrap_or(Node {
+    let tree = builder.root.unwrap_or(Node {
         loc: Loc::new(file.clone(), 1, 1),
         kind: NodeKind::Scalar(Value::Null),
-    }))
+    });
+    Ok((tree, builder.slot_aliases))
 }
 
 /// One map file read as the loader uses it.
@@ -204,14 +216,19 @@ pub struct Parsed {
     pub warnings: Vec<Diagnostic>,
     /// The numbers read as schema 1 reads them, which [`crate::schema::migrate`] rewrites.
     pub reread: Vec<crate::hex::Reread>,
+    /// YAML aliases where an address or code goes, which schema 1 read and schema 2 refuses.
+    pub slot_aliases: Vec<Diagnostic>,
 }
 
 /// [`parse`], then the file's schema version and the decision on every address and code
 /// written without a hex marker (see [`crate::hex`]): the tree of one map file as the loader
 /// uses it.
 pub fn parse_map(file: &Arc<str>, text: &str) -> Result<Parsed, Vec<Diagnostic>> {
-    let mut tree = parse(file, text).map_err(|d| vec![d])?;
+    let (mut tree, slot_aliases) = parse_tree(file, text).map_err(|d| vec![d])?;
     let version = crate::schema::version_of(&tree).map_err(|d| vec![d])?;
+    if version >= 2 && !slot_aliases.is_empty() {
+        return Err(slot_aliases);
+    }
     let resolved = crate::hex::resolve(&mut tree, version);
     if !resolved.errors.is_empty() {
         return Err(resolved.errors);
@@ -220,11 +237,23 @@ pub fn parse_map(file: &Arc<str>, text: &str) -> Result<Parsed, Vec<Diagnostic>>
         .into_iter()
         .collect();
     warnings.extend(resolved.reread.iter().map(crate::hex::Reread::warning));
+    warnings.extend(slot_aliases.iter().map(|a| {
+        Diagnostic::new(
+            a.loc.clone(),
+            None,
+            format!(
+                "{}; schema 1 reads the anchored value, schema 2 refuses the alias",
+                a.message
+                    .replacen(": write the number itself, as the manual prints it", "", 1)
+            ),
+        )
+    }));
     Ok(Parsed {
         tree,
         version,
         warnings,
         reread: resolved.reread,
+        slot_aliases,
     })
 }
 
@@ -274,6 +303,8 @@ struct Builder<'t> {
     documents: usize,
     aliases: usize,
     alias_nodes: usize,
+    /// Aliases written where an address or code goes.
+    slot_aliases: Vec<Diagnostic>,
 }
 
 impl Builder<'_> {
@@ -327,9 +358,11 @@ impl Builder<'_> {
                         if crate::hex::Slot::of_items(k).is_some()
                 );
                 if self.hex_slot().is_some() || items_slot {
+                    // Refused in schema 2 (`parse_map` decides once the version is known);
+                    // schema 1 read the anchored value.
                     let name = self.alias_name(&loc);
-                    return Err(Diagnostic::new(
-                        loc,
+                    self.slot_aliases.push(Diagnostic::new(
+                        loc.clone(),
                         None,
                         format!(
                             "YAML alias `*{name}` where an address or code goes: write the \
