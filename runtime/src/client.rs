@@ -1315,8 +1315,8 @@ impl<T: Transport> Client<T> {
     /// The wait for silence before the last call's request, if it needed one: after an
     /// attempt on an RTU-framed link timed out or met a frame that was not its answer, the
     /// next attempt or call first waits until the line has been silent for the reply timeout,
-    /// so that a late reply is never taken for another request's answer. `None` when the last
-    /// call sent at once.
+    /// so that a late reply is never taken for another request's answer. `None` when no such
+    /// attempt preceded the last call (a wait already over when the call came reports 0 ms).
     pub fn settled(&self) -> Option<Settled> {
         self.core.settled()
     }
