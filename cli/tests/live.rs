@@ -653,6 +653,7 @@ fn serial_line_through_a_pseudo_terminal_pair() {
         let mut slave = SimulatedSlave::new(1, profile);
         slave.set_holding(0x0198, 1);
         slave.set_holding(0x0002, 3575);
+        slave.set_holding(0x010B, 600); // n011 = 60.0 Hz bounds the reference
         slave
             .serve(&mut link, Instant::now() + Duration::from_secs(4))
             .expect("serving");

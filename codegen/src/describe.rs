@@ -244,6 +244,15 @@ pub fn range(min: Option<f64>, max: Option<f64>, unit: &str) -> String {
     s.trim_end().to_owned()
 }
 
+/// A limit through another quantity: `at most 100 % of n011 (003_...:102)`.
+pub fn relative_limit(drive: &crate::ir::Drive, l: &crate::model::RelativeLimit) -> String {
+    let of = match &l.relative_to {
+        crate::model::Reference::Register(name) => setting(drive, name),
+        crate::model::Reference::External(q) => format!("{} (external)", q.external),
+    };
+    format!("at most {} % of {of} ({})", num(l.percent), l.source)
+}
+
 /// What a default depends on.
 pub fn dependency(d: Dependency) -> &'static str {
     match d {

@@ -150,6 +150,14 @@ fn register(drive: &Drive, r: &Register) -> Value {
             "between_raw": drive.register_plan(r).repeat_needs_change.map(|x| x.between),
             "source": rule.source,
         })),
+        "max_relative": d.max_relative.as_ref().map(|l| json!({
+            "relative_to": match &l.relative_to {
+                model::Reference::Register(name) => json!(name),
+                model::Reference::External(q) => json!({"external": q.external, "unit": q.unit}),
+            },
+            "percent": l.percent,
+            "source": l.source,
+        })),
         "source": d.source,
         "group": group.id,
         "table": match r.table { model::ModbusTable::Holding => "holding", model::ModbusTable::Input => "input" },

@@ -365,6 +365,11 @@ impl Drive {
                     }
                 }
             }
+            if let Some(Reference::Register(name)) =
+                r.def.max_relative.as_ref().map(|l| &l.relative_to)
+            {
+                names.push(name.as_str());
+            }
         }
         self.unique_registers(names)
     }
@@ -381,6 +386,13 @@ impl Drive {
                             out.push(q);
                         }
                     }
+                }
+            }
+            if let Some(Reference::External(q)) =
+                r.def.max_relative.as_ref().map(|l| &l.relative_to)
+            {
+                if seen.insert(q.external.clone()) {
+                    out.push(q);
                 }
             }
         }

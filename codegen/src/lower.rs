@@ -14,7 +14,7 @@
 
 use drivemap_core::plan::{
     Case, CaseScale, Condition, Conversion, Field, Label, Move, Ranges, RegisterPlan, Relative,
-    RepeatNeedsChange, Setting, VariantOption,
+    RelativeLimit, RepeatNeedsChange, Setting, VariantOption,
 };
 use drivemap_core::profile::{
     AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, SerialFormats,
@@ -531,6 +531,11 @@ impl Lowering<'_> {
                 }
             }),
             read_values: labels(&d.read_values),
+            limit: d.max_relative.as_ref().map(|l| RelativeLimit {
+                reference: self.reference(&l.relative_to),
+                percent: l.percent,
+                source: text(&l.source),
+            }),
         }
     }
 }

@@ -585,6 +585,10 @@ pub struct Register {
     /// Limits and defaults of other variants, keyed by variant option id.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub by_variant: BTreeMap<String, VariantOverride>,
+    /// An upper limit the manual states through another register or quantity (a frequency
+    /// reference at most 100 % of the maximum output frequency n011), with its citation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_relative: Option<RelativeLimit>,
     /// Addresses the register moves to under some condition.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub address_alternatives: Vec<AddressAlternative>,
@@ -660,6 +664,19 @@ pub enum Scale {
     Relative(RelativeScale),
     /// The scale follows the setting of another parameter (V7 n152, n018).
     Selected(SelectedScale),
+}
+
+/// `max_relative`: the value is at most `percent` % of another register's value or of an
+/// external quantity, in the register's unit.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RelativeLimit {
+    /// A register id or parameter number (`n011`), or an external quantity (as in `scale`).
+    pub relative_to: Reference,
+    /// The limit in percent of the reference's value (finite, > 0).
+    pub percent: f64,
+    /// `file:line` of the manual's statement.
+    pub source: String,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]

@@ -558,6 +558,9 @@ fn range_cell(drive: &Drive, r: &Register) -> String {
     if r.range_unknown() {
         parts.push("unknown".into());
     }
+    if let Some(l) = &d.max_relative {
+        parts.push(describe::relative_limit(drive, l));
+    }
     if let Some(Scale::Selected(sel)) = &d.scale {
         for c in &sel.cases {
             if c.min.is_some() || c.max.is_some() {

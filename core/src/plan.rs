@@ -41,6 +41,22 @@ pub struct RegisterPlan {
     /// a password is written, 0 Unlock / 1 Lock is read); empty for other registers. The
     /// write side is [`RegisterPlan::conversion`].
     pub read_values: &'static [Label],
+    /// An upper limit the manual states through another parameter or quantity (a reference
+    /// at most the maximum output frequency n011), checked by [`RegisterPlan::encode_number`]
+    /// on the value given, with that quantity's value from the settings.
+    pub limit: Option<RelativeLimit>,
+}
+
+/// An upper limit through another quantity: a value at most `percent` % of the quantity in
+/// `reference` (a register read from the drive, or an external quantity).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RelativeLimit {
+    /// The quantity slot, and its label (the parameter number when printed).
+    pub reference: Setting,
+    /// The limit in percent of the reference.
+    pub percent: f64,
+    /// `file:line` of the manual's statement.
+    pub source: &'static str,
 }
 
 /// A register whose drive executes a written value only when it differs from the previous
@@ -65,6 +81,19 @@ impl AsRef<RegisterInfo> for RegisterPlan {
     fn as_ref(&self) -> &RegisterInfo {
         &self.info
     }
+}
+
+/// A register whose address depends on a setting that is not known: nothing is sent to a
+/// guessed address.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "{register}: its address depends on {setting}, which is not known; read {setting} from the drive (or set it) first: nothing is sent to a guessed address"
+)]
+pub struct AddressUnknown {
+    /// The register's id.
+    pub register: &'static str,
+    /// The setting its address depends on (the parameter number when printed).
+    pub setting: &'static str,
 }
 
 /// An alternative address: the register is at `address` when `when` holds.
@@ -316,6 +345,15 @@ impl RegisterPlan {
             also_at: &[],
             repeat_needs_change: None,
             read_values: &[],
+            limit: None,
+        }
+    }
+
+    /// The plan of a register whose values are bounded through another quantity.
+    pub const fn limited(self, limit: RelativeLimit) -> RegisterPlan {
+        RegisterPlan {
+            limit: Some(limit),
+            ..self
         }
     }
 
@@ -376,11 +414,40 @@ impl RegisterPlan {
 
     /// The communication address with these settings on this transport (before the profile's
     /// per-transport offset): the first move whose condition holds, else the printed address.
+    /// A setting not known holds no condition: for showing where a register usually is; what
+    /// goes on the wire uses [`RegisterPlan::locate`], which refuses to guess.
     pub fn address_for(&self, settings: &impl SettingsView, transport: TransportKind) -> u16 {
         self.moves
             .iter()
             .find(|m| m.when.holds(settings, transport))
             .map_or(self.info.address, |m| m.address)
+    }
+
+    /// The communication address with these settings on this transport, refusing to guess:
+    /// the first move whose condition holds, else the printed address, as
+    /// [`RegisterPlan::address_for`] — but a move that depends on a setting whose code is not
+    /// known (GPD 515 o2-09 not read) is an error, never passed over for the printed address
+    /// (with o2-09 = 1 the printed address of the frequency reference is the operation command).
+    /// A move listed before it that holds (an older firmware variant) still decides.
+    pub fn locate(
+        &self,
+        settings: &impl SettingsView,
+        transport: TransportKind,
+    ) -> Result<u16, AddressUnknown> {
+        for m in self.moves {
+            if let Condition::Setting { selector, .. } = m.when {
+                if settings.code(selector.slot).is_none() {
+                    return Err(AddressUnknown {
+                        register: self.info.id,
+                        setting: selector.label,
+                    });
+                }
+            }
+            if m.when.holds(settings, transport) {
+                return Ok(m.address);
+            }
+        }
+        Ok(self.info.address)
     }
 
     /// Calls `each` with every setting this register's conversion and address read: the
@@ -522,12 +589,57 @@ impl RegisterPlan {
         }
     }
 
-    /// The raw value (word, or pair) for an engineering value, checked against the range in force.
+    /// The quantity the register's limit through another quantity reads
+    /// ([`RegisterPlan::limit`]): needed to write it, not to read it.
+    pub fn limit_dependency(&self) -> Option<Dependency> {
+        self.limit.map(|l| Dependency::Quantity(l.reference))
+    }
+
+    /// The upper limit in force through another quantity ([`RegisterPlan::limit`]), in the
+    /// register's unit: `None` when the register has none; an error when the quantity is not
+    /// in `settings` (a limit that cannot be checked refuses, it is never skipped).
+    pub fn relative_max(&self, settings: &impl SettingsView) -> Result<Option<f64>, ValueError> {
+        let Some(limit) = &self.limit else {
+            return Ok(None);
+        };
+        let reference =
+            settings
+                .quantity(limit.reference.slot)
+                .ok_or(ValueError::MissingSetting {
+                    register: self.info.id,
+                    setting: limit.reference.label,
+                })?;
+        Ok(Some(reference * limit.percent / 100.0))
+    }
+
+    /// Refuses `value` above the register's limit through another quantity.
+    fn check_limit(&self, value: f64, settings: &impl SettingsView) -> Result<(), ValueError> {
+        let (Some(limit), Some(max)) = (&self.limit, self.relative_max(settings)?) else {
+            return Ok(());
+        };
+        if value > max {
+            return Err(ValueError::AboveLimit {
+                register: self.info.id,
+                value,
+                max,
+                unit: self.unit,
+                percent: limit.percent,
+                reference: limit.reference.label,
+            });
+        }
+        Ok(())
+    }
+
+    /// The raw value (word, or pair) for an engineering value, checked against the range in
+    /// force and the limit through another quantity ([`RegisterPlan::limit`]).
     pub fn encode_number(
         &self,
         value: f64,
         settings: &impl SettingsView,
     ) -> Result<u32, ValueError> {
+        if value.is_finite() {
+            self.check_limit(value, settings)?;
+        }
         let (id, unit, words) = (self.info.id, self.unit, self.info.width);
         match self.scale(settings) {
             Some(Ok(Scale::Decimal { scale, range })) => {

@@ -8,7 +8,7 @@
 
 use core::marker::PhantomData;
 
-use crate::plan::{Label, RegisterPlan, RepeatNeedsChange, SettingsView, Value};
+use crate::plan::{AddressUnknown, Label, RegisterPlan, RepeatNeedsChange, SettingsView, Value};
 use crate::profile::TransportKind;
 use crate::rule::WriteRule;
 use crate::scale::ValueError;
@@ -59,10 +59,11 @@ pub trait Register {
     /// The communication address to use with these settings on this transport. Most registers
     /// live at [`Register::ADDRESS`]; a few move with a setting (GPD 515 o2-09), a model variant
     /// or the transport (V7 Modbus TCP option card). The client adds the profile's per-transport
-    /// offset on top of this.
-    fn address(settings: &Self::Settings, transport: TransportKind) -> u16 {
+    /// offset on top of this. An address that depends on a setting `settings` does not hold is
+    /// an error ([`AddressUnknown`]), never the printed address by default.
+    fn address(settings: &Self::Settings, transport: TransportKind) -> Result<u16, AddressUnknown> {
         let _ = (settings, transport);
-        Self::ADDRESS
+        Ok(Self::ADDRESS)
     }
 
     /// Whether the register exists on this transport. Most do; the V7's Modbus TCP option card
@@ -347,8 +348,8 @@ impl<D: DrivePlan, V: Value, A, const I: usize> Register for Reg<D, V, A, I> {
     const SOURCE: &'static str = Self::PLAN.info.source;
     const WIDTH: Width = Self::PLAN.info.width;
 
-    fn address(settings: &D::Settings, transport: TransportKind) -> u16 {
-        Self::PLAN.address_for(settings, transport)
+    fn address(settings: &D::Settings, transport: TransportKind) -> Result<u16, AddressUnknown> {
+        Self::PLAN.locate(settings, transport)
     }
 
     fn on_transport(transport: TransportKind) -> bool {

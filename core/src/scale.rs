@@ -41,6 +41,17 @@ pub enum ValueError {
         max: f64,
         unit: &'static str,
     },
+    /// The value lies above a limit the manual states through another quantity (a reference
+    /// at most the maximum output frequency n011).
+    #[error("{register}: {value} {unit} is above {max} {unit}, {percent} % of {reference}")]
+    AboveLimit {
+        register: &'static str,
+        value: f64,
+        max: f64,
+        unit: &'static str,
+        percent: f64,
+        reference: &'static str,
+    },
     /// A plain word given a fraction.
     #[error("{register}: {value} is not a whole number")]
     NotWhole { register: &'static str, value: f64 },

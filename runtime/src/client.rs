@@ -1009,7 +1009,7 @@ macro_rules! client_methods {
         settings: &R::Settings,
     ) -> Result<R::Value, Error> {
         self.core.on_transport::<R>()?;
-        let address = R::address(settings, self.core.kind);
+        let address = R::address(settings, self.core.kind)?;
         let mut raw = [0u16; 2];
         let raw = &mut raw[..usize::from(R::WIDTH.count())];
         self.read_table(slave, R::TABLE, address, raw) $($aw)*?;
@@ -1030,7 +1030,7 @@ macro_rules! client_methods {
         settings: &R::Settings,
     ) -> Result<(), Error> {
         let raw = R::encode(value, settings)?;
-        let address = R::address(settings, self.core.kind);
+        let address = R::address(settings, self.core.kind)?;
         match R::REPEAT_NEEDS_CHANGE {
             Some(rule) => {
                 self.write_changed(slave, &R::RULE, address, rule.between, raw) $($aw)*

@@ -230,6 +230,16 @@ pub enum Refusal {
         min: i64,
         max: i64,
     },
+    /// The register's address depends on a setting that is not known (GPD 515 o2-09 not
+    /// read): nothing is sent to a guessed address.
+    #[error("{0}")]
+    AddressUnknown(#[from] drivemap_core::plan::AddressUnknown),
+}
+
+impl From<drivemap_core::plan::AddressUnknown> for Error {
+    fn from(e: drivemap_core::plan::AddressUnknown) -> Error {
+        Error::Refused(e.into())
+    }
 }
 
 /// An error of a client call.

@@ -57,7 +57,7 @@ fn check_next<R: Register>(
         });
     }
     let expected = start.wrapping_add(index);
-    let got = R::address(settings, kind);
+    let got = R::address(settings, kind)?;
     if got != expected || R::TABLE != table {
         return Err(Refusal::NotContiguous {
             first,
@@ -83,7 +83,7 @@ macro_rules! register_set {
                 if !$first::on_transport(kind) {
                     return Err(Refusal::NotOnTransport { register: $first::ID, transport: kind });
                 }
-                let start = $first::address(settings, kind);
+                let start = $first::address(settings, kind)?;
                 let mut index = $first::WIDTH.count();
                 $(
                     check_next::<$rest>($first::ID, start, $first::TABLE, index, settings, kind)?;

@@ -58,7 +58,7 @@ use drivemap_core::plan::{Conversion, RegisterPlan};
 use drivemap_core::register::{DrivePlan, DriveSettings, Table};
 use drivemap_core::roles::{FieldRole, Place, Role, RoleKind, Target};
 use drivemap_core::rule::Broadcast;
-use drivemap_core::{Roles, SettingsView};
+use drivemap_core::{Roles, SettingsView, ValueError};
 
 use crate::client::Client;
 use crate::error::{Error, Refusal};
@@ -184,7 +184,10 @@ pub trait VariableFrequencyDrive {
     /// Sets the direction; takes effect with the next run (or at once while running, where the
     /// drive's command word carries the direction).
     fn set_direction(&mut self, direction: Direction) -> Result<(), Error>;
-    /// Writes the frequency reference (Hz).
+    /// Writes the frequency reference (Hz). Refused before sending when it is not a value of
+    /// the register (its range, its limit through another quantity, a whole number of its
+    /// increments) or, where the map gives the `max_frequency` role, above that maximum (read
+    /// from the drive first, or the external quantity from the settings).
     fn set_reference(&mut self, hz: f64) -> Result<(), Error>;
     /// Writes the acceleration and deceleration times (s).
     fn set_ramp(&mut self, accel_s: f64, decel_s: f64) -> Result<(), Error>;
@@ -381,7 +384,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     /// The raw value of plan row `row`: its word, or a 32-bit pair read in one request.
     fn read_raw(&mut self, row: u16) -> Result<u32, Error> {
         let r = self.row(row);
-        let address = r.address_for(&self.settings, self.kind);
+        let address = r.locate(&self.settings, self.kind)?;
         let mut raw = [0u16; 2];
         let words = &mut raw[..usize::from(r.info.width.count())];
         match r.info.table {
@@ -398,7 +401,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
 
     fn write_word(&mut self, row: u16, raw: u32) -> Result<(), Error> {
         let r = self.row(row);
-        let address = r.address_for(&self.settings, self.kind);
+        let address = r.locate(&self.settings, self.kind)?;
         let rule = r.write_rule();
         match r.repeat_needs_change {
             // A role register whose drive executes only a changed value: its intermediate first.
@@ -591,6 +594,34 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         }
     }
 
+    /// Refuses a reference above the drive's maximum frequency where the map gives the
+    /// `max_frequency` role: the register is read first (an external quantity comes from the
+    /// settings), so a reference the drive cannot output is never sent. A maximum that cannot
+    /// be read refuses the reference too.
+    fn check_max_frequency(&mut self, hz: f64) -> Result<(), Error> {
+        if self.roles.of(Role::MaxFrequency).next().is_none() || !hz.is_finite() {
+            return Ok(());
+        }
+        let place = self.place(Role::FrequencyReference, "register")?;
+        let register = place
+            .target
+            .row()
+            .map_or(Role::FrequencyReference.id(), |row| self.row(row).info.id);
+        let max = self.read_number(Role::MaxFrequency)?;
+        if hz > max {
+            return Err(ValueError::AboveLimit {
+                register,
+                value: hz,
+                max,
+                unit: "Hz",
+                percent: 100.0,
+                reference: Role::MaxFrequency.id(),
+            }
+            .into());
+        }
+        Ok(())
+    }
+
     /// A plan whose role names the wrong kind of place (validation refuses such maps; a plan
     /// built by hand may still have one).
     fn misplaced(&self, role: Role, what: &'static str) -> Error {
@@ -659,6 +690,7 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
     }
 
     fn set_reference(&mut self, hz: f64) -> Result<(), Error> {
+        self.check_max_frequency(hz)?;
         self.write_number(Role::FrequencyReference, hz)
     }
 

@@ -13,7 +13,7 @@ use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, DrivePlan, DriveSettings, Error, Refusal};
+use drivemap_runtime::{Client, DrivePlan, DriveSettings, Error, Refusal, ValueError};
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 
 /// The map of a compiled drive, from the directory the drives crate was generated from
@@ -119,6 +119,21 @@ where
                     role: "reverse", ..
                 })) => {}
                 other => panic!("{}: reverse without a way: {other:?}", D::PROFILE.drive_id),
+            }
+        }
+        // A reference above the drive's maximum frequency (1000 Hz: the maps print at most
+        // 400 Hz) is refused where the map gives the role, and the drive keeps its reference.
+        if D::ROLES.of(Role::MaxFrequency).next().is_some() {
+            match d.set_reference(1000.0) {
+                Err(Error::Value(ValueError::AboveLimit { value, max, .. })) => {
+                    assert_eq!(value, 1000.0);
+                    assert!(max < 1000.0, "{}: max {max}", D::PROFILE.drive_id);
+                }
+                other => panic!("{}: 1000 Hz: {other:?}", D::PROFILE.drive_id),
+            }
+            if d.supports(Role::ReferenceMonitor) {
+                let r = d.reference()?;
+                assert!((r - 30.0).abs() <= 0.1, "{}: kept {r}", D::PROFILE.drive_id);
             }
         }
         // A role the map lacks is refused before anything is sent.
@@ -291,7 +306,8 @@ fn a_command_that_failed_is_not_resent_by_the_next() {
     let address = <tds::OperationCommand as drivemap_runtime::Register>::address(
         &tds::Settings::default(),
         TransportKind::Rtu,
-    );
+    )
+    .unwrap();
     d.client().transport().inject(Fault::Drop);
     assert!(matches!(d.run(), Err(Error::Timeout { .. })));
     // The drive did get it: the reply alone was lost.

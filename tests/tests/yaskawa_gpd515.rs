@@ -18,6 +18,7 @@ fn settings(rated_current: f64) -> gpd::Settings {
     gpd::Settings {
         initial_mode_select: Some(1),
         drive_rated_current: Some(rated_current),
+        maximum_output_frequency: Some(60.0),
         ..gpd::Settings::default()
     }
 }
@@ -45,7 +46,7 @@ fn read_command_is_the_manual_frame() {
     let s = settings(100.0);
     // "the starting register is 20h, indicating that the first register is the Frequency
     // Reference" (line 519-520).
-    let start = gpd::MonitorFrequencyReference::address(&s, TransportKind::Rtu);
+    let start = gpd::MonitorFrequencyReference::address(&s, TransportKind::Rtu).unwrap();
     assert_eq!(start, 0x0020);
     assert_eq!(gpd::OutputFrequency::ADDRESS, 0x0021);
     assert_eq!(gpd::OutputCurrent::ADDRESS, 0x0022);
@@ -188,7 +189,7 @@ fn write_command_is_built_from_typed_values() {
     let s = settings(100.0);
     // "The first register, 01h (Operation Command) has a value of 01h or 1 dec. (forward run
     // command)" (lines 768-771).
-    let start = gpd::OperationCommand::address(&s, TransportKind::Rtu);
+    let start = gpd::OperationCommand::address(&s, TransportKind::Rtu).unwrap();
     assert_eq!(start, 0x0001);
     let run = gpd::OperationCommandBits::new().with_forward_run(true);
     let run_word = gpd::OperationCommand::encode(&run, &s).unwrap();
@@ -196,7 +197,7 @@ fn write_command_is_built_from_typed_values() {
     // "The next register, 02h (Frequency Reference) has a value of 1770h or 6000 dec.
     // (60.00 Hz)" (lines 772-775).
     assert_eq!(
-        gpd::FrequencyReference::address(&s, TransportKind::Rtu),
+        gpd::FrequencyReference::address(&s, TransportKind::Rtu).unwrap(),
         0x0002
     );
     let hz_word = gpd::FrequencyReference::encode(&60.0, &s).unwrap();
@@ -292,11 +293,11 @@ fn operation_signal_and_frequency_reference_move_with_o2_09_and_flash() {
     // o2-09 = 1: 001h / 002h (lines 395-397); flash before 1024: 00h / 01h (lines 397-399).
     let s = settings(100.0);
     assert_eq!(
-        gpd::OperationCommand::address(&s, TransportKind::Rtu),
+        gpd::OperationCommand::address(&s, TransportKind::Rtu).unwrap(),
         0x0001
     );
     assert_eq!(
-        gpd::FrequencyReference::address(&s, TransportKind::Rtu),
+        gpd::FrequencyReference::address(&s, TransportKind::Rtu).unwrap(),
         0x0002
     );
 
@@ -305,19 +306,19 @@ fn operation_signal_and_frequency_reference_move_with_o2_09_and_flash() {
         ..settings(100.0)
     };
     assert_eq!(
-        gpd::OperationCommand::address(&old, TransportKind::Rtu),
+        gpd::OperationCommand::address(&old, TransportKind::Rtu).unwrap(),
         0x0000
     );
     assert_eq!(
-        gpd::FrequencyReference::address(&old, TransportKind::Rtu),
+        gpd::FrequencyReference::address(&old, TransportKind::Rtu).unwrap(),
         0x0001
     );
     assert_eq!(
-        gpd::BroadcastOperationSignals::address(&old, TransportKind::Rtu),
+        gpd::BroadcastOperationSignals::address(&old, TransportKind::Rtu).unwrap(),
         0x0000
     );
     assert_eq!(
-        gpd::BroadcastFrequencyReference::address(&old, TransportKind::Rtu),
+        gpd::BroadcastFrequencyReference::address(&old, TransportKind::Rtu).unwrap(),
         0x0001
     );
 
@@ -327,27 +328,40 @@ fn operation_signal_and_frequency_reference_move_with_o2_09_and_flash() {
         ..settings(100.0)
     };
     assert_eq!(
-        gpd::OperationCommand::address(&zero, TransportKind::Rtu),
+        gpd::OperationCommand::address(&zero, TransportKind::Rtu).unwrap(),
         0x0000
     );
     assert_eq!(
-        gpd::FrequencyReference::address(&zero, TransportKind::Rtu),
+        gpd::FrequencyReference::address(&zero, TransportKind::Rtu).unwrap(),
         0x0001
     );
 
-    // o2-09 not read yet: the layout of its default 0, never the o2-09 = 1 layout, so a client
-    // that has not loaded its settings cannot write the run command into the frequency slot.
+    // o2-09 not read: no address at all, never a guess (with o2-09 = 1 the printed 0001h of
+    // the frequency reference is the operation command).
     let unread = gpd::Settings {
         initial_mode_select: None,
         ..settings(100.0)
     };
-    assert_eq!(
+    for address in [
         gpd::OperationCommand::address(&unread, TransportKind::Rtu),
-        0x0000
-    );
-    assert_eq!(
         gpd::FrequencyReference::address(&unread, TransportKind::Rtu),
-        0x0001
+    ] {
+        let e = address.unwrap_err();
+        assert_eq!(e.setting, "o2-09");
+        assert!(
+            e.to_string()
+                .contains("nothing is sent to a guessed address")
+        );
+    }
+    // Older flash keeps 00h/01h whatever o2-09 holds: its alternative decides without it.
+    let old_unread = gpd::Settings {
+        firmware: gpd::Firmware::FlashLt1024,
+        initial_mode_select: None,
+        ..settings(100.0)
+    };
+    assert_eq!(
+        gpd::FrequencyReference::address(&old_unread, TransportKind::Rtu),
+        Ok(0x0001)
     );
 
     // o2-09 itself is at 50Dh (line 394).
@@ -425,4 +439,74 @@ fn h5_01_refuses_the_broadcast_address() {
 fn d4_02_is_at_290h() {
     // Printed at 280h (line 1267); between 28Fh and 291h it is 290h (map conflict).
     assert_eq!(gpd::SpeedLimits::ADDRESS, 0x0290);
+}
+
+// ---- o2-09 not known: no address guessed (issue 23, item 8) ----------------------------------
+
+/// With o2-09 unknown, the typed client, the drive trait and `Vfd::connect` refuse before
+/// anything reaches the drive: with o2-09 = 1 the printed 0001h of the frequency reference is
+/// the operation command, so the printed address is never a safe default.
+#[test]
+fn an_unknown_o2_09_sends_nothing() {
+    use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
+    use drivemap_runtime::{Client, ClientOptions, Error, Refusal};
+    use drivemap_sim::{FaultyLink, SimulatedSlave};
+    use std::time::Duration;
+
+    let options = ClientOptions {
+        retries: 0,
+        timeout: Duration::from_millis(50),
+        ..ClientOptions::default()
+    };
+    let mut slave = SimulatedSlave::new(1, &gpd::PROFILE);
+    slave.set_holding(0x0303, 600); // E1-04 = 60.0 Hz
+    slave.fail_at(0x050D, 0x02); // o2-09 cannot be read
+    let link = FaultyLink::new(TransportKind::Rtu, slave);
+    let mut c = Client::with_options(link, &gpd::PROFILE, options);
+    let unread = gpd::Settings {
+        initial_mode_select: None,
+        ..settings(100.0)
+    };
+    let refused = |e: Error| match e {
+        Error::Refused(Refusal::AddressUnknown(a)) => a.setting == "o2-09",
+        _ => false,
+    };
+    // The typed client.
+    let e = c
+        .write::<gpd::FrequencyReference>(1, &30.0, &unread)
+        .unwrap_err();
+    assert!(refused(e));
+    assert!(c.transport().sent.is_empty(), "a frame was sent");
+    // The drive trait, built with settings that lack o2-09.
+    {
+        let mut d = Vfd::new::<gpd::Drive>(&mut c, 1, unread.clone());
+        assert!(refused(d.set_reference(30.0).unwrap_err()));
+        assert!(refused(d.run().unwrap_err()));
+    }
+    // The trait read the maximum frequency E1-04 first; nothing was written.
+    assert!(
+        c.transport().slave.writes.is_empty(),
+        "a write reached the drive"
+    );
+    assert!(
+        c.transport()
+            .sent
+            .iter()
+            .all(|frame| frame.get(1) == Some(&0x03)),
+        "only reads were sent"
+    );
+    // Connecting reads o2-09; its failure is the error, not a layout by default.
+    let e = Vfd::connect::<gpd::Drive>(
+        &mut c,
+        1,
+        gpd::Settings::default(),
+        &[("drive_rated_current", 10.0)],
+    )
+    .err()
+    .expect("o2-09 unreadable");
+    assert_eq!(e.exception().map(|x| x.code), Some(0x02), "{e}");
+    assert!(
+        c.transport().slave.writes.is_empty(),
+        "a write reached the drive"
+    );
 }

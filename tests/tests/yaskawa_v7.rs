@@ -408,6 +408,41 @@ fn reconciled_addresses() {
     assert_eq!(j7::PROFILE.max_read, 16);
 }
 
+/// n011 bounds the frequency reference, whose rows print no range (000 :868, :1424): "30000 =
+/// Max. output frequency" (003 :102). A value above it is refused on the value given, and one
+/// that cannot be checked (n011 not in the settings) is refused, never sent unchecked.
+#[test]
+fn frequency_reference_is_bounded_by_n011() {
+    type Unit = v7::ModbusFrequencyReferenceUnitSelectionValue;
+    let s = v7::Settings {
+        modbus_frequency_reference_unit_selection: Some(Unit::Unit01Hz),
+        max_output_frequency: Some(60.0),
+        ..v7::Settings::default()
+    };
+    assert_eq!(v7::TcpFrequencyReference::encode(&60.0, &s), Ok(600));
+    assert_eq!(v7::FrequencyReference::encode(&60.0, &s), Ok(600));
+    let e = v7::TcpFrequencyReference::encode(&500.0, &s).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "tcp_frequency_reference: 500 Hz is above 60 Hz, 100 % of n011"
+    );
+    assert!(matches!(
+        v7::FrequencyReference::encode(&60.1, &s),
+        Err(ValueError::AboveLimit { .. })
+    ));
+    let unknown = v7::Settings {
+        max_output_frequency: None,
+        ..s
+    };
+    assert_eq!(
+        v7::FrequencyReference::encode(&10.0, &unknown),
+        Err(ValueError::MissingSetting {
+            register: "frequency_reference",
+            setting: "n011"
+        })
+    );
+}
+
 // ---- J7 --------------------------------------------------------------------------------------
 
 #[test]
@@ -426,8 +461,18 @@ fn j7_frequency_unit_follows_n69_and_its_reserved_bits_stay_zero() {
         modbus_frequency_reference_unit_selection: Some(J7Unit::Unit01Hz),
         ..s
     };
-    // Same frame as the V7: forward run at 60.0 Hz (003 line 394).
-    assert_eq!(j7::FrequencyReference::encode(&60.0, &s0), Ok(0x0258));
+    // Same frame as the V7: forward run at 60.0 Hz (003 line 394), on a drive whose maximum
+    // output frequency n09 allows it.
+    let s60 = j7::Settings {
+        max_output_frequency: Some(60.0),
+        ..s0
+    };
+    assert_eq!(j7::FrequencyReference::encode(&60.0, &s60), Ok(0x0258));
+    // Above the maximum output frequency (30000 = Max. output frequency, 003 line 102): refused.
+    assert!(matches!(
+        j7::FrequencyReference::encode(&60.0, &s0),
+        Err(ValueError::AboveLimit { max, .. }) if max == 50.0
+    ));
     // 0001H on the J7: bits 4, 9, A reserved (003 lines 535-547).
     assert_eq!(j7::DigitalInputCommandBits::MASK, 0x01EF);
     let all = j7::DigitalInputCommand::decode(0xFFFF, &s0).unwrap();

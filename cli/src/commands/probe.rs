@@ -116,7 +116,7 @@ fn finding(session: &Session<'_>, r: &Register, kind: &'static str, detail: Stri
         kind,
         register: r.def.id.clone(),
         parameter: r.def.param.clone(),
-        address: describe::address(session.address(r)),
+        address: describe::address(session.shown_address(r)),
         raw: None,
         exception: None,
         detail,

@@ -90,6 +90,40 @@ fn field_word(
         .map_err(|e| format!("{}; nothing written", value_error(drive, &e)))
 }
 
+/// The warning for a number register whose range the manual does not print, directly or
+/// through another parameter (`max_relative`): only its word bounds what is sent. `None` for
+/// registers with a range, codes and bit fields.
+pub fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
+    let plan = drive.register_plan(r);
+    let number = matches!(
+        plan.conversion,
+        Conversion::Word { .. }
+            | Conversion::Decimal { .. }
+            | Conversion::Relative { .. }
+            | Conversion::Selected { .. }
+    );
+    if !number || plan.limit.is_some() || plan.envelope != plan.full_range() {
+        return None;
+    }
+    let why = r
+        .def
+        .unknown
+        .iter()
+        .find(|u| u.what == drivemap_codegen::model::UnknownItem::Range)
+        .map(|u| format!(" ({})", u.reason))
+        .unwrap_or_default();
+    Some(format!(
+        "the manual prints no range for {}{why}: only its {}-bit {} bounds the value sent",
+        describe::register(r),
+        16 * plan.info.width.count(),
+        if plan.info.width.count() > 1 {
+            "value"
+        } else {
+            "word"
+        }
+    ))
+}
+
 /// Checks every assignment, then writes them in order; exits 1 when the drive refused one.
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let drive = args.target.load()?;
@@ -107,6 +141,11 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             continue;
         };
         match drivemap_live::lookup::find(drive, name.trim()) {
+            // An empty value is refused, never taken as "keep what the drive holds".
+            Ok(r) if value.trim().is_empty() => errors.push(format!(
+                "`{a}`: no value given for {}; nothing written",
+                describe::register(r)
+            )),
             Ok(r) => pairs.push((r, value.trim().to_owned())),
             Err(e) => errors.push(e.to_string()),
         }
@@ -151,9 +190,17 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             Err(e) => return Err(input_error(drive, &e)),
         }
     }
+    for (r, _) in &pairs {
+        if let Some(w) = no_printed_range(drive, r) {
+            eprintln!("warning: {w}");
+        }
+    }
     let regs: Vec<&Register> = pairs.iter().map(|(r, _)| *r).collect();
     let mut session = Session::open_with(drive, profile, &args.target.link, given.settings)?;
     for w in session.load_dependencies(&regs, &given.fixed) {
+        eprintln!("warning: {w}");
+    }
+    for w in session.load_limits(&regs, &given.fixed) {
         eprintln!("warning: {w}");
     }
     let mut raws = Vec::new();
@@ -168,7 +215,9 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
     // The whole gate for every assignment before the first is sent: all or nothing.
     let mut writes = Vec::new();
     for ((r, _), raw) in pairs.iter().zip(raws) {
-        let address = session.address(r);
+        let address = session
+            .address(r)
+            .map_err(|e| format!("{e}; nothing written"))?;
         let rule = gate::rule(profile, intern(r.id()))
             .and_then(|rule| {
                 let words = rule.width.split(raw);

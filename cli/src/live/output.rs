@@ -88,7 +88,7 @@ impl Reading {
             register: r.def.id.clone(),
             parameter: r.def.param.clone(),
             name: r.def.name.clone(),
-            address: describe::address(session.address(r)),
+            address: describe::address(session.shown_address(r)),
             value: None,
             unit: None,
             text: None,

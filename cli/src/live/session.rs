@@ -343,8 +343,25 @@ impl<'d> Session<'d> {
         })
     }
 
-    /// The address of `r` on this link under the current settings.
-    pub fn address(&self, r: &Register) -> u16 {
+    /// The address of `r` on this link under the current settings, or why it cannot be known
+    /// (it moves with a setting that could not be read: nothing is sent to a guessed address).
+    pub fn address(&self, r: &Register) -> Result<u16, String> {
+        self.drive
+            .register_plan(r)
+            .locate(&self.settings.view(self.drive), self.kind)
+            .map_err(|e| {
+                format!(
+                    "{}: its address depends on {}, which could not be read; give it with --set {}=<value>",
+                    describe::register(r),
+                    e.setting,
+                    e.setting
+                )
+            })
+    }
+
+    /// The address of `r` to show: [`Session::address`], or where the register is when the
+    /// settings it moves with are at their defaults (never used for a request).
+    pub fn shown_address(&self, r: &Register) -> u16 {
         address_of(self.drive, r, &self.settings, self.kind)
     }
 
@@ -372,6 +389,36 @@ impl<'d> Session<'d> {
             .flat_map(|r| references_of(drive, r, &self.settings))
             .collect();
         self.read_dependencies(&references, &mut done, &mut warnings);
+        warnings
+    }
+
+    /// Reads the quantities the limits of `regs` through other parameters depend on
+    /// (`RegisterPlan::limit`: V7 n011 for the frequency reference), except what `fixed` gives:
+    /// what a write checks before sending. Returns a warning per quantity that could not be
+    /// read (the write is then refused, since its limit cannot be checked).
+    pub fn load_limits(&mut self, regs: &[&Register], fixed: &BTreeSet<String>) -> Vec<String> {
+        let drive = self.drive;
+        let plan = drive.plan();
+        let mut deps: Vec<&Register> = Vec::new();
+        for r in regs {
+            if !on_transport(drive, r, self.kind) {
+                continue;
+            }
+            if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency() {
+                if let Some(Quantity::Register(row)) =
+                    plan.settings.quantities.get(usize::from(s.slot))
+                {
+                    if let Some(d) = drive.register_of_row(*row) {
+                        deps.push(d);
+                    }
+                }
+            }
+        }
+        let mut warnings = Vec::new();
+        let mut done = fixed.clone();
+        // A quantity a conversion already read is read again: the limit is checked against
+        // the drive's value now, and reading twice costs one request.
+        self.read_dependencies(&deps, &mut done, &mut warnings);
         warnings
     }
 
@@ -411,7 +458,7 @@ impl<'d> Session<'d> {
         if let Some(why) = self.unreadable(r) {
             return Err(why);
         }
-        let address = self.address(r);
+        let address = self.address(r)?;
         let info = self.drive.register_plan(r).info;
         let mut w = [0u16; 2];
         let words = &mut w[..usize::from(info.width.count())];
@@ -462,20 +509,23 @@ impl<'d> Session<'d> {
             .registers
             .iter()
             .filter(|r| on_transport(self.drive, r, self.kind))
-            // The plan's own row, at the address this link and these settings put it.
-            .map(|r| RegisterInfo {
-                address: self.address(r),
-                ..drive.register_plan(r).info
+            // The plan's own row, at the address this link and these settings put it (a
+            // register whose address is not known is not bridged over).
+            .filter_map(|r| {
+                Some(RegisterInfo {
+                    address: self.address(r).ok()?,
+                    ..drive.register_plan(r).info
+                })
             })
             .collect();
         let mut wanted = Vec::new();
         let mut slots = Vec::new();
         for r in regs {
-            match self.unreadable(r) {
-                Some(why) => slots.push(Err(why)),
-                None => {
+            match self.unreadable(r).map_or_else(|| self.address(r), Err) {
+                Err(why) => slots.push(Err(why)),
+                Ok(address) => {
                     let info = drive.register_plan(r).info;
-                    wanted.push((info.table, self.address(r)));
+                    wanted.push((info.table, address));
                     slots.push(Ok((wanted.len() - 1, info.width)));
                 }
             }

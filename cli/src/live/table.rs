@@ -31,7 +31,7 @@ impl Row {
         details: bool,
     ) -> Row {
         let register = describe::register(r);
-        let address = describe::address(session.address(r));
+        let address = describe::address(session.shown_address(r));
         match word {
             Err(e) => Row {
                 register,

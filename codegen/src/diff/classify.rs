@@ -131,6 +131,8 @@ pub enum ChangeKind {
     WriteRestrictionRelaxed,
     /// `repeat_needs_change` added, removed, or another value written in between.
     RepeatNeedsChangeChanged,
+    /// `max_relative` (a limit through another quantity) added, removed or changed.
+    RelativeLimitChanged,
     /// `read_values` (what a read means beside the write form) added, removed or changed.
     ReadMeaningChanged,
     /// Available on fewer transports.
@@ -217,6 +219,7 @@ impl ChangeKind {
         ChangeKind::WriteRestrictionTightened,
         ChangeKind::WriteRestrictionRelaxed,
         ChangeKind::RepeatNeedsChangeChanged,
+        ChangeKind::RelativeLimitChanged,
         ChangeKind::ReadMeaningChanged,
         ChangeKind::TransportsNarrowed,
         ChangeKind::TransportsWidened,
@@ -289,6 +292,7 @@ impl ChangeKind {
             WriteRestrictionTightened => "write restriction tightened",
             WriteRestrictionRelaxed => "write restriction relaxed",
             RepeatNeedsChangeChanged => "repeat-needs-change rule changed",
+            RelativeLimitChanged => "limit through another quantity changed",
             ReadMeaningChanged => "read meaning changed",
             TransportsNarrowed => "transports narrowed",
             TransportsWidened => "transports widened",
@@ -396,6 +400,10 @@ pub fn classify(kind: ChangeKind) -> (Severity, &'static str) {
         AccessWidened => (C, "a new capability; existing calls unchanged"),
         WriteRestrictionTightened => (B, "writes the drive accepted may now be refused by it"),
         WriteRestrictionRelaxed => (C, "writes that were accepted still are"),
+        RelativeLimitChanged => (
+            B,
+            "values that were written may now be refused, or need another quantity read first",
+        ),
         RepeatNeedsChangeChanged => (
             B,
             "a write sends another sequence of words (an intermediate value first, or no longer)",

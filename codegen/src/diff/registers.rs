@@ -293,6 +293,22 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             Some(rb.unwrap_or_else(|| "none".into())),
         );
     }
+    let limit = |d: &Drive, x: &Register| {
+        x.def
+            .max_relative
+            .as_ref()
+            .map(|l| describe::relative_limit(d, l))
+    };
+    let (la, lb) = (limit(old, r), limit(new, n));
+    if la != lb {
+        push(
+            c,
+            ChangeKind::RelativeLimitChanged,
+            "limit",
+            Some(la.unwrap_or_else(|| "none".into())),
+            Some(lb.unwrap_or_else(|| "none".into())),
+        );
+    }
     if pr.read_values != pn.read_values {
         let shown = |x: &Register| {
             if x.def.read_values.is_empty() {

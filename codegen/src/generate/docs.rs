@@ -151,6 +151,14 @@ pub fn register(drive: &Drive, r: &Register) -> String {
             s += &format!("\n{name}: {}.\n", parts.join(", "));
         }
     }
+    if let Some(l) = &d.max_relative {
+        s += &format!(
+            "\nLimited through another quantity: {}; a value above it is refused before \
+             sending (`ValueError::AboveLimit`), and one that cannot be checked because the \
+             quantity is not in the settings is refused too (`ValueError::MissingSetting`).\n",
+            describe::relative_limit(drive, l)
+        );
+    }
     if plan.restriction != WriteRestriction::None {
         s += &format!(
             "\nWritable {}.\n",

@@ -62,6 +62,7 @@ pub fn module(plan: &DrivePlan) -> String {
                 "Move",
                 "Ranges",
                 "Relative",
+                "RelativeLimit",
                 "RepeatNeedsChange",
                 "Setting",
                 "VariantOption",
@@ -381,6 +382,15 @@ pub fn row(r: &RegisterPlan) -> String {
     }
     if !r.read_values.is_empty() {
         let _ = write!(s, ".read_as({})", list(r.read_values, label));
+    }
+    if let Some(l) = &r.limit {
+        let _ = write!(
+            s,
+            ".limited(RelativeLimit {{ reference: {}, percent: {}, source: {} }})",
+            setting(&l.reference),
+            float(l.percent),
+            string(l.source)
+        );
     }
     s
 }

@@ -383,6 +383,16 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
         if let Some((rule, path)) = &r.repeat_needs_change {
             cite(drive, ctx, out, &rule.source, path.key("source"), rid);
         }
+        if let Some(limit) = &r.def.max_relative {
+            cite(
+                drive,
+                ctx,
+                out,
+                &limit.source,
+                r.key_path("max_relative").key("source"),
+                rid,
+            );
+        }
         for (k, o) in &r.def.by_variant {
             opt(
                 drive,

@@ -24,6 +24,7 @@ mod pairs_valid;
 mod protocol_valid;
 mod read_values_valid;
 mod references_resolve;
+mod relative_limits_valid;
 mod repeat_needs_change_valid;
 mod roles_valid;
 mod value_kind_single;
@@ -81,6 +82,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     protocol_valid::check(drive, &mut out);
     roles_valid::check(drive, &mut out);
     repeat_needs_change_valid::check(drive, &mut out);
+    relative_limits_valid::check(drive, &mut out);
     read_values_valid::check(drive, &mut out);
     numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);

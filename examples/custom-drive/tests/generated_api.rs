@@ -127,11 +127,11 @@ fn settings_absorb_their_dependencies() {
 fn addresses_move_with_the_transport_and_blocks_expand() {
     let s = md::Settings::new();
     assert_eq!(
-        md::FrequencyReference::address(&s, TransportKind::Rtu),
+        md::FrequencyReference::address(&s, TransportKind::Rtu).unwrap(),
         0x0002
     );
     assert_eq!(
-        md::FrequencyReference::address(&s, TransportKind::Tcp),
+        md::FrequencyReference::address(&s, TransportKind::Tcp).unwrap(),
         0x0102
     );
     assert_eq!(<md::Preset3 as Register>::ADDRESS, 0x0105);

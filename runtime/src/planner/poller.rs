@@ -51,6 +51,9 @@ pub enum PolledError<'a> {
     Read(&'a Error),
     /// The word was read but could not be converted.
     Value(ValueError),
+    /// Where the register is depends on a setting the settings do not hold: no word read
+    /// anywhere is taken for it.
+    Address(drivemap_core::plan::AddressUnknown),
 }
 
 impl fmt::Display for PolledError<'_> {
@@ -58,6 +61,7 @@ impl fmt::Display for PolledError<'_> {
         match self {
             PolledError::Read(e) => e.fmt(f),
             PolledError::Value(e) => e.fmt(f),
+            PolledError::Address(e) => e.fmt(f),
         }
     }
 }
@@ -546,7 +550,10 @@ impl Poller {
         &self,
         settings: &R::Settings,
     ) -> Option<Result<R::Value, PolledError<'_>>> {
-        let address = R::address(settings, self.kind);
+        let address = match R::address(settings, self.kind) {
+            Ok(a) => a,
+            Err(e) => return Some(Err(PolledError::Address(e))),
+        };
         let mut words = [0u16; 2];
         for (i, word) in words
             .iter_mut()

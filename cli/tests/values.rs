@@ -1,0 +1,252 @@
+//! What `drivemap write` sends is the value given, within every limit the manual states, at an
+//! address it knows, or nothing: through the binary, against a simulated drive.
+//!
+//! - a value above a limit through another parameter (V7 n011) is refused, after reading it;
+//! - a register whose address moves with a setting that cannot be read (GPD 515 o2-09) is
+//!   refused, never written to its printed address;
+//! - an empty value is refused;
+//! - a register whose range the manual does not print gets a warning naming that.
+
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::{Arc, Mutex};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use drivemap_codegen::validate::Context;
+use drivemap_runtime::transport::tcp::TcpTransport;
+use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn drivemap(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(args)
+        .arg("--maps")
+        .arg(repo().join("maps"))
+        .output()
+        .unwrap()
+}
+
+fn text(out: &Output) -> (String, String) {
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The drive simulator of a shipped map, with its drive model, on loopback Modbus TCP.
+fn simulator(id: &str) -> (Arc<Mutex<Simulator>>, TcpServer, String) {
+    let path = repo().join(format!("maps/{id}.yaml"));
+    let drive = drivemap_codegen::read_map(&path, &Context::default()).unwrap();
+    let sim = drivemap_sim::shared(Simulator::new(drive, SimOptions::new()).unwrap());
+    let server =
+        TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();
+    let addr = server.local_addr().to_string();
+    (sim, server, addr)
+}
+
+/// A bare simulated slave of `id`'s profile on loopback Modbus TCP that executes every write
+/// it receives and answers the faults set with `fail_at`.
+fn bare_slave(
+    id: &str,
+    setup: impl FnOnce(&mut SimulatedSlave),
+) -> (Arc<Mutex<SimulatedSlave>>, String) {
+    let path = repo().join(format!("maps/{id}.yaml"));
+    let drive = drivemap_codegen::read_map(&path, &Context::default()).unwrap();
+    let profile = drivemap_live::leak_profile(&drive);
+    let mut slave = SimulatedSlave::new(1, profile);
+    setup(&mut slave);
+    let slave = Arc::new(Mutex::new(slave));
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let shared = Arc::clone(&slave);
+    thread::spawn(move || {
+        for stream in listener.incoming() {
+            let Ok(stream) = stream else { continue };
+            let until = Instant::now() + Duration::from_secs(30);
+            let mut s = shared.lock().unwrap();
+            let _ = s.serve(&mut TcpTransport::from_stream(stream).unwrap(), until);
+        }
+    });
+    (slave, addr)
+}
+
+/// The repro: 500 Hz to a V7 whose maximum output frequency n011 is 60 Hz. The map
+/// prints no range for the register, but n011 bounds it ("30000 = Max. output frequency"):
+/// refused after reading n011, and the simulated drive keeps its reference.
+#[test]
+fn a_reference_above_n011_is_refused() {
+    let (sim, server, addr) = simulator("yaskawa-v7");
+    assert_eq!(
+        sim.lock()
+            .unwrap()
+            .value("max_output_frequency")
+            .unwrap()
+            .as_f64(),
+        Some(60.0)
+    );
+    let out = drivemap(&[
+        "write",
+        "--drive",
+        "yaskawa-v7",
+        "--tcp",
+        &addr,
+        "tcp_frequency_reference=500",
+    ]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("tcp_frequency_reference: 500 Hz is above 60 Hz, 100 % of n011")
+            && err.contains("nothing written"),
+        "{err}"
+    );
+    assert_eq!(
+        sim.lock().unwrap().raw("tcp_frequency_reference").unwrap(),
+        0
+    );
+    // 60 Hz is the maximum itself: written, as given.
+    let out = drivemap(&[
+        "write",
+        "--drive",
+        "yaskawa-v7",
+        "--tcp",
+        &addr,
+        "tcp_frequency_reference=60",
+    ]);
+    let (stdout, err) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        stdout.contains("wrote tcp_frequency_reference = 60.0 Hz (0258h)"),
+        "{stdout}"
+    );
+    assert_eq!(
+        sim.lock().unwrap().raw("tcp_frequency_reference").unwrap(),
+        600
+    );
+    // n011 lowered on the drive: the limit follows it, read afresh.
+    sim.lock()
+        .unwrap()
+        .set("max_output_frequency", 50.0)
+        .unwrap();
+    let out = drivemap(&[
+        "write",
+        "--drive",
+        "yaskawa-v7",
+        "--tcp",
+        &addr,
+        "tcp_frequency_reference=55",
+    ]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("above 50 Hz"), "{err}");
+    assert_eq!(
+        sim.lock().unwrap().raw("tcp_frequency_reference").unwrap(),
+        600
+    );
+    server.stop();
+}
+
+/// GPD 515: the frequency reference is at 0002h with o2-09 = 1, where 0001h is the operation
+/// command. When o2-09 (50Dh) cannot be read, nothing is written anywhere; given with `--set`,
+/// the write goes to the address it selects.
+#[test]
+fn an_address_chosen_by_an_unreadable_setting_is_refused() {
+    let (slave, addr) = bare_slave("yaskawa-gpd515", |s| {
+        s.fail_at(0x050D, 0x02);
+        s.set_holding(0x0303, 600); // E1-04 = 60.0 Hz
+    });
+    let out = drivemap(&[
+        "write",
+        "--drive",
+        "yaskawa-gpd515",
+        "--tcp",
+        &addr,
+        "--slave",
+        "1",
+        "frequency_reference=60",
+    ]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("its address depends on o2-09, which could not be read")
+            && err.contains("--set o2-09=<value>")
+            && err.contains("nothing written"),
+        "{err}"
+    );
+    assert!(
+        slave.lock().unwrap().writes.is_empty(),
+        "a write reached the drive"
+    );
+    // o2-09 given: written where o2-09 = 1 puts it.
+    let out = drivemap(&[
+        "write",
+        "--drive",
+        "yaskawa-gpd515",
+        "--tcp",
+        &addr,
+        "--slave",
+        "1",
+        "--set",
+        "o2-09=1",
+        "frequency_reference=60",
+    ]);
+    let (stdout, err) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(stdout.contains("at 0002h"), "{stdout}");
+    assert_eq!(slave.lock().unwrap().writes, vec![(0x0002, 0x1770)]);
+}
+
+/// `name=` is refused, never taken as "write back what the drive holds".
+#[test]
+fn an_empty_value_is_refused() {
+    let (slave, addr) = bare_slave("yaskawa-v7", |_| {});
+    let out = drivemap(&[
+        "write",
+        "--drive",
+        "yaskawa-v7",
+        "--tcp",
+        &addr,
+        "tcp_digital_input_command=",
+    ]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("`tcp_digital_input_command=`: no value given"),
+        "{err}"
+    );
+    assert!(slave.lock().unwrap().writes.is_empty());
+}
+
+/// The ACN's frequency command prints no range and no limit through another parameter: the
+/// write says so (and writes, since the word bounds it); a register with a printed range does
+/// not warn.
+#[test]
+fn a_register_without_a_printed_range_is_named() {
+    let (slave, addr) = bare_slave("automationdirect-acn", |_| {});
+    let out = drivemap(&[
+        "write",
+        "--drive",
+        "automationdirect-acn",
+        "--tcp",
+        &addr,
+        "frequency_command=10",
+    ]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("warning: the manual prints no range for frequency_command")
+            && err.contains("only its 16-bit word bounds the value sent"),
+        "{err}"
+    );
+    assert_eq!(slave.lock().unwrap().writes.len(), 1);
+    let (_, addr) = bare_slave("yaskawa-v7", |_| {});
+    let out = drivemap(&["write", "--drive", "yaskawa-v7", "--tcp", &addr, "n011=60"]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(!err.contains("prints no range"), "{err}");
+}
