@@ -151,8 +151,8 @@ fn a_reference_above_n011_is_refused() {
     server.stop();
 }
 
-/// GPD 515: the frequency reference is at 0002h with o2-09 = 1, where 0001h is the operation
-/// command. When o2-09 (50Dh) cannot be read, nothing is written anywhere; given with `--set`,
+/// GPD 515 (RTU only, reached through a Modbus TCP gateway): the frequency reference is at
+/// 0002h with o2-09 = 1, where 0001h is the operation command. When o2-09 (50Dh) cannot be read, nothing is written anywhere; given with `--set`,
 /// the write goes to the address it selects.
 #[test]
 fn an_address_chosen_by_an_unreadable_setting_is_refused() {
@@ -164,7 +164,7 @@ fn an_address_chosen_by_an_unreadable_setting_is_refused() {
         "write",
         "--drive",
         "yaskawa-gpd515",
-        "--tcp",
+        "--gateway",
         &addr,
         "--slave",
         "1",
@@ -187,7 +187,7 @@ fn an_address_chosen_by_an_unreadable_setting_is_refused() {
         "write",
         "--drive",
         "yaskawa-gpd515",
-        "--tcp",
+        "--gateway",
         &addr,
         "--slave",
         "1",
