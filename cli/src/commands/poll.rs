@@ -18,8 +18,9 @@ use crate::live::table::{self, Row};
 pub struct Args {
     #[command(flatten)]
     pub target: Target,
-    /// Registers by id, parameter number or printed name (default: the read-only registers,
-    /// i.e. the monitor groups, or those of --group).
+    /// Registers by id, parameter number, printed name or address as the manual prints it
+    /// (2101H, 0x2101; 45 in a manual numbering registers in decimal); default: the read-only
+    /// registers, i.e. the monitor groups, or those of --group.
     #[arg(value_name = "REGISTER")]
     pub names: Vec<String>,
     /// Poll the readable registers of this group (its id in the map).

@@ -14,7 +14,8 @@ use crate::live::table::{self, Row};
 pub struct Args {
     #[command(flatten)]
     pub target: Target,
-    /// Registers by id, parameter number or printed name.
+    /// Registers by id, parameter number, printed name or address as the manual prints it
+    /// (2101H, 0x2101; 45 in a manual numbering registers in decimal).
     #[arg(required = true, value_name = "REGISTER")]
     pub names: Vec<String>,
     /// Output: an aligned table, JSON (an array of records) or CSV.

@@ -20,7 +20,8 @@ use drivemap_codegen::describe;
 pub struct Args {
     #[command(flatten)]
     pub target: Target,
-    /// `register=value` in engineering units (`accel_time_1=12.5`, `Bn-01=12.5 s`), an
+    /// `register=value` in engineering units (`accel_time_1=12.5`, `Bn-01=12.5 s`, `0200H=12.5`:
+    /// a register by id, parameter number, printed name or address as the manual prints it), an
     /// enumeration code, id or meaning, or bit fields (`run,reverse`, `0x0003`).
     #[arg(required = true, value_name = "REGISTER=VALUE")]
     pub assignments: Vec<String>,

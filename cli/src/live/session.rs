@@ -168,8 +168,8 @@ fn number(text: &str, unit: &str) -> Option<f64> {
     t.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
-/// Resolves register names (id, parameter number or printed name); all unknown names are
-/// reported at once, each with the nearest names.
+/// Resolves register names (id, parameter number, printed name or address as the manual prints
+/// it); all unknown names are reported at once, each with the nearest names.
 pub fn find_all<'a>(drive: &'a Drive, names: &[String]) -> Result<Vec<&'a Register>, String> {
     let mut found = Vec::new();
     let mut errors = Vec::new();
