@@ -209,12 +209,33 @@ fn roles(drive: &Drive, position: &[usize], settings: &SettingsPlan) -> Roles {
                     role,
                     target,
                     source: text(p.source.as_deref().unwrap_or_default()),
+                    shared_with: p.shared_with.as_deref().and_then(Role::from_id),
                 });
+            }
+        }
+    }
+    // A sharing said on one place holds for the other too.
+    for i in 0..places.len() {
+        let Some(other) = places[i].shared_with else {
+            continue;
+        };
+        let (role, target) = (places[i].role, places[i].target);
+        for p in places.iter_mut() {
+            if p.role == other && p.shared_with.is_none() && same_bits(&p.target, &target) {
+                p.shared_with = Some(role);
             }
         }
     }
     Roles {
         places: leak(places),
+    }
+}
+
+/// Whether two role targets write the same register bits.
+fn same_bits(a: &Target, b: &Target) -> bool {
+    match (a, b) {
+        (Target::Field(x), Target::Field(y)) => x.row == y.row && x.mask() & y.mask() != 0,
+        _ => a.row().is_some() && a.row() == b.row(),
     }
 }
 

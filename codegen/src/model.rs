@@ -68,6 +68,11 @@ pub struct RolePlace {
     /// The drive acts on the off → on transition only.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub edge: bool,
+    /// Another role (by id) whose place is the same register or bits, as the manual says: one
+    /// ramp register for both directions (`shared_with: decel_time` on `accel_time`). Without
+    /// it two setpoint or command roles on the same register bits are refused.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shared_with: Option<String>,
     /// The manual line that says this register or field plays the role.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,

@@ -446,6 +446,11 @@ fn roles(out: &mut String, drive: &Drive) {
                 )
             }
         };
+        // One register for two roles (`shared_with`): said beside the register.
+        let register = match p.shared_with {
+            Some(other) => format!("{register} (one register with `{}`)", other.id()),
+            None => register,
+        };
         let _ = writeln!(
             out,
             "| `{}` | {register} | {field} | {on} | {off} | {} |",

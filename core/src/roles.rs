@@ -299,6 +299,10 @@ pub struct Place {
     pub target: Target,
     /// The manual line that says so (`file:line`).
     pub source: &'static str,
+    /// Another role whose place is the same register (or the same bits of it), as the map
+    /// says (`shared_with`, on either of the two): writing one writes the other. One ramp
+    /// register for both directions gives `accel_time` and `decel_time` each other.
+    pub shared_with: Option<Role>,
 }
 
 /// The roles of a drive, as its map gives them: every place, in the order of [`Role::ALL`] and,

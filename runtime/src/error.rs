@@ -160,6 +160,19 @@ pub enum Refusal {
         /// Set when the map gives the role on other transports only.
         transport: Option<crate::profile::TransportKind>,
     },
+    /// Two roles that are one register on this drive (the map's `shared_with`), asked for
+    /// different values: whichever is written last would hold for both.
+    #[error(
+        "{drive}: {role} and {other} are one register ({register}) on this drive, so they cannot be {asked}; give one value for both"
+    )]
+    SharedRegister {
+        drive: &'static str,
+        role: &'static str,
+        other: &'static str,
+        register: &'static str,
+        /// The two values asked for, with their unit ("2 s and 1 s").
+        asked: String,
+    },
     /// A drive's plan used with a client made for another drive's profile.
     #[error(
         "the client speaks to {client}, not to {drive}: build the client with {drive}'s profile"

@@ -51,6 +51,9 @@
 //!   reached the wire against the limits in force.
 //! - A role the map does not give on the link is refused ([`Refusal::NoRole`]) before anything
 //!   is sent: `drive_trait::one_routine_runs_every_drive_over_serial_framing`.
+//! - Where the map says two roles are one register (`shared_with`), a call that would give
+//!   them different values is refused ([`Refusal::SharedRegister`]) before anything is sent, and
+//!   `set_ramp(a, a)` writes the register once: `drive_contract::one_ramp_register_takes_one_value`.
 
 use std::fmt;
 
@@ -189,7 +192,9 @@ pub trait VariableFrequencyDrive {
     /// increments) or, where the map gives the `max_frequency` role, above that maximum (read
     /// from the drive first, or the external quantity from the settings).
     fn set_reference(&mut self, hz: f64) -> Result<(), Error>;
-    /// Writes the acceleration and deceleration times (s).
+    /// Writes the acceleration and deceleration times (s). Where the drive has one register
+    /// for both (the map's `shared_with`), different times are refused
+    /// ([`Refusal::SharedRegister`]) and equal ones written once.
     fn set_ramp(&mut self, accel_s: f64, decel_s: f64) -> Result<(), Error>;
     /// The frequency reference in force (Hz).
     fn reference(&mut self) -> Result<f64, Error>;
@@ -448,7 +453,13 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     /// its register unknown.
     fn command(&mut self, changes: &[(FieldRole, bool)]) -> Result<(), Error> {
         let mut words: Vec<(u16, u16)> = Vec::new();
-        for (f, on) in changes {
+        // Within a word, releases go first: where two roles share bits (run forward and run
+        // reverse as the codes of one field), the one set wins.
+        let ordered = changes
+            .iter()
+            .filter(|(_, on)| !on)
+            .chain(changes.iter().filter(|(_, on)| *on));
+        for (f, on) in ordered {
             if !self.commands.iter().any(|c| c.row == f.row) {
                 continue;
             }
@@ -503,8 +514,8 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             None => (false, self.direction),
         };
         if let Ok(fields) = self.run_fields(run, direction) {
-            for (f, on) in fields {
-                if f.row == row {
+            for on in [false, true] {
+                for (f, _) in fields.iter().filter(|(f, o)| f.row == row && *o == on) {
                     word = f.put(word, f.code(on));
                 }
             }
@@ -696,8 +707,25 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
 
     fn set_ramp(&mut self, accel_s: f64, decel_s: f64) -> Result<(), Error> {
         // Check both are writable before writing either.
-        self.place(Role::AccelTime, "register")?;
-        self.place(Role::DecelTime, "register")?;
+        let accel = self.place(Role::AccelTime, "register")?;
+        let decel = self.place(Role::DecelTime, "register")?;
+        let shared = accel.shared_with == Some(Role::DecelTime)
+            || decel.shared_with == Some(Role::AccelTime)
+            || (accel.target.row().is_some() && accel.target.row() == decel.target.row());
+        if shared {
+            // One ramp register for both: one value, written once.
+            if accel_s != decel_s {
+                return Err(Refusal::SharedRegister {
+                    drive: self.drive(),
+                    role: Role::AccelTime.id(),
+                    other: Role::DecelTime.id(),
+                    register: accel.target.row().map_or("", |row| self.row(row).info.id),
+                    asked: format!("{accel_s} s and {decel_s} s"),
+                }
+                .into());
+            }
+            return self.write_number(Role::AccelTime, accel_s);
+        }
         self.write_number(Role::AccelTime, accel_s)?;
         self.write_number(Role::DecelTime, decel_s)
     }

@@ -620,3 +620,63 @@ fn the_contract_holds_under_faults() {
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// A drive with one ramp register for both directions (the acme-vf1 fixture with its
+/// deceleration role moved onto the acceleration register, `shared_with` said once): the plan
+/// gives both places the sharing, `set_ramp(2, 1)` is refused before anything is sent (it wrote
+/// the register twice and reported success), and `set_ramp(2, 2)` writes it once.
+#[test]
+fn one_ramp_register_takes_one_value() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
+    let decel = r#"    - {register: deceleration_time, source: "acme-vf1.txt:21"}"#;
+    assert!(text.contains(decel), "the fixture's decel_time place");
+    let shared = text.replace(
+        decel,
+        r#"    - {register: acceleration_time, shared_with: accel_time, source: "acme-vf1.txt:20"}"#,
+    );
+    let drive =
+        drivemap_codegen::read_map_str("acme-vf1.yaml", &shared, &Default::default()).unwrap();
+    let p = drive.plan();
+    let place = |role| p.roles.of(role).next().unwrap();
+    assert_eq!(place(Role::AccelTime).shared_with, Some(Role::DecelTime));
+    assert_eq!(place(Role::DecelTime).shared_with, Some(Role::AccelTime));
+    // The reference document says so beside the register.
+    let doc = drivemap_codegen::reference::render(&drive, "acme-vf1.yaml");
+    assert!(
+        doc.contains("| `decel_time` | `acceleration_time` (one register with `accel_time`) |"),
+        "{doc}"
+    );
+    // Without `shared_with` the map is refused.
+    let unsaid = shared.replace("shared_with: accel_time, ", "");
+    let e = drivemap_codegen::read_map_str("acme-vf1.yaml", &unsaid, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("shared_with: accel_time"), "{e}");
+
+    let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    match d.set_ramp(2.0, 1.0) {
+        Err(Error::Refused(e @ drivemap_runtime::Refusal::SharedRegister { .. })) => {
+            let message = e.to_string();
+            assert!(
+                message.contains("accel_time and decel_time are one register (acceleration_time)")
+                    && message.contains("2 s and 1 s"),
+                "{message}"
+            );
+        }
+        other => panic!("set_ramp(2, 1) on one ramp register: {other:?}"),
+    }
+    assert!(d.client().transport().log.is_empty(), "nothing sent");
+    d.set_ramp(2.0, 2.0).unwrap();
+    assert_eq!(d.client().transport().log.len(), 1, "{}", wire(d.client()));
+    assert_eq!(
+        d.client()
+            .transport()
+            .sim
+            .value("acceleration_time")
+            .unwrap()
+            .as_f64(),
+        Some(2.0)
+    );
+}

@@ -133,9 +133,13 @@ fn roles(plan: &DrivePlan) -> String {
             Some(row) => plan.registers[usize::from(row)].info.id,
             None => "external quantity",
         };
+        let shared = match p.shared_with {
+            Some(r) => format!("Some(Role::{r:?})"),
+            None => "None".into(),
+        };
         let _ = writeln!(
             out,
-            "            /* {what} */ Place {{ role: Role::{:?}, target: {target}, source: {} }},",
+            "            /* {what} */ Place {{ role: Role::{:?}, target: {target}, source: {}, shared_with: {shared} }},",
             p.role,
             string(p.source)
         );

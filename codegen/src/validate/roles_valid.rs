@@ -1,7 +1,8 @@
 //! Roles name what they may: a known role, an existing register (or, for the maximum frequency,
 //! an external quantity of the map), of a fitting kind and access — a command or status role a
 //! field, a setpoint a writable number register in the role's unit, a monitor a readable one —
-//! and codes the field has. Citations of roles are checked with the others
+//! and codes the field has; two setpoint or command roles on the same register bits only where
+//! the map says so (`shared_with`). Citations of roles are checked with the others
 //! (`citations_present`).
 
 use drivemap_core::roles::{Role, RoleKind};
@@ -46,9 +47,148 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             c.place(role, place, &path.index(i));
         }
     }
+    c.shared();
+}
+
+/// What a setpoint or command place writes: a register, and for a command the bits of its field.
+struct Written<'a> {
+    role: Role,
+    place: &'a RolePlace,
+    path: Path,
+    register: &'a str,
+    /// The field's mask, `None` for a whole register.
+    mask: Option<u32>,
+}
+
+impl Written<'_> {
+    fn overlaps(&self, other: &Written<'_>) -> bool {
+        self.register == other.register
+            && match (self.mask, other.mask) {
+                (Some(a), Some(b)) => a & b != 0,
+                _ => true,
+            }
+    }
+
+    fn declares(&self, other: Role) -> bool {
+        self.place.shared_with.as_deref() == Some(other.id())
+    }
 }
 
 impl Check<'_> {
+    /// Every setpoint and command place, with what it writes (places that do not resolve are
+    /// reported elsewhere).
+    fn written(&self) -> Vec<Written<'_>> {
+        let mut out = Vec::new();
+        for (id, places) in &self.drive.roles {
+            let Some(role) = Role::from_id(id) else {
+                continue;
+            };
+            if !matches!(role.kind(), RoleKind::Setpoint | RoleKind::Command) {
+                continue;
+            }
+            for (i, place) in places.iter().enumerate() {
+                let Some(r) = place.register.as_deref().and_then(|n| self.drive.find(n)) else {
+                    continue;
+                };
+                let mask = match &place.field {
+                    Some(f) => {
+                        let Some((lsb, width)) = r
+                            .def
+                            .fields
+                            .iter()
+                            .find(|x| x.id == *f)
+                            .and_then(field_span)
+                        else {
+                            continue;
+                        };
+                        Some(((1u32 << width) - 1) << lsb)
+                    }
+                    None => None,
+                };
+                out.push(Written {
+                    role,
+                    place,
+                    path: Path::root().key("roles").key(id).index(i),
+                    register: r.id(),
+                    mask,
+                });
+            }
+        }
+        out
+    }
+
+    /// Two setpoint or command roles on the same register bits: a write of one changes the
+    /// other, so the map must say so (`shared_with`); and a `shared_with` names such a role.
+    fn shared(&mut self) {
+        let written = self.written();
+        let mut errors = Vec::new();
+        for (i, a) in written.iter().enumerate() {
+            for b in &written[i + 1..] {
+                if a.role == b.role || a.role.kind() != b.role.kind() || !a.overlaps(b) {
+                    continue;
+                }
+                if a.declares(b.role) || b.declares(a.role) {
+                    continue;
+                }
+                let what = if a.mask.is_some() {
+                    "bits of register"
+                } else {
+                    "register"
+                };
+                errors.push((
+                    b.path.clone(),
+                    b.register,
+                    format!(
+                        "roles `{}` and `{}` write the same {what} `{}`: a write of one changes the other. If the drive has one register for both, say so with `shared_with: {}` on this place (maps/README.md, \"Roles\")",
+                        a.role.id(),
+                        b.role.id(),
+                        b.register,
+                        a.role.id()
+                    ),
+                ));
+            }
+        }
+        for w in &written {
+            let Some(other_id) = w.place.shared_with.as_deref() else {
+                continue;
+            };
+            let path = w.path.key("shared_with");
+            let Some(other) = Role::from_id(other_id) else {
+                let hint = crate::hints::closest(other_id, Role::ALL.iter().map(|r| r.id()))
+                    .map(|b| format!(" (did you mean `{b}`?)"))
+                    .unwrap_or_default();
+                errors.push((
+                    path,
+                    w.register,
+                    format!("`{other_id}` is not a role{hint}"),
+                ));
+                continue;
+            };
+            let shares = written
+                .iter()
+                .any(|o| o.role == other && o.role != w.role && o.overlaps(w));
+            if !shares {
+                errors.push((
+                    path,
+                    w.register,
+                    format!(
+                        "`shared_with: {other_id}`, but no place of `{other_id}` is on {} `{}`{}: `shared_with` names a setpoint or command role of the same kind on the same register bits",
+                        if w.mask.is_some() { "the bits of register" } else { "register" },
+                        w.register,
+                        if other == w.role { " other than this one" } else { "" }
+                    ),
+                ));
+            }
+        }
+        let errors: Vec<(Path, String, String)> = errors
+            .into_iter()
+            .map(|(path, register, message)| (path, register.to_owned(), message))
+            .collect();
+        for (path, register, message) in errors {
+            self.error(&path, Some(&register), message);
+        }
+    }
+
     fn place(&mut self, role: Role, p: &RolePlace, path: &Path) {
         let id = role.id();
         if p.source.is_none() {
@@ -56,6 +196,21 @@ impl Check<'_> {
                 path,
                 None,
                 format!("role `{id}` needs a `source`: the manual line that says so"),
+            );
+        }
+        if p.shared_with.is_some() && !matches!(role.kind(), RoleKind::Setpoint | RoleKind::Command)
+        {
+            self.error(
+                &path.key("shared_with"),
+                None,
+                format!("`shared_with` says two written roles share a register; `{id}` is read, not written"),
+            );
+        }
+        if p.shared_with.is_some() && p.external.is_some() {
+            self.error(
+                &path.key("shared_with"),
+                None,
+                format!("role `{id}` is an external quantity: it shares no register"),
             );
         }
         let register = match (&p.register, &p.external) {
