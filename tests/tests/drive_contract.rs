@@ -680,3 +680,35 @@ fn one_ramp_register_takes_one_value() {
         Some(2.0)
     );
 }
+
+/// The property test's limit check has teeth: a word for 500 Hz to the V7's frequency reference
+/// registers (a 16-bit word allows it; the manual bounds it by n011, 60 Hz at the simulator's
+/// power-on) is outside the limits in force, 30 Hz is within, and a run word with a reserved
+/// bit set is outside.
+#[test]
+fn the_limit_check_refuses_what_the_map_does_not_allow() {
+    let v7 = map("maps/yaskawa-v7.yaml");
+    let sim = Simulator::new(v7.clone(), SimOptions::new()).unwrap();
+    let settings = sim.settings();
+    let view = settings.view(&v7);
+    let p = v7.plan();
+    let row = |id: &str| p.registers.iter().find(|r| r.info.id == id).unwrap();
+    for id in ["frequency_reference", "tcp_frequency_reference"] {
+        let r = row(id);
+        // The raw word for `hz` without any check: the register's own step in force.
+        let step = r.decode_number(1, &view).unwrap();
+        let at = |hz: f64| (hz / step).round() as u32;
+        let raw_30 = at(30.0);
+        assert_eq!(within_limits(r, raw_30, &view), Ok(()), "{id}: 30 Hz");
+        let raw_500 = at(500.0);
+        assert!(raw_500 <= 0xFFFF, "{id}: 500 Hz fits the word");
+        let e = within_limits(r, raw_500, &view).unwrap_err();
+        assert!(e.contains(id), "{id}: 500 Hz refused: {e}");
+    }
+    let command = row("digital_input_command");
+    assert_eq!(within_limits(command, 0x0001, &view), Ok(()));
+    assert!(
+        within_limits(command, 0x8001, &view).is_err(),
+        "a reserved bit"
+    );
+}
