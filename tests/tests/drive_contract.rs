@@ -712,3 +712,46 @@ fn the_limit_check_refuses_what_the_map_does_not_allow() {
         "a reserved bit"
     );
 }
+
+/// Two command roles on the same bits, said with `shared_with`: run forward and run reverse as
+/// two codes of one run field (the acme-vf1 fixture changed in memory: code 2 runs forward, 3
+/// runs reverse, 1 stops). A word is composed with releases first, so the role set wins: run()
+/// forward writes 2 (it wrote 1, stop, when the release of run reverse came after), and run()
+/// in reverse writes 3.
+#[test]
+fn command_roles_sharing_bits_get_the_one_set() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
+    let roles = r#"  run:
+    - {register: control_word, field: run_stop, on: run, off: stop, source: "acme-vf1.txt:16"}
+  reverse:
+    - {register: control_word, field: direction, on: reverse, off: forward, source: "acme-vf1.txt:17"}
+"#;
+    assert!(text.contains(roles), "the fixture's run and reverse places");
+    let two_codes = text.replace(
+        roles,
+        r#"  run_forward:
+    - {register: control_word, field: run_stop, on: 2, off: 1, source: "acme-vf1.txt:16"}
+  run_reverse:
+    - {register: control_word, field: run_stop, on: 3, off: 1, shared_with: run_forward, source: "acme-vf1.txt:16"}
+"#,
+    );
+    let drive =
+        drivemap_codegen::read_map_str("acme-vf1.yaml", &two_codes, &Default::default()).unwrap();
+    let p = drive.plan();
+    let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let run_code = |d: &mut Vfd<'_, _, SimLink>| {
+        d.client().transport().sim.raw("control_word").unwrap() & 0x0003
+    };
+    d.run().unwrap();
+    assert_eq!(run_code(&mut d), 2, "{}", wire(d.client()));
+    assert!(run_command(d.client()));
+    d.stop().unwrap();
+    assert_eq!(run_code(&mut d), 1);
+    d.set_direction(Direction::Reverse).unwrap();
+    d.run().unwrap();
+    assert_eq!(run_code(&mut d), 3, "{}", wire(d.client()));
+    let state = d.client().transport().sim.state().unwrap();
+    assert!(state.run_command && state.reverse_command, "{state:?}");
+}
