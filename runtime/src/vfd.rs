@@ -29,9 +29,10 @@
 //! # Safety contract
 //!
 //! Each guarantee is proved by the test named after it (in `tests/tests/`); the fault-injection
-//! property test `drive_contract::the_contract_holds_under_faults` checks the first three on
-//! random call sequences with lost, late and refused replies and reconnects, on every map of
-//! `maps/` and the `acme-vf1` fixture, over RTU framing and Modbus TCP.
+//! property test `drive_contract::the_contract_holds_under_faults` checks the run-code, stop
+//! and limit guarantees on random call sequences with lost, late and refused replies and
+//! reconnects, on every map of `maps/` and the `acme-vf1` fixture (with two variants whose roles
+//! share a register), over RTU framing and Modbus TCP.
 //!
 //! - A run bit or run code is written only by [`VariableFrequencyDrive::run`], or by a later call
 //!   while the last of `run()` and `stop()` called was a `run()` that succeeded (which keeps the

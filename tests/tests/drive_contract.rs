@@ -562,15 +562,18 @@ fn total_cases() -> u32 {
 const SHARDS: u32 = 8;
 
 /// Random sequences of trait calls, with reply loss, late replies, exceptions and reconnects
-/// injected at the transport, against the simulator of every map and the acme-vf1 fixture over
-/// RTU framing and Modbus TCP. Invariants, on what reached the wire and on the drive: a run code
+/// injected at the transport, against the simulator of every map, the acme-vf1 fixture and its
+/// two variants with shared roles, over RTU framing and Modbus TCP. Invariants, on what reached the wire and on the drive: a run code
 /// is written only by `run()` (or while a successful `run()` was the last of `run()` and
 /// `stop()`); after `stop()`, successful or not, the drive never runs again until the next
 /// `run()`; every word written is within the map's limits in force.
 #[test]
 fn the_contract_holds_under_faults() {
     use proptest::test_runner::{Config, TestCaseError, TestError, TestRunner};
-    let maps = every_map();
+    let mut maps = every_map();
+    // And the constructs no shipped map has: roles that share a register.
+    maps.push(("acme-vf1 (one ramp register)".into(), acme_one_ramp().0));
+    maps.push(("acme-vf1 (run codes)".into(), acme_run_codes()));
     let targets: Vec<(&str, &Drive, TransportKind)> = maps
         .iter()
         .filter(|(_, d)| !d.plan().roles.is_empty())
@@ -621,22 +624,51 @@ fn the_contract_holds_under_faults() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// The acme-vf1 fixture's map text, changed in memory: `from` replaced by `to`.
+fn acme_changed(from: &str, to: &str) -> (Drive, String) {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
+    assert!(text.contains(from), "the fixture has {from}");
+    let changed = text.replace(from, to);
+    let drive = drivemap_codegen::read_map_str("acme-vf1.yaml", &changed, &Default::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    (drive, changed)
+}
+
+/// acme-vf1 with one ramp register for both directions: its deceleration role moved onto the
+/// acceleration register, `shared_with` said once. Also the map's text.
+fn acme_one_ramp() -> (Drive, String) {
+    acme_changed(
+        r#"    - {register: deceleration_time, source: "acme-vf1.txt:21"}"#,
+        r#"    - {register: acceleration_time, shared_with: accel_time, source: "acme-vf1.txt:20"}"#,
+    )
+}
+
+/// acme-vf1 run by two codes of one field: 2 runs forward, 3 runs reverse, 1 stops
+/// (`run_forward` and `run_reverse` on the same bits, `shared_with` said once).
+fn acme_run_codes() -> Drive {
+    acme_changed(
+        r#"  run:
+    - {register: control_word, field: run_stop, on: run, off: stop, source: "acme-vf1.txt:16"}
+  reverse:
+    - {register: control_word, field: direction, on: reverse, off: forward, source: "acme-vf1.txt:17"}
+"#,
+        r#"  run_forward:
+    - {register: control_word, field: run_stop, on: 2, off: 1, source: "acme-vf1.txt:16"}
+  run_reverse:
+    - {register: control_word, field: run_stop, on: 3, off: 1, shared_with: run_forward, source: "acme-vf1.txt:16"}
+"#,
+    )
+    .0
+}
+
 /// A drive with one ramp register for both directions (the acme-vf1 fixture with its
 /// deceleration role moved onto the acceleration register, `shared_with` said once): the plan
 /// gives both places the sharing, `set_ramp(2, 1)` is refused before anything is sent (it wrote
 /// the register twice and reported success), and `set_ramp(2, 2)` writes it once.
 #[test]
 fn one_ramp_register_takes_one_value() {
-    let root = env!("CARGO_MANIFEST_DIR");
-    let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
-    let decel = r#"    - {register: deceleration_time, source: "acme-vf1.txt:21"}"#;
-    assert!(text.contains(decel), "the fixture's decel_time place");
-    let shared = text.replace(
-        decel,
-        r#"    - {register: acceleration_time, shared_with: accel_time, source: "acme-vf1.txt:20"}"#,
-    );
-    let drive =
-        drivemap_codegen::read_map_str("acme-vf1.yaml", &shared, &Default::default()).unwrap();
+    let (drive, shared) = acme_one_ramp();
     let p = drive.plan();
     let place = |role| p.roles.of(role).next().unwrap();
     assert_eq!(place(Role::AccelTime).shared_with, Some(Role::DecelTime));
@@ -720,24 +752,7 @@ fn the_limit_check_refuses_what_the_map_does_not_allow() {
 /// in reverse writes 3.
 #[test]
 fn command_roles_sharing_bits_get_the_one_set() {
-    let root = env!("CARGO_MANIFEST_DIR");
-    let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
-    let roles = r#"  run:
-    - {register: control_word, field: run_stop, on: run, off: stop, source: "acme-vf1.txt:16"}
-  reverse:
-    - {register: control_word, field: direction, on: reverse, off: forward, source: "acme-vf1.txt:17"}
-"#;
-    assert!(text.contains(roles), "the fixture's run and reverse places");
-    let two_codes = text.replace(
-        roles,
-        r#"  run_forward:
-    - {register: control_word, field: run_stop, on: 2, off: 1, source: "acme-vf1.txt:16"}
-  run_reverse:
-    - {register: control_word, field: run_stop, on: 3, off: 1, shared_with: run_forward, source: "acme-vf1.txt:16"}
-"#,
-    );
-    let drive =
-        drivemap_codegen::read_map_str("acme-vf1.yaml", &two_codes, &Default::default()).unwrap();
+    let drive = acme_run_codes();
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
     let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
