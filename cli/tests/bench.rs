@@ -245,6 +245,15 @@ fn installed_anywhere_every_command_works_from_outside_the_repository() {
     let (code, out, err) = run(&["demo", "--drive", "yaskawa-j7", "--time-scale", "50"]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("done in"), "{out}");
+    // The J7's source selections have no address: the demo sets them at the simulated drive,
+    // where the status bits that report the source live, and says so.
+    assert!(
+        out.contains(
+            "set at the simulated drive first (its factory setting ignores network commands): \
+             status_signal_2.run_command_source = 0, status_signal_2.frequency_reference_source = 0"
+        ),
+        "{out}"
+    );
 
     // The live commands against `drivemap simulate`.
     // The TDS-V8 speaks RTU only: served and reached as a drive behind a Modbus TCP gateway.

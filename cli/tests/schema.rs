@@ -62,7 +62,7 @@ fn s(p: &Path) -> &str {
 }
 
 /// The diff of the schema-1 fixture against today's map: only the exception whose code the
-/// old schema read as decimal 41 (29H); none of its 23 decimal addresses and codes.
+/// old schema read as decimal 41 (29H); none of its 25 decimal addresses and codes.
 const EXPECTED: &str = "acme-vf1: 1 breaking, 1 compatible
   breaking    protocol: exception removed — exception 29h
               Interlock active → (none)
@@ -80,7 +80,7 @@ fn a_schema_1_map_loads_with_warnings_naming_what_changed() {
     assert_eq!(code, 0, "{out}\n{err}");
     assert!(out.starts_with("ok "), "{out}");
     let warnings: Vec<&str> = err.lines().filter(|l| l.contains(": warning")).collect();
-    // The file's warning, then one per address or code written in decimal (20 addresses,
+    // The file's warning, then one per address or code written in decimal (22 addresses,
     // function code 16, exception codes 41 ... and nothing for codes 0-9).
     assert!(
         warnings[0].contains(":1:1: warning: this map states no `schema:`, so it is schema 1")
@@ -92,7 +92,7 @@ fn a_schema_1_map_loads_with_warnings_naming_what_changed() {
         .iter()
         .filter(|w| w.contains("as schema 1 reads it"))
         .count();
-    assert_eq!(per_value, 24, "{err}");
+    assert_eq!(per_value, 26, "{err}");
     assert!(
         err.contains(
             "acme-vf1.yaml:39:14: warning: protocol.exceptions[3].code: exception code 41 is \
@@ -123,7 +123,7 @@ fn diff_across_schema_versions_reports_only_what_changed_in_meaning() {
     let (code, out, err) = drivemap(&repo(), &["diff", s(&old_map()), s(&new_map())]);
     assert_eq!((code, out.as_str()), (1, EXPECTED), "{err}");
     assert!(err.contains("states no `schema:`"), "{err}");
-    assert!(err.contains("note: 24 address(es) and code(s)"), "{err}");
+    assert!(err.contains("note: 26 address(es) and code(s)"), "{err}");
     // The other way round, the same two changes reversed.
     let (code, out, _) = drivemap(&repo(), &["diff", s(&new_map()), s(&old_map())]);
     assert_eq!(code, 1);
@@ -143,7 +143,7 @@ fn migrate_rewrites_in_the_current_schema_with_the_same_meaning() {
     assert_eq!(code, 1, "{out}\n{err}");
     assert!(
         out.contains(
-            "acme-vf1.yaml: schema 1 -> 2, 24 value(s) would be rewritten (nothing written)"
+            "acme-vf1.yaml: schema 1 -> 2, 26 value(s) would be rewritten (nothing written)"
         ),
         "{out}"
     );

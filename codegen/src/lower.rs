@@ -21,7 +21,7 @@ use drivemap_core::profile::{
     Timing,
 };
 use drivemap_core::register::{Access, RegisterInfo, Table, WriteRestriction};
-use drivemap_core::roles::{FieldRole, Place, Role, Roles, Target};
+use drivemap_core::roles::{FieldRole, Place, Role, RoleKind, Roles, Target};
 use drivemap_core::rule::{Broadcast, Transports, WriteRule};
 use drivemap_core::scale::{Decimal, RawRange};
 
@@ -204,10 +204,18 @@ fn roles(drive: &Drive, position: &[usize], settings: &SettingsPlan) -> Roles {
     let mut places = Vec::new();
     for &role in Role::ALL {
         for p in drive.roles.get(role.id()).into_iter().flatten() {
-            if let Some(target) = role_target(drive, position, settings, p) {
+            if let Some(target) = role_target(drive, position, settings, role, p) {
+                let transports = match p.transports.as_deref() {
+                    None => Transports::ALL,
+                    Some(list) => Transports {
+                        rtu: list.contains(&TransportName::Rtu),
+                        tcp: list.contains(&TransportName::Tcp),
+                    },
+                };
                 places.push(Place {
                     role,
                     target,
+                    transports,
                     source: text(p.source.as_deref().unwrap_or_default()),
                     shared_with: p.shared_with.as_deref().and_then(Role::from_id),
                 });
@@ -243,6 +251,7 @@ fn role_target(
     drive: &Drive,
     position: &[usize],
     settings: &SettingsPlan,
+    role: Role,
     p: &model::RolePlace,
 ) -> Option<Target> {
     if let Some(name) = &p.external {
@@ -259,6 +268,28 @@ fn role_target(
     let i = drive.registers.iter().position(|x| std::ptr::eq(x, r))?;
     let row = position[i] as u16;
     let Some(field_id) = &p.field else {
+        if role.kind() == RoleKind::Source {
+            // A source parameter: the whole word is the code (its `values`, or a number).
+            let code = |c: &model::CodeRef| match c {
+                model::CodeRef::Number(n) => Some(*n),
+                model::CodeRef::Id(id) => {
+                    r.def.values.iter().find(|v| v.id == *id).map(|v| v.value)
+                }
+            };
+            let on: Vec<u16> =
+                p.on.iter()
+                    .flat_map(|c| c.list())
+                    .filter_map(code)
+                    .collect();
+            return Some(Target::Field(FieldRole {
+                row,
+                lsb: 0,
+                width: 16,
+                on: leak(on),
+                off: None,
+                edge: false,
+            }));
+        }
         return Some(Target::Register(row));
     };
     let f = r.def.fields.iter().find(|f| f.id == *field_id)?;

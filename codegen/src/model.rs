@@ -73,6 +73,14 @@ pub struct RolePlace {
     /// it two setpoint or command roles on the same register bits are refused.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shared_with: Option<String>,
+    /// The links on which this place holds (default: every transport of the map). A source
+    /// role's network code differs by link: V7 n003 = 2 (built-in RTU), 3 (TCP option card).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transports: Option<Vec<TransportName>>,
+    /// A source role the manual does not print (no parameter, or no address for it): why. The
+    /// place names no register then; the drive trait cannot check the source on such a drive.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unknown: Option<String>,
     /// The manual line that says this register or field plays the role.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,

@@ -427,13 +427,21 @@ fn roles(out: &mut String, drive: &Drive) {
                     _ => None,
                 };
                 let label = |c: u16| -> String {
-                    let name = field
-                        .and_then(|x| x.values.iter().find(|v| v.code == c))
-                        .map(|v| format!(" ({})", v.id))
-                        .unwrap_or_default();
+                    let name = match field {
+                        Some(x) => x.values.iter().find(|v| v.code == c).map(|v| v.id),
+                        // A source parameter: the whole word is the code.
+                        None => r.label(c).map(|l| l.id),
+                    }
+                    .map(|id| format!(" ({id})"))
+                    .unwrap_or_default();
                     format!("{c}{name}")
                 };
-                let on: Vec<String> = f.on.iter().map(|&c| label(c)).collect();
+                let mut on: Vec<String> = f.on.iter().map(|&c| label(c)).collect();
+                match (p.transports.rtu, p.transports.tcp) {
+                    (true, false) => on.push("on RTU links".into()),
+                    (false, true) => on.push("on Modbus TCP".into()),
+                    _ => {}
+                }
                 let mut off = f.off.map(label).unwrap_or_default();
                 if f.edge {
                     off.push_str(" (acts on the off → on edge)");
@@ -459,6 +467,32 @@ fn roles(out: &mut String, drive: &Drive) {
         );
     }
     let _ = writeln!(out);
+    // Source roles the manual does not print: the trait cannot check them.
+    for (id, places) in &drive.roles {
+        for p in places {
+            if let Some(why) = &p.unknown {
+                let links = match p.transports.as_deref() {
+                    Some(list) => format!(
+                        " on {}",
+                        list.iter()
+                            .map(|t| match t {
+                                crate::model::TransportName::Rtu => "RTU links",
+                                crate::model::TransportName::Tcp => "Modbus TCP",
+                            })
+                            .collect::<Vec<_>>()
+                            .join(" and ")
+                    ),
+                    None => String::new(),
+                };
+                let _ = writeln!(
+                    out,
+                    "`{id}`{links}: not printed — {} ({}). The drive trait does not check this source there.\n",
+                    why.trim(),
+                    cite(p.source.as_deref())
+                );
+            }
+        }
+    }
 }
 
 /// An address as the manual prints it: hex (`2001h`), or for a manual that numbers registers in

@@ -72,6 +72,12 @@ pub enum Role {
     Stopping,
     /// In operating (DRV) mode.
     DriveMode,
+    // Sources: the parameters that select where the drive takes its commands from.
+    /// Where the drive takes its run commands from: the parameter (or the status field that
+    /// reports it) and the codes meaning "the network" (V7 n003 = 2 over RTU).
+    CommandSource,
+    /// Where the drive takes its frequency reference from (V7 n004 = 6 over RTU).
+    ReferenceSource,
 }
 
 /// What a role is, and so what it may name.
@@ -87,6 +93,9 @@ pub enum RoleKind {
     /// A field the master reads: a 1-bit field (1 = on) or the codes of a multi-bit field that
     /// mean "on".
     Status,
+    /// A readable parameter (or status field) whose `on` codes say the drive takes commands
+    /// from the network on the place's transports; the drive ignores network commands otherwise.
+    Source,
 }
 
 impl Role {
@@ -120,6 +129,8 @@ impl Role {
         Role::Decelerating,
         Role::Stopping,
         Role::DriveMode,
+        Role::CommandSource,
+        Role::ReferenceSource,
     ];
 
     /// The key of this role under `roles:` in a map.
@@ -153,6 +164,8 @@ impl Role {
             Role::Decelerating => "decelerating",
             Role::Stopping => "stopping",
             Role::DriveMode => "drive_mode",
+            Role::CommandSource => "command_source",
+            Role::ReferenceSource => "reference_source",
         }
     }
 
@@ -191,6 +204,7 @@ impl Role {
             | Role::Decelerating
             | Role::Stopping
             | Role::DriveMode => RoleKind::Status,
+            Role::CommandSource | Role::ReferenceSource => RoleKind::Source,
         }
     }
 
@@ -297,6 +311,9 @@ pub struct Place {
     pub role: Role,
     /// Where.
     pub target: Target,
+    /// The links the place holds on (every one unless the map says): a source role's codes
+    /// differ by link (V7 n003 = 2 for the built-in RTU port, 3 for the TCP option card).
+    pub transports: crate::rule::Transports,
     /// The manual line that says so (`file:line`).
     pub source: &'static str,
     /// Another role whose place is the same register (or the same bits of it), as the map

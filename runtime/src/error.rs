@@ -173,6 +173,19 @@ pub enum Refusal {
         /// The two values asked for, with their unit ("2 s and 1 s").
         asked: String,
     },
+    /// The drive takes run commands (or its frequency reference) from somewhere other than the
+    /// network, as its source parameter says: a command sent now would be accepted on the wire
+    /// and ignored by the drive, so it is not sent.
+    #[error("{drive}: the drive takes {what} from {now}; {fix}")]
+    NotNetworkSource {
+        drive: &'static str,
+        /// "run commands" or "the frequency reference".
+        what: &'static str,
+        /// Where it takes them from, with the setting read: "the terminal strip (n003 = 1)".
+        now: String,
+        /// What to set: "set n003 = 2 for the network".
+        fix: String,
+    },
     /// A drive's plan used with a client made for another drive's profile.
     #[error(
         "the client speaks to {client}, not to {drive}: build the client with {drive}'s profile"

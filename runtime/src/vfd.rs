@@ -22,6 +22,17 @@
 //! drive's own errors). A role the map does not give is refused with [`Refusal::NoRole`] before
 //! anything is sent, never skipped: [`VariableFrequencyDrive::supports`] tells beforehand.
 //!
+//! A drive acts on network run commands and references only while its source parameters
+//! select the network (V7 n003 = 2 and n004 = 6 on its RTU port; the map's `command_source`
+//! and `reference_source` roles). [`VariableFrequencyDrive::run`] and
+//! [`VariableFrequencyDrive::set_reference`] read that parameter first and refuse with
+//! [`Refusal::NotNetworkSource`] — "the drive takes run commands from \"Terminal Strip\" (n003
+//! = 1); set n003 = 2 (...) for the network" — instead of sending a command the drive would
+//! accept and ignore. A source found to be the network is kept (read once per [`Vfd`]); one
+//! that is not is read again at the next call, so setting it and calling again works.
+//! [`VariableFrequencyDrive::stop`] is never refused for its source. A map that gives no
+//! source role for the link (or marks it not printed) is not checked.
+//!
 //! Command words are composed from what the [`Vfd`] last told the drive, never from hope: the
 //! run command of a drive is owned by one master, and every command register starts released
 //! (stopped, forward, no reset). See [the safety contract](#safety-contract).
@@ -50,6 +61,11 @@
 //! - Every value goes out through the register's conversion and the client's write gate, or
 //!   not at all: `drive_contract::the_contract_holds_under_faults` checks every word that
 //!   reached the wire against the limits in force.
+//! - A run or a reference the drive would ignore (its source parameter, the map's
+//!   `command_source` / `reference_source`, does not select the network on the link) is refused
+//!   with what to set, [`Refusal::NotNetworkSource`], and nothing is sent; `stop()` is never
+//!   refused for it:
+//!   `drive_trait::run_is_refused_at_the_factory_setting_and_works_after_setting_the_source`.
 //! - A role the map does not give on the link is refused ([`Refusal::NoRole`]) before anything
 //!   is sent: `drive_trait::one_routine_runs_every_drive_over_serial_framing`.
 //! - Where the map says two roles are one register (`shared_with`), a call that would give
@@ -181,7 +197,8 @@ pub trait VariableFrequencyDrive {
     fn drive_id(&self) -> &'static str;
     /// Whether the map gives `role` on this link.
     fn supports(&self, role: Role) -> bool;
-    /// Runs in the direction set.
+    /// Runs in the direction set. Refused ([`Refusal::NotNetworkSource`]) when the drive's run
+    /// command source (the map's `command_source`) is not the network on this link.
     fn run(&mut self) -> Result<(), Error>;
     /// Stops (ramp to stop, as the drive's stop command does).
     fn stop(&mut self) -> Result<(), Error>;
@@ -192,6 +209,8 @@ pub trait VariableFrequencyDrive {
     /// the register (its range, its limit through another quantity, a whole number of its
     /// increments) or, where the map gives the `max_frequency` role, above that maximum (read
     /// from the drive first, or the external quantity from the settings).
+    /// Also refused ([`Refusal::NotNetworkSource`]) when the
+    /// drive's reference source (the map's `reference_source`) is not the network on this link.
     fn set_reference(&mut self, hz: f64) -> Result<(), Error>;
     /// Writes the acceleration and deceleration times (s). Where the drive has one register
     /// for both (the map's `shared_with`), different times are refused
@@ -233,6 +252,8 @@ pub struct Vfd<'c, S: SettingsView, T: Transport> {
     running: Option<Direction>,
     /// Every command register, with what this master last told it.
     commands: Vec<CommandWord>,
+    /// The run command source and the reference source were read and select the network.
+    sources: [bool; 2],
 }
 
 /// A command register and what this master last told it.
@@ -300,6 +321,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             direction: Direction::Forward,
             running: None,
             commands,
+            sources: [false; 2],
         }
     }
 
@@ -634,6 +656,93 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         Ok(())
     }
 
+    /// Checks that the drive takes what `role` (a source role) selects from the network on
+    /// this link: reads the parameter (or status field) the map names, once; a network source
+    /// is kept, another is refused and read again next time.
+    fn network_source(&mut self, role: Role) -> Result<(), Error> {
+        let slot = usize::from(role == Role::ReferenceSource);
+        if self.sources[slot] {
+            return Ok(());
+        }
+        let kind = self.kind;
+        let Some(p) = self
+            .roles
+            .of(role)
+            .find(|p| p.transports.contains(kind) && self.usable(p))
+        else {
+            // No source parameter for this link in the map: nothing to check.
+            return Ok(());
+        };
+        let Target::Field(f) = p.target else {
+            return Ok(());
+        };
+        let word = self.read_word(f.row)?;
+        if f.holds(word) {
+            self.sources[slot] = true;
+            return Ok(());
+        }
+        Err(self.not_network(role, p, f, word))
+    }
+
+    /// Why the drive would ignore a network command: its source setting, and what to set.
+    fn not_network(&self, role: Role, p: &Place, f: FieldRole, word: u16) -> Error {
+        let r = self.row(f.row);
+        let code = f.get(word);
+        let what = if role == Role::CommandSource {
+            "run commands"
+        } else {
+            "the frequency reference"
+        };
+        let (now, fix) = if f.width == 16 {
+            // The source parameter itself: its codes are its values.
+            let param = r.info.param.unwrap_or(r.info.id);
+            let now = match r.label(code) {
+                Some(l) => format!("\"{}\" ({param} = {code})", l.name),
+                None => format!("another source ({param} = {code}, a code the map does not name)"),
+            };
+            let on: Vec<String> =
+                f.on.iter()
+                    .map(|&c| match r.label(c) {
+                        Some(l) => format!("{param} = {c} (\"{}\")", l.name),
+                        None => format!("{param} = {c}"),
+                    })
+                    .collect();
+            let fix = format!(
+                "set {} for the network on this link ({:?}; {})",
+                on.join(" or "),
+                self.kind,
+                p.source
+            );
+            (now, fix)
+        } else {
+            // A status field that reports the source.
+            let field = match &r.conversion {
+                drivemap_core::plan::Conversion::Bits { fields, .. } => fields
+                    .iter()
+                    .find(|x| x.lsb == f.lsb && x.width == f.width)
+                    .map(|x| x.name),
+                _ => None,
+            };
+            let now = format!(
+                "elsewhere than the network ({} reports {code}{})",
+                r.info.id,
+                field.map(|n| format!(": \"{n}\"")).unwrap_or_default()
+            );
+            let fix = format!(
+                "select the network as the drive's source at the drive ({})",
+                p.source
+            );
+            (now, fix)
+        };
+        Refusal::NotNetworkSource {
+            drive: self.drive(),
+            what,
+            now,
+            fix,
+        }
+        .into()
+    }
+
     /// A plan whose role names the wrong kind of place (validation refuses such maps; a plan
     /// built by hand may still have one).
     fn misplaced(&self, role: Role, what: &'static str) -> Error {
@@ -670,6 +779,8 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
         let fields = self.run_fields(true, self.direction)?;
         // Until the run is confirmed, every other command composes with run released.
         self.running = None;
+        // A run the drive would ignore (not the network's to give) is refused, not sent.
+        self.network_source(Role::CommandSource)?;
         self.command(&fields)?;
         self.running = Some(self.direction);
         Ok(())
@@ -702,6 +813,8 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
     }
 
     fn set_reference(&mut self, hz: f64) -> Result<(), Error> {
+        self.place(Role::FrequencyReference, "register")?;
+        self.network_source(Role::ReferenceSource)?;
         self.check_max_frequency(hz)?;
         self.write_number(Role::FrequencyReference, hz)
     }

@@ -10,6 +10,8 @@
 
 use drivemap_codegen::ir::Drive;
 use drivemap_runtime::core::roles::{FieldRole, Role, RoleKind, Target};
+use drivemap_runtime::core::rule::Transports;
+use drivemap_runtime::profile::TransportKind;
 
 /// What the drive model is doing, as status fields report it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -111,6 +113,27 @@ impl Bit {
     }
 }
 
+/// A source parameter (or the status field reporting it): the drive acts on network commands
+/// arriving on `transports` only while it holds one of the field's `on` codes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct SourcePlace {
+    /// Map index of the register.
+    pub register: usize,
+    /// The codes (a whole parameter: `lsb` 0, `width` 16).
+    pub field: FieldRole,
+    pub transports: Transports,
+}
+
+/// Whether the drive takes commands from the network on `kind`, given each register's raw
+/// value: a source place for the link that holds, or none for the link (nothing to check).
+pub(crate) fn network_selected(places: &[SourcePlace], raw: &[u32], kind: TransportKind) -> bool {
+    let mut here = places
+        .iter()
+        .filter(|p| p.transports.contains(kind))
+        .peekable();
+    here.peek().is_none() || here.any(|p| p.field.holds(raw[p.register] as u16))
+}
+
 /// Where a quantity comes from once resolved.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Source {
@@ -190,6 +213,10 @@ pub(crate) struct Resolved {
     pub modes: bool,
     /// Register index → plausible power-on value, for role registers without a printed default.
     pub initial: Vec<(usize, f64)>,
+    /// Where the drive takes run commands from (`command_source`).
+    pub command_source: Vec<SourcePlace>,
+    /// Where the drive takes its frequency reference from (`reference_source`).
+    pub reference_source: Vec<SourcePlace>,
 }
 
 /// The map index of the register at plan row `row`.
@@ -217,6 +244,8 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
         status: Vec::new(),
         modes: false,
         initial: Vec::new(),
+        command_source: Vec::new(),
+        reference_source: Vec::new(),
     };
     let quantity = |role: Role, fallback: f64, initial: &mut Vec<(usize, f64)>| {
         let p = roles.of(role).next()?;
@@ -250,6 +279,18 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
                     role: p.role,
                     bit: Bit { register, field },
                 });
+            }
+            (RoleKind::Source, Target::Field(field), Some(register)) => {
+                let place = SourcePlace {
+                    register,
+                    field,
+                    transports: p.transports,
+                };
+                if p.role == Role::CommandSource {
+                    r.command_source.push(place);
+                } else {
+                    r.reference_source.push(place);
+                }
             }
             (RoleKind::Status, Target::Field(f), Some(register)) => {
                 let cond = Condition::of(p.role);

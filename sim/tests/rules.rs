@@ -25,7 +25,13 @@ fn drive(id: &str) -> drivemap_codegen::Drive {
         .unwrap_or_else(|e| panic!("{id}: {e}"))
 }
 
-fn start(id: &str, options: SimOptions) -> (Simulator, ManualClock) {
+/// A simulator of `id`, installed for network control over RTU framing unless `options` say
+/// another link: its source parameters select the network (at the factory setting the drive
+/// ignores network run commands and references; `the_factory_setting_ignores_network_runs`).
+fn start(id: &str, mut options: SimOptions) -> (Simulator, ManualClock) {
+    if options.network_source.is_none() {
+        options = options.network_source(TransportKind::Rtu);
+    }
     let clock = ManualClock::new();
     let sim = Simulator::new(drive(id), options.clock(Arc::new(clock.clone())))
         .unwrap_or_else(|e| panic!("{id}: {e}"));
@@ -402,7 +408,10 @@ fn v7_selected_scales_follow_its_own_registers() {
 
 #[test]
 fn v7_over_tcp_has_the_option_card_registers() {
-    let (mut sim, clock) = start("yaskawa-v7", SimOptions::new());
+    let (mut sim, clock) = start(
+        "yaskawa-v7",
+        SimOptions::new().network_source(TransportKind::Tcp),
+    );
     let mut out = [0u8; tcp::MAX_FRAME];
     let mut frame = [0u8; tcp::MAX_FRAME];
     // Terminal S1 (n050 = Run Forward) and 40.0 Hz through 0001h/0002h of the option card.
@@ -585,7 +594,9 @@ fn acme() -> (Simulator, ManualClock) {
     let clock = ManualClock::new();
     let sim = Simulator::new(
         drivemap_codegen::read_map(path.as_ref(), &Default::default()).unwrap(),
-        SimOptions::new().clock(Arc::new(clock.clone())),
+        SimOptions::new()
+            .clock(Arc::new(clock.clone()))
+            .network_source(TransportKind::Rtu),
     )
     .unwrap();
     (sim, clock)
@@ -808,4 +819,77 @@ fn a_clone_goes_on_on_its_own_clock() {
     a.tick();
     assert_eq!(hz(&b, "output_frequency"), 12.0);
     assert_eq!(hz(&a, "output_frequency"), 0.0);
+}
+
+/// Every shipped map's simulator starts at the manual's factory setting of its source
+/// parameters, where a run command and a reference written over the network are accepted on
+/// the wire and ignored, as the drive ignores them; once the parameter selects the network (set
+/// over the link where it has an address), the same write runs the drive.
+#[test]
+fn the_factory_setting_ignores_network_runs() {
+    use drivemap_runtime::core::roles::{Role, Target};
+    for id in DRIVES {
+        let d = drive(id);
+        let plan = d.plan();
+        let clock = ManualClock::new();
+        let mut sim =
+            Simulator::new(d.clone(), SimOptions::new().clock(Arc::new(clock.clone()))).unwrap();
+        let run = plan
+            .roles
+            .of(Role::Run)
+            .chain(plan.roles.of(Role::RunForward))
+            .find_map(|p| match p.target {
+                Target::Field(f)
+                    if plan.registers[usize::from(f.row)].transports.rtu
+                        && plan.registers[usize::from(f.row)].broadcast
+                            != drivemap_runtime::Broadcast::Only =>
+                {
+                    Some(f)
+                }
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("{id}: a run command over RTU"));
+        let row = &plan.registers[usize::from(run.row)];
+        let address = row.address_for(&sim.settings().view(&d), TransportKind::Rtu);
+        let offsets = plan.profile.address_offsets;
+        let pdu = |a: u16| offsets.pdu_address(a, TransportKind::Rtu).unwrap();
+        let word = run.put(0, run.code(true));
+        assert_eq!(
+            write(&mut sim, pdu(address), &[word]),
+            Ok(()),
+            "{id}: accepted on the wire"
+        );
+        clock.advance(Duration::from_secs(30));
+        let state = sim.state().unwrap();
+        assert!(
+            !state.running,
+            "{id}: a network run at the factory setting is ignored: {state:?}"
+        );
+        // The source parameter over the link, where it has an address; at the drive otherwise.
+        let source = plan
+            .roles
+            .of(Role::CommandSource)
+            .find(|p| p.transports.rtu)
+            .unwrap_or_else(|| panic!("{id}: a command source over RTU"));
+        let Target::Field(f) = source.target else {
+            panic!("{id}: a source is a field")
+        };
+        if f.width == 16 {
+            let r = &plan.registers[usize::from(f.row)];
+            let a = r.address_for(&sim.settings().view(&d), TransportKind::Rtu);
+            assert_eq!(
+                write(&mut sim, pdu(a), &[f.on[0]]),
+                Ok(()),
+                "{id}: source set"
+            );
+        } else {
+            assert!(!sim.select_network_source(TransportKind::Rtu).is_empty());
+        }
+        assert_eq!(write(&mut sim, pdu(address), &[word]), Ok(()));
+        clock.advance(Duration::from_secs(30));
+        assert!(
+            sim.state().unwrap().running,
+            "{id}: runs once the network is the source"
+        );
+    }
 }

@@ -87,7 +87,15 @@ where
     D::Settings: DriveSettings + Default,
 {
     let clock = ManualClock::new();
-    let sim = Simulator::new(map(id), SimOptions::new().clock(Arc::new(clock.clone()))).unwrap();
+    // Installed for network control: the source parameters select the network (at the factory
+    // setting the drive ignores network run commands: see `run_is_refused_at_the_factory_setting`).
+    let sim = Simulator::new(
+        map(id),
+        SimOptions::new()
+            .clock(Arc::new(clock.clone()))
+            .network_source(kind),
+    )
+    .unwrap();
     assert!(sim.has_model(), "{id}: its map gives roles");
     let slave = sim.slave();
     let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
@@ -228,8 +236,13 @@ fn a_trip_is_seen_and_reset_through_the_trait() {
             return None;
         }
         let clock = ManualClock::new();
-        let sim =
-            Simulator::new(map(id), SimOptions::new().clock(Arc::new(clock.clone()))).unwrap();
+        let sim = Simulator::new(
+            map(id),
+            SimOptions::new()
+                .clock(Arc::new(clock.clone()))
+                .network_source(TransportKind::RtuOverTcp),
+        )
+        .unwrap();
         let slave = sim.slave();
         let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
         let shared = drivemap_sim::shared(sim);
@@ -300,7 +313,16 @@ fn a_command_that_failed_is_not_resent_by_the_next() {
         timeout: Duration::from_millis(50),
         ..ClientOptions::default()
     };
-    let link = FaultyLink::new(TransportKind::Rtu, SimulatedSlave::new(1, &tds::PROFILE));
+    let mut slave = SimulatedSlave::new(1, &tds::PROFILE);
+    // Sn-04 = 2: run commands from the RS-485 port.
+    slave.set_holding(
+        <tds::RunSource as drivemap_runtime::Register>::address(
+            &tds::Settings::default(),
+            TransportKind::Rtu,
+        ),
+        2,
+    );
+    let link = FaultyLink::new(TransportKind::Rtu, slave);
     let mut c = Client::with_options(link, &tds::PROFILE, options);
     let mut d = Vfd::new::<tds::Drive>(&mut c, 1, tds::Settings::default());
     let address = <tds::OperationCommand as drivemap_runtime::Register>::address(
@@ -308,6 +330,9 @@ fn a_command_that_failed_is_not_resent_by_the_next() {
         TransportKind::Rtu,
     )
     .unwrap();
+    // The first run reads the command source (once); stopped again, the drive is where it was.
+    d.run().unwrap();
+    d.stop().unwrap();
     d.client().transport().inject(Fault::Drop);
     assert!(matches!(d.run(), Err(Error::Timeout { .. })));
     // The drive did get it: the reply alone was lost.
@@ -338,4 +363,201 @@ fn a_command_that_failed_is_not_resent_by_the_next() {
         Err(e) => panic!("expected OtherDrive, got {e}"),
         Ok(_) => panic!("expected OtherDrive, got a Vfd"),
     }
+}
+
+/// The place of a source role on `kind`, if the map names one there.
+fn source_place<D: DrivePlan>(
+    role: Role,
+    kind: TransportKind,
+) -> Option<drivemap_runtime::roles::FieldRole> {
+    D::ROLES
+        .of(role)
+        .find(|p| p.transports.contains(kind))
+        .and_then(|p| match p.target {
+            drivemap_runtime::roles::Target::Field(f) => Some(f),
+            _ => None,
+        })
+}
+
+/// Every compiled drive at its factory setting (the simulator powers on with the manual's
+/// defaults for the source parameters): `run()` and `set_reference()` are refused with what to
+/// set, nothing reaches the command register, `stop()` is not refused; a run command written
+/// to the drive anyway is ignored by the simulator, as the drive would. After the source is
+/// set — over the link where the parameter has an address (V7 n003, GPD 515 b1-02, TDS-V8
+/// Sn-04, ACN dr.06, acme...), at the simulated drive where it has none (J7 n02) — the same
+/// calls run the drive.
+#[test]
+fn run_is_refused_at_the_factory_setting_and_works_after_setting_the_source() {
+    fn check<D>(id: &str, kind: TransportKind) -> bool
+    where
+        D: DrivePlan,
+        D::Settings: DriveSettings + Default,
+    {
+        let Some(command) = source_place::<D>(Role::CommandSource, kind) else {
+            return false;
+        };
+        let clock = ManualClock::new();
+        let sim =
+            Simulator::new(map(id), SimOptions::new().clock(Arc::new(clock.clone()))).unwrap();
+        let slave = sim.slave();
+        let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
+        let shared = drivemap_sim::shared(sim);
+        let framing = match kind {
+            TransportKind::Tcp => TcpFraming::ModbusTcp,
+            _ => TcpFraming::RtuOverTcp,
+        };
+        let server = TcpServer::spawn(shared.clone(), "127.0.0.1:0", framing, None).unwrap();
+        let link: Box<dyn Transport> = match kind {
+            TransportKind::Tcp => Box::new(
+                TcpTransport::connect(server.local_addr(), Duration::from_secs(2)).unwrap(),
+            ),
+            _ => Box::new(
+                RtuOverTcpTransport::connect(server.local_addr(), Duration::from_secs(2)).unwrap(),
+            ),
+        };
+        let mut c = Client::new(link, D::PROFILE);
+        let ext: Vec<(&str, f64)> = externals.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+        let mut d = Vfd::connect::<D>(&mut c, slave, D::Settings::default(), &ext).unwrap();
+        let wait = |s: f64| clock.advance(Duration::from_secs_f64(s));
+        let running = || {
+            drivemap_sim::server::lock(&shared)
+                .state()
+                .is_some_and(|s| s.running)
+        };
+        match d.run() {
+            Err(Error::Refused(Refusal::NotNetworkSource { what, now, fix, .. })) => {
+                assert_eq!(what, "run commands", "{id}");
+                let message = d.run().unwrap_err().to_string();
+                assert!(message.contains("; "), "{id}: {message}");
+                if command.width == 16 {
+                    let r = &D::REGISTERS[usize::from(command.row)];
+                    let param = r.info.param.unwrap_or(r.info.id);
+                    assert!(now.contains(&format!("({param} = ")), "{id}: {now}");
+                    assert!(
+                        fix.starts_with(&format!("set {param} = {}", command.on[0])),
+                        "{id}: {fix}"
+                    );
+                } else {
+                    assert!(now.starts_with("elsewhere than the network"), "{id}: {now}");
+                }
+            }
+            other => panic!("{id} over {kind:?}: run at the factory setting gave {other:?}"),
+        }
+        if source_place::<D>(Role::ReferenceSource, kind).is_some() {
+            match d.set_reference(20.0) {
+                Err(Error::Refused(Refusal::NotNetworkSource { what, .. })) => {
+                    assert_eq!(what, "the frequency reference", "{id}")
+                }
+                other => panic!("{id}: set_reference at the factory setting gave {other:?}"),
+            }
+        }
+        // Stop is never refused for its source.
+        d.stop()
+            .unwrap_or_else(|e| panic!("{id}: stop refused: {e}"));
+        wait(1.0);
+        assert!(!running(), "{id}: not running");
+        drop(d);
+
+        // A run command written anyway (the trait refused it; a master without the trait does
+        // not): the drive ignores it.
+        let run = D::ROLES
+            .of(Role::Run)
+            .chain(D::ROLES.of(Role::RunForward))
+            .find_map(|p| match p.target {
+                drivemap_runtime::roles::Target::Field(f)
+                    if D::REGISTERS[usize::from(f.row)].transports.contains(kind)
+                        && D::REGISTERS[usize::from(f.row)].broadcast
+                            != drivemap_runtime::Broadcast::Only =>
+                {
+                    Some(f)
+                }
+                _ => None,
+            })
+            .expect("a run command on the link");
+        let run_row = &D::REGISTERS[usize::from(run.row)];
+        let settings = D::Settings::default();
+        let run_address = run_row.address_for(&settings, kind);
+        let word = run.put(0, run.code(true));
+        c.write_rule(slave, &run_row.write_rule(), run_address, u32::from(word))
+            .unwrap();
+        wait(1.0);
+        assert!(
+            !running(),
+            "{id} over {kind:?}: a network run at the factory setting is ignored"
+        );
+        let released = run.put(0, run.code(false));
+        c.write_rule(
+            slave,
+            &run_row.write_rule(),
+            run_address,
+            u32::from(released),
+        )
+        .unwrap();
+
+        // Set the source, then the same calls run the drive.
+        if command.width == 16 {
+            for role in [Role::CommandSource, Role::ReferenceSource] {
+                if let Some(f) = source_place::<D>(role, kind) {
+                    let r = &D::REGISTERS[usize::from(f.row)];
+                    c.write_rule(
+                        slave,
+                        &r.write_rule(),
+                        r.address_for(&settings, kind),
+                        u32::from(f.on[0]),
+                    )
+                    .unwrap_or_else(|e| panic!("{id}: setting the source: {e}"));
+                }
+            }
+        } else {
+            drivemap_sim::server::lock(&shared).select_network_source(kind);
+        }
+        let mut d = Vfd::connect::<D>(&mut c, slave, D::Settings::default(), &ext).unwrap();
+        d.set_reference(20.0)
+            .unwrap_or_else(|e| panic!("{id}: set_reference after setting the source: {e}"));
+        d.run()
+            .unwrap_or_else(|e| panic!("{id}: run after setting the source: {e}"));
+        wait(60.0);
+        assert!(
+            running(),
+            "{id} over {kind:?}: running once the network is the source"
+        );
+        let hz = d.output_frequency().unwrap();
+        assert!(
+            (hz - 20.0).abs() <= 0.1,
+            "{id}: the network reference is used: {hz} Hz"
+        );
+        d.stop().unwrap();
+        drop(d);
+        server.stop();
+        true
+    }
+    let mut checked = Vec::new();
+    macro_rules! each {
+        ($m:ident, $id:literal) => {
+            for kind in [TransportKind::Rtu, TransportKind::Tcp] {
+                if on::<drivemap_drives::$m::Drive>(kind)
+                    && check::<drivemap_drives::$m::Drive>($id, kind)
+                {
+                    checked.push(($id, kind));
+                }
+            }
+        };
+    }
+    drivemap_drives::for_each_drive!(each);
+    for id in [
+        "yaskawa-v7",
+        "yaskawa-j7",
+        "yaskawa-gpd515",
+        "ptlk-tds-v8",
+        "automationdirect-acn",
+    ] {
+        assert!(
+            checked.contains(&(id, TransportKind::Rtu)),
+            "{id} is checked over RTU: {checked:?}"
+        );
+    }
+    assert!(
+        checked.contains(&("yaskawa-v7", TransportKind::Tcp)),
+        "{checked:?}"
+    );
 }

@@ -118,6 +118,15 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
         demo.contains("drivemap_drives::acme_vf1 (the generated module)"),
         "{demo}"
     );
+    // The simulated drive starts at its factory setting (run source: keypad), where it would
+    // ignore the demo's run: the demo selects the network first and says so.
+    assert!(
+        demo.contains(
+            "set at the simulated drive first (its factory setting ignores network commands): \
+             run_command_source = 2 (\"RS-485 (Modbus RTU)\"), frequency_reference_source = 2 (\"RS-485 (Modbus RTU)\")"
+        ),
+        "{demo}"
+    );
     assert!(
         demo.contains("running reversing ready accelerating"),
         "{demo}"
@@ -145,6 +154,8 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
                 "--time-scale",
                 "10",
                 "--quiet",
+                // Installed for network control: the Ethernet option selected as the source.
+                "--network-source",
             ])
             .env("DRIVEMAP_MAPS", &maps)
             .stdout(Stdio::piped())

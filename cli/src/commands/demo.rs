@@ -233,7 +233,11 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         ));
     }
     let clock = Arc::new(SystemClock::scaled(args.time_scale));
-    let sim = Simulator::new(drive, SimOptions::new().clock(clock)).map_err(|e| e.to_string())?;
+    let mut sim =
+        Simulator::new(drive, SimOptions::new().clock(clock)).map_err(|e| e.to_string())?;
+    // The simulated drive starts at its manual's factory setting, where it ignores network run
+    // commands and references: the demo selects the network first, as an installer would.
+    let selected = sim.select_network_source(drivemap_runtime::profile::TransportKind::RtuOverTcp);
     let slave = sim.slave();
     let title = format!(
         "{} {}",
@@ -261,6 +265,16 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             .map(|q| q.unit.clone())
             .unwrap_or_default();
         outln!("external quantity {name} = {v} {unit} (supplied by the application)");
+    }
+    if selected.is_empty() {
+        outln!(
+            "the map names no source parameter for this link: the drive is taken to accept network commands"
+        );
+    } else {
+        outln!(
+            "set at the simulated drive first (its factory setting ignores network commands): {}",
+            selected.join(", ")
+        );
     }
     let plan = Plan {
         frequency: args.frequency,

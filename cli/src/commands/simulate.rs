@@ -70,6 +70,12 @@ pub struct Args {
     /// Do not log requests.
     #[arg(long)]
     pub quiet: bool,
+    /// Power on with the network selected as the source of run commands and the reference
+    /// (the map's `command_source` / `reference_source`). Without it the simulated drive starts
+    /// at the manual's factory setting and ignores network run commands and references until
+    /// that parameter is set (`--set n003=2`, or written over the link).
+    #[arg(long = "network-source")]
+    pub network_source: bool,
     /// TCP: connections served at once; one more is closed as soon as it is accepted.
     #[arg(long = "max-connections", default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..))]
     pub max_connections: u16,
@@ -193,13 +199,20 @@ fn logger() -> Logger {
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let drive = load_drive(&args.dir, &args.drive)?;
-    let options = options(
+    let mut options = options(
         &drive,
         args.slave,
         &args.set,
         &args.variant,
         args.time_scale,
     )?;
+    if args.network_source {
+        options.network_source = Some(if args.tcp.is_some() {
+            drivemap_runtime::profile::TransportKind::Tcp
+        } else {
+            drivemap_runtime::profile::TransportKind::Rtu
+        });
+    }
     // The serial line, should --serial be chosen: the flags, else the map's defaults.
     let (baud, parity, stop_bits) =
         crate::live::link::serial_line(&drive, args.baud, args.parity, args.stop_bits);

@@ -139,8 +139,9 @@ fn roles(plan: &DrivePlan) -> String {
         };
         let _ = writeln!(
             out,
-            "            /* {what} */ Place {{ role: Role::{:?}, target: {target}, source: {}, shared_with: {shared} }},",
+            "            /* {what} */ Place {{ role: Role::{:?}, target: {target}, transports: {}, source: {}, shared_with: {shared} }},",
             p.role,
+            transports(p.transports),
             string(p.source)
         );
     }

@@ -198,6 +198,11 @@ impl Check<'_> {
                 format!("role `{id}` needs a `source`: the manual line that says so"),
             );
         }
+        if let Some(reason) = &p.unknown {
+            self.not_printed(role, p, reason, path);
+            return;
+        }
+        self.transports(role, p, path);
         if p.shared_with.is_some() && !matches!(role.kind(), RoleKind::Setpoint | RoleKind::Command)
         {
             self.error(
@@ -302,6 +307,7 @@ impl Check<'_> {
                 };
                 self.codes(role, p, register, field, path);
             }
+            RoleKind::Source => self.source(role, p, register, path),
             RoleKind::Setpoint | RoleKind::Monitor => {
                 if p.field.is_some() || p.on.is_some() || p.off.is_some() {
                     self.error(
@@ -334,6 +340,209 @@ impl Check<'_> {
                     );
                 }
                 self.number(role, register, path);
+            }
+        }
+    }
+
+    /// A source the manual does not print: a reason, a citation, and nothing else.
+    fn not_printed(&mut self, role: Role, p: &RolePlace, reason: &str, path: &Path) {
+        let id = role.id();
+        if role.kind() != RoleKind::Source {
+            self.error(
+                &path.key("unknown"),
+                None,
+                format!(
+                    "`unknown` marks a source role the manual does not print; `{id}` is a {} role: name its register or leave the role out",
+                    match role.kind() {
+                        RoleKind::Command => "command",
+                        RoleKind::Status => "status",
+                        RoleKind::Setpoint => "setpoint",
+                        RoleKind::Monitor => "monitor",
+                        RoleKind::Source => "source",
+                    }
+                ),
+            );
+            return;
+        }
+        if reason.trim().is_empty() {
+            self.error(
+                &path.key("unknown"),
+                None,
+                format!(
+                    "role `{id}`: `unknown` needs the reason the manual gives no source parameter"
+                ),
+            );
+        }
+        if p.source.is_none() {
+            self.error(
+                path,
+                None,
+                format!("role `{id}` needs a `source`: the manual line that names the parameter (or says nothing of it)"),
+            );
+        }
+        if p.register.is_some()
+            || p.field.is_some()
+            || p.external.is_some()
+            || p.on.is_some()
+            || p.off.is_some()
+            || p.edge
+        {
+            self.error(
+                path,
+                None,
+                format!(
+                    "role `{id}` is marked `unknown` (not printed): it names no `register`, `field`, `external`, `on`, `off` or `edge`"
+                ),
+            );
+        }
+    }
+
+    /// `transports`, when given, lists transports of the map, once each.
+    fn transports(&mut self, role: Role, p: &RolePlace, path: &Path) {
+        let Some(list) = &p.transports else {
+            return;
+        };
+        let map = &self.drive.protocol.transports;
+        if list.is_empty() {
+            self.error(
+                &path.key("transports"),
+                None,
+                format!(
+                    "role `{}`: `transports` lists no transport (leave it out for every one)",
+                    role.id()
+                ),
+            );
+        }
+        for (i, t) in list.iter().enumerate() {
+            if !map.contains(t) {
+                self.error(
+                    &path.key("transports").index(i),
+                    None,
+                    format!(
+                        "role `{}`: transport `{}` is not among the map's `protocol.transports`",
+                        role.id(),
+                        t.to_string().to_lowercase()
+                    ),
+                );
+            }
+            if list[..i].contains(t) {
+                self.error(
+                    &path.key("transports").index(i),
+                    None,
+                    format!(
+                        "role `{}`: transport `{}` is listed twice",
+                        role.id(),
+                        t.to_string().to_lowercase()
+                    ),
+                );
+            }
+        }
+    }
+
+    /// A source role names a readable parameter (a code register) and the codes with which the
+    /// drive takes commands from the network, or a status field that reports it.
+    fn source(&mut self, role: Role, p: &RolePlace, register: &Register, path: &Path) {
+        let id = role.id();
+        let rid = Some(register.id());
+        if !register.readable() {
+            self.error(
+                path,
+                rid,
+                format!(
+                    "role `{id}` is read before a command is sent, but `{}` is not readable",
+                    register.id()
+                ),
+            );
+        }
+        if p.on.is_none() {
+            self.error(
+                path,
+                rid,
+                format!(
+                    "role `{id}` needs `on`: the code(s) of `{}` with which the drive takes commands from the network",
+                    register.id()
+                ),
+            );
+        }
+        if let Some(field_id) = &p.field {
+            let Some(field) = register.def.fields.iter().find(|f| f.id == *field_id) else {
+                let hint = crate::hints::closest(
+                    field_id,
+                    register.def.fields.iter().map(|f| f.id.as_str()),
+                )
+                .map(|b| format!(" (did you mean `{b}`?)"))
+                .unwrap_or_default();
+                self.error(
+                    &path.key("field"),
+                    rid,
+                    format!(
+                        "register `{}` has no field `{field_id}`{hint}",
+                        register.id()
+                    ),
+                );
+                return;
+            };
+            self.codes(role, p, register, field, path);
+            return;
+        }
+        if !matches!(register.kind(), ValueKind::Enum(_) | ValueKind::Word)
+            || register.def.pair.is_some()
+        {
+            self.error(
+                path,
+                rid,
+                format!(
+                    "role `{id}` reads a code: `{}` must be an enumeration or a plain word (or name the `field` that reports the source)",
+                    register.id()
+                ),
+            );
+            return;
+        }
+        if p.off.is_some() {
+            self.error(
+                &path.key("off"),
+                rid,
+                format!(
+                    "role `{id}` on a whole parameter takes no `off`: every code but the `on` ones means another source"
+                ),
+            );
+        }
+        let values = &register.def.values;
+        for (i, c) in p.on.iter().flat_map(|c| c.list()).enumerate() {
+            let at = match &p.on {
+                Some(crate::model::Codes::Many(_)) => path.key("on").index(i),
+                _ => path.key("on"),
+            };
+            match c {
+                CodeRef::Id(code) if !values.iter().any(|v| v.id == *code) => {
+                    let listed: Vec<&str> = values.iter().map(|v| v.id.as_str()).collect();
+                    self.error(
+                        &at,
+                        rid,
+                        format!(
+                            "`{}` has no code `{code}`{}",
+                            register.id(),
+                            if listed.is_empty() {
+                                " (it lists no codes: write the number)".to_owned()
+                            } else {
+                                format!("; its codes are {}", listed.join(", "))
+                            }
+                        ),
+                    );
+                }
+                CodeRef::Number(n)
+                    if !values.is_empty() && !values.iter().any(|v| v.value == *n) =>
+                {
+                    self.error(
+                        &at,
+                        rid,
+                        format!(
+                            "`{}` lists no code {n}: name the network code among its `values` (with its citation)",
+                            register.id()
+                        ),
+                    );
+                }
+                _ => {}
             }
         }
     }

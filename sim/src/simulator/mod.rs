@@ -19,7 +19,7 @@ use std::time::Duration;
 
 use drivemap_codegen::ir::{Drive, Register};
 use drivemap_live::{LiveSettings, Value, codec, leak_profile};
-use drivemap_runtime::profile::Profile;
+use drivemap_runtime::profile::{Profile, TransportKind};
 
 use crate::clock::Clock;
 use crate::exceptions::ExceptionPlan;
@@ -69,6 +69,9 @@ pub struct Simulator {
     warnings: Vec<String>,
     /// The fault code registers' words before the drive tripped, restored by a reset.
     fault_words: Vec<(usize, u32)>,
+    /// The link the frequency reference in force was last written on (`None`: set by hand or
+    /// power-on): a reference from a link whose reference source is not selected is not used.
+    reference_via: Option<TransportKind>,
     stats: Stats,
     cache: TickCache,
 }
@@ -153,6 +156,7 @@ impl Simulator {
             commands,
             warnings: Vec::new(),
             fault_words: Vec::new(),
+            reference_via: None,
             stats: Stats::default(),
             cache: TickCache::default(),
         };
@@ -161,6 +165,7 @@ impl Simulator {
         sim.cache.stale = true;
         sim.apply_defaults();
         sim.apply_role_values()?;
+        sim.sources_at_power_on(options.network_source);
         for (name, v) in &options.initial {
             let i = sim.index_of(name)?;
             sim.set_index(i, *v)?;
@@ -255,7 +260,7 @@ impl Simulator {
         self.tick();
         let before = self.raw[i];
         self.set_index(i, value)?;
-        self.after_write(i, before);
+        self.after_write(i, before, None);
         self.invalidate();
         self.tick();
         Ok(())
@@ -267,7 +272,7 @@ impl Simulator {
         self.tick();
         let before = self.raw[i];
         self.raw[i] = raw;
-        self.after_write(i, before);
+        self.after_write(i, before, None);
         self.invalidate();
         self.tick();
         Ok(())

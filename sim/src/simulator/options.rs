@@ -29,6 +29,11 @@ pub struct SimOptions {
     pub roles: RolesChoice,
     /// Time for the drive model.
     pub clock: Arc<dyn Clock>,
+    /// Power on with the source parameters (`command_source`, `reference_source`) selecting
+    /// the network on this link, as an installer would set them (one parameter may select only
+    /// one link: V7 n003 = 2 for RTU, 3 for TCP); `None`: they start at the manual's factory
+    /// setting, and the drive ignores network run commands and references.
+    pub network_source: Option<drivemap_runtime::profile::TransportKind>,
 }
 
 impl Default for SimOptions {
@@ -40,6 +45,7 @@ impl Default for SimOptions {
             initial: Vec::new(),
             roles: RolesChoice::FromMap,
             clock: Arc::new(SystemClock::new()),
+            network_source: None,
         }
     }
 }
@@ -77,6 +83,13 @@ impl SimOptions {
     /// Sets a register's power-on value (engineering units).
     pub fn set(mut self, register: &str, value: f64) -> SimOptions {
         self.initial.push((register.into(), value));
+        self
+    }
+
+    /// Powers on with the network selected as the source of run commands and the reference on
+    /// link `kind` ([`SimOptions::network_source`](SimOptions#structfield.network_source)).
+    pub fn network_source(mut self, kind: drivemap_runtime::profile::TransportKind) -> SimOptions {
+        self.network_source = Some(kind);
         self
     }
 

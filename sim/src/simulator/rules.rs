@@ -168,7 +168,7 @@ impl Simulator {
                     let before = self.raw[i];
                     self.raw[i] = v;
                     if executes {
-                        self.after_write(i, before);
+                        self.after_write(i, before, Some(kind));
                     }
                 }
                 if executes {

@@ -7,6 +7,7 @@ use std::sync::Arc;
 use drivemap_codegen::ir::{Drive, Register};
 use drivemap_live::{LiveSettings, codec};
 use drivemap_runtime::WriteRestriction;
+use drivemap_runtime::profile::TransportKind;
 
 use crate::model::{DriveState, Model};
 use crate::roles::{self, Follow, Plausible, Resolved, Source};
@@ -190,13 +191,85 @@ impl Simulator {
         self.tick();
     }
 
-    /// Reacts to a write of register `i` (its word was `before`): mode switches, run/direction
-    /// commands, fault reset, reference.
-    pub(super) fn after_write(&mut self, i: usize, before: u32) {
+    /// The source parameters at power-on: the map's defaults (the manual's factory setting)
+    /// are in place; a status field that reports the source shows its `off` code (the drive
+    /// at its factory setting takes commands from elsewhere); with `network`, the sources
+    /// select the network on that link instead.
+    pub(super) fn sources_at_power_on(&mut self, network: Option<TransportKind>) {
+        let Some(roles) = self.roles.clone() else {
+            return;
+        };
+        for p in roles.command_source.iter().chain(&roles.reference_source) {
+            if p.field.width < 16 {
+                if let Some(off) = p.field.off {
+                    self.raw[p.register] = u32::from(p.field.put(self.raw[p.register] as u16, off));
+                }
+            }
+        }
+        if let Some(kind) = network {
+            self.select_network_source(kind);
+        }
+        self.invalidate();
+    }
+
+    /// Selects the network as the source of run commands and of the reference on `kind`, as
+    /// a person at the drive would (the simulator's operator panel: no protocol checks). Returns
+    /// what was set, one line each (`n003 = 2 ("Built-in Modbus RTU ...")`).
+    pub fn select_network_source(&mut self, kind: TransportKind) -> Vec<String> {
+        let Some(roles) = self.roles.clone() else {
+            return Vec::new();
+        };
+        self.tick();
+        let mut done = Vec::new();
+        for p in roles.command_source.iter().chain(&roles.reference_source) {
+            if !p.transports.contains(kind) {
+                continue;
+            }
+            let Some(&code) = p.field.on.first() else {
+                continue;
+            };
+            let r = &self.drive.registers[p.register];
+            let plan = self.drive.register_plan(r);
+            self.raw[p.register] = u32::from(p.field.put(self.raw[p.register] as u16, code));
+            let line = if p.field.width == 16 {
+                let param = r.def.param.as_deref().unwrap_or(r.id());
+                match plan.label(code) {
+                    Some(l) => format!("{param} = {code} (\"{}\")", l.name),
+                    None => format!("{param} = {code}"),
+                }
+            } else {
+                let field = r
+                    .def
+                    .fields
+                    .iter()
+                    .find(|f| {
+                        drivemap_codegen::names::field_span(f) == Some((p.field.lsb, p.field.width))
+                    })
+                    .map_or("?", |f| f.id.as_str());
+                format!("{}.{field} = {code}", r.id())
+            };
+            if !done.contains(&line) {
+                done.push(line);
+            }
+        }
+        self.invalidate();
+        self.tick();
+        done
+    }
+
+    /// Reacts to a write of register `i` (its word was `before`) that came over `via` (`None`:
+    /// set by hand): mode switches, run/direction commands, fault reset, reference. Run and
+    /// direction commands over a link whose command source is not selected are ignored, as the
+    /// drive ignores them (fault resets and mode switches are taken whatever the source).
+    pub(super) fn after_write(&mut self, i: usize, before: u32, via: Option<TransportKind>) {
         let Some(roles) = self.roles.clone() else {
             return;
         };
         use drivemap_runtime::core::Role;
+        let from_network = |places: &[roles::SourcePlace], raw: &[u32]| {
+            via.is_none_or(|k| roles::network_selected(places, raw, k))
+        };
+        let takes_run = from_network(&roles.command_source, &self.raw);
         let raw = self.raw[i];
         let (mut run, mut fwd, mut rev, mut reverse) = (None, None, None, None);
         for c in roles.commands.iter().filter(|c| c.bit.register == i) {
@@ -230,11 +303,15 @@ impl Simulator {
                 _ => {}
             }
         }
-        if self.model.fault.is_some() {
-            // A tripped drive takes no run command until reset.
+        if self.model.fault.is_some() || !takes_run {
+            // A tripped drive takes no run command until reset; a drive whose run command
+            // source is not this link takes none from it (nor a direction).
             run = None;
             fwd = None;
             rev = None;
+        }
+        if !takes_run {
+            reverse = None;
         }
         if run.is_some() || fwd.is_some() || rev.is_some() {
             self.model.run = run == Some(true) || fwd == Some(true) || rev == Some(true);
@@ -246,7 +323,16 @@ impl Simulator {
         }
         if roles.frequency_reference.contains(&i) {
             self.model.reference_register = Some(i);
+            self.reference_via = via;
+            self.cache.params = None;
         }
+    }
+
+    /// Whether the reference in force comes from a source the drive takes: set by hand, or
+    /// written on a link whose reference source is selected.
+    fn reference_taken(&self, roles: &Resolved) -> bool {
+        self.reference_via
+            .is_none_or(|k| roles::network_selected(&roles.reference_source, &self.raw, k))
     }
 
     /// Registers the settings and the model's inputs are read from.
@@ -271,6 +357,12 @@ impl Simulator {
                 }
             }
             v.extend(&r.frequency_reference);
+            v.extend(
+                r.command_source
+                    .iter()
+                    .chain(&r.reference_source)
+                    .map(|p| p.register),
+            );
         }
         v.sort_unstable();
         v.dedup();
@@ -329,9 +421,12 @@ impl Simulator {
                     .as_ref()
                     .and_then(|s| self.source_value(s, &settings))
                     .unwrap_or(accel);
+                // A network reference the drive does not take: its own source (terminals the
+                // simulator does not have) gives 0 Hz.
                 let reference = self
                     .model
                     .reference_register
+                    .filter(|_| self.reference_taken(&roles))
                     .and_then(|i| self.decode_f64(i, &settings))
                     .unwrap_or(0.0);
                 let p = [max_f, accel, decel, reference];
