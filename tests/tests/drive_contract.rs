@@ -36,7 +36,15 @@ fn options(retries: u8) -> ClientOptions {
 /// slave address.
 fn connect(drive: &Drive, kind: TransportKind, retries: u8) -> (Client<SimLink>, LiveSettings, u8) {
     let clock = ManualClock::new();
-    let sim = Simulator::new(drive.clone(), SimOptions::new().clock(Arc::new(clock))).unwrap();
+    // Installed for network control on the link (at the factory setting the drive ignores
+    // network runs, and the trait refuses them: drive_trait::run_is_refused_at_the_factory_setting...).
+    let sim = Simulator::new(
+        drive.clone(),
+        SimOptions::new()
+            .clock(Arc::new(clock))
+            .network_source(kind),
+    )
+    .unwrap();
     let settings = sim.settings();
     let slave = sim.slave();
     let link = SimLink::new(kind, sim);
@@ -200,6 +208,9 @@ fn an_unknown_command_register_is_read_again_or_released() {
     let p = gpd.plan();
     let (mut c, settings, slave) = connect(&gpd, TransportKind::RtuOverTcp, 0);
     let mut d = Vfd::from_plan(&mut c, slave, settings.view(&gpd), p.registers, p.roles);
+    // The first run reads the command source b1-02 (once); stopped again, the drive is released.
+    d.run().unwrap();
+    d.stop().unwrap();
     d.client().transport().inject(LinkFault::LoseReply);
     let e = d.run().unwrap_err();
     assert!(
@@ -591,7 +602,9 @@ fn the_contract_holds_under_faults() {
             .flat_map(|t| std::iter::repeat_n(t, SHARDS as usize))
             .map(|&(id, drive, kind)| {
                 scope.spawn(move || {
-                    let template = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
+                    let template =
+                        Simulator::new(drive.clone(), SimOptions::new().network_source(kind))
+                            .unwrap();
                     let mut runner = TestRunner::new(Config {
                         cases: per_shard,
                         failure_persistence: None,
