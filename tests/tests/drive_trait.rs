@@ -319,7 +319,8 @@ fn a_command_that_failed_is_not_resent_by_the_next() {
         <tds::RunSource as drivemap_runtime::Register>::address(
             &tds::Settings::default(),
             TransportKind::Rtu,
-        ),
+        )
+        .unwrap(),
         2,
     );
     let link = FaultyLink::new(TransportKind::Rtu, slave);
