@@ -470,7 +470,8 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     }
 
     /// Sets the command fields of `changes` in their registers' words and writes each word once,
-    /// in the order of `changes`. Each word is composed from what this master last told the
+    /// in the order of `changes` with releases before sets (so a stop goes out before a
+    /// direction, and a run after it). Each word is composed from what this master last told the
     /// register ([`Vfd::base`]) with the run and direction fields as the last successful `run()`
     /// or `stop()` and the direction set say, then `changes` on top. A write that fails makes
     /// its register unknown.
