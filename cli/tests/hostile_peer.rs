@@ -305,3 +305,69 @@ fn read_never_prints_a_late_reply_as_another_registers_value() {
         "n011's word printed as accel_time_1:\n{out}"
     );
 }
+
+/// `scan` against a peer that floods the link says why its probes got no answer, by cause,
+/// with the client's own words for the first one, instead of a bare "0 answered". A quiet
+/// address (nothing listening on the line's other slaves) is told apart: no reply in time.
+#[test]
+fn scan_against_a_flooding_peer_says_why_nothing_answered() {
+    for kind in [TransportKind::TcpGateway, TransportKind::RtuOverTcp] {
+        let peer = HostilePeer::start(kind, profile(), Script::Flood);
+        let addr = peer.addr.to_string();
+        // Three probes of at most 300 ms each, and 2 s to start and print.
+        let bound = Duration::from_millis(300) * 3 + Duration::from_secs(3);
+        let (code, out, err, took) = drivemap(
+            &[
+                "scan",
+                flag(kind),
+                &addr,
+                "--drive",
+                DRIVE,
+                "--slaves",
+                "1-3",
+                "--timeout",
+                "300ms",
+            ],
+            bound,
+        );
+        assert!(took <= bound, "{kind:?}: took {took:?}");
+        assert_eq!(code, 1, "{kind:?}: {out}{err}");
+        assert!(out.contains(": 0 answered in "), "{kind:?}: {out}");
+        assert!(
+            out.contains("why no answer (3 probe(s)): "),
+            "{kind:?}: {out}"
+        );
+        // The flood is named, with the client's words for it.
+        assert!(
+            out.contains("flooded: the peer sent more bytes than any answer, without the answer"),
+            "{kind:?}: {out}"
+        );
+        assert!(
+            out.contains("e.g. ") && out.contains("the peer floods the link"),
+            "{kind:?}: {out}"
+        );
+    }
+    // A peer that answers only for another unit: no reply in time, said so.
+    let peer = HostilePeer::start(TransportKind::TcpGateway, profile(), Script::OtherUnit);
+    let addr = peer.addr.to_string();
+    let bound = Duration::from_millis(300) * 2 + Duration::from_secs(3);
+    let (code, out, err, _) = drivemap(
+        &[
+            "scan",
+            "--gateway",
+            &addr,
+            "--drive",
+            DRIVE,
+            "--slaves",
+            "1-2",
+            "--timeout",
+            "300ms",
+        ],
+        bound,
+    );
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(
+        out.contains("why no answer (2 probe(s)): 2 no reply within the probe timeout"),
+        "{out}"
+    );
+}

@@ -124,6 +124,70 @@ pub struct Report {
     pub probe: String,
     pub elapsed_ms: u64,
     pub found: Vec<Found>,
+    /// Why the probes that got no answer got none, counted by cause.
+    pub unanswered: Unanswered,
+}
+
+/// Why probes got no answer, by cause: with 0 answered, this is what tells a quiet line (or
+/// wrong settings) from a peer that floods it.
+#[derive(Debug, Default, Serialize)]
+pub struct Unanswered {
+    /// Nothing (or nothing acceptable) arrived within the probe timeout.
+    pub no_reply: usize,
+    /// More bytes arrived than any answer could take: the peer floods the link.
+    pub flooded: usize,
+    /// The probe was held back: after an unanswered probe the RTU line never fell silent long
+    /// enough to tell a late reply from the next answer (bytes kept arriving).
+    pub never_silent: usize,
+    /// The link failed (closed, reset).
+    pub link_failed: usize,
+    /// Anything else (refused before sending).
+    pub other: usize,
+    /// The first error of each cause seen, as the client said it.
+    pub examples: Vec<String>,
+}
+
+impl Unanswered {
+    fn count(&mut self, e: &Error) {
+        let slot = match e {
+            Error::Timeout { .. } => &mut self.no_reply,
+            Error::Overrun { .. } => &mut self.flooded,
+            Error::Unsettled { .. } => &mut self.never_silent,
+            Error::Io { .. } => &mut self.link_failed,
+            _ => &mut self.other,
+        };
+        if *slot == 0 {
+            self.examples.push(e.to_string());
+        }
+        *slot += 1;
+    }
+
+    fn total(&self) -> usize {
+        self.no_reply + self.flooded + self.never_silent + self.link_failed + self.other
+    }
+
+    /// "why no answer: 247 flooded (the peer floods the link), ..." or nothing.
+    fn summary(&self) -> Option<String> {
+        if self.total() == 0 {
+            return None;
+        }
+        let parts: Vec<String> = [
+            (self.flooded, "flooded: the peer sent more bytes than any answer, without the answer"),
+            (self.never_silent, "held back: the line never fell silent after an unanswered probe (bytes kept arriving)"),
+            (self.no_reply, "no reply within the probe timeout"),
+            (self.link_failed, "the link failed"),
+            (self.other, "refused before sending"),
+        ]
+        .into_iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|(n, why)| format!("{n} {why}"))
+        .collect();
+        Some(format!(
+            "why no answer ({} probe(s)): {}",
+            self.total(),
+            parts.join("; ")
+        ))
+    }
 }
 
 /// A slave that answered.
@@ -365,6 +429,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     );
     let started = Instant::now();
     let mut found: Vec<(u8, Option<Line>, String)> = Vec::new();
+    let mut unanswered = Unanswered::default();
     let mut timeout_used = Duration::ZERO;
     let mut link_text = String::new();
     for line in &lines {
@@ -397,7 +462,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                     "exception {:02X}h ({})",
                     exception.code, exception.name
                 )),
-                Err(_) => None,
+                Err(e) => {
+                    unanswered.count(&e);
+                    None
+                }
             };
             if let Some(a) = answer {
                 bar.println(format!("slave {slave} answered at {shown}: {a}"));
@@ -452,6 +520,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         probe: format!("03h read of PDU {probe_pdu:04X}h x1"),
         elapsed_ms: started.elapsed().as_millis() as u64,
         found: report_found,
+        unanswered,
     };
     match args.format {
         Format::Table => out!("{}", table(&report)),
@@ -480,6 +549,15 @@ fn table(r: &Report) -> String {
         r.found.len(),
         r.elapsed_ms as f64 / 1000.0
     );
+    if let Some(why) = r.unanswered.summary() {
+        out += &why;
+        out += "\n";
+        if r.found.is_empty() {
+            for e in &r.unanswered.examples {
+                out += &format!("  e.g. {e}\n");
+            }
+        }
+    }
     if r.found.is_empty() {
         return out;
     }
