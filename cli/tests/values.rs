@@ -250,3 +250,105 @@ fn a_register_without_a_printed_range_is_named() {
     assert_eq!(out.status.code(), Some(0), "{err}");
     assert!(!err.contains("prints no range"), "{err}");
 }
+
+/// Sent as given or refused (issue 23, item 4), through the binary against the V7 simulator:
+/// `n019=0.04` and 35.75 Hz are refused with the two nearest values, `--round` sends the
+/// nearest and says so, and the range applies to the value given (-0.04 s is refused with
+/// `--round` too).
+#[test]
+fn a_value_between_steps_is_refused_unless_rounded() {
+    let (sim, server, addr) = simulator("yaskawa-v7");
+    let write = |args: &[&str]| {
+        let mut all = vec!["write", "--drive", "yaskawa-v7", "--tcp", addr.as_str()];
+        all.extend_from_slice(args);
+        drivemap(&all)
+    };
+    let before = sim.lock().unwrap().raw("accel_time_1").unwrap();
+    let out = write(&["n019=0.04"]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("accel_time_1: 0.04 s is between 0 and 0.1 s; the register counts 0.1 s")
+            && err.contains("--round sends the nearest")
+            && err.contains("nothing written"),
+        "{err}"
+    );
+    for args in [&["n019=-0.04"][..], &["--round", "n019=-0.04"]] {
+        let out = write(args);
+        let (_, err) = text(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("-0.04 s is out of range 0 ..= 6000 s"),
+            "{err}"
+        );
+    }
+    assert_eq!(sim.lock().unwrap().raw("accel_time_1").unwrap(), before);
+    let out = write(&["tcp_frequency_reference=35.75"]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("35.75 Hz is between 35.7 and 35.8 Hz; the register counts 0.1 Hz"),
+        "{err}"
+    );
+    assert_eq!(
+        sim.lock().unwrap().raw("tcp_frequency_reference").unwrap(),
+        0
+    );
+    let out = write(&["--round", "tcp_frequency_reference=35.75"]);
+    let (stdout, err) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        stdout.contains(
+            "wrote tcp_frequency_reference = 35.8 Hz, rounded from 35.75 (--round) (0166h)"
+        ),
+        "{stdout}"
+    );
+    assert_eq!(
+        sim.lock().unwrap().raw("tcp_frequency_reference").unwrap(),
+        358
+    );
+    // A value on a step needs no rounding and says none.
+    let out = write(&["--round", "n019=12.5"]);
+    let (stdout, err) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        stdout.contains("= 12.5 s (007Dh)") && !stdout.contains("rounded"),
+        "{stdout}"
+    );
+    server.stop();
+}
+
+/// The interpreted codec (what the CLI, the simulator and tools use): the same refusal and the
+/// same explicit rounding as the typed API.
+#[test]
+fn the_interpreted_codec_refuses_between_steps() {
+    use drivemap_live::LiveSettings;
+    use drivemap_live::codec;
+    use drivemap_runtime::{Rounding, ValueError};
+    let path = repo().join("maps/yaskawa-v7.yaml");
+    let drive = drivemap_codegen::read_map(&path, &Context::default()).unwrap();
+    let r = drivemap_live::lookup::find(&drive, "tcp_frequency_reference").unwrap();
+    let mut settings = LiveSettings::default();
+    settings
+        .selectors
+        .insert("modbus_frequency_reference_unit_selection".into(), 0);
+    settings
+        .references
+        .insert("max_output_frequency".into(), 60.0);
+    assert!(matches!(
+        codec::encode(&drive, r, 35.75, &settings),
+        Err(ValueError::NotAStep { below, above, .. }) if below == 35.7 && above == 35.8
+    ));
+    assert_eq!(
+        codec::encode_with(&drive, r, 35.75, &settings, Rounding::Nearest),
+        Ok(358)
+    );
+    assert!(matches!(
+        codec::encode_with(&drive, r, 60.04, &settings, Rounding::Nearest),
+        Err(ValueError::AboveLimit { .. })
+    ));
+    assert!(matches!(
+        codec::parse_value(&drive, r, " ", &settings),
+        Err(codec::InputError::Parse(m)) if m.contains("no value given")
+    ));
+}

@@ -30,5 +30,5 @@ pub use register::{
 };
 pub use roles::{Role, Roles};
 pub use rule::{Broadcast, Transports, WriteRule};
-pub use scale::ValueError;
+pub use scale::{Rounding, ValueError};
 pub use width::{Width, WordOrder};

@@ -11,7 +11,7 @@
 use crate::profile::TransportKind;
 use crate::register::{RegisterInfo, WriteRestriction};
 use crate::rule::{Broadcast, Transports, WriteRule};
-use crate::scale::{self, Decimal, RawRange, ValueError};
+use crate::scale::{self, Decimal, RawRange, Rounding, ValueError};
 
 /// One register of a drive, fully decided.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -631,11 +631,25 @@ impl RegisterPlan {
     }
 
     /// The raw value (word, or pair) for an engineering value, checked against the range in
-    /// force and the limit through another quantity ([`RegisterPlan::limit`]).
+    /// force and the limit through another quantity ([`RegisterPlan::limit`]), sent as given:
+    /// a value that is not a whole number of the register's steps is refused
+    /// ([`ValueError::NotAStep`]; [`RegisterPlan::encode_number_with`] can round instead).
     pub fn encode_number(
         &self,
         value: f64,
         settings: &impl SettingsView,
+    ) -> Result<u32, ValueError> {
+        self.encode_number_with(value, settings, Rounding::Exact)
+    }
+
+    /// [`RegisterPlan::encode_number`] with a choice for values between two steps: every limit
+    /// (range, limit through another quantity) is checked on the value given, then
+    /// [`Rounding::Exact`] refuses it and [`Rounding::Nearest`] sends the nearest step.
+    pub fn encode_number_with(
+        &self,
+        value: f64,
+        settings: &impl SettingsView,
+        rounding: Rounding,
     ) -> Result<u32, ValueError> {
         if value.is_finite() {
             self.check_limit(value, settings)?;
@@ -643,13 +657,14 @@ impl RegisterPlan {
         let (id, unit, words) = (self.info.id, self.unit, self.info.width);
         match self.scale(settings) {
             Some(Ok(Scale::Decimal { scale, range })) => {
-                scale::encode_decimal(id, unit, value, scale, range).map(|i| words.from_int(i))
+                scale::encode_decimal_with(id, unit, value, scale, range, rounding)
+                    .map(|i| words.from_int(i))
             }
             Some(Ok(Scale::Relative {
                 full_scale,
                 reference,
                 label,
-            })) => scale::encode_relative(
+            })) => scale::encode_relative_with(
                 id,
                 label,
                 unit,
@@ -657,6 +672,7 @@ impl RegisterPlan {
                 full_scale,
                 reference,
                 self.full_range(),
+                rounding,
             )
             .map(|i| words.from_int(i)),
             Some(Err(e)) => Err(e),
@@ -669,6 +685,14 @@ impl RegisterPlan {
                 }
                 match scale::round(value) {
                     Some(raw) if raw as f64 == value => self.encode_word(raw, settings),
+                    Some(raw) if rounding == Rounding::Nearest => {
+                        // The range on the value given: both whole numbers around it must be
+                        // in range, so a value below the minimum is not rounded into it.
+                        let floor = if (raw as f64) > value { raw - 1 } else { raw };
+                        self.encode_word(floor, settings)?;
+                        self.encode_word(floor + 1, settings)?;
+                        self.encode_word(raw, settings)
+                    }
                     _ => Err(ValueError::NotWhole {
                         register: id,
                         value,
@@ -766,6 +790,17 @@ pub trait Value: Sized {
     ) -> Result<Self, ValueError>;
     /// The raw value for the value, checked against the plan.
     fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u32, ValueError>;
+    /// [`Value::encode`] with a choice for a number between two steps of the register; codes,
+    /// bit fields and integers have no such values, so only `f64` uses it.
+    fn encode_with(
+        &self,
+        plan: &RegisterPlan,
+        settings: &impl SettingsView,
+        rounding: Rounding,
+    ) -> Result<u32, ValueError> {
+        let _ = rounding;
+        self.encode(plan, settings)
+    }
 }
 
 impl Value for f64 {
@@ -778,6 +813,14 @@ impl Value for f64 {
     }
     fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u32, ValueError> {
         plan.encode_number(*self, settings)
+    }
+    fn encode_with(
+        &self,
+        plan: &RegisterPlan,
+        settings: &impl SettingsView,
+        rounding: Rounding,
+    ) -> Result<u32, ValueError> {
+        plan.encode_number_with(*self, settings, rounding)
     }
 }
 

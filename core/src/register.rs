@@ -11,7 +11,7 @@ use core::marker::PhantomData;
 use crate::plan::{AddressUnknown, Label, RegisterPlan, RepeatNeedsChange, SettingsView, Value};
 use crate::profile::TransportKind;
 use crate::rule::WriteRule;
-use crate::scale::ValueError;
+use crate::scale::{Rounding, ValueError};
 use crate::width::Width;
 
 /// Which Modbus table a register lives in.
@@ -117,6 +117,19 @@ pub trait Writable: Register {
     /// reaches the wire. A pair's raw value goes out as its words in the map's order
     /// ([`Width::split`]).
     fn encode(value: &Self::Input, settings: &Self::Settings) -> Result<u32, ValueError>;
+
+    /// [`Writable::encode`] with a choice for a number between two steps of the register
+    /// (35.75 Hz to a register that counts 0.1 Hz): [`Rounding::Exact`] refuses it, as
+    /// `encode` does; [`Rounding::Nearest`] sends the nearest step. Every limit is checked on
+    /// the value given, before rounding.
+    fn encode_rounded(
+        value: &Self::Input,
+        settings: &Self::Settings,
+        rounding: Rounding,
+    ) -> Result<u32, ValueError> {
+        let _ = rounding;
+        Self::encode(value, settings)
+    }
 }
 
 /// When a drive accepts writes to a register.
@@ -376,6 +389,13 @@ impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, WriteOnly, I
     fn encode(value: &V, settings: &D::Settings) -> Result<u32, ValueError> {
         value.encode(Self::PLAN, settings)
     }
+    fn encode_rounded(
+        value: &V,
+        settings: &D::Settings,
+        rounding: Rounding,
+    ) -> Result<u32, ValueError> {
+        value.encode_with(Self::PLAN, settings, rounding)
+    }
 }
 
 impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, ReadWrite, I> {
@@ -385,6 +405,13 @@ impl<D: DrivePlan, V: Value, const I: usize> Writable for Reg<D, V, ReadWrite, I
     const REPEAT_NEEDS_CHANGE: Option<RepeatNeedsChange> = Self::PLAN.repeat_needs_change;
     fn encode(value: &V, settings: &D::Settings) -> Result<u32, ValueError> {
         value.encode(Self::PLAN, settings)
+    }
+    fn encode_rounded(
+        value: &V,
+        settings: &D::Settings,
+        rounding: Rounding,
+    ) -> Result<u32, ValueError> {
+        value.encode_with(Self::PLAN, settings, rounding)
     }
 }
 
@@ -396,6 +423,13 @@ impl<D: DrivePlan, V: Value, W: Value, const I: usize> Writable for Reg<D, V, Re
     const REPEAT_NEEDS_CHANGE: Option<RepeatNeedsChange> = Self::PLAN.repeat_needs_change;
     fn encode(value: &W, settings: &D::Settings) -> Result<u32, ValueError> {
         value.encode(Self::PLAN, settings)
+    }
+    fn encode_rounded(
+        value: &W,
+        settings: &D::Settings,
+        rounding: Rounding,
+    ) -> Result<u32, ValueError> {
+        value.encode_with(Self::PLAN, settings, rounding)
     }
 }
 

@@ -52,6 +52,19 @@ pub enum ValueError {
         percent: f64,
         reference: &'static str,
     },
+    /// A value that is not a whole number of the register's steps: sent as given or refused,
+    /// never rounded silently ([`Rounding::Nearest`] asks for the nearest).
+    #[error(
+        "{register}: {value} {unit} is between {below} and {above} {unit}; the register counts {step} {unit}"
+    )]
+    NotAStep {
+        register: &'static str,
+        value: f64,
+        below: f64,
+        above: f64,
+        step: f64,
+        unit: &'static str,
+    },
     /// A plain word given a fraction.
     #[error("{register}: {value} is not a whole number")]
     NotWhole { register: &'static str, value: f64 },
@@ -240,8 +253,21 @@ impl RawRange {
     }
 }
 
-/// Encodes an engineering value with a decimal scale, checking the raw range: the raw integer
-/// ([`Width::from_int`] makes it the register's bits).
+/// What to do with a value that is not a whole number of a register's steps (35.75 Hz to a
+/// register that counts 0.1 Hz).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Rounding {
+    /// Refuse it, naming the two nearest values the register can carry
+    /// ([`ValueError::NotAStep`]). The default: a value is sent as given or not at all.
+    #[default]
+    Exact,
+    /// Send the nearest value the register can carry (halves away from zero). The range is
+    /// still checked on the value given, before rounding.
+    Nearest,
+}
+
+/// Encodes an engineering value with a decimal scale, exactly ([`Rounding::Exact`]): the raw
+/// integer ([`Width::from_int`] makes it the register's bits).
 pub fn encode_decimal(
     register: &'static str,
     unit: &'static str,
@@ -249,12 +275,44 @@ pub fn encode_decimal(
     scale: Decimal,
     range: RawRange,
 ) -> Result<i64, ValueError> {
-    let Some(raw) = scale.encode(value) else {
+    encode_decimal_with(register, unit, value, scale, range, Rounding::Exact)
+}
+
+/// Encodes an engineering value with a decimal scale: the range is checked on the value given,
+/// then a value that is not a whole number of steps is refused or rounded as `rounding` says.
+/// A value accepted exactly decodes back to itself ([`Decimal::decode`] of the raw integer
+/// equals it).
+pub fn encode_decimal_with(
+    register: &'static str,
+    unit: &'static str,
+    value: f64,
+    scale: Decimal,
+    range: RawRange,
+    rounding: Rounding,
+) -> Result<i64, ValueError> {
+    if !value.is_finite() {
         return Err(ValueError::NotFinite { register, value });
+    }
+    let (min, max) = (scale.decode(range.min), scale.decode(range.max));
+    let raw = match scale.encode(value) {
+        Some(raw) if value >= min && value <= max && range.contains(raw) => raw,
+        _ => return Err(outside(register, unit, value, range, min, max)),
     };
-    if !range.contains(raw) {
-        let (min, max) = (scale.decode(range.min), scale.decode(range.max));
-        return Err(outside(register, unit, value, range, min, max));
+    let back = scale.decode(raw);
+    if rounding == Rounding::Exact && back != value {
+        let (below, above) = if value < back {
+            (scale.decode(raw - 1), back)
+        } else {
+            (back, scale.decode(raw + 1))
+        };
+        return Err(ValueError::NotAStep {
+            register,
+            value,
+            below,
+            above,
+            step: scale.as_f64(),
+            unit,
+        });
     }
     Ok(raw)
 }
@@ -270,7 +328,8 @@ pub fn decode_relative(raw: i64, full_scale: f64, reference: f64) -> f64 {
     raw as f64 * reference / full_scale
 }
 
-/// Encodes a value relative to a reference quantity, checking the raw range; the raw integer.
+/// Encodes a value relative to a reference quantity, exactly ([`Rounding::Exact`]); the raw
+/// integer.
 pub fn encode_relative(
     register: &'static str,
     setting: &'static str,
@@ -279,6 +338,32 @@ pub fn encode_relative(
     full_scale: f64,
     reference: f64,
     range: RawRange,
+) -> Result<i64, ValueError> {
+    encode_relative_with(
+        register,
+        setting,
+        unit,
+        value,
+        full_scale,
+        reference,
+        range,
+        Rounding::Exact,
+    )
+}
+
+/// Encodes a value relative to a reference quantity: the range is checked on the value given,
+/// then a value that is not a whole number of steps (`reference / full_scale`) is refused or
+/// rounded as `rounding` says; the raw integer.
+#[allow(clippy::too_many_arguments)]
+pub fn encode_relative_with(
+    register: &'static str,
+    setting: &'static str,
+    unit: &'static str,
+    value: f64,
+    full_scale: f64,
+    reference: f64,
+    range: RawRange,
+    rounding: Rounding,
 ) -> Result<i64, ValueError> {
     if !value.is_finite() {
         return Err(ValueError::NotFinite { register, value });
@@ -291,12 +376,29 @@ pub fn encode_relative(
         });
     }
     let raw = round(value * full_scale / reference).map_or(f64::NAN, |r| r as f64);
-    if !(raw >= range.min as f64 && raw <= range.max as f64) {
-        let min = range.min as f64 * reference / full_scale;
-        let max = range.max as f64 * reference / full_scale;
+    let min = range.min as f64 * reference / full_scale;
+    let max = range.max as f64 * reference / full_scale;
+    if !(raw >= range.min as f64 && raw <= range.max as f64) || value < min || value > max {
         return Err(outside(register, unit, value, range, min, max));
     }
-    Ok(raw as i64)
+    let raw = raw as i64;
+    let back = decode_relative(raw, full_scale, reference);
+    if rounding == Rounding::Exact && back != value {
+        let (below, above) = if value < back {
+            (decode_relative(raw - 1, full_scale, reference), back)
+        } else {
+            (back, decode_relative(raw + 1, full_scale, reference))
+        };
+        return Err(ValueError::NotAStep {
+            register,
+            value,
+            below,
+            above,
+            step: reference / full_scale,
+            unit,
+        });
+    }
+    Ok(raw)
 }
 
 /// Checks a plain integer against the raw range.

@@ -8,8 +8,8 @@
 use std::fmt;
 
 use drivemap_codegen::ir::{Drive, Register};
-use drivemap_runtime::ValueError;
 use drivemap_runtime::plan::{Conversion, Field, RegisterPlan};
+use drivemap_runtime::{Rounding, ValueError};
 
 use crate::settings::{LiveSettings, View};
 
@@ -206,8 +206,21 @@ pub fn encode(
     value: f64,
     settings: &LiveSettings,
 ) -> Result<u32, ValueError> {
+    encode_with(drive, r, value, settings, Rounding::Exact)
+}
+
+/// [`encode`] with a choice for a number between two steps of the register: refused
+/// ([`Rounding::Exact`], as `encode`) or the nearest step ([`Rounding::Nearest`]); limits are
+/// checked on the value given.
+pub fn encode_with(
+    drive: &Drive,
+    r: &Register,
+    value: f64,
+    settings: &LiveSettings,
+    rounding: Rounding,
+) -> Result<u32, ValueError> {
     let (plan, view) = planned(drive, r, settings);
-    plan.encode_number(value, &view)
+    plan.encode_number_with(value, &view, rounding)
 }
 
 /// Why a value typed by a user cannot be written.
@@ -327,7 +340,22 @@ pub fn parse_value(
     text: &str,
     settings: &LiveSettings,
 ) -> Result<u32, InputError> {
+    parse_value_with(drive, r, text, settings, Rounding::Exact)
+}
+
+/// [`parse_value`] with a choice for a number between two steps of the register (`--round`).
+/// An empty text is refused: it is no value.
+pub fn parse_value_with(
+    drive: &Drive,
+    r: &Register,
+    text: &str,
+    settings: &LiveSettings,
+    rounding: Rounding,
+) -> Result<u32, InputError> {
     let text = text.trim();
+    if text.is_empty() {
+        return Err(InputError::Parse(format!("no value given for {}", r.id())));
+    }
     let plan = drive.register_plan(r);
     let value = match &plan.conversion {
         Conversion::Enum { values, .. } => {
@@ -366,5 +394,5 @@ pub fn parse_value(
             })?
         }
     };
-    encode(drive, r, value, settings).map_err(InputError::Value)
+    encode_with(drive, r, value, settings, rounding).map_err(InputError::Value)
 }

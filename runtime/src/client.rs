@@ -1039,6 +1039,27 @@ macro_rules! client_methods {
         }
     }
 
+    /// [`write`](Self::write) with a choice for a number between two steps of the register:
+    /// `write` refuses 35.75 Hz to a register that counts 0.1 Hz
+    /// ([`ValueError::NotAStep`](crate::ValueError::NotAStep), naming 35.7 and 35.8);
+    /// `Rounding::Nearest` sends 35.8. Every limit is checked on the value given.
+    pub $($asy)* fn write_rounded<R: Writable>(
+        &mut self,
+        slave: u8,
+        value: &R::Input,
+        settings: &R::Settings,
+        rounding: crate::Rounding,
+    ) -> Result<(), Error> {
+        let raw = R::encode_rounded(value, settings, rounding)?;
+        let address = R::address(settings, self.core.kind)?;
+        match R::REPEAT_NEEDS_CHANGE {
+            Some(rule) => {
+                self.write_changed(slave, &R::RULE, address, rule.between, raw) $($aw)*
+            }
+            None => self.write_rule(slave, &R::RULE, address, raw) $($aw)*,
+        }
+    }
+
     /// Writes `raw` to a register whose drive executes a value only when it differs from the
     /// previous write: `between` first (unless `raw` is `between` itself, which the drive then
     /// takes as it takes any other value), then `raw`, each through the write gate with `rule`.

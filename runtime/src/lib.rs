@@ -62,7 +62,7 @@ pub use register::{
     ReadWriteAs, Readable, Reg, Register, RegisterInfo, RegisterPlan, SettingsView, Table, Value,
     Width, WordOrder, Writable, WriteOnly, WriteRestriction,
 };
-pub use scale::ValueError;
+pub use scale::{Rounding, ValueError};
 
 /// The examples of `README.md`, compiled as doctests.
 #[doc = include_str!("../README.md")]

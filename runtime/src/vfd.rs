@@ -78,7 +78,7 @@ use drivemap_core::plan::{Conversion, RegisterPlan};
 use drivemap_core::register::{DrivePlan, DriveSettings, Table};
 use drivemap_core::roles::{FieldRole, Place, Role, RoleKind, Target};
 use drivemap_core::rule::Broadcast;
-use drivemap_core::{Roles, SettingsView, ValueError};
+use drivemap_core::{Roles, Rounding, SettingsView, ValueError};
 
 use crate::client::Client;
 use crate::error::{Error, Refusal};
@@ -254,6 +254,9 @@ pub struct Vfd<'c, S: SettingsView, T: Transport> {
     commands: Vec<CommandWord>,
     /// The run command source and the reference source were read and select the network.
     sources: [bool; 2],
+    /// What a reference or ramp between two steps of its register becomes (refused unless
+    /// [`Vfd::rounding`] says otherwise).
+    rounding: Rounding,
 }
 
 /// A command register and what this master last told it.
@@ -322,6 +325,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             running: None,
             commands,
             sources: [false; 2],
+            rounding: Rounding::Exact,
         }
     }
 
@@ -358,6 +362,15 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
 
     fn drive(&self) -> &'static str {
         self.client.profile().drive_id
+    }
+
+    /// Chooses what a reference or a ramp time that is not a whole number of its register's
+    /// steps becomes: [`Rounding::Exact`] (the default) refuses it with the two nearest values
+    /// ([`ValueError::NotAStep`]); [`Rounding::Nearest`] sends the nearest. Limits are checked on
+    /// the value given either way.
+    pub fn rounding(mut self, rounding: Rounding) -> Self {
+        self.rounding = rounding;
+        self
     }
 
     /// The settings in force.
@@ -465,7 +478,9 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         let Target::Register(row) = p.target else {
             return Err(self.misplaced(role, "writable register"));
         };
-        let raw = self.row(row).encode_number(value, &self.settings)?;
+        let raw = self
+            .row(row)
+            .encode_number_with(value, &self.settings, self.rounding)?;
         self.write_word(row, raw)
     }
 

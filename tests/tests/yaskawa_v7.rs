@@ -443,6 +443,87 @@ fn frequency_reference_is_bounded_by_n011() {
     );
 }
 
+/// A value is sent as given or refused (issue 23, item 4): 35.75 Hz to a register that counts
+/// 0.1 Hz names 35.7 and 35.8; rounding is asked for (`Rounding::Nearest`), and limits apply
+/// to the value given. The typed API, the client and the drive trait.
+#[test]
+fn a_value_between_steps_is_refused_unless_rounding_is_asked_for() {
+    use drivemap_drives::runtime::Rounding;
+    use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
+    use drivemap_runtime::{Client, Error};
+    use drivemap_sim::{FaultyLink, SimulatedSlave};
+    type Unit = v7::ModbusFrequencyReferenceUnitSelectionValue;
+    type Time = v7::AccelDecelTimeUnitSelectionValue;
+    let s = v7::Settings {
+        modbus_frequency_reference_unit_selection: Some(Unit::Unit01Hz),
+        accel_decel_time_unit_selection: Some(Time::Unit01S),
+        max_output_frequency: Some(60.0),
+        ..v7::Settings::default()
+    };
+    let e = v7::FrequencyReference::encode(&35.75, &s).unwrap_err();
+    assert_eq!(
+        e,
+        ValueError::NotAStep {
+            register: "frequency_reference",
+            value: 35.75,
+            below: 35.7,
+            above: 35.8,
+            step: 0.1,
+            unit: "Hz"
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "frequency_reference: 35.75 Hz is between 35.7 and 35.8 Hz; the register counts 0.1 Hz"
+    );
+    assert_eq!(
+        v7::FrequencyReference::encode_rounded(&35.75, &s, Rounding::Nearest),
+        Ok(358)
+    );
+    // n019 = 0.04 s: refused; -0.04 s is below the range, rounded or not.
+    assert!(matches!(
+        v7::AccelTime1::encode(&0.04, &s),
+        Err(ValueError::NotAStep { .. })
+    ));
+    for rounding in [Rounding::Exact, Rounding::Nearest] {
+        assert!(matches!(
+            v7::AccelTime1::encode_rounded(&-0.04, &s, rounding),
+            Err(ValueError::OutOfRange { .. })
+        ));
+        // 60.04 Hz is above n011 although it rounds to 60.0 Hz.
+        assert!(matches!(
+            v7::FrequencyReference::encode_rounded(&60.04, &s, rounding),
+            Err(ValueError::AboveLimit { .. })
+        ));
+    }
+    // The client: nothing sent for a refused value; write_rounded sends the nearest.
+    let mut slave = SimulatedSlave::new(2, &v7::PROFILE);
+    slave.set_holding(0x010B, 600); // n011 = 60.0 Hz
+    let link = FaultyLink::new(drivemap_drives::runtime::profile::TransportKind::Rtu, slave);
+    let mut c = Client::new(link, &v7::PROFILE);
+    assert!(matches!(
+        c.write::<v7::FrequencyReference>(2, &35.75, &s),
+        Err(Error::Value(ValueError::NotAStep { .. }))
+    ));
+    assert!(c.transport().sent.is_empty());
+    c.write_rounded::<v7::FrequencyReference>(2, &35.75, &s, Rounding::Nearest)
+        .unwrap();
+    assert_eq!(c.transport().slave.writes, vec![(0x0002, 358)]);
+    // The drive trait: refused by default, the nearest when the Vfd is told to round.
+    {
+        let mut d = Vfd::new::<v7::Drive>(&mut c, 2, s.clone());
+        assert!(matches!(
+            d.set_reference(12.34),
+            Err(Error::Value(ValueError::NotAStep { .. }))
+        ));
+    }
+    assert_eq!(c.transport().slave.writes.len(), 1, "nothing more written");
+    let mut d = Vfd::new::<v7::Drive>(&mut c, 2, s).rounding(Rounding::Nearest);
+    d.set_reference(12.34).unwrap();
+    drop(d);
+    assert_eq!(c.transport().slave.writes[1], (0x0002, 123));
+}
+
 // ---- J7 --------------------------------------------------------------------------------------
 
 #[test]

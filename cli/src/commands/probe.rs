@@ -168,7 +168,8 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
             }
         }
     }
-    let warnings = session.load_dependencies(&readable, &given.fixed);
+    let mut warnings = session.load_dependencies(&readable, &given.fixed);
+    warnings.extend(session.load_limits(&readable, &given.fixed));
     let mut settings = Vec::new();
     for (role, regs) in [
         ("scale selector", drive.selectors()),

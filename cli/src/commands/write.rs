@@ -9,7 +9,7 @@ use drivemap_codegen::ir::Register;
 use drivemap_live::codec::{self, InputError};
 use drivemap_live::intern::intern;
 use drivemap_runtime::gate;
-use drivemap_runtime::{Profile, Refusal, ValueError};
+use drivemap_runtime::{Profile, Refusal, Rounding, ValueError};
 
 use crate::live::Target;
 use crate::live::session::{Session, value_error};
@@ -29,6 +29,11 @@ pub struct Args {
     /// a command that stores to EEPROM is counted against the runtime's hourly budget.
     #[arg(long, value_name = "COMMAND")]
     pub persist: Option<String>,
+    /// Send the nearest value the register can carry when a number is not a whole number of
+    /// its steps (35.75 Hz to a register that counts 0.1 Hz sends 35.8 Hz); without it such a
+    /// value is refused with the two nearest. Ranges and limits apply to the value given.
+    #[arg(long)]
+    pub round: bool,
 }
 
 /// A refusal of the write gate, naming the register as the map prints it; nothing was sent.
@@ -183,10 +188,15 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
         }
     }
     let given = args.target.settings.resolve(drive)?;
+    let rounding = if args.round {
+        Rounding::Nearest
+    } else {
+        Rounding::Exact
+    };
     // Refuse what cannot be written before connecting; values that need settings from the
     // drive are checked once those are read.
     for (r, value) in &pairs {
-        match codec::parse_value(drive, r, value, &given.settings) {
+        match codec::parse_value_with(drive, r, value, &given.settings, rounding) {
             Ok(_) | Err(InputError::Value(ValueError::MissingSetting { .. })) => {}
             Err(e) => return Err(input_error(drive, &e)),
         }
@@ -208,14 +218,20 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
     for (r, value) in &pairs {
         let raw = match field_word(drive, &mut session, r, value)? {
             Some(raw) => raw,
-            None => codec::parse_value(drive, r, value, &session.settings)
+            None => codec::parse_value_with(drive, r, value, &session.settings, rounding)
                 .map_err(|e| format!("{}; nothing written", input_error(drive, &e)))?,
         };
-        raws.push(raw);
+        // Said in the report: the value sent is not the one given.
+        let rounded = rounding == Rounding::Nearest
+            && matches!(
+                codec::parse_value(drive, r, value, &session.settings),
+                Err(InputError::Value(ValueError::NotAStep { .. }))
+            );
+        raws.push((raw, rounded.then(|| value.clone())));
     }
     // The whole gate for every assignment before the first is sent: all or nothing.
     let mut writes = Vec::new();
-    for ((r, _), raw) in pairs.iter().zip(raws) {
+    for ((r, _), (raw, rounded)) in pairs.iter().zip(raws) {
         let address = session
             .address(r)
             .map_err(|e| format!("{e}; nothing written"))?;
@@ -233,12 +249,15 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
                 .map(|()| rule)
             })
             .map_err(|e| refused(r, &e))?;
-        writes.push((*r, rule, address, raw));
+        writes.push((*r, rule, address, raw, rounded));
     }
-    for (r, rule, address, raw) in writes {
-        let shown = codec::decode_written(drive, r, raw, &session.settings)
+    for (r, rule, address, raw, rounded) in writes {
+        let mut shown = codec::decode_written(drive, r, raw, &session.settings)
             .map(|v| v.to_string())
             .unwrap_or_else(|_| format!("{raw}"));
+        if let Some(given) = rounded {
+            shown = format!("{shown}, rounded from {given} (--round)");
+        }
         // A register whose drive executes only a changed value gets its intermediate value
         // first (`Client::write_changed`, through the same gate), so writing the same value
         // twice executes it twice.

@@ -274,6 +274,7 @@ pub fn value_error(drive: &Drive, e: &ValueError) -> String {
                 ),
             }
         }
+        ValueError::NotAStep { .. } => format!("{e} (--round sends the nearest)"),
         other => other.to_string(),
     }
 }

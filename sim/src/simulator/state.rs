@@ -445,8 +445,12 @@ impl Simulator {
         self.cache.settings = settings;
     }
 
+    /// Publishes a value the drive model computed (an output frequency while ramping): the drive
+    /// shows the nearest step of the register, as a real monitor does.
     pub(super) fn store(&mut self, i: usize, value: f64, settings: &LiveSettings) {
-        if let Ok(raw) = codec::encode(&self.drive, &self.drive.registers[i], value, settings) {
+        let r = &self.drive.registers[i];
+        let nearest = drivemap_runtime::Rounding::Nearest;
+        if let Ok(raw) = codec::encode_with(&self.drive, r, value, settings, nearest) {
             self.raw[i] = raw;
         }
     }
