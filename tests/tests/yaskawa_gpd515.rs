@@ -461,6 +461,8 @@ fn an_unknown_o2_09_sends_nothing() {
     let mut slave = SimulatedSlave::new(1, &gpd::PROFILE);
     slave.set_holding(0x0303, 600); // E1-04 = 60.0 Hz
     slave.fail_at(0x050D, 0x02); // o2-09 cannot be read
+    slave.set_holding(0x0180, 2); // b1-01: reference from serial communication
+    slave.set_holding(0x0181, 2); // b1-02: run commands from serial communication
     let link = FaultyLink::new(TransportKind::Rtu, slave);
     let mut c = Client::with_options(link, &gpd::PROFILE, options);
     let unread = gpd::Settings {
@@ -483,7 +485,7 @@ fn an_unknown_o2_09_sends_nothing() {
         assert!(refused(d.set_reference(30.0).unwrap_err()));
         assert!(refused(d.run().unwrap_err()));
     }
-    // The trait read the maximum frequency E1-04 first; nothing was written.
+    // The trait read the command sources and the maximum frequency E1-04; nothing was written.
     assert!(
         c.transport().slave.writes.is_empty(),
         "a write reached the drive"

@@ -499,6 +499,8 @@ fn a_value_between_steps_is_refused_unless_rounding_is_asked_for() {
     // The client: nothing sent for a refused value; write_rounded sends the nearest.
     let mut slave = SimulatedSlave::new(2, &v7::PROFILE);
     slave.set_holding(0x010B, 600); // n011 = 60.0 Hz
+    slave.set_holding(0x0103, 2); // n003: run commands from Modbus RTU
+    slave.set_holding(0x0104, 6); // n004: reference from Modbus RTU
     let link = FaultyLink::new(drivemap_drives::runtime::profile::TransportKind::Rtu, slave);
     let mut c = Client::new(link, &v7::PROFILE);
     assert!(matches!(
