@@ -8,7 +8,7 @@
 
 use std::io;
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
@@ -170,6 +170,15 @@ impl Framer {
         }
     }
 
+    /// Whether an RTU frame has been arriving for longer than the frame deadline without being
+    /// whole: a peer trickling bytes faster than the silence (slowloris over RTU framing).
+    pub fn overdue(&self, now: Instant) -> bool {
+        self.rtu
+            && !self.buf.is_empty()
+            && now.saturating_duration_since(self.frame_start) >= self.limits.frame_deadline
+            && !matches!(rtu_frame(&self.buf), Ok(Some(_)))
+    }
+
     /// The bytes held, from the start of the current frame.
     pub fn bytes(&self) -> &[u8] {
         &self.buf
@@ -209,17 +218,69 @@ pub fn serve_link_with<T: Transport>(
     log: Option<&Logger>,
     limits: FrameLimits,
 ) -> io::Result<()> {
-    serve_frames(link, limits, stop, None, |kind, frame, out| {
+    serve_link_conn(sim, link, stop, log, limits, None)
+}
+
+/// [`serve_link_with`] for a connection of a [`TcpServer`]: `conn` closes it on request and
+/// records when it last sent a request to this drive.
+fn serve_link_conn<T: Transport>(
+    sim: &SharedSim,
+    link: &mut T,
+    stop: &AtomicBool,
+    log: Option<&Logger>,
+    limits: FrameLimits,
+    conn: Option<&Conn>,
+) -> io::Result<()> {
+    serve_frames_conn(link, limits, stop, None, conn, |kind, frame, out| {
         let handled = lock(sim).handle(kind, frame, out);
         if let Some(log) = log {
             log(&handled.record);
         }
         Answer {
             reply: handled.reply,
-            request: handled.record.outcome != Outcome::Damaged,
+            // Activity is a request this drive takes: a damaged frame is none, and neither is a
+            // frame to another unit (a peer cannot keep a slot by talking to someone else).
+            request: !matches!(
+                handled.record.outcome,
+                Outcome::Damaged | Outcome::NotAddressed
+            ),
         }
     })?;
     Ok(())
+}
+
+/// A connection of a [`TcpServer`] as its accept loop sees it: when it last sent a request to
+/// this drive, and a flag that closes it (to make room for a new master).
+#[derive(Debug)]
+pub(crate) struct Conn {
+    /// The server's start, what `last_request_ms` counts from.
+    epoch: Instant,
+    last_request_ms: AtomicU64,
+    close: AtomicBool,
+}
+
+impl Conn {
+    fn new(epoch: Instant) -> Conn {
+        let c = Conn {
+            epoch,
+            last_request_ms: AtomicU64::new(0),
+            close: AtomicBool::new(false),
+        };
+        c.touch();
+        c
+    }
+
+    /// A request arrived now (or the connection was accepted).
+    fn touch(&self) {
+        self.last_request_ms
+            .store(self.epoch.elapsed().as_millis() as u64, Ordering::Relaxed);
+    }
+
+    /// How long since the last request (or the accept).
+    fn idle(&self) -> Duration {
+        let now = self.epoch.elapsed().as_millis() as u64;
+        Duration::from_millis(now.saturating_sub(self.last_request_ms.load(Ordering::Relaxed)))
+    }
 }
 
 /// What a drive made of one frame, for [`serve_frames`].
@@ -246,6 +307,20 @@ pub(crate) fn serve_frames<T: Transport>(
     limits: FrameLimits,
     stop: &AtomicBool,
     until: Option<Instant>,
+    answer: impl FnMut(TransportKind, &[u8], &mut [u8]) -> Answer,
+) -> io::Result<u32> {
+    serve_frames_conn(link, limits, stop, until, None, answer)
+}
+
+/// [`serve_frames`] for a server's connection (`conn`): it also ends when the accept loop closes
+/// it, records each request, and closes on an RTU frame past its deadline (a peer trickling a
+/// frame faster than the silence must not hold a slot until the idle timeout).
+fn serve_frames_conn<T: Transport>(
+    link: &mut T,
+    limits: FrameLimits,
+    stop: &AtomicBool,
+    until: Option<Instant>,
+    conn: Option<&Conn>,
     mut answer: impl FnMut(TransportKind, &[u8], &mut [u8]) -> Answer,
 ) -> io::Result<u32> {
     let kind = link.kind();
@@ -254,7 +329,7 @@ pub(crate) fn serve_frames<T: Transport>(
     let mut out = [0u8; tcp::MAX_FRAME];
     let mut last_request = Instant::now();
     let mut answered = 0u32;
-    while !stop.load(Ordering::Relaxed) {
+    while !stop.load(Ordering::Relaxed) && !conn.is_some_and(|c| c.close.load(Ordering::Relaxed)) {
         let mut wait = POLL;
         if let Some(until) = until {
             let left = until.saturating_duration_since(Instant::now());
@@ -278,6 +353,9 @@ pub(crate) fn serve_frames<T: Transport>(
         framer.push(&chunk[..n], Instant::now());
         loop {
             let now = Instant::now();
+            if conn.is_some() && framer.overdue(now) {
+                return Ok(answered);
+            }
             let len = match framer.next(now) {
                 Next::Frame(len) => len,
                 Next::Wait => break,
@@ -286,6 +364,9 @@ pub(crate) fn serve_frames<T: Transport>(
             let a = answer(kind, &framer.bytes()[..len], &mut out);
             if a.request {
                 last_request = now;
+                if let Some(c) = conn {
+                    c.touch();
+                }
             }
             if let Some(m) = a.reply {
                 link.send(&out[..m])?;
@@ -314,14 +395,21 @@ pub enum TcpFraming {
 /// Limits of a TCP listener, as a server on a plant network needs them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ServerOptions {
-    /// Connections served at once; one more is accepted and closed at once.
+    /// Connections served at once. One more closes the connection that has gone longest
+    /// without a request to this drive, if that is at least [`ROOM_AFTER`] (so idle peers
+    /// cannot lock new masters out until the idle timeout), and is otherwise closed at once.
     pub max_connections: usize,
-    /// A connection with no well-formed request for this long is closed.
+    /// A connection with no request to this drive (a well-formed frame to its unit) for this
+    /// long is closed.
     pub idle_timeout: Duration,
-    /// A frame must arrive whole this long after its first byte: else a Modbus TCP connection is
-    /// closed, an RTU-over-TCP partial frame dropped.
+    /// A frame must arrive whole this long after its first byte: else the connection is closed
+    /// (Modbus TCP and RTU framing alike: a peer trickling a frame cannot hold it).
     pub frame_deadline: Duration,
 }
+
+/// How long a connection must have gone without a request to this drive before a new
+/// connection over the cap closes it to take its place.
+pub const ROOM_AFTER: Duration = Duration::from_secs(1);
 
 impl Default for ServerOptions {
     /// 64 connections, 60 s idle, 1 s per frame.
@@ -440,38 +528,73 @@ impl Drop for Slot {
     }
 }
 
+/// Full: closes the connection longest without a request to this drive, if that is at least
+/// [`ROOM_AFTER`], and waits (briefly) for its slot. Whether there is room now.
+fn make_room(a: &Accept, connections: &[(JoinHandle<()>, Arc<Conn>)]) -> bool {
+    let victim = connections
+        .iter()
+        .filter(|(h, c)| !h.is_finished() && !c.close.load(Ordering::Relaxed))
+        .max_by_key(|(_, c)| c.idle());
+    let Some((_, c)) = victim else {
+        return false;
+    };
+    if c.idle() < ROOM_AFTER {
+        return false;
+    }
+    c.close.store(true, Ordering::Relaxed);
+    // Its loop sees the flag within one poll.
+    let end = Instant::now() + POLL * 8;
+    while a.active.load(Ordering::Acquire) >= a.options.max_connections && Instant::now() < end {
+        thread::sleep(POLL / 5);
+    }
+    a.active.load(Ordering::Acquire) < a.options.max_connections
+}
+
 fn accept_loop(listener: TcpListener, a: Accept) {
-    let mut connections: Vec<JoinHandle<()>> = Vec::new();
+    let epoch = Instant::now();
+    let mut connections: Vec<(JoinHandle<()>, Arc<Conn>)> = Vec::new();
     while !a.stop.load(Ordering::Relaxed) {
         match listener.accept() {
             Ok((stream, _)) => {
-                connections.retain(|h| !h.is_finished());
-                if a.active.load(Ordering::Acquire) >= a.options.max_connections {
-                    // Full: refuse by closing at once, as a gateway at its connection limit does.
+                connections.retain(|(h, _)| !h.is_finished());
+                if a.active.load(Ordering::Acquire) >= a.options.max_connections
+                    && !make_room(&a, &connections)
+                {
+                    // Full of busy masters: refuse by closing at once, as a gateway at its
+                    // connection limit does.
                     let _ = stream.shutdown(std::net::Shutdown::Both);
                     continue;
                 }
                 a.active.fetch_add(1, Ordering::AcqRel);
                 let slot = Slot(a.active.clone());
+                let conn = Arc::new(Conn::new(epoch));
                 let (sim, log, stop) = (a.sim.clone(), a.log.clone(), a.stop.clone());
                 let (framing, options) = (a.framing, a.options);
+                let mine = conn.clone();
                 let spawned =
                     thread::Builder::new()
                         .name("sim-connection".into())
                         .spawn(move || {
                             let _slot = slot;
-                            let _ =
-                                serve_stream(stream, &sim, framing, options, log.as_ref(), &stop);
+                            let _ = serve_stream(
+                                stream,
+                                &sim,
+                                framing,
+                                options,
+                                log.as_ref(),
+                                &stop,
+                                &mine,
+                            );
                         });
                 if let Ok(h) = spawned {
-                    connections.push(h);
+                    connections.push((h, conn));
                 }
             }
             Err(e) if e.kind() == io::ErrorKind::WouldBlock => thread::sleep(POLL / 5),
             Err(_) => thread::sleep(POLL),
         }
     }
-    for h in connections {
+    for (h, _) in connections {
         let _ = h.join();
     }
 }
@@ -483,6 +606,7 @@ fn serve_stream(
     options: ServerOptions,
     log: Option<&Logger>,
     stop: &AtomicBool,
+    conn: &Conn,
 ) -> io::Result<()> {
     stream.set_nonblocking(false)?;
     let _ = stream.set_nodelay(true);
@@ -494,32 +618,35 @@ fn serve_stream(
     match framing {
         TcpFraming::ModbusTcp => {
             let mut link = TcpTransport::from_stream(stream)?;
-            serve_link_with(
+            serve_link_conn(
                 sim,
                 &mut link,
                 stop,
                 log,
                 limits(Duration::from_millis(500)),
+                Some(conn),
             )
         }
         TcpFraming::Gateway => {
             let mut link = TcpTransport::from_gateway_stream(stream)?;
-            serve_link_with(
+            serve_link_conn(
                 sim,
                 &mut link,
                 stop,
                 log,
                 limits(Duration::from_millis(500)),
+                Some(conn),
             )
         }
         TcpFraming::RtuOverTcp => {
             let mut link = RtuOverTcpTransport::from_stream(stream)?;
-            serve_link_with(
+            serve_link_conn(
                 sim,
                 &mut link,
                 stop,
                 log,
                 limits(Duration::from_millis(100)),
+                Some(conn),
             )
         }
     }

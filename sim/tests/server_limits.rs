@@ -146,17 +146,19 @@ fn a_modbus_tcp_frame_not_finished_within_the_deadline_closes_the_connection() {
     assert!(started.elapsed() < SOON);
 }
 
+/// Slowloris over RTU framing: one byte each 50 ms (inside the 100 ms silence), never a whole
+/// frame. The connection is closed at the frame deadline (400 ms), long before the idle
+/// timeout (60 s here); before, the partial frame was only dropped and the slot held until
+/// the idle timeout.
 #[test]
-fn rtu_over_tcp_garbage_trickled_forever_is_closed_by_the_idle_timeout() {
+fn rtu_over_tcp_a_frame_trickled_past_its_deadline_closes_the_connection() {
     let options = ServerOptions {
-        idle_timeout: Duration::from_millis(800),
         frame_deadline: Duration::from_millis(400),
         ..ServerOptions::default()
     };
     let srv = server(TcpFraming::RtuOverTcp, options);
     let mut s = connect(srv.local_addr());
-    // One byte each 50 ms (inside the 100 ms silence), never a whole frame: the partial frame
-    // is dropped at the deadline, and since nothing well-formed ever comes, the link goes.
+    let started = Instant::now();
     let mut closed = false;
     for i in 0..200u32 {
         if s.write_all(&[0x01, 0x03][i as usize % 2..][..1]).is_err() {
@@ -169,6 +171,108 @@ fn rtu_over_tcp_garbage_trickled_forever_is_closed_by_the_idle_timeout() {
         }
     }
     assert!(closed, "closed within 200 bytes (10 s)");
+    assert!(
+        started.elapsed() < Duration::from_secs(5),
+        "closed at the frame deadline, not the 60 s idle timeout: {:?}",
+        started.elapsed()
+    );
+}
+
+/// RTU over TCP: one read of 0020h x16 to unit `unit` (CRC included).
+fn rtu_read16(unit: u8) -> Vec<u8> {
+    let mut f = vec![unit, 0x03, 0x00, 0x20, 0x00, 0x10];
+    let crc = drivemap_runtime::crc::crc16(&f);
+    f.extend_from_slice(&crc.to_le_bytes());
+    f
+}
+
+/// A peer that keeps talking to another unit (its frames well-formed, but not for this drive)
+/// is idle as far as this drive is concerned: it is closed at the idle timeout. Before, every
+/// frame to any unit reset the timer and such a peer held its slot for ever.
+#[test]
+fn frames_to_another_unit_do_not_keep_a_connection_alive() {
+    let options = ServerOptions {
+        idle_timeout: Duration::from_millis(600),
+        ..ServerOptions::default()
+    };
+    let srv = server(TcpFraming::RtuOverTcp, options);
+    let mut s = connect(srv.local_addr());
+    let frame = rtu_read16(9);
+    let started = Instant::now();
+    let mut closed = false;
+    // A frame every 150 ms (well inside the idle timeout) for at most 5 s.
+    while started.elapsed() < Duration::from_secs(5) {
+        if s.write_all(&frame).is_err() || closed_by_server(&mut s, Duration::from_millis(150)) {
+            closed = true;
+            break;
+        }
+    }
+    assert!(
+        closed,
+        "closed: only requests to this drive count as activity"
+    );
+    assert!(
+        started.elapsed() < Duration::from_secs(3),
+        "{:?}",
+        started.elapsed()
+    );
+    // A master talking to the drive's own unit (1) is kept over the same time.
+    let mut m = connect(srv.local_addr());
+    let mine = rtu_read16(1);
+    for _ in 0..10 {
+        m.write_all(&mine).unwrap();
+        let mut reply = [0u8; 37];
+        m.read_exact(&mut reply)
+            .expect("the drive's own master is answered");
+        thread::sleep(Duration::from_millis(150));
+    }
+}
+
+/// Idle connections up to the cap do not lock everyone out until the idle timeout (60 s): a
+/// new master takes the place of the connection that has gone longest without a request
+/// (idle at least `ROOM_AFTER`); busy ones are never closed for it, and the cap still holds.
+#[test]
+fn a_new_master_takes_the_place_of_the_longest_idle_connection() {
+    let options = ServerOptions {
+        max_connections: 4,
+        ..ServerOptions::default()
+    };
+    let srv = server(TcpFraming::ModbusTcp, options);
+    // Three idle peers, oldest first, then a busy master.
+    let mut idle: Vec<TcpStream> = Vec::new();
+    for _ in 0..3 {
+        idle.push(connect(srv.local_addr()));
+        thread::sleep(Duration::from_millis(100));
+    }
+    let mut busy = connect(srv.local_addr());
+    exchange(&mut busy, 1).unwrap();
+    // Past ROOM_AFTER for the idle ones; the busy master keeps asking.
+    let end = Instant::now() + drivemap_sim::server::ROOM_AFTER + Duration::from_millis(300);
+    let mut tid = 2;
+    while Instant::now() < end {
+        exchange(&mut busy, tid).unwrap();
+        tid += 1;
+        thread::sleep(Duration::from_millis(50));
+    }
+    assert_eq!(srv.connections(), 4);
+    let mut newcomer = connect(srv.local_addr());
+    exchange(&mut newcomer, 100).expect("the new master is served");
+    assert!(
+        closed_by_server(&mut idle[0], SOON),
+        "the longest-idle connection made room"
+    );
+    assert!(
+        srv.connections() <= 4,
+        "the cap holds: {}",
+        srv.connections()
+    );
+    exchange(&mut busy, 101).expect("the busy master was not closed");
+    for s in idle.iter_mut().skip(1) {
+        assert!(
+            !closed_by_server(s, Duration::from_millis(50)),
+            "only one made room"
+        );
+    }
 }
 
 #[test]

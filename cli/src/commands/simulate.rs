@@ -76,14 +76,17 @@ pub struct Args {
     /// that parameter is set (`--set n003=2`, or written over the link).
     #[arg(long = "network-source")]
     pub network_source: bool,
-    /// TCP: connections served at once; one more is closed as soon as it is accepted.
+    /// TCP: connections served at once. One more takes the place of the connection that has
+    /// gone longest (at least 1 s) without a request to this drive; when every one is busy, it
+    /// is closed as soon as it is accepted.
     #[arg(long = "max-connections", default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..))]
     pub max_connections: u16,
-    /// TCP: a connection that sends no well-formed request this long is closed.
+    /// TCP: a connection that sends no request to this drive (a well-formed frame to its unit)
+    /// this long is closed.
     #[arg(long = "idle-timeout", default_value = "60s", value_parser = crate::duration::positive)]
     pub idle_timeout: std::time::Duration,
     /// TCP: a connection whose started frame is not complete this long after its first byte is
-    /// closed (a peer trickling bytes cannot hold it).
+    /// closed, Modbus TCP and RTU framing alike (a peer trickling bytes cannot hold it).
     #[arg(long = "frame-timeout", default_value = "1s", value_parser = crate::duration::positive)]
     pub frame_timeout: std::time::Duration,
     #[command(flatten)]
