@@ -266,7 +266,9 @@ fn step() -> impl proptest::strategy::Strategy<Value = Step> {
         4 => Just(Step::Run),
         4 => Just(Step::Stop),
         2 => direction.prop_map(Step::Direction),
-        2 => (-10.0f64..150.0).prop_map(|hz| Step::Reference((hz * 100.0).round() / 100.0)),
+        // Mostly on a 0.1 Hz grid, some on 0.01 Hz (between the steps of a 0.1 Hz register).
+        2 => (-10.0f64..150.0, prop_oneof![3 => Just(10.0), 1 => Just(100.0)])
+            .prop_map(|(hz, per)| Step::Reference((hz * per).round() / per)),
         1 => (0.0f64..120.0, 0.0f64..120.0, any::<bool>()).prop_map(|(a, d, same)| {
             let (a, d) = ((a * 10.0).round() / 10.0, (d * 10.0).round() / 10.0);
             Step::Ramp(a, if same { a } else { d })
