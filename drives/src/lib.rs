@@ -20,7 +20,7 @@
 //!
 //! ```no_run
 //! use std::time::Duration;
-//! use drivemap_drives::runtime::{Client, ClientOptions};
+//! use drivemap_drives::runtime::{Client, ClientOptions, Rounding};
 //! use drivemap_drives::runtime::transport::serial::{Parity, SerialOptions, SerialTransport};
 //! use drivemap_drives::yaskawa_v7::{self as v7, Settings};
 //!
@@ -36,7 +36,10 @@
 //! let mut settings = Settings::default();
 //! drive.load_settings(1, &mut settings)?; // reads n152 (frequency units) and n011
 //! let hz: f64 = drive.read::<v7::OutputFrequency>(1, &settings)?;
-//! drive.write::<v7::FrequencyReference>(1, &35.75, &settings)?; // refused if out of range
+//! // Refused above n011, out of range, or between two steps (35.75 Hz at 0.1 Hz): as given or not at all.
+//! drive.write::<v7::FrequencyReference>(1, &35.7, &settings)?;
+//! // The nearest step, asked for: 35.8 Hz.
+//! drive.write_rounded::<v7::FrequencyReference>(1, &35.75, &settings, Rounding::Nearest)?;
 //! drive.modify_bits::<v7::DigitalInputCommand>(1, &settings, 0x0001, 0)?; // run
 //! let (reference, output) =
 //!     drive.read_many::<(v7::FrequencyReferenceMonitor, v7::OutputFrequency)>(1, &settings)?;
