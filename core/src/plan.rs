@@ -605,16 +605,17 @@ impl RegisterPlan {
         let reference =
             settings
                 .quantity(limit.reference.slot)
-                .ok_or(ValueError::MissingSetting {
+                .ok_or(ValueError::LimitNotKnown {
                     register: self.info.id,
                     setting: limit.reference.label,
                 })?;
         Ok(Some(reference * limit.percent / 100.0))
     }
 
-    /// Refuses `value` above the register's limit through another quantity.
+    /// Refuses `value` above the register's limit through another quantity, when that quantity
+    /// is known (an unknown one is refused after the conversion, whose own errors come first).
     fn check_limit(&self, value: f64, settings: &impl SettingsView) -> Result<(), ValueError> {
-        let (Some(limit), Some(max)) = (&self.limit, self.relative_max(settings)?) else {
+        let (Some(limit), Ok(Some(max))) = (&self.limit, self.relative_max(settings)) else {
             return Ok(());
         };
         if value > max {
@@ -654,6 +655,18 @@ impl RegisterPlan {
         if value.is_finite() {
             self.check_limit(value, settings)?;
         }
+        let raw = self.convert(value, settings, rounding)?;
+        // A limit that cannot be checked refuses the value; it is never skipped.
+        self.relative_max(settings)?;
+        Ok(raw)
+    }
+
+    fn convert(
+        &self,
+        value: f64,
+        settings: &impl SettingsView,
+        rounding: Rounding,
+    ) -> Result<u32, ValueError> {
         let (id, unit, words) = (self.info.id, self.unit, self.info.width);
         match self.scale(settings) {
             Some(Ok(Scale::Decimal { scale, range })) => {

@@ -82,6 +82,15 @@ pub enum ValueError {
         register: &'static str,
         setting: &'static str,
     },
+    /// The register's limit through another quantity cannot be checked: the quantity is not
+    /// known. A limit that cannot be checked refuses the value.
+    #[error(
+        "{register}: its limit is a percentage of {setting}, which is not known; read it from the drive or set it in Settings (a value whose limit cannot be checked is not sent)"
+    )]
+    LimitNotKnown {
+        register: &'static str,
+        setting: &'static str,
+    },
     /// A selecting parameter holds a code for which the map defines no scale.
     #[error("{register}: {setting} = {code} selects no scale the manual defines")]
     UnsupportedSetting {

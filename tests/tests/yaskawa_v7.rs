@@ -436,7 +436,7 @@ fn frequency_reference_is_bounded_by_n011() {
     };
     assert_eq!(
         v7::FrequencyReference::encode(&10.0, &unknown),
-        Err(ValueError::MissingSetting {
+        Err(ValueError::LimitNotKnown {
             register: "frequency_reference",
             setting: "n011"
         })

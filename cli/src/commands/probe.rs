@@ -355,7 +355,7 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Sessi
                 ),
             )
         }
-        Err(e @ ValueError::MissingSetting { .. }) => {
+        Err(e @ (ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. })) => {
             Check::Unchecked(crate::live::session::value_error(drive, &e))
         }
         Err(e) => Check::Disagrees("out_of_range", format!("read {value} ({raw:04X}h): {e}")),

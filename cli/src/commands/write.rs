@@ -197,7 +197,10 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
     // drive are checked once those are read.
     for (r, value) in &pairs {
         match codec::parse_value_with(drive, r, value, &given.settings, rounding) {
-            Ok(_) | Err(InputError::Value(ValueError::MissingSetting { .. })) => {}
+            Ok(_)
+            | Err(InputError::Value(
+                ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. },
+            )) => {}
             Err(e) => return Err(input_error(drive, &e)),
         }
     }

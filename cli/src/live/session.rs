@@ -129,6 +129,7 @@ impl SettingsArgs {
                     Ok(_)
                     | Err(codec::InputError::Value(
                         V::MissingSetting { .. }
+                        | V::LimitNotKnown { .. }
                         | V::UnsupportedSetting { .. }
                         | V::BadReference { .. },
                     )) => {}
@@ -275,6 +276,10 @@ pub fn value_error(drive: &Drive, e: &ValueError) -> String {
             }
         }
         ValueError::NotAStep { .. } => format!("{e} (--round sends the nearest)"),
+        ValueError::LimitNotKnown { register, setting } => format!(
+            "{register}: its limit is a percentage of {setting}, which could not be read; give \
+             it with --set {setting}=<value>"
+        ),
         other => other.to_string(),
     }
 }
@@ -384,12 +389,12 @@ impl<'d> Session<'d> {
         let mut warnings = Vec::new();
         let mut done: BTreeSet<String> = fixed.clone();
         let selectors: Vec<&Register> = regs.iter().flat_map(|r| selectors_of(drive, r)).collect();
-        self.read_dependencies(&selectors, &mut done, &mut warnings);
+        self.read_dependencies(&selectors, &mut done, &mut warnings, "conversions depend");
         let references: Vec<&Register> = regs
             .iter()
             .flat_map(|r| references_of(drive, r, &self.settings))
             .collect();
-        self.read_dependencies(&references, &mut done, &mut warnings);
+        self.read_dependencies(&references, &mut done, &mut warnings, "conversions depend");
         warnings
     }
 
@@ -419,15 +424,18 @@ impl<'d> Session<'d> {
         let mut done = fixed.clone();
         // A quantity a conversion already read is read again: the limit is checked against
         // the drive's value now, and reading twice costs one request.
-        self.read_dependencies(&deps, &mut done, &mut warnings);
+        self.read_dependencies(&deps, &mut done, &mut warnings, "the write's limit depends");
         warnings
     }
 
+    /// Reads `deps` into the settings; `what` depends on them ("conversions depend") for the
+    /// warnings.
     fn read_dependencies(
         &mut self,
         deps: &[&Register],
         done: &mut BTreeSet<String>,
         warnings: &mut Vec<String>,
+        what: &str,
     ) {
         for d in deps {
             if !done.insert(d.def.id.clone()) {
@@ -435,7 +443,7 @@ impl<'d> Session<'d> {
             }
             if let Some(why) = self.unreadable(d) {
                 warnings.push(format!(
-                    "{why}, and conversions depend on it; give it with --set {}=<value>",
+                    "{why}, and {what} on it; give it with --set {}=<value>",
                     d.def.param.as_deref().unwrap_or(&d.def.id)
                 ));
                 continue;
@@ -446,7 +454,7 @@ impl<'d> Session<'d> {
                     self.settings.absorb(self.drive, d.def.address, raw as u16);
                 }
                 Err(e) => warnings.push(format!(
-                    "reading {}, which conversions depend on: {e}",
+                    "reading {}, which {what} on: {e}",
                     describe::register(d)
                 )),
             }

@@ -155,7 +155,7 @@ pub fn register(drive: &Drive, r: &Register) -> String {
         s += &format!(
             "\nLimited through another quantity: {}; a value above it is refused before \
              sending (`ValueError::AboveLimit`), and one that cannot be checked because the \
-             quantity is not in the settings is refused too (`ValueError::MissingSetting`).\n",
+             quantity is not in the settings is refused too (`ValueError::LimitNotKnown`).\n",
             describe::relative_limit(drive, l)
         );
     }
