@@ -352,3 +352,41 @@ fn the_interpreted_codec_refuses_between_steps() {
         Err(codec::InputError::Parse(m)) if m.contains("no value given")
     ));
 }
+
+/// The J7's maximum output frequency n09 has no register number in its manual: the map makes it
+/// an external quantity, so a reference is written only with `--set max_output_frequency`, and
+/// is refused above it.
+#[test]
+fn a_limit_through_an_external_quantity_needs_it_given() {
+    let (slave, addr) = bare_slave("yaskawa-j7", |_| {});
+    let write = |args: &[&str]| {
+        let mut all = vec![
+            "write",
+            "--drive",
+            "yaskawa-j7",
+            "--gateway",
+            addr.as_str(),
+            "--slave",
+            "1",
+        ];
+        all.extend_from_slice(args);
+        drivemap(&all)
+    };
+    let out = write(&["frequency_reference=30"]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("its limit is a percentage of max_output_frequency")
+            && err.contains("--set max_output_frequency=<value>"),
+        "{err}"
+    );
+    let out = write(&["--set", "max_output_frequency=60", "frequency_reference=70"]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("70 Hz is above 60 Hz"), "{err}");
+    assert!(slave.lock().unwrap().writes.is_empty());
+    let out = write(&["--set", "max_output_frequency=60", "frequency_reference=30"]);
+    let (_, err) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert_eq!(slave.lock().unwrap().writes, vec![(0x0002, 300)]);
+}

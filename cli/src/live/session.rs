@@ -276,10 +276,19 @@ pub fn value_error(drive: &Drive, e: &ValueError) -> String {
             }
         }
         ValueError::NotAStep { .. } => format!("{e} (--round sends the nearest)"),
-        ValueError::LimitNotKnown { register, setting } => format!(
-            "{register}: its limit is a percentage of {setting}, which could not be read; give \
-             it with --set {setting}=<value>"
-        ),
+        ValueError::LimitNotKnown { register, setting } => {
+            match drive.externals().iter().find(|q| q.external == *setting) {
+                Some(q) => format!(
+                    "{register}: its limit is a percentage of {setting} ({}, in {}), which is \
+                     not a register of the drive; give it with --set {setting}=<value>",
+                    q.description, q.unit
+                ),
+                None => format!(
+                    "{register}: its limit is a percentage of {setting}, which could not be \
+                     read; give it with --set {setting}=<value>"
+                ),
+            }
+        }
         other => other.to_string(),
     }
 }
