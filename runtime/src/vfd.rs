@@ -28,8 +28,9 @@
 //! [`VariableFrequencyDrive::set_reference`] read that parameter first and refuse with
 //! [`Refusal::NotNetworkSource`] — "the drive takes run commands from \"Terminal Strip\" (n003
 //! = 1); set n003 = 2 (...) for the network" — instead of sending a command the drive would
-//! accept and ignore. A source found to be the network is kept (read once per [`Vfd`]); one
-//! that is not is read again at the next call, so setting it and calling again works.
+//! accept and ignore. A source found to be the network is kept (read once per [`Vfd`], until
+//! [`Vfd::forget_sources`]); one that is not is read again at the next call, so setting it and
+//! calling again works.
 //! [`VariableFrequencyDrive::stop`] is never refused for its source. A map that gives no
 //! source role for the link (or marks it not printed) is not checked.
 //!
@@ -670,6 +671,14 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             .into());
         }
         Ok(())
+    }
+
+    /// Forgets that the drive's command and reference sources were found to be the network:
+    /// the next `run()` and `set_reference()` read them again. For an application that knows
+    /// someone may have changed them at the drive (the result is kept for the `Vfd`'s life
+    /// otherwise, one read per source).
+    pub fn forget_sources(&mut self) {
+        self.sources = [false; 2];
     }
 
     /// Checks that the drive takes what `role` (a source role) selects from the network on

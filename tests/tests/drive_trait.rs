@@ -528,6 +528,27 @@ fn run_is_refused_at_the_factory_setting_and_works_after_setting_the_source() {
             "{id}: the network reference is used: {hz} Hz"
         );
         d.stop().unwrap();
+        // The source is read once per Vfd: set to another source over the link, the next run
+        // is still sent (the drive ignores it) until the Vfd is told to read it again.
+        if command.width == 16 {
+            wait(60.0); // stopped: some drives take parameter writes only then
+            let r = &D::REGISTERS[usize::from(command.row)];
+            let other = (0..=3u16).find(|c| !command.on.contains(c)).unwrap();
+            let address = r.address_for(&settings, kind);
+            d.client()
+                .write_rule(slave, &r.write_rule(), address, u32::from(other))
+                .unwrap();
+            d.run().unwrap();
+            d.stop().unwrap();
+            d.forget_sources();
+            assert!(
+                matches!(
+                    d.run(),
+                    Err(Error::Refused(Refusal::NotNetworkSource { .. }))
+                ),
+                "{id}: read again after forget_sources"
+            );
+        }
         drop(d);
         server.stop();
         true
