@@ -50,7 +50,11 @@ impl Simulator {
                 ValueError::OutOfRange { .. }
                 | ValueError::WordOverflow { .. }
                 | ValueError::UnknownCode { .. }
-                | ValueError::NotFinite { .. },
+                | ValueError::NotFinite { .. }
+                // Above a limit through another parameter (V7 reference above n011): the drive
+                // answers a data setting error ("a simple upper/lower limit error occurred
+                // with control data", 003_8bcf5d50afb8e230.txt:739).
+                | ValueError::AboveLimit { .. },
             ) => false,
             Err(_) => true,
         }
