@@ -271,3 +271,109 @@ fn kinds_table_lists_every_kind() {
     assert!(out.contains("| register added | compatible |"));
     assert!(out.lines().count() > 60);
 }
+
+/// The issue's review: the run role deleted and reverse pointed at the run bit. Every format
+/// shows both as breaking, with the manual line each side cites quoted (md, json).
+#[test]
+fn roles_removed_or_re_pointed_are_breaking_in_every_format_with_their_lines_quoted() {
+    let s = Scratch::new("diff-roles");
+    let base =
+        std::fs::read_to_string(repo().join("cli/tests/fixtures/example-drive.yaml")).unwrap();
+    let roles = "roles:\n  run:\n    - {register: command, field: run, source: \"manual.txt:20\"}\n  \
+                 reverse:\n    - {register: command, field: reverse, source: \"manual.txt:20\"}\n  \
+                 running:\n    - {register: status, field: running, source: \"manual.txt:33\"}\ngaps:";
+    let old = edit(&base, "gaps:", roles);
+    let mut new = edit(
+        &old,
+        "  run:\n    - {register: command, field: run, source: \"manual.txt:20\"}\n",
+        "",
+    );
+    new = edit(
+        &new,
+        "{register: command, field: reverse,",
+        "{register: command, field: run,",
+    );
+    new = edit(
+        &new,
+        "field: running, source: \"manual.txt:33\"",
+        "field: running, source: \"manual.txt:34\"",
+    );
+    std::fs::write(s.0.join("old.yaml"), old).unwrap();
+    std::fs::write(s.0.join("new.yaml"), new).unwrap();
+    let manuals = repo().join("cli/tests/fixtures/manuals");
+    let run = |format: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+            .args(["diff", "--format", format, "old.yaml", "new.yaml"])
+            .current_dir(&s.0)
+            .env("DRIVEMAP_MANUALS", &manuals)
+            .env_remove("DRIVEMAP_MAPS")
+            .output()
+            .unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let text = run("text");
+    assert!(
+        text.starts_with("example-drive: 2 breaking, 1 compatible\n"),
+        "{text}"
+    );
+    assert!(
+        text.contains(
+            "  breaking    roles: role removed — run\n\
+             \x20             field `run` (bit 0) of command (0001h), on 1, off 0 → (none)\n\
+             \x20             old: manual.txt:20 · new: —\n"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains(
+            "  breaking    roles: role re-pointed — reverse\n\
+             \x20             field `reverse` (bit 1) of command (0001h), on 1, off 0 → field `run` (bit 0) of command (0001h), on 1, off 0\n"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("  compatible  roles: citation changed — running\n"),
+        "{text}"
+    );
+    let md = run("md");
+    let line20 = "“0001H \\| Operation command \\| bit 0 1: run; bit 1 1: reverse; bits 4-5 mode 0: Local, 2: Remote”";
+    assert!(
+        md.contains(&format!(
+            "| **breaking** | `roles` | role removed — run | field `run` (bit 0) of command (0001h), on 1, off 0 | — | `manual.txt:20`: {line20} | — |"
+        )),
+        "{md}"
+    );
+    let json: serde_json::Value = serde_json::from_str(&run("json")).unwrap();
+    let changes = json["drives"][0]["changes"].as_array().unwrap();
+    let kinds: Vec<(&str, &str)> = changes
+        .iter()
+        .map(|c| (c["kind"].as_str().unwrap(), c["severity"].as_str().unwrap()))
+        .collect();
+    assert_eq!(
+        kinds,
+        [
+            ("role re-pointed", "breaking"),
+            ("role removed", "breaking"),
+            ("citation changed", "compatible")
+        ]
+    );
+    assert_eq!(json["breaking"], 2);
+    let repointed = &changes[0];
+    assert_eq!(repointed["what"], "reverse");
+    assert_eq!(repointed["old_source"], "manual.txt:20");
+    assert_eq!(
+        repointed["old_quote"],
+        "0001H | Operation command | bit 0 1: run; bit 1 1: reverse; bits 4-5 mode 0: Local, 2: Remote"
+    );
+    assert_eq!(repointed["at"]["file"], "new.yaml");
+    assert_eq!(
+        changes[2]["new_quote"],
+        "0024H to 002FH: page missing from this copy"
+    );
+}

@@ -88,6 +88,18 @@ pub fn read_map_str_with(
     finish(&loaded, ctx)
 }
 
+/// Like [`read_map_str_with`] for a map already parsed into a tree ([`source::parse_map`]):
+/// for tools that edit a map's tree before reading it.
+pub fn read_map_tree_with(
+    name: &str,
+    tree: source::Node,
+    ctx: &validate::Context,
+    base: &load::BaseResolver<'_>,
+) -> Result<Drive, Diagnostics> {
+    let loaded = load::load_tree_with(name, tree, base).map_err(Diagnostics::from)?;
+    finish(&loaded, ctx)
+}
+
 fn finish(loaded: &load::LoadedMap, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
     let drive = ir::expand(loaded).map_err(Diagnostics::from)?;
     let errors = validate::validate(&drive, ctx);

@@ -631,7 +631,34 @@ fn load_tree_str(
     let file: Arc<str> = Arc::from(name);
     let parsed = source::parse_map(&file, text)?;
     warnings.extend(parsed.warnings);
-    let tree = parsed.tree;
+    extend_tree(parsed.tree, base, chain, warnings)
+}
+
+/// Like [`load_str_with`] for a map already parsed ([`source::parse_map`]): for tools that edit
+/// a map's tree before reading it (the diff's mutation test edits every value of a map).
+pub fn load_tree_with(
+    name: &str,
+    tree: Node,
+    base: &BaseResolver<'_>,
+) -> Result<LoadedMap, Vec<Diagnostic>> {
+    let mut warnings = Vec::new();
+    let tree = extend_tree(tree, base, &mut Vec::new(), &mut warnings)?;
+    let model = deserialize(&tree)?;
+    Ok(LoadedMap {
+        path: PathBuf::from(name),
+        model,
+        tree,
+        warnings,
+    })
+}
+
+/// A parsed map merged onto its base when it `extends` one (found through `base`).
+fn extend_tree(
+    tree: Node,
+    base: &BaseResolver<'_>,
+    chain: &mut Vec<String>,
+    warnings: &mut Vec<Diagnostic>,
+) -> Result<Node, Vec<Diagnostic>> {
     let Some(extends) = tree.get("drive").and_then(|d| d.get("extends")) else {
         return Ok(tree);
     };

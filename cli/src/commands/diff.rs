@@ -24,6 +24,9 @@ pub enum Format {
     /// GitHub workflow annotations on the changed lines of the map (`::error` for breaking
     /// changes, `::warning` for the rest).
     Github,
+    /// JSON for tools: every change with its kind, severity, both sides, both citations and
+    /// the manual lines they point at.
+    Json,
 }
 
 impl From<Format> for render::Format {
@@ -32,6 +35,7 @@ impl From<Format> for render::Format {
             Format::Text => render::Format::Text,
             Format::Md => render::Format::Md,
             Format::Github => render::Format::Github,
+            Format::Json => render::Format::Json,
         }
     }
 }
@@ -124,6 +128,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         }
         Format::Md => render::markdown(&diffs, manuals.as_ref()),
         Format::Github => render::github(&diffs, manuals.as_ref()),
+        Format::Json => render::json(&diffs, manuals.as_ref()),
     };
     out!("{out}");
     let breaking = diffs.iter().any(|d| d.breaking() > 0);

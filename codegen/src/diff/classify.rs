@@ -159,6 +159,15 @@ pub enum ChangeKind {
     FieldRenamed,
     /// Same field, another printed meaning.
     FieldReworded,
+    /// A role the map did not give (`roles:`).
+    RoleAdded,
+    /// A role the map no longer gives.
+    RoleRemoved,
+    /// A role played by another register, field or quantity, or by other places.
+    RoleRepointed,
+    /// A role's codes (`on`, `off`), its `edge`, or the role it shares its place with
+    /// (`shared_with`) changed.
+    RoleCodesChanged,
     /// The `file:line` cited.
     CitationChanged,
     /// Notes, conflicts, unknowns, gaps, keypad display steps, removed-register reasons.
@@ -233,6 +242,10 @@ impl ChangeKind {
         ChangeKind::FieldMoved,
         ChangeKind::FieldRenamed,
         ChangeKind::FieldReworded,
+        ChangeKind::RoleAdded,
+        ChangeKind::RoleRemoved,
+        ChangeKind::RoleRepointed,
+        ChangeKind::RoleCodesChanged,
         ChangeKind::CitationChanged,
         ChangeKind::DocumentationChanged,
     ];
@@ -306,6 +319,10 @@ impl ChangeKind {
             FieldMoved => "field moved",
             FieldRenamed => "field renamed",
             FieldReworded => "field meaning reworded",
+            RoleAdded => "role added",
+            RoleRemoved => "role removed",
+            RoleRepointed => "role re-pointed",
+            RoleCodesChanged => "role codes or sharing changed",
             CitationChanged => "citation changed",
             DocumentationChanged => "documentation changed",
         }
@@ -433,6 +450,22 @@ pub fn classify(kind: ChangeKind) -> (Severity, &'static str) {
         FieldMoved => (B, "the same field reads and writes other bits"),
         FieldRenamed => (B, "the field accessor name changes"),
         FieldReworded => (C, "rustdoc text only"),
+        RoleAdded => (
+            C,
+            "the drive API gains a role it refused with Refusal::NoRole; existing calls unchanged",
+        ),
+        RoleRemoved => (
+            B,
+            "the drive API refuses the role (Refusal::NoRole) where it acted, and the simulator drops it",
+        ),
+        RoleRepointed => (
+            B,
+            "the drive API reads or writes another register, field or quantity for the role",
+        ),
+        RoleCodesChanged => (
+            B,
+            "the drive API writes or expects other codes for the role, acts on its transition otherwise, or refuses (or allows) setting it apart from the role it shares a register with",
+        ),
         CitationChanged => (C, "a new citation; documentation only"),
         DocumentationChanged => (C, "documentation only"),
     }
@@ -457,6 +490,9 @@ mod tests {
             FieldRemoved,
             SignednessChanged,
             WidthChanged,
+            RoleRemoved,
+            RoleRepointed,
+            RoleCodesChanged,
         ] {
             assert_eq!(classify(k).0, Severity::Breaking, "{k:?}");
         }
@@ -467,6 +503,7 @@ mod tests {
             CitationChanged,
             DocumentationChanged,
             NameChanged,
+            RoleAdded,
         ] {
             assert_eq!(classify(k).0, Severity::Compatible, "{k:?}");
         }

@@ -60,6 +60,7 @@ fn section(kind: ChangeKind, what: &str) -> Path {
         AddressingChanged => protocol.key("addressing"),
         TimingChanged => protocol.key("timing"),
         LineSettingsChanged => protocol.key("serial"),
+        RoleAdded | RoleRemoved | RoleRepointed | RoleCodesChanged => role(what),
         DocumentationChanged => match what {
             "map conflicts" => root.key("conflicts"),
             "gaps" => root.key("gaps"),
@@ -71,8 +72,17 @@ fn section(kind: ChangeKind, what: &str) -> Path {
     }
 }
 
+/// The path of a role named at the start of a change's `what` (`run`, `run place 2`).
+fn role(what: &str) -> Path {
+    let id = what.split([' ', ':']).next().unwrap_or_default();
+    Path::root().key("roles").key(id)
+}
+
 /// Where `change` is in the new map, if the new map has it.
 pub(crate) fn at(change: &Change, old: &Drive, new: &Drive) -> Option<Loc> {
+    if change.subject == "roles" {
+        return Some(new.locate(&role(&change.what)));
+    }
     let id = change.subject.split(' ').next().unwrap_or_default();
     if let Some(r) = new.registers.iter().find(|r| r.def.id == id) {
         let path = match register_key(change.kind) {

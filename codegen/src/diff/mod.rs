@@ -16,6 +16,7 @@ mod locate;
 mod protocol;
 mod registers;
 pub mod render;
+mod roles;
 #[cfg(test)]
 mod tests;
 
@@ -176,13 +177,35 @@ pub fn removed(old: &Drive) -> DriveDiff {
 }
 
 /// Compares two versions of a drive's map.
+///
+/// Every part of a map is compared. The parts are named here field by field, with no `..`, as
+/// are the fields of each part in the function that compares it: a part or key added to the
+/// schema fails to compile until the diff compares it (or says here why it is not a part).
 pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
     let mut c = Collector {
         changes: Vec::new(),
     };
+    let Drive {
+        meta: _,           // protocol::meta
+        address_format: _, // map_documentation
+        module: _,         // derived from meta.id
+        variants: _,       // protocol::variants
+        protocol: _,       // protocol::protocol
+        groups: _,         // map_documentation (registers carry the group defaults)
+        registers: _,      // registers::registers
+        conflicts: _,      // map_documentation
+        gaps: _,           // map_documentation
+        removed: _,        // map_documentation
+        roles: _,          // roles::roles
+        file: _,           // where the map was read, not what it says
+        tree: _,           // the same map as text, for locating changes
+        plan: _,           // derived from the parts above
+        warnings: _,       // how an earlier schema version was read, not what the map says
+    } = new;
     protocol::meta(&mut c, old, new);
     protocol::variants(&mut c, old, new);
     protocol::protocol(&mut c, old, new);
+    roles::roles(&mut c, old, new);
     registers::registers(&mut c, old, new);
     map_documentation(&mut c, old, new);
     c.changes.sort_by_key(|ch| ch.order);
@@ -247,16 +270,36 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
             TAIL,
         );
     }
+    if old.address_format != new.address_format {
+        let text = |f: crate::model::AddressFormat| Some(format!("{f:?}").to_lowercase());
+        c.push(
+            ChangeKind::DocumentationChanged,
+            id,
+            "address format",
+            (text(old.address_format), None),
+            (text(new.address_format), None),
+            TAIL,
+        );
+    }
     let group_docs = |d: &Drive| {
         d.groups
             .iter()
-            .map(|g| {
-                (
-                    g.id.clone(),
-                    g.name.clone(),
-                    g.table.clone(),
-                    g.notes.clone(),
-                )
+            .enumerate()
+            .map(|(gi, g)| {
+                // Access, table, write restriction, transports and repeat rules of a group are
+                // its registers' defaults, and its broadcast flag their membership: compared on
+                // each register (an empty group's flag here).
+                let crate::ir::Group {
+                    id,
+                    name,
+                    table,
+                    source,
+                    broadcast,
+                    notes,
+                    path: _,
+                } = g;
+                let empty = !d.registers.iter().any(|r| r.group == gi);
+                json(&(id, name, table, source, *broadcast && empty, notes))
             })
             .collect::<Vec<_>>()
     };

@@ -11,6 +11,14 @@ use crate::describe;
 pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
     let (a, b) = (&old.meta, &new.meta);
     let id = &b.id;
+    let crate::model::DriveMeta {
+        id: _,
+        extends: _,
+        vendor: _,
+        models: _,
+        manuals: _,
+        description: _,
+    } = b;
     let mut parts = Vec::new();
     if a.id != b.id {
         parts.push("id");
@@ -92,6 +100,60 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
                 );
             }
         }
+        let crate::model::VariantAxis {
+            id: _,
+            name: _,
+            options: _,
+        } = b;
+        let mut docs = Vec::new();
+        if a.name != b.name {
+            docs.push("name".to_owned());
+        }
+        for o in &a.options {
+            let crate::model::VariantOption {
+                id: _,
+                name: _,
+                source: _,
+            } = o;
+            if let Some(p) = b.options.iter().find(|p| p.id == o.id) {
+                if o.name != p.name {
+                    docs.push(format!("option {} name", o.id));
+                }
+                if o.source != p.source {
+                    c.push(
+                        ChangeKind::CitationChanged,
+                        subject,
+                        &format!("{} option {}", a.id, o.id),
+                        (None, o.source.clone()),
+                        (None, p.source.clone()),
+                        HEAD,
+                    );
+                }
+            }
+        }
+        let order = |x: &crate::model::VariantAxis| {
+            x.options.iter().map(|o| o.id.clone()).collect::<Vec<_>>()
+        };
+        let (oa, ob) = (order(a), order(b));
+        let common = |x: &[String], y: &[String]| {
+            x.iter()
+                .filter(|i| y.contains(i))
+                .cloned()
+                .collect::<Vec<_>>()
+        };
+        if common(&oa, &ob) != common(&ob, &oa) {
+            docs.push("option order".to_owned());
+        }
+        if !docs.is_empty() {
+            c.push(
+                ChangeKind::DocumentationChanged,
+                subject,
+                &format!("{}: {}", a.id, docs.join(", ")),
+                (Some(format!("{} ({})", a.name, oa.join(", "))), None),
+                (Some(format!("{} ({})", b.name, ob.join(", "))), None),
+                HEAD,
+            );
+        }
         if let (Some(x), Some(y)) = (a.options.first(), b.options.first()) {
             if x.id != y.id {
                 c.push(
@@ -127,6 +189,23 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
     let (a, b) = (&old.protocol, &new.protocol);
     let s = "protocol";
     let src = (a.source.clone(), b.source.clone());
+    // Each key of the protocol is compared below, in this order.
+    let crate::model::Protocol {
+        transports: _,
+        function_codes: _,
+        max_read: _,
+        max_write: _,
+        slave_address: _,
+        broadcast: _,
+        exceptions: _,
+        commands: _,
+        eeprom: _,
+        addressing: _,
+        timing: _,
+        serial: _,
+        source: _,
+        notes: _,
+    } = b;
 
     let ta: BTreeSet<TransportName> = a.transports.iter().copied().collect();
     let tb: BTreeSet<TransportName> = b.transports.iter().copied().collect();
@@ -188,10 +267,74 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         );
     }
 
-    for (what, x, y) in [
-        ("max_read", a.max_read.value, b.max_read.value),
-        ("max_write", a.max_write.value, b.max_write.value),
+    {
+        // The list's citation and why it is the working list.
+        let crate::model::FunctionCodes {
+            codes: _,
+            source: sa,
+            unknown: ua,
+        } = &a.function_codes;
+        let crate::model::FunctionCodes {
+            codes: _,
+            source: sb,
+            unknown: ub,
+        } = &b.function_codes;
+        if ua != ub {
+            c.push(
+                ChangeKind::DocumentationChanged,
+                s,
+                "function codes: not printed",
+                (ua.clone(), sa.clone()),
+                (ub.clone(), sb.clone()),
+                HEAD,
+            );
+        } else if sa != sb {
+            c.push(
+                ChangeKind::CitationChanged,
+                s,
+                "function codes",
+                (None, sa.clone()),
+                (None, sb.clone()),
+                HEAD,
+            );
+        }
+    }
+    for (what, la, lb) in [
+        ("max_read", &a.max_read, &b.max_read),
+        ("max_write", &a.max_write, &b.max_write),
     ] {
+        let crate::model::Limit {
+            value: x,
+            source: xs,
+            unknown: xu,
+        } = la;
+        let crate::model::Limit {
+            value: y,
+            source: ys,
+            unknown: yu,
+        } = lb;
+        let (x, y) = (*x, *y);
+        if x == y {
+            if xu != yu {
+                c.push(
+                    ChangeKind::DocumentationChanged,
+                    s,
+                    &format!("{what}: not printed"),
+                    (xu.clone(), xs.clone()),
+                    (yu.clone(), ys.clone()),
+                    HEAD,
+                );
+            } else if xs != ys {
+                c.push(
+                    ChangeKind::CitationChanged,
+                    s,
+                    what,
+                    (None, xs.clone()),
+                    (None, ys.clone()),
+                    HEAD,
+                );
+            }
+        }
         if x != y {
             let kind = if y < x {
                 ChangeKind::MaxRequestLowered
@@ -202,8 +345,8 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
                 kind,
                 s,
                 what,
-                (Some(x.to_string()), src.0.clone()),
-                (Some(y.to_string()), src.1.clone()),
+                (Some(x.to_string()), xs.clone().or(src.0.clone())),
+                (Some(y.to_string()), ys.clone().or(src.1.clone())),
                 HEAD,
             );
         }

@@ -131,6 +131,50 @@ fn strictness(w: WriteRestriction) -> u8 {
 }
 
 fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Register) {
+    // Every key of a register, and what the IR adds to it, is compared below: a key added to
+    // the schema fails to compile here until it is.
+    let crate::model::Register {
+        id: _,                   // matching, RegisterRenamed
+        param: _,                // ParamChanged
+        name: _,                 // NameChanged
+        address: _,              // RegisterMoved
+        access: _,               // on the plan (with the group's default)
+        modbus_table: _,         // on the plan
+        unit: _,                 // UnitChanged
+        scale: _,                // scale()
+        signed: _,               // SignednessChanged
+        pair: _,                 // WidthChanged, citations()
+        min: _,                  // ranges()
+        max: _,                  // ranges()
+        max_relative: _,         // RelativeLimitChanged
+        default: _,              // defaults()
+        by_variant: _,           // ranges(), defaults(), documentation(), citations()
+        address_alternatives: _, // AddressAlternativesChanged
+        values: _,               // enum_codes()
+        fields: _,               // fields()
+        read_values: _,          // ReadMeaningChanged, enum_codes()
+        repeat_needs_change: _,  // on the IR register (with the group's)
+        write_restriction: _,    // on the plan
+        transports: _,           // on the plan
+        display_steps: _,        // documentation()
+        repeat: _,               // expanded by the IR: one register per instance
+        source: _,               // CitationChanged
+        indirect: _,             // documentation()
+        notes: _,                // documentation()
+        conflicts: _,            // documentation()
+        unknown: _,              // documentation()
+    } = &n.def;
+    let Register {
+        def: _,
+        access: _,              // on the plan
+        table: _,               // on the plan
+        write_restriction: _,   // on the plan
+        transports: _,          // on the plan
+        broadcast: _,           // BroadcastMembershipChanged
+        group: _,               // GroupChanged
+        path: _,                // where it is written
+        repeat_needs_change: _, // RepeatNeedsChangeChanged, citations()
+    } = n;
     let subject = describe::register(n);
     let order = u32::from(n.def.address) + 1;
     let (pr, pn) = (old.register_plan(r), new.register_plan(n));
@@ -309,6 +353,17 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             Some(lb.unwrap_or_else(|| "none".into())),
         );
     }
+    if pr.read_values == pn.read_values && !same(&a.read_values, &b.read_values) {
+        enum_codes(
+            c,
+            &subject,
+            "read ",
+            &a.read_values,
+            &b.read_values,
+            src.clone(),
+            order,
+        );
+    }
     if pr.read_values != pn.read_values {
         let shown = |x: &Register| {
             if x.def.read_values.is_empty() {
@@ -392,6 +447,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
     ranges(c, new, r, n, &subject, order);
     defaults(c, r, n, &subject, order);
     documentation(c, r, n, &subject, order);
+    citations(c, r, n, &subject, order);
     if a.source != b.source {
         c.push(
             ChangeKind::CitationChanged,
@@ -744,6 +800,65 @@ fn documentation(c: &mut Collector, r: &Register, n: &Register, subject: &str, o
     }
 }
 
+/// Citations of a register's parts that no other comparison shows when they alone change: the
+/// word order's, the repeat rule's, each variant override's.
+fn citations(c: &mut Collector, r: &Register, n: &Register, subject: &str, order: u32) {
+    let (a, b) = (&r.def, &n.def);
+    let pair = |d: &crate::model::Register| d.pair.as_ref().and_then(|p| p.source.clone());
+    if r.width() == n.width() && pair(a) != pair(b) {
+        c.push(
+            ChangeKind::CitationChanged,
+            subject,
+            "word order",
+            (None, pair(a)),
+            (None, pair(b)),
+            order,
+        );
+    }
+    let repeat = |x: &Register| {
+        x.repeat_needs_change
+            .as_ref()
+            .map(|(rule, _)| (rule.between.to_bits(), rule.source.clone()))
+    };
+    if let (Some((x, xs)), Some((y, ys))) = (repeat(r), repeat(n)) {
+        if x == y && xs != ys {
+            c.push(
+                ChangeKind::CitationChanged,
+                subject,
+                "repeat needs change",
+                (None, Some(xs)),
+                (None, Some(ys)),
+                order,
+            );
+        }
+    }
+    let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
+    for option in options {
+        let source = |d: &crate::model::Register| {
+            d.by_variant.get(option).and_then(|o| {
+                let crate::model::VariantOverride {
+                    min: _,
+                    max: _,
+                    default: _,
+                    unknown: _,
+                    source,
+                } = o;
+                source.clone()
+            })
+        };
+        if source(a) != source(b) {
+            c.push(
+                ChangeKind::CitationChanged,
+                subject,
+                &format!("({option})"),
+                (None, source(a)),
+                (None, source(b)),
+                order,
+            );
+        }
+    }
+}
+
 fn code_text(v: &EnumValue) -> String {
     format!("{} `{}`: {}", v.value, v.id, v.name)
 }
@@ -758,6 +873,13 @@ fn enum_codes(
     order: u32,
 ) {
     for x in a {
+        let EnumValue {
+            value: _,
+            id: _,
+            name: _,
+            source: _,
+            indirect: _,
+        } = x;
         let what = format!("{prefix}code {}", x.value);
         let xs = x.source.clone().or(src.0.clone());
         match b.iter().find(|y| y.value == x.value) {
@@ -796,6 +918,15 @@ fn enum_codes(
                         &what,
                         (None, xs),
                         (None, ys),
+                        order,
+                    );
+                } else if x.indirect != y.indirect {
+                    c.push(
+                        ChangeKind::DocumentationChanged,
+                        subject,
+                        &format!("{what} indirect citation"),
+                        (x.indirect.clone(), xs),
+                        (y.indirect.clone(), ys),
                         order,
                     );
                 }
@@ -876,6 +1007,16 @@ fn fields(
         );
     }
     for (x, y) in pairs {
+        let Field {
+            id: _,
+            name: _,
+            bit: _,
+            bits: _,
+            values: _,
+            source: _,
+            indirect: _,
+            notes: _,
+        } = y;
         let fs = (
             x.source.clone().or(src.0.clone()),
             y.source.clone().or(src.1.clone()),
@@ -910,11 +1051,11 @@ fn fields(
             fs.clone(),
             order,
         );
-        if x.notes != y.notes {
+        if x.notes != y.notes || x.indirect != y.indirect {
             c.push(
                 ChangeKind::DocumentationChanged,
                 subject,
-                &format!("field {} notes", y.id),
+                &format!("field {} notes or indirect citation", y.id),
                 (None, fs.0.clone()),
                 (None, fs.1.clone()),
                 order,

@@ -17,6 +17,9 @@ pub enum Format {
     /// GitHub workflow annotations on the changed lines of the map (`::error` for breaking
     /// changes, `::warning` for the rest).
     Github,
+    /// JSON for tools: every change with its kind, severity, both sides, both citations and
+    /// the manual lines they point at.
+    Json,
 }
 
 fn heading(d: &DriveDiff) -> String {
@@ -167,6 +170,17 @@ pub fn kinds(format: Format) -> String {
                 let _ = writeln!(out, "{label}{pad}  {:<10}  {why}", sev.to_string());
             }
         }
+        Format::Json => {
+            let kinds: Vec<serde_json::Value> = ChangeKind::ALL
+                .iter()
+                .map(|&k| {
+                    let (sev, why) = classify(k);
+                    serde_json::json!({"kind": k.label(), "severity": sev.to_string(), "why": why})
+                })
+                .collect();
+            out = serde_json::to_string_pretty(&kinds).unwrap_or_default();
+            out.push('\n');
+        }
         Format::Md | Format::Github => {
             let _ = writeln!(out, "| Change | Severity | Why |\n|---|---|---|");
             for &k in ChangeKind::ALL {
@@ -239,5 +253,61 @@ pub fn github(diffs: &[DriveDiff], manuals: Option<&Manuals>) -> String {
             );
         }
     }
+    out
+}
+
+/// JSON: `{"drives": [{"drive", "breaking", "compatible", "changes": [...]}], "breaking",
+/// "compatible"}`; each change gives `severity`, `kind` (the label of `--kinds`), `subject`,
+/// `what`, `old`, `new`, `old_source`, `new_source`, `old_quote` and `new_quote` (the manual
+/// lines cited, when the manuals are at hand), `why`, and `at` (`file`, `line`, `column` in
+/// the new map).
+pub fn json(diffs: &[DriveDiff], manuals: Option<&Manuals>) -> String {
+    let quote = |s: &Option<String>| {
+        s.as_deref()
+            .and_then(|s| manuals.and_then(|m| m.quote(s)))
+            .map_or(serde_json::Value::Null, serde_json::Value::from)
+    };
+    let drives: Vec<serde_json::Value> = diffs
+        .iter()
+        .map(|d| {
+            let changes: Vec<serde_json::Value> = d
+                .changes
+                .iter()
+                .map(|c| {
+                    serde_json::json!({
+                        "severity": c.severity().to_string(),
+                        "kind": c.kind.label(),
+                        "subject": c.subject,
+                        "what": c.what,
+                        "old": c.old,
+                        "new": c.new,
+                        "old_source": c.old_source,
+                        "new_source": c.new_source,
+                        "old_quote": quote(&c.old_source),
+                        "new_quote": quote(&c.new_source),
+                        "why": c.reason(),
+                        "at": c.at.as_ref().map(|at| serde_json::json!({
+                            "file": at.file.as_ref(),
+                            "line": at.line,
+                            "column": at.col,
+                        })),
+                    })
+                })
+                .collect();
+            serde_json::json!({
+                "drive": d.drive,
+                "breaking": d.breaking(),
+                "compatible": d.compatible(),
+                "changes": changes,
+            })
+        })
+        .collect();
+    let doc = serde_json::json!({
+        "drives": drives,
+        "breaking": diffs.iter().map(DriveDiff::breaking).sum::<usize>(),
+        "compatible": diffs.iter().map(DriveDiff::compatible).sum::<usize>(),
+    });
+    let mut out = serde_json::to_string_pretty(&doc).unwrap_or_default();
+    out.push('\n');
     out
 }

@@ -18,6 +18,9 @@ struct Case {
     /// The edits give the "before" map and the base is "after".
     #[serde(default)]
     swap: bool,
+    /// Edits made to both sides first (a part the base map lacks, such as roles).
+    #[serde(default)]
+    common: Vec<Edit>,
     edits: Vec<Edit>,
 }
 
@@ -53,7 +56,14 @@ fn kind_of(label: &str) -> Result<ChangeKind, String> {
 
 /// Runs one case; returns the kinds it produced, or what went wrong.
 fn run(case: &Case) -> Result<Vec<ChangeKind>, String> {
-    let base = base();
+    let mut base = base();
+    for e in &case.common {
+        let n = base.matches(e.from.as_str()).count();
+        if n != 1 {
+            return Err(format!("`{}` occurs {n} times, not once", e.from));
+        }
+        base = base.replace(e.from.as_str(), &e.to);
+    }
     let mut edited = base.clone();
     for e in &case.edits {
         let n = edited.matches(e.from.as_str()).count();
@@ -87,8 +97,16 @@ fn run(case: &Case) -> Result<Vec<ChangeKind>, String> {
     for c in &diff.changes {
         let register_change = !matches!(
             c.subject.as_str(),
-            "protocol" | "variants" | "example-drive"
+            "protocol" | "variants" | "roles" | "example-drive"
         );
+        // Role changes cite each side that exists, as register changes do.
+        if c.subject == "roles"
+            && c.kind != ChangeKind::DocumentationChanged
+            && (c.old_source.is_some() != (c.kind != ChangeKind::RoleAdded)
+                || c.new_source.is_some() != (c.kind != ChangeKind::RoleRemoved))
+        {
+            return Err(format!("role citations missing or extra: {c:?}"));
+        }
         // Register changes cite each side that exists.
         let old_exists = c.kind != ChangeKind::RegisterAdded;
         let new_exists = c.kind != ChangeKind::RegisterRemoved;
@@ -146,6 +164,7 @@ fn scale_change_carries_both_citations_and_the_values() {
     let case = Case {
         expect: vec!["scale changed".into()],
         swap: false,
+        common: Vec::new(),
         edits: vec![Edit {
             from: "scale: 0.1, min: 50.0".into(),
             to: "scale: 0.01, min: 50.0".into(),

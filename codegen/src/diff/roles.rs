@@ -1,0 +1,360 @@
+//! Differences of roles: which register, field or external quantity plays each standard part
+//! of a drive, with which codes. Roles decide what the drive API (`VariableFrequencyDrive`)
+//! reads and writes, so they are classified like registers: a role removed, re-pointed or given
+//! other codes is breaking, one added is compatible; a citation or note is documentation.
+//!
+//! A place is compared by what it means, resolved as the lowering resolves it (`lower.rs`,
+//! `role_target`): the register (by id, or the same address and parameter number when the
+//! register was renamed), the field's bits, the codes as numbers (`on: run` and `on: 1` are the
+//! same code), the default codes of a 1-bit field, `edge`, `shared_with`. A place written otherwise with the
+//! same meaning (a register by parameter number instead of id, a code by id instead of number)
+//! is reported as documentation.
+
+use std::collections::BTreeSet;
+
+use crate::describe;
+use crate::ir::Drive;
+use crate::model::{CodeRef, Codes, RolePlace};
+use crate::names::field_span;
+
+use super::{ChangeKind, Collector, HEAD};
+
+/// What a role place resolves to.
+#[derive(Debug, Clone, PartialEq)]
+enum Target {
+    Register {
+        id: String,
+        address: u16,
+        param: Option<String>,
+    },
+    Field {
+        register: String,
+        address: u16,
+        param: Option<String>,
+        field: String,
+        span: Option<(u8, u8)>,
+    },
+    External(String),
+    /// Names something the map does not have (validation refuses it; kept for completeness).
+    Unresolved(String),
+}
+
+impl Target {
+    /// The same register (or field of it, or quantity) on both sides: by id, or by address and
+    /// parameter number (a renamed register), and for a field by id or bits.
+    fn same(&self, other: &Target) -> bool {
+        let same_register = |a: (&str, u16, &Option<String>), b: (&str, u16, &Option<String>)| {
+            a.0 == b.0 || (a.1 == b.1 && a.2 == b.2)
+        };
+        match (self, other) {
+            (
+                Target::Register { id, address, param },
+                Target::Register {
+                    id: i2,
+                    address: a2,
+                    param: p2,
+                },
+            ) => same_register((id, *address, param), (i2, *a2, p2)),
+            (
+                Target::Field {
+                    register,
+                    address,
+                    param,
+                    field,
+                    span,
+                },
+                Target::Field {
+                    register: r2,
+                    address: a2,
+                    param: p2,
+                    field: f2,
+                    span: s2,
+                },
+            ) => {
+                same_register((register, *address, param), (r2, *a2, p2))
+                    && span == s2
+                    && (field == f2 || span.is_some())
+            }
+            (Target::External(a), Target::External(b)) => a == b,
+            (Target::Unresolved(a), Target::Unresolved(b)) => a == b,
+            _ => false,
+        }
+    }
+
+    fn text(&self) -> String {
+        match self {
+            Target::Register { id, address, .. } => {
+                format!("{id} ({})", describe::address(*address))
+            }
+            Target::Field {
+                register,
+                address,
+                field,
+                span,
+                ..
+            } => {
+                let bits = span
+                    .map(|(lsb, w)| describe::bit_span(lsb, w))
+                    .unwrap_or_else(|| "no bits".into());
+                format!(
+                    "field `{field}` ({bits}) of {register} ({})",
+                    describe::address(*address)
+                )
+            }
+            Target::External(name) => format!("external quantity `{name}`"),
+            Target::Unresolved(name) => format!("`{name}` (not in the map)"),
+        }
+    }
+}
+
+/// A place's meaning: where, and the codes (field places only).
+#[derive(Debug, Clone, PartialEq)]
+struct Meaning {
+    target: Target,
+    on: Vec<Option<u16>>,
+    off: Option<u16>,
+    edge: bool,
+    /// The role it shares its register or bits with, as the map says.
+    shared_with: Option<String>,
+}
+
+impl Meaning {
+    fn of(drive: &Drive, p: &RolePlace) -> Meaning {
+        // Every key of a place is read here or below: a new key fails to compile until the diff
+        // compares it.
+        let RolePlace {
+            register,
+            field,
+            external,
+            on,
+            off,
+            edge,
+            shared_with,
+            source: _,
+            notes: _,
+        } = p;
+        let target = match (register, external) {
+            (_, Some(name)) => Target::External(name.clone()),
+            (Some(name), None) => match drive.find(name) {
+                None => Target::Unresolved(name.clone()),
+                Some(r) => match field {
+                    None => Target::Register {
+                        id: r.def.id.clone(),
+                        address: r.def.address,
+                        param: r.def.param.clone(),
+                    },
+                    Some(fid) => {
+                        let f = r.def.fields.iter().find(|f| f.id == *fid);
+                        Target::Field {
+                            register: r.def.id.clone(),
+                            address: r.def.address,
+                            param: r.def.param.clone(),
+                            field: fid.clone(),
+                            span: f.and_then(field_span),
+                        }
+                    }
+                },
+            },
+            (None, None) => Target::Unresolved(String::new()),
+        };
+        let values: Vec<(String, u16)> = match (register, field) {
+            (Some(name), Some(fid)) => drive
+                .find(name)
+                .and_then(|r| r.def.fields.iter().find(|f| f.id == *fid))
+                .map(|f| f.values.iter().map(|v| (v.id.clone(), v.value)).collect())
+                .unwrap_or_default(),
+            _ => Vec::new(),
+        };
+        let code = |c: &CodeRef| match c {
+            CodeRef::Number(n) => Some(*n),
+            CodeRef::Id(id) => values.iter().find(|(v, _)| v == id).map(|(_, n)| *n),
+        };
+        let width = match &target {
+            Target::Field { span, .. } => span.map(|(_, w)| w),
+            _ => None,
+        };
+        let (on, off) = if matches!(target, Target::Field { .. }) {
+            let on: Vec<Option<u16>> = match on {
+                Some(codes) => codes.list().into_iter().map(code).collect(),
+                None => vec![Some(1)],
+            };
+            let off = match off {
+                Some(c) => code(c),
+                None if width == Some(1) => Some(if on == [Some(0)] { 1 } else { 0 }),
+                None => None,
+            };
+            (on, off)
+        } else {
+            // A register or external place has no codes (validation refuses them there); what
+            // is written is compared as written.
+            (
+                on.as_ref()
+                    .map(|c| c.list().into_iter().map(code).collect())
+                    .unwrap_or_default(),
+                off.as_ref().and_then(code),
+            )
+        };
+        Meaning {
+            target,
+            on,
+            off,
+            edge: *edge,
+            shared_with: shared_with.clone(),
+        }
+    }
+
+    fn codes_text(&self) -> String {
+        let shared = self
+            .shared_with
+            .as_ref()
+            .map(|r| format!("shared with `{r}`"));
+        if self.on.is_empty() && self.off.is_none() && !self.edge {
+            return shared.unwrap_or_default();
+        }
+        let on: Vec<String> = self
+            .on
+            .iter()
+            .map(|c| c.map_or("?".into(), |c| c.to_string()))
+            .collect();
+        let mut s = format!("on {}", on.join(" or "));
+        if let Some(off) = self.off {
+            s += &format!(", off {off}");
+        }
+        if self.edge {
+            s += ", on the transition";
+        }
+        if let Some(shared) = shared {
+            s += &format!(", {shared}");
+        }
+        s
+    }
+
+    fn text(&self) -> String {
+        let codes = self.codes_text();
+        if codes.is_empty() {
+            self.target.text()
+        } else {
+            format!("{}, {codes}", self.target.text())
+        }
+    }
+}
+
+fn places_text(drive: &Drive, places: &[RolePlace]) -> String {
+    places
+        .iter()
+        .map(|p| Meaning::of(drive, p).text())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+fn first_source(places: &[RolePlace]) -> Option<String> {
+    places.iter().find_map(|p| p.source.clone())
+}
+
+/// How a place is written, apart from its citation and notes.
+fn spelling(p: &RolePlace) -> (Option<&str>, Option<&str>, Option<&str>, Option<&Codes>) {
+    (
+        p.register.as_deref(),
+        p.field.as_deref(),
+        p.external.as_deref(),
+        p.on.as_ref(),
+    )
+}
+
+pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
+    let subject = "roles";
+    let ids: BTreeSet<&String> = old.roles.keys().chain(new.roles.keys()).collect();
+    for id in ids {
+        let empty = Vec::new();
+        let a = old.roles.get(id).unwrap_or(&empty);
+        let b = new.roles.get(id).unwrap_or(&empty);
+        match (a.is_empty(), b.is_empty()) {
+            (true, true) => continue,
+            (false, true) => {
+                c.push(
+                    ChangeKind::RoleRemoved,
+                    subject,
+                    id,
+                    (Some(places_text(old, a)), first_source(a)),
+                    (None, None),
+                    HEAD,
+                );
+                continue;
+            }
+            (true, false) => {
+                c.push(
+                    ChangeKind::RoleAdded,
+                    subject,
+                    id,
+                    (None, None),
+                    (Some(places_text(new, b)), first_source(b)),
+                    HEAD,
+                );
+                continue;
+            }
+            (false, false) => {}
+        }
+        let ma: Vec<Meaning> = a.iter().map(|p| Meaning::of(old, p)).collect();
+        let mb: Vec<Meaning> = b.iter().map(|p| Meaning::of(new, p)).collect();
+        let repointed =
+            ma.len() != mb.len() || ma.iter().zip(&mb).any(|(x, y)| !x.target.same(&y.target));
+        if repointed {
+            c.push(
+                ChangeKind::RoleRepointed,
+                subject,
+                id,
+                (Some(places_text(old, a)), first_source(a)),
+                (Some(places_text(new, b)), first_source(b)),
+                HEAD,
+            );
+            continue;
+        }
+        for (i, ((x, y), (p, q))) in ma.iter().zip(&mb).zip(a.iter().zip(b)).enumerate() {
+            let what = if a.len() == 1 {
+                id.clone()
+            } else {
+                format!("{id} place {}", i + 1)
+            };
+            let sides = |m: &Meaning, s: &RolePlace| (Some(m.text()), s.source.clone());
+            if (&x.on, x.off, x.edge, &x.shared_with) != (&y.on, y.off, y.edge, &y.shared_with) {
+                c.push(
+                    ChangeKind::RoleCodesChanged,
+                    subject,
+                    &what,
+                    sides(x, p),
+                    sides(y, q),
+                    HEAD,
+                );
+                continue;
+            }
+            // Same meaning: how it is written, its notes, its citation.
+            let mut parts = Vec::new();
+            if spelling(p) != spelling(q) || p.off != q.off || x.target != y.target {
+                parts.push("written otherwise");
+            }
+            if p.notes != q.notes {
+                parts.push("notes");
+            }
+            if !parts.is_empty() {
+                c.push(
+                    ChangeKind::DocumentationChanged,
+                    subject,
+                    &format!("{what}: {}", parts.join(", ")),
+                    sides(x, p),
+                    sides(y, q),
+                    HEAD,
+                );
+            }
+            if p.source != q.source {
+                c.push(
+                    ChangeKind::CitationChanged,
+                    subject,
+                    &what,
+                    (None, p.source.clone()),
+                    (None, q.source.clone()),
+                    HEAD,
+                );
+            }
+        }
+    }
+}
