@@ -71,7 +71,8 @@ fn the_fixture_map_verifies_against_its_manual() {
     assert_eq!(
         out,
         "ok   cli/tests/fixtures/example-drive.yaml (example-drive: 19 registers; \
-         citations: 29 of 29 verified, 0 indirect, 0 unverified)\n"
+         protocol 11 of 11, conflicts 4 of 4, gaps 1 of 1 verified; \
+         citations: 45 of 45 verified, 0 indirect, 0 unverified)\n"
     );
 }
 
@@ -98,7 +99,7 @@ fn a_citation_moved_to_the_next_row_is_reported_with_the_line_and_whose_row_it_i
          (the row of `frequency_units (P-03)`); fix the line, or mark it `indirect: <reason>`\n"
     );
     assert!(
-        out.contains("28 of 29 verified, 0 indirect, 1 unverified"),
+        out.contains("44 of 45 verified, 0 indirect, 1 unverified"),
         "{out}"
     );
 
@@ -136,7 +137,7 @@ fn an_indirect_citation_with_its_reason_is_accepted_and_counted() {
     );
     assert_eq!((code, err.as_str()), (0, ""), "{out}");
     assert!(
-        out.contains("28 of 29 verified, 1 indirect, 0 unverified"),
+        out.contains("44 of 45 verified, 1 indirect, 0 unverified"),
         "{out}"
     );
 
@@ -494,8 +495,8 @@ fn page_citations_are_counted_not_verified_by_content() {
     assert_eq!(
         out,
         "ok   cli/tests/fixtures/paged-manual.yaml (paged-manual: 2 registers; \
-         citations: 2 of 4 verified, 0 indirect, 0 unverified, \
-         2 page citations (not verifiable by content))\n"
+         citations: 2 of 5 verified, 0 indirect, 0 unverified, \
+         3 page citations (not verifiable by content))\n"
     );
 }
 
@@ -523,8 +524,8 @@ fn a_map_citing_only_pages_needs_no_manuals_directory() {
     assert_eq!((code, err.as_str()), (0, ""), "{out}");
     assert_eq!(
         out,
-        "ok   paged-manual.yaml (paged-manual: 2 registers; citations: 0 of 4 verified, \
-         0 indirect, 0 unverified, 4 page citations (not verifiable by content))\n"
+        "ok   paged-manual.yaml (paged-manual: 2 registers; citations: 0 of 5 verified, \
+         0 indirect, 0 unverified, 5 page citations (not verifiable by content))\n"
     );
 }
 
@@ -587,5 +588,120 @@ fn check_of_an_empty_maps_directory_is_an_error() {
             "{dir}: no maps to check (no *.yaml or *.yml file in the directory)"
         )),
         "{err}"
+    );
+}
+
+/// The issue's review: a role citing the manual's title line passed `check --strict` (its
+/// citations were not read). Roles, protocol items, readings of conflicts and gaps are read like
+/// register citations: a citation of an unrelated line fails `--strict`, naming the item and
+/// quoting the line; `indirect: <reason>` is the escape, counted as indirect.
+#[test]
+fn a_role_protocol_conflict_or_gap_citing_an_unrelated_line_fails_strict() {
+    let s = Scratch::new("review-others");
+    let manuals = repo().join("tests/fixtures/acme-vf1/manuals");
+    let map =
+        std::fs::read_to_string(repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
+    let title = "ACME VF-1 VARIABLE FREQUENCY DRIVE - MODBUS COMMUNICATION MANUAL";
+    let role = "{register: control_word, field: run_stop, on: run, off: stop, source: \"acme-vf1.txt:16\"}";
+    let slave = "slave_address: {min: 1, max: 254, default: 1, source: \"acme-vf1.txt:5\"}";
+    let mut edited = edit(
+        &map,
+        role,
+        &role.replace("acme-vf1.txt:16", "acme-vf1.txt:1"),
+    );
+    edited = edit(
+        &edited,
+        slave,
+        &slave.replace("acme-vf1.txt:5", "acme-vf1.txt:1"),
+    );
+    std::fs::write(s.0.join("acme-vf1.yaml"), &edited).unwrap();
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&manuals),
+        &["check", "--strict", "acme-vf1.yaml"],
+    );
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(
+        err.contains(&format!(
+            "acme-vf1.yaml:248:69: error: citation of role `run` `acme-vf1.txt:1` does not \
+             mention field \"Run/stop command\" (bits 0–1) of control_word: `{title}`"
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!(
+            "error: citation of the slave address `acme-vf1.txt:1` does not mention one of \
+             `address`, `addresses`, `station`, `slave`, `node`: `{title}`"
+        )),
+        "{err}"
+    );
+    assert!(
+        out.contains("roles 19 of 20, protocol 15 of 16 verified; citations: 82 of 84 verified, 0 indirect, 2 unverified"),
+        "{out}"
+    );
+    // Without --strict: warnings, exit 0.
+    let (code, _, err) = drivemap(&s.0, Some(&manuals), &["check", "acme-vf1.yaml"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(err.matches(": warning: citation of").count(), 2, "{err}");
+    // Marked indirect with a reason, both pass and are counted so.
+    let mut indirect = edit(
+        &edited,
+        "on: run, off: stop, source: \"acme-vf1.txt:1\"}",
+        "on: run, off: stop, indirect: \"a test of the escape\", source: \"acme-vf1.txt:1\"}",
+    );
+    indirect = edit(
+        &indirect,
+        "default: 1, source: \"acme-vf1.txt:1\"}",
+        "default: 1, indirect: \"a test of the escape\", source: \"acme-vf1.txt:1\"}",
+    );
+    std::fs::write(s.0.join("acme-vf1.yaml"), &indirect).unwrap();
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&manuals),
+        &["check", "--strict", "acme-vf1.yaml"],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("roles 19 of 20, protocol 15 of 16 verified; citations: 82 of 84 verified, 2 indirect, 0 unverified"),
+        "{out}"
+    );
+    // A reading of a conflict and a gap citing the fixture manual's title line.
+    let example = fixture();
+    let mut edited = edit(
+        &example,
+        "{source: \"manual.txt:91\", says: \"1-32\"}",
+        "{source: \"manual.txt:1\", says: \"1-32\"}",
+    );
+    edited = edit(
+        &edited,
+        "description: Page missing from the OCR text, source: \"manual.txt:34\"}",
+        "description: Page missing from the OCR text, source: \"manual.txt:1\"}",
+    );
+    std::fs::write(s.0.join("example-drive.yaml"), &edited).unwrap();
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&fixture_manuals()),
+        &["check", "--strict", "example-drive.yaml"],
+    );
+    assert_eq!(code, 1, "{out}{err}");
+    let line1 = "Example drive ED-1 communication manual (fixture for the command-line tests)";
+    assert!(
+        err.contains(&format!(
+            "error: citation of a reading of conflict \"Slave address range\" `manual.txt:1` does \
+             not mention one of \"1-32\", 1-32, 1 to 32, 1 ~ 32, 1~32, 1 - 32, 1-32: `{line1}`"
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!(
+            "error: citation of gap 0024h – 002Fh `manual.txt:1` does not mention one of \
+             \"not used\", U-05, U-16, 0024h, 002Fh, 0023h, 0030h, `reserved`, `unused`, \
+             `missing`: `{line1}`"
+        )),
+        "{err}"
+    );
+    assert!(
+        out.contains("protocol 11 of 11, conflicts 3 of 4, gaps 0 of 1 verified; citations: 43 of 45 verified, 0 indirect, 2 unverified"),
+        "{out}"
     );
 }

@@ -84,6 +84,10 @@ pub struct RolePlace {
     /// The manual line that says this register or field plays the role.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
@@ -255,6 +259,10 @@ pub struct Protocol {
     pub serial: Option<Serial>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
@@ -289,6 +297,10 @@ pub struct SlaveAddress {
     pub param: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -307,6 +319,10 @@ pub struct Broadcast {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unknown: Option<String>,
     pub source: String,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -317,6 +333,10 @@ pub struct ExceptionCode {
     #[serde(default)]
     pub description: String,
     pub source: String,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
@@ -337,6 +357,10 @@ pub struct Command {
     /// Writes in order.
     pub writes: Vec<CommandWrite>,
     pub source: String,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -352,6 +376,10 @@ pub struct Eeprom {
     /// Writes the manual says the memory endures.
     pub endurance: u32,
     pub source: String,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -365,6 +393,10 @@ pub struct Addressing {
     pub tcp_offset: i32,
     pub description: String,
     pub source: String,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -393,6 +425,10 @@ pub struct Timing {
     pub request_gap: Option<Interval>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
@@ -413,6 +449,10 @@ pub struct Interval {
     pub chars: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -439,6 +479,10 @@ pub struct Serial {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub formats: Option<SerialFormats>,
     pub source: String,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 /// `serial.formats`: the formats a parameter selects.
@@ -449,6 +493,10 @@ pub struct SerialFormats {
     pub selected_by: String,
     pub cases: Vec<SerialFormatCase>,
     pub source: String,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 /// One format: the selecting parameter's code and the character it gives.
@@ -464,6 +512,10 @@ pub struct SerialFormatCase {
     pub stop_bits: u8,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 fn default_data_bits() -> u8 {
@@ -922,6 +974,10 @@ pub struct Conflict {
 #[serde(deny_unknown_fields)]
 pub struct Reading {
     pub source: String,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
     pub says: String,
 }
 
@@ -959,6 +1015,10 @@ pub struct Gap {
     pub params: Option<String>,
     pub description: String,
     pub source: String,
+    /// The citation is deliberately indirect (the line does not mention the item itself); the
+    /// reason is required. Review does not check such a citation by content.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<String>,
 }
 
 /// A register of the base map that a variant map does not have.

@@ -110,6 +110,34 @@ impl std::fmt::Display for CitationCounts {
     }
 }
 
+/// Verified of each kind of citation outside the registers that can be read (not page
+/// citations), as `roles 20 of 20, protocol 14 of 15, conflicts 30 of 32, gaps 6 of 6
+/// verified`; empty when the map has none.
+pub fn kinds_verified(checks: &[review::CitationCheck]) -> String {
+    let mut parts = Vec::new();
+    for (kind, label) in [
+        ("role", "roles"),
+        ("protocol", "protocol"),
+        ("conflict", "conflicts"),
+        ("gap", "gaps"),
+    ] {
+        let of: Vec<&review::CitationCheck> = checks
+            .iter()
+            .filter(|c| matches!(&c.item, review::Item::Other { kind: k, .. } if *k == kind))
+            .filter(|c| !matches!(c.verdict, Verdict::Page | Verdict::Unchecked))
+            .collect();
+        if !of.is_empty() {
+            let verified = of.iter().filter(|c| c.verified()).count();
+            parts.push(format!("{label} {verified} of {}", of.len()));
+        }
+    }
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!("{} verified", parts.join(", "))
+    }
+}
+
 pub fn run(args: Args) -> Result<ExitCode, String> {
     // (name shown, map read, manuals directory for its citations)
     type Checked = (String, Result<Drive, Diagnostics>, Option<PathBuf>);
@@ -211,6 +239,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                     }
                     if args.strict {
                         map_errors += counts.unverified;
+                    }
+                    let by_kind = kinds_verified(&checks);
+                    if !by_kind.is_empty() {
+                        summary.push_str(&format!("; {by_kind}"));
                     }
                     summary.push_str(&format!("; {counts}"));
                 }

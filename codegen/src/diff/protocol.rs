@@ -205,6 +205,7 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         serial: _,
         source: _,
         notes: _,
+        indirect: _,
     } = b;
 
     let ta: BTreeSet<TransportName> = a.transports.iter().copied().collect();
@@ -461,11 +462,11 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             HEAD,
         );
     }
-    if a.notes != b.notes {
+    if a.notes != b.notes || a.indirect != b.indirect {
         c.push(
             ChangeKind::DocumentationChanged,
             s,
-            "notes",
+            "notes or indirect citation",
             (Some(format!("{} note(s)", a.notes.len())), src.0.clone()),
             (Some(format!("{} note(s)", b.notes.len())), src.1.clone()),
             HEAD,

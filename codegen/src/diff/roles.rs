@@ -25,12 +25,14 @@ enum Target {
     Register {
         id: String,
         address: u16,
-        param: Option<String>,
+        /// Parameter number, table and broadcast membership: with the address, what identifies
+        /// a register that was renamed.
+        param: (Option<String>, bool, bool),
     },
     Field {
         register: String,
         address: u16,
-        param: Option<String>,
+        param: (Option<String>, bool, bool),
         field: String,
         span: Option<(u8, u8)>,
     },
@@ -43,9 +45,8 @@ impl Target {
     /// The same register (or field of it, or quantity) on both sides: by id, or by address and
     /// parameter number (a renamed register), and for a field by id or bits.
     fn same(&self, other: &Target) -> bool {
-        let same_register = |a: (&str, u16, &Option<String>), b: (&str, u16, &Option<String>)| {
-            a.0 == b.0 || (a.1 == b.1 && a.2 == b.2)
-        };
+        type Key<'a> = (&'a str, u16, &'a (Option<String>, bool, bool));
+        let same_register = |a: Key<'_>, b: Key<'_>| a.0 == b.0 || (a.1 == b.1 && a.2 == b.2);
         match (self, other) {
             (
                 Target::Register { id, address, param },
@@ -131,8 +132,16 @@ impl Meaning {
             edge,
             shared_with,
             source: _,
+            indirect: _,
             notes: _,
         } = p;
+        let key = |r: &crate::ir::Register| {
+            (
+                r.def.param.clone(),
+                r.table == crate::model::ModbusTable::Input,
+                r.broadcast,
+            )
+        };
         let target = match (register, external) {
             (_, Some(name)) => Target::External(name.clone()),
             (Some(name), None) => match drive.find(name) {
@@ -141,14 +150,14 @@ impl Meaning {
                     None => Target::Register {
                         id: r.def.id.clone(),
                         address: r.def.address,
-                        param: r.def.param.clone(),
+                        param: key(r),
                     },
                     Some(fid) => {
                         let f = r.def.fields.iter().find(|f| f.id == *fid);
                         Target::Field {
                             register: r.def.id.clone(),
                             address: r.def.address,
-                            param: r.def.param.clone(),
+                            param: key(r),
                             field: fid.clone(),
                             span: f.and_then(field_span),
                         }
@@ -334,6 +343,9 @@ pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
             }
             if p.notes != q.notes {
                 parts.push("notes");
+            }
+            if p.indirect != q.indirect {
+                parts.push("indirect citation");
             }
             if !parts.is_empty() {
                 c.push(

@@ -36,6 +36,14 @@ pub enum Item {
         bit: String,
         name: String,
     },
+    /// A citation outside the registers ([`super::others`]): of a role, a protocol item, a
+    /// reading of a conflict, a gap.
+    Other {
+        /// `role`, `protocol`, `conflict` or `gap`.
+        kind: &'static str,
+        /// What it cites (`role `run``, `exception 21h`).
+        what: String,
+    },
 }
 
 /// The outcome of checking one citation.
@@ -84,6 +92,7 @@ impl CitationCheck {
             Item::Register => String::new(),
             Item::Value { code, .. } => format!(" of code {code}"),
             Item::Field { bit, .. } => format!(" of bit {bit}"),
+            Item::Other { what, .. } => format!(" of {what}"),
         };
         let mut message = format!(
             "citation{what} `{}` does not mention {}: `{}`",
@@ -97,7 +106,7 @@ impl CitationCheck {
         message.push_str("; fix the line, or mark it `indirect: <reason>`");
         Some(super::Warning {
             loc: self.loc.clone(),
-            register: Some(self.register.clone()),
+            register: (!self.register.is_empty()).then(|| self.register.clone()),
             message,
         })
     }
@@ -154,7 +163,8 @@ impl Cache<'_> {
 /// How far around a line other registers are looked for when deciding whose row it is.
 const WINDOW: usize = 80;
 
-/// Checks every register, value and field citation of a drive against the manuals.
+/// Checks every citation of a drive against the manuals: registers, values and fields, then
+/// roles, protocol items, readings of conflicts and gaps ([`super::others`]).
 pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> {
     let decimal = drive.address_format == crate::model::AddressFormat::Decimal;
     let offsets = drive
@@ -261,6 +271,32 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
             values(&f.values, fp.key("values"), &mut out);
         }
     }
+    for o in super::others::other_citations(drive) {
+        let Some(source) = o.source else {
+            continue;
+        };
+        let verdict = match &o.indirect {
+            Some(reason) => Verdict::Indirect(reason.clone()),
+            None => match &o.rule {
+                super::others::Rule::Register(i) => {
+                    register_verdict(drive, &keys, &by_file, &mut cache, *i, &source)
+                }
+                rule => near(manuals, &source, |l| rule.found(drive, offsets, l)),
+            },
+        };
+        out.push(CitationCheck {
+            loc: drive.locate(&o.path),
+            register: String::new(),
+            expected: o.rule.expected(drive),
+            quote: manuals.quote(&source),
+            item: Item::Other {
+                kind: o.kind,
+                what: o.what,
+            },
+            source,
+            verdict,
+        });
+    }
     out
 }
 
@@ -286,12 +322,12 @@ fn check(
     }
 }
 
-fn value_found(v: &EnumValue, line: &Line) -> bool {
+pub(crate) fn value_found(v: &EnumValue, line: &Line) -> bool {
     let label = label_text(&v.name);
     name_found(&label, line) && code_found(v.value, &label, line)
 }
 
-fn field_found(f: &Field, line: &Line) -> bool {
+pub(crate) fn field_found(f: &Field, line: &Line) -> bool {
     let bit = f.bit.or(f.bits.map(|b| b[0]));
     if let Some([lo, hi]) = f.bits {
         // `B0-B7`, OCR `BO-B7`

@@ -217,7 +217,9 @@ pub fn name_words(name: &str) -> Vec<String> {
         .collect()
 }
 
-fn word_found(word: &str, line: &Line) -> bool {
+/// Whether the line prints a word (lower case): as a word of its own when short, anywhere in the
+/// squashed line when it has four letters or more (OCR spaces inside words).
+pub fn word_found(word: &str, line: &Line) -> bool {
     if word.chars().count() >= 4 {
         line.squashed.contains(word)
     } else {

@@ -9,6 +9,7 @@
 pub mod citations;
 pub mod coverage;
 pub mod matching;
+pub mod others;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
