@@ -37,6 +37,8 @@ enum Target {
         span: Option<(u8, u8)>,
     },
     External(String),
+    /// A place the manual does not print (`unknown: <why>`, no register).
+    NotPrinted,
     /// Names something the map does not have (validation refuses it; kept for completeness).
     Unresolved(String),
 }
@@ -77,6 +79,7 @@ impl Target {
                     && (field == f2 || span.is_some())
             }
             (Target::External(a), Target::External(b)) => a == b,
+            (Target::NotPrinted, Target::NotPrinted) => true,
             (Target::Unresolved(a), Target::Unresolved(b)) => a == b,
             _ => false,
         }
@@ -103,6 +106,7 @@ impl Target {
                 )
             }
             Target::External(name) => format!("external quantity `{name}`"),
+            Target::NotPrinted => "not printed".to_owned(),
             Target::Unresolved(name) => format!("`{name}` (not in the map)"),
         }
     }
@@ -112,6 +116,8 @@ impl Target {
 #[derive(Debug, Clone, PartialEq)]
 struct Meaning {
     target: Target,
+    /// The links the place holds on (`None`: every transport of the map).
+    transports: Option<Vec<crate::model::TransportName>>,
     on: Vec<Option<u16>>,
     off: Option<u16>,
     edge: bool,
@@ -131,6 +137,8 @@ impl Meaning {
             off,
             edge,
             shared_with,
+            transports,
+            unknown,
             source: _,
             indirect: _,
             notes: _,
@@ -164,16 +172,27 @@ impl Meaning {
                     }
                 },
             },
+            (None, None) if unknown.is_some() => Target::NotPrinted,
             (None, None) => Target::Unresolved(String::new()),
         };
-        let values: Vec<(String, u16)> = match (register, field) {
-            (Some(name), Some(fid)) => drive
-                .find(name)
-                .and_then(|r| r.def.fields.iter().find(|f| f.id == *fid))
-                .map(|f| f.values.iter().map(|v| (v.id.clone(), v.value)).collect())
-                .unwrap_or_default(),
-            _ => Vec::new(),
-        };
+        // Codes by id: the field's values, or the register's own (a source role's `on: rs485`).
+        let values: Vec<(String, u16)> =
+            match (register.as_deref().and_then(|n| drive.find(n)), field) {
+                (Some(r), Some(fid)) => r
+                    .def
+                    .fields
+                    .iter()
+                    .find(|f| f.id == *fid)
+                    .map(|f| f.values.iter().map(|v| (v.id.clone(), v.value)).collect())
+                    .unwrap_or_default(),
+                (Some(r), None) => r
+                    .def
+                    .values
+                    .iter()
+                    .map(|v| (v.id.clone(), v.value))
+                    .collect(),
+                _ => Vec::new(),
+            };
         let code = |c: &CodeRef| match c {
             CodeRef::Number(n) => Some(*n),
             CodeRef::Id(id) => values.iter().find(|(v, _)| v == id).map(|(_, n)| *n),
@@ -203,8 +222,15 @@ impl Meaning {
                 off.as_ref().and_then(code),
             )
         };
+        let transports = transports.as_ref().map(|t| {
+            let mut t = t.clone();
+            t.sort();
+            t.dedup();
+            t
+        });
         Meaning {
             target,
+            transports,
             on,
             off,
             edge: *edge,
@@ -240,11 +266,15 @@ impl Meaning {
 
     fn text(&self) -> String {
         let codes = self.codes_text();
-        if codes.is_empty() {
-            self.target.text()
-        } else {
-            format!("{}, {codes}", self.target.text())
+        let mut s = self.target.text();
+        if !codes.is_empty() {
+            s = format!("{s}, {codes}");
         }
+        if let Some(t) = &self.transports {
+            let t: Vec<String> = t.iter().map(|t| t.to_string()).collect();
+            s = format!("{s}, on {}", t.join(" and "));
+        }
+        s
     }
 }
 
@@ -261,12 +291,21 @@ fn first_source(places: &[RolePlace]) -> Option<String> {
 }
 
 /// How a place is written, apart from its citation and notes.
-fn spelling(p: &RolePlace) -> (Option<&str>, Option<&str>, Option<&str>, Option<&Codes>) {
+type Spelling<'a> = (
+    Option<&'a str>,
+    Option<&'a str>,
+    Option<&'a str>,
+    Option<&'a Codes>,
+    Option<&'a str>,
+);
+
+fn spelling(p: &RolePlace) -> Spelling<'_> {
     (
         p.register.as_deref(),
         p.field.as_deref(),
         p.external.as_deref(),
         p.on.as_ref(),
+        p.unknown.as_deref(),
     )
 }
 
@@ -305,8 +344,11 @@ pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
         }
         let ma: Vec<Meaning> = a.iter().map(|p| Meaning::of(old, p)).collect();
         let mb: Vec<Meaning> = b.iter().map(|p| Meaning::of(new, p)).collect();
-        let repointed =
-            ma.len() != mb.len() || ma.iter().zip(&mb).any(|(x, y)| !x.target.same(&y.target));
+        let repointed = ma.len() != mb.len()
+            || ma
+                .iter()
+                .zip(&mb)
+                .any(|(x, y)| !x.target.same(&y.target) || x.transports != y.transports);
         if repointed {
             c.push(
                 ChangeKind::RoleRepointed,

@@ -368,7 +368,18 @@ fn roles(drive: &Drive, out: &mut Vec<Other>) {
                     }
                     rule
                 }
-                (None, None) => continue,
+                (None, None) => {
+                    // A place the manual does not print (`unknown`): its line is the one that
+                    // says so, where the role's printed places are cited, or names the role.
+                    let printed = places.iter().find_map(|q| {
+                        let r = drive.find(q.register.as_deref()?)?;
+                        drive.registers.iter().position(|x| std::ptr::eq(x, r))
+                    });
+                    match printed {
+                        Some(ri) => Rule::Register(ri),
+                        None => Rule::any().name(&id.replace('_', " ")),
+                    }
+                }
             };
             push(
                 out,
