@@ -269,7 +269,8 @@ fn allowed_on_link(drive: &Drive, r: &Register, kind: TransportKind, slave: u8) 
 }
 
 /// Whether a conversion of `r` needs a setting read from the drive (a selected or relative
-/// scale, an address chosen by a setting, limits per variant).
+/// scale, an address chosen by a setting, limits per variant, a limit through another
+/// parameter or quantity).
 fn needs_settings(r: &Register) -> bool {
     matches!(scale_form(r), Some("selected" | "relative"))
         || r.def
@@ -277,6 +278,7 @@ fn needs_settings(r: &Register) -> bool {
             .iter()
             .any(|a| a.when.setting.is_some())
         || !r.def.by_variant.is_empty()
+        || r.def.max_relative.is_some()
 }
 
 fn field_mask(r: &Register) -> Option<u16> {
