@@ -3,6 +3,8 @@
 //! over loopback TCP carrying RTU frames (as a serial gateway does) and, for the drives that have
 //! it, Modbus TCP. The settings the scales and addresses depend on are read from the simulated
 //! drive; values go through the generated encode/decode; the drive model ramps on a manual clock.
+//! Each simulated drive starts with the network selected as its command and reference source for
+//! the link the test uses (at the factory setting it would ignore the run commands written here).
 
 mod interop_support;
 
@@ -14,6 +16,7 @@ use drivemap_drives::{
     yaskawa_v7 as v7,
 };
 use drivemap_runtime::error::{Error, Refusal};
+use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
@@ -70,7 +73,10 @@ fn code(e: Error) -> u8 {
 
 #[test]
 fn tds_v8_through_its_generated_module() {
-    let sim = Sim::new("ptlk-tds-v8", SimOptions::new());
+    let sim = Sim::new(
+        "ptlk-tds-v8",
+        SimOptions::new().network_source(TransportKind::Rtu),
+    );
     let server = serve(&sim, TcpFraming::RtuOverTcp);
     let mut c = rtu_client(server.local_addr(), &tds::PROFILE);
     let mut s = tds::Settings::new();
@@ -182,7 +188,10 @@ fn yaskawa_v7_through_its_generated_module_over_rtu_framing() {
     // n152 = 1 (0.01 Hz) and n018 = 1 (0.01 s): the client must read them to convert.
     let sim = Sim::new(
         "yaskawa-v7",
-        SimOptions::new().set("n152", 1.0).set("n018", 1.0),
+        SimOptions::new()
+            .set("n152", 1.0)
+            .set("n018", 1.0)
+            .network_source(TransportKind::Rtu),
     );
     let server = serve(&sim, TcpFraming::RtuOverTcp);
     let mut c = rtu_client(server.local_addr(), &v7::PROFILE);
@@ -209,7 +218,10 @@ fn yaskawa_v7_through_its_generated_module_over_rtu_framing() {
 fn yaskawa_v7_through_its_generated_module_over_modbus_tcp() {
     let sim = Sim::new(
         "yaskawa-v7",
-        SimOptions::new().set("n019", 2.0).set("n020", 2.0),
+        SimOptions::new()
+            .set("n019", 2.0)
+            .set("n020", 2.0)
+            .network_source(TransportKind::Tcp),
     );
     let server = serve(&sim, TcpFraming::ModbusTcp);
     let mut c = tcp_client(server.local_addr(), &v7::PROFILE);
@@ -220,7 +232,10 @@ fn yaskawa_v7_through_its_generated_module_over_modbus_tcp() {
 
 #[test]
 fn yaskawa_j7_through_its_generated_module() {
-    let sim = Sim::new("yaskawa-j7", SimOptions::new());
+    let sim = Sim::new(
+        "yaskawa-j7",
+        SimOptions::new().network_source(TransportKind::Rtu),
+    );
     let server = serve(&sim, TcpFraming::RtuOverTcp);
     let mut c = rtu_client(server.local_addr(), &j7::PROFILE);
     let mut s = j7::Settings {
@@ -259,7 +274,9 @@ fn yaskawa_gpd515_through_its_generated_module() {
     // The drive rating the application supplies is the simulated drive's.
     let sim = Sim::new(
         "yaskawa-gpd515",
-        SimOptions::new().external("drive_rated_current", 9.6),
+        SimOptions::new()
+            .external("drive_rated_current", 9.6)
+            .network_source(TransportKind::Rtu),
     );
     let server = serve(&sim, TcpFraming::RtuOverTcp);
     let mut c = rtu_client(server.local_addr(), &gpd::PROFILE);
@@ -352,7 +369,10 @@ fn acn_conversation<T: Transport>(c: &mut Client<T>, sim: &Sim) {
 #[test]
 fn automationdirect_acn_through_its_generated_module_over_rtu_framing() {
     // RTU: PDU address = communication address - 1.
-    let sim = Sim::new("automationdirect-acn", SimOptions::new());
+    let sim = Sim::new(
+        "automationdirect-acn",
+        SimOptions::new().network_source(TransportKind::Rtu),
+    );
     let server = serve(&sim, TcpFraming::RtuOverTcp);
     let mut c = rtu_client(server.local_addr(), &acn::PROFILE);
     acn_conversation(&mut c, &sim);
