@@ -264,108 +264,137 @@ struct Counts {
     shown: usize,
 }
 
+/// Mutates one map; returns its counts and the mutations the diff did not show.
+fn mutate_map(map: &Path) -> (Counts, Vec<String>) {
+    let ctx = Context::default();
+    let mut missed = Vec::new();
+    let dir = map.parent().unwrap().to_path_buf();
+    let base = move |id: &str| {
+        let path = dir.join(format!("{id}.yaml"));
+        let text = std::fs::read_to_string(&path).ok()?;
+        Some((path.display().to_string(), text))
+    };
+    let name = map.file_name().unwrap().to_string_lossy().into_owned();
+    let text = std::fs::read_to_string(map).unwrap();
+    let file: Arc<str> = Arc::from(name.as_str());
+    let tree = drivemap_codegen::source::parse_map(&file, &text)
+        .unwrap()
+        .tree;
+    let read = |tree: Node| drivemap_codegen::read_map_tree_with(&name, tree, &ctx, &base);
+    let original = read(tree.clone()).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let original_meaning = meaning(&original);
+    assert!(
+        compare(&original, &original).changes.is_empty(),
+        "{name} differs from itself"
+    );
+
+    let mut all = Vec::new();
+    paths(&tree, &mut Vec::new(), "", &mut all);
+    // The first occurrence of each path in the registers, the first and the last elsewhere.
+    let mut by_path: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    for (i, (p, _, _)) in all.iter().enumerate() {
+        by_path.entry(abstract_path(p)).or_default().push(i);
+    }
+    let mut chosen: Vec<usize> = Vec::new();
+    for (ap, list) in &by_path {
+        chosen.push(list[0]);
+        if !ap.starts_with(".groups[]") {
+            chosen.push(list[list.len() - 1]);
+        }
+    }
+    chosen.sort_unstable();
+    chosen.dedup();
+
+    let mut counts = Counts::default();
+    for i in chosen {
+        let (path, key, scalar) = &all[i];
+        let mut mutations = vec![Mutation::Delete];
+        if *scalar {
+            let NodeKind::Scalar(v) = &tree
+                .at(&drivemap_codegen::source::Path(path.clone()))
+                .unwrap()
+                .kind
+            else {
+                unreachable!()
+            };
+            if let Some(v) = changed(key, v) {
+                mutations.push(Mutation::Set(v));
+            }
+        }
+        for m in mutations {
+            let Some(edited) = mutate(&tree, path, &m) else {
+                continue;
+            };
+            counts.tried += 1;
+            let Ok(drive) = read(edited) else {
+                counts.rejected += 1;
+                continue;
+            };
+            if meaning(&drive) == original_meaning {
+                counts.no_op += 1;
+                continue;
+            }
+            counts.accepted += 1;
+            let forward = compare(&original, &drive);
+            let backward = compare(&drive, &original);
+            if !forward.changes.is_empty() && !backward.changes.is_empty() {
+                counts.shown += 1;
+            } else {
+                missed.push(format!(
+                    "{name}: {} {m:?}: no change shown ({} forward, {} backward)",
+                    show(path),
+                    forward.changes.len(),
+                    backward.changes.len()
+                ));
+            }
+        }
+    }
+    (counts, missed)
+}
+
 #[test]
 fn every_mutation_check_accepts_shows_in_the_diff() {
     let started = std::time::Instant::now();
-    let ctx = Context::default();
+    // `MUTATE_ONLY=<part of a path>` mutates the maps it names (then the total check fails).
+    let only = std::env::var("MUTATE_ONLY").ok();
+    let maps: Vec<PathBuf> = maps()
+        .into_iter()
+        .filter(|m| {
+            only.as_ref()
+                .is_none_or(|o| m.to_string_lossy().contains(o.as_str()))
+        })
+        .collect();
+    // The maps share out among the cores (each mutation reads and validates a whole map).
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(maps.len().max(1));
+    let mut results: Vec<(usize, Counts, Vec<String>)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut done = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(map) = maps.get(i) else { break };
+                        let (counts, missed) = mutate_map(map);
+                        done.push((i, counts, missed));
+                    }
+                    done
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| w.join().unwrap())
+            .collect()
+    });
+    results.sort_by_key(|r| r.0);
     let mut total = Counts::default();
     let mut missed = Vec::new();
     let mut report = Vec::new();
-    let only = std::env::var("MUTATE_ONLY").ok();
-    for map in maps() {
-        if only
-            .as_ref()
-            .is_some_and(|o| !map.to_string_lossy().contains(o.as_str()))
-        {
-            continue;
-        }
-        let dir = map.parent().unwrap().to_path_buf();
-        let base = move |id: &str| {
-            let path = dir.join(format!("{id}.yaml"));
-            let text = std::fs::read_to_string(&path).ok()?;
-            Some((path.display().to_string(), text))
-        };
-        let name = map.file_name().unwrap().to_string_lossy().into_owned();
-        let text = std::fs::read_to_string(&map).unwrap();
-        let file: Arc<str> = Arc::from(name.as_str());
-        let tree = drivemap_codegen::source::parse_map(&file, &text)
-            .unwrap()
-            .tree;
-        let read = |tree: Node| drivemap_codegen::read_map_tree_with(&name, tree, &ctx, &base);
-        let original = read(tree.clone()).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let original_meaning = meaning(&original);
-        assert!(
-            compare(&original, &original).changes.is_empty(),
-            "{name} differs from itself"
-        );
-
-        let mut all = Vec::new();
-        paths(&tree, &mut Vec::new(), "", &mut all);
-        // The first occurrence of each path in the registers, the first and the last elsewhere.
-        let mut by_path: BTreeMap<String, Vec<usize>> = BTreeMap::new();
-        for (i, (p, _, _)) in all.iter().enumerate() {
-            by_path.entry(abstract_path(p)).or_default().push(i);
-        }
-        let mut chosen: Vec<usize> = Vec::new();
-        for (ap, list) in &by_path {
-            chosen.push(list[0]);
-            if !ap.starts_with(".groups[]") {
-                chosen.push(list[list.len() - 1]);
-            }
-        }
-        chosen.sort_unstable();
-        chosen.dedup();
-
-        let mut counts = Counts::default();
-        for i in chosen {
-            let (path, key, scalar) = &all[i];
-            let mut mutations = vec![Mutation::Delete];
-            if *scalar {
-                let NodeKind::Scalar(v) = &tree
-                    .at(&drivemap_codegen::source::Path(path.clone()))
-                    .unwrap()
-                    .kind
-                else {
-                    unreachable!()
-                };
-                if let Some(v) = changed(key, v) {
-                    mutations.push(Mutation::Set(v));
-                }
-            }
-            for m in mutations {
-                let Some(edited) = mutate(&tree, path, &m) else {
-                    continue;
-                };
-                counts.tried += 1;
-                let Ok(drive) = read(edited) else {
-                    counts.rejected += 1;
-                    continue;
-                };
-                if meaning(&drive) == original_meaning {
-                    counts.no_op += 1;
-                    continue;
-                }
-                counts.accepted += 1;
-                let forward = compare(&original, &drive);
-                let backward = compare(&drive, &original);
-                if !forward.changes.is_empty() && !backward.changes.is_empty() {
-                    counts.shown += 1;
-                } else {
-                    missed.push(format!(
-                        "{name}: {} {m:?}: no change shown ({} forward, {} backward)",
-                        show(path),
-                        forward.changes.len(),
-                        backward.changes.len()
-                    ));
-                }
-            }
-        }
-        eprintln!(
-            "{name}: {} tried, {} accepted, {:.1} s",
-            counts.tried,
-            counts.accepted,
-            started.elapsed().as_secs_f64()
-        );
+    for (i, counts, m) in results {
+        let name = maps[i].file_name().unwrap().to_string_lossy().into_owned();
         report.push(format!(
             "{name}: {} tried, {} rejected by check, {} no-op, {} accepted, {} shown",
             counts.tried, counts.rejected, counts.no_op, counts.accepted, counts.shown
@@ -375,9 +404,10 @@ fn every_mutation_check_accepts_shows_in_the_diff() {
         total.no_op += counts.no_op;
         total.accepted += counts.accepted;
         total.shown += counts.shown;
+        missed.extend(m);
     }
     report.push(format!(
-        "all maps: {} mutations tried, {} rejected by check, {} no-op, {} accepted, {} shown by diff ({:.1} s)",
+        "all maps: {} mutations tried, {} rejected by check, {} no-op, {} accepted, {} shown by diff ({:.1} s, {threads} threads)",
         total.tried,
         total.rejected,
         total.no_op,
