@@ -61,13 +61,10 @@ fn section(kind: ChangeKind, what: &str) -> Path {
         TimingChanged => protocol.key("timing"),
         LineSettingsChanged => protocol.key("serial"),
         RoleAdded | RoleRemoved | RoleRepointed | RoleCodesChanged => role(what),
-        DocumentationChanged => match what {
-            "map conflicts" => root.key("conflicts"),
-            "gaps" => root.key("gaps"),
-            "removed-register reasons" => root.key("removed"),
-            "groups" => root.key("groups"),
-            _ => root,
-        },
+        DocumentationChanged if what.starts_with("conflict ") => root.key("conflicts"),
+        DocumentationChanged if what.starts_with("gap ") => root.key("gaps"),
+        DocumentationChanged if what.starts_with("removed register ") => root.key("removed"),
+        DocumentationChanged if what == "groups" => root.key("groups"),
         _ => root,
     }
 }

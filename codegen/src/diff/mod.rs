@@ -20,6 +20,7 @@ mod roles;
 #[cfg(test)]
 mod tests;
 
+use crate::describe;
 use crate::ir::Drive;
 use serde::Serialize;
 
@@ -193,9 +194,9 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
         protocol: _,       // protocol::protocol
         groups: _,         // map_documentation (registers carry the group defaults)
         registers: _,      // registers::registers
-        conflicts: _,      // map_documentation
-        gaps: _,           // map_documentation
-        removed: _,        // map_documentation
+        conflicts: _,      // map_documentation, entry by entry
+        gaps: _,           // map_documentation, entry by entry
+        removed: _,        // map_documentation, entry by entry
         roles: _,          // roles::roles
         file: _,           // where the map was read, not what it says
         tree: _,           // the same map as text, for locating changes
@@ -218,6 +219,71 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
     }
 }
 
+/// Map documentation kept as a list of entries (conflicts, gaps, removed registers): each entry
+/// by its key (the n-th of a repeated key with the n-th), added, removed or changed, with its
+/// text and citation on each side.
+#[allow(clippy::too_many_arguments)]
+fn keyed<T: Serialize>(
+    c: &mut Collector,
+    id: &str,
+    label: &str,
+    a: &[T],
+    b: &[T],
+    key: impl Fn(&T) -> String,
+    text: impl Fn(&T) -> String,
+    source: impl Fn(&T) -> Option<String>,
+) {
+    let keys = |list: &[T]| {
+        let mut seen: Vec<String> = Vec::new();
+        list.iter()
+            .map(|x| {
+                let k = key(x);
+                let n = seen.iter().filter(|s| **s == k).count();
+                seen.push(k.clone());
+                if n == 0 {
+                    k
+                } else {
+                    format!("{k} ({})", n + 1)
+                }
+            })
+            .collect::<Vec<_>>()
+    };
+    let (ka, kb) = (keys(a), keys(b));
+    for (x, k) in a.iter().zip(&ka) {
+        match kb.iter().position(|j| j == k) {
+            None => c.push(
+                ChangeKind::DocumentationChanged,
+                id,
+                &format!("{label} {k} removed"),
+                (Some(text(x)), source(x)),
+                (None, None),
+                TAIL,
+            ),
+            Some(j) if !same(x, &b[j]) => c.push(
+                ChangeKind::DocumentationChanged,
+                id,
+                &format!("{label} {k}"),
+                (Some(text(x)), source(x)),
+                (Some(text(&b[j])), source(&b[j])),
+                TAIL,
+            ),
+            Some(_) => {}
+        }
+    }
+    for (y, k) in b.iter().zip(&kb) {
+        if !ka.contains(k) {
+            c.push(
+                ChangeKind::DocumentationChanged,
+                id,
+                &format!("{label} {k} added"),
+                (None, None),
+                (Some(text(y)), source(y)),
+                TAIL,
+            );
+        }
+    }
+}
+
 fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
     let id = &new.meta.id;
     let count = |n: usize, what: &str| Some(format!("{n} {what}"));
@@ -228,48 +294,41 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
             (count(a, what), count(b, what))
         }
     };
-    if !same(&old.conflicts, &new.conflicts) {
-        c.push(
-            ChangeKind::DocumentationChanged,
-            id,
-            "map conflicts",
-            (
-                counts(old.conflicts.len(), new.conflicts.len(), "conflict(s)").0,
-                None,
-            ),
-            (
-                counts(old.conflicts.len(), new.conflicts.len(), "conflict(s)").1,
-                None,
-            ),
-            TAIL,
-        );
-    }
-    if !same(&old.gaps, &new.gaps) {
-        c.push(
-            ChangeKind::DocumentationChanged,
-            id,
-            "gaps",
-            (counts(old.gaps.len(), new.gaps.len(), "gap(s)").0, None),
-            (counts(old.gaps.len(), new.gaps.len(), "gap(s)").1, None),
-            TAIL,
-        );
-    }
-    if !same(&old.removed, &new.removed) {
-        c.push(
-            ChangeKind::DocumentationChanged,
-            id,
-            "removed-register reasons",
-            (
-                counts(old.removed.len(), new.removed.len(), "entry(ies)").0,
-                None,
-            ),
-            (
-                counts(old.removed.len(), new.removed.len(), "entry(ies)").1,
-                None,
-            ),
-            TAIL,
-        );
-    }
+    // Conflicts, gaps and removed-register entries one by one, with their citations.
+    keyed(
+        c,
+        id,
+        "conflict",
+        &old.conflicts,
+        &new.conflicts,
+        |x| format!("\"{}\"", x.topic),
+        |x| format!("chosen: {}", x.chosen),
+        |x| x.readings.first().map(|r| r.source.clone()),
+    );
+    keyed(
+        c,
+        id,
+        "gap",
+        &old.gaps,
+        &new.gaps,
+        |x| match (x.addresses, &x.params) {
+            (Some([a, b]), _) => describe::address_span(a, b),
+            (None, Some(p)) => p.clone(),
+            (None, None) => x.description.clone(),
+        },
+        |x| x.description.clone(),
+        |x| Some(x.source.clone()),
+    );
+    keyed(
+        c,
+        id,
+        "removed register",
+        &old.removed,
+        &new.removed,
+        |x| format!("`{}`", x.id),
+        |x| x.reason.clone(),
+        |x| Some(x.source.clone()),
+    );
     if old.address_format != new.address_format {
         let text = |f: crate::model::AddressFormat| Some(format!("{f:?}").to_lowercase());
         c.push(

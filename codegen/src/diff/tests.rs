@@ -222,3 +222,58 @@ fn ranges_narrow_or_widen() {
         (false, false)
     );
 }
+
+#[test]
+fn conflicts_and_gaps_are_compared_entry_by_entry_with_their_citations() {
+    let before = read("before", &base()).unwrap();
+    let text = base()
+        .replace(
+            "description: Page missing from the OCR text",
+            "description: Page torn out",
+        )
+        .replace("chosen: \"1-31\"", "chosen: \"1-32\"");
+    let after = read("after", &text).unwrap();
+    let d = compare(&before, &after);
+    type Shown<'a> = (&'a str, Option<&'a str>, Option<&'a str>, Option<&'a str>);
+    let shown: Vec<Shown<'_>> = d
+        .changes
+        .iter()
+        .map(|c| {
+            (
+                c.what.as_str(),
+                c.old.as_deref(),
+                c.new.as_deref(),
+                c.new_source.as_deref(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        shown,
+        [
+            (
+                "conflict \"Slave address range\"",
+                Some("chosen: 1-31"),
+                Some("chosen: 1-32"),
+                Some("manual.txt:10")
+            ),
+            (
+                "gap 0024h – 002Fh",
+                Some("Page missing from the OCR text"),
+                Some("Page torn out"),
+                Some("manual.txt:34")
+            ),
+        ]
+    );
+    assert!(
+        d.changes
+            .iter()
+            .all(|c| c.severity() == Severity::Compatible)
+    );
+    let removed = compare(&before, &read("after", &base().replace("gaps:\n  - {addresses: [0x0024, 0x002F], params: \"U-05 .. U-16\", description: Page missing from the OCR text, source: \"manual.txt:34\"}\n", "")).unwrap());
+    assert_eq!(removed.changes.len(), 1);
+    assert_eq!(removed.changes[0].what, "gap 0024h – 002Fh removed");
+    assert_eq!(
+        removed.changes[0].old_source.as_deref(),
+        Some("manual.txt:34")
+    );
+}
