@@ -25,6 +25,7 @@ fuzz_target!(|data: &[u8]| {
     let _ = diff::render::text(&diffs, false);
     let _ = diff::render::markdown(&diffs, None);
     let _ = diff::render::github(&diffs, None);
+    let _ = diff::render::json(&diffs, None);
     let same = diff::compare(&old, &old);
     assert_eq!(same.breaking() + same.compatible(), 0, "a map differs from itself");
 });
