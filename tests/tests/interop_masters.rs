@@ -13,14 +13,20 @@ mod interop_support;
 use std::process::Command;
 use std::time::Duration;
 
+use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions};
 use drivemap_sim::{Outcome, SerialServer, SimOptions, TcpFraming, TcpServer};
 use interop_support::{PtyPair, Sim, python, require_tool, run_with_limit, script};
 use serde_json::Value;
 
-/// Slave 1 of a V7 with its defaults.
-fn v7() -> Sim {
-    Sim::new("yaskawa-v7", SimOptions::new().slave(1))
+/// Slave 1 of a V7 with its defaults, except that the network on `link` is selected as the source
+/// of run commands and of the reference (n003/n004): at the factory setting the drive ignores
+/// the reference and run commands the masters write.
+fn v7(link: TransportKind) -> Sim {
+    Sim::new(
+        "yaskawa-v7",
+        SimOptions::new().slave(1).network_source(link),
+    )
 }
 
 fn serve_tcp(sim: &Sim, framing: TcpFraming) -> TcpServer {
@@ -126,7 +132,7 @@ fn check_python_steps(steps: &[(String, Value)], master: &str) {
 #[test]
 fn pymodbus_master_over_modbus_tcp() {
     let py = python(&["pymodbus"]);
-    let sim = v7();
+    let sim = v7(TransportKind::Tcp);
     let server = serve_tcp(&sim, TcpFraming::ModbusTcp);
     let mut cmd = Command::new(py);
     cmd.arg(script("pymodbus_master.py"))
@@ -140,7 +146,7 @@ fn pymodbus_master_over_modbus_tcp() {
 fn pymodbus_master_over_rtu_on_a_pty_pair() {
     let py = python(&["pymodbus", "serial"]);
     let pty = PtyPair::new();
-    let sim = v7();
+    let sim = v7(TransportKind::Rtu);
     let _server = serve_pty(&sim, &pty.paths[0]);
     let mut cmd = Command::new(py);
     cmd.arg(script("pymodbus_master.py"))
@@ -154,7 +160,7 @@ fn pymodbus_master_over_rtu_on_a_pty_pair() {
 fn minimalmodbus_master_over_rtu_on_a_pty_pair() {
     let py = python(&["minimalmodbus", "serial"]);
     let pty = PtyPair::new();
-    let sim = v7();
+    let sim = v7(TransportKind::Rtu);
     let _server = serve_pty(&sim, &pty.paths[0]);
     let mut cmd = Command::new(py);
     cmd.arg(script("minimalmodbus_master.py"))
@@ -167,7 +173,7 @@ fn minimalmodbus_master_over_rtu_on_a_pty_pair() {
 #[test]
 fn minimalmodbus_master_over_rtu_over_tcp() {
     let py = python(&["minimalmodbus", "serial"]);
-    let sim = v7();
+    let sim = v7(TransportKind::Rtu);
     let server = serve_tcp(&sim, TcpFraming::RtuOverTcp);
     let mut cmd = Command::new(py);
     cmd.arg(script("minimalmodbus_master.py"))
@@ -260,7 +266,7 @@ fn mbpoll_scenario(link: Vec<String>, tcp: bool, sim: &Sim) {
 #[test]
 fn mbpoll_master_over_modbus_tcp() {
     require_tool("mbpoll", &["-V"]);
-    let sim = v7();
+    let sim = v7(TransportKind::Tcp);
     let server = serve_tcp(&sim, TcpFraming::ModbusTcp);
     let link = vec![
         "-m".into(),
@@ -276,7 +282,7 @@ fn mbpoll_master_over_modbus_tcp() {
 fn mbpoll_master_over_rtu_on_a_pty_pair() {
     require_tool("mbpoll", &["-V"]);
     let pty = PtyPair::new();
-    let sim = v7();
+    let sim = v7(TransportKind::Rtu);
     let _server = serve_pty(&sim, &pty.paths[0]);
     let link = vec![
         "-m".into(),
