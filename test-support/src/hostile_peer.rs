@@ -275,6 +275,9 @@ fn connection(
                 }
                 return;
             }
+            // A request the slave does not answer (another unit, a broadcast): nothing to
+            // disguise as another transaction's or unit's reply.
+            Script::OtherTransaction | Script::OtherUnit if answer.is_empty() => true,
             Script::OtherTransaction | Script::OtherUnit => {
                 let mut wrong = answer.clone();
                 if kind.is_rtu_framed() {
