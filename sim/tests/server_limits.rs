@@ -146,10 +146,12 @@ fn a_modbus_tcp_frame_not_finished_within_the_deadline_closes_the_connection() {
     assert!(started.elapsed() < SOON);
 }
 
-/// Slowloris over RTU framing: one byte each 50 ms (inside the 100 ms silence), never a whole
-/// frame. The connection is closed at the frame deadline (400 ms), long before the idle
+/// Slowloris over RTU framing: one byte each 20 ms (well inside the 100 ms silence, even on a
+/// loaded machine) of a 10h request announcing 246 bytes, so the frame is never whole before the
+/// deadline. The connection is closed at the frame deadline (400 ms), long before the idle
 /// timeout (60 s here); before, the partial frame was only dropped and the slot held until
-/// the idle timeout.
+/// the idle timeout. (Trickling `01 03 ...` made an 8-byte 03h frame every 400 ms, complete
+/// right at the deadline: the test then depended on the machine's load.)
 #[test]
 fn rtu_over_tcp_a_frame_trickled_past_its_deadline_closes_the_connection() {
     let options = ServerOptions {
@@ -160,19 +162,23 @@ fn rtu_over_tcp_a_frame_trickled_past_its_deadline_closes_the_connection() {
     let mut s = connect(srv.local_addr());
     let started = Instant::now();
     let mut closed = false;
-    for i in 0..200u32 {
-        if s.write_all(&[0x01, 0x03][i as usize % 2..][..1]).is_err() {
+    // Slave 1, 10h, 123 registers from 0000h, 246 bytes announced: 255 bytes in all.
+    let header = [0x01, 0x10, 0x00, 0x00, 0x00, 0x7B, 0xF6];
+    for i in 0..250usize {
+        if s.write_all(&[header.get(i).copied().unwrap_or(0x00)])
+            .is_err()
+        {
             closed = true;
             break;
         }
-        if closed_by_server(&mut s, Duration::from_millis(50)) {
+        if closed_by_server(&mut s, Duration::from_millis(20)) {
             closed = true;
             break;
         }
     }
-    assert!(closed, "closed within 200 bytes (10 s)");
+    assert!(closed, "closed within 250 bytes of a 255-byte frame");
     assert!(
-        started.elapsed() < Duration::from_secs(5),
+        started.elapsed() < Duration::from_secs(8),
         "closed at the frame deadline, not the 60 s idle timeout: {:?}",
         started.elapsed()
     );
