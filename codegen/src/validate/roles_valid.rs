@@ -288,21 +288,7 @@ impl Check<'_> {
                     );
                     return;
                 };
-                let Some(field) = register.def.fields.iter().find(|f| f.id == *field_id) else {
-                    let hint = crate::hints::closest(
-                        field_id,
-                        register.def.fields.iter().map(|f| f.id.as_str()),
-                    )
-                    .map(|b| format!(" (did you mean `{b}`?)"))
-                    .unwrap_or_default();
-                    self.error(
-                        &path.key("field"),
-                        rid,
-                        format!(
-                            "register `{}` has no field `{field_id}`{hint}",
-                            register.id()
-                        ),
-                    );
+                let Some(field) = self.field(register, field_id, path) else {
                     return;
                 };
                 self.codes(role, p, register, field, path);
@@ -465,21 +451,7 @@ impl Check<'_> {
             );
         }
         if let Some(field_id) = &p.field {
-            let Some(field) = register.def.fields.iter().find(|f| f.id == *field_id) else {
-                let hint = crate::hints::closest(
-                    field_id,
-                    register.def.fields.iter().map(|f| f.id.as_str()),
-                )
-                .map(|b| format!(" (did you mean `{b}`?)"))
-                .unwrap_or_default();
-                self.error(
-                    &path.key("field"),
-                    rid,
-                    format!(
-                        "register `{}` has no field `{field_id}`{hint}",
-                        register.id()
-                    ),
-                );
+            let Some(field) = self.field(register, field_id, path) else {
                 return;
             };
             self.codes(role, p, register, field, path);
@@ -619,6 +591,32 @@ impl Check<'_> {
     }
 
     /// `on` and `off` name codes the field has; a multi-bit command says both.
+    /// The field `field_id` of `register`, or an error at the place's `field` key with the
+    /// closest name as a hint.
+    fn field<'r>(
+        &mut self,
+        register: &'r Register,
+        field_id: &str,
+        path: &Path,
+    ) -> Option<&'r Field> {
+        let found = register.def.fields.iter().find(|f| f.id == field_id);
+        if found.is_none() {
+            let hint =
+                crate::hints::closest(field_id, register.def.fields.iter().map(|f| f.id.as_str()))
+                    .map(|b| format!(" (did you mean `{b}`?)"))
+                    .unwrap_or_default();
+            self.error(
+                &path.key("field"),
+                Some(register.id()),
+                format!(
+                    "register `{}` has no field `{field_id}`{hint}",
+                    register.id()
+                ),
+            );
+        }
+        found
+    }
+
     fn codes(&mut self, role: Role, p: &RolePlace, r: &Register, f: &Field, path: &Path) {
         let Some((_, width)) = field_span(f) else {
             return; // bit_fields_valid reports it
