@@ -616,19 +616,13 @@ fn serve_stream(
         idle_timeout: Some(options.idle_timeout),
     };
     match framing {
-        TcpFraming::ModbusTcp => {
-            let mut link = TcpTransport::from_stream(stream)?;
-            serve_link_conn(
-                sim,
-                &mut link,
-                stop,
-                log,
-                limits(Duration::from_millis(500)),
-                Some(conn),
-            )
-        }
-        TcpFraming::Gateway => {
-            let mut link = TcpTransport::from_gateway_stream(stream)?;
+        TcpFraming::ModbusTcp | TcpFraming::Gateway => {
+            // The same Modbus TCP frames; a gateway's link addresses the drive's RTU side.
+            let mut link = if framing == TcpFraming::Gateway {
+                TcpTransport::from_gateway_stream(stream)?
+            } else {
+                TcpTransport::from_stream(stream)?
+            };
             serve_link_conn(
                 sim,
                 &mut link,
