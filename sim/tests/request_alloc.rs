@@ -19,13 +19,19 @@ use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{rtu, tcp};
 use drivemap_sim::{ManualClock, Outcome, SimOptions, Simulator};
 
-const DRIVES: [&str; 5] = [
-    "ptlk-tds-v8",
-    "yaskawa-v7",
-    "yaskawa-j7",
-    "yaskawa-gpd515",
-    "automationdirect-acn",
-];
+/// Every map in `maps/` by id (the directory is read: a new map is covered with no edit here).
+fn drives() -> Vec<String> {
+    let dir = format!("{}/../maps", env!("CARGO_MANIFEST_DIR"));
+    let mut ids: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{dir}: {e}"))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "yaml"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    ids.sort();
+    assert!(!ids.is_empty(), "no maps in {dir}");
+    ids
+}
 
 fn start(id: &str) -> Simulator {
     let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
@@ -74,7 +80,7 @@ fn longest_read(sim: &mut Simulator, kind: TransportKind) -> Vec<u8> {
 
 #[test]
 fn requests_allocate_nothing_after_warm_up() {
-    for id in DRIVES {
+    for id in &drives() {
         let mut sim = start(id);
         for kind in [TransportKind::Rtu, TransportKind::Tcp] {
             let read = longest_read(&mut sim, kind);

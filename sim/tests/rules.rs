@@ -11,13 +11,19 @@ use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{rtu, tcp};
 use drivemap_sim::{ManualClock, Outcome, RolesChoice, SimOptions, Simulator};
 
-const DRIVES: [&str; 5] = [
-    "ptlk-tds-v8",
-    "yaskawa-v7",
-    "yaskawa-j7",
-    "yaskawa-gpd515",
-    "automationdirect-acn",
-];
+/// Every map in `maps/` by id (the directory is read: a new map is covered with no edit here).
+fn drives() -> Vec<String> {
+    let dir = format!("{}/../maps", env!("CARGO_MANIFEST_DIR"));
+    let mut ids: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{dir}: {e}"))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "yaml"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    ids.sort();
+    assert!(!ids.is_empty(), "no maps in {dir}");
+    ids
+}
 
 fn drive(id: &str) -> drivemap_codegen::Drive {
     let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
@@ -90,7 +96,7 @@ fn hz(sim: &Simulator, id: &str) -> f64 {
 
 #[test]
 fn every_map_starts_with_its_roles_and_defaults() {
-    for id in DRIVES {
+    for id in &drives() {
         let (sim, _) = start(id, SimOptions::new());
         assert!(sim.has_model(), "{id}");
         assert!(sim.warnings().is_empty(), "{id}: {:?}", sim.warnings());
@@ -828,7 +834,7 @@ fn a_clone_goes_on_on_its_own_clock() {
 #[test]
 fn the_factory_setting_ignores_network_runs() {
     use drivemap_runtime::core::roles::{Role, Target};
-    for id in DRIVES {
+    for id in &drives() {
         let d = drive(id);
         let plan = d.plan();
         let clock = ManualClock::new();
