@@ -745,3 +745,50 @@ fn a_role_protocol_conflict_or_gap_citing_an_unrelated_line_fails_strict() {
         "{out}"
     );
 }
+
+/// A limit through another quantity (`max_relative`) cites a line read like the others: it must
+/// print the percentage or name the quantity the limit is taken of. The fixture's manual does
+/// not bound its speed reference by another parameter, so the limit is added to a scratch copy.
+#[test]
+fn a_limit_through_another_quantity_citing_an_unrelated_line_fails_strict() {
+    let s = Scratch::new("review-limit");
+    let manuals = repo().join("tests/fixtures/acme-vf1/manuals");
+    let map =
+        std::fs::read_to_string(repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
+    let row = "        address: 0x2001\n";
+    let with = |line: u32| {
+        edit(
+            &map,
+            row,
+            &format!(
+                "{row}        max_relative: {{relative_to: maximum_frequency, percent: 100, \
+                 source: \"acme-vf1.txt:{line}\"}}\n"
+            ),
+        )
+    };
+    // Line 22 is the row of the maximum frequency: verified.
+    std::fs::write(s.0.join("acme-vf1.yaml"), with(22)).unwrap();
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&manuals),
+        &["check", "--strict", "acme-vf1.yaml"],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("limits 1 of 1 verified"), "{out}");
+    // Line 1 is the manual's title: not verified, and --strict fails naming the limit.
+    std::fs::write(s.0.join("acme-vf1.yaml"), with(1)).unwrap();
+    let (code, out, err) = drivemap(
+        &s.0,
+        Some(&manuals),
+        &["check", "--strict", "acme-vf1.yaml"],
+    );
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(
+        err.contains(
+            "error: citation of the limit of speed_reference through maximum_frequency \
+             `acme-vf1.txt:1` does not mention"
+        ),
+        "{err}"
+    );
+    assert!(out.contains("limits 0 of 1 verified"), "{out}");
+}

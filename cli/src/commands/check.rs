@@ -120,6 +120,7 @@ pub fn kinds_verified(checks: &[review::CitationCheck]) -> String {
         ("protocol", "protocol"),
         ("conflict", "conflicts"),
         ("gap", "gaps"),
+        ("limit", "limits"),
     ] {
         let of: Vec<&review::CitationCheck> = checks
             .iter()

@@ -287,6 +287,7 @@ pub fn other_citations(drive: &Drive) -> Vec<Other> {
     protocol(drive, &mut out);
     conflicts(drive, &mut out);
     gaps(drive, &mut out);
+    limits(drive, &mut out);
     out
 }
 
@@ -756,6 +757,41 @@ fn gaps(drive: &Drive, out: &mut Vec<Other>) {
             "gap",
             &Some(g.source.clone()),
             &g.indirect,
+            rule,
+        );
+    }
+}
+
+/// A limit through another quantity (`max_relative`): the line prints the percentage, or names
+/// the quantity it is taken of (the bounding register's parameter number, address or name, or
+/// the external quantity's name).
+fn limits(drive: &Drive, out: &mut Vec<Other>) {
+    for r in &drive.registers {
+        let Some(limit) = &r.def.max_relative else {
+            continue;
+        };
+        let mut rule = Rule::any().number(limit.percent);
+        let of = match &limit.relative_to {
+            model::Reference::Register(name) => {
+                if let Some(i) = drive.registers.iter().position(|b| {
+                    b.def.id == *name || b.def.param.as_deref() == Some(name.as_str())
+                }) {
+                    rule = rule.register(i).name(&drive.registers[i].def.name);
+                }
+                name.clone()
+            }
+            model::Reference::External(q) => {
+                rule = rule.name(&q.external.replace('_', " "));
+                q.external.clone()
+            }
+        };
+        push(
+            out,
+            r.key_path("max_relative").key("source"),
+            format!("the limit of {} through {of}", r.id()),
+            "limit",
+            &Some(limit.source.clone()),
+            &None,
             rule,
         );
     }
