@@ -374,6 +374,9 @@ impl Transport for SerialTransport {
 /// Switches the Linux kernel's RS-485 mode on for `port` (`TIOCSRS485`, see the kernel's
 /// Documentation/driver-api/serial/serial-rs485.rst).
 #[cfg(target_os = "linux")]
+// The workspace denies `unsafe`; this ioctl has no safe wrapper among the dependencies
+// (serialport has no RS-485 call, rustix's `ioctl` is itself unsafe).
+#[allow(unsafe_code)]
 fn kernel_rs485(
     port: &serialport::TTYPort,
     rts_on_send: bool,
