@@ -6,7 +6,8 @@
 #   command to run);
 # - Python packages pymodbus, minimalmodbus and pyserial in a venv at target/interop-venv, at the
 #   versions the scripts in tests/interop/ are written for (pymodbus changes its API between
-#   minor versions).
+#   minor versions), and jsonschema, which cli/tests/machine_output.rs checks the CLI's JSON
+#   output with (docs/schema/).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -30,12 +31,13 @@ if [ ! -x "$venv/bin/python" ]; then
   echo "== $python -m venv $venv"
   "$python" -m venv "$venv"
 fi
-pins=(pymodbus==3.16.1 minimalmodbus==2.1.1 pyserial==3.5)
-check='import pymodbus, minimalmodbus, serial
-assert (pymodbus.__version__, minimalmodbus.__version__, serial.__version__) == ("3.16.1", "2.1.1", "3.5")'
+pins=(pymodbus==3.16.1 minimalmodbus==2.1.1 pyserial==3.5 jsonschema==4.26.0)
+check='import pymodbus, minimalmodbus, serial, importlib.metadata
+assert (pymodbus.__version__, minimalmodbus.__version__, serial.__version__) == ("3.16.1", "2.1.1", "3.5")
+assert importlib.metadata.version("jsonschema") == "4.26.0"'
 if ! "$venv/bin/python" -c "$check" >/dev/null 2>&1; then
   echo "== $venv/bin/pip install ${pins[*]}"
   "$venv/bin/pip" install --quiet --disable-pip-version-check "${pins[@]}"
 fi
-"$venv/bin/python" -c 'import pymodbus, minimalmodbus, serial; print("interop peers: pymodbus", pymodbus.__version__, "minimalmodbus", minimalmodbus.__version__, "pyserial", serial.__version__)'
+"$venv/bin/python" -c 'import pymodbus, minimalmodbus, serial, importlib.metadata; print("interop peers: pymodbus", pymodbus.__version__, "minimalmodbus", minimalmodbus.__version__, "pyserial", serial.__version__, "jsonschema", importlib.metadata.version("jsonschema"))'
 echo "interop peers: $(command -v mbpoll || echo 'mbpoll MISSING') $(command -v socat || echo 'socat MISSING')"

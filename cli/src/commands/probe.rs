@@ -22,7 +22,7 @@ use drivemap_runtime::ValueError;
 use serde::Serialize;
 
 use crate::live::Target;
-use crate::live::output::{Format, now_rfc3339};
+use crate::live::output::{Format, address_text, now_rfc3339};
 use crate::live::session::{Failure, Session, on_transport};
 use drivemap_codegen::describe;
 
@@ -82,7 +82,10 @@ pub struct Finding {
     pub kind: &'static str,
     pub register: String,
     pub parameter: Option<String>,
-    pub address: String,
+    /// The address on this link, a number.
+    pub address: u16,
+    /// The same address in the manual's notation (`0024h`).
+    pub address_text: String,
     pub raw: Option<u32>,
     pub exception: Option<u8>,
     pub detail: String,
@@ -116,7 +119,8 @@ fn finding(session: &Session<'_>, r: &Register, kind: &'static str, detail: Stri
         kind,
         register: r.def.id.clone(),
         parameter: r.def.param.clone(),
-        address: describe::address(session.shown_address(r)),
+        address: session.shown_address(r),
+        address_text: address_text(session.drive, session.shown_address(r)),
         raw: None,
         exception: None,
         detail,
@@ -462,7 +466,7 @@ pub fn summary(r: &Report) -> String {
             "  DISAGREE {:<14} {} {}: {}{}\n",
             f.kind.replace('_', "-"),
             label(f),
-            f.address,
+            f.address_text,
             f.detail,
             f.source
                 .as_deref()
@@ -481,7 +485,7 @@ pub fn summary(r: &Report) -> String {
             .iter()
             .filter(|f| matches!(f.kind, "no_reply" | "not_converted"))
         {
-            out += &format!("  {} {}: {}\n", label(f), f.address, f.detail);
+            out += &format!("  {} {}: {}\n", label(f), f.address_text, f.detail);
         }
     }
     for n in &r.not_checkable {
@@ -495,16 +499,20 @@ pub fn summary(r: &Report) -> String {
     out
 }
 
-/// One CSV row per register result: disagreements, then unchecked registers.
+/// One CSV row per register result: disagreements, then unchecked registers, each naming the
+/// drive and slave.
 pub fn csv_rows(r: &Report) -> Result<String, String> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let err = |e: csv::Error| e.to_string();
     w.write_record([
+        "drive",
+        "slave",
         "result",
         "kind",
         "register",
         "parameter",
         "address",
+        "address_text",
         "raw",
         "exception",
         "detail",
@@ -518,11 +526,14 @@ pub fn csv_rows(r: &Report) -> Result<String, String> {
         .chain(r.unchecked.iter().map(|f| ("unchecked", f)))
     {
         w.write_record([
+            r.drive.clone(),
+            r.slave.to_string(),
             result.to_owned(),
             f.kind.to_owned(),
             f.register.clone(),
             f.parameter.clone().unwrap_or_default(),
-            f.address.clone(),
+            f.address.to_string(),
+            f.address_text.clone(),
             f.raw.map(|v| v.to_string()).unwrap_or_default(),
             f.exception.map(|v| format!("{v:02X}h")).unwrap_or_default(),
             f.detail.clone(),

@@ -5,10 +5,13 @@
 //! | field | what |
 //! |---|---|
 //! | `time` | when the value was read, UTC, RFC 3339 with milliseconds |
+//! | `drive` | the map's drive id (`ptlk-tds-v8`) |
+//! | `slave` | the slave address talked to (0: broadcast) |
 //! | `register` | the map's register id |
 //! | `parameter` | the manual's parameter number (`Bn-01`), or empty |
 //! | `name` | the printed name |
-//! | `address` | the address on this link, `0001h` |
+//! | `address` | the address on this link, a number (`1`) |
+//! | `address_text` | the same address in the manual's notation (`0001h`, or `45` in a manual numbering registers in decimal) |
 //! | `value` | the number: engineering value, plain word, enumeration code, or the raw bits |
 //! | `unit` | the unit of `value`, or empty |
 //! | `text` | the value as the table shows it (`48.00 Hz`, `2: Remote`, `0019h [running, ready]`) |
@@ -16,14 +19,17 @@
 //! | `status` | `ok` or `error` |
 //! | `error` | why the value is missing or could not be decoded |
 //!
-//! JSON adds `fields` for bit registers (`{"running": 1, ...}`).
+//! JSON adds `fields` for bit registers (`{"running": 1, ...}`). The JSON Schema of a record is
+//! `docs/schema/reading.schema.json`.
 
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use clap::ValueEnum;
+use drivemap_codegen::Drive;
 use drivemap_codegen::ir::Register;
+use drivemap_codegen::model::AddressFormat;
 use drivemap_live::codec::Value;
 use serde::Serialize;
 
@@ -46,10 +52,13 @@ pub enum Format {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Reading {
     pub time: String,
+    pub drive: String,
+    pub slave: u8,
     pub register: String,
     pub parameter: Option<String>,
     pub name: String,
-    pub address: String,
+    pub address: u16,
+    pub address_text: String,
     pub value: Option<f64>,
     pub unit: Option<String>,
     pub text: Option<String>,
@@ -61,12 +70,15 @@ pub struct Reading {
 }
 
 /// The CSV header, in record order.
-pub const CSV_HEADER: [&str; 11] = [
+pub const CSV_HEADER: [&str; 14] = [
     "time",
+    "drive",
+    "slave",
     "register",
     "parameter",
     "name",
     "address",
+    "address_text",
     "value",
     "unit",
     "text",
@@ -83,12 +95,16 @@ impl Reading {
         word: &Result<u32, String>,
         time: &str,
     ) -> Reading {
+        let address = session.shown_address(r);
         let mut rec = Reading {
             time: time.to_owned(),
+            drive: session.drive.meta.id.clone(),
+            slave: session.slave,
             register: r.def.id.clone(),
             parameter: r.def.param.clone(),
             name: r.def.name.clone(),
-            address: describe::address(session.shown_address(r)),
+            address,
+            address_text: address_text(session.drive, address),
             value: None,
             unit: None,
             text: None,
@@ -124,14 +140,17 @@ impl Reading {
         rec
     }
 
-    fn csv_record(&self) -> [String; 11] {
+    fn csv_record(&self) -> [String; 14] {
         let opt = |o: &Option<String>| o.clone().unwrap_or_default();
         [
             self.time.clone(),
+            self.drive.clone(),
+            self.slave.to_string(),
             self.register.clone(),
             opt(&self.parameter),
             self.name.clone(),
-            self.address.clone(),
+            self.address.to_string(),
+            self.address_text.clone(),
             self.value.map(|v| v.to_string()).unwrap_or_default(),
             opt(&self.unit),
             opt(&self.text),
@@ -139,6 +158,15 @@ impl Reading {
             self.status.to_owned(),
             opt(&self.error),
         ]
+    }
+}
+
+/// An address in the notation of the drive's manual: `0024h`, or the plain number in a manual
+/// that numbers its registers in decimal (`address_format: decimal`).
+pub fn address_text(drive: &Drive, address: u16) -> String {
+    match drive.address_format {
+        AddressFormat::Decimal => address.to_string(),
+        AddressFormat::Hex => describe::address(address),
     }
 }
 
@@ -236,10 +264,13 @@ mod tests {
     fn csv_quotes_and_writes_the_header_once() {
         let r = Reading {
             time: "t".into(),
+            drive: "ptlk-tds-v8".into(),
+            slave: 1,
             register: "inverter_status".into(),
             parameter: None,
             name: "Inverter status".into(),
-            address: "0020h".into(),
+            address: 32,
+            address_text: "0020h".into(),
             value: Some(25.0),
             unit: None,
             text: Some("0019h [running, ready]".into()),
@@ -258,7 +289,7 @@ mod tests {
         assert_eq!(lines[0], CSV_HEADER.join(","));
         assert_eq!(
             lines[1],
-            "t,inverter_status,,Inverter status,0020h,25,,\"0019h [running, ready]\",25,ok,"
+            "t,ptlk-tds-v8,1,inverter_status,,Inverter status,32,0020h,25,,\"0019h [running, ready]\",25,ok,"
         );
     }
 }

@@ -14,7 +14,7 @@ use drivemap_sim::{ManualClock, RequestRecord, SharedSim, SimOptions, Simulator}
 
 /// How to install every peer; printed when one is missing.
 pub const INSTALL: &str = "run tests/interop/install.sh (as root it does: apt-get install -y mbpoll socat; \
-     python3 -m venv target/interop-venv && target/interop-venv/bin/pip install pymodbus minimalmodbus pyserial)";
+     python3 -m venv target/interop-venv && target/interop-venv/bin/pip install pymodbus minimalmodbus pyserial jsonschema)";
 
 /// The workspace root.
 pub fn root() -> PathBuf {
