@@ -44,6 +44,7 @@ pub mod clock;
 pub mod exceptions;
 pub mod fault;
 pub mod framing;
+pub mod line;
 pub mod model;
 pub mod roles;
 pub mod server;
@@ -53,6 +54,7 @@ pub mod slave;
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use exceptions::ExceptionPlan;
 pub use fault::{Fault, FaultyLink};
+pub use line::{Line, SlaveTaken};
 pub use model::DriveState;
 pub use roles::{Mode, Plausible};
 pub use server::{

@@ -19,6 +19,7 @@ use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::{crc, rtu, tcp};
 
+use crate::line::Line;
 use crate::simulator::{Outcome, RequestRecord, Simulator};
 
 /// A simulator shared between connections.
@@ -191,11 +192,13 @@ impl Framer {
     }
 }
 
-/// Serves requests arriving on `link` until `stop` is set or the peer hangs up. `silence` is
+/// Serves requests arriving on `link` to the drives of `sim` (a [`Line`]; a
+/// [`SharedSim`] is a line of one: `&Line::from(sim)`) until `stop` is set or the peer hangs
+/// up. `silence` is
 /// how long an incomplete RTU frame may wait for its remaining bytes before it is dropped; no
 /// idle timeout, a frame deadline of `max(silence, 1 s)`.
 pub fn serve_link<T: Transport>(
-    sim: &SharedSim,
+    sim: &Line,
     link: &mut T,
     stop: &AtomicBool,
     log: Option<&Logger>,
@@ -212,7 +215,7 @@ pub fn serve_link<T: Transport>(
 /// [`serve_link`] with every limit given. Returns `Ok` when the peer hangs up, the stream is
 /// out of step, a frame misses its deadline (Modbus TCP) or the link stays idle too long.
 pub fn serve_link_with<T: Transport>(
-    sim: &SharedSim,
+    sim: &Line,
     link: &mut T,
     stop: &AtomicBool,
     log: Option<&Logger>,
@@ -224,7 +227,7 @@ pub fn serve_link_with<T: Transport>(
 /// [`serve_link_with`] for a connection of a [`TcpServer`]: `conn` closes it on request and
 /// records when it last sent a request to this drive.
 fn serve_link_conn<T: Transport>(
-    sim: &SharedSim,
+    sim: &Line,
     link: &mut T,
     stop: &AtomicBool,
     log: Option<&Logger>,
@@ -232,14 +235,15 @@ fn serve_link_conn<T: Transport>(
     conn: Option<&Conn>,
 ) -> io::Result<()> {
     serve_frames_conn(link, limits, stop, None, conn, |kind, frame, out| {
-        let handled = lock(sim).handle(kind, frame, out);
+        let handled = sim.handle(kind, frame, out);
         if let Some(log) = log {
             log(&handled.record);
         }
         Answer {
             reply: handled.reply,
-            // Activity is a request this drive takes: a damaged frame is none, and neither is a
-            // frame to another unit (a peer cannot keep a slot by talking to someone else).
+            // Activity is a request a drive of the line takes: a damaged frame is none, and
+            // neither is a frame to a unit not there (a peer cannot keep a slot by talking to
+            // no one).
             request: !matches!(
                 handled.record.outcome,
                 Outcome::Damaged | Outcome::NotAddressed
@@ -431,10 +435,11 @@ pub struct TcpServer {
 }
 
 impl TcpServer {
-    /// Binds `addr` and serves `sim` there, one thread per connection, with the default
-    /// [`ServerOptions`].
+    /// Binds `addr` and serves `sim` there (one drive, a [`SharedSim`] or [`Simulator`], or a
+    /// [`Line`] of drives at their slave addresses: each request goes to the drive of its unit
+    /// id), one thread per connection, with the default [`ServerOptions`].
     pub fn spawn(
-        sim: SharedSim,
+        sim: impl Into<Line>,
         addr: impl ToSocketAddrs,
         framing: TcpFraming,
         log: Option<Logger>,
@@ -444,7 +449,7 @@ impl TcpServer {
 
     /// [`TcpServer::spawn`] with the connection cap and timeouts given.
     pub fn spawn_with(
-        sim: SharedSim,
+        sim: impl Into<Line>,
         addr: impl ToSocketAddrs,
         framing: TcpFraming,
         log: Option<Logger>,
@@ -456,7 +461,7 @@ impl TcpServer {
         let stop = Arc::new(AtomicBool::new(false));
         let active = Arc::new(AtomicUsize::new(0));
         let shared = Accept {
-            sim,
+            sim: sim.into(),
             framing,
             log,
             options,
@@ -511,7 +516,7 @@ impl Drop for TcpServer {
 }
 
 struct Accept {
-    sim: SharedSim,
+    sim: Line,
     framing: TcpFraming,
     log: Option<Logger>,
     options: ServerOptions,
@@ -601,7 +606,7 @@ fn accept_loop(listener: TcpListener, a: Accept) {
 
 fn serve_stream(
     stream: TcpStream,
-    sim: &SharedSim,
+    sim: &Line,
     framing: TcpFraming,
     options: ServerOptions,
     log: Option<&Logger>,
@@ -655,19 +660,33 @@ pub struct SerialServer {
 
 #[cfg(feature = "serial")]
 impl SerialServer {
-    /// Opens the port and serves `sim` on it. The line must be one of the character formats
-    /// the drive's map lists, if it lists them (`Profile::serial_formats`): another is refused
-    /// (`InvalidInput`) before the port is opened.
+    /// Opens the port and serves `sim` on it (one drive, or a [`Line`] of drives at their
+    /// slave addresses). The line must be one of the character formats each drive's map lists,
+    /// if it lists them (`Profile::serial_formats`): another is refused (`InvalidInput`) before
+    /// the port is opened.
     pub fn spawn(
-        sim: SharedSim,
+        sim: impl Into<Line>,
         mut options: drivemap_runtime::transport::serial::SerialOptions,
         log: Option<Logger>,
     ) -> io::Result<SerialServer> {
         use drivemap_runtime::transport::serial::{SerialTransport, USB_LATENCY};
+        let sim: Line = sim.into();
         if options.formats.is_none() {
-            let profile = lock(&sim).profile();
-            options.formats = profile.serial_formats;
-            options.drive_id = profile.drive_id;
+            // Every drive of the line must offer the line's format: each is checked here, the
+            // first again when the port opens.
+            for d in sim.drives() {
+                let profile = lock(d).profile();
+                options.formats = profile.serial_formats;
+                options.drive_id = profile.drive_id;
+                options
+                    .check_format()
+                    .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e.to_string()))?;
+            }
+            if let Some(first) = sim.drives().first() {
+                let profile = lock(first).profile();
+                options.formats = profile.serial_formats;
+                options.drive_id = profile.drive_id;
+            }
         }
         let silence = options.frame_gap() + USB_LATENCY;
         let mut link = SerialTransport::open(options)?;

@@ -1,7 +1,8 @@
-//! `drivemap simulate --drive <id> (--tcp ADDR | --gateway ADDR | --rtu-tcp ADDR | --serial PATH) [--slave N]`
+//! `drivemap simulate --drive <id>[@SLAVE]... (--tcp ADDR | --gateway ADDR | --rtu-tcp ADDR | --serial PATH) [--slave N]`
 //!
-//! Serves a simulated drive (crate `drivemap-sim`) built from the drive's map, logging each
-//! request in one line: time, slave, function, address, quantity, result or exception.
+//! Serves a simulated drive (crate `drivemap-sim`) built from the drive's map, or a line of them
+//! at their slave addresses (`--drive yaskawa-v7@1 --drive ptlk-tds-v8@2`: a [`Line`]), logging
+//! each request in one line: time, slave, function, address, quantity, result or exception.
 
 use std::io::Write;
 use std::net::SocketAddr;
@@ -16,7 +17,7 @@ use drivemap_codegen::Drive;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
-    RequestRecord, SerialServer, SimOptions, Simulator, SystemClock, TcpFraming, TcpServer,
+    Line, RequestRecord, SerialServer, SimOptions, Simulator, SystemClock, TcpFraming, TcpServer,
 };
 
 use crate::maps::MapsDir;
@@ -24,9 +25,11 @@ use crate::maps::MapsDir;
 #[derive(ClapArgs, Debug)]
 #[command(group(ArgGroup::new("link").required(true).args(["tcp", "gateway", "rtu_tcp", "serial"])))]
 pub struct Args {
-    /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
-    #[arg(long)]
-    pub drive: String,
+    /// Drive id: a built-in map, or `<maps>/<id>.yaml`; `ID@SLAVE` puts it at that slave
+    /// address. Repeat for a line of several drives on the one link, each at its own address
+    /// (`--drive yaskawa-v7@1 --drive ptlk-tds-v8@2`), as on an RS-485 line or behind a gateway.
+    #[arg(long, required = true, value_name = "ID[@SLAVE]")]
+    pub drive: Vec<String>,
     /// Serve Modbus TCP here: `PORT` (binds 127.0.0.1) or `HOST:PORT` (binds where told).
     #[arg(long, value_name = "ADDR")]
     pub tcp: Option<String>,
@@ -52,16 +55,20 @@ pub struct Args {
     /// its serial formats refuses any other parity and stop bits.
     #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
     pub stop_bits: Option<u8>,
-    /// Slave address (default: the map's default, else 1).
+    /// Slave address of a single drive (default: the map's default, else 1); with several
+    /// drives, give each its address as `--drive ID@SLAVE`.
     #[arg(long)]
     pub slave: Option<u8>,
     /// The drive's value of a register or an external quantity of the map, in engineering units
     /// (`--set n152=1`, `--set drive_rated_current=9.6`): a register starts with it, an
     /// external quantity is the drive's. The same `--set` tells read/write/poll the value
-    /// instead of reading it. (`--external` is an older name for it.)
+    /// instead of reading it. (`--external` is an older name for it.) On a line of several
+    /// drives, `SLAVE:NAME=VALUE` (`--set 2:Cn-02=50`) sets it in the drive at that address
+    /// only; without the prefix, in every drive.
     #[arg(long = "set", alias = "external", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Model variant: `--variant voltage_class=v440`.
+    /// Model variant: `--variant voltage_class=v440` (`SLAVE:AXIS=OPTION` for one drive of a
+    /// line, as `--set`).
     #[arg(long, value_name = "AXIS=OPTION")]
     pub variant: Vec<String>,
     /// Simulated time runs this many times faster than real time (ramps finish sooner; 0.1 to 1000).
@@ -200,38 +207,120 @@ fn logger() -> Logger {
     })
 }
 
+/// One `--drive ID[@SLAVE]`: the id and the address, if given.
+pub(crate) fn drive_at(text: &str) -> Result<(&str, Option<u8>), String> {
+    match text.rsplit_once('@') {
+        None => Ok((text, None)),
+        Some((id, slave)) => match slave.parse::<u8>() {
+            Ok(n) if !id.is_empty() && n >= 1 => Ok((id, Some(n))),
+            _ => Err(format!(
+                "--drive `{text}`: give ID@SLAVE with a slave address 1-255 (`yaskawa-v7@1`)"
+            )),
+        },
+    }
+}
+
+/// The options of `--set` / `--variant` that are for the drive at `slave`: those with its
+/// `SLAVE:` prefix (taken off) and those without one. Only a line of several drives takes
+/// prefixes.
+fn for_slave(list: &[String], slave: u8, line: bool) -> Result<Vec<String>, String> {
+    let mut out = Vec::new();
+    for s in list {
+        match s.split_once(':') {
+            Some((n, rest)) if line && !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()) => {
+                match n.parse::<u8>() {
+                    Ok(n) if n == slave => out.push(rest.to_string()),
+                    Ok(_) => {}
+                    Err(_) => return Err(format!("`{s}`: `{n}` is not a slave address")),
+                }
+            }
+            _ => out.push(s.clone()),
+        }
+    }
+    Ok(out)
+}
+
 pub fn run(args: Args) -> Result<ExitCode, String> {
-    let drive = load_drive(&args.dir, &args.drive)?;
-    let mut options = options(
-        &drive,
-        args.slave,
-        &args.set,
-        &args.variant,
-        args.time_scale,
-    )?;
-    if args.network_source {
-        options.network_source = Some(if args.tcp.is_some() {
-            drivemap_runtime::profile::TransportKind::Tcp
-        } else {
-            drivemap_runtime::profile::TransportKind::Rtu
-        });
+    let several = args.drive.len() > 1;
+    if several && args.slave.is_some() {
+        return Err(
+            "--slave is for a single drive; on a line give each drive its address as --drive ID@SLAVE"
+                .into(),
+        );
     }
-    // The serial line, should --serial be chosen: the flags, else the map's defaults.
-    let (baud, parity, stop_bits) =
-        crate::live::link::serial_line(&drive, args.baud, args.parity, args.stop_bits);
-    let sim = Simulator::new(drive, options).map_err(|e| e.to_string())?;
-    for w in sim.warnings() {
-        eprintln!("warning: {w}");
-    }
-    let id = sim.drive().meta.id.clone();
-    let slave = sim.slave();
-    let model = if sim.has_model() {
-        "drive model on"
+    let kind = if args.tcp.is_some() {
+        drivemap_runtime::profile::TransportKind::Tcp
     } else {
-        "no drive model: the map gives no `roles:`, so this is a register store"
+        drivemap_runtime::profile::TransportKind::Rtu
     };
-    let profile = sim.profile();
-    let shared = drivemap_sim::shared(sim);
+    let mut line = Line::new();
+    let mut described = Vec::new();
+    let mut models = Vec::new();
+    let mut serial = None;
+    for text in &args.drive {
+        let (id, at) = drive_at(text)?;
+        if several && at.is_none() {
+            return Err(format!(
+                "--drive `{text}`: on a line of several drives give each its slave address (`{id}@1`)"
+            ));
+        }
+        let drive = load_drive(&args.dir, id)?;
+        let slave = at.or(args.slave);
+        let (set, variant) = match slave {
+            Some(n) => (
+                for_slave(&args.set, n, several)?,
+                for_slave(&args.variant, n, several)?,
+            ),
+            None => (args.set.clone(), args.variant.clone()),
+        };
+        let mut options = options(&drive, slave, &set, &variant, args.time_scale)
+            .map_err(|e| if several { format!("{text}: {e}") } else { e })?;
+        if args.network_source {
+            options.network_source = Some(kind);
+        }
+        // The serial line, should --serial be chosen: the flags, else the first map's defaults.
+        if serial.is_none() {
+            serial = Some(crate::live::link::serial_line(
+                &drive,
+                args.baud,
+                args.parity,
+                args.stop_bits,
+            ));
+        }
+        let sim = Simulator::new(drive, options).map_err(|e| {
+            if several {
+                format!("{text}: {e}")
+            } else {
+                e.to_string()
+            }
+        })?;
+        for w in sim.warnings() {
+            eprintln!(
+                "warning: {}{w}",
+                if several {
+                    format!("{text}: ")
+                } else {
+                    String::new()
+                }
+            );
+        }
+        let model = if sim.has_model() {
+            "drive model on"
+        } else {
+            "no drive model: the map gives no `roles:`, so this is a register store"
+        };
+        let (id, slave) = (&sim.drive().meta.id, sim.slave());
+        described.push(format!("{id} at slave {slave}"));
+        models.push(if several {
+            format!("slave {slave}: {model}")
+        } else {
+            model.to_string()
+        });
+        line.add(sim).map_err(|e| e.to_string())?;
+    }
+    let (baud, parity, stop_bits) = serial.ok_or("give --drive")?;
+    let what_drives = described.join(", ");
+    let models = models.join("; ");
     let log = (!args.quiet).then(logger);
     let time = if args.time_scale == 1.0 {
         String::new()
@@ -257,7 +346,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             idle_timeout: args.idle_timeout,
             frame_deadline: args.frame_timeout,
         };
-        let server = TcpServer::spawn_with(shared, addr.as_str(), framing, log, limits)
+        let server = TcpServer::spawn_with(line, addr.as_str(), framing, log, limits)
             .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
         let what = match framing {
             TcpFraming::ModbusTcp => "Modbus TCP",
@@ -265,7 +354,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             TcpFraming::Gateway => "Modbus TCP gateway to RTU",
         };
         outln!(
-            "simulating {id} at slave {slave} on {what} {} ({model}{time}); Ctrl-C stops",
+            "simulating {what_drives} on {what} {} ({models}{time}); Ctrl-C stops",
             server.local_addr()
         );
         server.wait();
@@ -274,7 +363,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let Some(path) = &args.serial else {
         return Err("give --tcp, --gateway, --rtu-tcp or --serial".into());
     };
-    let options = SerialOptions::new(path.to_string_lossy(), baud)
+    let mut options = SerialOptions::new(path.to_string_lossy(), baud)
         .parity(match parity {
             LineParity::None => Parity::None,
             LineParity::Even => Parity::Even,
@@ -284,13 +373,19 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             StopBits::Two
         } else {
             StopBits::One
-        })
-        .with_profile(profile);
-    options.check_format().map_err(|e| e.to_string())?;
-    let server = SerialServer::spawn(shared, options, log)
+        });
+    // Every drive of the line must offer the line's character format.
+    for d in line.drives() {
+        let profile = drivemap_sim::server::lock(d).profile();
+        options = options.with_profile(profile);
+        options.check_format().map_err(|e| e.to_string())?;
+    }
+    let first = drivemap_sim::server::lock(&line.drives()[0]).profile();
+    let options = options.with_profile(first);
+    let server = SerialServer::spawn(line, options, log)
         .map_err(|e| format!("cannot open serial port {}: {e}", path.display()))?;
     outln!(
-        "simulating {id} at slave {slave} on RTU {} {baud} baud, parity {}, {stop_bits} stop bit(s) ({model}{time}); Ctrl-C stops",
+        "simulating {what_drives} on RTU {} {baud} baud, parity {}, {stop_bits} stop bit(s) ({models}{time}); Ctrl-C stops",
         path.display(),
         format!("{parity:?}").to_lowercase()
     );

@@ -1,0 +1,195 @@
+//! A line of drives (issue 25, item 8): `drivemap simulate --drive ID@SLAVE ...` serves several
+//! simulated drives on one link, each at its address, and `drivemap scan` finds every one and
+//! names its map. Through the binary.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn drivemap(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(args)
+        .arg("--maps")
+        .arg(repo().join("maps"))
+        .output()
+        .expect("run drivemap");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// `drivemap simulate` in a child process; killed on drop.
+struct Sim {
+    child: Child,
+    addr: String,
+    first: String,
+}
+
+impl Sim {
+    fn start(args: &[&str]) -> Sim {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+            .arg("simulate")
+            .args(args)
+            .arg("--quiet")
+            .arg("--maps")
+            .arg(repo().join("maps"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let mut first = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut first)
+            .unwrap();
+        let addr = first
+            .split_whitespace()
+            .find(|w| w.starts_with("127.0.0.1:"))
+            .unwrap_or_else(|| panic!("no address in {first:?}"))
+            .to_owned();
+        Sim { child, addr, first }
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// `(slave, best map)` per slave found, from scan's JSON report.
+fn found(json: &str) -> Vec<(u64, String)> {
+    let v: serde_json::Value = serde_json::from_str(json).unwrap();
+    v["found"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            (
+                f["slave"].as_u64().unwrap(),
+                f["maps"][0]["drive"].as_str().unwrap().to_owned(),
+            )
+        })
+        .collect()
+}
+
+/// Two drives of two vendors on one RTU-over-TCP link and behind a simulated gateway: scan
+/// finds both, at their addresses, and names each one's map; the empty address 3 is not found.
+#[test]
+fn scan_finds_both_drives_of_a_simulated_line() {
+    for link in ["--rtu-tcp", "--gateway"] {
+        let sim = Sim::start(&[
+            "--drive",
+            "yaskawa-v7@1",
+            "--drive",
+            "ptlk-tds-v8@2",
+            link,
+            "0",
+        ]);
+        assert!(
+            sim.first.contains("yaskawa-v7 at slave 1")
+                && sim.first.contains("ptlk-tds-v8 at slave 2"),
+            "{}",
+            sim.first
+        );
+        let (code, out, err) = drivemap(&[
+            "scan",
+            link,
+            &sim.addr,
+            "--slaves",
+            "1-3",
+            "--drive",
+            "yaskawa-v7",
+            "--drive",
+            "ptlk-tds-v8",
+            "--drive",
+            "yaskawa-gpd515",
+            "--format",
+            "json",
+        ]);
+        assert_eq!(code, 0, "{link}: {err}");
+        assert_eq!(
+            found(&out),
+            [(1, "yaskawa-v7".to_owned()), (2, "ptlk-tds-v8".to_owned())],
+            "{link}: {out}"
+        );
+    }
+}
+
+/// Reads reach the drive at their address: the `--set` prefixed with a slave address sets that
+/// drive only.
+#[test]
+fn each_drive_of_a_line_keeps_its_own_values() {
+    let sim = Sim::start(&[
+        "--drive",
+        "yaskawa-v7@5",
+        "--drive",
+        "yaskawa-v7@6",
+        "--set",
+        "6:n011=50",
+        "--rtu-tcp",
+        "0",
+    ]);
+    let read = |slave: &str| {
+        let (code, out, err) = drivemap(&[
+            "read",
+            "--drive",
+            "yaskawa-v7",
+            "--rtu-tcp",
+            &sim.addr,
+            "--slave",
+            slave,
+            "n011",
+            "--format",
+            "json",
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        v[0]["value"].as_f64().unwrap()
+    };
+    assert_eq!(read("5"), 60.0);
+    assert_eq!(read("6"), 50.0);
+}
+
+#[test]
+fn a_line_refuses_ambiguous_addresses_clearly() {
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["--drive", "yaskawa-v7@1", "--drive", "ptlk-tds-v8@1"],
+            "slave address 1 is taken on this line by yaskawa-v7; cannot add ptlk-tds-v8 there",
+        ),
+        (
+            &["--drive", "yaskawa-v7@1", "--drive", "ptlk-tds-v8"],
+            "--drive `ptlk-tds-v8`: on a line of several drives give each its slave address (`ptlk-tds-v8@1`)",
+        ),
+        (
+            &[
+                "--drive",
+                "yaskawa-v7@1",
+                "--drive",
+                "ptlk-tds-v8@2",
+                "--slave",
+                "3",
+            ],
+            "--slave is for a single drive",
+        ),
+        (
+            &["--drive", "yaskawa-v7@x"],
+            "--drive `yaskawa-v7@x`: give ID@SLAVE with a slave address 1-255",
+        ),
+    ];
+    for (args, want) in cases {
+        let mut all = vec!["simulate"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--rtu-tcp", "0"]);
+        let (code, _, err) = drivemap(&all);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+}
