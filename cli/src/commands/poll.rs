@@ -94,6 +94,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     loop {
         let began = Instant::now();
         n += 1;
+        // A drive that went silent in the last cycle (or while its settings were read) may be
+        // back: this cycle tries again, and stops at its first request that goes unanswered.
+        session.silence.rearm();
         let words = session.poll(&mut plan);
         if args.format != Format::Table {
             let time = now_rfc3339();

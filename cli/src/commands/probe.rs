@@ -220,6 +220,9 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
     }
     let mut plan = session.plan(&readable)?;
     let (words, requests) = session.poll_detailed(&mut plan);
+    if let Some(why) = session.silence.report() {
+        warnings.push(format!("{} stopped answering: {why}", session.link));
+    }
     let answered = words.iter().any(|w| {
         matches!(
             w,

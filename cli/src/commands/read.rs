@@ -33,6 +33,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         eprintln!("warning: {w}");
     }
     let words = session.read_words(&regs)?;
+    // Said once for the command: what went unanswered and what was then not sent.
+    if let Some(why) = session.silence.report() {
+        eprintln!("drivemap: {} did not answer: {why}", session.link);
+    }
     if args.format != Format::Table {
         let time = now_rfc3339();
         let records: Vec<Reading> = regs

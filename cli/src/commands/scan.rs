@@ -335,6 +335,7 @@ fn identify(drive: &Drive, link: &LinkArgs) -> Candidate {
         c.unanswered = c.tried;
         return c;
     };
+    session.silence.disable();
     let _ = session.load_dependencies(&regs, &Default::default());
     let Ok(mut plan) = session.plan(&regs) else {
         c.unanswered = c.tried;

@@ -217,6 +217,12 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
     for w in session.load_limits(&regs, &given.fixed) {
         eprintln!("warning: {w}");
     }
+    if let Some(why) = session.silence.report() {
+        return Err(format!(
+            "{} did not answer: {why}; nothing written",
+            session.link
+        ));
+    }
     let mut raws = Vec::new();
     for (r, value) in &pairs {
         let raw = match field_word(drive, &mut session, r, value)? {

@@ -5,6 +5,7 @@
 pub mod link;
 pub mod output;
 pub mod session;
+pub mod silence;
 pub mod table;
 
 use clap::Args as ClapArgs;

@@ -16,7 +16,9 @@ use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError, Width};
 
 use super::link::{LinkArgs, LiveClient};
+use super::silence::SilenceGuard;
 use drivemap_codegen::describe;
+use drivemap_runtime::Client;
 
 /// What conversions depend on, given on the command line.
 #[derive(ClapArgs, Debug, Clone, Default)]
@@ -327,6 +329,8 @@ pub struct Session<'d> {
     pub settings: LiveSettings,
     /// The link, for headers.
     pub link: String,
+    /// Stops sending once the peer is silent (every attempt of one request unanswered).
+    pub silence: SilenceGuard,
     /// The serial line, for the planner's bus-time model.
     line: SerialConfig,
 }
@@ -347,9 +351,13 @@ impl<'d> Session<'d> {
     ) -> Result<Self, String> {
         link.check_transport(drive)?;
         let (client, text) = link.connect(drive, profile)?;
+        let options = *client.options();
+        let silence = SilenceGuard::new(u32::from(options.retries) + 1);
+        let client = Client::with_options(silence.wrap(client.into_transport()), profile, options);
         Ok(Session {
             drive,
             client,
+            silence,
             slave: link.slave(drive),
             kind: link.kind(),
             settings,
