@@ -16,6 +16,7 @@ pub mod duration;
 pub mod git;
 pub mod live;
 pub mod maps;
+pub mod targets;
 
 /// The command line.
 #[derive(Parser)]
@@ -35,7 +36,7 @@ pub struct Cli {
 pub enum Command {
     /// Validate maps; print every error with file:line:column; exit 1 if any.
     Check(commands::check::Args),
-    /// Print a map as JSON (drivemap-export/1).
+    /// Print a map as JSON (drivemap-export/1), or a Home Assistant, Node-RED or Telegraf configuration polling it.
     Export(commands::export::Args),
     /// Serve a simulated drive built from its map over Modbus TCP, RTU over TCP or a serial port.
     Simulate(commands::simulate::Args),

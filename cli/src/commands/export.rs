@@ -1,11 +1,28 @@
-//! `drivemap export (<map.yaml> | --drive <id>)`
+//! `drivemap export (<map.yaml> | --drive <id>) [--format json|home-assistant|node-red|telegraf]`
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
 
-use clap::Args as ClapArgs;
+use clap::{Args as ClapArgs, ValueEnum};
 
+use crate::live::link::{LineParity, LinkArgs};
+use crate::live::session::{SettingsArgs, find_all};
 use crate::maps::MapsDir;
+use crate::targets::{self, Points};
+
+/// What to write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    /// The map as JSON (drivemap-export/1).
+    Json,
+    /// Home Assistant's `modbus:` YAML: a hub and a sensor per register.
+    HomeAssistant,
+    /// A Node-RED flow for node-red-contrib-modbus (JSON to import or run).
+    NodeRed,
+    /// Telegraf's `inputs.modbus` configuration in the request style.
+    Telegraf,
+}
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
@@ -17,6 +34,75 @@ pub struct Args {
     pub drive: Option<String>,
     #[command(flatten)]
     pub dir: MapsDir,
+    /// What to write: the map as JSON, or a poller's configuration (which then needs the link).
+    #[arg(long, value_enum, default_value_t = Format::Json)]
+    pub format: Format,
+    /// Registers to poll, by id, parameter number, printed name or address (repeat, or
+    /// comma-separated; default: the registers the map's roles name and every read-only one).
+    #[arg(long = "register", value_delimiter = ',', value_name = "NAME")]
+    pub registers: Vec<String>,
+    /// Poll every readable register of the map.
+    #[arg(long, conflicts_with = "registers")]
+    pub all: bool,
+    /// How often the tool polls.
+    #[arg(long, default_value = "1s", value_parser = crate::duration::positive)]
+    pub interval: Duration,
+    /// The name of the hub, entities and measurement (default: the drive id).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// The drive's own Modbus TCP interface the tool connects to (`192.168.1.10:502`).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub tcp: Option<String>,
+    /// A Modbus TCP to RTU gateway with the drive on its serial line (the map's RTU addresses).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub gateway: Option<String>,
+    /// RTU frames over TCP through a transparent serial gateway.
+    #[arg(long = "rtu-tcp", value_name = "HOST:PORT")]
+    pub rtu_tcp: Option<String>,
+    /// Serial port speaking Modbus RTU.
+    #[arg(long, value_name = "PATH")]
+    pub serial: Option<String>,
+    /// Baud rate (default: the map's default, else 9600).
+    #[arg(long)]
+    pub baud: Option<u32>,
+    /// Parity (default: the map's default, else none).
+    #[arg(long, value_enum)]
+    pub parity: Option<LineParity>,
+    /// Stop bits (default: the map's for the parity).
+    #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
+    pub stop_bits: Option<u8>,
+    /// Slave address (default: the map's default, else 1).
+    #[arg(long)]
+    pub slave: Option<u8>,
+    /// What conversions and addresses depend on (`--set n152=1`): a scale another parameter
+    /// selects is exported only when given.
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+impl Args {
+    fn link(&self) -> LinkArgs {
+        LinkArgs {
+            tcp: self.tcp.clone(),
+            gateway: self.gateway.clone(),
+            rtu_tcp: self.rtu_tcp.clone(),
+            serial: self.serial.clone(),
+            baud: self.baud,
+            parity: self.parity,
+            stop_bits: self.stop_bits,
+            slave: self.slave,
+            timeout: None,
+            retries: 2,
+            request_gap: None,
+        }
+    }
+
+    fn link_given(&self) -> usize {
+        [&self.tcp, &self.gateway, &self.rtu_tcp, &self.serial]
+            .iter()
+            .filter(|l| l.is_some())
+            .count()
+    }
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
@@ -28,18 +114,61 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         },
         (None, None) => return Err("give a map file or --drive <id>".into()),
     };
-    match read {
-        Ok(drive) => {
-            let json = drivemap_codegen::export::export(&drive);
-            outln!(
-                "{}",
-                serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?
-            );
-            Ok(ExitCode::SUCCESS)
-        }
+    let drive = match read {
+        Ok(drive) => drive,
         Err(diags) => {
             eprintln!("{diags}");
-            Ok(ExitCode::FAILURE)
+            return Ok(ExitCode::FAILURE);
         }
+    };
+    if args.format == Format::Json {
+        if args.link_given() > 0 || !args.registers.is_empty() || args.all {
+            return Err(
+                "the JSON export is the whole map: --register, --all and a link go with --format home-assistant, node-red or telegraf".into(),
+            );
+        }
+        let json = drivemap_codegen::export::export(&drive);
+        outln!(
+            "{}",
+            serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?
+        );
+        return Ok(ExitCode::SUCCESS);
     }
+    if args.link_given() != 1 {
+        return Err(
+            "give one link the tool connects to: --tcp HOST:PORT, --gateway HOST:PORT, --rtu-tcp HOST:PORT or --serial PATH".into(),
+        );
+    }
+    let given = args.settings.resolve(&drive)?;
+    let regs = if args.all {
+        drive.registers.iter().filter(|r| r.readable()).collect()
+    } else if args.registers.is_empty() {
+        targets::default_registers(&drive)
+    } else {
+        find_all(&drive, &args.registers)?
+    };
+    let period_ms = u64::try_from(args.interval.as_millis()).unwrap_or(u64::MAX);
+    let points = Points::build(
+        &drive,
+        &regs,
+        &args.link(),
+        &given.settings,
+        period_ms,
+        args.name.as_deref(),
+    )?;
+    let text = match args.format {
+        Format::HomeAssistant => targets::home_assistant::render(&points),
+        Format::Telegraf => targets::telegraf::render(&points),
+        Format::NodeRed => {
+            serde_json::to_string_pretty(&targets::node_red::render(&points))
+                .map_err(|e| e.to_string())?
+                + "\n"
+        }
+        Format::Json => return Ok(ExitCode::SUCCESS),
+    };
+    out!("{text}");
+    for line in points.left_out_lines() {
+        eprintln!("drivemap: {line}");
+    }
+    Ok(ExitCode::SUCCESS)
 }

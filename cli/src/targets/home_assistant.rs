@@ -1,0 +1,206 @@
+//! Home Assistant's `modbus:` integration (YAML): one hub for the link, a sensor per register
+//! with `data_type`, `swap`, `scale`, `offset` and `precision`; what the integration cannot show
+//! (codes' meanings, bit fields, scales another parameter selects) as comments.
+
+use std::fmt::Write;
+
+use drivemap_runtime::Table;
+
+use super::{Endpoint, Meaning, Point, Points, meanings_text, slug};
+use crate::live::link::LineParity;
+
+fn q(text: &str) -> String {
+    // A JSON string is a YAML double-quoted scalar.
+    serde_json::Value::from(text).to_string()
+}
+
+/// Home Assistant's device class for a unit, where the unit is one the class accepts.
+fn device_class(unit: &str) -> Option<&'static str> {
+    Some(match unit {
+        "Hz" | "kHz" => "frequency",
+        "A" => "current",
+        "V" => "voltage",
+        "W" | "kW" => "power",
+        "kWh" => "energy",
+        "°C" | "degC" => "temperature",
+        "h" | "min" | "s" | "ms" | "d" => "duration",
+        _ => return None,
+    })
+}
+
+/// Home Assistant's spelling of a unit.
+fn unit(unit: &str) -> &str {
+    match unit {
+        "degC" => "°C",
+        "ohm" => "Ω",
+        u => u,
+    }
+}
+
+fn number(v: f64) -> String {
+    let s = format!("{v}");
+    if s.contains('.') || s.contains('e') {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+fn sensor(out: &mut String, points: &Points, p: &Point) {
+    let name = format!("{} {}", points.name, p.label());
+    let bits = p.width.count() * 16;
+    let data_type = format!("{}int{bits}", if p.signed { "" } else { "u" });
+    let _ = writeln!(out, "      - name: {}", q(&name));
+    let _ = writeln!(
+        out,
+        "        unique_id: {}",
+        q(&slug(&format!(
+            "{} {} {}",
+            points.name,
+            points.slave,
+            p.id()
+        )))
+    );
+    let _ = writeln!(out, "        slave: {}", points.slave);
+    let _ = writeln!(out, "        address: {}", p.pdu);
+    let _ = writeln!(
+        out,
+        "        input_type: {}",
+        match p.table {
+            Table::Holding => "holding",
+            Table::Input => "input",
+        }
+    );
+    let _ = writeln!(out, "        data_type: {data_type}");
+    let _ = writeln!(
+        out,
+        "        swap: {}",
+        if p.low_first() { "word" } else { "none" }
+    );
+    match &p.meaning {
+        Meaning::Number {
+            scale, precision, ..
+        } => {
+            let _ = writeln!(out, "        scale: {}", number(*scale));
+            let _ = writeln!(out, "        offset: 0");
+            let _ = writeln!(out, "        precision: {precision}");
+            if !p.unit.is_empty() {
+                let _ = writeln!(out, "        unit_of_measurement: {}", q(unit(p.unit)));
+                if let Some(class) = device_class(p.unit) {
+                    let _ = writeln!(out, "        device_class: {class}");
+                }
+            }
+            let _ = writeln!(out, "        state_class: measurement");
+        }
+        Meaning::Word => {
+            if !p.unit.is_empty() {
+                let _ = writeln!(out, "        unit_of_measurement: {}", q(unit(p.unit)));
+            }
+        }
+        Meaning::Code(_) | Meaning::Bits(_) => {}
+    }
+    let _ = writeln!(
+        out,
+        "        scan_interval: {}",
+        points.period_ms.div_ceil(1000).max(1)
+    );
+}
+
+/// The `modbus:` configuration of `points`.
+pub fn render(points: &Points) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# Home Assistant `modbus:` configuration written by `drivemap export --format home-assistant`"
+    );
+    let _ = writeln!(out, "# {}", points.summary());
+    let _ = writeln!(
+        out,
+        "# Home Assistant reads each sensor with a request of its own: {} request(s) per scan where drivemap's planner needs {}.",
+        points.points.len(),
+        points.reads.len()
+    );
+    let _ = writeln!(
+        out,
+        "# Addresses are the PDU addresses on this link (the manual's address, moved for the transport)."
+    );
+    for p in &points.points {
+        if let Meaning::Number { given, .. } = &p.meaning {
+            if !given.is_empty() {
+                let _ = writeln!(
+                    out,
+                    "# {}: its scale holds for {given}; export again if the drive's setting changes.",
+                    p.id()
+                );
+            }
+        }
+        if let Some(m) = meanings_text(p) {
+            let what = match p.meaning {
+                Meaning::Bits(_) => {
+                    "Home Assistant's modbus sensors cannot split bit fields: the sensor shows the word"
+                }
+                _ => "Home Assistant's modbus sensors show the code, not its meaning",
+            };
+            let _ = writeln!(out, "# {}: {what}; {m}", p.id());
+        }
+    }
+    for line in points.left_out_lines() {
+        let _ = writeln!(out, "# {line}");
+    }
+    let _ = writeln!(out, "modbus:");
+    let _ = writeln!(out, "  - name: {}", q(&slug(&points.name)));
+    match &points.endpoint {
+        Endpoint::Tcp {
+            host,
+            port,
+            rtu_frames,
+        } => {
+            let _ = writeln!(
+                out,
+                "    type: {}",
+                if *rtu_frames { "rtuovertcp" } else { "tcp" }
+            );
+            let _ = writeln!(out, "    host: {}", q(host));
+            let _ = writeln!(out, "    port: {port}");
+        }
+        Endpoint::Serial {
+            path,
+            baud,
+            parity,
+            stop_bits,
+        } => {
+            let _ = writeln!(out, "    type: serial");
+            let _ = writeln!(out, "    method: rtu");
+            let _ = writeln!(out, "    port: {}", q(path));
+            let _ = writeln!(out, "    baudrate: {baud}");
+            let _ = writeln!(out, "    bytesize: 8");
+            let _ = writeln!(
+                out,
+                "    parity: {}",
+                match parity {
+                    LineParity::None => "N",
+                    LineParity::Even => "E",
+                    LineParity::Odd => "O",
+                }
+            );
+            let _ = writeln!(out, "    stopbits: {stop_bits}");
+        }
+    }
+    let _ = writeln!(
+        out,
+        "    timeout: {}",
+        points.timeout_ms.div_ceil(1000).max(1)
+    );
+    if points.gap_ms > 0 {
+        let _ = writeln!(out, "    message_wait_milliseconds: {}", points.gap_ms);
+    }
+    if points.points.is_empty() {
+        let _ = writeln!(out, "    sensors: []");
+    } else {
+        let _ = writeln!(out, "    sensors:");
+        for p in &points.points {
+            sensor(&mut out, points, p);
+        }
+    }
+    out
+}

@@ -1,0 +1,459 @@
+//! Static exports for pollers a plant already runs: Home Assistant's `modbus:` YAML, a Node-RED
+//! flow for node-red-contrib-modbus, a Telegraf `inputs.modbus` configuration.
+//!
+//! [`Points::build`] decides, once for every format, what each chosen register is on the wire
+//! (table, PDU address on the link, 16 or 32 bits, word order, signedness) and what its value
+//! means (a fixed scale, a code, bit fields), and which reads the runtime's planner makes of
+//! them. A register none of these tools can read as the map means it (a scale that another
+//! parameter selects and no `--set` fixed, an address that moves with a setting) is kept in
+//! [`Points::left_out`] with the reason, which every format prints: nothing is dropped silently.
+
+use drivemap_codegen::Drive;
+use drivemap_codegen::ir::Register;
+use drivemap_live::{LiveSettings, leak_profile};
+use drivemap_runtime::bus_time::BusModel;
+use drivemap_runtime::plan::{Conversion, Field, Label, Scale};
+use drivemap_runtime::planner::Poller;
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::{RegisterInfo, Table, Width, WordOrder};
+
+use crate::live::link::{LineParity, LinkArgs};
+use crate::live::session::{on_transport, value_error};
+
+pub mod home_assistant;
+pub mod node_red;
+pub mod telegraf;
+
+/// What a register's word means, as far as a tool can show it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Meaning {
+    /// An engineering value: raw × `scale` in `unit`, shown with `precision` decimals.
+    /// `given` says which `--set` fixed a scale the drive could change (empty when the scale
+    /// is the map's own).
+    Number {
+        scale: f64,
+        precision: usize,
+        given: String,
+    },
+    /// A plain integer.
+    Word,
+    /// A code; the listed meanings.
+    Code(&'static [Label]),
+    /// Bit fields.
+    Bits(&'static [Field]),
+}
+
+/// One register as a tool reads it.
+#[derive(Debug, Clone)]
+pub struct Point<'d> {
+    pub reg: &'d Register,
+    /// Holding or input.
+    pub table: Table,
+    /// The PDU address on the link (the manual's address moved by the settings and the
+    /// transport's offset).
+    pub pdu: u16,
+    pub width: Width,
+    pub signed: bool,
+    /// The map's unit (`""` for none).
+    pub unit: &'static str,
+    pub meaning: Meaning,
+    /// The planned read it belongs to (index into [`Points::reads`]).
+    pub read: usize,
+}
+
+impl Point<'_> {
+    /// The map's id of the register.
+    pub fn id(&self) -> &str {
+        &self.reg.def.id
+    }
+
+    /// The printed name, with the parameter number when the manual gives one.
+    pub fn label(&self) -> String {
+        match &self.reg.def.param {
+            Some(p) if !self.reg.def.name.contains(p.as_str()) => {
+                format!("{} ({p})", self.reg.def.name)
+            }
+            _ => self.reg.def.name.clone(),
+        }
+    }
+
+    /// Whether the second word of a pair comes first on the wire.
+    pub fn low_first(&self) -> bool {
+        self.width == Width::Pair(WordOrder::LowFirst)
+    }
+}
+
+/// One read request of the plan, in PDU addresses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PlannedRead {
+    pub table: Table,
+    pub pdu: u16,
+    pub quantity: u16,
+}
+
+/// Where the drive is, as the tools configure a connection.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Endpoint {
+    /// `host`, `port` over TCP: Modbus TCP frames (`--tcp`, `--gateway`) or RTU frames
+    /// (`--rtu-tcp`).
+    Tcp {
+        host: String,
+        port: u16,
+        rtu_frames: bool,
+    },
+    /// A serial port speaking RTU.
+    Serial {
+        path: String,
+        baud: u32,
+        parity: LineParity,
+        stop_bits: u8,
+    },
+}
+
+/// The chosen registers of a drive on one link, ready for a tool.
+#[derive(Debug)]
+pub struct Points<'d> {
+    pub drive: &'d Drive,
+    pub kind: TransportKind,
+    pub endpoint: Endpoint,
+    pub slave: u8,
+    /// Reply timeout in milliseconds (the client's default for the map and line).
+    pub timeout_ms: u64,
+    /// Least pause between requests in milliseconds (the map's request gap on RTU links).
+    pub gap_ms: u64,
+    /// Poll period in milliseconds.
+    pub period_ms: u64,
+    /// A name for the hub, entities and measurements (`--name`, default the drive id).
+    pub name: String,
+    pub points: Vec<Point<'d>>,
+    /// Registers asked for that no tool can read as the map means them, with the reason.
+    pub left_out: Vec<(&'d Register, String)>,
+    /// The planner's requests, ascending per table.
+    pub reads: Vec<PlannedRead>,
+    /// Modelled bus time of one cycle of `reads`, in microseconds.
+    pub cycle_us: u64,
+}
+
+fn split_host(addr: &str) -> Result<(String, u16), String> {
+    let (host, port) = addr
+        .rsplit_once(':')
+        .ok_or_else(|| format!("`{addr}` is not HOST:PORT"))?;
+    let port = port
+        .parse::<u16>()
+        .map_err(|_| format!("`{addr}`: `{port}` is not a TCP port"))?;
+    let host = host.trim_start_matches('[').trim_end_matches(']');
+    if host.is_empty() {
+        return Err(format!("`{addr}` has no host"));
+    }
+    Ok((host.to_owned(), port))
+}
+
+/// The registers exported when none are named: those the map's roles name and every
+/// read-only register (monitors and status words).
+pub fn default_registers(drive: &Drive) -> Vec<&Register> {
+    let mut named: Vec<&str> = Vec::new();
+    for places in drive.roles.values() {
+        for p in places {
+            if let Some(r) = &p.register {
+                named.push(r.as_str());
+            }
+        }
+    }
+    drive
+        .registers
+        .iter()
+        .filter(|r| r.readable())
+        .filter(|r| {
+            !r.writable()
+                || named
+                    .iter()
+                    .any(|n| r.def.id == *n || r.def.param.as_deref() == Some(n))
+        })
+        .collect()
+}
+
+impl<'d> Points<'d> {
+    /// Decides every register of `regs` on `link` under `settings` and plans their reads.
+    pub fn build(
+        drive: &'d Drive,
+        regs: &[&'d Register],
+        link: &LinkArgs,
+        settings: &LiveSettings,
+        period_ms: u64,
+        name: Option<&str>,
+    ) -> Result<Points<'d>, String> {
+        link.check_transport(drive)?;
+        let kind = link.kind();
+        let endpoint = if let Some(a) = link.tcp.as_ref().or(link.gateway.as_ref()) {
+            let (host, port) = split_host(a)?;
+            Endpoint::Tcp {
+                host,
+                port,
+                rtu_frames: false,
+            }
+        } else if let Some(a) = &link.rtu_tcp {
+            let (host, port) = split_host(a)?;
+            Endpoint::Tcp {
+                host,
+                port,
+                rtu_frames: true,
+            }
+        } else if let Some(path) = &link.serial {
+            let (baud, parity, stop_bits) = link.line(drive);
+            Endpoint::Serial {
+                path: path.clone(),
+                baud,
+                parity,
+                stop_bits,
+            }
+        } else {
+            return Err(
+                "give the link the tool connects to: --tcp, --gateway, --rtu-tcp or --serial"
+                    .into(),
+            );
+        };
+        let profile = leak_profile(drive);
+        let options = link.client_options(drive, profile);
+        let view = settings.view(drive);
+        let offsets = profile.address_offsets;
+
+        let mut points = Vec::new();
+        let mut left_out = Vec::new();
+        let mut wanted = Vec::new();
+        for &r in regs {
+            let plan = drive.register_plan(r);
+            let why = if r.broadcast {
+                Some("broadcast-only: written to slave 0, never read".to_owned())
+            } else if !r.readable() {
+                Some("write-only: the drive does not let it be read".to_owned())
+            } else if !on_transport(drive, r, kind) {
+                Some(format!("does not exist on this link ({})", kind.name()))
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                left_out.push((r, why));
+                continue;
+            }
+            let address = match plan.locate(&view, kind) {
+                Ok(a) => a,
+                Err(e) => {
+                    left_out.push((
+                        r,
+                        format!(
+                            "its address moves with {}, which a tool does not read first; give the drive's value with --set {}=<value>",
+                            e.setting, e.setting
+                        ),
+                    ));
+                    continue;
+                }
+            };
+            let Some(pdu) = offsets.pdu_address(address, kind) else {
+                left_out.push((r, "its address is outside 0..=FFFFh on this link".into()));
+                continue;
+            };
+            let meaning = match (&plan.conversion, plan.scale(&view)) {
+                (_, Some(Err(e))) => {
+                    left_out.push((
+                        r,
+                        format!(
+                            "its scale depends on another parameter, which a tool does not read first ({})",
+                            value_error(drive, &e)
+                        ),
+                    ));
+                    continue;
+                }
+                (conversion, Some(Ok(scale))) => {
+                    let given = match conversion {
+                        Conversion::Selected { selector, .. } => {
+                            let mut g = format!("{} as given with --set", selector.label);
+                            if let Scale::Relative { label, .. } = scale {
+                                if label != selector.label {
+                                    g = format!("{g}, and {label}");
+                                }
+                            }
+                            g
+                        }
+                        Conversion::Relative { relative, .. } => {
+                            format!("{} as given with --set", relative.reference.label)
+                        }
+                        _ => String::new(),
+                    };
+                    let factor = match scale {
+                        Scale::Decimal { scale, .. } => scale.decode(1),
+                        Scale::Relative {
+                            full_scale,
+                            reference,
+                            ..
+                        } => reference / full_scale,
+                    };
+                    Meaning::Number {
+                        scale: factor,
+                        precision: scale.decimals(),
+                        given,
+                    }
+                }
+                (Conversion::Enum { values, .. }, None) => {
+                    Meaning::Code(if plan.read_values.is_empty() {
+                        values
+                    } else {
+                        plan.read_values
+                    })
+                }
+                (Conversion::Bits { fields, .. }, None) => Meaning::Bits(fields),
+                (_, None) => Meaning::Word,
+            };
+            wanted.push((plan.info.table, address));
+            points.push((
+                Point {
+                    reg: r,
+                    table: plan.info.table,
+                    pdu,
+                    width: plan.info.width,
+                    signed: plan.signed(),
+                    unit: plan.unit,
+                    meaning,
+                    read: 0,
+                },
+                address,
+            ));
+        }
+
+        // The planner's reads over the registers this link can read at the addresses these
+        // settings put them (a register whose address is not known is not bridged over).
+        let infos: Vec<RegisterInfo> = drive
+            .registers
+            .iter()
+            .filter(|r| on_transport(drive, r, kind))
+            .filter_map(|r| {
+                let plan = drive.register_plan(r);
+                Some(RegisterInfo {
+                    address: plan.locate(&view, kind).ok()?,
+                    ..plan.info
+                })
+            })
+            .collect();
+        let model = BusModel::new(profile, link.bus_line(drive));
+        let poller = Poller::new(profile, &infos, wanted)
+            .map_err(|e| e.to_string())?
+            .with_model(model);
+        let mut reads = Vec::new();
+        for (table, read) in poller.plan() {
+            let pdu = offsets.pdu_address(read.address, kind).ok_or_else(|| {
+                format!(
+                    "a planned read at {:04X}h is outside 0..=FFFFh on this link",
+                    read.address
+                )
+            })?;
+            reads.push(PlannedRead {
+                table,
+                pdu,
+                quantity: read.quantity,
+            });
+        }
+        let cycle_us = poller.plan_ns() / 1000;
+        let mut placed = Vec::with_capacity(points.len());
+        for (mut p, address) in points {
+            p.read = reads
+                .iter()
+                .position(|q| {
+                    q.table == p.table
+                        && p.pdu >= q.pdu
+                        && u32::from(p.pdu) + u32::from(p.width.count())
+                            <= u32::from(q.pdu) + u32::from(q.quantity)
+                })
+                .ok_or_else(|| format!("no planned read covers {} at {address:04X}h", p.id()))?;
+            placed.push(p);
+        }
+        Ok(Points {
+            drive,
+            kind,
+            endpoint,
+            slave: link.slave(drive),
+            timeout_ms: options.timeout.as_millis() as u64,
+            gap_ms: options.request_gap.as_micros().div_ceil(1000) as u64,
+            period_ms,
+            name: name.unwrap_or(&drive.meta.id).to_owned(),
+            points: placed,
+            left_out,
+            reads,
+            cycle_us,
+        })
+    }
+
+    /// The points of read `i`, in address order.
+    pub fn in_read(&self, i: usize) -> impl Iterator<Item = &Point<'d>> {
+        self.points.iter().filter(move |p| p.read == i)
+    }
+
+    /// One line per register left out, for a tool's comments.
+    pub fn left_out_lines(&self) -> Vec<String> {
+        self.left_out
+            .iter()
+            .map(|(r, why)| {
+                format!(
+                    "left out {}: {why}",
+                    drivemap_codegen::describe::register(r)
+                )
+            })
+            .collect()
+    }
+
+    /// A sentence on what the export covers, for headers.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} ({} {}) slave {} over {}: {} register(s) in {} planned read(s), {:.1} ms of bus time per cycle (drivemap's bus-time model); {} left out",
+            self.drive.meta.id,
+            self.drive.meta.vendor,
+            self.drive.meta.models.join(" / "),
+            self.slave,
+            self.kind.name(),
+            self.points.len(),
+            self.reads.len(),
+            self.cycle_us as f64 / 1000.0,
+            self.left_out.len()
+        )
+    }
+}
+
+/// An identifier safe in every tool: lowercase letters, digits and `_`.
+pub fn slug(text: &str) -> String {
+    let mut out = String::new();
+    for c in text.chars() {
+        if c.is_ascii_alphanumeric() {
+            out.push(c.to_ascii_lowercase());
+        } else if !out.ends_with('_') {
+            out.push('_');
+        }
+    }
+    out.trim_matches('_').to_owned()
+}
+
+/// What a tool cannot show of a code or bit-field register, for comments.
+pub fn meanings_text(p: &Point) -> Option<String> {
+    match &p.meaning {
+        Meaning::Code(labels) if !labels.is_empty() => Some(format!(
+            "codes {}",
+            labels
+                .iter()
+                .map(|l| format!("{} = {}", l.code, l.name))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+        Meaning::Bits(fields) => Some(format!(
+            "fields {}",
+            fields
+                .iter()
+                .map(|f| {
+                    if f.width == 1 {
+                        format!("bit {} {}", f.lsb, f.id)
+                    } else {
+                        format!("bits {}-{} {}", f.lsb, f.lsb + f.width - 1, f.id)
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+        _ => None,
+    }
+}

@@ -1,0 +1,203 @@
+//! Telegraf's `inputs.modbus` plugin in its request style: one `[[inputs.modbus.request]]` per
+//! read of drivemap's planner, the addresses it bridges as `omit` fields, so Telegraf sends
+//! exactly the planned requests (optimization `none` keeps a request's fields as given).
+
+use std::fmt::Write;
+
+use drivemap_runtime::Table;
+
+use super::{Endpoint, Meaning, Points, meanings_text};
+use crate::live::link::LineParity;
+
+fn q(text: &str) -> String {
+    // A JSON string without control characters is a TOML basic string.
+    serde_json::Value::from(text).to_string()
+}
+
+/// The `[[inputs.modbus]]` configuration of `points`.
+pub fn render(points: &Points) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# Telegraf inputs.modbus configuration written by `drivemap export --format telegraf`"
+    );
+    let _ = writeln!(out, "# {}", points.summary());
+    let _ = writeln!(
+        out,
+        "# One [[inputs.modbus.request]] per planned read; `omit` fields are addresses a read bridges."
+    );
+    for p in &points.points {
+        if let Meaning::Number { given, .. } = &p.meaning {
+            if !given.is_empty() {
+                let _ = writeln!(
+                    out,
+                    "# {}: its scale holds for {given}; export again if the drive's setting changes.",
+                    p.id()
+                );
+            }
+        }
+        if let Some(m) = meanings_text(p) {
+            let what = match p.meaning {
+                Meaning::Bits(_) => {
+                    "the request style reads whole registers: the field is the word"
+                }
+                _ => "the field is the code",
+            };
+            let _ = writeln!(out, "# {}: {what}; {m}", p.id());
+        }
+    }
+    // A request's byte order is one for all its fields: a pair of the other word order cannot
+    // share a read with a pair of this order.
+    let mut mixed = Vec::new();
+    for (i, _) in points.reads.iter().enumerate() {
+        let pairs: Vec<_> = points.in_read(i).filter(|p| p.width.count() == 2).collect();
+        if let Some(first) = pairs.first() {
+            for p in &pairs {
+                if p.low_first() != first.low_first() {
+                    mixed.push(p.id().to_owned());
+                    let _ = writeln!(
+                        out,
+                        "# left out {}: its word order differs from {}'s in the same read, and a Telegraf request has one byte_order",
+                        p.id(),
+                        first.id()
+                    );
+                }
+            }
+        }
+    }
+    for line in points.left_out_lines() {
+        let _ = writeln!(out, "# {line}");
+    }
+    let _ = writeln!(out, "[[inputs.modbus]]");
+    let _ = writeln!(out, "  name = {}", q(&points.name));
+    let _ = writeln!(out, "  interval = \"{}ms\"", points.period_ms);
+    let _ = writeln!(out, "  timeout = \"{}ms\"", points.timeout_ms);
+    match &points.endpoint {
+        Endpoint::Tcp {
+            host,
+            port,
+            rtu_frames,
+        } => {
+            let host = if host.contains(':') {
+                format!("[{host}]")
+            } else {
+                host.clone()
+            };
+            let _ = writeln!(out, "  controller = {}", q(&format!("tcp://{host}:{port}")));
+            let _ = writeln!(
+                out,
+                "  transmission_mode = \"{}\"",
+                if *rtu_frames { "RTUoverTCP" } else { "TCP" }
+            );
+        }
+        Endpoint::Serial {
+            path,
+            baud,
+            parity,
+            stop_bits,
+        } => {
+            let _ = writeln!(out, "  controller = {}", q(&format!("file://{path}")));
+            let _ = writeln!(out, "  baud_rate = {baud}");
+            let _ = writeln!(out, "  data_bits = 8");
+            let _ = writeln!(
+                out,
+                "  parity = \"{}\"",
+                match parity {
+                    LineParity::None => "N",
+                    LineParity::Even => "E",
+                    LineParity::Odd => "O",
+                }
+            );
+            let _ = writeln!(out, "  stop_bits = {stop_bits}");
+            let _ = writeln!(out, "  transmission_mode = \"RTU\"");
+        }
+    }
+    let _ = writeln!(out, "  configuration_type = \"request\"");
+    for (i, read) in points.reads.iter().enumerate() {
+        let members: Vec<_> = points
+            .in_read(i)
+            .filter(|p| !mixed.iter().any(|m| m == p.id()))
+            .collect();
+        let low_first = members
+            .iter()
+            .find(|p| p.width.count() == 2)
+            .is_some_and(|p| p.low_first());
+        let _ = writeln!(out);
+        let _ = writeln!(
+            out,
+            "  # planned read {}: {} PDU {}..{} ({} register(s))",
+            i + 1,
+            match read.table {
+                Table::Holding => "holding (03h)",
+                Table::Input => "input (04h)",
+            },
+            read.pdu,
+            u32::from(read.pdu) + u32::from(read.quantity) - 1,
+            read.quantity
+        );
+        let _ = writeln!(out, "  [[inputs.modbus.request]]");
+        let _ = writeln!(out, "    slave_id = {}", points.slave);
+        let _ = writeln!(
+            out,
+            "    byte_order = \"{}\"",
+            if low_first { "CDAB" } else { "ABCD" }
+        );
+        let _ = writeln!(
+            out,
+            "    register = \"{}\"",
+            match read.table {
+                Table::Holding => "holding",
+                Table::Input => "input",
+            }
+        );
+        let _ = writeln!(out, "    measurement = \"drivemap\"");
+        let _ = writeln!(out, "    optimization = \"none\"");
+        let _ = writeln!(out, "    fields = [");
+        let end = u32::from(read.pdu) + u32::from(read.quantity);
+        let mut address = u32::from(read.pdu);
+        while address < end {
+            match members.iter().find(|p| u32::from(p.pdu) == address) {
+                Some(p) => {
+                    let bits = p.width.count() * 16;
+                    let ty = format!("{}INT{bits}", if p.signed { "" } else { "U" });
+                    let scale = match &p.meaning {
+                        Meaning::Number { scale, .. } => format!(", scale = {scale:?}"),
+                        _ => String::new(),
+                    };
+                    let unit = if p.unit.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" {}", p.unit)
+                    };
+                    let _ = writeln!(
+                        out,
+                        "      {{ address = {address}, name = {}, type = \"{ty}\"{scale} }},  # {}{unit}",
+                        q(p.id()),
+                        p.label()
+                    );
+                    address += u32::from(p.width.count());
+                }
+                None => {
+                    let _ = writeln!(
+                        out,
+                        "      {{ address = {address}, name = \"unread_{address}\", type = \"UINT16\", omit = true }},"
+                    );
+                    address += 1;
+                }
+            }
+        }
+        let _ = writeln!(out, "    ]");
+        let _ = writeln!(out, "    [inputs.modbus.request.tags]");
+        let _ = writeln!(out, "      drive = {}", q(&points.drive.meta.id));
+        let _ = writeln!(out, "      slave = \"{}\"", points.slave);
+    }
+    let _ = writeln!(out);
+    let _ = writeln!(out, "  [inputs.modbus.workarounds]");
+    let _ = writeln!(out, "    pause_between_requests = \"{}ms\"", points.gap_ms);
+    let _ = writeln!(
+        out,
+        "    max_word_registers_per_request = {}",
+        points.drive.plan().profile.max_read.min(125)
+    );
+    out
+}
