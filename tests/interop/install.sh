@@ -4,6 +4,10 @@
 #
 # - Debian packages mbpoll and socat, with apt-get when running as root (otherwise prints the
 #   command to run);
+# - Node-RED and node-red-contrib-modbus from npm under target/interop-node (the Node-RED export's
+#   test, cli/tests/export_node_red.rs), pinned: node-red-contrib-modbus 5.23.3 is the newest the
+#   registry serves that runs on Debian's Node.js 20 (5.60 needs Node 22) and installs from npm
+#   alone (5.45 fetches a dependency from another host); ~25 s on an empty npm cache;
 # - Python packages pymodbus, minimalmodbus and pyserial in a venv at target/interop-venv, at the
 #   versions the scripts in tests/interop/ are written for (pymodbus changes its API between
 #   minor versions), and jsonschema, which cli/tests/machine_output.rs checks the CLI's JSON
@@ -12,14 +16,16 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 
 missing=()
-for tool in mbpoll socat; do
+for tool in mbpoll socat npm; do
   command -v "$tool" >/dev/null 2>&1 || missing+=("$tool")
 done
 if [ ${#missing[@]} -gt 0 ]; then
   if [ "$(id -u)" = 0 ]; then
     echo "== apt-get install -y ${missing[*]}"
     apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
+    packages=("${missing[@]/npm/nodejs npm}")
+    # shellcheck disable=SC2068 # "nodejs npm" is two packages
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq ${packages[@]} >/dev/null
   else
     echo "missing ${missing[*]}: run as root: apt-get install -y ${missing[*]}" >&2
   fi
@@ -41,3 +47,18 @@ if ! "$venv/bin/python" -c "$check" >/dev/null 2>&1; then
 fi
 "$venv/bin/python" -c 'import pymodbus, minimalmodbus, serial, importlib.metadata; print("interop peers: pymodbus", pymodbus.__version__, "minimalmodbus", minimalmodbus.__version__, "pyserial", serial.__version__, "jsonschema", importlib.metadata.version("jsonschema"))'
 echo "interop peers: $(command -v mbpoll || echo 'mbpoll MISSING') $(command -v socat || echo 'socat MISSING')"
+
+node_dir=target/interop-node
+node_pins=(node-red@4.1.15 node-red-contrib-modbus@5.23.3)
+node_check="const v = (m) => require(process.cwd() + '/$node_dir/node_modules/' + m + '/package.json').version;
+if (v('node-red') !== '4.1.15' || v('node-red-contrib-modbus') !== '5.23.3') process.exit(1);"
+if command -v npm >/dev/null 2>&1; then
+  if ! node -e "$node_check" >/dev/null 2>&1; then
+    echo "== npm install ${node_pins[*]} (in $node_dir)"
+    mkdir -p "$node_dir"
+    (cd "$node_dir" && npm install --no-audit --no-fund --loglevel=error --no-save "${node_pins[@]}")
+  fi
+  echo "Node-RED: $(node -e "console.log(require(process.cwd() + '/$node_dir/node_modules/node-red/package.json').version)" 2>/dev/null || echo MISSING), node-red-contrib-modbus $(node -e "console.log(require(process.cwd() + '/$node_dir/node_modules/node-red-contrib-modbus/package.json').version)" 2>/dev/null || echo MISSING)"
+else
+  echo "Node-RED: npm MISSING (apt-get install -y nodejs npm)" >&2
+fi
