@@ -1216,6 +1216,19 @@ impl<T: Transport> Client<T> {
         &self.core.options
     }
 
+    /// Talks to another drive on the same link from now on (several drives on one RS-485 line
+    /// or behind one gateway, each with its own map): its `profile` (functions, limits, write
+    /// gate, commands, slave range) and `options` (its timing:
+    /// [`ClientOptions::for_link`]`(profile, kind)`). What belongs to the link is kept: the end
+    /// of the last transaction, so the next request still waits the request gap after the
+    /// last reply on the line whichever drive sent it; a late reply still expected; the
+    /// transaction counter; and the EEPROM budget, counted for the whole link (fewer writes,
+    /// never more, than per drive).
+    pub fn switch_drive(&mut self, profile: &'static Profile, options: ClientOptions) {
+        self.core.profile = profile;
+        self.core.options = options;
+    }
+
     /// The transport.
     pub fn transport(&mut self) -> &mut T {
         &mut self.transport

@@ -393,7 +393,7 @@ pub fn plan_cost(reads: &[Read], cost: impl Fn(u16) -> u64) -> u64 {
 
 mod poller;
 
-pub use poller::{CycleStats, Learned, PolledError, Poller, splits_on, wanted};
+pub use poller::{CycleStats, Learned, PolledError, Poller, poll_line, splits_on, wanted};
 
 #[cfg(test)]
 mod tests {

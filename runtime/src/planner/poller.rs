@@ -66,6 +66,33 @@ impl fmt::Display for PolledError<'_> {
     }
 }
 
+/// One cycle over several drives of one link (an RS-485 line, a gateway), each `(slave,
+/// poller)` in turn through the one `client`: before each, the client is switched to that
+/// poller's drive ([`Client::switch_drive`]), with the drive's timing
+/// ([`ClientOptions::for_link`]) and the client's retries, reconnection and EEPROM budget as
+/// they were. Returns the cycle's statistics summed; each poller holds its drive's values.
+///
+/// [`ClientOptions::for_link`]: crate::ClientOptions::for_link
+pub fn poll_line<T: Transport>(client: &mut Client<T>, drives: &mut [(u8, Poller)]) -> CycleStats {
+    let kind = client.transport().kind();
+    let mut total = CycleStats::default();
+    for (slave, poller) in drives.iter_mut() {
+        let mine = *client.options();
+        let options = crate::ClientOptions {
+            retries: mine.retries,
+            reconnect: mine.reconnect,
+            eeprom_writes_per_hour: mine.eeprom_writes_per_hour,
+            ..crate::ClientOptions::for_link(poller.profile, kind)
+        };
+        client.switch_drive(poller.profile, options);
+        let s = poller.poll(client, *slave);
+        total.requests += s.requests;
+        total.splits += s.splits;
+        total.bus_ns += s.bus_ns;
+    }
+    total
+}
+
 /// The `(table, address)` of a generated register type, for [`Poller::new`] (a 32-bit pair's
 /// second word is added by the poller).
 pub fn wanted<R: Readable>() -> (Table, u16) {
@@ -215,6 +242,11 @@ impl Poller {
         self.replan = true;
         self.replan_now();
         self
+    }
+
+    /// The profile of the drive polled.
+    pub fn profile(&self) -> &'static Profile {
+        self.profile
     }
 
     /// The bus-time model in use.
