@@ -319,6 +319,10 @@ pub enum Error {
         #[source]
         source: io::Error,
     },
+    /// The link failed outside a request (connecting, reconnecting, setting up a line): the
+    /// `?` of an [`io::Error`] in a function that returns this error.
+    #[error("the link failed: {0}")]
+    Link(#[from] io::Error),
     /// The request was refused before anything was sent.
     #[error("refused before sending: {0}")]
     Refused(#[from] Refusal),
@@ -355,6 +359,23 @@ impl Error {
     }
 }
 
+/// An [`Error`] as an [`io::Error`], for code that returns `io::Result` (a tokio task, a
+/// `Read`/`Write` adapter): the kind says what happened ([`io::ErrorKind::TimedOut`] for a
+/// drive that did not answer, the link's own kind for a link that failed,
+/// [`io::ErrorKind::InvalidInput`] for a request refused before sending, [`io::ErrorKind::Other`]
+/// for an exception), and the error itself stays the source, with its message.
+impl From<Error> for io::Error {
+    fn from(e: Error) -> io::Error {
+        let kind = match &e {
+            Error::Timeout { .. } | Error::Unsettled { .. } => io::ErrorKind::TimedOut,
+            Error::Io { source, .. } | Error::Link(source) => source.kind(),
+            Error::Refused(_) | Error::Value(_) => io::ErrorKind::InvalidInput,
+            Error::Exception { .. } | Error::Overrun { .. } => io::ErrorKind::Other,
+        };
+        io::Error::new(kind, e)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -388,5 +409,61 @@ mod tests {
             value: None,
         };
         assert_eq!(s.to_string(), "10h write of 1103h (PDU 1102h) x2");
+    }
+
+    /// The link's errors and the client's convert both ways, and keep what caused them as their
+    /// source.
+    #[test]
+    fn io_errors_convert_both_ways_and_keep_their_source() {
+        use std::error::Error as _;
+        fn connect() -> Result<(), Error> {
+            Err(io::Error::new(
+                io::ErrorKind::ConnectionRefused,
+                "port 502 closed",
+            ))?;
+            Ok(())
+        }
+        let e = connect().unwrap_err();
+        assert_eq!(e.to_string(), "the link failed: port 502 closed");
+        assert!(matches!(e, Error::Link(ref io) if io.kind() == io::ErrorKind::ConnectionRefused));
+        let sent = Sent {
+            slave: 1,
+            function: 3,
+            address: Some(0x20),
+            pdu_address: Some(0x20),
+            quantity: 1,
+            value: None,
+        };
+        let e = Error::Io {
+            sent,
+            source: io::Error::new(io::ErrorKind::BrokenPipe, "pipe"),
+        };
+        let source = e.source().expect("the link's error is the source");
+        assert_eq!(source.to_string(), "pipe");
+        fn in_a_task(e: Error) -> io::Result<()> {
+            Err(e)?;
+            Ok(())
+        }
+        let io = in_a_task(e).unwrap_err();
+        assert_eq!(io.kind(), io::ErrorKind::BrokenPipe);
+        assert_eq!(io.to_string(), "03h read of 0020h x1 to slave 1: pipe");
+        let inner = io.get_ref().expect("the client's error inside");
+        assert!(inner.downcast_ref::<Error>().is_some());
+        let timeout = Error::Timeout {
+            sent,
+            waited: Duration::from_millis(5),
+            attempts: 1,
+            discarded: Discarded::default(),
+            settle: None,
+        };
+        assert_eq!(io::Error::from(timeout).kind(), io::ErrorKind::TimedOut);
+        let refused: io::Error = Error::Refused(Refusal::BroadcastLoopBack).into();
+        assert_eq!(refused.kind(), io::ErrorKind::InvalidInput);
+        let refusal = Error::Refused(Refusal::BroadcastLoopBack);
+        assert!(
+            refusal
+                .source()
+                .is_some_and(|s| s.downcast_ref::<Refusal>().is_some())
+        );
     }
 }

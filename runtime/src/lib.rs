@@ -10,9 +10,15 @@
 //! - links: the [`transport::Transport`] trait and its serial, TCP, RTU-over-TCP and in-memory
 //!   implementations;
 //! - [`client::Client`]: checked transactions with timeouts, retries, broadcast, typed register
-//!   access and counted EEPROM writes ([`persist`]).
+//!   access and counted EEPROM writes ([`persist`]); `async_client::AsyncClient` (feature
+//!   `tokio`) the same over tokio;
+//! - [`vfd`]: one drive API for every map with roles, blocking (`Vfd`) and async (`AsyncVfd`,
+//!   feature `tokio`), with one safety contract.
 
 #![cfg_attr(not(feature = "std"), no_std)]
+// docs.rs documents every feature (`[package.metadata.docs.rs]`), each item marked with the
+// feature it needs.
+#![cfg_attr(docsrs, feature(doc_cfg))]
 
 // The protocol core: no I/O, no allocation, and no `std` (`--no-default-features` builds it for
 // a microcontroller; `scripts/test` checks that on the host target).
@@ -28,6 +34,7 @@ pub mod tcp;
 
 // Links, clients and tools: need `std`.
 #[cfg(feature = "tokio")]
+#[cfg_attr(docsrs, doc(cfg(feature = "tokio")))]
 pub mod async_client;
 #[cfg(feature = "std")]
 pub mod bus_time;

@@ -44,7 +44,12 @@
 //! property test `drive_contract::the_contract_holds_under_faults` checks the run-code, stop
 //! and limit guarantees on random call sequences with lost, late and refused replies and
 //! reconnects, on every map of `maps/` and the `acme-vf1` fixture (with two variants whose roles
-//! share a register), over RTU framing and Modbus TCP.
+//! share a register), over RTU framing and Modbus TCP, through the blocking [`Vfd`] and the
+//! async `AsyncVfd` (feature `tokio`; one body of code for both, awaited in the async one).
+//!
+//! A `Vfd` borrows its client (`Vfd::connect::<D>(&mut client, ..)`) or owns it
+//! (`Vfd::connect::<D>(client, ..)`, [`Vfd::into_client`] to take it back): see
+//! [`HoldsClient`]. Owned, it can live next to nothing else, in a thread or a tokio task.
 //!
 //! - A run bit or run code is written only by [`VariableFrequencyDrive::run`], or by a later call
 //!   while the last of `run()` and `stop()` called was a `run()` that succeeded (which keeps the
@@ -81,6 +86,8 @@ use drivemap_core::roles::{FieldRole, Place, Role, RoleKind, Target};
 use drivemap_core::rule::Broadcast;
 use drivemap_core::{Roles, Rounding, SettingsView, ValueError};
 
+#[cfg(feature = "tokio")]
+use crate::async_client::{AsyncClient, AsyncTransport};
 use crate::client::Client;
 use crate::error::{Error, Refusal};
 use crate::profile::TransportKind;
@@ -236,12 +243,131 @@ pub trait VariableFrequencyDrive {
     fn reset_fault(&mut self) -> Result<(), Error>;
 }
 
+/// The [`VariableFrequencyDrive`] of the async client: the same calls, awaited, with the same
+/// contract (see [the module](self)); implemented by [`AsyncVfd`], the same code as [`Vfd`]'s
+/// over an [`AsyncClient`].
+#[cfg(feature = "tokio")]
+#[cfg_attr(docsrs, doc(cfg(feature = "tokio")))]
+#[allow(async_fn_in_trait)]
+pub trait AsyncVariableFrequencyDrive {
+    /// The drive's map id.
+    fn drive_id(&self) -> &'static str;
+    /// Whether the map gives `role` on this link.
+    fn supports(&self, role: Role) -> bool;
+    /// As [`VariableFrequencyDrive::run`].
+    async fn run(&mut self) -> Result<(), Error>;
+    /// As [`VariableFrequencyDrive::stop`].
+    async fn stop(&mut self) -> Result<(), Error>;
+    /// As [`VariableFrequencyDrive::set_direction`].
+    async fn set_direction(&mut self, direction: Direction) -> Result<(), Error>;
+    /// As [`VariableFrequencyDrive::set_reference`].
+    async fn set_reference(&mut self, hz: f64) -> Result<(), Error>;
+    /// As [`VariableFrequencyDrive::set_ramp`].
+    async fn set_ramp(&mut self, accel_s: f64, decel_s: f64) -> Result<(), Error>;
+    /// As [`VariableFrequencyDrive::reference`].
+    async fn reference(&mut self) -> Result<f64, Error>;
+    /// As [`VariableFrequencyDrive::output_frequency`].
+    async fn output_frequency(&mut self) -> Result<f64, Error>;
+    /// As [`VariableFrequencyDrive::output_current`].
+    async fn output_current(&mut self) -> Result<f64, Error>;
+    /// As [`VariableFrequencyDrive::output_voltage`].
+    async fn output_voltage(&mut self) -> Result<f64, Error>;
+    /// As [`VariableFrequencyDrive::dc_bus_voltage`].
+    async fn dc_bus_voltage(&mut self) -> Result<f64, Error>;
+    /// As [`VariableFrequencyDrive::status`].
+    async fn status(&mut self) -> Result<Status, Error>;
+    /// As [`VariableFrequencyDrive::fault_code`].
+    async fn fault_code(&mut self) -> Result<FaultCode, Error>;
+    /// As [`VariableFrequencyDrive::reset_fault`].
+    async fn reset_fault(&mut self) -> Result<(), Error>;
+}
+
+/// How a [`Vfd`] holds its blocking client: borrowed (`&mut Client<T>`) or owned (`Client<T>`,
+/// `Box<Client<T>>`), so that a `Vfd` can own its client and be moved into a thread.
+pub trait HoldsClient {
+    /// The client's link.
+    type Transport: Transport;
+    /// The client.
+    fn get(&self) -> &Client<Self::Transport>;
+    /// The client, to use it.
+    fn get_mut(&mut self) -> &mut Client<Self::Transport>;
+}
+
+/// How an [`AsyncVfd`] holds its async client: borrowed (`&mut AsyncClient<T>`) or owned
+/// (`AsyncClient<T>`, `Box<AsyncClient<T>>`), so that an `AsyncVfd` can own its client and be
+/// moved into a task.
+#[cfg(feature = "tokio")]
+#[cfg_attr(docsrs, doc(cfg(feature = "tokio")))]
+pub trait HoldsAsyncClient {
+    /// The client's link.
+    type Transport: AsyncTransport;
+    /// The client.
+    fn get(&self) -> &AsyncClient<Self::Transport>;
+    /// The client, to use it.
+    fn get_mut(&mut self) -> &mut AsyncClient<Self::Transport>;
+}
+
+macro_rules! holds {
+    ($holds:ident, $client:ident, $link:ident) => {
+        impl<T: $link> $holds for $client<T> {
+            type Transport = T;
+            fn get(&self) -> &$client<T> {
+                self
+            }
+            fn get_mut(&mut self) -> &mut $client<T> {
+                self
+            }
+        }
+
+        impl<T: $link> $holds for &mut $client<T> {
+            type Transport = T;
+            fn get(&self) -> &$client<T> {
+                self
+            }
+            fn get_mut(&mut self) -> &mut $client<T> {
+                self
+            }
+        }
+
+        impl<T: $link> $holds for Box<$client<T>> {
+            type Transport = T;
+            fn get(&self) -> &$client<T> {
+                self
+            }
+            fn get_mut(&mut self) -> &mut $client<T> {
+                self
+            }
+        }
+    };
+}
+
+holds!(HoldsClient, Client, Transport);
+#[cfg(feature = "tokio")]
+holds!(HoldsAsyncClient, AsyncClient, AsyncTransport);
+
 /// A drive on slave `slave` of a blocking client, read and written through its plan and roles:
 /// the [`VariableFrequencyDrive`] of every drive whose map has roles. Build it from a generated
 /// module with [`Vfd::new`] or [`Vfd::connect`], or from a plan lowered at run time with
-/// [`Vfd::from_plan`].
-pub struct Vfd<'c, S: SettingsView, T: Transport> {
-    client: &'c mut Client<T>,
+/// [`Vfd::from_plan`]. It holds its client as `C` ([`HoldsClient`]): `&mut Client<T>` to borrow
+/// it, `Client<T>` to own it.
+pub struct Vfd<S: SettingsView, C: HoldsClient> {
+    client: C,
+    state: State<S>,
+}
+
+/// A drive on slave `slave` of an async client: the [`AsyncVariableFrequencyDrive`], the same
+/// code as [`Vfd`] with each request awaited. It holds its client as `C` ([`HoldsAsyncClient`]):
+/// `AsyncClient<T>` to own it (and move the drive into a task), `&mut AsyncClient<T>` to borrow
+/// it.
+#[cfg(feature = "tokio")]
+#[cfg_attr(docsrs, doc(cfg(feature = "tokio")))]
+pub struct AsyncVfd<S: SettingsView, C: HoldsAsyncClient> {
+    client: C,
+    state: State<S>,
+}
+
+/// What a [`Vfd`] or an [`AsyncVfd`] knows of its drive besides the client.
+struct State<S> {
     slave: u8,
     settings: S,
     registers: &'static [RegisterPlan],
@@ -256,7 +382,7 @@ pub struct Vfd<'c, S: SettingsView, T: Transport> {
     /// The run command source and the reference source were read and select the network.
     sources: [bool; 2],
     /// What a reference or ramp between two steps of its register becomes (refused unless
-    /// [`Vfd::rounding`] says otherwise).
+    /// `rounding` says otherwise).
     rounding: Rounding,
 }
 
@@ -272,12 +398,16 @@ struct CommandWord {
     told: Option<u16>,
 }
 
-impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
+/// The methods of [`Vfd`] and [`AsyncVfd`], one body for both: `[async] [.await]` for the
+/// async drive, `[] []` for the blocking one.
+macro_rules! vfd_impl {
+    ($name:ident, $holder:ident, $trait:ident, $client:ident, [$($asy:tt)*] [$($aw:tt)*]) => {
+impl<S: SettingsView, C: $holder> $name<S, C> {
     /// The drive of generated module `D` on `slave`, with `settings` as conversions need them
     /// (fill them with [`Client::load_settings`] and the external quantities the map names, or
-    /// use [`Vfd::connect`]).
+    /// use [`connect`](Self::connect)).
     pub fn new<D: DrivePlan<Settings = S>>(
-        client: &'c mut Client<T>,
+        client: C,
         slave: u8,
         settings: S,
     ) -> Self {
@@ -287,13 +417,13 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     /// The drive on `slave` described by `registers` (the plan's rows, by address) and `roles`,
     /// with `settings` in force: for tools that lower a map at run time.
     pub fn from_plan(
-        client: &'c mut Client<T>,
+        mut client: C,
         slave: u8,
         settings: S,
         registers: &'static [RegisterPlan],
         roles: Roles,
     ) -> Self {
-        let kind = client.transport().kind();
+        let kind = client.get_mut().transport().kind();
         let mut commands: Vec<CommandWord> = Vec::new();
         for p in roles.places {
             if let (RoleKind::Command, Target::Field(f)) = (p.role.kind(), p.target) {
@@ -315,8 +445,9 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         for c in &mut commands {
             c.told = Some(c.released);
         }
-        Vfd {
+        $name {
             client,
+            state: State {
             slave,
             settings,
             registers,
@@ -327,13 +458,14 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             commands,
             sources: [false; 2],
             rounding: Rounding::Exact,
+            },
         }
     }
 
     /// The drive of generated module `D` on `slave`: reads the parameters its conversions
     /// depend on, and takes the external quantities (name, value) the application supplies.
-    pub fn connect<D: DrivePlan<Settings = S>>(
-        client: &'c mut Client<T>,
+    pub $($asy)* fn connect<D: DrivePlan<Settings = S>>(
+        mut client: C,
         slave: u8,
         mut settings: S,
         externals: &[(&str, f64)],
@@ -341,9 +473,9 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     where
         S: DriveSettings,
     {
-        if client.profile().drive_id != D::PROFILE.drive_id {
+        if client.get().profile().drive_id != D::PROFILE.drive_id {
             return Err(Refusal::OtherDrive {
-                client: client.profile().drive_id,
+                client: client.get().profile().drive_id,
                 drive: D::PROFILE.drive_id,
             }
             .into());
@@ -351,18 +483,18 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         for (name, value) in externals {
             if !settings.set_external(name, *value) {
                 return Err(Refusal::UnknownExternal {
-                    drive: client.profile().drive_id,
+                    drive: client.get().profile().drive_id,
                     name: (*name).to_owned(),
                 }
                 .into());
             }
         }
-        client.load_settings(slave, &mut settings)?;
+        client.get_mut().load_settings(slave, &mut settings) $($aw)*?;
         Ok(Self::new::<D>(client, slave, settings))
     }
 
     fn drive(&self) -> &'static str {
-        self.client.profile().drive_id
+        self.client.get().profile().drive_id
     }
 
     /// Chooses what a reference or a ramp time that is not a whole number of its register's
@@ -370,22 +502,27 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     /// ([`ValueError::NotAStep`]); [`Rounding::Nearest`] sends the nearest. Limits are checked on
     /// the value given either way.
     pub fn rounding(mut self, rounding: Rounding) -> Self {
-        self.rounding = rounding;
+        self.state.rounding = rounding;
         self
     }
 
     /// The settings in force.
     pub fn settings(&self) -> &S {
-        &self.settings
+        &self.state.settings
     }
 
     /// The client.
-    pub fn client(&mut self) -> &mut Client<T> {
+    pub fn client(&mut self) -> &mut $client<C::Transport> {
+        self.client.get_mut()
+    }
+
+    /// The client as it was given (owned or borrowed), giving the drive up.
+    pub fn into_client(self) -> C {
         self.client
     }
 
     fn row(&self, row: u16) -> &'static RegisterPlan {
-        &self.registers[usize::from(row)]
+        &self.state.registers[usize::from(row)]
     }
 
     /// Whether a place can be used on this link to this slave.
@@ -393,8 +530,8 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         match p.target.row() {
             Some(row) => {
                 let r = self.row(row);
-                let broadcast = self.slave == 0;
-                r.transports.contains(self.kind)
+                let broadcast = self.state.slave == 0;
+                r.transports.contains(self.state.kind)
                     && match r.broadcast {
                         Broadcast::Only => broadcast,
                         Broadcast::Also => true,
@@ -408,7 +545,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     /// The first place of `role` usable here, or why there is none.
     fn place(&self, role: Role, what: &'static str) -> Result<&'static Place, Error> {
         let mut any = false;
-        for p in self.roles.of(role) {
+        for p in self.state.roles.of(role) {
             any = true;
             if self.usable(p) {
                 return Ok(p);
@@ -418,51 +555,52 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             drive: self.drive(),
             role: role.id(),
             what,
-            transport: any.then_some(self.kind),
+            transport: any.then_some(self.state.kind),
         }
         .into())
     }
 
     /// The raw value of plan row `row`: its word, or a 32-bit pair read in one request.
-    fn read_raw(&mut self, row: u16) -> Result<u32, Error> {
+    $($asy)* fn read_raw(&mut self, row: u16) -> Result<u32, Error> {
         let r = self.row(row);
-        let address = r.locate(&self.settings, self.kind)?;
+        let address = r.locate(&self.state.settings, self.state.kind)?;
         let mut raw = [0u16; 2];
         let words = &mut raw[..usize::from(r.info.width.count())];
         match r.info.table {
-            Table::Input => self.client.read_input(self.slave, address, words)?,
-            Table::Holding => self.client.read_holding(self.slave, address, words)?,
+            Table::Input => self.client.get_mut().read_input(self.state.slave, address, words) $($aw)*?,
+            Table::Holding => self.client.get_mut().read_holding(self.state.slave, address, words) $($aw)*?,
         }
         Ok(r.info.width.join(words))
     }
 
     /// The word of a one-register row (bit fields and codes: the map keeps them in one word).
-    fn read_word(&mut self, row: u16) -> Result<u16, Error> {
-        Ok(self.read_raw(row)? as u16)
+    $($asy)* fn read_word(&mut self, row: u16) -> Result<u16, Error> {
+        Ok(self.read_raw(row) $($aw)*? as u16)
     }
 
-    fn write_word(&mut self, row: u16, raw: u32) -> Result<(), Error> {
+    $($asy)* fn write_word(&mut self, row: u16, raw: u32) -> Result<(), Error> {
         let r = self.row(row);
-        let address = r.locate(&self.settings, self.kind)?;
+        let address = r.locate(&self.state.settings, self.state.kind)?;
         let rule = r.write_rule();
         match r.repeat_needs_change {
             // A role register whose drive executes only a changed value: its intermediate first.
             Some(x) => self
                 .client
-                .write_changed(self.slave, &rule, address, x.between, raw),
-            None => self.client.write_rule(self.slave, &rule, address, raw),
+                .get_mut()
+                .write_changed(self.state.slave, &rule, address, x.between, raw) $($aw)*,
+            None => self.client.get_mut().write_rule(self.state.slave, &rule, address, raw) $($aw)*,
         }
     }
 
     /// Reads the number role `role` in its unit.
-    fn read_number(&mut self, role: Role) -> Result<f64, Error> {
+    $($asy)* fn read_number(&mut self, role: Role) -> Result<f64, Error> {
         let p = self.place(role, "register")?;
         match p.target {
             Target::Register(row) => {
-                let raw = self.read_raw(row)?;
-                Ok(self.row(row).decode_number(raw, &self.settings)?)
+                let raw = self.read_raw(row) $($aw)*?;
+                Ok(self.row(row).decode_number(raw, &self.state.settings)?)
             }
-            Target::External { slot, name } => self.settings.quantity(slot).ok_or_else(|| {
+            Target::External { slot, name } => self.state.settings.quantity(slot).ok_or_else(|| {
                 Refusal::ExternalNotSet {
                     drive: self.drive(),
                     name,
@@ -474,24 +612,24 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     }
 
     /// Writes the number role `role`, range-checked by the register's conversion.
-    fn write_number(&mut self, role: Role, value: f64) -> Result<(), Error> {
+    $($asy)* fn write_number(&mut self, role: Role, value: f64) -> Result<(), Error> {
         let p = self.place(role, "register")?;
         let Target::Register(row) = p.target else {
             return Err(self.misplaced(role, "writable register"));
         };
         let raw = self
             .row(row)
-            .encode_number_with(value, &self.settings, self.rounding)?;
-        self.write_word(row, raw)
+            .encode_number_with(value, &self.state.settings, self.state.rounding)?;
+        self.write_word(row, raw) $($aw)*
     }
 
     /// Sets the command fields of `changes` in their registers' words and writes each word once,
     /// in the order of `changes` with releases before sets (so a stop goes out before a
     /// direction, and a run after it). Each word is composed from what this master last told the
-    /// register ([`Vfd::base`]) with the run and direction fields as the last successful `run()`
+    /// register (`base`) with the run and direction fields as the last successful `run()`
     /// or `stop()` and the direction set say, then `changes` on top. A write that fails makes
     /// its register unknown.
-    fn command(&mut self, changes: &[(FieldRole, bool)]) -> Result<(), Error> {
+    $($asy)* fn command(&mut self, changes: &[(FieldRole, bool)]) -> Result<(), Error> {
         let mut words: Vec<(u16, u16)> = Vec::new();
         // Within a word, releases go first: where two roles share bits (run forward and run
         // reverse as the codes of one field), the one set wins.
@@ -500,13 +638,13 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             .filter(|(_, on)| !on)
             .chain(changes.iter().filter(|(_, on)| *on));
         for (f, on) in ordered {
-            if !self.commands.iter().any(|c| c.row == f.row) {
+            if !self.state.commands.iter().any(|c| c.row == f.row) {
                 continue;
             }
             let word = match words.iter().position(|(row, _)| *row == f.row) {
                 Some(i) => &mut words[i].1,
                 None => {
-                    let base = self.base(f.row)?;
+                    let base = self.base(f.row) $($aw)*?;
                     words.push((f.row, base));
                     &mut words.last_mut().expect("just pushed").1
                 }
@@ -514,8 +652,8 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             *word = f.put(*word, f.code(*on));
         }
         for (row, word) in words {
-            let result = self.write_word(row, u32::from(word));
-            if let Some(c) = self.commands.iter_mut().find(|c| c.row == row) {
+            let result = self.write_word(row, u32::from(word)) $($aw)*;
+            if let Some(c) = self.state.commands.iter_mut().find(|c| c.row == row) {
                 c.told = result.is_ok().then_some(word);
             }
             result?;
@@ -529,18 +667,18 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     /// role of the register released except the run and direction fields, which follow the last
     /// successful `run()` / `stop()` and the direction set. So no word carries a run code unless
     /// `run()` asks for it or succeeded last.
-    fn base(&mut self, row: u16) -> Result<u16, Error> {
-        let Some(c) = self.commands.iter().find(|c| c.row == row).copied() else {
+    $($asy)* fn base(&mut self, row: u16) -> Result<u16, Error> {
+        let Some(c) = self.state.commands.iter().find(|c| c.row == row).copied() else {
             return Ok(0);
         };
         let mut word = match c.told {
             Some(w) => w,
-            None => match self.read_back(row) {
+            None => match self.read_back(row) $($aw)* {
                 Some(read) => read,
                 None => c.released,
             },
         };
-        for p in self.roles.places {
+        for p in self.state.roles.places {
             if let (RoleKind::Command, Target::Field(f)) = (p.role.kind(), p.target) {
                 if f.row == row {
                     word = f.put(word, f.code(false));
@@ -549,9 +687,9 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         }
         // Run fields can be refused only when the map has none: then there is nothing to keep.
         // A drive run by terminals keeps the terminal of the direction it was run in.
-        let (run, direction) = match self.running {
+        let (run, direction) = match self.state.running {
             Some(d) => (true, d),
-            None => (false, self.direction),
+            None => (false, self.state.direction),
         };
         if let Ok(fields) = self.run_fields(run, direction) {
             for on in [false, true] {
@@ -562,7 +700,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         }
         if let Ok(Some(r)) = self.field(Role::Reverse) {
             if r.row == row {
-                word = r.put(word, r.code(self.direction == Direction::Reverse));
+                word = r.put(word, r.code(self.state.direction == Direction::Reverse));
             }
         }
         Ok(word)
@@ -571,13 +709,13 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     /// The word of command register `row` read from the drive, where the map lets it be read
     /// on this link and reads mean what writes do; only the bits of its fields are kept. `None`
     /// when it cannot be read or the read fails (the caller composes from the released state).
-    fn read_back(&mut self, row: u16) -> Option<u16> {
+    $($asy)* fn read_back(&mut self, row: u16) -> Option<u16> {
         let r = self.row(row);
         let readable = r.info.access.readable()
             && r.read_values.is_empty()
-            && r.transports.contains(self.kind)
+            && r.transports.contains(self.state.kind)
             && r.broadcast != Broadcast::Only
-            && self.slave != 0;
+            && self.state.slave != 0;
         if !readable {
             return None;
         }
@@ -585,7 +723,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             Conversion::Bits { mask, .. } => mask,
             _ => u16::MAX,
         };
-        self.read_word(row).ok().map(|w| w & mask)
+        self.read_word(row) $($aw)*.ok().map(|w| w & mask)
     }
 
     fn field(&self, role: Role) -> Result<Option<FieldRole>, Error> {
@@ -649,8 +787,8 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     /// `max_frequency` role: the register is read first (an external quantity comes from the
     /// settings), so a reference the drive cannot output is never sent. A maximum that cannot
     /// be read refuses the reference too.
-    fn check_max_frequency(&mut self, hz: f64) -> Result<(), Error> {
-        if self.roles.of(Role::MaxFrequency).next().is_none() || !hz.is_finite() {
+    $($asy)* fn check_max_frequency(&mut self, hz: f64) -> Result<(), Error> {
+        if self.state.roles.of(Role::MaxFrequency).next().is_none() || !hz.is_finite() {
             return Ok(());
         }
         let place = self.place(Role::FrequencyReference, "register")?;
@@ -658,7 +796,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             .target
             .row()
             .map_or(Role::FrequencyReference.id(), |row| self.row(row).info.id);
-        let max = self.read_number(Role::MaxFrequency)?;
+        let max = self.read_number(Role::MaxFrequency) $($aw)*?;
         if hz > max {
             return Err(ValueError::AboveLimit {
                 register,
@@ -678,19 +816,20 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     /// someone may have changed them at the drive (the result is kept for the `Vfd`'s life
     /// otherwise, one read per source).
     pub fn forget_sources(&mut self) {
-        self.sources = [false; 2];
+        self.state.sources = [false; 2];
     }
 
     /// Checks that the drive takes what `role` (a source role) selects from the network on
     /// this link: reads the parameter (or status field) the map names, once; a network source
     /// is kept, another is refused and read again next time.
-    fn network_source(&mut self, role: Role) -> Result<(), Error> {
+    $($asy)* fn network_source(&mut self, role: Role) -> Result<(), Error> {
         let slot = usize::from(role == Role::ReferenceSource);
-        if self.sources[slot] {
+        if self.state.sources[slot] {
             return Ok(());
         }
-        let kind = self.kind;
+        let kind = self.state.kind;
         let Some(p) = self
+            .state
             .roles
             .of(role)
             .find(|p| p.transports.contains(kind) && self.usable(p))
@@ -701,9 +840,9 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
         let Target::Field(f) = p.target else {
             return Ok(());
         };
-        let word = self.read_word(f.row)?;
+        let word = self.read_word(f.row) $($aw)*?;
         if f.holds(word) {
-            self.sources[slot] = true;
+            self.state.sources[slot] = true;
             return Ok(());
         }
         Err(self.not_network(role, p, f, word))
@@ -735,7 +874,7 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
             let fix = format!(
                 "set {} for the network on this link ({:?}; {})",
                 on.join(" or "),
-                self.kind,
+                self.state.kind,
                 p.source
             );
             (now, fix)
@@ -791,40 +930,40 @@ impl<'c, S: SettingsView, T: Transport> Vfd<'c, S, T> {
     }
 }
 
-impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
+impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
     fn drive_id(&self) -> &'static str {
         self.drive()
     }
 
     fn supports(&self, role: Role) -> bool {
-        self.roles.of(role).any(|p| self.usable(p))
+        self.state.roles.of(role).any(|p| self.usable(p))
     }
 
-    fn run(&mut self) -> Result<(), Error> {
-        let fields = self.run_fields(true, self.direction)?;
+    $($asy)* fn run(&mut self) -> Result<(), Error> {
+        let fields = self.run_fields(true, self.state.direction)?;
         // Until the run is confirmed, every other command composes with run released.
-        self.running = None;
+        self.state.running = None;
         // A run the drive would ignore (not the network's to give) is refused, not sent.
-        self.network_source(Role::CommandSource)?;
-        self.command(&fields)?;
-        self.running = Some(self.direction);
+        self.network_source(Role::CommandSource) $($aw)*?;
+        self.command(&fields) $($aw)*?;
+        self.state.running = Some(self.state.direction);
         Ok(())
     }
 
-    fn stop(&mut self) -> Result<(), Error> {
+    $($asy)* fn stop(&mut self) -> Result<(), Error> {
         // From now on no word carries a run code until the next run(), whatever becomes of
         // this one.
-        self.running = None;
-        let fields = self.run_fields(false, self.direction)?;
-        self.command(&fields)
+        self.state.running = None;
+        let fields = self.run_fields(false, self.state.direction)?;
+        self.command(&fields) $($aw)*
     }
 
-    fn set_direction(&mut self, direction: Direction) -> Result<(), Error> {
-        let before = self.direction;
-        self.direction = direction;
+    $($asy)* fn set_direction(&mut self, direction: Direction) -> Result<(), Error> {
+        let before = self.state.direction;
+        self.state.direction = direction;
         let result = match self.field(Role::Reverse)? {
             // The direction is a field of its own: write it now.
-            Some(r) => self.command(&[(r, direction == Direction::Reverse)]),
+            Some(r) => self.command(&[(r, direction == Direction::Reverse)]) $($aw)*,
             // The direction is the choice of run terminal: check there is one.
             None if direction == Direction::Reverse && !self.supports(Role::RunReverse) => {
                 Err(self.no_reverse())
@@ -832,19 +971,19 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
             None => Ok(()),
         };
         if result.is_err() {
-            self.direction = before;
+            self.state.direction = before;
         }
         result
     }
 
-    fn set_reference(&mut self, hz: f64) -> Result<(), Error> {
+    $($asy)* fn set_reference(&mut self, hz: f64) -> Result<(), Error> {
         self.place(Role::FrequencyReference, "register")?;
-        self.network_source(Role::ReferenceSource)?;
-        self.check_max_frequency(hz)?;
-        self.write_number(Role::FrequencyReference, hz)
+        self.network_source(Role::ReferenceSource) $($aw)*?;
+        self.check_max_frequency(hz) $($aw)*?;
+        self.write_number(Role::FrequencyReference, hz) $($aw)*
     }
 
-    fn set_ramp(&mut self, accel_s: f64, decel_s: f64) -> Result<(), Error> {
+    $($asy)* fn set_ramp(&mut self, accel_s: f64, decel_s: f64) -> Result<(), Error> {
         // Check both are writable before writing either.
         let accel = self.place(Role::AccelTime, "register")?;
         let decel = self.place(Role::DecelTime, "register")?;
@@ -863,33 +1002,33 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
                 }
                 .into());
             }
-            return self.write_number(Role::AccelTime, accel_s);
+            return self.write_number(Role::AccelTime, accel_s) $($aw)*;
         }
-        self.write_number(Role::AccelTime, accel_s)?;
-        self.write_number(Role::DecelTime, decel_s)
+        self.write_number(Role::AccelTime, accel_s) $($aw)*?;
+        self.write_number(Role::DecelTime, decel_s) $($aw)*
     }
 
-    fn reference(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::ReferenceMonitor)
+    $($asy)* fn reference(&mut self) -> Result<f64, Error> {
+        self.read_number(Role::ReferenceMonitor) $($aw)*
     }
 
-    fn output_frequency(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::OutputFrequency)
+    $($asy)* fn output_frequency(&mut self) -> Result<f64, Error> {
+        self.read_number(Role::OutputFrequency) $($aw)*
     }
 
-    fn output_current(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::OutputCurrent)
+    $($asy)* fn output_current(&mut self) -> Result<f64, Error> {
+        self.read_number(Role::OutputCurrent) $($aw)*
     }
 
-    fn output_voltage(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::OutputVoltage)
+    $($asy)* fn output_voltage(&mut self) -> Result<f64, Error> {
+        self.read_number(Role::OutputVoltage) $($aw)*
     }
 
-    fn dc_bus_voltage(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::DcBusVoltage)
+    $($asy)* fn dc_bus_voltage(&mut self) -> Result<f64, Error> {
+        self.read_number(Role::DcBusVoltage) $($aw)*
     }
 
-    fn status(&mut self) -> Result<Status, Error> {
+    $($asy)* fn status(&mut self) -> Result<Status, Error> {
         let mut status = Status::default();
         // One read per register, whichever roles share it.
         let mut words: Vec<(u16, u16)> = Vec::new();
@@ -907,7 +1046,7 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
             let word = match words.iter().find(|(row, _)| *row == f.row) {
                 Some(&(_, w)) => w,
                 None => {
-                    let w = self.read_word(f.row)?;
+                    let w = self.read_word(f.row) $($aw)*?;
                     words.push((f.row, w));
                     w
                 }
@@ -919,33 +1058,41 @@ impl<S: SettingsView, T: Transport> VariableFrequencyDrive for Vfd<'_, S, T> {
         Ok(status)
     }
 
-    fn fault_code(&mut self) -> Result<FaultCode, Error> {
+    $($asy)* fn fault_code(&mut self) -> Result<FaultCode, Error> {
         let p = self.place(Role::FaultCode, "register")?;
         let Some(row) = p.target.row() else {
             return Err(self.misplaced(Role::FaultCode, "register"));
         };
-        let code = self.read_word(row)?;
+        let code = self.read_word(row) $($aw)*?;
         Ok(FaultCode {
             code,
             name: self.row(row).label(code).map(|l| l.name),
         })
     }
 
-    fn reset_fault(&mut self) -> Result<(), Error> {
+    $($asy)* fn reset_fault(&mut self) -> Result<(), Error> {
         let p = self.place(Role::FaultReset, "field")?;
         let Target::Field(f) = p.target else {
             return Err(self.misplaced(Role::FaultReset, "field"));
         };
         // An unknown register may hold the reset: released first too.
         let set = self
+            .state
             .commands
             .iter()
             .find(|c| c.row == f.row)
             .is_some_and(|c| c.told.is_none_or(|w| f.holds(w)));
         if f.edge && set {
-            self.command(&[(f, false)])?;
+            self.command(&[(f, false)]) $($aw)*?;
         }
-        self.command(&[(f, true)])?;
-        self.command(&[(f, false)])
+        self.command(&[(f, true)]) $($aw)*?;
+        self.command(&[(f, false)]) $($aw)*
     }
 }
+
+    };
+}
+
+vfd_impl!(Vfd, HoldsClient, VariableFrequencyDrive, Client, [] []);
+#[cfg(feature = "tokio")]
+vfd_impl!(AsyncVfd, HoldsAsyncClient, AsyncVariableFrequencyDrive, AsyncClient, [async] [.await]);

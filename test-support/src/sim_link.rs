@@ -17,6 +17,7 @@ use std::io;
 use std::time::{Duration, Instant};
 
 use drivemap_live::LiveSettings;
+use drivemap_runtime::async_client::AsyncTransport;
 use drivemap_runtime::pdu::Response;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::tcp;
@@ -187,6 +188,62 @@ impl Transport for SimLink {
     }
 
     fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        if let Some(got) = self.arrived(buf, deadline) {
+            return got;
+        }
+        // Nothing arrives before the deadline: sleep until then (at most 100 ms a call), so that
+        // many links can wait side by side.
+        let now = Instant::now();
+        if deadline > now {
+            std::thread::sleep((deadline - now).min(Duration::from_millis(100)));
+        }
+        Ok(0)
+    }
+
+    fn discard_input(&mut self) -> io::Result<()> {
+        self.discard()
+    }
+
+    fn reconnect(&mut self) -> io::Result<()> {
+        self.reconnect_link()
+    }
+}
+
+/// The same link for the async client: the same script, log and timing, where waiting for a
+/// deadline is a tokio sleep.
+impl AsyncTransport for SimLink {
+    fn kind(&self) -> TransportKind {
+        self.kind
+    }
+
+    async fn send(&mut self, frame: &[u8]) -> io::Result<()> {
+        Transport::send(self, frame)
+    }
+
+    async fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        if let Some(got) = self.arrived(buf, deadline) {
+            return got;
+        }
+        let now = Instant::now();
+        if deadline > now {
+            tokio::time::sleep((deadline - now).min(Duration::from_millis(100))).await;
+        }
+        Ok(0)
+    }
+
+    async fn discard_input(&mut self) -> io::Result<()> {
+        self.discard()
+    }
+
+    async fn reconnect(&mut self) -> io::Result<()> {
+        self.reconnect_link()
+    }
+}
+
+impl SimLink {
+    /// What a receive until `deadline` gets without waiting: bytes, a broken connection, or
+    /// `None` (nothing before the deadline).
+    fn arrived(&mut self, buf: &mut [u8], deadline: Instant) -> Option<io::Result<usize>> {
         match &mut self.held {
             Some((_, missed @ None)) => *missed = Some(deadline),
             Some((_, Some(missed))) if *missed != deadline => {
@@ -202,21 +259,15 @@ impl Transport for SimLink {
             if bytes.is_empty() {
                 self.pending.pop_front();
             }
-            return Ok(n);
+            return Some(Ok(n));
         }
         if self.broken {
-            return Err(io::ErrorKind::ConnectionReset.into());
+            return Some(Err(io::ErrorKind::ConnectionReset.into()));
         }
-        // Nothing arrives before the deadline: sleep until then (at most 100 ms a call), so that
-        // many links can wait side by side.
-        let now = Instant::now();
-        if deadline > now {
-            std::thread::sleep((deadline - now).min(Duration::from_millis(100)));
-        }
-        Ok(0)
+        None
     }
 
-    fn discard_input(&mut self) -> io::Result<()> {
+    fn discard(&mut self) -> io::Result<()> {
         if self.broken {
             return Err(io::ErrorKind::ConnectionReset.into());
         }
@@ -224,7 +275,7 @@ impl Transport for SimLink {
         Ok(())
     }
 
-    fn reconnect(&mut self) -> io::Result<()> {
+    fn reconnect_link(&mut self) -> io::Result<()> {
         if !self.kind.is_rtu_framed() || self.kind == TransportKind::RtuOverTcp {
             // A new connection: nothing of the old one arrives on it.
             self.broken = false;

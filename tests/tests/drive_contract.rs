@@ -7,10 +7,13 @@ use std::time::Duration;
 
 use drivemap_codegen::Drive;
 use drivemap_live::LiveSettings;
+use drivemap_runtime::async_client::AsyncClient;
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::Role;
-use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
+use drivemap_runtime::vfd::{
+    AsyncVariableFrequencyDrive, AsyncVfd, Direction, VariableFrequencyDrive, Vfd,
+};
 use drivemap_runtime::{Client, ClientOptions, Error};
 use drivemap_sim::framing::{self, Decoded};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
@@ -365,6 +368,68 @@ fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -
     trace
 }
 
+/// Plays `case` as [`play`] does, through the async drive ([`AsyncVfd`] over an
+/// [`AsyncClient`] that owns its link) on `runtime`.
+fn play_async(
+    drive: &Drive,
+    template: &Simulator,
+    kind: TransportKind,
+    case: &Case,
+    runtime: &tokio::runtime::Runtime,
+) -> Trace {
+    let clock = ManualClock::new();
+    let mut sim = template.clone();
+    sim.set_clock(Arc::new(clock.clone()));
+    let settings = sim.settings();
+    let slave = sim.slave();
+    let mut link = SimLink::new(kind, sim);
+    link.record_settings = true;
+    link.script(case.faults.iter().copied());
+    let p = drive.plan();
+    let c = AsyncClient::with_options(link, p.profile, options(case.retries));
+    // The drive owns its client.
+    let mut d = AsyncVfd::from_plan(c, slave, settings.view(drive), p.registers, p.roles);
+    let mut trace = Trace {
+        steps: Vec::new(),
+        run_command: Vec::new(),
+        log: Vec::new(),
+    };
+    runtime.block_on(async {
+        for (i, &s) in case.steps.iter().enumerate() {
+            d.client().transport().tag = i as u32;
+            let before = link_runs(d.client().transport());
+            let result = match s {
+                Step::Run => d.run().await,
+                Step::Stop => d.stop().await,
+                Step::Direction(dir) => d.set_direction(dir).await,
+                Step::Reference(hz) => d.set_reference(hz).await,
+                Step::Ramp(a, dec) => d.set_ramp(a, dec).await,
+                Step::ResetFault => d.reset_fault().await,
+                Step::Status => d.status().await.map(|_| ()),
+                Step::OutputFrequency => d.output_frequency().await.map(|_| ()),
+                Step::Trip => {
+                    d.client().transport().sim.trip(1);
+                    Ok(())
+                }
+                Step::Wait(s) => {
+                    clock.advance(Duration::from_secs_f64(s));
+                    d.client().transport().sim.tick();
+                    Ok(())
+                }
+            };
+            let after = link_runs(d.client().transport());
+            trace.steps.push((s, result.map_err(|e| e.to_string())));
+            trace.run_command.push((before, after));
+        }
+    });
+    trace.log = std::mem::take(&mut d.into_client().transport().log);
+    trace
+}
+
+fn link_runs(link: &SimLink) -> bool {
+    link.sim.state().expect("a drive model").run_command
+}
+
 /// Whether `raw` is a value the map allows register `r` to take with `settings`: the plan's
 /// own conversion accepts it (its ranges, codes and reserved bits in force) and gives it back
 /// unchanged.
@@ -569,6 +634,10 @@ fn total_cases() -> u32 {
     }
 }
 
+/// Of the runners of each map and link, these play their sequences through the async drive
+/// ([`AsyncVfd`]); the others through the blocking one.
+const ASYNC_SHARDS: u32 = 2;
+
 /// Runners per map and link, side by side: on RTU framing the client waits for the line to
 /// be silent for the drive's response time after every unanswered request (real time, spent
 /// asleep), so sequences are played by many threads at once.
@@ -576,7 +645,9 @@ const SHARDS: u32 = 8;
 
 /// Random sequences of trait calls, with reply loss, late replies, exceptions and reconnects
 /// injected at the transport, against the simulator of every map, the acme-vf1 fixture and its
-/// two variants with shared roles, over RTU framing and Modbus TCP. Invariants, on what reached the wire and on the drive: a run code
+/// two variants with shared roles, over RTU framing and Modbus TCP, through the blocking drive
+/// ([`Vfd`]) and, on [`ASYNC_SHARDS`] of the [`SHARDS`] runners of each, the async one
+/// ([`AsyncVfd`], owning its client). Invariants, on what reached the wire and on the drive: a run code
 /// is written only by `run()` (or while a successful `run()` was the last of `run()` and
 /// `stop()`); after `stop()`, successful or not, the drive never runs again until the next
 /// `run()`; every word written is within the map's limits in force.
@@ -601,8 +672,8 @@ fn the_contract_holds_under_faults() {
     let failures: Vec<String> = std::thread::scope(|scope| {
         let runs: Vec<_> = targets
             .iter()
-            .flat_map(|t| std::iter::repeat_n(t, SHARDS as usize))
-            .map(|&(id, drive, kind)| {
+            .flat_map(|t| (0..SHARDS).map(move |shard| (t, shard)))
+            .map(|(&(id, drive, kind), shard)| {
                 scope.spawn(move || {
                     let template =
                         Simulator::new(drive.clone(), SimOptions::new().network_source(kind))
@@ -612,16 +683,30 @@ fn the_contract_holds_under_faults() {
                         failure_persistence: None,
                         ..Config::default()
                     });
+                    let runtime = tokio::runtime::Builder::new_current_thread()
+                        .enable_time()
+                        .build()
+                        .unwrap();
+                    let asynchronous = shard < ASYNC_SHARDS;
                     let result = runner.run(&case(), |case| {
-                        let trace = play(drive, &template, kind, &case);
+                        let trace = if asynchronous {
+                            play_async(drive, &template, kind, &case, &runtime)
+                        } else {
+                            play(drive, &template, kind, &case)
+                        };
                         check(drive, kind, &trace).map_err(TestCaseError::fail)
                     });
+                    let which = if asynchronous {
+                        "the async drive"
+                    } else {
+                        "the drive"
+                    };
                     match result {
                         Ok(()) => None,
                         Err(TestError::Fail(why, case)) => Some(format!(
-                            "{id} over {kind:?}: {why}\n  shrunk case: {case:?}"
+                            "{which}, {id} over {kind:?}: {why}\n  shrunk case: {case:?}"
                         )),
-                        Err(e) => Some(format!("{id} over {kind:?}: {e}")),
+                        Err(e) => Some(format!("{which}, {id} over {kind:?}: {e}")),
                     }
                 })
             })
@@ -631,9 +716,10 @@ fn the_contract_holds_under_faults() {
             .collect()
     });
     eprintln!(
-        "{} sequences ({per_shard} x {SHARDS} on each of {} maps x links) in {:.1} s",
+        "{} sequences ({per_shard} x {SHARDS} on each of {} maps x links, {} of them through the async drive) in {:.1} s",
         u64::from(per_shard * SHARDS) * targets.len() as u64,
         targets.len(),
+        u64::from(per_shard * ASYNC_SHARDS) * targets.len() as u64,
         started.elapsed().as_secs_f64()
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
@@ -771,7 +857,7 @@ fn command_roles_sharing_bits_get_the_one_set() {
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
     let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
-    let run_code = |d: &mut Vfd<'_, _, SimLink>| {
+    let run_code = |d: &mut Vfd<_, &mut Client<SimLink>>| {
         d.client().transport().sim.raw("control_word").unwrap() & 0x0003
     };
     d.run().unwrap();
