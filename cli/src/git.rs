@@ -45,39 +45,71 @@ impl Drop for TempDir {
     }
 }
 
-fn git(dir: &Path, args: &[&str]) -> Result<Vec<u8>, String> {
+/// Why the maps of a revision could not be had from git.
+#[derive(Debug, thiserror::Error)]
+pub enum GitError {
+    /// `git` could not be started.
+    #[error("cannot run git: {0}")]
+    Spawn(io::Error),
+    /// A git command failed; its arguments and what it said.
+    #[error("git {args} failed: {stderr}")]
+    Failed {
+        /// The arguments given.
+        args: String,
+        /// Its standard error, trimmed.
+        stderr: String,
+    },
+    /// Not a revision (empty, or an option).
+    #[error("`{0}` is not a revision")]
+    NotARevision(String),
+    /// The temporary directory or a map in it could not be written.
+    #[error("{path}: {source}")]
+    Write {
+        /// The file or directory.
+        path: String,
+        /// The operating system's reason.
+        source: io::Error,
+    },
+}
+
+fn git(dir: &Path, args: &[&str]) -> Result<Vec<u8>, GitError> {
     let out = Command::new("git")
         .arg("-C")
         .arg(dir)
         .args(args)
         .output()
-        .map_err(|e| format!("cannot run git: {e}"))?;
+        .map_err(GitError::Spawn)?;
     if !out.status.success() {
-        return Err(format!(
-            "git {} failed: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr).trim()
-        ));
+        return Err(GitError::Failed {
+            args: args.join(" "),
+            stderr: String::from_utf8_lossy(&out.stderr).trim().to_owned(),
+        });
     }
     Ok(out.stdout)
 }
 
 /// Writes the `*.yaml` maps of `maps_dir` as they are in revision `rev` into a new temporary
 /// directory, under the same file names.
-pub fn maps_at(maps_dir: &Path, rev: &str) -> Result<TempDir, String> {
+pub fn maps_at(maps_dir: &Path, rev: &str) -> Result<TempDir, GitError> {
     if rev.is_empty() || rev.starts_with('-') {
-        return Err(format!("`{rev}` is not a revision"));
+        return Err(GitError::NotARevision(rev.to_owned()));
     }
     let listing = git(maps_dir, &["ls-tree", "--name-only", "-z", rev, "--", "./"])?;
-    let tmp = TempDir::new("drivemap-diff").map_err(|e| format!("temporary directory: {e}"))?;
+    let tmp = TempDir::new("drivemap-diff").map_err(|source| GitError::Write {
+        path: "temporary directory".into(),
+        source,
+    })?;
     for name in listing.split(|b| *b == 0).filter(|n| !n.is_empty()) {
         let name = String::from_utf8_lossy(name).into_owned();
         if !(name.ends_with(".yaml") || name.ends_with(".yml")) || name.contains('/') {
             continue;
         }
         let text = git(maps_dir, &["show", &format!("{rev}:./{name}")])?;
-        std::fs::write(tmp.path().join(&name), text)
-            .map_err(|e| format!("{}: {e}", tmp.path().join(&name).display()))?;
+        let path = tmp.path().join(&name);
+        std::fs::write(&path, text).map_err(|source| GitError::Write {
+            path: path.display().to_string(),
+            source,
+        })?;
     }
     Ok(tmp)
 }

@@ -12,7 +12,8 @@ use clap::{Parser, Subcommand};
 mod output;
 
 pub mod commands;
-pub mod duration;
+pub mod error;
+pub use drivemap_live::duration;
 pub mod git;
 pub mod live;
 pub mod maps;

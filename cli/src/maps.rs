@@ -26,6 +26,35 @@ pub enum MapSource {
     Builtin(&'static str),
 }
 
+/// Why a drive's map cannot be had.
+#[derive(Debug, thiserror::Error)]
+pub enum MapError {
+    /// No map of that id, built in or in the maps directory.
+    #[error("no map for drive `{id}` (known: {known}{})", match dir {
+        Some(d) => format!("; looked in {} and the built-in maps", d.display()),
+        None => "; add maps with --maps DIR or DRIVEMAP_MAPS".into(),
+    })]
+    Unknown {
+        /// The id asked for.
+        id: String,
+        /// The ids known, comma-separated.
+        known: String,
+        /// The maps directory looked in.
+        dir: Option<PathBuf>,
+    },
+    /// A built-in map where a file is needed.
+    #[error("drive `{0}` is built in, not a file; give --maps DIR for a map file")]
+    BuiltIn(String),
+    /// The map does not validate; each diagnostic says file:line:column.
+    #[error("{what} does not validate:\n{diagnostics}")]
+    Invalid {
+        /// The file, or `built-in map <id>`.
+        what: String,
+        /// What is wrong, where.
+        diagnostics: Diagnostics,
+    },
+}
+
 /// The YAML of a built-in map.
 pub fn builtin(id: &str) -> Option<&'static str> {
     BUILTIN_MAPS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t)
@@ -55,7 +84,7 @@ impl MapsDir {
     }
 
     /// Where the map of `id` comes from: `<maps>/<id>.yaml` when there, else built in.
-    pub fn source_of(&self, id: &str) -> Result<MapSource, String> {
+    pub fn source_of(&self, id: &str) -> Result<MapSource, MapError> {
         if let Some(dir) = &self.maps {
             for ext in ["yaml", "yml"] {
                 let path = dir.join(format!("{id}.{ext}"));
@@ -68,36 +97,36 @@ impl MapsDir {
             return Ok(MapSource::Builtin(text));
         }
         let known: Vec<String> = self.known().into_keys().collect();
-        Err(format!(
-            "no map for drive `{id}` (known: {}{})",
-            known.join(", "),
-            match &self.maps {
-                Some(d) => format!("; looked in {} and the built-in maps", d.display()),
-                None => "; add maps with --maps DIR or DRIVEMAP_MAPS".into(),
-            }
-        ))
+        Err(MapError::Unknown {
+            id: id.to_owned(),
+            known: known.join(", "),
+            dir: self.maps.clone(),
+        })
     }
 
     /// The path of a drive's map file, for commands that need a file (built-in maps have none).
-    pub fn path_of(&self, id: &str) -> Result<PathBuf, String> {
+    pub fn path_of(&self, id: &str) -> Result<PathBuf, MapError> {
         match self.source_of(id)? {
             MapSource::File(p) => Ok(p),
-            MapSource::Builtin(_) => Err(format!(
-                "drive `{id}` is built in, not a file; give --maps DIR for a map file"
-            )),
+            MapSource::Builtin(_) => Err(MapError::BuiltIn(id.to_owned())),
         }
     }
 
     /// Reads, expands and validates the map of a drive id; `extends` is resolved by id the
     /// same way (the maps directory first, then the built-in maps).
-    pub fn load(&self, id: &str) -> Result<Drive, String> {
+    pub fn load(&self, id: &str) -> Result<Drive, MapError> {
         match self.source_of(id)? {
-            MapSource::File(p) => self
-                .read(&p)
-                .map_err(|d| format!("{} does not validate:\n{d}", p.display())),
-            MapSource::Builtin(text) => self
-                .read_builtin(id, text)
-                .map_err(|d| format!("built-in map {id} does not validate:\n{d}")),
+            MapSource::File(p) => self.read(&p).map_err(|diagnostics| MapError::Invalid {
+                what: p.display().to_string(),
+                diagnostics,
+            }),
+            MapSource::Builtin(text) => {
+                self.read_builtin(id, text)
+                    .map_err(|diagnostics| MapError::Invalid {
+                        what: format!("built-in map {id}"),
+                        diagnostics,
+                    })
+            }
         }
     }
 
@@ -230,7 +259,10 @@ mod tests {
             .read(&lone.join("yaskawa-j7.yaml"))
             .unwrap();
         assert_eq!(j7.meta.id, "yaskawa-j7");
-        let e = MapsDir::default().source_of("nope").unwrap_err();
+        let e = MapsDir::default()
+            .source_of("nope")
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("known: automationdirect-acn, ptlk-tds-v8"),
             "{e}"

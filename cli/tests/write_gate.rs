@@ -173,7 +173,7 @@ fn run_write(
     wire: &Wire,
     slave: u8,
     assignment: &str,
-) -> Result<ExitCode, String> {
+) -> Result<ExitCode, drivemap_cli::error::Error> {
     let maps = repo().join("maps");
     let slave = slave.to_string();
     let argv = [
@@ -193,7 +193,7 @@ fn run_write(
         "0",
         assignment,
     ];
-    let cli = Cli::try_parse_from(argv).map_err(|e| format!("arguments: {e}"))?;
+    let cli = Cli::try_parse_from(argv).expect("the test's own arguments parse");
     let Cmd::Write(args) = cli.command else {
         unreachable!()
     };

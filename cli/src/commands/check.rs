@@ -7,6 +7,7 @@ use clap::Args as ClapArgs;
 use drivemap_codegen::review::{self, Manuals, Verdict};
 use drivemap_codegen::{Diagnostics, Drive};
 
+use crate::error::Error;
 use crate::maps::MapsDir;
 
 #[derive(ClapArgs, Debug)]
@@ -139,7 +140,7 @@ pub fn kinds_verified(checks: &[review::CitationCheck]) -> String {
     }
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     // (name shown, map read, manuals directory for its citations)
     type Checked = (String, Result<Drive, Diagnostics>, Option<PathBuf>);
     // One cache for every file: a map's bases are read once, not once per variant.
@@ -157,10 +158,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         let found =
             drivemap_codegen::find_maps(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         if found.is_empty() {
-            return Err(format!(
+            return Err(Error::Refused(format!(
                 "{}: no maps to check (no *.yaml or *.yml file in the directory)",
                 dir.display()
-            ));
+            )));
         }
         found.iter().map(from_file).collect()
     } else {

@@ -9,6 +9,7 @@ use std::process::ExitCode;
 use clap::Args as ClapArgs;
 use drivemap_codegen::review::{self, CoverageReport, Manuals};
 
+use crate::error::Error;
 use crate::maps::MapsDir;
 
 /// Arguments of `drivemap coverage`.
@@ -35,7 +36,7 @@ pub const BEGIN: &str =
 pub const END: &str = "<!-- END drivemap coverage -->";
 
 /// The report of a map against the manuals at hand.
-pub fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<CoverageReport, String> {
+pub fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<CoverageReport, Error> {
     let drive = dir.read(path).map_err(|d| format!("{d}"))?;
     let manuals_dir = crate::maps::manuals_dir_for(path).ok_or_else(|| {
         format!(
@@ -46,11 +47,11 @@ pub fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<CoverageRepor
     let mut manuals = Manuals::new(&manuals_dir);
     manuals.load_for(&drive);
     if !manuals.any() {
-        return Err(format!(
+        return Err(Error::Refused(format!(
             "{}: none of its manuals is in {}",
             path.display(),
             manuals_dir.display()
-        ));
+        )));
     }
     // A variant map's base manuals are the base map's to cover.
     let skip: Vec<String> = match &drive.meta.extends {
@@ -74,7 +75,7 @@ pub fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<CoverageRepor
             .text_manuals()
             .filter(|f| !skip.iter().any(|s| s == f) && manuals.lines(f).is_some())
             .collect();
-        return Err(format!(
+        return Err(Error::Refused(format!(
             "{}: no register rows found in {} (coverage learns a row's shape from the lines the \
              registers cite: an address as the manual prints it, 2001H or 0x2001, a register \
              number of a manual numbering registers in decimal, declared with \
@@ -85,13 +86,13 @@ pub fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<CoverageRepor
             } else {
                 read.join(", ")
             }
-        ));
+        )));
     }
     Ok(report)
 }
 
 /// The manuals a map file names itself (a variant map's list before its base's is merged in).
-fn own_manuals(path: &std::path::Path) -> Result<Vec<String>, String> {
+fn own_manuals(path: &std::path::Path) -> Result<Vec<String>, Error> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let name: std::sync::Arc<str> = path.display().to_string().into();
     let tree = drivemap_codegen::source::parse(&name, &text).map_err(|d| d.to_string())?;
@@ -225,7 +226,7 @@ pub fn splice(doc: &str, section: &str) -> String {
 }
 
 /// Runs the command.
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let id = args.map.to_string_lossy();
     let path = if args.map.is_file() {
         args.map.clone()
@@ -239,7 +240,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                 if local.is_file() {
                     local
                 } else {
-                    return Err(e);
+                    return Err(e.into());
                 }
             }
         }

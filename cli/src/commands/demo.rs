@@ -20,6 +20,8 @@ use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, ClientOptions, Error};
+
+use crate::error::Error as CliError;
 use drivemap_sim::{SimOptions, Simulator, SystemClock, TcpFraming, TcpServer};
 
 use crate::maps::MapsDir;
@@ -30,19 +32,19 @@ pub struct Args {
     #[arg(long, default_value = "ptlk-tds-v8")]
     pub drive: String,
     /// Frequency reference to run at (Hz, 0 to 1000).
-    #[arg(long, default_value_t = 48.0, value_parser = crate::duration::number(0.0, 1000.0))]
+    #[arg(long, default_value_t = 48.0, value_parser = drivemap_live::duration::number(0.0, 1000.0))]
     pub frequency: f64,
     /// Accel and decel time written before running (s, 0 to 6000), where the map has the registers.
-    #[arg(long, default_value_t = 4.0, value_parser = crate::duration::number(0.0, 6000.0))]
+    #[arg(long, default_value_t = 4.0, value_parser = drivemap_live::duration::number(0.0, 6000.0))]
     pub ramp: f64,
     /// Run in reverse.
     #[arg(long)]
     pub reverse: bool,
     /// Simulated time runs this many times faster than real time (0.1 to 1000).
-    #[arg(long = "time-scale", default_value_t = 4.0, value_parser = crate::duration::number(0.1, 1000.0))]
+    #[arg(long = "time-scale", default_value_t = 4.0, value_parser = drivemap_live::duration::number(0.1, 1000.0))]
     pub time_scale: f64,
     /// Simulated seconds between rows of the table (0.01 to 5).
-    #[arg(long, default_value_t = 0.5, value_parser = crate::duration::number(0.01, 5.0))]
+    #[arg(long, default_value_t = 0.5, value_parser = drivemap_live::duration::number(0.01, 5.0))]
     pub step: f64,
     #[command(flatten)]
     pub dir: MapsDir,
@@ -73,15 +75,15 @@ fn row(t: f64, status: &str, values: [Result<f64, Error>; 4]) {
 }
 
 /// A reading the drive lacks is `Err(NoRole)`; any other error ends the demo.
-fn optional(v: Result<f64, Error>) -> Result<Result<f64, Error>, String> {
+fn optional(v: Result<f64, Error>) -> Result<Result<f64, Error>, CliError> {
     match v {
         Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. })) | Ok(_) => Ok(v),
-        Err(e) => Err(format!("reading the drive: {e}")),
+        Err(e) => Err(CliError::Refused(format!("reading the drive: {e}"))),
     }
 }
 
 /// The demo proper: one routine for every drive, through the drive trait only.
-pub fn drive_it(d: &mut impl VariableFrequencyDrive, plan: &Plan) -> Result<(), String> {
+pub fn drive_it(d: &mut impl VariableFrequencyDrive, plan: &Plan) -> Result<(), CliError> {
     let fail = |what: &str, e: Error| format!("{what}: {e}");
     if d.supports(Role::AccelTime) && d.supports(Role::DecelTime) {
         d.set_ramp(plan.ramp, plan.ramp)
@@ -121,7 +123,7 @@ pub fn drive_it(d: &mut impl VariableFrequencyDrive, plan: &Plan) -> Result<(), 
     let sim_time = || start.elapsed().as_secs_f64() * plan.time_scale;
     let pause = Duration::from_secs_f64(plan.step.as_secs_f64() / plan.time_scale);
     let deadline = start + Duration::from_secs(45);
-    let sample = |d: &mut _| -> Result<Option<f64>, String> {
+    let sample = |d: &mut _| -> Result<Option<f64>, CliError> {
         let (status, values) = read_row(d, plan)?;
         let out = values[1].as_ref().ok().copied();
         row(sim_time(), &status, values);
@@ -136,7 +138,9 @@ pub fn drive_it(d: &mut impl VariableFrequencyDrive, plan: &Plan) -> Result<(), 
             steady += 1;
         }
         if Instant::now() > deadline {
-            return Err("the output did not reach the reference within 45 s".into());
+            return Err(CliError::Refused(
+                "the output did not reach the reference within 45 s".into(),
+            ));
         }
         thread::sleep(pause);
     }
@@ -148,7 +152,9 @@ pub fn drive_it(d: &mut impl VariableFrequencyDrive, plan: &Plan) -> Result<(), 
             break;
         }
         if Instant::now() > deadline {
-            return Err("the output did not reach 0 Hz within 45 s".into());
+            return Err(CliError::Refused(
+                "the output did not reach 0 Hz within 45 s".into(),
+            ));
         }
         thread::sleep(pause);
     }
@@ -158,7 +164,7 @@ pub fn drive_it(d: &mut impl VariableFrequencyDrive, plan: &Plan) -> Result<(), 
 fn read_row(
     d: &mut impl VariableFrequencyDrive,
     plan: &Plan,
-) -> Result<(String, [Result<f64, Error>; 4]), String> {
+) -> Result<(String, [Result<f64, Error>; 4]), CliError> {
     let fail = |what: &str, e: Error| format!("{what}: {e}");
     let reference = if d.supports(Role::ReferenceMonitor) {
         optional(d.reference())?
@@ -183,7 +189,7 @@ macro_rules! through_module {
             slave: u8,
             externals: &[(&str, f64)],
             plan: &Plan,
-        ) -> Result<(), String> {
+        ) -> Result<(), CliError> {
             use drivemap_drives::$m as module;
             let mut d =
                 Vfd::connect::<module::Drive>(c, slave, module::Settings::default(), externals)
@@ -201,7 +207,7 @@ fn compiled<T: Transport>(
     slave: u8,
     externals: &[(&str, f64)],
     plan: &Plan,
-) -> Option<Result<(), String>> {
+) -> Option<Result<(), CliError>> {
     macro_rules! pick {
         ($m:ident, $id:literal) => {
             if id == $id {
@@ -217,20 +223,24 @@ fn compiled<T: Transport>(
     None
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, CliError> {
     if !(args.time_scale.is_finite() && args.time_scale > 0.0) {
-        return Err("--time-scale: give a positive number".into());
+        return Err(CliError::Refused(
+            "--time-scale: give a positive number".into(),
+        ));
     }
     if !(args.step.is_finite() && args.step > 0.0) {
-        return Err("--step: give a positive number of seconds".into());
+        return Err(CliError::Refused(
+            "--step: give a positive number of seconds".into(),
+        ));
     }
     let started = Instant::now();
     let drive = super::simulate::load_drive(&args.dir, &args.drive)?;
     if drive.plan().roles.is_empty() {
-        return Err(format!(
+        return Err(CliError::Refused(format!(
             "the map of {} gives no `roles:`, so there is no drive to run; add them (maps/README.md, \"Roles\")",
             args.drive
-        ));
+        )));
     }
     let clock = Arc::new(SystemClock::scaled(args.time_scale));
     let mut sim =
@@ -362,13 +372,14 @@ mod tests {
 
     #[test]
     fn what_the_demo_cannot_do_is_said() {
-        let e = run(args("no-such-drive")).unwrap_err();
+        let e = run(args("no-such-drive")).unwrap_err().to_string();
         assert!(e.contains("no map for drive `no-such-drive`"), "{e}");
         let e = run(Args {
             time_scale: 0.0,
             ..args("ptlk-tds-v8")
         })
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("--time-scale"), "{e}");
     }
 }

@@ -11,6 +11,7 @@ use drivemap_codegen::diff::{self, DriveDiff, render};
 use drivemap_codegen::review::Manuals;
 use drivemap_codegen::validate::Context;
 
+use crate::error::Error;
 use crate::git;
 use crate::maps::{MapsDir, context_for};
 
@@ -62,7 +63,7 @@ pub struct Args {
     pub dir: MapsDir,
 }
 
-fn read(path: &Path, ctx: &Context) -> Result<Drive, String> {
+fn read(path: &Path, ctx: &Context) -> Result<Drive, Error> {
     let drive = drivemap_codegen::read_map(path, ctx).map_err(|d| format!("{d}"))?;
     warn_schema(&drive, None);
     Ok(drive)
@@ -91,7 +92,7 @@ fn warn_schema(drive: &Drive, rename: Option<(&Path, &str)>) {
 
 /// Reads a map of revision `rev` written to the temporary directory `tmp`, naming it
 /// `rev:dir/name` in errors and warnings instead of the temporary path.
-fn read_at_rev(path: &Path, ctx: &Context, tmp: &Path, shown: &str) -> Result<Drive, String> {
+fn read_at_rev(path: &Path, ctx: &Context, tmp: &Path, shown: &str) -> Result<Drive, Error> {
     let drive = drivemap_codegen::read_map(path, ctx)
         .map_err(|d| format!("{d}").replace(&tmp.display().to_string(), shown))?;
     warn_schema(&drive, Some((tmp, shown)));
@@ -99,7 +100,7 @@ fn read_at_rev(path: &Path, ctx: &Context, tmp: &Path, shown: &str) -> Result<Dr
 }
 
 /// Compares maps and prints the changes; exits 1 when any is breaking.
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     if args.kinds {
         out!("{}", render::kinds(args.format.into()));
         return Ok(ExitCode::SUCCESS);
@@ -108,7 +109,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         Some(rev) => from_git(&args, rev)?,
         None => {
             let (Some(old), Some(new)) = (&args.old, &args.new) else {
-                return Err("give two map files, or --git <rev> [map]".into());
+                return Err(Error::Refused(
+                    "give two map files, or --git <rev> [map]".into(),
+                ));
             };
             let ctx = context_for(new);
             let read = |path: &Path| {
@@ -176,7 +179,7 @@ fn yaml_names(dir: &Path) -> BTreeSet<String> {
         .collect()
 }
 
-fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, String> {
+fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, Error> {
     // A map is named by path (it may be gone from the working tree) or by drive id.
     let (dir, names): (PathBuf, Option<Vec<String>>) = match &args.old {
         Some(map) => {
@@ -219,10 +222,10 @@ fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, String> {
             (false, true) => diff::added(&read(&new, &ctx)?),
             (true, false) => diff::removed(&old_read(&old)?),
             (false, false) => {
-                return Err(format!(
+                return Err(Error::Refused(format!(
                     "{name} is neither in {} nor at revision {rev}",
                     dir.display()
-                ));
+                )));
             }
         };
         diffs.push(diff);

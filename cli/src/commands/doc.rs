@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 
+use crate::error::Error;
 use crate::maps::{MapSource, MapsDir};
 use drivemap_codegen::reference;
 
@@ -31,7 +32,7 @@ pub struct Args {
 }
 
 /// Writes the Markdown reference of one map.
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let (path, drive) = match (&args.file, &args.drive) {
         (Some(f), _) => match args.dir.read(f) {
             Ok(drive) => (f.clone(), drive),
@@ -48,7 +49,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             };
             (path, args.dir.load(id)?)
         }
-        (None, None) => return Err("give a map file or --drive <id>".into()),
+        (None, None) => return Err(Error::Refused("give a map file or --drive <id>".into())),
     };
     // A stable name for the header: the file name, under `maps/` when it lives there.
     let file = path
@@ -90,17 +91,17 @@ fn write_docs(
     drive: &drivemap_codegen::Drive,
     reference: &str,
     args: &Args,
-) -> Result<ExitCode, String> {
+) -> Result<ExitCode, Error> {
     use crate::commands::coverage;
     let id = &drive.meta.id;
     if !path.is_file() {
-        return Err(format!(
+        return Err(Error::Refused(format!(
             "{}: not a file; the coverage document is made from the map's text beside its \
              manuals (give --maps DIR)",
             path.display()
-        ));
+        )));
     }
-    let write = |file: PathBuf, text: &str| -> Result<PathBuf, String> {
+    let write = |file: PathBuf, text: &str| -> Result<PathBuf, Error> {
         if let Some(dir) = file.parent() {
             std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         }

@@ -6,10 +6,11 @@ use std::time::Duration;
 
 use clap::{Args as ClapArgs, ValueEnum};
 
-use crate::live::link::{LineParity, LinkArgs};
-use crate::live::session::{SettingsArgs, find_all};
+use crate::error::Error;
 use crate::maps::MapsDir;
 use crate::targets::{self, Points};
+use drivemap_live::link::{LineParity, Link};
+use drivemap_live::session::{SettingsArgs, find_all};
 
 /// What to write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -45,7 +46,7 @@ pub struct Args {
     #[arg(long, conflicts_with = "registers")]
     pub all: bool,
     /// How often the tool polls.
-    #[arg(long, default_value = "1s", value_parser = crate::duration::positive)]
+    #[arg(long, default_value = "1s", value_parser = drivemap_live::duration::positive)]
     pub interval: Duration,
     /// The name of the hub, entities and measurement (default: the drive id).
     #[arg(long)]
@@ -81,8 +82,8 @@ pub struct Args {
 }
 
 impl Args {
-    fn link(&self) -> LinkArgs {
-        LinkArgs {
+    fn link(&self) -> Link {
+        Link {
             tcp: self.tcp.clone(),
             gateway: self.gateway.clone(),
             rtu_tcp: self.rtu_tcp.clone(),
@@ -105,14 +106,14 @@ impl Args {
     }
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let read = match (&args.file, &args.drive) {
         (Some(f), _) => args.dir.read(f),
         (None, Some(id)) => match args.dir.load(id) {
             Ok(d) => Ok(d),
-            Err(e) => return Err(e),
+            Err(e) => return Err(e.into()),
         },
-        (None, None) => return Err("give a map file or --drive <id>".into()),
+        (None, None) => return Err(Error::Refused("give a map file or --drive <id>".into())),
     };
     let drive = match read {
         Ok(drive) => drive,

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 
+use crate::error::Error;
 use clap::Args as ClapArgs;
 use drivemap_codegen::schema;
 
@@ -20,7 +21,7 @@ pub struct Args {
     pub check: bool,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let mut failed = false;
     let mut outdated = false;
     for path in &args.files {

@@ -8,10 +8,11 @@ use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::Register;
 
+use crate::error::Error;
 use crate::live::Target;
 use crate::live::output::{Emitter, Format, Reading, now_rfc3339};
-use crate::live::session::{Session, find_all, on_transport};
 use crate::live::table::{self, Row};
+use drivemap_live::session::{Session, find_all, on_transport};
 
 /// Arguments of `drivemap poll`.
 #[derive(ClapArgs, Debug)]
@@ -27,7 +28,7 @@ pub struct Args {
     #[arg(long, conflicts_with = "names")]
     pub group: Option<String>,
     /// Time between polls.
-    #[arg(long, default_value = "500ms", value_parser = crate::duration::parse)]
+    #[arg(long, default_value = "500ms", value_parser = drivemap_live::duration::parse)]
     pub interval: Duration,
     /// Stop after this many polls (default: until interrupted).
     #[arg(long)]
@@ -37,9 +38,9 @@ pub struct Args {
     pub format: Format,
 }
 
-fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, String> {
+fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Error> {
     if !args.names.is_empty() {
-        return find_all(drive, &args.names);
+        return Ok(find_all(drive, &args.names)?);
     }
     // Registers chosen for the user: those this link can read.
     let kind = args.target.link.kind();
@@ -48,11 +49,11 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Str
         Some(id) => {
             let Some(gi) = drive.groups.iter().position(|g| &g.id == id) else {
                 let ids: Vec<&str> = drive.groups.iter().map(|g| g.id.as_str()).collect();
-                return Err(format!(
+                return Err(Error::Refused(format!(
                     "{} has no group `{id}`; groups: {}",
                     drive.meta.id,
                     ids.join(", ")
-                ));
+                )));
             };
             drive
                 .registers
@@ -67,7 +68,9 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Str
             .collect(),
     };
     if regs.is_empty() {
-        return Err("no readable registers to poll; name some or give --group".into());
+        return Err(Error::Refused(
+            "no readable registers to poll; name some or give --group".into(),
+        ));
     }
     Ok(regs)
 }
@@ -76,7 +79,7 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Str
 /// Over TCP a connection the drive or gateway closes is re-established before the next request
 /// (back-off from 100 ms to 5 s between failed attempts, `ClientOptions::reconnect`); the
 /// header counts the reconnects.
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let regs = registers(&drive, &args)?;
     let given = args.target.settings.resolve(&drive)?;

@@ -21,10 +21,11 @@ use drivemap_live::codec;
 use drivemap_runtime::ValueError;
 use serde::Serialize;
 
+use crate::error::Error;
 use crate::live::Target;
 use crate::live::output::{Format, address_text, now_rfc3339};
-use crate::live::session::{Failure, Session, on_transport};
 use drivemap_codegen::describe;
+use drivemap_live::session::{Failure, Session, on_transport};
 
 /// Arguments of `drivemap probe`.
 #[derive(ClapArgs, Debug)]
@@ -94,7 +95,7 @@ pub struct Finding {
 }
 
 /// Arguments bundle for [`run_probe`], for tests.
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let report = run_probe(&drive, &args.target)?;
     let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
@@ -129,7 +130,7 @@ fn finding(session: &Session<'_>, r: &Register, kind: &'static str, detail: Stri
 }
 
 /// Reads the drive against its map and builds the report.
-pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
+pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error> {
     let given = target.settings.resolve(drive)?;
     let mut session = Session::open(drive, &target.link, given.settings)?;
     let mut unchecked = Vec::new();
@@ -165,10 +166,10 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
         let (words, _) = session.poll_detailed(&mut plan);
         if let Some(Err(f)) = words.first() {
             if f.sent && f.exception.is_none() {
-                return Err(format!(
+                return Err(Error::Refused(format!(
                     "{} did not answer; nothing checked ({})",
                     session.link, f.message
-                ));
+                )));
             }
         }
     }
@@ -239,10 +240,10 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, String> {
             .find_map(|w| w.as_ref().err())
             .map(|f| f.message.clone())
             .unwrap_or_default();
-        return Err(format!(
+        return Err(Error::Refused(format!(
             "{} did not answer any read; nothing checked ({first})",
             session.link
-        ));
+        )));
     }
     let mut disagreements = Vec::new();
     let mut checked = 0;
@@ -340,7 +341,9 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Sessi
     }
     let value = match codec::decode(drive, r, raw, &session.settings) {
         Ok(v) => v,
-        Err(e) => return Check::Unchecked(crate::live::session::value_error(drive, &e)),
+        Err(e) => {
+            return Check::Unchecked(drivemap_live::session::value_error(drive, &e).to_string());
+        }
     };
     let Some(number) = value.as_f64() else {
         return Check::Agrees;
@@ -363,7 +366,7 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Sessi
             )
         }
         Err(e @ (ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. })) => {
-            Check::Unchecked(crate::live::session::value_error(drive, &e))
+            Check::Unchecked(drivemap_live::session::value_error(drive, &e).to_string())
         }
         Err(e) => Check::Disagrees("out_of_range", format!("read {value} ({raw:04X}h): {e}")),
     }
@@ -504,7 +507,7 @@ pub fn summary(r: &Report) -> String {
 
 /// One CSV row per register result: disagreements, then unchecked registers, each naming the
 /// drive and slave.
-pub fn csv_rows(r: &Report) -> Result<String, String> {
+pub fn csv_rows(r: &Report) -> Result<String, Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let err = |e: csv::Error| e.to_string();
     w.write_record([
@@ -545,5 +548,5 @@ pub fn csv_rows(r: &Report) -> Result<String, String> {
         .map_err(err)?;
     }
     let bytes = w.into_inner().map_err(|e| e.to_string())?;
-    String::from_utf8(bytes).map_err(|e| e.to_string())
+    Ok(String::from_utf8(bytes).map_err(|e| e.to_string())?)
 }

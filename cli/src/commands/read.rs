@@ -4,10 +4,11 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 
+use crate::error::Error;
 use crate::live::Target;
 use crate::live::output::{Emitter, Format, Reading, now_rfc3339};
-use crate::live::session::{Session, find_all};
 use crate::live::table::{self, Row};
+use drivemap_live::session::{Session, find_all};
 
 /// Arguments of `drivemap read`.
 #[derive(ClapArgs, Debug)]
@@ -24,7 +25,7 @@ pub struct Args {
 }
 
 /// Reads the named registers and prints them decoded; exits 1 when any failed.
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let regs = find_all(&drive, &args.names)?;
     let given = args.target.settings.resolve(&drive)?;

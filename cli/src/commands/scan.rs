@@ -18,14 +18,16 @@ use drivemap_codegen::ir::Register;
 use drivemap_live::LiveSettings;
 use drivemap_runtime::transport::serial::char_times;
 use drivemap_runtime::{Error, Profile};
+
+use crate::error::Error as CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
 
 use super::probe::{Check, check_value};
-use crate::live::link::{LineParity, LinkArgs};
 use crate::live::output::Format;
-use crate::live::session::{Session, on_transport};
 use crate::maps::MapsDir;
+use drivemap_live::link::{LineParity, Link};
+use drivemap_live::session::{Session, on_transport};
 
 /// Monitor registers read per candidate map when identifying a slave.
 const MAX_IDENTIFY_REGISTERS: usize = 48;
@@ -59,7 +61,7 @@ pub struct Args {
     #[arg(long, value_enum, value_delimiter = ',')]
     pub parity: Vec<LineParity>,
     /// Longest wait for each probe (default: from the maps' timing and the line speed).
-    #[arg(long, value_parser = crate::duration::positive)]
+    #[arg(long, value_parser = drivemap_live::duration::positive)]
     pub timeout: Option<Duration>,
     /// Candidate maps by drive id (default: every map known).
     #[arg(long = "drive", value_name = "ID")]
@@ -83,13 +85,15 @@ static PROBE: Profile = Profile {
 };
 
 /// Parses `1-247`, `1,2,5`, `1-10,31`: addresses 1-255 (0 is broadcast, which nobody answers).
-pub fn parse_slaves(text: &str) -> Result<SlaveList, String> {
+pub fn parse_slaves(text: &str) -> Result<SlaveList, CliError> {
     let mut out: Vec<u8> = Vec::new();
     for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-        let num = |s: &str| -> Result<u8, String> {
+        let num = |s: &str| -> Result<u8, CliError> {
             match s.trim().parse::<u8>() {
                 Ok(n) if n >= 1 => Ok(n),
-                _ => Err(format!("`{s}` is not a slave address 1-255")),
+                _ => Err(CliError::Refused(format!(
+                    "`{s}` is not a slave address 1-255"
+                ))),
             }
         };
         let (a, b) = match part.split_once('-') {
@@ -97,7 +101,9 @@ pub fn parse_slaves(text: &str) -> Result<SlaveList, String> {
             None => (num(part)?, num(part)?),
         };
         if a > b {
-            return Err(format!("`{part}`: the range runs backwards"));
+            return Err(CliError::Refused(format!(
+                "`{part}`: the range runs backwards"
+            )));
         }
         for n in a..=b {
             if !out.contains(&n) {
@@ -106,7 +112,7 @@ pub fn parse_slaves(text: &str) -> Result<SlaveList, String> {
         }
     }
     if out.is_empty() {
-        return Err("no slave address given".into());
+        return Err(CliError::Refused("no slave address given".into()));
     }
     Ok(SlaveList(out))
 }
@@ -225,7 +231,7 @@ struct Line {
     parity: LineParity,
 }
 
-fn line_text(kind_serial: bool, line: Line, drive: &Drive, base: &LinkArgs) -> String {
+fn line_text(kind_serial: bool, line: Line, drive: &Drive, base: &Link) -> String {
     if !kind_serial {
         return "-".into();
     }
@@ -277,7 +283,7 @@ fn request_gap(profiles: &[&Profile], baud: Option<u32>) -> Duration {
 
 /// The holding register readable in the most candidate maps on this link (lowest address on
 /// a tie), as a PDU address.
-fn probe_address(drives: &[Drive], base: &LinkArgs) -> u16 {
+fn probe_address(drives: &[Drive], base: &Link) -> u16 {
     let kind = base.kind();
     let mut counts: std::collections::BTreeMap<u16, usize> = Default::default();
     for d in drives {
@@ -288,7 +294,7 @@ fn probe_address(drives: &[Drive], base: &LinkArgs) -> u16 {
             if d.register_plan(r).info.table != drivemap_runtime::Table::Holding {
                 continue;
             }
-            let a = crate::live::session::address_of(d, r, &settings, kind);
+            let a = drivemap_live::session::address_of(d, r, &settings, kind);
             let Some(pdu) = profile.address_offsets.pdu_address(a, kind) else {
                 continue;
             };
@@ -319,7 +325,7 @@ fn readable_monitors(
 }
 
 /// Reads a map's monitors from a slave and counts how the answers fit the map.
-fn identify(drive: &Drive, link: &LinkArgs) -> Candidate {
+fn identify(drive: &Drive, link: &Link) -> Candidate {
     let mut c = Candidate {
         drive: drive.meta.id.clone(),
         tried: 0,
@@ -360,7 +366,7 @@ fn identify(drive: &Drive, link: &LinkArgs) -> Candidate {
 }
 
 /// Scans and prints; exit status 0 when any slave answered, 1 when none did.
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, CliError> {
     let ids: Vec<String> = if args.drives.is_empty() {
         args.dir.known().into_keys().collect()
     } else {
@@ -371,10 +377,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         .map(|id| args.dir.load(id))
         .collect::<Result<_, _>>()?;
     let Some(first) = drives.first() else {
-        return Err("no candidate maps".into());
+        return Err(CliError::Refused("no candidate maps".into()));
     };
     let profiles: Vec<&'static Profile> = drives.iter().map(drivemap_live::leak_profile).collect();
-    let base = LinkArgs {
+    let base = Link {
         tcp: args.tcp.clone(),
         gateway: args.gateway.clone(),
         rtu_tcp: args.rtu_tcp.clone(),
@@ -585,7 +591,7 @@ fn table(r: &Report) -> String {
     out
 }
 
-fn csv_rows(r: &Report) -> Result<String, String> {
+fn csv_rows(r: &Report) -> Result<String, CliError> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let err = |e: csv::Error| e.to_string();
     w.write_record([
@@ -621,7 +627,7 @@ fn csv_rows(r: &Report) -> Result<String, String> {
         }
     }
     let bytes = w.into_inner().map_err(|e| e.to_string())?;
-    String::from_utf8(bytes).map_err(|e| e.to_string())
+    Ok(String::from_utf8(bytes).map_err(|e| e.to_string())?)
 }
 
 #[cfg(test)]

@@ -11,15 +11,16 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
 
-use crate::live::link::LineParity;
 use clap::{ArgGroup, Args as ClapArgs};
 use drivemap_codegen::Drive;
+use drivemap_live::link::LineParity;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
     Line, RequestRecord, SerialServer, SimOptions, Simulator, SystemClock, TcpFraming, TcpServer,
 };
 
+use crate::error::Error;
 use crate::maps::MapsDir;
 
 #[derive(ClapArgs, Debug)]
@@ -72,7 +73,7 @@ pub struct Args {
     #[arg(long, value_name = "AXIS=OPTION")]
     pub variant: Vec<String>,
     /// Simulated time runs this many times faster than real time (ramps finish sooner; 0.1 to 1000).
-    #[arg(long = "time-scale", default_value_t = 1.0, value_parser = crate::duration::number(0.1, 1000.0))]
+    #[arg(long = "time-scale", default_value_t = 1.0, value_parser = drivemap_live::duration::number(0.1, 1000.0))]
     pub time_scale: f64,
     /// Do not log requests.
     #[arg(long)]
@@ -90,31 +91,31 @@ pub struct Args {
     pub max_connections: u16,
     /// TCP: a connection that sends no request to this drive (a well-formed frame to its unit)
     /// this long is closed.
-    #[arg(long = "idle-timeout", default_value = "60s", value_parser = crate::duration::positive)]
+    #[arg(long = "idle-timeout", default_value = "60s", value_parser = drivemap_live::duration::positive)]
     pub idle_timeout: std::time::Duration,
     /// TCP: a connection whose started frame is not complete this long after its first byte is
     /// closed, Modbus TCP and RTU framing alike (a peer trickling bytes cannot hold it).
-    #[arg(long = "frame-timeout", default_value = "1s", value_parser = crate::duration::positive)]
+    #[arg(long = "frame-timeout", default_value = "1s", value_parser = drivemap_live::duration::positive)]
     pub frame_timeout: std::time::Duration,
     #[command(flatten)]
     pub dir: MapsDir,
 }
 
 /// The map of a drive id: under `--maps` when there, else built in.
-pub(crate) fn load_drive(dir: &MapsDir, id: &str) -> Result<Drive, String> {
-    dir.load(id)
+pub(crate) fn load_drive(dir: &MapsDir, id: &str) -> Result<Drive, Error> {
+    Ok(dir.load(id)?)
 }
 
-fn pair(text: &str, what: &str) -> Result<(String, String), String> {
+fn pair(text: &str, what: &str) -> Result<(String, String), Error> {
     text.split_once('=')
         .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
         .filter(|(k, v)| !k.is_empty() && !v.is_empty())
-        .ok_or_else(|| format!("`{text}` is not {what}"))
+        .ok_or_else(|| Error::Refused(format!("`{text}` is not {what}")))
 }
 
-fn number(text: &str, v: &str) -> Result<f64, String> {
+fn number(text: &str, v: &str) -> Result<f64, Error> {
     v.parse::<f64>()
-        .map_err(|_| format!("`{text}`: `{v}` is not a number"))
+        .map_err(|_| Error::Refused(format!("`{text}`: `{v}` is not a number")))
 }
 
 /// Simulator options from the command line. Each `--set NAME=VALUE` is the drive's value:
@@ -127,9 +128,11 @@ pub(crate) fn options(
     set: &[String],
     variant: &[String],
     time_scale: f64,
-) -> Result<SimOptions, String> {
+) -> Result<SimOptions, Error> {
     if !(time_scale.is_finite() && time_scale > 0.0) {
-        return Err(format!("--time-scale {time_scale}: give a positive number"));
+        return Err(Error::Refused(format!(
+            "--time-scale {time_scale}: give a positive number"
+        )));
     }
     let mut o = SimOptions::new().clock(Arc::new(SystemClock::scaled(time_scale)));
     o.slave = slave;
@@ -174,14 +177,16 @@ pub(crate) fn options(
 }
 
 /// `PORT` binds loopback; `HOST:PORT` binds where told.
-fn bind_address(text: &str) -> Result<String, String> {
+fn bind_address(text: &str) -> Result<String, Error> {
     if let Ok(port) = text.parse::<u16>() {
         return Ok(format!("127.0.0.1:{port}"));
     }
     if text.parse::<SocketAddr>().is_ok() || text.rsplit_once(':').is_some() {
         return Ok(text.to_string());
     }
-    Err(format!("`{text}` is neither PORT nor HOST:PORT"))
+    Err(Error::Refused(format!(
+        "`{text}` is neither PORT nor HOST:PORT"
+    )))
 }
 
 /// Wall-clock time of day (UTC) with milliseconds.
@@ -208,14 +213,14 @@ fn logger() -> Logger {
 }
 
 /// One `--drive ID[@SLAVE]`: the id and the address, if given.
-pub(crate) fn drive_at(text: &str) -> Result<(&str, Option<u8>), String> {
+pub(crate) fn drive_at(text: &str) -> Result<(&str, Option<u8>), Error> {
     match text.rsplit_once('@') {
         None => Ok((text, None)),
         Some((id, slave)) => match slave.parse::<u8>() {
             Ok(n) if !id.is_empty() && n >= 1 => Ok((id, Some(n))),
-            _ => Err(format!(
+            _ => Err(Error::Refused(format!(
                 "--drive `{text}`: give ID@SLAVE with a slave address 1-255 (`yaskawa-v7@1`)"
-            )),
+            ))),
         },
     }
 }
@@ -223,7 +228,7 @@ pub(crate) fn drive_at(text: &str) -> Result<(&str, Option<u8>), String> {
 /// The options of `--set` / `--variant` that are for the drive at `slave`: those with its
 /// `SLAVE:` prefix (taken off) and those without one. Only a line of several drives takes
 /// prefixes.
-fn for_slave(list: &[String], slave: u8, line: bool) -> Result<Vec<String>, String> {
+fn for_slave(list: &[String], slave: u8, line: bool) -> Result<Vec<String>, Error> {
     let mut out = Vec::new();
     for s in list {
         match s.split_once(':') {
@@ -231,7 +236,11 @@ fn for_slave(list: &[String], slave: u8, line: bool) -> Result<Vec<String>, Stri
                 match n.parse::<u8>() {
                     Ok(n) if n == slave => out.push(rest.to_string()),
                     Ok(_) => {}
-                    Err(_) => return Err(format!("`{s}`: `{n}` is not a slave address")),
+                    Err(_) => {
+                        return Err(Error::Refused(format!(
+                            "`{s}`: `{n}` is not a slave address"
+                        )));
+                    }
                 }
             }
             _ => out.push(s.clone()),
@@ -240,13 +249,13 @@ fn for_slave(list: &[String], slave: u8, line: bool) -> Result<Vec<String>, Stri
     Ok(out)
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let several = args.drive.len() > 1;
     if several && args.slave.is_some() {
-        return Err(
+        return Err(Error::Refused(
             "--slave is for a single drive; on a line give each drive its address as --drive ID@SLAVE"
                 .into(),
-        );
+        ));
     }
     let kind = if args.tcp.is_some() {
         drivemap_runtime::profile::TransportKind::Tcp
@@ -260,9 +269,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     for text in &args.drive {
         let (id, at) = drive_at(text)?;
         if several && at.is_none() {
-            return Err(format!(
+            return Err(Error::Refused(format!(
                 "--drive `{text}`: on a line of several drives give each its slave address (`{id}@1`)"
-            ));
+            )));
         }
         let drive = load_drive(&args.dir, id)?;
         let slave = at.or(args.slave);
@@ -273,14 +282,19 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             ),
             None => (args.set.clone(), args.variant.clone()),
         };
-        let mut options = options(&drive, slave, &set, &variant, args.time_scale)
-            .map_err(|e| if several { format!("{text}: {e}") } else { e })?;
+        let mut options = options(&drive, slave, &set, &variant, args.time_scale).map_err(|e| {
+            if several {
+                Error::Refused(format!("{text}: {e}"))
+            } else {
+                e
+            }
+        })?;
         if args.network_source {
             options.network_source = Some(kind);
         }
         // The serial line, should --serial be chosen: the flags, else the first map's defaults.
         if serial.is_none() {
-            serial = Some(crate::live::link::serial_line(
+            serial = Some(drivemap_live::link::serial_line(
                 &drive,
                 args.baud,
                 args.parity,
@@ -318,7 +332,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         });
         line.add(sim).map_err(|e| e.to_string())?;
     }
-    let (baud, parity, stop_bits) = serial.ok_or("give --drive")?;
+    let (baud, parity, stop_bits) = serial.ok_or_else(|| Error::Refused("give --drive".into()))?;
     let what_drives = described.join(", ");
     let models = models.join("; ");
     let log = (!args.quiet).then(logger);
@@ -361,7 +375,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         return Ok(ExitCode::SUCCESS);
     }
     let Some(path) = &args.serial else {
-        return Err("give --tcp, --gateway, --rtu-tcp or --serial".into());
+        return Err(Error::Refused(
+            "give --tcp, --gateway, --rtu-tcp or --serial".into(),
+        ));
     };
     let mut options = SerialOptions::new(path.to_string_lossy(), baud)
         .parity(match parity {
@@ -410,14 +426,20 @@ mod tests {
     fn options_are_parsed_with_clear_errors() {
         let v7 = MapsDir::default().load("yaskawa-v7").unwrap();
         assert!(options(&v7, None, &["n152=1".into()], &[], 1.0).is_ok());
-        let e = options(&v7, None, &["n152".into()], &[], 1.0).unwrap_err();
+        let e = options(&v7, None, &["n152".into()], &[], 1.0)
+            .unwrap_err()
+            .to_string();
         assert_eq!(e, "`n152` is not NAME=VALUE");
-        let e = options(&v7, None, &["n152=x".into()], &[], 1.0).unwrap_err();
+        let e = options(&v7, None, &["n152=x".into()], &[], 1.0)
+            .unwrap_err()
+            .to_string();
         assert_eq!(
             e,
             "`n152=x`: `x` is not a code of modbus_frequency_reference_unit_selection; expected a number or one of: unit_0_1_hz, unit_0_01_hz, full_scale_30000, unit_0_1_percent"
         );
-        let e = options(&v7, None, &["n019=x".into()], &[], 1.0).unwrap_err();
+        let e = options(&v7, None, &["n019=x".into()], &[], 1.0)
+            .unwrap_err()
+            .to_string();
         assert_eq!(e, "`n019=x`: `x` is not a number");
         assert!(options(&v7, None, &[], &[], 0.0).is_err());
     }

@@ -11,9 +11,10 @@ use drivemap_live::intern::intern;
 use drivemap_runtime::gate;
 use drivemap_runtime::{Profile, Refusal, Rounding, ValueError};
 
+use crate::error::Error;
 use crate::live::Target;
-use crate::live::session::{Session, value_error};
 use drivemap_codegen::describe;
+use drivemap_live::session::{Session, value_error};
 
 /// Arguments of `drivemap write`.
 #[derive(ClapArgs, Debug)]
@@ -48,7 +49,7 @@ fn refused(r: &Register, e: &Refusal) -> String {
 
 fn input_error(drive: &Drive, e: &InputError) -> String {
     match e {
-        InputError::Value(v) => value_error(drive, v),
+        InputError::Value(v) => value_error(drive, v).to_string(),
         InputError::Parse(m) => m.clone(),
     }
 }
@@ -63,7 +64,7 @@ fn field_word(
     session: &mut Session<'_>,
     r: &Register,
     text: &str,
-) -> Result<Option<u32>, String> {
+) -> Result<Option<u32>, Error> {
     let Some(input) = codec::field_input(drive, r, text).map_err(|e| input_error(drive, &e))?
     else {
         return Ok(None);
@@ -93,7 +94,7 @@ fn field_word(
     };
     codec::encode(drive, r, f64::from(word), &session.settings)
         .map(Some)
-        .map_err(|e| format!("{}; nothing written", value_error(drive, &e)))
+        .map_err(|e| Error::Refused(format!("{}; nothing written", value_error(drive, &e))))
 }
 
 /// The warning for a number register whose range the manual does not print, directly or
@@ -131,14 +132,14 @@ pub fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
 }
 
 /// Checks every assignment, then writes them in order; exits 1 when the drive refused one.
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let profile = drivemap_live::leak_profile(&drive);
     execute(&drive, profile, &args)
 }
 
 /// [`run`] with the map loaded and its run-time profile built.
-pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<ExitCode, String> {
+pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<ExitCode, Error> {
     let mut pairs: Vec<(&Register, String)> = Vec::new();
     let mut errors = Vec::new();
     for a in &args.assignments {
@@ -157,7 +158,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
         }
     }
     if !errors.is_empty() {
-        return Err(errors.join("\n"));
+        return Err(Error::Refused(errors.join("\n")));
     }
     let slave = args.target.link.slave(drive);
     let kind = args.target.link.kind();
@@ -176,7 +177,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
                 .iter()
                 .map(|c| c.id.as_str())
                 .collect();
-            return Err(format!(
+            return Err(Error::Refused(format!(
                 "{} has no command `{id}`; commands: {}",
                 drive.meta.id,
                 if known.is_empty() {
@@ -184,7 +185,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
                 } else {
                     known.join(", ")
                 }
-            ));
+            )));
         }
     }
     let given = args.target.settings.resolve(drive)?;
@@ -201,7 +202,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             | Err(InputError::Value(
                 ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. },
             )) => {}
-            Err(e) => return Err(input_error(drive, &e)),
+            Err(e) => return Err(Error::Refused(input_error(drive, &e))),
         }
     }
     for (r, _) in &pairs {
@@ -218,10 +219,10 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
         eprintln!("warning: {w}");
     }
     if let Some(why) = session.silence.report() {
-        return Err(format!(
+        return Err(Error::Refused(format!(
             "{} did not answer: {why}; nothing written",
             session.link
-        ));
+        )));
     }
     let mut raws = Vec::new();
     for (r, value) in &pairs {
@@ -284,7 +285,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
         };
         match result {
             Ok(()) => {}
-            Err(drivemap_runtime::Error::Refused(e)) => return Err(refused(r, &e)),
+            Err(drivemap_runtime::Error::Refused(e)) => return Err(Error::Refused(refused(r, &e))),
             Err(e) => {
                 eprintln!("drivemap: {e}");
                 return Ok(ExitCode::FAILURE);

@@ -2,15 +2,15 @@
 //! time ([`drivemap_live`]) and spoken over the runtime's transports; reads are planned by the
 //! runtime's read planner ([`drivemap_runtime::planner`]).
 
-pub mod link;
 pub mod output;
-pub mod session;
-pub mod silence;
 pub mod table;
+
+pub use drivemap_live::{link, session, silence};
 
 use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 
+use crate::error::Error;
 use crate::maps::MapsDir;
 
 /// The drive to talk to: its map and how to reach it.
@@ -22,16 +22,16 @@ pub struct Target {
     #[command(flatten)]
     pub dir: MapsDir,
     #[command(flatten)]
-    pub link: link::LinkArgs,
+    pub link: link::Link,
     #[command(flatten)]
     pub settings: session::SettingsArgs,
 }
 
 impl Target {
     /// Reads and validates the drive's map, and refuses a link the drive does not have
-    /// (`--tcp` to a drive without Modbus TCP: [`link::LinkArgs::check_transport`]) before
+    /// (`--tcp` to a drive without Modbus TCP: [`link::Link::check_transport`]) before
     /// anything else is looked at.
-    pub fn load(&self) -> Result<Drive, String> {
+    pub fn load(&self) -> Result<Drive, Error> {
         let drive = self.dir.load(&self.drive)?;
         self.link.check_transport(&drive)?;
         Ok(drive)

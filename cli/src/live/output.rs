@@ -33,8 +33,8 @@ use drivemap_codegen::model::AddressFormat;
 use drivemap_live::codec::Value;
 use serde::Serialize;
 
-use super::session::Session;
 use drivemap_codegen::describe;
+use drivemap_live::session::{ReadError, Session};
 
 /// How values are printed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
@@ -92,7 +92,7 @@ impl Reading {
     pub fn of(
         session: &Session<'_>,
         r: &Register,
-        word: &Result<u32, String>,
+        word: &Result<u32, ReadError>,
         time: &str,
     ) -> Reading {
         let address = session.shown_address(r);
@@ -114,11 +114,11 @@ impl Reading {
             fields: None,
         };
         match word {
-            Err(e) => rec.error = Some(e.clone()),
+            Err(e) => rec.error = Some(e.to_string()),
             Ok(raw) => {
                 rec.raw = Some(*raw);
                 match session.decode(r, *raw) {
-                    Err(e) => rec.error = Some(e),
+                    Err(e) => rec.error = Some(e.to_string()),
                     Ok(v) => {
                         rec.status = "ok";
                         rec.value = v.as_f64();

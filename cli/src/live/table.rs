@@ -2,8 +2,8 @@
 
 use drivemap_codegen::ir::Register;
 
-use super::session::{Session, field_lines};
 use drivemap_codegen::describe;
+use drivemap_live::session::{ReadError, Session, field_lines};
 
 /// One register's line.
 #[derive(Debug, Clone, PartialEq)]
@@ -27,7 +27,7 @@ impl Row {
     pub fn of(
         session: &Session<'_>,
         r: &Register,
-        word: &Result<u32, String>,
+        word: &Result<u32, ReadError>,
         details: bool,
     ) -> Row {
         let register = describe::register(r);

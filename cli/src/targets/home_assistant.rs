@@ -7,7 +7,7 @@ use std::fmt::Write;
 use drivemap_runtime::Table;
 
 use super::{Endpoint, Meaning, Point, Points, meanings_text, slug};
-use crate::live::link::LineParity;
+use drivemap_live::link::LineParity;
 
 fn q(text: &str) -> String {
     // A JSON string is a YAML double-quoted scalar.

@@ -17,8 +17,9 @@ use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{RegisterInfo, Table, Width, WordOrder};
 
-use crate::live::link::{LineParity, LinkArgs};
-use crate::live::session::{on_transport, value_error};
+use crate::error::Error;
+use drivemap_live::link::{LineParity, Link};
+use drivemap_live::session::{on_transport, value_error};
 
 pub mod home_assistant;
 pub mod node_red;
@@ -134,7 +135,7 @@ pub struct Points<'d> {
     pub cycle_us: u64,
 }
 
-fn split_host(addr: &str) -> Result<(String, u16), String> {
+fn split_host(addr: &str) -> Result<(String, u16), Error> {
     let (host, port) = addr
         .rsplit_once(':')
         .ok_or_else(|| format!("`{addr}` is not HOST:PORT"))?;
@@ -143,7 +144,7 @@ fn split_host(addr: &str) -> Result<(String, u16), String> {
         .map_err(|_| format!("`{addr}`: `{port}` is not a TCP port"))?;
     let host = host.trim_start_matches('[').trim_end_matches(']');
     if host.is_empty() {
-        return Err(format!("`{addr}` has no host"));
+        return Err(Error::Refused(format!("`{addr}` has no host")));
     }
     Ok((host.to_owned(), port))
 }
@@ -177,11 +178,11 @@ impl<'d> Points<'d> {
     pub fn build(
         drive: &'d Drive,
         regs: &[&'d Register],
-        link: &LinkArgs,
+        link: &Link,
         settings: &LiveSettings,
         period_ms: u64,
         name: Option<&str>,
-    ) -> Result<Points<'d>, String> {
+    ) -> Result<Points<'d>, Error> {
         link.check_transport(drive)?;
         let kind = link.kind();
         let endpoint = if let Some(a) = link.tcp.as_ref().or(link.gateway.as_ref()) {

@@ -8,7 +8,7 @@ use drivemap_runtime::Table;
 use serde_json::{Value, json};
 
 use super::{Endpoint, Meaning, Point, Points, slug};
-use crate::live::link::LineParity;
+use drivemap_live::link::LineParity;
 
 /// A stable node id: 16 hex digits (as the editor makes them) from `key`.
 fn node_id(key: &str) -> String {

@@ -7,7 +7,7 @@ use std::fmt::Write;
 use drivemap_runtime::Table;
 
 use super::{Endpoint, Meaning, Points, meanings_text};
-use crate::live::link::LineParity;
+use drivemap_live::link::LineParity;
 
 fn q(text: &str) -> String {
     // A JSON string without control characters is a TOML basic string.

@@ -1,8 +1,11 @@
 //! The link to a live drive: which transport, which slave, how long to wait.
+//!
+//! [`Link`] is what the `drivemap` command's `--tcp`, `--gateway`, `--rtu-tcp`, `--serial` and
+//! timing options give (with the `clap` feature it is those options); a program fills it in
+//! and opens a [`crate::Session`] on it.
 
 use std::time::Duration;
 
-use clap::{ArgGroup, Args as ClapArgs, ValueEnum};
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::LineParity as MapParity;
 use drivemap_runtime::bus_time::{Parity as BusParity, SerialConfig};
@@ -14,64 +17,146 @@ use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::{Client, ClientOptions, Profile};
 
 /// Parity of a serial line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum LineParity {
+    /// No parity bit.
     None,
+    /// Even parity.
     Even,
+    /// Odd parity.
     Odd,
 }
 
-/// How to reach the drive.
-#[derive(ClapArgs, Debug, Clone)]
-#[command(group(ArgGroup::new("link").required(true).args(["tcp", "gateway", "rtu_tcp", "serial"])))]
-pub struct LinkArgs {
+/// Why a link cannot be opened; each names the address or port.
+#[derive(Debug, thiserror::Error)]
+pub enum LinkError {
+    /// `--tcp` to a drive whose map lists no Modbus TCP interface.
+    #[error(
+        "{drive} has no Modbus TCP interface (its map's protocol.transports is [{transports}]), so --tcp {addr} cannot reach it: for the drive on the serial line of a Modbus TCP to RTU gateway give --gateway {addr} (Modbus TCP frames, the drive's RTU addressing and timing), for a transparent gateway --rtu-tcp {addr}"
+    )]
+    NoTcp {
+        /// The drive's id.
+        drive: String,
+        /// The transports its map lists.
+        transports: String,
+        /// The address given.
+        addr: String,
+    },
+    /// The connection or port could not be opened.
+    #[error("cannot {what} {addr}: {source}")]
+    Open {
+        /// What was tried: "connect to Modbus TCP server", "open serial port", ...
+        what: &'static str,
+        /// The address or port.
+        addr: String,
+        /// The operating system's reason.
+        source: std::io::Error,
+    },
+    /// The serial format is not one the map lists.
+    #[error(transparent)]
+    Format(#[from] drivemap_runtime::Refusal),
+    /// No transport was given.
+    #[error("give --tcp, --gateway, --rtu-tcp or --serial")]
+    NoTransport,
+}
+
+/// How to reach the drive: one of `tcp`, `gateway`, `rtu_tcp` or `serial`, and the line's
+/// settings (each `None` takes the map's default).
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", command(group(clap::ArgGroup::new("link").required(true).args(["tcp", "gateway", "rtu_tcp", "serial"]))))]
+pub struct Link {
     /// The drive's own Modbus TCP interface (`192.168.1.10:502`); refused for a map whose
     /// `protocol.transports` lacks `tcp` (reach such a drive with --gateway or --rtu-tcp).
-    #[arg(long, value_name = "ADDR")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "ADDR"))]
     pub tcp: Option<String>,
     /// A Modbus TCP to RTU gateway with the drive on its serial line (`192.168.1.20:502`):
     /// Modbus TCP frames, the map's RTU addressing, RTU registers and RTU timing (--baud and
     /// --parity are the serial line's behind the gateway, for the timing).
-    #[arg(long, value_name = "HOST:PORT")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "HOST:PORT"))]
     pub gateway: Option<String>,
     /// RTU frames over TCP through a transparent serial gateway (`192.168.1.20:4001`).
-    #[arg(long = "rtu-tcp", value_name = "ADDR")]
+    #[cfg_attr(feature = "clap", arg(long = "rtu-tcp", value_name = "ADDR"))]
     pub rtu_tcp: Option<String>,
     /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`).
-    #[arg(long, value_name = "PATH")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PATH"))]
     pub serial: Option<String>,
     /// Baud rate (default: the map's default, else 9600).
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub baud: Option<u32>,
     /// Parity (default: the map's default, else none).
-    #[arg(long, value_enum)]
+    #[cfg_attr(feature = "clap", arg(long, value_enum))]
     pub parity: Option<LineParity>,
     /// Stop bits (default: the map's for the parity when its formats give only one, else 1;
     /// 2 without parity where the map fixes 11-bit characters). A map that lists its serial
     /// formats (`serial.formats`) refuses any other parity and stop bits.
-    #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
+    #[cfg_attr(feature = "clap", arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2)))]
     pub stop_bits: Option<u8>,
     /// Slave address (default: the map's default, else 1; 0 broadcasts a write).
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub slave: Option<u8>,
     /// How long to wait for each reply (default: 1 s plus the map's response time and
     /// response-delay default).
-    #[arg(long, value_parser = crate::duration::positive)]
+    #[cfg_attr(feature = "clap", arg(long, value_parser = crate::duration::positive))]
     pub timeout: Option<Duration>,
     /// Further attempts after a timeout.
-    #[arg(long, default_value_t = 2)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 2))]
     pub retries: u8,
     /// Least pause between a reply and the next request (default on RTU links: the map's
     /// `timing.request_gap`, V7/J7 24 bit times + 10 ms, at least the 3.5-character frame gap;
     /// none on Modbus TCP).
-    #[arg(long = "request-gap", value_parser = crate::duration::parse)]
+    #[cfg_attr(feature = "clap", arg(long = "request-gap", value_parser = crate::duration::parse))]
     pub request_gap: Option<Duration>,
 }
 
 /// A client over whichever transport was chosen.
 pub type LiveClient = Client<Box<dyn Transport>>;
 
-impl LinkArgs {
+impl Link {
+    /// A link with the map's defaults and two retries (as the command line's): connect with
+    /// `tcp`, `gateway`, `rtu_tcp` or `serial` set through the constructors below.
+    fn with(
+        tcp: Option<String>,
+        gateway: Option<String>,
+        rtu_tcp: Option<String>,
+        serial: Option<String>,
+    ) -> Link {
+        Link {
+            tcp,
+            gateway,
+            rtu_tcp,
+            serial,
+            baud: None,
+            parity: None,
+            stop_bits: None,
+            slave: None,
+            timeout: None,
+            retries: 2,
+            request_gap: None,
+        }
+    }
+
+    /// The drive's own Modbus TCP interface at `addr` (`192.168.1.10:502`).
+    pub fn tcp(addr: impl Into<String>) -> Link {
+        Link::with(Some(addr.into()), None, None, None)
+    }
+
+    /// A Modbus TCP to RTU gateway at `addr` with the drive on its serial line.
+    pub fn gateway(addr: impl Into<String>) -> Link {
+        Link::with(None, Some(addr.into()), None, None)
+    }
+
+    /// RTU frames over TCP through a transparent serial gateway at `addr`.
+    pub fn rtu_over_tcp(addr: impl Into<String>) -> Link {
+        Link::with(None, None, Some(addr.into()), None)
+    }
+
+    /// A serial port speaking Modbus RTU (`/dev/ttyUSB0`).
+    pub fn serial(path: impl Into<String>) -> Link {
+        Link::with(None, None, None, Some(path.into()))
+    }
+
     /// The slave address to talk to.
     pub fn slave(&self, drive: &Drive) -> u8 {
         self.slave
@@ -108,7 +193,7 @@ impl LinkArgs {
         self.serial_config(drive)
     }
 
-    /// The serial line's baud rate and framing ([`LinkArgs::line`]) as the runtime counts bit
+    /// The serial line's baud rate and framing ([`Link::line`]) as the runtime counts bit
     /// and character times.
     fn serial_config(&self, drive: &Drive) -> SerialConfig {
         let (baud, parity, stop_bits) = self.line(drive);
@@ -153,7 +238,7 @@ impl LinkArgs {
     /// serial drive behind a Modbus TCP gateway is addressed on its RTU side, which `--gateway`
     /// does (Modbus TCP addressing would put every register of a drive with an RTU address
     /// offset one off).
-    pub fn check_transport(&self, drive: &Drive) -> Result<(), String> {
+    pub fn check_transport(&self, drive: &Drive) -> Result<(), LinkError> {
         use drivemap_codegen::model::TransportName;
         let Some(addr) = &self.tcp else {
             return Ok(());
@@ -161,10 +246,10 @@ impl LinkArgs {
         if drive.protocol.transports.contains(&TransportName::Tcp) {
             return Ok(());
         }
-        Err(format!(
-            "{} has no Modbus TCP interface (its map's protocol.transports is [{}]), so --tcp {addr} cannot reach it: for the drive on the serial line of a Modbus TCP to RTU gateway give --gateway {addr} (Modbus TCP frames, the drive's RTU addressing and timing), for a transparent gateway --rtu-tcp {addr}",
-            drive.meta.id,
-            drive
+        Err(LinkError::NoTcp {
+            drive: drive.meta.id.clone(),
+            addr: addr.clone(),
+            transports: drive
                 .protocol
                 .transports
                 .iter()
@@ -173,8 +258,8 @@ impl LinkArgs {
                     TransportName::Tcp => "tcp",
                 })
                 .collect::<Vec<_>>()
-                .join(", ")
-        ))
+                .join(", "),
+        })
     }
 
     /// Opens the link and makes a client for `profile`. Returns the client and a description
@@ -183,23 +268,39 @@ impl LinkArgs {
         &self,
         drive: &Drive,
         profile: &'static Profile,
-    ) -> Result<(LiveClient, String), String> {
+    ) -> Result<(LiveClient, String), LinkError> {
         let options = self.client_options(drive, profile);
         let connect_timeout = options.timeout.max(Duration::from_secs(1));
         let (transport, what): (Box<dyn Transport>, String) = if let Some(addr) = &self.tcp {
-            let t = TcpTransport::connect(addr.as_str(), connect_timeout)
-                .map_err(|e| format!("cannot connect to Modbus TCP server {addr}: {e}"))?;
+            let t = TcpTransport::connect(addr.as_str(), connect_timeout).map_err(|source| {
+                LinkError::Open {
+                    what: "connect to Modbus TCP server",
+                    addr: addr.clone(),
+                    source,
+                }
+            })?;
             (Box::new(t), format!("Modbus TCP {addr}"))
         } else if let Some(addr) = &self.gateway {
-            let t = TcpTransport::connect_gateway(addr.as_str(), connect_timeout)
-                .map_err(|e| format!("cannot connect to Modbus TCP gateway {addr}: {e}"))?;
+            let t = TcpTransport::connect_gateway(addr.as_str(), connect_timeout).map_err(
+                |source| LinkError::Open {
+                    what: "connect to Modbus TCP gateway",
+                    addr: addr.clone(),
+                    source,
+                },
+            )?;
             (
                 Box::new(t),
                 format!("Modbus TCP gateway {addr} (drive on RTU)"),
             )
         } else if let Some(addr) = &self.rtu_tcp {
-            let t = RtuOverTcpTransport::connect(addr.as_str(), connect_timeout)
-                .map_err(|e| format!("cannot connect to RTU gateway {addr}: {e}"))?;
+            let t =
+                RtuOverTcpTransport::connect(addr.as_str(), connect_timeout).map_err(|source| {
+                    LinkError::Open {
+                        what: "connect to RTU gateway",
+                        addr: addr.clone(),
+                        source,
+                    }
+                })?;
             (Box::new(t), format!("RTU over TCP {addr}"))
         } else if let Some(path) = &self.serial {
             let (baud, parity, stops) = self.line(drive);
@@ -216,16 +317,19 @@ impl LinkArgs {
                 })
                 .stop_bits(stop_bits)
                 .with_profile(profile);
-            options.check_format().map_err(|e| e.to_string())?;
-            let t = SerialTransport::open(options)
-                .map_err(|e| format!("cannot open serial port {path}: {e}"))?;
+            options.check_format()?;
+            let t = SerialTransport::open(options).map_err(|source| LinkError::Open {
+                what: "open serial port",
+                addr: path.clone(),
+                source,
+            })?;
             let parity = format!("{parity:?}").to_lowercase();
             (
                 Box::new(t),
                 format!("RTU {path} {baud} baud, parity {parity}, {stops} stop bit(s)"),
             )
         } else {
-            return Err("give --tcp, --gateway, --rtu-tcp or --serial".into());
+            return Err(LinkError::NoTransport);
         };
         let client = Client::with_options(transport, profile, options);
         Ok((client, format!("{what}, slave {}", self.slave(drive))))
@@ -261,10 +365,9 @@ pub fn serial_line(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use drivemap_drives::yaskawa_v7 as v7;
 
-    fn args(link: &str) -> LinkArgs {
-        LinkArgs {
+    fn args(link: &str) -> Link {
+        Link {
             tcp: (link == "tcp").then(|| "127.0.0.1:502".to_owned()),
             gateway: (link == "gateway").then(|| "127.0.0.1:5020".to_owned()),
             rtu_tcp: (link == "rtu-tcp").then(|| "127.0.0.1:4001".to_owned()),
@@ -283,24 +386,26 @@ mod tests {
     /// RTU links, follows `--baud`, and `--request-gap`/`--timeout` override it.
     #[test]
     fn client_timing_defaults_come_from_the_map() {
-        let drive = crate::maps::MapsDir::default().load("yaskawa-v7").unwrap();
-        let gap = |a: &LinkArgs| a.client_options(&drive, &v7::PROFILE).request_gap;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml");
+        let drive = drivemap_codegen::read_map(&path, &Default::default()).expect("the V7 map");
+        let profile = crate::leak_profile(&drive);
+        let gap = |a: &Link| a.client_options(&drive, profile).request_gap;
         assert_eq!(gap(&args("serial")), Duration::from_micros(12_500));
         assert_eq!(gap(&args("rtu-tcp")), Duration::from_micros(12_500));
         // Behind a Modbus TCP gateway the drive is on a serial line: its timing applies.
         assert_eq!(gap(&args("gateway")), Duration::from_micros(12_500));
         assert_eq!(gap(&args("tcp")), Duration::ZERO);
-        let slow = LinkArgs {
+        let slow = Link {
             baud: Some(4800),
             ..args("serial")
         };
         assert_eq!(gap(&slow), Duration::from_millis(15));
-        let given = LinkArgs {
+        let given = Link {
             request_gap: Some(Duration::from_millis(50)),
             timeout: Some(Duration::from_millis(300)),
             ..args("serial")
         };
-        let o = given.client_options(&drive, &v7::PROFILE);
+        let o = given.client_options(&drive, profile);
         assert_eq!(
             (o.request_gap, o.timeout),
             (Duration::from_millis(50), Duration::from_millis(300))

@@ -1,38 +1,117 @@
 //! A live drive by its map: names resolved, settings gathered, addresses chosen, words read in
-//! planned requests and decoded.
+//! planned requests and decoded. The `drivemap` command's `read`, `write`, `poll`, `probe` and
+//! `scan` are built on [`Session`]; so can any program (`examples/read_by_name.rs`).
+//!
+//! A register is named at run time by a [`Register`] of the loaded map (found by name with
+//! [`find_all`] or [`crate::find`]); its row of the map's plan (`Drive::register_plan`) gives
+//! the address, width and conversion, the same the generated code prints.
 
 use std::collections::BTreeSet;
 
-use clap::Args as ClapArgs;
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::Register;
 use drivemap_codegen::lower::Quantity;
-use drivemap_live::codec::{self, Value};
-use drivemap_live::{LiveSettings, leak_profile, lookup};
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::plan::Dependency;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError, Width};
 
-use super::link::{LinkArgs, LiveClient};
-use super::silence::SilenceGuard;
+use crate::codec::{self, InputError, Value};
+use crate::link::{Link, LinkError, LiveClient};
+use crate::lookup::NotFound;
+use crate::silence::SilenceGuard;
+use crate::{LiveSettings, leak_profile, lookup};
 use drivemap_codegen::describe;
 use drivemap_runtime::Client;
 
-/// What conversions depend on, given on the command line.
-#[derive(ClapArgs, Debug, Clone, Default)]
+/// What conversions depend on, as the user gives it (the command line's `--variant` and
+/// `--set`).
+#[derive(Debug, Clone, Default)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct SettingsArgs {
     /// Model variant: `axis=option` (e.g. `voltage_class=v440`), or just the option.
-    #[arg(long = "variant", value_name = "AXIS=OPTION")]
+    #[cfg_attr(feature = "clap", arg(long = "variant", value_name = "AXIS=OPTION"))]
     pub variants: Vec<String>,
     /// The drive's value of a register or an external quantity of the map (`n152=1`,
     /// `drive_rated_current=12.5`), taken as known instead of read: a parameter that selects a
     /// scale or serves as a reference is not read from the drive, an external quantity is the
     /// drive's. The same `--set` gives `simulate` its values. (`--external` is an older name.)
-    #[arg(long = "set", alias = "external", value_name = "NAME=VALUE")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long = "set", alias = "external", value_name = "NAME=VALUE")
+    )]
     pub sets: Vec<String>,
 }
+
+/// Why a `--variant` or `--set` is refused; each names the option as given.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SettingError {
+    /// A variant for a map without variants.
+    #[error("{drive} has no model variants (`--variant {given}`)")]
+    NoVariants {
+        /// The drive's id.
+        drive: String,
+        /// The option as given.
+        given: String,
+    },
+    /// No such variant axis (or option).
+    #[error("`--variant {given}`: {drive} has no such variant; choose from {known}")]
+    NoSuchVariant {
+        /// The option as given.
+        given: String,
+        /// The drive's id.
+        drive: String,
+        /// `axis=option|option` per axis.
+        known: String,
+    },
+    /// An axis without that option.
+    #[error("`--variant {given}`: {axis} has options {options}")]
+    NoSuchOption {
+        /// The option as given.
+        given: String,
+        /// The axis.
+        axis: String,
+        /// Its options.
+        options: String,
+    },
+    /// Not `NAME=VALUE`.
+    #[error("`{0}` is not NAME=VALUE")]
+    NotAssignment(String),
+    /// A value that is not a number where one is needed.
+    #[error("`--set {given}`: `{value}` is not a number{}", unit.as_deref().map(|u| format!(" of {u}")).unwrap_or_default())]
+    NotANumber {
+        /// The option as given.
+        given: String,
+        /// The value.
+        value: String,
+        /// The unit expected, for an external quantity.
+        unit: Option<String>,
+    },
+    /// No register or external quantity of that name.
+    #[error("`--set {given}`: {not_found}{}", hint.as_deref().map(|h| format!(" (external quantities and what conversions depend on: {h})")).unwrap_or_default())]
+    Unknown {
+        /// The option as given.
+        given: String,
+        /// The lookup's answer, with the nearest names.
+        not_found: NotFound,
+        /// The names whose value matters to conversions.
+        hint: Option<String>,
+    },
+    /// Not a value of the register.
+    #[error("`--set {given}`: {error}")]
+    Value {
+        /// The option as given.
+        given: String,
+        /// Why the value is not one of the register.
+        error: InputError,
+    },
+}
+
+/// Names that are not registers of the drive, each with its nearest names (one per line).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}", .0.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"))]
+pub struct UnknownNames(pub Vec<NotFound>);
 
 /// Settings from the command line, and which register ids they fix.
 pub struct Given {
@@ -42,16 +121,16 @@ pub struct Given {
     pub fixed: BTreeSet<String>,
 }
 
-fn split_assignment<'a>(text: &'a str, what: &str) -> Result<(&'a str, &'a str), String> {
+fn split_assignment(text: &str) -> Result<(&str, &str), SettingError> {
     text.split_once('=')
         .map(|(a, b)| (a.trim(), b.trim()))
         .filter(|(a, b)| !a.is_empty() && !b.is_empty())
-        .ok_or_else(|| format!("`{text}` is not {what}"))
+        .ok_or_else(|| SettingError::NotAssignment(text.to_owned()))
 }
 
 impl SettingsArgs {
     /// Checks the options against the map and builds the settings.
-    pub fn resolve(&self, drive: &Drive) -> Result<Given, String> {
+    pub fn resolve(&self, drive: &Drive) -> Result<Given, SettingError> {
         let mut settings = LiveSettings::default();
         for v in &self.variants {
             let (axis, option) = match v.split_once('=') {
@@ -71,55 +150,59 @@ impl SettingsArgs {
                     })
                     .collect();
                 return Err(if known.is_empty() {
-                    format!("{} has no model variants (`--variant {v}`)", drive.meta.id)
+                    SettingError::NoVariants {
+                        drive: drive.meta.id.clone(),
+                        given: v.clone(),
+                    }
                 } else {
-                    format!(
-                        "`--variant {v}`: {} has no such variant; choose from {}",
-                        drive.meta.id,
-                        known.join(", ")
-                    )
+                    SettingError::NoSuchVariant {
+                        given: v.clone(),
+                        drive: drive.meta.id.clone(),
+                        known: known.join(", "),
+                    }
                 });
             };
             if !ax.options.iter().any(|o| o.id == option) {
                 let opts: Vec<&str> = ax.options.iter().map(|o| o.id.as_str()).collect();
-                return Err(format!(
-                    "`--variant {v}`: {} has options {}",
-                    ax.id,
-                    opts.join(", ")
-                ));
+                return Err(SettingError::NoSuchOption {
+                    given: v.clone(),
+                    axis: ax.id.clone(),
+                    options: opts.join(", "),
+                });
             }
             settings.variants.insert(ax.id.clone(), option.to_owned());
         }
         let mut fixed = BTreeSet::new();
         for s in &self.sets {
-            let (name, value) = split_assignment(s, "NAME=VALUE")?;
+            let (name, value) = split_assignment(s)?;
+            let not_a_number = |unit: Option<&str>| SettingError::NotANumber {
+                given: s.clone(),
+                value: value.to_owned(),
+                unit: unit.map(str::to_owned),
+            };
             if let Some(q) = drive.externals().into_iter().find(|q| q.external == name) {
-                let v = number(value, &q.unit).ok_or_else(|| {
-                    format!("`--set {s}`: `{value}` is not a number of {}", q.unit)
-                })?;
+                let v = number(value, &q.unit).ok_or_else(|| not_a_number(Some(&q.unit)))?;
                 settings.references.insert(q.external.clone(), v);
                 continue;
             }
-            let r = lookup::find(drive, name).map_err(|e| {
-                format!(
-                    "`--set {s}`: {e}{}",
-                    settable_hint(drive)
-                        .map(|h| format!(
-                            " (external quantities and what conversions depend on: {h})"
-                        ))
-                        .unwrap_or_default()
-                )
+            let r = lookup::find(drive, name).map_err(|not_found| SettingError::Unknown {
+                given: s.clone(),
+                not_found,
+                hint: settable_hint(drive),
             })?;
+            let bad_value = |error| SettingError::Value {
+                given: s.clone(),
+                error,
+            };
             let is_selector = drive.selectors().iter().any(|x| x.def.id == r.def.id);
             let is_reference = drive.references().iter().any(|x| x.def.id == r.def.id);
             if is_selector {
-                let code = codec::parse_value(drive, r, value, &settings)
-                    .map_err(|e| format!("`--set {s}`: {e}"))?;
+                let code = codec::parse_value(drive, r, value, &settings).map_err(bad_value)?;
                 settings.selectors.insert(r.def.id.clone(), code as u16);
             }
             if is_reference {
                 let v = number(value, r.def.unit.as_deref().unwrap_or(""))
-                    .ok_or_else(|| format!("`--set {s}`: `{value}` is not a number"))?;
+                    .ok_or_else(|| not_a_number(None))?;
                 settings.references.insert(r.def.id.clone(), v);
             }
             if !(is_selector || is_reference) {
@@ -135,7 +218,7 @@ impl SettingsArgs {
                         | V::UnsupportedSetting { .. }
                         | V::BadReference { .. },
                     )) => {}
-                    Err(e) => return Err(format!("`--set {s}`: {e}")),
+                    Err(e) => return Err(bad_value(e)),
                 }
             }
             fixed.insert(r.def.id.clone());
@@ -173,19 +256,22 @@ fn number(text: &str, unit: &str) -> Option<f64> {
 
 /// Resolves register names (id, parameter number, printed name or address as the manual prints
 /// it); all unknown names are reported at once, each with the nearest names.
-pub fn find_all<'a>(drive: &'a Drive, names: &[String]) -> Result<Vec<&'a Register>, String> {
+pub fn find_all<'a>(
+    drive: &'a Drive,
+    names: &[impl AsRef<str>],
+) -> Result<Vec<&'a Register>, UnknownNames> {
     let mut found = Vec::new();
     let mut errors = Vec::new();
     for n in names {
-        match lookup::find(drive, n) {
+        match lookup::find(drive, n.as_ref()) {
             Ok(r) => found.push(r),
-            Err(e) => errors.push(e.to_string()),
+            Err(e) => errors.push(e),
         }
     }
     if errors.is_empty() {
         Ok(found)
     } else {
-        Err(errors.join("\n"))
+        Err(UnknownNames(errors))
     }
 }
 
@@ -262,37 +348,168 @@ pub fn address_of(
 }
 
 /// A conversion error, with what to do about a missing setting.
-pub fn value_error(drive: &Drive, e: &ValueError) -> String {
-    match e {
-        ValueError::MissingSetting { register, setting } => {
-            match drive.externals().iter().find(|q| q.external == *setting) {
-                Some(q) => format!(
-                    "{register}: converting needs {setting} ({}, in {}), which is not a register \
-                     of the drive; give it with --set {setting}=<value>",
-                    q.description, q.unit
-                ),
-                None => format!(
-                    "{register}: converting needs the value of {setting}, which could not be \
-                     read; give it with --set {setting}=<value>"
-                ),
-            }
+pub fn value_error(drive: &Drive, e: &ValueError) -> ConversionError {
+    let external = |setting: &str| {
+        drive
+            .externals()
+            .iter()
+            .find(|q| q.external == setting)
+            .map(|q| (q.description.clone(), q.unit.clone()))
+    };
+    let external = match e {
+        ValueError::MissingSetting { setting, .. } | ValueError::LimitNotKnown { setting, .. } => {
+            external(setting)
         }
-        ValueError::NotAStep { .. } => format!("{e} (--round sends the nearest)"),
-        ValueError::LimitNotKnown { register, setting } => {
-            match drive.externals().iter().find(|q| q.external == *setting) {
-                Some(q) => format!(
-                    "{register}: its limit is a percentage of {setting} ({}, in {}), which is \
-                     not a register of the drive; give it with --set {setting}=<value>",
-                    q.description, q.unit
-                ),
-                None => format!(
-                    "{register}: its limit is a percentage of {setting}, which could not be \
-                     read; give it with --set {setting}=<value>"
-                ),
-            }
-        }
-        other => other.to_string(),
+        _ => None,
+    };
+    ConversionError {
+        error: Box::new(e.clone()),
+        external: external.map(Box::new),
     }
+}
+
+/// A value that does not convert, said with what to do about it: a missing setting names the
+/// `--set` that gives it (and the external quantity's description and unit), a value between
+/// two steps names `--round`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConversionError {
+    /// The conversion's error.
+    pub error: Box<ValueError>,
+    /// The external quantity (description, unit) the error's setting is, if it is one.
+    pub external: Option<Box<(String, String)>>,
+}
+
+impl std::fmt::Display for ConversionError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let e = &*self.error;
+        match (e, self.external.as_deref()) {
+            (ValueError::MissingSetting { register, setting }, Some((description, unit))) => {
+                write!(
+                    f,
+                    "{register}: converting needs {setting} ({description}, in {unit}), which is not \
+                 a register of the drive; give it with --set {setting}=<value>"
+                )
+            }
+            (ValueError::MissingSetting { register, setting }, None) => write!(
+                f,
+                "{register}: converting needs the value of {setting}, which could not be \
+                 read; give it with --set {setting}=<value>"
+            ),
+            (ValueError::NotAStep { .. }, _) => write!(f, "{e} (--round sends the nearest)"),
+            (ValueError::LimitNotKnown { register, setting }, Some((description, unit))) => write!(
+                f,
+                "{register}: its limit is a percentage of {setting} ({description}, in {unit}), \
+                 which is not a register of the drive; give it with --set {setting}=<value>"
+            ),
+            (ValueError::LimitNotKnown { register, setting }, None) => write!(
+                f,
+                "{register}: its limit is a percentage of {setting}, which could not be \
+                 read; give it with --set {setting}=<value>"
+            ),
+            (other, _) => write!(f, "{other}"),
+        }
+    }
+}
+
+impl std::error::Error for ConversionError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&*self.error)
+    }
+}
+
+/// Why a register of a drive cannot be read on a link.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum Unreadable {
+    /// A broadcast-only register.
+    #[error("{0} is broadcast-only: it can be written to slave 0, never read")]
+    BroadcastOnly(String),
+    /// A write-only register.
+    #[error("{0} is write-only")]
+    WriteOnly(String),
+    /// A register of other transports only.
+    #[error("{register} exists only on {transports}, not on this link ({link})")]
+    NotOnLink {
+        /// The register, as the manual names it.
+        register: String,
+        /// The transports it exists on.
+        transports: String,
+        /// This link's transport kind.
+        link: &'static str,
+    },
+}
+
+/// Why a register has no value from a read; each names the register or says what the drive
+/// or the link answered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ReadError {
+    /// Not readable on this link.
+    #[error(transparent)]
+    Unreadable(#[from] Unreadable),
+    /// Its address moves with a setting that could not be read: nothing is sent to a guessed
+    /// address.
+    #[error(
+        "{register}: its address depends on {setting}, which could not be read; give it with --set {setting}=<value>"
+    )]
+    AddressUnknown {
+        /// The register, as the manual names it.
+        register: String,
+        /// The setting its address depends on.
+        setting: String,
+    },
+    /// The request failed: the drive's exception, a timeout, a refusal to send.
+    #[error("{message}")]
+    Bus {
+        /// What happened, as the runtime says it.
+        message: String,
+        /// The exception code the drive answered with, if it answered with one.
+        exception: Option<u8>,
+        /// Whether a request was sent.
+        sent: bool,
+    },
+    /// The planner read nothing for it (the drive refused the request it was in).
+    #[error("not read")]
+    NotRead,
+}
+
+impl ReadError {
+    fn bus(e: &drivemap_runtime::Error) -> ReadError {
+        ReadError::Bus {
+            message: e.to_string(),
+            exception: e.exception().map(|x| x.code),
+            sent: !e.is_refusal(),
+        }
+    }
+
+    /// As a [`Failure`]: the message, the exception code and whether a request was sent.
+    pub fn failure(&self) -> Failure {
+        match self {
+            ReadError::Bus {
+                message,
+                exception,
+                sent,
+            } => Failure {
+                message: message.clone(),
+                exception: *exception,
+                sent: *sent,
+            },
+            other => Failure {
+                message: other.to_string(),
+                exception: None,
+                sent: false,
+            },
+        }
+    }
+}
+
+/// Why the session cannot do what was asked.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// The link cannot be opened.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// The read planner refuses the registers asked for.
+    #[error(transparent)]
+    Plan(#[from] drivemap_runtime::planner::PlanError),
 }
 
 /// Why a planned register has no value.
@@ -312,7 +529,7 @@ pub struct Polling {
     poller: Poller,
     /// Per register asked for: its index among the planned registers and its width, or why it
     /// is not read.
-    slots: Vec<Result<(usize, Width), String>>,
+    slots: Vec<Result<(usize, Width), ReadError>>,
 }
 
 /// A connected drive with its settings.
@@ -337,7 +554,7 @@ pub struct Session<'d> {
 
 impl<'d> Session<'d> {
     /// Connects to the drive described by `drive`.
-    pub fn open(drive: &'d Drive, link: &LinkArgs, settings: LiveSettings) -> Result<Self, String> {
+    pub fn open(drive: &'d Drive, link: &Link, settings: LiveSettings) -> Result<Self, LinkError> {
         Self::open_with(drive, leak_profile(drive), link, settings)
     }
 
@@ -346,9 +563,9 @@ impl<'d> Session<'d> {
     pub fn open_with(
         drive: &'d Drive,
         profile: &'static Profile,
-        link: &LinkArgs,
+        link: &Link,
         settings: LiveSettings,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, LinkError> {
         link.check_transport(drive)?;
         let (client, text) = link.connect(drive, profile)?;
         let options = *client.options();
@@ -368,17 +585,13 @@ impl<'d> Session<'d> {
 
     /// The address of `r` on this link under the current settings, or why it cannot be known
     /// (it moves with a setting that could not be read: nothing is sent to a guessed address).
-    pub fn address(&self, r: &Register) -> Result<u16, String> {
+    pub fn address(&self, r: &Register) -> Result<u16, ReadError> {
         self.drive
             .register_plan(r)
             .locate(&self.settings.view(self.drive), self.kind)
-            .map_err(|e| {
-                format!(
-                    "{}: its address depends on {}, which could not be read; give it with --set {}=<value>",
-                    describe::register(r),
-                    e.setting,
-                    e.setting
-                )
+            .map_err(|e| ReadError::AddressUnknown {
+                register: describe::register(r),
+                setting: e.setting.to_string(),
             })
     }
 
@@ -480,16 +693,16 @@ impl<'d> Session<'d> {
 
     /// Reads the raw value of `r` at its address on this link: its word, or a 32-bit pair's
     /// two words in one request, joined in the map's order.
-    pub fn read_raw(&mut self, r: &Register) -> Result<u32, String> {
+    pub fn read_raw(&mut self, r: &Register) -> Result<u32, ReadError> {
         if let Some(why) = self.unreadable(r) {
-            return Err(why);
+            return Err(why.into());
         }
         let address = self.address(r)?;
         let info = self.drive.register_plan(r).info;
         let mut w = [0u16; 2];
         let words = &mut w[..usize::from(info.width.count())];
         self.read_into(info.table, address, words)
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| ReadError::bus(&e))?;
         Ok(info.width.join(words))
     }
 
@@ -506,21 +719,17 @@ impl<'d> Session<'d> {
     }
 
     /// Why a register cannot be read on this link, if it cannot.
-    pub fn unreadable(&self, r: &Register) -> Option<String> {
+    pub fn unreadable(&self, r: &Register) -> Option<Unreadable> {
         if r.broadcast {
-            Some(format!(
-                "{} is broadcast-only: it can be written to slave 0, never read",
-                describe::register(r)
-            ))
+            Some(Unreadable::BroadcastOnly(describe::register(r)))
         } else if !r.readable() {
-            Some(format!("{} is write-only", describe::register(r)))
+            Some(Unreadable::WriteOnly(describe::register(r)))
         } else if !on_transport(self.drive, r, self.kind) {
-            Some(format!(
-                "{} exists only on {}, not on this link ({})",
-                describe::register(r),
-                describe::transports(self.drive.register_plan(r).transports),
-                self.kind.name()
-            ))
+            Some(Unreadable::NotOnLink {
+                register: describe::register(r),
+                transports: describe::transports(self.drive.register_plan(r).transports),
+                link: self.kind.name(),
+            })
         } else {
             None
         }
@@ -529,7 +738,7 @@ impl<'d> Session<'d> {
     /// Plans the reads of `regs` with the runtime's read planner: the requests that read them in
     /// the least bus time, bridging only addresses of readable registers of the map, at most
     /// `max_read` per request. Registers this link cannot read get their reason instead.
-    pub fn plan(&self, regs: &[&Register]) -> Result<Polling, String> {
+    pub fn plan(&self, regs: &[&Register]) -> Result<Polling, SessionError> {
         let drive = self.drive;
         let infos: Vec<RegisterInfo> = drive
             .registers
@@ -547,7 +756,10 @@ impl<'d> Session<'d> {
         let mut wanted = Vec::new();
         let mut slots = Vec::new();
         for r in regs {
-            match self.unreadable(r).map_or_else(|| self.address(r), Err) {
+            match self
+                .unreadable(r)
+                .map_or_else(|| self.address(r), |why| Err(why.into()))
+            {
                 Err(why) => slots.push(Err(why)),
                 Ok(address) => {
                     let info = drive.register_plan(r).info;
@@ -557,9 +769,8 @@ impl<'d> Session<'d> {
             }
         }
         let profile = self.client.profile();
-        let poller = Poller::new(profile, &infos, wanted)
-            .map_err(|e| e.to_string())?
-            .with_model(BusModel::new(profile, self.line));
+        let poller =
+            Poller::new(profile, &infos, wanted)?.with_model(BusModel::new(profile, self.line));
         Ok(Polling { poller, slots })
     }
 
@@ -567,53 +778,43 @@ impl<'d> Session<'d> {
     /// joined) or the error of each, in the order the plan was made for. A request that the
     /// drive refuses with 02h or 21h is split so each register gets its own value or error;
     /// a pair is never split.
-    pub fn poll(&mut self, plan: &mut Polling) -> Vec<Result<u32, String>> {
-        plan.poller.poll(&mut self.client, self.slave);
-        plan.slots
-            .iter()
-            .map(|slot| match slot {
-                Err(why) => Err(why.clone()),
-                Ok((i, width)) => match plan.poller.raw(*i, *width) {
-                    Some(Ok(w)) => Ok(w),
-                    Some(Err(e)) => Err(e.to_string()),
-                    None => Err("not read".into()),
-                },
-            })
-            .collect()
+    pub fn poll(&mut self, plan: &mut Polling) -> Vec<Result<u32, ReadError>> {
+        self.poll_counted(plan).0
     }
 
-    /// [`Session::poll`] keeping the exception code of each refusal, and the requests sent.
-    pub fn poll_detailed(&mut self, plan: &mut Polling) -> (Vec<Result<u32, Failure>>, u32) {
+    /// [`Session::poll`], and the number of requests sent.
+    pub fn poll_counted(&mut self, plan: &mut Polling) -> (Vec<Result<u32, ReadError>>, u32) {
         let stats = plan.poller.poll(&mut self.client, self.slave);
         let words = plan
             .slots
             .iter()
             .map(|slot| match slot {
-                Err(why) => Err(Failure {
-                    message: why.clone(),
-                    exception: None,
-                    sent: false,
-                }),
+                Err(why) => Err(why.clone()),
                 Ok((i, width)) => match plan.poller.raw(*i, *width) {
                     Some(Ok(w)) => Ok(w),
-                    Some(Err(e)) => Err(Failure {
-                        message: e.to_string(),
-                        exception: e.exception().map(|x| x.code),
-                        sent: !e.is_refusal(),
-                    }),
-                    None => Err(Failure {
-                        message: "not read".into(),
-                        exception: None,
-                        sent: false,
-                    }),
+                    Some(Err(e)) => Err(ReadError::bus(e)),
+                    None => Err(ReadError::NotRead),
                 },
             })
             .collect();
         (words, stats.requests)
     }
 
+    /// [`Session::poll`] keeping the exception code of each refusal, and the requests sent.
+    pub fn poll_detailed(&mut self, plan: &mut Polling) -> (Vec<Result<u32, Failure>>, u32) {
+        let (words, requests) = self.poll_counted(plan);
+        let words = words
+            .into_iter()
+            .map(|w| w.map_err(|e| e.failure()))
+            .collect();
+        (words, requests)
+    }
+
     /// Reads the raw values of `regs` once, planned (see [`Session::plan`]).
-    pub fn read_words(&mut self, regs: &[&Register]) -> Result<Vec<Result<u32, String>>, String> {
+    pub fn read_words(
+        &mut self,
+        regs: &[&Register],
+    ) -> Result<Vec<Result<u32, ReadError>>, SessionError> {
         let mut plan = self.plan(regs)?;
         Ok(self.poll(&mut plan))
     }
@@ -625,7 +826,7 @@ impl<'d> Session<'d> {
     }
 
     /// Decodes a raw value of `r`.
-    pub fn decode(&self, r: &Register, raw: u32) -> Result<Value, String> {
+    pub fn decode(&self, r: &Register, raw: u32) -> Result<Value, ConversionError> {
         codec::decode(self.drive, r, raw, &self.settings).map_err(|e| value_error(self.drive, &e))
     }
 }

@@ -1,0 +1,72 @@
+//! What a command fails with: the typed errors of the libraries it calls (the live session, the
+//! map loader, git), each saying where, and the command's own refusals.
+
+use std::io;
+
+use drivemap_live::LinkError;
+use drivemap_live::session::{
+    ConversionError, ReadError, SessionError, SettingError, UnknownNames,
+};
+
+use crate::git::GitError;
+use crate::maps::MapError;
+
+/// Why a command stopped (exit status 2); printed after `drivemap: `.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The drive's link cannot be opened.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// A `--variant` or `--set` is not one of the map.
+    #[error(transparent)]
+    Setting(#[from] SettingError),
+    /// Register names that are not the drive's.
+    #[error(transparent)]
+    Names(#[from] UnknownNames),
+    /// The session cannot plan the reads.
+    #[error(transparent)]
+    Session(#[from] SessionError),
+    /// A register could not be read.
+    #[error(transparent)]
+    Read(#[from] ReadError),
+    /// A value does not convert.
+    #[error(transparent)]
+    Value(#[from] ConversionError),
+    /// A map cannot be found or does not validate.
+    #[error(transparent)]
+    Map(#[from] MapError),
+    /// Git could not give the maps of a revision.
+    #[error(transparent)]
+    Git(#[from] GitError),
+    /// Reading or writing a file or a stream failed.
+    #[error("{what}: {source}")]
+    Io {
+        /// The file or stream and what was done with it.
+        what: String,
+        /// The operating system's reason.
+        source: io::Error,
+    },
+    /// The command refuses, in its own words (what was given and why it cannot be done).
+    #[error("{0}")]
+    Refused(String),
+}
+
+impl Error {
+    /// An I/O error on `what` ("writing standard output", a file's path).
+    pub fn io(what: impl std::fmt::Display) -> impl FnOnce(io::Error) -> Error {
+        let what = what.to_string();
+        move |source| Error::Io { what, source }
+    }
+}
+
+impl From<String> for Error {
+    fn from(message: String) -> Error {
+        Error::Refused(message)
+    }
+}
+
+impl From<&str> for Error {
+    fn from(message: &str) -> Error {
+        Error::Refused(message.to_owned())
+    }
+}
