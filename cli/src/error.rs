@@ -46,6 +46,18 @@ pub enum Error {
         /// The operating system's reason.
         source: io::Error,
     },
+    /// JSON could not be written.
+    #[error("writing JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    /// CSV could not be written.
+    #[error("writing CSV: {0}")]
+    Csv(#[from] csv::Error),
+    /// Text that should be UTF-8 is not.
+    #[error("output is not UTF-8: {0}")]
+    Utf8(#[from] std::string::FromUtf8Error),
+    /// The simulator refuses its options.
+    #[error(transparent)]
+    Sim(#[from] drivemap_sim::SimError),
     /// The command refuses, in its own words (what was given and why it cannot be done).
     #[error("{0}")]
     Refused(String),

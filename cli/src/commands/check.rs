@@ -155,8 +155,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     let files: Vec<Checked> = if !args.files.is_empty() {
         args.files.iter().map(from_file).collect()
     } else if let Some(dir) = &args.dir.maps {
-        let found =
-            drivemap_codegen::find_maps(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let found = drivemap_codegen::find_maps(dir).map_err(Error::io(dir.display()))?;
         if found.is_empty() {
             return Err(Error::Refused(format!(
                 "{}: no maps to check (no *.yaml or *.yml file in the directory)",

@@ -93,7 +93,7 @@ pub fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<CoverageRepor
 
 /// The manuals a map file names itself (a variant map's list before its base's is merged in).
 fn own_manuals(path: &std::path::Path) -> Result<Vec<String>, Error> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text = std::fs::read_to_string(path).map_err(Error::io(path.display()))?;
     let name: std::sync::Arc<str> = path.display().to_string().into();
     let tree = drivemap_codegen::source::parse(&name, &text).map_err(|d| d.to_string())?;
     let list = tree.get("drive").and_then(|d| d.get("manuals"));
@@ -250,13 +250,13 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         let old = std::fs::read_to_string(doc).unwrap_or_default();
         let new = splice(&old, &markdown(&report));
         if new != old {
-            std::fs::write(doc, new).map_err(|e| format!("{}: {e}", doc.display()))?;
+            std::fs::write(doc, new).map_err(Error::io(doc.display()))?;
         }
         outln!("{}: {}", doc.display(), totals(&report));
         return Ok(ExitCode::SUCCESS);
     }
     if let Some(doc) = &args.check {
-        let old = std::fs::read_to_string(doc).map_err(|e| format!("{}: {e}", doc.display()))?;
+        let old = std::fs::read_to_string(doc).map_err(Error::io(doc.display()))?;
         if splice(&old, &markdown(&report)) != old {
             eprintln!(
                 "{}: the generated coverage section differs from `drivemap coverage {}`; run it with --update {}",

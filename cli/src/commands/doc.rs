@@ -71,7 +71,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     }
     match &args.output {
         Some(out) => {
-            std::fs::write(out, &text).map_err(|e| format!("{}: {e}", out.display()))?;
+            std::fs::write(out, &text).map_err(Error::io(out.display()))?;
             eprintln!(
                 "wrote {}: {} registers, {} lines",
                 out.display(),
@@ -103,10 +103,10 @@ fn write_docs(
     }
     let write = |file: PathBuf, text: &str| -> Result<PathBuf, Error> {
         if let Some(dir) = file.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            std::fs::create_dir_all(dir).map_err(Error::io(dir.display()))?;
         }
         if std::fs::read_to_string(&file).ok().as_deref() != Some(text) {
-            std::fs::write(&file, text).map_err(|e| format!("{}: {e}", file.display()))?;
+            std::fs::write(&file, text).map_err(Error::io(file.display()))?;
         }
         Ok(file)
     };

@@ -129,10 +129,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             );
         }
         let json = drivemap_codegen::export::export(&drive);
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?
-        );
+        outln!("{}", serde_json::to_string_pretty(&json)?);
         return Ok(ExitCode::SUCCESS);
     }
     if args.link_given() != 1 {

@@ -25,7 +25,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     let mut failed = false;
     let mut outdated = false;
     for path in &args.files {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path).map_err(Error::io(path.display()))?;
         let name: Arc<str> = drivemap_codegen::load::display_name(path);
         let migrated = match schema::migrate(&name, &text) {
             Ok(m) => m,
@@ -57,7 +57,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             migrated.rewritten.len()
         );
         if !args.check {
-            std::fs::write(path, &migrated.text).map_err(|e| format!("{}: {e}", path.display()))?;
+            std::fs::write(path, &migrated.text).map_err(Error::io(path.display()))?;
         }
     }
     Ok(if failed || (args.check && outdated) {

@@ -98,10 +98,10 @@ pub struct Finding {
 pub fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let report = run_probe(&drive, &args.target)?;
-    let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    let json = serde_json::to_string_pretty(&report)?;
     if let Some(path) = &args.report {
         std::fs::write(path, format!("{json}\n"))
-            .map_err(|e| format!("writing {}: {e}", path.display()))?;
+            .map_err(Error::io(format!("writing {}", path.display())))?;
     }
     match args.format {
         Format::Table => out!("{}", summary(&report)),
@@ -509,7 +509,6 @@ pub fn summary(r: &Report) -> String {
 /// drive and slave.
 pub fn csv_rows(r: &Report) -> Result<String, Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    let err = |e: csv::Error| e.to_string();
     w.write_record([
         "drive",
         "slave",
@@ -523,8 +522,7 @@ pub fn csv_rows(r: &Report) -> Result<String, Error> {
         "exception",
         "detail",
         "source",
-    ])
-    .map_err(err)?;
+    ])?;
     for (result, f) in r
         .disagreements
         .iter()
@@ -544,9 +542,10 @@ pub fn csv_rows(r: &Report) -> Result<String, Error> {
             f.exception.map(|v| format!("{v:02X}h")).unwrap_or_default(),
             f.detail.clone(),
             f.source.clone().unwrap_or_default(),
-        ])
-        .map_err(err)?;
+        ])?;
     }
-    let bytes = w.into_inner().map_err(|e| e.to_string())?;
-    Ok(String::from_utf8(bytes).map_err(|e| e.to_string())?)
+    let bytes = w
+        .into_inner()
+        .map_err(|e| csv::Error::from(e.into_error()))?;
+    Ok(String::from_utf8(bytes)?)
 }

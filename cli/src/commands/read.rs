@@ -48,7 +48,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         let mut out = std::io::stdout().lock();
         Emitter::new(args.format)
             .write(&mut out, &records, false)
-            .map_err(|e| format!("writing standard output: {e}"))?;
+            .map_err(Error::io("writing standard output"))?;
         return Ok(if records.iter().any(|r| r.status != "ok") {
             ExitCode::FAILURE
         } else {

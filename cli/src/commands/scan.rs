@@ -531,10 +531,7 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
     };
     match args.format {
         Format::Table => out!("{}", table(&report)),
-        Format::Json => outln!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
-        ),
+        Format::Json => outln!("{}", serde_json::to_string_pretty(&report)?),
         Format::Csv => out!("{}", csv_rows(&report)?),
     }
     Ok(if report.found.is_empty() {
@@ -593,7 +590,6 @@ fn table(r: &Report) -> String {
 
 fn csv_rows(r: &Report) -> Result<String, CliError> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    let err = |e: csv::Error| e.to_string();
     w.write_record([
         "slave",
         "line",
@@ -606,8 +602,7 @@ fn csv_rows(r: &Report) -> Result<String, CliError> {
         "refused",
         "unanswered",
         "tried",
-    ])
-    .map_err(err)?;
+    ])?;
     for f in &r.found {
         for (i, m) in f.maps.iter().enumerate() {
             w.write_record([
@@ -622,12 +617,13 @@ fn csv_rows(r: &Report) -> Result<String, CliError> {
                 m.refused.to_string(),
                 m.unanswered.to_string(),
                 m.tried.to_string(),
-            ])
-            .map_err(err)?;
+            ])?;
         }
     }
-    let bytes = w.into_inner().map_err(|e| e.to_string())?;
-    Ok(String::from_utf8(bytes).map_err(|e| e.to_string())?)
+    let bytes = w
+        .into_inner()
+        .map_err(|e| csv::Error::from(e.into_error()))?;
+    Ok(String::from_utf8(bytes)?)
 }
 
 #[cfg(test)]
