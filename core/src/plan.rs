@@ -324,6 +324,39 @@ impl Scale {
     }
 }
 
+/// How many rows of `plans` are writable: the length of their [`write_rules`].
+pub const fn writable_count(plans: &[RegisterPlan]) -> usize {
+    let (mut i, mut n) = (0, 0);
+    while i < plans.len() {
+        if plans[i].info.access.writable() {
+            n += 1;
+        }
+        i += 1;
+    }
+    n
+}
+
+/// The write rules of the writable rows of `plans`, in order: a profile's write table
+/// ([`crate::Profile::writes`]) derived from the drive's plan, evaluated at compile time
+/// (`static WRITES: [WriteRule; writable_count(REGISTERS)] = write_rules(REGISTERS)`). `N` must
+/// be [`writable_count`]; any other length is refused (a compile error in a constant).
+pub const fn write_rules<const N: usize>(plans: &[RegisterPlan]) -> [WriteRule; N] {
+    assert!(
+        writable_count(plans) == N,
+        "write_rules: N is not the number of writable rows"
+    );
+    let mut out = [WriteRule::rw("", 0, 0, 0); N];
+    let (mut i, mut n) = (0, 0);
+    while i < plans.len() {
+        if plans[i].info.access.writable() {
+            out[n] = plans[i].write_rule();
+            n += 1;
+        }
+        i += 1;
+    }
+    out
+}
+
 impl RegisterPlan {
     /// A register on every transport, never broadcast, writable at any time, at its printed
     /// address only; `envelope` is the union of its raw ranges (see [`RegisterPlan::envelope`]).

@@ -186,9 +186,16 @@ pub trait Enumeration: Copy + PartialEq + 'static {
     /// The code of an `Unknown` value, `None` for a listed one.
     fn unknown_code(&self) -> Option<u16>;
 
-    /// The plan's label of a listed value.
+    /// The plan's label of a listed value: found by variant (not by `==`, which compares
+    /// codes: [`code_eq!`](crate::code_eq)).
     fn label(&self) -> Option<&'static Label> {
-        let i = Self::ALL.iter().position(|v| v == self)?;
+        if self.unknown_code().is_some() {
+            return None;
+        }
+        let variant = core::mem::discriminant(self);
+        let i = Self::ALL
+            .iter()
+            .position(|v| core::mem::discriminant(v) == variant)?;
         Self::LABELS.get(i)
     }
 
@@ -204,6 +211,26 @@ pub trait Enumeration: Copy + PartialEq + 'static {
             None => write!(f, "unknown code {}", self.code()),
         }
     }
+}
+
+/// `PartialEq`, `Eq` and `Hash` of an [`Enumeration`] by its code, as the drive sees it:
+/// `Unknown(0)` (a code read from the device) equals the listed variant whose code is 0. The
+/// generated enumerations use it in place of the derived, variant-by-variant comparison.
+#[macro_export]
+macro_rules! code_eq {
+    ($t:ty) => {
+        impl ::core::cmp::PartialEq for $t {
+            fn eq(&self, other: &Self) -> bool {
+                $crate::register::Code::code(self) == $crate::register::Code::code(other)
+            }
+        }
+        impl ::core::cmp::Eq for $t {}
+        impl ::core::hash::Hash for $t {
+            fn hash<H: ::core::hash::Hasher>(&self, state: &mut H) {
+                ::core::hash::Hash::hash(&$crate::register::Code::code(self), state)
+            }
+        }
+    };
 }
 
 impl<T: Enumeration> Code for T {
