@@ -59,6 +59,8 @@ pub enum Command {
     Poll(commands::poll::Args),
     /// Read every readable register of a drive against its map (never writes); report what disagrees; exit 1 if anything does.
     Probe(commands::probe::Args),
+    /// Poll drives into Prometheus (/metrics) and MQTT / Home Assistant; commands over MQTT through the write gate.
+    Bridge(commands::bridge::Args),
     /// Find the slaves on a line: which addresses answer, at which baud rate and parity, and which maps fit them.
     Scan(commands::scan::Args),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
@@ -90,6 +92,7 @@ pub fn main() -> ExitCode {
         Command::Poll(a) => commands::poll::run(a),
         Command::Probe(a) => commands::probe::run(a),
         Command::Scan(a) => commands::scan::run(a),
+        Command::Bridge(a) => commands::bridge::run(a),
         Command::Completions(a) => {
             use clap::CommandFactory;
             let mut cmd = Cli::command();

@@ -1,3 +1,4 @@
+pub mod bridge;
 pub mod check;
 pub mod coverage;
 pub mod demo;

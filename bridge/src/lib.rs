@@ -1,0 +1,178 @@
+//! `drivemap bridge`: drives polled by their maps into the tools a plant already runs.
+//!
+//! - one blocking task per link ([`link::run`]), each polling its drives with the runtime's read
+//!   planner every period, reconnecting with the client's back-off, reading what conversions
+//!   depend on with every cycle and planning again when it changes;
+//! - Prometheus: `/metrics` in the OpenMetrics text format ([`metrics`]);
+//! - MQTT: state topics, Home Assistant discovery, command topics through the write gate and
+//!   the drive trait, off unless allowed ([`mqtt`]).
+//!
+//! Bounded: a scrape reads atomics; MQTT updates go through a bounded queue offered without
+//! waiting; commands through a bounded queue per link. SIGTERM (or SIGINT) stops every link
+//! after the cycle in flight, publishes the drives and the bridge offline, and returns.
+
+pub mod link;
+pub mod metrics;
+pub mod mqtt;
+pub mod points;
+
+use std::net::SocketAddr;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+pub use link::{Connect, DriveSpec, LinkSpec};
+
+/// What the bridge serves.
+pub struct Options {
+    /// Time between the starts of two poll cycles of a link.
+    pub period: Duration,
+    /// Where `/metrics` listens (none: no Prometheus endpoint).
+    pub metrics: Option<SocketAddr>,
+    /// The broker (none: no MQTT).
+    pub mqtt: Option<mqtt::Options>,
+}
+
+/// Capacity of the queue of updates to the MQTT side.
+pub const UPDATE_QUEUE: usize = 4096;
+/// Capacity of each link's command queue.
+pub const COMMAND_QUEUE: usize = 16;
+
+/// Runs the bridge until SIGTERM or SIGINT, or until `stop` is set.
+pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Result<(), String> {
+    if links.is_empty() {
+        return Err("no drives to bridge".into());
+    }
+    // The points of every drive, for the metric families and the MQTT side.
+    let mut infos = Vec::new();
+    let mut all_points = Vec::new();
+    for (li, l) in links.iter().enumerate() {
+        for d in &l.drives {
+            let (regs, _) = link::choose(d, l.kind)?;
+            let pts = points::points(d.drive, &regs, l.kind);
+            all_points.extend(pts.iter().cloned());
+            infos.push(mqtt::DriveInfo {
+                name: d.name.clone(),
+                drive: d.drive,
+                slave: d.slave,
+                kind: l.kind,
+                link: li,
+                points: pts,
+            });
+        }
+    }
+    let metrics = Arc::new(metrics::Metrics::new(&all_points));
+    drop(all_points);
+    let tls = match &options.mqtt {
+        Some(m) => {
+            let (secure, _, _) = mqtt::parse_url(&m.url)?;
+            match (&m.ca, secure) {
+                (Some(ca), true) => Some(mqtt::tls_config(ca)?),
+                (None, true) => {
+                    return Err(format!(
+                        "--mqtt {}: TLS needs the CA certificate the broker's chains to: --mqtt-ca FILE",
+                        m.url
+                    ));
+                }
+                (Some(_), false) => {
+                    return Err(format!(
+                        "--mqtt-ca given for {}, which is not TLS: use mqtts://",
+                        m.url
+                    ));
+                }
+                (None, false) => None,
+            }
+        }
+        None => None,
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .max_blocking_threads(links.len() + 4)
+        .enable_all()
+        .build()
+        .map_err(|e| format!("cannot start the runtime: {e}"))?;
+    runtime.block_on(async move {
+        let listener = match options.metrics {
+            Some(addr) => {
+                let l = metrics::bind(addr).await?;
+                eprintln!(
+                    "bridge: metrics at http://{}/metrics",
+                    l.local_addr().map(|a| a.to_string()).unwrap_or_default()
+                );
+                Some(l)
+            }
+            None => None,
+        };
+        let server = listener
+            .map(|l| tokio::spawn(metrics::serve(l, Arc::clone(&metrics), Arc::clone(&stop))));
+        let (tx, rx) = tokio::sync::mpsc::channel(UPDATE_QUEUE);
+        let updates = options.mqtt.as_ref().map(|_| tx);
+        let mut senders = Vec::new();
+        let mut republish = Vec::new();
+        let mut tasks = Vec::new();
+        let mut first = 0;
+        for l in links {
+            let (ctx, crx) = std::sync::mpsc::sync_channel(COMMAND_QUEUE);
+            senders.push(ctx);
+            let again = Arc::new(AtomicBool::new(false));
+            republish.push(Arc::clone(&again));
+            let n = l.drives.len();
+            eprintln!(
+                "bridge: polling {n} drive(s) on {} every {} ms",
+                l.name,
+                options.period.as_millis()
+            );
+            let (m, u, s, p) = (
+                Arc::clone(&metrics),
+                updates.clone(),
+                Arc::clone(&stop),
+                options.period,
+            );
+            tasks.push(tokio::task::spawn_blocking(move || {
+                link::run(l, first, p, m, u, crx, s, again)
+            }));
+            first += n;
+        }
+        drop(updates);
+        let mqtt_stop = Arc::new(AtomicBool::new(false));
+        let mqtt_task = options.mqtt.map(|m| {
+            tokio::spawn(mqtt::run(
+                m,
+                infos,
+                rx,
+                senders,
+                Arc::clone(&metrics),
+                Arc::clone(&mqtt_stop),
+                republish,
+                tls,
+            ))
+        });
+        let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+            .map_err(|e| format!("cannot watch SIGTERM: {e}"))?;
+        loop {
+            tokio::select! {
+                _ = term.recv() => break,
+                _ = tokio::signal::ctrl_c() => break,
+                _ = tokio::time::sleep(Duration::from_millis(100)) => {
+                    if stop.load(Ordering::Relaxed) { break; }
+                }
+            }
+        }
+        eprintln!("bridge: stopping after the cycle in flight");
+        stop.store(true, Ordering::Relaxed);
+        for t in tasks {
+            let _ = t.await;
+        }
+        mqtt_stop.store(true, Ordering::Relaxed);
+        if let Some(t) = mqtt_task {
+            let _ = tokio::time::timeout(Duration::from_secs(5), t).await;
+        }
+        if let Some(s) = server {
+            let _ = tokio::time::timeout(Duration::from_secs(1), s).await;
+        }
+        eprintln!("bridge: stopped");
+        Ok::<(), String>(())
+    })?;
+    runtime.shutdown_timeout(Duration::from_secs(1));
+    Ok(())
+}

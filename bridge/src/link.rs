@@ -1,0 +1,878 @@
+//! One link (a serial line, a gateway, a drive's own TCP port) and the drives on it, polled by
+//! the runtime's read planner in one blocking task: every drive each period, commands from MQTT
+//! between cycles (never during one), values into the metrics and onto the MQTT queue.
+//!
+//! Nothing here waits for Prometheus or the broker: the metrics are atomics read by scrapes,
+//! and MQTT updates are offered to a bounded queue with `try_send` (an update that does not fit
+//! is dropped and counted, and the value is offered again at the next cycle, since it is only
+//! marked published once queued).
+
+use std::cell::RefCell;
+use std::collections::BTreeSet;
+use std::io;
+use std::rc::Rc;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use drivemap_codegen::Drive;
+use drivemap_codegen::describe;
+use drivemap_codegen::ir::Register;
+use drivemap_codegen::lower::Quantity;
+use drivemap_live::codec::{self, InputError, Value};
+use drivemap_live::intern::intern;
+use drivemap_live::{LiveSettings, lookup};
+use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::gate;
+use drivemap_runtime::plan::{Conversion, Dependency};
+use drivemap_runtime::planner::Poller;
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::transport::Transport;
+use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
+use drivemap_runtime::{Client, ClientOptions, Error, RegisterInfo, Rounding, Table, Width};
+
+use crate::metrics::{Labels, Metrics};
+use crate::points::{self, Point, PointKind};
+
+/// A new connection of a link's transport.
+pub type Connect = Box<dyn FnMut() -> Result<Box<dyn Transport>, String> + Send>;
+
+/// A drive on a link, as configured.
+pub struct DriveSpec {
+    /// Its map (loaded once, kept for the life of the process).
+    pub drive: &'static Drive,
+    /// Slave address.
+    pub slave: u8,
+    /// A name unique in the bridge, used in topics and labels (`yaskawa-v7-1`).
+    pub name: String,
+    /// The client's timing for this drive on this link.
+    pub options: ClientOptions,
+    /// Variants and values given instead of read.
+    pub settings: LiveSettings,
+    /// Register ids whose value was given (not read from the drive).
+    pub fixed: BTreeSet<String>,
+    /// Registers to poll by name; empty: every role register and every read-only register.
+    pub registers: Vec<String>,
+}
+
+/// A link, as configured.
+pub struct LinkSpec {
+    /// How it is shown (`rtu-tcp 127.0.0.1:5020`), the `link` label.
+    pub name: String,
+    /// Its transport kind (addresses and framing).
+    pub kind: TransportKind,
+    /// The serial line, for the bus-time model.
+    pub line: SerialConfig,
+    /// Opens the transport.
+    pub connect: Connect,
+    /// The drives on it.
+    pub drives: Vec<DriveSpec>,
+}
+
+/// A command for a drive, from MQTT.
+#[derive(Debug, Clone)]
+pub struct Command {
+    /// The drive's index in the bridge.
+    pub drive: usize,
+    /// What to do.
+    pub action: Action,
+    /// The topic it came on.
+    pub topic: String,
+    /// Its payload, as text.
+    pub payload: String,
+}
+
+/// What a command does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Action {
+    /// Write a register (by id, parameter or printed name) in engineering units.
+    Set { register: String },
+    /// The drive trait's run.
+    Run,
+    /// The drive trait's stop.
+    Stop,
+    /// The drive trait's frequency reference (Hz).
+    Reference,
+    /// The drive trait's fault reset.
+    FaultReset,
+}
+
+/// What the link tells the MQTT side.
+#[derive(Debug, Clone)]
+pub enum Update {
+    /// New values of points (index among the drive's points, payload).
+    State {
+        drive: usize,
+        values: Vec<(usize, String)>,
+    },
+    /// The drive answered (true) or stopped answering (false).
+    Availability { drive: usize, online: bool },
+    /// A command's outcome: `Ok(what was done)` or `Err(why nothing was)`.
+    Outcome {
+        command: Command,
+        result: Result<String, String>,
+    },
+}
+
+/// Offers an update to the MQTT side without waiting.
+pub type Updates = Option<tokio::sync::mpsc::Sender<Update>>;
+
+/// One transport shared by the clients of the drives of a link (used by one thread at a time).
+#[derive(Clone)]
+struct Shared {
+    inner: Rc<RefCell<Box<dyn Transport>>>,
+    kind: TransportKind,
+}
+
+impl Transport for Shared {
+    fn kind(&self) -> TransportKind {
+        self.kind
+    }
+    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
+        self.inner.borrow_mut().send(frame)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        self.inner.borrow_mut().recv(buf, deadline)
+    }
+    fn discard_input(&mut self) -> io::Result<()> {
+        self.inner.borrow_mut().discard_input()
+    }
+    fn reconnect(&mut self) -> io::Result<()> {
+        self.inner.borrow_mut().reconnect()
+    }
+    fn inter_char_timeout(&self) -> Option<Duration> {
+        self.inner.borrow().inter_char_timeout()
+    }
+}
+
+/// The planned reads of a drive.
+struct Plan {
+    poller: Poller,
+    /// Per polled register: its index among the wanted and its width, or why it is not read.
+    slots: Vec<Result<(usize, Width), String>>,
+}
+
+/// A drive being polled.
+pub struct Polled {
+    /// Index in the bridge.
+    pub index: usize,
+    spec: DriveSpec,
+    client: Client<Shared>,
+    kind: TransportKind,
+    settings: LiveSettings,
+    regs: Vec<&'static Register>,
+    /// Indices in `regs` of what conversions and addresses depend on: selectors, then references.
+    deps: Vec<usize>,
+    /// The points published.
+    pub points: Vec<Point>,
+    base: Labels,
+    plan: Option<Plan>,
+    /// Last value given to MQTT per point.
+    published: Vec<Option<String>>,
+    /// The info-style label set in force per point.
+    info: Vec<Option<Labels>>,
+    online: Option<bool>,
+}
+
+/// The registers polled for `spec` on `kind`, and the indices of the dependencies among them.
+pub fn choose(
+    spec: &DriveSpec,
+    kind: TransportKind,
+) -> Result<(Vec<&'static Register>, Vec<usize>), String> {
+    let drive = spec.drive;
+    let on = |r: &Register| drive.register_plan(r).transports.contains(kind);
+    let readable = |r: &Register| r.readable() && !r.broadcast && on(r);
+    let mut regs: Vec<&'static Register> = Vec::new();
+    let add = |r: &'static Register, regs: &mut Vec<&'static Register>| {
+        if !regs.iter().any(|x| x.def.id == r.def.id) {
+            regs.push(r);
+        }
+    };
+    if spec.registers.is_empty() {
+        for r in points::role_registers(drive, kind) {
+            if readable(r) {
+                add(r, &mut regs);
+            }
+        }
+        for r in &drive.registers {
+            if readable(r) && !r.writable() {
+                add(r, &mut regs);
+            }
+        }
+    } else {
+        let mut errors = Vec::new();
+        for n in &spec.registers {
+            match lookup::find(drive, n) {
+                Ok(r) if readable(r) => add(r, &mut regs),
+                Ok(r) => errors.push(format!(
+                    "{}: {} cannot be read on this link",
+                    spec.name,
+                    describe::register(r)
+                )),
+                Err(e) => errors.push(format!("{}: {e}", spec.name)),
+            }
+        }
+        if !errors.is_empty() {
+            return Err(errors.join("\n"));
+        }
+    }
+    // What conversions and addresses depend on, read with every cycle: selectors first, then
+    // references, so that a change is seen at the next cycle.
+    let plan = drive.plan();
+    let mut deps = Vec::new();
+    let selectors = plan.settings.codes.iter().map(|c| c.register);
+    let references = plan.settings.quantities.iter().filter_map(|q| match q {
+        Quantity::Register(i) => Some(*i),
+        Quantity::External { .. } => None,
+    });
+    for row in selectors.chain(references) {
+        let Some(r) = drive.register_of_row(row) else {
+            continue;
+        };
+        if spec.fixed.contains(&r.def.id) || !readable(r) {
+            continue;
+        }
+        add(r, &mut regs);
+        if let Some(i) = regs.iter().position(|x| x.def.id == r.def.id) {
+            if !deps.contains(&i) {
+                deps.push(i);
+            }
+        }
+    }
+    if regs.is_empty() {
+        return Err(format!("{}: no readable registers on this link", spec.name));
+    }
+    Ok((regs, deps))
+}
+
+fn now_unix() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0)
+}
+
+/// The kind of an error, for `drivemap_bridge_errors_total{kind}`.
+pub fn error_kind(e: &Error) -> &'static str {
+    match e {
+        Error::Timeout { .. } => "timeout",
+        Error::Exception { .. } => "exception",
+        Error::Io { .. } => "io",
+        Error::Refused(_) => "refused",
+        Error::Value(_) => "value",
+        _ => "line",
+    }
+}
+
+impl Polled {
+    /// The drive as published before it is connected: its points and labels.
+    pub fn new(
+        index: usize,
+        spec: DriveSpec,
+        link: &str,
+        kind: TransportKind,
+        transport: Shared0,
+    ) -> Result<Polled, String> {
+        let (regs, deps) = choose(&spec, kind)?;
+        let points = points::points(spec.drive, &regs, kind);
+        let base: Labels = vec![
+            ("drive".into(), spec.drive.meta.id.clone()),
+            ("slave".into(), spec.slave.to_string()),
+            ("name".into(), spec.name.clone()),
+            ("link".into(), link.to_owned()),
+        ];
+        let profile = spec.drive.plan().profile;
+        let client = Client::with_options(
+            Shared {
+                inner: transport.0,
+                kind,
+            },
+            profile,
+            spec.options,
+        );
+        let n = points.len();
+        Ok(Polled {
+            index,
+            settings: spec.settings.clone(),
+            spec,
+            client,
+            kind,
+            regs,
+            deps,
+            points,
+            base,
+            plan: None,
+            published: vec![None; n],
+            info: vec![None; n],
+            online: None,
+        })
+    }
+
+    /// The drive's name.
+    pub fn name(&self) -> &str {
+        &self.spec.name
+    }
+
+    /// The drive's map.
+    pub fn drive(&self) -> &'static Drive {
+        self.spec.drive
+    }
+
+    fn address(&self, r: &Register) -> Result<u16, String> {
+        let drive = self.spec.drive;
+        drive
+            .register_plan(r)
+            .locate(&self.settings.view(drive), self.kind)
+            .map_err(|e| {
+                format!(
+                    "{}: its address depends on {}, which is not known yet",
+                    describe::register(r),
+                    e.setting
+                )
+            })
+    }
+
+    fn make_plan(&self, line: SerialConfig) -> Result<Plan, String> {
+        let drive = self.spec.drive;
+        let kind = self.kind;
+        let infos: Vec<RegisterInfo> = drive
+            .registers
+            .iter()
+            .filter(|r| drive.register_plan(r).transports.contains(kind))
+            .filter_map(|r| {
+                Some(RegisterInfo {
+                    address: self.address(r).ok()?,
+                    ..drive.register_plan(r).info
+                })
+            })
+            .collect();
+        let mut wanted = Vec::new();
+        let mut slots = Vec::new();
+        for r in &self.regs {
+            match self.address(r) {
+                Err(why) => slots.push(Err(why)),
+                Ok(address) => {
+                    let info = drive.register_plan(r).info;
+                    wanted.push((info.table, address));
+                    slots.push(Ok((wanted.len() - 1, info.width)));
+                }
+            }
+        }
+        let profile = self.client.profile();
+        let poller = Poller::new(profile, &infos, wanted)
+            .map_err(|e| e.to_string())?
+            .with_model(BusModel::new(profile, line));
+        Ok(Plan { poller, slots })
+    }
+
+    /// The modelled bus time of one cycle of the drive's plan, in seconds.
+    pub fn model_seconds(&self) -> f64 {
+        self.plan
+            .as_ref()
+            .map_or(0.0, |p| p.poller.plan_ns() as f64 / 1e9)
+    }
+
+    /// One poll of the drive: reads, settings absorbed (re-planned and read again when they
+    /// changed), values published. Returns the requests sent and their modelled bus time (ns).
+    pub fn cycle(
+        &mut self,
+        line: SerialConfig,
+        metrics: &Metrics,
+        updates: &Updates,
+    ) -> (u32, u64) {
+        let mut requests = 0;
+        let mut bus_ns = 0;
+        let link_label = self.base[3].1.clone();
+        // Selectors, then the references their scales pick, then the values: at most three
+        // rounds when settings change.
+        let mut rounds = 0;
+        let raws = loop {
+            rounds += 1;
+            if self.plan.is_none() {
+                match self.make_plan(line) {
+                    Ok(p) => self.plan = Some(p),
+                    Err(e) => {
+                        eprintln!("bridge: {}: cannot plan the reads: {e}", self.spec.name);
+                        return (0, 0);
+                    }
+                }
+            }
+            let Some(plan) = self.plan.as_mut() else {
+                return (requests, bus_ns);
+            };
+            let stats = plan.poller.poll(&mut self.client, self.spec.slave);
+            requests += stats.requests;
+            bus_ns += stats.bus_ns;
+            let raws: Vec<Result<u32, (&'static str, String)>> = plan
+                .slots
+                .iter()
+                .map(|slot| match slot {
+                    Err(why) => Err(("address", why.clone())),
+                    Ok((i, width)) => match plan.poller.raw(*i, *width) {
+                        Some(Ok(w)) => Ok(w),
+                        Some(Err(e)) => Err((error_kind(e), e.to_string())),
+                        None => Err(("line", "not read".into())),
+                    },
+                })
+                .collect();
+            let mut settings = self.settings.clone();
+            for &d in &self.deps {
+                if let Ok(raw) = raws[d] {
+                    let r = self.regs[d];
+                    settings.absorb(self.spec.drive, r.def.address, raw as u16);
+                }
+            }
+            if settings == self.settings || rounds >= 3 {
+                if settings != self.settings {
+                    self.settings = settings;
+                    self.plan = None;
+                }
+                break raws;
+            }
+            self.settings = settings;
+            self.plan = None;
+        };
+        let answered = raws.iter().any(|r| r.is_ok());
+        let mut changes = Vec::new();
+        for (pi, p) in self.points.iter().enumerate() {
+            let r = self.regs[p.slot];
+            let family = metrics.family(p);
+            let mut labels = self.base.clone();
+            labels.push(("register".into(), p.register.clone()));
+            labels.push(("param".into(), p.param.clone()));
+            if let Some(f) = &p.field {
+                labels.push(("field".into(), f.clone()));
+            }
+            let value = match &raws[p.slot] {
+                Ok(raw) => codec::decode(self.spec.drive, r, *raw, &self.settings)
+                    .map_err(|e| ("value", e.to_string())),
+                Err((kind, why)) => Err((*kind, why.clone())),
+            };
+            let value = match value {
+                Ok(v) => v,
+                Err((kind, _why)) => {
+                    // Only the first point of a register counts its error.
+                    if p.field.is_none() || matches!(p.kind, PointKind::Field { index: 0, .. }) {
+                        let mut l = self.base[..3].to_vec();
+                        l.push(("link".into(), link_label.clone()));
+                        l.push(("kind".into(), kind.into()));
+                        metrics.errors.get_or_create(&l).inc();
+                    }
+                    // A value not read is not shown as if it were current.
+                    match self.info[pi].take() {
+                        Some(old) => {
+                            family.remove(&old);
+                        }
+                        None => {
+                            family.remove(&labels);
+                        }
+                    }
+                    continue;
+                }
+            };
+            let (number, info, text) = match (&p.kind, &value) {
+                (PointKind::Number { unit }, v) => {
+                    let n = v.as_f64().unwrap_or(f64::NAN);
+                    let text = match v {
+                        Value::Quantity {
+                            value, decimals, ..
+                        } => format!("{value:.decimals$}"),
+                        other => other.as_f64().map(|x| x.to_string()).unwrap_or_default(),
+                    };
+                    (n * unit.factor, None, text)
+                }
+                (PointKind::Code, Value::Code { code, id, name }) => (
+                    1.0,
+                    Some(vec![
+                        ("code".to_owned(), code.to_string()),
+                        ("value".to_owned(), id.clone().unwrap_or_default()),
+                        ("meaning".to_owned(), name.clone().unwrap_or_default()),
+                    ]),
+                    option_text(*code, id.as_deref(), name.as_deref()),
+                ),
+                (PointKind::Field { index, width }, Value::Bits { fields, .. }) => {
+                    let Some(f) = fields.get(*index) else {
+                        continue;
+                    };
+                    if *width == 1 {
+                        (f64::from(f.value), None, f.value.to_string())
+                    } else {
+                        (
+                            1.0,
+                            Some(vec![
+                                ("code".to_owned(), f.value.to_string()),
+                                ("meaning".to_owned(), f.label.clone().unwrap_or_default()),
+                            ]),
+                            f.label.clone().unwrap_or_else(|| f.value.to_string()),
+                        )
+                    }
+                }
+                (_, v) => (v.as_f64().unwrap_or(f64::NAN), None, v.to_string()),
+            };
+            match info {
+                Some(extra) => {
+                    labels.extend(extra);
+                    if let Some(old) = self.info[pi].take() {
+                        if old != labels {
+                            family.remove(&old);
+                        }
+                    }
+                    family.get_or_create(&labels).set(1.0);
+                    self.info[pi] = Some(labels);
+                }
+                None => {
+                    family.get_or_create(&labels).set(number);
+                }
+            }
+            if self.published[pi].as_deref() != Some(text.as_str()) {
+                changes.push((pi, text));
+            }
+        }
+        let id = self.base[..3].to_vec();
+        metrics
+            .up
+            .get_or_create(&id)
+            .set(if answered { 1.0 } else { 0.0 });
+        if answered {
+            metrics.last_success.get_or_create(&id).set(now_unix());
+        }
+        if let Some(tx) = updates {
+            if self.online != Some(answered)
+                && tx
+                    .try_send(Update::Availability {
+                        drive: self.index,
+                        online: answered,
+                    })
+                    .is_ok()
+            {
+                self.online = Some(answered);
+            }
+            if !changes.is_empty() {
+                let sent: Vec<(usize, String)> = changes.clone();
+                match tx.try_send(Update::State {
+                    drive: self.index,
+                    values: sent,
+                }) {
+                    Ok(()) => {
+                        for (pi, text) in changes {
+                            self.published[pi] = Some(text);
+                        }
+                    }
+                    Err(_) => {
+                        metrics.mqtt_dropped.get_or_create(&Vec::new()).inc();
+                    }
+                }
+            }
+        }
+        (requests, bus_ns)
+    }
+
+    /// Forgets what MQTT was given, so that every value is published again (after the broker
+    /// connection was re-established).
+    pub fn republish(&mut self) {
+        self.published.iter_mut().for_each(|p| *p = None);
+        self.online = None;
+    }
+
+    /// Carries out a command through the write gate (registers) or the drive trait (run, stop,
+    /// reference, fault reset). Returns what was done, or why nothing was.
+    pub fn execute(&mut self, command: &Command) -> Result<String, String> {
+        let drive = self.spec.drive;
+        let slave = self.spec.slave;
+        let value = command.payload.trim();
+        match &command.action {
+            Action::Set { register } => self.write(register, value),
+            action => {
+                let plan = drive.plan();
+                let view = self.settings.view(drive);
+                let mut d =
+                    Vfd::from_plan(&mut self.client, slave, view, plan.registers, plan.roles);
+                let result = match action {
+                    Action::Run => d.run().map(|()| "running".to_owned()),
+                    Action::Stop => d.stop().map(|()| "stopped".to_owned()),
+                    Action::FaultReset => d.reset_fault().map(|()| "fault reset".to_owned()),
+                    Action::Reference => {
+                        let hz: f64 = value
+                            .trim_end_matches("Hz")
+                            .trim()
+                            .parse()
+                            .ok()
+                            .filter(|v: &f64| v.is_finite())
+                            .ok_or_else(|| format!("`{value}` is not a frequency in Hz"))?;
+                        d.set_reference(hz)
+                            .map(|()| format!("frequency reference {hz} Hz"))
+                    }
+                    Action::Set { .. } => unreachable!("handled above"),
+                };
+                result.map_err(|e| e.to_string())
+            }
+        }
+    }
+
+    /// Writes `value` to the register named `name`, as `drivemap write` does: parsed by the
+    /// register's conversion (range, steps, limits through other parameters read first), the
+    /// gate checked, other bit fields kept.
+    fn write(&mut self, name: &str, value: &str) -> Result<String, String> {
+        let drive = self.spec.drive;
+        let profile = drive.plan().profile;
+        let slave = self.spec.slave;
+        let kind = self.kind;
+        let r = lookup::find(drive, name).map_err(|e| e.to_string())?;
+        if value.is_empty() {
+            return Err(format!("no value given for {}", describe::register(r)));
+        }
+        let rule = gate::rule(profile, intern(r.id()))
+            .and_then(|rule| gate::check_link(profile, kind, slave, rule).map(|()| rule))
+            .map_err(|e| format!("{}: {e}", describe::register(r)))?;
+        // The limit through another parameter, read now (V7's reference against n011).
+        let mut settings = self.settings.clone();
+        if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency() {
+            if let Some(Quantity::Register(row)) =
+                drive.plan().settings.quantities.get(usize::from(s.slot))
+            {
+                if let Some(d) = drive.register_of_row(*row) {
+                    if !self.spec.fixed.contains(&d.def.id) {
+                        let raw = self.read_raw(d).map_err(|e| {
+                            format!(
+                                "reading {}, which the limit depends on: {e}",
+                                describe::register(d)
+                            )
+                        })?;
+                        settings.absorb(drive, d.def.address, raw as u16);
+                    }
+                }
+            }
+        }
+        let input_error = |e: InputError| match e {
+            InputError::Value(v) => v.to_string(),
+            InputError::Parse(m) => m,
+        };
+        let raw = match codec::field_input(drive, r, value).map_err(input_error)? {
+            Some(input) => {
+                let Conversion::Bits { mask, .. } = drive.register_plan(r).conversion else {
+                    return Err(format!("{} has no fields", describe::register(r)));
+                };
+                let word = if input.mask & mask == mask || !r.readable() {
+                    input.value
+                } else {
+                    let current = self
+                        .read_raw(r)
+                        .map_err(|e| format!("reading {} to keep its other fields: {e}", r.id()))?
+                        as u16;
+                    ((current & !input.mask) | input.value) & mask
+                };
+                codec::encode(drive, r, f64::from(word), &settings).map_err(|e| e.to_string())?
+            }
+            None => codec::parse_value_with(drive, r, value, &settings, Rounding::Exact)
+                .map_err(input_error)?,
+        };
+        let address = self.address(r)?;
+        let words = rule.width.split(raw);
+        gate::check(
+            profile,
+            kind,
+            slave,
+            gate::WriteTarget::Rule(rule),
+            address,
+            words[..usize::from(rule.width.count())].iter().copied(),
+        )
+        .map_err(|e| format!("{}: {e}", describe::register(r)))?;
+        let between = drive
+            .register_plan(r)
+            .repeat_needs_change
+            .map(|x| x.between);
+        match between {
+            Some(b) => self.client.write_changed(slave, rule, address, b, raw),
+            None => self.client.write_rule(slave, rule, address, raw),
+        }
+        .map_err(|e| e.to_string())?;
+        let shown = codec::decode_written(drive, r, raw, &settings)
+            .map(|v| v.to_string())
+            .unwrap_or_else(|_| raw.to_string());
+        // A written dependency changes conversions: read it again with the next cycle.
+        if self.deps.iter().any(|&d| self.regs[d].def.id == r.def.id) {
+            self.plan = None;
+        }
+        Ok(format!("wrote {} = {shown}", describe::register(r)))
+    }
+
+    fn read_raw(&mut self, r: &Register) -> Result<u32, String> {
+        let address = self.address(r)?;
+        let info = self.spec.drive.register_plan(r).info;
+        let mut w = [0u16; 2];
+        let words = &mut w[..usize::from(info.width.count())];
+        match info.table {
+            Table::Holding => self.client.read_holding(self.spec.slave, address, words),
+            Table::Input => self.client.read_input(self.spec.slave, address, words),
+        }
+        .map_err(|e| e.to_string())?;
+        Ok(info.width.join(words))
+    }
+}
+
+/// How a code is offered to Home Assistant and published: its meaning, else its id, else the
+/// number (each accepted back as a value by the register's parser).
+pub fn option_text(code: u16, id: Option<&str>, name: Option<&str>) -> String {
+    id.or(name)
+        .map(str::to_owned)
+        .unwrap_or_else(|| code.to_string())
+}
+
+/// The transport of a link before its drives are built: opened once, shared by their clients.
+pub struct Shared0(Rc<RefCell<Box<dyn Transport>>>);
+
+/// Runs a link until `stop` is set: connects (with the client's back-off, 100 ms doubling to
+/// 5 s), then polls every drive each `period`, carrying out commands between cycles. Returns
+/// when the cycle in flight is done after `stop`.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    mut link: LinkSpec,
+    first_index: usize,
+    period: Duration,
+    metrics: Arc<Metrics>,
+    updates: Updates,
+    commands: Receiver<Command>,
+    stop: Arc<AtomicBool>,
+    republish: Arc<AtomicBool>,
+) {
+    let label = vec![("link".to_owned(), link.name.clone())];
+    let mut wait = Duration::from_millis(100);
+    let transport = loop {
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        match (link.connect)() {
+            Ok(t) => break t,
+            Err(e) => {
+                eprintln!(
+                    "bridge: {}: {e}; trying again in {} ms",
+                    link.name,
+                    wait.as_millis()
+                );
+                let mut l = label.clone();
+                l.push(("kind".into(), "connect".into()));
+                metrics.errors.get_or_create(&l).inc();
+                sleep_unless(&stop, wait);
+                wait = (wait * 2).min(Duration::from_secs(5));
+            }
+        }
+    };
+    let shared = Rc::new(RefCell::new(transport));
+    let mut drives: Vec<Polled> = Vec::new();
+    for (i, spec) in std::mem::take(&mut link.drives).into_iter().enumerate() {
+        match Polled::new(
+            first_index + i,
+            spec,
+            &link.name,
+            link.kind,
+            Shared0(Rc::clone(&shared)),
+        ) {
+            Ok(p) => drives.push(p),
+            Err(e) => eprintln!("bridge: {e}"),
+        }
+    }
+    let mut next = Instant::now();
+    loop {
+        if stop.load(Ordering::Relaxed) {
+            break;
+        }
+        if republish.swap(false, Ordering::Relaxed) {
+            drives.iter_mut().for_each(Polled::republish);
+        }
+        let began = Instant::now();
+        let mut requests = 0;
+        let mut bus_ns = 0;
+        for d in drives.iter_mut() {
+            let (n, ns) = d.cycle(link.line, &metrics, &updates);
+            requests += n;
+            bus_ns += ns;
+        }
+        metrics
+            .cycle_seconds
+            .get_or_create(&label)
+            .set(began.elapsed().as_secs_f64());
+        metrics
+            .model_seconds
+            .get_or_create(&label)
+            .set(bus_ns as f64 / 1e9);
+        metrics
+            .requests
+            .get_or_create(&label)
+            .inc_by(u64::from(requests));
+        metrics.cycles.get_or_create(&label).inc();
+        next += period;
+        let now = Instant::now();
+        if next < now {
+            // A cycle longer than the period: the next starts at once, none are made up.
+            next = now;
+        }
+        // Commands are carried out while waiting for the next cycle.
+        loop {
+            if stop.load(Ordering::Relaxed) {
+                break;
+            }
+            let left = next.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                break;
+            }
+            match commands.recv_timeout(left.min(Duration::from_millis(100))) {
+                Ok(c) => {
+                    let result = match drives.iter_mut().find(|d| d.index == c.drive) {
+                        Some(d) => d.execute(&c),
+                        None => Err("no such drive on this link".into()),
+                    };
+                    let outcome = if result.is_ok() { "done" } else { "refused" };
+                    match &result {
+                        Ok(what) => {
+                            eprintln!("bridge: command on {} ({}): {what}", c.topic, c.payload)
+                        }
+                        Err(why) => eprintln!(
+                            "bridge: command on {} ({}) refused, nothing written: {why}",
+                            c.topic, c.payload
+                        ),
+                    }
+                    if let Some(name) = drives
+                        .iter()
+                        .find(|d| d.index == c.drive)
+                        .map(|d| d.name().to_owned())
+                    {
+                        metrics
+                            .commands
+                            .get_or_create(&vec![
+                                ("name".to_owned(), name),
+                                ("outcome".to_owned(), outcome.to_owned()),
+                            ])
+                            .inc();
+                    }
+                    if let Some(tx) = &updates {
+                        let _ = tx.try_send(Update::Outcome { command: c, result });
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => {
+                    std::thread::sleep(left.min(Duration::from_millis(100)));
+                }
+            }
+        }
+    }
+    if let Some(tx) = &updates {
+        for d in &drives {
+            let _ = tx.try_send(Update::Availability {
+                drive: d.index,
+                online: false,
+            });
+        }
+    }
+}
+
+fn sleep_unless(stop: &AtomicBool, total: Duration) {
+    let until = Instant::now() + total;
+    while !stop.load(Ordering::Relaxed) {
+        let left = until.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return;
+        }
+        std::thread::sleep(left.min(Duration::from_millis(50)));
+    }
+}

@@ -1,0 +1,612 @@
+//! The MQTT side: state topics per drive, Home Assistant MQTT discovery, and command topics
+//! whose messages go to the drive's link task only when `--allow-writes` names them and the
+//! drive's rate limit lets them through; the link carries them out through the write gate or
+//! the drive trait, and every refusal is published on the drive's error topic.
+//!
+//! Topics (`<t>` is `--mqtt-topic`, default `drivemap`; `<name>` the drive's name):
+//! - `<t>/bridge/availability`: `online` / `offline` (the connection's last will);
+//! - `<t>/<name>/availability`: `online` while the drive answers, else `offline`;
+//! - `<t>/<name>/<object>`: a value (retained): a number in the map's unit, a code's
+//!   meaning, `1`/`0` for a one-bit field;
+//! - `<t>/<name>/set/<register>`: write a register (payload: the value as `drivemap write`
+//!   takes it);
+//! - `<t>/<name>/command/<run|stop|reference|fault_reset>`: the drive trait's commands
+//!   (`reference` takes Hz);
+//! - `<t>/<name>/error`: a refused or failed command, JSON `{"topic", "payload", "error"}`.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::SyncSender;
+use std::time::{Duration, Instant};
+
+use drivemap_codegen::Drive;
+use drivemap_codegen::describe;
+use drivemap_codegen::ir::{Register, ValueKind};
+use drivemap_live::lookup;
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::roles::Role;
+use rumqttc::{AsyncClient, Event, EventLoop, LastWill, MqttOptions, Packet, QoS};
+use serde_json::{Value as Json, json};
+use tokio::sync::mpsc::Receiver;
+
+use crate::link::{Action, Command, Update};
+use crate::metrics::Metrics;
+use crate::points::{self, Point, PointKind, device_class, sanitize};
+
+/// How to reach the broker and what to publish.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// `mqtt://host[:1883]` or `mqtts://host[:8883]` (TLS).
+    pub url: String,
+    /// CA certificate (PEM) the broker's certificate must chain to, for `mqtts://`.
+    pub ca: Option<PathBuf>,
+    /// User name and password (from the environment or a file, never the command line).
+    pub credentials: Option<(String, String)>,
+    /// The client id.
+    pub client_id: String,
+    /// Root of the state and command topics.
+    pub topic: String,
+    /// Home Assistant's discovery prefix.
+    pub discovery_prefix: String,
+    /// What commands may write: register ids, parameter numbers or printed names, role ids
+    /// (`frequency_reference`, `run`, `fault_reset`), `stop`.
+    pub allow: Vec<String>,
+    /// Commands per second per drive (a burst of as many is let through at once).
+    pub rate: f64,
+}
+
+/// A drive as the MQTT side knows it.
+pub struct DriveInfo {
+    /// Its name (topics).
+    pub name: String,
+    /// Its map.
+    pub drive: &'static Drive,
+    /// Slave address.
+    pub slave: u8,
+    /// Its link's kind.
+    pub kind: TransportKind,
+    /// The link's index, for its command queue.
+    pub link: usize,
+    /// Its points.
+    pub points: Vec<Point>,
+}
+
+/// Splits `mqtt[s]://host[:port]`.
+pub fn parse_url(url: &str) -> Result<(bool, String, u16), String> {
+    let (tls, rest) = if let Some(r) = url.strip_prefix("mqtts://") {
+        (true, r)
+    } else if let Some(r) = url.strip_prefix("mqtt://") {
+        (false, r)
+    } else {
+        return Err(format!(
+            "--mqtt {url}: give mqtt://HOST[:PORT] or mqtts://HOST[:PORT] (TLS)"
+        ));
+    };
+    let rest = rest.trim_end_matches('/');
+    let (host, port) = match rest.rsplit_once(':') {
+        Some((h, p)) => (
+            h,
+            p.parse::<u16>()
+                .map_err(|_| format!("--mqtt {url}: `{p}` is not a port"))?,
+        ),
+        None => (rest, if tls { 8883 } else { 1883 }),
+    };
+    if host.is_empty() {
+        return Err(format!("--mqtt {url}: no host"));
+    }
+    Ok((tls, host.trim_matches(['[', ']']).to_owned(), port))
+}
+
+/// Whether `allow` lets `action` be written on `info` (`register` resolved for a set).
+pub fn allowed(info: &DriveInfo, allow: &[String], action: &Action) -> Result<(), String> {
+    let has = |name: &str| allow.iter().any(|a| a.eq_ignore_ascii_case(name));
+    let ok = match action {
+        Action::Set { register } => {
+            let r = lookup::find(info.drive, register).map_err(|e| e.to_string())?;
+            has(&r.def.id)
+                || r.def.param.as_deref().is_some_and(has)
+                || has(&r.def.name)
+                || points::register_role(info.drive, r, info.kind)
+                    .is_some_and(|role| has(role.id()))
+        }
+        Action::Run => has("run"),
+        Action::Stop => has("stop") || has("run"),
+        Action::Reference => has("frequency_reference") || has("reference"),
+        Action::FaultReset => has("fault_reset"),
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "not allowed: the bridge was not started with --allow-writes naming {}",
+            match action {
+                Action::Set { register } => format!("`{register}`"),
+                Action::Run => "`run`".into(),
+                Action::Stop => "`stop` (or `run`)".into(),
+                Action::Reference => "`frequency_reference`".into(),
+                Action::FaultReset => "`fault_reset`".into(),
+            }
+        ))
+    }
+}
+
+/// Parses a command topic `<t>/<name>/set/<register>` or `<t>/<name>/command/<what>`.
+pub fn parse_command(topic_root: &str, topic: &str) -> Option<(String, Action)> {
+    let rest = topic.strip_prefix(topic_root)?.strip_prefix('/')?;
+    let mut parts = rest.split('/');
+    let name = parts.next()?.to_owned();
+    let kind = parts.next()?;
+    let what = parts.next()?;
+    if parts.next().is_some() {
+        return None;
+    }
+    let action = match (kind, what) {
+        ("set", r) if !r.is_empty() => Action::Set {
+            register: r.to_owned(),
+        },
+        ("command", "run") => Action::Run,
+        ("command", "stop") => Action::Stop,
+        ("command", "reference") => Action::Reference,
+        ("command", "fault_reset") => Action::FaultReset,
+        _ => return None,
+    };
+    Some((name, action))
+}
+
+/// A token bucket: `rate` per second, as many at once.
+struct Bucket {
+    tokens: f64,
+    at: Instant,
+}
+
+impl Bucket {
+    fn take(&mut self, rate: f64) -> bool {
+        let now = Instant::now();
+        let cap = rate.max(1.0);
+        self.tokens = (self.tokens + now.duration_since(self.at).as_secs_f64() * rate).min(cap);
+        self.at = now;
+        if self.tokens >= 1.0 {
+            self.tokens -= 1.0;
+            true
+        } else {
+            false
+        }
+    }
+}
+
+fn device(info: &DriveInfo) -> Json {
+    let meta = &info.drive.meta;
+    json!({
+        "identifiers": [format!("drivemap_{}", sanitize(&info.name))],
+        "name": info.name,
+        "manufacturer": meta.vendor,
+        "model": meta.models.first().cloned().unwrap_or_else(|| meta.id.clone()),
+        "sw_version": format!("drivemap map {}", meta.id),
+    })
+}
+
+fn availability(root: &str, info: &DriveInfo) -> Json {
+    json!([
+        {"topic": format!("{root}/bridge/availability")},
+        {"topic": format!("{root}/{}/availability", info.name)},
+    ])
+}
+
+/// The Home Assistant discovery messages of a drive: `(topic, payload)`.
+pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
+    let root = &options.topic;
+    let node = format!("drivemap_{}", sanitize(&info.name));
+    let mut out = Vec::new();
+    let base = |object: &str, name: &str| {
+        json!({
+            "name": name,
+            "unique_id": format!("{node}_{object}"),
+            "object_id": format!("{node}_{object}"),
+            "availability": availability(root, info),
+            "availability_mode": "all",
+            "device": device(info),
+        })
+    };
+    let allow_set = |r: &Register| {
+        r.writable()
+            && !r.broadcast
+            && info.drive.register_plan(r).transports.contains(info.kind)
+            && allowed(
+                info,
+                &options.allow,
+                &Action::Set {
+                    register: r.def.id.clone(),
+                },
+            )
+            .is_ok()
+    };
+    for p in &info.points {
+        let r = lookup::find(info.drive, &p.register).ok();
+        let state = format!("{root}/{}/{}", info.name, p.object);
+        let mut c = base(&p.object, &p.name);
+        c["state_topic"] = json!(state);
+        let writable = p.field.is_none() && r.is_some_and(allow_set);
+        let component = match &p.kind {
+            PointKind::Number { .. } => {
+                if let Some(u) = &p.unit {
+                    c["unit_of_measurement"] = json!(u);
+                }
+                if let Some(dc) = device_class(p.unit.as_deref()) {
+                    c["device_class"] = json!(dc);
+                }
+                if writable {
+                    c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, p.register));
+                    c["mode"] = json!("box");
+                    if let Some(r) = r {
+                        if let Some(min) = r.def.min {
+                            c["min"] = json!(min);
+                        }
+                        if let Some(max) = r.def.max {
+                            c["max"] = json!(max);
+                        }
+                        c["step"] = json!(step(r));
+                    }
+                    "number"
+                } else {
+                    c["state_class"] = json!("measurement");
+                    "sensor"
+                }
+            }
+            PointKind::Code => {
+                let options: Vec<String> = r
+                    .map(|r| {
+                        r.def
+                            .values
+                            .iter()
+                            .map(|v| crate::link::option_text(v.value, Some(&v.id), Some(&v.name)))
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                if writable && !options.is_empty() {
+                    c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, p.register));
+                    c["options"] = json!(options);
+                    "select"
+                } else {
+                    c["device_class"] = json!("enum");
+                    if !options.is_empty() {
+                        c["options"] = json!(options);
+                    }
+                    "sensor"
+                }
+            }
+            PointKind::Field { width: 1, .. } => {
+                c["payload_on"] = json!("1");
+                c["payload_off"] = json!("0");
+                match p.role {
+                    Some(Role::Fault | Role::Alarm) => c["device_class"] = json!("problem"),
+                    Some(Role::Running) => c["device_class"] = json!("running"),
+                    _ => {}
+                }
+                "binary_sensor"
+            }
+            PointKind::Field { .. } => "sensor",
+        };
+        out.push((
+            format!(
+                "{}/{component}/{node}/{}/config",
+                options.discovery_prefix, p.object
+            ),
+            c,
+        ));
+    }
+    // Writable registers allowed but not polled: numbers and selects without a state topic.
+    for r in &info.drive.registers {
+        if !allow_set(r) || info.points.iter().any(|p| p.register == r.def.id) {
+            continue;
+        }
+        if !info.drive.register_plan(r).transports.contains(info.kind) {
+            continue;
+        }
+        let object = sanitize(&r.def.id);
+        let mut c = base(&object, &r.def.name);
+        c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.def.id));
+        let component = match r.kind() {
+            ValueKind::Enum(values) => {
+                let options: Vec<String> = values
+                    .iter()
+                    .map(|v| crate::link::option_text(v.value, Some(&v.id), Some(&v.name)))
+                    .collect();
+                c["options"] = json!(options);
+                c["optimistic"] = json!(true);
+                "select"
+            }
+            ValueKind::Bits(_) => continue,
+            _ => {
+                if let Some(u) = &r.def.unit {
+                    c["unit_of_measurement"] = json!(u);
+                }
+                if let Some(dc) = device_class(r.def.unit.as_deref()) {
+                    c["device_class"] = json!(dc);
+                }
+                if let Some(min) = r.def.min {
+                    c["min"] = json!(min);
+                }
+                if let Some(max) = r.def.max {
+                    c["max"] = json!(max);
+                }
+                c["step"] = json!(step(r));
+                c["mode"] = json!("box");
+                c["optimistic"] = json!(true);
+                "number"
+            }
+        };
+        out.push((
+            format!(
+                "{}/{component}/{node}/{object}/config",
+                options.discovery_prefix
+            ),
+            c,
+        ));
+    }
+    // The drive trait's commands: buttons, and the reference as a number.
+    let roles = info.drive.plan().roles;
+    let role_on_link = |role: Role| roles.of(role).any(|p| p.transports.contains(info.kind));
+    for (what, role, label) in [
+        ("run", Role::Run, "Run"),
+        ("stop", Role::Run, "Stop"),
+        ("fault_reset", Role::FaultReset, "Fault reset"),
+    ] {
+        let action = match what {
+            "run" => Action::Run,
+            "stop" => Action::Stop,
+            _ => Action::FaultReset,
+        };
+        let has_role = role_on_link(role) || (role == Role::Run && role_on_link(Role::RunForward));
+        if !has_role || allowed(info, &options.allow, &action).is_err() {
+            continue;
+        }
+        let object = format!("command_{what}");
+        let mut c = base(&object, label);
+        c["command_topic"] = json!(format!("{root}/{}/command/{what}", info.name));
+        c["payload_press"] = json!("PRESS");
+        out.push((
+            format!("{}/button/{node}/{object}/config", options.discovery_prefix),
+            c,
+        ));
+    }
+    if role_on_link(Role::FrequencyReference)
+        && allowed(info, &options.allow, &Action::Reference).is_ok()
+    {
+        let object = "command_reference";
+        let mut c = base(object, "Frequency reference");
+        c["command_topic"] = json!(format!("{root}/{}/command/reference", info.name));
+        c["unit_of_measurement"] = json!("Hz");
+        c["device_class"] = json!("frequency");
+        c["mode"] = json!("box");
+        c["optimistic"] = json!(true);
+        if let Some(r) = roles
+            .of(Role::FrequencyReference)
+            .find_map(|p| p.target.row())
+            .and_then(|row| info.drive.register_of_row(usize::from(row)))
+        {
+            if let Some(min) = r.def.min {
+                c["min"] = json!(min);
+            }
+            if let Some(max) = r.def.max {
+                c["max"] = json!(max);
+            }
+            c["step"] = json!(step(r));
+        }
+        out.push((
+            format!("{}/number/{node}/{object}/config", options.discovery_prefix),
+            c,
+        ));
+    }
+    out
+}
+
+/// The step of a number register: its scale's factor where fixed, else 1.
+fn step(r: &Register) -> f64 {
+    r.factor().map_or(1.0, |d| d.to_f64())
+}
+
+/// Connects and serves until `stop`: publishes discovery and availability on each connection,
+/// state updates as they come, and passes allowed commands to the links.
+#[allow(clippy::too_many_arguments)]
+pub async fn run(
+    options: Options,
+    drives: Vec<DriveInfo>,
+    mut updates: Receiver<Update>,
+    links: Vec<SyncSender<Command>>,
+    metrics: Arc<Metrics>,
+    stop: Arc<AtomicBool>,
+    republish: Vec<Arc<AtomicBool>>,
+    tls: Option<rumqttc::TlsConfiguration>,
+) {
+    let Ok((secure, host, port)) = parse_url(&options.url) else {
+        return;
+    };
+    let mut mo = MqttOptions::new(options.client_id.clone(), host, port);
+    mo.set_keep_alive(Duration::from_secs(15));
+    mo.set_max_packet_size(1 << 20, 1 << 20);
+    let bridge_availability = format!("{}/bridge/availability", options.topic);
+    mo.set_last_will(LastWill::new(
+        &bridge_availability,
+        "offline",
+        QoS::AtLeastOnce,
+        true,
+    ));
+    if let Some((user, password)) = &options.credentials {
+        mo.set_credentials(user.clone(), password.clone());
+    }
+    if secure {
+        if let Some(t) = tls {
+            mo.set_transport(rumqttc::Transport::Tls(t));
+        }
+    }
+    let (client, mut eventloop): (AsyncClient, EventLoop) = AsyncClient::new(mo, 1024);
+    let by_name: BTreeMap<String, usize> = drives
+        .iter()
+        .enumerate()
+        .map(|(i, d)| (d.name.clone(), i))
+        .collect();
+    let mut buckets: Vec<Bucket> = drives
+        .iter()
+        .map(|_| Bucket {
+            tokens: options.rate.max(1.0),
+            at: Instant::now(),
+        })
+        .collect();
+    let mut refused_logged = false;
+    let mut wait = Duration::from_millis(500);
+    loop {
+        if stop.load(Ordering::Relaxed) {
+            break;
+        }
+        tokio::select! {
+            event = eventloop.poll() => match event {
+                Ok(Event::Incoming(Packet::ConnAck(_))) => {
+                    eprintln!("bridge: MQTT connected to {}", options.url);
+                    refused_logged = false;
+                    wait = Duration::from_millis(500);
+                    let _ = client.try_publish(&bridge_availability, QoS::AtLeastOnce, true, "online");
+                    let _ = client.try_subscribe(format!("{}/+/set/+", options.topic), QoS::AtLeastOnce);
+                    let _ = client.try_subscribe(format!("{}/+/command/+", options.topic), QoS::AtLeastOnce);
+                    // Discovery, then every value again (the broker may have lost them).
+                    let all: Vec<(String, Json)> = drives.iter().flat_map(|d| discovery(&options, d)).collect();
+                    let client = client.clone();
+                    tokio::spawn(async move {
+                        for (topic, payload) in all {
+                            if client.publish(topic, QoS::AtLeastOnce, true, payload.to_string()).await.is_err() {
+                                return;
+                            }
+                        }
+                    });
+                    for r in &republish {
+                        r.store(true, Ordering::Relaxed);
+                    }
+                }
+                Ok(Event::Incoming(Packet::Publish(p))) => {
+                    let payload = String::from_utf8_lossy(&p.payload).into_owned();
+                    let Some((name, action)) = parse_command(&options.topic, &p.topic) else { continue };
+                    let Some(&index) = by_name.get(&name) else { continue };
+                    let info = &drives[index];
+                    let command = Command { drive: index, action: action.clone(), topic: p.topic.clone(), payload: payload.clone() };
+                    let refusal = if let Err(why) = allowed(info, &options.allow, &action) {
+                        Some(why)
+                    } else if !buckets[index].take(options.rate) {
+                        Some(format!("over the rate limit of {} command(s) per second for {}", options.rate, info.name))
+                    } else {
+                        match links[info.link].try_send(command.clone()) {
+                            Ok(()) => None,
+                            Err(_) => Some("the drive's link is busy with earlier commands".into()),
+                        }
+                    };
+                    if let Some(why) = refusal {
+                        eprintln!("bridge: command on {} ({payload}) refused, nothing written: {why}", p.topic);
+                        metrics.commands.get_or_create(&vec![
+                            ("name".to_owned(), info.name.clone()),
+                            ("outcome".to_owned(), "refused".to_owned()),
+                        ]).inc();
+                        publish_error(&client, &options.topic, info, &command, &why);
+                    }
+                }
+                Ok(_) => {}
+                Err(e) => {
+                    let text = match &e {
+                        rumqttc::ConnectionError::ConnectionRefused(code) => format!("the broker refused the connection: {code:?} (check the user name and password)"),
+                        other => other.to_string(),
+                    };
+                    if !refused_logged {
+                        eprintln!("bridge: MQTT {}: {text}; trying again", options.url);
+                        refused_logged = true;
+                    }
+                    let mut l = vec![("link".to_owned(), "mqtt".to_owned())];
+                    l.push(("kind".into(), "connect".into()));
+                    metrics.errors.get_or_create(&l).inc();
+                    tokio::time::sleep(wait).await;
+                    wait = (wait * 2).min(Duration::from_secs(10));
+                }
+            },
+            update = updates.recv() => match update {
+                None => break,
+                Some(Update::State { drive, values }) => {
+                    let info = &drives[drive];
+                    for (pi, text) in values {
+                        let topic = format!("{}/{}/{}", options.topic, info.name, info.points[pi].object);
+                        if client.try_publish(topic, QoS::AtMostOnce, true, text).is_err() {
+                            metrics.mqtt_dropped.get_or_create(&Vec::new()).inc();
+                        }
+                    }
+                }
+                Some(Update::Availability { drive, online }) => {
+                    let info = &drives[drive];
+                    let topic = format!("{}/{}/availability", options.topic, info.name);
+                    let _ = client.try_publish(topic, QoS::AtLeastOnce, true, if online { "online" } else { "offline" });
+                }
+                Some(Update::Outcome { command, result }) => {
+                    if let Err(why) = result {
+                        publish_error(&client, &options.topic, &drives[command.drive], &command, &why);
+                    }
+                }
+            },
+            _ = tokio::time::sleep(Duration::from_millis(200)) => {}
+        }
+    }
+    // Going away: the bridge's availability, then a clean disconnect (bounded).
+    let _ = client.try_publish(&bridge_availability, QoS::AtLeastOnce, true, "offline");
+    let _ = client.try_disconnect();
+    let _ = tokio::time::timeout(Duration::from_secs(2), async {
+        while let Ok(e) = eventloop.poll().await {
+            if matches!(e, Event::Outgoing(rumqttc::Outgoing::Disconnect)) {
+                break;
+            }
+        }
+    })
+    .await;
+}
+
+fn publish_error(client: &AsyncClient, root: &str, info: &DriveInfo, command: &Command, why: &str) {
+    let payload = json!({
+        "topic": command.topic,
+        "payload": command.payload,
+        "error": why,
+        "written": false,
+    });
+    let _ = client.try_publish(
+        format!("{root}/{}/error", info.name),
+        QoS::AtLeastOnce,
+        false,
+        payload.to_string(),
+    );
+}
+
+/// A rustls client configuration trusting only the CA certificates in `ca` (PEM).
+pub fn tls_config(ca: &std::path::Path) -> Result<rumqttc::TlsConfiguration, String> {
+    use rustls::pki_types::CertificateDer;
+    use rustls::pki_types::pem::PemObject;
+    let mut roots = rustls::RootCertStore::empty();
+    let certs: Vec<CertificateDer<'static>> = CertificateDer::pem_file_iter(ca)
+        .map_err(|e| format!("--mqtt-ca {}: {e}", ca.display()))?
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("--mqtt-ca {}: {e}", ca.display()))?;
+    if certs.is_empty() {
+        return Err(format!("--mqtt-ca {}: no certificate in it", ca.display()));
+    }
+    for c in certs {
+        roots
+            .add(c)
+            .map_err(|e| format!("--mqtt-ca {}: {e}", ca.display()))?;
+    }
+    let provider = Arc::new(rustls::crypto::ring::default_provider());
+    let config = rustls::ClientConfig::builder_with_provider(provider)
+        .with_safe_default_protocol_versions()
+        .map_err(|e| e.to_string())?
+        .with_root_certificates(roots)
+        .with_no_client_auth();
+    Ok(rumqttc::TlsConfiguration::Rustls(Arc::new(config)))
+}
+
+/// The register a name means on `drive`, for messages.
+pub fn describe_register(drive: &Drive, name: &str) -> String {
+    lookup::find(drive, name)
+        .map(describe::register)
+        .unwrap_or_else(|_| name.to_owned())
+}

@@ -1,0 +1,356 @@
+//! `drivemap bridge --drive ID@SLAVE... (--tcp | --gateway | --rtu-tcp | --serial) ...
+//! [--metrics ADDR] [--mqtt URL] [--config FILE]`: the drives polled into Prometheus and MQTT /
+//! Home Assistant ([`drivemap_bridge`]).
+
+use std::collections::BTreeSet;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use clap::Args as ClapArgs;
+use drivemap_bridge::{DriveSpec, LinkSpec, mqtt};
+use drivemap_codegen::Drive;
+use serde::Deserialize;
+
+use crate::live::link::{LineParity, LinkArgs};
+use crate::live::session::SettingsArgs;
+use crate::maps::MapsDir;
+
+/// Arguments of `drivemap bridge`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// A drive on the link given by --tcp/--gateway/--rtu-tcp/--serial: its map's id and its
+    /// slave address (`yaskawa-v7@1`). Repeat for every drive on that link; more links go in
+    /// --config.
+    #[arg(long = "drive", value_name = "ID@SLAVE")]
+    pub drives: Vec<String>,
+    #[command(flatten)]
+    pub dir: MapsDir,
+    /// The drives' own Modbus TCP interface (`192.168.1.10:502`).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub tcp: Option<String>,
+    /// A Modbus TCP to RTU gateway with the drives on its serial line.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub gateway: Option<String>,
+    /// RTU frames over TCP through a transparent serial gateway.
+    #[arg(long = "rtu-tcp", value_name = "HOST:PORT")]
+    pub rtu_tcp: Option<String>,
+    /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`).
+    #[arg(long, value_name = "PATH")]
+    pub serial: Option<String>,
+    /// Baud rate of the serial line (default: the first drive's map's default).
+    #[arg(long)]
+    pub baud: Option<u32>,
+    /// Parity of the serial line (default: the map's).
+    #[arg(long, value_enum)]
+    pub parity: Option<LineParity>,
+    /// How long to wait for each reply (default: from the map).
+    #[arg(long, value_parser = crate::duration::positive)]
+    pub timeout: Option<Duration>,
+    /// Further attempts after a timeout.
+    #[arg(long, default_value_t = 1)]
+    pub retries: u8,
+    /// Variants and values given instead of read, for every --drive (`--set n011=60`).
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+    /// Time between the starts of two poll cycles of each link.
+    #[arg(long, default_value = "1s", value_parser = crate::duration::positive)]
+    pub period: Duration,
+    /// Where Prometheus scrapes `/metrics` (loopback unless an address is given).
+    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:9187")]
+    pub metrics: SocketAddr,
+    /// No `/metrics` endpoint.
+    #[arg(long = "no-metrics", conflicts_with = "metrics")]
+    pub no_metrics: bool,
+    /// The MQTT broker: `mqtt://HOST[:1883]`, or `mqtts://HOST[:8883]` with --mqtt-ca.
+    #[arg(long, value_name = "URL")]
+    pub mqtt: Option<String>,
+    /// CA certificate (PEM) the broker's TLS certificate must chain to.
+    #[arg(long = "mqtt-ca", value_name = "FILE")]
+    pub mqtt_ca: Option<PathBuf>,
+    /// A file whose first line is `USER:PASSWORD` for the broker (else the environment's
+    /// DRIVEMAP_MQTT_USERNAME and DRIVEMAP_MQTT_PASSWORD; never on the command line).
+    #[arg(long = "mqtt-credentials", value_name = "FILE")]
+    pub mqtt_credentials: Option<PathBuf>,
+    /// Root of the state and command topics.
+    #[arg(long = "mqtt-topic", default_value = "drivemap")]
+    pub mqtt_topic: String,
+    /// Home Assistant's MQTT discovery prefix.
+    #[arg(long = "discovery-prefix", default_value = "homeassistant")]
+    pub discovery_prefix: String,
+    /// The MQTT client id (default: drivemap-bridge-<pid>).
+    #[arg(long = "mqtt-client-id")]
+    pub mqtt_client_id: Option<String>,
+    /// What MQTT commands may write, comma-separated: register ids, parameter numbers or
+    /// printed names, roles (`frequency_reference`, `accel_time`), `run` (run and stop),
+    /// `stop`, `fault_reset`. Without it every command is refused.
+    #[arg(long = "allow-writes", value_name = "LIST", value_delimiter = ',')]
+    pub allow_writes: Vec<String>,
+    /// Commands per second per drive over MQTT (as many at once); more are refused.
+    #[arg(long = "command-rate", default_value_t = 2.0)]
+    pub command_rate: f64,
+    /// More links and drives, in YAML (see the README, "Into Prometheus / Home Assistant").
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+}
+
+/// `--config` file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Config {
+    links: Vec<ConfigLink>,
+}
+
+/// One link of the `--config` file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConfigLink {
+    tcp: Option<String>,
+    gateway: Option<String>,
+    rtu_tcp: Option<String>,
+    serial: Option<String>,
+    baud: Option<u32>,
+    timeout_ms: Option<u64>,
+    /// `ID@SLAVE`.
+    drives: Vec<String>,
+}
+
+/// Splits `ID@SLAVE`.
+fn drive_slave(text: &str) -> Result<(String, u8), String> {
+    let (id, slave) = text
+        .rsplit_once('@')
+        .ok_or_else(|| format!("`{text}` is not ID@SLAVE (`yaskawa-v7@1`)"))?;
+    let slave: u8 = slave
+        .parse()
+        .ok()
+        .filter(|s| (1..=247).contains(s))
+        .ok_or_else(|| format!("`{text}`: the slave address `{slave}` is not 1 to 247"))?;
+    Ok((id.trim().to_owned(), slave))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn link_args(
+    tcp: Option<String>,
+    gateway: Option<String>,
+    rtu_tcp: Option<String>,
+    serial: Option<String>,
+    baud: Option<u32>,
+    parity: Option<LineParity>,
+    timeout: Option<Duration>,
+    retries: u8,
+) -> Result<LinkArgs, String> {
+    let given = [&tcp, &gateway, &rtu_tcp, &serial]
+        .iter()
+        .filter(|x| x.is_some())
+        .count();
+    if given != 1 {
+        return Err("give one of --tcp, --gateway, --rtu-tcp, --serial for the drives".into());
+    }
+    Ok(LinkArgs {
+        tcp,
+        gateway,
+        rtu_tcp,
+        serial,
+        baud,
+        parity,
+        stop_bits: None,
+        slave: None,
+        timeout,
+        retries,
+        request_gap: None,
+    })
+}
+
+/// Builds a link of the bridge: its drives' maps loaded, their clients' timing, its connection.
+fn link(
+    dir: &MapsDir,
+    args: LinkArgs,
+    drives: &[String],
+    settings: &SettingsArgs,
+    names: &mut BTreeSet<String>,
+) -> Result<LinkSpec, String> {
+    if drives.is_empty() {
+        return Err("a link without drives: give --drive ID@SLAVE".into());
+    }
+    let mut specs = Vec::new();
+    let mut first: Option<&'static Drive> = None;
+    for text in drives {
+        let (id, slave) = drive_slave(text)?;
+        let drive: &'static Drive = Box::leak(Box::new(dir.load(&id)?));
+        args.check_transport(drive)?;
+        first.get_or_insert(drive);
+        let given = settings.resolve(drive)?;
+        let profile = drive.plan().profile;
+        let mut name = format!("{id}-{slave}");
+        let mut n = 2;
+        while !names.insert(name.clone()) {
+            name = format!("{id}-{slave}-{n}");
+            n += 1;
+        }
+        specs.push(DriveSpec {
+            drive,
+            slave,
+            name,
+            options: args.client_options(drive, profile),
+            settings: given.settings,
+            fixed: given.fixed,
+            registers: Vec::new(),
+        });
+    }
+    let Some(first) = first else {
+        return Err("a link without drives".into());
+    };
+    let profile = first.plan().profile;
+    let kind = args.kind();
+    let line = args.bus_line(first);
+    let shown = if let Some(a) = &args.tcp {
+        format!("tcp {a}")
+    } else if let Some(a) = &args.gateway {
+        format!("gateway {a}")
+    } else if let Some(a) = &args.rtu_tcp {
+        format!("rtu-tcp {a}")
+    } else {
+        format!("serial {}", args.serial.clone().unwrap_or_default())
+    };
+    let connect = Box::new(move || {
+        args.connect(first, profile)
+            .map(|(client, _)| client.into_transport())
+    });
+    Ok(LinkSpec {
+        name: shown,
+        kind,
+        line,
+        connect,
+        drives: specs,
+    })
+}
+
+/// The broker's user name and password: from `--mqtt-credentials FILE` (`USER:PASSWORD`), else
+/// the environment.
+fn credentials(file: Option<&PathBuf>) -> Result<Option<(String, String)>, String> {
+    if let Some(f) = file {
+        let text = std::fs::read_to_string(f)
+            .map_err(|e| format!("--mqtt-credentials {}: {e}", f.display()))?;
+        let line = text.lines().next().unwrap_or("").trim_end();
+        let (user, password) = line.split_once(':').ok_or_else(|| {
+            format!(
+                "--mqtt-credentials {}: line 1 is not USER:PASSWORD",
+                f.display()
+            )
+        })?;
+        return Ok(Some((user.to_owned(), password.to_owned())));
+    }
+    match (
+        std::env::var("DRIVEMAP_MQTT_USERNAME"),
+        std::env::var("DRIVEMAP_MQTT_PASSWORD"),
+    ) {
+        (Ok(u), Ok(p)) => Ok(Some((u, p))),
+        (Ok(_), Err(_)) | (Err(_), Ok(_)) => Err(
+            "give both DRIVEMAP_MQTT_USERNAME and DRIVEMAP_MQTT_PASSWORD, or --mqtt-credentials FILE"
+                .into(),
+        ),
+        _ => Ok(None),
+    }
+}
+
+/// Runs the bridge until SIGTERM or SIGINT.
+pub fn run(args: Args) -> Result<ExitCode, String> {
+    let mut names = BTreeSet::new();
+    let mut links = Vec::new();
+    if !args.drives.is_empty() {
+        let la = link_args(
+            args.tcp.clone(),
+            args.gateway.clone(),
+            args.rtu_tcp.clone(),
+            args.serial.clone(),
+            args.baud,
+            args.parity,
+            args.timeout,
+            args.retries,
+        )?;
+        links.push(link(
+            &args.dir,
+            la,
+            &args.drives,
+            &args.settings,
+            &mut names,
+        )?);
+    } else if args.tcp.is_some()
+        || args.gateway.is_some()
+        || args.rtu_tcp.is_some()
+        || args.serial.is_some()
+    {
+        return Err("a link without drives: give --drive ID@SLAVE".into());
+    }
+    if let Some(path) = &args.config {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("--config {}: {e}", path.display()))?;
+        let config: Config =
+            serde_yaml::from_str(&text).map_err(|e| format!("--config {}: {e}", path.display()))?;
+        for (i, l) in config.links.into_iter().enumerate() {
+            let la = link_args(
+                l.tcp,
+                l.gateway,
+                l.rtu_tcp,
+                l.serial,
+                l.baud,
+                None,
+                l.timeout_ms.map(Duration::from_millis),
+                args.retries,
+            )
+            .map_err(|e| format!("--config {}: links[{i}]: {e}", path.display()))?;
+            links.push(
+                link(
+                    &args.dir,
+                    la,
+                    &l.drives,
+                    &SettingsArgs::default(),
+                    &mut names,
+                )
+                .map_err(|e| format!("--config {}: links[{i}]: {e}", path.display()))?,
+            );
+        }
+    }
+    if links.is_empty() {
+        return Err("no drives: give --drive ID@SLAVE with a link, or --config FILE".into());
+    }
+    let mqtt = match &args.mqtt {
+        Some(url) => {
+            mqtt::parse_url(url)?;
+            Some(mqtt::Options {
+                url: url.clone(),
+                ca: args.mqtt_ca.clone(),
+                credentials: credentials(args.mqtt_credentials.as_ref())?,
+                client_id: args
+                    .mqtt_client_id
+                    .clone()
+                    .unwrap_or_else(|| format!("drivemap-bridge-{}", std::process::id())),
+                topic: args.mqtt_topic.trim_end_matches('/').to_owned(),
+                discovery_prefix: args.discovery_prefix.trim_end_matches('/').to_owned(),
+                allow: args
+                    .allow_writes
+                    .iter()
+                    .map(|s| s.trim().to_owned())
+                    .collect(),
+                rate: args.command_rate.max(0.01),
+            })
+        }
+        None if !args.allow_writes.is_empty() => {
+            return Err("--allow-writes is for MQTT commands: give --mqtt too".into());
+        }
+        None => None,
+    };
+    if args.no_metrics && mqtt.is_none() {
+        return Err("nothing to serve: --no-metrics without --mqtt".into());
+    }
+    let options = drivemap_bridge::Options {
+        period: args.period,
+        metrics: (!args.no_metrics).then_some(args.metrics),
+        mqtt,
+    };
+    drivemap_bridge::run(links, options, Arc::new(AtomicBool::new(false)))?;
+    Ok(ExitCode::SUCCESS)
+}
