@@ -240,12 +240,9 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                     c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, p.register));
                     c["mode"] = json!("box");
                     if let Some(r) = r {
-                        if let Some(min) = r.def.min {
-                            c["min"] = json!(min);
-                        }
-                        if let Some(max) = r.def.max {
-                            c["max"] = json!(max);
-                        }
+                        let (min, max) = bounds(info.drive, r);
+                        c["min"] = json!(min);
+                        c["max"] = json!(max);
                         c["step"] = json!(step(r));
                     }
                     "number"
@@ -325,12 +322,9 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 if let Some(dc) = device_class(r.def.unit.as_deref()) {
                     c["device_class"] = json!(dc);
                 }
-                if let Some(min) = r.def.min {
-                    c["min"] = json!(min);
-                }
-                if let Some(max) = r.def.max {
-                    c["max"] = json!(max);
-                }
+                let (min, max) = bounds(info.drive, r);
+                c["min"] = json!(min);
+                c["max"] = json!(max);
                 c["step"] = json!(step(r));
                 c["mode"] = json!("box");
                 c["optimistic"] = json!(true);
@@ -386,12 +380,9 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             .find_map(|p| p.target.row())
             .and_then(|row| info.drive.register_of_row(usize::from(row)))
         {
-            if let Some(min) = r.def.min {
-                c["min"] = json!(min);
-            }
-            if let Some(max) = r.def.max {
-                c["max"] = json!(max);
-            }
+            let (min, max) = bounds(info.drive, r);
+            c["min"] = json!(min);
+            c["max"] = json!(max);
             c["step"] = json!(step(r));
         }
         out.push((
@@ -402,9 +393,71 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
     out
 }
 
-/// The step of a number register: its scale's factor where fixed, else 1.
+/// The step of a number register: its scale's factor where fixed, the finest of a selected
+/// scale's cases, 0.01 for a scale relative to another parameter, else 1.
 fn step(r: &Register) -> f64 {
-    r.factor().map_or(1.0, |d| d.to_f64())
+    use drivemap_codegen::model::Scale;
+    fn of(s: &Scale) -> f64 {
+        match s {
+            Scale::Factor(f) => *f,
+            Scale::Relative(_) => 0.01,
+            Scale::Selected(sel) => sel
+                .cases
+                .iter()
+                .map(|c| of(&c.scale))
+                .fold(f64::INFINITY, f64::min),
+        }
+    }
+    match &r.def.scale {
+        Some(s) => {
+            let f = of(s);
+            if f.is_finite() && f > 0.0 { f } else { 1.0 }
+        }
+        None => 1.0,
+    }
+}
+
+/// The widest bounds the manual gives a number register, for Home Assistant's input box (the
+/// bridge checks the bounds in force when a value comes): its range, else the widest of its
+/// selected scale's cases, its maximum through another parameter at that parameter's maximum,
+/// else the raw word's range.
+fn bounds(drive: &Drive, r: &Register) -> (f64, f64) {
+    use drivemap_codegen::model::{Reference, Scale};
+    let cases = match &r.def.scale {
+        Some(Scale::Selected(sel)) => sel.cases.as_slice(),
+        _ => &[],
+    };
+    let min = r.def.min.or_else(|| {
+        cases
+            .iter()
+            .filter_map(|c| c.min)
+            .fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.min(b))))
+    });
+    let max = r
+        .def
+        .max
+        .or_else(|| {
+            cases
+                .iter()
+                .filter_map(|c| c.max)
+                .fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.max(b))))
+        })
+        .or_else(|| {
+            let l = r.def.max_relative.as_ref()?;
+            let Reference::Register(id) = &l.relative_to else {
+                return None;
+            };
+            let of = lookup::find(drive, id).ok()?;
+            Some(of.def.max? * l.percent / 100.0)
+        });
+    let words = if r.def.pair.is_some() { 32 } else { 16 };
+    let full = (2f64.powi(words) - 1.0) * step(r);
+    let (lo, hi) = if r.def.signed {
+        (-full / 2.0, full / 2.0)
+    } else {
+        (0.0, full)
+    };
+    (min.unwrap_or(lo), max.unwrap_or(hi))
 }
 
 /// Connects and serves until `stop`: publishes discovery and availability on each connection,

@@ -4,6 +4,8 @@
 #
 # - Debian packages mbpoll and socat, with apt-get when running as root (otherwise prints the
 #   command to run);
+# - for the bridge tests (cli/tests/bridge.rs) prometheus, mosquitto, mosquitto-clients and
+#   openssl, without their recommendations (prometheus recommends node-exporter and more);
 # - Node-RED and node-red-contrib-modbus from npm under target/interop-node (the Node-RED export's
 #   test, cli/tests/export_node_red.rs), pinned: node-red-contrib-modbus 5.23.3 is the newest the
 #   registry serves that runs on Debian's Node.js 20 (5.60 needs Node 22) and installs from npm
@@ -19,15 +21,24 @@ missing=()
 for tool in mbpoll socat npm; do
   command -v "$tool" >/dev/null 2>&1 || missing+=("$tool")
 done
-if [ ${#missing[@]} -gt 0 ]; then
+bare=()
+for pair in prometheus:prometheus mosquitto:mosquitto mosquitto_sub:mosquitto-clients openssl:openssl; do
+  PATH="$PATH:/usr/sbin:/sbin" command -v "${pair%%:*}" >/dev/null 2>&1 || bare+=("${pair#*:}")
+done
+if [ $((${#missing[@]} + ${#bare[@]})) -gt 0 ]; then
   if [ "$(id -u)" = 0 ]; then
-    echo "== apt-get install -y ${missing[*]}"
+    echo "== apt-get install -y ${missing[*]} ${bare[*]}"
     apt-get update -qq
-    packages=("${missing[@]/npm/nodejs npm}")
-    # shellcheck disable=SC2068 # "nodejs npm" is two packages
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq ${packages[@]} >/dev/null
+    if [ ${#missing[@]} -gt 0 ]; then
+      packages=("${missing[@]/npm/nodejs npm}")
+      # shellcheck disable=SC2068 # "nodejs npm" is two packages
+      DEBIAN_FRONTEND=noninteractive apt-get install -y -qq ${packages[@]} >/dev/null
+    fi
+    if [ ${#bare[@]} -gt 0 ]; then
+      DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${bare[@]}" >/dev/null
+    fi
   else
-    echo "missing ${missing[*]}: run as root: apt-get install -y ${missing[*]}" >&2
+    echo "missing ${missing[*]} ${bare[*]}: run as root: apt-get install -y ${missing[*]} ${bare[*]}" >&2
   fi
 fi
 
@@ -47,6 +58,7 @@ if ! "$venv/bin/python" -c "$check" >/dev/null 2>&1; then
 fi
 "$venv/bin/python" -c 'import pymodbus, minimalmodbus, serial, importlib.metadata; print("interop peers: pymodbus", pymodbus.__version__, "minimalmodbus", minimalmodbus.__version__, "pyserial", serial.__version__, "jsonschema", importlib.metadata.version("jsonschema"))'
 echo "interop peers: $(command -v mbpoll || echo 'mbpoll MISSING') $(command -v socat || echo 'socat MISSING')"
+echo "bridge tools: $(command -v prometheus || echo 'prometheus MISSING') $(PATH="$PATH:/usr/sbin" command -v mosquitto || echo 'mosquitto MISSING') $(command -v mosquitto_sub || echo 'mosquitto-clients MISSING') $(command -v openssl || echo 'openssl MISSING')"
 
 node_dir=target/interop-node
 node_pins=(node-red@4.1.15 node-red-contrib-modbus@5.23.3)
