@@ -81,7 +81,7 @@ pub struct Args {
     /// Home Assistant's MQTT discovery prefix.
     #[arg(long = "discovery-prefix", default_value = "homeassistant")]
     pub discovery_prefix: String,
-    /// The MQTT client id (default: drivemap-bridge-<pid>).
+    /// The MQTT client id (default: `drivemap-bridge-PID`).
     #[arg(long = "mqtt-client-id")]
     pub mqtt_client_id: Option<String>,
     /// What MQTT commands may write, comma-separated: register ids, parameter numbers or
