@@ -15,7 +15,8 @@ use drivemap_bridge::{DriveSpec, LinkSpec, mqtt};
 use drivemap_codegen::Drive;
 use serde::Deserialize;
 
-use crate::live::link::{LineParity, LinkArgs};
+use crate::error::Error;
+use crate::live::link::{LineParity, Link as LinkArgs};
 use crate::live::session::SettingsArgs;
 use crate::maps::MapsDir;
 
@@ -179,10 +180,10 @@ fn link(
     let mut first: Option<&'static Drive> = None;
     for text in drives {
         let (id, slave) = drive_slave(text)?;
-        let drive: &'static Drive = Box::leak(Box::new(dir.load(&id)?));
-        args.check_transport(drive)?;
+        let drive: &'static Drive = Box::leak(Box::new(dir.load(&id).map_err(|e| e.to_string())?));
+        args.check_transport(drive).map_err(|e| e.to_string())?;
         first.get_or_insert(drive);
-        let given = settings.resolve(drive)?;
+        let given = settings.resolve(drive).map_err(|e| e.to_string())?;
         let profile = drive.plan().profile;
         let mut name = format!("{id}-{slave}");
         let mut n = 2;
@@ -218,6 +219,7 @@ fn link(
     let connect = Box::new(move || {
         args.connect(first, profile)
             .map(|(client, _)| client.into_transport())
+            .map_err(|e| e.to_string())
     });
     Ok(LinkSpec {
         name: shown,
@@ -257,7 +259,7 @@ fn credentials(file: Option<&PathBuf>) -> Result<Option<(String, String)>, Strin
 }
 
 /// Runs the bridge until SIGTERM or SIGINT.
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> Result<ExitCode, Error> {
     let mut names = BTreeSet::new();
     let mut links = Vec::new();
     if !args.drives.is_empty() {
