@@ -1,7 +1,8 @@
 //! A Modbus drive simulator driven by any drivemap map, with no code per drive.
 //!
 //! [`Simulator`] holds one word per register of the map, starting from the map's defaults
-//! (encoded through the live codec; registers without a numeric default start at 0), laid out
+//! (encoded through the live codec; a register without a numeric default starts at 0 where its
+//! map allows 0, else at the allowed value nearest 0, never at one its map refuses), laid out
 //! per transport with address alternatives resolved by the drive's own settings. It answers only
 //! the functions the drive's profile lists and enforces the manual's rules with the drive's own
 //! exception codes ([`ExceptionPlan`]): unknown function, unknown or write-only register,

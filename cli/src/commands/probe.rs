@@ -350,6 +350,12 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Sessi
     };
     match codec::encode(drive, r, number, &session.settings) {
         Ok(_) => Check::Agrees,
+        Err(ValueError::UnknownCode { .. }) if codes_incomplete(r).is_some() => {
+            Check::Unchecked(format!(
+                "read code {raw} ({raw:04X}h), which the map does not list; its list is incomplete: {}",
+                codes_incomplete(r).unwrap_or_default()
+            ))
+        }
         Err(ValueError::UnknownCode { .. }) => {
             let listed: Vec<String> = drive
                 .register_plan(r)
@@ -370,6 +376,16 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Sessi
         }
         Err(e) => Check::Disagrees("out_of_range", format!("read {value} ({raw:04X}h): {e}")),
     }
+}
+
+/// Why the map's list of codes of `r` is incomplete, when it says so (`unknown: values`): a
+/// code it does not list is then not a disagreement.
+fn codes_incomplete(r: &Register) -> Option<&str> {
+    r.def
+        .unknown
+        .iter()
+        .find(|u| u.what == drivemap_codegen::model::UnknownItem::Values)
+        .map(|u| u.reason.as_str())
 }
 
 /// What reading cannot check: gaps, unknown ranges, variant-specific ranges without a variant.

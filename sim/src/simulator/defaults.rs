@@ -1,8 +1,12 @@
-//! The map's defaults at power-on, for the variant options in force
-//! (`ir::Register::default_for`).
+//! The drive's power-on values: the map's defaults for the variant options in force
+//! (`ir::Register::default_for`), and for a register without one the value nearest 0 that its
+//! own map allows, so that nothing powers on at a value the map refuses.
 
 use drivemap_codegen::ir::Register;
+use drivemap_codegen::model::UnknownItem;
 use drivemap_live::{LiveSettings, codec};
+use drivemap_runtime::ValueError;
+use drivemap_runtime::plan::Conversion;
 
 use super::Simulator;
 
@@ -12,6 +16,8 @@ impl Simulator {
     }
 
     /// Map defaults: selectors and references first (other registers' scales depend on them).
+    /// A register without a default (or whose default cannot be encoded) keeps 0 where its map
+    /// allows 0, else starts at the allowed value nearest 0 ([`Simulator::nearest_allowed`]).
     pub(super) fn apply_defaults(&mut self) {
         let first: Vec<usize> = self
             .selectors
@@ -24,16 +30,92 @@ impl Simulator {
             let settings = self.settings();
             for i in pass {
                 let r = &self.drive.registers[i];
-                let Some(v) = self.default_of(r, &settings) else {
+                if let Some(v) = self.default_of(r, &settings) {
+                    match codec::encode(&self.drive, r, v, &settings) {
+                        Ok(raw) => {
+                            self.raw[i] = raw;
+                            continue;
+                        }
+                        Err(e) => self
+                            .warnings
+                            .push(format!("{}: default {v} not set: {e}", r.id())),
+                    }
+                }
+                if self.allows(r, self.raw[i], &settings) {
                     continue;
-                };
-                match codec::encode(&self.drive, r, v, &settings) {
-                    Ok(raw) => self.raw[i] = raw,
-                    Err(e) => self
-                        .warnings
-                        .push(format!("{}: default {v} not set: {e}", r.id())),
+                }
+                match self.nearest_allowed(r, &settings) {
+                    Some(raw) => self.raw[i] = raw,
+                    None => self.warnings.push(format!(
+                        "{}: powers on at {}, which its map refuses; no value it allows was found",
+                        r.id(),
+                        self.raw[i]
+                    )),
                 }
             }
         }
     }
+
+    /// Whether `raw`, read from `r`, is a value its map allows under `settings` — what
+    /// `drivemap probe` checks: no reserved bit set; a listed read code; a value that decodes
+    /// and encodes back within its range and listed codes. An unlisted code of a list the
+    /// manual leaves incomplete (`unknown: values`), and a value whose check needs a setting or
+    /// quantity not known, are not refused.
+    pub(super) fn allows(&self, r: &Register, raw: u32, settings: &LiveSettings) -> bool {
+        let plan = self.drive.register_plan(r);
+        if let Conversion::Bits { mask, .. } = plan.conversion {
+            return raw & !u32::from(mask) == 0;
+        }
+        if !plan.read_values.is_empty() {
+            return u16::try_from(raw)
+                .ok()
+                .and_then(|code| plan.read_label(code))
+                .is_some();
+        }
+        let Ok(value) = codec::decode(&self.drive, r, raw, settings) else {
+            return true;
+        };
+        let Some(number) = value.as_f64() else {
+            return true;
+        };
+        match codec::encode(&self.drive, r, number, settings) {
+            Ok(_) => true,
+            Err(ValueError::UnknownCode { .. }) => values_unknown(r),
+            Err(ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. }) => true,
+            Err(_) => false,
+        }
+    }
+
+    /// The raw word of the value nearest 0 that `r`'s map allows: its listed read code or code
+    /// nearest 0, or the bound of its range (for the variant options in force) nearest 0.
+    fn nearest_allowed(&self, r: &Register, settings: &LiveSettings) -> Option<u32> {
+        let plan = self.drive.register_plan(r);
+        if !plan.read_values.is_empty() {
+            return plan
+                .read_values
+                .iter()
+                .map(|l| l.code)
+                .min_by_key(|c| (i32::from(*c as i16).unsigned_abs(), *c))
+                .map(u32::from);
+        }
+        let mut candidates: Vec<f64> = plan.labels().iter().map(|l| f64::from(l.code)).collect();
+        candidates.extend(r.def.min);
+        candidates.extend(r.def.max);
+        for (option, o) in &r.def.by_variant {
+            if settings.has_variant(&self.drive, option) {
+                candidates.extend(o.min);
+                candidates.extend(o.max);
+            }
+        }
+        candidates.sort_by(|a, b| a.abs().total_cmp(&b.abs()).then(a.total_cmp(b)));
+        candidates.into_iter().find_map(|v| {
+            let raw = codec::encode(&self.drive, r, v, settings).ok()?;
+            self.allows(r, raw, settings).then_some(raw)
+        })
+    }
+}
+
+/// The map says the manual's list of codes is incomplete (`unknown: values`).
+fn values_unknown(r: &Register) -> bool {
+    r.def.unknown.iter().any(|u| u.what == UnknownItem::Values)
 }
