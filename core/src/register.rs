@@ -233,6 +233,35 @@ macro_rules! code_eq {
     };
 }
 
+/// The impls of a generated enumeration, in one line of generated code: [`Enumeration`] (its
+/// listed variants `[A, B, ...]` in the order of `labels`, and its `Unknown(u16)` variant),
+/// `Display` (the manual's meaning, or `unknown code N`) and [`code_eq!`](crate::code_eq)
+/// (equal by code).
+#[macro_export]
+macro_rules! enumeration {
+    ($t:ident, $labels:expr, [$($variant:ident),* $(,)?]) => {
+        impl $crate::register::Enumeration for $t {
+            const ALL: &'static [Self] = &[$(Self::$variant),*];
+            const LABELS: &'static [$crate::plan::Label] = $labels;
+            fn unknown(code: u16) -> Self {
+                Self::Unknown(code)
+            }
+            fn unknown_code(&self) -> ::core::option::Option<u16> {
+                match self {
+                    Self::Unknown(code) => ::core::option::Option::Some(*code),
+                    _ => ::core::option::Option::None,
+                }
+            }
+        }
+        impl ::core::fmt::Display for $t {
+            fn fmt(&self, f: &mut ::core::fmt::Formatter<'_>) -> ::core::fmt::Result {
+                $crate::register::Enumeration::describe(self, f)
+            }
+        }
+        $crate::code_eq!($t);
+    };
+}
+
 impl<T: Enumeration> Code for T {
     fn code(&self) -> u16 {
         match self.unknown_code() {

@@ -1,4 +1,4 @@
-//! What the generated code builds on: enumerations compare by code (`code_eq!`), and a
+//! What the generated code builds on: enumerations compare by code (`enumeration!`, `code_eq!`), and a
 //! profile's write table is derived from the plan at compile time (`write_rules`).
 
 use std::collections::HashSet;
@@ -16,32 +16,20 @@ enum Unit {
     Unknown(u16),
 }
 
-impl Enumeration for Unit {
-    const ALL: &'static [Self] = &[Self::Tenth, Self::Hundredth];
-    const LABELS: &'static [Label] = &[
-        Label {
-            code: 0,
-            id: "tenth",
-            name: "0.1 Hz",
-        },
-        Label {
-            code: 1,
-            id: "hundredth",
-            name: "0.01 Hz",
-        },
-    ];
-    fn unknown(code: u16) -> Self {
-        Self::Unknown(code)
-    }
-    fn unknown_code(&self) -> Option<u16> {
-        match self {
-            Self::Unknown(code) => Some(*code),
-            _ => None,
-        }
-    }
-}
+const LABELS: &[Label] = &[
+    Label {
+        code: 0,
+        id: "tenth",
+        name: "0.1 Hz",
+    },
+    Label {
+        code: 1,
+        id: "hundredth",
+        name: "0.01 Hz",
+    },
+];
 
-drivemap_core::code_eq!(Unit);
+drivemap_core::enumeration!(Unit, LABELS, [Tenth, Hundredth]);
 
 #[test]
 fn enumerations_are_equal_by_code() {
@@ -55,6 +43,9 @@ fn enumerations_are_equal_by_code() {
     assert_eq!(Unit::Hundredth.name(), Some("0.01 Hz"));
     assert_eq!(Unit::Unknown(1).name(), None);
     assert_eq!(Unit::from_code(1).code(), 1);
+    assert_eq!(Unit::Unknown(7).to_string(), "unknown code 7");
+    assert_eq!(Unit::Tenth.to_string(), "0.1 Hz");
+    assert_eq!(Unit::ALL.len(), 2);
 }
 
 const fn row(id: &'static str, address: u16, access: Access) -> RegisterPlan {

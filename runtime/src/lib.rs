@@ -58,10 +58,10 @@ pub mod vfd;
 #[cfg(feature = "std")]
 pub use client::{Client, ClientOptions, Reconnect};
 pub use drivemap_core as core;
-pub use drivemap_core::code_eq;
 pub use drivemap_core::plan;
 pub use drivemap_core::roles::{self, Role, Roles};
 pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
+pub use drivemap_core::{code_eq, enumeration};
 #[cfg(feature = "std")]
 pub use error::{Error, Refusal};
 pub use profile::Profile;
