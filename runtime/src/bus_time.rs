@@ -19,9 +19,9 @@
 //! stop bits: 10 bits for 8N1, 11 for 8E1, 8O1 and 8N2. Where a map fixes the character length
 //! whatever the parity (TDS-V8: always 11 bits, a second stop bit taking the parity slot,
 //! `002_661580cce154f322.txt:81`, `:91`; the map's `serial.char_bits`), [`BusModel::new`] takes
-//! it from the profile unless [`SerialConfig::fixed_char_bits`] says otherwise. The serial transport times its silences with 11-bit
-//! characters whatever the framing; the model uses the real character, so it is the physical
-//! lower bound that the planner optimises for.
+//! it from the profile unless [`SerialConfig::fixed_char_bits`] says otherwise. The serial transport times its silences with the same
+//! characters (`SerialOptions::frame_gap`), so the model is the physical lower bound that the
+//! planner optimises for and the client keeps.
 //!
 //! **Byte counts** (RTU: slave address, function, data, CRC-16; `000_032dced3a1e91a75.txt:296-302`
 //! Table 2.1, `003_8bcf5d50afb8e230.txt:290-300` Table 7.1, `002_661580cce154f322.txt:163-170`):

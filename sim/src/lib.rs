@@ -51,6 +51,8 @@ pub mod roles;
 pub mod server;
 pub mod simulator;
 pub mod slave;
+#[cfg(feature = "serial")]
+pub mod timed;
 
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use exceptions::ExceptionPlan;

@@ -666,8 +666,19 @@ impl SerialServer {
     /// the port is opened.
     pub fn spawn(
         sim: impl Into<Line>,
+        options: drivemap_runtime::transport::serial::SerialOptions,
+        log: Option<Logger>,
+    ) -> io::Result<SerialServer> {
+        SerialServer::spawn_on_line(sim, options, log, None)
+    }
+
+    /// [`SerialServer::spawn`], the drive answering after its response time on `line` (and,
+    /// where `line.pace`, at the line's speed): see [`crate::timed`].
+    pub fn spawn_on_line(
+        sim: impl Into<Line>,
         mut options: drivemap_runtime::transport::serial::SerialOptions,
         log: Option<Logger>,
+        line: Option<crate::timed::DriveLine>,
     ) -> io::Result<SerialServer> {
         use drivemap_runtime::transport::serial::{SerialTransport, USB_LATENCY};
         let sim: Line = sim.into();
@@ -689,12 +700,22 @@ impl SerialServer {
             }
         }
         let silence = options.frame_gap() + USB_LATENCY;
-        let mut link = SerialTransport::open(options)?;
+        let link = SerialTransport::open(options)?;
         let stop = Arc::new(AtomicBool::new(false));
         let flag = stop.clone();
-        let thread = thread::Builder::new()
-            .name("sim-serial".into())
-            .spawn(move || serve_link(&sim, &mut link, &flag, log.as_ref(), silence))?;
+        let thread =
+            thread::Builder::new()
+                .name("sim-serial".into())
+                .spawn(move || match line {
+                    Some(line) => {
+                        let mut link = crate::timed::TimedLink::new(link, sim.clone(), line);
+                        serve_link(&sim, &mut link, &flag, log.as_ref(), silence)
+                    }
+                    None => {
+                        let mut link = link;
+                        serve_link(&sim, &mut link, &flag, log.as_ref(), silence)
+                    }
+                })?;
         Ok(SerialServer {
             stop,
             thread: Some(thread),

@@ -1,5 +1,8 @@
 //! What the workspace's tests and benches share, from one place instead of `#[path]` includes:
 //!
+//! - [`line::EmulatedLine`]: a serial line at its baud rate between two pseudo-terminals,
+//!   recording each character's time on the wire, and [`line::analyse`], the timing rules
+//!   read from that record;
 //! - [`pty_pair::PtyPair`]: two linked pseudo-terminals made by `socat`, a real serial line;
 //! - [`hostile_peer::HostilePeer`]: a Modbus TCP server that misbehaves on purpose;
 //! - [`late_slave::serve_late`]: a slave on any transport (a pseudo-terminal) that answers
@@ -12,5 +15,7 @@
 pub mod alloc_count;
 pub mod hostile_peer;
 pub mod late_slave;
+#[cfg(unix)]
+pub mod line;
 pub mod pty_pair;
 pub mod sim_link;

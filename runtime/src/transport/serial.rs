@@ -1,9 +1,9 @@
 //! Modbus RTU on a serial line, through the `serialport` crate.
 //!
 //! What the transport adds to moving bytes:
-//! - the silence of 3.5 characters between frames (11 bits a character, whatever the parity
-//!   setting, as the Modbus specification counts; 1.75 ms above 19 200 baud), measured from the
-//!   last byte sent or received;
+//! - the silence of 3.5 characters between frames (characters of the line's format: 10 bits
+//!   for 8N1, 11 for 8E1, 8O1 and 8N2, or the map's fixed length; 1.75 ms above 19 200 baud),
+//!   measured from the last byte sent or received;
 //! - stale bytes (a late reply, noise) discarded before each request, and the request held back
 //!   until the line has been silent for the whole gap;
 //! - the inter-character timeout, which the client uses to discard frames broken off mid-way;
@@ -80,6 +80,9 @@ pub struct SerialOptions {
     pub formats: Option<SerialFormats>,
     /// The drive the formats are those of, for the refusal.
     pub drive_id: &'static str,
+    /// Bits per character when the drive's map fixes it whatever the parity (TDS-V8: 11, the
+    /// map's `serial.char_bits`; set by [`SerialOptions::with_profile`]).
+    pub char_bits: Option<u8>,
 }
 
 /// Allowance added to the inter-character timeout for adapters that deliver received bytes
@@ -100,6 +103,7 @@ impl SerialOptions {
             rs485: Rs485::None,
             formats: None,
             drive_id: "",
+            char_bits: None,
         }
     }
 
@@ -112,6 +116,7 @@ impl SerialOptions {
             Duration::from_micros(u64::from(profile.timing.frame_gap_us.unwrap_or(0)));
         self.formats = profile.serial_formats;
         self.drive_id = profile.drive_id;
+        self.char_bits = profile.timing.char_bits;
         self
     }
 
@@ -178,10 +183,31 @@ impl SerialOptions {
         self
     }
 
-    /// The silence kept between frames: the larger of the gap in characters at the baud rate
-    /// and [`frame_gap_min`](SerialOptions::frame_gap_min).
+    /// The line as the bus-time model counts it: baud rate, 8 data bits, parity, stop bits and
+    /// the map's fixed character length.
+    pub fn serial_config(&self) -> SerialConfig {
+        SerialConfig {
+            baud: self.baud,
+            data_bits: 8,
+            parity: bus_parity(self.parity),
+            stop_bits: stop_count(self.stop_bits),
+            char_bits: self.char_bits,
+        }
+    }
+
+    /// The silence kept between frames: the larger of the gap in characters of the line's
+    /// format (10 bits for 8N1, 11 for 8E1, 8O1, 8N2; 1.75 ms above 19 200 baud) and
+    /// [`frame_gap_min`](SerialOptions::frame_gap_min). The bus-time model counts the same
+    /// (`BusModel::frame_gap_ns`): an 8N1 line is not held silent for 11-bit characters.
     pub fn frame_gap(&self) -> Duration {
-        frame_gap(self.frame_gap_chars, self.baud).max(self.frame_gap_min)
+        let chars = if self.baud > 19_200 {
+            Duration::from_micros(1750)
+        } else {
+            Duration::from_nanos(
+                (self.frame_gap_chars * self.serial_config().char_ns()).ceil() as u64,
+            )
+        };
+        chars.max(self.frame_gap_min)
     }
 }
 
@@ -201,7 +227,8 @@ fn stop_count(stop_bits: StopBits) -> u8 {
     }
 }
 
-/// Duration of `chars` characters of 11 bits at `baud`.
+/// Duration of `chars` characters of 11 bits at `baud` (the longest RTU character: the
+/// transport's frame gap counts the line's own, [`SerialOptions::frame_gap`]).
 pub fn char_times(chars: f64, baud: u32) -> Duration {
     let baud = f64::from(baud.max(1));
     Duration::from_secs_f64(chars * f64::from(BITS_PER_CHAR) / baud)
@@ -459,7 +486,35 @@ mod tests {
         let o = SerialOptions::new("/dev/null", 115_200).with_profile(&p);
         assert_eq!(o.frame_gap(), Duration::from_millis(10));
         let o = SerialOptions::new("/dev/null", 1200).with_profile(&p);
-        assert_eq!(o.frame_gap(), frame_gap(3.5, 1200));
+        assert_eq!(o.frame_gap(), Duration::from_nanos(29_166_667));
+    }
+
+    /// The gap is 3.5 characters of the line's own format, as the bus-time model counts it:
+    /// an 8N1 line was held silent for 11-bit characters (4.01 ms at 9600 instead of 3.65 ms),
+    /// each turnaround 0.36 ms longer than the rules need.
+    #[test]
+    fn frame_gap_counts_the_lines_own_character() {
+        use crate::bus_time::BusModel;
+        let o = SerialOptions::new("/dev/null", 9600);
+        assert_eq!(o.frame_gap(), Duration::from_nanos(3_645_834));
+        let even = SerialOptions::new("/dev/null", 9600).parity(Parity::Even);
+        assert_eq!(even.frame_gap(), Duration::from_nanos(4_010_417));
+        let two = SerialOptions::new("/dev/null", 19_200).stop_bits(StopBits::Two);
+        assert_eq!(two.frame_gap(), Duration::from_nanos(2_005_209));
+        // The map's fixed 11-bit character (TDS-V8) counts whatever the parity.
+        let mut p = crate::profile::Profile::GENERIC;
+        p.timing.char_bits = Some(11);
+        let tds = SerialOptions::new("/dev/null", 9600).with_profile(&p);
+        assert_eq!(tds.frame_gap(), Duration::from_nanos(4_010_417));
+        // The same as the model's frame gap, for every format.
+        for o in [o, even, two, tds] {
+            let model = BusModel::new(&crate::profile::Profile::GENERIC, o.serial_config());
+            assert_eq!(
+                o.frame_gap().as_nanos() as f64,
+                model.frame_gap_ns().ceil(),
+                "{o:?}"
+            );
+        }
     }
 
     /// A drive whose map lists the formats a parameter selects (the ACN's CM.04: 8N1, 8N2,
