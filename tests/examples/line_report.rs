@@ -69,6 +69,18 @@ fn cell(m: &Measured) -> String {
 
 fn main() {
     let o = options();
+    let ((), realtime) = line_bench::on_realtime_thread(|| report(&o));
+    println!(
+        "\nReal-time priority (SCHED_FIFO 10) for the client, the line and the simulated drive: {}",
+        if realtime {
+            "granted"
+        } else {
+            "refused: figures include the machine's scheduling delays"
+        }
+    );
+}
+
+fn report(o: &Options) {
     let drives: Vec<Monitors> = line_bench::monitors()
         .into_iter()
         .filter(|m| o.drives.is_empty() || o.drives.contains(&m.id))

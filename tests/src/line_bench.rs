@@ -163,6 +163,20 @@ fn serial_options(path: &str, profile: &Profile, line: SerialConfig) -> SerialOp
         .expect("the map's format")
 }
 
+/// Runs `f` on a thread of its own at real-time priority where the system permits it
+/// ([`drivemap_test_support::line::realtime`]; the line's relay and the simulated drive it
+/// starts inherit it), and says whether it was granted.
+pub fn on_realtime_thread<T: Send>(f: impl FnOnce() -> T + Send) -> (T, bool) {
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            let granted = drivemap_test_support::line::realtime();
+            (f(), granted)
+        })
+        .join()
+        .expect("the measuring thread")
+    })
+}
+
 /// What one client did on the line.
 #[derive(Debug, Clone, Default)]
 pub struct Measured {
