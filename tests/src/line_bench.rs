@@ -116,7 +116,7 @@ pub fn monitors() -> Vec<Monitors> {
 pub struct SplitMix(pub u64);
 
 impl SplitMix {
-    pub fn next(&mut self) -> u64 {
+    pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -134,7 +134,7 @@ pub fn halves(wanted: &[(Table, u16)], n: usize, seed: u64) -> Vec<Vec<(Table, u
         let s: Vec<(Table, u16)> = wanted
             .iter()
             .copied()
-            .filter(|_| rng.next() & 1 == 1)
+            .filter(|_| rng.next_u64() & 1 == 1)
             .collect();
         if !s.is_empty() {
             sets.push(s);
