@@ -9,6 +9,7 @@ use crate::rule::WriteRule;
 
 /// How a transport frames Modbus PDUs. Address offsets and some rules differ per kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum TransportKind {
     /// Modbus RTU on a serial line.
     Rtu,

@@ -11,6 +11,7 @@
 
 /// A standard part of a variable-frequency drive.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[non_exhaustive]
 pub enum Role {
     // Commands: fields the master writes.
     /// Run (on) / stop (off), in the direction the direction role gives.

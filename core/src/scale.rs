@@ -17,6 +17,7 @@ use crate::width::Width;
 
 /// Why a value cannot be converted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ValueError {
     /// The value lies outside the register's range for the drive's variant.
     #[error("{register}: {value} {unit} is out of range {min} ..= {max} {unit}")]
@@ -265,6 +266,7 @@ impl RawRange {
 /// What to do with a value that is not a whole number of a register's steps (35.75 Hz to a
 /// register that counts 0.1 Hz).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[non_exhaustive]
 pub enum Rounding {
     /// Refuse it, naming the two nearest values the register can carry
     /// ([`ValueError::NotAStep`]). The default: a value is sent as given or not at all.

@@ -200,6 +200,7 @@ pub const EXCEPTION_BYTES: u32 = 5;
 
 /// One transaction's bus time, term by term, in nanoseconds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub struct Breakdown {
     /// The request on the wire.
     pub request_ns: u64,

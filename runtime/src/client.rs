@@ -139,6 +139,7 @@ impl ClientOptions {
 /// without its unbounded retry of the send; tokio-modbus leaves reconnecting to the caller,
 /// which [`Reconnect::Never`] does too.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Reconnect {
     /// Never reconnect: once the peer has closed the connection, every request fails with the
     /// I/O error.
@@ -188,6 +189,7 @@ pub(crate) struct Link {
 /// was still on its way ([`Client::settled`]): it waited until the line had been silent for
 /// `quiet`, throwing away what arrived meanwhile.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub struct Settled {
     /// Time spent waiting, over every attempt of the call.
     pub waited: Duration,

@@ -12,6 +12,7 @@ use crate::scale::ValueError;
 /// A request as the user asked for it: the manual's communication address and, where the
 /// profile maps it elsewhere, the PDU address that went on the wire.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct Sent {
     /// Slave address (0: broadcast).
     pub slave: u8,
@@ -53,6 +54,7 @@ impl fmt::Display for Sent {
 
 /// Why a request was not sent at all.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum Refusal {
     /// The drive does not implement the function.
     #[error("{drive} does not implement function {function:02X}h")]
@@ -270,6 +272,7 @@ impl From<drivemap_core::plan::AddressUnknown> for Error {
 
 /// An error of a client call.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// No acceptable reply arrived in time, on any attempt.
     #[error(

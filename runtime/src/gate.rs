@@ -37,6 +37,7 @@ use drivemap_core::width::Width;
 
 /// What a write is addressed to.
 #[derive(Debug, Clone, Copy)]
+#[non_exhaustive]
 pub enum WriteTarget<'a> {
     /// A register whose rule the caller has: the typed API and map interpreters.
     Rule(&'a WriteRule),

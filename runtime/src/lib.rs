@@ -15,6 +15,15 @@
 //! - [`vfd`]: one drive API for every map with roles, blocking (`Vfd`) and async (`AsyncVfd`,
 //!   feature `tokio`), with one safety contract.
 
+//!
+//! Stability: the enums an application matches that will grow — the errors ([`Error`],
+//! [`Refusal`], [`ValueError`], the frame and plan errors), [`TransportKind`](profile::TransportKind),
+//! [`Role`], the PDU's [`Request`](pdu::Request) and [`Response`](pdu::Response) — and the
+//! reports it reads ([`vfd::Status`], [`error::Sent`], ...) are `#[non_exhaustive]`: a new
+//! variant or field is not a breaking change, so a `match` needs a `_` arm. The plan's data
+//! model (`plan::Conversion`, `plan::Scale`, ...) is not: the generated code and this crate must
+//! agree on every variant of it, and a new one is a new plan format.
+
 #![cfg_attr(not(feature = "std"), no_std)]
 // docs.rs documents every feature (`[package.metadata.docs.rs]`), each item marked with the
 // feature it needs.

@@ -110,6 +110,7 @@ impl fmt::Debug for Words<'_> {
 
 /// A request as it goes on the wire (PDU addresses, not the manual's communication addresses).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Request<'a> {
     /// 03h: read `quantity` holding registers from `address`.
     ReadHolding { address: u16, quantity: u16 },
@@ -125,6 +126,7 @@ pub enum Request<'a> {
 
 /// Why a request cannot be encoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum RequestError {
     /// Zero registers, or more than the Modbus limit for the function.
     #[error("{function:02X}h with {quantity} registers: Modbus allows 1 ..= {max}")]
@@ -271,6 +273,7 @@ fn word(bytes: &[u8], at: usize) -> Option<u16> {
 
 /// A decoded response.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Response<'a> {
     /// 03h/04h: the registers read.
     Registers(Words<'a>),
@@ -332,6 +335,7 @@ impl Response<'_> {
 
 /// Why a received frame is not the answer to the request.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum FrameError {
     /// The frame is shorter or longer than its function code says.
     #[error("frame of {got} bytes, expected {expected}")]
@@ -533,6 +537,7 @@ fn echo(address: u16, got_address: u16, value: u16, got_value: u16) -> Result<()
 
 /// Why a slave rejects a request PDU (slave side: simulators and tests).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum RequestDecodeError {
     /// The function is not one of 03h, 04h, 06h, 08h, 10h: answer exception 01h.
     #[error("function {0:02X}h not implemented")]

@@ -28,6 +28,7 @@ pub enum Framing {
 
 /// What was thrown away while waiting for the answer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub struct Discarded {
     /// Complete, intact frames that were not the answer (other slave, late reply, bad echo).
     pub frames: u32,
@@ -39,6 +40,7 @@ pub struct Discarded {
 
 /// Why something was discarded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Discard {
     /// A frame or byte that failed a check.
     Frame(FrameError),

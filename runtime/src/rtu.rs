@@ -114,6 +114,7 @@ pub fn decode_response<'a>(
 
 /// Why a slave does not act on a request frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum RequestFrameError {
     /// The frame is damaged: the slave stays silent.
     #[error(transparent)]

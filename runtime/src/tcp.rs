@@ -148,6 +148,7 @@ pub fn decode_response<'a>(
 
 /// Why a server does not act on a request frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum RequestFrameError {
     /// The header is invalid: the stream is out of step.
     #[error(transparent)]

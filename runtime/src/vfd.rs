@@ -105,6 +105,7 @@ pub enum Direction {
 
 /// The status roles a drive reports, each `None` where its map gives no such role.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub struct Status {
     /// Running.
     pub running: Option<bool>,
@@ -189,6 +190,7 @@ impl fmt::Display for Status {
 
 /// A fault code as the drive reports it, with the map's name for it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct FaultCode {
     /// The raw code.
     pub code: u16,

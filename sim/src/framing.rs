@@ -78,7 +78,6 @@ pub enum Decoded<'a> {
 pub fn decode(kind: TransportKind, frame: &[u8]) -> Decoded<'_> {
     if kind.is_rtu_framed() {
         match rtu::decode_request(frame) {
-            Err(rtu::RequestFrameError::Frame(_)) => Decoded::Damaged,
             Err(rtu::RequestFrameError::Request { slave, error }) => Decoded::Refused {
                 origin: Origin::Rtu { slave },
                 error,
@@ -87,10 +86,12 @@ pub fn decode(kind: TransportKind, frame: &[u8]) -> Decoded<'_> {
                 origin: Origin::Rtu { slave },
                 request,
             },
+            // A frame that is not a request (its length, its check), or any other reason the
+            // runtime tells.
+            Err(_) => Decoded::Damaged,
         }
     } else {
         match tcp::decode_request(frame) {
-            Err(tcp::RequestFrameError::Frame(_)) => Decoded::Damaged,
             Err(tcp::RequestFrameError::Request { header, error }) => Decoded::Refused {
                 origin: Origin::Tcp(header),
                 error,
@@ -99,6 +100,9 @@ pub fn decode(kind: TransportKind, frame: &[u8]) -> Decoded<'_> {
                 origin: Origin::Tcp(header),
                 request,
             },
+            // A frame that is not a request (its length, its check), or any other reason the
+            // runtime tells.
+            Err(_) => Decoded::Damaged,
         }
     }
 }
@@ -116,6 +120,8 @@ pub fn refusal(
         RequestDecodeError::SubFunction(_) => Some((function::LOOP_BACK, illegal_function)),
         RequestDecodeError::Malformed(f) => Some((f, illegal_quantity)),
         RequestDecodeError::Empty => None,
+        // A reason the runtime learns to tell later: taken as a damaged frame (no reply).
+        _ => None,
     }
 }
 

@@ -209,6 +209,7 @@ impl ReadableSet {
 
 /// Why no plan could be made.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum PlanError {
     /// A wanted address may not be read (reserved, unmapped, write-only or broadcast-only).
     #[error(

@@ -23,6 +23,7 @@ pub fn splits_on(error: &Error) -> bool {
 
 /// What a [`Poller`] learned from exceptions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Learned {
     /// A wanted register that is refused when read alone: read alone from now on, never
     /// bridged or merged.
@@ -34,6 +35,7 @@ pub enum Learned {
 
 /// What one poll cycle did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub struct CycleStats {
     /// Requests sent (including those of splits).
     pub requests: u32,
@@ -46,6 +48,7 @@ pub struct CycleStats {
 
 /// A wanted register's value could not be had.
 #[derive(Debug)]
+#[non_exhaustive]
 pub enum PolledError<'a> {
     /// The register was not read: the request failed.
     Read(&'a Error),

@@ -28,6 +28,7 @@ pub const BITS_PER_CHAR: u32 = 11;
 
 /// How the RS-485 transceiver's driver is switched between sending and receiving.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum Rs485 {
     /// No direction control: RS-232, RS-422 / 4-wire RS-485, or an adapter that switches by
     /// itself (most USB RS-485 adapters).

@@ -288,6 +288,8 @@ impl Simulator {
                 })
             }
             Request::LoopBack { data } => Ok(Response::LoopBack { data }),
+            // A function the runtime learns to encode before the simulator serves it.
+            _ => Err(self.plan.illegal_function),
         }
     }
 }
