@@ -421,6 +421,13 @@ impl<T: AsyncTransport> AsyncClient<T> {
         &self.core.options
     }
 
+    /// Talks to another drive on the same link from now on, keeping the link's state, as
+    /// [`Client::switch_drive`](crate::Client::switch_drive) does.
+    pub fn switch_drive(&mut self, profile: &'static Profile, options: ClientOptions) {
+        self.core.profile = profile;
+        self.core.options = options;
+    }
+
     /// The transport.
     pub fn transport(&mut self) -> &mut T {
         &mut self.transport

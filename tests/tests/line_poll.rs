@@ -117,3 +117,64 @@ fn one_cycle_polls_two_drives_of_one_line_each_with_its_own_map() {
     // The client is left speaking to the last drive polled.
     assert_eq!(client.profile().drive_id, "ptlk-tds-v8");
 }
+
+/// One client per link, not per drive: switched to another drive of the line it takes that
+/// drive's limits (a 16-register read the V7's profile refuses before sending is sent to the
+/// TDS-V8), blocking and async alike.
+#[test]
+fn a_client_switched_to_another_drive_takes_its_profile() {
+    use drivemap_runtime::async_client::{AsyncClient, AsyncTcpTransport};
+    use drivemap_runtime::{ClientOptions, Refusal};
+    let clock = ManualClock::new();
+    let mut line = Line::new();
+    line.add(sim("yaskawa-v7", 1, &clock)).unwrap();
+    let tds_sim = line.add(sim("ptlk-tds-v8", 2, &clock)).unwrap();
+    let want: Vec<u16> = (0..16)
+        .map(|i| {
+            let s = lock(&tds_sim);
+            let r = tds::REGISTERS.iter().find(|r| r.info.address == 0x0300 + i);
+            r.map_or(0, |r| s.raw(r.info.id).unwrap() as u16)
+        })
+        .collect();
+    let server = TcpServer::spawn(line, "127.0.0.1:0", TcpFraming::RtuOverTcp, None).unwrap();
+    let refused = |e: drivemap_runtime::Error| {
+        matches!(
+            e,
+            drivemap_runtime::Error::Refused(Refusal::TooManyRegisters { .. })
+        )
+    };
+    let tds_options = ClientOptions::for_link(&tds::PROFILE, TransportKind::RtuOverTcp);
+
+    let link = RtuOverTcpTransport::connect(server.local_addr(), Duration::from_secs(1)).unwrap();
+    let mut client = Client::new(link, &v7::PROFILE);
+    let mut words = [0u16; 16];
+    let e = client.read_holding(2, 0x0300, &mut words).unwrap_err();
+    assert!(refused(e));
+    client.switch_drive(&tds::PROFILE, tds_options);
+    client.read_holding(2, 0x0300, &mut words).unwrap();
+    assert_eq!(words.to_vec(), want);
+
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    rt.block_on(async {
+        let link = AsyncTcpTransport::connect(
+            server.local_addr(),
+            TransportKind::RtuOverTcp,
+            Duration::from_secs(1),
+        )
+        .await
+        .unwrap();
+        let mut client = AsyncClient::new(link, &v7::PROFILE);
+        let mut words = [0u16; 16];
+        let e = client
+            .read_holding(2, 0x0300, &mut words)
+            .await
+            .unwrap_err();
+        assert!(refused(e));
+        client.switch_drive(&tds::PROFILE, tds_options);
+        client.read_holding(2, 0x0300, &mut words).await.unwrap();
+        assert_eq!(words.to_vec(), want);
+    });
+}
