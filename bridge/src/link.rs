@@ -7,10 +7,7 @@
 //! is dropped and counted, and the value is offered again at the next cycle, since it is only
 //! marked published once queued).
 
-use std::cell::RefCell;
 use std::collections::BTreeSet;
-use std::io;
-use std::rc::Rc;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
@@ -34,6 +31,11 @@ use drivemap_runtime::{Client, ClientOptions, Error, RegisterInfo, Rounding, Tab
 
 use crate::metrics::{Labels, Metrics};
 use crate::points::{self, Point, PointKind};
+
+/// The client of a link: one for every drive on it, switched to each in turn
+/// ([`Client::switch_drive`]), so the line's timing (the gap after the last reply, a late
+/// reply still expected) holds across drives.
+pub type LinkClient = Client<Box<dyn Transport>>;
 
 /// A new connection of a link's transport.
 pub type Connect = Box<dyn FnMut() -> Result<Box<dyn Transport>, String> + Send>;
@@ -118,34 +120,6 @@ pub enum Update {
 /// Offers an update to the MQTT side without waiting.
 pub type Updates = Option<tokio::sync::mpsc::Sender<Update>>;
 
-/// One transport shared by the clients of the drives of a link (used by one thread at a time).
-#[derive(Clone)]
-struct Shared {
-    inner: Rc<RefCell<Box<dyn Transport>>>,
-    kind: TransportKind,
-}
-
-impl Transport for Shared {
-    fn kind(&self) -> TransportKind {
-        self.kind
-    }
-    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
-        self.inner.borrow_mut().send(frame)
-    }
-    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
-        self.inner.borrow_mut().recv(buf, deadline)
-    }
-    fn discard_input(&mut self) -> io::Result<()> {
-        self.inner.borrow_mut().discard_input()
-    }
-    fn reconnect(&mut self) -> io::Result<()> {
-        self.inner.borrow_mut().reconnect()
-    }
-    fn inter_char_timeout(&self) -> Option<Duration> {
-        self.inner.borrow().inter_char_timeout()
-    }
-}
-
 /// The planned reads of a drive.
 struct Plan {
     poller: Poller,
@@ -158,7 +132,6 @@ pub struct Polled {
     /// Index in the bridge.
     pub index: usize,
     spec: DriveSpec,
-    client: Client<Shared>,
     kind: TransportKind,
     settings: LiveSettings,
     regs: Vec<&'static Register>,
@@ -272,7 +245,6 @@ impl Polled {
         spec: DriveSpec,
         link: &str,
         kind: TransportKind,
-        transport: Shared0,
     ) -> Result<Polled, String> {
         let (regs, deps) = choose(&spec, kind)?;
         let points = points::points(spec.drive, &regs, kind);
@@ -282,21 +254,11 @@ impl Polled {
             ("name".into(), spec.name.clone()),
             ("link".into(), link.to_owned()),
         ];
-        let profile = spec.drive.plan().profile;
-        let client = Client::with_options(
-            Shared {
-                inner: transport.0,
-                kind,
-            },
-            profile,
-            spec.options,
-        );
         let n = points.len();
         Ok(Polled {
             index,
             settings: spec.settings.clone(),
             spec,
-            client,
             kind,
             regs,
             deps,
@@ -359,7 +321,7 @@ impl Polled {
                 }
             }
         }
-        let profile = self.client.profile();
+        let profile = self.spec.drive.plan().profile;
         let poller = Poller::new(profile, &infos, wanted)
             .map_err(|e| e.to_string())?
             .with_model(BusModel::new(profile, line));
@@ -377,10 +339,12 @@ impl Polled {
     /// changed), values published. Returns the requests sent and their modelled bus time (ns).
     pub fn cycle(
         &mut self,
+        client: &mut LinkClient,
         line: SerialConfig,
         metrics: &Metrics,
         updates: &Updates,
     ) -> (u32, u64) {
+        client.switch_drive(self.spec.drive.plan().profile, self.spec.options);
         let mut requests = 0;
         let mut bus_ns = 0;
         let link_label = self.base[3].1.clone();
@@ -401,7 +365,7 @@ impl Polled {
             let Some(plan) = self.plan.as_mut() else {
                 return (requests, bus_ns);
             };
-            let stats = plan.poller.poll(&mut self.client, self.spec.slave);
+            let stats = plan.poller.poll(client, self.spec.slave);
             requests += stats.requests;
             bus_ns += stats.bus_ns;
             let raws: Vec<Result<u32, (&'static str, String)>> = plan
@@ -577,17 +541,18 @@ impl Polled {
 
     /// Carries out a command through the write gate (registers) or the drive trait (run, stop,
     /// reference, fault reset). Returns what was done, or why nothing was.
-    pub fn execute(&mut self, command: &Command) -> Result<String, String> {
+    pub fn execute(&mut self, client: &mut LinkClient, command: &Command) -> Result<String, String> {
+        client.switch_drive(self.spec.drive.plan().profile, self.spec.options);
         let drive = self.spec.drive;
         let slave = self.spec.slave;
         let value = command.payload.trim();
         match &command.action {
-            Action::Set { register } => self.write(register, value),
+            Action::Set { register } => self.write(client, register, value),
             action => {
                 let plan = drive.plan();
                 let view = self.settings.view(drive);
                 let mut d =
-                    Vfd::from_plan(&mut self.client, slave, view, plan.registers, plan.roles);
+                    Vfd::from_plan(client, slave, view, plan.registers, plan.roles);
                 let result = match action {
                     Action::Run => d.run().map(|()| "running".to_owned()),
                     Action::Stop => d.stop().map(|()| "stopped".to_owned()),
@@ -613,7 +578,7 @@ impl Polled {
     /// Writes `value` to the register named `name`, as `drivemap write` does: parsed by the
     /// register's conversion (range, steps, limits through other parameters read first), the
     /// gate checked, other bit fields kept.
-    fn write(&mut self, name: &str, value: &str) -> Result<String, String> {
+    fn write(&mut self, client: &mut LinkClient, name: &str, value: &str) -> Result<String, String> {
         let drive = self.spec.drive;
         let profile = drive.plan().profile;
         let slave = self.spec.slave;
@@ -633,7 +598,7 @@ impl Polled {
             {
                 if let Some(d) = drive.register_of_row(*row) {
                     if !self.spec.fixed.contains(&d.def.id) {
-                        let raw = self.read_raw(d).map_err(|e| {
+                        let raw = self.read_raw(client, d).map_err(|e| {
                             format!(
                                 "reading {}, which the limit depends on: {e}",
                                 describe::register(d)
@@ -657,7 +622,7 @@ impl Polled {
                     input.value
                 } else {
                     let current = self
-                        .read_raw(r)
+                        .read_raw(client, r)
                         .map_err(|e| format!("reading {} to keep its other fields: {e}", r.id()))?
                         as u16;
                     ((current & !input.mask) | input.value) & mask
@@ -683,8 +648,8 @@ impl Polled {
             .repeat_needs_change
             .map(|x| x.between);
         match between {
-            Some(b) => self.client.write_changed(slave, rule, address, b, raw),
-            None => self.client.write_rule(slave, rule, address, raw),
+            Some(b) => client.write_changed(slave, rule, address, b, raw),
+            None => client.write_rule(slave, rule, address, raw),
         }
         .map_err(|e| e.to_string())?;
         let shown = codec::decode_written(drive, r, raw, &settings)
@@ -697,14 +662,14 @@ impl Polled {
         Ok(format!("wrote {} = {shown}", describe::register(r)))
     }
 
-    fn read_raw(&mut self, r: &Register) -> Result<u32, String> {
+    fn read_raw(&self, client: &mut LinkClient, r: &Register) -> Result<u32, String> {
         let address = self.address(r)?;
         let info = self.spec.drive.register_plan(r).info;
         let mut w = [0u16; 2];
         let words = &mut w[..usize::from(info.width.count())];
         match info.table {
-            Table::Holding => self.client.read_holding(self.spec.slave, address, words),
-            Table::Input => self.client.read_input(self.spec.slave, address, words),
+            Table::Holding => client.read_holding(self.spec.slave, address, words),
+            Table::Input => client.read_input(self.spec.slave, address, words),
         }
         .map_err(|e| e.to_string())?;
         Ok(info.width.join(words))
@@ -718,9 +683,6 @@ pub fn option_text(code: u16, id: Option<&str>, name: Option<&str>) -> String {
         .map(str::to_owned)
         .unwrap_or_else(|| code.to_string())
 }
-
-/// The transport of a link before its drives are built: opened once, shared by their clients.
-pub struct Shared0(Rc<RefCell<Box<dyn Transport>>>);
 
 /// Runs a link until `stop` is set: connects (with the client's back-off, 100 ms doubling to
 /// 5 s), then polls every drive each `period`, carrying out commands between cycles. Returns
@@ -758,16 +720,14 @@ pub fn run(
             }
         }
     };
-    let shared = Rc::new(RefCell::new(transport));
+    let Some(first) = link.drives.first() else {
+        return;
+    };
+    let mut client: LinkClient =
+        Client::with_options(transport, first.drive.plan().profile, first.options);
     let mut drives: Vec<Polled> = Vec::new();
     for (i, spec) in std::mem::take(&mut link.drives).into_iter().enumerate() {
-        match Polled::new(
-            first_index + i,
-            spec,
-            &link.name,
-            link.kind,
-            Shared0(Rc::clone(&shared)),
-        ) {
+        match Polled::new(first_index + i, spec, &link.name, link.kind) {
             Ok(p) => drives.push(p),
             Err(e) => eprintln!("bridge: {e}"),
         }
@@ -784,7 +744,7 @@ pub fn run(
         let mut requests = 0;
         let mut bus_ns = 0;
         for d in drives.iter_mut() {
-            let (n, ns) = d.cycle(link.line, &metrics, &updates);
+            let (n, ns) = d.cycle(&mut client, link.line, &metrics, &updates);
             requests += n;
             bus_ns += ns;
         }
@@ -819,7 +779,7 @@ pub fn run(
             match commands.recv_timeout(left.min(Duration::from_millis(100))) {
                 Ok(c) => {
                     let result = match drives.iter_mut().find(|d| d.index == c.drive) {
-                        Some(d) => d.execute(&c),
+                        Some(d) => d.execute(&mut client, &c),
                         None => Err("no such drive on this link".into()),
                     };
                     let outcome = if result.is_ok() { "done" } else { "refused" };
