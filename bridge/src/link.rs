@@ -541,7 +541,11 @@ impl Polled {
 
     /// Carries out a command through the write gate (registers) or the drive trait (run, stop,
     /// reference, fault reset). Returns what was done, or why nothing was.
-    pub fn execute(&mut self, client: &mut LinkClient, command: &Command) -> Result<String, String> {
+    pub fn execute(
+        &mut self,
+        client: &mut LinkClient,
+        command: &Command,
+    ) -> Result<String, String> {
         client.switch_drive(self.spec.drive.plan().profile, self.spec.options);
         let drive = self.spec.drive;
         let slave = self.spec.slave;
@@ -551,8 +555,7 @@ impl Polled {
             action => {
                 let plan = drive.plan();
                 let view = self.settings.view(drive);
-                let mut d =
-                    Vfd::from_plan(client, slave, view, plan.registers, plan.roles);
+                let mut d = Vfd::from_plan(client, slave, view, plan.registers, plan.roles);
                 let result = match action {
                     Action::Run => d.run().map(|()| "running".to_owned()),
                     Action::Stop => d.stop().map(|()| "stopped".to_owned()),
@@ -578,7 +581,12 @@ impl Polled {
     /// Writes `value` to the register named `name`, as `drivemap write` does: parsed by the
     /// register's conversion (range, steps, limits through other parameters read first), the
     /// gate checked, other bit fields kept.
-    fn write(&mut self, client: &mut LinkClient, name: &str, value: &str) -> Result<String, String> {
+    fn write(
+        &mut self,
+        client: &mut LinkClient,
+        name: &str,
+        value: &str,
+    ) -> Result<String, String> {
         let drive = self.spec.drive;
         let profile = drive.plan().profile;
         let slave = self.spec.slave;

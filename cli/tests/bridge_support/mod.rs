@@ -149,26 +149,40 @@ pub fn listening(port: u16) -> bool {
 
 /// A simulated drive on an RTU-over-TCP port, network selected as its source, time 50× faster.
 pub fn simulator(dir: &Path, drive: &str, slave: u8) -> (Proc, u16) {
+    simulated_line(dir, &[(drive, slave)])
+}
+
+/// Simulated drives on one line (one RTU-over-TCP port), each at its slave address, network
+/// selected as their source, time 50× faster.
+pub fn simulated_line(dir: &Path, drives: &[(&str, u8)]) -> (Proc, u16) {
     let port = free_port();
     let addr = format!("127.0.0.1:{port}");
-    let slave = slave.to_string();
+    let mut args: Vec<String> = vec!["simulate".into()];
+    for (drive, slave) in drives {
+        args.push("--drive".into());
+        args.push(format!("{drive}@{slave}"));
+    }
+    for a in [
+        "--rtu-tcp",
+        &addr,
+        "--network-source",
+        "--time-scale",
+        "50",
+        "--quiet",
+    ] {
+        args.push(a.into());
+    }
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let name = drives
+        .iter()
+        .map(|(d, s)| format!("{d}@{s}"))
+        .collect::<Vec<_>>()
+        .join(" ");
     let p = Proc::spawn(
-        &format!("simulate {drive}"),
+        &format!("simulate {name}"),
         drivemap(),
-        &[
-            "simulate",
-            "--drive",
-            drive,
-            "--rtu-tcp",
-            &addr,
-            "--slave",
-            &slave,
-            "--network-source",
-            "--time-scale",
-            "50",
-            "--quiet",
-        ],
-        dir.join(format!("sim-{drive}.log")),
+        &refs,
+        dir.join(format!("sim-{port}.log")),
         &[],
     );
     wait_for(
