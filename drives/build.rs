@@ -38,9 +38,10 @@ fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"));
     let dir = std::env::var_os("DRIVEMAP_MAPS")
         .map(PathBuf::from)
-        .unwrap_or_else(|| manifest.join("../maps"));
-    // Errors name `/…/maps/<id>.yaml`, as `drivemap check` does for that path, not
-    // `drives/../maps/<id>.yaml`.
+        .unwrap_or_else(|| manifest.join("maps"));
+    // `drives/maps` links to the repository's `maps/` (the one place maps are edited), and
+    // `cargo package` stores the files, so the packaged crate builds from its own copy. Errors
+    // name `/…/maps/<id>.yaml` (the link resolved), as `drivemap check` does for that path.
     let dir = dir.canonicalize().unwrap_or(dir);
     println!("cargo:rerun-if-env-changed=DRIVEMAP_MAPS");
     println!("cargo:rerun-if-env-changed=DRIVEMAP_DRIVES");
@@ -59,6 +60,13 @@ fn main() {
             std::process::exit(1);
         }
     };
+    if maps.is_empty() {
+        eprintln!(
+            "no maps in {}: drivemap-drives generates its modules from them",
+            dir.display()
+        );
+        std::process::exit(1);
+    }
     let all = std::env::var_os("CARGO_FEATURE_ALL_DRIVES").is_some();
     let declared = declared_features(&manifest);
     let mut config = drivemap_codegen::Config::new();

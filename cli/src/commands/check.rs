@@ -163,6 +163,8 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             )));
         }
         found.iter().map(from_file).collect()
+    } else if crate::maps::BUILTIN_MAPS.is_empty() {
+        return Err("no maps to check: none built in; give map files or --maps DIR".into());
     } else {
         // The built-in maps; their manuals are found from the current directory.
         crate::maps::BUILTIN_MAPS
