@@ -50,6 +50,11 @@
 //! # }
 //! ```
 
+// Without the `std` feature: the registers over the runtime's protocol core, for a target
+// without an operating system (`scripts/test` builds `tests/no-std-drive`, a `#![no_std]` crate
+// on one drive).
+#![cfg_attr(not(feature = "std"), no_std)]
+
 pub use drivemap_runtime as runtime;
 
 include!(concat!(env!("OUT_DIR"), "/drivemap.rs"));
