@@ -51,6 +51,8 @@ pub enum Command {
     Migrate(commands::migrate::Args),
     /// List the rows of a map's manuals that no item cites, with a summary per table.
     Coverage(commands::coverage::Args),
+    /// Draft a map from a manual's text: every register row read with its citation, nothing invented.
+    Import(commands::import::Args),
     /// Read registers of a live drive by name, decoded by its map.
     Read(commands::read::Args),
     /// Write registers of a live drive by name, in engineering units, range-checked first.
@@ -86,6 +88,7 @@ pub fn main() -> ExitCode {
         Command::Doc(a) => commands::doc::run(a),
         Command::Diff(a) => commands::diff::run(a),
         Command::Coverage(a) => commands::coverage::run(a),
+        Command::Import(a) => commands::import::run(a),
         Command::Migrate(a) => commands::migrate::run(a),
         Command::Read(a) => commands::read::run(a),
         Command::Write(a) => commands::write::run(a),

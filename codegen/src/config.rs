@@ -207,6 +207,22 @@ impl Config {
             println!("cargo:rerun-if-env-changed=DRIVEMAP_MANUALS");
         }
         let drives = self.check()?;
+        // A draft is never generated: it has not been read against its manual by a person.
+        let drafts: Vec<crate::Diagnostic> = drives
+            .iter()
+            .filter(|d| d.draft.is_some())
+            .map(|d| {
+                crate::Diagnostic::new(
+                    d.tree.locate(&crate::source::Path::root().key("draft")),
+                    None,
+                    "the map is a draft (`draft:`): review every row against the manual and remove \
+                     the mark before generating code from it",
+                )
+            })
+            .collect();
+        if !drafts.is_empty() {
+            return Err(Error::Invalid(drafts.into()));
+        }
         if self.cargo_directives {
             // A map of an earlier schema version builds, by its meaning; say so once per map.
             for d in &drives {

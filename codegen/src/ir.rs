@@ -47,6 +47,8 @@ pub struct Drive {
     /// What reading a file of the map in an earlier schema version changed
     /// ([`crate::schema`]): printed by `check`, `diff` and the build, never an error.
     pub warnings: Vec<Diagnostic>,
+    /// The map's `draft:` mark: it loads and checks (with a warning), the generator refuses it.
+    pub draft: Option<model::Draft>,
 }
 
 #[derive(Debug, Clone)]
@@ -808,8 +810,36 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
         file: map.path.clone(),
         tree: map.tree.clone(),
         plan: OnceLock::new(),
-        warnings: map.warnings.clone(),
+        warnings: {
+            let mut w = map.warnings.clone();
+            if let Some(d) = &model.draft {
+                w.push(Diagnostic::new(
+                    map.tree.locate(&crate::source::Path::root().key("draft")),
+                    None,
+                    draft_warning(d),
+                ));
+            }
+            w
+        },
+        draft: model.draft.clone(),
     })
+}
+
+/// What `check` says of a draft: what made it, how many items to confirm, each of them, and that
+/// the generator refuses it.
+pub fn draft_warning(d: &model::Draft) -> String {
+    let mut s = format!(
+        "a draft (made by {}), not yet reviewed: the generator refuses it until `draft:` is removed",
+        d.by
+    );
+    if !d.to_confirm.is_empty() {
+        s.push_str(&format!("; {} item(s) to confirm:", d.to_confirm.len()));
+        for c in &d.to_confirm {
+            s.push_str("\n    - ");
+            s.push_str(c);
+        }
+    }
+    s
 }
 
 fn expand_block(r: &model::Register, rep: &model::Repeat) -> Result<Vec<model::Register>, String> {

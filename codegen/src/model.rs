@@ -22,6 +22,10 @@ pub struct MapFile {
     /// written). Decided per file while reading, see [`crate::hex`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub address_format: Option<AddressFormat>,
+    /// A draft not yet reviewed against its manual (`drivemap import` writes one): it loads and
+    /// checks, with a warning listing what to confirm, and the generator refuses it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub draft: Option<Draft>,
     pub drive: DriveMeta,
     /// Model variants selectable at run time, by axis (voltage class, firmware).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -43,6 +47,17 @@ pub struct MapFile {
     /// monitors, status), by role id (`drivemap_core::roles::Role::id`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub roles: BTreeMap<String, Vec<RolePlace>>,
+}
+
+/// The mark of a draft map: who made it and what the reviewer must confirm before removing it.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Draft {
+    /// What made the draft (`drivemap import`).
+    pub by: String,
+    /// Items written as placeholders or read with doubt, one sentence each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub to_confirm: Vec<String>,
 }
 
 /// One place a role lives: a register, a field of one, or an external quantity.

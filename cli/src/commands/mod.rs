@@ -5,6 +5,7 @@ pub mod demo;
 pub mod diff;
 pub mod doc;
 pub mod export;
+pub mod import;
 pub mod migrate;
 pub mod poll;
 pub mod probe;

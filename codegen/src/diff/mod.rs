@@ -202,6 +202,7 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
         tree: _,           // the same map as text, for locating changes
         plan: _,           // derived from the parts above
         warnings: _,       // how an earlier schema version was read, not what the map says
+        draft: _,          // map_documentation
     } = new;
     protocol::meta(&mut c, old, new);
     protocol::variants(&mut c, old, new);
@@ -329,6 +330,26 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         |x| x.reason.clone(),
         |x| Some(x.source.clone()),
     );
+    if old.draft != new.draft {
+        let text = |d: &Option<crate::model::Draft>| {
+            Some(match d {
+                None => "not a draft".to_string(),
+                Some(d) => format!(
+                    "a draft by {} ({} item(s) to confirm)",
+                    d.by,
+                    d.to_confirm.len()
+                ),
+            })
+        };
+        c.push(
+            ChangeKind::DocumentationChanged,
+            id,
+            "draft mark",
+            (text(&old.draft), None),
+            (text(&new.draft), None),
+            TAIL,
+        );
+    }
     if old.address_format != new.address_format {
         let text = |f: crate::model::AddressFormat| Some(format!("{f:?}").to_lowercase());
         c.push(

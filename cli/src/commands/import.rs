@@ -1,0 +1,120 @@
+//! `drivemap import --manual FILE... --id ID`: a draft map from a manual's own text, every row
+//! cited, nothing invented (the reader is `drivemap-import`); `--merge MAP` sets the manual's rows
+//! against an existing map instead: rows the map lacks, and fields where the two disagree.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Args as ClapArgs;
+
+use crate::error::Error;
+use crate::maps::MapsDir;
+
+/// Arguments of `drivemap import`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// A manual's text (OCR text as in shared/manuals); repeat for a drive with several manuals.
+    /// Citations name the file by its file name.
+    #[arg(long = "manual", value_name = "FILE", required = true)]
+    pub manuals: Vec<PathBuf>,
+    /// The drive id of the draft (`acme-vf2`); the draft's file should be `<id>.yaml`.
+    #[arg(long, value_name = "ID", required_unless_present = "merge")]
+    pub id: Option<String>,
+    /// Read rows only from this line on (1-based, in every manual).
+    #[arg(long, value_name = "N")]
+    pub start_line: Option<usize>,
+    /// Read rows only up to this line (inclusive).
+    #[arg(long, value_name = "M")]
+    pub end_line: Option<usize>,
+    /// Write the draft (or the merge report) here instead of standard output.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Write the report of lines not used as rows (with why) and of what to confirm here.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Compare with this map (a file, or a drive id): propose only rows it lacks and report the
+    /// rows where it and the manual disagree.
+    #[arg(long, value_name = "MAP")]
+    pub merge: Option<PathBuf>,
+    #[command(flatten)]
+    pub dir: MapsDir,
+}
+
+/// Runs `drivemap import`.
+pub fn run(a: Args) -> Result<ExitCode, Error> {
+    let mut texts = Vec::new();
+    for path in &a.manuals {
+        let text = std::fs::read_to_string(path).map_err(Error::io(path.display()))?;
+        let file = path
+            .file_name()
+            .map(|f| f.to_string_lossy().into_owned())
+            .ok_or_else(|| format!("{}: not a file", path.display()))?;
+        texts.push((file, text));
+    }
+    let lines = match (a.start_line, a.end_line) {
+        (None, None) => None,
+        (s, e) => {
+            let (s, e) = (s.unwrap_or(1), e.unwrap_or(usize::MAX));
+            if s == 0 || e < s {
+                return Err(Error::Refused(format!(
+                    "--start-line {s} --end-line {e}: not a range of lines (1-based, start <= end)"
+                )));
+            }
+            Some((s, e))
+        }
+    };
+    let manuals: Vec<drivemap_import::Manual<'_>> = texts
+        .iter()
+        .map(|(file, text)| drivemap_import::Manual { file, text })
+        .collect();
+    let command = std::env::args()
+        .skip(1)
+        .map(|a| if a.contains(' ') { format!("'{a}'") } else { a })
+        .collect::<Vec<_>>()
+        .join(" ");
+    let id = match (&a.id, &a.merge) {
+        (Some(id), _) => id.clone(),
+        (None, Some(m)) => m
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        (None, None) => unreachable!("clap requires --id or --merge"),
+    };
+    let import = drivemap_import::import(&id, &manuals, lines, &format!("drivemap {command}"));
+    if let Some(report) = &a.report {
+        std::fs::write(report, drivemap_import::report(&import))
+            .map_err(Error::io(report.display()))?;
+    }
+    let out = match &a.merge {
+        Some(map) => {
+            let drive = a.dir.read(map).map_err(|d| format!("{d}"))?;
+            let known = drivemap_import::known::registers(&drive);
+            drivemap_import::merge(&import, &known).render(&map.display().to_string())
+        }
+        None => import.yaml.clone(),
+    };
+    let proposed: usize = import
+        .readings
+        .iter()
+        .map(|(r, _)| {
+            r.rows
+                .iter()
+                .filter(|x| !x.reserved && x.address.is_some())
+                .count()
+        })
+        .sum();
+    match &a.output {
+        Some(path) => std::fs::write(path, &out).map_err(Error::io(path.display()))?,
+        None => print!("{out}"),
+    }
+    eprintln!(
+        "drivemap import: {proposed} rows proposed from {} manual(s); {} items to confirm{}",
+        import.readings.len(),
+        import.to_confirm.len(),
+        a.report
+            .as_ref()
+            .map(|r| format!("; report in {}", r.display()))
+            .unwrap_or_default()
+    );
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,173 @@
+//! Protocol facts a manual prints in prose or small tables: function codes, the most registers
+//! one request may read or write, the slave address range, exception codes, transports. Each is
+//! read from one line and cites it; what is not found is left for the reviewer.
+
+use std::collections::BTreeMap;
+use std::sync::LazyLock;
+
+use regex::Regex;
+
+/// A fact and the 1-based line it was read from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cited<T> {
+    pub value: T,
+    pub line: usize,
+}
+
+/// An exception code as printed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Exception {
+    pub code: u8,
+    pub name: String,
+    pub line: usize,
+}
+
+/// The protocol facts found in a manual.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Protocol {
+    /// Function codes, each with the first line that names it as a function.
+    pub function_codes: BTreeMap<u8, usize>,
+    pub max_read: Option<Cited<u16>>,
+    pub max_write: Option<Cited<u16>>,
+    pub slave_range: Option<Cited<(u8, u8)>>,
+    pub exceptions: Vec<Exception>,
+    /// `rtu` and/or `tcp`, with a line naming each.
+    pub transports: BTreeMap<&'static str, usize>,
+}
+
+/// Function codes a drive manual may print (Modbus public codes).
+const FUNCTIONS: &[u8] = &[
+    0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x0B, 0x0F, 0x10, 0x11, 0x16, 0x17, 0x2B,
+];
+
+/// Reads the protocol facts of `lines` (numbered from `first_line`).
+pub fn read(lines: &[&str], first_line: usize) -> Protocol {
+    static HEX: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"\b(?:0x([0-9A-Fa-f]{2})\b|([0-9A-F]{2})[hH]\b)").expect("pattern")
+    });
+    static MAX: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"(?i)\b(?:max(?:imum|\.)?(?:\s+of)?|up\s+to|at\s+most)\s+(\d{1,3})\s+(?:\w+\s+)?(?:registers|words|data)\b")
+            .expect("pattern")
+    });
+    static SLAVE: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"(?i)\b(\d{1,3})\s*(?:~|to|-|–|through)\s*(\d{1,3})\b").expect("pattern")
+    });
+    static EXC: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"^\s*(?:0x)?([0-9A-F]{2})[hH]?\s*[\t:|-]?\s*([A-Za-z][^\t]{2,80})")
+            .expect("pattern")
+    });
+    let mut p = Protocol::default();
+    let mut exception_region_until = 0usize;
+    for (i, raw) in lines.iter().enumerate() {
+        let line_no = first_line + i;
+        let line = raw.trim();
+        let lower = line.to_lowercase();
+        if lower.contains("function code") {
+            for c in HEX.captures_iter(line) {
+                let digits = c.get(1).or_else(|| c.get(2)).map_or("", |m| m.as_str());
+                if let Ok(code) = u8::from_str_radix(digits, 16)
+                    && FUNCTIONS.contains(&code)
+                {
+                    p.function_codes.entry(code).or_insert(line_no);
+                }
+            }
+        }
+        if let Some(c) = MAX.captures(line)
+            && let Ok(n) = c[1].parse::<u16>()
+            && (1..=125).contains(&n)
+        {
+            let cited = Cited {
+                value: n,
+                line: line_no,
+            };
+            if lower.contains("read") && p.max_read.is_none() {
+                p.max_read = Some(cited.clone());
+            }
+            if lower.contains("writ") && p.max_write.is_none() {
+                p.max_write = Some(cited);
+            }
+        }
+        if p.slave_range.is_none()
+            && (lower.contains("slave address")
+                || lower.contains("station")
+                || lower.contains("node address"))
+            && let Some(c) = SLAVE.captures(line)
+            && let (Ok(a), Ok(b)) = (c[1].parse::<u8>(), c[2].parse::<u8>())
+            && a <= 1
+            && b > a
+            && b <= 247
+        {
+            p.slave_range = Some(Cited {
+                value: (a.max(1), b),
+                line: line_no,
+            });
+        }
+        if lower.contains("exception") || lower.contains("error code") {
+            exception_region_until = line_no + 40;
+        }
+        if line_no <= exception_region_until
+            && let Some(c) = EXC.captures(line)
+            && let Ok(code) = u8::from_str_radix(&c[1], 16)
+            && code > 0
+            && code < 0x80
+            && !p.exceptions.iter().any(|e| e.code == code)
+        {
+            // Codes are listed in ascending order; a line out of order ends the list.
+            if p.exceptions.last().is_none_or(|e| e.code < code) {
+                p.exceptions.push(Exception {
+                    code,
+                    name: c[2].trim().to_string(),
+                    line: line_no,
+                });
+            }
+        }
+        if line.contains("RTU") {
+            p.transports.entry("rtu").or_insert(line_no);
+        }
+        if line.contains("Modbus TCP") || line.contains("MODBUS TCP") || line.contains("Modbus/TCP")
+        {
+            p.transports.entry("tcp").or_insert(line_no);
+        }
+    }
+    p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn facts_with_their_lines() {
+        let text = "The drive supports Modbus RTU.\n\
+                    Function codes 03H (read) and 06H, 10H (write) are used.\n\
+                    A maximum of 16 registers can be read at a time.\n\
+                    Up to 8 registers can be written in one message.\n\
+                    The slave address is set from 1 to 31.\n\
+                    Exception codes\n\
+                    01H  Illegal function\n\
+                    02H  Illegal address\n";
+        let lines: Vec<&str> = text.lines().collect();
+        let p = read(&lines, 1);
+        assert_eq!(
+            p.function_codes.keys().copied().collect::<Vec<_>>(),
+            vec![0x03, 0x06, 0x10]
+        );
+        assert_eq!(p.max_read, Some(Cited { value: 16, line: 3 }));
+        assert_eq!(p.max_write, Some(Cited { value: 8, line: 4 }));
+        assert_eq!(
+            p.slave_range,
+            Some(Cited {
+                value: (1, 31),
+                line: 5
+            })
+        );
+        assert_eq!(
+            p.exceptions
+                .iter()
+                .map(|e| (e.code, e.line))
+                .collect::<Vec<_>>(),
+            vec![(1, 7), (2, 8)]
+        );
+        assert_eq!(p.transports.get("rtu"), Some(&1));
+    }
+}

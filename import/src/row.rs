@@ -1,0 +1,958 @@
+//! The row grammar: a manual line → a register row, or a line the reader could not use.
+//!
+//! A row starts with its key: an address (`0101h`, `0x0300`, `19Eh` glued to what follows), a
+//! parameter number of one of the manual's schemes ([`crate::scheme`]), or both in either order;
+//! under a table header that names an address column, a decimal address (`40001`, `1102`). After
+//! the key comes the body, read cell by cell when the line has cells (tabs, wide gaps, `|`) and
+//! left to right when OCR glued it into one run (`1A2hb8-01Energy Saving Gain0 to 100%80`):
+//! the name, then a resolution (`0.01 Hz`), a range (`0.0~400.0`), a default, and enumeration
+//! codes (`0 Ramp To Stop`). Lines below a row that list codes are the row's codes.
+//!
+//! Nothing is guessed: a field the line does not show is left out; a key with no name is
+//! reported, not proposed.
+
+use std::collections::BTreeSet;
+use std::sync::LazyLock;
+
+use regex::Regex;
+
+use crate::scheme::{glued_address, param_prefix, shape};
+use crate::text::{Num, Range, cells, find_range, hex_address, resolution_cell, unit_cell};
+
+/// One enumeration code as printed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Code {
+    pub value: i64,
+    pub name: String,
+    /// 1-based line number of the code's line.
+    pub line: usize,
+}
+
+/// A bit or bits of a register, from a bit table (`Address  Bits  Function`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BitField {
+    pub first: u8,
+    pub last: u8,
+    pub name: String,
+    pub line: usize,
+}
+
+/// How the manual printed an address.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Notation {
+    Hex,
+    Decimal,
+}
+
+/// A register row read from a manual line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    /// 1-based line number of the row.
+    pub line: usize,
+    pub address: Option<u16>,
+    /// The address as printed (`0101h`, `40001`).
+    pub address_printed: Option<String>,
+    pub notation: Notation,
+    pub param: Option<String>,
+    pub name: String,
+    /// `r`, `w` or `rw` where the row prints it.
+    pub access: Option<&'static str>,
+    pub unit: Option<String>,
+    pub scale: Option<f64>,
+    pub min: Option<f64>,
+    pub max: Option<f64>,
+    pub default: Option<f64>,
+    pub values: Vec<Code>,
+    /// Bits, when the row heads a bit table.
+    pub fields: Vec<BitField>,
+    /// What the row prints that the draft does not carry (a ratio scale, a second range).
+    pub notes: Vec<String>,
+    /// The row prints `Reserved` / `Not used` as its name.
+    pub reserved: bool,
+}
+
+/// A line that looked like a row but could not be read.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unread {
+    pub line: usize,
+    pub text: String,
+    pub why: String,
+}
+
+/// What a table header says about the rows under it.
+#[derive(Debug, Clone, Copy, Default)]
+struct Header {
+    /// The first column is headed `Address`, `Register`, `Addr` or `Reg`: a decimal number
+    /// starting a row under it is an address.
+    address_first: bool,
+    /// A column is headed `Bit` or `Bits`: rows under it list a register's bits.
+    bits: bool,
+    /// A column is headed `Hex`: the number after a parameter number is its address in hex,
+    /// printed without a mark (`dr.02 1102 44354 44355`).
+    hex_column: bool,
+}
+
+const HEADER_WORDS: &[&str] = &[
+    "address",
+    "addr",
+    "register",
+    "reg.",
+    "parameter",
+    "param",
+    "no.",
+    "name",
+    "function",
+    "description",
+    "unit",
+    "units",
+    "range",
+    "setting range",
+    "default",
+    "factory",
+    "initial",
+    "access",
+    "r/w",
+    "attribute",
+    "resolution",
+    "bit",
+    "bits",
+    "hex",
+];
+
+fn header(line: &str) -> Option<Header> {
+    let cs = cells(line);
+    let words: Vec<String> = if cs.len() >= 2 {
+        cs.iter().map(|c| c.to_lowercase()).collect()
+    } else {
+        line.split_whitespace().map(str::to_lowercase).collect()
+    };
+    let hits = words
+        .iter()
+        .filter(|w| {
+            HEADER_WORDS
+                .iter()
+                .any(|h| w.as_str() == *h || w.starts_with(&format!("{h} ")))
+        })
+        .count();
+    if hits < 2 || line.chars().any(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    let first = words.first().map(String::as_str).unwrap_or("");
+    Some(Header {
+        address_first: first.starts_with("addr")
+            || first.starts_with("reg")
+            || first.contains("address"),
+        bits: words
+            .iter()
+            .any(|w| w == "bit" || w == "bits" || w.starts_with("bit ")),
+        hex_column: words.iter().any(|w| w == "hex" || w.starts_with("hex ")),
+    })
+}
+
+/// A heading line: a few words of text on their own, starting with a capital, no digits, no
+/// cells.
+fn is_heading(line: &str) -> bool {
+    let t = line.trim();
+    let words = t.split_whitespace().count();
+    (1..=6).contains(&words)
+        && t.starts_with(|c: char| c.is_uppercase())
+        && !t.chars().any(|c| c.is_ascii_digit())
+        && cells(line).len() == 1
+        && !t.ends_with(['.', ':', ','])
+}
+
+fn access_cell(cell: &str) -> Option<&'static str> {
+    match cell.to_ascii_lowercase().as_str() {
+        "r" | "ro" | "read" | "read only" | "read-only" => Some("r"),
+        "w" | "wo" | "write" | "write only" | "write-only" => Some("w"),
+        "r/w" | "rw" | "read/write" | "read-write" => Some("rw"),
+        _ => None,
+    }
+}
+
+fn is_reserved(name: &str) -> bool {
+    let n = name.to_ascii_lowercase();
+    n.starts_with("reserved") || n.starts_with("not used") || n == "unused" || n == "-"
+}
+
+/// Reads every row of `lines` (the whole manual, or a slice of it: line numbers stay the
+/// manual's), with the parameter schemes learnt from the whole manual.
+pub fn read_rows(
+    lines: &[&str],
+    first_line: usize,
+    schemes: &BTreeSet<String>,
+) -> (Vec<Row>, Vec<Unread>) {
+    let mut rows: Vec<Row> = Vec::new();
+    let mut unread = Vec::new();
+    let mut header_ctx = Header::default();
+    let mut last_attached = 0usize;
+    // The last short heading line (`Status word`), and the heading of the current table: a bit
+    // table's heading names its register when the row does not.
+    let mut heading: Option<(usize, String)> = None;
+    let mut table_heading: Option<String> = None;
+    for (i, raw) in lines.iter().enumerate() {
+        let line_no = first_line + i;
+        let line = raw.trim_end();
+        if line.trim().is_empty() {
+            continue;
+        }
+        if let Some(h) = header(line) {
+            header_ctx = h;
+            table_heading = heading
+                .take()
+                .filter(|(l, _)| line_no <= l + 3)
+                .map(|(_, t)| t);
+            continue;
+        }
+        if is_heading(line) {
+            heading = Some((line_no, line.trim().to_string()));
+        }
+        if header_ctx.hex_column
+            && let Some(records) = address_records(line, line_no, schemes)
+        {
+            last_attached = line_no;
+            rows.extend(records);
+            continue;
+        }
+        match read_key(line, schemes, header_ctx) {
+            Some(key) => {
+                let mut row = Row {
+                    line: line_no,
+                    address: key.address,
+                    address_printed: key.address_printed,
+                    notation: key.notation,
+                    param: key.param,
+                    name: String::new(),
+                    access: None,
+                    unit: None,
+                    scale: None,
+                    min: None,
+                    max: None,
+                    default: None,
+                    values: Vec::new(),
+                    fields: Vec::new(),
+                    notes: if key.references.is_empty() {
+                        Vec::new()
+                    } else {
+                        vec![format!("also printed: {}", key.references.join(", "))]
+                    },
+                    reserved: false,
+                };
+                if header_ctx.bits
+                    && let Some((first, last, name)) = bit_cells(key.body)
+                {
+                    // The row heads a bit table: its first bit is on its own line.
+                    match table_heading.take() {
+                        Some(t) => {
+                            row.name = t;
+                            row.notes
+                                .push("named by the heading of its bit table".into());
+                        }
+                        None => {
+                            row.name = format!(
+                                "Register {}",
+                                row.address_printed.as_deref().unwrap_or("?")
+                            );
+                            row.notes.push(
+                                "the manual prints no name for the register; named by its address"
+                                    .into(),
+                            );
+                        }
+                    }
+                    if !is_reserved(&name) {
+                        row.fields.push(BitField {
+                            first,
+                            last,
+                            name,
+                            line: line_no,
+                        });
+                    }
+                    last_attached = line_no;
+                    rows.push(row);
+                    continue;
+                }
+                read_body(key.body, &mut row);
+                if row.name.is_empty() {
+                    unread.push(Unread {
+                        line: line_no,
+                        text: line.trim().to_string(),
+                        why: "a row key with no name after it".into(),
+                    });
+                    continue;
+                }
+                row.reserved = is_reserved(&row.name);
+                last_attached = line_no;
+                rows.push(row);
+            }
+            None => {
+                let Some(row) = rows.last_mut() else { continue };
+                if line_no > last_attached + 6 || row.reserved {
+                    continue;
+                }
+                if !row.fields.is_empty() {
+                    if let Some((first, last, name)) = bit_cells(line) {
+                        if !is_reserved(&name) {
+                            row.fields.push(BitField {
+                                first,
+                                last,
+                                name,
+                                line: line_no,
+                            });
+                        }
+                        last_attached = line_no;
+                    }
+                    continue;
+                }
+                if continuation_codes(line, line_no, row) {
+                    last_attached = line_no;
+                }
+            }
+        }
+    }
+    (rows, unread)
+}
+
+struct Key<'a> {
+    address: Option<u16>,
+    address_printed: Option<String>,
+    notation: Notation,
+    param: Option<String>,
+    body: &'a str,
+    /// Modicon references printed after the address (`40769 40770`: the same register as RTU
+    /// and TCP `4xxxx` numbers), kept as a note.
+    references: Vec<String>,
+}
+
+fn known_param<'a>(s: &'a str, schemes: &BTreeSet<String>) -> Option<(&'a str, &'a str)> {
+    param_prefix(s).filter(|(p, _)| schemes.contains(&shape(p)))
+}
+
+fn read_key<'a>(line: &'a str, schemes: &BTreeSet<String>, header: Header) -> Option<Key<'a>> {
+    let t = line.trim_start();
+    let mut key = Key {
+        address: None,
+        address_printed: None,
+        notation: Notation::Hex,
+        param: None,
+        body: t,
+        references: Vec::new(),
+    };
+    if let Some((address, printed, rest)) = glued_address(t) {
+        key.address = Some(address);
+        key.address_printed = Some(printed.to_string());
+        let rest_t = rest.trim_start();
+        if let Some((p, after)) = known_param(rest_t, schemes) {
+            key.param = Some(p.to_string());
+            key.body = after;
+        } else {
+            // An address alone is followed by a separate word (`0000H  Run`) or a capital glued
+            // to it (`FFDDhACCEPT`), not lower-case letters or digits.
+            if rest.starts_with(|c: char| c.is_lowercase() || c.is_ascii_digit()) {
+                return None;
+            }
+            key.body = rest;
+        }
+    } else if let Some((p, rest)) = known_param(t, schemes) {
+        key.param = Some(p.to_string());
+        key.body = rest;
+        let rest_t = rest.trim_start();
+        let first = rest_t.split_whitespace().next().unwrap_or("");
+        if let Some(a) = hex_address(first) {
+            key.address = Some(a);
+            key.address_printed = Some(first.to_string());
+            key.body = &rest_t[first.len()..];
+        } else if let Some((a, printed, after)) = glued_address(rest_t)
+            && !after.starts_with(|c: char| c.is_ascii_lowercase())
+        {
+            key.address = Some(a);
+            key.address_printed = Some(printed.to_string());
+            key.body = after;
+        } else if header.address_first
+            && let Some(a) = decimal_address(first)
+        {
+            key.address = Some(a);
+            key.address_printed = Some(first.to_string());
+            key.notation = Notation::Decimal;
+            key.body = &rest_t[first.len()..];
+        }
+    } else if header.address_first && !line.starts_with(char::is_whitespace) {
+        let first = t.split_whitespace().next()?;
+        let a = decimal_address(first)?;
+        key.address = Some(a);
+        key.address_printed = Some(first.to_string());
+        key.notation = Notation::Decimal;
+        let rest = t[first.len()..].trim_start();
+        if let Some((p, after)) = known_param(rest, schemes) {
+            key.param = Some(p.to_string());
+            key.body = after;
+        } else {
+            key.body = rest;
+        }
+    } else {
+        return None;
+    }
+    // Modicon references (`40769`, `(40769`, `|40770`) between the address and the name.
+    if key.address.is_some() && key.notation == Notation::Hex {
+        loop {
+            let b = key.body.trim_start();
+            let tok = b.split_whitespace().next().unwrap_or("");
+            let digits = tok.trim_matches(['(', ')', '|']);
+            if key.references.len() < 2
+                && digits.len() == 5
+                && digits.starts_with('4')
+                && digits.chars().all(|c| c.is_ascii_digit())
+            {
+                key.references.push(digits.to_string());
+                key.body = &b[tok.len()..];
+            } else {
+                break;
+            }
+        }
+    }
+    // A key is followed by a name (`1'st Step Time` is one), or by a bit under a Bits header;
+    // prose (`n003 = 1`, `0101h.`) is not a row.
+    let b = key.body.trim_start();
+    // A name may start with an ordinal (`1'st Step Time`): a digit run glued to letters.
+    let first_token = b.split_whitespace().next().unwrap_or("");
+    let named = b.starts_with(|c: char| c.is_alphabetic() || c == '(' || c == '"')
+        || (first_token.starts_with(|c: char| c.is_ascii_digit())
+            && first_token.chars().any(char::is_alphabetic)
+            && resolution_cell(first_token).is_none());
+    let bit = header.bits && bit_cells(b).is_some();
+    if !named && !bit {
+        return None;
+    }
+    Some(key)
+}
+
+/// A bit table's cells: a bit (`3`) or bits (`4~7`, `8-F`? no: decimal only) and what it means.
+fn bit_cells(s: &str) -> Option<(u8, u8, String)> {
+    let mut cs = cells(s);
+    if cs.first().is_some_and(|c| clean_name(c).is_empty()) {
+        // A footnote mark between the address and the bit (`0000H (*1)  0  Run`).
+        cs.remove(0);
+    }
+    let (bit, name) = match cs.as_slice() {
+        [bit, name, ..] => (*bit, *name),
+        _ => return None,
+    };
+    let (first, last) = match bit.split_once(['~', '-', '–']) {
+        Some((a, b)) => (a.trim().parse::<u8>().ok()?, b.trim().parse::<u8>().ok()?),
+        None => {
+            let b = bit.parse::<u8>().ok()?;
+            (b, b)
+        }
+    };
+    if first > last || last > 31 || !name.starts_with(|c: char| c.is_alphanumeric() || c == '(') {
+        return None;
+    }
+    Some((first, last, clean_name(name)))
+}
+
+/// A line of an address list: parameter numbers, each followed by its address in hex without a
+/// mark and other numbers (decimal forms of the same address), one or several records a line
+/// (`dr.02 1102 44354 44355 dr21 1115 44373 44374`). The rows have no name of their own.
+fn address_records(line: &str, line_no: usize, schemes: &BTreeSet<String>) -> Option<Vec<Row>> {
+    let mut out: Vec<(String, Vec<String>)> = Vec::new();
+    for tok in line.split_whitespace() {
+        let tok = tok.trim_matches(|c: char| c == '|' || c == '(' || c == ')');
+        if tok.is_empty() {
+            continue;
+        }
+        match known_param(tok, schemes) {
+            Some((p, "")) => out.push((p.to_string(), Vec::new())),
+            _ => {
+                let last = out.last_mut()?;
+                if tok.chars().all(|c| c.is_ascii_hexdigit()) && last.1.len() < 3 {
+                    last.1.push(tok.to_string());
+                } else {
+                    return None;
+                }
+            }
+        }
+    }
+    if out.is_empty() {
+        return None;
+    }
+    let mut rows = Vec::new();
+    for (param, numbers) in out {
+        let hex = numbers.first()?;
+        let address = u16::from_str_radix(hex, 16).ok()?;
+        let mut notes =
+            vec!["the address list prints no name; named by its parameter number".to_string()];
+        if numbers.len() > 1 {
+            notes.push(format!("also printed: {}", numbers[1..].join(", ")));
+        }
+        rows.push(Row {
+            line: line_no,
+            address: Some(address),
+            address_printed: Some(hex.clone()),
+            notation: Notation::Hex,
+            name: param.clone(),
+            param: Some(param),
+            access: None,
+            unit: None,
+            scale: None,
+            min: None,
+            max: None,
+            default: None,
+            values: Vec::new(),
+            fields: Vec::new(),
+            notes,
+            reserved: false,
+        });
+    }
+    Some(rows)
+}
+
+fn decimal_address(tok: &str) -> Option<u16> {
+    if tok.is_empty() || tok.len() > 5 || !tok.chars().all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    tok.parse().ok()
+}
+
+#[derive(Debug)]
+enum Cell<'a> {
+    Range(Range),
+    Resolution(Num, Option<&'static str>),
+    Unit(&'static str),
+    Number(Num),
+    Dash,
+    Access(&'static str),
+    Text(&'a str),
+}
+
+fn classify(cell: &str) -> Cell<'_> {
+    if matches!(cell, "-" | "—" | "–" | "--") {
+        return Cell::Dash;
+    }
+    if let Some(a) = access_cell(cell) {
+        return Cell::Access(a);
+    }
+    if let Some(n) = Num::parse(cell) {
+        return Cell::Number(n);
+    }
+    if let Some(u) = unit_cell(cell) {
+        return Cell::Unit(u);
+    }
+    if cell.starts_with(|c: char| c.is_ascii_digit() || "+-−±.".contains(c))
+        && let Some(r) = find_range(cell)
+        && r.start <= 1
+    {
+        return Cell::Range(r);
+    }
+    if let Some((n, u)) = resolution_cell(cell)
+        && u.is_some()
+    {
+        return Cell::Resolution(n, u);
+    }
+    Cell::Text(cell)
+}
+
+fn set_range(
+    row: &mut Row,
+    r: &Range,
+    decimals: &mut Option<u32>,
+    unit: &mut Option<&'static str>,
+) {
+    row.min = Some(r.min.value);
+    row.max = Some(r.max.value);
+    *decimals = Some(r.min.decimals.max(r.max.decimals));
+    if unit.is_none() {
+        *unit = r.unit;
+    }
+}
+
+fn read_body(body: &str, row: &mut Row) {
+    static RATIO: LazyLock<Regex> =
+        LazyLock::new(|| Regex::new(r"\b\d+\s*/\s*\d+\s*%").expect("pattern"));
+    let cs = cells(body);
+    let mut unit: Option<&'static str> = None;
+    let mut step: Option<f64> = None;
+    let mut decimals: Option<u32> = None;
+    if cs.len() >= 2 {
+        let mut pending_code: Option<i64> = None;
+        let mut seen_range = false;
+        for cell in &cs {
+            match classify(cell) {
+                Cell::Text(t) if row.name.is_empty() => row.name = clean_name(t),
+                Cell::Text(t) => {
+                    if let Some(code) = pending_code.take()
+                        && t.starts_with(|c: char| c.is_alphabetic() || c == '(')
+                    {
+                        row.values.push(Code {
+                            value: code,
+                            name: t.to_string(),
+                            line: row.line,
+                        });
+                    } else if !seen_range
+                        && let Some(r) = find_range(t)
+                        && t.starts_with(|c: char| c.is_ascii_digit())
+                    {
+                        set_range(row, &r, &mut decimals, &mut unit);
+                        seen_range = true;
+                        row.notes.push(format!("range read from \"{t}\""));
+                    }
+                }
+                Cell::Range(r) if !seen_range => {
+                    set_range(row, &r, &mut decimals, &mut unit);
+                    seen_range = true;
+                }
+                Cell::Range(r) => row.notes.push(format!(
+                    "a second range {}..{} is printed",
+                    r.min.value, r.max.value
+                )),
+                Cell::Resolution(n, u) => {
+                    step = Some(n.value);
+                    unit = u;
+                }
+                Cell::Unit(u) if unit.is_none() => unit = Some(u),
+                Cell::Unit(_) | Cell::Dash => {}
+                Cell::Access(a) => row.access = Some(a),
+                Cell::Number(n) => {
+                    if seen_range || !row.values.is_empty() {
+                        row.default = Some(n.value);
+                    } else if n.decimals == 0 && n.value >= 0.0 && n.value < 65536.0 {
+                        if let Some(code) = pending_code.replace(n.value as i64) {
+                            // Two numbers in a row: the first was a resolution without a unit
+                            // (`0.01` reads as a number) or noise; keep the later one as a code.
+                            let _ = code;
+                        }
+                    } else if resolution_cell(cell).is_some() && step.is_none() {
+                        step = Some(n.value);
+                    }
+                }
+            }
+        }
+        if let Some(code) = pending_code
+            && row.values.is_empty()
+            && !seen_range
+        {
+            // A lone number after the name, with no code text: a default, as printed.
+            row.default = Some(code as f64);
+        }
+    } else {
+        read_glued(body.trim(), row, &mut unit, &mut decimals);
+    }
+    if let Some((first, rest)) = glued_columns(&row.name) {
+        let (first, rest) = (first.to_string(), rest.to_string());
+        if let (_, Some((s, u))) = name_resolution(&rest)
+            && step.is_none()
+        {
+            step = Some(s);
+            unit = Some(u);
+        }
+        row.notes
+            .push(format!("printed next to the name: \"{rest}\""));
+        row.name = first;
+    }
+    if let (name, Some((s, u))) = name_resolution(&row.name) {
+        row.name = name;
+        if step.is_none() {
+            step = Some(s);
+            unit = Some(u);
+        }
+    }
+    if RATIO.is_match(body) {
+        row.notes
+            .push("a ratio scale is printed; the draft carries no scale".into());
+        step = None;
+        unit = unit.filter(|u| *u != "%");
+    }
+    if !row.values.is_empty() && row.min.is_none() {
+        unit = None;
+        decimals = None;
+    }
+    row.unit = unit.map(str::to_string);
+    row.scale = match (step, unit, decimals) {
+        (Some(s), _, _) => Some(s),
+        (None, Some(_), Some(d)) => Some(10f64.powi(-(d as i32))),
+        (None, None, Some(d)) if d > 0 => Some(10f64.powi(-(d as i32))),
+        _ => None,
+    };
+}
+
+/// A body OCR glued into one run: `Energy Saving Gain0 to 100%80`,
+/// `Slip Compensation Selection0Disabled0`, `Acceleration Time 1`.
+fn read_glued(
+    body: &str,
+    row: &mut Row,
+    unit: &mut Option<&'static str>,
+    decimals: &mut Option<u32>,
+) {
+    static CODE: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(
+            r"^(?P<name>.*?[a-z.)])(?P<code>\d{1,2})(?P<text>[A-Z][a-z][^\d]*?)(?P<def>\d+(?:\.\d+)?)?$",
+        )
+        .expect("pattern")
+    });
+    if let Some(r) = find_range(body) {
+        let name = body[..r.start].trim();
+        // A resolution printed between the name and the range (`Gain 0.01 0.00~2.55`).
+        let (name, step) = match name.rsplit_once(' ') {
+            Some((head, last)) if resolution_cell(last).is_some() && !head.is_empty() => {
+                (head.trim(), resolution_cell(last))
+            }
+            _ => (name, None),
+        };
+        row.name = clean_name(name);
+        set_range(row, &r, decimals, unit);
+        if let Some((n, u)) = step {
+            row.scale = Some(n.value);
+            if u.is_some() {
+                *unit = u;
+            }
+        }
+        let after = body[r.end..].trim();
+        let lead: String = after
+            .chars()
+            .take_while(|c| c.is_ascii_digit() || *c == '.')
+            .collect();
+        if let Some(n) = Num::parse(&lead) {
+            row.default = Some(n.value);
+        }
+        if !after.is_empty() && lead.is_empty() {
+            row.notes
+                .push(format!("printed after the range: \"{after}\""));
+        }
+        return;
+    }
+    if let Some(c) = CODE.captures(body) {
+        row.name = clean_name(&c["name"]);
+        if let Ok(v) = c["code"].parse() {
+            row.values.push(Code {
+                value: v,
+                name: c["text"].trim().to_string(),
+                line: row.line,
+            });
+        }
+        if let Some(d) = c.name("def").and_then(|d| Num::parse(d.as_str())) {
+            row.default = Some(d.value);
+        }
+        return;
+    }
+    row.name = clean_name(body);
+}
+
+/// A resolution printed in the name (`Output Current (0.1A) (U-03)`): the name without it, and
+/// the step and unit.
+fn name_resolution(name: &str) -> (String, Option<(f64, &'static str)>) {
+    // `(0.1A)` anywhere in the name, or `0.1A/1` ("0.1 A per count") at its end.
+    static PAREN: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"\s*\((?:in\s+)?(\d[\d.]*\s*[^()\d\s][^()]{0,5})\)").expect("pattern")
+    });
+    static PER_COUNT: LazyLock<Regex> =
+        LazyLock::new(|| Regex::new(r"\s+(\d[\d.]*\s*[^\d\s/]{1,4})\s*/\s*1$").expect("pattern"));
+    for re in [&*PAREN, &*PER_COUNT] {
+        for c in re.captures_iter(name) {
+            if let Some((n, Some(u))) = resolution_cell(&c[1]) {
+                let m = c.get(0).expect("whole match");
+                let rest = format!("{}{}", &name[..m.start()], &name[m.end()..]);
+                return (clean_name(&rest), Some((n.value, u)));
+            }
+        }
+    }
+    (name.to_string(), None)
+}
+
+/// Two columns OCR glued together (`Motor SpeedMotor Speed (in 0.1 Hz)`): the first, and the
+/// rest. The seam is a word of two letters or more running into a capital (`SpeedMotor`,
+/// `VqOutput`, `(Iq)Motor`); `kWatts` is one word.
+fn glued_columns(s: &str) -> Option<(&str, &str)> {
+    let b = s.as_bytes();
+    for i in 1..b.len().saturating_sub(1) {
+        let (prev, cur, next) = (b[i - 1], b[i], b[i + 1]);
+        if !cur.is_ascii_uppercase() || !next.is_ascii_alphabetic() {
+            continue;
+        }
+        let word_start = s[..i].rfind([' ', '/', '-']).map_or(0, |p| p + 1);
+        let word = &s[word_start..i];
+        let seam = (prev.is_ascii_lowercase()
+            && word.len() >= 2
+            && word.chars().any(|c| c.is_ascii_lowercase()))
+            || prev == b')';
+        if seam {
+            return Some((s[..i].trim(), s[i..].trim()));
+        }
+    }
+    None
+}
+
+fn clean_name(s: &str) -> String {
+    static FOOTNOTE: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"\(\s*(?:\*|※|Note\s*)\d*\s*\)|(?:^|\s)[*※]\d+\b|\*+$").expect("pattern")
+    });
+    let s = FOOTNOTE.replace_all(s, "");
+    let s = s.trim().trim_matches(|c: char| c == '|' || c == '*');
+    let s = s.trim_end_matches(['(', ',', ':', ';']);
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Codes listed under a row: `0  Ramp To Stop`, `1: Coast`, `2 = External`. Returns whether the
+/// line gave one.
+fn continuation_codes(line: &str, line_no: usize, row: &mut Row) -> bool {
+    static INLINE: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"^\s*(?P<code>\d{1,3})\s*[:=]\s*(?P<text>[A-Za-z(].*)$").expect("pattern")
+    });
+    // A quantity with decimals has no codes.
+    if row.scale.is_some_and(|s| s < 1.0) {
+        return false;
+    }
+    let mut found = None;
+    if let Some(c) = cells(line)
+        .into_iter()
+        .find_map(|cell| INLINE.captures(cell))
+    {
+        found = Some((c["code"].parse::<i64>().ok(), c["text"].trim().to_string()));
+    } else {
+        let cs = cells(line);
+        for pair in cs.windows(2) {
+            if let (Some(n), true) = (
+                Num::parse(pair[0])
+                    .filter(|n| n.decimals == 0 && n.value >= 0.0 && n.value <= 255.0),
+                pair[1].starts_with(|c: char| c.is_alphabetic() || c == '('),
+            ) {
+                found = Some((Some(n.value as i64), pair[1].to_string()));
+            }
+        }
+    }
+    let Some((Some(value), name)) = found else {
+        return false;
+    };
+    if row.values.iter().any(|c| c.value == value) {
+        return false;
+    }
+    if let (Some(min), Some(max)) = (row.min, row.max)
+        && ((value as f64) < min || (value as f64) > max)
+    {
+        return false;
+    }
+    row.values.push(Code {
+        value,
+        name,
+        line: line_no,
+    });
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str) -> (Vec<Row>, Vec<Unread>) {
+        let lines: Vec<&str> = text.lines().collect();
+        let schemes = crate::scheme::learn(&lines);
+        read_rows(&lines, 1, &schemes)
+    }
+
+    #[test]
+    fn a_tabbed_table_with_a_unit_column() {
+        let (rows, _) = read(
+            "Address\tParameter\tName\tUnit\tSetting Range\n\
+             032BH\tCn-44\tPID Integral Upper Bound\t1%\t0~109%\n\
+             032CH\tCn-45\tPID Primary Delay Time Constant\t0.1s\t0.0~2.5s\n\
+             032DH\tCn-46\tResistance, Motor winding\t0.00 1Ω\t0.000~65.535Ω\n\
+             032EH\tCn-47\tSlip Compensation Gain\t0.01\t0.00~2.55\n",
+        );
+        assert_eq!(rows.len(), 4);
+        let r = &rows[1];
+        assert_eq!(
+            (r.address, r.param.as_deref(), r.name.as_str()),
+            (
+                Some(0x032C),
+                Some("Cn-45"),
+                "PID Primary Delay Time Constant"
+            )
+        );
+        assert_eq!(
+            (r.unit.as_deref(), r.scale, r.min, r.max),
+            (Some("s"), Some(0.1), Some(0.0), Some(2.5))
+        );
+        assert_eq!(rows[2].scale, Some(0.001));
+        assert_eq!((rows[3].unit.as_deref(), rows[3].scale), (None, Some(0.01)));
+        assert_eq!(
+            (rows[0].unit.as_deref(), rows[0].scale, rows[0].max),
+            (Some("%"), Some(1.0), Some(109.0))
+        );
+    }
+
+    #[test]
+    fn glued_rows_and_codes() {
+        let (rows, _) = read(
+            "1A0hb7-01Droop Control Gain0.0 to 100.0\n\
+             1A2hb8-01Energy Saving Gain0 to 100%80\n\
+             1A3hb8-02Energy Saving Frequency0.0 to 400.0 Hz0.0\n\
+             212hC3-04Slip Compensation Selection0Disabled0\n\
+             during Regeneration1Enabled\n",
+        );
+        assert_eq!(rows.len(), 4);
+        assert_eq!(
+            (
+                rows[1].name.as_str(),
+                rows[1].unit.as_deref(),
+                rows[1].default
+            ),
+            ("Energy Saving Gain", Some("%"), Some(80.0))
+        );
+        assert_eq!(
+            (rows[2].scale, rows[2].max, rows[2].default),
+            (Some(0.1), Some(400.0), Some(0.0))
+        );
+        assert_eq!(
+            rows[3].values.first().map(|c| (c.value, c.name.as_str())),
+            Some((0, "Disabled"))
+        );
+        assert_eq!(rows[3].default, Some(0.0));
+    }
+
+    #[test]
+    fn codes_listed_under_a_row() {
+        let (rows, _) = read(
+            "n004\t0104h\tReference Source\t0\tKeypad\t0\n\
+             \t\t\t1\tTerminal\n\
+             n005\t0105h\tStopping Method Selection\t0\tRamp To Stop\t0\n\
+             \t\t\t1\tCoast To Stop\n\
+             n006\t0106h\tReverse Prohibit\t0\tEnabled\t0\n\
+             n007\t0107h\tStop Key\t0\tEnabled\t0\n",
+        );
+        assert_eq!(rows.len(), 4);
+        let codes: Vec<_> = rows[1]
+            .values
+            .iter()
+            .map(|c| (c.value, c.name.as_str(), c.line))
+            .collect();
+        assert_eq!(codes, vec![(0, "Ramp To Stop", 3), (1, "Coast To Stop", 4)]);
+        assert_eq!(rows[1].default, Some(0.0));
+    }
+
+    #[test]
+    fn prose_is_not_a_row() {
+        let (rows, _) = read(
+            "n003 = 1 selects the terminals\nn001 Password\nn002 Control\nn003 Run\nn004 Reference\n\
+             The value 0101h. is written\n",
+        );
+        assert_eq!(
+            rows.iter().map(|r| r.line).collect::<Vec<_>>(),
+            vec![2, 3, 4, 5]
+        );
+    }
+
+    #[test]
+    fn decimal_addresses_under_an_address_header() {
+        let (rows, _) = read(
+            "Register   Name                 Range        Default\n\
+             40101      Acceleration time    0.1 to 600.0 s   5.0\n\
+             40102      Deceleration time    0.1 to 600.0 s   5.0\n",
+        );
+        assert_eq!(rows.len(), 2);
+        assert_eq!(
+            (rows[0].address, rows[0].notation),
+            (Some(40101), Notation::Decimal)
+        );
+        assert_eq!(
+            (rows[0].unit.as_deref(), rows[0].scale, rows[0].default),
+            (Some("s"), Some(0.1), Some(5.0))
+        );
+    }
+}
