@@ -508,6 +508,7 @@ pub async fn run(
         })
         .collect();
     let mut refused_logged = false;
+    let mut connected = false;
     let mut wait = Duration::from_millis(500);
     loop {
         if stop.load(Ordering::Relaxed) {
@@ -519,13 +520,23 @@ pub async fn run(
                     eprintln!("bridge: MQTT connected to {}", options.url);
                     refused_logged = false;
                     wait = Duration::from_millis(500);
-                    let _ = client.try_publish(&bridge_availability, QoS::AtLeastOnce, true, "online");
-                    let _ = client.try_subscribe(format!("{}/+/set/+", options.topic), QoS::AtLeastOnce);
-                    let _ = client.try_subscribe(format!("{}/+/command/+", options.topic), QoS::AtLeastOnce);
-                    // Discovery, then every value again (the broker may have lost them).
+                    connected = true;
+                    // The subscriptions, availability and discovery wait for room in the
+                    // client's queue (never dropped); then every value again (the broker may
+                    // have lost them).
                     let all: Vec<(String, Json)> = drives.iter().flat_map(|d| discovery(&options, d)).collect();
                     let client = client.clone();
+                    let root = options.topic.clone();
+                    let online = bridge_availability.clone();
                     tokio::spawn(async move {
+                        for filter in [format!("{root}/+/set/+"), format!("{root}/+/command/+")] {
+                            if client.subscribe(filter, QoS::AtLeastOnce).await.is_err() {
+                                return;
+                            }
+                        }
+                        if client.publish(online, QoS::AtLeastOnce, true, "online").await.is_err() {
+                            return;
+                        }
                         for (topic, payload) in all {
                             if client.publish(topic, QoS::AtLeastOnce, true, payload.to_string()).await.is_err() {
                                 return;
@@ -563,6 +574,7 @@ pub async fn run(
                 }
                 Ok(_) => {}
                 Err(e) => {
+                    connected = false;
                     let text = match &e {
                         rumqttc::ConnectionError::ConnectionRefused(code) => format!("the broker refused the connection: {code:?} (check the user name and password)"),
                         other => other.to_string(),
@@ -580,6 +592,11 @@ pub async fn run(
             },
             update = updates.recv() => match update {
                 None => break,
+                Some(Update::State { .. }) if !connected => {
+                    // Not queued while the broker is away: every value is sent again on
+                    // connecting.
+                    metrics.mqtt_dropped.get_or_create(&Vec::new()).inc();
+                }
                 Some(Update::State { drive, values }) => {
                     let info = &drives[drive];
                     for (pi, text) in values {
@@ -603,7 +620,19 @@ pub async fn run(
             _ = tokio::time::sleep(Duration::from_millis(200)) => {}
         }
     }
-    // Going away: the bridge's availability, then a clean disconnect (bounded).
+    // Going away: the drives the links marked offline, the bridge's availability, then a
+    // clean disconnect (bounded).
+    while let Ok(update) = updates.try_recv() {
+        if let Update::Availability { drive, online } = update {
+            let topic = format!("{}/{}/availability", options.topic, drives[drive].name);
+            let _ = client.try_publish(
+                topic,
+                QoS::AtLeastOnce,
+                true,
+                if online { "online" } else { "offline" },
+            );
+        }
+    }
     let _ = client.try_publish(&bridge_availability, QoS::AtLeastOnce, true, "offline");
     let _ = client.try_disconnect();
     let _ = tokio::time::timeout(Duration::from_secs(2), async {

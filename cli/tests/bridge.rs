@@ -441,11 +441,18 @@ fn mqtt_discovery_state_and_commands_through_the_gate() {
         b.output()
     );
     assert!(b.output().contains("bridge: stopped"));
-    let availability = subscribe(port, "drivemap/bridge/availability", 1, &[]);
-    assert_eq!(
-        availability.last().map(|(_, v)| v.as_str()),
-        Some("offline")
-    );
+    let availability = subscribe(port, "drivemap/+/availability", 1, &[]);
+    for topic in [
+        "drivemap/bridge/availability",
+        "drivemap/yaskawa-v7-1/availability",
+    ] {
+        let last = availability.iter().rev().find(|(t, _)| t == topic);
+        assert_eq!(
+            last.map(|(_, v)| v.as_str()),
+            Some("offline"),
+            "{topic}: {availability:?}"
+        );
+    }
 }
 
 fn openssl(dir: &std::path::Path, args: &[&str]) {
