@@ -1,23 +1,18 @@
 //! The bench tasks as a new user runs them, from a directory outside the repository:
 //! `cargo install` into an empty root, then every command; `probe` against a simulator serving
-//! a deliberately altered map; `scan` over a socat pseudo-terminal pair with two simulated
-//! slaves; JSON and CSV outputs read back with Python's `json` and `csv`.
+//! a deliberately altered map; `scan` over a socat pseudo-terminal pair with a line of two
+//! simulated drives; JSON and CSV outputs read back with Python's `json` and `csv`.
 
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_codegen::Drive;
 use drivemap_codegen::ir::ValueKind;
 use drivemap_codegen::validate::Context;
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::transport::Transport;
-use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport};
-use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_runtime::transport::serial::{Parity, SerialOptions};
+use drivemap_sim::{Line, SerialServer, SimOptions, Simulator, TcpFraming, TcpServer};
 
 use drivemap_test_support::pty_pair;
 
@@ -527,46 +522,6 @@ fn probe_reports_exactly_what_an_altered_drive_does_differently() {
     assert!(out.contains("scale selector modbus_frequency_reference_unit_selection (n152) = 0 (read from the drive)"), "{out}");
 }
 
-/// Two simulated slaves on one serial line: every request goes to both, the one addressed
-/// answers. Stops when `stop` is set or after 120 s.
-fn serve_bus(path: String, sims: Vec<Simulator>, stop: Arc<AtomicBool>) -> thread::JoinHandle<()> {
-    let mut link =
-        SerialTransport::open(SerialOptions::new(path, 9600).parity(Parity::Even)).unwrap();
-    thread::spawn(move || {
-        let mut sims = sims;
-        let until = Instant::now() + Duration::from_secs(120);
-        let mut buf: Vec<u8> = Vec::new();
-        let mut chunk = [0u8; 260];
-        let mut out = [0u8; 260];
-        let mut last = Instant::now();
-        while !stop.load(Ordering::Relaxed) && Instant::now() < until {
-            let n = link
-                .recv(&mut chunk, Instant::now() + Duration::from_millis(20))
-                .unwrap_or(0);
-            if n > 0 {
-                buf.extend_from_slice(&chunk[..n]);
-                last = Instant::now();
-            } else if last.elapsed() > Duration::from_millis(50) {
-                buf.clear(); // an incomplete frame after the silence is dropped
-            }
-            while let Ok(Some(len)) = drivemap_runtime::rtu::request_frame_len(&buf) {
-                if len > buf.len() {
-                    break;
-                }
-                for sim in sims.iter_mut() {
-                    if let Some(m) = sim.handle(TransportKind::Rtu, &buf[..len], &mut out).reply {
-                        let _ = link.send(&out[..m]);
-                    }
-                }
-                buf.drain(..len);
-            }
-            if buf.len() > 1024 {
-                buf.clear();
-            }
-        }
-    })
-}
-
 #[test]
 fn scan_finds_two_slaves_on_a_serial_line_and_names_their_maps() {
     let pty = pty_pair::PtyPair::new();
@@ -575,12 +530,18 @@ fn scan_finds_two_slaves_on_a_serial_line_and_names_their_maps() {
     let tds =
         drivemap_codegen::read_map(&repo().join("maps/ptlk-tds-v8.yaml"), &Context::default())
             .unwrap();
-    let stop = Arc::new(AtomicBool::new(false));
-    let bus = serve_bus(
-        pty.paths[1].clone(),
-        vec![simulator(v7, 2), simulator(tds, 7)],
-        stop.clone(),
-    );
+    // Two simulated drives on one serial line (`drivemap_sim::Line`): the one addressed answers.
+    let mut line = Line::new();
+    line.add(Simulator::new(v7, SimOptions::new().slave(2)).unwrap())
+        .unwrap();
+    line.add(Simulator::new(tds, SimOptions::new().slave(7)).unwrap())
+        .unwrap();
+    let bus = SerialServer::spawn(
+        line,
+        SerialOptions::new(pty.paths[1].clone(), 9600).parity(Parity::Even),
+        None,
+    )
+    .unwrap();
     let dir = TempDir::new("scan");
     let started = Instant::now();
     let (code, out, err) = run_in(
@@ -601,8 +562,7 @@ fn scan_finds_two_slaves_on_a_serial_line_and_names_their_maps() {
         ],
     );
     let took = started.elapsed();
-    stop.store(true, Ordering::Relaxed);
-    bus.join().unwrap();
+    bus.stop();
     assert_eq!(code, 0, "{err}");
     eprintln!("scan of 8 addresses took {:.1} s", took.as_secs_f64());
     assert!(took < Duration::from_secs(60), "scan hung: {took:?}");
