@@ -67,6 +67,16 @@ fn a_draft_checks_as_a_draft_with_every_citation_verified() {
         "{text}"
     );
     assert!(text.contains("0 unverified"), "{text}");
+
+    // `coverage` reads the draft's citations: every row of the manual's tables is covered.
+    let out = drivemap().arg("coverage").arg(&draft).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains(" 0 uncited"), "{text}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

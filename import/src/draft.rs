@@ -95,10 +95,11 @@ fn table_prefix(row: &Row) -> String {
 fn tables<'r>(rows: &[&'r Row]) -> Vec<Vec<&'r Row>> {
     let mut out: Vec<Vec<&Row>> = Vec::new();
     for r in rows {
-        let same = out
-            .last()
-            .and_then(|t| t.last())
-            .is_some_and(|last| table_prefix(last) == table_prefix(r) && r.line <= last.line + 60);
+        let same = out.last().and_then(|t| t.last()).is_some_and(|last| {
+            table_prefix(last) == table_prefix(r)
+                && r.line <= last.line + 60
+                && last.table == r.table
+        });
         if same {
             out.last_mut().expect("a table").push(r);
         } else {
@@ -180,7 +181,10 @@ pub fn write(input: &DraftInput<'_>) -> Written {
             let first = table[0];
             let prefix = table_prefix(first);
             let gid = unique(
-                ident(&format!("{prefix}_{}", first.line)),
+                match &first.table {
+                    Some((_, heading)) => ident(heading),
+                    None => ident(&format!("{prefix}_{}", first.line)),
+                },
                 &mut taken_groups,
             );
             let _ = writeln!(body, "  - id: {gid}");
@@ -196,12 +200,26 @@ pub fn write(input: &DraftInput<'_>) -> Written {
                     table[table.len() - 1].line
                 ),
             };
-            let _ = writeln!(body, "    name: {}", quote(&name));
-            let _ = writeln!(
-                body,
-                "    source: {}",
-                quote(&format!("{}:{}", reading.file, first.line))
-            );
+            match &first.table {
+                // The table's heading names the group, and is cited.
+                Some((line, heading)) => {
+                    let _ = writeln!(body, "    name: {}", quote(heading));
+                    let _ = writeln!(body, "    table: {}", quote(heading));
+                    let _ = writeln!(
+                        body,
+                        "    source: {}",
+                        quote(&format!("{}:{line}", reading.file))
+                    );
+                }
+                None => {
+                    let _ = writeln!(body, "    name: {}", quote(&name));
+                    let _ = writeln!(
+                        body,
+                        "    source: {}",
+                        quote(&format!("{}:{}", reading.file, first.line))
+                    );
+                }
+            }
             let _ = writeln!(body, "    registers:");
             for r in table {
                 let id = write_register(&mut body, &reading.file, r, &mut taken_ids);

@@ -69,6 +69,9 @@ pub struct Row {
     pub notes: Vec<String>,
     /// The row prints `Reserved` / `Not used` as its name.
     pub reserved: bool,
+    /// The heading of the row's table (`List of Monitor Data Registers`) and its line, when a
+    /// short heading stands just above the table's header.
+    pub table: Option<(usize, String)>,
 }
 
 /// A line that looked like a row but could not be read.
@@ -190,6 +193,7 @@ pub fn read_rows(
     // table's heading names its register when the row does not.
     let mut heading: Option<(usize, String)> = None;
     let mut table_heading: Option<String> = None;
+    let mut table: Option<(usize, String)> = None;
     for (i, raw) in lines.iter().enumerate() {
         let line_no = first_line + i;
         let line = raw.trim_end();
@@ -198,17 +202,15 @@ pub fn read_rows(
         }
         if let Some(h) = header(line) {
             header_ctx = h;
-            table_heading = heading
-                .take()
-                .filter(|(l, _)| line_no <= l + 3)
-                .map(|(_, t)| t);
+            table = heading.take().filter(|(l, _)| line_no <= l + 3);
+            table_heading = table.as_ref().map(|(_, t)| t.clone());
             continue;
         }
         if is_heading(line) {
             heading = Some((line_no, line.trim().to_string()));
         }
         if header_ctx.hex_column
-            && let Some(records) = address_records(line, line_no, schemes)
+            && let Some(records) = address_records(line, line_no, schemes, &table)
         {
             last_attached = line_no;
             rows.extend(records);
@@ -237,6 +239,7 @@ pub fn read_rows(
                         vec![format!("also printed: {}", key.references.join(", "))]
                     },
                     reserved: false,
+                    table: table.clone(),
                 };
                 if header_ctx.bits
                     && let Some((first, last, name)) = bit_cells(key.body)
@@ -452,7 +455,12 @@ fn bit_cells(s: &str) -> Option<(u8, u8, String)> {
 /// A line of an address list: parameter numbers, each followed by its address in hex without a
 /// mark and other numbers (decimal forms of the same address), one or several records a line
 /// (`dr.02 1102 44354 44355 dr21 1115 44373 44374`). The rows have no name of their own.
-fn address_records(line: &str, line_no: usize, schemes: &BTreeSet<String>) -> Option<Vec<Row>> {
+fn address_records(
+    line: &str,
+    line_no: usize,
+    schemes: &BTreeSet<String>,
+    table: &Option<(usize, String)>,
+) -> Option<Vec<Row>> {
     let mut out: Vec<(String, Vec<String>)> = Vec::new();
     for tok in line.split_whitespace() {
         let tok = tok.trim_matches(|c: char| c == '|' || c == '(' || c == ')');
@@ -500,6 +508,7 @@ fn address_records(line: &str, line_no: usize, schemes: &BTreeSet<String>) -> Op
             fields: Vec::new(),
             notes,
             reserved: false,
+            table: table.clone(),
         });
     }
     Some(rows)
