@@ -248,8 +248,7 @@ pub fn read_rows(
                     match table_heading.take() {
                         Some(t) => {
                             row.name = t;
-                            row.notes
-                                .push("named by the heading of its bit table".into());
+                            row.notes.push(BY_HEADING.into());
                         }
                         None => {
                             row.name = format!(
@@ -306,10 +305,31 @@ pub fn read_rows(
                     }
                     continue;
                 }
+                if line_no == row.line + 1 {
+                    name_continuation(line, row);
+                }
                 if continuation_codes(line, line_no, row) {
                     last_attached = line_no;
                 }
             }
+        }
+    }
+    // A heading names a bit table's register only when the table has one register; a heading
+    // over several (`List of Control Data Registers`) names the table.
+    const BY_HEADING: &str = "named by the heading of its bit table";
+    for i in 0..rows.len() {
+        let shared = rows[i].notes.iter().any(|n| n == BY_HEADING)
+            && rows
+                .iter()
+                .filter(|r| r.table.is_some() && r.table == rows[i].table && !r.fields.is_empty())
+                .count()
+                > 1;
+        if shared {
+            let r = &mut rows[i];
+            r.name = format!("Register {}", r.address_printed.as_deref().unwrap_or("?"));
+            r.notes.retain(|n| n != BY_HEADING);
+            r.notes
+                .push("the manual prints no name for the register; named by its address".into());
         }
     }
     (rows, unread)
@@ -798,6 +818,36 @@ fn clean_name(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// The rest of a name the table wraps onto the next line (`Password / Initialization` then
+/// `Selection`; `Slip Compensation Primary Delay` then `Time`): the first cell of words only
+/// (no digits: OCR noise such as `012/11` is not a name) that is not the text of a code.
+fn name_continuation(line: &str, row: &mut Row) {
+    let cs = cells(line);
+    let mut previous_is_code = false;
+    for cell in &cs {
+        let words_only = cell.chars().filter(|c| c.is_alphabetic()).count() >= 3
+            && !cell.chars().any(|c| c.is_ascii_digit())
+            && cell.starts_with(|c: char| c.is_alphabetic());
+        if words_only && !previous_is_code {
+            // Not a row's own echo (OCR prints some rows twice: `Reverse Fromott Selection`
+            // under `Reverse Prohibit Selection`), not a reserved row, not after a description.
+            let first = |t: &str| t.split_whitespace().next().unwrap_or("").to_lowercase();
+            let echo = first(cell) == first(&row.name);
+            if !echo
+                && !is_reserved(cell)
+                && !row.name.ends_with(['.', ':', ')'])
+                && !row.name.contains([':', ';'])
+                && access_cell(cell).is_none()
+                && unit_cell(cell).is_none()
+            {
+                row.name = format!("{} {}", row.name, clean_name(cell));
+            }
+            return;
+        }
+        previous_is_code = Num::parse(cell).is_some_and(|n| n.decimals == 0 && n.value <= 255.0);
+    }
+}
+
 /// Codes listed under a row: `0  Ramp To Stop`, `1: Coast`, `2 = External`. Returns whether the
 /// line gave one.
 fn continuation_codes(line: &str, line_no: usize, row: &mut Row) -> bool {
@@ -933,6 +983,37 @@ mod tests {
             .collect();
         assert_eq!(codes, vec![(0, "Ramp To Stop", 3), (1, "Coast To Stop", 4)]);
         assert_eq!(rows[1].default, Some(0.0));
+    }
+
+    #[test]
+    fn a_name_wrapped_onto_the_next_line() {
+        let (rows, _) = read(
+            "n001\t0101h\tPassword / Initialization\t0\tAll locked\t1\n\
+             11001\t010111\tSelection\t1\tAll open\n\
+             n002\t0102h\tReverse Prohibit Selection\t0\tEnabled\t0\n\
+             11002\t010211\tReverse Fromott Selection\t1\tDisabled\n\
+             n003\t0103h\tStop Key\t0\tEnabled\t0\n\
+             \t\tReserved\n\
+             n004\t0104h\tOperator\t0\tOn\t0\n",
+        );
+        let names: Vec<&str> = rows.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "Password / Initialization Selection",
+                "Reverse Prohibit Selection",
+                "Stop Key",
+                "Operator"
+            ]
+        );
+        assert_eq!(
+            rows[0].values.iter().map(|c| c.value).collect::<Vec<_>>(),
+            [0, 1]
+        );
+        assert_eq!(
+            rows[1].values.iter().map(|c| c.value).collect::<Vec<_>>(),
+            [0, 1]
+        );
     }
 
     #[test]
