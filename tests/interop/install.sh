@@ -10,6 +10,12 @@
 #   test, cli/tests/export_node_red.rs), pinned: node-red-contrib-modbus 5.23.3 is the newest the
 #   registry serves that runs on Debian's Node.js 20 (5.60 needs Node 22) and installs from npm
 #   alone (5.45 fetches a dependency from another host); ~25 s on an empty npm cache;
+# - Home Assistant 2024.3.3 in a venv of its own at target/ha-venv, for the check of the Home
+#   Assistant export against the modbus integration's own schema (tests/interop/ha_check_modbus.py):
+#   2024.3 is the last release for Python 3.11, its modbus integration pins pymodbus 3.6.6 (the
+#   interop venv pins 3.16.1), and a full `pip install homeassistant` resolves hundreds of
+#   packages (14 min here), so it is installed --no-deps with the modules its modbus schema
+#   imports (~1.5 min);
 # - Python packages pymodbus, minimalmodbus and pyserial in a venv at target/interop-venv, at the
 #   versions the scripts in tests/interop/ are written for (pymodbus changes its API between
 #   minor versions), and jsonschema, which cli/tests/machine_output.rs checks the CLI's JSON
@@ -74,3 +80,22 @@ if command -v npm >/dev/null 2>&1; then
 else
   echo "Node-RED: npm MISSING (apt-get install -y nodejs npm)" >&2
 fi
+
+ha_venv=target/ha-venv
+ha_pins=(homeassistant==2024.3.3 pymodbus==3.6.6 PyYAML==6.0.1 voluptuous==0.13.1 voluptuous-serialize==2.6.0
+  yarl==1.9.4 idna==3.20 multidict==6.9.1 python-slugify==8.0.4 text-unidecode==1.3 ciso8601==2.3.1
+  orjson==3.9.15 atomicwrites-homeassistant==1.4.1 aiohttp==3.9.3 attrs==23.2.0 aiosignal==1.4.0
+  frozenlist==1.8.0 typing_extensions==4.16.0 ulid-transform==0.9.0 awesomeversion==24.2.0
+  async-interrupt==1.1.1 Jinja2==3.1.3 MarkupSafe==3.0.4 lru-dict==1.3.0 PyJWT==2.8.0 packaging==26.4
+  aiohttp-fast-url-dispatcher==0.3.0 aiohttp-zlib-ng==0.3.1 zlib-ng==1.1.0 cryptography==42.0.5
+  cffi==2.1.1 ifaddr==0.2.0 certifi==2026.10.19.post1)
+ha_check='import homeassistant.components.modbus, homeassistant.const as c; assert c.__version__ == "2024.3.3"'
+if [ ! -x "$ha_venv/bin/python" ]; then
+  echo "== $python -m venv $ha_venv"
+  "$python" -m venv "$ha_venv"
+fi
+if ! "$ha_venv/bin/python" -c "$ha_check" >/dev/null 2>&1; then
+  echo "== $ha_venv/bin/pip install --no-deps homeassistant==2024.3.3 and what its modbus schema imports"
+  "$ha_venv/bin/pip" install --quiet --disable-pip-version-check --no-deps "${ha_pins[@]}"
+fi
+echo "Home Assistant: $("$ha_venv/bin/python" -c 'import homeassistant.const as c; print(c.__version__)' 2>/dev/null || echo MISSING) (modbus schema)"

@@ -45,9 +45,9 @@ pub struct Args {
     /// Poll every readable register of the map.
     #[arg(long, conflicts_with = "registers")]
     pub all: bool,
-    /// How often the tool polls.
-    #[arg(long, default_value = "1s", value_parser = drivemap_live::duration::positive)]
-    pub interval: Duration,
+    /// How often the tool polls (default 1 s; 5 s for Home Assistant, which warns below 5 s).
+    #[arg(long, value_parser = drivemap_live::duration::positive)]
+    pub interval: Option<Duration>,
     /// The name of the hub, entities and measurement (default: the drive id).
     #[arg(long)]
     pub name: Option<String>,
@@ -145,7 +145,14 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     } else {
         find_all(&drive, &args.registers)?
     };
-    let period_ms = u64::try_from(args.interval.as_millis()).unwrap_or(u64::MAX);
+    let interval = args.interval.unwrap_or(Duration::from_secs(
+        if args.format == Format::HomeAssistant {
+            5
+        } else {
+            1
+        },
+    ));
+    let period_ms = u64::try_from(interval.as_millis()).unwrap_or(u64::MAX);
     let points = Points::build(
         &drive,
         &regs,

@@ -46,11 +46,10 @@ fn number(v: f64) -> String {
     }
 }
 
-fn sensor(out: &mut String, points: &Points, p: &Point) {
-    let name = format!("{} {}", points.name, p.label());
+fn sensor(out: &mut String, points: &Points, p: &Point, name: &str) {
     let bits = p.width.count() * 16;
     let data_type = format!("{}int{bits}", if p.signed { "" } else { "u" });
-    let _ = writeln!(out, "      - name: {}", q(&name));
+    let _ = writeln!(out, "      - name: {}", q(name));
     let _ = writeln!(
         out,
         "        unique_id: {}",
@@ -72,11 +71,10 @@ fn sensor(out: &mut String, points: &Points, p: &Point) {
         }
     );
     let _ = writeln!(out, "        data_type: {data_type}");
-    let _ = writeln!(
-        out,
-        "        swap: {}",
-        if p.low_first() { "word" } else { "none" }
-    );
+    if p.low_first() {
+        // The low word at the lower address: Home Assistant swaps the words.
+        let _ = writeln!(out, "        swap: word");
+    }
     match &p.meaning {
         Meaning::Number {
             scale, precision, ..
@@ -144,6 +142,36 @@ pub fn render(points: &Points) -> String {
             let _ = writeln!(out, "# {}: {what}; {m}", p.id());
         }
     }
+    // Home Assistant loads one entity per name and one per address (the second is dropped with
+    // a warning): a printed name the manual gives twice takes the register id, a second
+    // register at an address is left out here.
+    let mut sensors: Vec<(&Point, String)> = Vec::new();
+    for p in &points.points {
+        if let Some((first, _)) = sensors
+            .iter()
+            .find(|(s, _)| s.pdu == p.pdu && s.table == p.table)
+        {
+            let _ = writeln!(
+                out,
+                "# left out {}: it shares PDU address {} with {}, and Home Assistant loads one entity per address",
+                p.id(),
+                p.pdu,
+                first.id()
+            );
+            continue;
+        }
+        let mut name = format!("{} {}", points.name, p.label());
+        if points
+            .points
+            .iter()
+            .filter(|o| o.label() == p.label())
+            .count()
+            > 1
+        {
+            name = format!("{name} [{}]", p.id());
+        }
+        sensors.push((p, name));
+    }
     for line in points.left_out_lines() {
         let _ = writeln!(out, "# {line}");
     }
@@ -194,12 +222,12 @@ pub fn render(points: &Points) -> String {
     if points.gap_ms > 0 {
         let _ = writeln!(out, "    message_wait_milliseconds: {}", points.gap_ms);
     }
-    if points.points.is_empty() {
+    if sensors.is_empty() {
         let _ = writeln!(out, "    sensors: []");
     } else {
         let _ = writeln!(out, "    sensors:");
-        for p in &points.points {
-            sensor(&mut out, points, p);
+        for (p, name) in &sensors {
+            sensor(&mut out, points, p, name);
         }
     }
     out
