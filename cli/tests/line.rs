@@ -32,7 +32,20 @@ struct Sim {
 }
 
 impl Sim {
+    /// Started on a TCP listener (`--rtu-tcp 0`, `--gateway 0`): its address from the first line.
     fn start(args: &[&str]) -> Sim {
+        let mut sim = Sim::start_any(args);
+        sim.addr = sim
+            .first
+            .split_whitespace()
+            .find(|w| w.starts_with("127.0.0.1:"))
+            .unwrap_or_else(|| panic!("no address in {:?}", sim.first))
+            .to_owned();
+        sim
+    }
+
+    /// Started on any link; `addr` left empty.
+    fn start_any(args: &[&str]) -> Sim {
         let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
             .arg("simulate")
             .args(args)
@@ -47,12 +60,11 @@ impl Sim {
         BufReader::new(child.stdout.take().unwrap())
             .read_line(&mut first)
             .unwrap();
-        let addr = first
-            .split_whitespace()
-            .find(|w| w.starts_with("127.0.0.1:"))
-            .unwrap_or_else(|| panic!("no address in {first:?}"))
-            .to_owned();
-        Sim { child, addr, first }
+        Sim {
+            child,
+            addr: String::new(),
+            first,
+        }
     }
 }
 
@@ -120,6 +132,53 @@ fn scan_finds_both_drives_of_a_simulated_line() {
             "{link}: {out}"
         );
     }
+}
+
+/// The same line on a serial port (a socat pseudo-terminal pair): `simulate --serial` serves
+/// both drives on the one port, `scan --serial` finds both.
+#[test]
+fn scan_finds_both_drives_on_a_simulated_serial_line() {
+    let pty = drivemap_test_support::pty_pair::PtyPair::new();
+    let sim = Sim::start_any(&[
+        "--drive",
+        "yaskawa-v7@2",
+        "--drive",
+        "ptlk-tds-v8@7",
+        "--serial",
+        &pty.paths[1],
+        "--baud",
+        "9600",
+        "--parity",
+        "even",
+    ]);
+    assert!(
+        sim.first.contains("9600 baud, parity even"),
+        "{}",
+        sim.first
+    );
+    let (code, out, err) = drivemap(&[
+        "scan",
+        "--serial",
+        &pty.paths[0],
+        "--baud",
+        "9600",
+        "--parity",
+        "even",
+        "--slaves",
+        "1-8",
+        "--drive",
+        "yaskawa-v7",
+        "--drive",
+        "ptlk-tds-v8",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        found(&out),
+        [(2, "yaskawa-v7".to_owned()), (7, "ptlk-tds-v8".to_owned())],
+        "{out}"
+    );
 }
 
 /// Reads reach the drive at their address: the `--set` prefixed with a slave address sets that
@@ -192,4 +251,24 @@ fn a_line_refuses_ambiguous_addresses_clearly() {
         assert_eq!(code, 2, "{args:?}: {err}");
         assert!(err.contains(want), "{args:?}: {err}");
     }
+    // A serial line's character format must be one every drive on it offers: the ACN lists
+    // 8N1, 8N2, 8E1 and 8O1 (CM.04), so 8E2 is refused, naming it, before the port is opened.
+    let (code, _, err) = drivemap(&[
+        "simulate",
+        "--drive",
+        "yaskawa-v7@1",
+        "--drive",
+        "automationdirect-acn@2",
+        "--serial",
+        "/nonexistent/tty",
+        "--parity",
+        "even",
+        "--stop-bits",
+        "2",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("automationdirect-acn's serial line offers only the formats its map lists"),
+        "{err}"
+    );
 }

@@ -1,8 +1,8 @@
 //! A simulator powers on like the drive (issue 25, item 7): every register starts at its
 //! factory default where the map gives one, else at the nearest value its own map allows. So
 //! `drivemap probe` of every map in `maps/` against its own simulator, as it powers on, agrees:
-//! 0 disagreements, on every transport the map offers. The maps are read from the directory,
-//! not from a list.
+//! 0 disagreements, on every transport the map offers and under every variant option. The maps
+//! are read from the directory, not from a list.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -29,7 +29,7 @@ fn probe_of_every_shipped_map_against_its_own_simulator_agrees() {
     for path in &maps {
         let drive = drivemap_codegen::read_map(path, &Context::default()).unwrap();
         let id = drive.meta.id.clone();
-        let mut links = vec![];
+        let mut links: Vec<(&str, TcpFraming)> = vec![];
         if drive.protocol.transports.contains(&TransportName::Rtu) {
             links.push(("--rtu-tcp", TcpFraming::RtuOverTcp));
         }
@@ -37,15 +37,34 @@ fn probe_of_every_shipped_map_against_its_own_simulator_agrees() {
             links.push(("--tcp", TcpFraming::ModbusTcp));
         }
         assert!(!links.is_empty(), "{id}: no transport");
-        let sim = Simulator::new(drive, SimOptions::new()).unwrap();
-        assert_eq!(sim.warnings(), [] as [String; 0], "{id}");
-        let slave = sim.slave().to_string();
-        let sim = drivemap_sim::shared(sim);
-        for (flag, framing) in links {
-            let server = TcpServer::spawn(sim.clone(), "127.0.0.1:0", framing, None).unwrap();
+        // The base variant, and each other option of every axis on its own: its own ranges
+        // and defaults (V7 460 V class: n012 0.2-510.0 V, default 460.0).
+        let mut variants: Vec<Option<(String, String)>> = vec![None];
+        for axis in &drive.variants {
+            for option in axis.options.iter().skip(1) {
+                variants.push(Some((axis.id.clone(), option.id.clone())));
+            }
+        }
+        for (variant, (flag, framing)) in variants
+            .iter()
+            .flat_map(|v| links.iter().map(move |l| (v, *l)))
+        {
+            let mut options = SimOptions::new();
+            let mut variant_args = vec![];
+            if let Some((axis, option)) = variant {
+                options = options.variant(axis, option);
+                variant_args = vec!["--variant".to_owned(), format!("{axis}={option}")];
+            }
+            let sim = Simulator::new(drive.clone(), options).unwrap();
+            assert_eq!(sim.warnings(), [] as [String; 0], "{id} {variant:?}");
+            let slave = sim.slave().to_string();
+            let server = TcpServer::spawn(sim, "127.0.0.1:0", framing, None).unwrap();
             let addr = server.local_addr().to_string();
+            let flag_shown = format!("{flag} {}", variant_args.join(" "));
+            let flag_shown = flag_shown.trim_end();
             let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
                 .args(["probe", "--drive", &id, flag, &addr, "--slave", &slave])
+                .args(&variant_args)
                 .args(["--format", "json", "--maps"])
                 .arg(repo().join("maps"))
                 .output()
@@ -53,19 +72,19 @@ fn probe_of_every_shipped_map_against_its_own_simulator_agrees() {
             let stdout = String::from_utf8_lossy(&out.stdout);
             let report: serde_json::Value = serde_json::from_str(&stdout).unwrap_or_else(|e| {
                 panic!(
-                    "{id} {flag}: {e}: {stdout}{}",
+                    "{id} {flag_shown}: {e}: {stdout}{}",
                     String::from_utf8_lossy(&out.stderr)
                 )
             });
             let disagreements = report["disagreements"].as_array().unwrap();
             summary.push(format!(
-                "{id} {flag}: checked {}, {} disagreement(s)",
+                "{id} {flag_shown}: checked {}, {} disagreement(s)",
                 report["checked"],
                 disagreements.len()
             ));
             if !disagreements.is_empty() || out.status.code() != Some(0) {
                 failures.push(format!(
-                    "{id} {flag}: exit {:?}, {} disagreement(s):\n{}",
+                    "{id} {flag_shown}: exit {:?}, {} disagreement(s):\n{}",
                     out.status.code(),
                     disagreements.len(),
                     disagreements
