@@ -2,7 +2,7 @@
 //! [--metrics ADDR] [--mqtt URL] [--config FILE]`: the drives polled into Prometheus and MQTT /
 //! Home Assistant ([`drivemap_bridge`]).
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -172,6 +172,7 @@ fn link(
     drives: &[String],
     settings: &SettingsArgs,
     names: &mut BTreeSet<String>,
+    loaded: &mut BTreeMap<String, &'static Drive>,
 ) -> Result<LinkSpec, String> {
     if drives.is_empty() {
         return Err("a link without drives: give --drive ID@SLAVE".into());
@@ -180,7 +181,16 @@ fn link(
     let mut first: Option<&'static Drive> = None;
     for text in drives {
         let (id, slave) = drive_slave(text)?;
-        let drive: &'static Drive = Box::leak(Box::new(dir.load(&id).map_err(|e| e.to_string())?));
+        // Each map is read once, however many drives use it (1,000 drives of five maps).
+        let drive: &'static Drive = match loaded.get(&id) {
+            Some(d) => d,
+            None => {
+                let d: &'static Drive =
+                    Box::leak(Box::new(dir.load(&id).map_err(|e| e.to_string())?));
+                loaded.insert(id.clone(), d);
+                d
+            }
+        };
         args.check_transport(drive).map_err(|e| e.to_string())?;
         first.get_or_insert(drive);
         let given = settings.resolve(drive).map_err(|e| e.to_string())?;
@@ -261,6 +271,7 @@ fn credentials(file: Option<&PathBuf>) -> Result<Option<(String, String)>, Strin
 /// Runs the bridge until SIGTERM or SIGINT.
 pub fn run(args: Args) -> Result<ExitCode, Error> {
     let mut names = BTreeSet::new();
+    let mut loaded = BTreeMap::new();
     let mut links = Vec::new();
     if !args.drives.is_empty() {
         let la = link_args(
@@ -279,6 +290,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             &args.drives,
             &args.settings,
             &mut names,
+            &mut loaded,
         )?);
     } else if args.tcp.is_some()
         || args.gateway.is_some()
@@ -311,6 +323,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                     &l.drives,
                     &SettingsArgs::default(),
                     &mut names,
+                    &mut loaded,
                 )
                 .map_err(|e| format!("--config {}: links[{i}]: {e}", path.display()))?,
             );
