@@ -2,11 +2,15 @@
 //!
 //! ```no_run
 //! // build.rs of a crate with its own maps under `maps/`
-//! drivemap_codegen::Config::new()
-//!     .maps_dir("maps")
-//!     .compile()
-//!     .unwrap_or_else(|e| panic!("{e}"));
+//! fn main() -> Result<(), Box<dyn std::error::Error>> {
+//!     drivemap_codegen::Config::new().maps_dir("maps").compile()?;
+//!     Ok(())
+//! }
 //! ```
+//!
+//! A map with an error fails the build with the report `drivemap check` prints for it, one
+//! `file:line:col: error ...` line per finding and the count: the error's `Display` and its
+//! `Debug` (what `?` in `main` prints) are that report.
 //!
 //! and in `src/lib.rs`:
 //!
@@ -46,24 +50,28 @@ impl Default for Config {
     }
 }
 
-/// Why generation failed.
-#[derive(Debug)]
+/// Why generation failed. `Display` and `Debug` are the same readable report (a `build.rs`
+/// whose `main` returns it with `?` prints it as is): for invalid maps, the lines `drivemap
+/// check` prints, `file:line:col: error ...`, and the count.
+#[non_exhaustive]
 pub enum Error {
     /// One or more maps are invalid; every finding is listed.
     Invalid(Diagnostics),
+    /// A map or a directory could not be read, or an output file written.
     Io {
         path: PathBuf,
         error: std::io::Error,
     },
     /// `OUT_DIR` is not set and no output directory was given.
     NoOutDir,
+    /// The generated code could not be formed (a runtime path that is not a Rust path).
     Generate(String),
 }
 
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::Invalid(d) => write!(f, "invalid drive maps:\n{d}"),
+            Error::Invalid(d) => write!(f, "{d}"),
             Error::Io { path, error } => write!(f, "{}: {error}", path.display()),
             Error::NoOutDir => write!(f, "OUT_DIR is not set; call Config::out_dir"),
             Error::Generate(e) => write!(f, "{e}"),
@@ -71,7 +79,20 @@ impl fmt::Display for Error {
     }
 }
 
-impl std::error::Error for Error {}
+impl fmt::Debug for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self, f)
+    }
+}
+
+impl std::error::Error for Error {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Error::Io { error, .. } => Some(error),
+            _ => None,
+        }
+    }
+}
 
 /// What a run produced.
 #[derive(Debug, Clone)]
