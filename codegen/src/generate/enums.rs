@@ -1,4 +1,5 @@
-//! Enumerations of codes, with an `Unknown(u16)` fallback so device data never panics.
+//! Enumerations of codes, with an `Unknown(u16)` fallback so device data never panics; equal
+//! by code (`rt::enumeration!`).
 
 use proc_macro2::{Ident, TokenStream};
 use quote::quote;
@@ -25,10 +26,12 @@ pub fn emit(
         let doc = docs::item(&text);
         quote!(#doc #var,)
     });
-    let doc = docs::item(&format!("Codes of {what}."));
+    let doc = docs::item(&format!(
+        "Codes of {what}; equal by code (`Unknown(c)` is the listed variant of code c)."
+    ));
     quote! {
         #doc
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[derive(Debug, Clone, Copy)]
         #[non_exhaustive]
         pub enum #ty {
             #(#decls)*
@@ -36,26 +39,8 @@ pub fn emit(
             Unknown(u16),
         }
 
-        impl #rt::Enumeration for #ty {
-            const ALL: &'static [Self] = &[#(Self::#variants),*];
-            const LABELS: &'static [#rt::plan::Label] = #labels;
-
-            fn unknown(code: u16) -> Self {
-                Self::Unknown(code)
-            }
-
-            fn unknown_code(&self) -> Option<u16> {
-                match self {
-                    Self::Unknown(code) => Some(*code),
-                    _ => None,
-                }
-            }
-        }
-
-        impl core::fmt::Display for #ty {
-            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-                #rt::Enumeration::describe(self, f)
-            }
-        }
+        // `Enumeration` (variants in the order of the labels), `Display`, and `PartialEq`,
+        // `Eq` and `Hash` by code: `Unknown(c)` equals the listed variant whose code is c.
+        #rt::enumeration!(#ty, #labels, [#(#variants),*]);
     }
 }

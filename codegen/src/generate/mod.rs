@@ -106,7 +106,7 @@ fn drive_tokens(drive: &Drive, plan: &DrivePlan, options: &Options) -> TokenStre
         used.push(ident("WriteOnly"));
     }
     let markers = quote!(use rt::{#(#used),*};);
-    let profile = profile::emit(drive, plan, rt);
+    let profile = profile::emit(plan, rt);
     let settings = settings::emit(drive, plan, rt);
     let registers = registers::emit(drive, plan, rt);
     quote! {
@@ -135,11 +135,4 @@ pub(crate) fn hex(v: u16) -> TokenStream {
 
 pub(crate) fn float(v: f64) -> Literal {
     Literal::f64_unsuffixed(v)
-}
-
-pub(crate) fn opt_str(s: &Option<String>) -> TokenStream {
-    match s {
-        Some(s) => quote!(Some(#s)),
-        None => quote!(None),
-    }
 }

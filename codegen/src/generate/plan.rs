@@ -2,9 +2,10 @@
 //! [`DrivePlan::registers`](crate::lower::DrivePlan::registers).
 //!
 //! Rows are printed here rather than through `prettyplease`, which would spread each row over
-//! a dozen lines: a table reads better one register per line, and the generated module stays
-//! small. Every value printed is a plain literal of the vocabulary crate's types, so a row is
-//! exactly the plan the lowering pass decided.
+//! dozens of lines: a row is three lines (the register's identity; its unit and conversion; its
+//! envelope and what else the plan says), and a list too long for one line (labels, bit fields,
+//! scale cases, moves) gets one item per line. Every value printed is a plain literal of the
+//! vocabulary crate's types, so a row is exactly the plan the lowering pass decided.
 
 use std::fmt::Write as _;
 
@@ -175,6 +176,25 @@ fn list<T>(items: &[T], f: impl Fn(&T) -> String) -> String {
     format!("&[{}]", parts.join(", "))
 }
 
+/// The longest list printed on one line; a longer one gets an item per line.
+const LIST_WIDTH: usize = 100;
+
+/// A list on one line if short, else one item per line, indented one step from `indent` (the
+/// indentation of the line the list starts on).
+fn block<T>(items: &[T], indent: usize, f: impl Fn(&T, usize) -> String) -> String {
+    let parts: Vec<String> = items.iter().map(|x| f(x, indent + 4)).collect();
+    let one_line = format!("&[{}]", parts.join(", "));
+    if parts.len() < 2 || (one_line.len() <= LIST_WIDTH && !one_line.contains('\n')) {
+        return one_line;
+    }
+    let mut out = String::from("&[\n");
+    for p in parts {
+        let _ = writeln!(out, "{:indent$}{p},", "", indent = indent + 4);
+    }
+    let _ = write!(out, "{:indent$}]", "");
+    out
+}
+
 fn setting(s: &Setting) -> String {
     format!("Setting {{ slot: {}, label: {} }}", s.slot, string(s.label))
 }
@@ -220,14 +240,14 @@ fn label(l: &Label) -> String {
     )
 }
 
-fn field(f: &Field) -> String {
+fn field(f: &Field, indent: usize) -> String {
     format!(
         "Field {{ id: {}, name: {}, lsb: {}, width: {}, values: {}, source: {} }}",
         string(f.id),
         string(f.name),
         f.lsb,
         f.width,
-        list(f.values, label),
+        block(f.values, indent, |l, _| label(l)),
         string(f.source)
     )
 }
@@ -247,7 +267,7 @@ fn case(c: &Case) -> String {
     )
 }
 
-fn conversion(c: &Conversion) -> String {
+fn conversion(c: &Conversion, indent: usize) -> String {
     match c {
         Conversion::Word { signed, range: r } => {
             format!(
@@ -278,11 +298,11 @@ fn conversion(c: &Conversion) -> String {
         } => format!(
             "Conversion::Selected {{ signed: {signed}, selector: {}, cases: {} }}",
             setting(selector),
-            list(cases, case)
+            block(cases, indent, |c, _| case(c))
         ),
         Conversion::Enum { values, unlisted } => format!(
             "Conversion::Enum {{ values: {}, unlisted: {} }}",
-            list(values, label),
+            block(values, indent, |l, _| label(l)),
             match unlisted {
                 Some(r) => format!("Some({})", range(*r)),
                 None => "None".into(),
@@ -291,7 +311,7 @@ fn conversion(c: &Conversion) -> String {
         Conversion::Bits { mask, fields } => format!(
             "Conversion::Bits {{ mask: {}, fields: {} }}",
             hex(*mask),
-            list(fields, field)
+            block(fields, indent, field)
         ),
     }
 }
@@ -325,12 +345,16 @@ fn access(a: Access) -> &'static str {
     }
 }
 
-/// One register's plan as a Rust expression.
+/// The indentation of a row's second and third lines.
+const ROW_INDENT: usize = 12;
+
+/// One register's plan as a Rust expression: its identity on the first line, its unit and
+/// conversion on the second, its envelope and the plan's other parts on the third.
 pub fn row(r: &RegisterPlan) -> String {
     let i = &r.info;
     let mut s = format!(
         "RegisterPlan::new(RegisterInfo {{ id: {}, param: {}, name: {}, address: {}, access: {}, \
-         table: {}, width: {}, broadcast_only: {}, source: {} }}, {}, {}, {})",
+         table: {}, width: {}, broadcast_only: {}, source: {} }},\n{:ROW_INDENT$}{}, {},\n{:ROW_INDENT$}{})",
         string(i.id),
         match i.param {
             Some(p) => format!("Some({})", string(p)),
@@ -350,12 +374,14 @@ pub fn row(r: &RegisterPlan) -> String {
         },
         i.broadcast_only,
         string(i.source),
+        "",
         string(r.unit),
-        conversion(&r.conversion),
+        conversion(&r.conversion, ROW_INDENT),
+        "",
         range(r.envelope),
     );
     if !r.moves.is_empty() || !r.also_at.is_empty() {
-        let moves = list(r.moves, |m: &Move| {
+        let moves = block(r.moves, ROW_INDENT, |m: &Move, _| {
             format!(
                 "Move {{ when: {}, address: {} }}",
                 condition(&m.when),
@@ -386,7 +412,11 @@ pub fn row(r: &RegisterPlan) -> String {
         );
     }
     if !r.read_values.is_empty() {
-        let _ = write!(s, ".read_as({})", list(r.read_values, label));
+        let _ = write!(
+            s,
+            ".read_as({})",
+            block(r.read_values, ROW_INDENT, |l, _| label(l))
+        );
     }
     if let Some(l) = &r.limit {
         let _ = write!(

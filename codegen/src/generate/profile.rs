@@ -1,63 +1,62 @@
-//! The drive's protocol profile as a `static PROFILE: Profile`.
+//! The drive's protocol profile as a `static PROFILE: Profile`, printed from the plan's profile
+//! ([`DrivePlan::profile`], which the lowering pass builds once and `drivemap-live` uses as it
+//! is); its write table is derived from the plan rows at compile time
+//! (`rt::plan::write_rules`), not listed.
 
 use proc_macro2::TokenStream;
 use quote::quote;
 
 use super::hex;
-use crate::ir::Drive;
 use crate::lower::DrivePlan;
-use crate::model::CommandKind;
+use drivemap_core::profile::{CommandKind, Parity};
 
-pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
-    let p = &drive.protocol;
-    let id = &drive.meta.id;
-    let fcs = p.function_codes.codes.iter().map(|f| hex2(*f));
-    let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read.value);
-    let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write.value);
-    let slave_min = proc_macro2::Literal::u8_unsuffixed(p.slave_address.min);
-    let slave_max = proc_macro2::Literal::u8_unsuffixed(p.slave_address.max);
+pub fn emit(plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
+    let p = plan.profile;
+    let id = p.drive_id;
+    let fcs = p.function_codes.iter().map(|f| hex2(*f));
+    let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read);
+    let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write);
+    let slave_min = proc_macro2::Literal::u8_unsuffixed(p.slave_min);
+    let slave_max = proc_macro2::Literal::u8_unsuffixed(p.slave_max);
     let broadcast = match &p.broadcast {
         None => quote!(None),
-        Some(b) => match &b.unknown {
-            Some(why) => {
-                let why = why.trim();
-                quote!(Some(#rt::profile::BroadcastInfo::not_printed(#why)))
-            }
+        Some(b) => match b.not_printed {
+            Some(why) => quote!(Some(#rt::profile::BroadcastInfo::not_printed(#why))),
             None => {
-                let addrs = drive.broadcast_addresses().into_iter().map(hex);
+                let addrs = b.addresses.iter().map(|a| hex(*a));
                 let fns = b.functions.iter().map(|f| hex2(*f));
                 quote!(Some(#rt::profile::BroadcastInfo::new(&[#(#fns),*], &[#(#addrs),*])))
             }
         },
     };
     let exceptions = p.exceptions.iter().map(|e| {
-        let (code, name, desc) = (hex2(e.code), &e.name, &e.description);
+        let (code, name, desc) = (hex2(e.code), e.name, e.description);
         quote!(#rt::profile::ExceptionInfo { code: #code, name: #name, description: #desc })
     });
     let commands = p.commands.iter().map(|c| {
-        let (cid, name, source) = (&c.id, &c.name, &c.source);
+        let (cid, name, source) = (c.id, c.name, c.source);
         let kind = match c.kind {
             CommandKind::Accept => quote!(#rt::profile::CommandKind::Accept),
             CommandKind::Persist => quote!(#rt::profile::CommandKind::Persist),
         };
-        let writes = c.writes.iter().map(|w| {
-            let (a, v) = (hex(w.address), hex(w.value));
+        let writes = c.writes.iter().map(|(a, v)| {
+            let (a, v) = (hex(*a), hex(*v));
             quote!((#a, #v))
         });
         quote!(#rt::profile::CommandInfo { id: #cid, name: #name, kind: #kind, writes: &[#(#writes),*], source: #source })
     });
-    let (rtu_off, tcp_off) = drive.address_offsets();
-    let (rtu_off, tcp_off) = (
-        proc_macro2::Literal::i32_unsuffixed(rtu_off),
-        proc_macro2::Literal::i32_unsuffixed(tcp_off),
-    );
-    let t = drive.timing_figures();
+    let rtu_off = proc_macro2::Literal::i32_unsuffixed(p.address_offsets.rtu);
+    let tcp_off = proc_macro2::Literal::i32_unsuffixed(p.address_offsets.tcp);
+    let t = &p.timing;
     let gap = super::float(t.frame_gap_chars);
     let gap_min_us = opt_u32(t.frame_gap_us);
     let ict_us = opt_u32(t.inter_char_timeout_us);
     let ict_bits = opt_u32(t.inter_char_timeout_bits);
     let resp = opt_u32(t.response_delay_us);
-    let resp_param = super::opt_str(&t.response_delay_param);
+    let resp_param = match t.response_delay_param {
+        Some(s) => quote!(Some(#s)),
+        None => quote!(None),
+    };
     let resp_bits = opt_u32(t.response_delay_bits);
     let resp_param_default = opt_u32(t.response_delay_param_default_us);
     let gap_bits = opt_u32(t.request_gap_bits);
@@ -69,8 +68,8 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
         }
         None => quote!(None),
     };
-    let endurance = opt_u32(p.eeprom.as_ref().map(|e| e.endurance));
-    let serial_formats = match &plan.profile.serial_formats {
+    let endurance = opt_u32(p.eeprom_write_endurance);
+    let serial_formats = match &p.serial_formats {
         None => quote!(None),
         Some(f) => {
             let (by, source) = (f.selected_by, f.source);
@@ -79,24 +78,15 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
                 let data = proc_macro2::Literal::u8_unsuffixed(x.data_bits);
                 let stop = proc_macro2::Literal::u8_unsuffixed(x.stop_bits);
                 let parity = match x.parity {
-                    drivemap_core::profile::Parity::None => quote!(None),
-                    drivemap_core::profile::Parity::Even => quote!(Even),
-                    drivemap_core::profile::Parity::Odd => quote!(Odd),
+                    Parity::None => quote!(None),
+                    Parity::Even => quote!(Even),
+                    Parity::Odd => quote!(Odd),
                 };
                 quote!(#rt::profile::SerialFormat { code: #code, data_bits: #data, parity: #rt::profile::Parity::#parity, stop_bits: #stop })
             });
             quote!(Some(#rt::profile::SerialFormats { selected_by: #by, formats: &[#(#formats),*], source: #source }))
         }
     };
-    let writes = plan
-        .registers
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.info.access.writable())
-        .map(|(i, _)| {
-            let i = proc_macro2::Literal::usize_unsuffixed(i);
-            quote!(plan::REGISTERS[#i].write_rule())
-        });
     quote! {
         /// The protocol profile: what the drive accepts on the wire, per its manual.
         pub static PROFILE: #rt::Profile = #rt::Profile {
@@ -125,8 +115,12 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
             },
             serial_formats: #serial_formats,
             eeprom_write_endurance: #endurance,
-            writes: &[#(#writes),*],
+            writes: &WRITES,
         };
+
+        /// The write rule of every writable register, derived from the plan in order.
+        static WRITES: [#rt::WriteRule; #rt::plan::writable_count(plan::REGISTERS)] =
+            #rt::plan::write_rules(plan::REGISTERS);
     }
 }
 
