@@ -15,20 +15,39 @@ fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+mod new_map;
+
 #[test]
 fn probe_of_every_shipped_map_against_its_own_simulator_agrees() {
-    let mut maps: Vec<PathBuf> = std::fs::read_dir(repo().join("maps"))
+    let ids = every_map_agrees_with_its_simulator(&repo().join("maps"));
+    assert!(ids.len() >= 5, "{ids:?}");
+}
+
+/// A map added to `maps/` (the fixture drive of another vendor) is probed against its own
+/// simulator by the same test, with no test edit.
+#[test]
+fn a_new_map_agrees_with_its_own_simulator_with_no_test_edit() {
+    let n = new_map::NewMap::new("probe-sim");
+    let ids = every_map_agrees_with_its_simulator(&n.root.join("maps"));
+    assert!(ids.iter().any(|i| i == n.id), "{ids:?}");
+}
+
+/// Probes every map of `dir` against its own simulator, on every transport and variant
+/// option; panics listing every disagreement. The drive ids probed.
+fn every_map_agrees_with_its_simulator(dir: &Path) -> Vec<String> {
+    let mut maps: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "yaml"))
         .collect();
     maps.sort();
-    assert!(maps.len() >= 5, "{maps:?}");
+    let mut ids = Vec::new();
     let mut failures = Vec::new();
     let mut summary = Vec::new();
     for path in &maps {
         let drive = drivemap_codegen::read_map(path, &Context::default()).unwrap();
         let id = drive.meta.id.clone();
+        ids.push(id.clone());
         let mut links: Vec<(&str, TcpFraming)> = vec![];
         if drive.protocol.transports.contains(&TransportName::Rtu) {
             links.push(("--rtu-tcp", TcpFraming::RtuOverTcp));
@@ -66,7 +85,7 @@ fn probe_of_every_shipped_map_against_its_own_simulator_agrees() {
                 .args(["probe", "--drive", &id, flag, &addr, "--slave", &slave])
                 .args(&variant_args)
                 .args(["--format", "json", "--maps"])
-                .arg(repo().join("maps"))
+                .arg(dir)
                 .output()
                 .unwrap();
             let stdout = String::from_utf8_lossy(&out.stdout);
@@ -98,4 +117,5 @@ fn probe_of_every_shipped_map_against_its_own_simulator_agrees() {
     }
     eprintln!("{}", summary.join("\n"));
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+    ids
 }
