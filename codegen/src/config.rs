@@ -289,8 +289,11 @@ impl Config {
             for line in generate::module_doc(drive) {
                 index += &format!("#[doc = {line:?}]\n");
             }
+            // A module is a drive's whole map; an application uses a few of its registers.
+            // Included into a binary or a private module, the rest is dead code by design, not
+            // a mistake to warn about (`examples/one-register` builds with `unused` denied).
             index += &format!(
-                "pub mod {module} {{\n    include!(\"{module}.rs\");\n}}\n\n",
+                "#[allow(dead_code)]\npub mod {module} {{\n    include!(\"{module}.rs\");\n}}\n\n",
                 module = drive.module,
             );
             ids.push((drive.meta.id.clone(), drive.module.clone()));
@@ -298,7 +301,7 @@ impl Config {
                 .modules
                 .push((drive.meta.id.clone(), drive.module.clone(), path));
         }
-        index += "/// Every generated drive: (drive id, module name).\npub const DRIVES: &[(&str, &str)] = &[\n";
+        index += "/// Every generated drive: (drive id, module name).\n#[allow(dead_code)]\npub const DRIVES: &[(&str, &str)] = &[\n";
         for (id, module) in &ids {
             index += &format!("    ({id:?}, {module:?}),\n");
         }

@@ -1,0 +1,8 @@
+//! One map, generated into OUT_DIR.
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    drivemap_codegen::Config::new()
+        .map("../../maps/yaskawa-v7.yaml")
+        .compile()?;
+    Ok(())
+}
