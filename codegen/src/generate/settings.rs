@@ -258,9 +258,16 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
     }
 }
 
-/// The map index of the register at `index` of the plan's table.
+/// The map index of the register at `index` of the plan's table. Every row is a register's
+/// (the lowering makes `order` a permutation of the rows): a row without one is a bug of the
+/// lowering, said as such, never register 0's place taken silently.
 fn plan_to_map(plan: &DrivePlan, index: usize) -> usize {
-    plan.order.iter().position(|&p| p == index).unwrap_or(0)
+    plan.order
+        .iter()
+        .position(|&p| p == index)
+        .unwrap_or_else(|| {
+            panic!("plan row {index} is no register's: `order` is not a permutation")
+        })
 }
 
 fn label(r: &crate::ir::Register) -> String {
