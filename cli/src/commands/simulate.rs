@@ -14,6 +14,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use clap::{ArgGroup, Args as ClapArgs};
 use drivemap_codegen::Drive;
 use drivemap_live::link::LineParity;
+use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
@@ -56,6 +57,13 @@ pub struct Args {
     /// its serial formats refuses any other parity and stop bits.
     #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
     pub stop_bits: Option<u8>,
+    /// With --serial: keep the drive's timing on a line of this speed in bits per second, for a
+    /// pseudo-terminal (socat), which delivers bytes at once: each request counts as taking a
+    /// character time per byte, each reply waits for the drive's response time from its map
+    /// (V7: 24 bits + n156 as the simulated drive holds it; TDS-V8: 5 ms) and is handed over
+    /// when its last character would have left the wire at this speed.
+    #[arg(long = "line-speed", value_name = "BAUD", requires = "serial", value_parser = clap::value_parser!(u32).range(50..=1_000_000))]
+    pub line_speed: Option<u32>,
     /// Slave address of a single drive (default: the map's default, else 1); with several
     /// drives, give each its address as `--drive ID@SLAVE`.
     #[arg(long)]
@@ -398,10 +406,26 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     }
     let first = drivemap_sim::server::lock(&line.drives()[0]).profile();
     let options = options.with_profile(first);
-    let server = SerialServer::spawn(line, options, log)
+    // The drive's side of a line at --line-speed: its response time, its characters' time.
+    let timed = args.line_speed.map(|speed| drivemap_sim::timed::DriveLine {
+        serial: SerialConfig {
+            baud: speed,
+            ..options.serial_config()
+        },
+        pace: true,
+    });
+    let server = SerialServer::spawn_on_line(line, options, log, timed)
         .map_err(|e| format!("cannot open serial port {}: {e}", path.display()))?;
+    let timing = match timed {
+        Some(t) => format!(
+            ", the drive's timing on a {} baud line of {}-bit characters",
+            t.serial.baud,
+            t.serial.bits_per_char()
+        ),
+        None => String::new(),
+    };
     outln!(
-        "simulating {what_drives} on RTU {} {baud} baud, parity {}, {stop_bits} stop bit(s) ({models}{time}); Ctrl-C stops",
+        "simulating {what_drives} on RTU {} {baud} baud, parity {}, {stop_bits} stop bit(s) ({models}{time}{timing}); Ctrl-C stops",
         path.display(),
         format!("{parity:?}").to_lowercase()
     );
