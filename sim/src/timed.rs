@@ -96,8 +96,9 @@ impl<T: Transport> Transport for TimedLink<T> {
         if self.line.pace
             && let Some(first) = self.first_byte
         {
-            // The first byte arrived when its last bit ended; the others follow on the wire.
-            request_end = request_end.max(first + self.chars(self.bytes.saturating_sub(1)));
+            // The link delivers bytes as they are written: the first arrived when the master
+            // started sending, and the request takes a character time per byte on the wire.
+            request_end = request_end.max(first + self.chars(self.bytes));
         }
         self.first_byte = None;
         self.bytes = 0;

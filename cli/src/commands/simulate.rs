@@ -258,6 +258,12 @@ fn for_slave(list: &[String], slave: u8, line: bool) -> Result<Vec<String>, Erro
 }
 
 pub fn run(args: Args) -> Result<ExitCode, Error> {
+    if args.line_speed.is_some() && args.serial.is_none() {
+        return Err(Error::Refused(
+            "--line-speed times the drive's side of a serial line: give it with --serial PATH"
+                .into(),
+        ));
+    }
     let several = args.drive.len() > 1;
     if several && args.slave.is_some() {
         return Err(Error::Refused(
