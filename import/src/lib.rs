@@ -50,20 +50,26 @@ fn table_line(line: &str) -> std::borrow::Cow<'_, str> {
     }
 }
 
+/// The lines `lines` (1-based, inclusive; all when `None`) of `all`, clamped to the text, with
+/// the number of the first.
+fn line_range<'a>(all: &'a [&'a str], lines: Option<(usize, usize)>) -> (&'a [&'a str], usize) {
+    let (first, last) = lines.unwrap_or((1, all.len()));
+    let first = first.max(1);
+    let last = last.min(all.len());
+    if first <= last {
+        (&all[first - 1..last], first)
+    } else {
+        (&all[0..0], first)
+    }
+}
+
 /// Reads the register rows of one manual; `lines` (1-based, inclusive) limits where rows are
 /// read, while the parameter schemes are learnt from the whole text.
 pub fn read_manual(file: &str, text: &str, lines: Option<(usize, usize)>) -> Reading {
     let owned: Vec<std::borrow::Cow<'_, str>> = text.lines().map(table_line).collect();
     let all: Vec<&str> = owned.iter().map(|l| l.as_ref()).collect();
     let schemes = scheme::learn(&all);
-    let (first, last) = lines.unwrap_or((1, all.len()));
-    let first = first.max(1);
-    let last = last.min(all.len());
-    let slice = if first <= last {
-        &all[first - 1..last]
-    } else {
-        &all[0..0]
-    };
+    let (slice, first) = line_range(&all, lines);
     let (rows, mut unread) = row::read_rows(slice, first, &schemes);
     // A row printed again (a summary table, a record sheet at the end of the manual) is
     // reported, not proposed twice: the first printing is the one a draft cites.
@@ -164,14 +170,7 @@ pub fn import(
         .map(|m| {
             let reading = read_manual(m.file, m.text, lines);
             let all: Vec<&str> = m.text.lines().collect();
-            let (first, last) = lines.unwrap_or((1, all.len()));
-            let first = first.max(1);
-            let last = last.min(all.len());
-            let slice = if first <= last {
-                &all[first - 1..last]
-            } else {
-                &all[0..0]
-            };
+            let (slice, first) = line_range(&all, lines);
             (reading, protocol::read(slice, first))
         })
         .collect();

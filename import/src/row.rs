@@ -74,6 +74,31 @@ pub struct Row {
     pub table: Option<(usize, String)>,
 }
 
+impl Row {
+    /// Adds a bit (or bits) of a bit table; reserved bits are left out (reserved bits are
+    /// written as 0, as the schema says).
+    fn push_bits(&mut self, first: u8, last: u8, name: String, line: usize) {
+        if !is_reserved(&name) {
+            self.fields.push(BitField {
+                first,
+                last,
+                name,
+                line,
+            });
+        }
+    }
+
+    /// Whether `line` (the row's own line) shows the row's parameter number or address as
+    /// printed: the rule `check` applies to a register's citation.
+    pub fn shown_by(&self, line: &str) -> bool {
+        self.param.as_deref().is_some_and(|p| line.contains(p))
+            || self
+                .address_printed
+                .as_deref()
+                .is_some_and(|a| line.contains(a))
+    }
+}
+
 /// A line that looked like a row but could not be read.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Unread {
@@ -261,14 +286,7 @@ pub fn read_rows(
                             );
                         }
                     }
-                    if !is_reserved(&name) {
-                        row.fields.push(BitField {
-                            first,
-                            last,
-                            name,
-                            line: line_no,
-                        });
-                    }
+                    row.push_bits(first, last, name, line_no);
                     last_attached = line_no;
                     rows.push(row);
                     continue;
@@ -293,14 +311,7 @@ pub fn read_rows(
                 }
                 if !row.fields.is_empty() {
                     if let Some((first, last, name)) = bit_cells(line) {
-                        if !is_reserved(&name) {
-                            row.fields.push(BitField {
-                                first,
-                                last,
-                                name,
-                                line: line_no,
-                            });
-                        }
+                        row.push_bits(first, last, name, line_no);
                         last_attached = line_no;
                     }
                     continue;

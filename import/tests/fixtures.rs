@@ -162,10 +162,7 @@ fn every_citation_of_a_draft_shows_its_row() {
             .filter(|r| r.address.is_some() && !r.reserved)
         {
             let line = lines[r.line - 1];
-            let shows = r.param.as_deref().is_some_and(|p| line.contains(p))
-                || r.address_printed
-                    .as_deref()
-                    .is_some_and(|a| line.contains(a));
+            let shows = r.shown_by(line);
             assert!(
                 shows,
                 "{file}:{}: `{line}` shows neither {:?} nor {:?}",
@@ -191,12 +188,14 @@ fn the_generator_refuses_a_draft() {
     std::fs::create_dir_all(&dir).unwrap();
     let map = dir.join(format!("{}.yaml", truth.meta.id));
     std::fs::write(&map, &imported.yaml).unwrap();
-    let err = drivemap_codegen::Config::new()
-        .map(&map)
-        .out_dir(dir.join("out"))
-        .cargo_directives(false)
-        .compile()
-        .expect_err("a draft must not generate");
+    let compile = || {
+        drivemap_codegen::Config::new()
+            .map(&map)
+            .out_dir(dir.join("out"))
+            .cargo_directives(false)
+            .compile()
+    };
+    let err = compile().expect_err("a draft must not generate");
     let text = err.to_string();
     assert!(
         text.contains("draft") && text.contains(&map.display().to_string()),
@@ -221,11 +220,6 @@ fn the_generator_refuses_a_draft() {
         .collect::<Vec<_>>()
         .join("\n");
     std::fs::write(&map, reviewed).unwrap();
-    drivemap_codegen::Config::new()
-        .map(&map)
-        .out_dir(dir.join("out"))
-        .cargo_directives(false)
-        .compile()
-        .unwrap();
+    compile().unwrap();
     std::fs::remove_dir_all(&dir).ok();
 }

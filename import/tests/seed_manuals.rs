@@ -96,10 +96,7 @@ fn the_seed_manuals_figures_do_not_regress() {
             .filter(|r| r.address.is_some() && !r.reserved)
         {
             let line = lines[r.line - 1];
-            let shows = r.param.as_deref().is_some_and(|p| line.contains(p))
-                || r.address_printed
-                    .as_deref()
-                    .is_some_and(|a| line.contains(a));
+            let shows = r.shown_by(line);
             if !shows {
                 failures.push(format!(
                     "{file}:{}: the row's line shows neither {:?} nor {:?}",
