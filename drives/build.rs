@@ -53,7 +53,7 @@ fn main() {
         .collect();
     println!("cargo:rerun-if-changed={}", dir.display());
     println!("cargo:rerun-if-changed=Cargo.toml");
-    let maps = match drivemap_codegen::find_maps(&dir) {
+    let maps = match drivemap_map::find_maps(&dir) {
         Ok(maps) => maps,
         Err(e) => {
             eprintln!("reading maps from {}: {e}", dir.display());

@@ -13,13 +13,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use drivemap_codegen::Drive;
-use drivemap_codegen::describe;
-use drivemap_codegen::ir::Register;
-use drivemap_codegen::lower::Quantity;
 use drivemap_live::codec::{self, InputError, Value};
 use drivemap_live::intern::intern;
 use drivemap_live::{LiveSettings, lookup};
+use drivemap_map::Drive;
+use drivemap_map::describe;
+use drivemap_map::ir::Register;
+use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::gate;
 use drivemap_runtime::plan::{Conversion, Dependency};

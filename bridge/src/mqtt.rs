@@ -21,10 +21,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::SyncSender;
 use std::time::{Duration, Instant};
 
-use drivemap_codegen::Drive;
-use drivemap_codegen::describe;
-use drivemap_codegen::ir::{Register, ValueKind};
 use drivemap_live::lookup;
+use drivemap_map::Drive;
+use drivemap_map::describe;
+use drivemap_map::ir::{Register, ValueKind};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::Role;
 use rumqttc::{AsyncClient, Event, EventLoop, LastWill, MqttOptions, Packet, QoS};
@@ -396,7 +396,7 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
 /// The step of a number register: its scale's factor where fixed, the finest of a selected
 /// scale's cases, 0.01 for a scale relative to another parameter, else 1.
 fn step(r: &Register) -> f64 {
-    use drivemap_codegen::model::Scale;
+    use drivemap_map::model::Scale;
     fn of(s: &Scale) -> f64 {
         match s {
             Scale::Factor(f) => *f,
@@ -422,7 +422,7 @@ fn step(r: &Register) -> f64 {
 /// selected scale's cases, its maximum through another parameter at that parameter's maximum,
 /// else the raw word's range.
 fn bounds(drive: &Drive, r: &Register) -> (f64, f64) {
-    use drivemap_codegen::model::{Reference, Scale};
+    use drivemap_map::model::{Reference, Scale};
     let cases = match &r.def.scale {
         Some(Scale::Selected(sel)) => sel.cases.as_slice(),
         _ => &[],

@@ -1,8 +1,8 @@
 //! What the bridge publishes of a drive: its polled registers ("points"), each with the
 //! Prometheus metric it feeds and the Home Assistant entity it is, named from the map.
 
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::{Register, ValueKind};
+use drivemap_map::Drive;
+use drivemap_map::ir::{Register, ValueKind};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::{Role, RoleKind, Target};
 
@@ -167,7 +167,7 @@ pub fn role_registers(drive: &Drive, kind: TransportKind) -> Vec<&Register> {
 }
 
 /// A field's lowest bit and width.
-pub fn field_span(f: &drivemap_codegen::model::Field) -> (u8, u8) {
+pub fn field_span(f: &drivemap_map::model::Field) -> (u8, u8) {
     match (f.bit, f.bits) {
         (Some(b), _) => (b, 1),
         (None, Some([a, b])) => (a.min(b), a.abs_diff(b) + 1),

@@ -11,8 +11,8 @@ use std::time::{Duration, Instant};
 use drivemap_bridge::link::{self, Connect, DriveSpec, LinkSpec, Update};
 use drivemap_bridge::metrics::Metrics;
 use drivemap_bridge::points;
-use drivemap_codegen::Drive;
-use drivemap_codegen::validate::Context;
+use drivemap_map::Drive;
+use drivemap_map::validate::Context;
 use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::profile::TransportKind;
@@ -23,7 +23,7 @@ use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 fn v7() -> &'static Drive {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml");
     Box::leak(Box::new(
-        drivemap_codegen::read_map(&path, &Context::default()).unwrap(),
+        drivemap_map::read_map(&path, &Context::default()).unwrap(),
     ))
 }
 

@@ -1,6 +1,6 @@
 //! The maps of a git revision for `drivemap diff --git`, written to a temporary directory so that
 //! a variant map and its base are both read as of that revision. The diff itself is the
-//! library's (`drivemap_codegen::diff`).
+//! library's (`drivemap_review::diff`).
 
 use std::io;
 use std::path::{Path, PathBuf};

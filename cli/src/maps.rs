@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Args as ClapArgs;
-use drivemap_codegen::{Diagnostics, Drive, validate::Context};
+use drivemap_map::{Diagnostics, Drive, validate::Context};
 
 include!(concat!(env!("OUT_DIR"), "/builtin_maps.rs"));
 
@@ -74,7 +74,7 @@ impl MapsDir {
             .map(|(id, text)| (id.to_string(), MapSource::Builtin(text)))
             .collect();
         if let Some(dir) = &self.maps {
-            for p in drivemap_codegen::find_maps(dir).unwrap_or_default() {
+            for p in drivemap_map::find_maps(dir).unwrap_or_default() {
                 if let Some(id) = p.file_stem().map(|s| s.to_string_lossy().into_owned()) {
                     all.insert(id, MapSource::File(p));
                 }
@@ -132,7 +132,7 @@ impl MapsDir {
 
     /// Reads, expands and validates a built-in map (its base too is looked up by id).
     pub fn read_builtin(&self, id: &str, text: &str) -> Result<Drive, Diagnostics> {
-        drivemap_codegen::read_map_str_with(
+        drivemap_map::read_map_str_with(
             &format!("<built-in>/{id}.yaml"),
             text,
             &Context::default(),
@@ -153,7 +153,7 @@ impl MapsDir {
     /// Reads, expands and validates a map file. Its base (`extends`) is looked up beside it,
     /// else by id among the maps this finds (the built-in ones too).
     pub fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
-        self.read_cached(path, &drivemap_codegen::load::TreeCache::new())
+        self.read_cached(path, &drivemap_map::load::TreeCache::new())
     }
 
     /// Like [`MapsDir::read`], taking the files already read (a map's bases) from `cache`:
@@ -161,10 +161,10 @@ impl MapsDir {
     pub fn read_cached(
         &self,
         path: &Path,
-        cache: &drivemap_codegen::load::TreeCache,
+        cache: &drivemap_map::load::TreeCache,
     ) -> Result<Drive, Diagnostics> {
         let ctx = context_for(path);
-        let direct = drivemap_codegen::read_map_cached(path, &ctx, cache);
+        let direct = drivemap_map::read_map_cached(path, &ctx, cache);
         let base_missing = |d: &Diagnostics| {
             d.iter()
                 .any(|x| x.message.starts_with("base map `") && x.message.ends_with("not found"))
@@ -177,15 +177,15 @@ impl MapsDir {
         let Ok(text) = std::fs::read_to_string(path) else {
             return direct;
         };
-        let name = drivemap_codegen::load::display_name(path);
-        drivemap_codegen::read_map_str_with(&name, &text, &ctx, &|base| self.base_text(base))
+        let name = drivemap_map::load::display_name(path);
+        drivemap_map::read_map_str_with(&name, &text, &ctx, &|base| self.base_text(base))
     }
 }
 
 /// Validation context for a map file: the manuals directory near it, if any.
 pub fn context_for(path: &Path) -> Context {
     let dir = path.parent().unwrap_or(Path::new("."));
-    match drivemap_codegen::default_manuals_dir(dir) {
+    match drivemap_map::default_manuals_dir(dir) {
         Some(m) => Context::with_manuals(&m),
         None => Context::default(),
     }
@@ -198,7 +198,7 @@ pub fn manuals_dir_for(path: &Path) -> Option<PathBuf> {
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    drivemap_codegen::default_manuals_dir(dir)
+    drivemap_map::default_manuals_dir(dir)
 }
 
 #[cfg(test)]
@@ -208,7 +208,7 @@ mod tests {
     #[test]
     fn every_shipped_map_is_built_in_and_loads_without_files() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps");
-        let shipped: Vec<String> = drivemap_codegen::find_maps(&dir)
+        let shipped: Vec<String> = drivemap_map::find_maps(&dir)
             .unwrap()
             .iter()
             .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
@@ -222,7 +222,7 @@ mod tests {
         // yaskawa-j7 extends yaskawa-v7: the base is found among the built-in maps.
         let j7 = MapsDir::default().load("yaskawa-j7").unwrap();
         let from_file =
-            drivemap_codegen::read_map(&dir.join("yaskawa-j7.yaml"), &Context::default()).unwrap();
+            drivemap_map::read_map(&dir.join("yaskawa-j7.yaml"), &Context::default()).unwrap();
         assert_eq!(j7.registers.len(), from_file.registers.len());
     }
 

@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::ValueKind;
-use drivemap_codegen::validate::Context;
+use drivemap_map::Drive;
+use drivemap_map::ir::ValueKind;
+use drivemap_map::validate::Context;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions};
 use drivemap_sim::{Line, SerialServer, SimOptions, Simulator, TcpFraming, TcpServer};
 
@@ -87,7 +87,7 @@ fn python(script: &str, input: &str) -> String {
 }
 
 fn shipped() -> Vec<String> {
-    drivemap_codegen::find_maps(&repo().join("maps"))
+    drivemap_map::find_maps(&repo().join("maps"))
         .unwrap()
         .iter()
         .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
@@ -488,15 +488,13 @@ const DISAGREEMENTS: &str = "import json,sys\nr=json.load(sys.stdin)\n\
 fn probe_reports_exactly_what_an_altered_drive_does_differently() {
     // Control: the shipped map served as it is agrees with itself.
     let shipped =
-        drivemap_codegen::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
-            .unwrap();
+        drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default()).unwrap();
     let (code, out, err) = probe(simulator(shipped, 1), "json");
     assert_eq!(code, 0, "{out}{err}");
     assert_eq!(python(DISAGREEMENTS, &out), "");
 
     let altered =
-        drivemap_codegen::read_map_str("yaskawa-v7.yaml", &altered_v7(), &Context::default())
-            .unwrap();
+        drivemap_map::read_map_str("yaskawa-v7.yaml", &altered_v7(), &Context::default()).unwrap();
     let (code, out, err) = probe(simulator(altered.clone(), 1), "json");
     assert_eq!(code, 1, "{err}");
     assert_eq!(
@@ -525,11 +523,10 @@ fn probe_reports_exactly_what_an_altered_drive_does_differently() {
 #[test]
 fn scan_finds_two_slaves_on_a_serial_line_and_names_their_maps() {
     let pty = pty_pair::PtyPair::new();
-    let v7 = drivemap_codegen::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
-        .unwrap();
+    let v7 =
+        drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default()).unwrap();
     let tds =
-        drivemap_codegen::read_map(&repo().join("maps/ptlk-tds-v8.yaml"), &Context::default())
-            .unwrap();
+        drivemap_map::read_map(&repo().join("maps/ptlk-tds-v8.yaml"), &Context::default()).unwrap();
     // Two simulated drives on one serial line (`drivemap_sim::Line`): the one addressed answers.
     let mut line = Line::new();
     line.add(Simulator::new(v7, SimOptions::new().slave(2)).unwrap())

@@ -11,7 +11,7 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_codegen::validate::Context;
+use drivemap_map::validate::Context;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_sim::slave::SimulatedSlave;
 
@@ -91,7 +91,7 @@ fn a_manual_with_no_rows_found_is_an_error_not_a_success() {
 
 #[test]
 fn read_by_register_number_and_parameter_number_against_the_simulator() {
-    let map = drivemap_codegen::read_map(&fixture().join("zenith-z3.yaml"), &Context::default())
+    let map = drivemap_map::read_map(&fixture().join("zenith-z3.yaml"), &Context::default())
         .expect("fixture map");
     let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
     slave.set_holding(45, 125); // P-01 acceleration time 12.5 s

@@ -38,7 +38,7 @@ fn every_reference_is_current(root: &Path, run: Run<'_>) -> Vec<String> {
     let docs = root.join("docs").join("drives");
     let mut ids = Vec::new();
     let mut stale = Vec::new();
-    for path in drivemap_codegen::find_maps(&root.join("maps")).expect("maps directory") {
+    for path in drivemap_map::find_maps(&root.join("maps")).expect("maps directory") {
         let id = path.file_stem().unwrap().to_string_lossy().into_owned();
         let (code, fresh, err) = run(&["doc", "--maps", "maps", "--drive", &id]);
         assert_eq!(code, 0, "drivemap doc --drive {id} failed: {err}");

@@ -11,7 +11,7 @@ use std::process::{Command, Stdio};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_codegen::validate::Context;
+use drivemap_map::validate::Context;
 use drivemap_runtime::profile::{Profile, TransportKind};
 
 use hostile_peer::{HostilePeer, Script};
@@ -26,7 +26,7 @@ fn repo() -> PathBuf {
 }
 
 fn profile() -> &'static Profile {
-    let map = drivemap_codegen::read_map(
+    let map = drivemap_map::read_map(
         &repo().join("maps").join(format!("{DRIVE}.yaml")),
         &Context::default(),
     )
@@ -253,7 +253,7 @@ fn read_never_prints_a_late_reply_as_another_registers_value() {
     use drivemap_test_support::late_slave::serve_late;
     use std::net::TcpListener;
 
-    let map = drivemap_codegen::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
+    let map = drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
         .expect("shipped map");
     let profile = drivemap_live::leak_profile(&map);
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();

@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_codegen::validate::Context;
+use drivemap_map::validate::Context;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_sim::slave::SimulatedSlave;
@@ -36,7 +36,7 @@ struct Drive {
 impl Drive {
     fn start(id: &str, framing: Framing, setup: impl FnOnce(&mut SimulatedSlave)) -> Drive {
         let path = repo().join("maps").join(format!("{id}.yaml"));
-        let map = drivemap_codegen::read_map(&path, &Context::default()).expect("shipped map");
+        let map = drivemap_map::read_map(&path, &Context::default()).expect("shipped map");
         let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
         setup(&mut slave);
         Drive::serve(slave, framing)
@@ -640,8 +640,8 @@ use pty_pair::PtyPair;
 fn serial_line_through_a_pseudo_terminal_pair() {
     use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport};
     let pty = PtyPair::new();
-    let map = drivemap_codegen::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
-        .unwrap();
+    let map =
+        drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default()).unwrap();
     let profile = drivemap_live::leak_profile(&map);
     let mut link = SerialTransport::open(
         SerialOptions::new(pty.paths[1].as_str(), 19_200)
@@ -798,7 +798,7 @@ fn writing_one_field_keeps_the_others() {
 #[test]
 fn pairs_and_field_selected_decimals_of_another_vendor_at_slave_254() {
     let fixture = repo().join("tests/fixtures/acme-vf1");
-    let map = drivemap_codegen::read_map(&fixture.join("acme-vf1.yaml"), &Context::default())
+    let map = drivemap_map::read_map(&fixture.join("acme-vf1.yaml"), &Context::default())
         .expect("fixture map");
     let mut slave = SimulatedSlave::new(254, drivemap_live::leak_profile(&map));
     slave.set_holding(0x2200, 0x0001); // energy counter 0001E240h = 123456: 12345.6 kWh

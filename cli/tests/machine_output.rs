@@ -377,7 +377,7 @@ fn probe_and_scan_reports_match_their_schemas_and_their_csv_names_drive_and_slav
 #[test]
 fn every_shipped_map_exports_to_the_export_schema() {
     let mut docs = Vec::new();
-    for path in drivemap_codegen::find_maps(&repo().join("maps")).unwrap() {
+    for path in drivemap_map::find_maps(&repo().join("maps")).unwrap() {
         let (code, out, err) = drivemap(&["export", path.to_str().unwrap()]);
         assert_eq!(code, 0, "{}: {err}", path.display());
         let doc = json(&out);

@@ -7,8 +7,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use drivemap_codegen::model::TransportName;
-use drivemap_codegen::validate::Context;
+use drivemap_map::model::TransportName;
+use drivemap_map::validate::Context;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
 fn repo() -> PathBuf {
@@ -45,7 +45,7 @@ fn every_map_agrees_with_its_simulator(dir: &Path) -> Vec<String> {
     let mut failures = Vec::new();
     let mut summary = Vec::new();
     for path in &maps {
-        let drive = drivemap_codegen::read_map(path, &Context::default()).unwrap();
+        let drive = drivemap_map::read_map(path, &Context::default()).unwrap();
         let id = drive.meta.id.clone();
         ids.push(id.clone());
         let mut links: Vec<(&str, TcpFraming)> = vec![];

@@ -305,7 +305,7 @@ type Run<'a> = &'a dyn Fn(&[&str]) -> (i32, String, String);
 
 /// The drive ids of the maps in `root/maps`.
 fn map_ids(root: &Path) -> Vec<String> {
-    drivemap_codegen::find_maps(&root.join("maps"))
+    drivemap_map::find_maps(&root.join("maps"))
         .expect("maps/")
         .iter()
         .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())

@@ -28,9 +28,9 @@ use std::time::{Duration, Instant};
 use clap::Parser;
 use drivemap_cli::commands::write;
 use drivemap_cli::{Cli, Command as Cmd};
-use drivemap_codegen::ir::{Drive, Register, ValueKind};
-use drivemap_codegen::model::TransportName;
-use drivemap_codegen::validate::{Context, field_span};
+use drivemap_map::ir::{Drive, Register, ValueKind};
+use drivemap_map::model::TransportName;
+use drivemap_map::validate::{Context, field_span};
 use drivemap_runtime::core::width::{Width, WordOrder};
 use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
@@ -45,7 +45,7 @@ mod new_map;
 
 /// The maps of a `maps/` directory.
 fn maps_in(dir: &Path) -> Vec<PathBuf> {
-    drivemap_codegen::find_maps(dir).expect("maps/")
+    drivemap_map::find_maps(dir).expect("maps/")
 }
 
 /// A simulated drive on loopback that executes every write it receives, legal or not.
@@ -482,7 +482,7 @@ struct Tally {
 }
 
 fn sweep(path: &Path, kind: TransportKind) -> Tally {
-    let drive = drivemap_codegen::read_map(path, &Context::default()).expect("shipped map");
+    let drive = drivemap_map::read_map(path, &Context::default()).expect("shipped map");
     let profile = drivemap_live::leak_profile(&drive);
     let wire = Wire::start(profile, kind);
     let mut tally = Tally::default();
@@ -618,7 +618,7 @@ fn every_register_of_every_map_through_a_modbus_tcp_gateway() {
 #[test]
 fn write_gate_repros_as_reported() {
     let path = repo().join("maps/yaskawa-v7.yaml");
-    let drive = drivemap_codegen::read_map(&path, &Context::default()).unwrap();
+    let drive = drivemap_map::read_map(&path, &Context::default()).unwrap();
     let profile = drivemap_live::leak_profile(&drive);
     let cases: [(TransportKind, &[&str], &str); 3] = [
         // The TCP option card's digital inputs over an RTU link: 0001h there is the run command.

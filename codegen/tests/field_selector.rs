@@ -4,14 +4,14 @@
 use std::path::Path;
 
 use drivemap_codegen::generate::{Options, drive_module};
-use drivemap_codegen::lower::{self, DrivePlan};
-use drivemap_codegen::validate::Context;
 use drivemap_core::plan::{Conversion, SettingsView};
 use drivemap_core::scale::ValueError;
+use drivemap_map::lower::{self, DrivePlan};
+use drivemap_map::validate::Context;
 
-fn fixture() -> drivemap_codegen::Drive {
-    drivemap_codegen::read_map(
-        Path::new("tests/fixtures/field-selector.yaml"),
+fn fixture() -> drivemap_map::Drive {
+    drivemap_map::read_map(
+        Path::new("../map/tests/fixtures/field-selector.yaml"),
         &Context::default(),
     )
     .unwrap_or_else(|d| panic!("{d}"))
@@ -156,7 +156,7 @@ fn docs_and_export_name_the_field() {
         code.contains("scale selected by field speed_in_rpm (bit 1) of status_word"),
         "{code}"
     );
-    let json = drivemap_codegen::export::export(&drive);
+    let json = drivemap_map::export::export(&drive);
     let current = json["registers"]
         .as_array()
         .unwrap()
@@ -169,7 +169,7 @@ fn docs_and_export_name_the_field() {
 /// The same form in an address alternative's condition: a 1-bit field moves a register.
 #[test]
 fn a_field_moves_a_register() {
-    let text = std::fs::read_to_string("tests/fixtures/field-selector.yaml").unwrap();
+    let text = std::fs::read_to_string("../map/tests/fixtures/field-selector.yaml").unwrap();
     let cited = "        source: \"manual.txt:23\"\n";
     assert_eq!(text.matches(cited).count(), 1);
     let moved = text.replace(
@@ -178,7 +178,7 @@ fn a_field_moves_a_register() {
             "        address_alternatives:\n          - {{address: 0x0014, when: {{setting: status_word.running, is: [1]}}, source: \"manual.txt:24\"}}\n{cited}"
         ),
     );
-    let drive = drivemap_codegen::read_map_str("field-selector.yaml", &moved, &Context::default())
+    let drive = drivemap_map::read_map_str("field-selector.yaml", &moved, &Context::default())
         .unwrap_or_else(|d| panic!("{d}"));
     let plan = lower::lower(&drive);
     assert_eq!(plan.settings.codes.len(), 3, "running is a third slot");
@@ -196,7 +196,7 @@ fn a_field_moves_a_register() {
     assert_eq!((at(0x0200), at(0x0201)), (0x0013, 0x0014));
 
     let wide = moved.replace("is: [1]", "is: [2]");
-    let err = drivemap_codegen::read_map_str("field-selector.yaml", &wide, &Context::default())
+    let err = drivemap_map::read_map_str("field-selector.yaml", &wide, &Context::default())
         .unwrap_err()
         .to_string();
     assert!(

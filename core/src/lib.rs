@@ -5,7 +5,7 @@
 //!
 //! `#![no_std]` and free of allocation: a generated drive module and the protocol layer built on
 //! this crate can run on a microcontroller. Data flows one way: the generator's lowering pass
-//! (`drivemap_codegen::lower`) decides a [`plan::RegisterPlan`] per register; generated code
+//! (`drivemap_map::lower`) decides a [`plan::RegisterPlan`] per register; generated code
 //! prints it as `const` data, the interpreter builds it at run time, and both convert with
 //! [`plan::RegisterPlan::decode_number`] and its siblings.
 #![no_std]

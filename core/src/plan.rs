@@ -1,12 +1,12 @@
 //! The drive plan: what every register of a map means, decided once by the generator's lowering
-//! pass (`drivemap_codegen::lower`) and then only read.
+//! pass (`drivemap_map::lower`) and then only read.
 //!
 //! Generated drive modules hold their plan as `const` data and implement the typed API on it
 //! ([`crate::register::Reg`]); the run-time interpreter (`drivemap-interp`) builds the same plan
 //! from a map file. Both convert words with the one implementation below, so the generated code
 //! and a map loaded at run time cannot disagree about a scale, a range or an address.
 //!
-//! Where a register's scale is decided: [`Conversion`], built in `codegen/src/lower.rs`.
+//! Where a register's scale is decided: [`Conversion`], built in `map/src/lower.rs`.
 
 use crate::profile::TransportKind;
 use crate::register::{RegisterInfo, WriteRestriction};

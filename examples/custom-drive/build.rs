@@ -8,8 +8,8 @@
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // A map with an error: `?` prints the report `drivemap check` prints, file:line:col.
     drivemap_codegen::Config::new()
-        .map("../../codegen/tests/fixtures/mini-drive.yaml")
-        .map("../../codegen/tests/fixtures/field-selector.yaml")
+        .map("../../map/tests/fixtures/mini-drive.yaml")
+        .map("../../map/tests/fixtures/field-selector.yaml")
         .map("../../tests/fixtures/acme-vf1/acme-vf1.yaml")
         .compile()?;
     Ok(())

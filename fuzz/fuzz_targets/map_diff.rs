@@ -1,10 +1,10 @@
-//! The semantic diff (`drivemap diff`, `drivemap_codegen::diff`) of two maps: the input is two
+//! The semantic diff (`drivemap diff`, `drivemap_review::diff`) of two maps: the input is two
 //! maps separated by a line `#---8<---`; when both validate, they are compared both ways and
 //! rendered as text, Markdown and annotations. It must never panic.
 #![no_main]
 
-use drivemap_codegen::diff;
-use drivemap_codegen::validate::Context;
+use drivemap_review::diff;
+use drivemap_map::validate::Context;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
@@ -16,8 +16,8 @@ fuzz_target!(|data: &[u8]| {
     };
     let ctx = Context::default();
     let (Ok(old), Ok(new)) = (
-        drivemap_codegen::read_map_str("old.yaml", old, &ctx),
-        drivemap_codegen::read_map_str("new.yaml", new, &ctx),
+        drivemap_map::read_map_str("old.yaml", old, &ctx),
+        drivemap_map::read_map_str("new.yaml", new, &ctx),
     ) else {
         return;
     };

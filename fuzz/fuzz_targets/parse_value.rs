@@ -5,8 +5,8 @@
 
 use std::sync::LazyLock;
 
-use drivemap_codegen::ir::Drive;
-use drivemap_codegen::validate::Context;
+use drivemap_map::ir::Drive;
+use drivemap_map::validate::Context;
 use drivemap_live::LiveSettings;
 use libfuzzer_sys::fuzz_target;
 
@@ -17,7 +17,7 @@ static DRIVES: LazyLock<Vec<Drive>> = LazyLock::new(|| {
     ]
     .iter()
     .map(|(name, text)| {
-        drivemap_codegen::read_map_str(name, text, &Context::default()).expect("shipped map")
+        drivemap_map::read_map_str(name, text, &Context::default()).expect("shipped map")
     })
     .collect()
 });

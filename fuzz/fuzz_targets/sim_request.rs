@@ -31,7 +31,7 @@ fn sims() -> &'static Sims {
             .iter()
             .map(|id| {
                 let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
-                let drive = drivemap_codegen::read_map(path.as_ref(), &Default::default())
+                let drive = drivemap_map::read_map(path.as_ref(), &Default::default())
                     .expect("shipped map");
                 let sim = Simulator::new(drive, SimOptions::new().clock(Arc::new(clock.clone())))
                     .expect("simulator of a shipped map");

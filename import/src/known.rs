@@ -1,7 +1,7 @@
 //! The registers of a map read by the front end, as [`Known`] rows.
 
-use drivemap_codegen::ir::Drive;
-use drivemap_codegen::model::{DefaultValue, Scale};
+use drivemap_map::ir::Drive;
+use drivemap_map::model::{DefaultValue, Scale};
 
 use crate::compare::Known;
 

@@ -187,7 +187,7 @@ pub fn import(
             command,
         });
         let findings =
-            match drivemap_codegen::read_map_str(&file_name, &written.yaml, &Default::default()) {
+            match drivemap_map::read_map_str(&file_name, &written.yaml, &Default::default()) {
                 Ok(_) => Vec::new(),
                 Err(d) => d.0,
             };

@@ -4,8 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use drivemap_codegen::ir::Drive;
 use drivemap_import::{Manual, compare, import, known};
+use drivemap_map::ir::Drive;
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/import")
@@ -15,8 +15,8 @@ fn fixtures() -> PathBuf {
 fn cases() -> Vec<(Drive, String, String)> {
     let dir = fixtures();
     let mut out = Vec::new();
-    for map in drivemap_codegen::find_maps(&dir).unwrap() {
-        let drive = drivemap_codegen::read_map(&map, &Default::default())
+    for map in drivemap_map::find_maps(&dir).unwrap() {
+        let drive = drivemap_map::read_map(&map, &Default::default())
             .unwrap_or_else(|e| panic!("{}: {e}", map.display()));
         let file = drive.meta.text_manuals().next().unwrap().to_string();
         let text = std::fs::read_to_string(dir.join("manuals").join(&file)).unwrap();
@@ -75,12 +75,11 @@ fn every_row_of_a_fixture_manual_is_read_right() {
             "{id}: {:?}",
             imported.left_out
         );
-        let draft = drivemap_codegen::read_map_str(
-            &format!("{id}.yaml"),
-            &imported.yaml,
-            &Default::default(),
-        )
-        .unwrap_or_else(|e| panic!("{id}: the draft does not check:\n{e}\n{}", imported.yaml));
+        let draft =
+            drivemap_map::read_map_str(&format!("{id}.yaml"), &imported.yaml, &Default::default())
+                .unwrap_or_else(|e| {
+                    panic!("{id}: the draft does not check:\n{e}\n{}", imported.yaml)
+                });
         assert!(draft.draft.is_some(), "{id}: the draft is marked");
         for t in &truth.registers {
             let d = draft
@@ -88,7 +87,7 @@ fn every_row_of_a_fixture_manual_is_read_right() {
                 .iter()
                 .find(|d| d.def.address == t.def.address)
                 .unwrap_or_else(|| panic!("{id}: {} not in the draft", t.def.id));
-            let codes = |r: &drivemap_codegen::ir::Register| {
+            let codes = |r: &drivemap_map::ir::Register| {
                 r.def
                     .values
                     .iter()
@@ -96,7 +95,7 @@ fn every_row_of_a_fixture_manual_is_read_right() {
                     .collect::<Vec<_>>()
             };
             assert_eq!(codes(d), codes(t), "{id}: codes of {}", t.def.id);
-            let bits = |r: &drivemap_codegen::ir::Register| {
+            let bits = |r: &drivemap_map::ir::Register| {
                 r.def
                     .fields
                     .iter()

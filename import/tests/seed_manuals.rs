@@ -27,15 +27,15 @@ const END: &str = "<!-- END figures -->";
 fn the_seed_manuals_figures_do_not_regress() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let maps_dir = root.join("maps");
-    let manuals = drivemap_codegen::default_manuals_dir(&maps_dir).unwrap_or_else(|| {
+    let manuals = drivemap_map::default_manuals_dir(&maps_dir).unwrap_or_else(|| {
         panic!(
             "the seed manuals are not at hand: set DRIVEMAP_MANUALS or clone next to shared/manuals"
         )
     });
-    let drives: Vec<_> = drivemap_codegen::find_maps(&maps_dir)
+    let drives: Vec<_> = drivemap_map::find_maps(&maps_dir)
         .unwrap()
         .iter()
-        .map(|p| drivemap_codegen::read_map(p, &Default::default()).unwrap())
+        .map(|p| drivemap_map::read_map(p, &Default::default()).unwrap())
         .collect();
     let mut table = String::new();
     let _ = writeln!(

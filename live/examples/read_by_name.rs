@@ -23,7 +23,7 @@ pub fn read_by_name(
     addr: &str,
     names: &[String],
 ) -> Result<Vec<Reading>, Box<dyn Error>> {
-    let drive = drivemap_codegen::read_map(map, &Default::default())?;
+    let drive = drivemap_map::read_map(map, &Default::default())?;
     let regs = find_all(&drive, names)?;
     let mut session = Session::open(&drive, &Link::tcp(addr), LiveSettings::default())?;
     for warning in session.load_dependencies(&regs, &BTreeSet::new()) {

@@ -7,7 +7,7 @@
 
 use std::fmt;
 
-use drivemap_codegen::ir::{Drive, Register};
+use drivemap_map::ir::{Drive, Register};
 use drivemap_runtime::plan::{Conversion, Field, RegisterPlan};
 use drivemap_runtime::{Rounding, ValueError};
 

@@ -3,7 +3,7 @@
 //! name ([`Session`] over a [`Link`]; `examples/read_by_name.rs`).
 //!
 //! The generated modules and this crate agree by construction: both read the same validated IR
-//! ([`drivemap_codegen::ir`]) and convert with the same functions of
+//! ([`drivemap_map::ir`]) and convert with the same functions of
 //! [`drivemap_runtime::scale`]; a test in `tests/` compares them register by register.
 
 pub mod codec;

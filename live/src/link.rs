@@ -6,8 +6,8 @@
 
 use std::time::Duration;
 
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::LineParity as MapParity;
+use drivemap_map::Drive;
+use drivemap_map::ir::LineParity as MapParity;
 use drivemap_runtime::bus_time::{Parity as BusParity, SerialConfig};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
@@ -239,7 +239,7 @@ impl Link {
     /// does (Modbus TCP addressing would put every register of a drive with an RTU address
     /// offset one off).
     pub fn check_transport(&self, drive: &Drive) -> Result<(), LinkError> {
-        use drivemap_codegen::model::TransportName;
+        use drivemap_map::model::TransportName;
         let Some(addr) = &self.tcp else {
             return Ok(());
         };
@@ -337,7 +337,7 @@ impl Link {
 }
 
 /// Baud rate, parity and stop bits of a serial line to `drive`: what is given, else the map's
-/// defaults ([`drivemap_codegen::ir::SerialDefaults`]: 9600, no parity unless the map says
+/// defaults ([`drivemap_map::ir::SerialDefaults`]: 9600, no parity unless the map says
 /// otherwise; the stop bits of the map's formats for the parity when they give only one, else
 /// 2 without parity where the map fixes 11-bit characters, else 1). For `read`/`write`/`poll`
 /// and for `simulate --serial`; whether the map lists the combination is checked when the port
@@ -387,7 +387,7 @@ mod tests {
     #[test]
     fn client_timing_defaults_come_from_the_map() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml");
-        let drive = drivemap_codegen::read_map(&path, &Default::default()).expect("the V7 map");
+        let drive = drivemap_map::read_map(&path, &Default::default()).expect("the V7 map");
         let profile = crate::leak_profile(&drive);
         let gap = |a: &Link| a.client_options(&drive, profile).request_gap;
         assert_eq!(gap(&args("serial")), Duration::from_micros(12_500));

@@ -5,7 +5,7 @@
 
 use std::fmt;
 
-use drivemap_codegen::ir::{Drive, Register};
+use drivemap_map::ir::{Drive, Register};
 
 /// No register has that name.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -95,8 +95,8 @@ fn at_address(drive: &Drive, address: u16) -> Option<&Register> {
 /// How the manual prints a register's address: `2101H`, or its number in a decimal manual.
 fn printed_address(drive: &Drive, r: &Register) -> String {
     match drive.address_format {
-        drivemap_codegen::model::AddressFormat::Decimal => r.def.address.to_string(),
-        drivemap_codegen::model::AddressFormat::Hex => format!("{:04X}H", r.def.address),
+        drivemap_map::model::AddressFormat::Decimal => r.def.address.to_string(),
+        drivemap_map::model::AddressFormat::Hex => format!("{:04X}H", r.def.address),
     }
 }
 
@@ -115,7 +115,7 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
     if let Some(r) = hit {
         return Ok(r);
     }
-    let decimal = drive.address_format == drivemap_codegen::model::AddressFormat::Decimal;
+    let decimal = drive.address_format == drivemap_map::model::AddressFormat::Decimal;
     if let Some(r) = address_in(name, decimal).and_then(|a| at_address(drive, a)) {
         return Ok(r);
     }
@@ -169,7 +169,7 @@ mod tests {
         let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../tests/fixtures")
             .join(path);
-        drivemap_codegen::read_map(&p, &Default::default()).expect("fixture map")
+        drivemap_map::read_map(&p, &Default::default()).expect("fixture map")
     }
 
     fn id<'a>(drive: &'a Drive, name: &str) -> Result<&'a str, String> {

@@ -1,10 +1,10 @@
 //! The runtime [`Profile`] of a map loaded at run time: the one the lowering pass decided
-//! ([`drivemap_codegen::lower`]), as generated code has it.
+//! ([`drivemap_map::lower`]), as generated code has it.
 //!
 //! The client takes `&'static Profile` (generated code has statics). The plan, profile included,
 //! is lowered once per loaded map and lives as long as the process.
 
-use drivemap_codegen::ir::Drive;
+use drivemap_map::ir::Drive;
 use drivemap_runtime::profile::Profile;
 
 /// The runtime profile of `drive`, with `'static` lifetime (see the module docs).

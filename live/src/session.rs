@@ -8,9 +8,9 @@
 
 use std::collections::BTreeSet;
 
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::Register;
-use drivemap_codegen::lower::Quantity;
+use drivemap_map::Drive;
+use drivemap_map::ir::Register;
+use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::plan::Dependency;
 use drivemap_runtime::planner::Poller;
@@ -22,7 +22,7 @@ use crate::link::{Link, LinkError, LiveClient};
 use crate::lookup::NotFound;
 use crate::silence::SilenceGuard;
 use crate::{LiveSettings, leak_profile, lookup};
-use drivemap_codegen::describe;
+use drivemap_map::describe;
 use drivemap_runtime::Client;
 
 /// What conversions depend on, as the user gives it (the command line's `--variant` and

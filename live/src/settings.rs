@@ -3,8 +3,8 @@
 
 use std::collections::BTreeMap;
 
-use drivemap_codegen::ir::Drive;
-use drivemap_codegen::lower::{DrivePlan, Quantity};
+use drivemap_map::ir::Drive;
+use drivemap_map::lower::{DrivePlan, Quantity};
 use drivemap_runtime::SettingsView;
 
 /// Variant choices, selector codes, reference values and external quantities.

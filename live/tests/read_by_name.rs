@@ -16,7 +16,7 @@ fn v7_map() -> PathBuf {
 
 /// A simulated V7 on loopback Modbus TCP with n018 = 1 (times in 0.01 s) and n019 = 12.34 s.
 fn serve_v7() -> TcpServer {
-    let drive = drivemap_codegen::read_map(&v7_map(), &Default::default()).unwrap();
+    let drive = drivemap_map::read_map(&v7_map(), &Default::default()).unwrap();
     let mut sim = Simulator::new(drive, SimOptions::new()).unwrap();
     sim.set("n018", 1.0).unwrap();
     sim.set("n019", 12.34).unwrap();

@@ -14,8 +14,8 @@
 //! use drivemap_runtime::profile::TransportKind;
 //!
 //! let maps = concat!(env!("CARGO_MANIFEST_DIR"), "/../maps/");
-//! let v7 = drivemap_codegen::read_map(format!("{maps}yaskawa-v7.yaml").as_ref(), &Default::default())?;
-//! let tds = drivemap_codegen::read_map(format!("{maps}ptlk-tds-v8.yaml").as_ref(), &Default::default())?;
+//! let v7 = drivemap_map::read_map(format!("{maps}yaskawa-v7.yaml").as_ref(), &Default::default())?;
+//! let tds = drivemap_map::read_map(format!("{maps}ptlk-tds-v8.yaml").as_ref(), &Default::default())?;
 //! let mut line = Line::new();
 //! line.add(Simulator::new(v7, SimOptions::new().slave(1))?)?;
 //! let tds = line.add(Simulator::new(tds, SimOptions::new().slave(2))?)?; // its SharedSim

@@ -1,6 +1,6 @@
 //! The drive model's view of a map's roles: which registers and fields it reads commands from and
 //! writes its state to, resolved once from the drive plan (`roles:` of the map, lowered by
-//! `drivemap_codegen::lower`) to register indices, bit positions and codes.
+//! `drivemap_map::lower`) to register indices, bit positions and codes.
 //!
 //! Nothing here knows a drive by name, and nothing here is a second reading of the map: the
 //! places are the plan's. What the map cannot say because the manual does not print it — the
@@ -8,7 +8,7 @@
 //! motor — the simulator fills with plausible values, the same for every drive, listed in
 //! [`Plausible`] and `sim/README.md`.
 
-use drivemap_codegen::ir::Drive;
+use drivemap_map::ir::Drive;
 use drivemap_runtime::core::roles::{FieldRole, Role, RoleKind, Target};
 use drivemap_runtime::core::rule::Transports;
 use drivemap_runtime::profile::TransportKind;

@@ -25,9 +25,9 @@ fn drives() -> Vec<String> {
     ids
 }
 
-fn drive(id: &str) -> drivemap_codegen::Drive {
+fn drive(id: &str) -> drivemap_map::Drive {
     let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
-    drivemap_codegen::read_map(path.as_ref(), &Default::default())
+    drivemap_map::read_map(path.as_ref(), &Default::default())
         .unwrap_or_else(|e| panic!("{id}: {e}"))
 }
 
@@ -599,7 +599,7 @@ fn acme() -> (Simulator, ManualClock) {
     );
     let clock = ManualClock::new();
     let sim = Simulator::new(
-        drivemap_codegen::read_map(path.as_ref(), &Default::default()).unwrap(),
+        drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap(),
         SimOptions::new()
             .clock(Arc::new(clock.clone()))
             .network_source(TransportKind::Rtu),

@@ -6,7 +6,7 @@
 //! Run: `cargo run -p drivemap-tests --example bus_time_report [--release] [BAUD]`
 //!
 //! - **Drives**: every entry of `drivemap_drives::DRIVES`, with the generated `PROFILE` and
-//!   `REGISTERS` of its module; the map (`maps/<id>.yaml`, read with `drivemap_codegen::read_map`)
+//!   `REGISTERS` of its module; the map (`maps/<id>.yaml`, read with `drivemap_map::read_map`)
 //!   supplies what the generated code does not carry: groups, transports, the fixed character
 //!   length.
 //! - **Monitor registers**: the registers of the map's *monitor groups*, the groups whose every
@@ -21,9 +21,9 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use drivemap_codegen::model::{Access, ModbusTable, TransportName};
-use drivemap_codegen::validate::Context;
 use drivemap_drives as drives;
+use drivemap_map::model::{Access, ModbusTable, TransportName};
+use drivemap_map::validate::Context;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::planner::{
     Read, ReadableSet, plan_contiguous, plan_cost, plan_reads, plan_single,
@@ -140,9 +140,8 @@ fn main() {
         .map(|b| b.parse().expect("BAUD must be a number"))
         .unwrap_or(9600);
     let maps_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps");
-    let ctx = Context::with_manuals(
-        &drivemap_codegen::default_manuals_dir(&maps_dir).unwrap_or_default(),
-    );
+    let ctx =
+        Context::with_manuals(&drivemap_map::default_manuals_dir(&maps_dir).unwrap_or_default());
     let mut rows = Vec::new();
     let mut notes = Vec::new();
     for &(drive_id, module) in drives::DRIVES {
@@ -153,19 +152,19 @@ fn main() {
             std::process::exit(1);
         };
         let path = maps_dir.join(format!("{drive_id}.yaml"));
-        let drive = drivemap_codegen::read_map(&path, &ctx).unwrap_or_else(|e| {
+        let drive = drivemap_map::read_map(&path, &ctx).unwrap_or_else(|e| {
             eprintln!("error: {}: {e}", path.display());
             std::process::exit(1);
         });
         assert_eq!(drive.meta.id, drive_id);
 
-        let on_rtu = |r: &drivemap_codegen::ir::Register| {
+        let on_rtu = |r: &drivemap_map::ir::Register| {
             r.transports
                 .as_ref()
                 .is_none_or(|t| t.contains(&TransportName::Rtu))
         };
         // Monitor groups: the groups the map declares read-only (`access: r`).
-        let loaded = drivemap_codegen::load::load(&path).unwrap_or_else(|_| {
+        let loaded = drivemap_map::load::load(&path).unwrap_or_else(|_| {
             eprintln!("error: {}: cannot load", path.display());
             std::process::exit(1);
         });

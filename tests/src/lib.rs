@@ -23,7 +23,7 @@ pub fn maps_and_app(dir: &Path, extra: &Path) -> (PathBuf, PathBuf) {
     let app = dir.join("app");
     std::fs::create_dir_all(&maps).expect("maps dir");
     std::fs::create_dir_all(app.join("src")).expect("app dir");
-    for map in drivemap_codegen::find_maps(&root.join("maps")).expect("maps/") {
+    for map in drivemap_map::find_maps(&root.join("maps")).expect("maps/") {
         std::fs::copy(&map, maps.join(map.file_name().expect("a file"))).expect("copy a map");
     }
     std::fs::copy(extra, maps.join(extra.file_name().expect("a file"))).expect("copy the new map");

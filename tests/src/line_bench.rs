@@ -17,9 +17,9 @@ use std::io;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use drivemap_codegen::Drive;
-use drivemap_codegen::model::{Access, ModbusTable, TransportName};
 use drivemap_drives as drives;
+use drivemap_map::Drive;
+use drivemap_map::model::{Access, ModbusTable, TransportName};
 use drivemap_runtime::bus_time::{BusModel, Parity, SerialConfig};
 use drivemap_runtime::planner::{Poller, plan_contiguous, plan_cost};
 use drivemap_runtime::profile::TransportKind;
@@ -61,17 +61,17 @@ fn generated(module: &str) -> Option<(&'static Profile, &'static [RegisterPlan])
 /// Every shipped drive (`drivemap_drives::DRIVES`) with its monitor registers.
 pub fn monitors() -> Vec<Monitors> {
     let maps_dir = crate::workspace().join("maps");
-    let ctx = drivemap_codegen::validate::Context::with_manuals(
-        &drivemap_codegen::default_manuals_dir(&maps_dir).unwrap_or_default(),
+    let ctx = drivemap_map::validate::Context::with_manuals(
+        &drivemap_map::default_manuals_dir(&maps_dir).unwrap_or_default(),
     );
     let mut out = Vec::new();
     for &(id, module) in drives::DRIVES {
         let (profile, registers) = generated(module)
             .unwrap_or_else(|| panic!("module `{module}` of DRIVES is not listed in line_bench"));
         let path: PathBuf = maps_dir.join(format!("{id}.yaml"));
-        let drive = drivemap_codegen::read_map(&path, &ctx)
+        let drive = drivemap_map::read_map(&path, &ctx)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let loaded = drivemap_codegen::load::load(&path)
+        let loaded = drivemap_map::load::load(&path)
             .unwrap_or_else(|_| panic!("{}: cannot load", path.display()));
         let read_only: Vec<&str> = loaded
             .model

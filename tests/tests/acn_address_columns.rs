@@ -9,8 +9,8 @@
 
 use std::path::PathBuf;
 
-use drivemap_codegen::load;
-use drivemap_codegen::model::{MapFile, Register};
+use drivemap_map::load;
+use drivemap_map::model::{MapFile, Register};
 
 fn map() -> MapFile {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps/automationdirect-acn.yaml");
@@ -29,7 +29,7 @@ fn printed(r: &Register) -> Option<(u32, u32)> {
     })
 }
 
-fn address_conflict(r: &Register) -> Option<&drivemap_codegen::model::Conflict> {
+fn address_conflict(r: &Register) -> Option<&drivemap_map::model::Conflict> {
     r.conflicts
         .iter()
         .find(|c| c.topic.starts_with("Address columns"))

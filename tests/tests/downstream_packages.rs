@@ -30,6 +30,7 @@ const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The packages the application needs, directly or through another.
 const NEEDED: [&str; 4] = [
     "drivemap-core",
+    "drivemap-map",
     "drivemap-codegen",
     "drivemap-runtime",
     "drivemap-drives",
@@ -144,7 +145,7 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
     );
 
     let path = root().join("maps").join("yaskawa-v7.yaml");
-    let v7 = drivemap_codegen::read_map(&path, &Default::default()).expect("shipped map");
+    let v7 = drivemap_map::read_map(&path, &Default::default()).expect("shipped map");
     let sim = Simulator::new(v7, SimOptions::new().network_source(TransportKind::Tcp)).unwrap();
     let sim = drivemap_sim::server::shared(sim);
     let server = TcpServer::spawn(sim.clone(), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();

@@ -5,8 +5,8 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_codegen::Drive;
 use drivemap_live::LiveSettings;
+use drivemap_map::Drive;
 use drivemap_runtime::async_client::AsyncClient;
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::profile::TransportKind;
@@ -21,7 +21,7 @@ use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
 fn map(path: &str) -> Drive {
     let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
-    drivemap_codegen::read_map(path.as_ref(), &Default::default())
+    drivemap_map::read_map(path.as_ref(), &Default::default())
         .unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
@@ -602,7 +602,7 @@ fn every_map() -> Vec<(String, Drive)> {
     paths
         .into_iter()
         .map(|p| {
-            let d = drivemap_codegen::read_map(&p, &Default::default())
+            let d = drivemap_map::read_map(&p, &Default::default())
                 .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
             (d.meta.id.clone(), d)
         })
@@ -616,7 +616,7 @@ fn links(drive: &Drive) -> Vec<TransportKind> {
     if drive
         .protocol
         .transports
-        .contains(&drivemap_codegen::model::TransportName::Tcp)
+        .contains(&drivemap_map::model::TransportName::Tcp)
     {
         kinds.push(TransportKind::Tcp);
     }
@@ -731,7 +731,7 @@ fn acme_changed(from: &str, to: &str) -> (Drive, String) {
     let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
     assert!(text.contains(from), "the fixture has {from}");
     let changed = text.replace(from, to);
-    let drive = drivemap_codegen::read_map_str("acme-vf1.yaml", &changed, &Default::default())
+    let drive = drivemap_map::read_map_str("acme-vf1.yaml", &changed, &Default::default())
         .unwrap_or_else(|e| panic!("{e}"));
     (drive, changed)
 }
@@ -775,14 +775,14 @@ fn one_ramp_register_takes_one_value() {
     assert_eq!(place(Role::AccelTime).shared_with, Some(Role::DecelTime));
     assert_eq!(place(Role::DecelTime).shared_with, Some(Role::AccelTime));
     // The reference document says so beside the register.
-    let doc = drivemap_codegen::reference::render(&drive, "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(&drive, "acme-vf1.yaml");
     assert!(
         doc.contains("| `decel_time` | `acceleration_time` (one register with `accel_time`) |"),
         "{doc}"
     );
     // Without `shared_with` the map is refused.
     let unsaid = shared.replace("shared_with: accel_time, ", "");
-    let e = drivemap_codegen::read_map_str("acme-vf1.yaml", &unsaid, &Default::default())
+    let e = drivemap_map::read_map_str("acme-vf1.yaml", &unsaid, &Default::default())
         .unwrap_err()
         .to_string();
     assert!(e.contains("shared_with: accel_time"), "{e}");

@@ -13,9 +13,9 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_codegen::diff::ChangeKind;
-use drivemap_codegen::validate::Context;
 use drivemap_live::{LiveSettings, Value};
+use drivemap_map::validate::Context;
+use drivemap_review::diff::ChangeKind;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::{Client, Error, Profile, Refusal, Width, WordOrder};
@@ -25,8 +25,8 @@ fn fixture() -> PathBuf {
     drivemap_tests::workspace().join("tests/fixtures/acme-vf1/acme-vf1.yaml")
 }
 
-fn map() -> drivemap_codegen::Drive {
-    drivemap_codegen::read_map(&fixture(), &Context::default()).expect("fixture map")
+fn map() -> drivemap_map::Drive {
+    drivemap_map::read_map(&fixture(), &Context::default()).expect("fixture map")
 }
 
 /// The exported register `id`.
@@ -43,7 +43,7 @@ fn exported(export: &serde_json::Value, id: &str) -> serde_json::Value {
 #[test]
 fn export_doc_and_diff_say_what_the_pairs_are() {
     let d = map();
-    let export = drivemap_codegen::export::export(&d);
+    let export = drivemap_map::export::export(&d);
     let register = |id: &str| exported(&export, id);
     let energy = register("energy_counter");
     assert_eq!(energy["words"], 2);
@@ -58,7 +58,7 @@ fn export_doc_and_diff_say_what_the_pairs_are() {
     );
     assert_eq!(export["protocol"]["slave_address"]["max"], 254);
 
-    let doc = drivemap_codegen::reference::render(&d, "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(&d, "acme-vf1.yaml");
     assert!(
         doc.contains("| 2200h – 2201h (32-bit pair, high word first, `acme-vf1.txt:34`) |"),
         "{doc}"
@@ -83,8 +83,8 @@ fn export_doc_and_diff_say_what_the_pairs_are() {
     );
     assert_ne!(single, swapped);
     let ctx = Context::default();
-    let new = drivemap_codegen::read_map_str("acme-vf1.yaml", &single, &ctx).unwrap();
-    let diff = drivemap_codegen::diff::compare(&d, &new);
+    let new = drivemap_map::read_map_str("acme-vf1.yaml", &single, &ctx).unwrap();
+    let diff = drivemap_review::diff::compare(&d, &new);
     let widths: Vec<(&str, Option<&str>, Option<&str>)> = diff
         .changes
         .iter()
@@ -114,7 +114,7 @@ fn export_doc_and_diff_say_what_the_pairs_are() {
 struct Bench {
     server: TcpServer,
     client: Client<TcpTransport>,
-    map: drivemap_codegen::Drive,
+    map: drivemap_map::Drive,
     sim: drivemap_sim::SharedSim,
 }
 
@@ -251,7 +251,7 @@ fn the_simulator_refuses_half_a_pair_from_a_master_without_the_map() {
 #[test]
 fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
     let d = map();
-    let export = drivemap_codegen::export::export(&d);
+    let export = drivemap_map::export::export(&d);
     let limits = &export["protocol"]["limits"];
     assert_eq!(limits["function_codes"]["source"], "acme-vf1.txt:7");
     assert_eq!(limits["max_read"]["source"], "acme-vf1.txt:8");
@@ -276,7 +276,7 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
         "signed"
     );
 
-    let doc = drivemap_codegen::reference::render(&d, "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(&d, "acme-vf1.yaml");
     for expected in [
         "| Function codes | 03h, 06h, 10h | `acme-vf1.txt:7` |",
         "| Registers per request | at most 16 per read, 16 per write | `acme-vf1.txt:8` |",
@@ -300,9 +300,8 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
             "{value: 1, id: locked, name: Locked,",
             "{value: 2, id: locked, name: Locked,",
         );
-    let new =
-        drivemap_codegen::read_map_str("acme-vf1.yaml", &changed, &Context::default()).unwrap();
-    let diff = drivemap_codegen::diff::compare(&d, &new);
+    let new = drivemap_map::read_map_str("acme-vf1.yaml", &changed, &Context::default()).unwrap();
+    let diff = drivemap_review::diff::compare(&d, &new);
     let kinds: Vec<ChangeKind> = diff
         .changes
         .iter()

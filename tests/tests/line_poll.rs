@@ -6,8 +6,8 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_codegen::validate::Context;
 use drivemap_drives::{ptlk_tds_v8 as tds, yaskawa_v7 as v7};
+use drivemap_map::validate::Context;
 use drivemap_runtime::plan::RegisterPlan;
 use drivemap_runtime::planner::{Poller, poll_line};
 use drivemap_runtime::profile::TransportKind;
@@ -18,7 +18,7 @@ use drivemap_sim::{Line, ManualClock, SimOptions, Simulator, TcpFraming, TcpServ
 
 fn sim(id: &str, slave: u8, clock: &ManualClock) -> Simulator {
     let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
-    let drive = drivemap_codegen::read_map(path.as_ref(), &Context::default()).unwrap();
+    let drive = drivemap_map::read_map(path.as_ref(), &Context::default()).unwrap();
     Simulator::new(
         drive,
         SimOptions::new()

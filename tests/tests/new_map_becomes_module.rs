@@ -69,7 +69,7 @@ fn a_new_yaml_file_becomes_a_module() {
     let tmp = std::env::temp_dir().join(format!("drivemap-new-map-{}", std::process::id()));
     // The new drive: nothing else in the repository mentions it.
     let (maps, app) =
-        drivemap_tests::maps_and_app(&tmp, &root.join("codegen/tests/fixtures/mini-drive.yaml"));
+        drivemap_tests::maps_and_app(&tmp, &root.join("map/tests/fixtures/mini-drive.yaml"));
 
     let stdout = run_app(&app, &maps, None, None, "mini_drive");
     let mut words = stdout.split_whitespace();
@@ -81,10 +81,7 @@ fn a_new_yaml_file_becomes_a_module() {
     );
     assert_eq!(
         ids.len(),
-        drivemap_codegen::find_maps(&root.join("maps"))
-            .unwrap()
-            .len()
-            + 1
+        drivemap_map::find_maps(&root.join("maps")).unwrap().len() + 1
     );
 
     // An application that enables one drive's feature gets that module alone.
@@ -111,10 +108,10 @@ fn a_broken_map_fails_the_build_with_every_error_as_check_prints_it() {
     let root = workspace();
     let tmp = std::env::temp_dir().join(format!("drivemap-broken-map-{}", std::process::id()));
     // Four errors in one file: decimal addresses in a register, an alternative, a command, a gap.
-    let broken = root.join("codegen/tests/ui/e41-decimal-address.yaml");
+    let broken = root.join("map/tests/ui/e41-decimal-address.yaml");
     let (maps, _) = drivemap_tests::maps_and_app(&tmp, &broken);
     let map = maps.join("e41-decimal-address.yaml");
-    let expected = drivemap_codegen::read_map(&map, &Default::default())
+    let expected = drivemap_map::read_map(&map, &Default::default())
         .expect_err("the map is broken")
         .to_string();
     assert!(expected.ends_with("4 errors"), "{expected}");

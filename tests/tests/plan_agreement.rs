@@ -17,10 +17,10 @@
 use std::cell::RefCell;
 use std::path::PathBuf;
 
-use drivemap_codegen::ir;
 use drivemap_drives::runtime::plan::{Conversion, RegisterPlan};
 use drivemap_drives::runtime::{DriveSettings, Profile, SettingsView};
 use drivemap_live::{LiveSettings, Value};
+use drivemap_map::ir;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 
@@ -149,7 +149,7 @@ fn agree<S: DriveSettings + SettingsView + Default>(
     profile: &Profile,
 ) {
     let path = maps_dir().join(format!("{id}.yaml"));
-    let live = drivemap_codegen::read_map(&path, &Default::default())
+    let live = drivemap_map::read_map(&path, &Default::default())
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let plan = live.plan();
 
@@ -187,8 +187,8 @@ fn agree<S: DriveSettings + SettingsView + Default>(
         .quantities
         .iter()
         .map(|q| match q {
-            drivemap_codegen::lower::Quantity::External { id, .. } => Some(id.as_str()),
-            drivemap_codegen::lower::Quantity::Register(_) => None,
+            drivemap_map::lower::Quantity::External { id, .. } => Some(id.as_str()),
+            drivemap_map::lower::Quantity::Register(_) => None,
         })
         .collect();
     let strategy = case_strategy(&axes, S::DEPENDENCIES.len(), externals.len());

@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use clap::Args as ClapArgs;
 use drivemap_bridge::{DriveSpec, LinkSpec, mqtt};
-use drivemap_codegen::Drive;
+use drivemap_map::Drive;
 use serde::Deserialize;
 
 use crate::error::Error;

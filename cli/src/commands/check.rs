@@ -4,8 +4,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
-use drivemap_codegen::review::{self, Manuals, Verdict};
-use drivemap_codegen::{Diagnostics, Drive};
+use drivemap_map::{Diagnostics, Drive};
+use drivemap_review::review::{self, Manuals, Verdict};
 
 use crate::error::Error;
 use crate::maps::MapsDir;
@@ -144,7 +144,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     // (name shown, map read, manuals directory for its citations)
     type Checked = (String, Result<Drive, Diagnostics>, Option<PathBuf>);
     // One cache for every file: a map's bases are read once, not once per variant.
-    let cache = drivemap_codegen::load::TreeCache::new();
+    let cache = drivemap_map::load::TreeCache::new();
     let from_file = |f: &PathBuf| -> Checked {
         (
             f.display().to_string(),
@@ -155,7 +155,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     let files: Vec<Checked> = if !args.files.is_empty() {
         args.files.iter().map(from_file).collect()
     } else if let Some(dir) = &args.dir.maps {
-        let found = drivemap_codegen::find_maps(dir).map_err(Error::io(dir.display()))?;
+        let found = drivemap_map::find_maps(dir).map_err(Error::io(dir.display()))?;
         if found.is_empty() {
             return Err(Error::Refused(format!(
                 "{}: no maps to check (no *.yaml or *.yml file in the directory)",
@@ -173,7 +173,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 (
                     format!("<built-in>/{id}.yaml"),
                     args.dir.read_builtin(id, text),
-                    drivemap_codegen::default_manuals_dir(Path::new(".")),
+                    drivemap_map::default_manuals_dir(Path::new(".")),
                 )
             })
             .collect()

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
-use drivemap_codegen::review::{self, CoverageReport, Manuals};
+use drivemap_review::review::{self, CoverageReport, Manuals};
 
 use crate::error::Error;
 use crate::maps::MapsDir;
@@ -95,10 +95,10 @@ pub fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<CoverageRepor
 fn own_manuals(path: &std::path::Path) -> Result<Vec<String>, Error> {
     let text = std::fs::read_to_string(path).map_err(Error::io(path.display()))?;
     let name: std::sync::Arc<str> = path.display().to_string().into();
-    let tree = drivemap_codegen::source::parse(&name, &text).map_err(|d| d.to_string())?;
+    let tree = drivemap_map::source::parse(&name, &text).map_err(|d| d.to_string())?;
     let list = tree.get("drive").and_then(|d| d.get("manuals"));
     let mut out = Vec::new();
-    if let Some(drivemap_codegen::source::NodeKind::Seq(items)) = list.map(|l| &l.kind) {
+    if let Some(drivemap_map::source::NodeKind::Seq(items)) = list.map(|l| &l.kind) {
         for item in items {
             if let Some(f) = item
                 .get("file")

@@ -6,10 +6,10 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
-use drivemap_codegen::Drive;
-use drivemap_codegen::diff::{self, DriveDiff, render};
-use drivemap_codegen::review::Manuals;
-use drivemap_codegen::validate::Context;
+use drivemap_map::Drive;
+use drivemap_map::validate::Context;
+use drivemap_review::diff::{self, DriveDiff, render};
+use drivemap_review::review::Manuals;
 
 use crate::error::Error;
 use crate::git;
@@ -64,7 +64,7 @@ pub struct Args {
 }
 
 fn read(path: &Path, ctx: &Context) -> Result<Drive, Error> {
-    let drive = drivemap_codegen::read_map(path, ctx).map_err(|d| format!("{d}"))?;
+    let drive = drivemap_map::read_map(path, ctx).map_err(|d| format!("{d}"))?;
     warn_schema(&drive, None);
     Ok(drive)
 }
@@ -93,7 +93,7 @@ fn warn_schema(drive: &Drive, rename: Option<(&Path, &str)>) {
 /// Reads a map of revision `rev` written to the temporary directory `tmp`, naming it
 /// `rev:dir/name` in errors and warnings instead of the temporary path.
 fn read_at_rev(path: &Path, ctx: &Context, tmp: &Path, shown: &str) -> Result<Drive, Error> {
-    let drive = drivemap_codegen::read_map(path, ctx)
+    let drive = drivemap_map::read_map(path, ctx)
         .map_err(|d| format!("{d}").replace(&tmp.display().to_string(), shown))?;
     warn_schema(&drive, Some((tmp, shown)));
     Ok(drive)
@@ -116,7 +116,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             let ctx = context_for(new);
             let read = |path: &Path| {
                 let drive =
-                    drivemap_codegen::read_map_version(path, &ctx).map_err(|d| format!("{d}"))?;
+                    drivemap_map::read_map_version(path, &ctx).map_err(|d| format!("{d}"))?;
                 warn_schema(&drive, None);
                 Ok::<_, String>(drive)
             };
@@ -163,7 +163,7 @@ fn manuals_for(args: &Args, diffs: &[DriveDiff]) -> Option<Manuals> {
     let mut manuals = Manuals::new(&dir);
     for c in diffs.iter().flat_map(|d| d.changes.iter()) {
         for s in [&c.old_source, &c.new_source].into_iter().flatten() {
-            if let Some((file, _)) = drivemap_codegen::validate::parse_citation(s) {
+            if let Some((file, _)) = drivemap_map::validate::parse_citation(s) {
                 manuals.load(file);
             }
         }
@@ -172,7 +172,7 @@ fn manuals_for(args: &Args, diffs: &[DriveDiff]) -> Option<Manuals> {
 }
 
 fn yaml_names(dir: &Path) -> BTreeSet<String> {
-    drivemap_codegen::find_maps(dir)
+    drivemap_map::find_maps(dir)
         .unwrap_or_default()
         .iter()
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))

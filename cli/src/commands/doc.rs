@@ -7,7 +7,7 @@ use clap::Args as ClapArgs;
 
 use crate::error::Error;
 use crate::maps::{MapSource, MapsDir};
-use drivemap_codegen::reference;
+use drivemap_review::reference;
 
 /// Arguments of `drivemap doc`.
 #[derive(ClapArgs, Debug)]
@@ -88,7 +88,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
 fn write_docs(
     docs: &std::path::Path,
     path: &std::path::Path,
-    drive: &drivemap_codegen::Drive,
+    drive: &drivemap_map::Drive,
     reference: &str,
     args: &Args,
 ) -> Result<ExitCode, Error> {

@@ -128,7 +128,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 "the JSON export is the whole map: --register, --all and a link go with --format home-assistant, node-red or telegraf".into(),
             );
         }
-        let json = drivemap_codegen::export::export(&drive);
+        let json = drivemap_map::export::export(&drive);
         outln!("{}", serde_json::to_string_pretty(&json)?);
         return Ok(ExitCode::SUCCESS);
     }

@@ -5,8 +5,8 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use clap::Args as ClapArgs;
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::Register;
+use drivemap_map::Drive;
+use drivemap_map::ir::Register;
 
 use crate::error::Error;
 use crate::live::Target;

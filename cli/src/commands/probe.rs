@@ -15,17 +15,17 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::Register;
 use drivemap_live::codec;
+use drivemap_map::Drive;
+use drivemap_map::ir::Register;
 use drivemap_runtime::ValueError;
 use serde::Serialize;
 
 use crate::error::Error;
 use crate::live::Target;
 use crate::live::output::{Format, address_text, now_rfc3339};
-use drivemap_codegen::describe;
 use drivemap_live::session::{Failure, Session, on_transport};
+use drivemap_map::describe;
 
 /// Arguments of `drivemap probe`.
 #[derive(ClapArgs, Debug)]
@@ -384,7 +384,7 @@ fn codes_incomplete(r: &Register) -> Option<&str> {
     r.def
         .unknown
         .iter()
-        .find(|u| u.what == drivemap_codegen::model::UnknownItem::Values)
+        .find(|u| u.what == drivemap_map::model::UnknownItem::Values)
         .map(|u| u.reason.as_str())
 }
 

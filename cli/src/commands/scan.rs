@@ -13,9 +13,9 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use clap::{ArgGroup, Args as ClapArgs};
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::Register;
 use drivemap_live::LiveSettings;
+use drivemap_map::Drive;
+use drivemap_map::ir::Register;
 use drivemap_runtime::transport::serial::char_times;
 use drivemap_runtime::{Error, Profile};
 

@@ -12,8 +12,8 @@ use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use clap::{ArgGroup, Args as ClapArgs};
-use drivemap_codegen::Drive;
 use drivemap_live::link::LineParity;
+use drivemap_map::Drive;
 use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
 use drivemap_sim::server::Logger;

@@ -4,17 +4,17 @@ use drivemap_runtime::plan::Conversion;
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::Register;
 use drivemap_live::codec::{self, InputError};
 use drivemap_live::intern::intern;
+use drivemap_map::Drive;
+use drivemap_map::ir::Register;
 use drivemap_runtime::gate;
 use drivemap_runtime::{Profile, Refusal, Rounding, ValueError};
 
 use crate::error::Error;
 use crate::live::Target;
-use drivemap_codegen::describe;
 use drivemap_live::session::{Session, value_error};
+use drivemap_map::describe;
 
 /// Arguments of `drivemap write`.
 #[derive(ClapArgs, Debug)]
@@ -116,7 +116,7 @@ pub fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
         .def
         .unknown
         .iter()
-        .find(|u| u.what == drivemap_codegen::model::UnknownItem::Range)
+        .find(|u| u.what == drivemap_map::model::UnknownItem::Range)
         .map(|u| format!(" ({})", u.reason))
         .unwrap_or_default();
     Some(format!(

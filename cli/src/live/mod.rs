@@ -8,7 +8,7 @@ pub mod table;
 pub use drivemap_live::{link, session, silence};
 
 use clap::Args as ClapArgs;
-use drivemap_codegen::Drive;
+use drivemap_map::Drive;
 
 use crate::error::Error;
 use crate::maps::MapsDir;

@@ -27,14 +27,14 @@ use std::io::Write;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use clap::ValueEnum;
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::Register;
-use drivemap_codegen::model::AddressFormat;
 use drivemap_live::codec::Value;
+use drivemap_map::Drive;
+use drivemap_map::ir::Register;
+use drivemap_map::model::AddressFormat;
 use serde::Serialize;
 
-use drivemap_codegen::describe;
 use drivemap_live::session::{ReadError, Session};
+use drivemap_map::describe;
 
 /// How values are printed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]

@@ -1,9 +1,9 @@
 //! Register values as an aligned terminal table.
 
-use drivemap_codegen::ir::Register;
+use drivemap_map::ir::Register;
 
-use drivemap_codegen::describe;
 use drivemap_live::session::{ReadError, Session, field_lines};
+use drivemap_map::describe;
 
 /// One register's line.
 #[derive(Debug, Clone, PartialEq)]

@@ -8,9 +8,9 @@
 //! parameter selects and no `--set` fixed, an address that moves with a setting) is kept in
 //! [`Points::left_out`] with the reason, which every format prints: nothing is dropped silently.
 
-use drivemap_codegen::Drive;
-use drivemap_codegen::ir::Register;
 use drivemap_live::{LiveSettings, leak_profile};
+use drivemap_map::Drive;
+use drivemap_map::ir::Register;
 use drivemap_runtime::bus_time::BusModel;
 use drivemap_runtime::plan::{Conversion, Field, Label, Scale};
 use drivemap_runtime::planner::Poller;
@@ -391,12 +391,7 @@ impl<'d> Points<'d> {
     pub fn left_out_lines(&self) -> Vec<String> {
         self.left_out
             .iter()
-            .map(|(r, why)| {
-                format!(
-                    "left out {}: {why}",
-                    drivemap_codegen::describe::register(r)
-                )
-            })
+            .map(|(r, why)| format!("left out {}: {why}", drivemap_map::describe::register(r)))
             .collect()
     }
 

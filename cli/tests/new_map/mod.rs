@@ -46,7 +46,7 @@ impl NewMap {
         .unwrap();
         let manuals = base.join("shared/manuals");
         std::fs::create_dir_all(&manuals).unwrap();
-        let shipped = drivemap_codegen::default_manuals_dir(&repo.join("maps"))
+        let shipped = drivemap_map::default_manuals_dir(&repo.join("maps"))
             .expect("the shipped maps' manuals (shared/manuals or DRIVEMAP_MANUALS)");
         for dir in [shipped, fixture.join("manuals")] {
             for e in std::fs::read_dir(&dir).unwrap() {

@@ -5,19 +5,19 @@
 use std::path::Path;
 
 use custom_drive::field_selector as fs;
-use drivemap_codegen::validate::Context;
 use drivemap_live::{LiveSettings, Value};
+use drivemap_map::validate::Context;
 use drivemap_runtime::{DriveSettings, Register};
 
-fn drive() -> drivemap_codegen::Drive {
-    drivemap_codegen::read_map(
-        Path::new("../../codegen/tests/fixtures/field-selector.yaml"),
+fn drive() -> drivemap_map::Drive {
+    drivemap_map::read_map(
+        Path::new("../../map/tests/fixtures/field-selector.yaml"),
         &Context::default(),
     )
     .unwrap()
 }
 
-fn live_number(d: &drivemap_codegen::Drive, id: &str, raw: u32, l: &LiveSettings) -> f64 {
+fn live_number(d: &drivemap_map::Drive, id: &str, raw: u32, l: &LiveSettings) -> f64 {
     match drivemap_live::decode(d, d.find(id).unwrap(), raw, l) {
         Ok(Value::Quantity { value, .. }) => value,
         other => panic!("{id} {raw}: {other:?}"),

@@ -4,13 +4,13 @@
 use std::path::Path;
 
 use custom_drive::mini_drive as md;
-use drivemap_codegen::validate::Context;
 use drivemap_live::{LiveSettings, Value};
+use drivemap_map::validate::Context;
 use drivemap_runtime::{Bits, Code, Enumeration, Register, Writable};
 
-fn drive() -> drivemap_codegen::Drive {
-    drivemap_codegen::read_map(
-        Path::new("../../codegen/tests/fixtures/mini-drive.yaml"),
+fn drive() -> drivemap_map::Drive {
+    drivemap_map::read_map(
+        Path::new("../../map/tests/fixtures/mini-drive.yaml"),
         &Context::default(),
     )
     .unwrap()
@@ -51,7 +51,7 @@ const RAWS: [u32; 9] = [0, 1, 2, 3, 600, 4000, 30000, 0x8000, 0xFFFF];
 const VALUES: [f64; 10] = [-1.0, 0.0, 0.1, 1.0, 2.0, 50.0, 255.0, 300.0, 400.0, 600.5];
 
 fn quantity<R: Register<Settings = md::Settings, Value = f64> + Writable<Input = f64>>(
-    d: &drivemap_codegen::Drive,
+    d: &drivemap_map::Drive,
 ) {
     let r = d.find(R::ID).unwrap();
     for (g, l) in combos() {

@@ -5,12 +5,12 @@
 use std::path::Path;
 
 use custom_drive::acme_vf1 as acme;
-use drivemap_codegen::validate::Context;
 use drivemap_live::{LiveSettings, Value};
+use drivemap_map::validate::Context;
 use drivemap_runtime::{Register, Width, WordOrder, Writable};
 
-fn drive() -> drivemap_codegen::Drive {
-    drivemap_codegen::read_map(
+fn drive() -> drivemap_map::Drive {
+    drivemap_map::read_map(
         Path::new("../../tests/fixtures/acme-vf1/acme-vf1.yaml"),
         &Context::default(),
     )
@@ -28,7 +28,7 @@ const RAWS: [u32; 8] = [
     0xFFFF_FFFF,
 ];
 
-fn live_number(d: &drivemap_codegen::Drive, id: &str, raw: u32) -> Result<f64, String> {
+fn live_number(d: &drivemap_map::Drive, id: &str, raw: u32) -> Result<f64, String> {
     let r = d.find(id).unwrap();
     match drivemap_live::decode(d, r, raw, &LiveSettings::default()) {
         Ok(Value::Quantity { value, .. }) => Ok(value),
@@ -38,7 +38,7 @@ fn live_number(d: &drivemap_codegen::Drive, id: &str, raw: u32) -> Result<f64, S
     }
 }
 
-fn agree<R: Register<Settings = acme::Settings, Value = f64>>(d: &drivemap_codegen::Drive) {
+fn agree<R: Register<Settings = acme::Settings, Value = f64>>(d: &drivemap_map::Drive) {
     let s = acme::Settings::default();
     for raw in RAWS {
         assert_eq!(

@@ -2,9 +2,9 @@
 //! (`ir::Register::default_for`), and for a register without one the value nearest 0 that its
 //! own map allows, so that nothing powers on at a value the map refuses.
 
-use drivemap_codegen::ir::Register;
-use drivemap_codegen::model::UnknownItem;
 use drivemap_live::{LiveSettings, codec};
+use drivemap_map::ir::Register;
+use drivemap_map::model::UnknownItem;
 use drivemap_runtime::ValueError;
 use drivemap_runtime::plan::Conversion;
 

@@ -17,8 +17,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_codegen::ir::{Drive, Register};
 use drivemap_live::{LiveSettings, Value, codec, leak_profile};
+use drivemap_map::ir::{Drive, Register};
 use drivemap_runtime::profile::{Profile, TransportKind};
 
 use crate::clock::Clock;

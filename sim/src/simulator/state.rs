@@ -4,8 +4,8 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use drivemap_codegen::ir::{Drive, Register};
 use drivemap_live::{LiveSettings, codec};
+use drivemap_map::ir::{Drive, Register};
 use drivemap_runtime::WriteRestriction;
 use drivemap_runtime::profile::TransportKind;
 
@@ -243,7 +243,7 @@ impl Simulator {
                     .fields
                     .iter()
                     .find(|f| {
-                        drivemap_codegen::names::field_span(f) == Some((p.field.lsb, p.field.width))
+                        drivemap_map::names::field_span(f) == Some((p.field.lsb, p.field.width))
                     })
                     .map_or("?", |f| f.id.as_str());
                 format!("{}.{field} = {code}", r.id())

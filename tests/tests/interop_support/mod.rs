@@ -118,9 +118,9 @@ pub fn free_port() -> u16 {
 }
 
 /// A map by drive id.
-pub fn drive(id: &str) -> drivemap_codegen::Drive {
+pub fn drive(id: &str) -> drivemap_map::Drive {
     let path = root().join("maps").join(format!("{id}.yaml"));
-    drivemap_codegen::read_map(&path, &Default::default())
+    drivemap_map::read_map(&path, &Default::default())
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 

@@ -2,16 +2,16 @@
 //! lowering into the plan, the Markdown reference and the export, on the fixture map (its
 //! `memory` group gives the rule to both of its registers; `password` reads as codes).
 
-use drivemap_codegen::lower;
-use drivemap_codegen::validate::Context;
 use drivemap_core::plan::{Label, RepeatNeedsChange};
+use drivemap_map::lower;
+use drivemap_map::validate::Context;
 
 fn fixture() -> String {
-    std::fs::read_to_string("tests/fixtures/mini-drive.yaml").unwrap()
+    std::fs::read_to_string("../map/tests/fixtures/mini-drive.yaml").unwrap()
 }
 
-fn read(text: &str) -> drivemap_codegen::Drive {
-    drivemap_codegen::read_map_str("mini-drive.yaml", text, &Context::default())
+fn read(text: &str) -> drivemap_map::Drive {
+    drivemap_map::read_map_str("mini-drive.yaml", text, &Context::default())
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -76,7 +76,7 @@ fn the_intermediate_is_lowered_to_its_raw_word() {
 #[test]
 fn the_reference_and_the_export_show_both() {
     let drive = read(&fixture());
-    let md = drivemap_codegen::reference::render(&drive, "mini-drive.yaml");
+    let md = drivemap_review::reference::render(&drive, "mini-drive.yaml");
     assert!(
         md.contains("| 0200h |  | Lock password | `password` | read/write<br>repeat needs a change: 0 between |  | written as a word, read as codes (below) | 0 ..= 9999 |"),
         "{md}"
@@ -89,7 +89,7 @@ fn the_reference_and_the_export_show_both() {
         md.contains("Repeat needs a change: a value is executed only when it differs from the previous write, so 0 is written before any other value (`manual.txt:50`)."),
         "{md}"
     );
-    let json = drivemap_codegen::export::export(&drive);
+    let json = drivemap_map::export::export(&drive);
     let regs = json["registers"].as_array().unwrap();
     let password = regs.iter().find(|r| r["id"] == "password").unwrap();
     assert_eq!(password["read_values"][1]["name"], "Locked");

@@ -275,7 +275,7 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
     }
     // `indirect` on roles, protocol items, readings of conflicts and gaps (review reads their
     // citations by content, `review::others`).
-    for o in crate::review::others::other_citations(drive) {
+    for o in crate::others::other_citations(drive) {
         if o.indirect_key {
             let mut at = o.path.clone();
             at.0.pop();

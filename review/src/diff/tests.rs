@@ -1,4 +1,4 @@
-//! The classifier over crafted before/after maps: `codegen/tests/fixtures/diff/<case>.yaml`
+//! The classifier over crafted before/after maps: `review/tests/fixtures/diff/<case>.yaml`
 //! lists text edits to `cli/tests/fixtures/example-drive.yaml` (the map of the command line's
 //! golden tests) and the change kinds they must produce, no more and no fewer.
 

@@ -19,10 +19,10 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use drivemap_codegen::Drive;
-use drivemap_codegen::diff::compare;
-use drivemap_codegen::source::{Node, NodeKind, Seg};
-use drivemap_codegen::validate::{Context, parse_citation};
+use drivemap_map::Drive;
+use drivemap_map::source::{Node, NodeKind, Seg};
+use drivemap_map::validate::{Context, parse_citation};
+use drivemap_review::diff::compare;
 use serde_yaml::Value;
 
 fn root() -> PathBuf {
@@ -31,15 +31,15 @@ fn root() -> PathBuf {
 
 /// The maps mutated: every map of `maps/`, then the fixture maps.
 fn maps() -> Vec<PathBuf> {
-    let mut out = drivemap_codegen::find_maps(&root().join("maps")).unwrap();
+    let mut out = drivemap_map::find_maps(&root().join("maps")).unwrap();
     assert!(out.len() >= 5, "maps/ holds {} maps", out.len());
     for dir in [
         "tests/fixtures/acme-vf1",
-        "codegen/tests/fixtures",
-        "codegen/tests/fixtures/variants",
+        "map/tests/fixtures",
+        "map/tests/fixtures/variants",
         "cli/tests/fixtures",
     ] {
-        out.extend(drivemap_codegen::find_maps(&root().join(dir)).unwrap());
+        out.extend(drivemap_map::find_maps(&root().join(dir)).unwrap());
     }
     out
 }
@@ -220,7 +220,7 @@ fn abstract_path(path: &[Seg]) -> String {
 }
 
 fn show(path: &[Seg]) -> String {
-    drivemap_codegen::source::Path(path.to_vec()).to_string()
+    drivemap_map::source::Path(path.to_vec()).to_string()
 }
 
 /// `tree` with `m` applied at `path`; `None` when the path is not there.
@@ -277,10 +277,8 @@ fn mutate_map(map: &Path) -> (Counts, Vec<String>) {
     let name = map.file_name().unwrap().to_string_lossy().into_owned();
     let text = std::fs::read_to_string(map).unwrap();
     let file: Arc<str> = Arc::from(name.as_str());
-    let tree = drivemap_codegen::source::parse_map(&file, &text)
-        .unwrap()
-        .tree;
-    let read = |tree: Node| drivemap_codegen::read_map_tree_with(&name, tree, &ctx, &base);
+    let tree = drivemap_map::source::parse_map(&file, &text).unwrap().tree;
+    let read = |tree: Node| drivemap_map::read_map_tree_with(&name, tree, &ctx, &base);
     let original = read(tree.clone()).unwrap_or_else(|e| panic!("{name}: {e}"));
     let original_meaning = meaning(&original);
     assert!(
@@ -311,7 +309,7 @@ fn mutate_map(map: &Path) -> (Counts, Vec<String>) {
         let mut mutations = vec![Mutation::Delete];
         if *scalar {
             let NodeKind::Scalar(v) = &tree
-                .at(&drivemap_codegen::source::Path(path.clone()))
+                .at(&drivemap_map::source::Path(path.clone()))
                 .unwrap()
                 .kind
             else {

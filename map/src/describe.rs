@@ -1,7 +1,7 @@
 //! How map items are written in text: numbers, addresses, access, scales, ranges, defaults,
 //! conditions, bit spans. The one wording of each, used by the rustdoc of generated items
-//! (`generate/docs.rs`), the Markdown reference of `drivemap doc` ([`crate::reference`]),
-//! the semantic diff of `drivemap diff` ([`crate::diff`]) and the command line's messages, so
+//! (`generate/docs.rs`), the Markdown reference of `drivemap doc` (`drivemap-review`'s `reference`),
+//! the semantic diff of `drivemap diff` (`drivemap-review`'s `diff`) and the command line's messages, so
 //! that all of them print an item the same way (a scale as `0.01 Hz`, a condition as
 //! `o2-09 is 1`, a range as `0 ..= 400 Hz`).
 //!

@@ -4,8 +4,8 @@
 
 use std::time::{Duration, Instant};
 
-use drivemap_codegen::load::load_str;
-use drivemap_codegen::source::{MAX_ALIAS_NODES, MAX_DEPTH, MAX_MAP_BYTES};
+use drivemap_map::load::load_str;
+use drivemap_map::source::{MAX_ALIAS_NODES, MAX_DEPTH, MAX_MAP_BYTES};
 
 /// Runs `f` on a thread with a 256 KiB stack: a recursion proportional to the input would
 /// overflow it long before 100,000 levels.
@@ -138,7 +138,7 @@ fn a_file_over_the_size_limit_is_refused_before_parsing() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("huge.yaml");
     std::fs::write(&path, &text).unwrap();
-    let err = drivemap_codegen::load::load(&path).expect_err("refused")[0].to_string();
+    let err = drivemap_map::load::load(&path).expect_err("refused")[0].to_string();
     std::fs::remove_dir_all(&dir).unwrap();
     assert!(
         err.contains("huge.yaml:1:1") && err.contains("at most 4194304 bytes"),
@@ -157,10 +157,10 @@ fn a_second_document_is_an_error_at_its_line() {
 
 #[test]
 fn every_shipped_map_is_within_the_limits() {
-    for map in drivemap_codegen::find_maps(std::path::Path::new("../maps")).unwrap() {
+    for map in drivemap_map::find_maps(std::path::Path::new("../maps")).unwrap() {
         let len = std::fs::metadata(&map).unwrap().len() as usize;
         assert!(len * 4 < MAX_MAP_BYTES, "{} is {len} bytes", map.display());
-        drivemap_codegen::load::load(&map).unwrap_or_else(|e| panic!("{e:?}"));
+        drivemap_map::load::load(&map).unwrap_or_else(|e| panic!("{e:?}"));
     }
 }
 
@@ -178,7 +178,7 @@ fn hostile_addresses_are_refused_briefly() {
     );
     // An alias would carry a decimal resolved elsewhere into an address: refused where it stands
     // in schema 2 (schema 1, where a bare number is decimal anyway, read the anchored value:
-    // `drivemap_codegen::schema`).
+    // `drivemap_map::schema`).
     for (text, at) in [
         ("x: &a 2001\ny: {address: *a}\n", "m.yaml:3:14"),
         ("x: &p [0x10, 20]\ngaps: [{addresses: *p}]\n", "m.yaml:3:20"),

@@ -10,8 +10,6 @@ use crate::ir::Drive;
 use crate::model::{self, RolePlace};
 use crate::source::Path;
 
-use super::matching::{AddressForms, Line, name_found, number_found, param_found, word_found};
-
 /// What one citation outside the registers must mention.
 #[derive(Debug, Clone)]
 pub enum Rule {
@@ -111,7 +109,7 @@ impl Rule {
             Rule::Register(i) => {
                 let r = &drive.registers[*i].def;
                 let mut e: Vec<String> = r.param.iter().cloned().collect();
-                e.push(AddressForms::display(r.address));
+                e.push(format!("{:04X}h", r.address));
                 e.push(format!("\"{}\"", r.name));
                 format!("register {}", e.join(", "))
             }
@@ -140,11 +138,11 @@ impl Rule {
                 for i in registers {
                     let r = &drive.registers[*i].def;
                     e.extend(r.param.iter().cloned());
-                    e.push(AddressForms::display(r.address));
+                    e.push(format!("{:04X}h", r.address));
                 }
                 e.extend(names.iter().map(|n| format!("\"{n}\"")));
                 e.extend(params.iter().cloned());
-                e.extend(addresses.iter().map(|a| AddressForms::display(*a)));
+                e.extend(addresses.iter().map(|a| format!("{a:04X}h")));
                 e.extend(codes.iter().map(|c| format!("{c:02X}h")));
                 e.extend(numbers.iter().cloned());
                 e.extend(words.iter().map(|w| format!("`{w}`")));
@@ -152,79 +150,6 @@ impl Rule {
             }
         }
     }
-
-    /// Whether the line shows it (`Register` is decided by the register check, not here).
-    pub fn found(&self, drive: &Drive, offsets: Option<(i32, i32)>, line: &Line) -> bool {
-        let decimal = drive.address_format == model::AddressFormat::Decimal;
-        let forms = |a: u16| {
-            let f = AddressForms::new(a, offsets);
-            if decimal { f.with_decimal(a) } else { f }
-        };
-        match self {
-            Rule::Register(_) => false,
-            Rule::Field {
-                register,
-                field,
-                codes,
-            } => {
-                let r = &drive.registers[*register].def;
-                let f = &r.fields[*field];
-                super::citations::field_found(f, line)
-                    || f.values
-                        .iter()
-                        .filter(|v| codes.contains(&v.value))
-                        .any(|v| super::citations::value_found(v, line))
-                    || r.param.as_deref().is_some_and(|p| param_found(p, line))
-                    || forms(r.address).found_in(line)
-                    || name_found(&r.name, line)
-            }
-            Rule::Any {
-                words,
-                params,
-                numbers,
-                codes,
-                addresses,
-                names,
-                registers,
-            } => {
-                registers.iter().any(|i| {
-                    let r = &drive.registers[*i].def;
-                    r.param.as_deref().is_some_and(|p| param_found(p, line))
-                        || forms(r.address).found_in(line)
-                }) || words.iter().any(|w| word_found(w, line))
-                    || params.iter().any(|p| param_found(p, line))
-                    || numbers.iter().any(|n| decimal_found(n, line))
-                    || codes.iter().any(|c| number_found(*c, line))
-                    || addresses.iter().any(|a| forms(*a).found_in(line))
-                    || names.iter().any(|n| name_found(n, line))
-            }
-        }
-    }
-}
-
-/// Whether the line prints a number as written (`3.5`, `100000`, `100,000`, `0008H`), not
-/// inside a longer number; a token of letters and digits (`8th`) also with OCR spaces inside.
-fn decimal_found(n: &str, line: &Line) -> bool {
-    let text = line.upper.replace(',', "");
-    let n = n.to_uppercase().replace(',', "");
-    let mixed = n.chars().any(|c| c.is_ascii_alphabetic()) && n.chars().count() >= 3;
-    if mixed && line.squashed.contains(&n.to_lowercase()) {
-        return true;
-    }
-    text.match_indices(n.as_str()).any(|(i, _)| {
-        let before = text[..i].chars().next_back();
-        let rest = &text[i + n.len()..];
-        let mut after = rest.chars();
-        let a1 = after.next();
-        let a2 = after.next();
-        let left = before.is_none_or(|c| !c.is_ascii_digit() && c != '.');
-        let right = match a1 {
-            None => true,
-            Some('.') => a2.is_none_or(|c| !c.is_ascii_digit()),
-            Some(c) => !c.is_ascii_digit(),
-        };
-        left && right
-    })
 }
 
 /// One citation outside the registers.

@@ -4,12 +4,12 @@
 
 use std::path::Path;
 
-use drivemap_codegen::lower::DrivePlan;
-use drivemap_codegen::validate::Context;
 use drivemap_core::roles::{FieldRole, Role, Target};
+use drivemap_map::lower::DrivePlan;
+use drivemap_map::validate::Context;
 
-fn drive() -> drivemap_codegen::Drive {
-    drivemap_codegen::read_map(
+fn drive() -> drivemap_map::Drive {
+    drivemap_map::read_map(
         Path::new("tests/fixtures/roles-drive.yaml"),
         &Context::default(),
     )

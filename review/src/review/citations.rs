@@ -281,7 +281,9 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
                 super::others::Rule::Register(i) => {
                     register_verdict(drive, &keys, &by_file, &mut cache, *i, &source)
                 }
-                rule => near(manuals, &source, |l| rule.found(drive, offsets, l)),
+                rule => near(manuals, &source, |l| {
+                    super::others::found(rule, drive, offsets, l)
+                }),
             },
         };
         out.push(CitationCheck {

@@ -2,11 +2,11 @@
 
 use std::path::Path;
 
-use drivemap_codegen::validate::Context;
+use drivemap_map::validate::Context;
 
 #[test]
 fn variant_inherits_overrides_and_removes() {
-    let child = drivemap_codegen::read_map(
+    let child = drivemap_map::read_map(
         Path::new("tests/fixtures/variants/child-drive.yaml"),
         &Context::default(),
     )
@@ -66,7 +66,7 @@ fn removing_an_unknown_register_is_an_error() {
         .replace("{id: extra,", "{id: no_such_register,");
     std::fs::write(dir.join("child-drive.yaml"), child).unwrap();
     let err =
-        drivemap_codegen::read_map(&dir.join("child-drive.yaml"), &Context::default()).unwrap_err();
+        drivemap_map::read_map(&dir.join("child-drive.yaml"), &Context::default()).unwrap_err();
     let text = err.to_string();
     assert!(
         text.contains("`removed` names `no_such_register`"),
@@ -99,15 +99,15 @@ fn a_chain_of_variants_reads_each_file_once() {
         )
         .unwrap();
     }
-    let files = drivemap_codegen::find_maps(&dir).unwrap();
+    let files = drivemap_map::find_maps(&dir).unwrap();
     assert_eq!(files.len(), N);
     let (read, last_models) = std::thread::Builder::new()
         .stack_size(256 * 1024)
         .spawn(move || {
-            let cache = drivemap_codegen::load::TreeCache::new();
+            let cache = drivemap_map::load::TreeCache::new();
             let mut last = Vec::new();
             for f in &files {
-                let d = drivemap_codegen::read_map_cached(f, &Context::default(), &cache)
+                let d = drivemap_map::read_map_cached(f, &Context::default(), &cache)
                     .unwrap_or_else(|d| panic!("{d}"));
                 assert_eq!(d.registers.len(), 17, "{}", f.display());
                 last = d.meta.models.clone();
@@ -135,9 +135,9 @@ fn a_cycle_of_variants_is_still_refused() {
         )
         .unwrap();
     }
-    let cache = drivemap_codegen::load::TreeCache::new();
+    let cache = drivemap_map::load::TreeCache::new();
     for id in ["a", "b"] {
-        let e = drivemap_codegen::read_map_cached(
+        let e = drivemap_map::read_map_cached(
             &dir.join(format!("{id}.yaml")),
             &Context::default(),
             &cache,

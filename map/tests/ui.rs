@@ -4,12 +4,12 @@
 
 use std::path::Path;
 
-use drivemap_codegen::validate::Context;
+use drivemap_map::validate::Context;
 
 #[test]
 fn malformed_maps_report_their_errors() {
     let dir = Path::new("tests/ui");
-    let maps = drivemap_codegen::find_maps(dir).expect("tests/ui exists");
+    let maps = drivemap_map::find_maps(dir).expect("tests/ui exists");
     assert!(
         maps.len() >= 20,
         "expected at least 20 malformed maps, found {}",
@@ -19,7 +19,7 @@ fn malformed_maps_report_their_errors() {
     let mut failures = Vec::new();
     for map in &maps {
         let expected_path = map.with_extension("stderr");
-        let actual = match drivemap_codegen::read_map(map, &Context::default()) {
+        let actual = match drivemap_map::read_map(map, &Context::default()) {
             Ok(_) => format!("{} unexpectedly passed validation\n", map.display()),
             Err(diags) => format!("{diags}\n"),
         };
@@ -38,49 +38,6 @@ fn malformed_maps_report_their_errors() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// The slave range is the manual's: 01H-FEH is recorded as printed (not refused for exceeding the
-/// serial-line specification's 247); a range starting at 0, the broadcast address, is refused.
-#[test]
-fn slave_ranges_are_recorded_as_the_manual_prints_them() {
-    let text = std::fs::read_to_string("tests/fixtures/mini-drive.yaml").unwrap();
-    let line = text
-        .lines()
-        .find(|l| l.trim_start().starts_with("slave_address:"))
-        .expect("the fixture has a slave range");
-    let indent = &line[..line.len() - line.trim_start().len()];
-    let with = |range: &str| text.replace(line, &format!("{indent}slave_address: {range}"));
-    let drive = drivemap_codegen::read_map_str(
-        "mini-drive.yaml",
-        &with("{min: 1, max: 254}"),
-        &Context::default(),
-    )
-    .expect("01H-FEH is valid");
-    assert_eq!(drive.protocol.slave_address.max, 254);
-    // Not refused, but a word about the serial-line specification's 247, at the range.
-    let warnings = drivemap_codegen::review::protocol_warnings(&drive);
-    assert_eq!(warnings.len(), 1);
-    let w = warnings[0].to_string();
-    assert!(w.starts_with("mini-drive.yaml:19:"), "{w}");
-    assert!(
-        w.contains("warning: slave addresses 248..=254 are the manual's, but the Modbus serial-line specification reserves 248-255"),
-        "{w}"
-    );
-    let standard = drivemap_codegen::read_map_str(
-        "mini-drive.yaml",
-        &with("{min: 1, max: 247}"),
-        &Context::default(),
-    )
-    .unwrap();
-    assert!(drivemap_codegen::review::protocol_warnings(&standard).is_empty());
-    let e = drivemap_codegen::read_map_str(
-        "mini-drive.yaml",
-        &with("{min: 0, max: 31}"),
-        &Context::default(),
-    )
-    .unwrap_err();
-    assert!(e.to_string().contains("0 is broadcast"), "{e}");
-}
-
 /// Addresses and codes are read in the manual's notations (`0x2001`, `2001H`, `2001h`, quoted or
 /// not) as hexadecimal; a map whose manual numbers registers in decimal says so with
 /// `address_format: decimal`, and then `address: 2001` is register 2001 (07D1H).
@@ -90,7 +47,7 @@ fn addresses_are_read_in_the_manuals_notation() {
     let first = "        address: 0x0001\n";
     assert!(text.contains(first), "the fixture's first register moved");
     let read = |text: &str| {
-        drivemap_codegen::read_map_str("mini-drive.yaml", text, &Context::default())
+        drivemap_map::read_map_str("mini-drive.yaml", text, &Context::default())
             .map(|d| {
                 let r = d.registers.iter().find(|r| r.def.id == "command").unwrap();
                 (r.def.address, d.protocol.exceptions[0].code)
@@ -114,19 +71,14 @@ fn addresses_are_read_in_the_manuals_notation() {
     let wrong = format!("address_format: octal\n{text}");
     let e = read(&wrong).unwrap_err();
     assert!(e.contains("unknown variant `octal`"), "{e}");
-    // The reference document shows a decimal manual's numbers as printed, with their hex; the
-    // export says how the manual numbers registers.
-    let d =
-        drivemap_codegen::read_map_str("mini-drive.yaml", &declared, &Context::default()).unwrap();
-    let doc = drivemap_codegen::reference::render(&d, "mini-drive.yaml");
-    assert!(doc.contains("| 2001 (07D1h) |"), "{doc}");
-    let export = drivemap_codegen::export::export(&d);
+    // The export says how the manual numbers registers (the reference document's rendering is
+    // checked in `review/tests/notation.rs`).
+    let d = drivemap_map::read_map_str("mini-drive.yaml", &declared, &Context::default()).unwrap();
+    let export = drivemap_map::export::export(&d);
     assert_eq!(export["drive"]["address_format"], "decimal");
-    let hex =
-        drivemap_codegen::read_map_str("mini-drive.yaml", &text, &Context::default()).unwrap();
+    let hex = drivemap_map::read_map_str("mini-drive.yaml", &text, &Context::default()).unwrap();
     assert_eq!(
-        drivemap_codegen::export::export(&hex)["drive"]["address_format"],
+        drivemap_map::export::export(&hex)["drive"]["address_format"],
         "hex"
     );
-    assert!(drivemap_codegen::reference::render(&hex, "mini-drive.yaml").contains("| 0001h |"));
 }

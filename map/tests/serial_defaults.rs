@@ -3,12 +3,12 @@
 
 use std::path::Path;
 
-use drivemap_codegen::ir::{LineParity, SerialDefaults};
-use drivemap_codegen::validate::Context;
+use drivemap_map::ir::{LineParity, SerialDefaults};
+use drivemap_map::validate::Context;
 
 fn defaults(map: &str) -> SerialDefaults {
     let ctx = Context::default();
-    drivemap_codegen::read_map(Path::new(map), &ctx)
+    drivemap_map::read_map(Path::new(map), &ctx)
         .unwrap_or_else(|d| panic!("{d}"))
         .serial_defaults()
 }

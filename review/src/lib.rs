@@ -1,0 +1,15 @@
+//! drivemap review tools on the map front end (`drivemap-map`): the semantic [`diff`] of two maps
+//! (`drivemap diff`), the manual [`review`] of a map's citations and coverage (`drivemap check
+//! --manuals`, `drivemap coverage`) and the Markdown [`reference`](mod@reference) of a drive
+//! (`drivemap doc`, `docs/drives/`).
+//!
+//! All text about a map comes from `drivemap_map::describe`.
+
+pub mod diff;
+pub mod reference;
+pub mod review;
+
+pub(crate) use drivemap_map::Drive;
+#[cfg(test)]
+pub(crate) use drivemap_map::read_map_str;
+pub(crate) use drivemap_map::{describe, diagnostic, ir, model, names, source, validate};
