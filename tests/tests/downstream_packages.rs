@@ -28,7 +28,7 @@ fn root() -> PathBuf {
 const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// The packages the application needs, directly or through another.
-const NEEDED: [&str; 4] = [
+const NEEDED: [&str; 5] = [
     "drivemap-core",
     "drivemap-map",
     "drivemap-codegen",
