@@ -8,15 +8,22 @@ use crate::row::Row;
 /// A register of an existing map, as far as a manual row can show it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Known {
+    /// The register's id.
     pub id: String,
+    /// Its parameter number, as printed.
     pub param: Option<String>,
+    /// Its address, as the manual prints it.
     pub address: u16,
+    /// Its name, as printed.
     pub name: String,
+    /// Its unit.
     pub unit: Option<String>,
     /// A decimal scale; `Err(kind)` for a scale a row cannot print as one number (relative,
     /// selected by another parameter).
     pub scale: Result<Option<f64>, &'static str>,
+    /// Its lower limit, in engineering units.
     pub min: Option<f64>,
+    /// Its upper limit, in engineering units.
     pub max: Option<f64>,
     /// `Err` for a default that depends on something (capacity, another setting).
     pub default: Result<Option<f64>, &'static str>,
@@ -27,22 +34,29 @@ pub struct Known {
 /// One field where a row and a register disagree.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Difference {
+    /// The field (`name`, `unit`, `scale`, `min`, `max`, `default`).
     pub field: &'static str,
+    /// What the map says.
     pub map: String,
+    /// What the manual's row says.
     pub manual: String,
 }
 
 /// A row matched to a register (same address and parameter number), with its differences.
 #[derive(Debug, Clone)]
 pub struct Matched<'a> {
+    /// The manual's row.
     pub row: &'a Row,
+    /// The map's register.
     pub known: &'a Known,
+    /// The fields where they disagree (none: every field equal).
     pub differences: Vec<Difference>,
 }
 
 /// Rows against a map's registers.
 #[derive(Debug, Clone)]
 pub struct Comparison<'a> {
+    /// Rows matched to a register.
     pub matched: Vec<Matched<'a>>,
     /// Rows no register has (proposed by `--merge`).
     pub new_rows: Vec<&'a Row>,
@@ -192,6 +206,7 @@ pub struct Figures {
 }
 
 impl Figures {
+    /// The figures of a comparison whose registers citing the manual number `register_rows`.
     pub fn of(c: &Comparison<'_>, register_rows: usize) -> Figures {
         Figures {
             register_rows,

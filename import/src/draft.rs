@@ -17,9 +17,11 @@ const SPOKEN: &[u8] = &[0x03, 0x04, 0x06, 0x08, 0x10];
 
 /// What the draft is made of.
 pub struct DraftInput<'a> {
+    /// The drive id of the draft.
     pub id: &'a str,
     /// Rows left out (by manual file and line), with why: the rows the front end refused.
     pub left_out: &'a BTreeMap<(String, usize), String>,
+    /// What was read from each manual.
     pub readings: &'a [(Reading, Protocol)],
     /// The command line that made it, recorded in the file's header.
     pub command: &'a str,
@@ -111,7 +113,9 @@ fn tables<'r>(rows: &[&'r Row]) -> Vec<Vec<&'r Row>> {
 
 /// What [`write()`] wrote.
 pub struct Written {
+    /// The draft map.
     pub yaml: String,
+    /// What the reviewer must confirm (also under `draft.to_confirm`).
     pub to_confirm: Vec<String>,
     /// Each register's id with the manual file and line of its row.
     pub registers: Vec<(String, String, usize)>,

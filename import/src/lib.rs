@@ -26,7 +26,9 @@ pub struct Reading {
     pub file: String,
     /// The manual's first line of text (a title, as far as the text shows).
     pub title: String,
+    /// The register rows read, in manual order (a row printed again is left out).
     pub rows: Vec<Row>,
+    /// Lines that looked like rows but were not read as one, with why.
     pub unread: Vec<Unread>,
     /// The parameter number shapes learnt from the manual (`AA-99`, `A999`).
     pub schemes: Vec<String>,
@@ -138,12 +140,15 @@ pub fn read_manual(file: &str, text: &str, lines: Option<(usize, usize)>) -> Rea
 
 /// A manual to import: its file name (as citations name it) and text.
 pub struct Manual<'a> {
+    /// The file name citations name.
     pub file: &'a str,
+    /// The manual's text.
     pub text: &'a str,
 }
 
 /// What `drivemap import` makes of its manuals.
 pub struct Import {
+    /// What was read from each manual: rows and protocol facts.
     pub readings: Vec<(Reading, protocol::Protocol)>,
     /// The draft map (YAML).
     pub yaml: String,
@@ -279,6 +284,7 @@ pub fn report(import: &Import) -> String {
 
 /// `--merge`: the rows of the manuals set against an existing map's registers.
 pub struct Merge<'a> {
+    /// Per manual file, its rows against the map's registers.
     pub comparisons: Vec<(&'a str, compare::Comparison<'a>)>,
 }
 

@@ -10,15 +10,20 @@ use regex::Regex;
 /// A fact and the 1-based line it was read from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cited<T> {
+    /// The fact.
     pub value: T,
+    /// The 1-based line it was read from.
     pub line: usize,
 }
 
 /// An exception code as printed.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Exception {
+    /// The exception code.
     pub code: u8,
+    /// Its name, as printed.
     pub name: String,
+    /// The 1-based line of the code.
     pub line: usize,
 }
 
@@ -27,9 +32,13 @@ pub struct Exception {
 pub struct Protocol {
     /// Function codes, each with the first line that names it as a function.
     pub function_codes: BTreeMap<u8, usize>,
+    /// The most registers one request may read.
     pub max_read: Option<Cited<u16>>,
+    /// The most registers one request may write.
     pub max_write: Option<Cited<u16>>,
+    /// The slave address range.
     pub slave_range: Option<Cited<(u8, u8)>>,
+    /// The exception codes, in the manual's order.
     pub exceptions: Vec<Exception>,
     /// `rtu` and/or `tcp`, with a line naming each.
     pub transports: BTreeMap<&'static str, usize>,

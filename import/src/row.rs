@@ -22,7 +22,9 @@ use crate::text::{Num, Range, cells, find_range, hex_address, resolution_cell, u
 /// One enumeration code as printed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Code {
+    /// The code.
     pub value: i64,
+    /// What it means, as printed.
     pub name: String,
     /// 1-based line number of the code's line.
     pub line: usize,
@@ -31,16 +33,22 @@ pub struct Code {
 /// A bit or bits of a register, from a bit table (`Address  Bits  Function`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BitField {
+    /// The first bit.
     pub first: u8,
+    /// The last bit (the first, for one bit).
     pub last: u8,
+    /// What the bits mean, as printed.
     pub name: String,
+    /// The 1-based line of the bit's row.
     pub line: usize,
 }
 
 /// How the manual printed an address.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Notation {
+    /// `0101h`, `0x0101`, `0h0101`, or digits under a Hex column.
     Hex,
+    /// Decimal digits under an Address or Register column.
     Decimal,
 }
 
@@ -49,19 +57,29 @@ pub enum Notation {
 pub struct Row {
     /// 1-based line number of the row.
     pub line: usize,
+    /// The address, as a number (in the manual's notation).
     pub address: Option<u16>,
     /// The address as printed (`0101h`, `40001`).
     pub address_printed: Option<String>,
+    /// How the address is printed.
     pub notation: Notation,
+    /// The parameter number, as printed.
     pub param: Option<String>,
+    /// The name, as printed (footnote marks dropped, a wrapped name joined).
     pub name: String,
     /// `r`, `w` or `rw` where the row prints it.
     pub access: Option<&'static str>,
+    /// The unit, in the map's spelling (`sec` → `s`).
     pub unit: Option<String>,
+    /// Engineering value per count: the printed resolution, else the range's decimals.
     pub scale: Option<f64>,
+    /// The lower end of the printed range.
     pub min: Option<f64>,
+    /// The upper end of the printed range.
     pub max: Option<f64>,
+    /// The printed default.
     pub default: Option<f64>,
+    /// Enumeration codes, from the row and the lines under it.
     pub values: Vec<Code>,
     /// Bits, when the row heads a bit table.
     pub fields: Vec<BitField>,
@@ -102,8 +120,11 @@ impl Row {
 /// A line that looked like a row but could not be read.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Unread {
+    /// The 1-based line.
     pub line: usize,
+    /// The line, trimmed.
     pub text: String,
+    /// Why it was not read as a row.
     pub why: String,
 }
 

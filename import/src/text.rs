@@ -12,7 +12,9 @@ use regex::Regex;
 /// A number as printed: its value and how many decimals it shows (`0.00` → 2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Num {
+    /// The value.
     pub value: f64,
+    /// How many decimals are printed.
     pub decimals: u32,
 }
 
@@ -133,11 +135,15 @@ pub fn resolution_cell(s: &str) -> Option<(Num, Option<&'static str>)> {
 /// A range as printed, with the units printed after either end.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Range {
+    /// The lower end.
     pub min: Num,
+    /// The upper end.
     pub max: Num,
+    /// The unit printed after either end.
     pub unit: Option<&'static str>,
     /// Byte offsets of the range in the text it was found in.
     pub start: usize,
+    /// Where the range ends in the text (byte offset).
     pub end: usize,
 }
 

@@ -36,6 +36,7 @@ pub struct Args {
     /// rows where it and the manual disagree.
     #[arg(long, value_name = "MAP")]
     pub merge: Option<PathBuf>,
+    /// Where `--merge` looks a drive id up.
     #[command(flatten)]
     pub dir: MapsDir,
 }
