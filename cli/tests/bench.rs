@@ -482,7 +482,7 @@ fn probe(sim: Simulator, format: &str) -> (i32, String, String) {
 }
 
 const DISAGREEMENTS: &str = "import json,sys\nr=json.load(sys.stdin)\n\
-    for d in r['disagreements']: print(d['kind'], d['register'], d['parameter'], d['address'], d['exception'], d['raw'])";
+    for d in r['disagreements']: print(d['kind'], d['register'], d['parameter'], d['address_text'], d['exception'], d['raw'])";
 
 #[test]
 fn probe_reports_exactly_what_an_altered_drive_does_differently() {
