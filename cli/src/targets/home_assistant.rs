@@ -6,7 +6,7 @@ use std::fmt::Write;
 
 use drivemap_runtime::Table;
 
-use super::{Endpoint, Meaning, Point, Points, meanings_text, slug};
+use super::{Endpoint, Meaning, Point, Points, slug, write_point_caveats};
 use drivemap_live::link::LineParity;
 
 fn q(text: &str) -> String {
@@ -122,26 +122,12 @@ pub fn render(points: &Points) -> String {
         out,
         "# Addresses are the PDU addresses on this link (the manual's address, moved for the transport)."
     );
-    for p in &points.points {
-        if let Meaning::Number { given, .. } = &p.meaning {
-            if !given.is_empty() {
-                let _ = writeln!(
-                    out,
-                    "# {}: its scale holds for {given}; export again if the drive's setting changes.",
-                    p.id()
-                );
-            }
-        }
-        if let Some(m) = meanings_text(p) {
-            let what = match p.meaning {
-                Meaning::Bits(_) => {
-                    "Home Assistant's modbus sensors cannot split bit fields: the sensor shows the word"
-                }
-                _ => "Home Assistant's modbus sensors show the code, not its meaning",
-            };
-            let _ = writeln!(out, "# {}: {what}; {m}", p.id());
-        }
-    }
+    write_point_caveats(
+        &mut out,
+        points,
+        "Home Assistant's modbus sensors cannot split bit fields: the sensor shows the word",
+        "Home Assistant's modbus sensors show the code, not its meaning",
+    );
     // Home Assistant loads one entity per name and one per address (the second is dropped with
     // a warning): a printed name the manual gives twice takes the register id, a second
     // register at an address is left out here.

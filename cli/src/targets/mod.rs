@@ -425,6 +425,31 @@ pub fn slug(text: &str) -> String {
     out.trim_matches('_').to_owned()
 }
 
+/// The comments every export writes per point: a scale that holds only for the settings given
+/// (`--set`), and what the tool shows of a bit-field register (`bits`) or a code register
+/// (`codes`) instead of its meanings.
+pub fn write_point_caveats(out: &mut String, points: &Points, bits: &str, codes: &str) {
+    use std::fmt::Write as _;
+    for p in &points.points {
+        if let Meaning::Number { given, .. } = &p.meaning
+            && !given.is_empty()
+        {
+            let _ = writeln!(
+                out,
+                "# {}: its scale holds for {given}; export again if the drive's setting changes.",
+                p.id()
+            );
+        }
+        if let Some(m) = meanings_text(p) {
+            let what = match p.meaning {
+                Meaning::Bits(_) => bits,
+                _ => codes,
+            };
+            let _ = writeln!(out, "# {}: {what}; {m}", p.id());
+        }
+    }
+}
+
 /// What a tool cannot show of a code or bit-field register, for comments.
 pub fn meanings_text(p: &Point) -> Option<String> {
     match &p.meaning {

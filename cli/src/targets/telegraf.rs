@@ -6,7 +6,7 @@ use std::fmt::Write;
 
 use drivemap_runtime::Table;
 
-use super::{Endpoint, Meaning, Points, meanings_text};
+use super::{Endpoint, Meaning, Points, write_point_caveats};
 use drivemap_live::link::LineParity;
 
 fn q(text: &str) -> String {
@@ -26,26 +26,12 @@ pub fn render(points: &Points) -> String {
         out,
         "# One [[inputs.modbus.request]] per planned read; `omit` fields are addresses a read bridges."
     );
-    for p in &points.points {
-        if let Meaning::Number { given, .. } = &p.meaning {
-            if !given.is_empty() {
-                let _ = writeln!(
-                    out,
-                    "# {}: its scale holds for {given}; export again if the drive's setting changes.",
-                    p.id()
-                );
-            }
-        }
-        if let Some(m) = meanings_text(p) {
-            let what = match p.meaning {
-                Meaning::Bits(_) => {
-                    "the request style reads whole registers: the field is the word"
-                }
-                _ => "the field is the code",
-            };
-            let _ = writeln!(out, "# {}: {what}; {m}", p.id());
-        }
-    }
+    write_point_caveats(
+        &mut out,
+        points,
+        "the request style reads whole registers: the field is the word",
+        "the field is the code",
+    );
     // A request's byte order is one for all its fields: a pair of the other word order cannot
     // share a read with a pair of this order.
     let mut mixed = Vec::new();
