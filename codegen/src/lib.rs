@@ -12,7 +12,7 @@ pub mod config;
 pub mod generate;
 
 pub(crate) use drivemap_map::{
-    Diagnostic, describe, diagnostic, ir, lower, model, names, source, validate,
+    Diagnostic, describe, diagnostic, facts, ir, lower, model, names, source, validate,
 };
 pub(crate) use drivemap_map::{default_manuals_dir, find_maps, read_map};
 

@@ -13,6 +13,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod kind;
 pub mod plan;
 pub mod profile;
 pub mod register;
@@ -21,6 +22,7 @@ pub mod rule;
 pub mod scale;
 pub mod width;
 
+pub use kind::ConversionKind;
 pub use plan::{RegisterPlan, SettingsView, Value};
 pub use profile::Profile;
 pub use register::{

@@ -3,11 +3,9 @@
 use proc_macro2::TokenStream;
 use quote::quote;
 
-use drivemap_core::register::WriteRestriction;
-
 use crate::describe;
-use crate::ir::{Drive, Register, ValueKind};
-use crate::model::Scale;
+use crate::facts::{self, FactKey};
+use crate::ir::{Drive, Register};
 
 /// Brackets of the manual's text (`Drive Read[y]`, `[1]`) escaped so that rustdoc does not
 /// read them as links; a link the generator writes (``[`Name`]``) and code spans stay as they are.
@@ -70,137 +68,108 @@ pub fn module(drive: &Drive) -> String {
     s
 }
 
+/// The rustdoc of a register, read from its [`facts`](crate::facts) alone: the summary line
+/// prints the identity rows, the paragraphs below the others.
 pub fn register(drive: &Drive, r: &Register) -> String {
-    let d = &r.def;
-    let plan = drive.register_plan(r);
-    let title = match &d.param {
-        Some(p) => format!("**{p} — {}**", d.name),
-        None => format!("**{}**", d.name),
+    let f = facts::register(drive, r);
+    let title = match &f.param {
+        Some(p) => format!("**{p} — {}**", f.name),
+        None => format!("**{}**", f.name),
     };
-    let mut facts = vec![match &d.pair {
-        None => format!("address `{}`", describe::address(d.address)),
-        Some(p) => format!(
+    let address = f.get(FactKey::Address).map(|a| a.value.as_str());
+    let mut summary = vec![match f.get(FactKey::Width) {
+        None => format!("address `{}`", address.unwrap_or_default()),
+        Some(w) => format!(
             "addresses `{}` ({}{}, read and written whole)",
-            describe::address_span(d.address, d.address.wrapping_add(1)),
-            describe::width(r.width()),
-            p.source
+            address.unwrap_or_default(),
+            w.value,
+            w.citation
                 .as_deref()
                 .map(|s| format!(", `{s}`"))
                 .unwrap_or_default()
         ),
     }];
-    facts.push(describe::access(plan.info.access).to_owned());
-    if r.broadcast {
-        facts.push("broadcast only (slave 0)".into());
-    }
-    let unit = d.unit.clone().unwrap_or_default();
-    match r.kind() {
-        ValueKind::Quantity(Scale::Selected(sel)) => facts.push(format!(
-            "unit {unit}, scale {}",
-            describe::selected_by(drive, &sel.selected_by)
-        )),
-        ValueKind::Quantity(scale) => {
-            facts.push(format!("scale {}", describe::scale(drive, scale, &unit)))
+    for row in &f.rows {
+        match row.key {
+            FactKey::Access | FactKey::Broadcast => summary.push(row.value.clone()),
+            FactKey::SelectedBy => summary.push(format!(
+                "unit {}, scale {}",
+                f.get(FactKey::Unit)
+                    .map(|u| u.value.as_str())
+                    .unwrap_or_default(),
+                row.value
+            )),
+            FactKey::Scale | FactKey::Range | FactKey::Default => {
+                summary.push(format!("{} {}", row.label, row.value))
+            }
+            _ => {}
         }
-        ValueKind::UnitQuantity => facts.push(format!(
-            "scale {}",
-            describe::scale(drive, &Scale::Factor(1.0), &unit)
-        )),
-        _ => {}
     }
-    let range = describe::range(d.min, d.max, &unit);
-    if !range.is_empty() {
-        facts.push(format!("range {range}"));
-    }
-    if let Some(v) = &d.default {
-        facts.push(format!("default {}", describe::default(v)));
-    }
-    let mut s = format!("{title}\n\n{}.\n", facts.join(" · "));
-    if let Some(Scale::Selected(sel)) = &d.scale {
+    let mut s = format!("{title}\n\n{}.\n", summary.join(" · "));
+    if !f.cases.is_empty() {
         s += "\n| selector | scale | range |\n|---|---|---|\n";
-        for c in &sel.cases {
-            s += &format!(
-                "| {} | {} | {} |\n",
-                describe::codes(&c.when),
-                describe::scale(drive, &c.scale, &unit),
-                describe::range(c.min, c.max, &unit)
-            );
+        for c in &f.cases {
+            s += &format!("| {} | {} | {} |\n", c.codes, c.scale, c.range);
         }
     }
-    for (k, o) in &d.by_variant {
-        let (min, max) = r.limits_for(k);
-        let name = drive
-            .variant_option(k)
-            .map(|(_, o)| o.name.clone())
-            .unwrap_or_else(|| k.clone());
+    for v in &f.variants {
         let mut parts = Vec::new();
-        if o.min.is_some() || o.max.is_some() {
-            parts.push(format!("range {}", describe::range(min, max, &unit)));
-        }
-        if let Some(v) = &o.default {
-            parts.push(format!("default {}", describe::default(v)));
-        }
-        for u in &o.unknown {
-            parts.push(format!(
-                "{} unknown: {}",
-                describe::unknown_item(u.what),
-                u.reason
-            ));
+        parts.extend(v.range.as_ref().map(|x| format!("range {x}")));
+        parts.extend(v.default.as_ref().map(|x| format!("default {x}")));
+        for u in &v.unknowns {
+            parts.push(format!("{} unknown: {}", u.what, u.reason));
         }
         if !parts.is_empty() {
-            s += &format!("\n{name}: {}.\n", parts.join(", "));
+            s += &format!("\n{}: {}.\n", v.name, parts.join(", "));
         }
     }
-    if let Some(l) = &d.max_relative {
-        s += &format!(
-            "\nLimited through another quantity: {}; a value above it is refused before \
-             sending (`ValueError::AboveLimit`), and one that cannot be checked because the \
-             quantity is not in the settings is refused too (`ValueError::LimitNotKnown`).\n",
-            describe::relative_limit(drive, l)
-        );
+    for row in &f.rows {
+        match row.key {
+            FactKey::RelativeLimit => {
+                s += &format!(
+                    "\nLimited through another quantity: {}; a value above it is refused before \
+                     sending (`ValueError::AboveLimit`), and one that cannot be checked because the \
+                     quantity is not in the settings is refused too (`ValueError::LimitNotKnown`).\n",
+                    row.value
+                )
+            }
+            FactKey::WriteRestriction => s += &format!("\nWritable {}.\n", row.value),
+            FactKey::RepeatNeedsChange => {
+                s += &format!(
+                    "\nRepeat needs a change: {}. `Client::write` does so, and writing the same value \
+                     twice executes it twice.\n",
+                    row.value
+                )
+            }
+            FactKey::ReadValues => {
+                s += &format!(
+                    "\nRead and written with different meanings: a read gives the read enumeration ({}); \
+                     a write takes the word described above.\n",
+                    row.value
+                )
+            }
+            _ => {}
+        }
     }
-    if plan.restriction != WriteRestriction::None {
-        s += &format!(
-            "\nWritable {}.\n",
-            describe::write_restriction(plan.restriction)
-        );
-    }
-    if let Some((rule, _)) = &r.repeat_needs_change {
-        s += &format!(
-            "\nRepeat needs a change: {}. `Client::write` does so, and writing the same value \
-             twice executes it twice.\n",
-            describe::repeat_needs_change(rule)
-        );
-    }
-    if !d.read_values.is_empty() {
-        s += &format!(
-            "\nRead and written with different meanings: a read gives the read enumeration ({}); \
-             a write takes the word described above.\n",
-            describe::read_values(&d.read_values)
-        );
-    }
-    for alt in &d.address_alternatives {
+    for alt in f.all(FactKey::AlternativeAddress) {
         s += &format!(
             "\nAt `{}` when {} (`{}`).\n",
-            describe::address(alt.address),
-            describe::condition(&alt.when),
-            alt.source
+            alt.value,
+            alt.when.as_deref().unwrap_or_default(),
+            alt.citation.as_deref().unwrap_or_default()
         );
     }
-    if !d.display_steps.is_empty() {
-        s += &format!(
-            "\n{}.\n",
-            capitalized(&describe::display_steps(&d.display_steps))
-        );
+    if let Some(d) = f.get(FactKey::DisplaySteps) {
+        s += &format!("\n{}.\n", capitalized(&d.value));
     }
-    for n in &d.notes {
+    for n in &f.notes {
         s += &format!("\nNote: {n}\n");
     }
-    for c in &d.conflicts {
+    for c in &f.conflicts {
         let cites = c
-            .readings
+            .citations
             .iter()
-            .map(|r| format!("`{}`", r.source))
+            .map(|r| format!("`{r}`"))
             .collect::<Vec<_>>()
             .join(" vs ");
         s += &format!(
@@ -208,14 +177,10 @@ pub fn register(drive: &Drive, r: &Register) -> String {
             c.topic, c.chosen, c.reason
         );
     }
-    for u in &d.unknown {
-        s += &format!(
-            "\nUnknown {}: {}\n",
-            describe::unknown_item(u.what),
-            u.reason
-        );
+    for u in &f.unknowns {
+        s += &format!("\nUnknown {}: {}\n", u.what, u.reason);
     }
-    if let Some(src) = &d.source {
+    if let Some(src) = &f.source {
         s += &format!("\nSource: `{src}`.");
     }
     s

@@ -1,0 +1,86 @@
+//! [`ConversionKind`]: the kinds of [`Conversion`] as a plain list, for the tools that must
+//! show every kind (the facts view of `drivemap-map`, and `tests/tests/scale_kinds.rs`, which
+//! fails when a printer leaves a kind out).
+//!
+//! The enum and [`ConversionKind::ALL`] are written by one macro from one list, so `ALL` cannot
+//! miss a kind; [`ConversionKind::of`] matches [`Conversion`] exhaustively, so a new
+//! `Conversion` variant does not compile until it has a kind here.
+
+use crate::plan::Conversion;
+
+macro_rules! kinds {
+    ($($(#[$doc:meta])* $kind:ident => $name:literal,)*) => {
+        /// The kind of a register's [`Conversion`], without its data.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        pub enum ConversionKind {
+            $($(#[$doc])* $kind,)*
+        }
+
+        impl ConversionKind {
+            /// Every kind, in declaration order.
+            pub const ALL: &'static [ConversionKind] = &[$(ConversionKind::$kind,)*];
+
+            /// The kind's name in the facts view and the JSON export (`decimal`).
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $(ConversionKind::$kind => $name,)*
+                }
+            }
+        }
+    };
+}
+
+kinds! {
+    /// [`Conversion::Word`]: a plain word.
+    Word => "word",
+    /// [`Conversion::Decimal`]: raw × a decimal factor.
+    Decimal => "decimal",
+    /// [`Conversion::Relative`]: `full_scale` raw = 100 % of a reference.
+    Relative => "relative",
+    /// [`Conversion::Selected`]: the scale a parameter's code chooses.
+    Selected => "selected",
+    /// [`Conversion::Enum`]: codes with meanings.
+    Enum => "enum",
+    /// [`Conversion::Bits`]: bit fields.
+    Bits => "bits",
+}
+
+impl ConversionKind {
+    /// The kind of a conversion.
+    pub const fn of(c: &Conversion) -> ConversionKind {
+        match c {
+            Conversion::Word { .. } => ConversionKind::Word,
+            Conversion::Decimal { .. } => ConversionKind::Decimal,
+            Conversion::Relative { .. } => ConversionKind::Relative,
+            Conversion::Selected { .. } => ConversionKind::Selected,
+            Conversion::Enum { .. } => ConversionKind::Enum,
+            Conversion::Bits { .. } => ConversionKind::Bits,
+        }
+    }
+
+    /// Whether the kind scales a word to an engineering value (a *scale kind*: decimal,
+    /// relative, selected), as opposed to a plain word, codes or bits.
+    pub const fn is_scale(self) -> bool {
+        matches!(
+            self,
+            ConversionKind::Decimal | ConversionKind::Relative | ConversionKind::Selected
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ConversionKind;
+
+    #[test]
+    fn every_kind_is_listed_once_with_its_own_name() {
+        for (i, k) in ConversionKind::ALL.iter().enumerate() {
+            assert!(
+                ConversionKind::ALL[i + 1..]
+                    .iter()
+                    .all(|o| o != k && o.name() != k.name()),
+                "{k:?} twice"
+            );
+        }
+    }
+}

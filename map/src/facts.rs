@@ -1,0 +1,375 @@
+//! The facts view: what a map says about each register, decided once from the lowered plan and
+//! the map's citations, as rows of `(label, value, citation)` that every printer reads as a
+//! table (after chiptool's IR, which its printers read instead of the SVD).
+//!
+//! Values are worded by [`describe`] (a scale as `0.01 Hz`, a range as `0 ..= 400 Hz`), so a
+//! printer only chooses which rows it shows and how it frames them: the rustdoc of generated
+//! items (`drivemap-codegen`'s `generate/docs.rs`) reads [`RegisterFacts`] alone. The view is
+//! [`serde::Serialize`], so a tool can take it as JSON ([`facts`] gives a drive's).
+//!
+//! A new kind of scale adds one [`ConversionKind`] in the vocabulary crate and one arm in
+//! [`scale_row`]: every printer that reads the view shows it (`tests/tests/scale_kinds.rs`).
+
+use serde::Serialize;
+
+use drivemap_core::ConversionKind;
+
+use crate::describe;
+use crate::ir::{Drive, Register, ValueKind};
+use crate::model::Scale;
+
+/// What a row of a register's facts says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FactKey {
+    /// Where the register is: `0200h`, or a pair's span `0200h – 0201h`.
+    Address,
+    /// A 32-bit pair's width and word order (`32-bit pair, high word first`), cited.
+    Width,
+    /// Access from the plan: `read/write`.
+    Access,
+    /// Broadcast only (slave 0).
+    Broadcast,
+    /// The unit as the manual prints it.
+    Unit,
+    /// A fixed scale in engineering units: `0.01 Hz`, `30000 = 100 % of …`.
+    Scale,
+    /// Who selects the scale: `selected by C6-01` (the cases are [`RegisterFacts::cases`]).
+    SelectedBy,
+    /// The base variant's range: `0 ..= 400 Hz`.
+    Range,
+    /// The base variant's default: `5`, `depends on capacity`.
+    Default,
+    /// A limit through another quantity: `at most 100 % of n011 (file:line)`.
+    RelativeLimit,
+    /// When writes are accepted (shown when restricted).
+    WriteRestriction,
+    /// A drive that executes a written value only when it changed.
+    RepeatNeedsChange,
+    /// What a read means when it differs from a write: `0 Unlock, 1 Lock`.
+    ReadValues,
+    /// An alternative address (`0201h`), cited; its condition in [`Fact::when`].
+    AlternativeAddress,
+    /// How the keypad shows a finer value.
+    DisplaySteps,
+}
+
+impl FactKey {
+    /// The row's label as printers write it before the value (`scale 0.01 Hz`).
+    pub const fn label(self) -> &'static str {
+        match self {
+            FactKey::Address => "address",
+            FactKey::Width => "width",
+            FactKey::Access => "access",
+            FactKey::Broadcast => "broadcast",
+            FactKey::Unit => "unit",
+            FactKey::Scale | FactKey::SelectedBy => "scale",
+            FactKey::Range => "range",
+            FactKey::Default => "default",
+            FactKey::RelativeLimit => "limit",
+            FactKey::WriteRestriction => "write restriction",
+            FactKey::RepeatNeedsChange => "repeat needs change",
+            FactKey::ReadValues => "read meaning",
+            FactKey::AlternativeAddress => "alternative address",
+            FactKey::DisplaySteps => "display steps",
+        }
+    }
+}
+
+/// One row: what it says, its value in [`describe`]'s wording, and the manual line it rests on
+/// when the map cites one for it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Fact {
+    pub key: FactKey,
+    pub label: &'static str,
+    pub value: String,
+    /// The condition under which the row applies (an alternative address's `o2-09 is 1`).
+    pub when: Option<String>,
+    pub citation: Option<String>,
+}
+
+impl Fact {
+    fn new(key: FactKey, value: impl Into<String>, citation: Option<&str>) -> Fact {
+        Fact {
+            key,
+            label: key.label(),
+            value: value.into(),
+            when: None,
+            citation: citation.map(str::to_owned),
+        }
+    }
+}
+
+/// One case of a selected scale: the selector's codes, the scale and range they choose.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseFacts {
+    pub codes: String,
+    pub scale: String,
+    pub range: String,
+    pub citation: Option<String>,
+}
+
+/// What one variant option changes: its name, its range (the base's where it gives none) and
+/// default when it overrides them, and what it leaves unknown.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VariantFacts {
+    pub option: String,
+    pub name: String,
+    pub range: Option<String>,
+    pub default: Option<String>,
+    pub unknowns: Vec<UnknownFacts>,
+}
+
+/// A conflict between readings of the manual and the one chosen.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ConflictFacts {
+    pub topic: String,
+    pub citations: Vec<String>,
+    pub chosen: String,
+    pub reason: String,
+}
+
+/// An item the manual leaves unknown: the item (`range`) and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UnknownFacts {
+    pub what: &'static str,
+    pub reason: String,
+}
+
+/// Everything the printers say about one register.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RegisterFacts {
+    /// The register's row in the drive plan (`None` for a register of another drive).
+    pub row: Option<usize>,
+    pub id: String,
+    pub param: Option<String>,
+    pub name: String,
+    pub address: u16,
+    /// The kind of conversion the plan decided.
+    #[serde(serialize_with = "kind_name")]
+    pub kind: ConversionKind,
+    pub rows: Vec<Fact>,
+    pub cases: Vec<CaseFacts>,
+    pub variants: Vec<VariantFacts>,
+    pub notes: Vec<String>,
+    pub conflicts: Vec<ConflictFacts>,
+    pub unknowns: Vec<UnknownFacts>,
+    /// The register's own citation.
+    pub source: Option<String>,
+}
+
+impl RegisterFacts {
+    /// The first row with `key`.
+    pub fn get(&self, key: FactKey) -> Option<&Fact> {
+        self.rows.iter().find(|f| f.key == key)
+    }
+
+    /// Every row with `key`, in the map's order.
+    pub fn all(&self, key: FactKey) -> impl Iterator<Item = &Fact> {
+        self.rows.iter().filter(move |f| f.key == key)
+    }
+}
+
+/// The facts of one drive: its registers in the map's order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DriveFacts {
+    pub drive: String,
+    pub registers: Vec<RegisterFacts>,
+}
+
+/// The facts of every register of a drive.
+pub fn facts(drive: &Drive) -> DriveFacts {
+    DriveFacts {
+        drive: drive.meta.id.clone(),
+        registers: drive.registers.iter().map(|r| register(drive, r)).collect(),
+    }
+}
+
+/// The scale row of a register, by the kind of its value: a fixed scale (a unit without a
+/// scale is factor 1), or who selects it; none for words, codes and bits.
+pub fn scale_row(drive: &Drive, r: &Register) -> Option<Fact> {
+    let unit = r.def.unit.as_deref().unwrap_or("");
+    match r.kind() {
+        ValueKind::Quantity(Scale::Selected(sel)) => Some(Fact::new(
+            FactKey::SelectedBy,
+            describe::selected_by(drive, &sel.selected_by),
+            None,
+        )),
+        ValueKind::Quantity(scale @ (Scale::Factor(_) | Scale::Relative(_))) => Some(Fact::new(
+            FactKey::Scale,
+            describe::scale(drive, scale, unit),
+            None,
+        )),
+        ValueKind::UnitQuantity => Some(Fact::new(
+            FactKey::Scale,
+            describe::scale(drive, &Scale::Factor(1.0), unit),
+            None,
+        )),
+        ValueKind::Word | ValueKind::Enum(_) | ValueKind::Bits(_) => None,
+    }
+}
+
+/// The facts of one register.
+pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
+    let d = &r.def;
+    let plan = drive.register_plan(r);
+    let unit = d.unit.as_deref().unwrap_or("");
+    let mut rows = Vec::new();
+    match &d.pair {
+        None => rows.push(Fact::new(
+            FactKey::Address,
+            describe::address(d.address),
+            None,
+        )),
+        Some(p) => {
+            rows.push(Fact::new(
+                FactKey::Address,
+                describe::address_span(d.address, d.address.wrapping_add(1)),
+                None,
+            ));
+            rows.push(Fact::new(
+                FactKey::Width,
+                describe::width(r.width()),
+                p.source.as_deref(),
+            ));
+        }
+    }
+    rows.push(Fact::new(
+        FactKey::Access,
+        describe::access(plan.info.access),
+        None,
+    ));
+    if r.broadcast {
+        rows.push(Fact::new(
+            FactKey::Broadcast,
+            "broadcast only (slave 0)",
+            None,
+        ));
+    }
+    if let Some(u) = &d.unit {
+        rows.push(Fact::new(FactKey::Unit, u.clone(), None));
+    }
+    rows.extend(scale_row(drive, r));
+    let range = describe::range(d.min, d.max, unit);
+    if !range.is_empty() {
+        rows.push(Fact::new(FactKey::Range, range, None));
+    }
+    if let Some(v) = &d.default {
+        rows.push(Fact::new(FactKey::Default, describe::default(v), None));
+    }
+    if let Some(l) = &d.max_relative {
+        rows.push(Fact::new(
+            FactKey::RelativeLimit,
+            describe::relative_limit(drive, l),
+            Some(&l.source),
+        ));
+    }
+    if plan.restriction != drivemap_core::WriteRestriction::None {
+        rows.push(Fact::new(
+            FactKey::WriteRestriction,
+            describe::write_restriction(plan.restriction),
+            None,
+        ));
+    }
+    if let Some((rule, _)) = &r.repeat_needs_change {
+        rows.push(Fact::new(
+            FactKey::RepeatNeedsChange,
+            describe::repeat_needs_change(rule),
+            Some(&rule.source),
+        ));
+    }
+    if !d.read_values.is_empty() {
+        rows.push(Fact::new(
+            FactKey::ReadValues,
+            describe::read_values(&d.read_values),
+            None,
+        ));
+    }
+    for alt in &d.address_alternatives {
+        rows.push(Fact {
+            when: Some(describe::condition(&alt.when)),
+            ..Fact::new(
+                FactKey::AlternativeAddress,
+                describe::address(alt.address),
+                Some(&alt.source),
+            )
+        });
+    }
+    if !d.display_steps.is_empty() {
+        rows.push(Fact::new(
+            FactKey::DisplaySteps,
+            describe::display_steps(&d.display_steps),
+            None,
+        ));
+    }
+    let cases = match &d.scale {
+        Some(Scale::Selected(sel)) => sel
+            .cases
+            .iter()
+            .map(|c| CaseFacts {
+                codes: describe::codes(&c.when),
+                scale: describe::scale(drive, &c.scale, unit),
+                range: describe::range(c.min, c.max, unit),
+                citation: c.source.clone(),
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    let variants = d
+        .by_variant
+        .iter()
+        .map(|(k, o)| {
+            let (min, max) = r.limits_for(k);
+            VariantFacts {
+                option: k.clone(),
+                name: drive
+                    .variant_option(k)
+                    .map(|(_, o)| o.name.clone())
+                    .unwrap_or_else(|| k.clone()),
+                range: (o.min.is_some() || o.max.is_some())
+                    .then(|| describe::range(min, max, unit)),
+                default: o.default.as_ref().map(describe::default),
+                unknowns: o.unknown.iter().map(unknown).collect(),
+            }
+        })
+        .collect();
+    RegisterFacts {
+        row: drive
+            .registers
+            .iter()
+            .position(|x| std::ptr::eq(x, r) || x.def.id == d.id)
+            .map(|m| drive.plan().order[m]),
+        id: d.id.clone(),
+        param: d.param.clone(),
+        name: d.name.clone(),
+        address: d.address,
+        kind: ConversionKind::of(&plan.conversion),
+        rows,
+        cases,
+        variants,
+        notes: d.notes.clone(),
+        conflicts: d
+            .conflicts
+            .iter()
+            .map(|c| ConflictFacts {
+                topic: c.topic.clone(),
+                citations: c.readings.iter().map(|r| r.source.clone()).collect(),
+                chosen: c.chosen.clone(),
+                reason: c.reason.clone(),
+            })
+            .collect(),
+        unknowns: d.unknown.iter().map(unknown).collect(),
+        source: d.source.clone(),
+    }
+}
+
+fn unknown(u: &crate::model::Unknown) -> UnknownFacts {
+    UnknownFacts {
+        what: describe::unknown_item(u.what),
+        reason: u.reason.clone(),
+    }
+}
+
+fn kind_name<S: serde::Serializer>(k: &ConversionKind, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(k.name())
+}
