@@ -377,7 +377,7 @@ fn legal_arrival(
     if plain && r.def.by_variant.is_empty() {
         let factor = r.factor().expect("fixed factor");
         if let Some(l) = r.raw_limits(factor, r.def.min, r.def.max) {
-            if raw < l.min || raw > l.max {
+            if raw < i128::from(l.min) || raw > i128::from(l.max) {
                 return Err(format!("raw {raw} outside {} ..= {}", l.min, l.max));
             }
         }

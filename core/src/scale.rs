@@ -161,6 +161,141 @@ impl Decimal {
         }
         round(value * self.power() / self.mantissa as f64)
     }
+
+    /// The decimal a float was written as: its shortest round-trip form, as Rust's `Display`
+    /// prints it (YAML's `0.1` is `Decimal::new(1, 1)`, `6000.0` is `Decimal::new(6000, 0)`).
+    ///
+    /// Without allocating: below 2^53 the fewest decimal places `e` at which an integer `m`
+    /// gives back `x` as `m / 10^e` (both exact in `f64`, so the division is correctly
+    /// rounded, as parsing the decimal text is) is the shortest form; from 2^53 on every
+    /// `f64` is a whole number and is taken as it is; a shortest mantissa beyond 2^53 is read
+    /// from the `Display` text in a stack buffer. `None` when `x` is not finite, needs more than
+    /// 22 decimal places, or its mantissa does not fit an `i64`.
+    pub fn from_f64(x: f64) -> Option<Decimal> {
+        if !x.is_finite() {
+            return None;
+        }
+        const EXACT: f64 = 9_007_199_254_740_992.0; // 2^53
+        if x.abs() >= EXACT {
+            // A whole number; `i64` holds it when below 2^63 (the cast saturates beyond).
+            const LIMIT: f64 = 9_223_372_036_854_775_808.0; // 2^63
+            return (x.abs() < LIMIT).then(|| Decimal::new(x as i64, 0));
+        }
+        let mut power = 1.0f64;
+        for exponent in 0..=22u32 {
+            let m = x * power;
+            let Some(whole) = round(m) else { break };
+            if (whole as f64) / power == x && (whole as f64).abs() < EXACT {
+                return Some(Decimal::new(whole, exponent).normalized());
+            }
+            power *= 10.0;
+        }
+        Self::from_display(x)
+    }
+
+    /// [`Decimal::from_f64`] through the float's shortest `Display` text, written into a
+    /// buffer on the stack (for the rare float whose shortest mantissa is beyond 2^53).
+    fn from_display(x: f64) -> Option<Decimal> {
+        struct Buf {
+            bytes: [u8; 48],
+            len: usize,
+        }
+        impl fmt::Write for Buf {
+            fn write_str(&mut self, s: &str) -> fmt::Result {
+                let end = self.len + s.len();
+                self.bytes
+                    .get_mut(self.len..end)
+                    .ok_or(fmt::Error)?
+                    .copy_from_slice(s.as_bytes());
+                self.len = end;
+                Ok(())
+            }
+        }
+        let mut buf = Buf {
+            bytes: [0; 48],
+            len: 0,
+        };
+        fmt::write(&mut buf, format_args!("{x}")).ok()?;
+        let text = buf.bytes.get(..buf.len)?;
+        let (neg, digits) = match text.split_first() {
+            Some((b'-', rest)) => (true, rest),
+            _ => (false, text),
+        };
+        let mut mantissa: i64 = 0;
+        let mut exponent = 0u32;
+        let mut fraction = false;
+        for &b in digits {
+            match b {
+                b'.' => fraction = true,
+                b'0'..=b'9' => {
+                    mantissa = mantissa.checked_mul(10)?.checked_add(i64::from(b - b'0'))?;
+                    if fraction {
+                        exponent += 1;
+                    }
+                }
+                _ => return None,
+            }
+        }
+        let mantissa = if neg { -mantissa } else { mantissa };
+        // Beyond 10^-22 the factor is no longer exact as an `f64` power of ten.
+        let d = Decimal::new(mantissa, exponent).normalized();
+        (d.exponent <= 22).then_some(d)
+    }
+
+    /// The same decimal with no trailing zeros in the mantissa (`Decimal::new(10, 2)` is
+    /// `Decimal::new(1, 1)`).
+    pub const fn normalized(mut self) -> Decimal {
+        while self.exponent > 0 && self.mantissa % 10 == 0 {
+            self.mantissa /= 10;
+            self.exponent -= 1;
+        }
+        self
+    }
+
+    /// Whether the factor is above zero (a usable scale).
+    pub const fn is_positive(self) -> bool {
+        self.mantissa > 0
+    }
+
+    /// Both mantissas at the larger exponent, in `i128`; `None` on overflow.
+    fn aligned(self, by: Decimal) -> Option<(i128, i128)> {
+        let e = if self.exponent > by.exponent {
+            self.exponent
+        } else {
+            by.exponent
+        };
+        let up = |d: Decimal| -> Option<i128> {
+            10i128
+                .checked_pow(e - d.exponent)?
+                .checked_mul(i128::from(d.mantissa))
+        };
+        Some((up(self)?, up(by)?))
+    }
+
+    /// `self / by` if it is a whole number (exact integer arithmetic: `6000 / 0.1` is 60000).
+    pub fn div_exact(self, by: Decimal) -> Option<i128> {
+        let (a, b) = self.aligned(by)?;
+        if b == 0 || a % b != 0 {
+            return None;
+        }
+        Some(a / b)
+    }
+
+    /// `self / by` rounded toward negative infinity.
+    pub fn div_floor(self, by: Decimal) -> Option<i128> {
+        let (a, b) = self.aligned(by)?;
+        if b == 0 {
+            return None;
+        }
+        Some(a.div_euclid(b))
+    }
+}
+
+/// The raw integer of an engineering value at a decimal scale, if it is a whole number of
+/// increments (`raw_of(6000.0, 0.1)` is 60000; `raw_of(0.05, 0.1)` is `None`). Exact: the value
+/// is taken as the decimal it was written as ([`Decimal::from_f64`]).
+pub fn raw_of(value: f64, scale: Decimal) -> Option<i128> {
+    Decimal::from_f64(value)?.div_exact(scale)
 }
 
 impl fmt::Display for Decimal {
@@ -430,6 +565,76 @@ pub fn encode_int(
 mod tests {
     use super::*;
     use std::string::ToString;
+
+    /// The decimal of a float's shortest `Display` text, parsed as text (what
+    /// [`Decimal::from_f64`] computes without allocating).
+    fn from_text(x: f64) -> Option<Decimal> {
+        let text = std::format!("{x}");
+        let (neg, digits) = match text.strip_prefix('-') {
+            Some(rest) => (true, rest),
+            None => (false, text.as_str()),
+        };
+        let (int, frac) = digits.split_once('.').unwrap_or((digits, ""));
+        let frac = frac.trim_end_matches('0');
+        let mantissa: i64 = std::format!("{int}{frac}").parse().ok()?;
+        let mantissa = if neg { -mantissa } else { mantissa };
+        Some(Decimal::new(mantissa, frac.len() as u32).normalized())
+    }
+
+    #[test]
+    fn from_f64_agrees_with_the_shortest_text() {
+        let mut values = std::vec![0.0, -0.0, 1e-7, 0.3, 2.675, 655.35, 1e15 + 0.5, 123456.789];
+        for e in 0..7 {
+            for k in (-20_000i64..20_000).step_by(7) {
+                values.push(k as f64 / 10f64.powi(e));
+            }
+        }
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            values.push((x >> 11) as f64 / (1u64 << 20) as f64 - 4096.0);
+        }
+        for v in values {
+            assert_eq!(Decimal::from_f64(v), from_text(v), "{v}");
+        }
+    }
+
+    #[test]
+    fn whole_numbers_beyond_two_to_the_53_are_taken_as_they_are() {
+        let big = 2f64.powi(60);
+        assert_eq!(Decimal::from_f64(big), Some(Decimal::new(1 << 60, 0)));
+        assert_eq!(Decimal::from_f64(-big), Some(Decimal::new(-(1 << 60), 0)));
+        assert_eq!(Decimal::from_f64(1e19), None, "beyond i64");
+        assert_eq!(Decimal::from_f64(f64::NAN), None);
+        assert_eq!(Decimal::from_f64(f64::INFINITY), None);
+        assert_eq!(Decimal::from_f64(1e-30), None, "more than 22 places");
+    }
+
+    #[test]
+    fn decimals_are_exact() {
+        let tenth = Decimal::from_f64(0.1).unwrap();
+        assert_eq!(tenth, Decimal::new(1, 1));
+        assert_eq!(raw_of(6000.0, tenth), Some(60000));
+        assert_eq!(raw_of(0.3, tenth), Some(3));
+        assert_eq!(raw_of(0.05, tenth), None);
+        assert_eq!(raw_of(-100.0, tenth), Some(-1000));
+        assert_eq!(
+            raw_of(65.535, Decimal::from_f64(0.001).unwrap()),
+            Some(65535)
+        );
+        assert_eq!(raw_of(400.0, Decimal::from_f64(0.01).unwrap()), Some(40000));
+        assert_eq!(Decimal::from_f64(5.0).unwrap(), Decimal::new(5, 0));
+        assert_eq!(Decimal::new(7, 1).div_floor(Decimal::new(2, 1)), Some(3));
+        assert_eq!(Decimal::new(-7, 1).div_floor(Decimal::new(2, 1)), Some(-4));
+        assert_eq!(Decimal::new(1, 0).div_exact(Decimal::new(0, 0)), None);
+        assert_eq!(
+            Decimal::new(1, 0).div_exact(Decimal::new(1, 40)),
+            None,
+            "overflow"
+        );
+    }
 
     #[test]
     fn every_word_round_trips_through_decimal_scales() {

@@ -16,8 +16,8 @@ use crate::model::{
     self, Access, Conflict, DefaultValue, EnumValue, Field, Gap, ModbusTable, Reference, Removed,
     Scale, TransportName, VariantAxis, WriteRestriction,
 };
-use crate::numbers::{Dec, raw_of};
 use crate::source::{Node, Path};
+use drivemap_core::scale::{Decimal, RawRange, raw_of};
 use drivemap_core::width::{Width, WordOrder};
 
 /// A drive map, expanded and located.
@@ -94,38 +94,6 @@ pub enum ValueKind<'a> {
     Bits(&'a [Field]),
 }
 
-/// A limit pair in raw integers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct RawLimits {
-    pub min: i128,
-    pub max: i128,
-}
-
-impl RawLimits {
-    /// The whole range of the register's value: one word, or a 32-bit pair.
-    pub fn of(width: Width, signed: bool) -> RawLimits {
-        let r = width.range(signed);
-        RawLimits {
-            min: i128::from(r.min),
-            max: i128::from(r.max),
-        }
-    }
-
-    pub fn word(signed: bool) -> RawLimits {
-        if signed {
-            RawLimits {
-                min: i16::MIN as i128,
-                max: i16::MAX as i128,
-            }
-        } else {
-            RawLimits {
-                min: 0,
-                max: u16::MAX as i128,
-            }
-        }
-    }
-}
-
 impl Register {
     pub fn id(&self) -> &str {
         &self.def.id
@@ -143,8 +111,8 @@ impl Register {
     }
 
     /// The whole range of the register's word or pair, signed or not.
-    pub fn full_limits(&self) -> RawLimits {
-        RawLimits::of(self.width(), self.def.signed)
+    pub fn full_limits(&self) -> RawRange {
+        self.width().range(self.def.signed)
     }
 
     pub fn kind(&self) -> ValueKind<'_> {
@@ -170,30 +138,34 @@ impl Register {
     }
 
     /// The decimal factor of a fixed-scale register (scale 1 for unit quantities and words).
-    pub fn factor(&self) -> Option<Dec> {
+    pub fn factor(&self) -> Option<Decimal> {
         match self.kind() {
-            ValueKind::Quantity(Scale::Factor(f)) => Dec::from_f64(*f),
+            ValueKind::Quantity(Scale::Factor(f)) => Decimal::from_f64(*f),
             ValueKind::Quantity(_) => None,
-            _ => Some(Dec {
-                mantissa: 1,
-                exponent: 0,
-            }),
+            _ => Some(Decimal::ONE),
         }
     }
 
     /// Raw limits for given engineering limits at a fixed decimal factor; missing limits are
-    /// the word's own. `None` when a limit is not a whole number of increments.
-    pub fn raw_limits(&self, factor: Dec, min: Option<f64>, max: Option<f64>) -> Option<RawLimits> {
+    /// the word's own. `None` when a limit is not a whole number of increments (or beyond
+    /// `i64`, far outside any word: validation reports both).
+    pub fn raw_limits(
+        &self,
+        factor: Decimal,
+        min: Option<f64>,
+        max: Option<f64>,
+    ) -> Option<RawRange> {
         let word = self.full_limits();
+        let raw = |m: f64| raw_of(m, factor).and_then(|r| i64::try_from(r).ok());
         let min = match min {
-            Some(m) => raw_of(m, factor)?,
+            Some(m) => raw(m)?,
             None => word.min,
         };
         let max = match max {
-            Some(m) => raw_of(m, factor)?,
+            Some(m) => raw(m)?,
             None => word.max,
         };
-        Some(RawLimits { min, max })
+        Some(RawRange { min, max })
     }
 
     /// Limits of the base variant in engineering units.
@@ -539,7 +511,7 @@ pub struct WriteRuleFigures {
     /// without its own.
     pub also_at: Vec<u16>,
     /// The envelope of its raw ranges over every variant and selector case.
-    pub raw: RawLimits,
+    pub raw: RawRange,
     /// Bits that carry no field (bit-field registers), which must be written as 0.
     pub reserved: u16,
 }
@@ -599,14 +571,11 @@ impl Register {
     /// The union of the raw ranges the map gives this register under any model variant and
     /// any case of a selected scale; the word's range where a conversion has none (relative
     /// scales, bit fields, limits that are not whole increments).
-    pub fn raw_envelope(&self) -> RawLimits {
+    pub fn raw_envelope(&self) -> RawRange {
         let word = self.full_limits();
-        let one = Dec {
-            mantissa: 1,
-            exponent: 0,
-        };
+        let one = Decimal::ONE;
         let mut ranges = Vec::new();
-        let variant_ranges = |factor: Dec, ranges: &mut Vec<RawLimits>| {
+        let variant_ranges = |factor: Decimal, ranges: &mut Vec<RawRange>| {
             ranges.push(
                 self.raw_limits(factor, self.def.min, self.def.max)
                     .unwrap_or(word),
@@ -620,16 +589,16 @@ impl Register {
             ValueKind::Bits(_) | ValueKind::Quantity(Scale::Relative(_)) => ranges.push(word),
             ValueKind::Enum(values) => {
                 for v in values {
-                    let code = i128::from(v.value);
-                    ranges.push(RawLimits {
+                    let code = i64::from(v.value);
+                    ranges.push(RawRange {
                         min: code,
                         max: code,
                     });
                 }
                 if self.def.min.is_some() || self.def.max.is_some() {
-                    ranges.push(RawLimits {
-                        min: self.def.min.map_or(0, |m| m as i128),
-                        max: self.def.max.map_or(i128::from(u16::MAX), |m| m as i128),
+                    ranges.push(RawRange {
+                        min: self.def.min.map_or(0, |m| m as i64),
+                        max: self.def.max.map_or(i64::from(u16::MAX), |m| m as i64),
                     });
                 }
             }
@@ -637,7 +606,7 @@ impl Register {
                 for case in &sel.cases {
                     match &case.scale {
                         Scale::Factor(f) => {
-                            let factor = Dec::from_f64(*f).unwrap_or(one);
+                            let factor = Decimal::from_f64(*f).unwrap_or(one);
                             ranges
                                 .push(self.raw_limits(factor, case.min, case.max).unwrap_or(word));
                         }
@@ -649,7 +618,7 @@ impl Register {
         }
         let min = ranges.iter().map(|l| l.min).min().unwrap_or(word.min);
         let max = ranges.iter().map(|l| l.max).max().unwrap_or(word.max);
-        RawLimits {
+        RawRange {
             min: min.max(word.min),
             max: max.min(word.max),
         }

@@ -24,7 +24,6 @@ pub mod load;
 pub mod lower;
 pub mod model;
 pub mod names;
-pub mod numbers;
 pub mod others;
 pub mod schema;
 pub mod source;

@@ -25,10 +25,9 @@ use drivemap_core::roles::{FieldRole, Place, Role, RoleKind, Roles, Target};
 use drivemap_core::rule::{Broadcast, Transports, WriteRule};
 use drivemap_core::scale::{Decimal, RawRange};
 
-use crate::ir::{BroadcastUse, Drive, RawLimits, Register, ValueKind};
+use crate::ir::{BroadcastUse, Drive, Register, ValueKind};
 use crate::model::{self, Reference, Scale, TransportName};
 use crate::names::field_span;
-use crate::numbers::Dec;
 
 /// A drive, lowered.
 #[derive(Debug, Clone)]
@@ -328,21 +327,7 @@ pub fn setting_label(r: &Register) -> String {
     r.def.param.clone().unwrap_or_else(|| r.def.id.clone())
 }
 
-fn decimal(d: Dec) -> Decimal {
-    Decimal::new(d.mantissa as i64, d.exponent)
-}
-
-fn raw(l: RawLimits) -> RawRange {
-    RawRange {
-        min: l.min as i64,
-        max: l.max as i64,
-    }
-}
-
-const ONE: Dec = Dec {
-    mantissa: 1,
-    exponent: 0,
-};
+const ONE: Decimal = Decimal::ONE;
 
 impl Lowering<'_> {
     fn map_index(&self, sorted_index: usize) -> &Register {
@@ -407,7 +392,7 @@ impl Lowering<'_> {
     }
 
     /// Raw ranges per variant at a fixed decimal factor: the map's overrides in map order.
-    fn ranges(&self, r: &Register, factor: Dec) -> Ranges {
+    fn ranges(&self, r: &Register, factor: Decimal) -> Ranges {
         let word = r.full_limits();
         let base = r.raw_limits(factor, r.def.min, r.def.max).unwrap_or(word);
         let mut by_variant = Vec::new();
@@ -416,11 +401,11 @@ impl Lowering<'_> {
             let (min, max) = r.limits_for(k);
             let lim = r.raw_limits(factor, min, max).unwrap_or(word);
             if lim != base {
-                by_variant.push((v, raw(lim)));
+                by_variant.push((v, lim));
             }
         }
         Ranges {
-            base: raw(base),
+            base,
             by_variant: leak(by_variant),
         }
     }
@@ -444,7 +429,7 @@ impl Lowering<'_> {
                 let factor = r.factor().unwrap_or(ONE);
                 Conversion::Decimal {
                     signed,
-                    scale: decimal(factor),
+                    scale: factor,
                     range: self.ranges(r, factor),
                 }
             }
@@ -459,13 +444,13 @@ impl Lowering<'_> {
                     .filter_map(|case| {
                         let scale = match &case.scale {
                             Scale::Factor(f) => {
-                                let factor = Dec::from_f64(*f).unwrap_or(ONE);
+                                let factor = Decimal::from_f64(*f).unwrap_or(ONE);
                                 let lim = r
                                     .raw_limits(factor, case.min, case.max)
                                     .unwrap_or(r.full_limits());
                                 CaseScale::Decimal {
-                                    scale: decimal(factor),
-                                    range: raw(lim),
+                                    scale: factor,
+                                    range: lim,
                                 }
                             }
                             Scale::Relative(rel) => CaseScale::Relative(self.relative(rel)),
@@ -574,7 +559,7 @@ impl Lowering<'_> {
                 model::WriteRestriction::Stopped => WriteRestriction::Stopped,
                 model::WriteRestriction::PrgMode => WriteRestriction::PrgMode,
             },
-            envelope: raw(w.raw),
+            envelope: w.raw,
             also_at: leak(w.also_at),
             repeat_needs_change: r.repeat_needs_change.as_ref().map(|(rule, _)| {
                 RepeatNeedsChange {
@@ -596,7 +581,10 @@ impl Lowering<'_> {
 /// increments of a fixed scale, two's complement when signed; 0 where the scale depends on a
 /// setting (validation admits only 0 there).
 fn between_word(r: &Register, value: f64) -> u32 {
-    match r.factor().and_then(|f| crate::numbers::raw_of(value, f)) {
+    match r
+        .factor()
+        .and_then(|f| drivemap_core::scale::raw_of(value, f))
+    {
         Some(raw) => r.width().from_int(raw as i64),
         None => 0,
     }

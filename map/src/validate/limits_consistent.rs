@@ -4,8 +4,8 @@
 use crate::diagnostic::Diagnostic;
 use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{DefaultValue, Scale};
-use crate::numbers::{Dec, raw_of};
 use crate::source::Path;
+use drivemap_core::scale::{Decimal, raw_of};
 
 struct Checker<'a> {
     drive: &'a Drive,
@@ -20,7 +20,7 @@ impl Checker<'_> {
     }
 
     /// Checks one value against the word at a factor; returns its raw integer.
-    fn raw(&mut self, what: &str, value: f64, factor: Dec, path: Path) -> Option<i128> {
+    fn raw(&mut self, what: &str, value: f64, factor: Decimal, path: Path) -> Option<i128> {
         let word = self.r.full_limits();
         match raw_of(value, factor) {
             None => {
@@ -30,7 +30,7 @@ impl Checker<'_> {
                 );
                 None
             }
-            Some(raw) if raw < word.min || raw > word.max => {
+            Some(raw) if raw < i128::from(word.min) || raw > i128::from(word.max) => {
                 self.err(
                     path,
                     format!(
@@ -56,7 +56,7 @@ impl Checker<'_> {
         min: Option<f64>,
         max: Option<f64>,
         default: Option<&DefaultValue>,
-        factor: Dec,
+        factor: Decimal,
         path: &Path,
         label: &str,
     ) {
@@ -120,7 +120,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         match r.kind() {
             ValueKind::Word | ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_)) => {
                 let factor = match &d.scale {
-                    Some(Scale::Factor(f)) => match Dec::from_f64(*f) {
+                    Some(Scale::Factor(f)) => match Decimal::from_f64(*f) {
                         Some(dec) if dec.is_positive() => dec,
                         _ => {
                             c.err(
@@ -130,10 +130,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                             continue;
                         }
                     },
-                    _ => Dec {
-                        mantissa: 1,
-                        exponent: 0,
-                    },
+                    _ => Decimal::ONE,
                 };
                 c.set(d.min, d.max, d.default.as_ref(), factor, &r.path, "");
                 for (k, o) in &d.by_variant {
@@ -172,7 +169,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 for (ci, case) in sel.cases.iter().enumerate() {
                     let cp = r.key_path("scale").key("cases").index(ci);
                     match &case.scale {
-                        Scale::Factor(f) => match Dec::from_f64(*f) {
+                        Scale::Factor(f) => match Decimal::from_f64(*f) {
                             Some(dec) if dec.is_positive() => {
                                 let label = format!("case {:?} ", case.when);
                                 c.set(case.min, case.max, None, dec, &cp, &label);
@@ -205,10 +202,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             }
             ValueKind::Enum(values) => {
                 // A partial enumeration: the manual prints a range of codes but names only some.
-                let one = Dec {
-                    mantissa: 1,
-                    exponent: 0,
-                };
+                let one = Decimal::ONE;
                 c.set(d.min, d.max, None, one, &r.path, "");
                 for (k, o) in &d.by_variant {
                     if o.min.is_some() || o.max.is_some() {

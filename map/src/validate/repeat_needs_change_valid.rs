@@ -8,7 +8,7 @@
 use crate::diagnostic::Diagnostic;
 use crate::ir::{Drive, Register, ValueKind};
 use crate::names::field_span;
-use crate::numbers::raw_of;
+use drivemap_core::scale::{RawRange, raw_of};
 
 pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {
@@ -82,8 +82,8 @@ fn legal(r: &Register, v: f64) -> Result<(), String> {
             let Some(raw) = raw_of(v, factor) else {
                 return Err("not a whole number of its increments".into());
             };
-            let word = crate::ir::RawLimits::word(d.signed);
-            if raw < word.min || raw > word.max {
+            let word = RawRange::word(d.signed);
+            if raw < i128::from(word.min) || raw > i128::from(word.max) {
                 return Err("outside its word".into());
             }
             let mut limits = vec![(None, r.limits())];
