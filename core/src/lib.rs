@@ -1,7 +1,8 @@
 //! The vocabulary of drivemap, shared by the generator, the generated drive modules, the
 //! run-time interpreter and the clients: what a register is ([`register`]), how its word converts
 //! ([`scale`], [`plan`]), what may be written to it ([`rule`]) and what a drive accepts on the
-//! wire ([`profile`]) and which registers play the standard parts of a drive ([`roles`]).
+//! wire ([`profile`]), which registers play the standard parts of a drive ([`roles`]) and which
+//! parameters are reached through an index/value register pair ([`indexed`]).
 //!
 //! `#![no_std]` and free of allocation: a generated drive module and the protocol layer built on
 //! this crate can run on a microcontroller. Data flows one way: the generator's lowering pass
@@ -13,6 +14,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod indexed;
 pub mod kind;
 pub mod plan;
 pub mod profile;

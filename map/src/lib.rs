@@ -19,6 +19,7 @@ pub mod export;
 pub mod facts;
 pub mod hex;
 pub mod hints;
+pub mod indexed;
 pub mod ir;
 pub mod load;
 pub mod lower;

@@ -43,6 +43,8 @@ pub struct DrivePlan {
     pub profile: &'static Profile,
     /// Which registers and fields play the standard parts of a drive.
     pub roles: Roles,
+    /// Index/value register pairs and their entries ([`crate::indexed`]).
+    pub indexed: &'static [drivemap_core::indexed::Indexed],
 }
 
 /// The slots of a drive's settings: what a `SettingsView` answers.
@@ -188,12 +190,14 @@ pub fn lower(drive: &Drive) -> DrivePlan {
     );
     let profile = Box::leak(Box::new(profile(drive, registers)));
     let roles = roles(drive, &position, &settings);
+    let indexed = crate::indexed::lower(drive, registers);
     DrivePlan {
         registers,
         order: position,
         settings,
         profile,
         roles,
+        indexed,
     }
 }
 

@@ -686,6 +686,10 @@ pub struct Register {
     /// The drive executes a written value only when it differs from the previous write.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repeat_needs_change: Option<RepeatNeedsChange>,
+    /// Indexed access: the value belongs to the entry selected by an index written to another
+    /// register ([`crate::indexed`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indexed: Option<crate::indexed::Indexed>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub write_restriction: Option<WriteRestriction>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

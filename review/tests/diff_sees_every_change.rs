@@ -35,6 +35,7 @@ fn maps() -> Vec<PathBuf> {
     assert!(out.len() >= 5, "maps/ holds {} maps", out.len());
     for dir in [
         "tests/fixtures/acme-vf1",
+        "tests/fixtures/tarrow-tm44",
         "map/tests/fixtures",
         "map/tests/fixtures/variants",
         "cli/tests/fixtures",

@@ -26,7 +26,7 @@ pub fn parse_page_citation(s: &str) -> Option<(&str, u32)> {
     (!manual.is_empty() && page > 0).then_some((manual, page))
 }
 
-fn cite(
+pub(super) fn cite(
     drive: &Drive,
     ctx: &Context,
     out: &mut Vec<Diagnostic>,

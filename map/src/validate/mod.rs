@@ -17,6 +17,7 @@ mod conflicts_recorded;
 mod enum_codes_fit;
 mod identifiers_unique;
 mod identifiers_valid;
+mod indexed_valid;
 mod limits_consistent;
 mod manuals_declared;
 mod numbers_finite;
@@ -86,5 +87,6 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     read_values_valid::check(drive, &mut out);
     numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);
+    indexed_valid::check(drive, ctx, &mut out);
     out
 }

@@ -135,6 +135,9 @@ pub enum ChangeKind {
     RelativeLimitChanged,
     /// `read_values` (what a read means beside the write form) added, removed or changed.
     ReadMeaningChanged,
+    /// `indexed:` (indexed access) added or removed, another index register, or an entry
+    /// added, removed, re-indexed or converting otherwise.
+    IndexedChanged,
     /// Available on fewer transports.
     TransportsNarrowed,
     /// Available on more transports.
@@ -230,6 +233,7 @@ impl ChangeKind {
         ChangeKind::RepeatNeedsChangeChanged,
         ChangeKind::RelativeLimitChanged,
         ChangeKind::ReadMeaningChanged,
+        ChangeKind::IndexedChanged,
         ChangeKind::TransportsNarrowed,
         ChangeKind::TransportsWidened,
         ChangeKind::BroadcastMembershipChanged,
@@ -307,6 +311,7 @@ impl ChangeKind {
             RepeatNeedsChangeChanged => "repeat-needs-change rule changed",
             RelativeLimitChanged => "limit through another quantity changed",
             ReadMeaningChanged => "read meaning changed",
+            IndexedChanged => "indexed access changed",
             TransportsNarrowed => "transports narrowed",
             TransportsWidened => "transports widened",
             BroadcastMembershipChanged => "broadcast membership changed",
@@ -424,6 +429,10 @@ pub fn classify(kind: ChangeKind) -> (Severity, &'static str) {
         RepeatNeedsChangeChanged => (
             B,
             "a write sends another sequence of words (an intermediate value first, or no longer)",
+        ),
+        IndexedChanged => (
+            B,
+            "entries are reached through another index, convert otherwise, or appear or disappear",
         ),
         ReadMeaningChanged => (
             B,

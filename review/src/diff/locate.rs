@@ -28,6 +28,7 @@ fn register_key(kind: ChangeKind) -> Option<&'static str> {
         RepeatNeedsChangeChanged => "repeat_needs_change",
         RelativeLimitChanged => "max_relative",
         ReadMeaningChanged => "read_values",
+        IndexedChanged => "indexed",
         CodeAdded | CodeRemoved | CodeRenamed | CodeReworded => "values",
         FieldAdded | FieldRemoved | FieldMoved | FieldRenamed | FieldReworded => "fields",
         CitationChanged => "source",

@@ -12,6 +12,7 @@
 //! (`cli/src/git.rs`).
 
 pub mod classify;
+mod indexed;
 mod locate;
 mod protocol;
 mod registers;

@@ -154,6 +154,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
         fields: _,               // fields()
         read_values: _,          // ReadMeaningChanged, enum_codes()
         repeat_needs_change: _,  // on the IR register (with the group's)
+        indexed: _,              // IndexedChanged, CitationChanged (indexed.rs)
         write_restriction: _,    // on the plan
         transports: _,           // on the plan
         display_steps: _,        // documentation()
@@ -336,6 +337,9 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             Some(ra.unwrap_or_else(|| "none".into())),
             Some(rb.unwrap_or_else(|| "none".into())),
         );
+    }
+    if let Some((kind, x, y)) = super::indexed::change(a.indexed.as_ref(), b.indexed.as_ref()) {
+        push(c, kind, "indexed access", x, y);
     }
     let limit = |d: &Drive, x: &Register| {
         x.def
