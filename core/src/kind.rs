@@ -20,7 +20,14 @@ macro_rules! kinds {
             /// Every kind, in declaration order.
             pub const ALL: &'static [ConversionKind] = &[$(ConversionKind::$kind,)*];
 
-            /// The kind's name in the facts view and the JSON export (`decimal`).
+            /// The name of its [`Conversion`] variant (`Decimal`), as generated code prints it.
+            pub const fn variant(self) -> &'static str {
+                match self {
+                    $(ConversionKind::$kind => stringify!($kind),)*
+                }
+            }
+
+            /// The kind's name in the facts view (`decimal`).
             pub const fn name(self) -> &'static str {
                 match self {
                     $(ConversionKind::$kind => $name,)*

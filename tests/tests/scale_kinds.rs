@@ -1,0 +1,261 @@
+//! Every kind of conversion (`drivemap_core::ConversionKind::ALL`; the scale kinds among them)
+//! is used by a map of `maps/` or a fixture, and every printer shows it: the JSON export, the
+//! Markdown reference of `drivemap doc`, the semantic diff, the wording of `describe` (through
+//! the facts view) and the generated code (its rustdoc and its plan rows).
+//!
+//! A new kind of scale (a `Conversion` variant) needs a `ConversionKind` (`core/src/kind.rs`,
+//! forced by `ConversionKind::of`), an arm in [`expected`] here (forced by the exhaustive match)
+//! saying what each printer must show of it, and a register using it in a fixture map under
+//! `tests/fixtures/` (else [`every_kind_is_used_by_a_map`] fails). See `core/README.md`,
+//! "Adding a new kind of scale".
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use drivemap_map::facts::{self, FactKey, RegisterFacts};
+use drivemap_map::ir::Register;
+use drivemap_map::validate::Context;
+use drivemap_map::{Drive, describe};
+use drivemap_runtime::core::ConversionKind;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Every map of `maps/` and of each fixture directory `tests/fixtures/<drive>/` (read, so a new
+/// fixture counts with no edit here).
+fn maps() -> Vec<PathBuf> {
+    let mut out = drivemap_map::find_maps(&root().join("maps")).unwrap();
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(root().join("tests/fixtures"))
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir())
+        .collect();
+    dirs.sort();
+    for d in dirs {
+        out.extend(drivemap_map::find_maps(&d).unwrap());
+    }
+    out
+}
+
+fn read(path: &Path) -> Drive {
+    drivemap_map::read_map(path, &Context::default())
+        .unwrap_or_else(|d| panic!("{}: {d}", path.display()))
+}
+
+/// What the printers must show of a register of each kind: `export` checks its JSON entry;
+/// `text` is words the Markdown reference and the rustdoc must contain; `diff` words the diff's
+/// one-line summary of the register must contain.
+struct Expected {
+    export: fn(&serde_json::Value) -> bool,
+    text: String,
+    diff: Vec<String>,
+}
+
+fn expected(kind: ConversionKind, drive: &Drive, r: &Register, f: &RegisterFacts) -> Expected {
+    let plan = drive.register_plan(r);
+    let named = describe::kind(plan).to_owned();
+    let scale_row = |key| {
+        f.get(key)
+            .unwrap_or_else(|| panic!("{}: {kind:?} without a {key:?} row", f.id))
+            .value
+            .clone()
+    };
+    // The diff's summary prints the map's scale, so a unit without one shows only the kind.
+    let with_scale = |text: &String| {
+        let mut d = vec![named.clone()];
+        if r.def.scale.is_some() {
+            d.push(text.clone());
+        }
+        d
+    };
+    match kind {
+        ConversionKind::Word => Expected {
+            export: |e| e["scale"] == 1.0 && e["values"] == serde_json::json!([]),
+            text: describe::address(r.def.address),
+            diff: vec![named.clone()],
+        },
+        ConversionKind::Decimal => {
+            let text = scale_row(FactKey::Scale);
+            Expected {
+                export: |e| e["scale"].is_number(),
+                diff: with_scale(&text),
+                text,
+            }
+        }
+        ConversionKind::Relative => {
+            let text = scale_row(FactKey::Scale);
+            assert!(text.contains("= 100 % of"), "{}: {text}", f.id);
+            Expected {
+                export: |e| e["scale_relative_to"]["full_scale"].is_number(),
+                diff: with_scale(&text),
+                text,
+            }
+        }
+        ConversionKind::Selected => {
+            let text = scale_row(FactKey::SelectedBy);
+            assert!(!f.cases.is_empty(), "{}: selected without cases", f.id);
+            Expected {
+                export: |e| {
+                    e["scale_selected_by"].is_string()
+                        && e["scale_cases"].as_array().is_some_and(|c| !c.is_empty())
+                },
+                diff: with_scale(&text),
+                text,
+            }
+        }
+        ConversionKind::Enum => Expected {
+            export: |e| e["values"].as_array().is_some_and(|v| !v.is_empty()),
+            text: r.def.values[0].id.clone(),
+            diff: vec![named.clone()],
+        },
+        ConversionKind::Bits => Expected {
+            export: |e| e["fields"].as_array().is_some_and(|v| !v.is_empty()),
+            text: r.def.fields[0].id.clone(),
+            diff: vec![named.clone()],
+        },
+    }
+}
+
+/// The registers of each kind in a drive, a few of each (the first three), with their facts.
+fn by_kind(drive: &Drive) -> BTreeMap<ConversionKind, Vec<(usize, RegisterFacts)>> {
+    let mut out: BTreeMap<ConversionKind, Vec<(usize, RegisterFacts)>> = BTreeMap::new();
+    for (i, r) in drive.registers.iter().enumerate() {
+        let f = facts::register(drive, r);
+        let list = out.entry(f.kind).or_default();
+        if list.len() < 3 {
+            list.push((i, f));
+        }
+    }
+    out
+}
+
+#[test]
+fn every_kind_is_used_by_a_map() {
+    let mut seen = BTreeMap::new();
+    for path in maps() {
+        for kind in by_kind(&read(&path)).into_keys() {
+            seen.entry(kind)
+                .or_insert_with(|| path.display().to_string());
+        }
+    }
+    let missing: Vec<_> = ConversionKind::ALL
+        .iter()
+        .filter(|k| !seen.contains_key(k))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "no map of maps/ or tests/fixtures/ uses {missing:?}: add a register of that kind to a fixture"
+    );
+}
+
+#[test]
+fn export_doc_and_generated_code_show_every_kind() {
+    let mut checked = BTreeMap::<ConversionKind, usize>::new();
+    for path in maps() {
+        let drive = read(&path);
+        let export = drivemap_map::export::export(&drive);
+        let doc = drivemap_review::reference::render(&drive, "map.yaml");
+        let code = drivemap_codegen::Config::new()
+            .map(&path)
+            .generate()
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+            .modules
+            .remove(0)
+            .source;
+        for (kind, list) in by_kind(&drive) {
+            assert!(
+                code.contains(&format!("Conversion::{} {{", kind.variant())),
+                "{}: generated plan has no Conversion::{}",
+                drive.meta.id,
+                kind.variant()
+            );
+            for (i, f) in list {
+                let r = &drive.registers[i];
+                let e = expected(kind, &drive, r, &f);
+                let entry = export["registers"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .find(|x| x["id"] == f.id.as_str())
+                    .unwrap_or_else(|| panic!("{}: {} not exported", drive.meta.id, f.id));
+                assert!(
+                    (e.export)(entry),
+                    "{}: export of {kind:?} register {} does not show it: {entry}",
+                    drive.meta.id,
+                    f.id
+                );
+                let shown = |text: &str, what: &str| {
+                    let escaped = text
+                        .replace('|', "\\|")
+                        .replace('[', "\\[")
+                        .replace(']', "\\]");
+                    assert!(
+                        what.contains(text) || what.contains(&escaped),
+                        "{}: {kind:?} register {}: `{text}` missing",
+                        drive.meta.id,
+                        f.id
+                    );
+                };
+                shown(&e.text, &doc);
+                shown(&e.text, &code);
+                *checked.entry(kind).or_default() += 1;
+            }
+        }
+    }
+    assert_eq!(
+        checked.keys().copied().collect::<Vec<_>>(),
+        ConversionKind::ALL,
+        "every kind checked"
+    );
+}
+
+#[test]
+fn the_diff_shows_every_kind() {
+    let mut checked = BTreeMap::<ConversionKind, usize>::new();
+    for path in maps() {
+        let drive = read(&path);
+        // Registers another one names (a selector, a reference) cannot be taken away alone.
+        let named: Vec<String> = drive
+            .selectors()
+            .into_iter()
+            .chain(drive.references())
+            .map(|r| r.def.id.clone())
+            .collect();
+        let mut old = drive.clone();
+        old.roles.clear();
+        old.plan = Default::default();
+        for (kind, list) in by_kind(&drive) {
+            let Some((i, f)) = list.into_iter().find(|(_, f)| !named.contains(&f.id)) else {
+                continue;
+            };
+            let e = expected(kind, &drive, &drive.registers[i], &f);
+            let mut new = old.clone();
+            new.registers.remove(i);
+            new.plan = Default::default();
+            let diff = drivemap_review::diff::compare(&old, &new);
+            let removed = diff
+                .changes
+                .iter()
+                .find(|c| c.kind == drivemap_review::diff::ChangeKind::RegisterRemoved)
+                .unwrap_or_else(|| {
+                    panic!("{}: removing {} is not in the diff", drive.meta.id, f.id)
+                });
+            let text = removed.old.as_deref().unwrap_or_default();
+            for words in &e.diff {
+                assert!(
+                    text.contains(words.as_str()),
+                    "{}: the diff of {kind:?} register {} does not say `{words}`: {text}",
+                    drive.meta.id,
+                    f.id
+                );
+            }
+            *checked.entry(kind).or_default() += 1;
+        }
+    }
+    assert_eq!(
+        checked.keys().copied().collect::<Vec<_>>(),
+        ConversionKind::ALL,
+        "every kind checked"
+    );
+}
