@@ -191,3 +191,56 @@ fn a_serial_format_the_map_does_not_list_is_refused() {
         assert!(err.contains("cannot open serial port /dev/null"), "{err}");
     }
 }
+
+/// `--parity` is the vocabulary crate's `Parity` (one definition for map, link and profile),
+/// parsed by `drivemap_live::link::ParityParser`: every command that takes it refuses another
+/// word naming the three it accepts, and `--help` lists them.
+#[test]
+fn parity_is_refused_naming_the_three_accepted() {
+    for command in [
+        &[
+            "read",
+            "--drive",
+            "automationdirect-acn",
+            "--serial",
+            "/dev/null",
+        ][..],
+        &[
+            "simulate",
+            "--drive",
+            "automationdirect-acn",
+            "--serial",
+            "/dev/null",
+        ],
+        &["scan", "--serial", "/dev/null"],
+        &[
+            "bridge",
+            "--drive",
+            "automationdirect-acn",
+            "--serial",
+            "/dev/null",
+        ],
+    ] {
+        let args = [command, &["--parity", "mark"]].concat();
+        let (code, err) = drivemap(&args);
+        assert_ne!(code, 0, "{args:?}: {err}");
+        assert!(
+            err.contains("invalid value 'mark' for '--parity")
+                && err.contains("[possible values: none, even, odd]"),
+            "{args:?}: {err}"
+        );
+    }
+    let help = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(["read", "--help"])
+        .output()
+        .expect("drivemap runs");
+    let out = String::from_utf8_lossy(&help.stdout);
+    assert!(help.status.success(), "{out}");
+    for value in [
+        "none: No parity bit",
+        "even: Even parity",
+        "odd:  Odd parity",
+    ] {
+        assert!(out.contains(value), "{value} missing from:\n{out}");
+    }
+}

@@ -117,8 +117,14 @@ impl BroadcastInfo {
     }
 }
 
-/// Parity of a serial line.
+/// Parity of a serial line: the one definition, used by the map (`protocol.serial.parity`,
+/// written `none`, `even`, `odd`), the run-time link and the profile.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum Parity {
     /// No parity bit.
     #[default]
@@ -136,6 +142,18 @@ impl Parity {
             Parity::None => 'N',
             Parity::Even => 'E',
             Parity::Odd => 'O',
+        }
+    }
+
+    /// Every parity, in the order `None`, `Even`, `Odd`.
+    pub const ALL: [Parity; 3] = [Parity::None, Parity::Even, Parity::Odd];
+
+    /// The word a map and the command line write it as: `none`, `even`, `odd`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Parity::None => "none",
+            Parity::Even => "even",
+            Parity::Odd => "odd",
         }
     }
 }

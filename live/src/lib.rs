@@ -17,7 +17,7 @@ pub mod settings;
 pub mod silence;
 
 pub use codec::{Value, decode, encode, parse_value};
-pub use link::{LineParity, Link, LinkError};
+pub use link::{Link, LinkError, Parity};
 pub use lookup::{NotFound, find};
 pub use profile::leak_profile;
 pub use session::{ReadError, Session, SessionError, find_all};

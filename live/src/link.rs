@@ -7,25 +7,60 @@
 use std::time::Duration;
 
 use drivemap_map::Drive;
-use drivemap_map::ir::LineParity as MapParity;
-use drivemap_runtime::bus_time::{Parity as BusParity, SerialConfig};
+use drivemap_runtime::bus_time::SerialConfig;
+/// Parity of a serial line: the vocabulary crate's one definition (`none`, `even`, `odd`).
+pub use drivemap_runtime::profile::Parity;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
-use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport, StopBits};
+use drivemap_runtime::transport::serial::{
+    Parity as PortParity, SerialOptions, SerialTransport, StopBits,
+};
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::{Client, ClientOptions, Profile};
 
-/// Parity of a serial line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
-pub enum LineParity {
-    /// No parity bit.
-    None,
-    /// Even parity.
-    Even,
-    /// Odd parity.
-    Odd,
+/// `--parity none|even|odd` as a clap value parser for [`Parity`] (the vocabulary crate has
+/// no clap): the possible values are listed in `--help` and a wrong one is refused naming them.
+#[cfg(feature = "clap")]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ParityParser;
+
+#[cfg(feature = "clap")]
+impl ParityParser {
+    fn possible() -> impl Iterator<Item = clap::builder::PossibleValue> {
+        Parity::ALL.into_iter().map(|p| {
+            clap::builder::PossibleValue::new(p.name()).help(match p {
+                Parity::None => "No parity bit",
+                Parity::Even => "Even parity",
+                Parity::Odd => "Odd parity",
+            })
+        })
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::builder::TypedValueParser for ParityParser {
+    type Value = Parity;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<Parity, clap::Error> {
+        let name = clap::builder::PossibleValuesParser::new(Self::possible())
+            .parse_ref(cmd, arg, value)?;
+        Parity::ALL
+            .into_iter()
+            .find(|p| p.name() == name)
+            .ok_or_else(|| clap::Error::new(clap::error::ErrorKind::InvalidValue).with_cmd(cmd))
+    }
+
+    fn possible_values(
+        &self,
+    ) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
+        Some(Box::new(Self::possible()))
+    }
 }
 
 /// Why a link cannot be opened; each names the address or port.
@@ -86,8 +121,8 @@ pub struct Link {
     #[cfg_attr(feature = "clap", arg(long))]
     pub baud: Option<u32>,
     /// Parity (default: the map's default, else none).
-    #[cfg_attr(feature = "clap", arg(long, value_enum))]
-    pub parity: Option<LineParity>,
+    #[cfg_attr(feature = "clap", arg(long, value_parser = ParityParser))]
+    pub parity: Option<Parity>,
     /// Stop bits (default: the map's for the parity when its formats give only one, else 1;
     /// 2 without parity where the map fixes 11-bit characters). A map that lists its serial
     /// formats (`serial.formats`) refuses any other parity and stop bits.
@@ -179,7 +214,7 @@ impl Link {
 
     /// Baud rate, parity and stop bits of the serial line: as given, else the map's defaults
     /// (9600, no parity); 2 stop bits without parity where the map fixes 11-bit characters.
-    pub fn line(&self, drive: &Drive) -> (u32, LineParity, u8) {
+    pub fn line(&self, drive: &Drive) -> (u32, Parity, u8) {
         serial_line(drive, self.baud, self.parity, self.stop_bits)
     }
 
@@ -197,13 +232,7 @@ impl Link {
     /// and character times.
     fn serial_config(&self, drive: &Drive) -> SerialConfig {
         let (baud, parity, stop_bits) = self.line(drive);
-        let mut config = SerialConfig::new(baud)
-            .parity(match parity {
-                LineParity::None => BusParity::None,
-                LineParity::Even => BusParity::Even,
-                LineParity::Odd => BusParity::Odd,
-            })
-            .stop_bits(stop_bits);
+        let mut config = SerialConfig::new(baud).parity(parity).stop_bits(stop_bits);
         if let Some(bits) = drive.serial_defaults().char_bits {
             config = config.fixed_char_bits(bits);
         }
@@ -310,11 +339,7 @@ impl Link {
                 StopBits::One
             };
             let options = SerialOptions::new(path.as_str(), baud)
-                .parity(match parity {
-                    LineParity::None => Parity::None,
-                    LineParity::Even => Parity::Even,
-                    LineParity::Odd => Parity::Odd,
-                })
+                .parity(port_parity(parity))
                 .stop_bits(stop_bits)
                 .with_profile(profile);
             options.check_format()?;
@@ -345,21 +370,22 @@ impl Link {
 pub fn serial_line(
     drive: &Drive,
     baud: Option<u32>,
-    parity: Option<LineParity>,
+    parity: Option<Parity>,
     stop_bits: Option<u8>,
-) -> (u32, LineParity, u8) {
+) -> (u32, Parity, u8) {
     let defaults = drive.serial_defaults();
-    let parity = parity.unwrap_or(match defaults.parity {
-        MapParity::None => LineParity::None,
-        MapParity::Even => LineParity::Even,
-        MapParity::Odd => LineParity::Odd,
-    });
-    let stop_bits = stop_bits.unwrap_or(defaults.stop_bits_for(match parity {
-        LineParity::None => MapParity::None,
-        LineParity::Even => MapParity::Even,
-        LineParity::Odd => MapParity::Odd,
-    }));
+    let parity = parity.unwrap_or(defaults.parity);
+    let stop_bits = stop_bits.unwrap_or(defaults.stop_bits_for(parity));
     (baud.unwrap_or(defaults.baud), parity, stop_bits)
+}
+
+/// The serial port crate's parity for a line's.
+pub fn port_parity(parity: Parity) -> PortParity {
+    match parity {
+        Parity::None => PortParity::None,
+        Parity::Even => PortParity::Even,
+        Parity::Odd => PortParity::Odd,
+    }
 }
 
 #[cfg(test)]

@@ -13,8 +13,8 @@ use crate::diagnostic::{Diagnostic, Loc};
 use crate::load::LoadedMap;
 use crate::lower::DrivePlan;
 use crate::model::{
-    self, Access, Conflict, DefaultValue, EnumValue, Field, Gap, ModbusTable, Reference, Removed,
-    Scale, TransportName, VariantAxis, WriteRestriction,
+    self, Access, Conflict, DefaultValue, EnumValue, Field, Gap, ModbusTable, Parity, Reference,
+    Removed, Scale, TransportName, VariantAxis, WriteRestriction,
 };
 use crate::source::{Node, Path};
 use drivemap_core::scale::{Decimal, RawRange, raw_of};
@@ -896,14 +896,6 @@ fn shift_line(source: &str, by: usize) -> Result<String, String> {
     Ok(format!("{file}:{shifted}"))
 }
 
-/// The parity of a serial line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LineParity {
-    None,
-    Even,
-    Odd,
-}
-
 /// A drive's serial line as its map gives the defaults (`protocol.serial`), with the fallbacks
 /// of a map that gives none: 9600 baud, no parity. The one reading of the map's serial
 /// defaults, for a client's link and for a simulated drive's port.
@@ -912,7 +904,7 @@ pub struct SerialDefaults {
     /// The default baud rate.
     pub baud: u32,
     /// The default parity.
-    pub parity: LineParity,
+    pub parity: Parity,
     /// Bits per character on the wire when the manual fixes it regardless of parity (TDS-V8:
     /// always 11 — without parity the parity slot is sent as a second stop bit).
     pub char_bits: Option<u8>,
@@ -925,13 +917,13 @@ pub struct SerialDefaults {
 impl SerialDefaults {
     /// Stop bits for `parity`: the map's formats', when only one stop-bit count goes with that
     /// parity, else [`SerialDefaults::stop_bits`].
-    pub fn stop_bits_for(&self, parity: LineParity) -> u8 {
+    pub fn stop_bits_for(&self, parity: Parity) -> u8 {
         let i = match parity {
-            LineParity::None => 0,
-            LineParity::Even => 1,
-            LineParity::Odd => 2,
+            Parity::None => 0,
+            Parity::Even => 1,
+            Parity::Odd => 2,
         };
-        self.format_stop_bits[i].unwrap_or_else(|| self.stop_bits(parity != LineParity::None))
+        self.format_stop_bits[i].unwrap_or_else(|| self.stop_bits(parity != Parity::None))
     }
 
     /// Stop bits: 2 without parity (`with_parity` false) where the map fixes 11-bit
@@ -949,7 +941,7 @@ impl Drive {
     /// The character formats of `serial.formats`, in the runtime's words (a case without
     /// `data_bits` has the line's); empty when the map lists none.
     pub fn serial_format_list(&self) -> Vec<drivemap_core::profile::SerialFormat> {
-        use drivemap_core::profile::{Parity, SerialFormat};
+        use drivemap_core::profile::SerialFormat;
         let Some(serial) = self.protocol.serial.as_ref() else {
             return Vec::new();
         };
@@ -962,11 +954,7 @@ impl Drive {
             .map(|c| SerialFormat {
                 code: c.when,
                 data_bits: c.data_bits.unwrap_or(serial.data_bits),
-                parity: match c.parity {
-                    model::Parity::None => Parity::None,
-                    model::Parity::Even => Parity::Even,
-                    model::Parity::Odd => Parity::Odd,
-                },
+                parity: c.parity,
                 stop_bits: c.stop_bits,
             })
             .collect()
@@ -977,16 +965,14 @@ impl Drive {
         let serial = self.protocol.serial.as_ref();
         SerialDefaults {
             baud: serial.and_then(|s| s.default_baud).unwrap_or(9600),
-            parity: match serial.and_then(|s| s.default_parity) {
-                Some(model::Parity::Even) => LineParity::Even,
-                Some(model::Parity::Odd) => LineParity::Odd,
-                Some(model::Parity::None) | None => LineParity::None,
-            },
+            parity: serial
+                .and_then(|s| s.default_parity)
+                .unwrap_or(Parity::None),
             char_bits: serial.and_then(|s| s.char_bits),
             format_stop_bits: {
-                use drivemap_core::profile::{Parity, only_stop_bits};
+                use drivemap_core::profile::only_stop_bits;
                 let list = self.serial_format_list();
-                [Parity::None, Parity::Even, Parity::Odd].map(|p| only_stop_bits(&list, p))
+                Parity::ALL.map(|p| only_stop_bits(&list, p))
             },
         }
     }

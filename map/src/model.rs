@@ -541,13 +541,8 @@ fn default_stop_bits() -> u8 {
     1
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Parity {
-    None,
-    Even,
-    Odd,
-}
+/// Parity of a serial line: the vocabulary crate's, read as `none`, `even`, `odd`.
+pub use drivemap_core::profile::Parity;
 
 /// Registers as the manual groups them (command, monitor, one parameter group...).
 #[derive(Debug, Clone, Deserialize, Serialize)]

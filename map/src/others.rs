@@ -522,11 +522,7 @@ fn protocol(drive: &Drive, out: &mut Vec<Other>) {
                     ),
             );
             for (i, c) in f.cases.iter().enumerate() {
-                let letter = match c.parity {
-                    model::Parity::None => 'n',
-                    model::Parity::Even => 'e',
-                    model::Parity::Odd => 'o',
-                };
+                let letter = c.parity.letter().to_ascii_lowercase();
                 let bits = c.data_bits.unwrap_or(s.data_bits);
                 push(
                     out,

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use drivemap_map::ir::{LineParity, SerialDefaults};
+use drivemap_map::ir::SerialDefaults;
+use drivemap_map::model::Parity;
 use drivemap_map::validate::Context;
 
 fn defaults(map: &str) -> SerialDefaults {
@@ -20,7 +21,7 @@ fn tds_v8_fixes_eleven_bit_characters_so_no_parity_means_two_stop_bits() {
         d,
         SerialDefaults {
             baud: 9600,
-            parity: LineParity::None,
+            parity: Parity::None,
             char_bits: Some(11),
             format_stop_bits: [None; 3],
         }
@@ -32,10 +33,7 @@ fn tds_v8_fixes_eleven_bit_characters_so_no_parity_means_two_stop_bits() {
 #[test]
 fn v7_defaults_come_from_the_map_with_one_stop_bit() {
     let d = defaults("../maps/yaskawa-v7.yaml");
-    assert_eq!(
-        (d.baud, d.parity, d.char_bits),
-        (9600, LineParity::None, None)
-    );
+    assert_eq!((d.baud, d.parity, d.char_bits), (9600, Parity::None, None));
     assert_eq!(d.stop_bits(false), 1);
 }
 
@@ -45,6 +43,6 @@ fn v7_defaults_come_from_the_map_with_one_stop_bit() {
 fn acn_formats_give_the_stop_bits_of_a_parity() {
     let d = defaults("../maps/automationdirect-acn.yaml");
     assert_eq!(d.format_stop_bits, [None, Some(1), Some(1)]);
-    assert_eq!(d.stop_bits_for(LineParity::Even), 1);
-    assert_eq!(d.stop_bits_for(LineParity::None), 1);
+    assert_eq!(d.stop_bits_for(Parity::Even), 1);
+    assert_eq!(d.stop_bits_for(Parity::None), 1);
 }

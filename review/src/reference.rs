@@ -10,8 +10,7 @@ use drivemap_core::rule::Transports;
 use crate::describe::{self, num};
 use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{
-    CommandKind, Conflict, DefaultValue, Dependency, EnumValue, Interval, Parity, Scale,
-    UnknownItem,
+    CommandKind, Conflict, DefaultValue, Dependency, EnumValue, Interval, Scale, UnknownItem,
 };
 
 /// Text safe inside a Markdown table cell.
@@ -57,14 +56,6 @@ fn interval(i: &Interval) -> String {
         s += &format!(" (`{src}`)");
     }
     s
-}
-
-fn parity(p: Parity) -> &'static str {
-    match p {
-        Parity::None => "none",
-        Parity::Even => "even",
-        Parity::Odd => "odd",
-    }
 }
 
 /// Renders the Markdown reference of `drive`. `file_name` is how the map file is named in the
@@ -302,12 +293,12 @@ fn protocol(out: &mut String, drive: &Drive) {
             "; parity {}",
             s.parities
                 .iter()
-                .map(|p| parity(*p))
+                .map(|p| p.name())
                 .collect::<Vec<_>>()
                 .join(", ")
         );
         if let Some(d) = s.default_parity {
-            text += &format!(" (default {})", parity(d));
+            text += &format!(" (default {})", d.name());
         }
         match &s.formats {
             None => text += &format!("; {} data bits, {} stop bit(s)", s.data_bits, s.stop_bits),

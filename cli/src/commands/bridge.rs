@@ -16,7 +16,7 @@ use drivemap_map::Drive;
 use serde::Deserialize;
 
 use crate::error::Error;
-use crate::live::link::{LineParity, Link as LinkArgs};
+use crate::live::link::{Link as LinkArgs, Parity, ParityParser};
 use crate::live::session::SettingsArgs;
 use crate::maps::MapsDir;
 
@@ -46,8 +46,8 @@ pub struct Args {
     #[arg(long)]
     pub baud: Option<u32>,
     /// Parity of the serial line (default: the map's).
-    #[arg(long, value_enum)]
-    pub parity: Option<LineParity>,
+    #[arg(long, value_parser = ParityParser)]
+    pub parity: Option<Parity>,
     /// How long to wait for each reply (default: from the map).
     #[arg(long, value_parser = crate::duration::positive)]
     pub timeout: Option<Duration>,
@@ -139,7 +139,7 @@ fn link_args(
     rtu_tcp: Option<String>,
     serial: Option<String>,
     baud: Option<u32>,
-    parity: Option<LineParity>,
+    parity: Option<Parity>,
     timeout: Option<Duration>,
     retries: u8,
 ) -> Result<LinkArgs, String> {

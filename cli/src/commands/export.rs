@@ -9,7 +9,7 @@ use clap::{Args as ClapArgs, ValueEnum};
 use crate::error::Error;
 use crate::maps::MapsDir;
 use crate::targets::{self, Points};
-use drivemap_live::link::{LineParity, Link};
+use drivemap_live::link::{Link, Parity, ParityParser};
 use drivemap_live::session::{SettingsArgs, find_all};
 
 /// What to write.
@@ -67,8 +67,8 @@ pub struct Args {
     #[arg(long)]
     pub baud: Option<u32>,
     /// Parity (default: the map's default, else none).
-    #[arg(long, value_enum)]
-    pub parity: Option<LineParity>,
+    #[arg(long, value_parser = ParityParser)]
+    pub parity: Option<Parity>,
     /// Stop bits (default: the map's for the parity).
     #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
     pub stop_bits: Option<u8>,

@@ -26,7 +26,7 @@ use serde::Serialize;
 use super::probe::{Check, check_value};
 use crate::live::output::Format;
 use crate::maps::MapsDir;
-use drivemap_live::link::{LineParity, Link};
+use drivemap_live::link::{Link, Parity, ParityParser};
 use drivemap_live::session::{Session, on_transport};
 
 /// Monitor registers read per candidate map when identifying a slave.
@@ -58,8 +58,8 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub baud: Vec<u32>,
     /// Parities to try on --serial, comma-separated (default: the candidate maps' defaults).
-    #[arg(long, value_enum, value_delimiter = ',')]
-    pub parity: Vec<LineParity>,
+    #[arg(long, value_parser = ParityParser, value_delimiter = ',')]
+    pub parity: Vec<Parity>,
     /// Longest wait for each probe (default: from the maps' timing and the line speed).
     #[arg(long, value_parser = drivemap_live::duration::positive)]
     pub timeout: Option<Duration>,
@@ -228,7 +228,7 @@ pub struct Candidate {
 #[derive(Clone, Copy)]
 struct Line {
     baud: u32,
-    parity: LineParity,
+    parity: Parity,
 }
 
 fn line_text(kind_serial: bool, line: Line, drive: &Drive, base: &Link) -> String {
@@ -239,12 +239,7 @@ fn line_text(kind_serial: bool, line: Line, drive: &Drive, base: &Link) -> Strin
     l.baud = Some(line.baud);
     l.parity = Some(line.parity);
     let (baud, parity, stops) = l.line(drive);
-    let p = match parity {
-        LineParity::None => 'N',
-        LineParity::Even => 'E',
-        LineParity::Odd => 'O',
-    };
-    format!("{baud} 8{p}{stops}")
+    format!("{baud} 8{}{stops}", parity.letter())
 }
 
 /// The longest time any candidate drive takes to answer a one-register read at `baud`:

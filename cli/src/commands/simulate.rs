@@ -12,10 +12,10 @@ use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use clap::{ArgGroup, Args as ClapArgs};
-use drivemap_live::link::LineParity;
+use drivemap_live::link::{Parity, ParityParser, port_parity};
 use drivemap_map::Drive;
 use drivemap_runtime::bus_time::SerialConfig;
-use drivemap_runtime::transport::serial::{Parity, SerialOptions, StopBits};
+use drivemap_runtime::transport::serial::{SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
     Line, RequestRecord, SerialServer, SimOptions, Simulator, SystemClock, TcpFraming, TcpServer,
@@ -50,8 +50,8 @@ pub struct Args {
     #[arg(long)]
     pub baud: Option<u32>,
     /// Parity for --serial (default: the map's default, else none).
-    #[arg(long, value_enum)]
-    pub parity: Option<LineParity>,
+    #[arg(long, value_parser = ParityParser)]
+    pub parity: Option<Parity>,
     /// Stop bits for --serial (default: the map's for the parity when its formats give only
     /// one, else 1; 2 without parity where the map fixes 11-bit characters). A map that lists
     /// its serial formats refuses any other parity and stop bits.
@@ -394,11 +394,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         ));
     };
     let mut options = SerialOptions::new(path.to_string_lossy(), baud)
-        .parity(match parity {
-            LineParity::None => Parity::None,
-            LineParity::Even => Parity::Even,
-            LineParity::Odd => Parity::Odd,
-        })
+        .parity(port_parity(parity))
         .stop_bits(if stop_bits == 2 {
             StopBits::Two
         } else {
@@ -433,7 +429,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     outln!(
         "simulating {what_drives} on RTU {} {baud} baud, parity {}, {stop_bits} stop bit(s) ({models}{time}{timing}); Ctrl-C stops",
         path.display(),
-        format!("{parity:?}").to_lowercase()
+        parity.name()
     );
     server
         .wait()

@@ -7,7 +7,6 @@ use std::fmt::Write;
 use drivemap_runtime::Table;
 
 use super::{Endpoint, Meaning, Point, Points, slug, write_point_caveats};
-use drivemap_live::link::LineParity;
 
 fn q(text: &str) -> String {
     // A JSON string is a YAML double-quoted scalar.
@@ -188,15 +187,7 @@ pub fn render(points: &Points) -> String {
             let _ = writeln!(out, "    port: {}", q(path));
             let _ = writeln!(out, "    baudrate: {baud}");
             let _ = writeln!(out, "    bytesize: 8");
-            let _ = writeln!(
-                out,
-                "    parity: {}",
-                match parity {
-                    LineParity::None => "N",
-                    LineParity::Even => "E",
-                    LineParity::Odd => "O",
-                }
-            );
+            let _ = writeln!(out, "    parity: {}", parity.letter());
             let _ = writeln!(out, "    stopbits: {stop_bits}");
         }
     }

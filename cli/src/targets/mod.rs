@@ -18,7 +18,7 @@ use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{RegisterInfo, Table, Width, WordOrder};
 
 use crate::error::Error;
-use drivemap_live::link::{LineParity, Link};
+use drivemap_live::link::{Link, Parity};
 use drivemap_live::session::{on_transport, value_error};
 
 pub mod home_assistant;
@@ -106,7 +106,7 @@ pub enum Endpoint {
     Serial {
         path: String,
         baud: u32,
-        parity: LineParity,
+        parity: Parity,
         stop_bits: u8,
     },
 }

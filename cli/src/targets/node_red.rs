@@ -8,7 +8,6 @@ use drivemap_runtime::Table;
 use serde_json::{Value, json};
 
 use super::{Endpoint, Meaning, Point, Points, slug};
-use drivemap_live::link::LineParity;
 
 /// A stable node id: 16 hex digits (as the editor makes them) from `key`.
 fn node_id(key: &str) -> String {
@@ -207,11 +206,7 @@ pub fn render(points: &Points) -> Value {
             config["serialPort"] = json!(path);
             config["serialBaudrate"] = json!(baud);
             config["serialStopbits"] = json!(stop_bits);
-            config["serialParity"] = json!(match parity {
-                LineParity::None => "none",
-                LineParity::Even => "even",
-                LineParity::Odd => "odd",
-            });
+            config["serialParity"] = json!(parity.name());
         }
     }
     nodes.push(config);

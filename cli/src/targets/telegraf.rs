@@ -7,7 +7,6 @@ use std::fmt::Write;
 use drivemap_runtime::Table;
 
 use super::{Endpoint, Meaning, Points, write_point_caveats};
-use drivemap_live::link::LineParity;
 
 fn q(text: &str) -> String {
     // A JSON string without control characters is a TOML basic string.
@@ -85,15 +84,7 @@ pub fn render(points: &Points) -> String {
             let _ = writeln!(out, "  controller = {}", q(&format!("file://{path}")));
             let _ = writeln!(out, "  baud_rate = {baud}");
             let _ = writeln!(out, "  data_bits = 8");
-            let _ = writeln!(
-                out,
-                "  parity = \"{}\"",
-                match parity {
-                    LineParity::None => "N",
-                    LineParity::Even => "E",
-                    LineParity::Odd => "O",
-                }
-            );
+            let _ = writeln!(out, "  parity = \"{}\"", parity.letter());
             let _ = writeln!(out, "  stop_bits = {stop_bits}");
             let _ = writeln!(out, "  transmission_mode = \"RTU\"");
         }

@@ -363,7 +363,7 @@ fn formats(drive: &Drive, out: &mut Vec<Diagnostic>, ser: &Serial, f: &SerialFor
                 None,
                 format!(
                     "parity {} is not among the line's `parities`",
-                    parity_name(c.parity)
+                    c.parity.name()
                 ),
             ));
         }
@@ -387,7 +387,7 @@ fn formats(drive: &Drive, out: &mut Vec<Diagnostic>, ser: &Serial, f: &SerialFor
                 None,
                 format!(
                     "parity {} is in `parities` but no format has it",
-                    parity_name(*parity)
+                    parity.name()
                 ),
             ));
         }
@@ -400,13 +400,5 @@ fn formats(drive: &Drive, out: &mut Vec<Diagnostic>, ser: &Serial, f: &SerialFor
             None,
             "with `formats`, each format gives its stop bits: remove `stop_bits`",
         ));
-    }
-}
-
-fn parity_name(p: Parity) -> &'static str {
-    match p {
-        Parity::None => "none",
-        Parity::Even => "even",
-        Parity::Odd => "odd",
     }
 }
