@@ -149,6 +149,8 @@ pub struct RegisterFacts {
     #[serde(serialize_with = "kind_name")]
     pub kind: ConversionKind,
     pub rows: Vec<Fact>,
+    /// Who selects the scale, as a user names it (`C6-01`), for a selected scale.
+    pub selector: Option<String>,
     pub cases: Vec<CaseFacts>,
     pub variants: Vec<VariantFacts>,
     pub notes: Vec<String>,
@@ -345,6 +347,10 @@ pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
         address: d.address,
         kind: ConversionKind::of(&plan.conversion),
         rows,
+        selector: match &d.scale {
+            Some(Scale::Selected(sel)) => Some(describe::setting(drive, &sel.selected_by)),
+            _ => None,
+        },
         cases,
         variants,
         notes: d.notes.clone(),

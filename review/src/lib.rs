@@ -12,4 +12,4 @@ pub mod review;
 pub(crate) use drivemap_map::Drive;
 #[cfg(test)]
 pub(crate) use drivemap_map::read_map_str;
-pub(crate) use drivemap_map::{describe, diagnostic, ir, model, names, source, validate};
+pub(crate) use drivemap_map::{describe, diagnostic, facts, ir, model, names, source, validate};

@@ -7,11 +7,12 @@ use std::fmt::Write as _;
 use drivemap_core::register::{Table, WriteRestriction};
 use drivemap_core::rule::Transports;
 
+use drivemap_core::ConversionKind;
+
 use crate::describe::{self, num};
+use crate::facts::{self, FactKey, RegisterFacts};
 use crate::ir::{Drive, Register, ValueKind};
-use crate::model::{
-    CommandKind, Conflict, DefaultValue, Dependency, EnumValue, Interval, Scale, UnknownItem,
-};
+use crate::model::{CommandKind, Conflict, DefaultValue, Dependency, EnumValue, Interval};
 
 /// Text safe inside a Markdown table cell.
 fn cell(s: &str) -> String {
@@ -552,75 +553,70 @@ fn access_cell(drive: &Drive, r: &Register) -> String {
     join_cells(&parts)
 }
 
-fn scale_cell(drive: &Drive, r: &Register) -> String {
-    let unit = r.def.unit.as_deref().unwrap_or("");
-    match r.kind() {
-        ValueKind::Word if !r.def.read_values.is_empty() => {
+/// The scale cell: the facts' scale row, or what stands for one (codes and bits are listed
+/// below the table, a selected scale's cases too).
+fn scale_cell(f: &RegisterFacts) -> String {
+    if let Some(s) = f.get(FactKey::SelectedBy) {
+        return format!("{} (below)", cell(&s.value));
+    }
+    if let Some(s) = f.get(FactKey::Scale) {
+        return cell(&s.value);
+    }
+    match f.kind {
+        ConversionKind::Enum => "codes (below)".into(),
+        ConversionKind::Bits => "bit fields (below)".into(),
+        _ if f.get(FactKey::ReadValues).is_some() => {
             "written as a word, read as codes (below)".into()
         }
-        ValueKind::Word => "—".into(),
-        ValueKind::UnitQuantity => cell(&describe::scale(drive, &Scale::Factor(1.0), unit)),
-        ValueKind::Quantity(Scale::Selected(sel)) => {
-            format!(
-                "{} (below)",
-                cell(&describe::selected_by(drive, &sel.selected_by))
-            )
-        }
-        ValueKind::Quantity(s) => cell(&describe::scale(drive, s, unit)),
-        ValueKind::Enum(_) => "codes (below)".into(),
-        ValueKind::Bits(_) => "bit fields (below)".into(),
+        _ => "—".into(),
     }
 }
 
-fn range_cell(drive: &Drive, r: &Register) -> String {
-    let d = &r.def;
-    let unit = d.unit.as_deref().unwrap_or("");
-    let mut parts = vec![describe::range(d.min, d.max, unit)];
-    for (option, o) in &d.by_variant {
-        if o.min.is_some() || o.max.is_some() {
-            let (min, max) = r.limits_for(option);
-            parts.push(format!("{}: {}", option, describe::range(min, max, unit)));
+fn range_cell(f: &RegisterFacts) -> String {
+    let mut parts = vec![
+        f.get(FactKey::Range)
+            .map(|x| x.value.clone())
+            .unwrap_or_default(),
+    ];
+    for v in &f.variants {
+        if let Some(range) = &v.range {
+            parts.push(format!("{}: {range}", v.option));
         }
-        if o.unknown.iter().any(|u| u.what == UnknownItem::Range) {
-            parts.push(format!("{}: unknown", option));
+        if v.unknowns.iter().any(|u| u.what == "range") {
+            parts.push(format!("{}: unknown", v.option));
         }
     }
-    if r.range_unknown() {
+    if f.unknowns.iter().any(|u| u.what == "range") {
         parts.push("unknown".into());
     }
-    if let Some(l) = &d.max_relative {
-        parts.push(describe::relative_limit(drive, l));
+    if let Some(l) = f.get(FactKey::RelativeLimit) {
+        parts.push(l.value.clone());
     }
-    if let Some(Scale::Selected(sel)) = &d.scale {
-        for c in &sel.cases {
-            if c.min.is_some() || c.max.is_some() {
-                parts.push(format!(
-                    "{}={}: {}",
-                    describe::setting(drive, &sel.selected_by),
-                    describe::codes(&c.when),
-                    describe::range(c.min, c.max, unit)
-                ));
-            }
+    for c in &f.cases {
+        if !c.range.is_empty() {
+            parts.push(format!(
+                "{}={}: {}",
+                f.selector.as_deref().unwrap_or_default(),
+                c.codes,
+                c.range
+            ));
         }
     }
     join_cells(&parts)
 }
 
-fn default_cell(r: &Register) -> String {
-    let d = &r.def;
-    let mut parts = Vec::new();
-    if let Some(v) = &d.default {
-        parts.push(describe::default(v));
-    }
-    for (option, o) in &d.by_variant {
-        if let Some(v) = &o.default {
-            parts.push(format!("{}: {}", option, describe::default(v)));
+fn default_cell(f: &RegisterFacts) -> String {
+    let base = f.get(FactKey::Default);
+    let mut parts: Vec<String> = base.iter().map(|d| d.value.clone()).collect();
+    for v in &f.variants {
+        if let Some(d) = &v.default {
+            parts.push(format!("{}: {d}", v.option));
         }
-        if o.unknown.iter().any(|u| u.what == UnknownItem::Default) {
-            parts.push(format!("{}: unknown", option));
+        if v.unknowns.iter().any(|u| u.what == "default") {
+            parts.push(format!("{}: unknown", v.option));
         }
     }
-    if d.unknown.iter().any(|u| u.what == UnknownItem::Default) && d.default.is_none() {
+    if base.is_none() && f.unknowns.iter().any(|u| u.what == "default") {
         parts.push("unknown".into());
     }
     join_cells(&parts)
@@ -653,6 +649,7 @@ fn registers(out: &mut String, drive: &Drive) {
         );
         for r in &members {
             let d = &r.def;
+            let f = facts::register(drive, r);
             let _ = writeln!(
                 out,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
@@ -662,9 +659,9 @@ fn registers(out: &mut String, drive: &Drive) {
                 code(&d.id),
                 access_cell(drive, r),
                 cell(d.unit.as_deref().unwrap_or("")),
-                scale_cell(drive, r),
-                range_cell(drive, r),
-                default_cell(r),
+                scale_cell(&f),
+                range_cell(&f),
+                default_cell(&f),
                 cite(d.source.as_deref())
             );
         }
@@ -693,6 +690,7 @@ fn enum_rows(out: &mut String, values: &[EnumValue]) {
 /// Codes, bit fields and selected scales of a register, under its group's table.
 fn details(out: &mut String, drive: &Drive, r: &Register) {
     let d = &r.def;
+    let f = facts::register(drive, r);
     let title = format!(
         "#### {} {} — {}",
         addr(drive, d.address),
@@ -729,32 +727,28 @@ fn details(out: &mut String, drive: &Drive, r: &Register) {
             }
             out.push('\n');
         }
-        ValueKind::Quantity(Scale::Selected(sel)) => {
+        _ if f.selector.is_some() => {
             let _ = writeln!(out, "{title}\n");
-            let unit = d.unit.as_deref().unwrap_or("");
             let _ = writeln!(
                 out,
                 "| {} | Scale | Range | Source |\n|---|---|---|---|",
-                cell(&describe::setting(drive, &sel.selected_by))
+                cell(f.selector.as_deref().unwrap_or_default())
             );
-            for c in &sel.cases {
+            for c in &f.cases {
                 let _ = writeln!(
                     out,
                     "| {} | {} | {} | {} |",
-                    describe::codes(&c.when),
-                    cell(&describe::scale(drive, &c.scale, unit)),
-                    cell(&describe::range(c.min, c.max, unit)),
-                    cite(c.source.as_deref())
+                    c.codes,
+                    cell(&c.scale),
+                    cell(&c.range),
+                    cite(c.citation.as_deref())
                 );
             }
             out.push('\n');
         }
         _ => {}
     }
-    let shown = matches!(
-        r.kind(),
-        ValueKind::Enum(_) | ValueKind::Bits(_) | ValueKind::Quantity(Scale::Selected(_))
-    );
+    let shown = matches!(r.kind(), ValueKind::Enum(_) | ValueKind::Bits(_)) || f.selector.is_some();
     let mut more = String::new();
     if !d.read_values.is_empty() {
         let _ = writeln!(
