@@ -575,4 +575,5 @@ impl<T: AsyncTransport> AsyncClient<T> {
     }
 
     client_methods!([async] [.await]);
+    crate::indexed::indexed_methods!([async] [.await]);
 }

@@ -1384,6 +1384,7 @@ impl<T: Transport> Client<T> {
     }
 
     client_methods!([] []);
+    crate::indexed::indexed_methods!([] []);
 }
 
 #[cfg(test)]

@@ -213,6 +213,9 @@ pub enum Refusal {
     /// A write to a register the manual makes read-only.
     #[error("{register} is read-only")]
     ReadOnly { register: &'static str },
+    /// A read of a register or indexed entry the manual makes write-only.
+    #[error("{register} is write-only")]
+    WriteOnly { register: &'static str },
     /// A broadcast-only register addressed to one slave.
     #[error("{register} is a broadcast register: it is written to slave 0 only")]
     BroadcastOnly { register: &'static str },
@@ -332,6 +335,22 @@ pub enum Error {
     /// A value could not be converted (out of range before writing, or a missing setting).
     #[error(transparent)]
     Value(#[from] ValueError),
+    /// An indexed access ([`crate::indexed`]) found the index register showing another index
+    /// than the one just written (another master or the keypad selected another entry): the
+    /// value was not attributed to the entry, and nothing was written to it.
+    #[error(
+        "{register}: {index_register} shows index {shown}, not {selected} as just written (another master or the keypad selected another entry); the value was not taken as entry {selected}'s"
+    )]
+    IndexChanged {
+        /// The value register.
+        register: &'static str,
+        /// The index register.
+        index_register: &'static str,
+        /// The index written.
+        selected: u16,
+        /// The index the drive showed.
+        shown: u16,
+    },
     /// More than [`MAX_UNANSWERED_BYTES`](crate::client::MAX_UNANSWERED_BYTES) arrived in one
     /// attempt without the answer among them: the peer floods the link. Not retried.
     #[error(
@@ -373,7 +392,9 @@ impl From<Error> for io::Error {
             Error::Timeout { .. } | Error::Unsettled { .. } => io::ErrorKind::TimedOut,
             Error::Io { source, .. } | Error::Link(source) => source.kind(),
             Error::Refused(_) | Error::Value(_) => io::ErrorKind::InvalidInput,
-            Error::Exception { .. } | Error::Overrun { .. } => io::ErrorKind::Other,
+            Error::Exception { .. } | Error::Overrun { .. } | Error::IndexChanged { .. } => {
+                io::ErrorKind::Other
+            }
         };
         io::Error::new(kind, e)
     }

@@ -54,6 +54,8 @@ pub mod error;
 #[cfg(feature = "std")]
 pub mod gate;
 #[cfg(feature = "std")]
+pub mod indexed;
+#[cfg(feature = "std")]
 pub mod persist;
 #[cfg(feature = "std")]
 pub mod planner;

@@ -75,6 +75,11 @@ impl FaultyLink {
         self.faults.push_back(fault);
     }
 
+    /// Drops the faults injected and not yet applied.
+    pub fn clear_faults(&mut self) {
+        self.faults.clear();
+    }
+
     fn deliver(&mut self, at: Instant, bytes: Vec<u8>) {
         let i = self
             .deliveries

@@ -45,6 +45,7 @@ pub mod clock;
 pub mod exceptions;
 pub mod fault;
 pub mod framing;
+pub mod indexed;
 pub mod line;
 pub mod model;
 pub mod roles;

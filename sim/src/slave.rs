@@ -30,6 +30,8 @@ pub struct SimulatedSlave {
     /// Reads executed (first address, quantity), for tests: `None` (the default) records
     /// nothing, so a long-running slave does not grow; set `Some(Vec::new())` to record.
     pub reads: Option<Vec<(u16, u16)>>,
+    /// Index/value register pairs served as the drive does ([`SimulatedSlave::with_indexed`]).
+    pub indexed: crate::indexed::IndexedBank,
 }
 
 impl SimulatedSlave {
@@ -44,7 +46,18 @@ impl SimulatedSlave {
             executed: 0,
             writes: Vec::new(),
             reads: None,
+            indexed: crate::indexed::IndexedBank::default(),
         }
+    }
+
+    /// Serves the index/value register pairs `pairs` (a map's `DrivePlan::indexed`): each value
+    /// register shows and takes the value of the entry its index register selects.
+    pub fn with_indexed(
+        mut self,
+        pairs: &'static [drivemap_runtime::core::indexed::Indexed],
+    ) -> SimulatedSlave {
+        self.indexed = crate::indexed::IndexedBank::new(pairs);
+        self
     }
 
     /// Sets a holding register.
@@ -109,12 +122,24 @@ impl SimulatedSlave {
                     };
                     let (a, q) = (usize::from(address), usize::from(quantity));
                     words[..q].copy_from_slice(&table[a..a + q]);
+                    if f == function::READ_HOLDING {
+                        let holding = &self.holding;
+                        for (k, w) in words[..q].iter_mut().enumerate() {
+                            let at = address.wrapping_add(k as u16);
+                            if let Some(v) = self.indexed.shown(at, |i| holding[usize::from(i)]) {
+                                *w = v;
+                            }
+                        }
+                    }
                     if let Some(reads) = &mut self.reads {
                         reads.push((address, quantity));
                     }
                     Response::Registers(Words::Native(&words[..q]))
                 }
                 Request::WriteSingle { address, value } => {
+                    let holding = &self.holding;
+                    self.indexed
+                        .store(address, value, |i| holding[usize::from(i)]);
                     self.holding[usize::from(address)] = value;
                     self.writes.push((address, value));
                     Response::WriteSingle { address, value }
@@ -123,6 +148,8 @@ impl SimulatedSlave {
                 Request::WriteMultiple { address, values } => {
                     for (i, v) in values.iter().enumerate() {
                         let a = address.wrapping_add(i as u16);
+                        let holding = &self.holding;
+                        self.indexed.store(a, v, |i| holding[usize::from(i)]);
                         self.holding[usize::from(a)] = v;
                         self.writes.push((a, v));
                     }
