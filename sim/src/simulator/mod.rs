@@ -74,6 +74,8 @@ pub struct Simulator {
     reference_via: Option<TransportKind>,
     stats: Stats,
     cache: TickCache,
+    /// Index/value register pairs: what each value register shows for the index selected.
+    indexed: crate::indexed::IndexedBank,
 }
 
 impl Simulator {
@@ -159,7 +161,9 @@ impl Simulator {
             reference_via: None,
             stats: Stats::default(),
             cache: TickCache::default(),
+            indexed: crate::indexed::IndexedBank::default(),
         };
+        sim.indexed = crate::indexed::IndexedBank::new(sim.drive.plan().indexed);
         sim.cache.inputs = sim.tick_inputs();
         sim.cache.seen = vec![0; sim.cache.inputs.len()];
         sim.cache.stale = true;
@@ -174,6 +178,16 @@ impl Simulator {
         sim.start_model();
         sim.tick();
         Ok(sim)
+    }
+
+    /// The entries of the index/value register pairs (`indexed:` in the map), as served.
+    pub fn indexed(&self) -> &crate::indexed::IndexedBank {
+        &self.indexed
+    }
+
+    /// The entries of the index/value register pairs, to set as the keypad would.
+    pub fn indexed_mut(&mut self) -> &mut crate::indexed::IndexedBank {
+        &mut self.indexed
     }
 
     /// Takes its time from `clock` from now on: the drive model stands still between the last

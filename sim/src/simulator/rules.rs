@@ -77,7 +77,16 @@ impl Simulator {
             Table::Holding => &layout.holding,
             Table::Input => &layout.input,
         };
+        let word = |a: u16| {
+            layout
+                .holding
+                .get(&a)
+                .map_or(0, |s| s.width.split(self.raw[s.index])[usize::from(s.word)])
+        };
         match map.get(&address) {
+            Some(_) if table == Table::Holding && self.indexed.shown(address, word).is_some() => {
+                Ok(self.indexed.shown(address, word).unwrap_or(0))
+            }
             Some(s) if s.readable => Ok(s.width.split(self.raw[s.index])[usize::from(s.word)]),
             Some(_) => Err(self.plan.illegal_address),
             None if !first || (table == Table::Holding && self.in_gap(address)) => Ok(0),
@@ -147,6 +156,20 @@ impl Simulator {
                     if !self.may_write_now(r) {
                         return Err(self.plan.refused_now);
                     }
+                    let raw = &self.raw;
+                    let word = |a: u16| {
+                        layout
+                            .holding
+                            .get(&a)
+                            .map_or(0, |s| s.width.split(raw[s.index])[usize::from(s.word)])
+                    };
+                    match self.indexed.check(comm, v as u16, word) {
+                        crate::indexed::WriteCheck::ReadOnly => return Err(self.plan.read_only),
+                        crate::indexed::WriteCheck::OutOfRange => {
+                            return Err(self.plan.out_of_range);
+                        }
+                        _ => {}
+                    }
                     if !self.accepts(r, v, settings) {
                         return Err(self.plan.out_of_range);
                     }
@@ -168,6 +191,14 @@ impl Simulator {
                 self.last_written[i] = Some(v);
                 // A register read with other meanings keeps its read word: what a password
                 // write does to the lock state depends on a password the simulator lacks.
+                let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
+                let raw = &self.raw;
+                self.indexed.store(comm, v as u16, |a| {
+                    layout
+                        .holding
+                        .get(&a)
+                        .map_or(0, |s| s.width.split(raw[s.index])[usize::from(s.word)])
+                });
                 if plan.read_values.is_empty() {
                     let before = self.raw[i];
                     self.raw[i] = v;
