@@ -281,5 +281,7 @@ pub fn export(drive: &Drive) -> Value {
     if !limits.is_empty() {
         out["protocol"]["limits"] = Value::Object(limits);
     }
+    // Index/value register pairs and their entries (an empty list when none).
+    out["indexed"] = crate::indexed::export(drive);
     out
 }

@@ -175,3 +175,59 @@ pub fn lower(drive: &Drive, registers: &'static [RegisterPlan]) -> &'static [Ind
     }
     leak(out)
 }
+
+/// The export of every index/value pair (`drivemap export`'s `indexed`): per pair the value
+/// and index registers (ids, addresses), whether the index is read back, the index range, the
+/// citation, the `unknown` reason and the entries, each with its engineering and raw limits.
+pub fn export(drive: &Drive) -> serde_json::Value {
+    use serde_json::json;
+    let plan = drive.plan();
+    let pairs: Vec<serde_json::Value> = drive
+        .registers
+        .iter()
+        .filter_map(|r| Some((r, r.def.indexed.as_ref()?)))
+        .map(|(r, ix)| {
+            let lowered = plan.indexed.iter().find(|p| p.register == r.id());
+            let entries: Vec<serde_json::Value> = ix
+                .entries
+                .iter()
+                .map(|e| {
+                    let raw = e.raw_limits();
+                    json!({
+                        "index": e.index,
+                        "id": e.id,
+                        "param": e.param,
+                        "name": e.name,
+                        "unit": e.unit,
+                        "scale": e.scale.unwrap_or(1.0),
+                        "signed": e.signed,
+                        "min": e.min,
+                        "max": e.max,
+                        "raw_min": raw.map(|x| x.0 as i64),
+                        "raw_max": raw.map(|x| x.1 as i64),
+                        "access": match e.access_under(r) {
+                            Access::Read => "r",
+                            Access::Write => "w",
+                            Access::ReadWrite => "rw",
+                        },
+                        "source": e.source,
+                        "notes": e.notes,
+                    })
+                })
+                .collect();
+            json!({
+                "register": r.id(),
+                "value_address": r.def.address,
+                "index_register": lowered.map_or(ix.by.as_str(), |p| p.index_register),
+                "index_address": lowered.map(|p| p.index_address),
+                "index_readable": lowered.map(|p| p.index_readable),
+                "index_min": lowered.map(|p| p.index_range.min),
+                "index_max": lowered.map(|p| p.index_range.max),
+                "source": ix.source,
+                "unknown": ix.unknown,
+                "entries": entries,
+            })
+        })
+        .collect();
+    serde_json::Value::Array(pairs)
+}

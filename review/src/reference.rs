@@ -15,6 +15,8 @@ use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{CommandKind, Conflict, DefaultValue, Dependency, EnumValue, Interval};
 
 /// Text safe inside a Markdown table cell.
+mod indexed;
+
 fn cell(s: &str) -> String {
     s.replace('\\', "\\\\")
         .replace('|', "\\|")
@@ -68,6 +70,7 @@ pub fn render(drive: &Drive, file_name: &str) -> String {
     protocol(&mut out, drive);
     roles(&mut out, drive);
     registers(&mut out, drive);
+    indexed::section(&mut out, drive);
     notes(&mut out, drive);
     conflicts(&mut out, drive);
     unknowns(&mut out, drive);

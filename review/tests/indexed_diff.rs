@@ -68,3 +68,62 @@ fn a_citation_moved_is_a_citation_change() {
     assert!(out.contains("citation changed"), "{out}");
     assert!(!out.contains("indexed access changed"), "{out}");
 }
+
+/// The export lists the pair with its entries (engineering and raw limits, access, citation)
+/// and the `unknown` reason; the Markdown reference prints them in an "Indexed access" section.
+#[test]
+fn export_and_doc_show_the_pair_and_its_entries() {
+    let drive = read(&fixture());
+    let export = drivemap_map::export::export(&drive);
+    let pair = &export["indexed"][0];
+    assert_eq!(pair["register"], "parameter_value");
+    assert_eq!(pair["value_address"], 45);
+    assert_eq!(pair["index_register"], "parameter_index");
+    assert_eq!(pair["index_address"], 44);
+    assert_eq!(pair["index_readable"], true);
+    assert_eq!(
+        (pair["index_min"].clone(), pair["index_max"].clone()),
+        (1.into(), 40.into())
+    );
+    assert_eq!(pair["source"], "tarrow-tm44.txt:14");
+    assert!(
+        pair["unknown"]
+            .as_str()
+            .unwrap()
+            .contains("reserved for factory use")
+    );
+    let max = &pair["entries"][2];
+    assert_eq!(max["id"], "maximum_frequency");
+    assert_eq!(max["index"], 3);
+    assert_eq!(
+        (max["raw_min"].clone(), max["raw_max"].clone()),
+        (1000.into(), 6000.into())
+    );
+    assert_eq!(max["access"], "rw");
+    assert_eq!(pair["entries"][5]["access"], "r");
+    assert_eq!(max["source"], "tarrow-tm44.txt:20");
+    let doc = drivemap_review::reference::render(&drive, "tarrow-tm44.yaml");
+    assert!(doc.contains("## Indexed access"), "{doc}");
+    assert!(doc.contains("Write the entry's index to `parameter_index` (44 (002Ch)), then read or write `parameter_value` (45 (002Dh))"), "{doc}");
+    assert!(
+        doc.contains("| 3 | `maximum_frequency` | Maximum frequency | Hz | 0.01 | 10 ..= 60 Hz | R/W | `tarrow-tm44.txt:20` |"),
+        "{doc}"
+    );
+    assert!(
+        doc.contains("| 12 | `total_running_hours` | Total running hours | h | 1 |"),
+        "{doc}"
+    );
+    assert!(doc.contains("Entries not listed: indices 4-6"), "{doc}");
+    // A map without pairs exports an empty list and prints no section.
+    let plain: String = fixture()
+        .lines()
+        .take_while(|l| l.trim() != "- id: parameter_value")
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let drive = read(&plain);
+    assert_eq!(
+        drivemap_map::export::export(&drive)["indexed"],
+        serde_json::json!([])
+    );
+    assert!(!drivemap_review::reference::render(&drive, "x.yaml").contains("Indexed access"));
+}

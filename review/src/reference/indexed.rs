@@ -1,0 +1,74 @@
+//! The reference's "Indexed access" section: each index/value register pair (`indexed:`) with
+//! the entries the manual lists (index, id, name, scale, range, access, citation) and the
+//! `unknown` reason when the list is missing or incomplete.
+
+use std::fmt::Write as _;
+
+use drivemap_map::Drive;
+use drivemap_map::model::Access;
+
+use super::{addr, cell, cite, code};
+
+pub(super) fn section(out: &mut String, drive: &Drive) {
+    let pairs: Vec<_> = drive
+        .registers
+        .iter()
+        .filter_map(|r| Some((r, r.def.indexed.as_ref()?)))
+        .collect();
+    if pairs.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "## Indexed access\n");
+    for (r, ix) in pairs {
+        let index = drive.find(&ix.by);
+        let index_at = index
+            .map(|i| format!(" ({})", addr(drive, i.def.address)))
+            .unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "### {} {} — {}\n\nWrite the entry's index to {}{index_at}, then read or write {} ({}): the client's `read_entry`/`write_entry` do both in one call. Source: {}.\n",
+            addr(drive, r.def.address),
+            code(r.id()),
+            cell(&r.def.name),
+            code(&ix.by),
+            code(r.id()),
+            addr(drive, r.def.address),
+            cite(Some(&ix.source)),
+        );
+        if !ix.entries.is_empty() {
+            let _ = writeln!(
+                out,
+                "| Index | Entry | Name | Unit | Scale | Range | Access | Source |\n|---|---|---|---|---|---|---|---|"
+            );
+            for e in &ix.entries {
+                let range =
+                    drivemap_map::describe::range(e.min, e.max, e.unit.as_deref().unwrap_or(""));
+                let access = match e.access_under(r) {
+                    Access::Read => "R",
+                    Access::Write => "W",
+                    Access::ReadWrite => "R/W",
+                };
+                let _ = writeln!(
+                    out,
+                    "| {} | {} | {} | {} | {} | {} | {access} | {} |",
+                    e.index,
+                    code(&e.id),
+                    cell(&e.name),
+                    cell(e.unit.as_deref().unwrap_or("")),
+                    e.scale.unwrap_or(1.0),
+                    cell(&range),
+                    cite(Some(&e.source)),
+                );
+            }
+            let _ = writeln!(out);
+        }
+        if let Some(why) = &ix.unknown {
+            let what = if ix.entries.is_empty() {
+                "Entries not printed in the manual"
+            } else {
+                "Entries not listed"
+            };
+            let _ = writeln!(out, "{what}: {}\n", cell(why));
+        }
+    }
+}
