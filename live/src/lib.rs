@@ -8,6 +8,7 @@
 
 pub mod codec;
 pub mod duration;
+pub mod examples;
 pub mod intern;
 pub mod link;
 pub mod lookup;

@@ -12,7 +12,9 @@
 //! `not_printed`; a broadcast whose rules are not printed has `broadcast.not_printed` and
 //! `broadcast.text`; `serial.formats` (`selected_by`, `source`, `cases`: `when`, `data_bits`,
 //! `parity`, `stop_bits`, `format` such as `8E1`, `source`) replaces `serial.stop_bits` when the
-//! map lists the formats a parameter selects.
+//! map lists the formats a parameter selects. `examples` (when the map has any) lists the manual's example frames: the
+//! map's keys (`id`, `transport`, `direction`, `bytes` as printed, `source`, `answers`, `says`,
+//! `conflict`, `notes`), `frame` (the bytes as numbers) and `text` (the line `doc` prints).
 
 use serde_json::{Value, json};
 
@@ -178,6 +180,19 @@ fn limit_json(l: &model::Limit) -> Value {
     json!({"value": l.value, "source": l.source, "not_printed": l.unknown})
 }
 
+/// An example frame: the map's keys (`bytes` as printed), the bytes as numbers (`frame`,
+/// empty when the text is not hex bytes) and the line `doc` shows (`text`).
+fn example_json(e: &crate::examples::Example) -> Value {
+    let mut v = json!(e);
+    v["frame"] = json!(
+        crate::examples::parse_bytes(&e.bytes)
+            .map(|b| b.iter().map(|b| b.value).collect::<Vec<u8>>())
+            .unwrap_or_default()
+    );
+    v["text"] = json!(e.summary());
+    v
+}
+
 pub fn export(drive: &Drive) -> Value {
     let p = &drive.protocol;
     let mut regs: Vec<&Register> = drive.registers.iter().collect();
@@ -221,6 +236,9 @@ pub fn export(drive: &Drive) -> Value {
         "removed": drive.removed,
         "roles": drive.roles,
     });
+    if !drive.examples.is_empty() {
+        out["examples"] = json!(drive.examples.iter().map(example_json).collect::<Vec<_>>());
+    }
     // What the protocol's working figures rest on, when a map says more than the number:
     // a citation, or "not printed" with the reason.
     let mut limits = serde_json::Map::new();

@@ -37,7 +37,7 @@ impl Slot {
     pub fn of_key(key: &str) -> Option<Slot> {
         match key {
             "address" => Some(Slot::Address),
-            "code" => Some(Slot::ExceptionCode),
+            "code" | "exception" => Some(Slot::ExceptionCode),
             _ => None,
         }
     }

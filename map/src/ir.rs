@@ -49,6 +49,8 @@ pub struct Drive {
     pub warnings: Vec<Diagnostic>,
     /// The map's `draft:` mark: it loads and checks (with a warning), the generator refuses it.
     pub draft: Option<model::Draft>,
+    /// The example frames the manual prints (`examples:`), as written.
+    pub examples: Vec<crate::examples::Example>,
 }
 
 #[derive(Debug, Clone)]
@@ -791,6 +793,7 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
             w
         },
         draft: model.draft.clone(),
+        examples: model.examples.clone(),
     })
 }
 

@@ -15,6 +15,7 @@
 
 pub mod describe;
 pub mod diagnostic;
+pub mod examples;
 pub mod export;
 pub mod facts;
 pub mod hex;

@@ -256,6 +256,9 @@ fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {
                     deserialize_at::<Vec<crate::model::Conflict>>(tree, node, &path).err()
                 }
                 "gaps" => deserialize_at::<Vec<crate::model::Gap>>(tree, node, &path).err(),
+                "examples" => {
+                    deserialize_at::<Vec<crate::examples::Example>>(tree, node, &path).err()
+                }
                 "removed" => deserialize_at::<Vec<crate::model::Removed>>(tree, node, &path).err(),
                 "roles" => deserialize_at::<
                     std::collections::BTreeMap<String, Vec<crate::model::RolePlace>>,

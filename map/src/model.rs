@@ -47,6 +47,10 @@ pub struct MapFile {
     /// monitors, status), by role id (`drivemap_core::roles::Role::id`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub roles: BTreeMap<String, Vec<RolePlace>>,
+    /// Example frames the manual prints, with what they say ([`crate::examples`]). A variant
+    /// map's list replaces its base's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub examples: Vec<crate::examples::Example>,
 }
 
 /// The mark of a draft map: who made it and what the reviewer must confirm before removing it.

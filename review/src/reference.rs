@@ -73,6 +73,7 @@ pub fn render(drive: &Drive, file_name: &str) -> String {
     indexed::section(&mut out, drive);
     notes(&mut out, drive);
     conflicts(&mut out, drive);
+    examples(&mut out, drive);
     unknowns(&mut out, drive);
     gaps(&mut out, drive);
     removed(&mut out, drive);
@@ -871,6 +872,51 @@ fn conflicts(out: &mut String, drive: &Drive) {
              taken.\n\n{body}"
         );
     }
+}
+
+/// The manual's example frames, as printed, with what each says (verified by `check`).
+fn examples(out: &mut String, drive: &Drive) {
+    if drive.examples.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "## Example frames\n\nThe frames the manual prints, byte for byte as printed; `drivemap check` \
+         verifies each against the Modbus codec and this map (CRC or MBAP length, function, \
+         addresses, values, the answer to its request).\n\n\
+         | Example | Frame | Bytes | Says | Source |\n|---|---|---|---|---|"
+    );
+    for e in &drive.examples {
+        let mut frame = format!("{} {}", e.transport, e.direction.as_str());
+        if let Some(a) = &e.answers {
+            frame.push_str(&format!(" to `{a}`"));
+        }
+        let mut says = e.says.as_ref().map(|s| s.text()).unwrap_or_default();
+        if let Some(c) = &e.conflict {
+            if !says.is_empty() {
+                says.push_str("; ");
+            }
+            says.push_str(&format!(
+                "contradicts the codec or the map: conflict \"{c}\""
+            ));
+        }
+        for n in &e.notes {
+            if !says.is_empty() {
+                says.push_str("; ");
+            }
+            says.push_str(n);
+        }
+        let _ = writeln!(
+            out,
+            "| `{}` | {} | `{}` | {} | {} |",
+            e.id,
+            cell(&frame),
+            e.bytes.trim(),
+            cell(&says),
+            cite(Some(&e.source))
+        );
+    }
+    out.push('\n');
 }
 
 fn unknowns(out: &mut String, drive: &Drive) {

@@ -36,6 +36,7 @@ fn maps() -> Vec<PathBuf> {
     for dir in [
         "tests/fixtures/acme-vf1",
         "tests/fixtures/tarrow-tm44",
+        "tests/fixtures/orbis-q5",
         "map/tests/fixtures",
         "map/tests/fixtures/variants",
         "cli/tests/fixtures",
@@ -101,6 +102,7 @@ fn meaning(d: &Drive) -> String {
         "gaps": d.gaps,
         "removed": d.removed,
         "roles": d.roles,
+        "examples": d.examples,
     })
     .to_string()
 }
@@ -125,6 +127,7 @@ fn domain(key: &str) -> Option<&'static [&'static str]> {
         "kind" => &["accept", "persist"],
         "order" => &["high_first", "low_first"],
         "address_format" => &["hex", "decimal"],
+        "direction" => &["request", "response"],
         "depends_on" => &[
             "capacity",
             "control_method",

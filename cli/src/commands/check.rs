@@ -203,6 +203,30 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 for w in review::protocol_warnings(drive) {
                     eprintln!("{w}");
                 }
+                // The manual's example frames against the codec and the map.
+                if !drive.examples.is_empty() {
+                    let found = drivemap_live::examples::verify(drive);
+                    for d in &found.errors {
+                        eprintln!("{d}");
+                    }
+                    for d in &found.known {
+                        eprintln!("{} (recorded in `conflicts:`)", d.as_warning());
+                    }
+                    map_errors += found.errors.len();
+                    let marked = drive
+                        .examples
+                        .iter()
+                        .filter(|e| e.conflict.is_some())
+                        .count();
+                    summary.push_str(&format!(
+                        "; example frames: {} of {} verified",
+                        found.clean,
+                        drive.examples.len()
+                    ));
+                    if marked > 0 {
+                        summary.push_str(&format!(", {marked} contradicting as recorded"));
+                    }
+                }
                 let mut manuals = manuals_dir.as_deref().map(Manuals::new);
                 if let Some(m) = manuals.as_mut() {
                     m.load_for(drive);

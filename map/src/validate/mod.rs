@@ -15,6 +15,7 @@ mod bit_fields_valid;
 mod citations_present;
 mod conflicts_recorded;
 mod enum_codes_fit;
+mod examples_valid;
 mod identifiers_unique;
 mod identifiers_valid;
 mod indexed_valid;
@@ -88,5 +89,6 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);
     indexed_valid::check(drive, ctx, &mut out);
+    examples_valid::check(drive, ctx, &mut out);
     out
 }

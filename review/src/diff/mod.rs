@@ -204,6 +204,7 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
         plan: _,           // derived from the parts above
         warnings: _,       // how an earlier schema version was read, not what the map says
         draft: _,          // map_documentation
+        examples: _,       // map_documentation, example by example
     } = new;
     protocol::meta(&mut c, old, new);
     protocol::variants(&mut c, old, new);
@@ -329,6 +330,16 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         &new.removed,
         |x| format!("`{}`", x.id),
         |x| x.reason.clone(),
+        |x| Some(x.source.clone()),
+    );
+    keyed(
+        c,
+        id,
+        "example frame",
+        &old.examples,
+        &new.examples,
+        |x| format!("`{}`", x.id),
+        |x| x.summary(),
         |x| Some(x.source.clone()),
     );
     if old.draft != new.draft {

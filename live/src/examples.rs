@@ -1,0 +1,656 @@
+//! The map's example frames (`examples:`) verified against the Modbus codec and the map.
+//!
+//! The map front end (`drivemap-map`) checks their form; this module checks what the bytes
+//! mean, with the runtime's codec (CRC-16, MBAP header, PDU decoding) and the map's plan (the
+//! register at each address, each value's range and conversion):
+//!
+//! - an RTU frame's CRC (the printed CRC bytes against the CRC-16 of the frame), a TCP frame's
+//!   MBAP protocol id and length;
+//! - the function code is one the map allows;
+//! - a request decodes, and every address it reads or writes is a register of the map;
+//! - a written value is in its register's range and decodes to the value the example states;
+//! - a response answers its request (slave, function and every echo, the byte count of a read),
+//!   an exception response carries the stated code and one the map lists;
+//! - `says.read` / `says.write` name the register at the frame's address.
+//!
+//! Each finding is located at the byte concerned: `file:line:col` of that byte in the
+//! `bytes:` text. `drivemap check` runs it on every map.
+
+use drivemap_map::diagnostic::{Diagnostic, Loc};
+use drivemap_map::examples::{Byte, Direction, Example, hex_text, locate_offset, parse_bytes};
+use drivemap_map::ir::{Drive, Register};
+use drivemap_map::model::TransportName;
+use drivemap_map::source::Path;
+use drivemap_runtime::pdu::{self, Request, Response};
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::{Table, crc, tcp};
+
+use crate::codec;
+use crate::settings::LiveSettings;
+
+/// The PDU of an example frame and where it lies.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    /// The example's bytes.
+    pub bytes: Vec<u8>,
+    /// The slave address (RTU) or unit id (TCP).
+    pub slave: u8,
+    /// Index of the PDU's first byte (the function code) in `bytes`.
+    pub pdu_start: usize,
+    /// One past the PDU's last byte.
+    pub pdu_end: usize,
+}
+
+impl Frame {
+    /// The PDU.
+    pub fn pdu(&self) -> &[u8] {
+        &self.bytes[self.pdu_start..self.pdu_end]
+    }
+}
+
+/// The transport kind an example's framing stands for.
+pub fn kind_of(e: &Example) -> TransportKind {
+    match e.transport {
+        TransportName::Rtu => TransportKind::Rtu,
+        TransportName::Tcp => TransportKind::Tcp,
+    }
+}
+
+/// Settings for decoding examples: the map's defaults of the registers conversions depend on.
+pub fn default_settings(drive: &Drive) -> LiveSettings {
+    let mut settings = LiveSettings::default();
+    let deps = LiveSettings::dependencies(drive);
+    for r in &drive.registers {
+        if !deps.contains(&r.def.address) {
+            continue;
+        }
+        if let Some(d) = r.default_value() {
+            if let Ok(raw) = codec::encode(drive, r, d, &settings) {
+                settings.absorb(drive, r.def.address, raw as u16);
+            }
+        }
+    }
+    settings
+}
+
+/// The register at communication address `address` on `kind`, as the plan places it (the word
+/// of a 32-bit pair with its index), among broadcast registers when `broadcast`.
+pub fn register_at<'a>(
+    drive: &'a Drive,
+    settings: &LiveSettings,
+    kind: TransportKind,
+    address: u16,
+    table: Option<Table>,
+    broadcast: bool,
+) -> Option<(&'a Register, u16)> {
+    let view = settings.view(drive);
+    let find = |want_broadcast: bool| {
+        drive.registers.iter().find_map(|r| {
+            if r.broadcast != want_broadcast {
+                return None;
+            }
+            let plan = drive.register_plan(r);
+            if !plan.transports.contains(kind) || table.is_some_and(|t| plan.info.table != t) {
+                return None;
+            }
+            let at = plan.address_for(&view, kind);
+            let word = address.checked_sub(at)?;
+            (word < plan.info.width.count()).then_some((r, word))
+        })
+    };
+    if broadcast {
+        find(true).or_else(|| find(false))
+    } else {
+        find(false)
+    }
+}
+
+/// Reads an example's bytes into its framing, or says what is wrong (with the byte index).
+pub fn frame(e: &Example) -> Result<Frame, (usize, String)> {
+    let bytes: Vec<u8> = parse_bytes(&e.bytes)
+        .map_err(|(_, m)| (0, m))?
+        .iter()
+        .map(|b| b.value)
+        .collect();
+    let n = bytes.len();
+    match e.transport {
+        TransportName::Rtu => {
+            if n < 4 {
+                return Err((
+                    n - 1,
+                    format!(
+                        "an RTU frame has at least 4 bytes (address, function, CRC); this one has {n}"
+                    ),
+                ));
+            }
+            if let Err((computed, _)) = crc::check(&bytes) {
+                let want = computed.to_le_bytes();
+                // The first printed CRC byte that differs.
+                let at = if bytes[n - 2] != want[0] {
+                    n - 2
+                } else {
+                    n - 1
+                };
+                return Err((
+                    at,
+                    format!(
+                        "CRC: the frame ends in {}, the CRC-16 of the bytes before it is {} (low byte first)",
+                        hex_text(&bytes[n - 2..]),
+                        hex_text(&want)
+                    ),
+                ));
+            }
+            Ok(Frame {
+                slave: bytes[0],
+                pdu_start: 1,
+                pdu_end: n - 2,
+                bytes,
+            })
+        }
+        TransportName::Tcp => {
+            if n < 8 {
+                return Err((
+                    n - 1,
+                    format!(
+                        "a Modbus TCP frame has at least 8 bytes (MBAP header, function); this one has {n}"
+                    ),
+                ));
+            }
+            let protocol = u16::from_be_bytes([bytes[2], bytes[3]]);
+            if protocol != 0 {
+                return Err((
+                    2,
+                    format!("MBAP protocol id {protocol:04X}h: Modbus is 0000h"),
+                ));
+            }
+            let length = usize::from(u16::from_be_bytes([bytes[4], bytes[5]]));
+            if length != n - 6 {
+                return Err((
+                    4,
+                    format!(
+                        "MBAP length says {length} bytes follow it, the frame has {} after it",
+                        n - 6
+                    ),
+                ));
+            }
+            debug_assert!(tcp::Header::parse(&bytes).is_ok());
+            Ok(Frame {
+                slave: bytes[6],
+                pdu_start: 7,
+                pdu_end: n,
+                bytes,
+            })
+        }
+    }
+}
+
+/// What verifying a map's examples found.
+#[derive(Debug, Clone, Default)]
+pub struct Verified {
+    /// Errors: an example that contradicts the codec or the map without a `conflict` mark, or
+    /// a mark on an example that verifies.
+    pub errors: Vec<Diagnostic>,
+    /// The findings of examples whose contradiction the map records (`conflict:`).
+    pub known: Vec<Diagnostic>,
+    /// The examples verified with no finding.
+    pub clean: usize,
+}
+
+/// Verifies every example of `drive`; the findings are located at the byte concerned.
+pub fn verify(drive: &Drive) -> Verified {
+    let mut v = Verified::default();
+    for (i, (e, found)) in drive.examples.iter().zip(findings(drive)).enumerate() {
+        match (&e.conflict, found.is_empty()) {
+            (None, true) => v.clean += 1,
+            (None, false) => v.errors.extend(found),
+            (Some(_), false) => v.known.extend(found),
+            (Some(topic), true) => v.errors.push(drive.error(
+                &Path::root().key("examples").index(i).key("conflict"),
+                None,
+                format!(
+                    "example `{}` verifies against the codec and the map, but is marked as \
+                     contradicting them (conflict \"{topic}\")",
+                    e.id
+                ),
+            )),
+        }
+    }
+    v
+}
+
+/// The findings of each example of `drive`, in order, marked or not.
+pub fn findings(drive: &Drive) -> Vec<Vec<Diagnostic>> {
+    let settings = default_settings(drive);
+    let mut all = Vec::new();
+    for (i, e) in drive.examples.iter().enumerate() {
+        let path = Path::root().key("examples").index(i);
+        let Ok(offsets) = parse_bytes(&e.bytes) else {
+            all.push(Vec::new()); // the front end reports it
+            continue;
+        };
+        let bytes_loc = drive
+            .tree
+            .at(&path.key("bytes"))
+            .map(|n| n.loc.clone())
+            .unwrap_or_else(|| drive.locate(&path.key("bytes")));
+        let v = Verifier {
+            drive,
+            settings: &settings,
+            example: e,
+            offsets: &offsets,
+            bytes_loc,
+            path,
+        };
+        let mut out = Vec::new();
+        v.run(&mut out);
+        all.push(out);
+    }
+    all
+}
+
+struct Verifier<'a> {
+    drive: &'a Drive,
+    settings: &'a LiveSettings,
+    example: &'a Example,
+    offsets: &'a [Byte],
+    bytes_loc: Loc,
+    path: Path,
+}
+
+/// A function code in the manuals' notation.
+fn fc(f: u8) -> String {
+    format!("{f:02X}h")
+}
+
+impl Verifier<'_> {
+    fn at(&self, index: usize) -> Loc {
+        let b = self.offsets[index.min(self.offsets.len() - 1)];
+        locate_offset(&self.bytes_loc, b.offset)
+    }
+
+    fn error(&self, out: &mut Vec<Diagnostic>, index: usize, register: Option<&str>, msg: String) {
+        let byte = self.offsets[index.min(self.offsets.len() - 1)].value;
+        out.push(Diagnostic::new(
+            self.at(index),
+            register,
+            format!(
+                "example `{}`, byte {} ({byte:02X}): {msg}",
+                self.example.id,
+                index + 1
+            ),
+        ));
+    }
+
+    /// Whether an example of the map answers this request with an exception.
+    fn refused(&self) -> bool {
+        self.drive.examples.iter().any(|x| {
+            x.answers.as_deref() == Some(self.example.id.as_str())
+                && frame(x).is_ok_and(|f| f.bytes[f.pdu_start] & 0x80 != 0)
+                || x.answers.as_deref() == Some(self.example.id.as_str())
+                    && x.says.as_ref().is_some_and(|s| s.exception.is_some())
+        })
+    }
+
+    fn says_error(&self, out: &mut Vec<Diagnostic>, key: &str, msg: String) {
+        out.push(self.drive.error(
+            &self.path.key("says").key(key),
+            None,
+            format!("example `{}`: {msg}", self.example.id),
+        ));
+    }
+
+    fn run(&self, out: &mut Vec<Diagnostic>) {
+        let e = self.example;
+        let f = match frame(e) {
+            Ok(f) => f,
+            Err((index, msg)) => return self.error(out, index, None, msg),
+        };
+        let function = f.bytes[f.pdu_start];
+        let allowed = &self.drive.protocol.function_codes.codes;
+        if !allowed.contains(&(function & 0x7F)) {
+            let list: Vec<String> = allowed.iter().map(|&c| fc(c)).collect();
+            return self.error(
+                out,
+                f.pdu_start,
+                None,
+                format!(
+                    "function {} is not among the map's function codes ({})",
+                    fc(function & 0x7F),
+                    list.join(", ")
+                ),
+            );
+        }
+        match e.direction {
+            Direction::Request => self.request(&f, out),
+            Direction::Response => self.response(&f, out),
+        }
+    }
+
+    fn request(&self, f: &Frame, out: &mut Vec<Diagnostic>) {
+        let e = self.example;
+        let req = match pdu::decode_request(f.pdu()) {
+            Ok(r) => r,
+            Err(err) => {
+                return self.error(
+                    out,
+                    f.pdu_start,
+                    None,
+                    format!("the request does not decode: {err}"),
+                );
+            }
+        };
+        let says = e.says.clone().unwrap_or_default();
+        match (&says.read, &says.write) {
+            (Some(_), _) if !req.is_read() => self.says_error(
+                out,
+                "read",
+                format!("the frame is function {}, not a read", fc(req.function())),
+            ),
+            (_, Some(_))
+                if !matches!(
+                    req,
+                    Request::WriteSingle { .. } | Request::WriteMultiple { .. }
+                ) =>
+            {
+                self.says_error(
+                    out,
+                    "write",
+                    format!("the frame is function {}, not a write", fc(req.function())),
+                )
+            }
+            _ => {}
+        }
+        let Some(address) = req.address() else {
+            return;
+        };
+        if self.refused() {
+            // The manual prints it to show the drive refusing it: its address or value may be
+            // one the map refuses; the exception response is checked against it.
+            return;
+        }
+        let words: Vec<u16> = match req {
+            Request::WriteSingle { value, .. } => vec![value],
+            Request::WriteMultiple { values, .. } => values.iter().collect(),
+            _ => Vec::new(),
+        };
+        let table = match req {
+            Request::ReadInput { .. } => Some(Table::Input),
+            Request::ReadHolding { .. } => None,
+            _ => Some(Table::Holding),
+        };
+        self.registers(
+            f,
+            out,
+            address,
+            req.quantity(),
+            table,
+            f.pdu_start + 1,
+            &words,
+            f.pdu_start + if words.len() > 1 { 6 } else { 3 },
+            says.read.as_ref().or(says.write.as_ref()),
+            &says.values,
+        );
+    }
+
+    /// Checks the registers of a read or write: each address is a register of the map, the
+    /// first is the one `says` names, and each word (if any) is in range and decodes to the
+    /// stated value. `address_byte` and `data_byte` index the frame.
+    #[allow(clippy::too_many_arguments)]
+    fn registers(
+        &self,
+        f: &Frame,
+        out: &mut Vec<Diagnostic>,
+        pdu_address: u16,
+        quantity: usize,
+        table: Option<Table>,
+        address_byte: usize,
+        words: &[u16],
+        data_byte: usize,
+        named: Option<&String>,
+        values: &[f64],
+    ) {
+        let kind = kind_of(self.example);
+        let offsets = &self.drive.plan().profile.address_offsets;
+        let broadcast = f.slave == 0;
+        for k in 0..quantity {
+            let Some(pdu) = pdu_address.checked_add(k as u16) else {
+                break;
+            };
+            let byte = if words.is_empty() || k >= words.len() {
+                address_byte
+            } else {
+                data_byte + 2 * k
+            };
+            let Some(comm) = offsets.communication_address(pdu, kind) else {
+                self.error(
+                    out,
+                    address_byte,
+                    None,
+                    format!("address {pdu:04X}h is below the {kind:?} address offset"),
+                );
+                return;
+            };
+            let Some((r, word)) =
+                register_at(self.drive, self.settings, kind, comm, table, broadcast)
+            else {
+                self.error(
+                    out,
+                    if k == 0 { address_byte } else { byte },
+                    None,
+                    format!(
+                        "address {comm:04X}h{} is not a register of the map",
+                        if k == 0 {
+                            String::new()
+                        } else {
+                            format!(" (word {} of the frame)", k + 1)
+                        }
+                    ),
+                );
+                if k == 0 {
+                    return;
+                }
+                continue;
+            };
+            if k == 0 {
+                if let Some(name) = named {
+                    if r.def.id != *name {
+                        self.error(
+                            out,
+                            address_byte,
+                            Some(&r.def.id),
+                            format!(
+                                "address {comm:04X}h is `{}`, the example says `{name}`",
+                                r.def.id
+                            ),
+                        );
+                    }
+                }
+            }
+            let Some(&raw) = words.get(k) else { continue };
+            let plan = self.drive.register_plan(r);
+            if plan.info.width.count() != 1 || word != 0 {
+                continue; // a pair's words are checked as one value only through the typed API
+            }
+            let decoded = match codec::decode_written(self.drive, r, u32::from(raw), self.settings)
+            {
+                Ok(v) => v,
+                Err(err) => {
+                    self.error(
+                        out,
+                        byte,
+                        Some(&r.def.id),
+                        format!("{raw:04X}h does not decode: {err}"),
+                    );
+                    continue;
+                }
+            };
+            let Some(number) = decoded.as_f64() else {
+                continue;
+            };
+            // Words of a request are written; a response's are read (a monitor may read values
+            // no write may give).
+            let writing = self.example.direction == Direction::Request;
+            if writing && !r.writable() {
+                self.error(
+                    out,
+                    byte,
+                    Some(&r.def.id),
+                    format!("`{}` is read-only in the map", r.def.id),
+                );
+            }
+            if writing {
+                if let Err(err) = codec::encode(self.drive, r, number, self.settings) {
+                    self.error(
+                        out,
+                        byte,
+                        Some(&r.def.id),
+                        format!("{raw:04X}h = {number} is refused by the map: {err}"),
+                    );
+                }
+            }
+            if let Some(&stated) = values.get(k) {
+                let close = (number - stated).abs() <= 1e-9 * stated.abs().max(1.0);
+                if !close {
+                    self.error(
+                        out,
+                        byte,
+                        Some(&r.def.id),
+                        format!(
+                            "{raw:04X}h decodes to {number} by the map, the example says {stated}"
+                        ),
+                    );
+                }
+            }
+        }
+        if values.len() > quantity {
+            self.says_error(
+                out,
+                "values",
+                format!(
+                    "{} values stated for a frame of {quantity} register(s)",
+                    values.len()
+                ),
+            );
+        }
+    }
+
+    fn response(&self, f: &Frame, out: &mut Vec<Diagnostic>) {
+        let e = self.example;
+        let says = e.says.clone().unwrap_or_default();
+        let function = f.bytes[f.pdu_start];
+        let exception = function & 0x80 != 0;
+        if exception {
+            let Some(&code) = f.bytes.get(f.pdu_start + 1).filter(|_| f.pdu().len() == 2) else {
+                return self.error(
+                    out,
+                    f.pdu_end.saturating_sub(1),
+                    None,
+                    format!(
+                        "an exception response is the function and one code; this PDU has {} bytes",
+                        f.pdu().len()
+                    ),
+                );
+            };
+            let listed = &self.drive.protocol.exceptions;
+            if !listed.is_empty() && !listed.iter().any(|x| x.code == code) {
+                self.error(
+                    out,
+                    f.pdu_start + 1,
+                    None,
+                    format!("exception code {code:02X}h is not among the map's exception codes"),
+                );
+            }
+            match says.exception {
+                Some(stated) if stated != code => self.error(
+                    out,
+                    f.pdu_start + 1,
+                    None,
+                    format!("exception code {code:02X}h, the example says {stated:02X}h"),
+                ),
+                _ => {}
+            }
+        } else if let Some(stated) = says.exception {
+            self.error(
+                out,
+                f.pdu_start,
+                None,
+                format!("function {} is not an exception response; the example says exception {stated:02X}h", fc(function)),
+            );
+        }
+        let Some(req_id) = &e.answers else { return };
+        let Some(req_ex) = self.drive.examples.iter().find(|x| x.id == *req_id) else {
+            return; // the front end reports it
+        };
+        let Ok(rf) = frame(req_ex) else { return };
+        let Ok(req) = pdu::decode_request(rf.pdu()) else {
+            return;
+        };
+        if rf.slave != f.slave {
+            let at = if e.transport == TransportName::Tcp {
+                6
+            } else {
+                0
+            };
+            self.error(
+                out,
+                at,
+                None,
+                format!(
+                    "slave {:02X}h answers `{req_id}`, which is addressed to slave {:02X}h",
+                    f.slave, rf.slave
+                ),
+            );
+        }
+        if e.transport == TransportName::Tcp && rf.bytes[..2] != f.bytes[..2] {
+            self.error(
+                out,
+                0,
+                None,
+                format!(
+                    "transaction {} does not echo `{req_id}`'s {}",
+                    hex_text(&f.bytes[..2]),
+                    hex_text(&rf.bytes[..2])
+                ),
+            );
+        }
+        let response = match pdu::decode_response(&req, f.pdu()) {
+            Ok(r) => r,
+            Err(err) => {
+                let at = first_difference(&req, rf.pdu(), f.pdu())
+                    .map_or(f.pdu_start, |d| f.pdu_start + d);
+                return self.error(out, at, None, format!("does not answer `{req_id}`: {err}"));
+            }
+        };
+        if let (Response::Registers(words), Some(address)) = (response, req.address()) {
+            let words: Vec<u16> = words.iter().collect();
+            let table = match req {
+                Request::ReadInput { .. } => Some(Table::Input),
+                _ => None,
+            };
+            self.registers(
+                f,
+                out,
+                address,
+                words.len(),
+                table,
+                f.pdu_start,
+                &words,
+                f.pdu_start + 2,
+                says.read.as_ref(),
+                &says.values,
+            );
+        }
+    }
+}
+
+/// Where an echo differs: the index in the response PDU of the first byte of an echoing
+/// response (06h, 08h, 10h) that differs from the request's.
+fn first_difference(req: &Request<'_>, request_pdu: &[u8], response_pdu: &[u8]) -> Option<usize> {
+    if req.is_read() {
+        return Some(1); // the byte count
+    }
+    let echo = request_pdu.len().min(5);
+    (0..echo.min(response_pdu.len()))
+        .find(|&i| request_pdu[i] != response_pdu[i])
+        .or(Some(response_pdu.len().min(echo)))
+}
