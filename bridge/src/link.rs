@@ -22,6 +22,7 @@ use drivemap_map::ir::Register;
 use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::gate;
+use drivemap_runtime::plan::RegisterPlan;
 use drivemap_runtime::plan::{Conversion, Dependency};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
@@ -298,14 +299,19 @@ impl Polled {
     fn make_plan(&self, line: SerialConfig) -> Result<Plan, String> {
         let drive = self.spec.drive;
         let kind = self.kind;
-        let infos: Vec<RegisterInfo> = drive
+        // Plans, not bare infos: the planner respects each register's `function_codes`.
+        let infos: Vec<RegisterPlan> = drive
             .registers
             .iter()
             .filter(|r| drive.register_plan(r).transports.contains(kind))
             .filter_map(|r| {
-                Some(RegisterInfo {
-                    address: self.address(r).ok()?,
-                    ..drive.register_plan(r).info
+                let plan = drive.register_plan(r);
+                Some(RegisterPlan {
+                    info: RegisterInfo {
+                        address: self.address(r).ok()?,
+                        ..plan.info
+                    },
+                    ..*plan
                 })
             })
             .collect();

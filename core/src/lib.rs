@@ -14,6 +14,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod functions;
 pub mod indexed;
 pub mod kind;
 pub mod plan;
@@ -24,6 +25,7 @@ pub mod rule;
 pub mod scale;
 pub mod width;
 
+pub use functions::Functions;
 pub use kind::ConversionKind;
 pub use plan::{RegisterPlan, SettingsView, Value};
 pub use profile::Profile;

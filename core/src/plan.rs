@@ -8,6 +8,7 @@
 //!
 //! Where a register's scale is decided: [`Conversion`], built in `map/src/lower.rs`.
 
+use crate::functions::Functions;
 use crate::profile::TransportKind;
 use crate::register::{RegisterInfo, WriteRestriction};
 use crate::rule::{Broadcast, Transports, WriteRule};
@@ -45,6 +46,9 @@ pub struct RegisterPlan {
     /// at most the maximum output frequency n011), checked by [`RegisterPlan::encode_number`]
     /// on the value given, with that quantity's value from the settings.
     pub limit: Option<RelativeLimit>,
+    /// The Modbus functions it accepts, where the map restricts them below the drive's list
+    /// ([`Functions::ANY`] otherwise).
+    pub functions: Functions,
 }
 
 /// An upper limit through another quantity: a value at most `percent` % of the quantity in
@@ -379,10 +383,16 @@ impl RegisterPlan {
             repeat_needs_change: None,
             read_values: &[],
             limit: None,
+            functions: Functions::ANY,
         }
     }
 
-    /// The plan of a register whose values are bounded through another quantity.
+    /// The plan of a register that accepts only `functions` (its write rule too).
+    pub const fn functions(self, functions: Functions) -> RegisterPlan {
+        RegisterPlan { functions, ..self }
+    }
+
+    /// The plan of a register with an upper limit through another quantity.
     pub const fn limited(self, limit: RelativeLimit) -> RegisterPlan {
         RegisterPlan {
             limit: Some(limit),
@@ -527,6 +537,7 @@ impl RegisterPlan {
                 _ => 0,
             },
             width: self.info.width,
+            functions: self.functions,
         }
     }
 

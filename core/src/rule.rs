@@ -1,6 +1,7 @@
 //! What the map allows when writing one register: the data of the write gate. The gate itself
 //! (`drivemap_runtime::gate`) checks requests against it.
 
+use crate::functions::Functions;
 use crate::profile::TransportKind;
 use crate::register::Access;
 use crate::scale::RawRange;
@@ -80,6 +81,10 @@ pub struct WriteRule {
     pub reserved: u16,
     /// One register, or a 32-bit pair that is only written whole, both words in one request.
     pub width: Width,
+    /// The Modbus functions the register accepts ([`Functions::ANY`]: every function of the
+    /// drive): the gate refuses a write with another, and a single word goes out with 06h or
+    /// 10h as the register allows.
+    pub functions: Functions,
 }
 
 impl WriteRule {
@@ -96,6 +101,7 @@ impl WriteRule {
             raw: RawRange { min, max },
             reserved: 0,
             width: Width::Word,
+            functions: Functions::ANY,
         }
     }
 
@@ -125,6 +131,11 @@ impl WriteRule {
     /// The rule with reserved bits `reserved`, which must be written as 0.
     pub const fn reserved(self, reserved: u16) -> WriteRule {
         WriteRule { reserved, ..self }
+    }
+
+    /// The rule for a register that accepts only `functions`.
+    pub const fn functions(self, functions: Functions) -> WriteRule {
+        WriteRule { functions, ..self }
     }
 
     /// The rule for a 32-bit pair whose words go in `order`.

@@ -13,6 +13,7 @@ use drivemap_map::ir::Register;
 use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::plan::Dependency;
+use drivemap_runtime::plan::RegisterPlan;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError, Width};
@@ -740,16 +741,21 @@ impl<'d> Session<'d> {
     /// `max_read` per request. Registers this link cannot read get their reason instead.
     pub fn plan(&self, regs: &[&Register]) -> Result<Polling, SessionError> {
         let drive = self.drive;
-        let infos: Vec<RegisterInfo> = drive
+        let infos: Vec<RegisterPlan> = drive
             .registers
             .iter()
             .filter(|r| on_transport(self.drive, r, self.kind))
             // The plan's own row, at the address this link and these settings put it (a
-            // register whose address is not known is not bridged over).
+            // register whose address is not known is not bridged over), with the functions
+            // it accepts (`function_codes`), which the planner respects.
             .filter_map(|r| {
-                Some(RegisterInfo {
-                    address: self.address(r).ok()?,
-                    ..drive.register_plan(r).info
+                let plan = drive.register_plan(r);
+                Some(RegisterPlan {
+                    info: RegisterInfo {
+                        address: self.address(r).ok()?,
+                        ..plan.info
+                    },
+                    ..*plan
                 })
             })
             .collect();

@@ -31,6 +31,22 @@ pub fn repeat_needs_change(rule: &crate::model::RepeatNeedsChange) -> String {
     )
 }
 
+/// The functions a register accepts where the map restricts them: `accepts only 03h, 06h;
+/// another function is answered with exception 01h (illegal function) (`m.txt:12`)`.
+pub fn function_codes(f: &crate::model::RegisterFunctions) -> String {
+    let codes: Vec<String> = f.codes.iter().map(|c| format!("{c:02X}h")).collect();
+    let refusal = match f.refusal() {
+        0x02 => "02h (illegal data address)".to_string(),
+        0x01 => "01h (illegal function)".to_string(),
+        other => format!("{other:02X}h"),
+    };
+    format!(
+        "accepts only {}; another function is answered with exception {refusal} (`{}`)",
+        codes.join(", "),
+        f.source
+    )
+}
+
 /// What a word read means when it differs from what a write means: `0 Unlock, 1 Lock`.
 pub fn read_values(values: &[crate::model::EnumValue]) -> String {
     values

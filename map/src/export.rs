@@ -152,6 +152,11 @@ fn register(drive: &Drive, r: &Register) -> Value {
             "between_raw": drive.register_plan(r).repeat_needs_change.map(|x| x.between),
             "source": rule.source,
         })),
+        "function_codes": r.function_codes.as_ref().map(|(f, _)| json!({
+            "codes": f.codes,
+            "refused_with": f.refusal(),
+            "source": f.source,
+        })),
         "max_relative": d.max_relative.as_ref().map(|l| json!({
             "relative_to": match &l.relative_to {
                 model::Reference::Register(name) => json!(name),

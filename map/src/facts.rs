@@ -46,6 +46,8 @@ pub enum FactKey {
     WriteRestriction,
     /// A drive that executes a written value only when it changed.
     RepeatNeedsChange,
+    /// The functions the register accepts, where the map restricts them (`function_codes`).
+    FunctionCodes,
     /// What a read means when it differs from a write: `0 Unlock, 1 Lock`.
     ReadValues,
     /// An alternative address (`0201h`), cited; its condition in [`Fact::when`].
@@ -69,6 +71,7 @@ impl FactKey {
             FactKey::RelativeLimit => "limit",
             FactKey::WriteRestriction => "write restriction",
             FactKey::RepeatNeedsChange => "repeat needs change",
+            FactKey::FunctionCodes => "function codes",
             FactKey::ReadValues => "read meaning",
             FactKey::AlternativeAddress => "alternative address",
             FactKey::DisplaySteps => "display steps",
@@ -278,6 +281,13 @@ pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
             FactKey::RepeatNeedsChange,
             describe::repeat_needs_change(rule),
             Some(&rule.source),
+        ));
+    }
+    if let Some((f, _)) = &r.function_codes {
+        rows.push(Fact::new(
+            FactKey::FunctionCodes,
+            describe::function_codes(f),
+            Some(&f.source),
         ));
     }
     if !d.read_values.is_empty() {

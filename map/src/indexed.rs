@@ -156,6 +156,8 @@ pub fn lower(drive: &Drive, registers: &'static [RegisterPlan]) -> &'static [Ind
                     raw: range,
                     reserved: 0,
                     width: Width::Word,
+                    // Written to the value register: its functions.
+                    functions: value_plan.functions,
                 },
                 source: text(&e.source),
             });

@@ -81,6 +81,8 @@ pub struct Register {
     pub path: Path,
     /// The register's `repeat_needs_change`, else its group's, with where it is written.
     pub repeat_needs_change: Option<(model::RepeatNeedsChange, Path)>,
+    /// The register's `function_codes`, else its group's, with where it is written.
+    pub function_codes: Option<(model::RegisterFunctions, Path)>,
 }
 
 /// What a register's word means.
@@ -755,6 +757,11 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                     repeat_needs_change: match (&def.repeat_needs_change, &g.repeat_needs_change) {
                         (Some(x), _) => Some((x.clone(), path.key("repeat_needs_change"))),
                         (None, Some(x)) => Some((x.clone(), gpath.key("repeat_needs_change"))),
+                        (None, None) => None,
+                    },
+                    function_codes: match (&def.function_codes, &g.function_codes) {
+                        (Some(x), _) => Some((x.clone(), path.key("function_codes"))),
+                        (None, Some(x)) => Some((x.clone(), gpath.key("function_codes"))),
                         (None, None) => None,
                     },
                     path: path.clone(),

@@ -12,6 +12,7 @@
 //! leaks them: a process lowers each map once (a build script, a tool loading its maps), so the
 //! memory is bounded by the maps it was given.
 
+use drivemap_core::functions::Functions;
 use drivemap_core::plan::{
     Case, CaseScale, Condition, Conversion, Field, Label, Move, Ranges, RegisterPlan, Relative,
     RelativeLimit, RepeatNeedsChange, Setting, VariantOption,
@@ -577,7 +578,17 @@ impl Lowering<'_> {
                 percent: l.percent,
                 source: text(&l.source),
             }),
+            functions: functions(r),
         }
+    }
+}
+
+/// The functions a register accepts: its (or its group's) validated `function_codes`, else
+/// every function of the drive.
+fn functions(r: &Register) -> Functions {
+    match &r.function_codes {
+        None => Functions::ANY,
+        Some((f, _)) => Functions::only(leak(f.codes.clone()), f.refusal(), text(&f.source)),
     }
 }
 

@@ -578,9 +578,38 @@ pub struct Group {
     /// differs from the previous write.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repeat_needs_change: Option<RepeatNeedsChange>,
+    /// Default of the group's registers: the Modbus functions they accept, where the manual
+    /// restricts them below `protocol.function_codes`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub function_codes: Option<RegisterFunctions>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
     pub registers: Vec<Register>,
+}
+
+/// The Modbus functions a register (or every register of a group) accepts, where the manual
+/// restricts them below the drive's `protocol.function_codes` ("function 10h is accepted on
+/// registers 0001h-0004h only"): `{codes: [0x03, 0x06], source: "file:line"}`, with
+/// `refused_with: 0x02` when the drive answers another function with illegal data address
+/// instead of illegal function (01h, the default).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegisterFunctions {
+    /// The function codes accepted: a subset of `protocol.function_codes` among 03h, 04h, 06h
+    /// and 10h.
+    pub codes: Vec<u8>,
+    /// The exception code the drive answers another function with (01h or 02h; absent: 01h).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refused_with: Option<u8>,
+    /// `file:line` of the manual's statement.
+    pub source: String,
+}
+
+impl RegisterFunctions {
+    /// The exception code another function is answered with.
+    pub fn refusal(&self) -> u8 {
+        self.refused_with.unwrap_or(0x01)
+    }
 }
 
 /// The drive executes a written value only when it differs from the previous write ("if you
@@ -689,6 +718,9 @@ pub struct Register {
     /// register ([`crate::indexed`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub indexed: Option<crate::indexed::Indexed>,
+    /// The Modbus functions the register accepts (overrides its group's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub function_codes: Option<RegisterFunctions>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub write_restriction: Option<WriteRestriction>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -213,6 +213,7 @@ pub fn other_citations(drive: &Drive) -> Vec<Other> {
     conflicts(drive, &mut out);
     gaps(drive, &mut out);
     limits(drive, &mut out);
+    functions(drive, &mut out);
     out
 }
 
@@ -712,6 +713,36 @@ fn limits(drive: &Drive, out: &mut Vec<Other>) {
             format!("the limit of {} through {of}", r.id()),
             "limit",
             &Some(limit.source.clone()),
+            &None,
+            rule,
+        );
+    }
+}
+
+/// A register's (or its group's) `function_codes`: the line mentions one of the listed codes
+/// (`10H`, `0x10`), or "function code(s)". A group's list is read once.
+fn functions(drive: &Drive, out: &mut Vec<Other>) {
+    let mut seen = std::collections::HashSet::new();
+    for r in &drive.registers {
+        let Some((f, path)) = &r.function_codes else {
+            continue;
+        };
+        if !seen.insert(path.clone()) {
+            continue;
+        }
+        let mut rule = Rule::any()
+            .name("function code")
+            .name("function codes")
+            .words(&["function"]);
+        for c in &f.codes {
+            rule = rule.code(u16::from(*c));
+        }
+        push(
+            out,
+            path.key("source"),
+            format!("the function codes of {}", r.id()),
+            "functions",
+            &Some(f.source.clone()),
             &None,
             rule,
         );

@@ -554,6 +554,10 @@ fn access_cell(drive: &Drive, r: &Register) -> String {
             describe::num(rule.between)
         ));
     }
+    if let Some((f, _)) = &r.function_codes {
+        let codes: Vec<String> = f.codes.iter().map(|c| format!("{c:02X}h")).collect();
+        parts.push(format!("functions {} only", codes.join("/")));
+    }
     join_cells(&parts)
 }
 
@@ -767,6 +771,15 @@ fn details(out: &mut String, drive: &Drive, r: &Register) {
             more,
             "Repeat needs a change: {}. `drivemap write` and `Client::write` do so.\n",
             describe::repeat_needs_change(rule)
+        );
+    }
+    if let Some((f, _)) = &r.function_codes {
+        let _ = writeln!(
+            more,
+            "Function codes: {}. The client's write gate refuses any other function here, a \
+             single word goes out with 06h or 10h as allowed, and reads are not merged across it \
+             with a function it refuses.\n",
+            describe::function_codes(f)
         );
     }
     if !more.is_empty() {

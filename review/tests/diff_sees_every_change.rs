@@ -6,7 +6,7 @@
 //! map says must show in the diff, in both directions.
 //!
 //! "What the map says" is the expanded map (the IR) with each register's effective access,
-//! table, write restriction, transports and repeat rule: deleting `access: rw` from a register
+//! table, write restriction, transports, repeat rule and function codes: deleting `access: rw` from a register
 //! whose group gives `rw`, or a variant's `min` equal to the base's, says nothing new, and is
 //! counted apart as a no-op.
 //!
@@ -37,6 +37,7 @@ fn maps() -> Vec<PathBuf> {
         "tests/fixtures/acme-vf1",
         "tests/fixtures/tarrow-tm44",
         "tests/fixtures/orbis-q5",
+        "tests/fixtures/halvard-hx2",
         "map/tests/fixtures",
         "map/tests/fixtures/variants",
         "cli/tests/fixtures",
@@ -74,6 +75,7 @@ fn meaning(d: &Drive) -> String {
             def.write_restriction = None;
             def.transports = None;
             def.repeat_needs_change = None;
+            def.function_codes = None;
             serde_json::json!([
                 def,
                 r.access,
@@ -83,6 +85,7 @@ fn meaning(d: &Drive) -> String {
                 r.broadcast,
                 d.groups[r.group].id,
                 r.repeat_needs_change.as_ref().map(|x| &x.0),
+                r.function_codes.as_ref().map(|x| &x.0),
             ])
         })
         .collect();

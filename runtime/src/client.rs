@@ -483,6 +483,9 @@ impl Core {
                 }
                 _ => {}
             }
+            if !request.is_read() {
+                gate::check_function(p, self.kind, target, f, a, quantity)?;
+            }
         }
         let pdu_address = match address {
             None => None,
@@ -693,9 +696,16 @@ impl Core {
         }
     }
 
-    pub(crate) fn single_write<'a>(&self, address: u16, value: &'a [u16; 1]) -> Request<'a> {
-        if self.profile.supports(function::WRITE_SINGLE)
-            || !self.profile.supports(function::WRITE_MULTIPLE)
+    /// One word at `address` as a request: 06h, or 10h where the drive lacks 06h or the
+    /// register there accepts only 10h ([`gate::single_write_function`]).
+    pub(crate) fn single_write<'a>(
+        &self,
+        target: WriteTarget<'_>,
+        address: u16,
+        value: &'a [u16; 1],
+    ) -> Request<'a> {
+        if gate::single_write_function(self.profile, self.kind, target, address)
+            == function::WRITE_SINGLE
         {
             Request::WriteSingle {
                 address,
@@ -921,7 +931,8 @@ macro_rules! client_methods {
         ) $($aw)*
     }
 
-    /// Writes one register by communication address (06h, or 10h where the drive lacks 06h).
+    /// Writes one register by communication address (06h, or 10h where the drive lacks 06h or
+    /// the register there accepts only 10h: its map's `function_codes`).
     /// Slave 0 broadcasts. The address must hold a writable register of the profile's write
     /// table that allows `value` on this link ([`gate`](crate::gate)).
     pub $($asy)* fn write_register(&mut self, slave: u8, address: u16, value: u16) -> Result<(), Error> {
@@ -962,12 +973,14 @@ macro_rules! client_methods {
         value: u16,
     ) -> Result<(), Error> {
         let value = [value];
-        let request = self.core.single_write(address, &value);
+        let request = self.core.single_write(target, address, &value);
         let retries = self.core.options.retries;
         self.transact(slave, request, &mut [], Purpose::Write(target), retries) $($aw)*
     }
 
-    /// Writes consecutive registers (10h). Slave 0 broadcasts.
+    /// Writes consecutive registers (10h). Slave 0 broadcasts. Refused, not split, when a
+    /// register it covers does not accept 10h ([`Refusal::FunctionNotAccepted`](crate::Refusal::FunctionNotAccepted); see
+    /// [`gate`](crate::gate)).
     pub $($asy)* fn write_registers(
         &mut self,
         slave: u8,
@@ -1168,7 +1181,7 @@ macro_rules! client_methods {
         };
         for &(address, value) in command.writes {
             let value = [value];
-            let request = self.core.single_write(address, &value);
+            let request = self.core.single_write(WriteTarget::Addresses, address, &value);
             self.transact(slave, request, &mut [], Purpose::Command, retries) $($aw)*?;
         }
         Ok(())

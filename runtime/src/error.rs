@@ -210,6 +210,20 @@ pub enum Refusal {
     /// Bits outside a bit-field register's fields.
     #[error("{register}: bits {bits:04X}h are reserved")]
     ReservedBits { register: &'static str, bits: u16 },
+    /// A function the register at `address` does not accept (its map's `function_codes`): the
+    /// drive would answer it with an exception.
+    #[error(
+        "{register} at {address:04X}h accepts only {} (`{citation}`): a {function:02X}h request there would be refused by the drive; write each register with a function it accepts",
+        function_list(accepted)
+    )]
+    FunctionNotAccepted {
+        register: &'static str,
+        address: u16,
+        function: u8,
+        accepted: &'static [u8],
+        /// `file:line` of the manual's statement.
+        citation: &'static str,
+    },
     /// A write to a register the manual makes read-only.
     #[error("{register} is read-only")]
     ReadOnly { register: &'static str },
@@ -364,6 +378,15 @@ pub enum Error {
         /// What was skipped.
         discarded: Discarded,
     },
+}
+
+/// `03h, 06h`.
+fn function_list(codes: &[u8]) -> String {
+    codes
+        .iter()
+        .map(|c| format!("{c:02X}h"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 impl Error {

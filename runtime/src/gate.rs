@@ -23,6 +23,17 @@
 //! - a word outside every range the map gives the register, or with reserved bits set
 //!   ([`Refusal::RawOutOfRange`], [`Refusal::ReservedBits`]).
 //!
+//! - a function the register does not accept, where the map restricts its functions
+//!   (`function_codes`: [`Refusal::FunctionNotAccepted`], checked by [`check_function`] on
+//!   every address a request covers).
+//!
+//! Function codes per register: a single word goes out with 06h unless its register refuses
+//! 06h and accepts 10h ([`single_write_function`]). A multi-register write (10h) that covers a
+//! register refusing 10h is **refused, not split**: split requests are no longer one write (the
+//! drive would hold part of the new values between them, and a failure part-way leaves a
+//! half-written block), so the caller decides, writing each register on its own
+//! (`write_register` picks the function each one accepts).
+//!
 //! The raw range of a rule is the envelope of the register's ranges over every model variant
 //! and every case of a selected scale. The exact range for the settings in force is checked when
 //! a value is encoded ([`Writable::encode`](crate::Writable::encode), or the run-time codec), so
@@ -208,4 +219,82 @@ fn check_rule(
         });
     }
     Ok(rule.width.count())
+}
+
+/// The rules of registers that cover `address` for this target on `kind`.
+fn covering<'p>(
+    profile: &'p Profile,
+    kind: TransportKind,
+    target: WriteTarget<'p>,
+    address: u16,
+) -> impl Iterator<Item = &'p WriteRule> {
+    let rules: &'p [WriteRule] = match target {
+        WriteTarget::Rule(rule) => core::slice::from_ref(rule),
+        WriteTarget::Addresses => profile.writes,
+    };
+    rules
+        .iter()
+        .filter(move |r| r.word_index(address).is_some() && r.transports.contains(kind))
+}
+
+/// Whether the register at `address` accepts `function`: true where no rule covers it or one
+/// that covers it accepts the function (a register that moves may have several).
+pub fn accepts(
+    profile: &Profile,
+    kind: TransportKind,
+    target: WriteTarget<'_>,
+    address: u16,
+    function: u8,
+) -> bool {
+    let mut rules = covering(profile, kind, target, address).peekable();
+    rules.peek().is_none() || rules.any(|r| r.functions.allows(function))
+}
+
+/// The function one word written at `address` goes out with: 06h, unless the drive lacks it or
+/// the register there refuses it while accepting 10h (one drive takes 10h only on its first
+/// registers, another writes some registers with 10h only).
+pub fn single_write_function(
+    profile: &Profile,
+    kind: TransportKind,
+    target: WriteTarget<'_>,
+    address: u16,
+) -> u8 {
+    use crate::pdu::function::{WRITE_MULTIPLE, WRITE_SINGLE};
+    let usable = |f| profile.supports(f) && accepts(profile, kind, target, address, f);
+    if usable(WRITE_SINGLE) || !usable(WRITE_MULTIPLE) {
+        WRITE_SINGLE
+    } else {
+        WRITE_MULTIPLE
+    }
+}
+
+/// Refuses a write with `function` over `quantity` registers from `address` when a register
+/// it covers does not accept that function ([`Refusal::FunctionNotAccepted`]). Nothing is
+/// split: see the module documentation.
+pub fn check_function(
+    profile: &Profile,
+    kind: TransportKind,
+    target: WriteTarget<'_>,
+    function: u8,
+    address: u16,
+    quantity: usize,
+) -> Result<(), Refusal> {
+    for i in 0..quantity {
+        let Some(at) = u16::try_from(usize::from(address) + i).ok() else {
+            break;
+        };
+        if accepts(profile, kind, target, at, function) {
+            continue;
+        }
+        if let Some(rule) = covering(profile, kind, target, at).next() {
+            return Err(Refusal::FunctionNotAccepted {
+                register: rule.register,
+                address: at,
+                function,
+                accepted: rule.functions.codes,
+                citation: rule.functions.source,
+            });
+        }
+    }
+    Ok(())
 }

@@ -69,6 +69,7 @@ pub mod vfd;
 #[cfg(feature = "std")]
 pub use client::{Client, ClientOptions, Reconnect};
 pub use drivemap_core as core;
+pub use drivemap_core::functions::{self, Functions};
 pub use drivemap_core::plan;
 pub use drivemap_core::roles::{self, Role, Roles};
 pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};

@@ -122,6 +122,7 @@ pub fn kinds_verified(checks: &[review::CitationCheck]) -> String {
         ("conflict", "conflicts"),
         ("gap", "gaps"),
         ("limit", "limits"),
+        ("functions", "function codes"),
     ] {
         let of: Vec<&review::CitationCheck> = checks
             .iter()

@@ -12,6 +12,7 @@ use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::Drive;
 use drivemap_map::ir::Register;
 use drivemap_runtime::bus_time::BusModel;
+use drivemap_runtime::plan::RegisterPlan;
 use drivemap_runtime::plan::{Conversion, Field, Label, Scale};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
@@ -322,15 +323,19 @@ impl<'d> Points<'d> {
 
         // The planner's reads over the registers this link can read at the addresses these
         // settings put them (a register whose address is not known is not bridged over).
-        let infos: Vec<RegisterInfo> = drive
+        // Plans, not bare infos: the planner respects each register's `function_codes`.
+        let infos: Vec<RegisterPlan> = drive
             .registers
             .iter()
             .filter(|r| on_transport(drive, r, kind))
             .filter_map(|r| {
                 let plan = drive.register_plan(r);
-                Some(RegisterInfo {
-                    address: plan.locate(&view, kind).ok()?,
-                    ..plan.info
+                Some(RegisterPlan {
+                    info: RegisterInfo {
+                        address: plan.locate(&view, kind).ok()?,
+                        ..plan.info
+                    },
+                    ..*plan
                 })
             })
             .collect();

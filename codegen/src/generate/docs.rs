@@ -141,6 +141,13 @@ pub fn register(drive: &Drive, r: &Register) -> String {
                     row.value
                 )
             }
+            FactKey::FunctionCodes => {
+                s += &format!(
+                    "\nFunction codes: {}. The write gate refuses any other function on this \
+                     register.\n",
+                    row.value
+                )
+            }
             FactKey::ReadValues => {
                 s += &format!(
                     "\nRead and written with different meanings: a read gives the read enumeration ({}); \

@@ -76,6 +76,7 @@ pub fn module(plan: &DrivePlan) -> String {
             &[
                 "Access",
                 "Broadcast",
+                "Functions",
                 "RegisterInfo",
                 "RegisterPlan",
                 "Table",
@@ -409,6 +410,16 @@ pub fn row(r: &RegisterPlan) -> String {
             ".repeat_needs_change(RepeatNeedsChange {{ between: {}, source: {} }})",
             rule.between,
             string(rule.source)
+        );
+    }
+    if r.functions.restricted() {
+        let f = &r.functions;
+        let _ = write!(
+            s,
+            ".functions(Functions::only({}, {:#04x}, {}))",
+            list(f.codes, |c| format!("{c:#04x}")),
+            f.refused_with,
+            string(f.source)
         );
     }
     if !r.read_values.is_empty() {

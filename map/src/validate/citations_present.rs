@@ -392,6 +392,9 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
         if let Some((rule, path)) = &r.repeat_needs_change {
             cite(drive, ctx, out, &rule.source, path.key("source"), rid);
         }
+        if let Some((f, path)) = &r.function_codes {
+            cite(drive, ctx, out, &f.source, path.key("source"), rid);
+        }
         if let Some(limit) = &r.def.max_relative {
             cite(
                 drive,

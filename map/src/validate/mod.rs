@@ -16,6 +16,7 @@ mod citations_present;
 mod conflicts_recorded;
 mod enum_codes_fit;
 mod examples_valid;
+mod function_codes_valid;
 mod identifiers_unique;
 mod identifiers_valid;
 mod indexed_valid;
@@ -84,6 +85,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     protocol_valid::check(drive, &mut out);
     roles_valid::check(drive, &mut out);
     repeat_needs_change_valid::check(drive, &mut out);
+    function_codes_valid::check(drive, &mut out);
     relative_limits_valid::check(drive, &mut out);
     read_values_valid::check(drive, &mut out);
     numbers_finite::check(drive, &mut out);

@@ -131,6 +131,8 @@ pub enum ChangeKind {
     WriteRestrictionRelaxed,
     /// `repeat_needs_change` added, removed, or another value written in between.
     RepeatNeedsChangeChanged,
+    /// `function_codes` (the functions the register accepts) added, removed or changed.
+    FunctionCodesChanged,
     /// `max_relative` (a limit through another quantity) added, removed or changed.
     RelativeLimitChanged,
     /// `read_values` (what a read means beside the write form) added, removed or changed.
@@ -231,6 +233,7 @@ impl ChangeKind {
         ChangeKind::WriteRestrictionTightened,
         ChangeKind::WriteRestrictionRelaxed,
         ChangeKind::RepeatNeedsChangeChanged,
+        ChangeKind::FunctionCodesChanged,
         ChangeKind::RelativeLimitChanged,
         ChangeKind::ReadMeaningChanged,
         ChangeKind::IndexedChanged,
@@ -309,6 +312,7 @@ impl ChangeKind {
             WriteRestrictionTightened => "write restriction tightened",
             WriteRestrictionRelaxed => "write restriction relaxed",
             RepeatNeedsChangeChanged => "repeat-needs-change rule changed",
+            FunctionCodesChanged => "accepted function codes changed",
             RelativeLimitChanged => "limit through another quantity changed",
             ReadMeaningChanged => "read meaning changed",
             IndexedChanged => "indexed access changed",
@@ -425,6 +429,10 @@ pub fn classify(kind: ChangeKind) -> (Severity, &'static str) {
         RelativeLimitChanged => (
             B,
             "values that were written may now be refused, or need another quantity read first",
+        ),
+        FunctionCodesChanged => (
+            B,
+            "a write may go out with another function, be refused, or a read be planned apart",
         ),
         RepeatNeedsChangeChanged => (
             B,

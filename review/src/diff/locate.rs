@@ -26,6 +26,7 @@ fn register_key(kind: ChangeKind) -> Option<&'static str> {
         WriteRestrictionTightened | WriteRestrictionRelaxed => "write_restriction",
         TransportsNarrowed | TransportsWidened => "transports",
         RepeatNeedsChangeChanged => "repeat_needs_change",
+        FunctionCodesChanged => "function_codes",
         RelativeLimitChanged => "max_relative",
         ReadMeaningChanged => "read_values",
         IndexedChanged => "indexed",

@@ -155,6 +155,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
         read_values: _,          // ReadMeaningChanged, enum_codes()
         repeat_needs_change: _,  // on the IR register (with the group's)
         indexed: _,              // IndexedChanged, CitationChanged (indexed.rs)
+        function_codes: _,       // on the IR register (with the group's)
         write_restriction: _,    // on the plan
         transports: _,           // on the plan
         display_steps: _,        // documentation()
@@ -175,6 +176,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
         group: _,               // GroupChanged
         path: _,                // where it is written
         repeat_needs_change: _, // RepeatNeedsChangeChanged, citations()
+        function_codes: _,      // FunctionCodesChanged, citations()
     } = n;
     let subject = describe::register(n);
     let order = u32::from(n.def.address) + 1;
@@ -340,6 +342,26 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
     }
     if let Some((kind, x, y)) = super::indexed::change(a.indexed.as_ref(), b.indexed.as_ref()) {
         push(c, kind, "indexed access", x, y);
+    }
+    let functions = |x: &Register| {
+        x.function_codes
+            .as_ref()
+            .map(|(f, _)| describe::function_codes(f))
+    };
+    let (fa, fb) = (functions(r), functions(n));
+    let codes = |x: &Register| {
+        x.function_codes
+            .as_ref()
+            .map(|(f, _)| (f.codes.clone(), f.refusal()))
+    };
+    if codes(r) != codes(n) {
+        push(
+            c,
+            ChangeKind::FunctionCodesChanged,
+            "function codes",
+            Some(fa.unwrap_or_else(|| "every function of the drive".into())),
+            Some(fb.unwrap_or_else(|| "every function of the drive".into())),
+        );
     }
     let limit = |d: &Drive, x: &Register| {
         x.def
@@ -835,6 +857,24 @@ fn citations(c: &mut Collector, r: &Register, n: &Register, subject: &str, order
                 order,
             );
         }
+    }
+    let functions = |x: &Register| {
+        x.function_codes
+            .as_ref()
+            .map(|(f, _)| ((f.codes.clone(), f.refusal()), f.source.clone()))
+    };
+    if let (Some((x, xs)), Some((y, ys))) = (functions(r), functions(n))
+        && x == y
+        && xs != ys
+    {
+        c.push(
+            ChangeKind::CitationChanged,
+            subject,
+            "function codes",
+            (None, Some(xs)),
+            (None, Some(ys)),
+            order,
+        );
     }
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {

@@ -42,6 +42,33 @@
 
 use crate::pdu;
 use crate::register::{RegisterInfo, Table};
+use drivemap_core::functions::Functions;
+use drivemap_core::plan::RegisterPlan;
+
+/// A register the planner plans reads over: where it is, and which functions it accepts.
+/// Implemented by [`RegisterInfo`] (every function of the drive) and by [`RegisterPlan`] (its
+/// map's `function_codes`): pass a drive's plans (a generated module's `REGISTERS`) for the
+/// planner to respect them.
+pub trait PlannedRegister: AsRef<RegisterInfo> {
+    /// The functions the register accepts.
+    fn functions(&self) -> Functions {
+        Functions::ANY
+    }
+}
+
+impl PlannedRegister for RegisterInfo {}
+
+impl PlannedRegister for RegisterPlan {
+    fn functions(&self) -> Functions {
+        self.functions
+    }
+}
+
+impl<T: PlannedRegister> PlannedRegister for &T {
+    fn functions(&self) -> Functions {
+        (**self).functions()
+    }
+}
 
 /// One read request: `quantity` registers from `address`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -97,10 +124,20 @@ impl ReadableSet {
     /// The addresses of `table` that a register of `registers` lets you read: readable and not
     /// broadcast-only, both words of a 32-bit pair. Reserved, unmapped and write-only addresses
     /// are left out. Pairs are kept whole by the plans made over the set.
-    pub fn from_registers<R: AsRef<RegisterInfo>>(registers: &[R], table: Table) -> ReadableSet {
+    ///
+    /// A register whose map restricts its functions (`function_codes`) to a list without the
+    /// table's read function (03h holding, 04h input) is left out too: no read is planned over
+    /// it, so the drive never sees a read function the register refuses. The two tables are
+    /// planned apart, so 03h and 04h registers are never read in one request.
+    pub fn from_registers<R: PlannedRegister>(registers: &[R], table: Table) -> ReadableSet {
+        let read = match table {
+            Table::Holding => pdu::function::READ_HOLDING,
+            Table::Input => pdu::function::READ_INPUT,
+        };
         let readable = || {
             registers
                 .iter()
+                .filter(move |r| r.functions().allows(read))
                 .map(AsRef::as_ref)
                 .filter(|r| r.table == table && r.access.readable() && !r.broadcast_only)
         };

@@ -6,12 +6,12 @@ use crate::client::Client;
 use crate::error::Error;
 use crate::pdu;
 use crate::profile::{Profile, TransportKind};
-use crate::register::{Readable, RegisterInfo, Table, Width};
+use crate::register::{Readable, Table, Width};
 use crate::scale::ValueError;
 use crate::transport::Transport;
 use std::fmt;
 
-use super::{PlanError, Read, ReadableSet, plan_single, plan_table};
+use super::{PlanError, PlannedRegister, Read, ReadableSet, plan_single, plan_table};
 
 /// Whether an exception answering a multi-register read is a reason to split it: 02h (invalid
 /// register address) or 21h (data setting error on the Yaskawa drives, busy on the TDS-V8).
@@ -200,7 +200,7 @@ impl Poller {
     ///
     /// With generated code: `Poller::new(&v7::PROFILE, v7::REGISTERS, [wanted::<v7::OutputFrequency>(), …])`,
     /// or from the table: `v7::REGISTERS.iter().filter(…).map(|r| (r.table, r.address))`.
-    pub fn new<R: AsRef<RegisterInfo>>(
+    pub fn new<R: PlannedRegister>(
         profile: &'static Profile,
         registers: &[R],
         wanted: impl IntoIterator<Item = (Table, u16)>,

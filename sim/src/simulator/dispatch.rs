@@ -253,6 +253,9 @@ impl Simulator {
         if !self.profile.supports(f) {
             return Err(self.plan.illegal_function);
         }
+        if let (Some(address), false) = (request.address(), f == function::LOOP_BACK) {
+            self.function_refused(kind, f, address, request.quantity())?;
+        }
         match *request {
             Request::ReadHolding { address, quantity }
             | Request::ReadInput { address, quantity } => {

@@ -4,10 +4,12 @@
 //! power-on values), `layout` (where each register lies per transport), `rules` (what a read or
 //! a write may do, persist commands), `state` (the drive model from the map's roles: the only
 //! module that reads them; the others name their type only, in the `roles` field), `dispatch`
-//! (one frame in, one reply out, [`RequestRecord`], [`Stats`]).
+//! (one frame in, one reply out, [`RequestRecord`], [`Stats`]), `functions` (a function a register
+//! does not accept, answered with the map's exception).
 
 mod defaults;
 mod dispatch;
+mod functions;
 mod layout;
 mod options;
 mod rules;

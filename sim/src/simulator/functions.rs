@@ -1,0 +1,40 @@
+//! Function codes per register (the map's `function_codes`): a request with a function one of
+//! its registers does not accept is answered with that register's `refused_with` exception
+//! (01h illegal function unless the map says 02h illegal data address), as the manual's drive
+//! answers it, before anything is read or written.
+
+use drivemap_runtime::pdu::function;
+use drivemap_runtime::profile::TransportKind;
+
+use super::Simulator;
+
+impl Simulator {
+    /// The exception for a request of `function` over `quantity` registers from PDU address
+    /// `pdu`, when a register it covers does not accept that function; `Ok` otherwise
+    /// (addresses that hold no register are left to the read and write rules).
+    pub(super) fn function_refused(
+        &self,
+        kind: TransportKind,
+        function: u8,
+        pdu: u16,
+        quantity: usize,
+    ) -> Result<(), u8> {
+        let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
+        let map = match function {
+            function::READ_INPUT => &layout.input,
+            _ => &layout.holding,
+        };
+        for k in 0..quantity {
+            let Ok(address) = self.communication_address(kind, u32::from(pdu) + k as u32) else {
+                continue;
+            };
+            if let Some(slot) = map.get(&address) {
+                let plan = self.drive.register_plan(&self.drive.registers[slot.index]);
+                if !plan.functions.allows(function) {
+                    return Err(plan.functions.refused_with);
+                }
+            }
+        }
+        Ok(())
+    }
+}
