@@ -61,8 +61,14 @@ pub struct ExceptionInfo {
     pub description: &'static str,
 }
 
-/// What an explicit command does to the drive's memory.
+/// What an explicit command does to the drive's memory (a map's command `kind`: `accept`,
+/// `persist`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum CommandKind {
     /// Makes written parameters active without storing them (V7 ACCEPT 0910h).
     Accept,

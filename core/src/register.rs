@@ -14,8 +14,13 @@ use crate::rule::WriteRule;
 use crate::scale::{Rounding, ValueError};
 use crate::width::Width;
 
-/// Which Modbus table a register lives in.
+/// Which Modbus table a register lives in (a map's `table`: `holding`, `input`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum Table {
     /// Holding registers: read with 03h, written with 06h/10h.
     Holding,
@@ -132,8 +137,14 @@ pub trait Writable: Register {
     }
 }
 
-/// When a drive accepts writes to a register.
+/// When a drive accepts writes to a register (a map's `write_restriction`: `none`,
+/// `stopped`, `prg_mode`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum WriteRestriction {
     /// Any time.
     None,
@@ -282,11 +293,18 @@ impl<T: Enumeration> Code for T {
     }
 }
 
-/// Access as the manual states it.
+/// Access as the manual states it (a map's `access`: `r`, `w`, `rw`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Access {
+    /// Read only.
+    #[cfg_attr(feature = "serde", serde(rename = "r"))]
     Read,
+    /// Write only.
+    #[cfg_attr(feature = "serde", serde(rename = "w"))]
     Write,
+    /// Read and write.
+    #[cfg_attr(feature = "serde", serde(rename = "rw"))]
     ReadWrite,
 }
 

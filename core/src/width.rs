@@ -16,8 +16,14 @@ pub enum Width {
     Pair(WordOrder),
 }
 
-/// Which half of a 32-bit value sits at the lower address.
+/// Which half of a 32-bit value sits at the lower address (a map's `pair.order`:
+/// `high_first`, `low_first`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum WordOrder {
     /// The high word first (at the register's address), the low word at the next address.
     HighFirst,

@@ -5,7 +5,6 @@
 
 use drivemap_core::indexed::{Entry as EntryPlan, Indexed as IndexedPlan};
 use drivemap_core::plan::RegisterPlan;
-use drivemap_core::register::Access as CoreAccess;
 use drivemap_core::rule::{Broadcast, WriteRule};
 use drivemap_core::scale::{Decimal, RawRange, raw_of};
 use drivemap_core::width::Width;
@@ -102,14 +101,6 @@ fn text(s: &str) -> &'static str {
     Box::leak(s.to_owned().into_boxed_str())
 }
 
-fn core_access(a: Access) -> CoreAccess {
-    match a {
-        Access::Read => CoreAccess::Read,
-        Access::Write => CoreAccess::Write,
-        Access::ReadWrite => CoreAccess::ReadWrite,
-    }
-}
-
 /// Lowers every `indexed:` of a validated drive, in map order; `registers` is the lowered table.
 /// Pairs whose index register does not resolve and entries whose scale or limits do not convert
 /// are left out: validation has reported them.
@@ -135,7 +126,7 @@ pub fn lower(drive: &Drive, registers: &'static [RegisterPlan]) -> &'static [Ind
                 continue;
             };
             let id = text(&e.id);
-            let access = core_access(e.access_under(r));
+            let access = e.access_under(r);
             let range = RawRange::new(min, max);
             entries.push(EntryPlan {
                 id,

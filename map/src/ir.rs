@@ -17,8 +17,9 @@ use crate::model::{
     Removed, Scale, TransportName, VariantAxis, WriteRestriction,
 };
 use crate::source::{Node, Path};
+use drivemap_core::rule::Broadcast;
 use drivemap_core::scale::{Decimal, RawRange, raw_of};
-use drivemap_core::width::{Width, WordOrder};
+use drivemap_core::width::Width;
 
 /// A drive map, expanded and located.
 #[derive(Debug, Clone)]
@@ -107,10 +108,7 @@ impl Register {
     pub fn width(&self) -> Width {
         match &self.def.pair {
             None => Width::Word,
-            Some(p) => Width::Pair(match p.order {
-                model::WordOrder::HighFirst => WordOrder::HighFirst,
-                model::WordOrder::LowFirst => WordOrder::LowFirst,
-            }),
+            Some(p) => Width::Pair(p.order),
         }
     }
 
@@ -490,23 +488,12 @@ pub struct TimingFigures {
     pub char_bits: Option<u8>,
 }
 
-/// Whether a register may be written as a broadcast (slave 0); see the runtime's
-/// `gate::Broadcast`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BroadcastUse {
-    No,
-    /// Named in `protocol.broadcast.registers`: written to one slave or to all.
-    Also,
-    /// A member of a broadcast group: slave 0 only, in the broadcast address space.
-    Only,
-}
-
 /// What the map allows on the wire when writing one register: the data of the runtime's
 /// write gate (`drivemap_runtime::gate::WriteRule`), decided here once for the generator and
 /// for tools that interpret a map at run time.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct WriteRuleFigures {
-    pub broadcast: BroadcastUse,
+    pub broadcast: Broadcast,
     /// Exists on RTU framing (serial, RTU over TCP).
     pub rtu: bool,
     /// Exists on Modbus TCP.
@@ -529,11 +516,11 @@ impl Drive {
                 .any(|n| self.find(n).is_some_and(|x| x.def.id == r.def.id))
         });
         let broadcast = if r.broadcast {
-            BroadcastUse::Only
+            Broadcast::Only
         } else if named {
-            BroadcastUse::Also
+            Broadcast::Also
         } else {
-            BroadcastUse::No
+            Broadcast::No
         };
         let (rtu, tcp) = match &r.transports {
             None => (true, true),

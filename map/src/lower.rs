@@ -18,15 +18,14 @@ use drivemap_core::plan::{
     RelativeLimit, RepeatNeedsChange, Setting, VariantOption,
 };
 use drivemap_core::profile::{
-    AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, SerialFormats,
-    Timing,
+    AddressOffsets, BroadcastInfo, CommandInfo, ExceptionInfo, Profile, SerialFormats, Timing,
 };
-use drivemap_core::register::{Access, RegisterInfo, Table, WriteRestriction};
+use drivemap_core::register::RegisterInfo;
 use drivemap_core::roles::{FieldRole, Place, Role, RoleKind, Roles, Target};
-use drivemap_core::rule::{Broadcast, Transports, WriteRule};
+use drivemap_core::rule::{Transports, WriteRule};
 use drivemap_core::scale::{Decimal, RawRange};
 
-use crate::ir::{BroadcastUse, Drive, Register, ValueKind};
+use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{self, Reference, Scale, TransportName};
 use crate::names::field_span;
 
@@ -528,11 +527,8 @@ impl Lowering<'_> {
                 param: d.param.as_deref().map(text),
                 name: text(&d.name),
                 address: d.address,
-                access: access(r.access),
-                table: match r.table {
-                    model::ModbusTable::Holding => Table::Holding,
-                    model::ModbusTable::Input => Table::Input,
-                },
+                access: r.access,
+                table: r.table,
                 width: r.width(),
                 broadcast_only: r.broadcast,
                 source: text(d.source.as_deref().unwrap_or_default()),
@@ -554,16 +550,8 @@ impl Lowering<'_> {
                 rtu: w.rtu,
                 tcp: w.tcp,
             },
-            broadcast: match w.broadcast {
-                BroadcastUse::No => Broadcast::No,
-                BroadcastUse::Also => Broadcast::Also,
-                BroadcastUse::Only => Broadcast::Only,
-            },
-            restriction: match r.write_restriction {
-                model::WriteRestriction::None => WriteRestriction::None,
-                model::WriteRestriction::Stopped => WriteRestriction::Stopped,
-                model::WriteRestriction::PrgMode => WriteRestriction::PrgMode,
-            },
+            broadcast: w.broadcast,
+            restriction: r.write_restriction,
             envelope: w.raw,
             also_at: leak(w.also_at),
             repeat_needs_change: r.repeat_needs_change.as_ref().map(|(rule, _)| {
@@ -618,14 +606,6 @@ fn lower_field(f: &model::Field) -> Option<Field> {
     })
 }
 
-fn access(a: model::Access) -> Access {
-    match a {
-        model::Access::Read => Access::Read,
-        model::Access::Write => Access::Write,
-        model::Access::ReadWrite => Access::ReadWrite,
-    }
-}
-
 fn labels(values: &[model::EnumValue]) -> &'static [Label] {
     leak(
         values
@@ -678,10 +658,7 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
                 .map(|c| CommandInfo {
                     id: text(&c.id),
                     name: text(&c.name),
-                    kind: match c.kind {
-                        model::CommandKind::Accept => CommandKind::Accept,
-                        model::CommandKind::Persist => CommandKind::Persist,
-                    },
+                    kind: c.kind,
                     writes: leak(c.writes.iter().map(|w| (w.address, w.value)).collect()),
                     source: text(&c.source),
                 })

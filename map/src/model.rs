@@ -358,14 +358,9 @@ pub struct ExceptionCode {
     pub indirect: Option<String>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CommandKind {
-    /// Activates written data without storing it.
-    Accept,
-    /// Stores data in non-volatile memory; wears the EEPROM.
-    Persist,
-}
+/// `accept` (activates written data without storing it) or `persist` (stores it in
+/// non-volatile memory; wears the EEPROM): the vocabulary crate's.
+pub use drivemap_core::profile::CommandKind;
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -625,34 +620,12 @@ pub struct RepeatNeedsChange {
     pub source: String,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
-pub enum Access {
-    #[serde(rename = "r")]
-    Read,
-    #[serde(rename = "w")]
-    Write,
-    #[serde(rename = "rw")]
-    ReadWrite,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ModbusTable {
-    Holding,
-    Input,
-}
-
-/// When the drive accepts a write.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum WriteRestriction {
-    /// Any time.
-    None,
-    /// Only while the motor is stopped (exception 22h otherwise).
-    Stopped,
-    /// Only in program (PRG) mode (TDS-V8).
-    PrgMode,
-}
+/// `r`, `w`, `rw`: the vocabulary crate's access.
+pub use drivemap_core::register::Access;
+/// `holding`, `input`: the vocabulary crate's table.
+pub use drivemap_core::register::Table as ModbusTable;
+/// When the drive accepts a write (`none`, `stopped`, `prg_mode`): the vocabulary crate's.
+pub use drivemap_core::register::WriteRestriction;
 
 /// One register (one 16-bit word, or a 32-bit pair with `pair`), or a block of them with `repeat`.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -760,14 +733,7 @@ pub struct Pair {
 }
 
 /// Which half of a 32-bit pair comes first (at the lower address).
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum WordOrder {
-    /// High word at the register's address, low word at the next.
-    HighFirst,
-    /// Low word at the register's address, high word at the next.
-    LowFirst,
-}
+pub use drivemap_core::width::WordOrder;
 
 /// How a raw word becomes an engineering value.
 #[derive(Debug, Clone, Deserialize, Serialize)]

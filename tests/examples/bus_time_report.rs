@@ -22,7 +22,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use drivemap_drives as drives;
-use drivemap_map::model::{Access, ModbusTable, TransportName};
+use drivemap_map::model::{Access, TransportName};
 use drivemap_map::validate::Context;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::planner::{
@@ -123,12 +123,6 @@ struct Row {
     subsets: Outcome,
 }
 
-fn table_of(t: ModbusTable) -> Table {
-    match t {
-        ModbusTable::Holding => Table::Holding,
-        ModbusTable::Input => Table::Input,
-    }
-}
 
 fn ms(ns: u64) -> f64 {
     ns as f64 / 1e6
@@ -188,7 +182,7 @@ fn main() {
             if !(r.readable() && !r.broadcast && on_rtu(r)) {
                 continue;
             }
-            let t = table_of(r.table);
+            let t = r.table;
             let ti = u8::from(t == Table::Input);
             assert!(
                 generated_readable[usize::from(ti)].contains(r.def.address),

@@ -19,7 +19,7 @@ use std::time::Duration;
 
 use drivemap_drives as drives;
 use drivemap_map::Drive;
-use drivemap_map::model::{Access, ModbusTable, TransportName};
+use drivemap_map::model::{Access, TransportName};
 use drivemap_runtime::bus_time::{BusModel, Parity, SerialConfig};
 use drivemap_runtime::planner::{Poller, plan_contiguous, plan_cost};
 use drivemap_runtime::profile::TransportKind;
@@ -91,13 +91,7 @@ pub fn monitors() -> Vec<Monitors> {
                         .is_none_or(|t| t.contains(&TransportName::Rtu))
                     && read_only.contains(&drive.groups[r.group].id.as_str())
             })
-            .map(|r| {
-                let t = match r.table {
-                    ModbusTable::Holding => Table::Holding,
-                    ModbusTable::Input => Table::Input,
-                };
-                (t, r.def.address)
-            })
+            .map(|r| (r.table, r.def.address))
             .collect();
         wanted.sort_by_key(|&(t, a)| (t == Table::Input, a));
         wanted.dedup();
