@@ -14,6 +14,7 @@ use crate::validate::field_span;
 
 use super::{ChangeKind, Collector, json, same};
 use crate::describe;
+use crate::facts::{self, FactKey, RegisterFacts};
 
 pub(super) fn registers(c: &mut Collector, old: &Drive, new: &Drive) {
     let mut pairs: Vec<(&Register, &Register)> = Vec::new();
@@ -130,6 +131,59 @@ fn strictness(w: WriteRestriction) -> u8 {
     }
 }
 
+/// A row of the table of simple differences: whether the two sides differ, the kind, which
+/// part, and the two sides as text.
+type Row = (
+    bool,
+    ChangeKind,
+    &'static str,
+    Option<String>,
+    Option<String>,
+);
+
+/// Alternative addresses: a change of an address or condition, or of their citations alone.
+fn alternatives(a: &crate::model::Register, b: &crate::model::Register) -> Row {
+    let what = "alternative addresses";
+    if same(&a.address_alternatives, &b.address_alternatives) {
+        return (false, ChangeKind::CitationChanged, what, None, None);
+    }
+    let text = |d: &crate::model::Register| {
+        let alts: Vec<String> = d
+            .address_alternatives
+            .iter()
+            .map(|x| {
+                format!(
+                    "{} if {}",
+                    describe::address(x.address),
+                    describe::condition(&x.when)
+                )
+            })
+            .collect();
+        if alts.is_empty() {
+            "none".to_owned()
+        } else {
+            alts.join("; ")
+        }
+    };
+    let addresses = |d: &crate::model::Register| {
+        d.address_alternatives
+            .iter()
+            .map(|x| json(&(x.address, &x.when)))
+            .collect::<Vec<_>>()
+    };
+    if addresses(a) == addresses(b) {
+        (true, ChangeKind::CitationChanged, what, None, None)
+    } else {
+        (
+            true,
+            ChangeKind::AddressAlternativesChanged,
+            what,
+            Some(text(a)),
+            Some(text(b)),
+        )
+    }
+}
+
 fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Register) {
     // Every key of a register, and what the IR adds to it, is compared below: a key added to
     // the schema fails to compile here until it is.
@@ -194,191 +248,168 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
         );
     };
 
-    if a.address != b.address {
-        push(
-            c,
-            ChangeKind::RegisterMoved,
-            "",
-            Some(describe::address(a.address)),
-            Some(describe::address(b.address)),
-        );
-    }
-    if !same(&a.address_alternatives, &b.address_alternatives) {
-        let text = |d: &crate::model::Register| {
-            let alts: Vec<String> = d
-                .address_alternatives
-                .iter()
-                .map(|x| {
-                    format!(
-                        "{} if {}",
-                        describe::address(x.address),
-                        describe::condition(&x.when)
-                    )
-                })
-                .collect();
-            if alts.is_empty() {
-                "none".to_owned()
-            } else {
-                alts.join("; ")
-            }
-        };
-        let addresses = |d: &crate::model::Register| {
-            d.address_alternatives
-                .iter()
-                .map(|x| json(&(x.address, &x.when)))
-                .collect::<Vec<_>>()
-        };
-        if addresses(a) == addresses(b) {
-            push(
-                c,
-                ChangeKind::CitationChanged,
-                "alternative addresses",
-                None,
-                None,
-            );
-        } else {
-            push(
-                c,
-                ChangeKind::AddressAlternativesChanged,
-                "alternative addresses",
-                Some(text(a)),
-                Some(text(b)),
-            );
-        }
-    }
-    if a.name != b.name {
-        push(
-            c,
-            ChangeKind::NameChanged,
-            "",
-            Some(a.name.clone()),
-            Some(b.name.clone()),
-        );
-    }
-    if a.param != b.param {
-        push(
-            c,
-            ChangeKind::ParamChanged,
-            "",
-            a.param.clone(),
-            b.param.clone(),
-        );
-    }
-    if pr.info.table != pn.info.table {
-        push(
-            c,
-            ChangeKind::TableChanged,
-            "table",
-            Some(describe::table(pr.info.table).into()),
-            Some(describe::table(pn.info.table).into()),
-        );
-    }
+    let (fa, fb) = (facts::register(old, r), facts::register(new, n));
+    // The facts of both sides compared row by row: (differs, kind, what, old, new); the codes of
+    // a read meaning, compared code by code, between the two tables.
+    let row = |f: &RegisterFacts, key, none: &str| {
+        Some(
+            f.get(key)
+                .map_or_else(|| none.to_owned(), |x| x.value.clone()),
+        )
+    };
+    let t = |x: bool, yes: &str, no: &str| Some(if x { yes } else { no }.to_owned());
+    let (ra, rb) = (pr.restriction, pn.restriction);
+    let (ta, tb) = (pr.transports, pn.transports);
+    let ((read_a, write_a), (read_b, write_b)) = (can(pr.info.access), can(pn.info.access));
     let (ga, gb) = (&old.group_of(r).id, &new.group_of(n).id);
-    if ga != gb {
-        push(
-            c,
-            ChangeKind::GroupChanged,
-            "group",
-            Some(ga.clone()),
-            Some(gb.clone()),
-        );
-    }
-    if r.broadcast != n.broadcast {
-        let t = |x: bool| if x { "broadcast only" } else { "addressed" }.to_owned();
-        push(
-            c,
-            ChangeKind::BroadcastMembershipChanged,
-            "broadcast",
-            Some(t(r.broadcast)),
-            Some(t(n.broadcast)),
-        );
-    }
-    if pr.info.access != pn.info.access {
-        let ((ra, wa), (rb, wb)) = (can(pr.info.access), can(pn.info.access));
-        let kind = if (ra && !rb) || (wa && !wb) {
-            ChangeKind::AccessNarrowed
-        } else {
-            ChangeKind::AccessWidened
-        };
-        push(
-            c,
-            kind,
-            "access",
-            Some(describe::access(pr.info.access).into()),
-            Some(describe::access(pn.info.access).into()),
-        );
-    }
-    let (wr, wn) = (pr.restriction, pn.restriction);
-    if wr != wn {
-        let kind = if strictness(wn) > strictness(wr)
-            || (wr != WriteRestriction::None && wn != WriteRestriction::None)
-        {
-            ChangeKind::WriteRestrictionTightened
-        } else {
-            ChangeKind::WriteRestrictionRelaxed
-        };
-        push(
-            c,
-            kind,
-            "write restriction",
-            Some(describe::write_restriction(wr).into()),
-            Some(describe::write_restriction(wn).into()),
-        );
-    }
-    let repeat = |x: &Register| {
-        x.repeat_needs_change
-            .as_ref()
-            .map(|(rule, _)| describe::repeat_needs_change(rule))
-    };
-    let (ra, rb) = (repeat(r), repeat(n));
-    if pr.repeat_needs_change.map(|x| x.between) != pn.repeat_needs_change.map(|x| x.between) {
-        push(
-            c,
-            ChangeKind::RepeatNeedsChangeChanged,
-            "repeat needs change",
-            Some(ra.unwrap_or_else(|| "none".into())),
-            Some(rb.unwrap_or_else(|| "none".into())),
-        );
-    }
-    if let Some((kind, x, y)) = super::indexed::change(a.indexed.as_ref(), b.indexed.as_ref()) {
-        push(c, kind, "indexed access", x, y);
-    }
-    let functions = |x: &Register| {
-        x.function_codes
-            .as_ref()
-            .map(|(f, _)| describe::function_codes(f))
-    };
-    let (fa, fb) = (functions(r), functions(n));
     let codes = |x: &Register| {
         x.function_codes
             .as_ref()
             .map(|(f, _)| (f.codes.clone(), f.refusal()))
     };
-    if codes(r) != codes(n) {
-        push(
-            c,
+    let indexed = super::indexed::change(a.indexed.as_ref(), b.indexed.as_ref());
+    let identity: Vec<Row> = vec![
+        (
+            a.address != b.address,
+            ChangeKind::RegisterMoved,
+            "",
+            Some(describe::address(a.address)),
+            Some(describe::address(b.address)),
+        ),
+        alternatives(a, b),
+        (
+            a.name != b.name,
+            ChangeKind::NameChanged,
+            "",
+            Some(fa.name.clone()),
+            Some(fb.name.clone()),
+        ),
+        (
+            a.param != b.param,
+            ChangeKind::ParamChanged,
+            "",
+            fa.param.clone(),
+            fb.param.clone(),
+        ),
+        (
+            pr.info.table != pn.info.table,
+            ChangeKind::TableChanged,
+            "table",
+            Some(describe::table(pr.info.table).into()),
+            Some(describe::table(pn.info.table).into()),
+        ),
+        (
+            ga != gb,
+            ChangeKind::GroupChanged,
+            "group",
+            Some(ga.clone()),
+            Some(gb.clone()),
+        ),
+        (
+            r.broadcast != n.broadcast,
+            ChangeKind::BroadcastMembershipChanged,
+            "broadcast",
+            t(r.broadcast, "broadcast only", "addressed"),
+            t(n.broadcast, "broadcast only", "addressed"),
+        ),
+        (
+            pr.info.access != pn.info.access,
+            if (read_a && !read_b) || (write_a && !write_b) {
+                ChangeKind::AccessNarrowed
+            } else {
+                ChangeKind::AccessWidened
+            },
+            "access",
+            row(&fa, FactKey::Access, ""),
+            row(&fb, FactKey::Access, ""),
+        ),
+        (
+            ra != rb,
+            if strictness(rb) > strictness(ra)
+                || (ra != WriteRestriction::None && rb != WriteRestriction::None)
+            {
+                ChangeKind::WriteRestrictionTightened
+            } else {
+                ChangeKind::WriteRestrictionRelaxed
+            },
+            "write restriction",
+            Some(describe::write_restriction(ra).into()),
+            Some(describe::write_restriction(rb).into()),
+        ),
+        (
+            pr.repeat_needs_change.map(|x| x.between) != pn.repeat_needs_change.map(|x| x.between),
+            ChangeKind::RepeatNeedsChangeChanged,
+            "repeat needs change",
+            row(&fa, FactKey::RepeatNeedsChange, "none"),
+            row(&fb, FactKey::RepeatNeedsChange, "none"),
+        ),
+        match indexed {
+            Some((kind, x, y)) => (true, kind, "indexed access", x, y),
+            None => (
+                false,
+                ChangeKind::IndexedChanged,
+                "indexed access",
+                None,
+                None,
+            ),
+        },
+        (
+            codes(r) != codes(n),
             ChangeKind::FunctionCodesChanged,
             "function codes",
-            Some(fa.unwrap_or_else(|| "every function of the drive".into())),
-            Some(fb.unwrap_or_else(|| "every function of the drive".into())),
-        );
-    }
-    let limit = |d: &Drive, x: &Register| {
-        x.def
-            .max_relative
-            .as_ref()
-            .map(|l| describe::relative_limit(d, l))
-    };
-    let (la, lb) = (limit(old, r), limit(new, n));
-    if la != lb {
-        push(
-            c,
+            row(&fa, FactKey::FunctionCodes, "every function of the drive"),
+            row(&fb, FactKey::FunctionCodes, "every function of the drive"),
+        ),
+        (
+            fa.get(FactKey::RelativeLimit) != fb.get(FactKey::RelativeLimit),
             ChangeKind::RelativeLimitChanged,
             "limit",
-            Some(la.unwrap_or_else(|| "none".into())),
-            Some(lb.unwrap_or_else(|| "none".into())),
-        );
-    }
+            row(&fa, FactKey::RelativeLimit, "none"),
+            row(&fb, FactKey::RelativeLimit, "none"),
+        ),
+    ];
+    let after: Vec<Row> = vec![
+        (
+            pr.read_values != pn.read_values,
+            ChangeKind::ReadMeaningChanged,
+            "read meaning",
+            row(&fa, FactKey::ReadValues, "as written"),
+            row(&fb, FactKey::ReadValues, "as written"),
+        ),
+        (
+            ta != tb,
+            if (!ta.rtu || tb.rtu) && (!ta.tcp || tb.tcp) {
+                ChangeKind::TransportsWidened
+            } else {
+                ChangeKind::TransportsNarrowed
+            },
+            "transports",
+            Some(describe::transports(ta)),
+            Some(describe::transports(tb)),
+        ),
+        (
+            a.signed != b.signed,
+            ChangeKind::SignednessChanged,
+            "signedness",
+            t(a.signed, "signed", "unsigned"),
+            t(b.signed, "signed", "unsigned"),
+        ),
+        (
+            r.width() != n.width(),
+            ChangeKind::WidthChanged,
+            "width",
+            Some(describe::width(r.width())),
+            Some(describe::width(n.width())),
+        ),
+    ];
+    let table = |c: &mut Collector, rows: Vec<Row>| {
+        for (differs, kind, what, x, y) in rows {
+            if differs {
+                push(c, kind, what, x, y);
+            }
+        }
+    };
+    table(c, identity);
     if pr.read_values == pn.read_values && !same(&a.read_values, &b.read_values) {
         enum_codes(
             c,
@@ -390,57 +421,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
             order,
         );
     }
-    if pr.read_values != pn.read_values {
-        let shown = |x: &Register| {
-            if x.def.read_values.is_empty() {
-                "as written".to_owned()
-            } else {
-                describe::read_values(&x.def.read_values)
-            }
-        };
-        push(
-            c,
-            ChangeKind::ReadMeaningChanged,
-            "read meaning",
-            Some(shown(r)),
-            Some(shown(n)),
-        );
-    }
-    let (ta, tb) = (pr.transports, pn.transports);
-    if ta != tb {
-        let widened = (!ta.rtu || tb.rtu) && (!ta.tcp || tb.tcp);
-        let kind = if widened {
-            ChangeKind::TransportsWidened
-        } else {
-            ChangeKind::TransportsNarrowed
-        };
-        push(
-            c,
-            kind,
-            "transports",
-            Some(describe::transports(ta)),
-            Some(describe::transports(tb)),
-        );
-    }
-    if a.signed != b.signed {
-        let t = |s: bool| if s { "signed" } else { "unsigned" }.to_owned();
-        push(
-            c,
-            ChangeKind::SignednessChanged,
-            "signedness",
-            Some(t(a.signed)),
-            Some(t(b.signed)),
-        );
-    }
-    if r.width() != n.width() {
-        push(
-            c,
-            ChangeKind::WidthChanged,
-            "width",
-            Some(describe::width(r.width())),
-            Some(describe::width(n.width())),
-        );
-    }
+    table(c, after);
     if !same_kind(r, n) {
         push(
             c,
