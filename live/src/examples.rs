@@ -23,7 +23,7 @@ use drivemap_map::model::TransportName;
 use drivemap_map::source::Path;
 use drivemap_runtime::pdu::{self, Request, Response};
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Table, crc, tcp};
+use drivemap_runtime::{Table, ValueError, crc, tcp};
 
 use crate::codec;
 use crate::settings::LiveSettings;
@@ -499,7 +499,17 @@ impl Verifier<'_> {
                 );
             }
             if writing {
-                if let Err(err) = codec::encode(self.drive, r, number, self.settings) {
+                // A limit that rests on a quantity the map does not hold (a maximum frequency
+                // read from the drive) cannot be checked here: only a refusal is reported.
+                if let Err(err) =
+                    codec::encode(self.drive, r, number, self.settings).map_err(|e| match e {
+                        ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. } => {
+                            None
+                        }
+                        e => Some(e),
+                    })
+                    && let Some(err) = err
+                {
                     self.error(
                         out,
                         byte,
