@@ -408,45 +408,6 @@ impl Drive {
         addresses
     }
 
-    /// The protocol's timing in the runtime's units (microseconds, bit times).
-    pub fn timing_figures(&self) -> TimingFigures {
-        let timing = self.protocol.timing.as_ref();
-        let ict = timing.and_then(|t| t.inter_char_timeout.as_ref());
-        let us = |ms: f64| (ms * 1000.0).round() as u32;
-        // Character counts are converted at 11 bits per character, the RTU character with parity.
-        let bits = |i: &crate::model::Interval| match (i.bits, i.chars) {
-            (None, None) => None,
-            (b, c) => Some(b.unwrap_or(0) + c.map_or(0, |c| (c * 11.0).round() as u32)),
-        };
-        let response = timing.and_then(|t| t.response_time.as_ref());
-        let gap = timing.and_then(|t| t.request_gap.as_ref());
-        let param = timing.and_then(|t| t.response_delay_param.clone());
-        let param_default_us = param.as_deref().and_then(|p| self.find(p)).and_then(|r| {
-            let per_unit_us = match r.def.unit.as_deref()? {
-                "ms" => 1000.0,
-                "s" => 1_000_000.0,
-                _ => return None,
-            };
-            r.default_value().map(|v| (v * per_unit_us).round() as u32)
-        });
-        TimingFigures {
-            frame_gap_chars: timing.map(|t| t.frame_gap_chars).unwrap_or(3.5),
-            frame_gap_us: timing
-                .and_then(|t| t.frame_gap.as_ref())
-                .and_then(|i| i.ms)
-                .map(us),
-            inter_char_timeout_us: ict.and_then(|i| i.ms).map(us),
-            inter_char_timeout_bits: ict.and_then(bits),
-            response_delay_us: response.and_then(|i| i.ms).map(us),
-            response_delay_bits: response.and_then(bits),
-            response_delay_param: param,
-            response_delay_param_default_us: param_default_us,
-            request_gap_bits: gap.and_then(bits),
-            request_gap_us: gap.and_then(|i| i.ms).map(us),
-            char_bits: self.protocol.serial.as_ref().and_then(|s| s.char_bits),
-        }
-    }
-
     /// PDU address offsets (RTU, TCP).
     pub fn address_offsets(&self) -> (i32, i32) {
         self.protocol
@@ -467,25 +428,6 @@ impl Drive {
     pub fn group_of(&self, r: &Register) -> &Group {
         &self.groups[r.group]
     }
-}
-
-/// Protocol timing in the runtime's units.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TimingFigures {
-    pub frame_gap_chars: f64,
-    /// The stated least frame gap in microseconds (`timing.frame_gap.ms`).
-    pub frame_gap_us: Option<u32>,
-    pub inter_char_timeout_us: Option<u32>,
-    /// Inter-character limit in bit times (`chars` are counted at 11 bits).
-    pub inter_char_timeout_bits: Option<u32>,
-    pub response_delay_us: Option<u32>,
-    pub response_delay_bits: Option<u32>,
-    pub response_delay_param: Option<String>,
-    /// The delay parameter's default, when the map prints it in ms or s.
-    pub response_delay_param_default_us: Option<u32>,
-    pub request_gap_bits: Option<u32>,
-    pub request_gap_us: Option<u32>,
-    pub char_bits: Option<u8>,
 }
 
 /// What the map allows on the wire when writing one register: the data of the runtime's

@@ -619,10 +619,48 @@ fn labels(values: &[model::EnumValue]) -> &'static [Label] {
     )
 }
 
+/// The protocol's timing in the runtime's units (microseconds, bit times).
+fn timing(drive: &Drive) -> Timing {
+    let timing = drive.protocol.timing.as_ref();
+    let ict = timing.and_then(|t| t.inter_char_timeout.as_ref());
+    let us = |ms: f64| (ms * 1000.0).round() as u32;
+    // Character counts are converted at 11 bits per character, the RTU character with parity.
+    let bits = |i: &crate::model::Interval| match (i.bits, i.chars) {
+        (None, None) => None,
+        (b, c) => Some(b.unwrap_or(0) + c.map_or(0, |c| (c * 11.0).round() as u32)),
+    };
+    let response = timing.and_then(|t| t.response_time.as_ref());
+    let gap = timing.and_then(|t| t.request_gap.as_ref());
+    let param = timing.and_then(|t| t.response_delay_param.clone());
+    let param_default_us = param.as_deref().and_then(|p| drive.find(p)).and_then(|r| {
+        let per_unit_us = match r.def.unit.as_deref()? {
+            "ms" => 1000.0,
+            "s" => 1_000_000.0,
+            _ => return None,
+        };
+        r.default_value().map(|v| (v * per_unit_us).round() as u32)
+    });
+    Timing {
+        frame_gap_chars: timing.map(|t| t.frame_gap_chars).unwrap_or(3.5),
+        frame_gap_us: timing
+            .and_then(|t| t.frame_gap.as_ref())
+            .and_then(|i| i.ms)
+            .map(us),
+        inter_char_timeout_us: ict.and_then(|i| i.ms).map(us),
+        inter_char_timeout_bits: ict.and_then(bits),
+        response_delay_us: response.and_then(|i| i.ms).map(us),
+        response_delay_bits: response.and_then(bits),
+        response_delay_param: param.as_deref().map(text),
+        response_delay_param_default_us: param_default_us,
+        request_gap_bits: gap.and_then(bits),
+        request_gap_us: gap.and_then(|i| i.ms).map(us),
+        char_bits: drive.protocol.serial.as_ref().and_then(|s| s.char_bits),
+    }
+}
+
 /// The drive's runtime profile; `registers` gives the write rules.
 fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
     let p = &drive.protocol;
-    let t = drive.timing_figures();
     let (rtu, tcp) = drive.address_offsets();
     let writes: Vec<WriteRule> = registers
         .iter()
@@ -665,19 +703,7 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
                 .collect(),
         ),
         address_offsets: AddressOffsets { rtu, tcp },
-        timing: Timing {
-            frame_gap_chars: t.frame_gap_chars,
-            frame_gap_us: t.frame_gap_us,
-            inter_char_timeout_us: t.inter_char_timeout_us,
-            inter_char_timeout_bits: t.inter_char_timeout_bits,
-            response_delay_us: t.response_delay_us,
-            response_delay_bits: t.response_delay_bits,
-            response_delay_param: t.response_delay_param.as_deref().map(text),
-            response_delay_param_default_us: t.response_delay_param_default_us,
-            request_gap_bits: t.request_gap_bits,
-            request_gap_us: t.request_gap_us,
-            char_bits: t.char_bits,
-        },
+        timing: timing(drive),
         serial_formats: p
             .serial
             .as_ref()
