@@ -11,6 +11,7 @@ use crate::lower::DrivePlan;
 mod bitfields;
 mod docs;
 mod enums;
+mod indexed;
 mod plan;
 mod profile;
 mod registers;
@@ -109,6 +110,7 @@ fn drive_tokens(drive: &Drive, plan: &DrivePlan, options: &Options) -> TokenStre
     let profile = profile::emit(plan, rt);
     let settings = settings::emit(drive, plan, rt);
     let registers = registers::emit(drive, plan, rt);
+    let indexed = indexed::emit(plan, rt);
     quote! {
 
         use #runtime as rt;
@@ -117,6 +119,7 @@ fn drive_tokens(drive: &Drive, plan: &DrivePlan, options: &Options) -> TokenStre
         #profile
         #settings
         #registers
+        #indexed
     }
 }
 
