@@ -123,7 +123,6 @@ struct Row {
     subsets: Outcome,
 }
 
-
 fn ms(ns: u64) -> f64 {
     ns as f64 / 1e6
 }
