@@ -266,3 +266,102 @@ fn the_planner_reads_the_monitor_area_with_04h_only() {
     assert!(poller.get(Table::Input, 0x0103).unwrap().is_ok());
     assert!(violation(&drive, c.transport()).is_none());
 }
+
+/// `export`, `doc`, `diff` and the generated module all show the functions a register accepts.
+#[test]
+fn export_doc_diff_and_generated_code_show_the_functions() {
+    let drive = map();
+    let export = drivemap_map::export::export(&drive);
+    let register = |id: &str| {
+        export["registers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["id"] == id)
+            .unwrap()
+            .clone()
+    };
+    assert_eq!(
+        register("frequency_command")["function_codes"],
+        serde_json::json!({"codes": [3, 16], "refused_with": 2, "source": "halvard-hx2.txt:11"})
+    );
+    // A group's list reaches its registers; a register without one exports null.
+    assert_eq!(
+        register("stop_mode")["function_codes"]["source"],
+        "halvard-hx2.txt:9"
+    );
+    assert!(register("operation_command")["function_codes"].is_null());
+
+    let doc = drivemap_review::reference::render(&drive, "halvard-hx2.yaml");
+    assert!(doc.contains("functions 03h/10h only"), "{doc}");
+    assert!(
+        doc.contains(
+            "Function codes: accepts only 03h, 10h; another function is answered with exception \
+             02h (illegal data address) (`halvard-hx2.txt:11`)"
+        ),
+        "{doc}"
+    );
+
+    let code = drivemap_codegen::generate::drive_module(
+        &drive,
+        &drivemap_codegen::generate::Options {
+            runtime: "::drivemap_runtime".parse().unwrap(),
+            source_name: "halvard-hx2.yaml".into(),
+        },
+    )
+    .unwrap();
+    assert!(
+        code.contains(".functions(Functions::only(&[0x03, 0x10], 0x02, \"halvard-hx2.txt:11\"))"),
+        "{code}"
+    );
+    assert!(
+        code.contains("Function codes: accepts only 03h, 06h; another function is answered with exception 01h (illegal function) (`halvard-hx2.txt:9`)"),
+        "{code}"
+    );
+
+    // diff: a changed list is breaking; a moved citation alone is a citation change.
+    let text = std::fs::read_to_string(
+        drivemap_tests::workspace().join("tests/fixtures/halvard-hx2/halvard-hx2.yaml"),
+    )
+    .unwrap();
+    let read = |t: &str| {
+        drivemap_map::read_map_str("halvard-hx2.yaml", t, &Context::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let kinds = |t: &str| -> Vec<(String, drivemap_review::diff::ChangeKind)> {
+        drivemap_review::diff::compare(&drive, &read(t))
+            .changes
+            .iter()
+            .map(|c| (c.subject.clone(), c.kind))
+            .collect()
+    };
+    let widened = text.replace(
+        "function_codes: {codes: [0x03, 0x06], source: \"halvard-hx2.txt:9\"}",
+        "function_codes: {codes: [0x03, 0x06, 0x10], source: \"halvard-hx2.txt:9\"}",
+    );
+    let changes = kinds(&widened);
+    assert_eq!(changes.len(), 3, "{changes:?}");
+    assert!(
+        changes
+            .iter()
+            .all(|(_, k)| *k == drivemap_review::diff::ChangeKind::FunctionCodesChanged),
+        "{changes:?}"
+    );
+    let moved = text.replace(
+        "refused_with: 0x02, source: \"halvard-hx2.txt:11\"",
+        "refused_with: 0x02, source: \"halvard-hx2.txt:12\"",
+    );
+    assert_eq!(
+        kinds(&moved),
+        [(
+            "frequency_command".to_string(),
+            drivemap_review::diff::ChangeKind::CitationChanged
+        )]
+    );
+    let dropped = text.replace(
+        "        function_codes: {codes: [0x03, 0x10], refused_with: 0x02, source: \"halvard-hx2.txt:11\"}\n",
+        "",
+    );
+    let diff = drivemap_review::diff::compare(&drive, &read(&dropped));
+    assert_eq!(diff.breaking(), 1, "{:?}", diff.changes);
+}

@@ -248,9 +248,10 @@ impl ReadableSet {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum PlanError {
-    /// A wanted address may not be read (reserved, unmapped, write-only or broadcast-only).
+    /// A wanted address may not be read (reserved, unmapped, write-only, broadcast-only, or a
+    /// register whose `function_codes` refuse its table's read function).
     #[error(
-        "{table:?} register {address:04X}h may not be read (reserved, unmapped, write-only or broadcast-only)"
+        "{table:?} register {address:04X}h may not be read (reserved, unmapped, write-only, broadcast-only, or its function codes refuse the table's read function)"
     )]
     NotReadable {
         /// The table.
