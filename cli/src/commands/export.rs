@@ -17,6 +17,9 @@ use drivemap_live::session::{SettingsArgs, find_all};
 pub enum Format {
     /// The map as JSON (drivemap-export/1).
     Json,
+    /// What every printer says of each register, as JSON: the facts view
+    /// (`drivemap_map::facts`), rows of label, value and citation per register.
+    Facts,
     /// Home Assistant's `modbus:` YAML: a hub and a sensor per register.
     HomeAssistant,
     /// A Node-RED flow for node-red-contrib-modbus (JSON to import or run).
@@ -122,13 +125,16 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             return Ok(ExitCode::FAILURE);
         }
     };
-    if args.format == Format::Json {
+    if matches!(args.format, Format::Json | Format::Facts) {
         if args.link_given() > 0 || !args.registers.is_empty() || args.all {
             return Err(
                 "the JSON export is the whole map: --register, --all and a link go with --format home-assistant, node-red or telegraf".into(),
             );
         }
-        let json = drivemap_map::export::export(&drive);
+        let json = match args.format {
+            Format::Facts => serde_json::to_value(drivemap_map::facts::facts(&drive))?,
+            _ => drivemap_map::export::export(&drive),
+        };
         outln!("{}", serde_json::to_string_pretty(&json)?);
         return Ok(ExitCode::SUCCESS);
     }
@@ -169,7 +175,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 .map_err(|e| e.to_string())?
                 + "\n"
         }
-        Format::Json => return Ok(ExitCode::SUCCESS),
+        Format::Json | Format::Facts => return Ok(ExitCode::SUCCESS),
     };
     out!("{text}");
     for line in points.left_out_lines() {

@@ -1,0 +1,82 @@
+//! `drivemap export --format facts`: the facts view of a map as JSON — per register its plan
+//! row, conversion kind and rows of label, value and citation — the same words the rustdoc,
+//! `drivemap doc` and `drivemap diff` print.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn drivemap(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(args)
+        .output()
+        .expect("run drivemap");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn register<'a>(facts: &'a Value, id: &str) -> &'a Value {
+    facts["registers"]
+        .as_array()
+        .expect("registers")
+        .iter()
+        .find(|r| r["id"] == id)
+        .unwrap_or_else(|| panic!("no register {id}"))
+}
+
+fn row<'a>(r: &'a Value, key: &str) -> &'a Value {
+    r["rows"]
+        .as_array()
+        .expect("rows")
+        .iter()
+        .find(|x| x["key"] == key)
+        .unwrap_or_else(|| panic!("{}: no {key} row", r["id"]))
+}
+
+#[test]
+fn the_facts_of_a_map_are_rows_with_their_citations() {
+    let map = repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml");
+    let (ok, out, err) = drivemap(&["export", "--format", "facts", map.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let facts: Value = serde_json::from_str(&out).expect("JSON");
+    assert_eq!(facts["drive"], "acme-vf1");
+    let energy = register(&facts, "energy_counter");
+    assert_eq!(energy["kind"], "decimal");
+    assert_eq!(row(energy, "address")["value"], "2200h – 2201h");
+    assert_eq!(row(energy, "width")["citation"], "acme-vf1.txt:34");
+    assert_eq!(row(energy, "scale")["value"], "0.1 kWh");
+    let current = register(&facts, "motor_current");
+    assert_eq!(current["kind"], "selected");
+    assert_eq!(current["cases"].as_array().map(Vec::len), Some(3));
+    let password = register(&facts, "keypad_password");
+    assert_eq!(
+        row(password, "repeat_needs_change")["citation"],
+        "acme-vf1.txt:51"
+    );
+    // Every register has its plan row.
+    for r in facts["registers"].as_array().unwrap() {
+        assert!(r["row"].is_u64(), "{}: no plan row", r["id"]);
+    }
+}
+
+#[test]
+fn facts_refuse_poller_options_like_the_json_export() {
+    let map = repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml");
+    let (ok, _, err) = drivemap(&[
+        "export",
+        "--format",
+        "facts",
+        "--all",
+        map.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("--register, --all and a link"), "{err}");
+}
