@@ -73,6 +73,25 @@ pub fn default_settings(drive: &Drive) -> LiveSettings {
     settings
 }
 
+/// `base` with the drive state an example assumes (`settings:`): a register's value (by id or
+/// parameter number) taken as if read from the drive, else an external quantity.
+pub fn with_settings(drive: &Drive, e: &Example, base: &LiveSettings) -> LiveSettings {
+    let mut settings = base.clone();
+    for (name, &value) in &e.settings {
+        match drive.find(name) {
+            Some(r) => {
+                if let Ok(raw) = codec::encode(drive, r, value, &settings) {
+                    settings.absorb(drive, r.def.address, raw as u16);
+                }
+            }
+            None => {
+                settings.references.insert(name.clone(), value);
+            }
+        }
+    }
+    settings
+}
+
 /// The register at communication address `address` on `kind`, as the plan places it (the word
 /// of a 32-bit pair with its index), among broadcast registers when `broadcast`.
 pub fn register_at<'a>(
@@ -233,6 +252,7 @@ pub fn findings(drive: &Drive) -> Vec<Vec<Diagnostic>> {
             .at(&path.key("bytes"))
             .map(|n| n.loc.clone())
             .unwrap_or_else(|| drive.locate(&path.key("bytes")));
+        let settings = with_settings(drive, e, &settings);
         let v = Verifier {
             drive,
             settings: &settings,

@@ -6,6 +6,8 @@
 //! mean is verified against the Modbus codec and the map by `drivemap_live::examples`, which the
 //! `drivemap check` command runs (this crate has no codec: it depends on `drivemap-core` only).
 
+use std::collections::BTreeMap;
+
 use serde::{Deserialize, Serialize};
 
 use crate::diagnostic::Loc;
@@ -34,6 +36,12 @@ pub struct Example {
     /// What the manual says the frame does, where it says it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub says: Option<Says>,
+    /// The drive's state the manual assumes for the frame, where a conversion or an address
+    /// depends on it: a register (by id or parameter number) or an external quantity, and its
+    /// value in engineering units (`settings: {o2-09: 1}`). Examples are otherwise read at the
+    /// map's defaults.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub settings: BTreeMap<String, f64>,
     /// The topic of the `conflicts:` entry recording that the printed bytes contradict the
     /// codec or the map (a CRC that does not check, a value the map refuses). `check` then
     /// reports its findings as known instead of errors, and refuses the mark on an example that
@@ -64,6 +72,14 @@ impl Example {
                 s.push_str(": ");
                 s.push_str(&said);
             }
+        }
+        if !self.settings.is_empty() {
+            let set: Vec<String> = self
+                .settings
+                .iter()
+                .map(|(k, v)| format!("{k} = {v}"))
+                .collect();
+            s.push_str(&format!(" (with {})", set.join(", ")));
         }
         if let Some(c) = &self.conflict {
             s.push_str(&format!(

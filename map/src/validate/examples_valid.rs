@@ -104,6 +104,17 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             }
             (None, _) => {}
         }
+        for name in e.settings.keys() {
+            let external = drive.externals().iter().any(|q| q.external == *name);
+            if drive.find(name).is_none() && !external {
+                error(
+                    "settings",
+                    format!(
+                        "`{name}` is no register (id or parameter number) or external quantity of the map"
+                    ),
+                );
+            }
+        }
         if let Some(topic) = &e.conflict {
             if !drive.conflicts.iter().any(|c| c.topic == *topic) {
                 error(
