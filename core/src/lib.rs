@@ -19,6 +19,7 @@ pub mod indexed;
 pub mod kind;
 pub mod plan;
 pub mod profile;
+pub mod ratio;
 pub mod register;
 pub mod roles;
 pub mod rule;

@@ -10,6 +10,7 @@
 
 use crate::functions::Functions;
 use crate::profile::TransportKind;
+use crate::ratio::{self, Fraction, Ratio};
 use crate::register::{RegisterInfo, WriteRestriction};
 use crate::rule::{Broadcast, Transports, WriteRule};
 use crate::scale::{self, Decimal, RawRange, Rounding, ValueError};
@@ -158,6 +159,13 @@ pub enum Conversion {
     },
     /// An engineering value relative to a reference: `full_scale` raw = 100 % of it.
     Relative { signed: bool, relative: Relative },
+    /// An engineering value with an exact ratio scale: `counts` raw = `equals` ("60.0 Hz =
+    /// 3600"), kept as integers ([`crate::ratio`]).
+    Ratio {
+        signed: bool,
+        ratio: Ratio,
+        range: Ranges,
+    },
     /// The scale chosen by a parameter's code.
     Selected {
         signed: bool,
@@ -316,6 +324,11 @@ pub enum Scale {
         reference: f64,
         label: &'static str,
     },
+    /// An exact ratio ([`Conversion::Ratio`]).
+    Ratio {
+        ratio: Ratio,
+        range: RawRange,
+    },
 }
 
 impl Scale {
@@ -324,6 +337,7 @@ impl Scale {
         match self {
             Scale::Decimal { scale, .. } => scale.exponent as usize,
             Scale::Relative { .. } => 2,
+            Scale::Ratio { ratio, .. } => ratio.step().decimal_digits().unwrap_or(6) as usize,
         }
     }
 }
@@ -557,6 +571,7 @@ impl RegisterPlan {
             Conversion::Word { signed, .. }
             | Conversion::Decimal { signed, .. }
             | Conversion::Relative { signed, .. }
+            | Conversion::Ratio { signed, .. }
             | Conversion::Selected { signed, .. } => signed,
             Conversion::Enum { .. } | Conversion::Bits { .. } => false,
         }
@@ -588,6 +603,10 @@ impl RegisterPlan {
                 range: range.select(settings),
             }),
             Conversion::Relative { relative, .. } => self.relative(relative, settings),
+            Conversion::Ratio { ratio, range, .. } => Ok(Scale::Ratio {
+                ratio: *ratio,
+                range: range.select(settings),
+            }),
             Conversion::Selected {
                 selector, cases, ..
             } => self.case(*selector, cases, settings),
@@ -628,9 +647,51 @@ impl RegisterPlan {
                 reference,
                 ..
             })) => Ok(scale::decode_relative(int, full_scale, reference)),
+            Some(Ok(Scale::Ratio { ratio, .. })) => Ok(ratio.decode(int)),
             Some(Err(e)) => Err(e),
             None => Ok(int as f64),
         }
+    }
+
+    /// The exact value of a raw value where the conversion is exact: a plain word, a decimal or
+    /// a ratio scale (`Ok(None)` for a relative scale, whose reference is a float, and for
+    /// codes and bits). [`RegisterPlan::decode_number`] gives the `f64` nearest to it.
+    pub fn decode_exact(
+        &self,
+        raw: u32,
+        settings: &impl SettingsView,
+    ) -> Result<Option<Fraction>, ValueError> {
+        let int = self.int(raw);
+        Ok(match self.scale(settings) {
+            Some(Ok(Scale::Decimal { scale, .. })) => Fraction::new(
+                i128::from(int) * i128::from(scale.mantissa),
+                10i128.pow(scale.exponent),
+            ),
+            Some(Ok(Scale::Ratio { ratio, .. })) => Some(ratio.exact(int)),
+            Some(Ok(Scale::Relative { .. })) => None,
+            Some(Err(e)) => return Err(e),
+            None => match self.conversion {
+                Conversion::Word { .. } => Some(Fraction::int(i128::from(int))),
+                _ => None,
+            },
+        })
+    }
+
+    /// [`RegisterPlan::encode_number`] for an exact value (typed as `59.9` or `3599/60`): with a
+    /// ratio scale the value is compared exactly with the counts, with no float involved; other
+    /// conversions take its nearest `f64`.
+    pub fn encode_exact(
+        &self,
+        value: Fraction,
+        settings: &impl SettingsView,
+    ) -> Result<u32, ValueError> {
+        if let Some(Ok(Scale::Ratio { ratio, range })) = self.scale(settings) {
+            self.check_limit(value.to_f64(), settings)?;
+            let raw = ratio::encode_ratio_exact(self.info.id, self.unit, value, ratio, range)?;
+            self.relative_max(settings)?;
+            return Ok(self.info.width.from_int(raw));
+        }
+        self.encode_number(value.to_f64(), settings)
     }
 
     /// The quantity the register's limit through another quantity reads
@@ -732,6 +793,10 @@ impl RegisterPlan {
                 rounding,
             )
             .map(|i| words.from_int(i)),
+            Some(Ok(Scale::Ratio { ratio, range })) => {
+                ratio::encode_ratio_with(id, unit, value, ratio, range, rounding)
+                    .map(|i| words.from_int(i))
+            }
             Some(Err(e)) => Err(e),
             None => {
                 if !value.is_finite() {

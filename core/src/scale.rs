@@ -66,6 +66,20 @@ pub enum ValueError {
         step: f64,
         unit: &'static str,
     },
+    /// A value that is not a whole number of counts of a ratio scale ("60.0 Hz = 3600"): sent
+    /// as given or refused, never rounded silently. The step and the two nearest legal values
+    /// are exact fractions (printed as decimals where their expansion is finite).
+    #[error(
+        "{register}: {value} {unit} is not a whole number of counts (the register counts {step} {unit}); the nearest legal values are {below} and {above} {unit}"
+    )]
+    NotACount {
+        register: &'static str,
+        value: f64,
+        below: crate::ratio::Fraction,
+        above: crate::ratio::Fraction,
+        step: crate::ratio::Fraction,
+        unit: &'static str,
+    },
     /// A plain word given a fraction.
     #[error("{register}: {value} is not a whole number")]
     NotWhole { register: &'static str, value: f64 },
@@ -342,7 +356,7 @@ pub struct RawRange {
 /// The refusal of `value` outside `range`, whose limits are `min` and `max` in engineering
 /// units: [`ValueError::WordOverflow`] when the range is the word's own (the manual printed none),
 /// else [`ValueError::OutOfRange`].
-fn outside(
+pub(crate) fn outside(
     register: &'static str,
     unit: &'static str,
     value: f64,
