@@ -393,14 +393,16 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
     out
 }
 
-/// The step of a number register: its scale's factor where fixed, the finest of a selected
-/// scale's cases, 0.01 for a scale relative to another parameter, else 1.
+/// The step of a number register: its scale's factor where fixed, one count of a ratio scale
+/// (`equals / counts`, the `f64` nearest to it: 1/60 Hz for 3600 = 60.0 Hz), the finest of a
+/// selected scale's cases, 0.01 for a scale relative to another parameter, else 1.
 fn step(r: &Register) -> f64 {
     use drivemap_map::model::Scale;
     fn of(s: &Scale) -> f64 {
         match s {
             Scale::Factor(f) => *f,
             Scale::Relative(_) => 0.01,
+            Scale::Ratio(q) => q.equals / f64::from(q.counts),
             Scale::Selected(sel) => sel
                 .cases
                 .iter()

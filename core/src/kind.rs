@@ -44,6 +44,8 @@ kinds! {
     Decimal => "decimal",
     /// [`Conversion::Relative`]: `full_scale` raw = 100 % of a reference.
     Relative => "relative",
+    /// [`Conversion::Ratio`]: `counts` raw = `equals`, exactly ("60.0 Hz = 3600").
+    Ratio => "ratio",
     /// [`Conversion::Selected`]: the scale a parameter's code chooses.
     Selected => "selected",
     /// [`Conversion::Enum`]: codes with meanings.
@@ -59,6 +61,7 @@ impl ConversionKind {
             Conversion::Word { .. } => ConversionKind::Word,
             Conversion::Decimal { .. } => ConversionKind::Decimal,
             Conversion::Relative { .. } => ConversionKind::Relative,
+            Conversion::Ratio { .. } => ConversionKind::Ratio,
             Conversion::Selected { .. } => ConversionKind::Selected,
             Conversion::Enum { .. } => ConversionKind::Enum,
             Conversion::Bits { .. } => ConversionKind::Bits,
@@ -66,11 +69,14 @@ impl ConversionKind {
     }
 
     /// Whether the kind scales a word to an engineering value (a *scale kind*: decimal,
-    /// relative, selected), as opposed to a plain word, codes or bits.
+    /// relative, ratio, selected), as opposed to a plain word, codes or bits.
     pub const fn is_scale(self) -> bool {
         matches!(
             self,
-            ConversionKind::Decimal | ConversionKind::Relative | ConversionKind::Selected
+            ConversionKind::Decimal
+                | ConversionKind::Relative
+                | ConversionKind::Ratio
+                | ConversionKind::Selected
         )
     }
 }

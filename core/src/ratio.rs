@@ -421,9 +421,8 @@ fn settle(
         _ => Err(ValueError::NotACount {
             register,
             value,
-            below: ratio.exact(b.below),
-            above: ratio.exact(b.above),
-            step: ratio.step(),
+            below: b.below,
+            ratio,
             unit,
         }),
     }

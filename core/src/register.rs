@@ -422,6 +422,11 @@ impl<D: DrivePlan, V, A, const I: usize> Reg<D, V, A, I> {
     pub const PLAN: &'static RegisterPlan = &D::REGISTERS[I];
     /// Engineering unit of the value (`""` for none).
     pub const UNIT: &'static str = Self::PLAN.unit;
+    /// The register's exact ratio scale (`3600 = 60.0 Hz`), if it has one.
+    pub const RATIO: Option<crate::ratio::Ratio> = match Self::PLAN.conversion {
+        crate::plan::Conversion::Ratio { ratio, .. } => Some(ratio),
+        _ => None,
+    };
 }
 
 impl<D: DrivePlan, V: Value, A, const I: usize> Register for Reg<D, V, A, I> {

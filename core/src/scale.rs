@@ -67,17 +67,20 @@ pub enum ValueError {
         unit: &'static str,
     },
     /// A value that is not a whole number of counts of a ratio scale ("60.0 Hz = 3600"): sent
-    /// as given or refused, never rounded silently. The step and the two nearest legal values
-    /// are exact fractions (printed as decimals where their expansion is finite).
+    /// as given or refused, never rounded silently. `below` and `below + 1` are the two counts
+    /// around it; the message gives their exact values and the step by `ratio` (printed as
+    /// decimals where their expansion is finite, see [`crate::ratio::Fraction`]).
     #[error(
-        "{register}: {value} {unit} is not a whole number of counts (the register counts {step} {unit}); the nearest legal values are {below} and {above} {unit}"
+        "{register}: {value} {unit} is not a whole number of counts (the register counts {} {unit}); the nearest legal values are {} and {} {unit}",
+        .ratio.step(),
+        .ratio.exact(*.below),
+        .ratio.exact(*.below + 1)
     )]
     NotACount {
         register: &'static str,
         value: f64,
-        below: crate::ratio::Fraction,
-        above: crate::ratio::Fraction,
-        step: crate::ratio::Fraction,
+        below: i64,
+        ratio: crate::ratio::Ratio,
         unit: &'static str,
     },
     /// A plain word given a fraction.

@@ -22,6 +22,7 @@ pub fn registers(drive: &Drive) -> Vec<Known> {
                     None => Ok(None),
                     Some(Scale::Factor(f)) => Ok(Some(*f)),
                     Some(Scale::Relative(_)) => Err("a relative scale"),
+                    Some(Scale::Ratio(_)) => Err("a ratio scale"),
                     Some(Scale::Selected(_)) => Err("a scale selected by another parameter"),
                 },
                 min: d.min,

@@ -9,6 +9,7 @@ use std::fmt;
 
 use drivemap_map::ir::{Drive, Register};
 use drivemap_runtime::plan::{Conversion, Field, RegisterPlan};
+use drivemap_runtime::ratio::Fraction;
 use drivemap_runtime::{Rounding, ValueError};
 
 use crate::settings::{LiveSettings, View};
@@ -19,10 +20,14 @@ pub enum Value {
     /// A plain word (`u16`, or `i16` when signed).
     Word(i64),
     /// An engineering value; `decimals` is the resolution of the scale in use, for display.
+    /// `exact` is its exact value for a ratio scale ("60.0 Hz = 3600"), whose steps are not
+    /// decimals: displayed by [`Fraction`]'s rule (the decimal when finite, else the fraction
+    /// and six decimals), `None` for other scales.
     Quantity {
         value: f64,
         unit: String,
         decimals: usize,
+        exact: Option<Fraction>,
     },
     /// An enumeration code and, when the manual lists it, its id and meaning.
     Code {
@@ -63,9 +68,21 @@ impl fmt::Display for Value {
         match self {
             Value::Word(w) => write!(f, "{w}"),
             Value::Quantity {
+                exact: Some(exact),
+                unit,
+                ..
+            } => {
+                write!(f, "{exact}")?;
+                if !unit.is_empty() {
+                    write!(f, " {unit}")?;
+                }
+                Ok(())
+            }
+            Value::Quantity {
                 value,
                 unit,
                 decimals,
+                exact: None,
             } => {
                 write!(f, "{value:.decimals$}")?;
                 if !unit.is_empty() {
@@ -182,7 +199,10 @@ pub fn decode_written(
                 fields: field_values(fields, raw),
             })
         }
-        Conversion::Decimal { .. } | Conversion::Relative { .. } | Conversion::Selected { .. } => {
+        Conversion::Decimal { .. }
+        | Conversion::Relative { .. }
+        | Conversion::Ratio { .. }
+        | Conversion::Selected { .. } => {
             let decimals = match plan.scale(&view) {
                 Some(Ok(s)) => s.decimals(),
                 Some(Err(e)) => return Err(e),
@@ -192,6 +212,10 @@ pub fn decode_written(
                 value: plan.decode_number(raw, &view)?,
                 unit: plan.unit.to_owned(),
                 decimals,
+                exact: match plan.conversion {
+                    Conversion::Ratio { .. } => plan.decode_exact(raw, &view)?,
+                    _ => None,
+                },
             })
         }
     }
@@ -385,6 +409,14 @@ pub fn parse_value_with(
                 .strip_suffix(unit)
                 .filter(|_| !unit.is_empty())
                 .unwrap_or(text);
+            if let (Conversion::Ratio { .. }, Rounding::Exact) = (&plan.conversion, rounding) {
+                // A ratio's counts are compared with the value as typed (`59.9`, `3599/60`),
+                // exactly: no float stands between the text and the count.
+                if let Some(exact) = Fraction::parse(number) {
+                    let (plan, view) = planned(drive, r, settings);
+                    return plan.encode_exact(exact, &view).map_err(InputError::Value);
+                }
+            }
             parse_number(number).ok_or_else(|| {
                 InputError::Parse(if unit.is_empty() {
                     format!("`{text}` is not a number")

@@ -167,14 +167,18 @@ pub fn kind(plan: &RegisterPlan) -> &'static str {
         Conversion::Word { .. } if pair => "32-bit pair",
         Conversion::Word { signed: true, .. } => "signed word",
         Conversion::Word { .. } => "word",
-        Conversion::Decimal { .. } | Conversion::Relative { .. } | Conversion::Selected { .. }
+        Conversion::Decimal { .. }
+        | Conversion::Relative { .. }
+        | Conversion::Ratio { .. }
+        | Conversion::Selected { .. }
             if pair =>
         {
             "32-bit quantity"
         }
-        Conversion::Decimal { .. } | Conversion::Relative { .. } | Conversion::Selected { .. } => {
-            "quantity"
-        }
+        Conversion::Decimal { .. }
+        | Conversion::Relative { .. }
+        | Conversion::Ratio { .. }
+        | Conversion::Selected { .. } => "quantity",
         Conversion::Enum { .. } => "enumeration",
         Conversion::Bits { .. } => "bit fields",
     }
@@ -219,6 +223,7 @@ pub fn scale(drive: &Drive, s: &Scale, unit: &str) -> String {
             num(rel.full_scale),
             reference(drive, &rel.relative_to)
         ),
+        Scale::Ratio(rs) => ratio(rs, unit),
         Scale::Selected(sel) => {
             let cases: Vec<String> = sel
                 .cases
@@ -231,6 +236,19 @@ pub fn scale(drive: &Drive, s: &Scale, unit: &str) -> String {
                 cases.join("; ")
             )
         }
+    }
+}
+
+/// A ratio scale: `3600 = 60 Hz (1/60 (≈0.016667) Hz per count, exact)`.
+pub fn ratio(s: &crate::model::RatioScale, unit: &str) -> String {
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    match crate::ratio::ratio_of(s) {
+        Some(r) => format!("{r}{unit} ({}{unit} per count, exact)", r.step()),
+        None => format!("{} = {}{unit}", s.counts, num(s.equals)),
     }
 }
 

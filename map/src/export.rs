@@ -59,8 +59,23 @@ fn scale_json(drive: &Drive, scale: &Scale) -> Value {
         Scale::Relative(rel) => {
             json!({"relative_to": reference_name(drive, &rel.relative_to), "full_scale": rel.full_scale})
         }
+        Scale::Ratio(rs) => ratio_json(rs),
         Scale::Selected(_) => Value::Null,
     }
+}
+
+/// A ratio scale: `{"counts": 3600, "equals": 60.0, "step": "1/60"}` (the exact value of one
+/// count as a fraction or a finite decimal).
+fn ratio_json(rs: &crate::model::RatioScale) -> Value {
+    let step = crate::ratio::ratio_of(rs).map(|r| {
+        let s = r.step();
+        if s.is_decimal() {
+            s.to_string()
+        } else {
+            format!("{}/{}", s.num, s.den)
+        }
+    });
+    json!({"counts": rs.counts, "equals": rs.equals, "step": step})
 }
 
 fn default_json(d: &Option<DefaultValue>) -> (Value, Value) {
@@ -84,6 +99,9 @@ fn register(drive: &Drive, r: &Register) -> Value {
             json!({"reference": reference_name(drive, &rel.relative_to), "full_scale": rel.full_scale}),
             Value::Null,
         ),
+        ValueKind::Quantity(Scale::Ratio(rs)) => {
+            (ratio_json(rs), Value::Null, Value::Null, Value::Null)
+        }
         ValueKind::Quantity(Scale::Selected(sel)) => {
             let selector = drive
                 .selector(&sel.selected_by)

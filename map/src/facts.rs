@@ -200,11 +200,13 @@ pub fn scale_row(drive: &Drive, r: &Register) -> Option<Fact> {
             describe::selected_by(drive, &sel.selected_by),
             None,
         )),
-        ValueKind::Quantity(scale @ (Scale::Factor(_) | Scale::Relative(_))) => Some(Fact::new(
-            FactKey::Scale,
-            describe::scale(drive, scale, unit),
-            None,
-        )),
+        ValueKind::Quantity(scale @ (Scale::Factor(_) | Scale::Relative(_) | Scale::Ratio(_))) => {
+            Some(Fact::new(
+                FactKey::Scale,
+                describe::scale(drive, scale, unit),
+                None,
+            ))
+        }
         ValueKind::UnitQuantity => Some(Fact::new(
             FactKey::Scale,
             describe::scale(drive, &Scale::Factor(1.0), unit),

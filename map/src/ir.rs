@@ -520,6 +520,19 @@ impl Register {
         };
         match self.kind() {
             ValueKind::Bits(_) | ValueKind::Quantity(Scale::Relative(_)) => ranges.push(word),
+            ValueKind::Quantity(Scale::Ratio(s)) => match crate::ratio::ratio_of(s) {
+                Some(ratio) => {
+                    ranges.push(
+                        self.ratio_limits(ratio, self.def.min, self.def.max)
+                            .unwrap_or(word),
+                    );
+                    for k in self.def.by_variant.keys() {
+                        let (min, max) = self.limits_for(k);
+                        ranges.push(self.ratio_limits(ratio, min, max).unwrap_or(word));
+                    }
+                }
+                None => ranges.push(word),
+            },
             ValueKind::Enum(values) => {
                 for v in values {
                     let code = i64::from(v.value);

@@ -27,6 +27,7 @@ pub mod lower;
 pub mod model;
 pub mod names;
 pub mod others;
+pub mod ratio;
 pub mod schema;
 pub mod source;
 pub mod validate;

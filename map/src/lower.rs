@@ -397,13 +397,22 @@ impl Lowering<'_> {
 
     /// Raw ranges per variant at a fixed decimal factor: the map's overrides in map order.
     fn ranges(&self, r: &Register, factor: Decimal) -> Ranges {
+        self.ranges_with(r, |min, max| r.raw_limits(factor, min, max))
+    }
+
+    /// Raw ranges per variant, each from the engineering limits by `limits`.
+    fn ranges_with(
+        &self,
+        r: &Register,
+        limits: impl Fn(Option<f64>, Option<f64>) -> Option<RawRange>,
+    ) -> Ranges {
         let word = r.full_limits();
-        let base = r.raw_limits(factor, r.def.min, r.def.max).unwrap_or(word);
+        let base = limits(r.def.min, r.def.max).unwrap_or(word);
         let mut by_variant = Vec::new();
         for k in r.def.by_variant.keys() {
             let Some(v) = self.variant(k) else { continue };
             let (min, max) = r.limits_for(k);
-            let lim = r.raw_limits(factor, min, max).unwrap_or(word);
+            let lim = limits(min, max).unwrap_or(word);
             if lim != base {
                 by_variant.push((v, lim));
             }
@@ -441,6 +450,17 @@ impl Lowering<'_> {
                 signed,
                 relative: self.relative(rel),
             },
+            ValueKind::Quantity(Scale::Ratio(s)) => {
+                // Validation refuses a ratio that `ratio_of` rejects; a map that was not
+                // validated gets one count per unit rather than a guess.
+                let ratio = crate::ratio::ratio_of(s)
+                    .unwrap_or(drivemap_core::ratio::Ratio::new(1, Decimal::ONE));
+                Conversion::Ratio {
+                    signed,
+                    ratio,
+                    range: self.ranges_with(r, |min, max| r.ratio_limits(ratio, min, max)),
+                }
+            }
             ValueKind::Quantity(Scale::Selected(sel)) => {
                 let cases = sel
                     .cases
@@ -458,7 +478,8 @@ impl Lowering<'_> {
                                 }
                             }
                             Scale::Relative(rel) => CaseScale::Relative(self.relative(rel)),
-                            Scale::Selected(_) => return None,
+                            // Refused by validation (`ratio_scales`): not inside a selection.
+                            Scale::Selected(_) | Scale::Ratio(_) => return None,
                         };
                         Some(Case {
                             codes: leak(case.when.clone()),

@@ -646,7 +646,8 @@ pub struct Register {
     pub modbus_table: Option<ModbusTable>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unit: Option<String>,
-    /// `0.1`, `{relative_to: .., full_scale: ..}` or `{selected_by: .., cases: [..]}`.
+    /// `0.1`, `{relative_to: .., full_scale: ..}`, `{counts: .., equals: ..}` or
+    /// `{selected_by: .., cases: [..]}`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale: Option<Scale>,
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
@@ -745,6 +746,19 @@ pub enum Scale {
     Relative(RelativeScale),
     /// The scale follows the setting of another parameter (V7 n152, n018).
     Selected(SelectedScale),
+    /// `counts` raw = `equals` in the register's unit, exactly ("60.0 Hz = 3600").
+    Ratio(RatioScale),
+}
+
+/// An exact ratio scale: `counts` raw counts equal `equals` in the register's unit ("60.0 Hz =
+/// 3600": `{counts: 3600, equals: 60.0}`), so raw `r` means `r × equals / counts` exactly.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RatioScale {
+    /// The raw count the manual prints (a whole number > 0).
+    pub counts: u32,
+    /// The value it equals in the register's unit (a decimal > 0).
+    pub equals: f64,
 }
 
 /// `max_relative`: the value is at most `percent` % of another register's value or of an

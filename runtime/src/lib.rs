@@ -71,6 +71,7 @@ pub use client::{Client, ClientOptions, Reconnect};
 pub use drivemap_core as core;
 pub use drivemap_core::functions::{self, Functions};
 pub use drivemap_core::plan;
+pub use drivemap_core::ratio;
 pub use drivemap_core::roles::{self, Role, Roles};
 pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
 pub use drivemap_core::{code_eq, enumeration};

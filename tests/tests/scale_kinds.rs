@@ -92,6 +92,19 @@ fn expected(kind: ConversionKind, drive: &Drive, r: &Register, f: &RegisterFacts
                 text,
             }
         }
+        ConversionKind::Ratio => {
+            let text = scale_row(FactKey::Scale);
+            assert!(text.contains("per count, exact"), "{}: {text}", f.id);
+            Expected {
+                export: |e| {
+                    e["scale"]["counts"].is_u64()
+                        && e["scale"]["equals"].is_number()
+                        && e["scale"]["step"].is_string()
+                },
+                diff: with_scale(&text),
+                text,
+            }
+        }
         ConversionKind::Selected => {
             let text = scale_row(FactKey::SelectedBy);
             assert!(!f.cases.is_empty(), "{}: selected without cases", f.id);

@@ -288,6 +288,9 @@ impl<'d> Points<'d> {
                             reference,
                             ..
                         } => reference / full_scale,
+                        // One count of a ratio scale as the nearest `f64` (1/60 Hz for 3600 =
+                        // 60.0 Hz); the target shows `decimals` of it (six when not a decimal).
+                        Scale::Ratio { ratio, .. } => ratio.decode(1),
                     };
                     Meaning::Number {
                         scale: factor,

@@ -13,6 +13,7 @@ use drivemap_core::plan::{
     Case, CaseScale, Condition, Conversion, Field, Label, Move, Ranges, RegisterPlan, Relative,
     Setting, VariantOption,
 };
+use drivemap_core::ratio::Ratio;
 use drivemap_core::register::{Access, Table, WriteRestriction};
 use drivemap_core::roles::Target;
 use drivemap_core::rule::{Broadcast, Transports};
@@ -69,6 +70,7 @@ pub fn module(plan: &DrivePlan) -> String {
                 "VariantOption",
             ][..],
         ),
+        ("rt::ratio", &["Ratio"][..]),
         ("rt::scale", &["Decimal", "RawRange"][..]),
         ("rt::roles", &["FieldRole", "Place", "Role", "Target"][..]),
         (
@@ -208,6 +210,10 @@ fn decimal(d: Decimal) -> String {
     format!("Decimal::new({}, {})", d.mantissa, d.exponent)
 }
 
+fn ratio(q: Ratio) -> String {
+    format!("Ratio::new({}, {})", q.counts, decimal(q.equals))
+}
+
 fn ranges(r: &Ranges) -> String {
     if r.by_variant.is_empty() {
         format!("Ranges::fixed({})", range(r.base))
@@ -291,6 +297,15 @@ fn conversion(c: &Conversion, indent: usize) -> String {
         } => format!(
             "Conversion::Relative {{ signed: {signed}, relative: {} }}",
             relative(r)
+        ),
+        Conversion::Ratio {
+            signed,
+            ratio: q,
+            range: r,
+        } => format!(
+            "Conversion::Ratio {{ signed: {signed}, ratio: {}, range: {} }}",
+            ratio(*q),
+            ranges(r)
         ),
         Conversion::Selected {
             signed,

@@ -1,6 +1,6 @@
 //! An application crate with its own drive maps (`mini-drive`, `field-selector` for scales
-//! selected by a field of a status word, and `acme-vf1` with 32-bit values in two registers),
-//! generated at build time.
+//! selected by a field of a status word, `acme-vf1` with 32-bit values in two registers, and
+//! `borealis-bf6` with ratio scales), generated at build time.
 //!
 //! ```
 //! use custom_drive::mini_drive as md;

@@ -162,6 +162,8 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                     );
                 }
             }
+            // Checked by `ratio_scales`.
+            ValueKind::Quantity(Scale::Ratio(_)) => {}
             ValueKind::Quantity(Scale::Selected(sel)) => {
                 c.no_limits(
                     "the scale is selected by another parameter; give `min`/`max` in each case",
@@ -193,6 +195,8 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                                 );
                             }
                         }
+                        // Refused by `ratio_scales`.
+                        Scale::Ratio(_) => {}
                         Scale::Selected(_) => c.err(
                             cp.key("scale"),
                             "a selected case cannot select again".into(),

@@ -25,6 +25,7 @@ mod manuals_declared;
 mod numbers_finite;
 mod pairs_valid;
 mod protocol_valid;
+mod ratio_scales;
 mod read_values_valid;
 mod references_resolve;
 mod relative_limits_valid;
@@ -80,6 +81,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     bit_fields_valid::check(drive, &mut out);
     enum_codes_fit::check(drive, &mut out);
     limits_consistent::check(drive, &mut out);
+    ratio_scales::check(drive, &mut out);
     references_resolve::check(drive, &mut out);
     access_consistent::check(drive, &mut out);
     protocol_valid::check(drive, &mut out);

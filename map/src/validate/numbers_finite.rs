@@ -66,6 +66,7 @@ fn scale(drive: &Drive, out: &mut Vec<Diagnostic>, reg: &str, s: &Scale, path: P
     match s {
         Scale::Factor(f) => finite(drive, out, Some(reg), *f, path),
         Scale::Relative(r) => finite(drive, out, Some(reg), r.full_scale, path.key("full_scale")),
+        Scale::Ratio(r) => finite(drive, out, Some(reg), r.equals, path.key("equals")),
         Scale::Selected(sel) => {
             for (i, case) in sel.cases.iter().enumerate() {
                 let cp = path.key("cases").index(i);
