@@ -22,7 +22,8 @@ pub enum Role {
     RunReverse,
     /// Direction: reverse (on) / forward (off).
     Reverse,
-    /// Fault reset (on), released (off); `edge` when the drive acts on the off → on transition.
+    /// Fault reset (on), released (off); [`Edge`] says whether the drive acts on the off → on
+    /// transition, on the level, or the manual does not print which.
     FaultReset,
     /// Switches to the drive's operating (DRV) mode, where it accepts run commands.
     ToDriveMode,
@@ -240,8 +241,41 @@ pub struct FieldRole {
     /// The code that releases a command (stop, forward, reset released); for a status, the code
     /// the field shows when the role does not hold, where the map says.
     pub off: Option<u16>,
-    /// The drive acts on the off → on transition only (a reset must be released before the next).
-    pub edge: bool,
+    /// Whether the drive acts on the off → on transition only (a reset must be released before
+    /// the next), on the level, or the manual does not print which.
+    pub edge: Edge,
+}
+
+/// How a drive acts on a command field, as the manual prints it (or does not).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Edge {
+    /// The drive acts while the field shows the `on` code (the default for a command).
+    #[default]
+    Level,
+    /// The drive acts on the off → on transition only: the field must be released before it
+    /// acts again.
+    Edge,
+    /// The manual does not print whether the drive acts on the transition or the level; the
+    /// map's reason. The drive trait then does what is safe for both: a momentary command (the
+    /// fault reset) is released before it is set where it may be set, and released after.
+    NotPrinted(&'static str),
+}
+
+impl Edge {
+    /// Whether a command must be released before it is set again for the drive to act: on an
+    /// edge, and where the manual does not print which (safe for both).
+    pub const fn needs_release_first(self) -> bool {
+        !matches!(self, Edge::Level)
+    }
+
+    /// How the map's documentation shows it: "edge", "level" or "not printed".
+    pub const fn describe(self) -> &'static str {
+        match self {
+            Edge::Level => "level",
+            Edge::Edge => "edge",
+            Edge::NotPrinted(_) => "not printed",
+        }
+    }
 }
 
 impl FieldRole {
@@ -276,13 +310,85 @@ impl FieldRole {
     }
 }
 
+/// A field of a register playing a number role (a fault code in the status word's high byte):
+/// its bits, whether they are two's complement, and the decimal scale of one count in the
+/// role's unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NumberField {
+    /// The register's row in the drive's plan (`REGISTERS`).
+    pub row: u16,
+    /// Lowest bit of the field.
+    pub lsb: u8,
+    /// Width in bits (1..=16).
+    pub width: u8,
+    /// The field is two's complement (its top bit is the sign).
+    pub signed: bool,
+    /// One count in the role's unit (1 for a code).
+    pub scale: crate::scale::Decimal,
+}
+
+impl NumberField {
+    /// The field's bits in the register's word.
+    pub const fn mask(&self) -> u16 {
+        ((((1u32 << self.width) - 1) << self.lsb) & 0xFFFF) as u16
+    }
+
+    /// The field's raw bits in `word`, unsigned.
+    pub const fn bits(&self, word: u16) -> u16 {
+        (word & self.mask()) >> self.lsb
+    }
+
+    /// The count the field holds in `word`: sign-extended where the field is signed.
+    pub const fn get(&self, word: u16) -> i64 {
+        let bits = self.bits(word) as i64;
+        if self.signed && self.width > 0 && bits >> (self.width - 1) & 1 == 1 {
+            bits - (1i64 << self.width)
+        } else {
+            bits
+        }
+    }
+
+    /// The counts the field can hold.
+    pub const fn range(&self) -> crate::scale::RawRange {
+        let span = 1i64 << self.width;
+        if self.signed {
+            crate::scale::RawRange {
+                min: -(span / 2),
+                max: span / 2 - 1,
+            }
+        } else {
+            crate::scale::RawRange {
+                min: 0,
+                max: span - 1,
+            }
+        }
+    }
+
+    /// `word` with the field set to `count`, or `None` when the field cannot hold it.
+    pub const fn put(&self, word: u16, count: i64) -> Option<u16> {
+        let r = self.range();
+        if count < r.min || count > r.max {
+            return None;
+        }
+        let bits = (count & ((1i64 << self.width) - 1)) as u16;
+        Some((word & !self.mask()) | ((bits << self.lsb) & self.mask()))
+    }
+
+    /// The value the field holds in `word`, in the role's unit.
+    pub fn value(&self, word: u16) -> f64 {
+        self.scale.decode(self.get(word))
+    }
+}
+
 /// Where a role lives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Target {
     /// A whole register: its row in the drive's plan.
     Register(u16),
-    /// A field of a register.
+    /// A field of a register playing a command, status or source role.
     Field(FieldRole),
+    /// A field of a register playing a number role (setpoint or monitor).
+    NumberField(NumberField),
     /// An external quantity of the map (a setting the application supplies, such as a maximum
     /// frequency with no register): its quantity slot in the drive's settings.
     External {
@@ -299,6 +405,7 @@ impl Target {
         match self {
             Target::Register(row) => Some(*row),
             Target::Field(f) => Some(f.row),
+            Target::NumberField(f) => Some(f.row),
             Target::External { .. } => None,
         }
     }
@@ -373,7 +480,7 @@ mod tests {
             width: 2,
             on: &[2],
             off: Some(1),
-            edge: false,
+            edge: Edge::Level,
         };
         assert_eq!(f.mask(), 0x0030);
         assert_eq!(f.put(0xFFFF, f.code(true)), 0xFFEF);
@@ -391,9 +498,59 @@ mod tests {
             width: 1,
             on: &[1],
             off: Some(0),
-            edge: true,
+            edge: Edge::Edge,
         };
         assert_eq!(f.put(0, f.code(true)), 0x8000);
         assert_eq!(f.put(0xFFFF, f.code(false)), 0x7FFF);
+    }
+
+    #[test]
+    fn edge_and_not_printed_need_a_release_first_level_does_not() {
+        assert!(!Edge::Level.needs_release_first());
+        assert!(Edge::Edge.needs_release_first());
+        assert!(Edge::NotPrinted("no timing diagram").needs_release_first());
+        assert_eq!(Edge::NotPrinted("x").describe(), "not printed");
+    }
+
+    #[test]
+    fn a_signed_byte_reads_and_writes_in_place() {
+        // A signed high byte: 0xFE is -2, the low byte is kept.
+        let f = NumberField {
+            row: 0,
+            lsb: 8,
+            width: 8,
+            signed: true,
+            scale: crate::scale::Decimal::ONE,
+        };
+        assert_eq!(f.get(0xFE34), -2);
+        assert_eq!(f.get(0x7F00), 127);
+        assert_eq!(f.get(0x8000), -128);
+        assert_eq!(f.put(0x1234, -1), Some(0xFF34));
+        assert_eq!(f.put(0x1234, 127), Some(0x7F34));
+        assert_eq!(f.put(0x1234, 128), None);
+        assert_eq!(f.put(0x1234, -129), None);
+        let u = NumberField { signed: false, ..f };
+        assert_eq!(u.get(0xFE34), 254);
+        assert_eq!(u.put(0, -1), None);
+        assert_eq!(u.put(0x00AB, 255), Some(0xFFAB));
+        // A low 4-bit field, scale 0.5.
+        let n = NumberField {
+            row: 0,
+            lsb: 0,
+            width: 4,
+            signed: false,
+            scale: crate::scale::Decimal::new(5, 1),
+        };
+        assert_eq!(n.value(0xFFF3), 1.5);
+        // A whole word, signed.
+        let w = NumberField {
+            row: 0,
+            lsb: 0,
+            width: 16,
+            signed: true,
+            scale: crate::scale::Decimal::ONE,
+        };
+        assert_eq!(w.get(0xFFFF), -1);
+        assert_eq!(w.put(0, -32768), Some(0x8000));
     }
 }

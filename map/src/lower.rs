@@ -21,7 +21,7 @@ use drivemap_core::profile::{
     AddressOffsets, BroadcastInfo, CommandInfo, ExceptionInfo, Profile, SerialFormats, Timing,
 };
 use drivemap_core::register::RegisterInfo;
-use drivemap_core::roles::{FieldRole, Place, Role, RoleKind, Roles, Target};
+use drivemap_core::roles::{Edge, FieldRole, NumberField, Place, Role, RoleKind, Roles, Target};
 use drivemap_core::rule::{Transports, WriteRule};
 use drivemap_core::scale::{Decimal, RawRange};
 
@@ -246,6 +246,9 @@ fn roles(drive: &Drive, position: &[usize], settings: &SettingsPlan) -> Roles {
 fn same_bits(a: &Target, b: &Target) -> bool {
     match (a, b) {
         (Target::Field(x), Target::Field(y)) => x.row == y.row && x.mask() & y.mask() != 0,
+        (Target::NumberField(x), Target::NumberField(y)) => {
+            x.row == y.row && x.mask() & y.mask() != 0
+        }
         _ => a.row().is_some() && a.row() == b.row(),
     }
 }
@@ -290,13 +293,27 @@ fn role_target(
                 width: 16,
                 on: leak(on),
                 off: None,
-                edge: false,
+                edge: Edge::Level,
             }));
         }
         return Some(Target::Register(row));
     };
     let f = r.def.fields.iter().find(|f| f.id == *field_id)?;
     let (lsb, width) = field_span(f)?;
+    if matches!(role.kind(), RoleKind::Setpoint | RoleKind::Monitor) {
+        // A number in part of the word (a fault code in the status word's high byte).
+        let scale = match p.scale {
+            Some(s) => Decimal::from_f64(s)?,
+            None => Decimal::ONE,
+        };
+        return Some(Target::NumberField(NumberField {
+            row,
+            lsb,
+            width,
+            signed: p.signed,
+            scale,
+        }));
+    }
     let code = |c: &model::CodeRef| match c {
         model::CodeRef::Number(n) => Some(*n),
         model::CodeRef::Id(id) => f.values.iter().find(|v| v.id == *id).map(|v| v.value),
@@ -316,7 +333,11 @@ fn role_target(
         width,
         on: leak(on),
         off,
-        edge: p.edge,
+        edge: match &p.edge {
+            model::EdgeSpec::Known(false) => Edge::Level,
+            model::EdgeSpec::Known(true) => Edge::Edge,
+            model::EdgeSpec::Unknown(u) => Edge::NotPrinted(text(&u.unknown)),
+        },
     }))
 }
 

@@ -84,9 +84,17 @@ pub struct RolePlace {
     /// (default 0 for a 1-bit field).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub off: Option<CodeRef>,
-    /// The drive acts on the off → on transition only.
+    /// How the drive acts on a command: `true` on the off → on transition only, `false` (the
+    /// default) on the level, `{unknown: reason}` where the manual does not print which.
+    #[serde(default, skip_serializing_if = "EdgeSpec::is_level")]
+    pub edge: EdgeSpec,
+    /// A number role on a `field`: the field is two's complement (default: unsigned).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub edge: bool,
+    pub signed: bool,
+    /// A number role on a `field`: one count of the field in the role's unit (`0.1` for
+    /// 0.1 A per count; default 1). Required for a role with a unit (Hz, A, V, s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
     /// Another role (by id) whose place is the same register or bits, as the manual says: one
     /// ramp register for both directions (`shared_with: decel_time` on `accel_time`). Without
     /// it two setpoint or command roles on the same register bits are refused.
@@ -109,6 +117,46 @@ pub struct RolePlace {
     pub indirect: Option<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
+}
+
+/// How a drive acts on a command field: `true` (edge), `false` (level), or `{unknown: reason}`.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum EdgeSpec {
+    /// Printed: `true` on the off → on transition, `false` on the level.
+    Known(bool),
+    /// Not printed: why.
+    Unknown(EdgeUnknown),
+}
+
+/// `edge: {unknown: reason}`: the manual does not print whether the drive acts on the edge or
+/// the level.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeUnknown {
+    /// Why the map cannot say (what the manual prints and does not).
+    pub unknown: String,
+}
+
+impl Default for EdgeSpec {
+    fn default() -> Self {
+        EdgeSpec::Known(false)
+    }
+}
+
+impl EdgeSpec {
+    /// `edge: false` or left out.
+    pub fn is_level(&self) -> bool {
+        *self == EdgeSpec::Known(false)
+    }
+
+    /// The reason, where the manual does not print it.
+    pub fn unknown(&self) -> Option<&str> {
+        match self {
+            EdgeSpec::Unknown(u) => Some(&u.unknown),
+            EdgeSpec::Known(_) => None,
+        }
+    }
 }
 
 /// A code of a field: its number, or its `id` among the field's `values`.

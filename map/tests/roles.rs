@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use drivemap_core::roles::{FieldRole, Role, Target};
+use drivemap_core::roles::{Edge, FieldRole, NumberField, Role, Target};
 use drivemap_map::lower::DrivePlan;
 use drivemap_map::validate::Context;
 
@@ -45,7 +45,7 @@ fn a_two_bit_run_code_lowers_to_its_row_bits_and_codes() {
                 width: 2,
                 on: &[2],
                 off: Some(1),
-                edge: false,
+                edge: Edge::Level,
             }),
             Target::Field(FieldRole {
                 row: row(plan, "broadcast_command"),
@@ -53,7 +53,7 @@ fn a_two_bit_run_code_lowers_to_its_row_bits_and_codes() {
                 width: 1,
                 on: &[1],
                 off: Some(0),
-                edge: false,
+                edge: Edge::Level,
             }),
         ]
     );
@@ -82,7 +82,7 @@ fn every_role_of_the_fixture_lowers_to_its_place() {
             width: 1,
             on: &[0],
             off: Some(1),
-            edge: false,
+            edge: Edge::Level,
         })]
     );
     assert_eq!(
@@ -93,7 +93,7 @@ fn every_role_of_the_fixture_lowers_to_its_place() {
             width: 1,
             on: &[1],
             off: Some(0),
-            edge: true,
+            edge: Edge::Edge,
         })]
     );
     assert_eq!(
@@ -113,7 +113,7 @@ fn every_role_of_the_fixture_lowers_to_its_place() {
             width: 2,
             on: &[1, 2],
             off: Some(0),
-            edge: false,
+            edge: Edge::Level,
         })]
     );
     assert_eq!(
@@ -124,7 +124,7 @@ fn every_role_of_the_fixture_lowers_to_its_place() {
             width: 1,
             on: &[1],
             off: Some(0),
-            edge: false,
+            edge: Edge::Level,
         })]
     );
     match targets(plan, Role::MaxFrequency)[..] {
@@ -141,4 +141,78 @@ fn every_role_of_the_fixture_lowers_to_its_place() {
     let mut sorted = order.clone();
     sorted.sort_by_key(|r| Role::ALL.iter().position(|a| a == r));
     assert_eq!(order, sorted);
+}
+
+/// The acme-vf1 fixture's fault code is the status word's high byte (acme-vf1.txt:58): lowered
+/// once to the row, bits and sign the trait and the simulator read.
+#[test]
+fn a_fault_code_in_a_byte_lowers_to_a_number_field() {
+    let drive = drivemap_map::read_map(
+        Path::new("../tests/fixtures/acme-vf1/acme-vf1.yaml"),
+        &Context::default(),
+    )
+    .unwrap_or_else(|d| panic!("{d}"));
+    let plan = drive.plan();
+    assert_eq!(
+        targets(plan, Role::FaultCode),
+        [Target::NumberField(NumberField {
+            row: row(plan, "status_word"),
+            lsb: 8,
+            width: 8,
+            signed: false,
+            scale: drivemap_core::scale::Decimal::ONE,
+        })]
+    );
+}
+
+/// `signed` and `scale` on a number field, and `edge: {unknown: ..}` on a command, lower as
+/// written.
+#[test]
+fn a_signed_scaled_field_and_an_unknown_edge_lower_as_written() {
+    let text = std::fs::read_to_string("../tests/fixtures/acme-vf1/acme-vf1.yaml").unwrap();
+    let text = text
+        .replace(
+            "{register: status_word, field: active_fault, source",
+            "{register: status_word, field: active_fault, signed: true, source",
+        )
+        .replace(
+            "{register: output_current, source: \"acme-vf1.txt:30\"}",
+            "{register: status_word, field: active_fault, scale: 0.5, source: \"acme-vf1.txt:30\"}",
+        )
+        .replace(
+            "field: fault_reset, edge: true,",
+            "field: fault_reset, edge: {unknown: \"no timing printed\"},",
+        );
+    let dir = std::env::temp_dir().join(format!("drivemap-roles-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("acme-vf1.yaml");
+    std::fs::write(&path, text).unwrap();
+    let drive = drivemap_map::read_map(&path, &Context::default()).unwrap_or_else(|d| panic!("{d}"));
+    let plan = drive.plan();
+    let status = row(plan, "status_word");
+    assert_eq!(
+        targets(plan, Role::FaultCode),
+        [Target::NumberField(NumberField {
+            row: status,
+            lsb: 8,
+            width: 8,
+            signed: true,
+            scale: drivemap_core::scale::Decimal::ONE,
+        })]
+    );
+    assert_eq!(
+        targets(plan, Role::OutputCurrent),
+        [Target::NumberField(NumberField {
+            row: status,
+            lsb: 8,
+            width: 8,
+            signed: false,
+            scale: drivemap_core::scale::Decimal::new(5, 1),
+        })]
+    );
+    let [Target::Field(reset)] = targets(plan, Role::FaultReset)[..] else {
+        panic!("fault_reset is not a field");
+    };
+    assert_eq!(reset.edge, Edge::NotPrinted("no timing printed"));
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -414,6 +414,29 @@ fn roles(out: &mut String, drive: &Drive) {
                 String::new(),
                 String::new(),
             ),
+            Target::NumberField(f) => {
+                let r = &plan.registers[usize::from(f.row)];
+                let field = match &r.conversion {
+                    Conversion::Bits { fields, .. } => fields
+                        .iter()
+                        .find(|x| x.lsb == f.lsb && x.width == f.width)
+                        .map(|x| code(x.id)),
+                    _ => None,
+                };
+                let unit = p.role.unit().map(|u| format!(" {u}")).unwrap_or_default();
+                let what = format!(
+                    "{} {}, {} per count",
+                    if f.signed { "signed" } else { "unsigned" },
+                    describe::bit_span(f.lsb, f.width),
+                    format!("{}{unit}", f.scale.as_f64()).trim()
+                );
+                (
+                    code(r.info.id),
+                    field.map(|x| format!("{x} ({what})")).unwrap_or(what),
+                    String::new(),
+                    String::new(),
+                )
+            }
             Target::Field(f) => {
                 let r = &plan.registers[usize::from(f.row)];
                 let field = match &r.conversion {
@@ -439,8 +462,14 @@ fn roles(out: &mut String, drive: &Drive) {
                     _ => {}
                 }
                 let mut off = f.off.map(label).unwrap_or_default();
-                if f.edge {
-                    off.push_str(" (acts on the off → on edge)");
+                match f.edge {
+                    drivemap_core::roles::Edge::Level => {}
+                    drivemap_core::roles::Edge::Edge => {
+                        off.push_str(" (acts on the off → on edge)")
+                    }
+                    drivemap_core::roles::Edge::NotPrinted(why) => off.push_str(&format!(
+                        " (edge or level not printed in the manual: {why}; the trait releases before it sets and after)"
+                    )),
                 }
                 (
                     code(r.info.id),
@@ -1026,3 +1055,4 @@ mod tests {
         assert_eq!(cell("a | b\nc <d>"), "a \\| b c &lt;d>");
     }
 }
+

@@ -188,6 +188,16 @@ pub enum Refusal {
         /// What to set: "set n003 = 2 for the network".
         fix: String,
     },
+    /// A number role the map puts in a field of a register (part of a word) that cannot be
+    /// written safely by reading the word and writing it back.
+    #[error("{drive}: `{role}` is a field of {register} and is not written: {why}")]
+    FieldNotWritable {
+        drive: &'static str,
+        role: &'static str,
+        register: &'static str,
+        /// Why a read-modify-write is not safe there.
+        why: &'static str,
+    },
     /// A drive's plan used with a client made for another drive's profile.
     #[error(
         "the client speaks to {client}, not to {drive}: build the client with {drive}'s profile"

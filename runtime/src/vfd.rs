@@ -82,7 +82,7 @@ use std::fmt;
 
 use drivemap_core::plan::{Conversion, RegisterPlan};
 use drivemap_core::register::{DrivePlan, DriveSettings, Table};
-use drivemap_core::roles::{FieldRole, Place, Role, RoleKind, Target};
+use drivemap_core::roles::{FieldRole, NumberField, Place, Role, RoleKind, Target};
 use drivemap_core::rule::Broadcast;
 use drivemap_core::{Roles, Rounding, SettingsView, ValueError};
 
@@ -192,8 +192,12 @@ impl fmt::Display for Status {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct FaultCode {
-    /// The raw code.
+    /// The raw code: the register's word, or the bits of the field the map names (a fault code
+    /// in the status word's high byte: that byte).
     pub code: u16,
+    /// The code as a number: sign-extended where the map says the register or field is signed,
+    /// else `code`.
+    pub value: i32,
     /// The map's name of the code, if it lists it.
     pub name: Option<&'static str>,
 }
@@ -609,6 +613,10 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
                 }
                 .into()
             }),
+            Target::NumberField(f) => {
+                let word = self.read_word(f.row) $($aw)*?;
+                Ok(f.value(word))
+            }
             Target::Field(_) => Err(self.misplaced(role, "register")),
         }
     }
@@ -616,6 +624,9 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
     /// Writes the number role `role`, range-checked by the register's conversion.
     $($asy)* fn write_number(&mut self, role: Role, value: f64) -> Result<(), Error> {
         let p = self.place(role, "register")?;
+        if let Target::NumberField(f) = p.target {
+            return self.write_number_field(role, f, value) $($aw)*;
+        }
         let Target::Register(row) = p.target else {
             return Err(self.misplaced(role, "writable register"));
         };
@@ -623,6 +634,55 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
             .row(row)
             .encode_number_with(value, &self.state.settings, self.state.rounding)?;
         self.write_word(row, raw) $($aw)*
+    }
+
+    /// Writes a number role that is a field of a register: reads the word, puts the value's
+    /// count into the field, writes the word back — only where that keeps the rest of the word
+    /// as the drive has it: the register is readable here and reads mean what writes do, it is
+    /// not a broadcast, and no command role lives in it (a read-back command word could send
+    /// a run bit again). Elsewhere refused, with why, before anything is sent.
+    $($asy)* fn write_number_field(&mut self, role: Role, f: NumberField, value: f64) -> Result<(), Error> {
+        let r = self.row(f.row);
+        let why = if !r.info.access.readable() || !r.transports.contains(self.state.kind) {
+            Some("the register cannot be read on this link, so the rest of its word is unknown")
+        } else if !r.read_values.is_empty() {
+            Some("the register reads back other values than are written, so the rest of its word cannot be kept")
+        } else if self.state.slave == 0 || r.broadcast == Broadcast::Only {
+            Some("a broadcast cannot read the word first")
+        } else if self
+            .state
+            .roles
+            .places
+            .iter()
+            .any(|p| p.role.kind() == RoleKind::Command && p.target.row() == Some(f.row))
+        {
+            Some("command fields share the register: writing back what was read could repeat a run or reset")
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            return Err(Refusal::FieldNotWritable {
+                drive: self.drive(),
+                role: role.id(),
+                register: r.info.id,
+                why,
+            }
+            .into());
+        }
+        let count = drivemap_core::scale::encode_decimal_with(
+            r.info.id,
+            role.unit().unwrap_or(""),
+            value,
+            f.scale,
+            f.range(),
+            self.state.rounding,
+        )?;
+        let word = self.read_word(f.row) $($aw)*?;
+        let Some(word) = f.put(word, count) else {
+            // encode_decimal_with keeps the count in the field's range.
+            return Err(self.misplaced(role, "field that holds the value"));
+        };
+        self.write_word(f.row, u32::from(word)) $($aw)*
     }
 
     /// Sets the command fields of `changes` in their registers' words and writes each word once,
@@ -1062,13 +1122,33 @@ impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
 
     $($asy)* fn fault_code(&mut self) -> Result<FaultCode, Error> {
         let p = self.place(Role::FaultCode, "register")?;
+        if let Target::NumberField(f) = p.target {
+            let word = self.read_word(f.row) $($aw)*?;
+            let code = f.bits(word);
+            let r = self.row(f.row);
+            let name = match &r.conversion {
+                Conversion::Bits { fields, .. } => fields
+                    .iter()
+                    .find(|x| x.lsb == f.lsb && x.width == f.width)
+                    .and_then(|x| x.values.iter().find(|v| v.code == code))
+                    .map(|v| v.name),
+                _ => None,
+            };
+            return Ok(FaultCode {
+                code,
+                value: f.get(word) as i32,
+                name,
+            });
+        }
         let Some(row) = p.target.row() else {
             return Err(self.misplaced(Role::FaultCode, "register"));
         };
         let code = self.read_word(row) $($aw)*?;
+        let r = self.row(row);
         Ok(FaultCode {
             code,
-            name: self.row(row).label(code).map(|l| l.name),
+            value: if r.signed() { i32::from(code as i16) } else { i32::from(code) },
+            name: r.label(code).map(|l| l.name),
         })
     }
 
@@ -1084,7 +1164,9 @@ impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
             .iter()
             .find(|c| c.row == f.row)
             .is_some_and(|c| c.told.is_none_or(|w| f.holds(w)));
-        if f.edge && set {
+        // On an edge, and where the manual does not print edge or level (safe for both), a reset
+        // that may be set is released first, so the drive sees the off → on transition.
+        if f.edge.needs_release_first() && set {
             self.command(&[(f, false)]) $($aw)*?;
         }
         self.command(&[(f, true)]) $($aw)*?;

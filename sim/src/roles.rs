@@ -9,7 +9,7 @@
 //! [`Plausible`] and `sim/README.md`.
 
 use drivemap_map::ir::Drive;
-use drivemap_runtime::core::roles::{FieldRole, Role, RoleKind, Target};
+use drivemap_runtime::core::roles::{FieldRole, NumberField, Role, RoleKind, Target};
 use drivemap_runtime::core::rule::Transports;
 use drivemap_runtime::profile::TransportKind;
 
@@ -197,6 +197,24 @@ pub(crate) enum Follow {
     DcBus,
     /// The fault code while tripped, the register's power-on word otherwise.
     FaultCode,
+    /// The fault code in a field of the register (a status word's byte) while tripped, the
+    /// field's power-on bits otherwise.
+    FaultCodeField(NumberField),
+}
+
+impl Follow {
+    /// Whether it shows the fault code.
+    pub fn is_fault_code(self) -> bool {
+        matches!(self, Follow::FaultCode | Follow::FaultCodeField(_))
+    }
+
+    /// The bits of the register's word it shows (the whole word but for a field).
+    pub fn mask(self) -> u32 {
+        match self {
+            Follow::FaultCodeField(f) => u32::from(f.mask()),
+            _ => u32::MAX,
+        }
+    }
 }
 
 /// The roles of a map, resolved to the simulator's register indices.
@@ -260,7 +278,7 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
                 None => Source::Value(fallback),
             },
             Target::External { name, .. } => Source::Value(externals(name).unwrap_or(fallback)),
-            Target::Field(_) => Source::Value(fallback),
+            Target::Field(_) | Target::NumberField(_) => Source::Value(fallback),
         })
     };
     if let Some(s) = quantity(Role::MaxFrequency, Plausible::MAX_FREQUENCY, &mut r.initial) {
@@ -319,6 +337,9 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
                 Role::FaultCode => r.follow.push((i, Follow::FaultCode)),
                 _ => {}
             },
+            (_, Target::NumberField(f), Some(i)) if p.role == Role::FaultCode => {
+                r.follow.push((i, Follow::FaultCodeField(f)));
+            }
             _ => {}
         }
     }

@@ -15,7 +15,7 @@ use drivemap_core::plan::{
 };
 use drivemap_core::ratio::Ratio;
 use drivemap_core::register::{Access, Table, WriteRestriction};
-use drivemap_core::roles::Target;
+use drivemap_core::roles::{Edge, Target};
 use drivemap_core::rule::{Broadcast, Transports};
 use drivemap_core::scale::{Decimal, RawRange};
 use drivemap_core::width::{Width, WordOrder};
@@ -72,7 +72,10 @@ pub fn module(plan: &DrivePlan) -> String {
         ),
         ("rt::ratio", &["Ratio"][..]),
         ("rt::scale", &["Decimal", "RawRange"][..]),
-        ("rt::roles", &["FieldRole", "Place", "Role", "Target"][..]),
+        (
+            "rt::roles",
+            &["Edge", "FieldRole", "NumberField", "Place", "Role", "Target"][..],
+        ),
         (
             "rt",
             &[
@@ -124,7 +127,19 @@ fn roles(plan: &DrivePlan) -> String {
                 f.width,
                 list(f.on, |c| c.to_string()),
                 f.off,
-                f.edge
+                match f.edge {
+                    Edge::Level => "Edge::Level".to_owned(),
+                    Edge::Edge => "Edge::Edge".to_owned(),
+                    Edge::NotPrinted(why) => format!("Edge::NotPrinted({})", string(why)),
+                }
+            ),
+            Target::NumberField(f) => format!(
+                "Target::NumberField(NumberField {{ row: {}, lsb: {}, width: {}, signed: {}, scale: {} }})",
+                f.row,
+                f.lsb,
+                f.width,
+                f.signed,
+                decimal(f.scale)
             ),
             Target::External { slot, name } => {
                 format!(

@@ -22,6 +22,7 @@ mod identifiers_valid;
 mod indexed_valid;
 mod limits_consistent;
 mod manuals_declared;
+mod number_fields;
 mod numbers_finite;
 mod pairs_valid;
 mod protocol_valid;

@@ -1,6 +1,7 @@
 //! Roles name what they may: a known role, an existing register (or, for the maximum frequency,
 //! an external quantity of the map), of a fitting kind and access — a command or status role a
-//! field, a setpoint a writable number register in the role's unit, a monitor a readable one —
+//! field, a setpoint a writable number register in the role's unit (or a number field of one:
+//! `number_fields`), a monitor a readable one —
 //! and codes the field has; two setpoint or command roles on the same register bits only where
 //! the map says so (`shared_with`). Citations of roles are checked with the others
 //! (`citations_present`).
@@ -246,7 +247,10 @@ impl Check<'_> {
             },
         };
         let rid = Some(register.id());
-        if p.edge && role.kind() != RoleKind::Command {
+        for (at, message) in super::number_fields::check(self.drive, role, p, register, path) {
+            self.error(&at, rid, message);
+        }
+        if !p.edge.is_level() && role.kind() != RoleKind::Command {
             self.error(
                 &path.key("edge"),
                 rid,
@@ -295,12 +299,12 @@ impl Check<'_> {
             }
             RoleKind::Source => self.source(role, p, register, path),
             RoleKind::Setpoint | RoleKind::Monitor => {
-                if p.field.is_some() || p.on.is_some() || p.off.is_some() {
+                if p.field.is_none() && (p.on.is_some() || p.off.is_some()) {
                     self.error(
                         path,
                         rid,
                         format!(
-                            "role `{id}` is a whole register: it takes no `field`, `on` or `off`"
+                            "role `{id}` is a number: it takes no `on` or `off` (those are the codes of a command or status field)"
                         ),
                     );
                 }
@@ -325,7 +329,13 @@ impl Check<'_> {
                         ),
                     );
                 }
-                self.number(role, register, path);
+                match &p.field {
+                    // A number field: number_fields checks it.
+                    Some(field_id) => {
+                        self.field(register, field_id, path);
+                    }
+                    None => self.number(role, register, path),
+                }
             }
         }
     }
@@ -371,7 +381,7 @@ impl Check<'_> {
             || p.external.is_some()
             || p.on.is_some()
             || p.off.is_some()
-            || p.edge
+            || !p.edge.is_level()
         {
             self.error(
                 path,
@@ -568,7 +578,7 @@ impl Check<'_> {
             );
             return;
         }
-        if p.field.is_some() || p.on.is_some() || p.off.is_some() || p.edge {
+        if p.field.is_some() || p.on.is_some() || p.off.is_some() || !p.edge.is_level() {
             self.error(
                 path,
                 None,

@@ -6,7 +6,9 @@
 //! A place is compared by what it means, resolved as the lowering resolves it (`lower.rs`,
 //! `role_target`): the register (by id, or the same address and parameter number when the
 //! register was renamed), the field's bits, the codes as numbers (`on: run` and `on: 1` are the
-//! same code), the default codes of a 1-bit field, `edge`, `shared_with`. A place written otherwise with the
+//! same code), the default codes of a 1-bit field, `edge` (edge, level or not printed; the
+//! reason of a not-printed one is documentation), a number field's `signed` and `scale`,
+//! `shared_with`. A place written otherwise with the
 //! same meaning (a register by parameter number instead of id, a code by id instead of number)
 //! is reported as documentation.
 
@@ -120,7 +122,10 @@ struct Meaning {
     transports: Option<Vec<crate::model::TransportName>>,
     on: Vec<Option<u16>>,
     off: Option<u16>,
-    edge: bool,
+    /// How the drive acts on a command: "level", "edge" or "not printed".
+    edge: &'static str,
+    /// A number role on a field: signed, and one count in the role's unit.
+    number: Option<(bool, f64)>,
     /// The role it shares its register or bits with, as the map says.
     shared_with: Option<String>,
 }
@@ -136,6 +141,8 @@ impl Meaning {
             on,
             off,
             edge,
+            signed,
+            scale,
             shared_with,
             transports,
             unknown,
@@ -233,7 +240,13 @@ impl Meaning {
             transports,
             on,
             off,
-            edge: *edge,
+            edge: match edge {
+                crate::model::EdgeSpec::Known(false) => "level",
+                crate::model::EdgeSpec::Known(true) => "edge",
+                crate::model::EdgeSpec::Unknown(_) => "not printed",
+            },
+            number: (field.is_some() && (*signed || scale.is_some()))
+                .then(|| (*signed, scale.unwrap_or(1.0))),
             shared_with: shared_with.clone(),
         }
     }
@@ -243,7 +256,17 @@ impl Meaning {
             .shared_with
             .as_ref()
             .map(|r| format!("shared with `{r}`"));
-        if self.on.is_empty() && self.off.is_none() && !self.edge {
+        if let Some((signed, scale)) = self.number {
+            let mut s = format!(
+                "{}, {scale} per count",
+                if signed { "signed" } else { "unsigned" }
+            );
+            if let Some(shared) = shared {
+                s += &format!(", {shared}");
+            }
+            return s;
+        }
+        if self.on.is_empty() && self.off.is_none() && self.edge == "level" {
             return shared.unwrap_or_default();
         }
         let on: Vec<String> = self
@@ -255,8 +278,10 @@ impl Meaning {
         if let Some(off) = self.off {
             s += &format!(", off {off}");
         }
-        if self.edge {
-            s += ", on the transition";
+        match self.edge {
+            "edge" => s += ", on the transition",
+            "not printed" => s += ", edge or level not printed",
+            _ => {}
         }
         if let Some(shared) = shared {
             s += &format!(", {shared}");
@@ -367,7 +392,9 @@ pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
                 format!("{id} place {}", i + 1)
             };
             let sides = |m: &Meaning, s: &RolePlace| (Some(m.text()), s.source.clone());
-            if (&x.on, x.off, x.edge, &x.shared_with) != (&y.on, y.off, y.edge, &y.shared_with) {
+            if (&x.on, x.off, x.edge, x.number, &x.shared_with)
+                != (&y.on, y.off, y.edge, y.number, &y.shared_with)
+            {
                 c.push(
                     ChangeKind::RoleCodesChanged,
                     subject,
@@ -380,7 +407,11 @@ pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
             }
             // Same meaning: how it is written, its notes, its citation.
             let mut parts = Vec::new();
-            if spelling(p) != spelling(q) || p.off != q.off || x.target != y.target {
+            if spelling(p) != spelling(q)
+                || p.off != q.off
+                || p.edge != q.edge
+                || x.target != y.target
+            {
                 parts.push("written otherwise");
             }
             if p.notes != q.notes {

@@ -70,7 +70,8 @@ pub struct Simulator {
     commands: Vec<CommandTrack>,
     warnings: Vec<String>,
     /// The fault code registers' words before the drive tripped, restored by a reset.
-    fault_words: Vec<(usize, u32)>,
+    /// With the bits of each that show the code (a field's, or the whole word).
+    fault_words: Vec<(usize, u32, u32)>,
     /// The link the frequency reference in force was last written on (`None`: set by hand or
     /// power-on): a reference from a link whose reference source is not selected is not used.
     reference_via: Option<TransportKind>,

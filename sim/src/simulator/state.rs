@@ -180,8 +180,8 @@ impl Simulator {
             self.fault_words = roles
                 .follow
                 .iter()
-                .filter(|(_, f)| *f == Follow::FaultCode)
-                .map(|&(i, _)| (i, self.raw[i]))
+                .filter(|(_, f)| f.is_fault_code())
+                .map(|&(i, f)| (i, self.raw[i], f.mask()))
                 .collect();
         }
         self.model.fault = Some(code);
@@ -289,14 +289,16 @@ impl Simulator {
                     self.raw[i] = c.bit.put(self.raw[i], c.bit.field.code(false));
                 }
                 Role::FaultReset => {
-                    let acts = if c.bit.field.edge {
+                    // Where the manual does not print edge or level, the simulated drive acts
+                    // on the edge: the stricter of the two, so a master that only sets fails here.
+                    let acts = if c.bit.field.edge.needs_release_first() {
                         on && !c.bit.holds(before)
                     } else {
                         on
                     };
                     if acts && self.model.fault.take().is_some() {
-                        for (r, word) in std::mem::take(&mut self.fault_words) {
-                            self.raw[r] = word;
+                        for (r, word, mask) in std::mem::take(&mut self.fault_words) {
+                            self.raw[r] = (self.raw[r] & !mask) | (word & mask);
                         }
                     }
                 }
@@ -478,6 +480,15 @@ impl Simulator {
                 Follow::FaultCode => {
                     if let Some(code) = self.model.fault {
                         self.raw[i] = u32::from(code);
+                    }
+                    continue;
+                }
+                Follow::FaultCodeField(f) => {
+                    if let Some(code) = self.model.fault {
+                        // The code's low bits in the field; the rest of the word is kept.
+                        let mask = f.mask();
+                        self.raw[i] =
+                            u32::from((self.raw[i] as u16 & !mask) | ((code << f.lsb) & mask));
                     }
                     continue;
                 }
