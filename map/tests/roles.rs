@@ -187,7 +187,8 @@ fn a_signed_scaled_field_and_an_unknown_edge_lower_as_written() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("acme-vf1.yaml");
     std::fs::write(&path, text).unwrap();
-    let drive = drivemap_map::read_map(&path, &Context::default()).unwrap_or_else(|d| panic!("{d}"));
+    let drive =
+        drivemap_map::read_map(&path, &Context::default()).unwrap_or_else(|d| panic!("{d}"));
     let plan = drive.plan();
     let status = row(plan, "status_word");
     assert_eq!(

@@ -1055,4 +1055,3 @@ mod tests {
         assert_eq!(cell("a | b\nc <d>"), "a \\| b c &lt;d>");
     }
 }
-

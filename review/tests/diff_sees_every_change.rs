@@ -38,6 +38,7 @@ fn maps() -> Vec<PathBuf> {
         "tests/fixtures/tarrow-tm44",
         "tests/fixtures/orbis-q5",
         "tests/fixtures/halvard-hx2",
+        "tests/fixtures/brenner-fx4",
         "map/tests/fixtures",
         "map/tests/fixtures/variants",
         "cli/tests/fixtures",

@@ -74,7 +74,14 @@ pub fn module(plan: &DrivePlan) -> String {
         ("rt::scale", &["Decimal", "RawRange"][..]),
         (
             "rt::roles",
-            &["Edge", "FieldRole", "NumberField", "Place", "Role", "Target"][..],
+            &[
+                "Edge",
+                "FieldRole",
+                "NumberField",
+                "Place",
+                "Role",
+                "Target",
+            ][..],
         ),
         (
             "rt",
@@ -148,9 +155,16 @@ fn roles(plan: &DrivePlan) -> String {
                 )
             }
         };
-        let what = match p.target.row() {
-            Some(row) => plan.registers[usize::from(row)].info.id,
-            None => "external quantity",
+        let what = match (p.target, p.target.row()) {
+            (Target::NumberField(f), Some(row)) => format!(
+                "{}, {} bits {}-{}",
+                plan.registers[usize::from(row)].info.id,
+                if f.signed { "signed" } else { "unsigned" },
+                f.lsb,
+                u16::from(f.lsb) + u16::from(f.width) - 1
+            ),
+            (_, Some(row)) => plan.registers[usize::from(row)].info.id.to_owned(),
+            (_, None) => "external quantity".to_owned(),
         };
         let shared = match p.shared_with {
             Some(r) => format!("Some(Role::{r:?})"),

@@ -75,7 +75,9 @@ pub(super) fn check(
     if p.signed && width < 2 {
         out.push((
             path.key("signed"),
-            format!("a signed field needs a sign bit and a value bit; `{rid}.{field_id}` is {width} bit"),
+            format!(
+                "a signed field needs a sign bit and a value bit; `{rid}.{field_id}` is {width} bit"
+            ),
         ));
     }
     if p.on.is_some() || p.off.is_some() || !p.edge.is_level() {

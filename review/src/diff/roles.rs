@@ -131,7 +131,7 @@ struct Meaning {
 }
 
 impl Meaning {
-    fn of(drive: &Drive, p: &RolePlace) -> Meaning {
+    fn of(drive: &Drive, id: &str, p: &RolePlace) -> Meaning {
         // Every key of a place is read here or below: a new key fails to compile until the diff
         // compares it.
         let RolePlace {
@@ -208,7 +208,16 @@ impl Meaning {
             Target::Field { span, .. } => span.map(|(_, w)| w),
             _ => None,
         };
-        let (on, off) = if matches!(target, Target::Field { .. }) {
+        // A number role on a field (a fault code in a byte) has no codes: its sign and scale.
+        let number = field.is_some()
+            && drivemap_core::roles::Role::from_id(id).is_some_and(|r| {
+                matches!(
+                    r.kind(),
+                    drivemap_core::roles::RoleKind::Setpoint
+                        | drivemap_core::roles::RoleKind::Monitor
+                )
+            });
+        let (on, off) = if matches!(target, Target::Field { .. }) && !number {
             let on: Vec<Option<u16>> = match on {
                 Some(codes) => codes.list().into_iter().map(code).collect(),
                 None => vec![Some(1)],
@@ -245,8 +254,7 @@ impl Meaning {
                 crate::model::EdgeSpec::Known(true) => "edge",
                 crate::model::EdgeSpec::Unknown(_) => "not printed",
             },
-            number: (field.is_some() && (*signed || scale.is_some()))
-                .then(|| (*signed, scale.unwrap_or(1.0))),
+            number: number.then(|| (*signed, scale.unwrap_or(1.0))),
             shared_with: shared_with.clone(),
         }
     }
@@ -303,10 +311,10 @@ impl Meaning {
     }
 }
 
-fn places_text(drive: &Drive, places: &[RolePlace]) -> String {
+fn places_text(drive: &Drive, id: &str, places: &[RolePlace]) -> String {
     places
         .iter()
-        .map(|p| Meaning::of(drive, p).text())
+        .map(|p| Meaning::of(drive, id, p).text())
         .collect::<Vec<_>>()
         .join("; ")
 }
@@ -348,7 +356,7 @@ pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
                     ChangeKind::RoleRemoved,
                     subject,
                     id,
-                    (Some(places_text(old, a)), first_source(a)),
+                    (Some(places_text(old, id, a)), first_source(a)),
                     (None, None),
                     HEAD,
                 );
@@ -360,15 +368,15 @@ pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
                     subject,
                     id,
                     (None, None),
-                    (Some(places_text(new, b)), first_source(b)),
+                    (Some(places_text(new, id, b)), first_source(b)),
                     HEAD,
                 );
                 continue;
             }
             (false, false) => {}
         }
-        let ma: Vec<Meaning> = a.iter().map(|p| Meaning::of(old, p)).collect();
-        let mb: Vec<Meaning> = b.iter().map(|p| Meaning::of(new, p)).collect();
+        let ma: Vec<Meaning> = a.iter().map(|p| Meaning::of(old, id, p)).collect();
+        let mb: Vec<Meaning> = b.iter().map(|p| Meaning::of(new, id, p)).collect();
         let repointed = ma.len() != mb.len()
             || ma
                 .iter()
@@ -379,8 +387,8 @@ pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
                 ChangeKind::RoleRepointed,
                 subject,
                 id,
-                (Some(places_text(old, a)), first_source(a)),
-                (Some(places_text(new, b)), first_source(b)),
+                (Some(places_text(old, id, a)), first_source(a)),
+                (Some(places_text(new, id, b)), first_source(b)),
                 HEAD,
             );
             continue;

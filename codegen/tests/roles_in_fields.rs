@@ -1,0 +1,52 @@
+//! The generated `ROLES` of a map with a number role on a field and a reset whose edge or level
+//! the manual does not print (the brenner-fx4 fixture): both are in the generated constants, and
+//! the module is the same plan the map lowers to (the `drive_trait` tests run compiled drives).
+
+use std::path::Path;
+
+use drivemap_codegen::generate::{Options, drive_module};
+use drivemap_map::validate::Context;
+
+#[test]
+fn a_number_field_and_an_unknown_edge_are_generated() {
+    let drive = drivemap_map::read_map(
+        Path::new("../tests/fixtures/brenner-fx4/brenner-fx4.yaml"),
+        &Context::default(),
+    )
+    .unwrap_or_else(|d| panic!("{d}"));
+    let options = Options {
+        runtime: "::drivemap_runtime".parse().unwrap(),
+        source_name: "brenner-fx4.yaml".into(),
+    };
+    let code = drive_module(&drive, &options).unwrap();
+    let line = |needle: &str| {
+        code.lines()
+            .find(|l| l.contains(needle))
+            .unwrap_or_else(|| panic!("no line with {needle} in:\n{code}"))
+            .trim()
+            .to_owned()
+    };
+    let row = drive
+        .plan()
+        .registers
+        .iter()
+        .position(|r| r.info.id == "state_word")
+        .unwrap();
+    assert_eq!(
+        line("role: Role::FaultCode"),
+        format!(
+            "/* state_word, signed bits 8-15 */ Place {{ role: Role::FaultCode, target: Target::NumberField(NumberField {{ row: {row}, lsb: 8, width: 8, signed: true, scale: Decimal::new(1, 0) }}), transports: Transports::ALL, source: \"brenner-fx4.txt:17\", shared_with: None }},"
+        )
+    );
+    assert!(
+        line("role: Role::FaultReset").contains(
+            "edge: Edge::NotPrinted(\"the guide names the bit (1 = reset) but not whether the drive acts on its 0 to 1 transition or while it is 1\")"
+        ),
+        "{}",
+        line("role: Role::FaultReset")
+    );
+    assert!(
+        code.contains("use super::rt::roles::{Edge, FieldRole, NumberField, Place, Role, Target};"),
+        "{code}"
+    );
+}
