@@ -84,6 +84,22 @@ pub struct Register {
     pub repeat_needs_change: Option<(model::RepeatNeedsChange, Path)>,
     /// The register's `function_codes`, else its group's, with where it is written.
     pub function_codes: Option<(model::RegisterFunctions, Path)>,
+    /// Its place in [`Drive::registers`], given by [`expand`] (only this crate can make a
+    /// [`RegisterIndex`]): the handle the plan lookups ([`Drive::register_plan`], lowering)
+    /// index by.
+    pub index: RegisterIndex,
+}
+
+/// A register's place in [`Drive::registers`] (map order). Made only when a map is expanded,
+/// so a lookup by it needs no search and has no row to fall back to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct RegisterIndex(usize);
+
+impl RegisterIndex {
+    /// The index into [`Drive::registers`].
+    pub fn get(self) -> usize {
+        self.0
+    }
 }
 
 /// What a register's word means.
@@ -102,6 +118,11 @@ pub enum ValueKind<'a> {
 impl Register {
     pub fn id(&self) -> &str {
         &self.def.id
+    }
+
+    /// Its place in [`Drive::registers`] (map order), given when the map was expanded.
+    pub fn index(&self) -> usize {
+        self.index.0
     }
 
     /// One register, or a 32-bit pair in the map's word order.
@@ -227,18 +248,31 @@ impl Drive {
         self.registers.get(m)
     }
 
-    /// The plan of register `r` of this drive.
+    /// The plan of register `r` of this drive, by the place [`expand`] gave it (constant time:
+    /// the simulator asks for every word it serves).
+    ///
+    /// # Panics
+    /// When `r` is not a register of this drive (a register of another map, or of this map
+    /// expanded separately, with another id at its place): a caller's mistake, never the data's —
+    /// [`Drive::plan_of`] finds another map's register by id. There is no fallback row.
     pub fn register_plan(&self, r: &Register) -> &'static drivemap_core::RegisterPlan {
         let plan = self.plan();
-        // A register of this map is found by its place in `registers` (constant time: the
-        // simulator asks for every word it serves); another map's register by its id.
-        let size = std::mem::size_of::<Register>().max(1);
-        let offset = (r as *const Register as usize).wrapping_sub(self.registers.as_ptr() as usize);
-        let index = Some(offset / size)
-            .filter(|&i| offset % size == 0 && i < self.registers.len())
-            .or_else(|| self.registers.iter().position(|x| x.def.id == r.def.id))
-            .unwrap_or(0);
-        &plan.registers[plan.order[index]]
+        let index = r.index();
+        match self.registers.get(index) {
+            Some(own) if own.def.id == r.def.id => &plan.registers[plan.order[index]],
+            _ => panic!(
+                "register {} (#{index}) is not a register of {}: look another map's register up by id (Drive::plan_of)",
+                r.def.id, self.meta.id
+            ),
+        }
+    }
+
+    /// The plan of the register `id` of this drive (a register id, not a parameter number), if
+    /// there is one.
+    pub fn plan_of(&self, id: &str) -> Option<&'static drivemap_core::RegisterPlan> {
+        let plan = self.plan();
+        let index = self.registers.iter().position(|x| x.def.id == id)?;
+        Some(&plan.registers[plan.order[index]])
     }
 
     /// Locates a path in the merged tree.
@@ -708,6 +742,7 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                     },
                     path: path.clone(),
                     def,
+                    index: RegisterIndex(registers.len()),
                 });
             }
         }

@@ -139,14 +139,7 @@ pub fn lower(drive: &Drive) -> DrivePlan {
     for (sorted, &i) in order.iter().enumerate() {
         position[i] = sorted;
     }
-    let index_of = |r: &Register| -> usize {
-        let i = drive
-            .registers
-            .iter()
-            .position(|x| std::ptr::eq(x, r))
-            .unwrap_or(0);
-        position[i]
-    };
+    let index_of = |r: &Register| -> usize { position[r.index()] };
     let settings = SettingsPlan {
         codes: drive
             .selector_slots()
@@ -271,8 +264,7 @@ fn role_target(
         });
     }
     let r = drive.find(p.register.as_deref()?)?;
-    let i = drive.registers.iter().position(|x| std::ptr::eq(x, r))?;
-    let row = position[i] as u16;
+    let row = position[r.index()] as u16;
     let Some(field_id) = &p.field else {
         if role.kind() == RoleKind::Source {
             // A source parameter: the whole word is the code (its `values`, or a number).

@@ -231,6 +231,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
         path: _,                // where it is written
         repeat_needs_change: _, // RepeatNeedsChangeChanged, citations()
         function_codes: _,      // FunctionCodesChanged, citations()
+        index: _,               // its place in the map's list, not a property
     } = n;
     let subject = describe::register(n);
     let order = u32::from(n.def.address) + 1;
