@@ -9,6 +9,7 @@
 pub mod codec;
 pub mod duration;
 pub mod examples;
+pub mod indexed;
 pub mod intern;
 pub mod link;
 pub mod lookup;

@@ -4,6 +4,7 @@ pub mod coverage;
 pub mod demo;
 pub mod diff;
 pub mod doc;
+pub mod entries;
 pub mod export;
 pub mod import;
 pub mod migrate;

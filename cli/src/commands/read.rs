@@ -16,7 +16,8 @@ pub struct Args {
     #[command(flatten)]
     pub target: Target,
     /// Registers by id, parameter number, printed name or address as the manual prints it
-    /// (2101H, 0x2101; 45 in a manual numbering registers in decimal).
+    /// (2101H, 0x2101; 45 in a manual numbering registers in decimal), or entries of an
+    /// indexed register by id, parameter number or printed name (read through its index).
     #[arg(required = true, value_name = "REGISTER")]
     pub names: Vec<String>,
     /// Output: an aligned table, JSON (an array of records) or CSV.
@@ -27,6 +28,10 @@ pub struct Args {
 /// Reads the named registers and prints them decoded; exits 1 when any failed.
 pub fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
+    let (names, entries) = super::entries::split(&drive, &args.names);
+    if !entries.is_empty() {
+        return super::entries::read(&drive, &args.target, &names, &entries);
+    }
     let regs = find_all(&drive, &args.names)?;
     let given = args.target.settings.resolve(&drive)?;
     let mut session = Session::open(&drive, &args.target.link, given.settings)?;

@@ -141,6 +141,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
 /// [`run`] with the map loaded and its run-time profile built.
 pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<ExitCode, Error> {
     let mut pairs: Vec<(&Register, String)> = Vec::new();
+    let mut entries = Vec::new();
     let mut errors = Vec::new();
     for a in &args.assignments {
         let Some((name, value)) = a.split_once('=') else {
@@ -154,11 +155,17 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
                 describe::register(r)
             )),
             Ok(r) => pairs.push((r, value.trim().to_owned())),
-            Err(e) => errors.push(e.to_string()),
+            Err(e) => match drivemap_live::indexed::find_entry(drive, name.trim()) {
+                Some(entry) => entries.push((entry, value.trim().to_owned())),
+                None => errors.push(e.to_string()),
+            },
         }
     }
     if !errors.is_empty() {
         return Err(Error::Refused(errors.join("\n")));
+    }
+    if !entries.is_empty() {
+        return super::entries::write(drive, &args.target, pairs.len(), &entries);
     }
     let slave = args.target.link.slave(drive);
     let kind = args.target.link.kind();
