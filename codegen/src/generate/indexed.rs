@@ -39,6 +39,14 @@ fn entry(e: &Entry, rt: &TokenStream) -> TokenStream {
     let acc = access(e.access, rt);
     let address = super::hex(e.rule.address);
     let (rtu, tcp) = (e.rule.transports.rtu, e.rule.transports.tcp);
+    let f = &e.rule.functions;
+    let functions = if f.restricted() {
+        let codes = f.codes.iter().map(|c| Literal::u8_unsuffixed(*c));
+        let (refused, fsource) = (Literal::u8_unsuffixed(f.refused_with), f.source);
+        quote!(#rt::core::functions::Functions::only(&[#(#codes),*], #refused, #fsource))
+    } else {
+        quote!(#rt::core::functions::Functions::ANY)
+    };
     quote! {
         #rt::core::indexed::Entry {
             id: #id,
@@ -59,6 +67,7 @@ fn entry(e: &Entry, rt: &TokenStream) -> TokenStream {
                 raw: #rt::core::scale::RawRange { min: #min, max: #max },
                 reserved: 0,
                 width: #rt::core::width::Width::Word,
+                functions: #functions,
             },
             source: #source,
         }
