@@ -216,120 +216,99 @@ pub fn scale_row(drive: &Drive, r: &Register) -> Option<Fact> {
     }
 }
 
-/// The facts of one register.
-pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
+/// The rows of a register, in the order printers show them: one entry per key, absent where
+/// the map says nothing of it.
+fn rows(drive: &Drive, r: &Register) -> Vec<Fact> {
+    use FactKey as K;
     let d = &r.def;
     let plan = drive.register_plan(r);
     let unit = d.unit.as_deref().unwrap_or("");
-    let mut rows = Vec::new();
-    match &d.pair {
-        None => rows.push(Fact::new(
-            FactKey::Address,
-            describe::address(d.address),
+    let range = describe::range(d.min, d.max, unit);
+    let address = match &d.pair {
+        None => describe::address(d.address),
+        Some(_) => describe::address_span(d.address, d.address.wrapping_add(1)),
+    };
+    let restricted = plan.restriction != drivemap_core::WriteRestriction::None;
+    let table = [
+        Some(Fact::new(K::Address, address, None)),
+        (d.pair.as_ref())
+            .map(|p| Fact::new(K::Width, describe::width(r.width()), p.source.as_deref())),
+        Some(Fact::new(
+            K::Access,
+            describe::access(plan.info.access),
             None,
         )),
-        Some(p) => {
-            rows.push(Fact::new(
-                FactKey::Address,
-                describe::address_span(d.address, d.address.wrapping_add(1)),
-                None,
-            ));
-            rows.push(Fact::new(
-                FactKey::Width,
-                describe::width(r.width()),
-                p.source.as_deref(),
-            ));
-        }
-    }
-    rows.push(Fact::new(
-        FactKey::Access,
-        describe::access(plan.info.access),
-        None,
-    ));
-    if r.broadcast {
-        rows.push(Fact::new(
-            FactKey::Broadcast,
-            "broadcast only (slave 0)",
-            None,
-        ));
-    }
-    if let Some(u) = &d.unit {
-        rows.push(Fact::new(FactKey::Unit, u.clone(), None));
-    }
-    rows.extend(scale_row(drive, r));
-    let range = describe::range(d.min, d.max, unit);
-    if !range.is_empty() {
-        rows.push(Fact::new(FactKey::Range, range, None));
-    }
-    if let Some(v) = &d.default {
-        rows.push(Fact::new(FactKey::Default, describe::default(v), None));
-    }
-    if let Some(l) = &d.max_relative {
-        rows.push(Fact::new(
-            FactKey::RelativeLimit,
-            describe::relative_limit(drive, l),
-            Some(&l.source),
-        ));
-    }
-    if plan.restriction != drivemap_core::WriteRestriction::None {
-        rows.push(Fact::new(
-            FactKey::WriteRestriction,
-            describe::write_restriction(plan.restriction),
-            None,
-        ));
-    }
-    if let Some((rule, _)) = &r.repeat_needs_change {
-        rows.push(Fact::new(
-            FactKey::RepeatNeedsChange,
-            describe::repeat_needs_change(rule),
-            Some(&rule.source),
-        ));
-    }
-    if let Some((f, _)) = &r.function_codes {
-        rows.push(Fact::new(
-            FactKey::FunctionCodes,
-            describe::function_codes(f),
-            Some(&f.source),
-        ));
-    }
-    if !d.read_values.is_empty() {
-        rows.push(Fact::new(
-            FactKey::ReadValues,
-            describe::read_values(&d.read_values),
-            None,
-        ));
-    }
-    for alt in &d.address_alternatives {
-        rows.push(Fact {
-            when: Some(describe::condition(&alt.when)),
-            ..Fact::new(
-                FactKey::AlternativeAddress,
-                describe::address(alt.address),
-                Some(&alt.source),
+        (r.broadcast).then(|| Fact::new(K::Broadcast, "broadcast only (slave 0)", None)),
+        (d.unit.clone()).map(|u| Fact::new(K::Unit, u, None)),
+        scale_row(drive, r),
+        (!range.is_empty()).then(|| Fact::new(K::Range, range, None)),
+        (d.default.as_ref()).map(|v| Fact::new(K::Default, describe::default(v), None)),
+        (d.max_relative.as_ref()).map(|l| {
+            let text = describe::relative_limit(drive, l);
+            Fact::new(K::RelativeLimit, text, Some(&l.source))
+        }),
+        restricted.then(|| {
+            let text = describe::write_restriction(plan.restriction);
+            Fact::new(K::WriteRestriction, text, None)
+        }),
+        (r.repeat_needs_change.as_ref()).map(|(rule, _)| {
+            let text = describe::repeat_needs_change(rule);
+            Fact::new(K::RepeatNeedsChange, text, Some(&rule.source))
+        }),
+        (r.function_codes.as_ref()).map(|(f, _)| {
+            Fact::new(
+                K::FunctionCodes,
+                describe::function_codes(f),
+                Some(&f.source),
             )
-        });
-    }
-    if !d.display_steps.is_empty() {
-        rows.push(Fact::new(
-            FactKey::DisplaySteps,
+        }),
+        (!d.read_values.is_empty())
+            .then(|| Fact::new(K::ReadValues, describe::read_values(&d.read_values), None)),
+    ];
+    let alternatives = d.address_alternatives.iter().map(|alt| Fact {
+        when: Some(describe::condition(&alt.when)),
+        ..Fact::new(
+            K::AlternativeAddress,
+            describe::address(alt.address),
+            Some(&alt.source),
+        )
+    });
+    let steps = (!d.display_steps.is_empty()).then(|| {
+        Fact::new(
+            K::DisplaySteps,
             describe::display_steps(&d.display_steps),
             None,
-        ));
-    }
-    let cases = match &d.scale {
-        Some(Scale::Selected(sel)) => sel
-            .cases
-            .iter()
-            .map(|c| CaseFacts {
-                codes: describe::codes(&c.when),
-                scale: describe::scale(drive, &c.scale, unit),
-                range: describe::range(c.min, c.max, unit),
-                citation: c.source.clone(),
-            })
-            .collect(),
-        _ => Vec::new(),
+        )
+    });
+    table
+        .into_iter()
+        .flatten()
+        .chain(alternatives)
+        .chain(steps)
+        .collect()
+}
+
+/// The cases of a selected scale; none for any other.
+fn cases(drive: &Drive, r: &Register) -> Vec<CaseFacts> {
+    let unit = r.def.unit.as_deref().unwrap_or("");
+    let Some(Scale::Selected(sel)) = &r.def.scale else {
+        return Vec::new();
     };
-    let variants = d
+    sel.cases
+        .iter()
+        .map(|c| CaseFacts {
+            codes: describe::codes(&c.when),
+            scale: describe::scale(drive, &c.scale, unit),
+            range: describe::range(c.min, c.max, unit),
+            citation: c.source.clone(),
+        })
+        .collect()
+}
+
+/// What each variant option overrides.
+fn variants(drive: &Drive, r: &Register) -> Vec<VariantFacts> {
+    let unit = r.def.unit.as_deref().unwrap_or("");
+    r.def
         .by_variant
         .iter()
         .map(|(k, o)| {
@@ -346,7 +325,12 @@ pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
                 unknowns: o.unknown.iter().map(unknown).collect(),
             }
         })
-        .collect();
+        .collect()
+}
+
+/// The facts of one register.
+pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
+    let d = &r.def;
     RegisterFacts {
         row: drive
             .registers
@@ -357,14 +341,14 @@ pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
         param: d.param.clone(),
         name: d.name.clone(),
         address: d.address,
-        kind: ConversionKind::of(&plan.conversion),
-        rows,
+        kind: ConversionKind::of(&drive.register_plan(r).conversion),
+        rows: rows(drive, r),
         selector: match &d.scale {
             Some(Scale::Selected(sel)) => Some(describe::setting(drive, &sel.selected_by)),
             _ => None,
         },
-        cases,
-        variants,
+        cases: cases(drive, r),
+        variants: variants(drive, r),
         notes: d.notes.clone(),
         conflicts: d
             .conflicts
