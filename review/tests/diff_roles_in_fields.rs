@@ -49,7 +49,12 @@ const REGISTER: &str = r#"    - {register: fault_code, source: "acme-vf1.txt:33"
 #[test]
 fn a_role_moved_from_a_register_to_a_field_is_re_pointed() {
     let new_text = acme_text();
-    let old = read(&changed(&new_text, FIELD, REGISTER));
+    // Before: the register alone (its place is the second now).
+    let old = read(&changed(
+        &new_text,
+        &format!("{FIELD}\n{REGISTER}\n"),
+        &format!("{REGISTER}\n"),
+    ));
     let new = read(&new_text);
     let changes = role_changes(&old, &new);
     assert_eq!(changes.len(), 1, "{changes:?}");
@@ -119,4 +124,43 @@ fn signed_scale_and_edge_changes_show() {
     let changes = role_changes(&not_printed, &other);
     assert_eq!(changes.len(), 1, "{changes:?}");
     assert_eq!(changes[0].0, ChangeKind::DocumentationChanged);
+}
+
+/// `doc` shows a number field with its bits, sign and scale, and an edge the manual does not
+/// print as "not printed" with the reason; `export` carries both keys as written.
+#[test]
+fn doc_and_export_show_a_number_field_and_an_unknown_edge() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/fixtures/brenner-fx4/brenner-fx4.yaml"
+    );
+    let drive = drivemap_map::read_map(path.as_ref(), &Default::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let doc = drivemap_review::reference::render(&drive, "brenner-fx4.yaml");
+    let row = |role: &str| {
+        doc.lines()
+            .find(|l| l.starts_with(&format!("| `{role}` |")))
+            .unwrap_or_else(|| panic!("no {role} row in:\n{doc}"))
+            .to_owned()
+    };
+    assert_eq!(
+        row("fault_code"),
+        "| `fault_code` | `state_word` | `last_event` (signed bits 8–15, 1 per count) |  |  | `brenner-fx4.txt:17` |"
+    );
+    assert!(
+        row("fault_reset")
+            .contains("edge or level not printed in the manual: the guide names the bit"),
+        "{}",
+        row("fault_reset")
+    );
+    let json = drivemap_map::export::export(&drive);
+    let roles = &json["roles"];
+    assert_eq!(roles["fault_code"][0]["signed"], true, "{roles}");
+    assert_eq!(roles["fault_code"][0]["field"], "last_event", "{roles}");
+    assert!(
+        roles["fault_reset"][0]["edge"]["unknown"]
+            .as_str()
+            .is_some_and(|s| s.starts_with("the guide names the bit")),
+        "{roles}"
+    );
 }
