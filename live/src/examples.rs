@@ -388,6 +388,7 @@ impl Verifier<'_> {
             // one the map refuses; the exception response is checked against it.
             return;
         }
+        self.functions_accepted(f, out, req.function(), address, req.quantity());
         let words: Vec<u16> = match req {
             Request::WriteSingle { value, .. } => vec![value],
             Request::WriteMultiple { values, .. } => values.iter().collect(),
@@ -410,6 +411,56 @@ impl Verifier<'_> {
             says.read.as_ref().or(says.write.as_ref()),
             &says.values,
         );
+    }
+
+    /// A request with a function a register it covers does not accept (the map's
+    /// `function_codes`): the drive would refuse it, so the example is either one the manual
+    /// prints to show that refusal (answered by an exception response) or the map is wrong. Reported at the
+    /// function byte, once, naming the register and its list.
+    fn functions_accepted(
+        &self,
+        f: &Frame,
+        out: &mut Vec<Diagnostic>,
+        function: u8,
+        pdu_address: u16,
+        quantity: usize,
+    ) {
+        let kind = kind_of(self.example);
+        let offsets = &self.drive.plan().profile.address_offsets;
+        let table = (function == pdu::function::READ_INPUT).then_some(Table::Input);
+        let table = table.or(Some(Table::Holding));
+        for k in 0..quantity {
+            let Some(comm) = pdu_address
+                .checked_add(k as u16)
+                .and_then(|pdu| offsets.communication_address(pdu, kind))
+            else {
+                return;
+            };
+            let Some((r, _)) =
+                register_at(self.drive, self.settings, kind, comm, table, f.slave == 0)
+            else {
+                continue;
+            };
+            let functions = self.drive.register_plan(r).functions;
+            if !functions.allows(function) {
+                let list: Vec<String> = functions.codes.iter().map(|&c| fc(c)).collect();
+                return self.error(
+                    out,
+                    f.pdu_start,
+                    Some(&r.def.id),
+                    format!(
+                        "function {} to {comm:04X}h: `{}` accepts only {} (`{}`), so the drive \
+                         refuses it; if the manual prints the refusal, add its exception response \
+                         (`answers: {}`, `says: {{exception: ..}}`)",
+                        fc(function),
+                        r.def.id,
+                        list.join(", "),
+                        functions.source,
+                        self.example.id
+                    ),
+                );
+            }
+        }
     }
 
     /// Checks the registers of a read or write: each address is a register of the map, the

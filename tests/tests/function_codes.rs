@@ -365,3 +365,33 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
     let diff = drivemap_review::diff::compare(&drive, &read(&dropped));
     assert_eq!(diff.breaking(), 1, "{:?}", diff.changes);
 }
+
+/// `check` verifies the manual's example frames against each register's functions: the
+/// fixture's 06h write to 0002h is printed with its refusal (exception 02h) and verifies; the
+/// same frame without the refusal is an error at its function byte.
+#[test]
+fn example_frames_are_checked_against_the_registers_functions() {
+    let drive = map();
+    let v = drivemap_live::examples::verify(&drive);
+    assert!(v.errors.is_empty(), "{:?}", v.errors);
+    assert_eq!(v.clean, 4);
+
+    let text = std::fs::read_to_string(
+        drivemap_tests::workspace().join("tests/fixtures/halvard-hx2/halvard-hx2.yaml"),
+    )
+    .unwrap();
+    let refusal = text.find("  - id: frequency_with_06h_refused").unwrap();
+    let unrefused =
+        drivemap_map::read_map_str("halvard-hx2.yaml", &text[..refusal], &Context::default())
+            .unwrap();
+    let v = drivemap_live::examples::verify(&unrefused);
+    let errors: Vec<String> = v.errors.iter().map(|e| e.to_string()).collect();
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert!(
+        errors[0].contains(
+            "example `frequency_with_06h`, byte 2 (06): function 06h to 0002h: `frequency_command` \
+             accepts only 03h, 10h (`halvard-hx2.txt:11`)"
+        ),
+        "{errors:?}"
+    );
+}
