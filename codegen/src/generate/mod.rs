@@ -11,6 +11,7 @@ use crate::lower::DrivePlan;
 mod bitfields;
 mod docs;
 mod enums;
+mod examples;
 mod indexed;
 mod plan;
 mod profile;
@@ -111,6 +112,7 @@ fn drive_tokens(drive: &Drive, plan: &DrivePlan, options: &Options) -> TokenStre
     let settings = settings::emit(drive, plan, rt);
     let registers = registers::emit(drive, plan, rt);
     let indexed = indexed::emit(plan, rt);
+    let examples = examples::emit(drive);
     quote! {
 
         use #runtime as rt;
@@ -120,6 +122,7 @@ fn drive_tokens(drive: &Drive, plan: &DrivePlan, options: &Options) -> TokenStre
         #settings
         #registers
         #indexed
+        #examples
     }
 }
 
