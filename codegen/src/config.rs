@@ -235,7 +235,8 @@ impl Config {
                     .map(|n| n.to_string_lossy().into_owned())
                     .unwrap_or_default(),
             };
-            let source = generate::drive_module(drive, &options).map_err(Error::Generate)?;
+            let source = generate::drive_module(drive, &options)
+                .map_err(|e| Error::Generate(e.to_string()))?;
             // The index and the modules lie side by side in the output directory; `include!`
             // resolves a relative path against the file it is written in, so the index works
             // wherever that directory is (prost-build's include file does the same).

@@ -234,7 +234,7 @@ fn node_mut<'a>(mut node: &'a mut Node, path: &Path) -> Option<&'a mut Node> {
 }
 
 /// The number a marked scalar stands for, or why it is refused.
-fn decide(text: &str, slot: Slot, decimal_addresses: bool) -> Result<u64, String> {
+fn decide(text: &str, slot: Slot, decimal_addresses: bool) -> Result<u64, Undecided> {
     let what = match slot {
         Slot::Address => "address",
         Slot::ExceptionCode => "exception code",
@@ -244,33 +244,70 @@ fn decide(text: &str, slot: Slot, decimal_addresses: bool) -> Result<u64, String
         // No address or code has this many digits; a hostile map's megabyte of them is not
         // repeated in the message.
         let head: String = text.chars().take(20).collect();
-        return Err(format!(
-            "{what} `{head}…` is too long ({} digits)",
-            text.len()
-        ));
+        return Err(Undecided::TooLong {
+            what,
+            head,
+            digits: text.len(),
+        });
     }
     if !text.bytes().all(|b| b.is_ascii_digit()) {
         // Hex digits with a letter (`1E08`, which YAML would read as 1.0e8).
-        return Err(format!(
-            "{what} `{text}` has no hexadecimal marker; write it as 0x{text} or {text}H"
-        ));
+        return Err(Undecided::NoMarker {
+            what,
+            text: text.to_owned(),
+        });
     }
     let Ok(n) = text.parse::<u64>() else {
-        return Err(format!("{what} {text} is too large"));
+        return Err(Undecided::TooLarge {
+            what,
+            text: text.to_owned(),
+        });
     };
     match slot {
         Slot::Address if decimal_addresses => Ok(n),
-        Slot::Address => Err(format!(
-            "address {n} is decimal ({n:04X}H); write it as the manual prints it: 0x{text} or \
-             {text}H, or declare `address_format: decimal` at the top of the map if the manual \
-             numbers registers in decimal"
-        )),
+        Slot::Address => Err(Undecided::DecimalAddress {
+            n,
+            text: text.to_owned(),
+        }),
         _ if n <= 9 => Ok(n),
-        Slot::ExceptionCode | Slot::FunctionCode => Err(format!(
-            "{what} {n} is decimal ({n:02X}H); write codes in hex as the manual prints them: \
-             0x{n:02X} for {n:02X}H, or 0x{text} for {text}H"
-        )),
+        Slot::ExceptionCode | Slot::FunctionCode => Err(Undecided::DecimalCode {
+            what,
+            n,
+            text: text.to_owned(),
+        }),
     }
+}
+
+/// Why a marked scalar is refused (said at the scalar, after its path).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+enum Undecided {
+    /// More digits than any address or code has; only the first 20 are repeated.
+    #[error("{what} `{head}…` is too long ({digits} digits)")]
+    TooLong {
+        what: &'static str,
+        head: String,
+        digits: usize,
+    },
+    /// Hex digits with a letter but no marker (`1E08`, which YAML reads as 1.0e8).
+    #[error("{what} `{text}` has no hexadecimal marker; write it as 0x{text} or {text}H")]
+    NoMarker { what: &'static str, text: String },
+    #[error("{what} {text} is too large")]
+    TooLarge { what: &'static str, text: String },
+    #[error(
+        "address {n} is decimal ({n:04X}H); write it as the manual prints it: 0x{text} or \
+         {text}H, or declare `address_format: decimal` at the top of the map if the manual \
+         numbers registers in decimal"
+    )]
+    DecimalAddress { n: u64, text: String },
+    #[error(
+        "{what} {n} is decimal ({n:02X}H); write codes in hex as the manual prints them: \
+         0x{n:02X} for {n:02X}H, or 0x{text} for {text}H"
+    )]
+    DecimalCode {
+        what: &'static str,
+        n: u64,
+        text: String,
+    },
 }
 
 #[cfg(test)]
@@ -297,27 +334,31 @@ mod tests {
         assert!(
             decide("2001", Slot::Address, false)
                 .unwrap_err()
+                .to_string()
                 .contains("address 2001 is decimal (07D1H)")
         );
         assert_eq!(decide("2001", Slot::Address, true), Ok(2001));
         assert!(
             decide("1E08", Slot::Address, true)
                 .unwrap_err()
+                .to_string()
                 .contains("0x1E08 or 1E08H")
         );
         assert_eq!(decide("3", Slot::FunctionCode, false), Ok(3));
         assert!(
             decide("16", Slot::FunctionCode, true)
                 .unwrap_err()
+                .to_string()
                 .contains("0x10 for 10H, or 0x16 for 16H")
         );
         assert!(
             decide("99999999999999999999", Slot::Address, true)
                 .unwrap_err()
+                .to_string()
                 .contains("too large")
         );
         let long = "7".repeat(1 << 20);
-        let e = decide(&long, Slot::Address, false).unwrap_err();
+        let e = decide(&long, Slot::Address, false).unwrap_err().to_string();
         assert!(e.len() < 100 && e.contains("1048576 digits"), "{e}");
     }
 }

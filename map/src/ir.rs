@@ -706,11 +706,11 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                 None => vec![r.clone()],
                 Some(rep) => match expand_block(r, rep) {
                     Ok(list) => list,
-                    Err(message) => {
+                    Err(e) => {
                         errors.push(Diagnostic::new(
                             map.locate(&path.key("repeat")),
                             Some(&r.id),
-                            message,
+                            e.to_string(),
                         ));
                         continue;
                     }
@@ -798,18 +798,19 @@ pub fn draft_warning(d: &model::Draft) -> String {
     s
 }
 
-fn expand_block(r: &model::Register, rep: &model::Repeat) -> Result<Vec<model::Register>, String> {
+fn expand_block(
+    r: &model::Register,
+    rep: &model::Repeat,
+) -> Result<Vec<model::Register>, BlockError> {
     if rep.count == 0 {
-        return Err("`repeat.count` must be at least 1".into());
+        return Err(BlockError::NoCount);
     }
     if !r.id.contains("{n}")
         && !r.id.contains("{p}")
         && !r.id.contains("{n:")
         && !r.id.contains("{p:")
     {
-        return Err(
-            "a block's `id` must contain `{n}` or `{p}` so each register gets its own id".into(),
-        );
+        return Err(BlockError::SameId);
     }
     let mut out = Vec::new();
     for k in 0..rep.count {
@@ -825,8 +826,7 @@ fn expand_block(r: &model::Register, rep: &model::Repeat) -> Result<Vec<model::R
             .map(|s| substitute(s, n, p))
             .transpose()?;
         let address = r.address as u32 + k as u32 * rep.address_step as u32;
-        def.address = u16::try_from(address)
-            .map_err(|_| format!("block runs past address FFFFh at instance {n}"))?;
+        def.address = u16::try_from(address).map_err(|_| BlockError::PastFfff { n })?;
         def.source = r
             .source
             .as_deref()
@@ -838,30 +838,36 @@ fn expand_block(r: &model::Register, rep: &model::Repeat) -> Result<Vec<model::R
 }
 
 /// Replaces `{n}`, `{p}`, `{n:02}`, `{p:03}` in a block template.
-fn substitute(template: &str, n: u32, p: Option<u32>) -> Result<String, String> {
+fn substitute(template: &str, n: u32, p: Option<u32>) -> Result<String, BlockError> {
+    let t = || template.to_owned();
     let mut out = String::new();
     let mut rest = template;
     while let Some(open) = rest.find('{') {
         out.push_str(&rest[..open]);
         let close = rest[open..]
             .find('}')
-            .ok_or_else(|| format!("unclosed placeholder in `{template}`"))?
+            .ok_or_else(|| BlockError::Unclosed { template: t() })?
             + open;
         let spec = &rest[open + 1..close];
         let (name, width) = match spec.split_once(':') {
             Some((name, w)) => (
                 name,
-                w.parse::<usize>()
-                    .map_err(|_| format!("bad width `{w}` in `{template}`"))?,
+                w.parse::<usize>().map_err(|_| BlockError::BadWidth {
+                    width: w.to_owned(),
+                    template: t(),
+                })?,
             ),
             None => (spec, 0),
         };
         let value = match name {
             "n" => n,
-            "p" => {
-                p.ok_or_else(|| format!("`{{p}}` in `{template}` needs `repeat.param_start`"))?
+            "p" => p.ok_or_else(|| BlockError::NoParamStart { template: t() })?,
+            other => {
+                return Err(BlockError::UnknownPlaceholder {
+                    name: other.to_owned(),
+                    template: t(),
+                });
             }
-            other => return Err(format!("unknown placeholder `{{{other}}}` in `{template}`")),
         };
         out.push_str(&format!("{value:0width$}"));
         rest = &rest[close + 1..];
@@ -870,17 +876,79 @@ fn substitute(template: &str, n: u32, p: Option<u32>) -> Result<String, String> 
     Ok(out)
 }
 
-fn shift_line(source: &str, by: usize) -> Result<String, String> {
-    let (file, line) = source
-        .rsplit_once(':')
-        .ok_or_else(|| format!("citation `{source}` is not `file:line`"))?;
-    let line: usize = line
-        .parse()
-        .map_err(|_| format!("citation `{source}` is not `file:line`"))?;
+fn shift_line(source: &str, by: usize) -> Result<String, BlockError> {
+    let not_file_line = || BlockError::NotFileLine {
+        citation: source.to_owned(),
+    };
+    let (file, line) = source.rsplit_once(':').ok_or_else(not_file_line)?;
+    let line: usize = line.parse().map_err(|_| not_file_line())?;
     let shifted = line
         .checked_add(by)
-        .ok_or_else(|| format!("citation `{source}` shifted by {by} lines overflows"))?;
+        .ok_or_else(|| BlockError::LineOverflow {
+            citation: source.to_owned(),
+            by,
+        })?;
     Ok(format!("{file}:{shifted}"))
+}
+
+/// Why a `repeat:` block cannot be expanded into its registers (reported at `repeat`, naming
+/// the block's register).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum BlockError {
+    /// `repeat.count: 0`.
+    #[error("`repeat.count` must be at least 1")]
+    NoCount,
+    /// The id template has no placeholder, so every instance would have the same id.
+    #[error("a block's `id` must contain `{{n}}` or `{{p}}` so each register gets its own id")]
+    SameId,
+    /// Instance `n` would sit beyond address FFFFh.
+    #[error("block runs past address FFFFh at instance {n}")]
+    PastFfff {
+        /// The instance number.
+        n: u32,
+    },
+    /// A `{` without its `}`.
+    #[error("unclosed placeholder in `{template}`")]
+    Unclosed {
+        /// The template.
+        template: String,
+    },
+    /// `{n:WIDTH}` whose width is not a number.
+    #[error("bad width `{width}` in `{template}`")]
+    BadWidth {
+        /// The width as written.
+        width: String,
+        /// The template.
+        template: String,
+    },
+    /// `{p}` without `repeat.param_start`.
+    #[error("`{{p}}` in `{template}` needs `repeat.param_start`")]
+    NoParamStart {
+        /// The template.
+        template: String,
+    },
+    /// A placeholder other than `n` and `p`.
+    #[error("unknown placeholder `{{{name}}}` in `{template}`")]
+    UnknownPlaceholder {
+        /// Its name.
+        name: String,
+        /// The template.
+        template: String,
+    },
+    /// The block's `source` is not `file:line`, so it cannot be shifted per instance.
+    #[error("citation `{citation}` is not `file:line`")]
+    NotFileLine {
+        /// The citation.
+        citation: String,
+    },
+    /// The shifted line number overflows.
+    #[error("citation `{citation}` shifted by {by} lines overflows")]
+    LineOverflow {
+        /// The citation.
+        citation: String,
+        /// The shift.
+        by: usize,
+    },
 }
 
 /// A drive's serial line as its map gives the defaults (`protocol.serial`), with the fallbacks

@@ -43,13 +43,25 @@ pub fn module_doc(drive: &Drive) -> Vec<String> {
         .collect()
 }
 
+/// Why a drive module could not be printed.
+#[derive(Debug, thiserror::Error)]
+#[error("generated code for {drive} does not parse: {source}")]
+pub struct Unparsable {
+    /// The drive's id.
+    pub drive: String,
+    /// Where the tokens stop being Rust (a runtime path that is not a Rust path).
+    pub source: syn::Error,
+}
+
 /// The formatted Rust source of one drive module: items only, made to be `include!`d inside
 /// `pub mod <module> { }` (its documentation is [`module_doc`]).
-pub fn drive_module(drive: &Drive, options: &Options) -> Result<String, String> {
+pub fn drive_module(drive: &Drive, options: &Options) -> Result<String, Unparsable> {
     let lowered = crate::lower::lower(drive);
     let tokens = drive_tokens(drive, &lowered, options);
-    let file: syn::File = syn::parse2(tokens)
-        .map_err(|e| format!("generated code for {} does not parse: {e}", drive.meta.id))?;
+    let file: syn::File = syn::parse2(tokens).map_err(|source| Unparsable {
+        drive: drive.meta.id.clone(),
+        source,
+    })?;
     let body = space_items(&prettyplease::unparse(&file));
     // Printed as text (one row per register); not parsed back here, which took longer than
     // printing it (0.7 s of the build script's 2.7 s in a release build): the compile of the

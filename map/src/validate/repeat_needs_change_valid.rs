@@ -39,9 +39,9 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
 }
 
 /// Whether `v` may be written to `r`, and why not.
-fn legal(r: &Register, v: f64) -> Result<(), String> {
+fn legal(r: &Register, v: f64) -> Result<(), Illegal> {
     if !v.is_finite() {
-        return Err("not a finite number".into());
+        return Err(Illegal::NotFinite);
     }
     let d = &r.def;
     match r.kind() {
@@ -55,7 +55,9 @@ fn legal(r: &Register, v: f64) -> Result<(), String> {
                 Ok(())
             } else {
                 let codes: Vec<String> = values.iter().map(|x| x.value.to_string()).collect();
-                Err(format!("not one of its codes {}", codes.join(", ")))
+                Err(Illegal::NotACode {
+                    codes: codes.join(", "),
+                })
             }
         }
         ValueKind::Bits(fields) => {
@@ -64,9 +66,9 @@ fn legal(r: &Register, v: f64) -> Result<(), String> {
                 .filter_map(field_span)
                 .fold(0u32, |m, (lsb, w)| m | (((1u32 << w) - 1) << lsb));
             if v.fract() != 0.0 || !(0.0..=65535.0).contains(&v) {
-                Err("not a 16-bit word".into())
+                Err(Illegal::NotAWord)
             } else if (v as u32) & !mask != 0 {
-                Err(format!("it sets reserved bits (fields cover {mask:04X}h)"))
+                Err(Illegal::ReservedBits { mask })
             } else {
                 Ok(())
             }
@@ -76,15 +78,15 @@ fn legal(r: &Register, v: f64) -> Result<(), String> {
                 return if v == 0.0 {
                     Ok(())
                 } else {
-                    Err("its scale depends on a setting, so only 0 converts without it".into())
+                    Err(Illegal::ScaleFromSetting)
                 };
             };
             let Some(raw) = raw_of(v, factor) else {
-                return Err("not a whole number of its increments".into());
+                return Err(Illegal::NotAStep);
             };
             let word = RawRange::word(d.signed);
             if raw < i128::from(word.min) || raw > i128::from(word.max) {
-                return Err("outside its word".into());
+                return Err(Illegal::OutsideWord);
             }
             let mut limits = vec![(None, r.limits())];
             for k in d.by_variant.keys() {
@@ -95,14 +97,41 @@ fn legal(r: &Register, v: f64) -> Result<(), String> {
                     let of = variant
                         .map(|k| format!(" of variant {k}"))
                         .unwrap_or_default();
-                    return Err(format!(
-                        "outside the range{of} {}..={}",
-                        min.map_or("-".into(), |m| m.to_string()),
-                        max.map_or("-".into(), |m| m.to_string())
-                    ));
+                    return Err(Illegal::OutsideRange {
+                        of,
+                        min: min.map_or("-".into(), |m| m.to_string()),
+                        max: max.map_or("-".into(), |m| m.to_string()),
+                    });
                 }
             }
             Ok(())
         }
     }
+}
+
+/// Why a `between` value is not one the register accepts (said inside the diagnostic at
+/// `repeat_needs_change.between`).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+enum Illegal {
+    #[error("not a finite number")]
+    NotFinite,
+    #[error("not one of its codes {codes}")]
+    NotACode { codes: String },
+    #[error("not a 16-bit word")]
+    NotAWord,
+    #[error("it sets reserved bits (fields cover {mask:04X}h)")]
+    ReservedBits { mask: u32 },
+    #[error("its scale depends on a setting, so only 0 converts without it")]
+    ScaleFromSetting,
+    #[error("not a whole number of its increments")]
+    NotAStep,
+    #[error("outside its word")]
+    OutsideWord,
+    /// `of` is empty for the base limits, else " of variant <k>".
+    #[error("outside the range{of} {min}..={max}")]
+    OutsideRange {
+        of: String,
+        min: String,
+        max: String,
+    },
 }
