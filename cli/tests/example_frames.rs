@@ -1,0 +1,157 @@
+//! Example frames through the command: `drivemap check` verifies every example of a map against
+//! the codec and the map (the fictional Orbis Q5 of `tests/fixtures/orbis-q5/`, whose manual
+//! misprints one CRC, and every shipped map), a wrong CRC not recorded in `conflicts:` fails the
+//! check at its byte, and `export`, `doc` and `diff` show the examples.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn fixture() -> PathBuf {
+    root().join("tests/fixtures/orbis-q5")
+}
+
+fn drivemap(args: &[&str], manuals: &Path) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        .args(args)
+        .env_remove("DRIVEMAP_MAPS")
+        .env("DRIVEMAP_MANUALS", manuals)
+        .output()
+        .expect("run drivemap");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A copy of the fixture map with `edit` applied, in a directory of its own.
+fn edited(name: &str, edit: impl Fn(String) -> String) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "drivemap-cli-examples-{}-{name}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("orbis-q5.yaml");
+    let text = std::fs::read_to_string(fixture().join("orbis-q5.yaml")).unwrap();
+    std::fs::write(&path, edit(text)).unwrap();
+    path
+}
+
+#[test]
+fn check_verifies_the_fixture_s_examples_and_names_the_recorded_crc() {
+    let map = fixture().join("orbis-q5.yaml");
+    let (code, out, err) = drivemap(
+        &["check", map.to_str().unwrap()],
+        &fixture().join("manuals"),
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("example frames: 11 of 12 verified, 1 contradicting as recorded"),
+        "{out}"
+    );
+    assert!(
+        err.contains(
+            "orbis-q5.yaml:108:25: warning: example `frequency_too_high_refused`, byte 5 (62): CRC: the frame ends in 02 62, the CRC-16 of the bytes before it is 02 61 (low byte first) (recorded in `conflicts:`)"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn an_unrecorded_wrong_crc_fails_check_at_its_byte() {
+    let map = edited("unmarked", |t| {
+        t.replace("    conflict: CRC of the refused-write example\n", "")
+    });
+    let (code, out, err) = drivemap(
+        &["check", map.to_str().unwrap()],
+        &fixture().join("manuals"),
+    );
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(
+        err.contains(&format!(
+            "{}:108:25: error: example `frequency_too_high_refused`, byte 5 (62): CRC",
+            map.display()
+        )),
+        "{err}"
+    );
+    assert!(out.contains("FAIL"), "{out}");
+    assert!(out.contains("example frames: 11 of 12 verified"), "{out}");
+}
+
+#[test]
+fn check_verifies_every_example_of_the_shipped_maps() {
+    let maps = root().join("maps");
+    let (code, out, err) = drivemap(
+        &["check", "--maps", maps.to_str().unwrap()],
+        &root().join("../shared/manuals"),
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    for (id, frames) in [
+        ("automationdirect-acn", "example frames: 2 of 2 verified;"),
+        (
+            "ptlk-tds-v8",
+            "example frames: 16 of 19 verified, 3 contradicting as recorded;",
+        ),
+        ("yaskawa-gpd515", "example frames: 9 of 9 verified;"),
+        (
+            "yaskawa-j7",
+            "example frames: 8 of 9 verified, 1 contradicting as recorded;",
+        ),
+        (
+            "yaskawa-v7",
+            "example frames: 20 of 21 verified, 1 contradicting as recorded;",
+        ),
+    ] {
+        let line = out
+            .lines()
+            .find(|l| l.contains(&format!("({id}:")))
+            .unwrap_or_else(|| panic!("{id} not checked: {out}"));
+        assert!(line.starts_with("ok "), "{line}");
+        assert!(line.contains(frames), "{id}: {line}");
+    }
+    assert!(!err.contains(": error"), "{err}");
+}
+
+#[test]
+fn export_doc_and_diff_show_the_examples() {
+    let map = fixture().join("orbis-q5.yaml");
+    let manuals = fixture().join("manuals");
+    let (code, out, err) = drivemap(&["export", map.to_str().unwrap()], &manuals);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let first = &json["examples"][0];
+    assert_eq!(first["id"], "read_monitors");
+    assert_eq!(first["bytes"], "01 03 00 10 00 02 C5 CE");
+    assert_eq!(
+        first["frame"],
+        serde_json::json!([1, 3, 0, 16, 0, 2, 197, 206])
+    );
+    assert_eq!(first["source"], "orbis-q5.txt:17-18");
+    assert_eq!(json["examples"].as_array().unwrap().len(), 12);
+
+    let (code, out, err) = drivemap(&["doc", map.to_str().unwrap()], &manuals);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("## Example frames"), "{out}");
+    assert!(
+        out.contains("| `frequency_too_high_refused` | RTU response to `frequency_too_high` | `01 86 03 02 62` | exception 03h; contradicts the codec or the map: conflict \"CRC of the refused-write example\" | `orbis-q5.txt:31` |"),
+        "{out}"
+    );
+
+    let changed = edited("diff", |t| {
+        t.replacen("01 06 00 02 0B B8 2F 48", "01 06 00 02 0B B9 EE 88", 1)
+    });
+    let (_, out, err) = drivemap(
+        &["diff", map.to_str().unwrap(), changed.to_str().unwrap()],
+        &manuals,
+    );
+    assert!(
+        out.contains("example frame `set_frequency`")
+            && out.contains("`01 06 00 02 0B B8 2F 48`")
+            && out.contains("`01 06 00 02 0B B9 EE 88`"),
+        "{out}{err}"
+    );
+}
