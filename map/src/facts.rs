@@ -142,8 +142,8 @@ pub struct UnknownFacts {
 /// Everything the printers say about one register.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RegisterFacts {
-    /// The register's row in the drive plan (`None` for a register of another drive).
-    pub row: Option<usize>,
+    /// The register's row in the drive plan.
+    pub row: usize,
     pub id: String,
     pub param: Option<String>,
     pub name: String,
@@ -328,15 +328,12 @@ fn variants(drive: &Drive, r: &Register) -> Vec<VariantFacts> {
         .collect()
 }
 
-/// The facts of one register.
+/// The facts of one register of `drive` (a register of another map is a caller's mistake and
+/// panics, as [`Drive::register_plan`] does).
 pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
     let d = &r.def;
     RegisterFacts {
-        row: drive
-            .registers
-            .iter()
-            .position(|x| std::ptr::eq(x, r) || x.def.id == d.id)
-            .map(|m| drive.plan().order[m]),
+        row: drive.plan().order[r.index()],
         id: d.id.clone(),
         param: d.param.clone(),
         name: d.name.clone(),

@@ -101,7 +101,7 @@ fn every_register_has_its_plan_row_and_the_kind_the_plan_decided() {
     let plan = drive.plan();
     let mut rows: Vec<usize> = Vec::new();
     for (f, r) in view.registers.iter().zip(&drive.registers) {
-        let row = f.row.unwrap_or_else(|| panic!("{}: no plan row", f.id));
+        let row = f.row;
         assert_eq!(plan.registers[row].info.id, r.def.id, "{}", f.id);
         assert_eq!(
             f.kind,
