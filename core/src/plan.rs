@@ -714,7 +714,10 @@ impl RegisterPlan {
                     register: self.info.id,
                     setting: limit.reference.label,
                 })?;
-        Ok(Some(reference * limit.percent / 100.0))
+        // `percent / 100` first: exact for 100 % (and 50, 200, ...), so a value equal to the
+        // reference is at the limit, not one rounding above it (59.983333333333334 × 100 / 100
+        // is 59.98333333333333).
+        Ok(Some(reference * (limit.percent / 100.0)))
     }
 
     /// Refuses `value` above the register's limit through another quantity, when that quantity

@@ -164,7 +164,9 @@ fn relative(
     };
     let fixed = matches!(
         target.kind(),
-        ValueKind::Quantity(Scale::Factor(_)) | ValueKind::UnitQuantity | ValueKind::Word
+        ValueKind::Quantity(Scale::Factor(_) | Scale::Ratio(_))
+            | ValueKind::UnitQuantity
+            | ValueKind::Word
     );
     if !fixed || !target.readable() {
         out.push(drive.error(

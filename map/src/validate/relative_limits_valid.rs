@@ -96,7 +96,8 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 }
                 let fixed = matches!(
                     target.kind(),
-                    ValueKind::Quantity(Scale::Factor(_)) | ValueKind::UnitQuantity
+                    ValueKind::Quantity(Scale::Factor(_) | Scale::Ratio(_))
+                        | ValueKind::UnitQuantity
                 );
                 if !fixed || !target.readable() || target.def.pair.is_some() || target.broadcast {
                     out.push(drive.error(
