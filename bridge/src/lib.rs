@@ -11,6 +11,7 @@
 //! waiting; commands through a bounded queue per link. SIGTERM (or SIGINT) stops every link
 //! after the cycle in flight, publishes the drives and the bridge offline, and returns.
 
+pub mod error;
 pub mod link;
 pub mod metrics;
 pub mod mqtt;
@@ -21,6 +22,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
+pub use error::{Error, Refused, RegisterProblem};
 pub use link::{Connect, DriveSpec, LinkSpec};
 
 /// What the bridge serves.
@@ -39,9 +41,9 @@ pub const UPDATE_QUEUE: usize = 4096;
 pub const COMMAND_QUEUE: usize = 16;
 
 /// Runs the bridge until SIGTERM or SIGINT, or until `stop` is set.
-pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Result<(), String> {
+pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Result<(), Error> {
     if links.is_empty() {
-        return Err("no drives to bridge".into());
+        return Err(Error::NoDrives);
     }
     // The points of every drive, for the metric families and the MQTT side.
     let mut infos = Vec::new();
@@ -68,18 +70,8 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
             let (secure, _, _) = mqtt::parse_url(&m.url)?;
             match (&m.ca, secure) {
                 (Some(ca), true) => Some(mqtt::tls_config(ca)?),
-                (None, true) => {
-                    return Err(format!(
-                        "--mqtt {}: TLS needs the CA certificate the broker's chains to: --mqtt-ca FILE",
-                        m.url
-                    ));
-                }
-                (Some(_), false) => {
-                    return Err(format!(
-                        "--mqtt-ca given for {}, which is not TLS: use mqtts://",
-                        m.url
-                    ));
-                }
+                (None, true) => return Err(Error::NoCa { url: m.url.clone() }),
+                (Some(_), false) => return Err(Error::CaWithoutTls { url: m.url.clone() }),
                 (None, false) => None,
             }
         }
@@ -90,7 +82,7 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
         .max_blocking_threads(links.len() + 4)
         .enable_all()
         .build()
-        .map_err(|e| format!("cannot start the runtime: {e}"))?;
+        .map_err(Error::Runtime)?;
     runtime.block_on(async move {
         let listener = match options.metrics {
             Some(addr) => {
@@ -148,7 +140,7 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
             ))
         });
         let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
-            .map_err(|e| format!("cannot watch SIGTERM: {e}"))?;
+            .map_err(Error::Signal)?;
         loop {
             tokio::select! {
                 _ = term.recv() => break,
@@ -171,7 +163,7 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
             let _ = tokio::time::timeout(Duration::from_secs(1), s).await;
         }
         eprintln!("bridge: stopped");
-        Ok::<(), String>(())
+        Ok::<(), Error>(())
     })?;
     runtime.shutdown_timeout(Duration::from_secs(1));
     Ok(())

@@ -153,7 +153,7 @@ pub struct Polled {
 pub fn choose(
     spec: &DriveSpec,
     kind: TransportKind,
-) -> Result<(Vec<&'static Register>, Vec<usize>), String> {
+) -> Result<(Vec<&'static Register>, Vec<usize>), crate::Error> {
     let drive = spec.drive;
     let on = |r: &Register| drive.register_plan(r).transports.contains(kind);
     let readable = |r: &Register| r.readable() && !r.broadcast && on(r);
@@ -179,16 +179,18 @@ pub fn choose(
         for n in &spec.registers {
             match lookup::find(drive, n) {
                 Ok(r) if readable(r) => add(r, &mut regs),
-                Ok(r) => errors.push(format!(
-                    "{}: {} cannot be read on this link",
-                    spec.name,
-                    describe::register(r)
-                )),
-                Err(e) => errors.push(format!("{}: {e}", spec.name)),
+                Ok(r) => errors.push(crate::RegisterProblem::Unreadable {
+                    link: spec.name.clone(),
+                    register: describe::register(r),
+                }),
+                Err(source) => errors.push(crate::RegisterProblem::NotFound {
+                    link: spec.name.clone(),
+                    source,
+                }),
             }
         }
         if !errors.is_empty() {
-            return Err(errors.join("\n"));
+            return Err(crate::Error::Registers(errors));
         }
     }
     // What conversions and addresses depend on, read with every cycle: selectors first, then
@@ -215,7 +217,9 @@ pub fn choose(
         }
     }
     if regs.is_empty() {
-        return Err(format!("{}: no readable registers on this link", spec.name));
+        return Err(crate::Error::NothingReadable {
+            link: spec.name.clone(),
+        });
     }
     Ok((regs, deps))
 }
@@ -246,7 +250,7 @@ impl Polled {
         spec: DriveSpec,
         link: &str,
         kind: TransportKind,
-    ) -> Result<Polled, String> {
+    ) -> Result<Polled, crate::Error> {
         let (regs, deps) = choose(&spec, kind)?;
         let points = points::points(spec.drive, &regs, kind);
         let base: Labels = vec![

@@ -258,8 +258,8 @@ fn respond(req: &Request<hyper::body::Incoming>, metrics: &Metrics) -> Response<
 }
 
 /// Binds the metrics listener (loopback unless told otherwise: the caller decides).
-pub async fn bind(addr: SocketAddr) -> Result<TcpListener, String> {
+pub async fn bind(addr: SocketAddr) -> Result<TcpListener, crate::Error> {
     TcpListener::bind(addr)
         .await
-        .map_err(|e| format!("cannot listen for /metrics on {addr}: {e}"))
+        .map_err(|source| crate::Error::Metrics { addr, source })
 }

@@ -22,6 +22,8 @@ use std::sync::mpsc::SyncSender;
 use std::time::{Duration, Instant};
 
 use drivemap_live::lookup;
+
+use crate::Refused;
 use drivemap_map::Drive;
 use drivemap_map::describe;
 use drivemap_map::ir::{Register, ValueKind};
@@ -74,37 +76,41 @@ pub struct DriveInfo {
 }
 
 /// Splits `mqtt[s]://host[:port]`.
-pub fn parse_url(url: &str) -> Result<(bool, String, u16), String> {
+pub fn parse_url(url: &str) -> Result<(bool, String, u16), crate::Error> {
     let (tls, rest) = if let Some(r) = url.strip_prefix("mqtts://") {
         (true, r)
     } else if let Some(r) = url.strip_prefix("mqtt://") {
         (false, r)
     } else {
-        return Err(format!(
-            "--mqtt {url}: give mqtt://HOST[:PORT] or mqtts://HOST[:PORT] (TLS)"
-        ));
+        return Err(crate::Error::MqttScheme {
+            url: url.to_owned(),
+        });
     };
     let rest = rest.trim_end_matches('/');
     let (host, port) = match rest.rsplit_once(':') {
         Some((h, p)) => (
             h,
-            p.parse::<u16>()
-                .map_err(|_| format!("--mqtt {url}: `{p}` is not a port"))?,
+            p.parse::<u16>().map_err(|_| crate::Error::MqttPort {
+                url: url.to_owned(),
+                port: p.to_owned(),
+            })?,
         ),
         None => (rest, if tls { 8883 } else { 1883 }),
     };
     if host.is_empty() {
-        return Err(format!("--mqtt {url}: no host"));
+        return Err(crate::Error::MqttHost {
+            url: url.to_owned(),
+        });
     }
     Ok((tls, host.trim_matches(['[', ']']).to_owned(), port))
 }
 
 /// Whether `allow` lets `action` be written on `info` (`register` resolved for a set).
-pub fn allowed(info: &DriveInfo, allow: &[String], action: &Action) -> Result<(), String> {
+pub fn allowed(info: &DriveInfo, allow: &[String], action: &Action) -> Result<(), Refused> {
     let has = |name: &str| allow.iter().any(|a| a.eq_ignore_ascii_case(name));
     let ok = match action {
         Action::Set { register } => {
-            let r = lookup::find(info.drive, register).map_err(|e| e.to_string())?;
+            let r = lookup::find(info.drive, register)?;
             has(&r.def.id)
                 || r.def.param.as_deref().is_some_and(has)
                 || has(&r.def.name)
@@ -119,16 +125,15 @@ pub fn allowed(info: &DriveInfo, allow: &[String], action: &Action) -> Result<()
     if ok {
         Ok(())
     } else {
-        Err(format!(
-            "not allowed: the bridge was not started with --allow-writes naming {}",
-            match action {
+        Err(Refused::NotAllowed {
+            what: match action {
                 Action::Set { register } => format!("`{register}`"),
                 Action::Run => "`run`".into(),
                 Action::Stop => "`stop` (or `run`)".into(),
                 Action::Reference => "`frequency_reference`".into(),
                 Action::FaultReset => "`fault_reset`".into(),
-            }
-        ))
+            },
+        })
     }
 }
 
@@ -556,7 +561,7 @@ pub async fn run(
                     let info = &drives[index];
                     let command = Command { drive: index, action: action.clone(), topic: p.topic.clone(), payload: payload.clone() };
                     let refusal = if let Err(why) = allowed(info, &options.allow, &action) {
-                        Some(why)
+                        Some(why.to_string())
                     } else if !buckets[index].take(options.rate) {
                         Some(format!("over the rate limit of {} command(s) per second for {}", options.rate, info.name))
                     } else {
@@ -663,26 +668,29 @@ fn publish_error(client: &AsyncClient, root: &str, info: &DriveInfo, command: &C
 }
 
 /// A rustls client configuration trusting only the CA certificates in `ca` (PEM).
-pub fn tls_config(ca: &std::path::Path) -> Result<rumqttc::TlsConfiguration, String> {
+pub fn tls_config(ca: &std::path::Path) -> Result<rumqttc::TlsConfiguration, crate::Error> {
     use rustls::pki_types::CertificateDer;
     use rustls::pki_types::pem::PemObject;
+    let bad = |e: &dyn std::fmt::Display| crate::Error::Ca {
+        path: ca.to_owned(),
+        message: e.to_string(),
+    };
     let mut roots = rustls::RootCertStore::empty();
     let certs: Vec<CertificateDer<'static>> = CertificateDer::pem_file_iter(ca)
-        .map_err(|e| format!("--mqtt-ca {}: {e}", ca.display()))?
+        .map_err(|e| bad(&e))?
         .collect::<Result<_, _>>()
-        .map_err(|e| format!("--mqtt-ca {}: {e}", ca.display()))?;
+        .map_err(|e| bad(&e))?;
     if certs.is_empty() {
-        return Err(format!("--mqtt-ca {}: no certificate in it", ca.display()));
+        return Err(crate::Error::NoCertificate {
+            path: ca.to_owned(),
+        });
     }
     for c in certs {
-        roots
-            .add(c)
-            .map_err(|e| format!("--mqtt-ca {}: {e}", ca.display()))?;
+        roots.add(c).map_err(|e| bad(&e))?;
     }
     let provider = Arc::new(rustls::crypto::ring::default_provider());
     let config = rustls::ClientConfig::builder_with_provider(provider)
-        .with_safe_default_protocol_versions()
-        .map_err(|e| e.to_string())?
+        .with_safe_default_protocol_versions()?
         .with_root_certificates(roots)
         .with_no_client_auth();
     Ok(rumqttc::TlsConfiguration::Rustls(Arc::new(config)))

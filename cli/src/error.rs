@@ -58,6 +58,9 @@ pub enum Error {
     /// The simulator refuses its options.
     #[error(transparent)]
     Sim(#[from] drivemap_sim::SimError),
+    /// The bridge cannot start (its options, a CA file, a listener, the registers asked).
+    #[error(transparent)]
+    Bridge(#[from] drivemap_bridge::Error),
     /// The command refuses, in its own words (what was given and why it cannot be done).
     #[error("{0}")]
     Refused(String),

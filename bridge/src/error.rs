@@ -1,0 +1,128 @@
+//! Why the bridge cannot start, and why a write through it is refused: each names the option,
+//! file, address or register it is about.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+use drivemap_live::lookup::NotFound;
+
+/// Why the bridge cannot start.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// No drive was given.
+    #[error("no drives to bridge")]
+    NoDrives,
+    /// `--mqtt` is not `mqtt://` or `mqtts://`.
+    #[error("--mqtt {url}: give mqtt://HOST[:PORT] or mqtts://HOST[:PORT] (TLS)")]
+    MqttScheme {
+        /// The URL given.
+        url: String,
+    },
+    /// `--mqtt`'s port is not a number from 0 to 65535.
+    #[error("--mqtt {url}: `{port}` is not a port")]
+    MqttPort {
+        /// The URL given.
+        url: String,
+        /// The port as written.
+        port: String,
+    },
+    /// `--mqtt` has no host.
+    #[error("--mqtt {url}: no host")]
+    MqttHost {
+        /// The URL given.
+        url: String,
+    },
+    /// `mqtts://` without `--mqtt-ca`.
+    #[error("--mqtt {url}: TLS needs the CA certificate the broker's chains to: --mqtt-ca FILE")]
+    NoCa {
+        /// The URL given.
+        url: String,
+    },
+    /// `--mqtt-ca` with `mqtt://`.
+    #[error("--mqtt-ca given for {url}, which is not TLS: use mqtts://")]
+    CaWithoutTls {
+        /// The URL given.
+        url: String,
+    },
+    /// The CA file cannot be read, or holds a certificate rustls refuses.
+    #[error("--mqtt-ca {}: {message}", path.display())]
+    Ca {
+        /// The file.
+        path: PathBuf,
+        /// What the PEM reader or rustls said.
+        message: String,
+    },
+    /// The CA file holds no certificate.
+    #[error("--mqtt-ca {}: no certificate in it", path.display())]
+    NoCertificate {
+        /// The file.
+        path: PathBuf,
+    },
+    /// rustls refused its own default protocol versions with the ring provider.
+    #[error("TLS: {0}")]
+    Tls(#[from] rustls::Error),
+    /// The tokio runtime could not be started.
+    #[error("cannot start the runtime: {0}")]
+    Runtime(#[source] std::io::Error),
+    /// SIGTERM cannot be watched.
+    #[error("cannot watch SIGTERM: {0}")]
+    Signal(#[source] std::io::Error),
+    /// The `/metrics` listener cannot bind.
+    #[error("cannot listen for /metrics on {addr}: {source}")]
+    Metrics {
+        /// The address asked.
+        addr: SocketAddr,
+        /// Why not.
+        source: std::io::Error,
+    },
+    /// Registers asked for a link that are not there or cannot be read on it, one line each.
+    #[error("{}", lines(.0))]
+    Registers(Vec<RegisterProblem>),
+    /// The link has nothing to poll.
+    #[error("{link}: no readable registers on this link")]
+    NothingReadable {
+        /// The drive's name on the link.
+        link: String,
+    },
+}
+
+fn lines(problems: &[RegisterProblem]) -> String {
+    let text: Vec<String> = problems.iter().map(ToString::to_string).collect();
+    text.join("\n")
+}
+
+/// A register asked for (`registers:` of a drive) that cannot be polled.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum RegisterProblem {
+    /// The map has no register of that name.
+    #[error("{link}: {source}")]
+    NotFound {
+        /// The drive's name on the link.
+        link: String,
+        /// The lookup's answer (with suggestions).
+        source: NotFound,
+    },
+    /// It exists but is write-only, broadcast-only or not on this transport.
+    #[error("{link}: {register} cannot be read on this link")]
+    Unreadable {
+        /// The drive's name on the link.
+        link: String,
+        /// The register, described.
+        register: String,
+    },
+}
+
+/// Why a write through the bridge is refused before it reaches the drive.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum Refused {
+    /// The register named is not on the drive.
+    #[error(transparent)]
+    NotFound(#[from] NotFound),
+    /// The bridge was not started with `--allow-writes` naming it (`what`, quoted).
+    #[error("not allowed: the bridge was not started with --allow-writes naming {what}")]
+    NotAllowed {
+        /// What would have to be named.
+        what: String,
+    },
+}
