@@ -126,3 +126,27 @@ pub enum Refused {
         what: String,
     },
 }
+
+/// A new connection of a link could not be made (what the link's `Connect` answers: the
+/// CLI's [`drivemap_live::LinkError`], a transport's I/O error).
+pub type ConnectError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Why a register of a polled drive cannot be read this cycle, or its reads not planned.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PollFailure {
+    /// Its address moves with a setting the bridge has not read yet.
+    #[error("{register}: its address depends on {setting}, which is not known yet")]
+    AddressUnknown {
+        /// The register, described.
+        register: String,
+        /// The setting (parameter number when printed).
+        setting: &'static str,
+    },
+    /// The runtime's planner refused the registers.
+    #[error(transparent)]
+    Plan(#[from] drivemap_runtime::planner::PlanError),
+    /// The read failed on the wire.
+    #[error(transparent)]
+    Read(#[from] drivemap_runtime::Error),
+}

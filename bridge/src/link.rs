@@ -30,6 +30,7 @@ use drivemap_runtime::transport::Transport;
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, ClientOptions, Error, RegisterInfo, Rounding, Table, Width};
 
+use crate::PollFailure;
 use crate::metrics::{Labels, Metrics};
 use crate::points::{self, Point, PointKind};
 
@@ -39,7 +40,7 @@ use crate::points::{self, Point, PointKind};
 pub type LinkClient = Client<Box<dyn Transport>>;
 
 /// A new connection of a link's transport.
-pub type Connect = Box<dyn FnMut() -> Result<Box<dyn Transport>, String> + Send>;
+pub type Connect = Box<dyn FnMut() -> Result<Box<dyn Transport>, crate::ConnectError> + Send>;
 
 /// A drive on a link, as configured.
 pub struct DriveSpec {
@@ -125,7 +126,7 @@ pub type Updates = Option<tokio::sync::mpsc::Sender<Update>>;
 struct Plan {
     poller: Poller,
     /// Per polled register: its index among the wanted and its width, or why it is not read.
-    slots: Vec<Result<(usize, Width), String>>,
+    slots: Vec<Result<(usize, Width), PollFailure>>,
 }
 
 /// A drive being polled.
@@ -286,21 +287,18 @@ impl Polled {
         self.spec.drive
     }
 
-    fn address(&self, r: &Register) -> Result<u16, String> {
+    fn address(&self, r: &Register) -> Result<u16, PollFailure> {
         let drive = self.spec.drive;
         drive
             .register_plan(r)
             .locate(&self.settings.view(drive), self.kind)
-            .map_err(|e| {
-                format!(
-                    "{}: its address depends on {}, which is not known yet",
-                    describe::register(r),
-                    e.setting
-                )
+            .map_err(|e| PollFailure::AddressUnknown {
+                register: describe::register(r),
+                setting: e.setting,
             })
     }
 
-    fn make_plan(&self, line: SerialConfig) -> Result<Plan, String> {
+    fn make_plan(&self, line: SerialConfig) -> Result<Plan, PollFailure> {
         let drive = self.spec.drive;
         let kind = self.kind;
         // Plans, not bare infos: the planner respects each register's `function_codes`.
@@ -332,9 +330,7 @@ impl Polled {
             }
         }
         let profile = self.spec.drive.plan().profile;
-        let poller = Poller::new(profile, &infos, wanted)
-            .map_err(|e| e.to_string())?
-            .with_model(BusModel::new(profile, line));
+        let poller = Poller::new(profile, &infos, wanted)?.with_model(BusModel::new(profile, line));
         Ok(Plan { poller, slots })
     }
 
@@ -382,7 +378,7 @@ impl Polled {
                 .slots
                 .iter()
                 .map(|slot| match slot {
-                    Err(why) => Err(("address", why.clone())),
+                    Err(why) => Err(("address", why.to_string())),
                     Ok((i, width)) => match plan.poller.raw(*i, *width) {
                         Some(Ok(w)) => Ok(w),
                         Some(Err(e)) => Err((error_kind(e), e.to_string())),
@@ -650,7 +646,7 @@ impl Polled {
             None => codec::parse_value_with(drive, r, value, &settings, Rounding::Exact)
                 .map_err(input_error)?,
         };
-        let address = self.address(r)?;
+        let address = self.address(r).map_err(|e| e.to_string())?;
         let words = rule.width.split(raw);
         gate::check(
             profile,
@@ -680,7 +676,7 @@ impl Polled {
         Ok(format!("wrote {} = {shown}", describe::register(r)))
     }
 
-    fn read_raw(&self, client: &mut LinkClient, r: &Register) -> Result<u32, String> {
+    fn read_raw(&self, client: &mut LinkClient, r: &Register) -> Result<u32, PollFailure> {
         let address = self.address(r)?;
         let info = self.spec.drive.register_plan(r).info;
         let mut w = [0u16; 2];
@@ -688,8 +684,7 @@ impl Polled {
         match info.table {
             Table::Holding => client.read_holding(self.spec.slave, address, words),
             Table::Input => client.read_input(self.spec.slave, address, words),
-        }
-        .map_err(|e| e.to_string())?;
+        }?;
         Ok(info.width.join(words))
     }
 }

@@ -48,7 +48,7 @@ fn connect_to(addr: String) -> Connect {
     Box::new(move || {
         RtuOverTcpTransport::connect(addr.as_str(), Duration::from_millis(300))
             .map(|t| Box::new(t) as Box<dyn Transport>)
-            .map_err(|e| e.to_string())
+            .map_err(Into::into)
     })
 }
 

@@ -229,7 +229,7 @@ fn link(
     let connect = Box::new(move || {
         args.connect(first, profile)
             .map(|(client, _)| client.into_transport())
-            .map_err(|e| e.to_string())
+            .map_err(Into::into)
     });
     Ok(LinkSpec {
         name: shown,
