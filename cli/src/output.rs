@@ -32,3 +32,15 @@ macro_rules! outln {
     () => { $crate::output::write(format_args!("\n")) };
     ($($arg:tt)*) => { $crate::output::write(format_args!("{}\n", format_args!($($arg)*))) };
 }
+
+/// Prints, on standard error, a warning for each protocol fact of `facts` the command relies on
+/// although `drive`'s manual does not print it (`drivemap_live::unprinted::warnings`).
+pub fn warn_unprinted(
+    drive: &drivemap_map::Drive,
+    link: &drivemap_live::Link,
+    facts: &[drivemap_runtime::core::ProtocolFact],
+) {
+    for w in drivemap_live::unprinted::warnings(drive, link, facts, None) {
+        eprintln!("{w}");
+    }
+}

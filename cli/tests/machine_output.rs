@@ -386,5 +386,13 @@ fn every_shipped_map_exports_to_the_export_schema() {
         docs.push(doc);
     }
     assert!(docs.len() >= 5);
+    // And a map whose manual prints no protocol fact: `protocol.not_printed` and the facts'
+    // `not_printed` reasons (tests/fixtures/halden-h1).
+    let halden = repo().join("tests/fixtures/halden-h1/halden-h1.yaml");
+    let (code, out, err) = drivemap(&["export", halden.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let doc = json(&out);
+    assert!(doc["protocol"]["not_printed"].is_object(), "{out}");
+    docs.push(doc);
     validate("export", &docs);
 }

@@ -71,8 +71,8 @@ fn the_fixture_map_verifies_against_its_manual() {
     assert_eq!(
         out,
         "ok   cli/tests/fixtures/example-drive.yaml (example-drive: 19 registers; \
-         protocol 11 of 11, conflicts 4 of 4, gaps 1 of 1 verified; \
-         citations: 45 of 45 verified, 0 indirect, 0 unverified)\n"
+         protocol 13 of 13, conflicts 4 of 4, gaps 1 of 1 verified; \
+         citations: 47 of 47 verified, 0 indirect, 0 unverified)\n"
     );
 }
 
@@ -99,7 +99,7 @@ fn a_citation_moved_to_the_next_row_is_reported_with_the_line_and_whose_row_it_i
          (the row of `frequency_units (P-03)`); fix the line, or mark it `indirect: <reason>`\n"
     );
     assert!(
-        out.contains("44 of 45 verified, 0 indirect, 1 unverified"),
+        out.contains("46 of 47 verified, 0 indirect, 1 unverified"),
         "{out}"
     );
 
@@ -137,7 +137,7 @@ fn an_indirect_citation_with_its_reason_is_accepted_and_counted() {
     );
     assert_eq!((code, err.as_str()), (0, ""), "{out}");
     assert!(
-        out.contains("44 of 45 verified, 1 indirect, 0 unverified"),
+        out.contains("46 of 47 verified, 1 indirect, 0 unverified"),
         "{out}"
     );
 
@@ -495,7 +495,7 @@ fn page_citations_are_counted_not_verified_by_content() {
     assert_eq!(
         out,
         "ok   cli/tests/fixtures/paged-manual.yaml (paged-manual: 2 registers; \
-         citations: 2 of 5 verified, 0 indirect, 0 unverified, \
+         protocol 2 of 2 verified; citations: 4 of 7 verified, 0 indirect, 0 unverified, \
          3 page citations (not verifiable by content))\n"
     );
 }
@@ -508,7 +508,8 @@ fn a_map_citing_only_pages_needs_no_manuals_directory() {
     let text = paged_fixture()
         .replace("    - {file: manual.txt, title: Example manual}\n", "")
         .replace("manual.txt:19", "acme-um:p40")
-        .replace("manual.txt:20", "acme-um:p41");
+        .replace("manual.txt:20", "acme-um:p41")
+        .replace("manual.txt:9", "acme-um:p12");
     assert!(!text.contains("manual.txt:"), "{text}");
     std::fs::write(s.0.join("paged-manual.yaml"), text).unwrap();
     let (code, out, err) = drivemap(
@@ -524,8 +525,8 @@ fn a_map_citing_only_pages_needs_no_manuals_directory() {
     assert_eq!((code, err.as_str()), (0, ""), "{out}");
     assert_eq!(
         out,
-        "ok   paged-manual.yaml (paged-manual: 2 registers; citations: 0 of 5 verified, \
-         0 indirect, 0 unverified, 5 page citations (not verifiable by content))\n"
+        "ok   paged-manual.yaml (paged-manual: 2 registers; citations: 0 of 7 verified, \
+         0 indirect, 0 unverified, 7 page citations (not verifiable by content))\n"
     );
 }
 
@@ -741,7 +742,7 @@ fn a_role_protocol_conflict_or_gap_citing_an_unrelated_line_fails_strict() {
         "{err}"
     );
     assert!(
-        out.contains("protocol 11 of 11, conflicts 3 of 4, gaps 0 of 1 verified; citations: 43 of 45 verified, 0 indirect, 2 unverified"),
+        out.contains("protocol 13 of 13, conflicts 3 of 4, gaps 0 of 1 verified; citations: 45 of 47 verified, 0 indirect, 2 unverified"),
         "{out}"
     );
 }

@@ -80,8 +80,8 @@ fn a_limit_not_printed_keeps_its_value_and_says_why() {
             .get("limits")
             .is_none()
     );
-    // The value is required: an unknown limit still needs a working number.
-    let e = drivemap_map::read_map_str(
+    // Without a value the Modbus limit stands in (125 per read), and every tool says so.
+    let drive = drivemap_map::read_map_str(
         "mini-drive.yaml",
         &fixture().replace(
             "  max_read: 8\n",
@@ -89,8 +89,27 @@ fn a_limit_not_printed_keeps_its_value_and_says_why() {
         ),
         &Context::default(),
     )
-    .unwrap_err();
-    assert!(e.to_string().contains("missing field `value`"), "{e}");
+    .unwrap();
+    let plan = lower::lower(&drive);
+    assert_eq!(plan.profile.max_read, 125);
+    assert_eq!(
+        plan.profile.max_read_stated(),
+        drivemap_core::stated::Stated::NotPrinted("not printed")
+    );
+    let md = drivemap_review::reference::render(&drive, "mini-drive.yaml");
+    assert!(
+        md.contains(
+            "at most 125 per read, 8 per write. max_read not printed in the manual: not printed; used instead: the Modbus limit (125)"
+        ),
+        "{md}"
+    );
+    let json = drivemap_map::export::export(&drive);
+    assert_eq!(json["protocol"]["max_read"], 125);
+    assert_eq!(json["protocol"]["limits"]["max_read"]["value"], 125);
+    assert_eq!(
+        json["protocol"]["not_printed"]["max_read"]["why"],
+        "not printed"
+    );
 }
 
 /// `function_codes` takes a plain list, `{codes, source}` or `{codes, unknown: <why>, source}`;

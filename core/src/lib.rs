@@ -24,6 +24,7 @@ pub mod register;
 pub mod roles;
 pub mod rule;
 pub mod scale;
+pub mod stated;
 pub mod width;
 
 pub use functions::Functions;
@@ -38,4 +39,5 @@ pub use register::{
 pub use roles::{Role, Roles};
 pub use rule::{Broadcast, Transports, WriteRule};
 pub use scale::{Rounding, ValueError};
+pub use stated::{NotPrinted, ProtocolFact, Stated};
 pub use width::{Width, WordOrder};

@@ -6,6 +6,7 @@
 //! manual's communication addresses to PDU addresses per transport.
 
 use crate::rule::WriteRule;
+pub use crate::stated::{NotPrinted, ProtocolFact, Stated};
 
 /// How a transport frames Modbus PDUs. Address offsets and some rules differ per kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -383,11 +384,13 @@ pub struct Profile {
     pub drive_id: &'static str,
     /// Function codes the drive implements.
     pub function_codes: &'static [u8],
-    /// Maximum registers per read (03h/04h).
+    /// Maximum registers per read (03h/04h); the Modbus 125 when the manual prints none (see
+    /// [`Profile::not_printed`]).
     pub max_read: u16,
-    /// Maximum registers per write (10h).
+    /// Maximum registers per write (10h); the Modbus 123 when the manual prints none.
     pub max_write: u16,
-    /// Valid slave addresses (excluding broadcast 0).
+    /// Valid slave addresses (excluding broadcast 0); the Modbus 1-247 when the manual prints
+    /// no range.
     pub slave_min: u8,
     pub slave_max: u8,
     pub broadcast: Option<BroadcastInfo>,
@@ -403,6 +406,9 @@ pub struct Profile {
     /// What the map allows for each writable register, for the write gate
     /// (the write gate of `drivemap_runtime::gate`). Empty: no register table, only the protocol is checked.
     pub writes: &'static [WriteRule],
+    /// The protocol facts the manual does not print (the map's `unknown:`), with why. The
+    /// figures above hold the Modbus ones in their place ([`ProtocolFact::fallback`]).
+    pub not_printed: &'static [NotPrinted],
 }
 
 impl Profile {
@@ -423,7 +429,36 @@ impl Profile {
         serial_formats: None,
         eeprom_write_endurance: None,
         writes: &[],
+        not_printed: &[],
     };
+
+    /// Why the manual prints no `fact`, when it prints none.
+    pub fn why_not_printed(&self, fact: ProtocolFact) -> Option<&NotPrinted> {
+        self.not_printed.iter().find(|n| n.fact == fact)
+    }
+
+    /// Registers per write, or why the manual prints no limit ([`Profile::max_write`] is the
+    /// Modbus 123 then).
+    pub fn max_write_stated(&self) -> Stated<u16> {
+        self.stated(ProtocolFact::MaxWrite, self.max_write)
+    }
+
+    /// Registers per read, or why the manual prints no limit.
+    pub fn max_read_stated(&self) -> Stated<u16> {
+        self.stated(ProtocolFact::MaxRead, self.max_read)
+    }
+
+    /// The slave-address range, or why the manual prints none.
+    pub fn slave_range_stated(&self) -> Stated<(u8, u8)> {
+        self.stated(ProtocolFact::SlaveAddress, (self.slave_min, self.slave_max))
+    }
+
+    fn stated<T>(&self, fact: ProtocolFact, value: T) -> Stated<T> {
+        match self.why_not_printed(fact) {
+            Some(n) => Stated::NotPrinted(n.why),
+            None => Stated::Printed(value),
+        }
+    }
 
     /// Whether the drive implements `function`.
     pub fn supports(&self, function: u8) -> bool {

@@ -17,6 +17,7 @@ pub mod profile;
 pub mod session;
 pub mod settings;
 pub mod silence;
+pub mod unprinted;
 
 pub use codec::{Value, decode, encode, parse_value};
 pub use link::{Link, LinkError, Parity};

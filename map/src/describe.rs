@@ -102,9 +102,33 @@ pub fn limit_citation(name: &str, l: &crate::model::Limit, with_source: bool) ->
         _ => String::new(),
     };
     match &l.unknown {
-        Some(why) => format!(". {name} {} not printed: {}{src}", l.value, why.trim()),
+        Some(why) => match l.value {
+            Some(v) => format!(". {name} {v} not printed: {}{src}", why.trim()),
+            None => format!(
+                ". {name} {}{src}",
+                not_printed(why, &format!("the Modbus limit ({})", fallback_limit(name)))
+            ),
+        },
         None if !src.is_empty() => format!(". {name}{src}"),
         None => String::new(),
+    }
+}
+
+/// A fact the manual does not print, in `doc`'s words: `not printed in the manual: <why>;
+/// used instead: <fallback>`.
+pub fn not_printed(why: &str, fallback: &str) -> String {
+    format!(
+        "not printed in the manual: {}; used instead: {fallback}",
+        why.trim()
+    )
+}
+
+/// The Modbus limit standing in for an unprinted `max_read` (125) or `max_write` (123).
+fn fallback_limit(name: &str) -> u16 {
+    if name == "max_read" {
+        drivemap_core::stated::MODBUS_MAX_READ
+    } else {
+        drivemap_core::stated::MODBUS_MAX_WRITE
     }
 }
 

@@ -198,9 +198,10 @@ fn register(drive: &Drive, r: &Register) -> Value {
 }
 
 /// The export of one drive.
-/// A per-request limit: its value, its citation and, when the manual prints none, the reason.
-fn limit_json(l: &model::Limit) -> Value {
-    json!({"value": l.value, "source": l.source, "not_printed": l.unknown})
+/// A per-request limit: its working value (the Modbus one when the map gives none), its
+/// citation and, when the manual prints none, the reason.
+fn limit_json(l: &model::Limit, working: u16) -> Value {
+    json!({"value": working, "source": l.source, "not_printed": l.unknown})
 }
 
 /// An example frame: the map's keys (`bytes` as printed), the bytes as numbers (`frame`,
@@ -240,8 +241,8 @@ pub fn export(drive: &Drive) -> Value {
             // The working list; `limits.function_codes` (when cited or not printed) says more.
             "function_codes": p.function_codes.codes,
             // The working numbers; `limits` (when one is cited or not printed) says more.
-            "max_read": p.max_read.value,
-            "max_write": p.max_write.value,
+            "max_read": p.max_read(),
+            "max_write": p.max_write(),
 
             "slave_address": p.slave_address,
             "broadcast": p.broadcast,
@@ -274,8 +275,8 @@ pub fn export(drive: &Drive) -> Value {
     }
     let stated = |l: &model::Limit| l.source.is_some() || l.unknown.is_some();
     if stated(&p.max_read) || stated(&p.max_write) {
-        limits.insert("max_read".into(), limit_json(&p.max_read));
-        limits.insert("max_write".into(), limit_json(&p.max_write));
+        limits.insert("max_read".into(), limit_json(&p.max_read, p.max_read()));
+        limits.insert("max_write".into(), limit_json(&p.max_write, p.max_write()));
     }
     // A broadcast whose rules are not printed: says so in the words of `doc`, with the reason.
     if let Some(b) = &p.broadcast
@@ -322,7 +323,56 @@ pub fn export(drive: &Drive) -> Value {
     if !limits.is_empty() {
         out["protocol"]["limits"] = Value::Object(limits);
     }
+    // The working frame gap, given or the Modbus 3.5 characters, is always written.
+    // (First, where the model's serialization always had it.)
+    if let Some(t) = &p.timing
+        && let Some(given) = out["protocol"]["timing"].as_object()
+    {
+        let mut timing = serde_json::Map::new();
+        timing.insert("frame_gap_chars".into(), json!(t.frame_gap_chars()));
+        for (k, v) in given {
+            if k != "frame_gap_chars" {
+                timing.insert(k.clone(), v.clone());
+            }
+        }
+        out["protocol"]["timing"] = Value::Object(timing);
+    }
+    not_printed(p, &mut out["protocol"]);
     // Index/value register pairs and their entries (an empty list when none).
     out["indexed"] = crate::indexed::export(drive);
     out
+}
+
+/// The facts the manual does not print, written explicitly: `protocol.not_printed` maps each
+/// fact's key (`slave_address`, `timing.frame_gap`) to `{why, source, used}` — `used` is what
+/// the tools take in its place. The working figures stay where they always were (the slave
+/// range as `min`/`max`, `timing.frame_gap_chars`), so a reader of the numbers alone keeps
+/// working; each object marked not printed carries `not_printed: <why>` in place of the map's
+/// `unknown`.
+fn not_printed(p: &model::Protocol, out: &mut Value) {
+    let list = crate::stated::unprinted(p);
+    if list.is_empty() {
+        return;
+    }
+    let (lo, hi) = p.slave_address.range();
+    out["slave_address"]["min"] = json!(lo);
+    out["slave_address"]["max"] = json!(hi);
+    let mut facts = serde_json::Map::new();
+    for u in list {
+        facts.insert(
+            u.fact.key().into(),
+            json!({"why": u.why, "source": u.source, "used": u.fact.fallback()}),
+        );
+        // The object itself says so, in export's words (`not_printed`, as `limits` does).
+        let mut at = &mut *out;
+        for k in u.fact.key().split('.') {
+            at = &mut at[k];
+        }
+        if let Some(o) = at.as_object_mut()
+            && o.remove("unknown").is_some()
+        {
+            o.insert("not_printed".into(), json!(u.why));
+        }
+    }
+    out["not_printed"] = Value::Object(facts);
 }

@@ -30,6 +30,7 @@ pub mod others;
 pub mod ratio;
 pub mod schema;
 pub mod source;
+pub mod stated;
 pub mod validate;
 
 pub use diagnostic::{Diagnostic, Diagnostics};

@@ -675,7 +675,7 @@ fn timing(drive: &Drive) -> Timing {
         r.default_value().map(|v| (v * per_unit_us).round() as u32)
     });
     Timing {
-        frame_gap_chars: timing.map(|t| t.frame_gap_chars).unwrap_or(3.5),
+        frame_gap_chars: timing.map(|t| t.frame_gap_chars()).unwrap_or(3.5),
         frame_gap_us: timing
             .and_then(|t| t.frame_gap.as_ref())
             .and_then(|i| i.ms)
@@ -704,10 +704,10 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
     Profile {
         drive_id: text(&drive.meta.id),
         function_codes: leak(p.function_codes.codes.clone()),
-        max_read: p.max_read.value,
-        max_write: p.max_write.value,
-        slave_min: p.slave_address.min,
-        slave_max: p.slave_address.max,
+        max_read: p.max_read(),
+        max_write: p.max_write(),
+        slave_min: p.slave_address.range().0,
+        slave_max: p.slave_address.range().1,
         broadcast: p.broadcast.as_ref().map(|b| match &b.unknown {
             Some(why) => BroadcastInfo::not_printed(text(why.trim())),
             None => {
@@ -749,5 +749,15 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
             }),
         eeprom_write_endurance: p.eeprom.as_ref().map(|e| e.endurance),
         writes: leak(writes),
+        not_printed: leak(
+            crate::stated::unprinted(p)
+                .into_iter()
+                .map(|u| drivemap_core::NotPrinted {
+                    fact: u.fact,
+                    why: text(&u.why),
+                    source: u.source.as_deref().map(text),
+                })
+                .collect(),
+        ),
     }
 }

@@ -310,8 +310,10 @@ pub struct Protocol {
     pub slave_address: SlaveAddress,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub broadcast: Option<Broadcast>,
+    /// The drive's exception codes: the list, or `{unknown: "<why>", source: ..}` when the
+    /// manual prints none (see [`Exceptions`]).
     #[serde(default)]
-    pub exceptions: Vec<ExceptionCode>,
+    pub exceptions: Exceptions,
     /// ENTER / ACCEPT / save commands.
     #[serde(default)]
     pub commands: Vec<Command>,
@@ -355,8 +357,16 @@ impl std::fmt::Display for TransportName {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SlaveAddress {
-    pub min: u8,
-    pub max: u8,
+    /// Lowest address; not given when the range is `unknown`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<u8>,
+    /// Highest address; not given when the range is `unknown`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<u8>,
+    /// The manual prints no range: why (`slave_address: {unknown: "<why>"}`). The tools use
+    /// the Modbus unicast range 1-247 then, and say so.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unknown: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub default: Option<u8>,
     /// Parameter that sets it (`Sn-36`).
@@ -464,9 +474,18 @@ pub struct Addressing {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Timing {
-    /// Silence between frames in character times.
-    #[serde(default = "default_frame_gap")]
-    pub frame_gap_chars: f64,
+    /// The manual prints no timing at all: why (`timing: {unknown: "<why>"}`). No other figure
+    /// is given then; the runtime keeps the Modbus RTU rule (3.5 characters between frames).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unknown: Option<String>,
+    /// Silence between frames in character times; 3.5 (the Modbus RTU rule) when not given
+    /// ([`Timing::frame_gap_chars`]). Not given when `frame_gap` is `unknown`.
+    #[serde(
+        default,
+        rename = "frame_gap_chars",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub frame_gap_chars_given: Option<f64>,
     /// Silence between frames in milliseconds, when the manual states it so ("at least 10 ms"):
     /// `frame_gap: {ms: 10, source: ...}`. Only `ms` is taken (a gap in characters is
     /// `frame_gap_chars`); the runtime keeps the larger of the two at the line's baud rate.
@@ -495,8 +514,11 @@ pub struct Timing {
     pub notes: Vec<String>,
 }
 
-fn default_frame_gap() -> f64 {
-    3.5
+impl Timing {
+    /// Silence between frames in character times: as given, else 3.5 (the Modbus RTU rule).
+    pub fn frame_gap_chars(&self) -> f64 {
+        self.frame_gap_chars_given.unwrap_or(3.5)
+    }
 }
 
 /// A duration: milliseconds, bit times, character times, or a sum of them (`{bits: 24, ms: 10}`).
@@ -509,6 +531,10 @@ pub struct Interval {
     pub bits: Option<u32>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chars: Option<f64>,
+    /// The manual prints no such interval: why (`response_time: {unknown: "<why>"}`); no
+    /// `ms`, `bits` or `chars` then.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unknown: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
@@ -520,9 +546,15 @@ pub struct Interval {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Serial {
+    /// The manual prints no serial settings: why (`serial: {unknown: "<why>"}`). No baud
+    /// rates, parities or formats are given then; `source` only where the manual says so.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unknown: Option<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub baud_rates: Vec<u32>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub default_baud: Option<u32>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub parities: Vec<Parity>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub default_parity: Option<Parity>,
@@ -540,6 +572,8 @@ pub struct Serial {
     /// length of every format.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub formats: Option<SerialFormats>,
+    /// Required, except with `unknown` (then only where the manual says it prints none).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub source: String,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
@@ -1109,12 +1143,14 @@ pub struct Removed {
 }
 
 /// A per-request limit (`max_read`, `max_write`): a plain number (`8`), the number with its
-/// citation (`{value: 8, source: "..."}`), or a number the manual does not print, with why it
-/// was chosen (`{value: 8, unknown: "the chapter prints no limit; ..."}`). The runtime always
-/// uses `value`: an unknown limit keeps the value the map gives as its working value.
+/// citation (`{value: 8, source: "..."}`), a limit the manual does not print (`{unknown:
+/// "<why>"}`: the tools use the Modbus limit, 125 per read and 123 per write), or a working
+/// number chosen although the manual prints none, with why (`{value: 8, unknown: "the chapter
+/// prints no limit; 8 is ..."}`).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Limit {
-    pub value: u16,
+    /// The number, when the map gives one.
+    pub value: Option<u16>,
     pub source: Option<String>,
     /// Why the manual prints no such limit and where `value` comes from.
     pub unknown: Option<String>,
@@ -1124,17 +1160,28 @@ impl Limit {
     /// A plain number, neither cited nor marked unknown.
     pub fn plain(value: u16) -> Limit {
         Limit {
-            value,
+            value: Some(value),
             source: None,
             unknown: None,
         }
+    }
+
+    /// The number the tools use: the map's, else `modbus` (the protocol's own limit).
+    pub fn working(&self, modbus: u16) -> u16 {
+        self.value.unwrap_or(modbus)
+    }
+
+    /// Whether the limit says more than its number (a citation or a reason).
+    pub fn stated(&self) -> bool {
+        self.source.is_some() || self.unknown.is_some()
     }
 }
 
 #[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct LimitForm {
-    value: u16,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    value: Option<u16>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     source: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -1147,9 +1194,7 @@ impl<'de> Deserialize<'de> for Limit {
         impl<'de> serde::de::Visitor<'de> for V {
             type Value = Limit;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str(
-                    "a number of registers, `{value: N, source: ..}` or `{value: N, unknown: <why>}`",
-                )
+                f.write_str("a number of registers, `{value: N, source: ..}` or `{unknown: <why>}`")
             }
             fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Limit, E> {
                 u16::try_from(v).map(Limit::plain).map_err(|_| {
@@ -1177,8 +1222,8 @@ impl<'de> Deserialize<'de> for Limit {
 impl Serialize for Limit {
     /// A plain limit as its number (as shipped maps and exports always had it), else the mapping.
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        if self.source.is_none() && self.unknown.is_none() {
-            return s.serialize_u16(self.value);
+        if let (None, None, Some(v)) = (&self.source, &self.unknown, self.value) {
+            return s.serialize_u16(v);
         }
         LimitForm {
             value: self.value,
@@ -1274,5 +1319,134 @@ impl Serialize for FunctionCodes {
             unknown: self.unknown.clone(),
         }
         .serialize(s)
+    }
+}
+
+/// `protocol.exceptions`: the drive's exception codes as a list, or `{unknown: "<why>", source:
+/// ..}` when the manual prints none (the tools then name only the standard Modbus exceptions).
+/// Reads as the list ([`std::ops::Deref`]).
+#[derive(Debug, Clone, Default)]
+pub struct Exceptions {
+    pub list: Vec<ExceptionCode>,
+    /// Why the manual prints no exception list.
+    pub unknown: Option<String>,
+    /// Where the manual says so, when it does.
+    pub source: Option<String>,
+    /// The citation is deliberately indirect: why.
+    pub indirect: Option<String>,
+}
+
+impl std::ops::Deref for Exceptions {
+    type Target = Vec<ExceptionCode>;
+    fn deref(&self) -> &Vec<ExceptionCode> {
+        &self.list
+    }
+}
+
+impl std::ops::DerefMut for Exceptions {
+    fn deref_mut(&mut self) -> &mut Vec<ExceptionCode> {
+        &mut self.list
+    }
+}
+
+impl<'a> IntoIterator for &'a Exceptions {
+    type Item = &'a ExceptionCode;
+    type IntoIter = std::slice::Iter<'a, ExceptionCode>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.list.iter()
+    }
+}
+
+impl From<Vec<ExceptionCode>> for Exceptions {
+    fn from(list: Vec<ExceptionCode>) -> Exceptions {
+        Exceptions {
+            list,
+            ..Exceptions::default()
+        }
+    }
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct ExceptionsForm {
+    unknown: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    source: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    indirect: Option<String>,
+}
+
+impl<'de> Deserialize<'de> for Exceptions {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Exceptions, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Exceptions;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a list of exception codes or `{unknown: <why>, source: ..}`")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                seq: A,
+            ) -> Result<Exceptions, A::Error> {
+                Vec::<ExceptionCode>::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))
+                    .map(Exceptions::from)
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<Exceptions, A::Error> {
+                let f =
+                    ExceptionsForm::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(Exceptions {
+                    list: Vec::new(),
+                    unknown: Some(f.unknown),
+                    source: f.source,
+                    indirect: f.indirect,
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl Serialize for Exceptions {
+    /// The list (as maps and exports always had it), or the mapping when not printed.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match &self.unknown {
+            None => self.list.serialize(s),
+            Some(why) => ExceptionsForm {
+                unknown: why.clone(),
+                source: self.source.clone(),
+                indirect: self.indirect.clone(),
+            }
+            .serialize(s),
+        }
+    }
+}
+
+impl SlaveAddress {
+    /// The range the tools use: the map's, else the Modbus unicast range 1-247.
+    pub fn range(&self) -> (u8, u8) {
+        match (self.min, self.max) {
+            (Some(lo), Some(hi)) => (lo, hi),
+            _ => (
+                drivemap_core::stated::MODBUS_SLAVE_MIN,
+                drivemap_core::stated::MODBUS_SLAVE_MAX,
+            ),
+        }
+    }
+}
+
+impl Protocol {
+    /// Registers per read the tools use: the map's, else the Modbus 125.
+    pub fn max_read(&self) -> u16 {
+        self.max_read
+            .working(drivemap_core::stated::MODBUS_MAX_READ)
+    }
+
+    /// Registers per write the tools use: the map's, else the Modbus 123.
+    pub fn max_write(&self) -> u16 {
+        self.max_write
+            .working(drivemap_core::stated::MODBUS_MAX_WRITE)
     }
 }

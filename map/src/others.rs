@@ -354,6 +354,7 @@ fn protocol(drive: &Drive, out: &mut Vec<Other>) {
         let model::SlaveAddress {
             min: _,
             max: _,
+            unknown: _,
             default: _,
             param,
             source,
@@ -500,7 +501,7 @@ fn protocol(drive: &Drive, out: &mut Vec<Other>) {
             sp.key("source"),
             "the serial line".into(),
             "protocol",
-            &Some(s.source.clone()),
+            &(!s.source.is_empty()).then(|| s.source.clone()),
             &s.indirect,
             rule,
         );
@@ -580,9 +581,11 @@ fn protocol(drive: &Drive, out: &mut Vec<Other>) {
                 "protocol",
                 source,
                 unknown,
-                Rule::any()
-                    .number(value)
-                    .words(&["quantity", "registers", "words"]),
+                match value {
+                    Some(v) => Rule::any().number(v),
+                    None => Rule::any(),
+                }
+                .words(&["quantity", "registers", "words"]),
             );
             if let Some(o) = out.last_mut() {
                 o.indirect_key = false;

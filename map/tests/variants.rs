@@ -17,8 +17,8 @@ fn variant_inherits_overrides_and_removes() {
     assert_eq!(manuals, ["base.txt", "child.txt"], "manuals are united");
     // protocol merged key by key
     assert_eq!(child.protocol.function_codes.codes, [0x03, 0x10]);
-    assert_eq!(child.protocol.max_read.value, 16);
-    assert_eq!(child.protocol.max_write.value, 8, "inherited");
+    assert_eq!(child.protocol.max_read(), 16);
+    assert_eq!(child.protocol.max_write(), 8, "inherited");
     let ict = child
         .protocol
         .timing

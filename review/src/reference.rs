@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 
 use drivemap_core::register::{Table, WriteRestriction};
 use drivemap_core::rule::Transports;
+use drivemap_core::stated::ProtocolFact;
 
 use drivemap_core::ConversionKind;
 
@@ -43,7 +44,14 @@ fn join_cells(parts: &[String]) -> String {
         .join("<br>")
 }
 
-fn interval(i: &Interval) -> String {
+fn interval(i: &Interval, fallback: &str) -> String {
+    if let Some(why) = &i.unknown {
+        let mut s = describe::not_printed(why, fallback);
+        if let Some(src) = &i.source {
+            s += &format!(" (`{src}`)");
+        }
+        return s;
+    }
     let mut parts = Vec::new();
     if let Some(ms) = i.ms {
         parts.push(format!("{} ms", num(ms)));
@@ -172,7 +180,7 @@ fn protocol(out: &mut String, drive: &Drive) {
         functions += &format!(". List not printed: {}", why.trim());
     }
     row("Function codes", functions, fc.source.as_deref());
-    let mut per_request = describe::per_request(p.max_read.value, p.max_write.value);
+    let mut per_request = describe::per_request(p.max_read(), p.max_write());
     let mut sources: Vec<&str> = [&p.max_read, &p.max_write]
         .iter()
         .filter_map(|l| l.source.as_deref())
@@ -188,7 +196,13 @@ fn protocol(out: &mut String, drive: &Drive) {
     }
     row("Registers per request", per_request, column);
     let s = &p.slave_address;
-    let mut slave = format!("{} ..= {}", s.min, s.max);
+    let mut slave = match &s.unknown {
+        Some(why) => describe::not_printed(why, "the Modbus range 1 ..= 247"),
+        None => {
+            let (lo, hi) = s.range();
+            format!("{lo} ..= {hi}")
+        }
+    };
     if let Some(d) = s.default {
         slave += &format!(", default {d}");
     }
@@ -237,8 +251,22 @@ fn protocol(out: &mut String, drive: &Drive) {
             Some(&a.source),
         );
     }
-    if let Some(t) = &p.timing {
-        let mut gap = format!("frame gap {} characters", num(t.frame_gap_chars));
+    if let Some(t) = &p.timing
+        && let Some(why) = &t.unknown
+    {
+        row(
+            "Timing",
+            describe::not_printed(why, ProtocolFact::Timing.fallback()),
+            t.source.as_deref(),
+        );
+    } else if let Some(t) = &p.timing {
+        let mut gap = match t.frame_gap.as_ref().and_then(|g| g.unknown.as_ref()) {
+            Some(why) => format!(
+                "frame gap {}",
+                describe::not_printed(why, ProtocolFact::FrameGap.fallback())
+            ),
+            None => format!("frame gap {} characters", num(t.frame_gap_chars())),
+        };
         if let Some(ms) = t.frame_gap.as_ref().and_then(|g| g.ms) {
             let src = t
                 .frame_gap
@@ -250,15 +278,28 @@ fn protocol(out: &mut String, drive: &Drive) {
         }
         let mut parts = vec![gap];
         if let Some(i) = &t.inter_char_timeout {
-            parts.push(format!("inter-character timeout {}", interval(i)));
+            parts.push(format!(
+                "inter-character timeout {}",
+                interval(i, ProtocolFact::InterCharTimeout.fallback())
+            ));
         }
         if let Some(i) = &t.response_time {
-            parts.push(format!("response time {}", interval(i)));
+            parts.push(format!(
+                "response time {}",
+                interval(i, ProtocolFact::ResponseTime.fallback())
+            ));
         }
         if let Some(param) = &t.response_delay_param {
             parts.push(format!("response delay set by {param}"));
         }
-        if let Some(g) = &t.request_gap {
+        if let Some(g) = &t.request_gap
+            && let Some(why) = &g.unknown
+        {
+            parts.push(format!(
+                "gap before the next request {}",
+                describe::not_printed(why, ProtocolFact::RequestGap.fallback())
+            ));
+        } else if let Some(g) = &t.request_gap {
             // The master's pause after a reply: its parts add up (V7/J7: 24 bits + 10 ms).
             let mut gap = Vec::new();
             if let Some(b) = g.bits {
@@ -282,7 +323,15 @@ fn protocol(out: &mut String, drive: &Drive) {
         }
         row("Timing", parts.join("; "), t.source.as_deref());
     }
-    if let Some(s) = &p.serial {
+    if let Some(s) = &p.serial
+        && let Some(why) = &s.unknown
+    {
+        row(
+            "Serial line",
+            describe::not_printed(why, ProtocolFact::Serial.fallback()),
+            (!s.source.is_empty()).then_some(s.source.as_str()),
+        );
+    } else if let Some(s) = &p.serial {
         let mut text = format!(
             "baud {}",
             s.baud_rates
@@ -331,6 +380,13 @@ fn protocol(out: &mut String, drive: &Drive) {
             "EEPROM endurance",
             format!("{} writes", e.endurance),
             Some(&e.source),
+        );
+    }
+    if let Some(why) = &p.exceptions.unknown {
+        row(
+            "Exception codes",
+            describe::not_printed(why, ProtocolFact::Exceptions.fallback()),
+            p.exceptions.source.as_deref(),
         );
     }
     out.push('\n');

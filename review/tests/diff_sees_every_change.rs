@@ -39,6 +39,7 @@ fn maps() -> Vec<PathBuf> {
         "tests/fixtures/orbis-q5",
         "tests/fixtures/halvard-hx2",
         "tests/fixtures/brenner-fx4",
+        "tests/fixtures/halden-h1",
         "map/tests/fixtures",
         "map/tests/fixtures/variants",
         "cli/tests/fixtures",

@@ -83,6 +83,14 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let regs = registers(&drive, &args)?;
     let given = args.target.settings.resolve(&drive)?;
+    crate::output::warn_unprinted(
+        &drive,
+        &args.target.link,
+        &[
+            drivemap_runtime::core::ProtocolFact::Serial,
+            drivemap_runtime::core::ProtocolFact::MaxRead,
+        ],
+    );
     let mut session = Session::open(&drive, &args.target.link, given.settings)?;
     for w in session.load_dependencies(&regs, &given.fixed) {
         eprintln!("warning: {w}");

@@ -132,6 +132,14 @@ fn finding(session: &Session<'_>, r: &Register, kind: &'static str, detail: Stri
 /// Reads the drive against its map and builds the report.
 pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error> {
     let given = target.settings.resolve(drive)?;
+    crate::output::warn_unprinted(
+        drive,
+        &target.link,
+        &[
+            drivemap_runtime::core::ProtocolFact::Serial,
+            drivemap_runtime::core::ProtocolFact::MaxRead,
+        ],
+    );
     let mut session = Session::open(drive, &target.link, given.settings)?;
     let mut unchecked = Vec::new();
     let mut readable: Vec<&Register> = Vec::new();

@@ -34,6 +34,14 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     }
     let regs = find_all(&drive, &args.names)?;
     let given = args.target.settings.resolve(&drive)?;
+    crate::output::warn_unprinted(
+        &drive,
+        &args.target.link,
+        &[
+            drivemap_runtime::core::ProtocolFact::Serial,
+            drivemap_runtime::core::ProtocolFact::MaxRead,
+        ],
+    );
     let mut session = Session::open(&drive, &args.target.link, given.settings)?;
     for w in session.load_dependencies(&regs, &given.fixed) {
         eprintln!("warning: {w}");

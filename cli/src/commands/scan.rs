@@ -388,6 +388,21 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
         retries: 0,
         request_gap: Some(Duration::ZERO),
     };
+    // What the scan relies on that a map marks not printed: the slave range (then 1-247 is
+    // scanned) and the serial settings (then the runtime's defaults are tried).
+    for d in &drives {
+        for w in drivemap_live::unprinted::warnings(
+            d,
+            &base,
+            &[
+                drivemap_runtime::core::ProtocolFact::SlaveAddress,
+                drivemap_runtime::core::ProtocolFact::Serial,
+            ],
+            Some(&args.slaves.0),
+        ) {
+            eprintln!("{w}");
+        }
+    }
     let serial = args.serial.is_some();
     let mut bauds = args.baud.clone();
     let mut parities = args.parity.clone();

@@ -218,6 +218,14 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
         }
     }
     let regs: Vec<&Register> = pairs.iter().map(|(r, _)| *r).collect();
+    crate::output::warn_unprinted(
+        drive,
+        &args.target.link,
+        &[
+            drivemap_runtime::core::ProtocolFact::Serial,
+            drivemap_runtime::core::ProtocolFact::MaxWrite,
+        ],
+    );
     let mut session = Session::open_with(drive, profile, &args.target.link, given.settings)?;
     for w in session.load_dependencies(&regs, &given.fixed) {
         eprintln!("warning: {w}");

@@ -59,12 +59,24 @@ pub fn module(drive: &Drive) -> String {
     s += &format!(
         "\n{} registers; {}; function codes {}.",
         drive.registers.len(),
-        describe::per_request(
-            drive.protocol.max_read.value,
-            drive.protocol.max_write.value
-        ),
+        describe::per_request(drive.protocol.max_read(), drive.protocol.max_write()),
         describe::functions(&drive.protocol.function_codes.codes)
     );
+    // The protocol facts the manual does not print (`PROFILE.not_printed`), each with what the
+    // runtime uses in its place.
+    let unprinted = drivemap_map::stated::unprinted(&drive.protocol);
+    if !unprinted.is_empty() {
+        s += "\n\nNot printed in the manual (`PROFILE.not_printed`):\n";
+        for u in unprinted {
+            s += &format!(
+                "- {} (`{}`): {}; {} is used.\n",
+                u.fact.name(),
+                u.fact.key(),
+                u.why,
+                u.fact.fallback()
+            );
+        }
+    }
     s
 }
 

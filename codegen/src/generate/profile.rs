@@ -87,6 +87,16 @@ pub fn emit(plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
             quote!(Some(#rt::profile::SerialFormats { selected_by: #by, formats: &[#(#formats),*], source: #source }))
         }
     };
+    let not_printed = p.not_printed.iter().map(|n| {
+        // The variant's name is its `Debug` text (a unit variant).
+        let fact = proc_macro2::Ident::new(&format!("{:?}", n.fact), proc_macro2::Span::call_site());
+        let why = n.why;
+        let source = match n.source {
+            Some(s) => quote!(Some(#s)),
+            None => quote!(None),
+        };
+        quote!(#rt::profile::NotPrinted { fact: #rt::profile::ProtocolFact::#fact, why: #why, source: #source })
+    });
     quote! {
         /// The protocol profile: what the drive accepts on the wire, per its manual.
         pub static PROFILE: #rt::Profile = #rt::Profile {
@@ -116,6 +126,7 @@ pub fn emit(plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
             serial_formats: #serial_formats,
             eeprom_write_endurance: #endurance,
             writes: &WRITES,
+            not_printed: &[#(#not_printed),*],
         };
 
         /// The write rule of every writable register, derived from the plan in order.

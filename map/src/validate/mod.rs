@@ -25,6 +25,7 @@ mod manuals_declared;
 mod number_fields;
 mod numbers_finite;
 mod pairs_valid;
+pub mod protocol_stated;
 mod protocol_valid;
 mod ratio_scales;
 mod read_values_valid;
@@ -86,6 +87,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     references_resolve::check(drive, &mut out);
     access_consistent::check(drive, &mut out);
     protocol_valid::check(drive, &mut out);
+    protocol_stated::check(drive, &mut out);
     roles_valid::check(drive, &mut out);
     repeat_needs_change_valid::check(drive, &mut out);
     function_codes_valid::check(drive, &mut out);

@@ -122,7 +122,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         bounded(
             drive,
             out,
-            t.frame_gap_chars,
+            t.frame_gap_chars(),
             MAX_TIMING_CHARS,
             "chars",
             tp.key("frame_gap_chars"),

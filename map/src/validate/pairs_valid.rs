@@ -71,19 +71,19 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             ));
         }
         let p = &drive.protocol;
-        if r.readable() && p.max_read.value < 2 {
+        if r.readable() && p.max_read() < 2 {
             err(format!(
                 "`{}` is a pair, but `protocol.max_read` is {}: both words must be read in one request",
                 r.id(),
-                p.max_read.value
+                p.max_read()
             ));
         }
         if r.writable() {
-            if p.max_write.value < 2 {
+            if p.max_write() < 2 {
                 err(format!(
                     "`{}` is a writable pair, but `protocol.max_write` is {}: both words must be written in one request",
                     r.id(),
-                    p.max_write.value
+                    p.max_write()
                 ));
             }
             if !p.function_codes.codes.is_empty()

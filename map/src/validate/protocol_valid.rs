@@ -10,6 +10,10 @@ use crate::source::Path;
 const KNOWN: &[u8] = &[0x03, 0x04, 0x06, 0x08, 0x10];
 
 fn interval(drive: &Drive, out: &mut Vec<Diagnostic>, i: &Interval, path: Path) {
+    if i.unknown.is_some() {
+        // Not printed: `protocol_stated` checks that no figure stands beside the reason.
+        return;
+    }
     if i.ms.is_none() && i.bits.is_none() && i.chars.is_none() {
         out.push(drive.error(&path, None, "give `ms`, `bits` or `chars` (several add up)"));
     }
@@ -70,39 +74,45 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             ));
         }
     }
-    if !(1..=125).contains(&p.max_read.value) {
+    if let Some(v) = p.max_read.value
+        && !(1..=125).contains(&v)
+    {
         out.push(drive.error(
             &pp.key("max_read"),
             None,
-            format!("max_read {} must be 1..=125", p.max_read.value),
+            format!("max_read {v} must be 1..=125"),
         ));
     }
-    if !(1..=123).contains(&p.max_write.value) {
+    if let Some(v) = p.max_write.value
+        && !(1..=123).contains(&v)
+    {
         out.push(drive.error(
             &pp.key("max_write"),
             None,
-            format!("max_write {} must be 1..=123", p.max_write.value),
+            format!("max_write {v} must be 1..=123"),
         ));
     }
     let s = &p.slave_address;
+    // Without a printed range (`unknown`) the Modbus 1..=247 is used; `protocol_stated` checks
+    // that the map gives one or the other.
+    let (s_min, s_max) = s.range();
     // The map records the range the manual gives: the Modbus serial-line specification's 1..=247
     // is not every drive's (some manuals print 01H-FEH). 0 is broadcast, never a slave.
-    if s.min == 0 || s.min > s.max {
+    if s_min == 0 || s_min > s_max {
         out.push(drive.error(
             &pp.key("slave_address"),
             None,
             format!(
-                "slave addresses {}..={} must lie in 1..=255 with min <= max (0 is broadcast)",
-                s.min, s.max
+                "slave addresses {s_min}..={s_max} must lie in 1..=255 with min <= max (0 is broadcast)"
             ),
         ));
     }
     if let Some(d) = s.default {
-        if d < s.min || d > s.max {
+        if d < s_min || d > s_max {
             out.push(drive.error(
                 &pp.key("slave_address").key("default"),
                 None,
-                format!("default slave {d} is outside {}..={}", s.min, s.max),
+                format!("default slave {d} is outside {s_min}..={s_max}"),
             ));
         }
     }
@@ -163,8 +173,11 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 &pp.key(name).key("unknown"),
                 None,
                 format!(
-                    "`{name}` marked unknown needs its reason: why the manual prints none and where {} comes from",
-                    limit.value
+                    "`{name}` marked unknown needs its reason: why the manual prints none{}",
+                    match limit.value {
+                        Some(v) => format!(" and where {v} comes from"),
+                        None => String::new(),
+                    }
                 ),
             ));
         }
@@ -198,14 +211,16 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     }
     if let Some(t) = &p.timing {
         let tp = pp.key("timing");
-        if t.frame_gap_chars.is_nan() || t.frame_gap_chars <= 0.0 {
+        if t.frame_gap_chars().is_nan() || t.frame_gap_chars() <= 0.0 {
             out.push(drive.error(
                 &tp.key("frame_gap_chars"),
                 None,
                 "the frame gap must be positive",
             ));
         }
-        if let Some(g) = &t.frame_gap {
+        if let Some(g) = &t.frame_gap
+            && g.unknown.is_none()
+        {
             // Only milliseconds: a gap in characters is `frame_gap_chars`, and the two are not
             // contradictory (the larger at the line's baud rate is kept).
             let gp = tp.key("frame_gap");

@@ -67,6 +67,18 @@ fn section(kind: ChangeKind, what: &str) -> Path {
         DocumentationChanged if what.starts_with("gap ") => root.key("gaps"),
         DocumentationChanged if what.starts_with("removed register ") => root.key("removed"),
         DocumentationChanged if what == "groups" => root.key("groups"),
+        // `slave_address: not printed`, `timing.frame_gap: not printed`.
+        DocumentationChanged
+            if what.ends_with(": not printed")
+                && drivemap_core::stated::ProtocolFact::from_key(
+                    what.trim_end_matches(": not printed"),
+                )
+                .is_some() =>
+        {
+            what.trim_end_matches(": not printed")
+                .split('.')
+                .fold(protocol, |p, k| p.key(k))
+        }
         _ => root,
     }
 }

@@ -300,9 +300,19 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             );
         }
     }
-    for (what, la, lb) in [
-        ("max_read", &a.max_read, &b.max_read),
-        ("max_write", &a.max_write, &b.max_write),
+    for (what, la, lb, modbus) in [
+        (
+            "max_read",
+            &a.max_read,
+            &b.max_read,
+            drivemap_core::stated::MODBUS_MAX_READ,
+        ),
+        (
+            "max_write",
+            &a.max_write,
+            &b.max_write,
+            drivemap_core::stated::MODBUS_MAX_WRITE,
+        ),
     ] {
         let crate::model::Limit {
             value: x,
@@ -314,7 +324,18 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             source: ys,
             unknown: yu,
         } = lb;
-        let (x, y) = (*x, *y);
+        // The working numbers: an unprinted limit is the Modbus one.
+        let (x, y) = (x.unwrap_or(modbus), y.unwrap_or(modbus));
+        if x != y && xu != yu {
+            c.push(
+                ChangeKind::DocumentationChanged,
+                s,
+                &format!("{what}: not printed"),
+                (xu.clone(), xs.clone()),
+                (yu.clone(), ys.clone()),
+                HEAD,
+            );
+        }
         if x == y {
             if xu != yu {
                 c.push(
@@ -354,8 +375,9 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
     }
 
     let (sa, sb) = (&a.slave_address, &b.slave_address);
-    if sa.min != sb.min || sa.max != sb.max {
-        let kind = if sb.min > sa.min || sb.max < sa.max {
+    let ((a_min, a_max), (b_min, b_max)) = (sa.range(), sb.range());
+    if a_min != b_min || a_max != b_max {
+        let kind = if b_min > a_min || b_max < a_max {
             ChangeKind::SlaveRangeNarrowed
         } else {
             ChangeKind::SlaveRangeWidened
@@ -364,14 +386,8 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
             kind,
             s,
             "slave address",
-            (
-                Some(format!("{} ..= {}", sa.min, sa.max)),
-                sa.source.clone(),
-            ),
-            (
-                Some(format!("{} ..= {}", sb.min, sb.max)),
-                sb.source.clone(),
-            ),
+            (Some(format!("{a_min} ..= {a_max}")), sa.source.clone()),
+            (Some(format!("{b_min} ..= {b_max}")), sb.source.clone()),
             HEAD,
         );
     } else if sa.default != sb.default || sa.param != sb.param {
@@ -394,6 +410,7 @@ pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
         );
     }
 
+    not_printed(c, a, b);
     broadcast(c, old, new);
     exceptions(c, a, b);
     commands(c, a, b);
@@ -643,6 +660,58 @@ fn commands(c: &mut Collector, a: &crate::model::Protocol, b: &crate::model::Pro
                 &format!("command {}", y.id),
                 (None, None),
                 (Some(text(y)), Some(y.source.clone())),
+                HEAD,
+            );
+        }
+    }
+}
+
+/// A protocol fact that became not printed (`unknown:`), printed again, or whose reason
+/// changed: `slave_address: not printed`, the reasons as the old and new values. (Function
+/// codes, limits and broadcast report theirs where their figures are compared.) A change of
+/// the working figure it brings (a slave range 1 ..= 32 becoming the Modbus 1 ..= 247) is
+/// reported on its own.
+fn not_printed(c: &mut Collector, a: &crate::model::Protocol, b: &crate::model::Protocol) {
+    use drivemap_core::stated::ProtocolFact as F;
+    let s = "protocol";
+    for fact in [
+        F::SlaveAddress,
+        F::Exceptions,
+        F::Serial,
+        F::Timing,
+        F::FrameGap,
+        F::InterCharTimeout,
+        F::ResponseTime,
+        F::RequestGap,
+    ] {
+        let (x, y) = (
+            drivemap_map::stated::why(a, fact),
+            drivemap_map::stated::why(b, fact),
+        );
+        if x.as_ref().map(|u| &u.why) != y.as_ref().map(|u| &u.why) {
+            let side = |u: Option<drivemap_map::stated::Unprinted>| match u {
+                Some(u) => (Some(u.why), u.source),
+                None => (Some("printed".to_owned()), None),
+            };
+            c.push(
+                ChangeKind::DocumentationChanged,
+                s,
+                &format!("{}: not printed", fact.key()),
+                side(x),
+                side(y),
+                HEAD,
+            );
+        } else if fact == F::Exceptions
+            && let (Some(x), Some(y)) = (x, y)
+            && x.source != y.source
+        {
+            // The other facts' citations are compared with their figures.
+            c.push(
+                ChangeKind::CitationChanged,
+                s,
+                "exceptions: not printed",
+                (None, x.source),
+                (None, y.source),
                 HEAD,
             );
         }

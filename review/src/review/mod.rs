@@ -127,13 +127,22 @@ fn split_lines(text: &str) -> Vec<String> {
 /// says what a standard master or gateway may do with 248-255.
 pub fn protocol_warnings(drive: &crate::Drive) -> Vec<Warning> {
     let s = &drive.protocol.slave_address;
-    let mut out = Vec::new();
-    if s.max > 247 {
+    // Numbers with neither a source nor an `unknown` (map/src/validate/protocol_stated.rs).
+    let mut out: Vec<Warning> = drivemap_map::validate::protocol_stated::warnings(drive)
+        .into_iter()
+        .map(|d| Warning {
+            loc: d.loc,
+            register: d.register,
+            message: d.message,
+        })
+        .collect();
+    let (s_min, s_max) = s.range();
+    if s.unknown.is_none() && s_max > 247 {
         let path = crate::source::Path::root()
             .key("protocol")
             .key("slave_address")
             .key("max");
-        let above = if s.min > 247 { s.min } else { 248 };
+        let above = if s_min > 247 { s_min } else { 248 };
         out.push(Warning {
             loc: drive.locate(&path),
             register: None,
@@ -141,7 +150,7 @@ pub fn protocol_warnings(drive: &crate::Drive) -> Vec<Warning> {
                 "slave addresses {above}..={} are the manual's, but the Modbus serial-line \
                  specification reserves 248-255 (unicast 1-247): a standard master or gateway \
                  may not reach them",
-                s.max
+                s_max
             ),
         });
     }

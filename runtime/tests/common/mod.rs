@@ -65,6 +65,7 @@ pub static V7: Profile = Profile {
     serial_formats: None,
     eeprom_write_endurance: Some(100_000),
     writes: &[],
+    not_printed: &[],
 };
 
 /// The ACN's addressing: RTU PDU address = communication address - 1 (its example writes
@@ -102,6 +103,7 @@ pub static ACN: Profile = Profile {
     serial_formats: None,
     eeprom_write_endurance: None,
     writes: &[],
+    not_printed: &[],
 };
 
 /// The VS mini J7: no 06h (`003_8bcf5d50afb8e230.txt:226-231`).

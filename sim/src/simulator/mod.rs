@@ -113,13 +113,15 @@ impl Simulator {
         }
         let (resolved, externals) = Simulator::resolve_roles(&drive, &options)?;
         let sa = &drive.protocol.slave_address;
+        // A range the manual does not print is the Modbus 1..=247.
+        let (min, max) = sa.range();
         let slave = options.slave.or(sa.default).unwrap_or(1);
-        if !(sa.min..=sa.max).contains(&slave) {
+        if !(min..=max).contains(&slave) {
             return Err(SimError::Slave {
                 drive: drive.meta.id.clone(),
                 slave,
-                min: sa.min,
-                max: sa.max,
+                min,
+                max,
             });
         }
         let ids = |list: Vec<&Register>| -> Vec<usize> {
