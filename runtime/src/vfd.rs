@@ -77,6 +77,17 @@
 //! - Where the map says two roles are one register (`shared_with`), a call that would give
 //!   them different values is refused ([`Refusal::SharedRegister`]) before anything is sent, and
 //!   `set_ramp(a, a)` writes the register once: `drive_contract::one_ramp_register_takes_one_value`.
+//! - A fault reset acts where the drive acts on the edge and where the manual does not print
+//!   edge or level (`edge: {unknown: ..}`, [`Edge::NotPrinted`](drivemap_core::roles::Edge)):
+//!   a reset that may still be set is released first, then set, then released, so every
+//!   `reset_fault()` that succeeds leaves the reset released and the drive reset, under lost,
+//!   late and refused replies: `roles_in_fields::a_reset_of_unknown_edge_acts_under_faults`.
+//! - A number role in a field of a register (a fault code in a status byte) is read from its
+//!   bits, sign-extended where the map says `signed`; a setpoint there is written by reading
+//!   the word and writing it back with the field changed only where the register is readable
+//!   on the link, reads mean what writes do, and no command field shares it, else refused
+//!   ([`Refusal::FieldNotWritable`]) before anything is sent:
+//!   `roles_in_fields::a_setpoint_on_a_field_is_refused_where_read_modify_write_is_not_safe`.
 
 use std::fmt;
 

@@ -241,6 +241,7 @@ fn fault() -> impl proptest::strategy::Strategy<Value = Option<LinkFault>> {
 /// link; returns a violation of the reset contract, if any.
 fn play(
     drive: &Drive,
+    roles: drivemap_runtime::roles::Roles,
     template: &Simulator,
     steps: &[Step],
     faults: &[Option<LinkFault>],
@@ -252,13 +253,7 @@ fn play(
     let (settings, slave) = (sim.settings(), sim.slave());
     let mut c = client(drive, sim, kind, retries);
     c.transport().script(faults.iter().copied());
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive),
-        plan.registers,
-        plan.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(drive), plan.registers, roles);
     let tripped = |sim: &Simulator| sim.raw("state_word").unwrap() & 0b10 != 0;
     for (i, &s) in steps.iter().enumerate() {
         match s {
@@ -335,19 +330,36 @@ fn a_reset_of_unknown_edge_acts_under_faults() {
     let template = simulator(&drive, TransportKind::RtuOverTcp);
     // Trip; the reset's set executes and its reply is lost (no retries: the call fails); trip
     // again; reset.
-    play(
-        &drive,
-        &template,
-        &[
-            Step::Trip(1),
-            Step::ResetFault,
-            Step::Trip(2),
-            Step::ResetFault,
-        ],
-        &[Some(LinkFault::LoseReply)],
-        0,
-    )
-    .unwrap();
+    let sequence = [
+        Step::Trip(1),
+        Step::ResetFault,
+        Step::Trip(2),
+        Step::ResetFault,
+    ];
+    let lost = [Some(LinkFault::LoseReply)];
+    let roles = drive.plan().roles;
+    play(&drive, roles, &template, &sequence, &lost, 0).unwrap();
+    // The same plan with the reset taken as level (what a trait that read "not printed" as
+    // level would do): the check catches it.
+    let level: Vec<_> = roles
+        .places
+        .iter()
+        .map(|p| match p.target {
+            Target::Field(f) if p.role == Role::FaultReset => drivemap_runtime::roles::Place {
+                target: Target::Field(drivemap_runtime::roles::FieldRole {
+                    edge: Edge::Level,
+                    ..f
+                }),
+                ..*p
+            },
+            _ => *p,
+        })
+        .collect();
+    let level = drivemap_runtime::roles::Roles {
+        places: Box::leak(level.into_boxed_slice()),
+    };
+    let caught = play(&drive, level, &template, &sequence, &lost, 0).unwrap_err();
+    assert!(caught.contains("still tripped"), "{caught}");
     let mut runner = TestRunner::new(Config {
         cases: 2_000,
         failure_persistence: None,
@@ -360,7 +372,7 @@ fn a_reset_of_unknown_edge_acts_under_faults() {
     );
     runner
         .run(&strategy, |(steps, faults, retries)| {
-            play(&drive, &template, &steps, &faults, retries).map_err(TestCaseError::fail)
+            play(&drive, roles, &template, &steps, &faults, retries).map_err(TestCaseError::fail)
         })
         .unwrap();
 }
