@@ -120,7 +120,7 @@ struct ConfigLink {
 }
 
 /// Splits `ID@SLAVE`.
-fn drive_slave(text: &str) -> Result<(String, u8), String> {
+fn drive_slave(text: &str) -> Result<(String, u8), Error> {
     let (id, slave) = text
         .rsplit_once('@')
         .ok_or_else(|| format!("`{text}` is not ID@SLAVE (`yaskawa-v7@1`)"))?;
@@ -142,7 +142,7 @@ fn link_args(
     parity: Option<Parity>,
     timeout: Option<Duration>,
     retries: u8,
-) -> Result<LinkArgs, String> {
+) -> Result<LinkArgs, Error> {
     let given = [&tcp, &gateway, &rtu_tcp, &serial]
         .iter()
         .filter(|x| x.is_some())
@@ -173,7 +173,7 @@ fn link(
     settings: &SettingsArgs,
     names: &mut BTreeSet<String>,
     loaded: &mut BTreeMap<String, &'static Drive>,
-) -> Result<LinkSpec, String> {
+) -> Result<LinkSpec, Error> {
     if drives.is_empty() {
         return Err("a link without drives: give --drive ID@SLAVE".into());
     }
@@ -186,14 +186,14 @@ fn link(
             Some(d) => d,
             None => {
                 let d: &'static Drive =
-                    Box::leak(Box::new(dir.load(&id).map_err(|e| e.to_string())?));
+                    Box::leak(Box::new(dir.load(&id)?));
                 loaded.insert(id.clone(), d);
                 d
             }
         };
-        args.check_transport(drive).map_err(|e| e.to_string())?;
+        args.check_transport(drive)?;
         first.get_or_insert(drive);
-        let given = settings.resolve(drive).map_err(|e| e.to_string())?;
+        let given = settings.resolve(drive)?;
         let profile = drive.plan().profile;
         let mut name = format!("{id}-{slave}");
         let mut n = 2;
@@ -242,10 +242,10 @@ fn link(
 
 /// The broker's user name and password: from `--mqtt-credentials FILE` (`USER:PASSWORD`), else
 /// the environment.
-fn credentials(file: Option<&PathBuf>) -> Result<Option<(String, String)>, String> {
+fn credentials(file: Option<&PathBuf>) -> Result<Option<(String, String)>, Error> {
     if let Some(f) = file {
         let text = std::fs::read_to_string(f)
-            .map_err(|e| format!("--mqtt-credentials {}: {e}", f.display()))?;
+            .map_err(Error::io(format!("--mqtt-credentials {}", f.display())))?;
         let line = text.lines().next().unwrap_or("").trim_end();
         let (user, password) = line.split_once(':').ok_or_else(|| {
             format!(
