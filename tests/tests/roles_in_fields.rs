@@ -361,7 +361,7 @@ fn a_reset_of_unknown_edge_acts_under_faults() {
     let caught = play(&drive, level, &template, &sequence, &lost, 0).unwrap_err();
     assert!(caught.contains("still tripped"), "{caught}");
     let mut runner = TestRunner::new(Config {
-        cases: 2_000,
+        cases: 800,
         failure_persistence: None,
         ..Config::default()
     });
