@@ -40,6 +40,7 @@ fn maps() -> Vec<PathBuf> {
         "tests/fixtures/halvard-hx2",
         "tests/fixtures/brenner-fx4",
         "tests/fixtures/halden-h1",
+        "tests/fixtures/borealis-bf6",
         "map/tests/fixtures",
         "map/tests/fixtures/variants",
         "cli/tests/fixtures",
