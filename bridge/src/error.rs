@@ -150,3 +150,69 @@ pub enum PollFailure {
     #[error(transparent)]
     Read(#[from] drivemap_runtime::Error),
 }
+
+/// Why a command through the bridge wrote nothing (published on the drive's `error` topic).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CommandFailure {
+    /// The register named is not on the drive.
+    #[error(transparent)]
+    NotFound(#[from] NotFound),
+    /// An empty payload.
+    #[error("no value given for {register}")]
+    NoValue {
+        /// The register, described.
+        register: String,
+    },
+    /// The write gate refused it (not writable on this link, broadcast only, ...).
+    #[error("{register}: {source}")]
+    Refused {
+        /// The register, described.
+        register: String,
+        /// The gate's refusal.
+        source: drivemap_runtime::Refusal,
+    },
+    /// The parameter its limit depends on could not be read.
+    #[error("reading {register}, which the limit depends on: {source}")]
+    Dependency {
+        /// The parameter, described.
+        register: String,
+        /// Why not.
+        source: PollFailure,
+    },
+    /// The payload is not a value of the register.
+    #[error(transparent)]
+    Input(#[from] drivemap_live::codec::InputError),
+    /// Fields given for a register without fields.
+    #[error("{register} has no fields")]
+    NoFields {
+        /// The register, described.
+        register: String,
+    },
+    /// The register's other fields could not be read to keep them.
+    #[error("reading {id} to keep its other fields: {source}")]
+    OtherFields {
+        /// The register's id.
+        id: String,
+        /// Why not.
+        source: PollFailure,
+    },
+    /// The value does not convert.
+    #[error(transparent)]
+    Value(#[from] drivemap_runtime::ValueError),
+    /// The register's address is not known yet.
+    #[error(transparent)]
+    Address(PollFailure),
+    /// The drive or the line failed the write or the drive command.
+    #[error(transparent)]
+    Drive(#[from] drivemap_runtime::Error),
+    /// The command names a drive index the link does not poll.
+    #[error("no such drive on this link")]
+    NoSuchDrive,
+    /// A reference that is not a frequency.
+    #[error("`{value}` is not a frequency in Hz")]
+    NotAFrequency {
+        /// The payload.
+        value: String,
+    },
+}

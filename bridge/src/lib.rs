@@ -22,7 +22,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-pub use error::{ConnectError, Error, PollFailure, Refused, RegisterProblem};
+pub use error::{CommandFailure, ConnectError, Error, PollFailure, Refused, RegisterProblem};
 pub use link::{Connect, DriveSpec, LinkSpec};
 
 /// What the bridge serves.

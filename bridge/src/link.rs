@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use drivemap_live::codec::{self, InputError, Value};
+use drivemap_live::codec::{self, Value};
 use drivemap_live::intern::intern;
 use drivemap_live::{LiveSettings, lookup};
 use drivemap_map::Drive;
@@ -30,9 +30,9 @@ use drivemap_runtime::transport::Transport;
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, ClientOptions, Error, RegisterInfo, Rounding, Table, Width};
 
-use crate::PollFailure;
 use crate::metrics::{Labels, Metrics};
 use crate::points::{self, Point, PointKind};
+use crate::{CommandFailure, PollFailure};
 
 /// The client of a link: one for every drive on it, switched to each in turn
 /// ([`Client::switch_drive`]), so the line's timing (the gap after the last reply, a late
@@ -115,7 +115,7 @@ pub enum Update {
     /// A command's outcome: `Ok(what was done)` or `Err(why nothing was)`.
     Outcome {
         command: Command,
-        result: Result<String, String>,
+        result: Result<String, Arc<CommandFailure>>,
     },
 }
 
@@ -551,7 +551,7 @@ impl Polled {
         &mut self,
         client: &mut LinkClient,
         command: &Command,
-    ) -> Result<String, String> {
+    ) -> Result<String, CommandFailure> {
         client.switch_drive(self.spec.drive.plan().profile, self.spec.options);
         let drive = self.spec.drive;
         let slave = self.spec.slave;
@@ -573,13 +573,15 @@ impl Polled {
                             .parse()
                             .ok()
                             .filter(|v: &f64| v.is_finite())
-                            .ok_or_else(|| format!("`{value}` is not a frequency in Hz"))?;
+                            .ok_or_else(|| CommandFailure::NotAFrequency {
+                                value: value.to_owned(),
+                            })?;
                         d.set_reference(hz)
                             .map(|()| format!("frequency reference {hz} Hz"))
                     }
                     Action::Set { .. } => unreachable!("handled above"),
                 };
-                result.map_err(|e| e.to_string())
+                Ok(result?)
             }
         }
     }
@@ -592,18 +594,23 @@ impl Polled {
         client: &mut LinkClient,
         name: &str,
         value: &str,
-    ) -> Result<String, String> {
+    ) -> Result<String, CommandFailure> {
         let drive = self.spec.drive;
         let profile = drive.plan().profile;
         let slave = self.spec.slave;
         let kind = self.kind;
-        let r = lookup::find(drive, name).map_err(|e| e.to_string())?;
+        let r = lookup::find(drive, name)?;
         if value.is_empty() {
-            return Err(format!("no value given for {}", describe::register(r)));
+            return Err(CommandFailure::NoValue {
+                register: describe::register(r),
+            });
         }
         let rule = gate::rule(profile, intern(r.id()))
             .and_then(|rule| gate::check_link(profile, kind, slave, rule).map(|()| rule))
-            .map_err(|e| format!("{}: {e}", describe::register(r)))?;
+            .map_err(|source| CommandFailure::Refused {
+                register: describe::register(r),
+                source,
+            })?;
         // The limit through another parameter, read now (V7's reference against n011).
         let mut settings = self.settings.clone();
         if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency() {
@@ -612,41 +619,40 @@ impl Polled {
             {
                 if let Some(d) = drive.register_of_row(*row) {
                     if !self.spec.fixed.contains(&d.def.id) {
-                        let raw = self.read_raw(client, d).map_err(|e| {
-                            format!(
-                                "reading {}, which the limit depends on: {e}",
-                                describe::register(d)
-                            )
+                        let raw = self.read_raw(client, d).map_err(|source| {
+                            CommandFailure::Dependency {
+                                register: describe::register(d),
+                                source,
+                            }
                         })?;
                         settings.absorb(drive, d.def.address, raw as u16);
                     }
                 }
             }
         }
-        let input_error = |e: InputError| match e {
-            InputError::Value(v) => v.to_string(),
-            InputError::Parse(m) => m,
-        };
-        let raw = match codec::field_input(drive, r, value).map_err(input_error)? {
+        let raw = match codec::field_input(drive, r, value)? {
             Some(input) => {
                 let Conversion::Bits { mask, .. } = drive.register_plan(r).conversion else {
-                    return Err(format!("{} has no fields", describe::register(r)));
+                    return Err(CommandFailure::NoFields {
+                        register: describe::register(r),
+                    });
                 };
                 let word = if input.mask & mask == mask || !r.readable() {
                     input.value
                 } else {
-                    let current = self
-                        .read_raw(client, r)
-                        .map_err(|e| format!("reading {} to keep its other fields: {e}", r.id()))?
-                        as u16;
+                    let current =
+                        self.read_raw(client, r)
+                            .map_err(|source| CommandFailure::OtherFields {
+                                id: r.id().to_owned(),
+                                source,
+                            })? as u16;
                     ((current & !input.mask) | input.value) & mask
                 };
-                codec::encode(drive, r, f64::from(word), &settings).map_err(|e| e.to_string())?
+                codec::encode(drive, r, f64::from(word), &settings)?
             }
-            None => codec::parse_value_with(drive, r, value, &settings, Rounding::Exact)
-                .map_err(input_error)?,
+            None => codec::parse_value_with(drive, r, value, &settings, Rounding::Exact)?,
         };
-        let address = self.address(r).map_err(|e| e.to_string())?;
+        let address = self.address(r).map_err(CommandFailure::Address)?;
         let words = rule.width.split(raw);
         gate::check(
             profile,
@@ -656,7 +662,10 @@ impl Polled {
             address,
             words[..usize::from(rule.width.count())].iter().copied(),
         )
-        .map_err(|e| format!("{}: {e}", describe::register(r)))?;
+        .map_err(|source| CommandFailure::Refused {
+            register: describe::register(r),
+            source,
+        })?;
         let between = drive
             .register_plan(r)
             .repeat_needs_change
@@ -664,8 +673,7 @@ impl Polled {
         match between {
             Some(b) => client.write_changed(slave, rule, address, b, raw),
             None => client.write_rule(slave, rule, address, raw),
-        }
-        .map_err(|e| e.to_string())?;
+        }?;
         let shown = codec::decode_written(drive, r, raw, &settings)
             .map(|v| v.to_string())
             .unwrap_or_else(|_| raw.to_string());
@@ -793,7 +801,7 @@ pub fn run(
                 Ok(c) => {
                     let result = match drives.iter_mut().find(|d| d.index == c.drive) {
                         Some(d) => d.execute(&mut client, &c),
-                        None => Err("no such drive on this link".into()),
+                        None => Err(CommandFailure::NoSuchDrive),
                     };
                     let outcome = if result.is_ok() { "done" } else { "refused" };
                     match &result {
@@ -819,6 +827,7 @@ pub fn run(
                             .inc();
                     }
                     if let Some(tx) = &updates {
+                        let result = result.map_err(Arc::new);
                         let _ = tx.try_send(Update::Outcome { command: c, result });
                     }
                 }

@@ -620,7 +620,7 @@ pub async fn run(
                 }
                 Some(Update::Outcome { command, result }) => {
                     if let Err(why) = result {
-                        publish_error(&client, &options.topic, &drives[command.drive], &command, &why);
+                        publish_error(&client, &options.topic, &drives[command.drive], &command, &why.to_string());
                     }
                 }
             },

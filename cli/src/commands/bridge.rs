@@ -185,8 +185,7 @@ fn link(
         let drive: &'static Drive = match loaded.get(&id) {
             Some(d) => d,
             None => {
-                let d: &'static Drive =
-                    Box::leak(Box::new(dir.load(&id)?));
+                let d: &'static Drive = Box::leak(Box::new(dir.load(&id)?));
                 loaded.insert(id.clone(), d);
                 d
             }
