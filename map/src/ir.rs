@@ -590,11 +590,17 @@ impl Register {
                             ranges
                                 .push(self.raw_limits(factor, case.min, case.max).unwrap_or(word));
                         }
-                        _ => ranges.push(word),
+                        // Validation refuses these as cases of a selected scale.
+                        Scale::Relative(_) | Scale::Selected(_) | Scale::Ratio(_) => {
+                            ranges.push(word)
+                        }
                     }
                 }
             }
-            _ => variant_ranges(self.factor().unwrap_or(one), &mut ranges),
+            // Every kind named: a new scale kind must say its envelope here (the compiler asks).
+            ValueKind::Word | ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_)) => {
+                variant_ranges(self.factor().unwrap_or(one), &mut ranges)
+            }
         }
         let min = ranges.iter().map(|l| l.min).min().unwrap_or(word.min);
         let max = ranges.iter().map(|l| l.max).max().unwrap_or(word.max);

@@ -279,7 +279,13 @@ impl<'d> Points<'d> {
                         Conversion::Relative { relative, .. } => {
                             format!("{} as given with --set", relative.reference.label)
                         }
-                        _ => String::new(),
+                        // No setting given by hand: every kind named, so a new one is decided
+                        // here (the compiler asks).
+                        Conversion::Word { .. }
+                        | Conversion::Decimal { .. }
+                        | Conversion::Ratio { .. }
+                        | Conversion::Enum { .. }
+                        | Conversion::Bits { .. } => String::new(),
                     };
                     let factor = match scale {
                         Scale::Decimal { scale, .. } => scale.decode(1),
