@@ -438,11 +438,12 @@ fn write_hex(value: &mut serde_yaml::Value, hex: bool) {
         Value::Mapping(m) => {
             for (k, v) in m.iter_mut() {
                 let key = k.as_str().unwrap_or("");
-                let hex = matches!(key, "address" | "code")
+                // The keys `drivemap_map::hex::Slot` reads as hex.
+                let hex = matches!(key, "address" | "code" | "exception")
                     || matches!(
                         (key, &*v),
                         (
-                            "addresses" | "function_codes" | "functions",
+                            "addresses" | "function_codes" | "codes" | "functions",
                             Value::Sequence(_)
                         )
                     );

@@ -340,13 +340,43 @@ fn every_coverage_document_is_current(root: &Path, run: Run<'_>) {
 #[test]
 fn every_citation_of_the_shipped_maps_verifies_or_is_marked_indirect() {
     let err = every_map_checks_strictly(&repo(), &|a| drivemap(&repo(), None, a));
-    // The one word on stderr: the ACN's printed station IDs 1-250 go beyond Modbus's 247, which
-    // is warned about, never refused (`--strict` included).
+    // What stderr says: the ACN's printed station IDs 1-250 go beyond Modbus's 247, which is
+    // warned about, never refused (`--strict` included); and the manuals' example frames that
+    // contradict their maps, each recorded in `conflicts:` (the 003 manual's loop-back fault
+    // CRC, in the V7 and J7 maps; the TDS-V8 PLC steps writing its reserved 0002H-0006H), a
+    // warning per byte. Nothing else.
+    let (acn, frames): (Vec<&str>, Vec<&str>) = err
+        .lines()
+        .partition(|l| l.starts_with("maps/automationdirect-acn.yaml"));
     assert_eq!(
-        err.as_str(),
-        "maps/automationdirect-acn.yaml:33:27: warning: slave addresses 248..=250 are the \
-         manual's, but the Modbus serial-line specification reserves 248-255 (unicast \
-         1-247): a standard master or gateway may not reach them\n"
+        acn,
+        [
+            "maps/automationdirect-acn.yaml:33:27: warning: slave addresses 248..=250 are the \
+          manual's, but the Modbus serial-line specification reserves 248-255 (unicast \
+          1-247): a standard master or gateway may not reach them"
+        ],
+        "{err}"
+    );
+    let mut recorded: Vec<(&str, &str)> = frames
+        .iter()
+        .map(|l| {
+            assert!(l.ends_with("(recorded in `conflicts:`)"), "{l}");
+            let map = l.split(':').next().unwrap();
+            let id = l.split('`').nth(1).unwrap_or_else(|| panic!("{l}"));
+            (map, id)
+        })
+        .collect();
+    recorded.dedup();
+    assert_eq!(
+        recorded,
+        [
+            ("maps/ptlk-tds-v8.yaml", "plc_step1_command"),
+            ("maps/ptlk-tds-v8.yaml", "plc_step2_command"),
+            ("maps/ptlk-tds-v8.yaml", "plc_step3_command"),
+            ("maps/yaskawa-j7.yaml", "memobus_loop_back_fault_response"),
+            ("maps/yaskawa-v7.yaml", "memobus_loop_back_fault_response"),
+        ],
+        "{err}"
     );
 }
 
