@@ -1,6 +1,8 @@
 //! The JSON export (`drivemap-export/1`) that other tools and review checks consume.
 //!
-//! Registers are listed by address (broadcast registers after the others). `min`, `max` and
+//! Registers are the facts view's ([`crate::facts`]): each register's object is a mapping of
+//! its [`RegisterData`](crate::facts::data::RegisterData) and identity, with no second walk of
+//! the map's registers. They are listed by address (broadcast registers after the others). `min`, `max` and
 //! `default` are engineering values of the base variant; `scale` is null where it depends on a
 //! setting (`scale_selected_by` names the parameter, or `<parameter>.<field>` for a field of it)
 //! or on another quantity (`scale_relative_to`). `drive.manuals` lists the names citations use;
@@ -18,64 +20,62 @@
 
 use serde_json::{Value, json};
 
-use crate::ir::{Drive, Register, ValueKind};
-use crate::model::{self, Access, DefaultValue, Reference, Scale};
-use crate::validate::field_span;
+use crate::facts::data::{Quantity, ScaleData};
+use crate::facts::{self, RegisterFacts};
+use crate::ir::Drive;
+use crate::model::{self, DefaultValue};
 
 pub const FORMAT: &str = "drivemap-export/1";
 
-fn access(a: Access) -> &'static str {
-    match a {
-        Access::Read => "r",
-        Access::Write => "w",
-        Access::ReadWrite => "rw",
-    }
-}
-
-fn values(list: &[model::EnumValue]) -> Value {
+/// Codes and their meanings: `[{"value": 0, "id": "stop", "name": "Stop"}]`.
+fn labels(list: &[drivemap_core::plan::Label]) -> Value {
     Value::Array(
         list.iter()
-            .map(|v| json!({"value": v.value, "id": v.id, "name": v.name}))
+            .map(|v| json!({"value": v.code, "id": v.id, "name": v.name}))
             .collect(),
     )
 }
 
-fn reference_name(drive: &Drive, reference: &Reference) -> Value {
-    match reference {
-        Reference::Register(name) => {
-            let shown = drive
-                .find(name)
-                .map(|r| r.def.param.clone().unwrap_or_else(|| r.def.id.clone()))
-                .unwrap_or_else(|| name.clone());
-            json!(shown)
-        }
-        Reference::External(q) => json!({"external": q.external, "unit": q.unit}),
+/// A register by its shown name (`"Cn-02"`), or an external quantity.
+fn shown(q: &Quantity) -> Value {
+    match q {
+        Quantity::Register { shown, .. } => json!(shown),
+        Quantity::External { external, unit } => json!({"external": external, "unit": unit}),
     }
 }
 
-fn scale_json(drive: &Drive, scale: &Scale) -> Value {
+/// A case's scale: a factor, `{"relative_to", "full_scale"}`, a ratio; null for a selection.
+fn scale_json(scale: &ScaleData) -> Value {
     match scale {
-        Scale::Factor(f) => json!(f),
-        Scale::Relative(rel) => {
-            json!({"relative_to": reference_name(drive, &rel.relative_to), "full_scale": rel.full_scale})
-        }
-        Scale::Ratio(rs) => ratio_json(rs),
-        Scale::Selected(_) => Value::Null,
+        ScaleData::Factor(f) => json!(f),
+        ScaleData::Relative {
+            reference,
+            full_scale,
+        } => json!({"relative_to": shown(reference), "full_scale": full_scale}),
+        ScaleData::Ratio { .. } => ratio_json(scale),
+        ScaleData::Selected { .. } | ScaleData::None => Value::Null,
     }
 }
 
 /// A ratio scale: `{"counts": 3600, "equals": 60.0, "step": "1/60"}` (the exact value of one
 /// count as a fraction or a finite decimal).
-fn ratio_json(rs: &crate::model::RatioScale) -> Value {
-    let step = crate::ratio::ratio_of(rs).map(|r| {
-        let s = r.step();
+fn ratio_json(scale: &ScaleData) -> Value {
+    let ScaleData::Ratio {
+        counts,
+        equals,
+        step,
+    } = scale
+    else {
+        return Value::Null;
+    };
+    let step = step.map(|s| {
         if s.is_decimal() {
             s.to_string()
         } else {
             format!("{}/{}", s.num, s.den)
         }
     });
-    json!({"counts": rs.counts, "equals": rs.equals, "step": step})
+    json!({"counts": counts, "equals": equals, "step": step})
 }
 
 fn default_json(d: &Option<DefaultValue>) -> (Value, Value) {
@@ -89,112 +89,113 @@ fn default_json(d: &Option<DefaultValue>) -> (Value, Value) {
     }
 }
 
-fn register(drive: &Drive, r: &Register) -> Value {
-    let d = &r.def;
-    let (scale, selected_by, relative_to, cases) = match r.kind() {
-        ValueKind::Quantity(Scale::Factor(f)) => (json!(f), Value::Null, Value::Null, Value::Null),
-        ValueKind::Quantity(Scale::Relative(rel)) => (
+/// The export's object of one register: a mapping of its facts' data.
+fn register(f: &RegisterFacts) -> Value {
+    let d = &f.data;
+    // (scale, scale_selected_by, scale_relative_to, scale_cases)
+    let (scale, selected_by, relative_to, cases) = match &d.scale {
+        ScaleData::Factor(x) => (json!(x), Value::Null, Value::Null, Value::Null),
+        ScaleData::Relative {
+            reference,
+            full_scale,
+        } => (
             Value::Null,
             Value::Null,
-            json!({"reference": reference_name(drive, &rel.relative_to), "full_scale": rel.full_scale}),
+            json!({"reference": shown(reference), "full_scale": full_scale}),
             Value::Null,
         ),
-        ValueKind::Quantity(Scale::Ratio(rs)) => {
-            (ratio_json(rs), Value::Null, Value::Null, Value::Null)
-        }
-        ValueKind::Quantity(Scale::Selected(sel)) => {
-            let selector = drive
-                .selector(&sel.selected_by)
-                .map_or_else(|| sel.selected_by.clone(), |s| s.label());
-            let cases = sel
-                .cases
+        ScaleData::Ratio { .. } => (ratio_json(&d.scale), Value::Null, Value::Null, Value::Null),
+        ScaleData::Selected { selector, cases } => {
+            let cases = cases
                 .iter()
-                .map(|c| json!({"when": c.when, "scale": scale_json(drive, &c.scale), "min": c.min, "max": c.max}))
+                .map(|c| json!({"when": c.when, "scale": scale_json(&c.scale), "min": c.min, "max": c.max}))
                 .collect::<Vec<_>>();
             (Value::Null, json!(selector), Value::Null, json!(cases))
         }
-        ValueKind::Word | ValueKind::UnitQuantity => {
-            (json!(1.0), Value::Null, Value::Null, Value::Null)
-        }
-        ValueKind::Enum(_) | ValueKind::Bits(_) => {
-            (Value::Null, Value::Null, Value::Null, Value::Null)
-        }
+        ScaleData::None => (Value::Null, Value::Null, Value::Null, Value::Null),
     };
     let fields: Vec<Value> = d
         .fields
         .iter()
-        .map(|f| {
-            let (lsb, width) = field_span(f).unwrap_or((0, 0));
-            json!({"id": f.id, "name": f.name, "lsb": lsb, "width": width, "values": values(&f.values)})
-        })
+        .map(|x| json!({"id": x.id, "name": x.name, "lsb": x.lsb, "width": x.width, "values": labels(x.values)}))
         .collect();
     let (default, depends_on) = default_json(&d.default);
     let by_variant: serde_json::Map<String, Value> = d
         .by_variant
         .iter()
-        .map(|(k, o)| {
-            let (min, max) = r.limits_for(k);
-            let (dv, dep) = default_json(&o.default);
+        .map(|v| {
+            let (dv, dep) = default_json(&v.default);
             (
-                k.clone(),
-                json!({"min": min, "max": max, "default": dv, "default_depends_on": dep}),
+                v.option.clone(),
+                json!({"min": v.min, "max": v.max, "default": dv, "default_depends_on": dep}),
             )
         })
         .collect();
-    let group = drive.group_of(r);
+    let word_order = match d.width {
+        drivemap_core::width::Width::Word => None,
+        drivemap_core::width::Width::Pair(order) => Some(order),
+    };
     json!({
-        "id": d.id,
-        "param": d.param,
-        "name": d.name,
-        "address": d.address,
-        "access": access(r.access),
+        "id": f.id,
+        "param": f.param,
+        "name": f.name,
+        "address": f.address,
+        "access": d.access,
         "unit": d.unit,
         "scale": scale,
         "scale_selected_by": selected_by,
         "scale_cases": cases,
         "scale_relative_to": relative_to,
         "signed": d.signed,
-        "words": r.width().count(),
-        "word_order": d.pair.as_ref().map(|p| p.order),
-        "word_order_source": d.pair.as_ref().and_then(|p| p.source.as_deref()),
+        "words": d.width.count(),
+        "word_order": word_order,
+        "word_order_source": d.word_order_source,
         "min": if selected_by.is_null() { json!(d.min) } else { Value::Null },
         "max": if selected_by.is_null() { json!(d.max) } else { Value::Null },
         "default": default,
         "default_depends_on": depends_on,
         "by_variant": by_variant,
         "fields": fields,
-        "values": values(&d.values),
-        "read_values": values(&d.read_values),
-        "repeat_needs_change": r.repeat_needs_change.as_ref().map(|(rule, _)| json!({
-            "between": rule.between,
-            "between_raw": drive.register_plan(r).repeat_needs_change.map(|x| x.between),
-            "source": rule.source,
+        "values": labels(d.values),
+        "read_values": labels(d.read_values),
+        "repeat_needs_change": d.repeat_needs_change.as_ref().map(|x| json!({
+            "between": x.between,
+            "between_raw": x.between_raw,
+            "source": x.source,
         })),
-        "function_codes": r.function_codes.as_ref().map(|(f, _)| json!({
-            "codes": f.codes,
-            "refused_with": f.refusal(),
-            "source": f.source,
+        "function_codes": d.function_codes.as_ref().map(|x| json!({
+            "codes": x.codes,
+            "refused_with": x.refused_with,
+            "source": x.source,
         })),
         "max_relative": d.max_relative.as_ref().map(|l| json!({
+            // As the map names it (`n011`), not as shown.
             "relative_to": match &l.relative_to {
-                model::Reference::Register(name) => json!(name),
-                model::Reference::External(q) => json!({"external": q.external, "unit": q.unit}),
+                Quantity::Register { name, .. } => json!(name),
+                q @ Quantity::External { .. } => shown(q),
             },
             "percent": l.percent,
             "source": l.source,
         })),
-        "source": d.source,
-        "group": group.id,
-        "table": match r.table { model::ModbusTable::Holding => "holding", model::ModbusTable::Input => "input" },
-        "broadcast": r.broadcast,
-        "write_restriction": serde_json::to_value(r.write_restriction).unwrap_or(Value::Null),
-        "transports": r.transports,
+        "source": f.source,
+        "group": d.group,
+        "table": table_name(d.table),
+        "broadcast": d.broadcast,
+        "write_restriction": serde_json::to_value(d.write_restriction).unwrap_or(Value::Null),
+        "transports": d.transports,
         "address_alternatives": d.address_alternatives,
         "display_steps": d.display_steps,
-        "notes": d.notes,
+        "notes": f.notes,
         "conflicts": d.conflicts,
         "unknown": d.unknown,
     })
+}
+
+fn table_name(t: drivemap_core::register::Table) -> &'static str {
+    match t {
+        drivemap_core::register::Table::Holding => "holding",
+        drivemap_core::register::Table::Input => "input",
+    }
 }
 
 /// The export of one drive.
@@ -219,8 +220,8 @@ fn example_json(e: &crate::examples::Example) -> Value {
 
 pub fn export(drive: &Drive) -> Value {
     let p = &drive.protocol;
-    let mut regs: Vec<&Register> = drive.registers.iter().collect();
-    regs.sort_by_key(|r| (r.broadcast, r.def.address));
+    let mut regs = facts::facts(drive).registers;
+    regs.sort_by_key(|f| (f.data.broadcast, f.address));
     let mut out = json!({
         "format": FORMAT,
         "drive": {
@@ -254,7 +255,7 @@ pub fn export(drive: &Drive) -> Value {
             "serial": p.serial,
         },
         "groups": drive.groups.iter().map(|g| json!({"id": g.id, "name": g.name, "table": g.table, "source": g.source, "broadcast": g.broadcast})).collect::<Vec<_>>(),
-        "registers": regs.into_iter().map(|r| register(drive, r)).collect::<Vec<_>>(),
+        "registers": regs.iter().map(register).collect::<Vec<_>>(),
         "conflicts": drive.conflicts,
         "gaps": drive.gaps,
         "removed": drive.removed,

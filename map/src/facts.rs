@@ -14,6 +14,8 @@ use serde::Serialize;
 
 use drivemap_core::ConversionKind;
 
+pub mod data;
+
 use crate::describe;
 use crate::ir::{Drive, Register, ValueKind};
 use crate::model::Scale;
@@ -161,6 +163,11 @@ pub struct RegisterFacts {
     pub unknowns: Vec<UnknownFacts>,
     /// The register's own citation.
     pub source: Option<String>,
+    /// The same facts as values (numbers, codes, citations) for printers that write values:
+    /// the JSON export reads them. Not part of this view's JSON (`export --format facts`),
+    /// which is the worded rows; the export is their JSON.
+    #[serde(skip)]
+    pub data: data::RegisterData,
 }
 
 impl RegisterFacts {
@@ -359,6 +366,7 @@ pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
             .collect(),
         unknowns: d.unknown.iter().map(unknown).collect(),
         source: d.source.clone(),
+        data: data::RegisterData::of(drive, r),
     }
 }
 

@@ -2,9 +2,9 @@
 //!
 //! Data flows one way: [`source`] reads YAML into a located tree, [`load`] merges variant maps
 //! onto their base and deserializes the [`model`], [`ir`] expands it, [`validate`] checks it one
-//! concern per pass, [`lower`] decides what every register means (the drive plan) and [`export`]
-//! emits JSON. [`facts`] is the one view of a register's facts (rows of label, value and
-//! citation) that printers read. [`others`] lists the citations outside the registers with what each must mention.
+//! concern per pass, [`lower`] decides what every register means (the drive plan). [`facts`] is the
+//! one view of a register's facts (rows of label, value and citation, and the same facts as
+//! typed values) that printers read; [`export`] writes the typed values as JSON. [`others`] lists the citations outside the registers with what each must mention.
 //!
 //! Text about a map has one wording, [`describe`], shared by the generated rustdoc
 //! (`drivemap-codegen`), the Markdown reference and the semantic diff (`drivemap-review`) and the

@@ -908,14 +908,14 @@ pub struct ScaleCase {
 }
 
 /// A default value, or why there is none to give.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(untagged)]
 pub enum DefaultValue {
     Value(f64),
     Depends(DependentDefault),
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DependentDefault {
     pub depends_on: Dependency,
@@ -954,7 +954,7 @@ pub struct VariantOverride {
     pub source: Option<String>,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct AddressAlternative {
     pub address: u16,
@@ -963,7 +963,7 @@ pub struct AddressAlternative {
 }
 
 /// A condition on a setting's value, a model variant, or the transport.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Condition {
     /// Register id or parameter number.
@@ -1043,7 +1043,7 @@ pub struct Field {
     pub notes: Vec<String>,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DisplayStep {
     /// Lowest value shown with this step.
@@ -1073,7 +1073,7 @@ fn one_u16() -> u16 {
 }
 
 /// A place where the manual contradicts itself or another manual, and the reading taken.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Conflict {
     pub topic: String,
@@ -1082,7 +1082,7 @@ pub struct Conflict {
     pub reason: String,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Reading {
     pub source: String,
@@ -1094,7 +1094,7 @@ pub struct Reading {
 }
 
 /// Something the manual leaves unknown about a register.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Unknown {
     pub what: UnknownItem,
