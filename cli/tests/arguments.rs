@@ -2,22 +2,21 @@
 //! by clap (exit 2 with a message, no panic, no endless loop), and a command whose output pipe
 //! closes ends quietly with status 141, as `cat` would.
 
-use std::io::Read;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+mod common;
 
+use std::io::Read;
+use std::process::Stdio;
+use std::time::Duration;
+
+use common::{command, repo, run_bounded};
+
+/// `drivemap ARGS` in the workspace root: exit code and stderr; a hang fails the test.
 fn drivemap(args: &[&str]) -> (i32, String) {
-    let started = Instant::now();
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-        .output()
-        .expect("drivemap runs");
-    assert!(started.elapsed() < Duration::from_secs(30), "{args:?} hung");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let (code, _, err, _) = run_bounded(
+        command().args(args).current_dir(repo()),
+        Duration::from_secs(30),
+    );
+    (code, err)
 }
 
 #[test]
@@ -112,9 +111,9 @@ fn a_closed_output_pipe_ends_quietly() {
         &["doc", "--drive", "automationdirect-acn"],
         &["check"],
     ] {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        let mut child = command()
             .args(args)
-            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+            .current_dir(repo())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
@@ -230,7 +229,7 @@ fn parity_is_refused_naming_the_three_accepted() {
             "{args:?}: {err}"
         );
     }
-    let help = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+    let help = command()
         .args(["read", "--help"])
         .output()
         .expect("drivemap runs");

@@ -2,20 +2,17 @@
 //! `drivemap check` prints for the same map, as its `Display` and as its `Debug` (what `?` in a
 //! `main` that returns it prints), with no debug dump of its structure.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use std::path::Path;
+
+use common::{command, repo};
 
 /// `drivemap check`'s error lines for `map` (stderr, without its closing summary).
 fn check_lines(map: &Path) -> Vec<String> {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+    let out = command()
         .arg("check")
         .arg(map)
-        .env_remove("DRIVEMAP_MAPS")
-        .env_remove("DRIVEMAP_MANUALS")
         .output()
         .expect("run drivemap");
     assert!(!out.status.success(), "check accepted {}", map.display());

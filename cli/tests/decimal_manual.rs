@@ -4,39 +4,22 @@
 //! none is an error, and the tool names a register by its number (`read 45`), its parameter
 //! number (`read P-01`) or the hex of its number (`read 2DH`) against a simulated drive.
 
-use std::net::TcpListener;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::sync::{Arc, Mutex};
-use std::thread;
-use std::time::{Duration, Instant};
+mod common;
+
+use std::path::PathBuf;
 
 use drivemap_map::validate::Context;
-use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_sim::slave::SimulatedSlave;
 
-fn fixture() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/zenith-z3")
-}
+use common::{Framing, drivemap_fixture, repo, serve};
 
-fn drivemap(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .current_dir(fixture())
-        .env_remove("DRIVEMAP_MAPS")
-        .env("DRIVEMAP_MANUALS", fixture().join("manuals"))
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+fn fixture() -> PathBuf {
+    repo().join("tests/fixtures/zenith-z3")
 }
 
 #[test]
 fn coverage_counts_the_rows_of_a_decimal_manual() {
-    let (code, out, err) = drivemap(&["coverage", "zenith-z3.yaml"]);
+    let (code, out, err) = drivemap_fixture(&fixture(), &["coverage", "zenith-z3.yaml"]);
     assert_eq!(code, 0, "{err}");
     // Five rows numbered only (1, 2, 10, 11, 12) and four with a parameter number (45-48);
     // P-04 (register 48) is left out of the map.
@@ -79,7 +62,7 @@ fn a_manual_with_no_rows_found_is_an_error_not_a_success() {
     std::fs::create_dir_all(&dir).unwrap();
     let map = dir.join("zenith-z3.yaml");
     std::fs::write(&map, hex).unwrap();
-    let (code, out, err) = drivemap(&["coverage", map.to_str().unwrap()]);
+    let (code, out, err) = drivemap_fixture(&fixture(), &["coverage", map.to_str().unwrap()]);
     std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(code, 2, "{out}{err}");
     assert!(
@@ -96,21 +79,7 @@ fn read_by_register_number_and_parameter_number_against_the_simulator() {
     let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
     slave.set_holding(45, 125); // P-01 acceleration time 12.5 s
     slave.set_holding(10, 4321); // output frequency 43.21 Hz
-    let slave = Arc::new(Mutex::new(slave));
-    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-    let addr = listener.local_addr().unwrap().to_string();
-    let shared = Arc::clone(&slave);
-    thread::spawn(move || {
-        for stream in listener.incoming() {
-            let Ok(stream) = stream else { continue };
-            let until = Instant::now() + Duration::from_secs(30);
-            let mut s = shared.lock().unwrap();
-            let _ = s.serve(
-                &mut RtuOverTcpTransport::from_stream(stream).unwrap(),
-                until,
-            );
-        }
-    });
+    let (addr, _) = serve(slave, Framing::RtuOverTcp);
     let read = |names: &[&str]| {
         let mut args = vec![
             "read",
@@ -124,7 +93,7 @@ fn read_by_register_number_and_parameter_number_against_the_simulator() {
             "2s",
         ];
         args.extend_from_slice(names);
-        drivemap(&args)
+        drivemap_fixture(&fixture(), &args)
     };
     for name in ["45", "P-01", "2DH", "acceleration_time"] {
         let (code, out, err) = read(&[name]);

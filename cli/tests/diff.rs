@@ -1,44 +1,12 @@
 //! `drivemap diff` end to end: golden output in both formats, exit codes, a scale edit of a
 //! shipped map, and `--git` with a variant map whose base changed.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::Command;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// A directory of its own under the system's temporary directory, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let p = std::env::temp_dir().join(format!("drivemap-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).unwrap();
-        Scratch(p)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn drivemap(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DRIVEMAP_MAPS")
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::{Scratch, drivemap_in, repo};
 
 fn edit(text: &str, from: &str, to: &str) -> String {
     assert_eq!(text.matches(from).count(), 1, "`{from}` must occur once");
@@ -85,10 +53,10 @@ fn fixture_pair(s: &Scratch) -> (String, String) {
 fn golden_text_and_markdown() {
     let s = Scratch::new("diff-golden");
     let (old, new) = fixture_pair(&s);
-    let (code, text, err) = drivemap(&s.0, &["diff", &old, &new]);
+    let (code, text, err) = drivemap_in(&s.0, &["diff", &old, &new]);
     assert_eq!(code, 1, "breaking changes exit 1: {err}");
     insta::assert_snapshot!("example_drive_diff_text", text);
-    let (code, md, err) = drivemap(&s.0, &["diff", "--format", "md", &old, &new]);
+    let (code, md, err) = drivemap_in(&s.0, &["diff", "--format", "md", &old, &new]);
     assert_eq!(code, 1, "{err}");
     insta::assert_snapshot!("example_drive_diff_md", md);
 }
@@ -105,14 +73,14 @@ fn compatible_only_exits_0_and_identical_maps_report_no_changes() {
     std::fs::write(s.0.join("old/example-drive.yaml"), &base).unwrap();
     std::fs::write(s.0.join("new/example-drive.yaml"), new).unwrap();
     let (old, new) = ("old/example-drive.yaml", "new/example-drive.yaml");
-    let (code, out, err) = drivemap(&s.0, &["diff", old, new]);
+    let (code, out, err) = drivemap_in(&s.0, &["diff", old, new]);
     assert_eq!(code, 0, "{err}");
     assert!(
         out.starts_with("example-drive: 0 breaking, 1 compatible\n"),
         "{out}"
     );
     assert!(out.contains("range widened — range (v400)"), "{out}");
-    let (code, out, _) = drivemap(&s.0, &["diff", old, old]);
+    let (code, out, _) = drivemap_in(&s.0, &["diff", old, old]);
     assert_eq!(code, 0);
     assert_eq!(out, "example-drive: no changes\n");
 }
@@ -125,7 +93,7 @@ fn one_scale_edit_of_a_shipped_map_is_exactly_one_breaking_change_with_both_cita
     let edited = edit(&original, from, &from.replace("scale: 0.1,", "scale: 1,"));
     std::fs::write(s.0.join("ptlk-tds-v8.yaml"), edited).unwrap();
     let old = repo().join("maps/ptlk-tds-v8.yaml");
-    let (code, out, err) = drivemap(&s.0, &["diff", old.to_str().unwrap(), "ptlk-tds-v8.yaml"]);
+    let (code, out, err) = drivemap_in(&s.0, &["diff", old.to_str().unwrap(), "ptlk-tds-v8.yaml"]);
     assert_eq!(code, 1, "{err}");
     assert_eq!(
         out,
@@ -137,7 +105,8 @@ fn one_scale_edit_of_a_shipped_map_is_exactly_one_breaking_change_with_both_cita
     );
     // Two versions of one map compare under any file names.
     std::fs::rename(s.0.join("ptlk-tds-v8.yaml"), s.0.join("tds-edited.yaml")).unwrap();
-    let (code, renamed, err) = drivemap(&s.0, &["diff", old.to_str().unwrap(), "tds-edited.yaml"]);
+    let (code, renamed, err) =
+        drivemap_in(&s.0, &["diff", old.to_str().unwrap(), "tds-edited.yaml"]);
     assert_eq!(code, 1, "{err}");
     assert_eq!(renamed, out);
 }
@@ -188,7 +157,7 @@ fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
     )
     .unwrap();
 
-    let (code, out, err) = drivemap(&s.0, &["diff", "--git", "HEAD", "--maps", "maps"]);
+    let (code, out, err) = drivemap_in(&s.0, &["diff", "--git", "HEAD", "--maps", "maps"]);
     assert_eq!(code, 1, "{err}");
     let headings: Vec<&str> = out.lines().filter(|l| !l.starts_with(' ')).collect();
     assert_eq!(
@@ -218,7 +187,7 @@ fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
     );
 
     // One map, by drive id; Markdown.
-    let (code, md, err) = drivemap(
+    let (code, md, err) = drivemap_in(
         &s.0,
         &[
             "diff",
@@ -242,12 +211,12 @@ fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
     );
 
     // A map by path, unchanged since the revision.
-    let (code, out, err) = drivemap(&s.0, &["diff", "--git", "HEAD", "maps/yaskawa-j7.yaml"]);
+    let (code, out, err) = drivemap_in(&s.0, &["diff", "--git", "HEAD", "maps/yaskawa-j7.yaml"]);
     assert_eq!((code, err.as_str()), (1, ""));
     assert!(out.starts_with("yaskawa-j7: 1 breaking"), "{out}");
 
     // A map by path that is gone from the working tree.
-    let (code, out, err) = drivemap(&s.0, &["diff", "--git", "HEAD", "maps/ptlk-tds-v8.yaml"]);
+    let (code, out, err) = drivemap_in(&s.0, &["diff", "--git", "HEAD", "maps/ptlk-tds-v8.yaml"]);
     assert_eq!(code, 1, "{err}");
     assert!(
         out.starts_with(
@@ -257,14 +226,14 @@ fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
     );
 
     // A revision that does not exist.
-    let (code, _, err) = drivemap(&s.0, &["diff", "--git", "no-such-rev", "--maps", "maps"]);
+    let (code, _, err) = drivemap_in(&s.0, &["diff", "--git", "no-such-rev", "--maps", "maps"]);
     assert_eq!(code, 2);
     assert!(err.contains("git ls-tree"), "{err}");
 }
 
 #[test]
 fn kinds_table_lists_every_kind() {
-    let (code, out, _) = drivemap(&repo(), &["diff", "--kinds", "--format", "md"]);
+    let (code, out, _) = drivemap_in(&repo(), &["diff", "--kinds", "--format", "md"]);
     assert_eq!(code, 0);
     assert!(out.starts_with("| Change | Severity | Why |\n|---|---|---|\n"));
     assert!(out.contains("| scale changed | breaking |"));
@@ -302,11 +271,10 @@ fn roles_removed_or_re_pointed_are_breaking_in_every_format_with_their_lines_quo
     std::fs::write(s.0.join("new.yaml"), new).unwrap();
     let manuals = repo().join("cli/tests/fixtures/manuals");
     let run = |format: &str| {
-        let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        let out = common::command()
             .args(["diff", "--format", format, "old.yaml", "new.yaml"])
             .current_dir(&s.0)
             .env("DRIVEMAP_MANUALS", &manuals)
-            .env_remove("DRIVEMAP_MAPS")
             .output()
             .unwrap();
         assert_eq!(

@@ -1,24 +1,15 @@
 //! `drivemap doc`: the Markdown reference of a fixture map (golden), and the committed
 //! references of every shipped map (regenerated and compared).
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use std::path::Path;
 
+use common::{drivemap_in, repo};
+
+/// `drivemap ARGS` in the workspace root.
 fn drivemap(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    drivemap_in(&repo(), args)
 }
 
 #[test]

@@ -3,29 +3,18 @@
 //! misprints one CRC, and every shipped map), a wrong CRC not recorded in `conflicts:` fails the
 //! check at its byte, and `export`, `doc` and `diff` show the examples.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use std::path::{Path, PathBuf};
+
+use common::{command, repo, run};
 
 fn fixture() -> PathBuf {
-    root().join("tests/fixtures/orbis-q5")
+    repo().join("tests/fixtures/orbis-q5")
 }
 
 fn drivemap(args: &[&str], manuals: &Path) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .env_remove("DRIVEMAP_MAPS")
-        .env("DRIVEMAP_MANUALS", manuals)
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    run(command().args(args).env("DRIVEMAP_MANUALS", manuals))
 }
 
 /// A copy of the fixture map with `edit` applied, in a directory of its own.
@@ -84,10 +73,10 @@ fn an_unrecorded_wrong_crc_fails_check_at_its_byte() {
 
 #[test]
 fn check_verifies_every_example_of_the_shipped_maps() {
-    let maps = root().join("maps");
+    let maps = repo().join("maps");
     let (code, out, err) = drivemap(
         &["check", "--maps", maps.to_str().unwrap()],
-        &root().join("../shared/manuals"),
+        &repo().join("../shared/manuals"),
     );
     assert_eq!(code, 0, "{out}{err}");
     for (id, frames) in [

@@ -2,26 +2,11 @@
 //! row, conversion kind and rows of label, value and citation — the same words the rustdoc,
 //! `drivemap doc` and `drivemap diff` print.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
 use serde_json::Value;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn drivemap(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::{drivemap_builtin, repo};
 
 fn register<'a>(facts: &'a Value, id: &str) -> &'a Value {
     facts["registers"]
@@ -44,8 +29,9 @@ fn row<'a>(r: &'a Value, key: &str) -> &'a Value {
 #[test]
 fn the_facts_of_a_map_are_rows_with_their_citations() {
     let map = repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml");
-    let (ok, out, err) = drivemap(&["export", "--format", "facts", map.to_str().unwrap()]);
-    assert!(ok, "{err}");
+    let (code, out, err) =
+        drivemap_builtin(&["export", "--format", "facts", map.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
     let facts: Value = serde_json::from_str(&out).expect("JSON");
     assert_eq!(facts["drive"], "acme-vf1");
     let energy = register(&facts, "energy_counter");
@@ -70,13 +56,13 @@ fn the_facts_of_a_map_are_rows_with_their_citations() {
 #[test]
 fn facts_refuse_poller_options_like_the_json_export() {
     let map = repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml");
-    let (ok, _, err) = drivemap(&[
+    let (code, _, err) = drivemap_builtin(&[
         "export",
         "--format",
         "facts",
         "--all",
         map.to_str().unwrap(),
     ]);
-    assert!(!ok);
+    assert_ne!(code, 0);
     assert!(err.contains("--register, --all and a link"), "{err}");
 }

@@ -13,12 +13,10 @@
 //! - nothing is left out silently: every register asked for is an entity, a field, a decoded
 //!   message, or named in a "left out" comment with its reason.
 
+mod common;
+
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
-use std::thread;
+use std::process::Command;
 use std::time::Duration;
 
 use drivemap_runtime::Client;
@@ -26,34 +24,11 @@ use drivemap_runtime::Profile;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use serde_json::Value;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-struct Peer(Child);
-
-impl Drop for Peer {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-fn drivemap(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::{Sim, command, drivemap_builtin, repo};
 
 fn export(args: &[&str]) -> String {
-    let (ok, out, err) = drivemap(&[&["export"][..], args].concat());
-    assert!(ok, "drivemap export {args:?}: {err}");
+    let (code, out, err) = drivemap_builtin(&[&["export"][..], args].concat());
+    assert_eq!(code, 0, "drivemap export {args:?}: {err}");
     out
 }
 
@@ -78,7 +53,7 @@ fn links(id: &str) -> Vec<[&'static str; 2]> {
         ["--rtu-tcp", "192.0.2.11:4001"],
         ["--serial", "/dev/ttyUSB0"],
     ];
-    let (_, json, _) = drivemap(&["export", "--drive", id]);
+    let (_, json, _) = drivemap_builtin(&["export", "--drive", id]);
     let map: Value = serde_json::from_str(&json).unwrap();
     if map["protocol"]["transports"]
         .as_array()
@@ -275,7 +250,7 @@ fn check_telegraf(text: &str, what: &str, max_read: i64) -> Vec<String> {
 #[test]
 fn telegraf_export_follows_the_documented_request_schema_one_request_per_planned_read() {
     for id in maps() {
-        let (_, json, _) = drivemap(&["export", "--drive", &id]);
+        let (_, json, _) = drivemap_builtin(&["export", "--drive", &id]);
         let map: Value = serde_json::from_str(&json).unwrap();
         let max_read = map["protocol"]["max_read"].as_i64().unwrap_or(125).min(125);
         for link in links(&id) {
@@ -311,7 +286,7 @@ fn telegraf_export_follows_the_documented_request_schema_one_request_per_planned
 #[test]
 fn every_register_asked_for_is_exported_or_named_with_the_reason() {
     for id in maps() {
-        let (_, json, _) = drivemap(&["export", "--drive", &id]);
+        let (_, json, _) = drivemap_builtin(&["export", "--drive", &id]);
         let map: Value = serde_json::from_str(&json).unwrap();
         let readable: Vec<String> = map["registers"]
             .as_array()
@@ -412,33 +387,11 @@ fn link_slave(ha: &str) -> String {
         .to_owned()
 }
 
-/// Starts `drivemap simulate` on a free loopback port.
-fn simulate(args: &[&str]) -> (Peer, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .arg("simulate")
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("start drivemap simulate");
-    let stdout = child.stdout.take().unwrap();
-    let peer = Peer(child);
-    let (tx, rx) = mpsc::channel();
-    thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            let _ = tx.send(line);
-        }
-    });
-    let line = rx
-        .recv_timeout(Duration::from_secs(20))
-        .expect("simulate starts");
-    let addr = line
-        .split_whitespace()
-        .find(|w| w.starts_with("127.0.0.1:"))
-        .unwrap_or_else(|| panic!("no address in `{line}`"))
-        .to_owned();
-    thread::spawn(move || while rx.recv().is_ok() {});
-    (peer, addr)
+/// Starts `drivemap simulate ARGS` on a loopback listener; returns it and its address.
+fn simulate(args: &[&str]) -> (Sim, String) {
+    let sim = Sim::listening(command().arg("simulate").args(args));
+    let addr = sim.addr.clone();
+    (sim, addr)
 }
 
 /// A raw Modbus client: PDU addresses as given, no map.
@@ -521,7 +474,7 @@ fn values_agree(drive: &str, sim_link: &str, link: &str, sets: &[&str]) {
         })
         .collect();
     assert!(ids.len() >= 5, "{drive}: {ids:?}");
-    let (ok, read, err) = drivemap(
+    let (code, read, err) = drivemap_builtin(
         &[
             &["read", "--drive", drive, link, &addr, "--format", "json"][..],
             sets,
@@ -529,7 +482,7 @@ fn values_agree(drive: &str, sim_link: &str, link: &str, sets: &[&str]) {
         ]
         .concat(),
     );
-    assert!(ok, "{drive}: drivemap read: {err}");
+    assert_eq!(code, 0, "{drive}: drivemap read: {err}");
     let read: Vec<Value> = serde_json::from_str(&read).unwrap();
     let expected: BTreeMap<String, f64> = read
         .iter()

@@ -4,19 +4,18 @@
 //! every node of the flow with a type that loaded without error, and the flow's reads of a
 //! `drivemap simulate` drive give the values `drivemap read` gives for the same registers.
 
-use std::io::{BufRead, BufReader, Read, Write};
+mod common;
+
+use std::io::{Read, Write};
 use std::net::TcpStream;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use common::{Sim, command, drivemap_builtin, repo};
 
 /// A child process killed when the test ends, pass or fail.
 struct Peer(Child);
@@ -28,46 +27,11 @@ impl Drop for Peer {
     }
 }
 
-fn drivemap(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-/// Starts `drivemap simulate` on a free loopback port; returns it and its address.
-fn simulate(args: &[&str]) -> (Peer, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(["simulate", "--tcp", "0"])
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("start drivemap simulate");
-    let stdout = child.stdout.take().expect("piped");
-    let peer = Peer(child);
-    let (tx, rx) = mpsc::channel();
-    thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            let _ = tx.send(line);
-        }
-    });
-    let line = rx
-        .recv_timeout(Duration::from_secs(20))
-        .expect("simulate says where it listens");
-    let addr = line
-        .split_whitespace()
-        .find(|w| w.starts_with("127.0.0.1:"))
-        .unwrap_or_else(|| panic!("no address in `{line}`"))
-        .to_owned();
-    // Drain the request log so the simulator never blocks on a full pipe.
-    thread::spawn(move || while rx.recv().is_ok() {});
-    (peer, addr)
+/// Starts `drivemap simulate --tcp 0 ARGS`; returns it and its address.
+fn simulate(args: &[&str]) -> (Sim, String) {
+    let sim = Sim::listening(command().args(["simulate", "--tcp", "0"]).args(args));
+    let addr = sim.addr.clone();
+    (sim, addr)
 }
 
 /// `GET path` on the Node-RED admin API: status and body.
@@ -126,7 +90,7 @@ fn the_exported_flow_loads_in_node_red_and_reads_the_values_drivemap_reads() {
         "--set",
         "n019=2.5",
     ]);
-    let (ok, _, err) = drivemap(
+    let (code, _, err) = drivemap_builtin(
         &[
             &["write", "--drive", "yaskawa-v7", "--tcp", &addr][..],
             &sets,
@@ -137,10 +101,10 @@ fn the_exported_flow_loads_in_node_red_and_reads_the_values_drivemap_reads() {
         ]
         .concat(),
     );
-    assert!(ok, "drivemap write: {err}");
+    assert_eq!(code, 0, "drivemap write: {err}");
 
     let registers = "output_frequency,output_current,n011,n019,n152,n003,status_signal_1";
-    let (ok, flow, err) = drivemap(
+    let (code, flow, err) = drivemap_builtin(
         &[
             &[
                 "export",
@@ -159,7 +123,7 @@ fn the_exported_flow_loads_in_node_red_and_reads_the_values_drivemap_reads() {
         ]
         .concat(),
     );
-    assert!(ok, "drivemap export: {err}");
+    assert_eq!(code, 0, "drivemap export: {err}");
     let nodes: Vec<Value> = serde_json::from_str::<Value>(&flow)
         .expect("the flow is JSON")
         .as_array()
@@ -257,7 +221,7 @@ fn the_exported_flow_loads_in_node_red_and_reads_the_values_drivemap_reads() {
     );
 
     // What drivemap reads now (the drive has reached 30 Hz; nothing changes from here).
-    let (ok, read, err) = drivemap(
+    let (code, read, err) = drivemap_builtin(
         &[
             &[
                 "read",
@@ -273,7 +237,7 @@ fn the_exported_flow_loads_in_node_red_and_reads_the_values_drivemap_reads() {
         ]
         .concat(),
     );
-    assert!(ok, "drivemap read: {err}");
+    assert_eq!(code, 0, "drivemap read: {err}");
     let read: Vec<Value> = serde_json::from_str(&read).expect("read --format json");
     let expected: Vec<(String, f64)> = read
         .iter()

@@ -6,16 +6,13 @@
 //! request that goes unanswered through every attempt stops the command, and the messages say
 //! which request was tried and which were then not sent. Wall time measured on the binary.
 
-use std::io::Read;
-use std::net::{TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::thread;
-use std::time::{Duration, Instant};
+mod common;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use std::net::{TcpListener, TcpStream};
+use std::thread;
+use std::time::Duration;
+
+use common::drivemap_bounded;
 
 /// A TCP peer that accepts and never sends a byte.
 fn silent_peer() -> String {
@@ -28,47 +25,6 @@ fn silent_peer() -> String {
         }
     });
     addr
-}
-
-/// Runs `drivemap <args> --maps maps`, killed after `limit`; exit code, stdout, stderr, time.
-fn drivemap(args: &[&str], limit: Duration) -> (i32, String, String, Duration) {
-    let started = Instant::now();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .arg("--maps")
-        .arg(repo().join("maps"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run drivemap");
-    let mut stdout = child.stdout.take().unwrap();
-    let mut stderr = child.stderr.take().unwrap();
-    let out = thread::spawn(move || {
-        let mut s = String::new();
-        let _ = stdout.read_to_string(&mut s);
-        s
-    });
-    let err = thread::spawn(move || {
-        let mut s = String::new();
-        let _ = stderr.read_to_string(&mut s);
-        s
-    });
-    let code = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status.code().unwrap_or(-1);
-        }
-        if started.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!(
-                "drivemap {}: still running after {limit:?}; killed",
-                args.join(" ")
-            );
-        }
-        thread::sleep(Duration::from_millis(10));
-    };
-    let took = started.elapsed();
-    (code, out.join().unwrap(), err.join().unwrap(), took)
 }
 
 const TIMEOUT: Duration = Duration::from_secs(1);
@@ -87,7 +43,7 @@ fn bound(link: &str) -> Duration {
 fn a_read_with_two_settings_to_read_first_fails_within_one_timeout_and_its_retries() {
     for link in ["--rtu-tcp", "--gateway"] {
         let addr = silent_peer();
-        let (code, out, err, took) = drivemap(
+        let (code, out, err, took) = drivemap_bounded(
             &[
                 "read",
                 "--drive",
@@ -142,7 +98,7 @@ fn a_read_with_two_settings_to_read_first_fails_within_one_timeout_and_its_retri
 #[test]
 fn a_write_to_a_silent_peer_stops_after_its_first_unanswered_request() {
     let addr = silent_peer();
-    let (code, out, err, took) = drivemap(
+    let (code, out, err, took) = drivemap_bounded(
         &[
             "write",
             "--drive",
@@ -171,7 +127,7 @@ fn a_write_to_a_silent_peer_stops_after_its_first_unanswered_request() {
 fn each_poll_cycle_tries_again_and_ends_within_one_timeout_and_its_retries() {
     let addr = silent_peer();
     // Settings first (one unanswered request), then two cycles of one unanswered request each.
-    let (code, out, err, took) = drivemap(
+    let (code, out, err, took) = drivemap_bounded(
         &[
             "poll",
             "--drive",

@@ -3,70 +3,15 @@
 //! addressing, RTU registers and RTU timing; `--tcp` on a map whose transports lack `tcp` is
 //! refused, naming `--gateway`. Through the binary, against `drivemap simulate --gateway`.
 
-use std::io::{BufRead, BufReader};
+mod common;
+
 use std::net::TcpListener;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::thread;
 use std::time::Duration;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn drivemap(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .arg("--maps")
-        .arg(repo().join("maps"))
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-/// `drivemap simulate` in a child process; killed on drop.
-struct Sim {
-    child: Child,
-    addr: String,
-    first: String,
-}
-
-impl Sim {
-    fn start(id: &str, link: &str, sets: &[&str]) -> Sim {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-            .args(["simulate", "--drive", id, link, "0", "--quiet"])
-            .args(sets.iter().flat_map(|s| ["--set", s]))
-            .arg("--maps")
-            .arg(repo().join("maps"))
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let mut first = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut first)
-            .unwrap();
-        let addr = first
-            .split_whitespace()
-            .find(|w| w.starts_with("127.0.0.1:"))
-            .unwrap_or_else(|| panic!("no address in {first:?}"))
-            .to_owned();
-        Sim { child, addr, first }
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use common::{Sim, drivemap};
 
 /// The row of `register` in a read table, with runs of spaces collapsed.
 fn row(out: &str, register: &str) -> String {
@@ -122,7 +67,7 @@ fn tcp_to_a_drive_without_modbus_tcp_is_refused_naming_the_gateway_option() {
 /// registers where the map puts them on RTU.
 #[test]
 fn gateway_reads_a_serial_only_drive() {
-    let sim = Sim::start("yaskawa-j7", "--gateway", &["n69=2"]);
+    let sim = Sim::start(&["--drive", "yaskawa-j7", "--gateway", "0", "--set", "n69=2"]);
     assert!(
         sim.first
             .contains("on Modbus TCP gateway to RTU 127.0.0.1:"),
@@ -152,11 +97,16 @@ fn gateway_reads_a_serial_only_drive() {
 /// gateway lands one register off (dec_time's word): the reason the link must be named.
 #[test]
 fn gateway_applies_the_maps_rtu_address_offset() {
-    let sim = Sim::start(
+    let sim = Sim::start(&[
+        "--drive",
         "automationdirect-acn",
         "--gateway",
-        &["acc_time=5", "dec_time=7"],
-    );
+        "0",
+        "--set",
+        "acc_time=5",
+        "--set",
+        "dec_time=7",
+    ]);
     let read = |flag: &str| {
         drivemap(&[
             "read",
@@ -182,7 +132,7 @@ fn gateway_applies_the_maps_rtu_address_offset() {
 /// Modbus TCP option card's registers are not.
 #[test]
 fn gateway_has_the_rtu_registers_of_a_drive_with_both_transports() {
-    let sim = Sim::start("yaskawa-v7", "--gateway", &[]);
+    let sim = Sim::start(&["--drive", "yaskawa-v7", "--gateway", "0"]);
     let (code, out, err) = drivemap(&[
         "read",
         "--drive",

@@ -3,11 +3,10 @@
 //! (per request) with an error that says what happened; `poll` must come back after the server
 //! restarts. A subprocess still running past its bound is killed and the test fails.
 
+mod common;
+
 use drivemap_test_support::hostile_peer;
 
-use std::io::Read;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -16,14 +15,12 @@ use drivemap_runtime::profile::{Profile, TransportKind};
 
 use hostile_peer::{HostilePeer, Script};
 
+use common::{drivemap_bounded, repo};
+
 /// RTU only: its Modbus TCP runs go through a Modbus TCP gateway (`--gateway`).
 const DRIVE: &str = "ptlk-tds-v8";
 /// 0027h, 0.1 A, no dependency: the peer holds 0027h = 39.
 const REGISTER: &str = "output_current";
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 fn profile() -> &'static Profile {
     let map = drivemap_map::read_map(
@@ -37,45 +34,7 @@ fn profile() -> &'static Profile {
 /// Runs `drivemap <args> --maps maps`, killing it after `bound`. Returns exit code, stdout,
 /// stderr and the time it took.
 fn drivemap(args: &[&str], bound: Duration) -> (i32, String, String, Duration) {
-    let started = Instant::now();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .arg("--maps")
-        .arg(repo().join("maps"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run drivemap");
-    let mut stdout = child.stdout.take().unwrap();
-    let mut stderr = child.stderr.take().unwrap();
-    let out = thread::spawn(move || {
-        let mut s = String::new();
-        let _ = stdout.read_to_string(&mut s);
-        s
-    });
-    let err = thread::spawn(move || {
-        let mut s = String::new();
-        let _ = stderr.read_to_string(&mut s);
-        s
-    });
-    let code = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status.code().unwrap_or(-1);
-        }
-        if started.elapsed() > bound + Duration::from_secs(1) {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!(
-                "drivemap {}: still running after {:?} (bound {bound:?}); killed\nstdout: {}",
-                args.join(" "),
-                started.elapsed(),
-                out.join().unwrap()
-            );
-        }
-        thread::sleep(Duration::from_millis(10));
-    };
-    let took = started.elapsed();
-    (code, out.join().unwrap(), err.join().unwrap(), took)
+    drivemap_bounded(args, bound + Duration::from_secs(1))
 }
 
 fn flag(kind: TransportKind) -> &'static str {

@@ -2,15 +2,15 @@
 //! `drivemap check --require-manuals` accepts as a draft (every citation verified by content),
 //! the report, and `--merge` against a map with a register missing and a default changed.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::PathBuf;
 use std::process::Command;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use common::{command, repo};
 
 fn drivemap() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_drivemap"));
+    let mut c = command();
     c.env(
         "DRIVEMAP_MANUALS",
         repo().join("tests/fixtures/import/manuals"),

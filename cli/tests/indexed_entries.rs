@@ -4,34 +4,17 @@
 //! request, to check the drive still shows index 1), against a simulated drive that serves the
 //! pair.
 
-use std::net::TcpListener;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::sync::{Arc, Mutex};
-use std::thread;
-use std::time::{Duration, Instant};
+mod common;
+
+use std::path::PathBuf;
 
 use drivemap_map::validate::Context;
-use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_sim::slave::SimulatedSlave;
 
-fn fixture() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/tarrow-tm44")
-}
+use common::{Framing, drivemap_fixture, repo, serve};
 
-fn drivemap(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .current_dir(fixture())
-        .env_remove("DRIVEMAP_MAPS")
-        .env("DRIVEMAP_MANUALS", fixture().join("manuals"))
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+fn fixture() -> PathBuf {
+    repo().join("tests/fixtures/tarrow-tm44")
 }
 
 #[test]
@@ -47,21 +30,7 @@ fn read_and_write_name_an_entry_of_an_indexed_register() {
     slave.indexed.set("parameter_value", 1, 125); // acceleration time 12.5 s
     slave.indexed.set("parameter_value", 2, 300); // deceleration time 30.0 s
     slave.set_holding(44, 2); // the keypad left deceleration time selected
-    let slave = Arc::new(Mutex::new(slave));
-    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-    let addr = listener.local_addr().unwrap().to_string();
-    let shared = Arc::clone(&slave);
-    thread::spawn(move || {
-        for stream in listener.incoming() {
-            let Ok(stream) = stream else { continue };
-            let until = Instant::now() + Duration::from_secs(30);
-            let mut s = shared.lock().unwrap();
-            let _ = s.serve(
-                &mut RtuOverTcpTransport::from_stream(stream).unwrap(),
-                until,
-            );
-        }
-    });
+    let (addr, slave) = serve(slave, Framing::RtuOverTcp);
     let run = |command: &str, names: &[&str]| {
         let mut args = vec![
             command,
@@ -75,7 +44,7 @@ fn read_and_write_name_an_entry_of_an_indexed_register() {
             "2s",
         ];
         args.extend_from_slice(names);
-        drivemap(&args)
+        drivemap_fixture(&fixture(), &args)
     };
     for name in ["acceleration_time", "Acceleration time"] {
         let (code, out, err) = run("read", &[name]);

@@ -2,78 +2,9 @@
 //! simulated drives on one link, each at its address, and `drivemap scan` finds every one and
 //! names its map. Through the binary.
 
-use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+mod common;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn drivemap(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .arg("--maps")
-        .arg(repo().join("maps"))
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-/// `drivemap simulate` in a child process; killed on drop.
-struct Sim {
-    child: Child,
-    addr: String,
-    first: String,
-}
-
-impl Sim {
-    /// Started on a TCP listener (`--rtu-tcp 0`, `--gateway 0`): its address from the first line.
-    fn start(args: &[&str]) -> Sim {
-        let mut sim = Sim::start_any(args);
-        sim.addr = sim
-            .first
-            .split_whitespace()
-            .find(|w| w.starts_with("127.0.0.1:"))
-            .unwrap_or_else(|| panic!("no address in {:?}", sim.first))
-            .to_owned();
-        sim
-    }
-
-    /// Started on any link; `addr` left empty.
-    fn start_any(args: &[&str]) -> Sim {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-            .arg("simulate")
-            .args(args)
-            .arg("--quiet")
-            .arg("--maps")
-            .arg(repo().join("maps"))
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let mut first = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut first)
-            .unwrap();
-        Sim {
-            child,
-            addr: String::new(),
-            first,
-        }
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use common::{Sim, drivemap};
 
 /// `(slave, best map)` per slave found, from scan's JSON report.
 fn found(json: &str) -> Vec<(u64, String)> {

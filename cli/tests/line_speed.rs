@@ -6,14 +6,18 @@
 
 #![cfg(unix)]
 
+mod common;
+
 use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Stdio};
 use std::time::{Duration, Instant};
 
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::transport::serial::{SerialOptions, SerialTransport};
 use drivemap_runtime::{Client, ClientOptions};
 use drivemap_test_support::pty_pair::PtyPair;
+
+use common::command;
 
 struct Sim(Child);
 
@@ -26,7 +30,7 @@ impl Drop for Sim {
 
 /// `drivemap simulate` of the V7 on `path`, with `extra` flags, once it says it serves.
 fn simulate(path: &str, extra: &[&str]) -> Sim {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+    let mut child = command()
         .args([
             "simulate",
             "--drive",
@@ -102,7 +106,7 @@ fn the_simulated_drive_keeps_its_timing_at_the_line_speed() {
 
 #[test]
 fn line_speed_needs_a_serial_port() {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+    let out = command()
         .args([
             "simulate",
             "--drive",

@@ -2,29 +2,15 @@
 //! or RTU frames over TCP) to a `SimulatedSlave` of the runtime served in a thread of the test.
 //! Addresses in the slave are PDU addresses, so the map's per-transport offsets are checked too.
 
+mod common;
+
 use std::net::{TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_map::validate::Context;
-use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
-use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_sim::slave::SimulatedSlave;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-#[derive(Clone, Copy, PartialEq)]
-enum Framing {
-    Tcp,
-    /// Modbus TCP to a gateway with the drive on its serial line (`--gateway`).
-    Gateway,
-    RtuOverTcp,
-}
 
 /// A simulated drive listening on loopback.
 struct Drive {
@@ -44,35 +30,10 @@ impl Drive {
 
     /// Serves `slave` on loopback.
     fn serve(slave: SimulatedSlave, framing: Framing) -> Drive {
-        let slave = Arc::new(Mutex::new(slave));
-        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-        let addr = listener.local_addr().unwrap().to_string();
-        let shared = Arc::clone(&slave);
-        thread::spawn(move || {
-            for stream in listener.incoming() {
-                let Ok(stream) = stream else { continue };
-                let until = Instant::now() + Duration::from_secs(30);
-                let mut s = shared.lock().unwrap();
-                let _ = match framing {
-                    Framing::Tcp => s.serve(&mut TcpTransport::from_stream(stream).unwrap(), until),
-                    Framing::Gateway => s.serve(
-                        &mut TcpTransport::from_gateway_stream(stream).unwrap(),
-                        until,
-                    ),
-                    Framing::RtuOverTcp => s.serve(
-                        &mut RtuOverTcpTransport::from_stream(stream).unwrap(),
-                        until,
-                    ),
-                };
-            }
-        });
+        let (addr, slave) = serve(slave, framing);
         Drive {
             addr,
-            flag: match framing {
-                Framing::Tcp => "--tcp",
-                Framing::Gateway => "--gateway",
-                Framing::RtuOverTcp => "--rtu-tcp",
-            },
+            flag: framing.flag(),
             slave,
         }
     }
@@ -96,25 +57,6 @@ impl Drive {
     fn writes(&self) -> Vec<(u16, u16)> {
         self.slave.lock().unwrap().writes.clone()
     }
-}
-
-fn drivemap(args: &[&str]) -> (i32, String, String) {
-    drivemap_with(&repo().join("maps"), args)
-}
-
-/// Runs `drivemap` with `maps` as its maps directory.
-fn drivemap_with(maps: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .arg("--maps")
-        .arg(maps)
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 /// The row of `register` in a read table, with runs of spaces collapsed.
@@ -503,8 +445,6 @@ fn an_external_reference_is_given_with_set() {
 /// simulator starts with it, and read takes it as known. One command line's `--set`s serve both.
 #[test]
 fn set_means_the_drives_value_for_simulate_and_read() {
-    use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
     let sets = [
         "--set",
         "max_output_frequency=60",
@@ -513,35 +453,15 @@ fn set_means_the_drives_value_for_simulate_and_read() {
         "--set",
         "frequency_reference=30",
     ];
-    let mut sim = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args([
-            "simulate",
+    let sim = Sim::start(&[&["--drive", "yaskawa-j7", "--rtu-tcp", "0"][..], &sets[..]].concat());
+    let read = |extra: &[&str]| {
+        let mut args = vec![
+            "read",
             "--drive",
             "yaskawa-j7",
             "--rtu-tcp",
-            "0",
-            "--quiet",
-        ])
-        .args(sets)
-        .arg("--maps")
-        .arg(repo().join("maps"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut first = String::new();
-    BufReader::new(sim.stdout.take().unwrap())
-        .read_line(&mut first)
-        .unwrap();
-    let addr = first
-        .split_whitespace()
-        .find(|w| w.starts_with("127.0.0.1:"))
-        .map(str::to_owned);
-    let read = |extra: &[&str]| {
-        let addr = addr
-            .clone()
-            .unwrap_or_else(|| panic!("no address in {first:?}"));
-        let mut args = vec!["read", "--drive", "yaskawa-j7", "--rtu-tcp", addr.as_str()];
+            sim.addr.as_str(),
+        ];
         args.extend_from_slice(extra);
         drivemap(&args)
     };
@@ -554,8 +474,7 @@ fn set_means_the_drives_value_for_simulate_and_read() {
         "n69",
         "frequency_reference",
     ]);
-    let _ = sim.kill();
-    let _ = sim.wait();
+    drop(sim);
     assert_eq!(code, 0, "{err}");
     assert_eq!(
         row(&out, "frequency_reference"),
@@ -635,6 +554,8 @@ fn broadcast_writes_go_to_slave_0_without_reply() {
 
 use drivemap_test_support::pty_pair;
 use pty_pair::PtyPair;
+
+use common::{Framing, Sim, drivemap, repo, serve};
 
 #[test]
 fn serial_line_through_a_pseudo_terminal_pair() {
@@ -823,7 +744,7 @@ fn pairs_and_field_selected_decimals_of_another_vendor_at_slave_254() {
         let mut all = vec![command, "--drive", "acme-vf1"];
         all.extend_from_slice(&link);
         all.extend_from_slice(args);
-        drivemap_with(&fixture, &all)
+        common::run(common::command().args(&all).arg("--maps").arg(&fixture))
     };
     let (code, out, err) = run(
         "read",

@@ -5,16 +5,16 @@
 //! The CSV headers are the schemas' property lists, so a column added in one place and not the
 //! other fails here. The drive is `drivemap simulate` at slave 7 behind a Modbus TCP gateway.
 
-use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+mod common;
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+
+use common::{drivemap, repo};
 
 const DRIVE: &str = "ptlk-tds-v8";
 const SLAVE: u8 = 7;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 fn schema(name: &str) -> PathBuf {
     repo()
@@ -91,64 +91,30 @@ fn properties(name: &str, def: Option<&str>) -> Vec<String> {
         .collect()
 }
 
-/// A `drivemap simulate` process; killed on drop.
-struct Sim {
-    child: Child,
-    addr: String,
-}
+/// `drivemap simulate` at slave 7 behind a gateway; killed on drop.
+struct Sim(common::Sim);
 
 impl Sim {
     fn start() -> Sim {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-            .args(["simulate", "--drive", DRIVE, "--gateway", "127.0.0.1:0"])
-            .args(["--slave", &SLAVE.to_string(), "--quiet", "--maps"])
-            .arg(repo().join("maps"))
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let mut first = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut first)
-            .unwrap();
-        let addr = first
-            .split_whitespace()
-            .find(|w| w.starts_with("127.0.0.1:"))
-            .unwrap_or_else(|| panic!("no address in {first:?}"))
-            .trim_end_matches([',', ')'])
-            .to_string();
-        Sim { child, addr }
+        let slave = SLAVE.to_string();
+        Sim(common::Sim::start(&[
+            "--drive",
+            DRIVE,
+            "--gateway",
+            "127.0.0.1:0",
+            "--slave",
+            &slave,
+        ]))
     }
 
     /// Runs `drivemap <command> --drive <id> --gateway <addr> --slave 7 <args...>`.
     fn run(&self, command: &str, args: &[&str]) -> (i32, String, String) {
-        let mut all = vec![command, "--drive", DRIVE, "--gateway", &self.addr];
+        let mut all = vec![command, "--drive", DRIVE, "--gateway", &self.0.addr];
         let slave = SLAVE.to_string();
         all.extend_from_slice(&["--slave", &slave, "--timeout", "2s"]);
         all.extend_from_slice(args);
         drivemap(&all)
     }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn drivemap(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .arg("--maps")
-        .arg(repo().join("maps"))
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 fn json(text: &str) -> serde_json::Value {
@@ -275,7 +241,7 @@ fn a_failed_read_is_a_record_of_the_schema_too() {
         "--drive",
         DRIVE,
         "--gateway",
-        &sim.addr,
+        &sim.0.addr,
         "--slave",
         "9",
         "--timeout",
@@ -331,7 +297,7 @@ fn probe_and_scan_reports_match_their_schemas_and_their_csv_names_drive_and_slav
     let (code, out, err) = drivemap(&[
         "scan",
         "--gateway",
-        &sim.addr,
+        &sim.0.addr,
         "--slaves",
         "6-8",
         "--timeout",
@@ -347,7 +313,7 @@ fn probe_and_scan_reports_match_their_schemas_and_their_csv_names_drive_and_slav
     let (code, out, err) = drivemap(&[
         "scan",
         "--gateway",
-        &sim.addr,
+        &sim.0.addr,
         "--slaves",
         "7",
         "--format",

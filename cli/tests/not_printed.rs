@@ -5,38 +5,26 @@
 //! uses, and `export` writes the unknowns explicitly (validated against
 //! `docs/schema/export.schema.json` by `machine_output.rs`).
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::Arc;
 
 use drivemap_map::validate::Context;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
-fn fixture() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/halden-h1")
-}
+use common::{drivemap_fixture, repo};
 
-fn drivemap(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .current_dir(fixture())
-        .env("DRIVEMAP_MAPS", fixture())
-        .env("DRIVEMAP_MANUALS", fixture().join("manuals"))
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+fn fixture() -> PathBuf {
+    repo().join("tests/fixtures/halden-h1")
 }
 
 #[test]
 fn check_accepts_the_map_and_doc_says_each_fact_is_not_printed_with_its_reason() {
-    let (code, out, err) = drivemap(&["check", "halden-h1.yaml"]);
+    let (code, out, err) = drivemap_fixture(&fixture(), &["check", "halden-h1.yaml"]);
     assert_eq!(code, 0, "{out}{err}");
     assert!(!err.contains("warning"), "{err}");
-    let (code, doc, err) = drivemap(&["doc", "halden-h1.yaml"]);
+    let (code, doc, err) = drivemap_fixture(&fixture(), &["doc", "halden-h1.yaml"]);
     assert_eq!(code, 0, "{err}");
     for row in [
         "| Slave address | not printed in the manual: set with F-20, whose settings the note does not list; used instead: the Modbus range 1 ..= 247 | `halden-h1.txt:7` |",
@@ -58,17 +46,20 @@ fn scan_warns_that_it_scans_the_modbus_range_and_finds_the_drive() {
     let server =
         TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::Gateway, None).unwrap();
     let addr = server.local_addr().to_string();
-    let (code, out, err) = drivemap(&[
-        "scan",
-        "--gateway",
-        &addr,
-        "--drive",
-        "halden-h1",
-        "--timeout",
-        "20ms",
-        "--format",
-        "json",
-    ]);
+    let (code, out, err) = drivemap_fixture(
+        &fixture(),
+        &[
+            "scan",
+            "--gateway",
+            &addr,
+            "--drive",
+            "halden-h1",
+            "--timeout",
+            "20ms",
+            "--format",
+            "json",
+        ],
+    );
     server.stop();
     assert_eq!(code, 0, "{out}{err}");
     assert!(
@@ -82,33 +73,39 @@ fn scan_warns_that_it_scans_the_modbus_range_and_finds_the_drive() {
     let report: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(report["found"][0]["slave"], 200, "{out}");
     // Slaves given on the command line: no warning, the scan relies on no unprinted range.
-    let (_, _, err) = drivemap(&[
-        "scan",
-        "--tcp",
-        "127.0.0.1:9",
-        "--drive",
-        "halden-h1",
-        "--slaves",
-        "1-3",
-        "--timeout",
-        "1ms",
-    ]);
+    let (_, _, err) = drivemap_fixture(
+        &fixture(),
+        &[
+            "scan",
+            "--tcp",
+            "127.0.0.1:9",
+            "--drive",
+            "halden-h1",
+            "--slaves",
+            "1-3",
+            "--timeout",
+            "1ms",
+        ],
+    );
     assert!(!err.contains("slave-address range not printed"), "{err}");
 }
 
 #[test]
 fn a_serial_link_names_the_defaults_it_uses_for_settings_not_printed() {
     // The port does not exist: the warning comes before the port is opened.
-    let (code, _, err) = drivemap(&[
-        "read",
-        "--drive",
-        "halden-h1",
-        "--serial",
-        "/nonexistent/ttyUSB9",
-        "--slave",
-        "1",
-        "output_frequency",
-    ]);
+    let (code, _, err) = drivemap_fixture(
+        &fixture(),
+        &[
+            "read",
+            "--drive",
+            "halden-h1",
+            "--serial",
+            "/nonexistent/ttyUSB9",
+            "--slave",
+            "1",
+            "output_frequency",
+        ],
+    );
     assert_ne!(code, 0);
     assert!(
         err.contains(
@@ -119,28 +116,31 @@ fn a_serial_link_names_the_defaults_it_uses_for_settings_not_printed() {
         "{err}"
     );
     // The settings given: nothing is assumed, nothing is said.
-    let (_, _, err) = drivemap(&[
-        "read",
-        "--drive",
-        "halden-h1",
-        "--serial",
-        "/nonexistent/ttyUSB9",
-        "--baud",
-        "19200",
-        "--parity",
-        "even",
-        "--stop-bits",
-        "1",
-        "--slave",
-        "1",
-        "output_frequency",
-    ]);
+    let (_, _, err) = drivemap_fixture(
+        &fixture(),
+        &[
+            "read",
+            "--drive",
+            "halden-h1",
+            "--serial",
+            "/nonexistent/ttyUSB9",
+            "--baud",
+            "19200",
+            "--parity",
+            "even",
+            "--stop-bits",
+            "1",
+            "--slave",
+            "1",
+            "output_frequency",
+        ],
+    );
     assert!(!err.contains("serial settings"), "{err}");
 }
 
 #[test]
 fn export_writes_the_unknowns_and_its_schema_names_every_fact() {
-    let (code, out, err) = drivemap(&["export", "halden-h1.yaml"]);
+    let (code, out, err) = drivemap_fixture(&fixture(), &["export", "halden-h1.yaml"]);
     assert_eq!(code, 0, "{err}");
     let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
     let np = &doc["protocol"]["not_printed"];

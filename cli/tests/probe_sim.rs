@@ -5,17 +5,15 @@
 //! are read from the directory, not from a list.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use drivemap_map::model::TransportName;
 use drivemap_map::validate::Context;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
+mod common;
 mod new_map;
+
+use common::repo;
 
 #[test]
 fn probe_of_every_shipped_map_against_its_own_simulator_agrees() {
@@ -81,7 +79,7 @@ fn every_map_agrees_with_its_simulator(dir: &Path) -> Vec<String> {
             let addr = server.local_addr().to_string();
             let flag_shown = format!("{flag} {}", variant_args.join(" "));
             let flag_shown = flag_shown.trim_end();
-            let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+            let out = common::command()
                 .args(["probe", "--drive", &id, flag, &addr, "--slave", &slave])
                 .args(&variant_args)
                 .args(["--format", "json", "--maps"])

@@ -3,59 +3,28 @@
 //! and six decimals), `write` sends a value that is a whole number of counts as that count and
 //! refuses any other, naming the two nearest legal values, before anything reaches the wire.
 
-use std::net::TcpListener;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+
+use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
-use std::thread;
-use std::time::{Duration, Instant};
 
 use drivemap_map::validate::Context;
-use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_sim::slave::SimulatedSlave;
 
-fn fixture() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/borealis-bf6")
-}
+use common::{Framing, drivemap_fixture, repo, serve};
 
-fn drivemap(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .current_dir(fixture())
-        .env_remove("DRIVEMAP_MAPS")
-        .env("DRIVEMAP_MANUALS", fixture().join("manuals"))
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+fn fixture() -> PathBuf {
+    repo().join("tests/fixtures/borealis-bf6")
 }
 
 /// A simulated BF6 register file on loopback (RTU over TCP); its address and the shared slave.
-fn serve() -> (String, Arc<Mutex<SimulatedSlave>>) {
+fn serve_bf6() -> (String, Arc<Mutex<SimulatedSlave>>) {
     let map = drivemap_map::read_map(&fixture().join("borealis-bf6.yaml"), &Context::default())
         .expect("fixture map");
-    let slave = Arc::new(Mutex::new(SimulatedSlave::new(
-        1,
-        drivemap_live::leak_profile(&map),
-    )));
-    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-    let addr = listener.local_addr().unwrap().to_string();
-    let shared = Arc::clone(&slave);
-    thread::spawn(move || {
-        for stream in listener.incoming() {
-            let Ok(stream) = stream else { continue };
-            let until = Instant::now() + Duration::from_secs(30);
-            let mut s = shared.lock().unwrap();
-            let _ = s.serve(
-                &mut RtuOverTcpTransport::from_stream(stream).unwrap(),
-                until,
-            );
-        }
-    });
-    (addr, slave)
+    serve(
+        SimulatedSlave::new(1, drivemap_live::leak_profile(&map)),
+        Framing::RtuOverTcp,
+    )
 }
 
 fn live(command: &str, addr: &str, rest: &[&str]) -> (i32, String, String) {
@@ -71,7 +40,7 @@ fn live(command: &str, addr: &str, rest: &[&str]) -> (i32, String, String) {
         "2s",
     ];
     args.extend_from_slice(rest);
-    drivemap(&args)
+    drivemap_fixture(&fixture(), &args)
 }
 
 fn row<'a>(out: &'a str, id: &str) -> &'a str {
@@ -82,7 +51,7 @@ fn row<'a>(out: &'a str, id: &str) -> &'a str {
 
 #[test]
 fn read_shows_the_exact_value_of_a_ratio() {
-    let (addr, slave) = serve();
+    let (addr, slave) = serve_bf6();
     {
         let mut s = slave.lock().unwrap();
         s.set_holding(0x0011, 3599); // output frequency 3599/60 Hz
@@ -108,7 +77,7 @@ fn read_shows_the_exact_value_of_a_ratio() {
 
 #[test]
 fn write_sends_whole_counts_and_refuses_values_between_them() {
-    let (addr, slave) = serve();
+    let (addr, slave) = serve_bf6();
     let (code, _, err) = live("write", &addr, &["frequency_reference=59.9"]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(slave.lock().unwrap().holding(0x0002), 3594);

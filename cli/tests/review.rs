@@ -2,51 +2,25 @@
 //! (`drivemap coverage`), the manual's words in `drivemap diff` (Markdown and GitHub
 //! annotations). The fixture map `fixtures/example-drive.yaml` cites `fixtures/manuals/manual.txt`.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+mod new_map;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use std::path::{Path, PathBuf};
+
+use common::{Scratch, command, repo, run};
 
 fn fixture_manuals() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/manuals")
 }
 
-/// A directory of its own under the system's temporary directory, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let p = std::env::temp_dir().join(format!("drivemap-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).unwrap();
-        Scratch(p)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 /// Runs drivemap in `dir`; `manuals` sets `DRIVEMAP_MANUALS`.
 fn drivemap(dir: &Path, manuals: Option<&Path>, args: &[&str]) -> (i32, String, String) {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_drivemap"));
-    cmd.args(args)
-        .current_dir(dir)
-        .env_remove("DRIVEMAP_MAPS")
-        .env_remove("DRIVEMAP_MANUALS");
+    let mut cmd = command();
+    cmd.args(args).current_dir(dir);
     if let Some(m) = manuals {
         cmd.env("DRIVEMAP_MANUALS", m);
     }
-    let out = cmd.output().expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    run(&mut cmd)
 }
 
 fn edit(text: &str, from: &str, to: &str) -> String {
@@ -298,8 +272,6 @@ fn diff_github_annotations_are_exact() {
     );
     assert_eq!(out.lines().count(), 1, "{out}");
 }
-
-mod new_map;
 
 type Run<'a> = &'a dyn Fn(&[&str]) -> (i32, String, String);
 

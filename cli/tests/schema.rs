@@ -6,12 +6,12 @@
 //! have been written in schema 1 (before the hex-only rule of commit abfacec): decimal addresses
 //! and codes, and the manual's "41H" mistyped as `code: 41` (41 decimal = 29H).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use common::{Scratch, command, repo, run};
 
 fn old_map() -> PathBuf {
     repo().join("tests/fixtures/acme-vf1/schema-1/acme-vf1.yaml")
@@ -21,40 +21,11 @@ fn new_map() -> PathBuf {
     repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml")
 }
 
-/// A directory of its own under the system's temporary directory, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let p = std::env::temp_dir().join(format!("drivemap-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).unwrap();
-        Scratch(p)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 fn drivemap(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DRIVEMAP_MAPS")
-        .env(
-            "DRIVEMAP_MANUALS",
-            repo().join("tests/fixtures/acme-vf1/manuals"),
-        )
-        .output()
-        .expect("run drivemap");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    run(command().args(args).current_dir(dir).env(
+        "DRIVEMAP_MANUALS",
+        repo().join("tests/fixtures/acme-vf1/manuals"),
+    ))
 }
 
 fn s(p: &Path) -> &str {

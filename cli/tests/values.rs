@@ -7,37 +7,15 @@
 //! - an empty value is refused;
 //! - a register whose range the manual does not print gets a warning naming that.
 
-use std::net::TcpListener;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+
 use std::sync::{Arc, Mutex};
-use std::thread;
-use std::time::{Duration, Instant};
 
 use drivemap_map::validate::Context;
-use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_sim::slave::SimulatedSlave;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn drivemap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_drivemap"))
-        .args(args)
-        .arg("--maps")
-        .arg(repo().join("maps"))
-        .output()
-        .unwrap()
-}
-
-fn text(out: &Output) -> (String, String) {
-    (
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::{Framing, drivemap, repo, serve};
 
 /// The drive simulator of a shipped map, with its drive model, on loopback Modbus TCP.
 fn simulator(id: &str) -> (Arc<Mutex<Simulator>>, TcpServer, String) {
@@ -61,18 +39,7 @@ fn bare_slave(
     let profile = drivemap_live::leak_profile(&drive);
     let mut slave = SimulatedSlave::new(1, profile);
     setup(&mut slave);
-    let slave = Arc::new(Mutex::new(slave));
-    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-    let addr = listener.local_addr().unwrap().to_string();
-    let shared = Arc::clone(&slave);
-    thread::spawn(move || {
-        for stream in listener.incoming() {
-            let Ok(stream) = stream else { continue };
-            let until = Instant::now() + Duration::from_secs(30);
-            let mut s = shared.lock().unwrap();
-            let _ = s.serve(&mut TcpTransport::from_stream(stream).unwrap(), until);
-        }
-    });
+    let (addr, slave) = serve(slave, Framing::Tcp);
     (slave, addr)
 }
 
@@ -90,7 +57,7 @@ fn a_reference_above_n011_is_refused() {
             .as_f64(),
         Some(60.0)
     );
-    let out = drivemap(&[
+    let (code, _, err) = drivemap(&[
         "write",
         "--drive",
         "yaskawa-v7",
@@ -98,8 +65,7 @@ fn a_reference_above_n011_is_refused() {
         &addr,
         "tcp_frequency_reference=500",
     ]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("tcp_frequency_reference: 500 Hz is above 60 Hz, 100 % of n011")
             && err.contains("nothing written"),
@@ -110,7 +76,7 @@ fn a_reference_above_n011_is_refused() {
         0
     );
     // 60 Hz is the maximum itself: written, as given.
-    let out = drivemap(&[
+    let (code, stdout, err) = drivemap(&[
         "write",
         "--drive",
         "yaskawa-v7",
@@ -118,8 +84,7 @@ fn a_reference_above_n011_is_refused() {
         &addr,
         "tcp_frequency_reference=60",
     ]);
-    let (stdout, err) = text(&out);
-    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert_eq!(code, 0, "{err}");
     assert!(
         stdout.contains("wrote tcp_frequency_reference = 60.0 Hz (0258h)"),
         "{stdout}"
@@ -133,7 +98,7 @@ fn a_reference_above_n011_is_refused() {
         .unwrap()
         .set("max_output_frequency", 50.0)
         .unwrap();
-    let out = drivemap(&[
+    let (code, _, err) = drivemap(&[
         "write",
         "--drive",
         "yaskawa-v7",
@@ -141,8 +106,7 @@ fn a_reference_above_n011_is_refused() {
         &addr,
         "tcp_frequency_reference=55",
     ]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(code, 2, "{err}");
     assert!(err.contains("above 50 Hz"), "{err}");
     assert_eq!(
         sim.lock().unwrap().raw("tcp_frequency_reference").unwrap(),
@@ -160,7 +124,7 @@ fn an_address_chosen_by_an_unreadable_setting_is_refused() {
         s.fail_at(0x050D, 0x02);
         s.set_holding(0x0303, 600); // E1-04 = 60.0 Hz
     });
-    let out = drivemap(&[
+    let (code, _, err) = drivemap(&[
         "write",
         "--drive",
         "yaskawa-gpd515",
@@ -170,8 +134,7 @@ fn an_address_chosen_by_an_unreadable_setting_is_refused() {
         "1",
         "frequency_reference=60",
     ]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("its address depends on o2-09, which could not be read")
             && err.contains("--set o2-09=<value>")
@@ -183,7 +146,7 @@ fn an_address_chosen_by_an_unreadable_setting_is_refused() {
         "a write reached the drive"
     );
     // o2-09 given: written where o2-09 = 1 puts it.
-    let out = drivemap(&[
+    let (code, stdout, err) = drivemap(&[
         "write",
         "--drive",
         "yaskawa-gpd515",
@@ -195,8 +158,7 @@ fn an_address_chosen_by_an_unreadable_setting_is_refused() {
         "o2-09=1",
         "frequency_reference=60",
     ]);
-    let (stdout, err) = text(&out);
-    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert_eq!(code, 0, "{err}");
     assert!(stdout.contains("at 0002h"), "{stdout}");
     assert_eq!(slave.lock().unwrap().writes, vec![(0x0002, 0x1770)]);
 }
@@ -205,7 +167,7 @@ fn an_address_chosen_by_an_unreadable_setting_is_refused() {
 #[test]
 fn an_empty_value_is_refused() {
     let (slave, addr) = bare_slave("yaskawa-v7", |_| {});
-    let out = drivemap(&[
+    let (code, _, err) = drivemap(&[
         "write",
         "--drive",
         "yaskawa-v7",
@@ -213,8 +175,7 @@ fn an_empty_value_is_refused() {
         &addr,
         "tcp_digital_input_command=",
     ]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("`tcp_digital_input_command=`: no value given"),
         "{err}"
@@ -228,7 +189,7 @@ fn an_empty_value_is_refused() {
 #[test]
 fn a_register_without_a_printed_range_is_named() {
     let (slave, addr) = bare_slave("automationdirect-acn", |_| {});
-    let out = drivemap(&[
+    let (code, _, err) = drivemap(&[
         "write",
         "--drive",
         "automationdirect-acn",
@@ -236,8 +197,7 @@ fn a_register_without_a_printed_range_is_named() {
         &addr,
         "frequency_command=10",
     ]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert_eq!(code, 0, "{err}");
     assert!(
         err.contains("warning: the manual prints no range for frequency_command")
             && err.contains("only its 16-bit word bounds the value sent"),
@@ -245,9 +205,8 @@ fn a_register_without_a_printed_range_is_named() {
     );
     assert_eq!(slave.lock().unwrap().writes.len(), 1);
     let (_, addr) = bare_slave("yaskawa-v7", |_| {});
-    let out = drivemap(&["write", "--drive", "yaskawa-v7", "--tcp", &addr, "n011=60"]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(0), "{err}");
+    let (code, _, err) = drivemap(&["write", "--drive", "yaskawa-v7", "--tcp", &addr, "n011=60"]);
+    assert_eq!(code, 0, "{err}");
     assert!(!err.contains("prints no range"), "{err}");
 }
 
@@ -264,9 +223,8 @@ fn a_value_between_steps_is_refused_unless_rounded() {
         drivemap(&all)
     };
     let before = sim.lock().unwrap().raw("accel_time_1").unwrap();
-    let out = write(&["n019=0.04"]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    let (code, _, err) = write(&["n019=0.04"]);
+    assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("accel_time_1: 0.04 s is between 0 and 0.1 s; the register counts 0.1 s")
             && err.contains("--round sends the nearest")
@@ -274,18 +232,16 @@ fn a_value_between_steps_is_refused_unless_rounded() {
         "{err}"
     );
     for args in [&["n019=-0.04"][..], &["--round", "n019=-0.04"]] {
-        let out = write(args);
-        let (_, err) = text(&out);
-        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        let (code, _, err) = write(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
         assert!(
             err.contains("-0.04 s is out of range 0 ..= 6000 s"),
             "{err}"
         );
     }
     assert_eq!(sim.lock().unwrap().raw("accel_time_1").unwrap(), before);
-    let out = write(&["tcp_frequency_reference=35.75"]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    let (code, _, err) = write(&["tcp_frequency_reference=35.75"]);
+    assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("35.75 Hz is between 35.7 and 35.8 Hz; the register counts 0.1 Hz"),
         "{err}"
@@ -294,9 +250,8 @@ fn a_value_between_steps_is_refused_unless_rounded() {
         sim.lock().unwrap().raw("tcp_frequency_reference").unwrap(),
         0
     );
-    let out = write(&["--round", "tcp_frequency_reference=35.75"]);
-    let (stdout, err) = text(&out);
-    assert_eq!(out.status.code(), Some(0), "{err}");
+    let (code, stdout, err) = write(&["--round", "tcp_frequency_reference=35.75"]);
+    assert_eq!(code, 0, "{err}");
     assert!(
         stdout.contains(
             "wrote tcp_frequency_reference = 35.8 Hz, rounded from 35.75 (--round) (0166h)"
@@ -308,9 +263,8 @@ fn a_value_between_steps_is_refused_unless_rounded() {
         358
     );
     // A value on a step needs no rounding and says none.
-    let out = write(&["--round", "n019=12.5"]);
-    let (stdout, err) = text(&out);
-    assert_eq!(out.status.code(), Some(0), "{err}");
+    let (code, stdout, err) = write(&["--round", "n019=12.5"]);
+    assert_eq!(code, 0, "{err}");
     assert!(
         stdout.contains("= 12.5 s (007Dh)") && !stdout.contains("rounded"),
         "{stdout}"
@@ -372,21 +326,18 @@ fn a_limit_through_an_external_quantity_needs_it_given() {
         all.extend_from_slice(args);
         drivemap(&all)
     };
-    let out = write(&["frequency_reference=30"]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    let (code, _, err) = write(&["frequency_reference=30"]);
+    assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("its limit is a percentage of max_output_frequency")
             && err.contains("--set max_output_frequency=<value>"),
         "{err}"
     );
-    let out = write(&["--set", "max_output_frequency=60", "frequency_reference=70"]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    let (code, _, err) = write(&["--set", "max_output_frequency=60", "frequency_reference=70"]);
+    assert_eq!(code, 2, "{err}");
     assert!(err.contains("70 Hz is above 60 Hz"), "{err}");
     assert!(slave.lock().unwrap().writes.is_empty());
-    let out = write(&["--set", "max_output_frequency=60", "frequency_reference=30"]);
-    let (_, err) = text(&out);
-    assert_eq!(out.status.code(), Some(0), "{err}");
+    let (code, _, err) = write(&["--set", "max_output_frequency=60", "frequency_reference=30"]);
+    assert_eq!(code, 0, "{err}");
     assert_eq!(slave.lock().unwrap().writes, vec![(0x0002, 300)]);
 }

@@ -20,7 +20,7 @@
 
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
-use std::process::{Command, ExitCode};
+use std::process::ExitCode;
 use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
@@ -37,11 +37,10 @@ use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_sim::slave::SimulatedSlave;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
+mod common;
 mod new_map;
+
+use common::repo;
 
 /// The maps of a `maps/` directory.
 fn maps_in(dir: &Path) -> Vec<PathBuf> {
@@ -650,7 +649,7 @@ fn write_gate_repros_as_reported() {
             wire.addr.as_str(),
         ];
         all.extend_from_slice(args);
-        let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
+        let out = common::command()
             .args(&all)
             .arg("--maps")
             .arg(repo().join("maps"))

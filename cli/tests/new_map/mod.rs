@@ -5,7 +5,6 @@
 //! change: a new map is covered without a test edit.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// The copy; removed on drop.
 pub struct NewMap {
@@ -30,7 +29,7 @@ fn copy_dir(from: &Path, to: &Path) {
 
 impl NewMap {
     pub fn new(name: &str) -> NewMap {
-        let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let repo = crate::common::repo();
         let base =
             std::env::temp_dir().join(format!("drivemap-newmap-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&base);
@@ -68,17 +67,11 @@ impl NewMap {
 
     /// Runs drivemap in the copy's root with its manuals.
     pub fn drivemap(&self, args: &[&str]) -> (i32, String, String) {
-        let out = Command::new(env!("CARGO_BIN_EXE_drivemap"))
-            .args(args)
-            .current_dir(&self.root)
-            .env_remove("DRIVEMAP_MAPS")
-            .env("DRIVEMAP_MANUALS", &self.manuals)
-            .output()
-            .expect("run drivemap");
-        (
-            out.status.code().unwrap_or(-1),
-            String::from_utf8_lossy(&out.stdout).into_owned(),
-            String::from_utf8_lossy(&out.stderr).into_owned(),
+        crate::common::run(
+            crate::common::command()
+                .args(args)
+                .current_dir(&self.root)
+                .env("DRIVEMAP_MANUALS", &self.manuals),
         )
     }
 }
