@@ -51,6 +51,23 @@ fn the_facts_of_a_map_are_rows_with_their_citations() {
     for r in facts["registers"].as_array().unwrap() {
         assert!(r["row"].is_u64(), "{}: no plan row", r["id"]);
     }
+    // The protocol: one row per fact, worded as `drivemap doc` prints it, with its citation.
+    let protocol = facts["protocol"]["rows"].as_array().expect("protocol rows");
+    let per_request = protocol
+        .iter()
+        .find(|r| r["key"] == "registers_per_request")
+        .expect("registers per request");
+    assert_eq!(per_request["value"], "at most 16 per read, 16 per write");
+    assert_eq!(per_request["citation"], "acme-vf1.txt:8");
+    let slave = protocol
+        .iter()
+        .find(|r| r["key"] == "slave_address")
+        .unwrap();
+    assert_eq!(
+        slave["figure"]["range"],
+        serde_json::json!({"min": 1, "max": 254})
+    );
+    assert_eq!(slave["not_printed"], Value::Null);
 }
 
 #[test]

@@ -20,6 +20,12 @@ use crate::describe;
 use crate::ir::{Drive, Register, ValueKind};
 use crate::model::Scale;
 
+mod protocol;
+pub use protocol::{
+    CommandFacts, ExceptionFacts, Figure, NotPrinted, ProtocolFacts, ProtocolKey, ProtocolRow,
+    manual_address, protocol,
+};
+
 /// What a row of a register's facts says.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -182,11 +188,12 @@ impl RegisterFacts {
     }
 }
 
-/// The facts of one drive: its registers in the map's order.
+/// The facts of one drive: its registers in the map's order, then its protocol.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DriveFacts {
     pub drive: String,
     pub registers: Vec<RegisterFacts>,
+    pub protocol: ProtocolFacts,
 }
 
 /// The facts of every register of a drive.
@@ -194,6 +201,7 @@ pub fn facts(drive: &Drive) -> DriveFacts {
     DriveFacts {
         drive: drive.meta.id.clone(),
         registers: drive.registers.iter().map(|r| register(drive, r)).collect(),
+        protocol: protocol(drive),
     }
 }
 

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use drivemap_core::ConversionKind;
-use drivemap_map::facts::{self, FactKey, RegisterFacts};
+use drivemap_map::facts::{self, FactKey, Figure, ProtocolKey, RegisterFacts};
 use drivemap_map::validate::Context;
 
 fn acme() -> drivemap_map::Drive {
@@ -130,4 +130,186 @@ fn the_view_serializes_with_kind_names_and_labels() {
     assert_eq!(energy["kind"], "decimal");
     assert_eq!(energy["rows"][1]["key"], "width");
     assert_eq!(energy["rows"][1]["citation"], "acme-vf1.txt:34");
+}
+
+fn read(path: &str) -> drivemap_map::Drive {
+    drivemap_map::read_map(Path::new(path), &Context::default()).unwrap_or_else(|d| panic!("{d}"))
+}
+
+fn keys(p: &facts::ProtocolFacts) -> Vec<ProtocolKey> {
+    p.rows.iter().map(|r| r.key).collect()
+}
+
+#[test]
+fn the_protocol_is_one_row_per_fact_with_its_figure_and_citation() {
+    use ProtocolKey as K;
+    let v7 = read("../maps/yaskawa-v7.yaml");
+    let p = facts::protocol(&v7);
+    assert_eq!(
+        keys(&p),
+        [
+            K::Transports,
+            K::FunctionCodes,
+            K::RegistersPerRequest,
+            K::MaxRead,
+            K::MaxWrite,
+            K::SlaveAddress,
+            K::Broadcast,
+            K::Addressing,
+            K::Timing,
+            K::FrameGap,
+            K::InterCharTimeout,
+            K::ResponseTime,
+            K::ResponseDelay,
+            K::RequestGap,
+            K::Serial,
+            K::Eeprom,
+        ]
+    );
+    let get = |k| p.get(k).unwrap_or_else(|| panic!("no {k:?} row"));
+    let read_limit = get(K::MaxRead);
+    assert_eq!(read_limit.value, "8");
+    assert_eq!(read_limit.figure, Figure::Count(8));
+    assert_eq!(
+        read_limit.citation.as_deref(),
+        Some("000_032dced3a1e91a75.txt:299")
+    );
+    assert_eq!(get(K::MaxWrite).figure, Figure::Count(16));
+    // Two citations: beside each limit, none in the whole's column.
+    let whole = get(K::RegistersPerRequest);
+    assert_eq!(whole.citation, None);
+    assert!(
+        whole
+            .value
+            .starts_with("at most 8 per read, 16 per write. max_read (`"),
+        "{}",
+        whole.value
+    );
+    assert_eq!(
+        get(K::SlaveAddress).figure,
+        Figure::Range { min: 1, max: 32 }
+    );
+    assert_eq!(
+        get(K::Broadcast).figure,
+        Figure::Broadcast {
+            functions: vec![0x06, 0x10],
+            registers: vec![]
+        }
+    );
+    // Each timing figure is a row; the timing gathers them as `drivemap doc` prints it.
+    let gap = get(K::FrameGap).not_printed.clone().expect("not printed");
+    assert_eq!(
+        gap.fallback.as_deref(),
+        Some("3.5 characters, the Modbus RTU rule")
+    );
+    assert_eq!(
+        get(K::RequestGap).value,
+        "master waits 24 bit times + 10 ms after each reply (`003_8bcf5d50afb8e230.txt:284`)"
+    );
+    assert_eq!(get(K::ResponseDelay).value, "response delay set by n156");
+    let parts: Vec<&str> = (p.rows.iter())
+        .filter(|r| r.key.part_of() == Some(K::Timing))
+        .map(|r| r.value.as_str())
+        .collect();
+    assert_eq!(get(K::Timing).value, parts.join("; "));
+    assert_eq!(get(K::Eeprom).figure, Figure::Count(100_000));
+    // The rows `drivemap doc` prints stand alone.
+    let wholes: Vec<&str> = p.wholes().map(|r| r.label).collect();
+    assert_eq!(
+        wholes,
+        [
+            "Transports",
+            "Function codes",
+            "Registers per request",
+            "Slave address",
+            "Broadcast",
+            "Addressing",
+            "Timing",
+            "Serial line",
+            "EEPROM endurance"
+        ]
+    );
+    let codes: Vec<&str> = p.exceptions.iter().map(|e| e.code.as_str()).collect();
+    assert_eq!(codes, ["01h", "02h", "03h", "21h", "22h"]);
+    let enter = &p.commands[0];
+    assert_eq!(
+        (enter.id.as_str(), enter.kind_text, enter.writes.as_slice()),
+        (
+            "enter",
+            "persist (writes EEPROM)",
+            &["0900h ← 0000h".to_owned()][..]
+        )
+    );
+    assert_eq!(enter.words, [(0x0900, 0)]);
+}
+
+#[test]
+fn a_fact_the_manual_does_not_print_says_why_and_what_is_used_instead() {
+    use ProtocolKey as K;
+    let halden = read("../tests/fixtures/halden-h1/halden-h1.yaml");
+    let p = facts::protocol(&halden);
+    let not_printed = |k| {
+        let r = p.get(k).unwrap_or_else(|| panic!("no {k:?} row"));
+        let n = r
+            .not_printed
+            .clone()
+            .unwrap_or_else(|| panic!("{k:?} printed"));
+        (n.why.trim().to_owned(), n.fallback, r.citation.clone())
+    };
+    assert_eq!(
+        not_printed(K::SlaveAddress),
+        (
+            "set with F-20, whose settings the note does not list".to_owned(),
+            Some("the Modbus range 1 ..= 247".to_owned()),
+            Some("halden-h1.txt:7".to_owned())
+        )
+    );
+    // The working figure is the fallback's.
+    assert_eq!(
+        p.get(K::SlaveAddress).unwrap().figure,
+        Figure::Range { min: 1, max: 247 }
+    );
+    assert_eq!(p.get(K::MaxRead).unwrap().figure, Figure::Count(125));
+    assert_eq!(
+        not_printed(K::MaxRead).1.as_deref(),
+        Some("the Modbus limit (125)")
+    );
+    assert_eq!(
+        not_printed(K::MaxWrite).1.as_deref(),
+        Some("the Modbus limit (123)")
+    );
+    for k in [K::Serial, K::Exceptions, K::Timing] {
+        let (why, fallback, _) = not_printed(k);
+        assert!(!why.is_empty() && fallback.is_some(), "{k:?}");
+        let fact = k.fact().expect("a fact a map can mark");
+        assert_eq!(fallback.as_deref(), Some(fact.fallback()), "{k:?}");
+    }
+    // A timing not printed has no figures of its own.
+    assert!(p.rows.iter().all(|r| r.key.part_of() != Some(K::Timing)));
+    // A printed fact has no reason.
+    assert!(p.get(K::Transports).unwrap().not_printed.is_none());
+}
+
+#[test]
+fn the_drive_facts_serialize_the_protocol_rows() {
+    let drive = acme();
+    let json = serde_json::to_value(facts::facts(&drive)).unwrap();
+    let rows = json["protocol"]["rows"].as_array().expect("protocol rows");
+    let broadcast = rows.iter().find(|r| r["key"] == "broadcast").unwrap();
+    assert_eq!(broadcast["label"], "Broadcast");
+    assert_eq!(broadcast["citation"], "acme-vf1.txt:47");
+    assert!(
+        broadcast["not_printed"]["why"]
+            .as_str()
+            .unwrap()
+            .contains("slave 0 is named a broadcast"),
+        "{broadcast}"
+    );
+    let read = rows.iter().find(|r| r["key"] == "max_read").unwrap();
+    assert_eq!(read["figure"], serde_json::json!({"count": 16}));
+    assert_eq!(json["protocol"]["exceptions"][3]["code"], "41h");
+    assert!(
+        read.get("entry").is_none(),
+        "the map's entry is not repeated"
+    );
 }

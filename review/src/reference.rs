@@ -6,14 +6,13 @@ use std::fmt::Write as _;
 
 use drivemap_core::register::{Table, WriteRestriction};
 use drivemap_core::rule::Transports;
-use drivemap_core::stated::ProtocolFact;
 
 use drivemap_core::ConversionKind;
 
-use crate::describe::{self, num};
+use crate::describe;
 use crate::facts::{self, FactKey, RegisterFacts};
 use crate::ir::{Drive, Register, ValueKind};
-use crate::model::{CommandKind, Conflict, DefaultValue, Dependency, EnumValue, Interval};
+use crate::model::{Conflict, DefaultValue, Dependency, EnumValue};
 
 /// Text safe inside a Markdown table cell.
 mod indexed;
@@ -42,31 +41,6 @@ fn join_cells(parts: &[String]) -> String {
         .map(|p| cell(p))
         .collect::<Vec<_>>()
         .join("<br>")
-}
-
-fn interval(i: &Interval, fallback: &str) -> String {
-    if let Some(why) = &i.unknown {
-        let mut s = describe::not_printed(why, fallback);
-        if let Some(src) = &i.source {
-            s += &format!(" (`{src}`)");
-        }
-        return s;
-    }
-    let mut parts = Vec::new();
-    if let Some(ms) = i.ms {
-        parts.push(format!("{} ms", num(ms)));
-    }
-    if let Some(b) = i.bits {
-        parts.push(format!("{b} bit times"));
-    }
-    if let Some(c) = i.chars {
-        parts.push(format!("{} characters", num(c)));
-    }
-    let mut s = parts.join(" / ");
-    if let Some(src) = &i.source {
-        s += &format!(" (`{src}`)");
-    }
-    s
 }
 
 /// Renders the Markdown reference of `drive`. `file_name` is how the map file is named in the
@@ -158,236 +132,16 @@ fn variants(out: &mut String, drive: &Drive) {
     out.push('\n');
 }
 
+/// The protocol profile: the rows of the protocol facts that stand alone (a limit is shown
+/// inside registers per request, a timing figure inside the timing), then the exception codes
+/// and the commands.
 fn protocol(out: &mut String, drive: &Drive) {
-    let p = &drive.protocol;
+    let p = facts::protocol(drive);
     let _ = writeln!(out, "## Protocol profile\n");
     let _ = writeln!(out, "| Item | Value | Source |\n|---|---|---|");
-    let mut row = |item: &str, value: String, source: Option<&str>| {
-        let _ = writeln!(out, "| {item} | {} | {} |", cell(&value), cite(source));
-    };
-    row(
-        "Transports",
-        p.transports
-            .iter()
-            .map(|t| t.to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
-        p.source.as_deref(),
-    );
-    let fc = &p.function_codes;
-    let mut functions = describe::functions(&fc.codes);
-    if let Some(why) = &fc.unknown {
-        functions += &format!(". List not printed: {}", why.trim());
-    }
-    row("Function codes", functions, fc.source.as_deref());
-    let mut per_request = describe::per_request(p.max_read(), p.max_write());
-    let mut sources: Vec<&str> = [&p.max_read, &p.max_write]
-        .iter()
-        .filter_map(|l| l.source.as_deref())
-        .collect();
-    sources.dedup();
-    // One citation for both limits goes in the source column; two are given beside each limit.
-    let column = match sources[..] {
-        [one] => Some(one),
-        _ => None,
-    };
-    for (name, l) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
-        per_request += &describe::limit_citation(name, l, column.is_none());
-    }
-    row("Registers per request", per_request, column);
-    let s = &p.slave_address;
-    let mut slave = match &s.unknown {
-        Some(why) => describe::not_printed(why, "the Modbus range 1 ..= 247"),
-        None => {
-            let (lo, hi) = s.range();
-            format!("{lo} ..= {hi}")
-        }
-    };
-    if let Some(d) = s.default {
-        slave += &format!(", default {d}");
-    }
-    if let Some(param) = &s.param {
-        slave += &format!(", set by {param}");
-    }
-    row("Slave address", slave, s.source.as_deref());
-    if let Some(b) = &p.broadcast
-        && let Some(why) = &b.unknown
-    {
-        row(
-            "Broadcast",
-            format!(
-                "{}. The runtime sends no broadcast to this drive.",
-                describe::broadcast_not_printed(why)
-            ),
-            Some(&b.source),
-        );
-    } else if let Some(b) = &p.broadcast {
-        let mut text = format!(
-            "slave 0 executes {} without reply",
-            describe::functions(&b.functions)
-        );
-        if !b.registers.is_empty() {
-            let regs: Vec<String> = b
-                .registers
-                .iter()
-                .map(|name| match drive.find(name) {
-                    Some(r) => format!("{name} ({})", addr(drive, r.def.address)),
-                    None => name.clone(),
-                })
-                .collect();
-            text += &format!("; registers {}", regs.join(", "));
-        }
-        row("Broadcast", text, Some(&b.source));
-    }
-    if let Some(a) = &p.addressing {
-        row(
-            "Addressing",
-            format!(
-                "PDU address = manual address {:+} on RTU, {:+} on TCP. {}",
-                a.rtu_offset,
-                a.tcp_offset,
-                a.description.trim()
-            ),
-            Some(&a.source),
-        );
-    }
-    if let Some(t) = &p.timing
-        && let Some(why) = &t.unknown
-    {
-        row(
-            "Timing",
-            describe::not_printed(why, ProtocolFact::Timing.fallback()),
-            t.source.as_deref(),
-        );
-    } else if let Some(t) = &p.timing {
-        let mut gap = match t.frame_gap.as_ref().and_then(|g| g.unknown.as_ref()) {
-            Some(why) => format!(
-                "frame gap {}",
-                describe::not_printed(why, ProtocolFact::FrameGap.fallback())
-            ),
-            None => format!("frame gap {} characters", num(t.frame_gap_chars())),
-        };
-        if let Some(ms) = t.frame_gap.as_ref().and_then(|g| g.ms) {
-            let src = t
-                .frame_gap
-                .as_ref()
-                .and_then(|g| g.source.as_ref())
-                .map(|s| format!(" (`{s}`)"))
-                .unwrap_or_default();
-            gap += &format!(", at least {} ms{src}", num(ms));
-        }
-        let mut parts = vec![gap];
-        if let Some(i) = &t.inter_char_timeout {
-            parts.push(format!(
-                "inter-character timeout {}",
-                interval(i, ProtocolFact::InterCharTimeout.fallback())
-            ));
-        }
-        if let Some(i) = &t.response_time {
-            parts.push(format!(
-                "response time {}",
-                interval(i, ProtocolFact::ResponseTime.fallback())
-            ));
-        }
-        if let Some(param) = &t.response_delay_param {
-            parts.push(format!("response delay set by {param}"));
-        }
-        if let Some(g) = &t.request_gap
-            && let Some(why) = &g.unknown
-        {
-            parts.push(format!(
-                "gap before the next request {}",
-                describe::not_printed(why, ProtocolFact::RequestGap.fallback())
-            ));
-        } else if let Some(g) = &t.request_gap {
-            // The master's pause after a reply: its parts add up (V7/J7: 24 bits + 10 ms).
-            let mut gap = Vec::new();
-            if let Some(b) = g.bits {
-                gap.push(format!("{b} bit times"));
-            }
-            if let Some(ms) = g.ms {
-                gap.push(format!("{} ms", num(ms)));
-            }
-            if let Some(c) = g.chars {
-                gap.push(format!("{} characters", num(c)));
-            }
-            let src = g
-                .source
-                .as_ref()
-                .map(|s| format!(" (`{s}`)"))
-                .unwrap_or_default();
-            parts.push(format!(
-                "master waits {} after each reply{src}",
-                gap.join(" + ")
-            ));
-        }
-        row("Timing", parts.join("; "), t.source.as_deref());
-    }
-    if let Some(s) = &p.serial
-        && let Some(why) = &s.unknown
-    {
-        row(
-            "Serial line",
-            describe::not_printed(why, ProtocolFact::Serial.fallback()),
-            (!s.source.is_empty()).then_some(s.source.as_str()),
-        );
-    } else if let Some(s) = &p.serial {
-        let mut text = format!(
-            "baud {}",
-            s.baud_rates
-                .iter()
-                .map(u32::to_string)
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        if let Some(d) = s.default_baud {
-            text += &format!(" (default {d})");
-        }
-        text += &format!(
-            "; parity {}",
-            s.parities
-                .iter()
-                .map(|p| p.name())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        if let Some(d) = s.default_parity {
-            text += &format!(" (default {})", d.name());
-        }
-        match &s.formats {
-            None => text += &format!("; {} data bits, {} stop bit(s)", s.data_bits, s.stop_bits),
-            Some(f) => {
-                let list: Vec<String> = drive
-                    .serial_format_list()
-                    .iter()
-                    .map(|x| format!("{} = {x}", x.code))
-                    .collect();
-                text += &format!(
-                    "; only the formats {} selects: {} (`{}`)",
-                    f.selected_by,
-                    list.join(", "),
-                    f.source
-                );
-            }
-        }
-        if let Some(c) = s.char_bits {
-            text += &format!("; always {c} bits per character");
-        }
-        row("Serial line", text, Some(&s.source));
-    }
-    if let Some(e) = &p.eeprom {
-        row(
-            "EEPROM endurance",
-            format!("{} writes", e.endurance),
-            Some(&e.source),
-        );
-    }
-    if let Some(why) = &p.exceptions.unknown {
-        row(
-            "Exception codes",
-            describe::not_printed(why, ProtocolFact::Exceptions.fallback()),
-            p.exceptions.source.as_deref(),
-        );
+    for r in p.wholes() {
+        let (value, source) = (cell(&r.value), cite(r.citation.as_deref()));
+        let _ = writeln!(out, "| {} | {value} | {source} |", r.label);
     }
     out.push('\n');
     if !p.exceptions.is_empty() {
@@ -396,14 +150,9 @@ fn protocol(out: &mut String, drive: &Drive) {
             "### Exception codes\n\n| Code | Name | Description | Source |\n|---|---|---|---|"
         );
         for e in &p.exceptions {
-            let _ = writeln!(
-                out,
-                "| {} | {} | {} | {} |",
-                describe::function(e.code),
-                cell(&e.name),
-                cell(&e.description),
-                cite(Some(&e.source))
-            );
+            let (name, description) = (cell(&e.name), cell(&e.description));
+            let source = cite(Some(&e.citation));
+            let _ = writeln!(out, "| {} | {name} | {description} | {source} |", e.code);
         }
         out.push('\n');
     }
@@ -415,22 +164,14 @@ fn protocol(out: &mut String, drive: &Drive) {
              |---|---|---|---|---|"
         );
         for c in &p.commands {
-            let kind = match c.kind {
-                CommandKind::Accept => "accept (activates, no EEPROM write)",
-                CommandKind::Persist => "persist (writes EEPROM)",
-            };
-            let writes: Vec<String> = c
-                .writes
-                .iter()
-                .map(|w| format!("{} ← {:04X}h", addr(drive, w.address), w.value))
-                .collect();
             let _ = writeln!(
                 out,
-                "| {} | {} | {kind} | {} | {} |",
+                "| {} | {} | {} | {} | {} |",
                 code(&c.id),
                 cell(&c.name),
-                writes.join(", "),
-                cite(Some(&c.source))
+                c.kind_text,
+                c.writes.join(", "),
+                cite(Some(&c.citation))
             );
         }
         out.push('\n');
@@ -579,10 +320,7 @@ fn roles(out: &mut String, drive: &Drive) {
 /// An address as the manual prints it: hex (`2001h`), or for a manual that numbers registers in
 /// decimal (`address_format: decimal`) the decimal number with its hex (`2001 (07D1h)`).
 fn addr(drive: &Drive, a: u16) -> String {
-    match drive.address_format {
-        crate::model::AddressFormat::Hex => describe::address(a),
-        crate::model::AddressFormat::Decimal => format!("{a} ({})", describe::address(a)),
-    }
+    facts::manual_address(drive, a)
 }
 
 /// Two addresses as the manual prints them (see [`addr`]).
@@ -877,11 +615,10 @@ fn details(out: &mut String, drive: &Drive, r: &Register) {
 
 fn notes(out: &mut String, drive: &Drive) {
     let mut body = String::new();
-    let p = &drive.protocol;
-    let timing_notes = p.timing.as_ref().map(|t| t.notes.as_slice()).unwrap_or(&[]);
-    if !p.notes.is_empty() || !timing_notes.is_empty() {
+    let p = facts::protocol(drive);
+    if !p.notes.is_empty() || !p.timing_notes.is_empty() {
         let _ = writeln!(body, "### Protocol\n");
-        for n in p.notes.iter().chain(timing_notes) {
+        for n in p.notes.iter().chain(&p.timing_notes) {
             let _ = writeln!(body, "- {}", one_line(n));
         }
         body.push('\n');
