@@ -36,63 +36,46 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
         for (i, e) in ix.entries.iter().enumerate() {
             let p = path.key("entries").index(i);
             cite(drive, ctx, out, &e.source, p.key("source"), rid);
+            let mut refusals = Vec::new();
             if !is_identifier(&e.id) {
-                out.push(drive.error(
-                    &p.key("id"),
-                    rid,
-                    format!("entry id `{}` is not snake_case (a-z, 0-9, single underscores, starting with a letter)", e.id),
-                ));
+                refusals.push(("id", format!("entry id `{}` is not snake_case (a-z, 0-9, single underscores, starting with a letter)", e.id)));
             }
             if let Some(first) = indices.get(&e.index) {
-                out.push(drive.error(
-                    &p.key("index"),
-                    rid,
-                    format!(
-                        "duplicate entry index {} (first at line {}): one index selects one entry",
-                        e.index,
-                        drive.locate(first).line
-                    ),
-                ));
+                let line = drive.locate(first).line;
+                refusals.push(("index", format!("duplicate entry index {} (first at line {line}): one index selects one entry", e.index)));
             } else {
                 indices.insert(e.index, p.key("index"));
             }
             if let Some(first) = ids.get(&e.id) {
-                out.push(drive.error(
-                    &p.key("id"),
-                    rid,
-                    format!(
-                        "duplicate entry id `{}` (first at line {})",
-                        e.id,
-                        drive.locate(first).line
-                    ),
+                let line = drive.locate(first).line;
+                refusals.push((
+                    "id",
+                    format!("duplicate entry id `{}` (first at line {line})", e.id),
                 ));
             } else if let Some(other) = drive.registers.iter().find(|x| x.id() == e.id) {
-                out.push(drive.error(
-                    &p.key("id"),
-                    rid,
-                    format!(
-                        "entry id `{}` is the id of register {} (line {}): entries and registers are looked up by the same names",
-                        e.id,
-                        crate::describe::address(other.def.address),
-                        drive.locate(&other.path).line
-                    ),
-                ));
+                let (address, line) = (
+                    crate::describe::address(other.def.address),
+                    drive.locate(&other.path).line,
+                );
+                refusals.push(("id", format!("entry id `{}` is the id of register {address} (line {line}): entries and registers are looked up by the same names", e.id)));
             } else {
                 ids.insert(e.id.clone(), p.key("id"));
             }
             if let Some((lo, hi)) = index
                 && !(lo..=hi).contains(&i128::from(e.index))
             {
-                out.push(drive.error(
-                    &p.key("index"),
-                    rid,
-                    format!(
-                        "entry index {} is outside the range of the index register `{}` ({lo}..={hi}): the drive refuses it",
-                        e.index, ix.by
-                    ),
-                ));
+                refusals.push(("index", format!("entry index {} is outside the range of the index register `{}` ({lo}..={hi}): the drive refuses it", e.index, ix.by)));
             }
-            entry_values(drive, r, e, &p, out);
+            refusals.extend(entry_values(r, e));
+            // One diagnostic a refusal, at the entry's key it names (`""`: the entry itself).
+            for (key, why) in refusals {
+                let at = if key.is_empty() {
+                    p.clone()
+                } else {
+                    p.key(key)
+                };
+                out.push(drive.error(&at, rid, why));
+            }
         }
     }
 }
@@ -168,76 +151,57 @@ fn index_register(
     ))
 }
 
-fn entry_values(
-    drive: &Drive,
-    r: &Register,
-    e: &crate::indexed::Entry,
-    p: &Path,
-    out: &mut Vec<Diagnostic>,
-) {
-    let rid = Some(r.id());
+/// What an entry's own values break: `(key, why)`, the key of the entry it names (`""` for
+/// the entry itself). A scale that is no factor stops there (its limits cannot be converted).
+fn entry_values(r: &Register, e: &crate::indexed::Entry) -> Vec<(&'static str, String)> {
     if e.scale.is_some_and(|s| !s.is_finite() || s <= 0.0) || e.factor().is_none() {
-        out.push(drive.error(
-            &p.key("scale"),
-            rid,
-            "an entry's scale is a positive decimal factor (0.1, 0.01, 1)",
-        ));
-        return;
+        let why = "an entry's scale is a positive decimal factor (0.1, 0.01, 1)";
+        return vec![("scale", why.to_owned())];
     }
+    let mut refusals = Vec::new();
+    let sign = if e.signed { "signed" } else { "unsigned" };
+    let word = if e.signed {
+        i128::from(i16::MIN)..=i128::from(i16::MAX)
+    } else {
+        0..=i128::from(u16::MAX)
+    };
     match e.raw_limits() {
-        None => out.push(drive.error(
-            p,
-            rid,
+        None => refusals.push((
+            "",
             format!(
                 "entry `{}`: its limits are not whole numbers of its steps ({})",
                 e.id,
                 e.scale.unwrap_or(1.0)
             ),
         )),
-        Some((lo, hi)) => {
-            let word = if e.signed {
-                i128::from(i16::MIN)..=i128::from(i16::MAX)
-            } else {
-                0..=i128::from(u16::MAX)
-            };
-            if !word.contains(&lo) || !word.contains(&hi) {
-                out.push(drive.error(
-                    p,
-                    rid,
-                    format!(
-                        "entry `{}`: its limits do not fit one {} word",
-                        e.id,
-                        if e.signed { "signed" } else { "unsigned" }
-                    ),
-                ));
-            } else if lo > hi {
-                out.push(drive.error(
-                    &p.key("min"),
-                    rid,
-                    format!("entry `{}`: min is above max", e.id),
-                ));
-            }
+        Some((lo, hi)) if !word.contains(&lo) || !word.contains(&hi) => {
+            refusals.push((
+                "",
+                format!("entry `{}`: its limits do not fit one {sign} word", e.id),
+            ));
         }
+        Some((lo, hi)) if lo > hi => {
+            refusals.push(("min", format!("entry `{}`: min is above max", e.id)))
+        }
+        Some(_) => {}
     }
     let access = e.access_under(r);
     let (reads, writes) = (
         matches!(access, Access::Read | Access::ReadWrite),
         matches!(access, Access::Write | Access::ReadWrite),
     );
-    let lacks = (reads && !r.readable()) || (writes && !r.writable());
-    if lacks {
-        out.push(drive.error(
-            &p.key("access"),
-            rid,
+    if (reads && !r.readable()) || (writes && !r.writable()) {
+        let (theirs, its) = (access_text(access), access_text(r.access));
+        refusals.push((
+            "access",
             format!(
-                "entry `{}` is {}, but the value register `{}` is {}",
+                "entry `{}` is {theirs}, but the value register `{}` is {its}",
                 e.id,
-                access_text(access),
-                r.id(),
-                access_text(r.access)
+                r.id()
             ),
         ));
     }
+    refusals
 }
 
 fn access_text(a: Access) -> &'static str {
