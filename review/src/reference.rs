@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use drivemap_core::register::{Table, WriteRestriction};
+use drivemap_core::register::Table;
 use drivemap_core::rule::Transports;
 
 use drivemap_core::ConversionKind;
@@ -328,57 +328,65 @@ fn span(drive: &Drive, first: u16, last: u16) -> String {
     format!("{} – {}", addr(drive, first), addr(drive, last))
 }
 
-fn address_cell(drive: &Drive, r: &Register) -> String {
-    let mut parts = vec![match &r.def.pair {
-        None => addr(drive, r.def.address),
-        Some(p) => {
+/// The address cell: the address as the manual prints it, a pair's span and its cited width
+/// row, and each alternative address with the condition of its row.
+fn address_cell(drive: &Drive, f: &RegisterFacts) -> String {
+    let mut parts = vec![match f.get(FactKey::Width) {
+        None => addr(drive, f.address),
+        Some(width) => {
             let pair = format!(
                 "{} ({}",
-                span(drive, r.def.address, r.def.address.wrapping_add(1)),
-                describe::width(r.width())
+                span(drive, f.address, f.address.wrapping_add(1)),
+                width.value
             );
-            match &p.source {
+            match &width.citation {
                 Some(s) => format!("{pair}, `{s}`)"),
                 None => format!("{pair})"),
             }
         }
     }];
-    for alt in &r.def.address_alternatives {
+    let alternatives = f.all(FactKey::AlternativeAddress);
+    for (alt, row) in f.data.address_alternatives.iter().zip(alternatives) {
         parts.push(format!(
             "{} if {}",
             addr(drive, alt.address),
-            describe::condition(&alt.when)
+            row.when.as_deref().unwrap_or_default()
         ));
     }
     join_cells(&parts)
 }
 
-fn access_cell(drive: &Drive, r: &Register) -> String {
-    let plan = drive.register_plan(r);
-    let mut parts = vec![describe::access(plan.info.access).to_owned()];
-    if plan.info.table == Table::Input {
+/// The access cell: the access row, then what restricts it (table, write restriction,
+/// transports, broadcast, repeated writes, functions), short.
+fn access_cell(f: &RegisterFacts) -> String {
+    let d = &f.data;
+    let mut parts: Vec<String> = f
+        .get(FactKey::Access)
+        .map(|a| a.value.clone())
+        .into_iter()
+        .collect();
+    if d.table == Table::Input {
         parts.push("input table (04h)".into());
     }
-    if plan.info.access.writable() && plan.restriction != WriteRestriction::None {
-        parts.push(format!(
-            "write {}",
-            describe::write_restriction(plan.restriction)
-        ));
+    if let Some(w) = f.get(FactKey::WriteRestriction)
+        && d.access.writable()
+    {
+        parts.push(format!("write {}", w.value));
     }
-    if plan.transports != Transports::ALL {
-        parts.push(format!("{} only", describe::transports(plan.transports)));
+    if d.exists_on != Transports::ALL {
+        parts.push(format!("{} only", describe::transports(d.exists_on)));
     }
-    if r.broadcast {
+    if d.broadcast {
         parts.push("broadcast only".into());
     }
-    if let Some((rule, _)) = &r.repeat_needs_change {
+    if let Some(rule) = &d.repeat_needs_change {
         parts.push(format!(
             "repeat needs a change: {} between",
             describe::num(rule.between)
         ));
     }
-    if let Some((f, _)) = &r.function_codes {
-        let codes: Vec<String> = f.codes.iter().map(|c| format!("{c:02X}h")).collect();
+    if let Some(x) = &d.function_codes {
+        let codes: Vec<String> = x.codes.iter().map(|c| format!("{c:02X}h")).collect();
         parts.push(format!("functions {} only", codes.join("/")));
     }
     join_cells(&parts)
@@ -478,27 +486,29 @@ fn registers(out: &mut String, drive: &Drive) {
             "| Address | Param | Name | Id | Access | Unit | Scale | Range | Default | Source |\n\
              |---|---|---|---|---|---|---|---|---|---|"
         );
-        for r in &members {
-            let d = &r.def;
-            let f = facts::register(drive, r);
+        let members: Vec<(&Register, RegisterFacts)> = members
+            .into_iter()
+            .map(|r| (r, facts::register(drive, r)))
+            .collect();
+        for (_, f) in &members {
             let _ = writeln!(
                 out,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                address_cell(drive, r),
-                cell(d.param.as_deref().unwrap_or("")),
-                cell(&d.name),
-                code(&d.id),
-                access_cell(drive, r),
-                cell(d.unit.as_deref().unwrap_or("")),
-                scale_cell(&f),
-                range_cell(&f),
-                default_cell(&f),
-                cite(d.source.as_deref())
+                address_cell(drive, f),
+                cell(f.param.as_deref().unwrap_or("")),
+                cell(&f.name),
+                code(&f.id),
+                access_cell(f),
+                cell(f.data.unit.as_deref().unwrap_or("")),
+                scale_cell(f),
+                range_cell(f),
+                default_cell(f),
+                cite(f.source.as_deref())
             );
         }
         out.push('\n');
-        for r in &members {
-            details(out, drive, r);
+        for (r, f) in &members {
+            details(out, drive, r, f);
         }
     }
 }
@@ -519,9 +529,8 @@ fn enum_rows(out: &mut String, values: &[EnumValue]) {
 }
 
 /// Codes, bit fields and selected scales of a register, under its group's table.
-fn details(out: &mut String, drive: &Drive, r: &Register) {
+fn details(out: &mut String, drive: &Drive, r: &Register, f: &RegisterFacts) {
     let d = &r.def;
-    let f = facts::register(drive, r);
     let title = format!(
         "#### {} {} — {}",
         addr(drive, d.address),
@@ -589,20 +598,20 @@ fn details(out: &mut String, drive: &Drive, r: &Register) {
         );
         enum_rows(&mut more, &d.read_values);
     }
-    if let Some((rule, _)) = &r.repeat_needs_change {
+    if let Some(rule) = f.get(FactKey::RepeatNeedsChange) {
         let _ = writeln!(
             more,
             "Repeat needs a change: {}. `drivemap write` and `Client::write` do so.\n",
-            describe::repeat_needs_change(rule)
+            rule.value
         );
     }
-    if let Some((f, _)) = &r.function_codes {
+    if let Some(functions) = f.get(FactKey::FunctionCodes) {
         let _ = writeln!(
             more,
             "Function codes: {}. The client's write gate refuses any other function here, a \
              single word goes out with 06h or 10h as allowed, and reads are not merged across it \
              with a function it refuses.\n",
-            describe::function_codes(f)
+            functions.value
         );
     }
     if !more.is_empty() {
@@ -633,7 +642,8 @@ fn notes(out: &mut String, drive: &Drive) {
         let _ = writeln!(body, "### Groups\n\n{groups}");
     }
     let mut regs = String::new();
-    for r in &drive.registers {
+    let view = facts::facts(drive);
+    for (r, f) in drive.registers.iter().zip(&view.registers) {
         let d = &r.def;
         let who = format!("{} {}", addr(drive, d.address), describe::register(r));
         for n in &d.notes {
@@ -644,12 +654,8 @@ fn notes(out: &mut String, drive: &Drive) {
                 let _ = writeln!(regs, "- {who}, field `{}`: {}", f.id, one_line(n));
             }
         }
-        if !d.display_steps.is_empty() {
-            let _ = writeln!(
-                regs,
-                "- {who}: {}.",
-                describe::display_steps(&d.display_steps)
-            );
+        if let Some(steps) = f.get(FactKey::DisplaySteps) {
+            let _ = writeln!(regs, "- {who}: {}.", steps.value);
         }
     }
     if !regs.is_empty() {
@@ -756,27 +762,24 @@ fn examples(out: &mut String, drive: &Drive) {
 
 fn unknowns(out: &mut String, drive: &Drive) {
     let mut body = String::new();
-    for r in &drive.registers {
-        let who = format!("{} {}", addr(drive, r.def.address), describe::register(r));
-        for u in &r.def.unknown {
-            let _ = writeln!(
-                body,
-                "- {who}, {}: {}",
-                describe::unknown_item(u.what),
-                one_line(&u.reason)
-            );
+    let view = facts::facts(drive);
+    for (r, f) in drive.registers.iter().zip(&view.registers) {
+        let who = format!("{} {}", addr(drive, f.address), describe::register(r));
+        for u in &f.unknowns {
+            let _ = writeln!(body, "- {who}, {}: {}", u.what, one_line(&u.reason));
         }
-        for (option, o) in &r.def.by_variant {
-            for u in &o.unknown {
+        for v in &f.variants {
+            for u in &v.unknowns {
                 let _ = writeln!(
                     body,
-                    "- {who}, {} for {option}: {}",
-                    describe::unknown_item(u.what),
+                    "- {who}, {} for {}: {}",
+                    u.what,
+                    v.option,
                     one_line(&u.reason)
                 );
             }
         }
-        if let Some(DefaultValue::Depends(dep)) = &r.def.default {
+        if let Some(DefaultValue::Depends(dep)) = &f.data.default {
             if dep.depends_on == Dependency::Unknown {
                 let _ = writeln!(
                     body,

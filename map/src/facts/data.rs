@@ -11,6 +11,7 @@
 use drivemap_core::plan::{Conversion, Field, Label};
 use drivemap_core::ratio::Fraction;
 use drivemap_core::register::{Access, Table, WriteRestriction};
+use drivemap_core::rule::Transports;
 use drivemap_core::width::Width;
 
 use crate::ir::{Drive, Register, ValueKind};
@@ -36,6 +37,8 @@ pub struct RegisterData {
     pub write_restriction: WriteRestriction,
     /// The transports the map lists for it (`None`: every transport of the drive).
     pub transports: Option<Vec<TransportName>>,
+    /// The transports it exists on, from the plan.
+    pub exists_on: Transports,
     /// The unit as the manual prints it.
     pub unit: Option<String>,
     pub signed: bool,
@@ -162,6 +165,7 @@ impl RegisterData {
             broadcast: r.broadcast,
             write_restriction: plan.restriction,
             transports: r.transports.clone(),
+            exists_on: plan.transports,
             unit: d.unit.clone(),
             signed: d.signed,
             scale: scale_data(drive, r),
