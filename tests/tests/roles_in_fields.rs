@@ -12,9 +12,11 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use drivemap_live::LiveSettings;
+use drivemap_live::settings::View;
 use drivemap_map::Drive;
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::{Edge, Role, Target};
+use drivemap_runtime::roles::{Edge, Role, Roles, Target};
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, ClientOptions, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
@@ -55,12 +57,43 @@ fn options(retries: u8) -> ClientOptions {
     }
 }
 
-fn client(drive: &Drive, sim: Simulator, kind: TransportKind, retries: u8) -> Client<SimLink> {
-    Client::with_options(
-        SimLink::new(kind, sim),
-        drive.plan().profile,
-        options(retries),
-    )
+/// A client on a simulated drive over `kind` (`retries` after a lost reply), with the
+/// simulator's slave and settings: what the drive trait is made of.
+struct Rig {
+    client: Client<SimLink>,
+    slave: u8,
+    settings: LiveSettings,
+}
+
+impl Rig {
+    fn new(drive: &Drive, sim: Simulator, kind: TransportKind, retries: u8) -> Rig {
+        let (settings, slave) = (sim.settings(), sim.slave());
+        let client = Client::with_options(
+            SimLink::new(kind, sim),
+            drive.plan().profile,
+            options(retries),
+        );
+        Rig {
+            client,
+            slave,
+            settings,
+        }
+    }
+
+    /// The drive trait on it, `drive`'s plan rows with `roles` (the plan's, or changed).
+    fn vfd<'a>(
+        &'a mut self,
+        drive: &'a Drive,
+        roles: Roles,
+    ) -> Vfd<View<'a>, &'a mut Client<SimLink>> {
+        Vfd::from_plan(
+            &mut self.client,
+            self.slave,
+            self.settings.view(drive),
+            drive.plan().registers,
+            roles,
+        )
+    }
 }
 
 #[test]
@@ -75,16 +108,8 @@ fn acme_reports_its_fault_code_from_the_status_words_high_byte() {
         "acme-vf1's fault code is the status word's high byte"
     );
     let kind = TransportKind::Rtu;
-    let sim = simulator(&drive, kind);
-    let (settings, slave) = (sim.settings(), sim.slave());
-    let mut c = client(&drive, sim, kind, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(&drive),
-        plan.registers,
-        plan.roles,
-    );
+    let mut rig = Rig::new(&drive, simulator(&drive, kind), kind, 0);
+    let mut d = rig.vfd(&drive, plan.roles);
     let none = d.fault_code().unwrap();
     assert_eq!((none.code, none.value, none.name), (0, 0, Some("No fault")));
     d.client().transport().sim.trip(3);
@@ -113,16 +138,8 @@ fn a_signed_fault_byte_reads_as_a_negative_value() {
     let drive = brenner();
     let plan = drive.plan();
     let kind = TransportKind::Rtu;
-    let sim = simulator(&drive, kind);
-    let (settings, slave) = (sim.settings(), sim.slave());
-    let mut c = client(&drive, sim, kind, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(&drive),
-        plan.registers,
-        plan.roles,
-    );
+    let mut rig = Rig::new(&drive, simulator(&drive, kind), kind, 0);
+    let mut d = rig.vfd(&drive, plan.roles);
     // Code 255 is -1, "Low DC bus" (brenner-fx4.txt:17).
     d.client().transport().sim.trip(0xFF);
     let code = d.fault_code().unwrap();
@@ -178,14 +195,12 @@ fn a_setpoint_on_a_field_is_refused_where_read_modify_write_is_not_safe() {
             });
         }
     }
-    let roles = drivemap_runtime::roles::Roles {
+    let roles = Roles {
         places: Box::leak(places.into_boxed_slice()),
     };
     let kind = TransportKind::Rtu;
-    let sim = simulator(&drive, kind);
-    let (settings, slave) = (sim.settings(), sim.slave());
-    let mut c = client(&drive, sim, kind, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), plan.registers, roles);
+    let mut rig = Rig::new(&drive, simulator(&drive, kind), kind, 0);
+    let mut d = rig.vfd(&drive, roles);
     let sent = d.client().transport().log.len();
     match d.set_reference(10.0) {
         Err(Error::Refused(Refusal::FieldNotWritable { role, why, .. })) => {
@@ -248,12 +263,9 @@ fn play(
     retries: u8,
 ) -> Result<(), String> {
     let kind = TransportKind::RtuOverTcp;
-    let plan = drive.plan();
-    let sim = template.clone();
-    let (settings, slave) = (sim.settings(), sim.slave());
-    let mut c = client(drive, sim, kind, retries);
-    c.transport().script(faults.iter().copied());
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(drive), plan.registers, roles);
+    let mut rig = Rig::new(drive, template.clone(), kind, retries);
+    rig.client.transport().script(faults.iter().copied());
+    let mut d = rig.vfd(drive, roles);
     let tripped = |sim: &Simulator| sim.raw("state_word").unwrap() & 0b10 != 0;
     for (i, &s) in steps.iter().enumerate() {
         match s {
@@ -355,7 +367,7 @@ fn a_reset_of_unknown_edge_acts_under_faults() {
             _ => *p,
         })
         .collect();
-    let level = drivemap_runtime::roles::Roles {
+    let level = Roles {
         places: Box::leak(level.into_boxed_slice()),
     };
     let caught = play(&drive, level, &template, &sequence, &lost, 0).unwrap_err();
