@@ -4,7 +4,9 @@
 //! onto their base and deserializes the [`model`], [`ir`] expands it, [`validate`] checks it one
 //! concern per pass, [`lower`] decides what every register means (the drive plan). [`facts`] is the
 //! one view of a register's facts (rows of label, value and citation, and the same facts as
-//! typed values) that printers read; [`export`] writes the typed values as JSON. [`others`] lists the citations outside the registers with what each must mention.
+//! typed values) that printers read; [`export`] writes the typed values as JSON. [`citations`]
+//! lists every place of a map that carries a citation; [`others`] says what each citation
+//! outside the registers must mention.
 //!
 //! Text about a map has one wording, [`describe`], shared by the generated rustdoc
 //! (`drivemap-codegen`), the Markdown reference and the semantic diff (`drivemap-review`) and the
@@ -13,6 +15,7 @@
 //! This crate has no code generator in it (no `syn`, `quote`, `prettyplease`): the run-time tools
 //! (`drivemap-live`, `drivemap-sim`, the `drivemap` command line) read maps through it alone.
 
+pub mod citations;
 pub mod describe;
 pub mod diagnostic;
 pub mod examples;

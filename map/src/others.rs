@@ -6,6 +6,9 @@
 //! As for values and fields, the line just after or before counts as the row when the cited line
 //! does not mention the item alone (a statement broken over two OCR lines).
 
+use std::collections::HashSet;
+
+use crate::citations::{CitationPlace, PlaceKind, Reason, citation_places};
 use crate::ir::Drive;
 use crate::model::{self, RolePlace};
 use crate::source::Path;
@@ -205,181 +208,80 @@ const TIMING_WORDS: &[&str] = &[
     "responds",
 ];
 
-/// Every citation of roles, the protocol, conflicts and gaps, with what its line must mention.
+/// Every citation of roles, the protocol, conflicts and gaps (then limits through another
+/// quantity and register function-code lists), with what its line must mention: the places of
+/// [`citation_places`] outside the registers' own rows, values and fields, each read by
+/// `rule_of`, in that order of kinds.
 pub fn other_citations(drive: &Drive) -> Vec<Other> {
-    let mut out = Vec::new();
-    roles(drive, &mut out);
-    protocol(drive, &mut out);
-    conflicts(drive, &mut out);
-    gaps(drive, &mut out);
-    limits(drive, &mut out);
-    functions(drive, &mut out);
-    out
-}
-
-fn push(
-    out: &mut Vec<Other>,
-    path: Path,
-    what: String,
-    kind: &'static str,
-    source: &Option<String>,
-    indirect: &Option<String>,
-    rule: Rule,
-) {
-    if source.is_some() || indirect.is_some() {
-        out.push(Other {
-            path,
-            what,
-            kind,
-            source: source.clone(),
-            indirect: indirect.clone(),
-            indirect_key: true,
-            rule,
-        });
-    }
-}
-
-fn roles(drive: &Drive, out: &mut Vec<Other>) {
-    for (id, places) in &drive.roles {
-        for (i, p) in places.iter().enumerate() {
-            let RolePlace {
-                register,
-                field,
-                external,
-                source,
-                indirect,
-                ..
-            } = p;
-            let rule = match (register, external) {
-                (Some(name), _) => {
-                    let Some(ri) = drive
-                        .find(name)
-                        .and_then(|r| drive.registers.iter().position(|x| std::ptr::eq(x, r)))
-                    else {
-                        continue;
-                    };
-                    let r = &drive.registers[ri];
-                    match field
-                        .as_ref()
-                        .and_then(|f| r.def.fields.iter().position(|x| x.id == *f))
-                    {
-                        Some(fi) => {
-                            let f = &r.def.fields[fi];
-                            let code = |c: &model::CodeRef| match c {
-                                model::CodeRef::Number(n) => Some(*n),
-                                model::CodeRef::Id(id) => {
-                                    f.values.iter().find(|v| v.id == *id).map(|v| v.value)
-                                }
-                            };
-                            let codes =
-                                p.on.iter()
-                                    .flat_map(|c| c.list())
-                                    .chain(p.off.iter())
-                                    .filter_map(code)
-                                    .collect();
-                            Rule::Field {
-                                register: ri,
-                                field: fi,
-                                codes,
-                            }
-                        }
-                        None => Rule::Register(ri),
-                    }
-                }
-                (None, Some(name)) => {
-                    let mut rule = Rule::any().name(&name.replace('_', " "));
-                    for q in drive.externals() {
-                        if q.external == *name {
-                            rule = rule.name(&q.description);
-                        }
-                    }
-                    rule
-                }
-                (None, None) => {
-                    // A place the manual does not print (`unknown`): its line is the one that
-                    // says so, where the role's printed places are cited, or names the role.
-                    let printed = places.iter().find_map(|q| {
-                        let r = drive.find(q.register.as_deref()?)?;
-                        drive.registers.iter().position(|x| std::ptr::eq(x, r))
-                    });
-                    match printed {
-                        Some(ri) => Rule::Register(ri),
-                        None => Rule::any().name(&id.replace('_', " ")),
-                    }
-                }
-            };
-            push(
-                out,
-                Path::root().key("roles").key(id).index(i).key("source"),
-                format!("role `{id}`"),
-                "role",
-                source,
-                indirect,
-                rule,
-            );
+    let mut out: Vec<(u8, Other)> = Vec::new();
+    let mut functions_seen = HashSet::new();
+    for place in citation_places(drive) {
+        if place.kind == PlaceKind::RegisterFunctions && !functions_seen.insert(place.path.clone())
+        {
+            // A group's list, read once.
+            continue;
+        }
+        let Some((rank, kind, what, rule)) = rule_of(drive, &place) else {
+            continue;
+        };
+        let source = match place.kind {
+            // An empty `serial.source` is no citation (validation says so).
+            PlaceKind::Serial => place.source.filter(|s| !s.is_empty()),
+            _ => place.source,
+        };
+        let indirect = place.reason.text();
+        let listed = match place.kind {
+            // A list or limit is read where it is cited.
+            PlaceKind::FunctionCodes | PlaceKind::Limit(_) => source.is_some(),
+            _ => source.is_some() || indirect.is_some(),
+        };
+        if listed {
+            out.push((
+                rank,
+                Other {
+                    path: place.path.clone(),
+                    what,
+                    kind,
+                    source: source.map(str::to_owned),
+                    indirect: indirect.map(str::to_owned),
+                    indirect_key: matches!(place.reason, Reason::Indirect(_)),
+                    rule,
+                },
+            ));
         }
     }
+    // Roles, the protocol, conflicts, gaps, limits, function codes (stable: each kind in map
+    // order).
+    out.sort_by_key(|(rank, _)| *rank);
+    out.into_iter().map(|(_, o)| o).collect()
 }
 
-fn protocol(drive: &Drive, out: &mut Vec<Other>) {
+/// What a place outside the registers' own rows, values and fields is, for review: its rank in
+/// [`other_citations`], its kind (`role`, `protocol`, `conflict`, `gap`, `limit`, `functions`),
+/// what it cites and what its line must mention. `None` for the places review reads otherwise
+/// (registers, values, fields) or not by content (variant options, groups, removed registers,
+/// pairs, indexed entries, example frames, an exception list the manual does not print).
+fn rule_of(drive: &Drive, place: &CitationPlace<'_>) -> Option<(u8, &'static str, String, Rule)> {
     let p = &drive.protocol;
-    let at = Path::root().key("protocol");
-    let model::Protocol {
-        transports: _,
-        function_codes,
-        max_read,
-        max_write,
-        slave_address,
-        broadcast,
-        exceptions,
-        commands,
-        eeprom,
-        addressing,
-        timing,
-        serial,
-        source,
-        indirect,
-        notes: _,
-    } = p;
-    push(
-        out,
-        at.key("source"),
-        "the protocol".into(),
-        "protocol",
-        source,
-        indirect,
-        Rule::any().words(PROTOCOL_WORDS).name("function code"),
-    );
-    {
-        let model::SlaveAddress {
-            min: _,
-            max: _,
-            unknown: _,
-            default: _,
-            param,
-            source,
-            indirect,
-        } = slave_address;
-        push(
-            out,
-            at.key("slave_address").key("source"),
-            "the slave address".into(),
-            "protocol",
-            source,
-            indirect,
+    let register = || place.register.map(|i| &drive.registers[i]);
+    let protocol = |what: &str, rule: Rule| Some((1, "protocol", what.to_owned(), rule));
+    match place.kind {
+        PlaceKind::Role { role, index } => {
+            let rule = role_rule(drive, role, index)?;
+            Some((0, "role", format!("role `{role}`"), rule))
+        }
+        PlaceKind::Protocol => protocol(
+            "the protocol",
+            Rule::any().words(PROTOCOL_WORDS).name("function code"),
+        ),
+        PlaceKind::SlaveAddress => protocol(
+            "the slave address",
             Rule::any()
                 .words(&["address", "addresses", "station", "slave", "node"])
-                .param(param.as_deref()),
-        );
-    }
-    if let Some(b) = broadcast {
-        push(
-            out,
-            at.key("broadcast").key("source"),
-            "the broadcast".into(),
-            "protocol",
-            &Some(b.source.clone()),
-            &b.indirect,
+                .param(p.slave_address.param.as_deref()),
+        ),
+        PlaceKind::Broadcast => protocol(
+            "the broadcast",
             Rule::any()
                 .words(&["broadcast", "broadcasting"])
                 .name("all slaves")
@@ -388,55 +290,35 @@ fn protocol(drive: &Drive, out: &mut Vec<Other>) {
                 .name("all inverters")
                 .name("slave address 0")
                 .name("station 0"),
-        );
-    }
-    for (i, e) in exceptions.iter().enumerate() {
-        push(
-            out,
-            at.key("exceptions").index(i).key("source"),
-            format!("exception {:02X}h", e.code),
-            "protocol",
-            &Some(e.source.clone()),
-            &e.indirect,
-            Rule::any().code(u16::from(e.code)).name(&e.name),
-        );
-    }
-    for (i, c) in commands.iter().enumerate() {
-        let mut rule = Rule::any().name(&c.name).name(&c.id.replace('_', " "));
-        for w in &c.writes {
-            rule = rule.address(w.address);
+        ),
+        PlaceKind::Exception(i) => {
+            let e = &p.exceptions[i];
+            Some((
+                1,
+                "protocol",
+                format!("exception {:02X}h", e.code),
+                Rule::any().code(u16::from(e.code)).name(&e.name),
+            ))
         }
-        push(
-            out,
-            at.key("commands").index(i).key("source"),
-            format!("command `{}`", c.id),
-            "protocol",
-            &Some(c.source.clone()),
-            &c.indirect,
-            rule,
-        );
-    }
-    if let Some(e) = eeprom {
-        push(
-            out,
-            at.key("eeprom").key("source"),
-            "the EEPROM endurance".into(),
-            "protocol",
-            &Some(e.source.clone()),
-            &e.indirect,
-            Rule::any()
-                .words(&["eeprom", "nonvolatile", "volatile", "memory"])
-                .number(e.endurance),
-        );
-    }
-    if let Some(a) = addressing {
-        push(
-            out,
-            at.key("addressing").key("source"),
-            "the addressing".into(),
-            "protocol",
-            &Some(a.source.clone()),
-            &a.indirect,
+        PlaceKind::Command(i) => {
+            let c = &p.commands[i];
+            let mut rule = Rule::any().name(&c.name).name(&c.id.replace('_', " "));
+            for w in &c.writes {
+                rule = rule.address(w.address);
+            }
+            Some((1, "protocol", format!("command `{}`", c.id), rule))
+        }
+        PlaceKind::Eeprom => {
+            let e = p.eeprom.as_ref()?;
+            protocol(
+                "the EEPROM endurance",
+                Rule::any()
+                    .words(&["eeprom", "nonvolatile", "volatile", "memory"])
+                    .number(e.endurance),
+            )
+        }
+        PlaceKind::Addressing => protocol(
+            "the addressing",
             Rule::any().words(&[
                 "address",
                 "addresses",
@@ -444,26 +326,17 @@ fn protocol(drive: &Drive, out: &mut Vec<Other>) {
                 "register",
                 "registers",
             ]),
-        );
-    }
-    if let Some(t) = timing {
-        let tp = at.key("timing");
-        push(
-            out,
-            tp.key("source"),
-            "the timing".into(),
-            "protocol",
-            &t.source,
-            &t.indirect,
-            Rule::any().words(TIMING_WORDS),
-        );
-        for (key, i) in [
-            ("frame_gap", &t.frame_gap),
-            ("inter_char_timeout", &t.inter_char_timeout),
-            ("response_time", &t.response_time),
-            ("request_gap", &t.request_gap),
-        ] {
-            let Some(i) = i else { continue };
+        ),
+        PlaceKind::Timing => protocol("the timing", Rule::any().words(TIMING_WORDS)),
+        PlaceKind::TimingInterval(key) => {
+            let t = p.timing.as_ref()?;
+            let i = match key {
+                "frame_gap" => &t.frame_gap,
+                "inter_char_timeout" => &t.inter_char_timeout,
+                "response_time" => &t.response_time,
+                _ => &t.request_gap,
+            }
+            .as_ref()?;
             let mut rule = Rule::any().words(TIMING_WORDS);
             for n in [i.ms, i.chars].into_iter().flatten() {
                 rule = rule.number(crate::describe::num(n));
@@ -471,127 +344,210 @@ fn protocol(drive: &Drive, out: &mut Vec<Other>) {
             if let Some(b) = i.bits {
                 rule = rule.number(b);
             }
-            push(
-                out,
-                tp.key(key).key("source"),
-                format!("timing `{key}`"),
-                "protocol",
-                &i.source,
-                &i.indirect,
-                rule,
-            );
+            Some((1, "protocol", format!("timing `{key}`"), rule))
         }
-    }
-    if let Some(s) = serial {
-        let sp = at.key("serial");
-        let mut rule = Rule::any().words(&[
-            "baud",
-            "bps",
-            "parity",
-            "speed",
-            "transmission",
-            "stop",
-            "data",
-        ]);
-        for b in &s.baud_rates {
-            rule = rule.number(b);
+        PlaceKind::Serial => {
+            let s = p.serial.as_ref()?;
+            let mut rule = Rule::any().words(&[
+                "baud",
+                "bps",
+                "parity",
+                "speed",
+                "transmission",
+                "stop",
+                "data",
+            ]);
+            for b in &s.baud_rates {
+                rule = rule.number(b);
+            }
+            protocol("the serial line", rule)
         }
-        push(
-            out,
-            sp.key("source"),
-            "the serial line".into(),
-            "protocol",
-            &(!s.source.is_empty()).then(|| s.source.clone()),
-            &s.indirect,
-            rule,
-        );
-        if let Some(f) = &s.formats {
-            let parity_words = &["parity", "even", "odd", "none", "stop"];
-            push(
-                out,
-                sp.key("formats").key("source"),
-                "the serial formats".into(),
-                "protocol",
-                &Some(f.source.clone()),
-                &f.indirect,
+        PlaceKind::SerialFormats => {
+            let f = p.serial.as_ref()?.formats.as_ref()?;
+            protocol(
+                "the serial formats",
                 Rule::any()
-                    .words(parity_words)
+                    .words(PARITY_WORDS)
                     .param(Some(&f.selected_by))
                     .param(
                         drive
                             .find(&f.selected_by)
                             .and_then(|r| r.def.param.as_deref()),
                     ),
-            );
-            for (i, c) in f.cases.iter().enumerate() {
-                let letter = c.parity.letter().to_ascii_lowercase();
-                let bits = c.data_bits.unwrap_or(s.data_bits);
-                push(
-                    out,
-                    sp.key("formats").key("cases").index(i).key("source"),
-                    format!("serial format {}", c.when),
-                    "protocol",
-                    &c.source,
-                    &c.indirect,
-                    Rule::any()
-                        .words(parity_words)
-                        .words(&[&format!("{bits}{letter}{}", c.stop_bits)]),
-                );
-            }
+            )
         }
-    }
-    // A list or limit the manual does not print is cited where its working value comes from:
-    // indirect by nature, with `unknown` as the reason.
-    {
-        let model::FunctionCodes {
-            codes,
-            source,
-            unknown,
-        } = function_codes;
-        let mut rule = Rule::any().name("function code").name("function codes");
-        for c in codes {
-            rule = rule.code(u16::from(*c));
-        }
-        if source.is_some() {
-            push(
-                out,
-                at.key("function_codes").key("source"),
-                "the function codes".into(),
+        PlaceKind::SerialFormatCase(i) => {
+            let s = p.serial.as_ref()?;
+            let c = &s.formats.as_ref()?.cases[i];
+            let letter = c.parity.letter().to_ascii_lowercase();
+            let bits = c.data_bits.unwrap_or(s.data_bits);
+            Some((
+                1,
                 "protocol",
-                source,
-                unknown,
-                rule,
-            );
-            if let Some(o) = out.last_mut() {
-                o.indirect_key = false;
-            }
+                format!("serial format {}", c.when),
+                Rule::any()
+                    .words(PARITY_WORDS)
+                    .words(&[&format!("{bits}{letter}{}", c.stop_bits)]),
+            ))
         }
-    }
-    for (key, l) in [("max_read", max_read), ("max_write", max_write)] {
-        let model::Limit {
-            value,
-            source,
-            unknown,
-        } = l;
-        if source.is_some() {
-            push(
-                out,
-                at.key(key).key("source"),
+        // A list or limit the manual does not print is cited where its working value comes
+        // from: indirect by nature, with `unknown` as the reason.
+        PlaceKind::FunctionCodes => {
+            let mut rule = Rule::any().name("function code").name("function codes");
+            for c in &p.function_codes.codes {
+                rule = rule.code(u16::from(*c));
+            }
+            protocol("the function codes", rule)
+        }
+        PlaceKind::Limit(key) => {
+            let l = if key == "max_read" {
+                &p.max_read
+            } else {
+                &p.max_write
+            };
+            let rule = match l.value {
+                Some(v) => Rule::any().number(v),
+                None => Rule::any(),
+            };
+            Some((
+                1,
+                "protocol",
                 format!("`{key}`"),
-                "protocol",
-                source,
-                unknown,
-                match value {
-                    Some(v) => Rule::any().number(v),
-                    None => Rule::any(),
+                rule.words(&["quantity", "registers", "words"]),
+            ))
+        }
+        PlaceKind::ConflictReading { conflict, reading } => {
+            // A reading of a register's own conflict may also cite the register's row.
+            let list = match register() {
+                Some(r) => &r.def.conflicts,
+                None => &drive.conflicts,
+            };
+            let c = &list[conflict];
+            let mut rule = reading_rule(&c.readings[reading].says);
+            if let Some(i) = place.register {
+                rule = rule.register(i);
+            }
+            Some((
+                2,
+                "conflict",
+                format!("a reading of conflict \"{}\"", c.topic),
+                rule,
+            ))
+        }
+        PlaceKind::Gap(i) => {
+            let (what, rule) = gap_rule(&drive.gaps[i]);
+            Some((3, "gap", what, rule))
+        }
+        PlaceKind::RelativeLimit => {
+            let r = register()?;
+            let (what, rule) = limit_rule(drive, r)?;
+            Some((4, "limit", what, rule))
+        }
+        PlaceKind::RegisterFunctions => {
+            let r = register()?;
+            let (f, _) = r.function_codes.as_ref()?;
+            let mut rule = Rule::any()
+                .name("function code")
+                .name("function codes")
+                .words(&["function"]);
+            for c in &f.codes {
+                rule = rule.code(u16::from(*c));
+            }
+            Some((
+                5,
+                "functions",
+                format!("the function codes of {}", r.id()),
+                rule,
+            ))
+        }
+        PlaceKind::ExceptionsUnknown
+        | PlaceKind::VariantOption { .. }
+        | PlaceKind::Group(_)
+        | PlaceKind::Removed(_)
+        | PlaceKind::Register
+        | PlaceKind::Value(_)
+        | PlaceKind::ReadValue(_)
+        | PlaceKind::Field(_)
+        | PlaceKind::FieldValue { .. }
+        | PlaceKind::Pair
+        | PlaceKind::RepeatNeedsChange
+        | PlaceKind::ByVariant(_)
+        | PlaceKind::AddressAlternative(_)
+        | PlaceKind::ScaleCase(_)
+        | PlaceKind::Indexed
+        | PlaceKind::IndexedEntry(_)
+        | PlaceKind::Example(_) => None,
+    }
+}
+
+const PARITY_WORDS: &[&str] = &["parity", "even", "odd", "none", "stop"];
+
+/// What the line of a role's place must mention; `None` for a place at a register the map does
+/// not have (validation reports it).
+fn role_rule(drive: &Drive, id: &str, index: usize) -> Option<Rule> {
+    let places = drive.roles.get(id)?;
+    let p = places.get(index)?;
+    let RolePlace {
+        register,
+        field,
+        external,
+        ..
+    } = p;
+    Some(match (register, external) {
+        (Some(name), _) => {
+            let ri = drive
+                .find(name)
+                .and_then(|r| drive.registers.iter().position(|x| std::ptr::eq(x, r)))?;
+            let r = &drive.registers[ri];
+            match field
+                .as_ref()
+                .and_then(|f| r.def.fields.iter().position(|x| x.id == *f))
+            {
+                Some(fi) => {
+                    let f = &r.def.fields[fi];
+                    let code = |c: &model::CodeRef| match c {
+                        model::CodeRef::Number(n) => Some(*n),
+                        model::CodeRef::Id(id) => {
+                            f.values.iter().find(|v| v.id == *id).map(|v| v.value)
+                        }
+                    };
+                    let codes =
+                        p.on.iter()
+                            .flat_map(|c| c.list())
+                            .chain(p.off.iter())
+                            .filter_map(code)
+                            .collect();
+                    Rule::Field {
+                        register: ri,
+                        field: fi,
+                        codes,
+                    }
                 }
-                .words(&["quantity", "registers", "words"]),
-            );
-            if let Some(o) = out.last_mut() {
-                o.indirect_key = false;
+                None => Rule::Register(ri),
             }
         }
-    }
+        (None, Some(name)) => {
+            let mut rule = Rule::any().name(&name.replace('_', " "));
+            for q in drive.externals() {
+                if q.external == *name {
+                    rule = rule.name(&q.description);
+                }
+            }
+            rule
+        }
+        (None, None) => {
+            // A place the manual does not print (`unknown`): its line is the one that
+            // says so, where the role's printed places are cited, or names the role.
+            let printed = places.iter().find_map(|q| {
+                let r = drive.find(q.register.as_deref()?)?;
+                drive.registers.iter().position(|x| std::ptr::eq(x, r))
+            });
+            match printed {
+                Some(ri) => Rule::Register(ri),
+                None => Rule::any().name(&id.replace('_', " ")),
+            }
+        }
+    })
 }
 
 /// A reading says what its line says: two of its words, or one of its numbers or codes as
@@ -622,81 +578,42 @@ fn reading_rule(says: &str) -> Rule {
     rule
 }
 
-fn conflicts(drive: &Drive, out: &mut Vec<Other>) {
-    // A reading of a register's own conflict may also cite the register's row.
-    let one =
-        |list: &[model::Conflict], base: Path, register: Option<usize>, out: &mut Vec<Other>| {
-            for (ci, c) in list.iter().enumerate() {
-                for (ri, r) in c.readings.iter().enumerate() {
-                    let mut rule = reading_rule(&r.says);
-                    if let Some(i) = register {
-                        rule = rule.register(i);
-                    }
-                    push(
-                        out,
-                        base.index(ci).key("readings").index(ri).key("source"),
-                        format!("a reading of conflict \"{}\"", c.topic),
-                        "conflict",
-                        &Some(r.source.clone()),
-                        &r.indirect,
-                        rule,
-                    );
-                }
-            }
-        };
-    one(&drive.conflicts, Path::root().key("conflicts"), None, out);
-    for (i, r) in drive.registers.iter().enumerate() {
-        one(&r.def.conflicts, r.key_path("conflicts"), Some(i), out);
+/// What a gap's line must mention, and how it is named.
+fn gap_rule(g: &model::Gap) -> (String, Rule) {
+    let mut rule = Rule::any()
+        .words(&["reserved", "unused", "missing"])
+        .name("not used");
+    let mut what = "a gap".to_owned();
+    if let Some([first, last]) = g.addresses {
+        what = format!("gap {}", crate::describe::address_span(first, last));
+        // The gap's own first or last address, or the row just before or after it.
+        rule = rule.address(first).address(last);
+        if let Some(a) = first.checked_sub(1) {
+            rule = rule.address(a);
+        }
+        if let Some(a) = last.checked_add(1) {
+            rule = rule.address(a);
+        }
     }
-}
-
-fn gaps(drive: &Drive, out: &mut Vec<Other>) {
-    for (i, g) in drive.gaps.iter().enumerate() {
-        let mut rule = Rule::any()
-            .words(&["reserved", "unused", "missing"])
-            .name("not used");
-        let mut what = "a gap".to_owned();
-        if let Some([first, last]) = g.addresses {
-            what = format!("gap {}", crate::describe::address_span(first, last));
-            // The gap's own first or last address, or the row just before or after it.
-            rule = rule.address(first).address(last);
-            if let Some(a) = first.checked_sub(1) {
-                rule = rule.address(a);
-            }
-            if let Some(a) = last.checked_add(1) {
-                rule = rule.address(a);
+    if let Some(params) = &g.params {
+        for p in params.split(|c: char| c.is_whitespace() || c == ',') {
+            let p = p.trim_matches('.');
+            if p.chars().any(|c| c.is_ascii_digit()) && !p.is_empty() {
+                rule = rule.param(Some(p));
             }
         }
-        if let Some(params) = &g.params {
-            for p in params.split(|c: char| c.is_whitespace() || c == ',') {
-                let p = p.trim_matches('.');
-                if p.chars().any(|c| c.is_ascii_digit()) && !p.is_empty() {
-                    rule = rule.param(Some(p));
-                }
-            }
-        }
-        push(
-            out,
-            Path::root().key("gaps").index(i).key("source"),
-            what,
-            "gap",
-            &Some(g.source.clone()),
-            &g.indirect,
-            rule,
-        );
     }
+    (what, rule)
 }
 
 /// A limit through another quantity (`max_relative`): the line prints the percentage, or names
 /// the quantity it is taken of (the bounding register's parameter number, address or name, or
 /// the external quantity's name).
-fn limits(drive: &Drive, out: &mut Vec<Other>) {
-    for r in &drive.registers {
-        let Some(limit) = &r.def.max_relative else {
-            continue;
-        };
-        let mut rule = Rule::any().number(limit.percent);
-        let of = match &limit.relative_to {
+fn limit_rule(drive: &Drive, r: &crate::ir::Register) -> Option<(String, Rule)> {
+    let limit = r.def.max_relative.as_ref()?;
+    let mut rule = Rule::any().number(limit.percent);
+    let of =
+        match &limit.relative_to {
             model::Reference::Register(name) => {
                 if let Some(i) = drive.registers.iter().position(|b| {
                     b.def.id == *name || b.def.param.as_deref() == Some(name.as_str())
@@ -710,44 +627,5 @@ fn limits(drive: &Drive, out: &mut Vec<Other>) {
                 q.external.clone()
             }
         };
-        push(
-            out,
-            r.key_path("max_relative").key("source"),
-            format!("the limit of {} through {of}", r.id()),
-            "limit",
-            &Some(limit.source.clone()),
-            &None,
-            rule,
-        );
-    }
-}
-
-/// A register's (or its group's) `function_codes`: the line mentions one of the listed codes
-/// (`10H`, `0x10`), or "function code(s)". A group's list is read once.
-fn functions(drive: &Drive, out: &mut Vec<Other>) {
-    let mut seen = std::collections::HashSet::new();
-    for r in &drive.registers {
-        let Some((f, path)) = &r.function_codes else {
-            continue;
-        };
-        if !seen.insert(path.clone()) {
-            continue;
-        }
-        let mut rule = Rule::any()
-            .name("function code")
-            .name("function codes")
-            .words(&["function"]);
-        for c in &f.codes {
-            rule = rule.code(u16::from(*c));
-        }
-        push(
-            out,
-            path.key("source"),
-            format!("the function codes of {}", r.id()),
-            "functions",
-            &Some(f.source.clone()),
-            &None,
-            rule,
-        );
-    }
+    Some((format!("the limit of {} through {of}", r.id()), rule))
 }

@@ -2,6 +2,7 @@
 //! for a manual with no text at hand; every citation anywhere names one of the map's manuals of
 //! the matching kind and, when the text manuals are at hand, a line inside the file.
 
+use crate::citations::{PlaceKind, Reason, citation_places};
 use crate::diagnostic::Diagnostic;
 use crate::hints::closest;
 use crate::ir::Drive;
@@ -95,8 +96,8 @@ pub(super) fn cite(
 fn indirect(
     drive: &Drive,
     out: &mut Vec<Diagnostic>,
-    reason: &Option<String>,
-    source: &Option<String>,
+    reason: Option<&str>,
+    source: Option<&str>,
     path: Path,
     register: Option<&str>,
 ) {
@@ -115,19 +116,31 @@ fn indirect(
     }
 }
 
-fn opt(
-    drive: &Drive,
-    ctx: &Context,
-    out: &mut Vec<Diagnostic>,
-    source: &Option<String>,
-    path: Path,
-    register: Option<&str>,
-) {
-    if let Some(s) = source {
-        cite(drive, ctx, out, s, path, register);
+/// How a kind of place is checked here: the form of its citation, and whether a finding about
+/// its `indirect` key names the register (it does for a register's own row, values and
+/// fields).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Form {
+    /// `file:line` or `<manual id>:p<page>` ([`cite`]).
+    Line,
+    /// `file:line` or `file:first-last`, checked with the frame (`examples_valid`).
+    Range,
+}
+
+fn rules(kind: &PlaceKind<'_>) -> (Form, bool) {
+    use PlaceKind as K;
+    match kind {
+        K::Example(_) => (Form::Range, false),
+        K::Register | K::Value(_) | K::ReadValue(_) | K::Field(_) | K::FieldValue { .. } => {
+            (Form::Line, true)
+        }
+        _ => (Form::Line, false),
     }
 }
 
+/// Every citation place ([`citation_places`]): a required one is present, each citation names
+/// a manual of the map in the right form (and a line inside it), an `indirect` key has a reason
+/// and a citation to qualify.
 pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
     if drive.meta.manuals.is_empty() {
         out.push(drive.error(
@@ -136,317 +149,27 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
             "a map must name the manuals it was transcribed from",
         ));
     }
-    let proto = Path::root().key("protocol");
-    let p = &drive.protocol;
-    opt(drive, ctx, out, &p.source, proto.key("source"), None);
-    opt(
-        drive,
-        ctx,
-        out,
-        &p.slave_address.source,
-        proto.key("slave_address").key("source"),
-        None,
-    );
-    if let Some(b) = &p.broadcast {
-        cite(
-            drive,
-            ctx,
-            out,
-            &b.source,
-            proto.key("broadcast").key("source"),
-            None,
-        );
-    }
-    for (i, e) in p.exceptions.iter().enumerate() {
-        cite(
-            drive,
-            ctx,
-            out,
-            &e.source,
-            proto.key("exceptions").index(i).key("source"),
-            None,
-        );
-    }
-    for (i, c) in p.commands.iter().enumerate() {
-        cite(
-            drive,
-            ctx,
-            out,
-            &c.source,
-            proto.key("commands").index(i).key("source"),
-            None,
-        );
-    }
-    if let Some(e) = &p.eeprom {
-        cite(
-            drive,
-            ctx,
-            out,
-            &e.source,
-            proto.key("eeprom").key("source"),
-            None,
-        );
-    }
-    if let Some(a) = &p.addressing {
-        cite(
-            drive,
-            ctx,
-            out,
-            &a.source,
-            proto.key("addressing").key("source"),
-            None,
-        );
-    }
-    if let Some(s) = &p.serial {
-        cite(
-            drive,
-            ctx,
-            out,
-            &s.source,
-            proto.key("serial").key("source"),
-            None,
-        );
-        if let Some(f) = &s.formats {
-            let fp = proto.key("serial").key("formats");
-            cite(drive, ctx, out, &f.source, fp.key("source"), None);
-            for (i, c) in f.cases.iter().enumerate() {
-                opt(
-                    drive,
-                    ctx,
-                    out,
-                    &c.source,
-                    fp.key("cases").index(i).key("source"),
-                    None,
-                );
-            }
-        }
-    }
-    opt(
-        drive,
-        ctx,
-        out,
-        &p.function_codes.source,
-        proto.key("function_codes").key("source"),
-        None,
-    );
-    for (name, limit) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
-        opt(
-            drive,
-            ctx,
-            out,
-            &limit.source,
-            proto.key(name).key("source"),
-            None,
-        );
-    }
-    if let Some(t) = &p.timing {
-        let tp = proto.key("timing");
-        opt(drive, ctx, out, &t.source, tp.key("source"), None);
-        if let Some(i) = &t.frame_gap {
-            opt(
-                drive,
-                ctx,
-                out,
-                &i.source,
-                tp.key("frame_gap").key("source"),
-                None,
-            );
-        }
-        if let Some(i) = &t.inter_char_timeout {
-            opt(
-                drive,
-                ctx,
-                out,
-                &i.source,
-                tp.key("inter_char_timeout").key("source"),
-                None,
-            );
-        }
-        if let Some(i) = &t.response_time {
-            opt(
-                drive,
-                ctx,
-                out,
-                &i.source,
-                tp.key("response_time").key("source"),
-                None,
-            );
-        }
-    }
-    // `indirect` on roles, protocol items, readings of conflicts and gaps (review reads their
-    // citations by content, `review::others`).
-    for o in crate::others::other_citations(drive) {
-        if o.indirect_key {
-            let mut at = o.path.clone();
-            at.0.pop();
-            indirect(drive, out, &o.indirect, &o.source, at.key("indirect"), None);
-        }
-    }
-    for (ai, axis) in drive.variants.iter().enumerate() {
-        for (oi, o) in axis.options.iter().enumerate() {
-            opt(
-                drive,
-                ctx,
-                out,
-                &o.source,
-                Path::root()
-                    .key("variants")
-                    .index(ai)
-                    .key("options")
-                    .index(oi)
-                    .key("source"),
-                None,
-            );
-        }
-    }
-    for g in &drive.groups {
-        opt(drive, ctx, out, &g.source, g.path.key("source"), None);
-    }
-    for (id, places) in &drive.roles {
-        for (i, p) in places.iter().enumerate() {
-            let path = Path::root().key("roles").key(id).index(i).key("source");
-            opt(drive, ctx, out, &p.source, path, p.register.as_deref());
-        }
-    }
-    for (i, g) in drive.gaps.iter().enumerate() {
-        cite(
-            drive,
-            ctx,
-            out,
-            &g.source,
-            Path::root().key("gaps").index(i).key("source"),
-            None,
-        );
-    }
-    for (i, r) in drive.removed.iter().enumerate() {
-        cite(
-            drive,
-            ctx,
-            out,
-            &r.source,
-            Path::root().key("removed").index(i).key("source"),
-            Some(&r.id),
-        );
-    }
-    for (ci, c) in drive.conflicts.iter().enumerate() {
-        for (ri, reading) in c.readings.iter().enumerate() {
-            let rp = Path::root()
-                .key("conflicts")
-                .index(ci)
-                .key("readings")
-                .index(ri)
-                .key("source");
-            cite(drive, ctx, out, &reading.source, rp, None);
-        }
-    }
-    for r in &drive.registers {
-        let rid = Some(r.id());
-        match &r.def.source {
-            None => out.push(drive.error(
-                &r.path,
-                rid,
+    for place in citation_places(drive) {
+        let (form, names_register) = rules(&place.kind);
+        let register = place.register_name;
+        match (place.source, form) {
+            (None, _) if place.required => out.push(drive.error(
+                &place.item_path(),
+                register,
                 "missing citation: add `source: <manual file>:<line>` pointing at the register's row",
             )),
-            Some(s) => cite(drive, ctx, out, s, r.key_path("source"), rid),
+            (Some(s), Form::Line) => cite(drive, ctx, out, s, place.path.clone(), register),
+            _ => {}
         }
-        indirect(
-            drive,
-            out,
-            &r.def.indirect,
-            &r.def.source,
-            r.key_path("indirect"),
-            rid,
-        );
-        if let Some(pair) = &r.def.pair {
-            let path = r.key_path("pair").key("source");
-            opt(drive, ctx, out, &pair.source, path, rid);
-        }
-        for (fi, f) in r.def.fields.iter().enumerate() {
-            let fp = r.key_path("fields").index(fi);
-            opt(drive, ctx, out, &f.source, fp.key("source"), rid);
-            indirect(drive, out, &f.indirect, &f.source, fp.key("indirect"), rid);
-            for (vi, v) in f.values.iter().enumerate() {
-                let vp = fp.key("values").index(vi);
-                indirect(drive, out, &v.indirect, &v.source, vp.key("indirect"), rid);
-                opt(
-                    drive,
-                    ctx,
-                    out,
-                    &v.source,
-                    fp.key("values").index(vi).key("source"),
-                    rid,
-                );
-            }
-        }
-        for key in ["values", "read_values"] {
-            let list = match key {
-                "values" => &r.def.values,
-                _ => &r.def.read_values,
-            };
-            for (vi, v) in list.iter().enumerate() {
-                let vp = r.key_path(key).index(vi);
-                indirect(drive, out, &v.indirect, &v.source, vp.key("indirect"), rid);
-                opt(drive, ctx, out, &v.source, vp.key("source"), rid);
-            }
-        }
-        if let Some((rule, path)) = &r.repeat_needs_change {
-            cite(drive, ctx, out, &rule.source, path.key("source"), rid);
-        }
-        if let Some((f, path)) = &r.function_codes {
-            cite(drive, ctx, out, &f.source, path.key("source"), rid);
-        }
-        if let Some(limit) = &r.def.max_relative {
-            cite(
+        if let Reason::Indirect(reason) = place.reason {
+            indirect(
                 drive,
-                ctx,
                 out,
-                &limit.source,
-                r.key_path("max_relative").key("source"),
-                rid,
+                reason,
+                place.source,
+                place.item_path().key("indirect"),
+                register.filter(|_| names_register),
             );
-        }
-        for (k, o) in &r.def.by_variant {
-            opt(
-                drive,
-                ctx,
-                out,
-                &o.source,
-                r.key_path("by_variant").key(k).key("source"),
-                rid,
-            );
-        }
-        for (ai, a) in r.def.address_alternatives.iter().enumerate() {
-            cite(
-                drive,
-                ctx,
-                out,
-                &a.source,
-                r.key_path("address_alternatives").index(ai).key("source"),
-                rid,
-            );
-        }
-        if let Some(crate::model::Scale::Selected(sel)) = &r.def.scale {
-            for (ci, c) in sel.cases.iter().enumerate() {
-                opt(
-                    drive,
-                    ctx,
-                    out,
-                    &c.source,
-                    r.key_path("scale").key("cases").index(ci).key("source"),
-                    rid,
-                );
-            }
-        }
-        for (ci, c) in r.def.conflicts.iter().enumerate() {
-            for (ri, reading) in c.readings.iter().enumerate() {
-                let rp = r
-                    .key_path("conflicts")
-                    .index(ci)
-                    .key("readings")
-                    .index(ri)
-                    .key("source");
-                cite(drive, ctx, out, &reading.source, rp, rid);
-            }
         }
     }
 }

@@ -3,7 +3,7 @@
 //! writable holding register (the index register), every entry's index is one the index register
 //! accepts, no index and no entry id is listed twice (nor an entry id taken by a register), each
 //! entry's scale, limits and access convert and fit the value register, and every citation is
-//! checked like a register's.
+//! checked like a register's (by `citations_present`, which reads every citation place).
 
 use std::collections::HashMap;
 
@@ -12,18 +12,15 @@ use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{Access, ModbusTable};
 use crate::source::Path;
 
-use super::Context;
-use super::citations_present::cite;
 use super::identifiers_valid::is_identifier;
 
-pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
+pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let mut ids: HashMap<String, Path> = HashMap::new();
     for r in &drive.registers {
         let Some(ix) = &r.def.indexed else { continue };
         let rid = Some(r.id());
         let path = r.key_path("indexed");
         value_register(drive, r, &path, out);
-        cite(drive, ctx, out, &ix.source, path.key("source"), rid);
         if ix.entries.is_empty() && ix.unknown.is_none() {
             out.push(drive.error(
                 &path,
@@ -35,7 +32,6 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
         let mut indices: HashMap<u16, Path> = HashMap::new();
         for (i, e) in ix.entries.iter().enumerate() {
             let p = path.key("entries").index(i);
-            cite(drive, ctx, out, &e.source, p.key("source"), rid);
             let mut refusals = Vec::new();
             if !is_identifier(&e.id) {
                 refusals.push(("id", format!("entry id `{}` is not snake_case (a-z, 0-9, single underscores, starting with a letter)", e.id)));

@@ -95,7 +95,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     read_values_valid::check(drive, &mut out);
     numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);
-    indexed_valid::check(drive, ctx, &mut out);
+    indexed_valid::check(drive, &mut out);
     examples_valid::check(drive, ctx, &mut out);
     out
 }

@@ -20,8 +20,8 @@ use super::matching::{
 use crate::diagnostic::Loc;
 use crate::ir::{Drive, Register};
 use crate::model::{EnumValue, Field};
-use crate::source::Path;
 use crate::validate::{parse_citation, parse_page_citation};
+use drivemap_map::citations::{PlaceKind, citation_places};
 
 /// What a citation is the citation of.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -192,59 +192,46 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
         lines: HashMap::new(),
     };
     let mut out = Vec::new();
-    for (i, r) in drive.registers.iter().enumerate() {
-        let Some(source) = r.def.source.as_deref() else {
+    // The registers' own citations, from the one list of citation places: each register's row,
+    // its values, its read values, each field with its values.
+    for place in citation_places(drive) {
+        let (Some(i), Some(src)) = (place.register, place.source) else {
             continue;
         };
-        let mut expected = Vec::new();
-        if let Some(p) = &r.def.param {
-            expected.push(p.clone());
-        }
-        expected.push(AddressForms::display(r.def.address));
-        expected.push(format!("\"{}\"", r.def.name));
-        let verdict = match &r.def.indirect {
-            Some(reason) => Verdict::Indirect(reason.clone()),
-            None => register_verdict(drive, &keys, &by_file, &mut cache, i, source),
+        let r = &drive.registers[i];
+        let value = |v: &EnumValue| {
+            let verdict = match &v.indirect {
+                Some(reason) => Verdict::Indirect(reason.clone()),
+                None => near(manuals, src, |l| value_found(v, l)),
+            };
+            (
+                Item::Value {
+                    code: v.value,
+                    label: v.name.clone(),
+                },
+                format!("code {} \"{}\"", v.value, v.name),
+                verdict,
+            )
         };
-        out.push(check(
-            drive,
-            manuals,
-            r,
-            r.key_path("source"),
-            Item::Register,
-            source,
-            expected.join(", "),
-            verdict,
-        ));
-        let values = |list: &[EnumValue], base: Path, out: &mut Vec<CitationCheck>| {
-            for (vi, v) in list.iter().enumerate() {
-                let Some(src) = v.source.as_deref() else {
-                    continue;
-                };
-                let verdict = match &v.indirect {
+        let (item, expected, verdict) = match place.kind {
+            PlaceKind::Register => {
+                let mut expected = Vec::new();
+                if let Some(p) = &r.def.param {
+                    expected.push(p.clone());
+                }
+                expected.push(AddressForms::display(r.def.address));
+                expected.push(format!("\"{}\"", r.def.name));
+                let verdict = match &r.def.indirect {
                     Some(reason) => Verdict::Indirect(reason.clone()),
-                    None => near(manuals, src, |l| value_found(v, l)),
+                    None => register_verdict(drive, &keys, &by_file, &mut cache, i, src),
                 };
-                out.push(check(
-                    drive,
-                    manuals,
-                    r,
-                    base.index(vi).key("source"),
-                    Item::Value {
-                        code: v.value,
-                        label: v.name.clone(),
-                    },
-                    src,
-                    format!("code {} \"{}\"", v.value, v.name),
-                    verdict,
-                ));
+                (Item::Register, expected.join(", "), verdict)
             }
-        };
-        values(&r.def.values, r.key_path("values"), &mut out);
-        values(&r.def.read_values, r.key_path("read_values"), &mut out);
-        for (fi, f) in r.def.fields.iter().enumerate() {
-            let fp = r.key_path("fields").index(fi);
-            if let Some(src) = f.source.as_deref() {
+            PlaceKind::Value(vi) => value(&r.def.values[vi]),
+            PlaceKind::ReadValue(vi) => value(&r.def.read_values[vi]),
+            PlaceKind::FieldValue { field, value: vi } => value(&r.def.fields[field].values[vi]),
+            PlaceKind::Field(fi) => {
+                let f = &r.def.fields[fi];
                 let verdict = match &f.indirect {
                     Some(reason) => Verdict::Indirect(reason.clone()),
                     None => near(manuals, src, |l| field_found(f, l)),
@@ -254,22 +241,27 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
                     (None, Some([lo, hi])) => format!("{lo}-{hi}"),
                     _ => String::new(),
                 };
-                out.push(check(
-                    drive,
-                    manuals,
-                    r,
-                    fp.key("source"),
+                (
                     Item::Field {
                         bit: bit.clone(),
                         name: f.name.clone(),
                     },
-                    src,
                     format!("bit {bit} or \"{}\"", f.name),
                     verdict,
-                ));
+                )
             }
-            values(&f.values, fp.key("values"), &mut out);
-        }
+            // Read by content with the citations outside the registers, or not at all.
+            _ => continue,
+        };
+        out.push(CitationCheck {
+            loc: drive.locate(&place.path),
+            register: r.def.id.clone(),
+            item,
+            source: src.to_owned(),
+            expected,
+            quote: manuals.quote(src),
+            verdict,
+        });
     }
     for o in super::others::other_citations(drive) {
         let Some(source) = o.source else {
@@ -300,28 +292,6 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
         });
     }
     out
-}
-
-#[allow(clippy::too_many_arguments)]
-fn check(
-    drive: &Drive,
-    manuals: &Manuals,
-    r: &Register,
-    path: Path,
-    item: Item,
-    source: &str,
-    expected: String,
-    verdict: Verdict,
-) -> CitationCheck {
-    CitationCheck {
-        loc: drive.locate(&path),
-        register: r.def.id.clone(),
-        item,
-        source: source.to_owned(),
-        expected,
-        quote: manuals.quote(source),
-        verdict,
-    }
 }
 
 pub(crate) fn value_found(v: &EnumValue, line: &Line) -> bool {

@@ -14,8 +14,8 @@ use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use super::Manuals;
 use super::citations::{Verdict, verify_citations};
 use crate::ir::Drive;
-use crate::source::{Node, NodeKind};
 use crate::validate::parse_citation;
+use drivemap_map::citations::citation_places;
 
 /// A row of a manual table no item of the map covers.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -260,34 +260,13 @@ fn norm_param(p: &str) -> String {
     out
 }
 
-/// Every `source:` string of the map (the merged tree), plus the expanded registers'.
+/// The lines every citation of the map points at ([`citation_places`]).
 fn all_citations(drive: &Drive) -> HashSet<(String, usize)> {
-    let mut out = HashSet::new();
-    let mut stack: Vec<&Node> = vec![&drive.tree];
-    while let Some(node) = stack.pop() {
-        match &node.kind {
-            NodeKind::Scalar(_) => {}
-            NodeKind::Seq(items) => stack.extend(items.iter()),
-            NodeKind::Map(entries) => {
-                for (k, _, v) in entries {
-                    if let (true, NodeKind::Scalar(serde_yaml::Value::String(s))) =
-                        (k == "source", &v.kind)
-                    {
-                        if let Some((f, l)) = parse_citation(s) {
-                            out.insert((f.to_owned(), l));
-                        }
-                    }
-                    stack.push(v);
-                }
-            }
-        }
-    }
-    for r in &drive.registers {
-        if let Some((f, l)) = r.def.source.as_deref().and_then(parse_citation) {
-            out.insert((f.to_owned(), l));
-        }
-    }
-    out
+    citation_places(drive)
+        .into_iter()
+        .filter_map(|p| p.source.and_then(parse_citation))
+        .map(|(f, l)| (f.to_owned(), l))
+        .collect()
 }
 
 /// Parameter numbers a `gaps` entry names: `U1-15 .. U1-18` covers U1-15 to U1-18; any other
