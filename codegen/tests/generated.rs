@@ -122,7 +122,7 @@ fn rustdoc_search_finds_a_register_by_the_manuals_words() {
     let tds = module("../maps/ptlk-tds-v8.yaml");
     assert!(
         tds.contains(
-            "#[doc(alias = \"max_output_frequency\")]\n#[doc(alias = \"Cn-02\")]\n#[doc(alias = \"0301H\")]\n#[doc(alias = \"0x0301\")]\npub type MaxOutputFrequency ="
+            "#[doc(alias(\"max_output_frequency\", \"Cn-02\", \"0301H\", \"0x0301\"))]\npub type MaxOutputFrequency ="
         ),
         "{}",
         &tds[tds.find("pub type MaxOutputFrequency").unwrap_or(0).saturating_sub(400)..][..600]
@@ -130,7 +130,7 @@ fn rustdoc_search_finds_a_register_by_the_manuals_words() {
     let z3 = module("../tests/fixtures/zenith-z3/zenith-z3.yaml");
     assert!(
         z3.contains(
-            "#[doc(alias = \"acceleration_time\")]\n#[doc(alias = \"P-01\")]\n#[doc(alias = \"45\")]\npub type AccelerationTime ="
+            "#[doc(alias(\"acceleration_time\", \"P-01\", \"45\"))]\npub type AccelerationTime ="
         ),
         "{z3}"
     );

@@ -124,6 +124,9 @@ pub fn register(drive: &Drive, r: &Register) -> String {
             s += &format!("| {} | {} | {} |\n", c.codes, c.scale, c.range);
         }
     }
+    // The other facts as one list, an item each (a paragraph each said the same in twice the
+    // lines).
+    let mut items = Vec::new();
     for v in &f.variants {
         let mut parts = Vec::new();
         parts.extend(v.range.as_ref().map(|x| format!("range {x}")));
@@ -132,57 +135,48 @@ pub fn register(drive: &Drive, r: &Register) -> String {
             parts.push(format!("{} unknown: {}", u.what, u.reason));
         }
         if !parts.is_empty() {
-            s += &format!("\n{}: {}.\n", v.name, parts.join(", "));
+            items.push(format!("{}: {}.", v.name, parts.join(", ")));
         }
     }
     for row in &f.rows {
         match row.key {
-            FactKey::RelativeLimit => {
-                s += &format!(
-                    "\nLimited through another quantity: {}; a value above it is refused before \
-                     sending (`ValueError::AboveLimit`), and one that cannot be checked because the \
-                     quantity is not in the settings is refused too (`ValueError::LimitNotKnown`).\n",
-                    row.value
-                )
-            }
-            FactKey::WriteRestriction => s += &format!("\nWritable {}.\n", row.value),
-            FactKey::RepeatNeedsChange => {
-                s += &format!(
-                    "\nRepeat needs a change: {}. `Client::write` does so, and writing the same value \
-                     twice executes it twice.\n",
-                    row.value
-                )
-            }
-            FactKey::FunctionCodes => {
-                s += &format!(
-                    "\nFunction codes: {}. The write gate refuses any other function on this \
-                     register.\n",
-                    row.value
-                )
-            }
-            FactKey::ReadValues => {
-                s += &format!(
-                    "\nRead and written with different meanings: a read gives the read enumeration ({}); \
-                     a write takes the word described above.\n",
-                    row.value
-                )
-            }
+            FactKey::RelativeLimit => items.push(format!(
+                "Limited through another quantity: {}; a value above it is refused before \
+                 sending (`ValueError::AboveLimit`), and one that cannot be checked because the \
+                 quantity is not in the settings is refused too (`ValueError::LimitNotKnown`).",
+                row.value
+            )),
+            FactKey::WriteRestriction => items.push(format!("Writable {}.", row.value)),
+            FactKey::RepeatNeedsChange => items.push(format!(
+                "Repeat needs a change: {}. `Client::write` does so, and writing the same value \
+                 twice executes it twice.",
+                row.value
+            )),
+            FactKey::FunctionCodes => items.push(format!(
+                "Function codes: {}. The write gate refuses any other function on this register.",
+                row.value
+            )),
+            FactKey::ReadValues => items.push(format!(
+                "Read and written with different meanings: a read gives the read enumeration ({}); \
+                 a write takes the word described above.",
+                row.value
+            )),
             _ => {}
         }
     }
     for alt in f.all(FactKey::AlternativeAddress) {
-        s += &format!(
-            "\nAt `{}` when {} (`{}`).\n",
+        items.push(format!(
+            "At `{}` when {} (`{}`).",
             alt.value,
             alt.when.as_deref().unwrap_or_default(),
             alt.citation.as_deref().unwrap_or_default()
-        );
+        ));
     }
     if let Some(d) = f.get(FactKey::DisplaySteps) {
-        s += &format!("\n{}.\n", capitalized(&d.value));
+        items.push(format!("{}.", capitalized(&d.value)));
     }
     for n in &f.notes {
-        s += &format!("\nNote: {n}\n");
+        items.push(format!("Note: {n}"));
     }
     for c in &f.conflicts {
         let cites = c
@@ -191,18 +185,46 @@ pub fn register(drive: &Drive, r: &Register) -> String {
             .map(|r| format!("`{r}`"))
             .collect::<Vec<_>>()
             .join(" vs ");
-        s += &format!(
-            "\nConflict — {}: {cites}. Chosen: {}. {}\n",
+        items.push(format!(
+            "Conflict — {}: {cites}. Chosen: {}. {}",
             c.topic, c.chosen, c.reason
-        );
+        ));
     }
     for u in &f.unknowns {
-        s += &format!("\nUnknown {}: {}\n", u.what, u.reason);
+        items.push(format!("Unknown {}: {}", u.what, u.reason));
     }
     if let Some(src) = &f.source {
-        s += &format!("\nSource: `{src}`.");
+        items.push(format!("Source: `{src}`."));
     }
+    match items.as_slice() {
+        [] => {}
+        [one] => s += &format!("\n{one}\n"),
+        many => {
+            s.push('\n');
+            for item in many {
+                s += &list_item(item);
+            }
+        }
+    }
+    s.truncate(s.trim_end().len());
     s
+}
+
+/// One Markdown list item: a text of several lines (or paragraphs) stays inside the item, its
+/// further lines indented under the marker.
+fn list_item(text: &str) -> String {
+    let mut out = String::from("- ");
+    for (i, line) in text.lines().enumerate() {
+        if i > 0 && !line.trim().is_empty() {
+            out.push_str("  ");
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    if text.is_empty() {
+        out.push('\n');
+    }
+    out
 }
 
 fn capitalized(s: &str) -> String {

@@ -71,7 +71,8 @@ fn register(drive: &Drive, r: &Register, index: usize, rt: &TokenStream) -> Toke
     let marker = ident(&type_name);
     let doc = docs::item(&docs::register(drive, r));
     let aliases = docs::aliases(drive, r, &type_name);
-    let aliases = aliases.iter().map(|a| quote!(#[doc(alias = #a)]));
+    // One attribute for all of them (rustdoc's list form), not one line each.
+    let aliases = (!aliases.is_empty()).then(|| quote!(#[doc(alias(#(#aliases),*))]));
     let (mut value, mut extra) = value(r, index, rt);
     let mut access = match r.access {
         Access::Read => quote!(ReadOnly),
@@ -97,7 +98,7 @@ fn register(drive: &Drive, r: &Register, index: usize, rt: &TokenStream) -> Toke
         #extra
 
         #doc
-        #(#aliases)*
+        #aliases
         pub type #marker = Reg<Drive, #value, #access, #index>;
     }
 }
