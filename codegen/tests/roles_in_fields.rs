@@ -19,12 +19,24 @@ fn a_number_field_and_an_unknown_edge_are_generated() {
         source_name: "brenner-fx4.yaml".into(),
     };
     let code = drive_module(&drive, &options).unwrap();
+    // The line with `needle` and the lines that continue it (a line longer than the printer's
+    // width goes on, deeper indented, on the next), joined.
     let line = |needle: &str| {
-        code.lines()
-            .find(|l| l.contains(needle))
-            .unwrap_or_else(|| panic!("no line with {needle} in:\n{code}"))
-            .trim()
-            .to_owned()
+        let lines: Vec<&str> = code.lines().collect();
+        let first = lines
+            .iter()
+            .position(|l| l.contains(needle))
+            .unwrap_or_else(|| panic!("no line with {needle} in:\n{code}"));
+        let indent = |l: &str| l.len() - l.trim_start().len();
+        let mut joined = lines[first].trim().to_owned();
+        for l in &lines[first + 1..] {
+            if indent(l) <= indent(lines[first]) {
+                break;
+            }
+            joined.push(' ');
+            joined.push_str(l.trim());
+        }
+        joined
     };
     let row = drive
         .plan()

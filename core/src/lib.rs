@@ -14,6 +14,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod bit_fields;
 pub mod functions;
 pub mod indexed;
 pub mod kind;

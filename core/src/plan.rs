@@ -182,6 +182,15 @@ pub enum Conversion {
     Bits { mask: u16, fields: &'static [Field] },
 }
 
+impl Conversion {
+    /// An unsigned word over its whole range, the commonest conversion: generated plan rows say
+    /// `Conversion::WORD` for it.
+    pub const WORD: Conversion = Conversion::Word {
+        signed: false,
+        range: Ranges::fixed(RawRange::word(false)),
+    };
+}
+
 /// A relative scale: `full_scale` raw counts are 100 % of the quantity in `reference`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Relative {
@@ -399,6 +408,12 @@ impl RegisterPlan {
             limit: None,
             functions: Functions::ANY,
         }
+    }
+
+    /// A plain unsigned word without unit over its whole range ([`Conversion::WORD`], envelope
+    /// `0 ..= 65535`), otherwise as [`RegisterPlan::new`]: the commonest row of a generated plan.
+    pub const fn word(info: RegisterInfo) -> RegisterPlan {
+        RegisterPlan::new(info, "", Conversion::WORD, RawRange::word(false))
     }
 
     /// The plan of a register that accepts only `functions` (its write rule too).

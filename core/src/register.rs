@@ -335,6 +335,23 @@ pub struct RegisterInfo {
     pub source: &'static str,
 }
 
+impl RegisterInfo {
+    /// The base that generated plan rows complete (`..RegisterInfo::DEFAULT`): a holding
+    /// register of one word, read-only, with no parameter number, not broadcast-only, and no
+    /// id, name, address or citation (every row gives those).
+    pub const DEFAULT: RegisterInfo = RegisterInfo {
+        id: "",
+        param: None,
+        name: "",
+        address: 0,
+        access: Access::Read,
+        table: Table::Holding,
+        width: Width::Word,
+        broadcast_only: false,
+        source: "",
+    };
+}
+
 impl AsRef<RegisterInfo> for RegisterInfo {
     fn as_ref(&self) -> &RegisterInfo {
         self

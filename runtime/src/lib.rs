@@ -74,7 +74,7 @@ pub use drivemap_core::plan;
 pub use drivemap_core::ratio;
 pub use drivemap_core::roles::{self, Role, Roles};
 pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
-pub use drivemap_core::{code_eq, enumeration};
+pub use drivemap_core::{bit_fields, code_eq, enumeration};
 #[cfg(feature = "std")]
 pub use error::{Error, Refusal};
 pub use profile::Profile;

@@ -2,10 +2,15 @@
 //! [`DrivePlan::registers`](crate::lower::DrivePlan::registers).
 //!
 //! Rows are printed here rather than through `prettyplease`, which would spread each row over
-//! dozens of lines: a row is three lines (the register's identity; its unit and conversion; its
-//! envelope and what else the plan says), and a list too long for one line (labels, bit fields,
-//! scale cases, moves) gets one item per line. Every value printed is a plain literal of the
-//! vocabulary crate's types, so a row is exactly the plan the lowering pass decided.
+//! dozens of lines: a row is the register's identity, then its unit, conversion, envelope and
+//! what else the plan says; a list too long for one line (labels, bit fields, scale cases,
+//! moves) gets one item per line; and a line longer than [`WIDTH`] continues on the next after a
+//! comma ([`wrap`]), so only a string literal longer than that makes a longer line. What a row
+//! leaves out is the value of `RegisterInfo::DEFAULT` (a holding word without parameter number,
+//! not broadcast-only) or of `RegisterPlan::new` (every transport, no broadcast, no moves);
+//! an unsigned word over its whole range is `Conversion::WORD`. Every value printed is a plain
+//! literal of the vocabulary crate's types, so a row is exactly the plan the lowering pass
+//! decided.
 
 use std::fmt::Write as _;
 
@@ -14,7 +19,7 @@ use drivemap_core::plan::{
     Setting, VariantOption,
 };
 use drivemap_core::ratio::Ratio;
-use drivemap_core::register::{Access, Table, WriteRestriction};
+use drivemap_core::register::{Access, RegisterInfo, Table, WriteRestriction};
 use drivemap_core::roles::{Edge, Target};
 use drivemap_core::rule::{Broadcast, Transports};
 use drivemap_core::scale::{Decimal, RawRange};
@@ -109,7 +114,67 @@ pub fn module(plan: &DrivePlan) -> String {
     out.push_str("    ];\n");
     out.push_str(&roles);
     out.push_str("}\n");
+    wrap(&out)
+}
+
+/// The longest line printed, but for one holding a string literal longer than that.
+pub const WIDTH: usize = 100;
+
+/// Every line of `text` longer than [`WIDTH`] broken after a comma (outside string literals)
+/// into lines that fill it, continued one step deeper than the line's indentation; comments
+/// stay as they are.
+pub fn wrap(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + text.len() / 16);
+    for line in text.lines() {
+        if line.len() <= WIDTH || line.trim_start().starts_with("//") {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        }
+        let indent = line.len() - line.trim_start().len();
+        let cont = " ".repeat(indent + 4);
+        let mut current = String::new();
+        for piece in comma_pieces(line) {
+            if current.is_empty() || current.len() + piece.len() <= WIDTH {
+                current.push_str(piece);
+            } else {
+                out.push_str(current.trim_end());
+                out.push('\n');
+                current = format!("{cont}{}", piece.trim_start());
+            }
+        }
+        out.push_str(&current);
+        out.push('\n');
+    }
     out
+}
+
+/// `line` cut where a line may break, outside string literals: after `", "` and `"{ "`, and
+/// before the `.` of a method called on a `)` (the pieces joined are the line).
+fn comma_pieces(line: &str) -> Vec<&str> {
+    let bytes = line.as_bytes();
+    let mut pieces = Vec::new();
+    let (mut start, mut in_string, mut escaped) = (0, false, false);
+    for (i, &b) in bytes.iter().enumerate() {
+        if in_string {
+            match b {
+                _ if escaped => escaped = false,
+                b'\\' => escaped = true,
+                b'"' => in_string = false,
+                _ => {}
+            }
+        } else if b == b'"' {
+            in_string = true;
+        } else if (b == b',' || b == b'{') && bytes.get(i + 1) == Some(&b' ') {
+            pieces.push(&line[start..i + 2]);
+            start = i + 2;
+        } else if b == b')' && bytes.get(i + 1) == Some(&b'.') {
+            pieces.push(&line[start..i + 1]);
+            start = i + 1;
+        }
+    }
+    pieces.push(&line[start..]);
+    pieces
 }
 
 /// `pub const ROLES`: one place per line, the register's id in a comment.
@@ -393,38 +458,65 @@ fn access(a: Access) -> &'static str {
 /// The indentation of a row's second and third lines.
 const ROW_INDENT: usize = 12;
 
-/// One register's plan as a Rust expression: its identity on the first line, its unit and
-/// conversion on the second, its envelope and the plan's other parts on the third.
+/// One register's plan as a Rust expression: its identity (the fields that differ from
+/// `RegisterInfo::DEFAULT`), its unit, conversion, envelope and the plan's other parts, on one
+/// line that [`module`] wraps (`RegisterPlan::word` for a plain unsigned word without unit).
 pub fn row(r: &RegisterPlan) -> String {
     let i = &r.info;
-    let mut s = format!(
-        "RegisterPlan::new(RegisterInfo {{ id: {}, param: {}, name: {}, address: {}, access: {}, \
-         table: {}, width: {}, broadcast_only: {}, source: {} }},\n{:ROW_INDENT$}{}, {},\n{:ROW_INDENT$}{})",
-        string(i.id),
-        match i.param {
-            Some(p) => format!("Some({})", string(p)),
-            None => "None".into(),
-        },
-        string(i.name),
-        hex(i.address),
-        access(i.access),
-        match i.table {
-            Table::Holding => "Table::Holding",
-            Table::Input => "Table::Input",
-        },
-        match i.width {
-            Width::Word => "Width::Word",
-            Width::Pair(WordOrder::HighFirst) => "Width::Pair(WordOrder::HighFirst)",
-            Width::Pair(WordOrder::LowFirst) => "Width::Pair(WordOrder::LowFirst)",
-        },
-        i.broadcast_only,
-        string(i.source),
-        "",
-        string(r.unit),
-        conversion(&r.conversion, ROW_INDENT),
-        "",
-        range(r.envelope),
+    let d = RegisterInfo::DEFAULT;
+    let mut info = vec![format!("id: {}", string(i.id))];
+    if let Some(p) = i.param {
+        info.push(format!("param: Some({})", string(p)));
+    }
+    info.push(format!("name: {}", string(i.name)));
+    info.push(format!("address: {}", hex(i.address)));
+    if i.access != d.access {
+        info.push(format!("access: {}", access(i.access)));
+    }
+    if i.table != d.table {
+        info.push(format!(
+            "table: {}",
+            match i.table {
+                Table::Holding => "Table::Holding",
+                Table::Input => "Table::Input",
+            }
+        ));
+    }
+    if i.width != d.width {
+        info.push(format!(
+            "width: {}",
+            match i.width {
+                Width::Word => "Width::Word",
+                Width::Pair(WordOrder::HighFirst) => "Width::Pair(WordOrder::HighFirst)",
+                Width::Pair(WordOrder::LowFirst) => "Width::Pair(WordOrder::LowFirst)",
+            }
+        ));
+    }
+    if i.broadcast_only != d.broadcast_only {
+        info.push(format!("broadcast_only: {}", i.broadcast_only));
+    }
+    info.push(format!("source: {}", string(i.source)));
+    let info = format!(
+        "RegisterInfo {{ {}, ..RegisterInfo::DEFAULT }}",
+        info.join(", ")
     );
+    let mut s = if r.conversion == Conversion::WORD
+        && r.unit.is_empty()
+        && r.envelope == RawRange::word(false)
+    {
+        format!("RegisterPlan::word({info})")
+    } else {
+        let conversion = if r.conversion == Conversion::WORD {
+            "Conversion::WORD".to_owned()
+        } else {
+            conversion(&r.conversion, ROW_INDENT)
+        };
+        format!(
+            "RegisterPlan::new({info}, {}, {conversion}, {})",
+            string(r.unit),
+            range(r.envelope),
+        )
+    };
     if !r.moves.is_empty() || !r.also_at.is_empty() {
         let moves = block(r.moves, ROW_INDENT, |m: &Move, _| {
             format!(
