@@ -1,8 +1,10 @@
 //! The JSON export (`drivemap-export/1`) that other tools and review checks consume.
 //!
-//! Registers are the facts view's ([`crate::facts`]): each register's object is a mapping of
-//! its [`RegisterData`](crate::facts::data::RegisterData) and identity, with no second walk of
-//! the map's registers. They are listed by address (broadcast registers after the others). `min`, `max` and
+//! Registers and protocol are the facts view's ([`crate::facts`]): each register's object is a
+//! mapping of its [`RegisterData`](crate::facts::data::RegisterData) and identity, the
+//! `protocol` object of the protocol rows' figures and entries and
+//! [`ProtocolData`](crate::facts::ProtocolData), with no second walk of the map's registers or
+//! protocol. Registers are listed by address (broadcast registers after the others). `min`, `max` and
 //! `default` are engineering values of the base variant; `scale` is null where it depends on a
 //! setting (`scale_selected_by` names the parameter, or `<parameter>.<field>` for a field of it)
 //! or on another quantity (`scale_relative_to`). `drive.manuals` lists the names citations use;
@@ -21,9 +23,11 @@
 use serde_json::{Value, json};
 
 use crate::facts::data::{Quantity, ScaleData};
-use crate::facts::{self, RegisterFacts};
+use drivemap_core::stated::ProtocolFact;
+
+use crate::facts::{self, Figure, ProtocolFacts, ProtocolKey, ProtocolRow, RegisterFacts};
 use crate::ir::Drive;
-use crate::model::{self, DefaultValue};
+use crate::model::DefaultValue;
 
 pub const FORMAT: &str = "drivemap-export/1";
 
@@ -198,13 +202,6 @@ fn table_name(t: drivemap_core::register::Table) -> &'static str {
     }
 }
 
-/// The export of one drive.
-/// A per-request limit: its working value (the Modbus one when the map gives none), its
-/// citation and, when the manual prints none, the reason.
-fn limit_json(l: &model::Limit, working: u16) -> Value {
-    json!({"value": working, "source": l.source, "not_printed": l.unknown})
-}
-
 /// An example frame: the map's keys (`bytes` as printed), the bytes as numbers (`frame`,
 /// empty when the text is not hex bytes) and the line `doc` shows (`text`).
 fn example_json(e: &crate::examples::Example) -> Value {
@@ -218,9 +215,10 @@ fn example_json(e: &crate::examples::Example) -> Value {
     v
 }
 
+/// The export of one drive.
 pub fn export(drive: &Drive) -> Value {
-    let p = &drive.protocol;
-    let mut regs = facts::facts(drive).registers;
+    let view = facts::facts(drive);
+    let mut regs: Vec<&RegisterFacts> = view.registers.iter().collect();
     regs.sort_by_key(|f| (f.data.broadcast, f.address));
     let mut out = json!({
         "format": FORMAT,
@@ -237,25 +235,9 @@ pub fn export(drive: &Drive) -> Value {
             "address_format": drive.address_format,
         },
         "variants": drive.variants,
-        "protocol": {
-            "transports": p.transports,
-            // The working list; `limits.function_codes` (when cited or not printed) says more.
-            "function_codes": p.function_codes.codes,
-            // The working numbers; `limits` (when one is cited or not printed) says more.
-            "max_read": p.max_read(),
-            "max_write": p.max_write(),
-
-            "slave_address": p.slave_address,
-            "broadcast": p.broadcast,
-            "exceptions": p.exceptions,
-            "commands": p.commands,
-            "eeprom": p.eeprom,
-            "addressing": p.addressing,
-            "timing": p.timing,
-            "serial": p.serial,
-        },
+        "protocol": protocol(&view.protocol),
         "groups": drive.groups.iter().map(|g| json!({"id": g.id, "name": g.name, "table": g.table, "source": g.source, "broadcast": g.broadcast})).collect::<Vec<_>>(),
-        "registers": regs.iter().map(register).collect::<Vec<_>>(),
+        "registers": regs.into_iter().map(register).collect::<Vec<_>>(),
         "conflicts": drive.conflicts,
         "gaps": drive.gaps,
         "removed": drive.removed,
@@ -264,83 +246,132 @@ pub fn export(drive: &Drive) -> Value {
     if !drive.examples.is_empty() {
         out["examples"] = json!(drive.examples.iter().map(example_json).collect::<Vec<_>>());
     }
+    // Index/value register pairs and their entries (an empty list when none).
+    out["indexed"] = crate::indexed::export(drive);
+    out
+}
+
+/// The `protocol` object: a mapping of the protocol facts' figures and entries.
+fn protocol(view: &ProtocolFacts) -> Value {
+    let entry = |key| view.get(key).map_or(Value::Null, |r| r.entry.clone());
+    let figure = |key| view.get(key).map(|r| &r.figure);
+    let codes = match figure(ProtocolKey::FunctionCodes) {
+        Some(Figure::Codes(codes)) => json!(codes),
+        _ => json!([]),
+    };
+    let count = |key| match figure(key) {
+        Some(Figure::Count(n)) => json!(n),
+        _ => Value::Null,
+    };
+    let mut out = json!({
+        "transports": entry(ProtocolKey::Transports),
+        // The working list; `limits.function_codes` (when cited or not printed) says more.
+        "function_codes": codes,
+        // The working numbers; `limits` (when one is cited or not printed) says more.
+        "max_read": count(ProtocolKey::MaxRead),
+        "max_write": count(ProtocolKey::MaxWrite),
+
+        "slave_address": entry(ProtocolKey::SlaveAddress),
+        "broadcast": entry(ProtocolKey::Broadcast),
+        "exceptions": view.data.exceptions,
+        "commands": view.commands.iter().map(|c| c.entry.clone()).collect::<Vec<_>>(),
+        "eeprom": entry(ProtocolKey::Eeprom),
+        "addressing": entry(ProtocolKey::Addressing),
+        "timing": entry(ProtocolKey::Timing),
+        "serial": entry(ProtocolKey::Serial),
+    });
     // What the protocol's working figures rest on, when a map says more than the number:
     // a citation, or "not printed" with the reason.
+    let stated = |r: &&ProtocolRow| r.citation.is_some() || r.not_printed.is_some();
+    let why = |r: &ProtocolRow| r.not_printed.as_ref().map(|n| n.why.clone());
     let mut limits = serde_json::Map::new();
-    let fc = &p.function_codes;
-    if fc.stated() {
+    if let Some(fc) = view.get(ProtocolKey::FunctionCodes).filter(stated) {
         limits.insert(
             "function_codes".into(),
-            json!({"codes": fc.codes, "source": fc.source, "not_printed": fc.unknown}),
+            json!({"codes": codes, "source": fc.citation, "not_printed": why(fc)}),
         );
     }
-    let stated = |l: &model::Limit| l.source.is_some() || l.unknown.is_some();
-    if stated(&p.max_read) || stated(&p.max_write) {
-        limits.insert("max_read".into(), limit_json(&p.max_read, p.max_read()));
-        limits.insert("max_write".into(), limit_json(&p.max_write, p.max_write()));
+    let (read, write) = (
+        view.get(ProtocolKey::MaxRead),
+        view.get(ProtocolKey::MaxWrite),
+    );
+    if let (Some(read), Some(write)) = (read, write)
+        && (stated(&read) || stated(&write))
+    {
+        // A per-request limit: its working value (the Modbus one when the map gives none),
+        // its citation and, when the manual prints none, the reason.
+        for (name, l) in [("max_read", read), ("max_write", write)] {
+            let value = count(l.key);
+            limits.insert(
+                name.into(),
+                json!({"value": value, "source": l.citation, "not_printed": why(l)}),
+            );
+        }
     }
     // A broadcast whose rules are not printed: says so in the words of `doc`, with the reason.
-    if let Some(b) = &p.broadcast
-        && let Some(why) = &b.unknown
+    if let Some(b) = view.get(ProtocolKey::Broadcast)
+        && let Some(np) = &b.not_printed
+        && let Figure::Broadcast {
+            functions,
+            registers,
+        } = &b.figure
     {
-        out["protocol"]["broadcast"] = json!({
-            "functions": b.functions,
-            "registers": b.registers,
-            "source": b.source,
-            "not_printed": why.trim(),
-            "text": format!("{} ({})", crate::describe::broadcast_not_printed(why), b.source),
+        let source = b.citation.as_deref().unwrap_or_default();
+        out["broadcast"] = json!({
+            "functions": functions,
+            "registers": registers,
+            "source": source,
+            "not_printed": np.why.trim(),
+            "text": format!("{} ({source})", crate::describe::broadcast_not_printed(&np.why)),
         });
     }
     // Serial formats chosen by a parameter: each case with its data bits and its notation
     // (`8E1`); the line's single `stop_bits` does not apply then.
-    if let Some(s) = &p.serial
-        && let Some(f) = &s.formats
-    {
-        let cases: Vec<Value> = f
-            .cases
-            .iter()
-            .zip(drive.serial_format_list())
+    if let Some(f) = out["serial"]["formats"].as_object().cloned() {
+        let cases: Vec<Value> = f["cases"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .zip(&view.data.serial_formats)
             .map(|(c, x)| {
                 json!({
-                    "when": c.when,
+                    "when": c["when"],
                     "data_bits": x.data_bits,
-                    "parity": c.parity,
-                    "stop_bits": c.stop_bits,
+                    "parity": c["parity"],
+                    "stop_bits": c["stop_bits"],
                     "format": x.to_string(),
-                    "source": c.source,
+                    "source": c["source"],
                 })
             })
             .collect();
-        let serial = &mut out["protocol"]["serial"];
+        let serial = &mut out["serial"];
         if let Some(m) = serial.as_object_mut() {
             m.remove("stop_bits");
         }
         serial["formats"] = json!({
-            "selected_by": f.selected_by,
-            "source": f.source,
+            "selected_by": f["selected_by"],
+            "source": f["source"],
             "cases": cases,
         });
     }
     if !limits.is_empty() {
-        out["protocol"]["limits"] = Value::Object(limits);
+        out["limits"] = Value::Object(limits);
     }
     // The working frame gap, given or the Modbus 3.5 characters, is always written.
     // (First, where the model's serialization always had it.)
-    if let Some(t) = &p.timing
-        && let Some(given) = out["protocol"]["timing"].as_object()
+    if let Some(chars) = view.data.frame_gap_chars
+        && let Some(given) = out["timing"].as_object()
     {
         let mut timing = serde_json::Map::new();
-        timing.insert("frame_gap_chars".into(), json!(t.frame_gap_chars()));
+        timing.insert("frame_gap_chars".into(), json!(chars));
         for (k, v) in given {
             if k != "frame_gap_chars" {
                 timing.insert(k.clone(), v.clone());
             }
         }
-        out["protocol"]["timing"] = Value::Object(timing);
+        out["timing"] = Value::Object(timing);
     }
-    not_printed(p, &mut out["protocol"]);
-    // Index/value register pairs and their entries (an empty list when none).
-    out["indexed"] = crate::indexed::export(drive);
+    not_printed(view, &mut out);
     out
 }
 
@@ -350,29 +381,37 @@ pub fn export(drive: &Drive) -> Value {
 /// range as `min`/`max`, `timing.frame_gap_chars`), so a reader of the numbers alone keeps
 /// working; each object marked not printed carries `not_printed: <why>` in place of the map's
 /// `unknown`.
-fn not_printed(p: &model::Protocol, out: &mut Value) {
-    let list = crate::stated::unprinted(p);
+fn not_printed(view: &ProtocolFacts, out: &mut Value) {
+    // The rows marked not printed, in the vocabulary's order of facts.
+    let mut list: Vec<(ProtocolFact, &ProtocolRow, &str)> = view
+        .rows
+        .iter()
+        .filter_map(|r| Some((r.key.fact()?, r, r.not_printed.as_ref()?.why.trim())))
+        .collect();
     if list.is_empty() {
         return;
     }
-    let (lo, hi) = p.slave_address.range();
-    out["slave_address"]["min"] = json!(lo);
-    out["slave_address"]["max"] = json!(hi);
+    list.sort_by_key(|(fact, ..)| ProtocolFact::ALL.iter().position(|f| f == fact));
+    if let Some(Figure::Range { min, max }) = view.get(ProtocolKey::SlaveAddress).map(|r| &r.figure)
+    {
+        out["slave_address"]["min"] = json!(min);
+        out["slave_address"]["max"] = json!(max);
+    }
     let mut facts = serde_json::Map::new();
-    for u in list {
+    for (fact, row, why) in list {
         facts.insert(
-            u.fact.key().into(),
-            json!({"why": u.why, "source": u.source, "used": u.fact.fallback()}),
+            fact.key().into(),
+            json!({"why": why, "source": row.citation, "used": fact.fallback()}),
         );
         // The object itself says so, in export's words (`not_printed`, as `limits` does).
         let mut at = &mut *out;
-        for k in u.fact.key().split('.') {
+        for k in fact.key().split('.') {
             at = &mut at[k];
         }
         if let Some(o) = at.as_object_mut()
             && o.remove("unknown").is_some()
         {
-            o.insert("not_printed".into(), json!(u.why));
+            o.insert("not_printed".into(), json!(why));
         }
     }
     out["not_printed"] = Value::Object(facts);

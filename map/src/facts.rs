@@ -22,8 +22,8 @@ use crate::model::Scale;
 
 mod protocol;
 pub use protocol::{
-    CommandFacts, ExceptionFacts, Figure, NotPrinted, ProtocolFacts, ProtocolKey, ProtocolRow,
-    manual_address, protocol,
+    CommandFacts, ExceptionFacts, Figure, NotPrinted, ProtocolData, ProtocolFacts, ProtocolKey,
+    ProtocolRow, manual_address, protocol,
 };
 
 /// What a row of a register's facts says.

@@ -262,3 +262,66 @@ fn a_reference_is_shown_by_parameter_and_a_limit_keeps_the_maps_name() {
     };
     assert_eq!(json["max_relative"]["relative_to"], name.as_str());
 }
+
+/// The export's protocol is the protocol facts': the working figures are the rows' figures,
+/// each object is the row's entry, and `not_printed` lists exactly the rows marked so.
+#[test]
+fn the_exported_protocol_is_the_protocol_facts() {
+    use drivemap_map::facts::{Figure, ProtocolKey};
+    for path in maps() {
+        let drive = read(&path);
+        let view = facts::facts(&drive).protocol;
+        let export = drivemap_map::export::export(&drive);
+        let p = &export["protocol"];
+        let at = path.display();
+        let figure = |key| &view.get(key).unwrap().figure;
+        let Figure::Codes(codes) = figure(ProtocolKey::FunctionCodes) else {
+            panic!("{at}: function codes")
+        };
+        assert_eq!(p["function_codes"], serde_json::json!(codes), "{at}");
+        for (key, name) in [
+            (ProtocolKey::MaxRead, "max_read"),
+            (ProtocolKey::MaxWrite, "max_write"),
+        ] {
+            let Figure::Count(n) = figure(key) else {
+                panic!("{at}: {name}")
+            };
+            assert_eq!(p[name], *n, "{at}: {name}");
+        }
+        let Figure::Range { min, max } = figure(ProtocolKey::SlaveAddress) else {
+            panic!("{at}: slave address")
+        };
+        // The slave range is written out when something is not printed, else as the map has it.
+        if p["not_printed"].is_object() {
+            assert_eq!(p["slave_address"]["min"], *min, "{at}");
+            assert_eq!(p["slave_address"]["max"], *max, "{at}");
+        }
+        assert_eq!(
+            p["transports"],
+            view.get(ProtocolKey::Transports).unwrap().entry,
+            "{at}"
+        );
+        assert_eq!(
+            p["commands"].as_array().unwrap().len(),
+            view.commands.len(),
+            "{at}"
+        );
+        let mut marked: Vec<&str> = view
+            .rows
+            .iter()
+            .filter(|r| r.not_printed.is_some())
+            .filter_map(|r| r.key.fact())
+            .map(|f| f.key())
+            .collect();
+        marked.sort_unstable();
+        let mut listed: Vec<&str> = p["not_printed"]
+            .as_object()
+            .map(|o| o.keys().map(String::as_str).collect())
+            .unwrap_or_default();
+        listed.sort_unstable();
+        assert_eq!(listed, marked, "{at}");
+        if let Some(chars) = view.data.frame_gap_chars {
+            assert_eq!(p["timing"]["frame_gap_chars"], chars, "{at}");
+        }
+    }
+}

@@ -207,6 +207,22 @@ pub struct ProtocolFacts {
     /// The protocol's own citation, and why it is indirect when it is.
     pub source: Option<String>,
     pub indirect: Option<String>,
+    /// What the JSON export writes beside the rows' figures and entries (not part of this
+    /// view's JSON).
+    #[serde(skip)]
+    pub data: ProtocolData,
+}
+
+/// The protocol's working figures and entries that no row carries, for the JSON export.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ProtocolData {
+    /// The map's exception list (or why it prints none) as written.
+    pub exceptions: serde_json::Value,
+    /// The silence between frames in characters: as given, else the Modbus 3.5; none
+    /// without timing.
+    pub frame_gap_chars: Option<f64>,
+    /// The serial formats a parameter selects, decided, in the map's order of cases.
+    pub serial_formats: Vec<drivemap_core::profile::SerialFormat>,
 }
 
 impl ProtocolFacts {
@@ -289,6 +305,11 @@ pub fn protocol(drive: &Drive) -> ProtocolFacts {
         timing_notes: timing.map(|t| t.notes.clone()).unwrap_or_default(),
         source: p.source.clone(),
         indirect: p.indirect.clone(),
+        data: ProtocolData {
+            exceptions: serde_json::to_value(&p.exceptions).unwrap_or_default(),
+            frame_gap_chars: timing.map(model::Timing::frame_gap_chars),
+            serial_formats: drive.serial_format_list(),
+        },
     }
 }
 
@@ -301,6 +322,7 @@ fn transports(p: &Protocol) -> ProtocolRow {
         Figure::Names(names),
         p.source.as_deref(),
     )
+    .entry(&p.transports)
 }
 
 fn function_codes(p: &Protocol) -> ProtocolRow {
