@@ -338,17 +338,17 @@ fn protocol<'a>(drive: &'a Drive, w: &mut Walk<'a>) {
     let at = Path::root().key("protocol");
     let model::Protocol {
         transports: _,
-        function_codes,
-        max_read,
-        max_write,
+        function_codes: _,
+        max_read: _,
+        max_write: _,
         slave_address,
         broadcast,
         exceptions,
         commands,
         eeprom,
         addressing,
-        timing,
-        serial,
+        timing: _,
+        serial: _,
         source,
         indirect: reason,
         notes: _,
@@ -413,6 +413,20 @@ fn protocol<'a>(drive: &'a Drive, w: &mut Walk<'a>) {
             indirect(&a.indirect),
         );
     }
+    protocol_figures(drive, w);
+}
+
+/// The protocol's timing, serial line and limits (continues [`protocol`]).
+fn protocol_figures<'a>(drive: &'a Drive, w: &mut Walk<'a>) {
+    let at = Path::root().key("protocol");
+    let model::Protocol {
+        function_codes,
+        max_read,
+        max_write,
+        timing,
+        serial,
+        ..
+    } = &drive.protocol;
     if let Some(t) = timing {
         let tp = at.key("timing");
         w.at(
@@ -560,6 +574,26 @@ fn register<'a>(drive: &'a Drive, ri: usize, w: &mut Walk<'a>) {
             );
         }
     }
+    register_keys(drive, ri, w);
+}
+
+/// A register's other cited keys (continues [`register`]): pair, rules, limits, variants,
+/// alternatives, scale cases, indexed entries, conflicts.
+fn register_keys<'a>(drive: &'a Drive, ri: usize, w: &mut Walk<'a>) {
+    let r = &drive.registers[ri];
+    let d = &r.def;
+    let id: &'a str = &d.id;
+    let mut at = |kind: PlaceKind<'a>, item: Path, source: Option<&'a str>, reason: Reason<'a>| {
+        w.out.push(CitationPlace {
+            kind,
+            path: item.key("source"),
+            source,
+            register: Some(ri),
+            register_name: Some(id),
+            required: false,
+            reason,
+        });
+    };
     if let Some(pair) = &d.pair {
         at(
             PlaceKind::Pair,

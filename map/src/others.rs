@@ -262,159 +262,28 @@ pub fn other_citations(drive: &Drive) -> Vec<Other> {
 /// (registers, values, fields) or not by content (variant options, groups, removed registers,
 /// pairs, indexed entries, example frames, an exception list the manual does not print).
 fn rule_of(drive: &Drive, place: &CitationPlace<'_>) -> Option<(u8, &'static str, String, Rule)> {
-    let p = &drive.protocol;
     let register = || place.register.map(|i| &drive.registers[i]);
-    let protocol = |what: &str, rule: Rule| Some((1, "protocol", what.to_owned(), rule));
     match place.kind {
         PlaceKind::Role { role, index } => {
             let rule = role_rule(drive, role, index)?;
             Some((0, "role", format!("role `{role}`"), rule))
         }
-        PlaceKind::Protocol => protocol(
-            "the protocol",
-            Rule::any().words(PROTOCOL_WORDS).name("function code"),
-        ),
-        PlaceKind::SlaveAddress => protocol(
-            "the slave address",
-            Rule::any()
-                .words(&["address", "addresses", "station", "slave", "node"])
-                .param(p.slave_address.param.as_deref()),
-        ),
-        PlaceKind::Broadcast => protocol(
-            "the broadcast",
-            Rule::any()
-                .words(&["broadcast", "broadcasting"])
-                .name("all slaves")
-                .name("all stations")
-                .name("all drives")
-                .name("all inverters")
-                .name("slave address 0")
-                .name("station 0"),
-        ),
-        PlaceKind::Exception(i) => {
-            let e = &p.exceptions[i];
-            Some((
-                1,
-                "protocol",
-                format!("exception {:02X}h", e.code),
-                Rule::any().code(u16::from(e.code)).name(&e.name),
-            ))
-        }
-        PlaceKind::Command(i) => {
-            let c = &p.commands[i];
-            let mut rule = Rule::any().name(&c.name).name(&c.id.replace('_', " "));
-            for w in &c.writes {
-                rule = rule.address(w.address);
-            }
-            Some((1, "protocol", format!("command `{}`", c.id), rule))
-        }
-        PlaceKind::Eeprom => {
-            let e = p.eeprom.as_ref()?;
-            protocol(
-                "the EEPROM endurance",
-                Rule::any()
-                    .words(&["eeprom", "nonvolatile", "volatile", "memory"])
-                    .number(e.endurance),
-            )
-        }
-        PlaceKind::Addressing => protocol(
-            "the addressing",
-            Rule::any().words(&[
-                "address",
-                "addresses",
-                "addressing",
-                "register",
-                "registers",
-            ]),
-        ),
-        PlaceKind::Timing => protocol("the timing", Rule::any().words(TIMING_WORDS)),
-        PlaceKind::TimingInterval(key) => {
-            let t = p.timing.as_ref()?;
-            let i = match key {
-                "frame_gap" => &t.frame_gap,
-                "inter_char_timeout" => &t.inter_char_timeout,
-                "response_time" => &t.response_time,
-                _ => &t.request_gap,
-            }
-            .as_ref()?;
-            let mut rule = Rule::any().words(TIMING_WORDS);
-            for n in [i.ms, i.chars].into_iter().flatten() {
-                rule = rule.number(crate::describe::num(n));
-            }
-            if let Some(b) = i.bits {
-                rule = rule.number(b);
-            }
-            Some((1, "protocol", format!("timing `{key}`"), rule))
-        }
-        PlaceKind::Serial => {
-            let s = p.serial.as_ref()?;
-            let mut rule = Rule::any().words(&[
-                "baud",
-                "bps",
-                "parity",
-                "speed",
-                "transmission",
-                "stop",
-                "data",
-            ]);
-            for b in &s.baud_rates {
-                rule = rule.number(b);
-            }
-            protocol("the serial line", rule)
-        }
-        PlaceKind::SerialFormats => {
-            let f = p.serial.as_ref()?.formats.as_ref()?;
-            protocol(
-                "the serial formats",
-                Rule::any()
-                    .words(PARITY_WORDS)
-                    .param(Some(&f.selected_by))
-                    .param(
-                        drive
-                            .find(&f.selected_by)
-                            .and_then(|r| r.def.param.as_deref()),
-                    ),
-            )
-        }
-        PlaceKind::SerialFormatCase(i) => {
-            let s = p.serial.as_ref()?;
-            let c = &s.formats.as_ref()?.cases[i];
-            let letter = c.parity.letter().to_ascii_lowercase();
-            let bits = c.data_bits.unwrap_or(s.data_bits);
-            Some((
-                1,
-                "protocol",
-                format!("serial format {}", c.when),
-                Rule::any()
-                    .words(PARITY_WORDS)
-                    .words(&[&format!("{bits}{letter}{}", c.stop_bits)]),
-            ))
-        }
-        // A list or limit the manual does not print is cited where its working value comes
-        // from: indirect by nature, with `unknown` as the reason.
-        PlaceKind::FunctionCodes => {
-            let mut rule = Rule::any().name("function code").name("function codes");
-            for c in &p.function_codes.codes {
-                rule = rule.code(u16::from(*c));
-            }
-            protocol("the function codes", rule)
-        }
-        PlaceKind::Limit(key) => {
-            let l = if key == "max_read" {
-                &p.max_read
-            } else {
-                &p.max_write
-            };
-            let rule = match l.value {
-                Some(v) => Rule::any().number(v),
-                None => Rule::any(),
-            };
-            Some((
-                1,
-                "protocol",
-                format!("`{key}`"),
-                rule.words(&["quantity", "registers", "words"]),
-            ))
+        PlaceKind::Protocol
+        | PlaceKind::SlaveAddress
+        | PlaceKind::Broadcast
+        | PlaceKind::Exception(_)
+        | PlaceKind::Command(_)
+        | PlaceKind::Eeprom
+        | PlaceKind::Addressing
+        | PlaceKind::Timing
+        | PlaceKind::TimingInterval(_)
+        | PlaceKind::Serial
+        | PlaceKind::SerialFormats
+        | PlaceKind::SerialFormatCase(_)
+        | PlaceKind::FunctionCodes
+        | PlaceKind::Limit(_) => {
+            let (what, rule) = protocol_rule(drive, place.kind)?;
+            Some((1, "protocol", what, rule))
         }
         PlaceKind::ConflictReading { conflict, reading } => {
             // A reading of a register's own conflict may also cite the register's row.
@@ -427,20 +296,15 @@ fn rule_of(drive: &Drive, place: &CitationPlace<'_>) -> Option<(u8, &'static str
             if let Some(i) = place.register {
                 rule = rule.register(i);
             }
-            Some((
-                2,
-                "conflict",
-                format!("a reading of conflict \"{}\"", c.topic),
-                rule,
-            ))
+            let what = format!("a reading of conflict \"{}\"", c.topic);
+            Some((2, "conflict", what, rule))
         }
         PlaceKind::Gap(i) => {
             let (what, rule) = gap_rule(&drive.gaps[i]);
             Some((3, "gap", what, rule))
         }
         PlaceKind::RelativeLimit => {
-            let r = register()?;
-            let (what, rule) = limit_rule(drive, r)?;
+            let (what, rule) = limit_rule(drive, register()?)?;
             Some((4, "limit", what, rule))
         }
         PlaceKind::RegisterFunctions => {
@@ -453,12 +317,8 @@ fn rule_of(drive: &Drive, place: &CitationPlace<'_>) -> Option<(u8, &'static str
             for c in &f.codes {
                 rule = rule.code(u16::from(*c));
             }
-            Some((
-                5,
-                "functions",
-                format!("the function codes of {}", r.id()),
-                rule,
-            ))
+            let what = format!("the function codes of {}", r.id());
+            Some((5, "functions", what, rule))
         }
         PlaceKind::ExceptionsUnknown
         | PlaceKind::VariantOption { .. }
@@ -478,6 +338,113 @@ fn rule_of(drive: &Drive, place: &CitationPlace<'_>) -> Option<(u8, &'static str
         | PlaceKind::IndexedEntry(_)
         | PlaceKind::Example(_) => None,
     }
+}
+
+/// What the line of a protocol item may print besides the item's own figures, by kind of place
+/// ([`PlaceKind::name`]): how the item is named (an empty name: worded from the item), words,
+/// names. [`protocol_rule`] adds the figures (a parameter number, codes, numbers).
+#[rustfmt::skip]
+const PROTOCOL_SAYS: &[(&str, &str, &[&str], &[&str])] = &[
+    ("protocol", "the protocol", PROTOCOL_WORDS, &["function code"]),
+    ("slave address", "the slave address", &["address", "addresses", "station", "slave", "node"], &[]),
+    ("broadcast", "the broadcast", &["broadcast", "broadcasting"],
+        &["all slaves", "all stations", "all drives", "all inverters", "slave address 0", "station 0"]),
+    ("exception", "", &[], &[]),
+    ("command", "", &[], &[]),
+    ("eeprom", "the EEPROM endurance", &["eeprom", "nonvolatile", "volatile", "memory"], &[]),
+    ("addressing", "the addressing", &["address", "addresses", "addressing", "register", "registers"], &[]),
+    ("timing", "the timing", TIMING_WORDS, &[]),
+    ("timing interval", "", TIMING_WORDS, &[]),
+    ("serial", "the serial line", &["baud", "bps", "parity", "speed", "transmission", "stop", "data"], &[]),
+    ("serial formats", "the serial formats", PARITY_WORDS, &[]),
+    ("serial format case", "", PARITY_WORDS, &[]),
+    // A list or limit the manual does not print is cited where its working value comes from:
+    // indirect by nature, with `unknown` as the reason.
+    ("function codes", "the function codes", &[], &["function code", "function codes"]),
+    ("limit", "", &["quantity", "registers", "words"], &[]),
+];
+
+/// A protocol item's name and rule: its row of [`PROTOCOL_SAYS`] with the item's figures.
+fn protocol_rule(drive: &Drive, kind: PlaceKind<'_>) -> Option<(String, Rule)> {
+    let p = &drive.protocol;
+    let (_, what, words, names) = PROTOCOL_SAYS.iter().find(|row| row.0 == kind.name())?;
+    let mut what = what.to_string();
+    let mut rule = Rule::any().words(words);
+    for n in *names {
+        rule = rule.name(n);
+    }
+    match kind {
+        PlaceKind::SlaveAddress => rule = rule.param(p.slave_address.param.as_deref()),
+        PlaceKind::Exception(i) => {
+            let e = &p.exceptions[i];
+            what = format!("exception {:02X}h", e.code);
+            rule = rule.code(u16::from(e.code)).name(&e.name);
+        }
+        PlaceKind::Command(i) => {
+            let c = &p.commands[i];
+            what = format!("command `{}`", c.id);
+            rule = rule.name(&c.name).name(&c.id.replace('_', " "));
+            for w in &c.writes {
+                rule = rule.address(w.address);
+            }
+        }
+        PlaceKind::Eeprom => rule = rule.number(p.eeprom.as_ref()?.endurance),
+        PlaceKind::TimingInterval(key) => {
+            let t = p.timing.as_ref()?;
+            let i = match key {
+                "frame_gap" => &t.frame_gap,
+                "inter_char_timeout" => &t.inter_char_timeout,
+                "response_time" => &t.response_time,
+                _ => &t.request_gap,
+            }
+            .as_ref()?;
+            what = format!("timing `{key}`");
+            for n in [i.ms, i.chars].into_iter().flatten() {
+                rule = rule.number(crate::describe::num(n));
+            }
+            if let Some(b) = i.bits {
+                rule = rule.number(b);
+            }
+        }
+        PlaceKind::Serial => {
+            for b in &p.serial.as_ref()?.baud_rates {
+                rule = rule.number(b);
+            }
+        }
+        PlaceKind::SerialFormats => {
+            let f = p.serial.as_ref()?.formats.as_ref()?;
+            let param = drive
+                .find(&f.selected_by)
+                .and_then(|r| r.def.param.as_deref());
+            rule = rule.param(Some(&f.selected_by)).param(param);
+        }
+        PlaceKind::SerialFormatCase(i) => {
+            let s = p.serial.as_ref()?;
+            let c = &s.formats.as_ref()?.cases[i];
+            let letter = c.parity.letter().to_ascii_lowercase();
+            let bits = c.data_bits.unwrap_or(s.data_bits);
+            what = format!("serial format {}", c.when);
+            rule = rule.words(&[&format!("{bits}{letter}{}", c.stop_bits)]);
+        }
+        PlaceKind::FunctionCodes => {
+            for c in &p.function_codes.codes {
+                rule = rule.code(u16::from(*c));
+            }
+        }
+        PlaceKind::Limit(key) => {
+            let l = if key == "max_read" {
+                &p.max_read
+            } else {
+                &p.max_write
+            };
+            what = format!("`{key}`");
+            if let Some(v) = l.value {
+                rule = rule.number(v);
+            }
+        }
+        _ => {}
+    }
+    Some((what, rule))
 }
 
 const PARITY_WORDS: &[&str] = &["parity", "even", "odd", "none", "stop"];
