@@ -46,7 +46,7 @@ fn check_verifies_the_fixture_s_examples_and_names_the_recorded_crc() {
     );
     assert!(
         err.contains(
-            "orbis-q5.yaml:108:25: warning: example `frequency_too_high_refused`, byte 5 (62): CRC: the frame ends in 02 62, the CRC-16 of the bytes before it is 02 61 (low byte first) (recorded in `conflicts:`)"
+            "orbis-q5.yaml:108:25: warning: example `frequency_too_high_refused`, byte 5 (62): CRC: the frame ends in 02 62, the CRC-16 of the bytes before it is 02 61 (low byte first); recorded in `conflicts:` as \"CRC of the refused-write example\""
         ),
         "{err}"
     );
@@ -119,6 +119,28 @@ fn check_verifies_every_example_of_the_shipped_maps() {
         match expected {
             Some(frames) => assert!(line.contains(&frames), "{id}: {line}, expected {frames}"),
             None => assert!(!line.contains("example frames"), "{id}: {line}"),
+        }
+        // One warning per recorded frame (not one per byte that differs), each naming its
+        // conflict.
+        let warnings: Vec<&str> = err
+            .lines()
+            .filter(|l| {
+                let file = l.split(':').next().map(Path::new);
+                file.and_then(Path::file_name) == path.file_name()
+                    && l.contains(": warning: example `")
+            })
+            .collect();
+        assert_eq!(warnings.len(), recorded, "{id}: {warnings:#?}");
+        for e in drive.examples.iter().filter(|e| e.conflict.is_some()) {
+            let topic = e.conflict.as_deref().unwrap();
+            assert!(
+                warnings
+                    .iter()
+                    .any(|w| w.contains(&format!("example `{}`", e.id))
+                        && w.ends_with(&format!("recorded in `conflicts:` as \"{topic}\""))),
+                "{id}: no warning for `{}`: {warnings:#?}",
+                e.id
+            );
         }
     }
     assert!(frames_seen > 0, "no shipped map has example frames");

@@ -209,10 +209,80 @@ pub struct Verified {
     /// Errors: an example that contradicts the codec or the map without a `conflict` mark, or
     /// a mark on an example that verifies.
     pub errors: Vec<Diagnostic>,
-    /// The findings of examples whose contradiction the map records (`conflict:`).
-    pub known: Vec<Diagnostic>,
+    /// The examples whose contradiction the map records (`conflict:`), one each, with their
+    /// findings.
+    pub known: Vec<Recorded>,
     /// The examples verified with no finding.
     pub clean: usize,
+}
+
+/// One thing an example's bytes contradict.
+#[derive(Debug, Clone)]
+pub struct Finding {
+    /// The byte concerned (from 1) and its value; `None` for a finding about the example's
+    /// `says`.
+    pub byte: Option<(usize, u8)>,
+    /// What is wrong, without the example and byte that [`Finding::diagnostic`] names.
+    pub reason: String,
+    /// The finding located at its byte in the `bytes:` text (or at the `says` key), naming the
+    /// example and the byte.
+    pub diagnostic: Diagnostic,
+}
+
+/// An example whose contradiction of the codec or the map is recorded in `conflicts:` (its
+/// `conflict:` topic), with what it contradicts.
+#[derive(Debug, Clone)]
+pub struct Recorded {
+    /// The example's id.
+    pub example: String,
+    /// The topic of the `conflicts:` entry its `conflict:` names.
+    pub conflict: String,
+    /// Its findings, by the byte concerned (those about `says` last); never empty.
+    pub findings: Vec<Finding>,
+}
+
+impl Recorded {
+    /// The bytes that differ, as `byte 5 (62)` for one and `bytes 12, 14, 16` for several
+    /// (empty when every finding is about `says`).
+    pub fn bytes(&self) -> String {
+        let mut bytes: Vec<(usize, u8)> = self.findings.iter().filter_map(|f| f.byte).collect();
+        bytes.dedup_by_key(|(n, _)| *n);
+        match bytes[..] {
+            [] => String::new(),
+            [(n, value)] => format!("byte {n} ({value:02X})"),
+            _ => {
+                let numbers: Vec<String> = bytes.iter().map(|(n, _)| n.to_string()).collect();
+                format!("bytes {}", numbers.join(", "))
+            }
+        }
+    }
+
+    /// One warning for the frame, at its first finding's place (the first byte that differs):
+    /// the example, the bytes that differ, the first finding (and how many there are) and the
+    /// conflict recorded; as
+    /// `drivemap check` prints it (`file:line:col: warning: ...`).
+    pub fn warning(&self) -> String {
+        let first = &self.findings[0];
+        let bytes = self.bytes();
+        let at = if bytes.is_empty() {
+            String::new()
+        } else {
+            format!(", {bytes}")
+        };
+        let count = match self.findings.len() {
+            1 => String::new(),
+            n => format!(" (the first of {n} findings)"),
+        };
+        Diagnostic::new(
+            first.diagnostic.loc.clone(),
+            first.diagnostic.register.as_deref(),
+            format!(
+                "example `{}`{at}: {}{count}; recorded in `conflicts:` as \"{}\"",
+                self.example, first.reason, self.conflict
+            ),
+        )
+        .as_warning()
+    }
 }
 
 /// Verifies every example of `drive`; the findings are located at the byte concerned.
@@ -221,8 +291,16 @@ pub fn verify(drive: &Drive) -> Verified {
     for (i, (e, found)) in drive.examples.iter().zip(findings(drive)).enumerate() {
         match (&e.conflict, found.is_empty()) {
             (None, true) => v.clean += 1,
-            (None, false) => v.errors.extend(found),
-            (Some(_), false) => v.known.extend(found),
+            (None, false) => v.errors.extend(found.into_iter().map(|f| f.diagnostic)),
+            (Some(topic), false) => {
+                let mut findings = found;
+                findings.sort_by_key(|f| f.byte.map_or(usize::MAX, |(n, _)| n));
+                v.known.push(Recorded {
+                    example: e.id.clone(),
+                    conflict: topic.clone(),
+                    findings,
+                });
+            }
             (Some(topic), true) => v.errors.push(drive.error(
                 &Path::root().key("examples").index(i).key("conflict"),
                 None,
@@ -238,7 +316,7 @@ pub fn verify(drive: &Drive) -> Verified {
 }
 
 /// The findings of each example of `drive`, in order, marked or not.
-pub fn findings(drive: &Drive) -> Vec<Vec<Diagnostic>> {
+pub fn findings(drive: &Drive) -> Vec<Vec<Finding>> {
     let settings = default_settings(drive);
     let mut all = Vec::new();
     for (i, e) in drive.examples.iter().enumerate() {
@@ -288,9 +366,9 @@ impl Verifier<'_> {
         locate_offset(&self.bytes_loc, b.offset)
     }
 
-    fn error(&self, out: &mut Vec<Diagnostic>, index: usize, register: Option<&str>, msg: String) {
+    fn error(&self, out: &mut Vec<Finding>, index: usize, register: Option<&str>, msg: String) {
         let byte = self.offsets[index.min(self.offsets.len() - 1)].value;
-        out.push(Diagnostic::new(
+        let diagnostic = Diagnostic::new(
             self.at(index),
             register,
             format!(
@@ -298,7 +376,12 @@ impl Verifier<'_> {
                 self.example.id,
                 index + 1
             ),
-        ));
+        );
+        out.push(Finding {
+            byte: Some((index + 1, byte)),
+            reason: msg,
+            diagnostic,
+        });
     }
 
     /// Whether an example of the map answers this request with an exception.
@@ -311,15 +394,20 @@ impl Verifier<'_> {
         })
     }
 
-    fn says_error(&self, out: &mut Vec<Diagnostic>, key: &str, msg: String) {
-        out.push(self.drive.error(
+    fn says_error(&self, out: &mut Vec<Finding>, key: &str, msg: String) {
+        let diagnostic = self.drive.error(
             &self.path.key("says").key(key),
             None,
             format!("example `{}`: {msg}", self.example.id),
-        ));
+        );
+        out.push(Finding {
+            byte: None,
+            reason: msg,
+            diagnostic,
+        });
     }
 
-    fn run(&self, out: &mut Vec<Diagnostic>) {
+    fn run(&self, out: &mut Vec<Finding>) {
         let e = self.example;
         let f = match frame(e) {
             Ok(f) => f,
@@ -346,7 +434,7 @@ impl Verifier<'_> {
         }
     }
 
-    fn request(&self, f: &Frame, out: &mut Vec<Diagnostic>) {
+    fn request(&self, f: &Frame, out: &mut Vec<Finding>) {
         let e = self.example;
         let req = match pdu::decode_request(f.pdu()) {
             Ok(r) => r,
@@ -420,7 +508,7 @@ impl Verifier<'_> {
     fn functions_accepted(
         &self,
         f: &Frame,
-        out: &mut Vec<Diagnostic>,
+        out: &mut Vec<Finding>,
         function: u8,
         pdu_address: u16,
         quantity: usize,
@@ -470,7 +558,7 @@ impl Verifier<'_> {
     fn registers(
         &self,
         f: &Frame,
-        out: &mut Vec<Diagnostic>,
+        out: &mut Vec<Finding>,
         pdu_address: u16,
         quantity: usize,
         table: Option<Table>,
@@ -623,7 +711,7 @@ impl Verifier<'_> {
         }
     }
 
-    fn response(&self, f: &Frame, out: &mut Vec<Diagnostic>) {
+    fn response(&self, f: &Frame, out: &mut Vec<Finding>) {
         let e = self.example;
         let says = e.says.clone().unwrap_or_default();
         let function = f.bytes[f.pdu_start];

@@ -53,15 +53,69 @@ fn the_fixture_verifies_with_its_recorded_crc_known() {
     let (path, v) = verify(&original(), "as-is");
     assert!(v.errors.is_empty(), "{:?}", errors(&v));
     assert_eq!(v.clean, 11);
-    let known: Vec<String> = v.known.iter().map(ToString::to_string).collect();
+    assert_eq!(v.known.len(), 1, "{:?}", v.known);
+    let known = &v.known[0];
+    assert_eq!(
+        (known.example.as_str(), known.conflict.as_str()),
+        (
+            "frequency_too_high_refused",
+            "CRC of the refused-write example"
+        )
+    );
+    let findings: Vec<String> = known
+        .findings
+        .iter()
+        .map(|f| f.diagnostic.to_string())
+        .collect();
     // Line 108 is `bytes: "01 86 03 02 62"`; byte 5 (62, the CRC byte that differs) is at column 25.
     assert_eq!(
-        known,
+        findings,
         [format!(
             "{}:108:25: error: example `frequency_too_high_refused`, byte 5 (62): CRC: the frame \
              ends in 02 62, the CRC-16 of the bytes before it is 02 61 (low byte first)",
             path.display()
         )]
+    );
+    assert_eq!(
+        known.warning(),
+        format!(
+            "{}:108:25: warning: example `frequency_too_high_refused`, byte 5 (62): CRC: the \
+             frame ends in 02 62, the CRC-16 of the bytes before it is 02 61 (low byte first); \
+             recorded in `conflicts:` as \"CRC of the refused-write example\"",
+            path.display()
+        )
+    );
+}
+
+/// A recorded frame that contradicts the map at several bytes is one warning, at the first
+/// byte that differs, naming each byte and the conflict: a write of four registers from 0001h
+/// (0003h and 0004h are none of the map's), appended to a copy with a `conflict:` mark.
+#[test]
+fn a_recorded_frame_with_several_findings_is_one_warning() {
+    let bytes = rtu("01 10 00 01 00 04 08 00 01 0B B8 00 00 00 00");
+    let text = format!(
+        "{}  - id: write_beyond_the_map\n    transport: rtu\n    direction: request\n    \
+         bytes: \"{bytes}\"\n    source: \"orbis-q5.txt:23-24\"\n    \
+         conflict: CRC of the refused-write example\n",
+        original()
+    );
+    let (path, v) = verify(&text, "several");
+    assert!(v.errors.is_empty(), "{:?}", errors(&v));
+    assert_eq!(v.known.len(), 2, "{:?}", v.known);
+    let known = &v.known[1];
+    assert_eq!(known.example, "write_beyond_the_map");
+    assert_eq!(known.findings.len(), 2, "{:?}", known.findings);
+    assert_eq!(known.bytes(), "bytes 12, 14");
+    let line = text.lines().position(|l| l.contains(&bytes)).unwrap() + 1;
+    // `    bytes: "` puts byte 1 at column 13; byte 12 at 13 + 3 × 11 = 46.
+    assert_eq!(
+        known.warning(),
+        format!(
+            "{}:{line}:46: warning: example `write_beyond_the_map`, bytes 12, 14: address 0003h \
+             (word 3 of the frame) is not a register of the map (the first of 2 findings); \
+             recorded in `conflicts:` as \"CRC of the refused-write example\"",
+            path.display()
+        )
     );
 }
 

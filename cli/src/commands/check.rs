@@ -210,8 +210,9 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                     for d in &found.errors {
                         eprintln!("{d}");
                     }
-                    for d in &found.known {
-                        eprintln!("{} (recorded in `conflicts:`)", d.as_warning());
+                    // One warning per frame whose contradiction the map records.
+                    for r in &found.known {
+                        eprintln!("{}", r.warning());
                     }
                     map_errors += found.errors.len();
                     let marked = drive
