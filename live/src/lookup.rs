@@ -172,10 +172,8 @@ mod tests {
         drivemap_map::read_map(&p, &Default::default()).expect("fixture map")
     }
 
-    fn id<'a>(drive: &'a Drive, name: &str) -> Result<&'a str, String> {
-        find(drive, name)
-            .map(|r| r.def.id.as_str())
-            .map_err(|e| e.to_string())
+    fn id<'a>(drive: &'a Drive, name: &str) -> Result<&'a str, NotFound> {
+        find(drive, name).map(|r| r.def.id.as_str())
     }
 
     #[test]
@@ -189,13 +187,15 @@ mod tests {
         assert_eq!(id(&acme, "0x2200"), Ok("energy_counter"));
         // Digits alone in a hex manual are not an address, but the register they would be is
         // suggested first.
-        let e = id(&acme, "2101").unwrap_err();
+        let e = id(&acme, "2101").unwrap_err().to_string();
         assert!(
             e.starts_with("acme-vf1 has no register `2101`; did you mean 2101H (output_frequency)"),
             "{e}"
         );
         // An address no register has: not found, no guess from it.
         let e = id(&acme, "0x7777").unwrap_err();
+        assert_eq!((e.name.as_str(), e.drive.as_str()), ("0x7777", "acme-vf1"));
+        let e = e.to_string();
         assert!(e.starts_with("acme-vf1 has no register `0x7777`"), "{e}");
     }
 
@@ -209,9 +209,10 @@ mod tests {
         // The hex notations stay hex: 2DH is register 45.
         assert_eq!(id(&z3, "2DH"), Ok("acceleration_time"));
         assert_eq!(id(&z3, "0x2D"), Ok("acceleration_time"));
-        let e = id(&z3, "49").unwrap_err();
+        let e = id(&z3, "49").unwrap_err().to_string();
         assert!(e.starts_with("zenith-z3 has no register `49`"), "{e}");
         let e = id(&z3, "P-05").unwrap_err();
-        assert!(e.contains("did you mean"), "{e}");
+        assert!(!e.suggestions.is_empty(), "{e}");
+        assert!(e.to_string().contains("did you mean"), "{e}");
     }
 }

@@ -40,37 +40,86 @@ fn base() -> String {
     std::fs::read_to_string(cli.join("example-drive.yaml")).unwrap()
 }
 
-/// Reads a version of the example map from memory (no temporary files).
-fn read(name: &str, text: &str) -> Result<Drive, String> {
-    crate::read_map_str("example-drive.yaml", text, &Context::default())
-        .map_err(|d| format!("the {name} map does not validate:\n{d}"))
+/// Why a case failed, said in the test's failure message.
+#[derive(Debug, PartialEq)]
+enum CaseError {
+    /// An edit's `from` text does not occur exactly once in the map.
+    NotOnce { from: String, count: usize },
+    /// A side of the case (`before`, `after`) does not validate: its diagnostics.
+    Invalid { side: String, diagnostics: String },
+    /// An `expect` label names no change kind.
+    NoKind(String),
+    /// The change kinds found are not the expected ones (the changes, as debug text).
+    Kinds {
+        want: Vec<ChangeKind>,
+        got: Vec<ChangeKind>,
+        changes: String,
+    },
+    /// A change lacks the citation of a side that exists, or cites one that does not.
+    Citations { what: &'static str, change: String },
+    /// Comparing a map with itself found changes.
+    SelfDiff,
 }
 
-fn kind_of(label: &str) -> Result<ChangeKind, String> {
+impl std::fmt::Display for CaseError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CaseError::NotOnce { from, count } => {
+                write!(f, "`{from}` occurs {count} times, not once")
+            }
+            CaseError::Invalid { side, diagnostics } => {
+                write!(f, "the {side} map does not validate:\n{diagnostics}")
+            }
+            CaseError::NoKind(label) => write!(f, "no change kind labelled `{label}`"),
+            CaseError::Kinds { want, got, changes } => {
+                write!(f, "expected {want:?}, got {got:?}:\n{changes}")
+            }
+            CaseError::Citations { what, change } => {
+                write!(f, "{what} citations missing or extra: {change}")
+            }
+            CaseError::SelfDiff => f.write_str("a map differs from itself"),
+        }
+    }
+}
+
+/// Reads a version of the example map from memory (no temporary files).
+fn read(name: &str, text: &str) -> Result<Drive, CaseError> {
+    crate::read_map_str("example-drive.yaml", text, &Context::default()).map_err(|d| {
+        CaseError::Invalid {
+            side: name.to_owned(),
+            diagnostics: d.to_string(),
+        }
+    })
+}
+
+fn kind_of(label: &str) -> Result<ChangeKind, CaseError> {
     ChangeKind::ALL
         .iter()
         .find(|k| k.label() == label)
         .copied()
-        .ok_or_else(|| format!("no change kind labelled `{label}`"))
+        .ok_or_else(|| CaseError::NoKind(label.to_owned()))
+}
+
+/// `text` with `edit` made where its `from` occurs, exactly once.
+fn edit_once(text: &str, edit: &Edit) -> Result<String, CaseError> {
+    match text.matches(edit.from.as_str()).count() {
+        1 => Ok(text.replace(edit.from.as_str(), &edit.to)),
+        count => Err(CaseError::NotOnce {
+            from: edit.from.clone(),
+            count,
+        }),
+    }
 }
 
 /// Runs one case; returns the kinds it produced, or what went wrong.
-fn run(case: &Case) -> Result<Vec<ChangeKind>, String> {
+fn run(case: &Case) -> Result<Vec<ChangeKind>, CaseError> {
     let mut base = base();
     for e in &case.common {
-        let n = base.matches(e.from.as_str()).count();
-        if n != 1 {
-            return Err(format!("`{}` occurs {n} times, not once", e.from));
-        }
-        base = base.replace(e.from.as_str(), &e.to);
+        base = edit_once(&base, e)?;
     }
     let mut edited = base.clone();
     for e in &case.edits {
-        let n = edited.matches(e.from.as_str()).count();
-        if n != 1 {
-            return Err(format!("`{}` occurs {n} times, not once", e.from));
-        }
-        edited = edited.replace(e.from.as_str(), &e.to);
+        edited = edit_once(&edited, e)?;
     }
     let (before, after) = if case.swap {
         (edited, base)
@@ -89,10 +138,11 @@ fn run(case: &Case) -> Result<Vec<ChangeKind>, String> {
     got.sort_by_key(|k| k.label());
     want.sort_by_key(|k| k.label());
     if got != want {
-        return Err(format!(
-            "expected {want:?}, got {got:?}:\n{:#?}",
-            diff.changes
-        ));
+        return Err(CaseError::Kinds {
+            want,
+            got,
+            changes: format!("{:#?}", diff.changes),
+        });
     }
     for c in &diff.changes {
         let register_change = !matches!(
@@ -105,7 +155,10 @@ fn run(case: &Case) -> Result<Vec<ChangeKind>, String> {
             && (c.old_source.is_some() != (c.kind != ChangeKind::RoleAdded)
                 || c.new_source.is_some() != (c.kind != ChangeKind::RoleRemoved))
         {
-            return Err(format!("role citations missing or extra: {c:?}"));
+            return Err(CaseError::Citations {
+                what: "role",
+                change: format!("{c:?}"),
+            });
         }
         // Register changes cite each side that exists.
         let old_exists = c.kind != ChangeKind::RegisterAdded;
@@ -113,11 +166,14 @@ fn run(case: &Case) -> Result<Vec<ChangeKind>, String> {
         if register_change
             && (c.old_source.is_some() != old_exists || c.new_source.is_some() != new_exists)
         {
-            return Err(format!("citations missing or extra: {c:?}"));
+            return Err(CaseError::Citations {
+                what: "register",
+                change: format!("{c:?}"),
+            });
         }
     }
     if !compare(&new, &new).changes.is_empty() {
-        return Err("a map differs from itself".into());
+        return Err(CaseError::SelfDiff);
     }
     Ok(got)
 }
