@@ -58,6 +58,27 @@ pub enum ProtocolKey {
 }
 
 impl ProtocolKey {
+    /// Every key, in the order the rows are listed.
+    pub const ALL: [ProtocolKey; 17] = [
+        ProtocolKey::Transports,
+        ProtocolKey::FunctionCodes,
+        ProtocolKey::RegistersPerRequest,
+        ProtocolKey::MaxRead,
+        ProtocolKey::MaxWrite,
+        ProtocolKey::SlaveAddress,
+        ProtocolKey::Broadcast,
+        ProtocolKey::Addressing,
+        ProtocolKey::Timing,
+        ProtocolKey::FrameGap,
+        ProtocolKey::InterCharTimeout,
+        ProtocolKey::ResponseTime,
+        ProtocolKey::ResponseDelay,
+        ProtocolKey::RequestGap,
+        ProtocolKey::Serial,
+        ProtocolKey::Eeprom,
+        ProtocolKey::Exceptions,
+    ];
+
     /// The row's label as `drivemap doc` writes it in the item column.
     pub const fn label(self) -> &'static str {
         match self {
@@ -267,6 +288,25 @@ impl ProtocolRow {
 /// The protocol facts of `drive`.
 pub fn protocol(drive: &Drive) -> ProtocolFacts {
     let p = &drive.protocol;
+    // Every key of the protocol is in the view (and so in `drivemap doc` and `drivemap diff`,
+    // which read it): a key added to the schema fails to compile here until it is.
+    let Protocol {
+        transports: _,     // transports()
+        function_codes: _, // function_codes()
+        max_read: _,       // per_request()
+        max_write: _,      // per_request()
+        slave_address: _,  // slave_address()
+        broadcast: _,      // broadcast()
+        exceptions: _,     // the `Exceptions` row, `exceptions`
+        commands: _,       // `commands`
+        eeprom: _,         // the `Eeprom` row
+        addressing: _,     // addressing()
+        timing: _,         // timing()
+        serial: _,         // serial()
+        source: _,         // `source`
+        notes: _,          // `notes`
+        indirect: _,       // `indirect`
+    } = p;
     let timing = p.timing.as_ref();
     let mut rows = vec![transports(p), function_codes(p)];
     rows.extend(per_request(p));

@@ -7,13 +7,14 @@
 //!
 //! [`classify`](mod@classify) says which kinds break applications built on the generated code;
 //! [`render`] prints the result for a terminal, as Markdown or as GitHub annotations. The
-//! comparisons themselves are in `protocol` (metadata, variants, protocol profile) and
-//! `registers`. Fetching the old maps from a git revision is the command line's
-//! (`cli/src/git.rs`).
+//! comparisons themselves are in `protocol` (metadata, variants), `profile` (the protocol
+//! profile, row by row on the protocol facts) and `registers`. Fetching the old maps from a
+//! git revision is the command line's (`cli/src/git.rs`).
 
 pub mod classify;
 mod indexed;
 mod locate;
+mod profile;
 mod protocol;
 mod registers;
 pub mod render;
@@ -192,7 +193,7 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
         address_format: _, // map_documentation
         module: _,         // derived from meta.id
         variants: _,       // protocol::variants
-        protocol: _,       // protocol::protocol
+        protocol: _,       // profile::protocol, on the protocol facts
         groups: _,         // map_documentation (registers carry the group defaults)
         registers: _,      // registers::registers
         conflicts: _,      // map_documentation, entry by entry
@@ -208,7 +209,7 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
     } = new;
     protocol::meta(&mut c, old, new);
     protocol::variants(&mut c, old, new);
-    protocol::protocol(&mut c, old, new);
+    profile::protocol(&mut c, old, new);
     roles::roles(&mut c, old, new);
     registers::registers(&mut c, old, new);
     map_documentation(&mut c, old, new);
