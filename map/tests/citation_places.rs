@@ -177,3 +177,50 @@ fn the_form_check_reads_every_place_of_the_list() {
         "{missing:#?}"
     );
 }
+
+/// An example frame's citation (one line or a line range of a text manual) is checked in the
+/// same loop, with the frame's id in the message.
+#[test]
+fn an_example_frame_cites_a_line_range_of_a_text_manual() {
+    let map = |source: &str| {
+        format!(
+            "drive: {{id: t, vendor: T, models: [T], manuals: [{{file: m.txt, title: M}}, {{id: scan, title: S, document: \"S-1 rev. A\"}}]}}\n\
+             protocol: {{transports: [rtu], function_codes: [0x03], max_read: 1, max_write: 1, slave_address: {{min: 1, max: 31}}}}\n\
+             groups:\n\
+             \x20 - {{id: g, name: G, registers: [{{id: speed, name: Speed, access: r, address: 0x0001, source: \"m.txt:1\"}}]}}\n\
+             examples:\n\
+             \x20 - {{id: ask, transport: rtu, direction: request, bytes: \"01 03 00 01 00 01 D5 CA\", source: \"{source}\"}}\n"
+        )
+    };
+    let ctx = Context {
+        manual_lines: [("m.txt".to_owned(), 20)].into(),
+    };
+    let errors = |source: &str| match drivemap_map::read_map_str("t.yaml", &map(source), &ctx) {
+        Ok(_) => Vec::new(),
+        Err(d) => d.iter().map(|d| d.to_string()).collect::<Vec<_>>(),
+    };
+    assert_eq!(errors("m.txt:3-5"), Vec::<String>::new());
+    assert_eq!(errors("m.txt:7"), Vec::<String>::new());
+    for (source, says) in [
+        (
+            "m.txt",
+            "citation `m.txt` is not `file:line` or `file:first-last`",
+        ),
+        (
+            "scan:p2",
+            "citation `scan:p2` is not `file:line` or `file:first-last`",
+        ),
+        (
+            "other.txt:2-3",
+            "citation `other.txt:2-3` names `other.txt`, which is not a text manual of `drive.manuals`",
+        ),
+        ("m.txt:19-21", "citation `m.txt:19-21`: m.txt has 20 lines"),
+    ] {
+        let found = errors(source);
+        assert_eq!(
+            found,
+            [format!("t.yaml:6:85: error: example `ask`: {says}")],
+            "{source}"
+        );
+    }
+}

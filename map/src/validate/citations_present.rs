@@ -4,6 +4,7 @@
 
 use crate::citations::{PlaceKind, Reason, citation_places};
 use crate::diagnostic::Diagnostic;
+use crate::examples::parse_range_citation;
 use crate::hints::closest;
 use crate::ir::Drive;
 use crate::source::Path;
@@ -91,6 +92,31 @@ pub(super) fn cite(
     }
 }
 
+/// An example frame's citation: one line or a line range (`file:first-last`) of a declared text
+/// manual, inside the file.
+fn cite_range(
+    drive: &Drive,
+    ctx: &Context,
+    out: &mut Vec<Diagnostic>,
+    id: &str,
+    source: &str,
+    path: &Path,
+) {
+    let message = match parse_range_citation(source) {
+        None => format!("citation `{source}` is not `file:line` or `file:first-last`"),
+        Some((file, _, _)) if !drive.meta.text_manuals().any(|m| m == file) => format!(
+            "citation `{source}` names `{file}`, which is not a text manual of `drive.manuals`"
+        ),
+        Some((file, _, last)) => match ctx.manual_lines.get(file) {
+            Some(&lines) if last > lines => {
+                format!("citation `{source}`: {file} has {lines} lines")
+            }
+            _ => return,
+        },
+    };
+    out.push(drive.error(path, None, format!("example `{id}`: {message}")));
+}
+
 /// `indirect: <reason>` marks a citation as deliberately indirect: it needs the citation it
 /// qualifies and a reason.
 fn indirect(
@@ -123,7 +149,7 @@ fn indirect(
 enum Form {
     /// `file:line` or `<manual id>:p<page>` ([`cite`]).
     Line,
-    /// `file:line` or `file:first-last`, checked with the frame (`examples_valid`).
+    /// `file:line` or `file:first-last` of a text manual (an example frame, [`cite_range`]).
     Range,
 }
 
@@ -159,6 +185,11 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
                 "missing citation: add `source: <manual file>:<line>` pointing at the register's row",
             )),
             (Some(s), Form::Line) => cite(drive, ctx, out, s, place.path.clone(), register),
+            (Some(s), Form::Range) => {
+                if let PlaceKind::Example(i) = place.kind {
+                    cite_range(drive, ctx, out, &drive.examples[i].id, s, &place.path);
+                }
+            }
             _ => {}
         }
         if let Reason::Indirect(reason) = place.reason {

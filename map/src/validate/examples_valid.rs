@@ -1,16 +1,16 @@
-//! Example frames (`examples:`) are well formed: a unique identifier, bytes in hex, a citation
-//! of a declared text manual (one line or a line range inside the file), a transport of the
-//! drive, a response answering an earlier request of the same transport, and `says` naming
+//! Example frames (`examples:`) are well formed: a unique identifier, bytes in hex (the citation,
+//! one line or a line range of a declared text manual, is checked with every citation place by
+//! `citations_present`), a transport of the drive, a response answering an earlier request of the same transport, and `says` naming
 //! registers of the map. What the bytes mean (CRC, function, address, values) is verified
 //! against the codec by `drivemap_live::examples`.
 
-use super::{Context, is_identifier};
+use super::is_identifier;
 use crate::diagnostic::Diagnostic;
-use crate::examples::{Direction, locate_offset, parse_bytes, parse_range_citation};
+use crate::examples::{Direction, locate_offset, parse_bytes};
 use crate::ir::Drive;
 use crate::source::Path;
 
-pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
+pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let list = Path::root().key("examples");
     for (i, e) in drive.examples.iter().enumerate() {
         let path = list.index(i);
@@ -41,33 +41,6 @@ pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
         }
         if drive.examples[..i].iter().any(|o| o.id == e.id) {
             error("id", "another example has this id".into());
-        }
-        match parse_range_citation(&e.source) {
-            None => error(
-                "source",
-                format!(
-                    "citation `{}` is not `file:line` or `file:first-last`",
-                    e.source
-                ),
-            ),
-            Some((file, _, last)) => {
-                if !drive.meta.text_manuals().any(|m| m == file) {
-                    error(
-                        "source",
-                        format!(
-                            "citation `{}` names `{file}`, which is not a text manual of `drive.manuals`",
-                            e.source
-                        ),
-                    );
-                } else if let Some(&lines) = ctx.manual_lines.get(file) {
-                    if last > lines {
-                        error(
-                            "source",
-                            format!("citation `{}`: {file} has {lines} lines", e.source),
-                        );
-                    }
-                }
-            }
         }
         if !drive.protocol.transports.contains(&e.transport) {
             error(

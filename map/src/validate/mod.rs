@@ -96,6 +96,6 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);
     indexed_valid::check(drive, &mut out);
-    examples_valid::check(drive, ctx, &mut out);
+    examples_valid::check(drive, &mut out);
     out
 }
