@@ -33,6 +33,8 @@ mod references_resolve;
 mod relative_limits_valid;
 mod repeat_needs_change_valid;
 mod roles_valid;
+mod serial_valid;
+mod timing_valid;
 mod value_kind_single;
 
 pub use crate::names::field_span;
@@ -87,6 +89,8 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     references_resolve::check(drive, &mut out);
     access_consistent::check(drive, &mut out);
     protocol_valid::check(drive, &mut out);
+    timing_valid::check(drive, &mut out);
+    serial_valid::check(drive, &mut out);
     protocol_stated::check(drive, &mut out);
     roles_valid::check(drive, &mut out);
     repeat_needs_change_valid::check(drive, &mut out);
