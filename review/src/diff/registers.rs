@@ -7,6 +7,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use crate::ir::{Drive, Register, ValueKind};
+use drivemap_core::RegisterPlan;
 use drivemap_core::register::{Access, WriteRestriction};
 
 use crate::model::{DefaultValue, EnumValue, Field, Scale};
@@ -131,8 +132,81 @@ fn strictness(w: WriteRestriction) -> u8 {
     }
 }
 
-/// A row of the table of simple differences: whether the two sides differ, the kind, which
-/// part, and the two sides as text.
+/// The two sides of a register compared, and what every aspect reads of them.
+struct Sides<'a> {
+    old: &'a Drive,
+    new: &'a Drive,
+    r: &'a Register,
+    n: &'a Register,
+    /// The lowered plans: what the generated code and the write gate act on.
+    pr: &'static RegisterPlan,
+    pn: &'static RegisterPlan,
+    /// The facts views of both sides.
+    fa: RegisterFacts,
+    fb: RegisterFacts,
+    /// The register as the changes name it (the new side's).
+    subject: String,
+    /// Where its changes sort: the new side's address.
+    order: u32,
+    /// The register's citation on each side.
+    src: (Option<String>, Option<String>),
+}
+
+impl<'a> Sides<'a> {
+    fn new(old: &'a Drive, r: &'a Register, new: &'a Drive, n: &'a Register) -> Sides<'a> {
+        Sides {
+            old,
+            new,
+            r,
+            n,
+            pr: old.register_plan(r),
+            pn: new.register_plan(n),
+            fa: facts::register(old, r),
+            fb: facts::register(new, n),
+            subject: describe::register(n),
+            order: u32::from(n.def.address) + 1,
+            src: (r.def.source.clone(), n.def.source.clone()),
+        }
+    }
+
+    /// The map's text of both sides.
+    fn defs(&self) -> (&'a crate::model::Register, &'a crate::model::Register) {
+        (&self.r.def, &self.n.def)
+    }
+
+    /// A change of the register's part `what`, cited by the register's citations.
+    fn push(
+        &self,
+        c: &mut Collector,
+        kind: ChangeKind,
+        what: &str,
+        x: Option<String>,
+        y: Option<String>,
+    ) {
+        c.push(
+            kind,
+            &self.subject,
+            what,
+            (x, self.src.0.clone()),
+            (y, self.src.1.clone()),
+            self.order,
+        );
+    }
+
+    /// Both sides' fact `key` as text, `none` where a side has none.
+    fn facts(&self, key: FactKey, none: &str) -> (Option<String>, Option<String>) {
+        let text = |f: &RegisterFacts| {
+            Some(
+                f.get(key)
+                    .map_or_else(|| none.to_owned(), |x| x.value.clone()),
+            )
+        };
+        (text(&self.fa), text(&self.fb))
+    }
+}
+
+/// A simple difference: whether the two sides differ, the kind, which part, and the two sides
+/// as text; pushed with the register's citations when they differ.
 type Row = (
     bool,
     ChangeKind,
@@ -141,8 +215,131 @@ type Row = (
     Option<String>,
 );
 
+/// One aspect of a register compared.
+enum Aspect {
+    /// One row ([`Row`]).
+    Row(fn(&Sides) -> Row),
+    /// A comparison part by part (codes, fields, variants, selected cases), pushing its own
+    /// changes with the parts' citations.
+    Parts(fn(&mut Collector, &Sides)),
+}
+
+/// Every aspect of a register, in the order its changes are reported.
+const ASPECTS: &[Aspect] = {
+    use Aspect::{Parts, Row};
+    &[
+        Row(moved),
+        Row(alternatives),
+        Row(name),
+        Row(param),
+        Row(table),
+        Row(group),
+        Row(broadcast),
+        Row(access),
+        Row(write_restriction),
+        Row(repeat_needs_change),
+        Row(indexed),
+        Row(function_codes),
+        Row(relative_limit),
+        Parts(read_codes),
+        Row(read_meaning),
+        Row(transports),
+        Row(signedness),
+        Row(width),
+        Row(value_kind),
+        Row(unit),
+        Parts(scale),
+        Parts(codes),
+        Parts(fields),
+        Parts(ranges),
+        Parts(defaults),
+        Parts(documentation),
+        Parts(citations),
+        Row(citation),
+    ]
+};
+
+fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Register) {
+    every_key_compared(n);
+    let s = Sides::new(old, r, new, n);
+    for aspect in ASPECTS {
+        match aspect {
+            Aspect::Row(row) => {
+                let (differs, kind, what, x, y) = row(&s);
+                if differs {
+                    s.push(c, kind, what, x, y);
+                }
+            }
+            Aspect::Parts(parts) => parts(c, &s),
+        }
+    }
+}
+
+/// Names every key of a register, and what the IR adds to it, with the aspect that compares
+/// it: a key added to the schema fails to compile here until it is compared.
+fn every_key_compared(n: &Register) {
+    let Register {
+        def:
+            crate::model::Register {
+                id: _,                   // matching, RegisterRenamed
+                param: _,                // param
+                name: _,                 // name
+                address: _,              // moved
+                access: _,               // access, on the plan (with the group's default)
+                modbus_table: _,         // table, on the plan
+                unit: _,                 // unit
+                scale: _,                // scale
+                signed: _,               // signedness
+                pair: _,                 // width, citations
+                min: _,                  // ranges
+                max: _,                  // ranges
+                max_relative: _,         // relative_limit
+                default: _,              // defaults
+                by_variant: _,           // ranges, defaults, documentation, citations
+                address_alternatives: _, // alternatives
+                values: _,               // codes
+                fields: _,               // fields
+                read_values: _,          // read_meaning, read_codes
+                repeat_needs_change: _,  // on the IR register (with the group's)
+                indexed: _,              // indexed (indexed.rs)
+                function_codes: _,       // on the IR register (with the group's)
+                write_restriction: _,    // write_restriction, on the plan
+                transports: _,           // transports, on the plan
+                display_steps: _,        // documentation
+                repeat: _,               // expanded by the IR: one register per instance
+                source: _,               // citation
+                indirect: _,             // documentation
+                notes: _,                // documentation
+                conflicts: _,            // documentation
+                unknown: _,              // documentation
+            },
+        access: _,              // on the plan
+        table: _,               // on the plan
+        write_restriction: _,   // on the plan
+        transports: _,          // on the plan
+        broadcast: _,           // broadcast
+        group: _,               // group
+        path: _,                // where it is written
+        repeat_needs_change: _, // repeat_needs_change, citations
+        function_codes: _,      // function_codes, citations
+        index: _,               // its place in the map's list, not a property
+    } = n;
+}
+
+fn moved(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    (
+        a.address != b.address,
+        ChangeKind::RegisterMoved,
+        "",
+        Some(describe::address(a.address)),
+        Some(describe::address(b.address)),
+    )
+}
+
 /// Alternative addresses: a change of an address or condition, or of their citations alone.
-fn alternatives(a: &crate::model::Register, b: &crate::model::Register) -> Row {
+fn alternatives(s: &Sides) -> Row {
+    let (a, b) = s.defs();
     let what = "alternative addresses";
     if same(&a.address_alternatives, &b.address_alternatives) {
         return (false, ChangeKind::CitationChanged, what, None, None);
@@ -184,288 +381,269 @@ fn alternatives(a: &crate::model::Register, b: &crate::model::Register) -> Row {
     }
 }
 
-fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Register) {
-    // Every key of a register, and what the IR adds to it, is compared below: a key added to
-    // the schema fails to compile here until it is.
-    let crate::model::Register {
-        id: _,                   // matching, RegisterRenamed
-        param: _,                // ParamChanged
-        name: _,                 // NameChanged
-        address: _,              // RegisterMoved
-        access: _,               // on the plan (with the group's default)
-        modbus_table: _,         // on the plan
-        unit: _,                 // UnitChanged
-        scale: _,                // scale()
-        signed: _,               // SignednessChanged
-        pair: _,                 // WidthChanged, citations()
-        min: _,                  // ranges()
-        max: _,                  // ranges()
-        max_relative: _,         // RelativeLimitChanged
-        default: _,              // defaults()
-        by_variant: _,           // ranges(), defaults(), documentation(), citations()
-        address_alternatives: _, // AddressAlternativesChanged
-        values: _,               // enum_codes()
-        fields: _,               // fields()
-        read_values: _,          // ReadMeaningChanged, enum_codes()
-        repeat_needs_change: _,  // on the IR register (with the group's)
-        indexed: _,              // IndexedChanged, CitationChanged (indexed.rs)
-        function_codes: _,       // on the IR register (with the group's)
-        write_restriction: _,    // on the plan
-        transports: _,           // on the plan
-        display_steps: _,        // documentation()
-        repeat: _,               // expanded by the IR: one register per instance
-        source: _,               // CitationChanged
-        indirect: _,             // documentation()
-        notes: _,                // documentation()
-        conflicts: _,            // documentation()
-        unknown: _,              // documentation()
-    } = &n.def;
-    let Register {
-        def: _,
-        access: _,              // on the plan
-        table: _,               // on the plan
-        write_restriction: _,   // on the plan
-        transports: _,          // on the plan
-        broadcast: _,           // BroadcastMembershipChanged
-        group: _,               // GroupChanged
-        path: _,                // where it is written
-        repeat_needs_change: _, // RepeatNeedsChangeChanged, citations()
-        function_codes: _,      // FunctionCodesChanged, citations()
-        index: _,               // its place in the map's list, not a property
-    } = n;
-    let subject = describe::register(n);
-    let order = u32::from(n.def.address) + 1;
-    let (pr, pn) = (old.register_plan(r), new.register_plan(n));
-    let (a, b) = (&r.def, &n.def);
-    let src = (a.source.clone(), b.source.clone());
-    let push = |c: &mut Collector, kind, what: &str, x: Option<String>, y: Option<String>| {
-        c.push(
-            kind,
-            &subject,
-            what,
-            (x, src.0.clone()),
-            (y, src.1.clone()),
-            order,
-        );
-    };
+fn name(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    (
+        a.name != b.name,
+        ChangeKind::NameChanged,
+        "",
+        Some(s.fa.name.clone()),
+        Some(s.fb.name.clone()),
+    )
+}
 
-    let (fa, fb) = (facts::register(old, r), facts::register(new, n));
-    // The facts of both sides compared row by row: (differs, kind, what, old, new); the codes of
-    // a read meaning, compared code by code, between the two tables.
-    let row = |f: &RegisterFacts, key, none: &str| {
+fn param(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    (
+        a.param != b.param,
+        ChangeKind::ParamChanged,
+        "",
+        s.fa.param.clone(),
+        s.fb.param.clone(),
+    )
+}
+
+fn table(s: &Sides) -> Row {
+    let (ta, tb) = (s.pr.info.table, s.pn.info.table);
+    (
+        ta != tb,
+        ChangeKind::TableChanged,
+        "table",
+        Some(describe::table(ta).into()),
+        Some(describe::table(tb).into()),
+    )
+}
+
+fn group(s: &Sides) -> Row {
+    let (ga, gb) = (&s.old.group_of(s.r).id, &s.new.group_of(s.n).id);
+    (
+        ga != gb,
+        ChangeKind::GroupChanged,
+        "group",
+        Some(ga.clone()),
+        Some(gb.clone()),
+    )
+}
+
+fn broadcast(s: &Sides) -> Row {
+    let text = |r: &Register| {
         Some(
-            f.get(key)
-                .map_or_else(|| none.to_owned(), |x| x.value.clone()),
+            if r.broadcast {
+                "broadcast only"
+            } else {
+                "addressed"
+            }
+            .into(),
         )
     };
-    let t = |x: bool, yes: &str, no: &str| Some(if x { yes } else { no }.to_owned());
-    let (ra, rb) = (pr.restriction, pn.restriction);
-    let (ta, tb) = (pr.transports, pn.transports);
-    let ((read_a, write_a), (read_b, write_b)) = (can(pr.info.access), can(pn.info.access));
-    let (ga, gb) = (&old.group_of(r).id, &new.group_of(n).id);
+    (
+        s.r.broadcast != s.n.broadcast,
+        ChangeKind::BroadcastMembershipChanged,
+        "broadcast",
+        text(s.r),
+        text(s.n),
+    )
+}
+
+fn access(s: &Sides) -> Row {
+    let (aa, ab) = (s.pr.info.access, s.pn.info.access);
+    let ((read_a, write_a), (read_b, write_b)) = (can(aa), can(ab));
+    let (x, y) = s.facts(FactKey::Access, "");
+    (
+        aa != ab,
+        if (read_a && !read_b) || (write_a && !write_b) {
+            ChangeKind::AccessNarrowed
+        } else {
+            ChangeKind::AccessWidened
+        },
+        "access",
+        x,
+        y,
+    )
+}
+
+fn write_restriction(s: &Sides) -> Row {
+    let (ra, rb) = (s.pr.restriction, s.pn.restriction);
+    (
+        ra != rb,
+        if strictness(rb) > strictness(ra)
+            || (ra != WriteRestriction::None && rb != WriteRestriction::None)
+        {
+            ChangeKind::WriteRestrictionTightened
+        } else {
+            ChangeKind::WriteRestrictionRelaxed
+        },
+        "write restriction",
+        Some(describe::write_restriction(ra).into()),
+        Some(describe::write_restriction(rb).into()),
+    )
+}
+
+fn repeat_needs_change(s: &Sides) -> Row {
+    let between = |p: &RegisterPlan| p.repeat_needs_change.map(|x| x.between);
+    let (x, y) = s.facts(FactKey::RepeatNeedsChange, "none");
+    (
+        between(s.pr) != between(s.pn),
+        ChangeKind::RepeatNeedsChangeChanged,
+        "repeat needs change",
+        x,
+        y,
+    )
+}
+
+fn indexed(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    match super::indexed::change(a.indexed.as_ref(), b.indexed.as_ref()) {
+        Some((kind, x, y)) => (true, kind, "indexed access", x, y),
+        None => (
+            false,
+            ChangeKind::IndexedChanged,
+            "indexed access",
+            None,
+            None,
+        ),
+    }
+}
+
+fn function_codes(s: &Sides) -> Row {
     let codes = |x: &Register| {
         x.function_codes
             .as_ref()
             .map(|(f, _)| (f.codes.clone(), f.refusal()))
     };
-    let indexed = super::indexed::change(a.indexed.as_ref(), b.indexed.as_ref());
-    let identity: Vec<Row> = vec![
-        (
-            a.address != b.address,
-            ChangeKind::RegisterMoved,
-            "",
-            Some(describe::address(a.address)),
-            Some(describe::address(b.address)),
-        ),
-        alternatives(a, b),
-        (
-            a.name != b.name,
-            ChangeKind::NameChanged,
-            "",
-            Some(fa.name.clone()),
-            Some(fb.name.clone()),
-        ),
-        (
-            a.param != b.param,
-            ChangeKind::ParamChanged,
-            "",
-            fa.param.clone(),
-            fb.param.clone(),
-        ),
-        (
-            pr.info.table != pn.info.table,
-            ChangeKind::TableChanged,
-            "table",
-            Some(describe::table(pr.info.table).into()),
-            Some(describe::table(pn.info.table).into()),
-        ),
-        (
-            ga != gb,
-            ChangeKind::GroupChanged,
-            "group",
-            Some(ga.clone()),
-            Some(gb.clone()),
-        ),
-        (
-            r.broadcast != n.broadcast,
-            ChangeKind::BroadcastMembershipChanged,
-            "broadcast",
-            t(r.broadcast, "broadcast only", "addressed"),
-            t(n.broadcast, "broadcast only", "addressed"),
-        ),
-        (
-            pr.info.access != pn.info.access,
-            if (read_a && !read_b) || (write_a && !write_b) {
-                ChangeKind::AccessNarrowed
-            } else {
-                ChangeKind::AccessWidened
-            },
-            "access",
-            row(&fa, FactKey::Access, ""),
-            row(&fb, FactKey::Access, ""),
-        ),
-        (
-            ra != rb,
-            if strictness(rb) > strictness(ra)
-                || (ra != WriteRestriction::None && rb != WriteRestriction::None)
-            {
-                ChangeKind::WriteRestrictionTightened
-            } else {
-                ChangeKind::WriteRestrictionRelaxed
-            },
-            "write restriction",
-            Some(describe::write_restriction(ra).into()),
-            Some(describe::write_restriction(rb).into()),
-        ),
-        (
-            pr.repeat_needs_change.map(|x| x.between) != pn.repeat_needs_change.map(|x| x.between),
-            ChangeKind::RepeatNeedsChangeChanged,
-            "repeat needs change",
-            row(&fa, FactKey::RepeatNeedsChange, "none"),
-            row(&fb, FactKey::RepeatNeedsChange, "none"),
-        ),
-        match indexed {
-            Some((kind, x, y)) => (true, kind, "indexed access", x, y),
-            None => (
-                false,
-                ChangeKind::IndexedChanged,
-                "indexed access",
-                None,
-                None,
-            ),
-        },
-        (
-            codes(r) != codes(n),
-            ChangeKind::FunctionCodesChanged,
-            "function codes",
-            row(&fa, FactKey::FunctionCodes, "every function of the drive"),
-            row(&fb, FactKey::FunctionCodes, "every function of the drive"),
-        ),
-        (
-            fa.get(FactKey::RelativeLimit) != fb.get(FactKey::RelativeLimit),
-            ChangeKind::RelativeLimitChanged,
-            "limit",
-            row(&fa, FactKey::RelativeLimit, "none"),
-            row(&fb, FactKey::RelativeLimit, "none"),
-        ),
-    ];
-    let after: Vec<Row> = vec![
-        (
-            pr.read_values != pn.read_values,
-            ChangeKind::ReadMeaningChanged,
-            "read meaning",
-            row(&fa, FactKey::ReadValues, "as written"),
-            row(&fb, FactKey::ReadValues, "as written"),
-        ),
-        (
-            ta != tb,
-            if (!ta.rtu || tb.rtu) && (!ta.tcp || tb.tcp) {
-                ChangeKind::TransportsWidened
-            } else {
-                ChangeKind::TransportsNarrowed
-            },
-            "transports",
-            Some(describe::transports(ta)),
-            Some(describe::transports(tb)),
-        ),
-        (
-            a.signed != b.signed,
-            ChangeKind::SignednessChanged,
-            "signedness",
-            t(a.signed, "signed", "unsigned"),
-            t(b.signed, "signed", "unsigned"),
-        ),
-        (
-            r.width() != n.width(),
-            ChangeKind::WidthChanged,
-            "width",
-            Some(describe::width(r.width())),
-            Some(describe::width(n.width())),
-        ),
-    ];
-    let table = |c: &mut Collector, rows: Vec<Row>| {
-        for (differs, kind, what, x, y) in rows {
-            if differs {
-                push(c, kind, what, x, y);
-            }
-        }
-    };
-    table(c, identity);
-    if pr.read_values == pn.read_values && !same(&a.read_values, &b.read_values) {
+    let (x, y) = s.facts(FactKey::FunctionCodes, "every function of the drive");
+    (
+        codes(s.r) != codes(s.n),
+        ChangeKind::FunctionCodesChanged,
+        "function codes",
+        x,
+        y,
+    )
+}
+
+fn relative_limit(s: &Sides) -> Row {
+    let (x, y) = s.facts(FactKey::RelativeLimit, "none");
+    (
+        s.fa.get(FactKey::RelativeLimit) != s.fb.get(FactKey::RelativeLimit),
+        ChangeKind::RelativeLimitChanged,
+        "limit",
+        x,
+        y,
+    )
+}
+
+/// The codes of a read meaning, compared code by code, when the meaning itself is the same.
+fn read_codes(c: &mut Collector, s: &Sides) {
+    let (a, b) = s.defs();
+    if s.pr.read_values == s.pn.read_values && !same(&a.read_values, &b.read_values) {
         enum_codes(
             c,
-            &subject,
+            &s.subject,
             "read ",
             &a.read_values,
             &b.read_values,
-            src.clone(),
-            order,
+            s.src.clone(),
+            s.order,
         );
     }
-    table(c, after);
-    if !same_kind(r, n) {
-        push(
-            c,
-            ChangeKind::ValueKindChanged,
-            "value kind",
-            Some(summary(old, r)),
-            Some(summary(new, n)),
-        );
-    } else {
-        if a.unit != b.unit {
-            push(
-                c,
-                ChangeKind::UnitChanged,
-                "unit",
-                Some(a.unit.clone().unwrap_or_else(|| "none".into())),
-                Some(b.unit.clone().unwrap_or_else(|| "none".into())),
-            );
-        }
-        scale(c, old, r, new, n, &subject, order);
-        match (r.kind(), n.kind()) {
-            (ValueKind::Enum(x), ValueKind::Enum(y)) => {
-                enum_codes(c, &subject, "", x, y, src.clone(), order)
-            }
-            (ValueKind::Bits(x), ValueKind::Bits(y)) => {
-                fields(c, &subject, x, y, src.clone(), order)
-            }
-            _ => {}
-        }
+}
+
+fn read_meaning(s: &Sides) -> Row {
+    let (x, y) = s.facts(FactKey::ReadValues, "as written");
+    (
+        s.pr.read_values != s.pn.read_values,
+        ChangeKind::ReadMeaningChanged,
+        "read meaning",
+        x,
+        y,
+    )
+}
+
+fn transports(s: &Sides) -> Row {
+    let (ta, tb) = (s.pr.transports, s.pn.transports);
+    (
+        ta != tb,
+        if (!ta.rtu || tb.rtu) && (!ta.tcp || tb.tcp) {
+            ChangeKind::TransportsWidened
+        } else {
+            ChangeKind::TransportsNarrowed
+        },
+        "transports",
+        Some(describe::transports(ta)),
+        Some(describe::transports(tb)),
+    )
+}
+
+fn signedness(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    let text = |signed: bool| Some(if signed { "signed" } else { "unsigned" }.into());
+    (
+        a.signed != b.signed,
+        ChangeKind::SignednessChanged,
+        "signedness",
+        text(a.signed),
+        text(b.signed),
+    )
+}
+
+fn width(s: &Sides) -> Row {
+    (
+        s.r.width() != s.n.width(),
+        ChangeKind::WidthChanged,
+        "width",
+        Some(describe::width(s.r.width())),
+        Some(describe::width(s.n.width())),
+    )
+}
+
+/// Another kind of value (word, quantity, enumeration, bits): the parts of a value (unit,
+/// scale, codes, fields) are compared only between values of one kind.
+fn value_kind(s: &Sides) -> Row {
+    let differs = !same_kind(s.r, s.n);
+    (
+        differs,
+        ChangeKind::ValueKindChanged,
+        "value kind",
+        differs.then(|| summary(s.old, s.r)),
+        differs.then(|| summary(s.new, s.n)),
+    )
+}
+
+fn unit(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    let text = |d: &crate::model::Register| Some(d.unit.clone().unwrap_or_else(|| "none".into()));
+    (
+        same_kind(s.r, s.n) && a.unit != b.unit,
+        ChangeKind::UnitChanged,
+        "unit",
+        text(a),
+        text(b),
+    )
+}
+
+/// The codes of two enumerations, code by code.
+fn codes(c: &mut Collector, s: &Sides) {
+    if let (ValueKind::Enum(x), ValueKind::Enum(y)) = (s.r.kind(), s.n.kind()) {
+        enum_codes(c, &s.subject, "", x, y, s.src.clone(), s.order);
     }
-    ranges(c, new, r, n, &subject, order);
-    defaults(c, r, n, &subject, order);
-    documentation(c, r, n, &subject, order);
-    citations(c, r, n, &subject, order);
-    if a.source != b.source {
-        c.push(
-            ChangeKind::CitationChanged,
-            &subject,
-            "",
-            (None, src.0.clone()),
-            (None, src.1.clone()),
-            order,
-        );
+}
+
+/// The fields of two bit sets, field by field.
+fn fields(c: &mut Collector, s: &Sides) {
+    if let (ValueKind::Bits(x), ValueKind::Bits(y)) = (s.r.kind(), s.n.kind()) {
+        bit_fields(c, &s.subject, x, y, s.src.clone(), s.order);
     }
+}
+
+/// The register's own citation alone.
+fn citation(s: &Sides) -> Row {
+    (
+        s.src.0 != s.src.1,
+        ChangeKind::CitationChanged,
+        "",
+        None,
+        None,
+    )
 }
 
 /// Scale per selector code; `None` as key for a fixed scale.
@@ -495,17 +673,21 @@ fn cases<'a>(r: &'a Register) -> Option<(Option<&'a str>, Cases<'a>)> {
     }
 }
 
-fn scale(
-    c: &mut Collector,
-    old: &Drive,
-    r: &Register,
-    new: &Drive,
-    n: &Register,
-    subject: &str,
-    order: u32,
-) {
+/// The scale, per selector code when both sides select it by the same parameter; between
+/// values of one kind only.
+fn scale(c: &mut Collector, s: &Sides) {
+    let Sides {
+        old,
+        new,
+        r,
+        n,
+        subject,
+        order,
+        ..
+    } = s;
+    let (subject, order) = (subject.as_str(), *order);
     let (a, b) = (&r.def.scale, &n.def.scale);
-    if same(a, b) {
+    if !same_kind(r, n) || same(a, b) {
         return;
     }
     let src = (r.def.source.clone(), n.def.source.clone());
@@ -646,7 +828,17 @@ fn range_push(
     );
 }
 
-fn ranges(c: &mut Collector, new: &Drive, r: &Register, n: &Register, subject: &str, order: u32) {
+/// The range, per variant and per selected case.
+fn ranges(c: &mut Collector, s: &Sides) {
+    let Sides {
+        new,
+        r,
+        n,
+        subject,
+        order,
+        ..
+    } = s;
+    let (subject, order) = (subject.as_str(), *order);
     let (a, b) = (&r.def, &n.def);
     let unit = (
         a.unit.as_deref().unwrap_or(""),
@@ -729,8 +921,10 @@ fn default_text(d: &Option<DefaultValue>) -> String {
         .unwrap_or_else(|| "none".into())
 }
 
-fn defaults(c: &mut Collector, r: &Register, n: &Register, subject: &str, order: u32) {
-    let (a, b) = (&r.def, &n.def);
+/// The default, and each variant's.
+fn defaults(c: &mut Collector, s: &Sides) {
+    let (subject, order) = (s.subject.as_str(), s.order);
+    let (a, b) = s.defs();
     let src = (a.source.clone(), b.source.clone());
     if !same(&a.default, &b.default) {
         c.push(
@@ -768,8 +962,10 @@ fn defaults(c: &mut Collector, r: &Register, n: &Register, subject: &str, order:
     }
 }
 
-fn documentation(c: &mut Collector, r: &Register, n: &Register, subject: &str, order: u32) {
-    let (a, b) = (&r.def, &n.def);
+/// Notes, conflicts, unknowns, display steps, indirect citations: one change naming the parts.
+fn documentation(c: &mut Collector, s: &Sides) {
+    let (subject, order) = (s.subject.as_str(), s.order);
+    let (a, b) = s.defs();
     let src = (a.source.clone(), b.source.clone());
     let mut parts = Vec::new();
     if a.notes != b.notes {
@@ -810,8 +1006,16 @@ fn documentation(c: &mut Collector, r: &Register, n: &Register, subject: &str, o
 
 /// Citations of a register's parts that no other comparison shows when they alone change: the
 /// word order's, the repeat rule's, each variant override's.
-fn citations(c: &mut Collector, r: &Register, n: &Register, subject: &str, order: u32) {
-    let (a, b) = (&r.def, &n.def);
+fn citations(c: &mut Collector, s: &Sides) {
+    let Sides {
+        r,
+        n,
+        subject,
+        order,
+        ..
+    } = s;
+    let (subject, order) = (subject.as_str(), *order);
+    let (a, b) = s.defs();
     let pair = |d: &crate::model::Register| d.pair.as_ref().and_then(|p| p.source.clone());
     if r.width() == n.width() && pair(a) != pair(b) {
         c.push(
@@ -977,7 +1181,7 @@ fn field_text(f: &Field) -> String {
     format!("`{}` at {}: {}", f.id, describe::bits(f), f.name)
 }
 
-fn fields(
+fn bit_fields(
     c: &mut Collector,
     subject: &str,
     a: &[Field],
