@@ -352,6 +352,40 @@ fn same_entry((a, b): Rows) -> bool {
     entry(a) == entry(b)
 }
 
+/// What a broadcast may carry: its functions and registers (none: any writable register).
+fn carries(r: Option<&ProtocolRow>) -> (BTreeSet<u8>, BTreeSet<String>) {
+    match r.map(|r| &r.figure) {
+        Some(Figure::Broadcast {
+            functions,
+            registers,
+        }) => (
+            functions.iter().copied().collect(),
+            registers.iter().cloned().collect(),
+        ),
+        _ => (BTreeSet::new(), BTreeSet::new()),
+    }
+}
+
+/// A broadcast in the diff's words: `06h, 10h to run_command`, or why its rules are not printed.
+fn broadcast_text(r: Option<&ProtocolRow>) -> Option<String> {
+    let r = r?;
+    if let Some(n) = &r.not_printed {
+        return Some(describe::broadcast_not_printed(&n.why));
+    }
+    let Figure::Broadcast {
+        functions,
+        registers,
+    } = &r.figure
+    else {
+        return None;
+    };
+    let mut t = describe::functions(functions);
+    if !registers.is_empty() {
+        t += &format!(" to {}", registers.join(", "));
+    }
+    Some(t)
+}
+
 fn broadcast(
     c: &mut Collector,
     (a, b): Rows,
@@ -361,37 +395,7 @@ fn broadcast(
     if same_entry((a, b)) {
         return;
     }
-    let set = |r: Option<&ProtocolRow>| -> (BTreeSet<u8>, BTreeSet<String>) {
-        match r.map(|r| &r.figure) {
-            Some(Figure::Broadcast {
-                functions,
-                registers,
-            }) => (
-                functions.iter().copied().collect(),
-                registers.iter().cloned().collect(),
-            ),
-            _ => (BTreeSet::new(), BTreeSet::new()),
-        }
-    };
-    let text = |r: Option<&ProtocolRow>| {
-        let r = r?;
-        if let Some(n) = &r.not_printed {
-            return Some(describe::broadcast_not_printed(&n.why));
-        }
-        let Figure::Broadcast {
-            functions,
-            registers,
-        } = &r.figure
-        else {
-            return None;
-        };
-        let mut t = describe::functions(functions);
-        if !registers.is_empty() {
-            t += &format!(" to {}", registers.join(", "));
-        }
-        Some(t)
-    };
-    let ((fa, ra), (fb, rb)) = (set(a), set(b));
+    let ((fa, ra), (fb, rb)) = (carries(a), carries(b));
     // An empty register list means "any writable register".
     let registers_lost = match (ra.is_empty(), rb.is_empty()) {
         (true, true) | (false, true) => false,
@@ -402,20 +406,13 @@ fn broadcast(
     let is_gained = (a.is_none() && b.is_some())
         || !fb.is_subset(&fa)
         || (!ra.is_empty() && (rb.is_empty() || !rb.is_subset(&ra)));
-    let kind = if is_lost {
-        lost
-    } else if is_gained {
-        gained
-    } else {
-        ChangeKind::CitationChanged
+    let kind = match (is_lost, is_gained) {
+        (true, _) => lost,
+        (false, true) => gained,
+        (false, false) => ChangeKind::CitationChanged,
     };
-    push(
-        c,
-        kind,
-        what,
-        (text(a), citation(a)),
-        (text(b), citation(b)),
-    );
+    let (x, y) = (broadcast_text(a), broadcast_text(b));
+    push(c, kind, what, (x, citation(a)), (y, citation(b)));
 }
 
 fn offsets(c: &mut Collector, (a, b): Rows, kind: ChangeKind, what: &str) {
