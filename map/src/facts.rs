@@ -7,6 +7,9 @@
 //! items (`drivemap-codegen`'s `generate/docs.rs`) reads [`RegisterFacts`] alone. The view is
 //! [`serde::Serialize`], so a tool can take it as JSON ([`facts`] gives a drive's).
 //!
+//! The protocol has its part ([`protocol()`], [`ProtocolFacts`]): one [`ProtocolRow`] per fact,
+//! which `drivemap doc` prints and `drivemap diff` compares key by key.
+//!
 //! A new kind of scale adds one [`ConversionKind`] in the vocabulary crate and one arm in
 //! [`scale_row`]: every printer that reads the view shows it (`tests/tests/scale_kinds.rs`).
 

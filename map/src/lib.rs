@@ -3,8 +3,8 @@
 //! Data flows one way: [`source`] reads YAML into a located tree, [`load`] merges variant maps
 //! onto their base and deserializes the [`model`], [`ir`] expands it, [`validate`] checks it one
 //! concern per pass, [`lower`] decides what every register means (the drive plan). [`facts`] is the
-//! one view of a register's facts (rows of label, value and citation, and the same facts as
-//! typed values) that printers read; [`export`] writes the typed values as JSON. [`citations`]
+//! one view of a register's facts and of the protocol's (rows of label, value and citation, and
+//! the same facts as typed values) that printers read; [`export`] writes the typed values as JSON. [`citations`]
 //! lists every place of a map that carries a citation; [`others`] says what each citation
 //! outside the registers must mention.
 //!
