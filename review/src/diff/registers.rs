@@ -10,11 +10,12 @@ use crate::ir::{Drive, Register, ValueKind};
 use drivemap_core::RegisterPlan;
 use drivemap_core::register::{Access, WriteRestriction};
 
-use crate::model::{DefaultValue, EnumValue, Field, Scale};
+use crate::model::{EnumValue, Field, Scale};
 use crate::validate::field_span;
 
 use super::{ChangeKind, Collector, json, same};
 use crate::describe;
+use crate::facts::data::ScaleData;
 use crate::facts::{self, FactKey, RegisterFacts};
 
 pub(super) fn registers(c: &mut Collector, old: &Drive, new: &Drive) {
@@ -81,28 +82,29 @@ pub(super) fn registers(c: &mut Collector, old: &Drive, new: &Drive) {
     }
 }
 
-/// A one-line description of a register.
+/// A one-line description of a register: its facts' name, access, unit and range, the
+/// plan's kind and the map's scale in one line (a selected scale with its cases).
 fn summary(drive: &Drive, r: &Register) -> String {
+    let f = facts::register(drive, r);
     let plan = drive.register_plan(r);
+    let access = f.get(FactKey::Access).map_or("", |x| x.value.as_str());
     let mut s = format!(
-        "{} {} at {}, {}",
-        r.def.name,
+        "{} {} at {}, {access}",
+        f.name,
         describe::kind(plan),
-        describe::address(r.def.address),
-        describe::access(plan.info.access)
+        describe::address(f.address),
     );
-    if let Some(u) = &r.def.unit {
+    if let Some(u) = &f.data.unit {
         s += &format!(", {u}");
     }
     if let Some(sc) = &r.def.scale {
         s += &format!(
             ", scale {}",
-            describe::scale(drive, sc, r.def.unit.as_deref().unwrap_or(""))
+            describe::scale(drive, sc, f.data.unit.as_deref().unwrap_or(""))
         );
     }
-    let range = describe::range(r.def.min, r.def.max, r.def.unit.as_deref().unwrap_or(""));
-    if !range.is_empty() {
-        s += &format!(", {range}");
+    if let Some(range) = f.get(FactKey::Range) {
+        s += &format!(", {}", range.value);
     }
     s
 }
@@ -337,24 +339,18 @@ fn moved(s: &Sides) -> Row {
     )
 }
 
-/// Alternative addresses: a change of an address or condition, or of their citations alone.
+/// Alternative addresses: a change of an address or condition, or of their citations alone;
+/// each side as its facts' rows word it.
 fn alternatives(s: &Sides) -> Row {
     let (a, b) = s.defs();
     let what = "alternative addresses";
     if same(&a.address_alternatives, &b.address_alternatives) {
         return (false, ChangeKind::CitationChanged, what, None, None);
     }
-    let text = |d: &crate::model::Register| {
-        let alts: Vec<String> = d
-            .address_alternatives
-            .iter()
-            .map(|x| {
-                format!(
-                    "{} if {}",
-                    describe::address(x.address),
-                    describe::condition(&x.when)
-                )
-            })
+    let text = |f: &RegisterFacts| {
+        let alts: Vec<String> = f
+            .all(FactKey::AlternativeAddress)
+            .map(|x| format!("{} if {}", x.value, x.when.as_deref().unwrap_or_default()))
             .collect();
         if alts.is_empty() {
             "none".to_owned()
@@ -375,8 +371,8 @@ fn alternatives(s: &Sides) -> Row {
             true,
             ChangeKind::AddressAlternativesChanged,
             what,
-            Some(text(a)),
-            Some(text(b)),
+            Some(text(&s.fa)),
+            Some(text(&s.fb)),
         )
     }
 }
@@ -673,14 +669,26 @@ fn cases<'a>(r: &'a Register) -> Option<(Option<&'a str>, Cases<'a>)> {
     }
 }
 
-/// The scale, per selector code when both sides select it by the same parameter; between
-/// values of one kind only.
+/// The worded scale of each selector code, from the facts' case table.
+fn case_scales(f: &RegisterFacts) -> BTreeMap<u16, &str> {
+    let ScaleData::Selected { cases, .. } = &f.data.scale else {
+        return BTreeMap::new();
+    };
+    (cases.iter().zip(&f.cases))
+        .flat_map(|(c, w)| c.when.iter().map(move |code| (*code, w.scale.as_str())))
+        .collect()
+}
+
+/// The scale, per selector code when both sides select it by the same parameter (each case
+/// as the facts word it); between values of one kind only.
 fn scale(c: &mut Collector, s: &Sides) {
     let Sides {
         old,
         new,
         r,
         n,
+        fa,
+        fb,
         subject,
         order,
         ..
@@ -718,7 +726,11 @@ fn scale(c: &mut Collector, s: &Sides) {
         return;
     }
     // Both selected by the same parameter: compare code by code.
-    let selector = describe::setting(new, sa.unwrap_or_default());
+    let selector = fb.selector.as_deref().unwrap_or_default();
+    let (wa, wb) = (case_scales(fa), case_scales(fb));
+    let worded = |w: &BTreeMap<u16, &str>, code: &Option<u16>| {
+        code.and_then(|c| w.get(&c)).map(|s| (*s).to_owned())
+    };
     for (code, (x, _, _, xs)) in &ca {
         let what = format!(
             "scale when {selector} = {}",
@@ -729,10 +741,7 @@ fn scale(c: &mut Collector, s: &Sides) {
                 ChangeKind::ScaleChanged,
                 subject,
                 &what,
-                (
-                    Some(describe::scale(old, x, units.0)),
-                    xs.clone().or(src.0.clone()),
-                ),
+                (worded(&wa, code), xs.clone().or(src.0.clone())),
                 (Some("none".into()), src.1.clone()),
                 order,
             ),
@@ -740,14 +749,8 @@ fn scale(c: &mut Collector, s: &Sides) {
                 ChangeKind::ScaleChanged,
                 subject,
                 &what,
-                (
-                    Some(describe::scale(old, x, units.0)),
-                    xs.clone().or(src.0.clone()),
-                ),
-                (
-                    Some(describe::scale(new, y, units.1)),
-                    ys.clone().or(src.1.clone()),
-                ),
+                (worded(&wa, code), xs.clone().or(src.0.clone())),
+                (worded(&wb, code), ys.clone().or(src.1.clone())),
                 order,
             ),
             Some((_, _, _, ys)) if xs != ys => c.push(
@@ -761,7 +764,7 @@ fn scale(c: &mut Collector, s: &Sides) {
             Some(_) => {}
         }
     }
-    for (code, (y, _, _, ys)) in &cb {
+    for (code, (_, _, _, ys)) in &cb {
         if !ca.contains_key(code) {
             c.push(
                 ChangeKind::ScaleCaseAdded,
@@ -771,10 +774,7 @@ fn scale(c: &mut Collector, s: &Sides) {
                     code.map(|c| c.to_string()).unwrap_or_default()
                 ),
                 (None, src.0.clone()),
-                (
-                    Some(describe::scale(new, y, units.1)),
-                    ys.clone().or(src.1.clone()),
-                ),
+                (worded(&wb, code), ys.clone().or(src.1.clone())),
                 order,
             );
         }
@@ -831,9 +831,9 @@ fn range_push(
 /// The range, per variant and per selected case.
 fn ranges(c: &mut Collector, s: &Sides) {
     let Sides {
-        new,
         r,
         n,
+        fb,
         subject,
         order,
         ..
@@ -900,7 +900,7 @@ fn ranges(c: &mut Collector, s: &Sides) {
                         subject,
                         &format!(
                             "range when {} = {}",
-                            describe::setting(new, sa),
+                            fb.selector.as_deref().unwrap_or_default(),
                             code.map(|c| c.to_string()).unwrap_or_default()
                         ),
                         unit,
@@ -915,27 +915,32 @@ fn ranges(c: &mut Collector, s: &Sides) {
     }
 }
 
-fn default_text(d: &Option<DefaultValue>) -> String {
-    d.as_ref()
-        .map(describe::default)
-        .unwrap_or_else(|| "none".into())
+/// A default as the facts word it, or `none`.
+fn default_text(d: Option<&str>) -> String {
+    d.unwrap_or("none").to_owned()
 }
 
-/// The default, and each variant's.
+/// The default, and each variant's, as the facts word them.
 fn defaults(c: &mut Collector, s: &Sides) {
     let (subject, order) = (s.subject.as_str(), s.order);
     let (a, b) = s.defs();
     let src = (a.source.clone(), b.source.clone());
+    let base = |f: &RegisterFacts| default_text(f.get(FactKey::Default).map(|x| x.value.as_str()));
     if !same(&a.default, &b.default) {
         c.push(
             ChangeKind::DefaultChanged,
             subject,
             "default",
-            (Some(default_text(&a.default)), src.0.clone()),
-            (Some(default_text(&b.default)), src.1.clone()),
+            (Some(base(&s.fa)), src.0.clone()),
+            (Some(base(&s.fb)), src.1.clone()),
             order,
         );
     }
+    // An option's default (none where the option gives none).
+    let option_default = |f: &RegisterFacts, option: &str| {
+        let v = f.variants.iter().find(|v| v.option == option);
+        default_text(v.and_then(|v| v.default.as_deref()))
+    };
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
         let (oa, ob) = (a.by_variant.get(option), b.by_variant.get(option));
@@ -949,11 +954,11 @@ fn defaults(c: &mut Collector, s: &Sides) {
                 subject,
                 &format!("default ({option})"),
                 (
-                    Some(default_text(&da)),
+                    Some(option_default(&s.fa, option)),
                     oa.and_then(|o| o.source.clone()).or(src.0.clone()),
                 ),
                 (
-                    Some(default_text(&db)),
+                    Some(option_default(&s.fb, option)),
                     ob.and_then(|o| o.source.clone()).or(src.1.clone()),
                 ),
                 order,
