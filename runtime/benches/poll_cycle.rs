@@ -13,44 +13,19 @@
 //! Run: `cargo bench -p drivemap-runtime --bench poll_cycle`
 
 use drivemap_test_support::alloc_count::{self, Counting};
+use drivemap_test_support::instant_link::InstantLink;
 use std::hint::black_box;
-use std::io;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use drivemap_runtime::client::ClientOptions;
 use drivemap_runtime::planner::{Poller, ReadableSet, plan_contiguous, plan_reads, plan_single};
-use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::transport::Transport;
+use drivemap_runtime::profile::Profile;
 use drivemap_runtime::{Access, Client, RegisterInfo, Table};
 use drivemap_sim::slave::SimulatedSlave;
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
-
-/// In-memory link: the simulated drive answers inside `send`, into a fixed buffer.
-struct Link {
-    drive: SimulatedSlave,
-    reply: [u8; 256],
-    len: usize,
-}
-
-impl Transport for Link {
-    fn kind(&self) -> TransportKind {
-        TransportKind::Rtu
-    }
-    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
-        self.len = self.drive.respond_rtu(frame, &mut self.reply).unwrap_or(0);
-        Ok(())
-    }
-    fn recv(&mut self, buf: &mut [u8], _: Instant) -> io::Result<usize> {
-        let n = self.len.min(buf.len());
-        buf[..n].copy_from_slice(&self.reply[..n]);
-        self.reply.copy_within(n..self.len, 0);
-        self.len -= n;
-        Ok(n)
-    }
-}
 
 static PROFILE: Profile = Profile {
     drive_id: "yaskawa-v7",
@@ -84,7 +59,7 @@ const WANTED: [u16; 18] = [
     0x3D, 0x3F,
 ];
 
-fn client() -> Client<Link> {
+fn client() -> Client<InstantLink> {
     let mut drive = SimulatedSlave::new(1, &PROFILE);
     for a in 0x20..0x40 {
         drive.set_holding(a, a * 3);
@@ -92,15 +67,7 @@ fn client() -> Client<Link> {
     // The generic options: no request gap. `Client::new` keeps the drive's timing on an RTU
     // link (the frame gap after each reply, 3.6 ms at 9600 8N1), which would make this a
     // measure of sleeping, not of the client's and the poller's own work.
-    Client::with_options(
-        Link {
-            drive,
-            reply: [0; 256],
-            len: 0,
-        },
-        &PROFILE,
-        ClientOptions::generic(),
-    )
+    Client::with_options(InstantLink::new(drive), &PROFILE, ClientOptions::generic())
 }
 
 fn allocations_per(iterations: usize, mut f: impl FnMut()) -> f64 {
@@ -113,7 +80,7 @@ fn allocations_per(iterations: usize, mut f: impl FnMut()) -> f64 {
 }
 
 /// A cycle of raw reads following `reads` (for the baselines), values summed.
-fn raw_cycle(client: &mut Client<Link>, reads: &[drivemap_runtime::planner::Read]) -> u32 {
+fn raw_cycle(client: &mut Client<InstantLink>, reads: &[drivemap_runtime::planner::Read]) -> u32 {
     let mut words = [0u16; 8];
     let mut sum = 0u32;
     for r in reads {

@@ -2,12 +2,10 @@
 //! allocator that counts the allocations of the current thread.
 
 use drivemap_test_support::alloc_count::{self, Counting};
-use std::io;
-use std::time::Instant;
+use drivemap_test_support::instant_link::InstantLink;
 
 use drivemap_runtime::planner::Poller;
-use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::transport::Transport;
+use drivemap_runtime::profile::Profile;
 use drivemap_runtime::{Access, Client, RegisterInfo, Table};
 use drivemap_sim::slave::SimulatedSlave;
 
@@ -16,30 +14,6 @@ static GLOBAL: Counting = Counting;
 
 fn allocations() -> usize {
     alloc_count::this_thread()
-}
-
-/// Answers each request as it is sent, into a fixed buffer.
-struct Link {
-    drive: SimulatedSlave,
-    reply: [u8; 256],
-    len: usize,
-}
-
-impl Transport for Link {
-    fn kind(&self) -> TransportKind {
-        TransportKind::Rtu
-    }
-    fn send(&mut self, frame: &[u8]) -> io::Result<()> {
-        self.len = self.drive.respond_rtu(frame, &mut self.reply).unwrap_or(0);
-        Ok(())
-    }
-    fn recv(&mut self, buf: &mut [u8], _: Instant) -> io::Result<usize> {
-        let n = self.len.min(buf.len());
-        buf[..n].copy_from_slice(&self.reply[..n]);
-        self.reply.copy_within(n..self.len, 0);
-        self.len -= n;
-        Ok(n)
-    }
 }
 
 static PROFILE: Profile = Profile {
@@ -78,14 +52,7 @@ fn a_planned_poll_cycle_allocates_nothing() {
     for a in 0x20..0x48 {
         drive.set_holding(a, a * 10);
     }
-    let mut client = Client::new(
-        Link {
-            drive,
-            reply: [0; 256],
-            len: 0,
-        },
-        &PROFILE,
-    );
+    let mut client = Client::new(InstantLink::new(drive), &PROFILE);
     poller.poll(&mut client, 1);
     let before = allocations();
     let mut requests = 0;

@@ -14,25 +14,7 @@
 use drivemap_runtime::bus_time::{BusModel, Parity, SerialConfig};
 use drivemap_runtime::planner::{ReadableSet, plan_contiguous, plan_cost, plan_reads, plan_single};
 use drivemap_runtime::profile::Profile;
-
-/// SplitMix64: small, deterministic, good enough to draw test cases.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-    fn chance(&mut self, percent: u64) -> bool {
-        self.below(100) < percent
-    }
-}
+use drivemap_test_support::rng::SplitMix;
 
 struct Case {
     base: u16,
@@ -45,7 +27,7 @@ struct Case {
     family: &'static str,
 }
 
-fn model_cost(rng: &mut Rng, max_read: u16) -> Vec<u64> {
+fn model_cost(rng: &mut SplitMix, max_read: u16) -> Vec<u64> {
     let bauds = [1200, 2400, 4800, 9600, 19_200, 38_400, 115_200];
     let parity = [Parity::None, Parity::Even, Parity::Odd][rng.below(3) as usize];
     let serial = SerialConfig::new(bauds[rng.below(bauds.len() as u64) as usize]).parity(parity);
@@ -69,7 +51,7 @@ fn model_cost(rng: &mut Rng, max_read: u16) -> Vec<u64> {
         .collect()
 }
 
-fn draw(rng: &mut Rng) -> Case {
+fn draw(rng: &mut SplitMix) -> Case {
     let n = 1 + rng.below(12) as usize;
     let base = match rng.below(4) {
         0 => 0,
@@ -174,7 +156,7 @@ fn search(case: &Case, wanted: &[usize], next: usize, partial: u64, best: &mut u
 #[test]
 fn the_planner_is_exact_against_exhaustive_search() {
     const CASES: usize = 20_000;
-    let mut rng = Rng(0x5EED_2024_0008);
+    let mut rng = SplitMix(0x5EED_2024_0008);
     let mut per_family: std::collections::BTreeMap<&str, (usize, usize)> = Default::default();
     let mut strictly_better_than_contiguous = 0;
     for index in 0..CASES {

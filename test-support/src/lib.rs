@@ -10,12 +10,17 @@
 //! - [`sim_link::SimLink`]: an in-memory link to a simulated drive that loses, delays and refuses
 //!   frames on request and records what reached the wire;
 //! - [`alloc_count::Counting`]: a global allocator that counts heap allocations, per thread and
-//!   in all, for the tests and benches that promise none per request.
+//!   in all, for the tests and benches that promise none per request;
+//! - [`instant_link::InstantLink`]: an in-memory RTU link on which a simulated slave answers
+//!   inside `send` (no thread, no clock), for those benches and tests;
+//! - [`rng::SplitMix`]: SplitMix64, to draw test cases and reproducible subsets.
 
 pub mod alloc_count;
 pub mod hostile_peer;
+pub mod instant_link;
 pub mod late_slave;
 #[cfg(unix)]
 pub mod line;
 pub mod pty_pair;
+pub mod rng;
 pub mod sim_link;

@@ -29,6 +29,7 @@ use drivemap_runtime::planner::{
     Read, ReadableSet, plan_contiguous, plan_cost, plan_reads, plan_single,
 };
 use drivemap_runtime::{Profile, RegisterPlan, Table};
+use drivemap_test_support::rng::SplitMix;
 
 /// The generated profile and register table of a module of `drivemap_drives`.
 fn generated(module: &str) -> Option<(&'static Profile, &'static [RegisterPlan])> {
@@ -51,19 +52,6 @@ fn generated(module: &str) -> Option<(&'static Profile, &'static [RegisterPlan])
 
 /// Random subsets per drive for the second table.
 const SUBSETS: usize = 1000;
-
-/// SplitMix64, for reproducible subsets.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-}
 
 /// Requests and bus time (ns) of the three strategies for one set of wanted registers.
 #[derive(Debug, Default, Clone, Copy)]
@@ -215,7 +203,10 @@ fn main() {
                 .map(|(&t, w)| {
                     (
                         t,
-                        w.iter().copied().filter(|_| rng.next() & 1 == 1).collect(),
+                        w.iter()
+                            .copied()
+                            .filter(|_| rng.next_u64() & 1 == 1)
+                            .collect(),
                     )
                 })
                 .collect();

@@ -28,6 +28,7 @@ use drivemap_runtime::{Client, ClientOptions, Profile, RegisterPlan, Table};
 use drivemap_sim::timed::DriveLine;
 use drivemap_sim::{SerialServer, SimOptions, Simulator};
 use drivemap_test_support::line::{EmulatedLine, LineReport, Violation, analyse};
+pub use drivemap_test_support::rng::SplitMix;
 
 /// A shipped drive and its monitor registers.
 pub struct Monitors {
@@ -104,19 +105,6 @@ pub fn monitors() -> Vec<Monitors> {
         });
     }
     out
-}
-
-/// SplitMix64, for reproducible subsets (the seed of `bus_time_report`).
-pub struct SplitMix(pub u64);
-
-impl SplitMix {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
 }
 
 /// `n` random halves of `wanted` (each register with probability 1/2; an empty draw is
