@@ -93,11 +93,10 @@ fn default_json(d: &Option<DefaultValue>) -> (Value, Value) {
     }
 }
 
-/// The export's object of one register: a mapping of its facts' data.
-fn register(f: &RegisterFacts) -> Value {
-    let d = &f.data;
-    // (scale, scale_selected_by, scale_relative_to, scale_cases)
-    let (scale, selected_by, relative_to, cases) = match &d.scale {
+/// The scale columns of a register: `scale` (a fixed factor or ratio), `scale_selected_by`,
+/// `scale_relative_to` and `scale_cases`, each null where it does not apply.
+fn scale_columns(scale: &ScaleData) -> (Value, Value, Value, Value) {
+    match scale {
         ScaleData::Factor(x) => (json!(x), Value::Null, Value::Null, Value::Null),
         ScaleData::Relative {
             reference,
@@ -108,7 +107,7 @@ fn register(f: &RegisterFacts) -> Value {
             json!({"reference": shown(reference), "full_scale": full_scale}),
             Value::Null,
         ),
-        ScaleData::Ratio { .. } => (ratio_json(&d.scale), Value::Null, Value::Null, Value::Null),
+        ScaleData::Ratio { .. } => (ratio_json(scale), Value::Null, Value::Null, Value::Null),
         ScaleData::Selected { selector, cases } => {
             let cases = cases
                 .iter()
@@ -117,7 +116,13 @@ fn register(f: &RegisterFacts) -> Value {
             (Value::Null, json!(selector), Value::Null, json!(cases))
         }
         ScaleData::None => (Value::Null, Value::Null, Value::Null, Value::Null),
-    };
+    }
+}
+
+/// The export's object of one register: a mapping of its facts' data.
+fn register(f: &RegisterFacts) -> Value {
+    let d = &f.data;
+    let (scale, selected_by, relative_to, cases) = scale_columns(&d.scale);
     let fields: Vec<Value> = d
         .fields
         .iter()
@@ -251,44 +256,69 @@ pub fn export(drive: &Drive) -> Value {
     out
 }
 
-/// The `protocol` object: a mapping of the protocol facts' figures and entries.
-fn protocol(view: &ProtocolFacts) -> Value {
-    let entry = |key| view.get(key).map_or(Value::Null, |r| r.entry.clone());
-    let figure = |key| view.get(key).map(|r| &r.figure);
-    let codes = match figure(ProtocolKey::FunctionCodes) {
-        Some(Figure::Codes(codes)) => json!(codes),
-        _ => json!([]),
-    };
-    let count = |key| match figure(key) {
+/// A row's entry (the map's object as written), null when the row is absent.
+fn entry(view: &ProtocolFacts, key: ProtocolKey) -> Value {
+    view.get(key).map_or(Value::Null, |r| r.entry.clone())
+}
+
+/// A row's working count (registers per read or write), null when absent.
+fn count(view: &ProtocolFacts, key: ProtocolKey) -> Value {
+    match view.get(key).map(|r| &r.figure) {
         Some(Figure::Count(n)) => json!(n),
         _ => Value::Null,
-    };
-    let mut out = json!({
-        "transports": entry(ProtocolKey::Transports),
-        // The working list; `limits.function_codes` (when cited or not printed) says more.
-        "function_codes": codes,
-        // The working numbers; `limits` (when one is cited or not printed) says more.
-        "max_read": count(ProtocolKey::MaxRead),
-        "max_write": count(ProtocolKey::MaxWrite),
+    }
+}
 
-        "slave_address": entry(ProtocolKey::SlaveAddress),
-        "broadcast": entry(ProtocolKey::Broadcast),
+/// The working list of function codes.
+fn codes(view: &ProtocolFacts) -> Value {
+    match view.get(ProtocolKey::FunctionCodes).map(|r| &r.figure) {
+        Some(Figure::Codes(codes)) => json!(codes),
+        _ => json!([]),
+    }
+}
+
+/// The `protocol` object: a mapping of the protocol facts' figures and entries.
+fn protocol(view: &ProtocolFacts) -> Value {
+    let mut out = json!({
+        "transports": entry(view, ProtocolKey::Transports),
+        // The working list; `limits.function_codes` (when cited or not printed) says more.
+        "function_codes": codes(view),
+        // The working numbers; `limits` (when one is cited or not printed) says more.
+        "max_read": count(view, ProtocolKey::MaxRead),
+        "max_write": count(view, ProtocolKey::MaxWrite),
+
+        "slave_address": entry(view, ProtocolKey::SlaveAddress),
+        "broadcast": entry(view, ProtocolKey::Broadcast),
         "exceptions": view.data.exceptions,
         "commands": view.commands.iter().map(|c| c.entry.clone()).collect::<Vec<_>>(),
-        "eeprom": entry(ProtocolKey::Eeprom),
-        "addressing": entry(ProtocolKey::Addressing),
-        "timing": entry(ProtocolKey::Timing),
-        "serial": entry(ProtocolKey::Serial),
+        "eeprom": entry(view, ProtocolKey::Eeprom),
+        "addressing": entry(view, ProtocolKey::Addressing),
+        "timing": entry(view, ProtocolKey::Timing),
+        "serial": entry(view, ProtocolKey::Serial),
     });
-    // What the protocol's working figures rest on, when a map says more than the number:
-    // a citation, or "not printed" with the reason.
+    if let Some(b) = broadcast_not_printed(view) {
+        out["broadcast"] = b;
+    }
+    serial_formats(view, &mut out["serial"]);
+    let limits = limits(view);
+    if !limits.is_empty() {
+        out["limits"] = Value::Object(limits);
+    }
+    frame_gap_first(view, &mut out["timing"]);
+    not_printed(view, &mut out);
+    out
+}
+
+/// What the protocol's working figures rest on, when a map says more than the number: a
+/// citation, or "not printed" with the reason.
+fn limits(view: &ProtocolFacts) -> serde_json::Map<String, Value> {
     let stated = |r: &&ProtocolRow| r.citation.is_some() || r.not_printed.is_some();
     let why = |r: &ProtocolRow| r.not_printed.as_ref().map(|n| n.why.clone());
     let mut limits = serde_json::Map::new();
     if let Some(fc) = view.get(ProtocolKey::FunctionCodes).filter(stated) {
         limits.insert(
             "function_codes".into(),
-            json!({"codes": codes, "source": fc.citation, "not_printed": why(fc)}),
+            json!({"codes": codes(view), "source": fc.citation, "not_printed": why(fc)}),
         );
     }
     let (read, write) = (
@@ -301,78 +331,79 @@ fn protocol(view: &ProtocolFacts) -> Value {
         // A per-request limit: its working value (the Modbus one when the map gives none),
         // its citation and, when the manual prints none, the reason.
         for (name, l) in [("max_read", read), ("max_write", write)] {
-            let value = count(l.key);
             limits.insert(
                 name.into(),
-                json!({"value": value, "source": l.citation, "not_printed": why(l)}),
+                json!({"value": count(view, l.key), "source": l.citation, "not_printed": why(l)}),
             );
         }
     }
-    // A broadcast whose rules are not printed: says so in the words of `doc`, with the reason.
-    if let Some(b) = view.get(ProtocolKey::Broadcast)
-        && let Some(np) = &b.not_printed
-        && let Figure::Broadcast {
-            functions,
-            registers,
-        } = &b.figure
-    {
-        let source = b.citation.as_deref().unwrap_or_default();
-        out["broadcast"] = json!({
-            "functions": functions,
-            "registers": registers,
-            "source": source,
-            "not_printed": np.why.trim(),
-            "text": format!("{} ({source})", crate::describe::broadcast_not_printed(&np.why)),
-        });
-    }
-    // Serial formats chosen by a parameter: each case with its data bits and its notation
-    // (`8E1`); the line's single `stop_bits` does not apply then.
-    if let Some(f) = out["serial"]["formats"].as_object().cloned() {
-        let cases: Vec<Value> = f["cases"]
-            .as_array()
-            .into_iter()
-            .flatten()
-            .zip(&view.data.serial_formats)
-            .map(|(c, x)| {
-                json!({
-                    "when": c["when"],
-                    "data_bits": x.data_bits,
-                    "parity": c["parity"],
-                    "stop_bits": c["stop_bits"],
-                    "format": x.to_string(),
-                    "source": c["source"],
-                })
+    limits
+}
+
+/// A broadcast whose rules are not printed: says so in the words of `doc`, with the reason.
+fn broadcast_not_printed(view: &ProtocolFacts) -> Option<Value> {
+    let b = view.get(ProtocolKey::Broadcast)?;
+    let np = b.not_printed.as_ref()?;
+    let Figure::Broadcast {
+        functions,
+        registers,
+    } = &b.figure
+    else {
+        return None;
+    };
+    let source = b.citation.as_deref().unwrap_or_default();
+    Some(json!({
+        "functions": functions,
+        "registers": registers,
+        "source": source,
+        "not_printed": np.why.trim(),
+        "text": format!("{} ({source})", crate::describe::broadcast_not_printed(&np.why)),
+    }))
+}
+
+/// Serial formats chosen by a parameter: each case with its data bits and its notation
+/// (`8E1`); the line's single `stop_bits` does not apply then.
+fn serial_formats(view: &ProtocolFacts, serial: &mut Value) {
+    let Some(f) = serial["formats"].as_object().cloned() else {
+        return;
+    };
+    let cases: Vec<Value> = (f["cases"].as_array().into_iter().flatten())
+        .zip(&view.data.serial_formats)
+        .map(|(c, x)| {
+            json!({
+                "when": c["when"],
+                "data_bits": x.data_bits,
+                "parity": c["parity"],
+                "stop_bits": c["stop_bits"],
+                "format": x.to_string(),
+                "source": c["source"],
             })
-            .collect();
-        let serial = &mut out["serial"];
-        if let Some(m) = serial.as_object_mut() {
-            m.remove("stop_bits");
+        })
+        .collect();
+    if let Some(m) = serial.as_object_mut() {
+        m.remove("stop_bits");
+    }
+    serial["formats"] = json!({
+        "selected_by": f["selected_by"],
+        "source": f["source"],
+        "cases": cases,
+    });
+}
+
+/// The working frame gap, given or the Modbus 3.5 characters, is always written (first, where
+/// the model's serialization always had it).
+fn frame_gap_first(view: &ProtocolFacts, timing: &mut Value) {
+    let (Some(chars), Some(given)) = (view.data.frame_gap_chars, timing.as_object()) else {
+        return;
+    };
+    let mut out = serde_json::Map::new();
+    out.insert("frame_gap_chars".into(), json!(chars));
+    for (k, v) in given {
+        if k != "frame_gap_chars" {
+            out.insert(k.clone(), v.clone());
         }
-        serial["formats"] = json!({
-            "selected_by": f["selected_by"],
-            "source": f["source"],
-            "cases": cases,
-        });
     }
-    if !limits.is_empty() {
-        out["limits"] = Value::Object(limits);
-    }
-    // The working frame gap, given or the Modbus 3.5 characters, is always written.
-    // (First, where the model's serialization always had it.)
-    if let Some(chars) = view.data.frame_gap_chars
-        && let Some(given) = out["timing"].as_object()
-    {
-        let mut timing = serde_json::Map::new();
-        timing.insert("frame_gap_chars".into(), json!(chars));
-        for (k, v) in given {
-            if k != "frame_gap_chars" {
-                timing.insert(k.clone(), v.clone());
-            }
-        }
-        out["timing"] = Value::Object(timing);
-    }
-    not_printed(view, &mut out);
-    out
+    *timing = Value::Object(out);
 }
 
 /// The facts the manual does not print, written explicitly: `protocol.not_printed` maps each
