@@ -15,6 +15,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use drivemap_live::codec::{self, Value};
 use drivemap_live::intern::intern;
+use drivemap_live::session::rows_on_link;
 use drivemap_live::{LiveSettings, lookup};
 use drivemap_map::Drive;
 use drivemap_map::describe;
@@ -22,13 +23,12 @@ use drivemap_map::ir::Register;
 use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::gate;
-use drivemap_runtime::plan::RegisterPlan;
 use drivemap_runtime::plan::{Conversion, Dependency};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, ClientOptions, Error, RegisterInfo, Rounding, Table, Width};
+use drivemap_runtime::{Client, ClientOptions, Error, Rounding, Table, Width};
 
 use crate::metrics::{Labels, Metrics};
 use crate::points::{self, Point, PointKind};
@@ -302,21 +302,7 @@ impl Polled {
         let drive = self.spec.drive;
         let kind = self.kind;
         // Plans, not bare infos: the planner respects each register's `function_codes`.
-        let infos: Vec<RegisterPlan> = drive
-            .registers
-            .iter()
-            .filter(|r| drive.register_plan(r).transports.contains(kind))
-            .filter_map(|r| {
-                let plan = drive.register_plan(r);
-                Some(RegisterPlan {
-                    info: RegisterInfo {
-                        address: self.address(r).ok()?,
-                        ..plan.info
-                    },
-                    ..*plan
-                })
-            })
-            .collect();
+        let infos = rows_on_link(drive, kind, |r| self.address(r).ok());
         let mut wanted = Vec::new();
         let mut slots = Vec::new();
         for r in &self.regs {

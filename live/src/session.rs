@@ -335,6 +335,32 @@ pub fn on_transport(drive: &Drive, r: &Register, kind: TransportKind) -> bool {
     drive.register_plan(r).transports.contains(kind)
 }
 
+/// The plan rows of `drive`'s registers on `kind`, each at the address `address` gives it on
+/// the link (a register whose address is not known there is left out): what the read planner
+/// may bridge over, with the functions each register accepts (`function_codes`), which it
+/// respects. The session's and the bridge's plans both start from it.
+pub fn rows_on_link(
+    drive: &Drive,
+    kind: TransportKind,
+    address: impl Fn(&Register) -> Option<u16>,
+) -> Vec<RegisterPlan> {
+    drive
+        .registers
+        .iter()
+        .filter(|r| on_transport(drive, r, kind))
+        .filter_map(|r| {
+            let plan = drive.register_plan(r);
+            Some(RegisterPlan {
+                info: RegisterInfo {
+                    address: address(r)?,
+                    ..plan.info
+                },
+                ..*plan
+            })
+        })
+        .collect()
+}
+
 /// The communication address of a register under `settings` on `kind`: the plan's answer
 /// (`RegisterPlan::address_for`), the same the generated code and the simulator give.
 pub fn address_of(
@@ -741,24 +767,7 @@ impl<'d> Session<'d> {
     /// `max_read` per request. Registers this link cannot read get their reason instead.
     pub fn plan(&self, regs: &[&Register]) -> Result<Polling, SessionError> {
         let drive = self.drive;
-        let infos: Vec<RegisterPlan> = drive
-            .registers
-            .iter()
-            .filter(|r| on_transport(self.drive, r, self.kind))
-            // The plan's own row, at the address this link and these settings put it (a
-            // register whose address is not known is not bridged over), with the functions
-            // it accepts (`function_codes`), which the planner respects.
-            .filter_map(|r| {
-                let plan = drive.register_plan(r);
-                Some(RegisterPlan {
-                    info: RegisterInfo {
-                        address: self.address(r).ok()?,
-                        ..plan.info
-                    },
-                    ..*plan
-                })
-            })
-            .collect();
+        let infos = rows_on_link(drive, self.kind, |r| self.address(r).ok());
         let mut wanted = Vec::new();
         let mut slots = Vec::new();
         for r in regs {
