@@ -18,6 +18,10 @@ mod profile;
 mod registers;
 mod settings;
 
+/// The longest line of generated code, but for one holding a single string literal longer
+/// than that, or a comment.
+pub const LINE_WIDTH: usize = plan::WIDTH;
+
 /// Options of emission.
 #[derive(Debug, Clone)]
 pub struct Options {
