@@ -8,6 +8,10 @@
 //! What the lowered plan decides (access, table, transports, write restriction, value kind) is
 //! described from the plan's [`drivemap_core`] types; scales, limits and defaults as the manual
 //! prints them (decimal, in engineering units, with their citations) from the map.
+//!
+//! A register's facts are worded here once, into the facts view ([`crate::facts`]); printers
+//! read a register's rows there rather than calling these functions on the map (see
+//! `map/README.md` for the few that still word a register themselves, and why).
 
 use drivemap_core::plan::{Conversion, RegisterPlan};
 use drivemap_core::register::{Access, Table, WriteRestriction};
