@@ -12,15 +12,14 @@ use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::Drive;
 use drivemap_map::ir::Register;
 use drivemap_runtime::bus_time::BusModel;
-use drivemap_runtime::plan::RegisterPlan;
 use drivemap_runtime::plan::{Conversion, Field, Label, Scale};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{RegisterInfo, Table, Width, WordOrder};
+use drivemap_runtime::{Table, Width, WordOrder};
 
 use crate::error::Error;
 use drivemap_live::link::{Link, Parity};
-use drivemap_live::session::{on_transport, value_error};
+use drivemap_live::session::{on_transport, rows_on_link, value_error};
 
 pub mod home_assistant;
 pub mod node_red;
@@ -333,21 +332,9 @@ impl<'d> Points<'d> {
         // The planner's reads over the registers this link can read at the addresses these
         // settings put them (a register whose address is not known is not bridged over).
         // Plans, not bare infos: the planner respects each register's `function_codes`.
-        let infos: Vec<RegisterPlan> = drive
-            .registers
-            .iter()
-            .filter(|r| on_transport(drive, r, kind))
-            .filter_map(|r| {
-                let plan = drive.register_plan(r);
-                Some(RegisterPlan {
-                    info: RegisterInfo {
-                        address: plan.locate(&view, kind).ok()?,
-                        ..plan.info
-                    },
-                    ..*plan
-                })
-            })
-            .collect();
+        let infos = rows_on_link(drive, kind, |r| {
+            drive.register_plan(r).locate(&view, kind).ok()
+        });
         let model = BusModel::new(profile, link.bus_line(drive));
         let poller = Poller::new(profile, &infos, wanted)
             .map_err(|e| e.to_string())?
