@@ -694,6 +694,8 @@ pub fn option_text(code: u16, id: Option<&str>, name: Option<&str>) -> String {
 /// Runs a link until `stop` is set: connects (with the client's back-off, 100 ms doubling to
 /// 5 s), then polls every drive each `period`, carrying out commands between cycles. Returns
 /// when the cycle in flight is done after `stop`.
+// The thread's inputs, each moved into it for its whole life (the link, its channels,
+// shared flags and counters); `lib.rs` builds them once and hands them over.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     mut link: LinkSpec,

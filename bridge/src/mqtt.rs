@@ -469,6 +469,8 @@ fn bounds(drive: &Drive, r: &Register) -> (f64, f64) {
 
 /// Connects and serves until `stop`: publishes discovery and availability on each connection,
 /// state updates as they come, and passes allowed commands to the links.
+// The task's inputs, each owned by it for its whole life (options, drives, channels,
+// shared flags and counters, TLS); `lib.rs` builds them once and hands them over.
 #[allow(clippy::too_many_arguments)]
 pub async fn run(
     options: Options,

@@ -257,6 +257,7 @@ impl Config {
                 source,
             });
         }
+        // Like the modules: a program that includes the index need not list the drives.
         index += "/// Every generated drive: (drive id, module name).\n#[allow(dead_code)]\npub const DRIVES: &[(&str, &str)] = &[\n";
         for m in &modules {
             index += &format!("    ({:?}, {:?}),\n", m.id, m.module);

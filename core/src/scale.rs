@@ -517,6 +517,8 @@ pub fn encode_relative(
 /// Encodes a value relative to a reference quantity: the range is checked on the value given,
 /// then a value that is not a whole number of steps (`reference / full_scale`) is refused or
 /// rounded as `rounding` says; the raw integer.
+// The register's names for messages (register, setting, unit), the value, the scale's
+// three numbers and the rounding: plain values the plan already holds apart.
 #[allow(clippy::too_many_arguments)]
 pub fn encode_relative_with(
     register: &'static str,

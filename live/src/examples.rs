@@ -554,6 +554,9 @@ impl Verifier<'_> {
     /// Checks the registers of a read or write: each address is a register of the map, the
     /// first is the one `says` names, and each word (if any) is in range and decodes to the
     /// stated value. `address_byte` and `data_byte` index the frame.
+    // The fields of one frame (address, quantity, table, words, byte offsets) and what the
+    // example says of them; the request and the reply (the two callers) hold them at
+    // different bytes.
     #[allow(clippy::too_many_arguments)]
     fn registers(
         &self,

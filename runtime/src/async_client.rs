@@ -25,6 +25,8 @@ use crate::transport::{DISCARD_BUDGET, Transport};
 use crate::typed::{ReadSet, WriteSet};
 
 /// A link for the [`AsyncClient`]; see [`Transport`] for the meaning of each method.
+// The futures are not promised `Send` (the lint's concern): the client is driven on one task
+// (a current-thread runtime, as in `examples/async-poll` and the runtime's async tests).
 #[allow(async_fn_in_trait)]
 pub trait AsyncTransport {
     /// How frames are framed on this link.

@@ -78,6 +78,8 @@ macro_rules! register_set {
             type Values = ($first::Value, $($rest::Value,)*);
             const LEN: usize = $first::WIDTH.count() as usize $(+ $rest::WIDTH.count() as usize)*;
 
+            // `index` is the next register's offset: the one-register set never reads it and every
+            // set's last `+=` is never read (the macro writes one loop body per register).
             #[allow(unused_assignments, unused_mut, unused_variables)]
             fn layout(settings: &Self::Settings, kind: TransportKind) -> Result<(u16, Table), Refusal> {
                 if !$first::on_transport(kind) {
@@ -96,7 +98,6 @@ macro_rules! register_set {
         impl<$first: Readable, $($rest: Readable<Settings = $first::Settings>),*> ReadSet
             for ($first, $($rest,)*)
         {
-            #[allow(unused_mut)]
             fn decode(raw: &[u16], settings: &Self::Settings) -> Result<Self::Values, ValueError> {
                 let mut rest = raw;
                 let mut take = |width: Width| {
@@ -118,7 +119,6 @@ macro_rules! register_set {
         > WriteSet
             for ($first, $($rest,)*)
         {
-            #[allow(unused_mut)]
             fn encode(
                 values: &Self::Values,
                 settings: &Self::Settings,

@@ -265,6 +265,8 @@ pub trait VariableFrequencyDrive {
 /// over an [`AsyncClient`].
 #[cfg(feature = "tokio")]
 #[cfg_attr(docsrs, doc(cfg(feature = "tokio")))]
+// The futures are not promised `Send` (the lint's concern): like `AsyncTransport`'s, they
+// run on the task that drives the client.
 #[allow(async_fn_in_trait)]
 pub trait AsyncVariableFrequencyDrive {
     /// The drive's map id.

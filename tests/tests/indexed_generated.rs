@@ -12,6 +12,8 @@ use drivemap_runtime::profile::TransportKind;
 use drivemap_sim::{SimOptions, Simulator};
 use drivemap_test_support::sim_link::SimLink;
 
+// A whole generated map of which the tests use a few registers (as `drivemap.rs` does for
+// every generated module).
 #[allow(dead_code)]
 mod tarrow_tm44 {
     include!(concat!(env!("OUT_DIR"), "/tarrow_tm44.rs"));

@@ -132,6 +132,7 @@ fn drive_slave(text: &str) -> Result<(String, u8), Error> {
     Ok((id.trim().to_owned(), slave))
 }
 
+// One parameter per command-line option of a link (clap's fields), checked together.
 #[allow(clippy::too_many_arguments)]
 fn link_args(
     tcp: Option<String>,

@@ -1,6 +1,7 @@
 //! Processes for the bridge tests: simulated drives, the bridge, the real tools (Prometheus,
 //! mosquitto), each killed when dropped; loopback ports; a tiny HTTP GET.
 
+// Each test binary compiles this module and uses only the helpers it needs.
 #![allow(dead_code)]
 
 use std::io::{Read, Write};

@@ -1,7 +1,11 @@
 //! A binary that includes the V7's generated module (not the `drivemap-drives` library) inside
 //! a private module, as applications do, and uses one register of it: with `unused` denied
-//! (`Cargo.toml`), it builds only if the generated code gives no dead-code or unused warning
+//! (below), it builds only if the generated code gives no dead-code or unused warning
 //! for the registers, types and tables it does not use (290 of them before).
+
+// Every `unused` lint (dead code, unused imports, ...) an error: the generated module must not
+// make a binary that uses one of its registers warn.
+#![deny(unused)]
 
 mod generated {
     include!(concat!(env!("OUT_DIR"), "/drivemap.rs"));

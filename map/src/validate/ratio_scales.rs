@@ -71,6 +71,8 @@ fn count(
     }
 }
 
+// The register, its ratio and the three values checked against it (min, max, default),
+// where to report them (map, diagnostics, path) and the label: one check, no shared state.
 #[allow(clippy::too_many_arguments)]
 fn limits(
     drive: &Drive,

@@ -226,6 +226,8 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
 /// Map documentation kept as a list of entries (conflicts, gaps, removed registers): each entry
 /// by its key (the n-th of a repeated key with the n-th), added, removed or changed, with its
 /// text and citation on each side.
+// The two lists and how to read an entry of them (key, text, citation): each call site
+// names its three readers in place; a struct of closures would only be unpacked here.
 #[allow(clippy::too_many_arguments)]
 fn keyed<T: Serialize>(
     c: &mut Collector,

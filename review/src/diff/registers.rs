@@ -794,6 +794,8 @@ pub(super) fn range_change(
     (narrowed, widened)
 }
 
+// Old and new side of one range line (bounds, citations) with the line's wording: the
+// arguments are already paired; one more struct would only be unpacked here.
 #[allow(clippy::too_many_arguments)]
 fn range_push(
     c: &mut Collector,

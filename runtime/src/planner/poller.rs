@@ -475,6 +475,8 @@ impl Poller {
     /// Reads the wanted `addresses` (sorted, unique) of `failed`, a request the drive refused,
     /// without bridging: runs of consecutive wanted addresses, or halves when `failed` was one
     /// such run. Returns whether a register was refused alone.
+    // One step of a recursion over halves: the poller, the link and where results and
+    // statistics go, plus the request being split; a struct would be rebuilt at every level.
     #[allow(clippy::too_many_arguments)]
     fn read_apart<T: Transport>(
         &mut self,

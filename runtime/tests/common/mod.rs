@@ -1,4 +1,5 @@
 //! Shared test fixtures: a V7-like profile transcribed from the manual, and client helpers.
+// Each test binary compiles this module and uses only the helpers it needs.
 #![allow(dead_code)]
 
 use std::time::Duration;

@@ -1,5 +1,6 @@
 //! Shared by the interop tests: the third-party peers (found or the test fails naming the
 //! install step), a socat pseudo-terminal pair, simulators served in-process with a request log.
+// Each test binary compiles this module and uses only the helpers it needs.
 #![allow(dead_code)]
 
 use std::io::{BufRead, BufReader};
