@@ -246,8 +246,9 @@ impl Config {
             // A module is a drive's whole map; an application uses a few of its registers.
             // Included into a binary or a private module, the rest is dead code by design, not
             // a mistake to warn about (`examples/one-register` builds with `unused` denied).
+            index += "#[allow(dead_code)]\n";
             index += &format!(
-                "#[allow(dead_code)]\npub mod {module} {{\n    include!(\"{module}.rs\");\n}}\n\n",
+                "pub mod {module} {{\n    include!(\"{module}.rs\");\n}}\n\n",
                 module = drive.module,
             );
             modules.push(Module {
