@@ -1,6 +1,8 @@
 //! Differences of registers: matching old and new registers (by id, then renames by address and
-//! parameter number), then comparing address, access, value kind, scale, unit, ranges per variant
-//! and per selected case, defaults, enumeration codes, bit fields, documentation and citations.
+//! parameter number), then comparing each pair aspect by aspect, in the order of `ASPECTS`:
+//! address, name, table, access and the other rows of one difference each, then the parts
+//! compared one by one (enumeration codes, bit fields, scale and range per variant and per
+//! selected case, defaults, documentation, citations).
 //! Access, table, write restriction and transports are compared on the lowered plans
 //! ([`Drive::register_plan`]): what the generated code and the write gate act on.
 
@@ -13,7 +15,7 @@ use drivemap_core::register::{Access, WriteRestriction};
 use crate::model::{EnumValue, Field, Scale};
 use crate::validate::field_span;
 
-use super::{ChangeKind, Collector, json, same};
+use super::{ChangeKind, Collector, Side, json, same};
 use crate::describe;
 use crate::facts::data::ScaleData;
 use crate::facts::{self, FactKey, RegisterFacts};
@@ -171,6 +173,14 @@ impl<'a> Sides<'a> {
         }
     }
 
+    /// The unit of both sides, empty for none.
+    fn units(&self) -> (&'a str, &'a str) {
+        (
+            self.r.def.unit.as_deref().unwrap_or(""),
+            self.n.def.unit.as_deref().unwrap_or(""),
+        )
+    }
+
     /// The map's text of both sides.
     fn defs(&self) -> (&'a crate::model::Register, &'a crate::model::Register) {
         (&self.r.def, &self.n.def)
@@ -191,6 +201,18 @@ impl<'a> Sides<'a> {
             what,
             (x, self.src.0.clone()),
             (y, self.src.1.clone()),
+            self.order,
+        );
+    }
+
+    /// A change of the citation of the register's part `what` alone.
+    fn cite(&self, c: &mut Collector, what: &str, x: Option<String>, y: Option<String>) {
+        c.push(
+            ChangeKind::CitationChanged,
+            &self.subject,
+            what,
+            (None, x),
+            (None, y),
             self.order,
         );
     }
@@ -253,10 +275,15 @@ const ASPECTS: &[Aspect] = {
         Parts(scale),
         Parts(codes),
         Parts(fields),
-        Parts(ranges),
+        Parts(range),
+        Parts(variant_ranges),
+        Parts(case_ranges),
         Parts(defaults),
         Parts(documentation),
-        Parts(citations),
+        Parts(pair_citation),
+        Parts(repeat_citation),
+        Parts(function_codes_citation),
+        Parts(variant_citations),
         Row(citation),
     ]
 };
@@ -292,28 +319,28 @@ fn every_key_compared(n: &Register) {
                 unit: _,                 // unit
                 scale: _,                // scale
                 signed: _,               // signedness
-                pair: _,                 // width, citations
-                min: _,                  // ranges
-                max: _,                  // ranges
+                pair: _,                 // width, pair_citation
+                min: _,                  // range, variant_ranges
+                max: _,                  // range, variant_ranges
                 max_relative: _,         // relative_limit
                 default: _,              // defaults
-                by_variant: _,           // ranges, defaults, documentation, citations
+                by_variant: _, // variant_ranges, defaults, documentation, variant_citations
                 address_alternatives: _, // alternatives
-                values: _,               // codes
-                fields: _,               // fields
-                read_values: _,          // read_meaning, read_codes
-                repeat_needs_change: _,  // on the IR register (with the group's)
-                indexed: _,              // indexed (indexed.rs)
-                function_codes: _,       // on the IR register (with the group's)
-                write_restriction: _,    // write_restriction, on the plan
-                transports: _,           // transports, on the plan
-                display_steps: _,        // documentation
-                repeat: _,               // expanded by the IR: one register per instance
-                source: _,               // citation
-                indirect: _,             // documentation
-                notes: _,                // documentation
-                conflicts: _,            // documentation
-                unknown: _,              // documentation
+                values: _,     // codes
+                fields: _,     // fields
+                read_values: _, // read_meaning, read_codes
+                repeat_needs_change: _, // on the IR register (with the group's)
+                indexed: _,    // indexed (indexed.rs)
+                function_codes: _, // on the IR register (with the group's)
+                write_restriction: _, // write_restriction, on the plan
+                transports: _, // transports, on the plan
+                display_steps: _, // documentation
+                repeat: _,     // expanded by the IR: one register per instance
+                source: _,     // citation
+                indirect: _,   // documentation
+                notes: _,      // documentation
+                conflicts: _,  // documentation
+                unknown: _,    // documentation
             },
         access: _,              // on the plan
         table: _,               // on the plan
@@ -322,8 +349,8 @@ fn every_key_compared(n: &Register) {
         broadcast: _,           // broadcast
         group: _,               // group
         path: _,                // where it is written
-        repeat_needs_change: _, // repeat_needs_change, citations
-        function_codes: _,      // function_codes, citations
+        repeat_needs_change: _, // repeat_needs_change, repeat_citation
+        function_codes: _,      // function_codes, function_codes_citation
         index: _,               // its place in the map's list, not a property
     } = n;
 }
@@ -682,60 +709,54 @@ fn case_scales(f: &RegisterFacts) -> BTreeMap<u16, &str> {
 /// The scale, per selector code when both sides select it by the same parameter (each case
 /// as the facts word it); between values of one kind only.
 fn scale(c: &mut Collector, s: &Sides) {
-    let Sides {
-        old,
-        new,
-        r,
-        n,
-        fa,
-        fb,
-        subject,
-        order,
-        ..
-    } = s;
-    let (subject, order) = (subject.as_str(), *order);
+    let (r, n) = (s.r, s.n);
     let (a, b) = (&r.def.scale, &n.def.scale);
     if !same_kind(r, n) || same(a, b) {
         return;
     }
-    let src = (r.def.source.clone(), n.def.source.clone());
-    let units = (
-        r.def.unit.as_deref().unwrap_or(""),
-        n.def.unit.as_deref().unwrap_or(""),
-    );
-    let text = |d: &Drive, s: &Option<Scale>, unit: &str| match s {
-        None => "none".to_owned(),
-        Some(s) => describe::scale(d, s, unit),
-    };
-    let whole = |c: &mut Collector| {
-        c.push(
-            ChangeKind::ScaleChanged,
-            subject,
-            "scale",
-            (Some(text(old, a, units.0)), src.0.clone()),
-            (Some(text(new, b, units.1)), src.1.clone()),
-            order,
-        )
-    };
-    let (Some((sa, ca)), Some((sb, cb))) = (cases(r), cases(n)) else {
-        whole(c);
-        return;
-    };
-    if sa.is_none() || sa != sb {
-        whole(c);
-        return;
+    if let (Some((Some(sa), ca)), Some((Some(sb), cb))) = (cases(r), cases(n))
+        && sa == sb
+    {
+        return scale_cases(c, s, &ca, &cb);
     }
-    // Both selected by the same parameter: compare code by code.
+    let text = |d: &Drive, x: &Option<Scale>, unit: &str| match x {
+        None => "none".to_owned(),
+        Some(x) => describe::scale(d, x, unit),
+    };
+    let units = s.units();
+    s.push(
+        c,
+        ChangeKind::ScaleChanged,
+        "scale",
+        Some(text(s.old, a, units.0)),
+        Some(text(s.new, b, units.1)),
+    );
+}
+
+/// Two scales selected by the same parameter, code by code.
+fn scale_cases(c: &mut Collector, s: &Sides, ca: &Cases, cb: &Cases) {
+    let Sides {
+        fa,
+        fb,
+        subject,
+        order,
+        src,
+        ..
+    } = s;
+    let (subject, order) = (subject.as_str(), *order);
     let selector = fb.selector.as_deref().unwrap_or_default();
     let (wa, wb) = (case_scales(fa), case_scales(fb));
     let worded = |w: &BTreeMap<u16, &str>, code: &Option<u16>| {
         code.and_then(|c| w.get(&c)).map(|s| (*s).to_owned())
     };
-    for (code, (x, _, _, xs)) in &ca {
-        let what = format!(
+    let what = |code: &Option<u16>| {
+        format!(
             "scale when {selector} = {}",
             code.map(|c| c.to_string()).unwrap_or_default()
-        );
+        )
+    };
+    for (code, (x, _, _, xs)) in ca {
+        let what = what(code);
         match cb.get(code) {
             None => c.push(
                 ChangeKind::ScaleChanged,
@@ -764,15 +785,12 @@ fn scale(c: &mut Collector, s: &Sides) {
             Some(_) => {}
         }
     }
-    for (code, (_, _, _, ys)) in &cb {
+    for (code, (_, _, _, ys)) in cb {
         if !ca.contains_key(code) {
             c.push(
                 ChangeKind::ScaleCaseAdded,
                 subject,
-                &format!(
-                    "scale when {selector} = {}",
-                    code.map(|c| c.to_string()).unwrap_or_default()
-                ),
+                &what(code),
                 (None, src.0.clone()),
                 (worded(&wb, code), ys.clone().or(src.1.clone())),
                 order,
@@ -830,33 +848,25 @@ fn range_push(
     );
 }
 
-/// The range, per variant and per selected case.
-fn ranges(c: &mut Collector, s: &Sides) {
-    let Sides {
-        r,
-        n,
-        fb,
-        subject,
-        order,
-        ..
-    } = s;
-    let (subject, order) = (subject.as_str(), *order);
-    let (a, b) = (&r.def, &n.def);
-    let unit = (
-        a.unit.as_deref().unwrap_or(""),
-        b.unit.as_deref().unwrap_or(""),
-    );
-    let src = (a.source.clone(), b.source.clone());
+/// The range (the base, when a variant or selected case does not give its own).
+fn range(c: &mut Collector, s: &Sides) {
+    let (a, b) = s.defs();
     range_push(
         c,
-        subject,
+        &s.subject,
         "range",
-        unit,
+        s.units(),
         (a.min, a.max),
         (b.min, b.max),
-        src.clone(),
-        order,
+        s.src.clone(),
+        s.order,
     );
+}
+
+/// The range of each variant, where either side overrides a bound.
+fn variant_ranges(c: &mut Collector, s: &Sides) {
+    let (r, n, src) = (s.r, s.n, &s.src);
+    let (a, b) = s.defs();
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
         let (oa, ob) = (a.by_variant.get(option), b.by_variant.get(option));
@@ -864,7 +874,7 @@ fn ranges(c: &mut Collector, s: &Sides) {
             o.map(|o| (o.min, o.max)).unwrap_or((None, None))
         };
         let ((mina, maxa), (minb, maxb)) = (overrides(oa), overrides(ob));
-        // Bounds neither side overrides follow the base, reported above.
+        // Bounds neither side overrides follow the base, reported by `range`.
         let (ea, eb) = (r.limits_for(option), n.limits_for(option));
         let min_differs = (mina.is_some() || minb.is_some()) && ea.0 != eb.0;
         let max_differs = (maxa.is_some() || maxb.is_some()) && ea.1 != eb.1;
@@ -884,35 +894,42 @@ fn ranges(c: &mut Collector, s: &Sides) {
         );
         range_push(
             c,
-            subject,
+            &s.subject,
             &format!("range ({option})"),
-            unit,
+            s.units(),
             pick(ea, eb),
             eb,
             osrc,
-            order,
+            s.order,
         );
     }
-    if let (Some((Some(sa), ca)), Some((Some(sb), cb))) = (cases(r), cases(n)) {
-        if sa == sb {
-            for (code, (_, mina, maxa, xs)) in &ca {
-                if let Some((_, minb, maxb, ys)) = cb.get(code) {
-                    range_push(
-                        c,
-                        subject,
-                        &format!(
-                            "range when {} = {}",
-                            fb.selector.as_deref().unwrap_or_default(),
-                            code.map(|c| c.to_string()).unwrap_or_default()
-                        ),
-                        unit,
-                        (*mina, *maxa),
-                        (*minb, *maxb),
-                        (xs.clone().or(src.0.clone()), ys.clone().or(src.1.clone())),
-                        order,
-                    );
-                }
-            }
+}
+
+/// The range of each code of a scale both sides select by the same parameter.
+fn case_ranges(c: &mut Collector, s: &Sides) {
+    let src = &s.src;
+    let (Some((Some(sa), ca)), Some((Some(sb), cb))) = (cases(s.r), cases(s.n)) else {
+        return;
+    };
+    if sa != sb {
+        return;
+    }
+    for (code, (_, mina, maxa, xs)) in &ca {
+        if let Some((_, minb, maxb, ys)) = cb.get(code) {
+            range_push(
+                c,
+                &s.subject,
+                &format!(
+                    "range when {} = {}",
+                    s.fb.selector.as_deref().unwrap_or_default(),
+                    code.map(|c| c.to_string()).unwrap_or_default()
+                ),
+                s.units(),
+                (*mina, *maxa),
+                (*minb, *maxb),
+                (xs.clone().or(src.0.clone()), ys.clone().or(src.1.clone())),
+                s.order,
+            );
         }
     }
 }
@@ -1011,64 +1028,47 @@ fn documentation(c: &mut Collector, s: &Sides) {
     }
 }
 
-/// Citations of a register's parts that no other comparison shows when they alone change: the
-/// word order's, the repeat rule's, each variant override's.
-fn citations(c: &mut Collector, s: &Sides) {
-    let Sides {
-        r,
-        n,
-        subject,
-        order,
-        ..
-    } = s;
-    let (subject, order) = (subject.as_str(), *order);
+// Citations of a register's parts that no other comparison shows when they alone change: the
+// word order's, the repeat rule's, the function codes', each variant override's.
+
+fn pair_citation(c: &mut Collector, s: &Sides) {
     let (a, b) = s.defs();
     let pair = |d: &crate::model::Register| d.pair.as_ref().and_then(|p| p.source.clone());
-    if r.width() == n.width() && pair(a) != pair(b) {
-        c.push(
-            ChangeKind::CitationChanged,
-            subject,
-            "word order",
-            (None, pair(a)),
-            (None, pair(b)),
-            order,
-        );
+    if s.r.width() == s.n.width() && pair(a) != pair(b) {
+        s.cite(c, "word order", pair(a), pair(b));
     }
+}
+
+fn repeat_citation(c: &mut Collector, s: &Sides) {
     let repeat = |x: &Register| {
         x.repeat_needs_change
             .as_ref()
             .map(|(rule, _)| (rule.between.to_bits(), rule.source.clone()))
     };
-    if let (Some((x, xs)), Some((y, ys))) = (repeat(r), repeat(n)) {
-        if x == y && xs != ys {
-            c.push(
-                ChangeKind::CitationChanged,
-                subject,
-                "repeat needs change",
-                (None, Some(xs)),
-                (None, Some(ys)),
-                order,
-            );
-        }
+    if let (Some((x, xs)), Some((y, ys))) = (repeat(s.r), repeat(s.n))
+        && x == y
+        && xs != ys
+    {
+        s.cite(c, "repeat needs change", Some(xs), Some(ys));
     }
+}
+
+fn function_codes_citation(c: &mut Collector, s: &Sides) {
     let functions = |x: &Register| {
         x.function_codes
             .as_ref()
             .map(|(f, _)| ((f.codes.clone(), f.refusal()), f.source.clone()))
     };
-    if let (Some((x, xs)), Some((y, ys))) = (functions(r), functions(n))
+    if let (Some((x, xs)), Some((y, ys))) = (functions(s.r), functions(s.n))
         && x == y
         && xs != ys
     {
-        c.push(
-            ChangeKind::CitationChanged,
-            subject,
-            "function codes",
-            (None, Some(xs)),
-            (None, Some(ys)),
-            order,
-        );
+        s.cite(c, "function codes", Some(xs), Some(ys));
     }
+}
+
+fn variant_citations(c: &mut Collector, s: &Sides) {
+    let (a, b) = s.defs();
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
         let source = |d: &crate::model::Register| {
@@ -1084,14 +1084,7 @@ fn citations(c: &mut Collector, s: &Sides) {
             })
         };
         if source(a) != source(b) {
-            c.push(
-                ChangeKind::CitationChanged,
-                subject,
-                &format!("({option})"),
-                (None, source(a)),
-                (None, source(b)),
-                order,
-            );
+            s.cite(c, &format!("({option})"), source(a), source(b));
         }
     }
 }
@@ -1188,6 +1181,7 @@ fn field_text(f: &Field) -> String {
     format!("`{}` at {}: {}", f.id, describe::bits(f), f.name)
 }
 
+/// The fields of two bit sets: matched, then compared field by field.
 fn bit_fields(
     c: &mut Collector,
     subject: &str,
@@ -1196,6 +1190,21 @@ fn bit_fields(
     src: (Option<String>, Option<String>),
     order: u32,
 ) {
+    for (x, y) in match_fields(c, subject, a, b, &src, order) {
+        field(c, subject, x, y, &src, order);
+    }
+}
+
+/// Matches the fields by id, then the rest by their bits (renamed); pushes the renamed, removed
+/// and added ones and returns the pairs.
+fn match_fields<'a>(
+    c: &mut Collector,
+    subject: &str,
+    a: &'a [Field],
+    b: &'a [Field],
+    src: &(Option<String>, Option<String>),
+    order: u32,
+) -> Vec<(&'a Field, &'a Field)> {
     let mut pairs: Vec<(&Field, &Field)> = Vec::new();
     let mut old_left: Vec<&Field> = Vec::new();
     for x in a {
@@ -1243,70 +1252,75 @@ fn bit_fields(
             order,
         );
     }
-    for (x, y) in pairs {
-        let Field {
-            id: _,
-            name: _,
-            bit: _,
-            bits: _,
-            values: _,
-            source: _,
-            indirect: _,
-            notes: _,
-        } = y;
-        let fs = (
-            x.source.clone().or(src.0.clone()),
-            y.source.clone().or(src.1.clone()),
-        );
-        let what = format!("field {}", y.id);
-        if field_span(x) != field_span(y) {
-            c.push(
-                ChangeKind::FieldMoved,
-                subject,
-                &what,
-                (Some(describe::bits(x)), fs.0.clone()),
-                (Some(describe::bits(y)), fs.1.clone()),
-                order,
-            );
+    pairs
+}
+
+/// One field on both sides: its bits, its name, its codes, its notes, its citation.
+fn field(
+    c: &mut Collector,
+    subject: &str,
+    x: &Field,
+    y: &Field,
+    src: &(Option<String>, Option<String>),
+    order: u32,
+) {
+    let Field {
+        id: _,       // matching, FieldRenamed
+        name: _,     // FieldReworded
+        bit: _,      // FieldMoved
+        bits: _,     // FieldMoved
+        values: _,   // enum_codes()
+        source: _,   // CitationChanged
+        indirect: _, // DocumentationChanged
+        notes: _,    // DocumentationChanged
+    } = y;
+    // The field's citations, the register's where a field has none.
+    let fs = (
+        x.source.clone().or(src.0.clone()),
+        y.source.clone().or(src.1.clone()),
+    );
+    let what = format!("field {}", y.id);
+    let push = |c: &mut Collector, differs: bool, kind, what: &str, sides: (Side, Side)| {
+        if differs {
+            c.push(kind, subject, what, sides.0, sides.1, order);
         }
-        if x.name != y.name {
-            c.push(
-                ChangeKind::FieldReworded,
-                subject,
-                &what,
-                (Some(x.name.clone()), fs.0.clone()),
-                (Some(y.name.clone()), fs.1.clone()),
-                order,
-            );
-        }
-        enum_codes(
-            c,
-            subject,
-            &format!("field {} ", y.id),
-            &x.values,
-            &y.values,
-            fs.clone(),
-            order,
-        );
-        if x.notes != y.notes || x.indirect != y.indirect {
-            c.push(
-                ChangeKind::DocumentationChanged,
-                subject,
-                &format!("field {} notes or indirect citation", y.id),
-                (None, fs.0.clone()),
-                (None, fs.1.clone()),
-                order,
-            );
-        }
-        if x.source != y.source {
-            c.push(
-                ChangeKind::CitationChanged,
-                subject,
-                &what,
-                (None, x.source.clone()),
-                (None, y.source.clone()),
-                order,
-            );
-        }
-    }
+    };
+    let text = |x: Option<String>, y: Option<String>| ((x, fs.0.clone()), (y, fs.1.clone()));
+    push(
+        c,
+        field_span(x) != field_span(y),
+        ChangeKind::FieldMoved,
+        &what,
+        text(Some(describe::bits(x)), Some(describe::bits(y))),
+    );
+    push(
+        c,
+        x.name != y.name,
+        ChangeKind::FieldReworded,
+        &what,
+        text(Some(x.name.clone()), Some(y.name.clone())),
+    );
+    enum_codes(
+        c,
+        subject,
+        &format!("field {} ", y.id),
+        &x.values,
+        &y.values,
+        fs.clone(),
+        order,
+    );
+    push(
+        c,
+        x.notes != y.notes || x.indirect != y.indirect,
+        ChangeKind::DocumentationChanged,
+        &format!("field {} notes or indirect citation", y.id),
+        text(None, None),
+    );
+    push(
+        c,
+        x.source != y.source,
+        ChangeKind::CitationChanged,
+        &what,
+        ((None, x.source.clone()), (None, y.source.clone())),
+    );
 }
