@@ -7,7 +7,7 @@ use std::collections::BTreeSet;
 use crate::diagnostic::Diagnostic;
 use crate::hints::closest;
 use crate::ir::{Drive, Register, SelectorRef, ValueKind};
-use crate::model::{Reference, Scale};
+use crate::model::{Reference, Scale, SelectedScale};
 use crate::source::Path;
 
 fn resolve<'a>(
@@ -177,7 +177,32 @@ fn relative(
     }
 }
 
+/// One rule over the whole map: appends its findings.
+type Rule = fn(&Drive, &mut Vec<Diagnostic>);
+
+/// One rule over one register: appends its findings.
+type RegisterRule = fn(&Drive, &Register, &mut Vec<Diagnostic>);
+
+/// The rules, in the order their findings are reported.
+const RULES: &[Rule] = &[
+    variant_axes,
+    registers,
+    broadcast_registers,
+    command_writes,
+    protocol_parameters,
+];
+
+/// The rules run on each register in turn (all of one register's findings before the next's).
+const REGISTER_RULES: &[RegisterRule] = &[scale, by_variant, address_alternatives];
+
 pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    for rule in RULES {
+        rule(drive, out);
+    }
+}
+
+/// Every variant axis has options.
+fn variant_axes(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for (ai, axis) in drive.variants.iter().enumerate() {
         if axis.options.is_empty() {
             out.push(drive.error(
@@ -187,164 +212,211 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             ));
         }
     }
+}
+
+/// [`REGISTER_RULES`] on every register.
+fn registers(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {
-        let rid = Some(r.id());
-        match &r.def.scale {
-            Some(Scale::Relative(rel)) => relative(
-                drive,
-                out,
-                r,
-                &rel.relative_to,
-                r.key_path("scale").key("relative_to"),
+        for rule in REGISTER_RULES {
+            rule(drive, r, out);
+        }
+    }
+}
+
+/// A relative scale's `relative_to`, or a selected scale's selector and cases.
+fn scale(drive: &Drive, r: &Register, out: &mut Vec<Diagnostic>) {
+    match &r.def.scale {
+        Some(Scale::Relative(rel)) => relative(
+            drive,
+            out,
+            r,
+            &rel.relative_to,
+            r.key_path("scale").key("relative_to"),
+        ),
+        Some(Scale::Selected(sel)) => selected_scale(drive, r, sel, out),
+        _ => {}
+    }
+}
+
+/// A selected scale: its selector resolves (not to the register itself, nor to a taken
+/// `Settings` field), and its cases are there, each with codes the selector has, once.
+fn selected_scale(drive: &Drive, r: &Register, sel: &SelectedScale, out: &mut Vec<Diagnostic>) {
+    let rid = Some(r.id());
+    let sp = r.key_path("scale");
+    let by = sp.key("selected_by");
+    let selector = selector(drive, out, &sel.selected_by, &by, rid, "selected_by");
+    if let Some(SelectorRef {
+        register: s,
+        field: Some(f),
+    }) = selector
+    {
+        settings_field_free(drive, out, s, f, &by, rid);
+    }
+    if selector.is_some_and(|s| s.register.id() == r.id()) {
+        out.push(drive.error(
+            &by,
+            rid,
+            format!(
+                "selected_by `{}` is this register itself: its word cannot both be the value and choose the value's scale; name the parameter that selects it",
+                sel.selected_by
             ),
-            Some(Scale::Selected(sel)) => {
-                let sp = r.key_path("scale");
-                let selector = selector(
-                    drive,
-                    out,
-                    &sel.selected_by,
-                    &sp.key("selected_by"),
-                    rid,
-                    "selected_by",
-                );
-                if let Some(SelectorRef {
-                    register: s,
-                    field: Some(f),
-                }) = selector
-                {
-                    settings_field_free(drive, out, s, f, &sp.key("selected_by"), rid);
-                }
-                if selector.is_some_and(|s| s.register.id() == r.id()) {
-                    out.push(drive.error(
-                        &sp.key("selected_by"),
-                        rid,
-                        format!(
-                            "selected_by `{}` is this register itself: its word cannot both be the value and choose the value's scale; name the parameter that selects it",
-                            sel.selected_by
-                        ),
-                    ));
-                }
-                if sel.cases.is_empty() {
-                    out.push(drive.error(&sp, rid, "a selected scale needs at least one case"));
-                }
-                let mut seen = BTreeSet::new();
-                for (ci, case) in sel.cases.iter().enumerate() {
-                    let cp = sp.key("cases").index(ci);
-                    if case.when.is_empty() {
-                        out.push(drive.error(
-                            &cp.key("when"),
-                            rid,
-                            "a case needs the selector codes it applies to",
-                        ));
-                    }
-                    for code in &case.when {
-                        if !seen.insert(*code) {
-                            out.push(drive.error(
-                                &cp.key("when"),
-                                rid,
-                                format!("selector code {code} appears in two cases"),
-                            ));
-                        }
-                        codes_fit(
-                            drive,
-                            out,
-                            &sel.selected_by,
-                            selector,
-                            *code,
-                            &cp.key("when"),
-                            rid,
-                        );
-                    }
-                    if let Scale::Relative(rel) = &case.scale {
-                        relative(
-                            drive,
-                            out,
-                            r,
-                            &rel.relative_to,
-                            cp.key("scale").key("relative_to"),
-                        );
-                    }
-                }
-            }
-            _ => {}
-        }
-        let mut axes = BTreeSet::new();
-        for k in r.def.by_variant.keys() {
-            match drive.variant_option(k) {
-                None => out.push(drive.error(
-                    &r.key_path("by_variant").key(k),
-                    rid,
-                    format!("`{k}` is not a variant option of this map"),
-                )),
-                Some((axis, _)) => {
-                    axes.insert(axis.id.clone());
-                }
-            }
-        }
-        if axes.len() > 1 {
+        ));
+    }
+    if sel.cases.is_empty() {
+        out.push(drive.error(&sp, rid, "a selected scale needs at least one case"));
+    }
+    let mut seen = BTreeSet::new();
+    for ci in 0..sel.cases.len() {
+        selected_case(drive, r, sel, selector, ci, &mut seen, out);
+    }
+}
+
+/// The `ci`th case of a selected scale: its codes (new to the scale, fitting the selector) and
+/// its own `relative_to`.
+fn selected_case(
+    drive: &Drive,
+    r: &Register,
+    sel: &SelectedScale,
+    selector: Option<SelectorRef<'_>>,
+    ci: usize,
+    seen: &mut BTreeSet<u16>,
+    out: &mut Vec<Diagnostic>,
+) {
+    let case = &sel.cases[ci];
+    let cp = r.key_path("scale").key("cases").index(ci);
+    let rid = Some(r.id());
+    let wp = cp.key("when");
+    if case.when.is_empty() {
+        out.push(drive.error(&wp, rid, "a case needs the selector codes it applies to"));
+    }
+    for code in &case.when {
+        if !seen.insert(*code) {
             out.push(drive.error(
-                &r.key_path("by_variant"),
+                &wp,
                 rid,
-                "overrides of one register must belong to one variant axis",
+                format!("selector code {code} appears in two cases"),
             ));
         }
-        for (ai, alt) in r.def.address_alternatives.iter().enumerate() {
-            let ap = r.key_path("address_alternatives").index(ai).key("when");
-            let w = &alt.when;
-            let n = usize::from(w.setting.is_some())
-                + usize::from(w.variant.is_some())
-                + usize::from(w.transport.is_some());
-            if n != 1 {
+        codes_fit(drive, out, &sel.selected_by, selector, *code, &wp, rid);
+    }
+    if let Scale::Relative(rel) = &case.scale {
+        relative(
+            drive,
+            out,
+            r,
+            &rel.relative_to,
+            cp.key("scale").key("relative_to"),
+        );
+    }
+}
+
+/// The `by_variant` keys are variant options, all of one axis.
+fn by_variant(drive: &Drive, r: &Register, out: &mut Vec<Diagnostic>) {
+    let rid = Some(r.id());
+    let mut axes = BTreeSet::new();
+    for k in r.def.by_variant.keys() {
+        match drive.variant_option(k) {
+            None => out.push(drive.error(
+                &r.key_path("by_variant").key(k),
+                rid,
+                format!("`{k}` is not a variant option of this map"),
+            )),
+            Some((axis, _)) => {
+                axes.insert(axis.id.clone());
+            }
+        }
+    }
+    if axes.len() > 1 {
+        out.push(drive.error(
+            &r.key_path("by_variant"),
+            rid,
+            "overrides of one register must belong to one variant axis",
+        ));
+    }
+}
+
+/// Each address alternative's condition names one thing, and what it names resolves.
+fn address_alternatives(drive: &Drive, r: &Register, out: &mut Vec<Diagnostic>) {
+    let rid = Some(r.id());
+    for (ai, alt) in r.def.address_alternatives.iter().enumerate() {
+        let ap = r.key_path("address_alternatives").index(ai).key("when");
+        let w = &alt.when;
+        let n = usize::from(w.setting.is_some())
+            + usize::from(w.variant.is_some())
+            + usize::from(w.transport.is_some());
+        if n != 1 {
+            out.push(drive.error(
+                &ap,
+                rid,
+                "a condition names exactly one of `setting`, `variant`, `transport`",
+            ));
+        }
+        if let Some(s) = &w.setting {
+            setting_condition(drive, r, s, &w.is, &ap, out);
+        }
+        if let Some(v) = &w.variant {
+            if drive.variant_option(v).is_none() {
                 out.push(drive.error(
-                    &ap,
+                    &ap.key("variant"),
                     rid,
-                    "a condition names exactly one of `setting`, `variant`, `transport`",
+                    format!("`{v}` is not a variant option of this map"),
                 ));
             }
-            if let Some(s) = &w.setting {
-                let found = selector(drive, out, s, &ap.key("setting"), rid, "condition setting");
-                if found.is_some_and(|f| f.register.id() == r.id()) {
-                    out.push(drive.error(
-                        &ap.key("setting"),
-                        rid,
-                        format!(
-                            "condition setting `{s}` is this register itself: its address cannot depend on its own value"
-                        ),
-                    ));
-                }
-                for code in &w.is {
-                    codes_fit(drive, out, s, found, *code, &ap.key("is"), rid);
-                }
-                if w.is.is_empty() {
-                    out.push(drive.error(&ap, rid, "a setting condition needs `is: [codes]`"));
-                }
-            }
-            if let Some(v) = &w.variant {
-                if drive.variant_option(v).is_none() {
-                    out.push(drive.error(
-                        &ap.key("variant"),
-                        rid,
-                        format!("`{v}` is not a variant option of this map"),
-                    ));
-                }
+        }
+    }
+}
+
+/// A setting condition (at `ap`): its selector resolves, is not the register itself, and has
+/// the codes of `is`, which are there.
+fn setting_condition(
+    drive: &Drive,
+    r: &Register,
+    s: &str,
+    is: &[u16],
+    ap: &Path,
+    out: &mut Vec<Diagnostic>,
+) {
+    let rid = Some(r.id());
+    let found = selector(drive, out, s, &ap.key("setting"), rid, "condition setting");
+    if found.is_some_and(|f| f.register.id() == r.id()) {
+        out.push(drive.error(
+            &ap.key("setting"),
+            rid,
+            format!(
+                "condition setting `{s}` is this register itself: its address cannot depend on its own value"
+            ),
+        ));
+    }
+    for code in is {
+        codes_fit(drive, out, s, found, *code, &ap.key("is"), rid);
+    }
+    if is.is_empty() {
+        out.push(drive.error(ap, rid, "a setting condition needs `is: [codes]`"));
+    }
+}
+
+/// The broadcast registers resolve and are writable.
+fn broadcast_registers(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    let Some(b) = &drive.protocol.broadcast else {
+        return;
+    };
+    let bp = Path::root()
+        .key("protocol")
+        .key("broadcast")
+        .key("registers");
+    for (i, name) in b.registers.iter().enumerate() {
+        let path = bp.index(i);
+        if let Some(r) = resolve(drive, out, name, path.clone(), None, "broadcast register") {
+            if !r.writable() {
+                out.push(drive.error(&path, Some(r.id()), "a broadcast register must be writable"));
             }
         }
     }
+}
+
+/// Each command write lands on a writable (not broadcast-only) register of the map.
+fn command_writes(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let proto = Path::root().key("protocol");
-    if let Some(b) = &drive.protocol.broadcast {
-        for (i, name) in b.registers.iter().enumerate() {
-            let path = proto.key("broadcast").key("registers").index(i);
-            if let Some(r) = resolve(drive, out, name, path.clone(), None, "broadcast register") {
-                if !r.writable() {
-                    out.push(drive.error(
-                        &path,
-                        Some(r.id()),
-                        "a broadcast register must be writable",
-                    ));
-                }
-            }
-        }
-    }
     for (ci, c) in drive.protocol.commands.iter().enumerate() {
         for (wi, w) in c.writes.iter().enumerate() {
             let ok = drive
@@ -360,26 +432,43 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             }
         }
     }
-    if let Some(p) = &drive.protocol.slave_address.param {
-        resolve(
-            drive,
-            out,
-            p,
-            proto.key("slave_address").key("param"),
-            None,
-            "slave address parameter",
-        );
-    }
-    if let Some(t) = &drive.protocol.timing {
-        if let Some(p) = &t.response_delay_param {
-            resolve(
-                drive,
-                out,
-                p,
-                proto.key("timing").key("response_delay_param"),
-                None,
-                "response delay parameter",
-            );
+}
+
+/// A protocol parameter naming a register: where it sits under `protocol`, what it is called in
+/// messages, and its value.
+type Parameter = (
+    &'static [&'static str],
+    &'static str,
+    fn(&Drive) -> Option<&str>,
+);
+
+/// The protocol parameters that name a register, in the order their findings are reported.
+const PARAMETERS: &[Parameter] = &[
+    (
+        &["slave_address", "param"],
+        "slave address parameter",
+        |d| d.protocol.slave_address.param.as_deref(),
+    ),
+    (
+        &["timing", "response_delay_param"],
+        "response delay parameter",
+        |d| {
+            d.protocol
+                .timing
+                .as_ref()
+                .and_then(|t| t.response_delay_param.as_deref())
+        },
+    ),
+];
+
+/// Each of [`PARAMETERS`] that is given resolves.
+fn protocol_parameters(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    for (keys, what, value) in PARAMETERS {
+        if let Some(p) = value(drive) {
+            let path = keys
+                .iter()
+                .fold(Path::root().key("protocol"), |path, k| path.key(k));
+            resolve(drive, out, p, path, None, what);
         }
     }
 }
