@@ -293,64 +293,103 @@ fn gap_covers_param(text: &str, param: &str) -> bool {
         .any(|w| norm_param(w) == p)
 }
 
+/// What the map says that the manuals' rows are compared with.
+struct Known<'a> {
+    drive: &'a Drive,
+    decimal: bool,
+    /// The shapes of the map's parameter numbers.
+    shapes: HashSet<String>,
+    /// Row shapes per manual, from lines that verify by themselves, with how many lines have each.
+    learnt: HashMap<String, BTreeMap<(Class, Class), usize>>,
+    /// Every line a citation of the map points at.
+    cited: HashSet<(String, usize)>,
+    /// The registers' parameter numbers (normalised).
+    params: HashSet<String>,
+    /// The registers' addresses, alternatives included.
+    addresses: HashSet<u16>,
+    /// The `removed` entries' ids (normalised).
+    removed: HashSet<String>,
+    /// The group citing each line, for naming tables.
+    group_of_line: HashMap<(String, usize), usize>,
+}
+
+impl<'a> Known<'a> {
+    fn new(drive: &'a Drive, manuals: &Manuals) -> Self {
+        let decimal = drive.address_format == crate::model::AddressFormat::Decimal;
+        let shapes: HashSet<String> = drive
+            .registers
+            .iter()
+            .filter_map(|r| r.def.param.as_deref())
+            .map(shape)
+            .collect();
+        let learnt = learn_shapes(drive, manuals, &shapes, decimal);
+        Known {
+            drive,
+            decimal,
+            shapes,
+            learnt,
+            cited: all_citations(drive),
+            params: drive
+                .registers
+                .iter()
+                .filter_map(|r| r.def.param.as_deref().map(norm_param))
+                .collect(),
+            addresses: drive
+                .registers
+                .iter()
+                .flat_map(|r| {
+                    std::iter::once(r.def.address)
+                        .chain(r.def.address_alternatives.iter().map(|a| a.address))
+                })
+                .collect(),
+            removed: drive.removed.iter().map(|r| norm_param(&r.id)).collect(),
+            group_of_line: drive
+                .registers
+                .iter()
+                .filter_map(|r| {
+                    let (f, l) = r.def.source.as_deref().and_then(parse_citation)?;
+                    Some(((f.to_owned(), l), r.group))
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Row shapes per manual, from the registers' citations that verify by themselves: the shape of
+/// each cited line (unless neither word is classed), counted.
+fn learn_shapes(
+    drive: &Drive,
+    manuals: &Manuals,
+    shapes: &HashSet<String>,
+    decimal: bool,
+) -> HashMap<String, BTreeMap<(Class, Class), usize>> {
+    let mut learnt: HashMap<String, BTreeMap<(Class, Class), usize>> = HashMap::new();
+    for c in verify_citations(drive, manuals).iter().filter(|c| {
+        matches!(c.item, super::Item::Register) && matches!(c.verdict, Verdict::Verified)
+    }) {
+        let Some((file, n)) = parse_citation(&c.source) else {
+            continue;
+        };
+        let Some(text) = manuals.line(file, n) else {
+            continue;
+        };
+        let s = line_shape(text, shapes, decimal);
+        if s.0 != Class::Other || s.1 != Class::Other {
+            *learnt
+                .entry(file.to_owned())
+                .or_default()
+                .entry(s)
+                .or_default() += 1;
+        }
+    }
+    learnt
+}
+
 /// Learns the row shapes from the registers' verified citations and lists the rows of each
 /// cited manual (but those in `skip`: a variant map's base manuals, covered by the base's
 /// report), the tables they form, and the rows nothing covers.
 pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageReport {
-    let decimal = drive.address_format == crate::model::AddressFormat::Decimal;
-    let shapes: HashSet<String> = drive
-        .registers
-        .iter()
-        .filter_map(|r| r.def.param.as_deref())
-        .map(shape)
-        .collect();
-    let checks = verify_citations(drive, manuals);
-    // Row shapes per manual, from lines that verify by themselves.
-    let mut learnt: HashMap<String, BTreeMap<(Class, Class), usize>> = HashMap::new();
-    for c in checks.iter().filter(|c| {
-        matches!(c.item, super::Item::Register) && matches!(c.verdict, Verdict::Verified)
-    }) {
-        if let Some((file, n)) = parse_citation(&c.source) {
-            if let Some(text) = manuals.line(file, n) {
-                let s = line_shape(text, &shapes, decimal);
-                if s.0 != Class::Other || s.1 != Class::Other {
-                    *learnt
-                        .entry(file.to_owned())
-                        .or_default()
-                        .entry(s)
-                        .or_default() += 1;
-                }
-            }
-        }
-    }
-    let cited = all_citations(drive);
-    let params: HashMap<String, &str> = drive
-        .registers
-        .iter()
-        .filter_map(|r| {
-            r.def
-                .param
-                .as_deref()
-                .map(|p| (norm_param(p), r.def.id.as_str()))
-        })
-        .collect();
-    let addresses: HashSet<u16> = drive
-        .registers
-        .iter()
-        .flat_map(|r| {
-            std::iter::once(r.def.address)
-                .chain(r.def.address_alternatives.iter().map(|a| a.address))
-        })
-        .collect();
-    let removed: HashSet<String> = drive.removed.iter().map(|r| norm_param(&r.id)).collect();
-    // The group citing each line, for naming tables.
-    let mut group_of_line: HashMap<(String, usize), usize> = HashMap::new();
-    for r in &drive.registers {
-        if let Some((f, l)) = r.def.source.as_deref().and_then(parse_citation) {
-            group_of_line.insert((f.to_owned(), l), r.group);
-        }
-    }
-
+    let known = Known::new(drive, manuals);
     let mut report = CoverageReport {
         drive: drive.meta.id.clone(),
         tables: Vec::new(),
@@ -360,115 +399,195 @@ pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageRe
     let mut files: Vec<&str> = drive.meta.text_manuals().collect();
     files.dedup();
     for file in files.into_iter().filter(|f| !skip.iter().any(|s| s == f)) {
-        let Some(lines) = manuals.lines(file) else {
-            report.missing_manuals.push(file.to_owned());
-            continue;
-        };
-        let Some(row_shapes) = learnt.get(file) else {
-            continue;
-        };
-        // A shape seen on at least two cited rows (or the only one seen).
-        let keep: BTreeSet<(Class, Class)> = row_shapes
-            .iter()
-            .filter(|(_, n)| **n >= 2 || row_shapes.len() == 1)
-            .map(|(s, _)| *s)
-            .collect();
-        let mut table: Option<(TableSummary, BTreeMap<usize, usize>)> = None;
-        let mut last_group: Option<usize> = None;
-        let finish = |t: Option<(TableSummary, BTreeMap<usize, usize>)>,
-                      out: &mut Vec<TableSummary>| {
-            if let Some((mut t, groups)) = t {
-                t.group = groups
-                    .iter()
-                    .max_by_key(|(g, n)| (**n, std::cmp::Reverse(**g)))
-                    .map(|(g, _)| drive.groups[*g].name.clone());
-                out.push(t);
-            }
-        };
-        for (i, text) in lines.iter().enumerate() {
-            let n = i + 1;
-            if !keep.contains(&line_shape(text, &shapes, decimal)) {
-                continue;
-            }
-            let keys = row_keys(text, &shapes, decimal);
-            if keys.is_empty() {
-                continue;
-            }
-            // A table ends after a dozen lines without rows, or where the rows start being
-            // another group's.
-            let group_here = group_of_line.get(&(file.to_owned(), n)).copied();
-            if table.as_ref().is_some_and(|(t, groups)| {
-                n > t.last_line + 12
-                    || group_here.is_some_and(|g| {
-                        last_group.is_some_and(|l| l != g) && !groups.contains_key(&g)
-                    })
-            }) {
-                finish(table.take(), &mut report.tables);
-            }
-            let (t, groups) = table.get_or_insert_with(|| {
-                (
-                    TableSummary {
-                        file: file.to_owned(),
-                        first_line: n,
-                        last_line: n,
-                        group: None,
-                        rows: 0,
-                        cited: 0,
-                        gaps: 0,
-                        uncited: 0,
-                    },
-                    BTreeMap::new(),
-                )
-            });
-            t.last_line = n;
-            if let Some(g) = group_here {
-                *groups.entry(g).or_default() += 1;
-                last_group = Some(g);
-            }
-            let line_cited = cited.contains(&(file.to_owned(), n));
-            for (param, address) in keys {
-                t.rows += 1;
-                let by_register = match &param {
-                    Some(p) => params.contains_key(&norm_param(p)),
-                    None => address.is_some_and(|a| addresses.contains(&a)),
-                };
-                let by_gap = drive.gaps.iter().any(|g| {
-                    address
-                        .is_some_and(|a| g.addresses.is_some_and(|[lo, hi]| (lo..=hi).contains(&a)))
-                        || param.as_deref().is_some_and(|p| {
-                            g.params.as_deref().is_some_and(|t| gap_covers_param(t, p))
-                        })
-                }) || param
-                    .as_deref()
-                    .is_some_and(|p| removed.contains(&norm_param(p)))
-                    // A removed register's citation on the row (which may span the lines
-                    // around the address).
-                    || drive.removed.iter().any(|r| {
-                        parse_citation(&r.source)
-                            .is_some_and(|(f, l)| f == file && l + 1 >= n && l <= n + 1)
-                    });
-                if by_register {
-                    t.cited += 1;
-                } else if by_gap || line_cited || reserved(text) || ends_reserved_range(lines, i) {
-                    t.gaps += 1;
-                } else {
-                    t.uncited += 1;
-                    report.uncited.push(UncitedRow {
-                        file: file.to_owned(),
-                        line: n,
-                        key: param.unwrap_or_else(|| {
-                            address
-                                .map(super::matching::AddressForms::display)
-                                .unwrap_or_default()
-                        }),
-                        text: super::quote_text(text),
-                    });
-                }
-            }
+        match manuals.lines(file) {
+            None => report.missing_manuals.push(file.to_owned()),
+            Some(lines) => manual(&known, file, lines, &mut report),
         }
-        finish(table.take(), &mut report.tables);
     }
     report
+}
+
+/// The table being read: its summary, and how many of its rows each group cites.
+type Open = (TableSummary, BTreeMap<usize, usize>);
+
+/// The tables and uncited rows of one manual (`lines` of `file`), added to `report`.
+fn manual(known: &Known<'_>, file: &str, lines: &[String], report: &mut CoverageReport) {
+    let Some(row_shapes) = known.learnt.get(file) else {
+        return;
+    };
+    // A shape seen on at least two cited rows (or the only one seen).
+    let keep: BTreeSet<(Class, Class)> = row_shapes
+        .iter()
+        .filter(|(_, n)| **n >= 2 || row_shapes.len() == 1)
+        .map(|(s, _)| *s)
+        .collect();
+    let mut table: Option<Open> = None;
+    let mut last_group: Option<usize> = None;
+    for (i, text) in lines.iter().enumerate() {
+        if !keep.contains(&line_shape(text, &known.shapes, known.decimal)) {
+            continue;
+        }
+        let keys = row_keys(text, &known.shapes, known.decimal);
+        if keys.is_empty() {
+            continue;
+        }
+        let row = Row {
+            file,
+            lines,
+            i,
+            n: i + 1,
+            text,
+        };
+        let group_here = known.group_of_line.get(&(file.to_owned(), row.n)).copied();
+        if table
+            .as_ref()
+            .is_some_and(|t| table_ends(t, row.n, group_here, last_group))
+        {
+            finish(known.drive, table.take(), &mut report.tables);
+        }
+        let (t, groups) =
+            table.get_or_insert_with(|| (TableSummary::starting(file, row.n), BTreeMap::new()));
+        t.last_line = row.n;
+        if let Some(g) = group_here {
+            *groups.entry(g).or_default() += 1;
+            last_group = Some(g);
+        }
+        for (param, address) in keys {
+            count(known, &row, t, param, address, &mut report.uncited);
+        }
+    }
+    finish(known.drive, table.take(), &mut report.tables);
+}
+
+impl TableSummary {
+    /// A table whose first row is line `n` of `file`, nothing counted yet.
+    fn starting(file: &str, n: usize) -> Self {
+        TableSummary {
+            file: file.to_owned(),
+            first_line: n,
+            last_line: n,
+            group: None,
+            rows: 0,
+            cited: 0,
+            gaps: 0,
+            uncited: 0,
+        }
+    }
+}
+
+/// A table ends after a dozen lines without rows, or where the rows start being another
+/// group's (the row at line `n` cited by `group_here`, the last cited row by `last_group`).
+fn table_ends(
+    (t, groups): &Open,
+    n: usize,
+    group_here: Option<usize>,
+    last_group: Option<usize>,
+) -> bool {
+    n > t.last_line + 12
+        || group_here
+            .is_some_and(|g| last_group.is_some_and(|l| l != g) && !groups.contains_key(&g))
+}
+
+/// Closes a table: named after the group citing most of its rows (the first such group on a
+/// tie), and added to `out`.
+fn finish(drive: &Drive, table: Option<Open>, out: &mut Vec<TableSummary>) {
+    if let Some((mut t, groups)) = table {
+        t.group = groups
+            .iter()
+            .max_by_key(|(g, n)| (**n, std::cmp::Reverse(**g)))
+            .map(|(g, _)| drive.groups[*g].name.clone());
+        out.push(t);
+    }
+}
+
+/// A row of a manual table: line `n` (index `i` of `lines`) of `file`.
+struct Row<'r> {
+    file: &'r str,
+    lines: &'r [String],
+    i: usize,
+    n: usize,
+    text: &'r str,
+}
+
+/// Counts one key of `row` into table `t`: cited by a register, a gap, or uncited (then listed
+/// in `uncited`).
+fn count(
+    known: &Known<'_>,
+    row: &Row<'_>,
+    t: &mut TableSummary,
+    param: Option<String>,
+    address: Option<u16>,
+    uncited: &mut Vec<UncitedRow>,
+) {
+    t.rows += 1;
+    let by_register = match &param {
+        Some(p) => known.params.contains(&norm_param(p)),
+        None => address.is_some_and(|a| known.addresses.contains(&a)),
+    };
+    let key = (param.as_deref(), address);
+    if by_register {
+        t.cited += 1;
+    } else if GAPS.iter().any(|gap| gap(known, row, key)) {
+        t.gaps += 1;
+    } else {
+        t.uncited += 1;
+        uncited.push(UncitedRow {
+            file: row.file.to_owned(),
+            line: row.n,
+            key: param.unwrap_or_else(|| {
+                address
+                    .map(super::matching::AddressForms::display)
+                    .unwrap_or_default()
+            }),
+            text: super::quote_text(row.text),
+        });
+    }
+}
+
+/// A row key: its parameter number and address, either may be absent.
+type Key<'k> = (Option<&'k str>, Option<u16>);
+
+/// One reason a key no register has is nonetheless covered (counted as a gap).
+type Gap = fn(&Known<'_>, &Row<'_>, Key<'_>) -> bool;
+
+/// The reasons a key no register has is covered.
+const GAPS: &[Gap] = &[
+    gaps_entry,
+    removed_param,
+    removed_citation,
+    line_cited,
+    printed_reserved,
+];
+
+/// A `gaps` entry covers the address or names the parameter.
+fn gaps_entry(known: &Known<'_>, _: &Row<'_>, (param, address): Key<'_>) -> bool {
+    known.drive.gaps.iter().any(|g| {
+        address.is_some_and(|a| g.addresses.is_some_and(|[lo, hi]| (lo..=hi).contains(&a)))
+            || param.is_some_and(|p| g.params.as_deref().is_some_and(|t| gap_covers_param(t, p)))
+    })
+}
+
+/// A `removed` entry names the parameter.
+fn removed_param(known: &Known<'_>, _: &Row<'_>, (param, _): Key<'_>) -> bool {
+    param.is_some_and(|p| known.removed.contains(&norm_param(p)))
+}
+
+/// A removed register's citation is on the row (which may span the lines around the address).
+fn removed_citation(known: &Known<'_>, row: &Row<'_>, _: Key<'_>) -> bool {
+    known.drive.removed.iter().any(|r| {
+        parse_citation(&r.source)
+            .is_some_and(|(f, l)| f == row.file && l + 1 >= row.n && l <= row.n + 1)
+    })
+}
+
+/// A citation of the map (a conflict, a note...) points at the line.
+fn line_cited(known: &Known<'_>, row: &Row<'_>, _: Key<'_>) -> bool {
+    known.cited.contains(&(row.file.to_owned(), row.n))
+}
+
+/// The manual prints the row, or the range it ends, as reserved or unused.
+fn printed_reserved(_: &Known<'_>, row: &Row<'_>, _: Key<'_>) -> bool {
+    reserved(row.text) || ends_reserved_range(row.lines, row.i)
 }
 
 #[cfg(test)]
