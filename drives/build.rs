@@ -25,10 +25,8 @@ fn declared_features(manifest_dir: &Path) -> Vec<String> {
     for line in text.lines().map(str::trim) {
         if line.starts_with('[') {
             in_features = line == "[features]";
-        } else if in_features {
-            if let Some((name, _)) = line.split_once('=') {
-                names.push(name.trim().trim_matches('"').to_owned());
-            }
+        } else if in_features && let Some((name, _)) = line.split_once('=') {
+            names.push(name.trim().trim_matches('"').to_owned());
         }
     }
     names

@@ -211,10 +211,10 @@ pub fn choose(
             continue;
         }
         add(r, &mut regs);
-        if let Some(i) = regs.iter().position(|x| x.def.id == r.def.id) {
-            if !deps.contains(&i) {
-                deps.push(i);
-            }
+        if let Some(i) = regs.iter().position(|x| x.def.id == r.def.id)
+            && !deps.contains(&i)
+        {
+            deps.push(i);
         }
     }
     if regs.is_empty() {
@@ -469,10 +469,10 @@ impl Polled {
             match info {
                 Some(extra) => {
                     labels.extend(extra);
-                    if let Some(old) = self.info[pi].take() {
-                        if old != labels {
-                            family.remove(&old);
-                        }
+                    if let Some(old) = self.info[pi].take()
+                        && old != labels
+                    {
+                        family.remove(&old);
                     }
                     family.get_or_create(&labels).set(1.0);
                     self.info[pi] = Some(labels);
@@ -599,22 +599,19 @@ impl Polled {
             })?;
         // The limit through another parameter, read now (V7's reference against n011).
         let mut settings = self.settings.clone();
-        if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency() {
-            if let Some(Quantity::Register(row)) =
+        if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency()
+            && let Some(Quantity::Register(row)) =
                 drive.plan().settings.quantities.get(usize::from(s.slot))
-            {
-                if let Some(d) = drive.register_of_row(*row) {
-                    if !self.spec.fixed.contains(&d.def.id) {
-                        let raw = self.read_raw(client, d).map_err(|source| {
-                            CommandFailure::Dependency {
-                                register: describe::register(d),
-                                source,
-                            }
-                        })?;
-                        settings.absorb(drive, d.def.address, raw as u16);
-                    }
-                }
-            }
+            && let Some(d) = drive.register_of_row(*row)
+            && !self.spec.fixed.contains(&d.def.id)
+        {
+            let raw = self
+                .read_raw(client, d)
+                .map_err(|source| CommandFailure::Dependency {
+                    register: describe::register(d),
+                    source,
+                })?;
+            settings.absorb(drive, d.def.address, raw as u16);
         }
         let raw = match codec::field_input(drive, r, value)? {
             Some(input) => {

@@ -498,10 +498,8 @@ pub async fn run(
     if let Some((user, password)) = &options.credentials {
         mo.set_credentials(user.clone(), password.clone());
     }
-    if secure {
-        if let Some(t) = tls {
-            mo.set_transport(rumqttc::Transport::Tls(t));
-        }
+    if secure && let Some(t) = tls {
+        mo.set_transport(rumqttc::Transport::Tls(t));
     }
     let (client, mut eventloop): (AsyncClient, EventLoop) = AsyncClient::new(mo, 1024);
     let by_name: BTreeMap<String, usize> = drives

@@ -157,10 +157,9 @@ pub fn role_registers(drive: &Drive, kind: TransportKind) -> Vec<&Register> {
             .target
             .row()
             .and_then(|row| drive.register_of_row(usize::from(row)))
+            && !out.iter().any(|x| x.def.id == r.def.id)
         {
-            if !out.iter().any(|x| x.def.id == r.def.id) {
-                out.push(r);
-            }
+            out.push(r);
         }
     }
     out

@@ -47,10 +47,10 @@ fn every_reference_is_current(root: &Path, run: Run<'_>) -> Vec<String> {
             .file_name()
             .to_string_lossy()
             .into_owned();
-        if let Some(id) = name.strip_suffix(".md") {
-            if !ids.iter().any(|i| i == id) {
-                stale.push(format!("docs/drives/{name} documents no map in maps/"));
-            }
+        if let Some(id) = name.strip_suffix(".md")
+            && !ids.iter().any(|i| i == id)
+        {
+            stale.push(format!("docs/drives/{name} documents no map in maps/"));
         }
     }
     assert!(stale.is_empty(), "{}", stale.join("\n"));

@@ -172,10 +172,10 @@ fn the_exported_flow_loads_in_node_red_and_reads_the_values_drivemap_reads() {
     // The admin API answers once the flows are started.
     let deadline = Instant::now() + Duration::from_secs(90);
     let listed = loop {
-        if let Some((200, body)) = get(port, "/flows") {
-            if log_text().contains("Started flows") {
-                break body;
-            }
+        if let Some((200, body)) = get(port, "/flows")
+            && log_text().contains("Started flows")
+        {
+            break body;
         }
         assert!(
             Instant::now() < deadline,

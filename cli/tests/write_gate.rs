@@ -363,22 +363,22 @@ fn legal_arrival(
             )
         }
     };
-    if let Some(mask) = field_mask(r) {
-        if unsigned & !u32::from(mask) != 0 {
-            return Err(format!(
-                "reserved bits {:04X}h set",
-                unsigned & !u32::from(mask)
-            ));
-        }
+    if let Some(mask) = field_mask(r)
+        && unsigned & !u32::from(mask) != 0
+    {
+        return Err(format!(
+            "reserved bits {:04X}h set",
+            unsigned & !u32::from(mask)
+        ));
     }
     let plain = matches!(r.kind(), ValueKind::Word | ValueKind::UnitQuantity)
         || (matches!(r.kind(), ValueKind::Quantity(_)) && scale_form(r) == Some("factor"));
     if plain && r.def.by_variant.is_empty() {
         let factor = r.factor().expect("fixed factor");
-        if let Some(l) = r.raw_limits(factor, r.def.min, r.def.max) {
-            if raw < i128::from(l.min) || raw > i128::from(l.max) {
-                return Err(format!("raw {raw} outside {} ..= {}", l.min, l.max));
-            }
+        if let Some(l) = r.raw_limits(factor, r.def.min, r.def.max)
+            && (raw < i128::from(l.min) || raw > i128::from(l.max))
+        {
+            return Err(format!("raw {raw} outside {} ..= {}", l.min, l.max));
         }
     }
     if let ValueKind::Enum(values) = r.kind() {
@@ -503,17 +503,17 @@ fn sweep(path: &Path, kind: TransportKind) -> Tally {
                         run_write(&drive, profile, &wire, slave, &format!("{name}={value}"));
                     wire.settle();
                     let arrived = wire.writes_since(before);
-                    if !arrived.is_empty() {
-                        if let Err(why) = legal_arrival(&drive, r, kind, slave, &wire, &arrived) {
-                            let words: Vec<String> = arrived
-                                .iter()
-                                .map(|(pdu, word)| format!("{pdu:04X}h = {word:04X}h"))
-                                .collect();
-                            failures.push(format!(
-                                "{case}: {} reached the wire: {why}",
-                                words.join(", ")
-                            ));
-                        }
+                    if !arrived.is_empty()
+                        && let Err(why) = legal_arrival(&drive, r, kind, slave, &wire, &arrived)
+                    {
+                        let words: Vec<String> = arrived
+                            .iter()
+                            .map(|(pdu, word)| format!("{pdu:04X}h = {word:04X}h"))
+                            .collect();
+                        failures.push(format!(
+                            "{case}: {} reached the wire: {why}",
+                            words.join(", ")
+                        ));
                     }
                     let sent = !arrived.is_empty();
                     match (&result, sent) {

@@ -507,13 +507,13 @@ impl RegisterPlan {
         transport: TransportKind,
     ) -> Result<u16, AddressUnknown> {
         for m in self.moves {
-            if let Condition::Setting { selector, .. } = m.when {
-                if settings.code(selector.slot).is_none() {
-                    return Err(AddressUnknown {
-                        register: self.info.id,
-                        setting: selector.label,
-                    });
-                }
+            if let Condition::Setting { selector, .. } = m.when
+                && settings.code(selector.slot).is_none()
+            {
+                return Err(AddressUnknown {
+                    register: self.info.id,
+                    setting: selector.label,
+                });
             }
             if m.when.holds(settings, transport) {
                 return Ok(m.address);

@@ -272,10 +272,11 @@ fn parse_number(text: &str) -> Option<f64> {
     if let Some(hex) = t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
         return u32::from_str_radix(hex, 16).ok().map(f64::from);
     }
-    if let Some(hex) = t.strip_suffix('h').or_else(|| t.strip_suffix('H')) {
-        if hex.chars().all(|c| c.is_ascii_hexdigit()) && !hex.is_empty() {
-            return u32::from_str_radix(hex, 16).ok().map(f64::from);
-        }
+    if let Some(hex) = t.strip_suffix('h').or_else(|| t.strip_suffix('H'))
+        && hex.chars().all(|c| c.is_ascii_hexdigit())
+        && !hex.is_empty()
+    {
+        return u32::from_str_radix(hex, 16).ok().map(f64::from);
     }
     t.parse::<f64>().ok()
 }

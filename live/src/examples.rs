@@ -64,10 +64,10 @@ pub fn default_settings(drive: &Drive) -> LiveSettings {
         if !deps.contains(&r.def.address) {
             continue;
         }
-        if let Some(d) = r.default_value() {
-            if let Ok(raw) = codec::encode(drive, r, d, &settings) {
-                settings.absorb(drive, r.def.address, raw as u16);
-            }
+        if let Some(d) = r.default_value()
+            && let Ok(raw) = codec::encode(drive, r, d, &settings)
+        {
+            settings.absorb(drive, r.def.address, raw as u16);
         }
     }
     settings
@@ -613,20 +613,19 @@ impl Verifier<'_> {
                 }
                 continue;
             };
-            if k == 0 {
-                if let Some(name) = named {
-                    if r.def.id != *name {
-                        self.error(
-                            out,
-                            address_byte,
-                            Some(&r.def.id),
-                            format!(
-                                "address {comm:04X}h is `{}`, the example says `{name}`",
-                                r.def.id
-                            ),
-                        );
-                    }
-                }
+            if k == 0
+                && let Some(name) = named
+                && r.def.id != *name
+            {
+                self.error(
+                    out,
+                    address_byte,
+                    Some(&r.def.id),
+                    format!(
+                        "address {comm:04X}h is `{}`, the example says `{name}`",
+                        r.def.id
+                    ),
+                );
             }
             let Some(&raw) = words.get(k) else { continue };
             let plan = self.drive.register_plan(r);

@@ -29,10 +29,8 @@ pub fn find_entry(drive: &Drive, name: &str) -> Option<EntryRef> {
             let hit = e.id == name
                 || e.param.as_deref() == Some(name)
                 || (!wanted.is_empty() && norm(&e.name) == wanted);
-            if hit {
-                if let Some(entry) = pair.entry(&e.id) {
-                    return Some(EntryRef { pair, entry });
-                }
+            if hit && let Some(entry) = pair.entry(&e.id) {
+                return Some(EntryRef { pair, entry });
             }
         }
     }

@@ -321,10 +321,10 @@ fn dependencies<'a>(
         });
     let mut out: Vec<&Register> = Vec::new();
     for row in rows {
-        if let Some(d) = drive.register_of_row(row) {
-            if !out.iter().any(|x| x.def.id == d.def.id) {
-                out.push(d);
-            }
+        if let Some(d) = drive.register_of_row(row)
+            && !out.iter().any(|x| x.def.id == d.def.id)
+        {
+            out.push(d);
         }
     }
     out
@@ -667,14 +667,12 @@ impl<'d> Session<'d> {
             if !on_transport(drive, r, self.kind) {
                 continue;
             }
-            if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency() {
-                if let Some(Quantity::Register(row)) =
+            if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency()
+                && let Some(Quantity::Register(row)) =
                     plan.settings.quantities.get(usize::from(s.slot))
-                {
-                    if let Some(d) = drive.register_of_row(*row) {
-                        deps.push(d);
-                    }
-                }
+                && let Some(d) = drive.register_of_row(*row)
+            {
+                deps.push(d);
             }
         }
         let mut warnings = Vec::new();

@@ -102,11 +102,11 @@ impl LiveSettings {
         for q in &plan.settings.quantities {
             if let Quantity::Register(i) = q {
                 let r = &plan.registers[*i];
-                if r.info.address == address {
-                    if let Ok(v) = r.decode_number(u32::from(raw), &self.view(drive)) {
-                        self.references.insert(r.info.id.to_owned(), v);
-                        used = true;
-                    }
+                if r.info.address == address
+                    && let Ok(v) = r.decode_number(u32::from(raw), &self.view(drive))
+                {
+                    self.references.insert(r.info.id.to_owned(), v);
+                    used = true;
                 }
             }
         }

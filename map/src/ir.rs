@@ -328,10 +328,10 @@ impl Drive {
     pub fn selector_slots(&self) -> Vec<SelectorRef<'_>> {
         let mut out: Vec<SelectorRef<'_>> = Vec::new();
         for name in self.selector_names() {
-            if let Some(s) = self.selector(name) {
-                if !out.iter().any(|o| o.same(&s)) {
-                    out.push(s);
-                }
+            if let Some(s) = self.selector(name)
+                && !out.iter().any(|o| o.same(&s))
+            {
+                out.push(s);
             }
         }
         out
@@ -369,10 +369,10 @@ impl Drive {
         let mut names = Vec::new();
         for r in &self.registers {
             for scale in scales_of(r) {
-                if let Scale::Relative(rel) = scale {
-                    if let Reference::Register(name) = &rel.relative_to {
-                        names.push(name.as_str());
-                    }
+                if let Scale::Relative(rel) = scale
+                    && let Reference::Register(name) = &rel.relative_to
+                {
+                    names.push(name.as_str());
                 }
             }
             if let Some(Reference::Register(name)) =
@@ -390,20 +390,18 @@ impl Drive {
         let mut out = Vec::new();
         for r in &self.registers {
             for scale in scales_of(r) {
-                if let Scale::Relative(rel) = scale {
-                    if let Reference::External(q) = &rel.relative_to {
-                        if seen.insert(q.external.clone()) {
-                            out.push(q);
-                        }
-                    }
+                if let Scale::Relative(rel) = scale
+                    && let Reference::External(q) = &rel.relative_to
+                    && seen.insert(q.external.clone())
+                {
+                    out.push(q);
                 }
             }
             if let Some(Reference::External(q)) =
                 r.def.max_relative.as_ref().map(|l| &l.relative_to)
+                && seen.insert(q.external.clone())
             {
-                if seen.insert(q.external.clone()) {
-                    out.push(q);
-                }
+                out.push(q);
             }
         }
         out
@@ -413,10 +411,10 @@ impl Drive {
         let mut seen = BTreeSet::new();
         let mut out = Vec::new();
         for name in names {
-            if let Some(r) = self.find(name) {
-                if seen.insert(r.def.id.clone()) {
-                    out.push(r);
-                }
+            if let Some(r) = self.find(name)
+                && seen.insert(r.def.id.clone())
+            {
+                out.push(r);
             }
         }
         out

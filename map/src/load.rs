@@ -289,14 +289,14 @@ fn group_errors(tree: &Node, group: &Node, path: &Path, errors: &mut Vec<Diagnos
     };
     let mut shell = entries.clone();
     for (key, _, value) in shell.iter_mut() {
-        if key == "registers" {
-            if let NodeKind::Seq(regs) = &value.kind {
-                for (ri, reg) in regs.iter().enumerate() {
-                    let rp = path.key("registers").index(ri);
-                    errors.extend(deserialize_at::<crate::model::Register>(tree, reg, &rp).err());
-                }
-                value.kind = NodeKind::Seq(Vec::new());
+        if key == "registers"
+            && let NodeKind::Seq(regs) = &value.kind
+        {
+            for (ri, reg) in regs.iter().enumerate() {
+                let rp = path.key("registers").index(ri);
+                errors.extend(deserialize_at::<crate::model::Register>(tree, reg, &rp).err());
             }
+            value.kind = NodeKind::Seq(Vec::new());
         }
     }
     let shell = Node {
@@ -514,10 +514,10 @@ fn merge_variant(base: Node, child: Node) -> Result<Node, Vec<Diagnostic>> {
                     _ => None,
                 };
                 let mut m = merge_shallow(old, value);
-                if let (Some(manuals), NodeKind::Map(e)) = (manuals, &mut m.kind) {
-                    if let Some(slot) = e.iter_mut().find(|(k, _, _)| k == "manuals") {
-                        slot.2 = manuals;
-                    }
+                if let (Some(manuals), NodeKind::Map(e)) = (manuals, &mut m.kind)
+                    && let Some(slot) = e.iter_mut().find(|(k, _, _)| k == "manuals")
+                {
+                    slot.2 = manuals;
                 }
                 m
             }

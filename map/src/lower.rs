@@ -531,18 +531,18 @@ impl Lowering<'_> {
     }
 
     fn condition(&self, w: &model::Condition) -> Option<Condition> {
-        if let Some(s) = &w.setting {
-            if let Some(selector) = self.selector(s) {
-                return Some(Condition::Setting {
-                    selector,
-                    codes: leak(w.is.clone()),
-                });
-            }
+        if let Some(s) = &w.setting
+            && let Some(selector) = self.selector(s)
+        {
+            return Some(Condition::Setting {
+                selector,
+                codes: leak(w.is.clone()),
+            });
         }
-        if let Some(v) = &w.variant {
-            if let Some(v) = self.variant(v) {
-                return Some(Condition::Variant(v));
-            }
+        if let Some(v) = &w.variant
+            && let Some(v) = self.variant(v)
+        {
+            return Some(Condition::Variant(v));
         }
         w.transport.map(|t| {
             Condition::Transport(match t {

@@ -98,10 +98,10 @@ impl Rule {
     }
 
     fn name(mut self, n: &str) -> Rule {
-        if let Rule::Any { names, .. } = &mut self {
-            if !n.trim().is_empty() {
-                names.push(n.to_owned());
-            }
+        if let Rule::Any { names, .. } = &mut self
+            && !n.trim().is_empty()
+        {
+            names.push(n.to_owned());
         }
         self
     }

@@ -779,14 +779,14 @@ fn unknowns(out: &mut String, drive: &Drive) {
                 );
             }
         }
-        if let Some(DefaultValue::Depends(dep)) = &f.data.default {
-            if dep.depends_on == Dependency::Unknown {
-                let _ = writeln!(
-                    body,
-                    "- {who}, default: {}",
-                    dep.note.as_deref().map(one_line).unwrap_or_default()
-                );
-            }
+        if let Some(DefaultValue::Depends(dep)) = &f.data.default
+            && dep.depends_on == Dependency::Unknown
+        {
+            let _ = writeln!(
+                body,
+                "- {who}, default: {}",
+                dep.note.as_deref().map(one_line).unwrap_or_default()
+            );
         }
     }
     if !body.is_empty() {

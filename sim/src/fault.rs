@@ -151,16 +151,16 @@ impl Transport for FaultyLink {
     fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
         loop {
             let now = Instant::now();
-            if let Some((at, bytes)) = self.deliveries.front_mut() {
-                if *at <= now {
-                    let n = buf.len().min(bytes.len());
-                    buf[..n].copy_from_slice(&bytes[..n]);
-                    bytes.drain(..n);
-                    if bytes.is_empty() {
-                        self.deliveries.pop_front();
-                    }
-                    return Ok(n);
+            if let Some((at, bytes)) = self.deliveries.front_mut()
+                && *at <= now
+            {
+                let n = buf.len().min(bytes.len());
+                buf[..n].copy_from_slice(&bytes[..n]);
+                bytes.drain(..n);
+                if bytes.is_empty() {
+                    self.deliveries.pop_front();
                 }
+                return Ok(n);
             }
             let next = self.deliveries.front().map(|(at, _)| *at);
             let wake = next.map_or(deadline, |at| at.min(deadline));

@@ -349,10 +349,10 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
             c.extend(on.iter().filter(|x| !c.contains(x)).collect::<Vec<_>>());
         }
         for (_, _, off) in &s.roles {
-            if let Some(off) = off {
-                if !c.contains(off) {
-                    c.push(*off);
-                }
+            if let Some(off) = off
+                && !c.contains(off)
+            {
+                c.push(*off);
             }
         }
         if !c.contains(&0) {
@@ -384,10 +384,10 @@ mod tests {
             }
         }
         for (_, _, off) in &s.roles {
-            if let Some(o) = off {
-                if !c.contains(o) {
-                    c.push(*o);
-                }
+            if let Some(o) = off
+                && !c.contains(o)
+            {
+                c.push(*o);
             }
         }
         c.push(0);

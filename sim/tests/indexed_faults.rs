@@ -73,10 +73,11 @@ impl Transport for Line {
             &frame[1..]
         };
         let index = pair().index_address.to_be_bytes();
-        if pdu[0] == 0x06 && pdu[1..3] == index {
-            if let Some(other) = self.meddle.take() {
-                self.link.slave.set_holding(pair().index_address, other);
-            }
+        if pdu[0] == 0x06
+            && pdu[1..3] == index
+            && let Some(other) = self.meddle.take()
+        {
+            self.link.slave.set_holding(pair().index_address, other);
         }
         Ok(())
     }

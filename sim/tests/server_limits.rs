@@ -308,10 +308,11 @@ fn a_master_is_served_through_a_flood_of_connections_and_slowloris_peers() {
                             break;
                         }
                         attempts += 1;
-                        if let Ok(s) = TcpStream::connect_timeout(&addr, Duration::from_secs(1)) {
-                            if (attempts + k) % 2 == 0 && slow.len() < 100 {
-                                slow.push(s);
-                            }
+                        if let Ok(s) = TcpStream::connect_timeout(&addr, Duration::from_secs(1))
+                            && (attempts + k).is_multiple_of(2)
+                            && slow.len() < 100
+                        {
+                            slow.push(s);
                         }
                     }
                     slow.retain_mut(|s| s.write_all(&[0x00]).is_ok());

@@ -216,7 +216,7 @@ fn connection(
         let ok = match script {
             Script::Answer => stream.write_all(&answer).is_ok(),
             Script::Late { every, by_us } => {
-                if (served - 1) % every.max(1) == 0 {
+                if (served - 1).is_multiple_of(every.max(1)) {
                     thread::sleep(Duration::from_micros(by_us));
                 }
                 stream.write_all(&answer).is_ok()
@@ -234,7 +234,7 @@ fn connection(
                         Err(_) => return,
                     }
                     writes += 1;
-                    if writes % 64 == 0 {
+                    if writes.is_multiple_of(64) {
                         drain_input(&mut stream);
                     }
                 }

@@ -60,7 +60,7 @@ pub fn serve_late(
         let frame: Vec<u8> = buf.drain(..total).collect();
         let mut out = [0u8; tcp::MAX_FRAME];
         let n = slave.respond(kind, &frame, &mut out).unwrap_or(0);
-        if served % every.max(1) == 0 {
+        if served.is_multiple_of(every.max(1)) {
             std::thread::sleep(late);
         }
         served += 1;

@@ -172,13 +172,14 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error> {
     if let Some(first) = readable.first() {
         let mut plan = session.plan(std::slice::from_ref(first))?;
         let (words, _) = session.poll_detailed(&mut plan);
-        if let Some(Err(f)) = words.first() {
-            if f.sent && f.exception.is_none() {
-                return Err(Error::Refused(format!(
-                    "{} did not answer; nothing checked ({})",
-                    session.link, f.message
-                )));
-            }
+        if let Some(Err(f)) = words.first()
+            && f.sent
+            && f.exception.is_none()
+        {
+            return Err(Error::Refused(format!(
+                "{} did not answer; nothing checked ({})",
+                session.link, f.message
+            )));
         }
     }
     let mut warnings = session.load_dependencies(&readable, &given.fixed);

@@ -176,24 +176,24 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             .and_then(|rule| gate::check_link(profile, kind, slave, rule))
             .map_err(|e| refused(r, &e))?;
     }
-    if let Some(id) = &args.persist {
-        if !drive.protocol.commands.iter().any(|c| &c.id == id) {
-            let known: Vec<&str> = drive
-                .protocol
-                .commands
-                .iter()
-                .map(|c| c.id.as_str())
-                .collect();
-            return Err(Error::Refused(format!(
-                "{} has no command `{id}`; commands: {}",
-                drive.meta.id,
-                if known.is_empty() {
-                    "none".to_owned()
-                } else {
-                    known.join(", ")
-                }
-            )));
-        }
+    if let Some(id) = &args.persist
+        && !drive.protocol.commands.iter().any(|c| &c.id == id)
+    {
+        let known: Vec<&str> = drive
+            .protocol
+            .commands
+            .iter()
+            .map(|c| c.id.as_str())
+            .collect();
+        return Err(Error::Refused(format!(
+            "{} has no command `{id}`; commands: {}",
+            drive.meta.id,
+            if known.is_empty() {
+                "none".to_owned()
+            } else {
+                known.join(", ")
+            }
+        )));
     }
     let given = args.target.settings.resolve(drive)?;
     let rounding = if args.round {

@@ -268,10 +268,10 @@ impl<'d> Points<'d> {
                     let given = match conversion {
                         Conversion::Selected { selector, .. } => {
                             let mut g = format!("{} as given with --set", selector.label);
-                            if let Scale::Relative { label, .. } = scale {
-                                if label != selector.label {
-                                    g = format!("{g}, and {label}");
-                                }
+                            if let Scale::Relative { label, .. } = scale
+                                && label != selector.label
+                            {
+                                g = format!("{g}, and {label}");
                             }
                             g
                         }

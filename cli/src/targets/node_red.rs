@@ -126,13 +126,13 @@ pub fn render(points: &Points) -> Value {
     }));
     let mut notes: Vec<String> = Vec::new();
     for p in &points.points {
-        if let Meaning::Number { given, .. } = &p.meaning {
-            if !given.is_empty() {
-                notes.push(format!(
-                    "{}: its scale holds for {given}; export again if the drive's setting changes.",
-                    p.id()
-                ));
-            }
+        if let Meaning::Number { given, .. } = &p.meaning
+            && !given.is_empty()
+        {
+            notes.push(format!(
+                "{}: its scale holds for {given}; export again if the drive's setting changes.",
+                p.id()
+            ));
         }
     }
     notes.extend(points.left_out_lines());

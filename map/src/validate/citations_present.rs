@@ -81,14 +81,14 @@ pub(super) fn cite(
             return;
         }
     }
-    if let Some(&lines) = ctx.manual_lines.get(file) {
-        if line > lines {
-            out.push(drive.error(
-                &path,
-                register,
-                format!("citation `{source}` points past the end of `{file}` ({lines} lines)"),
-            ));
-        }
+    if let Some(&lines) = ctx.manual_lines.get(file)
+        && line > lines
+    {
+        out.push(drive.error(
+            &path,
+            register,
+            format!("citation `{source}` points past the end of `{file}` ({lines} lines)"),
+        ));
     }
 }
 

@@ -53,14 +53,14 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     }
     for (i, g) in drive.gaps.iter().enumerate() {
         let gp = Path::root().key("gaps").index(i);
-        if let Some([lo, hi]) = g.addresses {
-            if lo > hi {
-                out.push(drive.error(
-                    &gp.key("addresses"),
-                    None,
-                    format!("gap {lo:04X}h..{hi:04X}h runs backwards"),
-                ));
-            }
+        if let Some([lo, hi]) = g.addresses
+            && lo > hi
+        {
+            out.push(drive.error(
+                &gp.key("addresses"),
+                None,
+                format!("gap {lo:04X}h..{hi:04X}h runs backwards"),
+            ));
         }
         if g.description.trim().is_empty() {
             out.push(drive.error(&gp.key("description"), None, "say what is missing"));

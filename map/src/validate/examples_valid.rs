@@ -88,13 +88,13 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 );
             }
         }
-        if let Some(topic) = &e.conflict {
-            if !drive.conflicts.iter().any(|c| c.topic == *topic) {
-                error(
-                    "conflict",
-                    format!("no entry of `conflicts:` has the topic \"{topic}\""),
-                );
-            }
+        if let Some(topic) = &e.conflict
+            && !drive.conflicts.iter().any(|c| c.topic == *topic)
+        {
+            error(
+                "conflict",
+                format!("no entry of `conflicts:` has the topic \"{topic}\""),
+            );
         }
         let Some(says) = &e.says else { continue };
         let said = usize::from(says.read.is_some())
@@ -125,14 +125,14 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             );
         }
         for (key, id) in [("read", &says.read), ("write", &says.write)] {
-            if let Some(id) = id {
-                if !drive.registers.iter().any(|r| r.def.id == *id) {
-                    out.push(drive.error(
-                        &path.key("says").key(key),
-                        None,
-                        format!("example `{}`: no register `{id}` in the map", e.id),
-                    ));
-                }
+            if let Some(id) = id
+                && !drive.registers.iter().any(|r| r.def.id == *id)
+            {
+                out.push(drive.error(
+                    &path.key("says").key(key),
+                    None,
+                    format!("example `{}`: no register `{id}` in the map", e.id),
+                ));
             }
         }
     }

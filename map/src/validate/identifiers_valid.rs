@@ -55,17 +55,18 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             format!("drive id `{id}` must be lower case letters, digits and single dashes (`ptlk-tds-v8`)"),
         ));
     }
-    if let Some(stem) = drive.file.file_stem() {
-        if drive.file.extension().is_some_and(|e| e == "yaml") && stem.to_string_lossy() != *id {
-            out.push(drive.error(
-                &Path::root().key("drive").key("id"),
-                None,
-                format!(
-                    "drive id `{id}` must match the file name `{}`",
-                    drive.file.display()
-                ),
-            ));
-        }
+    if let Some(stem) = drive.file.file_stem()
+        && drive.file.extension().is_some_and(|e| e == "yaml")
+        && stem.to_string_lossy() != *id
+    {
+        out.push(drive.error(
+            &Path::root().key("drive").key("id"),
+            None,
+            format!(
+                "drive id `{id}` must match the file name `{}`",
+                drive.file.display()
+            ),
+        ));
     }
     for (ai, axis) in drive.variants.iter().enumerate() {
         let ap = Path::root().key("variants").index(ai);

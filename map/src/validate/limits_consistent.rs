@@ -62,33 +62,32 @@ impl Checker<'_> {
     ) {
         let lo = min.and_then(|v| self.raw(&format!("{label}min"), v, factor, path.key("min")));
         let hi = max.and_then(|v| self.raw(&format!("{label}max"), v, factor, path.key("max")));
-        if let (Some(lo), Some(hi)) = (lo, hi) {
-            if lo > hi {
+        if let (Some(lo), Some(hi)) = (lo, hi)
+            && lo > hi
+        {
+            self.err(
+                path.key("min"),
+                format!(
+                    "{label}min {} is above max {}",
+                    min.unwrap_or_default(),
+                    max.unwrap_or_default()
+                ),
+            );
+        }
+        if let Some(DefaultValue::Value(d)) = default
+            && let Some(raw) = self.raw(&format!("{label}default"), *d, factor, path.key("default"))
+        {
+            let below = lo.is_some_and(|lo| raw < lo);
+            let above = hi.is_some_and(|hi| raw > hi);
+            if below || above {
                 self.err(
-                    path.key("min"),
+                    path.key("default"),
                     format!(
-                        "{label}min {} is above max {}",
-                        min.unwrap_or_default(),
-                        max.unwrap_or_default()
+                        "{label}default {d} is outside {}..={}",
+                        min.map(|v| v.to_string()).unwrap_or("-".into()),
+                        max.map(|v| v.to_string()).unwrap_or("-".into())
                     ),
                 );
-            }
-        }
-        if let Some(DefaultValue::Value(d)) = default {
-            if let Some(raw) = self.raw(&format!("{label}default"), *d, factor, path.key("default"))
-            {
-                let below = lo.is_some_and(|lo| raw < lo);
-                let above = hi.is_some_and(|hi| raw > hi);
-                if below || above {
-                    self.err(
-                        path.key("default"),
-                        format!(
-                            "{label}default {d} is outside {}..={}",
-                            min.map(|v| v.to_string()).unwrap_or("-".into()),
-                            max.map(|v| v.to_string()).unwrap_or("-".into())
-                        ),
-                    );
-                }
             }
         }
     }
@@ -246,13 +245,13 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             }
             ValueKind::Bits(_) => {
                 c.no_limits("a bit-field register has no range");
-                if let Some(DefaultValue::Value(v)) = &d.default {
-                    if !(v.fract() == 0.0 && (0.0..=65535.0).contains(v)) {
-                        c.err(
-                            r.key_path("default"),
-                            format!("default {v} is not a 16-bit word"),
-                        );
-                    }
+                if let Some(DefaultValue::Value(v)) = &d.default
+                    && !(v.fract() == 0.0 && (0.0..=65535.0).contains(v))
+                {
+                    c.err(
+                        r.key_path("default"),
+                        format!("default {v} is not a 16-bit word"),
+                    );
                 }
             }
         }

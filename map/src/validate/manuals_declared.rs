@@ -46,13 +46,13 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             }
             (Some(_), None) => {}
         }
-        if let Some(url) = &m.url {
-            if !(url.starts_with("https://") || url.starts_with("http://")) {
-                error(
-                    Some("url"),
-                    format!("manual url `{url}` is not an http(s) address"),
-                );
-            }
+        if let Some(url) = &m.url
+            && !(url.starts_with("https://") || url.starts_with("http://"))
+        {
+            error(
+                Some("url"),
+                format!("manual url `{url}` is not an http(s) address"),
+            );
         }
         let name = m.name();
         if !name.is_empty()

@@ -58,13 +58,11 @@ impl Context {
         if let Ok(entries) = std::fs::read_dir(dir) {
             for entry in entries.flatten() {
                 let path = entry.path();
-                if path.extension().is_some_and(|e| e == "txt") {
-                    if let (Some(name), Ok(text)) =
+                if path.extension().is_some_and(|e| e == "txt")
+                    && let (Some(name), Ok(text)) =
                         (path.file_name(), std::fs::read_to_string(&path))
-                    {
-                        manual_lines
-                            .insert(name.to_string_lossy().into_owned(), text.lines().count());
-                    }
+                {
+                    manual_lines.insert(name.to_string_lossy().into_owned(), text.lines().count());
                 }
             }
         }

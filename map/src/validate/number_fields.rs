@@ -25,13 +25,13 @@ pub(super) fn check(
     let mut out = Vec::new();
     let id = role.id();
     let number = matches!(role.kind(), RoleKind::Setpoint | RoleKind::Monitor);
-    if let EdgeSpec::Unknown(u) = &p.edge {
-        if u.unknown.trim().is_empty() {
-            out.push((
-                path.key("edge").key("unknown"),
-                format!("role `{id}`: `edge: {{unknown: ..}}` needs the reason the manual does not print whether the drive acts on the edge or the level"),
-            ));
-        }
+    if let EdgeSpec::Unknown(u) = &p.edge
+        && u.unknown.trim().is_empty()
+    {
+        out.push((
+            path.key("edge").key("unknown"),
+            format!("role `{id}`: `edge: {{unknown: ..}}` needs the reason the manual does not print whether the drive acts on the edge or the level"),
+        ));
     }
     if !number || p.field.is_none() {
         for (key, given) in [("signed", p.signed), ("scale", p.scale.is_some())] {

@@ -131,14 +131,14 @@ fn slave_address(drive: &Drive, pp: &Path, out: &mut Vec<Diagnostic>) {
             ),
         ));
     }
-    if let Some(d) = s.default {
-        if d < s_min || d > s_max {
-            out.push(drive.error(
-                &pp.key("slave_address").key("default"),
-                None,
-                format!("default slave {d} is outside {s_min}..={s_max}"),
-            ));
-        }
+    if let Some(d) = s.default
+        && (d < s_min || d > s_max)
+    {
+        out.push(drive.error(
+            &pp.key("slave_address").key("default"),
+            None,
+            format!("default slave {d} is outside {s_min}..={s_max}"),
+        ));
     }
 }
 
@@ -247,13 +247,13 @@ fn commands(drive: &Drive, pp: &Path, out: &mut Vec<Diagnostic>) {
 
 /// An EEPROM's endurance is some writes.
 fn eeprom(drive: &Drive, pp: &Path, out: &mut Vec<Diagnostic>) {
-    if let Some(e) = &drive.protocol.eeprom {
-        if e.endurance == 0 {
-            out.push(drive.error(
-                &pp.key("eeprom").key("endurance"),
-                None,
-                "endurance must be positive",
-            ));
-        }
+    if let Some(e) = &drive.protocol.eeprom
+        && e.endurance == 0
+    {
+        out.push(drive.error(
+            &pp.key("eeprom").key("endurance"),
+            None,
+            "endurance must be positive",
+        ));
     }
 }

@@ -107,23 +107,23 @@ fn limits(
             path.key("max"),
         )
     });
-    if let (Some(lo), Some(hi)) = (lo, hi) {
-        if lo > hi {
-            err(
-                drive,
-                out,
-                r,
-                path.key("min"),
-                format!(
-                    "{label}min {} is above max {}",
-                    min.unwrap_or_default(),
-                    max.unwrap_or_default()
-                ),
-            );
-        }
+    if let (Some(lo), Some(hi)) = (lo, hi)
+        && lo > hi
+    {
+        err(
+            drive,
+            out,
+            r,
+            path.key("min"),
+            format!(
+                "{label}min {} is above max {}",
+                min.unwrap_or_default(),
+                max.unwrap_or_default()
+            ),
+        );
     }
-    if let Some(DefaultValue::Value(d)) = default {
-        if let Some(raw) = count(
+    if let Some(DefaultValue::Value(d)) = default
+        && let Some(raw) = count(
             drive,
             out,
             r,
@@ -131,17 +131,16 @@ fn limits(
             &format!("{label}default"),
             *d,
             path.key("default"),
-        ) {
-            if lo.is_some_and(|lo| raw < lo) || hi.is_some_and(|hi| raw > hi) {
-                err(
-                    drive,
-                    out,
-                    r,
-                    path.key("default"),
-                    format!("{label}default {d} is outside min..=max"),
-                );
-            }
-        }
+        )
+        && (lo.is_some_and(|lo| raw < lo) || hi.is_some_and(|hi| raw > hi))
+    {
+        err(
+            drive,
+            out,
+            r,
+            path.key("default"),
+            format!("{label}default {d} is outside min..=max"),
+        );
     }
 }
 

@@ -106,14 +106,14 @@ fn codes_fit(
                 s.max_code()
             ),
         ));
-    } else if let Some(values) = s.listed() {
-        if !values.iter().any(|v| v.value == code) {
-            out.push(drive.error(
-                path,
-                register,
-                format!("selector `{name}` lists no code {code}"),
-            ));
-        }
+    } else if let Some(values) = s.listed()
+        && !values.iter().any(|v| v.value == code)
+    {
+        out.push(drive.error(
+            path,
+            register,
+            format!("selector `{name}` lists no code {code}"),
+        ));
     }
 }
 
@@ -354,14 +354,14 @@ fn address_alternatives(drive: &Drive, r: &Register, out: &mut Vec<Diagnostic>) 
         if let Some(s) = &w.setting {
             setting_condition(drive, r, s, &w.is, &ap, out);
         }
-        if let Some(v) = &w.variant {
-            if drive.variant_option(v).is_none() {
-                out.push(drive.error(
-                    &ap.key("variant"),
-                    rid,
-                    format!("`{v}` is not a variant option of this map"),
-                ));
-            }
+        if let Some(v) = &w.variant
+            && drive.variant_option(v).is_none()
+        {
+            out.push(drive.error(
+                &ap.key("variant"),
+                rid,
+                format!("`{v}` is not a variant option of this map"),
+            ));
         }
     }
 }
@@ -406,10 +406,10 @@ fn broadcast_registers(drive: &Drive, out: &mut Vec<Diagnostic>) {
         .key("registers");
     for (i, name) in b.registers.iter().enumerate() {
         let path = bp.index(i);
-        if let Some(r) = resolve(drive, out, name, path.clone(), None, "broadcast register") {
-            if !r.writable() {
-                out.push(drive.error(&path, Some(r.id()), "a broadcast register must be writable"));
-            }
+        if let Some(r) = resolve(drive, out, name, path.clone(), None, "broadcast register")
+            && !r.writable()
+        {
+            out.push(drive.error(&path, Some(r.id()), "a broadcast register must be writable"));
         }
     }
 }

@@ -715,14 +715,14 @@ impl Check<'_> {
                 ),
             );
         }
-        if let Some(off) = off {
-            if on.contains(&Some(off)) {
-                self.error(
-                    &path.key("off"),
-                    rid,
-                    format!("code {off} is both `on` and `off`"),
-                );
-            }
+        if let Some(off) = off
+            && on.contains(&Some(off))
+        {
+            self.error(
+                &path.key("off"),
+                rid,
+                format!("code {off} is both `on` and `off`"),
+            );
         }
     }
 }

@@ -65,14 +65,14 @@ fn data_bits(drive: &Drive, ser: &Serial, sp: &Path, out: &mut Vec<Diagnostic>) 
 }
 
 fn char_bits(drive: &Drive, ser: &Serial, sp: &Path, out: &mut Vec<Diagnostic>) {
-    if let Some(c) = ser.char_bits {
-        if !(9..=12).contains(&c) || c < 1 + ser.data_bits + ser.stop_bits {
-            out.push(drive.error(
-                &sp.key("char_bits"),
-                None,
-                "char_bits must cover start, data and stop bits (9..=12)",
-            ));
-        }
+    if let Some(c) = ser.char_bits
+        && (!(9..=12).contains(&c) || c < 1 + ser.data_bits + ser.stop_bits)
+    {
+        out.push(drive.error(
+            &sp.key("char_bits"),
+            None,
+            "char_bits must cover start, data and stop bits (9..=12)",
+        ));
     }
 }
 

@@ -151,17 +151,17 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
                 HEAD,
             );
         }
-        if let (Some(x), Some(y)) = (a.options.first(), b.options.first()) {
-            if x.id != y.id {
-                c.push(
-                    ChangeKind::VariantBaseChanged,
-                    subject,
-                    &a.id,
-                    (Some(x.id.clone()), x.source.clone()),
-                    (Some(y.id.clone()), y.source.clone()),
-                    HEAD,
-                );
-            }
+        if let (Some(x), Some(y)) = (a.options.first(), b.options.first())
+            && x.id != y.id
+        {
+            c.push(
+                ChangeKind::VariantBaseChanged,
+                subject,
+                &a.id,
+                (Some(x.id.clone()), x.source.clone()),
+                (Some(y.id.clone()), y.source.clone()),
+                HEAD,
+            );
         }
     }
     for b in &new.variants {

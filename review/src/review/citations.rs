@@ -326,15 +326,15 @@ fn near(manuals: &Manuals, source: &str, found: impl Fn(&Line) -> bool) -> Verdi
     if found(&Line::new(text)) {
         return Verdict::Verified;
     }
-    if let Some(next) = manuals.line(file, n + 1) {
-        if found(&Line::new(&format!("{text} {next}"))) {
-            return Verdict::VerifiedRow(n + 1);
-        }
+    if let Some(next) = manuals.line(file, n + 1)
+        && found(&Line::new(&format!("{text} {next}")))
+    {
+        return Verdict::VerifiedRow(n + 1);
     }
-    if let Some(prev) = n.checked_sub(1).and_then(|m| manuals.line(file, m)) {
-        if found(&Line::new(&format!("{prev} {text}"))) {
-            return Verdict::VerifiedRow(n - 1);
-        }
+    if let Some(prev) = n.checked_sub(1).and_then(|m| manuals.line(file, m))
+        && found(&Line::new(&format!("{prev} {text}")))
+    {
+        return Verdict::VerifiedRow(n - 1);
     }
     Verdict::Unverified { row_of: None }
 }
@@ -402,10 +402,10 @@ fn register_verdict(
         if m == 0 {
             continue;
         }
-        if let Some(l) = cache.get(file, m).cloned() {
-            if matches(&l).0 {
-                return Verdict::VerifiedRow(m);
-            }
+        if let Some(l) = cache.get(file, m).cloned()
+            && matches(&l).0
+        {
+            return Verdict::VerifiedRow(m);
         }
     }
     Verdict::Unverified { row_of: None }

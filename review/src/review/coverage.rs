@@ -192,10 +192,10 @@ fn row_keys(
     for (i, w) in words.iter().enumerate() {
         if let Some((a, rest)) = address_prefix(w, decimal) {
             addresses.push(a);
-            if let Some(last) = keys.last_mut() {
-                if last.1.is_none() {
-                    last.1 = Some(a);
-                }
+            if let Some(last) = keys.last_mut()
+                && last.1.is_none()
+            {
+                last.1 = Some(a);
             }
             if let Some(p) = param_prefix(rest, shapes) {
                 keys.push((Some(p.to_owned()), Some(a)));
@@ -283,10 +283,12 @@ fn gap_covers_param(text: &str, param: &str) -> bool {
         let (pa, lo) = split(parts[0]);
         let (pb, hi) = split(parts[1]);
         let (pp, n) = split(param);
-        if let (Some(lo), Some(hi), Some(n)) = (lo, hi, n) {
-            if pa == pb && pa == pp && (lo..=hi).contains(&n) {
-                return true;
-            }
+        if let (Some(lo), Some(hi), Some(n)) = (lo, hi, n)
+            && pa == pb
+            && pa == pp
+            && (lo..=hi).contains(&n)
+        {
+            return true;
         }
     }
     text.split(|c: char| c.is_whitespace() || c == ',')

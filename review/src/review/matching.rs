@@ -312,12 +312,12 @@ pub fn code_found(code: u16, label: &str, line: &Line) -> bool {
     for pair in runs.windows(2) {
         let ((a, _, end), (b, start, _)) = (&pair[0], &pair[1]);
         let between = line.upper[*end..*start].trim().to_lowercase();
-        if matches!(between.as_str(), "-" | "~" | "to" | "..") {
-            if let (Ok(a), Ok(b)) = (a.parse::<u32>(), b.parse::<u32>()) {
-                if a <= n && n <= b {
-                    return true;
-                }
-            }
+        if matches!(between.as_str(), "-" | "~" | "to" | "..")
+            && let (Ok(a), Ok(b)) = (a.parse::<u32>(), b.parse::<u32>())
+            && a <= n
+            && n <= b
+        {
+            return true;
         }
     }
     let label_words = words(label);

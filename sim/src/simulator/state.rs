@@ -200,10 +200,10 @@ impl Simulator {
             return;
         };
         for p in roles.command_source.iter().chain(&roles.reference_source) {
-            if p.field.width < 16 {
-                if let Some(off) = p.field.off {
-                    self.raw[p.register] = u32::from(p.field.put(self.raw[p.register] as u16, off));
-                }
+            if p.field.width < 16
+                && let Some(off) = p.field.off
+            {
+                self.raw[p.register] = u32::from(p.field.put(self.raw[p.register] as u16, off));
             }
         }
         if let Some(kind) = network {
