@@ -435,12 +435,7 @@ fn protocol_figures<'a>(drive: &'a Drive, w: &mut Walk<'a>) {
             t.source.as_deref(),
             indirect(&t.indirect),
         );
-        for (key, i) in [
-            ("frame_gap", &t.frame_gap),
-            ("inter_char_timeout", &t.inter_char_timeout),
-            ("response_time", &t.response_time),
-            ("request_gap", &t.request_gap),
-        ] {
+        for (key, i) in t.figures() {
             if let Some(i) = i {
                 w.at(
                     PlaceKind::TimingInterval(key),

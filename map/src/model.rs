@@ -519,6 +519,17 @@ impl Timing {
     pub fn frame_gap_chars(&self) -> f64 {
         self.frame_gap_chars_given.unwrap_or(3.5)
     }
+
+    /// The timing figures given as intervals, with their keys, in the schema's order:
+    /// `frame_gap`, `inter_char_timeout`, `response_time`, `request_gap`.
+    pub fn figures(&self) -> [(&'static str, Option<&Interval>); 4] {
+        [
+            ("frame_gap", self.frame_gap.as_ref()),
+            ("inter_char_timeout", self.inter_char_timeout.as_ref()),
+            ("response_time", self.response_time.as_ref()),
+            ("request_gap", self.request_gap.as_ref()),
+        ]
+    }
 }
 
 /// A duration: milliseconds, bit times, character times, or a sum of them (`{bits: 24, ms: 10}`).

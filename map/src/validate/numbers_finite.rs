@@ -127,12 +127,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             "chars",
             tp.key("frame_gap_chars"),
         );
-        for (name, i) in [
-            ("frame_gap", &t.frame_gap),
-            ("inter_char_timeout", &t.inter_char_timeout),
-            ("response_time", &t.response_time),
-            ("request_gap", &t.request_gap),
-        ] {
+        for (name, i) in t.figures() {
             if let Some(i) = i {
                 interval(drive, out, i, tp.key(name));
             }

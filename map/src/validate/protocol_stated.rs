@@ -180,12 +180,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 "`frame_gap` is marked not printed (`unknown`), so no `frame_gap_chars` is given: the tools use 3.5 characters, the Modbus RTU rule",
             ));
         }
-        for (key, i) in [
-            ("frame_gap", &t.frame_gap),
-            ("inter_char_timeout", &t.inter_char_timeout),
-            ("response_time", &t.response_time),
-            ("request_gap", &t.request_gap),
-        ] {
+        for (key, i) in t.figures() {
             if let Some(i) = i {
                 interval(drive, out, i, tp.key(key));
             }
@@ -230,12 +225,7 @@ pub fn warnings(drive: &Drive) -> Vec<Diagnostic> {
                 "frame_gap_chars has no source (timing has none): cite the line, or mark `frame_gap: {unknown: \"<why>\"}` and drop the number",
             ));
         }
-        for (key, i) in [
-            ("frame_gap", &t.frame_gap),
-            ("inter_char_timeout", &t.inter_char_timeout),
-            ("response_time", &t.response_time),
-            ("request_gap", &t.request_gap),
-        ] {
+        for (key, i) in t.figures() {
             if let Some(i) = i
                 && i.unknown.is_none()
                 && i.source.is_none()
