@@ -227,6 +227,12 @@ pub fn write(input: &DraftInput<'_>) -> Written {
             let _ = writeln!(body, "    registers:");
             for r in table {
                 let id = write_register(&mut body, &reading.file, r, &mut taken_ids);
+                if r.access.is_none() {
+                    to_confirm.push(format!(
+                        "{id}.access: unknown ({}:{} prints no access; read-only until a reviewer writes it)",
+                        reading.file, r.line
+                    ));
+                }
                 registers.push((id, reading.file.clone(), r.line));
             }
         }
@@ -416,7 +422,19 @@ pub fn write_register(y: &mut String, file: &str, r: &Row, taken: &mut BTreeSet<
     if let Some(s) = r.scale {
         let _ = writeln!(y, "        scale: {}", num(s));
     }
-    if r.min.is_some_and(|m| m < 0.0) || r.max.is_some_and(|m| m < 0.0) {
+    if let Some(p) = r.pair {
+        let _ = writeln!(
+            y,
+            "        pair: {{order: {}}}  # the other word's row: line {}",
+            if p.high_first {
+                "high_first"
+            } else {
+                "low_first"
+            },
+            p.other_line
+        );
+    }
+    if r.signed == Some(true) || r.min.is_some_and(|m| m < 0.0) || r.max.is_some_and(|m| m < 0.0) {
         let _ = writeln!(y, "        signed: true");
     }
     if let Some(m) = r.min {

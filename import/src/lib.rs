@@ -7,6 +7,7 @@
 //! every register citing the line it came from; [`compare`] sets rows against an existing map
 //! (`drivemap import --merge`, and the figures in `docs/import.md`).
 
+pub mod columns;
 pub mod compare;
 pub mod draft;
 pub mod known;
@@ -32,6 +33,8 @@ pub struct Reading {
     pub unread: Vec<Unread>,
     /// The parameter number shapes learnt from the manual (`AA-99`, `A999`).
     pub schemes: Vec<String>,
+    /// The tables read by their header's columns.
+    pub layouts: Vec<columns::Layout>,
 }
 
 /// A Markdown or box-drawn table row (`| 1001 | P1.01 | Maximum frequency |`) as cells separated by
@@ -68,11 +71,32 @@ fn line_range<'a>(all: &'a [&'a str], lines: Option<(usize, usize)>) -> (&'a [&'
 /// Reads the register rows of one manual; `lines` (1-based, inclusive) limits where rows are
 /// read, while the parameter schemes are learnt from the whole text.
 pub fn read_manual(file: &str, text: &str, lines: Option<(usize, usize)>) -> Reading {
+    read_manual_with(file, text, lines, &BTreeMap::new())
+}
+
+/// [`read_manual`], with the columns of some tables named by the user (by the line of their
+/// header: `--columns`).
+pub fn read_manual_with(
+    file: &str,
+    text: &str,
+    lines: Option<(usize, usize)>,
+    columns: &BTreeMap<usize, Vec<columns::Role>>,
+) -> Reading {
     let owned: Vec<std::borrow::Cow<'_, str>> = text.lines().map(table_line).collect();
     let all: Vec<&str> = owned.iter().map(|l| l.as_ref()).collect();
     let schemes = scheme::learn(&all);
     let (slice, first) = line_range(&all, lines);
-    let (rows, mut unread) = row::read_rows(slice, first, &schemes);
+    let ruled: std::collections::BTreeSet<usize> = owned
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| matches!(l, std::borrow::Cow::Owned(_)))
+        .map(|(i, _)| i + 1)
+        .collect();
+    let row::Tables {
+        rows,
+        mut unread,
+        layouts,
+    } = row::read_tables(slice, first, &schemes, columns, &ruled);
     // A row printed again (a summary table, a record sheet at the end of the manual) is
     // reported, not proposed twice: the first printing is the one a draft cites.
     let mut first_at = std::collections::BTreeMap::new();
@@ -135,6 +159,7 @@ pub fn read_manual(file: &str, text: &str, lines: Option<(usize, usize)>) -> Rea
         rows,
         unread,
         schemes: schemes.into_iter().collect(),
+        layouts,
     }
 }
 
@@ -160,6 +185,15 @@ pub struct Import {
     /// Findings of the front end on the draft that no row explains (empty when the draft
     /// checks).
     pub unresolved: Vec<String>,
+    /// The draft's registers: id, manual file and line of the row.
+    pub registers: Vec<(String, String, usize)>,
+}
+
+impl Import {
+    /// The registers of the draft read from one manual.
+    pub fn proposed(&self, file: &str) -> usize {
+        self.registers.iter().filter(|(_, f, _)| f == file).count()
+    }
 }
 
 /// Reads the manuals and writes the draft map `id`. `lines` limits where rows and protocol facts
@@ -170,10 +204,22 @@ pub fn import(
     lines: Option<(usize, usize)>,
     command: &str,
 ) -> Import {
+    import_with(id, manuals, lines, &BTreeMap::new(), command)
+}
+
+/// [`import`], with the columns of tables named by the user: by the line of the table's header
+/// (the same line in each manual), the roles of its columns left to right (`--columns`).
+pub fn import_with(
+    id: &str,
+    manuals: &[Manual<'_>],
+    lines: Option<(usize, usize)>,
+    columns: &BTreeMap<usize, Vec<columns::Role>>,
+    command: &str,
+) -> Import {
     let readings: Vec<(Reading, protocol::Protocol)> = manuals
         .iter()
         .map(|m| {
-            let reading = read_manual(m.file, m.text, lines);
+            let reading = read_manual_with(m.file, m.text, lines, columns);
             let all: Vec<&str> = m.text.lines().collect();
             let (slice, first) = line_range(&all, lines);
             (reading, protocol::read(slice, first))
@@ -213,6 +259,7 @@ pub fn import(
                 to_confirm: written.to_confirm,
                 left_out,
                 unresolved,
+                registers: written.registers,
             };
         }
     }
@@ -225,21 +272,56 @@ pub fn report(import: &Import) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "# drivemap import report");
     for (r, _) in &import.readings {
-        let proposed = r
-            .rows
-            .iter()
-            .filter(|x| !x.reserved && x.address.is_some())
-            .count();
+        let proposed = import.proposed(&r.file);
         let _ = writeln!(
             out,
-            "\n## {}\n\nparameter number schemes learnt: {}\nrows proposed: {proposed}\n",
+            "\n## {}\n\nparameter number schemes learnt: {}\nrows read: {}; registers proposed in the draft: {proposed}; lines reported below: {}\n",
             r.file,
             if r.schemes.is_empty() {
                 "none".to_string()
             } else {
                 r.schemes.join(", ")
-            }
+            },
+            r.rows.len(),
+            r.unread.len()
         );
+        for l in &r.layouts {
+            let roles: Vec<String> = l
+                .columns
+                .iter()
+                .map(|c| columns::role_name(c.role).to_string())
+                .collect();
+            let _ = writeln!(
+                out,
+                "- {}:{}: a table read by its columns: {}",
+                r.file,
+                l.line,
+                l.columns
+                    .iter()
+                    .zip(&roles)
+                    .map(|(c, role)| format!("\"{}\" = {role}", c.title))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            for (n, c) in l.columns.iter().enumerate() {
+                if c.role == columns::Role::Undecided {
+                    let _ = writeln!(
+                        out,
+                        "- {}:{}: column {} \"{}\" of this table is not understood (neither its title nor its cells say what it holds); its cells are not used. Name the columns: --columns {}:{}",
+                        r.file,
+                        l.line,
+                        n + 1,
+                        c.title,
+                        l.line,
+                        roles
+                            .iter()
+                            .map(|r| if r == "undecided" { "?" } else { r.as_str() })
+                            .collect::<Vec<_>>()
+                            .join(",")
+                    );
+                }
+            }
+        }
         for x in r.rows.iter().filter(|x| x.reserved) {
             let _ = writeln!(
                 out,

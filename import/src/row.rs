@@ -11,11 +11,12 @@
 //! Nothing is guessed: a field the line does not show is left out; a key with no name is
 //! reported, not proposed.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::LazyLock;
 
 use regex::Regex;
 
+use crate::columns::{Column, Layout, Role, Split, access_word, modicon, param_cell, scale_of};
 use crate::scheme::{glued_address, param_prefix, shape};
 use crate::text::{Num, Range, cells, find_range, hex_address, resolution_cell, unit_cell};
 
@@ -90,6 +91,21 @@ pub struct Row {
     /// The heading of the row's table (`List of Monitor Data Registers`) and its line, when a
     /// short heading stands just above the table's header.
     pub table: Option<(usize, String)>,
+    /// `Some(true)` when a type column prints a signed type (`INT16`, `S16`), `Some(false)` for
+    /// an unsigned one; a negative range makes the register signed too.
+    pub signed: Option<bool>,
+    /// A 32-bit value printed as two rows (`... (HIGH)` and `... (LOW)`): the order of its words
+    /// and the line of the other word's row.
+    pub pair: Option<Pair>,
+}
+
+/// A 32-bit value the manual prints as a HIGH and a LOW row.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Pair {
+    /// The word at the lower address is the high word.
+    pub high_first: bool,
+    /// The 1-based line of the other word's row.
+    pub other_line: usize,
 }
 
 impl Row {
@@ -231,8 +247,52 @@ pub fn read_rows(
     first_line: usize,
     schemes: &BTreeSet<String>,
 ) -> (Vec<Row>, Vec<Unread>) {
+    let r = read_tables(
+        lines,
+        first_line,
+        schemes,
+        &BTreeMap::new(),
+        &BTreeSet::new(),
+    );
+    (r.rows, r.unread)
+}
+
+/// What [`read_tables`] read.
+#[derive(Debug, Clone, Default)]
+pub struct Tables {
+    /// The register rows, in manual order.
+    pub rows: Vec<Row>,
+    /// Lines that looked like rows but were not read as one, with why.
+    pub unread: Vec<Unread>,
+    /// The tables read by their header's columns.
+    pub layouts: Vec<Layout>,
+}
+
+/// A table's lines for deciding its columns: the lines after its header up to the next header
+/// (at most 300).
+fn table_lines<'a>(lines: &[&'a str], from: usize) -> Vec<&'a str> {
+    lines[from..]
+        .iter()
+        .take(300)
+        .take_while(|l| header(l).is_none() && Layout::header(l, 0).is_none())
+        .copied()
+        .collect()
+}
+
+/// Reads every row of `lines` like [`read_rows`]; tables with a header are read by their
+/// columns, `columns` naming the columns of the tables whose header is on a given line (the
+/// user's `--columns`); `ruled` are the lines printed as `|` tables.
+pub fn read_tables(
+    lines: &[&str],
+    first_line: usize,
+    schemes: &BTreeSet<String>,
+    columns: &BTreeMap<usize, Vec<Role>>,
+    ruled: &BTreeSet<usize>,
+) -> Tables {
     let mut rows: Vec<Row> = Vec::new();
     let mut unread = Vec::new();
+    let mut layouts: Vec<Layout> = Vec::new();
+    let mut layout: Option<Layout> = None;
     let mut header_ctx = Header::default();
     let mut last_attached = 0usize;
     // The last short heading line (`Status word`), and the heading of the current table: a bit
@@ -240,25 +300,95 @@ pub fn read_rows(
     let mut heading: Option<(usize, String)> = None;
     let mut table_heading: Option<String> = None;
     let mut table: Option<(usize, String)> = None;
+    // The lines a row or its codes took, and the lines of prose between tables.
+    let mut used: BTreeSet<usize> = BTreeSet::new();
     for (i, raw) in lines.iter().enumerate() {
         let line_no = first_line + i;
         let line = raw.trim_end();
         if line.trim().is_empty() {
             continue;
         }
-        if let Some(h) = header(line) {
-            header_ctx = h;
-            table = heading.take().filter(|(l, _)| line_no <= l + 3);
+        let old_header = header(line);
+        let new_layout = Layout::header(line, line_no).or_else(|| {
+            // A header the reader cannot read at all, named by the user.
+            columns
+                .contains_key(&line_no)
+                .then(|| Layout::header_as_named(line, line_no))?
+        });
+        if old_header.is_some() || new_layout.is_some() {
+            header_ctx = old_header.unwrap_or_default();
+            let h_heading = heading.take().filter(|(l, _)| line_no <= l + 3);
+            let named = columns.contains_key(&line_no);
+            layout = new_layout.filter(|_| !header_ctx.bits).map(|mut l| {
+                l.decide(&table_lines(lines, i + 1));
+                if let Some(named) = columns.get(&line_no) {
+                    l.name_columns(named);
+                }
+                let context = h_heading
+                    .as_ref()
+                    .map(|(_, t)| t.to_lowercase())
+                    .unwrap_or_default();
+                if l.bits.is_none() {
+                    l.bits = bit_space(&context);
+                }
+                l
+            });
+            // A tab-separated table (OCR text) whose columns the row grammar reads as well is
+            // left to it.
+            layout = layout.filter(|l| {
+                l.split == Split::Blanks || ruled.contains(&line_no) || named || l.needs_columns()
+            });
+            if let Some(l) = &layout {
+                layouts.push(l.clone());
+                header_ctx.address_first = false;
+            }
+            table = h_heading;
             table_heading = table.as_ref().map(|(_, t)| t.clone());
+            used.insert(line_no);
             continue;
         }
         if is_heading(line) {
             heading = Some((line_no, line.trim().to_string()));
         }
+        if let Some(l) = &layout {
+            match layout_row(line, line_no, l, &table) {
+                LayoutLine::Row(row) => {
+                    used.insert(line_no);
+                    last_attached = line_no;
+                    if row.name.is_empty() {
+                        unread.push(Unread {
+                            line: line_no,
+                            text: line.trim().to_string(),
+                            why: "a row key with no name after it".into(),
+                        });
+                    } else {
+                        rows.push(*row);
+                    }
+                    continue;
+                }
+                LayoutLine::Reported(u) => {
+                    used.insert(line_no);
+                    unread.push(u);
+                    continue;
+                }
+                LayoutLine::NotKeyed => {
+                    if let Some(row) = rows.last_mut()
+                        && line_no <= last_attached + 3
+                        && !row.reserved
+                        && layout_continuation(line, line_no, l, row, last_attached)
+                    {
+                        used.insert(line_no);
+                        last_attached = line_no;
+                        continue;
+                    }
+                }
+            }
+        }
         if header_ctx.hex_column
             && let Some(records) = address_records(line, line_no, schemes, &table)
         {
             last_attached = line_no;
+            used.insert(line_no);
             rows.extend(records);
             continue;
         }
@@ -286,6 +416,8 @@ pub fn read_rows(
                     },
                     reserved: false,
                     table: table.clone(),
+                    signed: None,
+                    pair: None,
                 };
                 if header_ctx.bits
                     && let Some((first, last, name)) = bit_cells(key.body)
@@ -309,10 +441,12 @@ pub fn read_rows(
                     }
                     row.push_bits(first, last, name, line_no);
                     last_attached = line_no;
+                    used.insert(line_no);
                     rows.push(row);
                     continue;
                 }
                 read_body(key.body, &mut row);
+                used.insert(line_no);
                 if row.name.is_empty() {
                     unread.push(Unread {
                         line: line_no,
@@ -334,14 +468,20 @@ pub fn read_rows(
                     if let Some((first, last, name)) = bit_cells(line) {
                         row.push_bits(first, last, name, line_no);
                         last_attached = line_no;
+                        used.insert(line_no);
                     }
                     continue;
                 }
                 if line_no == row.line + 1 {
+                    let before = row.name.len();
                     name_continuation(line, row);
+                    if row.name.len() != before {
+                        used.insert(line_no);
+                    }
                 }
                 if continuation_codes(line, line_no, row) {
                     last_attached = line_no;
+                    used.insert(line_no);
                 }
             }
         }
@@ -364,7 +504,127 @@ pub fn read_rows(
                 .push("the manual prints no name for the register; named by its address".into());
         }
     }
-    (rows, unread)
+    let (rows, mut unread) = pairs(rows, unread);
+    // Every line shaped like a row is a row, part of one, or reported with why.
+    for (i, raw) in lines.iter().enumerate() {
+        let line_no = first_line + i;
+        if !used.contains(&line_no) && row_shaped(raw) && !unread.iter().any(|u| u.line == line_no)
+        {
+            unread.push(Unread {
+                line: line_no,
+                text: shorten(raw.trim()),
+                why: "a number and a name, but not a row of a register table the reader found (prose, a heading, or a table without a header)".into(),
+            });
+        }
+    }
+    Tables {
+        rows,
+        unread,
+        layouts,
+    }
+}
+
+/// A line shortened for a report (at most 120 characters).
+fn shorten(s: &str) -> String {
+    let mut out: String = s.chars().take(120).collect();
+    if s.chars().count() > 120 {
+        out.push('…');
+    }
+    out
+}
+
+/// Whether a line is shaped like a register row: it starts with an address-like token (a
+/// number of up to six digits, a marked hex number, a parameter-like token with a digit) and a
+/// name (a word of two letters or more) follows.
+pub fn row_shaped(line: &str) -> bool {
+    static RE: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(
+            r"^\s*\|?\s*(?:0x[0-9A-Fa-f]{1,4}|[0-9A-Fa-f]{2,4}[hH]|\d{1,6}|[A-Za-z]{1,3}\d{1,4}(?:[-.]\d{1,4})?|\d{1,3}[-.]\d{1,3})\b[\s|:]*(?:\S+\s+){0,3}?[A-Za-z][a-z]+",
+        )
+        .expect("pattern")
+    });
+    RE.is_match(line)
+}
+
+/// The coil or discrete-input space a table heading names.
+fn bit_space(text: &str) -> Option<&'static str> {
+    if text.contains("coil") {
+        Some("coil")
+    } else if text.contains("discrete input") || text.contains("input status") {
+        Some("discrete input")
+    } else {
+        None
+    }
+}
+
+/// The HIGH and LOW rows of a 32-bit value (`Energy (HIGH)` at 0014h, `Energy (LOW)` at 0015h)
+/// made one row with a pair; the other word's row is reported as part of it.
+fn pairs(rows: Vec<Row>, mut unread: Vec<Unread>) -> (Vec<Row>, Vec<Unread>) {
+    let mut out: Vec<Row> = Vec::with_capacity(rows.len());
+    let mut iter = rows.into_iter().peekable();
+    while let Some(mut row) = iter.next() {
+        let word = word_of(&row.name);
+        if let (Some((first_high, base)), Some(next)) = (word, iter.peek())
+            && let Some((next_high, next_base)) = word_of(&next.name)
+            && next_high != first_high
+            && crate::compare::name_key(&next_base) == crate::compare::name_key(&base)
+            && row.address.is_some()
+            && next.address == row.address.and_then(|a| a.checked_add(1))
+        {
+            let next = iter.next().expect("peeked");
+            row.name = base;
+            row.pair = Some(Pair {
+                high_first: first_high,
+                other_line: next.line,
+            });
+            row.notes.push(format!(
+                "a 32-bit value: the {} word at {} (line {})",
+                if first_high { "low" } else { "high" },
+                next.address_printed.as_deref().unwrap_or("?"),
+                next.line
+            ));
+            if row.scale.is_none() {
+                row.scale = next.scale;
+                row.unit = row.unit.clone().or(next.unit.clone());
+            }
+            unread.push(Unread {
+                line: next.line,
+                text: next.name.clone(),
+                why: format!(
+                    "the {} word of a 32-bit value; part of the row at line {}",
+                    if first_high { "low" } else { "high" },
+                    row.line
+                ),
+            });
+        }
+        out.push(row);
+    }
+    (out, unread)
+}
+
+/// A name that marks one word of a 32-bit value: whether it is the high word, and the name
+/// without the mark (`Output power (HIGH)`, `Trip frequency (low)`, `Power [LOW WORD]`,
+/// `Control word MSW`).
+fn word_of(name: &str) -> Option<(bool, String)> {
+    static RE: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(
+            r"(?i)\s*[(\[]?\s*\b(high|low|upper|lower|hi|lo|msw|lsw)(?:\s+word)?\b\s*[)\]]?\s*$",
+        )
+        .expect("pattern")
+    });
+    let m = RE.captures(name)?;
+    let high = matches!(
+        m[1].to_ascii_lowercase().as_str(),
+        "high" | "upper" | "hi" | "msw"
+    );
+    let base = name[..m.get(0).expect("match").start()].trim();
+    // `(frequency (low)`: an unclosed parenthesis the mark closed.
+    let base = if base.matches('(').count() > base.matches(')').count() {
+        format!("{base})")
+    } else {
+        base.to_string()
+    };
+    (!base.is_empty()).then_some((high, clean_name(&base)))
 }
 
 struct Key<'a> {
@@ -561,6 +821,8 @@ fn address_records(
             notes,
             reserved: false,
             table: table.clone(),
+            signed: None,
+            pair: None,
         });
     }
     Some(rows)
@@ -1068,13 +1330,350 @@ mod tests {
              40102      Deceleration time    0.1 to 600.0 s   5.0\n",
         );
         assert_eq!(rows.len(), 2);
+        // A register column of Modicon references only: 40001 is register 0.
         assert_eq!(
-            (rows[0].address, rows[0].notation),
-            (Some(40101), Notation::Decimal)
+            (
+                rows[0].address,
+                rows[0].notation,
+                rows[0].address_printed.as_deref()
+            ),
+            (Some(100), Notation::Decimal, Some("40101"))
         );
         assert_eq!(
             (rows[0].unit.as_deref(), rows[0].scale, rows[0].default),
             (Some("s"), Some(0.1), Some(5.0))
         );
     }
+}
+
+/// What a line under a table header is, read by the header's columns.
+enum LayoutLine {
+    /// A register row.
+    Row(Box<Row>),
+    /// A row that is not proposed (a coil, a block of registers printed as one row), with why.
+    Reported(Unread),
+    /// No key in the address or parameter column.
+    NotKeyed,
+}
+
+/// A number printed for a column of a row: the address, as a register of this table.
+enum AddressKey {
+    Register(u16, Notation, Option<String>),
+    OtherSpace(&'static str),
+    Block,
+}
+
+fn address_key(cell: &str, col: &Column) -> Option<AddressKey> {
+    let tok = cell.split_whitespace().next()?;
+    let tok = tok.trim_matches(['(', ')', '|']);
+    static BLOCK: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"^\S+\s*(?:…|\.\.\.|\.\.|–|-|~|to)\s*\S*\d").expect("pattern")
+    });
+    if BLOCK.is_match(cell.trim()) && !cell.trim().contains(char::is_alphabetic) {
+        return Some(AddressKey::Block);
+    }
+    if cell.trim().ends_with(['…', '.']) && cell.trim().contains("..") || cell.contains('…') {
+        return Some(AddressKey::Block);
+    }
+    if let Some((space, register)) = modicon(tok)
+        && (col.modicon || space != '4')
+        && !col.hex
+    {
+        return Some(match space {
+            '4' => AddressKey::Register(
+                register,
+                Notation::Decimal,
+                Some(format!(
+                    "printed as the Modicon reference {tok} (4xxxx numbering: 40001 is register 0)"
+                )),
+            ),
+            '3' => AddressKey::OtherSpace("an input register (3xxxx, read with 04h)"),
+            '1' => AddressKey::OtherSpace("a discrete input (1xxxx)"),
+            _ => AddressKey::OtherSpace("a coil (0xxxx)"),
+        });
+    }
+    if let Some(a) = hex_address(tok) {
+        return Some(AddressKey::Register(a, Notation::Hex, None));
+    }
+    if col.hex && tok.len() <= 4 && tok.chars().all(|c| c.is_ascii_hexdigit()) {
+        return Some(AddressKey::Register(
+            u16::from_str_radix(tok, 16).ok()?,
+            Notation::Hex,
+            None,
+        ));
+    }
+    if tok.len() <= 5 && tok.chars().all(|c| c.is_ascii_digit()) {
+        return Some(AddressKey::Register(
+            tok.parse().ok()?,
+            Notation::Decimal,
+            None,
+        ));
+    }
+    None
+}
+
+/// A register row read by the columns of its table's header.
+fn layout_row(
+    line: &str,
+    line_no: usize,
+    layout: &Layout,
+    table: &Option<(usize, String)>,
+) -> LayoutLine {
+    let cells = layout.assign(line);
+    let cell = |role: Role| layout.find(role).and_then(|i| cells[i]);
+    let mut row = Row {
+        line: line_no,
+        address: None,
+        address_printed: None,
+        notation: Notation::Hex,
+        param: None,
+        name: String::new(),
+        access: None,
+        unit: None,
+        scale: None,
+        min: None,
+        max: None,
+        default: None,
+        values: Vec::new(),
+        fields: Vec::new(),
+        notes: Vec::new(),
+        reserved: false,
+        table: table.clone(),
+        signed: None,
+        pair: None,
+    };
+    let reported = |why: String| {
+        LayoutLine::Reported(Unread {
+            line: line_no,
+            text: shorten(line.trim()),
+            why,
+        })
+    };
+    if let Some(i) = layout.find(Role::Address)
+        && let Some(c) = cells[i]
+    {
+        match address_key(c, &layout.columns[i]) {
+            Some(AddressKey::Register(a, notation, note)) => {
+                row.address = Some(a);
+                row.address_printed = c.split_whitespace().next().map(str::to_string);
+                row.notation = notation;
+                row.notes.extend(note);
+            }
+            Some(AddressKey::OtherSpace(what)) => {
+                return reported(format!(
+                    "{what}: not a holding register; the map has no space for it yet, so it is reported, not proposed"
+                ));
+            }
+            Some(AddressKey::Block) => {
+                return reported(
+                    "a block of registers printed as one row (its registers are not named one by one); not proposed".into(),
+                );
+            }
+            None => {}
+        }
+    }
+    // A name printed under the number's title (`0500H  Save parameters  -`): the row leaves
+    // the number out and its cells shift left.
+    let mut shifted_name = None;
+    if let Some(c) = cell(Role::Param) {
+        match param_cell(c) {
+            Some(p) => row.param = Some(p.to_string()),
+            None if row.address.is_none() => return LayoutLine::NotKeyed,
+            None => shifted_name = Some(c),
+        }
+    }
+    if row.address.is_none() && row.param.is_none() {
+        return LayoutLine::NotKeyed;
+    }
+    if let Some(space) = layout.bits {
+        return reported(format!(
+            "a {space} (the table at line {} lists {space}s): not a holding register; the map has no space for it yet, so it is reported, not proposed",
+            layout.line
+        ));
+    }
+    if let Some(c) = cell(Role::Reference) {
+        if let Some((space, _)) = modicon(c.split_whitespace().next().unwrap_or(""))
+            && space != '4'
+        {
+            return reported(format!(
+                "printed with the reference {c} of another space than the holding registers; not proposed"
+            ));
+        }
+        row.notes.push(format!("also printed as {c}"));
+    }
+    if let Some(c) = cell(Role::Name) {
+        row.name = clean_name(c);
+    }
+    if let Some(c) = shifted_name
+        && (row.name.is_empty() || row.name == "-")
+        && c.chars().filter(|c| c.is_alphabetic()).count() >= 3
+    {
+        row.name = clean_name(c);
+    }
+    row.reserved = is_reserved(&row.name);
+    let mut unit: Option<&'static str> = None;
+    let mut step: Option<f64> = None;
+    let mut decimals: Option<u32> = None;
+    let debracket = |c: &str| c.replace(['[', ']'], " ").trim().to_string();
+    for (col, c) in layout.columns.iter().zip(&cells) {
+        let Some(c) = c else { continue };
+        let dash = matches!(*c, "-" | "—" | "–" | "--" | "n/a" | "N/A");
+        match col.role {
+            Role::Access => match access_word(c) {
+                Some(a) => row.access = Some(a),
+                None if dash => {}
+                None => row.notes.push(format!("access printed as \"{c}\"")),
+            },
+            Role::Unit if !dash => {
+                let d = debracket(c);
+                if let Some(u) = unit_cell(&d) {
+                    unit = Some(u);
+                } else if let Some((n, u)) = resolution_cell(&d) {
+                    step = Some(n.value);
+                    unit = u.or(unit);
+                }
+            }
+            Role::Step if !dash => {
+                let d = debracket(c);
+                if let Some((n, u)) = resolution_cell(&d) {
+                    step = Some(n.value);
+                    if u.is_some() {
+                        unit = u;
+                    }
+                } else {
+                    row.notes.push(format!("{} printed as \"{c}\"", col.title));
+                }
+            }
+            Role::Factor | Role::Exponent if !dash => match scale_of(col.role, c) {
+                Some(s) => step = Some(s),
+                None => row.notes.push(format!("{} printed as \"{c}\"", col.title)),
+            },
+            Role::Range if !dash => {
+                if let Some(r) = find_range(c) {
+                    set_range(&mut row, &r, &mut decimals, &mut unit);
+                } else {
+                    for code in inline_codes(c, line_no) {
+                        row.values.push(code);
+                    }
+                }
+            }
+            Role::Min if !dash => match Num::parse(c) {
+                Some(n) => {
+                    row.min = Some(n.value);
+                    decimals = Some(decimals.unwrap_or(0).max(n.decimals));
+                }
+                None => row.notes.push(format!("minimum printed as \"{c}\"")),
+            },
+            Role::Max if !dash => match Num::parse(c) {
+                Some(n) => {
+                    row.max = Some(n.value);
+                    decimals = Some(decimals.unwrap_or(0).max(n.decimals));
+                }
+                None => row.notes.push(format!("maximum printed as \"{c}\"")),
+            },
+            Role::Default if !dash => match Num::parse(c) {
+                Some(n) => row.default = Some(n.value),
+                None => row.notes.push(format!("default printed as \"{c}\"")),
+            },
+            Role::Type if !dash => {
+                let t = c.to_ascii_lowercase();
+                let signed = (t.contains("int") && !t.contains("uint") && !t.contains("unsigned"))
+                    || t.starts_with('s')
+                    || t.starts_with('i')
+                    || (t.contains("signed") && !t.contains("unsigned"));
+                let unsigned = t.contains("uint") || t.starts_with('u') || t.contains("unsigned");
+                if signed && !t.contains("float") && !t.contains("real") {
+                    row.signed = Some(true);
+                } else if unsigned {
+                    row.signed = Some(false);
+                }
+                if t.contains("32") || t.contains("float") || t.contains("real") {
+                    row.notes
+                        .push(format!("printed as the type {c} (two registers)"));
+                }
+            }
+            Role::Size if !dash && c.trim() != "1" => {
+                row.notes.push(format!("{} printed as \"{c}\"", col.title));
+            }
+            Role::Description => {
+                for code in inline_codes(c, line_no) {
+                    row.values.push(code);
+                }
+            }
+            _ => {}
+        }
+    }
+    if !row.values.is_empty() && row.min.is_none() {
+        unit = None;
+        decimals = None;
+    }
+    row.unit = unit.map(str::to_string);
+    row.scale = match (step, unit, decimals) {
+        (Some(s), _, _) => Some(s),
+        (None, Some(_), Some(d)) => Some(10f64.powi(-(d as i32))),
+        (None, None, Some(d)) if d > 0 => Some(10f64.powi(-(d as i32))),
+        _ => None,
+    };
+    LayoutLine::Row(Box::new(row))
+}
+
+/// Codes printed in one cell (`0: Stop, 1: Run`, `0 = off`).
+fn inline_codes(cell: &str, line_no: usize) -> Vec<Code> {
+    static RE: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"(?:^|[,;]\s*)(\d{1,3})\s*[:=]\s*([A-Za-z(][^,;]*)").expect("pattern")
+    });
+    RE.captures_iter(cell)
+        .filter_map(|c| {
+            Some(Code {
+                value: c[1].parse().ok()?,
+                name: c[2].trim().to_string(),
+                line: line_no,
+            })
+        })
+        .collect()
+}
+
+/// A line under a row of a column-read table that carries no key: the rest of a wrapped name
+/// (text in the name column), or codes (in the name, range or description column). Returns
+/// whether the line was taken.
+fn layout_continuation(
+    line: &str,
+    line_no: usize,
+    layout: &Layout,
+    row: &mut Row,
+    last_attached: usize,
+) -> bool {
+    let cells = layout.assign(line);
+    let mut taken = false;
+    for (col, c) in layout.columns.iter().zip(&cells) {
+        let Some(c) = c else { continue };
+        let codes = inline_codes(c, line_no);
+        if !codes.is_empty() {
+            for code in codes {
+                if !row.values.iter().any(|v| v.value == code.value) {
+                    row.values.push(code);
+                }
+            }
+            taken = true;
+            continue;
+        }
+        match col.role {
+            Role::Name
+                if line_no == last_attached + 1
+                    && row.values.is_empty()
+                    && c.chars().filter(|c| c.is_alphabetic()).count() >= 2
+                    && !c.starts_with(|c: char| c.is_ascii_digit()) =>
+            {
+                row.name = clean_name(&format!("{} {c}", row.name));
+                taken = true;
+            }
+            Role::Description | Role::Unit | Role::Type | Role::Step => taken = true,
+            _ => return false,
+        }
+    }
+    if taken && !row.values.is_empty() && row.min.is_none() {
+        row.unit = None;
+        row.scale = None;
+    }
+    taken
 }
