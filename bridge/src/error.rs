@@ -27,6 +27,41 @@ pub enum Error {
         /// The port as written.
         port: String,
     },
+    /// `--mqtt` carries a user name or password (`mqtt://user:pass@host`): never taken from
+    /// the command line, where every process and shell history can read it.
+    #[error(
+        "--mqtt {url}: credentials in the URL are refused (the command line is readable by every process); give DRIVEMAP_MQTT_USERNAME and DRIVEMAP_MQTT_PASSWORD or --mqtt-credentials FILE"
+    )]
+    MqttUserinfo {
+        /// The URL without its credentials.
+        url: String,
+    },
+    /// `--mqtt-topic` or `--discovery-prefix` is not a topic to publish under.
+    #[error("{option} {root}: {why}")]
+    TopicRoot {
+        /// The option.
+        option: &'static str,
+        /// The value, quoted.
+        root: String,
+        /// What is wrong with it.
+        why: &'static str,
+    },
+    /// `--command-rate` is not a finite positive number.
+    #[error("--command-rate {rate}: give a finite number of commands per second above 0")]
+    CommandRate {
+        /// The rate given.
+        rate: f64,
+    },
+    /// More links than the bridge serves.
+    #[error(
+        "{links} links: the bridge serves at most {max} (one thread each); put the drives of a line on one link"
+    )]
+    TooManyLinks {
+        /// Links given.
+        links: usize,
+        /// The most served.
+        max: usize,
+    },
     /// `--mqtt` has no host.
     #[error("--mqtt {url}: no host")]
     MqttHost {
@@ -125,6 +160,45 @@ pub enum Refused {
         /// What would have to be named.
         what: String,
     },
+    /// A button command (`run`, `stop`, `fault_reset`) whose payload is not `PRESS`.
+    #[error("command/{command} takes the payload PRESS (a Home Assistant button), not {payload}")]
+    NotPress {
+        /// The command topic's last level.
+        command: &'static str,
+        /// The payload, quoted.
+        payload: String,
+    },
+    /// A message with the retain flag on a command topic: a command is carried out once, when
+    /// it is sent, never again on a (re)connection.
+    #[error(
+        "retained messages are never carried out on command topics (publish commands with retain off; clear the retained one with an empty retained message)"
+    )]
+    Retained,
+    /// Over the drive's rate of runs, references and sets (a stop is never limited).
+    #[error(
+        "over the rate limit of {rate} command(s) per second for {drive} (stops are never limited)"
+    )]
+    RateLimit {
+        /// Commands per second, as given.
+        rate: String,
+        /// The drive's name.
+        drive: String,
+    },
+    /// The drive did not answer its last poll (link down or drive silent): a run, reference,
+    /// set or reset is not kept for later.
+    #[error(
+        "{drive} did not answer its last poll (link down or drive silent): commands other than stop are not kept for later"
+    )]
+    NotAnswering {
+        /// The drive's name.
+        drive: String,
+    },
+    /// A later command replaced this one before it was carried out.
+    #[error("superseded by a later {by} before it was carried out")]
+    Superseded {
+        /// The later command (`stop`, `run`, ...).
+        by: &'static str,
+    },
 }
 
 /// A new connection of a link could not be made (what the link's `Connect` answers: the
@@ -210,9 +284,54 @@ pub enum CommandFailure {
     #[error("no such drive on this link")]
     NoSuchDrive,
     /// A reference that is not a frequency.
-    #[error("`{value}` is not a frequency in Hz")]
+    #[error("{value} is not a frequency in Hz")]
     NotAFrequency {
-        /// The payload.
+        /// The payload, quoted.
         value: String,
     },
+    /// The command waited past its deadline (the link busy, down, or its drive silent).
+    #[error("expired after {} ms waiting for the link (deadline {} ms): not carried out late", waited.as_millis(), deadline.as_millis())]
+    Expired {
+        /// How long it waited.
+        waited: std::time::Duration,
+        /// The deadline.
+        deadline: std::time::Duration,
+    },
+    /// A fault reset for a drive that reports no fault.
+    #[error("the drive reports no fault{}: nothing to reset", if *running { " and is running" } else { "" })]
+    NoFault {
+        /// It reports running.
+        running: bool,
+    },
+    /// A fault reset for a running drive whose map gives no fault status.
+    #[error(
+        "the drive is running and its map gives no fault status: a reset is not sent to a running drive"
+    )]
+    RunningWithoutFaultRole,
+    /// A field write on a command register that would keep fields read back from the drive.
+    #[error(
+        "{register} holds command fields (run, reset): write the whole word, or use command/run, command/stop, command/fault_reset"
+    )]
+    CommandFields {
+        /// The register, described.
+        register: String,
+    },
+}
+
+impl CommandFailure {
+    /// Whether a stop that failed this way is worth sending again: the line or the drive did
+    /// not answer (a refusal of the gate or the drive's exception is final).
+    pub fn retryable(&self) -> bool {
+        use drivemap_runtime::Error as E;
+        match self {
+            CommandFailure::Drive(e) => {
+                !matches!(e, E::Refused(_) | E::Value(_) | E::Exception { .. })
+            }
+            CommandFailure::Dependency { source, .. }
+            | CommandFailure::OtherFields { source, .. } => {
+                matches!(source, PollFailure::Read(e) if !matches!(e, E::Refused(_) | E::Value(_) | E::Exception { .. }))
+            }
+            _ => false,
+        }
+    }
 }

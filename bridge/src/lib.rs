@@ -5,14 +5,24 @@
 //!   depend on with every cycle and planning again when it changes;
 //! - Prometheus: `/metrics` in the OpenMetrics text format ([`metrics`]);
 //! - MQTT: state topics, Home Assistant discovery, command topics through the write gate and
-//!   the drive trait, off unless allowed ([`mqtt`]).
+//!   the drive trait, off unless allowed ([`mqtt`]);
+//! - commands as intents with deadlines ([`command`]): a stop first and never refused for a
+//!   rate or a queue, other commands carried out fresh or refused, never late; one drive object
+//!   per drive for the bridge's life ([`commander`]).
 //!
 //! Bounded: a scrape reads atomics; MQTT updates go through a bounded queue offered without
-//! waiting; commands through a bounded queue per link. SIGTERM (or SIGINT) stops every link
-//! after the cycle in flight, publishes the drives and the bridge offline, and returns.
+//! waiting; commands are the latest wish per drive and register. SIGTERM (or SIGINT) stops
+//! every link after the cycle in flight, publishes the drives and the bridge offline, and
+//! returns.
+//!
+//! The bridge is not a safety function: a drive's own communication-loss stop (the V7's n151,
+//! the ACN's CM.03 / CM.04) is what stops a motor when the bridge, the broker or the line is gone.
 
+pub mod command;
+pub mod commander;
 pub mod error;
 pub mod link;
+pub mod log;
 pub mod metrics;
 pub mod mqtt;
 pub mod points;
@@ -33,17 +43,25 @@ pub struct Options {
     pub metrics: Option<SocketAddr>,
     /// The broker (none: no MQTT).
     pub mqtt: Option<mqtt::Options>,
+    /// How long a run, reference, set or fault reset may wait for its link.
+    pub deadline: Duration,
 }
 
 /// Capacity of the queue of updates to the MQTT side.
 pub const UPDATE_QUEUE: usize = 4096;
-/// Capacity of each link's command queue.
-pub const COMMAND_QUEUE: usize = 16;
+/// The most links one bridge serves (each is a thread).
+pub const MAX_LINKS: usize = 1024;
 
 /// Runs the bridge until SIGTERM or SIGINT, or until `stop` is set.
 pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Result<(), Error> {
     if links.is_empty() {
         return Err(Error::NoDrives);
+    }
+    if links.len() > MAX_LINKS {
+        return Err(Error::TooManyLinks {
+            links: links.len(),
+            max: MAX_LINKS,
+        });
     }
     // The points of every drive, for the metric families and the MQTT side.
     let mut infos = Vec::new();
@@ -64,6 +82,7 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
         }
     }
     let metrics = Arc::new(metrics::Metrics::new(&all_points));
+    let board = Arc::new(command::Board::new(infos.len(), options.deadline));
     drop(all_points);
     let tls = match &options.mqtt {
         Some(m) => {
@@ -99,13 +118,10 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
             .map(|l| tokio::spawn(metrics::serve(l, Arc::clone(&metrics), Arc::clone(&stop))));
         let (tx, rx) = tokio::sync::mpsc::channel(UPDATE_QUEUE);
         let updates = options.mqtt.as_ref().map(|_| tx);
-        let mut senders = Vec::new();
         let mut republish = Vec::new();
         let mut tasks = Vec::new();
         let mut first = 0;
         for l in links {
-            let (ctx, crx) = std::sync::mpsc::sync_channel(COMMAND_QUEUE);
-            senders.push(ctx);
             let again = Arc::new(AtomicBool::new(false));
             republish.push(Arc::clone(&again));
             let n = l.drives.len();
@@ -114,14 +130,15 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
                 l.name,
                 options.period.as_millis()
             );
-            let (m, u, s, p) = (
+            let (m, u, s, p, b) = (
                 Arc::clone(&metrics),
                 updates.clone(),
                 Arc::clone(&stop),
                 options.period,
+                Arc::clone(&board),
             );
             tasks.push(tokio::task::spawn_blocking(move || {
-                link::run(l, first, p, m, u, crx, s, again)
+                link::run(l, first, p, m, u, b, s, again)
             }));
             first += n;
         }
@@ -132,7 +149,7 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
                 m,
                 infos,
                 rx,
-                senders,
+                Arc::clone(&board),
                 Arc::clone(&metrics),
                 Arc::clone(&mqtt_stop),
                 republish,

@@ -1,6 +1,12 @@
 //! One link (a serial line, a gateway, a drive's own TCP port) and the drives on it, polled by
-//! the runtime's read planner in one blocking task: every drive each period, commands from MQTT
-//! between cycles (never during one), values into the metrics and onto the MQTT queue.
+//! the runtime's read planner in one blocking task: every drive each period, the commands of
+//! its drives (from the [`Board`]) before every request of a cycle and while waiting for the
+//! next, values into the metrics and onto the MQTT queue.
+//!
+//! A drive that does not answer a request is not asked again in that cycle (the rest of its
+//! reads fail with that timeout), and after cycles without an answer it is polled with a
+//! back-off (every 2nd, 4th, ... cycle, at most every 32nd), so a silent drive costs the line
+//! one timeout per poll of it, not one per request, and holds no command back for longer.
 //!
 //! Nothing here waits for Prometheus or the broker: the metrics are atomics read by scrapes,
 //! and MQTT updates are offered to a bounded queue with `try_send` (an update that does not fit
@@ -10,11 +16,9 @@
 use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use drivemap_live::codec::{self, Value};
-use drivemap_live::intern::intern;
 use drivemap_live::session::rows_on_link;
 use drivemap_live::{LiveSettings, lookup};
 use drivemap_map::Drive;
@@ -22,14 +26,14 @@ use drivemap_map::describe;
 use drivemap_map::ir::Register;
 use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
-use drivemap_runtime::gate;
-use drivemap_runtime::plan::{Conversion, Dependency};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
-use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, ClientOptions, Error, Rounding, Table, Width};
+use drivemap_runtime::{Client, ClientOptions, Error, Width};
 
+use crate::command::{Board, Intent, Next};
+use crate::commander::Commander;
+use crate::log::{Limiter, quote};
 use crate::metrics::{Labels, Metrics};
 use crate::points::{self, Point, PointKind};
 use crate::{CommandFailure, PollFailure};
@@ -102,6 +106,20 @@ pub enum Action {
     FaultReset,
 }
 
+impl Action {
+    /// The command's name in topics and metrics: `set`, `run`, `stop`, `reference`,
+    /// `fault_reset`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Action::Set { .. } => "set",
+            Action::Run => "run",
+            Action::Stop => "stop",
+            Action::Reference => "reference",
+            Action::FaultReset => "fault_reset",
+        }
+    }
+}
+
 /// What the link tells the MQTT side.
 #[derive(Debug, Clone)]
 pub enum Update {
@@ -112,10 +130,12 @@ pub enum Update {
     },
     /// The drive answered (true) or stopped answering (false).
     Availability { drive: usize, online: bool },
-    /// A command's outcome: `Ok(what was done)` or `Err(why nothing was)`.
+    /// A command's outcome: `Ok(what was done)` or `Err(why nothing was)`, with its word
+    /// (`done`, `refused`, `expired`, `superseded`, `failed`, `pending` for a stop sent again).
     Outcome {
         command: Command,
         result: Result<String, Arc<CommandFailure>>,
+        outcome: &'static str,
     },
 }
 
@@ -148,6 +168,12 @@ pub struct Polled {
     /// The info-style label set in force per point.
     info: Vec<Option<Labels>>,
     online: Option<bool>,
+    /// Cycles in a row in which the drive answered nothing.
+    silent: u32,
+    /// Cycles still to skip before it is polled again (the back-off of a silent drive).
+    skip: u32,
+    /// It answered its last poll.
+    answered: bool,
 }
 
 /// The registers polled for `spec` on `kind`, and the indices of the dependencies among them.
@@ -274,7 +300,32 @@ impl Polled {
             published: vec![None; n],
             info: vec![None; n],
             online: None,
+            silent: 0,
+            skip: 0,
+            answered: false,
         })
+    }
+
+    /// What carries out this drive's commands: the same map, slave, timing and settings.
+    pub fn commander(&self) -> Commander {
+        Commander {
+            index: self.index,
+            name: self.spec.name.clone(),
+            drive: self.spec.drive,
+            slave: self.spec.slave,
+            options: self.spec.options,
+            kind: self.kind,
+            fixed: self.spec.fixed.clone(),
+            deps: self
+                .deps
+                .iter()
+                .map(|&d| self.regs[d].def.id.clone())
+                .collect(),
+            settings: self.settings.clone(),
+            memory: None,
+            forget: true,
+            replan: false,
+        }
     }
 
     /// The drive's name.
@@ -328,15 +379,24 @@ impl Polled {
     }
 
     /// One poll of the drive: reads, settings absorbed (re-planned and read again when they
-    /// changed), values published. Returns the requests sent and their modelled bus time (ns).
+    /// changed), values published; `between` is called before every request (the link's
+    /// commands). A drive that answered nothing in its last cycles is skipped with a back-off.
+    /// Returns the requests sent and their modelled bus time (ns).
     pub fn cycle(
         &mut self,
         client: &mut LinkClient,
         line: SerialConfig,
         metrics: &Metrics,
         updates: &Updates,
+        between: &mut dyn FnMut(&mut LinkClient),
     ) -> (u32, u64) {
-        client.switch_drive(self.spec.drive.plan().profile, self.spec.options);
+        if self.skip > 0 {
+            self.skip -= 1;
+            return (0, 0);
+        }
+        let profile = self.spec.drive.plan().profile;
+        let options = self.spec.options;
+        client.switch_drive(profile, options);
         let mut requests = 0;
         let mut bus_ns = 0;
         let link_label = self.base[3].1.clone();
@@ -357,7 +417,12 @@ impl Polled {
             let Some(plan) = self.plan.as_mut() else {
                 return (requests, bus_ns);
             };
-            let stats = plan.poller.poll(client, self.spec.slave);
+            let stats =
+                plan.poller
+                    .poll_between(client, self.spec.slave, &mut |c: &mut LinkClient| {
+                        between(c);
+                        c.switch_drive(profile, options);
+                    });
             requests += stats.requests;
             bus_ns += stats.bus_ns;
             let raws: Vec<Result<u32, (&'static str, String)>> = plan
@@ -390,6 +455,14 @@ impl Polled {
             self.plan = None;
         };
         let answered = raws.iter().any(|r| r.is_ok());
+        self.answered = answered;
+        if answered {
+            self.silent = 0;
+        } else {
+            self.silent = self.silent.saturating_add(1);
+            // Polled again after 0, 1, 3, 7, ... 31 cycles.
+            self.skip = (1u32 << self.silent.min(6).saturating_sub(1)) - 1;
+        }
         let mut changes = Vec::new();
         for (pi, p) in self.points.iter().enumerate() {
             let r = self.regs[p.slot];
@@ -524,159 +597,26 @@ impl Polled {
         (requests, bus_ns)
     }
 
+    /// Whether the drive answered its last poll.
+    pub fn answering(&self) -> bool {
+        self.answered
+    }
+
+    /// The settings the last poll read (what conversions and limits depend on).
+    pub fn settings(&self) -> &LiveSettings {
+        &self.settings
+    }
+
+    /// Plans the reads again at the next cycle (a command wrote what they depend on).
+    pub fn replan(&mut self) {
+        self.plan = None;
+    }
+
     /// Forgets what MQTT was given, so that every value is published again (after the broker
     /// connection was re-established).
     pub fn republish(&mut self) {
         self.published.iter_mut().for_each(|p| *p = None);
         self.online = None;
-    }
-
-    /// Carries out a command through the write gate (registers) or the drive trait (run, stop,
-    /// reference, fault reset). Returns what was done, or why nothing was.
-    pub fn execute(
-        &mut self,
-        client: &mut LinkClient,
-        command: &Command,
-    ) -> Result<String, CommandFailure> {
-        client.switch_drive(self.spec.drive.plan().profile, self.spec.options);
-        let drive = self.spec.drive;
-        let slave = self.spec.slave;
-        let value = command.payload.trim();
-        match &command.action {
-            Action::Set { register } => self.write(client, register, value),
-            action => {
-                let plan = drive.plan();
-                let view = self.settings.view(drive);
-                let mut d = Vfd::from_plan(client, slave, view, plan.registers, plan.roles);
-                let result = match action {
-                    Action::Run => d.run().map(|()| "running".to_owned()),
-                    Action::Stop => d.stop().map(|()| "stopped".to_owned()),
-                    Action::FaultReset => d.reset_fault().map(|()| "fault reset".to_owned()),
-                    Action::Reference => {
-                        let hz: f64 = value
-                            .trim_end_matches("Hz")
-                            .trim()
-                            .parse()
-                            .ok()
-                            .filter(|v: &f64| v.is_finite())
-                            .ok_or_else(|| CommandFailure::NotAFrequency {
-                                value: value.to_owned(),
-                            })?;
-                        d.set_reference(hz)
-                            .map(|()| format!("frequency reference {hz} Hz"))
-                    }
-                    Action::Set { .. } => unreachable!("handled above"),
-                };
-                Ok(result?)
-            }
-        }
-    }
-
-    /// Writes `value` to the register named `name`, as `drivemap write` does: parsed by the
-    /// register's conversion (range, steps, limits through other parameters read first), the
-    /// gate checked, other bit fields kept.
-    fn write(
-        &mut self,
-        client: &mut LinkClient,
-        name: &str,
-        value: &str,
-    ) -> Result<String, CommandFailure> {
-        let drive = self.spec.drive;
-        let profile = drive.plan().profile;
-        let slave = self.spec.slave;
-        let kind = self.kind;
-        let r = lookup::find(drive, name)?;
-        if value.is_empty() {
-            return Err(CommandFailure::NoValue {
-                register: describe::register(r),
-            });
-        }
-        let rule = gate::rule(profile, intern(r.id()))
-            .and_then(|rule| gate::check_link(profile, kind, slave, rule).map(|()| rule))
-            .map_err(|source| CommandFailure::Refused {
-                register: describe::register(r),
-                source,
-            })?;
-        // The limit through another parameter, read now (V7's reference against n011).
-        let mut settings = self.settings.clone();
-        if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency()
-            && let Some(Quantity::Register(row)) =
-                drive.plan().settings.quantities.get(usize::from(s.slot))
-            && let Some(d) = drive.register_of_row(*row)
-            && !self.spec.fixed.contains(&d.def.id)
-        {
-            let raw = self
-                .read_raw(client, d)
-                .map_err(|source| CommandFailure::Dependency {
-                    register: describe::register(d),
-                    source,
-                })?;
-            settings.absorb(drive, d.def.address, raw as u16);
-        }
-        let raw = match codec::field_input(drive, r, value)? {
-            Some(input) => {
-                let Conversion::Bits { mask, .. } = drive.register_plan(r).conversion else {
-                    return Err(CommandFailure::NoFields {
-                        register: describe::register(r),
-                    });
-                };
-                let word = if input.mask & mask == mask || !r.readable() {
-                    input.value
-                } else {
-                    let current =
-                        self.read_raw(client, r)
-                            .map_err(|source| CommandFailure::OtherFields {
-                                id: r.id().to_owned(),
-                                source,
-                            })? as u16;
-                    ((current & !input.mask) | input.value) & mask
-                };
-                codec::encode(drive, r, f64::from(word), &settings)?
-            }
-            None => codec::parse_value_with(drive, r, value, &settings, Rounding::Exact)?,
-        };
-        let address = self.address(r).map_err(CommandFailure::Address)?;
-        let words = rule.width.split(raw);
-        gate::check(
-            profile,
-            kind,
-            slave,
-            gate::WriteTarget::Rule(rule),
-            address,
-            words[..usize::from(rule.width.count())].iter().copied(),
-        )
-        .map_err(|source| CommandFailure::Refused {
-            register: describe::register(r),
-            source,
-        })?;
-        let between = drive
-            .register_plan(r)
-            .repeat_needs_change
-            .map(|x| x.between);
-        match between {
-            Some(b) => client.write_changed(slave, rule, address, b, raw),
-            None => client.write_rule(slave, rule, address, raw),
-        }?;
-        let shown = codec::decode_written(drive, r, raw, &settings)
-            .map(|v| v.to_string())
-            .unwrap_or_else(|_| raw.to_string());
-        // A written dependency changes conversions: read it again with the next cycle.
-        if self.deps.iter().any(|&d| self.regs[d].def.id == r.def.id) {
-            self.plan = None;
-        }
-        Ok(format!("wrote {} = {shown}", describe::register(r)))
-    }
-
-    fn read_raw(&self, client: &mut LinkClient, r: &Register) -> Result<u32, PollFailure> {
-        let address = self.address(r)?;
-        let info = self.spec.drive.register_plan(r).info;
-        let mut w = [0u16; 2];
-        let words = &mut w[..usize::from(info.width.count())];
-        match info.table {
-            Table::Holding => client.read_holding(self.spec.slave, address, words),
-            Table::Input => client.read_input(self.spec.slave, address, words),
-        }?;
-        Ok(info.width.join(words))
     }
 }
 
@@ -689,8 +629,10 @@ pub fn option_text(code: u16, id: Option<&str>, name: Option<&str>) -> String {
 }
 
 /// Runs a link until `stop` is set: connects (with the client's back-off, 100 ms doubling to
-/// 5 s), then polls every drive each `period`, carrying out commands between cycles. Returns
-/// when the cycle in flight is done after `stop`.
+/// 5 s), then polls every drive each `period`, carrying out the drives' commands from `board`
+/// before every request and while waiting (a stop before anything else). While the link cannot
+/// be opened, stops wait for it and other commands expire. Returns when the cycle in flight is
+/// done after `stop`.
 // The thread's inputs, each moved into it for its whole life (the link, its channels,
 // shared flags and counters); `lib.rs` builds them once and hands them over.
 #[allow(clippy::too_many_arguments)]
@@ -700,11 +642,36 @@ pub fn run(
     period: Duration,
     metrics: Arc<Metrics>,
     updates: Updates,
-    commands: Receiver<Command>,
+    board: Arc<Board>,
     stop: Arc<AtomicBool>,
     republish: Arc<AtomicBool>,
 ) {
     let label = vec![("link".to_owned(), link.name.clone())];
+    metrics
+        .period_seconds
+        .get_or_create(&label)
+        .set(period.as_secs_f64());
+    let count = link.drives.len();
+    let mut drives: Vec<Polled> = Vec::new();
+    for (i, spec) in std::mem::take(&mut link.drives).into_iter().enumerate() {
+        match Polled::new(first_index + i, spec, &link.name, link.kind) {
+            Ok(p) => drives.push(p),
+            Err(e) => eprintln!("bridge: {e}"),
+        }
+    }
+    for d in &drives {
+        // Down until it answers (an alert on `drivemap_up == 0` fires from the start).
+        metrics.up.get_or_create(&d.base[..3].to_vec()).set(0.0);
+    }
+    let mut serving = Serving {
+        board,
+        first: first_index,
+        count,
+        commanders: drives.iter().map(Polled::commander).collect(),
+        metrics: Arc::clone(&metrics),
+        updates: updates.clone(),
+        log: Limiter::default(),
+    };
     let mut wait = Duration::from_millis(100);
     let transport = loop {
         if stop.load(Ordering::Relaxed) {
@@ -721,24 +688,27 @@ pub fn run(
                 let mut l = label.clone();
                 l.push(("kind".into(), "connect".into()));
                 metrics.errors.get_or_create(&l).inc();
-                sleep_unless(&stop, wait);
+                // Commands other than a stop expire while the link cannot be opened.
+                let until = Instant::now() + wait;
+                while !stop.load(Ordering::Relaxed) && Instant::now() < until {
+                    serving.expire_only();
+                    serving.board.wait(
+                        until
+                            .saturating_duration_since(Instant::now())
+                            .min(Duration::from_millis(50)),
+                    );
+                }
                 wait = (wait * 2).min(Duration::from_secs(5));
             }
         }
     };
-    let Some(first) = link.drives.first() else {
+    let Some(first) = drives.first() else {
         return;
     };
     let mut client: LinkClient =
-        Client::with_options(transport, first.drive.plan().profile, first.options);
-    let mut drives: Vec<Polled> = Vec::new();
-    for (i, spec) in std::mem::take(&mut link.drives).into_iter().enumerate() {
-        match Polled::new(first_index + i, spec, &link.name, link.kind) {
-            Ok(p) => drives.push(p),
-            Err(e) => eprintln!("bridge: {e}"),
-        }
-    }
+        Client::with_options(transport, first.drive().plan().profile, first.spec.options);
     let mut next = Instant::now();
+    let mut warned_model = false;
     loop {
         if stop.load(Ordering::Relaxed) {
             break;
@@ -746,18 +716,41 @@ pub fn run(
         if republish.swap(false, Ordering::Relaxed) {
             drives.iter_mut().for_each(Polled::republish);
         }
+        serving.serve(&mut client);
         let began = Instant::now();
         let mut requests = 0;
         let mut bus_ns = 0;
-        for d in drives.iter_mut() {
-            let (n, ns) = d.cycle(&mut client, link.line, &metrics, &updates);
+        // By index: the commanders are lent to the cycle's `between` (a command for any drive
+        // of the link goes out between two requests), so they cannot be borrowed alongside.
+        #[allow(clippy::needless_range_loop)]
+        for k in 0..drives.len() {
+            let d = &mut drives[k];
+            let (n, ns) = d.cycle(&mut client, link.line, &metrics, &updates, &mut |c| {
+                serving.serve(c)
+            });
             requests += n;
             bus_ns += ns;
+            serving.board.set_answering(d.index, d.answering());
+            let c = &mut serving.commanders[k];
+            c.update_settings(d.settings());
+            if c.take_replan() {
+                d.replan();
+            }
         }
         metrics
             .cycle_seconds
             .get_or_create(&label)
             .set(began.elapsed().as_secs_f64());
+        let model: f64 = drives.iter().map(Polled::model_seconds).sum();
+        if model > period.as_secs_f64() && !warned_model {
+            warned_model = true;
+            eprintln!(
+                "bridge: {}: one cycle needs {:.3} s of bus time by the bus-time model, more than the period of {} ms: cycles run back to back (drivemap_bridge_cycle_bus_model_seconds > drivemap_bridge_period_seconds)",
+                link.name,
+                model,
+                period.as_millis()
+            );
+        }
         metrics
             .model_seconds
             .get_or_create(&label)
@@ -773,8 +766,9 @@ pub fn run(
             // A cycle longer than the period: the next starts at once, none are made up.
             next = now;
         }
-        // Commands are carried out while waiting for the next cycle.
+        // Commands are carried out as they come while waiting for the next cycle.
         loop {
+            serving.serve(&mut client);
             if stop.load(Ordering::Relaxed) {
                 break;
             }
@@ -782,45 +776,7 @@ pub fn run(
             if left.is_zero() {
                 break;
             }
-            match commands.recv_timeout(left.min(Duration::from_millis(100))) {
-                Ok(c) => {
-                    let result = match drives.iter_mut().find(|d| d.index == c.drive) {
-                        Some(d) => d.execute(&mut client, &c),
-                        None => Err(CommandFailure::NoSuchDrive),
-                    };
-                    let outcome = if result.is_ok() { "done" } else { "refused" };
-                    match &result {
-                        Ok(what) => {
-                            eprintln!("bridge: command on {} ({}): {what}", c.topic, c.payload)
-                        }
-                        Err(why) => eprintln!(
-                            "bridge: command on {} ({}) refused, nothing written: {why}",
-                            c.topic, c.payload
-                        ),
-                    }
-                    if let Some(name) = drives
-                        .iter()
-                        .find(|d| d.index == c.drive)
-                        .map(|d| d.name().to_owned())
-                    {
-                        metrics
-                            .commands
-                            .get_or_create(&vec![
-                                ("name".to_owned(), name),
-                                ("outcome".to_owned(), outcome.to_owned()),
-                            ])
-                            .inc();
-                    }
-                    if let Some(tx) = &updates {
-                        let result = result.map_err(Arc::new);
-                        let _ = tx.try_send(Update::Outcome { command: c, result });
-                    }
-                }
-                Err(RecvTimeoutError::Timeout) => {}
-                Err(RecvTimeoutError::Disconnected) => {
-                    std::thread::sleep(left.min(Duration::from_millis(100)));
-                }
-            }
+            serving.board.wait(left.min(Duration::from_millis(100)));
         }
     }
     if let Some(tx) = &updates {
@@ -833,13 +789,144 @@ pub fn run(
     }
 }
 
-fn sleep_unless(stop: &AtomicBool, total: Duration) {
-    let until = Instant::now() + total;
-    while !stop.load(Ordering::Relaxed) {
-        let left = until.saturating_duration_since(Instant::now());
-        if left.is_zero() {
-            return;
+/// The commands side of a link: the board it takes them from, a commander per drive, and where
+/// outcomes go.
+struct Serving {
+    board: Arc<Board>,
+    first: usize,
+    count: usize,
+    commanders: Vec<Commander>,
+    metrics: Arc<Metrics>,
+    updates: Updates,
+    log: Limiter,
+}
+
+impl Serving {
+    /// Carries out every command of the link's drives that is due (stops first), reports the
+    /// expired ones, gives back a stop that could not be delivered.
+    fn serve(&mut self, client: &mut LinkClient) {
+        while let Some(next) = self.board.next(self.first, self.count, Instant::now()) {
+            match next {
+                Next::Expired(i) => {
+                    let waited = i.received.elapsed();
+                    let why = CommandFailure::Expired {
+                        waited,
+                        deadline: self.board.deadline(),
+                    };
+                    self.report(i, Err(why), "expired");
+                }
+                Next::Due(i) => {
+                    let Some(c) = self
+                        .commanders
+                        .iter_mut()
+                        .find(|c| c.index == i.command.drive)
+                    else {
+                        self.report(i, Err(CommandFailure::NoSuchDrive), "refused");
+                        continue;
+                    };
+                    let result = c.execute(client, &i.command);
+                    match result {
+                        Err(e) if i.command.action == Action::Stop && e.retryable() => {
+                            let attempts = i.attempts + 1;
+                            let (topic, payload) =
+                                (quote(&i.command.topic), quote(&i.command.payload));
+                            let name = c.name.clone();
+                            if self.board.retry_stop(i.clone(), Instant::now()) {
+                                if attempts == 1 || attempts.is_power_of_two() {
+                                    eprintln!(
+                                        "bridge: stop on {topic} ({payload}) not delivered to {name} (attempt {attempts}): {e}; sent again every {} ms until delivered or a run replaces it",
+                                        crate::command::STOP_RETRY.as_millis()
+                                    );
+                                }
+                                if attempts == 1 {
+                                    self.outcome(&i, Err(e), "pending");
+                                }
+                            } else {
+                                self.report(i, Err(e), "superseded");
+                            }
+                        }
+                        Ok(what) => {
+                            let labels = vec![
+                                ("name".to_owned(), c.name.clone()),
+                                ("command".to_owned(), i.command.action.name().to_owned()),
+                            ];
+                            self.metrics
+                                .command_latency
+                                .get_or_create(&labels)
+                                .observe(i.received.elapsed().as_secs_f64());
+                            self.report(i, Ok(what), "done");
+                        }
+                        Err(e) => {
+                            let outcome = if e.retryable() { "failed" } else { "refused" };
+                            self.report(i, Err(e), outcome);
+                        }
+                    }
+                }
+            }
         }
-        std::thread::sleep(left.min(Duration::from_millis(50)));
+    }
+
+    /// Reports the commands that expired, without touching the line (it is not open).
+    fn expire_only(&mut self) {
+        for i in self.board.expired(self.first, self.count, Instant::now()) {
+            let why = CommandFailure::Expired {
+                waited: i.received.elapsed(),
+                deadline: self.board.deadline(),
+            };
+            self.report(i, Err(why), "expired");
+        }
+    }
+
+    /// Logs (at a bounded rate), counts and publishes what became of a command.
+    fn report(&mut self, i: Intent, result: Result<String, CommandFailure>, outcome: &'static str) {
+        let said = match &result {
+            Ok(what) => what.clone(),
+            Err(why) => format!("refused, nothing written: {why}"),
+        };
+        if outcome == "done" {
+            eprintln!(
+                "bridge: command on {} ({}): {said}",
+                quote(&i.command.topic),
+                quote(&i.command.payload)
+            );
+        } else {
+            let (ok, held) = self.log.allow(Instant::now());
+            if let Some(n) = held {
+                eprintln!("bridge: {n} more command refusal(s) not logged");
+            }
+            if ok {
+                eprintln!(
+                    "bridge: command on {} ({}) {outcome}: {said}",
+                    quote(&i.command.topic),
+                    quote(&i.command.payload)
+                );
+            }
+        }
+        self.outcome(&i, result, outcome);
+    }
+
+    fn outcome(
+        &mut self,
+        i: &Intent,
+        result: Result<String, CommandFailure>,
+        outcome: &'static str,
+    ) {
+        if let Some(c) = self.commanders.iter().find(|c| c.index == i.command.drive) {
+            self.metrics
+                .commands
+                .get_or_create(&vec![
+                    ("name".to_owned(), c.name.clone()),
+                    ("outcome".to_owned(), outcome.to_owned()),
+                ])
+                .inc();
+        }
+        if let Some(tx) = &self.updates {
+            let result = result.map_err(Arc::new);
+            let _ = tx.try_send(Update::Outcome {
+                command: i.command.clone(),
+                result,
+                outcome,
+            });
+        }
     }
 }

@@ -22,6 +22,7 @@ use prometheus_client::encoding::text::encode;
 use prometheus_client::metrics::counter::Counter;
 use prometheus_client::metrics::family::Family;
 use prometheus_client::metrics::gauge::Gauge;
+use prometheus_client::metrics::histogram::Histogram;
 use prometheus_client::registry::{Registry, Unit};
 use tokio::net::TcpListener;
 use tokio::sync::Semaphore;
@@ -34,6 +35,15 @@ pub type Labels = Vec<(String, String)>;
 pub type Gauges = Family<Labels, Gauge<f64, AtomicU64>>;
 /// A counter family.
 pub type Counters = Family<Labels, Counter>;
+/// A histogram family (command latencies).
+pub type Histograms = Family<Labels, Histogram, fn() -> Histogram>;
+
+/// The buckets of command latencies (seconds): 5 ms to 20 s.
+fn latency_histogram() -> Histogram {
+    Histogram::new([
+        0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0, 20.0,
+    ])
+}
 
 /// Scrapes served at once; more wait for a free place.
 pub const MAX_CONNECTIONS: usize = 16;
@@ -61,6 +71,10 @@ pub struct Metrics {
     pub mqtt_dropped: Counters,
     /// Commands by drive and outcome.
     pub commands: Counters,
+    /// Time from a command's arrival to its write's reply, by drive and command.
+    pub command_latency: Histograms,
+    /// The poll period asked for each link (compare with the bus-time model).
+    pub period_seconds: Gauges,
 }
 
 fn gauges(registry: &mut Registry, name: &str, help: &str, unit: Option<Unit>) -> Gauges {
@@ -160,7 +174,21 @@ impl Metrics {
         let commands = counters(
             &mut registry,
             "drivemap_bridge_commands",
-            "commands received over MQTT by outcome (done, refused, failed, limited)",
+            "commands received over MQTT by outcome (done; refused, expired or superseded: nothing written; failed: the write failed on the line)",
+        );
+        let command_latency =
+            Histograms::new_with_constructor(latency_histogram as fn() -> Histogram);
+        registry.register_with_unit(
+            "drivemap_bridge_command_latency",
+            "from a command's arrival over MQTT to the reply to its last write, by drive and command",
+            Unit::Seconds,
+            command_latency.clone(),
+        );
+        let period_seconds = gauges(
+            &mut registry,
+            "drivemap_bridge_period",
+            "the poll period asked for the link; above the bus-time model the cycles run back to back",
+            Some(Unit::Seconds),
         );
         Metrics {
             registry,
@@ -174,6 +202,8 @@ impl Metrics {
             up,
             mqtt_dropped,
             commands,
+            command_latency,
+            period_seconds,
         }
     }
 

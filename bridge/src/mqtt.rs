@@ -1,7 +1,16 @@
-//! The MQTT side: state topics per drive, Home Assistant MQTT discovery, and command topics
-//! whose messages go to the drive's link task only when `--allow-writes` names them and the
-//! drive's rate limit lets them through; the link carries them out through the write gate or
-//! the drive trait, and every refusal is published on the drive's error topic.
+//! The MQTT side (MQTT 5): state topics per drive, Home Assistant MQTT discovery, and command
+//! topics whose messages become intents on the [`Board`] only when `--allow-writes` names them
+//! and, but for a stop, the drive's rate limit lets them through; the link carries them out
+//! through the write gate or the drive trait, and every refusal is published on the drive's
+//! error topic.
+//!
+//! A command is carried out when it is sent, never again: command topics are subscribed with
+//! MQTT 5's "do not send retained messages", and a message that arrives with the retain flag
+//! all the same is refused. `run`, `stop` and `fault_reset` take the payload `PRESS` only (an
+//! `OFF`, a `0` or the empty payload that clears a retained message start nothing). The
+//! broker is told the largest packet the bridge takes ([`MAX_PACKET`]): MQTT 5 brokers drop a
+//! larger message for this client instead of sending it, so an oversized message cannot make
+//! the connection fail over and over.
 //!
 //! Topics (`<t>` is `--mqtt-topic`, default `drivemap`; `<name>` the drive's name):
 //! - `<t>/bridge/availability`: `online` / `offline` (the connection's last will);
@@ -10,15 +19,15 @@
 //!   meaning, `1`/`0` for a one-bit field;
 //! - `<t>/<name>/set/<register>`: write a register (payload: the value as `drivemap write`
 //!   takes it);
-//! - `<t>/<name>/command/<run|stop|reference|fault_reset>`: the drive trait's commands
-//!   (`reference` takes Hz);
-//! - `<t>/<name>/error`: a refused or failed command, JSON `{"topic", "payload", "error"}`.
+//! - `<t>/<name>/command/<run|stop|fault_reset>`: the drive trait's commands, payload `PRESS`;
+//!   `<t>/<name>/command/reference`: the frequency reference in Hz;
+//! - `<t>/<name>/error`: a refused, expired, superseded or failed command, JSON `{"topic",
+//!   "payload", "error", "outcome", "written": false}` (topic and payload shortened).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::SyncSender;
 use std::time::{Duration, Instant};
 
 use drivemap_live::lookup;
@@ -29,11 +38,15 @@ use drivemap_map::describe;
 use drivemap_map::ir::{Register, ValueKind};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::Role;
-use rumqttc::{AsyncClient, Event, EventLoop, LastWill, MqttOptions, Packet, QoS};
+use rumqttc::v5::mqttbytes::QoS;
+use rumqttc::v5::mqttbytes::v5::{Filter, LastWill, Packet, RetainForwardRule};
+use rumqttc::v5::{AsyncClient, ConnectionError, Event, EventLoop, MqttOptions};
 use serde_json::{Value as Json, json};
 use tokio::sync::mpsc::Receiver;
 
+use crate::command::Board;
 use crate::link::{Action, Command, Update};
+use crate::log::{Limiter, quote, shorten};
 use crate::metrics::Metrics;
 use crate::points::{self, Point, PointKind, device_class, sanitize};
 
@@ -55,9 +68,14 @@ pub struct Options {
     /// What commands may write: register ids, parameter numbers or printed names, role ids
     /// (`frequency_reference`, `run`, `fault_reset`), `stop`.
     pub allow: Vec<String>,
-    /// Commands per second per drive (a burst of as many is let through at once).
+    /// Runs, references, sets and fault resets per second per drive (a burst of as many is
+    /// let through at once); stops are never limited.
     pub rate: f64,
 }
+
+/// The largest MQTT packet the bridge takes (told to the broker when connecting): commands
+/// are short, and a larger message is dropped by an MQTT 5 broker for this client.
+pub const MAX_PACKET: u32 = 64 * 1024;
 
 /// A drive as the MQTT side knows it.
 pub struct DriveInfo {
@@ -87,6 +105,13 @@ pub fn parse_url(url: &str) -> Result<(bool, String, u16), crate::Error> {
         });
     };
     let rest = rest.trim_end_matches('/');
+    if let Some((_, host)) = rest.rsplit_once('@') {
+        // Never printed: the URL is named without what stood before the `@`.
+        let scheme = if tls { "mqtts" } else { "mqtt" };
+        return Err(crate::Error::MqttUserinfo {
+            url: format!("{scheme}://…@{host}"),
+        });
+    }
     let (host, port) = match rest.rsplit_once(':') {
         Some((h, p)) => (
             h,
@@ -103,6 +128,35 @@ pub fn parse_url(url: &str) -> Result<(bool, String, u16), crate::Error> {
         });
     }
     Ok((tls, host.trim_matches(['[', ']']).to_owned(), port))
+}
+
+/// Checks a topic root or discovery prefix given on the command line (`option` names it): one
+/// or more topic levels to publish under and subscribe below, so no wildcard (`+`, `#`), no
+/// empty level, no NUL, not a broker's `$` topic, at most 512 bytes.
+pub fn check_topic_root(option: &'static str, root: &str) -> Result<(), crate::Error> {
+    let why = if root.is_empty() {
+        Some("it is empty")
+    } else if root.len() > 512 {
+        Some("it is longer than 512 bytes")
+    } else if root.contains(['+', '#']) {
+        Some("MQTT wildcards (+, #) cannot be published to")
+    } else if root.starts_with('$') {
+        Some("topics starting with $ are the broker's")
+    } else if root.contains('\0') {
+        Some("it contains a NUL character")
+    } else if root.split('/').any(str::is_empty) {
+        Some("it has an empty level (a leading, trailing or double /)")
+    } else {
+        None
+    };
+    match why {
+        Some(why) => Err(crate::Error::TopicRoot {
+            option,
+            root: quote(root),
+            why,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Whether `allow` lets `action` be written on `info` (`register` resolved for a set).
@@ -161,13 +215,22 @@ pub fn parse_command(topic_root: &str, topic: &str) -> Option<(String, Action)> 
 }
 
 /// A token bucket: `rate` per second, as many at once.
-struct Bucket {
+pub struct Bucket {
     tokens: f64,
     at: Instant,
 }
 
 impl Bucket {
-    fn take(&mut self, rate: f64) -> bool {
+    /// A full bucket for `rate` per second.
+    pub fn new(rate: f64) -> Bucket {
+        Bucket {
+            tokens: rate.max(1.0),
+            at: Instant::now(),
+        }
+    }
+
+    /// Takes a token if there is one.
+    pub fn take(&mut self, rate: f64) -> bool {
         let now = Instant::now();
         let cap = rate.max(1.0);
         self.tokens = (self.tokens + now.duration_since(self.at).as_secs_f64() * rate).min(cap);
@@ -468,7 +531,7 @@ fn bounds(drive: &Drive, r: &Register) -> (f64, f64) {
 }
 
 /// Connects and serves until `stop`: publishes discovery and availability on each connection,
-/// state updates as they come, and passes allowed commands to the links.
+/// state updates as they come, and offers allowed commands to the [`Board`].
 // The task's inputs, each owned by it for its whole life (options, drives, channels,
 // shared flags and counters, TLS); `lib.rs` builds them once and hands them over.
 #[allow(clippy::too_many_arguments)]
@@ -476,7 +539,7 @@ pub async fn run(
     options: Options,
     drives: Vec<DriveInfo>,
     mut updates: Receiver<Update>,
-    links: Vec<SyncSender<Command>>,
+    board: Arc<Board>,
     metrics: Arc<Metrics>,
     stop: Arc<AtomicBool>,
     republish: Vec<Arc<AtomicBool>>,
@@ -487,13 +550,14 @@ pub async fn run(
     };
     let mut mo = MqttOptions::new(options.client_id.clone(), host, port);
     mo.set_keep_alive(Duration::from_secs(15));
-    mo.set_max_packet_size(1 << 20, 1 << 20);
+    mo.set_max_packet_size(Some(MAX_PACKET));
     let bridge_availability = format!("{}/bridge/availability", options.topic);
     mo.set_last_will(LastWill::new(
         &bridge_availability,
         "offline",
         QoS::AtLeastOnce,
         true,
+        None,
     ));
     if let Some((user, password)) = &options.credentials {
         mo.set_credentials(user.clone(), password.clone());
@@ -507,13 +571,8 @@ pub async fn run(
         .enumerate()
         .map(|(i, d)| (d.name.clone(), i))
         .collect();
-    let mut buckets: Vec<Bucket> = drives
-        .iter()
-        .map(|_| Bucket {
-            tokens: options.rate.max(1.0),
-            at: Instant::now(),
-        })
-        .collect();
+    let mut buckets: Vec<Bucket> = drives.iter().map(|_| Bucket::new(options.rate)).collect();
+    let mut log = Limiter::default();
     let mut refused_logged = false;
     let mut connected = false;
     let mut wait = Duration::from_millis(500);
@@ -536,10 +595,15 @@ pub async fn run(
                     let root = options.topic.clone();
                     let online = bridge_availability.clone();
                     tokio::spawn(async move {
-                        for filter in [format!("{root}/+/set/+"), format!("{root}/+/command/+")] {
-                            if client.subscribe(filter, QoS::AtLeastOnce).await.is_err() {
-                                return;
-                            }
+                        // Retained messages are never sent for the command topics.
+                        let filters = [format!("{root}/+/set/+"), format!("{root}/+/command/+")]
+                            .map(|f| {
+                                let mut f = Filter::new(f, QoS::AtLeastOnce);
+                                f.retain_forward_rule = RetainForwardRule::Never;
+                                f
+                            });
+                        if client.subscribe_many(filters).await.is_err() {
+                            return;
                         }
                         if client.publish(online, QoS::AtLeastOnce, true, "online").await.is_err() {
                             return;
@@ -555,35 +619,30 @@ pub async fn run(
                     }
                 }
                 Ok(Event::Incoming(Packet::Publish(p))) => {
+                    let topic = String::from_utf8_lossy(&p.topic).into_owned();
                     let payload = String::from_utf8_lossy(&p.payload).into_owned();
-                    let Some((name, action)) = parse_command(&options.topic, &p.topic) else { continue };
+                    let Some((name, action)) = parse_command(&options.topic, &topic) else { continue };
                     let Some(&index) = by_name.get(&name) else { continue };
                     let info = &drives[index];
-                    let command = Command { drive: index, action: action.clone(), topic: p.topic.clone(), payload: payload.clone() };
-                    let refusal = if let Err(why) = allowed(info, &options.allow, &action) {
-                        Some(why.to_string())
-                    } else if !buckets[index].take(options.rate) {
-                        Some(format!("over the rate limit of {} command(s) per second for {}", options.rate, info.name))
-                    } else {
-                        match links[info.link].try_send(command.clone()) {
-                            Ok(()) => None,
-                            Err(_) => Some("the drive's link is busy with earlier commands".into()),
+                    let command = Command { drive: index, action: action.clone(), topic, payload };
+                    match accept(info, &options, &mut buckets[index], &board, &command, p.retain) {
+                        Err(why) => {
+                            refuse(&client, &options.topic, info, &command, &why.to_string(), "refused", &metrics, &mut log);
                         }
-                    };
-                    if let Some(why) = refusal {
-                        eprintln!("bridge: command on {} ({payload}) refused, nothing written: {why}", p.topic);
-                        metrics.commands.get_or_create(&vec![
-                            ("name".to_owned(), info.name.clone()),
-                            ("outcome".to_owned(), "refused".to_owned()),
-                        ]).inc();
-                        publish_error(&client, &options.topic, info, &command, &why);
+                        Ok(key) => {
+                            let gone = board.offer(command.clone(), &key, Instant::now());
+                            for g in gone.0 {
+                                let why = crate::Refused::Superseded { by: command.action.name() };
+                                refuse(&client, &options.topic, info, &g.command, &why.to_string(), "superseded", &metrics, &mut log);
+                            }
+                        }
                     }
                 }
                 Ok(_) => {}
                 Err(e) => {
                     connected = false;
                     let text = match &e {
-                        rumqttc::ConnectionError::ConnectionRefused(code) => format!("the broker refused the connection: {code:?} (check the user name and password)"),
+                        ConnectionError::ConnectionRefused(code) => format!("the broker refused the connection: {code:?} (check the user name and password)"),
                         other => other.to_string(),
                     };
                     if !refused_logged {
@@ -618,9 +677,9 @@ pub async fn run(
                     let topic = format!("{}/{}/availability", options.topic, info.name);
                     let _ = client.try_publish(topic, QoS::AtLeastOnce, true, if online { "online" } else { "offline" });
                 }
-                Some(Update::Outcome { command, result }) => {
+                Some(Update::Outcome { command, result, outcome }) => {
                     if let Err(why) = result {
-                        publish_error(&client, &options.topic, &drives[command.drive], &command, &why.to_string());
+                        publish_error(&client, &options.topic, &drives[command.drive], &command, &why.to_string(), outcome);
                     }
                 }
             },
@@ -652,11 +711,99 @@ pub async fn run(
     .await;
 }
 
-fn publish_error(client: &AsyncClient, root: &str, info: &DriveInfo, command: &Command, why: &str) {
+/// Whether a command message is taken as an intent: not retained, allowed, a press for a
+/// button, within the rate (but a stop), its drive answering (but for a stop). Returns the
+/// key it is kept under (the register's id for a set).
+pub fn accept(
+    info: &DriveInfo,
+    options: &Options,
+    bucket: &mut Bucket,
+    board: &Board,
+    command: &Command,
+    retained: bool,
+) -> Result<String, crate::Refused> {
+    if retained {
+        return Err(crate::Refused::Retained);
+    }
+    allowed(info, &options.allow, &command.action)?;
+    let press = match &command.action {
+        Action::Run | Action::Stop | Action::FaultReset => Some(command.action.name()),
+        _ => None,
+    };
+    if let Some(name) = press
+        && command.payload.trim() != "PRESS"
+    {
+        return Err(crate::Refused::NotPress {
+            command: name,
+            payload: quote(&command.payload),
+        });
+    }
+    if command.action == Action::Stop {
+        return Ok(String::new());
+    }
+    if !bucket.take(options.rate) {
+        return Err(crate::Refused::RateLimit {
+            rate: options.rate.to_string(),
+            drive: info.name.clone(),
+        });
+    }
+    if !board.answering(command.drive) {
+        return Err(crate::Refused::NotAnswering {
+            drive: info.name.clone(),
+        });
+    }
+    Ok(match &command.action {
+        Action::Set { register } => lookup::find(info.drive, register)?.def.id.clone(),
+        _ => String::new(),
+    })
+}
+
+// The refusal's parts, each needed: where to publish, what, and the two counters.
+#[allow(clippy::too_many_arguments)]
+fn refuse(
+    client: &AsyncClient,
+    root: &str,
+    info: &DriveInfo,
+    command: &Command,
+    why: &str,
+    outcome: &'static str,
+    metrics: &Metrics,
+    log: &mut Limiter,
+) {
+    let (ok, held) = log.allow(Instant::now());
+    if let Some(n) = held {
+        eprintln!("bridge: {n} more command refusal(s) not logged");
+    }
+    if ok {
+        eprintln!(
+            "bridge: command on {} ({}) {outcome}, nothing written: {why}",
+            quote(&command.topic),
+            quote(&command.payload)
+        );
+        publish_error(client, root, info, command, why, outcome);
+    }
+    metrics
+        .commands
+        .get_or_create(&vec![
+            ("name".to_owned(), info.name.clone()),
+            ("outcome".to_owned(), outcome.to_owned()),
+        ])
+        .inc();
+}
+
+fn publish_error(
+    client: &AsyncClient,
+    root: &str,
+    info: &DriveInfo,
+    command: &Command,
+    why: &str,
+    outcome: &str,
+) {
     let payload = json!({
-        "topic": command.topic,
-        "payload": command.payload,
+        "topic": shorten(&command.topic, 256),
+        "payload": shorten(&command.payload, 64),
         "error": why,
+        "outcome": outcome,
         "written": false,
     });
     let _ = client.try_publish(

@@ -8,7 +8,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use drivemap_bridge::link::{self, Connect, DriveSpec, LinkSpec, Update};
+use drivemap_bridge::command::{Board, DEFAULT_DEADLINE};
+use drivemap_bridge::link::{self, Action, Command, Connect, DriveSpec, LinkSpec, Update};
 use drivemap_bridge::metrics::Metrics;
 use drivemap_bridge::points;
 use drivemap_map::Drive;
@@ -77,7 +78,7 @@ fn a_stuck_broker_side_never_holds_polling_back() {
     let addr = server.local_addr().to_string();
     let metrics = metrics_for(drive);
     let (tx, rx) = tokio::sync::mpsc::channel::<Update>(1);
-    let (_commands_tx, commands) = std::sync::mpsc::sync_channel(4);
+    let commands = Arc::new(Board::new(1, DEFAULT_DEADLINE));
     let stop = Arc::new(AtomicBool::new(false));
     let l = LinkSpec {
         name: "sim".into(),
@@ -138,7 +139,7 @@ fn an_unreachable_link_is_retried_and_still_stops() {
         .unwrap()
         .port();
     let metrics = metrics_for(drive);
-    let (_commands_tx, commands) = std::sync::mpsc::sync_channel(4);
+    let commands = Arc::new(Board::new(1, DEFAULT_DEADLINE));
     let stop = Arc::new(AtomicBool::new(false));
     let l = LinkSpec {
         name: "nobody".into(),
@@ -176,4 +177,230 @@ fn an_unreachable_link_is_retried_and_still_stops() {
         "{:?}",
         asked.elapsed()
     );
+}
+
+/// A link of a simulated V7 (slave 1) and `silent` drives that never answer (slaves 2, ...), its commands
+/// taken from `board`: the link thread, the shared simulator, the server.
+struct Line {
+    sim: drivemap_sim::SharedSim,
+    server: Option<TcpServer>,
+    board: Arc<Board>,
+    stop: Arc<AtomicBool>,
+    task: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Line {
+    fn start(silent: u8, deadline: Duration) -> Line {
+        let drive = v7();
+        let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
+        let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+        let server = TcpServer::spawn(
+            Arc::clone(&sim),
+            "127.0.0.1:0",
+            TcpFraming::RtuOverTcp,
+            None,
+        )
+        .unwrap();
+        let mut drives = vec![spec(drive)];
+        for n in 0..silent {
+            let mut s = spec(drive);
+            s.slave = 2 + n;
+            s.name = format!("silent-{n}");
+            drives.push(s);
+        }
+        for d in &mut drives {
+            d.options.timeout = Duration::from_millis(300);
+            d.options.retries = 1;
+        }
+        let board = Arc::new(Board::new(drives.len(), deadline));
+        let l = LinkSpec {
+            name: "line".into(),
+            kind: TransportKind::RtuOverTcp,
+            line: SerialConfig::default(),
+            connect: connect_to(server.local_addr().to_string()),
+            drives,
+        };
+        let stop = Arc::new(AtomicBool::new(false));
+        let (m, s, b) = (metrics_for(drive), Arc::clone(&stop), Arc::clone(&board));
+        let task = std::thread::spawn(move || {
+            link::run(
+                l,
+                0,
+                Duration::from_millis(50),
+                m,
+                None,
+                b,
+                s,
+                Arc::new(AtomicBool::new(false)),
+            )
+        });
+        let line = Line {
+            sim,
+            server: Some(server),
+            board,
+            stop,
+            task: Some(task),
+        };
+        line.until(Duration::from_secs(20), "the V7 answering", |l| {
+            l.board.answering(0)
+        });
+        line
+    }
+
+    fn state(&self) -> drivemap_sim::DriveState {
+        drivemap_sim::server::lock(&self.sim).state().unwrap()
+    }
+
+    fn offer(&self, action: Action) {
+        let command = Command {
+            drive: 0,
+            action,
+            topic: "test".into(),
+            payload: "PRESS".into(),
+        };
+        self.board.offer(command, "", Instant::now());
+    }
+
+    /// Waits until `what` holds; returns how long it took.
+    fn until(&self, limit: Duration, what: &str, check: impl Fn(&Line) -> bool) -> Duration {
+        let began = Instant::now();
+        while !check(self) {
+            assert!(began.elapsed() < limit, "{what}: not within {limit:?}");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        began.elapsed()
+    }
+}
+
+impl Drop for Line {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.task.take() {
+            let _ = t.join();
+        }
+        if let Some(s) = self.server.take() {
+            s.stop();
+        }
+    }
+}
+
+/// With three drives on the line that never answer (every request to one times out, with a
+/// retry: 600 ms), a stop for the running V7 reaches it before the link's next request: within
+/// two request times, never behind a cycle of timeouts (the bridge used to carry commands out
+/// between cycles only, and a cycle of the silent drives' timeouts took seconds; without the
+/// commands between requests a cycle here is still three timeouts, 1.8 s). The figures are
+/// printed for the notes.
+#[test]
+fn a_stop_goes_out_before_the_next_request_with_a_silent_drive_on_the_line() {
+    let line = Line::start(3, DEFAULT_DEADLINE);
+    let mut took = Vec::new();
+    for k in 0..8 {
+        line.offer(Action::Run);
+        line.until(Duration::from_secs(10), "the run", |l| {
+            l.state().run_command
+        });
+        // At points spread over the cycle, where the silent drives' timeouts are.
+        std::thread::sleep(Duration::from_millis(150 + 230 * k));
+        line.offer(Action::Stop);
+        took.push(line.until(Duration::from_secs(10), "the stop", |l| {
+            !l.state().run_command
+        }));
+    }
+    took.sort();
+    eprintln!(
+        "stop latency with a silent slave (request time 600 ms): median {:?}, max {:?}",
+        took[took.len() / 2],
+        took[took.len() - 1]
+    );
+    // Two request times of the silent drive (the one in flight, and one of the V7's own).
+    for t in &took {
+        assert!(*t < Duration::from_millis(1300), "{took:?}");
+    }
+}
+
+/// `run` on a drive turning in reverse keeps it in reverse (the bridge used to build a fresh
+/// drive object per command, which wrote the run word with the forward direction); a stop
+/// keeps the direction too.
+#[test]
+fn run_keeps_the_direction_the_drive_turns_in() {
+    let line = Line::start(0, DEFAULT_DEADLINE);
+    {
+        let mut sim = drivemap_sim::server::lock(&line.sim);
+        // Run and reverse, as another master (or `drivemap write`) left them.
+        sim.set_raw("digital_input_command", 0b11).unwrap();
+    }
+    line.until(Duration::from_secs(5), "the drive in reverse", |l| {
+        let s = l.state();
+        s.run_command && s.reverse_command
+    });
+    line.offer(Action::Stop);
+    line.until(Duration::from_secs(5), "the stop", |l| {
+        !l.state().run_command
+    });
+    assert!(
+        line.state().reverse_command,
+        "the stop changed the direction"
+    );
+    line.offer(Action::Run);
+    line.until(Duration::from_secs(5), "the run", |l| l.state().run_command);
+    assert!(line.state().reverse_command, "run reversed the drive");
+}
+
+/// While the link cannot be opened, a run waits at most its deadline and is then dropped:
+/// when the drive comes back it does not start; a stop offered meanwhile is delivered.
+#[test]
+fn a_run_sent_while_the_link_is_down_expires_and_never_starts_the_drive() {
+    let drive = v7();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let board = Arc::new(Board::new(1, Duration::from_millis(300)));
+    let l = LinkSpec {
+        name: "later".into(),
+        kind: TransportKind::RtuOverTcp,
+        line: SerialConfig::default(),
+        connect: connect_to(format!("127.0.0.1:{port}")),
+        drives: vec![spec(drive)],
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let (m, s, b) = (metrics_for(drive), Arc::clone(&stop), Arc::clone(&board));
+    let task = std::thread::spawn(move || {
+        link::run(
+            l,
+            0,
+            Duration::from_millis(50),
+            m,
+            None,
+            b,
+            s,
+            Arc::new(AtomicBool::new(false)),
+        )
+    });
+    let command = |action| Command {
+        drive: 0,
+        action,
+        topic: "test".into(),
+        payload: "PRESS".into(),
+    };
+    board.offer(command(Action::Run), "", Instant::now());
+    std::thread::sleep(Duration::from_millis(800));
+    // The gateway comes up with the drive.
+    let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
+    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+    let server = TcpServer::spawn(
+        Arc::clone(&sim),
+        format!("127.0.0.1:{port}"),
+        TcpFraming::RtuOverTcp,
+        None,
+    )
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(2500));
+    let state = drivemap_sim::server::lock(&sim).state().unwrap();
+    assert!(!state.run_command, "a run that expired started the drive");
+    assert!(board.idle(0, 1));
+    stop.store(true, Ordering::Relaxed);
+    task.join().unwrap();
+    server.stop();
 }

@@ -405,6 +405,16 @@ struct State<S> {
     rounding: Rounding,
 }
 
+/// What a [`Vfd`] or an [`AsyncVfd`] knows of its drive besides its client and settings, to
+/// carry from one drive object to the next ([`Vfd::memory`], [`Vfd::with_memory`]).
+#[derive(Debug, Clone)]
+pub struct Memory {
+    direction: Direction,
+    running: Option<Direction>,
+    commands: Vec<CommandWord>,
+    sources: [bool; 2],
+}
+
 /// A command register and what this master last told it.
 #[derive(Debug, Clone, Copy)]
 struct CommandWord {
@@ -528,6 +538,82 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
     /// The settings in force.
     pub fn settings(&self) -> &S {
         &self.state.settings
+    }
+
+    /// What this drive object knows of its drive besides the client and the settings: the
+    /// direction set, whether its last `run()` succeeded and was not followed by a `stop()`,
+    /// what each command register was last told, the sources found to be the network. For a
+    /// program that keeps one drive for its life but builds the drive object around a client it
+    /// shares (a bridge polling a line between commands): take the memory before giving the
+    /// client back, and give it to the next drive object with [`with_memory`](Self::with_memory),
+    /// so that a later command composes from what was told, never from a fresh start.
+    pub fn memory(&self) -> Memory {
+        Memory {
+            direction: self.state.direction,
+            running: self.state.running,
+            commands: self.state.commands.clone(),
+            sources: self.state.sources,
+        }
+    }
+
+    /// This drive object with what an earlier one of the same map knew ([`memory`](Self::memory)).
+    /// A memory of other command registers (another map's) is not taken.
+    pub fn with_memory(mut self, memory: Memory) -> Self {
+        let same = memory.commands.len() == self.state.commands.len()
+            && memory
+                .commands
+                .iter()
+                .zip(&self.state.commands)
+                .all(|(a, b)| a.row == b.row && a.released == b.released);
+        if same {
+            self.state.direction = memory.direction;
+            self.state.running = memory.running;
+            self.state.commands = memory.commands;
+            self.state.sources = memory.sources;
+        }
+        self
+    }
+
+    /// Forgets what the command registers were told: the next command to each reads it back
+    /// where the map lets it be read on the link (keeping the bits other masters or field
+    /// writes set) and composes from the released word where it cannot, as after a failed
+    /// write. For a master that starts while the drive may already hold a command word.
+    pub fn forget_commands(&mut self) {
+        for c in &mut self.state.commands {
+            c.told = None;
+        }
+    }
+
+    /// Takes the direction the drive reports as the direction set, for a master that has not
+    /// set one, so that a later `run()` keeps the direction the drive turns in instead of
+    /// reversing it: the direction field of its command register read back where the map lets
+    /// it be read on this link (what the drive was last told, by any master), else the status
+    /// role `reversing`. Returns the direction taken, or `None` where the drive reports none
+    /// (the direction set stays).
+    pub $($asy)* fn adopt_direction(&mut self) -> Result<Option<Direction>, Error> {
+        let told = match self.field(Role::Reverse)? {
+            Some(r) => self.read_back(r.row) $($aw)*.map(|w| r.holds(w)),
+            None => None,
+        };
+        let reverse = match (told, self.place(Role::Reversing, "field")) {
+            (Some(t), _) => Some(t),
+            (
+                None,
+                Ok(Place {
+                    target: Target::Field(f),
+                    ..
+                }),
+            ) => {
+                let f = *f;
+                Some(f.holds(self.read_word(f.row) $($aw)*?))
+            }
+            (None, _) => None,
+        };
+        let taken = reverse.map(|r| if r { Direction::Reverse } else { Direction::Forward });
+        if let Some(d) = taken {
+            self.state.direction = d;
+        }
+        Ok(taken)
     }
 
     /// The client.
@@ -799,6 +885,117 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
             _ => u16::MAX,
         };
         self.read_word(row) $($aw)*.ok().map(|w| w & mask)
+    }
+
+    /// Whether plan row `row` holds a command role (a field the trait's commands write): a
+    /// write of its fields goes through [`Self::write_command_fields`].
+    pub fn holds_command(&self, row: u16) -> bool {
+        self.state.commands.iter().any(|c| c.row == row)
+    }
+
+    /// The word a write of the bits `mask` (set to `value`'s bits there) of command register
+    /// `row` sends, composed from the roles as the trait's commands compose theirs, never from
+    /// a word read back alone: every command field the write does not name is released —
+    /// edge commands (the fault reset, any field the map marks `edge: true` or edge not printed)
+    /// always, run fields (run, run forward, run reverse) unless the drive runs (this `Vfd`'s
+    /// last `run()` succeeded, or the `running` status role reads true), where they are kept as
+    /// read; other command fields (direction, mode) and bits that are no command are kept as
+    /// read where the register can be read on this link, else released (0 for other bits).
+    /// So a word read back never starts a drive or repeats a reset. Reads the register and
+    /// the status role as needed; writes nothing.
+    ///
+    /// Refused ([`Refusal::FieldNotWritable`], nothing sent) when `row` holds no command role,
+    /// and when the drive runs but the register cannot be read here, so the run bits to keep
+    /// are unknown (use `run()` / `stop()`).
+    pub $($asy)* fn command_fields_word(&mut self, row: u16, mask: u16, value: u16) -> Result<u16, Error> {
+        let r = self.row(row);
+        let Some(c) = self.state.commands.iter().find(|c| c.row == row).copied() else {
+            return Err(Refusal::FieldNotWritable {
+                drive: self.drive(),
+                role: "command",
+                register: r.info.id,
+                why: "it holds no command role: write it as a whole register",
+            }
+            .into());
+        };
+        let fields_mask = match r.conversion {
+            Conversion::Bits { mask, .. } => mask,
+            _ => u16::MAX,
+        };
+        let readable = r.info.access.readable()
+            && r.read_values.is_empty()
+            && r.transports.contains(self.state.kind)
+            && r.broadcast != Broadcast::Only
+            && self.state.slave != 0;
+        let runs = |role: Role| matches!(role, Role::Run | Role::RunForward | Role::RunReverse);
+        let places: Vec<(Role, FieldRole)> = self
+            .state
+            .roles
+            .places
+            .iter()
+            .filter_map(|p| match (p.role.kind(), p.target) {
+                (RoleKind::Command, Target::Field(f)) if f.row == row && f.mask() & mask == 0 => {
+                    Some((p.role, f))
+                }
+                _ => None,
+            })
+            .collect();
+        let has_run = places.iter().any(|(role, _)| runs(*role));
+        let read = if readable {
+            Some(self.read_word(row) $($aw)*? & fields_mask)
+        } else {
+            None
+        };
+        let running = has_run
+            && (self.state.running.is_some()
+                || (self.state.slave != 0
+                    && self.supports(Role::Running)
+                    && self.status() $($aw)*?.running == Some(true)));
+        if running && read.is_none() && self.state.running.is_none() {
+            return Err(Refusal::FieldNotWritable {
+                drive: self.drive(),
+                role: "run",
+                register: r.info.id,
+                why: "the drive runs and the register cannot be read on this link, so the run bits to keep are unknown: use the drive trait's run() or stop()",
+            }
+            .into());
+        }
+        let mut word = read.unwrap_or(c.released & fields_mask);
+        for (role, f) in &places {
+            let keep = match role {
+                Role::FaultReset => false,
+                _ if f.edge.needs_release_first() => false,
+                role if runs(*role) => running,
+                _ => read.is_some(),
+            };
+            if !keep {
+                word = f.put(word, f.code(false));
+            }
+        }
+        if running && read.is_none() {
+            // Known from this master's own run(): its run fields, as base() composes them.
+            if let Some(d) = self.state.running {
+                if let Ok(fields) = self.run_fields(true, d) {
+                    for (f, on) in fields.iter().filter(|(f, on)| f.row == row && *on) {
+                        word = f.put(word, f.code(*on));
+                    }
+                }
+            }
+        }
+        Ok(((word & !mask) | (value & mask)) & fields_mask)
+    }
+
+    /// Writes the bits `mask` of command register `row` to `value`'s, the rest of the word
+    /// composed by [`Self::command_fields_word`] (no run or reset bit the call does not ask for,
+    /// unless the drive runs), through the client's write gate. Returns the word written; this
+    /// master's record of the register follows it (unknown after a write that failed).
+    pub $($asy)* fn write_command_fields(&mut self, row: u16, mask: u16, value: u16) -> Result<u16, Error> {
+        let word = self.command_fields_word(row, mask, value) $($aw)*?;
+        let result = self.write_word(row, u32::from(word)) $($aw)*;
+        if let Some(c) = self.state.commands.iter_mut().find(|c| c.row == row) {
+            c.told = result.is_ok().then_some(word);
+        }
+        result.map(|()| word)
     }
 
     fn field(&self, role: Role) -> Result<Option<FieldRole>, Error> {

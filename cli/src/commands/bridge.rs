@@ -90,9 +90,15 @@ pub struct Args {
     /// `stop`, `fault_reset`. Without it every command is refused.
     #[arg(long = "allow-writes", value_name = "LIST", value_delimiter = ',')]
     pub allow_writes: Vec<String>,
-    /// Commands per second per drive over MQTT (as many at once); more are refused.
+    /// Runs, references, sets and fault resets per second per drive over MQTT (as many at
+    /// once); more are refused. A stop is never limited.
     #[arg(long = "command-rate", default_value_t = 2.0)]
     pub command_rate: f64,
+    /// How long a run, reference, set or fault reset may wait for its link (busy, down, its
+    /// drive silent) before it is refused as expired; never carried out later. A stop waits
+    /// until it is delivered or a later run replaces it.
+    #[arg(long = "command-deadline", default_value = "3s", value_parser = crate::duration::positive)]
+    pub command_deadline: Duration,
     /// More links and drives, in YAML (see the README, "Into Prometheus / Home Assistant").
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
@@ -117,6 +123,25 @@ struct ConfigLink {
     timeout_ms: Option<u64>,
     /// `ID@SLAVE`.
     drives: Vec<String>,
+}
+
+/// Reads `--config` with the map loader's limits (size, nesting depth, aliases: untrusted
+/// text is never read whole or expanded without bound), every error naming the file and line.
+fn read_config(path: &std::path::Path) -> Result<Config, Error> {
+    use drivemap_map::source;
+    let shown = path.display();
+    let mut text = String::new();
+    let file = std::fs::File::open(path).map_err(|e| format!("--config {shown}: {e}"))?;
+    // At most one byte past the limit, so a huge file (or a device) is never read whole.
+    std::io::Read::take(file, source::MAX_MAP_BYTES as u64 + 1)
+        .read_to_string(&mut text)
+        .map_err(|e| format!("--config {shown}: {e}"))?;
+    let name: std::sync::Arc<str> = format!("{shown}").into();
+    if text.len() > source::MAX_MAP_BYTES {
+        return Err(format!("{}", source::too_large(&name, text.len())).into());
+    }
+    let tree = source::parse(&name, &text).map_err(|d| format!("--config {d}"))?;
+    serde_yaml::from_value(tree.to_value()).map_err(|e| format!("--config {shown}: {e}").into())
 }
 
 /// Splits `ID@SLAVE`.
@@ -300,10 +325,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         return Err("a link without drives: give --drive ID@SLAVE".into());
     }
     if let Some(path) = &args.config {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("--config {}: {e}", path.display()))?;
-        let config: Config =
-            serde_yaml::from_str(&text).map_err(|e| format!("--config {}: {e}", path.display()))?;
+        let config = read_config(path)?;
         for (i, l) in config.links.into_iter().enumerate() {
             let la = link_args(
                 l.tcp,
@@ -332,9 +354,26 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     if links.is_empty() {
         return Err("no drives: give --drive ID@SLAVE with a link, or --config FILE".into());
     }
+    if links.len() > drivemap_bridge::MAX_LINKS {
+        return Err(drivemap_bridge::Error::TooManyLinks {
+            links: links.len(),
+            max: drivemap_bridge::MAX_LINKS,
+        }
+        .into());
+    }
     let mqtt = match &args.mqtt {
         Some(url) => {
             mqtt::parse_url(url)?;
+            let topic = args.mqtt_topic.trim_end_matches('/').to_owned();
+            let prefix = args.discovery_prefix.trim_end_matches('/').to_owned();
+            mqtt::check_topic_root("--mqtt-topic", &topic)?;
+            mqtt::check_topic_root("--discovery-prefix", &prefix)?;
+            if !(args.command_rate.is_finite() && args.command_rate > 0.0) {
+                return Err(drivemap_bridge::Error::CommandRate {
+                    rate: args.command_rate,
+                }
+                .into());
+            }
             Some(mqtt::Options {
                 url: url.clone(),
                 ca: args.mqtt_ca.clone(),
@@ -343,14 +382,14 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                     .mqtt_client_id
                     .clone()
                     .unwrap_or_else(|| format!("drivemap-bridge-{}", std::process::id())),
-                topic: args.mqtt_topic.trim_end_matches('/').to_owned(),
-                discovery_prefix: args.discovery_prefix.trim_end_matches('/').to_owned(),
+                topic,
+                discovery_prefix: prefix,
                 allow: args
                     .allow_writes
                     .iter()
                     .map(|s| s.trim().to_owned())
                     .collect(),
-                rate: args.command_rate.max(0.01),
+                rate: args.command_rate,
             })
         }
         None if !args.allow_writes.is_empty() => {
@@ -365,6 +404,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         period: args.period,
         metrics: (!args.no_metrics).then_some(args.metrics),
         mqtt,
+        deadline: args.command_deadline,
     };
     drivemap_bridge::run(links, options, Arc::new(AtomicBool::new(false)))?;
     Ok(ExitCode::SUCCESS)

@@ -44,6 +44,9 @@ pub struct CycleStats {
     /// Modelled bus time of the requests sent, in nanoseconds (exception replies counted as
     /// normal replies).
     pub bus_ns: u64,
+    /// Requests not sent because the slave had not answered an earlier one of the same poll
+    /// ([`Poller::poll_between`]).
+    pub skipped: u32,
 }
 
 /// A wanted register's value could not be had.
@@ -92,6 +95,7 @@ pub fn poll_line<T: Transport>(client: &mut Client<T>, drives: &mut [(u8, Poller
         total.requests += s.requests;
         total.splits += s.splits;
         total.bus_ns += s.bus_ns;
+        total.skipped += s.skipped;
     }
     total
 }
@@ -387,12 +391,38 @@ impl Poller {
     /// with a word or an error ([`Poller::value`]); a merged request refused with 02h or 21h is
     /// split (see the module documentation). Allocates nothing unless a request fails.
     pub fn poll<T: Transport>(&mut self, client: &mut Client<T>, slave: u8) -> CycleStats {
+        self.poll_between(client, slave, &mut |_| {})
+    }
+
+    /// [`Poller::poll`] for a link shared with other work: `between` is called with the client
+    /// before every planned request (a bridge sends its pending commands there, so polling
+    /// never holds a command back for more than one request), and a slave that does not answer
+    /// one request ([`Error::Timeout`] after the client's retries) is not asked again in this
+    /// poll: the rest of its registers fail with that timeout ([`CycleStats::skipped`] counts
+    /// the requests not sent), so one silent drive costs a line one timeout per poll, not one
+    /// per request.
+    pub fn poll_between<T: Transport>(
+        &mut self,
+        client: &mut Client<T>,
+        slave: u8,
+        between: &mut dyn FnMut(&mut Client<T>),
+    ) -> CycleStats {
         self.replan_now();
         self.kind = client.transport().kind();
         self.errors.clear();
         let mut stats = CycleStats::default();
+        let mut silent: Option<usize> = None;
         for k in 0..self.plan.len() {
             let p = self.plan[k];
+            if let Some(at) = silent {
+                stats.skipped += 1;
+                let (from, to) = p.members;
+                for &(i, _) in &self.members[from..to] {
+                    self.slots[i] = Slot::Failed(at);
+                }
+                continue;
+            }
+            between(client);
             let q = usize::from(p.read.quantity);
             let words = &mut self.words[p.first_word..p.first_word + q];
             stats.requests += 1;
@@ -414,6 +444,9 @@ impl Poller {
                         self.refuse_alone(p.table, p.read.address);
                     }
                     let at = self.errors.len();
+                    if matches!(e, Error::Timeout { .. }) {
+                        silent = Some(at);
+                    }
                     self.errors.push(e);
                     for &(i, _) in &self.members[from..to] {
                         self.slots[i] = Slot::Failed(at);

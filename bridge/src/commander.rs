@@ -1,0 +1,292 @@
+//! What carries out a drive's commands on its link: one per drive for the bridge's life, so that
+//! every command composes from what the bridge told the drive before (the drive trait's memory:
+//! the run and direction it gave, each command register's word), never from a fresh start.
+//!
+//! - `run` keeps the direction the drive turns in (the bridge has no direction command): the
+//!   direction is taken from the drive's status (`reversing`) or its command word before the run.
+//! - `stop` is the drive trait's stop.
+//! - `fault_reset` acts only on a drive that reports a fault (the map's `fault` status role), or,
+//!   where the map has none, on a drive that does not report running: on a drive running without
+//!   a fault it is refused, since the manuals' reset acts on a trip and the word that carries it
+//!   would otherwise release the run command.
+//! - `set/<register>` writes through the write gate, as `drivemap write` does; a write to a
+//!   command register makes the next run or stop read that register back first, so the bits a set
+//!   wrote are kept.
+
+use std::collections::BTreeSet;
+
+use drivemap_live::LiveSettings;
+use drivemap_live::codec;
+use drivemap_live::intern::intern;
+use drivemap_live::lookup;
+use drivemap_map::Drive;
+use drivemap_map::describe;
+use drivemap_map::ir::Register;
+use drivemap_map::lower::Quantity;
+use drivemap_runtime::gate;
+use drivemap_runtime::plan::{Conversion, Dependency};
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::roles::RoleKind;
+use drivemap_runtime::vfd::{Memory, VariableFrequencyDrive, Vfd};
+use drivemap_runtime::{ClientOptions, Rounding, Table};
+
+use crate::link::{Action, Command, LinkClient};
+use crate::{CommandFailure, PollFailure};
+
+/// Carries out one drive's commands (see the [module](self)).
+pub struct Commander {
+    /// The drive's index in the bridge.
+    pub index: usize,
+    /// Its name (topics, logs).
+    pub name: String,
+    pub(crate) drive: &'static Drive,
+    pub(crate) slave: u8,
+    pub(crate) options: ClientOptions,
+    pub(crate) kind: TransportKind,
+    /// Register ids whose value was given, not read.
+    pub(crate) fixed: BTreeSet<String>,
+    /// Register ids the polled reads depend on (a write to one plans the reads again).
+    pub(crate) deps: Vec<String>,
+    /// The settings the link's last poll read.
+    pub(crate) settings: LiveSettings,
+    /// What the drive trait knew after the last command.
+    pub(crate) memory: Option<Memory>,
+    /// The next command reads the command registers back first (at start, after a set).
+    pub(crate) forget: bool,
+    /// A command wrote what the polled reads depend on.
+    pub(crate) replan: bool,
+}
+
+impl Commander {
+    /// Takes the settings the link's last poll of the drive read.
+    pub fn update_settings(&mut self, settings: &LiveSettings) {
+        if &self.settings != settings {
+            self.settings = settings.clone();
+        }
+    }
+
+    /// Whether a command wrote what the drive's polled reads depend on (cleared by the call).
+    pub fn take_replan(&mut self) -> bool {
+        std::mem::take(&mut self.replan)
+    }
+
+    /// Carries out `command`: the drive trait's calls (run, stop, reference, fault reset) or a
+    /// register write through the write gate. Returns what was done, or why nothing was.
+    pub fn execute(
+        &mut self,
+        client: &mut LinkClient,
+        command: &Command,
+    ) -> Result<String, CommandFailure> {
+        client.switch_drive(self.drive.plan().profile, self.options);
+        let value = command.payload.trim();
+        let action = match &command.action {
+            Action::Set { register } => return self.write(client, register, value),
+            a => a.clone(),
+        };
+        let drive = self.drive;
+        let plan = drive.plan();
+        let mut d = Vfd::from_plan(
+            &mut *client,
+            self.slave,
+            self.settings.view(drive),
+            plan.registers,
+            plan.roles,
+        );
+        if let Some(m) = self.memory.take() {
+            d = d.with_memory(m);
+        }
+        let unknown = std::mem::take(&mut self.forget);
+        if unknown {
+            d.forget_commands();
+        }
+        let result = match action {
+            // The direction the drive turns in, read before every run: the bridge commands no
+            // direction, so a run never reverses a drive another master runs in reverse.
+            Action::Run => d
+                .adopt_direction()
+                .and_then(|_| d.run())
+                .map(|()| "running".to_owned())
+                .map_err(CommandFailure::from),
+            Action::Stop => {
+                if unknown {
+                    // Keeps the direction in the word the stop writes; a failed read holds
+                    // no stop back (the direction set stays).
+                    let _ = d.adopt_direction();
+                }
+                d.stop()
+                    .map(|()| "stopped".to_owned())
+                    .map_err(CommandFailure::from)
+            }
+            Action::FaultReset => match d.status() {
+                Err(e) => Err(e.into()),
+                Ok(s) if s.fault == Some(false) => Err(CommandFailure::NoFault {
+                    running: s.running == Some(true),
+                }),
+                Ok(s) if s.fault.is_none() && s.running == Some(true) => {
+                    Err(CommandFailure::RunningWithoutFaultRole)
+                }
+                Ok(_) => d
+                    .reset_fault()
+                    .map(|()| "fault reset".to_owned())
+                    .map_err(CommandFailure::from),
+            },
+            Action::Reference => match frequency(value) {
+                Ok(hz) => d
+                    .set_reference(hz)
+                    .map(|()| format!("frequency reference {hz} Hz"))
+                    .map_err(CommandFailure::from),
+                Err(e) => Err(e),
+            },
+            Action::Set { .. } => unreachable!("handled above"),
+        };
+        self.memory = Some(d.memory());
+        result
+    }
+
+    /// Writes `value` to the register named `name`, as `drivemap write` does: parsed by the
+    /// register's conversion (range, steps, limits through other parameters read first), the
+    /// gate checked, other bit fields kept.
+    fn write(
+        &mut self,
+        client: &mut LinkClient,
+        name: &str,
+        value: &str,
+    ) -> Result<String, CommandFailure> {
+        let drive = self.drive;
+        let profile = drive.plan().profile;
+        let slave = self.slave;
+        let kind = self.kind;
+        let r = lookup::find(drive, name)?;
+        if value.is_empty() {
+            return Err(CommandFailure::NoValue {
+                register: describe::register(r),
+            });
+        }
+        let rule = gate::rule(profile, intern(r.id()))
+            .and_then(|rule| gate::check_link(profile, kind, slave, rule).map(|()| rule))
+            .map_err(|source| CommandFailure::Refused {
+                register: describe::register(r),
+                source,
+            })?;
+        // The limit through another parameter, read now (V7's reference against n011).
+        let mut settings = self.settings.clone();
+        if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency()
+            && let Some(Quantity::Register(row)) =
+                drive.plan().settings.quantities.get(usize::from(s.slot))
+            && let Some(d) = drive.register_of_row(*row)
+            && !self.fixed.contains(&d.def.id)
+        {
+            let raw = self
+                .read_raw(client, d)
+                .map_err(|source| CommandFailure::Dependency {
+                    register: describe::register(d),
+                    source,
+                })?;
+            settings.absorb(drive, d.def.address, raw as u16);
+        }
+        let row = drive.register_plan(r);
+        let at = u16::try_from(drive.plan().order[r.index()]).ok();
+        let command_register = drive
+            .plan()
+            .roles
+            .places
+            .iter()
+            .any(|p| p.role.kind() == RoleKind::Command && p.target.row() == at);
+        let raw = match codec::field_input(drive, r, value)? {
+            Some(input) => {
+                let Conversion::Bits { mask, .. } = row.conversion else {
+                    return Err(CommandFailure::NoFields {
+                        register: describe::register(r),
+                    });
+                };
+                if command_register && input.mask & mask != mask {
+                    // The rest of a command word read back could carry a run or a reset the
+                    // drive was given long ago: the trait's calls compose command words.
+                    return Err(CommandFailure::CommandFields {
+                        register: describe::register(r),
+                    });
+                }
+                let word = if input.mask & mask == mask || !r.readable() {
+                    input.value
+                } else {
+                    let current =
+                        self.read_raw(client, r)
+                            .map_err(|source| CommandFailure::OtherFields {
+                                id: r.id().to_owned(),
+                                source,
+                            })? as u16;
+                    ((current & !input.mask) | input.value) & mask
+                };
+                codec::encode(drive, r, f64::from(word), &settings)?
+            }
+            None => codec::parse_value_with(drive, r, value, &settings, Rounding::Exact)?,
+        };
+        let address = self.address(r).map_err(CommandFailure::Address)?;
+        let words = rule.width.split(raw);
+        gate::check(
+            profile,
+            kind,
+            slave,
+            gate::WriteTarget::Rule(rule),
+            address,
+            words[..usize::from(rule.width.count())].iter().copied(),
+        )
+        .map_err(|source| CommandFailure::Refused {
+            register: describe::register(r),
+            source,
+        })?;
+        let between = row.repeat_needs_change.map(|x| x.between);
+        if command_register {
+            // Whatever becomes of the write, the next run or stop reads the word back first.
+            self.forget = true;
+        }
+        match between {
+            Some(b) => client.write_changed(slave, rule, address, b, raw),
+            None => client.write_rule(slave, rule, address, raw),
+        }?;
+        let shown = codec::decode_written(drive, r, raw, &settings)
+            .map(|v| v.to_string())
+            .unwrap_or_else(|_| raw.to_string());
+        // A written dependency changes conversions: read it again with the next cycle.
+        if self.deps.contains(&r.def.id) {
+            self.replan = true;
+        }
+        Ok(format!("wrote {} = {shown}", describe::register(r)))
+    }
+
+    fn address(&self, r: &Register) -> Result<u16, PollFailure> {
+        let drive = self.drive;
+        drive
+            .register_plan(r)
+            .locate(&self.settings.view(drive), self.kind)
+            .map_err(|e| PollFailure::AddressUnknown {
+                register: describe::register(r),
+                setting: e.setting,
+            })
+    }
+
+    fn read_raw(&self, client: &mut LinkClient, r: &Register) -> Result<u32, PollFailure> {
+        let address = self.address(r)?;
+        let info = self.drive.register_plan(r).info;
+        let mut w = [0u16; 2];
+        let words = &mut w[..usize::from(info.width.count())];
+        match info.table {
+            Table::Holding => client.read_holding(self.slave, address, words),
+            Table::Input => client.read_input(self.slave, address, words),
+        }?;
+        Ok(info.width.join(words))
+    }
+}
+
+/// A reference payload in Hz (`30`, `30.5`, `30 Hz`), finite.
+fn frequency(value: &str) -> Result<f64, CommandFailure> {
+    value
+        .trim_end_matches("Hz")
+        .trim()
+        .parse()
+        .ok()
+        .filter(|v: &f64| v.is_finite())
+        .ok_or_else(|| CommandFailure::NotAFrequency {
+            value: crate::log::quote(value),
+        })
+}
