@@ -59,6 +59,12 @@ pub enum Command {
     Write(commands::write::Args),
     /// Poll registers of a live drive by name as a live-updating table (reconnects over TCP).
     Poll(commands::poll::Args),
+    /// Save every setting of a live drive to a parameter set file (YAML, the map's order).
+    Save(commands::save::Args),
+    /// Compare parameter sets, live drives and the map's defaults; exit 1 if any setting differs.
+    Compare(commands::compare::Args),
+    /// Restore a parameter set to a live drive: validated first, what differs written in dependency order, stored, read back.
+    Restore(commands::restore::Args),
     /// Read every readable register of a drive against its map (never writes); report what disagrees; exit 1 if anything does.
     Probe(commands::probe::Args),
     /// Poll drives into Prometheus (/metrics) and MQTT / Home Assistant; commands over MQTT through the write gate.
@@ -93,6 +99,9 @@ pub fn main() -> ExitCode {
         Command::Read(a) => commands::read::run(a),
         Command::Write(a) => commands::write::run(a),
         Command::Poll(a) => commands::poll::run(a),
+        Command::Save(a) => commands::save::run(a),
+        Command::Compare(a) => commands::compare::run(a),
+        Command::Restore(a) => commands::restore::run(a),
         Command::Probe(a) => commands::probe::run(a),
         Command::Scan(a) => commands::scan::run(a),
         Command::Bridge(a) => commands::bridge::run(a),

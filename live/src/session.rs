@@ -610,6 +610,33 @@ impl<'d> Session<'d> {
         })
     }
 
+    /// A session over a transport the caller made (a test's in-memory link to a simulator, a
+    /// program's own port): `slave` on a link of the transport's kind, `line` the serial
+    /// line's speed for the planner's bus-time model, the client with `options`.
+    pub fn over(
+        drive: &'d Drive,
+        transport: Box<dyn drivemap_runtime::transport::Transport>,
+        options: drivemap_runtime::ClientOptions,
+        slave: u8,
+        line: SerialConfig,
+        settings: LiveSettings,
+    ) -> Self {
+        let profile = leak_profile(drive);
+        let kind = transport.kind();
+        let silence = SilenceGuard::new(u32::from(options.retries) + 1);
+        let client = Client::with_options(silence.wrap(transport), profile, options);
+        Session {
+            drive,
+            client,
+            silence,
+            slave,
+            kind,
+            settings,
+            link: format!("{} link", kind.name()),
+            line,
+        }
+    }
+
     /// The address of `r` on this link under the current settings, or why it cannot be known
     /// (it moves with a setting that could not be read: nothing is sent to a guessed address).
     pub fn address(&self, r: &Register) -> Result<u16, ReadError> {

@@ -1,5 +1,6 @@
 pub mod bridge;
 pub mod check;
+pub mod compare;
 pub mod coverage;
 pub mod demo;
 pub mod diff;
@@ -11,6 +12,8 @@ pub mod migrate;
 pub mod poll;
 pub mod probe;
 pub mod read;
+pub mod restore;
+pub mod save;
 pub mod scan;
 pub mod simulate;
 pub mod write;
