@@ -35,6 +35,8 @@ pub struct Reading {
     pub schemes: Vec<String>,
     /// The tables read by their header's columns.
     pub layouts: Vec<columns::Layout>,
+    /// The lines the rows took (their own, their codes', bits' and wrapped names').
+    pub taken: std::collections::BTreeSet<usize>,
 }
 
 /// A Markdown or box-drawn table row (`| 1001 | P1.01 | Maximum frequency |`) as cells separated by
@@ -96,6 +98,7 @@ pub fn read_manual_with(
         rows,
         mut unread,
         layouts,
+        taken,
     } = row::read_tables(slice, first, &schemes, columns, &ruled);
     // A row printed again (a summary table, a record sheet at the end of the manual) is
     // reported, not proposed twice: the first printing is the one a draft cites.
@@ -160,6 +163,7 @@ pub fn read_manual_with(
         unread,
         schemes: schemes.into_iter().collect(),
         layouts,
+        taken,
     }
 }
 

@@ -266,6 +266,9 @@ pub struct Tables {
     pub unread: Vec<Unread>,
     /// The tables read by their header's columns.
     pub layouts: Vec<Layout>,
+    /// The lines taken by the rows: a row's own, its codes', bits' (reserved ones too) and the
+    /// rest of a wrapped name, and table headers.
+    pub taken: BTreeSet<usize>,
 }
 
 /// A table's lines for deciding its columns: the lines after its header up to the next header
@@ -521,6 +524,7 @@ pub fn read_tables(
         rows,
         unread,
         layouts,
+        taken: used,
     }
 }
 

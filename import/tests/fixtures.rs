@@ -2,17 +2,46 @@
 //! use, against maps of them transcribed by hand (`tests/fixtures/import/`): every row found
 //! with every field right, codes and bits included, nothing else proposed, and the draft checks.
 
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use drivemap_import::{Manual, compare, import, known};
-use drivemap_map::ir::Drive;
+use drivemap_import::columns::{Role, parse_roles};
+use drivemap_import::{Manual, compare, import, import_with, known, row::row_shaped};
+use drivemap_map::ir::{Drive, Register};
+use drivemap_map::model::Access;
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/import")
 }
 
+/// A fixture: the hand-written map, its manual, and what the map's `# import:` comments say
+/// (the layout in a few words, the lines the reader must report as of the wrong kind, the
+/// columns a user names with `--columns`).
+struct Case {
+    truth: Drive,
+    file: String,
+    text: String,
+    layout: String,
+    wrong_kind: BTreeSet<usize>,
+    columns: BTreeMap<usize, Vec<Role>>,
+}
+
+fn lines_of(list: &str) -> BTreeSet<usize> {
+    let mut out = BTreeSet::new();
+    for part in list.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        match part.split_once('-') {
+            Some((a, b)) => out.extend(a.trim().parse::<usize>().unwrap()..=b.trim().parse().unwrap()),
+            None => {
+                out.insert(part.parse().unwrap());
+            }
+        }
+    }
+    out
+}
+
 /// Every hand-written map of the fixture directory, with its manual.
-fn cases() -> Vec<(Drive, String, String)> {
+fn cases() -> Vec<Case> {
     let dir = fixtures();
     let mut out = Vec::new();
     for map in drivemap_map::find_maps(&dir).unwrap() {
@@ -20,149 +49,313 @@ fn cases() -> Vec<(Drive, String, String)> {
             .unwrap_or_else(|e| panic!("{}: {e}", map.display()));
         let file = drive.meta.text_manuals().next().unwrap().to_string();
         let text = std::fs::read_to_string(dir.join("manuals").join(&file)).unwrap();
-        out.push((drive, file, text));
+        let source = std::fs::read_to_string(&map).unwrap();
+        let mut case = Case {
+            truth: drive,
+            file,
+            text,
+            layout: String::new(),
+            wrong_kind: BTreeSet::new(),
+            columns: BTreeMap::new(),
+        };
+        for l in source.lines() {
+            let Some(rest) = l.strip_prefix("# import: ") else {
+                continue;
+            };
+            if let Some(v) = rest.strip_prefix("layout ") {
+                case.layout = v.trim().to_string();
+            } else if let Some(v) = rest.strip_prefix("wrong_kind ") {
+                case.wrong_kind = lines_of(v);
+            } else if let Some(v) = rest.strip_prefix("columns ") {
+                let (line, roles) = v.trim().split_once(':').unwrap();
+                case.columns
+                    .insert(line.parse().unwrap(), parse_roles(roles).unwrap());
+            } else {
+                panic!("{}: unknown `# import:` line {l}", map.display());
+            }
+        }
+        out.push(case);
     }
     assert!(out.len() >= 2, "fixture maps in {}", dir.display());
     out
 }
 
+/// The figures of one fixture.
+#[derive(Debug, Default)]
+struct Figures {
+    rows: usize,
+    proposed: usize,
+    found: usize,
+    right: usize,
+    wrong_kind: usize,
+    invented: usize,
+    unaccounted: usize,
+    /// Lines the map's comments name as of the wrong kind that the report does not list.
+    unreported: usize,
+}
+
+fn codes(r: &Register) -> Vec<(u16, String, Option<String>)> {
+    r.def
+        .values
+        .iter()
+        .map(|v| (v.value, v.name.clone(), v.source.clone()))
+        .collect()
+}
+
+fn bits(r: &Register) -> Vec<(Option<u8>, Option<[u8; 2]>, String, Option<String>)> {
+    r.def
+        .fields
+        .iter()
+        .map(|f| (f.bit, f.bits, f.name.clone(), f.source.clone()))
+        .collect()
+}
+
+/// Imports a fixture as a user would (with its `--columns`, if any) and scores the draft
+/// against the hand-written map; `wrong` collects what is not right, for the failure message.
+fn score(case: &Case, wrong: &mut Vec<String>) -> Figures {
+    let id = case.truth.meta.id.clone();
+    let imported = import_with(
+        &id,
+        &[Manual {
+            file: &case.file,
+            text: &case.text,
+        }],
+        None,
+        &case.columns,
+        "test",
+    );
+    let registers = known::registers(&case.truth);
+    let (reading, _) = &imported.readings[0];
+    let c = compare::compare(&reading.rows, &registers, &case.file);
+    let draft =
+        drivemap_map::read_map_str(&format!("{id}.yaml"), &imported.yaml, &Default::default())
+            .unwrap_or_else(|e| panic!("{id}: the draft does not check:\n{e}\n{}", imported.yaml));
+    assert!(draft.draft.is_some(), "{id}: the draft is marked");
+    if !imported.unresolved.is_empty() || !imported.left_out.is_empty() {
+        wrong.push(format!(
+            "{id}: the front end refused rows: {:?} {:?}",
+            imported.unresolved, imported.left_out
+        ));
+    }
+    let mut f = Figures {
+        rows: registers.len(),
+        proposed: imported.proposed(&case.file),
+        found: c.matched.len(),
+        invented: c.new_rows.len(),
+        ..Figures::default()
+    };
+    for r in &c.new_rows {
+        wrong.push(format!("{id}:{}: proposed, not in the map: {:?}", r.line, r.name));
+        if case.wrong_kind.contains(&r.line) {
+            f.wrong_kind += 1;
+        }
+    }
+    for k in &c.missed {
+        wrong.push(format!("{id}: not found: {}", k.id));
+    }
+    for m in &c.matched {
+        let t = case
+            .truth
+            .registers
+            .iter()
+            .find(|t| t.def.id == m.known.id)
+            .unwrap();
+        let Some(d) = draft
+            .registers
+            .iter()
+            .find(|d| d.def.address == t.def.address && d.def.param == t.def.param)
+        else {
+            wrong.push(format!("{id}: {} read but not in the draft", t.def.id));
+            continue;
+        };
+        let mut why = Vec::new();
+        if !m.differences.is_empty() {
+            why.push(format!("{:?}", m.differences));
+        }
+        if codes(d) != codes(t) {
+            why.push(format!("codes {:?} / {:?}", codes(d), codes(t)));
+        }
+        if bits(d) != bits(t) {
+            why.push(format!("bits {:?} / {:?}", bits(d), bits(t)));
+        }
+        // An access the manual prints is read; one it does not print is left unknown (to
+        // confirm), and a draft register without one is read-only.
+        if t.def.access.is_some() {
+            if d.access != t.access {
+                why.push(format!("access {:?} / {:?}", d.access, t.access));
+            }
+        } else if d.access != Access::Read
+            || !imported
+                .to_confirm
+                .iter()
+                .any(|c| c.starts_with(&format!("{}.access: unknown", d.def.id)))
+        {
+            why.push(format!("access {:?} not left unknown", d.access));
+        }
+        if d.def.signed != t.def.signed {
+            why.push(format!("signed {} / {}", d.def.signed, t.def.signed));
+        }
+        if format!("{:?}", d.def.pair.as_ref().map(|p| p.order))
+            != format!("{:?}", t.def.pair.as_ref().map(|p| p.order))
+        {
+            why.push("pair".to_string());
+        }
+        if why.is_empty() {
+            f.right += 1;
+        } else {
+            wrong.push(format!("{id}: {}: {}", t.def.id, why.join("; ")));
+        }
+    }
+    // Lines of the wrong kind are reported, never proposed.
+    for line in &case.wrong_kind {
+        if !reading.unread.iter().any(|u| u.line == *line) {
+            f.unreported += 1;
+            wrong.push(format!("{id}:{line}: of the wrong kind, but not reported"));
+        }
+    }
+    // Every row-shaped line is a row, part of one (codes, bits) or reported.
+    let mut accounted: BTreeSet<usize> = reading.unread.iter().map(|u| u.line).collect();
+    accounted.extend(&reading.taken);
+    for r in &reading.rows {
+        accounted.insert(r.line);
+        accounted.extend(r.values.iter().map(|v| v.line));
+        accounted.extend(r.fields.iter().map(|b| b.line));
+    }
+    for (i, l) in case.text.lines().enumerate() {
+        if row_shaped(l) && !accounted.contains(&(i + 1)) {
+            f.unaccounted += 1;
+            wrong.push(format!("{id}:{}: row-shaped, not accounted for: {l}", i + 1));
+        }
+    }
+    f
+}
+
+fn percent(a: usize, b: usize) -> f64 {
+    if b == 0 { 0.0 } else { 100.0 * a as f64 / b as f64 }
+}
+
+const BEGIN: &str = "<!-- BEGIN catalogue figures: generated by `cargo test -p drivemap-import --test fixtures` (DRIVEMAP_UPDATE_DOCS=1 rewrites), do not edit -->";
+const END: &str = "<!-- END catalogue figures -->";
+
 #[test]
-fn every_row_of_a_fixture_manual_is_read_right() {
-    for (truth, file, text) in cases() {
-        let id = truth.meta.id.clone();
-        let imported = import(
-            &id,
+fn every_catalogue_fixture_is_read_to_its_map() {
+    let mut table = String::new();
+    let _ = writeln!(
+        table,
+        "| fixture | layout | rows in the manual | proposed | found | every field right | wrong kind | invented | unaccounted lines |"
+    );
+    let _ = writeln!(table, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
+    let mut failures = Vec::new();
+    for case in cases() {
+        let mut wrong = Vec::new();
+        let f = score(&case, &mut wrong);
+        let _ = writeln!(
+            table,
+            "| `{}` | {} | {} | {} | {} ({:.0} %) | {} ({:.0} %) | {} | {} | {} |",
+            case.file,
+            case.layout,
+            f.rows,
+            f.proposed,
+            f.found,
+            percent(f.found, f.rows),
+            f.right,
+            percent(f.right, f.found),
+            f.wrong_kind,
+            f.invented,
+            f.unaccounted
+        );
+        let id = &case.truth.meta.id;
+        let ok = percent(f.found, f.rows) >= 95.0
+            && percent(f.right, f.found) >= 85.0
+            && f.wrong_kind == 0
+            && f.invented == 0
+            && f.unaccounted == 0
+            && f.unreported == 0
+            && f.proposed == f.found + f.invented;
+        if !ok {
+            failures.push(format!("{id}: {f:?}: {wrong:#?}"));
+        }
+        // The protocol facts the manual prints.
+        let imported = import_with(
+            id,
             &[Manual {
-                file: &file,
-                text: &text,
+                file: &case.file,
+                text: &case.text,
             }],
             None,
+            &case.columns,
             "test",
-        );
-        let registers = known::registers(&truth);
-        let (reading, _) = &imported.readings[0];
-        let c = compare::compare(&reading.rows, &registers, &file);
-        let wrong: Vec<String> = c
-            .matched
-            .iter()
-            .filter(|m| !m.differences.is_empty())
-            .map(|m| format!("{}: {:?}", m.known.id, m.differences))
-            .collect();
-        assert!(wrong.is_empty(), "{id}: rows read wrong: {wrong:#?}");
-        assert!(
-            c.missed.is_empty(),
-            "{id}: rows not found: {:?}",
-            c.missed.iter().map(|k| &k.id).collect::<Vec<_>>()
-        );
-        assert!(
-            c.new_rows.is_empty(),
-            "{id}: rows proposed that the manual's map does not have: {:?}",
-            c.new_rows
-                .iter()
-                .map(|r| (r.line, &r.name))
-                .collect::<Vec<_>>()
-        );
-        assert_eq!(c.matched.len(), registers.len(), "{id}");
-
-        // The draft loads and checks, and carries the codes and bits of every register.
-        assert!(
-            imported.unresolved.is_empty(),
-            "{id}: {:?}",
-            imported.unresolved
-        );
-        assert!(
-            imported.left_out.is_empty(),
-            "{id}: {:?}",
-            imported.left_out
         );
         let draft =
             drivemap_map::read_map_str(&format!("{id}.yaml"), &imported.yaml, &Default::default())
-                .unwrap_or_else(|e| {
-                    panic!("{id}: the draft does not check:\n{e}\n{}", imported.yaml)
-                });
-        assert!(draft.draft.is_some(), "{id}: the draft is marked");
-        for t in &truth.registers {
-            let d = draft
-                .registers
-                .iter()
-                .find(|d| d.def.address == t.def.address)
-                .unwrap_or_else(|| panic!("{id}: {} not in the draft", t.def.id));
-            let codes = |r: &drivemap_map::ir::Register| {
-                r.def
-                    .values
-                    .iter()
-                    .map(|v| (v.value, v.name.clone(), v.source.clone()))
-                    .collect::<Vec<_>>()
-            };
-            assert_eq!(codes(d), codes(t), "{id}: codes of {}", t.def.id);
-            let bits = |r: &drivemap_map::ir::Register| {
-                r.def
-                    .fields
-                    .iter()
-                    .map(|f| (f.bit, f.bits, f.name.clone(), f.source.clone()))
-                    .collect::<Vec<_>>()
-            };
-            assert_eq!(bits(d), bits(t), "{id}: bits of {}", t.def.id);
-            // An access the manual prints is read; one it does not print is left unknown, and
-            // a draft register without one is read-only.
-            if t.def.access.is_some() {
-                assert_eq!(d.access, t.access, "{id}: access of {}", t.def.id);
-            } else {
-                assert_eq!(
-                    d.access,
-                    drivemap_map::model::Access::Read,
-                    "{id}: {} prints no access",
-                    t.def.id
-                );
-                assert!(
-                    imported
-                        .to_confirm
+                .unwrap();
+        let (tp, dp) = (&case.truth.protocol, &draft.protocol);
+        for (what, d, t) in [
+            (
+                "function codes",
+                format!("{:?}", dp.function_codes),
+                format!("{:?}", tp.function_codes),
+            ),
+            (
+                "max_read",
+                format!("{:?}", dp.max_read),
+                format!("{:?}", tp.max_read),
+            ),
+            (
+                "slave address",
+                format!("{:?}", dp.slave_address),
+                format!("{:?}", tp.slave_address),
+            ),
+            (
+                "exceptions",
+                format!(
+                    "{:?}",
+                    dp.exceptions
                         .iter()
-                        .any(|c| c.starts_with(&format!("{}.access: unknown", d.def.id))),
-                    "{id}: {} has no access to confirm",
-                    t.def.id
-                );
+                        .map(|e| (e.code, e.name.clone()))
+                        .collect::<Vec<_>>()
+                ),
+                format!(
+                    "{:?}",
+                    tp.exceptions
+                        .iter()
+                        .map(|e| (e.code, e.name.clone()))
+                        .collect::<Vec<_>>()
+                ),
+            ),
+        ] {
+            if d != t {
+                failures.push(format!("{id}: {what}: draft {d} / map {t}"));
             }
-            assert_eq!(
-                d.def.signed, t.def.signed,
-                "{id}: signedness of {}",
-                t.def.id
-            );
         }
-        // The protocol facts the manual prints.
-        let (tp, dp) = (&truth.protocol, &draft.protocol);
-        assert_eq!(
-            format!("{:?}", dp.function_codes),
-            format!("{:?}", tp.function_codes),
-            "{id}"
-        );
-        assert_eq!(
-            format!("{:?}", dp.max_read),
-            format!("{:?}", tp.max_read),
-            "{id}"
-        );
-        assert_eq!(
-            format!("{:?}", dp.slave_address),
-            format!("{:?}", tp.slave_address),
-            "{id}"
-        );
-        assert_eq!(
-            dp.exceptions
-                .iter()
-                .map(|e| (e.code, e.name.clone()))
-                .collect::<Vec<_>>(),
-            tp.exceptions
-                .iter()
-                .map(|e| (e.code, e.name.clone()))
-                .collect::<Vec<_>>(),
-            "{id}"
-        );
     }
+    print!("{table}");
+    let doc_path = fixtures().join("../../../docs/import.md");
+    let doc = std::fs::read_to_string(&doc_path).unwrap();
+    let (Some(b), Some(e)) = (doc.find(BEGIN), doc.find(END)) else {
+        panic!("{}: the catalogue figures' markers are missing", doc_path.display())
+    };
+    let generated = format!("{BEGIN}\n{table}{END}");
+    let current = &doc[b..e + END.len()];
+    if current != generated {
+        if std::env::var_os("DRIVEMAP_UPDATE_DOCS").is_some() {
+            std::fs::write(&doc_path, doc.replace(current, &generated)).unwrap();
+        } else {
+            failures.push(format!(
+                "{}: the catalogue figures differ from the reader's; rerun with DRIVEMAP_UPDATE_DOCS=1 and review the change",
+                doc_path.display()
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
 }
 
 #[test]
 fn every_citation_of_a_draft_shows_its_row() {
-    for (truth, file, text) in cases() {
+    for Case {
+        truth, file, text, ..
+    } in cases()
+    {
         let imported = import(
             &truth.meta.id,
             &[Manual {
@@ -192,7 +385,9 @@ fn every_citation_of_a_draft_shows_its_row() {
 
 #[test]
 fn the_generator_refuses_a_draft() {
-    let (truth, file, text) = cases().remove(0);
+    let Case {
+        truth, file, text, ..
+    } = cases().remove(0);
     let imported = import(
         &truth.meta.id,
         &[Manual {
