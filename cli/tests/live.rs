@@ -3,6 +3,7 @@
 //! Addresses in the slave are PDU addresses, so the map's per-transport offsets are checked too.
 
 mod common;
+mod paramset;
 
 use std::net::{TcpListener, TcpStream};
 use std::sync::{Arc, Mutex};
@@ -672,11 +673,14 @@ fn poll_by_default_reads_the_monitors_this_link_has() {
 }
 
 /// Naming some fields of a bit-field register changes those fields only: the others keep the
-/// value read from the drive (V7 0001h, Table 4.1, `000_032dced3a1e91a75.txt:853-867`).
+/// value read from the drive (V7 0001h, Table 4.1, `000_032dced3a1e91a75.txt:853-867`) — in a
+/// command register, as the drive trait composes it: the run bit only while the status shows
+/// the drive running, the fault reset only when named (issue 37).
 #[test]
 fn writing_one_field_keeps_the_others() {
     let d = Drive::start("yaskawa-v7", Framing::RtuOverTcp, |s| {
         s.set_holding(0x0001, 0x0003); // running in reverse
+        s.set_holding(0x0020, 0x0003); // status: during run, reverse
     });
     let (code, out, err) = d.run(
         "write",
@@ -711,6 +715,21 @@ fn writing_one_field_keeps_the_others() {
     );
     assert_eq!(code, 0, "{err}");
     assert_eq!(d.holding(0x0001), 0x0001);
+    // Stopped (the status shows no run): a word read back with run and reverse set goes out
+    // without the run; the reset only because it is named.
+    d.slave.lock().unwrap().set_holding(0x0020, 0x0000);
+    d.slave.lock().unwrap().set_holding(0x0001, 0x0003);
+    let (code, _, err) = d.run(
+        "write",
+        "yaskawa-v7",
+        &["digital_input_command=fault_reset"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        d.holding(0x0001),
+        0x000A,
+        "reverse kept, run released, reset set"
+    );
 }
 
 /// The fixture drive of another vendor (`tests/fixtures/acme-vf1`, its own fictional manual):

@@ -39,6 +39,7 @@ use drivemap_sim::slave::SimulatedSlave;
 
 mod common;
 mod new_map;
+mod safe_live;
 
 use common::repo;
 

@@ -267,6 +267,24 @@ impl fmt::Display for InputError {
 
 impl std::error::Error for InputError {}
 
+/// Whether `text` is written as hexadecimal (`0x32`, `0032h`).
+fn is_hex(text: &str) -> bool {
+    let t = text.trim();
+    t.starts_with("0x")
+        || t.starts_with("0X")
+        || t.strip_suffix(['h', 'H'])
+            .is_some_and(|h| !h.is_empty() && h.chars().all(|c| c.is_ascii_hexdigit()))
+}
+
+/// `text` as a message quotes it: escaped, and at most 40 characters (then `...`).
+pub fn shorten(text: &str) -> String {
+    let escaped: String = text.escape_debug().collect();
+    match escaped.char_indices().nth(40) {
+        Some((i, _)) => format!("{}...", &escaped[..i]),
+        None => escaped,
+    }
+}
+
 fn parse_number(text: &str) -> Option<f64> {
     let t = text.trim();
     if let Some(hex) = t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
@@ -354,6 +372,16 @@ fn parse_fields(r: &Register, fields: &[Field], text: &str) -> Result<FieldInput
         input.value = (input.value & !mask) | (code << lsb);
         input.mask |= mask;
     }
+    if input.mask == 0 {
+        // `,` names nothing: never taken as "write back what the drive holds".
+        let ids: Vec<&str> = fields.iter().map(|f| f.id).collect();
+        return Err(InputError::Parse(format!(
+            "`{}` names no field of {}: name at least one ({})",
+            shorten(text),
+            r.id(),
+            ids.join(", ")
+        )));
+    }
     Ok(input)
 }
 
@@ -418,11 +446,26 @@ pub fn parse_value_with(
                     return plan.encode_exact(exact, &view).map_err(InputError::Value);
                 }
             }
+            // A quantity is a decimal number in its unit: `0032h` or `0x32` would be read as
+            // 50 of the unit, which is not what a raw word printed as `0032h` means.
+            let raw_word = matches!(plan.conversion, Conversion::Word { .. }) && unit.is_empty();
+            if !raw_word && is_hex(number) {
+                return Err(InputError::Parse(format!(
+                    "`{}` is hexadecimal, but {} takes a decimal number{}: hex is only for words, codes and bit fields",
+                    shorten(text),
+                    r.id(),
+                    if unit.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" of {unit}")
+                    }
+                )));
+            }
             parse_number(number).ok_or_else(|| {
                 InputError::Parse(if unit.is_empty() {
-                    format!("`{text}` is not a number")
+                    format!("`{}` is not a number", shorten(text))
                 } else {
-                    format!("`{text}` is not a number of {unit}")
+                    format!("`{}` is not a number of {unit}", shorten(text))
                 })
             })?
         }

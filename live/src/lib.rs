@@ -7,6 +7,7 @@
 //! [`drivemap_runtime::scale`]; a test in `tests/` compares them register by register.
 
 pub mod codec;
+pub mod draft;
 pub mod duration;
 pub mod examples;
 pub mod indexed;

@@ -7,6 +7,8 @@
 use std::time::Duration;
 
 use drivemap_map::Drive;
+
+use crate::draft::DraftWrites;
 use drivemap_runtime::bus_time::SerialConfig;
 /// Parity of a serial line: the vocabulary crate's one definition (`none`, `even`, `odd`).
 pub use drivemap_runtime::profile::Parity;
@@ -292,11 +294,24 @@ impl Link {
     }
 
     /// Opens the link and makes a client for `profile`. Returns the client and a description
-    /// of the link for headers.
+    /// of the link for headers. Through a draft map (`draft:`) the client's writes are refused
+    /// unsent ([`crate::draft`]): [`Link::connect_as`] with [`DraftWrites::Allowed`] lets them
+    /// through.
     pub fn connect(
         &self,
         drive: &Drive,
         profile: &'static Profile,
+    ) -> Result<(LiveClient, String), LinkError> {
+        self.connect_as(drive, profile, DraftWrites::Refused)
+    }
+
+    /// [`Link::connect`], with writes through a draft map refused or allowed as `draft` says
+    /// (the command line's `--draft`); a reviewed map's writes are not affected.
+    pub fn connect_as(
+        &self,
+        drive: &Drive,
+        profile: &'static Profile,
+        draft: DraftWrites,
     ) -> Result<(LiveClient, String), LinkError> {
         let options = self.client_options(drive, profile);
         let connect_timeout = options.timeout.max(Duration::from_secs(1));
@@ -356,6 +371,7 @@ impl Link {
         } else {
             return Err(LinkError::NoTransport);
         };
+        let transport = crate::draft::guard(drive, draft, transport);
         let client = Client::with_options(transport, profile, options);
         Ok((client, format!("{what}, slave {}", self.slave(drive))))
     }

@@ -19,6 +19,7 @@ use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError, Width};
 
 use crate::codec::{self, InputError, Value};
+use crate::draft::DraftWrites;
 use crate::link::{Link, LinkError, LiveClient};
 use crate::lookup::NotFound;
 use crate::silence::SilenceGuard;
@@ -120,6 +121,76 @@ pub struct Given {
     pub settings: LiveSettings,
     /// Register ids whose value was given with `--set`.
     pub fixed: BTreeSet<String>,
+    /// Every `--set` as given (name as typed, value as typed), with the register id or external
+    /// quantity it names: what [`Session::check_given`] compares and the notes quote.
+    pub given: Vec<GivenValue>,
+}
+
+/// One `--set NAME=VALUE` as given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GivenValue {
+    /// The register id or external quantity name it sets.
+    pub id: String,
+    /// The name as typed.
+    pub name: String,
+    /// The value as typed.
+    pub value: String,
+    /// Whether it is an external quantity (the drive holds no register for it).
+    pub external: bool,
+}
+
+/// The `--set` values a command's conversions rest on without the drive having confirmed
+/// them: each says "assuming NAME = VALUE, given, not read".
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Assumed {
+    /// Register id or external quantity name → the note.
+    pub notes: Vec<(String, String)>,
+}
+
+impl Assumed {
+    /// The notes of the settings `r`'s conversion or limit uses, joined with `; ` (empty when
+    /// none): `assuming P2000 = 50 Hz, given, not read`.
+    pub fn for_register(&self, drive: &Drive, r: &Register, settings: &LiveSettings) -> String {
+        let used = settings_used(drive, r, settings);
+        self.notes
+            .iter()
+            .filter(|(id, _)| used.contains(id))
+            .map(|(_, n)| n.as_str())
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+}
+
+/// The settings `r`'s conversion, address or limit uses under `settings`: register ids of
+/// selectors and references, names of external quantities.
+pub fn settings_used(drive: &Drive, r: &Register, settings: &LiveSettings) -> Vec<String> {
+    let plan = drive.plan();
+    let rp = drive.register_plan(r);
+    let mut out: Vec<String> = Vec::new();
+    let mut add = |d: Dependency| {
+        let id = match d {
+            Dependency::Code(s) => plan
+                .settings
+                .codes
+                .get(usize::from(s.slot))
+                .map(|c| plan.registers[c.register].info.id.to_owned()),
+            Dependency::Quantity(s) => match plan.settings.quantities.get(usize::from(s.slot)) {
+                Some(Quantity::Register(row)) => Some(plan.registers[*row].info.id.to_owned()),
+                Some(Quantity::External { id, .. }) => Some(id.clone()),
+                None => None,
+            },
+        };
+        if let Some(id) = id
+            && !out.contains(&id)
+        {
+            out.push(id);
+        }
+    };
+    rp.depends_on(&settings.view(drive), &mut add);
+    if let Some(d) = rp.limit_dependency() {
+        add(d);
+    }
+    out
 }
 
 fn split_assignment(text: &str) -> Result<(&str, &str), SettingError> {
@@ -174,6 +245,7 @@ impl SettingsArgs {
             settings.variants.insert(ax.id.clone(), option.to_owned());
         }
         let mut fixed = BTreeSet::new();
+        let mut given = Vec::new();
         for s in &self.sets {
             let (name, value) = split_assignment(s)?;
             let not_a_number = |unit: Option<&str>| SettingError::NotANumber {
@@ -184,6 +256,12 @@ impl SettingsArgs {
             if let Some(q) = drive.externals().into_iter().find(|q| q.external == name) {
                 let v = number(value, &q.unit).ok_or_else(|| not_a_number(Some(&q.unit)))?;
                 settings.references.insert(q.external.clone(), v);
+                given.push(GivenValue {
+                    id: q.external.clone(),
+                    name: name.to_owned(),
+                    value: value.to_owned(),
+                    external: true,
+                });
                 continue;
             }
             let r = lookup::find(drive, name).map_err(|not_found| SettingError::Unknown {
@@ -204,6 +282,17 @@ impl SettingsArgs {
             if is_reference {
                 let v = number(value, r.def.unit.as_deref().unwrap_or(""))
                     .ok_or_else(|| not_a_number(None))?;
+                // Checked as a write of the register would be: a value the drive cannot hold
+                // (P2000 = 5000 Hz where its range is 1-599) converts nothing.
+                match codec::encode(drive, r, v, &settings) {
+                    Ok(_)
+                    | Err(
+                        ValueError::MissingSetting { .. }
+                        | ValueError::LimitNotKnown { .. }
+                        | ValueError::NotAStep { .. },
+                    ) => {}
+                    Err(e) => return Err(bad_value(InputError::Value(e))),
+                }
                 settings.references.insert(r.def.id.clone(), v);
             }
             if !(is_selector || is_reference) {
@@ -223,8 +312,18 @@ impl SettingsArgs {
                 }
             }
             fixed.insert(r.def.id.clone());
+            given.push(GivenValue {
+                id: r.def.id.clone(),
+                name: name.to_owned(),
+                value: value.to_owned(),
+                external: false,
+            });
         }
-        Ok(Given { settings, fixed })
+        Ok(Given {
+            settings,
+            fixed,
+            given,
+        })
     }
 }
 
@@ -593,8 +692,20 @@ impl<'d> Session<'d> {
         link: &Link,
         settings: LiveSettings,
     ) -> Result<Self, LinkError> {
+        Self::open_as(drive, profile, link, settings, DraftWrites::Refused)
+    }
+
+    /// [`Session::open_with`], with writes through a draft map (`draft:`) refused unsent or
+    /// allowed as `draft` says ([`crate::draft`]); a reviewed map's writes are not affected.
+    pub fn open_as(
+        drive: &'d Drive,
+        profile: &'static Profile,
+        link: &Link,
+        settings: LiveSettings,
+        draft: DraftWrites,
+    ) -> Result<Self, LinkError> {
         link.check_transport(drive)?;
-        let (client, text) = link.connect(drive, profile)?;
+        let (client, text) = link.connect_as(drive, profile, draft)?;
         let options = *client.options();
         let silence = SilenceGuard::new(u32::from(options.retries) + 1);
         let client = Client::with_options(silence.wrap(client.into_transport()), profile, options);
@@ -680,6 +791,83 @@ impl<'d> Session<'d> {
             .collect();
         self.read_dependencies(&references, &mut done, &mut warnings, "conversions depend");
         warnings
+    }
+
+    /// Checks every `--set` value of a register against the drive where the register can be
+    /// read on this link: a value the drive does not hold refuses the command, naming both
+    /// (`--set ref_freq=1`: the drive holds P2000 = 50.00 Hz). A value that could not be read
+    /// (write-only, not on this link, a read that failed) and every external quantity is
+    /// assumed: returned as a note the command prints with each result it converted with it.
+    pub fn check_given(&mut self, given: &[GivenValue]) -> Result<Assumed, String> {
+        let drive = self.drive;
+        let mut assumed = Assumed::default();
+        for g in given {
+            let shown = |v: &str| {
+                format!(
+                    "{} = {}",
+                    if g.external {
+                        g.id.as_str()
+                    } else {
+                        g.name.as_str()
+                    },
+                    codec::shorten(v)
+                )
+            };
+            let assume = |why: &str| {
+                (
+                    g.id.clone(),
+                    format!("assuming {}, given, not read{why}", shown(&g.value)),
+                )
+            };
+            if g.external {
+                assumed.notes.push(assume(""));
+                continue;
+            }
+            let Ok(r) = lookup::find(drive, &g.id) else {
+                continue;
+            };
+            if let Some(why) = self.unreadable(r) {
+                assumed.notes.push(assume(&format!(" ({why})")));
+                continue;
+            }
+            if self.slave == 0 {
+                assumed.notes.push(assume(" (a broadcast reads nothing)"));
+                continue;
+            }
+            let read = match self.read_raw(r) {
+                Ok(raw) => raw,
+                Err(e) => {
+                    assumed.notes.push(assume(&format!(" (reading it: {e})")));
+                    continue;
+                }
+            };
+            // The given value as the drive would hold it: the nearest word (a reference given
+            // between two steps agrees with the step the drive holds).
+            let Ok(mine) = codec::parse_value_with(
+                drive,
+                r,
+                &g.value,
+                &self.settings,
+                drivemap_runtime::Rounding::Nearest,
+            ) else {
+                assumed.notes.push(assume(""));
+                continue;
+            };
+            if mine != read {
+                let held = self
+                    .decode(r, read)
+                    .map(|v| v.to_string())
+                    .unwrap_or_else(|_| self.raw_text(r, read));
+                return Err(format!(
+                    "`--set {}={}`: the drive holds {}, not {}: a --set value is checked against a drive that gives it (leave the --set out to use the drive's)",
+                    g.name,
+                    codec::shorten(&g.value),
+                    format_args!("{} = {held}", describe::register(r)),
+                    codec::shorten(&g.value)
+                ));
+            }
+        }
+        Ok(assumed)
     }
 
     /// Reads the quantities the limits of `regs` through other parameters depend on

@@ -722,7 +722,13 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
             };
             for def in instances {
                 registers.push(Register {
-                    access: def.access.or(g.access).unwrap_or(Access::ReadWrite),
+                    // A draft's rows were not read against the manual: an access nobody
+                    // wrote is read-only there, read-write only in a reviewed map.
+                    access: def.access.or(g.access).unwrap_or(if model.draft.is_some() {
+                        Access::Read
+                    } else {
+                        Access::ReadWrite
+                    }),
                     table: def
                         .modbus_table
                         .or(g.modbus_table)

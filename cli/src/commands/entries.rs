@@ -121,13 +121,22 @@ pub fn write(
             .map_err(|err| format!("{err}; nothing written"))?;
         values.push((*e, v));
     }
+    let through = drivemap_live::draft::check_write(drive, target.draft_writes())?
+        .map(|note| format!(" [{note}]"))
+        .unwrap_or_default();
     let given = target.settings.resolve(drive)?;
-    let mut session = Session::open(drive, &target.link, given.settings)?;
+    let mut session = Session::open_as(
+        drive,
+        drivemap_live::leak_profile(drive),
+        &target.link,
+        given.settings,
+        target.draft_writes(),
+    )?;
     for (e, v) in values {
         session
             .write_entry(e, v)
             .map_err(|err| format!("{}: {err} ({})", e.entry.id, what(e)))?;
-        outln!("{} = {v}  ({})", e.entry.id, what(e));
+        outln!("{} = {v}  ({}){through}", e.entry.id, what(e));
     }
     Ok(ExitCode::SUCCESS)
 }

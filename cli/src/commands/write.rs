@@ -9,6 +9,8 @@ use drivemap_live::intern::intern;
 use drivemap_map::Drive;
 use drivemap_map::ir::Register;
 use drivemap_runtime::gate;
+use drivemap_runtime::roles::{RoleKind, Target as Place};
+use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Profile, Refusal, Rounding, ValueError};
 
 use crate::error::Error;
@@ -35,6 +37,52 @@ pub struct Args {
     /// value is refused with the two nearest. Ranges and limits apply to the value given.
     #[arg(long)]
     pub round: bool,
+    /// Change a setting that scales, bounds or selects other registers (`ref_freq`, `n011`)
+    /// while the drive's status shows it running: without it such a write is refused, since
+    /// it moves what the running drive does (its reference taken as a percentage of the
+    /// setting, say).
+    #[arg(long = "while-running")]
+    pub while_running: bool,
+}
+
+/// The registers whose conversion, limit or address `r` takes part in, each with how: `scales
+/// frequency_setpoint`, `bounds tcp_frequency_reference`, `selects the scale of x`.
+pub fn dependants(
+    drive: &Drive,
+    r: &Register,
+    settings: &drivemap_live::LiveSettings,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    for x in &drive.registers {
+        if x.def.id == r.def.id {
+            continue;
+        }
+        let all = drive.plan();
+        let bounds = match drive.register_plan(x).limit_dependency() {
+            Some(drivemap_runtime::plan::Dependency::Quantity(s)) => matches!(
+                all.settings.quantities.get(usize::from(s.slot)),
+                Some(drivemap_map::lower::Quantity::Register(row))
+                    if all.registers[*row].info.id == r.def.id
+            ),
+            _ => false,
+        };
+        let used = drivemap_live::session::settings_used(drive, x, settings);
+        if !used.contains(&r.def.id) {
+            continue;
+        }
+        let selects = drivemap_live::session::selectors_of(drive, x)
+            .iter()
+            .any(|s| s.def.id == r.def.id);
+        let how = if selects {
+            "selects the scale or address of"
+        } else if bounds {
+            "bounds"
+        } else {
+            "scales"
+        };
+        out.push(format!("{how} {}", x.def.id));
+    }
+    out
 }
 
 /// A refusal of the write gate, naming the register as the map prints it; nothing was sent.
@@ -56,7 +104,9 @@ fn input_error(drive: &Drive, e: &InputError) -> String {
 
 /// The word for an assignment that names some fields of a bit-field register (`run`,
 /// `direction=reverse`): the fields not named keep the value read from the drive, so writing
-/// one field never changes another. A register that cannot be read here (write-only, or a
+/// one field never changes another — except in a register that holds a command role, whose
+/// word is composed as the drive trait composes it (`Vfd::command_fields_word`: no run or
+/// reset bit the assignment does not name, unless the drive runs). A register that cannot be read here (write-only, or a
 /// broadcast) gets the named fields and 0 elsewhere, and a warning says so. `None` when the
 /// value is not a field list (a number is the whole word).
 fn field_word(
@@ -75,8 +125,30 @@ fn field_word(
     else {
         return Ok(None);
     };
+    let plan = drive.plan();
+    let row = u16::try_from(plan.order[r.index()]).unwrap_or(u16::MAX);
     let word = if input.mask & fields_mask == fields_mask {
         input.value
+    } else if holds_command(drive, row) {
+        // A command word: composed from the roles as the drive trait composes its own (no run
+        // or reset bit this write does not name, unless the drive runs), never a read-back.
+        let mut vfd = Vfd::from_plan(
+            &mut session.client,
+            session.slave,
+            session.settings.view(drive),
+            plan.registers,
+            plan.roles,
+        );
+        let word = vfd
+            .command_fields_word(row, input.mask, input.value)
+            .map_err(|e| format!("{}: {e}; nothing written", describe::register(r)))?;
+        if session.slave == 0 || session.unreadable(r).is_some() {
+            eprintln!(
+                "warning: {} cannot be read here, so the fields not named are released (0 where no command)",
+                describe::register(r)
+            );
+        }
+        word
     } else if session.slave == 0 || session.unreadable(r).is_some() {
         eprintln!(
             "warning: {} cannot be read here, so the fields not named are written as 0",
@@ -95,6 +167,13 @@ fn field_word(
     codec::encode(drive, r, f64::from(word), &session.settings)
         .map(Some)
         .map_err(|e| Error::Refused(format!("{}; nothing written", value_error(drive, &e))))
+}
+
+/// Whether plan row `row` of `drive` holds a command role (run, direction, fault reset, ...).
+fn holds_command(drive: &Drive, row: u16) -> bool {
+    drive.plan().roles.places.iter().any(|p| {
+        p.role.kind() == RoleKind::Command && matches!(p.target, Place::Field(f) if f.row == row)
+    })
 }
 
 /// The warning for a number register whose range the manual does not print, directly or
@@ -164,6 +243,10 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
     if !errors.is_empty() {
         return Err(Error::Refused(errors.join("\n")));
     }
+    // A draft map is not written through unless --draft says so; then every write says it.
+    let through = drivemap_live::draft::check_write(drive, args.target.draft_writes())?
+        .map(|note| format!(" [{note}]"))
+        .unwrap_or_default();
     if !entries.is_empty() {
         return super::entries::write(drive, &args.target, pairs.len(), &entries);
     }
@@ -226,18 +309,61 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             drivemap_runtime::core::ProtocolFact::MaxWrite,
         ],
     );
-    let mut session = Session::open_with(drive, profile, &args.target.link, given.settings)?;
+    let mut session = Session::open_as(
+        drive,
+        profile,
+        &args.target.link,
+        given.settings.clone(),
+        args.target.draft_writes(),
+    )?;
     for w in session.load_dependencies(&regs, &given.fixed) {
         eprintln!("warning: {w}");
     }
     for w in session.load_limits(&regs, &given.fixed) {
         eprintln!("warning: {w}");
     }
+    // Each --set of a register the drive gives is checked against it; the rest are assumed,
+    // and every write converted with one says so.
+    let assumed = session
+        .check_given(&given.given)
+        .map_err(|e| Error::Refused(format!("{e}; nothing written")))?;
     if let Some(why) = session.silence.report() {
         return Err(Error::Refused(format!(
             "{} did not answer: {why}; nothing written",
             session.link
         )));
+    }
+    // A setting others depend on: named, and not changed under a running drive unless asked.
+    for (r, _) in &pairs {
+        let deps = dependants(drive, r, &session.settings);
+        if deps.is_empty() {
+            continue;
+        }
+        let list = deps.join(", ");
+        let running = if session.slave == 0 {
+            None
+        } else {
+            let plan = drive.plan();
+            let mut vfd = Vfd::from_plan(
+                &mut session.client,
+                session.slave,
+                session.settings.view(drive),
+                plan.registers,
+                plan.roles,
+            );
+            if vfd.supports(drivemap_runtime::roles::Role::Running) {
+                vfd.status().ok().and_then(|s| s.running)
+            } else {
+                None
+            }
+        };
+        if running == Some(true) && !args.while_running {
+            return Err(Error::Refused(format!(
+                "{}: the drive is running (its status shows `running`), and this setting {list}: changing it moves what the running drive does; give --while-running to change it anyway; nothing written",
+                describe::register(r)
+            )));
+        }
+        eprintln!("note: {} {list}: their meaning changes with it", r.def.id);
     }
     let mut raws = Vec::new();
     for (r, value) in &pairs {
@@ -283,6 +409,10 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
         if let Some(given) = rounded {
             shown = format!("{shown}, rounded from {given} (--round)");
         }
+        let mut assuming = assumed.for_register(drive, r, &session.settings);
+        if !assuming.is_empty() {
+            assuming.insert_str(0, "; ");
+        }
         // A register whose drive executes only a changed value gets its intermediate value
         // first (`Client::write_changed`, through the same gate), so writing the same value
         // twice executes it twice.
@@ -314,7 +444,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             _ => String::new(),
         };
         outln!(
-            "wrote {} = {shown} ({raw:0digits$X}h) at {}{first}",
+            "wrote {} = {shown} ({raw:0digits$X}h) at {}{first}{through}{assuming}",
             describe::register(r),
             describe::address(address)
         );

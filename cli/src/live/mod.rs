@@ -25,15 +25,29 @@ pub struct Target {
     pub link: link::Link,
     #[command(flatten)]
     pub settings: session::SettingsArgs,
+    /// Write through a draft map (one marked `draft:`, as `drivemap import` writes it, not yet
+    /// reviewed against its manual); without it such writes are refused, nothing sent. Every
+    /// write made with it says it went through a draft.
+    #[arg(long)]
+    pub draft: bool,
 }
 
 impl Target {
     /// Reads and validates the drive's map, and refuses a link the drive does not have
     /// (`--tcp` to a drive without Modbus TCP: [`link::Link::check_transport`]) before
     /// anything else is looked at.
+    /// A draft map (`draft:`) is loaded with a note saying so on standard error.
     pub fn load(&self) -> Result<Drive, Error> {
         let drive = self.dir.load(&self.drive)?;
         self.link.check_transport(&drive)?;
+        if let Some(note) = drivemap_live::draft::read_note(&drive) {
+            eprintln!("note: {note}");
+        }
         Ok(drive)
+    }
+
+    /// Whether writes through a draft map are allowed (`--draft`).
+    pub fn draft_writes(&self) -> drivemap_live::draft::DraftWrites {
+        drivemap_live::draft::DraftWrites::from_flag(self.draft)
     }
 }

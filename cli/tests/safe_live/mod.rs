@@ -1,0 +1,561 @@
+//! Issue 37: from a draft to a live drive, safely. Nothing a user did not check decides what
+//! goes on the wire: a draft map is not written through without `--draft`, a `--set` value
+//! outside its range or disagreeing with a drive that gives it is not used, a write of one
+//! field of a command register carries no run or reset bit the call did not ask for, and a
+//! setting others depend on is not changed under a running drive without `--while-running`.
+//!
+//! Property tests (proptest) over every map of `maps/` (the directory is read, no list) and the
+//! drafts `drivemap import` makes of the import fixtures' manuals, through the CLI's own write
+//! command in-process against a simulated drive that records every write; and the
+//! reproductions of the report through the binary, each asserting what reached the drive.
+
+use std::collections::BTreeSet;
+
+use drivemap_live::LiveSettings;
+use drivemap_runtime::core::roles::FieldRole;
+use drivemap_runtime::roles::{Role, RoleKind, Target as Place};
+use proptest::prelude::*;
+use proptest::sample::Index;
+use proptest::test_runner::{Config, TestRunner};
+
+use super::*;
+use crate::common::{Framing, Scratch, serve};
+
+/// `drivemap write` in-process against the maps of `maps`, slave 1, `extra` before the
+/// assignment.
+fn write_in(
+    maps: &Path,
+    drive: &Drive,
+    profile: &'static Profile,
+    wire: &Wire,
+    extra: &[&str],
+    assignment: &str,
+) -> Result<ExitCode, drivemap_cli::error::Error> {
+    let mut argv = vec![
+        "drivemap",
+        "write",
+        "--drive",
+        &drive.meta.id,
+        "--maps",
+        maps.to_str().unwrap(),
+        wire.flag(),
+        &wire.addr,
+        "--timeout",
+        "500ms",
+        "--retries",
+        "0",
+    ];
+    argv.extend_from_slice(extra);
+    argv.push(assignment);
+    let cli = Cli::try_parse_from(argv).expect("the test's own arguments parse");
+    let Cmd::Write(args) = cli.command else {
+        unreachable!()
+    };
+    write::execute(drive, profile, &args)
+}
+
+/// Every map of `maps/` copied into `dir` with a `draft:` mark, and the drafts `drivemap import`
+/// writes of the import fixtures' manuals (`tests/fixtures/import/manuals/*.txt`).
+fn drafts(dir: &Path) -> Vec<PathBuf> {
+    for path in maps_in(&repo().join("maps")) {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut out = String::new();
+        let mut marked = false;
+        for line in text.lines() {
+            out.push_str(line);
+            out.push('\n');
+            if !marked && line.starts_with("schema:") {
+                out.push_str("draft: {by: issue 37 test}\n");
+                marked = true;
+            }
+        }
+        assert!(marked, "{}: no schema line to mark after", path.display());
+        std::fs::write(dir.join(path.file_name().unwrap()), out).unwrap();
+    }
+    let manuals = repo().join("tests/fixtures/import/manuals");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&manuals).unwrap() {
+        let manual = entry.unwrap().path();
+        if manual.extension().is_none_or(|e| e != "txt") {
+            continue;
+        }
+        let id = manual.file_stem().unwrap().to_str().unwrap().to_owned();
+        let out = dir.join(format!("{id}.yaml"));
+        let (code, _, err) = common::run(common::command().args([
+            "import",
+            "--manual",
+            manual.to_str().unwrap(),
+            "--id",
+            &id,
+            "-o",
+            out.to_str().unwrap(),
+        ]));
+        assert_eq!(code, 0, "drivemap import {}: {err}", manual.display());
+        n += 1;
+    }
+    assert!(n >= 2, "the import fixtures' manuals");
+    maps_in(dir)
+}
+
+/// The RTU-framed link every map has (`--rtu-tcp`): a draft of an import fixture lists `rtu`.
+const KIND: TransportKind = TransportKind::RtuOverTcp;
+
+/// No write reaches the wire through a draft without `--draft`: every draft (each shipped map
+/// marked, each import fixture's draft), a register and a value form drawn at random, legal or
+/// not. On the old code every legal write arrived.
+#[test]
+fn no_write_reaches_the_wire_through_a_draft_without_draft() {
+    let scratch = Scratch::new("issue37-drafts");
+    let paths = drafts(&scratch.0);
+    let mut loaded = Vec::new();
+    for p in &paths {
+        let drive = drivemap_map::read_map(p, &Context::default())
+            .unwrap_or_else(|e| panic!("{}: {e:?}", p.display()));
+        assert!(drive.draft.is_some(), "{} is a draft", p.display());
+        let profile = drivemap_live::leak_profile(&drive);
+        let wire = Wire::start(profile, KIND);
+        loaded.push((drive, profile, wire));
+    }
+    let mut runner = TestRunner::new(Config {
+        cases: 96,
+        failure_persistence: None,
+        ..Config::default()
+    });
+    let strategy = (any::<Index>(), any::<Index>(), any::<Index>());
+    runner
+        .run(&strategy, |(m, ri, vi)| {
+            let (drive, profile, wire) = &loaded[m.index(loaded.len())];
+            let r = &drive.registers[ri.index(drive.registers.len())];
+            let values = values(r);
+            let (value, _) = &values[vi.index(values.len())];
+            let assignment = format!("{}={value}", r.def.id);
+            let before = wire.writes();
+            let result = write_in(&scratch.0, drive, profile, wire, &[], &assignment);
+            wire.settle();
+            let arrived = wire.writes_since(before);
+            prop_assert!(
+                arrived.is_empty(),
+                "{} {assignment}: {arrived:?} reached the wire through a draft",
+                drive.meta.id
+            );
+            prop_assert!(
+                result.is_err(),
+                "{} {assignment}: {result:?}",
+                drive.meta.id
+            );
+            Ok(())
+        })
+        .unwrap();
+    // With --draft a register whose access nobody wrote (neither the row nor its group) is
+    // read-only: refused, nothing sent. The import fixtures' drafts have such rows.
+    let mut checked = 0;
+    for (drive, profile, wire) in &loaded {
+        for r in &drive.registers {
+            if r.access != drivemap_runtime::core::Access::Read || !on_transport(r, KIND) {
+                continue;
+            }
+            let Some((value, _)) = values(r).into_iter().next() else {
+                continue;
+            };
+            let before = wire.writes();
+            let result = write_in(
+                &scratch.0,
+                drive,
+                profile,
+                wire,
+                &["--draft"],
+                &format!("{}={value}", r.def.id),
+            );
+            wire.settle();
+            assert_eq!(
+                wire.writes(),
+                before,
+                "{} {}: read-only",
+                drive.meta.id,
+                r.def.id
+            );
+            assert!(result.is_err(), "{} {}", drive.meta.id, r.def.id);
+            if r.def.access.is_none() {
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 0, "a draft register without access was tried");
+}
+
+/// The command fields of plan row `row`, with their roles.
+fn command_fields(drive: &Drive, row: u16) -> Vec<(Role, FieldRole)> {
+    drive
+        .plan()
+        .roles
+        .places
+        .iter()
+        .filter_map(|p| match (p.role.kind(), p.target) {
+            (RoleKind::Command, Place::Field(f)) if f.row == row => Some((p.role, f)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The PDU address of plan row `row` on `KIND` (an RTU link: the map's RTU address offset
+/// applies) at the drive's default settings.
+fn pdu(drive: &Drive, row: u16) -> Option<u16> {
+    let settings = LiveSettings::default();
+    let at = drive.plan().registers[usize::from(row)]
+        .locate(&settings.view(drive), KIND)
+        .ok()?;
+    u16::try_from(i32::from(at) + drive.address_offsets().0).ok()
+}
+
+fn runs(role: Role) -> bool {
+    matches!(role, Role::Run | Role::RunForward | Role::RunReverse)
+}
+
+/// One field of a command register written, on every map of `maps/` that has command roles:
+/// whatever the drive's word holds (run and reset bits set by someone), the word sent carries
+/// the fault reset (and every edge command) released, and a run bit only where the status
+/// role shows the drive running and the word had it. On the old code the word read back went
+/// out with its run and reset bits.
+#[test]
+fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
+    let maps = repo().join("maps");
+    // (drive, profile, wire, command register, field ids writable that are no run or reset)
+    let mut cases = Vec::new();
+    for path in maps_in(&maps) {
+        let drive = drivemap_map::read_map(&path, &Context::default()).unwrap();
+        let profile = drivemap_live::leak_profile(&drive);
+        let rows: BTreeSet<u16> = drive
+            .plan()
+            .roles
+            .places
+            .iter()
+            .filter_map(|p| match (p.role.kind(), p.target) {
+                (RoleKind::Command, Place::Field(f)) => Some(f.row),
+                _ => None,
+            })
+            .collect();
+        let mut regs = Vec::new();
+        for row in rows {
+            let Some(r) = drive.register_of_row(usize::from(row)) else {
+                continue;
+            };
+            if !allowed_on_link(&drive, r, KIND, 1) || !r.readable() || pdu(&drive, row).is_none() {
+                continue;
+            }
+            let guarded: u16 = command_fields(&drive, row)
+                .iter()
+                .filter(|(role, f)| {
+                    runs(*role) || *role == Role::FaultReset || f.edge.needs_release_first()
+                })
+                .fold(0, |m, (_, f)| m | f.mask());
+            let ValueKind::Bits(fields) = r.kind() else {
+                continue;
+            };
+            let free: Vec<(String, u16)> = fields
+                .iter()
+                .filter_map(|f| {
+                    let (lsb, width) = field_span(f)?;
+                    let mask = ((((1u32 << width) - 1) << lsb) & 0xFFFF) as u16;
+                    (mask & guarded == 0 && width == 1).then(|| (f.id.clone(), mask))
+                })
+                .collect();
+            if !free.is_empty() && guarded != 0 {
+                regs.push((row, free));
+            }
+        }
+        if !regs.is_empty() {
+            let wire = Wire::start(profile, KIND);
+            cases.push((drive, profile, wire, regs));
+        }
+    }
+    assert!(cases.len() >= 2, "maps with command registers");
+    let mut runner = TestRunner::new(Config {
+        cases: 128,
+        failure_persistence: None,
+        ..Config::default()
+    });
+    let strategy = (
+        any::<Index>(),
+        any::<Index>(),
+        any::<Index>(),
+        any::<u16>(),
+        any::<bool>(),
+        any::<bool>(),
+    );
+    runner
+        .run(&strategy, |(m, ri, fi, preset, running, on)| {
+            let (drive, profile, wire, regs) = &cases[m.index(cases.len())];
+            let (row, free) = &regs[ri.index(regs.len())];
+            let (field, field_mask) = &free[fi.index(free.len())];
+            let r = drive.register_of_row(usize::from(*row)).unwrap();
+            let at = pdu(drive, *row).unwrap();
+            let mask = field_mask_of(r);
+            let preset = preset & mask;
+            // The status the drive shows: the running role where the link has it.
+            let status = drive
+                .plan()
+                .roles
+                .places
+                .iter()
+                .find_map(|p| match p.target {
+                    Place::Field(f)
+                        if p.role == Role::Running
+                            && drive.plan().registers[usize::from(f.row)]
+                                .transports
+                                .contains(KIND) =>
+                    {
+                        Some(f)
+                    }
+                    _ => None,
+                });
+            {
+                let mut s = wire.slave.lock().unwrap();
+                s.set_holding(at, preset);
+                if let Some(f) = status
+                    && f.row != *row
+                    && let Some(st) = pdu(drive, f.row)
+                {
+                    let word = s.holding(st);
+                    let code = if running { f.on[0] } else { f.off.unwrap_or(0) };
+                    s.set_holding(st, f.put(word, code));
+                }
+            }
+            let shows_running = running && status.is_some_and(|f| f.row != *row);
+            let before = wire.writes();
+            let assignment = format!("{}={field}={}", r.def.id, u8::from(on));
+            let result = write_in(&repo().join("maps"), drive, profile, wire, &[], &assignment);
+            wire.settle();
+            let arrived = wire.writes_since(before);
+            let words: Vec<u16> = arrived
+                .iter()
+                .filter(|(a, _)| *a == at)
+                .map(|(_, w)| *w)
+                .collect();
+            prop_assert!(
+                words.len() == 1,
+                "{} {assignment}: {result:?}, arrived {arrived:?}",
+                drive.meta.id
+            );
+            let word = words[0];
+            prop_assert_eq!(word & field_mask, if on { *field_mask } else { 0 });
+            for (role, f) in command_fields(drive, *row) {
+                let sent = f.get(word);
+                if role == Role::FaultReset || f.edge.needs_release_first() {
+                    prop_assert_eq!(
+                        sent,
+                        f.code(false),
+                        "{} {}: {:?} sent set in {:04X}h (drive held {:04X}h)",
+                        drive.meta.id,
+                        assignment,
+                        role,
+                        word,
+                        preset
+                    );
+                } else if runs(role) && !shows_running {
+                    prop_assert_eq!(
+                        sent,
+                        f.code(false),
+                        "{} {}: {:?} sent to a stopped drive in {:04X}h (it held {:04X}h)",
+                        drive.meta.id,
+                        assignment,
+                        role,
+                        word,
+                        preset
+                    );
+                } else if runs(role) {
+                    prop_assert_eq!(sent, f.get(preset), "a running drive keeps its run");
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+fn field_mask_of(r: &Register) -> u16 {
+    field_mask(r).unwrap_or(0xFFFF)
+}
+
+/// A `--set` value of a register the drive gives is checked against it: on every map of
+/// `maps/`, for every selector or reference register readable on the link and every register
+/// whose conversion or limit uses it, a given value outside the register's range or other than
+/// the drive's sends nothing. On the old code the given value was used as it was.
+#[test]
+fn no_set_value_outside_its_range_or_against_the_drive_is_used() {
+    let maps = repo().join("maps");
+    let mut cases = Vec::new();
+    for path in maps_in(&maps) {
+        let drive = drivemap_map::read_map(&path, &Context::default()).unwrap();
+        let profile = drivemap_live::leak_profile(&drive);
+        let mut pairs = Vec::new();
+        let settings = LiveSettings::default();
+        let mut sources: Vec<&Register> = drive.references();
+        sources.extend(drive.selectors());
+        for s in sources {
+            if !s.readable() || !on_transport(s, KIND) || s.broadcast {
+                continue;
+            }
+            let users: Vec<String> = drive
+                .registers
+                .iter()
+                .filter(|x| {
+                    x.def.id != s.def.id
+                        && allowed_on_link(&drive, x, KIND, 1)
+                        && drivemap_live::session::settings_used(&drive, x, &settings)
+                            .contains(&s.def.id)
+                })
+                .map(|x| x.def.id.clone())
+                .collect();
+            if !users.is_empty() {
+                pairs.push((s.def.id.clone(), users));
+            }
+        }
+        if !pairs.is_empty() {
+            let wire = Wire::start(profile, KIND);
+            cases.push((drive, profile, wire, pairs));
+        }
+    }
+    assert!(!cases.is_empty(), "maps whose conversions read a setting");
+    let mut runner = TestRunner::new(Config {
+        cases: 96,
+        failure_persistence: None,
+        ..Config::default()
+    });
+    let strategy = (
+        any::<Index>(),
+        any::<Index>(),
+        any::<Index>(),
+        any::<Index>(),
+        -1.0f64..2.0,
+        any::<bool>(),
+    );
+    runner
+        .run(&strategy, |(m, si, ui, hi, given, same)| {
+            let (drive, profile, wire, pairs) = &cases[m.index(cases.len())];
+            let (sid, users) = &pairs[si.index(pairs.len())];
+            let s = drive.find(sid).unwrap();
+            let u = drive.find(&users[ui.index(users.len())]).unwrap();
+            let settings = LiveSettings::default();
+            let plan = drive.register_plan(s);
+            let at = u16::try_from(
+                i32::from(plan.locate(&settings.view(drive), KIND).unwrap())
+                    + drive.address_offsets().0,
+            )
+            .unwrap();
+            // What the drive holds: a value of the register (its range, or its codes).
+            let (lo, hi_v) = (s.def.min.unwrap_or(0.0), s.def.max.unwrap_or(100.0));
+            let held_text = match s.kind() {
+                ValueKind::Enum(list) => list[hi.index(list.len())].value.to_string(),
+                _ => number(s.def.min.unwrap_or(0.0).max(lo)),
+            };
+            let held = drivemap_live::codec::parse_value(drive, s, &held_text, &settings)
+                .expect("a value of the setting") as u16;
+            wire.slave.lock().unwrap().set_holding(at, held);
+            // What is given: the drive's value, or anything from below the range to above it.
+            let given_text = if same {
+                held_text.clone()
+            } else {
+                number(((lo + given * (hi_v - lo)) * 10.0).round() / 10.0)
+            };
+            let value = values(u)
+                .into_iter()
+                .next()
+                .map(|(v, _)| v)
+                .unwrap_or_else(|| "0".into());
+            let before = wire.writes();
+            let set = format!("{}={given_text}", s.def.id);
+            let result = write_in(
+                &repo().join("maps"),
+                drive,
+                profile,
+                wire,
+                &["--set", &set],
+                &format!("{}={value}", u.def.id),
+            );
+            wire.settle();
+            let arrived = wire.writes_since(before);
+            let agrees = drivemap_live::codec::parse_value_with(
+                drive,
+                s,
+                &given_text,
+                &settings,
+                drivemap_runtime::Rounding::Nearest,
+            )
+            .is_ok_and(|raw| raw == u32::from(held));
+            if !agrees {
+                prop_assert!(
+                    arrived.is_empty(),
+                    "{}: --set {set} (the drive holds {held_text}) {}={value}: {arrived:?} arrived ({result:?})",
+                    drive.meta.id,
+                    u.def.id
+                );
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+/// The report's draft write, through the binary: an import draft is refused without
+/// `--draft` (nothing reaches the drive), written with it (and said so), and read with a
+/// note; a register whose access the draft does not give is read-only even with `--draft`.
+#[test]
+fn repro_a_draft_map_is_not_written_without_draft() {
+    let scratch = Scratch::new("issue37-repro-draft");
+    let paths = drafts(&scratch.0);
+    let k20 = paths
+        .iter()
+        .find(|p| p.ends_with("kestrel-k20.yaml"))
+        .expect("the kestrel draft");
+    let drive = drivemap_map::read_map(k20, &Context::default()).unwrap();
+    let profile = drivemap_live::leak_profile(&drive);
+    let (addr, slave) = serve(
+        drivemap_sim::slave::SimulatedSlave::new(1, profile),
+        Framing::RtuOverTcp,
+    );
+    let maps = scratch.0.to_str().unwrap();
+    let r = drive
+        .find("frequency_reference")
+        .expect("the draft's reference");
+    let writable = r.writable();
+    let base = [
+        "write",
+        "--drive",
+        "kestrel-k20",
+        "--maps",
+        maps,
+        "--rtu-tcp",
+        &addr,
+        "frequency_reference=50",
+    ];
+    let (code, _, err) = common::run(common::command().args(base));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("kestrel-k20 is a draft map"), "{err}");
+    assert!(
+        err.contains("--draft") && err.contains("nothing written"),
+        "{err}"
+    );
+    assert!(slave.lock().unwrap().writes.is_empty());
+    let (code, out, err) = common::run(common::command().args(base).arg("--draft"));
+    let writes = slave.lock().unwrap().writes.clone();
+    if writable {
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            out.contains("through draft map kestrel-k20 (--draft)"),
+            "{out}"
+        );
+        assert_eq!(writes, vec![(0x2001, 5000)]);
+    } else {
+        assert_eq!(code, 2, "{err}");
+        assert!(writes.is_empty());
+    }
+    let (_, _, err) = common::run(common::command().args([
+        "read",
+        "--drive",
+        "kestrel-k20",
+        "--maps",
+        maps,
+        "--rtu-tcp",
+        &addr,
+        "frequency_reference",
+    ]));
+    assert!(err.contains("kestrel-k20 is a draft map"), "{err}");
+}
