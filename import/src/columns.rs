@@ -121,6 +121,9 @@ pub fn title_role(title: &str) -> Option<Role> {
         t.split(|c: char| !c.is_alphanumeric() && c != '/')
             .any(|x| x == w)
     };
+    if has("setting unit") || has("min. unit") || word("step") || word("lsb") {
+        return Some(Role::Step);
+    }
     if has("conversion index") || has("exponent") {
         return Some(Role::Exponent);
     }
@@ -195,6 +198,7 @@ pub fn title_role(title: &str) -> Option<Role> {
         || has("reference")
         || has("communication no")
         || word("modbus")
+        || word("modicon")
         || word("pdu")
         || word("dec")
     {
@@ -367,7 +371,8 @@ impl Layout {
             })
             .collect();
         let known = columns.iter().filter(|c| c.role != Role::Undecided).count();
-        if known * 2 < columns.len() || known < 2 {
+        let named = columns.iter().any(|c| c.role == Role::Name);
+        if known < 2 || (known * 2 < columns.len() && !named) {
             return None;
         }
         if !columns
@@ -508,6 +513,18 @@ impl Layout {
             }
             v
         };
+        // A `Parameter` column of names is the name column.
+        let has_name = self.columns.iter().any(|c| c.role == Role::Name);
+        for (i, col) in self.columns.iter_mut().enumerate() {
+            let cells = &per_column[i];
+            if col.role == Role::Param
+                && !has_name
+                && !cells.is_empty()
+                && cells.iter().filter(|c| param_cell(c).is_none()).count() * 10 >= cells.len() * 9
+            {
+                col.role = Role::Name;
+            }
+        }
         let has_name = self.columns.iter().any(|c| c.role == Role::Name);
         for (i, col) in self.columns.iter_mut().enumerate() {
             let cells = &per_column[i];
@@ -517,7 +534,13 @@ impl Layout {
             };
             match col.role {
                 Role::Undecided => {
-                    col.role = if all(&|c| access_word(c).is_some()) {
+                    col.role = if all(&|c| modicon(c).is_some_and(|(k, _)| k == '4')) {
+                        Role::Address
+                    } else if all(&|c| {
+                        param_cell(c).is_some() && c.chars().any(|d| d.is_ascii_alphabetic())
+                    }) {
+                        Role::Param
+                    } else if all(&|c| access_word(c).is_some()) {
                         Role::Access
                     } else if all(&|c| unit_cell(c.trim_matches(['[', ']'])).is_some() || c == "-")
                     {

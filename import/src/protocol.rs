@@ -99,7 +99,10 @@ pub fn read(lines: &[&str], first_line: usize) -> Protocol {
         if p.slave_range.is_none()
             && (lower.contains("slave address")
                 || lower.contains("station")
-                || lower.contains("node address"))
+                || lower.contains("node address")
+                || lower.contains("inverter number")
+                || lower.contains("drive address")
+                || lower.contains("device address"))
             && let Some(c) = SLAVE.captures(line)
             && let (Ok(a), Ok(b)) = (c[1].parse::<u8>(), c[2].parse::<u8>())
             && a <= 1

@@ -327,10 +327,19 @@ pub fn read_tables(
                 if let Some(named) = columns.get(&line_no) {
                     l.name_columns(named);
                 }
+                // The table's caption: its heading, or the short line just above its header.
+                let caption = lines[..i]
+                    .iter()
+                    .rev()
+                    .take(2)
+                    .find(|l| !l.trim().is_empty())
+                    .filter(|l| l.len() < 100)
+                    .map(|l| l.to_lowercase())
+                    .unwrap_or_default();
                 let context = h_heading
                     .as_ref()
                     .map(|(_, t)| t.to_lowercase())
-                    .unwrap_or_default();
+                    .unwrap_or(caption);
                 if l.bits.is_none() {
                     l.bits = bit_space(&context);
                 }
@@ -1613,6 +1622,8 @@ fn layout_row(
     }
     row.unit = unit.map(str::to_string);
     row.scale = match (step, unit, decimals) {
+        // A count of one with no unit is a plain word.
+        (Some(s), None, _) if s == 1.0 => None,
         (Some(s), _, _) => Some(s),
         (None, Some(_), Some(d)) => Some(10f64.powi(-(d as i32))),
         (None, None, Some(d)) if d > 0 => Some(10f64.powi(-(d as i32))),
