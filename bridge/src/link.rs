@@ -879,27 +879,19 @@ impl Serving {
 
     /// Logs (at a bounded rate), counts and publishes what became of a command.
     fn report(&mut self, i: Intent, result: Result<String, CommandFailure>, outcome: &'static str) {
-        let said = match &result {
-            Ok(what) => what.clone(),
-            Err(why) => format!("refused, nothing written: {why}"),
-        };
-        if outcome == "done" {
-            eprintln!(
-                "bridge: command on {} ({}): {said}",
-                quote(&i.command.topic),
-                quote(&i.command.payload)
-            );
-        } else {
-            let (ok, held) = self.log.allow(Instant::now());
-            if let Some(n) = held {
-                eprintln!("bridge: {n} more command refusal(s) not logged");
-            }
-            if ok {
-                eprintln!(
-                    "bridge: command on {} ({}) {outcome}: {said}",
-                    quote(&i.command.topic),
-                    quote(&i.command.payload)
-                );
+        let (topic, payload) = (quote(&i.command.topic), quote(&i.command.payload));
+        match &result {
+            Ok(what) => eprintln!("bridge: command on {topic} ({payload}): {what}"),
+            Err(why) => {
+                let (ok, held) = self.log.allow(Instant::now());
+                if let Some(n) = held {
+                    eprintln!("bridge: {n} more command refusal(s) not logged");
+                }
+                if ok {
+                    eprintln!(
+                        "bridge: command on {topic} ({payload}) {outcome}, nothing written: {why}"
+                    );
+                }
             }
         }
         self.outcome(&i, result, outcome);

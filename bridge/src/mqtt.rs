@@ -5,8 +5,9 @@
 //! error topic.
 //!
 //! A command is carried out when it is sent, never again: command topics are subscribed with
-//! MQTT 5's "do not send retained messages", and a message that arrives with the retain flag
-//! all the same is refused. `run`, `stop` and `fault_reset` take the payload `PRESS` only (an
+//! MQTT 5's "do not send retained messages" and "retain as published", and every message that
+//! arrives with the retain flag (one published retained while the bridge is connected) is
+//! refused. `run`, `stop` and `fault_reset` take the payload `PRESS` only (an
 //! `OFF`, a `0` or the empty payload that clears a retained message start nothing). The
 //! broker is told the largest packet the bridge takes ([`MAX_PACKET`]): MQTT 5 brokers drop a
 //! larger message for this client instead of sending it, so an oversized message cannot make
@@ -600,6 +601,9 @@ pub async fn run(
                             .map(|f| {
                                 let mut f = Filter::new(f, QoS::AtLeastOnce);
                                 f.retain_forward_rule = RetainForwardRule::Never;
+                                // A retained message published while connected keeps its flag
+                                // (retain as published), so it is refused too.
+                                f.preserve_retain = true;
                                 f
                             });
                         if client.subscribe_many(filters).await.is_err() {

@@ -3,6 +3,7 @@
 //! test starts simulated drives (`drivemap simulate`), the bridge and the tool on loopback, and
 //! fails, never skips, when a tool is missing (`tests/interop/install.sh` installs them).
 
+mod bridge_contract;
 mod bridge_support;
 
 use std::time::Duration;
@@ -426,11 +427,11 @@ fn mqtt_discovery_state_and_commands_through_the_gate() {
     );
     let log = b.output();
     assert!(
-        log.contains("command on drivemap/yaskawa-v7-1/command/run (PRESS): running"),
+        log.contains("command on \"drivemap/yaskawa-v7-1/command/run\" (\"PRESS\"): running"),
         "{log}"
     );
     assert!(
-        log.contains("set/accel_time_1 (5) refused, nothing written"),
+        log.contains("set/accel_time_1\" (\"5\") refused, nothing written"),
         "{log}"
     );
     // SIGTERM: stops after the cycle in flight, marks the bridge offline.

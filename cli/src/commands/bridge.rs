@@ -129,11 +129,12 @@ struct ConfigLink {
 /// text is never read whole or expanded without bound), every error naming the file and line.
 fn read_config(path: &std::path::Path) -> Result<Config, Error> {
     use drivemap_map::source;
+    use std::io::Read;
     let shown = path.display();
     let mut text = String::new();
     let file = std::fs::File::open(path).map_err(|e| format!("--config {shown}: {e}"))?;
     // At most one byte past the limit, so a huge file (or a device) is never read whole.
-    std::io::Read::take(file, source::MAX_MAP_BYTES as u64 + 1)
+    file.take(source::MAX_MAP_BYTES as u64 + 1)
         .read_to_string(&mut text)
         .map_err(|e| format!("--config {shown}: {e}"))?;
     let name: std::sync::Arc<str> = format!("{shown}").into();

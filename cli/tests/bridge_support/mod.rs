@@ -156,6 +156,12 @@ pub fn simulator(dir: &Path, drive: &str, slave: u8) -> (Proc, u16) {
 /// Simulated drives on one line (one RTU-over-TCP port), each at its slave address, network
 /// selected as their source, time 50× faster.
 pub fn simulated_line(dir: &Path, drives: &[(&str, u8)]) -> (Proc, u16) {
+    simulated_line_with(dir, drives, true)
+}
+
+/// [`simulated_line`], logging every request it serves (`quiet: false`): the log shows what
+/// reached the drives (`slave   1  06h  0001h x1    ok`).
+pub fn simulated_line_with(dir: &Path, drives: &[(&str, u8)], quiet: bool) -> (Proc, u16) {
     let port = free_port();
     let addr = format!("127.0.0.1:{port}");
     let mut args: Vec<String> = vec!["simulate".into()];
@@ -163,15 +169,11 @@ pub fn simulated_line(dir: &Path, drives: &[(&str, u8)]) -> (Proc, u16) {
         args.push("--drive".into());
         args.push(format!("{drive}@{slave}"));
     }
-    for a in [
-        "--rtu-tcp",
-        &addr,
-        "--network-source",
-        "--time-scale",
-        "50",
-        "--quiet",
-    ] {
+    for a in ["--rtu-tcp", &addr, "--network-source", "--time-scale", "50"] {
         args.push(a.into());
+    }
+    if quiet {
+        args.push("--quiet".into());
     }
     let refs: Vec<&str> = args.iter().map(String::as_str).collect();
     let name = drives
@@ -325,12 +327,29 @@ pub fn publish(port: u16, topic: &str, payload: &str, extra: &[&str]) -> (bool, 
     )
 }
 
-/// A mosquitto broker on loopback with `config` (its `listener` line is added).
+/// The user the tests run as (`id -un`).
+fn user() -> String {
+    let out = Command::new("id").arg("-un").output().unwrap();
+    String::from_utf8_lossy(&out.stdout).trim().to_owned()
+}
+
+/// A mosquitto broker on loopback with `config` (its `listener` line is added). It runs as the
+/// user the tests run as (`user` line: started as root, mosquitto would otherwise drop to its
+/// own user, which cannot read the test's files where the clone is in a directory only root
+/// may enter).
 pub fn mosquitto(dir: &Path, name: &str, config: &str) -> (Proc, u16) {
+    mosquitto_on(dir, name, config, free_port())
+}
+
+/// [`mosquitto`] on `port` (a broker started again where the last one listened).
+pub fn mosquitto_on(dir: &Path, name: &str, config: &str, port: u16) -> (Proc, u16) {
     let broker = require("mosquitto");
-    let port = free_port();
     let conf = dir.join(format!("{name}.conf"));
-    std::fs::write(&conf, format!("listener {port} 127.0.0.1\n{config}\n")).unwrap();
+    std::fs::write(
+        &conf,
+        format!("listener {port} 127.0.0.1\nuser {}\n{config}\n", user()),
+    )
+    .unwrap();
     let p = Proc::spawn(
         name,
         &broker,
