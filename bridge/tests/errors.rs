@@ -64,6 +64,7 @@ fn a_bridge_without_drives_or_with_a_taken_port_says_so() {
         period: Duration::from_millis(100),
         metrics: None,
         mqtt: None,
+        deadline: drivemap_bridge::command::DEFAULT_DEADLINE,
     };
     let e = drivemap_bridge::run(Vec::new(), options, Arc::new(AtomicBool::new(true)));
     assert!(matches!(e, Err(Error::NoDrives)), "{e:?}");
@@ -85,4 +86,29 @@ fn a_bridge_without_drives_or_with_a_taken_port_says_so() {
             .starts_with(&format!("cannot listen for /metrics on {addr}: ")),
         "{e}"
     );
+}
+
+/// Credentials in the broker URL are refused without being repeated; topic roots that cannot
+/// be published under are refused with why.
+#[test]
+fn credentials_in_the_url_and_wildcard_roots_are_refused() {
+    let e = mqtt::parse_url("mqtt://bridge:s3cret@broker.local:1883").unwrap_err();
+    assert!(matches!(e, Error::MqttUserinfo { .. }), "{e:?}");
+    let text = e.to_string();
+    assert!(!text.contains("s3cret") && !text.contains("bridge:"), "{text}");
+    assert!(text.contains("broker.local:1883"), "{text}");
+    for (root, why) in [
+        ("plant/+", "wildcards"),
+        ("ha/#", "wildcards"),
+        ("", "empty"),
+        ("a//b", "empty level"),
+        ("/a", "empty level"),
+        ("$SYS", "broker's"),
+    ] {
+        let e = mqtt::check_topic_root("--mqtt-topic", root).unwrap_err();
+        assert!(e.to_string().contains(why), "{root}: {e}");
+    }
+    for root in ["drivemap", "plant/hall-2/drives", "homeassistant"] {
+        mqtt::check_topic_root("--mqtt-topic", root).unwrap();
+    }
 }
