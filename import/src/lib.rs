@@ -397,9 +397,26 @@ impl Merge<'_> {
             .iter()
             .map(|(_, c)| c.new_rows.iter().filter(|r| r.address.is_some()).count())
             .sum();
+        let _ = writeln!(out, "# drivemap import --merge {map}");
+        // What was read comes first: "0 rows the map lacks" means nothing when no row was read.
+        for (file, c) in &self.comparisons {
+            let read = c.matched.len() + c.new_rows.len();
+            let _ = writeln!(
+                out,
+                "# {file}: {read} register rows read ({} matching a register of the map), {} registers of the map citing it not found",
+                c.matched.len(),
+                c.missed.len()
+            );
+            if read == 0 {
+                let _ = writeln!(
+                    out,
+                    "# {file}: no register row was read, so nothing below says the map agrees with it; see `--report`"
+                );
+            }
+        }
         let _ = writeln!(
             out,
-            "# drivemap import --merge {map}\n# {new} rows the map lacks (registers to review and paste into a group):"
+            "# {new} rows the map lacks (registers to review and paste into a group):"
         );
         for (file, c) in &self.comparisons {
             for r in c.new_rows.iter().filter(|r| r.address.is_some()) {

@@ -19,7 +19,8 @@
 # - Python packages pymodbus, minimalmodbus and pyserial in a venv at target/interop-venv, at the
 #   versions the scripts in tests/interop/ are written for (pymodbus changes its API between
 #   minor versions), and jsonschema, which cli/tests/machine_output.rs checks the CLI's JSON
-#   output with (docs/schema/).
+#   output with (docs/schema/), and fpdf2, which cli/tests/import.rs writes PDF manuals with;
+# - poppler-utils (pdftotext), which `drivemap import --manual x.pdf` extracts a PDF's text with.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -28,7 +29,7 @@ for tool in mbpoll socat npm; do
   command -v "$tool" >/dev/null 2>&1 || missing+=("$tool")
 done
 bare=()
-for pair in prometheus:prometheus mosquitto:mosquitto mosquitto_sub:mosquitto-clients openssl:openssl; do
+for pair in prometheus:prometheus mosquitto:mosquitto mosquitto_sub:mosquitto-clients openssl:openssl pdftotext:poppler-utils; do
   PATH="$PATH:/usr/sbin:/sbin" command -v "${pair%%:*}" >/dev/null 2>&1 || bare+=("${pair#*:}")
 done
 if [ $((${#missing[@]} + ${#bare[@]})) -gt 0 ]; then
@@ -54,10 +55,11 @@ if [ ! -x "$venv/bin/python" ]; then
   echo "== $python -m venv $venv"
   "$python" -m venv "$venv"
 fi
-pins=(pymodbus==3.16.1 minimalmodbus==2.1.1 pyserial==3.5 jsonschema==4.26.0)
+pins=(pymodbus==3.16.1 minimalmodbus==2.1.1 pyserial==3.5 jsonschema==4.26.0 fpdf2==2.8.9)
 check='import pymodbus, minimalmodbus, serial, importlib.metadata
 assert (pymodbus.__version__, minimalmodbus.__version__, serial.__version__) == ("3.16.1", "2.1.1", "3.5")
-assert importlib.metadata.version("jsonschema") == "4.26.0"'
+assert importlib.metadata.version("jsonschema") == "4.26.0"
+assert importlib.metadata.version("fpdf2") == "2.8.9"'
 if ! "$venv/bin/python" -c "$check" >/dev/null 2>&1; then
   echo "== $venv/bin/pip install ${pins[*]}"
   "$venv/bin/pip" install --quiet --disable-pip-version-check "${pins[@]}"

@@ -13,8 +13,9 @@ use crate::maps::MapsDir;
 /// Arguments of `drivemap import`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// A manual's text (OCR text as in shared/manuals); repeat for a drive with several manuals.
-    /// Citations name the file by its file name.
+    /// A manual's text (OCR text as in shared/manuals) or a PDF (its text is extracted with
+    /// poppler's `pdftotext -layout` and kept beside the draft as `<name>.txt`, which the draft
+    /// cites); repeat for a drive with several manuals. Citations name the file by its file name.
     #[arg(long = "manual", value_name = "FILE", required = true)]
     pub manuals: Vec<PathBuf>,
     /// The drive id of the draft (`acme-vf2`); the draft's file should be `<id>.yaml`.
@@ -36,6 +37,13 @@ pub struct Args {
     /// rows where it and the manual disagree.
     #[arg(long, value_name = "MAP")]
     pub merge: Option<PathBuf>,
+    /// Name the columns of the table whose header is on line LINE, left to right (the report
+    /// names the tables and columns the reader could not decide): `--columns
+    /// 12:address,name,min,max,default,unit`. Roles: address, reference, param, name, access,
+    /// unit, resolution, factor, exponent, range, min, max, default, type, size, description,
+    /// skip. Repeat for several tables.
+    #[arg(long = "columns", value_name = "LINE:ROLES")]
+    pub columns: Vec<String>,
     /// Where `--merge` looks a drive id up.
     #[command(flatten)]
     pub dir: MapsDir,
@@ -43,13 +51,36 @@ pub struct Args {
 
 /// Runs `drivemap import`.
 pub fn run(a: Args) -> Result<ExitCode, Error> {
+    let mut columns = std::collections::BTreeMap::new();
+    for c in &a.columns {
+        let (line, roles) = c.split_once(':').ok_or_else(|| {
+            Error::Refused(format!(
+                "--columns {c}: write the header's line and the roles, `12:address,name,unit`"
+            ))
+        })?;
+        let line: usize = line
+            .trim()
+            .parse()
+            .map_err(|_| Error::Refused(format!("--columns {c}: `{line}` is not a line number")))?;
+        let roles = drivemap_import::columns::parse_roles(roles)
+            .map_err(|e| Error::Refused(format!("--columns {c}: {e}")))?;
+        columns.insert(line, roles);
+    }
     let mut texts = Vec::new();
     for path in &a.manuals {
-        let text = std::fs::read_to_string(path).map_err(Error::io(path.display()))?;
-        let file = path
-            .file_name()
-            .map(|f| f.to_string_lossy().into_owned())
-            .ok_or_else(|| format!("{}: not a file", path.display()))?;
+        let is_pdf = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("pdf"));
+        let (file, text) = if is_pdf {
+            pdf_text(path, a.output.as_deref())?
+        } else {
+            let text = std::fs::read_to_string(path).map_err(Error::io(path.display()))?;
+            let file = path
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .ok_or_else(|| format!("{}: not a file", path.display()))?;
+            (file, text)
+        };
         texts.push((file, text));
     }
     let lines = match (a.start_line, a.end_line) {
@@ -81,7 +112,13 @@ pub fn run(a: Args) -> Result<ExitCode, Error> {
             .unwrap_or_default(),
         (None, None) => unreachable!("clap requires --id or --merge"),
     };
-    let import = drivemap_import::import(&id, &manuals, lines, &format!("drivemap {command}"));
+    let import = drivemap_import::import_with(
+        &id,
+        &manuals,
+        lines,
+        &columns,
+        &format!("drivemap {command}"),
+    );
     if let Some(report) = &a.report {
         std::fs::write(report, drivemap_import::report(&import))
             .map_err(Error::io(report.display()))?;
@@ -94,22 +131,16 @@ pub fn run(a: Args) -> Result<ExitCode, Error> {
         }
         None => import.yaml.clone(),
     };
-    let proposed: usize = import
-        .readings
-        .iter()
-        .map(|(r, _)| {
-            r.rows
-                .iter()
-                .filter(|x| !x.reserved && x.address.is_some())
-                .count()
-        })
-        .sum();
+    // The draft's registers (rows refused by the front end, coils, the other word of a pair
+    // and reserved rows are reported, not counted).
+    let proposed = import.registers.len();
+    let reported: usize = import.readings.iter().map(|(r, _)| r.unread.len()).sum();
     match &a.output {
         Some(path) => std::fs::write(path, &out).map_err(Error::io(path.display()))?,
         None => print!("{out}"),
     }
     eprintln!(
-        "drivemap import: {proposed} rows proposed from {} manual(s); {} items to confirm{}",
+        "drivemap import: {proposed} rows proposed from {} manual(s); {reported} lines reported; {} items to confirm{}",
         import.readings.len(),
         import.to_confirm.len(),
         a.report
@@ -118,4 +149,58 @@ pub fn run(a: Args) -> Result<ExitCode, Error> {
             .unwrap_or_default()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// The text of a PDF manual, extracted with poppler's `pdftotext -layout` and kept beside the
+/// draft (the directory of `-o`, else the PDF's own) as `<name>.txt`: the file the draft cites.
+fn pdf_text(
+    path: &std::path::Path,
+    output: Option<&std::path::Path>,
+) -> Result<(String, String), Error> {
+    let stem = path
+        .file_stem()
+        .map(|f| f.to_string_lossy().into_owned())
+        .ok_or_else(|| format!("{}: not a file", path.display()))?;
+    let out = std::process::Command::new("pdftotext")
+        .arg("-layout")
+        .arg("-enc")
+        .arg("UTF-8")
+        .arg(path)
+        .arg("-")
+        .output()
+        .map_err(|e| {
+            Error::Refused(format!(
+                "{}: a PDF manual needs poppler's pdftotext, which could not be run ({e}); install poppler-utils (apt-get install poppler-utils) or give the manual's text",
+                path.display()
+            ))
+        })?;
+    if !out.status.success() {
+        return Err(Error::Refused(format!(
+            "{}: pdftotext failed ({}): {}",
+            path.display(),
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+                .chars()
+                .take(300)
+                .collect::<String>()
+                .escape_debug()
+        )));
+    }
+    // Page breaks (form feeds) become blank lines: line numbers stay those of the text file.
+    let text = String::from_utf8_lossy(&out.stdout).replace('\u{c}', "\n");
+    let file = format!("{stem}.txt");
+    let dir = output
+        .and_then(|o| o.parent())
+        .filter(|d| !d.as_os_str().is_empty())
+        .or_else(|| path.parent())
+        .map(std::path::Path::to_path_buf)
+        .unwrap_or_default();
+    let kept = dir.join(&file);
+    std::fs::write(&kept, &text).map_err(Error::io(kept.display()))?;
+    eprintln!(
+        "drivemap import: the text of {} is in {} (the draft cites it)",
+        path.display(),
+        kept.display()
+    );
+    Ok((file, text))
 }
