@@ -9,9 +9,10 @@
 //!   where the map has none, on a drive that does not report running: on a drive running without
 //!   a fault it is refused, since the manuals' reset acts on a trip and the word that carries it
 //!   would otherwise release the run command.
-//! - `set/<register>` writes through the write gate, as `drivemap write` does; a write to a
-//!   command register makes the next run or stop read that register back first, so the bits a set
-//!   wrote are kept.
+//! - `set/<register>` writes through the write gate, as `drivemap write` does; fields of a
+//!   command register are written through the drive object (the word composed from what the
+//!   bridge told the drive, never from a word read back), so later runs and stops keep them; a
+//!   whole command word written makes the next run or stop read the register back first.
 
 use std::collections::BTreeSet;
 
@@ -199,12 +200,18 @@ impl Commander {
                         register: describe::register(r),
                     });
                 };
-                if command_register && input.mask & mask != mask {
-                    // The rest of a command word read back could carry a run or a reset the
-                    // drive was given long ago: the trait's calls compose command words.
-                    return Err(CommandFailure::CommandFields {
-                        register: describe::register(r),
-                    });
+                if command_register && let Some(at) = at {
+                    // Composed as the drive trait composes command words (what the bridge told
+                    // the drive, no run or reset bit the payload does not set unless the drive
+                    // runs), never from a word read back; the drive object remembers it, so
+                    // later runs and stops keep these fields.
+                    return self.write_command_fields(
+                        client,
+                        r,
+                        at,
+                        input.mask & mask,
+                        input.value,
+                    );
                 }
                 let word = if input.mask & mask == mask || !r.readable() {
                     input.value
@@ -251,6 +258,40 @@ impl Commander {
         if self.deps.contains(&r.def.id) {
             self.replan = true;
         }
+        Ok(format!("wrote {} = {shown}", describe::register(r)))
+    }
+
+    /// Writes the fields `mask` of command register `r` (plan row `row`) through the drive
+    /// object ([`Vfd::write_command_fields`]).
+    fn write_command_fields(
+        &mut self,
+        client: &mut LinkClient,
+        r: &Register,
+        row: u16,
+        mask: u16,
+        value: u16,
+    ) -> Result<String, CommandFailure> {
+        let drive = self.drive;
+        let plan = drive.plan();
+        let mut d = Vfd::from_plan(
+            &mut *client,
+            self.slave,
+            self.settings.view(drive),
+            plan.registers,
+            plan.roles,
+        );
+        if let Some(m) = self.memory.take() {
+            d = d.with_memory(m);
+        }
+        if std::mem::take(&mut self.forget) {
+            d.forget_commands();
+        }
+        let result = d.write_command_fields(row, mask, value);
+        self.memory = Some(d.memory());
+        let word = result?;
+        let shown = codec::decode_written(drive, r, u32::from(word), &self.settings)
+            .map(|v| v.to_string())
+            .unwrap_or_else(|_| word.to_string());
         Ok(format!("wrote {} = {shown}", describe::register(r)))
     }
 

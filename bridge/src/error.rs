@@ -308,14 +308,6 @@ pub enum CommandFailure {
         "the drive is running and its map gives no fault status: a reset is not sent to a running drive"
     )]
     RunningWithoutFaultRole,
-    /// A field write on a command register that would keep fields read back from the drive.
-    #[error(
-        "{register} holds command fields (run, reset): write the whole word, or use command/run, command/stop, command/fault_reset"
-    )]
-    CommandFields {
-        /// The register, described.
-        register: String,
-    },
 }
 
 impl CommandFailure {

@@ -404,3 +404,53 @@ fn a_run_sent_while_the_link_is_down_expires_and_never_starts_the_drive() {
     task.join().unwrap();
     server.stop();
 }
+
+/// A `set/` of a field of the command word (a multi-function input) is written from what the
+/// bridge told the drive, never from a word read back, and later runs and stops keep it (the
+/// bridge used to clear it with the next run or stop, 0040h -> 0001h); the set itself carries
+/// no run bit while the drive is stopped.
+#[test]
+fn a_set_of_a_command_field_is_kept_by_run_and_stop() {
+    let line = Line::start(0, DEFAULT_DEADLINE);
+    let word = |l: &Line| {
+        drivemap_sim::server::lock(&l.sim)
+            .raw("digital_input_command")
+            .unwrap()
+    };
+    let set = |l: &Line, payload: &str| {
+        let command = Command {
+            drive: 0,
+            action: Action::Set {
+                register: "digital_input_command".into(),
+            },
+            topic: "test".into(),
+            payload: payload.into(),
+        };
+        l.board
+            .offer(command, "digital_input_command", Instant::now());
+    };
+    let s3 = 1 << 6;
+    set(&line, "terminal_s3=1");
+    line.until(Duration::from_secs(5), "the field written", |l| {
+        word(l) & s3 != 0
+    });
+    assert_eq!(word(&line) & 1, 0, "the set sent a run bit");
+    line.offer(Action::Run);
+    line.until(Duration::from_secs(5), "the run", |l| l.state().run_command);
+    assert_ne!(
+        word(&line) & s3,
+        0,
+        "run cleared the field ({:04X}h)",
+        word(&line)
+    );
+    line.offer(Action::Stop);
+    line.until(Duration::from_secs(5), "the stop", |l| {
+        !l.state().run_command
+    });
+    assert_ne!(
+        word(&line) & s3,
+        0,
+        "stop cleared the field ({:04X}h)",
+        word(&line)
+    );
+}
