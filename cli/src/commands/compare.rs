@@ -25,8 +25,9 @@ pub enum Format {
     Json,
 }
 
-/// Arguments of `drivemap compare`.
+/// Arguments of `drivemap compare`: the link is needed only for a `drive` side.
 #[derive(ClapArgs, Debug)]
+#[command(mut_group("link", |g| g.required(false)))]
 pub struct Args {
     /// The sides: a set file (`drivemap save`), `defaults` (the map's printed factory
     /// values), `drive` (the drive on the link given, at --slave) or `drive@SLAVE` (another
@@ -40,7 +41,7 @@ pub struct Args {
     #[command(flatten)]
     pub dir: MapsDir,
     #[command(flatten)]
-    pub link: Option<Link>,
+    pub link: Link,
     #[command(flatten)]
     pub settings: SettingsArgs,
     /// Compare sides of different maps or variants (refused without it, naming what differs).
@@ -148,20 +149,17 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             }
         }
     }
-    let left = side(
-        &drive,
-        &sides[0],
-        args.link.as_ref(),
-        &args.settings,
-        &variant,
-    )?;
-    let right = side(
-        &drive,
-        &sides[1],
-        args.link.as_ref(),
-        &args.settings,
-        &variant,
-    )?;
+    let given_link = [
+        &args.link.tcp,
+        &args.link.gateway,
+        &args.link.rtu_tcp,
+        &args.link.serial,
+    ]
+    .iter()
+    .any(|l| l.is_some());
+    let link = given_link.then_some(&args.link);
+    let left = side(&drive, &sides[0], link, &args.settings, &variant)?;
+    let right = side(&drive, &sides[1], link, &args.settings, &variant)?;
     let compared = paramset::compare(&drive, &left, &right, args.other).map_err(Error::Refused)?;
     for w in &compared.warnings {
         eprintln!("warning: {w}");
