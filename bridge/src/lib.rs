@@ -15,8 +15,9 @@
 //! every link after the cycle in flight, publishes the drives and the bridge offline, and
 //! returns.
 //!
-//! The bridge is not a safety function: a drive's own communication-loss stop (the V7's n151,
-//! the ACN's CM.03 / CM.04) is what stops a motor when the bridge, the broker or the line is gone.
+//! The bridge is not a safety function: a drive's own communication-loss stop (the V7's n151
+//! Modbus time-out detection, the ACN's Pr.12 lost-command mode) is what stops a motor when the
+//! bridge, the broker or the line is gone.
 
 pub mod command;
 pub mod commander;
