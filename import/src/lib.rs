@@ -10,6 +10,7 @@
 pub mod columns;
 pub mod compare;
 pub mod draft;
+pub mod formula;
 pub mod known;
 pub mod protocol;
 pub mod row;
@@ -145,6 +146,27 @@ pub fn read_manual_with(
                 }
                 Err(_) => r.address = None,
             }
+        }
+    }
+    // A parameter table addressed by a formula the manual prints: each row with a parameter
+    // number and no address gets the formula's address, noted with the formula's line.
+    if let Some(f) = formula::find(&all) {
+        for r in rows.iter_mut().filter(|r| r.address.is_none()) {
+            let Some(a) = r.param.as_deref().and_then(|p| f.address(p)) else {
+                continue;
+            };
+            r.address = Some(a);
+            r.notation = Notation::Decimal;
+            r.notes.push(format!(
+                "address {a} from the formula at line {}: \"{}\"{}",
+                f.line,
+                f.text,
+                if f.modicon() {
+                    " (its Modicon base left out: the register, not the reference)"
+                } else {
+                    ""
+                }
+            ));
         }
     }
     unread.sort_by_key(|u| u.line);
