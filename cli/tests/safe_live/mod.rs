@@ -536,17 +536,14 @@ fn repro_a_draft_map_is_not_written_without_draft() {
     assert!(slave.lock().unwrap().writes.is_empty());
     let (code, out, err) = common::run(common::command().args(base).arg("--draft"));
     let writes = slave.lock().unwrap().writes.clone();
-    if writable {
-        assert_eq!(code, 0, "{err}");
-        assert!(
-            out.contains("through draft map kestrel-k20 (--draft)"),
-            "{out}"
-        );
-        assert_eq!(writes, vec![(0x2001, 5000)]);
-    } else {
-        assert_eq!(code, 2, "{err}");
-        assert!(writes.is_empty());
-    }
+    // The manual's row prints `rw`, and the draft says so.
+    assert!(writable, "the draft's frequency_reference is read-write");
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("through draft map kestrel-k20 (--draft)"),
+        "{out}"
+    );
+    assert_eq!(writes, vec![(0x2001, 5000)]);
     let (_, _, err) = common::run(common::command().args([
         "read",
         "--drive",
@@ -558,4 +555,197 @@ fn repro_a_draft_map_is_not_written_without_draft() {
         "frequency_reference",
     ]));
     assert!(err.contains("kestrel-k20 is a draft map"), "{err}");
+}
+
+/// A shipped map's profile, for a simulated drive of it.
+fn shipped(id: &str) -> &'static Profile {
+    let drive =
+        drivemap_map::read_map(&repo().join(format!("maps/{id}.yaml")), &Context::default())
+            .unwrap();
+    drivemap_live::leak_profile(&drive)
+}
+
+/// `drivemap write --drive <id> <flag> <addr> <args>` with the shipped maps.
+fn write_bin(id: &str, framing: Framing, addr: &str, args: &[&str]) -> (i32, String, String) {
+    let mut all = vec![
+        "write",
+        "--drive",
+        id,
+        framing.flag(),
+        addr,
+        "--timeout",
+        "2s",
+    ];
+    all.extend_from_slice(args);
+    common::drivemap(&all)
+}
+
+/// The report's `--set` cases on the V7 over Modbus TCP (n011 bounds and, with n152 = 2 or 3,
+/// scales the TCP card's frequency reference): a value outside n011's range and one other than
+/// the drive's are refused naming both, nothing sent; the drive's own value is used. An
+/// external quantity (the TDS-V8's inverter rated current) cannot be read: each write converted
+/// with it says it was assumed.
+#[test]
+fn repro_set_values_are_checked_and_disclosed() {
+    let mut slave = drivemap_sim::slave::SimulatedSlave::new(1, shipped("yaskawa-v7"));
+    slave.set_holding(0x010B, 600); // n011 = 60.0 Hz
+    let (addr, slave) = serve(slave, Framing::Tcp);
+    let (code, _, err) = write_bin(
+        "yaskawa-v7",
+        Framing::Tcp,
+        &addr,
+        &["--set", "n011=500", "tcp_frequency_reference=400"],
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("`--set n011=500`") && err.contains("out of range"),
+        "{err}"
+    );
+    let (code, _, err) = write_bin(
+        "yaskawa-v7",
+        Framing::Tcp,
+        &addr,
+        &["--set", "n011=400", "tcp_frequency_reference=400"],
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("the drive holds max_output_frequency (n011) = 60.0 Hz, not 400"),
+        "{err}"
+    );
+    assert!(err.contains("nothing written"), "{err}");
+    assert!(
+        slave.lock().unwrap().writes.is_empty(),
+        "nothing reached the drive"
+    );
+    let (code, out, err) = write_bin(
+        "yaskawa-v7",
+        Framing::Tcp,
+        &addr,
+        &["--set", "n011=60", "tcp_frequency_reference=40"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("assuming"), "read, so not assumed: {out}");
+    assert_eq!(slave.lock().unwrap().writes, vec![(0x0002, 400)]);
+
+    let (addr, slave) = serve(
+        drivemap_sim::slave::SimulatedSlave::new(1, shipped("ptlk-tds-v8")),
+        Framing::RtuOverTcp,
+    );
+    let (code, out, err) = write_bin(
+        "ptlk-tds-v8",
+        Framing::RtuOverTcp,
+        &addr,
+        &[
+            "--set",
+            "inverter_rated_current=10",
+            "motor_rated_current=15",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("; assuming inverter_rated_current = 10, given, not read"),
+        "{out}"
+    );
+    let writes = slave.lock().unwrap().writes.clone();
+    assert_eq!(writes.len(), 1, "{writes:?}");
+    assert_eq!(writes[0].1, 150);
+    // Above 200 % of the rated current given: refused, nothing more sent.
+    let (code, _, err) = write_bin(
+        "ptlk-tds-v8",
+        Framing::RtuOverTcp,
+        &addr,
+        &[
+            "--set",
+            "inverter_rated_current=10",
+            "motor_rated_current=25",
+        ],
+    );
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(slave.lock().unwrap().writes.len(), 1);
+}
+
+/// The report's field write, on the ACN (0382h: run bit 0, forward bit 1, trip initialization
+/// bit 2 on its 0 -> 1 edge): the drive's word holds run, forward and the reset; writing the
+/// direction alone sends neither the reset nor, to a stopped drive, the run; to a running
+/// drive (0305h shows operating forward) the run is kept, the reset still released.
+#[test]
+fn repro_a_field_write_does_not_resend_run_or_reset() {
+    let mut slave = drivemap_sim::slave::SimulatedSlave::new(1, shipped("automationdirect-acn"));
+    slave.set_holding(0x0381, 0x0007); // PDU = 0382h - 1 on RTU
+    slave.set_holding(0x0304, 0x0000); // stopped
+    let (addr, slave) = serve(slave, Framing::RtuOverTcp);
+    let (code, _, err) = write_bin(
+        "automationdirect-acn",
+        Framing::RtuOverTcp,
+        &addr,
+        &["operation_command=forward=0"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(slave.lock().unwrap().writes, vec![(0x0381, 0x0000)]);
+    {
+        let mut s = slave.lock().unwrap();
+        s.set_holding(0x0381, 0x0007);
+        s.set_holding(0x0304, 0x0001); // operating forward
+    }
+    let (code, _, err) = write_bin(
+        "automationdirect-acn",
+        Framing::RtuOverTcp,
+        &addr,
+        &["operation_command=forward=0"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        slave.lock().unwrap().writes,
+        vec![(0x0381, 0x0000), (0x0381, 0x0001)]
+    );
+    // A field list naming nothing is refused, never taken as "write back what was read".
+    let (code, _, err) = write_bin(
+        "automationdirect-acn",
+        Framing::RtuOverTcp,
+        &addr,
+        &["operation_command=,"],
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("names no field of operation_command"), "{err}");
+    assert_eq!(slave.lock().unwrap().writes.len(), 2);
+}
+
+/// The report's running reference change, on the V7 (n011 bounds every frequency reference
+/// and scales the monitors): while the status shows the drive running, a write of n011 is
+/// refused naming what depends on it, nothing sent; `--while-running` sends it; stopped, it
+/// is sent with a note naming the dependants.
+#[test]
+fn repro_a_setting_others_depend_on_is_not_changed_under_a_running_drive() {
+    let mut slave = drivemap_sim::slave::SimulatedSlave::new(1, shipped("yaskawa-v7"));
+    slave.set_holding(0x010B, 600);
+    slave.set_holding(0x0020, 0x0001); // status signal 1: during run
+    let (addr, slave) = serve(slave, Framing::RtuOverTcp);
+    let (code, _, err) = write_bin("yaskawa-v7", Framing::RtuOverTcp, &addr, &["n011=50"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("the drive is running"), "{err}");
+    assert!(err.contains("bounds frequency_reference"), "{err}");
+    assert!(
+        err.contains("--while-running") && err.contains("nothing written"),
+        "{err}"
+    );
+    assert!(slave.lock().unwrap().writes.is_empty());
+    let (code, _, err) = write_bin(
+        "yaskawa-v7",
+        Framing::RtuOverTcp,
+        &addr,
+        &["n011=50", "--while-running"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(slave.lock().unwrap().writes, vec![(0x010B, 500)]);
+    slave.lock().unwrap().set_holding(0x0020, 0x0000);
+    let (code, _, err) = write_bin("yaskawa-v7", Framing::RtuOverTcp, &addr, &["n011=55"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("note: max_output_frequency bounds frequency_reference"),
+        "{err}"
+    );
+    assert_eq!(
+        slave.lock().unwrap().writes,
+        vec![(0x010B, 500), (0x010B, 550)]
+    );
 }
