@@ -454,3 +454,112 @@ fn a_set_of_a_command_field_is_kept_by_run_and_stop() {
         word(&line)
     );
 }
+
+/// On a 9600-baud line (the test-support's emulated line, each character taking its time), the
+/// V7 running: a stop reaches it before the link's next request, within two of the line's
+/// request times. The figures are printed for the notes.
+#[cfg(unix)]
+#[test]
+fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
+    use drivemap_runtime::transport::serial::{self, SerialOptions, SerialTransport};
+    use drivemap_sim::SerialServer;
+    use drivemap_sim::timed::DriveLine;
+    use drivemap_test_support::line::EmulatedLine;
+
+    let drive = v7();
+    let profile = drive.plan().profile;
+    let serial_line = SerialConfig::new(9600);
+    let emulated = EmulatedLine::new(serial_line).unwrap();
+    let options_for = |path: &str| {
+        SerialOptions::new(path, 9600)
+            .line(profile, serial::Parity::None, Some(serial::StopBits::One))
+            .unwrap()
+    };
+    let options = SimOptions::new().network_source(TransportKind::Rtu);
+    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+    let server = SerialServer::spawn_on_line(
+        Arc::clone(&sim),
+        options_for(emulated.drive_path()),
+        None,
+        Some(DriveLine {
+            serial: serial_line,
+            pace: false,
+        }),
+    )
+    .unwrap();
+    let master = options_for(emulated.master_path());
+    let mut s = spec(drive);
+    s.options = ClientOptions::for_line(profile, serial_line);
+    let board = Arc::new(Board::new(1, DEFAULT_DEADLINE));
+    let l = LinkSpec {
+        name: "9600".into(),
+        kind: TransportKind::Rtu,
+        line: serial_line,
+        connect: Box::new(move || {
+            SerialTransport::open(master.clone())
+                .map(|t| Box::new(t) as Box<dyn Transport>)
+                .map_err(Into::into)
+        }),
+        drives: vec![s],
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let (m, st, b) = (metrics_for(drive), Arc::clone(&stop), Arc::clone(&board));
+    let task = std::thread::spawn(move || {
+        link::run(
+            l,
+            0,
+            Duration::from_millis(200),
+            m,
+            None,
+            b,
+            st,
+            Arc::new(AtomicBool::new(false)),
+        )
+    });
+    let running = || {
+        drivemap_sim::server::lock(&sim)
+            .state()
+            .unwrap()
+            .run_command
+    };
+    let until = |what: &str, f: &dyn Fn() -> bool| {
+        let began = Instant::now();
+        while !f() {
+            assert!(began.elapsed() < Duration::from_secs(10), "{what}");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        began.elapsed()
+    };
+    until("the V7 answering", &|| board.answering(0));
+    let command = |action| Command {
+        drive: 0,
+        action,
+        topic: "test".into(),
+        payload: "PRESS".into(),
+    };
+    let mut took = Vec::new();
+    for k in 0..12u64 {
+        board.offer(command(Action::Run), "", Instant::now());
+        until("the run", &|| running());
+        std::thread::sleep(Duration::from_millis(37 * k));
+        board.offer(command(Action::Stop), "", Instant::now());
+        took.push(until("the stop", &|| !running()));
+    }
+    took.sort();
+    let model = drivemap_runtime::bus_time::BusModel::new(profile, serial_line);
+    // The longest request of the V7's plan (16 registers) and a write, on the wire.
+    let request = Duration::from_nanos((model.read_ns(16) + model.read_ns(1)) as u64);
+    eprintln!(
+        "stop latency on a 9600-baud line: median {:?}, p90 {:?}, max {:?} (a 16-register read and a write take {:?} by the bus-time model)",
+        took[took.len() / 2],
+        took[took.len() * 9 / 10],
+        took[took.len() - 1],
+        request
+    );
+    for t in &took {
+        assert!(*t < 2 * request + Duration::from_millis(100), "{took:?}");
+    }
+    stop.store(true, Ordering::Relaxed);
+    task.join().unwrap();
+    server.stop();
+}

@@ -302,7 +302,9 @@ fn random_interleavings_keep_the_contract() {
 }
 
 /// Untrusted text is escaped and shortened in the log, so a payload cannot forge a line; the
-/// options that would leak a password or silently break the connection are refused at start.
+/// options that would leak a password or silently break the connection are refused at start;
+/// a `--config` nested 100,000 deep is refused at once with the map loader's depth limit (it
+/// took 36.7 s, quadratic).
 #[test]
 fn untrusted_text_and_unsafe_options() {
     let dir = scratch("hygiene");
@@ -333,6 +335,25 @@ fn untrusted_text_and_unsafe_options() {
     assert!(log.len() < 20_000, "{} bytes of log", log.len());
     // A stop still gets through.
     assert!(publish(port, STOP, "PRESS", &["-q", "1"]).0);
+    let deep = dir.join("deep.yaml");
+    std::fs::write(&deep, "[".repeat(100_000)).unwrap();
+    let began = Instant::now();
+    let out = run(&[
+        "bridge",
+        "--config",
+        deep.to_str().unwrap(),
+        "--no-metrics",
+        "--mqtt",
+        "mqtt://127.0.0.1:1",
+    ]);
+    let text = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "{text}");
+    assert!(text.contains("deep.yaml:1:"), "{text}");
+    assert!(
+        began.elapsed() < Duration::from_secs(5),
+        "{:?}",
+        began.elapsed()
+    );
     let allowed = ["--allow-writes", "run"];
     for (args, says, never) in [
         (
