@@ -10,9 +10,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-/// The drivemap binary.
+/// The drivemap binary: this build's, or the one `DRIVEMAP_TEST_BIN` names (an older build,
+/// to show which of these tests fail on it).
 pub fn drivemap() -> &'static str {
-    env!("CARGO_BIN_EXE_drivemap")
+    static BIN: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    BIN.get_or_init(|| {
+        std::env::var("DRIVEMAP_TEST_BIN").unwrap_or_else(|_| env!("CARGO_BIN_EXE_drivemap").into())
+    })
 }
 
 /// A tool the test needs; the test fails (never skips) when it is missing.
