@@ -374,6 +374,53 @@ fn write_protocol(y: &mut String, input: &DraftInput<'_>, to_confirm: &mut Vec<S
             to_confirm.push("protocol.slave_address: not found; the Modbus range 1-247 written as a placeholder".into());
         }
     }
+    if let Some((r, p)) = find(&|p| p.format.is_some())
+        && let Some(f) = &p.format
+    {
+        // The schema takes serial settings whole: with the baud rates, or not at all.
+        match &p.bauds {
+            Some(b) => {
+                let rates: Vec<String> = b.value.0.iter().map(u32::to_string).collect();
+                let default = b
+                    .value
+                    .1
+                    .map(|d| format!(" default_baud: {d},"))
+                    .unwrap_or_default();
+                let _ = writeln!(
+                    y,
+                    "  serial: {{baud_rates: [{rates}],{default} parities: [{parity}], default_parity: {parity}, data_bits: {data}, stop_bits: {stop}, source: {source}}}  # baud rates: line {line}",
+                    rates = rates.join(", "),
+                    parity = f.value.parity,
+                    data = f.value.data_bits,
+                    stop = f.value.stop_bits,
+                    source = quote(&format!("{}:{}", r.file, f.line)),
+                    line = b.line
+                );
+            }
+            None => to_confirm.push(format!(
+                "protocol.serial: the character format is printed ({}:{}: {} data bits, parity {}, {} stop bit(s)) but no baud rate was read; not written",
+                r.file, f.line, f.value.data_bits, f.value.parity, f.value.stop_bits
+            )),
+        }
+    }
+    if let Some((r, p)) = find(&|p| p.broadcast.is_some())
+        && let Some(line) = p.broadcast
+    {
+        // The rules (which functions, which registers) are not read: the runtime refuses every
+        // broadcast until a reviewer writes them.
+        let _ = writeln!(
+            y,
+            "  broadcast: {{unknown: {}, source: {}}}",
+            quote(
+                "the manual names a broadcast; its functions and registers are to be read by the reviewer"
+            ),
+            quote(&format!("{}:{line}", r.file))
+        );
+        to_confirm.push(format!(
+            "protocol.broadcast: the manual names one ({}:{line}); its functions and registers are not read",
+            r.file
+        ));
+    }
     if let Some((r, p)) = find(&|p| !p.exceptions.is_empty()) {
         let _ = writeln!(y, "  exceptions:");
         for e in &p.exceptions {
@@ -382,7 +429,7 @@ fn write_protocol(y: &mut String, input: &DraftInput<'_>, to_confirm: &mut Vec<S
                 "    - {{code: 0x{:02X}, name: {}, description: {}, source: {}}}",
                 e.code,
                 quote(&e.name),
-                quote(&e.name),
+                quote(e.description.as_deref().unwrap_or(&e.name)),
                 quote(&format!("{}:{}", r.file, e.line))
             );
         }

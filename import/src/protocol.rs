@@ -23,8 +23,21 @@ pub struct Exception {
     pub code: u8,
     /// Its name, as printed.
     pub name: String,
+    /// Its description, when the manual prints one on the lines under the code.
+    pub description: Option<String>,
     /// The 1-based line of the code.
     pub line: usize,
+}
+
+/// A character format as printed (`8 data bits, 1 parity-even bit and 1 stop bit`, `8N1`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Format {
+    /// Data bits.
+    pub data_bits: u8,
+    /// `none`, `even` or `odd`.
+    pub parity: &'static str,
+    /// Stop bits.
+    pub stop_bits: u8,
 }
 
 /// The protocol facts found in a manual.
@@ -42,6 +55,12 @@ pub struct Protocol {
     pub exceptions: Vec<Exception>,
     /// `rtu` and/or `tcp`, with a line naming each.
     pub transports: BTreeMap<&'static str, usize>,
+    /// The character format, where one line prints it whole.
+    pub format: Option<Cited<Format>>,
+    /// The line saying that slave address 0 is a broadcast.
+    pub broadcast: Option<usize>,
+    /// The baud rates of the first line that lists them, with the default where the line says.
+    pub bauds: Option<Cited<(Vec<u32>, Option<u32>)>>,
 }
 
 /// Function codes a drive manual may print (Modbus public codes).
@@ -59,8 +78,24 @@ pub fn read(lines: &[&str], first_line: usize) -> Protocol {
             .expect("pattern")
     });
     static SLAVE: LazyLock<Regex> = LazyLock::new(|| {
-        Regex::new(r"(?i)\b(\d{1,3})\s*(?:~|to|-|–|through)\s*(\d{1,3})\b").expect("pattern")
+        Regex::new(r"(?i)\b(\d{1,3})\s*(?:~|to|-|–|through|\.{2,3}|…)\s*(\d{1,3})\b")
+            .expect("pattern")
     });
+    // A code of a function-code table, its digits perhaps spaced as PDF text leaves them
+    // (`0 3 h`, `1 0 h`, `03H`, `0x10`), then what the function does.
+    static FUNCTION_ROW: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"(?i)^\s*(?:0x([0-9a-f]{2})|([0-9a-f])\s?([0-9a-f])\s?h)\b[\s:|-]*(?:\(\s*\d+\s*\)\s*)?(read|write|preset|force|diagnos|loop|report|mask)")
+            .expect("pattern")
+    });
+    static DATA_BITS: LazyLock<Regex> =
+        LazyLock::new(|| Regex::new(r"(?i)\b([78])\s*data\s*bits?").expect("pattern"));
+    static STOP_BITS: LazyLock<Regex> =
+        LazyLock::new(|| Regex::new(r"(?i)\b([12])\s*stop\s*bits?").expect("pattern"));
+    static PARITY: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"(?i)\b(?:(even|odd|no|none)[\s-]*parity|parity[\s-]*(even|odd|none))\b")
+            .expect("pattern")
+    });
+    let mut function_region_until = 0usize;
     static EXC: LazyLock<Regex> = LazyLock::new(|| {
         Regex::new(r"^\s*(?:0x)?([0-9A-F]{2})[hH]?\s*[\t:|-]?\s*([A-Za-z][^\t]{2,80})")
             .expect("pattern")
@@ -71,6 +106,80 @@ pub fn read(lines: &[&str], first_line: usize) -> Protocol {
         let line_no = first_line + i;
         let line = raw.trim();
         let lower = line.to_lowercase();
+        if lower.contains("function code") {
+            function_region_until = line_no + 10;
+        }
+        if line_no <= function_region_until
+            && let Some(c) = FUNCTION_ROW.captures(line)
+        {
+            let digits = match c.get(1) {
+                Some(d) => d.as_str().to_string(),
+                None => format!("{}{}", &c[2], &c[3]),
+            };
+            if let Ok(code) = u8::from_str_radix(&digits, 16)
+                && FUNCTIONS.contains(&code)
+            {
+                p.function_codes.entry(code).or_insert(line_no);
+            }
+        }
+        if p.format.is_none()
+            && let (Some(d), Some(st), Some(pa)) = (
+                DATA_BITS.captures(line),
+                STOP_BITS.captures(line),
+                PARITY.captures(line),
+            )
+        {
+            let word = pa
+                .get(1)
+                .or_else(|| pa.get(2))
+                .map_or("", |m| m.as_str())
+                .to_ascii_lowercase();
+            p.format = Some(Cited {
+                value: Format {
+                    data_bits: d[1].parse().unwrap_or(8),
+                    parity: match word.as_str() {
+                        "even" => "even",
+                        "odd" => "odd",
+                        _ => "none",
+                    },
+                    stop_bits: st[1].parse().unwrap_or(1),
+                },
+                line: line_no,
+            });
+        }
+        if p.bauds.is_none() && (lower.contains("baud") || lower.contains("bps")) {
+            static BAUD: LazyLock<Regex> = LazyLock::new(|| {
+                Regex::new(r"\b(1200|2400|4800|9600|14400|19200|38400|57600|115200)\b")
+                    .expect("pattern")
+            });
+            static DEFAULT: LazyLock<Regex> = LazyLock::new(|| {
+                Regex::new(r"(?i)(?:default|factory setting)\D{0,12}(\d{4,6})").expect("pattern")
+            });
+            let mut rates: Vec<u32> = BAUD
+                .captures_iter(line)
+                .filter_map(|c| c[1].parse().ok())
+                .collect();
+            rates.sort_unstable();
+            rates.dedup();
+            if !rates.is_empty() {
+                let default = DEFAULT
+                    .captures(line)
+                    .and_then(|c| c[1].parse().ok())
+                    .filter(|d| rates.contains(d));
+                p.bauds = Some(Cited {
+                    value: (rates, default),
+                    line: line_no,
+                });
+            }
+        }
+        if p.broadcast.is_none()
+            && lower.contains("broadcast")
+            && (lower.contains("address 0")
+                || lower.contains("slave 0")
+                || lower.contains("station 0"))
+        {
+            p.broadcast = Some(line_no);
+        }
         if lower.contains("function code") {
             for c in HEX.captures_iter(line) {
                 let digits = c.get(1).or_else(|| c.get(2)).map_or("", |m| m.as_str());
@@ -129,9 +238,19 @@ pub fn read(lines: &[&str], first_line: usize) -> Protocol {
                 p.exceptions.push(Exception {
                     code,
                     name: c[2].trim().to_string(),
+                    description: None,
                     line: line_no,
                 });
             }
+        } else if line_no <= exception_region_until
+            && raw.starts_with(char::is_whitespace)
+            && line.starts_with(char::is_alphabetic)
+            && let Some(e) = p.exceptions.last_mut()
+            && e.line + 1 == line_no
+            && e.description.is_none()
+        {
+            // The description printed under the exception's name.
+            e.description = Some(line.to_string());
         }
         if line.contains("RTU") {
             p.transports.entry("rtu").or_insert(line_no);

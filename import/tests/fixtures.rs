@@ -328,16 +328,36 @@ fn every_catalogue_fixture_is_read_to_its_map() {
                     "{:?}",
                     dp.exceptions
                         .iter()
-                        .map(|e| (e.code, e.name.clone()))
+                        .map(|e| (e.code, e.name.clone(), e.description.clone()))
                         .collect::<Vec<_>>()
                 ),
                 format!(
                     "{:?}",
                     tp.exceptions
                         .iter()
-                        .map(|e| (e.code, e.name.clone()))
+                        .map(|e| (e.code, e.name.clone(), e.description.clone()))
                         .collect::<Vec<_>>()
                 ),
+            ),
+            (
+                "serial format",
+                format!(
+                    "{:?}",
+                    dp.serial
+                        .as_ref()
+                        .map(|s| (&s.parities, s.data_bits, s.stop_bits))
+                ),
+                format!(
+                    "{:?}",
+                    tp.serial
+                        .as_ref()
+                        .map(|s| (&s.parities, s.data_bits, s.stop_bits))
+                ),
+            ),
+            (
+                "broadcast",
+                format!("{:?}", dp.broadcast.as_ref().map(|b| &b.source)),
+                format!("{:?}", tp.broadcast.as_ref().map(|b| &b.source)),
             ),
         ] {
             if d != t {
