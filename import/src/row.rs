@@ -305,10 +305,20 @@ pub fn read_tables(
     let mut table: Option<(usize, String)> = None;
     // The lines a row or its codes took, and the lines of prose between tables.
     let mut used: BTreeSet<usize> = BTreeSet::new();
+    // Tables printed one cell per line (text as PDF extraction gives it) are read first.
+    let vertical = vertical_tables(lines, first_line, &table);
+    let mut skip: BTreeSet<usize> = BTreeSet::new();
+    for v in vertical {
+        skip.extend(v.lines.iter().copied());
+        used.extend(v.lines.iter().copied());
+        rows.extend(v.rows);
+        unread.extend(v.unread);
+        layouts.push(v.layout);
+    }
     for (i, raw) in lines.iter().enumerate() {
         let line_no = first_line + i;
         let line = raw.trim_end();
-        if line.trim().is_empty() {
+        if line.trim().is_empty() || skip.contains(&line_no) {
             continue;
         }
         let old_header = header(line);
@@ -1691,4 +1701,216 @@ fn layout_continuation(
         row.scale = None;
     }
     taken
+}
+
+/// A table printed one cell per line, as read.
+struct Vertical {
+    /// The lines it takes (header and records), 1-based.
+    lines: BTreeSet<usize>,
+    rows: Vec<Row>,
+    unread: Vec<Unread>,
+    layout: Layout,
+}
+
+/// Whether a line is a lone column title (one cell, a known title, no digit).
+fn lone_title(line: &str) -> Option<Role> {
+    let t = line.trim();
+    if t.is_empty() || t.len() > 40 || t.chars().any(|c| c.is_ascii_digit()) || cells(t).len() != 1
+    {
+        return None;
+    }
+    crate::columns::title_role(t)
+}
+
+/// Whether a cell fits a column of a role, by its shape.
+fn fits(role: Role, cell: &str) -> bool {
+    let c = cell.trim();
+    let dash = matches!(c, "-" | "—" | "–" | "--");
+    match role {
+        Role::Access => access_word(c).is_some() || dash,
+        Role::Unit => unit_cell(&c.replace(['[', ']'], " ")).is_some() || dash,
+        Role::Step | Role::Factor | Role::Exponent => {
+            resolution_cell(&c.replace(['[', ']'], " ")).is_some()
+                || Num::parse(c).is_some()
+                || dash
+        }
+        Role::Range => find_range(c).is_some() || dash,
+        Role::Min | Role::Max | Role::Default | Role::Size => Num::parse(c).is_some() || dash,
+        Role::Type => {
+            let t = c.to_ascii_lowercase();
+            [
+                "int", "uint", "word", "float", "real", "bool", "u16", "s16", "u32", "s32", "i16",
+                "i32",
+            ]
+            .iter()
+            .any(|w| t.contains(w))
+                || dash
+        }
+        Role::Name | Role::Description => {
+            c.chars().filter(|c| c.is_alphabetic()).count() >= 2
+                && access_word(c).is_none()
+                && unit_cell(c).is_none()
+        }
+        _ => false,
+    }
+}
+
+/// Tables printed one cell per line: a run of three or more lone column titles (`Register`,
+/// `Name`, `Unit`, `Access`), then records that each start with a key under the first title
+/// (an address or a parameter number) and give the other cells on the lines after it, in the
+/// titles' order; a cell that does not fit its column's shape is left empty, and a name may
+/// wrap over several lines.
+fn vertical_tables(
+    lines: &[&str],
+    first_line: usize,
+    table: &Option<(usize, String)>,
+) -> Vec<Vertical> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < lines.len() {
+        // A run of lone titles.
+        let start = i;
+        let mut roles = Vec::new();
+        let mut titles = Vec::new();
+        while i < lines.len()
+            && let Some(r) = lone_title(lines[i])
+        {
+            roles.push(r);
+            titles.push(lines[i].trim().to_string());
+            i += 1;
+        }
+        if roles.len() < 3 || !matches!(roles[0], Role::Address | Role::Param) || i >= lines.len() {
+            i = start + 1;
+            continue;
+        }
+        let header_line = first_line + start;
+        let columns: Vec<Column> = titles
+            .iter()
+            .zip(&roles)
+            .enumerate()
+            .map(|(n, (t, r))| Column {
+                title: t.clone(),
+                role: *r,
+                start: n,
+                end: n,
+                hex: false,
+                modicon: false,
+            })
+            .collect();
+        let mut layout = Layout {
+            line: header_line,
+            columns,
+            split: Split::Tabs,
+            bits: None,
+        };
+        let key_col = layout.columns[0].clone();
+        let is_key = |l: &str| {
+            let t = l.trim();
+            !t.contains(char::is_whitespace)
+                && match key_col.role {
+                    Role::Address => {
+                        hex_address(t).is_some()
+                            || (t.len() <= 6 && t.chars().all(|c| c.is_ascii_digit()))
+                    }
+                    _ => param_cell(t).is_some() && t.chars().any(|c| c.is_ascii_alphabetic()),
+                }
+        };
+        // The records: from a key to the next key.
+        let mut records: Vec<(usize, Vec<&str>)> = Vec::new();
+        let mut taken = BTreeSet::new();
+        for n in start..i {
+            taken.insert(first_line + n);
+        }
+        let mut blanks = 0;
+        while i < lines.len() {
+            let l = lines[i].trim();
+            if l.is_empty() {
+                blanks += 1;
+                if blanks >= 2 {
+                    break;
+                }
+                i += 1;
+                continue;
+            }
+            blanks = 0;
+            // A key like the first (hex with its mark, or decimal), and a decimal one above the
+            // last (a resolution `1` under a decimal-numbered table is not a key).
+            let like_first = records.first().is_none_or(|(_, f)| {
+                let marked = |t: &str| hex_address(t).is_some();
+                marked(f[0]) == marked(l)
+                    && (marked(l)
+                        || records.last().is_some_and(|(_, r)| {
+                            r.len() >= 2 && l.parse::<u32>().ok() > r[0].parse::<u32>().ok()
+                        }))
+            });
+            if is_key(l) && like_first {
+                records.push((i, vec![l]));
+            } else if let Some(r) = records.last_mut()
+                && l.len() <= 60
+            {
+                r.1.push(l);
+            } else {
+                break;
+            }
+            taken.insert(first_line + i);
+            i += 1;
+        }
+        if records.is_empty() {
+            i = start + 1;
+            continue;
+        }
+        // Decide hex and Modicon numbering from the keys, as for a table on one line.
+        let keys: Vec<String> = records.iter().map(|(_, c)| c[0].to_string()).collect();
+        layout.decide(&keys.iter().map(String::as_str).collect::<Vec<_>>());
+        let mut v = Vertical {
+            lines: taken,
+            rows: Vec::new(),
+            unread: Vec::new(),
+            layout: layout.clone(),
+        };
+        for (at, cells_of) in records {
+            // Cells to columns in order: a cell goes to the next column its shape fits; text
+            // that fits no later column continues the name.
+            let mut placed: Vec<String> = vec![String::new(); layout.columns.len()];
+            placed[0] = cells_of[0].to_string();
+            let mut col = 1;
+            for c in &cells_of[1..] {
+                let next = (col..layout.columns.len()).find(|k| fits(layout.columns[*k].role, c));
+                match next {
+                    Some(k) => {
+                        placed[k] = c.to_string();
+                        col = k + 1;
+                    }
+                    None => {
+                        if let Some(k) = (0..col).rev().find(|k| {
+                            matches!(layout.columns[*k].role, Role::Name | Role::Description)
+                        }) {
+                            placed[k] = format!("{} {c}", placed[k]).trim().to_string();
+                        }
+                    }
+                }
+            }
+            let line_no = first_line + at;
+            let synthetic = placed.join("\t");
+            match layout_row(&synthetic, line_no, &layout, table) {
+                LayoutLine::Row(mut row) => {
+                    if row.name.is_empty() {
+                        v.unread.push(Unread {
+                            line: line_no,
+                            text: cells_of.join(" "),
+                            why: "a row key with no name after it".into(),
+                        });
+                    } else {
+                        row.notes
+                            .push("read from a table printed one cell per line".into());
+                        v.rows.push(*row);
+                    }
+                }
+                LayoutLine::Reported(u) => v.unread.push(u),
+                LayoutLine::NotKeyed => {}
+            }
+        }
+        out.push(v);
+    }
+    out
 }
