@@ -268,6 +268,11 @@ fn a_pdf_manual_imports_like_its_text() {
         "fjord-fx5",
         "lumen-l500",
         "borealis-bx3",
+        "aurora-av15",
+        "solstice-sx300",
+        "halcyon-h8",
+        "cirrus-c4",
+        "vesper-vs2",
     ] {
         let text = repo().join(format!("tests/fixtures/import/manuals/{id}.txt"));
         let pdf = dir.join(format!("{id}.pdf"));
