@@ -563,15 +563,6 @@ impl Layout {
                         Role::Undecided
                     }
                 }
-                Role::Param => {
-                    // `Parameter` heading names (`Inverter model`), not numbers.
-                    if all(&|c| {
-                        c.split_whitespace().count() >= 2 || !c.chars().any(|d| d.is_ascii_digit())
-                    }) && !has_name
-                    {
-                        col.role = Role::Name;
-                    }
-                }
                 Role::Description if !has_name => col.role = Role::Name,
                 _ => {}
             }

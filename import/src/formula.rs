@@ -11,8 +11,8 @@ use regex::Regex;
 /// An address formula read from the manual.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Formula {
-    /// Added to the result (a Modicon base `40000` / `400000` is not: it is the prefix of the
-    /// reference, and the address is the rest).
+    /// Added to the result. A Modicon base (`40000`, `400000`) makes the result a reference,
+    /// and the register is the reference less `40001` / `400001` (40001 is register 0).
     pub base: i64,
     /// Multiplies the parameter number (or the group).
     pub mul: i64,
@@ -88,8 +88,10 @@ impl Formula {
     /// The address of a parameter number as printed (`3-41`, `P0940`, `22.80`), when the
     /// formula gives one that fits a register.
     pub fn address(&self, param: &str) -> Option<u16> {
+        // A reference: register = reference - (40000 + 1), as for every Modicon number.
         let base = match self.base {
-            40000 | 40001 | 400000 | 400001 => 0,
+            40000 | 400000 => -1,
+            40001 | 400001 => 0,
             b => b,
         };
         let value = if self.group {
@@ -129,7 +131,8 @@ mod tests {
         let f = find(&["address = 128 + parameter number"]).unwrap();
         assert_eq!(f.address("P012"), Some(140));
         let f = find(&["use 400000 + 256 * parameter group + parameter index"]).unwrap();
-        assert_eq!(f.address("22.80"), Some(5712));
+        // 400000 + 256 x 22 + 80 = 405712, the Modicon reference of register 5711.
+        assert_eq!(f.address("22.80"), Some(5711));
         assert!(f.modicon());
         assert_eq!(find(&["The drive has 12 parameters."]), None);
     }

@@ -44,6 +44,23 @@ pub struct Reading {
 /// tabs, so that every layout reaches the row grammar as cells; other lines unchanged.
 fn table_line(line: &str) -> std::borrow::Cow<'_, str> {
     let t = line.trim();
+    // Cells separated by spaced bars without a leading one (`0 | 40001 | Speed | R/W`), or a
+    // header introduced by a label (`Columns: Register | Name | Access`).
+    let spaced = !t.starts_with('|') && t.matches(" | ").count() >= 2;
+    if spaced {
+        let cells: Vec<&str> = t.split('|').map(str::trim).collect();
+        let first = cells[0];
+        let first = match first.split_once(':') {
+            Some((label, rest)) if label.to_lowercase().contains("column") => rest.trim(),
+            _ => first,
+        };
+        return std::borrow::Cow::Owned(
+            std::iter::once(first)
+                .chain(cells[1..].iter().copied())
+                .collect::<Vec<_>>()
+                .join("\t"),
+        );
+    }
     if t.starts_with('|') && t.matches('|').count() >= 2 {
         let inner = t.trim_matches('|');
         std::borrow::Cow::Owned(
@@ -162,7 +179,7 @@ pub fn read_manual_with(
                 f.line,
                 f.text,
                 if f.modicon() {
-                    " (its Modicon base left out: the register, not the reference)"
+                    " (a Modicon reference: the register is the reference less 40001 / 400001; confirm against an example of the manual)"
                 } else {
                     ""
                 }

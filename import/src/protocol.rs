@@ -190,18 +190,30 @@ pub fn read(lines: &[&str], first_line: usize) -> Protocol {
                 }
             }
         }
-        if let Some(c) = MAX.captures(line)
-            && let Ok(n) = c[1].parse::<u16>()
+        // A sentence may wrap onto the next line (`reads at most` / `100 registers`): the limit
+        // is read from the line and the next, when it starts on this line.
+        let next = lines.get(i + 1).map_or("", |l| l.trim());
+        let joined = format!("{line} {next}");
+        if let Some(c) = MAX.captures(line).or_else(|| {
+            MAX.captures(&joined)
+                .filter(|c| c.get(0).is_some_and(|m| m.start() < line.len()))
+        }) && let Ok(n) = c[1].parse::<u16>()
             && (1..=125).contains(&n)
         {
             let cited = Cited {
                 value: n,
                 line: line_no,
             };
-            if lower.contains("read") && p.max_read.is_none() {
+            let m = c.get(0).map_or("", |m| m.as_str()).to_lowercase();
+            let around = if m.contains("read") || m.contains("writ") {
+                m
+            } else {
+                lower.clone()
+            };
+            if around.contains("read") && p.max_read.is_none() {
                 p.max_read = Some(cited.clone());
             }
-            if lower.contains("writ") && p.max_write.is_none() {
+            if around.contains("writ") && p.max_write.is_none() {
                 p.max_write = Some(cited);
             }
         }

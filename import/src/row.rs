@@ -549,7 +549,18 @@ pub fn read_tables(
 
 /// A line shortened for a report (at most 120 characters).
 fn shorten(s: &str) -> String {
-    let mut out: String = s.chars().take(120).collect();
+    // Escaped: a manual's text may hold control characters.
+    let mut out: String = s
+        .chars()
+        .take(120)
+        .flat_map(|c| {
+            if c.is_control() {
+                c.escape_default().collect::<Vec<_>>()
+            } else {
+                vec![c]
+            }
+        })
+        .collect();
     if s.chars().count() > 120 {
         out.push('…');
     }
@@ -1212,163 +1223,6 @@ fn continuation_codes(line: &str, line_no: usize, row: &mut Row) -> bool {
     true
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn read(text: &str) -> (Vec<Row>, Vec<Unread>) {
-        let lines: Vec<&str> = text.lines().collect();
-        let schemes = crate::scheme::learn(&lines);
-        read_rows(&lines, 1, &schemes)
-    }
-
-    #[test]
-    fn a_tabbed_table_with_a_unit_column() {
-        let (rows, _) = read(
-            "Address\tParameter\tName\tUnit\tSetting Range\n\
-             032BH\tCn-44\tPID Integral Upper Bound\t1%\t0~109%\n\
-             032CH\tCn-45\tPID Primary Delay Time Constant\t0.1s\t0.0~2.5s\n\
-             032DH\tCn-46\tResistance, Motor winding\t0.00 1Ω\t0.000~65.535Ω\n\
-             032EH\tCn-47\tSlip Compensation Gain\t0.01\t0.00~2.55\n",
-        );
-        assert_eq!(rows.len(), 4);
-        let r = &rows[1];
-        assert_eq!(
-            (r.address, r.param.as_deref(), r.name.as_str()),
-            (
-                Some(0x032C),
-                Some("Cn-45"),
-                "PID Primary Delay Time Constant"
-            )
-        );
-        assert_eq!(
-            (r.unit.as_deref(), r.scale, r.min, r.max),
-            (Some("s"), Some(0.1), Some(0.0), Some(2.5))
-        );
-        assert_eq!(rows[2].scale, Some(0.001));
-        assert_eq!((rows[3].unit.as_deref(), rows[3].scale), (None, Some(0.01)));
-        assert_eq!(
-            (rows[0].unit.as_deref(), rows[0].scale, rows[0].max),
-            (Some("%"), Some(1.0), Some(109.0))
-        );
-    }
-
-    #[test]
-    fn glued_rows_and_codes() {
-        let (rows, _) = read(
-            "1A0hb7-01Droop Control Gain0.0 to 100.0\n\
-             1A2hb8-01Energy Saving Gain0 to 100%80\n\
-             1A3hb8-02Energy Saving Frequency0.0 to 400.0 Hz0.0\n\
-             212hC3-04Slip Compensation Selection0Disabled0\n\
-             during Regeneration1Enabled\n",
-        );
-        assert_eq!(rows.len(), 4);
-        assert_eq!(
-            (
-                rows[1].name.as_str(),
-                rows[1].unit.as_deref(),
-                rows[1].default
-            ),
-            ("Energy Saving Gain", Some("%"), Some(80.0))
-        );
-        assert_eq!(
-            (rows[2].scale, rows[2].max, rows[2].default),
-            (Some(0.1), Some(400.0), Some(0.0))
-        );
-        assert_eq!(
-            rows[3].values.first().map(|c| (c.value, c.name.as_str())),
-            Some((0, "Disabled"))
-        );
-        assert_eq!(rows[3].default, Some(0.0));
-    }
-
-    #[test]
-    fn codes_listed_under_a_row() {
-        let (rows, _) = read(
-            "n004\t0104h\tReference Source\t0\tKeypad\t0\n\
-             \t\t\t1\tTerminal\n\
-             n005\t0105h\tStopping Method Selection\t0\tRamp To Stop\t0\n\
-             \t\t\t1\tCoast To Stop\n\
-             n006\t0106h\tReverse Prohibit\t0\tEnabled\t0\n\
-             n007\t0107h\tStop Key\t0\tEnabled\t0\n",
-        );
-        assert_eq!(rows.len(), 4);
-        let codes: Vec<_> = rows[1]
-            .values
-            .iter()
-            .map(|c| (c.value, c.name.as_str(), c.line))
-            .collect();
-        assert_eq!(codes, vec![(0, "Ramp To Stop", 3), (1, "Coast To Stop", 4)]);
-        assert_eq!(rows[1].default, Some(0.0));
-    }
-
-    #[test]
-    fn a_name_wrapped_onto_the_next_line() {
-        let (rows, _) = read(
-            "n001\t0101h\tPassword / Initialization\t0\tAll locked\t1\n\
-             11001\t010111\tSelection\t1\tAll open\n\
-             n002\t0102h\tReverse Prohibit Selection\t0\tEnabled\t0\n\
-             11002\t010211\tReverse Fromott Selection\t1\tDisabled\n\
-             n003\t0103h\tStop Key\t0\tEnabled\t0\n\
-             \t\tReserved\n\
-             n004\t0104h\tOperator\t0\tOn\t0\n",
-        );
-        let names: Vec<&str> = rows.iter().map(|r| r.name.as_str()).collect();
-        assert_eq!(
-            names,
-            [
-                "Password / Initialization Selection",
-                "Reverse Prohibit Selection",
-                "Stop Key",
-                "Operator"
-            ]
-        );
-        assert_eq!(
-            rows[0].values.iter().map(|c| c.value).collect::<Vec<_>>(),
-            [0, 1]
-        );
-        assert_eq!(
-            rows[1].values.iter().map(|c| c.value).collect::<Vec<_>>(),
-            [0, 1]
-        );
-    }
-
-    #[test]
-    fn prose_is_not_a_row() {
-        let (rows, _) = read(
-            "n003 = 1 selects the terminals\nn001 Password\nn002 Control\nn003 Run\nn004 Reference\n\
-             The value 0101h. is written\n",
-        );
-        assert_eq!(
-            rows.iter().map(|r| r.line).collect::<Vec<_>>(),
-            vec![2, 3, 4, 5]
-        );
-    }
-
-    #[test]
-    fn decimal_addresses_under_an_address_header() {
-        let (rows, _) = read(
-            "Register   Name                 Range        Default\n\
-             40101      Acceleration time    0.1 to 600.0 s   5.0\n\
-             40102      Deceleration time    0.1 to 600.0 s   5.0\n",
-        );
-        assert_eq!(rows.len(), 2);
-        // A register column of Modicon references only: 40001 is register 0.
-        assert_eq!(
-            (
-                rows[0].address,
-                rows[0].notation,
-                rows[0].address_printed.as_deref()
-            ),
-            (Some(100), Notation::Decimal, Some("40101"))
-        );
-        assert_eq!(
-            (rows[0].unit.as_deref(), rows[0].scale, rows[0].default),
-            (Some("s"), Some(0.1), Some(5.0))
-        );
-    }
-}
-
 /// What a line under a table header is, read by the header's columns.
 enum LayoutLine {
     /// A register row.
@@ -1633,7 +1487,7 @@ fn layout_row(
     row.unit = unit.map(str::to_string);
     row.scale = match (step, unit, decimals) {
         // A count of one with no unit is a plain word.
-        (Some(s), None, _) if s == 1.0 => None,
+        (Some(1.0), None, _) => None,
         (Some(s), _, _) => Some(s),
         (None, Some(_), Some(d)) => Some(10f64.powi(-(d as i32))),
         (None, None, Some(d)) if d > 0 => Some(10f64.powi(-(d as i32))),
@@ -1913,4 +1767,161 @@ fn vertical_tables(
         out.push(v);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str) -> (Vec<Row>, Vec<Unread>) {
+        let lines: Vec<&str> = text.lines().collect();
+        let schemes = crate::scheme::learn(&lines);
+        read_rows(&lines, 1, &schemes)
+    }
+
+    #[test]
+    fn a_tabbed_table_with_a_unit_column() {
+        let (rows, _) = read(
+            "Address\tParameter\tName\tUnit\tSetting Range\n\
+             032BH\tCn-44\tPID Integral Upper Bound\t1%\t0~109%\n\
+             032CH\tCn-45\tPID Primary Delay Time Constant\t0.1s\t0.0~2.5s\n\
+             032DH\tCn-46\tResistance, Motor winding\t0.00 1Ω\t0.000~65.535Ω\n\
+             032EH\tCn-47\tSlip Compensation Gain\t0.01\t0.00~2.55\n",
+        );
+        assert_eq!(rows.len(), 4);
+        let r = &rows[1];
+        assert_eq!(
+            (r.address, r.param.as_deref(), r.name.as_str()),
+            (
+                Some(0x032C),
+                Some("Cn-45"),
+                "PID Primary Delay Time Constant"
+            )
+        );
+        assert_eq!(
+            (r.unit.as_deref(), r.scale, r.min, r.max),
+            (Some("s"), Some(0.1), Some(0.0), Some(2.5))
+        );
+        assert_eq!(rows[2].scale, Some(0.001));
+        assert_eq!((rows[3].unit.as_deref(), rows[3].scale), (None, Some(0.01)));
+        assert_eq!(
+            (rows[0].unit.as_deref(), rows[0].scale, rows[0].max),
+            (Some("%"), Some(1.0), Some(109.0))
+        );
+    }
+
+    #[test]
+    fn glued_rows_and_codes() {
+        let (rows, _) = read(
+            "1A0hb7-01Droop Control Gain0.0 to 100.0\n\
+             1A2hb8-01Energy Saving Gain0 to 100%80\n\
+             1A3hb8-02Energy Saving Frequency0.0 to 400.0 Hz0.0\n\
+             212hC3-04Slip Compensation Selection0Disabled0\n\
+             during Regeneration1Enabled\n",
+        );
+        assert_eq!(rows.len(), 4);
+        assert_eq!(
+            (
+                rows[1].name.as_str(),
+                rows[1].unit.as_deref(),
+                rows[1].default
+            ),
+            ("Energy Saving Gain", Some("%"), Some(80.0))
+        );
+        assert_eq!(
+            (rows[2].scale, rows[2].max, rows[2].default),
+            (Some(0.1), Some(400.0), Some(0.0))
+        );
+        assert_eq!(
+            rows[3].values.first().map(|c| (c.value, c.name.as_str())),
+            Some((0, "Disabled"))
+        );
+        assert_eq!(rows[3].default, Some(0.0));
+    }
+
+    #[test]
+    fn codes_listed_under_a_row() {
+        let (rows, _) = read(
+            "n004\t0104h\tReference Source\t0\tKeypad\t0\n\
+             \t\t\t1\tTerminal\n\
+             n005\t0105h\tStopping Method Selection\t0\tRamp To Stop\t0\n\
+             \t\t\t1\tCoast To Stop\n\
+             n006\t0106h\tReverse Prohibit\t0\tEnabled\t0\n\
+             n007\t0107h\tStop Key\t0\tEnabled\t0\n",
+        );
+        assert_eq!(rows.len(), 4);
+        let codes: Vec<_> = rows[1]
+            .values
+            .iter()
+            .map(|c| (c.value, c.name.as_str(), c.line))
+            .collect();
+        assert_eq!(codes, vec![(0, "Ramp To Stop", 3), (1, "Coast To Stop", 4)]);
+        assert_eq!(rows[1].default, Some(0.0));
+    }
+
+    #[test]
+    fn a_name_wrapped_onto_the_next_line() {
+        let (rows, _) = read(
+            "n001\t0101h\tPassword / Initialization\t0\tAll locked\t1\n\
+             11001\t010111\tSelection\t1\tAll open\n\
+             n002\t0102h\tReverse Prohibit Selection\t0\tEnabled\t0\n\
+             11002\t010211\tReverse Fromott Selection\t1\tDisabled\n\
+             n003\t0103h\tStop Key\t0\tEnabled\t0\n\
+             \t\tReserved\n\
+             n004\t0104h\tOperator\t0\tOn\t0\n",
+        );
+        let names: Vec<&str> = rows.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "Password / Initialization Selection",
+                "Reverse Prohibit Selection",
+                "Stop Key",
+                "Operator"
+            ]
+        );
+        assert_eq!(
+            rows[0].values.iter().map(|c| c.value).collect::<Vec<_>>(),
+            [0, 1]
+        );
+        assert_eq!(
+            rows[1].values.iter().map(|c| c.value).collect::<Vec<_>>(),
+            [0, 1]
+        );
+    }
+
+    #[test]
+    fn prose_is_not_a_row() {
+        let (rows, _) = read(
+            "n003 = 1 selects the terminals\nn001 Password\nn002 Control\nn003 Run\nn004 Reference\n\
+             The value 0101h. is written\n",
+        );
+        assert_eq!(
+            rows.iter().map(|r| r.line).collect::<Vec<_>>(),
+            vec![2, 3, 4, 5]
+        );
+    }
+
+    #[test]
+    fn decimal_addresses_under_an_address_header() {
+        let (rows, _) = read(
+            "Register   Name                 Range        Default\n\
+             40101      Acceleration time    0.1 to 600.0 s   5.0\n\
+             40102      Deceleration time    0.1 to 600.0 s   5.0\n",
+        );
+        assert_eq!(rows.len(), 2);
+        // A register column of Modicon references only: 40001 is register 0.
+        assert_eq!(
+            (
+                rows[0].address,
+                rows[0].notation,
+                rows[0].address_printed.as_deref()
+            ),
+            (Some(100), Notation::Decimal, Some("40101"))
+        );
+        assert_eq!(
+            (rows[0].unit.as_deref(), rows[0].scale, rows[0].default),
+            (Some("s"), Some(0.1), Some(5.0))
+        );
+    }
 }

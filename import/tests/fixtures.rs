@@ -104,7 +104,10 @@ fn codes(r: &Register) -> Vec<(u16, String, Option<String>)> {
         .collect()
 }
 
-fn bits(r: &Register) -> Vec<(Option<u8>, Option<[u8; 2]>, String, Option<String>)> {
+/// A bit field as compared: its bit or bits, name and citation.
+type Bits = (Option<u8>, Option<[u8; 2]>, String, Option<String>);
+
+fn bits(r: &Register) -> Vec<Bits> {
     r.def
         .fields
         .iter()
@@ -522,4 +525,59 @@ fn a_column_the_reader_cannot_decide_is_reported_and_named_with_columns() {
         "{report}"
     );
     assert_eq!(roles.len(), named.readings[0].0.layouts[0].columns.len());
+}
+
+#[test]
+fn two_numbers_per_row_in_spaced_bars_give_the_drives_own_register() {
+    // The drive's register beside its 40001-style reference, cells between spaced bars and a
+    // header introduced by a label: the address is the drive's own number, the reference a note.
+    let text = "Columns: Register | Modbus reference | Name | Access | Unit | Scaling factor | Range\n\
+                0 | 40001 | Watchdog time | R/W | ms | 1 | 0 - 65535\n\
+                1 | 40002 | Frequency setpoint | R/W | Hz | 100 | -200.00 - 200.00\n\
+                2 | 40003 | Run enable | R/W | - | 1 | 0 - 1\n";
+    let reading = drivemap_import::read_manual("v.txt", text, None);
+    let rows: Vec<_> = reading
+        .rows
+        .iter()
+        .map(|r| {
+            (
+                r.address,
+                r.name.as_str(),
+                r.access,
+                r.unit.as_deref(),
+                r.scale,
+                r.min,
+            )
+        })
+        .collect();
+    assert_eq!(
+        rows,
+        [
+            (
+                Some(0),
+                "Watchdog time",
+                Some("rw"),
+                Some("ms"),
+                Some(1.0),
+                Some(0.0)
+            ),
+            (
+                Some(1),
+                "Frequency setpoint",
+                Some("rw"),
+                Some("Hz"),
+                Some(0.01),
+                Some(-200.0)
+            ),
+            (Some(2), "Run enable", Some("rw"), None, None, Some(0.0)),
+        ]
+    );
+    assert!(
+        reading.rows[1]
+            .notes
+            .iter()
+            .any(|n| n.contains("also printed as 40002")),
+        "{:?}",
+        reading.rows[1].notes
+    );
 }
