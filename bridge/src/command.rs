@@ -146,6 +146,8 @@ pub struct Board {
     /// refused at once while it does not).
     answering: Vec<AtomicBool>,
     deadline: Duration,
+    /// Rung since the last wait.
+    rung: Mutex<bool>,
 }
 
 impl Board {
@@ -156,6 +158,7 @@ impl Board {
             bell: Condvar::new(),
             answering: (0..drives).map(|_| AtomicBool::new(false)).collect(),
             deadline,
+            rung: Mutex::new(false),
         }
     }
 
@@ -293,10 +296,21 @@ impl Board {
             .is_none_or(|d| d.iter().all(Pending::is_empty))
     }
 
-    /// Waits until something is offered or `timeout` passes.
+    /// Waits until something is offered (or [`Board::ring`] is called) or `timeout` passes.
     pub fn wait(&self, timeout: Duration) {
         let drives = self.lock();
+        if std::mem::take(&mut *self.rung.lock().unwrap_or_else(|e| e.into_inner())) {
+            return;
+        }
         let _ = self.bell.wait_timeout(drives, timeout);
+    }
+
+    /// Wakes the links waiting on the board (a proxied request came); a link that is not
+    /// waiting does not wait at its next [`Board::wait`].
+    pub fn ring(&self) {
+        let _drives = self.lock();
+        *self.rung.lock().unwrap_or_else(|e| e.into_inner()) = true;
+        self.bell.notify_all();
     }
 }
 

@@ -111,6 +111,14 @@ pub enum Error {
         /// Why not.
         source: std::io::Error,
     },
+    /// The proxy's listener cannot bind.
+    #[error("cannot listen for Modbus TCP masters on {addr}: {source}")]
+    Proxy {
+        /// The address asked.
+        addr: SocketAddr,
+        /// Why not.
+        source: std::io::Error,
+    },
     /// Registers asked for a link that are not there or cannot be read on it, one line each.
     #[error("{}", lines(.0))]
     Registers(Vec<RegisterProblem>),

@@ -27,6 +27,7 @@ pub mod log;
 pub mod metrics;
 pub mod mqtt;
 pub mod points;
+pub mod proxy;
 
 use std::net::SocketAddr;
 use std::sync::Arc;
@@ -121,16 +122,46 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
         let updates = options.mqtt.as_ref().map(|_| tx);
         let mut republish = Vec::new();
         let mut tasks = Vec::new();
+        let mut servers = Vec::new();
         let mut first = 0;
         for l in links {
             let again = Arc::new(AtomicBool::new(false));
             republish.push(Arc::clone(&again));
             let n = l.drives.len();
-            eprintln!(
-                "bridge: polling {n} drive(s) on {} every {} ms",
-                l.name,
-                options.period.as_millis()
-            );
+            if l.poll {
+                eprintln!(
+                    "bridge: polling {n} drive(s) on {} every {} ms",
+                    l.name,
+                    options.period.as_millis()
+                );
+            }
+            let proxy = match &l.proxy {
+                Some(o) => {
+                    let listener =
+                        tokio::net::TcpListener::bind(o.listen)
+                            .await
+                            .map_err(|source| Error::Proxy {
+                                addr: o.listen,
+                                source,
+                            })?;
+                    let queue = Arc::new(proxy::Queue::new(Arc::clone(&board)));
+                    let slaves = l.drives.iter().map(|d| d.slave).collect();
+                    eprintln!(
+                        "bridge: serving Modbus TCP masters on {} for {n} drive(s) on {}",
+                        listener.local_addr().map_or(o.listen, |a| a),
+                        l.name
+                    );
+                    servers.push(tokio::spawn(proxy::serve(
+                        listener,
+                        Arc::clone(&queue),
+                        slaves,
+                        o.clone(),
+                        Arc::clone(&stop),
+                    )));
+                    Some(proxy::LineSide::new(o.clone(), queue, Arc::clone(&metrics)))
+                }
+                None => None,
+            };
             let (m, u, s, p, b) = (
                 Arc::clone(&metrics),
                 updates.clone(),
@@ -139,7 +170,7 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
                 Arc::clone(&board),
             );
             tasks.push(tokio::task::spawn_blocking(move || {
-                link::run(l, first, p, m, u, b, s, again)
+                link::run(l, first, p, m, u, b, s, again, proxy)
             }));
             first += n;
         }
@@ -178,6 +209,9 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
             let _ = tokio::time::timeout(Duration::from_secs(5), t).await;
         }
         if let Some(s) = server {
+            let _ = tokio::time::timeout(Duration::from_secs(1), s).await;
+        }
+        for s in servers {
             let _ = tokio::time::timeout(Duration::from_secs(1), s).await;
         }
         eprintln!("bridge: stopped");

@@ -76,6 +76,12 @@ pub struct LinkSpec {
     pub connect: Connect,
     /// The drives on it.
     pub drives: Vec<DriveSpec>,
+    /// Whether its drives are polled every period (off for a link that only carries commands
+    /// and proxied requests: `drivemap proxy`).
+    pub poll: bool,
+    /// Modbus TCP masters served on this link through the proxy (`--serve-modbus`,
+    /// `drivemap proxy`).
+    pub proxy: Option<crate::proxy::ProxyOptions>,
 }
 
 /// A command for a drive, from MQTT.
@@ -645,6 +651,7 @@ pub fn run(
     board: Arc<Board>,
     stop: Arc<AtomicBool>,
     republish: Arc<AtomicBool>,
+    proxy: Option<crate::proxy::LineSide>,
 ) {
     let label = vec![("link".to_owned(), link.name.clone())];
     metrics
@@ -671,6 +678,7 @@ pub fn run(
         metrics: Arc::clone(&metrics),
         updates: updates.clone(),
         log: Limiter::default(),
+        proxy,
     };
     let mut wait = Duration::from_millis(100);
     let transport = loop {
@@ -724,6 +732,9 @@ pub fn run(
         // of the link goes out between two requests), so they cannot be borrowed alongside.
         #[allow(clippy::needless_range_loop)]
         for k in 0..drives.len() {
+            if !link.poll {
+                break;
+            }
             let d = &mut drives[k];
             let (n, ns) = d.cycle(&mut client, link.line, &metrics, &updates, &mut |c| {
                 serving.serve(c)
@@ -799,13 +810,24 @@ struct Serving {
     metrics: Arc<Metrics>,
     updates: Updates,
     log: Limiter,
+    proxy: Option<crate::proxy::LineSide>,
 }
 
 impl Serving {
     /// Carries out every command of the link's drives that is due (stops first), reports the
     /// expired ones, gives back a stop that could not be delivered.
     fn serve(&mut self, client: &mut LinkClient) {
-        while let Some(next) = self.board.next(self.first, self.count, Instant::now()) {
+        loop {
+            let Some(next) = self.board.next(self.first, self.count, Instant::now()) else {
+                // No command due: a proxied master's request, then look again.
+                match self.proxy.as_mut().and_then(|p| p.next().map(|r| (p, r))) {
+                    Some((p, r)) => {
+                        p.serve(r, client, &mut self.commanders);
+                        continue;
+                    }
+                    None => break,
+                }
+            };
             match next {
                 Next::Expired(i) => {
                     let waited = i.received.elapsed();

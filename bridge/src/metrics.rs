@@ -75,6 +75,10 @@ pub struct Metrics {
     pub command_latency: Histograms,
     /// The poll period asked for each link (compare with the bus-time model).
     pub period_seconds: Gauges,
+    /// Requests of proxied masters, by master address.
+    pub proxy_requests: Counters,
+    /// Requests of proxied masters refused, by reason.
+    pub proxy_refusals: Counters,
 }
 
 fn gauges(registry: &mut Registry, name: &str, help: &str, unit: Option<Unit>) -> Gauges {
@@ -190,6 +194,16 @@ impl Metrics {
             "the poll period asked for the link; above the bus-time model the cycles run back to back",
             Some(Unit::Seconds),
         );
+        let proxy_requests = counters(
+            &mut registry,
+            "drivemap_proxy_requests",
+            "requests of masters through the proxy, by master address",
+        );
+        let proxy_refusals = counters(
+            &mut registry,
+            "drivemap_proxy_refusals",
+            "requests of masters refused by the proxy (answered with an exception), by reason",
+        );
         Metrics {
             registry,
             values,
@@ -204,6 +218,8 @@ impl Metrics {
             commands,
             command_latency,
             period_seconds,
+            proxy_requests,
+            proxy_refusals,
         }
     }
 

@@ -21,6 +21,8 @@ use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
+mod proxy;
+
 fn v7() -> &'static Drive {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml");
     Box::leak(Box::new(
@@ -86,6 +88,8 @@ fn a_stuck_broker_side_never_holds_polling_back() {
         line: SerialConfig::default(),
         connect: connect_to(addr),
         drives: vec![spec(drive)],
+        poll: true,
+        proxy: None,
     };
     let (m, s) = (Arc::clone(&metrics), Arc::clone(&stop));
     let task = std::thread::spawn(move || {
@@ -98,6 +102,7 @@ fn a_stuck_broker_side_never_holds_polling_back() {
             commands,
             s,
             Arc::new(AtomicBool::new(false)),
+            None,
         )
     });
     // The queue is full after the first update; the cycles go on (each is the V7's planned
@@ -147,6 +152,8 @@ fn an_unreachable_link_is_retried_and_still_stops() {
         line: SerialConfig::default(),
         connect: connect_to(format!("127.0.0.1:{port}")),
         drives: vec![spec(drive)],
+        poll: true,
+        proxy: None,
     };
     let (m, s) = (Arc::clone(&metrics), Arc::clone(&stop));
     let task = std::thread::spawn(move || {
@@ -159,6 +166,7 @@ fn an_unreachable_link_is_retried_and_still_stops() {
             commands,
             s,
             Arc::new(AtomicBool::new(false)),
+            None,
         )
     });
     std::thread::sleep(Duration::from_millis(1500));
@@ -219,6 +227,8 @@ impl Line {
             line: SerialConfig::default(),
             connect: connect_to(server.local_addr().to_string()),
             drives,
+            poll: true,
+            proxy: None,
         };
         let stop = Arc::new(AtomicBool::new(false));
         let (m, s, b) = (metrics_for(drive), Arc::clone(&stop), Arc::clone(&board));
@@ -232,6 +242,7 @@ impl Line {
                 b,
                 s,
                 Arc::new(AtomicBool::new(false)),
+                None,
             )
         });
         let line = Line {
@@ -363,6 +374,8 @@ fn a_run_sent_while_the_link_is_down_expires_and_never_starts_the_drive() {
         line: SerialConfig::default(),
         connect: connect_to(format!("127.0.0.1:{port}")),
         drives: vec![spec(drive)],
+        poll: true,
+        proxy: None,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let (m, s, b) = (metrics_for(drive), Arc::clone(&stop), Arc::clone(&board));
@@ -376,6 +389,7 @@ fn a_run_sent_while_the_link_is_down_expires_and_never_starts_the_drive() {
             b,
             s,
             Arc::new(AtomicBool::new(false)),
+            None,
         )
     });
     let command = |action| Command {
@@ -501,6 +515,8 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
                 .map_err(Into::into)
         }),
         drives: vec![s],
+        poll: true,
+        proxy: None,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let (m, st, b) = (metrics_for(drive), Arc::clone(&stop), Arc::clone(&board));
@@ -514,6 +530,7 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
             b,
             st,
             Arc::new(AtomicBool::new(false)),
+            None,
         )
     });
     let running = || {
@@ -548,7 +565,7 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
     took.sort();
     let model = drivemap_runtime::bus_time::BusModel::new(profile, serial_line);
     // The longest request of the V7's plan (16 registers) and a write, on the wire.
-    let request = Duration::from_nanos((model.read_ns(16) + model.read_ns(1)) as u64);
+    let request = Duration::from_nanos(model.read_ns(16) + model.read_ns(1));
     eprintln!(
         "stop latency on a 9600-baud line: median {:?}, p90 {:?}, max {:?} (a 16-register read and a write take {:?} by the bus-time model)",
         took[took.len() / 2],

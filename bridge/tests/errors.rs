@@ -95,7 +95,10 @@ fn credentials_in_the_url_and_wildcard_roots_are_refused() {
     let e = mqtt::parse_url("mqtt://bridge:s3cret@broker.local:1883").unwrap_err();
     assert!(matches!(e, Error::MqttUserinfo { .. }), "{e:?}");
     let text = e.to_string();
-    assert!(!text.contains("s3cret") && !text.contains("bridge:"), "{text}");
+    assert!(
+        !text.contains("s3cret") && !text.contains("bridge:"),
+        "{text}"
+    );
     assert!(text.contains("broker.local:1883"), "{text}");
     for (root, why) in [
         ("plant/+", "wildcards"),

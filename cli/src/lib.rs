@@ -69,6 +69,8 @@ pub enum Command {
     Probe(commands::probe::Args),
     /// Poll drives into Prometheus (/metrics) and MQTT / Home Assistant; commands over MQTT through the write gate.
     Bridge(commands::bridge::Args),
+    /// Let many Modbus TCP masters share one link: requests serialised onto the line, every write checked by the drive's map.
+    Proxy(commands::proxy::Args),
     /// Find the slaves on a line: which addresses answer, at which baud rate and parity, and which maps fit them.
     Scan(commands::scan::Args),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
@@ -105,6 +107,7 @@ pub fn main() -> ExitCode {
         Command::Probe(a) => commands::probe::run(a),
         Command::Scan(a) => commands::scan::run(a),
         Command::Bridge(a) => commands::bridge::run(a),
+        Command::Proxy(a) => commands::proxy::run(a),
         Command::Completions(a) => {
             use clap::CommandFactory;
             let mut cmd = Cli::command();

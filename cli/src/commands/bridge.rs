@@ -102,6 +102,58 @@ pub struct Args {
     /// More links and drives, in YAML (see the README, "Into Prometheus / Home Assistant").
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// Serve Modbus TCP masters on this address for the drives of the command line's link,
+    /// through the bridge's one master on the line (see `drivemap proxy`).
+    #[arg(long = "serve-modbus", value_name = "ADDR")]
+    pub serve_modbus: Option<SocketAddr>,
+    #[command(flatten)]
+    pub proxy: ProxyArgs,
+}
+
+/// What Modbus TCP masters served by the proxy may do (`drivemap proxy`, `bridge --serve-modbus`).
+#[derive(ClapArgs, Debug, Clone)]
+pub struct ProxyArgs {
+    /// Carry out the masters' writes (each checked by the drive's write gate and its limits);
+    /// without it every write is refused with exception 01h.
+    #[arg(long = "proxy-writes")]
+    pub writes: bool,
+    /// The masters (addresses or networks, `192.168.1.20`, `10.0.0.0/8`) whose writes may touch
+    /// a command register (run, stop, fault reset); others get exception 01h.
+    #[arg(long = "allow-commands", value_name = "CIDR", value_delimiter = ',')]
+    pub allow_commands: Vec<String>,
+    /// Answer a read from the same read of another master made within this age.
+    #[arg(long, value_name = "AGE", value_parser = crate::duration::positive)]
+    pub cache: Option<Duration>,
+    /// Masters served at once; more are closed at once.
+    #[arg(long = "max-connections", default_value_t = 16, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    pub max_connections: u16,
+    /// How long a master's request may wait for the line before it is answered 0Bh.
+    #[arg(long = "proxy-timeout", default_value = "5s", value_parser = crate::duration::positive)]
+    pub timeout: Duration,
+}
+
+impl ProxyArgs {
+    /// The proxy's options on `listen`.
+    pub fn options(
+        &self,
+        listen: SocketAddr,
+    ) -> Result<drivemap_bridge::proxy::ProxyOptions, Error> {
+        let allow_commands = self
+            .allow_commands
+            .iter()
+            .map(|c| {
+                drivemap_bridge::proxy::Cidr::parse(c).map_err(|e| format!("--allow-commands {e}"))
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(drivemap_bridge::proxy::ProxyOptions {
+            listen,
+            allow_writes: self.writes,
+            allow_commands,
+            max_connections: usize::from(self.max_connections),
+            cache: self.cache,
+            timeout: self.timeout,
+        })
+    }
 }
 
 /// `--config` file.
@@ -160,7 +212,7 @@ fn drive_slave(text: &str) -> Result<(String, u8), Error> {
 
 // One parameter per command-line option of a link (clap's fields), checked together.
 #[allow(clippy::too_many_arguments)]
-fn link_args(
+pub(crate) fn link_args(
     tcp: Option<String>,
     gateway: Option<String>,
     rtu_tcp: Option<String>,
@@ -193,7 +245,7 @@ fn link_args(
 }
 
 /// Builds a link of the bridge: its drives' maps loaded, their clients' timing, its connection.
-fn link(
+pub(crate) fn link(
     dir: &MapsDir,
     args: LinkArgs,
     drives: &[String],
@@ -263,6 +315,8 @@ fn link(
         line,
         connect,
         drives: specs,
+        poll: true,
+        proxy: None,
     })
 }
 
@@ -310,14 +364,21 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             args.timeout,
             args.retries,
         )?;
-        links.push(link(
+        let mut l = link(
             &args.dir,
             la,
             &args.drives,
             &args.settings,
             &mut names,
             &mut loaded,
-        )?);
+        )?;
+        l.proxy = args
+            .serve_modbus
+            .map(|addr| args.proxy.options(addr))
+            .transpose()?;
+        links.push(l);
+    } else if args.serve_modbus.is_some() {
+        return Err("--serve-modbus serves the drives of the command line's link: give --drive ID@SLAVE with a link".into());
     } else if args.tcp.is_some()
         || args.gateway.is_some()
         || args.rtu_tcp.is_some()
@@ -398,8 +459,8 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         }
         None => None,
     };
-    if args.no_metrics && mqtt.is_none() {
-        return Err("nothing to serve: --no-metrics without --mqtt".into());
+    if args.no_metrics && mqtt.is_none() && args.serve_modbus.is_none() {
+        return Err("nothing to serve: --no-metrics without --mqtt or --serve-modbus".into());
     }
     let options = drivemap_bridge::Options {
         period: args.period,

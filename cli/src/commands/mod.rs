@@ -11,6 +11,7 @@ pub mod import;
 pub mod migrate;
 pub mod poll;
 pub mod probe;
+pub mod proxy;
 pub mod read;
 pub mod restore;
 pub mod save;
