@@ -273,6 +273,8 @@ fn a_pdf_manual_imports_like_its_text() {
         "halcyon-h8",
         "cirrus-c4",
         "vesper-vs2",
+        "zephyr-z580",
+        "tarn-t35",
     ] {
         let text = repo().join(format!("tests/fixtures/import/manuals/{id}.txt"));
         let pdf = dir.join(format!("{id}.pdf"));

@@ -296,6 +296,7 @@ pub fn read_tables(
     let mut unread = Vec::new();
     let mut layouts: Vec<Layout> = Vec::new();
     let mut layout: Option<Layout> = None;
+    let mut words_layout: Option<Layout> = None;
     let mut header_ctx = Header::default();
     let mut last_attached = 0usize;
     // The last short heading line (`Status word`), and the heading of the current table: a bit
@@ -328,7 +329,51 @@ pub fn read_tables(
                 .contains_key(&line_no)
                 .then(|| Layout::header_as_named(line, line_no))?
         });
+        // A header whose titles are separated by single blanks (text copied from a page, PDF
+        // text without its layout): read by words, its rows by their tokens' shapes.
+        let words = new_layout
+            .is_none()
+            .then(|| word_header(line, line_no))
+            .flatten()
+            .map(|mut w| {
+                // Hex and Modicon numbering, and undecided titles, from the rows' tokens.
+                let rows: Vec<String> = table_lines(lines, i + 1)
+                    .iter()
+                    .filter_map(|l| word_row(l, &w))
+                    .collect();
+                w.decide(&rows.iter().map(String::as_str).collect::<Vec<_>>());
+                if let Some(named) = columns.get(&line_no) {
+                    w.name_columns(named);
+                }
+                w
+            })
+            // Left to the row grammar: bit tables, address lists, and headers it reads alike.
+            .filter(|w| {
+                old_header.is_none_or(|h| !h.bits && !h.hex_column)
+                    && !header_ctx.hex_column
+                    && !header_ctx.bits
+                    && w.columns.iter().any(|c| {
+                        !matches!(
+                            c.role,
+                            Role::Address | Role::Reference | Role::Param | Role::Name
+                        )
+                    })
+                    && (w.needs_columns() || columns.contains_key(&line_no))
+            });
+        if words.is_some() || (new_layout.is_some() && words_layout.is_some()) {
+            words_layout = words.clone();
+        }
+        if let Some(w) = words {
+            layouts.push(w);
+            layout = None;
+            header_ctx = Header::default();
+            table = heading.take().filter(|(l, _)| line_no <= l + 3);
+            table_heading = table.as_ref().map(|(_, t)| t.clone());
+            used.insert(line_no);
+            continue;
+        }
         if old_header.is_some() || new_layout.is_some() {
+            words_layout = None;
             header_ctx = old_header.unwrap_or_default();
             let h_heading = heading.take().filter(|(l, _)| line_no <= l + 3);
             let named = columns.contains_key(&line_no);
@@ -372,8 +417,28 @@ pub fn read_tables(
         if is_heading(line) {
             heading = Some((line_no, line.trim().to_string()));
         }
-        if let Some(l) = &layout {
-            match layout_row(line, line_no, l, &table) {
+        let synthetic = words_layout
+            .as_ref()
+            .and_then(|w| word_row(line, w).map(|s| (s, w)));
+        // Under a header read by words, a line without a key just after a row continues its
+        // last cell (a description wrapping): it is part of the row, not its name.
+        if words_layout.is_some()
+            && synthetic.is_none()
+            && !rows.is_empty()
+            && line_no <= last_attached + 3
+            && !row_shaped(line)
+        {
+            used.insert(line_no);
+            last_attached = line_no;
+            continue;
+        }
+        let read_as = match (&synthetic, &layout) {
+            (Some((s, w)), _) => Some((s.as_str(), *w)),
+            (None, Some(l)) => Some((line, l)),
+            (None, None) => None,
+        };
+        if let Some((line_as, l)) = read_as {
+            match layout_row(line_as, line_no, l, &table) {
                 LayoutLine::Row(row) => {
                     used.insert(line_no);
                     last_attached = line_no;
@@ -1767,6 +1832,204 @@ fn vertical_tables(
         out.push(v);
     }
     out
+}
+
+/// A header whose titles are separated by single blanks: its roles, matched greedily over one to
+/// three words (`Modbus register` `Access` `Information`), a name column put after the keys when
+/// no title names one. `None` unless most words are known titles and the first is an address or
+/// a parameter number.
+fn word_header(line: &str, line_no: usize) -> Option<Layout> {
+    let t = line.trim();
+    if t.is_empty() || t.len() > 120 || t.chars().any(|c| c.is_ascii_digit()) || t.ends_with('.') {
+        return None;
+    }
+    let words: Vec<&str> = t.split_whitespace().collect();
+    if words.len() < 2 || words.len() > 14 {
+        return None;
+    }
+    let mut roles: Vec<(String, Role)> = Vec::new();
+    let mut known_words = 0;
+    let mut i = 0;
+    while i < words.len() {
+        // A title of two words is one title when neither word names another column on its own
+        // (`Modbus register`, `Data resolution`, `Register No.`; not `Register Access`).
+        let suffix = |w: &str| {
+            matches!(
+                w.to_lowercase().trim_end_matches(['.', ':']),
+                "no" | "number" | "nr" | "value" | "values" | "(hex)" | "(dec)"
+            )
+        };
+        let mut matched = None;
+        for n in (1..=2).rev() {
+            if i + n <= words.len() {
+                let title = words[i..i + n].join(" ");
+                let Some(r) = crate::columns::title_role(&title) else {
+                    continue;
+                };
+                let alone = |w: &str| crate::columns::title_role(w);
+                let consistent = n == 1
+                    || (alone(words[i]).is_none_or(|x| x == r)
+                        && (suffix(words[i + 1]) || alone(words[i + 1]).is_none_or(|x| x == r)));
+                if consistent {
+                    matched = Some((title, r, n));
+                    break;
+                }
+            }
+        }
+        match matched {
+            Some((title, r, n)) => {
+                roles.push((title, r));
+                known_words += n;
+                i += n;
+            }
+            None => {
+                roles.push((words[i].to_string(), Role::Undecided));
+                i += 1;
+            }
+        }
+    }
+    let known = roles.iter().filter(|(_, r)| *r != Role::Undecided).count();
+    if known < 2 || known_words * 10 < words.len() * 7 {
+        return None;
+    }
+    if !matches!(roles[0].1, Role::Address | Role::Param) {
+        return None;
+    }
+    // Undecided titles are used for nothing; a description with no name column is the name.
+    if !roles.iter().any(|(_, r)| *r == Role::Name) {
+        match roles.iter().position(|(_, r)| *r == Role::Description) {
+            Some(d) if d == 1 => roles[d].1 = Role::Name,
+            _ => {
+                let at = roles
+                    .iter()
+                    .position(|(_, r)| !matches!(r, Role::Address | Role::Param | Role::Reference))
+                    .unwrap_or(roles.len());
+                roles.insert(at, ("(name)".to_string(), Role::Name));
+            }
+        }
+    }
+    // Two number columns: the second is a reference.
+    if roles.len() > 1 && roles[0].1 == Role::Address && roles[1].1 == Role::Address {
+        roles[1].1 = Role::Reference;
+    }
+    Some(Layout {
+        line: line_no,
+        columns: roles
+            .into_iter()
+            .enumerate()
+            .map(|(n, (title, role))| Column {
+                title,
+                role,
+                start: n,
+                end: n,
+                hex: false,
+                modicon: false,
+            })
+            .collect(),
+        split: Split::Tabs,
+        bits: None,
+    })
+}
+
+/// A row under a header read by words, as cells joined by tabs for [`layout_row`]: the keys (one
+/// token each), the name up to the first token that can only be a later column (an access, a
+/// parameter number, a range, a bracketed unit, a resolution with its unit), then each token in
+/// the next column its shape fits; what fits none is description.
+fn word_row(line: &str, layout: &Layout) -> Option<String> {
+    let toks: Vec<&str> = line.split_whitespace().collect();
+    let offset = |t: &str| t.as_ptr() as usize - line.as_ptr() as usize;
+    let roles: Vec<Role> = layout.columns.iter().map(|c| c.role).collect();
+    let name_at = roles.iter().position(|r| *r == Role::Name)?;
+    if toks.len() <= name_at {
+        return None;
+    }
+    let mut cells = vec![String::new(); roles.len()];
+    for k in 0..name_at {
+        let t = toks[k];
+        let ok = match roles[k] {
+            Role::Address | Role::Reference => {
+                hex_address(t).is_some() || (t.len() <= 6 && t.chars().all(|c| c.is_ascii_digit()))
+            }
+            Role::Param => param_cell(t).is_some(),
+            r => fits(r, t),
+        };
+        if !ok {
+            return None;
+        }
+        cells[k] = t.to_string();
+    }
+    let later: Vec<Role> = roles[name_at + 1..].to_vec();
+    let anchor = |j: usize| {
+        let t = toks[j];
+        let rest = &line[offset(t)..];
+        (later.contains(&Role::Access) && access_word(t).is_some())
+            || (later.contains(&Role::Param)
+                && param_cell(t).is_some()
+                && t.chars().any(|c| c.is_ascii_alphabetic())
+                && t.chars().any(|c| c.is_ascii_digit()))
+            || (later.contains(&Role::Range)
+                && rest.starts_with(|c: char| c.is_ascii_digit() || "+-−±".contains(c))
+                && find_range(rest).is_some_and(|r| r.start == 0))
+            || (t.starts_with('[') && unit_cell(t.trim_matches(['[', ']'])).is_some())
+            || (resolution_cell(&t.replace(['[', ']'], " ")).is_some_and(|(_, u)| u.is_some())
+                && t.chars().next().is_some_and(|c| c.is_ascii_digit()))
+    };
+    let mut j = name_at + 1;
+    while j < toks.len() && !anchor(j) {
+        j += 1;
+    }
+    cells[name_at] = toks[name_at..j].join(" ");
+    let mut col = name_at + 1;
+    let mut t = j;
+    let mut last: Option<usize> = None;
+    while t < toks.len() {
+        // A bracketed unit after a number belongs to it (`0.01 [Hz]`).
+        if let Some(k) = last
+            && toks[t].starts_with('[')
+            && unit_cell(toks[t].trim_matches(['[', ']'])).is_some()
+            && matches!(
+                roles[k],
+                Role::Step | Role::Unit | Role::Min | Role::Max | Role::Default
+            )
+        {
+            cells[k] = format!("{} {}", cells[k], toks[t]);
+            t += 1;
+            continue;
+        }
+        let rest = &line[offset(toks[t])..];
+        // A range takes the tokens it spans.
+        if let Some(k) = (col..roles.len()).find(|k| roles[*k] == Role::Range)
+            && rest.starts_with(|c: char| c.is_ascii_digit() || "+-−±".contains(c))
+            && let Some(r) = find_range(rest).filter(|r| r.start == 0)
+        {
+            let end = offset(toks[t]) + r.end;
+            cells[k] = line[offset(toks[t])..end].trim().to_string();
+            col = k + 1;
+            last = Some(k);
+            while t < toks.len() && offset(toks[t]) < end {
+                t += 1;
+            }
+            continue;
+        }
+        let tok = toks[t];
+        match (col..roles.len()).find(|k| {
+            !matches!(roles[*k], Role::Description | Role::Undecided) && fits(roles[*k], tok)
+        }) {
+            Some(k) => {
+                cells[k] = tok.to_string();
+                col = k + 1;
+                last = Some(k);
+            }
+            None => {
+                last = None;
+                if let Some(d) = roles.iter().position(|r| *r == Role::Description) {
+                    cells[d] = format!("{} {tok}", cells[d]).trim().to_string();
+                }
+            }
+        }
+        t += 1;
+    }
+    Some(cells.join("\t"))
 }
 
 #[cfg(test)]
