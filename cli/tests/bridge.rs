@@ -4,6 +4,7 @@
 //! fails, never skips, when a tool is missing (`tests/interop/install.sh` installs them).
 
 mod bridge_contract;
+mod bridge_proxy;
 mod bridge_support;
 
 use std::time::Duration;

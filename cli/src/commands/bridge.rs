@@ -128,8 +128,8 @@ pub struct ProxyArgs {
     #[arg(long = "max-connections", default_value_t = 16, value_parser = clap::value_parser!(u16).range(1..=1024))]
     pub max_connections: u16,
     /// How long a master's request may wait for the line before it is answered 0Bh.
-    #[arg(long = "proxy-timeout", default_value = "5s", value_parser = crate::duration::positive)]
-    pub timeout: Duration,
+    #[arg(long = "proxy-timeout", id = "proxy_timeout", default_value = "5s", value_parser = crate::duration::positive)]
+    pub wait: Duration,
 }
 
 impl ProxyArgs {
@@ -151,7 +151,7 @@ impl ProxyArgs {
             allow_commands,
             max_connections: usize::from(self.max_connections),
             cache: self.cache,
-            timeout: self.timeout,
+            timeout: self.wait,
         })
     }
 }
