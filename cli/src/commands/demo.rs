@@ -10,7 +10,6 @@
 //! times faster than real time.
 
 use std::process::ExitCode;
-use std::sync::Arc;
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -22,7 +21,7 @@ use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, ClientOptions, Error};
 
 use crate::error::Error as CliError;
-use drivemap_sim::{SimOptions, Simulator, SystemClock, TcpFraming, TcpServer};
+use drivemap_sim::{Simulator, TcpFraming, TcpServer};
 
 use crate::maps::MapsDir;
 
@@ -46,6 +45,15 @@ pub struct Args {
     /// Simulated seconds between rows of the table (0.01 to 5).
     #[arg(long, default_value_t = 0.5, value_parser = drivemap_live::duration::number(0.01, 5.0))]
     pub step: f64,
+    /// The simulated drive's value of a register or an external quantity of the map, as
+    /// `simulate --set` takes it (`--set p2000=50`: a reference scale resting on a parameter
+    /// without a printed default); the client reads the register from the simulated drive.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Drive a draft map (`draft:`, not yet reviewed against its manual): without it a draft
+    /// is refused, since the demo writes through the map.
+    #[arg(long)]
+    pub draft: bool,
     #[command(flatten)]
     pub dir: MapsDir,
 }
@@ -242,9 +250,15 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
             args.drive
         )));
     }
-    let clock = Arc::new(SystemClock::scaled(args.time_scale));
-    let mut sim =
-        Simulator::new(drive, SimOptions::new().clock(clock)).map_err(|e| e.to_string())?;
+    let through = drivemap_live::draft::check_write(
+        &drive,
+        drivemap_live::draft::DraftWrites::from_flag(args.draft),
+    )?;
+    if let Some(note) = &through {
+        outln!("note: writes go {note}");
+    }
+    let options = super::simulate::options(&drive, None, &args.set, &[], args.time_scale)?;
+    let mut sim = Simulator::new(drive, options).map_err(|e| e.to_string())?;
     // The simulated drive starts at its manual's factory setting, where it ignores network run
     // commands and references: the demo selects the network first, as an installer would.
     let selected = sim.select_network_source(drivemap_runtime::profile::TransportKind::RtuOverTcp);

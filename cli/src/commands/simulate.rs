@@ -288,6 +288,21 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             )));
         }
         let drive = load_drive(&args.dir, id)?;
+        // Served on a link the map does not list, it would answer requests the drive never
+        // would (`read --tcp` refuses the same map).
+        if let Some(addr) = &args.tcp
+            && !drive
+                .protocol
+                .transports
+                .contains(&drivemap_map::model::TransportName::Tcp)
+        {
+            return Err(Error::Refused(format!(
+                "{id} has no Modbus TCP interface (its map's protocol.transports lacks tcp), so --tcp {addr} would serve what the drive never does: serve it behind a Modbus TCP to RTU gateway with --gateway {addr}, or RTU frames over TCP with --rtu-tcp {addr}"
+            )));
+        }
+        if let Some(note) = drivemap_live::draft::read_note(&drive) {
+            eprintln!("note: {note}");
+        }
         let slave = at.or(args.slave);
         let (set, variant) = match slave {
             Some(n) => (

@@ -749,3 +749,77 @@ fn repro_a_setting_others_depend_on_is_not_changed_under_a_running_drive() {
         vec![(0x010B, 500), (0x010B, 550)]
     );
 }
+
+/// `simulate --tcp` refuses a map whose transports lack Modbus TCP, as `read --tcp` does.
+#[test]
+fn simulate_refuses_a_link_the_map_lacks_as_read_does() {
+    let (code, _, err, _) = common::drivemap_bounded(
+        &[
+            "simulate",
+            "--drive",
+            "yaskawa-gpd515",
+            "--tcp",
+            "127.0.0.1:0",
+            "--quiet",
+        ],
+        Duration::from_secs(20),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("yaskawa-gpd515 has no Modbus TCP interface"),
+        "{err}"
+    );
+    assert!(err.contains("--gateway 127.0.0.1:0"), "{err}");
+    let (code, _, err) = common::drivemap(&[
+        "read",
+        "--drive",
+        "yaskawa-gpd515",
+        "--tcp",
+        "127.0.0.1:9",
+        "output_frequency",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("yaskawa-gpd515 has no Modbus TCP interface"),
+        "{err}"
+    );
+}
+
+/// `demo` drives its simulated drive through the map: a draft is refused without `--draft`
+/// and said with it; `--set` gives the simulated drive a setting (the TDS-V8's Cn-02, the
+/// maximum frequency its reference is taken against), which the client reads from it.
+#[test]
+fn demo_refuses_a_draft_and_takes_set() {
+    let scratch = Scratch::new("issue37-demo");
+    drafts(&scratch.0);
+    let maps = scratch.0.to_str().unwrap();
+    let base = [
+        "demo",
+        "--drive",
+        "ptlk-tds-v8",
+        "--maps",
+        maps,
+        "--time-scale",
+        "100",
+        "--frequency",
+        "30",
+    ];
+    let (code, out, err, _) =
+        common::run_bounded(common::command().args(base), Duration::from_secs(60));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("ptlk-tds-v8 is a draft map"), "{err}");
+    assert!(!out.contains("written:"), "{out}");
+    let mut with = base.to_vec();
+    with.extend_from_slice(&["--draft", "--set", "Cn-02=50"]);
+    let (code, out, err, _) =
+        common::run_bounded(common::command().args(&with), Duration::from_secs(120));
+    assert_eq!(code, 0, "{err}\n{out}");
+    assert!(
+        out.contains("note: writes go through draft map ptlk-tds-v8 (--draft)"),
+        "{out}"
+    );
+    assert!(
+        out.contains("written: frequency reference 30.00 Hz"),
+        "{out}"
+    );
+}
