@@ -68,7 +68,7 @@ pub enum Command {
     /// Read every readable register of a drive against its map (never writes); report what disagrees; exit 1 if anything does.
     Probe(commands::probe::Args),
     /// Poll drives into Prometheus (/metrics) and MQTT / Home Assistant; commands over MQTT through the write gate.
-    Bridge(commands::bridge::Args),
+    Bridge(Box<commands::bridge::Args>),
     /// Let many Modbus TCP masters share one link: requests serialised onto the line, every write checked by the drive's map.
     Proxy(commands::proxy::Args),
     /// Find the slaves on a line: which addresses answer, at which baud rate and parity, and which maps fit them.
@@ -106,7 +106,7 @@ pub fn main() -> ExitCode {
         Command::Restore(a) => commands::restore::run(a),
         Command::Probe(a) => commands::probe::run(a),
         Command::Scan(a) => commands::scan::run(a),
-        Command::Bridge(a) => commands::bridge::run(a),
+        Command::Bridge(a) => commands::bridge::run(*a),
         Command::Proxy(a) => commands::proxy::run(a),
         Command::Completions(a) => {
             use clap::CommandFactory;
