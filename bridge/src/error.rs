@@ -146,6 +146,16 @@ pub enum RegisterProblem {
         /// The lookup's answer (with suggestions).
         source: NotFound,
     },
+    /// A poll period names nothing that is polled.
+    #[error(
+        "{link}: the period of {what}: no polled register is that (a register, role, group of the map, `status`, `monitors` or `parameters`)"
+    )]
+    NoPeriodTarget {
+        /// The drive's name on the link.
+        link: String,
+        /// What was named, quoted.
+        what: String,
+    },
     /// It exists but is write-only, broadcast-only or not on this transport.
     #[error("{link}: {register} cannot be read on this link")]
     Unreadable {

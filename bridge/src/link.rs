@@ -28,8 +28,9 @@ use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::roles::{Role, RoleKind};
 use drivemap_runtime::transport::Transport;
-use drivemap_runtime::{Client, ClientOptions, Error, Width};
+use drivemap_runtime::{Client, ClientOptions, Error, Table, Width};
 
 use crate::command::{Board, Intent, Next};
 use crate::commander::Commander;
@@ -62,6 +63,11 @@ pub struct DriveSpec {
     pub fixed: BTreeSet<String>,
     /// Registers to poll by name; empty: every role register and every read-only register.
     pub registers: Vec<String>,
+    /// Poll periods longer than the link's for some registers: `(what, period)`, `what` a
+    /// register (id, parameter number or name), a role id, a group of the map, or `status`
+    /// (registers holding status roles), `monitors` (read-only) or `parameters` (writable). The
+    /// most specific wins (register, then role, then group); the rest every cycle.
+    pub periods: Vec<(String, Duration)>,
 }
 
 /// A link, as configured.
@@ -148,12 +154,27 @@ pub enum Update {
 /// Offers an update to the MQTT side without waiting.
 pub type Updates = Option<tokio::sync::mpsc::Sender<Update>>;
 
-/// The planned reads of a drive.
-struct Plan {
+/// The reads of a drive that share a period.
+struct Class {
+    /// `None`: every cycle.
+    period: Option<Duration>,
     poller: Poller,
-    /// Per polled register: its index among the wanted and its width, or why it is not read.
-    slots: Vec<Result<(usize, Width), PollFailure>>,
+    /// When it is due next.
+    next: Instant,
+    /// Polled in the cycle in progress.
+    polled: bool,
 }
+
+/// The planned reads of a drive, by period.
+struct Plan {
+    classes: Vec<Class>,
+    /// Per polled register: its class, its index among that class's wanted and its width, or
+    /// why it is not read.
+    slots: Vec<Result<(usize, usize, Width), PollFailure>>,
+}
+
+/// A raw value as a poll left it: the word(s), or the error kind and text.
+type Raw = Result<u32, (&'static str, String)>;
 
 /// A drive being polled.
 pub struct Polled {
@@ -180,6 +201,10 @@ pub struct Polled {
     skip: u32,
     /// It answered its last poll.
     answered: bool,
+    /// Per polled register: its period (`None`: every cycle).
+    periods: Vec<Option<Duration>>,
+    /// Per polled register: what its last poll read.
+    last: Vec<Option<Raw>>,
 }
 
 /// The registers polled for `spec` on `kind`, and the indices of the dependencies among them.
@@ -257,6 +282,77 @@ pub fn choose(
     Ok((regs, deps))
 }
 
+/// The period of each of `regs` from `spec.periods` (see [`DriveSpec::periods`]); the
+/// dependencies (`deps`, what conversions depend on) every cycle. A `what` that names no polled
+/// register is an error.
+fn periods_of(
+    spec: &DriveSpec,
+    kind: TransportKind,
+    regs: &[&'static Register],
+    deps: &[usize],
+) -> Result<Vec<Option<Duration>>, crate::Error> {
+    let drive = spec.drive;
+    let plan = drive.plan();
+    let roles_of = |r: &Register| -> Vec<Role> {
+        let row = u16::try_from(plan.order[r.index()]).ok();
+        plan.roles
+            .places
+            .iter()
+            .filter(|p| p.transports.contains(kind) && p.target.row() == row)
+            .map(|p| p.role)
+            .collect()
+    };
+    // Rank 0 register, 1 role, 2 group; the lowest rank that matches, the shortest period.
+    let rank = |what: &str, r: &Register| -> Option<u8> {
+        if lookup::find(drive, what).is_ok_and(|x| x.def.id == r.def.id) {
+            return Some(0);
+        }
+        let roles = roles_of(r);
+        if Role::from_id(what).is_some_and(|role| roles.contains(&role)) {
+            return Some(1);
+        }
+        let group = match what {
+            "status" => roles.iter().any(|r| r.kind() == RoleKind::Status),
+            "monitors" => !r.writable(),
+            "parameters" => r.writable(),
+            g => drive.group_of(r).id == g,
+        };
+        group.then_some(2)
+    };
+    let mut errors = Vec::new();
+    for (what, _) in &spec.periods {
+        if !regs.iter().any(|r| rank(what, r).is_some()) {
+            errors.push(crate::RegisterProblem::NoPeriodTarget {
+                link: spec.name.clone(),
+                what: crate::log::quote(what),
+            });
+        }
+    }
+    if !errors.is_empty() {
+        return Err(crate::Error::Registers(errors));
+    }
+    Ok(regs
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            if deps.contains(&k) {
+                return None;
+            }
+            let matches: Vec<(u8, Duration)> = spec
+                .periods
+                .iter()
+                .filter_map(|(what, period)| Some((rank(what, r)?, *period)))
+                .collect();
+            let best = matches.iter().map(|(rank, _)| *rank).min()?;
+            matches
+                .iter()
+                .filter(|(rank, _)| *rank == best)
+                .map(|(_, p)| *p)
+                .min()
+        })
+        .collect())
+}
+
 fn now_unix() -> f64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
@@ -285,6 +381,7 @@ impl Polled {
         kind: TransportKind,
     ) -> Result<Polled, crate::Error> {
         let (regs, deps) = choose(&spec, kind)?;
+        let periods = periods_of(&spec, kind, &regs, &deps)?;
         let points = points::points(spec.drive, &regs, kind);
         let base: Labels = vec![
             ("drive".into(), spec.drive.meta.id.clone()),
@@ -309,6 +406,8 @@ impl Polled {
             silent: 0,
             skip: 0,
             answered: false,
+            last: vec![None; periods.len()],
+            periods,
         })
     }
 
@@ -360,28 +459,57 @@ impl Polled {
         let kind = self.kind;
         // Plans, not bare infos: the planner respects each register's `function_codes`.
         let infos = rows_on_link(drive, kind, |r| self.address(r).ok());
-        let mut wanted = Vec::new();
+        let mut periods: Vec<Option<Duration>> = self.periods.clone();
+        periods.sort();
+        periods.dedup();
+        let mut wanted: Vec<Vec<(Table, u16)>> = vec![Vec::new(); periods.len()];
         let mut slots = Vec::new();
-        for r in &self.regs {
+        for (r, period) in self.regs.iter().zip(&self.periods) {
             match self.address(r) {
                 Err(why) => slots.push(Err(why)),
                 Ok(address) => {
+                    let c = periods.iter().position(|p| p == period).unwrap_or(0);
                     let info = drive.register_plan(r).info;
-                    wanted.push((info.table, address));
-                    slots.push(Ok((wanted.len() - 1, info.width)));
+                    wanted[c].push((info.table, address));
+                    slots.push(Ok((c, wanted[c].len() - 1, info.width)));
                 }
             }
         }
         let profile = self.spec.drive.plan().profile;
-        let poller = Poller::new(profile, &infos, wanted)?.with_model(BusModel::new(profile, line));
-        Ok(Plan { poller, slots })
+        let now = Instant::now();
+        let mut classes = Vec::new();
+        for (period, wanted) in periods.into_iter().zip(wanted) {
+            let poller =
+                Poller::new(profile, &infos, wanted)?.with_model(BusModel::new(profile, line));
+            classes.push(Class {
+                period,
+                poller,
+                next: now,
+                polled: false,
+            });
+        }
+        Ok(Plan { classes, slots })
     }
 
-    /// The modelled bus time of one cycle of the drive's plan, in seconds.
+    /// The modelled bus time of one cycle of the drive's plan (every class), in seconds.
     pub fn model_seconds(&self) -> f64 {
-        self.plan
-            .as_ref()
-            .map_or(0.0, |p| p.poller.plan_ns() as f64 / 1e9)
+        self.plan.as_ref().map_or(0.0, |p| {
+            p.classes.iter().map(|c| c.poller.plan_ns()).sum::<u64>() as f64 / 1e9
+        })
+    }
+
+    /// The share of the line the drive's reads take at their periods (`period`: the link's),
+    /// by the bus-time model: above 1 the line cannot meet them.
+    pub fn load(&self, period: Duration) -> f64 {
+        self.plan.as_ref().map_or(0.0, |p| {
+            p.classes
+                .iter()
+                .map(|c| {
+                    let every = c.period.unwrap_or(period).max(period).as_secs_f64();
+                    c.poller.plan_ns() as f64 / 1e9 / every
+                })
+                .sum()
+        })
     }
 
     /// One poll of the drive: reads, settings absorbed (re-planned and read again when they
@@ -409,6 +537,7 @@ impl Polled {
         // Selectors, then the references their scales pick, then the values: at most three
         // rounds when settings change.
         let mut rounds = 0;
+        let mut polled_ok;
         let raws = loop {
             rounds += 1;
             if self.plan.is_none() {
@@ -423,25 +552,51 @@ impl Polled {
             let Some(plan) = self.plan.as_mut() else {
                 return (requests, bus_ns);
             };
-            let stats =
-                plan.poller
-                    .poll_between(client, self.spec.slave, &mut |c: &mut LinkClient| {
+            let now = Instant::now();
+            for class in &mut plan.classes {
+                class.polled = class.period.is_none() || class.next <= now;
+                if !class.polled {
+                    continue;
+                }
+                if let Some(p) = class.period {
+                    class.next = now + p;
+                }
+                let stats = class.poller.poll_between(
+                    client,
+                    self.spec.slave,
+                    &mut |c: &mut LinkClient| {
                         between(c);
                         c.switch_drive(profile, options);
-                    });
-            requests += stats.requests;
-            bus_ns += stats.bus_ns;
-            let raws: Vec<Result<u32, (&'static str, String)>> = plan
-                .slots
-                .iter()
-                .map(|slot| match slot {
-                    Err(why) => Err(("address", why.to_string())),
-                    Ok((i, width)) => match plan.poller.raw(*i, *width) {
-                        Some(Ok(w)) => Ok(w),
-                        Some(Err(e)) => Err((error_kind(e), e.to_string())),
-                        None => Err(("line", "not read".into())),
                     },
-                })
+                );
+                requests += stats.requests;
+                bus_ns += stats.bus_ns;
+            }
+            polled_ok = false;
+            for (k, slot) in plan.slots.iter().enumerate() {
+                let raw = match slot {
+                    Err(why) => Err(("address", why.to_string())),
+                    Ok((c, i, width)) => {
+                        let class = &plan.classes[*c];
+                        if !class.polled {
+                            continue; // not due: its last value stands
+                        }
+                        match class.poller.raw(*i, *width) {
+                            Some(Ok(w)) => {
+                                polled_ok = true;
+                                Ok(w)
+                            }
+                            Some(Err(e)) => Err((error_kind(e), e.to_string())),
+                            None => Err(("line", "not read".into())),
+                        }
+                    }
+                };
+                self.last[k] = Some(raw);
+            }
+            let raws: Vec<Raw> = self
+                .last
+                .iter()
+                .map(|l| l.clone().unwrap_or(Err(("line", "not read yet".into()))))
                 .collect();
             let mut settings = self.settings.clone();
             for &d in &self.deps {
@@ -460,7 +615,8 @@ impl Polled {
             self.settings = settings;
             self.plan = None;
         };
-        let answered = raws.iter().any(|r| r.is_ok());
+        // Only what was read in this cycle says whether the drive answers.
+        let answered = polled_ok;
         self.answered = answered;
         if answered {
             self.silent = 0;
@@ -752,13 +908,15 @@ pub fn run(
             .cycle_seconds
             .get_or_create(&label)
             .set(began.elapsed().as_secs_f64());
-        let model: f64 = drives.iter().map(Polled::model_seconds).sum();
-        if model > period.as_secs_f64() && !warned_model {
+        let load: f64 = drives.iter().map(|d| d.load(period)).sum();
+        metrics.line_load.get_or_create(&label).set(load);
+        if load > 1.0 && !warned_model {
             warned_model = true;
             eprintln!(
-                "bridge: {}: one cycle needs {:.3} s of bus time by the bus-time model, more than the period of {} ms: cycles run back to back (drivemap_bridge_cycle_bus_model_seconds > drivemap_bridge_period_seconds)",
+                "bridge: {}: the reads at their periods need {:.0} % of the line by the bus-time model (one cycle of every read {:.3} s, period {} ms): the line cannot meet them; cycles run back to back (drivemap_bridge_line_load_ratio > 1)",
                 link.name,
-                model,
+                load * 100.0,
+                drives.iter().map(Polled::model_seconds).sum::<f64>(),
                 period.as_millis()
             );
         }

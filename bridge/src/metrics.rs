@@ -75,6 +75,8 @@ pub struct Metrics {
     pub command_latency: Histograms,
     /// The poll period asked for each link (compare with the bus-time model).
     pub period_seconds: Gauges,
+    /// The share of the line the link's reads take at their periods (bus-time model).
+    pub line_load: Gauges,
     /// Requests of proxied masters, by master address.
     pub proxy_requests: Counters,
     /// Requests of proxied masters refused, by reason.
@@ -194,6 +196,12 @@ impl Metrics {
             "the poll period asked for the link; above the bus-time model the cycles run back to back",
             Some(Unit::Seconds),
         );
+        let line_load = gauges(
+            &mut registry,
+            "drivemap_bridge_line_load",
+            "the share of the line the link's reads take at their periods by the bus-time model; above 1 the periods cannot be met",
+            Some(Unit::Other("ratio".into())),
+        );
         let proxy_requests = counters(
             &mut registry,
             "drivemap_proxy_requests",
@@ -218,6 +226,7 @@ impl Metrics {
             commands,
             command_latency,
             period_seconds,
+            line_load,
             proxy_requests,
             proxy_refusals,
         }

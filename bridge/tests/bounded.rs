@@ -44,6 +44,7 @@ fn spec(drive: &'static Drive) -> DriveSpec {
         settings: Default::default(),
         fixed: Default::default(),
         registers: Vec::new(),
+        periods: Vec::new(),
     }
 }
 
@@ -579,4 +580,95 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
     stop.store(true, Ordering::Relaxed);
     task.join().unwrap();
     server.stop();
+}
+
+/// Poll periods per class of register: with `parameters` every 2 s on a link polled every
+/// 100 ms, the V7's status word is read every cycle and its acceleration time (a parameter) once
+/// per 2 s, counted on the simulator's request log; the line's load is reported.
+#[test]
+fn parameters_are_read_at_their_period_and_status_every_cycle() {
+    let drive = v7();
+    let reads: Arc<std::sync::Mutex<Vec<(u16, usize)>>> = Arc::default();
+    let log: drivemap_sim::server::Logger = {
+        let reads = Arc::clone(&reads);
+        Arc::new(move |r: &drivemap_sim::RequestRecord| {
+            if let (Some(0x03), Some(a)) = (r.function, r.address) {
+                reads.lock().unwrap().push((a, r.quantity));
+            }
+        })
+    };
+    let sim = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
+    let server = TcpServer::spawn(sim, "127.0.0.1:0", TcpFraming::RtuOverTcp, Some(log)).unwrap();
+    let mut s = spec(drive);
+    s.periods = vec![("parameters".into(), Duration::from_secs(2))];
+    let l = LinkSpec {
+        name: "periods".into(),
+        kind: TransportKind::RtuOverTcp,
+        line: SerialConfig::default(),
+        connect: connect_to(server.local_addr().to_string()),
+        drives: vec![s],
+        poll: true,
+        proxy: None,
+    };
+    let metrics = metrics_for(drive);
+    let stop = Arc::new(AtomicBool::new(false));
+    let (m, st) = (Arc::clone(&metrics), Arc::clone(&stop));
+    let task = std::thread::spawn(move || {
+        link::run(
+            l,
+            0,
+            Duration::from_millis(100),
+            m,
+            None,
+            Arc::new(Board::new(1, DEFAULT_DEADLINE)),
+            st,
+            Arc::new(AtomicBool::new(false)),
+            None,
+        )
+    });
+    std::thread::sleep(Duration::from_millis(4500));
+    stop.store(true, Ordering::Relaxed);
+    task.join().unwrap();
+    server.stop();
+    let at = |id: &str| {
+        drive
+            .registers
+            .iter()
+            .find(|r| r.def.id == id)
+            .unwrap()
+            .def
+            .address
+    };
+    let covering = |a: u16| {
+        reads
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|(start, n)| *start <= a && usize::from(a - start) < *n)
+            .count()
+    };
+    let (status, accel) = (
+        covering(at("status_signal_1")),
+        covering(at("accel_time_1")),
+    );
+    assert!(status >= 8, "status read {status} times in 4.5 s");
+    assert!(
+        (2..=3).contains(&accel),
+        "accel_time_1 read {accel} times in 4.5 s"
+    );
+    let text = metrics.encode();
+    assert!(text.contains("drivemap_bridge_line_load_ratio"), "{text}");
+}
+
+/// A poll period that names nothing polled is refused at start, naming it.
+#[test]
+fn a_period_of_nothing_is_refused() {
+    let drive = v7();
+    let mut s = spec(drive);
+    s.periods = vec![("no_such_thing".into(), Duration::from_secs(1))];
+    let e = match link::Polled::new(0, s, "x", TransportKind::RtuOverTcp) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("accepted"),
+    };
+    assert!(e.contains("\"no_such_thing\""), "{e}");
 }

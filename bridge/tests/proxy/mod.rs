@@ -270,3 +270,131 @@ fn writes_are_checked_by_the_map_before_the_line() {
     let (_, _, body) = m.ask(6, 1, &write_pdu(reference, 250));
     assert_eq!(body, vec![0x86, 0x01], "writes not allowed");
 }
+
+/// Four masters reading as fast as they can through the proxy onto a 9600-baud emulated line:
+/// the line keeps its rules (no timing violation in the line's record), each master's share of
+/// the answered requests is within 20 % of the others', and the line carries what the bus-time
+/// model allows (the ratio printed for the notes, not asserted: speed is for benchmarks).
+#[cfg(unix)]
+#[test]
+fn four_masters_share_a_9600_baud_line_fairly() {
+    use drivemap_runtime::ClientOptions;
+    use drivemap_runtime::bus_time::BusModel;
+    use drivemap_runtime::transport::Transport;
+    use drivemap_runtime::transport::serial::{self, SerialOptions, SerialTransport};
+    use drivemap_sim::SerialServer;
+    use drivemap_sim::timed::DriveLine;
+    use drivemap_test_support::line::{EmulatedLine, analyse};
+
+    let drive = v7();
+    let profile = drive.plan().profile;
+    let serial_line = SerialConfig::new(9600);
+    let emulated = EmulatedLine::new(serial_line).unwrap();
+    let options_for = |path: &str| {
+        SerialOptions::new(path, 9600)
+            .line(profile, serial::Parity::None, Some(serial::StopBits::One))
+            .unwrap()
+    };
+    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), SimOptions::new()).unwrap());
+    let server = SerialServer::spawn_on_line(
+        Arc::clone(&sim),
+        options_for(emulated.drive_path()),
+        None,
+        Some(DriveLine {
+            serial: serial_line,
+            pace: false,
+        }),
+    )
+    .unwrap();
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap();
+    let listener = runtime
+        .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
+        .unwrap();
+    let addr = listener.local_addr().unwrap();
+    let opts = options(addr);
+    let board = Arc::new(Board::new(1, DEFAULT_DEADLINE));
+    let queue = Arc::new(proxy::Queue::new(Arc::clone(&board)));
+    let stop = Arc::new(AtomicBool::new(false));
+    let metrics = metrics_for(drive);
+    runtime.spawn(proxy::serve(
+        listener,
+        Arc::clone(&queue),
+        vec![1],
+        opts.clone(),
+        Arc::clone(&stop),
+    ));
+    let master_path = options_for(emulated.master_path());
+    let mut s = spec(drive);
+    s.options = ClientOptions::for_line(profile, serial_line);
+    let l = LinkSpec {
+        name: "9600".into(),
+        kind: TransportKind::Rtu,
+        line: serial_line,
+        connect: Box::new(move || {
+            SerialTransport::open(master_path.clone())
+                .map(|t| Box::new(t) as Box<dyn Transport>)
+                .map_err(Into::into)
+        }),
+        drives: vec![s],
+        poll: false,
+        proxy: Some(opts.clone()),
+    };
+    let line_side = proxy::LineSide::new(opts, queue, Arc::clone(&metrics));
+    let st = Arc::clone(&stop);
+    let link = std::thread::spawn(move || {
+        link::run(
+            l,
+            0,
+            Duration::from_millis(100),
+            metrics,
+            None,
+            board,
+            st,
+            Arc::new(AtomicBool::new(false)),
+            Some(line_side),
+        )
+    });
+    // Warm up (the link opened, one request), then a clean record.
+    Master::connect(addr).ask(0, 1, &read_pdu(0x0020, 4));
+    drop(emulated.take_record());
+    let run_for = Duration::from_secs(4);
+    let began = std::time::Instant::now();
+    let masters: Vec<_> = (0..4)
+        .map(|m| {
+            std::thread::spawn(move || {
+                let mut master = Master::connect(addr);
+                let mut n = 0u32;
+                while began.elapsed() < run_for {
+                    let (_, _, body) = master.ask(n as u16, 1, &read_pdu(0x0020, 4));
+                    assert_eq!(body.len(), 10, "master {m}: {body:?}");
+                    n += 1;
+                }
+                n
+            })
+        })
+        .collect();
+    let counts: Vec<u32> = masters.into_iter().map(|t| t.join().unwrap()).collect();
+    let elapsed = began.elapsed();
+    let record = emulated.take_record();
+    stop.store(true, Ordering::Relaxed);
+    link.join().unwrap();
+    server.stop();
+    let model = BusModel::new(profile, serial_line);
+    let report = analyse(&record, &model);
+    assert!(report.violations.is_empty(), "{:?}", report.violations);
+    let total: u32 = counts.iter().sum();
+    let (lo, hi) = (
+        *counts.iter().min().unwrap() as f64,
+        *counts.iter().max().unwrap() as f64,
+    );
+    assert!(lo >= 0.8 * hi, "shares {counts:?}");
+    let allowed = elapsed.as_nanos() as f64 / model.read_ns(4) as f64;
+    eprintln!(
+        "4 masters through the proxy on 9600 baud: {counts:?} requests in {elapsed:?}; {:.2} of what the bus-time model allows ({allowed:.0} reads of 4 registers)",
+        f64::from(total) / allowed
+    );
+}

@@ -60,6 +60,11 @@ pub struct Args {
     /// Time between the starts of two poll cycles of each link.
     #[arg(long, default_value = "1s", value_parser = crate::duration::positive)]
     pub period: Duration,
+    /// A longer period for some registers of the command line's drives: `WHAT=PERIOD`, WHAT a
+    /// register, a role, a group of the map, `status`, `monitors` or `parameters`
+    /// (`--period-of parameters=60s`); repeat for more. The rest every --period.
+    #[arg(long = "period-of", value_name = "WHAT=PERIOD", value_parser = period_of)]
+    pub period_of: Vec<(String, Duration)>,
     /// Where Prometheus scrapes `/metrics` (loopback unless an address is given).
     #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:9187")]
     pub metrics: SocketAddr,
@@ -175,6 +180,18 @@ struct ConfigLink {
     timeout_ms: Option<u64>,
     /// `ID@SLAVE`.
     drives: Vec<String>,
+    /// Longer periods for some registers: `{parameters: 60s, output_current: 5s}`.
+    #[serde(default)]
+    periods: BTreeMap<String, String>,
+}
+
+/// `WHAT=PERIOD` of `--period-of`.
+fn period_of(text: &str) -> Result<(String, Duration), String> {
+    let (what, period) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}` is not WHAT=PERIOD (`parameters=60s`)"))?;
+    let period = crate::duration::positive(period.trim()).map_err(|e| e.to_string())?;
+    Ok((what.trim().to_owned(), period))
 }
 
 /// Reads `--config` with the map loader's limits (size, nesting depth, aliases: untrusted
@@ -287,6 +304,7 @@ pub(crate) fn link(
             settings: given.settings,
             fixed: given.fixed,
             registers: Vec::new(),
+            periods: Vec::new(),
         });
     }
     let Some(first) = first else {
@@ -372,6 +390,9 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             &mut names,
             &mut loaded,
         )?;
+        for d in &mut l.drives {
+            d.periods = args.period_of.clone();
+        }
         l.proxy = args
             .serve_modbus
             .map(|addr| args.proxy.options(addr))
@@ -400,17 +421,33 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 args.retries,
             )
             .map_err(|e| format!("--config {}: links[{i}]: {e}", path.display()))?;
-            links.push(
-                link(
-                    &args.dir,
-                    la,
-                    &l.drives,
-                    &SettingsArgs::default(),
-                    &mut names,
-                    &mut loaded,
-                )
-                .map_err(|e| format!("--config {}: links[{i}]: {e}", path.display()))?,
-            );
+            let mut spec = link(
+                &args.dir,
+                la,
+                &l.drives,
+                &SettingsArgs::default(),
+                &mut names,
+                &mut loaded,
+            )
+            .map_err(|e| format!("--config {}: links[{i}]: {e}", path.display()))?;
+            let periods = l
+                .periods
+                .iter()
+                .map(|(what, p)| {
+                    crate::duration::positive(p.trim())
+                        .map(|d| (what.clone(), d))
+                        .map_err(|e| {
+                            format!(
+                                "--config {}: links[{i}].periods.{what}: {e}",
+                                path.display()
+                            )
+                        })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            for d in &mut spec.drives {
+                d.periods = periods.clone();
+            }
+            links.push(spec);
         }
     }
     if links.is_empty() {
