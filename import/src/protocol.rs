@@ -238,7 +238,15 @@ pub fn read(lines: &[&str], first_line: usize) -> Protocol {
         if lower.contains("exception") || lower.contains("error code") {
             exception_region_until = line_no + 40;
         }
+        // A blank line after the list ends it.
+        if line.is_empty() && !p.exceptions.is_empty() && line_no <= exception_region_until {
+            exception_region_until = 0;
+        }
+        // An exception is a code, a name and perhaps a description: a row of more cells is a
+        // register table's row (`10 | 40011 | Motor current | R`), not an exception.
+        let cell_count = crate::text::cells(&line.replace('|', "\t")).len();
         if line_no <= exception_region_until
+            && cell_count <= 3
             && let Some(c) = EXC.captures(line)
             && let Ok(code) = u8::from_str_radix(&c[1], 16)
             && code > 0
@@ -312,5 +320,57 @@ mod tests {
             vec![(1, 7), (2, 8)]
         );
         assert_eq!(p.transports.get("rtu"), Some(&1));
+    }
+
+    #[test]
+    fn table_rows_after_an_exception_line_are_not_exceptions() {
+        let text = "Exception codes are listed in chapter 9.\n\
+                    10 | 40011 | Motor current | R\n\
+                    11 | 40012 | Motor voltage | R\n\
+                    Exception codes\n\
+                    01h  Illegal function\n\
+                    02h  Illegal data address\n\
+                    \n\
+                    03  Acceleration time  0.1 s\n";
+        let lines: Vec<&str> = text.lines().collect();
+        let p = read(&lines, 1);
+        assert_eq!(
+            p.exceptions.iter().map(|e| e.code).collect::<Vec<_>>(),
+            vec![1, 2]
+        );
+    }
+
+    #[test]
+    fn facts_printed_in_words() {
+        let text = "It knows only three Function Codes:\n\
+                    \u{20}\u{20}0 3 h   Read Holding Registers\n\
+                    \u{20}\u{20}1 0 h   Write Multiple Registers\n\
+                    Drive address (parameter H-01). Range: 1 ... 247\n\
+                    Character format: 8 data bits, 1 parity-even bit and 1 stop bit.\n\
+                    Baud rate: 4800, 9600 or 19200 bps (factory setting 9600).\n\
+                    A message sent to address 0 is a broadcast.\n\
+                    The drive reads at most\n\
+                    20 registers per request.\n";
+        let lines: Vec<&str> = text.lines().collect();
+        let p = read(&lines, 1);
+        assert_eq!(
+            p.function_codes.keys().copied().collect::<Vec<_>>(),
+            vec![0x03, 0x10]
+        );
+        assert_eq!(p.slave_range.map(|c| c.value), Some((1, 247)));
+        assert_eq!(
+            p.format.map(|f| f.value),
+            Some(Format {
+                data_bits: 8,
+                parity: "even",
+                stop_bits: 1
+            })
+        );
+        assert_eq!(
+            p.bauds.map(|b| b.value),
+            Some((vec![4800, 9600, 19200], Some(9600)))
+        );
+        assert_eq!(p.broadcast, Some(7));
+        assert_eq!(p.max_read, Some(Cited { value: 20, line: 8 }));
     }
 }

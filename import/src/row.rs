@@ -1702,6 +1702,25 @@ fn vertical_tables(
             i = start + 1;
             continue;
         }
+        // Titles the reader does not know, right after the known ones (`Allotment for bits`):
+        // columns it leaves undecided.
+        while i < lines.len() && roles.len() < 12 {
+            let t = lines[i].trim();
+            let words = t.split_whitespace().count();
+            if t.is_empty()
+                || t.chars().any(|c| c.is_ascii_digit())
+                || !(1..=4).contains(&words)
+                || t.len() > 30
+                || hex_address(t).is_some()
+                || access_word(t).is_some()
+                || t == "-"
+            {
+                break;
+            }
+            roles.push(Role::Undecided);
+            titles.push(t.to_string());
+            i += 1;
+        }
         let header_line = first_line + start;
         let columns: Vec<Column> = titles
             .iter()
@@ -1781,6 +1800,22 @@ fn vertical_tables(
         // Decide hex and Modicon numbering from the keys, as for a table on one line.
         let keys: Vec<String> = records.iter().map(|(_, c)| c[0].to_string()).collect();
         layout.decide(&keys.iter().map(String::as_str).collect::<Vec<_>>());
+        // A `Parameter` title over names (the cell after the key is words, not a number).
+        if !layout.columns.iter().any(|c| c.role == Role::Name)
+            && let Some(k) = layout.columns.iter().position(|c| c.role == Role::Param)
+            && k > 0
+        {
+            let wordy = records
+                .iter()
+                .filter(|(_, c)| {
+                    c.get(1)
+                        .is_some_and(|t| t.contains(' ') || param_cell(t).is_none())
+                })
+                .count();
+            if wordy * 10 >= records.len() * 9 {
+                layout.columns[k].role = Role::Name;
+            }
+        }
         let mut v = Vertical {
             lines: taken,
             rows: Vec::new(),
@@ -1801,9 +1836,21 @@ fn vertical_tables(
                         col = k + 1;
                     }
                     None => {
-                        if let Some(k) = (0..col).rev().find(|k| {
-                            matches!(layout.columns[*k].role, Role::Name | Role::Description)
-                        }) {
+                        // Text that fits no later column: the name wrapping, while nothing after
+                        // the name is filled; else a column the reader left undecided (or the
+                        // description), never the name.
+                        let name = layout.columns.iter().position(|c| c.role == Role::Name);
+                        let target = if name.is_some_and(|n| col <= n + 1) {
+                            name
+                        } else {
+                            (col..layout.columns.len()).find(|k| {
+                                matches!(
+                                    layout.columns[*k].role,
+                                    Role::Undecided | Role::Description
+                                )
+                            })
+                        };
+                        if let Some(k) = target {
                             placed[k] = format!("{} {c}", placed[k]).trim().to_string();
                         }
                     }
@@ -2185,6 +2232,87 @@ mod tests {
         assert_eq!(
             (rows[0].unit.as_deref(), rows[0].scale, rows[0].default),
             (Some("s"), Some(0.1), Some(5.0))
+        );
+    }
+
+    #[test]
+    fn one_cell_per_line_with_a_parameter_title_over_names_and_an_unknown_title() {
+        let (rows, _) = read(
+            "Address\nParameter\nScale\nUnit\nR/W\nBit assignment\n\
+             0x0010\nDrive type\n-\n-\nR\nB : model B\n\
+             0x0011\nSpeed\nreference\n0.01\nHz\nR/W\n",
+        );
+        let got: Vec<_> = rows
+            .iter()
+            .map(|r| {
+                (
+                    r.address,
+                    r.name.as_str(),
+                    r.access,
+                    r.unit.as_deref(),
+                    r.scale,
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (Some(0x10), "Drive type", Some("r"), None, None),
+                (
+                    Some(0x11),
+                    "Speed reference",
+                    Some("rw"),
+                    Some("Hz"),
+                    Some(0.01)
+                ),
+            ]
+        );
+    }
+
+    #[test]
+    fn a_header_with_single_blanks_read_by_words() {
+        let (rows, _) = read(
+            "Modbus register Access Data resolution Remarks\n\
+             40001 Output frequency R 0.01 [Hz] Filtered value.\n\
+             40002 Trip counter R 1 [times] Since power-on.\n\
+             40003 Frequency reference R/W 0.01 [Hz] Written by the master,\n\
+             kept until power-off.\n",
+        );
+        let got: Vec<_> = rows
+            .iter()
+            .map(|r| {
+                (
+                    r.address,
+                    r.name.as_str(),
+                    r.access,
+                    r.unit.as_deref(),
+                    r.scale,
+                    r.default,
+                )
+            })
+            .collect();
+        // A resolution column is never a default; a unit the reader does not know is left out.
+        assert_eq!(
+            got,
+            [
+                (
+                    Some(0),
+                    "Output frequency",
+                    Some("r"),
+                    Some("Hz"),
+                    Some(0.01),
+                    None
+                ),
+                (Some(1), "Trip counter", Some("r"), None, None, None),
+                (
+                    Some(2),
+                    "Frequency reference",
+                    Some("rw"),
+                    Some("Hz"),
+                    Some(0.01),
+                    None
+                ),
+            ]
         );
     }
 }
