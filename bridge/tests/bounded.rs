@@ -588,12 +588,12 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
 #[test]
 fn parameters_are_read_at_their_period_and_status_every_cycle() {
     let drive = v7();
-    let reads: Arc<std::sync::Mutex<Vec<(u16, usize)>>> = Arc::default();
+    let reads: Arc<std::sync::Mutex<Vec<(Instant, u16, usize)>>> = Arc::default();
     let log: drivemap_sim::server::Logger = {
         let reads = Arc::clone(&reads);
         Arc::new(move |r: &drivemap_sim::RequestRecord| {
             if let (Some(0x03), Some(a)) = (r.function, r.address) {
-                reads.lock().unwrap().push((a, r.quantity));
+                reads.lock().unwrap().push((Instant::now(), a, r.quantity));
             }
         })
     };
@@ -626,7 +626,11 @@ fn parameters_are_read_at_their_period_and_status_every_cycle() {
             None,
         )
     });
-    std::thread::sleep(Duration::from_millis(4500));
+    // The first cycles read everything (and again when the settings they read change the
+    // plan); counted from 1 s on, for 4 s.
+    let from = Instant::now() + Duration::from_secs(1);
+    std::thread::sleep(Duration::from_millis(5000));
+    let to = from + Duration::from_secs(4);
     stop.store(true, Ordering::Relaxed);
     task.join().unwrap();
     server.stop();
@@ -644,7 +648,9 @@ fn parameters_are_read_at_their_period_and_status_every_cycle() {
             .lock()
             .unwrap()
             .iter()
-            .filter(|(start, n)| *start <= a && usize::from(a - start) < *n)
+            .filter(|(t, start, n)| {
+                (from..to).contains(t) && *start <= a && usize::from(a - start) < *n
+            })
             .count()
     };
     let (status, accel) = (
