@@ -15,6 +15,7 @@
 extern crate std;
 
 pub mod bit_fields;
+pub mod command_profile;
 pub mod functions;
 pub mod indexed;
 pub mod kind;
@@ -28,6 +29,7 @@ pub mod scale;
 pub mod stated;
 pub mod width;
 
+pub use command_profile::CommandProfile;
 pub use functions::Functions;
 pub use kind::ConversionKind;
 pub use plan::{RegisterPlan, SettingsView, Value};

@@ -436,11 +436,17 @@ pub struct Place {
 pub struct Roles {
     /// Every place.
     pub places: &'static [Place],
+    /// The drive's command profile (a control-word state machine), where the map gives one:
+    /// then run, stop and fault reset walk it instead of writing run and reset fields.
+    pub profile: Option<&'static crate::command_profile::CommandProfile>,
 }
 
 impl Roles {
     /// A drive whose map gives no roles.
-    pub const NONE: Roles = Roles { places: &[] };
+    pub const NONE: Roles = Roles {
+        places: &[],
+        profile: None,
+    };
 
     /// The places of `role`, in the map's order.
     pub fn of(&self, role: Role) -> impl Iterator<Item = &'static Place> + '_ {
@@ -452,9 +458,9 @@ impl Roles {
         self.of(role).next().is_some()
     }
 
-    /// Whether the map gives any role.
+    /// Whether the map gives any role (or a command profile).
     pub fn is_empty(&self) -> bool {
-        self.places.is_empty()
+        self.places.is_empty() && self.profile.is_none()
     }
 }
 

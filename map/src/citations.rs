@@ -97,6 +97,10 @@ pub enum PlaceKind<'a> {
     IndexedEntry(usize),
     /// `examples[i].source`: a line or a line range (`file:first-last`).
     Example(usize),
+    /// `profile.source` (the drive uses the profile: `part` "profile"),
+    /// `profile.power_on_source` ("power on"), `profile.states.<id>.source` ("state") or
+    /// `profile.transitions.<id>.source` ("transition").
+    Profile { part: &'static str, id: &'a str },
 }
 
 impl PlaceKind<'_> {
@@ -140,6 +144,7 @@ impl PlaceKind<'_> {
             PlaceKind::Indexed => "indexed",
             PlaceKind::IndexedEntry(_) => "indexed entry",
             PlaceKind::Example(_) => "example",
+            PlaceKind::Profile { .. } => "profile",
         }
     }
 
@@ -181,6 +186,7 @@ impl PlaceKind<'_> {
         "indexed",
         "indexed entry",
         "example",
+        "profile",
     ];
 }
 
@@ -298,6 +304,48 @@ pub fn citation_places(drive: &Drive) -> Vec<CitationPlace<'_>> {
             if let Some(last) = w.out.last_mut() {
                 last.register_name = p.register.as_deref();
             }
+        }
+    }
+    if let Some(profile) = &drive.profile {
+        let at = root.key("profile");
+        w.at(
+            PlaceKind::Profile {
+                part: "profile",
+                id: "profile",
+            },
+            at.clone(),
+            profile.source.as_deref(),
+            Reason::None,
+        );
+        if let Some(p) = &profile.power_on {
+            w.at(
+                PlaceKind::Profile {
+                    part: "power on",
+                    id: &p.state,
+                },
+                at.key("power_on"),
+                p.source.as_deref(),
+                Reason::None,
+            );
+        }
+        for (id, s) in &profile.states {
+            w.at(
+                PlaceKind::Profile { part: "state", id },
+                at.key("states").key(id),
+                s.source.as_deref(),
+                Reason::None,
+            );
+        }
+        for (id, t) in &profile.transitions {
+            w.at(
+                PlaceKind::Profile {
+                    part: "transition",
+                    id,
+                },
+                at.key("transitions").key(id),
+                t.source.as_deref(),
+                Reason::None,
+            );
         }
     }
     for (i, g) in drive.gaps.iter().enumerate() {

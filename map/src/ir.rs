@@ -39,6 +39,9 @@ pub struct Drive {
     pub removed: Vec<Removed>,
     /// Roles by id, as written (checked by `validate::roles_valid`, lowered in `lower`).
     pub roles: std::collections::BTreeMap<String, Vec<model::RolePlace>>,
+    /// The command profile, as written (`profile:`; checked and lowered by
+    /// [`crate::command_profile`]).
+    pub profile: Option<crate::command_profile::ProfileSpec>,
     /// The file the map was read from.
     pub file: PathBuf,
     /// The merged YAML tree, for locating findings.
@@ -772,6 +775,7 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
         gaps: model.gaps.clone(),
         removed: model.removed.clone(),
         roles: model.roles.clone(),
+        profile: model.profile.clone(),
         file: map.path.clone(),
         tree: map.tree.clone(),
         plan: OnceLock::new(),

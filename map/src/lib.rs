@@ -16,6 +16,7 @@
 //! (`drivemap-live`, `drivemap-sim`, the `drivemap` command line) read maps through it alone.
 
 pub mod citations;
+pub mod command_profile;
 pub mod describe;
 pub mod diagnostic;
 pub mod examples;

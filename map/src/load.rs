@@ -264,6 +264,9 @@ fn deserialize(tree: &Node) -> Result<MapFile, Vec<Diagnostic>> {
                     std::collections::BTreeMap<String, Vec<crate::model::RolePlace>>,
                 >(tree, node, &path)
                 .err(),
+                "profile" => {
+                    deserialize_at::<crate::command_profile::ProfileSpec>(tree, node, &path).err()
+                }
                 "groups" => {
                     if let NodeKind::Seq(groups) = &node.kind {
                         for (gi, group) in groups.iter().enumerate() {

@@ -230,8 +230,15 @@ fn roles(drive: &Drive, position: &[usize], settings: &SettingsPlan) -> Roles {
             }
         }
     }
+    let row_of = |id: &str| {
+        drive
+            .find(id)
+            .and_then(|r| position.get(r.index()))
+            .map(|&row| row as u16)
+    };
     Roles {
         places: leak(places),
+        profile: crate::command_profile::lower(drive, &row_of).map(|p| &*Box::leak(Box::new(p))),
     }
 }
 

@@ -47,6 +47,10 @@ pub struct MapFile {
     /// monitors, status), by role id (`drivemap_core::roles::Role::id`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub roles: BTreeMap<String, Vec<RolePlace>>,
+    /// The drive's command profile: a control-word state machine that run, stop and fault reset
+    /// walk ([`crate::command_profile`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<crate::command_profile::ProfileSpec>,
     /// Example frames the manual prints, with what they say ([`crate::examples`]). A variant
     /// map's list replaces its base's.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

@@ -320,6 +320,28 @@ fn rule_of(drive: &Drive, place: &CitationPlace<'_>) -> Option<(u8, &'static str
             let what = format!("the function codes of {}", r.id());
             Some((5, "functions", what, rule))
         }
+        PlaceKind::Profile { part, id } => {
+            // A state or transition is printed by its name (or a transition by its word); the
+            // profile's own line is not read by content.
+            let name = id.replace('_', " ");
+            let rule = match part {
+                "state" | "power on" => Rule::any().name(&name),
+                "transition" => {
+                    let word = drive
+                        .profile
+                        .as_ref()
+                        .map(crate::command_profile::resolve)
+                        .and_then(|p| p.transitions.get(id).and_then(|t| t.word));
+                    let rule = Rule::any().name(&name);
+                    match word {
+                        Some(w) => rule.code(w.0),
+                        None => rule,
+                    }
+                }
+                _ => return None,
+            };
+            Some((6, "profile", format!("profile {part} `{id}`"), rule))
+        }
         PlaceKind::ExceptionsUnknown
         | PlaceKind::VariantOption { .. }
         | PlaceKind::Group(_)

@@ -356,6 +356,22 @@ pub enum Error {
     /// The request was refused before anything was sent.
     #[error("refused before sending: {0}")]
     Refused(#[from] Refusal),
+    /// A path of the drive's command profile (run, stop, coast, quick stop, fault reset) did
+    /// not reach its end: the status word showed no state of the profile, no transition of the
+    /// path leaves the state the drive is in, the drive did not show the state a transition
+    /// leads to within its time limit, or it tripped on the way. Names the state it is in.
+    #[error("{drive}: {path} did not complete: {why}; the drive is in state {state}")]
+    StateMachine {
+        /// The drive's map id.
+        drive: &'static str,
+        /// The path (`run`, `stop`, `coast`, `quick_stop`, `reset_fault`).
+        path: &'static str,
+        /// The state the status word showed last (`switch_on_disabled`), or the word itself
+        /// where it showed none (`no state (status word 0x0012)`).
+        state: String,
+        /// What went wrong.
+        why: String,
+    },
     /// A value could not be converted (out of range before writing, or a missing setting).
     #[error(transparent)]
     Value(#[from] ValueError),
@@ -425,9 +441,10 @@ impl From<Error> for io::Error {
             Error::Timeout { .. } | Error::Unsettled { .. } => io::ErrorKind::TimedOut,
             Error::Io { source, .. } | Error::Link(source) => source.kind(),
             Error::Refused(_) | Error::Value(_) => io::ErrorKind::InvalidInput,
-            Error::Exception { .. } | Error::Overrun { .. } | Error::IndexChanged { .. } => {
-                io::ErrorKind::Other
-            }
+            Error::Exception { .. }
+            | Error::Overrun { .. }
+            | Error::IndexChanged { .. }
+            | Error::StateMachine { .. } => io::ErrorKind::Other,
         };
         io::Error::new(kind, e)
     }

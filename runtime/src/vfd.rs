@@ -91,6 +91,7 @@
 
 use std::fmt;
 
+use drivemap_core::command_profile::{CommandProfile, Path, PathKind, Transition};
 use drivemap_core::plan::{Conversion, RegisterPlan};
 use drivemap_core::register::{DrivePlan, DriveSettings, Table};
 use drivemap_core::roles::{FieldRole, NumberField, Place, Role, RoleKind, Target};
@@ -256,8 +257,32 @@ pub trait VariableFrequencyDrive {
     /// The fault code.
     fn fault_code(&mut self) -> Result<FaultCode, Error>;
     /// Resets a fault: sets the reset command and releases it (an edge-triggered reset is
-    /// released first if it was left set).
+    /// released first if it was left set). On a drive with a command profile: gives the
+    /// acknowledge edge of the profile's `reset_fault` path, only while the drive shows the
+    /// fault state (nothing is written otherwise).
     fn reset_fault(&mut self) -> Result<(), Error>;
+    /// Coasts to a stop (the output off at once): the `coast` path of the drive's command
+    /// profile. Refused ([`Refusal::NoRole`]) where the map gives no such path.
+    fn coast(&mut self) -> Result<(), Error> {
+        Err(Refusal::NoRole {
+            drive: self.drive_id(),
+            role: "coast",
+            what: "command profile path",
+            transport: None,
+        }
+        .into())
+    }
+    /// Stops on the drive's quick-stop ramp: the `quick_stop` path of the drive's command
+    /// profile. Refused ([`Refusal::NoRole`]) where the map gives no such path.
+    fn quick_stop(&mut self) -> Result<(), Error> {
+        Err(Refusal::NoRole {
+            drive: self.drive_id(),
+            role: "quick_stop",
+            what: "command profile path",
+            transport: None,
+        }
+        .into())
+    }
 }
 
 /// The [`VariableFrequencyDrive`] of the async client: the same calls, awaited, with the same
@@ -299,6 +324,26 @@ pub trait AsyncVariableFrequencyDrive {
     async fn fault_code(&mut self) -> Result<FaultCode, Error>;
     /// As [`VariableFrequencyDrive::reset_fault`].
     async fn reset_fault(&mut self) -> Result<(), Error>;
+    /// As [`VariableFrequencyDrive::coast`].
+    async fn coast(&mut self) -> Result<(), Error> {
+        Err(Refusal::NoRole {
+            drive: self.drive_id(),
+            role: "coast",
+            what: "command profile path",
+            transport: None,
+        }
+        .into())
+    }
+    /// As [`VariableFrequencyDrive::quick_stop`].
+    async fn quick_stop(&mut self) -> Result<(), Error> {
+        Err(Refusal::NoRole {
+            drive: self.drive_id(),
+            role: "quick_stop",
+            what: "command profile path",
+            transport: None,
+        }
+        .into())
+    }
 }
 
 /// How a [`Vfd`] holds its blocking client: borrowed (`&mut Client<T>`) or owned (`Client<T>`,
@@ -469,6 +514,16 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
                 };
                 c.released = f.put(c.released, f.code(false));
             }
+        }
+        // A command profile's control word is a command register of its own.
+        if let Some(p) = roles.profile
+            && !commands.iter().any(|c| c.row == p.control)
+        {
+            commands.push(CommandWord {
+                row: p.control,
+                released: 0,
+                told: None,
+            });
         }
         // At the start the drive is taken as released: the first command composes from that.
         for c in &mut commands {
@@ -864,7 +919,30 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
                 word = r.put(word, r.code(self.state.direction == Direction::Reverse));
             }
         }
-        Ok(word)
+        Ok(self.no_run_word(row, word))
+    }
+
+    /// `word` for register `row`, with a control word that asks the command profile for a run
+    /// transition replaced by the stop path's first word (its kept bits as they were), unless
+    /// the last of `run()` and `stop()` was a `run()` that succeeded: no word read back or
+    /// composed asks a drive to run that was not told to.
+    fn no_run_word(&self, row: u16, word: u16) -> u16 {
+        let Some(p) = self.state.roles.profile else {
+            return word;
+        };
+        if row != p.control || self.state.running.is_some() || !p.word_runs(word) {
+            return word;
+        }
+        let stop = p
+            .path(PathKind::Stop)
+            .or_else(|| p.path(PathKind::Coast))
+            .and_then(|path| path.via.first())
+            .and_then(|&t| p.transition(t));
+        match stop {
+            Some(t) => t.compose(word),
+            // A profile without a stop or coast path: every bit but the kept ones released.
+            None => 0,
+        }
     }
 
     /// The word of command register `row` read from the drive, where the map lets it be read
@@ -982,7 +1060,7 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
                 }
             }
         }
-        Ok(((word & !mask) | (value & mask)) & fields_mask)
+        Ok(self.no_run_word(row, ((word & !mask) | (value & mask)) & fields_mask))
     }
 
     /// Writes the bits `mask` of command register `row` to `value`'s, the rest of the word
@@ -996,6 +1074,192 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
             c.told = result.is_ok().then_some(word);
         }
         result.map(|()| word)
+    }
+
+    /// The state of the command profile the drive shows in its status word, by id
+    /// (`operation_enabled`); `None` when the word shows no state of the profile. Refused
+    /// ([`Refusal::NoRole`]) for a drive whose map gives no command profile.
+    pub $($asy)* fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
+        let p = self.profile(PathKind::Run.id())?;
+        let word = self.read_word(p.status) $($aw)*?;
+        Ok(p.state_of(word).map(|s| p.state_id(s)))
+    }
+
+    fn profile(&self, role: &'static str) -> Result<&'static CommandProfile, Error> {
+        self.state.roles.profile.ok_or_else(|| {
+            Refusal::NoRole {
+                drive: self.drive(),
+                role,
+                what: "command profile",
+                transport: None,
+            }
+            .into()
+        })
+    }
+
+    /// The state the status word shows (index), or the error naming the word.
+    $($asy)* fn read_state(&mut self, p: &'static CommandProfile, path: &Path) -> Result<u8, Error> {
+        let word = self.read_word(p.status) $($aw)*?;
+        p.state_of(word).ok_or_else(|| Error::StateMachine {
+            drive: self.drive(),
+            path: path.kind.id(),
+            state: format!("none (status word {word:#06X} shows no state of the profile)"),
+            why: "the status word shows no state of the profile".into(),
+        })
+    }
+
+    /// Writes transition `t`'s control word (its kept bits from this master's composition),
+    /// with the bits `clear` cleared; the register's record follows (unknown after a failed
+    /// write).
+    $($asy)* fn write_transition(&mut self, p: &'static CommandProfile, t: &Transition, clear: u16) -> Result<(), Error> {
+        let base = self.base(p.control) $($aw)*?;
+        let word = t.compose(base) & !clear;
+        let result = self.write_word(p.control, u32::from(word)) $($aw)*;
+        if let Some(c) = self.state.commands.iter_mut().find(|c| c.row == p.control) {
+            c.told = result.is_ok().then_some(word);
+        }
+        result
+    }
+
+    /// Waits until the drive shows `t.to` (or a state that ends `path`), reading the status
+    /// word until `t.limit_ms` has passed; a drive that shows the fault state instead (it
+    /// tripped) ends the wait at once.
+    $($asy)* fn await_transition(&mut self, p: &'static CommandProfile, path: &Path, t: &Transition) -> Result<(), Error> {
+        let start = std::time::Instant::now();
+        let limit = std::time::Duration::from_millis(u64::from(t.limit_ms));
+        let faults: Vec<u8> = p
+            .path(PathKind::ResetFault)
+            .map(|r| r.via.iter().filter_map(|&i| p.transition(i)).flat_map(|x| x.from.iter().copied()).collect())
+            .unwrap_or_default();
+        loop {
+            let s = self.read_state(p, path) $($aw)*?;
+            if s == t.to || path.to.contains(&s) {
+                return Ok(());
+            }
+            let why = if faults.contains(&s) && path.kind != PathKind::ResetFault {
+                Some(format!("the drive tripped after `{}` ({:#06X})", t.id, t.word))
+            } else if start.elapsed() >= limit {
+                Some(format!(
+                    "the drive did not show `{}` within {} ms of `{}` ({:#06X})",
+                    p.state_id(t.to),
+                    t.limit_ms,
+                    t.id,
+                    t.word
+                ))
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(Error::StateMachine {
+                    drive: self.drive(),
+                    path: path.kind.id(),
+                    state: p.state_id(s).to_owned(),
+                    why,
+                });
+            }
+            let left = limit.saturating_sub(start.elapsed());
+            self.pause(left.min(std::time::Duration::from_millis(10))) $($aw)*;
+        }
+    }
+
+    /// Walks path `kind` of the command profile: reads the state, writes the first transition
+    /// of the path that leaves it, waits for the state it leads to, until the drive shows a
+    /// state that ends the path. A stop, coast or quick stop that finds the drive already
+    /// there writes the path's first word once all the same (so the control word holds no
+    /// run), and one whose status cannot be read writes it before returning the error. No path
+    /// but `run` writes a run transition.
+    $($asy)* fn walk(&mut self, kind: PathKind) -> Result<(), Error> {
+        let p = self.profile(kind.id())?;
+        let Some(path) = p.path(kind) else {
+            return Err(Refusal::NoRole {
+                drive: self.drive(),
+                role: kind.id(),
+                what: "command profile path",
+                transport: None,
+            }
+            .into());
+        };
+        let first = path.via.first().and_then(|&t| p.transition(t)).filter(|t| !p.runs(t));
+        let stopping = matches!(kind, PathKind::Stop | PathKind::Coast | PathKind::QuickStop);
+        let mut wrote = false;
+        for _ in 0..=path.via.len() + 1 {
+            let s = match self.read_state(p, path) $($aw)* {
+                Ok(s) => s,
+                Err(e) => {
+                    if stopping && !wrote && let Some(t) = first {
+                        // Whatever the drive shows, the stop word goes out.
+                        let _ = self.write_transition(p, t, 0) $($aw)*;
+                    }
+                    return Err(e);
+                }
+            };
+            if path.to.contains(&s) {
+                if stopping && !wrote && let Some(t) = first {
+                    self.write_transition(p, t, 0) $($aw)*?;
+                }
+                return Ok(());
+            }
+            let Some(t) = p.next(path, s) else {
+                if stopping && !wrote && let Some(t) = first {
+                    let _ = self.write_transition(p, t, 0) $($aw)*;
+                }
+                return Err(Error::StateMachine {
+                    drive: self.drive(),
+                    path: kind.id(),
+                    state: p.state_id(s).to_owned(),
+                    why: format!("no transition of the `{}` path leaves this state", kind.id()),
+                });
+            };
+            if kind != PathKind::Run && p.runs(t) {
+                // Validation refuses such a map; a plan built by hand may still have one.
+                return Err(self.misplaced(Role::Run, "path that does not run the drive"));
+            }
+            self.write_transition(p, t, 0) $($aw)*?;
+            wrote = true;
+            self.await_transition(p, path, t) $($aw)*?;
+        }
+        let s = self.read_state(p, path) $($aw)*?;
+        if path.to.contains(&s) {
+            return Ok(());
+        }
+        Err(Error::StateMachine {
+            drive: self.drive(),
+            path: kind.id(),
+            state: p.state_id(s).to_owned(),
+            why: format!("the drive did not reach the end of the `{}` path", kind.id()),
+        })
+    }
+
+    /// The profile's fault acknowledge: only while the drive shows a state the `reset_fault`
+    /// path's transitions leave (the fault state), its edge bits cleared first where they may
+    /// be set, then set, the state awaited, then cleared.
+    $($asy)* fn acknowledge(&mut self) -> Result<(), Error> {
+        let p = self.profile(Role::FaultReset.id())?;
+        let Some(path) = p.path(PathKind::ResetFault) else {
+            return Err(self.misplaced(Role::FaultReset, "command profile path"));
+        };
+        let s = self.read_state(p, path) $($aw)*?;
+        let Some(t) = p.next(path, s) else {
+            // Not in the fault state: nothing to acknowledge, nothing written.
+            return Ok(());
+        };
+        let told = self
+            .state
+            .commands
+            .iter()
+            .find(|c| c.row == p.control)
+            .and_then(|c| c.told);
+        if t.edge != 0 && told.is_none_or(|w| w & t.edge != 0) {
+            self.write_transition(p, t, t.edge) $($aw)*?;
+        }
+        self.write_transition(p, t, 0) $($aw)*?;
+        let reached = self.await_transition(p, path, t) $($aw)*;
+        let released = if t.edge != 0 {
+            self.write_transition(p, t, t.edge) $($aw)*
+        } else {
+            Ok(())
+        };
+        reached.and(released)
     }
 
     fn field(&self, role: Role) -> Result<Option<FieldRole>, Error> {
@@ -1208,10 +1472,24 @@ impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
     }
 
     fn supports(&self, role: Role) -> bool {
+        if let Some(p) = self.state.roles.profile {
+            match role {
+                Role::Run => return p.path(PathKind::Run).is_some(),
+                Role::FaultReset => return p.path(PathKind::ResetFault).is_some(),
+                _ => {}
+            }
+        }
         self.state.roles.of(role).any(|p| self.usable(p))
     }
 
     $($asy)* fn run(&mut self) -> Result<(), Error> {
+        if self.state.roles.profile.is_some() {
+            self.state.running = None;
+            self.network_source(Role::CommandSource) $($aw)*?;
+            self.walk(PathKind::Run) $($aw)*?;
+            self.state.running = Some(self.state.direction);
+            return Ok(());
+        }
         let fields = self.run_fields(true, self.state.direction)?;
         // Until the run is confirmed, every other command composes with run released.
         self.state.running = None;
@@ -1226,8 +1504,21 @@ impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
         // From now on no word carries a run code until the next run(), whatever becomes of
         // this one.
         self.state.running = None;
+        if self.state.roles.profile.is_some() {
+            return self.walk(PathKind::Stop) $($aw)*;
+        }
         let fields = self.run_fields(false, self.state.direction)?;
         self.command(&fields) $($aw)*
+    }
+
+    $($asy)* fn coast(&mut self) -> Result<(), Error> {
+        self.state.running = None;
+        self.walk(PathKind::Coast) $($aw)*
+    }
+
+    $($asy)* fn quick_stop(&mut self) -> Result<(), Error> {
+        self.state.running = None;
+        self.walk(PathKind::QuickStop) $($aw)*
     }
 
     $($asy)* fn set_direction(&mut self, direction: Direction) -> Result<(), Error> {
@@ -1363,6 +1654,9 @@ impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
     }
 
     $($asy)* fn reset_fault(&mut self) -> Result<(), Error> {
+        if self.state.roles.profile.is_some() {
+            return self.acknowledge() $($aw)*;
+        }
         let p = self.place(Role::FaultReset, "field")?;
         let Target::Field(f) = p.target else {
             return Err(self.misplaced(Role::FaultReset, "field"));
@@ -1388,5 +1682,20 @@ impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
 }
 
 vfd_impl!(Vfd, HoldsClient, VariableFrequencyDrive, Client, [] []);
+
+impl<S: SettingsView, C: HoldsClient> Vfd<S, C> {
+    /// Waits between two reads of a command profile's status word.
+    fn pause(&self, d: std::time::Duration) {
+        std::thread::sleep(d);
+    }
+}
+
+#[cfg(feature = "tokio")]
+impl<S: SettingsView, C: HoldsAsyncClient> AsyncVfd<S, C> {
+    /// Waits between two reads of a command profile's status word.
+    async fn pause(&self, d: std::time::Duration) {
+        tokio::time::sleep(d).await;
+    }
+}
 #[cfg(feature = "tokio")]
 vfd_impl!(AsyncVfd, HoldsAsyncClient, AsyncVariableFrequencyDrive, AsyncClient, [async] [.await]);

@@ -40,6 +40,8 @@ pub(crate) struct Model {
     pub reference_register: Option<usize>,
     /// The fault code the drive tripped with, until reset.
     pub fault: Option<u16>,
+    /// The command profile's state (index), for a drive with one.
+    pub machine: Option<u8>,
 }
 
 fn rate(max_frequency: f64, seconds: f64) -> f64 {

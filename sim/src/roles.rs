@@ -9,6 +9,7 @@
 //! [`Plausible`] and `sim/README.md`.
 
 use drivemap_map::ir::Drive;
+use drivemap_runtime::core::command_profile::{CommandProfile, PathKind, Transition};
 use drivemap_runtime::core::roles::{FieldRole, NumberField, Role, RoleKind, Target};
 use drivemap_runtime::core::rule::Transports;
 use drivemap_runtime::profile::TransportKind;
@@ -235,6 +236,40 @@ pub(crate) struct Resolved {
     pub command_source: Vec<SourcePlace>,
     /// Where the drive takes its frequency reference from (`reference_source`).
     pub reference_source: Vec<SourcePlace>,
+    /// The command profile, for a drive run through a control-word state machine.
+    pub profile: Option<ProfileSim>,
+}
+
+/// A command profile with its control and status words as the simulator's register indices.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ProfileSim {
+    /// Map index of the control word.
+    pub control: usize,
+    /// Map index of the status word.
+    pub status: usize,
+    pub profile: &'static CommandProfile,
+}
+
+impl ProfileSim {
+    /// The state the drive is in after a write of control word `word` (it was `before`) in
+    /// state `state`: the transition that leaves `state` and that the word asks for (an edge
+    /// transition only where its edge bits rose), else `state`: a word that skips a state
+    /// moves nothing.
+    pub fn next(&self, state: u8, before: u16, word: u16) -> Option<&'static Transition> {
+        self.profile.transitions.iter().find(|t| {
+            t.leaves(state) && t.asked_by(word) && (t.edge == 0 || (before & t.edge) != t.edge)
+        })
+    }
+
+    /// The state a trip leads to: the one the `reset_fault` path leaves.
+    pub fn fault_state(&self) -> Option<u8> {
+        let p = self.profile;
+        let path = p.path(PathKind::ResetFault)?;
+        path.via
+            .iter()
+            .filter_map(|&t| p.transition(t))
+            .find_map(|t| t.from.first().copied())
+    }
 }
 
 /// The map index of the register at plan row `row`.
@@ -264,7 +299,18 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
         initial: Vec::new(),
         command_source: Vec::new(),
         reference_source: Vec::new(),
+        profile: None,
     };
+    if let Some(p) = roles.profile
+        && let (Some(control), Some(status)) =
+            (map_index(drive, p.control), map_index(drive, p.status))
+    {
+        r.profile = Some(ProfileSim {
+            control,
+            status,
+            profile: p,
+        });
+    }
     let quantity = |role: Role, fallback: f64, initial: &mut Vec<(usize, f64)>| {
         let p = roles.of(role).next()?;
         Some(match p.target {

@@ -19,6 +19,8 @@ use drivemap_sim::framing::{self, Decoded};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
+mod command_profiles;
+
 fn map(path: &str) -> Drive {
     let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
     drivemap_map::read_map(path.as_ref(), &Default::default())
@@ -247,10 +249,24 @@ enum Step {
     ResetFault,
     Status,
     OutputFrequency,
+    /// Coast to a stop (`coast()`: a command profile's path, refused elsewhere).
+    Coast,
+    /// Quick stop (`quick_stop()`: a command profile's path, refused elsewhere).
+    QuickStop,
     /// The drive trips (not a call: the simulated drive faults).
     Trip,
+    /// The drive is stopped at its own panel (not a call).
+    LocalStop,
     /// Simulated time passes (s).
     Wait(f64),
+}
+
+impl Step {
+    /// A call that stops the drive: `stop()`, and on a drive with a command profile (`profile`)
+    /// `coast()` and `quick_stop()` (refused elsewhere, where they send nothing).
+    fn stops(&self, profile: bool) -> bool {
+        *self == Step::Stop || (profile && matches!(self, Step::Coast | Step::QuickStop))
+    }
 }
 
 /// A sequence and what happens on the link: the fault of each request in turn (`None`:
@@ -279,7 +295,10 @@ fn step() -> impl proptest::strategy::Strategy<Value = Step> {
         2 => Just(Step::ResetFault),
         1 => Just(Step::Status),
         1 => Just(Step::OutputFrequency),
+        1 => Just(Step::Coast),
+        1 => Just(Step::QuickStop),
         1 => Just(Step::Trip),
+        1 => Just(Step::LocalStop),
         1 => (0.0f64..30.0).prop_map(Step::Wait),
     ]
 }
@@ -349,8 +368,14 @@ fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -
             Step::ResetFault => d.reset_fault(),
             Step::Status => d.status().map(|_| ()),
             Step::OutputFrequency => d.output_frequency().map(|_| ()),
+            Step::Coast => d.coast(),
+            Step::QuickStop => d.quick_stop(),
             Step::Trip => {
                 d.client().transport().sim.trip(1);
+                Ok(())
+            }
+            Step::LocalStop => {
+                d.client().transport().sim.local_stop();
                 Ok(())
             }
             Step::Wait(s) => {
@@ -407,8 +432,14 @@ fn play_async(
                 Step::ResetFault => d.reset_fault().await,
                 Step::Status => d.status().await.map(|_| ()),
                 Step::OutputFrequency => d.output_frequency().await.map(|_| ()),
+                Step::Coast => d.coast().await,
+                Step::QuickStop => d.quick_stop().await,
                 Step::Trip => {
                     d.client().transport().sim.trip(1);
+                    Ok(())
+                }
+                Step::LocalStop => {
+                    d.client().transport().sim.local_stop();
                     Ok(())
                 }
                 Step::Wait(s) => {
@@ -461,6 +492,7 @@ fn within_limits(
 fn check(drive: &Drive, kind: TransportKind, trace: &Trace) -> Result<(), String> {
     use drivemap_runtime::core::roles::Target;
     let p = drive.plan();
+    let profile = p.roles.profile.is_some();
     let run_roles: Vec<_> = [Role::Run, Role::RunForward, Role::RunReverse]
         .into_iter()
         .flat_map(|role| p.roles.of(role))
@@ -478,7 +510,7 @@ fn check(drive: &Drive, kind: TransportKind, trace: &Trace) -> Result<(), String
         trace.steps[..t]
             .iter()
             .rev()
-            .find(|(s, _)| matches!(s, Step::Run | Step::Stop))
+            .find(|(s, _)| matches!(s, Step::Run) || s.stops(profile))
             .is_some_and(|(s, r)| *s == Step::Run && r.is_ok())
     };
     for sent in &trace.log {
@@ -533,9 +565,14 @@ fn check(drive: &Drive, kind: TransportKind, trace: &Trace) -> Result<(), String
             within_limits(r, raw, &view).map_err(|e| {
                 format!("step {t} ({step:?}): {frame}: outside the map's limits: {e}")
             })?;
+            // A run code of a run field, or a control word that asks the drive's command
+            // profile for a run transition.
             let runs = run_roles
                 .iter()
-                .any(|f| usize::from(f.row) == row && f.holds(raw as u16));
+                .any(|f| usize::from(f.row) == row && f.holds(raw as u16))
+                || p.roles.profile.is_some_and(|profile| {
+                    usize::from(profile.control) == row && profile.word_runs(raw as u16)
+                });
             if runs && !may_run(t) {
                 return Err(format!(
                     "step {t} ({step:?}) wrote a run code ({frame}: {} = {raw:#06X}) although the last of run() and stop() before it was not a successful run()",
@@ -552,19 +589,19 @@ fn check(drive: &Drive, kind: TransportKind, trace: &Trace) -> Result<(), String
         let (before, after) = trace.run_command[t];
         match step {
             Step::Run => stopped = false,
-            Step::Stop => stopped = !before,
+            s if s.stops(profile) => stopped = !before,
             _ if stopped && before => {
                 return Err(format!("the drive ran again before step {t} ({step:?})"));
             }
             _ => {}
         }
-        let stop_window = *step == Step::Stop
+        let stop_window = step.stops(profile)
             || (*step != Step::Run
                 && trace.steps[..t]
                     .iter()
                     .rev()
-                    .find(|(s, _)| matches!(s, Step::Run | Step::Stop))
-                    .is_some_and(|(s, _)| *s == Step::Stop));
+                    .find(|(s, _)| matches!(s, Step::Run) || s.stops(profile))
+                    .is_some_and(|(s, _)| s.stops(profile)));
         while let Some(sent) = frames.next_if(|s| s.tag as usize == t) {
             let Some(on) = sent.run_command else { continue };
             if stop_window && stopped && on {
@@ -599,6 +636,12 @@ fn every_map() -> Vec<(String, Drive)> {
         .collect();
     paths.sort();
     paths.push(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml").into());
+    // The drives run through a command profile (a control-word state machine).
+    paths.extend(
+        command_profiles::FIXTURES
+            .iter()
+            .map(|f| std::path::PathBuf::from(format!("{root}/../{f}"))),
+    );
     paths
         .into_iter()
         .map(|p| {

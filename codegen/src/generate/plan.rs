@@ -243,7 +243,67 @@ fn roles(plan: &DrivePlan) -> String {
             string(p.source)
         );
     }
-    out.push_str("        ],\n    };\n");
+    out.push_str("        ],\n");
+    out.push_str(&command_profile(plan));
+    out.push_str("    };\n");
+    out
+}
+
+/// The `profile` of `ROLES`: the command profile as data (`None` for a drive run by fields).
+fn command_profile(plan: &DrivePlan) -> String {
+    let Some(p) = plan.roles.profile else {
+        return "        profile: None,\n".into();
+    };
+    let cp = "super::rt::core::command_profile";
+    let id = |row: u16| plan.registers[usize::from(row)].info.id;
+    let mut out = format!(
+        "        profile: Some(&{cp}::CommandProfile {{\n            name: {},\n            /* {} */ control: {},\n            /* {} */ status: {},\n            states: &[\n",
+        string(p.name),
+        id(p.control),
+        p.control,
+        id(p.status),
+        p.status
+    );
+    for (i, s) in p.states.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "                /* {i} */ {cp}::ProfileState {{ id: {}, mask: {}, value: {}, source: {} }},",
+            string(s.id),
+            hex(s.mask),
+            hex(s.value),
+            string(s.source)
+        );
+    }
+    out.push_str("            ],\n            transitions: &[\n");
+    for (i, t) in p.transitions.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "                /* {i} */ {cp}::Transition {{ id: {}, word: {}, keep: {}, edge: {}, from: &{:?}, to: {}, limit_ms: {}, source: {} }},",
+            string(t.id),
+            hex(t.word),
+            hex(t.keep),
+            hex(t.edge),
+            t.from,
+            t.to,
+            t.limit_ms,
+            string(t.source)
+        );
+    }
+    out.push_str("            ],\n            paths: &[\n");
+    for path in p.paths {
+        let _ = writeln!(
+            out,
+            "                {cp}::Path {{ kind: {cp}::PathKind::{:?}, via: &{:?}, to: &{:?} }},",
+            path.kind, path.via, path.to
+        );
+    }
+    let _ = write!(
+        out,
+        "            ],\n            /* {} */ power_on: {},\n            source: {},\n        }}),\n",
+        p.state_id(p.power_on),
+        p.power_on,
+        string(p.source)
+    );
     out
 }
 

@@ -91,6 +91,7 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     serial_valid::check(drive, &mut out);
     protocol_stated::check(drive, &mut out);
     roles_valid::check(drive, &mut out);
+    crate::command_profile::check(drive, &mut out);
     repeat_needs_change_valid::check(drive, &mut out);
     function_codes_valid::check(drive, &mut out);
     relative_limits_valid::check(drive, &mut out);

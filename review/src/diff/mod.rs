@@ -200,6 +200,7 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
         gaps: _,           // map_documentation, entry by entry
         removed: _,        // map_documentation, entry by entry
         roles: _,          // roles::roles
+        profile: _,        // roles::command_profile
         file: _,           // where the map was read, not what it says
         tree: _,           // the same map as text, for locating changes
         plan: _,           // derived from the parts above
@@ -211,6 +212,7 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
     protocol::variants(&mut c, old, new);
     profile::protocol(&mut c, old, new);
     roles::roles(&mut c, old, new);
+    roles::command_profile(&mut c, old, new);
     registers::registers(&mut c, old, new);
     map_documentation(&mut c, old, new);
     c.changes.sort_by_key(|ch| ch.order);

@@ -451,3 +451,145 @@ pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
         }
     }
 }
+
+/// Differences of the command profile (`profile:`), compared as resolved (the standard it
+/// names merged under the map's entries): a profile added is compatible; one removed, or a
+/// control or status register, a state's mask or value, a transition's word, kept bits, edge,
+/// states or time limit, a path or the power-on state changed, is breaking (the drive trait
+/// walks them); a citation is documentation.
+pub(super) fn command_profile(c: &mut Collector, old: &Drive, new: &Drive) {
+    use drivemap_map::command_profile::resolve;
+    let subject = "profile";
+    let text = |d: &Drive| {
+        d.profile.as_ref().map(|p| {
+            let r = resolve(p);
+            format!(
+                "{} (control {}, status {})",
+                r.standard.as_deref().unwrap_or("own"),
+                r.control.as_deref().unwrap_or("?"),
+                r.status.as_deref().unwrap_or("?")
+            )
+        })
+    };
+    let (a, b) = match (&old.profile, &new.profile) {
+        (None, None) => return,
+        (Some(a), None) => {
+            c.push(
+                ChangeKind::RoleRemoved,
+                subject,
+                "profile",
+                (text(old), a.source.clone()),
+                (None, None),
+                HEAD,
+            );
+            return;
+        }
+        (None, Some(b)) => {
+            c.push(
+                ChangeKind::RoleAdded,
+                subject,
+                "profile",
+                (None, None),
+                (text(new), b.source.clone()),
+                HEAD,
+            );
+            return;
+        }
+        (Some(a), Some(b)) => (resolve(a), resolve(b)),
+    };
+    let mut entry = |what: String,
+                     x: Option<String>,
+                     y: Option<String>,
+                     sx: Option<String>,
+                     sy: Option<String>| {
+        if x != y {
+            let kind = if x.is_none() {
+                ChangeKind::RoleAdded
+            } else {
+                ChangeKind::RoleCodesChanged
+            };
+            c.push(kind, subject, &what, (x, sx), (y, sy), HEAD);
+        } else if sx != sy {
+            c.push(
+                ChangeKind::DocumentationChanged,
+                subject,
+                &what,
+                (None, sx),
+                (None, sy),
+                HEAD,
+            );
+        }
+    };
+    entry(
+        "profile".into(),
+        Some(format!(
+            "{} control {} status {} power-on {}",
+            a.standard.as_deref().unwrap_or("own"),
+            a.control.as_deref().unwrap_or("?"),
+            a.status.as_deref().unwrap_or("?"),
+            a.power_on.as_ref().map_or("?", |s| s.state.as_str())
+        )),
+        Some(format!(
+            "{} control {} status {} power-on {}",
+            b.standard.as_deref().unwrap_or("own"),
+            b.control.as_deref().unwrap_or("?"),
+            b.status.as_deref().unwrap_or("?"),
+            b.power_on.as_ref().map_or("?", |s| s.state.as_str())
+        )),
+        a.source.clone(),
+        b.source.clone(),
+    );
+    let state = |s: &drivemap_map::command_profile::StateSpec| {
+        format!(
+            "mask {:#06X} value {:#06X}",
+            s.mask.map_or(0, |w| w.0),
+            s.value.map_or(0, |w| w.0)
+        )
+    };
+    let ids: BTreeSet<&String> = a.states.keys().chain(b.states.keys()).collect();
+    for id in ids {
+        let (x, y) = (a.states.get(id), b.states.get(id));
+        entry(
+            format!("state {id}"),
+            x.map(state),
+            y.map(state),
+            x.and_then(|s| s.source.clone()),
+            y.and_then(|s| s.source.clone()),
+        );
+    }
+    let transition = |t: &drivemap_map::command_profile::TransitionSpec| {
+        format!(
+            "word {:#06X} keep {:#06X} edge {:#06X} from {} to {} within {} ms",
+            t.word.map_or(0, |w| w.0),
+            t.keep.map_or(0, |w| w.0),
+            t.edge.map_or(0, |w| w.0),
+            t.from.as_deref().unwrap_or_default().join(", "),
+            t.to.as_deref().unwrap_or("?"),
+            t.limit_ms.unwrap_or(0)
+        )
+    };
+    let ids: BTreeSet<&String> = a.transitions.keys().chain(b.transitions.keys()).collect();
+    for id in ids {
+        let (x, y) = (a.transitions.get(id), b.transitions.get(id));
+        entry(
+            format!("transition {id}"),
+            x.map(transition),
+            y.map(transition),
+            x.and_then(|t| t.source.clone()),
+            y.and_then(|t| t.source.clone()),
+        );
+    }
+    let path = |p: &drivemap_map::command_profile::PathSpec| {
+        format!("via {} to {}", p.via.join(", "), p.to.join(", "))
+    };
+    let ids: BTreeSet<&String> = a.paths.keys().chain(b.paths.keys()).collect();
+    for id in ids {
+        entry(
+            format!("path {id}"),
+            a.paths.get(id).map(path),
+            b.paths.get(id).map(path),
+            None,
+            None,
+        );
+    }
+}

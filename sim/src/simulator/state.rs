@@ -116,6 +116,8 @@ impl Simulator {
         if let Some(r) = self.roles.clone() {
             self.model.mode = r.modes.then_some(roles::Mode::Prg);
             self.model.reference_register = r.frequency_reference.first().copied();
+            // A drive with a command profile powers on in the state its manual names.
+            self.model.machine = r.profile.map(|p| p.profile.power_on);
         }
     }
 }
@@ -186,9 +188,44 @@ impl Simulator {
         }
         self.model.fault = Some(code);
         self.model.run = false;
+        if let Some(p) = roles.profile {
+            self.model.machine = p.fault_state().or(self.model.machine);
+        }
         self.model.output = 0.0;
         self.invalidate();
         self.tick();
+    }
+
+    /// Stops the drive at its own panel (a local stop, not a network command): the run
+    /// command is dropped and the output ramps down; a drive with a command profile goes to
+    /// the state its stop path's first transition leads to (CiA 402 *ready to switch on*). The
+    /// network control word keeps what it held. Without a drive model, nothing happens.
+    pub fn local_stop(&mut self) {
+        self.tick();
+        let Some(roles) = self.roles.clone() else {
+            return;
+        };
+        self.model.run = false;
+        if let Some(p) = roles.profile
+            && self.model.fault.is_none()
+        {
+            let stop = p
+                .profile
+                .path(drivemap_runtime::core::command_profile::PathKind::Stop)
+                .and_then(|path| path.via.first())
+                .and_then(|&t| p.profile.transition(t));
+            if let Some(t) = stop {
+                self.model.machine = Some(t.to);
+            }
+        }
+        self.invalidate();
+        self.tick();
+    }
+
+    /// The state of the drive's command profile, by id, for a drive with one.
+    pub fn profile_state(&self) -> Option<&'static str> {
+        let p = self.roles.as_ref()?.profile?;
+        Some(p.profile.state_id(self.model.machine?))
     }
 
     /// The source parameters at power-on: the map's defaults (the manual's factory setting)
@@ -322,6 +359,25 @@ impl Simulator {
             self.model.reverse = r;
         } else if fwd.is_some() || rev.is_some() {
             self.model.reverse = rev == Some(true) && fwd != Some(true);
+        }
+        if let Some(p) = roles.profile
+            && p.control == i
+            && let Some(state) = self.model.machine
+            && let Some(t) = p.next(state, before as u16, raw as u16)
+        {
+            // The state machine as the manual prints it: only the transition the word asks
+            // for from the state the drive is in; a run only from the network the drive takes
+            // commands from, an acknowledge from any.
+            let fault = p.fault_state() == Some(state);
+            if takes_run || fault {
+                if fault && self.model.fault.take().is_some() {
+                    for (r, word, mask) in std::mem::take(&mut self.fault_words) {
+                        self.raw[r] = (self.raw[r] & !mask) | (word & mask);
+                    }
+                }
+                self.model.machine = Some(t.to);
+                self.model.run = p.profile.is_running(t.to) && self.model.fault.is_none();
+            }
         }
         if roles.frequency_reference.contains(&i) {
             self.model.reference_register = Some(i);
@@ -463,6 +519,15 @@ impl Simulator {
             if let Some(code) = s.code(|c| self.model.holds(c)) {
                 self.raw[s.register] = s.put(self.raw[s.register], code);
             }
+        }
+        if let Some(p) = roles.profile
+            && let Some(s) = self
+                .model
+                .machine
+                .and_then(|s| p.profile.states.get(usize::from(s)))
+        {
+            // The state's bits in the status word, over what the status roles show.
+            self.raw[p.status] = u32::from((self.raw[p.status] as u16 & !s.mask) | s.value);
         }
         let running = self.model.running();
         let fraction = if max_f > 0.0 { out / max_f } else { 0.0 };

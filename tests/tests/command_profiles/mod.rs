@@ -1,0 +1,308 @@
+//! Drives run through a control-word state machine (`profile:` of a map: CiA 402, PROFIdrive,
+//! the ABB Drives profile): the drive trait walks the machine, the simulated drive follows it,
+//! the generated module carries it as data. The fault-injection property test
+//! (`the_contract_holds_under_faults`) plays every fixture of [`FIXTURES`] too.
+
+use drivemap_map::Drive;
+use drivemap_runtime::Error;
+use drivemap_runtime::core::command_profile::{CommandProfile, PathKind};
+use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::roles::Role;
+use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
+
+use drivemap_runtime::Client;
+use drivemap_runtime::pdu::Request;
+use drivemap_sim::framing::{self, Decoded};
+use drivemap_test_support::sim_link::SimLink;
+
+use super::{connect, map, run_command, wire};
+
+// The generated module of the CiA 402 fixture (`build.rs`), compiled with this runtime.
+#[allow(dead_code)]
+mod kestrel_kd4 {
+    include!(concat!(env!("OUT_DIR"), "/kestrel_kd4.rs"));
+}
+
+/// The fixtures with a command profile.
+pub(super) const FIXTURES: &[&str] = &["tests/fixtures/kestrel-kd4/kestrel-kd4.yaml"];
+
+/// The words written (06h / 10h, the first word) since the log was last cleared, on either
+/// framing.
+fn written<S: drivemap_runtime::SettingsView>(d: &mut Vfd<S, &mut Client<SimLink>>) -> Vec<u16> {
+    let kind = drivemap_runtime::transport::Transport::kind(d.client().transport());
+    let w: Vec<u16> = d
+        .client()
+        .transport()
+        .log
+        .iter()
+        .filter_map(|s| match framing::decode(kind, &s.frame) {
+            Decoded::Request {
+                request: Request::WriteSingle { value, .. },
+                ..
+            } => Some(value),
+            Decoded::Request {
+                request: Request::WriteMultiple { values, .. },
+                ..
+            } => values.get(0),
+            _ => None,
+        })
+        .collect();
+    d.client().transport().log.clear();
+    w
+}
+
+fn kestrel() -> Drive {
+    map(FIXTURES[0])
+}
+
+/// The CiA 402 fixture run from power-on: 0006h, 0007h, 000Fh, each verified in the
+/// statusword; stop is shutdown (0006h), coast disable voltage (0000h), quick stop 0002h; over
+/// RTU framing and Modbus TCP.
+#[test]
+fn run_and_stops_walk_the_machine_from_power_on() {
+    let drive = kestrel();
+    let p = drive.plan();
+    for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
+        let (mut c, settings, slave) = connect(&drive, kind, 0);
+        let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+        assert!(d.supports(Role::Run) && d.supports(Role::FaultReset));
+        assert_eq!(d.profile_state().unwrap(), Some("switch_on_disabled"));
+        d.set_reference(30.0).unwrap();
+        written(&mut d);
+        d.run()
+            .unwrap_or_else(|e| panic!("{e}: {}", wire(d.client())));
+        assert_eq!(written(&mut d), [0x0006, 0x0007, 0x000F], "{kind:?}");
+        assert!(run_command(d.client()));
+        assert_eq!(d.profile_state().unwrap(), Some("operation_enabled"));
+        // Running already: nothing to write.
+        d.run().unwrap();
+        assert_eq!(written(&mut d), [] as [u16; 0]);
+        d.stop().unwrap();
+        assert_eq!(written(&mut d), [0x0006]);
+        assert!(!run_command(d.client()));
+        assert_eq!(d.profile_state().unwrap(), Some("ready_to_switch_on"));
+        // From ready to switch on the run path goes on from there.
+        d.run().unwrap();
+        assert_eq!(written(&mut d), [0x0007, 0x000F]);
+        d.coast().unwrap();
+        assert_eq!(written(&mut d), [0x0000]);
+        assert_eq!(d.profile_state().unwrap(), Some("switch_on_disabled"));
+        d.run().unwrap();
+        written(&mut d);
+        d.quick_stop().unwrap();
+        assert_eq!(written(&mut d), [0x0002]);
+        assert_eq!(d.profile_state().unwrap(), Some("quick_stop_active"));
+        assert!(!run_command(d.client()));
+        // A stop that finds the drive stopped writes the stop word once all the same.
+        d.coast().unwrap();
+        d.stop().unwrap();
+        assert_eq!(written(&mut d), [0x0000, 0x0006]);
+    }
+}
+
+/// The final word written directly (skipping shutdown and switch on) moves nothing: the
+/// simulated drive stays in switch on disabled and does not run; so does 000Fh from ready to
+/// switch on (switched on is skipped).
+#[test]
+fn a_word_that_skips_a_state_leaves_the_drive_where_it_is() {
+    let drive = kestrel();
+    for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
+        let (mut c, _, slave) = connect(&drive, kind, 0);
+        c.write_register(slave, 0x6040, 0x000F).unwrap();
+        let sim = &mut c.transport().sim;
+        assert_eq!(sim.profile_state(), Some("switch_on_disabled"));
+        assert!(!sim.state().unwrap().run_command);
+        c.write_register(slave, 0x6040, 0x0006).unwrap();
+        assert_eq!(
+            c.transport().sim.profile_state(),
+            Some("ready_to_switch_on")
+        );
+        c.write_register(slave, 0x6040, 0x000F).unwrap();
+        let sim = &mut c.transport().sim;
+        assert_eq!(sim.profile_state(), Some("ready_to_switch_on"));
+        assert!(!sim.state().unwrap().run_command);
+        // In order, it runs.
+        c.write_register(slave, 0x6040, 0x0007).unwrap();
+        c.write_register(slave, 0x6040, 0x000F).unwrap();
+        let sim = &mut c.transport().sim;
+        assert_eq!(sim.profile_state(), Some("operation_enabled"));
+        assert!(sim.state().unwrap().run_command);
+        // The statusword shows the state as the guide prints it: x01x 0111.
+        assert_eq!(sim.raw("statusword").unwrap() & 0x6F, 0x27);
+    }
+}
+
+/// A trip: the drive shows fault and stops; run() is refused by the machine, naming the
+/// state; the fault reset acts on the edge only (0080h held does not acknowledge twice) and
+/// only in the fault state (elsewhere reset_fault() writes nothing); then the drive runs again.
+#[test]
+fn a_trip_needs_the_acknowledge_edge_in_the_fault_state() {
+    let drive = kestrel();
+    let p = drive.plan();
+    let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    d.reset_fault().unwrap();
+    assert_eq!(written(&mut d), [] as [u16; 0], "no fault: nothing written");
+    d.run().unwrap();
+    d.client().transport().sim.trip(0x2310);
+    assert_eq!(d.profile_state().unwrap(), Some("fault"));
+    assert!(d.status().unwrap().fault == Some(true));
+    assert_eq!(d.fault_code().unwrap().name, Some("Overcurrent"));
+    written(&mut d);
+    match d.run() {
+        Err(Error::StateMachine { state, path, .. }) => {
+            assert_eq!((state.as_str(), path), ("fault", "run"));
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(written(&mut d), [] as [u16; 0]);
+    // The edge acknowledges (0080h after 000Fh); the level alone does not: tripped again with
+    // 0080h held, 0080h written again leaves the fault.
+    d.client().write_register(slave, 0x6040, 0x0080).unwrap();
+    assert_eq!(d.profile_state().unwrap(), Some("switch_on_disabled"));
+    d.client().transport().sim.trip(0x2310);
+    d.client().write_register(slave, 0x6040, 0x0080).unwrap();
+    assert_eq!(d.profile_state().unwrap(), Some("fault"));
+    d.client().transport().log.clear();
+    // The drive object does not know what the word holds now: the edge is cleared first,
+    // then set, the state awaited, then cleared.
+    d.forget_commands();
+    d.reset_fault().unwrap();
+    assert_eq!(written(&mut d), [0x0000, 0x0080, 0x0000]);
+    assert_eq!(d.profile_state().unwrap(), Some("switch_on_disabled"));
+    assert_eq!(d.fault_code().unwrap().code, 0);
+    d.run().unwrap();
+    assert!(run_command(d.client()));
+}
+
+/// A transition the drive does not take: the trait waits the transition's time limit (100 ms,
+/// as the guide prints) and reports the state the drive is in. Here the plan's enable
+/// operation word is changed (000Bh: quick stop bit clear), which the simulated drive takes
+/// for no command.
+#[test]
+fn a_refused_transition_times_out_naming_the_state() {
+    let drive = kestrel();
+    let p = drive.plan();
+    let real = p.roles.profile.unwrap();
+    let transitions: Vec<_> = real
+        .transitions
+        .iter()
+        .map(|t| {
+            let mut t = *t;
+            if t.id == "enable_operation" {
+                t.word = 0x000B;
+            }
+            t
+        })
+        .collect();
+    let changed: &'static CommandProfile = Box::leak(Box::new(CommandProfile {
+        transitions: Box::leak(transitions.into_boxed_slice()),
+        ..*real
+    }));
+    let roles = drivemap_runtime::Roles {
+        profile: Some(changed),
+        ..p.roles
+    };
+    let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, roles);
+    let started = std::time::Instant::now();
+    let e = d.run().unwrap_err();
+    let waited = started.elapsed();
+    match &e {
+        Error::StateMachine { state, why, .. } => {
+            assert_eq!(state, "switched_on");
+            assert!(why.contains("within 100 ms of `enable_operation`"), "{why}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(
+        waited >= std::time::Duration::from_millis(100)
+            && waited < std::time::Duration::from_secs(5),
+        "{waited:?}"
+    );
+    assert!(
+        e.to_string().contains("the drive is in state switched_on"),
+        "{e}"
+    );
+    assert!(!run_command(d.client()));
+    // stop() still stops: shutdown from switched on.
+    written(&mut d);
+    d.stop().unwrap();
+    assert_eq!(written(&mut d), [0x0006]);
+}
+
+/// A stop never takes a run transition: a hand-built plan whose stop path goes through enable
+/// operation (validation refuses such a map) is refused before anything is sent.
+#[test]
+fn a_stop_path_through_a_run_transition_is_refused() {
+    let drive = kestrel();
+    let p = drive.plan();
+    let real = p.roles.profile.unwrap();
+    let enable = real
+        .transitions
+        .iter()
+        .position(|t| t.id == "enable_operation")
+        .unwrap() as u8;
+    let paths: Vec<_> = real
+        .paths
+        .iter()
+        .map(|path| {
+            let mut path = *path;
+            if path.kind == PathKind::Stop {
+                path.via = Box::leak(vec![enable].into_boxed_slice());
+            }
+            path
+        })
+        .collect();
+    let changed: &'static CommandProfile = Box::leak(Box::new(CommandProfile {
+        paths: Box::leak(paths.into_boxed_slice()),
+        ..*real
+    }));
+    let roles = drivemap_runtime::Roles {
+        profile: Some(changed),
+        ..p.roles
+    };
+    let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, roles);
+    d.client().write_register(slave, 0x6040, 0x0006).unwrap();
+    d.client().write_register(slave, 0x6040, 0x0007).unwrap();
+    written(&mut d);
+    assert!(d.stop().is_err());
+    assert!(!written(&mut d).contains(&0x000F));
+    assert!(!run_command(d.client()));
+    // And the map that says so is refused with where.
+    let text = std::fs::read_to_string(format!(
+        "{}/../{}",
+        env!("CARGO_MANIFEST_DIR"),
+        FIXTURES[0]
+    ))
+    .unwrap()
+    .replace(
+        "  transitions:\n",
+        "  paths:\n    stop: {via: [enable_operation], to: [ready_to_switch_on]}\n  transitions:\n",
+    );
+    let e = drivemap_map::read_map_str("kestrel-kd4.yaml", &text, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("path `stop` takes `enable_operation`, a run transition"),
+        "{e}"
+    );
+}
+
+/// The generated module carries the profile the map lowers to, as const data.
+#[test]
+fn the_generated_module_carries_the_profile() {
+    let drive = kestrel();
+    let lowered = drive.plan().roles.profile.expect("a profile");
+    let generated = kestrel_kd4::plan::ROLES.profile.expect("a profile");
+    assert_eq!(generated, lowered);
+    assert_eq!(generated.name, "cia402");
+    let run = generated.path(PathKind::Run).unwrap();
+    let words: Vec<u16> = run
+        .via
+        .iter()
+        .map(|&t| generated.transitions[usize::from(t)].word)
+        .collect();
+    assert_eq!(words, [0x0006, 0x0007, 0x000F]);
+}
