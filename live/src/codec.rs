@@ -418,14 +418,33 @@ pub fn parse_value_with(
                 .find(|v| v.id == lower || v.name.eq_ignore_ascii_case(text))
             {
                 Some(v) => f64::from(v.code),
-                None => parse_number(text).ok_or_else(|| {
-                    let ids: Vec<&str> = values.iter().map(|v| v.id).collect();
-                    InputError::Parse(format!(
-                        "`{text}` is not a code of {}; expected a number or one of: {}",
-                        r.id(),
-                        ids.join(", ")
-                    ))
-                })?,
+                None => {
+                    let codes = || {
+                        values
+                            .iter()
+                            .map(|v| format!("{} ({})", v.code, v.id))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    };
+                    let n = parse_number(text).ok_or_else(|| {
+                        InputError::Parse(format!(
+                            "`{}` is not a code of {}; expected a number or one of: {}",
+                            shorten(text),
+                            r.id(),
+                            codes()
+                        ))
+                    })?;
+                    // A code is a whole number of one word: `-1` is no code (not code 0).
+                    if !(n.fract() == 0.0 && (0.0..=f64::from(u16::MAX)).contains(&n)) {
+                        return Err(InputError::Parse(format!(
+                            "`{}` is not a code of {}: the codes the manual lists are {}",
+                            shorten(text),
+                            r.id(),
+                            codes()
+                        )));
+                    }
+                    n
+                }
             }
         }
         Conversion::Bits { fields, .. } => match parse_number(text) {

@@ -14,10 +14,20 @@ pub struct NotFound {
     pub drive: String,
     /// Nearest ids (with parameter numbers), best first.
     pub suggestions: Vec<String>,
+    /// When the name is an address inside one of the map's gaps (a reserved or illegible
+    /// range): the gap as the map describes it, with its citation.
+    pub gap: Option<String>,
 }
 
 impl fmt::Display for NotFound {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(gap) = &self.gap {
+            return write!(
+                f,
+                "{} has no register at `{}`: it is in a gap of the map, where nothing is mapped ({gap})",
+                self.drive, self.name
+            );
+        }
         write!(f, "{} has no register `{}`", self.drive, self.name)?;
         if !self.suggestions.is_empty() {
             write!(f, "; did you mean {}?", self.suggestions.join(", "))?;
@@ -119,6 +129,33 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
     if let Some(r) = address_in(name, decimal).and_then(|a| at_address(drive, a)) {
         return Ok(r);
     }
+    // An address the map records as a gap (reserved, illegible): said so, not suggested away.
+    let gap = address_in(name, decimal).and_then(|a| {
+        drive.gaps.iter().find_map(|g| {
+            let [lo, hi] = g.addresses?;
+            (lo..=hi).contains(&a).then(|| {
+                // The map's text, on one line, at most 120 characters.
+                let mut d: String = g
+                    .description
+                    .chars()
+                    .map(|c| if c.is_control() { ' ' } else { c })
+                    .collect();
+                if let Some((i, _)) = d.char_indices().nth(120) {
+                    d.truncate(i);
+                    d.push_str("...");
+                }
+                format!("{d}; {}", g.source)
+            })
+        })
+    });
+    if gap.is_some() {
+        return Err(NotFound {
+            name: name.to_owned(),
+            drive: drive.meta.id.clone(),
+            suggestions: Vec::new(),
+            gap,
+        });
+    }
     // Digits alone in a manual that prints hex: the register they would be as hex, suggested.
     let as_hex = (!decimal)
         .then(|| address_in(&format!("{}H", name.trim()), false))
@@ -148,6 +185,7 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
     Err(NotFound {
         name: name.to_owned(),
         drive: drive.meta.id.clone(),
+        gap: None,
         suggestions: as_hex
             .into_iter()
             .chain(

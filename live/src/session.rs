@@ -494,6 +494,17 @@ pub fn value_error(drive: &Drive, e: &ValueError) -> ConversionError {
     }
 }
 
+/// A number as a message quotes it: as Rust prints it while that is short, in exponent form
+/// beyond (`1e308`, not a 309-digit number).
+pub fn compact(v: f64) -> String {
+    let plain = format!("{v}");
+    if plain.len() > 16 {
+        format!("{v:e}")
+    } else {
+        plain
+    }
+}
+
 /// A value that does not convert, said with what to do about it: a missing setting names the
 /// `--set` that gives it (and the external quantity's description and unit), a value between
 /// two steps names `--round`.
@@ -521,7 +532,53 @@ impl std::fmt::Display for ConversionError {
                 "{register}: converting needs the value of {setting}, which could not be \
                  read; give it with --set {setting}=<value>"
             ),
-            (ValueError::NotAStep { .. }, _) => write!(f, "{e} (--round sends the nearest)"),
+            (
+                ValueError::NotAStep {
+                    register,
+                    value,
+                    below,
+                    above,
+                    step,
+                    unit,
+                },
+                _,
+            ) => write!(
+                f,
+                "{register}: {} {unit} is between {below} and {above} {unit}; the register counts {step} {unit} (--round sends the nearest)",
+                compact(*value)
+            ),
+            (
+                ValueError::OutOfRange {
+                    register,
+                    value,
+                    min,
+                    max,
+                    unit,
+                },
+                _,
+            ) => write!(
+                f,
+                "{register}: {} {unit} is out of range {min} ..= {max} {unit}",
+                compact(*value)
+            ),
+            (
+                ValueError::AboveLimit {
+                    register,
+                    value,
+                    max,
+                    unit,
+                    percent,
+                    reference,
+                },
+                _,
+            ) => write!(
+                f,
+                "{register}: {} {unit} is above {max} {unit}, {percent} % of {reference}",
+                compact(*value)
+            ),
+            (ValueError::NotWhole { register, value }, _) => {
+                write!(f, "{register}: {} is not a whole number", compact(*value))
+            }
             (ValueError::LimitNotKnown { register, setting }, Some((description, unit))) => write!(
                 f,
                 "{register}: its limit is a percentage of {setting} ({description}, in {unit}), \

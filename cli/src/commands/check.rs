@@ -194,7 +194,17 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 // A map in an earlier schema version is read by its meaning, with warnings;
                 // `--strict` wants it in the current one.
                 for w in &drive.warnings {
-                    if args.strict {
+                    let draft = drive
+                        .draft
+                        .as_ref()
+                        .is_some_and(|d| w.message == drivemap_map::ir::draft_warning(d));
+                    if args.strict && draft {
+                        // Not a schema matter: a reviewer's.
+                        eprintln!(
+                            "{w} (--strict: review every row against the manual, confirm the items listed, then remove `draft:`)"
+                        );
+                        map_errors += 1;
+                    } else if args.strict {
                         eprintln!("{w} (--strict: run `drivemap migrate`)");
                         map_errors += 1;
                     } else {

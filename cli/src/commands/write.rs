@@ -292,7 +292,12 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             | Err(InputError::Value(
                 ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. },
             )) => {}
-            Err(e) => return Err(Error::Refused(input_error(drive, &e))),
+            Err(e) => {
+                return Err(Error::Refused(format!(
+                    "{}; nothing written",
+                    input_error(drive, &e)
+                )));
+            }
         }
     }
     for (r, _) in &pairs {

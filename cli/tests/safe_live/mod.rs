@@ -823,3 +823,112 @@ fn demo_refuses_a_draft_and_takes_set() {
         "{out}"
     );
 }
+
+/// Values as typed: a quantity is a decimal number in its unit (`0032h` is refused, not taken
+/// as 50 Hz), a code is a whole number (`-1` is no code, not code 0), a huge number is quoted
+/// short, an address in a gap of the map is said to be one; every refusal says nothing was
+/// written, and nothing was. A `read --set` the drive contradicts is refused too.
+#[test]
+fn values_are_taken_as_typed() {
+    let mut slave = drivemap_sim::slave::SimulatedSlave::new(1, shipped("yaskawa-v7"));
+    slave.set_holding(0x010B, 600);
+    let (addr, slave) = serve(slave, Framing::RtuOverTcp);
+    let cases: [(&str, &str); 5] = [
+        (
+            "frequency_reference=0032h",
+            "`0032h` is hexadecimal, but frequency_reference takes a decimal number of Hz",
+        ),
+        ("n019=10h", "accel_time_1 takes a decimal number of s"),
+        (
+            "n003=-1",
+            "`-1` is not a code of run_stop_source_selection: the codes the manual lists are 0 (keypad)",
+        ),
+        (
+            "n019=1e308",
+            "accel_time_1: 1e308 s is out of range 0 ..= 6000 s",
+        ),
+        (
+            "digital_input_command=,",
+            "names no field of digital_input_command",
+        ),
+    ];
+    for (assignment, expected) in cases {
+        let (code, _, err) = write_bin("yaskawa-v7", Framing::RtuOverTcp, &addr, &[assignment]);
+        assert_eq!(code, 2, "{assignment}: {err}");
+        assert!(err.contains(expected), "{assignment}: {err}");
+        assert!(
+            err.trim_end().ends_with("nothing written"),
+            "{assignment}: {err}"
+        );
+    }
+    assert!(slave.lock().unwrap().writes.is_empty());
+    // A raw word may still be written in hex where the register is a word (bit fields).
+    let (code, _, err) = write_bin(
+        "yaskawa-v7",
+        Framing::RtuOverTcp,
+        &addr,
+        &["digital_input_command=0x0002"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(slave.lock().unwrap().writes, vec![(0x0001, 0x0002)]);
+    let (code, _, err) = common::drivemap(&[
+        "read",
+        "--drive",
+        "yaskawa-v7",
+        "--rtu-tcp",
+        &addr,
+        "--set",
+        "n011=50",
+        "frequency_reference",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("the drive holds max_output_frequency (n011) = 60.0 Hz, not 50"),
+        "{err}"
+    );
+    // The ACN's 0108h-010Fh is a gap of its map.
+    let (code, _, err) = common::drivemap(&[
+        "write",
+        "--drive",
+        "automationdirect-acn",
+        "--rtu-tcp",
+        "127.0.0.1:9",
+        "0x0109=1",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("has no register at `0x0109`: it is in a gap of the map"),
+        "{err}"
+    );
+    assert!(!err.contains("did you mean"), "{err}");
+}
+
+/// `check --strict` on a draft names the reviewer's fix (remove `draft:` after the review),
+/// not `drivemap migrate`, which has nothing to do with it.
+#[test]
+fn check_strict_on_a_draft_says_to_review_it() {
+    let scratch = Scratch::new("issue37-check");
+    let paths = drafts(&scratch.0);
+    let k20 = paths
+        .iter()
+        .find(|p| p.ends_with("kestrel-k20.yaml"))
+        .expect("the kestrel draft");
+    let (code, _, err) = common::run(
+        common::command()
+            .args(["check", "--strict", k20.to_str().unwrap()])
+            .env(
+                "DRIVEMAP_MANUALS",
+                repo().join("tests/fixtures/import/manuals"),
+            ),
+    );
+    assert_ne!(code, 0, "{err}");
+    assert!(err.contains("a draft (made by drivemap import)"), "{err}");
+    assert!(
+        err.contains(
+            "(--strict: review every row against the manual, confirm the items listed, then remove `draft:`)"
+        ),
+        "{err}"
+    );
+    // The import writes the current schema: nothing here is for migrate.
+    assert!(!err.contains("drivemap migrate"), "{err}");
+}
