@@ -53,3 +53,52 @@ fn an_unknown_name_is_a_typed_error_with_the_nearest_names() {
         "{e}"
     );
 }
+
+/// A session over a draft map (`draft:`, not reviewed) reads, and refuses every write unsent
+/// unless opened with `DraftWrites::Allowed`: the link's transport stops the write request,
+/// whichever client call made it.
+#[test]
+fn a_session_over_a_draft_writes_only_when_allowed() {
+    use drivemap_live::draft::DraftWrites;
+    use drivemap_live::{Link, LiveSettings, Session};
+    let dir = std::env::temp_dir().join(format!("drivemap-live-draft-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(v7_map()).unwrap();
+    let marked = text.replacen("schema: 2\n", "schema: 2\ndraft: {by: a test}\n", 1);
+    assert_ne!(marked, text, "the V7 map states its schema");
+    let path = dir.join("yaskawa-v7.yaml");
+    std::fs::write(&path, marked).unwrap();
+    let drive = drivemap_map::read_map(&path, &Default::default()).unwrap();
+    assert!(drive.draft.is_some());
+    let sim = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
+    let server = TcpServer::spawn(
+        drivemap_sim::shared(sim),
+        "127.0.0.1:0",
+        TcpFraming::ModbusTcp,
+        None,
+    )
+    .unwrap();
+    let link = Link::tcp(server.local_addr().to_string());
+    let r = drivemap_live::find(&drive, "n019").unwrap();
+    let profile = drivemap_live::leak_profile(&drive);
+    let mut session = Session::open(&drive, &link, LiveSettings::default()).unwrap();
+    let at = session.address(r).unwrap();
+    let before = session.read_raw(r).unwrap();
+    let refused = session.client.write_registers(1, at, &[777]).unwrap_err();
+    assert!(
+        refused.to_string().contains("yaskawa-v7 is a draft map"),
+        "{refused}"
+    );
+    assert_eq!(session.read_raw(r).unwrap(), before, "nothing was written");
+    let mut allowed = Session::open_as(
+        &drive,
+        profile,
+        &link,
+        LiveSettings::default(),
+        DraftWrites::Allowed,
+    )
+    .unwrap();
+    allowed.client.write_registers(1, at, &[777]).unwrap();
+    assert_eq!(allowed.read_raw(r).unwrap(), 777);
+    let _ = std::fs::remove_dir_all(&dir);
+}
