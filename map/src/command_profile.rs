@@ -228,6 +228,16 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         );
         return;
     }
+    for role in ["run", "run_forward", "run_reverse", "fault_reset"] {
+        if drive.roles.contains_key(role) {
+            err(
+                &source::Path::root().key("roles").key(role),
+                format!(
+                    "the drive has a command profile: its paths run, stop and reset it, so a `{role}` role would be a second way past the state machine; remove the role"
+                ),
+            );
+        }
+    }
     let p = resolve(spec);
     for (key, id, writable) in [("control", &p.control, true), ("status", &p.status, false)] {
         let Some(id) = id else {

@@ -24,7 +24,11 @@ mod kestrel_kd4 {
 }
 
 /// The fixtures with a command profile.
-pub(super) const FIXTURES: &[&str] = &["tests/fixtures/kestrel-kd4/kestrel-kd4.yaml"];
+pub(super) const FIXTURES: &[&str] = &[
+    "tests/fixtures/kestrel-kd4/kestrel-kd4.yaml",
+    "tests/fixtures/norrland-nv20/norrland-nv20.yaml",
+    "tests/fixtures/oskar-ax3/oskar-ax3.yaml",
+];
 
 /// The words written (06h / 10h, the first word) since the log was last cleared, on either
 /// framing.
@@ -305,4 +309,89 @@ fn the_generated_module_carries_the_profile() {
         .map(|&t| generated.transitions[usize::from(t)].word)
         .collect();
     assert_eq!(words, [0x0006, 0x0007, 0x000F]);
+}
+
+/// Every profile fixture (CiA 402, PROFIdrive, ABB Drives), from its own data: the simulated
+/// drive powers on in the state its manual names; the run path's last word written directly
+/// does not run it; run() reaches the run path's end and stop() the stop path's; a trip stops
+/// it and run() is refused until reset_fault(); over every link the map lists.
+#[test]
+fn every_profile_fixture_follows_its_machine() {
+    for file in FIXTURES {
+        let drive = map(file);
+        let p = drive.plan();
+        let profile = p.roles.profile.expect("a profile");
+        let run = profile.path(PathKind::Run).unwrap();
+        let last = profile.transitions[usize::from(*run.via.last().unwrap())];
+        let control = p.registers[usize::from(profile.control)].info.address;
+        for kind in super::links(&drive) {
+            let (mut c, settings, slave) = connect(&drive, kind, 0);
+            let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+            let id = &drive.meta.id;
+            let power_on = profile.state_id(profile.power_on);
+            assert_eq!(d.profile_state().unwrap(), Some(power_on), "{id}");
+            d.client()
+                .write_register(slave, control, last.word)
+                .unwrap();
+            assert_eq!(
+                d.profile_state().unwrap(),
+                Some(power_on),
+                "{id}: {:#06X}",
+                last.word
+            );
+            assert!(!run_command(d.client()), "{id}: ran on a skipped state");
+            d.set_reference(20.0).unwrap();
+            d.run().unwrap_or_else(|e| panic!("{id} {kind:?}: {e}"));
+            assert!(run_command(d.client()), "{id}");
+            let state = d.profile_state().unwrap().unwrap();
+            assert!(
+                run.to.iter().any(|&s| profile.state_id(s) == state),
+                "{id}: {state}"
+            );
+            d.stop().unwrap();
+            assert!(!run_command(d.client()), "{id}");
+            let stop = profile.path(PathKind::Stop).unwrap();
+            let state = d.profile_state().unwrap().unwrap();
+            assert!(
+                stop.to.iter().any(|&s| profile.state_id(s) == state),
+                "{id}: {state}"
+            );
+            d.run().unwrap();
+            d.client().transport().sim.trip(7);
+            assert!(!run_command(d.client()), "{id}");
+            assert!(matches!(d.run(), Err(Error::StateMachine { .. })), "{id}");
+            assert_eq!(d.status().unwrap().fault, Some(true), "{id}");
+            d.reset_fault().unwrap();
+            assert_eq!(d.status().unwrap().fault, Some(false), "{id}");
+            d.run().unwrap();
+            assert!(run_command(d.client()), "{id}");
+            d.coast().unwrap();
+            assert!(!run_command(d.client()), "{id}");
+        }
+    }
+}
+
+/// PROFIdrive keeps STW1 bit 11 (reversing, the map's `reverse` role) through every
+/// transition: 047Eh then 047Fh forward, 0C7Fh once reversed, 0C7Eh to stop in reverse.
+#[test]
+fn profidrive_keeps_the_direction_bit_through_the_machine() {
+    let drive = map(FIXTURES[1]);
+    let p = drive.plan();
+    let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    d.set_reference(25.0).unwrap();
+    written(&mut d);
+    d.run().unwrap();
+    assert_eq!(written(&mut d), [0x047E, 0x047F]);
+    d.set_direction(drivemap_runtime::vfd::Direction::Reverse)
+        .unwrap();
+    assert_eq!(written(&mut d), [0x0C7F]);
+    assert!(d.client().transport().sim.state().unwrap().reverse_command);
+    d.stop().unwrap();
+    assert_eq!(written(&mut d), [0x0C7E]);
+    assert_eq!(d.profile_state().unwrap(), Some("ready_for_switching_on"));
+    d.client().transport().sim.trip(3);
+    d.reset_fault().unwrap();
+    // The acknowledge edge (bit 7) with the direction kept, then released.
+    assert_eq!(written(&mut d), [0x0CFE, 0x0C7E]);
 }
