@@ -122,6 +122,11 @@ impl SimLink {
         self.script.len()
     }
 
+    /// Drops the faults still scripted: the next requests are delivered and answered.
+    pub fn clear_script(&mut self) {
+        self.script.clear();
+    }
+
     fn execute(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
         let mut out = [0u8; tcp::MAX_FRAME];
         let handled = self.sim.handle(self.kind, frame, &mut out);

@@ -20,6 +20,7 @@ use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
 mod command_profiles;
+mod paramset_faults;
 
 fn map(path: &str) -> Drive {
     let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));

@@ -151,6 +151,30 @@ pub fn restore_order<'a>(drive: &Drive, regs: &[&'a Register]) -> Vec<&'a Regist
 /// Two maps that read and write every setting alike have the same fingerprint; a set saved
 /// under another fingerprint is compared and restored by id all the same, with a warning.
 pub fn fingerprint(drive: &Drive) -> String {
+    // Computed once per loaded map: the plan's `Arc` names it while it lives.
+    type Cache = Vec<(std::sync::Weak<drivemap_map::lower::DrivePlan>, String)>;
+    static CACHE: std::sync::Mutex<Cache> = std::sync::Mutex::new(Vec::new());
+    drive.plan();
+    let Some(plan) = drive.plan.get() else {
+        return compute_fingerprint(drive);
+    };
+    let mut cache = match CACHE.lock() {
+        Ok(c) => c,
+        Err(poisoned) => poisoned.into_inner(),
+    };
+    cache.retain(|(w, _)| w.strong_count() > 0);
+    if let Some((_, f)) = cache
+        .iter()
+        .find(|(w, _)| std::ptr::eq(w.as_ptr(), std::sync::Arc::as_ptr(plan)))
+    {
+        return f.clone();
+    }
+    let f = compute_fingerprint(drive);
+    cache.push((std::sync::Arc::downgrade(plan), f.clone()));
+    f
+}
+
+fn compute_fingerprint(drive: &Drive) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     let mut feed = |bytes: &[u8]| {
         for b in bytes {

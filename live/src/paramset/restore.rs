@@ -329,9 +329,9 @@ pub fn validate<'d>(
     })
 }
 
-/// Whether the drive shows a status role (read now): `Some(holds)`, `None` when the map gives
-/// the role no place on this link or it could not be read.
-fn status(session: &mut Session<'_>, role: Role) -> Option<bool> {
+/// Whether the drive shows a status role (read now): `Ok(holds)`, or why it is not known (the
+/// map gives the role no place on this link, or reading it failed).
+fn status(session: &mut Session<'_>, role: Role) -> Result<bool, String> {
     let drive = session.drive;
     let places: Vec<_> = drive
         .plan()
@@ -339,6 +339,7 @@ fn status(session: &mut Session<'_>, role: Role) -> Option<bool> {
         .of(role)
         .filter(|p| p.transports.contains(session.kind))
         .collect();
+    let mut why = format!("its map gives no {} status on this link", role.id());
     for place in places {
         let Target::Field(f) = place.target else {
             continue;
@@ -346,11 +347,12 @@ fn status(session: &mut Session<'_>, role: Role) -> Option<bool> {
         let Some(r) = drive.register_of_row(usize::from(f.row)) else {
             continue;
         };
-        if let Ok(word) = session.read_raw(r) {
-            return Some(f.holds(word as u16));
+        match session.read_raw(r) {
+            Ok(word) => return Ok(f.holds(word as u16)),
+            Err(e) => why = format!("reading {}: {e}", describe::register(r)),
         }
     }
-    None
+    Err(why)
 }
 
 /// Reads the drive and plans the writes of what differs from `set`, in its order. Refused,
@@ -363,8 +365,21 @@ pub fn plan<'d>(
     set: &Validated<'d>,
 ) -> Result<RestorePlan<'d>, RestoreError> {
     let drive = session.drive;
-    let regs: Vec<&Register> = set.entries.iter().map(|(r, _)| *r).collect();
-    let (words, requests) = read_all(session, &regs)?;
+    let mut regs: Vec<&Register> = set.entries.iter().map(|(r, _)| *r).collect();
+    let count = regs.len();
+    // What the set's settings depend on and the set does not hold (a selector of a scale, a
+    // maximum): read with them, in the same planned requests, for the drive's value.
+    for r in set
+        .entries
+        .iter()
+        .flat_map(|(r, _)| super::depends_on(drive, r))
+    {
+        if !regs.iter().any(|x| x.def.id == r.def.id) {
+            regs.push(r);
+        }
+    }
+    let (mut words, requests) = read_all(session, &regs)?;
+    words.truncate(count);
     if let Some(why) = session.silence.report() {
         return Err(RestoreError::Refused(vec![format!(
             "{} did not answer: {why}",
@@ -449,14 +464,14 @@ pub fn plan<'d>(
     let stopped_only = restricted(WriteRestriction::Stopped);
     if !stopped_only.is_empty() {
         match status(session, Role::Running) {
-            Some(false) => warnings.push("the drive shows stopped".to_owned()),
-            Some(true) => reasons.push(format!(
+            Ok(false) => warnings.push("the drive shows stopped".to_owned()),
+            Ok(true) => reasons.push(format!(
                 "the drive shows running, and {} may be written only while it is stopped: {}",
                 if stopped_only.len() == 1 { "this setting" } else { "these settings" },
                 stopped_only.join(", ")
             )),
-            None => reasons.push(format!(
-                "{} may be written only while the drive is stopped, and its map gives no running status this link can read: {}",
+            Err(why) => reasons.push(format!(
+                "{} may be written only while the drive is stopped, and whether it is is not known ({why}): {}",
                 if stopped_only.len() == 1 { "this setting" } else { "these settings" },
                 stopped_only.join(", ")
             )),
@@ -465,13 +480,13 @@ pub fn plan<'d>(
     let prg_only = restricted(WriteRestriction::PrgMode);
     if !prg_only.is_empty() {
         match status(session, Role::DriveMode) {
-            Some(false) => {}
-            Some(true) => reasons.push(format!(
+            Ok(false) => {}
+            Ok(true) => reasons.push(format!(
                 "the drive is in DRV mode, and these settings may be written only in PRG mode: {}",
                 prg_only.join(", ")
             )),
-            None => reasons.push(format!(
-                "these settings may be written only in PRG mode, and the drive's mode could not be read: {}",
+            Err(why) => reasons.push(format!(
+                "these settings may be written only in PRG mode, and the drive's mode is not known ({why}): {}",
                 prg_only.join(", ")
             )),
         }
