@@ -25,12 +25,35 @@ pub enum TransportKind {
     /// own: a drive's `tcp` registers and addresses are those of a Modbus TCP interface it
     /// would have itself, never what a gateway reaches.
     TcpGateway,
+    /// Modbus ASCII on a serial line: `:`, the slave address and PDU as hexadecimal
+    /// characters, an LRC, CR LF (Delta's factory setting, usually 7 data bits). The drive's
+    /// serial side, as [`TransportKind::Rtu`].
+    Ascii,
+    /// Modbus ASCII frames carried over a TCP stream (a serial gateway in transparent mode).
+    AsciiOverTcp,
 }
 
 impl TransportKind {
     /// Whether frames of this transport carry RTU framing (slave address + CRC).
     pub const fn is_rtu_framed(self) -> bool {
         matches!(self, TransportKind::Rtu | TransportKind::RtuOverTcp)
+    }
+
+    /// Whether frames of this transport are Modbus ASCII (`:` ... LRC CR LF).
+    pub const fn is_ascii(self) -> bool {
+        matches!(self, TransportKind::Ascii | TransportKind::AsciiOverTcp)
+    }
+
+    /// Whether frames of this transport are serial-line frames (slave address, PDU, check;
+    /// RTU or ASCII), with no transaction id: a late reply can be told from the answer only by
+    /// its echoes and by silence.
+    pub const fn is_serial_framed(self) -> bool {
+        self.is_rtu_framed() || self.is_ascii()
+    }
+
+    /// Whether the link is a TCP stream (Modbus TCP, or serial frames carried over TCP).
+    pub const fn is_tcp_stream(self) -> bool {
+        !matches!(self, TransportKind::Rtu | TransportKind::Ascii)
     }
 
     /// Whether the drive at the far end of the link is reached on its serial (RTU) side:
@@ -40,13 +63,16 @@ impl TransportKind {
         !matches!(self, TransportKind::Tcp)
     }
 
-    /// A short name for messages: `RTU`, `RTU over TCP`, `Modbus TCP`, `Modbus TCP gateway`.
+    /// A short name for messages: `RTU`, `RTU over TCP`, `Modbus TCP`, `Modbus TCP gateway`,
+    /// `ASCII`, `ASCII over TCP`.
     pub const fn name(self) -> &'static str {
         match self {
             TransportKind::Rtu => "RTU",
             TransportKind::RtuOverTcp => "RTU over TCP",
             TransportKind::Tcp => "Modbus TCP",
             TransportKind::TcpGateway => "Modbus TCP gateway to RTU",
+            TransportKind::Ascii => "ASCII",
+            TransportKind::AsciiOverTcp => "ASCII over TCP",
         }
     }
 }
@@ -302,12 +328,13 @@ pub struct AddressOffsets {
 }
 
 impl AddressOffsets {
-    /// The offset for a transport kind. RTU over TCP and a Modbus TCP gateway reach the drive's
-    /// serial side and use the RTU offset.
+    /// The offset for a transport kind. RTU over TCP, a Modbus TCP gateway and Modbus ASCII
+    /// reach the drive's serial side and use the RTU offset.
     pub const fn for_kind(&self, kind: TransportKind) -> i32 {
-        match kind {
-            TransportKind::Rtu | TransportKind::RtuOverTcp | TransportKind::TcpGateway => self.rtu,
-            TransportKind::Tcp => self.tcp,
+        if kind.reaches_rtu_side() {
+            self.rtu
+        } else {
+            self.tcp
         }
     }
 

@@ -10,8 +10,8 @@ use crate::width::{Width, WordOrder};
 /// The transports a register exists on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Transports {
-    /// The drive's serial (RTU) side: serial lines, RTU over TCP, and a Modbus TCP gateway to
-    /// the serial line ([`TransportKind::TcpGateway`]).
+    /// The drive's serial (RTU) side: serial lines, RTU over TCP, a Modbus TCP gateway to
+    /// the serial line ([`TransportKind::TcpGateway`]), and Modbus ASCII.
     pub rtu: bool,
     /// The drive's own Modbus TCP interface (MBAP).
     pub tcp: bool,
@@ -38,9 +38,10 @@ impl Transports {
 
     /// Whether a register with these transports exists on `kind`.
     pub const fn contains(self, kind: TransportKind) -> bool {
-        match kind {
-            TransportKind::Rtu | TransportKind::RtuOverTcp | TransportKind::TcpGateway => self.rtu,
-            TransportKind::Tcp => self.tcp,
+        if kind.reaches_rtu_side() {
+            self.rtu
+        } else {
+            self.tcp
         }
     }
 }

@@ -529,7 +529,7 @@ impl<T: AsyncTransport> AsyncClient<T> {
             let until = self.core.settle_until(&settle);
             let n = self
                 .transport
-                .recv(self.core.rx.space(), until)
+                .recv(self.core.space(), until)
                 .await
                 .map_err(|e| io_error(checked, e))?;
             if let Some(outcome) = self.core.settle_step(&mut settle, n, checked) {
@@ -564,7 +564,7 @@ impl<T: AsyncTransport> AsyncClient<T> {
             let until = self.core.receive_until(&wait);
             let n = self
                 .transport
-                .recv(self.core.rx.space(), until)
+                .recv(self.core.space(), until)
                 .await
                 .map_err(|e| io_error(checked, e))?;
             if let Some(outcome) = self

@@ -23,6 +23,7 @@
 use std::io;
 use std::time::{Duration, Instant};
 
+use crate::ascii;
 use crate::bus_time::{BusModel, SerialConfig};
 use crate::error::{Error, Refusal, Sent};
 use crate::exception::Exception;
@@ -31,7 +32,7 @@ use crate::pdu::{FrameError, Request, Response, Words, function};
 use crate::persist::PersistBudget;
 use crate::profile::{CommandInfo, CommandKind, Profile, TransportKind};
 use crate::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
-use crate::reply::{Discarded, Framing, ReplyBuffer};
+use crate::reply::{Discard, Discarded, Framing, ReplyBuffer};
 use crate::transport::Transport;
 use crate::typed::{ReadSet, WriteSet};
 use crate::{rtu, tcp};
@@ -244,9 +245,12 @@ pub(crate) struct Core {
     pub(crate) options: ClientOptions,
     pub(crate) kind: TransportKind,
     next_transaction: u16,
-    tx: [u8; tcp::MAX_FRAME],
+    tx: [u8; ascii::MAX_FRAME],
     tx_len: usize,
     pub(crate) rx: ReplyBuffer,
+    /// Modbus ASCII links: the characters received, cut into frames, each turned into the RTU
+    /// frame `rx` matches.
+    ascii_in: Box<AsciiIn>,
     budget: PersistBudget,
     idle_since: Option<Instant>,
     link: Link,
@@ -286,9 +290,10 @@ impl Core {
             options,
             kind,
             next_transaction: 1,
-            tx: [0; tcp::MAX_FRAME],
+            tx: [0; ascii::MAX_FRAME],
             tx_len: 0,
             rx: ReplyBuffer::new(),
+            ascii_in: Box::default(),
             budget: PersistBudget::new(options.eeprom_writes_per_hour),
             idle_since: None,
             link: Link::default(),
@@ -315,7 +320,7 @@ impl Core {
     /// out, failed mid-reply or met anything that was not its answer may leave a reply on its
     /// way.
     pub(crate) fn attempt_ended(&mut self, slave: u8, answered: bool) {
-        if self.kind.is_rtu_framed() && (!answered || !self.rx.discarded().is_empty()) {
+        if self.kind.is_serial_framed() && (!answered || !self.rx.discarded().is_empty()) {
             self.unsettled = Some(Unsettled {
                 slave,
                 since: Instant::now(),
@@ -361,6 +366,7 @@ impl Core {
             settle.last_byte = now;
         }
         self.rx.clear();
+        self.ascii_in.assembler.clear();
         let silent = now.saturating_duration_since(settle.last_byte) >= settle.quiet;
         let record = |core: &mut Core| {
             let s = core.settled.get_or_insert(Settled {
@@ -577,6 +583,10 @@ impl Core {
         let encoded = if self.kind.is_rtu_framed() {
             rtu::encode_request(slave, &checked.request, &mut self.tx)
                 .map(|n| (n, Framing::Rtu { slave }))
+        } else if self.kind.is_ascii() {
+            // The reply is turned into an RTU frame on arrival ([`Core::received`]).
+            ascii::encode_request(slave, &checked.request, &mut self.tx)
+                .map(|n| (n, Framing::Rtu { slave }))
         } else {
             let transaction = self.next_transaction;
             self.next_transaction = self.next_transaction.wrapping_add(1);
@@ -604,6 +614,7 @@ impl Core {
         })?;
         self.tx_len = n;
         self.rx.clear();
+        self.ascii_in.assembler.clear();
         Ok((slave != rtu::BROADCAST).then_some(framing))
     }
 
@@ -661,7 +672,7 @@ impl Core {
             waited: self.options.timeout,
             attempts,
             discarded: self.rx.discarded(),
-            settle: self.kind.is_rtu_framed().then(|| self.settle_quiet()),
+            settle: self.kind.is_serial_framed().then(|| self.settle_quiet()),
         }
     }
 
@@ -720,6 +731,25 @@ impl Core {
     }
 }
 
+/// What a Modbus ASCII link's replies pass through before the reply buffer.
+pub(crate) struct AsciiIn {
+    assembler: ascii::Assembler,
+    /// Characters as the transport received them.
+    chars: [u8; tcp::MAX_FRAME],
+    /// The RTU frame an ASCII frame stands for.
+    rtu_frame: [u8; rtu::MAX_FRAME],
+}
+
+impl Default for AsciiIn {
+    fn default() -> Self {
+        AsciiIn {
+            assembler: ascii::Assembler::new(),
+            chars: [0; tcp::MAX_FRAME],
+            rtu_frame: [0; rtu::MAX_FRAME],
+        }
+    }
+}
+
 /// Where waiting for one reply stands: the deadline, the inter-character gap, the last byte.
 pub(crate) struct Wait {
     deadline: Instant,
@@ -746,8 +776,46 @@ impl Core {
     /// partly received and the link keeps byte timing.
     pub(crate) fn receive_until(&self, wait: &Wait) -> Instant {
         match wait.gap {
-            Some(g) if self.rx.pending() > 0 => wait.deadline.min(wait.last_byte + g),
+            // An ASCII frame ends with its CR LF, not with a silence.
+            Some(g) if self.rx.pending() > 0 && !self.kind.is_ascii() => {
+                wait.deadline.min(wait.last_byte + g)
+            }
             _ => wait.deadline,
+        }
+    }
+
+    /// The buffer the transport receives into: the reply buffer, or on a Modbus ASCII link the
+    /// characters' buffer ([`Core::received`] turns them into frames).
+    pub(crate) fn space(&mut self) -> &mut [u8] {
+        if self.kind.is_ascii() {
+            &mut self.ascii_in.chars
+        } else {
+            self.rx.space()
+        }
+    }
+
+    /// Modbus ASCII: cuts the `n` characters just received into frames and puts each intact
+    /// one into the reply buffer as the RTU frame with the same address and PDU; counts what
+    /// is thrown away.
+    fn take_ascii(&mut self, n: usize) {
+        let AsciiIn {
+            assembler,
+            chars,
+            rtu_frame,
+        } = &mut *self.ascii_in;
+        for &c in &chars[..n.min(chars.len())] {
+            match assembler.feed(c) {
+                ascii::Feed::Pending => {}
+                ascii::Feed::Skipped(k) => self
+                    .rx
+                    .discard_bytes(k, Discard::Ascii(ascii::AsciiError::Start)),
+                ascii::Feed::Frame => match ascii::to_rtu(assembler.frame(), rtu_frame) {
+                    Ok(m) => {
+                        self.rx.push(&rtu_frame[..m]);
+                    }
+                    Err(e) => self.rx.discard_frame(Discard::Ascii(e)),
+                },
+            }
         }
     }
 
@@ -767,6 +835,9 @@ impl Core {
         if n == 0 {
             if now >= wait.deadline {
                 self.rx.break_off();
+                let partial = self.ascii_in.assembler.clear();
+                self.rx
+                    .discard_bytes(partial, Discard::Gap { bytes: partial });
                 return Some(Ok(None));
             }
             if now >= until {
@@ -776,7 +847,11 @@ impl Core {
         }
         wait.last_byte = now;
         wait.bytes = wait.bytes.saturating_add(n);
-        self.rx.filled(n);
+        if self.kind.is_ascii() {
+            self.take_ascii(n);
+        } else {
+            self.rx.filled(n);
+        }
         if let Some(range) = self.rx.scan(framing, &checked.request) {
             return Some(self.finish(framing, range, checked, out).map(Some));
         }
@@ -1347,7 +1422,7 @@ impl<T: Transport> Client<T> {
             let until = self.core.settle_until(&settle);
             let n = self
                 .transport
-                .recv(self.core.rx.space(), until)
+                .recv(self.core.space(), until)
                 .map_err(|e| io_error(checked, e))?;
             if let Some(outcome) = self.core.settle_step(&mut settle, n, checked) {
                 return outcome;
@@ -1385,7 +1460,7 @@ impl<T: Transport> Client<T> {
             let until = self.core.receive_until(&wait);
             let n = self
                 .transport
-                .recv(self.core.rx.space(), until)
+                .recv(self.core.space(), until)
                 .map_err(|e| io_error(checked, e))?;
             if let Some(outcome) = self
                 .core

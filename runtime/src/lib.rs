@@ -6,7 +6,7 @@
 //! helpers of [`scale`].
 //!
 //! Layers, bottom up:
-//! - protocol core without I/O: [`crc`], [`pdu`], [`rtu`], [`tcp`], [`exception`];
+//! - protocol core without I/O: [`crc`], [`pdu`], [`rtu`], [`ascii`], [`tcp`], [`exception`];
 //! - links: the [`transport::Transport`] trait and its serial, TCP, RTU-over-TCP and in-memory
 //!   implementations;
 //! - [`client::Client`]: checked transactions with timeouts, retries, broadcast, typed register
@@ -31,6 +31,7 @@
 
 // The protocol core: no I/O, no allocation, and no `std` (`--no-default-features` builds it for
 // a microcontroller; `scripts/test` checks that on the host target).
+pub mod ascii;
 pub mod crc;
 pub mod exception;
 pub mod pdu;

@@ -47,6 +47,9 @@ pub enum Discard {
     /// A frame left incomplete: broken off by a gap longer than the inter-character timeout,
     /// or still incomplete when the reply timed out.
     Gap { bytes: usize },
+    /// Modbus ASCII: characters that were not an intact frame (no `:` before them, a frame
+    /// broken off by a new `:` or too long, bad hexadecimal digits or LRC).
+    Ascii(crate::ascii::AsciiError),
 }
 
 impl Discarded {
@@ -78,6 +81,7 @@ impl ::core::fmt::Display for Discarded {
             Some(Discard::Gap { bytes }) => {
                 write!(f, ", first: an incomplete frame of {bytes} byte(s)")
             }
+            Some(Discard::Ascii(e)) => write!(f, ", first: {e}"),
             None => Ok(()),
         }
     }
@@ -170,6 +174,20 @@ impl ReplyBuffer {
             self.discarded.bytes(n, Discard::Gap { bytes: n });
             self.len = 0;
         }
+    }
+
+    /// Counts `n` bytes (characters, on Modbus ASCII) thrown away before they reached the
+    /// buffer, for `why`.
+    pub fn discard_bytes(&mut self, n: usize, why: Discard) {
+        if n > 0 {
+            self.discarded.bytes(n, why);
+        }
+    }
+
+    /// Counts one frame thrown away before it reached the buffer, for `why`.
+    pub fn discard_frame(&mut self, why: Discard) {
+        self.discarded.frames = self.discarded.frames.saturating_add(1);
+        self.discarded.first.get_or_insert(why);
     }
 
     /// What was discarded since the last [`ReplyBuffer::clear`].

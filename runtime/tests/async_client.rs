@@ -11,7 +11,7 @@ use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::pdu::FrameError;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::reply::Discard;
-use drivemap_runtime::{rtu, tcp};
+use drivemap_runtime::{ascii, rtu, tcp};
 use drivemap_sim::fault::{Fault, FaultyLink};
 use drivemap_sim::slave::SimulatedSlave;
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
@@ -42,6 +42,27 @@ async fn serve(
     let mut chunk = [0u8; 300];
     let mut out = [0u8; tcp::MAX_FRAME];
     loop {
+        if kind.is_ascii() {
+            // Modbus ASCII: a frame runs to its LF; the drive answers the RTU frame it stands
+            // for, and its reply goes back as ASCII.
+            if let Some(lf) = buf.iter().position(|&c| c == b'\n') {
+                let frame: Vec<u8> = buf.drain(..=lf).collect();
+                let mut request = [0u8; rtu::MAX_FRAME];
+                if let Ok(n) = ascii::to_rtu(&frame, &mut request)
+                    && let Some(m) = slave.respond(kind, &request[..n], &mut out)
+                {
+                    let mut reply = [0u8; ascii::MAX_FRAME];
+                    let k = ascii::from_rtu(&out[..m], &mut reply).unwrap();
+                    stream.write_all(&reply[..k]).await.unwrap();
+                }
+                continue;
+            }
+            match stream.read(&mut chunk).await {
+                Ok(0) | Err(_) => return slave,
+                Ok(n) => buf.extend_from_slice(&chunk[..n]),
+            }
+            continue;
+        }
         let total = if kind.is_rtu_framed() {
             rtu::request_frame_len(&buf).ok().flatten()
         } else {
@@ -68,7 +89,12 @@ async fn serve(
 #[test]
 fn async_client_over_a_duplex_pipe() {
     runtime().block_on(async {
-        for kind in [TransportKind::Rtu, TransportKind::Tcp] {
+        for kind in [
+            TransportKind::Rtu,
+            TransportKind::Tcp,
+            TransportKind::Ascii,
+            TransportKind::AsciiOverTcp,
+        ] {
             let (a, b) = tokio::io::duplex(1024);
             let server = tokio::spawn(serve(b, kind, drive()));
             let mut c =
@@ -96,7 +122,7 @@ fn async_client_over_a_duplex_pipe() {
             // On RTU framing (no transaction id) it says that the next request waits for
             // silence first, so that a late reply is not taken for its answer.
             let e = c.read_holding(2, 0x0020, &mut [0; 1]).await.unwrap_err();
-            let settle = if kind.is_rtu_framed() {
+            let settle = if kind.is_serial_framed() {
                 "; the next request to slave 2 waits until the line has been silent for 100 ms, so that a late reply is not taken for its answer"
             } else {
                 ""

@@ -16,10 +16,20 @@ use drivemap_sim::slave::SimulatedSlave;
 
 use common::{V7, strict};
 
-const KINDS: [TransportKind; 3] = [
+const KINDS: [TransportKind; 5] = [
     TransportKind::Rtu,
     TransportKind::RtuOverTcp,
     TransportKind::Tcp,
+    TransportKind::Ascii,
+    TransportKind::AsciiOverTcp,
+];
+
+/// The links without a transaction id: RTU and ASCII, on a line or over TCP.
+const SERIAL_FRAMED: [TransportKind; 4] = [
+    TransportKind::Rtu,
+    TransportKind::RtuOverTcp,
+    TransportKind::Ascii,
+    TransportKind::AsciiOverTcp,
 ];
 
 fn client(kind: TransportKind, options: ClientOptions) -> Client<FaultyLink> {
@@ -60,7 +70,7 @@ fn dropped_reply_times_out_naming_the_request() {
         let mut c = client(kind, strict());
         c.transport().inject(Fault::Drop);
         let e = read_0020(&mut c).unwrap_err();
-        let settle = if kind.is_rtu_framed() {
+        let settle = if kind.is_serial_framed() {
             "; the next request to slave 1 waits until the line has been silent for 100 ms, so that a late reply is not taken for its answer"
         } else {
             ""
@@ -119,6 +129,26 @@ fn corrupt_crc_is_rejected() {
             Some(Discard::Frame(FrameError::Crc { .. }))
                 | Some(Discard::Frame(FrameError::UnknownFunction(_)))
         ));
+        assert_recovers(&mut c);
+    }
+}
+
+#[test]
+fn corrupt_lrc_is_rejected() {
+    for kind in [TransportKind::Ascii, TransportKind::AsciiOverTcp] {
+        let mut c = client(kind, strict());
+        c.transport().inject(Fault::CorruptCrc);
+        let e = read_0020(&mut c).unwrap_err();
+        assert!(e.to_string().contains("LRC"), "{e}");
+        assert!(
+            matches!(
+                timeout_of(e),
+                Some(Discard::Ascii(
+                    drivemap_runtime::ascii::AsciiError::Lrc { .. }
+                ))
+            ),
+            "{kind:?}"
+        );
         assert_recovers(&mut c);
     }
 }
@@ -199,7 +229,7 @@ fn late_reply_is_discarded_by_transaction_id_even_for_an_identical_request() {
 
 #[test]
 fn late_write_echo_is_not_taken_for_another_write() {
-    for kind in [TransportKind::Rtu, TransportKind::RtuOverTcp] {
+    for kind in SERIAL_FRAMED {
         let mut c = client(kind, strict());
         c.transport().inject(Fault::LateReply);
         assert!(matches!(

@@ -7,8 +7,8 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::tcp;
 use drivemap_runtime::transport::Transport;
+use drivemap_runtime::{ascii, rtu, tcp};
 
 use crate::slave::SimulatedSlave;
 
@@ -19,7 +19,7 @@ pub enum Fault {
     Drop,
     /// Only the first `keep` bytes arrive.
     Truncate { keep: usize },
-    /// The reply's CRC (RTU) is damaged; on TCP the last byte is.
+    /// The reply's CRC (RTU) is damaged; on TCP the last byte is, on ASCII the LRC.
     CorruptCrc,
     /// The reply arrives after `delay`.
     Delay(Duration),
@@ -90,6 +90,26 @@ impl FaultyLink {
     }
 }
 
+/// The drive's answer to `frame` as the link frames it: on Modbus ASCII the request is turned
+/// into the RTU frame it stands for (a damaged one is not answered) and the reply back into
+/// ASCII.
+fn answer_framed(
+    slave: &mut SimulatedSlave,
+    kind: TransportKind,
+    frame: &[u8],
+    out: &mut [u8],
+    reply_as: Option<u8>,
+) -> Option<usize> {
+    if !kind.is_ascii() {
+        return slave.answer(kind, frame, out, reply_as);
+    }
+    let mut request = [0u8; rtu::MAX_FRAME];
+    let n = ascii::to_rtu(frame, &mut request).ok()?;
+    let mut reply = [0u8; tcp::MAX_FRAME];
+    let m = slave.answer(kind, &request[..n], &mut reply, reply_as)?;
+    ascii::from_rtu(&reply[..m], out).ok()
+}
+
 impl Transport for FaultyLink {
     fn kind(&self) -> TransportKind {
         self.kind
@@ -108,8 +128,8 @@ impl Transport for FaultyLink {
             Some(Fault::WrongSlave(s)) => Some(s),
             _ => None,
         };
-        let mut out = [0u8; tcp::MAX_FRAME];
-        let Some(n) = self.slave.answer(self.kind, frame, &mut out, reply_as) else {
+        let mut out = [0u8; ascii::MAX_FRAME];
+        let Some(n) = answer_framed(&mut self.slave, self.kind, frame, &mut out, reply_as) else {
             return Ok(());
         };
         let mut reply = out[..n].to_vec();
@@ -118,6 +138,13 @@ impl Transport for FaultyLink {
             Some(Fault::Drop) => {}
             Some(Fault::Truncate { keep }) => {
                 reply.truncate(keep);
+                self.deliver(now, reply);
+            }
+            Some(Fault::CorruptCrc) if self.kind.is_ascii() => {
+                // The LRC's last digit, changed to another hexadecimal digit.
+                if let Some(d) = reply.len().checked_sub(3).and_then(|i| reply.get_mut(i)) {
+                    *d = if *d == b'0' { b'1' } else { b'0' };
+                }
                 self.deliver(now, reply);
             }
             Some(Fault::CorruptCrc) => {

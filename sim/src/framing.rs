@@ -76,7 +76,8 @@ pub enum Decoded<'a> {
 
 /// Decodes one complete request frame of `kind`.
 pub fn decode(kind: TransportKind, frame: &[u8]) -> Decoded<'_> {
-    if kind.is_rtu_framed() {
+    // Modbus ASCII frames reach here as the RTU frames they stand for (see `server`).
+    if kind.is_serial_framed() {
         match rtu::decode_request(frame) {
             Err(rtu::RequestFrameError::Request { slave, error }) => Decoded::Refused {
                 origin: Origin::Rtu { slave },

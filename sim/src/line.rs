@@ -141,7 +141,7 @@ impl Line {
     /// address no drive has, or too short to carry one, is seen by the first drive, which does
     /// not answer it (its record says `NotAddressed` or `Damaged`).
     pub fn handle(&self, kind: TransportKind, frame: &[u8], out: &mut [u8]) -> Handled {
-        let at = if kind.is_rtu_framed() {
+        let at = if kind.is_serial_framed() {
             0
         } else {
             tcp::HEADER_LEN - 1

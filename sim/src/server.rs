@@ -1,5 +1,10 @@
-//! Serving a simulator over real links: Modbus TCP and RTU-over-TCP listeners, serial ports, or
-//! any [`Transport`].
+//! Serving a simulator over real links: Modbus TCP, RTU-over-TCP and ASCII-over-TCP listeners,
+//! serial ports (RTU or ASCII), or any [`Transport`].
+//!
+//! Modbus ASCII frames run from `:` to LF; each is checked ([`ascii::to_rtu`]: hexadecimal
+//! digits, LRC, CR LF) and handed to the drive as the RTU frame with the same address and PDU,
+//! and the drive's reply is sent back as ASCII. A damaged ASCII frame, or characters outside a
+//! frame, are a damaged frame: no reply.
 //!
 //! RTU frames are found by their length (the function code says it), checked by CRC, and a
 //! frame left incomplete for longer than the silence limit is dropped, as a drive does after the
@@ -15,9 +20,10 @@ use std::time::{Duration, Instant};
 
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
+use drivemap_runtime::transport::ascii_over_tcp::AsciiOverTcpTransport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{crc, rtu, tcp};
+use drivemap_runtime::{ascii, crc, rtu, tcp};
 
 use crate::line::Line;
 use crate::simulator::{Outcome, RequestRecord, Simulator};
@@ -60,6 +66,28 @@ fn rtu_frame(buf: &[u8]) -> Result<Option<usize>, ()> {
             }
         }
     }
+}
+
+/// The characters at the start of `buf` to hand over at once, in Modbus ASCII: a frame from
+/// `:` through LF; what comes before a `:` (characters outside a frame), or a frame broken off
+/// by the next `:`, as a damaged frame. `None` while a frame is still arriving.
+fn ascii_frame(buf: &[u8]) -> Option<usize> {
+    let first = buf.first()?;
+    if *first != ascii::START {
+        return Some(
+            buf.iter()
+                .position(|&c| c == ascii::START)
+                .unwrap_or(buf.len()),
+        );
+    }
+    for (i, &c) in buf.iter().enumerate().skip(1) {
+        match c {
+            ascii::START => return Some(i),
+            b'\n' => return Some(i + 1),
+            _ => {}
+        }
+    }
+    None
 }
 
 /// Limits on how a connection or line may hold a partial frame or sit idle.
@@ -107,11 +135,12 @@ pub enum Next {
 }
 
 /// Cuts a byte stream into request frames: RTU by length and CRC, Modbus TCP by the MBAP
-/// header; holds at most `BUF_BUDGET` bytes; time is passed in, so it can be tested and
-/// fuzzed without waiting.
+/// header, Modbus ASCII from `:` to LF; holds at most `BUF_BUDGET` bytes; time is passed in,
+/// so it can be tested and fuzzed without waiting.
 #[derive(Debug)]
 pub struct Framer {
     rtu: bool,
+    ascii: bool,
     limits: FrameLimits,
     buf: Vec<u8>,
     last_byte: Instant,
@@ -123,6 +152,7 @@ impl Framer {
     pub fn new(kind: TransportKind, limits: FrameLimits, now: Instant) -> Framer {
         Framer {
             rtu: kind.is_rtu_framed(),
+            ascii: kind.is_ascii(),
             limits,
             buf: Vec::with_capacity(BUF_BUDGET + tcp::MAX_FRAME),
             last_byte: now,
@@ -153,6 +183,15 @@ impl Framer {
             return Next::Wait;
         }
         let late = now.saturating_duration_since(self.frame_start) >= self.limits.frame_deadline;
+        if self.ascii {
+            let quiet =
+                late || now.saturating_duration_since(self.last_byte) >= self.limits.silence;
+            return match ascii_frame(&self.buf) {
+                Some(len) => Next::Frame(len),
+                None if quiet => Next::Frame(self.buf.len()),
+                None => Next::Wait,
+            };
+        }
         if self.rtu {
             let quiet =
                 late || now.saturating_duration_since(self.last_byte) >= self.limits.silence;
@@ -174,10 +213,15 @@ impl Framer {
     /// Whether an RTU frame has been arriving for longer than the frame deadline without being
     /// whole: a peer trickling bytes faster than the silence (slowloris over RTU framing).
     pub fn overdue(&self, now: Instant) -> bool {
-        self.rtu
+        let whole = if self.ascii {
+            ascii_frame(&self.buf).is_some()
+        } else {
+            matches!(rtu_frame(&self.buf), Ok(Some(_)))
+        };
+        (self.rtu || self.ascii)
             && !self.buf.is_empty()
             && now.saturating_duration_since(self.frame_start) >= self.limits.frame_deadline
-            && !matches!(rtu_frame(&self.buf), Ok(Some(_)))
+            && !whole
     }
 
     /// The bytes held, from the start of the current frame.
@@ -330,7 +374,11 @@ fn serve_frames_conn<T: Transport>(
     let kind = link.kind();
     let mut framer = Framer::new(kind, limits, Instant::now());
     let mut chunk = [0u8; tcp::MAX_FRAME];
-    let mut out = [0u8; tcp::MAX_FRAME];
+    let mut out = [0u8; ascii::MAX_FRAME];
+    // Modbus ASCII: the RTU frame a request stands for, and the drive's reply before it is
+    // turned into ASCII.
+    let mut rtu_in = [0u8; rtu::MAX_FRAME];
+    let mut rtu_out = [0u8; tcp::MAX_FRAME];
     let mut last_request = Instant::now();
     let mut answered = 0u32;
     while !stop.load(Ordering::Relaxed) && !conn.is_some_and(|c| c.close.load(Ordering::Relaxed)) {
@@ -365,7 +413,17 @@ fn serve_frames_conn<T: Transport>(
                 Next::Wait => break,
                 Next::Close => return Ok(answered),
             };
-            let a = answer(kind, &framer.bytes()[..len], &mut out);
+            let a = if kind.is_ascii() {
+                // A damaged frame is handed over empty: the drive stays silent.
+                let n = ascii::to_rtu(&framer.bytes()[..len], &mut rtu_in).unwrap_or(0);
+                let mut a = answer(kind, &rtu_in[..n], &mut rtu_out);
+                a.reply = a
+                    .reply
+                    .and_then(|m| ascii::from_rtu(&rtu_out[..m], &mut out).ok());
+                a
+            } else {
+                answer(kind, &framer.bytes()[..len], &mut out)
+            };
             if a.request {
                 last_request = now;
                 if let Some(c) = conn {
@@ -394,6 +452,9 @@ pub enum TcpFraming {
     /// address offset) and only the registers its map lists for RTU, answered under the
     /// request's transaction and unit id.
     Gateway,
+    /// Modbus ASCII frames over TCP, as a transparent serial gateway forwards them from a
+    /// line set to ASCII ([`TransportKind::AsciiOverTcp`]).
+    AsciiOverTcp,
 }
 
 /// Limits of a TCP listener, as a server on a plant network needs them.
@@ -648,6 +709,18 @@ fn serve_stream(
                 Some(conn),
             )
         }
+        TcpFraming::AsciiOverTcp => {
+            // A frame ends with its LF; the silence only drops one left incomplete.
+            let mut link = AsciiOverTcpTransport::from_stream(stream)?;
+            serve_link_conn(
+                sim,
+                &mut link,
+                stop,
+                log,
+                limits(Duration::from_millis(500)),
+                Some(conn),
+            )
+        }
     }
 }
 
@@ -699,7 +772,13 @@ impl SerialServer {
                 options.drive_id = profile.drive_id;
             }
         }
-        let silence = options.frame_gap() + USB_LATENCY;
+        // Modbus ASCII ends a frame with its LF; a frame left incomplete for 1 s (the Modbus
+        // serial line specification's inter-character timeout) is dropped.
+        let silence = if options.ascii {
+            Duration::from_secs(1)
+        } else {
+            options.frame_gap() + USB_LATENCY
+        };
         let link = SerialTransport::open(options)?;
         let stop = Arc::new(AtomicBool::new(false));
         let flag = stop.clone();
@@ -758,6 +837,7 @@ pub fn kind_of(framing: TcpFraming) -> TransportKind {
         TcpFraming::ModbusTcp => TransportKind::Tcp,
         TcpFraming::RtuOverTcp => TransportKind::RtuOverTcp,
         TcpFraming::Gateway => TransportKind::TcpGateway,
+        TcpFraming::AsciiOverTcp => TransportKind::AsciiOverTcp,
     }
 }
 

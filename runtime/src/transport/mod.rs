@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 
 use crate::profile::TransportKind;
 
+pub mod ascii_over_tcp;
 pub mod memory;
 pub mod rtu_over_tcp;
 #[cfg(feature = "serial")]

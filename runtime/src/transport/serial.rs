@@ -1,4 +1,5 @@
-//! Modbus RTU on a serial line, through the `serialport` crate.
+//! Modbus RTU or Modbus ASCII ([`SerialOptions::ascii`]) on a serial line, through the
+//! `serialport` crate.
 //!
 //! What the transport adds to moving bytes:
 //! - the silence of 3.5 characters between frames (characters of the line's format: 10 bits
@@ -84,6 +85,12 @@ pub struct SerialOptions {
     /// Bits per character when the drive's map fixes it whatever the parity (TDS-V8: 11, the
     /// map's `serial.char_bits`; set by [`SerialOptions::with_profile`]).
     pub char_bits: Option<u8>,
+    /// Data bits per character: 8 (RTU needs them), or 7 (Modbus ASCII's usual format).
+    pub data_bits: u8,
+    /// Frames are Modbus ASCII (`:` ... LRC CR LF, [`crate::ascii`]) rather than RTU: the
+    /// transport's kind is [`TransportKind::Ascii`] and a reply ends with its CR LF, not with
+    /// a silence (no inter-character timeout).
+    pub ascii: bool,
 }
 
 /// Allowance added to the inter-character timeout for adapters that deliver received bytes
@@ -105,7 +112,23 @@ impl SerialOptions {
             formats: None,
             drive_id: "",
             char_bits: None,
+            data_bits: 8,
+            ascii: false,
         }
+    }
+
+    /// Modbus ASCII with `data_bits` data bits per character (7 as Delta's factory setting,
+    /// or 8); refused unless 7 or 8.
+    pub fn ascii(mut self, data_bits: u8) -> io::Result<SerialOptions> {
+        if !matches!(data_bits, 7 | 8) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("{data_bits} data bits: a Modbus ASCII line has 7 or 8"),
+            ));
+        }
+        self.ascii = true;
+        self.data_bits = data_bits;
+        Ok(self)
     }
 
     /// Takes the frame gap the drive's manual prescribes (in characters, and its least time
@@ -150,13 +173,13 @@ impl SerialOptions {
     }
 
     /// Refuses a parity and stop bits that are not one of the formats of
-    /// [`formats`](SerialOptions::formats) (8 data bits, as the transport opens the port).
+    /// [`formats`](SerialOptions::formats) (with the line's data bits).
     pub fn check_format(&self) -> Result<(), Refusal> {
         match self.formats {
             Some(f) => f
                 .check(
                     self.drive_id,
-                    8,
+                    self.data_bits,
                     bus_parity(self.parity),
                     stop_count(self.stop_bits),
                 )
@@ -184,12 +207,12 @@ impl SerialOptions {
         self
     }
 
-    /// The line as the bus-time model counts it: baud rate, 8 data bits, parity, stop bits and
+    /// The line as the bus-time model counts it: baud rate, data bits, parity, stop bits and
     /// the map's fixed character length.
     pub fn serial_config(&self) -> SerialConfig {
         SerialConfig {
             baud: self.baud,
-            data_bits: 8,
+            data_bits: self.data_bits,
             parity: bus_parity(self.parity),
             stop_bits: stop_count(self.stop_bits),
             char_bits: self.char_bits,
@@ -245,7 +268,7 @@ pub fn frame_gap(chars: f64, baud: u32) -> Duration {
     }
 }
 
-/// A serial port speaking Modbus RTU.
+/// A serial port speaking Modbus RTU, or Modbus ASCII ([`SerialOptions::ascii`]).
 pub struct SerialTransport {
     port: Box<dyn SerialPort>,
     options: SerialOptions,
@@ -260,8 +283,13 @@ impl SerialTransport {
         options
             .check_format()
             .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e.to_string()))?;
+        let data_bits = if options.data_bits == 7 {
+            DataBits::Seven
+        } else {
+            DataBits::Eight
+        };
         let builder = serialport::new(&options.path, options.baud)
-            .data_bits(DataBits::Eight)
+            .data_bits(data_bits)
             .parity(options.parity)
             .stop_bits(options.stop_bits)
             .flow_control(FlowControl::None)
@@ -340,7 +368,11 @@ impl SerialTransport {
 
 impl Transport for SerialTransport {
     fn kind(&self) -> TransportKind {
-        TransportKind::Rtu
+        if self.options.ascii {
+            TransportKind::Ascii
+        } else {
+            TransportKind::Rtu
+        }
     }
 
     fn send(&mut self, frame: &[u8]) -> io::Result<()> {
@@ -395,6 +427,9 @@ impl Transport for SerialTransport {
     }
 
     fn inter_char_timeout(&self) -> Option<Duration> {
+        if self.options.ascii {
+            return None;
+        }
         Some(self.options.inter_char_timeout)
     }
 }

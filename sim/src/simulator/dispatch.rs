@@ -105,7 +105,8 @@ impl Simulator {
     /// Answers one complete frame of `kind`. Returns the reply length written to `out` (at least
     /// [`tcp::MAX_FRAME`] bytes), or `None` when the drive stays silent. The frame is decoded
     /// and the reply framed by [`crate::framing`], the runtime's `decode_request` and
-    /// `encode_response`.
+    /// `encode_response`. On Modbus ASCII ([`TransportKind::is_ascii`]) `frame` is the RTU
+    /// frame the ASCII frame stands for, and so is the reply (the serving loop converts both).
     pub fn handle(&mut self, kind: TransportKind, frame: &[u8], out: &mut [u8]) -> Handled {
         self.stats.requests += 1;
         let mut record = RequestRecord {
@@ -116,7 +117,7 @@ impl Simulator {
             quantity: 0,
             outcome: Outcome::Damaged,
         };
-        if kind.is_rtu_framed() {
+        if kind.is_serial_framed() {
             record.slave = frame.first().copied().unwrap_or(0);
             record.function = frame.get(1).copied();
         } else {
