@@ -275,6 +275,7 @@ fn a_pdf_manual_imports_like_its_text() {
         "vesper-vs2",
         "zephyr-z580",
         "tarn-t35",
+        "meridian-m4",
     ] {
         let text = repo().join(format!("tests/fixtures/import/manuals/{id}.txt"));
         let pdf = dir.join(format!("{id}.pdf"));

@@ -1317,6 +1317,31 @@ fn address_key(cell: &str, col: &Column) -> Option<AddressKey> {
     if cell.trim().ends_with(['…', '.']) && cell.trim().contains("..") || cell.contains('…') {
         return Some(AddressKey::Block);
     }
+    // One number with the other notation in brackets (`40 (28)`, `0028h (40)`): the pair says
+    // which is decimal and which hex.
+    static BRACKETED: LazyLock<Regex> = LazyLock::new(|| {
+        Regex::new(r"^([0-9A-Fa-f]{1,5})[hH]?\s*[(\[]\s*(?:0x)?([0-9A-Fa-f]{1,5})[hH]?\s*[)\]]$")
+            .expect("pattern")
+    });
+    if let Some(c) = BRACKETED.captures(cell.trim()) {
+        let (a, b) = (&c[1], &c[2]);
+        let dec = |t: &str| t.parse::<u32>().ok();
+        let hex = |t: &str| u32::from_str_radix(t, 16).ok();
+        if dec(a).is_some() && dec(a) == hex(b) {
+            return Some(AddressKey::Register(
+                u16::try_from(dec(a)?).ok()?,
+                Notation::Decimal,
+                Some(format!("printed with its hex form: {}", cell.trim())),
+            ));
+        }
+        if hex(a).is_some() && hex(a) == dec(b) {
+            return Some(AddressKey::Register(
+                u16::try_from(hex(a)?).ok()?,
+                Notation::Hex,
+                Some(format!("printed with its decimal form: {}", cell.trim())),
+            ));
+        }
+    }
     if let Some((space, register)) = modicon(tok)
         && (col.modicon || space != '4')
         && !col.hex
@@ -1459,7 +1484,7 @@ fn layout_row(
     let debracket = |c: &str| c.replace(['[', ']'], " ").trim().to_string();
     for (col, c) in layout.columns.iter().zip(&cells) {
         let Some(c) = c else { continue };
-        let dash = matches!(*c, "-" | "—" | "–" | "--" | "n/a" | "N/A");
+        let dash = matches!(*c, "-" | "—" | "–" | "--" | "n/a" | "N/A" | "None" | "none");
         match col.role {
             Role::Access => match access_word(c) {
                 Some(a) => row.access = Some(a),
@@ -1547,6 +1572,25 @@ fn layout_row(
     }
     if !row.values.is_empty() && row.min.is_none() {
         unit = None;
+        decimals = None;
+    }
+    // Limits printed in counts (`0  65000` beside `0.01 Hz`): whole numbers that no register
+    // holds at the scale but that fit one as counts are counts; read as such, with a note.
+    if let (Some(s), Some(max)) = (step, row.max)
+        && s < 1.0
+        && decimals == Some(0)
+        && max > 65535.0 * s
+        && max <= 65535.0
+        && row.min.is_none_or(|m| m >= -32768.0)
+    {
+        let round = |v: f64| (v * s * 1e6).round() / 1e6;
+        row.max = Some(round(max));
+        row.min = row.min.map(round);
+        row.notes.push(format!(
+            "limits printed in counts ({} to {}); read as counts of {s}",
+            num_text(row.min.unwrap_or(0.0) / s),
+            num_text(max)
+        ));
         decimals = None;
     }
     row.unit = unit.map(str::to_string);
@@ -2077,6 +2121,12 @@ fn word_row(line: &str, layout: &Layout) -> Option<String> {
         t += 1;
     }
     Some(cells.join("\t"))
+}
+
+/// A number for a note (`65000`, `0.5`).
+fn num_text(v: f64) -> String {
+    let r = (v * 1e6).round() / 1e6;
+    format!("{r}")
 }
 
 #[cfg(test)]
