@@ -96,7 +96,7 @@ pub enum SettingError {
         /// The option as given.
         given: String,
         /// The lookup's answer, with the nearest names.
-        not_found: NotFound,
+        not_found: Box<NotFound>,
         /// The names whose value matters to conversions.
         hint: Option<String>,
     },
@@ -266,7 +266,7 @@ impl SettingsArgs {
             }
             let r = lookup::find(drive, name).map_err(|not_found| SettingError::Unknown {
                 given: s.clone(),
-                not_found,
+                not_found: Box::new(not_found),
                 hint: settable_hint(drive),
             })?;
             let bad_value = |error| SettingError::Value {

@@ -368,6 +368,8 @@ mod tests {
             reverse: false,
             time_scale: 50.0,
             step: 0.5,
+            set: Vec::new(),
+            draft: false,
             dir: MapsDir { maps: None },
         }
     }
