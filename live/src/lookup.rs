@@ -15,8 +15,9 @@ pub struct NotFound {
     /// Nearest ids (with parameter numbers), best first.
     pub suggestions: Vec<String>,
     /// When the name is an address inside one of the map's gaps (a reserved or illegible
-    /// range): the gap as the map describes it, with its citation.
-    pub gap: Option<String>,
+    /// range): the gap as the map describes it, with its citation (boxed: the error stays
+    /// small where it is carried).
+    pub gap: Option<Box<str>>,
 }
 
 impl fmt::Display for NotFound {
@@ -144,7 +145,7 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
                     d.truncate(i);
                     d.push_str("...");
                 }
-                format!("{d}; {}", g.source)
+                format!("{d}; {}", g.source).into_boxed_str()
             })
         })
     });
