@@ -49,8 +49,10 @@ pub enum Role {
     OutputVoltage,
     /// DC bus voltage (V).
     DcBusVoltage,
-    /// The code of the present (or last) fault.
+    /// The code of the active fault (0 or the map's no-fault code when none is active).
     FaultCode,
+    /// The code of the last fault the drive recorded (its fault history), kept after a reset.
+    LastFault,
     // Status: fields the master reads.
     /// Running (output live or run commanded).
     Running,
@@ -120,6 +122,7 @@ impl Role {
         Role::OutputVoltage,
         Role::DcBusVoltage,
         Role::FaultCode,
+        Role::LastFault,
         Role::Running,
         Role::Reversing,
         Role::Fault,
@@ -155,6 +158,7 @@ impl Role {
             Role::OutputVoltage => "output_voltage",
             Role::DcBusVoltage => "dc_bus_voltage",
             Role::FaultCode => "fault_code",
+            Role::LastFault => "last_fault",
             Role::Running => "running",
             Role::Reversing => "reversing",
             Role::Fault => "fault",
@@ -194,7 +198,8 @@ impl Role {
             | Role::OutputCurrent
             | Role::OutputVoltage
             | Role::DcBusVoltage
-            | Role::FaultCode => RoleKind::Monitor,
+            | Role::FaultCode
+            | Role::LastFault => RoleKind::Monitor,
             Role::Running
             | Role::Reversing
             | Role::Fault

@@ -251,6 +251,10 @@ pub fn export(drive: &Drive) -> Value {
     if !drive.examples.is_empty() {
         out["examples"] = json!(drive.examples.iter().map(example_json).collect::<Vec<_>>());
     }
+    // The command profile as written (`profile:`), where the map gives one.
+    if let Some(p) = &drive.profile {
+        out["profile"] = json!(p);
+    }
     // Index/value register pairs and their entries (an empty list when none).
     out["indexed"] = crate::indexed::export(drive);
     out

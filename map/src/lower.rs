@@ -273,6 +273,28 @@ fn role_target(
     let r = drive.find(p.register.as_deref()?)?;
     let row = position[r.index()] as u16;
     let Some(field_id) = &p.field else {
+        if role.kind() == RoleKind::Status {
+            // Codes of the whole register (an inverter status register: 3 run, 2 stop).
+            let code = |c: &model::CodeRef| match c {
+                model::CodeRef::Number(n) => Some(*n),
+                model::CodeRef::Id(id) => {
+                    r.def.values.iter().find(|v| v.id == *id).map(|v| v.value)
+                }
+            };
+            let on: Vec<u16> =
+                p.on.iter()
+                    .flat_map(|c| c.list())
+                    .filter_map(code)
+                    .collect();
+            return Some(Target::Field(FieldRole {
+                row,
+                lsb: 0,
+                width: 16,
+                on: leak(on),
+                off: p.off.as_ref().and_then(code),
+                edge: Edge::Level,
+            }));
+        }
         if role.kind() == RoleKind::Source {
             // A source parameter: the whole word is the code (its `values`, or a number).
             let code = |c: &model::CodeRef| match c {

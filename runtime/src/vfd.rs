@@ -88,6 +88,19 @@
 //!   on the link, reads mean what writes do, and no command field shares it, else refused
 //!   ([`Refusal::FieldNotWritable`]) before anything is sent:
 //!   `roles_in_fields::a_setpoint_on_a_field_is_refused_where_read_modify_write_is_not_safe`.
+//! - On a drive with a command profile (a control-word state machine, the map's `profile:`,
+//!   [`CommandProfile`]), `run()` reads the status word and writes the run path's transitions in
+//!   order, each verified in the status word within its time limit, else
+//!   [`Error::StateMachine`] naming the state the drive is in:
+//!   `drive_contract::command_profiles::run_and_stops_walk_the_machine_from_power_on`,
+//!   `drive_contract::command_profiles::a_refused_transition_times_out_naming_the_state`.
+//!   `stop()`, `coast()` and `quick_stop()` take their paths and never a run transition (one
+//!   leading where the run path ends), and no word composed, read back or written by field asks
+//!   for one unless the last of `run()` and `stop()` was a `run()` that succeeded:
+//!   `drive_contract::the_contract_holds_under_faults` (which plays the profile fixtures) and
+//!   `drive_contract::command_profiles::a_stop_path_through_a_run_transition_is_refused`.
+//!   `reset_fault()` writes nothing outside the fault state and gives the acknowledge edge in it:
+//!   `drive_contract::command_profiles::a_trip_needs_the_acknowledge_edge_in_the_fault_state`.
 
 use std::fmt;
 
@@ -254,8 +267,20 @@ pub trait VariableFrequencyDrive {
     fn dc_bus_voltage(&mut self) -> Result<f64, Error>;
     /// The status roles the map gives.
     fn status(&mut self) -> Result<Status, Error>;
-    /// The fault code.
+    /// The code of the active fault (the map's `fault_code`).
     fn fault_code(&mut self) -> Result<FaultCode, Error>;
+    /// The code of the last fault the drive recorded, kept after a reset (the map's
+    /// `last_fault`: a fault history register). Refused ([`Refusal::NoRole`]) where the map
+    /// gives no such role.
+    fn last_fault(&mut self) -> Result<FaultCode, Error> {
+        Err(Refusal::NoRole {
+            drive: self.drive_id(),
+            role: Role::LastFault.id(),
+            what: "register",
+            transport: None,
+        }
+        .into())
+    }
     /// Resets a fault: sets the reset command and releases it (an edge-triggered reset is
     /// released first if it was left set). On a drive with a command profile: gives the
     /// acknowledge edge of the profile's `reset_fault` path, only while the drive shows the
@@ -322,6 +347,16 @@ pub trait AsyncVariableFrequencyDrive {
     async fn status(&mut self) -> Result<Status, Error>;
     /// As [`VariableFrequencyDrive::fault_code`].
     async fn fault_code(&mut self) -> Result<FaultCode, Error>;
+    /// As [`VariableFrequencyDrive::last_fault`].
+    async fn last_fault(&mut self) -> Result<FaultCode, Error> {
+        Err(Refusal::NoRole {
+            drive: self.drive_id(),
+            role: Role::LastFault.id(),
+            what: "register",
+            transport: None,
+        }
+        .into())
+    }
     /// As [`VariableFrequencyDrive::reset_fault`].
     async fn reset_fault(&mut self) -> Result<(), Error>;
     /// As [`VariableFrequencyDrive::coast`].
@@ -1262,6 +1297,40 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
         reached.and(released)
     }
 
+    /// A fault code role (`fault_code`, `last_fault`): the register's word or the field's bits,
+    /// with the map's name for it.
+    $($asy)* fn read_fault(&mut self, role: Role) -> Result<FaultCode, Error> {
+        let p = self.place(role, "register")?;
+        if let Target::NumberField(f) = p.target {
+            let word = self.read_word(f.row) $($aw)*?;
+            let code = f.bits(word);
+            let r = self.row(f.row);
+            let name = match &r.conversion {
+                Conversion::Bits { fields, .. } => fields
+                    .iter()
+                    .find(|x| x.lsb == f.lsb && x.width == f.width)
+                    .and_then(|x| x.values.iter().find(|v| v.code == code))
+                    .map(|v| v.name),
+                _ => None,
+            };
+            return Ok(FaultCode {
+                code,
+                value: f.get(word) as i32,
+                name,
+            });
+        }
+        let Some(row) = p.target.row() else {
+            return Err(self.misplaced(role, "register"));
+        };
+        let code = self.read_word(row) $($aw)*?;
+        let r = self.row(row);
+        Ok(FaultCode {
+            code,
+            value: if r.signed() { i32::from(code as i16) } else { i32::from(code) },
+            name: r.label(code).map(|l| l.name),
+        })
+    }
+
     fn field(&self, role: Role) -> Result<Option<FieldRole>, Error> {
         match self.place(role, "field") {
             Ok(Place {
@@ -1622,35 +1691,11 @@ impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
     }
 
     $($asy)* fn fault_code(&mut self) -> Result<FaultCode, Error> {
-        let p = self.place(Role::FaultCode, "register")?;
-        if let Target::NumberField(f) = p.target {
-            let word = self.read_word(f.row) $($aw)*?;
-            let code = f.bits(word);
-            let r = self.row(f.row);
-            let name = match &r.conversion {
-                Conversion::Bits { fields, .. } => fields
-                    .iter()
-                    .find(|x| x.lsb == f.lsb && x.width == f.width)
-                    .and_then(|x| x.values.iter().find(|v| v.code == code))
-                    .map(|v| v.name),
-                _ => None,
-            };
-            return Ok(FaultCode {
-                code,
-                value: f.get(word) as i32,
-                name,
-            });
-        }
-        let Some(row) = p.target.row() else {
-            return Err(self.misplaced(Role::FaultCode, "register"));
-        };
-        let code = self.read_word(row) $($aw)*?;
-        let r = self.row(row);
-        Ok(FaultCode {
-            code,
-            value: if r.signed() { i32::from(code as i16) } else { i32::from(code) },
-            name: r.label(code).map(|l| l.name),
-        })
+        self.read_fault(Role::FaultCode) $($aw)*
+    }
+
+    $($asy)* fn last_fault(&mut self) -> Result<FaultCode, Error> {
+        self.read_fault(Role::LastFault) $($aw)*
     }
 
     $($asy)* fn reset_fault(&mut self) -> Result<(), Error> {

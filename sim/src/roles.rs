@@ -201,6 +201,9 @@ pub(crate) enum Follow {
     /// The fault code in a field of the register (a status word's byte) while tripped, the
     /// field's power-on bits otherwise.
     FaultCodeField(NumberField),
+    /// The last fault's code (a fault history): its power-on word until the first trip, then
+    /// the code of the last trip, kept after the reset.
+    LastFault,
 }
 
 impl Follow {
@@ -381,6 +384,7 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
                 Role::OutputCurrent => r.follow.push((i, Follow::Current)),
                 Role::DcBusVoltage => r.follow.push((i, Follow::DcBus)),
                 Role::FaultCode => r.follow.push((i, Follow::FaultCode)),
+                Role::LastFault => r.follow.push((i, Follow::LastFault)),
                 _ => {}
             },
             (_, Target::NumberField(f), Some(i)) if p.role == Role::FaultCode => {

@@ -33,6 +33,7 @@ mod references_resolve;
 mod relative_limits_valid;
 mod repeat_needs_change_valid;
 mod roles_valid;
+mod status_codes;
 mod serial_valid;
 mod timing_valid;
 mod value_kind_single;
@@ -100,5 +101,9 @@ pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     conflicts_recorded::check(drive, &mut out);
     indexed_valid::check(drive, &mut out);
     examples_valid::check(drive, &mut out);
+    // On the lowered roles: only once everything else holds.
+    if out.is_empty() {
+        status_codes::check(drive, &mut out);
+    }
     out
 }

@@ -281,13 +281,24 @@ impl Check<'_> {
                     );
                 }
                 let Some(field_id) = &p.field else {
+                    if !command && p.on.is_some() {
+                        // Codes of a whole register (an inverter status register: 2 stop,
+                        // 3 run): the register's values.
+                        self.whole_register_codes(role, p, register, path);
+                        return;
+                    }
                     self.error(
                         path,
                         rid,
                         format!(
-                            "role `{id}` is a {} and needs the `field` of `{}` that plays it",
+                            "role `{id}` is a {} and needs the `field` of `{}` that plays it{}",
                             if command { "command" } else { "status" },
-                            register.id()
+                            register.id(),
+                            if command {
+                                ""
+                            } else {
+                                " (or, for codes of the whole register, its `on` codes)"
+                            }
                         ),
                     );
                     return;
@@ -525,6 +536,66 @@ impl Check<'_> {
                     );
                 }
                 _ => {}
+            }
+        }
+    }
+
+    /// A status role on the codes of a whole register: an enumeration or plain word (not a
+    /// pair), its `on` codes (and `off`, if given) among the register's values where it lists
+    /// them.
+    fn whole_register_codes(&mut self, role: Role, p: &RolePlace, register: &Register, path: &Path) {
+        let id = role.id();
+        let rid = Some(register.id());
+        if !matches!(register.kind(), ValueKind::Enum(_) | ValueKind::Word)
+            || register.def.pair.is_some()
+        {
+            self.error(
+                path,
+                rid,
+                format!(
+                    "role `{id}` reads codes of the whole register: `{}` must be an enumeration or a plain word (or name the `field` that plays the role)",
+                    register.id()
+                ),
+            );
+            return;
+        }
+        let values = &register.def.values;
+        let on = p.on.iter().flat_map(|c| c.list()).enumerate().map(|(i, c)| {
+            let at = match &p.on {
+                Some(crate::model::Codes::Many(_)) => path.key("on").index(i),
+                _ => path.key("on"),
+            };
+            (at, c)
+        });
+        let off = p.off.iter().map(|c| (path.key("off"), c));
+        let all: Vec<(Path, &CodeRef)> = on.chain(off).collect();
+        for (at, c) in all {
+            let known = match c {
+                CodeRef::Id(code) => values.iter().any(|v| v.id == *code),
+                CodeRef::Number(n) => values.is_empty() || values.iter().any(|v| v.value == *n),
+            };
+            if !known {
+                let listed: Vec<String> = values
+                    .iter()
+                    .map(|v| format!("{} ({})", v.value, v.id))
+                    .collect();
+                self.error(
+                    &at,
+                    rid,
+                    format!(
+                        "`{}` has no code {}{}",
+                        register.id(),
+                        match c {
+                            CodeRef::Id(s) => format!("`{s}`"),
+                            CodeRef::Number(n) => n.to_string(),
+                        },
+                        if listed.is_empty() {
+                            " (it lists no codes: write the number)".to_owned()
+                        } else {
+                            format!("; its codes are {}", listed.join(", "))
+                        }
+                    ),
+                );
             }
         }
     }

@@ -542,7 +542,7 @@ impl Simulator {
                 }
                 Follow::Current => 0.0,
                 Follow::DcBus => Plausible::DC_BUS,
-                Follow::FaultCode => {
+                Follow::FaultCode | Follow::LastFault => {
                     if let Some(code) = self.model.fault {
                         self.raw[i] = u32::from(code);
                     }

@@ -395,3 +395,110 @@ fn profidrive_keeps_the_direction_bit_through_the_machine() {
     // The acknowledge edge (bit 7) with the direction kept, then released.
     assert_eq!(written(&mut d), [0x0CFE, 0x0C7E]);
 }
+
+/// The active fault and the last fault are two roles: after a trip both show the code; after
+/// the reset the active one is 0 again and the last one keeps it (PROFIdrive r0947 / r0948,
+/// ABB FLT / LASTFLT).
+#[test]
+fn active_fault_and_last_fault_are_two_roles() {
+    for file in &FIXTURES[1..] {
+        let drive = map(file);
+        let p = drive.plan();
+        let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
+        let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+        let id = &drive.meta.id;
+        assert!(d.supports(Role::LastFault), "{id}");
+        assert_eq!(d.last_fault().unwrap().code, 0, "{id}");
+        d.run().unwrap();
+        d.client().transport().sim.trip(42);
+        assert_eq!(d.fault_code().unwrap().code, 42, "{id}");
+        assert_eq!(d.last_fault().unwrap().code, 42, "{id}");
+        d.reset_fault().unwrap();
+        assert_eq!(d.fault_code().unwrap().code, 0, "{id}");
+        assert_eq!(d.last_fault().unwrap().code, 42, "{id}: the history keeps the trip");
+    }
+    // A map without the role refuses it before sending.
+    let drive = kestrel();
+    let p = drive.plan();
+    let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    assert!(matches!(
+        d.last_fault(),
+        Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. }))
+    ));
+}
+
+/// Status roles on codes of a whole register (an inverter status register: 0 initial,
+/// 2 stop, 3 run, 5 trip): the drive trait reads them, the simulated drive shows the code
+/// that agrees with every role (3 while running, not "stopped" at 30 Hz).
+#[test]
+fn status_roles_read_codes_of_a_whole_register() {
+    let text = r#"
+drive:
+  id: codes-as-states
+  vendor: Example
+  models: [MD-1]
+  manuals:
+    - {file: manual.txt, title: Example manual}
+protocol:
+  transports: [rtu]
+  function_codes: [0x03, 0x06, 0x10]
+  max_read: 8
+  max_write: 8
+  slave_address: {min: 1, max: 31}
+groups:
+  - id: main
+    name: Main registers
+    access: rw
+    registers:
+      - id: command
+        name: Operation command
+        address: 0x0001
+        fields:
+          - {id: run, name: Run, bit: 0, source: "manual.txt:10"}
+          - {id: reset, name: Trip reset, bit: 1, source: "manual.txt:11"}
+        source: "manual.txt:9"
+      - {id: reference, name: Frequency reference, address: 0x0002, unit: Hz, scale: 0.01, min: 0.0, max: 400.0, source: "manual.txt:12"}
+      - {id: output, name: Output frequency, address: 0x0003, access: r, unit: Hz, scale: 0.01, source: "manual.txt:13"}
+      - id: status_a
+        name: Inverter status A
+        address: 0x0004
+        access: r
+        values:
+          - {value: 0, id: initial, name: Initial status, source: "manual.txt:14"}
+          - {value: 2, id: stop, name: Stop, source: "manual.txt:14"}
+          - {value: 3, id: run, name: Run, source: "manual.txt:14"}
+          - {value: 5, id: trip, name: Trip, source: "manual.txt:14"}
+        source: "manual.txt:14"
+roles:
+  run: [{register: command, field: run, source: "manual.txt:10"}]
+  fault_reset: [{register: command, field: reset, edge: true, source: "manual.txt:11"}]
+  frequency_reference: [{register: reference, source: "manual.txt:12"}]
+  output_frequency: [{register: output, source: "manual.txt:13"}]
+  running: [{register: status_a, on: run, source: "manual.txt:14"}]
+  fault: [{register: status_a, on: trip, source: "manual.txt:14"}]
+"#;
+    let drive = drivemap_map::read_map_str("codes-as-states.yaml", text, &Default::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let p = drive.plan();
+    let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    assert_eq!(d.status().unwrap().running, Some(false));
+    d.set_reference(30.0).unwrap();
+    d.run().unwrap();
+    let s = d.status().unwrap();
+    assert_eq!((s.running, s.fault), (Some(true), Some(false)));
+    assert_eq!(d.client().transport().sim.raw("status_a").unwrap(), 3);
+    d.client().transport().sim.trip(1);
+    let s = d.status().unwrap();
+    assert_eq!((s.running, s.fault), (Some(false), Some(true)));
+    assert_eq!(d.client().transport().sim.raw("status_a").unwrap(), 5);
+    // With `off: stop` on both, the two cannot hold together: refused with why.
+    let both = text
+        .replace("on: run, source", "on: run, off: stop, source")
+        .replace("on: trip, source", "on: trip, off: stop, source");
+    let e = drivemap_map::read_map_str("codes-as-states.yaml", &both, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cannot hold together"), "{e}");
+}
