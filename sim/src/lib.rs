@@ -10,7 +10,9 @@
 //! to a read-only register or to a parameter the drive's state forbids (stopped-only while
 //! running, TDS-V8 PRG-only in DRV mode). It stays silent on broadcasts, damaged frames and
 //! other slaves' addresses, executes broadcasts only on the registers the profile allows, and
-//! counts the persist commands of the map (ENTER, save).
+//! counts the persist commands of the map (ENTER, save). What a persist command stores is what
+//! the drive powers on with after [`Simulator::power_cycle`]: values written and not stored
+//! are lost.
 //!
 //! A map that gives `roles:` also gets a drive model ([`roles`]): the run and direction fields of
 //! its command registers make the status fields show running and the output frequency ramp

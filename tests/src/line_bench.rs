@@ -131,7 +131,8 @@ pub fn line_for(profile: &Profile, baud: u32) -> SerialConfig {
     SerialConfig::for_profile(profile, baud, Parity::None, None).expect("8N1 or the map's format")
 }
 
-fn serial_options(path: &str, profile: &Profile, line: SerialConfig) -> SerialOptions {
+/// The serial port options of `path` for a line `line` to a drive of `profile`.
+pub fn serial_options(path: &str, profile: &Profile, line: SerialConfig) -> SerialOptions {
     SerialOptions::new(path, line.baud)
         .line(
             profile,

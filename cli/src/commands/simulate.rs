@@ -76,6 +76,11 @@ pub struct Args {
     /// only; without the prefix, in every drive.
     #[arg(long = "set", alias = "external", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
+    /// Power on with the settings of a parameter set (`drivemap save`), as if restored and
+    /// stored; `--set` values go on top. On a line of several drives, `SLAVE:FILE` gives it to
+    /// the drive at that address only; without the prefix, to every drive of the set's map.
+    #[arg(long = "restore", value_name = "[SLAVE:]FILE")]
+    pub restore: Vec<String>,
     /// Model variant: `--variant voltage_class=v440` (`SLAVE:AXIS=OPTION` for one drive of a
     /// line, as `--set`).
     #[arg(long, value_name = "AXIS=OPTION")]
@@ -182,6 +187,44 @@ pub(crate) fn options(
         o = o.variant(&k, &v);
     }
     Ok(o)
+}
+
+/// The values of the parameter set in `file` for a simulated `drive`, as power-on values in
+/// the order a restore writes them (what selects a scale first). A set of another map is
+/// refused, unless on a line of several drives, where it is for the drives of its map.
+fn restored_values(drive: &Drive, file: &str, line: bool) -> Result<Vec<(String, f64)>, Error> {
+    use drivemap_live::paramset;
+    let set = super::compare::read_set(file)?;
+    if set.drive != drive.meta.id {
+        if line {
+            return Ok(Vec::new());
+        }
+        return Err(Error::Refused(format!(
+            "--restore {file}: a set of {}, not of {}",
+            set.drive, drive.meta.id
+        )));
+    }
+    let given = drivemap_live::LiveSettings::default();
+    let validated = paramset::validate(drive, &set, &given, false)
+        .map_err(|e| Error::Refused(format!("--restore {file}: {e}")))?;
+    let mut out = Vec::new();
+    for (r, text) in &validated.entries {
+        let value = text
+            .trim()
+            .parse::<f64>()
+            .ok()
+            .or_else(|| {
+                drivemap_runtime::ratio::Fraction::parse(text).map(|f| f.num as f64 / f.den as f64)
+            })
+            .ok_or_else(|| {
+                Error::Refused(format!(
+                    "--restore {file}: {}: `{text}` is not a number",
+                    r.def.id
+                ))
+            })?;
+        out.push((r.def.id.clone(), value));
+    }
+    Ok(out)
 }
 
 /// `PORT` binds loopback; `HOST:PORT` binds where told.
@@ -318,6 +361,16 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 e
             }
         })?;
+        let files = match slave {
+            Some(n) => for_slave(&args.restore, n, several)?,
+            None => args.restore.clone(),
+        };
+        let mut restored = Vec::new();
+        for file in &files {
+            restored.extend(restored_values(&drive, file, several)?);
+        }
+        // The set's values first, in its restore order; `--set` on top.
+        options.initial.splice(0..0, restored);
         if args.network_source {
             options.network_source = Some(kind);
         }

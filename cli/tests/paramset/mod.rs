@@ -12,7 +12,51 @@ use drivemap_map::validate::Context;
 use drivemap_runtime::plan::Conversion;
 use drivemap_sim::{SimOptions, Simulator};
 
-use crate::common::{Scratch, Sim, drivemap, shipped_maps};
+use crate::common::{Scratch, Sim, drivemap, repo, shipped_maps};
+
+/// Validates each set file (YAML, as parsed) against `docs/schema/parameter-set.schema.json`
+/// with the interop venv's `jsonschema` (`tests/interop/install.sh`).
+fn validate_schema(files: &[String]) {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    const SCRIPT: &str = "import json, sys, jsonschema
+schema = json.load(open(sys.argv[1]))
+jsonschema.Draft202012Validator.check_schema(schema)
+v = jsonschema.Draft202012Validator(schema)
+bad = 0
+for i, doc in enumerate(json.load(sys.stdin)):
+    for e in v.iter_errors(doc):
+        bad += 1
+        print(f'set {i}: at /{\"/\".join(map(str, e.absolute_path))}: {e.message}')
+sys.exit(1 if bad else 0)
+";
+    let python = repo().join("target/interop-venv/bin/python");
+    let docs: Vec<serde_json::Value> = files
+        .iter()
+        .map(|f| serde_yaml::from_str(&std::fs::read_to_string(f).unwrap()).unwrap())
+        .collect();
+    let mut child = Command::new(&python)
+        .args(["-c", SCRIPT])
+        .arg(repo().join("docs/schema/parameter-set.schema.json"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap_or_else(|e| panic!("{}: {e}: run tests/interop/install.sh", python.display()));
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(serde_json::to_string(&docs).unwrap().as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "parameter-set.schema.json rejects a set:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
 
 fn maps() -> Vec<(String, Drive)> {
     let mut out: Vec<(String, Drive)> = drivemap_map::find_maps(&shipped_maps())
@@ -178,6 +222,7 @@ fn line(id: &str, flag: &str, sets: &[(String, String)], ext: &[String]) -> Sim 
 #[test]
 fn a_drive_saved_and_restored_to_another_slave_compares_equal_for_every_map() {
     let scratch = Scratch::new("paramset-clone");
+    let mut saved = Vec::new();
     for (id, drive) in maps() {
         let sim = Simulator::new(drive.clone(), SimOptions::new()).expect("simulator");
         let changed = changes(&drive, &sim, 4);
@@ -196,6 +241,7 @@ fn a_drive_saved_and_restored_to_another_slave_compares_equal_for_every_map() {
                 &ext,
             );
             assert_eq!(code, 0, "{id} {flag}: save: {err}");
+            saved.push(file.to_owned());
             let text = std::fs::read_to_string(file).unwrap();
             for (k, _) in &changed {
                 assert!(text.contains(&format!("id: \"{k}\"")), "{id}: {k} saved");
@@ -274,6 +320,7 @@ fn a_drive_saved_and_restored_to_another_slave_compares_equal_for_every_map() {
             );
         }
     }
+    validate_schema(&saved);
 }
 
 /// The V7 with the maximum frequency, a frequency reference and an accel time changed.
@@ -529,6 +576,77 @@ fn a_set_of_another_map_or_a_broken_file_is_refused_naming_where() {
     assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("ptlk-tds-v8") && err.contains("--other"),
+        "{err}"
+    );
+}
+
+/// `simulate --restore set.yaml` powers on with the set: the drive compares equal to it.
+#[test]
+fn simulate_restore_powers_on_with_a_set() {
+    let changed = pairs(&[("C1-10", "0"), ("C1-01", "50"), ("b1-01", "0")]);
+    let line = line("yaskawa-gpd515", "--rtu-tcp", &changed, &[]);
+    let link = ("--rtu-tcp", line.addr.as_str());
+    let scratch = Scratch::new("paramset-simulate");
+    let file = scratch.0.join("gpd.yaml");
+    let file = file.to_str().unwrap();
+    let (code, _, err) = run(
+        &[
+            "save",
+            "--drive",
+            "yaskawa-gpd515",
+            "--slave",
+            "1",
+            "-o",
+            file,
+        ],
+        link,
+        &[],
+    );
+    assert_eq!(code, 0, "{err}");
+    drop(line);
+    let sim = Sim::start(&[
+        "--drive",
+        "yaskawa-gpd515",
+        "--slave",
+        "1",
+        "--rtu-tcp",
+        "0",
+        "--restore",
+        file,
+    ]);
+    let link = ("--rtu-tcp", sim.addr.as_str());
+    let (code, out, err) = run(
+        &["compare", file, "--drive", "yaskawa-gpd515", "--slave", "1"],
+        link,
+        &[],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, _) = run(
+        &[
+            "compare",
+            "defaults",
+            "--drive",
+            "yaskawa-gpd515",
+            "--slave",
+            "1",
+        ],
+        link,
+        &[],
+    );
+    assert_eq!(code, 1, "{out}");
+    // A set of another map is refused naming both.
+    let (code, _, err) = drivemap(&[
+        "simulate",
+        "--drive",
+        "yaskawa-v7",
+        "--rtu-tcp",
+        "0",
+        "--restore",
+        file,
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("yaskawa-gpd515") && err.contains("yaskawa-v7"),
         "{err}"
     );
 }

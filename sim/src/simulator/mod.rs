@@ -79,6 +79,10 @@ pub struct Simulator {
     cache: TickCache,
     /// Index/value register pairs: what each value register shows for the index selected.
     indexed: crate::indexed::IndexedBank,
+    /// What the drive keeps over a power cycle ([`Simulator::power_cycle`]): each register's
+    /// raw value at power-on, replaced by the values in force whenever a persist command of the
+    /// map (ENTER, save) completes. Written values not stored are lost.
+    stored: Vec<u32>,
 }
 
 impl Simulator {
@@ -167,6 +171,7 @@ impl Simulator {
             stats: Stats::default(),
             cache: TickCache::default(),
             indexed: crate::indexed::IndexedBank::default(),
+            stored: Vec::new(),
         };
         sim.indexed = crate::indexed::IndexedBank::new(sim.drive.plan().indexed);
         sim.cache.inputs = sim.tick_inputs();
@@ -182,7 +187,30 @@ impl Simulator {
         sim.layouts = [sim.layout(false), sim.layout(true)];
         sim.start_model();
         sim.tick();
+        sim.stored = sim.raw.clone();
         Ok(sim)
+    }
+
+    /// Switches the drive off and on: every register takes the value it had at power-on or at
+    /// the last persist command (ENTER, save) that completed since, so what was written and
+    /// not stored is lost; the drive model starts stopped, the last-written memory is empty.
+    pub fn power_cycle(&mut self) {
+        self.raw = self.stored.clone();
+        self.last_written = vec![None; self.raw.len()];
+        self.fault_words.clear();
+        self.reference_via = None;
+        self.model = Model::default();
+        self.invalidate();
+        self.layouts = [self.layout(false), self.layout(true)];
+        self.last_tick = self.clock.now();
+        self.start_model();
+        self.tick();
+    }
+
+    /// The raw value of a register the drive would power on with ([`Simulator::power_cycle`]),
+    /// by id, parameter number or name.
+    pub fn stored(&self, name: &str) -> Result<u32, SimError> {
+        Ok(self.stored[self.index_of(name)?])
     }
 
     /// The entries of the index/value register pairs (`indexed:` in the map), as served.

@@ -217,6 +217,7 @@ impl Simulator {
     }
 
     pub(super) fn track_commands(&mut self, address: u16, value: u16) {
+        let mut stored = false;
         for c in &mut self.commands {
             if !c.writes.iter().any(|&(a, _)| a == address) {
                 continue;
@@ -231,7 +232,12 @@ impl Simulator {
             if c.progress == c.writes.len() {
                 c.count += 1;
                 c.progress = 0;
+                stored |= c.kind == CommandKind::Persist;
             }
+        }
+        if stored {
+            // What is in force now survives a power cycle.
+            self.stored = self.raw.clone();
         }
     }
 }

@@ -598,3 +598,53 @@ fn part(
         .collect();
     ParameterSet { settings, ..set }
 }
+
+/// What a restore writes survives a power cycle because it runs the map's store command once
+/// (ENTER, save): a restore without it is caught, for every map with settings.
+#[test]
+fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not() {
+    let mut rng = SplitMix(1);
+    for drive in maps() {
+        if paramset::settings_of(&drive).is_empty() {
+            continue;
+        }
+        let base = simulator(&drive);
+        let kind = TransportKind::RtuOverTcp;
+        let source = source(&drive, &base, 3, &mut rng);
+        let set = save(&drive, kind, &source);
+        assert!(
+            !equal(&set, &source, &base).is_empty(),
+            "{}: the set differs",
+            drive.meta.id
+        );
+        for store in [true, false] {
+            let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, base.clone()))));
+            let mut s = session(&drive, &link, base.slave());
+            let given = s.settings.clone();
+            let validated = paramset::validate(&drive, &set, &given, false).unwrap();
+            let mut plan = paramset::plan(&mut s, &validated).unwrap();
+            assert!(plan.store.is_some(), "{}: a store command", drive.meta.id);
+            if !store {
+                plan.store = None;
+            }
+            let report = paramset::execute(&mut s, &plan, &mut |_| {});
+            assert!(report.complete(), "{}: {report:?}", drive.meta.id);
+            let mut l = link.0.borrow_mut();
+            assert!(
+                equal(&set, &source, &l.sim).is_empty(),
+                "{}: restored",
+                drive.meta.id
+            );
+            assert_eq!(l.sim.persist_count(), u32::from(store), "{}", drive.meta.id);
+            l.sim.power_cycle();
+            let lost = equal(&set, &source, &l.sim);
+            assert_eq!(
+                lost.is_empty(),
+                store,
+                "{} (store command {}): after a power cycle {lost:?} differ",
+                drive.meta.id,
+                if store { "run" } else { "skipped" }
+            );
+        }
+    }
+}
