@@ -16,6 +16,7 @@ use crate::model::{Conflict, DefaultValue, Dependency, EnumValue};
 
 /// Text safe inside a Markdown table cell.
 mod indexed;
+mod profile;
 
 fn cell(s: &str) -> String {
     s.replace('\\', "\\\\")
@@ -51,6 +52,7 @@ pub fn render(drive: &Drive, file_name: &str) -> String {
     variants(&mut out, drive);
     protocol(&mut out, drive);
     roles(&mut out, drive);
+    profile::section(&mut out, drive);
     registers(&mut out, drive);
     indexed::section(&mut out, drive);
     notes(&mut out, drive);

@@ -415,7 +415,11 @@ fn active_fault_and_last_fault_are_two_roles() {
         assert_eq!(d.last_fault().unwrap().code, 42, "{id}");
         d.reset_fault().unwrap();
         assert_eq!(d.fault_code().unwrap().code, 0, "{id}");
-        assert_eq!(d.last_fault().unwrap().code, 42, "{id}: the history keeps the trip");
+        assert_eq!(
+            d.last_fault().unwrap().code,
+            42,
+            "{id}: the history keeps the trip"
+        );
     }
     // A map without the role refuses it before sending.
     let drive = kestrel();
@@ -501,4 +505,86 @@ roles:
         .unwrap_err()
         .to_string();
     assert!(e.contains("cannot hold together"), "{e}");
+}
+
+/// The profile in the other outputs of a map: the Markdown reference (`drivemap doc`) prints
+/// the machine with its citations, `export` carries `profile:` as written, `diff` reports a
+/// changed time limit as breaking and a changed citation as documentation; the shipped maps'
+/// reference and export have no such section.
+#[test]
+fn doc_export_and_diff_cover_the_profile() {
+    use drivemap_review::diff::{ChangeKind, Severity, compare};
+    let drive = kestrel();
+    let doc = drivemap_review::reference::render(&drive, "kestrel-kd4.yaml");
+    assert!(doc.contains("## Command profile"), "{doc}");
+    assert!(
+        doc.contains("| `enable_operation` | 000Fh | FF70h | 0000h | `switched_on` | `operation_enabled` | 100 ms | `kestrel-kd4.txt:40` |"),
+        "{doc}"
+    );
+    assert!(
+        doc.contains("| `operation_enabled` | 006Fh | 0027h | `kestrel-kd4.txt:64` |"),
+        "{doc}"
+    );
+    assert!(doc.contains("At power-on: `switch_on_disabled`"), "{doc}");
+    let export = drivemap_map::export::export(&drive);
+    assert_eq!(export["profile"]["standard"], "cia402");
+    assert_eq!(
+        export["profile"]["transitions"]["shutdown"]["source"],
+        "kestrel-kd4.txt:38"
+    );
+    let shipped = map("maps/yaskawa-v7.yaml");
+    assert!(
+        !drivemap_review::reference::render(&shipped, "yaskawa-v7.yaml")
+            .contains("Command profile")
+    );
+    assert!(
+        drivemap_map::export::export(&shipped)
+            .get("profile")
+            .is_none()
+    );
+
+    let text =
+        std::fs::read_to_string(format!("{}/../{}", env!("CARGO_MANIFEST_DIR"), FIXTURES[0]))
+            .unwrap();
+    let changed = |from: &str, to: &str| {
+        assert!(text.contains(from), "{from}");
+        drivemap_map::read_map_str(
+            "kestrel-kd4.yaml",
+            &text.replace(from, to),
+            &Default::default(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let slower = changed(
+        r#"enable_operation: {limit_ms: 100, source: "kestrel-kd4.txt:40"}"#,
+        r#"enable_operation: {limit_ms: 250, source: "kestrel-kd4.txt:40"}"#,
+    );
+    let d = compare(&drive, &slower);
+    let c: Vec<_> = d
+        .changes
+        .iter()
+        .filter(|c| c.subject == "profile")
+        .collect();
+    assert_eq!(c.len(), 1, "{c:?}");
+    assert_eq!(c[0].what, "transition enable_operation");
+    assert_eq!(c[0].kind, ChangeKind::RoleCodesChanged);
+    assert_eq!(c[0].severity(), Severity::Breaking);
+    let recited = changed(
+        r#"quick_stop_active: {source: "kestrel-kd4.txt:65"}"#,
+        r#"quick_stop_active: {source: "kestrel-kd4.txt:54"}"#,
+    );
+    let d = compare(&drive, &recited);
+    let c: Vec<_> = d
+        .changes
+        .iter()
+        .filter(|c| c.subject == "profile")
+        .collect();
+    assert_eq!(c.len(), 1, "{c:?}");
+    assert_eq!(c[0].severity(), Severity::Compatible, "{c:?}");
+    let none = compare(&shipped, &drive);
+    assert!(
+        none.changes
+            .iter()
+            .any(|c| c.subject == "profile" && c.kind == ChangeKind::RoleAdded)
+    );
 }
