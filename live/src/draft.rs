@@ -90,8 +90,11 @@ struct Guarded {
 }
 
 /// The function code of a request frame of `kind`: after the MBAP header (7 bytes) on Modbus
-/// TCP, after the slave address on RTU.
+/// TCP, after the slave address on RTU, the second pair of characters on Modbus ASCII.
 fn function_code(kind: TransportKind, frame: &[u8]) -> Option<u8> {
+    if kind.is_ascii() {
+        return drivemap_runtime::ascii::function_code(frame);
+    }
     frame.get(if kind.is_rtu_framed() { 1 } else { 7 }).copied()
 }
 
@@ -129,5 +132,27 @@ impl Transport for Guarded {
 
     fn inter_char_timeout(&self) -> Option<std::time::Duration> {
         self.inner.inter_char_timeout()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_write_is_told_on_every_framing() {
+        // 06h write of 0001h = 0258h to slave 1.
+        let rtu_frame = [0x01, 0x06, 0x00, 0x01, 0x02, 0x58, 0x00, 0x00];
+        assert_eq!(function_code(TransportKind::Rtu, &rtu_frame), Some(0x06));
+        let tcp_frame = [0, 1, 0, 0, 0, 6, 1, 0x06, 0x00, 0x01, 0x02, 0x58];
+        assert_eq!(function_code(TransportKind::Tcp, &tcp_frame), Some(0x06));
+        let ascii_frame = b":010600010258\r\n";
+        assert_eq!(function_code(TransportKind::Ascii, ascii_frame), Some(0x06));
+        assert_eq!(
+            function_code(TransportKind::AsciiOverTcp, b":011000010001"),
+            Some(0x10)
+        );
+        assert!(writes(function_code(TransportKind::Ascii, ascii_frame).unwrap()));
+        assert_eq!(function_code(TransportKind::Ascii, b":01"), None);
     }
 }

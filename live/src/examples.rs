@@ -4,8 +4,9 @@
 //! mean, with the runtime's codec (CRC-16, MBAP header, PDU decoding) and the map's plan (the
 //! register at each address, each value's range and conversion):
 //!
-//! - an RTU frame's CRC (the printed CRC bytes against the CRC-16 of the frame), a TCP frame's
-//!   MBAP protocol id and length;
+//! - an RTU frame's CRC (the printed CRC bytes against the CRC-16 of the frame), an ASCII
+//!   frame's LRC (its bytes as the character pairs between `:` and CR LF stand for them), a TCP
+//!   frame's MBAP protocol id and length;
 //! - the function code is one the map allows;
 //! - a request decodes, and every address it reads or writes is a register of the map;
 //! - a written value is in its register's range and decodes to the value the example states;
@@ -53,6 +54,7 @@ pub fn kind_of(e: &Example) -> TransportKind {
     match e.transport {
         TransportName::Rtu => TransportKind::Rtu,
         TransportName::Tcp => TransportKind::Tcp,
+        TransportName::Ascii => TransportKind::Ascii,
     }
 }
 
@@ -163,6 +165,34 @@ pub fn frame(e: &Example) -> Result<Frame, (usize, String)> {
                 slave: bytes[0],
                 pdu_start: 1,
                 pdu_end: n - 2,
+                bytes,
+            })
+        }
+        TransportName::Ascii => {
+            // The bytes the frame's character pairs stand for, as manuals print an ASCII frame
+            // between its ':' and CR LF: address, PDU, LRC.
+            if n < 3 {
+                return Err((
+                    n.saturating_sub(1),
+                    format!(
+                        "an ASCII frame carries at least 3 bytes between ':' and CR LF (address, function, LRC); this one has {n}"
+                    ),
+                ));
+            }
+            let want = drivemap_runtime::ascii::lrc(&bytes[..n - 1]);
+            if bytes[n - 1] != want {
+                return Err((
+                    n - 1,
+                    format!(
+                        "LRC: the frame ends in {}, the LRC of the bytes before it is {want:02X}",
+                        hex_text(&bytes[n - 1..])
+                    ),
+                ));
+            }
+            Ok(Frame {
+                slave: bytes[0],
+                pdu_start: 1,
+                pdu_end: n - 1,
                 bytes,
             })
         }

@@ -1,7 +1,7 @@
 //! The link to a live drive: which transport, which slave, how long to wait.
 //!
-//! [`Link`] is what the `drivemap` command's `--tcp`, `--gateway`, `--rtu-tcp`, `--serial` and
-//! timing options give (with the `clap` feature it is those options); a program fills it in
+//! [`Link`] is what the `drivemap` command's `--tcp`, `--gateway`, `--rtu-tcp`, `--serial`,
+//! `--ascii` and timing options give (with the `clap` feature it is those options); a program fills it in
 //! and opens a [`crate::Session`] on it.
 
 use std::time::Duration;
@@ -14,6 +14,7 @@ use drivemap_runtime::bus_time::SerialConfig;
 pub use drivemap_runtime::profile::Parity;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
+use drivemap_runtime::transport::ascii_over_tcp::AsciiOverTcpTransport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::serial::{
     Parity as PortParity, SerialOptions, SerialTransport, StopBits,
@@ -90,6 +91,29 @@ pub enum LinkError {
         /// The operating system's reason.
         source: std::io::Error,
     },
+    /// `--ascii` to a drive whose map does not list Modbus ASCII.
+    #[error(
+        "{drive}'s map does not list Modbus ASCII (its protocol.transports is [{transports}]), so --ascii would send frames the drive does not read: leave --ascii out for RTU, or add `ascii` to the map's transports with the manual's citation"
+    )]
+    NoAscii {
+        /// The drive's id.
+        drive: String,
+        /// The transports its map lists.
+        transports: String,
+    },
+    /// RTU framing to a drive whose map lists Modbus ASCII and not RTU.
+    #[error(
+        "{drive} speaks Modbus ASCII, not RTU (its map's protocol.transports is [{transports}]): add --ascii"
+    )]
+    NoRtu {
+        /// The drive's id.
+        drive: String,
+        /// The transports its map lists.
+        transports: String,
+    },
+    /// `--ascii` with a link that carries no serial frames, or data bits a line cannot have.
+    #[error("{0}")]
+    Ascii(String),
     /// The serial format is not one the map lists.
     #[error(transparent)]
     Format(#[from] drivemap_runtime::Refusal),
@@ -116,9 +140,18 @@ pub struct Link {
     /// RTU frames over TCP through a transparent serial gateway (`192.168.1.20:4001`).
     #[cfg_attr(feature = "clap", arg(long = "rtu-tcp", value_name = "ADDR"))]
     pub rtu_tcp: Option<String>,
-    /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`).
+    /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`), or Modbus ASCII with --ascii.
     #[cfg_attr(feature = "clap", arg(long, value_name = "PATH"))]
     pub serial: Option<String>,
+    /// Modbus ASCII (`:` ... LRC CR LF) instead of RTU: on --serial, or over TCP through a
+    /// transparent gateway with --rtu-tcp. Refused for a map whose `protocol.transports`
+    /// lacks `ascii`.
+    #[cfg_attr(feature = "clap", arg(long, conflicts_with_all = ["tcp", "gateway"]))]
+    pub ascii: bool,
+    /// Data bits of an ASCII line, 7 or 8 (default: the map's `serial.data_bits`); RTU lines
+    /// have 8.
+    #[cfg_attr(feature = "clap", arg(long = "data-bits", requires = "ascii", value_parser = clap::value_parser!(u8).range(7..=8)))]
+    pub data_bits: Option<u8>,
     /// Baud rate (default: the map's default, else 9600).
     #[cfg_attr(feature = "clap", arg(long))]
     pub baud: Option<u32>,
@@ -164,6 +197,8 @@ impl Link {
             gateway,
             rtu_tcp,
             serial,
+            ascii: false,
+            data_bits: None,
             baud: None,
             parity: None,
             stop_bits: None,
@@ -194,6 +229,14 @@ impl Link {
         Link::with(None, None, None, Some(path.into()))
     }
 
+    /// The same link speaking Modbus ASCII (a serial port, or a transparent gateway over TCP).
+    pub fn with_ascii(self) -> Link {
+        Link {
+            ascii: true,
+            ..self
+        }
+    }
+
     /// The slave address to talk to.
     pub fn slave(&self, drive: &Drive) -> u8 {
         self.slave
@@ -208,10 +251,27 @@ impl Link {
         } else if self.gateway.is_some() {
             TransportKind::TcpGateway
         } else if self.rtu_tcp.is_some() {
-            TransportKind::RtuOverTcp
+            if self.ascii {
+                TransportKind::AsciiOverTcp
+            } else {
+                TransportKind::RtuOverTcp
+            }
+        } else if self.ascii {
+            TransportKind::Ascii
         } else {
             TransportKind::Rtu
         }
+    }
+
+    /// Data bits of the serial line: 8 on RTU; on ASCII as given, else the map's
+    /// `serial.data_bits`.
+    pub fn data_bits(&self, drive: &Drive) -> u8 {
+        if !self.ascii {
+            return 8;
+        }
+        self.data_bits
+            .or(drive.protocol.serial.as_ref().map(|s| s.data_bits))
+            .unwrap_or(8)
     }
 
     /// Baud rate, parity and stop bits of the serial line: as given, else the map's defaults
@@ -235,6 +295,7 @@ impl Link {
     fn serial_config(&self, drive: &Drive) -> SerialConfig {
         let (baud, parity, stop_bits) = self.line(drive);
         let mut config = SerialConfig::new(baud).parity(parity).stop_bits(stop_bits);
+        config.data_bits = self.data_bits(drive);
         if let Some(bits) = drive.serial_defaults().char_bits {
             config = config.fixed_char_bits(bits);
         }
@@ -271,6 +332,41 @@ impl Link {
     /// offset one off).
     pub fn check_transport(&self, drive: &Drive) -> Result<(), LinkError> {
         use drivemap_map::model::TransportName;
+        let listed = &drive.protocol.transports;
+        let transports = || {
+            listed
+                .iter()
+                .map(|t| t.word())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        if self.ascii {
+            if self.tcp.is_some() || self.gateway.is_some() {
+                return Err(LinkError::Ascii(
+                    "--ascii goes with --serial or --rtu-tcp (a transparent gateway): --tcp and --gateway carry Modbus TCP frames".into(),
+                ));
+            }
+            if !listed.contains(&TransportName::Ascii) {
+                return Err(LinkError::NoAscii {
+                    drive: drive.meta.id.clone(),
+                    transports: transports(),
+                });
+            }
+            if !matches!(self.data_bits(drive), 7 | 8) {
+                return Err(LinkError::Ascii(format!(
+                    "{} data bits: an ASCII line has 7 or 8",
+                    self.data_bits(drive)
+                )));
+            }
+        } else if (self.serial.is_some() || self.rtu_tcp.is_some())
+            && listed.contains(&TransportName::Ascii)
+            && !listed.contains(&TransportName::Rtu)
+        {
+            return Err(LinkError::NoRtu {
+                drive: drive.meta.id.clone(),
+                transports: transports(),
+            });
+        }
         let Some(addr) = &self.tcp else {
             return Ok(());
         };
@@ -284,10 +380,7 @@ impl Link {
                 .protocol
                 .transports
                 .iter()
-                .map(|t| match t {
-                    TransportName::Rtu => "rtu",
-                    TransportName::Tcp => "tcp",
-                })
+                .map(|t| t.word())
                 .collect::<Vec<_>>()
                 .join(", "),
         })
@@ -336,7 +429,7 @@ impl Link {
                 Box::new(t),
                 format!("Modbus TCP gateway {addr} (drive on RTU)"),
             )
-        } else if let Some(addr) = &self.rtu_tcp {
+        } else if let Some(addr) = self.rtu_tcp.as_ref().filter(|_| !self.ascii) {
             let t =
                 RtuOverTcpTransport::connect(addr.as_str(), connect_timeout).map_err(|source| {
                     LinkError::Open {
@@ -346,6 +439,15 @@ impl Link {
                     }
                 })?;
             (Box::new(t), format!("RTU over TCP {addr}"))
+        } else if let Some(addr) = self.rtu_tcp.as_ref().filter(|_| self.ascii) {
+            let t = AsciiOverTcpTransport::connect(addr.as_str(), connect_timeout).map_err(
+                |source| LinkError::Open {
+                    what: "connect to ASCII gateway",
+                    addr: addr.clone(),
+                    source,
+                },
+            )?;
+            (Box::new(t), format!("ASCII over TCP {addr}"))
         } else if let Some(path) = &self.serial {
             let (baud, parity, stops) = self.line(drive);
             let stop_bits = if stops == 2 {
@@ -353,10 +455,15 @@ impl Link {
             } else {
                 StopBits::One
             };
-            let options = SerialOptions::new(path.as_str(), baud)
+            let mut options = SerialOptions::new(path.as_str(), baud)
                 .parity(port_parity(parity))
                 .stop_bits(stop_bits)
                 .with_profile(profile);
+            if self.ascii {
+                options = options
+                    .ascii(self.data_bits(drive))
+                    .map_err(|e| LinkError::Ascii(e.to_string()))?;
+            }
             options.check_format()?;
             let t = SerialTransport::open(options).map_err(|source| LinkError::Open {
                 what: "open serial port",
@@ -364,9 +471,14 @@ impl Link {
                 source,
             })?;
             let parity = format!("{parity:?}").to_lowercase();
+            let framing = if self.ascii {
+                format!("ASCII ({} data bits)", self.data_bits(drive))
+            } else {
+                "RTU".to_owned()
+            };
             (
                 Box::new(t),
-                format!("RTU {path} {baud} baud, parity {parity}, {stops} stop bit(s)"),
+                format!("{framing} {path} {baud} baud, parity {parity}, {stops} stop bit(s)"),
             )
         } else {
             return Err(LinkError::NoTransport);
@@ -414,6 +526,8 @@ mod tests {
             gateway: (link == "gateway").then(|| "127.0.0.1:5020".to_owned()),
             rtu_tcp: (link == "rtu-tcp").then(|| "127.0.0.1:4001".to_owned()),
             serial: (link == "serial").then(|| "/dev/null".to_owned()),
+            ascii: false,
+            data_bits: None,
             baud: None,
             parity: None,
             stop_bits: None,

@@ -169,8 +169,14 @@ impl Transport for Guarded {
 /// A request frame as the client's errors say it: `03h read of 0301h x1` (PDU address),
 /// `06h write of 0001h`, `10h write of 0001h x2`, else `08h request`.
 fn describe(kind: TransportKind, frame: &[u8]) -> String {
+    // A Modbus ASCII frame is described by the RTU frame it stands for.
+    let mut rtu_frame = [0u8; drivemap_runtime::rtu::MAX_FRAME];
+    let (kind, frame) = match drivemap_runtime::ascii::to_rtu(frame, &mut rtu_frame) {
+        Ok(n) if kind.is_ascii() => (TransportKind::Rtu, &rtu_frame[..n]),
+        _ => (kind, frame),
+    };
     let pdu = frame
-        .get(if kind.is_rtu_framed() { 1 } else { 7 }..)
+        .get(if kind.is_serial_framed() { 1 } else { 7 }..)
         .unwrap_or_default();
     let word = |i: usize| {
         pdu.get(i..i + 2)

@@ -502,7 +502,7 @@ impl Drive {
         let (rtu, tcp) = match &r.transports {
             None => (true, true),
             Some(list) => (
-                list.contains(&TransportName::Rtu),
+                list.iter().any(|t| t.is_serial()),
                 list.contains(&TransportName::Tcp),
             ),
         };

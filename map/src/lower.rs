@@ -204,7 +204,7 @@ fn roles(drive: &Drive, position: &[usize], settings: &SettingsPlan) -> Roles {
                 let transports = match p.transports.as_deref() {
                     None => Transports::ALL,
                     Some(list) => Transports {
-                        rtu: list.contains(&TransportName::Rtu),
+                        rtu: list.iter().any(|t| t.is_serial()),
                         tcp: list.contains(&TransportName::Tcp),
                     },
                 };
@@ -575,7 +575,7 @@ impl Lowering<'_> {
         }
         w.transport.map(|t| {
             Condition::Transport(match t {
-                TransportName::Rtu => Transports::RTU,
+                TransportName::Rtu | TransportName::Ascii => Transports::RTU,
                 TransportName::Tcp => Transports::TCP,
             })
         })

@@ -347,6 +347,27 @@ pub enum TransportName {
     Rtu,
     /// Modbus TCP.
     Tcp,
+    /// Modbus ASCII on the serial line (`:` ... LRC CR LF). In `protocol.transports` it says
+    /// the drive's serial line speaks ASCII (and RTU too where `rtu` is listed); in a
+    /// register's, role place's or condition's list it names the drive's serial side, as `rtu`
+    /// does.
+    Ascii,
+}
+
+impl TransportName {
+    /// Whether this names the drive's serial side (`rtu` or `ascii`).
+    pub fn is_serial(self) -> bool {
+        matches!(self, TransportName::Rtu | TransportName::Ascii)
+    }
+
+    /// The word a map writes it as: `rtu`, `tcp`, `ascii`.
+    pub fn word(self) -> &'static str {
+        match self {
+            TransportName::Rtu => "rtu",
+            TransportName::Tcp => "tcp",
+            TransportName::Ascii => "ascii",
+        }
+    }
 }
 
 impl std::fmt::Display for TransportName {
@@ -354,6 +375,7 @@ impl std::fmt::Display for TransportName {
         f.write_str(match self {
             TransportName::Rtu => "RTU",
             TransportName::Tcp => "TCP",
+            TransportName::Ascii => "ASCII",
         })
     }
 }

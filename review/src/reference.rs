@@ -302,6 +302,7 @@ fn roles(out: &mut String, drive: &Drive) {
                             .map(|t| match t {
                                 crate::model::TransportName::Rtu => "RTU links",
                                 crate::model::TransportName::Tcp => "Modbus TCP",
+                                crate::model::TransportName::Ascii => "ASCII links",
                             })
                             .collect::<Vec<_>>()
                             .join(" and ")

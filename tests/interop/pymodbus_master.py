@@ -1,7 +1,11 @@
 #!/usr/bin/env python3
 """pymodbus as the master of our simulated Yaskawa V7 (tests/tests/interop_masters.rs).
 
-    pymodbus_master.py (--tcp HOST:PORT | --serial PATH) [--slave 1] [--baud 9600]
+    pymodbus_master.py (--tcp HOST:PORT | --serial PATH) [--slave 1] [--baud 9600] [--ascii]
+
+--ascii: Modbus ASCII frames (':' ... LRC CR LF) instead of RTU on --serial, or instead of
+Modbus TCP's MBAP on --tcp (ASCII frames over TCP, as a transparent gateway forwards them).
+--bytesize 7|8 and --parity N|E|O set the serial line's character (default 8, N).
 
 Runs the scenario below and prints one JSON object per step on stdout:
 {"step": ..., "values": [...]} for data, {"step": ..., "exception": code} for an exception
@@ -47,19 +51,23 @@ def main():
     link.add_argument("--serial", metavar="PATH")
     parser.add_argument("--slave", type=int, default=1)
     parser.add_argument("--baud", type=int, default=9600)
+    parser.add_argument("--ascii", action="store_true")
+    parser.add_argument("--bytesize", type=int, choices=[7, 8], default=8)
+    parser.add_argument("--parity", choices=["N", "E", "O"], default="N")
     args = parser.parse_args()
     logging.basicConfig(level=logging.CRITICAL, stream=sys.stderr)
     if args.tcp:
         host, port = args.tcp.rsplit(":", 1)
-        client = ModbusTcpClient(host, port=int(port), timeout=1, retries=0)
+        framer = FramerType.ASCII if args.ascii else FramerType.SOCKET
+        client = ModbusTcpClient(host, port=int(port), framer=framer, timeout=1, retries=0)
     else:
         client = ModbusSerialClient(
             args.serial,
-            framer=FramerType.RTU,
+            framer=FramerType.ASCII if args.ascii else FramerType.RTU,
             baudrate=args.baud,
-            parity="N",
+            parity=args.parity,
             stopbits=1,
-            bytesize=8,
+            bytesize=args.bytesize,
             timeout=1,
             retries=0,
         )

@@ -251,6 +251,8 @@ pub(crate) fn link_args(
         gateway,
         rtu_tcp,
         serial,
+        ascii: false,
+        data_bits: None,
         baud,
         parity,
         stop_bits: None,

@@ -16,6 +16,7 @@ use std::time::{Duration, Instant};
 use clap::Args as ClapArgs;
 use drivemap_runtime::roles::Role;
 use drivemap_runtime::transport::Transport;
+use drivemap_runtime::transport::ascii_over_tcp::AsciiOverTcpTransport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, ClientOptions, Error};
@@ -54,6 +55,11 @@ pub struct Args {
     /// is refused, since the demo writes through the map.
     #[arg(long)]
     pub draft: bool,
+    /// Talk Modbus ASCII to the simulated drive (ASCII frames over TCP), as to a drive set to
+    /// ASCII; the default for a map whose `protocol.transports` lists `ascii` and not `rtu`.
+    /// Refused for a map that does not list `ascii`.
+    #[arg(long)]
+    pub ascii: bool,
     #[command(flatten)]
     pub dir: MapsDir,
 }
@@ -257,11 +263,36 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
     if let Some(note) = &through {
         outln!("note: writes go {note}");
     }
+    let ascii = {
+        use drivemap_map::model::TransportName;
+        let listed = &drive.protocol.transports;
+        if args.ascii && !listed.contains(&TransportName::Ascii) {
+            return Err(CliError::Refused(format!(
+                "the map of {} does not list Modbus ASCII in protocol.transports: leave --ascii out",
+                args.drive
+            )));
+        }
+        args.ascii
+            || (listed.contains(&TransportName::Ascii) && !listed.contains(&TransportName::Rtu))
+    };
+    let (kind, framing, words) = if ascii {
+        (
+            drivemap_runtime::profile::TransportKind::AsciiOverTcp,
+            TcpFraming::AsciiOverTcp,
+            "Modbus ASCII frames over TCP",
+        )
+    } else {
+        (
+            drivemap_runtime::profile::TransportKind::RtuOverTcp,
+            TcpFraming::RtuOverTcp,
+            "RTU frames over TCP",
+        )
+    };
     let options = super::simulate::options(&drive, None, &args.set, &[], args.time_scale)?;
     let mut sim = Simulator::new(drive, options).map_err(|e| e.to_string())?;
     // The simulated drive starts at its manual's factory setting, where it ignores network run
     // commands and references: the demo selects the network first, as an installer would.
-    let selected = sim.select_network_source(drivemap_runtime::profile::TransportKind::RtuOverTcp);
+    let selected = sim.select_network_source(kind);
     let slave = sim.slave();
     let title = format!(
         "{} {}",
@@ -273,11 +304,11 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
     let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
     let drive = sim.drive().clone();
     let shared = drivemap_sim::shared(sim);
-    let server = TcpServer::spawn(shared.clone(), "127.0.0.1:0", TcpFraming::RtuOverTcp, None)
+    let server = TcpServer::spawn(shared.clone(), "127.0.0.1:0", framing, None)
         .map_err(|e| format!("cannot start the simulator on loopback: {e}"))?;
     let addr = server.local_addr();
     outln!(
-        "drivemap demo: simulated {} ({title}), slave {slave}, RTU frames over TCP {addr}, time x{}",
+        "drivemap demo: simulated {} ({title}), slave {slave}, {words} {addr}, time x{}",
         args.drive,
         args.time_scale
     );
@@ -308,8 +339,17 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
         time_scale: args.time_scale,
     };
     let result = (|| {
-        let link = RtuOverTcpTransport::connect(addr, Duration::from_secs(2))
-            .map_err(|e| format!("cannot connect to the simulator at {addr}: {e}"))?;
+        let link: Box<dyn Transport> = if ascii {
+            Box::new(
+                AsciiOverTcpTransport::connect(addr, Duration::from_secs(2))
+                    .map_err(|e| format!("cannot connect to the simulator at {addr}: {e}"))?,
+            )
+        } else {
+            Box::new(
+                RtuOverTcpTransport::connect(addr, Duration::from_secs(2))
+                    .map_err(|e| format!("cannot connect to the simulator at {addr}: {e}"))?,
+            )
+        };
         let profile = drive.plan().profile;
         let mut c = Client::with_options(
             link,

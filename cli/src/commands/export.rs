@@ -91,6 +91,8 @@ impl Args {
             gateway: self.gateway.clone(),
             rtu_tcp: self.rtu_tcp.clone(),
             serial: self.serial.clone(),
+            ascii: false,
+            data_bits: None,
             baud: self.baud,
             parity: self.parity,
             stop_bits: self.stop_bits,

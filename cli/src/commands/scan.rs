@@ -380,6 +380,8 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
         gateway: args.gateway.clone(),
         rtu_tcp: args.rtu_tcp.clone(),
         serial: args.serial.clone(),
+        ascii: false,
+        data_bits: None,
         baud: None,
         parity: None,
         stop_bits: None,

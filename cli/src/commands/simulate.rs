@@ -43,9 +43,17 @@ pub struct Args {
     /// Serve RTU frames over TCP, as a transparent serial gateway does: `PORT` or `HOST:PORT`.
     #[arg(long = "rtu-tcp", value_name = "ADDR")]
     pub rtu_tcp: Option<String>,
-    /// Serve Modbus RTU on a serial port or pseudo-terminal.
+    /// Serve Modbus RTU on a serial port or pseudo-terminal (Modbus ASCII with --ascii).
     #[arg(long, value_name = "PATH")]
     pub serial: Option<PathBuf>,
+    /// Serve Modbus ASCII (`:` ... LRC CR LF) instead of RTU: on --serial, or over TCP with
+    /// --rtu-tcp (as a transparent gateway forwards an ASCII line). Refused for a map whose
+    /// `protocol.transports` lacks `ascii`.
+    #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
+    pub ascii: bool,
+    /// Data bits of an ASCII serial line, 7 or 8 (default: the map's `serial.data_bits`).
+    #[arg(long = "data-bits", requires = "ascii", value_parser = clap::value_parser!(u8).range(7..=8))]
+    pub data_bits: Option<u8>,
     /// Baud rate for --serial (default: the map's default, else 9600).
     #[arg(long)]
     pub baud: Option<u32>,
@@ -316,9 +324,12 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     }
     let kind = if args.tcp.is_some() {
         drivemap_runtime::profile::TransportKind::Tcp
+    } else if args.ascii {
+        drivemap_runtime::profile::TransportKind::Ascii
     } else {
         drivemap_runtime::profile::TransportKind::Rtu
     };
+    let mut data_bits = args.data_bits;
     let mut line = Line::new();
     let mut described = Vec::new();
     let mut models = Vec::new();
@@ -342,6 +353,38 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             return Err(Error::Refused(format!(
                 "{id} has no Modbus TCP interface (its map's protocol.transports lacks tcp), so --tcp {addr} would serve what the drive never does: serve it behind a Modbus TCP to RTU gateway with --gateway {addr}, or RTU frames over TCP with --rtu-tcp {addr}"
             )));
+        }
+        // ASCII is served only for a map that lists it, RTU only for one that lists RTU or
+        // does not list ASCII alone (`read --ascii` refuses the same).
+        {
+            use drivemap_map::model::TransportName;
+            let listed = &drive.protocol.transports;
+            let words = || {
+                listed
+                    .iter()
+                    .map(|t| t.word())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            if args.ascii && !listed.contains(&TransportName::Ascii) {
+                return Err(Error::Refused(format!(
+                    "{id}'s map does not list Modbus ASCII (its protocol.transports is [{}]): serve it without --ascii",
+                    words()
+                )));
+            }
+            if !args.ascii
+                && (args.serial.is_some() || args.rtu_tcp.is_some())
+                && listed.contains(&TransportName::Ascii)
+                && !listed.contains(&TransportName::Rtu)
+            {
+                return Err(Error::Refused(format!(
+                    "{id} speaks Modbus ASCII, not RTU (its map's protocol.transports is [{}]): add --ascii",
+                    words()
+                )));
+            }
+            if args.ascii && data_bits.is_none() {
+                data_bits = drive.protocol.serial.as_ref().map(|s| s.data_bits);
+            }
         }
         if let Some(note) = drivemap_live::draft::read_note(&drive) {
             eprintln!("note: {note}");
@@ -433,6 +476,8 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             TcpFraming::ModbusTcp
         } else if args.gateway.is_some() {
             TcpFraming::Gateway
+        } else if args.ascii {
+            TcpFraming::AsciiOverTcp
         } else {
             TcpFraming::RtuOverTcp
         };
@@ -448,6 +493,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             TcpFraming::ModbusTcp => "Modbus TCP",
             TcpFraming::RtuOverTcp => "RTU over TCP",
             TcpFraming::Gateway => "Modbus TCP gateway to RTU",
+            TcpFraming::AsciiOverTcp => "ASCII over TCP",
         };
         outln!(
             "simulating {what_drives} on {what} {} ({models}{time}); Ctrl-C stops",
@@ -468,6 +514,11 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         } else {
             StopBits::One
         });
+    if args.ascii {
+        options = options
+            .ascii(data_bits.unwrap_or(7))
+            .map_err(|e| Error::Refused(e.to_string()))?;
+    }
     // Every drive of the line must offer the line's character format.
     for d in line.drives() {
         let profile = drivemap_sim::server::lock(d).profile();
@@ -476,6 +527,11 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     }
     let first = drivemap_sim::server::lock(&line.drives()[0]).profile();
     let options = options.with_profile(first);
+    let framing = if options.ascii {
+        format!("ASCII ({} data bits)", options.data_bits)
+    } else {
+        "RTU".to_owned()
+    };
     // The drive's side of a line at --line-speed: its response time, its characters' time.
     let timed = args.line_speed.map(|speed| drivemap_sim::timed::DriveLine {
         serial: SerialConfig {
@@ -495,7 +551,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         None => String::new(),
     };
     outln!(
-        "simulating {what_drives} on RTU {} {baud} baud, parity {}, {stop_bits} stop bit(s) ({models}{time}{timing}); Ctrl-C stops",
+        "simulating {what_drives} on {framing} {} {baud} baud, parity {}, {stop_bits} stop bit(s) ({models}{time}{timing}); Ctrl-C stops",
         path.display(),
         parity.name()
     );
