@@ -117,3 +117,51 @@ fn every_map_agrees_with_its_simulator(dir: &Path) -> Vec<String> {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     ids
 }
+
+/// The fixtures run through a command profile (CiA 402, PROFIdrive, ABB Drives), each in its
+/// own directory with its manual.
+const PROFILE_FIXTURES: &[&str] = &["kestrel-kd4", "norrland-nv20", "oskar-ax3"];
+
+/// Each profile fixture agrees with its own simulator (`probe`, every link it lists), passes
+/// `check --strict` against its own manual, and `demo` runs and stops it through its state
+/// machine; `export` carries its profile and `diff` against itself reports nothing.
+#[test]
+fn every_profile_fixture_is_probed_checked_demoed_exported_and_diffed() {
+    for id in PROFILE_FIXTURES {
+        let dir = repo().join("tests/fixtures").join(id);
+        let ids = every_map_agrees_with_its_simulator(&dir);
+        assert_eq!(ids, [id.to_string()]);
+        let file = format!("{id}.yaml");
+        let (code, out, err) = common::drivemap_fixture(&dir, &["check", "--strict", &file]);
+        assert_eq!(code, 0, "{id}: {out}{err}");
+        assert!(out.contains("0 unverified"), "{id}: {out}");
+        let (code, out, err) = common::drivemap_fixture(
+            &dir,
+            &["demo", "--drive", id, "--time-scale", "50", "--step", "1"],
+        );
+        assert_eq!(code, 0, "{id}: {out}{err}");
+        assert!(
+            out.contains("then run forward") && out.contains("stop"),
+            "{id}: {out}"
+        );
+        // The last row of the table: the output back at 0 Hz after the stop.
+        let last = out
+            .lines()
+            .rev()
+            .find(|l| l.split_whitespace().nth(1) == Some("s"))
+            .unwrap_or_default();
+        let numbers: Vec<f64> = last
+            .split_whitespace()
+            .skip(2)
+            .filter_map(|t| t.parse().ok())
+            .collect();
+        assert_eq!(numbers.get(1), Some(&0.0), "{id}: {last}\n{out}");
+        assert!(out.contains("done in"), "{id}: {out}");
+        let (code, out, err) = common::drivemap_fixture(&dir, &["export", &file]);
+        assert_eq!(code, 0, "{id}: {err}");
+        let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert!(json["profile"]["standard"].is_string(), "{id}: {out}");
+        let (code, out, err) = common::drivemap_fixture(&dir, &["diff", &file, &file]);
+        assert_eq!(code, 0, "{id}: {out}{err}");
+    }
+}
