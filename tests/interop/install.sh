@@ -51,9 +51,9 @@ fi
 
 venv=target/interop-venv
 python=${PYTHON:-python3}
-if [ ! -x "$venv/bin/python" ]; then
+if [ ! -x "$venv/bin/python" ] || [ ! -x "$venv/bin/pip" ]; then
   echo "== $python -m venv $venv"
-  "$python" -m venv "$venv"
+  "$python" -m venv --clear "$venv"
 fi
 pins=(pymodbus==3.16.1 minimalmodbus==2.1.1 pyserial==3.5 jsonschema==4.26.0 fpdf2==2.8.9)
 check='import pymodbus, minimalmodbus, serial, importlib.metadata
@@ -92,9 +92,9 @@ ha_pins=(homeassistant==2024.3.3 pymodbus==3.6.6 PyYAML==6.0.1 voluptuous==0.13.
   aiohttp-fast-url-dispatcher==0.3.0 aiohttp-zlib-ng==0.3.1 zlib-ng==1.1.0 cryptography==42.0.5
   cffi==2.1.1 ifaddr==0.2.0 certifi==2026.10.19.post1)
 ha_check='import homeassistant.components.modbus, homeassistant.const as c; assert c.__version__ == "2024.3.3"'
-if [ ! -x "$ha_venv/bin/python" ]; then
+if [ ! -x "$ha_venv/bin/python" ] || [ ! -x "$ha_venv/bin/pip" ]; then
   echo "== $python -m venv $ha_venv"
-  "$python" -m venv "$ha_venv"
+  "$python" -m venv --clear "$ha_venv"
 fi
 if ! "$ha_venv/bin/python" -c "$ha_check" >/dev/null 2>&1; then
   echo "== $ha_venv/bin/pip install --no-deps homeassistant==2024.3.3 and what its modbus schema imports"
