@@ -121,6 +121,9 @@ pub fn title_role(title: &str) -> Option<Role> {
         t.split(|c: char| !c.is_alphanumeric() && c != '/')
             .any(|x| x == w)
     };
+    if has("function code") || has("parameter no") || has("param. no") {
+        return Some(Role::Param);
+    }
     if has("setting unit") || has("min. unit") || word("step") || word("lsb") {
         return Some(Role::Step);
     }
@@ -634,6 +637,46 @@ impl Layout {
                     | Role::Reference
             ) || c.modicon
         })
+    }
+
+    /// Takes the second line of a header whose titles wrap (`Register` over `No.`, `Data` over
+    /// `resolution`, as PDF tables print them): each of its cells is added to the title it sits
+    /// under, and the titles' roles are read again. `false` (and nothing changed) when the line
+    /// is not such a line: digits, or a cell under no title.
+    pub fn continue_titles(&mut self, line: &str) -> bool {
+        if self.split != Split::Blanks || line.trim().is_empty() {
+            return false;
+        }
+        if line.chars().any(|c| c.is_ascii_digit()) {
+            return false;
+        }
+        let cells: Vec<Cell<'_>> = positioned(line, Split::Blanks)
+            .into_iter()
+            .flatten()
+            .collect();
+        if cells.is_empty() || cells.len() > self.columns.len() {
+            return false;
+        }
+        // Each cell must start within a title's reach and overlap it.
+        let mut targets = Vec::new();
+        for c in &cells {
+            let i = self.column_of(c.start, c.end);
+            let col = &self.columns[i];
+            let reach_end = self.columns.get(i + 1).map_or(usize::MAX, |n| n.start);
+            if c.end <= col.start.saturating_sub(2) || c.start >= reach_end {
+                return false;
+            }
+            targets.push(i);
+        }
+        for (c, i) in cells.iter().zip(targets) {
+            let col = &mut self.columns[i];
+            col.title = format!("{} {}", col.title, c.text);
+            if let Some(r) = title_role(&col.title) {
+                col.role = r;
+            }
+            col.hex |= c.text.to_lowercase().contains("hex");
+        }
+        true
     }
 
     /// The index of the first column of a role.

@@ -274,7 +274,7 @@ pub struct Tables {
 /// A table's lines for deciding its columns: the lines after its header up to the next header
 /// (at most 300).
 fn table_lines<'a>(lines: &[&'a str], from: usize) -> Vec<&'a str> {
-    lines[from..]
+    lines[from.min(lines.len())..]
         .iter()
         .take(300)
         .take_while(|l| header(l).is_none() && Layout::header(l, 0).is_none())
@@ -323,12 +323,23 @@ pub fn read_tables(
             continue;
         }
         let old_header = header(line);
-        let new_layout = Layout::header(line, line_no).or_else(|| {
-            // A header the reader cannot read at all, named by the user.
-            columns
-                .contains_key(&line_no)
-                .then(|| Layout::header_as_named(line, line_no))?
-        });
+        let new_layout = Layout::header(line, line_no)
+            .or_else(|| {
+                // A header the reader cannot read at all, named by the user.
+                columns
+                    .contains_key(&line_no)
+                    .then(|| Layout::header_as_named(line, line_no))?
+            })
+            .map(|mut l| {
+                // Titles wrapped onto the next line.
+                if let Some(next) = lines.get(i + 1)
+                    && l.continue_titles(next)
+                {
+                    skip.insert(line_no + 1);
+                    used.insert(line_no + 1);
+                }
+                l
+            });
         // A header whose titles are separated by single blanks (text copied from a page, PDF
         // text without its layout): read by words, its rows by their tokens' shapes.
         let words = new_layout
@@ -2359,6 +2370,41 @@ mod tests {
                     "Frequency reference",
                     Some("rw"),
                     Some("Hz"),
+                    Some(0.01),
+                    None
+                ),
+            ]
+        );
+    }
+
+    #[test]
+    fn titles_wrapped_onto_a_second_header_line() {
+        let (rows, _) = read(
+            "Register   Function name          Function   R/W   Setting range      Data\n\
+             No.                               code                                resolution\n\
+             0011h      Trip counter           d080       R     0 to 65530         1\n\
+             0012h      Output frequency       d001       R     0.00 to 400.00     0.01 [Hz]\n",
+        );
+        let got: Vec<_> = rows
+            .iter()
+            .map(|r| {
+                (
+                    r.address,
+                    r.param.as_deref(),
+                    r.name.as_str(),
+                    r.scale,
+                    r.default,
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (Some(0x11), Some("d080"), "Trip counter", None, None),
+                (
+                    Some(0x12),
+                    Some("d001"),
+                    "Output frequency",
                     Some(0.01),
                     None
                 ),
