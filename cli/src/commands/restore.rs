@@ -25,6 +25,10 @@ pub struct Args {
     /// Restore a set of another map or variant (refused without it, naming what differs).
     #[arg(long)]
     pub other: bool,
+    /// Run the map's store command (ENTER, save) even when nothing differs: after a restore
+    /// whose writes all went through but whose store command failed.
+    #[arg(long)]
+    pub store: bool,
 }
 
 /// Validates the whole set, reads the drive, writes what differs in the map's dependency order,
@@ -47,8 +51,17 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         ],
     );
     let mut session = Session::open(&drive, &args.target.link, given.settings)?;
-    let plan =
+    let mut plan =
         paramset::plan(&mut session, &validated).map_err(|e| Error::Refused(e.to_string()))?;
+    if args.store && plan.store.is_none() {
+        plan.store = paramset::store_command(&drive);
+        if plan.store.is_none() {
+            return Err(Error::Refused(format!(
+                "{} has no store command (protocol.commands of kind persist)",
+                drive.meta.id
+            )));
+        }
+    }
     for w in &plan.warnings {
         eprintln!("note: {w}");
     }

@@ -33,7 +33,7 @@ pub use compare::{Compared, Difference, Side, compare};
 pub use file::{FORMAT, FileError, MAX_FILE, ParameterSet, SavedSetting, UnreadSetting};
 pub use restore::{
     Progress, RestoreError, RestorePlan, RestoreReport, Skipped, StoreOutcome, Validated, Write,
-    execute, plan, restore, validate,
+    execute, plan, restore, store_command, validate,
 };
 pub use save::{SaveReport, save};
 

@@ -76,7 +76,8 @@ pub struct RestorePlan<'d> {
     pub writes: Vec<Write<'d>>,
     /// Settings that already hold the set's value.
     pub unchanged: Vec<&'d Register>,
-    /// The map's command that stores written values (ENTER, save), run once after the writes.
+    /// The map's command that stores written values (ENTER, save), run once after the writes
+    /// when they all went through; `None` when nothing is written (or the map has none).
     pub store: Option<&'static CommandInfo>,
     /// The settings in force after the writes (the drive's, with the set's selectors and
     /// references): what the writes are encoded, addressed and verified under.
@@ -494,14 +495,7 @@ pub fn plan<'d>(
     if !reasons.is_empty() {
         return Err(RestoreError::Refused(reasons));
     }
-    let store = (!writes.is_empty())
-        .then(|| {
-            profile
-                .commands
-                .iter()
-                .find(|c| c.kind == CommandKind::Persist)
-        })
-        .flatten();
+    let store = (!writes.is_empty()).then(|| store_command(drive)).flatten();
     Ok(RestorePlan {
         writes,
         unchanged,
@@ -510,6 +504,19 @@ pub fn plan<'d>(
         requests,
         warnings,
     })
+}
+
+/// The map's command that stores written values to the drive's memory (kind `persist`: the
+/// V7's ENTER, the ACN's and TDS-V8's save), if it has one. [`plan`] puts it in a plan with
+/// writes; a caller that wants the drive's values stored when nothing differs (the store of an
+/// earlier restore failed) sets [`RestorePlan::store`] to it.
+pub fn store_command(drive: &Drive) -> Option<&'static CommandInfo> {
+    drive
+        .plan()
+        .profile
+        .commands
+        .iter()
+        .find(|c| c.kind == CommandKind::Persist)
 }
 
 /// Whether a failed write may have reached the drive: a request sent whose reply did not come
@@ -591,7 +598,6 @@ pub fn execute<'d>(
     }
     let store = match plan.store {
         None => StoreOutcome::NotNeeded,
-        Some(_) if sent.is_empty() => StoreOutcome::NotNeeded,
         Some(c) if failed => StoreOutcome::NotRun(format!(
             "{} not run: the restore did not finish; run it again",
             c.id
