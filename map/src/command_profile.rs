@@ -59,7 +59,8 @@ impl<'de> Deserialize<'de> for Word {
 #[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ProfileSpec {
-    /// The standard definition the map extends (`cia402`, `profidrive`, `abb_drives`).
+    /// The standard definition the map extends (`cia402`, `profidrive`, `abb_drives`,
+    /// `danfoss_fc`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub standard: Option<String>,
     /// A definition's title.
@@ -154,6 +155,7 @@ pub const STANDARDS: &[(&str, &str)] = &[
     ("cia402", include_str!("../profiles/cia402.yaml")),
     ("profidrive", include_str!("../profiles/profidrive.yaml")),
     ("abb_drives", include_str!("../profiles/abb_drives.yaml")),
+    ("danfoss_fc", include_str!("../profiles/danfoss_fc.yaml")),
 ];
 
 /// The standard definition `id`, parsed.

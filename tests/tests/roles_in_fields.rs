@@ -197,6 +197,7 @@ fn a_setpoint_on_a_field_is_refused_where_read_modify_write_is_not_safe() {
     }
     let roles = Roles {
         places: Box::leak(places.into_boxed_slice()),
+        profile: None,
     };
     let kind = TransportKind::Rtu;
     let mut rig = Rig::new(&drive, simulator(&drive, kind), kind, 0);
@@ -369,6 +370,7 @@ fn a_reset_of_unknown_edge_acts_under_faults() {
         .collect();
     let level = Roles {
         places: Box::leak(level.into_boxed_slice()),
+        profile: None,
     };
     let caught = play(&drive, level, &template, &sequence, &lost, 0).unwrap_err();
     assert!(caught.contains("still tripped"), "{caught}");

@@ -588,3 +588,99 @@ fn doc_export_and_diff_cover_the_profile() {
             .any(|c| c.subject == "profile" && c.kind == ChangeKind::RoleAdded)
     );
 }
+
+/// The Danfoss FC profile definition (`standard: danfoss_fc`) on a small map of its own: 047Ch
+/// starts, 043Ch ramps to a stop, 0474h coasts; the reverse bit (15) is kept; a trip is reset by
+/// 04BCh's rising bit 7.
+#[test]
+fn the_danfoss_fc_profile_runs_and_stops_a_drive() {
+    let text = r#"
+drive:
+  id: fc-example
+  vendor: Example
+  models: [FC-1]
+  manuals:
+    - {file: fc.txt, title: Example FC manual}
+protocol:
+  transports: [rtu, tcp]
+  function_codes: [0x03, 0x06, 0x10]
+  max_read: 8
+  max_write: 8
+  slave_address: {min: 1, max: 247}
+groups:
+  - id: main
+    name: Process data
+    access: rw
+    registers:
+      - id: ctw
+        name: Control word
+        address: 0x07D0
+        fields:
+          - {id: dc_brake, name: DC brake, bit: 2, source: "fc.txt:3"}
+          - {id: coasting, name: Coasting, bit: 3, source: "fc.txt:4"}
+          - {id: quick_stop, name: Quick stop, bit: 4, source: "fc.txt:5"}
+          - {id: hold, name: Hold output frequency, bit: 5, source: "fc.txt:6"}
+          - {id: ramp_start, name: Ramp stop/start, bit: 6, source: "fc.txt:7"}
+          - {id: reset, name: Reset, bit: 7, source: "fc.txt:8"}
+          - {id: data_valid, name: Data valid, bit: 10, source: "fc.txt:9"}
+          - {id: reversing, name: Reversing, bit: 15, source: "fc.txt:10"}
+        source: "fc.txt:2"
+      - {id: reference, name: Reference, address: 0x07D1, unit: Hz, scale: 0.01, min: 0.0, max: 400.0, source: "fc.txt:11"}
+      - id: stw
+        name: Status word
+        address: 0x07D2
+        access: r
+        fields:
+          - {id: trip, name: Trip, bit: 3, source: "fc.txt:13"}
+          - {id: running, name: Running, bit: 11, source: "fc.txt:14"}
+        source: "fc.txt:12"
+roles:
+  reverse: [{register: ctw, field: reversing, source: "fc.txt:10"}]
+  frequency_reference: [{register: reference, source: "fc.txt:11"}]
+  fault: [{register: stw, field: trip, source: "fc.txt:13"}]
+profile:
+  standard: danfoss_fc
+  control: ctw
+  status: stw
+  source: "fc.txt:1"
+  power_on: {state: stopped, source: "fc.txt:15"}
+  states:
+    stopped: {source: "fc.txt:14"}
+    running: {source: "fc.txt:14"}
+    fault: {source: "fc.txt:13"}
+  transitions:
+    start: {source: "fc.txt:16"}
+    ramp_stop: {source: "fc.txt:17"}
+    coast: {source: "fc.txt:18"}
+    quick_stop: {source: "fc.txt:19"}
+    reset: {source: "fc.txt:20"}
+"#;
+    let drive = drivemap_map::read_map_str("fc-example.yaml", text, &Default::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let p = drive.plan();
+    for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
+        let (mut c, settings, slave) = connect(&drive, kind, 0);
+        let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+        assert_eq!(d.profile_state().unwrap(), Some("stopped"));
+        d.set_reference(10.0).unwrap();
+        d.set_direction(drivemap_runtime::vfd::Direction::Reverse)
+            .unwrap();
+        written(&mut d);
+        d.run().unwrap();
+        assert_eq!(written(&mut d), [0x847C]);
+        assert!(run_command(d.client()));
+        d.stop().unwrap();
+        assert_eq!(written(&mut d), [0x843C]);
+        assert!(!run_command(d.client()));
+        d.run().unwrap();
+        d.coast().unwrap();
+        written(&mut d);
+        assert!(!run_command(d.client()));
+        d.run().unwrap();
+        d.client().transport().sim.trip(9);
+        written(&mut d);
+        d.reset_fault().unwrap();
+        assert_eq!(written(&mut d), [0x84BC, 0x843C]);
+        assert_eq!(d.profile_state().unwrap(), Some("stopped"));
+    }
+}
