@@ -1,7 +1,8 @@
 //! The link's topology (issue 23, item 6): a serial drive behind a Modbus TCP to RTU gateway is
 //! a link of its own. `drivemap read --gateway` sends Modbus TCP frames with the map's RTU
 //! addressing, RTU registers and RTU timing; `--tcp` on a map whose transports lack `tcp` is
-//! refused, naming `--gateway`. Through the binary, against `drivemap simulate --gateway`.
+//! refused, naming `--gateway`. Through the binary, against `drivemap simulate --gateway`. An
+//! ASCII-only drive (`tests/fixtures/quill-q2`) reached over ASCII frames, RTU refused to it.
 
 mod common;
 
@@ -156,4 +157,137 @@ fn gateway_has_the_rtu_registers_of_a_drive_with_both_transports() {
         out.contains("error: tcp_digital_input_command exists only on TCP, not on this link (Modbus TCP gateway to RTU)"),
         "{out}"
     );
+}
+
+/// The fictional Quill Q2 (`tests/fixtures/quill-q2`) speaks Modbus ASCII only, 7E1.
+fn quill() -> std::path::PathBuf {
+    common::repo().join("tests/fixtures/quill-q2")
+}
+
+/// `drivemap simulate` of the Quill Q2 with `args`, its maps from the fixture.
+fn quill_sim(args: &[&str]) -> Sim {
+    let mut cmd = common::command();
+    cmd.arg("simulate")
+        .args(["--drive", "quill-q2", "--quiet"])
+        .args(args)
+        .env("DRIVEMAP_MAPS", quill());
+    Sim::listening(&mut cmd)
+}
+
+/// An ASCII-only drive through the binary: `check --strict` accepts its map (its manual's
+/// ASCII frames verified by their LRC), `simulate --rtu-tcp --ascii` serves it as ASCII frames
+/// over TCP, and `read`/`probe --ascii` reach it there; RTU framing to it is refused before
+/// anything is sent, and so is `--ascii` to a map that does not list ASCII.
+#[test]
+fn an_ascii_drive_is_checked_simulated_read_and_probed_over_ascii() {
+    let (code, out, err) = common::drivemap_fixture(
+        &quill(),
+        &["check", "--strict", "--require-manuals", "quill-q2.yaml"],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("example frames: 2 of 2 verified"), "{out}");
+
+    let sim = quill_sim(&[
+        "--rtu-tcp",
+        "0",
+        "--ascii",
+        "--set",
+        "frequency_command=42.5",
+    ]);
+    assert!(
+        sim.first.contains("on ASCII over TCP 127.0.0.1:"),
+        "{}",
+        sim.first
+    );
+    let maps = quill();
+    let maps = maps.to_str().unwrap();
+    let (code, out, err) = common::run(common::command().args([
+        "read",
+        "--maps",
+        maps,
+        "--drive",
+        "quill-q2",
+        "--rtu-tcp",
+        sim.addr.as_str(),
+        "--ascii",
+        "frequency_command",
+        "status",
+    ]));
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(
+        row(&out, "frequency_command"),
+        "frequency_command 0101h 42.50 Hz 109Ah"
+    );
+    let (code, out, err) = common::run(common::command().args([
+        "probe",
+        "--maps",
+        maps,
+        "--drive",
+        "quill-q2",
+        "--rtu-tcp",
+        sim.addr.as_str(),
+        "--ascii",
+    ]));
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("over ASCII over TCP") && out.contains("6 agree, 0 disagree"),
+        "{out}"
+    );
+
+    // RTU frames to it: refused before connecting, naming --ascii.
+    let (addr, connections) = counting_listener();
+    let (code, out, err) = common::run(common::command().args([
+        "read",
+        "--maps",
+        maps,
+        "--drive",
+        "quill-q2",
+        "--rtu-tcp",
+        addr.as_str(),
+        "frequency_command",
+    ]));
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(
+        err.contains("quill-q2 speaks Modbus ASCII, not RTU") && err.contains("add --ascii"),
+        "{err}"
+    );
+    // ASCII to a drive whose map lists RTU only.
+    let (code, out, err) = drivemap(&[
+        "read",
+        "--drive",
+        "yaskawa-j7",
+        "--rtu-tcp",
+        addr.as_str(),
+        "--ascii",
+        "status_signal_1",
+    ]);
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(
+        err.contains("yaskawa-j7's map does not list Modbus ASCII"),
+        "{err}"
+    );
+    thread::sleep(Duration::from_millis(50));
+    assert_eq!(connections.load(Ordering::Relaxed), 0, "nothing connected");
+}
+
+/// `drivemap demo` of the ASCII-only drive runs and stops it through the drive trait over
+/// Modbus ASCII frames.
+#[test]
+fn an_ascii_drive_is_demoed_over_ascii() {
+    let maps = quill();
+    let (code, out, err) = common::run(common::command().args([
+        "demo",
+        "--maps",
+        maps.to_str().unwrap(),
+        "--drive",
+        "quill-q2",
+        "--frequency",
+        "30",
+        "--time-scale",
+        "50",
+    ]));
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("Modbus ASCII frames over TCP"), "{out}");
+    assert!(out.contains("30.00"), "{out}");
+    assert!(out.contains("0 exceptions"), "{out}");
 }

@@ -152,7 +152,9 @@ mod tests {
             function_code(TransportKind::AsciiOverTcp, b":011000010001"),
             Some(0x10)
         );
-        assert!(writes(function_code(TransportKind::Ascii, ascii_frame).unwrap()));
+        assert!(writes(
+            function_code(TransportKind::Ascii, ascii_frame).unwrap()
+        ));
         assert_eq!(function_code(TransportKind::Ascii, b":01"), None);
     }
 }

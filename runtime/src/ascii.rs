@@ -46,7 +46,7 @@ pub enum AsciiError {
     #[error("an ASCII frame of {bytes} byte(s) between ':' and CR LF")]
     Length {
         /// Bytes the characters stand for (LRC included).
-        bytes: usize,
+        bytes: u32,
     },
     /// The LRC does not match the bytes.
     #[error("LRC {received:02X}h, expected {computed:02X}h")]
@@ -60,10 +60,15 @@ pub enum AsciiError {
     #[error("{needed} bytes needed, {available} available")]
     Buffer {
         /// Bytes the output needs.
-        needed: usize,
-        /// Bytes the buffer has.
-        available: usize,
+        needed: u32,
+        /// Bytes the buffer has (at most `u32::MAX`).
+        available: u32,
     },
+}
+
+/// A length as the errors carry it (32 bits keep them small inside every reply error).
+fn n32(n: usize) -> u32 {
+    u32::try_from(n).unwrap_or(u32::MAX)
 }
 
 /// Frames `body` (slave address and PDU) as ASCII into `out`; returns the frame's length.
@@ -71,13 +76,13 @@ pub fn encode(body: &[u8], out: &mut [u8]) -> Result<usize, AsciiError> {
     let needed = 1 + 2 * (body.len() + 1) + 2;
     if body.len() > rtu::MAX_FRAME - 2 {
         return Err(AsciiError::Length {
-            bytes: body.len() + 1,
+            bytes: n32(body.len() + 1),
         });
     }
     if out.len() < needed {
         return Err(AsciiError::Buffer {
-            needed,
-            available: out.len(),
+            needed: n32(needed),
+            available: n32(out.len()),
         });
     }
     out[0] = START;
@@ -104,12 +109,12 @@ pub fn decode<'a>(frame: &[u8], out: &'a mut [u8]) -> Result<&'a [u8], AsciiErro
     // An address, a function code and the LRC at least; at most an RTU frame's address and
     // PDU and the LRC.
     if !(3..=rtu::MAX_FRAME - 1).contains(&bytes) {
-        return Err(AsciiError::Length { bytes });
+        return Err(AsciiError::Length { bytes: n32(bytes) });
     }
     if out.len() < bytes {
         return Err(AsciiError::Buffer {
-            needed: bytes,
-            available: out.len(),
+            needed: n32(bytes),
+            available: n32(out.len()),
         });
     }
     let decoded = base16ct::mixed::decode(hex, &mut out[..bytes]).map_err(|_| AsciiError::Hex)?;
@@ -133,7 +138,7 @@ pub fn from_rtu(frame: &[u8], out: &mut [u8]) -> Result<usize, AsciiError> {
         .filter(|&n| n >= 2)
         .map(|n| &frame[..n])
         .ok_or(AsciiError::Length {
-            bytes: frame.len().saturating_sub(1),
+            bytes: n32(frame.len().saturating_sub(1)),
         })?;
     encode(body, out)
 }
@@ -145,8 +150,8 @@ pub fn to_rtu(frame: &[u8], out: &mut [u8]) -> Result<usize, AsciiError> {
     let needed = n + 2;
     if out.len() < needed {
         return Err(AsciiError::Buffer {
-            needed,
-            available: out.len(),
+            needed: n32(needed),
+            available: n32(out.len()),
         });
     }
     let crc = crc::crc_bytes(&out[..n]);

@@ -173,8 +173,13 @@ fn pymodbus_master_over_ascii_on_a_pty_pair() {
     let _server =
         SerialServer::spawn(sim.sim.clone(), options, Some(sim.logger())).expect("serving the pty");
     let mut cmd = Command::new(py);
-    cmd.arg(script("pymodbus_master.py"))
-        .args(["--serial", &pty.paths[1], "--baud", "9600", "--ascii"]);
+    cmd.arg(script("pymodbus_master.py")).args([
+        "--serial",
+        &pty.paths[1],
+        "--baud",
+        "9600",
+        "--ascii",
+    ]);
     let out = run_with_limit(cmd, Duration::from_secs(60));
     check_python_steps(&steps(&out, "pymodbus/ASCII"), "pymodbus/ASCII");
     check_drive_side(&sim, "pymodbus/ASCII");
@@ -192,10 +197,16 @@ fn pymodbus_master_over_ascii_over_tcp() {
     let sim = v7(TransportKind::AsciiOverTcp);
     let server = serve_tcp(&sim, TcpFraming::AsciiOverTcp);
     let mut cmd = Command::new(py);
-    cmd.arg(script("pymodbus_master.py"))
-        .args(["--tcp", &server.local_addr().to_string(), "--ascii"]);
+    cmd.arg(script("pymodbus_master.py")).args([
+        "--tcp",
+        &server.local_addr().to_string(),
+        "--ascii",
+    ]);
     let out = run_with_limit(cmd, Duration::from_secs(60));
-    check_python_steps(&steps(&out, "pymodbus/ASCII over TCP"), "pymodbus/ASCII over TCP");
+    check_python_steps(
+        &steps(&out, "pymodbus/ASCII over TCP"),
+        "pymodbus/ASCII over TCP",
+    );
     check_drive_side(&sim, "pymodbus/ASCII over TCP");
 }
 

@@ -410,6 +410,7 @@ mod tests {
             step: 0.5,
             set: Vec::new(),
             draft: false,
+            ascii: false,
             dir: MapsDir { maps: None },
         }
     }
