@@ -578,6 +578,25 @@ fn a_set_of_another_map_or_a_broken_file_is_refused_naming_where() {
         err.contains("ptlk-tds-v8") && err.contains("--other"),
         "{err}"
     );
+    // Text printed in messages is one short line: a value with a line break, or a long one, is
+    // refused naming where it is, shortened and escaped.
+    let long = "9".repeat(5000);
+    for (value, shown) in [("\"1\\n2\"", "`1\\n2`"), (long.as_str(), "99999…")] {
+        std::fs::write(
+            &file,
+            format!(
+                "format: \"drivemap-parameter-set/1\"\ndrive: yaskawa-v7\nfingerprint: x\nslave: 1\nsaved: now\nsettings:\n  - {{id: max_output_frequency, value: {value}}}\n"
+            ),
+        )
+        .unwrap();
+        let (code, _, err) = drivemap(&["compare", file.to_str().unwrap(), "defaults"]);
+        assert_eq!(code, 2, "{err}");
+        assert!(
+            err.contains("settings[0].value") && err.contains(shown),
+            "{err}"
+        );
+        assert!(err.len() < 400, "{err}");
+    }
 }
 
 /// `simulate --restore set.yaml` powers on with the set: the drive compares equal to it.

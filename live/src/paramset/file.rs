@@ -252,6 +252,42 @@ impl ParameterSet {
                 found: super::quoted(&set.format, 60),
             });
         }
+        // Every text of the file is printed in messages and reports: short and one line.
+        let mut texts: Vec<(String, &str, usize)> = vec![
+            ("drive".into(), &set.drive, 100),
+            ("fingerprint".into(), &set.fingerprint, 100),
+            ("saved".into(), &set.saved, 100),
+        ];
+        for (a, o) in &set.variant {
+            texts.push(("variant".into(), a, 100));
+            texts.push((format!("variant {}", super::quoted(a, 40)), o, 100));
+        }
+        for (i, s) in set.settings.iter().enumerate() {
+            let at = format!("settings[{i}]");
+            texts.push((format!("{at}.id"), &s.id, 200));
+            texts.push((format!("{at}.value"), &s.value, 200));
+            if let Some(p) = &s.param {
+                texts.push((format!("{at}.param"), p, 200));
+            }
+            if let Some(c) = &s.code {
+                texts.push((format!("{at}.code"), c, 200));
+            }
+        }
+        for (i, u) in set.unread.iter().enumerate() {
+            texts.push((format!("unread[{i}].id"), &u.id, 200));
+            texts.push((format!("unread[{i}].reason"), &u.reason, 2000));
+        }
+        for (at, text, max) in texts {
+            if text.chars().count() > max || text.chars().any(char::is_control) {
+                return Err(FileError::Syntax {
+                    file: file.to_owned(),
+                    message: format!(
+                        "{at}: {} is not a value of a set (at most {max} characters, one line)",
+                        super::quoted(text, 40)
+                    ),
+                });
+            }
+        }
         Ok(set)
     }
 
