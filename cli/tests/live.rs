@@ -355,17 +355,31 @@ fn a_selector_read_from_the_drive_picks_the_scale_unless_set() {
         "frequency_reference 0002h 35.75 Hz 0DF7h"
     );
     assert_eq!(d.requests(), 2, "n152, then the register");
-    let (code, out, err) = d.run(
+    // A --set the drive contradicts is refused (issue 37): read as n152 = 0 the word would say
+    // 357.5 Hz.
+    let (code, _, err) = d.run(
         "read",
         "yaskawa-v7",
         &["--set", "n152=0", "frequency_reference"],
     );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("`--set n152=0`: the drive holds"), "{err}");
+    assert_eq!(
+        d.requests(),
+        3,
+        "n152 read to check the --set, nothing else"
+    );
+    let (code, out, err) = d.run(
+        "read",
+        "yaskawa-v7",
+        &["--set", "n152=1", "frequency_reference"],
+    );
     assert_eq!(code, 0, "{err}");
     assert_eq!(
         row(&out, "frequency_reference"),
-        "frequency_reference 0002h 357.5 Hz 0DF7h"
+        "frequency_reference 0002h 35.75 Hz 0DF7h"
     );
-    assert_eq!(d.requests(), 3, "n152 given, not read");
+    assert_eq!(d.requests(), 5, "n152 checked, then the register");
     // Over Modbus TCP the register does not exist: nothing is sent.
     let (code, out, err) = drivemap(&[
         "read",
@@ -380,7 +394,7 @@ fn a_selector_read_from_the_drive_picks_the_scale_unless_set() {
         out.contains("error: frequency_reference exists only on RTU"),
         "{out}"
     );
-    assert_eq!(d.requests(), 3);
+    assert_eq!(d.requests(), 5);
 }
 
 #[test]

@@ -26,10 +26,16 @@ impl fmt::Display for NotFound {
             return write!(
                 f,
                 "{} has no register at `{}`: it is in a gap of the map, where nothing is mapped ({gap})",
-                self.drive, self.name
+                self.drive,
+                crate::codec::shorten(&self.name)
             );
         }
-        write!(f, "{} has no register `{}`", self.drive, self.name)?;
+        write!(
+            f,
+            "{} has no register `{}`",
+            self.drive,
+            crate::codec::shorten(&self.name)
+        )?;
         if !self.suggestions.is_empty() {
             write!(f, "; did you mean {}?", self.suggestions.join(", "))?;
         }

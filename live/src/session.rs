@@ -197,7 +197,7 @@ fn split_assignment(text: &str) -> Result<(&str, &str), SettingError> {
     text.split_once('=')
         .map(|(a, b)| (a.trim(), b.trim()))
         .filter(|(a, b)| !a.is_empty() && !b.is_empty())
-        .ok_or_else(|| SettingError::NotAssignment(text.to_owned()))
+        .ok_or_else(|| SettingError::NotAssignment(codec::shorten(text)))
 }
 
 impl SettingsArgs {
@@ -224,11 +224,11 @@ impl SettingsArgs {
                 return Err(if known.is_empty() {
                     SettingError::NoVariants {
                         drive: drive.meta.id.clone(),
-                        given: v.clone(),
+                        given: codec::shorten(v),
                     }
                 } else {
                     SettingError::NoSuchVariant {
-                        given: v.clone(),
+                        given: codec::shorten(v),
                         drive: drive.meta.id.clone(),
                         known: known.join(", "),
                     }
@@ -237,7 +237,7 @@ impl SettingsArgs {
             if !ax.options.iter().any(|o| o.id == option) {
                 let opts: Vec<&str> = ax.options.iter().map(|o| o.id.as_str()).collect();
                 return Err(SettingError::NoSuchOption {
-                    given: v.clone(),
+                    given: codec::shorten(v),
                     axis: ax.id.clone(),
                     options: opts.join(", "),
                 });
@@ -249,8 +249,8 @@ impl SettingsArgs {
         for s in &self.sets {
             let (name, value) = split_assignment(s)?;
             let not_a_number = |unit: Option<&str>| SettingError::NotANumber {
-                given: s.clone(),
-                value: value.to_owned(),
+                given: codec::shorten(s),
+                value: codec::shorten(value),
                 unit: unit.map(str::to_owned),
             };
             if let Some(q) = drive.externals().into_iter().find(|q| q.external == name) {
@@ -265,12 +265,12 @@ impl SettingsArgs {
                 continue;
             }
             let r = lookup::find(drive, name).map_err(|not_found| SettingError::Unknown {
-                given: s.clone(),
+                given: codec::shorten(s),
                 not_found: Box::new(not_found),
                 hint: settable_hint(drive),
             })?;
             let bad_value = |error| SettingError::Value {
-                given: s.clone(),
+                given: codec::shorten(s),
                 error,
             };
             let is_selector = drive.selectors().iter().any(|x| x.def.id == r.def.id);

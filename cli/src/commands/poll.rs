@@ -95,6 +95,18 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     for w in session.load_dependencies(&regs, &given.fixed) {
         eprintln!("warning: {w}");
     }
+    // A --set the drive gives is checked against it; one it does not is said where used.
+    let assumed = session.check_given(&given.given).map_err(Error::Refused)?;
+    let mut notes: Vec<String> = Vec::new();
+    for r in &regs {
+        let n = assumed.for_register(&drive, r, &session.settings);
+        if !n.is_empty() && !notes.contains(&n) {
+            notes.push(n);
+        }
+    }
+    for n in notes {
+        eprintln!("note: {n}");
+    }
     let mut plan = session.plan(&regs)?;
     let tty = std::io::stdout().is_terminal();
     let started = Instant::now();

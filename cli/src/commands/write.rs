@@ -224,13 +224,17 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
     let mut errors = Vec::new();
     for a in &args.assignments {
         let Some((name, value)) = a.split_once('=') else {
-            errors.push(format!("`{a}` is not REGISTER=VALUE"));
+            errors.push(format!(
+                "`{}` is not REGISTER=VALUE; nothing written",
+                codec::shorten(a)
+            ));
             continue;
         };
         match drivemap_live::lookup::find(drive, name.trim()) {
             // An empty value is refused, never taken as "keep what the drive holds".
             Ok(r) if value.trim().is_empty() => errors.push(format!(
-                "`{a}`: no value given for {}; nothing written",
+                "`{}`: no value given for {}; nothing written",
+                codec::shorten(a),
                 describe::register(r)
             )),
             Ok(r) => pairs.push((r, value.trim().to_owned())),
@@ -269,8 +273,9 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
             .map(|c| c.id.as_str())
             .collect();
         return Err(Error::Refused(format!(
-            "{} has no command `{id}`; commands: {}",
+            "{} has no command `{}`; commands: {}; nothing written",
             drive.meta.id,
+            codec::shorten(id),
             if known.is_empty() {
                 "none".to_owned()
             } else {
