@@ -669,3 +669,73 @@ fn simulate_restore_powers_on_with_a_set() {
         "{err}"
     );
 }
+
+/// The V7's parameters may be written only while it is stopped: a restore to a running drive
+/// is refused, naming the settings, and nothing is written.
+#[test]
+fn a_running_drive_is_not_restored() {
+    let scratch = Scratch::new("paramset-running");
+    let file = scratch.0.join("v7.yaml");
+    let file = file.to_str().unwrap();
+    let sim = Sim::start(&[
+        "--drive",
+        "yaskawa-v7@1",
+        "--drive",
+        "yaskawa-v7@2",
+        "--rtu-tcp",
+        "0",
+        "--network-source",
+        "--set",
+        "1:n019=12.5",
+        "--set",
+        "2:n024=30",
+    ]);
+    let link = ("--rtu-tcp", sim.addr.as_str());
+    let (code, _, err) = run(&["save", "--drive", "yaskawa-v7", "-o", file], link, &[]);
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) = run(
+        &[
+            "write",
+            "--drive",
+            "yaskawa-v7",
+            "--slave",
+            "2",
+            "digital_input_command=run_command",
+        ],
+        link,
+        &[],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, err) = run(
+        &["restore", file, "--drive", "yaskawa-v7", "--slave", "2"],
+        link,
+        &[],
+    );
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(
+        err.contains("the drive shows running") && err.contains("accel_time_1 (n019)"),
+        "{err}"
+    );
+    assert!(err.contains("nothing written"), "{err}");
+    // Stopped, it is restored.
+    let (code, out, err) = run(
+        &[
+            "write",
+            "--drive",
+            "yaskawa-v7",
+            "--slave",
+            "2",
+            "digital_input_command=0",
+        ],
+        link,
+        &[],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, err) = run(
+        &["restore", file, "--drive", "yaskawa-v7", "--slave", "2"],
+        link,
+        &[],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("2 written and verified"), "{out}");
+}
