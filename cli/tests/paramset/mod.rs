@@ -352,7 +352,7 @@ fn compare_defaults_lists_exactly_the_settings_changed() {
         })
         .collect();
     assert_eq!(params, ["n011", "n019", "n024"], "{out}");
-    assert!(out.contains("(n011): 60 Hz -> 50.0 Hz"), "{out}");
+    assert!(out.contains("(n011): 60.0 Hz -> 50.0 Hz"), "{out}");
     assert!(
         out.contains("[000_032dced3a1e91a75.txt:1061]"),
         "the citation: {out}"
@@ -387,7 +387,7 @@ fn compare_defaults_lists_exactly_the_settings_changed() {
     assert_eq!(code, 1);
     assert!(
         out.contains(
-            "| max_output_frequency (n011) | 60 Hz | 50.0 Hz | 000_032dced3a1e91a75.txt:1061 |"
+            "| max_output_frequency (n011) | 60.0 Hz | 50.0 Hz | 000_032dced3a1e91a75.txt:1061 |"
         ),
         "{out}"
     );

@@ -162,8 +162,24 @@ fn shown(drive: &Drive, id: &str, s: &SavedSetting) -> String {
                 None => format!("{} (not listed)", s.value),
             }
         }
-        _ if !plan.unit.is_empty() => format!("{} {}", s.value, plan.unit),
-        _ => s.value.clone(),
+        _ => {
+            // A number at the resolution of the register's scale where that does not depend
+            // on a setting (`50.0 Hz` from a file's `50` as from a drive's `50.0`).
+            let settings = crate::LiveSettings::default();
+            let decimals = match plan.scale(&settings.view(drive)) {
+                Some(Ok(scale)) => Some(scale.decimals()),
+                _ => None,
+            };
+            let text = match (s.value.trim().parse::<f64>(), decimals) {
+                (Ok(v), Some(d)) if v.is_finite() => format!("{v:.d$}"),
+                _ => s.value.clone(),
+            };
+            if plan.unit.is_empty() {
+                text
+            } else {
+                format!("{text} {}", plan.unit)
+            }
+        }
     }
 }
 
