@@ -362,3 +362,50 @@ fn every_shipped_map_exports_to_the_export_schema() {
     docs.push(doc);
     validate("export", &docs);
 }
+
+/// A record carries the map's address and the wire's under names that say which: the ACN's
+/// RTU offset (-1) sends its 0100h as PDU address 00FFh, its Modbus TCP offset (0) as 0100h.
+#[test]
+fn records_carry_the_maps_address_and_the_pdu_address_on_the_wire() {
+    for (link, pdu) in [("--rtu-tcp", 0x00FF), ("--tcp", 0x0100)] {
+        let sim = common::Sim::start(&["--drive", "automationdirect-acn", link, "0"]);
+        let (code, out, err) = drivemap(&[
+            "read",
+            "--drive",
+            "automationdirect-acn",
+            link,
+            sim.addr.as_str(),
+            "--format",
+            "json",
+            "0x0100",
+        ]);
+        assert_eq!(code, 0, "{link}: {err}");
+        let records: Vec<serde_json::Value> = json(&out).as_array().unwrap().clone();
+        assert_eq!(records[0]["address"], 0x0100, "{link}: {out}");
+        assert_eq!(records[0]["address_text"], "0100h", "{link}: {out}");
+        assert_eq!(records[0]["pdu_address"], pdu, "{link}: {out}");
+        validate("reading", &records);
+        // CSV: the same, in its own column.
+        let (code, out, err) = drivemap(&[
+            "read",
+            "--drive",
+            "automationdirect-acn",
+            link,
+            sim.addr.as_str(),
+            "--format",
+            "csv",
+            "0x0100",
+        ]);
+        assert_eq!(code, 0, "{link}: {err}");
+        let header: Vec<String> = properties("reading", None)
+            .into_iter()
+            .filter(|p| p != "fields")
+            .collect();
+        let rows = csv_rows(&out, &header);
+        assert_eq!(
+            cell(&rows[0], "pdu_address"),
+            pdu.to_string(),
+            "{link}: {out}"
+        );
+    }
+}

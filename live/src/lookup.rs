@@ -1,7 +1,15 @@
 //! Registers by the names a user types: id, parameter number as printed, printed name
-//! (case-insensitively), or the address in the manual's notation (`2101H`, `2101h`, `0x2101`; the
-//! register number as printed, `45`, when the manual numbers registers in decimal), with the
-//! nearest names suggested when nothing matches.
+//! (case-insensitively), the address in the manual's notation (`2101H`, `2101h`, `0x2101`; the
+//! register number as printed, `45`, when the manual numbers registers in decimal), or a Modicon
+//! reference (`40024`, `400024`, `30002`), with the nearest names suggested when nothing matches.
+//!
+//! A Modicon reference is five or six digits: the table (`4` holding registers, `3` input
+//! registers, `0` coils, `1` discrete inputs) and the register's number counted from 1, so
+//! `40001` and `400001` are PDU address 0. The map's address of that PDU address follows from
+//! its `protocol.addressing` offset on each transport it lists. Digits are read as a reference
+//! only where that reading is unambiguous for the map ([`modicon_reading`]): never in a map
+//! whose decimal register numbers reach five digits (`40024` could be its own number), and only
+//! when every transport the map lists puts the reference on the same address.
 
 use std::fmt;
 
@@ -18,10 +26,22 @@ pub struct NotFound {
     /// range): the gap as the map describes it, with its citation (boxed: the error stays
     /// small where it is carried).
     pub gap: Option<Box<str>>,
+    /// When the name is a Modicon reference: how it was read and why it names no register
+    /// here (no register at that address or in that table, or a reading the map leaves
+    /// ambiguous).
+    pub reference: Option<Box<str>>,
 }
 
 impl fmt::Display for NotFound {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(why) = &self.reference {
+            return write!(
+                f,
+                "{} has no register `{}`: {why}",
+                self.drive,
+                crate::codec::shorten(&self.name)
+            );
+        }
         if let Some(gap) = &self.gap {
             return write!(
                 f,
@@ -91,6 +111,186 @@ fn address_in(name: &str, decimal: bool) -> Option<u16> {
     }
 }
 
+/// The Modbus table a Modicon reference names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReferenceTable {
+    /// `0xxxx`: coils.
+    Coil,
+    /// `1xxxx`: discrete inputs.
+    DiscreteInput,
+    /// `3xxxx`: input registers.
+    Input,
+    /// `4xxxx`: holding registers.
+    Holding,
+}
+
+/// A Modicon reference: five digits (`40024`: table digit, register 1 to 9999) or six
+/// (`400024`: register 1 to 65536). `40001` is PDU address 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Modicon {
+    /// The table its first digit names.
+    pub table: ReferenceTable,
+    /// The PDU address (the register's number minus 1).
+    pub pdu: u16,
+}
+
+/// Reads `name` as a Modicon reference, if it is one in form (digits only, five or six, the
+/// first 0, 1, 3 or 4, the register number at least 1). Whether the map reads it so is
+/// [`modicon_reading`]'s decision.
+pub fn modicon(name: &str) -> Option<Modicon> {
+    let t = name.trim();
+    if !(5..=6).contains(&t.len()) || !t.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let table = match t.as_bytes()[0] {
+        b'0' => ReferenceTable::Coil,
+        b'1' => ReferenceTable::DiscreteInput,
+        b'3' => ReferenceTable::Input,
+        b'4' => ReferenceTable::Holding,
+        _ => return None,
+    };
+    let number: u32 = t[1..].parse().ok()?;
+    let pdu = u16::try_from(number.checked_sub(1)?).ok()?;
+    Some(Modicon { table, pdu })
+}
+
+/// How a map reads a Modicon reference: the map's address it names, or why the map does not
+/// read it so.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ModiconReading {
+    /// The map's (communication) address in the reference's table, the same on every transport
+    /// the map lists.
+    Address {
+        /// The reference.
+        reference: Modicon,
+        /// The map's address.
+        address: u16,
+    },
+    /// Not read as a reference: why (boxed text for the error).
+    Refused(String),
+}
+
+/// Whether `name` is a Modicon reference for `drive`, and what it names. `None` when it is not
+/// one in form ([`modicon`]). The map decides:
+/// - in a map that prints decimal register numbers (`address_format: decimal`) whose numbers
+///   (addresses, alternatives, gaps) reach 10000, five or six digits could be its own number:
+///   not read as a reference (refused, naming the ids and hex notations that are unambiguous);
+/// - the PDU address is turned into the map's address with the `protocol.addressing` offset of
+///   each transport the map lists (serial side and Modbus TCP); where they differ (ACN: RTU
+///   -1, TCP 0) the reference names two registers and is refused.
+pub fn modicon_reading(drive: &Drive, name: &str) -> Option<ModiconReading> {
+    use drivemap_map::model::{AddressFormat, TransportName};
+    let reference = modicon(name)?;
+    if drive.address_format == AddressFormat::Decimal {
+        let big = drive.registers.iter().any(|r| {
+            r.def.address >= 10_000
+                || r.def
+                    .address_alternatives
+                    .iter()
+                    .any(|a| a.address >= 10_000)
+        }) || drive
+            .gaps
+            .iter()
+            .any(|g| g.addresses.is_some_and(|[_, hi]| hi >= 10_000));
+        if big {
+            return Some(ModiconReading::Refused(format!(
+                "the map numbers its registers in decimal up to five digits, so `{}` is not read as a Modicon reference (it could be the map's own number); name the register by id or in hex (`0x...`)",
+                name.trim()
+            )));
+        }
+    }
+    let (rtu, tcp) = drive.address_offsets();
+    let listed = &drive.protocol.transports;
+    let mut offsets: Vec<(&str, i32)> = Vec::new();
+    if listed.iter().any(|t| t.is_serial()) {
+        offsets.push(("the serial side", rtu));
+    }
+    if listed.contains(&TransportName::Tcp) {
+        offsets.push(("Modbus TCP", tcp));
+    }
+    if offsets.is_empty() {
+        offsets.push(("the serial side", rtu));
+    }
+    let address = |offset: i32| u16::try_from(i32::from(reference.pdu) - offset).ok();
+    let first = address(offsets[0].1);
+    if offsets.iter().any(|(_, o)| address(*o) != first) {
+        let each: Vec<String> = offsets
+            .iter()
+            .map(|(link, o)| match address(*o) {
+                Some(a) => format!("{a:04X}h on {link}"),
+                None => format!("no address on {link}"),
+            })
+            .collect();
+        return Some(ModiconReading::Refused(format!(
+            "as a Modicon reference it is PDU address {:04X}h, which the map's addressing offsets make {}; name the register by id or by its address",
+            reference.pdu,
+            each.join(" and ")
+        )));
+    }
+    Some(match first {
+        Some(address) => ModiconReading::Address { reference, address },
+        None => ModiconReading::Refused(format!(
+            "as a Modicon reference it is PDU address {:04X}h, below the map's address offset",
+            reference.pdu
+        )),
+    })
+}
+
+/// The register a Modicon reference names in `drive`, or why none.
+fn by_reference<'a>(drive: &'a Drive, name: &str) -> Option<Result<&'a Register, String>> {
+    use drivemap_map::model::ModbusTable;
+    let (reference, address) = match modicon_reading(drive, name)? {
+        ModiconReading::Address { reference, address } => (reference, address),
+        ModiconReading::Refused(why) => return Some(Err(why)),
+    };
+    let table = match reference.table {
+        ReferenceTable::Holding => ModbusTable::Holding,
+        ReferenceTable::Input => ModbusTable::Input,
+        ReferenceTable::Coil | ReferenceTable::DiscreteInput => {
+            return Some(Err(format!(
+                "`{}` is a Modicon reference to a {}, and this map holds registers only",
+                name.trim(),
+                if reference.table == ReferenceTable::Coil {
+                    "coil"
+                } else {
+                    "discrete input"
+                }
+            )));
+        }
+    };
+    let what = if table == ModbusTable::Holding {
+        "holding register"
+    } else {
+        "input register"
+    };
+    Some(match at_address(drive, address) {
+        Some(r) if r.table == table => Ok(r),
+        Some(r) => Err(format!(
+            "as a Modicon reference it is {what} {}, and {} there is {} register",
+            printed_number(drive, address),
+            r.def.id,
+            if r.table == ModbusTable::Holding {
+                "a holding"
+            } else {
+                "an input"
+            }
+        )),
+        None => Err(format!(
+            "as a Modicon reference it is {what} {} (PDU address {:04X}h), where the map has no register",
+            printed_number(drive, address),
+            reference.pdu
+        )),
+    })
+}
+
+/// An address as the map prints it: decimal in a decimal map, else `2101H`.
+fn printed_number(drive: &Drive, address: u16) -> String {
+    match drive.address_format {
+        drivemap_map::model::AddressFormat::Decimal => address.to_string(),
+        drivemap_map::model::AddressFormat::Hex => format!("{address:04X}H"),
+    }
+}
+
 /// The register at `address` (its own address, an alternative, or the second word of a pair),
 /// among those found by name.
 fn at_address(drive: &Drive, address: u16) -> Option<&Register> {
@@ -136,6 +336,20 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
     if let Some(r) = address_in(name, decimal).and_then(|a| at_address(drive, a)) {
         return Ok(r);
     }
+    // A Modicon reference (40024), where the map reads it so.
+    match by_reference(drive, name) {
+        Some(Ok(r)) => return Ok(r),
+        Some(Err(why)) => {
+            return Err(NotFound {
+                name: name.to_owned(),
+                drive: drive.meta.id.clone(),
+                suggestions: Vec::new(),
+                gap: None,
+                reference: Some(why.into_boxed_str()),
+            });
+        }
+        None => {}
+    }
     // An address the map records as a gap (reserved, illegible): said so, not suggested away.
     let gap = address_in(name, decimal).and_then(|a| {
         drive.gaps.iter().find_map(|g| {
@@ -161,6 +375,7 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
             drive: drive.meta.id.clone(),
             suggestions: Vec::new(),
             gap,
+            reference: None,
         });
     }
     // Digits alone in a manual that prints hex: the register they would be as hex, suggested.
@@ -193,6 +408,7 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
         name: name.to_owned(),
         drive: drive.meta.id.clone(),
         gap: None,
+        reference: None,
         suggestions: as_hex
             .into_iter()
             .chain(
@@ -259,5 +475,97 @@ mod tests {
         let e = id(&z3, "P-05").unwrap_err();
         assert!(!e.suggestions.is_empty(), "{e}");
         assert!(e.to_string().contains("did you mean"), "{e}");
+    }
+
+    #[test]
+    fn modicon_references_name_registers_where_the_map_reads_them_so() {
+        // A hex map with no address offset: 40258 is PDU address 0101h.
+        let quill = fixture("quill-q2/quill-q2.yaml");
+        for name in ["40258", "400258", " 40258 "] {
+            assert_eq!(id(&quill, name), Ok("frequency_command"), "{name}");
+        }
+        assert_eq!(id(&quill, "40260"), Ok("status"));
+        // The table is the reference's: 3xxxx is an input register, 0xxxx a coil.
+        let e = id(&quill, "30258").unwrap_err().to_string();
+        assert!(
+            e.contains("input register 0101H")
+                && e.contains("frequency_command there is a holding register"),
+            "{e}"
+        );
+        let e = id(&quill, "00001").unwrap_err().to_string();
+        assert!(
+            e.contains("a coil, and this map holds registers only"),
+            "{e}"
+        );
+        let e = id(&quill, "49999").unwrap_err().to_string();
+        assert!(
+            e.contains("holding register 270EH (PDU address 270Eh), where the map has no register"),
+            "{e}"
+        );
+        // Not references: seven digits, a first digit of 2, register 0.
+        assert!(modicon("4000001").is_none());
+        assert!(modicon("20001").is_none());
+        assert!(modicon("40000").is_none());
+        assert_eq!(
+            modicon("465536"),
+            Some(Modicon {
+                table: ReferenceTable::Holding,
+                pdu: 0xFFFF
+            })
+        );
+        assert!(modicon("465537").is_none());
+
+        // A decimal map whose numbers stay below 10000: 40046 is register 45.
+        let z3 = fixture("zenith-z3/zenith-z3.yaml");
+        assert_eq!(id(&z3, "40046"), Ok("acceleration_time"));
+        assert_eq!(id(&z3, "45"), Ok("acceleration_time"));
+
+        // Offsets that differ per transport (RTU -1, TCP 0): two registers, refused.
+        let acn = drivemap_map::read_map(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../maps/automationdirect-acn.yaml"),
+            &Default::default(),
+        )
+        .expect("the ACN map");
+        let e = id(&acn, "44356").unwrap_err().to_string();
+        assert!(
+            e.contains("PDU address 1103h")
+                && e.contains("1104h on the serial side and 1103h on Modbus TCP"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_decimal_map_with_five_digit_numbers_never_reads_a_modicon_reference() {
+        let text = r#"
+schema: 2
+drive: {id: big-decimal, vendor: Nobody, models: [X], manuals: [{file: x.txt, title: X}]}
+address_format: decimal
+protocol:
+  transports: [rtu]
+  function_codes: [0x03, 0x06]
+  max_read: 8
+  max_write: 8
+  slave_address: {min: 1, max: 31}
+groups:
+  - id: g
+    name: G
+    registers:
+      - {id: low, name: Low, address: 23, source: "x.txt:1"}
+      - {id: high, name: High, address: 40024, source: "x.txt:2"}
+"#;
+        let drive = drivemap_map::read_map_str("big-decimal.yaml", text, &Default::default())
+            .expect("the map");
+        // 40024 is the map's own number, not holding register 24 (PDU 23).
+        assert_eq!(id(&drive, "40024"), Ok("high"));
+        let e = id(&drive, "40025").unwrap_err().to_string();
+        assert!(
+            e.contains("not read as a Modicon reference (it could be the map's own number)"),
+            "{e}"
+        );
+        assert!(matches!(
+            modicon_reading(&drive, "40024"),
+            Some(ModiconReading::Refused(_))
+        ));
     }
 }

@@ -10,8 +10,9 @@
 //! | `register` | the map's register id |
 //! | `parameter` | the manual's parameter number (`Bn-01`), or empty |
 //! | `name` | the printed name |
-//! | `address` | the address on this link, a number (`1`) |
+//! | `address` | the register's address as the map (the manual) numbers it, a number (`1`): after the settings and the transport that move it, before the link's address offset |
 //! | `address_text` | the same address in the manual's notation (`0001h`, or `45` in a manual numbering registers in decimal) |
+//! | `pdu_address` | the address the request carried on the wire (the PDU address: `address` plus the map's offset for this link), a number; empty when the offset puts it outside 0 to 65535 |
 //! | `value` | the number: engineering value, plain word, enumeration code, or the raw bits |
 //! | `unit` | the unit of `value`, or empty |
 //! | `text` | the value as the table shows it (`48.00 Hz`, `2: Remote`, `0019h [running, ready]`) |
@@ -59,6 +60,7 @@ pub struct Reading {
     pub name: String,
     pub address: u16,
     pub address_text: String,
+    pub pdu_address: Option<u16>,
     pub value: Option<f64>,
     pub unit: Option<String>,
     pub text: Option<String>,
@@ -70,7 +72,7 @@ pub struct Reading {
 }
 
 /// The CSV header, in record order.
-pub const CSV_HEADER: [&str; 14] = [
+pub const CSV_HEADER: [&str; 15] = [
     "time",
     "drive",
     "slave",
@@ -79,6 +81,7 @@ pub const CSV_HEADER: [&str; 14] = [
     "name",
     "address",
     "address_text",
+    "pdu_address",
     "value",
     "unit",
     "text",
@@ -105,6 +108,7 @@ impl Reading {
             name: r.def.name.clone(),
             address,
             address_text: address_text(session.drive, address),
+            pdu_address: pdu_address(session.drive, address, session.kind),
             value: None,
             unit: None,
             text: None,
@@ -140,7 +144,7 @@ impl Reading {
         rec
     }
 
-    fn csv_record(&self) -> [String; 14] {
+    fn csv_record(&self) -> [String; 15] {
         let opt = |o: &Option<String>| o.clone().unwrap_or_default();
         [
             self.time.clone(),
@@ -151,6 +155,7 @@ impl Reading {
             self.name.clone(),
             self.address.to_string(),
             self.address_text.clone(),
+            self.pdu_address.map(|a| a.to_string()).unwrap_or_default(),
             self.value.map(|v| v.to_string()).unwrap_or_default(),
             opt(&self.unit),
             opt(&self.text),
@@ -159,6 +164,17 @@ impl Reading {
             opt(&self.error),
         ]
     }
+}
+
+/// The PDU address `address` (the map's) goes on the wire as on a link of `kind`: the map's
+/// `protocol.addressing` offset for that transport applied; `None` outside 0 to 65535.
+pub fn pdu_address(
+    drive: &Drive,
+    address: u16,
+    kind: drivemap_runtime::profile::TransportKind,
+) -> Option<u16> {
+    let (rtu, tcp) = drive.address_offsets();
+    drivemap_runtime::profile::AddressOffsets { rtu, tcp }.pdu_address(address, kind)
 }
 
 /// An address in the notation of the drive's manual: `0024h`, or the plain number in a manual
@@ -271,6 +287,7 @@ mod tests {
             name: "Inverter status".into(),
             address: 32,
             address_text: "0020h".into(),
+            pdu_address: Some(31),
             value: Some(25.0),
             unit: None,
             text: Some("0019h [running, ready]".into()),
@@ -289,7 +306,7 @@ mod tests {
         assert_eq!(lines[0], CSV_HEADER.join(","));
         assert_eq!(
             lines[1],
-            "t,ptlk-tds-v8,1,inverter_status,,Inverter status,32,0020h,25,,\"0019h [running, ready]\",25,ok,"
+            "t,ptlk-tds-v8,1,inverter_status,,Inverter status,32,0020h,31,25,,\"0019h [running, ready]\",25,ok,"
         );
     }
 }
