@@ -38,16 +38,22 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     let mut session = Session::open(&drive, &args.target.link, given.settings)?;
     let count = paramset::settings_of(&drive).len();
     let tty = std::io::stderr().is_terminal();
-    if tty {
-        eprint!(
-            "reading {count} settings of {} over {}...",
-            drive.meta.id, session.link
+    let bar = tty.then(|| {
+        let bar = indicatif::ProgressBar::new(count as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} settings read")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
-    }
+        bar
+    });
     let started = std::time::Instant::now();
-    let report = paramset::save(&mut session, &now_rfc3339())?;
-    if tty {
-        eprintln!(" done");
+    let report = paramset::save_with(&mut session, &now_rfc3339(), &mut |done, _| {
+        if let Some(bar) = &bar {
+            bar.set_position(done as u64);
+        }
+    })?;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
     }
     if let Some(why) = session.silence.report() {
         return Err(Error::Refused(format!(

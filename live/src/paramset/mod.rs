@@ -35,7 +35,7 @@ pub use restore::{
     Progress, RestoreError, RestorePlan, RestoreReport, Skipped, StoreOutcome, Validated, Write,
     execute, plan, restore, store_command, validate,
 };
-pub use save::{SaveReport, save};
+pub use save::{SaveReport, save, save_with};
 
 /// The settings of `drive`, in the map's order: registers that are read and written (not
 /// monitors, not write-only commands), carry a parameter number, are not broadcast-only, are

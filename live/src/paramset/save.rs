@@ -30,6 +30,18 @@ pub(crate) fn read_all(
     session: &mut Session<'_>,
     regs: &[&Register],
 ) -> Result<(Vec<Result<u32, ReadError>>, u32), SessionError> {
+    read_all_with(session, regs, false, &mut |_, _| {})
+}
+
+/// [`read_all`], planned group by group of the map when `by_group` (for a progress display:
+/// `progress(read, total)` after each group; the planner does not bridge one group's area
+/// to another's anyway, so this costs no request where groups lie apart).
+pub(crate) fn read_all_with(
+    session: &mut Session<'_>,
+    regs: &[&Register],
+    by_group: bool,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(Vec<Result<u32, ReadError>>, u32), SessionError> {
     let drive = session.drive;
     let mut results: Vec<Option<Result<u32, ReadError>>> = vec![None; regs.len()];
     let mut requests = 0;
@@ -38,21 +50,30 @@ pub(crate) fn read_all(
             .filter(|&i| results[i].is_none())
             .filter(|&i| pass == 1 || session.address(regs[i]).is_ok())
             .collect();
-        if wanted.is_empty() {
-            continue;
-        }
-        let these: Vec<&Register> = wanted.iter().map(|&i| regs[i]).collect();
-        let mut plan = session.plan(&these)?;
-        let (words, sent) = session.poll_counted(&mut plan);
-        requests += sent;
-        for (&i, w) in wanted.iter().zip(words) {
-            if let Ok(raw) = &w {
-                // Selectors and references are one-word registers.
-                session
-                    .settings
-                    .absorb(drive, regs[i].def.address, *raw as u16);
+        let chunks: Vec<&[usize]> = if by_group {
+            wanted
+                .chunk_by(|&a, &b| regs[a].group == regs[b].group)
+                .collect()
+        } else if wanted.is_empty() {
+            Vec::new()
+        } else {
+            vec![&wanted[..]]
+        };
+        for chunk in chunks {
+            let these: Vec<&Register> = chunk.iter().map(|&i| regs[i]).collect();
+            let mut plan = session.plan(&these)?;
+            let (words, sent) = session.poll_counted(&mut plan);
+            requests += sent;
+            for (&i, w) in chunk.iter().zip(words) {
+                if let Ok(raw) = &w {
+                    // Selectors and references are one-word registers.
+                    session
+                        .settings
+                        .absorb(drive, regs[i].def.address, *raw as u16);
+                }
+                results[i] = Some(w);
             }
-            results[i] = Some(w);
+            progress(results.iter().filter(|r| r.is_some()).count(), regs.len());
         }
     }
     Ok((
@@ -89,9 +110,19 @@ pub(crate) fn value_text(value: &Value) -> (String, Option<String>) {
 /// returns the set, stamped `saved` (an RFC 3339 time the caller gives). Settings the link
 /// cannot read, or the drive refuses, are listed in [`ParameterSet::unread`] with why.
 pub fn save(session: &mut Session<'_>, saved: &str) -> Result<SaveReport, SessionError> {
+    save_with(session, saved, &mut |_, _| {})
+}
+
+/// [`save`], telling `progress(read, total)` the settings read so far after each group of the
+/// map (each group's settings planned on their own).
+pub fn save_with(
+    session: &mut Session<'_>,
+    saved: &str,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<SaveReport, SessionError> {
     let drive = session.drive;
     let regs = settings_of(drive);
-    let (words, requests) = read_all(session, &regs)?;
+    let (words, requests) = read_all_with(session, &regs, true, progress)?;
     let mut settings = Vec::new();
     let mut unread = Vec::new();
     let mut warnings = Vec::new();

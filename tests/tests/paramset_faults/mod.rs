@@ -648,3 +648,40 @@ fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not()
         }
     }
 }
+
+/// `save_with` reports its progress group by group, up to every setting, and reads in as few
+/// requests as one plan over all of them (the planner bridges no group's area to another's).
+#[test]
+fn save_reports_progress_group_by_group_at_no_cost_in_requests() {
+    for drive in maps() {
+        let sim = simulator(&drive);
+        let n = paramset::settings_of(&drive).len();
+        let kind = TransportKind::RtuOverTcp;
+        let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, sim.clone()))));
+        let mut s = session(&drive, &link, sim.slave());
+        let mut seen = Vec::new();
+        let report =
+            paramset::save_with(&mut s, "", &mut |done, total| seen.push((done, total))).unwrap();
+        assert_eq!(report.set.settings.len(), n, "{}", drive.meta.id);
+        if n > 0 {
+            assert_eq!(seen.last(), Some(&(n, n)), "{}", drive.meta.id);
+            assert!(
+                seen.windows(2).all(|w| w[0].0 < w[1].0),
+                "{}: {seen:?}",
+                drive.meta.id
+            );
+        }
+        // One plan over every setting.
+        let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, sim.clone()))));
+        let mut s = session(&drive, &link, sim.slave());
+        let regs = paramset::settings_of(&drive);
+        let mut plan = s.plan(&regs).unwrap();
+        let (_, requests) = s.poll_counted(&mut plan);
+        assert!(
+            report.requests <= requests,
+            "{}: {} requests group by group, {requests} in one plan",
+            drive.meta.id,
+            report.requests
+        );
+    }
+}
