@@ -31,7 +31,9 @@ fn main() {
             }
         }
     }
-    println!("| map | settings | save: requests | save: time | one per request: requests | one per request: time | time ratio |");
+    println!(
+        "| map | settings | save: requests | save: time | one per request: requests | one per request: time | time ratio |"
+    );
     println!("|---|---:|---:|---:|---:|---:|---:|");
     for m in line_bench::monitors() {
         if !only.is_empty() && !only.contains(&m.id) {
@@ -62,7 +64,12 @@ fn main() {
             );
             let t = Instant::now();
             let report = paramset::save(&mut s, "").expect("save");
-            assert!(report.set.unread.is_empty(), "{}: {:?}", m.id, report.set.unread);
+            assert!(
+                report.set.unread.is_empty(),
+                "{}: {:?}",
+                m.id,
+                report.set.unread
+            );
             let planned = (report.requests, t.elapsed());
             let t = Instant::now();
             let mut requests = 0u32;
