@@ -43,8 +43,10 @@
 //! Each guarantee is proved by the test named after it (in `tests/tests/`); the fault-injection
 //! property test `drive_contract::the_contract_holds_under_faults` checks the run-code, stop
 //! and limit guarantees on random call sequences with lost, late and refused replies and
-//! reconnects, on every map of `maps/` and the `acme-vf1` fixture (with two variants whose roles
-//! share a register), over RTU framing and Modbus TCP, through the blocking [`Vfd`] and the
+//! reconnects, on every map of `maps/`, the `acme-vf1` fixture (with two variants whose roles
+//! share a register) and the command-profile fixtures (CiA 402, PROFIdrive, ABB Drives, with
+//! coast, quick stop and a stop at the drive's panel among the steps), over RTU framing and
+//! Modbus TCP, through the blocking [`Vfd`] and the
 //! async `AsyncVfd` (feature `tokio`; one body of code for both, awaited in the async one).
 //!
 //! A `Vfd` borrows its client (`Vfd::connect::<D>(&mut client, ..)`) or owns it
