@@ -181,7 +181,7 @@ impl Commander {
                 .read_raw(client, d)
                 .map_err(|source| CommandFailure::Dependency {
                     register: describe::register(d),
-                    source,
+                    source: Box::new(source),
                 })?;
             settings.absorb(drive, d.def.address, raw as u16);
         }
@@ -220,7 +220,7 @@ impl Commander {
                         self.read_raw(client, r)
                             .map_err(|source| CommandFailure::OtherFields {
                                 id: r.id().to_owned(),
-                                source,
+                                source: Box::new(source),
                             })? as u16;
                     ((current & !input.mask) | input.value) & mask
                 };

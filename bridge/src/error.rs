@@ -270,7 +270,7 @@ pub enum CommandFailure {
         /// The parameter, described.
         register: String,
         /// Why not.
-        source: PollFailure,
+        source: Box<PollFailure>,
     },
     /// The payload is not a value of the register.
     #[error(transparent)]
@@ -287,7 +287,7 @@ pub enum CommandFailure {
         /// The register's id.
         id: String,
         /// Why not.
-        source: PollFailure,
+        source: Box<PollFailure>,
     },
     /// The value does not convert.
     #[error(transparent)]
@@ -339,7 +339,7 @@ impl CommandFailure {
             }
             CommandFailure::Dependency { source, .. }
             | CommandFailure::OtherFields { source, .. } => {
-                matches!(source, PollFailure::Read(e) if !matches!(e, E::Refused(_) | E::Value(_) | E::Exception { .. }))
+                matches!(&**source, PollFailure::Read(e) if !matches!(e, E::Refused(_) | E::Value(_) | E::Exception { .. }))
             }
             _ => false,
         }
