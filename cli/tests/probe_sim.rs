@@ -157,6 +157,14 @@ fn every_profile_fixture_is_probed_checked_demoed_exported_and_diffed() {
             .collect();
         assert_eq!(numbers.get(1), Some(&0.0), "{id}: {last}\n{out}");
         assert!(out.contains("done in"), "{id}: {out}");
+        // The table shows the state of the machine: where the run path ends while running.
+        let drive = drivemap_map::read_map(&dir.join(&file), &Context::default()).unwrap();
+        let profile = drive.plan().roles.profile.unwrap();
+        let run = profile
+            .path(drivemap_runtime::core::command_profile::PathKind::Run)
+            .unwrap();
+        let running = profile.state_id(run.to[0]);
+        assert!(out.contains(&format!("[{running}]")), "{id}: {out}");
         let (code, out, err) = common::drivemap_fixture(&dir, &["export", &file]);
         assert_eq!(code, 0, "{id}: {err}");
         let json: serde_json::Value = serde_json::from_str(&out).unwrap();

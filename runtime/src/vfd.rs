@@ -288,6 +288,12 @@ pub trait VariableFrequencyDrive {
     /// acknowledge edge of the profile's `reset_fault` path, only while the drive shows the
     /// fault state (nothing is written otherwise).
     fn reset_fault(&mut self) -> Result<(), Error>;
+    /// The state of the drive's command profile the status word shows, by id
+    /// (`operation_enabled`): `None` for a drive without a command profile, or a status word
+    /// that shows no state of it.
+    fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
+        Ok(None)
+    }
     /// Coasts to a stop (the output off at once): the `coast` path of the drive's command
     /// profile. Refused ([`Refusal::NoRole`]) where the map gives no such path.
     fn coast(&mut self) -> Result<(), Error> {
@@ -361,6 +367,10 @@ pub trait AsyncVariableFrequencyDrive {
     }
     /// As [`VariableFrequencyDrive::reset_fault`].
     async fn reset_fault(&mut self) -> Result<(), Error>;
+    /// As [`VariableFrequencyDrive::profile_state`].
+    async fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
+        Ok(None)
+    }
     /// As [`VariableFrequencyDrive::coast`].
     async fn coast(&mut self) -> Result<(), Error> {
         Err(Refusal::NoRole {
@@ -1580,6 +1590,13 @@ impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
         }
         let fields = self.run_fields(false, self.state.direction)?;
         self.command(&fields) $($aw)*
+    }
+
+    $($asy)* fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
+        if self.state.roles.profile.is_none() {
+            return Ok(None);
+        }
+        $name::profile_state(self) $($aw)*
     }
 
     $($asy)* fn coast(&mut self) -> Result<(), Error> {

@@ -192,7 +192,15 @@ fn read_row(
     let voltage = optional(d.output_voltage())?;
     // Last, so that the status is never older than the output frequency beside it.
     let status = d.status().map_err(|e| fail("reading the status", e))?;
-    Ok((status.flags(), [reference, Ok(output), current, voltage]))
+    // A drive run through a command profile: the state it shows first.
+    let flags = match d
+        .profile_state()
+        .map_err(|e| fail("reading the profile state", e))?
+    {
+        Some(state) => format!("[{state}] {}", status.flags()),
+        None => status.flags(),
+    };
+    Ok((flags, [reference, Ok(output), current, voltage]))
 }
 
 /// Runs the routine on the drive compiled in as module `$m`, if `$id` is the one asked for.
