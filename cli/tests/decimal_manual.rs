@@ -2,7 +2,8 @@
 //! `tests/fixtures/zenith-z3/`, `address_format: decimal`): `drivemap coverage` finds its rows
 //! (register numbers `1`, `2`, ... `45`, not only parameter numbers), a manual in which it finds
 //! none is an error, and the tool names a register by its number (`read 45`), its parameter
-//! number (`read P-01`) or the hex of its number (`read 2DH`) against a simulated drive.
+//! number (`read P-01`), the hex of its number (`read 2DH`) or its Modicon reference
+//! (`read 40046`) against a simulated drive, and shows its address as printed (`45`).
 
 mod common;
 
@@ -95,7 +96,9 @@ fn read_by_register_number_and_parameter_number_against_the_simulator() {
         args.extend_from_slice(names);
         drivemap_fixture(&fixture(), &args)
     };
-    for name in ["45", "P-01", "2DH", "acceleration_time"] {
+    // The Modicon reference 40046 (holding register PDU address 45) too: the map's numbers
+    // stay below 10000, so five digits cannot be one of its own.
+    for name in ["45", "P-01", "2DH", "acceleration_time", "40046", "400046"] {
         let (code, out, err) = read(&[name]);
         assert_eq!(code, 0, "{name}: {err}");
         let row = out
@@ -103,6 +106,13 @@ fn read_by_register_number_and_parameter_number_against_the_simulator() {
             .find(|l| l.starts_with("acceleration_time "))
             .unwrap_or_else(|| panic!("{name}: no row in {out}"));
         assert!(row.contains("12.5 s"), "{name}: {row}");
+        // The address as the manual prints it: 45, not 002Dh.
+        let cells: Vec<&str> = row.split_whitespace().collect();
+        assert_eq!(
+            cells[..3],
+            ["acceleration_time", "(P-01)", "45"],
+            "{name}: {row}"
+        );
     }
     let (code, out, err) = read(&["10"]);
     assert_eq!(code, 0, "{err}");
@@ -111,4 +121,27 @@ fn read_by_register_number_and_parameter_number_against_the_simulator() {
     let (code, _, err) = read(&["49"]);
     assert_ne!(code, 0);
     assert!(err.contains("zenith-z3 has no register `49`"), "{err}");
+}
+
+/// `diff` shows a decimal-numbered map's addresses as the manual prints them: `45 → 49`, not
+/// `002Dh → 0031h`.
+#[test]
+fn diff_shows_a_decimal_maps_addresses_in_decimal() {
+    let text = std::fs::read_to_string(fixture().join("zenith-z3.yaml")).unwrap();
+    let moved = text.replace("address: 45, unit: s", "address: 49, unit: s");
+    assert_ne!(moved, text, "the fixture has acceleration_time at 45");
+    let dir = std::env::temp_dir().join(format!("drivemap-z3-diff-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let new = dir.join("zenith-z3.yaml");
+    std::fs::write(&new, moved).unwrap();
+    let old = fixture().join("zenith-z3.yaml");
+    let (code, out, err) =
+        common::run(common::command().args(["diff", old.to_str().unwrap(), new.to_str().unwrap()]));
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(code == 0 || code == 1, "{out}{err}");
+    assert!(
+        out.contains("register moved") && out.contains("45 → 49"),
+        "{out}"
+    );
+    assert!(!out.contains("002Dh"), "{out}");
 }

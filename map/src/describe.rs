@@ -70,6 +70,15 @@ pub fn address(a: u16) -> String {
     format!("{a:04X}h")
 }
 
+/// An address in the notation the map gives its addresses: the plain number in a map that
+/// numbers registers in decimal (`address_format: decimal`, `45`), else `002Dh`.
+pub fn address_as(format: crate::model::AddressFormat, a: u16) -> String {
+    match format {
+        crate::model::AddressFormat::Decimal => a.to_string(),
+        crate::model::AddressFormat::Hex => address(a),
+    }
+}
+
 /// A function code (`03h`).
 pub fn function(f: u8) -> String {
     format!("{f:02X}h")

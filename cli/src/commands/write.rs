@@ -456,7 +456,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
         outln!(
             "wrote {} = {shown} ({raw:0digits$X}h) at {}{first}{through}{assuming}",
             describe::register(r),
-            describe::address(address)
+            describe::address_as(drive.address_format, address)
         );
     }
     if let Some(id) = &args.persist {

@@ -31,7 +31,7 @@ impl Row {
         details: bool,
     ) -> Row {
         let register = describe::register(r);
-        let address = describe::address(session.shown_address(r));
+        let address = crate::live::output::address_text(session.drive, session.shown_address(r));
         match word {
             Err(e) => Row {
                 register,

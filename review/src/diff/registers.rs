@@ -94,7 +94,7 @@ fn summary(drive: &Drive, r: &Register) -> String {
         "{} {} at {}, {access}",
         f.name,
         describe::kind(plan),
-        describe::address(f.address),
+        describe::address_as(drive.address_format, f.address),
     );
     if let Some(u) = &f.data.unit {
         s += &format!(", {u}");
@@ -361,8 +361,8 @@ fn moved(s: &Sides) -> Row {
         a.address != b.address,
         ChangeKind::RegisterMoved,
         "",
-        Some(describe::address(a.address)),
-        Some(describe::address(b.address)),
+        Some(describe::address_as(s.old.address_format, a.address)),
+        Some(describe::address_as(s.new.address_format, b.address)),
     )
 }
 
