@@ -1030,8 +1030,11 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
     /// the status role as needed; writes nothing.
     ///
     /// Refused ([`Refusal::FieldNotWritable`], nothing sent) when `row` holds no command role,
-    /// and when the drive runs but the register cannot be read here, so the run bits to keep
-    /// are unknown (use `run()` / `stop()`).
+    /// when the drive runs but the register cannot be read here, so the run bits to keep
+    /// are unknown (use `run()` / `stop()`), and when `row` is the control word of the drive's
+    /// command profile and the word would ask it for a run transition while this drive object's
+    /// last of `run()` and `stop()` is not a `run()` that succeeded (use `run()`, which walks
+    /// the state machine).
     pub $($asy)* fn command_fields_word(&mut self, row: u16, mask: u16, value: u16) -> Result<u16, Error> {
         let r = self.row(row);
         let Some(c) = self.state.commands.iter().find(|c| c.row == row).copied() else {
@@ -1107,7 +1110,22 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
                 }
             }
         }
-        Ok(self.no_run_word(row, ((word & !mask) | (value & mask)) & fields_mask))
+        let word = ((word & !mask) | (value & mask)) & fields_mask;
+        if let Some(p) = self.state.roles.profile
+            && row == p.control
+            && self.state.running.is_none()
+            && p.word_runs(word)
+        {
+            // A word that asks the command profile for a run transition: only run() walks there.
+            return Err(Refusal::FieldNotWritable {
+                drive: self.drive(),
+                role: "run",
+                register: r.info.id,
+                why: "the word asks the drive's command profile for a run transition: run the drive with the drive trait's run(), which walks its state machine",
+            }
+            .into());
+        }
+        Ok(self.no_run_word(row, word))
     }
 
     /// Writes the bits `mask` of command register `row` to `value`'s, the rest of the word

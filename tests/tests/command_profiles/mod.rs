@@ -684,3 +684,27 @@ profile:
         assert_eq!(d.profile_state().unwrap(), Some("stopped"));
     }
 }
+
+/// A field write of a profile's control word (`Vfd::command_fields_word`, what `drivemap write`
+/// and the bridge use for a command register) that would ask for a run transition is refused
+/// unless this drive object's last run() succeeded; the direction bit alone is composed with the
+/// stop word.
+#[test]
+fn a_field_write_never_asks_the_machine_to_run() {
+    let drive = map(FIXTURES[1]);
+    let p = drive.plan();
+    let stw1 = p.roles.profile.unwrap().control;
+    let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    d.client().write_register(slave, 0x0063, 0x047E).unwrap();
+    match d.command_fields_word(stw1, 0x000F, 0x000F) {
+        Err(Error::Refused(drivemap_runtime::Refusal::FieldNotWritable { role, .. })) => {
+            assert_eq!(role, "run")
+        }
+        other => panic!("{other:?}"),
+    }
+    // The direction alone: the word read back (047Eh) with bit 11, no run.
+    assert_eq!(d.command_fields_word(stw1, 0x0800, 0x0800).unwrap(), 0x0C7E);
+    d.run().unwrap();
+    assert_eq!(d.command_fields_word(stw1, 0x0800, 0x0800).unwrap(), 0x0C7F);
+}
