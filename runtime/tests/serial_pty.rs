@@ -112,3 +112,53 @@ fn stale_bytes_on_the_line_are_flushed_before_the_request() {
     assert_eq!(r, [6000]);
     drive.join().unwrap();
 }
+
+/// Modbus ASCII on the pseudo-terminal pair at 7 data bits, even parity (Delta's factory
+/// setting): the client's `SerialTransport` with `SerialOptions::ascii(7)`, the drive serving
+/// through the same, the same requests as over RTU.
+#[test]
+fn client_talks_ascii_at_seven_data_bits_over_a_pseudo_terminal_pair() {
+    use drivemap_runtime::profile::TransportKind;
+    let ascii = |path: &str| options(path).ascii(7).expect("7 data bits");
+    let pty = PtyPair::new();
+    let mut drive_end = SerialTransport::open(ascii(&pty.paths[1])).expect("the drive's end");
+    assert_eq!(drive_end.kind(), TransportKind::Ascii);
+    let drive = thread::spawn(move || {
+        let mut slave = SimulatedSlave::new(1, &V7);
+        slave.set_holding(0x0020, 0x0005);
+        slave.set_holding(0x0023, 6000);
+        slave
+            .serve(&mut drive_end, Instant::now() + Duration::from_secs(3))
+            .expect("serving");
+        slave
+    });
+    let link = SerialTransport::open(ascii(&pty.paths[0])).expect("the client's end");
+    assert_eq!(link.kind(), TransportKind::Ascii);
+    assert_eq!(link.options().serial_config().data_bits, 7);
+    // A reply ends at its CR LF, not at a silence.
+    assert!(link.inter_char_timeout().is_none());
+    let mut client = Client::with_options(
+        link,
+        &V7,
+        ClientOptions {
+            timeout: Duration::from_millis(500),
+            retries: 0,
+            ..ClientOptions::default()
+        },
+    );
+    let mut r = [0u16; 4];
+    client.read_holding(1, 0x0020, &mut r).unwrap();
+    assert_eq!(r, [0x0005, 0, 0, 6000]);
+    client.write_registers(1, 0x0001, &[1, 600]).unwrap();
+    client.write_register(1, 0x0002, 3575).unwrap();
+    client.loop_back(1, 0xA537).unwrap();
+    client.write_register(0, 0x0001, 0).unwrap();
+    let e = client.read_holding(2, 0x0020, &mut [0; 1]).unwrap_err();
+    assert!(matches!(e, Error::Timeout { .. }), "{e}");
+    let mut r = [0u16; 2];
+    client.read_holding(1, 0x0001, &mut r).unwrap();
+    assert_eq!(r, [0, 3575]);
+    let slave = drive.join().unwrap();
+    assert_eq!(slave.holding(0x0002), 3575);
+    assert_eq!(slave.holding(0x0001), 0, "broadcast executed");
+}

@@ -846,6 +846,33 @@ mod tests {
     use super::*;
 
     #[test]
+    fn ascii_frames_run_from_the_colon_to_the_lf() {
+        assert_eq!(ascii_frame(b""), None);
+        assert_eq!(ascii_frame(b":0103"), None);
+        assert_eq!(ascii_frame(b":1103006B00037E\r\n:01"), Some(17));
+        // Characters before a ':' are handed over alone (a damaged frame), and a frame broken
+        // off by a new ':' too.
+        assert_eq!(ascii_frame(b"xx:01"), Some(2));
+        assert_eq!(ascii_frame(b"noise"), Some(5));
+        assert_eq!(ascii_frame(b":0103:1103"), Some(5));
+        let now = Instant::now();
+        let limits = FrameLimits::default();
+        let mut f = Framer::new(TransportKind::AsciiOverTcp, limits, now);
+        f.push(b":1103006B", now);
+        assert_eq!(f.next(now), Next::Wait);
+        // Left incomplete past the silence: handed over whole, as damaged.
+        assert_eq!(f.next(now + limits.silence), Next::Frame(9));
+        f.push(b"00037E\r\n", now);
+        assert_eq!(f.next(now), Next::Frame(17));
+        assert!(!f.overdue(now + limits.frame_deadline));
+        // A frame trickled past its deadline is overdue (a slowloris over ASCII framing).
+        let mut f = Framer::new(TransportKind::AsciiOverTcp, limits, now);
+        f.push(b":0103", now);
+        assert!(!f.overdue(now));
+        assert!(f.overdue(now + limits.frame_deadline));
+    }
+
+    #[test]
     fn rtu_frames_are_found_by_length_or_by_crc() {
         let read = [0x01, 0x03, 0x00, 0x20, 0x00, 0x01, 0x85, 0xC0];
         assert_eq!(rtu_frame(&read), Ok(Some(8)));
