@@ -708,3 +708,88 @@ fn a_field_write_never_asks_the_machine_to_run() {
     d.run().unwrap();
     assert_eq!(d.command_fields_word(stw1, 0x0800, 0x0800).unwrap(), 0x0C7F);
 }
+
+/// A map's own profile, no standard named: a drive that runs only with RUN ENABLE (bit 1) and
+/// START (bit 0) both set, enabled first (as the V20's Modbus table prints them as two
+/// commands). The trait writes 0002h then 0003h; 0003h alone from power-on (the skipped enable)
+/// leaves the simulated drive stopped.
+#[test]
+fn a_profile_of_the_maps_own_runs_through_its_two_bits() {
+    let text = r#"
+drive:
+  id: two-bits
+  vendor: Example
+  models: [TB-1]
+  manuals:
+    - {file: tb.txt, title: Example manual}
+protocol:
+  transports: [rtu]
+  function_codes: [0x03, 0x06, 0x10]
+  max_read: 8
+  max_write: 8
+  slave_address: {min: 1, max: 247}
+groups:
+  - id: main
+    name: Registers
+    access: rw
+    registers:
+      - id: command
+        name: Command
+        address: 0x0010
+        fields:
+          - {id: start, name: START, bit: 0, source: "tb.txt:2"}
+          - {id: run_enable, name: RUN ENABLE, bit: 1, source: "tb.txt:3"}
+          - {id: fault_ack, name: Fault acknowledge, bit: 7, source: "tb.txt:4"}
+        source: "tb.txt:1"
+      - id: status
+        name: Status
+        address: 0x0011
+        access: r
+        fields:
+          - {id: enabled, name: Enabled, bit: 0, source: "tb.txt:6"}
+          - {id: running, name: Running, bit: 1, source: "tb.txt:7"}
+          - {id: fault, name: Fault, bit: 2, source: "tb.txt:8"}
+        source: "tb.txt:5"
+profile:
+  control: command
+  status: status
+  source: "tb.txt:9"
+  power_on: {state: disabled, source: "tb.txt:10"}
+  states:
+    disabled: {mask: 0x0007, value: 0x0000, source: "tb.txt:11"}
+    enabled: {mask: 0x0007, value: 0x0001, source: "tb.txt:12"}
+    running: {mask: 0x0007, value: 0x0003, source: "tb.txt:13"}
+    fault: {mask: 0x0004, value: 0x0004, source: "tb.txt:14"}
+  transitions:
+    enable: {word: 0x0002, from: [disabled, running], to: enabled, limit_ms: 200, source: "tb.txt:15"}
+    start: {word: 0x0003, from: [enabled], to: running, limit_ms: 200, source: "tb.txt:16"}
+    disable: {word: 0x0000, from: [enabled, running], to: disabled, limit_ms: 200, source: "tb.txt:17"}
+    acknowledge: {word: 0x0080, edge: 0x0080, from: [fault], to: disabled, limit_ms: 200, source: "tb.txt:18"}
+  paths:
+    run: {via: [enable, start], to: [running]}
+    stop: {via: [enable], to: [enabled, disabled, fault]}
+    coast: {via: [disable], to: [disabled, fault]}
+    reset_fault: {via: [acknowledge], to: [disabled]}
+"#;
+    let drive = drivemap_map::read_map_str("two-bits.yaml", text, &Default::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let p = drive.plan();
+    assert_eq!(p.roles.profile.unwrap().name, "own");
+    let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
+    c.write_register(slave, 0x0010, 0x0003).unwrap();
+    assert_eq!(c.transport().sim.profile_state(), Some("disabled"));
+    assert!(!c.transport().sim.state().unwrap().run_command);
+    c.write_register(slave, 0x0010, 0x0000).unwrap();
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    written(&mut d);
+    d.run().unwrap();
+    assert_eq!(written(&mut d), [0x0002, 0x0003]);
+    assert!(run_command(d.client()));
+    d.stop().unwrap();
+    assert_eq!(written(&mut d), [0x0002]);
+    assert!(!run_command(d.client()));
+    assert!(matches!(
+        d.quick_stop(),
+        Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. }))
+    ));
+}
