@@ -42,6 +42,9 @@ pub(crate) struct Model {
     pub fault: Option<u16>,
     /// The command profile's state (index), for a drive with one.
     pub machine: Option<u8>,
+    /// An interlock holds (a safe torque off input open, the DC bus not charged): a drive with a
+    /// command profile refuses the transitions towards running, still taking stops.
+    pub interlock: bool,
 }
 
 fn rate(max_frequency: f64, seconds: f64) -> f64 {

@@ -264,6 +264,24 @@ impl ProfileSim {
         })
     }
 
+    /// Whether `t` moves the drive towards running: a transition of the run path that no stop,
+    /// coast or quick stop path takes.
+    pub fn towards_run(&self, t: &Transition) -> bool {
+        let p = self.profile;
+        let index = |x: &Transition| p.transitions.iter().position(|y| y == x);
+        let Some(i) = index(t) else {
+            return false;
+        };
+        let taken = |kind: PathKind| {
+            p.path(kind)
+                .is_some_and(|path| path.via.contains(&(i as u8)))
+        };
+        taken(PathKind::Run)
+            && ![PathKind::Stop, PathKind::Coast, PathKind::QuickStop]
+                .into_iter()
+                .any(taken)
+    }
+
     /// The state a trip leads to: the one the `reset_fault` path leaves.
     pub fn fault_state(&self) -> Option<u8> {
         let p = self.profile;

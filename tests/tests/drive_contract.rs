@@ -258,6 +258,9 @@ enum Step {
     Trip,
     /// The drive is stopped at its own panel (not a call).
     LocalStop,
+    /// An interlock at the drive opens (`true`: a command profile's drive refuses the
+    /// transitions towards running) or closes (not a call).
+    Interlock(bool),
     /// Simulated time passes (s).
     Wait(f64),
 }
@@ -300,6 +303,7 @@ fn step() -> impl proptest::strategy::Strategy<Value = Step> {
         1 => Just(Step::QuickStop),
         1 => Just(Step::Trip),
         1 => Just(Step::LocalStop),
+        1 => any::<bool>().prop_map(Step::Interlock),
         1 => (0.0f64..30.0).prop_map(Step::Wait),
     ]
 }
@@ -379,6 +383,10 @@ fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -
                 d.client().transport().sim.local_stop();
                 Ok(())
             }
+            Step::Interlock(open) => {
+                d.client().transport().sim.set_interlock(open);
+                Ok(())
+            }
             Step::Wait(s) => {
                 clock.advance(Duration::from_secs_f64(s));
                 d.client().transport().sim.tick();
@@ -441,6 +449,10 @@ fn play_async(
                 }
                 Step::LocalStop => {
                     d.client().transport().sim.local_stop();
+                    Ok(())
+                }
+                Step::Interlock(open) => {
+                    d.client().transport().sim.set_interlock(open);
                     Ok(())
                 }
                 Step::Wait(s) => {
@@ -637,20 +649,36 @@ fn every_map() -> Vec<(String, Drive)> {
         .collect();
     paths.sort();
     paths.push(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml").into());
-    // The drives run through a command profile (a control-word state machine).
-    paths.extend(
-        command_profiles::FIXTURES
-            .iter()
-            .map(|f| std::path::PathBuf::from(format!("{root}/../{f}"))),
-    );
-    paths
+    let mut maps: Vec<(String, Drive)> = paths
         .into_iter()
         .map(|p| {
             let d = drivemap_map::read_map(&p, &Default::default())
                 .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
             (d.meta.id.clone(), d)
         })
-        .collect()
+        .collect();
+    // The drives run through a command profile (a control-word state machine), with every
+    // transition's time limit cut to 3 ms: a transition the drive refuses (an interlock) is
+    // waited out in real time.
+    for f in command_profiles::FIXTURES {
+        let text = std::fs::read_to_string(format!("{root}/../{f}")).unwrap();
+        let fast = text
+            .lines()
+            .map(|l| match l.find("limit_ms: ") {
+                Some(i) => {
+                    let rest = &l[i + "limit_ms: ".len()..];
+                    let digits = rest.chars().take_while(char::is_ascii_digit).count();
+                    format!("{}limit_ms: 3{}", &l[..i], &rest[digits..])
+                }
+                None => l.to_owned(),
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let d = drivemap_map::read_map_str(f, &fast, &Default::default())
+            .unwrap_or_else(|e| panic!("{f}: {e}"));
+        maps.push((d.meta.id.clone(), d));
+    }
+    maps
 }
 
 /// The links a map is driven over: RTU framing (RTU over TCP, which can reconnect) always,
@@ -688,8 +716,10 @@ const ASYNC_SHARDS: u32 = 2;
 const SHARDS: u32 = 8;
 
 /// Random sequences of trait calls, with reply loss, late replies, exceptions and reconnects
-/// injected at the transport, against the simulator of every map, the acme-vf1 fixture and its
-/// two variants with shared roles, over RTU framing and Modbus TCP, through the blocking drive
+/// injected at the transport, and the drive changing on its own (a trip, a stop at its panel,
+/// an interlock that refuses a command profile's way to running), against the simulator of
+/// every map, the acme-vf1 fixture and its two variants with shared roles, the command-profile
+/// fixtures (time limits cut to 3 ms), over RTU framing and Modbus TCP, through the blocking drive
 /// ([`Vfd`]) and, on [`ASYNC_SHARDS`] of the [`SHARDS`] runners of each, the async one
 /// ([`AsyncVfd`], owning its client). Invariants, on what reached the wire and on the drive: a run code
 /// is written only by `run()` (or while a successful `run()` was the last of `run()` and

@@ -222,6 +222,15 @@ impl Simulator {
         self.tick();
     }
 
+    /// Opens (`true`) or closes an interlock at the drive (a safe torque off input, a DC bus not
+    /// yet charged): while it is open a drive with a command profile refuses the transitions
+    /// towards running (those of its run path that no stop, coast or quick stop path takes), so
+    /// a master's run() waits out the transition's time limit and reports the state the drive
+    /// stayed in; stops are still taken. Without a command profile, nothing changes.
+    pub fn set_interlock(&mut self, open: bool) {
+        self.model.interlock = open;
+    }
+
     /// The state of the drive's command profile, by id, for a drive with one.
     pub fn profile_state(&self) -> Option<&'static str> {
         let p = self.roles.as_ref()?.profile?;
@@ -369,7 +378,8 @@ impl Simulator {
             // for from the state the drive is in; a run only from the network the drive takes
             // commands from, an acknowledge from any.
             let fault = p.fault_state() == Some(state);
-            if takes_run || fault {
+            let refused = self.model.interlock && p.towards_run(t);
+            if (takes_run || fault) && !refused {
                 if fault && self.model.fault.take().is_some() {
                     for (r, word, mask) in std::mem::take(&mut self.fault_words) {
                         self.raw[r] = (self.raw[r] & !mask) | (word & mask);

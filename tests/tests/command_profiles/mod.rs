@@ -793,3 +793,32 @@ profile:
         Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. }))
     ));
 }
+
+/// An interlock at the drive (safe torque off open): the simulated drive refuses the
+/// transitions towards running; run() waits out switch on's 100 ms and names the state the drive
+/// stayed in (shutdown, a stop's transition too, was taken); stop still acts; once the interlock
+/// closes, run() completes.
+#[test]
+fn an_interlock_refuses_the_way_to_running_and_run_says_where_it_stopped() {
+    let drive = kestrel();
+    let p = drive.plan();
+    let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    d.client().transport().sim.set_interlock(true);
+    match d.run() {
+        Err(Error::StateMachine { state, why, .. }) => {
+            assert_eq!(state, "ready_to_switch_on");
+            assert!(
+                why.contains("`switched_on` within 100 ms of `switch_on`"),
+                "{why}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(!run_command(d.client()));
+    d.stop().unwrap();
+    assert_eq!(d.profile_state().unwrap(), Some("ready_to_switch_on"));
+    d.client().transport().sim.set_interlock(false);
+    d.run().unwrap();
+    assert!(run_command(d.client()));
+}
