@@ -306,3 +306,34 @@ fn frame_broken_off_by_an_inter_character_gap_is_discarded() {
         assert!(c.discarded().is_empty(), "{:?}", c.discarded());
     }
 }
+
+/// A peer that sends ASCII characters without end: a frame that never ends is dropped at the
+/// largest frame's length (the assembler holds no more), a flood past the client's bound ends
+/// the call with an overrun, and in both cases the next transaction is correct.
+#[test]
+fn endless_ascii_characters_are_bounded() {
+    use drivemap_runtime::ascii;
+    for kind in [TransportKind::Ascii, TransportKind::AsciiOverTcp] {
+        // A ':' and then more hex digits than a frame holds, before the reply: thrown away,
+        // the reply found.
+        let mut c = client(kind, strict());
+        let mut noise = vec![b':'];
+        noise.extend(std::iter::repeat_n(b'0', 3 * ascii::MAX_FRAME));
+        c.transport().inject(Fault::Noise(noise));
+        assert_eq!(read_0020(&mut c).unwrap(), 0x1234, "{kind:?}");
+        assert!(
+            c.discarded().bytes as usize > 3 * ascii::MAX_FRAME,
+            "{kind:?}"
+        );
+        assert_recovers(&mut c);
+        // A flood past the bound: an overrun, not a wait without end.
+        let mut c = client(kind, strict());
+        c.transport().inject(Fault::Noise(vec![
+            b'7';
+            2 * drivemap_runtime::client::MAX_UNANSWERED_BYTES
+        ]));
+        let e = read_0020(&mut c).unwrap_err();
+        assert!(matches!(e, Error::Overrun { .. }), "{kind:?}: {e}");
+        assert_recovers(&mut c);
+    }
+}
