@@ -1,5 +1,6 @@
 //! The manuals' example frames as tests of the simulator: for every map of `maps/` (the
-//! directory is read, so a new map is covered with no edit here) and the Orbis Q5 fixture, each
+//! directory is read, so a new map is covered with no edit here), the Orbis Q5 fixture and the
+//! Quill Q2 fixture (Modbus ASCII: its frames go over the wire as ASCII characters), each
 //! request example that a response example answers is fed to a simulated drive of that map (at
 //! the request's slave address, with the drive state the example assumes, and, for a read, the
 //! response's words set first as the drive's state, in a register store without the drive model,
@@ -29,6 +30,7 @@ fn maps() -> Vec<PathBuf> {
     let mut out = drivemap_map::find_maps(&root().join("maps")).unwrap();
     assert!(out.len() >= 5, "maps/ holds {} maps", out.len());
     out.push(root().join("tests/fixtures/orbis-q5/orbis-q5.yaml"));
+    out.push(root().join("tests/fixtures/quill-q2/quill-q2.yaml"));
     out
 }
 
@@ -73,6 +75,7 @@ fn simulator(drive: &Drive, request: &Example, response: &Frame, req: &Request<'
 #[test]
 fn every_map_s_simulator_answers_its_manual_s_examples_byte_for_byte() {
     let ctx = Context::with_manuals(&root().join("../shared/manuals"));
+    let mut ascii_pairs = 0;
     let mut report = Vec::new();
     let mut failures = Vec::new();
     for path in maps() {
@@ -97,9 +100,8 @@ fn every_map_s_simulator_answers_its_manual_s_examples_byte_for_byte() {
             let req = pdu::decode_request(rf.pdu()).unwrap();
             // A marked response: its CRC is the codec's, the rest as printed.
             let mut printed = parse(&response.bytes);
-            if response.conflict.is_some()
-                && kind_of(response) != drivemap_runtime::profile::TransportKind::Tcp
-            {
+            let ascii = kind_of(request).is_ascii();
+            if response.conflict.is_some() && kind_of(response).is_rtu_framed() {
                 let n = printed.len();
                 let crc = crc::crc_bytes(&printed[..n - 2]);
                 printed[n - 2..].copy_from_slice(&crc);
@@ -107,13 +109,40 @@ fn every_map_s_simulator_answers_its_manual_s_examples_byte_for_byte() {
             let resp = Frame {
                 slave: printed[if rf.pdu_start == 1 { 0 } else { 6 }],
                 pdu_start: rf.pdu_start,
-                pdu_end: printed.len() - if rf.pdu_start == 1 { 2 } else { 0 },
+                pdu_end: printed.len()
+                    - match (rf.pdu_start, ascii) {
+                        (1, true) => 1,
+                        (1, false) => 2,
+                        _ => 0,
+                    },
                 bytes: printed.clone(),
             };
             let mut sim = simulator(&drive, request, &resp, &req);
             let mut out = [0u8; tcp::MAX_FRAME];
-            let handled = sim.handle(kind_of(request), &rf.bytes, &mut out);
-            let answer = handled.reply.map(|n| out[..n].to_vec());
+            let answer = if ascii {
+                // On the wire as the manual prints it: ':', the bytes as characters, CR LF; the
+                // drive answers the RTU frame it stands for, its reply goes back as ASCII.
+                let wire = ascii_wire(&rf.bytes);
+                let mut rtu_frame = [0u8; 256];
+                let n = drivemap_runtime::ascii::to_rtu(&wire, &mut rtu_frame)
+                    .unwrap_or_else(|e| panic!("{}: {e}", request.id));
+                let handled = sim.handle(kind_of(request), &rtu_frame[..n], &mut out);
+                ascii_pairs += 1;
+                handled.reply.map(|m| {
+                    let mut reply = [0u8; drivemap_runtime::ascii::MAX_FRAME];
+                    let k = drivemap_runtime::ascii::from_rtu(&out[..m], &mut reply).unwrap();
+                    assert_eq!(
+                        &reply[..k],
+                        &ascii_wire(&printed)[..],
+                        "{}: the ASCII reply as the manual prints it",
+                        response.id
+                    );
+                    printed.clone()
+                })
+            } else {
+                let handled = sim.handle(kind_of(request), &rf.bytes, &mut out);
+                handled.reply.map(|n| out[..n].to_vec())
+            };
             if answer.as_deref() != Some(&printed[..]) {
                 failures.push(format!(
                     "{}: `{}` answered {} to `{}`; the manual prints {}",
@@ -136,7 +165,22 @@ fn every_map_s_simulator_answers_its_manual_s_examples_byte_for_byte() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+    assert!(
+        ascii_pairs > 0,
+        "the Quill Q2's ASCII examples were replayed"
+    );
     eprintln!("request/response pairs replayed: {}", report.join(", "));
+}
+
+/// An ASCII frame as it goes on the wire: ':', each byte as two upper-case hex characters,
+/// CR LF.
+fn ascii_wire(bytes: &[u8]) -> Vec<u8> {
+    let mut wire = vec![b':'];
+    for b in bytes {
+        wire.extend_from_slice(format!("{b:02X}").as_bytes());
+    }
+    wire.extend_from_slice(b"\r\n");
+    wire
 }
 
 fn parse(text: &str) -> Vec<u8> {
