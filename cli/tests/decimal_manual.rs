@@ -145,3 +145,35 @@ fn diff_shows_a_decimal_maps_addresses_in_decimal() {
     );
     assert!(!out.contains("002Dh"), "{out}");
 }
+
+/// A role re-pointed in a decimal-numbered map is shown with the manual's numbers:
+/// `output_frequency (10)` → `frequency_command (2)`.
+#[test]
+fn diff_shows_a_decimal_maps_role_places_in_decimal() {
+    let text = std::fs::read_to_string(fixture().join("zenith-z3.yaml")).unwrap();
+    assert!(
+        !text.contains("\nroles:"),
+        "the fixture has no roles of its own"
+    );
+    let with_role = |register: &str| {
+        format!(
+            "{text}roles:\n  output_frequency:\n    - {{register: {register}, source: \"zenith-z3.txt:13\"}}\n"
+        )
+    };
+    let dir = std::env::temp_dir().join(format!("drivemap-z3-roles-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("old")).unwrap();
+    std::fs::create_dir_all(dir.join("new")).unwrap();
+    let old = dir.join("old/zenith-z3.yaml");
+    let new = dir.join("new/zenith-z3.yaml");
+    std::fs::write(&old, with_role("output_frequency")).unwrap();
+    std::fs::write(&new, with_role("frequency_command")).unwrap();
+    let (code, out, err) =
+        common::run(common::command().args(["diff", old.to_str().unwrap(), new.to_str().unwrap()]));
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(code == 0 || code == 1, "{out}{err}");
+    assert!(
+        out.contains("output_frequency (10)") && out.contains("frequency_command (2)"),
+        "{out}"
+    );
+    assert!(!out.contains("000Ah"), "{out}");
+}

@@ -87,10 +87,11 @@ impl Target {
         }
     }
 
-    fn text(&self) -> String {
+    /// The target as a change names it, its address in the map's notation (`format`).
+    fn text(&self, format: crate::model::AddressFormat) -> String {
         match self {
             Target::Register { id, address, .. } => {
-                format!("{id} ({})", describe::address(*address))
+                format!("{id} ({})", describe::address_as(format, *address))
             }
             Target::Field {
                 register,
@@ -104,7 +105,7 @@ impl Target {
                     .unwrap_or_else(|| "no bits".into());
                 format!(
                     "field `{field}` ({bits}) of {register} ({})",
-                    describe::address(*address)
+                    describe::address_as(format, *address)
                 )
             }
             Target::External(name) => format!("external quantity `{name}`"),
@@ -128,6 +129,8 @@ struct Meaning {
     number: Option<(bool, f64)>,
     /// The role it shares its register or bits with, as the map says.
     shared_with: Option<String>,
+    /// How the map prints addresses (for the text only; not a change of the role).
+    address_format: crate::model::AddressFormat,
 }
 
 impl Meaning {
@@ -256,6 +259,7 @@ impl Meaning {
             },
             number: number.then(|| (*signed, scale.unwrap_or(1.0))),
             shared_with: shared_with.clone(),
+            address_format: drive.address_format,
         }
     }
 
@@ -299,7 +303,7 @@ impl Meaning {
 
     fn text(&self) -> String {
         let codes = self.codes_text();
-        let mut s = self.target.text();
+        let mut s = self.target.text(self.address_format);
         if !codes.is_empty() {
             s = format!("{s}, {codes}");
         }
