@@ -6,7 +6,8 @@
 //! real serial line (a socat pseudo-terminal pair), with the blocking and the async client.
 //! Before the fix each late reply was taken as the next read's answer.
 //!
-//! A Modbus TCP gateway link (Modbus TCP framing, transaction ids) is checked the same way.
+//! A Modbus TCP gateway link (Modbus TCP framing, transaction ids) is checked the same way, and
+//! so is Modbus ASCII on the serial line (no transaction id either).
 
 use std::time::{Duration, Instant};
 
@@ -203,6 +204,31 @@ mod serial {
         let mut client = Client::with_options(link, &PROFILE, options());
         let tally = reads_blocking(&mut client);
         tally.check("blocking, serial", true);
+        drop(client);
+        drop(pty);
+        let _ = server.join();
+    }
+
+    /// Modbus ASCII on the same line: the same guarantee, no late reply taken for an answer.
+    #[test]
+    fn blocking_ascii_serial_never_takes_a_late_reply_for_the_next_answer() {
+        let ascii = |path: &str| line(path).ascii(7).expect("7 data bits");
+        let pty = PtyPair::new();
+        let mut drive_end = SerialTransport::open(ascii(&pty.paths[1])).expect("the drive's end");
+        let server = thread::spawn(move || {
+            serve_late(
+                &mut drive_end,
+                &mut numbered(&PROFILE),
+                EVERY,
+                LATE,
+                Instant::now() + Duration::from_secs(60),
+            )
+        });
+        let link = SerialTransport::open(ascii(&pty.paths[0])).expect("opening the client's end");
+        assert_eq!(link.kind(), TransportKind::Ascii);
+        let mut client = Client::with_options(link, &PROFILE, options());
+        let tally = reads_blocking(&mut client);
+        tally.check("blocking, ASCII serial", true);
         drop(client);
         drop(pty);
         let _ = server.join();

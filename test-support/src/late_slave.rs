@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use drivemap_runtime::profile::Profile;
 use drivemap_runtime::transport::Transport;
-use drivemap_runtime::{rtu, tcp};
+use drivemap_runtime::{ascii, rtu, tcp};
 use drivemap_sim::slave::SimulatedSlave;
 
 /// Slave 1 of `profile` whose holding and input register `a` hold `a` (0..64).
@@ -34,7 +34,10 @@ pub fn serve_late(
     let mut chunk = [0u8; 512];
     let mut served = 0u32;
     while Instant::now() < until {
-        let total = if kind.is_rtu_framed() {
+        let total = if kind.is_ascii() {
+            // Modbus ASCII: a frame runs to its LF (what precedes its ':' is dropped below).
+            buf.iter().position(|&c| c == b'\n').map(|lf| lf + 1)
+        } else if kind.is_rtu_framed() {
             match rtu::request_frame_len(&buf) {
                 Ok(t) => t,
                 Err(_) => {
@@ -58,8 +61,21 @@ pub fn serve_late(
             continue;
         };
         let frame: Vec<u8> = buf.drain(..total).collect();
-        let mut out = [0u8; tcp::MAX_FRAME];
-        let n = slave.respond(kind, &frame, &mut out).unwrap_or(0);
+        let mut out = [0u8; ascii::MAX_FRAME];
+        let n = if kind.is_ascii() {
+            // The drive answers the RTU frame an ASCII frame stands for; its reply goes back
+            // as ASCII. A damaged frame goes unanswered.
+            let start = frame.iter().position(|&c| c == ascii::START).unwrap_or(0);
+            let mut request = [0u8; rtu::MAX_FRAME];
+            let mut reply = [0u8; tcp::MAX_FRAME];
+            ascii::to_rtu(&frame[start..], &mut request)
+                .ok()
+                .and_then(|m| slave.respond(kind, &request[..m], &mut reply))
+                .and_then(|m| ascii::from_rtu(&reply[..m], &mut out).ok())
+                .unwrap_or(0)
+        } else {
+            slave.respond(kind, &frame, &mut out).unwrap_or(0)
+        };
         if served.is_multiple_of(every.max(1)) {
             std::thread::sleep(late);
         }
