@@ -176,7 +176,7 @@ fn quill_sim(args: &[&str]) -> Sim {
 
 /// An ASCII-only drive through the binary: `check --strict` accepts its map (its manual's
 /// ASCII frames verified by their LRC), `simulate --rtu-tcp --ascii` serves it as ASCII frames
-/// over TCP, and `read`/`probe --ascii` reach it there; RTU framing to it is refused before
+/// over TCP, and `read`/`probe`/`scan --ascii` reach it there; RTU framing to it is refused before
 /// anything is sent, and so is `--ascii` to a map that does not list ASCII.
 #[test]
 fn an_ascii_drive_is_checked_simulated_read_and_probed_over_ascii() {
@@ -233,6 +233,24 @@ fn an_ascii_drive_is_checked_simulated_read_and_probed_over_ascii() {
         out.contains("over ASCII over TCP") && out.contains("6 agree, 0 disagree"),
         "{out}"
     );
+    // scan --ascii finds it at slave 1 and names its map.
+    let (code, out, err) = common::run(common::command().args([
+        "scan",
+        "--maps",
+        maps,
+        "--rtu-tcp",
+        sim.addr.as_str(),
+        "--ascii",
+        "--slaves",
+        "1-2",
+    ]));
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("scan of ASCII over TCP"), "{out}");
+    let row = out
+        .lines()
+        .find(|l| l.starts_with("1 "))
+        .unwrap_or_else(|| panic!("no slave 1 in {out}"));
+    assert!(row.contains("quill-q2 4/4"), "{out}");
 
     // RTU frames to it: refused before connecting, naming --ascii.
     let (addr, connections) = counting_listener();

@@ -50,6 +50,10 @@ pub struct Args {
     /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`).
     #[arg(long, value_name = "PATH")]
     pub serial: Option<String>,
+    /// Modbus ASCII instead of RTU, on --serial or --rtu-tcp: only candidate maps that list
+    /// `ascii` in `protocol.transports` are tried (the line's data bits are the first one's).
+    #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
+    pub ascii: bool,
     /// Slave addresses to try: `1-247` (the Modbus serial-line range, the default), `1,2,5`,
     /// `1-10,31`; up to 255 where a manual gives more (ACN CM.01: 1-250).
     #[arg(long, default_value = "1-247", value_parser = parse_slaves)]
@@ -239,7 +243,7 @@ fn line_text(kind_serial: bool, line: Line, drive: &Drive, base: &Link) -> Strin
     l.baud = Some(line.baud);
     l.parity = Some(line.parity);
     let (baud, parity, stops) = l.line(drive);
-    format!("{baud} 8{}{stops}", parity.letter())
+    format!("{baud} {}{}{stops}", l.data_bits(drive), parity.letter())
 }
 
 /// The longest time any candidate drive takes to answer a one-register read at `baud`:
@@ -367,10 +371,23 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
     } else {
         args.drives.clone()
     };
-    let drives: Vec<Drive> = ids
+    let mut drives: Vec<Drive> = ids
         .iter()
         .map(|id| args.dir.load(id))
         .collect::<Result<_, _>>()?;
+    if args.ascii {
+        // A drive whose map does not list ASCII would not read the frames.
+        drives.retain(|d| {
+            d.protocol
+                .transports
+                .contains(&drivemap_map::model::TransportName::Ascii)
+        });
+        if drives.is_empty() {
+            return Err(CliError::Refused(
+                "--ascii: no candidate map lists `ascii` in protocol.transports".into(),
+            ));
+        }
+    }
     let Some(first) = drives.first() else {
         return Err(CliError::Refused("no candidate maps".into()));
     };
@@ -380,7 +397,7 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
         gateway: args.gateway.clone(),
         rtu_tcp: args.rtu_tcp.clone(),
         serial: args.serial.clone(),
-        ascii: false,
+        ascii: args.ascii,
         data_bits: None,
         baud: None,
         parity: None,
@@ -457,14 +474,15 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
             link.baud = Some(l.baud);
             link.parity = Some(l.parity);
         }
-        let timeout = args
-            .timeout
-            .unwrap_or_else(|| probe_timeout(&profiles, link.baud));
+        let timeout = args.timeout.unwrap_or_else(|| {
+            probe_timeout(&profiles, link.baud) * if args.ascii { 2 } else { 1 }
+        });
         link.timeout = Some(timeout);
         link.request_gap = Some(request_gap(&profiles, link.baud));
         timeout_used = timeout_used.max(timeout);
         let (mut client, text) = link.connect(first, &PROBE)?;
         link_text = match (&args.serial, text.rsplit_once(", slave")) {
+            (Some(path), _) if args.ascii => format!("ASCII {path}"),
             (Some(path), _) => format!("RTU {path}"),
             (None, Some((a, _))) => a.to_string(),
             (None, None) => text,
@@ -502,10 +520,10 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
             link.baud = Some(l.baud);
             link.parity = Some(l.parity);
         }
-        link.timeout = Some(
-            args.timeout
-                .unwrap_or_else(|| probe_timeout(&profiles, link.baud)),
-        );
+        link.timeout = Some(args.timeout.unwrap_or_else(|| {
+            // An ASCII frame is about twice as many characters.
+            probe_timeout(&profiles, link.baud) * if args.ascii { 2 } else { 1 }
+        }));
         link.request_gap = Some(request_gap(&profiles, link.baud));
         let mut maps: Vec<Candidate> = drives.iter().map(|d| identify(d, &link)).collect();
         maps.sort_by(|a, b| {
