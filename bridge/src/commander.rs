@@ -56,6 +56,9 @@ pub struct Commander {
     pub(crate) forget: bool,
     /// A command wrote what the polled reads depend on.
     pub(crate) replan: bool,
+    /// Writes through the drive's map: refused (a draft without `--draft`, why), said to go
+    /// through a draft (the note), or a reviewed map's (`None`).
+    pub(crate) draft: Result<Option<String>, String>,
 }
 
 impl Commander {
@@ -79,9 +82,14 @@ impl Commander {
         command: &Command,
     ) -> Result<String, CommandFailure> {
         client.switch_drive(self.drive.plan().profile, self.options);
+        if let Err(why) = &self.draft {
+            return Err(CommandFailure::Draft { why: why.clone() });
+        }
         let value = command.payload.trim();
         let action = match &command.action {
-            Action::Set { register } => return self.write(client, register, value),
+            Action::Set { register } => {
+                return self.write(client, register, value).map(|d| self.said(d));
+            }
             a => a.clone(),
         };
         let drive = self.drive;
@@ -141,7 +149,15 @@ impl Commander {
             Action::Set { .. } => unreachable!("handled above"),
         };
         self.memory = Some(d.memory());
-        result
+        result.map(|done| self.said(done))
+    }
+
+    /// What was done, with the draft's note where the map is a draft written through.
+    fn said(&self, done: String) -> String {
+        match &self.draft {
+            Ok(Some(note)) => format!("{done} ({note})"),
+            _ => done,
+        }
     }
 
     /// Writes `value` to the register named `name`, as `drivemap write` does: parsed by the

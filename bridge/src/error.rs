@@ -192,6 +192,14 @@ pub enum Refused {
         "retained messages are never carried out on command topics (publish commands with retain off; clear the retained one with an empty retained message)"
     )]
     Retained,
+    /// The drive's map is a draft and the bridge was not started with `--draft`: nothing is
+    /// written through it, not even a stop (its run register's address is what a reader made of
+    /// the manual's text).
+    #[error("{why}")]
+    Draft {
+        /// The refusal, naming the map.
+        why: String,
+    },
     /// Over the drive's rate of runs, references and sets (a stop is never limited).
     #[error(
         "over the rate limit of {rate} command(s) per second for {drive} (stops are never limited)"
@@ -306,6 +314,12 @@ pub enum CommandFailure {
     NotAFrequency {
         /// The payload, quoted.
         value: String,
+    },
+    /// The drive's map is a draft and the bridge was not started with `--draft`.
+    #[error("{why}")]
+    Draft {
+        /// The refusal, naming the map.
+        why: String,
     },
     /// The command waited past its deadline (the link busy, down, or its drive silent).
     #[error("expired after {} ms waiting for the link (deadline {} ms): not carried out late", waited.as_millis(), deadline.as_millis())]

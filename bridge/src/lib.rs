@@ -80,7 +80,15 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
                 kind: l.kind,
                 link: li,
                 points: pts,
+                draft: d.draft,
             });
+            if let Some(note) = drivemap_live::draft::read_note(d.drive) {
+                let writes = match drivemap_live::draft::check_write(d.drive, d.draft) {
+                    Ok(_) => "its commands are written through it (--draft)",
+                    Err(_) => "no command is written through it (give --draft to allow it)",
+                };
+                eprintln!("bridge: {}: {note}; {writes}", d.name);
+            }
         }
     }
     let metrics = Arc::new(metrics::Metrics::new(&all_points));

@@ -63,6 +63,9 @@ pub struct DriveSpec {
     pub fixed: BTreeSet<String>,
     /// Registers to poll by name; empty: every role register and every read-only register.
     pub registers: Vec<String>,
+    /// Whether writes may go through the drive's map when it is a draft (`--draft`); a
+    /// reviewed map's writes are not affected.
+    pub draft: drivemap_live::draft::DraftWrites,
     /// Poll periods longer than the link's for some registers: `(what, period)`, `what` a
     /// register (id, parameter number or name), a role id, a group of the map, or `status`
     /// (registers holding status roles), `monitors` (read-only) or `parameters` (writable). The
@@ -430,6 +433,7 @@ impl Polled {
             memory: None,
             forget: true,
             replan: false,
+            draft: drivemap_live::draft::check_write(self.spec.drive, self.spec.draft),
         }
     }
 

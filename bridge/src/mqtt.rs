@@ -92,6 +92,8 @@ pub struct DriveInfo {
     pub link: usize,
     /// Its points.
     pub points: Vec<Point>,
+    /// Whether writes may go through its map when it is a draft.
+    pub draft: drivemap_live::draft::DraftWrites,
 }
 
 /// Splits `mqtt[s]://host[:port]`.
@@ -278,8 +280,10 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             "device": device(info),
         })
     };
+    let writes = drivemap_live::draft::check_write(info.drive, info.draft).is_ok();
     let allow_set = |r: &Register| {
-        r.writable()
+        writes
+            && r.writable()
             && !r.broadcast
             && info.drive.register_plan(r).transports.contains(info.kind)
             && allowed(
@@ -422,7 +426,7 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             _ => Action::FaultReset,
         };
         let has_role = role_on_link(role) || (role == Role::Run && role_on_link(Role::RunForward));
-        if !has_role || allowed(info, &options.allow, &action).is_err() {
+        if !writes || !has_role || allowed(info, &options.allow, &action).is_err() {
             continue;
         }
         let object = format!("command_{what}");
@@ -434,7 +438,8 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             c,
         ));
     }
-    if role_on_link(Role::FrequencyReference)
+    if writes
+        && role_on_link(Role::FrequencyReference)
         && allowed(info, &options.allow, &Action::Reference).is_ok()
     {
         let object = "command_reference";
@@ -730,6 +735,9 @@ pub fn accept(
         return Err(crate::Refused::Retained);
     }
     allowed(info, &options.allow, &command.action)?;
+    if let Err(why) = drivemap_live::draft::check_write(info.drive, info.draft) {
+        return Err(crate::Refused::Draft { why });
+    }
     let press = match &command.action {
         Action::Run | Action::Stop | Action::FaultReset => Some(command.action.name()),
         _ => None,

@@ -421,6 +421,9 @@ impl LineSide {
                 "writes not allowed: the proxy was not started with --allow-writes".into(),
             );
         }
+        if let Err(why) = &d.draft {
+            return refuse(ILLEGAL_FUNCTION, why.clone());
+        }
         let Some(address) = address else {
             return refuse(
                 ILLEGAL_ADDRESS,

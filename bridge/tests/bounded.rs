@@ -45,6 +45,7 @@ fn spec(drive: &'static Drive) -> DriveSpec {
         fixed: Default::default(),
         registers: Vec::new(),
         periods: Vec::new(),
+        draft: Default::default(),
     }
 }
 

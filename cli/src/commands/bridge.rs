@@ -107,6 +107,11 @@ pub struct Args {
     /// More links and drives, in YAML (see the README, "Into Prometheus / Home Assistant").
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// Write through maps marked `draft:` (not reviewed against their manuals): without it, the
+    /// drives of a draft map are read (with a note) and nothing is written to them, not even a
+    /// stop. With it every command through a draft says so.
+    #[arg(long)]
+    pub draft: bool,
     /// Serve Modbus TCP masters on this address for the drives of the command line's link,
     /// through the bridge's one master on the line (see `drivemap proxy`).
     #[arg(long = "serve-modbus", value_name = "ADDR")]
@@ -269,6 +274,7 @@ pub(crate) fn link(
     args: LinkArgs,
     drives: &[String],
     settings: &SettingsArgs,
+    draft: bool,
     names: &mut BTreeSet<String>,
     loaded: &mut BTreeMap<String, &'static Drive>,
 ) -> Result<LinkSpec, Error> {
@@ -307,6 +313,7 @@ pub(crate) fn link(
             fixed: given.fixed,
             registers: Vec::new(),
             periods: Vec::new(),
+            draft: drivemap_live::draft::DraftWrites::from_flag(draft),
         });
     }
     let Some(first) = first else {
@@ -324,8 +331,10 @@ pub(crate) fn link(
     } else {
         format!("serial {}", args.serial.clone().unwrap_or_default())
     };
+    // Each drive's commands are checked against its own map being a draft (`DriveSpec::draft`):
+    // the link's transport is shared, so it is not guarded by the first drive's map.
     let connect = Box::new(move || {
-        args.connect(first, profile)
+        args.connect_as(first, profile, drivemap_live::draft::DraftWrites::Allowed)
             .map(|(client, _)| client.into_transport())
             .map_err(Into::into)
     });
@@ -389,6 +398,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             la,
             &args.drives,
             &args.settings,
+            args.draft,
             &mut names,
             &mut loaded,
         )?;
@@ -428,6 +438,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 la,
                 &l.drives,
                 &SettingsArgs::default(),
+                args.draft,
                 &mut names,
                 &mut loaded,
             )

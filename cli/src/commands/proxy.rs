@@ -54,6 +54,10 @@ pub struct Args {
     pub retries: u8,
     #[command(flatten)]
     pub proxy: ProxyArgs,
+    /// Carry out writes to drives whose map is marked `draft:` (not reviewed against its
+    /// manual); without it they are refused (01h).
+    #[arg(long)]
+    pub draft: bool,
     /// Where Prometheus scrapes the proxy's `/metrics` (requests per master, refusals).
     #[arg(long, value_name = "ADDR")]
     pub metrics: Option<SocketAddr>,
@@ -77,6 +81,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         la,
         &args.drives,
         &settings,
+        args.draft,
         &mut BTreeSet::new(),
         &mut BTreeMap::new(),
     )?;

@@ -66,13 +66,15 @@ fn bridge_on(dir: &std::path::Path, line: u16, broker: u16, silent: bool, extra:
         "200ms",
         "--timeout",
         "300ms",
-        "--no-metrics",
         "--mqtt",
         &format!("mqtt://127.0.0.1:{broker}"),
         "--mqtt-client-id",
         "drivemap-test",
     ] {
         args.push(a.to_owned());
+    }
+    if !extra.contains(&"--metrics") {
+        args.push("--no-metrics".into());
     }
     args.extend(extra.iter().map(|s| s.to_string()));
     let refs: Vec<&str> = args.iter().map(String::as_str).collect();
@@ -162,20 +164,29 @@ fn retained_and_unpressed_commands_start_nothing() {
 }
 
 /// `--command-rate 1` and a client pressing `run` 20 times a second: the operator's stops are
-/// never refused, and after the last stop the drive is stopped within two request times
-/// (figures printed). The bridge used to refuse stops over the rate and carry queued runs out
-/// after them.
+/// never refused (each is carried out, or superseded by a run that came after it), and after
+/// the last stop the drive stays stopped. The bridge used to refuse stops over the rate and
+/// carry queued runs out after them. The stops' latency (arrival to the write's reply, from the
+/// bridge's own histogram) is printed.
 #[test]
 fn a_stop_gets_through_a_flood_of_runs() {
     let dir = scratch("flood");
     let (broker, port) = mosquitto(&dir, "mosquitto", "allow_anonymous true");
     let (sim, line) = simulated_line_with(&dir, &[(V7, 1)], true);
+    let metrics = free_port();
     let b = bridge_on(
         &dir,
         line,
         port,
         false,
-        &["--allow-writes", "run", "--command-rate", "1"],
+        &[
+            "--allow-writes",
+            "run",
+            "--command-rate",
+            "1",
+            "--metrics",
+            &format!("127.0.0.1:{metrics}"),
+        ],
     );
     online(port, &[&b, &broker, &sim]);
     let flood = std::thread::spawn(move || {
@@ -186,15 +197,9 @@ fn a_stop_gets_through_a_flood_of_runs() {
             std::thread::sleep(Duration::from_millis(250));
         }
     });
-    let mut took = Vec::new();
     for _ in 0..5 {
         std::thread::sleep(Duration::from_millis(400));
-        let t0 = Instant::now();
         assert!(publish(port, STOP, "PRESS", &[]).0);
-        wait_for(Duration::from_secs(5), "the stop", &[&b, &sim], || {
-            (command_word(line)? & 1 == 0).then_some(())
-        });
-        took.push(t0.elapsed());
     }
     flood.join().unwrap();
     assert!(publish(port, STOP, "PRESS", &[]).0);
@@ -202,17 +207,34 @@ fn a_stop_gets_through_a_flood_of_runs() {
     wait_for(Duration::from_secs(5), "the last stop", &[&b, &sim], || {
         (command_word(line)? & 1 == 0).then_some(())
     });
-    took.push(t0.elapsed());
-    std::thread::sleep(Duration::from_secs(4));
+    let last = t0.elapsed();
+    std::thread::sleep(Duration::from_secs(3));
     assert_eq!(command_word(line).map(|w| w & 1), Some(0), "{}", b.output());
     let log = b.output();
-    assert!(!log.contains("command/stop\" (\"PRESS\") refused"), "{log}");
+    let stops: Vec<&str> = log.lines().filter(|l| l.contains("command/stop")).collect();
+    assert_eq!(stops.len(), 6, "{log}");
+    assert!(
+        stops
+            .iter()
+            .all(|l| l.ends_with(": stopped") || l.contains("superseded by a later run")),
+        "{stops:#?}"
+    );
     assert!(log.contains("rate limit"), "{log}");
-    took.sort();
+    let (_, text) = http_get(metrics, "/metrics").unwrap();
+    let stat = |what: &str| -> f64 {
+        text.lines()
+            .filter(|l| {
+                l.starts_with(&format!("drivemap_bridge_command_latency_seconds_{what}"))
+                    && l.contains("command=\"stop\"")
+            })
+            .filter_map(|l| l.rsplit(' ').next()?.parse::<f64>().ok())
+            .sum()
+    };
+    let (sum, count) = (stat("sum"), stat("count"));
+    assert!(count >= 1.0, "{text}");
     eprintln!(
-        "stop latency under a 20/s run flood (publish to stopped, read by a separate process): median {:?}, max {:?}",
-        took[took.len() / 2],
-        took[took.len() - 1]
+        "stop latency under a 20/s run flood: {count} stops carried out, mean {:.1} ms from arrival to the write's reply; the last one read stopped by a separate process {last:?} after publishing",
+        1000.0 * sum / count
     );
 }
 
@@ -409,4 +431,74 @@ fn untrusted_text_and_unsafe_options() {
             assert!(!text.contains(never), "{args:?}: {text}");
         }
     }
+}
+
+/// A map marked `draft:` (not reviewed against its manual) is read by the bridge, with a note,
+/// and nothing is written through it, not even a stop: its run register's address is what a
+/// reader made of the text. With `--draft` the same commands are carried out and say they went
+/// through a draft.
+#[test]
+fn a_draft_map_is_read_and_never_written_without_draft() {
+    let dir = scratch("draft");
+    let maps = dir.join("maps");
+    std::fs::create_dir_all(&maps).unwrap();
+    let v7 = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml"),
+    )
+    .unwrap();
+    let draft = v7.replacen(
+        "\nschema: 2\n",
+        "\nschema: 2\ndraft:\n  by: a test (the V7 map marked as a draft)\n",
+        1,
+    );
+    assert_ne!(draft, v7, "no `schema: 2` line to mark");
+    std::fs::write(maps.join("yaskawa-v7.yaml"), draft).unwrap();
+    let (broker, port) = mosquitto(&dir, "mosquitto", "allow_anonymous true");
+    let (sim, line) = simulated_line_with(&dir, &[(V7, 1)], false);
+    let maps_arg = maps.to_str().unwrap();
+    let b = bridge_on(
+        &dir,
+        line,
+        port,
+        false,
+        &["--maps", maps_arg, "--allow-writes", "run"],
+    );
+    online(port, &[&b, &broker, &sim]);
+    let errors =
+        std::thread::spawn(move || subscribe(port, "drivemap/yaskawa-v7-1/error", 6, &["-C", "2"]));
+    std::thread::sleep(Duration::from_millis(800));
+    assert!(publish(port, RUN, "PRESS", &[]).0);
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(publish(port, STOP, "PRESS", &[]).0);
+    let errors = errors.join().unwrap();
+    assert_eq!(errors.len(), 2, "{errors:?}\n{}", b.output());
+    assert!(
+        errors.iter().all(|(_, e)| e.contains("draft")),
+        "{errors:?}"
+    );
+    assert!(b.output().contains("is a draft map"), "{}", b.output());
+    assert_eq!(command_writes(&sim), 0, "{}", sim.output());
+    drop(b);
+    let again = dir.join("again");
+    std::fs::create_dir_all(&again).unwrap();
+    let b = bridge_on(
+        &again,
+        line,
+        port,
+        false,
+        &["--maps", maps_arg, "--allow-writes", "run", "--draft"],
+    );
+    // The first bridge's retained `online` is still on the broker: wait for this one's.
+    wait_for(
+        Duration::from_secs(30),
+        "the bridge connected",
+        &[&b],
+        || (connections(&b) >= 1).then_some(()),
+    );
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(publish(port, RUN, "PRESS", &[]).0);
+    wait_for(Duration::from_secs(10), "the run", &[&b, &sim], || {
+        (command_word(line)? & 1 == 1).then_some(())
+    });
+    assert!(b.output().contains("through draft map"), "{}", b.output());
 }
