@@ -39,9 +39,15 @@ pub struct Args {
     /// RTU frames over TCP through a transparent serial gateway.
     #[arg(long = "rtu-tcp", value_name = "HOST:PORT")]
     pub rtu_tcp: Option<String>,
-    /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`).
+    /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`), or Modbus ASCII with --ascii.
     #[arg(long, value_name = "PATH")]
     pub serial: Option<String>,
+    /// Modbus ASCII instead of RTU, on --serial or through a transparent gateway (--rtu-tcp).
+    #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
+    pub ascii: bool,
+    /// Data bits of an ASCII line, 7 or 8 (default: the map's).
+    #[arg(long = "data-bits", requires = "ascii", value_parser = clap::value_parser!(u8).range(7..=8))]
+    pub data_bits: Option<u8>,
     /// Baud rate of the serial line (default: the first drive's map's default).
     #[arg(long)]
     pub baud: Option<u32>,
@@ -183,6 +189,11 @@ struct ConfigLink {
     serial: Option<String>,
     baud: Option<u32>,
     timeout_ms: Option<u64>,
+    /// Modbus ASCII instead of RTU on `serial` or `rtu_tcp`.
+    #[serde(default)]
+    ascii: bool,
+    /// Data bits of an ASCII line.
+    data_bits: Option<u8>,
     /// `ID@SLAVE`.
     drives: Vec<String>,
     /// Longer periods for some registers: `{parameters: 60s, output_current: 5s}`.
@@ -243,6 +254,8 @@ pub(crate) fn link_args(
     parity: Option<Parity>,
     timeout: Option<Duration>,
     retries: u8,
+    ascii: bool,
+    data_bits: Option<u8>,
 ) -> Result<LinkArgs, Error> {
     let given = [&tcp, &gateway, &rtu_tcp, &serial]
         .iter()
@@ -256,8 +269,8 @@ pub(crate) fn link_args(
         gateway,
         rtu_tcp,
         serial,
-        ascii: false,
-        data_bits: None,
+        ascii,
+        data_bits,
         baud,
         parity,
         stop_bits: None,
@@ -392,6 +405,8 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             args.parity,
             args.timeout,
             args.retries,
+            args.ascii,
+            args.data_bits,
         )?;
         let mut l = link(
             &args.dir,
@@ -431,6 +446,8 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 None,
                 l.timeout_ms.map(Duration::from_millis),
                 args.retries,
+                l.ascii,
+                l.data_bits,
             )
             .map_err(|e| format!("--config {}: links[{i}]: {e}", path.display()))?;
             let mut spec = link(

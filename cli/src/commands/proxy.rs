@@ -37,9 +37,16 @@ pub struct Args {
     /// RTU frames over TCP through a transparent serial gateway.
     #[arg(long = "rtu-tcp", value_name = "HOST:PORT")]
     pub rtu_tcp: Option<String>,
-    /// Serial port speaking Modbus RTU.
+    /// Serial port speaking Modbus RTU, or Modbus ASCII with --ascii.
     #[arg(long, value_name = "PATH")]
     pub serial: Option<String>,
+    /// Modbus ASCII instead of RTU on the line (--serial, or --rtu-tcp through a transparent
+    /// gateway); the masters still speak Modbus TCP to the proxy.
+    #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
+    pub ascii: bool,
+    /// Data bits of an ASCII line, 7 or 8 (default: the map's).
+    #[arg(long = "data-bits", requires = "ascii", value_parser = clap::value_parser!(u8).range(7..=8))]
+    pub data_bits: Option<u8>,
     /// Baud rate of the serial line (default: the first drive's map's).
     #[arg(long)]
     pub baud: Option<u32>,
@@ -74,6 +81,8 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         args.parity,
         args.timeout,
         args.retries,
+        args.ascii,
+        args.data_bits,
     )?;
     let settings = SettingsArgs::default();
     let mut l = link(

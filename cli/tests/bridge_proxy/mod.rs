@@ -147,3 +147,129 @@ print(json.dumps({"asked": 40, "bad": bad}))
     assert!(log.contains("is above"), "{log}");
     assert!(log.contains("not in --allow-commands"), "{log}");
 }
+
+/// A Modbus ASCII drive (the `quill-q2` fixture, 7E1) behind the proxy and the bridge: mbpoll
+/// reads and writes it through `drivemap proxy --ascii` as Modbus TCP, and the bridge's
+/// `command/run` runs it over `--ascii`.
+#[test]
+fn an_ascii_line_behind_the_proxy_and_the_bridge() {
+    let dir = scratch("ascii");
+    let maps = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/quill-q2");
+    let maps = maps.to_str().unwrap();
+    let line = free_port();
+    let line_addr = format!("127.0.0.1:{line}");
+    let sim = Proc::spawn(
+        "simulate quill-q2",
+        drivemap(),
+        &[
+            "simulate",
+            "--maps",
+            maps,
+            "--drive",
+            "quill-q2@1",
+            "--rtu-tcp",
+            &line_addr,
+            "--ascii",
+            "--network-source",
+            "--time-scale",
+            "50",
+        ],
+        dir.join("sim.log"),
+        &[],
+    );
+    wait_for(Duration::from_secs(20), "the simulator", &[&sim], || {
+        listening(line).then_some(())
+    });
+    let port = free_port();
+    let proxy = Proc::spawn(
+        "proxy",
+        drivemap(),
+        &[
+            "proxy",
+            "--maps",
+            maps,
+            "--listen",
+            &format!("127.0.0.1:{port}"),
+            "--drive",
+            "quill-q2@1",
+            "--rtu-tcp",
+            &line_addr,
+            "--ascii",
+            "--proxy-writes",
+        ],
+        dir.join("proxy.log"),
+        &[],
+    );
+    wait_for(Duration::from_secs(20), "the proxy", &[&proxy], || {
+        listening(port).then_some(())
+    });
+    // 0101h: the frequency command in 0.01 Hz.
+    let (ok, text) = mbpoll(port, &["-r", "257", "127.0.0.1", "1234"]);
+    assert!(ok, "{text}\n{}", proxy.output());
+    let (ok, text) = mbpoll(port, &["-r", "257", "-c", "1", "127.0.0.1"]);
+    assert!(ok && text.contains("1234"), "{text}");
+    // Above the map's 60 Hz: refused before the line.
+    let (ok, text) = mbpoll(port, &["-r", "257", "127.0.0.1", "6001"]);
+    assert!(
+        !ok && text.to_lowercase().contains("illegal data value"),
+        "{text}"
+    );
+    drop(proxy);
+    let (broker, mqtt) = mosquitto(&dir, "mosquitto", "allow_anonymous true");
+    let b = Proc::spawn(
+        "bridge",
+        drivemap(),
+        &[
+            "bridge",
+            "--maps",
+            maps,
+            "--drive",
+            "quill-q2@1",
+            "--rtu-tcp",
+            &line_addr,
+            "--ascii",
+            "--period",
+            "200ms",
+            "--no-metrics",
+            "--mqtt",
+            &format!("mqtt://127.0.0.1:{mqtt}"),
+            "--allow-writes",
+            "run",
+        ],
+        dir.join("bridge.log"),
+        &[],
+    );
+    wait_for(
+        Duration::from_secs(30),
+        "the drive online",
+        &[&b, &broker, &sim],
+        || {
+            subscribe(mqtt, "drivemap/quill-q2-1/availability", 1, &[])
+                .into_iter()
+                .find(|(_, v)| v == "online")
+        },
+    );
+    assert!(publish(mqtt, "drivemap/quill-q2-1/command/run", "PRESS", &[]).0);
+    wait_for(
+        Duration::from_secs(10),
+        "the run over ASCII",
+        &[&b, &sim],
+        || {
+            let out = run(&[
+                "read",
+                "--maps",
+                maps,
+                "--drive",
+                "quill-q2",
+                "--rtu-tcp",
+                &line_addr,
+                "--ascii",
+                "--format",
+                "json",
+                "run_command",
+            ]);
+            let v: serde_json::Value = serde_json::from_slice(&out.stdout).ok()?;
+            (v.get(0)?.get("raw")?.as_u64()? & 1 == 1).then_some(())
+        },
+    );
+}
