@@ -310,6 +310,23 @@ pub(crate) fn link(
         args.check_transport(drive)?;
         first.get_or_insert(drive);
         let given = settings.resolve(drive)?;
+        // The bridge reads what conversions depend on from the drive every cycle: a `--set`
+        // of a register it can read would replace what the drive holds by what was assumed.
+        for g in given.given.iter().filter(|g| !g.external) {
+            if let Some(r) = drive.registers.iter().find(|r| r.def.id == g.id)
+                && r.readable()
+                && !r.broadcast
+                && drive.register_plan(r).transports.contains(args.kind())
+            {
+                return Err(format!(
+                    "--set {}={}: the bridge reads {} from the drive every cycle; --set is for what the drive does not give (an external quantity, a setting it cannot read on this link)",
+                    drivemap_live::codec::shorten(&g.name),
+                    drivemap_live::codec::shorten(&g.value),
+                    drivemap_map::describe::register(r)
+                )
+                .into());
+            }
+        }
         let profile = drive.plan().profile;
         let mut name = format!("{id}-{slave}");
         let mut n = 2;

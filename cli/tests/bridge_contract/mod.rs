@@ -409,6 +409,8 @@ fn untrusted_text_and_unsafe_options() {
         (vec!["--discovery-prefix", "ha/#"], "wildcards", ""),
         (vec!["--command-rate", "inf"], "--command-rate", ""),
         (vec!["--command-rate", "0"], "--command-rate", ""),
+        // n011 is read from the drive every cycle: an assumed value would replace it.
+        (vec!["--set", "n011=400"], "reads max_output_frequency (n011)", ""),
     ] {
         let mut all = vec![
             "bridge",
