@@ -6,7 +6,8 @@
 //!
 //! Property tests (proptest) over every map of `maps/` (the directory is read, no list) and the
 //! drafts `drivemap import` makes of the import fixtures' manuals, through the CLI's own write
-//! command in-process against a simulated drive that records every write; and the
+//! command in-process (and, for drafts, a `drivemap_live::Session`'s client) against a simulated
+//! drive that records every write; and the
 //! reproductions of the report through the binary, each asserting what reached the drive.
 
 use std::collections::BTreeSet;
@@ -122,6 +123,7 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
         ..Config::default()
     });
     let strategy = (any::<Index>(), any::<Index>(), any::<Index>());
+    let sessions = std::cell::Cell::new(0usize);
     runner
         .run(&strategy, |(m, ri, vi)| {
             let (drive, profile, wire) = &loaded[m.index(loaded.len())];
@@ -143,9 +145,31 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
                 "{} {assignment}: {result:?}",
                 drive.meta.id
             );
+            // The library's path: a session over the draft, a write request made through its
+            // client directly, is refused at the link.
+            // (The simulated drive is locked while it serves a connection: counted before.)
+            let before = wire.writes();
+            let link = drivemap_live::Link::rtu_over_tcp(wire.addr.clone());
+            let mut session = drivemap_live::Session::open(drive, &link, LiveSettings::default())
+                .expect("the simulated drive is there");
+            if let Ok(at) = session.address(r) {
+                sessions.set(sessions.get() + 1);
+                let result = session.client.write_registers(1, at, &[1]);
+                drop(session);
+                wire.settle();
+                let arrived = wire.writes_since(before);
+                prop_assert!(
+                    arrived.is_empty(),
+                    "{} {}: the session's write {arrived:?} reached the wire",
+                    drive.meta.id,
+                    r.def.id
+                );
+                prop_assert!(result.is_err());
+            }
             Ok(())
         })
         .unwrap();
+    assert!(sessions.get() > 0, "the session's path was tried");
     // With --draft a register whose access nobody wrote (neither the row nor its group) is
     // read-only: refused, nothing sent. The import fixtures' drafts have such rows.
     let mut checked = 0;
