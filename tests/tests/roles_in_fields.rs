@@ -390,3 +390,48 @@ fn a_reset_of_unknown_edge_acts_under_faults() {
         })
         .unwrap();
 }
+
+/// A field of a command register written through the library (`Vfd::write_command_fields`,
+/// what `drivemap write reg=field=value` composes with): the fault reset never goes out unless
+/// named, the run bit only while this master's last `run()` stands (or the status shows the
+/// drive running); a register that holds no command is refused, nothing sent (issue 37).
+#[test]
+fn a_command_field_is_written_from_the_roles_not_from_a_read_back() {
+    let drive = map("maps/yaskawa-v7.yaml");
+    let kind = TransportKind::Rtu;
+    let mut rig = Rig::new(&drive, simulator(&drive, kind), kind, 0);
+    let command = drive.find("digital_input_command").unwrap();
+    let row = u16::try_from(drive.plan().order[command.index()]).unwrap();
+    let bit = |id: &str| match &drive.plan().registers[usize::from(row)].conversion {
+        drivemap_runtime::plan::Conversion::Bits { fields, .. } => {
+            fields.iter().find(|f| f.id == id).unwrap().mask()
+        }
+        _ => unreachable!("a bit-field register"),
+    };
+    let (run, reset, s3) = (bit("run_command"), bit("fault_reset"), bit("terminal_s3"));
+    let mut d = rig.vfd(&drive, drive.plan().roles);
+    assert!(d.holds_command(row));
+    // Stopped: S3 on, nothing else.
+    assert_eq!(d.write_command_fields(row, s3, s3).unwrap(), s3);
+    // Running by this master: the run is kept, the reset still not sent.
+    d.run().unwrap();
+    let word = d.write_command_fields(row, s3, 0).unwrap();
+    assert_eq!(word & (run | reset | s3), run, "{word:04X}h");
+    // A reset named is sent; the next write releases it.
+    let word = d.write_command_fields(row, reset, reset).unwrap();
+    assert_eq!(word & (run | reset), run | reset, "{word:04X}h");
+    let word = d.write_command_fields(row, s3, s3).unwrap();
+    assert_eq!(word & (run | reset | s3), run | s3, "{word:04X}h");
+    // Stopped again: no run in any word a field write sends.
+    d.stop().unwrap();
+    let word = d.write_command_fields(row, s3, 0).unwrap();
+    assert_eq!(word & (run | reset | s3), 0, "{word:04X}h");
+    // A register without a command role is refused, not written.
+    let other = drive.find("n019").unwrap();
+    let other_row = u16::try_from(drive.plan().order[other.index()]).unwrap();
+    assert!(!d.holds_command(other_row));
+    assert!(matches!(
+        d.write_command_fields(other_row, 1, 1),
+        Err(Error::Refused(Refusal::FieldNotWritable { .. }))
+    ));
+}
