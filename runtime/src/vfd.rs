@@ -90,6 +90,11 @@
 //!   on the link, reads mean what writes do, and no command field shares it, else refused
 //!   ([`Refusal::FieldNotWritable`]) before anything is sent:
 //!   `roles_in_fields::a_setpoint_on_a_field_is_refused_where_read_modify_write_is_not_safe`.
+//! - A write of some fields of a command register ([`Vfd::write_command_fields`]; `drivemap
+//!   write reg=field=value` composes with [`Vfd::command_fields_word`]) never sends a run or a
+//!   reset the write does not name from a word read back: the reset and every edge command
+//!   released, a run kept only while this master's `run()` stands or the status shows the drive
+//!   running: `roles_in_fields::a_command_field_is_written_from_the_roles_not_from_a_read_back`.
 //! - On a drive with a command profile (a control-word state machine, the map's `profile:`,
 //!   [`CommandProfile`]), `run()` reads the status word and writes the run path's transitions in
 //!   order, each verified in the status word within its time limit, else
