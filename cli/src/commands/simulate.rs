@@ -585,7 +585,7 @@ mod tests {
             .to_string();
         assert_eq!(
             e,
-            "`n152=x`: `x` is not a code of modbus_frequency_reference_unit_selection; expected a number or one of: unit_0_1_hz, unit_0_01_hz, full_scale_30000, unit_0_1_percent"
+            "`n152=x`: `x` is not a code of modbus_frequency_reference_unit_selection; expected a number or one of: 0 (unit_0_1_hz), 1 (unit_0_01_hz), 2 (full_scale_30000), 3 (unit_0_1_percent)"
         );
         let e = options(&v7, None, &["n019=x".into()], &[], 1.0)
             .unwrap_err()
