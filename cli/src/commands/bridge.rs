@@ -30,36 +30,8 @@ pub struct Args {
     pub drives: Vec<String>,
     #[command(flatten)]
     pub dir: MapsDir,
-    /// The drives' own Modbus TCP interface (`192.168.1.10:502`).
-    #[arg(long, value_name = "HOST:PORT")]
-    pub tcp: Option<String>,
-    /// A Modbus TCP to RTU gateway with the drives on its serial line.
-    #[arg(long, value_name = "HOST:PORT")]
-    pub gateway: Option<String>,
-    /// RTU frames over TCP through a transparent serial gateway.
-    #[arg(long = "rtu-tcp", value_name = "HOST:PORT")]
-    pub rtu_tcp: Option<String>,
-    /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`), or Modbus ASCII with --ascii.
-    #[arg(long, value_name = "PATH")]
-    pub serial: Option<String>,
-    /// Modbus ASCII instead of RTU, on --serial or through a transparent gateway (--rtu-tcp).
-    #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
-    pub ascii: bool,
-    /// Data bits of an ASCII line, 7 or 8 (default: the map's).
-    #[arg(long = "data-bits", requires = "ascii", value_parser = clap::value_parser!(u8).range(7..=8))]
-    pub data_bits: Option<u8>,
-    /// Baud rate of the serial line (default: the first drive's map's default).
-    #[arg(long)]
-    pub baud: Option<u32>,
-    /// Parity of the serial line (default: the map's).
-    #[arg(long, value_parser = ParityParser)]
-    pub parity: Option<Parity>,
-    /// How long to wait for each reply (default: from the map).
-    #[arg(long, value_parser = crate::duration::positive)]
-    pub timeout: Option<Duration>,
-    /// Further attempts after a timeout.
-    #[arg(long, default_value_t = 1)]
-    pub retries: u8,
+    #[command(flatten)]
+    pub line: LineArgs,
     /// Variants and values given instead of read, for every --drive (`--set n011=60`).
     #[command(flatten)]
     pub settings: SettingsArgs,
@@ -169,6 +141,67 @@ impl ProxyArgs {
             cache: self.cache,
             timeout: self.wait,
         })
+    }
+}
+
+/// The link of the command line's drives (`drivemap bridge`, `drivemap proxy`).
+#[derive(ClapArgs, Debug, Clone)]
+pub struct LineArgs {
+    /// The drives' own Modbus TCP interface (`192.168.1.10:502`).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub tcp: Option<String>,
+    /// A Modbus TCP to RTU gateway with the drives on its serial line.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub gateway: Option<String>,
+    /// RTU frames over TCP through a transparent serial gateway.
+    #[arg(long = "rtu-tcp", value_name = "HOST:PORT")]
+    pub rtu_tcp: Option<String>,
+    /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`), or Modbus ASCII with --ascii.
+    #[arg(long, value_name = "PATH")]
+    pub serial: Option<String>,
+    /// Modbus ASCII instead of RTU, on --serial or through a transparent gateway (--rtu-tcp).
+    #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
+    pub ascii: bool,
+    /// Data bits of an ASCII line, 7 or 8 (default: the map's).
+    #[arg(long = "data-bits", requires = "ascii", value_parser = clap::value_parser!(u8).range(7..=8))]
+    pub data_bits: Option<u8>,
+    /// Baud rate of the serial line (default: the first drive's map's default).
+    #[arg(long)]
+    pub baud: Option<u32>,
+    /// Parity of the serial line (default: the map's).
+    #[arg(long, value_parser = ParityParser)]
+    pub parity: Option<Parity>,
+    /// How long to wait for each reply (default: from the map).
+    #[arg(long, value_parser = crate::duration::positive)]
+    pub timeout: Option<Duration>,
+    /// Further attempts after a timeout.
+    #[arg(long, default_value_t = 1)]
+    pub retries: u8,
+}
+
+impl LineArgs {
+    /// Whether a link was given.
+    fn given(&self) -> bool {
+        self.tcp.is_some()
+            || self.gateway.is_some()
+            || self.rtu_tcp.is_some()
+            || self.serial.is_some()
+    }
+
+    /// The link, checked.
+    pub(crate) fn link(&self) -> Result<LinkArgs, Error> {
+        link_args(
+            self.tcp.clone(),
+            self.gateway.clone(),
+            self.rtu_tcp.clone(),
+            self.serial.clone(),
+            self.baud,
+            self.parity,
+            self.timeout,
+            self.retries,
+            self.ascii,
+            self.data_bits,
+        )
     }
 }
 
@@ -413,18 +446,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     let mut loaded = BTreeMap::new();
     let mut links = Vec::new();
     if !args.drives.is_empty() {
-        let la = link_args(
-            args.tcp.clone(),
-            args.gateway.clone(),
-            args.rtu_tcp.clone(),
-            args.serial.clone(),
-            args.baud,
-            args.parity,
-            args.timeout,
-            args.retries,
-            args.ascii,
-            args.data_bits,
-        )?;
+        let la = args.line.link()?;
         let mut l = link(
             &args.dir,
             la,
@@ -444,11 +466,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         links.push(l);
     } else if args.serve_modbus.is_some() {
         return Err("--serve-modbus serves the drives of the command line's link: give --drive ID@SLAVE with a link".into());
-    } else if args.tcp.is_some()
-        || args.gateway.is_some()
-        || args.rtu_tcp.is_some()
-        || args.serial.is_some()
-    {
+    } else if args.line.given() {
         return Err("a link without drives: give --drive ID@SLAVE".into());
     }
     if let Some(path) = &args.config {
@@ -462,7 +480,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 l.baud,
                 None,
                 l.timeout_ms.map(Duration::from_millis),
-                args.retries,
+                args.line.retries,
                 l.ascii,
                 l.data_bits,
             )

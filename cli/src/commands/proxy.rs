@@ -11,9 +11,8 @@ use std::time::Duration;
 
 use clap::Args as ClapArgs;
 
-use crate::commands::bridge::{ProxyArgs, link, link_args};
+use crate::commands::bridge::{LineArgs, ProxyArgs, link};
 use crate::error::Error;
-use crate::live::link::{Parity, ParityParser};
 use crate::live::session::SettingsArgs;
 use crate::maps::MapsDir;
 
@@ -28,37 +27,8 @@ pub struct Args {
     pub drives: Vec<String>,
     #[command(flatten)]
     pub dir: MapsDir,
-    /// The drives' own Modbus TCP interface.
-    #[arg(long, value_name = "HOST:PORT")]
-    pub tcp: Option<String>,
-    /// A Modbus TCP to RTU gateway with the drives on its serial line.
-    #[arg(long, value_name = "HOST:PORT")]
-    pub gateway: Option<String>,
-    /// RTU frames over TCP through a transparent serial gateway.
-    #[arg(long = "rtu-tcp", value_name = "HOST:PORT")]
-    pub rtu_tcp: Option<String>,
-    /// Serial port speaking Modbus RTU, or Modbus ASCII with --ascii.
-    #[arg(long, value_name = "PATH")]
-    pub serial: Option<String>,
-    /// Modbus ASCII instead of RTU on the line (--serial, or --rtu-tcp through a transparent
-    /// gateway); the masters still speak Modbus TCP to the proxy.
-    #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
-    pub ascii: bool,
-    /// Data bits of an ASCII line, 7 or 8 (default: the map's).
-    #[arg(long = "data-bits", requires = "ascii", value_parser = clap::value_parser!(u8).range(7..=8))]
-    pub data_bits: Option<u8>,
-    /// Baud rate of the serial line (default: the first drive's map's).
-    #[arg(long)]
-    pub baud: Option<u32>,
-    /// Parity of the serial line (default: the map's).
-    #[arg(long, value_parser = ParityParser)]
-    pub parity: Option<Parity>,
-    /// How long to wait for each reply on the line (default: from the map).
-    #[arg(long, value_parser = crate::duration::positive)]
-    pub timeout: Option<Duration>,
-    /// Further attempts after a timeout on the line.
-    #[arg(long, default_value_t = 0)]
-    pub retries: u8,
+    #[command(flatten)]
+    pub line: LineArgs,
     #[command(flatten)]
     pub proxy: ProxyArgs,
     /// Carry out writes to drives whose map is marked `draft:` (not reviewed against its
@@ -72,18 +42,7 @@ pub struct Args {
 
 /// Serves masters until SIGTERM or SIGINT.
 pub fn run(args: Args) -> Result<ExitCode, Error> {
-    let la = link_args(
-        args.tcp,
-        args.gateway,
-        args.rtu_tcp,
-        args.serial,
-        args.baud,
-        args.parity,
-        args.timeout,
-        args.retries,
-        args.ascii,
-        args.data_bits,
-    )?;
+    let la = args.line.link()?;
     let settings = SettingsArgs::default();
     let mut l = link(
         &args.dir,
