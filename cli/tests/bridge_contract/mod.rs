@@ -410,7 +410,11 @@ fn untrusted_text_and_unsafe_options() {
         (vec!["--command-rate", "inf"], "--command-rate", ""),
         (vec!["--command-rate", "0"], "--command-rate", ""),
         // n011 is read from the drive every cycle: an assumed value would replace it.
-        (vec!["--set", "n011=400"], "reads max_output_frequency (n011)", ""),
+        (
+            vec!["--set", "n011=400"],
+            "reads max_output_frequency (n011)",
+            "",
+        ),
     ] {
         let mut all = vec![
             "bridge",
