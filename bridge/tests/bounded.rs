@@ -679,3 +679,126 @@ fn a_period_of_nothing_is_refused() {
     };
     assert!(e.contains("\"no_such_thing\""), "{e}");
 }
+
+/// A relay on loopback between the link and `to` that holds every reply back `late`.
+fn late_relay(to: std::net::SocketAddr, late: Duration) -> std::net::SocketAddr {
+    use std::io::{Read, Write};
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap();
+    std::thread::spawn(move || {
+        for master in listener.incoming() {
+            let Ok(mut master) = master else { return };
+            let Ok(mut drive) = std::net::TcpStream::connect(to) else {
+                return;
+            };
+            let (mut m2, mut d2) = (master.try_clone().unwrap(), drive.try_clone().unwrap());
+            // Requests straight through; replies after `late`.
+            std::thread::spawn(move || {
+                let mut buf = [0u8; 512];
+                while let Ok(n) = m2.read(&mut buf) {
+                    if n == 0 || d2.write_all(&buf[..n]).is_err() {
+                        return;
+                    }
+                }
+            });
+            std::thread::spawn(move || {
+                let mut buf = [0u8; 512];
+                while let Ok(n) = drive.read(&mut buf) {
+                    std::thread::sleep(late);
+                    if n == 0 || master.write_all(&buf[..n]).is_err() {
+                        return;
+                    }
+                }
+            });
+        }
+    });
+    addr
+}
+
+/// Every reply 100 ms late and a period shorter than a cycle (the bridge used to carry
+/// commands out only in the time left before the next cycle, so with cycles back to back
+/// they were never carried out): a stop reaches the running drive within two request times.
+#[test]
+fn a_stop_gets_out_when_every_reply_is_late_and_cycles_run_back_to_back() {
+    let drive = v7();
+    let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
+    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+    let server = TcpServer::spawn(
+        Arc::clone(&sim),
+        "127.0.0.1:0",
+        TcpFraming::RtuOverTcp,
+        None,
+    )
+    .unwrap();
+    let late = Duration::from_millis(100);
+    let relay = late_relay(server.local_addr(), late);
+    let mut s = spec(drive);
+    s.options.timeout = Duration::from_millis(400);
+    let board = Arc::new(Board::new(1, DEFAULT_DEADLINE));
+    let l = LinkSpec {
+        name: "late".into(),
+        kind: TransportKind::RtuOverTcp,
+        line: SerialConfig::default(),
+        connect: connect_to(relay.to_string()),
+        drives: vec![s],
+        poll: true,
+        proxy: None,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let (m, st, b) = (metrics_for(drive), Arc::clone(&stop), Arc::clone(&board));
+    let task = std::thread::spawn(move || {
+        link::run(
+            l,
+            0,
+            Duration::from_millis(50),
+            m,
+            None,
+            b,
+            st,
+            Arc::new(AtomicBool::new(false)),
+            None,
+        )
+    });
+    let running = || {
+        drivemap_sim::server::lock(&sim)
+            .state()
+            .unwrap()
+            .run_command
+    };
+    let until = |what: &str, f: &dyn Fn() -> bool| {
+        let began = Instant::now();
+        while !f() {
+            assert!(began.elapsed() < Duration::from_secs(15), "{what}");
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        began.elapsed()
+    };
+    until("the V7 answering", &|| board.answering(0));
+    let command = |action| Command {
+        drive: 0,
+        action,
+        topic: "test".into(),
+        payload: "PRESS".into(),
+    };
+    let mut took = Vec::new();
+    for k in 0..6u64 {
+        board.offer(command(Action::Run), "", Instant::now());
+        until("the run", &|| running());
+        std::thread::sleep(Duration::from_millis(90 * k));
+        board.offer(command(Action::Stop), "", Instant::now());
+        took.push(until("the stop", &|| !running()));
+    }
+    stop.store(true, Ordering::Relaxed);
+    task.join().unwrap();
+    server.stop();
+    took.sort();
+    eprintln!(
+        "stop latency with every reply 100 ms late, cycles back to back: median {:?}, max {:?}",
+        took[took.len() / 2],
+        took[took.len() - 1]
+    );
+    // The request in flight (its reply 100 ms late) and the stop's own.
+    for t in &took {
+        assert!(*t < 4 * late, "{took:?}");
+    }
+}
