@@ -185,22 +185,8 @@ impl Commander {
                 register: describe::register(r),
                 source,
             })?;
-        // The limit through another parameter, read now (V7's reference against n011).
-        let mut settings = self.settings.clone();
-        if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency()
-            && let Some(Quantity::Register(row)) =
-                drive.plan().settings.quantities.get(usize::from(s.slot))
-            && let Some(d) = drive.register_of_row(*row)
-            && !self.fixed.contains(&d.def.id)
-        {
-            let raw = self
-                .read_raw(client, d)
-                .map_err(|source| CommandFailure::Dependency {
-                    register: describe::register(d),
-                    source: Box::new(source),
-                })?;
-            settings.absorb(drive, d.def.address, raw as u16);
-        }
+        // What its scale and limits depend on, read now (V7's reference against n011).
+        let settings = self.settings_now(client, r)?;
         let row = drive.register_plan(r);
         let at = u16::try_from(drive.plan().order[r.index()]).ok();
         let command_register = drive
@@ -312,18 +298,97 @@ impl Commander {
     }
 
     fn address(&self, r: &Register) -> Result<u16, PollFailure> {
+        self.address_with(r, &self.settings)
+    }
+
+    fn address_with(
+        &self,
+        r: &Register,
+        settings: &drivemap_live::LiveSettings,
+    ) -> Result<u16, PollFailure> {
         let drive = self.drive;
         drive
             .register_plan(r)
-            .locate(&self.settings.view(drive), self.kind)
+            .locate(&settings.view(drive), self.kind)
             .map_err(|e| PollFailure::AddressUnknown {
                 register: describe::register(r),
                 setting: e.setting,
             })
     }
 
+    /// The settings `r`'s conversion and limits depend on, read from the drive now (the
+    /// selecting parameters first, then the quantities they pick; at most three rounds), over
+    /// what the link's polls last read; given ones (`--set`) kept. A write converted with them
+    /// means what the drive will take it for.
+    pub(crate) fn settings_now(
+        &self,
+        client: &mut LinkClient,
+        r: &Register,
+    ) -> Result<drivemap_live::LiveSettings, CommandFailure> {
+        let drive = self.drive;
+        let plan = drive.plan();
+        let mut settings = self.settings.clone();
+        for _ in 0..3 {
+            let mut rows = Vec::new();
+            drive
+                .register_plan(r)
+                .depends_on(&settings.view(drive), |dep| match dep {
+                    Dependency::Code(s) => {
+                        rows.extend(
+                            plan.settings
+                                .codes
+                                .get(usize::from(s.slot))
+                                .map(|c| c.register),
+                        );
+                    }
+                    Dependency::Quantity(s) => {
+                        if let Some(Quantity::Register(row)) =
+                            plan.settings.quantities.get(usize::from(s.slot))
+                        {
+                            rows.push(*row);
+                        }
+                    }
+                });
+            if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency()
+                && let Some(Quantity::Register(row)) =
+                    plan.settings.quantities.get(usize::from(s.slot))
+            {
+                rows.push(*row);
+            }
+            let before = settings.clone();
+            for row in rows {
+                let Some(dep) = drive.register_of_row(row) else {
+                    continue;
+                };
+                if self.fixed.contains(&dep.def.id) {
+                    continue;
+                }
+                let raw = self
+                    .read_raw_with(client, dep, &settings)
+                    .map_err(|source| CommandFailure::Dependency {
+                        register: describe::register(dep),
+                        source: Box::new(source),
+                    })?;
+                settings.absorb(drive, dep.def.address, raw as u16);
+            }
+            if settings == before {
+                break;
+            }
+        }
+        Ok(settings)
+    }
+
     fn read_raw(&self, client: &mut LinkClient, r: &Register) -> Result<u32, PollFailure> {
-        let address = self.address(r)?;
+        self.read_raw_with(client, r, &self.settings)
+    }
+
+    fn read_raw_with(
+        &self,
+        client: &mut LinkClient,
+        r: &Register,
+        settings: &drivemap_live::LiveSettings,
+    ) -> Result<u32, PollFailure> {
+        let address = self.address_with(r, settings)?;
         let info = self.drive.register_plan(r).info;
         let mut w = [0u16; 2];
         let words = &mut w[..usize::from(info.width.count())];

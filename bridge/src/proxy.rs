@@ -30,12 +30,10 @@ use std::time::{Duration, Instant};
 
 use drivemap_live::codec;
 use drivemap_map::describe;
-use drivemap_map::lower::Quantity;
 use drivemap_runtime::pdu::{self, Request, Response, Words};
-use drivemap_runtime::plan::Dependency;
 use drivemap_runtime::roles::RoleKind;
 use drivemap_runtime::tcp;
-use drivemap_runtime::{Error as LineError, Refusal, Table};
+use drivemap_runtime::{Error as LineError, Refusal};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::{Semaphore, oneshot};
@@ -481,9 +479,9 @@ impl LineSide {
             if !quantity {
                 continue; // codes, fields and words: the gate's checks of the word
             }
-            let settings = match settings_for(d, client, r) {
+            let settings = match d.settings_now(client, r) {
                 Ok(s) => s,
-                Err(why) => return refuse(DEVICE_FAILURE, why),
+                Err(why) => return refuse(DEVICE_FAILURE, why.to_string()),
             };
             let checked = codec::decode_written(drive, r, u32::from(word), &settings)
                 .map_err(|e| e.to_string())
@@ -499,76 +497,6 @@ impl LineSide {
         }
         Ok(())
     }
-}
-
-/// The settings `r`'s conversion and limits depend on, read from the drive now (the selecting
-/// parameters first, then the quantities they pick; at most three rounds), over the ones the
-/// link's polls last read; given ones (`--set`) are kept.
-fn settings_for(
-    d: &Commander,
-    client: &mut LinkClient,
-    r: &drivemap_map::ir::Register,
-) -> Result<drivemap_live::LiveSettings, String> {
-    let drive = d.drive;
-    let plan = drive.plan();
-    let mut settings = d.settings.clone();
-    for _ in 0..3 {
-        let mut rows = Vec::new();
-        drive
-            .register_plan(r)
-            .depends_on(&settings.view(drive), |dep| match dep {
-                Dependency::Code(s) => {
-                    if let Some(c) = plan.settings.codes.get(usize::from(s.slot)) {
-                        rows.push(c.register);
-                    }
-                }
-                Dependency::Quantity(s) => {
-                    if let Some(Quantity::Register(row)) =
-                        plan.settings.quantities.get(usize::from(s.slot))
-                    {
-                        rows.push(*row);
-                    }
-                }
-            });
-        if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency()
-            && let Some(Quantity::Register(row)) = plan.settings.quantities.get(usize::from(s.slot))
-        {
-            rows.push(*row);
-        }
-        let before = settings.clone();
-        for row in rows {
-            let Some(dep) = drive.register_of_row(row) else {
-                continue;
-            };
-            if d.fixed.contains(&dep.def.id) {
-                continue;
-            }
-            let dp = drive.register_plan(dep);
-            let address = dp.locate(&settings.view(drive), d.kind).map_err(|e| {
-                format!(
-                    "{}: its address depends on {}",
-                    describe::register(dep),
-                    e.setting
-                )
-            })?;
-            let mut w = [0u16; 1];
-            let read = match dp.info.table {
-                Table::Holding => client.read_holding(d.slave, address, &mut w),
-                Table::Input => client.read_input(d.slave, address, &mut w),
-            };
-            read.map_err(|e| {
-                format!(
-                    "reading {}, which the value depends on: {e}",
-                    describe::register(dep)
-                )
-            })?;
-            settings.absorb(drive, dep.def.address, w[0]);
-        }
-        if settings == before {
-            break;
-        }
-    }
-    Ok(settings)
 }
 
 /// The first words of a refusal, for the `reason` label.
