@@ -651,7 +651,7 @@ pub async fn run(
                 Err(e) => {
                     connected = false;
                     let text = match &e {
-                        ConnectionError::ConnectionRefused(code) => format!("the broker refused the connection: {code:?} (check the user name and password)"),
+                        ConnectionError::ConnectionRefused(code) => refused_why(*code),
                         other => other.to_string(),
                     };
                     if !refused_logged {
@@ -718,6 +718,22 @@ pub async fn run(
         }
     })
     .await;
+}
+
+/// Why the broker refused the connection, with what to check.
+fn refused_why(code: rumqttc::v5::mqttbytes::v5::ConnectReturnCode) -> String {
+    use rumqttc::v5::mqttbytes::v5::ConnectReturnCode as C;
+    let check = match code {
+        C::BadUserNamePassword | C::NotAuthorized | C::BadAuthenticationMethod => {
+            "check the user name and password"
+        }
+        C::RefusedProtocolVersion | C::UnsupportedProtocolVersion => {
+            "the bridge speaks MQTT 5 (command topics without retained messages); use a broker that does (mosquitto 1.6 or later)"
+        }
+        C::ClientIdentifierNotValid | C::BadClientId => "check --mqtt-client-id",
+        _ => "see the broker's log",
+    };
+    format!("the broker refused the connection: {code:?} ({check})")
 }
 
 /// Whether a command message is taken as an intent: not retained, allowed, a press for a
