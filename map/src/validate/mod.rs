@@ -33,8 +33,8 @@ mod references_resolve;
 mod relative_limits_valid;
 mod repeat_needs_change_valid;
 mod roles_valid;
-mod status_codes;
 mod serial_valid;
+mod status_codes;
 mod timing_valid;
 mod value_kind_single;
 

@@ -543,7 +543,13 @@ impl Check<'_> {
     /// A status role on the codes of a whole register: an enumeration or plain word (not a
     /// pair), its `on` codes (and `off`, if given) among the register's values where it lists
     /// them.
-    fn whole_register_codes(&mut self, role: Role, p: &RolePlace, register: &Register, path: &Path) {
+    fn whole_register_codes(
+        &mut self,
+        role: Role,
+        p: &RolePlace,
+        register: &Register,
+        path: &Path,
+    ) {
         let id = role.id();
         let rid = Some(register.id());
         if !matches!(register.kind(), ValueKind::Enum(_) | ValueKind::Word)
@@ -560,13 +566,17 @@ impl Check<'_> {
             return;
         }
         let values = &register.def.values;
-        let on = p.on.iter().flat_map(|c| c.list()).enumerate().map(|(i, c)| {
-            let at = match &p.on {
-                Some(crate::model::Codes::Many(_)) => path.key("on").index(i),
-                _ => path.key("on"),
-            };
-            (at, c)
-        });
+        let on =
+            p.on.iter()
+                .flat_map(|c| c.list())
+                .enumerate()
+                .map(|(i, c)| {
+                    let at = match &p.on {
+                        Some(crate::model::Codes::Many(_)) => path.key("on").index(i),
+                        _ => path.key("on"),
+                    };
+                    (at, c)
+                });
         let off = p.off.iter().map(|c| (path.key("off"), c));
         let all: Vec<(Path, &CodeRef)> = on.chain(off).collect();
         for (at, c) in all {
