@@ -7,7 +7,7 @@
 //! transition (overriding what its drive does differently: a time limit, the bits it keeps). A
 //! map may also write a whole profile of its own. [`resolve`] merges the two, [`check`]
 //! validates the result, [`lower`] decides the plan's
-//! [`CommandProfile`](drivemap_core::command_profile::CommandProfile).
+//! [`CommandProfile`].
 
 use std::collections::BTreeMap;
 
