@@ -216,6 +216,15 @@ impl ReplyBuffer {
             match classify(&self.buf[..self.len], framing, request) {
                 Class::Ours(n) => return Some(0..n),
                 Class::Incomplete => break,
+                Class::Foreign(e, n)
+                    if starts_inside(&self.buf[..self.len.min(n)], framing, request) =>
+                {
+                    // Noise before our reply can pass a CRC together with the reply's first
+                    // bytes (`0D F3 46 25` + `01`): dropped whole, that "frame" would take the
+                    // reply's start with it. Dropped a byte at a time, the reply is found.
+                    self.discarded.bytes(1, Discard::Frame(e));
+                    self.drop_front(1);
+                }
                 Class::Foreign(e, n) => {
                     self.discarded.frame(e);
                     self.drop_front(n);
@@ -242,6 +251,22 @@ impl ReplyBuffer {
         }
         None
     }
+}
+
+/// Whether our reply could start inside `frame` (after its first byte): on an RTU-framed link,
+/// a byte of our slave address followed by our function (or its exception), or at the end.
+/// Modbus TCP frames carry a transaction id and are never cut from noise.
+fn starts_inside(frame: &[u8], framing: Framing, request: &Request<'_>) -> bool {
+    let Framing::Rtu { slave } = framing else {
+        return false;
+    };
+    let f = request.function();
+    (1..frame.len()).any(|off| {
+        frame[off] == slave
+            && frame
+                .get(off + 1)
+                .is_none_or(|&g| g == f || g == f | pdu::function::EXCEPTION_BIT)
+    })
 }
 
 fn classify(b: &[u8], framing: Framing, request: &Request<'_>) -> Class {

@@ -277,3 +277,33 @@ proptest! {
         }
     }
 }
+
+/// Noise before an RTU reply that looks like the head of a longer frame (the case a proptest
+/// run found: `0D F3 46 25` before `01 03 02 00 00 CRC`), fed one byte at a time.
+#[test]
+fn reply_found_behind_noise_that_looks_like_a_longer_frame() {
+    let request = Request::ReadHolding {
+        address: 0,
+        quantity: 1,
+    };
+    let values = [0u16];
+    let response = Response::Registers(Words::Native(&values));
+    let mut buf = [0u8; rtu::MAX_FRAME];
+    let n = rtu::encode_response(1, request.function(), &response, &mut buf).unwrap();
+    let mut stream = vec![13u8, 243, 70, 37];
+    stream.extend_from_slice(&buf[..n]);
+    let mut rx = ReplyBuffer::new();
+    let mut found = None;
+    for (k, piece) in stream.chunks(1).enumerate() {
+        rx.push(piece);
+        if let Some(r) = rx.scan(Framing::Rtu { slave: 1 }, &request) {
+            found = Some((k, rx.frame(r).to_vec()));
+            break;
+        }
+    }
+    assert_eq!(
+        found.map(|(_, f)| f),
+        Some(buf[..n].to_vec()),
+        "stream {stream:02X?}"
+    );
+}
