@@ -520,50 +520,8 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
         poll: true,
         proxy: None,
     };
-    let stop = Arc::new(AtomicBool::new(false));
-    let (m, st, b) = (metrics_for(drive), Arc::clone(&stop), Arc::clone(&board));
-    let task = std::thread::spawn(move || {
-        link::run(
-            l,
-            0,
-            Duration::from_millis(200),
-            m,
-            None,
-            b,
-            st,
-            Arc::new(AtomicBool::new(false)),
-            None,
-        )
-    });
-    let running = || {
-        drivemap_sim::server::lock(&sim)
-            .state()
-            .unwrap()
-            .run_command
-    };
-    let until = |what: &str, f: &dyn Fn() -> bool| {
-        let began = Instant::now();
-        while !f() {
-            assert!(began.elapsed() < Duration::from_secs(10), "{what}");
-            std::thread::sleep(Duration::from_millis(1));
-        }
-        began.elapsed()
-    };
-    until("the V7 answering", &|| board.answering(0));
-    let command = |action| Command {
-        drive: 0,
-        action,
-        topic: "test".into(),
-        payload: "PRESS".into(),
-    };
-    let mut took = Vec::new();
-    for k in 0..12u64 {
-        board.offer(command(Action::Run), "", Instant::now());
-        until("the run", &|| running());
-        std::thread::sleep(Duration::from_millis(37 * k));
-        board.offer(command(Action::Stop), "", Instant::now());
-        took.push(until("the stop", &|| !running()));
-    }
+    let (stop, task) = spawn_link(l, Duration::from_millis(200), Arc::clone(&board));
+    let mut took = stop_latencies(&board, &sim, 12, Duration::from_millis(37));
     took.sort();
     let model = drivemap_runtime::bus_time::BusModel::new(profile, serial_line);
     // The longest request of the V7's plan (16 registers) and a write, on the wire.
@@ -581,6 +539,68 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
     stop.store(true, Ordering::Relaxed);
     task.join().unwrap();
     server.stop();
+}
+
+/// Runs link `l` in a thread of its own every `period`, its commands from `board`; the flag
+/// that stops it and the thread.
+fn spawn_link(
+    l: LinkSpec,
+    period: Duration,
+    board: Arc<Board>,
+) -> (Arc<AtomicBool>, std::thread::JoinHandle<()>) {
+    let drive = l.drives[0].drive;
+    let stop = Arc::new(AtomicBool::new(false));
+    let (m, st) = (metrics_for(drive), Arc::clone(&stop));
+    let task = std::thread::spawn(move || {
+        link::run(
+            l,
+            0,
+            period,
+            m,
+            None,
+            board,
+            st,
+            Arc::new(AtomicBool::new(false)),
+            None,
+        )
+    });
+    (stop, task)
+}
+
+/// Once the simulated drive answers: `runs` times, a run, then after `k` x `spacing` a stop;
+/// how long each stop took to reach the drive, sorted.
+fn stop_latencies(
+    board: &Board,
+    sim: &drivemap_sim::SharedSim,
+    runs: u64,
+    spacing: Duration,
+) -> Vec<Duration> {
+    let running = || drivemap_sim::server::lock(sim).state().unwrap().run_command;
+    let until = |what: &str, f: &dyn Fn() -> bool| {
+        let began = Instant::now();
+        while !f() {
+            assert!(began.elapsed() < Duration::from_secs(15), "{what}");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        began.elapsed()
+    };
+    until("the V7 answering", &|| board.answering(0));
+    let command = |action| Command {
+        drive: 0,
+        action,
+        topic: "test".into(),
+        payload: "PRESS".into(),
+    };
+    let mut took = Vec::new();
+    for k in 0..runs {
+        board.offer(command(Action::Run), "", Instant::now());
+        until("the run", &|| running());
+        std::thread::sleep(spacing * k as u32);
+        board.offer(command(Action::Stop), "", Instant::now());
+        took.push(until("the stop", &|| !running()));
+    }
+    took.sort();
+    took
 }
 
 /// Poll periods per class of register: with `parameters` every 2 s on a link polled every
@@ -744,54 +764,11 @@ fn a_stop_gets_out_when_every_reply_is_late_and_cycles_run_back_to_back() {
         poll: true,
         proxy: None,
     };
-    let stop = Arc::new(AtomicBool::new(false));
-    let (m, st, b) = (metrics_for(drive), Arc::clone(&stop), Arc::clone(&board));
-    let task = std::thread::spawn(move || {
-        link::run(
-            l,
-            0,
-            Duration::from_millis(50),
-            m,
-            None,
-            b,
-            st,
-            Arc::new(AtomicBool::new(false)),
-            None,
-        )
-    });
-    let running = || {
-        drivemap_sim::server::lock(&sim)
-            .state()
-            .unwrap()
-            .run_command
-    };
-    let until = |what: &str, f: &dyn Fn() -> bool| {
-        let began = Instant::now();
-        while !f() {
-            assert!(began.elapsed() < Duration::from_secs(15), "{what}");
-            std::thread::sleep(Duration::from_millis(2));
-        }
-        began.elapsed()
-    };
-    until("the V7 answering", &|| board.answering(0));
-    let command = |action| Command {
-        drive: 0,
-        action,
-        topic: "test".into(),
-        payload: "PRESS".into(),
-    };
-    let mut took = Vec::new();
-    for k in 0..6u64 {
-        board.offer(command(Action::Run), "", Instant::now());
-        until("the run", &|| running());
-        std::thread::sleep(Duration::from_millis(90 * k));
-        board.offer(command(Action::Stop), "", Instant::now());
-        took.push(until("the stop", &|| !running()));
-    }
+    let (stop, task) = spawn_link(l, Duration::from_millis(50), Arc::clone(&board));
+    let took = stop_latencies(&board, &sim, 6, Duration::from_millis(90));
     stop.store(true, Ordering::Relaxed);
     task.join().unwrap();
     server.stop();
-    took.sort();
     eprintln!(
         "stop latency with every reply 100 ms late, cycles back to back: median {:?}, max {:?}",
         took[took.len() / 2],
