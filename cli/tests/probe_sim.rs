@@ -118,9 +118,9 @@ fn every_map_agrees_with_its_simulator(dir: &Path) -> Vec<String> {
     ids
 }
 
-/// The fixtures run through a command profile (CiA 402, PROFIdrive, ABB Drives), each in its
-/// own directory with its manual.
-const PROFILE_FIXTURES: &[&str] = &["kestrel-kd4", "norrland-nv20", "oskar-ax3"];
+/// The fixtures run through a command profile (CiA 402, PROFIdrive, ABB Drives, Danfoss FC),
+/// each in its own directory with its manual.
+const PROFILE_FIXTURES: &[&str] = &["kestrel-kd4", "norrland-nv20", "oskar-ax3", "solvik-sf7"];
 
 /// Each profile fixture agrees with its own simulator (`probe`, every link it lists), passes
 /// `check --strict` against its own manual, and `demo` runs and stops it through its state
