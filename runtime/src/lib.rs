@@ -66,6 +66,8 @@ pub mod transport;
 pub mod typed;
 #[cfg(feature = "std")]
 pub mod vfd;
+#[cfg(feature = "std")]
+mod wire;
 
 #[cfg(feature = "std")]
 pub use client::{Client, ClientOptions, Reconnect};
