@@ -10,6 +10,7 @@
 //! prints it as `const` data, the interpreter builds it at run time, and both convert with
 //! [`plan::RegisterPlan::decode_number`] and its siblings.
 #![no_std]
+#![deny(missing_docs, unreachable_pub)]
 
 #[cfg(test)]
 extern crate std;

@@ -25,6 +25,7 @@
 //! agree on every variant of it, and a new one is a new plan format.
 
 #![cfg_attr(not(feature = "std"), no_std)]
+#![deny(missing_docs, unreachable_pub)]
 // docs.rs documents every feature (`[package.metadata.docs.rs]`), each item marked with the
 // feature it needs.
 #![cfg_attr(docsrs, feature(doc_cfg))]
