@@ -15,12 +15,12 @@ use crate::client::{ClientOptions, Core, Session};
 use crate::error::Error;
 use crate::gate::WriteRule;
 use crate::persist::PersistBudget;
-use crate::profile::{Profile, TransportKind};
-use crate::register::{BitRegister, Bits, DriveSettings, Readable, Writable};
 use crate::reply::Discarded;
 use crate::transport::{DISCARD_BUDGET, Transport};
 use crate::typed::{ReadSet, WriteSet};
 use crate::wire::Tokio;
+use drivemap_core::profile::{Profile, TransportKind};
+use drivemap_core::register::{BitRegister, Bits, DriveSettings, Readable, Writable};
 
 /// A link for the [`AsyncClient`]; see [`Transport`] for the meaning of each method.
 // The futures are not promised `Send` (the lint's concern): the client is driven on one task
@@ -553,7 +553,7 @@ impl<T: AsyncTransport> AsyncClient<T> {
         slave: u8,
         value: &R::Input,
         settings: &R::Settings,
-        rounding: crate::Rounding,
+        rounding: drivemap_core::scale::Rounding,
     ) -> Result<(), Error> {
         self.session()
             .write_rounded::<R>(slave, value, settings, rounding)
@@ -575,7 +575,9 @@ impl<T: AsyncTransport> AsyncClient<T> {
     }
 
     /// As [`Client::update`](crate::client::Client::update).
-    pub async fn update<R: Readable + Writable<Input = <R as crate::register::Register>::Value>>(
+    pub async fn update<
+        R: Readable + Writable<Input = <R as drivemap_core::register::Register>::Value>,
+    >(
         &mut self,
         slave: u8,
         settings: &R::Settings,
@@ -593,7 +595,9 @@ impl<T: AsyncTransport> AsyncClient<T> {
         clear: u16,
     ) -> Result<R::Value, Error>
     where
-        R: BitRegister + Readable + Writable<Input = <R as crate::register::Register>::Value>,
+        R: BitRegister
+            + Readable
+            + Writable<Input = <R as drivemap_core::register::Register>::Value>,
         R::Value: Bits,
     {
         self.session()

@@ -5,7 +5,7 @@
 //!    registers than the drive's maximum, a read or loop-back to broadcast, a broadcast the
 //!    drive does not execute, a plain write to an ENTER/ACCEPT/save register;
 //! 2. maps the manual's communication address to the PDU address for the transport kind
-//!    ([`crate::profile::AddressOffsets::pdu_address`]);
+//!    ([`drivemap_core::profile::AddressOffsets::pdu_address`]);
 //! 3. on an RTU-framed link (serial, RTU over TCP) after an attempt that timed out or met a
 //!    frame that was not its answer, waits until the line has been silent for the reply
 //!    timeout (at least the drive's response time), so
@@ -30,13 +30,13 @@ use crate::exception::Exception;
 use crate::gate::{self, WriteRule, WriteTarget};
 use crate::pdu::{FrameError, Request, Response, Words, function};
 use crate::persist::PersistBudget;
-use crate::profile::{CommandInfo, CommandKind, Profile, TransportKind};
-use crate::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
 use crate::reply::{Discard, Discarded, Framing, ReplyBuffer};
 use crate::transport::Transport;
 use crate::typed::{ReadSet, WriteSet};
 use crate::wire::{Blocking, Wire, block_on};
 use crate::{rtu, tcp};
+use drivemap_core::profile::{CommandInfo, CommandKind, Profile, TransportKind};
+use drivemap_core::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
 
 /// Per-client settings (not part of a drive's profile).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -697,7 +697,7 @@ impl Core {
     /// The request for writing one register: 06h, or 10h with one register where the drive has
     /// no 06h (VS mini J7: 03h/08h/10h only, `003_8bcf5d50afb8e230.txt:226-231`).
     /// Refuses a register the map does not list on this client's transport.
-    pub(crate) fn on_transport<R: crate::register::Register>(&self) -> Result<(), Refusal> {
+    pub(crate) fn on_transport<R: drivemap_core::register::Register>(&self) -> Result<(), Refusal> {
         if R::on_transport(self.kind) {
             Ok(())
         } else {
@@ -1158,11 +1158,11 @@ impl<W: Wire> Session<'_, W> {
         raw: u32,
     ) -> Result<(), Error> {
         match rule.width {
-            crate::register::Width::Word => {
+            drivemap_core::width::Width::Word => {
                 self.write_single(slave, WriteTarget::Rule(rule), address, raw as u16)
                     .await
             }
-            crate::register::Width::Pair(_) => {
+            drivemap_core::width::Width::Pair(_) => {
                 let words = rule.width.split(raw);
                 let request = Request::WriteMultiple {
                     address,
@@ -1283,7 +1283,7 @@ impl<W: Wire> Session<'_, W> {
         slave: u8,
         value: &R::Input,
         settings: &R::Settings,
-        rounding: crate::Rounding,
+        rounding: drivemap_core::scale::Rounding,
     ) -> Result<(), Error> {
         let raw = R::encode_rounded(value, settings, rounding)?;
         let address = R::address(settings, self.core.kind)?;
@@ -1324,7 +1324,7 @@ impl<W: Wire> Session<'_, W> {
 
     /// [`Client::update`].
     pub(crate) async fn update<
-        R: Readable + Writable<Input = <R as crate::register::Register>::Value>,
+        R: Readable + Writable<Input = <R as drivemap_core::register::Register>::Value>,
     >(
         &mut self,
         slave: u8,
@@ -1346,7 +1346,9 @@ impl<W: Wire> Session<'_, W> {
         clear: u16,
     ) -> Result<R::Value, Error>
     where
-        R: BitRegister + Readable + Writable<Input = <R as crate::register::Register>::Value>,
+        R: BitRegister
+            + Readable
+            + Writable<Input = <R as drivemap_core::register::Register>::Value>,
         R::Value: Bits,
     {
         let reserved = (set | clear) & !R::FIELD_MASK;
@@ -1520,7 +1522,7 @@ impl<T: Transport> Client<T> {
     /// Writes one register by communication address (06h, or 10h where the drive lacks 06h or
     /// the register there accepts only 10h: its map's `function_codes`).
     /// Slave 0 broadcasts. The address must hold a writable register of the profile's write
-    /// table that allows `value` on this link ([`gate`](crate::gate)).
+    /// table that allows `value` on this link ([`gate`]).
     pub fn write_register(&mut self, slave: u8, address: u16, value: u16) -> Result<(), Error> {
         block_on(self.session().write_register(slave, address, value))
     }
@@ -1541,8 +1543,8 @@ impl<T: Transport> Client<T> {
     }
 
     /// Writes consecutive registers (10h). Slave 0 broadcasts. Refused, not split, when a
-    /// register it covers does not accept 10h ([`Refusal::FunctionNotAccepted`](crate::Refusal::FunctionNotAccepted); see
-    /// [`gate`](crate::gate)).
+    /// register it covers does not accept 10h ([`Refusal::FunctionNotAccepted`]; see
+    /// [`gate`]).
     pub fn write_registers(
         &mut self,
         slave: u8,
@@ -1595,14 +1597,14 @@ impl<T: Transport> Client<T> {
 
     /// [`write`](Self::write) with a choice for a number between two steps of the register:
     /// `write` refuses 35.75 Hz to a register that counts 0.1 Hz
-    /// ([`ValueError::NotAStep`](crate::ValueError::NotAStep), naming 35.7 and 35.8);
+    /// ([`ValueError::NotAStep`](drivemap_core::scale::ValueError::NotAStep), naming 35.7 and 35.8);
     /// `Rounding::Nearest` sends 35.8. Every limit is checked on the value given.
     pub fn write_rounded<R: Writable>(
         &mut self,
         slave: u8,
         value: &R::Input,
         settings: &R::Settings,
-        rounding: crate::Rounding,
+        rounding: drivemap_core::scale::Rounding,
     ) -> Result<(), Error> {
         block_on(
             self.session()
@@ -1632,8 +1634,10 @@ impl<T: Transport> Client<T> {
 
     /// Read-modify-write: reads the register, lets `change` edit the typed value, writes it back.
     /// Returns the value written. Not for a register whose read meaning differs from its write
-    /// form ([`ReadWriteAs`](crate::register::ReadWriteAs)): what it reads cannot be written.
-    pub fn update<R: Readable + Writable<Input = <R as crate::register::Register>::Value>>(
+    /// form ([`ReadWriteAs`](drivemap_core::register::ReadWriteAs)): what it reads cannot be written.
+    pub fn update<
+        R: Readable + Writable<Input = <R as drivemap_core::register::Register>::Value>,
+    >(
         &mut self,
         slave: u8,
         settings: &R::Settings,
@@ -1653,7 +1657,9 @@ impl<T: Transport> Client<T> {
         clear: u16,
     ) -> Result<R::Value, Error>
     where
-        R: BitRegister + Readable + Writable<Input = <R as crate::register::Register>::Value>,
+        R: BitRegister
+            + Readable
+            + Writable<Input = <R as drivemap_core::register::Register>::Value>,
         R::Value: Bits,
     {
         block_on(self.session().modify_bits::<R>(slave, settings, set, clear))

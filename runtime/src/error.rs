@@ -7,7 +7,7 @@ use std::time::Duration;
 use crate::exception::Exception;
 use crate::pdu::function;
 use crate::reply::Discarded;
-use crate::scale::ValueError;
+use drivemap_core::scale::ValueError;
 
 /// A request as the user asked for it: the manual's communication address and, where the
 /// profile maps it elsewhere, the PDU address that went on the wire.
@@ -116,7 +116,7 @@ pub enum Refusal {
     /// A serial line set to a character format the drive's map does not list (`serial.formats`:
     /// the ACN offers 8N1, 8N2, 8E1 and 8O1 only).
     #[error("{0}")]
-    SerialFormat(crate::profile::FormatNotListed),
+    SerialFormat(drivemap_core::profile::FormatNotListed),
     /// The drive has a broadcast, but its manual does not print the rules (which functions,
     /// which registers): nothing is broadcast, since no one can say what the drives would do.
     #[error(
@@ -208,7 +208,7 @@ pub enum Refusal {
         /// The register's id.
         register: &'static str,
         /// The client's transport kind.
-        transport: crate::profile::TransportKind,
+        transport: drivemap_core::profile::TransportKind,
     },
     /// The drive's map gives no register or field for a role of the drive trait (on this link).
     #[error("{drive}'s map gives no {what} for `{role}`{}", match transport { Some(t) => format!(" usable on {t:?}"), None => String::new() })]
@@ -220,7 +220,7 @@ pub enum Refusal {
         /// What was looked for: "register", "field", "way to run in reverse".
         what: &'static str,
         /// Set when the map gives the role on other transports only.
-        transport: Option<crate::profile::TransportKind>,
+        transport: Option<drivemap_core::profile::TransportKind>,
     },
     /// Two roles that are one register on this drive (the map's `shared_with`), asked for
     /// different values: whichever is written last would hold for both.
@@ -378,7 +378,7 @@ pub enum Refusal {
         /// The communication address written.
         address: u16,
         /// The client's transport kind.
-        transport: crate::profile::TransportKind,
+        transport: drivemap_core::profile::TransportKind,
         /// Whether the write is a broadcast (slave 0).
         broadcast: bool,
     },

@@ -9,7 +9,7 @@
 //!
 //! What the map allows for one register is a [`WriteRule`]: generated as
 //! [`Writable::RULE`](crate::Writable::RULE) for every writable register and collected in
-//! [`Profile::writes`](crate::Profile::writes). The gate refuses
+//! [`Profile::writes`](drivemap_core::profile::Profile::writes). The gate refuses
 //! - a register that is read-only ([`Refusal::ReadOnly`]);
 //! - a register the map lists for other transports only ([`Refusal::NotOnTransport`]): the V7's
 //!   RTU command register 0001h is the Modbus TCP option card's digital-input register;
@@ -41,8 +41,11 @@
 //! setting at all.
 
 use crate::error::Refusal;
-use crate::profile::{Profile, TransportKind};
 use crate::rtu;
+use drivemap_core::profile::{Profile, TransportKind};
+// A second path to the write rules (`drivemap_runtime::core::rule` is the documented one),
+// kept for code that names it.
+#[doc(hidden)]
 pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
 use drivemap_core::width::Width;
 

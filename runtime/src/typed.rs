@@ -6,9 +6,10 @@
 //! anything is sent). Tuples of 1 to 8 registers sharing one `Settings` type are supported.
 
 use crate::error::Refusal;
-use crate::profile::TransportKind;
-use crate::register::{Readable, Register, Table, Width, Writable};
-use crate::scale::ValueError;
+use drivemap_core::profile::TransportKind;
+use drivemap_core::register::{Readable, Register, Table, Writable};
+use drivemap_core::scale::ValueError;
+use drivemap_core::width::Width;
 
 /// Consecutive registers handled in one request.
 pub trait RegisterSet {

@@ -96,7 +96,7 @@
 //!   released, a run kept only while this master's `run()` stands or the status shows the drive
 //!   running: `roles_in_fields::a_command_field_is_written_from_the_roles_not_from_a_read_back`.
 //! - On a drive with a command profile (a control-word state machine, the map's `profile:`,
-//!   [`CommandProfile`]), `run()` reads the status word and writes the run path's transitions in
+//!   [`CommandProfile`](drivemap_core::command_profile::CommandProfile)), `run()` reads the status word and writes the run path's transitions in
 //!   order, each verified in the status word within its time limit, else
 //!   [`Error::StateMachine`] naming the state the drive is in:
 //!   `drive_contract::command_profiles::run_and_stops_walk_the_machine_from_power_on`,
@@ -549,7 +549,7 @@ impl<S: SettingsView, C: HoldsClient> Vfd<S, C> {
 
     /// Chooses what a reference or a ramp time that is not a whole number of its register's
     /// steps becomes: [`Rounding::Exact`] (the default) refuses it with the two nearest values
-    /// ([`ValueError::NotAStep`]); [`Rounding::Nearest`] sends the nearest. Limits are checked on
+    /// ([`ValueError::NotAStep`](drivemap_core::scale::ValueError::NotAStep)); [`Rounding::Nearest`] sends the nearest. Limits are checked on
     /// the value given either way.
     pub fn rounding(mut self, rounding: Rounding) -> Self {
         self.state.rounding = rounding;

@@ -11,7 +11,7 @@ use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
 use super::{DISCARD_BUDGET, Transport};
-use crate::profile::TransportKind;
+use drivemap_core::profile::TransportKind;
 
 /// How much shorter than the wait asked for the socket's receive timeout may be before it is
 /// set again. A receive that ends up to this much early just waits again for the rest, so the

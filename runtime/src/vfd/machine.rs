@@ -14,8 +14,8 @@ use drivemap_core::{Roles, Rounding, SettingsView, ValueError};
 use super::{Direction, FaultCode, Memory, Status};
 use crate::client::Session;
 use crate::error::{Error, Refusal};
-use crate::profile::TransportKind;
 use crate::wire::Wire;
+use drivemap_core::profile::TransportKind;
 
 /// What a [`Vfd`](super::Vfd) or an `AsyncVfd` knows of its drive besides the client.
 pub(super) struct State<S> {
@@ -489,10 +489,10 @@ impl<'a, S: SettingsView, W: Wire> Machine<'a, S, W> {
             },
         };
         for p in self.state.roles.places {
-            if let (RoleKind::Command, Target::Field(f)) = (p.role.kind(), p.target) {
-                if f.row == row {
-                    word = f.put(word, f.code(false));
-                }
+            if let (RoleKind::Command, Target::Field(f)) = (p.role.kind(), p.target)
+                && f.row == row
+            {
+                word = f.put(word, f.code(false));
             }
         }
         // Run fields can be refused only when the map has none: then there is nothing to keep.
@@ -508,10 +508,10 @@ impl<'a, S: SettingsView, W: Wire> Machine<'a, S, W> {
                 }
             }
         }
-        if let Ok(Some(r)) = self.field(Role::Reverse) {
-            if r.row == row {
-                word = r.put(word, r.code(self.state.direction == Direction::Reverse));
-            }
+        if let Ok(Some(r)) = self.field(Role::Reverse)
+            && r.row == row
+        {
+            word = r.put(word, r.code(self.state.direction == Direction::Reverse));
         }
         Ok(self.no_run_word(row, word))
     }
@@ -632,11 +632,11 @@ impl<'a, S: SettingsView, W: Wire> Machine<'a, S, W> {
         }
         if running && read.is_none() {
             // Known from this master's own run(): its run fields, as base() composes them.
-            if let Some(d) = self.state.running {
-                if let Ok(fields) = self.run_fields(true, d) {
-                    for (f, on) in fields.iter().filter(|(f, on)| f.row == row && *on) {
-                        word = f.put(word, f.code(*on));
-                    }
+            if let Some(d) = self.state.running
+                && let Ok(fields) = self.run_fields(true, d)
+            {
+                for (f, on) in fields.iter().filter(|(f, on)| f.row == row && *on) {
+                    word = f.put(word, f.code(*on));
                 }
             }
         }
