@@ -99,7 +99,7 @@ fn listed_broadcast(profile: &Profile) -> bool {
 
 /// Refuses a broadcast (slave 0) to a drive whose broadcast rules the manual does not print:
 /// the map cannot say which functions and registers the drives would execute.
-pub fn broadcast_known(profile: &Profile, slave: u8) -> Result<(), Refusal> {
+pub(crate) fn broadcast_known(profile: &Profile, slave: u8) -> Result<(), Refusal> {
     match profile.broadcast {
         Some(b) if slave == rtu::BROADCAST => match b.not_printed {
             Some(why) => Err(Refusal::BroadcastRulesNotPrinted {
@@ -256,7 +256,7 @@ pub fn accepts(
 /// The function one word written at `address` goes out with: 06h, unless the drive lacks it or
 /// the register there refuses it while accepting 10h (one drive takes 10h only on its first
 /// registers, another writes some registers with 10h only).
-pub fn single_write_function(
+pub(crate) fn single_write_function(
     profile: &Profile,
     kind: TransportKind,
     target: WriteTarget<'_>,
@@ -274,7 +274,7 @@ pub fn single_write_function(
 /// Refuses a write with `function` over `quantity` registers from `address` when a register
 /// it covers does not accept that function ([`Refusal::FunctionNotAccepted`]). Nothing is
 /// split: see the module documentation.
-pub fn check_function(
+pub(crate) fn check_function(
     profile: &Profile,
     kind: TransportKind,
     target: WriteTarget<'_>,

@@ -15,7 +15,7 @@ use crate::{crc, rtu, tcp};
 
 /// Capacity of the receive buffer: twice the largest frame, so a frame that is still incomplete
 /// never fills it.
-pub const CAPACITY: usize = 2 * tcp::MAX_FRAME;
+pub(crate) const CAPACITY: usize = 2 * tcp::MAX_FRAME;
 
 /// How replies are framed and addressed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

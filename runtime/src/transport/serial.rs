@@ -236,7 +236,7 @@ impl SerialOptions {
 }
 
 /// The vocabulary crate's parity for the `serialport` crate's.
-pub fn bus_parity(parity: Parity) -> crate::bus_time::Parity {
+pub(crate) fn bus_parity(parity: Parity) -> crate::bus_time::Parity {
     match parity {
         Parity::None => crate::bus_time::Parity::None,
         Parity::Even => crate::bus_time::Parity::Even,

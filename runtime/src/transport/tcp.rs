@@ -16,7 +16,7 @@ use drivemap_core::profile::TransportKind;
 /// How much shorter than the wait asked for the socket's receive timeout may be before it is
 /// set again. A receive that ends up to this much early just waits again for the rest, so the
 /// deadline is kept; the kernel rounds `SO_RCVTIMEO` to its tick (1-4 ms) anyway.
-pub const TIMEOUT_SLACK: Duration = Duration::from_millis(2);
+pub(crate) const TIMEOUT_SLACK: Duration = Duration::from_millis(2);
 
 /// A TCP connection carrying frames of `kind` (Modbus TCP, or RTU frames through a gateway).
 pub struct TcpTransport {
