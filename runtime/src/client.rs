@@ -984,6 +984,9 @@ pub(crate) struct Session<'a, W> {
 }
 
 impl<W: Wire> Session<'_, W> {
+    /// One request: checked and mapped to the wire, then per attempt the request gap, the
+    /// link prepared, the line settled, the frame sent and the answer awaited; retried after a
+    /// timeout or a lost connection, up to `retries` times.
     async fn transact(
         &mut self,
         slave: u8,
