@@ -427,43 +427,68 @@ pub trait HoldsAsyncClient {
     fn get_mut(&mut self) -> &mut AsyncClient<Self::Transport>;
 }
 
-macro_rules! holds {
-    ($holds:ident, $client:ident, $link:ident) => {
-        impl<T: $link> $holds for $client<T> {
-            type Transport = T;
-            fn get(&self) -> &$client<T> {
-                self
-            }
-            fn get_mut(&mut self) -> &mut $client<T> {
-                self
-            }
-        }
-
-        impl<T: $link> $holds for &mut $client<T> {
-            type Transport = T;
-            fn get(&self) -> &$client<T> {
-                self
-            }
-            fn get_mut(&mut self) -> &mut $client<T> {
-                self
-            }
-        }
-
-        impl<T: $link> $holds for Box<$client<T>> {
-            type Transport = T;
-            fn get(&self) -> &$client<T> {
-                self
-            }
-            fn get_mut(&mut self) -> &mut $client<T> {
-                self
-            }
-        }
-    };
+impl<T: Transport> HoldsClient for Client<T> {
+    type Transport = T;
+    fn get(&self) -> &Client<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut Client<T> {
+        self
+    }
 }
 
-holds!(HoldsClient, Client, Transport);
+impl<T: Transport> HoldsClient for &mut Client<T> {
+    type Transport = T;
+    fn get(&self) -> &Client<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut Client<T> {
+        self
+    }
+}
+
+impl<T: Transport> HoldsClient for Box<Client<T>> {
+    type Transport = T;
+    fn get(&self) -> &Client<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut Client<T> {
+        self
+    }
+}
+
 #[cfg(feature = "tokio")]
-holds!(HoldsAsyncClient, AsyncClient, AsyncTransport);
+impl<T: AsyncTransport> HoldsAsyncClient for AsyncClient<T> {
+    type Transport = T;
+    fn get(&self) -> &AsyncClient<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut AsyncClient<T> {
+        self
+    }
+}
+
+#[cfg(feature = "tokio")]
+impl<T: AsyncTransport> HoldsAsyncClient for &mut AsyncClient<T> {
+    type Transport = T;
+    fn get(&self) -> &AsyncClient<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut AsyncClient<T> {
+        self
+    }
+}
+
+#[cfg(feature = "tokio")]
+impl<T: AsyncTransport> HoldsAsyncClient for Box<AsyncClient<T>> {
+    type Transport = T;
+    fn get(&self) -> &AsyncClient<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut AsyncClient<T> {
+        self
+    }
+}
 
 /// A drive on slave `slave` of a blocking client, read and written through its plan and roles:
 /// the [`VariableFrequencyDrive`] of every drive whose map has roles. Build it from a generated
