@@ -24,11 +24,11 @@
 //!   ([`Refusal::RawOutOfRange`], [`Refusal::ReservedBits`]).
 //!
 //! - a function the register does not accept, where the map restricts its functions
-//!   (`function_codes`: [`Refusal::FunctionNotAccepted`], checked by [`check_function`] on
+//!   (`function_codes`: [`Refusal::FunctionNotAccepted`], checked by `check_function` on
 //!   every address a request covers).
 //!
 //! Function codes per register: a single word goes out with 06h unless its register refuses
-//! 06h and accepts 10h ([`single_write_function`]). A multi-register write (10h) that covers a
+//! 06h and accepts 10h (`single_write_function`). A multi-register write (10h) that covers a
 //! register refusing 10h is **refused, not split**: split requests are no longer one write (the
 //! drive would hold part of the new values between them, and a failure part-way leaves a
 //! half-written block), so the caller decides, writing each register on its own

@@ -4,7 +4,7 @@
 //! non-blocking `recv` that finds the input empty (the flush of stale input), one `write`, and
 //! one blocking `recv` that returns the reply. The socket stays in blocking mode; its receive
 //! timeout (`SO_RCVTIMEO`) is set only when the wait asked for differs from the one in force by
-//! more than [`TIMEOUT_SLACK`], and never longer than the wait, so a deadline is never overrun.
+//! more than `TIMEOUT_SLACK` (2 ms), and never longer than the wait, so a deadline is never overrun.
 
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
