@@ -104,7 +104,9 @@ pub struct AddressUnknown {
 /// An alternative address: the register is at `address` when `when` holds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Move {
+    /// The condition under which the register is at `address`.
     pub when: Condition,
+    /// The communication address that holds then.
     pub address: u16,
 }
 
@@ -113,7 +115,9 @@ pub struct Move {
 pub enum Condition {
     /// A selecting parameter holds one of `codes`.
     Setting {
+        /// The selecting parameter.
         selector: Setting,
+        /// The codes of it that make the condition hold.
         codes: &'static [u16],
     },
     /// The drive is of this variant.
@@ -135,14 +139,18 @@ pub enum Dependency {
 /// name errors give it (the parameter number when printed).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Setting {
+    /// The setting's slot in the drive's settings ([`SettingsView`]).
     pub slot: u8,
+    /// The name errors give it: the parameter number when printed.
     pub label: &'static str,
 }
 
 /// One option of one variant axis (option 0 is the base variant).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct VariantOption {
+    /// The variant axis.
     pub axis: u8,
+    /// The option on that axis (0: the base variant).
     pub option: u8,
 }
 
@@ -150,36 +158,62 @@ pub struct VariantOption {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Conversion {
     /// A plain `u16` / `i16` word.
-    Word { signed: bool, range: Ranges },
+    Word {
+        /// Whether the word is read as an `i16`.
+        signed: bool,
+        /// The raw range, per variant.
+        range: Ranges,
+    },
     /// An engineering value: raw × a decimal factor.
     Decimal {
+        /// Whether the raw value is signed.
         signed: bool,
+        /// The factor: engineering = raw × `scale`.
         scale: Decimal,
+        /// The raw range, per variant.
         range: Ranges,
     },
     /// An engineering value relative to a reference: `full_scale` raw = 100 % of it.
-    Relative { signed: bool, relative: Relative },
+    Relative {
+        /// Whether the raw value is signed.
+        signed: bool,
+        /// The full-scale count and the reference quantity.
+        relative: Relative,
+    },
     /// An engineering value with an exact ratio scale: `counts` raw = `equals` ("60.0 Hz =
     /// 3600"), kept as integers ([`crate::ratio`]).
     Ratio {
+        /// Whether the raw value is signed.
         signed: bool,
+        /// The exact scale: `counts` raw = `equals`.
         ratio: Ratio,
+        /// The raw range, per variant.
         range: Ranges,
     },
     /// The scale chosen by a parameter's code.
     Selected {
+        /// Whether the raw value is signed.
         signed: bool,
+        /// The parameter whose code chooses the scale.
         selector: Setting,
+        /// The scale of each code.
         cases: &'static [Case],
     },
     /// An enumeration: the listed codes, and the range of codes the manual admits without
     /// listing their meaning.
     Enum {
+        /// The listed codes and their meanings.
         values: &'static [Label],
+        /// The codes the manual admits without listing their meaning, if any.
         unlisted: Option<RawRange>,
     },
     /// Bit fields; bits outside `mask` are reserved and kept 0.
-    Bits { mask: u16, fields: &'static [Field] },
+    Bits {
+        /// The bits of the fields (the others are reserved).
+        mask: u16,
+        /// The fields, each with its bits.
+        fields: &'static [Field],
+    },
 }
 
 impl Conversion {
@@ -194,7 +228,9 @@ impl Conversion {
 /// A relative scale: `full_scale` raw counts are 100 % of the quantity in `reference`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Relative {
+    /// The raw count that is 100 % of the reference.
     pub full_scale: f64,
+    /// The reference quantity (a quantity slot of the settings).
     pub reference: Setting,
 }
 
@@ -203,13 +239,21 @@ pub struct Relative {
 pub struct Case {
     /// The selector codes that choose it.
     pub codes: &'static [u16],
+    /// The scale of the case.
     pub scale: CaseScale,
 }
 
 /// The scale of one case.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum CaseScale {
-    Decimal { scale: Decimal, range: RawRange },
+    /// A decimal factor and the raw range.
+    Decimal {
+        /// The factor: engineering = raw × `scale`.
+        scale: Decimal,
+        /// The raw range.
+        range: RawRange,
+    },
+    /// A scale relative to a reference quantity.
     Relative(Relative),
 }
 
@@ -217,7 +261,9 @@ pub enum CaseScale {
 /// applies, else `base`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ranges {
+    /// The range of every variant without an override.
     pub base: RawRange,
+    /// The overrides: a variant option and its range.
     pub by_variant: &'static [(VariantOption, RawRange)],
 }
 
@@ -242,20 +288,28 @@ impl Ranges {
 /// A listed code: enumeration value or value of a multi-bit field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Label {
+    /// The code.
     pub code: u16,
+    /// Its identifier in the map.
     pub id: &'static str,
+    /// Its name as printed in the manual.
     pub name: &'static str,
 }
 
 /// A field of a bit-field register.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Field {
+    /// The field's identifier in the map.
     pub id: &'static str,
+    /// Its name as printed in the manual.
     pub name: &'static str,
+    /// Its lowest bit.
     pub lsb: u8,
+    /// Its number of bits.
     pub width: u8,
     /// Meanings of a multi-bit field's codes, when listed.
     pub values: &'static [Label],
+    /// Where the manual prints it.
     pub source: &'static str,
 }
 
@@ -324,18 +378,27 @@ impl Condition {
 /// The scale of a quantity once the settings have chosen it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Scale {
+    /// A decimal factor, with the raw range.
     Decimal {
+        /// The factor: engineering = raw × `scale`.
         scale: Decimal,
+        /// The raw range.
         range: RawRange,
     },
+    /// A share of a reference quantity.
     Relative {
+        /// The raw count that is 100 % of the reference.
         full_scale: f64,
+        /// The reference quantity's value in force.
         reference: f64,
+        /// The reference's name, for messages.
         label: &'static str,
     },
     /// An exact ratio ([`Conversion::Ratio`]).
     Ratio {
+        /// The exact scale: `counts` raw = `equals`.
         ratio: Ratio,
+        /// The raw range.
         range: RawRange,
     },
 }

@@ -6,6 +6,9 @@
 //! manual's communication addresses to PDU addresses per transport.
 
 use crate::rule::WriteRule;
+// A second path to the stated facts ([`crate::stated`] is the documented one), kept for the
+// generated drive modules, which name them here.
+#[doc(hidden)]
 pub use crate::stated::{NotPrinted, ProtocolFact, Stated};
 
 /// How a transport frames Modbus PDUs. Address offsets and some rules differ per kind.
@@ -110,6 +113,7 @@ pub struct CommandInfo {
     pub id: &'static str,
     /// Name as printed in the manual.
     pub name: &'static str,
+    /// Whether it only makes written values take effect, or stores them in EEPROM.
     pub kind: CommandKind,
     /// The writes in order: (communication address, value). ACN writes 0 then 1 to 0x03E0.
     pub writes: &'static [(u16, u16)],
@@ -197,8 +201,11 @@ impl Parity {
 pub struct SerialFormat {
     /// The selecting parameter's code for this format.
     pub code: u16,
+    /// Data bits per character.
     pub data_bits: u8,
+    /// Parity.
     pub parity: Parity,
+    /// Stop bits.
     pub stop_bits: u8,
 }
 
@@ -284,9 +291,13 @@ pub fn only_stop_bits(formats: &[SerialFormat], parity: Parity) -> Option<u8> {
 /// A serial line set to a character format the drive's map does not list.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FormatNotListed {
+    /// The drive's map id.
     pub drive: &'static str,
+    /// Data bits per character of the line.
     pub data_bits: u8,
+    /// Parity of the line.
     pub parity: Parity,
+    /// Stop bits of the line.
     pub stop_bits: u8,
     /// What the map lists.
     pub formats: SerialFormats,
@@ -323,7 +334,9 @@ impl core::fmt::Display for FormatNotListed {
 /// reach 0x1103 (offset -1), while its TCP decimals are one higher (offset 0).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct AddressOffsets {
+    /// The offset on RTU-framed links (serial, RTU over TCP).
     pub rtu: i32,
+    /// The offset over Modbus TCP.
     pub tcp: i32,
 }
 
@@ -376,6 +389,7 @@ pub struct Timing {
     /// Least time the master leaves after a reply before the next request: bit times plus
     /// microseconds (V7/J7: 24 bits + 10 ms).
     pub request_gap_bits: Option<u32>,
+    /// The microseconds of that gap (added to `request_gap_bits`).
     pub request_gap_us: Option<u32>,
     /// Bits per character when the manual fixes it whatever the parity (TDS-V8: 11).
     pub char_bits: Option<u8>,
@@ -419,11 +433,17 @@ pub struct Profile {
     /// Valid slave addresses (excluding broadcast 0); the Modbus 1-247 when the manual prints
     /// no range.
     pub slave_min: u8,
+    /// The highest valid slave address (see `slave_min`).
     pub slave_max: u8,
+    /// The drive's broadcast (slave 0) rules; `None` when it executes no broadcast.
     pub broadcast: Option<BroadcastInfo>,
+    /// The exception codes the manual lists.
     pub exceptions: &'static [ExceptionInfo],
+    /// The explicit commands (ENTER, ACCEPT, save), by map id.
     pub commands: &'static [CommandInfo],
+    /// The offset from communication address to PDU address, per transport kind.
     pub address_offsets: AddressOffsets,
+    /// The drive's timing on its serial line.
     pub timing: Timing,
     /// The only serial character formats the drive offers, when its map lists them (a
     /// parameter selects one on the drive); `None`: any parity and stop bits.

@@ -27,7 +27,9 @@ pub const EXACT_LIMIT: i128 = 1 << 53;
 /// An exact rational number: `num / den`, `den > 0`, reduced.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Fraction {
+    /// The numerator.
     pub num: i128,
+    /// The denominator (positive).
     pub den: i128,
 }
 
@@ -222,7 +224,9 @@ pub struct Ratio {
 /// `below` and `above` (`below + 1 == above`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Between {
+    /// The count below the value.
     pub below: i64,
+    /// The count above it (`below + 1`).
     pub above: i64,
 }
 

@@ -309,9 +309,11 @@ pub enum Access {
 }
 
 impl Access {
+    /// Whether the register can be read.
     pub const fn readable(self) -> bool {
         matches!(self, Access::Read | Access::ReadWrite)
     }
+    /// Whether the register can be written.
     pub const fn writable(self) -> bool {
         matches!(self, Access::Write | Access::ReadWrite)
     }
@@ -322,16 +324,23 @@ impl Access {
 /// address.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RegisterInfo {
+    /// The register's identifier in the map.
     pub id: &'static str,
+    /// The parameter number as printed in the manual (`n011`), if any.
     pub param: Option<&'static str>,
+    /// The name as printed in the manual.
     pub name: &'static str,
+    /// The communication address as printed in the manual.
     pub address: u16,
+    /// Read, write or both.
     pub access: Access,
+    /// Holding or input register.
     pub table: Table,
     /// One register, or two holding one 32-bit value.
     pub width: Width,
     /// Only reachable as a broadcast (slave 0) write, in its own bit layout.
     pub broadcast_only: bool,
+    /// Where the manual prints it.
     pub source: &'static str,
 }
 

@@ -22,10 +22,15 @@ pub enum ValueError {
     /// The value lies outside the register's range for the drive's variant.
     #[error("{register}: {value} {unit} is out of range {min} ..= {max} {unit}")]
     OutOfRange {
+        /// The register's id.
         register: &'static str,
+        /// The value given.
         value: f64,
+        /// The lowest value of the range.
         min: f64,
+        /// The highest value of the range.
         max: f64,
+        /// The value's unit.
         unit: &'static str,
     },
     /// The manual prints no range for the register, and the value does not fit its word (or
@@ -35,22 +40,34 @@ pub enum ValueError {
         word_or_value(*.bits)
     )]
     WordOverflow {
+        /// The register's id.
         register: &'static str,
+        /// The bits of the register's value: 16 or 32.
         bits: u32,
+        /// The value given.
         value: f64,
+        /// The lowest value that fits.
         min: f64,
+        /// The highest value that fits.
         max: f64,
+        /// The value's unit.
         unit: &'static str,
     },
     /// The value lies above a limit the manual states through another quantity (a reference
     /// at most the maximum output frequency n011).
     #[error("{register}: {value} {unit} is above {max} {unit}, {percent} % of {reference}")]
     AboveLimit {
+        /// The register's id.
         register: &'static str,
+        /// The value given.
         value: f64,
+        /// The limit.
         max: f64,
+        /// The value's unit.
         unit: &'static str,
+        /// The limit as a percentage of `reference`.
         percent: f64,
+        /// The quantity the limit is stated through.
         reference: &'static str,
     },
     /// A value that is not a whole number of the register's steps: sent as given or refused,
@@ -59,11 +76,17 @@ pub enum ValueError {
         "{register}: {value} {unit} is between {below} and {above} {unit}; the register counts {step} {unit}"
     )]
     NotAStep {
+        /// The register's id.
         register: &'static str,
+        /// The value given.
         value: f64,
+        /// The register's value just below.
         below: f64,
+        /// The register's value just above.
         above: f64,
+        /// The register's step.
         step: f64,
+        /// The value's unit.
         unit: &'static str,
     },
     /// A value that is not a whole number of counts of a ratio scale ("60.0 Hz = 3600"): sent
@@ -77,27 +100,49 @@ pub enum ValueError {
         .ratio.exact(*.below + 1)
     )]
     NotACount {
+        /// The register's id.
         register: &'static str,
+        /// The value given.
         value: f64,
+        /// The count just below the value (the one above is `below + 1`).
         below: i64,
+        /// The register's scale.
         ratio: crate::ratio::Ratio,
+        /// The value's unit.
         unit: &'static str,
     },
     /// A plain word given a fraction.
     #[error("{register}: {value} is not a whole number")]
-    NotWhole { register: &'static str, value: f64 },
+    NotWhole {
+        /// The register's id.
+        register: &'static str,
+        /// The value given.
+        value: f64,
+    },
     /// NaN or infinite.
     #[error("{register}: {value} is not a finite number")]
-    NotFinite { register: &'static str, value: f64 },
+    NotFinite {
+        /// The register's id.
+        register: &'static str,
+        /// The value given.
+        value: f64,
+    },
     /// An enumeration value that the manual does not list cannot be written.
     #[error("{register}: code {code} is not one of the codes the manual lists")]
-    UnknownCode { register: &'static str, code: u16 },
+    UnknownCode {
+        /// The register's id.
+        register: &'static str,
+        /// The code given.
+        code: u16,
+    },
     /// The conversion depends on a setting the caller has not provided.
     #[error(
         "{register}: converting needs the value of {setting}; read it from the drive or set it in Settings"
     )]
     MissingSetting {
+        /// The register's id.
         register: &'static str,
+        /// The setting the conversion needs (the parameter number when printed).
         setting: &'static str,
     },
     /// The register's limit through another quantity cannot be checked: the quantity is not
@@ -106,21 +151,29 @@ pub enum ValueError {
         "{register}: its limit is a percentage of {setting}, which is not known; read it from the drive or set it in Settings (a value whose limit cannot be checked is not sent)"
     )]
     LimitNotKnown {
+        /// The register's id.
         register: &'static str,
+        /// The quantity the limit is stated through.
         setting: &'static str,
     },
     /// A selecting parameter holds a code for which the map defines no scale.
     #[error("{register}: {setting} = {code} selects no scale the manual defines")]
     UnsupportedSetting {
+        /// The register's id.
         register: &'static str,
+        /// The selecting parameter.
         setting: &'static str,
+        /// The code it holds.
         code: u16,
     },
     /// A reference quantity is zero or negative, so a relative value cannot be computed.
     #[error("{register}: reference {setting} = {value} cannot scale a relative value")]
     BadReference {
+        /// The register's id.
         register: &'static str,
+        /// The reference quantity.
         setting: &'static str,
+        /// Its value.
         value: f64,
     },
 }
@@ -134,11 +187,14 @@ fn word_or_value(bits: u32) -> &'static str {
 /// `0.1` is `Decimal { mantissa: 1, exponent: 1 }`; `5` is `Decimal { mantissa: 5, exponent: 0 }`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Decimal {
+    /// The digits.
     pub mantissa: i64,
+    /// The power of ten that divides them.
     pub exponent: u32,
 }
 
 impl Decimal {
+    /// The factor 1.
     pub const ONE: Decimal = Decimal {
         mantissa: 1,
         exponent: 0,
@@ -352,7 +408,9 @@ pub const fn word_to_int(raw: u16, signed: bool) -> i64 {
 /// Limits of a register in raw integers, with the engineering values for messages.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RawRange {
+    /// The lowest raw value.
     pub min: i64,
+    /// The highest raw value.
     pub max: i64,
 }
 
@@ -410,6 +468,7 @@ impl RawRange {
         }
     }
 
+    /// Whether `raw` lies in the range.
     pub const fn contains(&self, raw: i64) -> bool {
         raw >= self.min && raw <= self.max
     }

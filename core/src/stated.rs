@@ -137,6 +137,7 @@ impl core::fmt::Display for ProtocolFact {
 /// A protocol fact the drive's manual does not print, and why (the map's `unknown:`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct NotPrinted {
+    /// The protocol fact the manual does not print.
     pub fact: ProtocolFact,
     /// Why the manual prints none, as the map says.
     pub why: &'static str,

@@ -11,18 +11,16 @@ use std::time::{Duration, Instant};
 
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt, ReadBuf};
 
-use crate::client::{
-    Checked, ClientOptions, Core, MAX_SET, Purpose, Wait, client_methods, io_error, read_request,
-};
-use crate::error::{Error, Refusal};
-use crate::gate::{WriteRule, WriteTarget};
-use crate::pdu::{Request, Words};
+use crate::client::{ClientOptions, Core, Session};
+use crate::error::Error;
+use crate::gate::WriteRule;
 use crate::persist::PersistBudget;
-use crate::profile::{CommandKind, Profile, TransportKind};
-use crate::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
-use crate::reply::{Discarded, Framing};
+use crate::reply::Discarded;
 use crate::transport::{DISCARD_BUDGET, Transport};
 use crate::typed::{ReadSet, WriteSet};
+use crate::wire::Tokio;
+use drivemap_core::profile::{Profile, TransportKind};
+use drivemap_core::register::{BitRegister, Bits, DriveSettings, Readable, Writable};
 
 /// A link for the [`AsyncClient`]; see [`Transport`] for the meaning of each method.
 // The futures are not promised `Send` (the lint's concern): the client is driven on one task
@@ -445,99 +443,6 @@ impl<T: AsyncTransport> AsyncClient<T> {
         self.core.rx.discarded()
     }
 
-    async fn transact(
-        &mut self,
-        slave: u8,
-        request: Request<'_>,
-        out: &mut [u16],
-        purpose: Purpose<'_>,
-        retries: u8,
-    ) -> Result<(), Error> {
-        let checked = self.core.check(slave, request, purpose)?;
-        self.core.begin_call();
-        let attempts = retries.saturating_add(1);
-        for attempt in 1..=attempts {
-            let framing = self.core.encode(&checked)?;
-            // Only when the gap is still to come: a sleep registers a timer even for an instant
-            // that has passed, and tokio's timer rounds it up to its 1 ms tick.
-            if let Some(at) = self.core.ready_at() {
-                tokio::time::sleep_until(tokio::time::Instant::from_std(at)).await;
-            }
-            if let Err(e) = self.prepare().await {
-                self.core.mark_idle();
-                return Err(io_error(&checked, e));
-            }
-            if let Err(e) = self.settle(&checked).await {
-                self.core.mark_idle();
-                return Err(e);
-            }
-            if let Err(e) = self.transport.send(self.core.frame()).await {
-                self.core.mark_idle();
-                if self.core.lost(&e) && attempt < attempts {
-                    continue;
-                }
-                return Err(io_error(&checked, e));
-            }
-            let Some(framing) = framing else {
-                self.core.mark_idle();
-                return Ok(());
-            };
-            let result = self.receive(framing, &checked, out).await;
-            self.core.mark_idle();
-            self.core.attempt_ended(
-                checked.sent.slave,
-                matches!(result, Ok(Some(())) | Err(Error::Exception { .. })),
-            );
-            match result {
-                Ok(Some(())) => return Ok(()),
-                Ok(None) if attempt < attempts => continue,
-                Ok(None) => return Err(self.core.timeout(&checked, attempts)),
-                Err(Error::Io { source, .. }) if self.core.lost(&source) && attempt < attempts => {
-                    continue;
-                }
-                Err(e) => return Err(e),
-            }
-        }
-        Err(self.core.timeout(&checked, attempts))
-    }
-
-    /// As [`Client`](crate::client::Client)'s: re-establishes a lost connection and flushes
-    /// stale input before sending.
-    async fn prepare(&mut self) -> io::Result<()> {
-        let mut reconnected = false;
-        loop {
-            if self.core.link_lost() {
-                self.core.may_reconnect()?;
-                let outcome = self.transport.reconnect().await;
-                self.core.reconnected(outcome)?;
-                reconnected = true;
-            }
-            match self.transport.discard_input().await {
-                Err(e) if !reconnected && self.core.lost(&e) => continue,
-                other => return other,
-            }
-        }
-    }
-
-    /// As [`Client`](crate::client::Client)'s: on an RTU-framed link after an attempt that
-    /// was not answered cleanly, waits until the line has been silent for the reply timeout.
-    async fn settle(&mut self, checked: &Checked<'_>) -> Result<(), Error> {
-        let Some(mut settle) = self.core.settle_start(checked.sent.slave) else {
-            return Ok(());
-        };
-        loop {
-            let until = self.core.settle_until(&settle);
-            let n = self
-                .transport
-                .recv(self.core.space(), until)
-                .await
-                .map_err(|e| io_error(checked, e))?;
-            if let Some(outcome) = self.core.settle_step(&mut settle, n, checked) {
-                return outcome;
-            }
-        }
-    }
-
     /// Connections re-established after the peer closed or reset them
     /// ([`ClientOptions::reconnect`]).
     pub fn reconnects(&self) -> u32 {
@@ -550,32 +455,179 @@ impl<T: AsyncTransport> AsyncClient<T> {
         self.core.settled()
     }
 
-    async fn receive(
-        &mut self,
-        framing: Framing,
-        checked: &Checked<'_>,
-        out: &mut [u16],
-    ) -> Result<Option<()>, Error> {
-        let mut wait = Wait::new(
-            self.core.options.timeout,
-            self.transport.inter_char_timeout(),
-        );
-        loop {
-            let until = self.core.receive_until(&wait);
-            let n = self
-                .transport
-                .recv(self.core.space(), until)
-                .await
-                .map_err(|e| io_error(checked, e))?;
-            if let Some(outcome) = self
-                .core
-                .received(n, until, &mut wait, framing, checked, out)
-            {
-                return outcome;
-            }
+    /// The link and the protocol state, for one call.
+    pub(crate) fn session(&mut self) -> Session<'_, Tokio<'_, T>> {
+        Session {
+            wire: Tokio(&mut self.transport),
+            core: &mut self.core,
         }
     }
 
-    client_methods!([async] [.await]);
-    crate::indexed::indexed_methods!([async] [.await]);
+    /// As [`Client::read_holding`](crate::client::Client::read_holding).
+    pub async fn read_holding(
+        &mut self,
+        slave: u8,
+        address: u16,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        self.session().read_holding(slave, address, out).await
+    }
+
+    /// As [`Client::read_input`](crate::client::Client::read_input).
+    pub async fn read_input(
+        &mut self,
+        slave: u8,
+        address: u16,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        self.session().read_input(slave, address, out).await
+    }
+
+    /// As [`Client::write_register`](crate::client::Client::write_register).
+    pub async fn write_register(
+        &mut self,
+        slave: u8,
+        address: u16,
+        value: u16,
+    ) -> Result<(), Error> {
+        self.session().write_register(slave, address, value).await
+    }
+
+    /// As [`Client::write_rule`](crate::client::Client::write_rule).
+    pub async fn write_rule(
+        &mut self,
+        slave: u8,
+        rule: &WriteRule,
+        address: u16,
+        raw: u32,
+    ) -> Result<(), Error> {
+        self.session().write_rule(slave, rule, address, raw).await
+    }
+
+    /// As [`Client::write_registers`](crate::client::Client::write_registers).
+    pub async fn write_registers(
+        &mut self,
+        slave: u8,
+        address: u16,
+        values: &[u16],
+    ) -> Result<(), Error> {
+        self.session().write_registers(slave, address, values).await
+    }
+
+    /// As [`Client::loop_back`](crate::client::Client::loop_back).
+    pub async fn loop_back(&mut self, slave: u8, data: u16) -> Result<(), Error> {
+        self.session().loop_back(slave, data).await
+    }
+
+    /// As [`Client::load_settings`](crate::client::Client::load_settings).
+    pub async fn load_settings<S: DriveSettings>(
+        &mut self,
+        slave: u8,
+        settings: &mut S,
+    ) -> Result<(), Error> {
+        self.session().load_settings::<S>(slave, settings).await
+    }
+
+    /// As [`Client::read`](crate::client::Client::read).
+    pub async fn read<R: Readable>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+    ) -> Result<R::Value, Error> {
+        self.session().read::<R>(slave, settings).await
+    }
+
+    /// As [`Client::write`](crate::client::Client::write).
+    pub async fn write<R: Writable>(
+        &mut self,
+        slave: u8,
+        value: &R::Input,
+        settings: &R::Settings,
+    ) -> Result<(), Error> {
+        self.session().write::<R>(slave, value, settings).await
+    }
+
+    /// As [`Client::write_rounded`](crate::client::Client::write_rounded).
+    pub async fn write_rounded<R: Writable>(
+        &mut self,
+        slave: u8,
+        value: &R::Input,
+        settings: &R::Settings,
+        rounding: drivemap_core::scale::Rounding,
+    ) -> Result<(), Error> {
+        self.session()
+            .write_rounded::<R>(slave, value, settings, rounding)
+            .await
+    }
+
+    /// As [`Client::write_changed`](crate::client::Client::write_changed).
+    pub async fn write_changed(
+        &mut self,
+        slave: u8,
+        rule: &WriteRule,
+        address: u16,
+        between: u32,
+        raw: u32,
+    ) -> Result<(), Error> {
+        self.session()
+            .write_changed(slave, rule, address, between, raw)
+            .await
+    }
+
+    /// As [`Client::update`](crate::client::Client::update).
+    pub async fn update<
+        R: Readable + Writable<Input = <R as drivemap_core::register::Register>::Value>,
+    >(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+        change: impl FnOnce(&mut R::Value),
+    ) -> Result<R::Value, Error> {
+        self.session().update::<R>(slave, settings, change).await
+    }
+
+    /// As [`Client::modify_bits`](crate::client::Client::modify_bits).
+    pub async fn modify_bits<R>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+        set: u16,
+        clear: u16,
+    ) -> Result<R::Value, Error>
+    where
+        R: BitRegister
+            + Readable
+            + Writable<Input = <R as drivemap_core::register::Register>::Value>,
+        R::Value: Bits,
+    {
+        self.session()
+            .modify_bits::<R>(slave, settings, set, clear)
+            .await
+    }
+
+    /// As [`Client::read_many`](crate::client::Client::read_many).
+    pub async fn read_many<S: ReadSet>(
+        &mut self,
+        slave: u8,
+        settings: &S::Settings,
+    ) -> Result<S::Values, Error> {
+        self.session().read_many::<S>(slave, settings).await
+    }
+
+    /// As [`Client::write_many`](crate::client::Client::write_many).
+    pub async fn write_many<S: WriteSet>(
+        &mut self,
+        slave: u8,
+        values: &S::Values,
+        settings: &S::Settings,
+    ) -> Result<(), Error> {
+        self.session()
+            .write_many::<S>(slave, values, settings)
+            .await
+    }
+
+    /// As [`Client::persist`](crate::client::Client::persist).
+    pub async fn persist(&mut self, slave: u8, id: &str) -> Result<(), Error> {
+        self.session().persist(slave, id).await
+    }
 }

@@ -11,7 +11,7 @@
 //! | response | reply bytes × character time (none for a broadcast) | byte counts below |
 //! | turnaround | from the last reply byte to the next request: the larger of the frame gap and the master's wait the manual prescribes | V7/J7: 24 bits + 10 ms (`003_8bcf5d50afb8e230.txt:284`) |
 //!
-//! The frame gap is [`Timing::frame_gap_chars`](crate::profile::Timing::frame_gap_chars)
+//! The frame gap is [`Timing::frame_gap_chars`](drivemap_core::profile::Timing::frame_gap_chars)
 //! characters (3.5 on every map; the manuals defer to the Modbus RTU rule), or a fixed 1.75 ms
 //! above 19 200 baud (Modbus over Serial Line V1.02, 2.5.1.1), as the serial transport keeps it.
 //!
@@ -37,9 +37,9 @@
 //! **Response time.** Where the profile names a response-delay parameter (V7 n156, J7 n73, ACN
 //! CM.05) the delay is the value configured in the drive: give it with
 //! [`BusModel::with_delay_param`]; otherwise the parameter's default from the map
-//! ([`Timing::response_delay_param_default_us`](crate::profile::Timing::response_delay_param_default_us))
+//! ([`Timing::response_delay_param_default_us`](drivemap_core::profile::Timing::response_delay_param_default_us))
 //! is assumed, or none where the map prints no default. Where the profile states a fixed response time
-//! ([`Timing::response_delay_us`](crate::profile::Timing::response_delay_us), TDS-V8 5 ms) it is
+//! ([`Timing::response_delay_us`](drivemap_core::profile::Timing::response_delay_us), TDS-V8 5 ms) it is
 //! used. The V7/J7 "24 bits" before the delay and the master's "24 bits + 10 ms" after a reply
 //! come from the map's `timing.response_time` and `timing.request_gap`. A drive
 //! whose manual prints nothing (GPD 515: it defers to PI-MBUS-300, `001_ef66da56d29a05af.txt:1-3`)
@@ -49,10 +49,12 @@ use std::time::Duration;
 
 use crate::error::Refusal;
 use crate::pdu::function;
-use crate::profile::Profile;
+use drivemap_core::profile::Profile;
 
-/// Parity of a serial line (the vocabulary crate's).
-pub use crate::profile::Parity;
+// A second path to the parity of a serial line (`drivemap_runtime::core::profile::Parity` is the
+// documented one), kept for code that names it.
+#[doc(hidden)]
+pub use drivemap_core::profile::Parity;
 
 /// The settings of a serial line that decide the length of a character.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

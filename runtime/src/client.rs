@@ -5,7 +5,7 @@
 //!    registers than the drive's maximum, a read or loop-back to broadcast, a broadcast the
 //!    drive does not execute, a plain write to an ENTER/ACCEPT/save register;
 //! 2. maps the manual's communication address to the PDU address for the transport kind
-//!    ([`crate::profile::AddressOffsets::pdu_address`]);
+//!    ([`drivemap_core::profile::AddressOffsets::pdu_address`]);
 //! 3. on an RTU-framed link (serial, RTU over TCP) after an attempt that timed out or met a
 //!    frame that was not its answer, waits until the line has been silent for the reply
 //!    timeout (at least the drive's response time), so
@@ -30,12 +30,13 @@ use crate::exception::Exception;
 use crate::gate::{self, WriteRule, WriteTarget};
 use crate::pdu::{FrameError, Request, Response, Words, function};
 use crate::persist::PersistBudget;
-use crate::profile::{CommandInfo, CommandKind, Profile, TransportKind};
-use crate::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
 use crate::reply::{Discard, Discarded, Framing, ReplyBuffer};
 use crate::transport::Transport;
 use crate::typed::{ReadSet, WriteSet};
+use crate::wire::{Blocking, Wire, block_on};
 use crate::{rtu, tcp};
+use drivemap_core::profile::{CommandInfo, CommandKind, Profile, TransportKind};
+use drivemap_core::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
 
 /// Per-client settings (not part of a drive's profile).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -696,7 +697,7 @@ impl Core {
     /// The request for writing one register: 06h, or 10h with one register where the drive has
     /// no 06h (VS mini J7: 03h/08h/10h only, `003_8bcf5d50afb8e230.txt:226-231`).
     /// Refuses a register the map does not list on this client's transport.
-    pub(crate) fn on_transport<R: crate::register::Register>(&self) -> Result<(), Refusal> {
+    pub(crate) fn on_transport<R: drivemap_core::register::Register>(&self) -> Result<(), Refusal> {
         if R::on_transport(self.kind) {
             Ok(())
         } else {
@@ -974,22 +975,155 @@ pub(crate) fn io_error(checked: &Checked<'_>, source: std::io::Error) -> Error {
 /// each of which may be a 32-bit pair).
 pub const MAX_SET: usize = 16;
 
-/// The public request methods, written once for the blocking and the async client: `$asy` is
-/// empty or `async`, `$aw` empty or `.await`. Each client supplies `transact`.
-macro_rules! client_methods {
-    ([$($asy:tt)*] [$($aw:tt)*]) => {
-    /// Reads consecutive holding registers (03h) from communication address `address` into
-    /// `out`; the quantity is `out.len()`.
-    pub $($asy)* fn read_holding(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
-        self.read_table(slave, Table::Holding, address, out) $($aw)*
+/// A client's link and protocol state, borrowed for one call: the requests and their
+/// transactions, written once for the blocking [`Client`] (over [`Blocking`], run by
+/// [`block_on`]) and the async client (over [`Tokio`](crate::wire::Tokio), awaited).
+pub(crate) struct Session<'a, W> {
+    pub(crate) wire: W,
+    pub(crate) core: &'a mut Core,
+}
+
+impl<W: Wire> Session<'_, W> {
+    /// One request: checked and mapped to the wire, then per attempt the request gap, the
+    /// link prepared, the line settled, the frame sent and the answer awaited; retried after a
+    /// timeout or a lost connection, up to `retries` times.
+    async fn transact(
+        &mut self,
+        slave: u8,
+        request: Request<'_>,
+        out: &mut [u16],
+        purpose: Purpose<'_>,
+        retries: u8,
+    ) -> Result<(), Error> {
+        let checked = self.core.check(slave, request, purpose)?;
+        self.core.begin_call();
+        let attempts = retries.saturating_add(1);
+        for attempt in 1..=attempts {
+            let framing = self.core.encode(&checked)?;
+            if let Some(at) = self.core.ready_at() {
+                self.wire.sleep_until(at).await;
+            }
+            if let Err(e) = self.prepare().await {
+                self.core.mark_idle();
+                return Err(io_error(&checked, e));
+            }
+            if let Err(e) = self.settle(&checked).await {
+                self.core.mark_idle();
+                return Err(e);
+            }
+            if let Err(e) = self.wire.send(self.core.frame()).await {
+                self.core.mark_idle();
+                if self.core.lost(&e) && attempt < attempts {
+                    continue;
+                }
+                return Err(io_error(&checked, e));
+            }
+            let Some(framing) = framing else {
+                self.core.mark_idle();
+                return Ok(());
+            };
+            let result = self.receive(framing, &checked, out).await;
+            self.core.mark_idle();
+            self.core.attempt_ended(
+                checked.sent.slave,
+                matches!(result, Ok(Some(())) | Err(Error::Exception { .. })),
+            );
+            match result {
+                Ok(Some(())) => return Ok(()),
+                Ok(None) if attempt < attempts => continue,
+                Ok(None) => return Err(self.core.timeout(&checked, attempts)),
+                Err(Error::Io { source, .. }) if self.core.lost(&source) && attempt < attempts => {
+                    continue;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        Err(self.core.timeout(&checked, attempts))
     }
 
-    /// Reads consecutive input registers (04h).
-    pub $($asy)* fn read_input(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
-        self.read_table(slave, Table::Input, address, out) $($aw)*
+    /// Before sending: re-establishes a lost connection and flushes stale input. Nothing has
+    /// been sent yet, so a connection found closed here is re-established once and the request
+    /// goes on over the new one.
+    async fn prepare(&mut self) -> std::io::Result<()> {
+        let mut reconnected = false;
+        loop {
+            if self.core.link_lost() {
+                self.core.may_reconnect()?;
+                let outcome = self.wire.reconnect().await;
+                self.core.reconnected(outcome)?;
+                reconnected = true;
+            }
+            match self.wire.discard_input().await {
+                Err(e) if !reconnected && self.core.lost(&e) => continue,
+                other => return other,
+            }
+        }
     }
 
-    $($asy)* fn read_table(
+    /// On an RTU-framed link after an attempt that was not answered cleanly: waits until the
+    /// line has been silent for the reply timeout, throwing away what arrives.
+    async fn settle(&mut self, checked: &Checked<'_>) -> Result<(), Error> {
+        let Some(mut settle) = self.core.settle_start(checked.sent.slave) else {
+            return Ok(());
+        };
+        loop {
+            let until = self.core.settle_until(&settle);
+            let n = self
+                .wire
+                .recv(self.core.space(), until)
+                .await
+                .map_err(|e| io_error(checked, e))?;
+            if let Some(outcome) = self.core.settle_step(&mut settle, n, checked) {
+                return outcome;
+            }
+        }
+    }
+
+    /// Waits for the answer; `Ok(None)` on timeout.
+    async fn receive(
+        &mut self,
+        framing: Framing,
+        checked: &Checked<'_>,
+        out: &mut [u16],
+    ) -> Result<Option<()>, Error> {
+        let mut wait = Wait::new(self.core.options.timeout, self.wire.inter_char_timeout());
+        loop {
+            let until = self.core.receive_until(&wait);
+            let n = self
+                .wire
+                .recv(self.core.space(), until)
+                .await
+                .map_err(|e| io_error(checked, e))?;
+            if let Some(outcome) = self
+                .core
+                .received(n, until, &mut wait, framing, checked, out)
+            {
+                return outcome;
+            }
+        }
+    }
+
+    /// [`Client::read_holding`].
+    pub(crate) async fn read_holding(
+        &mut self,
+        slave: u8,
+        address: u16,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        self.read_table(slave, Table::Holding, address, out).await
+    }
+
+    /// [`Client::read_input`].
+    pub(crate) async fn read_input(
+        &mut self,
+        slave: u8,
+        address: u16,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        self.read_table(slave, Table::Input, address, out).await
+    }
+
+    async fn read_table(
         &mut self,
         slave: u8,
         table: Table,
@@ -1003,23 +1137,23 @@ macro_rules! client_methods {
             out,
             Purpose::Read,
             retries,
-        ) $($aw)*
+        )
+        .await
     }
 
-    /// Writes one register by communication address (06h, or 10h where the drive lacks 06h or
-    /// the register there accepts only 10h: its map's `function_codes`).
-    /// Slave 0 broadcasts. The address must hold a writable register of the profile's write
-    /// table that allows `value` on this link ([`gate`](crate::gate)).
-    pub $($asy)* fn write_register(&mut self, slave: u8, address: u16, value: u16) -> Result<(), Error> {
-        self.write_single(slave, WriteTarget::Addresses, address, value) $($aw)*
+    /// [`Client::write_register`].
+    pub(crate) async fn write_register(
+        &mut self,
+        slave: u8,
+        address: u16,
+        value: u16,
+    ) -> Result<(), Error> {
+        self.write_single(slave, WriteTarget::Addresses, address, value)
+            .await
     }
 
-    /// Writes the raw value of the register `rule` describes at `address` (its address under
-    /// the settings in force), through the write gate: for tools that interpret a map at run
-    /// time. Applications use [`write`](Self::write), which encodes and finds the rule itself.
-    /// A word goes out with 06h (10h where the drive lacks 06h); a 32-bit pair as its two words
-    /// in the map's order in one 10h request, so the drive never holds half a value.
-    pub $($asy)* fn write_rule(
+    /// [`Client::write_rule`].
+    pub(crate) async fn write_rule(
         &mut self,
         slave: u8,
         rule: &WriteRule,
@@ -1027,20 +1161,30 @@ macro_rules! client_methods {
         raw: u32,
     ) -> Result<(), Error> {
         match rule.width {
-            crate::register::Width::Word => self.write_single(slave, WriteTarget::Rule(rule), address, raw as u16) $($aw)*,
-            crate::register::Width::Pair(_) => {
+            drivemap_core::width::Width::Word => {
+                self.write_single(slave, WriteTarget::Rule(rule), address, raw as u16)
+                    .await
+            }
+            drivemap_core::width::Width::Pair(_) => {
                 let words = rule.width.split(raw);
                 let request = Request::WriteMultiple {
                     address,
                     values: Words::Native(&words),
                 };
                 let retries = self.core.options.retries;
-                self.transact(slave, request, &mut [], Purpose::Write(WriteTarget::Rule(rule)), retries) $($aw)*
+                self.transact(
+                    slave,
+                    request,
+                    &mut [],
+                    Purpose::Write(WriteTarget::Rule(rule)),
+                    retries,
+                )
+                .await
             }
         }
     }
 
-    $($asy)* fn write_single(
+    async fn write_single(
         &mut self,
         slave: u8,
         target: WriteTarget<'_>,
@@ -1050,13 +1194,12 @@ macro_rules! client_methods {
         let value = [value];
         let request = self.core.single_write(target, address, &value);
         let retries = self.core.options.retries;
-        self.transact(slave, request, &mut [], Purpose::Write(target), retries) $($aw)*
+        self.transact(slave, request, &mut [], Purpose::Write(target), retries)
+            .await
     }
 
-    /// Writes consecutive registers (10h). Slave 0 broadcasts. Refused, not split, when a
-    /// register it covers does not accept 10h ([`Refusal::FunctionNotAccepted`](crate::Refusal::FunctionNotAccepted); see
-    /// [`gate`](crate::gate)).
-    pub $($asy)* fn write_registers(
+    /// [`Client::write_registers`].
+    pub(crate) async fn write_registers(
         &mut self,
         slave: u8,
         address: u16,
@@ -1067,33 +1210,46 @@ macro_rules! client_methods {
             values: Words::Native(values),
         };
         let retries = self.core.options.retries;
-        self.transact(slave, request, &mut [], Purpose::Write(WriteTarget::Addresses), retries) $($aw)*
+        self.transact(
+            slave,
+            request,
+            &mut [],
+            Purpose::Write(WriteTarget::Addresses),
+            retries,
+        )
+        .await
     }
 
-    /// Loop-back test (08h, sub-function 0000h): the drive must return `data`.
-    pub $($asy)* fn loop_back(&mut self, slave: u8, data: u16) -> Result<(), Error> {
+    /// [`Client::loop_back`].
+    pub(crate) async fn loop_back(&mut self, slave: u8, data: u16) -> Result<(), Error> {
         let retries = self.core.options.retries;
-        self.transact(slave, Request::LoopBack { data }, &mut [], Purpose::Read, retries) $($aw)*
+        self.transact(
+            slave,
+            Request::LoopBack { data },
+            &mut [],
+            Purpose::Read,
+            retries,
+        )
+        .await
     }
 
-    /// Reads the parameters the drive's conversions depend on (`S::DEPENDENCIES`: scale
-    /// selectors such as V7 n152, reference quantities such as TDS-V8 Cn-02) and records them in
-    /// `settings`, one holding register at a time.
-    pub $($asy)* fn load_settings<S: DriveSettings>(
+    /// [`Client::load_settings`].
+    pub(crate) async fn load_settings<S: DriveSettings>(
         &mut self,
         slave: u8,
         settings: &mut S,
     ) -> Result<(), Error> {
         for &address in S::DEPENDENCIES {
             let mut raw = [0u16; 1];
-            self.read_table(slave, Table::Holding, address, &mut raw) $($aw)*?;
+            self.read_table(slave, Table::Holding, address, &mut raw)
+                .await?;
             settings.absorb(address, raw[0]);
         }
         Ok(())
     }
 
-    /// Reads a register as its typed value.
-    pub $($asy)* fn read<R: Readable>(
+    /// [`Client::read`].
+    pub(crate) async fn read<R: Readable>(
         &mut self,
         slave: u8,
         settings: &R::Settings,
@@ -1102,18 +1258,12 @@ macro_rules! client_methods {
         let address = R::address(settings, self.core.kind)?;
         let mut raw = [0u16; 2];
         let raw = &mut raw[..usize::from(R::WIDTH.count())];
-        self.read_table(slave, R::TABLE, address, raw) $($aw)*?;
+        self.read_table(slave, R::TABLE, address, raw).await?;
         Ok(R::decode(R::WIDTH.join(raw), settings)?)
     }
 
-    /// Writes a typed value. The value is range-checked first; nothing out of range is sent.
-    ///
-    /// A register whose drive executes a value only when it differs from the previous write
-    /// ([`Writable::REPEAT_NEEDS_CHANGE`], the ACN's password registers) is written twice: its
-    /// intermediate value, then `value` ([`write_changed`](Self::write_changed)). The client
-    /// cannot know what was written last (another master, a power cycle), so it always changes
-    /// the word first: otherwise writing the same command twice would be silently ignored.
-    pub $($asy)* fn write<R: Writable>(
+    /// [`Client::write`].
+    pub(crate) async fn write<R: Writable>(
         &mut self,
         slave: u8,
         value: &R::Input,
@@ -1123,40 +1273,34 @@ macro_rules! client_methods {
         let address = R::address(settings, self.core.kind)?;
         match R::REPEAT_NEEDS_CHANGE {
             Some(rule) => {
-                self.write_changed(slave, &R::RULE, address, rule.between, raw) $($aw)*
+                self.write_changed(slave, &R::RULE, address, rule.between, raw)
+                    .await
             }
-            None => self.write_rule(slave, &R::RULE, address, raw) $($aw)*,
+            None => self.write_rule(slave, &R::RULE, address, raw).await,
         }
     }
 
-    /// [`write`](Self::write) with a choice for a number between two steps of the register:
-    /// `write` refuses 35.75 Hz to a register that counts 0.1 Hz
-    /// ([`ValueError::NotAStep`](crate::ValueError::NotAStep), naming 35.7 and 35.8);
-    /// `Rounding::Nearest` sends 35.8. Every limit is checked on the value given.
-    pub $($asy)* fn write_rounded<R: Writable>(
+    /// [`Client::write_rounded`].
+    pub(crate) async fn write_rounded<R: Writable>(
         &mut self,
         slave: u8,
         value: &R::Input,
         settings: &R::Settings,
-        rounding: crate::Rounding,
+        rounding: drivemap_core::scale::Rounding,
     ) -> Result<(), Error> {
         let raw = R::encode_rounded(value, settings, rounding)?;
         let address = R::address(settings, self.core.kind)?;
         match R::REPEAT_NEEDS_CHANGE {
             Some(rule) => {
-                self.write_changed(slave, &R::RULE, address, rule.between, raw) $($aw)*
+                self.write_changed(slave, &R::RULE, address, rule.between, raw)
+                    .await
             }
-            None => self.write_rule(slave, &R::RULE, address, raw) $($aw)*,
+            None => self.write_rule(slave, &R::RULE, address, raw).await,
         }
     }
 
-    /// Writes `raw` to a register whose drive executes a value only when it differs from the
-    /// previous write: `between` first (unless `raw` is `between` itself, which the drive then
-    /// takes as it takes any other value), then `raw`, each through the write gate with `rule`.
-    /// The manual's example: "if you want to enter 244 twice, enter it in the following order:
-    /// 244 > 0 > 244" (`004_c5cbf92472673495.txt:1113`). Nothing is sent when the gate refuses
-    /// either word.
-    pub $($asy)* fn write_changed(
+    /// [`Client::write_changed`].
+    pub(crate) async fn write_changed(
         &mut self,
         slave: u8,
         rule: &WriteRule,
@@ -1168,31 +1312,36 @@ macro_rules! client_methods {
             let target = WriteTarget::Rule(rule);
             let words = rule.width.split(raw);
             let words = words[..usize::from(rule.width.count())].iter().copied();
-            crate::gate::check(self.core.profile, self.core.kind, slave, target, address, words)?;
-            self.write_rule(slave, rule, address, between) $($aw)*?;
+            crate::gate::check(
+                self.core.profile,
+                self.core.kind,
+                slave,
+                target,
+                address,
+                words,
+            )?;
+            self.write_rule(slave, rule, address, between).await?;
         }
-        self.write_rule(slave, rule, address, raw) $($aw)*
+        self.write_rule(slave, rule, address, raw).await
     }
 
-    /// Read-modify-write: reads the register, lets `change` edit the typed value, writes it back.
-    /// Returns the value written. Not for a register whose read meaning differs from its write
-    /// form ([`ReadWriteAs`](crate::register::ReadWriteAs)): what it reads cannot be written.
-    pub $($asy)* fn update<R: Readable + Writable<Input = <R as crate::register::Register>::Value>>(
+    /// [`Client::update`].
+    pub(crate) async fn update<
+        R: Readable + Writable<Input = <R as drivemap_core::register::Register>::Value>,
+    >(
         &mut self,
         slave: u8,
         settings: &R::Settings,
         change: impl FnOnce(&mut R::Value),
     ) -> Result<R::Value, Error> {
-        let mut value = self.read::<R>(slave, settings) $($aw)*?;
+        let mut value = self.read::<R>(slave, settings).await?;
         change(&mut value);
-        self.write::<R>(slave, &value, settings) $($aw)*?;
+        self.write::<R>(slave, &value, settings).await?;
         Ok(value)
     }
 
-    /// Read-modify-write of a bit-field register: sets the bits of `set` and clears those of
-    /// `clear`, keeping the other fields as read. Reserved bits are refused in the masks and
-    /// written as 0.
-    pub $($asy)* fn modify_bits<R>(
+    /// [`Client::modify_bits`].
+    pub(crate) async fn modify_bits<R>(
         &mut self,
         slave: u8,
         settings: &R::Settings,
@@ -1200,7 +1349,9 @@ macro_rules! client_methods {
         clear: u16,
     ) -> Result<R::Value, Error>
     where
-        R: BitRegister + Readable + Writable<Input = <R as crate::register::Register>::Value>,
+        R: BitRegister
+            + Readable
+            + Writable<Input = <R as drivemap_core::register::Register>::Value>,
         R::Value: Bits,
     {
         let reserved = (set | clear) & !R::FIELD_MASK;
@@ -1214,11 +1365,12 @@ macro_rules! client_methods {
         self.update::<R>(slave, settings, |v| {
             let raw = ((v.bits() & !clear) | set) & R::FIELD_MASK;
             *v = R::Value::from_bits(raw);
-        }) $($aw)*
+        })
+        .await
     }
 
-    /// Reads consecutive registers in one request: `client.read_many::<(A, B, C)>(1, &s)`.
-    pub $($asy)* fn read_many<S: ReadSet>(
+    /// [`Client::read_many`].
+    pub(crate) async fn read_many<S: ReadSet>(
         &mut self,
         slave: u8,
         settings: &S::Settings,
@@ -1226,12 +1378,12 @@ macro_rules! client_methods {
         let (address, table) = S::layout(settings, self.core.kind)?;
         let mut raw = [0u16; MAX_SET];
         let raw = &mut raw[..S::LEN.min(MAX_SET)];
-        self.read_table(slave, table, address, raw) $($aw)*?;
+        self.read_table(slave, table, address, raw).await?;
         Ok(S::decode(raw, settings)?)
     }
 
-    /// Writes consecutive registers in one 10h request, each value range-checked first.
-    pub $($asy)* fn write_many<S: WriteSet>(
+    /// [`Client::write_many`].
+    pub(crate) async fn write_many<S: WriteSet>(
         &mut self,
         slave: u8,
         values: &S::Values,
@@ -1241,14 +1393,11 @@ macro_rules! client_methods {
         let mut raw = [0u16; MAX_SET];
         let raw = &mut raw[..S::LEN.min(MAX_SET)];
         S::encode(values, settings, raw)?;
-        self.write_registers(slave, address, raw) $($aw)*
+        self.write_registers(slave, address, raw).await
     }
 
-    /// Runs a command of the profile (ENTER, ACCEPT, save parameters) by its map id. A command
-    /// that stores to EEPROM ([`CommandKind::Persist`]) takes one write from the hourly budget,
-    /// or is refused when the budget is spent; it is never retried, since a lost reply may
-    /// follow a completed write. Plain writes to these registers are refused.
-    pub $($asy)* fn persist(&mut self, slave: u8, id: &str) -> Result<(), Error> {
+    /// [`Client::persist`].
+    pub(crate) async fn persist(&mut self, slave: u8, id: &str) -> Result<(), Error> {
         let command = self.core.command(id)?;
         let retries = match command.kind {
             CommandKind::Persist => 0,
@@ -1256,15 +1405,15 @@ macro_rules! client_methods {
         };
         for &(address, value) in command.writes {
             let value = [value];
-            let request = self.core.single_write(WriteTarget::Addresses, address, &value);
-            self.transact(slave, request, &mut [], Purpose::Command, retries) $($aw)*?;
+            let request = self
+                .core
+                .single_write(WriteTarget::Addresses, address, &value);
+            self.transact(slave, request, &mut [], Purpose::Command, retries)
+                .await?;
         }
         Ok(())
     }
-    };
 }
-#[cfg(feature = "tokio")]
-pub(crate) use client_methods;
 
 /// A blocking Modbus client for drives described by a [`Profile`].
 pub struct Client<T: Transport> {
@@ -1339,97 +1488,6 @@ impl<T: Transport> Client<T> {
         self.core.rx.discarded()
     }
 
-    fn transact(
-        &mut self,
-        slave: u8,
-        request: Request<'_>,
-        out: &mut [u16],
-        purpose: Purpose<'_>,
-        retries: u8,
-    ) -> Result<(), Error> {
-        let checked = self.core.check(slave, request, purpose)?;
-        self.core.begin_call();
-        let attempts = retries.saturating_add(1);
-        for attempt in 1..=attempts {
-            let framing = self.core.encode(&checked)?;
-            if let Some(at) = self.core.ready_at() {
-                std::thread::sleep(at.saturating_duration_since(Instant::now()));
-            }
-            if let Err(e) = self.prepare() {
-                self.core.mark_idle();
-                return Err(io_error(&checked, e));
-            }
-            if let Err(e) = self.settle(&checked) {
-                self.core.mark_idle();
-                return Err(e);
-            }
-            if let Err(e) = self.transport.send(self.core.frame()) {
-                self.core.mark_idle();
-                if self.core.lost(&e) && attempt < attempts {
-                    continue;
-                }
-                return Err(io_error(&checked, e));
-            }
-            let Some(framing) = framing else {
-                self.core.mark_idle();
-                return Ok(());
-            };
-            let result = self.receive(framing, &checked, out);
-            self.core.mark_idle();
-            self.core.attempt_ended(
-                checked.sent.slave,
-                matches!(result, Ok(Some(())) | Err(Error::Exception { .. })),
-            );
-            match result {
-                Ok(Some(())) => return Ok(()),
-                Ok(None) if attempt < attempts => continue,
-                Ok(None) => return Err(self.core.timeout(&checked, attempts)),
-                Err(Error::Io { source, .. }) if self.core.lost(&source) && attempt < attempts => {
-                    continue;
-                }
-                Err(e) => return Err(e),
-            }
-        }
-        Err(self.core.timeout(&checked, attempts))
-    }
-
-    /// Before sending: re-establishes a lost connection and flushes stale input. Nothing has
-    /// been sent yet, so a connection found closed here is re-established once and the request
-    /// goes on over the new one.
-    fn prepare(&mut self) -> std::io::Result<()> {
-        let mut reconnected = false;
-        loop {
-            if self.core.link_lost() {
-                self.core.may_reconnect()?;
-                let outcome = self.transport.reconnect();
-                self.core.reconnected(outcome)?;
-                reconnected = true;
-            }
-            match self.transport.discard_input() {
-                Err(e) if !reconnected && self.core.lost(&e) => continue,
-                other => return other,
-            }
-        }
-    }
-
-    /// On an RTU-framed link after an attempt that was not answered cleanly: waits until the
-    /// line has been silent for the reply timeout, throwing away what arrives.
-    fn settle(&mut self, checked: &Checked<'_>) -> Result<(), Error> {
-        let Some(mut settle) = self.core.settle_start(checked.sent.slave) else {
-            return Ok(());
-        };
-        loop {
-            let until = self.core.settle_until(&settle);
-            let n = self
-                .transport
-                .recv(self.core.space(), until)
-                .map_err(|e| io_error(checked, e))?;
-            if let Some(outcome) = self.core.settle_step(&mut settle, n, checked) {
-                return outcome;
-            }
-        }
-    }
-
     /// Connections re-established after the peer closed or reset them
     /// ([`ClientOptions::reconnect`]).
     pub fn reconnects(&self) -> u32 {
@@ -1445,34 +1503,197 @@ impl<T: Transport> Client<T> {
         self.core.settled()
     }
 
-    /// Waits for the answer; `Ok(None)` on timeout.
-    fn receive(
-        &mut self,
-        framing: Framing,
-        checked: &Checked<'_>,
-        out: &mut [u16],
-    ) -> Result<Option<()>, Error> {
-        let mut wait = Wait::new(
-            self.core.options.timeout,
-            self.transport.inter_char_timeout(),
-        );
-        loop {
-            let until = self.core.receive_until(&wait);
-            let n = self
-                .transport
-                .recv(self.core.space(), until)
-                .map_err(|e| io_error(checked, e))?;
-            if let Some(outcome) = self
-                .core
-                .received(n, until, &mut wait, framing, checked, out)
-            {
-                return outcome;
-            }
+    /// The link and the protocol state, for one call.
+    pub(crate) fn session(&mut self) -> Session<'_, Blocking<'_, T>> {
+        Session {
+            wire: Blocking(&mut self.transport),
+            core: &mut self.core,
         }
     }
 
-    client_methods!([] []);
-    crate::indexed::indexed_methods!([] []);
+    /// Reads consecutive holding registers (03h) from communication address `address` into
+    /// `out`; the quantity is `out.len()`.
+    pub fn read_holding(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
+        block_on(self.session().read_holding(slave, address, out))
+    }
+
+    /// Reads consecutive input registers (04h).
+    pub fn read_input(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
+        block_on(self.session().read_input(slave, address, out))
+    }
+
+    /// Writes one register by communication address (06h, or 10h where the drive lacks 06h or
+    /// the register there accepts only 10h: its map's `function_codes`).
+    /// Slave 0 broadcasts. The address must hold a writable register of the profile's write
+    /// table that allows `value` on this link ([`gate`]).
+    pub fn write_register(&mut self, slave: u8, address: u16, value: u16) -> Result<(), Error> {
+        block_on(self.session().write_register(slave, address, value))
+    }
+
+    /// Writes the raw value of the register `rule` describes at `address` (its address under
+    /// the settings in force), through the write gate: for tools that interpret a map at run
+    /// time. Applications use [`write`](Self::write), which encodes and finds the rule itself.
+    /// A word goes out with 06h (10h where the drive lacks 06h); a 32-bit pair as its two words
+    /// in the map's order in one 10h request, so the drive never holds half a value.
+    pub fn write_rule(
+        &mut self,
+        slave: u8,
+        rule: &WriteRule,
+        address: u16,
+        raw: u32,
+    ) -> Result<(), Error> {
+        block_on(self.session().write_rule(slave, rule, address, raw))
+    }
+
+    /// Writes consecutive registers (10h). Slave 0 broadcasts. Refused, not split, when a
+    /// register it covers does not accept 10h ([`Refusal::FunctionNotAccepted`]; see
+    /// [`gate`]).
+    pub fn write_registers(
+        &mut self,
+        slave: u8,
+        address: u16,
+        values: &[u16],
+    ) -> Result<(), Error> {
+        block_on(self.session().write_registers(slave, address, values))
+    }
+
+    /// Loop-back test (08h, sub-function 0000h): the drive must return `data`.
+    pub fn loop_back(&mut self, slave: u8, data: u16) -> Result<(), Error> {
+        block_on(self.session().loop_back(slave, data))
+    }
+
+    /// Reads the parameters the drive's conversions depend on (`S::DEPENDENCIES`: scale
+    /// selectors such as V7 n152, reference quantities such as TDS-V8 Cn-02) and records them in
+    /// `settings`, one holding register at a time.
+    pub fn load_settings<S: DriveSettings>(
+        &mut self,
+        slave: u8,
+        settings: &mut S,
+    ) -> Result<(), Error> {
+        block_on(self.session().load_settings::<S>(slave, settings))
+    }
+
+    /// Reads a register as its typed value.
+    pub fn read<R: Readable>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+    ) -> Result<R::Value, Error> {
+        block_on(self.session().read::<R>(slave, settings))
+    }
+
+    /// Writes a typed value. The value is range-checked first; nothing out of range is sent.
+    ///
+    /// A register whose drive executes a value only when it differs from the previous write
+    /// ([`Writable::REPEAT_NEEDS_CHANGE`], the ACN's password registers) is written twice: its
+    /// intermediate value, then `value` ([`write_changed`](Self::write_changed)). The client
+    /// cannot know what was written last (another master, a power cycle), so it always changes
+    /// the word first: otherwise writing the same command twice would be silently ignored.
+    pub fn write<R: Writable>(
+        &mut self,
+        slave: u8,
+        value: &R::Input,
+        settings: &R::Settings,
+    ) -> Result<(), Error> {
+        block_on(self.session().write::<R>(slave, value, settings))
+    }
+
+    /// [`write`](Self::write) with a choice for a number between two steps of the register:
+    /// `write` refuses 35.75 Hz to a register that counts 0.1 Hz
+    /// ([`ValueError::NotAStep`](drivemap_core::scale::ValueError::NotAStep), naming 35.7 and 35.8);
+    /// `Rounding::Nearest` sends 35.8. Every limit is checked on the value given.
+    pub fn write_rounded<R: Writable>(
+        &mut self,
+        slave: u8,
+        value: &R::Input,
+        settings: &R::Settings,
+        rounding: drivemap_core::scale::Rounding,
+    ) -> Result<(), Error> {
+        block_on(
+            self.session()
+                .write_rounded::<R>(slave, value, settings, rounding),
+        )
+    }
+
+    /// Writes `raw` to a register whose drive executes a value only when it differs from the
+    /// previous write: `between` first (unless `raw` is `between` itself, which the drive then
+    /// takes as it takes any other value), then `raw`, each through the write gate with `rule`.
+    /// The manual's example: "if you want to enter 244 twice, enter it in the following order:
+    /// 244 > 0 > 244" (`004_c5cbf92472673495.txt:1113`). Nothing is sent when the gate refuses
+    /// either word.
+    pub fn write_changed(
+        &mut self,
+        slave: u8,
+        rule: &WriteRule,
+        address: u16,
+        between: u32,
+        raw: u32,
+    ) -> Result<(), Error> {
+        block_on(
+            self.session()
+                .write_changed(slave, rule, address, between, raw),
+        )
+    }
+
+    /// Read-modify-write: reads the register, lets `change` edit the typed value, writes it back.
+    /// Returns the value written. Not for a register whose read meaning differs from its write
+    /// form ([`ReadWriteAs`](drivemap_core::register::ReadWriteAs)): what it reads cannot be written.
+    pub fn update<
+        R: Readable + Writable<Input = <R as drivemap_core::register::Register>::Value>,
+    >(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+        change: impl FnOnce(&mut R::Value),
+    ) -> Result<R::Value, Error> {
+        block_on(self.session().update::<R>(slave, settings, change))
+    }
+
+    /// Read-modify-write of a bit-field register: sets the bits of `set` and clears those of
+    /// `clear`, keeping the other fields as read. Reserved bits are refused in the masks and
+    /// written as 0.
+    pub fn modify_bits<R>(
+        &mut self,
+        slave: u8,
+        settings: &R::Settings,
+        set: u16,
+        clear: u16,
+    ) -> Result<R::Value, Error>
+    where
+        R: BitRegister
+            + Readable
+            + Writable<Input = <R as drivemap_core::register::Register>::Value>,
+        R::Value: Bits,
+    {
+        block_on(self.session().modify_bits::<R>(slave, settings, set, clear))
+    }
+
+    /// Reads consecutive registers in one request: `client.read_many::<(A, B, C)>(1, &s)`.
+    pub fn read_many<S: ReadSet>(
+        &mut self,
+        slave: u8,
+        settings: &S::Settings,
+    ) -> Result<S::Values, Error> {
+        block_on(self.session().read_many::<S>(slave, settings))
+    }
+
+    /// Writes consecutive registers in one 10h request, each value range-checked first.
+    pub fn write_many<S: WriteSet>(
+        &mut self,
+        slave: u8,
+        values: &S::Values,
+        settings: &S::Settings,
+    ) -> Result<(), Error> {
+        block_on(self.session().write_many::<S>(slave, values, settings))
+    }
+
+    /// Runs a command of the profile (ENTER, ACCEPT, save parameters) by its map id. A command
+    /// that stores to EEPROM ([`CommandKind::Persist`]) takes one write from the hourly budget,
+    /// or is refused when the budget is spent; it is never retried, since a lost reply may
+    /// follow a completed write. Plain writes to these registers are refused.
+    pub fn persist(&mut self, slave: u8, id: &str) -> Result<(), Error> {
+        block_on(self.session().persist(slave, id))
+    }
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@ use std::time::Duration;
 use crate::exception::Exception;
 use crate::pdu::function;
 use crate::reply::Discarded;
-use crate::scale::ValueError;
+use drivemap_core::scale::ValueError;
 
 /// A request as the user asked for it: the manual's communication address and, where the
 /// profile maps it elsewhere, the PDU address that went on the wire.
@@ -58,80 +58,132 @@ impl fmt::Display for Sent {
 pub enum Refusal {
     /// The drive does not implement the function.
     #[error("{drive} does not implement function {function:02X}h")]
-    UnsupportedFunction { drive: &'static str, function: u8 },
+    UnsupportedFunction {
+        /// The drive's map id.
+        drive: &'static str,
+        /// The function code asked for.
+        function: u8,
+    },
     /// More registers than the drive accepts in one request.
     #[error(
         "{drive} accepts at most {max} registers per {function:02X}h request; {quantity} asked"
     )]
     TooManyRegisters {
+        /// The drive's map id.
         drive: &'static str,
+        /// The function code.
         function: u8,
+        /// The registers asked for.
         quantity: usize,
+        /// The most the drive accepts in one request.
         max: u16,
     },
     /// A request for zero registers.
     #[error("{function:02X}h request for no registers")]
-    NoRegisters { function: u8 },
+    NoRegisters {
+        /// The function code.
+        function: u8,
+    },
     /// A slave address outside the drive's range.
     #[error("slave address {slave} is outside {drive}'s range {min} ..= {max} (0 is broadcast)")]
     Slave {
+        /// The drive's map id.
         drive: &'static str,
+        /// The slave address given.
         slave: u8,
+        /// The lowest address of the drive's range.
         min: u8,
+        /// The highest address of the drive's range.
         max: u8,
     },
     /// Broadcast cannot read: nobody replies to slave 0.
     #[error("broadcast (slave 0) gets no reply, so it cannot read ({function:02X}h)")]
-    BroadcastRead { function: u8 },
+    BroadcastRead {
+        /// The function code.
+        function: u8,
+    },
     /// Broadcast cannot loop back: nobody replies to slave 0.
     #[error("broadcast (slave 0) gets no reply, so loop-back (08h) is meaningless")]
     BroadcastLoopBack,
     /// The drive has no broadcast, or not for this function.
     #[error("{drive} does not execute function {function:02X}h as a broadcast")]
-    BroadcastFunction { drive: &'static str, function: u8 },
+    BroadcastFunction {
+        /// The drive's map id.
+        drive: &'static str,
+        /// The function code.
+        function: u8,
+    },
     /// A serial line set to a character format the drive's map does not list (`serial.formats`:
     /// the ACN offers 8N1, 8N2, 8E1 and 8O1 only).
     #[error("{0}")]
-    SerialFormat(crate::profile::FormatNotListed),
+    SerialFormat(drivemap_core::profile::FormatNotListed),
     /// The drive has a broadcast, but its manual does not print the rules (which functions,
     /// which registers): nothing is broadcast, since no one can say what the drives would do.
     #[error(
         "{drive} has a broadcast whose rules its manual does not print ({why}): drivemap sends it no broadcast; address each slave instead"
     )]
     BroadcastRulesNotPrinted {
+        /// The drive's map id.
         drive: &'static str,
+        /// Why the manual prints none, as the map says.
         why: &'static str,
     },
     /// The drive does not accept this register in a broadcast.
     #[error("{drive} does not accept register {address:04X}h in a broadcast")]
-    BroadcastAddress { drive: &'static str, address: u16 },
+    BroadcastAddress {
+        /// The drive's map id.
+        drive: &'static str,
+        /// The communication address.
+        address: u16,
+    },
     /// The address cannot be mapped to a PDU address on this transport.
     #[error("communication address {address:04X}h with offset {offset} is outside 0000h ..= FFFFh")]
-    AddressMapping { address: u16, offset: i32 },
+    AddressMapping {
+        /// The communication address.
+        address: u16,
+        /// The profile's offset for the transport.
+        offset: i32,
+    },
     /// The registers would run past FFFFh.
     #[error("{quantity} registers from {address:04X}h run past FFFFh")]
-    AddressOverflow { address: u16, quantity: usize },
+    AddressOverflow {
+        /// The first address.
+        address: u16,
+        /// The number of registers.
+        quantity: usize,
+    },
     /// A plain write to a command register (ENTER, ACCEPT, save) that must go through
     /// [`Client::persist`](crate::client::Client::persist).
     #[error(
         "{address:04X}h is the command register of {command:?} ({name}); use persist(slave, {command:?}), which counts EEPROM writes"
     )]
     CommandRegister {
+        /// The communication address.
         address: u16,
+        /// The command's id in the map.
         command: &'static str,
+        /// The command's name as printed in the manual.
         name: &'static str,
     },
     /// The profile has no command of that id.
     #[error("{drive} has no command {id:?}")]
-    UnknownCommand { drive: &'static str, id: String },
+    UnknownCommand {
+        /// The drive's map id.
+        drive: &'static str,
+        /// The id asked for.
+        id: String,
+    },
     /// The EEPROM write budget for the last hour is spent.
     #[error(
         "EEPROM write budget spent: {used} of {budget} writes in the last hour; the next is allowed in {} s",
         next_in.as_secs()
     )]
     EepromBudget {
+        /// EEPROM writes in the last hour.
         used: u32,
+        /// EEPROM writes allowed per hour.
         budget: u32,
+        /// Time until the next write is allowed.
         next_in: Duration,
     },
     /// Registers requested together are not consecutive or not in one table.
@@ -139,9 +191,13 @@ pub enum Refusal {
         "{register} is at {got:04X}h, not {expected:04X}h right after {first}: they cannot be read in one request"
     )]
     NotContiguous {
+        /// The first register of the set.
         first: &'static str,
+        /// The register out of place.
         register: &'static str,
+        /// The address it would need.
         expected: u16,
+        /// The address it has.
         got: u16,
     },
     /// The register does not exist on the client's transport (the map's `transports`).
@@ -149,18 +205,22 @@ pub enum Refusal {
         "{register} does not exist on {transport:?}: the map lists it for other transports only"
     )]
     NotOnTransport {
+        /// The register's id.
         register: &'static str,
-        transport: crate::profile::TransportKind,
+        /// The client's transport kind.
+        transport: drivemap_core::profile::TransportKind,
     },
     /// The drive's map gives no register or field for a role of the drive trait (on this link).
     #[error("{drive}'s map gives no {what} for `{role}`{}", match transport { Some(t) => format!(" usable on {t:?}"), None => String::new() })]
     NoRole {
+        /// The drive's map id.
         drive: &'static str,
+        /// The role's id (or the command profile path's).
         role: &'static str,
         /// What was looked for: "register", "field", "way to run in reverse".
         what: &'static str,
         /// Set when the map gives the role on other transports only.
-        transport: Option<crate::profile::TransportKind>,
+        transport: Option<drivemap_core::profile::TransportKind>,
     },
     /// Two roles that are one register on this drive (the map's `shared_with`), asked for
     /// different values: whichever is written last would hold for both.
@@ -168,9 +228,13 @@ pub enum Refusal {
         "{drive}: {role} and {other} are one register ({register}) on this drive, so they cannot be {asked}; give one value for both"
     )]
     SharedRegister {
+        /// The drive's map id.
         drive: &'static str,
+        /// The first role's id.
         role: &'static str,
+        /// The other role's id.
         other: &'static str,
+        /// The register's id.
         register: &'static str,
         /// The two values asked for, with their unit ("2 s and 1 s").
         asked: String,
@@ -180,6 +244,7 @@ pub enum Refusal {
     /// and ignored by the drive, so it is not sent.
     #[error("{drive}: the drive takes {what} from {now}; {fix}")]
     NotNetworkSource {
+        /// The drive's map id.
         drive: &'static str,
         /// "run commands" or "the frequency reference".
         what: &'static str,
@@ -192,8 +257,11 @@ pub enum Refusal {
     /// written safely by reading the word and writing it back.
     #[error("{drive}: `{role}` is a field of {register} and is not written: {why}")]
     FieldNotWritable {
+        /// The drive's map id.
         drive: &'static str,
+        /// The role's id.
         role: &'static str,
+        /// The id of the register that holds the field.
         register: &'static str,
         /// Why a read-modify-write is not safe there.
         why: &'static str,
@@ -203,23 +271,37 @@ pub enum Refusal {
         "the client speaks to {client}, not to {drive}: build the client with {drive}'s profile"
     )]
     OtherDrive {
+        /// The drive id of the client's profile.
         client: &'static str,
+        /// The drive id of the plan.
         drive: &'static str,
     },
     /// An external quantity the map does not have, or one not supplied.
     #[error("{drive} has no external quantity {name}")]
-    UnknownExternal { drive: &'static str, name: String },
+    UnknownExternal {
+        /// The drive's map id.
+        drive: &'static str,
+        /// The name given.
+        name: String,
+    },
     /// An external quantity the application has not supplied.
     #[error(
         "{drive}: the external quantity {name} is not set; the application supplies it (Vfd::connect's externals)"
     )]
     ExternalNotSet {
+        /// The drive's map id.
         drive: &'static str,
+        /// The external quantity's name.
         name: &'static str,
     },
     /// Bits outside a bit-field register's fields.
     #[error("{register}: bits {bits:04X}h are reserved")]
-    ReservedBits { register: &'static str, bits: u16 },
+    ReservedBits {
+        /// The register's id.
+        register: &'static str,
+        /// The reserved bits asked for.
+        bits: u16,
+    },
     /// A function the register at `address` does not accept (its map's `function_codes`): the
     /// drive would answer it with an exception.
     #[error(
@@ -227,28 +309,43 @@ pub enum Refusal {
         function_list(accepted)
     )]
     FunctionNotAccepted {
+        /// The register's id.
         register: &'static str,
+        /// The register's communication address.
         address: u16,
+        /// The function code of the request.
         function: u8,
+        /// The function codes the register accepts.
         accepted: &'static [u8],
         /// `file:line` of the manual's statement.
         citation: &'static str,
     },
     /// A write to a register the manual makes read-only.
     #[error("{register} is read-only")]
-    ReadOnly { register: &'static str },
+    ReadOnly {
+        /// The register's id.
+        register: &'static str,
+    },
     /// A read of a register or indexed entry the manual makes write-only.
     #[error("{register} is write-only")]
-    WriteOnly { register: &'static str },
+    WriteOnly {
+        /// The register's id.
+        register: &'static str,
+    },
     /// A broadcast-only register addressed to one slave.
     #[error("{register} is a broadcast register: it is written to slave 0 only")]
-    BroadcastOnly { register: &'static str },
+    BroadcastOnly {
+        /// The register's id.
+        register: &'static str,
+    },
     /// A register a broadcast may not write, addressed to slave 0.
     #[error(
         "{drive} does not accept {register} in a broadcast: slave 0 addresses the broadcast registers, which have their own layout"
     )]
     NotBroadcast {
+        /// The drive's map id.
         drive: &'static str,
+        /// The register's id.
         register: &'static str,
     },
     /// A write that covers one word of a 32-bit pair without the other: the drive would take
@@ -257,13 +354,17 @@ pub enum Refusal {
         "{register} is a 32-bit value in two registers: write both words in one request, from its first address (not from {address:04X}h)"
     )]
     SplitPair {
+        /// The register's id.
         register: &'static str,
+        /// The address the write starts at.
         address: u16,
     },
     /// A register written at an address it does not occupy.
     #[error("{register} is not at {address:04X}h")]
     NotAtAddress {
+        /// The register's id.
         register: &'static str,
+        /// The address written.
         address: u16,
     },
     /// A raw write to an address where the map has no writable register on this link.
@@ -272,17 +373,25 @@ pub enum Refusal {
         if *broadcast { " in the broadcast space" } else { "" }
     )]
     NoWritableRegister {
+        /// The drive's map id.
         drive: &'static str,
+        /// The communication address written.
         address: u16,
-        transport: crate::profile::TransportKind,
+        /// The client's transport kind.
+        transport: drivemap_core::profile::TransportKind,
+        /// Whether the write is a broadcast (slave 0).
         broadcast: bool,
     },
     /// A word outside every range the map gives the register.
     #[error("{register}: raw value {raw} is outside {min} ..= {max}, the map's range for it")]
     RawOutOfRange {
+        /// The register's id.
         register: &'static str,
+        /// The raw value.
         raw: i64,
+        /// The lowest raw value of the map's range.
         min: i64,
+        /// The highest raw value of the map's range.
         max: i64,
     },
     /// The register's address depends on a setting that is not known (GPD 515 o2-09 not
@@ -311,9 +420,11 @@ pub enum Error {
         match settle { Some(q) => format!("; the next request to slave {} waits until the line has been silent for {} ms, so that a late reply is not taken for its answer", sent.slave, q.as_millis()), None => String::new() }
     )]
     Timeout {
+        /// The request.
         sent: Sent,
         /// Time waited on each attempt.
         waited: Duration,
+        /// Attempts made.
         attempts: u8,
         /// What arrived but was not the answer, on the last attempt.
         discarded: Discarded,
@@ -331,6 +442,7 @@ pub enum Error {
         waited.as_millis()
     )]
     Unsettled {
+        /// The request.
         sent: Sent,
         /// The silence waited for.
         quiet: Duration,
@@ -341,12 +453,19 @@ pub enum Error {
     },
     /// The drive answered with an exception.
     #[error("slave {} answered {sent} with {exception}", sent.slave)]
-    Exception { sent: Sent, exception: Exception },
+    Exception {
+        /// The request.
+        sent: Sent,
+        /// The drive's exception.
+        exception: Exception,
+    },
     /// The link failed.
     #[error("{sent} to slave {}: {source}", sent.slave)]
     Io {
+        /// The request.
         sent: Sent,
         #[source]
+        /// The link's error.
         source: io::Error,
     },
     /// The link failed outside a request (connecting, reconnecting, setting up a line): the
@@ -398,6 +517,7 @@ pub enum Error {
         sent.slave
     )]
     Overrun {
+        /// The request.
         sent: Sent,
         /// Bytes received in the attempt.
         bytes: usize,

@@ -8,7 +8,7 @@
 
 use ::core::fmt;
 
-use crate::profile::Profile;
+use drivemap_core::profile::Profile;
 
 /// The Modbus specification's name and meaning of a standard exception code.
 pub fn standard(code: u8) -> Option<(&'static str, &'static str)> {
@@ -124,7 +124,7 @@ impl fmt::Display for Exception {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::profile::ExceptionInfo;
+    use drivemap_core::profile::ExceptionInfo;
 
     static TDS: Profile = Profile {
         drive_id: "tds",

@@ -9,7 +9,7 @@
 //!
 //! What the map allows for one register is a [`WriteRule`]: generated as
 //! [`Writable::RULE`](crate::Writable::RULE) for every writable register and collected in
-//! [`Profile::writes`](crate::Profile::writes). The gate refuses
+//! [`Profile::writes`](drivemap_core::profile::Profile::writes). The gate refuses
 //! - a register that is read-only ([`Refusal::ReadOnly`]);
 //! - a register the map lists for other transports only ([`Refusal::NotOnTransport`]): the V7's
 //!   RTU command register 0001h is the Modbus TCP option card's digital-input register;
@@ -24,11 +24,11 @@
 //!   ([`Refusal::RawOutOfRange`], [`Refusal::ReservedBits`]).
 //!
 //! - a function the register does not accept, where the map restricts its functions
-//!   (`function_codes`: [`Refusal::FunctionNotAccepted`], checked by [`check_function`] on
+//!   (`function_codes`: [`Refusal::FunctionNotAccepted`], checked by `check_function` on
 //!   every address a request covers).
 //!
 //! Function codes per register: a single word goes out with 06h unless its register refuses
-//! 06h and accepts 10h ([`single_write_function`]). A multi-register write (10h) that covers a
+//! 06h and accepts 10h (`single_write_function`). A multi-register write (10h) that covers a
 //! register refusing 10h is **refused, not split**: split requests are no longer one write (the
 //! drive would hold part of the new values between them, and a failure part-way leaves a
 //! half-written block), so the caller decides, writing each register on its own
@@ -41,8 +41,11 @@
 //! setting at all.
 
 use crate::error::Refusal;
-use crate::profile::{Profile, TransportKind};
 use crate::rtu;
+use drivemap_core::profile::{Profile, TransportKind};
+// A second path to the write rules (`drivemap_runtime::core::rule` is the documented one),
+// kept for code that names it.
+#[doc(hidden)]
 pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
 use drivemap_core::width::Width;
 
@@ -96,7 +99,7 @@ fn listed_broadcast(profile: &Profile) -> bool {
 
 /// Refuses a broadcast (slave 0) to a drive whose broadcast rules the manual does not print:
 /// the map cannot say which functions and registers the drives would execute.
-pub fn broadcast_known(profile: &Profile, slave: u8) -> Result<(), Refusal> {
+pub(crate) fn broadcast_known(profile: &Profile, slave: u8) -> Result<(), Refusal> {
     match profile.broadcast {
         Some(b) if slave == rtu::BROADCAST => match b.not_printed {
             Some(why) => Err(Refusal::BroadcastRulesNotPrinted {
@@ -253,7 +256,7 @@ pub fn accepts(
 /// The function one word written at `address` goes out with: 06h, unless the drive lacks it or
 /// the register there refuses it while accepting 10h (one drive takes 10h only on its first
 /// registers, another writes some registers with 10h only).
-pub fn single_write_function(
+pub(crate) fn single_write_function(
     profile: &Profile,
     kind: TransportKind,
     target: WriteTarget<'_>,
@@ -271,7 +274,7 @@ pub fn single_write_function(
 /// Refuses a write with `function` over `quantity` registers from `address` when a register
 /// it covers does not accept that function ([`Refusal::FunctionNotAccepted`]). Nothing is
 /// split: see the module documentation.
-pub fn check_function(
+pub(crate) fn check_function(
     profile: &Profile,
     kind: TransportKind,
     target: WriteTarget<'_>,

@@ -113,15 +113,38 @@ impl fmt::Debug for Words<'_> {
 #[non_exhaustive]
 pub enum Request<'a> {
     /// 03h: read `quantity` holding registers from `address`.
-    ReadHolding { address: u16, quantity: u16 },
+    ReadHolding {
+        /// The PDU address of the first register.
+        address: u16,
+        /// The number of registers.
+        quantity: u16,
+    },
     /// 04h: read `quantity` input registers from `address`.
-    ReadInput { address: u16, quantity: u16 },
+    ReadInput {
+        /// The PDU address of the first register.
+        address: u16,
+        /// The number of registers.
+        quantity: u16,
+    },
     /// 06h: write one register.
-    WriteSingle { address: u16, value: u16 },
+    WriteSingle {
+        /// The register's PDU address.
+        address: u16,
+        /// The value.
+        value: u16,
+    },
     /// 08h sub-function 0000h: the drive returns `data` unchanged.
-    LoopBack { data: u16 },
+    LoopBack {
+        /// The data.
+        data: u16,
+    },
     /// 10h: write consecutive registers from `address`.
-    WriteMultiple { address: u16, values: Words<'a> },
+    WriteMultiple {
+        /// The PDU address of the first register.
+        address: u16,
+        /// The values, in address order.
+        values: Words<'a>,
+    },
 }
 
 /// Why a request cannot be encoded.
@@ -131,16 +154,29 @@ pub enum RequestError {
     /// Zero registers, or more than the Modbus limit for the function.
     #[error("{function:02X}h with {quantity} registers: Modbus allows 1 ..= {max}")]
     Quantity {
+        /// The function code.
         function: u8,
+        /// The number of registers.
         quantity: usize,
+        /// The Modbus limit for the function.
         max: u16,
     },
     /// The registers would run past address FFFFh.
     #[error("{quantity} registers from {address:04X}h run past FFFFh")]
-    AddressOverflow { address: u16, quantity: usize },
+    AddressOverflow {
+        /// The PDU address of the first register.
+        address: u16,
+        /// The number of registers.
+        quantity: usize,
+    },
     /// The output buffer is too small for the frame.
     #[error("frame of {needed} bytes does not fit a buffer of {available}")]
-    Buffer { needed: usize, available: usize },
+    Buffer {
+        /// Bytes the frame needs.
+        needed: usize,
+        /// Bytes the buffer has.
+        available: usize,
+    },
 }
 
 impl Request<'_> {
@@ -278,13 +314,31 @@ pub enum Response<'a> {
     /// 03h/04h: the registers read.
     Registers(Words<'a>),
     /// 06h: the echo of the written register.
-    WriteSingle { address: u16, value: u16 },
+    WriteSingle {
+        /// The register's PDU address.
+        address: u16,
+        /// The value.
+        value: u16,
+    },
     /// 08h: the echoed data.
-    LoopBack { data: u16 },
+    LoopBack {
+        /// The data.
+        data: u16,
+    },
     /// 10h: the echo of the start address and quantity.
-    WriteMultiple { address: u16, quantity: u16 },
+    WriteMultiple {
+        /// The PDU address of the first register.
+        address: u16,
+        /// The number of registers written.
+        quantity: u16,
+    },
     /// An exception response: the request's function and the drive's own code.
-    Exception { function: u8, code: u8 },
+    Exception {
+        /// The request's function code.
+        function: u8,
+        /// The drive's exception code.
+        code: u8,
+    },
 }
 
 impl Response<'_> {
@@ -339,37 +393,82 @@ impl Response<'_> {
 pub enum FrameError {
     /// The frame is shorter or longer than its function code says.
     #[error("frame of {got} bytes, expected {expected}")]
-    Length { expected: usize, got: usize },
+    Length {
+        /// The length its function code gives.
+        expected: usize,
+        /// The length received.
+        got: usize,
+    },
     /// The CRC does not match the frame.
     #[error("CRC {received:04X}h received, {computed:04X}h computed")]
-    Crc { computed: u16, received: u16 },
+    Crc {
+        /// The CRC computed over the frame.
+        computed: u16,
+        /// The CRC the frame carries.
+        received: u16,
+    },
     /// The reply comes from another slave.
     #[error("reply from slave {got}, expected slave {expected}")]
-    Slave { expected: u8, got: u8 },
+    Slave {
+        /// The slave asked.
+        expected: u8,
+        /// The slave that answered.
+        got: u8,
+    },
     /// The function code is neither the request's nor its exception code.
     #[error("function {got:02X}h in reply, expected {expected:02X}h")]
-    Function { expected: u8, got: u8 },
+    Function {
+        /// The request's function code.
+        expected: u8,
+        /// The function code in the reply.
+        got: u8,
+    },
     /// A function code the runtime does not implement.
     #[error("unknown function code {0:02X}h")]
     UnknownFunction(u8),
     /// The byte count of a read reply does not match the quantity requested.
     #[error("byte count {got} in reply, expected {expected}")]
-    ByteCount { expected: usize, got: usize },
+    ByteCount {
+        /// The byte count the quantity requested gives.
+        expected: usize,
+        /// The byte count in the reply.
+        got: usize,
+    },
     /// The address echo differs from the request.
     #[error("address {got:04X}h echoed, {expected:04X}h sent")]
-    AddressEcho { expected: u16, got: u16 },
+    AddressEcho {
+        /// The address sent.
+        expected: u16,
+        /// The address echoed.
+        got: u16,
+    },
     /// The quantity echo differs from the request.
     #[error("quantity {got} echoed, {expected} sent")]
-    QuantityEcho { expected: u16, got: u16 },
+    QuantityEcho {
+        /// The quantity sent.
+        expected: u16,
+        /// The quantity echoed.
+        got: u16,
+    },
     /// The value echo (06h, 08h) differs from the request.
     #[error("value {got:04X}h echoed, {expected:04X}h sent")]
-    ValueEcho { expected: u16, got: u16 },
+    ValueEcho {
+        /// The value sent.
+        expected: u16,
+        /// The value echoed.
+        got: u16,
+    },
     /// The loop-back reply carries a sub-function other than 0000h.
     #[error("loop-back sub-function {0:04X}h, expected 0000h")]
     SubFunction(u16),
     /// Modbus TCP: the reply carries another transaction id (a late reply to an earlier request).
     #[error("transaction {got} in reply, expected {expected}")]
-    Transaction { expected: u16, got: u16 },
+    Transaction {
+        /// The request's transaction id.
+        expected: u16,
+        /// The reply's transaction id.
+        got: u16,
+    },
     /// Modbus TCP: the protocol identifier is not 0.
     #[error("protocol identifier {0}, expected 0")]
     Protocol(u16),
@@ -378,7 +477,12 @@ pub enum FrameError {
     MbapLength(u16),
     /// Modbus TCP: the reply's unit identifier differs from the request's.
     #[error("unit {got} in reply, expected unit {expected}")]
-    Unit { expected: u8, got: u8 },
+    Unit {
+        /// The request's unit identifier.
+        expected: u8,
+        /// The reply's unit identifier.
+        got: u8,
+    },
 }
 
 /// Length of a response PDU as its own header says, given at least its first two bytes.

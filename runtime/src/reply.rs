@@ -15,15 +15,23 @@ use crate::{crc, rtu, tcp};
 
 /// Capacity of the receive buffer: twice the largest frame, so a frame that is still incomplete
 /// never fills it.
-pub const CAPACITY: usize = 2 * tcp::MAX_FRAME;
+pub(crate) const CAPACITY: usize = 2 * tcp::MAX_FRAME;
 
 /// How replies are framed and addressed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Framing {
     /// RTU frames (serial line or RTU over TCP) from `slave`.
-    Rtu { slave: u8 },
+    Rtu {
+        /// The slave the reply must come from.
+        slave: u8,
+    },
     /// Modbus TCP frames with transaction id `transaction` from `unit`.
-    Tcp { transaction: u16, unit: u8 },
+    Tcp {
+        /// The request's transaction id.
+        transaction: u16,
+        /// The request's unit identifier.
+        unit: u8,
+    },
 }
 
 /// What was thrown away while waiting for the answer.
@@ -46,7 +54,10 @@ pub enum Discard {
     Frame(FrameError),
     /// A frame left incomplete: broken off by a gap longer than the inter-character timeout,
     /// or still incomplete when the reply timed out.
-    Gap { bytes: usize },
+    Gap {
+        /// The bytes of the incomplete frame.
+        bytes: usize,
+    },
     /// Modbus ASCII: characters that were not an intact frame (no `:` before them, a frame
     /// broken off by a new `:` or too long, bad hexadecimal digits or LRC).
     Ascii(crate::ascii::AsciiError),

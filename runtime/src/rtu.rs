@@ -122,7 +122,9 @@ pub enum RequestFrameError {
     /// The frame is intact but the request is not acceptable: the slave answers an exception.
     #[error("slave {slave}: {error}")]
     Request {
+        /// The slave addressed.
         slave: u8,
+        /// Why the request is not acceptable.
         error: RequestDecodeError,
     },
 }

@@ -156,7 +156,9 @@ pub enum RequestFrameError {
     /// The request is not acceptable: the server answers an exception.
     #[error("unit {}: {error}", header.unit)]
     Request {
+        /// The request's MBAP header.
         header: Header,
+        /// Why the request is not acceptable.
         error: RequestDecodeError,
     },
 }

@@ -6,9 +6,10 @@
 //! anything is sent). Tuples of 1 to 8 registers sharing one `Settings` type are supported.
 
 use crate::error::Refusal;
-use crate::profile::TransportKind;
-use crate::register::{Readable, Register, Table, Width, Writable};
-use crate::scale::ValueError;
+use drivemap_core::profile::TransportKind;
+use drivemap_core::register::{Readable, Register, Table, Writable};
+use drivemap_core::scale::ValueError;
+use drivemap_core::width::Width;
 
 /// Consecutive registers handled in one request.
 pub trait RegisterSet {
@@ -69,6 +70,27 @@ fn check_next<R: Register>(
     Ok(())
 }
 
+/// The raw value of the next member of a set from the front of `rest` (its words joined in the
+/// map's order), taking them off.
+fn take(rest: &mut &[u16], width: Width) -> u32 {
+    let n = usize::from(width.count()).min(rest.len());
+    let (these, after) = rest.split_at(n);
+    *rest = after;
+    width.join(these)
+}
+
+/// Puts the raw value of the next member of a set into the next words of `slots`, in the map's
+/// order.
+fn put<'a>(slots: &mut impl Iterator<Item = &'a mut u16>, width: Width, raw: u32) {
+    for word in &width.split(raw)[..usize::from(width.count())] {
+        if let Some(slot) = slots.next() {
+            *slot = *word;
+        }
+    }
+}
+
+/// The three traits for the tuple of the registers named (`A a, B b`: each type with a name
+/// for its value).
 macro_rules! register_set {
     ($first:ident $fv:ident $(, $rest:ident $rv:ident)*) => {
         impl<$first: Register, $($rest: Register<Settings = $first::Settings>),*> RegisterSet
@@ -100,15 +122,9 @@ macro_rules! register_set {
         {
             fn decode(raw: &[u16], settings: &Self::Settings) -> Result<Self::Values, ValueError> {
                 let mut rest = raw;
-                let mut take = |width: Width| {
-                    let n = usize::from(width.count()).min(rest.len());
-                    let (these, after) = rest.split_at(n);
-                    rest = after;
-                    width.join(these)
-                };
                 Ok((
-                    $first::decode(take($first::WIDTH), settings)?,
-                    $($rest::decode(take($rest::WIDTH), settings)?,)*
+                    $first::decode(take(&mut rest, $first::WIDTH), settings)?,
+                    $($rest::decode(take(&mut rest, $rest::WIDTH), settings)?,)*
                 ))
             }
         }
@@ -126,15 +142,8 @@ macro_rules! register_set {
             ) -> Result<(), ValueError> {
                 let ($fv, $($rv,)*) = values;
                 let mut slots = out.iter_mut();
-                let mut put = |width: Width, raw: u32| {
-                    for word in &width.split(raw)[..usize::from(width.count())] {
-                        if let Some(slot) = slots.next() {
-                            *slot = *word;
-                        }
-                    }
-                };
-                put($first::WIDTH, $first::encode($fv, settings)?);
-                $(put($rest::WIDTH, $rest::encode($rv, settings)?);)*
+                put(&mut slots, $first::WIDTH, $first::encode($fv, settings)?);
+                $(put(&mut slots, $rest::WIDTH, $rest::encode($rv, settings)?);)*
                 Ok(())
             }
         }

@@ -96,7 +96,7 @@
 //!   released, a run kept only while this master's `run()` stands or the status shows the drive
 //!   running: `roles_in_fields::a_command_field_is_written_from_the_roles_not_from_a_read_back`.
 //! - On a drive with a command profile (a control-word state machine, the map's `profile:`,
-//!   [`CommandProfile`]), `run()` reads the status word and writes the run path's transitions in
+//!   [`CommandProfile`](drivemap_core::command_profile::CommandProfile)), `run()` reads the status word and writes the run path's transitions in
 //!   order, each verified in the status word within its time limit, else
 //!   [`Error::StateMachine`] naming the state the drive is in:
 //!   `drive_contract::command_profiles::run_and_stops_walk_the_machine_from_power_on`,
@@ -111,19 +111,23 @@
 
 use std::fmt;
 
-use drivemap_core::command_profile::{CommandProfile, Path, PathKind, Transition};
-use drivemap_core::plan::{Conversion, RegisterPlan};
-use drivemap_core::register::{DrivePlan, DriveSettings, Table};
-use drivemap_core::roles::{FieldRole, NumberField, Place, Role, RoleKind, Target};
-use drivemap_core::rule::Broadcast;
-use drivemap_core::{Roles, Rounding, SettingsView, ValueError};
+use drivemap_core::plan::RegisterPlan;
+use drivemap_core::register::{DrivePlan, DriveSettings};
+use drivemap_core::roles::Role;
+use drivemap_core::{Roles, Rounding, SettingsView};
 
 #[cfg(feature = "tokio")]
 use crate::async_client::{AsyncClient, AsyncTransport};
 use crate::client::Client;
 use crate::error::{Error, Refusal};
-use crate::profile::TransportKind;
 use crate::transport::Transport;
+#[cfg(feature = "tokio")]
+use crate::wire::Tokio;
+use crate::wire::{Blocking, block_on};
+
+mod machine;
+
+use machine::{CommandWord, Machine, State};
 
 /// Direction of rotation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -423,43 +427,68 @@ pub trait HoldsAsyncClient {
     fn get_mut(&mut self) -> &mut AsyncClient<Self::Transport>;
 }
 
-macro_rules! holds {
-    ($holds:ident, $client:ident, $link:ident) => {
-        impl<T: $link> $holds for $client<T> {
-            type Transport = T;
-            fn get(&self) -> &$client<T> {
-                self
-            }
-            fn get_mut(&mut self) -> &mut $client<T> {
-                self
-            }
-        }
-
-        impl<T: $link> $holds for &mut $client<T> {
-            type Transport = T;
-            fn get(&self) -> &$client<T> {
-                self
-            }
-            fn get_mut(&mut self) -> &mut $client<T> {
-                self
-            }
-        }
-
-        impl<T: $link> $holds for Box<$client<T>> {
-            type Transport = T;
-            fn get(&self) -> &$client<T> {
-                self
-            }
-            fn get_mut(&mut self) -> &mut $client<T> {
-                self
-            }
-        }
-    };
+impl<T: Transport> HoldsClient for Client<T> {
+    type Transport = T;
+    fn get(&self) -> &Client<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut Client<T> {
+        self
+    }
 }
 
-holds!(HoldsClient, Client, Transport);
+impl<T: Transport> HoldsClient for &mut Client<T> {
+    type Transport = T;
+    fn get(&self) -> &Client<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut Client<T> {
+        self
+    }
+}
+
+impl<T: Transport> HoldsClient for Box<Client<T>> {
+    type Transport = T;
+    fn get(&self) -> &Client<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut Client<T> {
+        self
+    }
+}
+
 #[cfg(feature = "tokio")]
-holds!(HoldsAsyncClient, AsyncClient, AsyncTransport);
+impl<T: AsyncTransport> HoldsAsyncClient for AsyncClient<T> {
+    type Transport = T;
+    fn get(&self) -> &AsyncClient<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut AsyncClient<T> {
+        self
+    }
+}
+
+#[cfg(feature = "tokio")]
+impl<T: AsyncTransport> HoldsAsyncClient for &mut AsyncClient<T> {
+    type Transport = T;
+    fn get(&self) -> &AsyncClient<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut AsyncClient<T> {
+        self
+    }
+}
+
+#[cfg(feature = "tokio")]
+impl<T: AsyncTransport> HoldsAsyncClient for Box<AsyncClient<T>> {
+    type Transport = T;
+    fn get(&self) -> &AsyncClient<T> {
+        self
+    }
+    fn get_mut(&mut self) -> &mut AsyncClient<T> {
+        self
+    }
+}
 
 /// A drive on slave `slave` of a blocking client, read and written through its plan and roles:
 /// the [`VariableFrequencyDrive`] of every drive whose map has roles. Build it from a generated
@@ -482,26 +511,6 @@ pub struct AsyncVfd<S: SettingsView, C: HoldsAsyncClient> {
     state: State<S>,
 }
 
-/// What a [`Vfd`] or an [`AsyncVfd`] knows of its drive besides the client.
-struct State<S> {
-    slave: u8,
-    settings: S,
-    registers: &'static [RegisterPlan],
-    roles: Roles,
-    kind: TransportKind,
-    direction: Direction,
-    /// The direction of the last `run()`, if it succeeded and was the last of `run()` and
-    /// `stop()` called.
-    running: Option<Direction>,
-    /// Every command register, with what this master last told it.
-    commands: Vec<CommandWord>,
-    /// The run command source and the reference source were read and select the network.
-    sources: [bool; 2],
-    /// What a reference or ramp between two steps of its register becomes (refused unless
-    /// `rounding` says otherwise).
-    rounding: Rounding,
-}
-
 /// What a [`Vfd`] or an [`AsyncVfd`] knows of its drive besides its client and settings, to
 /// carry from one drive object to the next ([`Vfd::memory`], [`Vfd::with_memory`]).
 #[derive(Debug, Clone)]
@@ -512,31 +521,11 @@ pub struct Memory {
     sources: [bool; 2],
 }
 
-/// A command register and what this master last told it.
-#[derive(Debug, Clone, Copy)]
-struct CommandWord {
-    /// The plan row.
-    row: u16,
-    /// Every command role of the register released (stop, forward, no reset), other bits 0.
-    released: u16,
-    /// The word last written, or `None` before the first write and after a write that failed
-    /// (the drive may hold the new word, the old one, or anything in between).
-    told: Option<u16>,
-}
-
-/// The methods of [`Vfd`] and [`AsyncVfd`], one body for both: `[async] [.await]` for the
-/// async drive, `[] []` for the blocking one.
-macro_rules! vfd_impl {
-    ($name:ident, $holder:ident, $trait:ident, $client:ident, [$($asy:tt)*] [$($aw:tt)*]) => {
-impl<S: SettingsView, C: $holder> $name<S, C> {
+impl<S: SettingsView, C: HoldsClient> Vfd<S, C> {
     /// The drive of generated module `D` on `slave`, with `settings` as conversions need them
     /// (fill them with [`Client::load_settings`] and the external quantities the map names, or
     /// use [`connect`](Self::connect)).
-    pub fn new<D: DrivePlan<Settings = S>>(
-        client: C,
-        slave: u8,
-        settings: S,
-    ) -> Self {
+    pub fn new<D: DrivePlan<Settings = S>>(client: C, slave: u8, settings: S) -> Self {
         Self::from_plan(client, slave, settings, D::REGISTERS, D::ROLES)
     }
 
@@ -550,57 +539,15 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
         roles: Roles,
     ) -> Self {
         let kind = client.get_mut().transport().kind();
-        let mut commands: Vec<CommandWord> = Vec::new();
-        for p in roles.places {
-            if let (RoleKind::Command, Target::Field(f)) = (p.role.kind(), p.target) {
-                let c = match commands.iter_mut().find(|c| c.row == f.row) {
-                    Some(c) => c,
-                    None => {
-                        commands.push(CommandWord {
-                            row: f.row,
-                            released: 0,
-                            told: None,
-                        });
-                        commands.last_mut().expect("just pushed")
-                    }
-                };
-                c.released = f.put(c.released, f.code(false));
-            }
-        }
-        // A command profile's control word is a command register of its own.
-        if let Some(p) = roles.profile
-            && !commands.iter().any(|c| c.row == p.control)
-        {
-            commands.push(CommandWord {
-                row: p.control,
-                released: 0,
-                told: None,
-            });
-        }
-        // At the start the drive is taken as released: the first command composes from that.
-        for c in &mut commands {
-            c.told = Some(c.released);
-        }
-        $name {
+        Vfd {
             client,
-            state: State {
-            slave,
-            settings,
-            registers,
-            roles,
-            kind,
-            direction: Direction::Forward,
-            running: None,
-            commands,
-            sources: [false; 2],
-            rounding: Rounding::Exact,
-            },
+            state: State::new(slave, settings, registers, roles, kind),
         }
     }
 
     /// The drive of generated module `D` on `slave`: reads the parameters its conversions
     /// depend on, and takes the external quantities (name, value) the application supplies.
-    pub $($asy)* fn connect<D: DrivePlan<Settings = S>>(
+    pub fn connect<D: DrivePlan<Settings = S>>(
         mut client: C,
         slave: u8,
         mut settings: S,
@@ -609,33 +556,25 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
     where
         S: DriveSettings,
     {
-        if client.get().profile().drive_id != D::PROFILE.drive_id {
-            return Err(Refusal::OtherDrive {
-                client: client.get().profile().drive_id,
-                drive: D::PROFILE.drive_id,
-            }
-            .into());
-        }
-        for (name, value) in externals {
-            if !settings.set_external(name, *value) {
-                return Err(Refusal::UnknownExternal {
-                    drive: client.get().profile().drive_id,
-                    name: (*name).to_owned(),
-                }
-                .into());
-            }
-        }
-        client.get_mut().load_settings(slave, &mut settings) $($aw)*?;
+        let session = client.get_mut().session();
+        block_on(machine::load_settings(
+            session,
+            D::PROFILE.drive_id,
+            slave,
+            &mut settings,
+            externals,
+        ))?;
         Ok(Self::new::<D>(client, slave, settings))
     }
 
-    fn drive(&self) -> &'static str {
-        self.client.get().profile().drive_id
+    /// The drive's state and the client's session, for one call.
+    fn machine(&mut self) -> Machine<'_, S, Blocking<'_, C::Transport>> {
+        Machine::new(self.client.get_mut().session(), &mut self.state)
     }
 
     /// Chooses what a reference or a ramp time that is not a whole number of its register's
     /// steps becomes: [`Rounding::Exact`] (the default) refuses it with the two nearest values
-    /// ([`ValueError::NotAStep`]); [`Rounding::Nearest`] sends the nearest. Limits are checked on
+    /// ([`ValueError::NotAStep`](drivemap_core::scale::ValueError::NotAStep)); [`Rounding::Nearest`] sends the nearest. Limits are checked on
     /// the value given either way.
     pub fn rounding(mut self, rounding: Rounding) -> Self {
         self.state.rounding = rounding;
@@ -655,29 +594,13 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
     /// client back, and give it to the next drive object with [`with_memory`](Self::with_memory),
     /// so that a later command composes from what was told, never from a fresh start.
     pub fn memory(&self) -> Memory {
-        Memory {
-            direction: self.state.direction,
-            running: self.state.running,
-            commands: self.state.commands.clone(),
-            sources: self.state.sources,
-        }
+        self.state.memory()
     }
 
     /// This drive object with what an earlier one of the same map knew ([`memory`](Self::memory)).
     /// A memory of other command registers (another map's) is not taken.
     pub fn with_memory(mut self, memory: Memory) -> Self {
-        let same = memory.commands.len() == self.state.commands.len()
-            && memory
-                .commands
-                .iter()
-                .zip(&self.state.commands)
-                .all(|(a, b)| a.row == b.row && a.released == b.released);
-        if same {
-            self.state.direction = memory.direction;
-            self.state.running = memory.running;
-            self.state.commands = memory.commands;
-            self.state.sources = memory.sources;
-        }
+        self.state.remember(memory);
         self
     }
 
@@ -686,9 +609,7 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
     /// writes set) and composes from the released word where it cannot, as after a failed
     /// write. For a master that starts while the drive may already hold a command word.
     pub fn forget_commands(&mut self) {
-        for c in &mut self.state.commands {
-            c.told = None;
-        }
+        self.state.forget_commands();
     }
 
     /// Takes the direction the drive reports as the direction set, for a master that has not
@@ -697,34 +618,12 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
     /// it be read on this link (what the drive was last told, by any master), else the status
     /// role `reversing`. Returns the direction taken, or `None` where the drive reports none
     /// (the direction set stays).
-    pub $($asy)* fn adopt_direction(&mut self) -> Result<Option<Direction>, Error> {
-        let told = match self.field(Role::Reverse)? {
-            Some(r) => self.read_back(r.row) $($aw)*.map(|w| r.holds(w)),
-            None => None,
-        };
-        let reverse = match (told, self.place(Role::Reversing, "field")) {
-            (Some(t), _) => Some(t),
-            (
-                None,
-                Ok(Place {
-                    target: Target::Field(f),
-                    ..
-                }),
-            ) => {
-                let f = *f;
-                Some(f.holds(self.read_word(f.row) $($aw)*?))
-            }
-            (None, _) => None,
-        };
-        let taken = reverse.map(|r| if r { Direction::Reverse } else { Direction::Forward });
-        if let Some(d) = taken {
-            self.state.direction = d;
-        }
-        Ok(taken)
+    pub fn adopt_direction(&mut self) -> Result<Option<Direction>, Error> {
+        block_on(self.machine().adopt_direction())
     }
 
     /// The client.
-    pub fn client(&mut self) -> &mut $client<C::Transport> {
+    pub fn client(&mut self) -> &mut Client<C::Transport> {
         self.client.get_mut()
     }
 
@@ -733,294 +632,10 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
         self.client
     }
 
-    fn row(&self, row: u16) -> &'static RegisterPlan {
-        &self.state.registers[usize::from(row)]
-    }
-
-    /// Whether a place can be used on this link to this slave.
-    fn usable(&self, p: &Place) -> bool {
-        match p.target.row() {
-            Some(row) => {
-                let r = self.row(row);
-                let broadcast = self.state.slave == 0;
-                r.transports.contains(self.state.kind)
-                    && match r.broadcast {
-                        Broadcast::Only => broadcast,
-                        Broadcast::Also => true,
-                        Broadcast::No => !broadcast,
-                    }
-            }
-            None => true,
-        }
-    }
-
-    /// The first place of `role` usable here, or why there is none.
-    fn place(&self, role: Role, what: &'static str) -> Result<&'static Place, Error> {
-        let mut any = false;
-        for p in self.state.roles.of(role) {
-            any = true;
-            if self.usable(p) {
-                return Ok(p);
-            }
-        }
-        Err(Refusal::NoRole {
-            drive: self.drive(),
-            role: role.id(),
-            what,
-            transport: any.then_some(self.state.kind),
-        }
-        .into())
-    }
-
-    /// The raw value of plan row `row`: its word, or a 32-bit pair read in one request.
-    $($asy)* fn read_raw(&mut self, row: u16) -> Result<u32, Error> {
-        let r = self.row(row);
-        let address = r.locate(&self.state.settings, self.state.kind)?;
-        let mut raw = [0u16; 2];
-        let words = &mut raw[..usize::from(r.info.width.count())];
-        match r.info.table {
-            Table::Input => self.client.get_mut().read_input(self.state.slave, address, words) $($aw)*?,
-            Table::Holding => self.client.get_mut().read_holding(self.state.slave, address, words) $($aw)*?,
-        }
-        Ok(r.info.width.join(words))
-    }
-
-    /// The word of a one-register row (bit fields and codes: the map keeps them in one word).
-    $($asy)* fn read_word(&mut self, row: u16) -> Result<u16, Error> {
-        Ok(self.read_raw(row) $($aw)*? as u16)
-    }
-
-    $($asy)* fn write_word(&mut self, row: u16, raw: u32) -> Result<(), Error> {
-        let r = self.row(row);
-        let address = r.locate(&self.state.settings, self.state.kind)?;
-        let rule = r.write_rule();
-        match r.repeat_needs_change {
-            // A role register whose drive executes only a changed value: its intermediate first.
-            Some(x) => self
-                .client
-                .get_mut()
-                .write_changed(self.state.slave, &rule, address, x.between, raw) $($aw)*,
-            None => self.client.get_mut().write_rule(self.state.slave, &rule, address, raw) $($aw)*,
-        }
-    }
-
-    /// Reads the number role `role` in its unit.
-    $($asy)* fn read_number(&mut self, role: Role) -> Result<f64, Error> {
-        let p = self.place(role, "register")?;
-        match p.target {
-            Target::Register(row) => {
-                let raw = self.read_raw(row) $($aw)*?;
-                Ok(self.row(row).decode_number(raw, &self.state.settings)?)
-            }
-            Target::External { slot, name } => self.state.settings.quantity(slot).ok_or_else(|| {
-                Refusal::ExternalNotSet {
-                    drive: self.drive(),
-                    name,
-                }
-                .into()
-            }),
-            Target::NumberField(f) => {
-                let word = self.read_word(f.row) $($aw)*?;
-                Ok(f.value(word))
-            }
-            Target::Field(_) => Err(self.misplaced(role, "register")),
-        }
-    }
-
-    /// Writes the number role `role`, range-checked by the register's conversion.
-    $($asy)* fn write_number(&mut self, role: Role, value: f64) -> Result<(), Error> {
-        let p = self.place(role, "register")?;
-        if let Target::NumberField(f) = p.target {
-            return self.write_number_field(role, f, value) $($aw)*;
-        }
-        let Target::Register(row) = p.target else {
-            return Err(self.misplaced(role, "writable register"));
-        };
-        let raw = self
-            .row(row)
-            .encode_number_with(value, &self.state.settings, self.state.rounding)?;
-        self.write_word(row, raw) $($aw)*
-    }
-
-    /// Writes a number role that is a field of a register: reads the word, puts the value's
-    /// count into the field, writes the word back — only where that keeps the rest of the word
-    /// as the drive has it: the register is readable here and reads mean what writes do, it is
-    /// not a broadcast, and no command role lives in it (a read-back command word could send
-    /// a run bit again). Elsewhere refused, with why, before anything is sent.
-    $($asy)* fn write_number_field(&mut self, role: Role, f: NumberField, value: f64) -> Result<(), Error> {
-        let r = self.row(f.row);
-        let why = if !r.info.access.readable() || !r.transports.contains(self.state.kind) {
-            Some("the register cannot be read on this link, so the rest of its word is unknown")
-        } else if !r.read_values.is_empty() {
-            Some("the register reads back other values than are written, so the rest of its word cannot be kept")
-        } else if self.state.slave == 0 || r.broadcast == Broadcast::Only {
-            Some("a broadcast cannot read the word first")
-        } else if self
-            .state
-            .roles
-            .places
-            .iter()
-            .any(|p| p.role.kind() == RoleKind::Command && p.target.row() == Some(f.row))
-        {
-            Some("command fields share the register: writing back what was read could repeat a run or reset")
-        } else {
-            None
-        };
-        if let Some(why) = why {
-            return Err(Refusal::FieldNotWritable {
-                drive: self.drive(),
-                role: role.id(),
-                register: r.info.id,
-                why,
-            }
-            .into());
-        }
-        let count = drivemap_core::scale::encode_decimal_with(
-            r.info.id,
-            role.unit().unwrap_or(""),
-            value,
-            f.scale,
-            f.range(),
-            self.state.rounding,
-        )?;
-        let word = self.read_word(f.row) $($aw)*?;
-        let Some(word) = f.put(word, count) else {
-            // encode_decimal_with keeps the count in the field's range.
-            return Err(self.misplaced(role, "field that holds the value"));
-        };
-        self.write_word(f.row, u32::from(word)) $($aw)*
-    }
-
-    /// Sets the command fields of `changes` in their registers' words and writes each word once,
-    /// in the order of `changes` with releases before sets (so a stop goes out before a
-    /// direction, and a run after it). Each word is composed from what this master last told the
-    /// register (`base`) with the run and direction fields as the last successful `run()`
-    /// or `stop()` and the direction set say, then `changes` on top. A write that fails makes
-    /// its register unknown.
-    $($asy)* fn command(&mut self, changes: &[(FieldRole, bool)]) -> Result<(), Error> {
-        let mut words: Vec<(u16, u16)> = Vec::new();
-        // Within a word, releases go first: where two roles share bits (run forward and run
-        // reverse as the codes of one field), the one set wins.
-        let ordered = changes
-            .iter()
-            .filter(|(_, on)| !on)
-            .chain(changes.iter().filter(|(_, on)| *on));
-        for (f, on) in ordered {
-            if !self.state.commands.iter().any(|c| c.row == f.row) {
-                continue;
-            }
-            let word = match words.iter().position(|(row, _)| *row == f.row) {
-                Some(i) => &mut words[i].1,
-                None => {
-                    let base = self.base(f.row) $($aw)*?;
-                    words.push((f.row, base));
-                    &mut words.last_mut().expect("just pushed").1
-                }
-            };
-            *word = f.put(*word, f.code(*on));
-        }
-        for (row, word) in words {
-            let result = self.write_word(row, u32::from(word)) $($aw)*;
-            if let Some(c) = self.state.commands.iter_mut().find(|c| c.row == row) {
-                c.told = result.is_ok().then_some(word);
-            }
-            result?;
-        }
-        Ok(())
-    }
-
-    /// The word a command to register `row` starts from: what this master last told it, or,
-    /// when that is unknown, the word read back from the drive where the map lets it be read
-    /// here (its defined bits only) and the released word where it cannot; then every command
-    /// role of the register released except the run and direction fields, which follow the last
-    /// successful `run()` / `stop()` and the direction set. So no word carries a run code unless
-    /// `run()` asks for it or succeeded last.
-    $($asy)* fn base(&mut self, row: u16) -> Result<u16, Error> {
-        let Some(c) = self.state.commands.iter().find(|c| c.row == row).copied() else {
-            return Ok(0);
-        };
-        let mut word = match c.told {
-            Some(w) => w,
-            None => match self.read_back(row) $($aw)* {
-                Some(read) => read,
-                None => c.released,
-            },
-        };
-        for p in self.state.roles.places {
-            if let (RoleKind::Command, Target::Field(f)) = (p.role.kind(), p.target) {
-                if f.row == row {
-                    word = f.put(word, f.code(false));
-                }
-            }
-        }
-        // Run fields can be refused only when the map has none: then there is nothing to keep.
-        // A drive run by terminals keeps the terminal of the direction it was run in.
-        let (run, direction) = match self.state.running {
-            Some(d) => (true, d),
-            None => (false, self.state.direction),
-        };
-        if let Ok(fields) = self.run_fields(run, direction) {
-            for on in [false, true] {
-                for (f, _) in fields.iter().filter(|(f, o)| f.row == row && *o == on) {
-                    word = f.put(word, f.code(on));
-                }
-            }
-        }
-        if let Ok(Some(r)) = self.field(Role::Reverse) {
-            if r.row == row {
-                word = r.put(word, r.code(self.state.direction == Direction::Reverse));
-            }
-        }
-        Ok(self.no_run_word(row, word))
-    }
-
-    /// `word` for register `row`, with a control word that asks the command profile for a run
-    /// transition replaced by the stop path's first word (its kept bits as they were), unless
-    /// the last of `run()` and `stop()` was a `run()` that succeeded: no word read back or
-    /// composed asks a drive to run that was not told to.
-    fn no_run_word(&self, row: u16, word: u16) -> u16 {
-        let Some(p) = self.state.roles.profile else {
-            return word;
-        };
-        if row != p.control || self.state.running.is_some() || !p.word_runs(word) {
-            return word;
-        }
-        let stop = p
-            .path(PathKind::Stop)
-            .or_else(|| p.path(PathKind::Coast))
-            .and_then(|path| path.via.first())
-            .and_then(|&t| p.transition(t));
-        match stop {
-            Some(t) => t.compose(word),
-            // A profile without a stop or coast path: every bit but the kept ones released.
-            None => 0,
-        }
-    }
-
-    /// The word of command register `row` read from the drive, where the map lets it be read
-    /// on this link and reads mean what writes do; only the bits of its fields are kept. `None`
-    /// when it cannot be read or the read fails (the caller composes from the released state).
-    $($asy)* fn read_back(&mut self, row: u16) -> Option<u16> {
-        let r = self.row(row);
-        let readable = r.info.access.readable()
-            && r.read_values.is_empty()
-            && r.transports.contains(self.state.kind)
-            && r.broadcast != Broadcast::Only
-            && self.state.slave != 0;
-        if !readable {
-            return None;
-        }
-        let mask = match r.conversion {
-            Conversion::Bits { mask, .. } => mask,
-            _ => u16::MAX,
-        };
-        self.read_word(row) $($aw)*.ok().map(|w| w & mask)
-    }
-
     /// Whether plan row `row` holds a command role (a field the trait's commands write): a
     /// write of its fields goes through [`Self::write_command_fields`].
     pub fn holds_command(&self, row: u16) -> bool {
-        self.state.commands.iter().any(|c| c.row == row)
+        self.state.holds_command(row)
     }
 
     /// The word a write of the bits `mask` (set to `value`'s bits there) of command register
@@ -1040,415 +655,23 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
     /// command profile and the word would ask it for a run transition while this drive object's
     /// last of `run()` and `stop()` is not a `run()` that succeeded (use `run()`, which walks
     /// the state machine).
-    pub $($asy)* fn command_fields_word(&mut self, row: u16, mask: u16, value: u16) -> Result<u16, Error> {
-        let r = self.row(row);
-        let Some(c) = self.state.commands.iter().find(|c| c.row == row).copied() else {
-            return Err(Refusal::FieldNotWritable {
-                drive: self.drive(),
-                role: "command",
-                register: r.info.id,
-                why: "it holds no command role: write it as a whole register",
-            }
-            .into());
-        };
-        let fields_mask = match r.conversion {
-            Conversion::Bits { mask, .. } => mask,
-            _ => u16::MAX,
-        };
-        let readable = r.info.access.readable()
-            && r.read_values.is_empty()
-            && r.transports.contains(self.state.kind)
-            && r.broadcast != Broadcast::Only
-            && self.state.slave != 0;
-        let runs = |role: Role| matches!(role, Role::Run | Role::RunForward | Role::RunReverse);
-        let places: Vec<(Role, FieldRole)> = self
-            .state
-            .roles
-            .places
-            .iter()
-            .filter_map(|p| match (p.role.kind(), p.target) {
-                (RoleKind::Command, Target::Field(f)) if f.row == row && f.mask() & mask == 0 => {
-                    Some((p.role, f))
-                }
-                _ => None,
-            })
-            .collect();
-        let has_run = places.iter().any(|(role, _)| runs(*role));
-        let read = if readable {
-            Some(self.read_word(row) $($aw)*? & fields_mask)
-        } else {
-            None
-        };
-        let running = has_run
-            && (self.state.running.is_some()
-                || (self.state.slave != 0
-                    && self.supports(Role::Running)
-                    && self.status() $($aw)*?.running == Some(true)));
-        if running && read.is_none() && self.state.running.is_none() {
-            return Err(Refusal::FieldNotWritable {
-                drive: self.drive(),
-                role: "run",
-                register: r.info.id,
-                why: "the drive runs and the register cannot be read on this link, so the run bits to keep are unknown: use the drive trait's run() or stop()",
-            }
-            .into());
-        }
-        let mut word = read.unwrap_or(c.released & fields_mask);
-        for (role, f) in &places {
-            let keep = match role {
-                Role::FaultReset => false,
-                _ if f.edge.needs_release_first() => false,
-                role if runs(*role) => running,
-                _ => read.is_some(),
-            };
-            if !keep {
-                word = f.put(word, f.code(false));
-            }
-        }
-        if running && read.is_none() {
-            // Known from this master's own run(): its run fields, as base() composes them.
-            if let Some(d) = self.state.running {
-                if let Ok(fields) = self.run_fields(true, d) {
-                    for (f, on) in fields.iter().filter(|(f, on)| f.row == row && *on) {
-                        word = f.put(word, f.code(*on));
-                    }
-                }
-            }
-        }
-        let word = ((word & !mask) | (value & mask)) & fields_mask;
-        if let Some(p) = self.state.roles.profile
-            && row == p.control
-            && self.state.running.is_none()
-            && p.word_runs(word)
-        {
-            // A word that asks the command profile for a run transition: only run() walks there.
-            return Err(Refusal::FieldNotWritable {
-                drive: self.drive(),
-                role: "run",
-                register: r.info.id,
-                why: "the word asks the drive's command profile for a run transition: run the drive with the drive trait's run(), which walks its state machine",
-            }
-            .into());
-        }
-        Ok(self.no_run_word(row, word))
+    pub fn command_fields_word(&mut self, row: u16, mask: u16, value: u16) -> Result<u16, Error> {
+        block_on(self.machine().command_fields_word(row, mask, value))
     }
 
     /// Writes the bits `mask` of command register `row` to `value`'s, the rest of the word
     /// composed by [`Self::command_fields_word`] (no run or reset bit the call does not ask for,
     /// unless the drive runs), through the client's write gate. Returns the word written; this
     /// master's record of the register follows it (unknown after a write that failed).
-    pub $($asy)* fn write_command_fields(&mut self, row: u16, mask: u16, value: u16) -> Result<u16, Error> {
-        let word = self.command_fields_word(row, mask, value) $($aw)*?;
-        let result = self.write_word(row, u32::from(word)) $($aw)*;
-        if let Some(c) = self.state.commands.iter_mut().find(|c| c.row == row) {
-            c.told = result.is_ok().then_some(word);
-        }
-        result.map(|()| word)
+    pub fn write_command_fields(&mut self, row: u16, mask: u16, value: u16) -> Result<u16, Error> {
+        block_on(self.machine().write_command_fields(row, mask, value))
     }
 
     /// The state of the command profile the drive shows in its status word, by id
     /// (`operation_enabled`); `None` when the word shows no state of the profile. Refused
     /// ([`Refusal::NoRole`]) for a drive whose map gives no command profile.
-    pub $($asy)* fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
-        let p = self.profile(PathKind::Run.id())?;
-        let word = self.read_word(p.status) $($aw)*?;
-        Ok(p.state_of(word).map(|s| p.state_id(s)))
-    }
-
-    fn profile(&self, role: &'static str) -> Result<&'static CommandProfile, Error> {
-        self.state.roles.profile.ok_or_else(|| {
-            Refusal::NoRole {
-                drive: self.drive(),
-                role,
-                what: "command profile",
-                transport: None,
-            }
-            .into()
-        })
-    }
-
-    /// The state the status word shows (index), or the error naming the word.
-    $($asy)* fn read_state(&mut self, p: &'static CommandProfile, path: &Path) -> Result<u8, Error> {
-        let word = self.read_word(p.status) $($aw)*?;
-        p.state_of(word).ok_or_else(|| Error::StateMachine {
-            drive: self.drive(),
-            path: path.kind.id(),
-            state: format!("none (status word {word:#06X} shows no state of the profile)"),
-            why: "the status word shows no state of the profile".into(),
-        })
-    }
-
-    /// Writes transition `t`'s control word (its kept bits from this master's composition),
-    /// with the bits `clear` cleared; the register's record follows (unknown after a failed
-    /// write).
-    $($asy)* fn write_transition(&mut self, p: &'static CommandProfile, t: &Transition, clear: u16) -> Result<(), Error> {
-        let base = self.base(p.control) $($aw)*?;
-        let word = t.compose(base) & !clear;
-        let result = self.write_word(p.control, u32::from(word)) $($aw)*;
-        if let Some(c) = self.state.commands.iter_mut().find(|c| c.row == p.control) {
-            c.told = result.is_ok().then_some(word);
-        }
-        result
-    }
-
-    /// Waits until the drive shows `t.to` (or a state that ends `path`), reading the status
-    /// word until `t.limit_ms` has passed; a drive that shows the fault state instead (it
-    /// tripped) ends the wait at once.
-    $($asy)* fn await_transition(&mut self, p: &'static CommandProfile, path: &Path, t: &Transition) -> Result<(), Error> {
-        let start = std::time::Instant::now();
-        let limit = std::time::Duration::from_millis(u64::from(t.limit_ms));
-        let faults: Vec<u8> = p
-            .path(PathKind::ResetFault)
-            .map(|r| r.via.iter().filter_map(|&i| p.transition(i)).flat_map(|x| x.from.iter().copied()).collect())
-            .unwrap_or_default();
-        loop {
-            let s = self.read_state(p, path) $($aw)*?;
-            if s == t.to || path.to.contains(&s) {
-                return Ok(());
-            }
-            let why = if faults.contains(&s) && path.kind != PathKind::ResetFault {
-                Some(format!("the drive tripped after `{}` ({:#06X})", t.id, t.word))
-            } else if start.elapsed() >= limit {
-                Some(format!(
-                    "the drive did not show `{}` within {} ms of `{}` ({:#06X})",
-                    p.state_id(t.to),
-                    t.limit_ms,
-                    t.id,
-                    t.word
-                ))
-            } else {
-                None
-            };
-            if let Some(why) = why {
-                return Err(Error::StateMachine {
-                    drive: self.drive(),
-                    path: path.kind.id(),
-                    state: p.state_id(s).to_owned(),
-                    why,
-                });
-            }
-            let left = limit.saturating_sub(start.elapsed());
-            self.pause(left.min(std::time::Duration::from_millis(10))) $($aw)*;
-        }
-    }
-
-    /// Walks path `kind` of the command profile: reads the state, writes the first transition
-    /// of the path that leaves it, waits for the state it leads to, until the drive shows a
-    /// state that ends the path. A stop, coast or quick stop that finds the drive already
-    /// there writes the path's first word once all the same (so the control word holds no
-    /// run), and one whose status cannot be read writes it before returning the error. No path
-    /// but `run` writes a run transition.
-    $($asy)* fn walk(&mut self, kind: PathKind) -> Result<(), Error> {
-        let p = self.profile(kind.id())?;
-        let Some(path) = p.path(kind) else {
-            return Err(Refusal::NoRole {
-                drive: self.drive(),
-                role: kind.id(),
-                what: "command profile path",
-                transport: None,
-            }
-            .into());
-        };
-        let first = path.via.first().and_then(|&t| p.transition(t)).filter(|t| !p.runs(t));
-        let stopping = matches!(kind, PathKind::Stop | PathKind::Coast | PathKind::QuickStop);
-        let mut wrote = false;
-        for _ in 0..=path.via.len() + 1 {
-            let s = match self.read_state(p, path) $($aw)* {
-                Ok(s) => s,
-                Err(e) => {
-                    if stopping && !wrote && let Some(t) = first {
-                        // Whatever the drive shows, the stop word goes out.
-                        let _ = self.write_transition(p, t, 0) $($aw)*;
-                    }
-                    return Err(e);
-                }
-            };
-            if path.to.contains(&s) {
-                if stopping && !wrote && let Some(t) = first {
-                    self.write_transition(p, t, 0) $($aw)*?;
-                }
-                return Ok(());
-            }
-            let Some(t) = p.next(path, s) else {
-                if stopping && !wrote && let Some(t) = first {
-                    let _ = self.write_transition(p, t, 0) $($aw)*;
-                }
-                return Err(Error::StateMachine {
-                    drive: self.drive(),
-                    path: kind.id(),
-                    state: p.state_id(s).to_owned(),
-                    why: format!("no transition of the `{}` path leaves this state", kind.id()),
-                });
-            };
-            if kind != PathKind::Run && p.runs(t) {
-                // Validation refuses such a map; a plan built by hand may still have one.
-                return Err(self.misplaced(Role::Run, "path that does not run the drive"));
-            }
-            self.write_transition(p, t, 0) $($aw)*?;
-            wrote = true;
-            self.await_transition(p, path, t) $($aw)*?;
-        }
-        let s = self.read_state(p, path) $($aw)*?;
-        if path.to.contains(&s) {
-            return Ok(());
-        }
-        Err(Error::StateMachine {
-            drive: self.drive(),
-            path: kind.id(),
-            state: p.state_id(s).to_owned(),
-            why: format!("the drive did not reach the end of the `{}` path", kind.id()),
-        })
-    }
-
-    /// The profile's fault acknowledge: only while the drive shows a state the `reset_fault`
-    /// path's transitions leave (the fault state), its edge bits cleared first where they may
-    /// be set, then set, the state awaited, then cleared.
-    $($asy)* fn acknowledge(&mut self) -> Result<(), Error> {
-        let p = self.profile(Role::FaultReset.id())?;
-        let Some(path) = p.path(PathKind::ResetFault) else {
-            return Err(self.misplaced(Role::FaultReset, "command profile path"));
-        };
-        let s = self.read_state(p, path) $($aw)*?;
-        let Some(t) = p.next(path, s) else {
-            // Not in the fault state: nothing to acknowledge, nothing written.
-            return Ok(());
-        };
-        let told = self
-            .state
-            .commands
-            .iter()
-            .find(|c| c.row == p.control)
-            .and_then(|c| c.told);
-        if t.edge != 0 && told.is_none_or(|w| w & t.edge != 0) {
-            self.write_transition(p, t, t.edge) $($aw)*?;
-        }
-        self.write_transition(p, t, 0) $($aw)*?;
-        let reached = self.await_transition(p, path, t) $($aw)*;
-        let released = if t.edge != 0 {
-            self.write_transition(p, t, t.edge) $($aw)*
-        } else {
-            Ok(())
-        };
-        reached.and(released)
-    }
-
-    /// A fault code role (`fault_code`, `last_fault`): the register's word or the field's bits,
-    /// with the map's name for it.
-    $($asy)* fn read_fault(&mut self, role: Role) -> Result<FaultCode, Error> {
-        let p = self.place(role, "register")?;
-        if let Target::NumberField(f) = p.target {
-            let word = self.read_word(f.row) $($aw)*?;
-            let code = f.bits(word);
-            let r = self.row(f.row);
-            let name = match &r.conversion {
-                Conversion::Bits { fields, .. } => fields
-                    .iter()
-                    .find(|x| x.lsb == f.lsb && x.width == f.width)
-                    .and_then(|x| x.values.iter().find(|v| v.code == code))
-                    .map(|v| v.name),
-                _ => None,
-            };
-            return Ok(FaultCode {
-                code,
-                value: f.get(word) as i32,
-                name,
-            });
-        }
-        let Some(row) = p.target.row() else {
-            return Err(self.misplaced(role, "register"));
-        };
-        let code = self.read_word(row) $($aw)*?;
-        let r = self.row(row);
-        Ok(FaultCode {
-            code,
-            value: if r.signed() { i32::from(code as i16) } else { i32::from(code) },
-            name: r.label(code).map(|l| l.name),
-        })
-    }
-
-    fn field(&self, role: Role) -> Result<Option<FieldRole>, Error> {
-        match self.place(role, "field") {
-            Ok(Place {
-                target: Target::Field(f),
-                ..
-            }) => Ok(Some(*f)),
-            Ok(_) => Ok(None),
-            Err(Error::Refused(Refusal::NoRole { .. })) => Ok(None),
-            Err(e) => Err(e),
-        }
-    }
-
-    /// The command fields that run (`true`) or stop in `direction`, the direction first
-    /// (registers are written in this order).
-    fn run_fields(&self, run: bool, direction: Direction) -> Result<Vec<(FieldRole, bool)>, Error> {
-        let reverse = direction == Direction::Reverse;
-        let mut out = Vec::new();
-        if let Some(f) = self.field(Role::Run)? {
-            out.push((f, run));
-            match (reverse, self.field(Role::Reverse)?) {
-                // The direction goes first: where it is a register of its own, the drive must
-                // not start in the old direction.
-                (_, Some(r)) => out.insert(0, (r, reverse)),
-                (true, None) => {
-                    if let Some(rr) = self.field(Role::RunReverse)? {
-                        // Run with the reverse terminal instead.
-                        out[0].1 = false;
-                        out.push((rr, run));
-                    } else if run {
-                        return Err(self.no_reverse());
-                    }
-                }
-                (false, None) => {}
-            }
-            return Ok(out);
-        }
-        let forward = self.field(Role::RunForward)?;
-        let backward = self.field(Role::RunReverse)?;
-        match (forward, backward) {
-            (None, None) => Err(self.place(Role::Run, "field").unwrap_err()),
-            (f, b) => {
-                if reverse && b.is_none() && run {
-                    return Err(self.no_reverse());
-                }
-                if !reverse && f.is_none() && run {
-                    return Err(self
-                        .place(Role::RunForward, "field")
-                        .err()
-                        .unwrap_or_else(|| self.no_reverse()));
-                }
-                out.extend(f.map(|f| (f, run && !reverse)));
-                out.extend(b.map(|b| (b, run && reverse)));
-                Ok(out)
-            }
-        }
-    }
-
-    /// Refuses a reference above the drive's maximum frequency where the map gives the
-    /// `max_frequency` role: the register is read first (an external quantity comes from the
-    /// settings), so a reference the drive cannot output is never sent. A maximum that cannot
-    /// be read refuses the reference too.
-    $($asy)* fn check_max_frequency(&mut self, hz: f64) -> Result<(), Error> {
-        if self.state.roles.of(Role::MaxFrequency).next().is_none() || !hz.is_finite() {
-            return Ok(());
-        }
-        let place = self.place(Role::FrequencyReference, "register")?;
-        let register = place
-            .target
-            .row()
-            .map_or(Role::FrequencyReference.id(), |row| self.row(row).info.id);
-        let max = self.read_number(Role::MaxFrequency) $($aw)*?;
-        if hz > max {
-            return Err(ValueError::AboveLimit {
-                register,
-                value: hz,
-                max,
-                unit: "Hz",
-                percent: 100.0,
-                reference: Role::MaxFrequency.id(),
-            }
-            .into());
-        }
-        Ok(())
+    pub fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
+        block_on(self.machine().profile_state())
     }
 
     /// Forgets that the drive's command and reference sources were found to be the network:
@@ -1456,333 +679,290 @@ impl<S: SettingsView, C: $holder> $name<S, C> {
     /// someone may have changed them at the drive (the result is kept for the `Vfd`'s life
     /// otherwise, one read per source).
     pub fn forget_sources(&mut self) {
-        self.state.sources = [false; 2];
-    }
-
-    /// Checks that the drive takes what `role` (a source role) selects from the network on
-    /// this link: reads the parameter (or status field) the map names, once; a network source
-    /// is kept, another is refused and read again next time.
-    $($asy)* fn network_source(&mut self, role: Role) -> Result<(), Error> {
-        let slot = usize::from(role == Role::ReferenceSource);
-        if self.state.sources[slot] {
-            return Ok(());
-        }
-        let kind = self.state.kind;
-        let Some(p) = self
-            .state
-            .roles
-            .of(role)
-            .find(|p| p.transports.contains(kind) && self.usable(p))
-        else {
-            // No source parameter for this link in the map: nothing to check.
-            return Ok(());
-        };
-        let Target::Field(f) = p.target else {
-            return Ok(());
-        };
-        let word = self.read_word(f.row) $($aw)*?;
-        if f.holds(word) {
-            self.state.sources[slot] = true;
-            return Ok(());
-        }
-        Err(self.not_network(role, p, f, word))
-    }
-
-    /// Why the drive would ignore a network command: its source setting, and what to set.
-    fn not_network(&self, role: Role, p: &Place, f: FieldRole, word: u16) -> Error {
-        let r = self.row(f.row);
-        let code = f.get(word);
-        let what = if role == Role::CommandSource {
-            "run commands"
-        } else {
-            "the frequency reference"
-        };
-        let (now, fix) = if f.width == 16 {
-            // The source parameter itself: its codes are its values.
-            let param = r.info.param.unwrap_or(r.info.id);
-            let now = match r.label(code) {
-                Some(l) => format!("\"{}\" ({param} = {code})", l.name),
-                None => format!("another source ({param} = {code}, a code the map does not name)"),
-            };
-            let on: Vec<String> =
-                f.on.iter()
-                    .map(|&c| match r.label(c) {
-                        Some(l) => format!("{param} = {c} (\"{}\")", l.name),
-                        None => format!("{param} = {c}"),
-                    })
-                    .collect();
-            let fix = format!(
-                "set {} for the network on this link ({:?}; {})",
-                on.join(" or "),
-                self.state.kind,
-                p.source
-            );
-            (now, fix)
-        } else {
-            // A status field that reports the source.
-            let field = match &r.conversion {
-                drivemap_core::plan::Conversion::Bits { fields, .. } => fields
-                    .iter()
-                    .find(|x| x.lsb == f.lsb && x.width == f.width)
-                    .map(|x| x.name),
-                _ => None,
-            };
-            let now = format!(
-                "elsewhere than the network ({} reports {code}{})",
-                r.info.id,
-                field.map(|n| format!(": \"{n}\"")).unwrap_or_default()
-            );
-            let fix = format!(
-                "select the network as the drive's source at the drive ({})",
-                p.source
-            );
-            (now, fix)
-        };
-        Refusal::NotNetworkSource {
-            drive: self.drive(),
-            what,
-            now,
-            fix,
-        }
-        .into()
-    }
-
-    /// A plan whose role names the wrong kind of place (validation refuses such maps; a plan
-    /// built by hand may still have one).
-    fn misplaced(&self, role: Role, what: &'static str) -> Error {
-        Refusal::NoRole {
-            drive: self.drive(),
-            role: role.id(),
-            what,
-            transport: None,
-        }
-        .into()
-    }
-
-    fn no_reverse(&self) -> Error {
-        Refusal::NoRole {
-            drive: self.drive(),
-            role: Role::Reverse.id(),
-            what: "way to run in reverse",
-            transport: None,
-        }
-        .into()
+        self.state.forget_sources();
     }
 }
 
-impl<S: SettingsView, C: $holder> $trait for $name<S, C> {
+impl<S: SettingsView, C: HoldsClient> VariableFrequencyDrive for Vfd<S, C> {
     fn drive_id(&self) -> &'static str {
-        self.drive()
+        self.client.get().profile().drive_id
     }
 
     fn supports(&self, role: Role) -> bool {
-        if let Some(p) = self.state.roles.profile {
-            match role {
-                Role::Run => return p.path(PathKind::Run).is_some(),
-                Role::FaultReset => return p.path(PathKind::ResetFault).is_some(),
-                _ => {}
-            }
-        }
-        self.state.roles.of(role).any(|p| self.usable(p))
+        self.state.supports(role)
     }
 
-    $($asy)* fn run(&mut self) -> Result<(), Error> {
-        if self.state.roles.profile.is_some() {
-            self.state.running = None;
-            self.network_source(Role::CommandSource) $($aw)*?;
-            self.walk(PathKind::Run) $($aw)*?;
-            self.state.running = Some(self.state.direction);
-            return Ok(());
-        }
-        let fields = self.run_fields(true, self.state.direction)?;
-        // Until the run is confirmed, every other command composes with run released.
-        self.state.running = None;
-        // A run the drive would ignore (not the network's to give) is refused, not sent.
-        self.network_source(Role::CommandSource) $($aw)*?;
-        self.command(&fields) $($aw)*?;
-        self.state.running = Some(self.state.direction);
-        Ok(())
+    fn run(&mut self) -> Result<(), Error> {
+        block_on(self.machine().run())
     }
 
-    $($asy)* fn stop(&mut self) -> Result<(), Error> {
-        // From now on no word carries a run code until the next run(), whatever becomes of
-        // this one.
-        self.state.running = None;
-        if self.state.roles.profile.is_some() {
-            return self.walk(PathKind::Stop) $($aw)*;
-        }
-        let fields = self.run_fields(false, self.state.direction)?;
-        self.command(&fields) $($aw)*
+    fn stop(&mut self) -> Result<(), Error> {
+        block_on(self.machine().stop())
     }
 
-    $($asy)* fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
-        if self.state.roles.profile.is_none() {
-            return Ok(None);
-        }
-        $name::profile_state(self) $($aw)*
+    fn set_direction(&mut self, direction: Direction) -> Result<(), Error> {
+        block_on(self.machine().set_direction(direction))
     }
 
-    $($asy)* fn coast(&mut self) -> Result<(), Error> {
-        self.state.running = None;
-        self.walk(PathKind::Coast) $($aw)*
+    fn set_reference(&mut self, hz: f64) -> Result<(), Error> {
+        block_on(self.machine().set_reference(hz))
     }
 
-    $($asy)* fn quick_stop(&mut self) -> Result<(), Error> {
-        self.state.running = None;
-        self.walk(PathKind::QuickStop) $($aw)*
+    fn set_ramp(&mut self, accel_s: f64, decel_s: f64) -> Result<(), Error> {
+        block_on(self.machine().set_ramp(accel_s, decel_s))
     }
 
-    $($asy)* fn set_direction(&mut self, direction: Direction) -> Result<(), Error> {
-        let before = self.state.direction;
-        self.state.direction = direction;
-        let result = match self.field(Role::Reverse)? {
-            // The direction is a field of its own: write it now.
-            Some(r) => self.command(&[(r, direction == Direction::Reverse)]) $($aw)*,
-            // The direction is the choice of run terminal: check there is one.
-            None if direction == Direction::Reverse && !self.supports(Role::RunReverse) => {
-                Err(self.no_reverse())
-            }
-            None => Ok(()),
-        };
-        if result.is_err() {
-            self.state.direction = before;
-        }
-        result
+    fn reference(&mut self) -> Result<f64, Error> {
+        block_on(self.machine().reference())
     }
 
-    $($asy)* fn set_reference(&mut self, hz: f64) -> Result<(), Error> {
-        self.place(Role::FrequencyReference, "register")?;
-        self.network_source(Role::ReferenceSource) $($aw)*?;
-        self.check_max_frequency(hz) $($aw)*?;
-        self.write_number(Role::FrequencyReference, hz) $($aw)*
+    fn output_frequency(&mut self) -> Result<f64, Error> {
+        block_on(self.machine().output_frequency())
     }
 
-    $($asy)* fn set_ramp(&mut self, accel_s: f64, decel_s: f64) -> Result<(), Error> {
-        // Check both are writable before writing either.
-        let accel = self.place(Role::AccelTime, "register")?;
-        let decel = self.place(Role::DecelTime, "register")?;
-        let shared = accel.shared_with == Some(Role::DecelTime)
-            || decel.shared_with == Some(Role::AccelTime)
-            || (accel.target.row().is_some() && accel.target.row() == decel.target.row());
-        if shared {
-            // One ramp register for both: one value, written once.
-            if accel_s != decel_s {
-                return Err(Refusal::SharedRegister {
-                    drive: self.drive(),
-                    role: Role::AccelTime.id(),
-                    other: Role::DecelTime.id(),
-                    register: accel.target.row().map_or("", |row| self.row(row).info.id),
-                    asked: format!("{accel_s} s and {decel_s} s"),
-                }
-                .into());
-            }
-            return self.write_number(Role::AccelTime, accel_s) $($aw)*;
-        }
-        self.write_number(Role::AccelTime, accel_s) $($aw)*?;
-        self.write_number(Role::DecelTime, decel_s) $($aw)*
+    fn output_current(&mut self) -> Result<f64, Error> {
+        block_on(self.machine().output_current())
     }
 
-    $($asy)* fn reference(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::ReferenceMonitor) $($aw)*
+    fn output_voltage(&mut self) -> Result<f64, Error> {
+        block_on(self.machine().output_voltage())
     }
 
-    $($asy)* fn output_frequency(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::OutputFrequency) $($aw)*
+    fn dc_bus_voltage(&mut self) -> Result<f64, Error> {
+        block_on(self.machine().dc_bus_voltage())
     }
 
-    $($asy)* fn output_current(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::OutputCurrent) $($aw)*
+    fn status(&mut self) -> Result<Status, Error> {
+        block_on(self.machine().status())
     }
 
-    $($asy)* fn output_voltage(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::OutputVoltage) $($aw)*
+    fn fault_code(&mut self) -> Result<FaultCode, Error> {
+        block_on(self.machine().fault_code())
     }
 
-    $($asy)* fn dc_bus_voltage(&mut self) -> Result<f64, Error> {
-        self.read_number(Role::DcBusVoltage) $($aw)*
+    fn last_fault(&mut self) -> Result<FaultCode, Error> {
+        block_on(self.machine().last_fault())
     }
 
-    $($asy)* fn status(&mut self) -> Result<Status, Error> {
-        let mut status = Status::default();
-        // One read per register, whichever roles share it.
-        let mut words: Vec<(u16, u16)> = Vec::new();
-        for &role in Role::ALL {
-            if role.kind() != RoleKind::Status {
-                continue;
-            }
-            let Ok(Place {
-                target: Target::Field(f),
-                ..
-            }) = self.place(role, "field")
-            else {
-                continue;
-            };
-            let word = match words.iter().find(|(row, _)| *row == f.row) {
-                Some(&(_, w)) => w,
-                None => {
-                    let w = self.read_word(f.row) $($aw)*?;
-                    words.push((f.row, w));
-                    w
-                }
-            };
-            if let Some(slot) = status.slot(role) {
-                *slot = Some(f.holds(word));
-            }
-        }
-        Ok(status)
+    fn reset_fault(&mut self) -> Result<(), Error> {
+        block_on(self.machine().reset_fault())
     }
 
-    $($asy)* fn fault_code(&mut self) -> Result<FaultCode, Error> {
-        self.read_fault(Role::FaultCode) $($aw)*
+    fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
+        block_on(self.machine().profile_state_if_any())
     }
 
-    $($asy)* fn last_fault(&mut self) -> Result<FaultCode, Error> {
-        self.read_fault(Role::LastFault) $($aw)*
+    fn coast(&mut self) -> Result<(), Error> {
+        block_on(self.machine().coast())
     }
 
-    $($asy)* fn reset_fault(&mut self) -> Result<(), Error> {
-        if self.state.roles.profile.is_some() {
-            return self.acknowledge() $($aw)*;
-        }
-        let p = self.place(Role::FaultReset, "field")?;
-        let Target::Field(f) = p.target else {
-            return Err(self.misplaced(Role::FaultReset, "field"));
-        };
-        // An unknown register may hold the reset: released first too.
-        let set = self
-            .state
-            .commands
-            .iter()
-            .find(|c| c.row == f.row)
-            .is_some_and(|c| c.told.is_none_or(|w| f.holds(w)));
-        // On an edge, and where the manual does not print edge or level (safe for both), a reset
-        // that may be set is released first, so the drive sees the off → on transition.
-        if f.edge.needs_release_first() && set {
-            self.command(&[(f, false)]) $($aw)*?;
-        }
-        self.command(&[(f, true)]) $($aw)*?;
-        self.command(&[(f, false)]) $($aw)*
-    }
-}
-
-    };
-}
-
-vfd_impl!(Vfd, HoldsClient, VariableFrequencyDrive, Client, [] []);
-
-impl<S: SettingsView, C: HoldsClient> Vfd<S, C> {
-    /// Waits between two reads of a command profile's status word.
-    fn pause(&self, d: std::time::Duration) {
-        std::thread::sleep(d);
+    fn quick_stop(&mut self) -> Result<(), Error> {
+        block_on(self.machine().quick_stop())
     }
 }
 
 #[cfg(feature = "tokio")]
 impl<S: SettingsView, C: HoldsAsyncClient> AsyncVfd<S, C> {
-    /// Waits between two reads of a command profile's status word.
-    async fn pause(&self, d: std::time::Duration) {
-        tokio::time::sleep(d).await;
+    /// As [`Vfd::new`].
+    pub fn new<D: DrivePlan<Settings = S>>(client: C, slave: u8, settings: S) -> Self {
+        Self::from_plan(client, slave, settings, D::REGISTERS, D::ROLES)
+    }
+
+    /// As [`Vfd::from_plan`].
+    pub fn from_plan(
+        mut client: C,
+        slave: u8,
+        settings: S,
+        registers: &'static [RegisterPlan],
+        roles: Roles,
+    ) -> Self {
+        let kind = client.get_mut().transport().kind();
+        AsyncVfd {
+            client,
+            state: State::new(slave, settings, registers, roles, kind),
+        }
+    }
+
+    /// As [`Vfd::connect`].
+    pub async fn connect<D: DrivePlan<Settings = S>>(
+        mut client: C,
+        slave: u8,
+        mut settings: S,
+        externals: &[(&str, f64)],
+    ) -> Result<Self, Error>
+    where
+        S: DriveSettings,
+    {
+        let session = client.get_mut().session();
+        machine::load_settings(
+            session,
+            D::PROFILE.drive_id,
+            slave,
+            &mut settings,
+            externals,
+        )
+        .await?;
+        Ok(Self::new::<D>(client, slave, settings))
+    }
+
+    /// The drive's state and the client's session, for one call.
+    fn machine(&mut self) -> Machine<'_, S, Tokio<'_, C::Transport>> {
+        Machine::new(self.client.get_mut().session(), &mut self.state)
+    }
+
+    /// As [`Vfd::rounding`].
+    pub fn rounding(mut self, rounding: Rounding) -> Self {
+        self.state.rounding = rounding;
+        self
+    }
+
+    /// As [`Vfd::settings`].
+    pub fn settings(&self) -> &S {
+        &self.state.settings
+    }
+
+    /// As [`Vfd::memory`].
+    pub fn memory(&self) -> Memory {
+        self.state.memory()
+    }
+
+    /// As [`Vfd::with_memory`].
+    pub fn with_memory(mut self, memory: Memory) -> Self {
+        self.state.remember(memory);
+        self
+    }
+
+    /// As [`Vfd::forget_commands`].
+    pub fn forget_commands(&mut self) {
+        self.state.forget_commands();
+    }
+
+    /// As [`Vfd::adopt_direction`].
+    pub async fn adopt_direction(&mut self) -> Result<Option<Direction>, Error> {
+        self.machine().adopt_direction().await
+    }
+
+    /// The client.
+    pub fn client(&mut self) -> &mut AsyncClient<C::Transport> {
+        self.client.get_mut()
+    }
+
+    /// As [`Vfd::into_client`].
+    pub fn into_client(self) -> C {
+        self.client
+    }
+
+    /// As [`Vfd::holds_command`].
+    pub fn holds_command(&self, row: u16) -> bool {
+        self.state.holds_command(row)
+    }
+
+    /// As [`Vfd::command_fields_word`].
+    pub async fn command_fields_word(
+        &mut self,
+        row: u16,
+        mask: u16,
+        value: u16,
+    ) -> Result<u16, Error> {
+        self.machine().command_fields_word(row, mask, value).await
+    }
+
+    /// As [`Vfd::write_command_fields`].
+    pub async fn write_command_fields(
+        &mut self,
+        row: u16,
+        mask: u16,
+        value: u16,
+    ) -> Result<u16, Error> {
+        self.machine().write_command_fields(row, mask, value).await
+    }
+
+    /// As [`Vfd::profile_state`].
+    pub async fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
+        self.machine().profile_state().await
+    }
+
+    /// As [`Vfd::forget_sources`].
+    pub fn forget_sources(&mut self) {
+        self.state.forget_sources();
     }
 }
+
 #[cfg(feature = "tokio")]
-vfd_impl!(AsyncVfd, HoldsAsyncClient, AsyncVariableFrequencyDrive, AsyncClient, [async] [.await]);
+impl<S: SettingsView, C: HoldsAsyncClient> AsyncVariableFrequencyDrive for AsyncVfd<S, C> {
+    fn drive_id(&self) -> &'static str {
+        self.client.get().profile().drive_id
+    }
+
+    fn supports(&self, role: Role) -> bool {
+        self.state.supports(role)
+    }
+
+    async fn run(&mut self) -> Result<(), Error> {
+        self.machine().run().await
+    }
+
+    async fn stop(&mut self) -> Result<(), Error> {
+        self.machine().stop().await
+    }
+
+    async fn set_direction(&mut self, direction: Direction) -> Result<(), Error> {
+        self.machine().set_direction(direction).await
+    }
+
+    async fn set_reference(&mut self, hz: f64) -> Result<(), Error> {
+        self.machine().set_reference(hz).await
+    }
+
+    async fn set_ramp(&mut self, accel_s: f64, decel_s: f64) -> Result<(), Error> {
+        self.machine().set_ramp(accel_s, decel_s).await
+    }
+
+    async fn reference(&mut self) -> Result<f64, Error> {
+        self.machine().reference().await
+    }
+
+    async fn output_frequency(&mut self) -> Result<f64, Error> {
+        self.machine().output_frequency().await
+    }
+
+    async fn output_current(&mut self) -> Result<f64, Error> {
+        self.machine().output_current().await
+    }
+
+    async fn output_voltage(&mut self) -> Result<f64, Error> {
+        self.machine().output_voltage().await
+    }
+
+    async fn dc_bus_voltage(&mut self) -> Result<f64, Error> {
+        self.machine().dc_bus_voltage().await
+    }
+
+    async fn status(&mut self) -> Result<Status, Error> {
+        self.machine().status().await
+    }
+
+    async fn fault_code(&mut self) -> Result<FaultCode, Error> {
+        self.machine().fault_code().await
+    }
+
+    async fn last_fault(&mut self) -> Result<FaultCode, Error> {
+        self.machine().last_fault().await
+    }
+
+    async fn reset_fault(&mut self) -> Result<(), Error> {
+        self.machine().reset_fault().await
+    }
+
+    async fn profile_state(&mut self) -> Result<Option<&'static str>, Error> {
+        self.machine().profile_state_if_any().await
+    }
+
+    async fn coast(&mut self) -> Result<(), Error> {
+        self.machine().coast().await
+    }
+
+    async fn quick_stop(&mut self) -> Result<(), Error> {
+        self.machine().quick_stop().await
+    }
+}

@@ -41,9 +41,9 @@
 //! from the next cycle on.
 
 use crate::pdu;
-use crate::register::{RegisterInfo, Table};
 use drivemap_core::functions::Functions;
 use drivemap_core::plan::RegisterPlan;
+use drivemap_core::register::{RegisterInfo, Table};
 
 /// A register the planner plans reads over: where it is, and which functions it accepts.
 /// Implemented by [`RegisterInfo`] (every function of the drive) and by [`RegisterPlan`] (its

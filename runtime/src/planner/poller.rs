@@ -5,10 +5,11 @@ use crate::bus_time::{BusModel, SerialConfig};
 use crate::client::Client;
 use crate::error::Error;
 use crate::pdu;
-use crate::profile::{Profile, TransportKind};
-use crate::register::{Readable, Table, Width};
-use crate::scale::ValueError;
 use crate::transport::Transport;
+use drivemap_core::profile::{Profile, TransportKind};
+use drivemap_core::register::{Readable, Table};
+use drivemap_core::scale::ValueError;
+use drivemap_core::width::Width;
 use std::fmt;
 
 use super::{PlanError, PlannedRegister, Read, ReadableSet, plan_single, plan_table};

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use super::Transport;
 use super::tcp::TcpTransport;
-use crate::profile::TransportKind;
+use drivemap_core::profile::TransportKind;
 
 /// A TCP connection to a transparent gateway in front of a Modbus ASCII line.
 pub struct AsciiOverTcpTransport(TcpTransport);

@@ -6,7 +6,7 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::time::Instant;
 
 use super::Transport;
-use crate::profile::TransportKind;
+use drivemap_core::profile::TransportKind;
 
 #[derive(Default)]
 struct Pipe {

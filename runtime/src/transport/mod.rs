@@ -8,7 +8,7 @@
 use std::io;
 use std::time::{Duration, Instant};
 
-use crate::profile::TransportKind;
+use drivemap_core::profile::TransportKind;
 
 pub mod ascii_over_tcp;
 pub mod memory;

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use super::Transport;
 use super::tcp::TcpTransport;
-use crate::profile::TransportKind;
+use drivemap_core::profile::TransportKind;
 
 /// A TCP connection to a transparent RTU gateway.
 pub struct RtuOverTcpTransport(TcpTransport);

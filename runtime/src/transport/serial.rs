@@ -20,7 +20,7 @@ use serialport::{ClearBuffer, DataBits, FlowControl, SerialPort};
 use super::Transport;
 use crate::bus_time::SerialConfig;
 use crate::error::Refusal;
-use crate::profile::{Profile, SerialFormats, TransportKind};
+use drivemap_core::profile::{Profile, SerialFormats, TransportKind};
 
 pub use serialport::{Parity, StopBits};
 
@@ -236,7 +236,7 @@ impl SerialOptions {
 }
 
 /// The vocabulary crate's parity for the `serialport` crate's.
-pub fn bus_parity(parity: Parity) -> crate::bus_time::Parity {
+pub(crate) fn bus_parity(parity: Parity) -> crate::bus_time::Parity {
     match parity {
         Parity::None => crate::bus_time::Parity::None,
         Parity::Even => crate::bus_time::Parity::Even,
@@ -517,7 +517,7 @@ mod tests {
         // 19 200 is not above 19 200: 2.005 ms.
         assert!(frame_gap(3.5, 19_200) > Duration::from_micros(2000));
         // A gap the manual states in ms is kept where it is the longer.
-        let mut p = crate::profile::Profile::GENERIC;
+        let mut p = drivemap_core::profile::Profile::GENERIC;
         p.timing.frame_gap_us = Some(10_000);
         let o = SerialOptions::new("/dev/null", 115_200).with_profile(&p);
         assert_eq!(o.frame_gap(), Duration::from_millis(10));
@@ -538,13 +538,13 @@ mod tests {
         let two = SerialOptions::new("/dev/null", 19_200).stop_bits(StopBits::Two);
         assert_eq!(two.frame_gap(), Duration::from_nanos(2_005_209));
         // The map's fixed 11-bit character (TDS-V8) counts whatever the parity.
-        let mut p = crate::profile::Profile::GENERIC;
+        let mut p = drivemap_core::profile::Profile::GENERIC;
         p.timing.char_bits = Some(11);
         let tds = SerialOptions::new("/dev/null", 9600).with_profile(&p);
         assert_eq!(tds.frame_gap(), Duration::from_nanos(4_010_417));
         // The same as the model's frame gap, for every format.
         for o in [o, even, two, tds] {
-            let model = BusModel::new(&crate::profile::Profile::GENERIC, o.serial_config());
+            let model = BusModel::new(&drivemap_core::profile::Profile::GENERIC, o.serial_config());
             assert_eq!(
                 o.frame_gap().as_nanos() as f64,
                 model.frame_gap_ns().ceil(),
@@ -556,7 +556,7 @@ mod tests {
     /// A drive whose map lists the formats a parameter selects (the ACN's CM.04: 8N1, 8N2,
     /// 8E1, 8O1), and one whose only format without parity has 2 stop bits.
     fn acn() -> Profile {
-        use crate::profile::{Parity as P, SerialFormat, SerialFormats};
+        use drivemap_core::profile::{Parity as P, SerialFormat, SerialFormats};
         const fn f(code: u16, parity: P, stop_bits: u8) -> SerialFormat {
             SerialFormat {
                 code,
@@ -621,7 +621,7 @@ mod tests {
 
     #[test]
     fn the_stop_bits_of_a_parity_with_one_format_are_the_maps() {
-        use crate::profile::{Parity as P, SerialFormat, SerialFormats};
+        use drivemap_core::profile::{Parity as P, SerialFormat, SerialFormats};
         // 8N2 is the only format without parity (as on a drive with 11-bit characters).
         static FORMATS: [SerialFormat; 2] = [
             SerialFormat {

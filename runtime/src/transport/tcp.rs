@@ -4,19 +4,19 @@
 //! non-blocking `recv` that finds the input empty (the flush of stale input), one `write`, and
 //! one blocking `recv` that returns the reply. The socket stays in blocking mode; its receive
 //! timeout (`SO_RCVTIMEO`) is set only when the wait asked for differs from the one in force by
-//! more than [`TIMEOUT_SLACK`], and never longer than the wait, so a deadline is never overrun.
+//! more than `TIMEOUT_SLACK` (2 ms), and never longer than the wait, so a deadline is never overrun.
 
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
 use super::{DISCARD_BUDGET, Transport};
-use crate::profile::TransportKind;
+use drivemap_core::profile::TransportKind;
 
 /// How much shorter than the wait asked for the socket's receive timeout may be before it is
 /// set again. A receive that ends up to this much early just waits again for the rest, so the
 /// deadline is kept; the kernel rounds `SO_RCVTIMEO` to its tick (1-4 ms) anyway.
-pub const TIMEOUT_SLACK: Duration = Duration::from_millis(2);
+pub(crate) const TIMEOUT_SLACK: Duration = Duration::from_millis(2);
 
 /// A TCP connection carrying frames of `kind` (Modbus TCP, or RTU frames through a gateway).
 pub struct TcpTransport {
