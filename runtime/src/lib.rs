@@ -23,6 +23,7 @@
 //! variant or field is not a breaking change, so a `match` needs a `_` arm. The plan's data
 //! model (`plan::Conversion`, `plan::Scale`, ...) is not: the generated code and this crate must
 //! agree on every variant of it, and a new one is a new plan format.
+#![doc = include_str!("../README.md")]
 
 #![cfg_attr(not(feature = "std"), no_std)]
 // docs.rs documents every feature (`[package.metadata.docs.rs]`), each item marked with the
@@ -86,7 +87,3 @@ pub use register::{
 };
 pub use scale::{Rounding, ValueError};
 
-/// The examples of `README.md`, compiled as doctests.
-#[doc = include_str!("../README.md")]
-#[cfg(doctest)]
-pub struct ReadmeDoctests;

@@ -1,4 +1,5 @@
 //! Shared test helpers of the cross-crate tests.
+#![doc = include_str!("../README.md")]
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -6,6 +7,13 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 
 #[cfg(unix)]
 pub mod line_bench;
+
+/// The Rust examples of the repository's `README.md`, compiled as doctests of this crate
+/// (`cargo test -p drivemap-tests --doc`), which depends on every crate they use. Not part of
+/// the documentation (`cfg(doctest)`): the README is the repository's front page.
+#[doc = include_str!("../../README.md")]
+#[cfg(doctest)]
+pub struct RootReadme;
 
 /// The workspace root.
 pub fn workspace() -> PathBuf {
