@@ -24,7 +24,6 @@
 //! model (`plan::Conversion`, `plan::Scale`, ...) is not: the generated code and this crate must
 //! agree on every variant of it, and a new one is a new plan format.
 #![doc = include_str!("../README.md")]
-
 #![cfg_attr(not(feature = "std"), no_std)]
 // docs.rs documents every feature (`[package.metadata.docs.rs]`), each item marked with the
 // feature it needs.
@@ -86,4 +85,3 @@ pub use register::{
     Width, WordOrder, Writable, WriteOnly, WriteRestriction,
 };
 pub use scale::{Rounding, ValueError};
-

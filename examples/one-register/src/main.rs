@@ -3,7 +3,6 @@
 //! (below), it builds only if the generated code gives no dead-code or unused warning
 //! for the registers, types and tables it does not use (290 of them before).
 #![doc = include_str!("../README.md")]
-
 // Every `unused` lint (dead code, unused imports, ...) an error: the generated module must not
 // make a binary that uses one of its registers warn.
 #![deny(unused)]
