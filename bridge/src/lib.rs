@@ -18,6 +18,7 @@
 //! The bridge is not a safety function: a drive's own communication-loss stop (the V7's n151
 //! Modbus time-out detection, the ACN's Pr.12 lost-command mode) is what stops a motor when the
 //! bridge, the broker or the line is gone.
+#![doc = include_str!("../README.md")]
 
 pub mod command;
 pub mod commander;

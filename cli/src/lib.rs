@@ -3,6 +3,7 @@
 //!
 //! `src/main.rs` is [`main`]; tests call the commands in-process where running the binary once
 //! per case would cost a map load each (the write-gate sweep over every register of every map).
+#![doc = include_str!("../README.md")]
 
 use std::process::ExitCode;
 

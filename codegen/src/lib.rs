@@ -7,6 +7,7 @@
 //!
 //! The map front end (model, loading, validation, lowering) is `drivemap-map`; this crate only
 //! prints.
+#![doc = include_str!("../README.md")]
 
 pub mod config;
 pub mod generate;

@@ -9,6 +9,7 @@
 //! (`drivemap_map::lower`) decides a [`plan::RegisterPlan`] per register; generated code
 //! prints it as `const` data, the interpreter builds it at run time, and both convert with
 //! [`plan::RegisterPlan::decode_number`] and its siblings.
+#![doc = include_str!("../README.md")]
 #![no_std]
 #![deny(missing_docs, unreachable_pub)]
 

@@ -1,12 +1,13 @@
-//! The drive plan: what every register of a map means, decided once by the generator's lowering
-//! pass (`drivemap_map::lower`) and then only read.
+//! The drive plan: what every register of a map means, decided once by the map front end's
+//! lowering (`drivemap-map`) and then only read.
 //!
 //! Generated drive modules hold their plan as `const` data and implement the typed API on it
-//! ([`crate::register::Reg`]); the run-time interpreter (`drivemap-interp`) builds the same plan
+//! ([`crate::register::Reg`]); the run-time interpreter (`drivemap-live`) builds the same plan
 //! from a map file. Both convert words with the one implementation below, so the generated code
 //! and a map loaded at run time cannot disagree about a scale, a range or an address.
 //!
-//! Where a register's scale is decided: [`Conversion`], built in `map/src/lower.rs`.
+//! Where a register's scale is decided: [`Conversion`], chosen by `drivemap-map`'s lowering (the
+//! data flow: `ARCHITECTURE.md` at the repository root).
 
 use crate::functions::Functions;
 use crate::profile::TransportKind;

@@ -6,6 +6,7 @@
 //! number schemes from the manual itself ([`scheme`]). [`draft`] writes the rows as a draft map,
 //! every register citing the line it came from; [`compare`] sets rows against an existing map
 //! (`drivemap import --merge`, and the figures in `docs/import.md`).
+#![doc = include_str!("../README.md")]
 
 pub mod columns;
 pub mod compare;

@@ -5,6 +5,7 @@
 //! The generated modules and this crate agree by construction: both read the same validated IR
 //! ([`drivemap_map::ir`]) and convert with the same functions of
 //! [`drivemap_runtime::scale`]; a test in `tests/` compares them register by register.
+#![doc = include_str!("../README.md")]
 
 pub mod codec;
 pub mod draft;

@@ -14,6 +14,7 @@
 //!
 //! This crate has no code generator in it (no `syn`, `quote`, `prettyplease`): the run-time tools
 //! (`drivemap-live`, `drivemap-sim`, the `drivemap` command line) read maps through it alone.
+#![doc = include_str!("../README.md")]
 
 pub mod citations;
 pub mod command_profile;

@@ -4,7 +4,7 @@
 //! broadcast use, the settings it depends on — and the drive's runtime [`Profile`].
 //!
 //! The plan is made of the vocabulary crate's types ([`drivemap_core::plan`]). The generator
-//! prints it as `const` data; the run-time interpreter (`drivemap-interp`) uses it as it is.
+//! prints it as `const` data; the run-time interpreter (`drivemap-live`) uses it as it is.
 //! Nothing downstream of this pass reads the serde model again: **a register's scale is decided
 //! in `Lowering::conversion` below.**
 //!

@@ -4,6 +4,7 @@
 //! (`drivemap doc`, `docs/drives/`).
 //!
 //! All text about a map comes from `drivemap_map::describe`.
+#![doc = include_str!("../README.md")]
 
 pub mod diff;
 pub mod reference;

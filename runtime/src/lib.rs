@@ -26,7 +26,7 @@
 //! not a breaking change, so a `match` needs a `_` arm. The plan's data model
 //! (`core::plan::Conversion`, `core::plan::Scale`, ...) is not: the generated code and this
 //! crate must agree on every variant of it, and a new one is a new plan format.
-
+#![doc = include_str!("../README.md")]
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs, unreachable_pub)]
 // docs.rs documents every feature (`[package.metadata.docs.rs]`), each item marked with the
@@ -105,6 +105,7 @@ pub use drivemap_core::{
     ReadWrite, ReadWriteAs, Readable, Reg, Register, RegisterInfo, RegisterPlan, SettingsView,
     Table, Value, Writable, WriteOnly, WriteRestriction,
 };
+<<<<<<< HEAD
 #[doc(hidden)]
 pub use drivemap_core::{bit_fields, code_eq, enumeration};
 
@@ -133,3 +134,6 @@ pub mod scale {
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
+=======
+pub use scale::{Rounding, ValueError};
+>>>>>>> docs-arch

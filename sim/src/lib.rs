@@ -42,6 +42,7 @@
 //! sim.tick();
 //! assert_eq!(sim.value("output_frequency").unwrap().as_f64(), Some(12.0));
 //! ```
+#![doc = include_str!("../README.md")]
 
 pub mod clock;
 pub mod exceptions;

@@ -14,6 +14,7 @@
 //! - [`instant_link::InstantLink`]: an in-memory RTU link on which a simulated slave answers
 //!   inside `send` (no thread, no clock), for those benches and tests;
 //! - [`rng::SplitMix`]: SplitMix64, to draw test cases and reproducible subsets.
+#![doc = include_str!("../README.md")]
 
 pub mod alloc_count;
 pub mod hostile_peer;

@@ -1,9 +1,19 @@
 //! Shared test helpers of the cross-crate tests.
+#![doc = include_str!("../README.md")]
 
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 #[cfg(unix)]
 pub mod line_bench;
+
+/// The Rust examples of the repository's `README.md`, compiled as doctests of this crate
+/// (`cargo test -p drivemap-tests --doc`), which depends on every crate they use. Not part of
+/// the documentation (`cfg(doctest)`): the README is the repository's front page.
+#[doc = include_str!("../../README.md")]
+#[cfg(doctest)]
+pub struct RootReadme;
 
 /// The workspace root.
 pub fn workspace() -> PathBuf {
@@ -13,20 +23,110 @@ pub fn workspace() -> PathBuf {
         .to_path_buf()
 }
 
-/// A scratch workspace for building against another maps directory: `<dir>/maps` holding a copy
-/// of the shipped maps plus `extra` (a map file), and `<dir>/app/src` for an application crate
-/// with the workspace's `Cargo.lock` (so an offline build needs nothing new). Returns `(maps,
-/// app)`.
-pub fn maps_and_app(dir: &Path, extra: &Path) -> (PathBuf, PathBuf) {
+/// A directory for an application crate outside the workspace: `<dir>/src`, and the
+/// workspace's `Cargo.lock` (so an offline build needs nothing new). Returns `<dir>`.
+pub fn app_dir(dir: &Path) -> PathBuf {
+    std::fs::create_dir_all(dir.join("src")).expect("app dir");
+    std::fs::copy(workspace().join("Cargo.lock"), dir.join("Cargo.lock")).expect("copy Cargo.lock");
+    dir.to_path_buf()
+}
+
+/// The one copy of the workspace that [`workspace_with_map`] keeps, and the lock its users take
+/// turns with.
+static COPY: Mutex<()> = Mutex::new(());
+
+/// A copy of this checkout with one map file added to its `maps/`: what a contributor has after
+/// dropping a YAML file into `maps/`. The drives crate (and the `drivemap` binary's built-in
+/// maps) generate from the maps they carry and from nothing in the environment, so building
+/// against a new map means building a tree that holds it.
+///
+/// The copy is one directory, `target/new-map-probe/workspace` (build it with
+/// `CARGO_TARGET_DIR=target/new-map-probe`), brought up to date on each call: a file is written
+/// only when its content differs and a file the checkout no longer has is removed, so cargo
+/// rebuilds only what changed since the last build. Everything but `target` directories and
+/// dot-files is copied; symbolic links (`drives/maps`, `cli/maps`) stay links. The guard
+/// returned keeps the other tests of this process out of the copy until it is dropped.
+pub fn workspace_with_map(map: &Path) -> (MutexGuard<'static, ()>, PathBuf) {
+    let guard = COPY.lock().unwrap_or_else(PoisonError::into_inner);
     let root = workspace();
-    let maps = dir.join("maps");
-    let app = dir.join("app");
-    std::fs::create_dir_all(&maps).expect("maps dir");
-    std::fs::create_dir_all(app.join("src")).expect("app dir");
-    for map in drivemap_map::find_maps(&root.join("maps")).expect("maps/") {
-        std::fs::copy(&map, maps.join(map.file_name().expect("a file"))).expect("copy a map");
+    let copy = root.join("target/new-map-probe/workspace");
+    let name = map.file_name().expect("a map file");
+    let added = copy.join("maps").join(name);
+    sync(&root, &copy, &|p| p == added).expect("copying the workspace");
+    let text = std::fs::read(map).expect("reading the new map");
+    if std::fs::read(&added).ok().as_ref() != Some(&text) {
+        std::fs::write(&added, text).expect("writing the new map");
     }
-    std::fs::copy(extra, maps.join(extra.file_name().expect("a file"))).expect("copy the new map");
-    std::fs::copy(root.join("Cargo.lock"), app.join("Cargo.lock")).expect("copy Cargo.lock");
-    (maps, app)
+    (guard, copy)
+}
+
+/// Makes `to` hold what `from` holds (see [`workspace_with_map`]); `keep` names the files of
+/// `to` to leave in place although `from` lacks them.
+fn sync(from: &Path, to: &Path, keep: &dyn Fn(&Path) -> bool) -> std::io::Result<()> {
+    std::fs::create_dir_all(to)?;
+    let mut names = HashSet::new();
+    for entry in std::fs::read_dir(from)? {
+        let entry = entry?;
+        let name = entry.file_name();
+        let kind = entry.file_type()?;
+        if name.to_string_lossy().starts_with('.') || (kind.is_dir() && name == "target") {
+            continue;
+        }
+        let (src, dest) = (entry.path(), to.join(&name));
+        names.insert(name);
+        let old = std::fs::symlink_metadata(&dest).ok();
+        if kind.is_symlink() {
+            let link = std::fs::read_link(&src)?;
+            if std::fs::read_link(&dest).ok() != Some(link.clone()) {
+                remove(&dest, old.as_ref())?;
+                symlink(&link, &dest)?;
+            }
+        } else if kind.is_dir() {
+            if old.as_ref().is_some_and(|m| !m.is_dir()) {
+                remove(&dest, old.as_ref())?;
+            }
+            sync(&src, &dest, keep)?;
+        } else {
+            let text = std::fs::read(&src)?;
+            let same = old.as_ref().is_some_and(|m| m.is_file())
+                && std::fs::read(&dest).ok().as_ref() == Some(&text);
+            if !same {
+                remove(&dest, old.as_ref())?;
+                std::fs::write(&dest, text)?;
+            }
+        }
+    }
+    for entry in std::fs::read_dir(to)? {
+        let entry = entry?;
+        let path = entry.path();
+        if !names.contains(&entry.file_name()) && !keep(&path) {
+            remove(&path, std::fs::symlink_metadata(&path).ok().as_ref())?;
+        }
+    }
+    Ok(())
+}
+
+/// Removes what is at `path` (`old`: its metadata, if anything is there).
+fn remove(path: &Path, old: Option<&std::fs::Metadata>) -> std::io::Result<()> {
+    match old {
+        None => Ok(()),
+        Some(m) if m.is_dir() => std::fs::remove_dir_all(path),
+        Some(_) => std::fs::remove_file(path),
+    }
+}
+
+#[cfg(unix)]
+fn symlink(link: &Path, at: &Path) -> std::io::Result<()> {
+    std::os::unix::fs::symlink(link, at)
+}
+
+/// Elsewhere a link is copied as what it points to.
+#[cfg(not(unix))]
+fn symlink(link: &Path, at: &Path) -> std::io::Result<()> {
+    let target = at.parent().unwrap_or(Path::new(".")).join(link);
+    if target.is_dir() {
+        sync(&target, at, &|_| false)
+    } else {
+        std::fs::copy(target, at).map(drop)
+    }
 }

@@ -138,8 +138,6 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
             .args(["build", "--offline", "--quiet"])
             .current_dir(dir.join("app"))
             .env("CARGO_TARGET_DIR", &target)
-            .env_remove("DRIVEMAP_MAPS")
-            .env_remove("DRIVEMAP_DRIVES")
             .env_remove("RUSTFLAGS"),
         "cargo build of the downstream application",
     );

@@ -637,11 +637,11 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02X}")).collect()
 }
 
-/// Every map of `maps/` (the directory, not a list: `DRIVEMAP_MAPS` when it was set for the
-/// build, as for the other per-map tests) and the acme-vf1 fixture.
+/// Every map of `maps/` (the directory, not a list, as for the other per-map tests) and the
+/// acme-vf1 fixture.
 fn every_map() -> Vec<(String, Drive)> {
     let root = env!("CARGO_MANIFEST_DIR");
-    let dir = option_env!("DRIVEMAP_MAPS").map_or_else(|| format!("{root}/../maps"), str::to_owned);
+    let dir = format!("{root}/../maps");
     let mut paths: Vec<std::path::PathBuf> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("{dir}: {e}"))
         .map(|e| e.unwrap().path())

@@ -16,14 +16,9 @@ use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, DrivePlan, DriveSettings, Error, Refusal, ValueError};
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 
-/// The map of a compiled drive, from the directory the drives crate was generated from
-/// (`DRIVEMAP_MAPS` when it was set for the build, else `maps/`).
+/// The map of a compiled drive, from `maps/`, which the drives crate is generated from.
 fn map(id: &str) -> drivemap_map::Drive {
-    let dir = option_env!("DRIVEMAP_MAPS").map_or_else(
-        || format!("{}/../maps", env!("CARGO_MANIFEST_DIR")),
-        str::to_owned,
-    );
-    let path = format!("{dir}/{id}.yaml");
+    let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
     drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap()
 }
 

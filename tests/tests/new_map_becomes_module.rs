@@ -1,25 +1,20 @@
-//! Dropping a YAML file into the maps directory adds a module to `drivemap-drives` with no other
-//! edit: a throwaway application depends on the drives crate, built against a copy of `maps/`
-//! plus one new map, and uses the new module by name. With one drive's feature, the crate has that
-//! drive's module alone; with `DRIVEMAP_DRIVES=<id>`, the new drive's module alone.
+//! Dropping a YAML file into `maps/` adds a module to `drivemap-drives` with no other edit: a
+//! throwaway application depends on the drives crate of a copy of the workspace with one new map
+//! in `maps/`, and uses the new module by name. With one drive's feature, the crate has that
+//! drive's module alone; the new map has no feature until a line in the drives crate's
+//! `Cargo.toml` declares it (rustc warns until then), and then it is selected alone.
 
 use std::path::Path;
 use std::process::Command;
 
-use drivemap_tests::workspace;
+use drivemap_tests::{workspace, workspace_with_map};
 
-/// Builds and runs the application in `app` whose `drivemap-drives` dependency has `features`
-/// (Cargo's `default-features = false` when given) and whose `main` prints the module `module`'s
-/// drive id and `DRIVES`; returns what it printed.
-fn run_app(
-    app: &Path,
-    maps: &Path,
-    features: Option<&str>,
-    selected: Option<&str>,
-    module: &str,
-) -> String {
+/// Builds and runs the application in `app` whose `drivemap-drives` dependency is `drives` with
+/// `features` (Cargo's `default-features = false` when given) and whose `main` prints the module
+/// `module`'s drive id and `DRIVES`; returns what it printed and what the build said.
+fn run_app(app: &Path, drives: &Path, features: Option<&str>, module: &str) -> (String, String) {
     let root = workspace();
-    let drives = root.join("drives").display().to_string();
+    let drives = drives.display().to_string();
     let dependency = match features {
         None => format!("{{ path = {drives:?} }}"),
         Some("") => format!("{{ path = {drives:?}, default-features = false }}"),
@@ -39,15 +34,9 @@ fn run_app(
         ),
     )
     .unwrap();
-    let mut cargo = Command::new(env!("CARGO"));
-    match selected {
-        Some(ids) => cargo.env("DRIVEMAP_DRIVES", ids),
-        None => cargo.env_remove("DRIVEMAP_DRIVES"),
-    };
-    let out = cargo
+    let out = Command::new(env!("CARGO"))
         .args(["run", "--quiet", "--offline", "--manifest-path"])
         .arg(app.join("Cargo.toml"))
-        .env("DRIVEMAP_MAPS", maps)
         .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
         .env(
             "DRIVEMAP_MANUALS",
@@ -55,23 +44,24 @@ fn run_app(
         )
         .output()
         .expect("cargo runs");
-    assert!(
-        out.status.success(),
-        "build failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).trim().to_owned()
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "build failed:\n{stderr}");
+    (
+        String::from_utf8_lossy(&out.stdout).trim().to_owned(),
+        stderr,
+    )
 }
 
 #[test]
 fn a_new_yaml_file_becomes_a_module() {
     let root = workspace();
     let tmp = std::env::temp_dir().join(format!("drivemap-new-map-{}", std::process::id()));
+    let app = drivemap_tests::app_dir(&tmp.join("app"));
     // The new drive: nothing else in the repository mentions it.
-    let (maps, app) =
-        drivemap_tests::maps_and_app(&tmp, &root.join("map/tests/fixtures/mini-drive.yaml"));
+    let (_copy, copy) = workspace_with_map(&root.join("map/tests/fixtures/mini-drive.yaml"));
+    let drives = copy.join("drives");
 
-    let stdout = run_app(&app, &maps, None, None, "mini_drive");
+    let (stdout, said) = run_app(&app, &drives, None, "mini_drive");
     let mut words = stdout.split_whitespace();
     assert_eq!(words.next(), Some("mini-drive"));
     let ids: Vec<&str> = words.next().unwrap_or_default().split(',').collect();
@@ -83,43 +73,63 @@ fn a_new_yaml_file_becomes_a_module() {
         ids.len(),
         drivemap_map::find_maps(&root.join("maps")).unwrap().len() + 1
     );
+    // The new map has no feature (Cargo features are declared in Cargo.toml, never generated):
+    // rustc says so, naming it.
+    assert!(
+        said.contains("unexpected `cfg` condition value: `mini-drive`")
+            && said.contains("consider adding `mini-drive` as a feature in `Cargo.toml`"),
+        "{said}"
+    );
 
     // An application that enables one drive's feature gets that module alone.
     assert_eq!(
-        run_app(&app, &maps, Some("yaskawa-v7"), None, "yaskawa_v7"),
+        run_app(&app, &drives, Some("yaskawa-v7"), "yaskawa_v7").0,
         "yaskawa-v7 yaskawa-v7",
         "only the V7 module is generated"
     );
-    // The new map has no feature (Cargo features are declared in Cargo.toml), but an
-    // application selects it alone by id, with no edit of the drives crate.
+    // With the line the warning asks for, an application selects the new map alone.
+    let manifest = drives.join("Cargo.toml");
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    let declared = text.replace(
+        "\nyaskawa-v7 = []\n",
+        "\nyaskawa-v7 = []\nmini-drive = []\n",
+    );
+    assert_ne!(
+        text, declared,
+        "drives/Cargo.toml declares `yaskawa-v7 = []`"
+    );
+    std::fs::write(&manifest, declared).unwrap();
+    let (stdout, said) = run_app(&app, &drives, Some("mini-drive"), "mini_drive");
     assert_eq!(
-        run_app(&app, &maps, Some(""), Some("mini-drive"), "mini_drive"),
-        "mini-drive mini-drive",
+        stdout, "mini-drive mini-drive",
         "only the new module is generated"
     );
+    assert!(!said.contains("unexpected `cfg`"), "{said}");
     std::fs::remove_dir_all(&tmp).unwrap();
 }
 
-/// A broken map in the maps directory fails the drives build with the diagnostics
-/// `drivemap check` prints for it, every one of them at once (`file:line:col`, the register, the
-/// message), not a panic or the first error alone.
+/// A broken map in `maps/` fails the drives build with the diagnostics `drivemap check` prints
+/// for it, every one of them at once (`file:line:col`, the register, the message), not a panic
+/// or the first error alone.
 #[test]
 fn a_broken_map_fails_the_build_with_every_error_as_check_prints_it() {
     let root = workspace();
-    let tmp = std::env::temp_dir().join(format!("drivemap-broken-map-{}", std::process::id()));
     // Four errors in one file: decimal addresses in a register, an alternative, a command, a gap.
     let broken = root.join("map/tests/ui/e41-decimal-address.yaml");
-    let (maps, _) = drivemap_tests::maps_and_app(&tmp, &broken);
-    let map = maps.join("e41-decimal-address.yaml");
+    let (_copy, copy) = workspace_with_map(&broken);
+    // As the build names it: through `drives/maps`, resolved.
+    let map = copy
+        .join("maps")
+        .canonicalize()
+        .unwrap()
+        .join("e41-decimal-address.yaml");
     let expected = drivemap_map::read_map(&map, &Default::default())
         .expect_err("the map is broken")
         .to_string();
     assert!(expected.ends_with("4 errors"), "{expected}");
     let out = Command::new(env!("CARGO"))
         .args(["build", "--quiet", "--offline", "-p", "drivemap-drives"])
-        .current_dir(&root)
-        .env("DRIVEMAP_MAPS", &maps)
-        .env_remove("DRIVEMAP_DRIVES")
+        .current_dir(&copy)
         .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
         .env(
             "DRIVEMAP_MANUALS",
@@ -133,5 +143,4 @@ fn a_broken_map_fails_the_build_with_every_error_as_check_prints_it() {
         assert!(stderr.contains(line), "missing `{line}` in:\n{stderr}");
     }
     assert!(!stderr.contains("panicked"), "{stderr}");
-    std::fs::remove_dir_all(&tmp).unwrap();
 }

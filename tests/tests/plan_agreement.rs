@@ -24,13 +24,9 @@ use drivemap_map::ir;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 
-/// The maps the drives crate was generated from: `DRIVEMAP_MAPS` when it was set for the build
-/// (a copy of `maps/` with a new map, say), else `maps/`.
+/// The maps the drives crate is generated from: `maps/`.
 fn maps_dir() -> PathBuf {
-    option_env!("DRIVEMAP_MAPS").map_or_else(
-        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps"),
-        PathBuf::from,
-    )
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps")
 }
 
 /// The generated settings seen with the variants and external quantities this case chose

@@ -1,5 +1,5 @@
-//! A new drive is a YAML file and nothing else. With a copy of `maps/` plus the map of a fictional
-//! drive (`tests/fixtures/acme-vf1/`: a 2-bit run/stop code, a 2-bit direction code, an operating
+//! A new drive is a YAML file and nothing else. With a copy of the workspace whose `maps/` holds
+//! the map of a fictional drive (`tests/fixtures/acme-vf1/`: a 2-bit run/stop code, a 2-bit direction code, an operating
 //! state reported as codes, an edge-triggered reset, a drive-specific exception code) and no
 //! other edit:
 //!
@@ -10,7 +10,8 @@
 //!   trait (`tests/fixtures/any-drive-app/main.rs`, which names no register and no drive) ramps
 //!   it to the reference and stops it.
 //!
-//! Builds share `target/new-map-probe` with `new_map_becomes_module.rs`.
+//! Builds share `target/new-map-probe` and the copy of the workspace with
+//! `new_map_becomes_module.rs` (`drivemap_tests::workspace_with_map`).
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -26,10 +27,10 @@ fn target() -> PathBuf {
     workspace().join("target/new-map-probe")
 }
 
-fn cargo(args: &[&str], maps: &Path) -> std::process::Output {
+fn cargo(args: &[&str], workspace: &Path) -> std::process::Output {
     Command::new(env!("CARGO"))
         .args(args)
-        .env("DRIVEMAP_MAPS", maps)
+        .current_dir(workspace)
         .env("CARGO_TARGET_DIR", target())
         .env("DRIVEMAP_MANUALS", fixture().join("manuals"))
         .output()
@@ -62,7 +63,10 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
     let tmp = root
         .join("target/new-map-probe")
         .join(format!("yaml-is-enough-{}", std::process::id()));
-    let (maps, app) = drivemap_tests::maps_and_app(&tmp, &fixture().join("acme-vf1.yaml"));
+    let app = drivemap_tests::app_dir(&tmp.join("app"));
+    let (_copy, copy) = drivemap_tests::workspace_with_map(&fixture().join("acme-vf1.yaml"));
+    // The maps of the copy: the shipped ones and the new one.
+    let maps = copy.join("maps");
 
     // The tool, built with the new map among its drives.
     ok(
@@ -76,7 +80,7 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
                 "--bin",
                 "drivemap",
             ],
-            &maps,
+            &copy,
         ),
         "building drivemap with the new map",
     );
@@ -179,14 +183,13 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
         app.join("src/main.rs"),
     )
     .unwrap();
-    let path = |c: &str| root.join(c).display().to_string();
     std::fs::write(
         app.join("Cargo.toml"),
         format!(
             "[package]\nname = \"any-drive-app\"\nversion = \"0.0.0\"\nedition = \"2024\"\n\n[workspace]\n\n\
              [dependencies]\ndrivemap-drives = {{ path = {:?} }}\ndrivemap-runtime = {{ path = {:?} }}\n",
-            path("drives"),
-            path("runtime")
+            copy.join("drives").display().to_string(),
+            copy.join("runtime").display().to_string()
         ),
     )
     .unwrap();
@@ -201,7 +204,7 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
             "acme-vf1",
             &addr,
         ],
-        &maps,
+        &copy,
     );
     let said = ok(&out, "the generic application");
     assert!(said.contains("at reference 30.00 Hz"), "{said}");

@@ -8,6 +8,7 @@
 //!
 //! Against the simulator: `drivemap simulate --drive yaskawa-v7 --tcp 127.0.0.1:1502` (with
 //! the network selected as the drive's source), then `async-poll 127.0.0.1:1502 1 30 5`.
+#![doc = include_str!("../README.md")]
 
 use std::error::Error;
 use std::process::ExitCode;

@@ -9,5 +9,6 @@
 //! let settings = md::Settings { frequency_units: Some(md::FrequencyUnitsValue::HundredthHz), ..Default::default() };
 //! assert_eq!(md::FrequencyReference::encode(&50.0, &settings), Ok(5000));
 //! ```
+#![doc = include_str!("../README.md")]
 
 include!(concat!(env!("OUT_DIR"), "/drivemap.rs"));

@@ -2,7 +2,7 @@
 //! a private module, as applications do, and uses one register of it: with `unused` denied
 //! (below), it builds only if the generated code gives no dead-code or unused warning
 //! for the registers, types and tables it does not use (290 of them before).
-
+#![doc = include_str!("../README.md")]
 // Every `unused` lint (dead code, unused imports, ...) an error: the generated module must not
 // make a binary that uses one of its registers warn.
 #![deny(unused)]
