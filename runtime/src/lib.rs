@@ -105,7 +105,6 @@ pub use drivemap_core::{
     ReadWrite, ReadWriteAs, Readable, Reg, Register, RegisterInfo, RegisterPlan, SettingsView,
     Table, Value, Writable, WriteOnly, WriteRestriction,
 };
-<<<<<<< HEAD
 #[doc(hidden)]
 pub use drivemap_core::{bit_fields, code_eq, enumeration};
 
@@ -129,11 +128,3 @@ pub mod register {
 pub mod scale {
     pub use drivemap_core::scale::*;
 }
-
-/// The examples of `README.md`, compiled as doctests.
-#[doc = include_str!("../README.md")]
-#[cfg(doctest)]
-pub struct ReadmeDoctests;
-=======
-pub use scale::{Rounding, ValueError};
->>>>>>> docs-arch
