@@ -2,7 +2,7 @@
 //! by clap (exit 2 with a message, no panic, no endless loop), and a command whose output pipe
 //! closes ends quietly with status 141, as `cat` would.
 
-mod common;
+use crate::common;
 
 use std::io::Read;
 use std::process::Stdio;

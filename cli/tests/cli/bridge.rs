@@ -5,7 +5,7 @@
 
 mod bridge_contract;
 mod bridge_proxy;
-mod bridge_support;
+use crate::bridge_support;
 
 use std::time::Duration;
 

@@ -2,7 +2,7 @@
 //! `drivemap check` prints for the same map, as its `Display` and as its `Debug` (what `?` in a
 //! `main` that returns it prints), with no debug dump of its structure.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -5,7 +5,7 @@
 //! number (`read P-01`), the hex of its number (`read 2DH`) or its Modicon reference
 //! (`read 40046`) against a simulated drive, and shows its address as printed (`45`).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -1,7 +1,7 @@
 //! `drivemap diff` end to end: golden output in both formats, exit codes, a scale edit of a
 //! shipped map, and `--git` with a variant map whose base changed.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

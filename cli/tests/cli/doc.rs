@@ -1,7 +1,7 @@
 //! `drivemap doc`: the Markdown reference of a fixture map (golden), and the committed
 //! references of every shipped map (regenerated and compared).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
@@ -19,7 +19,7 @@ fn fixture_reference_golden() {
     insta::assert_snapshot!("example_drive_doc", out);
 }
 
-mod new_map;
+use crate::new_map;
 
 type Run<'a> = &'a dyn Fn(&[&str]) -> (i32, String, String);
 

@@ -3,7 +3,7 @@
 //! misprints one CRC, and every shipped map), a wrong CRC not recorded in `conflicts:` fails the
 //! check at its byte, and `export`, `doc` and `diff` show the examples.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

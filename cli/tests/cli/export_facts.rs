@@ -2,7 +2,7 @@
 //! row, conversion kind and rows of label, value and citation — the same words the rustdoc,
 //! `drivemap doc` and `drivemap diff` print.
 
-mod common;
+use crate::common;
 
 use serde_json::Value;
 

@@ -13,7 +13,7 @@
 //! - nothing is left out silently: every register asked for is an entity, a field, a decoded
 //!   message, or named in a "left out" comment with its reason.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::process::Command;

@@ -4,7 +4,7 @@
 //! every node of the flow with a type that loaded without error, and the flow's reads of a
 //! `drivemap simulate` drive give the values `drivemap read` gives for the same registers.
 
-mod common;
+use crate::common;
 
 use std::io::{Read, Write};
 use std::net::TcpStream;

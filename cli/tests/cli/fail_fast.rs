@@ -6,7 +6,7 @@
 //! request that goes unanswered through every attempt stops the command, and the messages say
 //! which request was tried and which were then not sent. Wall time measured on the binary.
 
-mod common;
+use crate::common;
 
 use std::net::{TcpListener, TcpStream};
 use std::thread;

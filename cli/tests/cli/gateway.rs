@@ -4,7 +4,7 @@
 //! refused, naming `--gateway`. Through the binary, against `drivemap simulate --gateway`. An
 //! ASCII-only drive (`tests/fixtures/quill-q2`) reached over ASCII frames, RTU refused to it.
 
-mod common;
+use crate::common;
 
 use std::net::TcpListener;
 use std::sync::Arc;

@@ -3,7 +3,7 @@
 //! (per request) with an error that says what happened; `poll` must come back after the server
 //! restarts. A subprocess still running past its bound is killed and the test fails.
 
-mod common;
+use crate::common;
 
 use drivemap_test_support::hostile_peer;
 

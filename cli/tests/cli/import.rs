@@ -2,7 +2,7 @@
 //! `drivemap check --require-manuals` accepts as a draft (every citation verified by content),
 //! the report, and `--merge` against a map with a register missing and a default changed.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 use std::process::Command;

@@ -4,7 +4,7 @@
 //! request, to check the drive still shows index 1), against a simulated drive that serves the
 //! pair.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -2,7 +2,7 @@
 //! simulated drives on one link, each at its address, and `drivemap scan` finds every one and
 //! names its map. Through the binary.
 
-mod common;
+use crate::common;
 
 use common::{Sim, drivemap};
 

@@ -2,7 +2,7 @@
 //! or RTU frames over TCP) to a `SimulatedSlave` of the runtime served in a thread of the test.
 //! Addresses in the slave are PDU addresses, so the map's per-transport offsets are checked too.
 
-mod common;
+use crate::common;
 mod paramset;
 
 use std::net::{TcpListener, TcpStream};

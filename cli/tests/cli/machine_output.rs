@@ -5,7 +5,7 @@
 //! The CSV headers are the schemas' property lists, so a column added in one place and not the
 //! other fails here. The drive is `drivemap simulate` at slave 7 behind a Modbus TCP gateway.
 
-mod common;
+use crate::common;
 
 use std::io::Write;
 use std::path::PathBuf;

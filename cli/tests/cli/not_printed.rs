@@ -5,7 +5,7 @@
 //! uses, and `export` writes the unknowns explicitly (validated against
 //! `docs/schema/export.schema.json` by `machine_output.rs`).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -10,8 +10,8 @@ use drivemap_map::model::TransportName;
 use drivemap_map::validate::Context;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
-mod common;
-mod new_map;
+use crate::common;
+use crate::new_map;
 
 use common::repo;
 

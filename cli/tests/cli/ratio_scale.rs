@@ -3,7 +3,7 @@
 //! and six decimals), `write` sends a value that is a whole number of counts as that count and
 //! refuses any other, naming the two nearest legal values, before anything reaches the wire.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};

@@ -2,8 +2,8 @@
 //! (`drivemap coverage`), the manual's words in `drivemap diff` (Markdown and GitHub
 //! annotations). The fixture map `fixtures/example-drive.yaml` cites `fixtures/manuals/manual.txt`.
 
-mod common;
-mod new_map;
+use crate::common;
+use crate::new_map;
 
 use std::path::{Path, PathBuf};
 

@@ -6,7 +6,7 @@
 //! have been written in schema 1 (before the hex-only rule of commit abfacec): decimal addresses
 //! and codes, and the manual's "41H" mistyped as `code: 41` (41 decimal = 29H).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -7,7 +7,7 @@
 //! - an empty value is refused;
 //! - a register whose range the manual does not print gets a warning naming that.
 
-mod common;
+use crate::common;
 
 use std::sync::{Arc, Mutex};
 

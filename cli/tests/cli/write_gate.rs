@@ -37,8 +37,8 @@ use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_sim::slave::SimulatedSlave;
 
-mod common;
-mod new_map;
+use crate::common;
+use crate::new_map;
 mod safe_live;
 
 use common::repo;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use drivemap_live::session::UnknownNames;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
-#[path = "../examples/read_by_name.rs"]
+#[path = "../../examples/read_by_name.rs"]
 #[allow(dead_code)] // the example's `main` is the program's; the test calls `read_by_name`
 mod example;
 

@@ -72,7 +72,7 @@ fn addresses_are_read_in_the_manuals_notation() {
     let e = read(&wrong).unwrap_err();
     assert!(e.contains("unknown variant `octal`"), "{e}");
     // The export says how the manual numbers registers (the reference document's rendering is
-    // checked in `review/tests/notation.rs`).
+    // checked in `review/tests/review/notation.rs`).
     let d = drivemap_map::read_map_str("mini-drive.yaml", &declared, &Context::default()).unwrap();
     let export = drivemap_map::export::export(&d);
     assert_eq!(export["drive"]["address_format"], "decimal");

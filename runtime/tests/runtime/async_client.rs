@@ -2,7 +2,7 @@
 //! pipe, a loopback TCP socket, and the fault-injection link on the blocking pool.
 #![cfg(feature = "tokio")]
 
-mod common;
+use crate::common;
 
 use std::time::{Duration, Instant};
 

@@ -1,7 +1,7 @@
 //! The client against a simulated drive: typed access through hand-written register types (as
 //! the generator will emit them), refusals before sending, broadcast, and EEPROM writes.
 
-mod common;
+use crate::common;
 
 use std::time::{Duration, Instant};
 

@@ -1,7 +1,7 @@
 //! Fault injection: every fault gives the expected error, and the very next transaction on the
 //! same client is correct.
 
-mod common;
+use crate::common;
 
 use std::thread;
 use std::time::Duration;

@@ -6,7 +6,7 @@
 //! (Table 4.5), the broadcast operation signal at 0001h in the broadcast space (Table 4.2), the
 //! frequency reference at 0002h, and n001 at 0101h (0-4).
 
-mod common;
+use crate::common;
 
 use drivemap_runtime::client::Client;
 use drivemap_runtime::error::{Error, Refusal};

@@ -4,7 +4,7 @@
 //! two entries, and the gate refuses before anything is sent. (Feature `tokio`.)
 #![cfg(feature = "tokio")]
 
-mod common;
+use crate::common;
 
 use std::time::Duration;
 

@@ -1,7 +1,7 @@
 //! The client over the in-memory pair and over real TCP sockets on the loopback interface, with
 //! a simulated drive serving the other end in a thread.
 
-mod common;
+use crate::common;
 
 use std::net::TcpListener;
 use std::thread;

@@ -15,7 +15,7 @@
 //! (`003_8bcf5d50afb8e230.txt:380-386`, `01 88 01 86 50`); see
 //! [`memobus_loop_back_fault_response_has_a_wrong_crc`].
 
-mod common;
+use crate::common;
 
 use drivemap_runtime::Client;
 use drivemap_runtime::crc;

@@ -3,7 +3,7 @@
 //! `SerialTransport`. Needs `socat` (Debian package `socat`); without it the test fails.
 #![cfg(all(unix, feature = "serial"))]
 
-mod common;
+use crate::common;
 
 use std::io::Write;
 use std::thread;

@@ -1,7 +1,7 @@
 //! The simulator's request path allocates nothing once warmed up: reads of every shipped map,
 //! on RTU and Modbus TCP, and writes that leave the drive's settings as they were. Counted with
 //! a global allocator that counts the allocations of the current thread (the project's way, as
-//! in `runtime/tests/planner_alloc.rs`).
+//! in `runtime/tests/runtime/planner_alloc.rs`).
 
 use drivemap_test_support::alloc_count::{self, Counting};
 

@@ -7,7 +7,7 @@
 //! leaves open. Here it goes through the
 //! export, the reference document, the semantic diff, the simulator and the client over a real
 //! socket; `yaml_is_enough.rs` compiles its generated module and runs the demo on it, and
-//! `cli/tests/live.rs` reads and writes its pairs with the tool.
+//! `cli/tests/cli/live.rs` reads and writes its pairs with the tool.
 
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -5,7 +5,7 @@
 //! whose late reply the client must then discard. A missing peer fails the test with the install
 //! step (tests/interop/install.sh).
 
-mod interop_support;
+use crate::interop_support;
 
 use std::process::Command;
 use std::time::Duration;

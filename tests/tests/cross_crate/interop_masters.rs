@@ -9,7 +9,7 @@
 //! manual clock; every request it handles is recorded. A missing peer fails the test with the
 //! install step (tests/interop/install.sh).
 
-mod interop_support;
+use crate::interop_support;
 
 use std::process::Command;
 use std::time::Duration;

@@ -6,7 +6,7 @@
 //! Each simulated drive starts with the network selected as its command and reference source for
 //! the link the test uses (at the factory setting it would ignore the run commands written here).
 
-mod interop_support;
+use crate::interop_support;
 
 use std::net::SocketAddr;
 use std::time::Duration;

@@ -1,4 +1,4 @@
-//! Shared by the CLI's integration tests (`mod common;` in each): the built `drivemap` binary run
+//! Shared by the CLI's integration tests (`use crate::common;` in each): the built `drivemap` binary run
 //! as a user runs it, with its exit code and output; bounded runs that kill a hang; a
 //! `drivemap simulate` process killed on drop.
 

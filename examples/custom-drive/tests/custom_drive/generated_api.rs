@@ -172,7 +172,7 @@ fn profile_and_register_table() {
 }
 
 /// `read_values`: a read decodes to the read enumeration, a write takes the word; the group's
-/// `repeat_needs_change` reaches both of its registers (`tests/tests/automationdirect_acn.rs`
+/// `repeat_needs_change` reaches both of its registers (`tests/tests/cross_crate/automationdirect_acn.rs`
 /// shows `Client::write` sending the intermediate value first).
 #[test]
 fn read_meanings_and_repeated_values() {
