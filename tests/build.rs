@@ -1,8 +1,8 @@
 //! Generates the modules of the fictional Tarrow TM-44 (`fixtures/tarrow-tm44`, a drive with
 //! indexed access) and Kestrel KD4 (`fixtures/kestrel-kd4`, a CiA 402 command profile) into
-//! `OUT_DIR`, for `tests/indexed_generated.rs` and `tests/command_profiles` to compile and use:
-//! the generated code of a fixture construct is compiled with the current generator and
-//! runtime.
+//! `OUT_DIR`, for `tests/cross_crate/indexed_generated.rs` and
+//! `tests/cross_crate/drive_contract/command_profiles.rs` to compile and use: the generated code
+//! of a fixture construct is compiled with the current generator and runtime.
 
 use std::path::PathBuf;
 

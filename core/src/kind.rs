@@ -1,5 +1,5 @@
 //! [`ConversionKind`]: the kinds of [`Conversion`] as a plain list, for the tools that must
-//! show every kind (the facts view of `drivemap-map`, and `tests/tests/scale_kinds.rs`, which
+//! show every kind (the facts view of `drivemap-map`, and `tests/tests/cross_crate/scale_kinds.rs`, which
 //! fails when a printer leaves a kind out).
 //!
 //! The enum and [`ConversionKind::ALL`] are written by one macro from one list, so `ALL` cannot

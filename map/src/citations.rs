@@ -6,7 +6,7 @@
 //! citation checks read this list instead of walking the model themselves: the form check
 //! (`validate::citations_present`), the review by content ([`crate::others`] and
 //! `drivemap_review::review`) and the coverage of a manual's rows. A new `source` key of the
-//! schema is added here once; `map/tests/citation_places.rs` fails while a `source` key written
+//! schema is added here once; `map/tests/map/citation_places.rs` fails while a `source` key written
 //! in a map or fixture has no place in the list.
 //!
 //! Order: the protocol (in the order of `maps/README.md`), variant options, groups, roles, gaps,

@@ -11,7 +11,7 @@
 //! which `drivemap doc` prints and `drivemap diff` compares key by key.
 //!
 //! A new kind of scale adds one [`ConversionKind`] in the vocabulary crate and one arm in
-//! [`scale_row`]: every printer that reads the view shows it (`tests/tests/scale_kinds.rs`).
+//! [`scale_row`]: every printer that reads the view shows it (`tests/tests/cross_crate/scale_kinds.rs`).
 
 use serde::Serialize;
 

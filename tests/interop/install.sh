@@ -4,10 +4,10 @@
 #
 # - Debian packages mbpoll and socat, with apt-get when running as root (otherwise prints the
 #   command to run);
-# - for the bridge tests (cli/tests/bridge.rs) prometheus, mosquitto, mosquitto-clients and
+# - for the bridge tests (cli/tests/cli/bridge.rs) prometheus, mosquitto, mosquitto-clients and
 #   openssl, without their recommendations (prometheus recommends node-exporter and more);
 # - Node-RED and node-red-contrib-modbus from npm under target/interop-node (the Node-RED export's
-#   test, cli/tests/export_node_red.rs), pinned: node-red-contrib-modbus 5.23.3 is the newest the
+#   test, cli/tests/cli/export_node_red.rs), pinned: node-red-contrib-modbus 5.23.3 is the newest the
 #   registry serves that runs on Debian's Node.js 20 (5.60 needs Node 22) and installs from npm
 #   alone (5.45 fetches a dependency from another host); ~25 s on an empty npm cache;
 # - Home Assistant 2024.3.3 in a venv of its own at target/ha-venv, for the check of the Home
@@ -18,8 +18,8 @@
 #   imports (~1.5 min);
 # - Python packages pymodbus, minimalmodbus and pyserial in a venv at target/interop-venv, at the
 #   versions the scripts in tests/interop/ are written for (pymodbus changes its API between
-#   minor versions), and jsonschema, which cli/tests/machine_output.rs checks the CLI's JSON
-#   output with (docs/schema/), and fpdf2, which cli/tests/import.rs writes PDF manuals with;
+#   minor versions), and jsonschema, which cli/tests/cli/machine_output.rs checks the CLI's JSON
+#   output with (docs/schema/), and fpdf2, which cli/tests/cli/import.rs writes PDF manuals with;
 # - poppler-utils (pdftotext), which `drivemap import --manual x.pdf` extracts a PDF's text with.
 set -euo pipefail
 cd "$(dirname "$0")/../.."

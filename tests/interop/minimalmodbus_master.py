@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""minimalmodbus as the master of our simulated Yaskawa V7 (tests/tests/interop_masters.rs).
+"""minimalmodbus as the master of our simulated Yaskawa V7 (tests/tests/cross_crate/interop_masters.rs).
 
 minimalmodbus speaks Modbus RTU only; over TCP it sends RTU frames through a pyserial
 `socket://` URL, as to a transparent serial gateway.

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""pymodbus as the master of our simulated Yaskawa V7 (tests/tests/interop_masters.rs).
+"""pymodbus as the master of our simulated Yaskawa V7 (tests/tests/cross_crate/interop_masters.rs).
 
     pymodbus_master.py (--tcp HOST:PORT | --serial PATH) [--slave 1] [--baud 9600] [--ascii]
 

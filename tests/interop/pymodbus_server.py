@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """A Modbus slave made with pymodbus (code nobody on this project wrote), for our client to talk
-to in tests/tests/interop_client.rs.
+to in tests/tests/cross_crate/interop_client.rs.
 
 Device 1:
   - holding registers 0-99 hold 1000 + address; input registers 0-9 hold 2000 + address;

@@ -2,7 +2,7 @@
 //! ([`drivemap_test_support::line`]) against a simulated drive that keeps the map's response
 //! time, and measuring the cycle on the wire against the bus-time model
 //! (`drivemap_runtime::bus_time`). Used by `examples/line_report.rs` (the full table) and
-//! `tests/line_timing.rs` (one drive, one baud rate, in the test script).
+//! `tests/cross_crate/line_timing.rs` (one drive, one baud rate, in the test script).
 //!
 //! - **Monitor registers**: as `examples/bus_time_report.rs` takes them: the registers of the
 //!   groups the map declares read-only (`access: r`), readable on RTU and not broadcast-only.

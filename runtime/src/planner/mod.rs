@@ -27,7 +27,7 @@
 //!
 //! `best[k]` is the optimum for any non-negative cost function (for the bus-time model, which
 //! grows with the quantity, `eff(span, U) = cost(span)`). The inner loop stops after `max_read`
-//! steps: O(k · max_read) time. `runtime/tests/planner_exhaustive.rs` compares it with an
+//! steps: O(k · max_read) time. `runtime/tests/runtime/planner_exhaustive.rs` compares it with an
 //! exhaustive search over all sets of requests on tens of thousands of random cases.
 //!
 //! ## At run time

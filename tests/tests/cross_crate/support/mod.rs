@@ -1,0 +1,3 @@
+//! Helpers shared by several test modules of this binary (`crate::<helper>` in each).
+
+pub mod interop_support;
