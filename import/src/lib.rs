@@ -280,11 +280,10 @@ pub fn import_with(
             readings: &readings,
             command,
         });
-        let findings =
-            match drivemap_map::read_map_str(&file_name, &written.yaml, &Default::default()) {
-                Ok(_) => Vec::new(),
-                Err(d) => d.0,
-            };
+        let findings = match drivemap_map::Loader::new().load_str(&file_name, &written.yaml) {
+            Ok(_) => Vec::new(),
+            Err(d) => d.0,
+        };
         let before = left_out.len();
         for f in &findings {
             let Some(reg) = &f.register else { continue };

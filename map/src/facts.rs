@@ -32,9 +32,11 @@ pub use crate::examples::{Byte, Direction, Example, Says, hex_text, parse_bytes}
 pub use crate::ir::Group;
 pub use crate::model::{
     AddressAlternative, AddressFormat, Condition, Conflict, DefaultValue, DependentDefault,
-    DisplayStep, Draft, DriveMeta, ExternalQuantity, Gap, Manual, Protocol, Reading, Removed,
-    RolePlace, TransportName, Unknown, UnknownItem, VariantAxis, VariantOption,
+    DisplayStep, Draft, DriveMeta, EnumValue, ExternalQuantity, Field as BitField, Gap, Manual,
+    Protocol, Reading, Removed, RolePlace, TransportName, Unknown, UnknownItem, VariantAxis,
+    VariantOption,
 };
+pub use crate::stated::Unprinted;
 pub use data::RegisterData;
 pub use input::InputBounds;
 pub use protocol::{

@@ -43,7 +43,7 @@ pub mod validate;
 pub use diagnostic::{Diagnostic, Diagnostics, Loc};
 pub use ir::Drive;
 pub use loader::{Loader, MAX_YAML_BYTES, parse_map, parse_yaml, too_large};
-pub use lower::MapPlan;
+pub use lower::{CodeSlot, MapPlan, Quantity, SettingsPlan};
 pub use map::{Map, RegisterRef};
 /// A YAML file read into a tree whose every node keeps where it was written.
 pub use source::{Node as Tree, NodeKind as TreeKind, Path as TreePath};

@@ -183,6 +183,23 @@ impl Map {
         &self.drive.protocol
     }
 
+    /// Every protocol fact the map marks not printed (`unknown:`), in `ProtocolFact::ALL`
+    /// order, with why.
+    pub fn not_printed(&self) -> Vec<facts::Unprinted> {
+        crate::stated::unprinted(&self.drive.protocol)
+    }
+
+    /// Why `fact` is not printed, if the map says so.
+    pub fn not_printed_why(&self, fact: drivemap_core::ProtocolFact) -> Option<facts::Unprinted> {
+        crate::stated::why(&self.drive.protocol, fact)
+    }
+
+    /// The warnings `drivemap check` prints for protocol facts the map neither states nor
+    /// marks not printed.
+    pub fn protocol_warnings(&self) -> Vec<Diagnostic> {
+        crate::validate::protocol_stated::warnings(&self.drive)
+    }
+
     /// The groups of registers as the manual groups them, in the map's order.
     pub fn groups(&self) -> &[facts::Group] {
         &self.drive.groups
@@ -412,6 +429,12 @@ impl<'m> RegisterRef<'m> {
         self.reg.writable()
     }
 
+    /// The access the register's own row states; `None` where it takes its group's (or the
+    /// default, read-only).
+    pub fn access_written(&self) -> Option<drivemap_core::Access> {
+        self.reg.def.access
+    }
+
     /// Member of a broadcast group: written to slave 0 only.
     pub fn broadcast_only(&self) -> bool {
         self.reg.broadcast
@@ -471,6 +494,55 @@ impl<'m> RegisterRef<'m> {
     /// Indexed access: the entries an index register selects, when it has them.
     pub fn indexed(&self) -> Option<&'m crate::indexed::Indexed> {
         self.reg.def.indexed.as_ref()
+    }
+
+    /// The scale as the map writes it (`scale:`), `None` where it writes none (the plan's
+    /// conversion takes a unit without a scale as factor 1).
+    pub fn scale(&self) -> Option<facts::data::ScaleData> {
+        (self.reg.def.scale.as_ref()).map(|s| facts::data::scale_of(&self.map.drive, s))
+    }
+
+    /// Enumeration codes as written, with their citations (the plan's are
+    /// `Conversion::Enum { values }`).
+    pub fn values(&self) -> &'m [facts::EnumValue] {
+        &self.reg.def.values
+    }
+
+    /// What a read means when it differs from a write, as written with citations (the plan's
+    /// are `RegisterPlan::read_values`).
+    pub fn read_values(&self) -> &'m [facts::EnumValue] {
+        &self.reg.def.read_values
+    }
+
+    /// Bit fields as written, with names, notes and citations (the plan's, with their bit
+    /// spans decided, are `Conversion::Bits { fields }`).
+    pub fn fields(&self) -> &'m [facts::BitField] {
+        &self.reg.def.fields
+    }
+
+    /// The Rust type of the register in generated code: `accel_time_1` → `AccelTime1`.
+    pub fn type_name(&self) -> String {
+        crate::names::register_type(self.reg)
+    }
+
+    /// The generated enumeration of its codes: `RunSourceValue`.
+    pub fn value_enum_name(&self) -> String {
+        crate::names::value_enum(self.reg)
+    }
+
+    /// The generated enumeration of what a read means (`read_values`): `…Read`.
+    pub fn read_enum_name(&self) -> String {
+        crate::names::read_enum(self.reg)
+    }
+
+    /// The generated bit-field struct: `InverterStatusBits`.
+    pub fn bits_type_name(&self) -> String {
+        crate::names::bits_type(self.reg)
+    }
+
+    /// The generated enumeration of a multi-bit field's codes: `InverterStatusSettingError`.
+    pub fn field_enum_name(&self, field: &facts::BitField) -> String {
+        crate::names::field_enum(self.reg, field)
     }
 
     /// The widest bounds and finest step of a number input for the register (Home Assistant's

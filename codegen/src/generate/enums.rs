@@ -5,8 +5,8 @@ use proc_macro2::{Ident, TokenStream};
 use quote::quote;
 
 use super::{docs, ident};
-use crate::model::EnumValue;
-use crate::validate::pascal_case;
+use crate::describe::pascal_case;
+use crate::facts::EnumValue;
 
 /// An enum type named `ty` for `values`; `what` describes it in rustdoc; `labels` is the
 /// expression of its labels in the plan (`plan::REGISTERS[3].labels()`).

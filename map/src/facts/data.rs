@@ -222,7 +222,7 @@ fn scale_data(drive: &Drive, r: &Register) -> ScaleData {
     }
 }
 
-fn scale_of(drive: &Drive, scale: &Scale) -> ScaleData {
+pub(crate) fn scale_of(drive: &Drive, scale: &Scale) -> ScaleData {
     match scale {
         Scale::Factor(f) => ScaleData::Factor(*f),
         Scale::Relative(rel) => ScaleData::Relative {
