@@ -205,6 +205,12 @@ impl Map {
         &self.drive.groups
     }
 
+    /// The access a group states for its registers (`access:` of the group), if it does.
+    pub fn group_access(&self, group: &facts::Group) -> Option<drivemap_core::Access> {
+        let node = self.drive.tree.at(&group.path.key("access"))?;
+        serde_yaml::from_value(node.to_value()).ok()
+    }
+
     /// The variant axes (voltage class, capacity), each option 0 the base.
     pub fn variants(&self) -> &[facts::VariantAxis] {
         &self.drive.variants
@@ -433,6 +439,11 @@ impl<'m> RegisterRef<'m> {
     /// default, read-only).
     pub fn access_written(&self) -> Option<drivemap_core::Access> {
         self.reg.def.access
+    }
+
+    /// The access its group states for its registers (`access:` of the group), if it does.
+    pub fn group_access(&self) -> Option<drivemap_core::Access> {
+        self.map.group_access(self.map.drive.group_of(self.reg))
     }
 
     /// Member of a broadcast group: written to slave 0 only.
