@@ -42,7 +42,9 @@ pub mod validate;
 
 pub use diagnostic::{Diagnostic, Diagnostics, Loc};
 pub use ir::Drive;
-pub use loader::{Loader, MAX_YAML_BYTES, parse_map, parse_yaml, too_large};
+pub use loader::{
+    Loader, MAX_YAML_ALIAS_NODES, MAX_YAML_BYTES, MAX_YAML_DEPTH, parse_map, parse_yaml, too_large,
+};
 pub use lower::{CodeSlot, MapPlan, Quantity, SettingsPlan};
 pub use map::{Map, RegisterRef};
 /// A YAML file read into a tree whose every node keeps where it was written.

@@ -58,6 +58,13 @@ impl<'a> Loader<'a> {
         self
     }
 
+    /// Checks citations of the text manual `file` against `lines` lines, as if the manuals
+    /// directory held it (for maps and manuals held in memory).
+    pub fn manual_lines(mut self, file: &str, lines: usize) -> Loader<'a> {
+        self.ctx.manual_lines.insert(file.to_owned(), lines);
+        self
+    }
+
     /// [`Loader::manuals`] with the directory [`default_manuals_dir`](crate::default_manuals_dir)
     /// finds for maps in `maps_dir`, when it finds one.
     pub fn default_manuals(self, maps_dir: &Path) -> Loader<'a> {
@@ -158,6 +165,12 @@ pub fn parse_yaml(name: &str, text: &str) -> Result<Node, crate::Diagnostic> {
 
 /// The largest map (or YAML file) read, in bytes.
 pub const MAX_YAML_BYTES: usize = crate::source::MAX_MAP_BYTES;
+
+/// The deepest nesting of YAML collections read.
+pub const MAX_YAML_DEPTH: usize = crate::source::MAX_DEPTH;
+
+/// The most nodes YAML aliases may expand to in one file.
+pub const MAX_YAML_ALIAS_NODES: usize = crate::source::MAX_ALIAS_NODES;
 
 /// The error for a file of `len` bytes, over [`MAX_YAML_BYTES`].
 pub fn too_large(name: &str, len: usize) -> crate::Diagnostic {

@@ -254,6 +254,11 @@ impl Map {
         self.drive.profile.as_ref()
     }
 
+    /// The serial line's defaults: baud, parity, character bits, stop bits by format.
+    pub fn serial_defaults(&self) -> facts::SerialDefaults {
+        self.drive.serial_defaults()
+    }
+
     /// PDU address offsets (RTU, TCP).
     pub fn address_offsets(&self) -> (i32, i32) {
         self.drive.address_offsets()
