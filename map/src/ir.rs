@@ -17,7 +17,6 @@ use crate::model::{
     Removed, Scale, TransportName, VariantAxis, WriteRestriction,
 };
 use crate::source::{Node, Path};
-use drivemap_core::rule::Broadcast;
 use drivemap_core::scale::{Decimal, RawRange, raw_of};
 use drivemap_core::width::Width;
 
@@ -240,9 +239,24 @@ impl Register {
 impl Drive {
     /// What every register means, decided once ([`crate::lower`]): lowered on first use and
     /// kept for the life of this value. Call it on a validated drive.
+    ///
+    /// # Panics
+    /// When the drive does not lower: a [`crate::Map`] is lowered when it is loaded, so only
+    /// the crate's own passes ask a drive that may not, through [`Drive::try_plan`].
     pub fn plan(&self) -> &MapPlan {
-        self.plan
-            .get_or_init(|| Arc::new(crate::lower::lower(self)))
+        match self.try_plan() {
+            Ok(plan) => plan,
+            Err(errors) => panic!("{} does not lower: {errors:?}", self.meta.id),
+        }
+    }
+
+    /// The plan, lowered on first use, or why the drive does not lower.
+    pub fn try_plan(&self) -> Result<&MapPlan, Vec<Diagnostic>> {
+        if let Some(plan) = self.plan.get() {
+            return Ok(plan);
+        }
+        let plan = crate::lower::lower(self)?;
+        Ok(self.plan.get_or_init(|| Arc::new(plan)))
     }
 
     /// The register of row `row` of the plan (`plan().registers[row]`).
@@ -462,153 +476,6 @@ impl Drive {
     /// The group of a register.
     pub fn group_of(&self, r: &Register) -> &Group {
         &self.groups[r.group]
-    }
-}
-
-/// What the map allows on the wire when writing one register: the data of the runtime's
-/// write gate (`drivemap_runtime::gate::WriteRule`), decided here once for the generator and
-/// for tools that interpret a map at run time.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct WriteRuleFigures {
-    pub broadcast: Broadcast,
-    /// Exists on RTU framing (serial, RTU over TCP).
-    pub rtu: bool,
-    /// Exists on Modbus TCP.
-    pub tcp: bool,
-    /// The addresses it moves to (with a setting, variant or transport), without repeats and
-    /// without its own.
-    pub also_at: Vec<u16>,
-    /// The envelope of its raw ranges over every variant and selector case.
-    pub raw: RawRange,
-    /// Bits that carry no field (bit-field registers), which must be written as 0.
-    pub reserved: u16,
-}
-
-impl Drive {
-    /// The write gate's data for `r` (see [`WriteRuleFigures`]).
-    pub fn write_rule(&self, r: &Register) -> WriteRuleFigures {
-        let named = self.protocol.broadcast.iter().any(|b| {
-            b.registers
-                .iter()
-                .any(|n| self.find(n).is_some_and(|x| x.def.id == r.def.id))
-        });
-        let broadcast = if r.broadcast {
-            Broadcast::Only
-        } else if named {
-            Broadcast::Also
-        } else {
-            Broadcast::No
-        };
-        let (rtu, tcp) = match &r.transports {
-            None => (true, true),
-            Some(list) => (
-                list.iter().any(|t| t.is_serial()),
-                list.contains(&TransportName::Tcp),
-            ),
-        };
-        let mut also_at = Vec::new();
-        for alt in &r.def.address_alternatives {
-            if alt.address != r.def.address && !also_at.contains(&alt.address) {
-                also_at.push(alt.address);
-            }
-        }
-        let reserved = match r.kind() {
-            ValueKind::Bits(fields) => {
-                let mask = fields
-                    .iter()
-                    .filter_map(crate::names::field_span)
-                    .fold(0u16, |m, (lsb, width)| {
-                        m | ((((1u32 << width) - 1) << lsb) as u16)
-                    });
-                !mask
-            }
-            _ => 0,
-        };
-        WriteRuleFigures {
-            broadcast,
-            rtu,
-            tcp,
-            also_at,
-            raw: r.raw_envelope(),
-            reserved,
-        }
-    }
-}
-
-impl Register {
-    /// The union of the raw ranges the map gives this register under any model variant and
-    /// any case of a selected scale; the word's range where a conversion has none (relative
-    /// scales, bit fields, limits that are not whole increments).
-    pub fn raw_envelope(&self) -> RawRange {
-        let word = self.full_limits();
-        let one = Decimal::ONE;
-        let mut ranges = Vec::new();
-        let variant_ranges = |factor: Decimal, ranges: &mut Vec<RawRange>| {
-            ranges.push(
-                self.raw_limits(factor, self.def.min, self.def.max)
-                    .unwrap_or(word),
-            );
-            for k in self.def.by_variant.keys() {
-                let (min, max) = self.limits_for(k);
-                ranges.push(self.raw_limits(factor, min, max).unwrap_or(word));
-            }
-        };
-        match self.kind() {
-            ValueKind::Bits(_) | ValueKind::Quantity(Scale::Relative(_)) => ranges.push(word),
-            ValueKind::Quantity(Scale::Ratio(s)) => match crate::ratio::ratio_of(s) {
-                Some(ratio) => {
-                    ranges.push(
-                        self.ratio_limits(ratio, self.def.min, self.def.max)
-                            .unwrap_or(word),
-                    );
-                    for k in self.def.by_variant.keys() {
-                        let (min, max) = self.limits_for(k);
-                        ranges.push(self.ratio_limits(ratio, min, max).unwrap_or(word));
-                    }
-                }
-                None => ranges.push(word),
-            },
-            ValueKind::Enum(values) => {
-                for v in values {
-                    let code = i64::from(v.value);
-                    ranges.push(RawRange {
-                        min: code,
-                        max: code,
-                    });
-                }
-                if self.def.min.is_some() || self.def.max.is_some() {
-                    ranges.push(RawRange {
-                        min: self.def.min.map_or(0, |m| m as i64),
-                        max: self.def.max.map_or(i64::from(u16::MAX), |m| m as i64),
-                    });
-                }
-            }
-            ValueKind::Quantity(Scale::Selected(sel)) => {
-                for case in &sel.cases {
-                    match &case.scale {
-                        Scale::Factor(f) => {
-                            let factor = Decimal::from_f64(*f).unwrap_or(one);
-                            ranges
-                                .push(self.raw_limits(factor, case.min, case.max).unwrap_or(word));
-                        }
-                        // Validation refuses these as cases of a selected scale.
-                        Scale::Relative(_) | Scale::Selected(_) | Scale::Ratio(_) => {
-                            ranges.push(word)
-                        }
-                    }
-                }
-            }
-            // Every kind named: a new scale kind must say its envelope here (the compiler asks).
-            ValueKind::Word | ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_)) => {
-                variant_ranges(self.factor().unwrap_or(one), &mut ranges)
-            }
-        }
-        let min = ranges.iter().map(|l| l.min).min().unwrap_or(word.min);
-        let max = ranges.iter().map(|l| l.max).max().unwrap_or(word.max);
-        RawRange {
-            min: min.max(word.min),
-            max: max.min(word.max),
-        }
     }
 }
 

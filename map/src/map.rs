@@ -22,12 +22,14 @@ pub struct Map {
 
 impl Map {
     /// A map when validation found nothing, else the findings.
+    /// A map when validation found nothing and the drive lowers (the last pass), else the
+    /// findings.
     pub(crate) fn checked(drive: Drive, errors: Vec<Diagnostic>) -> Result<Map, Diagnostics> {
-        if errors.is_empty() {
-            Ok(Map { drive })
-        } else {
-            Err(errors.into())
+        if !errors.is_empty() {
+            return Err(errors.into());
         }
+        drive.try_plan()?;
+        Ok(Map { drive })
     }
 
     /// The expanded map this value holds, for the crate's own passes and for consumers that

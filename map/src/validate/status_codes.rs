@@ -17,7 +17,10 @@ use crate::ir::Drive;
 use crate::source::Path;
 
 pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
-    let plan = drive.plan();
+    // A drive that does not lower is reported by the lowering, the last pass.
+    let Ok(plan) = drive.try_plan() else {
+        return;
+    };
     let places: Vec<_> = plan
         .roles
         .places
