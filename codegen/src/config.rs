@@ -58,7 +58,9 @@ pub enum Error {
     Invalid(Diagnostics),
     /// A map or a directory could not be read, or an output file written.
     Io {
+        /// The file or directory.
         path: PathBuf,
+        /// What went wrong.
         error: std::io::Error,
     },
     /// `OUT_DIR` is not set and no output directory was given.
@@ -107,6 +109,8 @@ pub struct Generated {
 }
 
 impl Config {
+    /// A configuration with no maps, the runtime at `::drivemap_runtime`, the manuals found
+    /// beside the maps, and the output in `OUT_DIR`.
     pub fn new() -> Self {
         Config {
             maps: Vec::new(),

@@ -8,6 +8,8 @@
 //! The map front end (model, loading, validation, lowering) is `drivemap-map`; this crate only
 //! prints.
 
+#![warn(unreachable_pub, missing_docs)]
+
 pub mod config;
 pub mod generate;
 

@@ -7,6 +7,8 @@
 //! every register citing the line it came from; [`compare`] sets rows against an existing map
 //! (`drivemap import --merge`, and the figures in `docs/import.md`).
 
+#![warn(unreachable_pub, missing_docs)]
+
 pub mod columns;
 pub mod compare;
 pub mod draft;

@@ -400,7 +400,7 @@ fn every_citation_of_a_draft_shows_its_row() {
     } in cases()
     {
         let imported = import(
-            &truth.id(),
+            truth.id(),
             &[Manual {
                 file: &file,
                 text: &text,
@@ -432,7 +432,7 @@ fn the_generator_refuses_a_draft() {
         truth, file, text, ..
     } = cases().remove(0);
     let imported = import(
-        &truth.id(),
+        truth.id(),
         &[Manual {
             file: &file,
             text: &text,
@@ -493,7 +493,7 @@ fn a_column_the_reader_cannot_decide_is_reported_and_named_with_columns() {
     }];
     // Without the user's names: the report names the table and every column it cannot decide,
     // and no number of those columns is used (no limit, no default is made up).
-    let plain = import(&case.truth.id(), &manual, None, "test");
+    let plain = import(case.truth.id(), &manual, None, "test");
     let report = drivemap_import::report(&plain);
     let undecided: Vec<&str> = report
         .lines()
@@ -518,7 +518,7 @@ fn a_column_the_reader_cannot_decide_is_reported_and_named_with_columns() {
         assert_eq!((r.min, r.max, r.default), (None, None, None), "{r:?}");
     }
     // Named: every field as the map has it (the figures above), and the report says so.
-    let named = import_with(&case.truth.id(), &manual, None, &case.columns, "test");
+    let named = import_with(case.truth.id(), &manual, None, &case.columns, "test");
     let report = drivemap_import::report(&named);
     assert!(!report.contains("is not understood"), "{report}");
     assert!(

@@ -57,13 +57,21 @@ pub struct Drive {
 }
 
 #[derive(Debug, Clone)]
+/// A group of registers as the manual groups them.
 pub struct Group {
+    /// The group id.
     pub id: String,
+    /// Its name as the map gives it.
     pub name: String,
+    /// The manual's table name.
     pub table: Option<String>,
+    /// Its citation.
     pub source: Option<String>,
+    /// Broadcast registers: written to slave 0 only.
     pub broadcast: bool,
+    /// The group's notes.
     pub notes: Vec<String>,
+    /// Where the group is written.
     pub path: Path,
 }
 
@@ -480,7 +488,7 @@ impl Drive {
 }
 
 /// The scales of a register: its own, and those of each selected case.
-pub fn scales_of(r: &Register) -> Vec<&Scale> {
+pub(crate) fn scales_of(r: &Register) -> Vec<&Scale> {
     match &r.def.scale {
         Some(Scale::Selected(sel)) => sel.cases.iter().map(|c| &c.scale).collect(),
         Some(s) => vec![s],
@@ -552,13 +560,13 @@ impl SelectorRef<'_> {
 }
 
 /// The Rust module name of a drive id.
-pub fn module_name(id: &str) -> String {
+pub(crate) fn module_name(id: &str) -> String {
     id.replace(['-', '.'], "_")
 }
 
 /// Builds the IR from a loaded map. Errors are only those of block expansion; everything else
 /// is left to [`crate::validate`].
-pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
+pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
     let model = &map.model;
     let mut errors = Vec::new();
     let mut groups = Vec::new();
@@ -664,7 +672,7 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
 
 /// What `check` says of a draft: what made it, how many items to confirm, each of them, and that
 /// the generator refuses it.
-pub fn draft_warning(d: &model::Draft) -> String {
+pub(crate) fn draft_warning(d: &model::Draft) -> String {
     let mut s = format!(
         "a draft (made by {}), not yet reviewed: the generator refuses it until `draft:` is removed",
         d.by
@@ -775,7 +783,7 @@ fn shift_line(source: &str, by: usize) -> Result<String, BlockError> {
 /// Why a `repeat:` block cannot be expanded into its registers (reported at `repeat`, naming
 /// the block's register).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum BlockError {
+pub(crate) enum BlockError {
     /// `repeat.count: 0`.
     #[error("`repeat.count` must be at least 1")]
     NoCount,

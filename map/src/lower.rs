@@ -32,16 +32,13 @@ use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{self, Reference, Scale, TransportName};
 use crate::names::field_span;
 
-/// The old name of [`MapPlan`] (the vocabulary crate's `DrivePlan` is a trait).
-pub type DrivePlan = MapPlan;
-
 /// A drive, lowered.
 #[derive(Debug, Clone)]
 pub struct MapPlan {
     /// Every register's plan, sorted by address with broadcast-only registers last (stable:
     /// registers at one address keep the map's order). Generated code indexes this table.
     pub registers: &'static [RegisterPlan],
-    /// For each register of [`Drive::registers`] (map order), its index in `registers`.
+    /// For each register of [`Map::registers`](crate::Map::registers) (map order), its index in `registers`.
     pub order: Vec<usize>,
     /// What conversions and addresses depend on.
     pub settings: SettingsPlan,
@@ -91,8 +88,11 @@ pub enum Quantity {
     Register(usize),
     /// Not a register: the application supplies it.
     External {
+        /// The quantity's name.
         id: String,
+        /// What it is.
         description: String,
+        /// Its unit.
         unit: String,
     },
 }
@@ -384,7 +384,7 @@ struct Lowering<'a> {
 }
 
 /// The label a setting has in errors: the parameter number when printed, else the id.
-pub fn setting_label(r: &Register) -> String {
+pub(crate) fn setting_label(r: &Register) -> String {
     r.def.param.clone().unwrap_or_else(|| r.def.id.clone())
 }
 

@@ -10,7 +10,7 @@ use drivemap_core::scale::{Decimal, RawRange};
 fn drive() -> drivemap_map::Map {
     let dir = Path::new("../tests/fixtures/tarrow-tm44");
     drivemap_map::Loader::new()
-        .manuals(&dir.join("manuals"))
+        .manuals(dir.join("manuals"))
         .load(&dir.join("tarrow-tm44.yaml"))
         .unwrap_or_else(|d| panic!("{d}"))
 }

@@ -73,7 +73,7 @@ fn simulator(drive: &Drive, request: &Example, response: &Frame, req: &Request<'
 
 #[test]
 fn every_map_s_simulator_answers_its_manual_s_examples_byte_for_byte() {
-    let ctx = drivemap_map::Loader::new().manuals(&root().join("../shared/manuals"));
+    let ctx = drivemap_map::Loader::new().manuals(root().join("../shared/manuals"));
     let mut ascii_pairs = 0;
     let mut report = Vec::new();
     let mut failures = Vec::new();

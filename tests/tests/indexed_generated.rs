@@ -58,7 +58,7 @@ fn a_typed_entry_handle_reads_and_writes_through_the_client() {
     assert_eq!(entries::MAXIMUM_FREQUENCY.pair.index_address, 44);
     assert_eq!(tarrow_tm44::INDEXED.len(), 1);
     let drive = drivemap_map::Loader::new()
-        .manuals(&fixture().join("manuals"))
+        .manuals(fixture().join("manuals"))
         .load(&fixture().join("tarrow-tm44.yaml"))
         .unwrap_or_else(|d| panic!("{d}"));
     // The generated data is the plan the map lowers to.

@@ -17,11 +17,11 @@ use drivemap_core::plan::Field;
 use drivemap_map::RegisterRef;
 
 /// The macro the placeholder calls: `rt::bit_fields_placeholder!(<row>);` on one line.
-pub const PLACEHOLDER: &str = "bit_fields_placeholder";
+pub(super) const PLACEHOLDER: &str = "bit_fields_placeholder";
 
 /// The items of a bit-field register: the enumerations of its coded fields, then the
 /// placeholder of its `rt::bit_fields!` invocation ([`text`]).
-pub fn emit(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> TokenStream {
+pub(super) fn emit(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> TokenStream {
     let row = proc_macro2::Literal::usize_unsuffixed(index);
     let mut field_enums = Vec::new();
     // The plan's fields (their spans decided), each with the map's record of it.
@@ -48,7 +48,7 @@ pub fn emit(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> TokenStream {
 }
 
 /// `rt::bit_fields! { … }` of a register, as text at the top level of the module.
-pub fn text(r: RegisterRef<'_>, mask: u16, fields: &[Field]) -> String {
+pub(super) fn text(r: RegisterRef<'_>, mask: u16, fields: &[Field]) -> String {
     let writable = r.writable();
     let mut lines = String::new();
     for (f, lowered) in lowered_fields(r).zip(fields) {

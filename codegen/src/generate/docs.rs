@@ -9,7 +9,7 @@ use drivemap_map::{Map, RegisterRef};
 
 /// Brackets of the manual's text (`Drive Read[y]`, `[1]`) escaped so that rustdoc does not
 /// read them as links; a link the generator writes (``[`Name`]``) and code spans stay as they are.
-pub fn escape_brackets(line: &str) -> String {
+pub(super) fn escape_brackets(line: &str) -> String {
     let chars: Vec<char> = line.chars().collect();
     let mut out = String::with_capacity(line.len());
     let mut in_code = false;
@@ -26,7 +26,7 @@ pub fn escape_brackets(line: &str) -> String {
 }
 
 /// `#[doc]` attributes, one per line (outer, for items).
-pub fn item(text: &str) -> TokenStream {
+pub(super) fn item(text: &str) -> TokenStream {
     let attrs = text.lines().map(|l| {
         let l = if l.is_empty() {
             String::new()
@@ -38,7 +38,7 @@ pub fn item(text: &str) -> TokenStream {
     quote!(#(#attrs)*)
 }
 
-pub fn module(drive: &Map) -> String {
+pub(super) fn module(drive: &Map) -> String {
     let m = drive.meta();
     let mut s = format!(
         "{} {} — register map `{}`.\n\n",
@@ -82,7 +82,7 @@ pub fn module(drive: &Map) -> String {
 
 /// The rustdoc of a register, read from its [`facts`](crate::facts) alone: the summary line
 /// prints the identity rows, the paragraphs below the others.
-pub fn register(r: RegisterRef<'_>) -> String {
+pub(super) fn register(r: RegisterRef<'_>) -> String {
     let f = r.facts();
     let title = match &f.param {
         Some(p) => format!("**{p} — {}**", f.name),
@@ -238,7 +238,7 @@ fn capitalized(s: &str) -> String {
 /// What rustdoc search finds a register by besides its type's name (`#[doc(alias)]`): its id,
 /// its parameter number as printed (`Cn-02`, `n011`) and its address in the manual's notation
 /// (`2101H` and `0x2101`, or the register number of a manual numbering them in decimal).
-pub fn aliases(r: RegisterRef<'_>, type_name: &str) -> Vec<String> {
+pub(super) fn aliases(r: RegisterRef<'_>, type_name: &str) -> Vec<String> {
     let mut out = vec![r.id().to_owned()];
     out.extend(r.param().map(str::to_owned));
     let addresses =

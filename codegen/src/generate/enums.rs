@@ -10,7 +10,7 @@ use crate::facts::EnumValue;
 
 /// An enum type named `ty` for `values`; `what` describes it in rustdoc; `labels` is the
 /// expression of its labels in the plan (`plan::REGISTERS[3].labels()`).
-pub fn emit(
+pub(super) fn emit(
     ty: &Ident,
     values: &[EnumValue],
     what: &str,

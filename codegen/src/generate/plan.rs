@@ -28,7 +28,7 @@ use drivemap_core::width::{Width, WordOrder};
 use drivemap_map::MapPlan;
 
 /// The `plan` module of a drive: `pub const REGISTERS: &[RegisterPlan]`.
-pub fn module(plan: &MapPlan) -> String {
+pub(super) fn module(plan: &MapPlan) -> String {
     let mut rows = String::new();
     for (i, r) in plan.registers.iter().enumerate() {
         let _ = writeln!(rows, "        /* {i} */ {},", row(r));
@@ -118,12 +118,12 @@ pub fn module(plan: &MapPlan) -> String {
 }
 
 /// The longest line printed, but for one holding a string literal longer than that.
-pub const WIDTH: usize = 100;
+pub(super) const WIDTH: usize = 100;
 
 /// Every line of `text` longer than [`WIDTH`] broken after a comma (outside string literals)
 /// into lines that fill it, continued one step deeper than the line's indentation; comments
 /// stay as they are.
-pub fn wrap(text: &str) -> String {
+pub(super) fn wrap(text: &str) -> String {
     let mut out = String::with_capacity(text.len() + text.len() / 16);
     for line in text.lines() {
         if line.len() <= WIDTH || line.trim_start().starts_with("//") {
@@ -521,7 +521,7 @@ const ROW_INDENT: usize = 12;
 /// One register's plan as a Rust expression: its identity (the fields that differ from
 /// `RegisterInfo::DEFAULT`), its unit, conversion, envelope and the plan's other parts, on one
 /// line that [`module`] wraps (`RegisterPlan::word` for a plain unsigned word without unit).
-pub fn row(r: &RegisterPlan) -> String {
+pub(super) fn row(r: &RegisterPlan) -> String {
     let i = &r.info;
     let d = RegisterInfo::DEFAULT;
     let mut info = vec![format!("id: {}", string(i.id))];

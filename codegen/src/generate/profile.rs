@@ -10,7 +10,7 @@ use super::hex;
 use drivemap_core::profile::{CommandKind, Parity};
 use drivemap_map::MapPlan;
 
-pub fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
+pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
     let p = plan.profile;
     let id = p.drive_id;
     let fcs = p.function_codes.iter().map(|f| hex2(*f));

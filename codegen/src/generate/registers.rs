@@ -11,7 +11,7 @@ use drivemap_core::Access;
 use drivemap_core::plan::Conversion;
 use drivemap_map::{Map, MapPlan, RegisterRef};
 
-pub fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream {
+pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream {
     let items = drive
         .registers()
         .zip(&plan.order)

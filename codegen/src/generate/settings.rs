@@ -29,7 +29,7 @@ struct Parts {
 }
 
 /// `Settings`, its impls and the variant enums, from the plan's slots.
-pub fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream {
+pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream {
     let SettingsPlan {
         codes,
         quantities,

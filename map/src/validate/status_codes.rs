@@ -16,7 +16,7 @@ use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
 use crate::source::Path;
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     // A drive that does not lower is reported by the lowering, the last pass.
     let Ok(plan) = drive.try_plan() else {
         return;
