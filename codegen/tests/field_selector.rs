@@ -74,7 +74,7 @@ fn the_field_of_the_status_word_chooses_the_decimals() {
     let torque = plan.register("torque_current").unwrap();
     let speed = plan.register("speed_monitor").unwrap();
     let with = |status| Words {
-        plan: &plan,
+        plan,
         status: Some(status),
     };
     // Bits 8-15 = 0, 1, 2: the same word 1234 reads 1234 A, 123.4 A, 12.34 A; the low byte
@@ -95,10 +95,7 @@ fn the_field_of_the_status_word_chooses_the_decimals() {
             code: 3
         })
     );
-    let unread = Words {
-        plan: &plan,
-        status: None,
-    };
+    let unread = Words { plan, status: None };
     assert_eq!(
         current.decode_number(1234, &unread),
         Err(ValueError::MissingSetting {
@@ -185,7 +182,7 @@ fn a_field_moves_a_register() {
     let at = |status| {
         speed.address_for(
             &Words {
-                plan: &plan,
+                plan,
                 status: Some(status),
             },
             drivemap_core::profile::TransportKind::Rtu,

@@ -65,7 +65,7 @@ fn simulator(drive: &Drive, request: &Example, response: &Frame, req: &Request<'
             let (r, w) = register_at(drive.ir(), &settings, kind, comm, None, false)
                 .unwrap_or_else(|| panic!("{}: no register at {comm:04X}h", request.id));
             assert_eq!(w, 0, "{}: a 32-bit pair in a read example", request.id);
-            sim.set_raw(&r.id(), u32::from(word)).unwrap();
+            sim.set_raw(r.id(), u32::from(word)).unwrap();
         }
     }
     sim
