@@ -43,6 +43,8 @@
 //! assert_eq!(sim.value("output_frequency").unwrap().as_f64(), Some(12.0));
 //! ```
 
+#![warn(unreachable_pub, missing_docs)]
+
 pub mod clock;
 pub mod exceptions;
 pub mod fault;
