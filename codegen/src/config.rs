@@ -27,10 +27,9 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use crate::diagnostic::Diagnostics;
 use crate::generate::{self, Options};
-use crate::ir::Drive;
-use crate::validate::Context;
+use drivemap_map::Diagnostics;
+use drivemap_map::{Loader, Map as Drive};
 
 /// Builder for generating drive modules from maps.
 #[derive(Debug, Clone)]
@@ -59,7 +58,9 @@ pub enum Error {
     Invalid(Diagnostics),
     /// A map or a directory could not be read, or an output file written.
     Io {
+        /// The file or directory.
         path: PathBuf,
+        /// What went wrong.
         error: std::io::Error,
     },
     /// `OUT_DIR` is not set and no output directory was given.
@@ -108,6 +109,8 @@ pub struct Generated {
 }
 
 impl Config {
+    /// A configuration with no maps, the runtime at `::drivemap_runtime`, the manuals found
+    /// beside the maps, and the output in `OUT_DIR`.
     pub fn new() -> Self {
         Config {
             maps: Vec::new(),
@@ -178,26 +181,26 @@ impl Config {
         Ok(files)
     }
 
-    fn context(&self, files: &[PathBuf]) -> Context {
+    fn loader(&self, files: &[PathBuf]) -> Loader<'static> {
         let dir = self.manuals_dir.clone().or_else(|| {
             files
                 .first()
                 .and_then(|f| crate::default_manuals_dir(f.parent().unwrap_or(Path::new("."))))
         });
         match dir {
-            Some(d) => Context::with_manuals(&d),
-            None => Context::default(),
+            Some(d) => Loader::new().manuals(d),
+            None => Loader::new(),
         }
     }
 
     /// Reads and validates every map without writing anything.
     pub fn check(&self) -> Result<Vec<Drive>, Error> {
         let files = self.map_files()?;
-        let ctx = self.context(&files);
+        let loader = self.loader(&files);
         let mut drives = Vec::new();
         let mut errors = Vec::new();
         for f in &files {
-            match crate::read_map(f, &ctx) {
+            match loader.load(f) {
                 Ok(d) => drives.push(d),
                 Err(d) => errors.extend(d.0),
             }
@@ -230,7 +233,7 @@ impl Config {
             let options = Options {
                 runtime: runtime.clone(),
                 source_name: drive
-                    .file
+                    .file()
                     .file_name()
                     .map(|n| n.to_string_lossy().into_owned())
                     .unwrap_or_default(),
@@ -249,12 +252,12 @@ impl Config {
             index += "#[allow(dead_code)]\n";
             index += &format!(
                 "pub mod {module} {{\n    include!(\"{module}.rs\");\n}}\n\n",
-                module = drive.module,
+                module = drive.module(),
             );
             modules.push(Module {
-                id: drive.meta.id.clone(),
-                module: drive.module.clone(),
-                file_name: format!("{}.rs", drive.module),
+                id: drive.id().to_owned(),
+                module: drive.module().to_owned(),
+                file_name: format!("{}.rs", drive.module()),
                 source,
             });
         }
@@ -299,7 +302,7 @@ impl Config {
         if self.cargo_directives {
             // A map of an earlier schema version builds, by its meaning; say so once per map.
             for d in &drives {
-                if let Some(first) = d.warnings.first() {
+                if let Some(first) = d.warnings().first() {
                     println!("cargo:warning={}", first.as_warning());
                 }
             }
@@ -357,10 +360,10 @@ pub struct Module {
 fn refuse_drafts(drives: &[Drive]) -> Result<(), Error> {
     let drafts: Vec<crate::Diagnostic> = drives
         .iter()
-        .filter(|d| d.draft.is_some())
+        .filter(|d| d.draft().is_some())
         .map(|d| {
-            crate::Diagnostic::new(
-                d.tree.locate(&crate::source::Path::root().key("draft")),
+            d.error_at(
+                "draft",
                 None,
                 "the map is a draft (`draft:`): review every row against the manual and remove \
                  the mark before generating code from it",

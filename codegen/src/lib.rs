@@ -9,12 +9,12 @@
 //! prints.
 #![doc = include_str!("../README.md")]
 
+#![warn(unreachable_pub, missing_docs)]
+
 pub mod config;
 pub mod generate;
 
-pub(crate) use drivemap_map::{
-    Diagnostic, describe, diagnostic, facts, ir, lower, model, names, source, validate,
-};
-pub(crate) use drivemap_map::{default_manuals_dir, find_maps, read_map};
+pub(crate) use drivemap_map::{Diagnostic, describe, facts};
+pub(crate) use drivemap_map::{default_manuals_dir, find_maps};
 
 pub use config::{Code, Config, Error, Generated, Module};

@@ -1,40 +1,42 @@
 //! The registers of a map read by the front end, as [`Known`] rows.
 
-use drivemap_map::ir::Drive;
-use drivemap_map::model::{DefaultValue, Scale};
+use drivemap_map::Map;
+use drivemap_map::facts::DefaultValue;
+use drivemap_map::facts::data::ScaleData;
 
 use crate::compare::Known;
 
 /// Every register of a checked map, with what a manual row can show of it.
-pub fn registers(drive: &Drive) -> Vec<Known> {
+pub fn registers(drive: &Map) -> Vec<Known> {
     drive
-        .registers
-        .iter()
+        .registers()
         .map(|r| {
-            let d = &r.def;
+            let (min, max) = r.limits();
             Known {
-                id: d.id.clone(),
-                param: d.param.clone(),
-                address: d.address,
-                name: d.name.clone(),
-                unit: d.unit.clone(),
-                scale: match &d.scale {
-                    None => Ok(None),
-                    Some(Scale::Factor(f)) => Ok(Some(*f)),
-                    Some(Scale::Relative(_)) => Err("a relative scale"),
-                    Some(Scale::Ratio(_)) => Err("a ratio scale"),
-                    Some(Scale::Selected(_)) => Err("a scale selected by another parameter"),
+                id: r.id().to_owned(),
+                param: r.param().map(str::to_owned),
+                address: r.address(),
+                name: r.name().to_owned(),
+                unit: r.unit().map(str::to_owned),
+                scale: match r.scale() {
+                    None | Some(ScaleData::None) => Ok(None),
+                    Some(ScaleData::Factor(f)) => Ok(Some(f)),
+                    Some(ScaleData::Relative { .. }) => Err("a relative scale"),
+                    Some(ScaleData::Ratio { .. }) => Err("a ratio scale"),
+                    Some(ScaleData::Selected { .. }) => {
+                        Err("a scale selected by another parameter")
+                    }
                 },
-                min: d.min,
-                max: d.max,
-                default: match &d.default {
+                min,
+                max,
+                default: match r.default() {
                     None => Ok(None),
                     Some(DefaultValue::Value(v)) => Ok(Some(*v)),
                     Some(DefaultValue::Depends(_)) => {
                         Err("a default that depends on another setting")
                     }
                 },
-                source: d.source.as_deref().and_then(|s| {
+                source: r.source().and_then(|s| {
                     let (file, line) = s.rsplit_once(':')?;
                     Some((file.to_string(), line.trim().parse().ok()?))
                 }),

@@ -8,6 +8,8 @@
 //! (`drivemap import --merge`, and the figures in `docs/import.md`).
 #![doc = include_str!("../README.md")]
 
+#![warn(unreachable_pub, missing_docs)]
+
 pub mod columns;
 pub mod compare;
 pub mod draft;
@@ -281,11 +283,10 @@ pub fn import_with(
             readings: &readings,
             command,
         });
-        let findings =
-            match drivemap_map::read_map_str(&file_name, &written.yaml, &Default::default()) {
-                Ok(_) => Vec::new(),
-                Err(d) => d.0,
-            };
+        let findings = match drivemap_map::Loader::new().load_str(&file_name, &written.yaml) {
+            Ok(_) => Vec::new(),
+            Err(d) => d.0,
+        };
         let before = left_out.len();
         for f in &findings {
             let Some(reg) = &f.register else { continue };

@@ -1,6 +1,6 @@
 //! Every place of a map that carries a `source:` citation, listed once.
 //!
-//! [`citation_places`] walks the expanded map ([`Drive`]) and returns one [`CitationPlace`] per
+//! [`citation_places`] walks the expanded map (`Drive`) and returns one [`CitationPlace`] per
 //! `source` key: where it is written (for `file:line:col`), the citation as written, the register
 //! it belongs to, what kind of place it is, and whether a citation is required there. The
 //! citation checks read this list instead of walking the model themselves: the form check
@@ -221,7 +221,7 @@ pub struct CitationPlace<'a> {
     pub path: Path,
     /// The citation as written; `None` where it is left out.
     pub source: Option<&'a str>,
-    /// The register it belongs to (an index into [`Drive::registers`]), if any.
+    /// The register it belongs to (an index into `Map::registers`), if any.
     pub register: Option<usize>,
     /// The register diagnostics about the citation name: the register's id, the `register` a
     /// role place names as written, a `removed` entry's id.

@@ -23,6 +23,8 @@ use crate::model::{
     Condition, DefaultValue, Dependency, DisplayStep, Field, Reference, Scale, UnknownItem,
 };
 use crate::names::field_span;
+/// `accel_time_1` → `AccelTime1`: how generated code names map items.
+pub use crate::names::pascal_case;
 
 /// A register whose drive executes a written value only when it differs from the previous
 /// write: `a value is executed only when it differs from the previous write, so 0 is written

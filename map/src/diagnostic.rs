@@ -6,12 +6,16 @@ use std::sync::Arc;
 /// A position in a map file (1-based line and column).
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Loc {
+    /// The file, as named in diagnostics.
     pub file: Arc<str>,
+    /// The line, from 1.
     pub line: usize,
+    /// The column, from 1.
     pub col: usize,
 }
 
 impl Loc {
+    /// A location.
     pub fn new(file: Arc<str>, line: usize, col: usize) -> Self {
         Loc { file, line, col }
     }
@@ -26,13 +30,16 @@ impl fmt::Display for Loc {
 /// One problem found in a map.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
 pub struct Diagnostic {
+    /// Where.
     pub loc: Loc,
     /// The register concerned, by id, if any.
     pub register: Option<String>,
+    /// What is wrong (or, for a warning, what to know).
     pub message: String,
 }
 
 impl Diagnostic {
+    /// A finding at `loc`, naming `register` when it is about one.
     pub fn new(loc: Loc, register: Option<&str>, message: impl Into<String>) -> Self {
         Diagnostic {
             loc,
@@ -66,14 +73,17 @@ impl fmt::Display for Diagnostic {
 pub struct Diagnostics(pub Vec<Diagnostic>);
 
 impl Diagnostics {
+    /// No findings.
     pub fn is_empty(&self) -> bool {
         self.0.is_empty()
     }
 
+    /// How many findings.
     pub fn len(&self) -> usize {
         self.0.len()
     }
 
+    /// The findings, in the order found.
     pub fn iter(&self) -> impl Iterator<Item = &Diagnostic> {
         self.0.iter()
     }

@@ -29,6 +29,7 @@ use crate::facts::{self, Figure, ProtocolFacts, ProtocolKey, ProtocolRow, Regist
 use crate::ir::Drive;
 use crate::model::DefaultValue;
 
+/// The format name and version written in every export (`format`).
 pub const FORMAT: &str = "drivemap-export/1";
 
 /// Codes and their meanings: `[{"value": 0, "id": "stop", "name": "Stop"}]`.

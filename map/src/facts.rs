@@ -23,7 +23,22 @@ use crate::describe;
 use crate::ir::{Drive, Register, ValueKind};
 use crate::model::Scale;
 
+mod input;
 mod protocol;
+/// The map's own records, as it writes them: who the drive is, its protocol, groups, variants,
+/// conflicts, gaps, removed registers, roles, and a register's defaults, alternative addresses
+/// and unknowns.
+pub use crate::examples::{Byte, Direction, Example, Says, hex_text, parse_bytes};
+pub use crate::ir::{Group, SerialDefaults};
+pub use crate::model::{
+    AddressAlternative, AddressFormat, Condition, Conflict, DefaultValue, DependentDefault,
+    DisplayStep, Draft, DriveMeta, EnumValue, ExternalQuantity, Field as BitField, Gap, Manual,
+    Parity, Protocol, Reading, Removed, RolePlace, TransportName, Unknown, UnknownItem,
+    VariantAxis, VariantOption,
+};
+pub use crate::stated::Unprinted;
+pub use data::RegisterData;
+pub use input::InputBounds;
 pub use protocol::{
     CommandFacts, ExceptionFacts, Figure, NotPrinted, ProtocolData, ProtocolFacts, ProtocolKey,
     ProtocolRow, manual_address, protocol,
@@ -94,11 +109,15 @@ impl FactKey {
 /// when the map cites one for it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Fact {
+    /// What the row says.
     pub key: FactKey,
+    /// The row's label as printers write it ([`FactKey::label`]).
     pub label: &'static str,
+    /// The value in [`describe`]'s wording.
     pub value: String,
     /// The condition under which the row applies (an alternative address's `o2-09 is 1`).
     pub when: Option<String>,
+    /// The manual line the row rests on, when the map cites one for it.
     pub citation: Option<String>,
 }
 
@@ -117,9 +136,13 @@ impl Fact {
 /// One case of a selected scale: the selector's codes, the scale and range they choose.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CaseFacts {
+    /// The selector's codes that choose the case (`0`, `1, 2`).
     pub codes: String,
+    /// The case's scale, worded.
     pub scale: String,
+    /// The case's range, worded.
     pub range: String,
+    /// The case's citation.
     pub citation: Option<String>,
 }
 
@@ -127,26 +150,37 @@ pub struct CaseFacts {
 /// default when it overrides them, and what it leaves unknown.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct VariantFacts {
+    /// The variant option's id.
     pub option: String,
+    /// The option's name as the map gives it.
     pub name: String,
+    /// Its range, when it overrides the base's.
     pub range: Option<String>,
+    /// Its default, when it overrides the base's.
     pub default: Option<String>,
+    /// What it leaves unknown.
     pub unknowns: Vec<UnknownFacts>,
 }
 
 /// A conflict between readings of the manual and the one chosen.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ConflictFacts {
+    /// What the readings disagree on.
     pub topic: String,
+    /// The citation of each reading.
     pub citations: Vec<String>,
+    /// The reading the map follows.
     pub chosen: String,
+    /// Why.
     pub reason: String,
 }
 
 /// An item the manual leaves unknown: the item (`range`) and why.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct UnknownFacts {
+    /// The item left unknown (`range`, `default`).
     pub what: &'static str,
+    /// Why the manual leaves it unknown.
     pub reason: String,
 }
 
@@ -155,20 +189,30 @@ pub struct UnknownFacts {
 pub struct RegisterFacts {
     /// The register's row in the drive plan.
     pub row: usize,
+    /// The register id.
     pub id: String,
+    /// The parameter number as printed.
     pub param: Option<String>,
+    /// The name as printed.
     pub name: String,
+    /// The communication address as the manual prints it.
     pub address: u16,
     /// The kind of conversion the plan decided.
     #[serde(serialize_with = "kind_name")]
     pub kind: ConversionKind,
+    /// The rows, in the order printers show them.
     pub rows: Vec<Fact>,
     /// Who selects the scale, as a user names it (`C6-01`), for a selected scale.
     pub selector: Option<String>,
+    /// The cases of a selected scale (none for any other).
     pub cases: Vec<CaseFacts>,
+    /// What each variant option overrides.
     pub variants: Vec<VariantFacts>,
+    /// The register's notes.
     pub notes: Vec<String>,
+    /// Conflicts between readings of the manual about it.
     pub conflicts: Vec<ConflictFacts>,
+    /// What the manual leaves unknown about it.
     pub unknowns: Vec<UnknownFacts>,
     /// The register's own citation.
     pub source: Option<String>,
@@ -194,8 +238,11 @@ impl RegisterFacts {
 /// The facts of one drive: its registers in the map's order, then its protocol.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DriveFacts {
+    /// The drive id.
     pub drive: String,
+    /// Every register's facts, in the map's order.
     pub registers: Vec<RegisterFacts>,
+    /// The protocol's facts.
     pub protocol: ProtocolFacts,
 }
 
@@ -347,7 +394,7 @@ fn variants(drive: &Drive, r: &Register) -> Vec<VariantFacts> {
 }
 
 /// The facts of one register of `drive` (a register of another map is a caller's mistake and
-/// panics, as [`Drive::register_plan`] does).
+/// panics, as `Drive::register_plan` does).
 pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
     let d = &r.def;
     RegisterFacts {

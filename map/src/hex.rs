@@ -69,7 +69,7 @@ impl Slot {
 /// The value of a scalar written as `text` at `slot`: an integer for the hex notations
 /// (`0x2001`, `2001H`, `2001h`), a marked scalar for digits without a hex marker (decided by
 /// [`resolve`]), or `None` to let YAML resolve it as usual (and the schema refuse it).
-pub fn literal(text: &str, slot: Slot) -> Option<Value> {
+pub(crate) fn literal(text: &str, slot: Slot) -> Option<Value> {
     let t = text.trim();
     let hex_digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_hexdigit());
     let digits = t
@@ -94,11 +94,17 @@ pub fn literal(text: &str, slot: Slot) -> Option<Value> {
 /// schema 2 would refuse it: where it is, how it is written, what it means, what kind of number.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Reread {
+    /// Where the number is written.
     pub loc: Loc,
+    /// The register it belongs to, if any.
     pub register: Option<String>,
+    /// The key path of the number.
     pub path: Path,
+    /// The number as written.
     pub text: String,
+    /// What schema 1 reads it as.
     pub value: u64,
+    /// What kind of number it is.
     pub slot: Slot,
 }
 
@@ -136,7 +142,7 @@ impl Reread {
 
 /// What [`resolve`] decided: the errors, and the numbers read as schema 1 reads them.
 #[derive(Debug, Default)]
-pub struct Resolved {
+pub(crate) struct Resolved {
     pub errors: Vec<Diagnostic>,
     pub reread: Vec<Reread>,
 }
@@ -145,7 +151,7 @@ pub struct Resolved {
 /// its base, so each file's own `address_format` applies to its own addresses), as schema
 /// `version` reads them (see [`crate::schema`]): in schema 1 a bare decimal is the decimal
 /// number. The tree is left with plain values either way.
-pub fn resolve(tree: &mut Node, version: u32) -> Resolved {
+pub(crate) fn resolve(tree: &mut Node, version: u32) -> Resolved {
     let decimal = matches!(
         tree.get("address_format").map(|n| &n.kind),
         Some(NodeKind::Scalar(Value::String(s))) if s == "decimal"

@@ -6,7 +6,7 @@ use serde_yaml::Value;
 
 /// The message of a deserialization error with a hint added. `value` is the value written at the
 /// place of the error, when there is one.
-pub fn explain(message: &str, value: Option<&Value>) -> String {
+pub(crate) fn explain(message: &str, value: Option<&Value>) -> String {
     if let Some(rest) = message
         .strip_prefix("unknown field `")
         .or_else(|| message.strip_prefix("unknown variant `"))
@@ -163,7 +163,10 @@ fn did_you_mean(message: &str, rest: &str) -> Option<String> {
 }
 
 /// The candidate closest to `given`, if it is close enough to be a typo of it.
-pub fn closest<'a>(given: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+pub(crate) fn closest<'a>(
+    given: &str,
+    candidates: impl IntoIterator<Item = &'a str>,
+) -> Option<&'a str> {
     let (d, best) = candidates
         .into_iter()
         .map(|c| (distance(&given.to_lowercase(), &c.to_lowercase()), c))

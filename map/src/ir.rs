@@ -11,13 +11,12 @@ use std::sync::{Arc, OnceLock};
 
 use crate::diagnostic::{Diagnostic, Loc};
 use crate::load::LoadedMap;
-use crate::lower::DrivePlan;
+use crate::lower::MapPlan;
 use crate::model::{
     self, Access, Conflict, DefaultValue, EnumValue, Field, Gap, ModbusTable, Parity, Reference,
     Removed, Scale, TransportName, VariantAxis, WriteRestriction,
 };
 use crate::source::{Node, Path};
-use drivemap_core::rule::Broadcast;
 use drivemap_core::scale::{Decimal, RawRange, raw_of};
 use drivemap_core::width::Width;
 
@@ -47,7 +46,7 @@ pub struct Drive {
     /// The merged YAML tree, for locating findings.
     pub tree: Node,
     /// The drive plan, lowered on first use ([`Drive::plan`]).
-    pub plan: OnceLock<Arc<DrivePlan>>,
+    pub plan: OnceLock<Arc<MapPlan>>,
     /// What reading a file of the map in an earlier schema version changed
     /// ([`crate::schema`]): printed by `check`, `diff` and the build, never an error.
     pub warnings: Vec<Diagnostic>,
@@ -58,13 +57,21 @@ pub struct Drive {
 }
 
 #[derive(Debug, Clone)]
+/// A group of registers as the manual groups them.
 pub struct Group {
+    /// The group id.
     pub id: String,
+    /// Its name as the map gives it.
     pub name: String,
+    /// The manual's table name.
     pub table: Option<String>,
+    /// Its citation.
     pub source: Option<String>,
+    /// Broadcast registers: written to slave 0 only.
     pub broadcast: bool,
+    /// The group's notes.
     pub notes: Vec<String>,
+    /// Where the group is written.
     pub path: Path,
 }
 
@@ -240,9 +247,24 @@ impl Register {
 impl Drive {
     /// What every register means, decided once ([`crate::lower`]): lowered on first use and
     /// kept for the life of this value. Call it on a validated drive.
-    pub fn plan(&self) -> &DrivePlan {
-        self.plan
-            .get_or_init(|| Arc::new(crate::lower::lower(self)))
+    ///
+    /// # Panics
+    /// When the drive does not lower: a [`crate::Map`] is lowered when it is loaded, so only
+    /// the crate's own passes ask a drive that may not, through [`Drive::try_plan`].
+    pub fn plan(&self) -> &MapPlan {
+        match self.try_plan() {
+            Ok(plan) => plan,
+            Err(errors) => panic!("{} does not lower: {errors:?}", self.meta.id),
+        }
+    }
+
+    /// The plan, lowered on first use, or why the drive does not lower.
+    pub fn try_plan(&self) -> Result<&MapPlan, Vec<Diagnostic>> {
+        if let Some(plan) = self.plan.get() {
+            return Ok(plan);
+        }
+        let plan = crate::lower::lower(self)?;
+        Ok(self.plan.get_or_init(|| Arc::new(plan)))
     }
 
     /// The register of row `row` of the plan (`plan().registers[row]`).
@@ -465,155 +487,8 @@ impl Drive {
     }
 }
 
-/// What the map allows on the wire when writing one register: the data of the runtime's
-/// write gate (`drivemap_runtime::gate::WriteRule`), decided here once for the generator and
-/// for tools that interpret a map at run time.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct WriteRuleFigures {
-    pub broadcast: Broadcast,
-    /// Exists on RTU framing (serial, RTU over TCP).
-    pub rtu: bool,
-    /// Exists on Modbus TCP.
-    pub tcp: bool,
-    /// The addresses it moves to (with a setting, variant or transport), without repeats and
-    /// without its own.
-    pub also_at: Vec<u16>,
-    /// The envelope of its raw ranges over every variant and selector case.
-    pub raw: RawRange,
-    /// Bits that carry no field (bit-field registers), which must be written as 0.
-    pub reserved: u16,
-}
-
-impl Drive {
-    /// The write gate's data for `r` (see [`WriteRuleFigures`]).
-    pub fn write_rule(&self, r: &Register) -> WriteRuleFigures {
-        let named = self.protocol.broadcast.iter().any(|b| {
-            b.registers
-                .iter()
-                .any(|n| self.find(n).is_some_and(|x| x.def.id == r.def.id))
-        });
-        let broadcast = if r.broadcast {
-            Broadcast::Only
-        } else if named {
-            Broadcast::Also
-        } else {
-            Broadcast::No
-        };
-        let (rtu, tcp) = match &r.transports {
-            None => (true, true),
-            Some(list) => (
-                list.iter().any(|t| t.is_serial()),
-                list.contains(&TransportName::Tcp),
-            ),
-        };
-        let mut also_at = Vec::new();
-        for alt in &r.def.address_alternatives {
-            if alt.address != r.def.address && !also_at.contains(&alt.address) {
-                also_at.push(alt.address);
-            }
-        }
-        let reserved = match r.kind() {
-            ValueKind::Bits(fields) => {
-                let mask = fields
-                    .iter()
-                    .filter_map(crate::names::field_span)
-                    .fold(0u16, |m, (lsb, width)| {
-                        m | ((((1u32 << width) - 1) << lsb) as u16)
-                    });
-                !mask
-            }
-            _ => 0,
-        };
-        WriteRuleFigures {
-            broadcast,
-            rtu,
-            tcp,
-            also_at,
-            raw: r.raw_envelope(),
-            reserved,
-        }
-    }
-}
-
-impl Register {
-    /// The union of the raw ranges the map gives this register under any model variant and
-    /// any case of a selected scale; the word's range where a conversion has none (relative
-    /// scales, bit fields, limits that are not whole increments).
-    pub fn raw_envelope(&self) -> RawRange {
-        let word = self.full_limits();
-        let one = Decimal::ONE;
-        let mut ranges = Vec::new();
-        let variant_ranges = |factor: Decimal, ranges: &mut Vec<RawRange>| {
-            ranges.push(
-                self.raw_limits(factor, self.def.min, self.def.max)
-                    .unwrap_or(word),
-            );
-            for k in self.def.by_variant.keys() {
-                let (min, max) = self.limits_for(k);
-                ranges.push(self.raw_limits(factor, min, max).unwrap_or(word));
-            }
-        };
-        match self.kind() {
-            ValueKind::Bits(_) | ValueKind::Quantity(Scale::Relative(_)) => ranges.push(word),
-            ValueKind::Quantity(Scale::Ratio(s)) => match crate::ratio::ratio_of(s) {
-                Some(ratio) => {
-                    ranges.push(
-                        self.ratio_limits(ratio, self.def.min, self.def.max)
-                            .unwrap_or(word),
-                    );
-                    for k in self.def.by_variant.keys() {
-                        let (min, max) = self.limits_for(k);
-                        ranges.push(self.ratio_limits(ratio, min, max).unwrap_or(word));
-                    }
-                }
-                None => ranges.push(word),
-            },
-            ValueKind::Enum(values) => {
-                for v in values {
-                    let code = i64::from(v.value);
-                    ranges.push(RawRange {
-                        min: code,
-                        max: code,
-                    });
-                }
-                if self.def.min.is_some() || self.def.max.is_some() {
-                    ranges.push(RawRange {
-                        min: self.def.min.map_or(0, |m| m as i64),
-                        max: self.def.max.map_or(i64::from(u16::MAX), |m| m as i64),
-                    });
-                }
-            }
-            ValueKind::Quantity(Scale::Selected(sel)) => {
-                for case in &sel.cases {
-                    match &case.scale {
-                        Scale::Factor(f) => {
-                            let factor = Decimal::from_f64(*f).unwrap_or(one);
-                            ranges
-                                .push(self.raw_limits(factor, case.min, case.max).unwrap_or(word));
-                        }
-                        // Validation refuses these as cases of a selected scale.
-                        Scale::Relative(_) | Scale::Selected(_) | Scale::Ratio(_) => {
-                            ranges.push(word)
-                        }
-                    }
-                }
-            }
-            // Every kind named: a new scale kind must say its envelope here (the compiler asks).
-            ValueKind::Word | ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_)) => {
-                variant_ranges(self.factor().unwrap_or(one), &mut ranges)
-            }
-        }
-        let min = ranges.iter().map(|l| l.min).min().unwrap_or(word.min);
-        let max = ranges.iter().map(|l| l.max).max().unwrap_or(word.max);
-        RawRange {
-            min: min.max(word.min),
-            max: max.min(word.max),
-        }
-    }
-}
-
 /// The scales of a register: its own, and those of each selected case.
-pub fn scales_of(r: &Register) -> Vec<&Scale> {
+pub(crate) fn scales_of(r: &Register) -> Vec<&Scale> {
     match &r.def.scale {
         Some(Scale::Selected(sel)) => sel.cases.iter().map(|c| &c.scale).collect(),
         Some(s) => vec![s],
@@ -685,13 +560,13 @@ impl SelectorRef<'_> {
 }
 
 /// The Rust module name of a drive id.
-pub fn module_name(id: &str) -> String {
+pub(crate) fn module_name(id: &str) -> String {
     id.replace(['-', '.'], "_")
 }
 
 /// Builds the IR from a loaded map. Errors are only those of block expansion; everything else
 /// is left to [`crate::validate`].
-pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
+pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
     let model = &map.model;
     let mut errors = Vec::new();
     let mut groups = Vec::new();
@@ -797,7 +672,7 @@ pub fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
 
 /// What `check` says of a draft: what made it, how many items to confirm, each of them, and that
 /// the generator refuses it.
-pub fn draft_warning(d: &model::Draft) -> String {
+pub(crate) fn draft_warning(d: &model::Draft) -> String {
     let mut s = format!(
         "a draft (made by {}), not yet reviewed: the generator refuses it until `draft:` is removed",
         d.by
@@ -908,7 +783,7 @@ fn shift_line(source: &str, by: usize) -> Result<String, BlockError> {
 /// Why a `repeat:` block cannot be expanded into its registers (reported at `repeat`, naming
 /// the block's register).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum BlockError {
+pub(crate) enum BlockError {
     /// `repeat.count: 0`.
     #[error("`repeat.count` must be at least 1")]
     NoCount,

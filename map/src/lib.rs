@@ -1,12 +1,17 @@
-//! drivemap map front end: YAML register maps of AC drives → validated IR → the drive plan.
+//! drivemap map front end: YAML register maps of AC drives → a validated [`Map`] and its plan.
 //!
-//! Data flows one way: [`source`] reads YAML into a located tree, [`load`] merges variant maps
-//! onto their base and deserializes the [`model`], [`ir`] expands it, [`validate`] checks it one
-//! concern per pass, [`lower`] decides what every register means (the drive plan). [`facts`] is the
-//! one view of a register's facts and of the protocol's (rows of label, value and citation, and
-//! the same facts as typed values) that printers read; [`export`] writes the typed values as JSON. [`citations`]
-//! lists every place of a map that carries a citation; [`others`] says what each citation
-//! outside the registers must mention.
+//! A [`Loader`] reads a map file (or text, or an edited [`Tree`]): the YAML is read into a
+//! located tree, a variant map is merged onto its base, the model is expanded and checked one
+//! concern per pass, and lowering decides what every register means — all problems of a file
+//! come back at once as [`Diagnostics`]. A [`Map`] gives:
+//!
+//! - the plan ([`MapPlan`], [`Map::plan`], [`RegisterRef::plan`]): what every register means on
+//!   the wire, decided once, in the vocabulary crate's types that generated code prints;
+//! - the facts view ([`facts`], [`Map::facts`], [`RegisterRef::facts`]): what the map says of
+//!   each register and of the protocol, as rows of label, value and citation and as typed values,
+//!   and the map's own records (groups, variants, conflicts, gaps);
+//! - locations ([`RegisterRef::location`], [`Map::locate`]) for diagnostics of a tool's own;
+//! - [`export`] (`drivemap export`), and [`migrate`] for files of an older schema.
 //!
 //! Text about a map has one wording, [`describe`], shared by the generated rustdoc
 //! (`drivemap-codegen`), the Markdown reference and the semantic diff (`drivemap-review`) and the
@@ -16,106 +21,53 @@
 //! (`drivemap-live`, `drivemap-sim`, the `drivemap` command line) read maps through it alone.
 #![doc = include_str!("../README.md")]
 
-pub mod citations;
-pub mod command_profile;
+#![warn(unreachable_pub, missing_docs)]
+
+// The map as written and its expansion, checks and lowering: private. What a consumer reads is
+// the `Map` a `Loader` gives, its plan (`MapPlan`) and its facts view (`facts`).
+mod diagnostic;
+mod hex;
+mod hints;
+mod ir;
+mod load;
+mod loader;
+mod lower;
+mod map;
+mod model;
+mod names;
+mod ratio;
+mod schema;
+mod source;
+mod stated;
+mod validate;
+
 pub mod describe;
-pub mod diagnostic;
-pub mod examples;
 pub mod export;
 pub mod facts;
-pub mod hex;
-pub mod hints;
-pub mod indexed;
-pub mod ir;
-pub mod load;
-pub mod lower;
-pub mod model;
-pub mod names;
-pub mod others;
-pub mod ratio;
-pub mod schema;
-pub mod source;
-pub mod stated;
-pub mod validate;
+pub mod migrate;
 
-pub use diagnostic::{Diagnostic, Diagnostics};
-pub use ir::Drive;
+// Read by `drivemap-review` and `drivemap-live` until they read the facts view alone.
+#[doc(hidden)]
+pub mod citations;
+#[doc(hidden)]
+pub mod command_profile;
+#[doc(hidden)]
+pub mod examples;
+#[doc(hidden)]
+pub mod indexed;
+#[doc(hidden)]
+pub mod others;
+
+pub use diagnostic::{Diagnostic, Diagnostics, Loc};
+pub use loader::{
+    Loader, MAX_YAML_ALIAS_NODES, MAX_YAML_BYTES, MAX_YAML_DEPTH, parse_map, parse_yaml, too_large,
+};
+pub use lower::{CodeSlot, MapPlan, Quantity, SettingsPlan};
+pub use map::{Map, RegisterRef};
+/// A YAML file read into a tree whose every node keeps where it was written.
+pub use source::{Node as Tree, NodeKind as TreeKind, Path as TreePath};
 
 use std::path::{Path, PathBuf};
-
-/// Reads, expands and validates one map file. All problems of the file are returned at once.
-pub fn read_map(path: &Path, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
-    let loaded = load::load(path).map_err(Diagnostics::from)?;
-    finish(&loaded, ctx)
-}
-
-/// Like [`read_map`], sharing the trees of map files already read (and their bases) through
-/// `cache`: reading every map of a directory with one cache reads each file once, however
-/// long its chain of `extends`.
-pub fn read_map_cached(
-    path: &Path,
-    ctx: &validate::Context,
-    cache: &load::TreeCache,
-) -> Result<Drive, Diagnostics> {
-    let loaded = load::load_cached(path, cache).map_err(Diagnostics::from)?;
-    finish(&loaded, ctx)
-}
-
-/// Like [`read_map`] for YAML held in memory (`extends` is not available).
-pub fn read_map_str(name: &str, text: &str, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
-    let loaded = load::load_str(name, text).map_err(Diagnostics::from)?;
-    finish(&loaded, ctx)
-}
-
-/// Like [`read_map`] for one version of a map kept under any file name (`old.yaml`,
-/// `tds-before.yaml`): the rule that a map's file is named `<drive id>.yaml`, which matters for a
-/// maps directory, is not applied. `drivemap diff old.yaml new.yaml` reads maps so.
-pub fn read_map_version(path: &Path, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
-    let loaded = load::load(path).map_err(Diagnostics::from)?;
-    let mut drive = ir::expand(&loaded).map_err(Diagnostics::from)?;
-    drive.file = path.with_file_name(format!("{}.yaml", drive.meta.id));
-    let errors = validate::validate(&drive, ctx);
-    if errors.is_empty() {
-        drive.file = path.to_path_buf();
-        Ok(drive)
-    } else {
-        Err(errors.into())
-    }
-}
-
-/// Like [`read_map_str`], resolving `extends` through `base`, which gives the name and YAML text
-/// of a base map by drive id (maps built into a program).
-pub fn read_map_str_with(
-    name: &str,
-    text: &str,
-    ctx: &validate::Context,
-    base: &load::BaseResolver<'_>,
-) -> Result<Drive, Diagnostics> {
-    let loaded = load::load_str_with(name, text, base).map_err(Diagnostics::from)?;
-    finish(&loaded, ctx)
-}
-
-/// Like [`read_map_str_with`] for a map already parsed into a tree ([`source::parse_map`]):
-/// for tools that edit a map's tree before reading it.
-pub fn read_map_tree_with(
-    name: &str,
-    tree: source::Node,
-    ctx: &validate::Context,
-    base: &load::BaseResolver<'_>,
-) -> Result<Drive, Diagnostics> {
-    let loaded = load::load_tree_with(name, tree, base).map_err(Diagnostics::from)?;
-    finish(&loaded, ctx)
-}
-
-fn finish(loaded: &load::LoadedMap, ctx: &validate::Context) -> Result<Drive, Diagnostics> {
-    let drive = ir::expand(loaded).map_err(Diagnostics::from)?;
-    let errors = validate::validate(&drive, ctx);
-    if errors.is_empty() {
-        Ok(drive)
-    } else {
-        Err(errors.into())
-    }
-}
 
 /// The `*.yaml` files of a directory, sorted by name.
 pub fn find_maps(dir: &Path) -> std::io::Result<Vec<PathBuf>> {

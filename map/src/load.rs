@@ -23,7 +23,7 @@ use crate::source::{self, Node, NodeKind, Path, Seg};
 
 /// A map read from disk: the model and the tree it was deserialized from.
 #[derive(Debug, Clone)]
-pub struct LoadedMap {
+pub(crate) struct LoadedMap {
     /// The file that was asked for.
     pub path: PathBuf,
     pub model: MapFile,
@@ -36,13 +36,13 @@ pub struct LoadedMap {
 
 impl LoadedMap {
     /// The location of a path in the (merged) map.
-    pub fn locate(&self, path: &Path) -> Loc {
+    pub(crate) fn locate(&self, path: &Path) -> Loc {
         self.tree.locate(path)
     }
 }
 
 /// How a file is named in diagnostics: relative to the current directory when possible.
-pub fn display_name(path: &FsPath) -> Arc<str> {
+pub(crate) fn display_name(path: &FsPath) -> Arc<str> {
     let shown = std::env::current_dir()
         .ok()
         .and_then(|cwd| path.strip_prefix(&cwd).ok().map(FsPath::to_path_buf))
@@ -58,32 +58,32 @@ type Merged = Result<(Node, Vec<Diagnostic>), Vec<Diagnostic>>;
 /// time in proportion to its length (each variant is merged onto its base's cached tree),
 /// not to the square of it.
 #[derive(Debug, Default)]
-pub struct TreeCache {
+pub(crate) struct TreeCache {
     trees: RefCell<HashMap<PathBuf, Merged>>,
     read: Cell<usize>,
 }
 
 impl TreeCache {
     /// An empty cache.
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self::default()
     }
 
     /// How many map files were read and parsed through this cache.
-    pub fn files_read(&self) -> usize {
+    pub(crate) fn files_read(&self) -> usize {
         self.read.get()
     }
 }
 
 /// Reads one map file, resolving `extends` against maps in the same directory
 /// (`<id>.yaml`). Returns every problem found while reading.
-pub fn load(path: &FsPath) -> Result<LoadedMap, Vec<Diagnostic>> {
+pub(crate) fn load(path: &FsPath) -> Result<LoadedMap, Vec<Diagnostic>> {
     load_cached(path, &TreeCache::new())
 }
 
 /// Like [`load`], taking the merged tree of every file (the map and its bases) from `cache`
 /// when it was read before, and keeping what it reads there.
-pub fn load_cached(path: &FsPath, cache: &TreeCache) -> Result<LoadedMap, Vec<Diagnostic>> {
+pub(crate) fn load_cached(path: &FsPath, cache: &TreeCache) -> Result<LoadedMap, Vec<Diagnostic>> {
     let (tree, warnings) = load_tree(path, cache)?;
     let model = deserialize(&tree)?;
     Ok(LoadedMap {
@@ -96,7 +96,7 @@ pub fn load_cached(path: &FsPath, cache: &TreeCache) -> Result<LoadedMap, Vec<Di
 
 /// Parses a map from text (for tests and tools that hold YAML in memory). `extends` is not
 /// resolved.
-pub fn load_str(name: &str, text: &str) -> Result<LoadedMap, Vec<Diagnostic>> {
+pub(crate) fn load_str(name: &str, text: &str) -> Result<LoadedMap, Vec<Diagnostic>> {
     let file: Arc<str> = Arc::from(name);
     let parsed = source::parse_map(&file, text)?;
     let tree = parsed.tree;
@@ -347,7 +347,7 @@ fn unknown_field(message: &str) -> Option<&str> {
 }
 
 /// The id of the register a path points into, if any.
-pub fn register_at(tree: &Node, path: &Path) -> Option<String> {
+pub(crate) fn register_at(tree: &Node, path: &Path) -> Option<String> {
     let pos = path
         .0
         .iter()
@@ -607,11 +607,11 @@ fn drop_register(root: &mut [(String, Loc, Node)], id: &str) -> bool {
 
 /// Finds the text of a base map by drive id, for maps held in memory: `(name shown in
 /// diagnostics, YAML text)`.
-pub type BaseResolver<'a> = dyn Fn(&str) -> Option<(String, String)> + 'a;
+pub(crate) type BaseResolver<'a> = dyn Fn(&str) -> Option<(String, String)> + 'a;
 
 /// Like [`load_str`], resolving `extends` through `base` (by drive id) instead of refusing it:
 /// for maps built into a program, or a map file whose base is built in.
-pub fn load_str_with(
+pub(crate) fn load_str_with(
     name: &str,
     text: &str,
     base: &BaseResolver<'_>,
@@ -642,7 +642,7 @@ fn load_tree_str(
 
 /// Like [`load_str_with`] for a map already parsed ([`source::parse_map`]): for tools that edit
 /// a map's tree before reading it (the diff's mutation test edits every value of a map).
-pub fn load_tree_with(
+pub(crate) fn load_tree_with(
     name: &str,
     tree: Node,
     base: &BaseResolver<'_>,

@@ -22,20 +22,23 @@ use drivemap_core::profile::{
 };
 use drivemap_core::register::RegisterInfo;
 use drivemap_core::roles::{Edge, FieldRole, NumberField, Place, Role, RoleKind, Roles, Target};
-use drivemap_core::rule::{Transports, WriteRule};
+use drivemap_core::rule::{Broadcast, Transports, WriteRule};
 use drivemap_core::scale::{Decimal, RawRange};
 
+use std::cell::RefCell;
+
+use crate::diagnostic::Diagnostic;
 use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{self, Reference, Scale, TransportName};
 use crate::names::field_span;
 
 /// A drive, lowered.
 #[derive(Debug, Clone)]
-pub struct DrivePlan {
+pub struct MapPlan {
     /// Every register's plan, sorted by address with broadcast-only registers last (stable:
     /// registers at one address keep the map's order). Generated code indexes this table.
     pub registers: &'static [RegisterPlan],
-    /// For each register of [`Drive::registers`] (map order), its index in `registers`.
+    /// For each register of [`Map::registers`](crate::Map::registers) (map order), its index in `registers`.
     pub order: Vec<usize>,
     /// What conversions and addresses depend on.
     pub settings: SettingsPlan,
@@ -85,13 +88,16 @@ pub enum Quantity {
     Register(usize),
     /// Not a register: the application supplies it.
     External {
+        /// The quantity's name.
         id: String,
+        /// What it is.
         description: String,
+        /// Its unit.
         unit: String,
     },
 }
 
-impl DrivePlan {
+impl MapPlan {
     /// The plan of the register with map id `id`.
     pub fn register(&self, id: &str) -> Option<&'static RegisterPlan> {
         self.registers.iter().find(|r| r.info.id == id)
@@ -127,8 +133,10 @@ fn text(s: &str) -> &'static str {
     Box::leak(s.to_owned().into_boxed_str())
 }
 
-/// Lowers a validated drive.
-pub fn lower(drive: &Drive) -> DrivePlan {
+/// Lowers a validated drive: the last pass of checking a map. What the earlier passes should
+/// have refused and lowering cannot decide (a scale that is no decimal, a selector or a
+/// reference without a slot) is a diagnostic at the register's key, never a fallback value.
+pub(crate) fn lower(drive: &Drive) -> Result<MapPlan, Vec<Diagnostic>> {
     let mut order: Vec<usize> = (0..drive.registers.len()).collect();
     order.sort_by_key(|&i| {
         let r = &drive.registers[i];
@@ -174,6 +182,7 @@ pub fn lower(drive: &Drive) -> DrivePlan {
         drive,
         settings: &settings,
         sorted: &order,
+        errors: RefCell::new(Vec::new()),
     };
     let registers = leak(
         order
@@ -181,17 +190,21 @@ pub fn lower(drive: &Drive) -> DrivePlan {
             .map(|&i| lowering.register(&drive.registers[i]))
             .collect(),
     );
+    let errors = lowering.errors.into_inner();
+    if !errors.is_empty() {
+        return Err(errors);
+    }
     let profile = Box::leak(Box::new(profile(drive, registers)));
     let roles = roles(drive, &position, &settings);
     let indexed = crate::indexed::lower(drive, registers);
-    DrivePlan {
+    Ok(MapPlan {
         registers,
         order: position,
         settings,
         profile,
         roles,
         indexed,
-    }
+    })
 }
 
 /// The map's roles as plan rows, bit positions and codes, in the order of [`Role::ALL`]. Places
@@ -366,16 +379,28 @@ struct Lowering<'a> {
     drive: &'a Drive,
     settings: &'a SettingsPlan,
     sorted: &'a [usize],
+    /// What could not be decided, each at the register's key.
+    errors: RefCell<Vec<Diagnostic>>,
 }
 
 /// The label a setting has in errors: the parameter number when printed, else the id.
-pub fn setting_label(r: &Register) -> String {
+pub(crate) fn setting_label(r: &Register) -> String {
     r.def.param.clone().unwrap_or_else(|| r.def.id.clone())
 }
 
 const ONE: Decimal = Decimal::ONE;
 
 impl Lowering<'_> {
+    /// Records that `r`'s `key` cannot be lowered. The value lowering goes on with is never
+    /// used: a plan with an error is not returned.
+    fn fail(&self, r: &Register, key: &str, message: impl std::fmt::Display) {
+        self.errors.borrow_mut().push(self.drive.error(
+            &r.key_path(key),
+            Some(r.id()),
+            format!("cannot be lowered: {message}"),
+        ));
+    }
+
     fn map_index(&self, sorted_index: usize) -> &Register {
         &self.drive.registers[self.sorted[sorted_index]]
     }
@@ -394,8 +419,8 @@ impl Lowering<'_> {
         })
     }
 
-    /// The quantity slot of a reference.
-    fn reference(&self, reference: &Reference) -> Setting {
+    /// The quantity slot of a reference of `r`'s `key`.
+    fn reference(&self, r: &Register, key: &str, reference: &Reference) -> Setting {
         let (slot, label) = match reference {
             Reference::Register(name) => {
                 let target = self.drive.find(name);
@@ -415,8 +440,19 @@ impl Lowering<'_> {
                 q.external.clone(),
             ),
         };
+        let slot = match slot.map(u8::try_from) {
+            Some(Ok(slot)) => slot,
+            _ => {
+                self.fail(
+                    r,
+                    key,
+                    format_args!("`{label}` is no quantity slot of the drive"),
+                );
+                0
+            }
+        };
         Setting {
-            slot: slot.unwrap_or(u8::MAX as usize) as u8,
+            slot,
             label: text(&label),
         }
     }
@@ -449,12 +485,21 @@ impl Lowering<'_> {
         limits: impl Fn(Option<f64>, Option<f64>) -> Option<RawRange>,
     ) -> Ranges {
         let word = r.full_limits();
-        let base = limits(r.def.min, r.def.max).unwrap_or(word);
+        let raw = |min: Option<f64>, max: Option<f64>, key: &str| {
+            limits(min, max).unwrap_or_else(|| {
+                self.fail(r, key, "a limit is not a whole number of raw increments");
+                word
+            })
+        };
+        let base = raw(r.def.min, r.def.max, "min");
         let mut by_variant = Vec::new();
         for k in r.def.by_variant.keys() {
-            let Some(v) = self.variant(k) else { continue };
+            let Some(v) = self.variant(k) else {
+                self.fail(r, "by_variant", format_args!("`{k}` is no variant option"));
+                continue;
+            };
             let (min, max) = r.limits_for(k);
-            let lim = limits(min, max).unwrap_or(word);
+            let lim = raw(min, max, "by_variant");
             if lim != base {
                 by_variant.push((v, lim));
             }
@@ -465,11 +510,23 @@ impl Lowering<'_> {
         }
     }
 
-    fn relative(&self, rel: &model::RelativeScale) -> Relative {
+    fn relative(&self, r: &Register, rel: &model::RelativeScale) -> Relative {
         Relative {
             full_scale: rel.full_scale,
-            reference: self.reference(&rel.relative_to),
+            reference: self.reference(r, "scale", &rel.relative_to),
         }
+    }
+
+    /// A decimal factor, or a diagnostic at `r`'s scale.
+    fn factor(&self, r: &Register, factor: Option<Decimal>, written: f64) -> Decimal {
+        factor.unwrap_or_else(|| {
+            self.fail(
+                r,
+                "scale",
+                format_args!("{written} is not a decimal factor"),
+            );
+            ONE
+        })
     }
 
     /// How the register's word converts: decided here and nowhere else.
@@ -480,8 +537,13 @@ impl Lowering<'_> {
                 signed,
                 range: self.ranges(r, ONE),
             },
-            ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_)) => {
-                let factor = r.factor().unwrap_or(ONE);
+            ValueKind::UnitQuantity => Conversion::Decimal {
+                signed,
+                scale: ONE,
+                range: self.ranges(r, ONE),
+            },
+            ValueKind::Quantity(Scale::Factor(f)) => {
+                let factor = self.factor(r, Decimal::from_f64(*f), *f);
                 Conversion::Decimal {
                     signed,
                     scale: factor,
@@ -490,13 +552,18 @@ impl Lowering<'_> {
             }
             ValueKind::Quantity(Scale::Relative(rel)) => Conversion::Relative {
                 signed,
-                relative: self.relative(rel),
+                relative: self.relative(r, rel),
             },
             ValueKind::Quantity(Scale::Ratio(s)) => {
-                // Validation refuses a ratio that `ratio_of` rejects; a map that was not
-                // validated gets one count per unit rather than a guess.
-                let ratio = crate::ratio::ratio_of(s)
-                    .unwrap_or(drivemap_core::ratio::Ratio::new(1, Decimal::ONE));
+                // Validation refuses a ratio that `ratio_of` rejects.
+                let ratio = crate::ratio::ratio_of(s).unwrap_or_else(|| {
+                    self.fail(
+                        r,
+                        "scale",
+                        format_args!("{} = {} is no exact ratio", s.counts, s.equals),
+                    );
+                    drivemap_core::ratio::Ratio::new(1, Decimal::ONE)
+                });
                 Conversion::Ratio {
                     signed,
                     ratio,
@@ -510,7 +577,7 @@ impl Lowering<'_> {
                     .filter_map(|case| {
                         let scale = match &case.scale {
                             Scale::Factor(f) => {
-                                let factor = Decimal::from_f64(*f).unwrap_or(ONE);
+                                let factor = self.factor(r, Decimal::from_f64(*f), *f);
                                 let lim = r
                                     .raw_limits(factor, case.min, case.max)
                                     .unwrap_or(r.full_limits());
@@ -519,9 +586,16 @@ impl Lowering<'_> {
                                     range: lim,
                                 }
                             }
-                            Scale::Relative(rel) => CaseScale::Relative(self.relative(rel)),
+                            Scale::Relative(rel) => CaseScale::Relative(self.relative(r, rel)),
                             // Refused by validation (`ratio_scales`): not inside a selection.
-                            Scale::Selected(_) | Scale::Ratio(_) => return None,
+                            Scale::Selected(_) | Scale::Ratio(_) => {
+                                self.fail(
+                                    r,
+                                    "scale",
+                                    "a case of a selected scale is itself selected or a ratio",
+                                );
+                                return None;
+                            }
                         };
                         Some(Case {
                             codes: leak(case.when.clone()),
@@ -529,9 +603,16 @@ impl Lowering<'_> {
                         })
                     })
                     .collect();
-                let selector = self.selector(&sel.selected_by).unwrap_or(Setting {
-                    slot: u8::MAX,
-                    label: text(&sel.selected_by),
+                let selector = self.selector(&sel.selected_by).unwrap_or_else(|| {
+                    self.fail(
+                        r,
+                        "scale",
+                        format_args!("the selector `{}` has no code slot", sel.selected_by),
+                    );
+                    Setting {
+                        slot: 0,
+                        label: text(&sel.selected_by),
+                    }
                 });
                 Conversion::Selected {
                     signed,
@@ -583,7 +664,9 @@ impl Lowering<'_> {
 
     fn register(&self, r: &Register) -> RegisterPlan {
         let d = &r.def;
-        let w = self.drive.write_rule(r);
+        let w = self.write_rule(r);
+        let conversion = self.conversion(r);
+        let envelope = envelope(&conversion, r.full_limits());
         RegisterPlan {
             info: RegisterInfo {
                 id: text(&d.id),
@@ -597,7 +680,7 @@ impl Lowering<'_> {
                 source: text(d.source.as_deref().unwrap_or_default()),
             },
             unit: text(d.unit.as_deref().unwrap_or_default()),
-            conversion: self.conversion(r),
+            conversion,
             moves: leak(
                 d.address_alternatives
                     .iter()
@@ -615,7 +698,7 @@ impl Lowering<'_> {
             },
             broadcast: w.broadcast,
             restriction: r.write_restriction,
-            envelope: w.raw,
+            envelope,
             also_at: leak(w.also_at),
             repeat_needs_change: r.repeat_needs_change.as_ref().map(|(rule, _)| {
                 RepeatNeedsChange {
@@ -625,12 +708,100 @@ impl Lowering<'_> {
             }),
             read_values: labels(&d.read_values),
             limit: d.max_relative.as_ref().map(|l| RelativeLimit {
-                reference: self.reference(&l.relative_to),
+                reference: self.reference(r, "max_relative", &l.relative_to),
                 percent: l.percent,
                 source: text(&l.source),
             }),
             functions: functions(r),
         }
+    }
+}
+
+/// Where a register exists and may be written: the write gate's data beside the conversion.
+struct WriteRuleFigures {
+    broadcast: Broadcast,
+    /// Exists on RTU framing (serial, RTU over TCP).
+    rtu: bool,
+    /// Exists on Modbus TCP.
+    tcp: bool,
+    /// The addresses it moves to (with a setting, variant or transport), without repeats and
+    /// without its own.
+    also_at: Vec<u16>,
+}
+
+impl Lowering<'_> {
+    fn write_rule(&self, r: &Register) -> WriteRuleFigures {
+        let drive = self.drive;
+        let named = drive.protocol.broadcast.iter().any(|b| {
+            b.registers
+                .iter()
+                .any(|n| drive.find(n).is_some_and(|x| x.def.id == r.def.id))
+        });
+        let broadcast = if r.broadcast {
+            Broadcast::Only
+        } else if named {
+            Broadcast::Also
+        } else {
+            Broadcast::No
+        };
+        let (rtu, tcp) = match &r.transports {
+            None => (true, true),
+            Some(list) => (
+                list.iter().any(|t| t.is_serial()),
+                list.contains(&TransportName::Tcp),
+            ),
+        };
+        let mut also_at = Vec::new();
+        for alt in &r.def.address_alternatives {
+            if alt.address != r.def.address && !also_at.contains(&alt.address) {
+                also_at.push(alt.address);
+            }
+        }
+        WriteRuleFigures {
+            broadcast,
+            rtu,
+            tcp,
+            also_at,
+        }
+    }
+}
+
+/// The union of the raw ranges a conversion admits under any variant and any case of a
+/// selected scale, within the word: what the write gate lets through before converting. Read
+/// off the decided conversion, so it cannot disagree with it; the word's range where the
+/// conversion has none (relative scales, bit fields).
+fn envelope(conversion: &Conversion, word: RawRange) -> RawRange {
+    let mut ranges: Vec<RawRange> = Vec::new();
+    let all = |r: &Ranges, out: &mut Vec<RawRange>| {
+        out.push(r.base);
+        out.extend(r.by_variant.iter().map(|(_, range)| *range));
+    };
+    match conversion {
+        Conversion::Word { range, .. }
+        | Conversion::Decimal { range, .. }
+        | Conversion::Ratio { range, .. } => all(range, &mut ranges),
+        Conversion::Relative { .. } | Conversion::Bits { .. } => ranges.push(word),
+        Conversion::Enum { values, unlisted } => {
+            ranges.extend(values.iter().map(|v| RawRange {
+                min: i64::from(v.code),
+                max: i64::from(v.code),
+            }));
+            ranges.extend(*unlisted);
+        }
+        Conversion::Selected { cases, .. } => {
+            for case in cases.iter() {
+                match case.scale {
+                    CaseScale::Decimal { range, .. } => ranges.push(range),
+                    CaseScale::Relative(_) => ranges.push(word),
+                }
+            }
+        }
+    }
+    let min = ranges.iter().map(|l| l.min).min().unwrap_or(word.min);
+    let max = ranges.iter().map(|l| l.max).max().unwrap_or(word.max);
+    RawRange {
+        min: min.max(word.min),
+        max: max.min(word.max),
     }
 }
 

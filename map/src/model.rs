@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 /// One map file: a drive, or a variant of another drive (`drive.extends`).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub struct MapFile {
+pub(crate) struct MapFile {
     /// The schema version the file is written in (`schema: 2`); a file without it is read as
     /// schema 1. Each file of a variant map is read in its own version ([`crate::schema`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -119,6 +119,7 @@ pub struct RolePlace {
     /// reason is required. Review does not check such a citation by content.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub indirect: Option<String>,
+    /// Notes on the role place.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
@@ -209,10 +210,13 @@ pub struct DriveMeta {
     /// Identifier of the base map this one inherits from and overrides (`yaskawa-v7`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub extends: Option<String>,
+    /// The vendor as the manuals print it.
     pub vendor: String,
+    /// The models the map covers.
     pub models: Vec<String>,
     /// The manuals the map was transcribed from. Every citation must name one of them.
     pub manuals: Vec<Manual>,
+    /// One paragraph on the drive.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
 }
@@ -228,6 +232,7 @@ pub struct Manual {
     /// Name page citations use (`acme-um` in `acme-um:p42`): a manual with no text at hand.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub id: Option<String>,
+    /// The manual's title.
     pub title: String,
     /// The vendor's document number and revision as printed (`UM-1234 rev C`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -283,17 +288,23 @@ impl DriveMeta {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct VariantAxis {
+    /// The axis id (`voltage_class`).
     pub id: String,
+    /// Its name.
     pub name: String,
     /// The first option is the base variant: top-level limits and defaults describe it.
     pub options: Vec<VariantOption>,
 }
 
+/// One option of a variant axis.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct VariantOption {
+    /// The option id.
     pub id: String,
+    /// Its name.
     pub name: String,
+    /// Where the manual names it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
 }
@@ -305,41 +316,49 @@ pub struct Protocol {
     /// Transports the drive (or its option card) offers natively.
     pub transports: Vec<TransportName>,
     /// The function codes the drive implements: a plain list, or with its citation, or marked
-    /// not printed (see [`FunctionCodes`]).
+    /// not printed (see `FunctionCodes`).
     pub function_codes: FunctionCodes,
     /// Maximum registers per read (03h/04h).
     pub max_read: Limit,
     /// Maximum registers per write (10h).
     pub max_write: Limit,
+    /// The slave addresses the drive answers to.
     pub slave_address: SlaveAddress,
+    /// Broadcast writes (slave 0), when the drive takes them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub broadcast: Option<Broadcast>,
     /// The drive's exception codes: the list, or `{unknown: "<why>", source: ..}` when the
-    /// manual prints none (see [`Exceptions`]).
+    /// manual prints none (see `Exceptions`).
     #[serde(default)]
     pub exceptions: Exceptions,
     /// ENTER / ACCEPT / save commands.
     #[serde(default)]
     pub commands: Vec<Command>,
+    /// How the drive stores written values, and its write endurance.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub eeprom: Option<Eeprom>,
     /// Transport-dependent mapping from the manual's addresses to PDU addresses.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub addressing: Option<Addressing>,
+    /// Response times and gaps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub timing: Option<Timing>,
+    /// The serial line's settings.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub serial: Option<Serial>,
+    /// The protocol section's citation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub indirect: Option<String>,
+    /// Notes on the protocol.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
 
+/// A transport a drive offers: Modbus RTU, ASCII or TCP.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum TransportName {
@@ -444,7 +463,7 @@ pub struct ExceptionCode {
 
 /// `accept` (activates written data without storing it) or `persist` (stores it in
 /// non-volatile memory; wears the EEPROM): the vocabulary crate's.
-pub use drivemap_core::profile::CommandKind;
+pub(crate) use drivemap_core::profile::CommandKind;
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -665,7 +684,7 @@ pub use drivemap_core::profile::Parity;
 /// Registers as the manual groups them (command, monitor, one parameter group...).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub struct Group {
+pub(crate) struct Group {
     pub id: String,
     pub name: String,
     /// The manual's table name ("Table 4.3 Monitor Registers").
@@ -740,11 +759,11 @@ pub struct RepeatNeedsChange {
 }
 
 /// `r`, `w`, `rw`: the vocabulary crate's access.
-pub use drivemap_core::register::Access;
+pub(crate) use drivemap_core::register::Access;
 /// `holding`, `input`: the vocabulary crate's table.
-pub use drivemap_core::register::Table as ModbusTable;
+pub(crate) use drivemap_core::register::Table as ModbusTable;
 /// When the drive accepts a write (`none`, `stopped`, `prg_mode`): the vocabulary crate's.
-pub use drivemap_core::register::WriteRestriction;
+pub(crate) use drivemap_core::register::WriteRestriction;
 
 /// One register (one 16-bit word, or a 32-bit pair with `pair`), or a block of them with `repeat`.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -853,7 +872,7 @@ pub struct Pair {
 }
 
 /// Which half of a 32-bit pair comes first (at the lower address).
-pub use drivemap_core::width::WordOrder;
+pub(crate) use drivemap_core::width::WordOrder;
 
 /// How a raw word becomes an engineering value.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -916,7 +935,9 @@ pub enum Reference {
 pub struct ExternalQuantity {
     /// snake_case name; becomes a field of the generated `Settings`.
     pub external: String,
+    /// Its unit.
     pub unit: String,
+    /// What it is (the motor's rated current).
     pub description: String,
 }
 
@@ -948,14 +969,19 @@ pub struct ScaleCase {
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(untagged)]
 pub enum DefaultValue {
+    /// A number in engineering units.
     Value(f64),
+    /// A default that depends on another setting.
     Depends(DependentDefault),
 }
 
+/// A default the manual gives as depending on another setting.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DependentDefault {
+    /// What it depends on.
     pub depends_on: Dependency,
+    /// The manual's words on it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
 }
@@ -991,11 +1017,15 @@ pub struct VariantOverride {
     pub source: Option<String>,
 }
 
+/// An address the register moves to under a condition.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct AddressAlternative {
+    /// The address.
     pub address: u16,
+    /// When.
     pub when: Condition,
+    /// Its citation.
     pub source: String,
 }
 
@@ -1012,6 +1042,7 @@ pub struct Condition {
     /// A variant option id.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variant: Option<String>,
+    /// A transport.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transport: Option<TransportName>,
 }
@@ -1039,14 +1070,17 @@ impl std::fmt::Display for Condition {
     }
 }
 
+/// One code of an enumeration.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct EnumValue {
+    /// The code.
     pub value: u16,
     /// snake_case identifier; becomes the enum variant in PascalCase.
     pub id: String,
     /// Meaning as printed.
     pub name: String,
+    /// Its citation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
     /// The citation is deliberately indirect (the item has no row of its own there); the
@@ -1055,9 +1089,11 @@ pub struct EnumValue {
     pub indirect: Option<String>,
 }
 
+/// A bit field (`bit`) or multi-bit field (`bits`) of a register.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Field {
+    /// The field id.
     pub id: String,
     /// Meaning as printed.
     pub name: String,
@@ -1070,21 +1106,25 @@ pub struct Field {
     /// Codes of a multi-bit field.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub values: Vec<EnumValue>,
+    /// Its citation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
     /// The citation is deliberately indirect (the item has no row of its own there); the
     /// reason is required. Review does not check such a citation by content.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub indirect: Option<String>,
+    /// Notes on the field.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
 
+/// A keypad resolution band.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DisplayStep {
     /// Lowest value shown with this step.
     pub from: f64,
+    /// The step shown from `from` on.
     pub step: f64,
 }
 
@@ -1113,20 +1153,27 @@ fn one_u16() -> u16 {
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Conflict {
+    /// What the readings disagree on.
     pub topic: String,
+    /// The readings, each cited.
     pub readings: Vec<Reading>,
+    /// The reading the map follows.
     pub chosen: String,
+    /// Why.
     pub reason: String,
 }
 
+/// One reading of the manual.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Reading {
+    /// Where.
     pub source: String,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub indirect: Option<String>,
+    /// What it says.
     pub says: String,
 }
 
@@ -1134,21 +1181,31 @@ pub struct Reading {
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Unknown {
+    /// The item.
     pub what: UnknownItem,
+    /// Why the manual leaves it unknown.
     pub reason: String,
 }
 
+/// An item of a register the manual may leave unknown.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum UnknownItem {
+    /// Its range.
     Range,
+    /// Its default.
     Default,
+    /// Its unit.
     Unit,
+    /// Its scale.
     Scale,
     /// Whether the word is signed (two's complement) or unsigned.
     Signed,
+    /// Its list of codes.
     Values,
+    /// Its bit fields.
     Fields,
+    /// Its access.
     Access,
 }
 
@@ -1162,7 +1219,9 @@ pub struct Gap {
     /// Parameter numbers covered, as printed ("U1-15 .. U1-18").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub params: Option<String>,
+    /// What the addresses hold (or why none is listed).
     pub description: String,
+    /// Its citation.
     pub source: String,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
@@ -1174,8 +1233,11 @@ pub struct Gap {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Removed {
+    /// The register id.
     pub id: String,
+    /// Why the variant lacks it.
     pub reason: String,
+    /// Its citation.
     pub source: String,
 }
 

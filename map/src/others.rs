@@ -17,7 +17,7 @@ use crate::source::Path;
 #[derive(Debug, Clone)]
 pub enum Rule {
     /// A role at a register: read as that register's own citation (address, parameter number,
-    /// name; not another register's row). The index is into [`Drive::registers`].
+    /// name; not another register's row). The index is into `Map::registers`.
     Register(usize),
     /// A role at a field: the field's bit or name, one of the role's codes with its label, or
     /// the field's register (its address, parameter number or name).
@@ -36,7 +36,7 @@ pub enum Rule {
         addresses: Vec<u16>,
         /// Names of which two words (or all, for a shorter name) must be printed.
         names: Vec<String>,
-        /// Registers (indices into [`Drive::registers`]) whose address or parameter number
+        /// Registers (indices into `Map::registers`) whose address or parameter number
         /// counts: a reading of a register's own conflict may cite the register's row.
         registers: Vec<usize>,
     },

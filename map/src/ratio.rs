@@ -12,7 +12,7 @@ use crate::model::RatioScale;
 
 /// The core's ratio for a map's scale; `None` when `counts` is 0 or `equals` is not a
 /// positive decimal with at most 18 decimals.
-pub fn ratio_of(s: &RatioScale) -> Option<Ratio> {
+pub(crate) fn ratio_of(s: &RatioScale) -> Option<Ratio> {
     let equals = Decimal::from_f64(s.equals)?;
     if s.counts == 0 || equals.mantissa <= 0 || equals.exponent > 18 {
         return None;
@@ -21,13 +21,13 @@ pub fn ratio_of(s: &RatioScale) -> Option<Ratio> {
 }
 
 /// The exact value a map's number was written as (`59.9` is 599/10, not the binary float).
-pub fn exact(value: f64) -> Option<Fraction> {
+pub(crate) fn exact(value: f64) -> Option<Fraction> {
     let d = Decimal::from_f64(value)?;
     Fraction::new(i128::from(d.mantissa), 10i128.checked_pow(d.exponent)?)
 }
 
 /// The count an engineering value of the map is, if it is a whole number of counts.
-pub fn count_of(ratio: Ratio, value: f64) -> Option<i64> {
+pub(crate) fn count_of(ratio: Ratio, value: f64) -> Option<i64> {
     ratio.encode_exact(exact(value)?).ok()
 }
 

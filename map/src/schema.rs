@@ -26,7 +26,7 @@ pub const CURRENT: u32 = 2;
 
 /// What each version changed, by version (index 0 is version 2): the text of a warning on a
 /// map of an earlier version.
-pub const CHANGES: &[(u32, &str)] = &[(
+pub(crate) const CHANGES: &[(u32, &str)] = &[(
     2,
     "schema 2 reads addresses and codes as the manual prints them, in hex (0x2001, 2001H), and \
      refuses a bare decimal (unless `address_format: decimal`, or a code 0-9) and a YAML alias \
@@ -34,7 +34,7 @@ pub const CHANGES: &[(u32, &str)] = &[(
 )];
 
 /// The version a file is written in: its `schema:` (1 when it states none), or why it is refused.
-pub fn version_of(tree: &Node) -> Result<u32, Diagnostic> {
+pub(crate) fn version_of(tree: &Node) -> Result<u32, Diagnostic> {
     let Some(node) = tree.get("schema") else {
         return Ok(1);
     };
@@ -60,7 +60,7 @@ pub fn version_of(tree: &Node) -> Result<u32, Diagnostic> {
 }
 
 /// The warning on a file read in an earlier version: what changed since.
-pub fn file_warning(file: &Arc<str>, tree: &Node, version: u32) -> Option<Diagnostic> {
+pub(crate) fn file_warning(file: &Arc<str>, tree: &Node, version: u32) -> Option<Diagnostic> {
     if version >= CURRENT {
         return None;
     }
@@ -104,7 +104,7 @@ pub struct Migrated {
 /// (`code: 10` of schema 1, decimal ten, becomes `code: 0x0A`), and the file states
 /// `schema: {CURRENT}`. Comments and layout are kept. The result is read back and compared with
 /// the original, value by value; a difference is an error, never a silent change.
-pub fn migrate(file: &Arc<str>, text: &str) -> Result<Migrated, Vec<Diagnostic>> {
+pub(crate) fn migrate(file: &Arc<str>, text: &str) -> Result<Migrated, Vec<Diagnostic>> {
     let parsed = crate::source::parse_map(file, text)?;
     if parsed.version >= CURRENT {
         return Ok(Migrated {

@@ -18,13 +18,18 @@ use crate::diagnostic::{Diagnostic, Loc};
 /// A YAML node and where it was written.
 #[derive(Debug, Clone)]
 pub struct Node {
+    /// Where the node was written.
     pub loc: Loc,
+    /// What the node is.
     pub kind: NodeKind,
 }
 
 #[derive(Debug, Clone)]
+/// What a YAML node holds.
 pub enum NodeKind {
+    /// A scalar.
     Scalar(Value),
+    /// A sequence.
     Seq(Vec<Node>),
     /// Entries in document order: (key, location of the key, value).
     Map(Vec<(String, Loc, Node)>),
@@ -42,16 +47,19 @@ pub enum Seg {
 pub struct Path(pub Vec<Seg>);
 
 impl Path {
+    /// The root of a map.
     pub fn root() -> Self {
         Path(Vec::new())
     }
 
+    /// This path, then mapping key `key`.
     pub fn key(&self, key: &str) -> Path {
         let mut p = self.clone();
         p.0.push(Seg::Key(key.to_owned()));
         p
     }
 
+    /// This path, then sequence item `index`.
     pub fn index(&self, index: usize) -> Path {
         let mut p = self.clone();
         p.0.push(Seg::Index(index));
@@ -143,25 +151,25 @@ impl Node {
 /// (`maps/automationdirect-acn.yaml`, 1,300 registers) is 377 KB, so this leaves room for a drive
 /// ten times larger while bounding what a contributed file can make the loader hold (the tree is
 /// a few times the text).
-pub const MAX_MAP_BYTES: usize = 4 * 1024 * 1024;
+pub(crate) const MAX_MAP_BYTES: usize = 4 * 1024 * 1024;
 
 /// The deepest nesting of collections. Shipped maps nest 8 levels; every recursive step after
 /// parsing (merging a variant, `to_value`, deserializing, dropping the tree) is bounded by this.
-pub const MAX_DEPTH: usize = 64;
+pub(crate) const MAX_DEPTH: usize = 64;
 
 /// The most aliases (`*name`) a map may use.
-pub const MAX_ALIASES: usize = 1_000;
+pub(crate) const MAX_ALIASES: usize = 1_000;
 
 /// The most nodes all aliases of a map may expand to together (aliases are copied into the
 /// tree, so this bounds the work and memory a "billion laughs" file can cause).
-pub const MAX_ALIAS_NODES: usize = 100_000;
+pub(crate) const MAX_ALIAS_NODES: usize = 100_000;
 
 /// Parses YAML text into a located tree. `file` names the file in locations.
 ///
 /// Safe for untrusted text: the size, the nesting depth and alias expansion are bounded (see the
 /// constants above), nothing recurses while parsing, every step is linear in the input, and
 /// exactly one YAML document is accepted.
-pub fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
+pub(crate) fn parse(file: &Arc<str>, text: &str) -> Result<Node, Diagnostic> {
     let (tree, slot_aliases) = parse_tree(file, text)?;
     match slot_aliases.into_iter().next() {
         Some(alias) => Err(alias),
@@ -208,7 +216,7 @@ fn parse_tree(file: &Arc<str>, text: &str) -> Result<(Node, Vec<Diagnostic>), Di
 
 /// One map file read as the loader uses it.
 #[derive(Debug, Clone)]
-pub struct Parsed {
+pub(crate) struct Parsed {
     pub tree: Node,
     /// The schema version the file is written in ([`crate::schema`]).
     pub version: u32,
@@ -223,7 +231,7 @@ pub struct Parsed {
 /// [`parse`], then the file's schema version and the decision on every address and code
 /// written without a hex marker (see [`crate::hex`]): the tree of one map file as the loader
 /// uses it.
-pub fn parse_map(file: &Arc<str>, text: &str) -> Result<Parsed, Vec<Diagnostic>> {
+pub(crate) fn parse_map(file: &Arc<str>, text: &str) -> Result<Parsed, Vec<Diagnostic>> {
     let (mut tree, slot_aliases) = parse_tree(file, text).map_err(|d| vec![d])?;
     let version = crate::schema::version_of(&tree).map_err(|d| vec![d])?;
     if version >= 2 && !slot_aliases.is_empty() {
@@ -258,7 +266,7 @@ pub fn parse_map(file: &Arc<str>, text: &str) -> Result<Parsed, Vec<Diagnostic>>
 }
 
 /// The error for a file over [`MAX_MAP_BYTES`].
-pub fn too_large(file: &Arc<str>, len: usize) -> Diagnostic {
+pub(crate) fn too_large(file: &Arc<str>, len: usize) -> Diagnostic {
     Diagnostic::new(
         Loc::new(file.clone(), 1, 1),
         None,

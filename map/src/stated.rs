@@ -7,6 +7,7 @@ use drivemap_core::stated::ProtocolFact;
 /// One fact the manual does not print, as the map says it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Unprinted {
+    /// The fact.
     pub fact: ProtocolFact,
     /// Why, as the map's `unknown:` gives it (trimmed).
     pub why: String,
@@ -27,7 +28,7 @@ fn interval(fact: ProtocolFact, i: &Option<Interval>) -> Option<Unprinted> {
 }
 
 /// Every fact of `p` marked `unknown:`, in [`ProtocolFact::ALL`] order.
-pub fn unprinted(p: &Protocol) -> Vec<Unprinted> {
+pub(crate) fn unprinted(p: &Protocol) -> Vec<Unprinted> {
     let mut out = Vec::new();
     let fc = &p.function_codes;
     out.extend(one(ProtocolFact::FunctionCodes, &fc.unknown, &fc.source));
@@ -70,6 +71,6 @@ pub fn unprinted(p: &Protocol) -> Vec<Unprinted> {
 }
 
 /// Why `fact` is not printed, if the map says so.
-pub fn why(p: &Protocol, fact: ProtocolFact) -> Option<Unprinted> {
+pub(crate) fn why(p: &Protocol, fact: ProtocolFact) -> Option<Unprinted> {
     unprinted(p).into_iter().find(|u| u.fact == fact)
 }

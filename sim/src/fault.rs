@@ -18,7 +18,10 @@ pub enum Fault {
     /// The reply is lost.
     Drop,
     /// Only the first `keep` bytes arrive.
-    Truncate { keep: usize },
+    Truncate {
+        /// How many bytes arrive.
+        keep: usize,
+    },
     /// The reply's CRC (RTU) is damaged; on TCP the last byte is, on ASCII the LRC.
     CorruptCrc,
     /// The reply arrives after `delay`.
@@ -35,7 +38,12 @@ pub enum Fault {
     Noise(Vec<u8>),
     /// The first `keep` bytes arrive, then nothing for `pause`, then the rest of the reply and
     /// the whole reply again (a transmitter that stalled mid-frame and repeated it).
-    Gap { keep: usize, pause: Duration },
+    Gap {
+        /// How many bytes arrive first.
+        keep: usize,
+        /// How long nothing arrives.
+        pause: Duration,
+    },
 }
 
 /// The client's end of a link to a [`SimulatedSlave`], with faults applied in order, one per

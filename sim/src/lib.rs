@@ -33,7 +33,7 @@
 //! use drivemap_sim::{ManualClock, SimOptions, Simulator};
 //!
 //! let maps = concat!(env!("CARGO_MANIFEST_DIR"), "/../maps/ptlk-tds-v8.yaml");
-//! let drive = drivemap_map::read_map(maps.as_ref(), &Default::default()).unwrap();
+//! let drive = drivemap_map::Loader::new().load(maps.as_ref()).unwrap();
 //! let clock = ManualClock::new();
 //! let mut sim = Simulator::new(drive, SimOptions::new().clock(Arc::new(clock.clone()))).unwrap();
 //! sim.set("frequency_command", 30.0).unwrap(); // Hz, 50 % of Cn-02 = 60 Hz
@@ -43,6 +43,8 @@
 //! assert_eq!(sim.value("output_frequency").unwrap().as_f64(), Some(12.0));
 //! ```
 #![doc = include_str!("../README.md")]
+
+#![warn(unreachable_pub, missing_docs)]
 
 pub mod clock;
 pub mod exceptions;

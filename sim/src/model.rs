@@ -57,7 +57,7 @@ fn rate(max_frequency: f64, seconds: f64) -> f64 {
 
 impl Model {
     /// Sets the target from the commands and a reference (Hz, clamped to `0..=max`).
-    pub fn aim(&mut self, reference: f64, max_frequency: f64) {
+    pub(crate) fn aim(&mut self, reference: f64, max_frequency: f64) {
         let reference = if reference.is_finite() {
             reference.abs().min(max_frequency)
         } else {
@@ -72,7 +72,7 @@ impl Model {
     }
 
     /// Moves the output towards the target for `dt` seconds.
-    pub fn advance(&mut self, dt: f64, max_frequency: f64, accel_s: f64, decel_s: f64) {
+    pub(crate) fn advance(&mut self, dt: f64, max_frequency: f64, accel_s: f64, decel_s: f64) {
         let up = rate(max_frequency, accel_s);
         let down = rate(max_frequency, decel_s);
         let mut left = if dt.is_finite() && dt > 0.0 { dt } else { 0.0 };
@@ -107,7 +107,7 @@ impl Model {
         self.output = out;
     }
 
-    pub fn running(&self) -> bool {
+    pub(crate) fn running(&self) -> bool {
         self.run || self.output != 0.0
     }
 
@@ -125,7 +125,7 @@ impl Model {
     }
 
     /// Whether a status condition holds.
-    pub fn holds(&self, c: Condition) -> bool {
+    pub(crate) fn holds(&self, c: Condition) -> bool {
         let moving = (self.output - self.target).abs() >= 1e-9;
         let accelerating = self.run
             && moving
@@ -146,7 +146,7 @@ impl Model {
         }
     }
 
-    pub fn state(&self) -> DriveState {
+    pub(crate) fn state(&self) -> DriveState {
         DriveState {
             output_hz: self.output,
             target_hz: self.target,

@@ -8,7 +8,7 @@
 //! motor — the simulator fills with plausible values, the same for every drive, listed in
 //! [`Plausible`] and `sim/README.md`.
 
-use drivemap_map::ir::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::core::command_profile::{CommandProfile, PathKind, Transition};
 use drivemap_runtime::core::roles::{FieldRole, NumberField, Role, RoleKind, Target};
 use drivemap_runtime::core::rule::Transports;
@@ -104,12 +104,12 @@ pub(crate) struct Bit {
 impl Bit {
     /// Whether the field holds its `on` code in the register's raw value (a bit-field
     /// register: one word).
-    pub fn holds(self, raw: u32) -> bool {
+    pub(crate) fn holds(self, raw: u32) -> bool {
         self.field.holds(raw as u16)
     }
 
     /// The register's raw value with the field set to `code`.
-    pub fn put(self, raw: u32, code: u16) -> u32 {
+    pub(crate) fn put(self, raw: u32, code: u16) -> u32 {
         u32::from(self.field.put(raw as u16, code))
     }
 }
@@ -164,7 +164,7 @@ pub(crate) struct StatusField {
 
 impl StatusField {
     /// The code to show, given which conditions hold; `None` when no code is consistent.
-    pub fn code(&self, holds: impl Fn(Condition) -> bool) -> Option<u16> {
+    pub(crate) fn code(&self, holds: impl Fn(Condition) -> bool) -> Option<u16> {
         self.candidates.iter().copied().find(|&c| {
             self.roles.iter().all(|&(cond, on, off)| {
                 if holds(cond) {
@@ -177,7 +177,7 @@ impl StatusField {
     }
 
     /// The register's raw value (one word) with the field set to `code`.
-    pub fn put(&self, raw: u32, code: u16) -> u32 {
+    pub(crate) fn put(&self, raw: u32, code: u16) -> u32 {
         let mask = ((((1u32 << self.width) - 1) << self.lsb) & 0xFFFF) as u16;
         u32::from((raw as u16 & !mask) | ((code << self.lsb) & mask))
     }
@@ -208,12 +208,12 @@ pub(crate) enum Follow {
 
 impl Follow {
     /// Whether it shows the fault code.
-    pub fn is_fault_code(self) -> bool {
+    pub(crate) fn is_fault_code(self) -> bool {
         matches!(self, Follow::FaultCode | Follow::FaultCodeField(_))
     }
 
     /// The bits of the register's word it shows (the whole word but for a field).
-    pub fn mask(self) -> u32 {
+    pub(crate) fn mask(self) -> u32 {
         match self {
             Follow::FaultCodeField(f) => u32::from(f.mask()),
             _ => u32::MAX,
@@ -258,7 +258,7 @@ impl ProfileSim {
     /// state `state`: the transition that leaves `state` and that the word asks for (an edge
     /// transition only where its edge bits rose), else `state`: a word that skips a state
     /// moves nothing.
-    pub fn next(&self, state: u8, before: u16, word: u16) -> Option<&'static Transition> {
+    pub(crate) fn next(&self, state: u8, before: u16, word: u16) -> Option<&'static Transition> {
         self.profile.transitions.iter().find(|t| {
             t.leaves(state) && t.asked_by(word) && (t.edge == 0 || (before & t.edge) != t.edge)
         })
@@ -266,7 +266,7 @@ impl ProfileSim {
 
     /// Whether `t` moves the drive towards running: a transition of the run path that no stop,
     /// coast or quick stop path takes.
-    pub fn towards_run(&self, t: &Transition) -> bool {
+    pub(crate) fn towards_run(&self, t: &Transition) -> bool {
         let p = self.profile;
         let index = |x: &Transition| p.transitions.iter().position(|y| y == x);
         let Some(i) = index(t) else {
@@ -283,7 +283,7 @@ impl ProfileSim {
     }
 
     /// The state a trip leads to: the one the `reset_fault` path leaves.
-    pub fn fault_state(&self) -> Option<u8> {
+    pub(crate) fn fault_state(&self) -> Option<u8> {
         let p = self.profile;
         let path = p.path(PathKind::ResetFault)?;
         path.via
@@ -294,16 +294,12 @@ impl ProfileSim {
 }
 
 /// The map index of the register at plan row `row`.
-fn map_index(drive: &Drive, row: u16) -> Option<usize> {
-    drive
-        .plan()
-        .order
-        .iter()
-        .position(|&p| p == usize::from(row))
+fn map_index(map: &Map, row: u16) -> Option<usize> {
+    map.register_of_row(usize::from(row)).map(|r| r.index())
 }
 
 /// Resolves the plan's roles of `drive`; `None` when the map gives none (a register store).
-pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) -> Option<Resolved> {
+pub(crate) fn resolve(drive: &Map, externals: &dyn Fn(&str) -> Option<f64>) -> Option<Resolved> {
     let roles = drive.plan().roles;
     if roles.is_empty() {
         return None;
@@ -337,7 +333,11 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
         Some(match p.target {
             Target::Register(row) => match map_index(drive, row) {
                 Some(i) => {
-                    if drive.registers[i].default_value().is_none() {
+                    if drive
+                        .register_at(i)
+                        .and_then(|r| r.default_value())
+                        .is_none()
+                    {
                         initial.push((i, fallback));
                     }
                     Source::Register(i)

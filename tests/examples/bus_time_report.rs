@@ -22,9 +22,10 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use drivemap_drives as drives;
-use drivemap_map::model::{Access, TransportName};
-use drivemap_map::validate::Context;
+use drivemap_map::RegisterRef;
+use drivemap_map::facts::TransportName;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::core::Access;
 use drivemap_runtime::planner::{
     Read, ReadableSet, plan_contiguous, plan_cost, plan_reads, plan_single,
 };
@@ -121,8 +122,7 @@ fn main() {
         .map(|b| b.parse().expect("BAUD must be a number"))
         .unwrap_or(9600);
     let maps_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps");
-    let ctx =
-        Context::with_manuals(&drivemap_map::default_manuals_dir(&maps_dir).unwrap_or_default());
+    let ctx = drivemap_map::Loader::new().default_manuals(&maps_dir);
     let mut rows = Vec::new();
     let mut notes = Vec::new();
     for &(drive_id, module) in drives::DRIVES {
@@ -133,57 +133,43 @@ fn main() {
             std::process::exit(1);
         };
         let path = maps_dir.join(format!("{drive_id}.yaml"));
-        let drive = drivemap_map::read_map(&path, &ctx).unwrap_or_else(|e| {
+        let drive = ctx.load(&path).unwrap_or_else(|e| {
             eprintln!("error: {}: {e}", path.display());
             std::process::exit(1);
         });
-        assert_eq!(drive.meta.id, drive_id);
+        assert_eq!(drive.id(), drive_id);
 
-        let on_rtu = |r: &drivemap_map::ir::Register| {
-            r.transports
+        let on_rtu = |r: RegisterRef<'_>| {
+            r.data()
+                .transports
                 .as_ref()
                 .is_none_or(|t| t.contains(&TransportName::Rtu))
         };
-        // Monitor groups: the groups the map declares read-only (`access: r`).
-        let loaded = drivemap_map::load::load(&path).unwrap_or_else(|_| {
-            eprintln!("error: {}: cannot load", path.display());
-            std::process::exit(1);
-        });
-        let read_only: Vec<&str> = loaded
-            .model
-            .groups
-            .iter()
-            .filter(|g| g.access == Some(Access::Read))
-            .map(|g| g.id.as_str())
-            .collect();
-        let monitor: Vec<usize> = (0..drive.groups.len())
-            .filter(|&g| read_only.contains(&drive.groups[g].id.as_str()))
-            .collect();
         let generated_readable = [
             ReadableSet::from_registers(registers, Table::Holding),
             ReadableSet::from_registers(registers, Table::Input),
         ];
         let mut readable: BTreeMap<u8, Vec<u16>> = BTreeMap::new();
         let mut wanted: BTreeMap<u8, Vec<u16>> = BTreeMap::new();
-        for r in &drive.registers {
-            if !(r.readable() && !r.broadcast && on_rtu(r)) {
+        for r in drive.registers() {
+            if !(r.readable() && !r.broadcast_only() && on_rtu(r)) {
                 continue;
             }
-            let t = r.table;
+            let t = r.plan().info.table;
             let ti = u8::from(t == Table::Input);
             assert!(
-                generated_readable[usize::from(ti)].contains(r.def.address),
+                generated_readable[usize::from(ti)].contains(r.address()),
                 "{drive_id}: {} at {:04X}h is readable in the map but not in REGISTERS",
                 r.id(),
-                r.def.address
+                r.address()
             );
-            readable.entry(ti).or_default().push(r.def.address);
-            if monitor.contains(&r.group) {
-                wanted.entry(ti).or_default().push(r.def.address);
+            readable.entry(ti).or_default().push(r.address());
+            if r.group_access() == Some(Access::Read) {
+                wanted.entry(ti).or_default().push(r.address());
             }
         }
 
-        let protocol = &drive.protocol;
+        let protocol = drive.protocol();
         let mut serial = SerialConfig::new(baud);
         if let Some(bits) = protocol.serial.as_ref().and_then(|s| s.char_bits) {
             serial = serial.fixed_char_bits(bits);
@@ -224,9 +210,12 @@ fn main() {
             opt(t.request_gap_bits),
             opt(t.request_gap_us),
         ));
-        let mut groups: Vec<String> = monitor
+        // Monitor groups: the groups the map declares read-only (`access: r`).
+        let mut groups: Vec<String> = drive
+            .groups()
             .iter()
-            .map(|&g| drive.groups[g].id.clone())
+            .filter(|g| drive.group_access(g) == Some(Access::Read))
+            .map(|g| g.id.clone())
             .collect();
         groups.sort();
         rows.push(Row {

@@ -39,7 +39,7 @@ fn main() {
         if !only.is_empty() && !only.contains(&m.id) {
             continue;
         }
-        let settings = paramset::settings_of(&m.drive);
+        let settings = paramset::settings_of(m.drive.ir());
         if settings.is_empty() {
             println!("| {} | 0 | 0 | - | 0 | - | - |", m.id);
             continue;
@@ -55,7 +55,7 @@ fn main() {
             ))
             .expect("the line's master side");
             let mut s = Session::over(
-                &m.drive,
+                m.drive.ir(),
                 Box::new(transport),
                 ClientOptions::for_line(m.profile, line),
                 slave,

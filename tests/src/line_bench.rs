@@ -18,9 +18,10 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use drivemap_drives as drives;
-use drivemap_map::Drive;
-use drivemap_map::model::{Access, TransportName};
+use drivemap_map::Map as Drive;
+use drivemap_map::facts::TransportName;
 use drivemap_runtime::bus_time::{BusModel, Parity, SerialConfig};
+use drivemap_runtime::core::Access;
 use drivemap_runtime::planner::{Poller, plan_contiguous, plan_cost};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::serial::{self, SerialOptions, SerialTransport};
@@ -62,37 +63,27 @@ fn generated(module: &str) -> Option<(&'static Profile, &'static [RegisterPlan])
 /// Every shipped drive (`drivemap_drives::DRIVES`) with its monitor registers.
 pub fn monitors() -> Vec<Monitors> {
     let maps_dir = crate::workspace().join("maps");
-    let ctx = drivemap_map::validate::Context::with_manuals(
-        &drivemap_map::default_manuals_dir(&maps_dir).unwrap_or_default(),
-    );
+    let ctx = drivemap_map::Loader::new().default_manuals(&maps_dir);
     let mut out = Vec::new();
     for &(id, module) in drives::DRIVES {
         let (profile, registers) = generated(module)
             .unwrap_or_else(|| panic!("module `{module}` of DRIVES is not listed in line_bench"));
         let path: PathBuf = maps_dir.join(format!("{id}.yaml"));
-        let drive = drivemap_map::read_map(&path, &ctx)
+        let drive = ctx
+            .load(&path)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let loaded = drivemap_map::load::load(&path)
-            .unwrap_or_else(|_| panic!("{}: cannot load", path.display()));
-        let read_only: Vec<&str> = loaded
-            .model
-            .groups
-            .iter()
-            .filter(|g| g.access == Some(Access::Read))
-            .map(|g| g.id.as_str())
-            .collect();
         let mut wanted: Vec<(Table, u16)> = drive
-            .registers
-            .iter()
+            .registers()
             .filter(|r| {
                 r.readable()
-                    && !r.broadcast
-                    && r.transports
+                    && !r.broadcast_only()
+                    && r.data()
+                        .transports
                         .as_ref()
                         .is_none_or(|t| t.contains(&TransportName::Rtu))
-                    && read_only.contains(&drive.groups[r.group].id.as_str())
+                    && r.group_access() == Some(Access::Read)
             })
-            .map(|r| (r.table, r.def.address))
+            .map(|r| (r.plan().info.table, r.address()))
             .collect();
         wanted.sort_by_key(|&(t, a)| (t == Table::Input, a));
         wanted.dedup();

@@ -13,28 +13,23 @@ use proc_macro2::TokenStream;
 use quote::quote;
 
 use super::{docs, enums, ident};
-use crate::ir::Register;
-use crate::model::Field;
-use crate::names;
-use crate::validate::field_span;
+use drivemap_core::plan::Field;
+use drivemap_map::RegisterRef;
 
 /// The macro the placeholder calls: `rt::bit_fields_placeholder!(<row>);` on one line.
-pub const PLACEHOLDER: &str = "bit_fields_placeholder";
+pub(super) const PLACEHOLDER: &str = "bit_fields_placeholder";
 
 /// The items of a bit-field register: the enumerations of its coded fields, then the
 /// placeholder of its `rt::bit_fields!` invocation ([`text`]).
-pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> TokenStream {
+pub(super) fn emit(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> TokenStream {
     let row = proc_macro2::Literal::usize_unsuffixed(index);
     let mut field_enums = Vec::new();
-    for (fi, f) in fields
-        .iter()
-        .filter(|f| field_span(f).is_some())
-        .enumerate()
-    {
+    // The plan's fields (their spans decided), each with the map's record of it.
+    for (fi, f) in lowered_fields(r).enumerate() {
         if f.values.is_empty() {
             continue;
         }
-        let ety = ident(&names::field_enum(r, f));
+        let ety = ident(&r.field_enum_name(f));
         let fi = proc_macro2::Literal::usize_unsuffixed(fi);
         field_enums.push(enums::emit(
             &ety,
@@ -53,16 +48,12 @@ pub fn emit(r: &Register, fields: &[Field], index: usize, rt: &TokenStream) -> T
 }
 
 /// `rt::bit_fields! { … }` of a register, as text at the top level of the module.
-pub fn text(r: &Register, fields: &[Field]) -> String {
+pub(super) fn text(r: RegisterRef<'_>, mask: u16, fields: &[Field]) -> String {
     let writable = r.writable();
-    let mut mask: u16 = 0;
     let mut lines = String::new();
-    for f in fields {
-        let Some((lo, width)) = field_span(f) else {
-            continue;
-        };
-        let fmask: u16 = (((1u32 << width) - 1) << lo) as u16;
-        mask |= fmask;
+    for (f, lowered) in lowered_fields(r).zip(fields) {
+        let (lo, width) = (lowered.lsb, lowered.width);
+        let fmask = lowered.mask();
         let where_ = if width == 1 {
             format!("bit {lo}")
         } else {
@@ -90,7 +81,7 @@ pub fn text(r: &Register, fields: &[Field]) -> String {
             let (kind, names) = if f.values.is_empty() {
                 ("number", names)
             } else {
-                let ety = names::field_enum(r, f);
+                let ety = r.field_enum_name(f);
                 let names = match names.split_once(',') {
                     Some((get, rest)) => format!("{get}: {ety},{rest}"),
                     None => format!("{names}: {ety}"),
@@ -116,20 +107,32 @@ pub fn text(r: &Register, fields: &[Field]) -> String {
     out += &doc_lines(
         &format!(
             "Bit fields of `{}`; bits outside `{mask:#06x}` are reserved and always 0.",
-            r.def.name
+            r.name()
         ),
         4,
     );
     let _ = writeln!(
         out,
         "    pub struct {}(mask {}, register {:?});",
-        names::bits_type(r),
+        r.bits_type_name(),
         super::hex_text(mask),
         r.id()
     );
     out += &lines;
     out.push_str("}\n");
     super::plan::wrap(&out)
+}
+
+/// The map's records of the fields the plan kept (those with a bit span), in the plan's
+/// order.
+fn lowered_fields(r: RegisterRef<'_>) -> impl Iterator<Item = &drivemap_map::facts::BitField> {
+    let kept: &'static [Field] = match r.plan().conversion {
+        drivemap_core::plan::Conversion::Bits { fields, .. } => fields,
+        _ => &[],
+    };
+    r.fields()
+        .iter()
+        .filter(move |f| kept.iter().any(|k| k.id == f.id))
 }
 
 /// `text` as `///` lines indented by `indent`, brackets of the manual escaped as in rustdoc

@@ -5,11 +5,11 @@ use quote::quote;
 
 use crate::describe;
 use crate::facts::{self, FactKey};
-use crate::ir::{Drive, Register};
+use drivemap_map::{Map, RegisterRef};
 
 /// Brackets of the manual's text (`Drive Read[y]`, `[1]`) escaped so that rustdoc does not
 /// read them as links; a link the generator writes (``[`Name`]``) and code spans stay as they are.
-pub fn escape_brackets(line: &str) -> String {
+pub(super) fn escape_brackets(line: &str) -> String {
     let chars: Vec<char> = line.chars().collect();
     let mut out = String::with_capacity(line.len());
     let mut in_code = false;
@@ -26,7 +26,7 @@ pub fn escape_brackets(line: &str) -> String {
 }
 
 /// `#[doc]` attributes, one per line (outer, for items).
-pub fn item(text: &str) -> TokenStream {
+pub(super) fn item(text: &str) -> TokenStream {
     let attrs = text.lines().map(|l| {
         let l = if l.is_empty() {
             String::new()
@@ -38,8 +38,8 @@ pub fn item(text: &str) -> TokenStream {
     quote!(#(#attrs)*)
 }
 
-pub fn module(drive: &Drive) -> String {
-    let m = &drive.meta;
+pub(super) fn module(drive: &Map) -> String {
+    let m = drive.meta();
     let mut s = format!(
         "{} {} — register map `{}`.\n\n",
         m.vendor,
@@ -58,13 +58,13 @@ pub fn module(drive: &Drive) -> String {
     }
     s += &format!(
         "\n{} registers; {}; function codes {}.",
-        drive.registers.len(),
-        describe::per_request(drive.protocol.max_read(), drive.protocol.max_write()),
-        describe::functions(&drive.protocol.function_codes.codes)
+        drive.registers().len(),
+        describe::per_request(drive.protocol().max_read(), drive.protocol().max_write()),
+        describe::functions(&drive.protocol().function_codes.codes)
     );
     // The protocol facts the manual does not print (`PROFILE.not_printed`), each with what the
     // runtime uses in its place.
-    let unprinted = drivemap_map::stated::unprinted(&drive.protocol);
+    let unprinted = drive.not_printed();
     if !unprinted.is_empty() {
         s += "\n\nNot printed in the manual (`PROFILE.not_printed`):\n";
         for u in unprinted {
@@ -82,8 +82,8 @@ pub fn module(drive: &Drive) -> String {
 
 /// The rustdoc of a register, read from its [`facts`](crate::facts) alone: the summary line
 /// prints the identity rows, the paragraphs below the others.
-pub fn register(drive: &Drive, r: &Register) -> String {
-    let f = facts::register(drive, r);
+pub(super) fn register(r: RegisterRef<'_>) -> String {
+    let f = r.facts();
     let title = match &f.param {
         Some(p) => format!("**{p} — {}**", f.name),
         None => format!("**{}**", f.name),
@@ -238,15 +238,15 @@ fn capitalized(s: &str) -> String {
 /// What rustdoc search finds a register by besides its type's name (`#[doc(alias)]`): its id,
 /// its parameter number as printed (`Cn-02`, `n011`) and its address in the manual's notation
 /// (`2101H` and `0x2101`, or the register number of a manual numbering them in decimal).
-pub fn aliases(drive: &Drive, r: &Register, type_name: &str) -> Vec<String> {
-    let mut out = vec![r.def.id.clone()];
-    out.extend(r.def.param.clone());
+pub(super) fn aliases(r: RegisterRef<'_>, type_name: &str) -> Vec<String> {
+    let mut out = vec![r.id().to_owned()];
+    out.extend(r.param().map(str::to_owned));
     let addresses =
-        std::iter::once(r.def.address).chain(r.def.address_alternatives.iter().map(|a| a.address));
+        std::iter::once(r.address()).chain(r.address_alternatives().iter().map(|a| a.address));
     for a in addresses {
-        match drive.address_format {
-            crate::model::AddressFormat::Decimal => out.push(a.to_string()),
-            crate::model::AddressFormat::Hex => {
+        match r.map().address_format() {
+            facts::AddressFormat::Decimal => out.push(a.to_string()),
+            facts::AddressFormat::Hex => {
                 out.push(format!("{a:04X}H"));
                 out.push(format!("0x{a:04X}"));
             }

@@ -5,12 +5,12 @@ use proc_macro2::{Ident, TokenStream};
 use quote::quote;
 
 use super::{docs, ident};
-use crate::model::EnumValue;
-use crate::validate::pascal_case;
+use crate::describe::pascal_case;
+use crate::facts::EnumValue;
 
 /// An enum type named `ty` for `values`; `what` describes it in rustdoc; `labels` is the
 /// expression of its labels in the plan (`plan::REGISTERS[3].labels()`).
-pub fn emit(
+pub(super) fn emit(
     ty: &Ident,
     values: &[EnumValue],
     what: &str,

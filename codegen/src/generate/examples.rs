@@ -6,16 +6,16 @@ use proc_macro2::TokenStream;
 use quote::{format_ident, quote};
 use syn::LitInt;
 
-use crate::ir::Drive;
+use drivemap_map::Map;
 
-pub(super) fn emit(drive: &Drive) -> TokenStream {
-    if drive.examples.is_empty() {
+pub(super) fn emit(drive: &Map) -> TokenStream {
+    if drive.examples().is_empty() {
         return TokenStream::new();
     }
     let mut items = Vec::new();
     let mut all = Vec::new();
-    for e in &drive.examples {
-        let Ok(bytes) = drivemap_map::examples::parse_bytes(&e.bytes) else {
+    for e in drive.examples() {
+        let Ok(bytes) = drivemap_map::facts::parse_bytes(&e.bytes) else {
             continue; // validation refuses the map before generation
         };
         let name = format_ident!("{}", e.id.to_uppercase());

@@ -5,9 +5,9 @@
 use proc_macro2::{Literal, TokenStream};
 use quote::{format_ident, quote};
 
-use crate::lower::DrivePlan;
 use drivemap_core::indexed::Entry;
 use drivemap_core::register::{Access, Table};
+use drivemap_map::MapPlan;
 
 fn access(a: Access, rt: &TokenStream) -> TokenStream {
     match a {
@@ -75,7 +75,7 @@ fn entry(e: &Entry, rt: &TokenStream) -> TokenStream {
 }
 
 /// The items, or nothing for a drive without indexed access.
-pub(super) fn emit(plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
+pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
     if plan.indexed.is_empty() {
         return TokenStream::new();
     }

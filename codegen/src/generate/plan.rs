@@ -1,5 +1,5 @@
 //! The drive plan printed as `const` data: one row per register, in the order of
-//! [`DrivePlan::registers`](crate::lower::DrivePlan::registers).
+//! [`MapPlan::registers`](drivemap_map::MapPlan::registers).
 //!
 //! Rows are printed here rather than through `prettyplease`, which would spread each row over
 //! dozens of lines: a row is the register's identity, then its unit, conversion, envelope and
@@ -25,10 +25,10 @@ use drivemap_core::rule::{Broadcast, Transports};
 use drivemap_core::scale::{Decimal, RawRange};
 use drivemap_core::width::{Width, WordOrder};
 
-use crate::lower::DrivePlan;
+use drivemap_map::MapPlan;
 
 /// The `plan` module of a drive: `pub const REGISTERS: &[RegisterPlan]`.
-pub fn module(plan: &DrivePlan) -> String {
+pub(super) fn module(plan: &MapPlan) -> String {
     let mut rows = String::new();
     for (i, r) in plan.registers.iter().enumerate() {
         let _ = writeln!(rows, "        /* {i} */ {},", row(r));
@@ -118,12 +118,12 @@ pub fn module(plan: &DrivePlan) -> String {
 }
 
 /// The longest line printed, but for one holding a string literal longer than that.
-pub const WIDTH: usize = 100;
+pub(super) const WIDTH: usize = 100;
 
 /// Every line of `text` longer than [`WIDTH`] broken after a comma (outside string literals)
 /// into lines that fill it, continued one step deeper than the line's indentation; comments
 /// stay as they are.
-pub fn wrap(text: &str) -> String {
+pub(super) fn wrap(text: &str) -> String {
     let mut out = String::with_capacity(text.len() + text.len() / 16);
     for line in text.lines() {
         if line.len() <= WIDTH || line.trim_start().starts_with("//") {
@@ -178,7 +178,7 @@ fn comma_pieces(line: &str) -> Vec<&str> {
 }
 
 /// `pub const ROLES`: one place per line, the register's id in a comment.
-fn roles(plan: &DrivePlan) -> String {
+fn roles(plan: &MapPlan) -> String {
     let mut out = String::from(
         "\n    /// Which registers and fields play the standard parts of a drive (the map's `roles`).\n",
     );
@@ -250,7 +250,7 @@ fn roles(plan: &DrivePlan) -> String {
 }
 
 /// The `profile` of `ROLES`: the command profile as data (`None` for a drive run by fields).
-fn command_profile(plan: &DrivePlan) -> String {
+fn command_profile(plan: &MapPlan) -> String {
     let Some(p) = plan.roles.profile else {
         return "        profile: None,\n".into();
     };
@@ -521,7 +521,7 @@ const ROW_INDENT: usize = 12;
 /// One register's plan as a Rust expression: its identity (the fields that differ from
 /// `RegisterInfo::DEFAULT`), its unit, conversion, envelope and the plan's other parts, on one
 /// line that [`module`] wraps (`RegisterPlan::word` for a plain unsigned word without unit).
-pub fn row(r: &RegisterPlan) -> String {
+pub(super) fn row(r: &RegisterPlan) -> String {
     let i = &r.info;
     let d = RegisterInfo::DEFAULT;
     let mut info = vec![format!("id: {}", string(i.id))];

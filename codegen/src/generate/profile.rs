@@ -1,5 +1,5 @@
 //! The drive's protocol profile as a `static PROFILE: Profile`, printed from the plan's profile
-//! ([`DrivePlan::profile`], which the lowering pass builds once and `drivemap-live` uses as it
+//! ([`MapPlan::profile`], which the lowering pass builds once and `drivemap-live` uses as it
 //! is); its write table is derived from the plan rows at compile time
 //! (`rt::plan::write_rules`), not listed.
 
@@ -7,10 +7,10 @@ use proc_macro2::TokenStream;
 use quote::quote;
 
 use super::hex;
-use crate::lower::DrivePlan;
 use drivemap_core::profile::{CommandKind, Parity};
+use drivemap_map::MapPlan;
 
-pub fn emit(plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
+pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
     let p = plan.profile;
     let id = p.drive_id;
     let fcs = p.function_codes.iter().map(|f| hex2(*f));

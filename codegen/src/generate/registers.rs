@@ -7,17 +7,15 @@ use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 
 use super::{bitfields, docs, enums, ident};
-use crate::ir::{Drive, Register, ValueKind};
-use crate::lower::DrivePlan;
-use crate::model::Access;
-use crate::names;
+use drivemap_core::Access;
+use drivemap_core::plan::Conversion;
+use drivemap_map::{Map, MapPlan, RegisterRef};
 
-pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
+pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream {
     let items = drive
-        .registers
-        .iter()
+        .registers()
         .zip(&plan.order)
-        .map(|(r, &index)| register(drive, r, index, rt));
+        .map(|(r, &index)| register(r, index, rt));
     quote! {
         /// This drive: its settings and the plan of its registers, for the generic register
         /// type [`rt::Reg`].
@@ -39,56 +37,60 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
 }
 
 /// The value type of a register and the items that define it (enumerations, bit fields).
-fn value(r: &Register, index: usize, rt: &TokenStream) -> (TokenStream, TokenStream) {
+fn value(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> (TokenStream, TokenStream) {
     let row = Literal::usize_unsuffixed(index);
-    match r.kind() {
-        ValueKind::Word => match (r.def.pair.is_some(), r.def.signed) {
+    let plan = r.plan();
+    match plan.conversion {
+        Conversion::Word { signed, .. } => match (plan.info.width.count() == 2, signed) {
             (false, true) => (quote!(i16), quote!()),
             (false, false) => (quote!(u16), quote!()),
             (true, true) => (quote!(i32), quote!()),
             (true, false) => (quote!(u32), quote!()),
         },
-        ValueKind::UnitQuantity | ValueKind::Quantity(_) => (quote!(f64), quote!()),
-        ValueKind::Enum(values) => {
-            let ty = ident(&names::value_enum(r));
-            let what = match &r.def.param {
-                Some(p) => format!("{p} {}", r.def.name),
-                None => r.def.name.clone(),
+        Conversion::Decimal { .. }
+        | Conversion::Relative { .. }
+        | Conversion::Ratio { .. }
+        | Conversion::Selected { .. } => (quote!(f64), quote!()),
+        Conversion::Enum { .. } => {
+            let ty = ident(&r.value_enum_name());
+            let what = match r.param() {
+                Some(p) => format!("{p} {}", r.name()),
+                None => r.name().to_owned(),
             };
             let labels = quote!(plan::REGISTERS[#row].labels());
-            let extra = enums::emit(&ty, values, &what, labels, rt);
+            let extra = enums::emit(&ty, r.values(), &what, labels, rt);
             (quote!(#ty), extra)
         }
-        ValueKind::Bits(fields) => {
-            let ty = ident(&names::bits_type(r));
-            (quote!(#ty), bitfields::emit(r, fields, index, rt))
+        Conversion::Bits { .. } => {
+            let ty = ident(&r.bits_type_name());
+            (quote!(#ty), bitfields::emit(r, index, rt))
         }
     }
 }
 
-fn register(drive: &Drive, r: &Register, index: usize, rt: &TokenStream) -> TokenStream {
-    let type_name = names::register_type(r);
+fn register(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> TokenStream {
+    let type_name = r.type_name();
     let marker = ident(&type_name);
-    let doc = docs::item(&docs::register(drive, r));
-    let aliases = docs::aliases(drive, r, &type_name);
+    let doc = docs::item(&docs::register(r));
+    let aliases = docs::aliases(r, &type_name);
     // One attribute for all of them (rustdoc's list form), not one line each.
     let aliases = (!aliases.is_empty()).then(|| quote!(#[doc(alias(#(#aliases),*))]));
     let (mut value, mut extra) = value(r, index, rt);
-    let mut access = match r.access {
+    let mut access = match r.plan().info.access {
         Access::Read => quote!(ReadOnly),
         Access::Write => quote!(WriteOnly),
         Access::ReadWrite => quote!(ReadWrite),
     };
-    if !r.def.read_values.is_empty() {
+    if !r.read_values().is_empty() {
         // Reads decode to the read enumeration; writes take the word (`ReadWriteAs`).
-        let ty = ident(&names::read_enum(r));
+        let ty = ident(&r.read_enum_name());
         let row = Literal::usize_unsuffixed(index);
-        let what = match &r.def.param {
-            Some(p) => format!("{p} {} as read", r.def.name),
-            None => format!("{} as read", r.def.name),
+        let what = match r.param() {
+            Some(p) => format!("{p} {} as read", r.name()),
+            None => format!("{} as read", r.name()),
         };
         let labels = quote!(plan::REGISTERS[#row].read_values);
-        let read = enums::emit(&ty, &r.def.read_values, &what, labels, rt);
+        let read = enums::emit(&ty, r.read_values(), &what, labels, rt);
         access = quote!(#rt::ReadWriteAs<#value>);
         value = quote!(#ty);
         extra = quote!(#extra #read);

@@ -6,9 +6,9 @@ use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 
 use super::{docs, hex, ident};
-use crate::ir::{Drive, ValueKind};
-use crate::lower::{DrivePlan, Quantity, SettingsPlan};
-use crate::names::{self, pascal_case};
+use crate::describe::pascal_case;
+use drivemap_core::plan::Conversion;
+use drivemap_map::{Map, MapPlan, Quantity, RegisterRef, SettingsPlan};
 
 /// What the printers of the three kinds of slot collect: the `Settings` fields with their docs,
 /// and the arms of the methods that fill and answer them.
@@ -29,25 +29,25 @@ struct Parts {
 }
 
 /// `Settings`, its impls and the variant enums, from the plan's slots.
-pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
+pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream {
     let SettingsPlan {
         codes,
         quantities,
         axes: _,
     } = &plan.settings;
     let mut parts = Parts::default();
-    for (a, axis) in drive.variants.iter().enumerate() {
+    for (a, axis) in drive.variants().iter().enumerate() {
         variant_axis(&mut parts, a, axis);
     }
     let mut selector_fields = Vec::new();
     for (slot, code) in codes.iter().enumerate() {
-        let sel = &drive.registers[plan_to_map(plan, code.register)];
+        let sel = plan_register(drive, code.register);
         if let Some(id) = code_slot(&mut parts, slot, sel, code.field.as_ref(), rt) {
             selector_fields.push(id);
         }
     }
     for (slot, q) in quantities.iter().enumerate() {
-        quantity_slot(&mut parts, slot, q, drive, plan, &selector_fields, rt);
+        quantity_slot(&mut parts, slot, q, drive, &selector_fields, rt);
     }
     let Parts {
         fields,
@@ -118,8 +118,8 @@ pub fn emit(drive: &Drive, plan: &DrivePlan, rt: &TokenStream) -> TokenStream {
 }
 
 /// A variant axis: its enum, its field and its arm of `variant`.
-fn variant_axis(parts: &mut Parts, a: usize, axis: &crate::model::VariantAxis) {
-    let ty = ident(&names::axis_enum(axis));
+fn variant_axis(parts: &mut Parts, a: usize, axis: &crate::facts::VariantAxis) {
+    let ty = ident(&pascal_case(&axis.id));
     let field = ident(&axis.id);
     let doc = docs::item(&format!(
         "{} of the drive (base: {}).",
@@ -153,11 +153,11 @@ fn variant_axis(parts: &mut Parts, a: usize, axis: &crate::model::VariantAxis) {
 fn code_slot(
     parts: &mut Parts,
     slot: usize,
-    sel: &crate::ir::Register,
+    sel: RegisterRef<'_>,
     field: Option<&drivemap_core::plan::Field>,
     rt: &TokenStream,
 ) -> Option<String> {
-    let addr = sel.def.address;
+    let addr = sel.address();
     let slot = Literal::u8_unsuffixed(slot as u8);
     if let Some(f) = field {
         // A field of the selector's word: the code is the field's value.
@@ -191,9 +191,9 @@ fn code_slot(
         "{} (`{addr:04X}h`), which selects a scale or an address. `None` until read or set.",
         label(sel),
     ));
-    match sel.kind() {
-        ValueKind::Enum(_) => {
-            let ty = ident(&names::value_enum(sel));
+    match sel.plan().conversion {
+        Conversion::Enum { .. } => {
+            let ty = ident(&sel.value_enum_name());
             parts.fields.push(quote!(#doc pub #field: Option<#ty>,));
             parts.absorb.push((
                 addr,
@@ -209,7 +209,7 @@ fn code_slot(
             parts.code.push(quote!(#slot => self.#field,));
         }
     }
-    Some(sel.def.id.clone())
+    Some(sel.id().to_owned())
 }
 
 /// A quantity slot (a register other values are relative to, or a quantity the application
@@ -218,29 +218,28 @@ fn quantity_slot(
     parts: &mut Parts,
     slot: usize,
     q: &Quantity,
-    drive: &Drive,
-    plan: &DrivePlan,
+    drive: &Map,
     selector_fields: &[String],
     rt: &TokenStream,
 ) {
     let slot_lit = Literal::u8_unsuffixed(slot as u8);
     match q {
         Quantity::Register(i) => {
-            let reference = &drive.registers[plan_to_map(plan, *i)];
+            let reference = plan_register(drive, *i);
             let field = ident(reference.id());
-            if selector_fields.contains(&reference.def.id) {
+            if selector_fields.iter().any(|s| s == reference.id()) {
                 // Also a selector: its code is the quantity.
                 parts.quantity.push(
                     quote!(#slot_lit => #rt::SettingsView::code(self, #slot_lit).map(f64::from),),
                 );
                 return;
             }
-            let addr = reference.def.address;
-            let unit = reference.def.unit.clone().unwrap_or_default();
+            let addr = reference.address();
+            let unit = reference.unit().unwrap_or_default();
             let doc = docs::item(&format!(
                 "{} (`{:04X}h`) in {unit}: other values are scaled relative to it. `None` until read or set.",
                 label(reference),
-                reference.def.address
+                reference.address()
             ));
             parts.fields.push(quote!(#doc pub #field: Option<f64>,));
             let index = Literal::usize_unsuffixed(*i);
@@ -334,18 +333,15 @@ fn view_method(
 /// The map index of the register at `index` of the plan's table. Every row is a register's
 /// (the lowering makes `order` a permutation of the rows): a row without one is a bug of the
 /// lowering, said as such, never register 0's place taken silently.
-fn plan_to_map(plan: &DrivePlan, index: usize) -> usize {
-    plan.order
-        .iter()
-        .position(|&p| p == index)
-        .unwrap_or_else(|| {
-            panic!("plan row {index} is no register's: `order` is not a permutation")
-        })
+fn plan_register(drive: &Map, index: usize) -> RegisterRef<'_> {
+    drive.register_of_row(index).unwrap_or_else(|| {
+        panic!("plan row {index} is no register's: `order` is not a permutation")
+    })
 }
 
-fn label(r: &crate::ir::Register) -> String {
-    match &r.def.param {
-        Some(p) => format!("{p} {}", r.def.name),
-        None => r.def.name.clone(),
+fn label(r: RegisterRef<'_>) -> String {
+    match r.param() {
+        Some(p) => format!("{p} {}", r.name()),
+        None => r.name().to_owned(),
     }
 }

@@ -6,15 +6,12 @@ use std::path::Path;
 use drivemap_codegen::generate::{Options, drive_module};
 use drivemap_core::plan::{Conversion, SettingsView};
 use drivemap_core::scale::ValueError;
-use drivemap_map::lower::{self, DrivePlan};
-use drivemap_map::validate::Context;
+use drivemap_map::MapPlan as DrivePlan;
 
-fn fixture() -> drivemap_map::Drive {
-    drivemap_map::read_map(
-        Path::new("../map/tests/fixtures/field-selector.yaml"),
-        &Context::default(),
-    )
-    .unwrap_or_else(|d| panic!("{d}"))
+fn fixture() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(Path::new("../map/tests/fixtures/field-selector.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"))
 }
 
 /// Settings filled the way both printers fill them: the selector's word, through the plan's code
@@ -40,7 +37,7 @@ impl SettingsView for Words<'_> {
 #[test]
 fn lowering_gives_each_field_its_own_code_slot() {
     let drive = fixture();
-    let plan = lower::lower(&drive);
+    let plan = drive.plan();
     let slots: Vec<_> = plan
         .settings
         .codes
@@ -72,12 +69,12 @@ fn lowering_gives_each_field_its_own_code_slot() {
 #[test]
 fn the_field_of_the_status_word_chooses_the_decimals() {
     let drive = fixture();
-    let plan = lower::lower(&drive);
+    let plan = drive.plan();
     let current = plan.register("output_current").unwrap();
     let torque = plan.register("torque_current").unwrap();
     let speed = plan.register("speed_monitor").unwrap();
     let with = |status| Words {
-        plan: &plan,
+        plan,
         status: Some(status),
     };
     // Bits 8-15 = 0, 1, 2: the same word 1234 reads 1234 A, 123.4 A, 12.34 A; the low byte
@@ -98,10 +95,7 @@ fn the_field_of_the_status_word_chooses_the_decimals() {
             code: 3
         })
     );
-    let unread = Words {
-        plan: &plan,
-        status: None,
-    };
+    let unread = Words { plan, status: None };
     assert_eq!(
         current.decode_number(1234, &unread),
         Err(ValueError::MissingSetting {
@@ -156,7 +150,7 @@ fn docs_and_export_name_the_field() {
         code.contains("scale selected by field speed_in_rpm (bit 1) of status_word"),
         "{code}"
     );
-    let json = drivemap_map::export::export(&drive);
+    let json = drive.export();
     let current = json["registers"]
         .as_array()
         .unwrap()
@@ -178,16 +172,17 @@ fn a_field_moves_a_register() {
             "        address_alternatives:\n          - {{address: 0x0014, when: {{setting: status_word.running, is: [1]}}, source: \"manual.txt:24\"}}\n{cited}"
         ),
     );
-    let drive = drivemap_map::read_map_str("field-selector.yaml", &moved, &Context::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("field-selector.yaml", &moved)
         .unwrap_or_else(|d| panic!("{d}"));
-    let plan = lower::lower(&drive);
+    let plan = drive.plan();
     assert_eq!(plan.settings.codes.len(), 3, "running is a third slot");
     assert_eq!(plan.dependencies(), [0x0010], "still one word to read");
     let speed = plan.register("speed_monitor").unwrap();
     let at = |status| {
         speed.address_for(
             &Words {
-                plan: &plan,
+                plan,
                 status: Some(status),
             },
             drivemap_core::profile::TransportKind::Rtu,
@@ -196,7 +191,8 @@ fn a_field_moves_a_register() {
     assert_eq!((at(0x0200), at(0x0201)), (0x0013, 0x0014));
 
     let wide = moved.replace("is: [1]", "is: [2]");
-    let err = drivemap_map::read_map_str("field-selector.yaml", &wide, &Context::default())
+    let err = drivemap_map::Loader::new()
+        .load_str("field-selector.yaml", &wide)
         .unwrap_err()
         .to_string();
     assert!(

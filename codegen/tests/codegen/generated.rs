@@ -3,14 +3,11 @@
 use std::path::Path;
 
 use drivemap_codegen::generate::{Options, drive_module};
-use drivemap_map::validate::Context;
 
-fn fixture() -> drivemap_map::Drive {
-    drivemap_map::read_map(
-        Path::new("../map/tests/fixtures/mini-drive.yaml"),
-        &Context::default(),
-    )
-    .unwrap_or_else(|d| panic!("{d}"))
+fn fixture() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(Path::new("../map/tests/fixtures/mini-drive.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"))
 }
 
 #[test]
@@ -28,7 +25,7 @@ fn generated_module_snapshot() {
 #[test]
 fn export_snapshot() {
     let drive = fixture();
-    let json = serde_json::to_string_pretty(&drivemap_map::export::export(&drive)).unwrap();
+    let json = serde_json::to_string_pretty(&drive.export()).unwrap();
     insta::assert_snapshot!("mini_drive_export", json);
 }
 
@@ -111,7 +108,8 @@ fn generate_returns_the_code_compile_writes_without_writing() {
 #[test]
 fn rustdoc_search_finds_a_register_by_the_manuals_words() {
     let module = |path: &str| {
-        let drive = drivemap_map::read_map(Path::new(path), &Context::default())
+        let drive = drivemap_map::Loader::new()
+            .load(Path::new(path))
             .unwrap_or_else(|d| panic!("{d}"));
         let options = Options {
             runtime: "::drivemap_runtime".parse().unwrap(),

@@ -5,15 +5,12 @@
 use std::path::Path;
 
 use drivemap_codegen::generate::{Options, drive_module};
-use drivemap_map::validate::Context;
 
 #[test]
 fn a_number_field_and_an_unknown_edge_are_generated() {
-    let drive = drivemap_map::read_map(
-        Path::new("../tests/fixtures/brenner-fx4/brenner-fx4.yaml"),
-        &Context::default(),
-    )
-    .unwrap_or_else(|d| panic!("{d}"));
+    let drive = drivemap_map::Loader::new()
+        .load(Path::new("../tests/fixtures/brenner-fx4/brenner-fx4.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"));
     let options = Options {
         runtime: "::drivemap_runtime".parse().unwrap(),
         source_name: "brenner-fx4.yaml".into(),

@@ -8,8 +8,7 @@ use std::path::{Path, PathBuf};
 
 use drivemap_import::columns::{Role, parse_roles};
 use drivemap_import::{Manual, compare, import, import_with, known, row::row_shaped};
-use drivemap_map::ir::{Drive, Register};
-use drivemap_map::model::Access;
+use drivemap_map::{Map as Drive, RegisterRef};
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/import")
@@ -47,9 +46,10 @@ fn cases() -> Vec<Case> {
     let dir = fixtures();
     let mut out = Vec::new();
     for map in drivemap_map::find_maps(&dir).unwrap() {
-        let drive = drivemap_map::read_map(&map, &Default::default())
+        let drive = drivemap_map::Loader::new()
+            .load(&map)
             .unwrap_or_else(|e| panic!("{}: {e}", map.display()));
-        let file = drive.meta.text_manuals().next().unwrap().to_string();
+        let file = drive.meta().text_manuals().next().unwrap().to_string();
         let text = std::fs::read_to_string(dir.join("manuals").join(&file)).unwrap();
         let source = std::fs::read_to_string(&map).unwrap();
         let mut case = Case {
@@ -96,9 +96,8 @@ struct Figures {
     unreported: usize,
 }
 
-fn codes(r: &Register) -> Vec<(u16, String, Option<String>)> {
-    r.def
-        .values
+fn codes(r: RegisterRef<'_>) -> Vec<(u16, String, Option<String>)> {
+    r.values()
         .iter()
         .map(|v| (v.value, v.name.clone(), v.source.clone()))
         .collect()
@@ -107,9 +106,8 @@ fn codes(r: &Register) -> Vec<(u16, String, Option<String>)> {
 /// A bit field as compared: its bit or bits, name and citation.
 type Bits = (Option<u8>, Option<[u8; 2]>, String, Option<String>);
 
-fn bits(r: &Register) -> Vec<Bits> {
-    r.def
-        .fields
+fn bits(r: RegisterRef<'_>) -> Vec<Bits> {
+    r.fields()
         .iter()
         .map(|f| (f.bit, f.bits, f.name.clone(), f.source.clone()))
         .collect()
@@ -118,7 +116,7 @@ fn bits(r: &Register) -> Vec<Bits> {
 /// Imports a fixture as a user would (with its `--columns`, if any) and scores the draft
 /// against the hand-written map; `wrong` collects what is not right, for the failure message.
 fn score(case: &Case, wrong: &mut Vec<String>) -> Figures {
-    let id = case.truth.meta.id.clone();
+    let id = case.truth.id().to_owned();
     let imported = import_with(
         &id,
         &[Manual {
@@ -132,10 +130,10 @@ fn score(case: &Case, wrong: &mut Vec<String>) -> Figures {
     let registers = known::registers(&case.truth);
     let (reading, _) = &imported.readings[0];
     let c = compare::compare(&reading.rows, &registers, &case.file);
-    let draft =
-        drivemap_map::read_map_str(&format!("{id}.yaml"), &imported.yaml, &Default::default())
-            .unwrap_or_else(|e| panic!("{id}: the draft does not check:\n{e}\n{}", imported.yaml));
-    assert!(draft.draft.is_some(), "{id}: the draft is marked");
+    let draft = drivemap_map::Loader::new()
+        .load_str(&format!("{id}.yaml"), &imported.yaml)
+        .unwrap_or_else(|e| panic!("{id}: the draft does not check:\n{e}\n{}", imported.yaml));
+    assert!(draft.draft().is_some(), "{id}: the draft is marked");
     if !imported.unresolved.is_empty() || !imported.left_out.is_empty() {
         wrong.push(format!(
             "{id}: the front end refused rows: {:?} {:?}",
@@ -164,16 +162,14 @@ fn score(case: &Case, wrong: &mut Vec<String>) -> Figures {
     for m in &c.matched {
         let t = case
             .truth
-            .registers
-            .iter()
-            .find(|t| t.def.id == m.known.id)
+            .registers()
+            .find(|t| t.id() == m.known.id)
             .unwrap();
         let Some(d) = draft
-            .registers
-            .iter()
-            .find(|d| d.def.address == t.def.address && d.def.param == t.def.param)
+            .registers()
+            .find(|d| d.address() == t.address() && d.param() == t.param())
         else {
-            wrong.push(format!("{id}: {} read but not in the draft", t.def.id));
+            wrong.push(format!("{id}: {} read but not in the draft", t.id()));
             continue;
         };
         let mut why = Vec::new();
@@ -188,30 +184,35 @@ fn score(case: &Case, wrong: &mut Vec<String>) -> Figures {
         }
         // An access the manual prints is read; one it does not print is left unknown (to
         // confirm), and a draft register without one is read-only.
-        if t.def.access.is_some() {
-            if d.access != t.access {
-                why.push(format!("access {:?} / {:?}", d.access, t.access));
+        if t.access_written().is_some() {
+            if d.plan().info.access != t.plan().info.access {
+                why.push(format!(
+                    "access {:?} / {:?}",
+                    d.plan().info.access,
+                    t.plan().info.access
+                ));
             }
-        } else if d.access != Access::Read
+        } else if d.plan().info.access.writable()
             || !imported
                 .to_confirm
                 .iter()
-                .any(|c| c.starts_with(&format!("{}.access: unknown", d.def.id)))
+                .any(|c| c.starts_with(&format!("{}.access: unknown", d.id())))
         {
-            why.push(format!("access {:?} not left unknown", d.access));
+            why.push(format!(
+                "access {:?} not left unknown",
+                d.plan().info.access
+            ));
         }
-        if d.def.signed != t.def.signed {
-            why.push(format!("signed {} / {}", d.def.signed, t.def.signed));
+        if d.signed() != t.signed() {
+            why.push(format!("signed {} / {}", d.signed(), t.signed()));
         }
-        if format!("{:?}", d.def.pair.as_ref().map(|p| p.order))
-            != format!("{:?}", t.def.pair.as_ref().map(|p| p.order))
-        {
+        if d.width() != t.width() {
             why.push("pair".to_string());
         }
         if why.is_empty() {
             f.right += 1;
         } else {
-            wrong.push(format!("{id}: {}: {}", t.def.id, why.join("; ")));
+            wrong.push(format!("{id}: {}: {}", t.id(), why.join("; ")));
         }
     }
     // Lines of the wrong kind are reported, never proposed.
@@ -279,7 +280,7 @@ fn every_catalogue_fixture_is_read_to_its_map() {
             f.invented,
             f.unaccounted
         );
-        let id = &case.truth.meta.id;
+        let id = &case.truth.id();
         let ok = percent(f.found, f.rows) >= 95.0
             && percent(f.right, f.found) >= 85.0
             && f.wrong_kind == 0
@@ -301,10 +302,10 @@ fn every_catalogue_fixture_is_read_to_its_map() {
             &case.columns,
             "test",
         );
-        let draft =
-            drivemap_map::read_map_str(&format!("{id}.yaml"), &imported.yaml, &Default::default())
-                .unwrap();
-        let (tp, dp) = (&case.truth.protocol, &draft.protocol);
+        let draft = drivemap_map::Loader::new()
+            .load_str(&format!("{id}.yaml"), &imported.yaml)
+            .unwrap();
+        let (tp, dp) = (case.truth.protocol(), draft.protocol());
         for (what, d, t) in [
             (
                 "function codes",
@@ -399,7 +400,7 @@ fn every_citation_of_a_draft_shows_its_row() {
     } in cases()
     {
         let imported = import(
-            &truth.meta.id,
+            truth.id(),
             &[Manual {
                 file: &file,
                 text: &text,
@@ -431,7 +432,7 @@ fn the_generator_refuses_a_draft() {
         truth, file, text, ..
     } = cases().remove(0);
     let imported = import(
-        &truth.meta.id,
+        truth.id(),
         &[Manual {
             file: &file,
             text: &text,
@@ -441,7 +442,7 @@ fn the_generator_refuses_a_draft() {
     );
     let dir = std::env::temp_dir().join(format!("drivemap-import-draft-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let map = dir.join(format!("{}.yaml", truth.meta.id));
+    let map = dir.join(format!("{}.yaml", truth.id()));
     std::fs::write(&map, &imported.yaml).unwrap();
     let compile = || {
         drivemap_codegen::Config::new()
@@ -492,7 +493,7 @@ fn a_column_the_reader_cannot_decide_is_reported_and_named_with_columns() {
     }];
     // Without the user's names: the report names the table and every column it cannot decide,
     // and no number of those columns is used (no limit, no default is made up).
-    let plain = import(&case.truth.meta.id, &manual, None, "test");
+    let plain = import(case.truth.id(), &manual, None, "test");
     let report = drivemap_import::report(&plain);
     let undecided: Vec<&str> = report
         .lines()
@@ -512,12 +513,12 @@ fn a_column_the_reader_cannot_decide_is_reported_and_named_with_columns() {
         );
     }
     let rows = &plain.readings[0].0.rows;
-    assert_eq!(rows.len(), case.truth.registers.len());
+    assert_eq!(rows.len(), case.truth.registers().len());
     for r in rows {
         assert_eq!((r.min, r.max, r.default), (None, None, None), "{r:?}");
     }
     // Named: every field as the map has it (the figures above), and the report says so.
-    let named = import_with(&case.truth.meta.id, &manual, None, &case.columns, "test");
+    let named = import_with(case.truth.id(), &manual, None, &case.columns, "test");
     let report = drivemap_import::report(&named);
     assert!(!report.contains("is not understood"), "{report}");
     assert!(

@@ -35,7 +35,7 @@ fn the_seed_manuals_figures_do_not_regress() {
     let drives: Vec<_> = drivemap_map::find_maps(&maps_dir)
         .unwrap()
         .iter()
-        .map(|p| drivemap_map::read_map(p, &Default::default()).unwrap())
+        .map(|p| drivemap_map::Loader::new().load(p).unwrap())
         .collect();
     let mut table = String::new();
     let _ = writeln!(

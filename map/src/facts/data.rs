@@ -41,10 +41,13 @@ pub struct RegisterData {
     pub exists_on: Transports,
     /// The unit as the manual prints it.
     pub unit: Option<String>,
+    /// A signed word or pair.
     pub signed: bool,
+    /// The scale in engineering units.
     pub scale: ScaleData,
-    /// The base variant's limits in engineering units.
+    /// The base variant's lower limit in engineering units.
     pub min: Option<f64>,
+    /// The base variant's upper limit in engineering units.
     pub max: Option<f64>,
     /// The base variant's default, or what it depends on.
     pub default: Option<DefaultValue>,
@@ -56,14 +59,21 @@ pub struct RegisterData {
     pub values: &'static [Label],
     /// What a read means when it differs from a write, from the plan.
     pub read_values: &'static [Label],
+    /// A drive that executes a written value only when it changed.
     pub repeat_needs_change: Option<RepeatData>,
+    /// The functions it accepts, where the map restricts them.
     pub function_codes: Option<FunctionsData>,
+    /// An upper limit through another quantity.
     pub max_relative: Option<LimitData>,
     /// The id of its group.
     pub group: String,
+    /// Addresses it moves to under a condition, cited.
     pub address_alternatives: Vec<AddressAlternative>,
+    /// How the keypad shows finer values.
     pub display_steps: Vec<DisplayStep>,
+    /// Conflicts between readings of the manual about it.
     pub conflicts: Vec<Conflict>,
+    /// What the manual leaves unknown about it.
     pub unknown: Vec<Unknown>,
 }
 
@@ -76,19 +86,26 @@ pub enum ScaleData {
     Factor(f64),
     /// `full_scale` raw = 100 % of `reference`.
     Relative {
+        /// The quantity 100 % refers to.
         reference: Quantity,
+        /// The raw value that is 100 %.
         full_scale: f64,
     },
     /// `counts` raw = `equals` exactly; `step` is one count's exact value (`None` when the
     /// ratio is not one the core can hold).
     Ratio {
+        /// Raw counts.
         counts: u32,
+        /// What `counts` equal in engineering units.
         equals: f64,
+        /// One count's exact value.
         step: Option<Fraction>,
     },
     /// Chosen by a setting, named as a user names it (`n152`, `C6-01.unit`).
     Selected {
+        /// Who selects the scale, as a user names it.
         selector: String,
+        /// The cases, in the map's order.
         cases: Vec<CaseData>,
     },
 }
@@ -98,8 +115,11 @@ pub enum ScaleData {
 pub struct CaseData {
     /// The selector's codes that choose it.
     pub when: Vec<u16>,
+    /// The case's scale.
     pub scale: ScaleData,
+    /// The case's lower limit.
     pub min: Option<f64>,
+    /// The case's upper limit.
     pub max: Option<f64>,
 }
 
@@ -108,17 +128,31 @@ pub struct CaseData {
 pub enum Quantity {
     /// A register of the drive: as the map names it, and as a user does (its parameter
     /// number when printed, else its id; the map's name when no register has it).
-    Register { name: String, shown: String },
+    Register {
+        /// The register as the map names it.
+        name: String,
+        /// The register as a user names it.
+        shown: String,
+    },
     /// A quantity the application supplies.
-    External { external: String, unit: String },
+    External {
+        /// The quantity's name.
+        external: String,
+        /// Its unit.
+        unit: String,
+    },
 }
 
 /// What one variant option gives: its limits (the base's where it gives none) and default.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VariantData {
+    /// The variant option's id.
     pub option: String,
+    /// Its lower limit (the base's where it gives none).
     pub min: Option<f64>,
+    /// Its upper limit (the base's where it gives none).
     pub max: Option<f64>,
+    /// Its default, when it overrides the base's.
     pub default: Option<DefaultValue>,
 }
 
@@ -126,24 +160,33 @@ pub struct VariantData {
 /// (as the map writes it, and raw from the plan) and the citation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RepeatData {
+    /// The value written in between, in engineering units.
     pub between: f64,
+    /// The same value as the raw word, from the plan.
     pub between_raw: Option<u32>,
+    /// The rule's citation.
     pub source: String,
 }
 
 /// The functions a register accepts, the exception another is answered with, the citation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FunctionsData {
+    /// The function codes accepted.
     pub codes: Vec<u8>,
+    /// The exception code another function is answered with.
     pub refused_with: u8,
+    /// The statement's citation.
     pub source: String,
 }
 
 /// An upper limit through another quantity: at most `percent` % of it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LimitData {
+    /// The quantity the limit is relative to.
     pub relative_to: Quantity,
+    /// The limit in percent of it.
     pub percent: f64,
+    /// The limit's citation.
     pub source: String,
 }
 
@@ -222,7 +265,7 @@ fn scale_data(drive: &Drive, r: &Register) -> ScaleData {
     }
 }
 
-fn scale_of(drive: &Drive, scale: &Scale) -> ScaleData {
+pub(crate) fn scale_of(drive: &Drive, scale: &Scale) -> ScaleData {
     match scale {
         Scale::Factor(f) => ScaleData::Factor(*f),
         Scale::Relative(rel) => ScaleData::Relative {

@@ -144,7 +144,9 @@ impl ProtocolKey {
 /// use in its place (none where the map gives its own working figure with the reason).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NotPrinted {
+    /// Why, as the map's `unknown:` gives it.
     pub why: String,
+    /// What the tools use in its place, if the map gives none of its own.
     pub fallback: Option<String>,
 }
 
@@ -161,27 +163,43 @@ pub enum Figure {
     /// A number the tools use (registers per request, EEPROM writes).
     Count(u32),
     /// The slave addresses the tools use.
-    Range { min: u8, max: u8 },
+    Range {
+        /// The lowest.
+        min: u8,
+        /// The highest.
+        max: u8,
+    },
     /// What a broadcast may carry: functions and registers (none: any writable register).
     Broadcast {
+        /// The functions a broadcast may carry.
         functions: Vec<u8>,
+        /// The registers it may write.
         registers: Vec<String>,
     },
     /// PDU address = manual address + offset.
-    Offsets { rtu: i32, tcp: i32 },
+    Offsets {
+        /// On RTU framing.
+        rtu: i32,
+        /// On Modbus TCP.
+        tcp: i32,
+    },
 }
 
 /// One protocol fact.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ProtocolRow {
+    /// What the row says.
     pub key: ProtocolKey,
+    /// The row's label as `drivemap doc` writes it.
     pub label: &'static str,
     /// The value in `drivemap doc`'s words (with the citation of a part inline where the row
     /// gathers parts cited apart).
     pub value: String,
+    /// The row's figure, typed.
     pub figure: Figure,
     /// Set when the manual does not print the fact.
     pub not_printed: Option<NotPrinted>,
+    /// The citation of the fact.
     pub citation: Option<String>,
     /// The map's entry for the fact as written, for comparison (the JSON export shows it).
     #[serde(skip)]
@@ -193,16 +211,22 @@ pub struct ProtocolRow {
 pub struct ExceptionFacts {
     /// `01h`.
     pub code: String,
+    /// The exception's name.
     pub name: String,
+    /// What it means.
     pub description: String,
+    /// Its citation.
     pub citation: String,
 }
 
 /// A command (ENTER, ACCEPT, save): its writes in order, as `drivemap doc` prints them.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CommandFacts {
+    /// The command's id.
     pub id: String,
+    /// Its name as the map gives it.
     pub name: String,
+    /// What it does.
     pub kind: CommandKind,
     /// `accept (activates, no EEPROM write)`.
     pub kind_text: &'static str,
@@ -210,6 +234,7 @@ pub struct CommandFacts {
     pub writes: Vec<String>,
     /// The same writes as `[address, value]` words.
     pub words: Vec<(u16, u16)>,
+    /// Its citation.
     pub citation: String,
     /// The map's entry as written, for comparison.
     #[serde(skip)]
@@ -219,14 +244,19 @@ pub struct CommandFacts {
 /// Everything the printers say about a drive's protocol.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ProtocolFacts {
+    /// One row per protocol fact.
     pub rows: Vec<ProtocolRow>,
+    /// The drive's own exception codes.
     pub exceptions: Vec<ExceptionFacts>,
+    /// The commands (ENTER, ACCEPT, save).
     pub commands: Vec<CommandFacts>,
     /// The protocol's notes; the timing's are [`ProtocolFacts::timing_notes`].
     pub notes: Vec<String>,
+    /// The timing's notes.
     pub timing_notes: Vec<String>,
     /// The protocol's own citation, and why it is indirect when it is.
     pub source: Option<String>,
+    /// Why the protocol's citation is indirect, when it is.
     pub indirect: Option<String>,
     /// What the JSON export writes beside the rows' figures and entries (not part of this
     /// view's JSON).

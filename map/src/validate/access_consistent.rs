@@ -6,7 +6,7 @@ use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
 use crate::model::{Access, ModbusTable, WriteRestriction};
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let fc = &drive.protocol.function_codes.codes;
     for r in &drive.registers {
         let rid = Some(r.id());

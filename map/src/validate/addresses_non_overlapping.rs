@@ -14,7 +14,7 @@ fn shares_transport(a: &Register, b: &Register) -> bool {
     }
 }
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let mut by_key: HashMap<(bool, ModbusTable, u16), Vec<&Register>> = HashMap::new();
     for r in &drive.registers {
         let slot = by_key

@@ -6,7 +6,7 @@ use crate::ir::Drive;
 
 use crate::names::field_span as span;
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {
         let rid = Some(r.id());
         let mut used: u16 = 0;

@@ -11,14 +11,14 @@ use crate::source::Path;
 use crate::validate::Context;
 
 /// Splits `file:line` (a line of a text manual).
-pub fn parse_citation(s: &str) -> Option<(&str, usize)> {
+pub(super) fn parse_citation(s: &str) -> Option<(&str, usize)> {
     let (file, line) = s.rsplit_once(':')?;
     let line: usize = line.trim().parse().ok()?;
     (!file.is_empty() && line > 0).then_some((file, line))
 }
 
 /// Splits `<manual id>:p<page>` (a page of a manual with no text at hand).
-pub fn parse_page_citation(s: &str) -> Option<(&str, u32)> {
+pub(super) fn parse_page_citation(s: &str) -> Option<(&str, u32)> {
     let (manual, page) = s.rsplit_once(':')?;
     let page = page.trim().strip_prefix('p')?;
     if !page.bytes().all(|b| b.is_ascii_digit()) {
@@ -167,7 +167,7 @@ fn rules(kind: &PlaceKind<'_>) -> (Form, bool) {
 /// Every citation place ([`citation_places`]): a required one is present, each citation names
 /// a manual of the map in the right form (and a line inside it), an `indirect` key has a reason
 /// and a citation to qualify.
-pub fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, ctx: &Context, out: &mut Vec<Diagnostic>) {
     if drive.meta.manuals.is_empty() {
         out.push(drive.error(
             &Path::root().key("drive").key("manuals"),

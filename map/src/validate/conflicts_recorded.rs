@@ -47,7 +47,7 @@ fn conflict(
     }
 }
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for (i, c) in drive.conflicts.iter().enumerate() {
         conflict(drive, out, c, Path::root().key("conflicts").index(i), None);
     }

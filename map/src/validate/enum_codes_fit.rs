@@ -4,7 +4,7 @@ use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
 use crate::names::field_span as span;
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {
         for (fi, f) in r.def.fields.iter().enumerate() {
             let Some((_, width)) = span(f) else { continue };

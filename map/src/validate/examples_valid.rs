@@ -10,7 +10,7 @@ use crate::examples::{Direction, locate_offset, parse_bytes};
 use crate::ir::Drive;
 use crate::source::Path;
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let list = Path::root().key("examples");
     for (i, e) in drive.examples.iter().enumerate() {
         let path = list.index(i);

@@ -16,7 +16,7 @@ use crate::model::ModbusTable;
 /// The register functions a `function_codes` list may name.
 const REGISTER_FUNCTIONS: [u8; 4] = [0x03, 0x04, 0x06, 0x10];
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let implemented = &drive.protocol.function_codes.codes;
     let mut seen = HashSet::new();
     for r in &drive.registers {

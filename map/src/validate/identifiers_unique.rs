@@ -77,7 +77,7 @@ fn values(
     }
 }
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let mut groups = Seen::new("group id");
     for g in &drive.groups {
         groups.add(drive, out, &g.id, g.path.key("id"), None);

@@ -14,7 +14,7 @@ const KEYWORDS: &[&str] = &[
 ];
 
 /// A lower snake_case identifier that is not a Rust keyword: `[a-z][a-z0-9_]*`.
-pub fn is_identifier(s: &str) -> bool {
+pub(crate) fn is_identifier(s: &str) -> bool {
     let mut chars = s.chars();
     matches!(chars.next(), Some('a'..='z'))
         && chars.all(|c| matches!(c, 'a'..='z' | '0'..='9' | '_'))
@@ -40,7 +40,7 @@ fn need(
     }
 }
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let id = &drive.meta.id;
     let ok = id.chars().next().is_some_and(|c| c.is_ascii_lowercase())
         && id

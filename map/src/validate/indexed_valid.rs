@@ -14,7 +14,7 @@ use crate::source::Path;
 
 use super::identifiers_valid::is_identifier;
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let mut ids: HashMap<String, Path> = HashMap::new();
     for r in &drive.registers {
         let Some(ix) = &r.def.indexed else { continue };

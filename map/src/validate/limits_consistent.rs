@@ -112,7 +112,7 @@ impl Checker<'_> {
     }
 }
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {
         let mut c = Checker { drive, r, out };
         let d = &r.def;

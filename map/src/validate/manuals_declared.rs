@@ -5,7 +5,7 @@ use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
 use crate::source::Path;
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let list = Path::root().key("drive").key("manuals");
     for (i, m) in drive.meta.manuals.iter().enumerate() {
         let path = list.index(i);

@@ -25,7 +25,7 @@ mod manuals_declared;
 mod number_fields;
 mod numbers_finite;
 mod pairs_valid;
-pub mod protocol_stated;
+pub(crate) mod protocol_stated;
 mod protocol_valid;
 mod ratio_scales;
 mod read_values_valid;
@@ -38,14 +38,12 @@ mod status_codes;
 mod timing_valid;
 mod value_kind_single;
 
-pub use crate::names::field_span;
-pub use crate::names::pascal_case;
-pub use citations_present::{parse_citation, parse_page_citation};
-pub use identifiers_valid::is_identifier;
+pub(crate) use crate::names::pascal_case;
+pub(crate) use identifiers_valid::is_identifier;
 
 /// What validation may consult beyond the map itself.
 #[derive(Debug, Clone, Default)]
-pub struct Context {
+pub(crate) struct Context {
     /// Line count of each manual file, when the manuals directory is available; citations are
     /// then checked to fall inside the file.
     pub manual_lines: HashMap<String, usize>,
@@ -54,7 +52,7 @@ pub struct Context {
 impl Context {
     /// Reads the line counts of the `*.txt` manuals in `dir`. A missing directory gives an
     /// empty context (citations are then checked for form and manual name only).
-    pub fn with_manuals(dir: &Path) -> Context {
+    pub(crate) fn with_manuals(dir: &Path) -> Context {
         let mut manual_lines = HashMap::new();
         if let Ok(entries) = std::fs::read_dir(dir) {
             for entry in entries.flatten() {
@@ -72,7 +70,7 @@ impl Context {
 }
 
 /// Runs every pass over a drive and returns all findings.
-pub fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
+pub(crate) fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     let mut out = Vec::new();
     identifiers_valid::check(drive, &mut out);
     identifiers_unique::check(drive, &mut out);

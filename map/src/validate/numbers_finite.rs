@@ -9,11 +9,11 @@ use crate::source::Path;
 
 /// The largest timing figure in milliseconds: one minute. Drives answer in milliseconds;
 /// anything near this is a typo, and it keeps every derived `Duration` far from overflow.
-pub const MAX_TIMING_MS: f64 = 60_000.0;
+pub(super) const MAX_TIMING_MS: f64 = 60_000.0;
 
 /// The largest timing figure in character times (a minute at 115200 baud is ~630,000
 /// characters; drives quote 1.5 to 10).
-pub const MAX_TIMING_CHARS: f64 = 1_000.0;
+pub(super) const MAX_TIMING_CHARS: f64 = 1_000.0;
 
 fn finite(drive: &Drive, out: &mut Vec<Diagnostic>, reg: Option<&str>, v: f64, path: Path) {
     if !v.is_finite() {
@@ -116,7 +116,7 @@ fn register(drive: &Drive, out: &mut Vec<Diagnostic>, r: &Register) {
     }
 }
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     if let Some(t) = &drive.protocol.timing {
         let tp = Path::root().key("protocol").key("timing");
         bounded(

@@ -16,7 +16,7 @@ fn shares_space(a: &Register, b: &Register) -> bool {
     a.broadcast == b.broadcast && a.table == b.table && transports
 }
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let depended_on: Vec<&str> = drive
         .selectors()
         .iter()

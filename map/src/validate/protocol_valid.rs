@@ -26,7 +26,7 @@ const RULES: &[Rule] = &[
     eeprom,
 ];
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let pp = Path::root().key("protocol");
     for rule in RULES {
         rule(drive, &pp, out);

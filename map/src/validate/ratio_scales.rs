@@ -144,7 +144,7 @@ fn limits(
     }
 }
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {
         match &r.def.scale {
             Some(Scale::Ratio(s)) => {

@@ -195,7 +195,7 @@ const RULES: &[Rule] = &[
 /// The rules run on each register in turn (all of one register's findings before the next's).
 const REGISTER_RULES: &[RegisterRule] = &[scale, by_variant, address_alternatives];
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for rule in RULES {
         rule(drive, out);
     }

@@ -9,7 +9,7 @@ use crate::hints::closest;
 use crate::ir::{Drive, ValueKind};
 use crate::model::{Reference, Scale};
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {
         let Some(limit) = &r.def.max_relative else {
             continue;

@@ -10,7 +10,7 @@ use crate::ir::{Drive, Register, ValueKind};
 use crate::names::field_span;
 use drivemap_core::scale::{RawRange, raw_of};
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {
         let Some((rule, path)) = &r.repeat_needs_change else {
             continue;

@@ -25,7 +25,7 @@ impl Check<'_> {
     }
 }
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let mut c = Check { drive, out };
     for (id, places) in &drive.roles {
         let path = Path::root().key("roles").key(id);

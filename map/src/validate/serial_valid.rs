@@ -22,7 +22,7 @@ const RULES: &[Rule] = &[
     formats,
 ];
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let Some(ser) = &drive.protocol.serial else {
         return;
     };

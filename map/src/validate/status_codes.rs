@@ -16,8 +16,11 @@ use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
 use crate::source::Path;
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
-    let plan = drive.plan();
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    // A drive that does not lower is reported by the lowering, the last pass.
+    let Ok(plan) = drive.try_plan() else {
+        return;
+    };
     let places: Vec<_> = plan
         .roles
         .places

@@ -13,7 +13,7 @@ type Rule = fn(&Drive, &Timing, &Path, &mut Vec<Diagnostic>);
 /// The rules, in the order their findings are reported.
 const RULES: &[Rule] = &[frame_gap_chars, frame_gap, intervals];
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let Some(t) = &drive.protocol.timing else {
         return;
     };

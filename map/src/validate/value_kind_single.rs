@@ -3,7 +3,7 @@
 use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
 
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     for r in &drive.registers {
         let d = &r.def;
         let rid = Some(r.id());

@@ -8,8 +8,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use drivemap_map::citations::{PlaceKind, citation_places};
-use drivemap_map::source::{Node, NodeKind, Path as YamlPath};
-use drivemap_map::validate::Context;
+use drivemap_map::{Tree as Node, TreeKind as NodeKind, TreePath as YamlPath};
 
 /// Every scalar under a `source` key of the tree, by path.
 fn tree_sources(node: &Node, at: &YamlPath, out: &mut BTreeMap<String, String>) {
@@ -62,11 +61,12 @@ fn every_source_key_of_every_map_and_fixture_is_a_citation_place() {
     assert!(files.len() >= 15, "{files:?}");
     let mut kinds_seen = BTreeSet::new();
     for file in &files {
-        let drive = drivemap_map::read_map(file, &Context::default())
+        let drive = drivemap_map::Loader::new()
+            .load(file)
             .unwrap_or_else(|d| panic!("{}: {d}", file.display()));
         let mut written = BTreeMap::new();
-        tree_sources(&drive.tree, &YamlPath::root(), &mut written);
-        let places = citation_places(&drive);
+        tree_sources(&drive.ir().tree, &YamlPath::root(), &mut written);
+        let places = citation_places(drive.ir());
         let mut listed: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
         for p in &places {
             kinds_seen.insert(p.kind.name());
@@ -147,8 +147,7 @@ fn the_form_check_reads_every_place_of_the_list() {
              \x20     - {{id: speed, name: Speed, access: r, address: 0x0001{speed_source}}}\n"
         )
     };
-    let errors = |text: &str| match drivemap_map::read_map_str("t.yaml", text, &Context::default())
-    {
+    let errors = |text: &str| match drivemap_map::Loader::new().load_str("t.yaml", text) {
         Ok(_) => Vec::new(),
         Err(d) => d.iter().map(|d| d.to_string()).collect::<Vec<_>>(),
     };
@@ -192,10 +191,8 @@ fn an_example_frame_cites_a_line_range_of_a_text_manual() {
              \x20 - {{id: ask, transport: rtu, direction: request, bytes: \"01 03 00 01 00 01 D5 CA\", source: \"{source}\"}}\n"
         )
     };
-    let ctx = Context {
-        manual_lines: [("m.txt".to_owned(), 20)].into(),
-    };
-    let errors = |source: &str| match drivemap_map::read_map_str("t.yaml", &map(source), &ctx) {
+    let ctx = drivemap_map::Loader::new().manual_lines("m.txt", 20);
+    let errors = |source: &str| match ctx.load_str("t.yaml", &map(source)) {
         Ok(_) => Vec::new(),
         Err(d) => d.iter().map(|d| d.to_string()).collect::<Vec<_>>(),
     };

@@ -5,14 +5,11 @@ use std::path::Path;
 
 use drivemap_core::ConversionKind;
 use drivemap_map::facts::{self, FactKey, Figure, ProtocolKey, RegisterFacts};
-use drivemap_map::validate::Context;
 
-fn acme() -> drivemap_map::Drive {
-    drivemap_map::read_map(
-        Path::new("../tests/fixtures/acme-vf1/acme-vf1.yaml"),
-        &Context::default(),
-    )
-    .unwrap_or_else(|d| panic!("{d}"))
+fn acme() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(Path::new("../tests/fixtures/acme-vf1/acme-vf1.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"))
 }
 
 fn of<'a>(all: &'a [RegisterFacts], id: &str) -> &'a RegisterFacts {
@@ -31,7 +28,7 @@ fn row(f: &RegisterFacts, key: FactKey) -> (&str, &str, Option<&str>) {
 #[test]
 fn a_pair_has_its_span_and_cited_width() {
     let drive = acme();
-    let all = facts::facts(&drive).registers;
+    let all = drive.facts().registers;
     let energy = of(&all, "energy_counter");
     assert_eq!(
         row(energy, FactKey::Address),
@@ -63,7 +60,7 @@ fn a_pair_has_its_span_and_cited_width() {
 #[test]
 fn a_selected_scale_is_a_row_naming_the_selector_and_a_table_of_cases() {
     let drive = acme();
-    let all = facts::facts(&drive).registers;
+    let all = drive.facts().registers;
     let current = of(&all, "motor_current");
     assert_eq!(current.kind, ConversionKind::Selected);
     assert!(current.get(FactKey::Scale).is_none());
@@ -81,7 +78,7 @@ fn a_selected_scale_is_a_row_naming_the_selector_and_a_table_of_cases() {
 #[test]
 fn read_meanings_and_repeat_rules_are_rows_with_their_citation() {
     let drive = acme();
-    let all = facts::facts(&drive).registers;
+    let all = drive.facts().registers;
     let password = of(&all, "keypad_password");
     assert_eq!(row(password, FactKey::Range).1, "0 ..= 9999");
     assert_eq!(row(password, FactKey::ReadValues).1, "0 Unlocked, 1 Locked");
@@ -96,13 +93,13 @@ fn read_meanings_and_repeat_rules_are_rows_with_their_citation() {
 #[test]
 fn every_register_has_its_plan_row_and_the_kind_the_plan_decided() {
     let drive = acme();
-    let view = facts::facts(&drive);
-    assert_eq!(view.registers.len(), drive.registers.len());
+    let view = drive.facts();
+    assert_eq!(view.registers.len(), drive.registers().len());
     let plan = drive.plan();
     let mut rows: Vec<usize> = Vec::new();
-    for (f, r) in view.registers.iter().zip(&drive.registers) {
+    for (f, r) in view.registers.iter().zip(drive.registers()) {
         let row = f.row;
-        assert_eq!(plan.registers[row].info.id, r.def.id, "{}", f.id);
+        assert_eq!(plan.registers[row].info.id, r.id(), "{}", f.id);
         assert_eq!(
             f.kind,
             ConversionKind::of(&plan.registers[row].conversion),
@@ -113,13 +110,13 @@ fn every_register_has_its_plan_row_and_the_kind_the_plan_decided() {
     }
     rows.sort_unstable();
     rows.dedup();
-    assert_eq!(rows.len(), drive.registers.len(), "one row per register");
+    assert_eq!(rows.len(), drive.registers().len(), "one row per register");
 }
 
 #[test]
 fn the_view_serializes_with_kind_names_and_labels() {
     let drive = acme();
-    let json = serde_json::to_value(facts::facts(&drive)).unwrap();
+    let json = serde_json::to_value(drive.facts()).unwrap();
     assert_eq!(json["drive"], "acme-vf1");
     let energy = json["registers"]
         .as_array()
@@ -132,8 +129,10 @@ fn the_view_serializes_with_kind_names_and_labels() {
     assert_eq!(energy["rows"][1]["citation"], "acme-vf1.txt:34");
 }
 
-fn read(path: &str) -> drivemap_map::Drive {
-    drivemap_map::read_map(Path::new(path), &Context::default()).unwrap_or_else(|d| panic!("{d}"))
+fn read(path: &str) -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(Path::new(path))
+        .unwrap_or_else(|d| panic!("{d}"))
 }
 
 fn keys(p: &facts::ProtocolFacts) -> Vec<ProtocolKey> {
@@ -144,7 +143,7 @@ fn keys(p: &facts::ProtocolFacts) -> Vec<ProtocolKey> {
 fn the_protocol_is_one_row_per_fact_with_its_figure_and_citation() {
     use ProtocolKey as K;
     let v7 = read("../maps/yaskawa-v7.yaml");
-    let p = facts::protocol(&v7);
+    let p = v7.protocol_facts();
     assert_eq!(
         keys(&p),
         [
@@ -247,7 +246,7 @@ fn the_protocol_is_one_row_per_fact_with_its_figure_and_citation() {
 fn a_fact_the_manual_does_not_print_says_why_and_what_is_used_instead() {
     use ProtocolKey as K;
     let halden = read("../tests/fixtures/halden-h1/halden-h1.yaml");
-    let p = facts::protocol(&halden);
+    let p = halden.protocol_facts();
     let not_printed = |k| {
         let r = p.get(k).unwrap_or_else(|| panic!("no {k:?} row"));
         let n = r
@@ -293,7 +292,7 @@ fn a_fact_the_manual_does_not_print_says_why_and_what_is_used_instead() {
 #[test]
 fn the_drive_facts_serialize_the_protocol_rows() {
     let drive = acme();
-    let json = serde_json::to_value(facts::facts(&drive)).unwrap();
+    let json = serde_json::to_value(drive.facts()).unwrap();
     let rows = json["protocol"]["rows"].as_array().expect("protocol rows");
     let broadcast = rows.iter().find(|r| r["key"] == "broadcast").unwrap();
     assert_eq!(broadcast["label"], "Broadcast");

@@ -7,8 +7,7 @@ use std::path::{Path, PathBuf};
 use drivemap_core::width::{Width, WordOrder};
 use drivemap_map::describe;
 use drivemap_map::facts::data::{Quantity, ScaleData};
-use drivemap_map::facts::{self, FactKey, RegisterFacts};
-use drivemap_map::validate::Context;
+use drivemap_map::facts::{FactKey, RegisterFacts};
 
 /// Every map of the repository and every fixture map (each a different vendor's constructs).
 fn maps() -> Vec<PathBuf> {
@@ -23,8 +22,10 @@ fn maps() -> Vec<PathBuf> {
     out
 }
 
-fn read(path: &Path) -> drivemap_map::Drive {
-    drivemap_map::read_map(path, &Context::default()).unwrap_or_else(|d| panic!("{d}"))
+fn read(path: &Path) -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(path)
+        .unwrap_or_else(|d| panic!("{d}"))
 }
 
 fn value(f: &RegisterFacts, key: FactKey) -> Option<&str> {
@@ -41,7 +42,7 @@ fn citation(f: &RegisterFacts, key: FactKey) -> Option<&str> {
 fn every_typed_value_says_what_its_worded_row_says() {
     for path in maps() {
         let drive = read(&path);
-        for f in facts::facts(&drive).registers {
+        for f in drive.facts().registers {
             let d = &f.data;
             let at = format!("{}: {}", path.display(), f.id);
             let unit = d.unit.as_deref().unwrap_or("");
@@ -152,10 +153,10 @@ fn every_typed_value_says_what_its_worded_row_says() {
 fn codes_and_fields_from_the_plan_are_the_maps() {
     for path in maps() {
         let drive = read(&path);
-        let view = facts::facts(&drive);
-        for (f, r) in view.registers.iter().zip(&drive.registers) {
+        let view = drive.facts();
+        for (f, r) in view.registers.iter().zip(drive.registers()) {
             let at = format!("{}: {}", path.display(), f.id);
-            let listed = |v: &[drivemap_map::model::EnumValue]| -> Vec<(u16, String, String)> {
+            let listed = |v: &[drivemap_map::facts::EnumValue]| -> Vec<(u16, String, String)> {
                 v.iter()
                     .map(|x| (x.value, x.id.clone(), x.name.clone()))
                     .collect()
@@ -165,20 +166,12 @@ fn codes_and_fields_from_the_plan_are_the_maps() {
                     .map(|x| (x.code, x.id.to_owned(), x.name.to_owned()))
                     .collect()
             };
-            assert_eq!(planned(f.data.values), listed(&r.def.values), "{at}");
-            assert_eq!(
-                planned(f.data.read_values),
-                listed(&r.def.read_values),
-                "{at}"
-            );
-            assert_eq!(f.data.fields.len(), r.def.fields.len(), "{at}");
-            for (x, y) in f.data.fields.iter().zip(&r.def.fields) {
+            assert_eq!(planned(f.data.values), listed(r.values()), "{at}");
+            assert_eq!(planned(f.data.read_values), listed(r.read_values()), "{at}");
+            assert_eq!(f.data.fields.len(), r.fields().len(), "{at}");
+            for (x, y) in f.data.fields.iter().zip(r.fields()) {
                 assert_eq!((x.id, x.name), (y.id.as_str(), y.name.as_str()), "{at}");
-                assert_eq!(
-                    Some((x.lsb, x.width)),
-                    drivemap_map::names::field_span(y),
-                    "{at}"
-                );
+                assert_eq!(Some((x.lsb, x.width)), span(y), "{at}");
                 assert_eq!(planned(x.values), listed(&y.values), "{at}");
             }
         }
@@ -190,9 +183,9 @@ fn codes_and_fields_from_the_plan_are_the_maps() {
 #[test]
 fn the_export_is_the_views_registers_in_address_order() {
     let drive = read(Path::new("../tests/fixtures/acme-vf1/acme-vf1.yaml"));
-    let mut view = facts::facts(&drive).registers;
+    let mut view = drive.facts().registers;
     view.sort_by_key(|f| (f.data.broadcast, f.address));
-    let export = drivemap_map::export::export(&drive);
+    let export = drive.export();
     let ids: Vec<&str> = export["registers"]
         .as_array()
         .unwrap()
@@ -233,7 +226,7 @@ fn the_export_is_the_views_registers_in_address_order() {
 #[test]
 fn a_reference_is_shown_by_parameter_and_a_limit_keeps_the_maps_name() {
     let drive = read(Path::new("../maps/ptlk-tds-v8.yaml"));
-    let view = facts::facts(&drive).registers;
+    let view = drive.facts().registers;
     let reference = view.iter().find(|f| f.id == "frequency_command").unwrap();
     let ScaleData::Relative {
         reference: q,
@@ -249,7 +242,7 @@ fn a_reference_is_shown_by_parameter_and_a_limit_keeps_the_maps_name() {
     assert_eq!(shown, "Cn-02");
     let limit = reference.data.max_relative.as_ref().unwrap();
     assert_eq!(limit.percent, 100.0);
-    let export = drivemap_map::export::export(&drive);
+    let export = drive.export();
     let json = export["registers"]
         .as_array()
         .unwrap()
@@ -270,8 +263,8 @@ fn the_exported_protocol_is_the_protocol_facts() {
     use drivemap_map::facts::{Figure, ProtocolKey};
     for path in maps() {
         let drive = read(&path);
-        let view = facts::facts(&drive).protocol;
-        let export = drivemap_map::export::export(&drive);
+        let view = drive.facts().protocol;
+        let export = drive.export();
         let p = &export["protocol"];
         let at = path.display();
         let figure = |key| &view.get(key).unwrap().figure;
@@ -323,5 +316,14 @@ fn the_exported_protocol_is_the_protocol_facts() {
         if let Some(chars) = view.data.frame_gap_chars {
             assert_eq!(p["timing"]["frame_gap_chars"], chars, "{at}");
         }
+    }
+}
+
+/// The bit span a field is written with: `bit: b` or `bits: [lo, hi]`.
+fn span(f: &drivemap_map::facts::BitField) -> Option<(u8, u8)> {
+    match (f.bit, f.bits) {
+        (Some(b), None) => Some((b, 1)),
+        (None, Some([lo, hi])) => Some((lo, hi - lo + 1)),
+        _ => None,
     }
 }

@@ -6,15 +6,13 @@ use std::path::Path;
 
 use drivemap_core::register::{Access, Table};
 use drivemap_core::scale::{Decimal, RawRange};
-use drivemap_map::validate::Context;
 
-fn drive() -> drivemap_map::Drive {
+fn drive() -> drivemap_map::Map {
     let dir = Path::new("../tests/fixtures/tarrow-tm44");
-    drivemap_map::read_map(
-        &dir.join("tarrow-tm44.yaml"),
-        &Context::with_manuals(&dir.join("manuals")),
-    )
-    .unwrap_or_else(|d| panic!("{d}"))
+    drivemap_map::Loader::new()
+        .manuals(dir.join("manuals"))
+        .load(&dir.join("tarrow-tm44.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"))
 }
 
 #[test]
@@ -76,7 +74,8 @@ fn a_pair_without_a_printed_list_keeps_its_reason() {
     let end = text.find("          unknown:").unwrap();
     let text = format!("{}{}", &text[..start], &text[end..])
         .replace("indices 4-6", "the manual prints no list; indices 4-6");
-    let drive = drivemap_map::read_map_str("tarrow-tm44.yaml", &text, &Context::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("tarrow-tm44.yaml", &text)
         .unwrap_or_else(|d| panic!("{d}"));
     let pair = &drive.plan().indexed[0];
     assert!(pair.entries.is_empty());

@@ -5,7 +5,6 @@
 use std::path::Path;
 
 use drivemap_core::stated::{ProtocolFact, Stated};
-use drivemap_map::validate::Context;
 
 const HALDEN: &str = "../tests/fixtures/halden-h1/halden-h1.yaml";
 
@@ -13,8 +12,9 @@ fn halden_text() -> String {
     std::fs::read_to_string(HALDEN).unwrap()
 }
 
-fn read(text: &str) -> Result<drivemap_map::Drive, String> {
-    drivemap_map::read_map_str("halden-h1.yaml", text, &Context::default())
+fn read(text: &str) -> Result<drivemap_map::Map, String> {
+    drivemap_map::Loader::new()
+        .load_str("halden-h1.yaml", text)
         .map_err(|d| d.to_string())
 }
 
@@ -40,13 +40,14 @@ fn with_line(key: &str, line: &str) -> String {
 
 #[test]
 fn a_map_whose_manual_prints_no_protocol_fact_loads_with_the_modbus_figures_in_the_profile() {
-    let drive = drivemap_map::read_map(Path::new(HALDEN), &Context::default())
+    let drive = drivemap_map::Loader::new()
+        .load(Path::new(HALDEN))
         .unwrap_or_else(|d| panic!("{d}"));
     assert!(
-        drivemap_map::validate::protocol_stated::warnings(&drive).is_empty(),
+        drive.protocol_warnings().is_empty(),
         "every fact is cited or unknown"
     );
-    let plan = drivemap_map::lower::lower(&drive);
+    let plan = drive.plan();
     let p = plan.profile;
     assert_eq!((p.max_read, p.max_write), (125, 123));
     assert_eq!((p.slave_min, p.slave_max), (1, 247));
@@ -83,9 +84,10 @@ fn a_map_whose_manual_prints_no_protocol_fact_loads_with_the_modbus_figures_in_t
 
 #[test]
 fn printed_facts_stay_printed_in_the_profile() {
-    let drive = drivemap_map::read_map(Path::new("../maps/ptlk-tds-v8.yaml"), &Context::default())
+    let drive = drivemap_map::Loader::new()
+        .load(Path::new("../maps/ptlk-tds-v8.yaml"))
         .unwrap_or_else(|d| panic!("{d}"));
-    let p = drivemap_map::lower::lower(&drive).profile;
+    let p = drive.plan().profile;
     assert!(p.not_printed.is_empty(), "{:?}", p.not_printed);
     assert_eq!(p.max_write_stated(), Stated::Printed(16));
     assert_eq!(p.slave_range_stated(), Stated::Printed((1, 31)));
@@ -99,9 +101,10 @@ fn the_shipped_maps_cite_or_mark_every_protocol_number() {
         if path.extension().is_none_or(|e| e != "yaml") {
             continue;
         }
-        let drive =
-            drivemap_map::read_map(&path, &Context::default()).unwrap_or_else(|d| panic!("{d}"));
-        let w = drivemap_map::validate::protocol_stated::warnings(&drive);
+        let drive = drivemap_map::Loader::new()
+            .load(&path)
+            .unwrap_or_else(|d| panic!("{d}"));
+        let w = drive.protocol_warnings();
         assert!(w.is_empty(), "{}: {w:?}", path.display());
     }
 }
@@ -110,7 +113,7 @@ fn the_shipped_maps_cite_or_mark_every_protocol_number() {
 fn a_plain_number_is_a_warning_naming_its_place() {
     let text = with_line("max_read", "  max_read: 16");
     let drive = read(&text).unwrap();
-    let w = drivemap_map::validate::protocol_stated::warnings(&drive);
+    let w = drive.protocol_warnings();
     assert_eq!(w.len(), 1, "{w:?}");
     assert_eq!(w[0].loc.line, 16);
     assert!(
@@ -124,8 +127,8 @@ fn a_plain_number_is_a_warning_naming_its_place() {
         "  max_read: {value: 16, source: \"halden-h1.txt:5\"}",
     );
     let drive = read(&text).unwrap();
-    assert!(drivemap_map::validate::protocol_stated::warnings(&drive).is_empty());
-    assert_eq!(drivemap_map::lower::lower(&drive).profile.max_read, 16);
+    assert!(drive.protocol_warnings().is_empty());
+    assert_eq!(drive.plan().profile.max_read, 16);
 }
 
 #[test]
@@ -190,8 +193,8 @@ fn a_fact_neither_given_nor_unknown_or_both_is_refused_where_it_is() {
 
 #[test]
 fn export_writes_each_unprinted_fact_explicitly() {
-    let drive = drivemap_map::read_map(Path::new(HALDEN), &Context::default()).unwrap();
-    let out = drivemap_map::export::export(&drive);
+    let drive = drivemap_map::Loader::new().load(Path::new(HALDEN)).unwrap();
+    let out = drive.export();
     let p = &out["protocol"];
     assert_eq!(p["max_read"], 125);
     assert_eq!(p["max_write"], 123);
@@ -226,20 +229,17 @@ fn export_writes_each_unprinted_fact_explicitly() {
         ]
     );
     // A map printing everything writes no `not_printed`.
-    let tds =
-        drivemap_map::read_map(Path::new("../maps/ptlk-tds-v8.yaml"), &Context::default()).unwrap();
-    assert!(
-        drivemap_map::export::export(&tds)["protocol"]
-            .get("not_printed")
-            .is_none()
-    );
+    let tds = drivemap_map::Loader::new()
+        .load(Path::new("../maps/ptlk-tds-v8.yaml"))
+        .unwrap();
+    assert!(tds.export()["protocol"].get("not_printed").is_none());
 }
 
 /// The map round-trips: each `unknown` form serializes as it was written.
 #[test]
 fn unknown_forms_serialize_as_written() {
-    let drive = drivemap_map::read_map(Path::new(HALDEN), &Context::default()).unwrap();
-    let yaml = serde_yaml::to_string(&drive.protocol).unwrap();
+    let drive = drivemap_map::Loader::new().load(Path::new(HALDEN)).unwrap();
+    let yaml = serde_yaml::to_string(&drive.protocol()).unwrap();
     for part in [
         "max_read:\n  unknown: the note prints no register count for function 03H",
         "exceptions:\n  unknown: exception responses are mentioned, no codes are listed",
@@ -247,8 +247,8 @@ fn unknown_forms_serialize_as_written() {
     ] {
         assert!(yaml.contains(part), "{part}\nin\n{yaml}");
     }
-    let back: drivemap_map::model::Protocol = serde_yaml::from_str(&yaml).unwrap();
+    let back: drivemap_map::facts::Protocol = serde_yaml::from_str(&yaml).unwrap();
     assert_eq!(back.max_read.value, None);
-    assert_eq!(back.exceptions.unknown, drive.protocol.exceptions.unknown);
+    assert_eq!(back.exceptions.unknown, drive.protocol().exceptions.unknown);
     assert_eq!(back.slave_address.range(), (1, 247));
 }

@@ -5,11 +5,12 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
-use drivemap_map::Drive;
-use drivemap_map::validate::Context;
+use drivemap_map::Map as Drive;
 
 fn load(path: &str) -> Drive {
-    drivemap_map::read_map(Path::new(path), &Context::default()).unwrap_or_else(|d| panic!("{d}"))
+    drivemap_map::Loader::new()
+        .load(Path::new(path))
+        .unwrap_or_else(|d| panic!("{d}"))
 }
 
 fn maps() -> Vec<Drive> {
@@ -29,18 +30,20 @@ fn maps() -> Vec<Drive> {
 fn every_register_finds_its_own_row() {
     for drive in maps() {
         let plan = drive.plan();
-        for (i, r) in drive.registers.iter().enumerate() {
-            assert_eq!(r.index(), i, "{}: {}", drive.meta.id, r.id());
-            assert_eq!(r.index.get(), i);
-            let row = drive.register_plan(r);
-            assert_eq!(row.info.id, r.id(), "{}", drive.meta.id);
+        for (i, r) in drive.registers().enumerate() {
+            assert_eq!(r.index(), i, "{}: {}", drive.id(), r.id());
+            assert_eq!(r.ir().index.get(), i);
+            let row = r.plan();
+            assert!(std::ptr::eq(row, drive.ir().register_plan(r.ir())));
+            assert_eq!(row.info.id, r.id(), "{}", drive.id());
             assert!(std::ptr::eq(row, &plan.registers[plan.order[i]]));
-            let by_id = drive.plan_of(r.id()).expect("by id");
-            assert!(std::ptr::eq(row, by_id), "{}: {}", drive.meta.id, r.id());
+            let by_id = drive.ir().plan_of(r.id()).expect("by id");
+            assert!(std::ptr::eq(row, by_id), "{}: {}", drive.id(), r.id());
             // A copy of the register is still this drive's register.
-            assert!(std::ptr::eq(drive.register_plan(&r.clone()), row));
+            assert!(std::ptr::eq(drive.ir().register_plan(&r.ir().clone()), row));
         }
-        assert!(drive.plan_of("no_such_register").is_none());
+        assert!(drive.ir().plan_of("no_such_register").is_none());
+        assert!(drive.register_by_id("no_such_register").is_none());
     }
 }
 
@@ -51,17 +54,18 @@ fn another_maps_register_has_no_row_here() {
     let drives = maps();
     let (a, b) = (&drives[0], &drives[1]);
     let foreign = b
-        .registers
-        .iter()
-        .find(|r| a.plan_of(r.id()).is_none())
+        .registers()
+        .find(|r| a.register_by_id(r.id()).is_none())
         .expect("a register of the second map that the first lacks");
-    let caught = catch_unwind(AssertUnwindSafe(|| a.register_plan(foreign).info.id));
+    let caught = catch_unwind(AssertUnwindSafe(|| {
+        a.ir().register_plan(foreign.ir()).info.id
+    }));
     let message = match caught {
-        Ok(id) => panic!("{} answered row {id} for {}", a.meta.id, foreign.id()),
+        Ok(id) => panic!("{} answered row {id} for {}", a.id(), foreign.id()),
         Err(e) => e.downcast_ref::<String>().cloned().unwrap_or_default(),
     };
     assert!(
-        message.contains(foreign.id()) && message.contains(&a.meta.id),
+        message.contains(foreign.id()) && message.contains(a.id()),
         "{message}"
     );
 }

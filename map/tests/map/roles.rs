@@ -1,23 +1,20 @@
 //! Roles are lowered to plan rows, bit positions and codes: `tests/fixtures/roles-drive.yaml`
-//! read, validated and lowered, and every place of its `DrivePlan::roles` checked. The errors of
+//! read, validated and lowered, and every place of its `MapPlan::roles` checked. The errors of
 //! `validate::roles_valid` are in `tests/ui/e46-*` .. `e56-*`.
 
 use std::path::Path;
 
 use drivemap_core::roles::{Edge, FieldRole, NumberField, Role, Target};
-use drivemap_map::lower::DrivePlan;
-use drivemap_map::validate::Context;
+use drivemap_map::MapPlan;
 
-fn drive() -> drivemap_map::Drive {
-    drivemap_map::read_map(
-        Path::new("tests/fixtures/roles-drive.yaml"),
-        &Context::default(),
-    )
-    .unwrap_or_else(|d| panic!("{d}"))
+fn drive() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(Path::new("tests/fixtures/roles-drive.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"))
 }
 
 /// The plan row of register `id`.
-fn row(plan: &DrivePlan, id: &str) -> u16 {
+fn row(plan: &MapPlan, id: &str) -> u16 {
     let i = plan
         .registers
         .iter()
@@ -26,7 +23,7 @@ fn row(plan: &DrivePlan, id: &str) -> u16 {
     u16::try_from(i).unwrap()
 }
 
-fn targets(plan: &DrivePlan, role: Role) -> Vec<Target> {
+fn targets(plan: &MapPlan, role: Role) -> Vec<Target> {
     plan.roles.of(role).map(|p| p.target).collect()
 }
 
@@ -147,11 +144,9 @@ fn every_role_of_the_fixture_lowers_to_its_place() {
 /// once to the row, bits and sign the trait and the simulator read.
 #[test]
 fn a_fault_code_in_a_byte_lowers_to_a_number_field() {
-    let drive = drivemap_map::read_map(
-        Path::new("../tests/fixtures/acme-vf1/acme-vf1.yaml"),
-        &Context::default(),
-    )
-    .unwrap_or_else(|d| panic!("{d}"));
+    let drive = drivemap_map::Loader::new()
+        .load(Path::new("../tests/fixtures/acme-vf1/acme-vf1.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"));
     let plan = drive.plan();
     assert_eq!(
         targets(plan, Role::FaultCode),
@@ -190,8 +185,9 @@ fn a_signed_scaled_field_and_an_unknown_edge_lower_as_written() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("acme-vf1.yaml");
     std::fs::write(&path, text).unwrap();
-    let drive =
-        drivemap_map::read_map(&path, &Context::default()).unwrap_or_else(|d| panic!("{d}"));
+    let drive = drivemap_map::Loader::new()
+        .load(&path)
+        .unwrap_or_else(|d| panic!("{d}"));
     let plan = drive.plan();
     let status = row(plan, "status_word");
     assert_eq!(

@@ -3,13 +3,11 @@
 
 use std::path::Path;
 
-use drivemap_map::ir::SerialDefaults;
-use drivemap_map::model::Parity;
-use drivemap_map::validate::Context;
+use drivemap_map::facts::{Parity, SerialDefaults};
 
 fn defaults(map: &str) -> SerialDefaults {
-    let ctx = Context::default();
-    drivemap_map::read_map(Path::new(map), &ctx)
+    let ctx = drivemap_map::Loader::new();
+    ctx.load(Path::new(map))
         .unwrap_or_else(|d| panic!("{d}"))
         .serial_defaults()
 }

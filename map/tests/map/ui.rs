@@ -4,8 +4,6 @@
 
 use std::path::Path;
 
-use drivemap_map::validate::Context;
-
 #[test]
 fn malformed_maps_report_their_errors() {
     let dir = Path::new("tests/ui");
@@ -19,7 +17,7 @@ fn malformed_maps_report_their_errors() {
     let mut failures = Vec::new();
     for map in &maps {
         let expected_path = map.with_extension("stderr");
-        let actual = match drivemap_map::read_map(map, &Context::default()) {
+        let actual = match drivemap_map::Loader::new().load(map) {
             Ok(_) => format!("{} unexpectedly passed validation\n", map.display()),
             Err(diags) => format!("{diags}\n"),
         };
@@ -47,10 +45,11 @@ fn addresses_are_read_in_the_manuals_notation() {
     let first = "        address: 0x0001\n";
     assert!(text.contains(first), "the fixture's first register moved");
     let read = |text: &str| {
-        drivemap_map::read_map_str("mini-drive.yaml", text, &Context::default())
+        drivemap_map::Loader::new()
+            .load_str("mini-drive.yaml", text)
             .map(|d| {
-                let r = d.registers.iter().find(|r| r.def.id == "command").unwrap();
-                (r.def.address, d.protocol.exceptions[0].code)
+                let r = d.registers().find(|r| r.id() == "command").unwrap();
+                (r.address(), d.protocol().exceptions[0].code)
             })
             .map_err(|e| e.to_string())
     };
@@ -73,12 +72,13 @@ fn addresses_are_read_in_the_manuals_notation() {
     assert!(e.contains("unknown variant `octal`"), "{e}");
     // The export says how the manual numbers registers (the reference document's rendering is
     // checked in `review/tests/review/notation.rs`).
-    let d = drivemap_map::read_map_str("mini-drive.yaml", &declared, &Context::default()).unwrap();
-    let export = drivemap_map::export::export(&d);
+    let d = drivemap_map::Loader::new()
+        .load_str("mini-drive.yaml", &declared)
+        .unwrap();
+    let export = d.export();
     assert_eq!(export["drive"]["address_format"], "decimal");
-    let hex = drivemap_map::read_map_str("mini-drive.yaml", &text, &Context::default()).unwrap();
-    assert_eq!(
-        drivemap_map::export::export(&hex)["drive"]["address_format"],
-        "hex"
-    );
+    let hex = drivemap_map::Loader::new()
+        .load_str("mini-drive.yaml", &text)
+        .unwrap();
+    assert_eq!(hex.export()["drive"]["address_format"], "hex");
 }

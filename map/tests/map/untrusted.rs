@@ -4,8 +4,16 @@
 
 use std::time::{Duration, Instant};
 
-use drivemap_map::load::load_str;
-use drivemap_map::source::{MAX_ALIAS_NODES, MAX_DEPTH, MAX_MAP_BYTES};
+use drivemap_map::{
+    MAX_YAML_ALIAS_NODES as MAX_ALIAS_NODES, MAX_YAML_BYTES as MAX_MAP_BYTES,
+    MAX_YAML_DEPTH as MAX_DEPTH,
+};
+
+fn load_str(name: &str, text: &str) -> Result<drivemap_map::Map, Vec<drivemap_map::Diagnostic>> {
+    drivemap_map::Loader::new()
+        .load_str(name, text)
+        .map_err(|d| d.0)
+}
 
 /// Runs `f` on a thread with a 256 KiB stack: a recursion proportional to the input would
 /// overflow it long before 100,000 levels.
@@ -138,7 +146,11 @@ fn a_file_over_the_size_limit_is_refused_before_parsing() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("huge.yaml");
     std::fs::write(&path, &text).unwrap();
-    let err = drivemap_map::load::load(&path).expect_err("refused")[0].to_string();
+    let err = drivemap_map::Loader::new()
+        .load(&path)
+        .expect_err("refused")
+        .0[0]
+        .to_string();
     std::fs::remove_dir_all(&dir).unwrap();
     assert!(
         err.contains("huge.yaml:1:1") && err.contains("at most 4194304 bytes"),
@@ -160,7 +172,9 @@ fn every_shipped_map_is_within_the_limits() {
     for map in drivemap_map::find_maps(std::path::Path::new("../maps")).unwrap() {
         let len = std::fs::metadata(&map).unwrap().len() as usize;
         assert!(len * 4 < MAX_MAP_BYTES, "{} is {len} bytes", map.display());
-        drivemap_map::load::load(&map).unwrap_or_else(|e| panic!("{e:?}"));
+        drivemap_map::Loader::new()
+            .load(&map)
+            .unwrap_or_else(|e| panic!("{e:?}"));
     }
 }
 

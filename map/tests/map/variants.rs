@@ -2,25 +2,21 @@
 
 use std::path::Path;
 
-use drivemap_map::validate::Context;
-
 #[test]
 fn variant_inherits_overrides_and_removes() {
-    let child = drivemap_map::read_map(
-        Path::new("tests/fixtures/variants/child-drive.yaml"),
-        &Context::default(),
-    )
-    .unwrap_or_else(|d| panic!("{d}"));
-    assert_eq!(child.meta.id, "child-drive");
-    assert_eq!(child.meta.extends.as_deref(), Some("base-drive"));
-    let manuals: Vec<&str> = child.meta.manuals.iter().map(|m| m.name()).collect();
+    let child = drivemap_map::Loader::new()
+        .load(Path::new("tests/fixtures/variants/child-drive.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(child.id(), "child-drive");
+    assert_eq!(child.meta().extends.as_deref(), Some("base-drive"));
+    let manuals: Vec<&str> = child.meta().manuals.iter().map(|m| m.name()).collect();
     assert_eq!(manuals, ["base.txt", "child.txt"], "manuals are united");
     // protocol merged key by key
-    assert_eq!(child.protocol.function_codes.codes, [0x03, 0x10]);
-    assert_eq!(child.protocol.max_read(), 16);
-    assert_eq!(child.protocol.max_write(), 8, "inherited");
+    assert_eq!(child.protocol().function_codes.codes, [0x03, 0x10]);
+    assert_eq!(child.protocol().max_read(), 16);
+    assert_eq!(child.protocol().max_write(), 8, "inherited");
     let ict = child
-        .protocol
+        .protocol()
         .timing
         .as_ref()
         .unwrap()
@@ -29,27 +25,27 @@ fn variant_inherits_overrides_and_removes() {
         .unwrap();
     assert_eq!((ict.ms, ict.bits), (None, Some(24)));
     // registers merged by id
-    let ids: Vec<&str> = child.registers.iter().map(|r| r.id()).collect();
+    let ids: Vec<&str> = child.registers().map(|r| r.id()).collect();
     assert_eq!(
         ids,
         ["speed", "delay", "added"],
         "extra removed, added appended"
     );
-    let speed = child.find("speed").unwrap();
-    assert_eq!(speed.def.param.as_deref(), Some("n01"));
-    assert_eq!((speed.def.min, speed.def.max), (Some(0.0), Some(200.0)));
-    assert_eq!(speed.def.address, 0x0101, "inherited address");
-    assert_eq!(speed.def.source.as_deref(), Some("child.txt:5"));
+    let speed = child.register("speed").unwrap();
+    assert_eq!(speed.param(), Some("n01"));
+    assert_eq!(speed.limits(), (Some(0.0), Some(200.0)));
+    assert_eq!(speed.address(), 0x0101, "inherited address");
+    assert_eq!(speed.source(), Some("child.txt:5"));
     assert_eq!(
-        child.find("n01").map(|r| r.id()),
+        child.register("n01").map(|r| r.id()),
         Some("speed"),
         "lookup by the new parameter number"
     );
     // locations: inherited rows point at the base file, overrides at the child
-    let delay = child.find("delay").unwrap();
-    assert!(child.locate(&delay.path).file.ends_with("base-drive.yaml"));
-    let added = child.find("added").unwrap();
-    assert!(child.locate(&added.path).file.ends_with("child-drive.yaml"));
+    let delay = child.register("delay").unwrap();
+    assert!(delay.location().file.ends_with("base-drive.yaml"));
+    let added = child.register("added").unwrap();
+    assert!(added.location().file.ends_with("child-drive.yaml"));
 }
 
 #[test]
@@ -65,8 +61,9 @@ fn removing_an_unknown_register_is_an_error() {
         .unwrap()
         .replace("{id: extra,", "{id: no_such_register,");
     std::fs::write(dir.join("child-drive.yaml"), child).unwrap();
-    let err =
-        drivemap_map::read_map(&dir.join("child-drive.yaml"), &Context::default()).unwrap_err();
+    let err = drivemap_map::Loader::new()
+        .load(&dir.join("child-drive.yaml"))
+        .unwrap_err();
     let text = err.to_string();
     assert!(
         text.contains("`removed` names `no_such_register`"),
@@ -104,15 +101,14 @@ fn a_chain_of_variants_reads_each_file_once() {
     let (read, last_models) = std::thread::Builder::new()
         .stack_size(256 * 1024)
         .spawn(move || {
-            let cache = drivemap_map::load::TreeCache::new();
+            let loader = drivemap_map::Loader::new().cached();
             let mut last = Vec::new();
             for f in &files {
-                let d = drivemap_map::read_map_cached(f, &Context::default(), &cache)
-                    .unwrap_or_else(|d| panic!("{d}"));
-                assert_eq!(d.registers.len(), 17, "{}", f.display());
-                last = d.meta.models.clone();
+                let d = loader.load(f).unwrap_or_else(|d| panic!("{d}"));
+                assert_eq!(d.registers().len(), 17, "{}", f.display());
+                last = d.meta().models.clone();
             }
-            (cache.files_read(), last)
+            (loader.files_read(), last)
         })
         .unwrap()
         .join()
@@ -135,17 +131,14 @@ fn a_cycle_of_variants_is_still_refused() {
         )
         .unwrap();
     }
-    let cache = drivemap_map::load::TreeCache::new();
+    let loader = drivemap_map::Loader::new().cached();
     for id in ["a", "b"] {
-        let e = drivemap_map::read_map_cached(
-            &dir.join(format!("{id}.yaml")),
-            &Context::default(),
-            &cache,
-        )
-        .unwrap_err()
-        .to_string();
+        let e = loader
+            .load(&dir.join(format!("{id}.yaml")))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("makes a cycle of variant maps"), "{e}");
     }
-    assert_eq!(cache.files_read(), 2);
+    assert_eq!(loader.files_read(), 2);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -109,31 +109,45 @@ pub enum SimError {
     /// A value the register cannot hold.
     #[error("cannot set {register} to {value}: {error}")]
     Value {
+        /// The register.
         register: String,
+        /// The value.
         value: f64,
+        /// Why it cannot hold it.
         error: ValueError,
     },
     /// A slave address outside the drive's range.
     #[error("slave address {slave} is outside {drive}'s range {min} ..= {max}")]
     Slave {
+        /// The drive's id.
         drive: String,
+        /// The slave address asked for.
         slave: u8,
+        /// The lowest address the drive answers to.
         min: u8,
+        /// The highest.
         max: u8,
     },
     /// A variant the map does not define.
     #[error("{drive} has no variant `{option}` on axis `{axis}`; known: {known}")]
     Variant {
+        /// The drive's id.
         drive: String,
+        /// The variant axis asked for.
         axis: String,
+        /// The option asked for.
         option: String,
+        /// The variants the map defines (`axis=option`, listed).
         known: String,
     },
     /// An external quantity the map does not use.
     #[error("{drive} has no external quantity `{name}`; known: {known}")]
     External {
+        /// The drive's id.
         drive: String,
+        /// The quantity asked for.
         name: String,
+        /// The external quantities the map uses, listed.
         known: String,
     },
 }

@@ -9,14 +9,99 @@
 
 use std::path::PathBuf;
 
-use drivemap_map::load;
-use drivemap_map::model::{MapFile, Register};
+use drivemap_map::{Tree, TreeKind};
+
+/// The map file as written (blocks not expanded): what these tests read of it.
+struct MapFile {
+    groups: Vec<Group>,
+}
+
+struct Group {
+    id: String,
+    registers: Vec<Register>,
+}
+
+struct Register {
+    id: String,
+    param: Option<String>,
+    address: u16,
+    notes: Vec<String>,
+    repeat: Option<Repeat>,
+    conflicts: Vec<Conflict>,
+}
+
+struct Repeat {
+    count: u16,
+}
+
+struct Conflict {
+    topic: String,
+    chosen: String,
+    readings: Vec<Reading>,
+}
+
+struct Reading {
+    says: String,
+}
+
+fn items(node: Option<&Tree>) -> &[Tree] {
+    match node.map(|n| &n.kind) {
+        Some(TreeKind::Seq(items)) => items,
+        _ => &[],
+    }
+}
+
+fn text(node: Option<&Tree>) -> Option<String> {
+    node.and_then(|n| n.to_value().as_str().map(str::to_owned))
+}
+
+fn number(node: Option<&Tree>) -> Option<u64> {
+    node.and_then(|n| n.to_value().as_u64())
+}
 
 fn map() -> MapFile {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps/automationdirect-acn.yaml");
-    match load::load(&path) {
-        Ok(m) => m.model,
-        Err(errors) => panic!("{} does not load: {errors:?}", path.display()),
+    let name = path.display().to_string();
+    let yaml = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let tree = drivemap_map::parse_map(&name, &yaml)
+        .unwrap_or_else(|errors| panic!("{name} does not load: {errors}"));
+    let register = |r: &Tree| Register {
+        id: text(r.get("id")).expect("a register id"),
+        param: text(r.get("param")),
+        address: number(r.get("address"))
+            .and_then(|a| u16::try_from(a).ok())
+            .expect("a register address"),
+        notes: items(r.get("notes"))
+            .iter()
+            .filter_map(|n| text(Some(n)))
+            .collect(),
+        repeat: r.get("repeat").map(|rep| Repeat {
+            count: number(rep.get("count"))
+                .and_then(|c| u16::try_from(c).ok())
+                .unwrap_or(1),
+        }),
+        conflicts: items(r.get("conflicts"))
+            .iter()
+            .map(|c| Conflict {
+                topic: text(c.get("topic")).unwrap_or_default(),
+                chosen: text(c.get("chosen")).unwrap_or_default(),
+                readings: items(c.get("readings"))
+                    .iter()
+                    .map(|rd| Reading {
+                        says: text(rd.get("says")).unwrap_or_default(),
+                    })
+                    .collect(),
+            })
+            .collect(),
+    };
+    MapFile {
+        groups: items(tree.get("groups"))
+            .iter()
+            .map(|g| Group {
+                id: text(g.get("id")).expect("a group id"),
+                registers: items(g.get("registers")).iter().map(register).collect(),
+            })
+            .collect(),
     }
 }
 
@@ -29,7 +114,7 @@ fn printed(r: &Register) -> Option<(u32, u32)> {
     })
 }
 
-fn address_conflict(r: &Register) -> Option<&drivemap_map::model::Conflict> {
+fn address_conflict(r: &Register) -> Option<&Conflict> {
     r.conflicts
         .iter()
         .find(|c| c.topic.starts_with("Address columns"))

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_live::LiveSettings;
-use drivemap_map::Drive;
+use drivemap_map::Map as Drive;
 use drivemap_runtime::async_client::AsyncClient;
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::profile::TransportKind;
@@ -24,7 +24,8 @@ mod paramset_faults;
 
 fn map(path: &str) -> Drive {
     let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
-    drivemap_map::read_map(path.as_ref(), &Default::default())
+    drivemap_map::Loader::new()
+        .load(path.as_ref())
         .unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
@@ -86,7 +87,7 @@ fn a_stop_whose_replies_were_lost_stays_a_stop() {
     for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
         for (what, call) in calls {
             let (mut c, settings, slave) = connect(&v7, kind, 2);
-            let view = settings.view(&v7);
+            let view = settings.view(v7.ir());
             let p = v7.plan();
             let mut d = Vfd::from_plan(&mut c, slave, view, p.registers, p.roles);
             if !d.supports(Role::Reverse) && what.starts_with("set_direction") {
@@ -158,7 +159,7 @@ fn an_unknown_command_register_is_read_again_or_released() {
     let p = v7.plan();
     // Read back: the drive got reverse (the reply was lost) and shows an external fault bit.
     let (mut c, settings, slave) = connect(&v7, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&v7), p.registers, p.roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(v7.ir()), p.registers, p.roles);
     d.run().unwrap();
     d.client().transport().inject(LinkFault::LoseReply);
     assert!(d.set_direction(Direction::Reverse).is_err());
@@ -184,7 +185,7 @@ fn an_unknown_command_register_is_read_again_or_released() {
 
     // The read back fails too: the released state, with run as the last run() left it.
     let (mut c, settings, slave) = connect(&v7, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&v7), p.registers, p.roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(v7.ir()), p.registers, p.roles);
     d.run().unwrap();
     d.client().transport().inject(LinkFault::LoseReply);
     assert!(d.set_direction(Direction::Reverse).is_err());
@@ -213,7 +214,7 @@ fn an_unknown_command_register_is_read_again_or_released() {
     let gpd = map("maps/yaskawa-gpd515.yaml");
     let p = gpd.plan();
     let (mut c, settings, slave) = connect(&gpd, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&gpd), p.registers, p.roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(gpd.ir()), p.registers, p.roles);
     // The first run reads the command source b1-02 (once); stopped again, the drive is released.
     d.run().unwrap();
     d.stop().unwrap();
@@ -355,7 +356,13 @@ fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -
     link.script(case.faults.iter().copied());
     let p = drive.plan();
     let mut c = Client::with_options(link, p.profile, options(case.retries));
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     let mut trace = Trace {
         steps: Vec::new(),
         run_command: Vec::new(),
@@ -422,7 +429,7 @@ fn play_async(
     let p = drive.plan();
     let c = AsyncClient::with_options(link, p.profile, options(case.retries));
     // The drive owns its client.
-    let mut d = AsyncVfd::from_plan(c, slave, settings.view(drive), p.registers, p.roles);
+    let mut d = AsyncVfd::from_plan(c, slave, settings.view(drive.ir()), p.registers, p.roles);
     let mut trace = Trace {
         steps: Vec::new(),
         run_command: Vec::new(),
@@ -545,7 +552,7 @@ fn check(drive: &Drive, kind: TransportKind, trace: &Trace) -> Result<(), String
             return Err(format!("step {t} ({step:?}): a broadcast {frame}"));
         }
         let settings = sent.settings.as_ref().expect("recorded");
-        let view = settings.view(drive);
+        let view = settings.view(drive.ir());
         let mut at = 0usize;
         while at < words.len() {
             let pdu = address.wrapping_add(at as u16);
@@ -652,9 +659,10 @@ fn every_map() -> Vec<(String, Drive)> {
     let mut maps: Vec<(String, Drive)> = paths
         .into_iter()
         .map(|p| {
-            let d = drivemap_map::read_map(&p, &Default::default())
+            let d = drivemap_map::Loader::new()
+                .load(&p)
                 .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-            (d.meta.id.clone(), d)
+            (d.id().to_owned(), d)
         })
         .collect();
     // The drives run through a command profile (a control-word state machine), with every
@@ -674,9 +682,10 @@ fn every_map() -> Vec<(String, Drive)> {
             })
             .collect::<Vec<_>>()
             .join("\n");
-        let d = drivemap_map::read_map_str(f, &fast, &Default::default())
+        let d = drivemap_map::Loader::new()
+            .load_str(f, &fast)
             .unwrap_or_else(|e| panic!("{f}: {e}"));
-        maps.push((d.meta.id.clone(), d));
+        maps.push((d.id().to_owned(), d));
     }
     maps
 }
@@ -686,7 +695,7 @@ fn every_map() -> Vec<(String, Drive)> {
 fn links(drive: &Drive) -> Vec<TransportKind> {
     let mut kinds = vec![TransportKind::RtuOverTcp];
     if drive
-        .protocol
+        .protocol()
         .transports
         .contains(&drivemap_map::model::TransportName::Tcp)
     {
@@ -805,7 +814,8 @@ fn acme_changed(from: &str, to: &str) -> (Drive, String) {
     let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
     assert!(text.contains(from), "the fixture has {from}");
     let changed = text.replace(from, to);
-    let drive = drivemap_map::read_map_str("acme-vf1.yaml", &changed, &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("acme-vf1.yaml", &changed)
         .unwrap_or_else(|e| panic!("{e}"));
     (drive, changed)
 }
@@ -849,20 +859,27 @@ fn one_ramp_register_takes_one_value() {
     assert_eq!(place(Role::AccelTime).shared_with, Some(Role::DecelTime));
     assert_eq!(place(Role::DecelTime).shared_with, Some(Role::AccelTime));
     // The reference document says so beside the register.
-    let doc = drivemap_review::reference::render(&drive, "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(drive.ir(), "acme-vf1.yaml");
     assert!(
         doc.contains("| `decel_time` | `acceleration_time` (one register with `accel_time`) |"),
         "{doc}"
     );
     // Without `shared_with` the map is refused.
     let unsaid = shared.replace("shared_with: accel_time, ", "");
-    let e = drivemap_map::read_map_str("acme-vf1.yaml", &unsaid, &Default::default())
+    let e = drivemap_map::Loader::new()
+        .load_str("acme-vf1.yaml", &unsaid)
         .unwrap_err()
         .to_string();
     assert!(e.contains("shared_with: accel_time"), "{e}");
 
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     match d.set_ramp(2.0, 1.0) {
         Err(Error::Refused(e @ drivemap_runtime::Refusal::SharedRegister { .. })) => {
             let message = e.to_string();
@@ -897,7 +914,7 @@ fn the_limit_check_refuses_what_the_map_does_not_allow() {
     let v7 = map("maps/yaskawa-v7.yaml");
     let sim = Simulator::new(v7.clone(), SimOptions::new()).unwrap();
     let settings = sim.settings();
-    let view = settings.view(&v7);
+    let view = settings.view(v7.ir());
     let p = v7.plan();
     let row = |id: &str| p.registers.iter().find(|r| r.info.id == id).unwrap();
     for id in ["frequency_reference", "tcp_frequency_reference"] {
@@ -930,7 +947,13 @@ fn command_roles_sharing_bits_get_the_one_set() {
     let drive = acme_run_codes();
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     let run_code = |d: &mut Vfd<_, &mut Client<SimLink>>| {
         d.client().transport().sim.raw("control_word").unwrap() & 0x0003
     };

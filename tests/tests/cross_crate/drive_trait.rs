@@ -17,9 +17,9 @@ use drivemap_runtime::{Client, DrivePlan, DriveSettings, Error, Refusal, ValueEr
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 
 /// The map of a compiled drive, from `maps/`, which the drives crate is generated from.
-fn map(id: &str) -> drivemap_map::Drive {
+fn map(id: &str) -> drivemap_map::Map {
     let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
-    drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap()
+    drivemap_map::Loader::new().load(path.as_ref()).unwrap()
 }
 
 /// The generic part: what an application does with any drive. `wait` lets simulated time pass.

@@ -7,8 +7,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_map::Drive;
-use drivemap_map::validate::Context;
+use drivemap_map::Map as Drive;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Client, ClientOptions, Error, Refusal, Table};
@@ -18,7 +17,9 @@ use proptest::prelude::*;
 
 fn map() -> Drive {
     let path = drivemap_tests::workspace().join("tests/fixtures/halvard-hx2/halvard-hx2.yaml");
-    drivemap_map::read_map(&path, &Context::default()).expect("fixture map")
+    drivemap_map::Loader::new()
+        .load(&path)
+        .expect("fixture map")
 }
 
 fn client(drive: &Drive) -> Client<SimLink> {
@@ -62,8 +63,8 @@ fn violation(drive: &Drive, link: &SimLink) -> Option<String> {
             Table::Holding
         };
         for a in address..address.saturating_add(quantity) {
-            for r in &drive.registers {
-                let plan = drive.register_plan(r);
+            for r in drive.registers() {
+                let plan = r.plan();
                 if plan.info.table == table
                     && (plan.info.address..plan.info.address + plan.info.width.count()).contains(&a)
                     && !plan.functions.allows(f)
@@ -271,7 +272,7 @@ fn the_planner_reads_the_monitor_area_with_04h_only() {
 #[test]
 fn export_doc_diff_and_generated_code_show_the_functions() {
     let drive = map();
-    let export = drivemap_map::export::export(&drive);
+    let export = drive.export();
     let register = |id: &str| {
         export["registers"]
             .as_array()
@@ -292,7 +293,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
     );
     assert!(register("operation_command")["function_codes"].is_null());
 
-    let doc = drivemap_review::reference::render(&drive, "halvard-hx2.yaml");
+    let doc = drivemap_review::reference::render(drive.ir(), "halvard-hx2.yaml");
     assert!(doc.contains("functions 03h/10h only"), "{doc}");
     assert!(
         doc.contains(
@@ -336,11 +337,12 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
     )
     .unwrap();
     let read = |t: &str| {
-        drivemap_map::read_map_str("halvard-hx2.yaml", t, &Context::default())
+        drivemap_map::Loader::new()
+            .load_str("halvard-hx2.yaml", t)
             .unwrap_or_else(|e| panic!("{e}"))
     };
     let kinds = |t: &str| -> Vec<(String, drivemap_review::diff::ChangeKind)> {
-        drivemap_review::diff::compare(&drive, &read(t))
+        drivemap_review::diff::compare(drive.ir(), read(t).ir())
             .changes
             .iter()
             .map(|c| (c.subject.clone(), c.kind))
@@ -373,7 +375,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
         "        function_codes: {codes: [0x03, 0x10], refused_with: 0x02, source: \"halvard-hx2.txt:11\"}\n",
         "",
     );
-    let diff = drivemap_review::diff::compare(&drive, &read(&dropped));
+    let diff = drivemap_review::diff::compare(drive.ir(), (read(&dropped)).ir());
     assert_eq!(diff.breaking(), 1, "{:?}", diff.changes);
 }
 
@@ -383,7 +385,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
 #[test]
 fn example_frames_are_checked_against_the_registers_functions() {
     let drive = map();
-    let v = drivemap_live::examples::verify(&drive);
+    let v = drivemap_live::examples::verify(drive.ir());
     assert!(v.errors.is_empty(), "{:?}", v.errors);
     assert_eq!(v.clean, 4);
 
@@ -392,10 +394,10 @@ fn example_frames_are_checked_against_the_registers_functions() {
     )
     .unwrap();
     let refusal = text.find("  - id: frequency_with_06h_refused").unwrap();
-    let unrefused =
-        drivemap_map::read_map_str("halvard-hx2.yaml", &text[..refusal], &Context::default())
-            .unwrap();
-    let v = drivemap_live::examples::verify(&unrefused);
+    let unrefused = drivemap_map::Loader::new()
+        .load_str("halvard-hx2.yaml", &text[..refusal])
+        .unwrap();
+    let v = drivemap_live::examples::verify(unrefused.ir());
     let errors: Vec<String> = v.errors.iter().map(|e| e.to_string()).collect();
     assert_eq!(errors.len(), 1, "{errors:?}");
     assert!(

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use drivemap_drives::{automationdirect_acn, ptlk_tds_v8, yaskawa_gpd515, yaskawa_j7, yaskawa_v7};
-use drivemap_map::examples::parse_bytes;
+use drivemap_map::facts::parse_bytes;
 use drivemap_map::model::TransportName;
 use drivemap_runtime::crc;
 
@@ -14,9 +14,9 @@ type Frames = &'static [(&'static str, &'static [u8])];
 
 fn map_examples(id: &str) -> Vec<(String, Vec<u8>, bool, bool)> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../maps/{id}.yaml"));
-    let drive = drivemap_map::read_map(&path, &Default::default()).unwrap();
+    let drive = drivemap_map::Loader::new().load(&path).unwrap();
     drive
-        .examples
+        .examples()
         .iter()
         .map(|e| {
             let bytes = parse_bytes(&e.bytes)

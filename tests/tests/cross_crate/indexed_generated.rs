@@ -6,7 +6,6 @@
 
 use std::time::Duration;
 
-use drivemap_map::validate::Context;
 use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_sim::{SimOptions, Simulator};
@@ -58,11 +57,10 @@ fn a_typed_entry_handle_reads_and_writes_through_the_client() {
     assert_eq!(entries::MAXIMUM_FREQUENCY.entry.index, 3);
     assert_eq!(entries::MAXIMUM_FREQUENCY.pair.index_address, 44);
     assert_eq!(tarrow_tm44::INDEXED.len(), 1);
-    let drive = drivemap_map::read_map(
-        &fixture().join("tarrow-tm44.yaml"),
-        &Context::with_manuals(&fixture().join("manuals")),
-    )
-    .unwrap_or_else(|d| panic!("{d}"));
+    let drive = drivemap_map::Loader::new()
+        .manuals(fixture().join("manuals"))
+        .load(&fixture().join("tarrow-tm44.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"));
     // The generated data is the plan the map lowers to.
     assert_eq!(tarrow_tm44::INDEXED, drive.plan().indexed);
     let sim = Simulator::new(drive.clone(), SimOptions::new()).unwrap();

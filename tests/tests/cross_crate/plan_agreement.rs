@@ -20,7 +20,7 @@ use std::path::PathBuf;
 use drivemap_drives::runtime::plan::{Conversion, RegisterPlan};
 use drivemap_drives::runtime::{DriveSettings, Profile, SettingsView};
 use drivemap_live::{LiveSettings, Value};
-use drivemap_map::ir;
+use drivemap_map::RegisterRef;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 
@@ -145,7 +145,8 @@ fn agree<S: DriveSettings + SettingsView + Default>(
     profile: &Profile,
 ) {
     let path = maps_dir().join(format!("{id}.yaml"));
-    let live = drivemap_map::read_map(&path, &Default::default())
+    let live = drivemap_map::Loader::new()
+        .load(&path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let plan = live.plan();
 
@@ -165,26 +166,25 @@ fn agree<S: DriveSettings + SettingsView + Default>(
     assert_eq!(*profile, *plan.profile, "{id}: profile differs");
     assert_eq!(
         S::DEPENDENCIES,
-        LiveSettings::dependencies(&live).as_slice(),
+        LiveSettings::dependencies(live.ir()).as_slice(),
         "{id}: settings dependencies"
     );
 
     // 2. Settings and conversions agree on random settings, words and values.
-    let by_row: Vec<&ir::Register> = {
-        let mut rows = vec![None; live.registers.len()];
-        for (m, &row) in plan.order.iter().enumerate() {
-            rows[row] = Some(&live.registers[m]);
-        }
-        rows.into_iter().map(Option::unwrap).collect()
-    };
+    let by_row: Vec<RegisterRef<'_>> = (0..plan.registers.len())
+        .map(|row| {
+            live.register_of_row(row)
+                .expect("every row is a register's")
+        })
+        .collect();
     let axes: Vec<usize> = plan.settings.axes.iter().map(|(_, o)| o.len()).collect();
     let externals: Vec<Option<&str>> = plan
         .settings
         .quantities
         .iter()
         .map(|q| match q {
-            drivemap_map::lower::Quantity::External { id, .. } => Some(id.as_str()),
-            drivemap_map::lower::Quantity::Register(_) => None,
+            drivemap_map::Quantity::External { id, .. } => Some(id.as_str()),
+            drivemap_map::Quantity::Register(_) => None,
         })
         .collect();
     let strategy = case_strategy(&axes, S::DEPENDENCIES.len(), externals.len());
@@ -204,7 +204,7 @@ fn agree<S: DriveSettings + SettingsView + Default>(
         }
         for (&address, &raw) in S::DEPENDENCIES.iter().zip(&case.dependencies) {
             let a = typed.absorb(address, raw);
-            let b = named.absorb(&live, address, raw);
+            let b = named.absorb(live.ir(), address, raw);
             prop_assert_eq!(a, b, "{}: absorb({:#06x}, {})", id, address, raw);
         }
         let external_values: Vec<Option<f64>> = externals
@@ -228,7 +228,8 @@ fn agree<S: DriveSettings + SettingsView + Default>(
                 let g = generated_number(generated, raw, &view);
                 let l = live_number(
                     generated,
-                    drivemap_live::decode(&live, r, raw, &named).map_err(|e| e.to_string()),
+                    drivemap_live::decode(live.ir(), r.ir(), raw, &named)
+                        .map_err(|e| e.to_string()),
                 );
                 prop_assert!(
                     same_number(&g, &l),
@@ -246,7 +247,8 @@ fn agree<S: DriveSettings + SettingsView + Default>(
             }
             for &v in &values {
                 let g = generated.encode_number(v, &view).map_err(|e| e.to_string());
-                let l = drivemap_live::encode(&live, r, v, &named).map_err(|e| e.to_string());
+                let l =
+                    drivemap_live::encode(live.ir(), r.ir(), v, &named).map_err(|e| e.to_string());
                 prop_assert_eq!(
                     &g,
                     &l,

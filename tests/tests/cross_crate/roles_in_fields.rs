@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use drivemap_live::LiveSettings;
 use drivemap_live::settings::View;
-use drivemap_map::Drive;
+use drivemap_map::Map as Drive;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::{Edge, Role, Roles, Target};
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
@@ -24,7 +24,8 @@ use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
 fn map(path: &str) -> Drive {
     let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
-    drivemap_map::read_map(path.as_ref(), &Default::default())
+    drivemap_map::Loader::new()
+        .load(path.as_ref())
         .unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
@@ -89,7 +90,7 @@ impl Rig {
         Vfd::from_plan(
             &mut self.client,
             self.slave,
-            self.settings.view(drive),
+            self.settings.view(drive.ir()),
             drive.plan().registers,
             roles,
         )
@@ -169,7 +170,9 @@ fn a_setpoint_on_a_field_is_refused_where_read_modify_write_is_not_safe() {
     );
     assert_ne!(moved, text);
     // The status word is read-only: validation refuses a setpoint there.
-    let e = drivemap_map::read_map_str("acme-vf1.yaml", &moved, &Default::default()).unwrap_err();
+    let e = drivemap_map::Loader::new()
+        .load_str("acme-vf1.yaml", &moved)
+        .unwrap_err();
     assert!(
         e.to_string()
             .contains("role `frequency_reference` is written, but `status_word` is not writable"),
@@ -400,8 +403,8 @@ fn a_command_field_is_written_from_the_roles_not_from_a_read_back() {
     let drive = map("maps/yaskawa-v7.yaml");
     let kind = TransportKind::Rtu;
     let mut rig = Rig::new(&drive, simulator(&drive, kind), kind, 0);
-    let command = drive.find("digital_input_command").unwrap();
-    let row = u16::try_from(drive.plan().order[command.index()]).unwrap();
+    let command = drive.register("digital_input_command").unwrap();
+    let row = u16::try_from(command.row()).unwrap();
     let bit = |id: &str| match &drive.plan().registers[usize::from(row)].conversion {
         drivemap_runtime::plan::Conversion::Bits { fields, .. } => {
             fields.iter().find(|f| f.id == id).unwrap().mask()
@@ -427,8 +430,8 @@ fn a_command_field_is_written_from_the_roles_not_from_a_read_back() {
     let word = d.write_command_fields(row, s3, 0).unwrap();
     assert_eq!(word & (run | reset | s3), 0, "{word:04X}h");
     // A register without a command role is refused, not written.
-    let other = drive.find("n019").unwrap();
-    let other_row = u16::try_from(drive.plan().order[other.index()]).unwrap();
+    let other = drive.register("n019").unwrap();
+    let other_row = u16::try_from(other.row()).unwrap();
     assert!(!d.holds_command(other_row));
     assert!(matches!(
         d.write_command_fields(other_row, 1, 1),

@@ -12,10 +12,8 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use drivemap_map::facts::{self, FactKey, RegisterFacts};
-use drivemap_map::ir::Register;
-use drivemap_map::validate::Context;
-use drivemap_map::{Drive, describe};
+use drivemap_map::facts::{FactKey, RegisterFacts};
+use drivemap_map::{Map, RegisterRef, describe};
 use drivemap_runtime::core::ConversionKind;
 
 fn root() -> PathBuf {
@@ -38,8 +36,9 @@ fn maps() -> Vec<PathBuf> {
     out
 }
 
-fn read(path: &Path) -> Drive {
-    drivemap_map::read_map(path, &Context::default())
+fn read(path: &Path) -> Map {
+    drivemap_map::Loader::new()
+        .load(path)
         .unwrap_or_else(|d| panic!("{}: {d}", path.display()))
 }
 
@@ -52,8 +51,8 @@ struct Expected {
     diff: Vec<String>,
 }
 
-fn expected(kind: ConversionKind, drive: &Drive, r: &Register, f: &RegisterFacts) -> Expected {
-    let plan = drive.register_plan(r);
+fn expected(kind: ConversionKind, r: RegisterRef<'_>, f: &RegisterFacts) -> Expected {
+    let plan = r.plan();
     let named = describe::kind(plan).to_owned();
     let scale_row = |key| {
         f.get(key)
@@ -64,7 +63,7 @@ fn expected(kind: ConversionKind, drive: &Drive, r: &Register, f: &RegisterFacts
     // The diff's summary prints the map's scale, so a unit without one shows only the kind.
     let with_scale = |text: &String| {
         let mut d = vec![named.clone()];
-        if r.def.scale.is_some() {
+        if r.scale().is_some() {
             d.push(text.clone());
         }
         d
@@ -72,7 +71,7 @@ fn expected(kind: ConversionKind, drive: &Drive, r: &Register, f: &RegisterFacts
     match kind {
         ConversionKind::Word => Expected {
             export: |e| e["scale"] == 1.0 && e["values"] == serde_json::json!([]),
-            text: describe::address(r.def.address),
+            text: describe::address(r.address()),
             diff: vec![named.clone()],
         },
         ConversionKind::Decimal => {
@@ -119,22 +118,22 @@ fn expected(kind: ConversionKind, drive: &Drive, r: &Register, f: &RegisterFacts
         }
         ConversionKind::Enum => Expected {
             export: |e| e["values"].as_array().is_some_and(|v| !v.is_empty()),
-            text: r.def.values[0].id.clone(),
+            text: r.values()[0].id.clone(),
             diff: vec![named.clone()],
         },
         ConversionKind::Bits => Expected {
             export: |e| e["fields"].as_array().is_some_and(|v| !v.is_empty()),
-            text: r.def.fields[0].id.clone(),
+            text: r.fields()[0].id.clone(),
             diff: vec![named.clone()],
         },
     }
 }
 
 /// The registers of each kind in a drive, a few of each (the first three), with their facts.
-fn by_kind(drive: &Drive) -> BTreeMap<ConversionKind, Vec<(usize, RegisterFacts)>> {
+fn by_kind(drive: &Map) -> BTreeMap<ConversionKind, Vec<(usize, RegisterFacts)>> {
     let mut out: BTreeMap<ConversionKind, Vec<(usize, RegisterFacts)>> = BTreeMap::new();
-    for (i, r) in drive.registers.iter().enumerate() {
-        let f = facts::register(drive, r);
+    for (i, r) in drive.registers().enumerate() {
+        let f = r.facts();
         let list = out.entry(f.kind).or_default();
         if list.len() < 3 {
             list.push((i, f));
@@ -167,8 +166,8 @@ fn export_doc_and_generated_code_show_every_kind() {
     let mut checked = BTreeMap::<ConversionKind, usize>::new();
     for path in maps() {
         let drive = read(&path);
-        let export = drivemap_map::export::export(&drive);
-        let doc = drivemap_review::reference::render(&drive, "map.yaml");
+        let export = drive.export();
+        let doc = drivemap_review::reference::render(drive.ir(), "map.yaml");
         let code = drivemap_codegen::Config::new()
             .map(&path)
             .generate()
@@ -183,22 +182,22 @@ fn export_doc_and_generated_code_show_every_kind() {
                 code.contains(&format!("Conversion::{} {{", kind.variant()))
                     || (kind == ConversionKind::Word && code.contains("RegisterPlan::word(")),
                 "{}: generated plan has no Conversion::{}",
-                drive.meta.id,
+                drive.id(),
                 kind.variant()
             );
             for (i, f) in list {
-                let r = &drive.registers[i];
-                let e = expected(kind, &drive, r, &f);
+                let r = drive.register_at(i).expect("an index of the map");
+                let e = expected(kind, r, &f);
                 let entry = export["registers"]
                     .as_array()
                     .unwrap()
                     .iter()
                     .find(|x| x["id"] == f.id.as_str())
-                    .unwrap_or_else(|| panic!("{}: {} not exported", drive.meta.id, f.id));
+                    .unwrap_or_else(|| panic!("{}: {} not exported", drive.id(), f.id));
                 assert!(
                     (e.export)(entry),
                     "{}: export of {kind:?} register {} does not show it: {entry}",
-                    drive.meta.id,
+                    drive.id(),
                     f.id
                 );
                 let shown = |text: &str, what: &str| {
@@ -209,7 +208,7 @@ fn export_doc_and_generated_code_show_every_kind() {
                     assert!(
                         what.contains(text) || what.contains(&escaped),
                         "{}: {kind:?} register {}: `{text}` missing",
-                        drive.meta.id,
+                        drive.id(),
                         f.id
                     );
                 };
@@ -232,7 +231,8 @@ fn the_diff_shows_every_kind() {
     for path in maps() {
         let drive = read(&path);
         // Every register taken away: the diff sums each removed register up in one line.
-        let mut old = drive.clone();
+        // The expanded map, until the diff reads a `Map` (`Map::ir`).
+        let mut old = drive.ir().clone();
         old.roles.clear();
         old.plan = Default::default();
         let mut none = old.clone();
@@ -240,9 +240,9 @@ fn the_diff_shows_every_kind() {
         let diff = drivemap_review::diff::compare(&old, &none);
         for (kind, list) in by_kind(&drive) {
             for (i, f) in list {
-                let r = &drive.registers[i];
-                let e = expected(kind, &drive, r, &f);
-                let subject = describe::register(r);
+                let r = drive.register_at(i).expect("an index of the map");
+                let e = expected(kind, r, &f);
+                let subject = r.label();
                 let removed = diff
                     .changes
                     .iter()
@@ -251,14 +251,14 @@ fn the_diff_shows_every_kind() {
                             && c.subject == subject
                     })
                     .unwrap_or_else(|| {
-                        panic!("{}: removing {} is not in the diff", drive.meta.id, f.id)
+                        panic!("{}: removing {} is not in the diff", drive.id(), f.id)
                     });
                 let text = removed.old.as_deref().unwrap_or_default();
                 for words in &e.diff {
                     assert!(
                         text.contains(words.as_str()),
                         "{}: the diff of {kind:?} register {} does not say `{words}`: {text}",
-                        drive.meta.id,
+                        drive.id(),
                         f.id
                     );
                 }

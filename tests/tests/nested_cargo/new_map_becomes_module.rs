@@ -123,7 +123,8 @@ fn a_broken_map_fails_the_build_with_every_error_as_check_prints_it() {
         .canonicalize()
         .unwrap()
         .join("e41-decimal-address.yaml");
-    let expected = drivemap_map::read_map(&map, &Default::default())
+    let expected = drivemap_map::Loader::new()
+        .load(&map)
         .expect_err("the map is broken")
         .to_string();
     assert!(expected.ends_with("4 errors"), "{expected}");

@@ -3,7 +3,7 @@
 //! the generated module carries it as data. The fault-injection property test
 //! (`the_contract_holds_under_faults`) plays every fixture of [`FIXTURES`] too.
 
-use drivemap_map::Drive;
+use drivemap_map::Map as Drive;
 use drivemap_runtime::Error;
 use drivemap_runtime::core::command_profile::{CommandProfile, PathKind};
 use drivemap_runtime::profile::TransportKind;
@@ -69,7 +69,13 @@ fn run_and_stops_walk_the_machine_from_power_on() {
     let p = drive.plan();
     for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
         let (mut c, settings, slave) = connect(&drive, kind, 0);
-        let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+        let mut d = Vfd::from_plan(
+            &mut c,
+            slave,
+            settings.view(drive.ir()),
+            p.registers,
+            p.roles,
+        );
         assert!(d.supports(Role::Run) && d.supports(Role::FaultReset));
         assert_eq!(d.profile_state().unwrap(), Some("switch_on_disabled"));
         d.set_reference(30.0).unwrap();
@@ -145,7 +151,13 @@ fn a_trip_needs_the_acknowledge_edge_in_the_fault_state() {
     let drive = kestrel();
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     d.reset_fault().unwrap();
     assert_eq!(written(&mut d), [] as [u16; 0], "no fault: nothing written");
     d.run().unwrap();
@@ -209,7 +221,7 @@ fn a_refused_transition_times_out_naming_the_state() {
         ..p.roles
     };
     let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(drive.ir()), p.registers, roles);
     let started = std::time::Instant::now();
     let e = d.run().unwrap_err();
     let waited = started.elapsed();
@@ -268,7 +280,7 @@ fn a_stop_path_through_a_run_transition_is_refused() {
         ..p.roles
     };
     let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(drive.ir()), p.registers, roles);
     d.client().write_register(slave, 0x6040, 0x0006).unwrap();
     d.client().write_register(slave, 0x6040, 0x0007).unwrap();
     written(&mut d);
@@ -286,7 +298,8 @@ fn a_stop_path_through_a_run_transition_is_refused() {
         "  transitions:\n",
         "  paths:\n    stop: {via: [enable_operation], to: [ready_to_switch_on]}\n  transitions:\n",
     );
-    let e = drivemap_map::read_map_str("kestrel-kd4.yaml", &text, &Default::default())
+    let e = drivemap_map::Loader::new()
+        .load_str("kestrel-kd4.yaml", &text)
         .unwrap_err()
         .to_string();
     assert!(
@@ -328,8 +341,14 @@ fn every_profile_fixture_follows_its_machine() {
         let control = p.registers[usize::from(profile.control)].info.address;
         for kind in super::links(&drive) {
             let (mut c, settings, slave) = connect(&drive, kind, 0);
-            let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
-            let id = &drive.meta.id;
+            let mut d = Vfd::from_plan(
+                &mut c,
+                slave,
+                settings.view(drive.ir()),
+                p.registers,
+                p.roles,
+            );
+            let id = &drive.id();
             let power_on = profile.state_id(profile.power_on);
             assert_eq!(d.profile_state().unwrap(), Some(power_on), "{id}");
             // A run path of one transition (the FC profile's start) skips nothing.
@@ -383,7 +402,13 @@ fn profidrive_keeps_the_direction_bit_through_the_machine() {
     let drive = map(FIXTURES[1]);
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     d.set_reference(25.0).unwrap();
     written(&mut d);
     d.run().unwrap();
@@ -410,8 +435,14 @@ fn active_fault_and_last_fault_are_two_roles() {
         let drive = map(file);
         let p = drive.plan();
         let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-        let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
-        let id = &drive.meta.id;
+        let mut d = Vfd::from_plan(
+            &mut c,
+            slave,
+            settings.view(drive.ir()),
+            p.registers,
+            p.roles,
+        );
+        let id = &drive.id();
         assert!(d.supports(Role::LastFault), "{id}");
         assert_eq!(d.last_fault().unwrap().code, 0, "{id}");
         d.run().unwrap();
@@ -430,7 +461,13 @@ fn active_fault_and_last_fault_are_two_roles() {
     let drive = kestrel();
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     assert!(matches!(
         d.last_fault(),
         Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. }))
@@ -487,11 +524,18 @@ roles:
   running: [{register: status_a, on: run, source: "manual.txt:14"}]
   fault: [{register: status_a, on: trip, source: "manual.txt:14"}]
 "#;
-    let drive = drivemap_map::read_map_str("codes-as-states.yaml", text, &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("codes-as-states.yaml", text)
         .unwrap_or_else(|e| panic!("{e}"));
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     assert_eq!(d.status().unwrap().running, Some(false));
     d.set_reference(30.0).unwrap();
     d.run().unwrap();
@@ -506,7 +550,8 @@ roles:
     let both = text
         .replace("on: run, source", "on: run, off: stop, source")
         .replace("on: trip, source", "on: trip, off: stop, source");
-    let e = drivemap_map::read_map_str("codes-as-states.yaml", &both, &Default::default())
+    let e = drivemap_map::Loader::new()
+        .load_str("codes-as-states.yaml", &both)
         .unwrap_err()
         .to_string();
     assert!(e.contains("cannot hold together"), "{e}");
@@ -520,7 +565,7 @@ roles:
 fn doc_export_and_diff_cover_the_profile() {
     use drivemap_review::diff::{ChangeKind, Severity, compare};
     let drive = kestrel();
-    let doc = drivemap_review::reference::render(&drive, "kestrel-kd4.yaml");
+    let doc = drivemap_review::reference::render(drive.ir(), "kestrel-kd4.yaml");
     assert!(doc.contains("## Command profile"), "{doc}");
     assert!(
         doc.contains("| `enable_operation` | 000Fh | FF70h | 0000h | `switched_on` | `operation_enabled` | 100 ms | `kestrel-kd4.txt:40` |"),
@@ -531,7 +576,7 @@ fn doc_export_and_diff_cover_the_profile() {
         "{doc}"
     );
     assert!(doc.contains("At power-on: `switch_on_disabled`"), "{doc}");
-    let export = drivemap_map::export::export(&drive);
+    let export = drive.export();
     assert_eq!(export["profile"]["standard"], "cia402");
     assert_eq!(
         export["profile"]["transitions"]["shutdown"]["source"],
@@ -539,32 +584,25 @@ fn doc_export_and_diff_cover_the_profile() {
     );
     let shipped = map("maps/yaskawa-v7.yaml");
     assert!(
-        !drivemap_review::reference::render(&shipped, "yaskawa-v7.yaml")
+        !drivemap_review::reference::render(shipped.ir(), "yaskawa-v7.yaml")
             .contains("Command profile")
     );
-    assert!(
-        drivemap_map::export::export(&shipped)
-            .get("profile")
-            .is_none()
-    );
+    assert!(shipped.export().get("profile").is_none());
 
     let text =
         std::fs::read_to_string(format!("{}/../{}", env!("CARGO_MANIFEST_DIR"), FIXTURES[0]))
             .unwrap();
     let changed = |from: &str, to: &str| {
         assert!(text.contains(from), "{from}");
-        drivemap_map::read_map_str(
-            "kestrel-kd4.yaml",
-            &text.replace(from, to),
-            &Default::default(),
-        )
-        .unwrap_or_else(|e| panic!("{e}"))
+        drivemap_map::Loader::new()
+            .load_str("kestrel-kd4.yaml", &text.replace(from, to))
+            .unwrap_or_else(|e| panic!("{e}"))
     };
     let slower = changed(
         r#"enable_operation: {limit_ms: 100, source: "kestrel-kd4.txt:40"}"#,
         r#"enable_operation: {limit_ms: 250, source: "kestrel-kd4.txt:40"}"#,
     );
-    let d = compare(&drive, &slower);
+    let d = compare(drive.ir(), slower.ir());
     let c: Vec<_> = d
         .changes
         .iter()
@@ -578,7 +616,7 @@ fn doc_export_and_diff_cover_the_profile() {
         r#"quick_stop_active: {source: "kestrel-kd4.txt:65"}"#,
         r#"quick_stop_active: {source: "kestrel-kd4.txt:54"}"#,
     );
-    let d = compare(&drive, &recited);
+    let d = compare(drive.ir(), recited.ir());
     let c: Vec<_> = d
         .changes
         .iter()
@@ -586,7 +624,7 @@ fn doc_export_and_diff_cover_the_profile() {
         .collect();
     assert_eq!(c.len(), 1, "{c:?}");
     assert_eq!(c[0].severity(), Severity::Compatible, "{c:?}");
-    let none = compare(&shipped, &drive);
+    let none = compare(shipped.ir(), drive.ir());
     assert!(
         none.changes
             .iter()
@@ -660,12 +698,19 @@ profile:
     quick_stop: {source: "fc.txt:19"}
     reset: {source: "fc.txt:20"}
 "#;
-    let drive = drivemap_map::read_map_str("fc-example.yaml", text, &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("fc-example.yaml", text)
         .unwrap_or_else(|e| panic!("{e}"));
     let p = drive.plan();
     for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
         let (mut c, settings, slave) = connect(&drive, kind, 0);
-        let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+        let mut d = Vfd::from_plan(
+            &mut c,
+            slave,
+            settings.view(drive.ir()),
+            p.registers,
+            p.roles,
+        );
         assert_eq!(d.profile_state().unwrap(), Some("stopped"));
         d.set_reference(10.0).unwrap();
         d.set_direction(drivemap_runtime::vfd::Direction::Reverse)
@@ -700,7 +745,13 @@ fn a_field_write_never_asks_the_machine_to_run() {
     let p = drive.plan();
     let stw1 = p.roles.profile.unwrap().control;
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     d.client().write_register(slave, 0x0063, 0x047E).unwrap();
     match d.command_fields_word(stw1, 0x000F, 0x000F) {
         Err(Error::Refused(drivemap_runtime::Refusal::FieldNotWritable { role, .. })) => {
@@ -776,7 +827,8 @@ profile:
     coast: {via: [disable], to: [disabled, fault]}
     reset_fault: {via: [acknowledge], to: [disabled]}
 "#;
-    let drive = drivemap_map::read_map_str("two-bits.yaml", text, &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("two-bits.yaml", text)
         .unwrap_or_else(|e| panic!("{e}"));
     let p = drive.plan();
     assert_eq!(p.roles.profile.unwrap().name, "own");
@@ -785,7 +837,13 @@ profile:
     assert_eq!(c.transport().sim.profile_state(), Some("disabled"));
     assert!(!c.transport().sim.state().unwrap().run_command);
     c.write_register(slave, 0x0010, 0x0000).unwrap();
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     written(&mut d);
     d.run().unwrap();
     assert_eq!(written(&mut d), [0x0002, 0x0003]);
@@ -808,7 +866,13 @@ fn an_interlock_refuses_the_way_to_running_and_run_says_where_it_stopped() {
     let drive = kestrel();
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
+    let mut d = Vfd::from_plan(
+        &mut c,
+        slave,
+        settings.view(drive.ir()),
+        p.registers,
+        p.roles,
+    );
     d.client().transport().sim.set_interlock(true);
     match d.run() {
         Err(Error::StateMachine { state, why, .. }) => {

@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 use drivemap_live::codec::{self, Value};
 use drivemap_live::paramset::{self, ParameterSet, RestoreReport};
 use drivemap_live::{LiveSettings, Session};
-use drivemap_map::Drive;
+use drivemap_map::{Map as Drive, RegisterRef};
 use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::pdu::Request;
@@ -72,7 +72,7 @@ fn options() -> ClientOptions {
 
 fn session<'d>(drive: &'d Drive, link: &Shared, slave: u8) -> Session<'d> {
     Session::over(
-        drive,
+        drive.ir(),
         Box::new(link.clone()),
         options(),
         slave,
@@ -95,16 +95,16 @@ fn maps() -> Vec<Drive> {
     let mut out: Vec<Drive> = drivemap_map::find_maps(dir.as_ref())
         .expect("maps/")
         .iter()
-        .map(|p| drivemap_map::read_map(p, &Default::default()).expect("shipped map"))
+        .map(|p| drivemap_map::Loader::new().load(p).expect("shipped map"))
         .collect();
-    out.sort_by(|a, b| a.meta.id.cmp(&b.meta.id));
+    out.sort_by(|a, b| a.id().cmp(b.id()));
     out
 }
 
 fn kinds(drive: &Drive) -> Vec<TransportKind> {
     let mut out = vec![TransportKind::RtuOverTcp];
     let tcp = drive
-        .protocol
+        .protocol()
         .transports
         .iter()
         .any(|t| format!("{t:?}").eq_ignore_ascii_case("tcp"));
@@ -127,7 +127,7 @@ fn simulator(drive: &Drive) -> Simulator {
         && let Target::Field(f) = place.target
         && let Some(r) = drive.register_of_row(usize::from(f.row))
     {
-        sim.set_raw(&r.def.id, u32::from(f.code(true)) << f.lsb)
+        sim.set_raw(r.id(), u32::from(f.code(true)) << f.lsb)
             .unwrap();
     }
     sim
@@ -136,12 +136,12 @@ fn simulator(drive: &Drive) -> Simulator {
 /// A raw value of `r` other than `current` that the map accepts under `settings`.
 fn other_raw(
     drive: &Drive,
-    r: &drivemap_map::ir::Register,
+    r: RegisterRef<'_>,
     current: u32,
     settings: &LiveSettings,
     rng: &mut SplitMix,
 ) -> Option<u32> {
-    let plan = drive.register_plan(r);
+    let plan = r.plan();
     let mut raws: Vec<i64> = match plan.conversion {
         Conversion::Enum { values, .. } => values.iter().map(|v| i64::from(v.code)).collect(),
         Conversion::Bits { .. } => return None,
@@ -164,7 +164,7 @@ fn other_raw(
         if raw == current {
             return None;
         }
-        let text = match codec::decode(drive, r, raw, settings).ok()? {
+        let text = match codec::decode(drive.ir(), r.ir(), raw, settings).ok()? {
             Value::Quantity {
                 value,
                 decimals,
@@ -175,7 +175,7 @@ fn other_raw(
             Value::Code { code, .. } => code.to_string(),
             _ => return None,
         };
-        (codec::parse_value(drive, r, &text, settings).ok()? == raw).then_some(raw)
+        (codec::parse_value(drive.ir(), r.ir(), &text, settings).ok()? == raw).then_some(raw)
     })
 }
 
@@ -206,13 +206,14 @@ const LINK_WORDS: &[&str] = &[
 /// is chosen under the selected scale), each to a value the map accepts.
 fn source(drive: &Drive, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simulator {
     let mut sim = base.clone();
-    let regs: Vec<_> = paramset::settings_of(drive)
+    let regs: Vec<RegisterRef<'_>> = paramset::settings_of(drive.ir())
         .into_iter()
+        .filter_map(|r| drive.register_by_id(r.id()))
         .filter(|r| {
-            let name = r.def.name.to_ascii_lowercase();
+            let name = r.name().to_ascii_lowercase();
             !LINK_WORDS
                 .iter()
-                .any(|w| r.def.id.contains(w) || name.contains(&w.replace('_', " ")))
+                .any(|w| r.id().contains(w) || name.contains(&w.replace('_', " ")))
         })
         .collect();
     if regs.is_empty() {
@@ -220,32 +221,34 @@ fn source(drive: &Drive, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simu
     }
     let depended: Vec<String> = regs
         .iter()
-        .flat_map(|r| paramset::depends_on(drive, r))
-        .map(|d| d.def.id.clone())
+        .flat_map(|r| paramset::depends_on(drive.ir(), r.ir()))
+        .map(|d| d.id().to_owned())
         .collect();
     let mut chosen: Vec<usize> = (0..n)
         .map(|_| rng.below(regs.len() as u64) as usize)
         .collect();
     // Half the time, a setting others depend on and one that depends on it.
     if rng.chance(50)
-        && let Some(i) = regs.iter().position(|r| depended.contains(&r.def.id))
+        && let Some(i) = regs
+            .iter()
+            .position(|r| depended.iter().any(|d| d == r.id()))
     {
         chosen.push(i);
         if let Some(j) = regs.iter().position(|r| {
-            paramset::depends_on(drive, r)
+            paramset::depends_on(drive.ir(), r.ir())
                 .iter()
-                .any(|d| d.def.id == regs[i].def.id)
+                .any(|d| d.id() == regs[i].id())
         }) {
             chosen.push(j);
         }
     }
-    chosen.sort_by_key(|&i| !depended.contains(&regs[i].def.id));
+    chosen.sort_by_key(|&i| !depended.iter().any(|d| d == regs[i].id()));
     chosen.dedup();
     for i in chosen {
         let r = regs[i];
-        let current = sim.raw(&r.def.id).unwrap();
+        let current = sim.raw(r.id()).unwrap();
         if let Some(raw) = other_raw(drive, r, current, &sim.settings(), rng) {
-            sim.set_raw(&r.def.id, raw).unwrap();
+            sim.set_raw(r.id(), raw).unwrap();
         }
     }
     sim
@@ -286,17 +289,14 @@ fn writes(
             continue;
         }
         let settings = s.settings.clone().unwrap_or_default();
-        let view = settings.view(drive);
-        let r = drive.registers.iter().find(|r| {
-            drive
-                .register_plan(r)
-                .locate(&view, kind)
-                .is_ok_and(|a| a == address)
-        });
+        let view = settings.view(drive.ir());
+        let r = drive
+            .registers()
+            .find(|r| r.plan().locate(&view, kind).is_ok_and(|a| a == address));
         if let Some(r) = r {
-            let width = drive.register_plan(r).info.width;
+            let width = r.plan().info.width;
             let raw = width.join(&words[..usize::from(width.count()).min(words.len())]);
-            out.push((r.def.id.clone(), raw, s.settings.clone()));
+            out.push((r.id().to_owned(), raw, s.settings.clone()));
         }
     }
     out
@@ -320,22 +320,22 @@ fn violations(
             out.push(format!("{id}: written, not a setting of the set"));
             continue;
         }
-        let r = drive.registers.iter().find(|r| r.def.id == id).unwrap();
+        let r = drive.registers().find(|r| r.id() == id).unwrap();
         let settings = settings.unwrap_or_default();
-        let then = codec::decode(drive, r, raw, &settings).map(|v| v.as_f64());
-        let meant = codec::decode(drive, r, raw, &wanted).map(|v| v.as_f64());
+        let then = codec::decode(drive.ir(), r.ir(), raw, &settings).map(|v| v.as_f64());
+        let meant = codec::decode(drive.ir(), r.ir(), raw, &wanted).map(|v| v.as_f64());
         if then != meant {
             out.push(format!(
                 "{id}: {raw} meant {then:?} when written, the set's value is {meant:?}"
             ));
         } else if let Ok(Some(v)) = then
             && matches!(
-                drive.register_plan(r).conversion,
+                r.plan().conversion,
                 Conversion::Decimal { .. }
                     | Conversion::Relative { .. }
                     | Conversion::Selected { .. }
             )
-            && let Err(e) = codec::encode(drive, r, v, &settings)
+            && let Err(e) = codec::encode(drive.ir(), r.ir(), v, &settings)
         {
             out.push(format!(
                 "{id}: {v} outside the limits in force when written: {e}"
@@ -403,12 +403,12 @@ fn restore(
 ) -> Option<RestoreReport> {
     let mut s = session(drive, link, slave);
     let given = s.settings.clone();
-    let validated = paramset::validate(drive, set, &given, false).expect("the set validates");
+    let validated = paramset::validate(drive.ir(), set, &given, false).expect("the set validates");
     let mut plan = match paramset::plan(&mut s, &validated) {
         Ok(plan) => plan,
         Err(e) => {
             if std::env::var_os("PARAMSET_DEBUG").is_some() {
-                eprintln!("{}: refused: {e}", drive.meta.id);
+                eprintln!("{}: refused: {e}", drive.id());
             }
             return None;
         }
@@ -433,7 +433,7 @@ fn save(drive: &Drive, kind: TransportKind, source: &Simulator) -> ParameterSet 
     assert!(
         report.set.unread.is_empty(),
         "{}: {:?}",
-        drive.meta.id,
+        drive.id(),
         report.set.unread
     );
     report.set
@@ -466,7 +466,7 @@ fn sweep(
             link.script(std::iter::repeat_n(Some(fault), attempts));
             let link = Shared(Rc::new(RefCell::new(link)));
             let first = restore(drive, &link, slave, set, mutation);
-            let what = format!("{} {kind:?} fault {fault:?} at request {at}", drive.meta.id);
+            let what = format!("{} {kind:?} fault {fault:?} at request {at}", drive.id());
             {
                 let l = link.0.borrow();
                 for v in violations(drive, kind, set, source, &l, first.as_ref()) {
@@ -536,7 +536,7 @@ fn interrupted_restores_report_exactly_and_converge_for_every_map() {
             }
             eprintln!(
                 "{} {kind:?}: {} interrupted restores in {:.1} s",
-                drive.meta.id,
+                drive.id(),
                 runs - before,
                 at.elapsed().as_secs_f64()
             );
@@ -556,7 +556,7 @@ fn interrupted_restores_report_exactly_and_converge_for_every_map() {
 fn the_sweep_fails_when_the_order_is_reversed_or_the_read_back_skipped() {
     let gpd = maps()
         .into_iter()
-        .find(|d| d.meta.id == "yaskawa-gpd515")
+        .find(|d| d.id() == "yaskawa-gpd515")
         .unwrap();
     let base = simulator(&gpd);
     let mut source = base.clone();
@@ -605,7 +605,7 @@ fn part(
 fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not() {
     let mut rng = SplitMix(1);
     for drive in maps() {
-        if paramset::settings_of(&drive).is_empty() {
+        if paramset::settings_of(drive.ir()).is_empty() {
             continue;
         }
         let base = simulator(&drive);
@@ -615,34 +615,34 @@ fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not()
         assert!(
             !equal(&set, &source, &base).is_empty(),
             "{}: the set differs",
-            drive.meta.id
+            drive.id()
         );
         for store in [true, false] {
             let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, base.clone()))));
             let mut s = session(&drive, &link, base.slave());
             let given = s.settings.clone();
-            let validated = paramset::validate(&drive, &set, &given, false).unwrap();
+            let validated = paramset::validate(drive.ir(), &set, &given, false).unwrap();
             let mut plan = paramset::plan(&mut s, &validated).unwrap();
-            assert!(plan.store.is_some(), "{}: a store command", drive.meta.id);
+            assert!(plan.store.is_some(), "{}: a store command", drive.id());
             if !store {
                 plan.store = None;
             }
             let report = paramset::execute(&mut s, &plan, &mut |_| {});
-            assert!(report.complete(), "{}: {report:?}", drive.meta.id);
+            assert!(report.complete(), "{}: {report:?}", drive.id());
             let mut l = link.0.borrow_mut();
             assert!(
                 equal(&set, &source, &l.sim).is_empty(),
                 "{}: restored",
-                drive.meta.id
+                drive.id()
             );
-            assert_eq!(l.sim.persist_count(), u32::from(store), "{}", drive.meta.id);
+            assert_eq!(l.sim.persist_count(), u32::from(store), "{}", drive.id());
             l.sim.power_cycle();
             let lost = equal(&set, &source, &l.sim);
             assert_eq!(
                 lost.is_empty(),
                 store,
                 "{} (store command {}): after a power cycle {lost:?} differ",
-                drive.meta.id,
+                drive.id(),
                 if store { "run" } else { "skipped" }
             );
         }
@@ -655,32 +655,32 @@ fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not()
 fn save_reports_progress_group_by_group_at_no_cost_in_requests() {
     for drive in maps() {
         let sim = simulator(&drive);
-        let n = paramset::settings_of(&drive).len();
+        let n = paramset::settings_of(drive.ir()).len();
         let kind = TransportKind::RtuOverTcp;
         let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, sim.clone()))));
         let mut s = session(&drive, &link, sim.slave());
         let mut seen = Vec::new();
         let report =
             paramset::save_with(&mut s, "", &mut |done, total| seen.push((done, total))).unwrap();
-        assert_eq!(report.set.settings.len(), n, "{}", drive.meta.id);
+        assert_eq!(report.set.settings.len(), n, "{}", drive.id());
         if n > 0 {
-            assert_eq!(seen.last(), Some(&(n, n)), "{}", drive.meta.id);
+            assert_eq!(seen.last(), Some(&(n, n)), "{}", drive.id());
             assert!(
                 seen.windows(2).all(|w| w[0].0 < w[1].0),
                 "{}: {seen:?}",
-                drive.meta.id
+                drive.id()
             );
         }
         // One plan over every setting.
         let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, sim.clone()))));
         let mut s = session(&drive, &link, sim.slave());
-        let regs = paramset::settings_of(&drive);
+        let regs = paramset::settings_of(drive.ir());
         let mut plan = s.plan(&regs).unwrap();
         let (_, requests) = s.poll_counted(&mut plan);
         assert!(
             report.requests <= requests,
             "{}: {} requests group by group, {requests} in one plan",
-            drive.meta.id,
+            drive.id(),
             report.requests
         );
     }
