@@ -36,7 +36,7 @@ use crate::command::{Board, Intent, Next};
 use crate::commander::Commander;
 use crate::log::{Limiter, quote};
 use crate::metrics::{Labels, Metrics};
-use crate::points::{self, Point, PointKind};
+use crate::points::{self, Meaning, Point};
 use crate::{CommandFailure, PollFailure};
 
 /// The client of a link: one for every drive on it, switched to each in turn
@@ -110,7 +110,10 @@ pub struct Command {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Action {
     /// Write a register (by id, parameter or printed name) in engineering units.
-    Set { register: String },
+    Set {
+        /// The register as the command topic names it.
+        register: String,
+    },
     /// The drive trait's run.
     Run,
     /// The drive trait's stop.
@@ -140,16 +143,26 @@ impl Action {
 pub enum Update {
     /// New values of points (index among the drive's points, payload).
     State {
+        /// The drive's index in the bridge.
         drive: usize,
+        /// Per changed point: its index among the drive's points, and the payload.
         values: Vec<(usize, String)>,
     },
     /// The drive answered (true) or stopped answering (false).
-    Availability { drive: usize, online: bool },
+    Availability {
+        /// The drive's index in the bridge.
+        drive: usize,
+        /// Whether it answers.
+        online: bool,
+    },
     /// A command's outcome: `Ok(what was done)` or `Err(why nothing was)`, with its word
     /// (`done`, `refused`, `expired`, `superseded`, `failed`, `pending` for a stop sent again).
     Outcome {
+        /// The command.
         command: Command,
+        /// What was done, or why nothing was.
         result: Result<String, Arc<CommandFailure>>,
+        /// The outcome's word.
         outcome: &'static str,
     },
 }
@@ -190,7 +203,7 @@ pub struct Polled {
     /// Indices in `regs` of what conversions and addresses depend on: selectors, then references.
     deps: Vec<usize>,
     /// The points published.
-    pub points: Vec<Point>,
+    pub points: Vec<Point<'static>>,
     base: Labels,
     plan: Option<Plan>,
     /// Last value given to MQTT per point.
@@ -385,7 +398,7 @@ impl Polled {
     ) -> Result<Polled, crate::Error> {
         let (regs, deps) = choose(&spec, kind)?;
         let periods = periods_of(&spec, kind, &regs, &deps)?;
-        let points = points::points(spec.drive, &regs, kind);
+        let points = points::polled(spec.drive, &regs, kind);
         let base: Labels = vec![
             ("drive".into(), spec.drive.meta.id.clone()),
             ("slave".into(), spec.slave.to_string()),
@@ -634,10 +647,10 @@ impl Polled {
             let r = self.regs[p.slot];
             let family = metrics.family(p);
             let mut labels = self.base.clone();
-            labels.push(("register".into(), p.register.clone()));
-            labels.push(("param".into(), p.param.clone()));
-            if let Some(f) = &p.field {
-                labels.push(("field".into(), f.clone()));
+            labels.push(("register".into(), p.id().to_owned()));
+            labels.push(("param".into(), p.param().to_owned()));
+            if let Some(f) = p.field() {
+                labels.push(("field".into(), f.to_owned()));
             }
             let value = match &raws[p.slot] {
                 Ok(raw) => codec::decode(self.spec.drive, r, *raw, &self.settings)
@@ -648,7 +661,7 @@ impl Polled {
                 Ok(v) => v,
                 Err((kind, _why)) => {
                     // Only the first point of a register counts its error.
-                    if p.field.is_none() || matches!(p.kind, PointKind::Field { index: 0, .. }) {
+                    if !matches!(p.meaning, Meaning::Field { index, .. } if index != 0) {
                         let mut l = self.base[..3].to_vec();
                         l.push(("link".into(), link_label.clone()));
                         l.push(("kind".into(), kind.into()));
@@ -666,8 +679,9 @@ impl Polled {
                     continue;
                 }
             };
-            let (number, info, text) = match (&p.kind, &value) {
-                (PointKind::Number { unit }, v) => {
+            let (number, info, text) = match (&p.meaning, &value) {
+                (Meaning::Number(_) | Meaning::Word, v) => {
+                    let factor = p.metric_unit().map_or(1.0, |u| u.factor);
                     let n = v.as_f64().unwrap_or(f64::NAN);
                     let text = match v {
                         Value::Quantity {
@@ -675,9 +689,9 @@ impl Polled {
                         } => format!("{value:.decimals$}"),
                         other => other.as_f64().map(|x| x.to_string()).unwrap_or_default(),
                     };
-                    (n * unit.factor, None, text)
+                    (n * factor, None, text)
                 }
-                (PointKind::Code, Value::Code { code, id, name }) => (
+                (Meaning::Code(_), Value::Code { code, id, name }) => (
                     1.0,
                     Some(vec![
                         ("code".to_owned(), code.to_string()),
@@ -686,11 +700,12 @@ impl Polled {
                     ]),
                     option_text(*code, id.as_deref(), name.as_deref()),
                 ),
-                (PointKind::Field { index, width }, Value::Bits { fields, .. }) => {
+                (Meaning::Field { index, field }, Value::Bits { fields, .. }) => {
+                    let width = field.width;
                     let Some(f) = fields.get(*index) else {
                         continue;
                     };
-                    if *width == 1 {
+                    if width == 1 {
                         (f64::from(f.value), None, f.value.to_string())
                     } else {
                         (

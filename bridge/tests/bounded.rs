@@ -60,7 +60,7 @@ fn connect_to(addr: String) -> Connect {
 fn metrics_for(drive: &'static Drive) -> Arc<Metrics> {
     let s = spec(drive);
     let (regs, _) = link::choose(&s, TransportKind::RtuOverTcp).unwrap();
-    let pts = points::points(drive, &regs, TransportKind::RtuOverTcp);
+    let pts = points::polled(drive, &regs, TransportKind::RtuOverTcp);
     Arc::new(Metrics::new(&pts))
 }
 

@@ -17,7 +17,6 @@ pub use drivemap_live::duration;
 pub mod git;
 pub mod live;
 pub mod maps;
-pub mod targets;
 
 /// The command line.
 #[derive(Parser)]
