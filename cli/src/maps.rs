@@ -11,15 +11,15 @@ include!(concat!(env!("OUT_DIR"), "/builtin_maps.rs"));
 
 /// Where maps are looked up.
 #[derive(ClapArgs, Debug, Clone, Default)]
-pub struct MapsDir {
+pub(crate) struct MapsDir {
     /// Directory of `<drive id>.yaml` maps that add to the built-in maps or replace them by id.
     #[arg(long, value_name = "DIR", env = "DRIVEMAP_MAPS")]
-    pub maps: Option<PathBuf>,
+    pub(crate) maps: Option<PathBuf>,
 }
 
 /// Where a drive's map comes from.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum MapSource {
+pub(crate) enum MapSource {
     /// A file of the maps directory.
     File(PathBuf),
     /// Built into the binary.
@@ -28,7 +28,7 @@ pub enum MapSource {
 
 /// Why a drive's map cannot be had.
 #[derive(Debug, thiserror::Error)]
-pub enum MapError {
+pub(crate) enum MapError {
     /// No map of that id, built in or in the maps directory.
     #[error("no map for drive `{id}` (known: {known}{})", match dir {
         Some(d) => format!("; looked in {} and the built-in maps", d.display()),
@@ -56,19 +56,19 @@ pub enum MapError {
 }
 
 /// The YAML of a built-in map.
-pub fn builtin(id: &str) -> Option<&'static str> {
+pub(crate) fn builtin(id: &str) -> Option<&'static str> {
     BUILTIN_MAPS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t)
 }
 
 impl MapsDir {
     /// The directory given, else `maps` (for commands that work on a directory of files:
     /// `check` without files, `diff --git`).
-    pub fn dir(&self) -> PathBuf {
+    pub(crate) fn dir(&self) -> PathBuf {
         self.maps.clone().unwrap_or_else(|| PathBuf::from("maps"))
     }
 
     /// Every drive id known and where its map comes from: built in, then the maps directory.
-    pub fn known(&self) -> BTreeMap<String, MapSource> {
+    pub(crate) fn known(&self) -> BTreeMap<String, MapSource> {
         let mut all: BTreeMap<String, MapSource> = BUILTIN_MAPS
             .iter()
             .map(|(id, text)| (id.to_string(), MapSource::Builtin(text)))
@@ -84,7 +84,7 @@ impl MapsDir {
     }
 
     /// Where the map of `id` comes from: `<maps>/<id>.yaml` when there, else built in.
-    pub fn source_of(&self, id: &str) -> Result<MapSource, MapError> {
+    pub(crate) fn source_of(&self, id: &str) -> Result<MapSource, MapError> {
         if let Some(dir) = &self.maps {
             for ext in ["yaml", "yml"] {
                 let path = dir.join(format!("{id}.{ext}"));
@@ -105,7 +105,7 @@ impl MapsDir {
     }
 
     /// The path of a drive's map file, for commands that need a file (built-in maps have none).
-    pub fn path_of(&self, id: &str) -> Result<PathBuf, MapError> {
+    pub(crate) fn path_of(&self, id: &str) -> Result<PathBuf, MapError> {
         match self.source_of(id)? {
             MapSource::File(p) => Ok(p),
             MapSource::Builtin(_) => Err(MapError::BuiltIn(id.to_owned())),
@@ -114,7 +114,7 @@ impl MapsDir {
 
     /// Reads, expands and validates the map of a drive id; `extends` is resolved by id the
     /// same way (the maps directory first, then the built-in maps).
-    pub fn load(&self, id: &str) -> Result<Drive, MapError> {
+    pub(crate) fn load(&self, id: &str) -> Result<Drive, MapError> {
         match self.source_of(id)? {
             MapSource::File(p) => self.read(&p).map_err(|diagnostics| MapError::Invalid {
                 what: p.display().to_string(),
@@ -131,7 +131,7 @@ impl MapsDir {
     }
 
     /// Reads, expands and validates a built-in map (its base too is looked up by id).
-    pub fn read_builtin(&self, id: &str, text: &str) -> Result<Drive, Diagnostics> {
+    pub(crate) fn read_builtin(&self, id: &str, text: &str) -> Result<Drive, Diagnostics> {
         drivemap_map::read_map_str_with(
             &format!("<built-in>/{id}.yaml"),
             text,
@@ -152,13 +152,13 @@ impl MapsDir {
 
     /// Reads, expands and validates a map file. Its base (`extends`) is looked up beside it,
     /// else by id among the maps this finds (the built-in ones too).
-    pub fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
+    pub(crate) fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
         self.read_cached(path, &drivemap_map::load::TreeCache::new())
     }
 
     /// Like [`MapsDir::read`], taking the files already read (a map's bases) from `cache`:
     /// checking a directory reads each file once, however long its chains of `extends`.
-    pub fn read_cached(
+    pub(crate) fn read_cached(
         &self,
         path: &Path,
         cache: &drivemap_map::load::TreeCache,
@@ -183,7 +183,7 @@ impl MapsDir {
 }
 
 /// Validation context for a map file: the manuals directory near it, if any.
-pub fn context_for(path: &Path) -> Context {
+pub(crate) fn context_for(path: &Path) -> Context {
     let dir = path.parent().unwrap_or(Path::new("."));
     match drivemap_map::default_manuals_dir(dir) {
         Some(m) => Context::with_manuals(&m),
@@ -193,7 +193,7 @@ pub fn context_for(path: &Path) -> Context {
 
 /// The manuals directory for a map file: `$DRIVEMAP_MANUALS`, else `shared/manuals` beside an
 /// ancestor of the map's directory.
-pub fn manuals_dir_for(path: &Path) -> Option<PathBuf> {
+pub(crate) fn manuals_dir_for(path: &Path) -> Option<PathBuf> {
     let dir = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())

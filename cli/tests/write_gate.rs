@@ -25,9 +25,6 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use clap::Parser;
-use drivemap_cli::commands::write;
-use drivemap_cli::{Cli, Command as Cmd};
 use drivemap_map::ir::{Drive, Register, ValueKind};
 use drivemap_map::model::TransportName;
 use drivemap_map::validate::{Context, field_span};
@@ -173,7 +170,7 @@ fn run_write(
     wire: &Wire,
     slave: u8,
     assignment: &str,
-) -> Result<ExitCode, drivemap_cli::error::Error> {
+) -> Result<ExitCode, String> {
     let maps = repo().join("maps");
     let slave = slave.to_string();
     let argv = [
@@ -193,11 +190,15 @@ fn run_write(
         "0",
         assignment,
     ];
-    let cli = Cli::try_parse_from(argv).expect("the test's own arguments parse");
-    let Cmd::Write(args) = cli.command else {
-        unreachable!()
-    };
-    write::execute(drive, profile, &args)
+    let result = drivemap_cli::write_in_process(&argv, drive, profile);
+    if let Err(e) = &result {
+        // A command line clap refuses is the test's mistake, not a refusal of the write.
+        assert!(
+            !e.starts_with("error: "),
+            "the test's own arguments parse: {e}"
+        );
+    }
+    result
 }
 
 /// The register's `transports` as written in the map (`rtu`, `tcp`): this oracle reads the

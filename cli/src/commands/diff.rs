@@ -17,7 +17,7 @@ use crate::maps::{MapsDir, context_for};
 
 /// Output format of `drivemap diff` (see [`render::Format`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     /// Plain text for a terminal.
     Text,
     /// Markdown, for pasting into a review; quotes the manual line each side cites.
@@ -43,24 +43,24 @@ impl From<Format> for render::Format {
 
 /// Arguments of `drivemap diff`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// The old map file; with `--git`, the map to compare (a file or a drive id; every map of
     /// the maps directory when omitted).
-    pub old: Option<PathBuf>,
+    pub(crate) old: Option<PathBuf>,
     /// The new map file.
     #[arg(conflicts_with = "git")]
-    pub new: Option<PathBuf>,
+    pub(crate) new: Option<PathBuf>,
     /// Compare the working tree with this git revision (`HEAD`, `main`, `HEAD~3`).
     #[arg(long, value_name = "REV")]
-    pub git: Option<String>,
+    pub(crate) git: Option<String>,
     /// Output format.
     #[arg(long, value_enum, default_value = "text")]
-    pub format: Format,
+    pub(crate) format: Format,
     /// Print every kind of change with its classification (breaking or compatible) and why.
     #[arg(long, conflicts_with_all = ["old", "new", "git"])]
-    pub kinds: bool,
+    pub(crate) kinds: bool,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
 }
 
 fn read(path: &Path, ctx: &Context) -> Result<Drive, Error> {
@@ -100,7 +100,7 @@ fn read_at_rev(path: &Path, ctx: &Context, tmp: &Path, shown: &str) -> Result<Dr
 }
 
 /// Compares maps and prints the changes; exits 1 when any is breaking.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     if args.kinds {
         out!("{}", render::kinds(args.format.into()));
         return Ok(ExitCode::SUCCESS);

@@ -11,17 +11,17 @@ use drivemap_map::schema;
 
 /// Arguments of `drivemap migrate`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// Map files to rewrite in place.
     #[arg(required = true)]
-    pub files: Vec<PathBuf>,
+    pub(crate) files: Vec<PathBuf>,
     /// Print what would change and write nothing; exit 1 if any file is not in the current
     /// schema.
     #[arg(long)]
-    pub check: bool,
+    pub(crate) check: bool,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let mut failed = false;
     let mut outdated = false;
     for path in &args.files {
