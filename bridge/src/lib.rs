@@ -77,8 +77,7 @@ pub fn run(
     let mut all_points = Vec::new();
     for (li, l) in links.iter().enumerate() {
         for d in &l.drives {
-            let (regs, _) = link::choose(d, l.kind)?;
-            let pts = points::polled(d.drive, &regs, l.kind);
+            let pts = link::points_of(d, l.kind)?;
             all_points.extend(pts.iter().cloned());
             infos.push(mqtt::DriveInfo {
                 name: d.name.clone(),
@@ -89,8 +88,8 @@ pub fn run(
                 points: pts,
                 draft: d.draft,
             });
-            if let Some(note) = drivemap_live::draft::read_note(d.drive) {
-                let writes = match drivemap_live::draft::check_write(d.drive, d.draft) {
+            if let Some(note) = drivemap_live::draft::read_note(d.drive.ir()) {
+                let writes = match drivemap_live::draft::check_write(d.drive.ir(), d.draft) {
                     Ok(_) => "its commands are written through it (--draft)",
                     Err(_) => "no command is written through it (give --draft to allow it)",
                 };

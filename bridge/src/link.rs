@@ -21,7 +21,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use drivemap_live::codec::{self, Value};
 use drivemap_live::session::rows_on_link;
 use drivemap_live::{LiveSettings, lookup};
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_map::describe;
 use drivemap_map::ir::Register;
 use drivemap_map::lower::Quantity;
@@ -50,7 +50,7 @@ pub type Connect = Box<dyn FnMut() -> Result<Box<dyn Transport>, crate::ConnectE
 /// A drive on a link, as configured.
 pub struct DriveSpec {
     /// Its map (loaded once, kept for the life of the process).
-    pub drive: &'static Drive,
+    pub drive: &'static Map,
     /// Slave address.
     pub slave: u8,
     /// A name unique in the bridge, used in topics and labels (`yaskawa-v7-1`).
@@ -228,17 +228,19 @@ pub fn choose(
     spec: &DriveSpec,
     kind: TransportKind,
 ) -> Result<(Vec<&'static Register>, Vec<usize>), crate::Error> {
-    let drive = spec.drive;
+    let map = spec.drive;
+    let drive = map.ir();
     let on = |r: &Register| drive.register_plan(r).transports.contains(kind);
     let readable = |r: &Register| r.readable() && !r.broadcast && on(r);
     let mut regs: Vec<&'static Register> = Vec::new();
     let add = |r: &'static Register, regs: &mut Vec<&'static Register>| {
-        if !regs.iter().any(|x| x.def.id == r.def.id) {
+        if !regs.iter().any(|x| x.id() == r.id()) {
             regs.push(r);
         }
     };
     if spec.registers.is_empty() {
-        for r in points::role_registers(drive, kind) {
+        for r in points::role_registers(map, kind) {
+            let r = r.ir();
             if readable(r) {
                 add(r, &mut regs);
             }
@@ -280,11 +282,11 @@ pub fn choose(
         let Some(r) = drive.register_of_row(row) else {
             continue;
         };
-        if spec.fixed.contains(&r.def.id) || !readable(r) {
+        if spec.fixed.contains(r.id()) || !readable(r) {
             continue;
         }
         add(r, &mut regs);
-        if let Some(i) = regs.iter().position(|x| x.def.id == r.def.id)
+        if let Some(i) = regs.iter().position(|x| x.id() == r.id())
             && !deps.contains(&i)
         {
             deps.push(i);
@@ -298,6 +300,20 @@ pub fn choose(
     Ok((regs, deps))
 }
 
+/// The points the bridge publishes of `spec` on `kind`: those of the registers [`choose`]
+/// polls.
+pub fn points_of(
+    spec: &DriveSpec,
+    kind: TransportKind,
+) -> Result<Vec<Point<'static>>, crate::Error> {
+    let (regs, _) = choose(spec, kind)?;
+    let regs: Vec<_> = regs
+        .iter()
+        .filter_map(|r| spec.drive.register_at(r.index()))
+        .collect();
+    Ok(points::polled(spec.drive, &regs, kind))
+}
+
 /// The period of each of `regs` from `spec.periods` (see [`DriveSpec::periods`]); the
 /// dependencies (`deps`, what conversions depend on) every cycle. A `what` that names no polled
 /// register is an error.
@@ -307,7 +323,7 @@ fn periods_of(
     regs: &[&'static Register],
     deps: &[usize],
 ) -> Result<Vec<Option<Duration>>, crate::Error> {
-    let drive = spec.drive;
+    let drive = spec.drive.ir();
     let plan = drive.plan();
     let roles_of = |r: &Register| -> Vec<Role> {
         let row = u16::try_from(plan.order[r.index()]).ok();
@@ -320,7 +336,7 @@ fn periods_of(
     };
     // Rank 0 register, 1 role, 2 group; the lowest rank that matches, the shortest period.
     let rank = |what: &str, r: &Register| -> Option<u8> {
-        if lookup::find(drive, what).is_ok_and(|x| x.def.id == r.def.id) {
+        if lookup::find(drive, what).is_ok_and(|x| x.id() == r.id()) {
             return Some(0);
         }
         let roles = roles_of(r);
@@ -398,9 +414,13 @@ impl Polled {
     ) -> Result<Polled, crate::Error> {
         let (regs, deps) = choose(&spec, kind)?;
         let periods = periods_of(&spec, kind, &regs, &deps)?;
-        let points = points::polled(spec.drive, &regs, kind);
+        let refs: Vec<_> = regs
+            .iter()
+            .filter_map(|r| spec.drive.register_at(r.index()))
+            .collect();
+        let points = points::polled(spec.drive, &refs, kind);
         let base: Labels = vec![
-            ("drive".into(), spec.drive.meta.id.clone()),
+            ("drive".into(), spec.drive.id().to_owned()),
             ("slave".into(), spec.slave.to_string()),
             ("name".into(), spec.name.clone()),
             ("link".into(), link.to_owned()),
@@ -432,7 +452,7 @@ impl Polled {
         Commander {
             index: self.index,
             name: self.spec.name.clone(),
-            drive: self.spec.drive,
+            drive: self.spec.drive.ir(),
             slave: self.spec.slave,
             options: self.spec.options,
             kind: self.kind,
@@ -440,13 +460,13 @@ impl Polled {
             deps: self
                 .deps
                 .iter()
-                .map(|&d| self.regs[d].def.id.clone())
+                .map(|&d| self.regs[d].id().to_owned())
                 .collect(),
             settings: self.settings.clone(),
             memory: None,
             forget: true,
             replan: false,
-            draft: drivemap_live::draft::check_write(self.spec.drive, self.spec.draft),
+            draft: drivemap_live::draft::check_write(self.spec.drive.ir(), self.spec.draft),
         }
     }
 
@@ -456,12 +476,12 @@ impl Polled {
     }
 
     /// The drive's map.
-    pub fn drive(&self) -> &'static Drive {
+    pub fn drive(&self) -> &'static Map {
         self.spec.drive
     }
 
     fn address(&self, r: &Register) -> Result<u16, PollFailure> {
-        let drive = self.spec.drive;
+        let drive = self.spec.drive.ir();
         drive
             .register_plan(r)
             .locate(&self.settings.view(drive), self.kind)
@@ -472,7 +492,7 @@ impl Polled {
     }
 
     fn make_plan(&self, line: SerialConfig) -> Result<Plan, PollFailure> {
-        let drive = self.spec.drive;
+        let drive = self.spec.drive.ir();
         let kind = self.kind;
         // Plans, not bare infos: the planner respects each register's `function_codes`.
         let infos = rows_on_link(drive, kind, |r| self.address(r).ok());
@@ -619,7 +639,11 @@ impl Polled {
             for &d in &self.deps {
                 if let Ok(raw) = raws[d] {
                     let r = self.regs[d];
-                    settings.absorb(self.spec.drive, r.def.address, raw as u16);
+                    settings.absorb(
+                        self.spec.drive.ir(),
+                        self.spec.drive.ir().register_plan(r).info.address,
+                        raw as u16,
+                    );
                 }
             }
             if settings == self.settings || rounds >= 3 {
@@ -653,7 +677,7 @@ impl Polled {
                 labels.push(("field".into(), f.to_owned()));
             }
             let value = match &raws[p.slot] {
-                Ok(raw) => codec::decode(self.spec.drive, r, *raw, &self.settings)
+                Ok(raw) => codec::decode(self.spec.drive.ir(), r, *raw, &self.settings)
                     .map_err(|e| ("value", e.to_string())),
                 Err((kind, why)) => Err((*kind, why.clone())),
             };

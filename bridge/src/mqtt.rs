@@ -31,12 +31,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use drivemap_live::lookup;
-
 use crate::Refused;
-use drivemap_map::Drive;
-use drivemap_map::describe;
-use drivemap_map::ir::Register;
+use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::plan::{Conversion, RegisterPlan};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::Role;
@@ -50,7 +46,7 @@ use crate::command::Board;
 use crate::link::{Action, Command, Update};
 use crate::log::{Limiter, quote, shorten};
 use crate::metrics::Metrics;
-use crate::points::home_assistant::{bounds, device_class, step, unit};
+use crate::points::home_assistant::{device_class, unit};
 use crate::points::{self, Meaning, Point, slug};
 
 /// How to reach the broker and what to publish.
@@ -85,7 +81,7 @@ pub struct DriveInfo {
     /// Its name (topics).
     pub name: String,
     /// Its map.
-    pub drive: &'static Drive,
+    pub drive: &'static Map,
     /// Slave address.
     pub slave: u8,
     /// Its link's kind.
@@ -169,10 +165,10 @@ pub fn allowed(info: &DriveInfo, allow: &[String], action: &Action) -> Result<()
     let has = |name: &str| allow.iter().any(|a| a.eq_ignore_ascii_case(name));
     let ok = match action {
         Action::Set { register } => {
-            let r = lookup::find(info.drive, register)?;
-            has(&r.def.id)
-                || r.def.param.as_deref().is_some_and(has)
-                || has(&r.def.name)
+            let r = points::find(info.drive, register)?;
+            has(r.id())
+                || r.param().is_some_and(has)
+                || has(r.name())
                 || points::register_role(info.drive, r, info.kind)
                     .is_some_and(|role| has(role.id()))
         }
@@ -250,7 +246,7 @@ impl Bucket {
 }
 
 fn device(info: &DriveInfo) -> Json {
-    let meta = &info.drive.meta;
+    let meta = info.drive.meta();
     json!({
         "identifiers": [format!("drivemap_{}", slug(&info.name))],
         "name": info.name,
@@ -282,17 +278,17 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             "device": device(info),
         })
     };
-    let writes = drivemap_live::draft::check_write(info.drive, info.draft).is_ok();
-    let allow_set = |r: &Register| {
+    let writes = drivemap_live::draft::check_write(info.drive.ir(), info.draft).is_ok();
+    let allow_set = |r: RegisterRef<'_>| {
         writes
             && r.writable()
-            && !r.broadcast
-            && info.drive.register_plan(r).transports.contains(info.kind)
+            && !r.broadcast_only()
+            && r.plan().transports.contains(info.kind)
             && allowed(
                 info,
                 &options.allow,
                 &Action::Set {
-                    register: r.def.id.clone(),
+                    register: r.id().to_owned(),
                 },
             )
             .is_ok()
@@ -314,10 +310,10 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 if writable {
                     c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, p.id()));
                     c["mode"] = json!("box");
-                    let (min, max) = bounds(info.drive, p.plan);
-                    c["min"] = json!(min);
-                    c["max"] = json!(max);
-                    c["step"] = json!(step(p.plan));
+                    let bounds = r.input_bounds();
+                    c["min"] = json!(bounds.min);
+                    c["max"] = json!(bounds.max);
+                    c["step"] = json!(bounds.step);
                     "number"
                 } else {
                     c["state_class"] = json!("measurement");
@@ -360,17 +356,17 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
         ));
     }
     // Writable registers allowed but not polled: numbers and selects without a state topic.
-    for r in &info.drive.registers {
-        if !allow_set(r) || info.points.iter().any(|p| p.id() == r.def.id) {
+    for r in info.drive.registers() {
+        if !allow_set(r) || info.points.iter().any(|p| p.register == r) {
             continue;
         }
-        let plan = info.drive.register_plan(r);
+        let plan = r.plan();
         if !plan.transports.contains(info.kind) {
             continue;
         }
-        let object = slug(&r.def.id);
-        let mut c = base(&object, &r.def.name);
-        c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.def.id));
+        let object = slug(r.id());
+        let mut c = base(&object, r.name());
+        c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.id()));
         let component = match plan.conversion {
             Conversion::Enum { .. } => {
                 c["options"] = json!(select_options(plan));
@@ -389,10 +385,10 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 if let Some(dc) = device_class(plan.unit) {
                     c["device_class"] = json!(dc);
                 }
-                let (min, max) = bounds(info.drive, plan);
-                c["min"] = json!(min);
-                c["max"] = json!(max);
-                c["step"] = json!(step(plan));
+                let bounds = r.input_bounds();
+                c["min"] = json!(bounds.min);
+                c["max"] = json!(bounds.max);
+                c["step"] = json!(bounds.step);
                 c["mode"] = json!("box");
                 c["optimistic"] = json!(true);
                 "number"
@@ -443,15 +439,15 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
         c["device_class"] = json!("frequency");
         c["mode"] = json!("box");
         c["optimistic"] = json!(true);
-        if let Some(plan) = roles
+        if let Some(r) = roles
             .of(Role::FrequencyReference)
             .find_map(|p| p.target.row())
-            .and_then(|row| info.drive.plan().registers.get(usize::from(row)))
+            .and_then(|row| info.drive.register_of_row(usize::from(row)))
         {
-            let (min, max) = bounds(info.drive, plan);
-            c["min"] = json!(min);
-            c["max"] = json!(max);
-            c["step"] = json!(step(plan));
+            let bounds = r.input_bounds();
+            c["min"] = json!(bounds.min);
+            c["max"] = json!(bounds.max);
+            c["step"] = json!(bounds.step);
         }
         out.push((
             format!("{}/number/{node}/{object}/config", options.discovery_prefix),
@@ -687,7 +683,7 @@ pub fn accept(
         return Err(crate::Refused::Retained);
     }
     allowed(info, &options.allow, &command.action)?;
-    if let Err(why) = drivemap_live::draft::check_write(info.drive, info.draft) {
+    if let Err(why) = drivemap_live::draft::check_write(info.drive.ir(), info.draft) {
         return Err(crate::Refused::Draft { why });
     }
     let press = match &command.action {
@@ -717,7 +713,7 @@ pub fn accept(
         });
     }
     Ok(match &command.action {
-        Action::Set { register } => lookup::find(info.drive, register)?.def.id.clone(),
+        Action::Set { register } => points::find(info.drive, register)?.id().to_owned(),
         _ => String::new(),
     })
 }
@@ -808,8 +804,8 @@ pub fn tls_config(ca: &std::path::Path) -> Result<rumqttc::TlsConfiguration, cra
 }
 
 /// The register a name means on `drive`, for messages.
-pub fn describe_register(drive: &Drive, name: &str) -> String {
-    lookup::find(drive, name)
-        .map(describe::register)
+pub fn describe_register(map: &Map, name: &str) -> String {
+    points::find(map, name)
+        .map(|r| r.label())
         .unwrap_or_else(|_| name.to_owned())
 }

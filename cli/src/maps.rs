@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Args as ClapArgs;
-use drivemap_map::{Diagnostics, Drive, validate::Context};
+use drivemap_map::{Diagnostics, Drive, Loader, Map, validate::Context};
 
 include!(concat!(env!("OUT_DIR"), "/builtin_maps.rs"));
 
@@ -115,13 +115,18 @@ impl MapsDir {
     /// Reads, expands and validates the map of a drive id; `extends` is resolved by id the
     /// same way (the maps directory first, then the built-in maps).
     pub(crate) fn load(&self, id: &str) -> Result<Drive, MapError> {
+        self.load_map(id).map(Map::into_ir)
+    }
+
+    /// [`MapsDir::load`], as the map API's [`Map`].
+    pub(crate) fn load_map(&self, id: &str) -> Result<Map, MapError> {
         match self.source_of(id)? {
-            MapSource::File(p) => self.read(&p).map_err(|diagnostics| MapError::Invalid {
+            MapSource::File(p) => self.read_map(&p).map_err(|diagnostics| MapError::Invalid {
                 what: p.display().to_string(),
                 diagnostics,
             }),
             MapSource::Builtin(text) => {
-                self.read_builtin(id, text)
+                self.read_builtin_map(id, text)
                     .map_err(|diagnostics| MapError::Invalid {
                         what: format!("built-in map {id}"),
                         diagnostics,
@@ -132,12 +137,13 @@ impl MapsDir {
 
     /// Reads, expands and validates a built-in map (its base too is looked up by id).
     pub(crate) fn read_builtin(&self, id: &str, text: &str) -> Result<Drive, Diagnostics> {
-        drivemap_map::read_map_str_with(
-            &format!("<built-in>/{id}.yaml"),
-            text,
-            &Context::default(),
-            &|base| self.base_text(base),
-        )
+        self.read_builtin_map(id, text).map(Map::into_ir)
+    }
+
+    fn read_builtin_map(&self, id: &str, text: &str) -> Result<Map, Diagnostics> {
+        Loader::new()
+            .bases(|base| self.base_text(base))
+            .load_str(&format!("<built-in>/{id}.yaml"), text)
     }
 
     fn base_text(&self, id: &str) -> Option<(String, String)> {
@@ -153,7 +159,29 @@ impl MapsDir {
     /// Reads, expands and validates a map file. Its base (`extends`) is looked up beside it,
     /// else by id among the maps this finds (the built-in ones too).
     pub(crate) fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
-        self.read_cached(path, &drivemap_map::load::TreeCache::new())
+        self.read_map(path).map(Map::into_ir)
+    }
+
+    /// [`MapsDir::read`], as the map API's [`Map`].
+    pub(crate) fn read_map(&self, path: &Path) -> Result<Map, Diagnostics> {
+        let loader = || Loader::new().default_manuals(map_dir(path));
+        let direct = loader().load(path);
+        let base_missing = |d: &Diagnostics| {
+            d.iter()
+                .any(|x| x.message.starts_with("base map `") && x.message.ends_with("not found"))
+        };
+        match &direct {
+            Err(d) if base_missing(d) => {}
+            _ => return direct,
+        }
+        // The base is not beside the file: look it up by id.
+        let Ok(text) = std::fs::read_to_string(path) else {
+            return direct;
+        };
+        let name = drivemap_map::migrate::display_name(path);
+        loader()
+            .bases(|base| self.base_text(base))
+            .load_str(&name, &text)
     }
 
     /// Like [`MapsDir::read`], taking the files already read (a map's bases) from `cache`:
@@ -182,9 +210,14 @@ impl MapsDir {
     }
 }
 
+/// The directory of a map file, where its manuals are looked for.
+fn map_dir(path: &Path) -> &Path {
+    path.parent().unwrap_or(Path::new("."))
+}
+
 /// Validation context for a map file: the manuals directory near it, if any.
 pub(crate) fn context_for(path: &Path) -> Context {
-    let dir = path.parent().unwrap_or(Path::new("."));
+    let dir = map_dir(path);
     match drivemap_map::default_manuals_dir(dir) {
         Some(m) => Context::with_manuals(&m),
         None => Context::default(),

@@ -11,8 +11,7 @@
 use drivemap_live::link::{Link, Parity};
 use drivemap_live::session::{on_transport, rows_on_link, value_error};
 use drivemap_live::{LiveSettings, leak_profile};
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
+use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::Table;
 use drivemap_runtime::bus_time::BusModel;
 use drivemap_runtime::plan::{Conversion, Scale};
@@ -63,7 +62,7 @@ pub enum Endpoint {
 #[derive(Debug)]
 pub struct Export<'d> {
     /// The drive.
-    pub drive: &'d Drive,
+    pub drive: &'d Map,
     /// The link's transport.
     pub kind: TransportKind,
     /// Where the tool connects.
@@ -81,7 +80,7 @@ pub struct Export<'d> {
     /// The registers a tool reads, each placed on the link ([`Point::at`]).
     pub points: Vec<Point<'d>>,
     /// Registers asked for that no tool can read as the map means them, with the reason.
-    pub left_out: Vec<(&'d Register, String)>,
+    pub left_out: Vec<(RegisterRef<'d>, String)>,
     /// The planner's requests, ascending per table.
     pub reads: Vec<PlannedRead>,
     /// Modelled bus time of one cycle of `reads`, in microseconds.
@@ -109,39 +108,32 @@ fn split_host(addr: &str) -> Result<(String, u16), ExportError> {
 
 /// The registers exported when none are named: those the map's roles name and every
 /// read-only register (monitors and status words).
-pub fn default_registers(drive: &Drive) -> Vec<&Register> {
+pub fn default_registers(map: &Map) -> Vec<RegisterRef<'_>> {
     let mut named: Vec<&str> = Vec::new();
-    for places in drive.roles.values() {
+    for places in map.roles().values() {
         for p in places {
             if let Some(r) = &p.register {
                 named.push(r.as_str());
             }
         }
     }
-    drive
-        .registers
-        .iter()
+    map.registers()
         .filter(|r| r.readable())
-        .filter(|r| {
-            !r.writable()
-                || named
-                    .iter()
-                    .any(|n| r.def.id == *n || r.def.param.as_deref() == Some(n))
-        })
+        .filter(|r| !r.writable() || named.iter().any(|n| r.id() == *n || r.param() == Some(n)))
         .collect()
 }
 
 impl<'d> Export<'d> {
     /// Decides every register of `regs` on `link` under `settings` and plans their reads.
     pub fn build(
-        drive: &'d Drive,
-        regs: &[&'d Register],
+        drive: &'d Map,
+        regs: &[RegisterRef<'d>],
         link: &Link,
         settings: &LiveSettings,
         period_ms: u64,
         name: Option<&str>,
     ) -> Result<Export<'d>, ExportError> {
-        link.check_transport(drive)?;
+        link.check_transport(drive.ir())?;
         let kind = link.kind();
         let endpoint = if let Some(a) = link.tcp.as_ref().or(link.gateway.as_ref()) {
             let (host, port) = split_host(a)?;
@@ -158,7 +150,7 @@ impl<'d> Export<'d> {
                 rtu_frames: true,
             }
         } else if let Some(path) = &link.serial {
-            let (baud, parity, stop_bits) = link.line(drive);
+            let (baud, parity, stop_bits) = link.line(drive.ir());
             Endpoint::Serial {
                 path: path.clone(),
                 baud,
@@ -168,21 +160,21 @@ impl<'d> Export<'d> {
         } else {
             return Err(ExportError::NoLink);
         };
-        let profile = leak_profile(drive);
-        let options = link.client_options(drive, profile);
-        let view = settings.view(drive);
+        let profile = leak_profile(drive.ir());
+        let options = link.client_options(drive.ir(), profile);
+        let view = settings.view(drive.ir());
         let offsets = profile.address_offsets;
 
         let mut points = Vec::new();
         let mut left_out = Vec::new();
         let mut wanted = Vec::new();
         for &r in regs {
-            let plan = drive.register_plan(r);
-            let why = if r.broadcast {
+            let plan = r.plan();
+            let why = if r.broadcast_only() {
                 Some("broadcast-only: written to slave 0, never read".to_owned())
             } else if !r.readable() {
                 Some("write-only: the drive does not let it be read".to_owned())
-            } else if !on_transport(drive, r, kind) {
+            } else if !on_transport(drive.ir(), r.ir(), kind) {
                 Some(format!("does not exist on this link ({})", kind.name()))
             } else {
                 None
@@ -214,7 +206,7 @@ impl<'d> Export<'d> {
                         r,
                         format!(
                             "its scale depends on another parameter, which a tool does not read first ({})",
-                            value_error(drive, &e)
+                            value_error(drive.ir(), &e)
                         ),
                     ));
                     continue;
@@ -285,10 +277,10 @@ impl<'d> Export<'d> {
         // The planner's reads over the registers this link can read at the addresses these
         // settings put them (a register whose address is not known is not bridged over).
         // Plans, not bare infos: the planner respects each register's `function_codes`.
-        let infos = rows_on_link(drive, kind, |r| {
-            drive.register_plan(r).locate(&view, kind).ok()
+        let infos = rows_on_link(drive.ir(), kind, |r| {
+            drive.ir().register_plan(r).locate(&view, kind).ok()
         });
-        let model = BusModel::new(profile, link.bus_line(drive));
+        let model = BusModel::new(profile, link.bus_line(drive.ir()));
         let poller = Poller::new(profile, &infos, wanted)
             .map_err(ExportError::Plan)?
             .with_model(model);
@@ -328,11 +320,11 @@ impl<'d> Export<'d> {
             drive,
             kind,
             endpoint,
-            slave: link.slave(drive),
+            slave: link.slave(drive.ir()),
             timeout_ms: options.timeout.as_millis() as u64,
             gap_ms: options.request_gap.as_micros().div_ceil(1000) as u64,
             period_ms,
-            name: name.unwrap_or(&drive.meta.id).to_owned(),
+            name: name.unwrap_or(drive.id()).to_owned(),
             points: placed,
             left_out,
             reads,
@@ -349,7 +341,7 @@ impl<'d> Export<'d> {
     pub fn left_out_lines(&self) -> Vec<String> {
         self.left_out
             .iter()
-            .map(|(r, why)| format!("left out {}: {why}", drivemap_map::describe::register(r)))
+            .map(|(r, why)| format!("left out {}: {why}", r.label()))
             .collect()
     }
 
@@ -357,9 +349,9 @@ impl<'d> Export<'d> {
     pub fn summary(&self) -> String {
         format!(
             "{} ({} {}) slave {} over {}: {} register(s) in {} planned read(s), {:.1} ms of bus time per cycle (drivemap's bus-time model); {} left out",
-            self.drive.meta.id,
-            self.drive.meta.vendor,
-            self.drive.meta.models.join(" / "),
+            self.drive.id(),
+            self.drive.meta().vendor,
+            self.drive.meta().models.join(" / "),
             self.slave,
             self.kind.name(),
             self.points.len(),

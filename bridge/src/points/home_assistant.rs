@@ -1,16 +1,14 @@
 //! Home Assistant's view of a point, for both ways the tools reach it: the unit and device
-//! class of a sensor or number, and a number's step and bounds for its input box, used by the
-//! bridge's MQTT discovery ([`crate::mqtt`]); and [`render`], the `modbus:` integration's YAML
+//! class of a sensor or number, used by the bridge's MQTT discovery ([`crate::mqtt`], whose
+//! number entities take their bounds and step from the map: `RegisterRef::input_bounds`); and
+//! [`render`], the `modbus:` integration's YAML
 //! of an [`Export`]: one hub for the link, a sensor per register with `data_type`, `swap`,
 //! `scale`, `offset` and `precision`; what the integration cannot show (codes' meanings, bit
 //! fields, scales another parameter selects) as comments.
 
 use std::fmt::Write;
 
-use drivemap_map::Drive;
 use drivemap_runtime::Table;
-use drivemap_runtime::plan::{CaseScale, Conversion, RegisterPlan, Relative, Scale, SettingsView};
-use drivemap_runtime::scale::RawRange;
 
 use super::export::{Endpoint, Export, write_point_caveats};
 use super::{Meaning, Point, slug};
@@ -43,116 +41,6 @@ pub fn device_class(map_unit: &str) -> Option<&'static str> {
         "d" | "h" | "min" | "s" | "ms" => "duration",
         _ => return None,
     })
-}
-
-/// The step of a number register's input box, from its planned conversion: one count of a
-/// decimal or ratio scale (a ratio's as the nearest `f64`: 1/60 Hz for 3600 = 60.0 Hz), the
-/// finest of a selected scale's cases; for a scale relative to another quantity, whose count
-/// is not known before that quantity is read, the resolution the runtime shows such a value
-/// with ([`Scale::decimals`]: 0.01); else 1.
-pub fn step(plan: &RegisterPlan) -> f64 {
-    fn relative(r: &Relative) -> f64 {
-        let shown = Scale::Relative {
-            full_scale: r.full_scale,
-            reference: f64::NAN,
-            label: r.reference.label,
-        };
-        1.0 / 10f64.powi(shown.decimals() as i32)
-    }
-    let step = match &plan.conversion {
-        Conversion::Decimal { scale, .. } => scale.decode(1),
-        Conversion::Ratio { ratio, .. } => ratio.decode(1),
-        Conversion::Relative { relative: r, .. } => relative(r),
-        Conversion::Selected { cases, .. } => cases
-            .iter()
-            .map(|c| match &c.scale {
-                CaseScale::Decimal { scale, .. } => scale.decode(1),
-                CaseScale::Relative(r) => relative(r),
-            })
-            .fold(f64::INFINITY, f64::min),
-        Conversion::Word { .. } | Conversion::Enum { .. } | Conversion::Bits { .. } => 1.0,
-    };
-    if step.is_finite() && step > 0.0 {
-        step
-    } else {
-        1.0
-    }
-}
-
-/// The quantities a relative limit is taken at for [`bounds`]: each register at the largest
-/// value its range allows.
-struct AtMost<'d>(&'d Drive);
-
-impl SettingsView for AtMost<'_> {
-    fn code(&self, _: u8) -> Option<u16> {
-        None
-    }
-    fn quantity(&self, slot: u8) -> Option<f64> {
-        let all = self.0.plan();
-        let drivemap_map::lower::Quantity::Register(row) =
-            all.settings.quantities.get(usize::from(slot))?
-        else {
-            return None;
-        };
-        let plan = all.registers.get(*row)?;
-        let (_, max) = printed_range(plan)?;
-        Some(max)
-    }
-    fn variant(&self, _: u8) -> u8 {
-        0
-    }
-}
-
-/// The range the manual prints for a register, widest over a selected scale's cases, decoded
-/// (`None` when it prints none: the plan's range is then the word's own).
-fn printed_range(plan: &RegisterPlan) -> Option<(f64, f64)> {
-    let full = plan.full_range();
-    let printed = |r: &RawRange| (*r != full).then_some(*r);
-    let widest = |a: Option<(f64, f64)>, b: (f64, f64)| match a {
-        Some((lo, hi)) => Some((lo.min(b.0), hi.max(b.1))),
-        None => Some(b),
-    };
-    match &plan.conversion {
-        Conversion::Decimal { scale, range, .. } => {
-            printed(&range.base).map(|r| (scale.decode(r.min), scale.decode(r.max)))
-        }
-        Conversion::Ratio { ratio, range, .. } => {
-            printed(&range.base).map(|r| (ratio.decode(r.min), ratio.decode(r.max)))
-        }
-        Conversion::Word { range, .. } => {
-            printed(&range.base).map(|r| (r.min as f64, r.max as f64))
-        }
-        Conversion::Selected { cases, .. } => cases.iter().fold(None, |acc, c| match &c.scale {
-            CaseScale::Decimal { scale, range } => match printed(range) {
-                Some(r) => widest(acc, (scale.decode(r.min), scale.decode(r.max))),
-                None => acc,
-            },
-            CaseScale::Relative(_) => acc,
-        }),
-        Conversion::Relative { .. } | Conversion::Enum { .. } | Conversion::Bits { .. } => None,
-    }
-}
-
-/// The widest bounds the map gives a number register, for Home Assistant's input box (the
-/// bridge checks the bounds in force when a value comes), from its plan: its range (the widest
-/// of a selected scale's cases), else its limit through another register at that register's
-/// largest value, else what the raw word holds (decoded by its scale where fixed, else counted
-/// in [`step`]s).
-pub fn bounds(drive: &Drive, plan: &RegisterPlan) -> (f64, f64) {
-    if let Some(range) = printed_range(plan) {
-        return range;
-    }
-    let full = plan.full_range();
-    let (lo, hi) = match &plan.conversion {
-        Conversion::Decimal { scale, .. } => (scale.decode(full.min), scale.decode(full.max)),
-        Conversion::Ratio { ratio, .. } => (ratio.decode(full.min), ratio.decode(full.max)),
-        _ => {
-            let step = step(plan);
-            (full.min as f64 * step, full.max as f64 * step)
-        }
-    };
-    let limit = plan.relative_max(&AtMost(drive)).ok().flatten();
-    (lo, limit.unwrap_or(hi))
 }
 
 fn number(v: f64) -> String {

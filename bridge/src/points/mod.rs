@@ -7,13 +7,13 @@
 //! A [`Point`] is one value a tool reads: a register, or one field of a bit-field register
 //! (the bridge publishes each field on its own). Its [`Meaning`] comes from the register's
 //! planned conversion; the names the tools give it are here too: [`slug`] for identifiers and
-//! topics, [`prometheus`] for metric families and units, [`home_assistant`] for units, device
-//! classes and a number's step and bounds. [`export`] places the points of a drive on a link
+//! topics, [`prometheus`] for metric families and units, [`home_assistant`] for units and device
+//! classes (a number's bounds and step are the map's: `RegisterRef::input_bounds`). [`export`] places the points of a drive on a link
 //! (table, PDU address, the planner's reads) for the exports, which [`home_assistant`],
 //! [`node_red`] and [`telegraf`] print.
 
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
+use drivemap_live::lookup::{self, NotFound};
+use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::plan::{Conversion, Field, Label, RegisterPlan};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::{Role, RoleKind, Target};
@@ -64,7 +64,7 @@ pub struct Fixed {
 #[derive(Debug, Clone)]
 pub struct Point<'d> {
     /// The register.
-    pub register: &'d Register,
+    pub register: RegisterRef<'d>,
     /// The register's plan.
     pub plan: &'static RegisterPlan,
     /// The register's position among the registers chosen (the bridge polls them in order).
@@ -89,15 +89,15 @@ pub struct At {
     pub read: usize,
 }
 
-impl Point<'_> {
+impl<'d> Point<'d> {
     /// The map's id of the register.
-    pub fn id(&self) -> &str {
-        &self.register.def.id
+    pub fn id(&self) -> &'d str {
+        self.register.id()
     }
 
     /// The manual's parameter number, empty when it gives none.
-    pub fn param(&self) -> &str {
-        self.register.def.param.as_deref().unwrap_or_default()
+    pub fn param(&self) -> &'d str {
+        self.register.param().unwrap_or_default()
     }
 
     /// The field's id, for the point of a field.
@@ -112,19 +112,18 @@ impl Point<'_> {
     /// the point of a field.
     pub fn name(&self) -> String {
         match self.meaning {
-            Meaning::Field { field, .. } => format!("{}: {}", self.register.def.name, field.name),
-            _ => self.register.def.name.clone(),
+            Meaning::Field { field, .. } => format!("{}: {}", self.register.name(), field.name),
+            _ => self.register.name().to_owned(),
         }
     }
 
     /// The printed name of the register, with the parameter number when the manual gives one
     /// and the name does not hold it.
     pub fn label(&self) -> String {
-        match &self.register.def.param {
-            Some(p) if !self.register.def.name.contains(p.as_str()) => {
-                format!("{} ({p})", self.register.def.name)
-            }
-            _ => self.register.def.name.clone(),
+        let name = self.register.name();
+        match self.register.param() {
+            Some(p) if !name.contains(p) => format!("{name} ({p})"),
+            _ => name.to_owned(),
         }
     }
 
@@ -192,52 +191,55 @@ pub fn slug(text: &str) -> String {
     if out.is_empty() { "x".into() } else { out }
 }
 
+/// The register `name` means on `map`: an id, parameter number, printed name or address, as
+/// `drivemap read` and `write` take it (drivemap-live's lookup).
+pub fn find<'m>(map: &'m Map, name: &str) -> Result<RegisterRef<'m>, NotFound> {
+    let r = lookup::find(map.ir(), name)?;
+    map.register_at(r.index()).ok_or_else(|| NotFound {
+        name: name.to_owned(),
+        drive: map.id().to_owned(),
+        suggestions: Vec::new(),
+        gap: None,
+        reference: None,
+    })
+}
+
 /// The role a whole register plays (monitors and setpoints), if any, on `kind`.
-pub fn register_role(drive: &Drive, r: &Register, kind: TransportKind) -> Option<Role> {
-    let plan = drive.plan();
-    plan.roles.places.iter().find_map(|p| {
-        let row = match p.target {
-            Target::Register(row) => row,
-            _ => return None,
+pub fn register_role(map: &Map, r: RegisterRef<'_>, kind: TransportKind) -> Option<Role> {
+    map.plan().roles.places.iter().find_map(|p| {
+        let Target::Register(row) = p.target else {
+            return None;
         };
-        (p.transports.contains(kind)
-            && drive
-                .register_of_row(usize::from(row))
-                .is_some_and(|x| x.def.id == r.def.id))
-        .then_some(p.role)
+        (p.transports.contains(kind) && usize::from(row) == r.row()).then_some(p.role)
     })
 }
 
 /// The status role of a one-bit field of `r` at bit `lsb`, if any, on `kind`.
-pub fn field_role(drive: &Drive, r: &Register, lsb: u8, kind: TransportKind) -> Option<Role> {
-    let plan = drive.plan();
-    plan.roles.places.iter().find_map(|p| {
+pub fn field_role(map: &Map, r: RegisterRef<'_>, lsb: u8, kind: TransportKind) -> Option<Role> {
+    map.plan().roles.places.iter().find_map(|p| {
         let Target::Field(f) = p.target else {
             return None;
         };
         (p.role.kind() == RoleKind::Status
             && p.transports.contains(kind)
             && f.lsb == lsb
-            && drive
-                .register_of_row(usize::from(f.row))
-                .is_some_and(|x| x.def.id == r.def.id))
+            && usize::from(f.row) == r.row())
         .then_some(p.role)
     })
 }
 
 /// The registers a drive's roles read or write on `kind` (fields' registers included).
-pub fn role_registers(drive: &Drive, kind: TransportKind) -> Vec<&Register> {
-    let plan = drive.plan();
-    let mut out: Vec<&Register> = Vec::new();
-    for p in plan.roles.places {
+pub fn role_registers(map: &Map, kind: TransportKind) -> Vec<RegisterRef<'_>> {
+    let mut out: Vec<RegisterRef<'_>> = Vec::new();
+    for p in map.plan().roles.places {
         if !p.transports.contains(kind) {
             continue;
         }
         if let Some(r) = p
             .target
             .row()
-            .and_then(|row| drive.register_of_row(usize::from(row)))
-            && !out.iter().any(|x| x.def.id == r.def.id)
+            .and_then(|row| map.register_of_row(usize::from(row)))
+            && !out.contains(&r)
         {
             out.push(r);
         }
@@ -248,10 +250,10 @@ pub fn role_registers(drive: &Drive, kind: TransportKind) -> Vec<&Register> {
 /// The points the bridge publishes of the polled registers `regs` of `drive` on `kind`: one per
 /// register, one per field of a bit-field register. Numbers are converted by the runtime with
 /// the settings read from the drive ([`Meaning::Number`] without a fixed scale).
-pub fn polled<'d>(drive: &'d Drive, regs: &[&'d Register], kind: TransportKind) -> Vec<Point<'d>> {
+pub fn polled<'d>(map: &'d Map, regs: &[RegisterRef<'d>], kind: TransportKind) -> Vec<Point<'d>> {
     let mut out = Vec::new();
     for (slot, &r) in regs.iter().enumerate() {
-        let plan = drive.register_plan(r);
+        let plan = r.plan();
         let point = |role, meaning| Point {
             register: r,
             plan,
@@ -264,7 +266,7 @@ pub fn polled<'d>(drive: &'d Drive, regs: &[&'d Register], kind: TransportKind) 
             Conversion::Bits { fields, .. } => {
                 for (index, field) in fields.iter().enumerate() {
                     let role = if field.width == 1 {
-                        field_role(drive, r, field.lsb, kind)
+                        field_role(map, r, field.lsb, kind)
                     } else {
                         None
                     };
@@ -272,16 +274,16 @@ pub fn polled<'d>(drive: &'d Drive, regs: &[&'d Register], kind: TransportKind) 
                 }
             }
             Conversion::Enum { values, .. } => {
-                out.push(point(register_role(drive, r, kind), Meaning::Code(values)));
+                out.push(point(register_role(map, r, kind), Meaning::Code(values)));
             }
             Conversion::Word { .. } => {
-                out.push(point(register_role(drive, r, kind), Meaning::Word));
+                out.push(point(register_role(map, r, kind), Meaning::Word));
             }
             Conversion::Decimal { .. }
             | Conversion::Relative { .. }
             | Conversion::Ratio { .. }
             | Conversion::Selected { .. } => {
-                out.push(point(register_role(drive, r, kind), Meaning::Number(None)));
+                out.push(point(register_role(map, r, kind), Meaning::Number(None)));
             }
         }
     }

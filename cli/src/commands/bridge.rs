@@ -13,7 +13,7 @@ use std::time::Duration;
 use clap::Args as ClapArgs;
 use drivemap_bridge::link::{DriveSpec, LinkSpec};
 use drivemap_bridge::mqtt;
-use drivemap_map::Drive;
+use drivemap_map::{Drive, Map};
 use serde::Deserialize;
 
 use crate::error::Error;
@@ -323,7 +323,7 @@ pub(crate) fn link(
     settings: &SettingsArgs,
     draft: bool,
     names: &mut BTreeSet<String>,
-    loaded: &mut BTreeMap<String, &'static Drive>,
+    loaded: &mut BTreeMap<String, &'static Map>,
 ) -> Result<LinkSpec, Error> {
     if drives.is_empty() {
         return Err("a link without drives: give --drive ID@SLAVE".into());
@@ -333,30 +333,31 @@ pub(crate) fn link(
     for text in drives {
         let (id, slave) = drive_slave(text)?;
         // Each map is read once, however many drives use it (1,000 drives of five maps).
-        let drive: &'static Drive = match loaded.get(&id) {
+        let map: &'static Map = match loaded.get(&id) {
             Some(d) => d,
             None => {
-                let d: &'static Drive = Box::leak(Box::new(dir.load(&id)?));
+                let d: &'static Map = Box::leak(Box::new(dir.load_map(&id)?));
                 loaded.insert(id.clone(), d);
                 d
             }
         };
+        let drive: &'static Drive = map.ir();
         args.check_transport(drive)?;
         first.get_or_insert(drive);
         let given = settings.resolve(drive)?;
         // The bridge reads what conversions depend on from the drive every cycle: a `--set`
         // of a register it can read would replace what the drive holds by what was assumed.
         for g in given.given.iter().filter(|g| !g.external) {
-            if let Some(r) = drive.registers.iter().find(|r| r.def.id == g.id)
+            if let Some(r) = map.register_by_id(&g.id)
                 && r.readable()
-                && !r.broadcast
-                && drive.register_plan(r).transports.contains(args.kind())
+                && !r.broadcast_only()
+                && r.plan().transports.contains(args.kind())
             {
                 return Err(format!(
                     "--set {}={}: the bridge reads {} from the drive every cycle; --set is for what the drive does not give (an external quantity, a setting it cannot read on this link)",
                     drivemap_live::codec::shorten(&g.name),
                     drivemap_live::codec::shorten(&g.value),
-                    drivemap_map::describe::register(r)
+                    r.label()
                 )
                 .into());
             }
@@ -369,7 +370,7 @@ pub(crate) fn link(
             n += 1;
         }
         specs.push(DriveSpec {
-            drive,
+            drive: map,
             slave,
             name,
             options: args.client_options(drive, profile),

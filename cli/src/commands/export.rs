@@ -114,8 +114,8 @@ impl Args {
 
 pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let read = match (&args.file, &args.drive) {
-        (Some(f), _) => args.dir.read(f),
-        (None, Some(id)) => match args.dir.load(id) {
+        (Some(f), _) => args.dir.read_map(f),
+        (None, Some(id)) => match args.dir.load_map(id) {
             Ok(d) => Ok(d),
             Err(e) => return Err(e.into()),
         },
@@ -135,8 +135,8 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
             );
         }
         let json = match args.format {
-            Format::Facts => serde_json::to_value(drivemap_map::facts::facts(&drive))?,
-            _ => drivemap_map::export::export(&drive),
+            Format::Facts => serde_json::to_value(drive.facts())?,
+            _ => drive.export(),
         };
         outln!("{}", serde_json::to_string_pretty(&json)?);
         return Ok(ExitCode::SUCCESS);
@@ -146,13 +146,16 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
             "give one link the tool connects to: --tcp HOST:PORT, --gateway HOST:PORT, --rtu-tcp HOST:PORT or --serial PATH".into(),
         );
     }
-    let given = args.settings.resolve(&drive)?;
+    let given = args.settings.resolve(drive.ir())?;
     let regs = if args.all {
-        drive.registers.iter().filter(|r| r.readable()).collect()
+        drive.registers().filter(|r| r.readable()).collect()
     } else if args.registers.is_empty() {
         export::default_registers(&drive)
     } else {
-        find_all(&drive, &args.registers)?
+        find_all(drive.ir(), &args.registers)?
+            .into_iter()
+            .filter_map(|r| drive.register_at(r.index()))
+            .collect()
     };
     let interval = args.interval.unwrap_or(Duration::from_secs(
         if args.format == Format::HomeAssistant {

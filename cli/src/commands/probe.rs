@@ -118,7 +118,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
 fn finding(session: &Session<'_>, r: &Register, kind: &'static str, detail: String) -> Finding {
     Finding {
         kind,
-        register: r.def.id.clone(),
+        register: r.id().to_owned(),
         parameter: r.def.param.clone(),
         address: session.shown_address(r),
         address_text: address_text(session.drive, session.shown_address(r)),
@@ -190,7 +190,7 @@ pub(crate) fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error>
         ("reference", drive.references()),
     ] {
         for r in regs {
-            let id = &r.def.id;
+            let id = r.id();
             let value = match role {
                 "scale selector" => session.settings.selectors.get(id).map(|c| c.to_string()),
                 _ => session.settings.references.get(id).map(|v| {
@@ -200,7 +200,7 @@ pub(crate) fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error>
                 }),
             };
             settings.push(Setting {
-                register: id.clone(),
+                register: id.to_owned(),
                 parameter: r.def.param.clone(),
                 role,
                 origin: if given.fixed.contains(id) {

@@ -154,7 +154,7 @@ fn name(drive: &drivemap_map::Drive, id: &str) -> String {
     drive
         .registers
         .iter()
-        .find(|r| r.def.id == id)
+        .find(|r| r.id() == id)
         .map_or_else(|| id.to_owned(), describe::register)
 }
 

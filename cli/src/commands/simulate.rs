@@ -227,10 +227,10 @@ fn restored_values(drive: &Drive, file: &str, line: bool) -> Result<Vec<(String,
             .ok_or_else(|| {
                 Error::Refused(format!(
                     "--restore {file}: {}: `{text}` is not a number",
-                    r.def.id
+                    r.id()
                 ))
             })?;
-        out.push((r.def.id.clone(), value));
+        out.push((r.id().to_owned(), value));
     }
     Ok(out)
 }

@@ -54,7 +54,7 @@ pub(crate) fn dependants(
 ) -> Vec<String> {
     let mut out = Vec::new();
     for x in &drive.registers {
-        if x.def.id == r.def.id {
+        if x.id() == r.id() {
             continue;
         }
         let all = drive.plan();
@@ -62,17 +62,17 @@ pub(crate) fn dependants(
             Some(drivemap_runtime::plan::Dependency::Quantity(s)) => matches!(
                 all.settings.quantities.get(usize::from(s.slot)),
                 Some(drivemap_map::lower::Quantity::Register(row))
-                    if all.registers[*row].info.id == r.def.id
+                    if all.registers[*row].info.id == r.id()
             ),
             _ => false,
         };
         let used = drivemap_live::session::settings_used(drive, x, settings);
-        if !used.contains(&r.def.id) {
+        if !used.iter().any(|u| u == r.id()) {
             continue;
         }
         let selects = drivemap_live::session::selectors_of(drive, x)
             .iter()
-            .any(|s| s.def.id == r.def.id);
+            .any(|s| s.id() == r.id());
         let how = if selects {
             "selects the scale or address of"
         } else if bounds {
@@ -80,7 +80,7 @@ pub(crate) fn dependants(
         } else {
             "scales"
         };
-        out.push(format!("{how} {}", x.def.id));
+        out.push(format!("{how} {}", x.id()));
     }
     out
 }
@@ -377,7 +377,7 @@ pub(crate) fn execute(
                 describe::register(r)
             )));
         }
-        eprintln!("note: {} {list}: their meaning changes with it", r.def.id);
+        eprintln!("note: {} {list}: their meaning changes with it", r.id());
     }
     let mut raws = Vec::new();
     for (r, value) in &pairs {

@@ -103,7 +103,7 @@ impl Reading {
             time: time.to_owned(),
             drive: session.drive.meta.id.clone(),
             slave: session.slave,
-            register: r.def.id.clone(),
+            register: r.id().to_owned(),
             parameter: r.def.param.clone(),
             name: r.def.name.clone(),
             address,
