@@ -164,7 +164,7 @@ impl MapsDir {
 
     /// [`MapsDir::read`], as the map API's [`Map`].
     pub(crate) fn read_map(&self, path: &Path) -> Result<Map, Diagnostics> {
-        let loader = || Loader::new().default_manuals(map_dir(path));
+        let loader = || loader_for(path);
         let direct = loader().load(path);
         let base_missing = |d: &Diagnostics| {
             d.iter()
@@ -208,6 +208,11 @@ impl MapsDir {
         let name = drivemap_map::load::display_name(path);
         drivemap_map::read_map_str_with(&name, &text, &ctx, &|base| self.base_text(base))
     }
+}
+
+/// The loader for a map file: with the manuals directory near it, if any, for its citations.
+pub(crate) fn loader_for(path: &Path) -> Loader<'static> {
+    Loader::new().default_manuals(map_dir(path))
 }
 
 /// The directory of a map file, where its manuals are looked for.
@@ -254,8 +259,10 @@ mod tests {
         }
         // yaskawa-j7 extends yaskawa-v7: the base is found among the built-in maps.
         let j7 = MapsDir::default().load("yaskawa-j7").unwrap();
-        let from_file =
-            drivemap_map::read_map(&dir.join("yaskawa-j7.yaml"), &Context::default()).unwrap();
+        let from_file = Loader::new()
+            .load(&dir.join("yaskawa-j7.yaml"))
+            .unwrap()
+            .into_ir();
         assert_eq!(j7.registers.len(), from_file.registers.len());
     }
 

@@ -67,7 +67,7 @@ fn function_body(points: &Export, i: usize) -> String {
         let o = usize::from(p.pdu() - read.pdu);
         let value = decode(p, o);
         let mut extra = vec![
-            format!("drive: {}", js(&points.drive.id())),
+            format!("drive: {}", js(points.drive.id())),
             format!("slave: {}", points.slave),
             format!("name: {}", js(&p.label())),
         ];

@@ -247,20 +247,20 @@ fn period_of(text: &str) -> Result<(String, Duration), String> {
 /// Reads `--config` with the map loader's limits (size, nesting depth, aliases: untrusted
 /// text is never read whole or expanded without bound), every error naming the file and line.
 fn read_config(path: &std::path::Path) -> Result<Config, Error> {
-    use drivemap_map::source;
+    use drivemap_map::{MAX_YAML_BYTES, parse_yaml, too_large};
     use std::io::Read;
     let shown = path.display();
     let mut text = String::new();
     let file = std::fs::File::open(path).map_err(|e| format!("--config {shown}: {e}"))?;
     // At most one byte past the limit, so a huge file (or a device) is never read whole.
-    file.take(source::MAX_MAP_BYTES as u64 + 1)
+    file.take(MAX_YAML_BYTES as u64 + 1)
         .read_to_string(&mut text)
         .map_err(|e| format!("--config {shown}: {e}"))?;
-    let name: std::sync::Arc<str> = format!("{shown}").into();
-    if text.len() > source::MAX_MAP_BYTES {
-        return Err(format!("{}", source::too_large(&name, text.len())).into());
+    let name = format!("{shown}");
+    if text.len() > MAX_YAML_BYTES {
+        return Err(format!("{}", too_large(&name, text.len())).into());
     }
-    let tree = source::parse(&name, &text).map_err(|d| format!("--config {d}"))?;
+    let tree = parse_yaml(&name, &text).map_err(|d| format!("--config {d}"))?;
     serde_yaml::from_value(tree.to_value()).map_err(|e| format!("--config {shown}: {e}").into())
 }
 

@@ -94,11 +94,11 @@ pub(crate) fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<Covera
 /// The manuals a map file names itself (a variant map's list before its base's is merged in).
 fn own_manuals(path: &std::path::Path) -> Result<Vec<String>, Error> {
     let text = std::fs::read_to_string(path).map_err(Error::io(path.display()))?;
-    let name: std::sync::Arc<str> = path.display().to_string().into();
-    let tree = drivemap_map::source::parse(&name, &text).map_err(|d| d.to_string())?;
+    let name = path.display().to_string();
+    let tree = drivemap_map::parse_yaml(&name, &text).map_err(|d| d.to_string())?;
     let list = tree.get("drive").and_then(|d| d.get("manuals"));
     let mut out = Vec::new();
-    if let Some(drivemap_map::source::NodeKind::Seq(items)) = list.map(|l| &l.kind) {
+    if let Some(drivemap_map::TreeKind::Seq(items)) = list.map(|l| &l.kind) {
         for item in items {
             if let Some(f) = item
                 .get("file")

@@ -272,7 +272,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
         outln!("note: writes go {note}");
     }
     let ascii = {
-        use drivemap_map::model::TransportName;
+        use drivemap_map::facts::TransportName;
         let listed = &drive.protocol.transports;
         if args.ascii && !listed.contains(&TransportName::Ascii) {
             return Err(CliError::Refused(format!(

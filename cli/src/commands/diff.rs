@@ -7,13 +7,12 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 use drivemap_map::Drive;
-use drivemap_map::validate::Context;
 use drivemap_review::diff::{self, DriveDiff, render};
 use drivemap_review::review::Manuals;
 
 use crate::error::Error;
 use crate::git;
-use crate::maps::{MapsDir, context_for};
+use crate::maps::{MapsDir, loader_for};
 
 /// Output format of `drivemap diff` (see [`render::Format`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -63,8 +62,11 @@ pub(crate) struct Args {
     pub(crate) dir: MapsDir,
 }
 
-fn read(path: &Path, ctx: &Context) -> Result<Drive, Error> {
-    let drive = drivemap_map::read_map(path, ctx).map_err(|d| format!("{d}"))?;
+fn read(path: &Path, manuals_near: &Path) -> Result<Drive, Error> {
+    let drive = loader_for(manuals_near)
+        .load(path)
+        .map_err(|d| format!("{d}"))?
+        .into_ir();
     warn_schema(&drive, None);
     Ok(drive)
 }
@@ -92,9 +94,11 @@ fn warn_schema(drive: &Drive, rename: Option<(&Path, &str)>) {
 
 /// Reads a map of revision `rev` written to the temporary directory `tmp`, naming it
 /// `rev:dir/name` in errors and warnings instead of the temporary path.
-fn read_at_rev(path: &Path, ctx: &Context, tmp: &Path, shown: &str) -> Result<Drive, Error> {
-    let drive = drivemap_map::read_map(path, ctx)
-        .map_err(|d| format!("{d}").replace(&tmp.display().to_string(), shown))?;
+fn read_at_rev(path: &Path, manuals_near: &Path, tmp: &Path, shown: &str) -> Result<Drive, Error> {
+    let drive = loader_for(manuals_near)
+        .load(path)
+        .map_err(|d| format!("{d}").replace(&tmp.display().to_string(), shown))?
+        .into_ir();
     warn_schema(&drive, Some((tmp, shown)));
     Ok(drive)
 }
@@ -113,10 +117,12 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                     "give two map files, or --git <rev> [map]".into(),
                 ));
             };
-            let ctx = context_for(new);
             let read = |path: &Path| {
-                let drive =
-                    drivemap_map::read_map_version(path, &ctx).map_err(|d| format!("{d}"))?;
+                let drive = loader_for(new)
+                    .any_file_name()
+                    .load(path)
+                    .map_err(|d| format!("{d}"))?
+                    .into_ir();
                 warn_schema(&drive, None);
                 Ok::<_, String>(drive)
             };
@@ -211,15 +217,15 @@ fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, Error> {
             .cloned()
             .collect(),
     };
-    let ctx = context_for(&dir.join("x.yaml"));
+    let near = dir.join("x.yaml");
     let shown = format!("{rev}:{}", dir.display());
-    let old_read = |p: &Path| read_at_rev(p, &ctx, then.path(), &shown);
+    let old_read = |p: &Path| read_at_rev(p, &near, then.path(), &shown);
     let mut diffs = Vec::new();
     for name in names {
         let (old, new) = (then.path().join(&name), dir.join(&name));
         let diff = match (old.is_file(), new.is_file()) {
-            (true, true) => diff::compare(&old_read(&old)?, &read(&new, &ctx)?),
-            (false, true) => diff::added(&read(&new, &ctx)?),
+            (true, true) => diff::compare(&old_read(&old)?, &read(&new, &near)?),
+            (false, true) => diff::added(&read(&new, &near)?),
             (true, false) => diff::removed(&old_read(&old)?),
             (false, false) => {
                 return Err(Error::Refused(format!(

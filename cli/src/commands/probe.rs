@@ -393,7 +393,7 @@ fn codes_incomplete(r: &Register) -> Option<&str> {
     r.def
         .unknown
         .iter()
-        .find(|u| u.what == drivemap_map::model::UnknownItem::Values)
+        .find(|u| u.what == drivemap_map::facts::UnknownItem::Values)
         .map(|u| u.reason.as_str())
 }
 

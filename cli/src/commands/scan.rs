@@ -380,7 +380,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
         drives.retain(|d| {
             d.protocol
                 .transports
-                .contains(&drivemap_map::model::TransportName::Ascii)
+                .contains(&drivemap_map::facts::TransportName::Ascii)
         });
         if drives.is_empty() {
             return Err(CliError::Refused(

@@ -348,7 +348,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
             && !drive
                 .protocol
                 .transports
-                .contains(&drivemap_map::model::TransportName::Tcp)
+                .contains(&drivemap_map::facts::TransportName::Tcp)
         {
             return Err(Error::Refused(format!(
                 "{id} has no Modbus TCP interface (its map's protocol.transports lacks tcp), so --tcp {addr} would serve what the drive never does: serve it behind a Modbus TCP to RTU gateway with --gateway {addr}, or RTU frames over TCP with --rtu-tcp {addr}"
@@ -357,7 +357,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         // ASCII is served only for a map that lists it, RTU only for one that lists RTU or
         // does not list ASCII alone (`read --ascii` refuses the same).
         {
-            use drivemap_map::model::TransportName;
+            use drivemap_map::facts::TransportName;
             let listed = &drive.protocol.transports;
             let words = || {
                 listed

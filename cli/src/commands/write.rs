@@ -195,7 +195,7 @@ pub(crate) fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
         .def
         .unknown
         .iter()
-        .find(|u| u.what == drivemap_map::model::UnknownItem::Range)
+        .find(|u| u.what == drivemap_map::facts::UnknownItem::Range)
         .map(|u| format!(" ({})", u.reason))
         .unwrap_or_default();
     Some(format!(

@@ -30,8 +30,8 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use clap::ValueEnum;
 use drivemap_live::codec::Value;
 use drivemap_map::Drive;
+use drivemap_map::facts::AddressFormat;
 use drivemap_map::ir::Register;
-use drivemap_map::model::AddressFormat;
 use serde::Serialize;
 
 use drivemap_live::session::{ReadError, Session};
