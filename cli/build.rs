@@ -29,7 +29,7 @@ fn main() {
     }
     let mut out = String::from(
         "/// The shipped maps, `(drive id, YAML text)`, sorted by id.\n\
-         pub static BUILTIN_MAPS: &[(&str, &str)] = &[\n",
+         pub(crate) static BUILTIN_MAPS: &[(&str, &str)] = &[\n",
     );
     for f in &files {
         println!("cargo::rerun-if-changed={}", f.display());

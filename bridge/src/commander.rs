@@ -257,7 +257,7 @@ impl Commander {
             .map(|v| v.to_string())
             .unwrap_or_else(|_| raw.to_string());
         // A written dependency changes conversions: read it again with the next cycle.
-        if self.deps.contains(&r.def.id) {
+        if self.deps.iter().any(|d| d == r.id()) {
             self.replan = true;
         }
         Ok(format!("wrote {} = {shown}", describe::register(r)))
@@ -360,7 +360,7 @@ impl Commander {
                 let Some(dep) = drive.register_of_row(row) else {
                     continue;
                 };
-                if self.fixed.contains(&dep.def.id) {
+                if self.fixed.contains(dep.id()) {
                     continue;
                 }
                 let raw = self
@@ -369,7 +369,7 @@ impl Commander {
                         register: describe::register(dep),
                         source: Box::new(source),
                     })?;
-                settings.absorb(drive, dep.def.address, raw as u16);
+                settings.absorb(drive, drive.register_plan(dep).info.address, raw as u16);
             }
             if settings == before {
                 break;

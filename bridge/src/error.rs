@@ -359,3 +359,53 @@ impl CommandFailure {
         }
     }
 }
+
+/// Why a drive cannot be exported for a tool on the link given (`drivemap export --format
+/// home-assistant | node-red | telegraf`).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExportError {
+    /// The drive does not have the link's transport.
+    #[error(transparent)]
+    Link(#[from] drivemap_live::LinkError),
+    /// No link given.
+    #[error("give the link the tool connects to: --tcp, --gateway, --rtu-tcp or --serial")]
+    NoLink,
+    /// A link address without a port.
+    #[error("`{addr}` is not HOST:PORT")]
+    NotHostPort {
+        /// The address given.
+        addr: String,
+    },
+    /// A link address whose port is not a TCP port.
+    #[error("`{addr}`: `{port}` is not a TCP port")]
+    NotPort {
+        /// The address given.
+        addr: String,
+        /// What stands for the port.
+        port: String,
+    },
+    /// A link address without a host.
+    #[error("`{addr}` has no host")]
+    NoHost {
+        /// The address given.
+        addr: String,
+    },
+    /// The runtime's planner cannot plan the reads.
+    #[error(transparent)]
+    Plan(drivemap_runtime::planner::PlanError),
+    /// A planned read starts outside the link's address space.
+    #[error("a planned read at {address:04X}h is outside 0..=FFFFh on this link")]
+    ReadOutside {
+        /// The read's address, as the manual prints it.
+        address: u16,
+    },
+    /// No planned read covers a register.
+    #[error("no planned read covers {register} at {address:04X}h")]
+    NotCovered {
+        /// The register's id.
+        register: String,
+        /// Its address.
+        address: u16,
+    },
+}

@@ -8,7 +8,7 @@
 //!   the drive trait, off unless allowed ([`mqtt`]);
 //! - commands as intents with deadlines ([`command`]): a stop first and never refused for a
 //!   rate or a queue, other commands carried out fresh or refused, never late; one drive object
-//!   per drive for the bridge's life ([`commander`]).
+//!   per drive for the bridge's life (`commander`).
 //!
 //! Bounded: a scrape reads atomics; MQTT updates go through a bounded queue offered without
 //! waiting; commands are the latest wish per drive and register. SIGTERM (or SIGINT) stops
@@ -20,11 +20,13 @@
 //! bridge, the broker or the line is gone.
 #![doc = include_str!("../README.md")]
 
+#![warn(missing_docs, unreachable_pub)]
+
 pub mod command;
-pub mod commander;
-pub mod error;
+mod commander;
+mod error;
 pub mod link;
-pub mod log;
+mod log;
 pub mod metrics;
 pub mod mqtt;
 pub mod points;
@@ -35,8 +37,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-pub use error::{CommandFailure, ConnectError, Error, PollFailure, Refused, RegisterProblem};
-pub use link::{Connect, DriveSpec, LinkSpec};
+pub use error::{
+    CommandFailure, ConnectError, Error, ExportError, PollFailure, Refused, RegisterProblem,
+};
 
 /// What the bridge serves.
 pub struct Options {
@@ -56,7 +59,11 @@ pub const UPDATE_QUEUE: usize = 4096;
 pub const MAX_LINKS: usize = 1024;
 
 /// Runs the bridge until SIGTERM or SIGINT, or until `stop` is set.
-pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Result<(), Error> {
+pub fn run(
+    links: Vec<link::LinkSpec>,
+    options: Options,
+    stop: Arc<AtomicBool>,
+) -> Result<(), Error> {
     if links.is_empty() {
         return Err(Error::NoDrives);
     }
@@ -71,8 +78,7 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
     let mut all_points = Vec::new();
     for (li, l) in links.iter().enumerate() {
         for d in &l.drives {
-            let (regs, _) = link::choose(d, l.kind)?;
-            let pts = points::points(d.drive, &regs, l.kind);
+            let pts = link::points_of(d, l.kind)?;
             all_points.extend(pts.iter().cloned());
             infos.push(mqtt::DriveInfo {
                 name: d.name.clone(),
@@ -83,8 +89,8 @@ pub fn run(links: Vec<LinkSpec>, options: Options, stop: Arc<AtomicBool>) -> Res
                 points: pts,
                 draft: d.draft,
             });
-            if let Some(note) = drivemap_live::draft::read_note(d.drive) {
-                let writes = match drivemap_live::draft::check_write(d.drive, d.draft) {
+            if let Some(note) = drivemap_live::draft::read_note(d.drive.ir()) {
+                let writes = match drivemap_live::draft::check_write(d.drive.ir(), d.draft) {
                     Ok(_) => "its commands are written through it (--draft)",
                     Err(_) => "no command is written through it (give --draft to allow it)",
                 };

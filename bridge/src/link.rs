@@ -21,7 +21,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use drivemap_live::codec::{self, Value};
 use drivemap_live::session::rows_on_link;
 use drivemap_live::{LiveSettings, lookup};
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_map::describe;
 use drivemap_map::ir::Register;
 use drivemap_map::lower::Quantity;
@@ -36,7 +36,7 @@ use crate::command::{Board, Intent, Next};
 use crate::commander::Commander;
 use crate::log::{Limiter, quote};
 use crate::metrics::{Labels, Metrics};
-use crate::points::{self, Point, PointKind};
+use crate::points::{self, Meaning, Point};
 use crate::{CommandFailure, PollFailure};
 
 /// The client of a link: one for every drive on it, switched to each in turn
@@ -50,7 +50,7 @@ pub type Connect = Box<dyn FnMut() -> Result<Box<dyn Transport>, crate::ConnectE
 /// A drive on a link, as configured.
 pub struct DriveSpec {
     /// Its map (loaded once, kept for the life of the process).
-    pub drive: &'static Drive,
+    pub drive: &'static Map,
     /// Slave address.
     pub slave: u8,
     /// A name unique in the bridge, used in topics and labels (`yaskawa-v7-1`).
@@ -110,7 +110,10 @@ pub struct Command {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Action {
     /// Write a register (by id, parameter or printed name) in engineering units.
-    Set { register: String },
+    Set {
+        /// The register as the command topic names it.
+        register: String,
+    },
     /// The drive trait's run.
     Run,
     /// The drive trait's stop.
@@ -140,16 +143,26 @@ impl Action {
 pub enum Update {
     /// New values of points (index among the drive's points, payload).
     State {
+        /// The drive's index in the bridge.
         drive: usize,
+        /// Per changed point: its index among the drive's points, and the payload.
         values: Vec<(usize, String)>,
     },
     /// The drive answered (true) or stopped answering (false).
-    Availability { drive: usize, online: bool },
+    Availability {
+        /// The drive's index in the bridge.
+        drive: usize,
+        /// Whether it answers.
+        online: bool,
+    },
     /// A command's outcome: `Ok(what was done)` or `Err(why nothing was)`, with its word
     /// (`done`, `refused`, `expired`, `superseded`, `failed`, `pending` for a stop sent again).
     Outcome {
+        /// The command.
         command: Command,
+        /// What was done, or why nothing was.
         result: Result<String, Arc<CommandFailure>>,
+        /// The outcome's word.
         outcome: &'static str,
     },
 }
@@ -190,7 +203,7 @@ pub struct Polled {
     /// Indices in `regs` of what conversions and addresses depend on: selectors, then references.
     deps: Vec<usize>,
     /// The points published.
-    pub points: Vec<Point>,
+    pub points: Vec<Point<'static>>,
     base: Labels,
     plan: Option<Plan>,
     /// Last value given to MQTT per point.
@@ -215,17 +228,19 @@ pub fn choose(
     spec: &DriveSpec,
     kind: TransportKind,
 ) -> Result<(Vec<&'static Register>, Vec<usize>), crate::Error> {
-    let drive = spec.drive;
+    let map = spec.drive;
+    let drive = map.ir();
     let on = |r: &Register| drive.register_plan(r).transports.contains(kind);
     let readable = |r: &Register| r.readable() && !r.broadcast && on(r);
     let mut regs: Vec<&'static Register> = Vec::new();
     let add = |r: &'static Register, regs: &mut Vec<&'static Register>| {
-        if !regs.iter().any(|x| x.def.id == r.def.id) {
+        if !regs.iter().any(|x| x.id() == r.id()) {
             regs.push(r);
         }
     };
     if spec.registers.is_empty() {
-        for r in points::role_registers(drive, kind) {
+        for r in points::role_registers(map, kind) {
+            let r = r.ir();
             if readable(r) {
                 add(r, &mut regs);
             }
@@ -267,11 +282,11 @@ pub fn choose(
         let Some(r) = drive.register_of_row(row) else {
             continue;
         };
-        if spec.fixed.contains(&r.def.id) || !readable(r) {
+        if spec.fixed.contains(r.id()) || !readable(r) {
             continue;
         }
         add(r, &mut regs);
-        if let Some(i) = regs.iter().position(|x| x.def.id == r.def.id)
+        if let Some(i) = regs.iter().position(|x| x.id() == r.id())
             && !deps.contains(&i)
         {
             deps.push(i);
@@ -285,6 +300,20 @@ pub fn choose(
     Ok((regs, deps))
 }
 
+/// The points the bridge publishes of `spec` on `kind`: those of the registers [`choose`]
+/// polls.
+pub fn points_of(
+    spec: &DriveSpec,
+    kind: TransportKind,
+) -> Result<Vec<Point<'static>>, crate::Error> {
+    let (regs, _) = choose(spec, kind)?;
+    let regs: Vec<_> = regs
+        .iter()
+        .filter_map(|r| spec.drive.register_at(r.index()))
+        .collect();
+    Ok(points::polled(spec.drive, &regs, kind))
+}
+
 /// The period of each of `regs` from `spec.periods` (see [`DriveSpec::periods`]); the
 /// dependencies (`deps`, what conversions depend on) every cycle. A `what` that names no polled
 /// register is an error.
@@ -294,7 +323,7 @@ fn periods_of(
     regs: &[&'static Register],
     deps: &[usize],
 ) -> Result<Vec<Option<Duration>>, crate::Error> {
-    let drive = spec.drive;
+    let drive = spec.drive.ir();
     let plan = drive.plan();
     let roles_of = |r: &Register| -> Vec<Role> {
         let row = u16::try_from(plan.order[r.index()]).ok();
@@ -307,7 +336,7 @@ fn periods_of(
     };
     // Rank 0 register, 1 role, 2 group; the lowest rank that matches, the shortest period.
     let rank = |what: &str, r: &Register| -> Option<u8> {
-        if lookup::find(drive, what).is_ok_and(|x| x.def.id == r.def.id) {
+        if lookup::find(drive, what).is_ok_and(|x| x.id() == r.id()) {
             return Some(0);
         }
         let roles = roles_of(r);
@@ -385,9 +414,13 @@ impl Polled {
     ) -> Result<Polled, crate::Error> {
         let (regs, deps) = choose(&spec, kind)?;
         let periods = periods_of(&spec, kind, &regs, &deps)?;
-        let points = points::points(spec.drive, &regs, kind);
+        let refs: Vec<_> = regs
+            .iter()
+            .filter_map(|r| spec.drive.register_at(r.index()))
+            .collect();
+        let points = points::polled(spec.drive, &refs, kind);
         let base: Labels = vec![
-            ("drive".into(), spec.drive.meta.id.clone()),
+            ("drive".into(), spec.drive.id().to_owned()),
             ("slave".into(), spec.slave.to_string()),
             ("name".into(), spec.name.clone()),
             ("link".into(), link.to_owned()),
@@ -419,7 +452,7 @@ impl Polled {
         Commander {
             index: self.index,
             name: self.spec.name.clone(),
-            drive: self.spec.drive,
+            drive: self.spec.drive.ir(),
             slave: self.spec.slave,
             options: self.spec.options,
             kind: self.kind,
@@ -427,13 +460,13 @@ impl Polled {
             deps: self
                 .deps
                 .iter()
-                .map(|&d| self.regs[d].def.id.clone())
+                .map(|&d| self.regs[d].id().to_owned())
                 .collect(),
             settings: self.settings.clone(),
             memory: None,
             forget: true,
             replan: false,
-            draft: drivemap_live::draft::check_write(self.spec.drive, self.spec.draft),
+            draft: drivemap_live::draft::check_write(self.spec.drive.ir(), self.spec.draft),
         }
     }
 
@@ -443,12 +476,12 @@ impl Polled {
     }
 
     /// The drive's map.
-    pub fn drive(&self) -> &'static Drive {
+    pub fn drive(&self) -> &'static Map {
         self.spec.drive
     }
 
     fn address(&self, r: &Register) -> Result<u16, PollFailure> {
-        let drive = self.spec.drive;
+        let drive = self.spec.drive.ir();
         drive
             .register_plan(r)
             .locate(&self.settings.view(drive), self.kind)
@@ -459,7 +492,7 @@ impl Polled {
     }
 
     fn make_plan(&self, line: SerialConfig) -> Result<Plan, PollFailure> {
-        let drive = self.spec.drive;
+        let drive = self.spec.drive.ir();
         let kind = self.kind;
         // Plans, not bare infos: the planner respects each register's `function_codes`.
         let infos = rows_on_link(drive, kind, |r| self.address(r).ok());
@@ -606,7 +639,11 @@ impl Polled {
             for &d in &self.deps {
                 if let Ok(raw) = raws[d] {
                     let r = self.regs[d];
-                    settings.absorb(self.spec.drive, r.def.address, raw as u16);
+                    settings.absorb(
+                        self.spec.drive.ir(),
+                        self.spec.drive.ir().register_plan(r).info.address,
+                        raw as u16,
+                    );
                 }
             }
             if settings == self.settings || rounds >= 3 {
@@ -634,13 +671,13 @@ impl Polled {
             let r = self.regs[p.slot];
             let family = metrics.family(p);
             let mut labels = self.base.clone();
-            labels.push(("register".into(), p.register.clone()));
-            labels.push(("param".into(), p.param.clone()));
-            if let Some(f) = &p.field {
-                labels.push(("field".into(), f.clone()));
+            labels.push(("register".into(), p.id().to_owned()));
+            labels.push(("param".into(), p.param().to_owned()));
+            if let Some(f) = p.field() {
+                labels.push(("field".into(), f.to_owned()));
             }
             let value = match &raws[p.slot] {
-                Ok(raw) => codec::decode(self.spec.drive, r, *raw, &self.settings)
+                Ok(raw) => codec::decode(self.spec.drive.ir(), r, *raw, &self.settings)
                     .map_err(|e| ("value", e.to_string())),
                 Err((kind, why)) => Err((*kind, why.clone())),
             };
@@ -648,7 +685,7 @@ impl Polled {
                 Ok(v) => v,
                 Err((kind, _why)) => {
                     // Only the first point of a register counts its error.
-                    if p.field.is_none() || matches!(p.kind, PointKind::Field { index: 0, .. }) {
+                    if !matches!(p.meaning, Meaning::Field { index, .. } if index != 0) {
                         let mut l = self.base[..3].to_vec();
                         l.push(("link".into(), link_label.clone()));
                         l.push(("kind".into(), kind.into()));
@@ -666,8 +703,9 @@ impl Polled {
                     continue;
                 }
             };
-            let (number, info, text) = match (&p.kind, &value) {
-                (PointKind::Number { unit }, v) => {
+            let (number, info, text) = match (&p.meaning, &value) {
+                (Meaning::Number(_) | Meaning::Word, v) => {
+                    let factor = p.metric_unit().map_or(1.0, |u| u.factor);
                     let n = v.as_f64().unwrap_or(f64::NAN);
                     let text = match v {
                         Value::Quantity {
@@ -675,9 +713,9 @@ impl Polled {
                         } => format!("{value:.decimals$}"),
                         other => other.as_f64().map(|x| x.to_string()).unwrap_or_default(),
                     };
-                    (n * unit.factor, None, text)
+                    (n * factor, None, text)
                 }
-                (PointKind::Code, Value::Code { code, id, name }) => (
+                (Meaning::Code(_), Value::Code { code, id, name }) => (
                     1.0,
                     Some(vec![
                         ("code".to_owned(), code.to_string()),
@@ -686,11 +724,12 @@ impl Polled {
                     ]),
                     option_text(*code, id.as_deref(), name.as_deref()),
                 ),
-                (PointKind::Field { index, width }, Value::Bits { fields, .. }) => {
+                (Meaning::Field { index, field }, Value::Bits { fields, .. }) => {
+                    let width = field.width;
                     let Some(f) = fields.get(*index) else {
                         continue;
                     };
-                    if *width == 1 {
+                    if width == 1 {
                         (f64::from(f.value), None, f.value.to_string())
                     } else {
                         (

@@ -5,12 +5,12 @@
 use std::time::{Duration, Instant};
 
 /// Characters of untrusted text quoted at the most.
-pub const QUOTED_CHARS: usize = 64;
+pub(crate) const QUOTED_CHARS: usize = 64;
 
 /// `text` in double quotes, control characters, quotes and backslashes escaped, cut after
 /// [`QUOTED_CHARS`] characters with the length of the whole said: `"OFF"`,
 /// `"line\nforged"`, `"aaaa…" (1048576 bytes)`.
-pub fn quote(text: &str) -> String {
+pub(crate) fn quote(text: &str) -> String {
     let mut out = String::from("\"");
     let mut cut = false;
     for (n, c) in text.chars().enumerate() {
@@ -29,7 +29,7 @@ pub fn quote(text: &str) -> String {
 }
 
 /// `text` cut after `max` characters (with `…`), for JSON values (which escape the rest).
-pub fn shorten(text: &str, max: usize) -> String {
+pub(crate) fn shorten(text: &str, max: usize) -> String {
     match text.char_indices().nth(max) {
         Some((at, _)) => format!("{}…", &text[..at]),
         None => text.to_owned(),
@@ -39,7 +39,7 @@ pub fn shorten(text: &str, max: usize) -> String {
 /// Lets at most `burst` lines through per `window`, and counts the rest, so that a flood of
 /// refusals costs a bounded log.
 #[derive(Debug)]
-pub struct Limiter {
+pub(crate) struct Limiter {
     burst: u32,
     window: Duration,
     start: Instant,
@@ -49,7 +49,7 @@ pub struct Limiter {
 
 impl Limiter {
     /// At most `burst` lines per `window`.
-    pub fn new(burst: u32, window: Duration) -> Limiter {
+    pub(crate) fn new(burst: u32, window: Duration) -> Limiter {
         Limiter {
             burst,
             window,
@@ -61,7 +61,7 @@ impl Limiter {
 
     /// Whether a line may be said now; when one may after some were held back, the count of
     /// those is returned too (`Some(n)`: say "n more not logged").
-    pub fn allow(&mut self, now: Instant) -> (bool, Option<u64>) {
+    pub(crate) fn allow(&mut self, now: Instant) -> (bool, Option<u64>) {
         if now.duration_since(self.start) >= self.window {
             self.start = now;
             self.said = 0;

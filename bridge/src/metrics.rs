@@ -27,7 +27,7 @@ use prometheus_client::registry::{Registry, Unit};
 use tokio::net::TcpListener;
 use tokio::sync::Semaphore;
 
-use crate::points::{Point, PointKind};
+use crate::points::{Meaning, Point};
 
 /// Label pairs, in the order given.
 pub type Labels = Vec<(String, String)>;
@@ -100,33 +100,32 @@ fn counters(registry: &mut Registry, name: &str, help: &str) -> Counters {
 
 impl Metrics {
     /// The families of the bridge's health, and one per distinct value metric of `points`.
-    pub fn new<'a>(points: impl IntoIterator<Item = &'a Point>) -> Metrics {
+    pub fn new<'a, 'd: 'a>(points: impl IntoIterator<Item = &'a Point<'d>>) -> Metrics {
         let mut registry = Registry::default();
         let mut values = BTreeMap::new();
         for p in points {
-            let suffix = match &p.kind {
-                PointKind::Number { unit } => unit.suffix.clone(),
-                _ => String::new(),
-            };
-            let key = (p.metric.clone(), suffix.clone());
+            let suffix = p.metric_suffix();
+            let key = (p.metric(), suffix.clone());
             if values.contains_key(&key) {
                 continue;
             }
-            let help = match (&p.kind, p.role) {
-                (PointKind::Number { .. }, Some(r)) => format!("role {} of the drive's map", r.id()),
-                (PointKind::Number { .. }, None) => {
+            let help = match (&p.meaning, p.role) {
+                (Meaning::Number(_) | Meaning::Word, Some(r)) => {
+                    format!("role {} of the drive's map", r.id())
+                }
+                (Meaning::Number(_) | Meaning::Word, None) => {
                     "a register without a role, by its map (labels register, param)".into()
                 }
-                (PointKind::Code, _) => {
+                (Meaning::Code(_) | Meaning::Bits(_), _) => {
                     "an enumeration register's code and meaning (value 1; labels code, value, meaning)".into()
                 }
-                (PointKind::Field { width: 1, .. }, Some(r)) => {
+                (Meaning::Field { field, .. }, Some(r)) if field.width == 1 => {
                     format!("status role {} of the drive's map (0/1)", r.id())
                 }
-                (PointKind::Field { width: 1, .. }, None) => {
+                (Meaning::Field { field, .. }, None) if field.width == 1 => {
                     "a one-bit field of a bit-field register (0/1)".into()
                 }
-                (PointKind::Field { .. }, _) => {
+                (Meaning::Field { .. }, _) => {
                     "a multi-bit field's code and meaning (value 1; labels code, meaning)".into()
                 }
             };
@@ -139,7 +138,7 @@ impl Metrics {
                 "joules" => Unit::Joules,
                 other => Unit::Other(other.to_owned()),
             });
-            values.insert(key, gauges(&mut registry, &p.metric, &help, unit));
+            values.insert(key, gauges(&mut registry, &p.metric(), &help, unit));
         }
         let cycle_seconds = gauges(
             &mut registry,
@@ -234,11 +233,7 @@ impl Metrics {
 
     /// The family a point's values go to.
     pub fn family(&self, p: &Point) -> &Gauges {
-        let suffix = match &p.kind {
-            PointKind::Number { unit } => unit.suffix.clone(),
-            _ => String::new(),
-        };
-        &self.values[&(p.metric.clone(), suffix)]
+        &self.values[&(p.metric(), p.metric_suffix())]
     }
 
     /// The registry in the OpenMetrics text format.

@@ -31,12 +31,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use drivemap_live::lookup;
-
 use crate::Refused;
-use drivemap_map::Drive;
-use drivemap_map::describe;
-use drivemap_map::ir::{Register, ValueKind};
+use drivemap_map::{Map, RegisterRef};
+use drivemap_runtime::plan::{Conversion, RegisterPlan};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::Role;
 use rumqttc::v5::mqttbytes::QoS;
@@ -49,7 +46,8 @@ use crate::command::Board;
 use crate::link::{Action, Command, Update};
 use crate::log::{Limiter, quote, shorten};
 use crate::metrics::Metrics;
-use crate::points::{self, Point, PointKind, device_class, sanitize};
+use crate::points::home_assistant::{device_class, unit};
+use crate::points::{self, Meaning, Point, slug};
 
 /// How to reach the broker and what to publish.
 #[derive(Debug, Clone)]
@@ -83,7 +81,7 @@ pub struct DriveInfo {
     /// Its name (topics).
     pub name: String,
     /// Its map.
-    pub drive: &'static Drive,
+    pub drive: &'static Map,
     /// Slave address.
     pub slave: u8,
     /// Its link's kind.
@@ -91,7 +89,7 @@ pub struct DriveInfo {
     /// The link's index, for its command queue.
     pub link: usize,
     /// Its points.
-    pub points: Vec<Point>,
+    pub points: Vec<Point<'static>>,
     /// Whether writes may go through its map when it is a draft.
     pub draft: drivemap_live::draft::DraftWrites,
 }
@@ -167,10 +165,10 @@ pub fn allowed(info: &DriveInfo, allow: &[String], action: &Action) -> Result<()
     let has = |name: &str| allow.iter().any(|a| a.eq_ignore_ascii_case(name));
     let ok = match action {
         Action::Set { register } => {
-            let r = lookup::find(info.drive, register)?;
-            has(&r.def.id)
-                || r.def.param.as_deref().is_some_and(has)
-                || has(&r.def.name)
+            let r = points::find(info.drive, register)?;
+            has(r.id())
+                || r.param().is_some_and(has)
+                || has(r.name())
                 || points::register_role(info.drive, r, info.kind)
                     .is_some_and(|role| has(role.id()))
         }
@@ -248,9 +246,9 @@ impl Bucket {
 }
 
 fn device(info: &DriveInfo) -> Json {
-    let meta = &info.drive.meta;
+    let meta = info.drive.meta();
     json!({
-        "identifiers": [format!("drivemap_{}", sanitize(&info.name))],
+        "identifiers": [format!("drivemap_{}", slug(&info.name))],
         "name": info.name,
         "manufacturer": meta.vendor,
         "model": meta.models.first().cloned().unwrap_or_else(|| meta.id.clone()),
@@ -268,7 +266,7 @@ fn availability(root: &str, info: &DriveInfo) -> Json {
 /// The Home Assistant discovery messages of a drive: `(topic, payload)`.
 pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
     let root = &options.topic;
-    let node = format!("drivemap_{}", sanitize(&info.name));
+    let node = format!("drivemap_{}", slug(&info.name));
     let mut out = Vec::new();
     let base = |object: &str, name: &str| {
         json!({
@@ -280,62 +278,52 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             "device": device(info),
         })
     };
-    let writes = drivemap_live::draft::check_write(info.drive, info.draft).is_ok();
-    let allow_set = |r: &Register| {
+    let writes = drivemap_live::draft::check_write(info.drive.ir(), info.draft).is_ok();
+    let allow_set = |r: RegisterRef<'_>| {
         writes
             && r.writable()
-            && !r.broadcast
-            && info.drive.register_plan(r).transports.contains(info.kind)
+            && !r.broadcast_only()
+            && r.plan().transports.contains(info.kind)
             && allowed(
                 info,
                 &options.allow,
                 &Action::Set {
-                    register: r.def.id.clone(),
+                    register: r.id().to_owned(),
                 },
             )
             .is_ok()
     };
     for p in &info.points {
-        let r = lookup::find(info.drive, &p.register).ok();
-        let state = format!("{root}/{}/{}", info.name, p.object);
-        let mut c = base(&p.object, &p.name);
+        let r = p.register;
+        let state = format!("{root}/{}/{}", info.name, p.object());
+        let mut c = base(&p.object(), &p.name());
         c["state_topic"] = json!(state);
-        let writable = p.field.is_none() && r.is_some_and(allow_set);
-        let component = match &p.kind {
-            PointKind::Number { .. } => {
-                if let Some(u) = &p.unit {
-                    c["unit_of_measurement"] = json!(u);
+        let writable = p.field().is_none() && allow_set(r);
+        let component = match &p.meaning {
+            Meaning::Number(_) | Meaning::Word => {
+                if !p.unit().is_empty() {
+                    c["unit_of_measurement"] = json!(unit(p.unit()));
                 }
-                if let Some(dc) = device_class(p.unit.as_deref()) {
+                if let Some(dc) = device_class(p.unit()) {
                     c["device_class"] = json!(dc);
                 }
                 if writable {
-                    c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, p.register));
+                    c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, p.id()));
                     c["mode"] = json!("box");
-                    if let Some(r) = r {
-                        let (min, max) = bounds(info.drive, r);
-                        c["min"] = json!(min);
-                        c["max"] = json!(max);
-                        c["step"] = json!(step(r));
-                    }
+                    let bounds = r.input_bounds();
+                    c["min"] = json!(bounds.min);
+                    c["max"] = json!(bounds.max);
+                    c["step"] = json!(bounds.step);
                     "number"
                 } else {
                     c["state_class"] = json!("measurement");
                     "sensor"
                 }
             }
-            PointKind::Code => {
-                let options: Vec<String> = r
-                    .map(|r| {
-                        r.def
-                            .values
-                            .iter()
-                            .map(|v| crate::link::option_text(v.value, Some(&v.id), Some(&v.name)))
-                            .collect()
-                    })
-                    .unwrap_or_default();
+            Meaning::Code(_) => {
+                let options = select_options(p.plan);
                 if writable && !options.is_empty() {
-                    c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, p.register));
+                    c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, p.id()));
                     c["options"] = json!(options);
                     "select"
                 } else {
@@ -346,7 +334,7 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                     "sensor"
                 }
             }
-            PointKind::Field { width: 1, .. } => {
+            Meaning::Field { field, .. } if field.width == 1 => {
                 c["payload_on"] = json!("1");
                 c["payload_off"] = json!("0");
                 match p.role {
@@ -356,49 +344,51 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 }
                 "binary_sensor"
             }
-            PointKind::Field { .. } => "sensor",
+            Meaning::Field { .. } | Meaning::Bits(_) => "sensor",
         };
         out.push((
             format!(
                 "{}/{component}/{node}/{}/config",
-                options.discovery_prefix, p.object
+                options.discovery_prefix,
+                p.object()
             ),
             c,
         ));
     }
     // Writable registers allowed but not polled: numbers and selects without a state topic.
-    for r in &info.drive.registers {
-        if !allow_set(r) || info.points.iter().any(|p| p.register == r.def.id) {
+    for r in info.drive.registers() {
+        if !allow_set(r) || info.points.iter().any(|p| p.register == r) {
             continue;
         }
-        if !info.drive.register_plan(r).transports.contains(info.kind) {
+        let plan = r.plan();
+        if !plan.transports.contains(info.kind) {
             continue;
         }
-        let object = sanitize(&r.def.id);
-        let mut c = base(&object, &r.def.name);
-        c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.def.id));
-        let component = match r.kind() {
-            ValueKind::Enum(values) => {
-                let options: Vec<String> = values
-                    .iter()
-                    .map(|v| crate::link::option_text(v.value, Some(&v.id), Some(&v.name)))
-                    .collect();
-                c["options"] = json!(options);
+        let object = slug(r.id());
+        let mut c = base(&object, r.name());
+        c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.id()));
+        let component = match plan.conversion {
+            Conversion::Enum { .. } => {
+                c["options"] = json!(select_options(plan));
                 c["optimistic"] = json!(true);
                 "select"
             }
-            ValueKind::Bits(_) => continue,
-            _ => {
-                if let Some(u) = &r.def.unit {
-                    c["unit_of_measurement"] = json!(u);
+            Conversion::Bits { .. } => continue,
+            Conversion::Word { .. }
+            | Conversion::Decimal { .. }
+            | Conversion::Relative { .. }
+            | Conversion::Ratio { .. }
+            | Conversion::Selected { .. } => {
+                if !plan.unit.is_empty() {
+                    c["unit_of_measurement"] = json!(unit(plan.unit));
                 }
-                if let Some(dc) = device_class(r.def.unit.as_deref()) {
+                if let Some(dc) = device_class(plan.unit) {
                     c["device_class"] = json!(dc);
                 }
-                let (min, max) = bounds(info.drive, r);
-                c["min"] = json!(min);
-                c["max"] = json!(max);
-                c["step"] = json!(step(r));
+                let bounds = r.input_bounds();
+                c["min"] = json!(bounds.min);
+                c["max"] = json!(bounds.max);
+                c["step"] = json!(bounds.step);
                 c["mode"] = json!("box");
                 c["optimistic"] = json!(true);
                 "number"
@@ -454,10 +444,10 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             .find_map(|p| p.target.row())
             .and_then(|row| info.drive.register_of_row(usize::from(row)))
         {
-            let (min, max) = bounds(info.drive, r);
-            c["min"] = json!(min);
-            c["max"] = json!(max);
-            c["step"] = json!(step(r));
+            let bounds = r.input_bounds();
+            c["min"] = json!(bounds.min);
+            c["max"] = json!(bounds.max);
+            c["step"] = json!(bounds.step);
         }
         out.push((
             format!("{}/number/{node}/{object}/config", options.discovery_prefix),
@@ -467,73 +457,15 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
     out
 }
 
-/// The step of a number register: its scale's factor where fixed, one count of a ratio scale
-/// (`equals / counts`, the `f64` nearest to it: 1/60 Hz for 3600 = 60.0 Hz), the finest of a
-/// selected scale's cases, 0.01 for a scale relative to another parameter, else 1.
-fn step(r: &Register) -> f64 {
-    use drivemap_map::model::Scale;
-    fn of(s: &Scale) -> f64 {
-        match s {
-            Scale::Factor(f) => *f,
-            Scale::Relative(_) => 0.01,
-            Scale::Ratio(q) => q.equals / f64::from(q.counts),
-            Scale::Selected(sel) => sel
-                .cases
-                .iter()
-                .map(|c| of(&c.scale))
-                .fold(f64::INFINITY, f64::min),
-        }
-    }
-    match &r.def.scale {
-        Some(s) => {
-            let f = of(s);
-            if f.is_finite() && f > 0.0 { f } else { 1.0 }
-        }
-        None => 1.0,
-    }
-}
-
-/// The widest bounds the manual gives a number register, for Home Assistant's input box (the
-/// bridge checks the bounds in force when a value comes): its range, else the widest of its
-/// selected scale's cases, its maximum through another parameter at that parameter's maximum,
-/// else the raw word's range.
-fn bounds(drive: &Drive, r: &Register) -> (f64, f64) {
-    use drivemap_map::model::{Reference, Scale};
-    let cases = match &r.def.scale {
-        Some(Scale::Selected(sel)) => sel.cases.as_slice(),
-        _ => &[],
-    };
-    let min = r.def.min.or_else(|| {
-        cases
+/// The options of a select: an enumeration's codes as the bridge publishes them.
+fn select_options(plan: &RegisterPlan) -> Vec<String> {
+    match plan.conversion {
+        Conversion::Enum { values, .. } => values
             .iter()
-            .filter_map(|c| c.min)
-            .fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.min(b))))
-    });
-    let max = r
-        .def
-        .max
-        .or_else(|| {
-            cases
-                .iter()
-                .filter_map(|c| c.max)
-                .fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.max(b))))
-        })
-        .or_else(|| {
-            let l = r.def.max_relative.as_ref()?;
-            let Reference::Register(id) = &l.relative_to else {
-                return None;
-            };
-            let of = lookup::find(drive, id).ok()?;
-            Some(of.def.max? * l.percent / 100.0)
-        });
-    let words = if r.def.pair.is_some() { 32 } else { 16 };
-    let full = (2f64.powi(words) - 1.0) * step(r);
-    let (lo, hi) = if r.def.signed {
-        (-full / 2.0, full / 2.0)
-    } else {
-        (0.0, full)
-    };
-    (min.unwrap_or(lo), max.unwrap_or(hi))
+            .map(|v| crate::link::option_text(v.code, Some(v.id), Some(v.name)))
+            .collect(),
+        _ => Vec::new(),
+    }
 }
 
 /// Connects and serves until `stop`: publishes discovery and availability on each connection,
@@ -675,7 +607,7 @@ pub async fn run(
                 Some(Update::State { drive, values }) => {
                     let info = &drives[drive];
                     for (pi, text) in values {
-                        let topic = format!("{}/{}/{}", options.topic, info.name, info.points[pi].object);
+                        let topic = format!("{}/{}/{}", options.topic, info.name, info.points[pi].object());
                         if client.try_publish(topic, QoS::AtMostOnce, true, text).is_err() {
                             metrics.mqtt_dropped.get_or_create(&Vec::new()).inc();
                         }
@@ -751,7 +683,7 @@ pub fn accept(
         return Err(crate::Refused::Retained);
     }
     allowed(info, &options.allow, &command.action)?;
-    if let Err(why) = drivemap_live::draft::check_write(info.drive, info.draft) {
+    if let Err(why) = drivemap_live::draft::check_write(info.drive.ir(), info.draft) {
         return Err(crate::Refused::Draft { why });
     }
     let press = match &command.action {
@@ -781,7 +713,7 @@ pub fn accept(
         });
     }
     Ok(match &command.action {
-        Action::Set { register } => lookup::find(info.drive, register)?.def.id.clone(),
+        Action::Set { register } => points::find(info.drive, register)?.id().to_owned(),
         _ => String::new(),
     })
 }
@@ -872,8 +804,8 @@ pub fn tls_config(ca: &std::path::Path) -> Result<rumqttc::TlsConfiguration, cra
 }
 
 /// The register a name means on `drive`, for messages.
-pub fn describe_register(drive: &Drive, name: &str) -> String {
-    lookup::find(drive, name)
-        .map(describe::register)
+pub fn describe_register(map: &Map, name: &str) -> String {
+    points::find(map, name)
+        .map(|r| r.label())
         .unwrap_or_else(|_| name.to_owned())
 }

@@ -13,7 +13,7 @@ use crate::maps::MapError;
 
 /// Why a command stopped (exit status 2); printed after `drivemap: `.
 #[derive(Debug, thiserror::Error)]
-pub enum Error {
+pub(crate) enum Error {
     /// The drive's link cannot be opened.
     #[error(transparent)]
     Link(#[from] LinkError),
@@ -61,6 +61,9 @@ pub enum Error {
     /// The bridge cannot start (its options, a CA file, a listener, the registers asked).
     #[error(transparent)]
     Bridge(#[from] drivemap_bridge::Error),
+    /// The drive cannot be exported for a tool on the link given.
+    #[error(transparent)]
+    Export(#[from] drivemap_bridge::ExportError),
     /// The command refuses, in its own words (what was given and why it cannot be done).
     #[error("{0}")]
     Refused(String),
@@ -68,7 +71,7 @@ pub enum Error {
 
 impl Error {
     /// An I/O error on `what` ("writing standard output", a file's path).
-    pub fn io(what: impl std::fmt::Display) -> impl FnOnce(io::Error) -> Error {
+    pub(crate) fn io(what: impl std::fmt::Display) -> impl FnOnce(io::Error) -> Error {
         let what = what.to_string();
         move |source| Error::Io { what, source }
     }

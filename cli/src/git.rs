@@ -9,11 +9,11 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 /// A directory removed (with its contents) when dropped.
 #[derive(Debug)]
-pub struct TempDir(PathBuf);
+pub(crate) struct TempDir(PathBuf);
 
 impl TempDir {
     /// Creates a fresh directory under the system's temporary directory.
-    pub fn new(prefix: &str) -> io::Result<TempDir> {
+    pub(crate) fn new(prefix: &str) -> io::Result<TempDir> {
         let nanos = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .map(|d| d.subsec_nanos())
@@ -34,7 +34,7 @@ impl TempDir {
     }
 
     /// The directory.
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.0
     }
 }
@@ -47,7 +47,7 @@ impl Drop for TempDir {
 
 /// Why the maps of a revision could not be had from git.
 #[derive(Debug, thiserror::Error)]
-pub enum GitError {
+pub(crate) enum GitError {
     /// `git` could not be started.
     #[error("cannot run git: {0}")]
     Spawn(io::Error),
@@ -90,7 +90,7 @@ fn git(dir: &Path, args: &[&str]) -> Result<Vec<u8>, GitError> {
 
 /// Writes the `*.yaml` maps of `maps_dir` as they are in revision `rev` into a new temporary
 /// directory, under the same file names.
-pub fn maps_at(maps_dir: &Path, rev: &str) -> Result<TempDir, GitError> {
+pub(crate) fn maps_at(maps_dir: &Path, rev: &str) -> Result<TempDir, GitError> {
     if rev.is_empty() || rev.starts_with('-') {
         return Err(GitError::NotARevision(rev.to_owned()));
     }

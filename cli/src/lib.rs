@@ -1,8 +1,14 @@
-//! The `drivemap` command as a library: check, export, document and diff drive maps; simulate a
-//! drive; read, write and poll live drives by register name.
+//! The `drivemap` command: check, export, document and diff drive maps; simulate a drive; read,
+//! write and poll live drives by register name.
 //!
-//! `src/main.rs` is [`main`]; tests call the commands in-process where running the binary once
-//! per case would cost a map load each (the write-gate sweep over every register of every map).
+//! A library for one reason only, and with two items: `src/main.rs` is [`main`], and
+//! [`write_in_process`] runs `drivemap write` in-process for the write-gate sweeps
+//! (`tests/cli/write_gate.rs`, `tests/cli/safe_live`), which write every register of every map in every
+//! name and value form, thousands of cases per map: a process per case would load and validate
+//! the map each time. Every other test drives the binary, as users do. The commands' modules
+//! are private; nothing here is an API.
+
+#![warn(missing_docs, unreachable_pub)]
 #![doc = include_str!("../README.md")]
 
 use std::process::ExitCode;
@@ -12,13 +18,11 @@ use clap::{Parser, Subcommand};
 #[macro_use]
 mod output;
 
-pub mod commands;
-pub mod error;
-pub use drivemap_live::duration;
-pub mod git;
-pub mod live;
-pub mod maps;
-pub mod targets;
+mod commands;
+mod error;
+mod git;
+mod live;
+mod maps;
 
 /// The command line.
 #[derive(Parser)]
@@ -27,15 +31,15 @@ pub mod targets;
     version,
     about = "Register maps of industrial AC drives: check, export, simulate, talk to drives by name"
 )]
-pub struct Cli {
+struct Cli {
     /// What to do.
     #[command(subcommand)]
-    pub command: Command,
+    command: Command,
 }
 
 /// The commands.
 #[derive(Subcommand)]
-pub enum Command {
+enum Command {
     /// Validate maps; print every error with file:line:column; exit 1 if any.
     Check(commands::check::Args),
     /// Print a map as JSON (drivemap-export/1), or a Home Assistant, Node-RED or Telegraf configuration polling it.
@@ -80,10 +84,10 @@ pub enum Command {
 
 /// Arguments of `drivemap completions`.
 #[derive(clap::Args, Debug)]
-pub struct Completions {
+struct Completions {
     /// The shell.
     #[arg(value_enum)]
-    pub shell: clap_complete::Shell,
+    shell: clap_complete::Shell,
 }
 
 /// Parses the command line and runs the command; errors go to standard error, exit status 2.
@@ -123,4 +127,20 @@ pub fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// `drivemap write` in-process on a map already loaded: `argv` is the command line (`drivemap
+/// write --drive <id> --tcp <addr> ... <register>=<value>`), `drive` and `profile` the map it
+/// names, read once by the caller. What the binary prints on standard error before exit status
+/// 2 is the error's text.
+pub fn write_in_process(
+    argv: &[&str],
+    drive: &drivemap_map::Drive,
+    profile: &'static drivemap_runtime::Profile,
+) -> Result<ExitCode, String> {
+    let cli = Cli::try_parse_from(argv).map_err(|e| e.to_string())?;
+    let Command::Write(args) = cli.command else {
+        return Err("not a `drivemap write` command line".to_owned());
+    };
+    commands::write::execute(drive, profile, &args).map_err(|e| e.to_string())
 }

@@ -5,21 +5,21 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Args as ClapArgs;
-use drivemap_map::{Diagnostics, Drive, validate::Context};
+use drivemap_map::{Diagnostics, Drive, Loader, Map, validate::Context};
 
 include!(concat!(env!("OUT_DIR"), "/builtin_maps.rs"));
 
 /// Where maps are looked up.
 #[derive(ClapArgs, Debug, Clone, Default)]
-pub struct MapsDir {
+pub(crate) struct MapsDir {
     /// Directory of `<drive id>.yaml` maps that add to the built-in maps or replace them by id.
     #[arg(long, value_name = "DIR", env = "DRIVEMAP_MAPS")]
-    pub maps: Option<PathBuf>,
+    pub(crate) maps: Option<PathBuf>,
 }
 
 /// Where a drive's map comes from.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum MapSource {
+pub(crate) enum MapSource {
     /// A file of the maps directory.
     File(PathBuf),
     /// Built into the binary.
@@ -28,7 +28,7 @@ pub enum MapSource {
 
 /// Why a drive's map cannot be had.
 #[derive(Debug, thiserror::Error)]
-pub enum MapError {
+pub(crate) enum MapError {
     /// No map of that id, built in or in the maps directory.
     #[error("no map for drive `{id}` (known: {known}{})", match dir {
         Some(d) => format!("; looked in {} and the built-in maps", d.display()),
@@ -56,19 +56,19 @@ pub enum MapError {
 }
 
 /// The YAML of a built-in map.
-pub fn builtin(id: &str) -> Option<&'static str> {
+pub(crate) fn builtin(id: &str) -> Option<&'static str> {
     BUILTIN_MAPS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t)
 }
 
 impl MapsDir {
     /// The directory given, else `maps` (for commands that work on a directory of files:
     /// `check` without files, `diff --git`).
-    pub fn dir(&self) -> PathBuf {
+    pub(crate) fn dir(&self) -> PathBuf {
         self.maps.clone().unwrap_or_else(|| PathBuf::from("maps"))
     }
 
     /// Every drive id known and where its map comes from: built in, then the maps directory.
-    pub fn known(&self) -> BTreeMap<String, MapSource> {
+    pub(crate) fn known(&self) -> BTreeMap<String, MapSource> {
         let mut all: BTreeMap<String, MapSource> = BUILTIN_MAPS
             .iter()
             .map(|(id, text)| (id.to_string(), MapSource::Builtin(text)))
@@ -84,7 +84,7 @@ impl MapsDir {
     }
 
     /// Where the map of `id` comes from: `<maps>/<id>.yaml` when there, else built in.
-    pub fn source_of(&self, id: &str) -> Result<MapSource, MapError> {
+    pub(crate) fn source_of(&self, id: &str) -> Result<MapSource, MapError> {
         if let Some(dir) = &self.maps {
             for ext in ["yaml", "yml"] {
                 let path = dir.join(format!("{id}.{ext}"));
@@ -105,7 +105,7 @@ impl MapsDir {
     }
 
     /// The path of a drive's map file, for commands that need a file (built-in maps have none).
-    pub fn path_of(&self, id: &str) -> Result<PathBuf, MapError> {
+    pub(crate) fn path_of(&self, id: &str) -> Result<PathBuf, MapError> {
         match self.source_of(id)? {
             MapSource::File(p) => Ok(p),
             MapSource::Builtin(_) => Err(MapError::BuiltIn(id.to_owned())),
@@ -114,14 +114,19 @@ impl MapsDir {
 
     /// Reads, expands and validates the map of a drive id; `extends` is resolved by id the
     /// same way (the maps directory first, then the built-in maps).
-    pub fn load(&self, id: &str) -> Result<Drive, MapError> {
+    pub(crate) fn load(&self, id: &str) -> Result<Drive, MapError> {
+        self.load_map(id).map(Map::into_ir)
+    }
+
+    /// [`MapsDir::load`], as the map API's [`Map`].
+    pub(crate) fn load_map(&self, id: &str) -> Result<Map, MapError> {
         match self.source_of(id)? {
-            MapSource::File(p) => self.read(&p).map_err(|diagnostics| MapError::Invalid {
+            MapSource::File(p) => self.read_map(&p).map_err(|diagnostics| MapError::Invalid {
                 what: p.display().to_string(),
                 diagnostics,
             }),
             MapSource::Builtin(text) => {
-                self.read_builtin(id, text)
+                self.read_builtin_map(id, text)
                     .map_err(|diagnostics| MapError::Invalid {
                         what: format!("built-in map {id}"),
                         diagnostics,
@@ -131,13 +136,14 @@ impl MapsDir {
     }
 
     /// Reads, expands and validates a built-in map (its base too is looked up by id).
-    pub fn read_builtin(&self, id: &str, text: &str) -> Result<Drive, Diagnostics> {
-        drivemap_map::read_map_str_with(
-            &format!("<built-in>/{id}.yaml"),
-            text,
-            &Context::default(),
-            &|base| self.base_text(base),
-        )
+    pub(crate) fn read_builtin(&self, id: &str, text: &str) -> Result<Drive, Diagnostics> {
+        self.read_builtin_map(id, text).map(Map::into_ir)
+    }
+
+    fn read_builtin_map(&self, id: &str, text: &str) -> Result<Map, Diagnostics> {
+        Loader::new()
+            .bases(|base| self.base_text(base))
+            .load_str(&format!("<built-in>/{id}.yaml"), text)
     }
 
     fn base_text(&self, id: &str) -> Option<(String, String)> {
@@ -152,13 +158,35 @@ impl MapsDir {
 
     /// Reads, expands and validates a map file. Its base (`extends`) is looked up beside it,
     /// else by id among the maps this finds (the built-in ones too).
-    pub fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
-        self.read_cached(path, &drivemap_map::load::TreeCache::new())
+    pub(crate) fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
+        self.read_map(path).map(Map::into_ir)
+    }
+
+    /// [`MapsDir::read`], as the map API's [`Map`].
+    pub(crate) fn read_map(&self, path: &Path) -> Result<Map, Diagnostics> {
+        let loader = || loader_for(path);
+        let direct = loader().load(path);
+        let base_missing = |d: &Diagnostics| {
+            d.iter()
+                .any(|x| x.message.starts_with("base map `") && x.message.ends_with("not found"))
+        };
+        match &direct {
+            Err(d) if base_missing(d) => {}
+            _ => return direct,
+        }
+        // The base is not beside the file: look it up by id.
+        let Ok(text) = std::fs::read_to_string(path) else {
+            return direct;
+        };
+        let name = drivemap_map::migrate::display_name(path);
+        loader()
+            .bases(|base| self.base_text(base))
+            .load_str(&name, &text)
     }
 
     /// Like [`MapsDir::read`], taking the files already read (a map's bases) from `cache`:
     /// checking a directory reads each file once, however long its chains of `extends`.
-    pub fn read_cached(
+    pub(crate) fn read_cached(
         &self,
         path: &Path,
         cache: &drivemap_map::load::TreeCache,
@@ -182,9 +210,19 @@ impl MapsDir {
     }
 }
 
+/// The loader for a map file: with the manuals directory near it, if any, for its citations.
+pub(crate) fn loader_for(path: &Path) -> Loader<'static> {
+    Loader::new().default_manuals(map_dir(path))
+}
+
+/// The directory of a map file, where its manuals are looked for.
+fn map_dir(path: &Path) -> &Path {
+    path.parent().unwrap_or(Path::new("."))
+}
+
 /// Validation context for a map file: the manuals directory near it, if any.
-pub fn context_for(path: &Path) -> Context {
-    let dir = path.parent().unwrap_or(Path::new("."));
+pub(crate) fn context_for(path: &Path) -> Context {
+    let dir = map_dir(path);
     match drivemap_map::default_manuals_dir(dir) {
         Some(m) => Context::with_manuals(&m),
         None => Context::default(),
@@ -193,7 +231,7 @@ pub fn context_for(path: &Path) -> Context {
 
 /// The manuals directory for a map file: `$DRIVEMAP_MANUALS`, else `shared/manuals` beside an
 /// ancestor of the map's directory.
-pub fn manuals_dir_for(path: &Path) -> Option<PathBuf> {
+pub(crate) fn manuals_dir_for(path: &Path) -> Option<PathBuf> {
     let dir = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
@@ -221,8 +259,10 @@ mod tests {
         }
         // yaskawa-j7 extends yaskawa-v7: the base is found among the built-in maps.
         let j7 = MapsDir::default().load("yaskawa-j7").unwrap();
-        let from_file =
-            drivemap_map::read_map(&dir.join("yaskawa-j7.yaml"), &Context::default()).unwrap();
+        let from_file = Loader::new()
+            .load(&dir.join("yaskawa-j7.yaml"))
+            .unwrap()
+            .into_ir();
         assert_eq!(j7.registers.len(), from_file.registers.len());
     }
 

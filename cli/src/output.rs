@@ -7,11 +7,11 @@ use std::fmt;
 use std::io::{self, Write};
 
 /// Exit status of a command whose output pipe was closed.
-pub const BROKEN_PIPE_EXIT: i32 = 141;
+pub(crate) const BROKEN_PIPE_EXIT: i32 = 141;
 
 /// Writes to standard output; on a closed pipe ends the process quietly, on any other error
 /// reports it and exits with status 2.
-pub fn write(args: fmt::Arguments<'_>) {
+pub(crate) fn write(args: fmt::Arguments<'_>) {
     let mut out = io::stdout().lock();
     if let Err(e) = out.write_fmt(args).and_then(|()| out.flush()) {
         if e.kind() == io::ErrorKind::BrokenPipe {
@@ -35,7 +35,7 @@ macro_rules! outln {
 
 /// Prints, on standard error, a warning for each protocol fact of `facts` the command relies on
 /// although `drive`'s manual does not print it (`drivemap_live::unprinted::warnings`).
-pub fn warn_unprinted(
+pub(crate) fn warn_unprinted(
     drive: &drivemap_map::Drive,
     link: &drivemap_live::Link,
     facts: &[drivemap_runtime::core::ProtocolFact],

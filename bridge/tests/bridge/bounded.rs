@@ -11,9 +11,7 @@ use std::time::{Duration, Instant};
 use drivemap_bridge::command::{Board, DEFAULT_DEADLINE};
 use drivemap_bridge::link::{self, Action, Command, Connect, DriveSpec, LinkSpec, Update};
 use drivemap_bridge::metrics::Metrics;
-use drivemap_bridge::points;
-use drivemap_map::Drive;
-use drivemap_map::validate::Context;
+use drivemap_map::{Loader, Map};
 use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::profile::TransportKind;
@@ -23,14 +21,12 @@ use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
 mod proxy;
 
-fn v7() -> &'static Drive {
+fn v7() -> &'static Map {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml");
-    Box::leak(Box::new(
-        drivemap_map::read_map(&path, &Context::default()).unwrap(),
-    ))
+    Box::leak(Box::new(Loader::new().load(&path).unwrap()))
 }
 
-fn spec(drive: &'static Drive) -> DriveSpec {
+fn spec(drive: &'static Map) -> DriveSpec {
     let profile = drive.plan().profile;
     DriveSpec {
         drive,
@@ -57,10 +53,9 @@ fn connect_to(addr: String) -> Connect {
     })
 }
 
-fn metrics_for(drive: &'static Drive) -> Arc<Metrics> {
+fn metrics_for(drive: &'static Map) -> Arc<Metrics> {
     let s = spec(drive);
-    let (regs, _) = link::choose(&s, TransportKind::RtuOverTcp).unwrap();
-    let pts = points::points(drive, &regs, TransportKind::RtuOverTcp);
+    let pts = link::points_of(&s, TransportKind::RtuOverTcp).unwrap();
     Arc::new(Metrics::new(&pts))
 }
 
@@ -77,7 +72,7 @@ fn value(text: &str, name: &str) -> f64 {
 #[test]
 fn a_stuck_broker_side_never_holds_polling_back() {
     let drive = v7();
-    let sim = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
+    let sim = Simulator::new(drive.ir().clone(), SimOptions::new()).unwrap();
     let server = TcpServer::spawn(sim, "127.0.0.1:0", TcpFraming::RtuOverTcp, None).unwrap();
     let addr = server.local_addr().to_string();
     let metrics = metrics_for(drive);
@@ -203,7 +198,7 @@ impl Line {
     fn start(silent: u8, deadline: Duration) -> Line {
         let drive = v7();
         let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-        let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+        let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), options).unwrap());
         let server = TcpServer::spawn(
             Arc::clone(&sim),
             "127.0.0.1:0",
@@ -404,7 +399,7 @@ fn a_run_sent_while_the_link_is_down_expires_and_never_starts_the_drive() {
     std::thread::sleep(Duration::from_millis(800));
     // The gateway comes up with the drive.
     let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+    let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), options).unwrap());
     let server = TcpServer::spawn(
         Arc::clone(&sim),
         format!("127.0.0.1:{port}"),
@@ -492,7 +487,7 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
             .unwrap()
     };
     let options = SimOptions::new().network_source(TransportKind::Rtu);
-    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+    let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), options).unwrap());
     let server = SerialServer::spawn_on_line(
         Arc::clone(&sim),
         options_for(emulated.drive_path()),
@@ -618,7 +613,7 @@ fn parameters_are_read_at_their_period_and_status_every_cycle() {
             }
         })
     };
-    let sim = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
+    let sim = Simulator::new(drive.ir().clone(), SimOptions::new()).unwrap();
     let server = TcpServer::spawn(sim, "127.0.0.1:0", TcpFraming::RtuOverTcp, Some(log)).unwrap();
     let mut s = spec(drive);
     s.periods = vec![("parameters".into(), Duration::from_secs(2))];
@@ -655,15 +650,7 @@ fn parameters_are_read_at_their_period_and_status_every_cycle() {
     stop.store(true, Ordering::Relaxed);
     task.join().unwrap();
     server.stop();
-    let at = |id: &str| {
-        drive
-            .registers
-            .iter()
-            .find(|r| r.def.id == id)
-            .unwrap()
-            .def
-            .address
-    };
+    let at = |id: &str| drive.register_by_id(id).unwrap().address();
     let covering = |a: u16| {
         reads
             .lock()
@@ -742,7 +729,7 @@ fn late_relay(to: std::net::SocketAddr, late: Duration) -> std::net::SocketAddr 
 fn a_stop_gets_out_when_every_reply_is_late_and_cycles_run_back_to_back() {
     let drive = v7();
     let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+    let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), options).unwrap());
     let server = TcpServer::spawn(
         Arc::clone(&sim),
         "127.0.0.1:0",

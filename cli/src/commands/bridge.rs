@@ -11,8 +11,9 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use clap::Args as ClapArgs;
-use drivemap_bridge::{DriveSpec, LinkSpec, mqtt};
-use drivemap_map::Drive;
+use drivemap_bridge::link::{DriveSpec, LinkSpec};
+use drivemap_bridge::mqtt;
+use drivemap_map::{Drive, Map};
 use serde::Deserialize;
 
 use crate::error::Error;
@@ -22,107 +23,107 @@ use crate::maps::MapsDir;
 
 /// Arguments of `drivemap bridge`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// A drive on the link given by --tcp/--gateway/--rtu-tcp/--serial: its map's id and its
     /// slave address (`yaskawa-v7@1`). Repeat for every drive on that link; more links go in
     /// --config.
     #[arg(long = "drive", value_name = "ID@SLAVE")]
-    pub drives: Vec<String>,
+    pub(crate) drives: Vec<String>,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
     #[command(flatten)]
-    pub line: LineArgs,
+    pub(crate) line: LineArgs,
     /// Variants and values given instead of read, for every --drive (`--set n011=60`).
     #[command(flatten)]
-    pub settings: SettingsArgs,
+    pub(crate) settings: SettingsArgs,
     /// Time between the starts of two poll cycles of each link.
-    #[arg(long, default_value = "1s", value_parser = crate::duration::positive)]
-    pub period: Duration,
+    #[arg(long, default_value = "1s", value_parser = drivemap_live::duration::positive)]
+    pub(crate) period: Duration,
     /// A longer period for some registers of the command line's drives: `WHAT=PERIOD`, WHAT a
     /// register, a role, a group of the map, `status`, `monitors` or `parameters`
     /// (`--period-of parameters=60s`); repeat for more. The rest every --period.
     #[arg(long = "period-of", value_name = "WHAT=PERIOD", value_parser = period_of)]
-    pub period_of: Vec<(String, Duration)>,
+    pub(crate) period_of: Vec<(String, Duration)>,
     /// Where Prometheus scrapes `/metrics` (loopback unless an address is given).
     #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:9187")]
-    pub metrics: SocketAddr,
+    pub(crate) metrics: SocketAddr,
     /// No `/metrics` endpoint.
     #[arg(long = "no-metrics", conflicts_with = "metrics")]
-    pub no_metrics: bool,
+    pub(crate) no_metrics: bool,
     /// The MQTT broker: `mqtt://HOST[:1883]`, or `mqtts://HOST[:8883]` with --mqtt-ca.
     #[arg(long, value_name = "URL")]
-    pub mqtt: Option<String>,
+    pub(crate) mqtt: Option<String>,
     /// CA certificate (PEM) the broker's TLS certificate must chain to.
     #[arg(long = "mqtt-ca", value_name = "FILE")]
-    pub mqtt_ca: Option<PathBuf>,
+    pub(crate) mqtt_ca: Option<PathBuf>,
     /// A file whose first line is `USER:PASSWORD` for the broker (else the environment's
     /// DRIVEMAP_MQTT_USERNAME and DRIVEMAP_MQTT_PASSWORD; never on the command line).
     #[arg(long = "mqtt-credentials", value_name = "FILE")]
-    pub mqtt_credentials: Option<PathBuf>,
+    pub(crate) mqtt_credentials: Option<PathBuf>,
     /// Root of the state and command topics.
     #[arg(long = "mqtt-topic", default_value = "drivemap")]
-    pub mqtt_topic: String,
+    pub(crate) mqtt_topic: String,
     /// Home Assistant's MQTT discovery prefix.
     #[arg(long = "discovery-prefix", default_value = "homeassistant")]
-    pub discovery_prefix: String,
+    pub(crate) discovery_prefix: String,
     /// The MQTT client id (default: `drivemap-bridge-PID`).
     #[arg(long = "mqtt-client-id")]
-    pub mqtt_client_id: Option<String>,
+    pub(crate) mqtt_client_id: Option<String>,
     /// What MQTT commands may write, comma-separated: register ids, parameter numbers or
     /// printed names, roles (`frequency_reference`, `accel_time`), `run` (run and stop),
     /// `stop`, `fault_reset`. Without it every command is refused.
     #[arg(long = "allow-writes", value_name = "LIST", value_delimiter = ',')]
-    pub allow_writes: Vec<String>,
+    pub(crate) allow_writes: Vec<String>,
     /// Runs, references, sets and fault resets per second per drive over MQTT (as many at
     /// once); more are refused. A stop is never limited.
     #[arg(long = "command-rate", default_value_t = 2.0)]
-    pub command_rate: f64,
+    pub(crate) command_rate: f64,
     /// How long a run, reference, set or fault reset may wait for its link (busy, down, its
     /// drive silent) before it is refused as expired; never carried out later. A stop waits
     /// until it is delivered or a later run replaces it.
-    #[arg(long = "command-deadline", default_value = "3s", value_parser = crate::duration::positive)]
-    pub command_deadline: Duration,
+    #[arg(long = "command-deadline", default_value = "3s", value_parser = drivemap_live::duration::positive)]
+    pub(crate) command_deadline: Duration,
     /// More links and drives, in YAML (see the README, "Into Prometheus / Home Assistant").
     #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    pub(crate) config: Option<PathBuf>,
     /// Write through maps marked `draft:` (not reviewed against their manuals): without it, the
     /// drives of a draft map are read (with a note) and nothing is written to them, not even a
     /// stop. With it every command through a draft says so.
     #[arg(long)]
-    pub draft: bool,
+    pub(crate) draft: bool,
     /// Serve Modbus TCP masters on this address for the drives of the command line's link,
     /// through the bridge's one master on the line (see `drivemap proxy`).
     #[arg(long = "serve-modbus", value_name = "ADDR")]
-    pub serve_modbus: Option<SocketAddr>,
+    pub(crate) serve_modbus: Option<SocketAddr>,
     #[command(flatten)]
-    pub proxy: ProxyArgs,
+    pub(crate) proxy: ProxyArgs,
 }
 
 /// What Modbus TCP masters served by the proxy may do (`drivemap proxy`, `bridge --serve-modbus`).
 #[derive(ClapArgs, Debug, Clone)]
-pub struct ProxyArgs {
+pub(crate) struct ProxyArgs {
     /// Carry out the masters' writes (each checked by the drive's write gate and its limits);
     /// without it every write is refused with exception 01h.
     #[arg(long = "proxy-writes")]
-    pub writes: bool,
+    pub(crate) writes: bool,
     /// The masters (addresses or networks, `192.168.1.20`, `10.0.0.0/8`) whose writes may touch
     /// a command register (run, stop, fault reset); others get exception 01h.
     #[arg(long = "allow-commands", value_name = "CIDR", value_delimiter = ',')]
-    pub allow_commands: Vec<String>,
+    pub(crate) allow_commands: Vec<String>,
     /// Answer a read from the same read of another master made within this age.
-    #[arg(long, value_name = "AGE", value_parser = crate::duration::positive)]
-    pub cache: Option<Duration>,
+    #[arg(long, value_name = "AGE", value_parser = drivemap_live::duration::positive)]
+    pub(crate) cache: Option<Duration>,
     /// Masters served at once; more are closed at once.
     #[arg(long = "max-connections", default_value_t = 16, value_parser = clap::value_parser!(u16).range(1..=1024))]
-    pub max_connections: u16,
+    pub(crate) max_connections: u16,
     /// How long a master's request may wait for the line before it is answered 0Bh.
-    #[arg(long = "proxy-timeout", id = "proxy_timeout", default_value = "5s", value_parser = crate::duration::positive)]
-    pub wait: Duration,
+    #[arg(long = "proxy-timeout", id = "proxy_timeout", default_value = "5s", value_parser = drivemap_live::duration::positive)]
+    pub(crate) wait: Duration,
 }
 
 impl ProxyArgs {
     /// The proxy's options on `listen`.
-    pub fn options(
+    pub(crate) fn options(
         &self,
         listen: SocketAddr,
     ) -> Result<drivemap_bridge::proxy::ProxyOptions, Error> {
@@ -146,37 +147,37 @@ impl ProxyArgs {
 
 /// The link of the command line's drives (`drivemap bridge`, `drivemap proxy`).
 #[derive(ClapArgs, Debug, Clone)]
-pub struct LineArgs {
+pub(crate) struct LineArgs {
     /// The drives' own Modbus TCP interface (`192.168.1.10:502`).
     #[arg(long, value_name = "HOST:PORT")]
-    pub tcp: Option<String>,
+    pub(crate) tcp: Option<String>,
     /// A Modbus TCP to RTU gateway with the drives on its serial line.
     #[arg(long, value_name = "HOST:PORT")]
-    pub gateway: Option<String>,
+    pub(crate) gateway: Option<String>,
     /// RTU frames over TCP through a transparent serial gateway.
     #[arg(long = "rtu-tcp", value_name = "HOST:PORT")]
-    pub rtu_tcp: Option<String>,
+    pub(crate) rtu_tcp: Option<String>,
     /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`), or Modbus ASCII with --ascii.
     #[arg(long, value_name = "PATH")]
-    pub serial: Option<String>,
+    pub(crate) serial: Option<String>,
     /// Modbus ASCII instead of RTU, on --serial or through a transparent gateway (--rtu-tcp).
     #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
-    pub ascii: bool,
+    pub(crate) ascii: bool,
     /// Data bits of an ASCII line, 7 or 8 (default: the map's).
     #[arg(long = "data-bits", requires = "ascii", value_parser = clap::value_parser!(u8).range(7..=8))]
-    pub data_bits: Option<u8>,
+    pub(crate) data_bits: Option<u8>,
     /// Baud rate of the serial line (default: the first drive's map's default).
     #[arg(long)]
-    pub baud: Option<u32>,
+    pub(crate) baud: Option<u32>,
     /// Parity of the serial line (default: the map's).
     #[arg(long, value_parser = ParityParser)]
-    pub parity: Option<Parity>,
+    pub(crate) parity: Option<Parity>,
     /// How long to wait for each reply (default: from the map).
-    #[arg(long, value_parser = crate::duration::positive)]
-    pub timeout: Option<Duration>,
+    #[arg(long, value_parser = drivemap_live::duration::positive)]
+    pub(crate) timeout: Option<Duration>,
     /// Further attempts after a timeout.
     #[arg(long, default_value_t = 1)]
-    pub retries: u8,
+    pub(crate) retries: u8,
 }
 
 impl LineArgs {
@@ -239,27 +240,27 @@ fn period_of(text: &str) -> Result<(String, Duration), String> {
     let (what, period) = text
         .split_once('=')
         .ok_or_else(|| format!("`{text}` is not WHAT=PERIOD (`parameters=60s`)"))?;
-    let period = crate::duration::positive(period.trim()).map_err(|e| e.to_string())?;
+    let period = drivemap_live::duration::positive(period.trim()).map_err(|e| e.to_string())?;
     Ok((what.trim().to_owned(), period))
 }
 
 /// Reads `--config` with the map loader's limits (size, nesting depth, aliases: untrusted
 /// text is never read whole or expanded without bound), every error naming the file and line.
 fn read_config(path: &std::path::Path) -> Result<Config, Error> {
-    use drivemap_map::source;
+    use drivemap_map::{MAX_YAML_BYTES, parse_yaml, too_large};
     use std::io::Read;
     let shown = path.display();
     let mut text = String::new();
     let file = std::fs::File::open(path).map_err(|e| format!("--config {shown}: {e}"))?;
     // At most one byte past the limit, so a huge file (or a device) is never read whole.
-    file.take(source::MAX_MAP_BYTES as u64 + 1)
+    file.take(MAX_YAML_BYTES as u64 + 1)
         .read_to_string(&mut text)
         .map_err(|e| format!("--config {shown}: {e}"))?;
-    let name: std::sync::Arc<str> = format!("{shown}").into();
-    if text.len() > source::MAX_MAP_BYTES {
-        return Err(format!("{}", source::too_large(&name, text.len())).into());
+    let name = format!("{shown}");
+    if text.len() > MAX_YAML_BYTES {
+        return Err(format!("{}", too_large(&name, text.len())).into());
     }
-    let tree = source::parse(&name, &text).map_err(|d| format!("--config {d}"))?;
+    let tree = parse_yaml(&name, &text).map_err(|d| format!("--config {d}"))?;
     serde_yaml::from_value(tree.to_value()).map_err(|e| format!("--config {shown}: {e}").into())
 }
 
@@ -322,7 +323,7 @@ pub(crate) fn link(
     settings: &SettingsArgs,
     draft: bool,
     names: &mut BTreeSet<String>,
-    loaded: &mut BTreeMap<String, &'static Drive>,
+    loaded: &mut BTreeMap<String, &'static Map>,
 ) -> Result<LinkSpec, Error> {
     if drives.is_empty() {
         return Err("a link without drives: give --drive ID@SLAVE".into());
@@ -332,30 +333,31 @@ pub(crate) fn link(
     for text in drives {
         let (id, slave) = drive_slave(text)?;
         // Each map is read once, however many drives use it (1,000 drives of five maps).
-        let drive: &'static Drive = match loaded.get(&id) {
+        let map: &'static Map = match loaded.get(&id) {
             Some(d) => d,
             None => {
-                let d: &'static Drive = Box::leak(Box::new(dir.load(&id)?));
+                let d: &'static Map = Box::leak(Box::new(dir.load_map(&id)?));
                 loaded.insert(id.clone(), d);
                 d
             }
         };
+        let drive: &'static Drive = map.ir();
         args.check_transport(drive)?;
         first.get_or_insert(drive);
         let given = settings.resolve(drive)?;
         // The bridge reads what conversions depend on from the drive every cycle: a `--set`
         // of a register it can read would replace what the drive holds by what was assumed.
         for g in given.given.iter().filter(|g| !g.external) {
-            if let Some(r) = drive.registers.iter().find(|r| r.def.id == g.id)
+            if let Some(r) = map.register_by_id(&g.id)
                 && r.readable()
-                && !r.broadcast
-                && drive.register_plan(r).transports.contains(args.kind())
+                && !r.broadcast_only()
+                && r.plan().transports.contains(args.kind())
             {
                 return Err(format!(
                     "--set {}={}: the bridge reads {} from the drive every cycle; --set is for what the drive does not give (an external quantity, a setting it cannot read on this link)",
                     drivemap_live::codec::shorten(&g.name),
                     drivemap_live::codec::shorten(&g.value),
-                    drivemap_map::describe::register(r)
+                    r.label()
                 )
                 .into());
             }
@@ -368,7 +370,7 @@ pub(crate) fn link(
             n += 1;
         }
         specs.push(DriveSpec {
-            drive,
+            drive: map,
             slave,
             name,
             options: args.client_options(drive, profile),
@@ -441,7 +443,7 @@ fn credentials(file: Option<&PathBuf>) -> Result<Option<(String, String)>, Error
 }
 
 /// Runs the bridge until SIGTERM or SIGINT.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let mut names = BTreeSet::new();
     let mut loaded = BTreeMap::new();
     let mut links = Vec::new();
@@ -499,7 +501,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                 .periods
                 .iter()
                 .map(|(what, p)| {
-                    crate::duration::positive(p.trim())
+                    drivemap_live::duration::positive(p.trim())
                         .map(|d| (what.clone(), d))
                         .map_err(|e| {
                             format!(

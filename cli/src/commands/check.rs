@@ -11,19 +11,19 @@ use crate::error::Error;
 use crate::maps::MapsDir;
 
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// Map files to check (default: every map of --maps, else every built-in map).
-    pub files: Vec<PathBuf>,
+    pub(crate) files: Vec<PathBuf>,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
     /// Treat citations whose line does not mention the cited item as errors.
     #[arg(long)]
-    pub strict: bool,
+    pub(crate) strict: bool,
     /// Fail when a map's citations cannot be verified: the manuals directory is not found
     /// (DRIVEMAP_MANUALS, or shared/manuals beside the repository) or lacks a text manual the
     /// map names (manuals cited by page are not expected there).
     #[arg(long)]
-    pub require_manuals: bool,
+    pub(crate) require_manuals: bool,
 }
 
 /// Why some of a map's citations cannot be read against their manual, or `None` when every
@@ -64,17 +64,17 @@ fn not_verified(dir: Option<&Path>, manuals: &Manuals, drive: &Drive) -> Option<
 
 /// Counts of a map's citation review.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
-pub struct CitationCounts {
-    pub verified: usize,
-    pub indirect: usize,
-    pub unverified: usize,
-    pub unchecked: usize,
+pub(crate) struct CitationCounts {
+    pub(crate) verified: usize,
+    pub(crate) indirect: usize,
+    pub(crate) unverified: usize,
+    pub(crate) unchecked: usize,
     /// Page citations of manuals with no text at hand: not verifiable by content.
-    pub pages: usize,
+    pub(crate) pages: usize,
 }
 
 impl CitationCounts {
-    pub fn of(checks: &[review::CitationCheck]) -> CitationCounts {
+    pub(crate) fn of(checks: &[review::CitationCheck]) -> CitationCounts {
         let mut c = CitationCounts::default();
         for check in checks {
             match check.verdict {
@@ -114,7 +114,7 @@ impl std::fmt::Display for CitationCounts {
 /// Verified of each kind of citation outside the registers that can be read (not page
 /// citations), as `roles 20 of 20, protocol 14 of 15, conflicts 30 of 32, gaps 6 of 6
 /// verified`; empty when the map has none.
-pub fn kinds_verified(checks: &[review::CitationCheck]) -> String {
+pub(crate) fn kinds_verified(checks: &[review::CitationCheck]) -> String {
     let mut parts = Vec::new();
     for (kind, label) in [
         ("role", "roles"),
@@ -141,7 +141,7 @@ pub fn kinds_verified(checks: &[review::CitationCheck]) -> String {
     }
 }
 
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     // (name shown, map read, manuals directory for its citations)
     type Checked = (String, Result<Drive, Diagnostics>, Option<PathBuf>);
     // One cache for every file: a map's bases are read once, not once per variant.

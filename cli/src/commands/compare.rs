@@ -16,7 +16,7 @@ use crate::maps::MapsDir;
 
 /// How the differences are printed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     /// One line per setting that differs.
     Text,
     /// A Markdown table.
@@ -28,32 +28,32 @@ pub enum Format {
 /// Arguments of `drivemap compare`: the link is needed only for a `drive` side.
 #[derive(ClapArgs, Debug)]
 #[command(mut_group("link", |g| g.required(false)))]
-pub struct Args {
+pub(crate) struct Args {
     /// The sides: a set file (`drivemap save`), `defaults` (the map's printed factory
     /// values), `drive` (the drive on the link given, at --slave) or `drive@SLAVE` (another
     /// slave on the same link). One side alone is compared with `drive`.
     #[arg(required = true, num_args = 1..=2, value_name = "SIDE")]
-    pub sides: Vec<String>,
+    pub(crate) sides: Vec<String>,
     /// Drive id: a built-in map, or `<maps>/<id>.yaml` (default: the map the first set file
     /// names).
     #[arg(long)]
-    pub drive: Option<String>,
+    pub(crate) drive: Option<String>,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
     #[command(flatten)]
-    pub link: Link,
+    pub(crate) link: Link,
     #[command(flatten)]
-    pub settings: SettingsArgs,
+    pub(crate) settings: SettingsArgs,
     /// Compare sides of different maps or variants (refused without it, naming what differs).
     #[arg(long)]
-    pub other: bool,
+    pub(crate) other: bool,
     /// Output format.
     #[arg(long, value_enum, default_value = "text")]
-    pub format: Format,
+    pub(crate) format: Format,
 }
 
 /// Reads a set file, naming it in every error.
-pub fn read_set(path: &str) -> Result<ParameterSet, Error> {
+pub(crate) fn read_set(path: &str) -> Result<ParameterSet, Error> {
     let meta = std::fs::metadata(path).map_err(|source| Error::Io {
         what: format!("reading {path}"),
         source,
@@ -120,7 +120,7 @@ fn side(
 }
 
 /// Prints the differences; exits 1 when any setting differs.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let mut sides = args.sides.clone();
     if sides.len() == 1 {
         sides.push("drive".to_owned());

@@ -27,50 +27,50 @@ use drivemap_sim::{Simulator, TcpFraming, TcpServer};
 use crate::maps::MapsDir;
 
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// Drive to simulate: the id of any map with `roles:` (shipped, or in --maps DIR).
     #[arg(long, default_value = "ptlk-tds-v8")]
-    pub drive: String,
+    pub(crate) drive: String,
     /// Frequency reference to run at (Hz, 0 to 1000).
     #[arg(long, default_value_t = 48.0, value_parser = drivemap_live::duration::number(0.0, 1000.0))]
-    pub frequency: f64,
+    pub(crate) frequency: f64,
     /// Accel and decel time written before running (s, 0 to 6000), where the map has the registers.
     #[arg(long, default_value_t = 4.0, value_parser = drivemap_live::duration::number(0.0, 6000.0))]
-    pub ramp: f64,
+    pub(crate) ramp: f64,
     /// Run in reverse.
     #[arg(long)]
-    pub reverse: bool,
+    pub(crate) reverse: bool,
     /// Simulated time runs this many times faster than real time (0.1 to 1000).
     #[arg(long = "time-scale", default_value_t = 4.0, value_parser = drivemap_live::duration::number(0.1, 1000.0))]
-    pub time_scale: f64,
+    pub(crate) time_scale: f64,
     /// Simulated seconds between rows of the table (0.01 to 5).
     #[arg(long, default_value_t = 0.5, value_parser = drivemap_live::duration::number(0.01, 5.0))]
-    pub step: f64,
+    pub(crate) step: f64,
     /// The simulated drive's value of a register or an external quantity of the map, as
     /// `simulate --set` takes it (`--set p2000=50`: a reference scale resting on a parameter
     /// without a printed default); the client reads the register from the simulated drive.
     #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
+    pub(crate) set: Vec<String>,
     /// Drive a draft map (`draft:`, not yet reviewed against its manual): without it a draft
     /// is refused, since the demo writes through the map.
     #[arg(long)]
-    pub draft: bool,
+    pub(crate) draft: bool,
     /// Talk Modbus ASCII to the simulated drive (ASCII frames over TCP), as to a drive set to
     /// ASCII; the default for a map whose `protocol.transports` lists `ascii` and not `rtu`.
     /// Refused for a map that does not list `ascii`.
     #[arg(long)]
-    pub ascii: bool,
+    pub(crate) ascii: bool,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
 }
 
 /// What the routine does.
-pub struct Plan {
-    pub frequency: f64,
-    pub ramp: f64,
-    pub reverse: bool,
-    pub step: Duration,
-    pub time_scale: f64,
+pub(crate) struct Plan {
+    pub(crate) frequency: f64,
+    pub(crate) ramp: f64,
+    pub(crate) reverse: bool,
+    pub(crate) step: Duration,
+    pub(crate) time_scale: f64,
 }
 
 /// One row of the table: a reading the drive does not support is shown as `-`.
@@ -97,7 +97,7 @@ fn optional(v: Result<f64, Error>) -> Result<Result<f64, Error>, CliError> {
 }
 
 /// The demo proper: one routine for every drive, through the drive trait only.
-pub fn drive_it(d: &mut impl VariableFrequencyDrive, plan: &Plan) -> Result<(), CliError> {
+pub(crate) fn drive_it(d: &mut impl VariableFrequencyDrive, plan: &Plan) -> Result<(), CliError> {
     let fail = |what: &str, e: Error| format!("{what}: {e}");
     if d.supports(Role::AccelTime) && d.supports(Role::DecelTime) {
         d.set_ramp(plan.ramp, plan.ramp)
@@ -245,7 +245,7 @@ fn compiled<T: Transport>(
     None
 }
 
-pub fn run(args: Args) -> Result<ExitCode, CliError> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
     if !(args.time_scale.is_finite() && args.time_scale > 0.0) {
         return Err(CliError::Refused(
             "--time-scale: give a positive number".into(),
@@ -272,7 +272,7 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
         outln!("note: writes go {note}");
     }
     let ascii = {
-        use drivemap_map::model::TransportName;
+        use drivemap_map::facts::TransportName;
         let listed = &drive.protocol.transports;
         if args.ascii && !listed.contains(&TransportName::Ascii) {
             return Err(CliError::Refused(format!(

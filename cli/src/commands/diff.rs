@@ -7,17 +7,16 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 use drivemap_map::Drive;
-use drivemap_map::validate::Context;
 use drivemap_review::diff::{self, DriveDiff, render};
 use drivemap_review::review::Manuals;
 
 use crate::error::Error;
 use crate::git;
-use crate::maps::{MapsDir, context_for};
+use crate::maps::{MapsDir, loader_for};
 
 /// Output format of `drivemap diff` (see [`render::Format`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     /// Plain text for a terminal.
     Text,
     /// Markdown, for pasting into a review; quotes the manual line each side cites.
@@ -43,28 +42,31 @@ impl From<Format> for render::Format {
 
 /// Arguments of `drivemap diff`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// The old map file; with `--git`, the map to compare (a file or a drive id; every map of
     /// the maps directory when omitted).
-    pub old: Option<PathBuf>,
+    pub(crate) old: Option<PathBuf>,
     /// The new map file.
     #[arg(conflicts_with = "git")]
-    pub new: Option<PathBuf>,
+    pub(crate) new: Option<PathBuf>,
     /// Compare the working tree with this git revision (`HEAD`, `main`, `HEAD~3`).
     #[arg(long, value_name = "REV")]
-    pub git: Option<String>,
+    pub(crate) git: Option<String>,
     /// Output format.
     #[arg(long, value_enum, default_value = "text")]
-    pub format: Format,
+    pub(crate) format: Format,
     /// Print every kind of change with its classification (breaking or compatible) and why.
     #[arg(long, conflicts_with_all = ["old", "new", "git"])]
-    pub kinds: bool,
+    pub(crate) kinds: bool,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
 }
 
-fn read(path: &Path, ctx: &Context) -> Result<Drive, Error> {
-    let drive = drivemap_map::read_map(path, ctx).map_err(|d| format!("{d}"))?;
+fn read(path: &Path, manuals_near: &Path) -> Result<Drive, Error> {
+    let drive = loader_for(manuals_near)
+        .load(path)
+        .map_err(|d| format!("{d}"))?
+        .into_ir();
     warn_schema(&drive, None);
     Ok(drive)
 }
@@ -92,15 +94,17 @@ fn warn_schema(drive: &Drive, rename: Option<(&Path, &str)>) {
 
 /// Reads a map of revision `rev` written to the temporary directory `tmp`, naming it
 /// `rev:dir/name` in errors and warnings instead of the temporary path.
-fn read_at_rev(path: &Path, ctx: &Context, tmp: &Path, shown: &str) -> Result<Drive, Error> {
-    let drive = drivemap_map::read_map(path, ctx)
-        .map_err(|d| format!("{d}").replace(&tmp.display().to_string(), shown))?;
+fn read_at_rev(path: &Path, manuals_near: &Path, tmp: &Path, shown: &str) -> Result<Drive, Error> {
+    let drive = loader_for(manuals_near)
+        .load(path)
+        .map_err(|d| format!("{d}").replace(&tmp.display().to_string(), shown))?
+        .into_ir();
     warn_schema(&drive, Some((tmp, shown)));
     Ok(drive)
 }
 
 /// Compares maps and prints the changes; exits 1 when any is breaking.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     if args.kinds {
         out!("{}", render::kinds(args.format.into()));
         return Ok(ExitCode::SUCCESS);
@@ -113,10 +117,12 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
                     "give two map files, or --git <rev> [map]".into(),
                 ));
             };
-            let ctx = context_for(new);
             let read = |path: &Path| {
-                let drive =
-                    drivemap_map::read_map_version(path, &ctx).map_err(|d| format!("{d}"))?;
+                let drive = loader_for(new)
+                    .any_file_name()
+                    .load(path)
+                    .map_err(|d| format!("{d}"))?
+                    .into_ir();
                 warn_schema(&drive, None);
                 Ok::<_, String>(drive)
             };
@@ -211,15 +217,15 @@ fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, Error> {
             .cloned()
             .collect(),
     };
-    let ctx = context_for(&dir.join("x.yaml"));
+    let near = dir.join("x.yaml");
     let shown = format!("{rev}:{}", dir.display());
-    let old_read = |p: &Path| read_at_rev(p, &ctx, then.path(), &shown);
+    let old_read = |p: &Path| read_at_rev(p, &near, then.path(), &shown);
     let mut diffs = Vec::new();
     for name in names {
         let (old, new) = (then.path().join(&name), dir.join(&name));
         let diff = match (old.is_file(), new.is_file()) {
-            (true, true) => diff::compare(&old_read(&old)?, &read(&new, &ctx)?),
-            (false, true) => diff::added(&read(&new, &ctx)?),
+            (true, true) => diff::compare(&old_read(&old)?, &read(&new, &near)?),
+            (false, true) => diff::added(&read(&new, &near)?),
             (true, false) => diff::removed(&old_read(&old)?),
             (false, false) => {
                 return Err(Error::Refused(format!(

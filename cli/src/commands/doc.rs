@@ -11,28 +11,28 @@ use drivemap_review::reference;
 
 /// Arguments of `drivemap doc`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// Map file to document.
     #[arg(conflicts_with = "drive", required_unless_present = "drive")]
-    pub file: Option<PathBuf>,
+    pub(crate) file: Option<PathBuf>,
     /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
     #[arg(long)]
-    pub drive: Option<String>,
+    pub(crate) drive: Option<String>,
     /// Write the Markdown here instead of standard output.
     #[arg(short = 'o', long = "output")]
-    pub output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
     /// Regenerate every generated document of the map under DIR (the repository's `docs`): the
     /// reference `DIR/drives/<id>.md` and the generated section of `DIR/coverage/<id>.md`
     /// (created with a title when new; the text around the section is kept). The tests compare
     /// both with the map.
     #[arg(long, value_name = "DIR", conflicts_with = "output")]
-    pub docs: Option<PathBuf>,
+    pub(crate) docs: Option<PathBuf>,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
 }
 
 /// Writes the Markdown reference of one map.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let (path, drive) = match (&args.file, &args.drive) {
         (Some(f), _) => match args.dir.read(f) {
             Ok(drive) => (f.clone(), drive),

@@ -14,7 +14,7 @@ use crate::error::Error;
 use crate::live::Target;
 
 /// The names that are entries of indexed registers and not registers, and the others.
-pub fn split<'a>(drive: &Drive, names: &'a [String]) -> (Vec<&'a String>, Vec<EntryRef>) {
+pub(crate) fn split<'a>(drive: &Drive, names: &'a [String]) -> (Vec<&'a String>, Vec<EntryRef>) {
     let mut registers = Vec::new();
     let mut entries = Vec::new();
     for n in names {
@@ -44,7 +44,7 @@ fn what(e: EntryRef) -> String {
 
 /// Reads `entries` (no register named with them) and prints one line each: id, value, unit and
 /// the pair it is reached through. Exits 1 when any failed.
-pub fn read(
+pub(crate) fn read(
     drive: &Drive,
     target: &Target,
     registers: &[&String],
@@ -80,7 +80,7 @@ pub fn read(
 }
 
 /// Writes `entries` (entry, value text in engineering units; no register named with them).
-pub fn write(
+pub(crate) fn write(
     drive: &Drive,
     target: &Target,
     registers: usize,

@@ -8,13 +8,14 @@ use clap::{Args as ClapArgs, ValueEnum};
 
 use crate::error::Error;
 use crate::maps::MapsDir;
-use crate::targets::{self, Points};
+use drivemap_bridge::points::export::{self, Export};
+use drivemap_bridge::points::{home_assistant, node_red, telegraf};
 use drivemap_live::link::{Link, Parity, ParityParser};
 use drivemap_live::session::{SettingsArgs, find_all};
 
 /// What to write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     /// The map as JSON (drivemap-export/1).
     Json,
     /// What every printer says of each register, as JSON: the facts view
@@ -29,59 +30,59 @@ pub enum Format {
 }
 
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// Map file to export.
     #[arg(conflicts_with = "drive", required_unless_present = "drive")]
-    pub file: Option<PathBuf>,
+    pub(crate) file: Option<PathBuf>,
     /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
     #[arg(long)]
-    pub drive: Option<String>,
+    pub(crate) drive: Option<String>,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
     /// What to write: the map as JSON, or a poller's configuration (which then needs the link).
     #[arg(long, value_enum, default_value_t = Format::Json)]
-    pub format: Format,
+    pub(crate) format: Format,
     /// Registers to poll, by id, parameter number, printed name or address (repeat, or
     /// comma-separated; default: the registers the map's roles name and every read-only one).
     #[arg(long = "register", value_delimiter = ',', value_name = "NAME")]
-    pub registers: Vec<String>,
+    pub(crate) registers: Vec<String>,
     /// Poll every readable register of the map.
     #[arg(long, conflicts_with = "registers")]
-    pub all: bool,
+    pub(crate) all: bool,
     /// How often the tool polls (default 1 s; 5 s for Home Assistant, which warns below 5 s).
     #[arg(long, value_parser = drivemap_live::duration::positive)]
-    pub interval: Option<Duration>,
+    pub(crate) interval: Option<Duration>,
     /// The name of the hub, entities and measurement (default: the drive id).
     #[arg(long)]
-    pub name: Option<String>,
+    pub(crate) name: Option<String>,
     /// The drive's own Modbus TCP interface the tool connects to (`192.168.1.10:502`).
     #[arg(long, value_name = "HOST:PORT")]
-    pub tcp: Option<String>,
+    pub(crate) tcp: Option<String>,
     /// A Modbus TCP to RTU gateway with the drive on its serial line (the map's RTU addresses).
     #[arg(long, value_name = "HOST:PORT")]
-    pub gateway: Option<String>,
+    pub(crate) gateway: Option<String>,
     /// RTU frames over TCP through a transparent serial gateway.
     #[arg(long = "rtu-tcp", value_name = "HOST:PORT")]
-    pub rtu_tcp: Option<String>,
+    pub(crate) rtu_tcp: Option<String>,
     /// Serial port speaking Modbus RTU.
     #[arg(long, value_name = "PATH")]
-    pub serial: Option<String>,
+    pub(crate) serial: Option<String>,
     /// Baud rate (default: the map's default, else 9600).
     #[arg(long)]
-    pub baud: Option<u32>,
+    pub(crate) baud: Option<u32>,
     /// Parity (default: the map's default, else none).
     #[arg(long, value_parser = ParityParser)]
-    pub parity: Option<Parity>,
+    pub(crate) parity: Option<Parity>,
     /// Stop bits (default: the map's for the parity).
     #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
-    pub stop_bits: Option<u8>,
+    pub(crate) stop_bits: Option<u8>,
     /// Slave address (default: the map's default, else 1).
     #[arg(long)]
-    pub slave: Option<u8>,
+    pub(crate) slave: Option<u8>,
     /// What conversions and addresses depend on (`--set n152=1`): a scale another parameter
     /// selects is exported only when given.
     #[command(flatten)]
-    pub settings: SettingsArgs,
+    pub(crate) settings: SettingsArgs,
 }
 
 impl Args {
@@ -111,10 +112,10 @@ impl Args {
     }
 }
 
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let read = match (&args.file, &args.drive) {
-        (Some(f), _) => args.dir.read(f),
-        (None, Some(id)) => match args.dir.load(id) {
+        (Some(f), _) => args.dir.read_map(f),
+        (None, Some(id)) => match args.dir.load_map(id) {
             Ok(d) => Ok(d),
             Err(e) => return Err(e.into()),
         },
@@ -134,8 +135,8 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             );
         }
         let json = match args.format {
-            Format::Facts => serde_json::to_value(drivemap_map::facts::facts(&drive))?,
-            _ => drivemap_map::export::export(&drive),
+            Format::Facts => serde_json::to_value(drive.facts())?,
+            _ => drive.export(),
         };
         outln!("{}", serde_json::to_string_pretty(&json)?);
         return Ok(ExitCode::SUCCESS);
@@ -145,13 +146,16 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             "give one link the tool connects to: --tcp HOST:PORT, --gateway HOST:PORT, --rtu-tcp HOST:PORT or --serial PATH".into(),
         );
     }
-    let given = args.settings.resolve(&drive)?;
+    let given = args.settings.resolve(drive.ir())?;
     let regs = if args.all {
-        drive.registers.iter().filter(|r| r.readable()).collect()
+        drive.registers().filter(|r| r.readable()).collect()
     } else if args.registers.is_empty() {
-        targets::default_registers(&drive)
+        export::default_registers(&drive)
     } else {
-        find_all(&drive, &args.registers)?
+        find_all(drive.ir(), &args.registers)?
+            .into_iter()
+            .filter_map(|r| drive.register_at(r.index()))
+            .collect()
     };
     let interval = args.interval.unwrap_or(Duration::from_secs(
         if args.format == Format::HomeAssistant {
@@ -161,7 +165,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         },
     ));
     let period_ms = u64::try_from(interval.as_millis()).unwrap_or(u64::MAX);
-    let points = Points::build(
+    let points = Export::build(
         &drive,
         &regs,
         &args.link(),
@@ -170,11 +174,10 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         args.name.as_deref(),
     )?;
     let text = match args.format {
-        Format::HomeAssistant => targets::home_assistant::render(&points),
-        Format::Telegraf => targets::telegraf::render(&points),
+        Format::HomeAssistant => home_assistant::render(&points),
+        Format::Telegraf => telegraf::render(&points),
         Format::NodeRed => {
-            serde_json::to_string_pretty(&targets::node_red::render(&points))
-                .map_err(|e| e.to_string())?
+            serde_json::to_string_pretty(&node_red::render(&points)).map_err(|e| e.to_string())?
                 + "\n"
         }
         Format::Json | Format::Facts => return Ok(ExitCode::SUCCESS),

@@ -12,45 +12,45 @@ use crate::maps::MapsDir;
 
 /// Arguments of `drivemap import`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// A manual's text (OCR text as in shared/manuals) or a PDF (its text is extracted with
     /// poppler's `pdftotext -layout` and kept beside the draft as `<name>.txt`, which the draft
     /// cites); repeat for a drive with several manuals. Citations name the file by its file name.
     #[arg(long = "manual", value_name = "FILE", required = true)]
-    pub manuals: Vec<PathBuf>,
+    pub(crate) manuals: Vec<PathBuf>,
     /// The drive id of the draft (`acme-vf2`); the draft's file should be `<id>.yaml`.
     #[arg(long, value_name = "ID", required_unless_present = "merge")]
-    pub id: Option<String>,
+    pub(crate) id: Option<String>,
     /// Read rows only from this line on (1-based, in every manual).
     #[arg(long, value_name = "N")]
-    pub start_line: Option<usize>,
+    pub(crate) start_line: Option<usize>,
     /// Read rows only up to this line (inclusive).
     #[arg(long, value_name = "M")]
-    pub end_line: Option<usize>,
+    pub(crate) end_line: Option<usize>,
     /// Write the draft (or the merge report) here instead of standard output.
     #[arg(short, long, value_name = "FILE")]
-    pub output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
     /// Write the report of lines not used as rows (with why) and of what to confirm here.
     #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
+    pub(crate) report: Option<PathBuf>,
     /// Compare with this map (a file, or a drive id): propose only rows it lacks and report the
     /// rows where it and the manual disagree.
     #[arg(long, value_name = "MAP")]
-    pub merge: Option<PathBuf>,
+    pub(crate) merge: Option<PathBuf>,
     /// Name the columns of the table whose header is on line LINE, left to right (the report
     /// names the tables and columns the reader could not decide): `--columns
     /// 12:address,name,min,max,default,unit`. Roles: address, reference, param, name, access,
     /// unit, resolution, factor, exponent, range, min, max, default, type, size, description,
     /// skip. Repeat for several tables.
     #[arg(long = "columns", value_name = "LINE:ROLES")]
-    pub columns: Vec<String>,
+    pub(crate) columns: Vec<String>,
     /// Where `--merge` looks a drive id up.
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
 }
 
 /// Runs `drivemap import`.
-pub fn run(a: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(a: Args) -> Result<ExitCode, Error> {
     let mut columns = std::collections::BTreeMap::new();
     for c in &a.columns {
         let (line, roles) = c.split_once(':').ok_or_else(|| {

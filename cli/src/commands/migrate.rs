@@ -1,5 +1,5 @@
 //! `drivemap migrate <map>...`: rewrites maps written in an earlier schema version in the
-//! current one, keeping their meaning (see `drivemap_map::schema`).
+//! current one, keeping their meaning (see `drivemap_map::migrate`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -7,30 +7,30 @@ use std::sync::Arc;
 
 use crate::error::Error;
 use clap::Args as ClapArgs;
-use drivemap_map::schema;
+use drivemap_map::migrate as schema;
 
 /// Arguments of `drivemap migrate`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// Map files to rewrite in place.
     #[arg(required = true)]
-    pub files: Vec<PathBuf>,
+    pub(crate) files: Vec<PathBuf>,
     /// Print what would change and write nothing; exit 1 if any file is not in the current
     /// schema.
     #[arg(long)]
-    pub check: bool,
+    pub(crate) check: bool,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let mut failed = false;
     let mut outdated = false;
     for path in &args.files {
         let text = std::fs::read_to_string(path).map_err(Error::io(path.display()))?;
-        let name: Arc<str> = drivemap_map::load::display_name(path);
+        let name: Arc<str> = schema::display_name(path);
         let migrated = match schema::migrate(&name, &text) {
             Ok(m) => m,
             Err(errors) => {
-                for e in &errors {
+                for e in errors.iter() {
                     eprintln!("{e}");
                 }
                 failed = true;

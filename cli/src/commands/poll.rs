@@ -16,26 +16,26 @@ use drivemap_live::session::{Session, find_all, on_transport};
 
 /// Arguments of `drivemap poll`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     #[command(flatten)]
-    pub target: Target,
+    pub(crate) target: Target,
     /// Registers by id, parameter number, printed name or address as the manual prints it
     /// (2101H, 0x2101; 45 in a manual numbering registers in decimal); default: the read-only
     /// registers, i.e. the monitor groups, or those of --group.
     #[arg(value_name = "REGISTER")]
-    pub names: Vec<String>,
+    pub(crate) names: Vec<String>,
     /// Poll the readable registers of this group (its id in the map).
     #[arg(long, conflicts_with = "names")]
-    pub group: Option<String>,
+    pub(crate) group: Option<String>,
     /// Time between polls.
     #[arg(long, default_value = "500ms", value_parser = drivemap_live::duration::parse)]
-    pub interval: Duration,
+    pub(crate) interval: Duration,
     /// Stop after this many polls (default: until interrupted).
     #[arg(long)]
-    pub count: Option<u64>,
+    pub(crate) count: Option<u64>,
     /// Output: a live table, JSON lines (one record per register and poll) or CSV rows.
     #[arg(long, value_enum, default_value = "table")]
-    pub format: Format,
+    pub(crate) format: Format,
 }
 
 fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Error> {
@@ -79,7 +79,7 @@ fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Err
 /// Over TCP a connection the drive or gateway closes is re-established before the next request
 /// (back-off from 100 ms to 5 s between failed attempts, `ClientOptions::reconnect`); the
 /// header counts the reconnects.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let regs = registers(&drive, &args)?;
     let given = args.target.settings.resolve(&drive)?;

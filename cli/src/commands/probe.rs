@@ -29,73 +29,73 @@ use drivemap_map::describe;
 
 /// Arguments of `drivemap probe`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     #[command(flatten)]
-    pub target: Target,
+    pub(crate) target: Target,
     /// Output: a summary for eyes, the JSON report, or one CSV row per register.
     #[arg(long, value_enum, default_value = "table")]
-    pub format: Format,
+    pub(crate) format: Format,
     /// Also write the JSON report to this file (to attach to a map's pull request).
     #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
+    pub(crate) report: Option<PathBuf>,
 }
 
 /// The JSON report (`drivemap-probe/1`).
 #[derive(Debug, Serialize)]
-pub struct Report {
-    pub format: &'static str,
-    pub drive: String,
-    pub map_version: Option<String>,
-    pub link: String,
-    pub slave: u8,
-    pub time: String,
+pub(crate) struct Report {
+    pub(crate) format: &'static str,
+    pub(crate) drive: String,
+    pub(crate) map_version: Option<String>,
+    pub(crate) link: String,
+    pub(crate) slave: u8,
+    pub(crate) time: String,
     /// Scale selectors and references conversions depend on: given or read first.
-    pub settings: Vec<Setting>,
+    pub(crate) settings: Vec<Setting>,
     /// Registers read and compared with the map.
-    pub checked: usize,
+    pub(crate) checked: usize,
     /// Of those, how many agree.
-    pub agreed: usize,
+    pub(crate) agreed: usize,
     /// Requests sent for the registers (splits included).
-    pub requests: u32,
-    pub disagreements: Vec<Finding>,
+    pub(crate) requests: u32,
+    pub(crate) disagreements: Vec<Finding>,
     /// Registers of the map not checked, each with why.
-    pub unchecked: Vec<Finding>,
+    pub(crate) unchecked: Vec<Finding>,
     /// Other parts of the map a read cannot check.
-    pub not_checkable: Vec<String>,
-    pub warnings: Vec<String>,
+    pub(crate) not_checkable: Vec<String>,
+    pub(crate) warnings: Vec<String>,
 }
 
 /// A scale selector or reference value.
 #[derive(Debug, Serialize)]
-pub struct Setting {
-    pub register: String,
-    pub parameter: Option<String>,
-    pub role: &'static str,
-    pub value: String,
-    pub origin: &'static str,
+pub(crate) struct Setting {
+    pub(crate) register: String,
+    pub(crate) parameter: Option<String>,
+    pub(crate) role: &'static str,
+    pub(crate) value: String,
+    pub(crate) origin: &'static str,
 }
 
 /// One register's result.
 #[derive(Debug, Clone, Serialize)]
-pub struct Finding {
+pub(crate) struct Finding {
     /// `refused`, `out_of_range`, `unlisted_code`, `reserved_bits`, `no_reply`,
     /// `not_on_link`, `write_only`, `broadcast_only`, `not_converted`.
-    pub kind: &'static str,
-    pub register: String,
-    pub parameter: Option<String>,
+    pub(crate) kind: &'static str,
+    pub(crate) register: String,
+    pub(crate) parameter: Option<String>,
     /// The address on this link, a number.
-    pub address: u16,
+    pub(crate) address: u16,
     /// The same address in the manual's notation (`0024h`).
-    pub address_text: String,
-    pub raw: Option<u32>,
-    pub exception: Option<u8>,
-    pub detail: String,
+    pub(crate) address_text: String,
+    pub(crate) raw: Option<u32>,
+    pub(crate) exception: Option<u8>,
+    pub(crate) detail: String,
     /// Where the map says what it says.
-    pub source: Option<String>,
+    pub(crate) source: Option<String>,
 }
 
 /// Arguments bundle for [`run_probe`], for tests.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let report = run_probe(&drive, &args.target)?;
     let json = serde_json::to_string_pretty(&report)?;
@@ -118,7 +118,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
 fn finding(session: &Session<'_>, r: &Register, kind: &'static str, detail: String) -> Finding {
     Finding {
         kind,
-        register: r.def.id.clone(),
+        register: r.id().to_owned(),
         parameter: r.def.param.clone(),
         address: session.shown_address(r),
         address_text: address_text(session.drive, session.shown_address(r)),
@@ -130,7 +130,7 @@ fn finding(session: &Session<'_>, r: &Register, kind: &'static str, detail: Stri
 }
 
 /// Reads the drive against its map and builds the report.
-pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error> {
+pub(crate) fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error> {
     let given = target.settings.resolve(drive)?;
     crate::output::warn_unprinted(
         drive,
@@ -190,7 +190,7 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error> {
         ("reference", drive.references()),
     ] {
         for r in regs {
-            let id = &r.def.id;
+            let id = r.id();
             let value = match role {
                 "scale selector" => session.settings.selectors.get(id).map(|c| c.to_string()),
                 _ => session.settings.references.get(id).map(|v| {
@@ -200,7 +200,7 @@ pub fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error> {
                 }),
             };
             settings.push(Setting {
-                register: id.clone(),
+                register: id.to_owned(),
                 parameter: r.def.param.clone(),
                 role,
                 origin: if given.fixed.contains(id) {
@@ -393,7 +393,7 @@ fn codes_incomplete(r: &Register) -> Option<&str> {
     r.def
         .unknown
         .iter()
-        .find(|u| u.what == drivemap_map::model::UnknownItem::Values)
+        .find(|u| u.what == drivemap_map::facts::UnknownItem::Values)
         .map(|u| u.reason.as_str())
 }
 
@@ -469,7 +469,7 @@ fn label(f: &Finding) -> String {
 }
 
 /// The report for eyes.
-pub fn summary(r: &Report) -> String {
+pub(crate) fn summary(r: &Report) -> String {
     let mut out = format!("probe of {} over {} at {}\n", r.drive, r.link, r.time);
     for s in r.settings.iter().filter(|s| !s.value.is_empty()) {
         let p = s
@@ -532,7 +532,7 @@ pub fn summary(r: &Report) -> String {
 
 /// One CSV row per register result: disagreements, then unchecked registers, each naming the
 /// drive and slave.
-pub fn csv_rows(r: &Report) -> Result<String, Error> {
+pub(crate) fn csv_rows(r: &Report) -> Result<String, Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "drive",

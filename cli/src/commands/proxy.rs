@@ -18,30 +18,30 @@ use crate::maps::MapsDir;
 
 /// Arguments of `drivemap proxy`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// Where masters connect (Modbus TCP; loopback unless another address is given).
     #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:5020")]
-    pub listen: SocketAddr,
+    pub(crate) listen: SocketAddr,
     /// A drive on the link: its map's id and slave address (`yaskawa-v7@1`); repeat per drive.
     #[arg(long = "drive", value_name = "ID@SLAVE", required = true)]
-    pub drives: Vec<String>,
+    pub(crate) drives: Vec<String>,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
     #[command(flatten)]
-    pub line: LineArgs,
+    pub(crate) line: LineArgs,
     #[command(flatten)]
-    pub proxy: ProxyArgs,
+    pub(crate) proxy: ProxyArgs,
     /// Carry out writes to drives whose map is marked `draft:` (not reviewed against its
     /// manual); without it they are refused (01h).
     #[arg(long)]
-    pub draft: bool,
+    pub(crate) draft: bool,
     /// Where Prometheus scrapes the proxy's `/metrics` (requests per master, refusals).
     #[arg(long, value_name = "ADDR")]
-    pub metrics: Option<SocketAddr>,
+    pub(crate) metrics: Option<SocketAddr>,
 }
 
 /// Serves masters until SIGTERM or SIGINT.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let la = args.line.link()?;
     let settings = SettingsArgs::default();
     let mut l = link(

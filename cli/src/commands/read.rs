@@ -12,21 +12,21 @@ use drivemap_live::session::{Session, find_all};
 
 /// Arguments of `drivemap read`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     #[command(flatten)]
-    pub target: Target,
+    pub(crate) target: Target,
     /// Registers by id, parameter number, printed name or address as the manual prints it
     /// (2101H, 0x2101; 45 in a manual numbering registers in decimal), or entries of an
     /// indexed register by id, parameter number or printed name (read through its index).
     #[arg(required = true, value_name = "REGISTER")]
-    pub names: Vec<String>,
+    pub(crate) names: Vec<String>,
     /// Output: an aligned table, JSON (an array of records) or CSV.
     #[arg(long, value_enum, default_value = "table")]
-    pub format: Format,
+    pub(crate) format: Format,
 }
 
 /// Reads the named registers and prints them decoded; exits 1 when any failed.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let (names, entries) = super::entries::split(&drive, &args.names);
     if !entries.is_empty() {

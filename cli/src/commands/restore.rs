@@ -13,29 +13,29 @@ use crate::live::Target;
 
 /// Arguments of `drivemap restore`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     /// The parameter set (`drivemap save`).
     #[arg(value_name = "SET")]
-    pub set: String,
+    pub(crate) set: String,
     #[command(flatten)]
-    pub target: Target,
+    pub(crate) target: Target,
     /// Read the drive and print the writes, in order, without writing anything.
     #[arg(long = "dry-run")]
-    pub dry_run: bool,
+    pub(crate) dry_run: bool,
     /// Restore a set of another map or variant (refused without it, naming what differs).
     #[arg(long)]
-    pub other: bool,
+    pub(crate) other: bool,
     /// Run the map's store command (ENTER, save) even when nothing differs: after a restore
     /// whose writes all went through but whose store command failed.
     #[arg(long)]
-    pub store: bool,
+    pub(crate) store: bool,
 }
 
 /// Validates the whole set, reads the drive, writes what differs in the map's dependency order,
 /// stores once, reads back. Exits 0 when the drive holds the set, verified; 1 when a write,
 /// the store or a read-back failed (the report says which settings are in which state: run
 /// it again, it writes only what still differs); 2 when the set is refused (nothing written).
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let set = super::compare::read_set(&args.set)?;
     let given = args.target.settings.resolve(&drive)?;
@@ -154,7 +154,7 @@ fn name(drive: &drivemap_map::Drive, id: &str) -> String {
     drive
         .registers
         .iter()
-        .find(|r| r.def.id == id)
+        .find(|r| r.id() == id)
         .map_or_else(|| id.to_owned(), describe::register)
 }
 

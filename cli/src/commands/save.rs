@@ -14,17 +14,17 @@ use crate::live::output::now_rfc3339;
 
 /// Arguments of `drivemap save`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     #[command(flatten)]
-    pub target: Target,
+    pub(crate) target: Target,
     /// Write the set to this file (default: standard output).
     #[arg(short = 'o', long, value_name = "FILE")]
-    pub output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
 }
 
 /// Reads every setting of the drive (planned requests) and writes the parameter set; exits 1
 /// when some settings could not be read (they are listed in the set's `unread`).
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let given = args.target.settings.resolve(&drive)?;
     crate::output::warn_unprinted(

@@ -35,51 +35,51 @@ const MAX_IDENTIFY_REGISTERS: usize = 48;
 /// Arguments of `drivemap scan`.
 #[derive(ClapArgs, Debug)]
 #[command(group(ArgGroup::new("link").required(true).args(["tcp", "gateway", "rtu_tcp", "serial"])))]
-pub struct Args {
+pub(crate) struct Args {
     /// Modbus TCP server (`192.168.1.10:502`): drives with a Modbus TCP interface of their own
     /// (candidate maps without `tcp` in `protocol.transports` are not identified here).
     #[arg(long, value_name = "ADDR")]
-    pub tcp: Option<String>,
+    pub(crate) tcp: Option<String>,
     /// Modbus TCP to RTU gateway with the drives on its serial line (`192.168.1.20:502`):
     /// candidates are identified by their RTU addresses and registers.
     #[arg(long, value_name = "HOST:PORT")]
-    pub gateway: Option<String>,
+    pub(crate) gateway: Option<String>,
     /// RTU frames over TCP through a transparent serial gateway (`192.168.1.20:4001`).
     #[arg(long = "rtu-tcp", value_name = "ADDR")]
-    pub rtu_tcp: Option<String>,
+    pub(crate) rtu_tcp: Option<String>,
     /// Serial port speaking Modbus RTU (`/dev/ttyUSB0`).
     #[arg(long, value_name = "PATH")]
-    pub serial: Option<String>,
+    pub(crate) serial: Option<String>,
     /// Modbus ASCII instead of RTU, on --serial or --rtu-tcp: only candidate maps that list
     /// `ascii` in `protocol.transports` are tried (the line's data bits are the first one's).
     #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
-    pub ascii: bool,
+    pub(crate) ascii: bool,
     /// Slave addresses to try: `1-247` (the Modbus serial-line range, the default), `1,2,5`,
     /// `1-10,31`; up to 255 where a manual gives more (ACN CM.01: 1-250).
     #[arg(long, default_value = "1-247", value_parser = parse_slaves)]
-    pub slaves: SlaveList,
+    pub(crate) slaves: SlaveList,
     /// Baud rates to try on --serial, comma-separated (default: the candidate maps' defaults).
     #[arg(long, value_delimiter = ',')]
-    pub baud: Vec<u32>,
+    pub(crate) baud: Vec<u32>,
     /// Parities to try on --serial, comma-separated (default: the candidate maps' defaults).
     #[arg(long, value_parser = ParityParser, value_delimiter = ',')]
-    pub parity: Vec<Parity>,
+    pub(crate) parity: Vec<Parity>,
     /// Longest wait for each probe (default: from the maps' timing and the line speed).
     #[arg(long, value_parser = drivemap_live::duration::positive)]
-    pub timeout: Option<Duration>,
+    pub(crate) timeout: Option<Duration>,
     /// Candidate maps by drive id (default: every map known).
     #[arg(long = "drive", value_name = "ID")]
-    pub drives: Vec<String>,
+    pub(crate) drives: Vec<String>,
     /// Output: a table for eyes, JSON, or CSV (one row per slave and candidate map).
     #[arg(long, value_enum, default_value = "table")]
-    pub format: Format,
+    pub(crate) format: Format,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
 }
 
 /// Slave addresses, in order, without repeats.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SlaveList(pub Vec<u8>);
+pub(crate) struct SlaveList(pub(crate) Vec<u8>);
 
 /// The profile of the probe reads: generic Modbus, with every slave address a manual may give
 /// (the ACN's CM.01 goes to 250; some manuals print 01H-FEH), not only the standard's 1-247.
@@ -89,7 +89,7 @@ static PROBE: Profile = Profile {
 };
 
 /// Parses `1-247`, `1,2,5`, `1-10,31`: addresses 1-255 (0 is broadcast, which nobody answers).
-pub fn parse_slaves(text: &str) -> Result<SlaveList, CliError> {
+pub(crate) fn parse_slaves(text: &str) -> Result<SlaveList, CliError> {
     let mut out: Vec<u8> = Vec::new();
     for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let num = |s: &str| -> Result<u8, CliError> {
@@ -123,38 +123,38 @@ pub fn parse_slaves(text: &str) -> Result<SlaveList, CliError> {
 
 /// The JSON report (`drivemap-scan/1`).
 #[derive(Debug, Serialize)]
-pub struct Report {
-    pub format: &'static str,
-    pub link: String,
+pub(crate) struct Report {
+    pub(crate) format: &'static str,
+    pub(crate) link: String,
     /// Line settings tried (serial), e.g. `9600 8E1`; `-` on TCP.
-    pub lines: Vec<String>,
-    pub slaves_tried: usize,
-    pub probe_timeout_ms: u64,
+    pub(crate) lines: Vec<String>,
+    pub(crate) slaves_tried: usize,
+    pub(crate) probe_timeout_ms: u64,
     /// The register every slave was asked for.
-    pub probe: String,
-    pub elapsed_ms: u64,
-    pub found: Vec<Found>,
+    pub(crate) probe: String,
+    pub(crate) elapsed_ms: u64,
+    pub(crate) found: Vec<Found>,
     /// Why the probes that got no answer got none, counted by cause.
-    pub unanswered: Unanswered,
+    pub(crate) unanswered: Unanswered,
 }
 
 /// Why probes got no answer, by cause: with 0 answered, this is what tells a quiet line (or
 /// wrong settings) from a peer that floods it.
 #[derive(Debug, Default, Serialize)]
-pub struct Unanswered {
+pub(crate) struct Unanswered {
     /// Nothing (or nothing acceptable) arrived within the probe timeout.
-    pub no_reply: usize,
+    pub(crate) no_reply: usize,
     /// More bytes arrived than any answer could take: the peer floods the link.
-    pub flooded: usize,
+    pub(crate) flooded: usize,
     /// The probe was held back: after an unanswered probe the RTU line never fell silent long
     /// enough to tell a late reply from the next answer (bytes kept arriving).
-    pub never_silent: usize,
+    pub(crate) never_silent: usize,
     /// The link failed (closed, reset).
-    pub link_failed: usize,
+    pub(crate) link_failed: usize,
     /// Anything else (refused before sending).
-    pub other: usize,
+    pub(crate) other: usize,
     /// The first error of each cause seen, as the client said it.
-    pub examples: Vec<String>,
+    pub(crate) examples: Vec<String>,
 }
 
 impl Unanswered {
@@ -202,31 +202,31 @@ impl Unanswered {
 
 /// A slave that answered.
 #[derive(Debug, Serialize)]
-pub struct Found {
-    pub slave: u8,
-    pub line: String,
+pub(crate) struct Found {
+    pub(crate) slave: u8,
+    pub(crate) line: String,
     /// What it answered to the probe: the word, or the exception.
-    pub answer: String,
+    pub(crate) answer: String,
     /// Candidate maps, best first.
-    pub maps: Vec<Candidate>,
+    pub(crate) maps: Vec<Candidate>,
 }
 
 /// How a slave answered one map's monitor registers.
 #[derive(Debug, Serialize)]
-pub struct Candidate {
-    pub drive: String,
+pub(crate) struct Candidate {
+    pub(crate) drive: String,
     /// Monitor registers read.
-    pub tried: usize,
+    pub(crate) tried: usize,
     /// Answered with a value the map allows.
-    pub consistent: usize,
+    pub(crate) consistent: usize,
     /// Answered with a value outside the map's range or codes.
-    pub inconsistent: usize,
+    pub(crate) inconsistent: usize,
     /// Refused with an exception.
-    pub refused: usize,
+    pub(crate) refused: usize,
     /// No reply, or not converted.
-    pub unanswered: usize,
+    pub(crate) unanswered: usize,
     /// `consistent / tried`.
-    pub score: f64,
+    pub(crate) score: f64,
 }
 
 #[derive(Clone, Copy)]
@@ -250,7 +250,7 @@ fn line_text(kind_serial: bool, line: Line, drive: &Drive, base: &Link) -> Strin
 /// request and reply on the wire (11 bits a character), the drive's response delay from its
 /// map (bit times, microseconds, the delay parameter's factory setting), plus 20 ms for USB
 /// adapters and scheduling.
-pub fn probe_timeout(profiles: &[&Profile], baud: Option<u32>) -> Duration {
+pub(crate) fn probe_timeout(profiles: &[&Profile], baud: Option<u32>) -> Duration {
     let baud = baud.unwrap_or(9600).max(300);
     let wire = char_times(8.0 + 7.0, baud);
     let bit = Duration::from_secs_f64(1.0 / f64::from(baud));
@@ -365,7 +365,7 @@ fn identify(drive: &Drive, link: &Link) -> Candidate {
 }
 
 /// Scans and prints; exit status 0 when any slave answered, 1 when none did.
-pub fn run(args: Args) -> Result<ExitCode, CliError> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
     let ids: Vec<String> = if args.drives.is_empty() {
         args.dir.known().into_keys().collect()
     } else {
@@ -380,7 +380,7 @@ pub fn run(args: Args) -> Result<ExitCode, CliError> {
         drives.retain(|d| {
             d.protocol
                 .transports
-                .contains(&drivemap_map::model::TransportName::Ascii)
+                .contains(&drivemap_map::facts::TransportName::Ascii)
         });
         if drives.is_empty() {
             return Err(CliError::Refused(

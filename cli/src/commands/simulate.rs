@@ -26,56 +26,56 @@ use crate::maps::MapsDir;
 
 #[derive(ClapArgs, Debug)]
 #[command(group(ArgGroup::new("link").required(true).args(["tcp", "gateway", "rtu_tcp", "serial"])))]
-pub struct Args {
+pub(crate) struct Args {
     /// Drive id: a built-in map, or `<maps>/<id>.yaml`; `ID@SLAVE` puts it at that slave
     /// address. Repeat for a line of several drives on the one link, each at its own address
     /// (`--drive yaskawa-v7@1 --drive ptlk-tds-v8@2`), as on an RS-485 line or behind a gateway.
     #[arg(long, required = true, value_name = "ID[@SLAVE]")]
-    pub drive: Vec<String>,
+    pub(crate) drive: Vec<String>,
     /// Serve Modbus TCP here: `PORT` (binds 127.0.0.1) or `HOST:PORT` (binds where told).
     #[arg(long, value_name = "ADDR")]
-    pub tcp: Option<String>,
+    pub(crate) tcp: Option<String>,
     /// Serve Modbus TCP as a Modbus TCP to RTU gateway with the drive on its serial line:
     /// the map's RTU addressing and RTU registers (`read --gateway` talks to it). `PORT` or
     /// `HOST:PORT`.
     #[arg(long, value_name = "ADDR")]
-    pub gateway: Option<String>,
+    pub(crate) gateway: Option<String>,
     /// Serve RTU frames over TCP, as a transparent serial gateway does: `PORT` or `HOST:PORT`.
     #[arg(long = "rtu-tcp", value_name = "ADDR")]
-    pub rtu_tcp: Option<String>,
+    pub(crate) rtu_tcp: Option<String>,
     /// Serve Modbus RTU on a serial port or pseudo-terminal (Modbus ASCII with --ascii).
     #[arg(long, value_name = "PATH")]
-    pub serial: Option<PathBuf>,
+    pub(crate) serial: Option<PathBuf>,
     /// Serve Modbus ASCII (`:` ... LRC CR LF) instead of RTU: on --serial, or over TCP with
     /// --rtu-tcp (as a transparent gateway forwards an ASCII line). Refused for a map whose
     /// `protocol.transports` lacks `ascii`.
     #[arg(long, conflicts_with_all = ["tcp", "gateway"])]
-    pub ascii: bool,
+    pub(crate) ascii: bool,
     /// Data bits of an ASCII serial line, 7 or 8 (default: the map's `serial.data_bits`).
     #[arg(long = "data-bits", requires = "ascii", value_parser = clap::value_parser!(u8).range(7..=8))]
-    pub data_bits: Option<u8>,
+    pub(crate) data_bits: Option<u8>,
     /// Baud rate for --serial (default: the map's default, else 9600).
     #[arg(long)]
-    pub baud: Option<u32>,
+    pub(crate) baud: Option<u32>,
     /// Parity for --serial (default: the map's default, else none).
     #[arg(long, value_parser = ParityParser)]
-    pub parity: Option<Parity>,
+    pub(crate) parity: Option<Parity>,
     /// Stop bits for --serial (default: the map's for the parity when its formats give only
     /// one, else 1; 2 without parity where the map fixes 11-bit characters). A map that lists
     /// its serial formats refuses any other parity and stop bits.
     #[arg(long = "stop-bits", value_parser = clap::value_parser!(u8).range(1..=2))]
-    pub stop_bits: Option<u8>,
+    pub(crate) stop_bits: Option<u8>,
     /// With --serial: keep the drive's timing on a line of this speed in bits per second, for a
     /// pseudo-terminal (socat), which delivers bytes at once: each request counts as taking a
     /// character time per byte, each reply waits for the drive's response time from its map
     /// (V7: 24 bits + n156 as the simulated drive holds it; TDS-V8: 5 ms) and is handed over
     /// when its last character would have left the wire at this speed.
     #[arg(long = "line-speed", value_name = "BAUD", requires = "serial", value_parser = clap::value_parser!(u32).range(50..=1_000_000))]
-    pub line_speed: Option<u32>,
+    pub(crate) line_speed: Option<u32>,
     /// Slave address of a single drive (default: the map's default, else 1); with several
     /// drives, give each its address as `--drive ID@SLAVE`.
     #[arg(long)]
-    pub slave: Option<u8>,
+    pub(crate) slave: Option<u8>,
     /// The drive's value of a register or an external quantity of the map, in engineering units
     /// (`--set n152=1`, `--set drive_rated_current=9.6`): a register starts with it, an
     /// external quantity is the drive's. The same `--set` tells read/write/poll the value
@@ -83,43 +83,43 @@ pub struct Args {
     /// drives, `SLAVE:NAME=VALUE` (`--set 2:Cn-02=50`) sets it in the drive at that address
     /// only; without the prefix, in every drive.
     #[arg(long = "set", alias = "external", value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
+    pub(crate) set: Vec<String>,
     /// Power on with the settings of a parameter set (`drivemap save`), as if restored and
     /// stored; `--set` values go on top. On a line of several drives, `SLAVE:FILE` gives it to
     /// the drive at that address only; without the prefix, to every drive of the set's map.
     #[arg(long = "restore", value_name = "[SLAVE:]FILE")]
-    pub restore: Vec<String>,
+    pub(crate) restore: Vec<String>,
     /// Model variant: `--variant voltage_class=v440` (`SLAVE:AXIS=OPTION` for one drive of a
     /// line, as `--set`).
     #[arg(long, value_name = "AXIS=OPTION")]
-    pub variant: Vec<String>,
+    pub(crate) variant: Vec<String>,
     /// Simulated time runs this many times faster than real time (ramps finish sooner; 0.1 to 1000).
     #[arg(long = "time-scale", default_value_t = 1.0, value_parser = drivemap_live::duration::number(0.1, 1000.0))]
-    pub time_scale: f64,
+    pub(crate) time_scale: f64,
     /// Do not log requests.
     #[arg(long)]
-    pub quiet: bool,
+    pub(crate) quiet: bool,
     /// Power on with the network selected as the source of run commands and the reference
     /// (the map's `command_source` / `reference_source`). Without it the simulated drive starts
     /// at the manual's factory setting and ignores network run commands and references until
     /// that parameter is set (`--set n003=2`, or written over the link).
     #[arg(long = "network-source")]
-    pub network_source: bool,
+    pub(crate) network_source: bool,
     /// TCP: connections served at once. One more takes the place of the connection that has
     /// gone longest (at least 1 s) without a request to this drive; when every one is busy, it
     /// is closed as soon as it is accepted.
     #[arg(long = "max-connections", default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..))]
-    pub max_connections: u16,
+    pub(crate) max_connections: u16,
     /// TCP: a connection that sends no request to this drive (a well-formed frame to its unit)
     /// this long is closed.
     #[arg(long = "idle-timeout", default_value = "60s", value_parser = drivemap_live::duration::positive)]
-    pub idle_timeout: std::time::Duration,
+    pub(crate) idle_timeout: std::time::Duration,
     /// TCP: a connection whose started frame is not complete this long after its first byte is
     /// closed, Modbus TCP and RTU framing alike (a peer trickling bytes cannot hold it).
     #[arg(long = "frame-timeout", default_value = "1s", value_parser = drivemap_live::duration::positive)]
-    pub frame_timeout: std::time::Duration,
+    pub(crate) frame_timeout: std::time::Duration,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
 }
 
 /// The map of a drive id: under `--maps` when there, else built in.
@@ -227,10 +227,10 @@ fn restored_values(drive: &Drive, file: &str, line: bool) -> Result<Vec<(String,
             .ok_or_else(|| {
                 Error::Refused(format!(
                     "--restore {file}: {}: `{text}` is not a number",
-                    r.def.id
+                    r.id()
                 ))
             })?;
-        out.push((r.def.id.clone(), value));
+        out.push((r.id().to_owned(), value));
     }
     Ok(out)
 }
@@ -308,7 +308,7 @@ fn for_slave(list: &[String], slave: u8, line: bool) -> Result<Vec<String>, Erro
     Ok(out)
 }
 
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     if args.line_speed.is_some() && args.serial.is_none() {
         return Err(Error::Refused(
             "--line-speed times the drive's side of a serial line: give it with --serial PATH"
@@ -348,7 +348,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             && !drive
                 .protocol
                 .transports
-                .contains(&drivemap_map::model::TransportName::Tcp)
+                .contains(&drivemap_map::facts::TransportName::Tcp)
         {
             return Err(Error::Refused(format!(
                 "{id} has no Modbus TCP interface (its map's protocol.transports lacks tcp), so --tcp {addr} would serve what the drive never does: serve it behind a Modbus TCP to RTU gateway with --gateway {addr}, or RTU frames over TCP with --rtu-tcp {addr}"
@@ -357,7 +357,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
         // ASCII is served only for a map that lists it, RTU only for one that lists RTU or
         // does not list ASCII alone (`read --ascii` refuses the same).
         {
-            use drivemap_map::model::TransportName;
+            use drivemap_map::facts::TransportName;
             let listed = &drive.protocol.transports;
             let words = || {
                 listed

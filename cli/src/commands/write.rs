@@ -20,41 +20,41 @@ use drivemap_map::describe;
 
 /// Arguments of `drivemap write`.
 #[derive(ClapArgs, Debug)]
-pub struct Args {
+pub(crate) struct Args {
     #[command(flatten)]
-    pub target: Target,
+    pub(crate) target: Target,
     /// `register=value` in engineering units (`accel_time_1=12.5`, `Bn-01=12.5 s`, `0200H=12.5`:
     /// a register by id, parameter number, printed name or address as the manual prints it), an
     /// enumeration code, id or meaning, or bit fields (`run,reverse`, `0x0003`).
     #[arg(required = true, value_name = "REGISTER=VALUE")]
-    pub assignments: Vec<String>,
+    pub(crate) assignments: Vec<String>,
     /// After writing, run this command of the map (`save_parameters`, `enter`, `accept`);
     /// a command that stores to EEPROM is counted against the runtime's hourly budget.
     #[arg(long, value_name = "COMMAND")]
-    pub persist: Option<String>,
+    pub(crate) persist: Option<String>,
     /// Send the nearest value the register can carry when a number is not a whole number of
     /// its steps (35.75 Hz to a register that counts 0.1 Hz sends 35.8 Hz); without it such a
     /// value is refused with the two nearest. Ranges and limits apply to the value given.
     #[arg(long)]
-    pub round: bool,
+    pub(crate) round: bool,
     /// Change a setting that scales, bounds or selects other registers (`ref_freq`, `n011`)
     /// while the drive's status shows it running: without it such a write is refused, since
     /// it moves what the running drive does (its reference taken as a percentage of the
     /// setting, say).
     #[arg(long = "while-running")]
-    pub while_running: bool,
+    pub(crate) while_running: bool,
 }
 
 /// The registers whose conversion, limit or address `r` takes part in, each with how: `scales
 /// frequency_setpoint`, `bounds tcp_frequency_reference`, `selects the scale of x`.
-pub fn dependants(
+pub(crate) fn dependants(
     drive: &Drive,
     r: &Register,
     settings: &drivemap_live::LiveSettings,
 ) -> Vec<String> {
     let mut out = Vec::new();
     for x in &drive.registers {
-        if x.def.id == r.def.id {
+        if x.id() == r.id() {
             continue;
         }
         let all = drive.plan();
@@ -62,17 +62,17 @@ pub fn dependants(
             Some(drivemap_runtime::plan::Dependency::Quantity(s)) => matches!(
                 all.settings.quantities.get(usize::from(s.slot)),
                 Some(drivemap_map::lower::Quantity::Register(row))
-                    if all.registers[*row].info.id == r.def.id
+                    if all.registers[*row].info.id == r.id()
             ),
             _ => false,
         };
         let used = drivemap_live::session::settings_used(drive, x, settings);
-        if !used.contains(&r.def.id) {
+        if !used.iter().any(|u| u == r.id()) {
             continue;
         }
         let selects = drivemap_live::session::selectors_of(drive, x)
             .iter()
-            .any(|s| s.def.id == r.def.id);
+            .any(|s| s.id() == r.id());
         let how = if selects {
             "selects the scale or address of"
         } else if bounds {
@@ -80,7 +80,7 @@ pub fn dependants(
         } else {
             "scales"
         };
-        out.push(format!("{how} {}", x.def.id));
+        out.push(format!("{how} {}", x.id()));
     }
     out
 }
@@ -179,7 +179,7 @@ fn holds_command(drive: &Drive, row: u16) -> bool {
 /// The warning for a number register whose range the manual does not print, directly or
 /// through another parameter (`max_relative`): only its word bounds what is sent. `None` for
 /// registers with a range, codes and bit fields.
-pub fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
+pub(crate) fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
     let plan = drive.register_plan(r);
     let number = matches!(
         plan.conversion,
@@ -195,7 +195,7 @@ pub fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
         .def
         .unknown
         .iter()
-        .find(|u| u.what == drivemap_map::model::UnknownItem::Range)
+        .find(|u| u.what == drivemap_map::facts::UnknownItem::Range)
         .map(|u| format!(" ({})", u.reason))
         .unwrap_or_default();
     Some(format!(
@@ -211,14 +211,18 @@ pub fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
 }
 
 /// Checks every assignment, then writes them in order; exits 1 when the drive refused one.
-pub fn run(args: Args) -> Result<ExitCode, Error> {
+pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let drive = args.target.load()?;
     let profile = drivemap_live::leak_profile(&drive);
     execute(&drive, profile, &args)
 }
 
 /// [`run`] with the map loaded and its run-time profile built.
-pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<ExitCode, Error> {
+pub(crate) fn execute(
+    drive: &Drive,
+    profile: &'static Profile,
+    args: &Args,
+) -> Result<ExitCode, Error> {
     let mut pairs: Vec<(&Register, String)> = Vec::new();
     let mut entries = Vec::new();
     let mut errors = Vec::new();
@@ -373,7 +377,7 @@ pub fn execute(drive: &Drive, profile: &'static Profile, args: &Args) -> Result<
                 describe::register(r)
             )));
         }
-        eprintln!("note: {} {list}: their meaning changes with it", r.def.id);
+        eprintln!("note: {} {list}: their meaning changes with it", r.id());
     }
     let mut raws = Vec::new();
     for (r, value) in &pairs {

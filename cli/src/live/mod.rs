@@ -2,10 +2,10 @@
 //! time ([`drivemap_live`]) and spoken over the runtime's transports; reads are planned by the
 //! runtime's read planner ([`drivemap_runtime::planner`]).
 
-pub mod output;
-pub mod table;
+pub(crate) mod output;
+pub(crate) mod table;
 
-pub use drivemap_live::{link, session, silence};
+pub(crate) use drivemap_live::{link, session};
 
 use clap::Args as ClapArgs;
 use drivemap_map::Drive;
@@ -15,21 +15,21 @@ use crate::maps::MapsDir;
 
 /// The drive to talk to: its map and how to reach it.
 #[derive(ClapArgs, Debug, Clone)]
-pub struct Target {
+pub(crate) struct Target {
     /// Drive id: a built-in map, or `<maps>/<id>.yaml`.
     #[arg(long)]
-    pub drive: String,
+    pub(crate) drive: String,
     #[command(flatten)]
-    pub dir: MapsDir,
+    pub(crate) dir: MapsDir,
     #[command(flatten)]
-    pub link: link::Link,
+    pub(crate) link: link::Link,
     #[command(flatten)]
-    pub settings: session::SettingsArgs,
+    pub(crate) settings: session::SettingsArgs,
     /// Write through a draft map (one marked `draft:`, as `drivemap import` writes it, not yet
     /// reviewed against its manual); without it such writes are refused, nothing sent. Every
     /// write made with it says it went through a draft.
     #[arg(long)]
-    pub draft: bool,
+    pub(crate) draft: bool,
 }
 
 impl Target {
@@ -37,7 +37,7 @@ impl Target {
     /// (`--tcp` to a drive without Modbus TCP: [`link::Link::check_transport`]) before
     /// anything else is looked at.
     /// A draft map (`draft:`) is loaded with a note saying so on standard error.
-    pub fn load(&self) -> Result<Drive, Error> {
+    pub(crate) fn load(&self) -> Result<Drive, Error> {
         let drive = self.dir.load(&self.drive)?;
         self.link.check_transport(&drive)?;
         if let Some(note) = drivemap_live::draft::read_note(&drive) {
@@ -47,7 +47,7 @@ impl Target {
     }
 
     /// Whether writes through a draft map are allowed (`--draft`).
-    pub fn draft_writes(&self) -> drivemap_live::draft::DraftWrites {
+    pub(crate) fn draft_writes(&self) -> drivemap_live::draft::DraftWrites {
         drivemap_live::draft::DraftWrites::from_flag(self.draft)
     }
 }

@@ -30,8 +30,8 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use clap::ValueEnum;
 use drivemap_live::codec::Value;
 use drivemap_map::Drive;
+use drivemap_map::facts::AddressFormat;
 use drivemap_map::ir::Register;
-use drivemap_map::model::AddressFormat;
 use serde::Serialize;
 
 use drivemap_live::session::{ReadError, Session};
@@ -39,7 +39,7 @@ use drivemap_map::describe;
 
 /// How values are printed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     /// An aligned table for eyes.
     #[default]
     Table,
@@ -51,28 +51,28 @@ pub enum Format {
 
 /// One register's value as a record.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Reading {
-    pub time: String,
-    pub drive: String,
-    pub slave: u8,
-    pub register: String,
-    pub parameter: Option<String>,
-    pub name: String,
-    pub address: u16,
-    pub address_text: String,
-    pub pdu_address: Option<u16>,
-    pub value: Option<f64>,
-    pub unit: Option<String>,
-    pub text: Option<String>,
-    pub raw: Option<u32>,
-    pub status: &'static str,
-    pub error: Option<String>,
+pub(crate) struct Reading {
+    pub(crate) time: String,
+    pub(crate) drive: String,
+    pub(crate) slave: u8,
+    pub(crate) register: String,
+    pub(crate) parameter: Option<String>,
+    pub(crate) name: String,
+    pub(crate) address: u16,
+    pub(crate) address_text: String,
+    pub(crate) pdu_address: Option<u16>,
+    pub(crate) value: Option<f64>,
+    pub(crate) unit: Option<String>,
+    pub(crate) text: Option<String>,
+    pub(crate) raw: Option<u32>,
+    pub(crate) status: &'static str,
+    pub(crate) error: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub fields: Option<BTreeMap<String, u16>>,
+    pub(crate) fields: Option<BTreeMap<String, u16>>,
 }
 
 /// The CSV header, in record order.
-pub const CSV_HEADER: [&str; 15] = [
+pub(crate) const CSV_HEADER: [&str; 15] = [
     "time",
     "drive",
     "slave",
@@ -92,7 +92,7 @@ pub const CSV_HEADER: [&str; 15] = [
 
 impl Reading {
     /// The record of a register read as `word` (or its error) at `time`.
-    pub fn of(
+    pub(crate) fn of(
         session: &Session<'_>,
         r: &Register,
         word: &Result<u32, ReadError>,
@@ -103,7 +103,7 @@ impl Reading {
             time: time.to_owned(),
             drive: session.drive.meta.id.clone(),
             slave: session.slave,
-            register: r.def.id.clone(),
+            register: r.id().to_owned(),
             parameter: r.def.param.clone(),
             name: r.def.name.clone(),
             address,
@@ -168,7 +168,7 @@ impl Reading {
 
 /// The PDU address `address` (the map's) goes on the wire as on a link of `kind`: the map's
 /// `protocol.addressing` offset for that transport applied; `None` outside 0 to 65535.
-pub fn pdu_address(
+pub(crate) fn pdu_address(
     drive: &Drive,
     address: u16,
     kind: drivemap_runtime::profile::TransportKind,
@@ -179,7 +179,7 @@ pub fn pdu_address(
 
 /// An address in the notation of the drive's manual: `0024h`, or the plain number in a manual
 /// that numbers its registers in decimal (`address_format: decimal`).
-pub fn address_text(drive: &Drive, address: u16) -> String {
+pub(crate) fn address_text(drive: &Drive, address: u16) -> String {
     match drive.address_format {
         AddressFormat::Decimal => address.to_string(),
         AddressFormat::Hex => describe::address(address),
@@ -187,13 +187,13 @@ pub fn address_text(drive: &Drive, address: u16) -> String {
 }
 
 /// Writes records as JSON (an array, or one object a line) or CSV (the header once).
-pub struct Emitter {
+pub(crate) struct Emitter {
     format: Format,
     header_written: bool,
 }
 
 impl Emitter {
-    pub fn new(format: Format) -> Emitter {
+    pub(crate) fn new(format: Format) -> Emitter {
         Emitter {
             format,
             header_written: false,
@@ -202,7 +202,7 @@ impl Emitter {
 
     /// Writes `records`: JSON lines when `lines`, else one JSON array; CSV rows after the
     /// header (written before the first batch).
-    pub fn write(
+    pub(crate) fn write(
         &mut self,
         out: &mut impl Write,
         records: &[Reading],
@@ -237,7 +237,7 @@ impl Emitter {
 }
 
 /// Now, UTC, RFC 3339 with milliseconds: `2026-11-25T07:47:01.123Z`.
-pub fn now_rfc3339() -> String {
+pub(crate) fn now_rfc3339() -> String {
     let now = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .unwrap_or_default();
@@ -245,7 +245,7 @@ pub fn now_rfc3339() -> String {
 }
 
 /// Seconds since 1970 as an RFC 3339 UTC time (days to civil date: H. Hinnant's algorithm).
-pub fn rfc3339(secs: u64, millis: u32) -> String {
+pub(crate) fn rfc3339(secs: u64, millis: u32) -> String {
     let days = (secs / 86_400) as i64;
     let s = secs % 86_400;
     let z = days + 719_468;

@@ -7,24 +7,24 @@ use drivemap_map::describe;
 
 /// One register's line.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Row {
+pub(crate) struct Row {
     /// `accel_time_1 (Bn-01)`.
-    pub register: String,
+    pub(crate) register: String,
     /// `0200h`.
-    pub address: String,
+    pub(crate) address: String,
     /// Decoded value, or the error.
-    pub value: String,
+    pub(crate) value: String,
     /// Raw word in hex, when read.
-    pub raw: String,
+    pub(crate) raw: String,
     /// Lines shown under the row (bit fields).
-    pub details: Vec<String>,
+    pub(crate) details: Vec<String>,
     /// Whether the value failed.
-    pub failed: bool,
+    pub(crate) failed: bool,
 }
 
 impl Row {
     /// The row of a register read as `word` (or its error).
-    pub fn of(
+    pub(crate) fn of(
         session: &Session<'_>,
         r: &Register,
         word: &Result<u32, ReadError>,
@@ -73,7 +73,7 @@ fn pad(s: &str, w: usize) -> String {
 
 /// Renders rows under a header. `highlight[i]` shows row `i`'s value in bold (changed since
 /// the last poll); pass an empty slice for none.
-pub fn render(rows: &[Row], highlight: &[bool]) -> String {
+pub(crate) fn render(rows: &[Row], highlight: &[bool]) -> String {
     let head = ["REGISTER", "ADDRESS", "VALUE", "RAW"];
     let w0 = rows
         .iter()

@@ -9,7 +9,6 @@ use crate::common;
 
 use std::path::PathBuf;
 
-use drivemap_map::validate::Context;
 use drivemap_sim::slave::SimulatedSlave;
 
 use common::{Framing, drivemap_fixture, repo, serve};
@@ -75,7 +74,9 @@ fn a_manual_with_no_rows_found_is_an_error_not_a_success() {
 
 #[test]
 fn read_by_register_number_and_parameter_number_against_the_simulator() {
-    let map = drivemap_map::read_map(&fixture().join("zenith-z3.yaml"), &Context::default())
+    let map = drivemap_map::Loader::new()
+        .load(&fixture().join("zenith-z3.yaml"))
+        .map(drivemap_map::Map::into_ir)
         .expect("fixture map");
     let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
     slave.set_holding(45, 125); // P-01 acceleration time 12.5 s

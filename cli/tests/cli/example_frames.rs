@@ -7,8 +7,6 @@ use crate::common;
 
 use std::path::{Path, PathBuf};
 
-use drivemap_map::validate::Context;
-
 use common::{command, repo, run};
 
 fn fixture() -> PathBuf {
@@ -93,7 +91,9 @@ fn check_verifies_every_example_of_the_shipped_maps() {
     );
     let mut frames_seen = 0;
     for path in paths {
-        let drive = drivemap_map::read_map(&path, &Context::default())
+        let drive = drivemap_map::Loader::new()
+            .load(&path)
+            .map(drivemap_map::Map::into_ir)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let id = &drive.meta.id;
         let line = out

@@ -10,7 +10,6 @@ use drivemap_test_support::hostile_peer;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_map::validate::Context;
 use drivemap_runtime::profile::{Profile, TransportKind};
 
 use hostile_peer::{HostilePeer, Script};
@@ -23,11 +22,10 @@ const DRIVE: &str = "ptlk-tds-v8";
 const REGISTER: &str = "output_current";
 
 fn profile() -> &'static Profile {
-    let map = drivemap_map::read_map(
-        &repo().join("maps").join(format!("{DRIVE}.yaml")),
-        &Context::default(),
-    )
-    .expect("shipped map");
+    let map = drivemap_map::Loader::new()
+        .load(&repo().join("maps").join(format!("{DRIVE}.yaml")))
+        .map(drivemap_map::Map::into_ir)
+        .expect("shipped map");
     drivemap_live::leak_profile(&map)
 }
 
@@ -212,7 +210,9 @@ fn read_never_prints_a_late_reply_as_another_registers_value() {
     use drivemap_test_support::late_slave::serve_late;
     use std::net::TcpListener;
 
-    let map = drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
+    let map = drivemap_map::Loader::new()
+        .load(&repo().join("maps/yaskawa-v7.yaml"))
+        .map(drivemap_map::Map::into_ir)
         .expect("shipped map");
     let profile = drivemap_live::leak_profile(&map);
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();

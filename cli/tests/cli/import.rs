@@ -219,7 +219,9 @@ fn merge_says_how_many_rows_it_read_before_anything_agrees() {
 /// The registers of a draft as a reviewer compares them, without citations (a PDF's text is
 /// laid out again, so its line numbers are not the text file's).
 fn registers_of(yaml: &str, id: &str) -> Vec<String> {
-    let drive = drivemap_map::read_map_str(&format!("{id}.yaml"), yaml, &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str(&format!("{id}.yaml"), yaml)
+        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}\n{yaml}"));
     drive
         .registers

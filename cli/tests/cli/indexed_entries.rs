@@ -8,7 +8,6 @@ use crate::common;
 
 use std::path::PathBuf;
 
-use drivemap_map::validate::Context;
 use drivemap_sim::slave::SimulatedSlave;
 
 use common::{Framing, drivemap_fixture, repo, serve};
@@ -19,11 +18,11 @@ fn fixture() -> PathBuf {
 
 #[test]
 fn read_and_write_name_an_entry_of_an_indexed_register() {
-    let map = drivemap_map::read_map(
-        &fixture().join("tarrow-tm44.yaml"),
-        &Context::with_manuals(&fixture().join("manuals")),
-    )
-    .unwrap_or_else(|d| panic!("{d}"));
+    let map = drivemap_map::Loader::new()
+        .manuals(fixture().join("manuals"))
+        .load(&fixture().join("tarrow-tm44.yaml"))
+        .map(drivemap_map::Map::into_ir)
+        .unwrap_or_else(|d| panic!("{d}"));
     let plan = map.plan().clone();
     let mut slave =
         SimulatedSlave::new(1, drivemap_live::leak_profile(&map)).with_indexed(plan.indexed);

@@ -6,8 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use drivemap_map::model::TransportName;
-use drivemap_map::validate::Context;
+use drivemap_map::facts::TransportName;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
 use crate::common;
@@ -43,7 +42,10 @@ fn every_map_agrees_with_its_simulator(dir: &Path) -> Vec<String> {
     let mut failures = Vec::new();
     let mut summary = Vec::new();
     for path in &maps {
-        let drive = drivemap_map::read_map(path, &Context::default()).unwrap();
+        let drive = drivemap_map::Loader::new()
+            .load(path)
+            .map(drivemap_map::Map::into_ir)
+            .unwrap();
         let id = drive.meta.id.clone();
         ids.push(id.clone());
         let mut links: Vec<(&str, TcpFraming)> = vec![];
@@ -158,7 +160,10 @@ fn every_profile_fixture_is_probed_checked_demoed_exported_and_diffed() {
         assert_eq!(numbers.get(1), Some(&0.0), "{id}: {last}\n{out}");
         assert!(out.contains("done in"), "{id}: {out}");
         // The table shows the state of the machine: where the run path ends while running.
-        let drive = drivemap_map::read_map(&dir.join(&file), &Context::default()).unwrap();
+        let drive = drivemap_map::Loader::new()
+            .load(&dir.join(&file))
+            .map(drivemap_map::Map::into_ir)
+            .unwrap();
         let profile = drive.plan().roles.profile.unwrap();
         let run = profile
             .path(drivemap_runtime::core::command_profile::PathKind::Run)

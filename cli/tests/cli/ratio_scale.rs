@@ -8,7 +8,6 @@ use crate::common;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use drivemap_map::validate::Context;
 use drivemap_sim::slave::SimulatedSlave;
 
 use common::{Framing, drivemap_fixture, repo, serve};
@@ -19,7 +18,9 @@ fn fixture() -> PathBuf {
 
 /// A simulated BF6 register file on loopback (RTU over TCP); its address and the shared slave.
 fn serve_bf6() -> (String, Arc<Mutex<SimulatedSlave>>) {
-    let map = drivemap_map::read_map(&fixture().join("borealis-bf6.yaml"), &Context::default())
+    let map = drivemap_map::Loader::new()
+        .load(&fixture().join("borealis-bf6.yaml"))
+        .map(drivemap_map::Map::into_ir)
         .expect("fixture map");
     serve(
         SimulatedSlave::new(1, drivemap_live::leak_profile(&map)),

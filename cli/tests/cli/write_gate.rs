@@ -25,12 +25,9 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use clap::Parser;
-use drivemap_cli::commands::write;
-use drivemap_cli::{Cli, Command as Cmd};
+use drivemap_map::facts::TransportName;
 use drivemap_map::ir::{Drive, Register, ValueKind};
-use drivemap_map::model::TransportName;
-use drivemap_map::validate::{Context, field_span};
+use drivemap_map::validate::field_span;
 use drivemap_runtime::core::width::{Width, WordOrder};
 use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
@@ -173,7 +170,7 @@ fn run_write(
     wire: &Wire,
     slave: u8,
     assignment: &str,
-) -> Result<ExitCode, drivemap_cli::error::Error> {
+) -> Result<ExitCode, String> {
     let maps = repo().join("maps");
     let slave = slave.to_string();
     let argv = [
@@ -193,11 +190,15 @@ fn run_write(
         "0",
         assignment,
     ];
-    let cli = Cli::try_parse_from(argv).expect("the test's own arguments parse");
-    let Cmd::Write(args) = cli.command else {
-        unreachable!()
-    };
-    write::execute(drive, profile, &args)
+    let result = drivemap_cli::write_in_process(&argv, drive, profile);
+    if let Err(e) = &result {
+        // A command line clap refuses is the test's mistake, not a refusal of the write.
+        assert!(
+            !e.starts_with("error: "),
+            "the test's own arguments parse: {e}"
+        );
+    }
+    result
 }
 
 /// The register's `transports` as written in the map (`rtu`, `tcp`): this oracle reads the
@@ -482,7 +483,10 @@ struct Tally {
 }
 
 fn sweep(path: &Path, kind: TransportKind) -> Tally {
-    let drive = drivemap_map::read_map(path, &Context::default()).expect("shipped map");
+    let drive = drivemap_map::Loader::new()
+        .load(path)
+        .map(drivemap_map::Map::into_ir)
+        .expect("shipped map");
     let profile = drivemap_live::leak_profile(&drive);
     let wire = Wire::start(profile, kind);
     let mut tally = Tally::default();
@@ -618,7 +622,10 @@ fn every_register_of_every_map_through_a_modbus_tcp_gateway() {
 #[test]
 fn write_gate_repros_as_reported() {
     let path = repo().join("maps/yaskawa-v7.yaml");
-    let drive = drivemap_map::read_map(&path, &Context::default()).unwrap();
+    let drive = drivemap_map::Loader::new()
+        .load(&path)
+        .map(drivemap_map::Map::into_ir)
+        .unwrap();
     let profile = drivemap_live::leak_profile(&drive);
     let cases: [(TransportKind, &[&str], &str); 3] = [
         // The TCP option card's digital inputs over an RTU link: 0001h there is the run command.

@@ -10,7 +10,6 @@ use std::time::{Duration, Instant};
 
 use drivemap_map::Drive;
 use drivemap_map::ir::ValueKind;
-use drivemap_map::validate::Context;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions};
 use drivemap_sim::{Line, SerialServer, SimOptions, Simulator, TcpFraming, TcpServer};
 
@@ -488,14 +487,18 @@ const DISAGREEMENTS: &str = "import json,sys\nr=json.load(sys.stdin)\n\
 #[test]
 fn probe_reports_exactly_what_an_altered_drive_does_differently() {
     // Control: the shipped map served as it is agrees with itself.
-    let shipped =
-        drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default()).unwrap();
+    let shipped = drivemap_map::Loader::new()
+        .load(&repo().join("maps/yaskawa-v7.yaml"))
+        .map(drivemap_map::Map::into_ir)
+        .unwrap();
     let (code, out, err) = probe(simulator(shipped, 1), "json");
     assert_eq!(code, 0, "{out}{err}");
     assert_eq!(python(DISAGREEMENTS, &out), "");
 
-    let altered =
-        drivemap_map::read_map_str("yaskawa-v7.yaml", &altered_v7(), &Context::default()).unwrap();
+    let altered = drivemap_map::Loader::new()
+        .load_str("yaskawa-v7.yaml", &altered_v7())
+        .map(drivemap_map::Map::into_ir)
+        .unwrap();
     let (code, out, err) = probe(simulator(altered.clone(), 1), "json");
     assert_eq!(code, 1, "{err}");
     assert_eq!(
@@ -524,10 +527,14 @@ fn probe_reports_exactly_what_an_altered_drive_does_differently() {
 #[test]
 fn scan_finds_two_slaves_on_a_serial_line_and_names_their_maps() {
     let pty = pty_pair::PtyPair::new();
-    let v7 =
-        drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default()).unwrap();
-    let tds =
-        drivemap_map::read_map(&repo().join("maps/ptlk-tds-v8.yaml"), &Context::default()).unwrap();
+    let v7 = drivemap_map::Loader::new()
+        .load(&repo().join("maps/yaskawa-v7.yaml"))
+        .map(drivemap_map::Map::into_ir)
+        .unwrap();
+    let tds = drivemap_map::Loader::new()
+        .load(&repo().join("maps/ptlk-tds-v8.yaml"))
+        .map(drivemap_map::Map::into_ir)
+        .unwrap();
     // Two simulated drives on one serial line (`drivemap_sim::Line`): the one addressed answers.
     let mut line = Line::new();
     line.add(Simulator::new(v7, SimOptions::new().slave(2)).unwrap())

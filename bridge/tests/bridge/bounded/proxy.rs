@@ -31,7 +31,7 @@ impl Proxied {
     fn start(options: impl FnOnce(SocketAddr) -> ProxyOptions) -> Proxied {
         let drive = v7();
         let sim_options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-        let sim = drivemap_sim::shared(Simulator::new(drive.clone(), sim_options).unwrap());
+        let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), sim_options).unwrap());
         let server = TcpServer::spawn(
             Arc::clone(&sim),
             "127.0.0.1:0",
@@ -180,8 +180,8 @@ fn every_reply_goes_to_the_master_that_asked() {
         "max_output_frequency",
         "frequency_reference",
     ] {
-        let r = drive.registers.iter().find(|r| r.def.id == name).unwrap();
-        held.insert(r.def.address, p.raw(name) as u16);
+        let r = drive.register_by_id(name).unwrap();
+        held.insert(r.address(), p.raw(name) as u16);
     }
     let held = Arc::new(held);
     let addr = p.addr;
@@ -223,15 +223,7 @@ fn every_reply_goes_to_the_master_that_asked() {
 fn writes_are_checked_by_the_map_before_the_line() {
     let p = Proxied::start(options);
     let drive = v7();
-    let address = |name: &str| {
-        drive
-            .registers
-            .iter()
-            .find(|r| r.def.id == name)
-            .unwrap()
-            .def
-            .address
-    };
+    let address = |name: &str| drive.register_by_id(name).unwrap().address();
     let mut m = Master::connect(p.addr);
     let reference = address("frequency_reference");
     let max = p.raw("max_output_frequency");
@@ -295,7 +287,7 @@ fn four_masters_share_a_9600_baud_line_fairly() {
             .line(profile, serial::Parity::None, Some(serial::StopBits::One))
             .unwrap()
     };
-    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), SimOptions::new()).unwrap());
+    let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), SimOptions::new()).unwrap());
     let server = SerialServer::spawn_on_line(
         Arc::clone(&sim),
         options_for(emulated.drive_path()),

@@ -8,7 +8,6 @@ use std::collections::BTreeMap;
 use drivemap_live::codec::{self, Value};
 use drivemap_live::paramset;
 use drivemap_map::Drive;
-use drivemap_map::validate::Context;
 use drivemap_runtime::plan::Conversion;
 use drivemap_sim::{SimOptions, Simulator};
 
@@ -63,7 +62,10 @@ fn maps() -> Vec<(String, Drive)> {
         .expect("maps/ lists")
         .into_iter()
         .map(|p| {
-            let d = drivemap_map::read_map(&p, &Context::default()).expect("shipped map");
+            let d = drivemap_map::Loader::new()
+                .load(&p)
+                .map(drivemap_map::Map::into_ir)
+                .expect("shipped map");
             (d.meta.id.clone(), d)
         })
         .collect();
@@ -563,7 +565,9 @@ fn a_set_of_another_map_or_a_broken_file_is_refused_naming_where() {
         unread: Vec::new(),
     };
     let tds = scratch.0.join("tds.yaml");
-    let v7 = drivemap_map::read_map(&shipped_maps().join("yaskawa-v7.yaml"), &Context::default())
+    let v7 = drivemap_map::Loader::new()
+        .load(&shipped_maps().join("yaskawa-v7.yaml"))
+        .map(drivemap_map::Map::into_ir)
         .unwrap();
     std::fs::write(&tds, set.to_yaml(&v7)).unwrap();
     let (code, _, err) = drivemap(&[

@@ -1,39 +1,46 @@
-//! Home Assistant's `modbus:` integration (YAML): one hub for the link, a sensor per register
-//! with `data_type`, `swap`, `scale`, `offset` and `precision`; what the integration cannot show
-//! (codes' meanings, bit fields, scales another parameter selects) as comments.
+//! Home Assistant's view of a point, for both ways the tools reach it: the unit and device
+//! class of a sensor or number, used by the bridge's MQTT discovery ([`crate::mqtt`], whose
+//! number entities take their bounds and step from the map: `RegisterRef::input_bounds`); and
+//! [`render`], the `modbus:` integration's YAML
+//! of an [`Export`]: one hub for the link, a sensor per register with `data_type`, `swap`,
+//! `scale`, `offset` and `precision`; what the integration cannot show (codes' meanings, bit
+//! fields, scales another parameter selects) as comments.
 
 use std::fmt::Write;
 
 use drivemap_runtime::Table;
 
-use super::{Endpoint, Meaning, Point, Points, slug, write_point_caveats};
+use super::export::{Endpoint, Export, write_point_caveats};
+use super::{Meaning, Point, slug};
 
 fn q(text: &str) -> String {
     // A JSON string is a YAML double-quoted scalar.
     serde_json::Value::from(text).to_string()
 }
 
-/// Home Assistant's device class for a unit, where the unit is one the class accepts.
-fn device_class(unit: &str) -> Option<&'static str> {
-    Some(match unit {
+/// Home Assistant's spelling of a map's unit (`degC` → `°C`, `ohm` → `Ω`, `day` → `d`).
+pub fn unit(unit: &str) -> &str {
+    match unit.trim() {
+        "degC" => "°C",
+        "ohm" => "Ω",
+        "day" => "d",
+        u => u,
+    }
+}
+
+/// Home Assistant's device class of a sensor or number in the map's unit, where the unit, as
+/// Home Assistant spells it ([`unit()`]), is one the class accepts.
+pub fn device_class(map_unit: &str) -> Option<&'static str> {
+    Some(match unit(map_unit) {
         "Hz" | "kHz" => "frequency",
         "A" => "current",
         "V" => "voltage",
         "W" | "kW" => "power",
         "kWh" => "energy",
-        "°C" | "degC" => "temperature",
-        "h" | "min" | "s" | "ms" | "d" => "duration",
+        "°C" => "temperature",
+        "d" | "h" | "min" | "s" | "ms" => "duration",
         _ => return None,
     })
-}
-
-/// Home Assistant's spelling of a unit.
-fn unit(unit: &str) -> &str {
-    match unit {
-        "degC" => "°C",
-        "ohm" => "Ω",
-        u => u,
-    }
 }
 
 fn number(v: f64) -> String {
@@ -45,9 +52,9 @@ fn number(v: f64) -> String {
     }
 }
 
-fn sensor(out: &mut String, points: &Points, p: &Point, name: &str) {
-    let bits = p.width.count() * 16;
-    let data_type = format!("{}int{bits}", if p.signed { "" } else { "u" });
+fn sensor(out: &mut String, points: &Export, p: &Point, name: &str) {
+    let bits = p.width().count() * 16;
+    let data_type = format!("{}int{bits}", if p.signed() { "" } else { "u" });
     let _ = writeln!(out, "      - name: {}", q(name));
     let _ = writeln!(
         out,
@@ -60,11 +67,11 @@ fn sensor(out: &mut String, points: &Points, p: &Point, name: &str) {
         )))
     );
     let _ = writeln!(out, "        slave: {}", points.slave);
-    let _ = writeln!(out, "        address: {}", p.pdu);
+    let _ = writeln!(out, "        address: {}", p.pdu());
     let _ = writeln!(
         out,
         "        input_type: {}",
-        match p.table {
+        match p.table() {
             Table::Holding => "holding",
             Table::Input => "input",
         }
@@ -75,26 +82,25 @@ fn sensor(out: &mut String, points: &Points, p: &Point, name: &str) {
         let _ = writeln!(out, "        swap: word");
     }
     match &p.meaning {
-        Meaning::Number {
-            scale, precision, ..
-        } => {
-            let _ = writeln!(out, "        scale: {}", number(*scale));
+        Meaning::Number(Some(fixed)) => {
+            let (scale, precision) = (fixed.factor, fixed.precision);
+            let _ = writeln!(out, "        scale: {}", number(scale));
             let _ = writeln!(out, "        offset: 0");
             let _ = writeln!(out, "        precision: {precision}");
-            if !p.unit.is_empty() {
-                let _ = writeln!(out, "        unit_of_measurement: {}", q(unit(p.unit)));
-                if let Some(class) = device_class(p.unit) {
+            if !p.unit().is_empty() {
+                let _ = writeln!(out, "        unit_of_measurement: {}", q(unit(p.unit())));
+                if let Some(class) = device_class(p.unit()) {
                     let _ = writeln!(out, "        device_class: {class}");
                 }
             }
             let _ = writeln!(out, "        state_class: measurement");
         }
         Meaning::Word => {
-            if !p.unit.is_empty() {
-                let _ = writeln!(out, "        unit_of_measurement: {}", q(unit(p.unit)));
+            if !p.unit().is_empty() {
+                let _ = writeln!(out, "        unit_of_measurement: {}", q(unit(p.unit())));
             }
         }
-        Meaning::Code(_) | Meaning::Bits(_) => {}
+        Meaning::Number(None) | Meaning::Code(_) | Meaning::Bits(_) | Meaning::Field { .. } => {}
     }
     let _ = writeln!(
         out,
@@ -104,7 +110,7 @@ fn sensor(out: &mut String, points: &Points, p: &Point, name: &str) {
 }
 
 /// The `modbus:` configuration of `points`.
-pub fn render(points: &Points) -> String {
+pub fn render(points: &Export) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -134,13 +140,13 @@ pub fn render(points: &Points) -> String {
     for p in &points.points {
         if let Some((first, _)) = sensors
             .iter()
-            .find(|(s, _)| s.pdu == p.pdu && s.table == p.table)
+            .find(|(s, _)| s.pdu() == p.pdu() && s.table() == p.table())
         {
             let _ = writeln!(
                 out,
                 "# left out {}: it shares PDU address {} with {}, and Home Assistant loads one entity per address",
                 p.id(),
-                p.pdu,
+                p.pdu(),
                 first.id()
             );
             continue;

@@ -6,7 +6,8 @@ use std::fmt::Write;
 
 use drivemap_runtime::Table;
 
-use super::{Endpoint, Meaning, Points, write_point_caveats};
+use super::Meaning;
+use super::export::{Endpoint, Export, write_point_caveats};
 
 fn q(text: &str) -> String {
     // A JSON string without control characters is a TOML basic string.
@@ -14,7 +15,7 @@ fn q(text: &str) -> String {
 }
 
 /// The `[[inputs.modbus]]` configuration of `points`.
-pub fn render(points: &Points) -> String {
+pub fn render(points: &Export) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -35,7 +36,10 @@ pub fn render(points: &Points) -> String {
     // share a read with a pair of this order.
     let mut mixed = Vec::new();
     for (i, _) in points.reads.iter().enumerate() {
-        let pairs: Vec<_> = points.in_read(i).filter(|p| p.width.count() == 2).collect();
+        let pairs: Vec<_> = points
+            .in_read(i)
+            .filter(|p| p.width().count() == 2)
+            .collect();
         if let Some(first) = pairs.first() {
             for p in &pairs {
                 if p.low_first() != first.low_first() {
@@ -97,7 +101,7 @@ pub fn render(points: &Points) -> String {
             .collect();
         let low_first = members
             .iter()
-            .find(|p| p.width.count() == 2)
+            .find(|p| p.width().count() == 2)
             .is_some_and(|p| p.low_first());
         let _ = writeln!(out);
         let _ = writeln!(
@@ -133,18 +137,18 @@ pub fn render(points: &Points) -> String {
         let end = u32::from(read.pdu) + u32::from(read.quantity);
         let mut address = u32::from(read.pdu);
         while address < end {
-            match members.iter().find(|p| u32::from(p.pdu) == address) {
+            match members.iter().find(|p| u32::from(p.pdu()) == address) {
                 Some(p) => {
-                    let bits = p.width.count() * 16;
-                    let ty = format!("{}INT{bits}", if p.signed { "" } else { "U" });
+                    let bits = p.width().count() * 16;
+                    let ty = format!("{}INT{bits}", if p.signed() { "" } else { "U" });
                     let scale = match &p.meaning {
-                        Meaning::Number { scale, .. } => format!(", scale = {scale:?}"),
+                        Meaning::Number(Some(f)) => format!(", scale = {:?}", f.factor),
                         _ => String::new(),
                     };
-                    let unit = if p.unit.is_empty() {
+                    let unit = if p.unit().is_empty() {
                         String::new()
                     } else {
-                        format!(" {}", p.unit)
+                        format!(" {}", p.unit())
                     };
                     let _ = writeln!(
                         out,
@@ -152,7 +156,7 @@ pub fn render(points: &Points) -> String {
                         q(p.id()),
                         p.label()
                     );
-                    address += u32::from(p.width.count());
+                    address += u32::from(p.width().count());
                 }
                 None => {
                     let _ = writeln!(
@@ -165,7 +169,7 @@ pub fn render(points: &Points) -> String {
         }
         let _ = writeln!(out, "    ]");
         let _ = writeln!(out, "    [inputs.modbus.request.tags]");
-        let _ = writeln!(out, "      drive = {}", q(&points.drive.meta.id));
+        let _ = writeln!(out, "      drive = {}", q(points.drive.id()));
         let _ = writeln!(out, "      slave = \"{}\"", points.slave);
     }
     let _ = writeln!(out);

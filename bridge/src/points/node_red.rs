@@ -7,7 +7,8 @@
 use drivemap_runtime::Table;
 use serde_json::{Value, json};
 
-use super::{Endpoint, Meaning, Point, Points, slug};
+use super::export::{Endpoint, Export};
+use super::{Fixed, Meaning, Point, slug};
 
 /// A stable node id: 16 hex digits (as the editor makes them) from `key`.
 fn node_id(key: &str) -> String {
@@ -26,7 +27,7 @@ fn js(text: &str) -> String {
 
 /// The JavaScript expression of point `p`'s value from the read's words `w`, `p` at offset `o`.
 fn decode(p: &Point, o: usize) -> String {
-    let raw = match (p.width.count(), p.signed, p.low_first()) {
+    let raw = match (p.width().count(), p.signed(), p.low_first()) {
         (1, false, _) => format!("w[{o}]"),
         (1, true, _) => format!("((w[{o}] << 16) >> 16)"),
         (_, signed, low_first) => {
@@ -39,19 +40,19 @@ fn decode(p: &Point, o: usize) -> String {
         }
     };
     match &p.meaning {
-        Meaning::Number {
-            scale, precision, ..
-        } => format!("Number(({raw} * {scale:?}).toFixed({precision}))"),
+        Meaning::Number(Some(Fixed {
+            factor, precision, ..
+        })) => format!("Number(({raw} * {factor:?}).toFixed({precision}))"),
         _ => raw,
     }
 }
 
-fn function_body(points: &Points, i: usize) -> String {
+fn function_body(points: &Export, i: usize) -> String {
     let read = points.reads[i];
     let mut f = String::new();
     f.push_str(&format!(
         "// drivemap: {} slave {}, {} PDU {} x{}\n",
-        points.drive.meta.id,
+        points.drive.id(),
         points.slave,
         match read.table {
             Table::Holding => "holding",
@@ -63,15 +64,15 @@ fn function_body(points: &Points, i: usize) -> String {
     f.push_str("const w = msg.payload;\nconst out = [];\n");
     f.push_str("function put(id, value, extra) {\n  flow.set(id, value);\n  out.push(Object.assign({topic: id, payload: value}, extra));\n}\n");
     for p in points.in_read(i) {
-        let o = usize::from(p.pdu - read.pdu);
+        let o = usize::from(p.pdu() - read.pdu);
         let value = decode(p, o);
         let mut extra = vec![
-            format!("drive: {}", js(&points.drive.meta.id)),
+            format!("drive: {}", js(points.drive.id())),
             format!("slave: {}", points.slave),
             format!("name: {}", js(&p.label())),
         ];
-        if !p.unit.is_empty() {
-            extra.push(format!("unit: {}", js(p.unit)));
+        if !p.unit().is_empty() {
+            extra.push(format!("unit: {}", js(p.unit())));
         }
         match &p.meaning {
             Meaning::Code(labels) if !labels.is_empty() => {
@@ -111,7 +112,7 @@ fn function_body(points: &Points, i: usize) -> String {
 }
 
 /// The flow of `points`: a JSON array of nodes to import or to start `node-red` with.
-pub fn render(points: &Points) -> Value {
+pub fn render(points: &Export) -> Value {
     let base = format!("drivemap {} {}", points.name, points.slave);
     let tab = node_id(&format!("{base} tab"));
     let client = node_id(&format!("{base} client"));
@@ -126,7 +127,7 @@ pub fn render(points: &Points) -> Value {
     }));
     let mut notes: Vec<String> = Vec::new();
     for p in &points.points {
-        if let Meaning::Number { given, .. } = &p.meaning
+        if let Meaning::Number(Some(Fixed { given, .. })) = &p.meaning
             && !given.is_empty()
         {
             notes.push(format!(

@@ -1,94 +1,34 @@
-//! Static exports for pollers a plant already runs: Home Assistant's `modbus:` YAML, a Node-RED
-//! flow for node-red-contrib-modbus, a Telegraf `inputs.modbus` configuration.
+//! Static exports for pollers a plant already runs (`drivemap export --format home-assistant |
+//! node-red | telegraf`): the [`Point`]s of a drive placed on one link.
 //!
-//! [`Points::build`] decides, once for every format, what each chosen register is on the wire
+//! [`Export::build`] decides, once for every format, what each chosen register is on the wire
 //! (table, PDU address on the link, 16 or 32 bits, word order, signedness) and what its value
 //! means (a fixed scale, a code, bit fields), and which reads the runtime's planner makes of
 //! them. A register none of these tools can read as the map means it (a scale that another
 //! parameter selects and no `--set` fixed, an address that moves with a setting) is kept in
-//! [`Points::left_out`] with the reason, which every format prints: nothing is dropped silently.
+//! [`Export::left_out`] with the reason, which every format prints: nothing is dropped silently.
 
-use drivemap_live::{LiveSettings, leak_profile};
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
-use drivemap_runtime::bus_time::BusModel;
-use drivemap_runtime::plan::{Conversion, Field, Label, Scale};
-use drivemap_runtime::planner::Poller;
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Table, Width, WordOrder};
-
-use crate::error::Error;
 use drivemap_live::link::{Link, Parity};
 use drivemap_live::session::{on_transport, rows_on_link, value_error};
+use drivemap_live::{LiveSettings, leak_profile};
+use drivemap_map::{Map, RegisterRef};
+use drivemap_runtime::Table;
+use drivemap_runtime::bus_time::BusModel;
+use drivemap_runtime::plan::{Conversion, Scale};
+use drivemap_runtime::planner::Poller;
+use drivemap_runtime::profile::TransportKind;
 
-pub mod home_assistant;
-pub mod node_red;
-pub mod telegraf;
-
-/// What a register's word means, as far as a tool can show it.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Meaning {
-    /// An engineering value: raw × `scale` in `unit`, shown with `precision` decimals.
-    /// `given` says which `--set` fixed a scale the drive could change (empty when the scale
-    /// is the map's own).
-    Number {
-        scale: f64,
-        precision: usize,
-        given: String,
-    },
-    /// A plain integer.
-    Word,
-    /// A code; the listed meanings.
-    Code(&'static [Label]),
-    /// Bit fields.
-    Bits(&'static [Field]),
-}
-
-/// One register as a tool reads it.
-#[derive(Debug, Clone)]
-pub struct Point<'d> {
-    pub reg: &'d Register,
-    /// Holding or input.
-    pub table: Table,
-    /// The PDU address on the link (the manual's address moved by the settings and the
-    /// transport's offset).
-    pub pdu: u16,
-    pub width: Width,
-    pub signed: bool,
-    /// The map's unit (`""` for none).
-    pub unit: &'static str,
-    pub meaning: Meaning,
-    /// The planned read it belongs to (index into [`Points::reads`]).
-    pub read: usize,
-}
-
-impl Point<'_> {
-    /// The map's id of the register.
-    pub fn id(&self) -> &str {
-        &self.reg.def.id
-    }
-
-    /// The printed name, with the parameter number when the manual gives one.
-    pub fn label(&self) -> String {
-        match &self.reg.def.param {
-            Some(p) if !self.reg.def.name.contains(p.as_str()) => {
-                format!("{} ({p})", self.reg.def.name)
-            }
-            _ => self.reg.def.name.clone(),
-        }
-    }
-
-    /// Whether the second word of a pair comes first on the wire.
-    pub fn low_first(&self) -> bool {
-        self.width == Width::Pair(WordOrder::LowFirst)
-    }
-}
+use super::{At, Fixed, Meaning, Point};
+use crate::error::ExportError;
 
 /// One read request of the plan, in PDU addresses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PlannedRead {
+    /// Holding or input.
     pub table: Table,
+    /// The first PDU address read.
     pub pdu: u16,
+    /// How many registers it reads.
     pub quantity: u16,
 }
 
@@ -98,25 +38,36 @@ pub enum Endpoint {
     /// `host`, `port` over TCP: Modbus TCP frames (`--tcp`, `--gateway`) or RTU frames
     /// (`--rtu-tcp`).
     Tcp {
+        /// Host name or IP address (an IPv6 address without brackets).
         host: String,
+        /// TCP port.
         port: u16,
+        /// RTU frames over TCP (a transparent serial gateway) rather than Modbus TCP.
         rtu_frames: bool,
     },
     /// A serial port speaking RTU.
     Serial {
+        /// The port's path.
         path: String,
+        /// Baud rate.
         baud: u32,
+        /// Parity.
         parity: Parity,
+        /// Stop bits.
         stop_bits: u8,
     },
 }
 
 /// The chosen registers of a drive on one link, ready for a tool.
 #[derive(Debug)]
-pub struct Points<'d> {
-    pub drive: &'d Drive,
+pub struct Export<'d> {
+    /// The drive.
+    pub drive: &'d Map,
+    /// The link's transport.
     pub kind: TransportKind,
+    /// Where the tool connects.
     pub endpoint: Endpoint,
+    /// The drive's slave address.
     pub slave: u8,
     /// Reply timeout in milliseconds (the client's default for the map and line).
     pub timeout_ms: u64,
@@ -126,64 +77,63 @@ pub struct Points<'d> {
     pub period_ms: u64,
     /// A name for the hub, entities and measurements (`--name`, default the drive id).
     pub name: String,
+    /// The registers a tool reads, each placed on the link ([`Point::at`]).
     pub points: Vec<Point<'d>>,
     /// Registers asked for that no tool can read as the map means them, with the reason.
-    pub left_out: Vec<(&'d Register, String)>,
+    pub left_out: Vec<(RegisterRef<'d>, String)>,
     /// The planner's requests, ascending per table.
     pub reads: Vec<PlannedRead>,
     /// Modelled bus time of one cycle of `reads`, in microseconds.
     pub cycle_us: u64,
 }
 
-fn split_host(addr: &str) -> Result<(String, u16), Error> {
+fn split_host(addr: &str) -> Result<(String, u16), ExportError> {
     let (host, port) = addr
         .rsplit_once(':')
-        .ok_or_else(|| format!("`{addr}` is not HOST:PORT"))?;
-    let port = port
-        .parse::<u16>()
-        .map_err(|_| format!("`{addr}`: `{port}` is not a TCP port"))?;
+        .ok_or_else(|| ExportError::NotHostPort {
+            addr: addr.to_owned(),
+        })?;
+    let port = port.parse::<u16>().map_err(|_| ExportError::NotPort {
+        addr: addr.to_owned(),
+        port: port.to_owned(),
+    })?;
     let host = host.trim_start_matches('[').trim_end_matches(']');
     if host.is_empty() {
-        return Err(Error::Refused(format!("`{addr}` has no host")));
+        return Err(ExportError::NoHost {
+            addr: addr.to_owned(),
+        });
     }
     Ok((host.to_owned(), port))
 }
 
 /// The registers exported when none are named: those the map's roles name and every
 /// read-only register (monitors and status words).
-pub fn default_registers(drive: &Drive) -> Vec<&Register> {
+pub fn default_registers(map: &Map) -> Vec<RegisterRef<'_>> {
     let mut named: Vec<&str> = Vec::new();
-    for places in drive.roles.values() {
+    for places in map.roles().values() {
         for p in places {
             if let Some(r) = &p.register {
                 named.push(r.as_str());
             }
         }
     }
-    drive
-        .registers
-        .iter()
+    map.registers()
         .filter(|r| r.readable())
-        .filter(|r| {
-            !r.writable()
-                || named
-                    .iter()
-                    .any(|n| r.def.id == *n || r.def.param.as_deref() == Some(n))
-        })
+        .filter(|r| !r.writable() || named.iter().any(|n| r.id() == *n || r.param() == Some(n)))
         .collect()
 }
 
-impl<'d> Points<'d> {
+impl<'d> Export<'d> {
     /// Decides every register of `regs` on `link` under `settings` and plans their reads.
     pub fn build(
-        drive: &'d Drive,
-        regs: &[&'d Register],
+        drive: &'d Map,
+        regs: &[RegisterRef<'d>],
         link: &Link,
         settings: &LiveSettings,
         period_ms: u64,
         name: Option<&str>,
-    ) -> Result<Points<'d>, Error> {
-        link.check_transport(drive)?;
+    ) -> Result<Export<'d>, ExportError> {
+        link.check_transport(drive.ir())?;
         let kind = link.kind();
         let endpoint = if let Some(a) = link.tcp.as_ref().or(link.gateway.as_ref()) {
             let (host, port) = split_host(a)?;
@@ -200,7 +150,7 @@ impl<'d> Points<'d> {
                 rtu_frames: true,
             }
         } else if let Some(path) = &link.serial {
-            let (baud, parity, stop_bits) = link.line(drive);
+            let (baud, parity, stop_bits) = link.line(drive.ir());
             Endpoint::Serial {
                 path: path.clone(),
                 baud,
@@ -208,26 +158,23 @@ impl<'d> Points<'d> {
                 stop_bits,
             }
         } else {
-            return Err(
-                "give the link the tool connects to: --tcp, --gateway, --rtu-tcp or --serial"
-                    .into(),
-            );
+            return Err(ExportError::NoLink);
         };
-        let profile = leak_profile(drive);
-        let options = link.client_options(drive, profile);
-        let view = settings.view(drive);
+        let profile = leak_profile(drive.ir());
+        let options = link.client_options(drive.ir(), profile);
+        let view = settings.view(drive.ir());
         let offsets = profile.address_offsets;
 
         let mut points = Vec::new();
         let mut left_out = Vec::new();
         let mut wanted = Vec::new();
         for &r in regs {
-            let plan = drive.register_plan(r);
-            let why = if r.broadcast {
+            let plan = r.plan();
+            let why = if r.broadcast_only() {
                 Some("broadcast-only: written to slave 0, never read".to_owned())
             } else if !r.readable() {
                 Some("write-only: the drive does not let it be read".to_owned())
-            } else if !on_transport(drive, r, kind) {
+            } else if !on_transport(drive.ir(), r.ir(), kind) {
                 Some(format!("does not exist on this link ({})", kind.name()))
             } else {
                 None
@@ -259,7 +206,7 @@ impl<'d> Points<'d> {
                         r,
                         format!(
                             "its scale depends on another parameter, which a tool does not read first ({})",
-                            value_error(drive, &e)
+                            value_error(drive.ir(), &e)
                         ),
                     ));
                     continue;
@@ -297,11 +244,11 @@ impl<'d> Points<'d> {
                         // 60.0 Hz); the target shows `decimals` of it (six when not a decimal).
                         Scale::Ratio { ratio, .. } => ratio.decode(1),
                     };
-                    Meaning::Number {
-                        scale: factor,
+                    Meaning::Number(Some(Fixed {
+                        factor,
                         precision: scale.decimals(),
                         given,
-                    }
+                    }))
                 }
                 (Conversion::Enum { values, .. }, None) => {
                     Meaning::Code(if plan.read_values.is_empty() {
@@ -316,14 +263,12 @@ impl<'d> Points<'d> {
             wanted.push((plan.info.table, address));
             points.push((
                 Point {
-                    reg: r,
-                    table: plan.info.table,
-                    pdu,
-                    width: plan.info.width,
-                    signed: plan.signed(),
-                    unit: plan.unit,
+                    register: r,
+                    plan,
+                    slot: points.len(),
+                    role: super::register_role(drive, r, kind),
                     meaning,
-                    read: 0,
+                    at: Some(At { pdu, read: 0 }),
                 },
                 address,
             ));
@@ -332,21 +277,20 @@ impl<'d> Points<'d> {
         // The planner's reads over the registers this link can read at the addresses these
         // settings put them (a register whose address is not known is not bridged over).
         // Plans, not bare infos: the planner respects each register's `function_codes`.
-        let infos = rows_on_link(drive, kind, |r| {
-            drive.register_plan(r).locate(&view, kind).ok()
+        let infos = rows_on_link(drive.ir(), kind, |r| {
+            drive.ir().register_plan(r).locate(&view, kind).ok()
         });
-        let model = BusModel::new(profile, link.bus_line(drive));
+        let model = BusModel::new(profile, link.bus_line(drive.ir()));
         let poller = Poller::new(profile, &infos, wanted)
-            .map_err(|e| e.to_string())?
+            .map_err(ExportError::Plan)?
             .with_model(model);
         let mut reads = Vec::new();
         for (table, read) in poller.plan() {
-            let pdu = offsets.pdu_address(read.address, kind).ok_or_else(|| {
-                format!(
-                    "a planned read at {:04X}h is outside 0..=FFFFh on this link",
-                    read.address
-                )
-            })?;
+            let pdu = offsets
+                .pdu_address(read.address, kind)
+                .ok_or(ExportError::ReadOutside {
+                    address: read.address,
+                })?;
             reads.push(PlannedRead {
                 table,
                 pdu,
@@ -356,26 +300,31 @@ impl<'d> Points<'d> {
         let cycle_us = poller.plan_ns() / 1000;
         let mut placed = Vec::with_capacity(points.len());
         for (mut p, address) in points {
-            p.read = reads
+            let pdu = p.pdu();
+            let read = reads
                 .iter()
                 .position(|q| {
-                    q.table == p.table
-                        && p.pdu >= q.pdu
-                        && u32::from(p.pdu) + u32::from(p.width.count())
+                    q.table == p.table()
+                        && pdu >= q.pdu
+                        && u32::from(pdu) + u32::from(p.width().count())
                             <= u32::from(q.pdu) + u32::from(q.quantity)
                 })
-                .ok_or_else(|| format!("no planned read covers {} at {address:04X}h", p.id()))?;
+                .ok_or_else(|| ExportError::NotCovered {
+                    register: p.id().to_owned(),
+                    address,
+                })?;
+            p.at = Some(At { pdu, read });
             placed.push(p);
         }
-        Ok(Points {
+        Ok(Export {
             drive,
             kind,
             endpoint,
-            slave: link.slave(drive),
+            slave: link.slave(drive.ir()),
             timeout_ms: options.timeout.as_millis() as u64,
             gap_ms: options.request_gap.as_micros().div_ceil(1000) as u64,
             period_ms,
-            name: name.unwrap_or(&drive.meta.id).to_owned(),
+            name: name.unwrap_or(drive.id()).to_owned(),
             points: placed,
             left_out,
             reads,
@@ -385,14 +334,14 @@ impl<'d> Points<'d> {
 
     /// The points of read `i`, in address order.
     pub fn in_read(&self, i: usize) -> impl Iterator<Item = &Point<'d>> {
-        self.points.iter().filter(move |p| p.read == i)
+        self.points.iter().filter(move |p| p.read() == i)
     }
 
     /// One line per register left out, for a tool's comments.
     pub fn left_out_lines(&self) -> Vec<String> {
         self.left_out
             .iter()
-            .map(|(r, why)| format!("left out {}: {why}", drivemap_map::describe::register(r)))
+            .map(|(r, why)| format!("left out {}: {why}", r.label()))
             .collect()
     }
 
@@ -400,9 +349,9 @@ impl<'d> Points<'d> {
     pub fn summary(&self) -> String {
         format!(
             "{} ({} {}) slave {} over {}: {} register(s) in {} planned read(s), {:.1} ms of bus time per cycle (drivemap's bus-time model); {} left out",
-            self.drive.meta.id,
-            self.drive.meta.vendor,
-            self.drive.meta.models.join(" / "),
+            self.drive.id(),
+            self.drive.meta().vendor,
+            self.drive.meta().models.join(" / "),
             self.slave,
             self.kind.name(),
             self.points.len(),
@@ -413,26 +362,13 @@ impl<'d> Points<'d> {
     }
 }
 
-/// An identifier safe in every tool: lowercase letters, digits and `_`.
-pub fn slug(text: &str) -> String {
-    let mut out = String::new();
-    for c in text.chars() {
-        if c.is_ascii_alphanumeric() {
-            out.push(c.to_ascii_lowercase());
-        } else if !out.ends_with('_') {
-            out.push('_');
-        }
-    }
-    out.trim_matches('_').to_owned()
-}
-
 /// The comments every export writes per point: a scale that holds only for the settings given
 /// (`--set`), and what the tool shows of a bit-field register (`bits`) or a code register
 /// (`codes`) instead of its meanings.
-pub fn write_point_caveats(out: &mut String, points: &Points, bits: &str, codes: &str) {
+pub fn write_point_caveats(out: &mut String, points: &Export, bits: &str, codes: &str) {
     use std::fmt::Write as _;
     for p in &points.points {
-        if let Meaning::Number { given, .. } = &p.meaning
+        if let Meaning::Number(Some(Fixed { given, .. })) = &p.meaning
             && !given.is_empty()
         {
             let _ = writeln!(
