@@ -1,5 +1,5 @@
 //! Reads registers of a drive by name over Modbus TCP, decoded by its map: the
-//! [`drivemap_live::Session`] that `drivemap read` is built on, used by another program.
+//! [`drivemap_live::session::Session`] that `drivemap read` is built on, used by another program.
 //!
 //! ```text
 //! cargo run -p drivemap-live --example read_by_name -- maps/yaskawa-v7.yaml 192.168.1.10:502 n019 output_current
@@ -12,7 +12,9 @@ use std::collections::BTreeSet;
 use std::error::Error;
 use std::path::Path;
 
-use drivemap_live::{Link, LiveSettings, Session, find_all};
+use drivemap_live::LiveSettings;
+use drivemap_live::link::Link;
+use drivemap_live::session::{Session, find_all};
 
 /// A register's id and its decoded value, or why it has none.
 pub type Reading = (String, Result<String, Box<dyn Error>>);

@@ -24,28 +24,45 @@ pub enum Value {
     /// decimals: displayed by [`Fraction`]'s rule (the decimal when finite, else the fraction
     /// and six decimals), `None` for other scales.
     Quantity {
+        /// The value in `unit`.
         value: f64,
+        /// The unit as the manual prints it (empty for none).
         unit: String,
+        /// The decimals the scale in use resolves, for display.
         decimals: usize,
+        /// The exact value under a ratio scale; `None` for other scales.
         exact: Option<Fraction>,
     },
     /// An enumeration code and, when the manual lists it, its id and meaning.
     Code {
+        /// The code read.
         code: u16,
+        /// The code's id in the map, when the manual lists the code.
         id: Option<String>,
+        /// The code's meaning as the manual prints it, when listed.
         name: Option<String>,
     },
     /// Bit fields.
-    Bits { raw: u16, fields: Vec<FieldValue> },
+    Bits {
+        /// The whole word.
+        raw: u16,
+        /// Each field of the map, in the map's order.
+        fields: Vec<FieldValue>,
+    },
 }
 
 /// One field of a bit-field register.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FieldValue {
+    /// The field's id in the map.
     pub id: String,
+    /// The field's name as the manual prints it.
     pub name: String,
+    /// Its lowest bit.
     pub lsb: u8,
+    /// Its width in bits.
     pub width: u8,
+    /// Its value, shifted down to bit 0.
     pub value: u16,
     /// Meaning of a multi-bit field's code, when listed.
     pub label: Option<String>,
@@ -303,7 +320,9 @@ fn parse_number(text: &str) -> Option<f64> {
 /// cover. Bits outside `mask` were not named.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FieldInput {
+    /// The bits the named fields set, in place in the word.
     pub value: u16,
+    /// The bits the named fields cover.
     pub mask: u16,
 }
 

@@ -6,9 +6,9 @@
 //! ([`DraftWrites::Allowed`]), and then every write says it went through a draft.
 //!
 //! The refusal is made twice: by each command before anything is sent (with a message naming
-//! the map), and by the link itself ([`Link::connect_as`](crate::Link::connect_as) wraps the
+//! the map), and by the link itself ([`Link::connect_as`](crate::link::Link::connect_as) wraps the
 //! transport of a draft's client in a guard that refuses every write function code unsent), so
-//! no path that reaches a drive through a [`Link`](crate::Link) writes through a draft by
+//! no path that reaches a drive through a [`Link`](crate::link::Link) writes through a draft by
 //! accident.
 
 use std::io;
@@ -99,7 +99,7 @@ fn function_code(kind: TransportKind, frame: &[u8]) -> Option<u8> {
 }
 
 /// Whether a function code writes.
-pub fn writes(code: u8) -> bool {
+pub(crate) fn writes(code: u8) -> bool {
     matches!(code, 0x05 | 0x06 | 0x0F | 0x10 | 0x16 | 0x17)
 }
 

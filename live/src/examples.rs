@@ -59,7 +59,7 @@ pub fn kind_of(e: &Example) -> TransportKind {
 }
 
 /// Settings for decoding examples: the map's defaults of the registers conversions depend on.
-pub fn default_settings(drive: &Drive) -> LiveSettings {
+pub(crate) fn default_settings(drive: &Drive) -> LiveSettings {
     let mut settings = LiveSettings::default();
     let deps = LiveSettings::dependencies(drive);
     for r in &drive.registers {
@@ -346,7 +346,7 @@ pub fn verify(drive: &Drive) -> Verified {
 }
 
 /// The findings of each example of `drive`, in order, marked or not.
-pub fn findings(drive: &Drive) -> Vec<Vec<Finding>> {
+pub(crate) fn findings(drive: &Drive) -> Vec<Vec<Finding>> {
     let settings = default_settings(drive);
     let mut all = Vec::new();
     for (i, e) in drive.examples.iter().enumerate() {

@@ -2,7 +2,7 @@
 //!
 //! [`Link`] is what the `drivemap` command's `--tcp`, `--gateway`, `--rtu-tcp`, `--serial`,
 //! `--ascii` and timing options give (with the `clap` feature it is those options); a program fills it in
-//! and opens a [`crate::Session`] on it.
+//! and opens a [`crate::session::Session`] on it.
 
 use std::time::Duration;
 
@@ -10,8 +10,7 @@ use drivemap_map::Drive;
 
 use crate::draft::DraftWrites;
 use drivemap_runtime::bus_time::SerialConfig;
-/// Parity of a serial line: the vocabulary crate's one definition (`none`, `even`, `odd`).
-pub use drivemap_runtime::profile::Parity;
+use drivemap_runtime::profile::Parity;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::ascii_over_tcp::AsciiOverTcpTransport;

@@ -18,7 +18,9 @@ use drivemap_map::ir::{Drive, Register};
 /// No register has that name.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct NotFound {
+    /// The name as given.
     pub name: String,
+    /// The id of the drive whose map was searched.
     pub drive: String,
     /// Nearest ids (with parameter numbers), best first.
     pub suggestions: Vec<String>,
@@ -73,7 +75,7 @@ fn norm(s: &str) -> String {
 }
 
 /// Levenshtein distance, for suggestions.
-pub fn distance(a: &str, b: &str) -> usize {
+pub(crate) fn distance(a: &str, b: &str) -> usize {
     let b: Vec<char> = b.chars().collect();
     let mut prev: Vec<usize> = (0..=b.len()).collect();
     for (i, ca) in a.chars().enumerate() {

@@ -3,7 +3,7 @@
 //! `scan` are built on [`Session`]; so can any program (`examples/read_by_name.rs`).
 //!
 //! A register is named at run time by a [`Register`] of the loaded map (found by name with
-//! [`find_all`] or [`crate::find`]); its row of the map's plan (`Drive::register_plan`) gives
+//! [`find_all`] or [`crate::lookup::find`]); its row of the map's plan (`Drive::register_plan`) gives
 //! the address, width and conversion, the same the generated code prints.
 
 use std::collections::BTreeSet;
@@ -496,7 +496,7 @@ pub fn value_error(drive: &Drive, e: &ValueError) -> ConversionError {
 
 /// A number as a message quotes it: as Rust prints it while that is short, in exponent form
 /// beyond (`1e308`, not a 309-digit number).
-pub fn compact(v: f64) -> String {
+pub(crate) fn compact(v: f64) -> String {
     let plain = format!("{v}");
     if plain.len() > 16 {
         format!("{v:e}")

@@ -2,7 +2,8 @@
 //! BF6's maximum frequency, "60.0 Hz = 3600"): a scale relative to it and a limit through it
 //! (`max_relative`) take its exact value once the settings hold the word read from the drive.
 
-use drivemap_live::{LiveSettings, Value};
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_map::validate::Context;
 use drivemap_runtime::ValueError;
 
@@ -33,17 +34,17 @@ fn a_ratio_register_is_a_reference() {
     // Maximum frequency 0022h reads 3599 counts: 3599/60 Hz.
     assert!(s.absorb(&d, 0x0022, 3599));
     let speed = d.find("speed_percent").unwrap();
-    match drivemap_live::decode(&d, speed, 5000, &s) {
+    match drivemap_live::codec::decode(&d, speed, 5000, &s) {
         Ok(Value::Quantity { value, .. }) => assert_eq!(value, 3599.0 / 120.0),
         other => panic!("{other:?}"),
     }
     let reference = d.find("frequency_reference").unwrap();
     assert_eq!(
-        drivemap_live::encode(&d, reference, 3599.0 / 60.0, &s),
+        drivemap_live::codec::encode(&d, reference, 3599.0 / 60.0, &s),
         Ok(3599)
     );
     assert!(matches!(
-        drivemap_live::encode(&d, reference, 60.0, &s),
+        drivemap_live::codec::encode(&d, reference, 60.0, &s),
         Err(ValueError::AboveLimit { .. })
     ));
 }

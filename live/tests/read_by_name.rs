@@ -59,8 +59,10 @@ fn an_unknown_name_is_a_typed_error_with_the_nearest_names() {
 /// whichever client call made it.
 #[test]
 fn a_session_over_a_draft_writes_only_when_allowed() {
+    use drivemap_live::LiveSettings;
     use drivemap_live::draft::DraftWrites;
-    use drivemap_live::{Link, LiveSettings, Session};
+    use drivemap_live::link::Link;
+    use drivemap_live::session::Session;
     let dir = std::env::temp_dir().join(format!("drivemap-live-draft-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let text = std::fs::read_to_string(v7_map()).unwrap();
@@ -79,7 +81,7 @@ fn a_session_over_a_draft_writes_only_when_allowed() {
     )
     .unwrap();
     let link = Link::tcp(server.local_addr().to_string());
-    let r = drivemap_live::find(&drive, "n019").unwrap();
+    let r = drivemap_live::lookup::find(&drive, "n019").unwrap();
     let profile = drivemap_live::leak_profile(&drive);
     let mut session = Session::open(&drive, &link, LiveSettings::default()).unwrap();
     let at = session.address(r).unwrap();

@@ -1,5 +1,5 @@
 //! Parameter sets: a drive's settings saved to a file, compared, and restored or cloned to a
-//! drive, written against the map's plan and a live [`Session`](crate::Session).
+//! drive, written against the map's plan and a live [`Session`](crate::session::Session).
 //!
 //! - [`save`] reads every setting of the map (a readable and writable parameter with a
 //!   parameter number, not a command) with the runtime's read planner and returns a

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::validate::Context;
+use drivemap_map::validate::Context;
 use serde::Deserialize;
 
 use super::registers::range_change;
@@ -84,7 +84,7 @@ impl std::fmt::Display for CaseError {
 
 /// Reads a version of the example map from memory (no temporary files).
 fn read(name: &str, text: &str) -> Result<Drive, CaseError> {
-    crate::read_map_str("example-drive.yaml", text, &Context::default()).map_err(|d| {
+    drivemap_map::read_map_str("example-drive.yaml", text, &Context::default()).map_err(|d| {
         CaseError::Invalid {
             side: name.to_owned(),
             diagnostics: d.to_string(),
