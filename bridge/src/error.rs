@@ -228,7 +228,7 @@ pub enum Refused {
 }
 
 /// A new connection of a link could not be made (what the link's `Connect` answers: the
-/// CLI's [`drivemap_live::LinkError`], a transport's I/O error).
+/// CLI's [`drivemap_live::link::LinkError`], a transport's I/O error).
 pub type ConnectError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Why a register of a polled drive cannot be read this cycle, or its reads not planned.

@@ -37,7 +37,7 @@ macro_rules! outln {
 /// although `drive`'s manual does not print it (`drivemap_live::unprinted::warnings`).
 pub fn warn_unprinted(
     drive: &drivemap_map::Drive,
-    link: &drivemap_live::Link,
+    link: &drivemap_live::link::Link,
     facts: &[drivemap_runtime::core::ProtocolFact],
 ) {
     for w in drivemap_live::unprinted::warnings(drive, link, facts, None) {

@@ -778,7 +778,7 @@ fn acn_memory_control_executes_only_a_changed_value_and_reads_the_lock_state() {
     // A read is the lock state, not the password written.
     assert_eq!(read(&mut sim, lock, 1), Ok(vec![0]));
     match sim.value("lock_parameter_mode").unwrap() {
-        drivemap_live::Value::Code { code, name, .. } => {
+        drivemap_live::codec::Value::Code { code, name, .. } => {
             assert_eq!((code, name.as_deref()), (0, Some("Unlock")));
         }
         other => panic!("a read gives the read meaning: {other:?}"),

@@ -13,7 +13,8 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_live::{LiveSettings, Value};
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_map::validate::Context;
 use drivemap_review::diff::ChangeKind;
 use drivemap_runtime::planner::Poller;
@@ -186,7 +187,7 @@ fn the_simulator_serves_pairs_whole_and_the_client_reads_them_as_one_value() {
     // The current's decimals follow the display status's high byte.
     let mut settings = LiveSettings::default();
     settings.absorb(&b.map, 0x2300, raw(3) as u16);
-    match drivemap_live::decode(
+    match drivemap_live::codec::decode(
         &b.map,
         b.map.find("motor_current").unwrap(),
         raw(4),
@@ -336,7 +337,7 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
     drop(sim);
     let mut word = [0u16; 1];
     b.client.read_holding(254, 0x2011, &mut word).unwrap();
-    match drivemap_live::decode(
+    match drivemap_live::codec::decode(
         &b.map,
         b.map.find("keypad_password").unwrap(),
         u32::from(word[0]),

@@ -19,7 +19,8 @@ use std::path::PathBuf;
 
 use drivemap_drives::runtime::plan::{Conversion, RegisterPlan};
 use drivemap_drives::runtime::{DriveSettings, Profile, SettingsView};
-use drivemap_live::{LiveSettings, Value};
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_map::ir;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -232,7 +233,7 @@ fn agree<S: DriveSettings + SettingsView + Default>(
                 let g = generated_number(generated, raw, &view);
                 let l = live_number(
                     generated,
-                    drivemap_live::decode(&live, r, raw, &named).map_err(|e| e.to_string()),
+                    drivemap_live::codec::decode(&live, r, raw, &named).map_err(|e| e.to_string()),
                 );
                 prop_assert!(
                     same_number(&g, &l),
@@ -250,7 +251,8 @@ fn agree<S: DriveSettings + SettingsView + Default>(
             }
             for &v in &values {
                 let g = generated.encode_number(v, &view).map_err(|e| e.to_string());
-                let l = drivemap_live::encode(&live, r, v, &named).map_err(|e| e.to_string());
+                let l =
+                    drivemap_live::codec::encode(&live, r, v, &named).map_err(|e| e.to_string());
                 prop_assert_eq!(
                     &g,
                     &l,

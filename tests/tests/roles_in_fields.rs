@@ -13,7 +13,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_live::LiveSettings;
-use drivemap_live::settings::View;
+use drivemap_live::View;
 use drivemap_map::Drive;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::{Edge, Role, Roles, Target};

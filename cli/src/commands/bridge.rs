@@ -16,9 +16,10 @@ use drivemap_map::Drive;
 use serde::Deserialize;
 
 use crate::error::Error;
-use crate::live::link::{Link as LinkArgs, Parity, ParityParser};
+use crate::live::link::{Link as LinkArgs, ParityParser};
 use crate::live::session::SettingsArgs;
 use crate::maps::MapsDir;
+use drivemap_runtime::profile::Parity;
 
 /// Arguments of `drivemap bridge`.
 #[derive(ClapArgs, Debug)]

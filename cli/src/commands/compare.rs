@@ -5,7 +5,7 @@
 use std::process::ExitCode;
 
 use clap::{Args as ClapArgs, ValueEnum};
-use drivemap_live::Link;
+use drivemap_live::link::Link;
 use drivemap_live::paramset::{self, Compared, ParameterSet, Side};
 use drivemap_live::session::{Session, SettingsArgs};
 use drivemap_map::Drive;

@@ -9,8 +9,9 @@ use clap::{Args as ClapArgs, ValueEnum};
 use crate::error::Error;
 use crate::maps::MapsDir;
 use crate::targets::{self, Points};
-use drivemap_live::link::{Link, Parity, ParityParser};
+use drivemap_live::link::{Link, ParityParser};
 use drivemap_live::session::{SettingsArgs, find_all};
+use drivemap_runtime::profile::Parity;
 
 /// What to write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -26,8 +26,9 @@ use serde::Serialize;
 use super::probe::{Check, check_value};
 use crate::live::output::Format;
 use crate::maps::MapsDir;
-use drivemap_live::link::{Link, Parity, ParityParser};
+use drivemap_live::link::{Link, ParityParser};
 use drivemap_live::session::{Session, on_transport};
+use drivemap_runtime::profile::Parity;
 
 /// Monitor registers read per candidate map when identifying a slave.
 const MAX_IDENTIFY_REGISTERS: usize = 48;

@@ -12,9 +12,10 @@ use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use clap::{ArgGroup, Args as ClapArgs};
-use drivemap_live::link::{Parity, ParityParser, port_parity};
+use drivemap_live::link::{ParityParser, port_parity};
 use drivemap_map::Drive;
 use drivemap_runtime::bus_time::SerialConfig;
+use drivemap_runtime::profile::Parity;
 use drivemap_runtime::transport::serial::{SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{

@@ -18,8 +18,9 @@ use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Table, Width, WordOrder};
 
 use crate::error::Error;
-use drivemap_live::link::{Link, Parity};
+use drivemap_live::link::Link;
 use drivemap_live::session::{on_transport, rows_on_link, value_error};
+use drivemap_runtime::profile::Parity;
 
 pub mod home_assistant;
 pub mod node_red;

@@ -6,7 +6,7 @@
 //!
 //! Property tests (proptest) over every map of `maps/` (the directory is read, no list) and the
 //! drafts `drivemap import` makes of the import fixtures' manuals, through the CLI's own write
-//! command in-process (and, for drafts, a `drivemap_live::Session`'s client) against a simulated
+//! command in-process (and, for drafts, a `drivemap_live::session::Session`'s client) against a simulated
 //! drive that records every write; and the
 //! reproductions of the report through the binary, each asserting what reached the drive.
 
@@ -149,9 +149,10 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
             // client directly, is refused at the link.
             // (The simulated drive is locked while it serves a connection: counted before.)
             let before = wire.writes();
-            let link = drivemap_live::Link::rtu_over_tcp(wire.addr.clone());
-            let mut session = drivemap_live::Session::open(drive, &link, LiveSettings::default())
-                .expect("the simulated drive is there");
+            let link = drivemap_live::link::Link::rtu_over_tcp(wire.addr.clone());
+            let mut session =
+                drivemap_live::session::Session::open(drive, &link, LiveSettings::default())
+                    .expect("the simulated drive is there");
             if let Ok(at) = session.address(r) {
                 sessions.set(sessions.get() + 1);
                 let result = session.client.write_registers(1, at, &[1]);

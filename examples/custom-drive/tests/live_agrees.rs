@@ -4,7 +4,8 @@
 use std::path::Path;
 
 use custom_drive::mini_drive as md;
-use drivemap_live::{LiveSettings, Value};
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_map::validate::Context;
 use drivemap_runtime::{Bits, Code, Enumeration, Register, Writable};
 
@@ -57,7 +58,7 @@ fn quantity<R: Register<Settings = md::Settings, Value = f64> + Writable<Input =
     for (g, l) in combos() {
         for raw in RAWS {
             let gen_v = R::decode(raw, &g);
-            let live_v = drivemap_live::decode(d, r, raw, &l);
+            let live_v = drivemap_live::codec::decode(d, r, raw, &l);
             match (gen_v, live_v) {
                 (Ok(a), Ok(Value::Quantity { value, .. })) => {
                     assert_eq!(a, value, "{} decode {raw}", R::ID)
@@ -69,7 +70,7 @@ fn quantity<R: Register<Settings = md::Settings, Value = f64> + Writable<Input =
         for v in VALUES {
             assert_eq!(
                 R::encode(&v, &g),
-                drivemap_live::encode(d, r, v, &l),
+                drivemap_live::codec::encode(d, r, v, &l),
                 "{} encode {v} under {g:?}",
                 R::ID
             );
@@ -93,10 +94,11 @@ fn read_only_quantities_decode_alike() {
     for (g, l) in combos() {
         for raw in RAWS {
             let a = md::OutputCurrent::decode(raw, &g).unwrap();
-            let b = drivemap_live::decode(&d, d.find("output_current").unwrap(), raw, &l).unwrap();
+            let b = drivemap_live::codec::decode(&d, d.find("output_current").unwrap(), raw, &l)
+                .unwrap();
             assert_eq!(Some(a), b.as_f64());
             let a = md::Torque::decode(raw, &g).unwrap();
-            let b = drivemap_live::decode(&d, d.find("torque").unwrap(), raw, &l).unwrap();
+            let b = drivemap_live::codec::decode(&d, d.find("torque").unwrap(), raw, &l).unwrap();
             assert_eq!(Some(a), b.as_f64());
         }
     }
@@ -111,7 +113,7 @@ fn codes_and_bits_agree() {
     let command = d.find("command").unwrap();
     for raw in RAWS {
         let a = md::FrequencyUnits::decode(raw, &g).unwrap();
-        match drivemap_live::decode(&d, units, raw, &l).unwrap() {
+        match drivemap_live::codec::decode(&d, units, raw, &l).unwrap() {
             Value::Code { code, name, .. } => {
                 assert_eq!(a.code(), code);
                 assert_eq!(a.name().map(str::to_owned), name);
@@ -120,19 +122,19 @@ fn codes_and_bits_agree() {
         }
         assert_eq!(
             md::FrequencyUnits::encode(&a, &g).ok(),
-            drivemap_live::encode(&d, units, f64::from(raw), &l).ok(),
+            drivemap_live::codec::encode(&d, units, f64::from(raw), &l).ok(),
             "code {raw}"
         );
         let bits = md::Command::decode(raw, &g).unwrap();
-        match drivemap_live::decode(&d, command, raw, &l).unwrap() {
+        match drivemap_live::codec::decode(&d, command, raw, &l).unwrap() {
             Value::Bits { raw: live_raw, .. } => assert_eq!(bits.bits(), live_raw),
             other => panic!("{other:?}"),
         }
     }
     // Reserved bits cannot be written through the live codec either.
-    assert!(drivemap_live::encode(&d, command, 0x0004 as f64, &l).is_err());
+    assert!(drivemap_live::codec::encode(&d, command, 0x0004 as f64, &l).is_err());
     assert_eq!(
-        drivemap_live::parse_value(&d, command, "run,mode=remote", &l),
+        drivemap_live::codec::parse_value(&d, command, "run,mode=remote", &l),
         Ok(0x0021)
     );
 }

@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use custom_drive::acme_vf1 as acme;
-use drivemap_live::{LiveSettings, Value};
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_map::validate::Context;
 use drivemap_runtime::{Register, Width, WordOrder, Writable};
 
@@ -30,7 +31,7 @@ const RAWS: [u32; 8] = [
 
 fn live_number(d: &drivemap_map::Drive, id: &str, raw: u32) -> Result<f64, String> {
     let r = d.find(id).unwrap();
-    match drivemap_live::decode(d, r, raw, &LiveSettings::default()) {
+    match drivemap_live::codec::decode(d, r, raw, &LiveSettings::default()) {
         Ok(Value::Quantity { value, .. }) => Ok(value),
         Ok(Value::Word(w)) => Ok(w as f64),
         Ok(other) => Err(format!("{other:?}")),
@@ -85,7 +86,7 @@ fn generated_and_interpreted_pairs_agree() {
             format!("{:?}", acme::PositionSetpoint::encode(&v, &s)),
             format!(
                 "{:?}",
-                drivemap_live::encode(&d, position, v, &LiveSettings::default())
+                drivemap_live::codec::encode(&d, position, v, &LiveSettings::default())
             ),
             "{v}"
         );

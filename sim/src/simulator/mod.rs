@@ -19,7 +19,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_live::{LiveSettings, Value, codec, leak_profile};
+use drivemap_live::codec::{self, Value};
+use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::ir::{Drive, Register};
 use drivemap_runtime::profile::{Profile, TransportKind};
 
@@ -262,7 +263,7 @@ impl Simulator {
     }
 
     pub(super) fn index_of(&self, name: &str) -> Result<usize, SimError> {
-        let r = drivemap_live::find(&self.drive, name)?;
+        let r = drivemap_live::lookup::find(&self.drive, name)?;
         Ok(self.index[r.id()])
     }
 

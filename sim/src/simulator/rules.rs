@@ -2,7 +2,8 @@
 //! and gaps, values the generated `encode` would refuse, broadcast addresses, and the persist
 //! commands a sequence of writes completes.
 
-use drivemap_live::{LiveSettings, Value, codec};
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::{self, Value};
 use drivemap_map::ir::Register;
 use drivemap_runtime::profile::{CommandKind, TransportKind};
 use drivemap_runtime::{Table, ValueError, pdu};

@@ -19,9 +19,10 @@ use std::io;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use drivemap_live::LiveSettings;
 use drivemap_live::codec::{self, Value};
 use drivemap_live::paramset::{self, ParameterSet, RestoreReport};
-use drivemap_live::{LiveSettings, Session};
+use drivemap_live::session::Session;
 use drivemap_map::Drive;
 use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
