@@ -23,7 +23,19 @@ use crate::describe;
 use crate::ir::{Drive, Register, ValueKind};
 use crate::model::Scale;
 
+mod input;
 mod protocol;
+/// The map's own records, as it writes them: who the drive is, its protocol, groups, variants,
+/// conflicts, gaps, removed registers, roles, and a register's defaults, alternative addresses
+/// and unknowns.
+pub use crate::ir::Group;
+pub use crate::model::{
+    AddressAlternative, AddressFormat, Condition, Conflict, DefaultValue, DependentDefault,
+    DisplayStep, Draft, DriveMeta, Gap, Manual, Protocol, Reading, Removed, RolePlace,
+    TransportName, Unknown, UnknownItem, VariantAxis, VariantOption,
+};
+pub use data::RegisterData;
+pub use input::InputBounds;
 pub use protocol::{
     CommandFacts, ExceptionFacts, Figure, NotPrinted, ProtocolData, ProtocolFacts, ProtocolKey,
     ProtocolRow, manual_address, protocol,

@@ -11,7 +11,7 @@ use std::sync::{Arc, OnceLock};
 
 use crate::diagnostic::{Diagnostic, Loc};
 use crate::load::LoadedMap;
-use crate::lower::DrivePlan;
+use crate::lower::MapPlan;
 use crate::model::{
     self, Access, Conflict, DefaultValue, EnumValue, Field, Gap, ModbusTable, Parity, Reference,
     Removed, Scale, TransportName, VariantAxis, WriteRestriction,
@@ -47,7 +47,7 @@ pub struct Drive {
     /// The merged YAML tree, for locating findings.
     pub tree: Node,
     /// The drive plan, lowered on first use ([`Drive::plan`]).
-    pub plan: OnceLock<Arc<DrivePlan>>,
+    pub plan: OnceLock<Arc<MapPlan>>,
     /// What reading a file of the map in an earlier schema version changed
     /// ([`crate::schema`]): printed by `check`, `diff` and the build, never an error.
     pub warnings: Vec<Diagnostic>,
@@ -240,7 +240,7 @@ impl Register {
 impl Drive {
     /// What every register means, decided once ([`crate::lower`]): lowered on first use and
     /// kept for the life of this value. Call it on a validated drive.
-    pub fn plan(&self) -> &DrivePlan {
+    pub fn plan(&self) -> &MapPlan {
         self.plan
             .get_or_init(|| Arc::new(crate::lower::lower(self)))
     }

@@ -27,7 +27,10 @@ pub mod hints;
 pub mod indexed;
 pub mod ir;
 pub mod load;
+mod loader;
 pub mod lower;
+mod map;
+pub mod migrate;
 pub mod model;
 pub mod names;
 pub mod others;
@@ -37,8 +40,13 @@ pub mod source;
 pub mod stated;
 pub mod validate;
 
-pub use diagnostic::{Diagnostic, Diagnostics};
+pub use diagnostic::{Diagnostic, Diagnostics, Loc};
 pub use ir::Drive;
+pub use loader::{Loader, MAX_YAML_BYTES, parse_map, parse_yaml, too_large};
+pub use lower::MapPlan;
+pub use map::{Map, RegisterRef};
+/// A YAML file read into a tree whose every node keeps where it was written.
+pub use source::{Node as Tree, NodeKind as TreeKind, Path as TreePath};
 
 use std::path::{Path, PathBuf};
 

@@ -29,9 +29,12 @@ use crate::ir::{Drive, Register, ValueKind};
 use crate::model::{self, Reference, Scale, TransportName};
 use crate::names::field_span;
 
+/// The old name of [`MapPlan`] (the vocabulary crate's `DrivePlan` is a trait).
+pub type DrivePlan = MapPlan;
+
 /// A drive, lowered.
 #[derive(Debug, Clone)]
-pub struct DrivePlan {
+pub struct MapPlan {
     /// Every register's plan, sorted by address with broadcast-only registers last (stable:
     /// registers at one address keep the map's order). Generated code indexes this table.
     pub registers: &'static [RegisterPlan],
@@ -91,7 +94,7 @@ pub enum Quantity {
     },
 }
 
-impl DrivePlan {
+impl MapPlan {
     /// The plan of the register with map id `id`.
     pub fn register(&self, id: &str) -> Option<&'static RegisterPlan> {
         self.registers.iter().find(|r| r.info.id == id)
@@ -128,7 +131,7 @@ fn text(s: &str) -> &'static str {
 }
 
 /// Lowers a validated drive.
-pub fn lower(drive: &Drive) -> DrivePlan {
+pub fn lower(drive: &Drive) -> MapPlan {
     let mut order: Vec<usize> = (0..drive.registers.len()).collect();
     order.sort_by_key(|&i| {
         let r = &drive.registers[i];
@@ -184,7 +187,7 @@ pub fn lower(drive: &Drive) -> DrivePlan {
     let profile = Box::leak(Box::new(profile(drive, registers)));
     let roles = roles(drive, &position, &settings);
     let indexed = crate::indexed::lower(drive, registers);
-    DrivePlan {
+    MapPlan {
         registers,
         order: position,
         settings,

@@ -1,0 +1,470 @@
+//! A validated map ([`Map`]) and its registers ([`RegisterRef`]): what every consumer reads,
+//! the plan for what a register means on the wire, the facts view for what the map says
+//! about it (with citations), locations for what a tool reports.
+
+use std::path::Path;
+
+use drivemap_core::ConversionKind;
+use drivemap_core::plan::RegisterPlan;
+use drivemap_core::width::Width;
+
+use crate::diagnostic::{Diagnostic, Diagnostics, Loc};
+use crate::facts::{self, DriveFacts, ProtocolFacts, RegisterFacts};
+use crate::ir::{self, Drive};
+use crate::lower::MapPlan;
+
+/// A map read and validated by a [`Loader`](crate::Loader): one drive's registers, its
+/// plan and its facts.
+#[derive(Debug, Clone)]
+pub struct Map {
+    drive: Drive,
+}
+
+impl Map {
+    /// A map when validation found nothing, else the findings.
+    pub(crate) fn checked(drive: Drive, errors: Vec<Diagnostic>) -> Result<Map, Diagnostics> {
+        if errors.is_empty() {
+            Ok(Map { drive })
+        } else {
+            Err(errors.into())
+        }
+    }
+
+    /// The expanded map this value holds, for the crate's own passes and for consumers that
+    /// have not moved onto [`Map`]'s accessors yet. Not part of the lasting API.
+    #[doc(hidden)]
+    pub fn ir(&self) -> &Drive {
+        &self.drive
+    }
+
+    /// The expanded map, owned (see [`Map::ir`]). Not part of the lasting API.
+    #[doc(hidden)]
+    pub fn into_ir(self) -> Drive {
+        self.drive
+    }
+
+    // ---- who the drive is -------------------------------------------------------------
+
+    /// The drive id (`yaskawa-v7`).
+    pub fn id(&self) -> &str {
+        &self.drive.meta.id
+    }
+
+    /// The Rust module name of the generated drive (`yaskawa_v7`).
+    pub fn module(&self) -> &str {
+        &self.drive.module
+    }
+
+    /// The file the map was read from.
+    pub fn file(&self) -> &Path {
+        &self.drive.file
+    }
+
+    /// Vendor, models, manuals, base map and description, as the map writes them.
+    pub fn meta(&self) -> &facts::DriveMeta {
+        &self.drive.meta
+    }
+
+    /// How the manual numbers registers (hex unless the map says decimal).
+    pub fn address_format(&self) -> facts::AddressFormat {
+        self.drive.address_format
+    }
+
+    /// An address as the manual prints it (`0200h`, or decimal).
+    pub fn manual_address(&self, address: u16) -> String {
+        facts::manual_address(&self.drive, address)
+    }
+
+    /// The map's `draft:` mark: it loads and checks (with a warning), the generator refuses it.
+    pub fn draft(&self) -> Option<&facts::Draft> {
+        self.drive.draft.as_ref()
+    }
+
+    /// The warning that a draft map prints, when it is one.
+    pub fn draft_warning(&self) -> Option<String> {
+        self.drive.draft.as_ref().map(ir::draft_warning)
+    }
+
+    /// What reading a file of the map in an earlier schema version changed: printed by
+    /// `check`, `diff` and the build, never an error.
+    pub fn warnings(&self) -> &[Diagnostic] {
+        &self.drive.warnings
+    }
+
+    // ---- the plan ---------------------------------------------------------------------
+
+    /// What every register means, decided once (lowered on first use).
+    pub fn plan(&self) -> &MapPlan {
+        self.drive.plan()
+    }
+
+    // ---- registers --------------------------------------------------------------------
+
+    /// Every register in the map's order (group by group, blocks expanded).
+    pub fn registers(&self) -> impl ExactSizeIterator<Item = RegisterRef<'_>> + '_ {
+        self.drive
+            .registers
+            .iter()
+            .map(|r| RegisterRef { map: self, reg: r })
+    }
+
+    /// A register by id, or else by parameter number as printed.
+    pub fn register(&self, name: &str) -> Option<RegisterRef<'_>> {
+        self.drive
+            .find(name)
+            .map(|r| RegisterRef { map: self, reg: r })
+    }
+
+    /// A register by id only.
+    pub fn register_by_id(&self, id: &str) -> Option<RegisterRef<'_>> {
+        self.drive
+            .registers
+            .iter()
+            .find(|r| r.def.id == id)
+            .map(|r| RegisterRef { map: self, reg: r })
+    }
+
+    /// The register of `row` of the plan (`plan().registers[row]`).
+    pub fn register_of_row(&self, row: usize) -> Option<RegisterRef<'_>> {
+        self.drive
+            .register_of_row(row)
+            .map(|r| RegisterRef { map: self, reg: r })
+    }
+
+    /// The register at place `index` of [`Map::registers`] (map order).
+    pub fn register_at(&self, index: usize) -> Option<RegisterRef<'_>> {
+        self.drive
+            .registers
+            .get(index)
+            .map(|r| RegisterRef { map: self, reg: r })
+    }
+
+    /// Communication addresses a broadcast may write, sorted.
+    pub fn broadcast_addresses(&self) -> Vec<u16> {
+        self.drive.broadcast_addresses()
+    }
+
+    // ---- the facts view ---------------------------------------------------------------
+
+    /// The facts of every register and of the protocol.
+    pub fn facts(&self) -> DriveFacts {
+        facts::facts(&self.drive)
+    }
+
+    /// The protocol's facts.
+    pub fn protocol_facts(&self) -> ProtocolFacts {
+        facts::protocol(&self.drive)
+    }
+
+    /// The protocol as the map writes it.
+    pub fn protocol(&self) -> &facts::Protocol {
+        &self.drive.protocol
+    }
+
+    /// The groups of registers as the manual groups them, in the map's order.
+    pub fn groups(&self) -> &[facts::Group] {
+        &self.drive.groups
+    }
+
+    /// The variant axes (voltage class, capacity), each option 0 the base.
+    pub fn variants(&self) -> &[facts::VariantAxis] {
+        &self.drive.variants
+    }
+
+    /// The variant axis and option for an option id.
+    pub fn variant_option(
+        &self,
+        option: &str,
+    ) -> Option<(&facts::VariantAxis, &facts::VariantOption)> {
+        self.drive.variant_option(option)
+    }
+
+    /// The map's conflicts between readings of the manual (outside registers).
+    pub fn conflicts(&self) -> &[facts::Conflict] {
+        &self.drive.conflicts
+    }
+
+    /// Address ranges the manual leaves out, with why.
+    pub fn gaps(&self) -> &[facts::Gap] {
+        &self.drive.gaps
+    }
+
+    /// Registers of the base map a variant map removes.
+    pub fn removed(&self) -> &[facts::Removed] {
+        &self.drive.removed
+    }
+
+    /// The example frames the manual prints.
+    pub fn examples(&self) -> &[crate::examples::Example] {
+        &self.drive.examples
+    }
+
+    /// The map's roles as written, by role id (the lowered ones are [`MapPlan::roles`]).
+    pub fn roles(&self) -> &std::collections::BTreeMap<String, Vec<facts::RolePlace>> {
+        &self.drive.roles
+    }
+
+    /// The command profile as written (`profile:`), if any.
+    pub fn profile(&self) -> Option<&crate::command_profile::ProfileSpec> {
+        self.drive.profile.as_ref()
+    }
+
+    /// PDU address offsets (RTU, TCP).
+    pub fn address_offsets(&self) -> (i32, i32) {
+        self.drive.address_offsets()
+    }
+
+    // ---- printing -----------------------------------------------------------------------
+
+    /// The map as `drivemap export --format json` writes it.
+    pub fn export(&self) -> serde_json::Value {
+        crate::export::export(&self.drive)
+    }
+
+    /// A setting named in the map (a selector, a reference) as a user names it.
+    pub fn describe_setting(&self, name: &str) -> String {
+        crate::describe::setting(&self.drive, name)
+    }
+
+    // ---- locations ----------------------------------------------------------------------
+
+    /// Where a key path of the map (`protocol.timing`, `groups[0].registers[1].scale`,
+    /// written with `.` between keys and `[i]` for items) is written; the map's own file
+    /// start when no node is there.
+    pub fn locate(&self, path: &str) -> Loc {
+        self.drive.locate(&parse_path(path))
+    }
+
+    /// A diagnostic at a key path of the map (see [`Map::locate`]), naming `register`.
+    pub fn error_at(
+        &self,
+        path: &str,
+        register: Option<&str>,
+        message: impl Into<String>,
+    ) -> Diagnostic {
+        Diagnostic::new(self.locate(path), register, message)
+    }
+}
+
+/// `a.b[2].c` → a tree path.
+fn parse_path(text: &str) -> crate::source::Path {
+    let mut p = crate::source::Path::root();
+    for part in text.split('.').filter(|s| !s.is_empty()) {
+        let (key, rest) = part.split_once('[').unwrap_or((part, ""));
+        if !key.is_empty() {
+            p = p.key(key);
+        }
+        for index in rest.split('[') {
+            if let Ok(i) = index.trim_end_matches(']').parse::<usize>() {
+                p = p.index(i);
+            }
+        }
+    }
+    p
+}
+
+/// One register of a [`Map`]: its names, its plan, its facts and where it is written.
+#[derive(Debug, Clone, Copy)]
+pub struct RegisterRef<'m> {
+    map: &'m Map,
+    reg: &'m ir::Register,
+}
+
+impl PartialEq for RegisterRef<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::eq(self.map, other.map) && self.reg.index == other.reg.index
+    }
+}
+
+impl<'m> RegisterRef<'m> {
+    /// The expanded register, for consumers not moved onto the accessors yet. Not part of
+    /// the lasting API.
+    #[doc(hidden)]
+    pub fn ir(&self) -> &'m ir::Register {
+        self.reg
+    }
+
+    /// The map it belongs to.
+    pub fn map(&self) -> &'m Map {
+        self.map
+    }
+
+    /// The register id (snake_case).
+    pub fn id(&self) -> &'m str {
+        &self.reg.def.id
+    }
+
+    /// The parameter number exactly as printed (`Bn-01`, `n019`).
+    pub fn param(&self) -> Option<&'m str> {
+        self.reg.def.param.as_deref()
+    }
+
+    /// The name as printed.
+    pub fn name(&self) -> &'m str {
+        &self.reg.def.name
+    }
+
+    /// The register as a user names it: id, and the parameter number when printed
+    /// (`frequency_reference (n024)`).
+    pub fn label(&self) -> String {
+        crate::describe::register(self.reg)
+    }
+
+    /// The parameter number when printed, else the id.
+    pub fn shown(&self) -> &'m str {
+        self.param().unwrap_or(self.id())
+    }
+
+    /// The communication address as the manual prints it (the plan's `info.address`).
+    pub fn address(&self) -> u16 {
+        self.reg.def.address
+    }
+
+    /// The unit as the manual prints it.
+    pub fn unit(&self) -> Option<&'m str> {
+        self.reg.def.unit.as_deref()
+    }
+
+    /// The register's own citation (`file:line`).
+    pub fn source(&self) -> Option<&'m str> {
+        self.reg.def.source.as_deref()
+    }
+
+    /// Why the citation is indirect, when it is.
+    pub fn indirect(&self) -> Option<&'m str> {
+        self.reg.def.indirect.as_deref()
+    }
+
+    /// The register's notes.
+    pub fn notes(&self) -> &'m [String] {
+        &self.reg.def.notes
+    }
+
+    /// Its place in [`Map::registers`] (map order).
+    pub fn index(&self) -> usize {
+        self.reg.index()
+    }
+
+    /// Its row in the plan (`plan().registers[row]`).
+    pub fn row(&self) -> usize {
+        self.map.drive.plan().order[self.reg.index()]
+    }
+
+    /// What it means on the wire, decided once.
+    pub fn plan(&self) -> &'static RegisterPlan {
+        self.map.drive.register_plan(self.reg)
+    }
+
+    /// The kind of conversion the plan decided.
+    pub fn kind(&self) -> ConversionKind {
+        ConversionKind::of(&self.plan().conversion)
+    }
+
+    /// Everything the printers say about it (rows with citations, and the typed values).
+    pub fn facts(&self) -> RegisterFacts {
+        facts::register(&self.map.drive, self.reg)
+    }
+
+    /// The same facts as typed values.
+    pub fn data(&self) -> facts::RegisterData {
+        facts::RegisterData::of(&self.map.drive, self.reg)
+    }
+
+    /// One register, or a 32-bit pair in the map's word order.
+    pub fn width(&self) -> Width {
+        self.reg.width()
+    }
+
+    /// A signed word or pair.
+    pub fn signed(&self) -> bool {
+        self.reg.def.signed
+    }
+
+    /// Readable (access `r` or `rw`).
+    pub fn readable(&self) -> bool {
+        self.reg.readable()
+    }
+
+    /// Writable (access `w` or `rw`).
+    pub fn writable(&self) -> bool {
+        self.reg.writable()
+    }
+
+    /// Member of a broadcast group: written to slave 0 only.
+    pub fn broadcast_only(&self) -> bool {
+        self.reg.broadcast
+    }
+
+    /// The group it belongs to.
+    pub fn group(&self) -> &'m facts::Group {
+        self.map.drive.group_of(self.reg)
+    }
+
+    /// The base variant's limits in engineering units.
+    pub fn limits(&self) -> (Option<f64>, Option<f64>) {
+        self.reg.limits()
+    }
+
+    /// The limits for a variant option: its override where given, else the base.
+    pub fn limits_for(&self, option: &str) -> (Option<f64>, Option<f64>) {
+        self.reg.limits_for(option)
+    }
+
+    /// The base variant's default as a number, if the manual prints one.
+    pub fn default_value(&self) -> Option<f64> {
+        self.reg.default_value()
+    }
+
+    /// The printed numeric default for the first variant option `chosen` accepts that
+    /// overrides it, else the base default.
+    pub fn default_for(&self, chosen: impl Fn(&str) -> bool) -> Option<f64> {
+        self.reg.default_for(chosen)
+    }
+
+    /// The base variant's default as written (a value, or what it depends on).
+    pub fn default(&self) -> Option<&'m facts::DefaultValue> {
+        self.reg.def.default.as_ref()
+    }
+
+    /// Addresses the register moves to under a condition, cited.
+    pub fn address_alternatives(&self) -> &'m [facts::AddressAlternative] {
+        &self.reg.def.address_alternatives
+    }
+
+    /// Conflicts between readings of the manual about this register.
+    pub fn conflicts(&self) -> &'m [facts::Conflict] {
+        &self.reg.def.conflicts
+    }
+
+    /// What the manual leaves unknown about it.
+    pub fn unknown(&self) -> &'m [facts::Unknown] {
+        &self.reg.def.unknown
+    }
+
+    /// Indexed access: the entries an index register selects, when it has them.
+    pub fn indexed(&self) -> Option<&'m crate::indexed::Indexed> {
+        self.reg.def.indexed.as_ref()
+    }
+
+    /// The widest bounds and finest step of a number input for the register (Home Assistant's
+    /// `number`): see [`facts::InputBounds`].
+    pub fn input_bounds(&self) -> facts::InputBounds {
+        facts::InputBounds::of(&self.map.drive, self.reg)
+    }
+
+    /// Where the register (or its block template) is written.
+    pub fn location(&self) -> Loc {
+        self.map.drive.locate(&self.reg.path)
+    }
+
+    /// Where key `key` of the register is written (the register's own place when it has no
+    /// such key).
+    pub fn key_location(&self, key: &str) -> Loc {
+        self.map.drive.locate(&self.reg.key_path(key))
+    }
+
+    /// A diagnostic at key `key` of this register.
+    pub fn error_at(&self, key: &str, message: impl Into<String>) -> Diagnostic {
+        Diagnostic::new(self.key_location(key), Some(self.id()), message)
+    }
+}
