@@ -28,11 +28,12 @@ mod protocol;
 /// The map's own records, as it writes them: who the drive is, its protocol, groups, variants,
 /// conflicts, gaps, removed registers, roles, and a register's defaults, alternative addresses
 /// and unknowns.
+pub use crate::examples::{Byte, Direction, Example, Says, hex_text, parse_bytes};
 pub use crate::ir::Group;
 pub use crate::model::{
     AddressAlternative, AddressFormat, Condition, Conflict, DefaultValue, DependentDefault,
-    DisplayStep, Draft, DriveMeta, Gap, Manual, Protocol, Reading, Removed, RolePlace,
-    TransportName, Unknown, UnknownItem, VariantAxis, VariantOption,
+    DisplayStep, Draft, DriveMeta, ExternalQuantity, Gap, Manual, Protocol, Reading, Removed,
+    RolePlace, TransportName, Unknown, UnknownItem, VariantAxis, VariantOption,
 };
 pub use data::RegisterData;
 pub use input::InputBounds;

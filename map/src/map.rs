@@ -139,6 +139,28 @@ impl Map {
             .map(|r| RegisterRef { map: self, reg: r })
     }
 
+    /// The registers whose values (or a field of whose values) select scales or addresses, in
+    /// first-use order, each once (what a client reads before converting).
+    pub fn selectors(&self) -> Vec<RegisterRef<'_>> {
+        self.wrap(self.drive.selectors())
+    }
+
+    /// The registers other registers are scaled or limited relative to, in first-use order.
+    pub fn references(&self) -> Vec<RegisterRef<'_>> {
+        self.wrap(self.drive.references())
+    }
+
+    /// The external quantities (not registers) relative scales and limits refer to.
+    pub fn externals(&self) -> Vec<&facts::ExternalQuantity> {
+        self.drive.externals()
+    }
+
+    fn wrap<'m>(&'m self, list: Vec<&'m ir::Register>) -> Vec<RegisterRef<'m>> {
+        list.into_iter()
+            .map(|reg| RegisterRef { map: self, reg })
+            .collect()
+    }
+
     /// Communication addresses a broadcast may write, sorted.
     pub fn broadcast_addresses(&self) -> Vec<u16> {
         self.drive.broadcast_addresses()
@@ -408,6 +430,11 @@ impl<'m> RegisterRef<'m> {
     /// The limits for a variant option: its override where given, else the base.
     pub fn limits_for(&self, option: &str) -> (Option<f64>, Option<f64>) {
         self.reg.limits_for(option)
+    }
+
+    /// The variant options that override its limits or default, in the map's order (by id).
+    pub fn variant_options(&self) -> impl Iterator<Item = &'m str> + 'm {
+        self.reg.def.by_variant.keys().map(String::as_str)
     }
 
     /// The base variant's default as a number, if the manual prints one.

@@ -149,7 +149,7 @@ fn env<T: std::str::FromStr>(name: &str, default: T) -> T {
 
 fn simulator() -> Simulator {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../maps/ptlk-tds-v8.yaml");
-    let drive = drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap();
+    let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     Simulator::new(drive, SimOptions::new().clock(Arc::new(SystemClock::new()))).unwrap()
 }
 

@@ -33,7 +33,7 @@
 //! use drivemap_sim::{ManualClock, SimOptions, Simulator};
 //!
 //! let maps = concat!(env!("CARGO_MANIFEST_DIR"), "/../maps/ptlk-tds-v8.yaml");
-//! let drive = drivemap_map::read_map(maps.as_ref(), &Default::default()).unwrap();
+//! let drive = drivemap_map::Loader::new().load(maps.as_ref()).unwrap();
 //! let clock = ManualClock::new();
 //! let mut sim = Simulator::new(drive, SimOptions::new().clock(Arc::new(clock.clone()))).unwrap();
 //! sim.set("frequency_command", 30.0).unwrap(); // Hz, 50 % of Cn-02 = 60 Hz

@@ -14,8 +14,8 @@
 //! use drivemap_runtime::profile::TransportKind;
 //!
 //! let maps = concat!(env!("CARGO_MANIFEST_DIR"), "/../maps/");
-//! let v7 = drivemap_map::read_map(format!("{maps}yaskawa-v7.yaml").as_ref(), &Default::default())?;
-//! let tds = drivemap_map::read_map(format!("{maps}ptlk-tds-v8.yaml").as_ref(), &Default::default())?;
+//! let v7 = drivemap_map::Loader::new().load(format!("{maps}yaskawa-v7.yaml").as_ref())?;
+//! let tds = drivemap_map::Loader::new().load(format!("{maps}ptlk-tds-v8.yaml").as_ref())?;
 //! let mut line = Line::new();
 //! line.add(Simulator::new(v7, SimOptions::new().slave(1))?)?;
 //! let tds = line.add(Simulator::new(tds, SimOptions::new().slave(2))?)?; // its SharedSim
@@ -50,7 +50,7 @@ impl fmt::Debug for Line {
         f.debug_list()
             .entries(self.drives.iter().map(|d| {
                 let d = lock(d);
-                format!("{}@{}", d.drive().meta.id, d.slave())
+                format!("{}@{}", d.drive().id(), d.slave())
             }))
             .finish()
     }
@@ -95,12 +95,12 @@ impl Line {
     pub fn add_shared(&mut self, sim: SharedSim) -> Result<(), SlaveTaken> {
         let (slave, id) = {
             let s = lock(&sim);
-            (s.slave(), s.drive().meta.id.clone())
+            (s.slave(), s.drive().id().to_owned())
         };
         if let Some(i) = self.by_slave[usize::from(slave)] {
             return Err(SlaveTaken {
                 slave,
-                taken_by: lock(&self.drives[usize::from(i)]).drive().meta.id.clone(),
+                taken_by: lock(&self.drives[usize::from(i)]).drive().id().to_owned(),
                 drive: id,
             });
         }

@@ -8,7 +8,7 @@
 //! motor — the simulator fills with plausible values, the same for every drive, listed in
 //! [`Plausible`] and `sim/README.md`.
 
-use drivemap_map::ir::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::core::command_profile::{CommandProfile, PathKind, Transition};
 use drivemap_runtime::core::roles::{FieldRole, NumberField, Role, RoleKind, Target};
 use drivemap_runtime::core::rule::Transports;
@@ -294,16 +294,12 @@ impl ProfileSim {
 }
 
 /// The map index of the register at plan row `row`.
-fn map_index(drive: &Drive, row: u16) -> Option<usize> {
-    drive
-        .plan()
-        .order
-        .iter()
-        .position(|&p| p == usize::from(row))
+fn map_index(map: &Map, row: u16) -> Option<usize> {
+    map.register_of_row(usize::from(row)).map(|r| r.index())
 }
 
 /// Resolves the plan's roles of `drive`; `None` when the map gives none (a register store).
-pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) -> Option<Resolved> {
+pub(crate) fn resolve(drive: &Map, externals: &dyn Fn(&str) -> Option<f64>) -> Option<Resolved> {
     let roles = drive.plan().roles;
     if roles.is_empty() {
         return None;
@@ -337,7 +333,11 @@ pub(crate) fn resolve(drive: &Drive, externals: &dyn Fn(&str) -> Option<f64>) ->
         Some(match p.target {
             Target::Register(row) => match map_index(drive, row) {
                 Some(i) => {
-                    if drive.registers[i].default_value().is_none() {
+                    if drive
+                        .register_at(i)
+                        .and_then(|r| r.default_value())
+                        .is_none()
+                    {
                         initial.push((i, fallback));
                     }
                     Source::Register(i)

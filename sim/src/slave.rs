@@ -50,7 +50,7 @@ impl SimulatedSlave {
         }
     }
 
-    /// Serves the index/value register pairs `pairs` (a map's `DrivePlan::indexed`): each value
+    /// Serves the index/value register pairs `pairs` (a map's `MapPlan::indexed`): each value
     /// register shows and takes the value of the entry its index register selects. This slave
     /// knows PDU addresses only: the pairs' addresses are taken as such (right for a map without
     /// address offsets; the map-driven [`crate::Simulator`] places them on every link).

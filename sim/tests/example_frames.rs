@@ -15,9 +15,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use drivemap_live::examples::{Frame, frame, kind_of, register_at, with_settings};
-use drivemap_map::examples::{Direction, Example};
-use drivemap_map::ir::Drive;
-use drivemap_map::validate::Context;
+use drivemap_map::Map as Drive;
+use drivemap_map::facts::{Direction, Example};
 use drivemap_runtime::pdu::{self, Request, Response};
 use drivemap_runtime::{crc, tcp};
 use drivemap_sim::{ManualClock, RolesChoice, SimOptions, Simulator};
@@ -46,7 +45,7 @@ fn simulator(drive: &Drive, request: &Example, response: &Frame, req: &Request<'
         options = options.roles(RolesChoice::NoModel);
     }
     for (name, &value) in &request.settings {
-        options = if drive.find(name).is_some() {
+        options = if drive.register(name).is_some() {
             options.set(name, value)
         } else {
             options.external(name, value)
@@ -57,16 +56,16 @@ fn simulator(drive: &Drive, request: &Example, response: &Frame, req: &Request<'
         (pdu::decode_response(req, response.pdu()), req.address())
     {
         let kind = kind_of(request);
-        let settings = with_settings(drive, request, &sim.settings());
+        let settings = with_settings(drive.ir(), request, &sim.settings());
         let offsets = &drive.plan().profile.address_offsets;
         for (k, word) in words.iter().enumerate() {
             let comm = offsets
                 .communication_address(address + k as u16, kind)
                 .unwrap();
-            let (r, w) = register_at(drive, &settings, kind, comm, None, false)
+            let (r, w) = register_at(drive.ir(), &settings, kind, comm, None, false)
                 .unwrap_or_else(|| panic!("{}: no register at {comm:04X}h", request.id));
             assert_eq!(w, 0, "{}: a 32-bit pair in a read example", request.id);
-            sim.set_raw(&r.def.id, u32::from(word)).unwrap();
+            sim.set_raw(&r.id(), u32::from(word)).unwrap();
         }
     }
     sim
@@ -74,22 +73,22 @@ fn simulator(drive: &Drive, request: &Example, response: &Frame, req: &Request<'
 
 #[test]
 fn every_map_s_simulator_answers_its_manual_s_examples_byte_for_byte() {
-    let ctx = Context::with_manuals(&root().join("../shared/manuals"));
+    let ctx = drivemap_map::Loader::new().manuals(&root().join("../shared/manuals"));
     let mut ascii_pairs = 0;
     let mut report = Vec::new();
     let mut failures = Vec::new();
     for path in maps() {
-        let drive = drivemap_map::read_map(&path, &ctx).unwrap_or_else(|e| panic!("{e}"));
+        let drive = ctx.load(&path).unwrap_or_else(|e| panic!("{e}"));
         let mut pairs = 0;
         for response in drive
-            .examples
+            .examples()
             .iter()
             .filter(|e| e.direction == Direction::Response)
         {
             let Some(request) = response
                 .answers
                 .as_ref()
-                .and_then(|id| drive.examples.iter().find(|e| e.id == *id))
+                .and_then(|id| drive.examples().iter().find(|e| e.id == *id))
             else {
                 continue;
             };
@@ -146,21 +145,21 @@ fn every_map_s_simulator_answers_its_manual_s_examples_byte_for_byte() {
             if answer.as_deref() != Some(&printed[..]) {
                 failures.push(format!(
                     "{}: `{}` answered {} to `{}`; the manual prints {}",
-                    drive.meta.id,
+                    drive.id(),
                     response.id,
-                    answer.map_or("nothing".into(), |a| drivemap_map::examples::hex_text(&a)),
+                    answer.map_or("nothing".into(), |a| drivemap_map::facts::hex_text(&a)),
                     request.id,
-                    drivemap_map::examples::hex_text(&printed)
+                    drivemap_map::facts::hex_text(&printed)
                 ));
             }
             pairs += 1;
         }
-        report.push(format!("{}: {pairs}", drive.meta.id));
+        report.push(format!("{}: {pairs}", drive.id()));
         if path.starts_with(root().join("maps")) {
             assert!(
                 pairs > 0,
                 "{}: no request/response example pair",
-                drive.meta.id
+                drive.id()
             );
         }
     }
@@ -184,7 +183,7 @@ fn ascii_wire(bytes: &[u8]) -> Vec<u8> {
 }
 
 fn parse(text: &str) -> Vec<u8> {
-    drivemap_map::examples::parse_bytes(text)
+    drivemap_map::facts::parse_bytes(text)
         .unwrap()
         .iter()
         .map(|b| b.value)

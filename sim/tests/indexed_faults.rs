@@ -12,8 +12,7 @@ use std::path::Path;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use drivemap_map::lower::DrivePlan;
-use drivemap_map::validate::Context;
+use drivemap_map::MapPlan;
 use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::core::indexed::{EntryRef, Indexed};
 use drivemap_runtime::error::Error;
@@ -23,15 +22,14 @@ use drivemap_sim::fault::{Fault, FaultyLink};
 use drivemap_sim::slave::SimulatedSlave;
 use proptest::prelude::*;
 
-fn plan() -> &'static DrivePlan {
-    static PLAN: OnceLock<DrivePlan> = OnceLock::new();
+fn plan() -> &'static MapPlan {
+    static PLAN: OnceLock<MapPlan> = OnceLock::new();
     PLAN.get_or_init(|| {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/tarrow-tm44");
-        let drive = drivemap_map::read_map(
-            &dir.join("tarrow-tm44.yaml"),
-            &Context::with_manuals(&dir.join("manuals")),
-        )
-        .unwrap_or_else(|d| panic!("{d}"));
+        let drive = drivemap_map::Loader::new()
+            .manuals(&dir.join("manuals"))
+            .load(&dir.join("tarrow-tm44.yaml"))
+            .unwrap_or_else(|d| panic!("{d}"));
         drive.plan().clone()
     })
 }

@@ -6,20 +6,18 @@
 use std::path::Path;
 use std::time::Duration;
 
-use drivemap_map::validate::Context;
 use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::core::indexed::EntryRef;
 use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_sim::{SimOptions, Simulator};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
-fn drive() -> drivemap_map::Drive {
+fn drive() -> drivemap_map::Map {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/tarrow-tm44");
-    drivemap_map::read_map(
-        &dir.join("tarrow-tm44.yaml"),
-        &Context::with_manuals(&dir.join("manuals")),
-    )
-    .unwrap_or_else(|d| panic!("{d}"))
+    drivemap_map::Loader::new()
+        .manuals(&dir.join("manuals"))
+        .load(&dir.join("tarrow-tm44.yaml"))
+        .unwrap_or_else(|d| panic!("{d}"))
 }
 
 fn options() -> ClientOptions {
@@ -31,7 +29,7 @@ fn options() -> ClientOptions {
     }
 }
 
-fn entry(drive: &drivemap_map::Drive, id: &str) -> EntryRef {
+fn entry(drive: &drivemap_map::Map, id: &str) -> EntryRef {
     drivemap_runtime::core::indexed::find(drive.plan().indexed, id).unwrap()
 }
 

@@ -10,7 +10,7 @@ use drivemap_sim::{SimOptions, Simulator};
 
 fn v7() -> Simulator {
     let path = format!("{}/../maps/yaskawa-v7.yaml", env!("CARGO_MANIFEST_DIR"));
-    let drive = drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap();
+    let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     Simulator::new(drive, SimOptions::new()).unwrap()
 }
 

@@ -15,7 +15,7 @@ use drivemap_sim::{Line, Outcome, SimOptions, Simulator, TcpFraming, TcpServer};
 
 fn sim(id: &str, slave: u8) -> Simulator {
     let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
-    let drive = drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap();
+    let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     Simulator::new(drive, SimOptions::new().slave(slave)).unwrap()
 }
 

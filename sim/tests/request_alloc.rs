@@ -35,7 +35,7 @@ fn drives() -> Vec<String> {
 
 fn start(id: &str) -> Simulator {
     let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
-    let drive = drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap();
+    let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     let clock = ManualClock::new();
     Simulator::new(drive, SimOptions::new().clock(Arc::new(clock))).unwrap()
 }

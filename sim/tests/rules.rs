@@ -25,9 +25,10 @@ fn drives() -> Vec<String> {
     ids
 }
 
-fn drive(id: &str) -> drivemap_map::Drive {
+fn drive(id: &str) -> drivemap_map::Map {
     let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
-    drivemap_map::read_map(path.as_ref(), &Default::default())
+    drivemap_map::Loader::new()
+        .load(path.as_ref())
         .unwrap_or_else(|e| panic!("{id}: {e}"))
 }
 
@@ -599,7 +600,7 @@ fn acme() -> (Simulator, ManualClock) {
     );
     let clock = ManualClock::new();
     let sim = Simulator::new(
-        drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap(),
+        drivemap_map::Loader::new().load(path.as_ref()).unwrap(),
         SimOptions::new()
             .clock(Arc::new(clock.clone()))
             .network_source(TransportKind::Rtu),
@@ -856,7 +857,7 @@ fn the_factory_setting_ignores_network_runs() {
             })
             .unwrap_or_else(|| panic!("{id}: a run command over RTU"));
         let row = &plan.registers[usize::from(run.row)];
-        let address = row.address_for(&sim.settings().view(&d), TransportKind::Rtu);
+        let address = row.address_for(&sim.settings().view(d.ir()), TransportKind::Rtu);
         let offsets = plan.profile.address_offsets;
         let pdu = |a: u16| offsets.pdu_address(a, TransportKind::Rtu).unwrap();
         let word = run.put(0, run.code(true));
@@ -882,7 +883,7 @@ fn the_factory_setting_ignores_network_runs() {
         };
         if f.width == 16 {
             let r = &plan.registers[usize::from(f.row)];
-            let a = r.address_for(&sim.settings().view(&d), TransportKind::Rtu);
+            let a = r.address_for(&sim.settings().view(d.ir()), TransportKind::Rtu);
             assert_eq!(
                 write(&mut sim, pdu(a), &[f.on[0]]),
                 Ok(()),

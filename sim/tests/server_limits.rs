@@ -15,7 +15,7 @@ const SOON: Duration = Duration::from_secs(10);
 
 fn server(framing: TcpFraming, options: ServerOptions) -> TcpServer {
     let path = format!("{}/../maps/ptlk-tds-v8.yaml", env!("CARGO_MANIFEST_DIR"));
-    let drive = drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap();
+    let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     let clock = ManualClock::new();
     let sim = Simulator::new(drive, SimOptions::new().clock(Arc::new(clock))).unwrap();
     TcpServer::spawn_with(

@@ -3,16 +3,17 @@
 //! own map allows, so that nothing powers on at a value the map refuses.
 
 use drivemap_live::{LiveSettings, codec};
-use drivemap_map::ir::Register;
-use drivemap_map::model::UnknownItem;
+use drivemap_map::RegisterRef;
+use drivemap_map::facts::UnknownItem;
 use drivemap_runtime::ValueError;
 use drivemap_runtime::plan::Conversion;
+use std::sync::Arc;
 
 use super::Simulator;
 
 impl Simulator {
-    pub(super) fn default_of(&self, r: &Register, settings: &LiveSettings) -> Option<f64> {
-        r.default_for(|option| settings.has_variant(&self.drive, option))
+    pub(super) fn default_of(&self, r: RegisterRef<'_>, settings: &LiveSettings) -> Option<f64> {
+        r.default_for(|option| settings.has_variant(self.map.ir(), option))
     }
 
     /// Map defaults: selectors and references first (other registers' scales depend on them).
@@ -26,12 +27,13 @@ impl Simulator {
             .copied()
             .collect();
         let rest: Vec<usize> = (0..self.raw.len()).filter(|i| !first.contains(i)).collect();
+        let map = Arc::clone(&self.map);
         for pass in [first, rest] {
             let settings = self.settings();
             for i in pass {
-                let r = &self.drive.registers[i];
+                let r = map.register_at(i).expect("an index of the map");
                 if let Some(v) = self.default_of(r, &settings) {
-                    match codec::encode(&self.drive, r, v, &settings) {
+                    match codec::encode(self.map.ir(), r.ir(), v, &settings) {
                         Ok(raw) => {
                             self.raw[i] = raw;
                             continue;
@@ -61,8 +63,8 @@ impl Simulator {
     /// and encodes back within its range and listed codes. An unlisted code of a list the
     /// manual leaves incomplete (`unknown: values`), and a value whose check needs a setting or
     /// quantity not known, are not refused.
-    pub(super) fn allows(&self, r: &Register, raw: u32, settings: &LiveSettings) -> bool {
-        let plan = self.drive.register_plan(r);
+    pub(super) fn allows(&self, r: RegisterRef<'_>, raw: u32, settings: &LiveSettings) -> bool {
+        let plan = r.plan();
         if let Conversion::Bits { mask, .. } = plan.conversion {
             return raw & !u32::from(mask) == 0;
         }
@@ -72,13 +74,13 @@ impl Simulator {
                 .and_then(|code| plan.read_label(code))
                 .is_some();
         }
-        let Ok(value) = codec::decode(&self.drive, r, raw, settings) else {
+        let Ok(value) = codec::decode(self.map.ir(), r.ir(), raw, settings) else {
             return true;
         };
         let Some(number) = value.as_f64() else {
             return true;
         };
-        match codec::encode(&self.drive, r, number, settings) {
+        match codec::encode(self.map.ir(), r.ir(), number, settings) {
             Ok(_) => true,
             Err(ValueError::UnknownCode { .. }) => values_unknown(r),
             Err(ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. }) => true,
@@ -88,8 +90,8 @@ impl Simulator {
 
     /// The raw word of the value nearest 0 that `r`'s map allows: its listed read code or code
     /// nearest 0, or the bound of its range (for the variant options in force) nearest 0.
-    fn nearest_allowed(&self, r: &Register, settings: &LiveSettings) -> Option<u32> {
-        let plan = self.drive.register_plan(r);
+    fn nearest_allowed(&self, r: RegisterRef<'_>, settings: &LiveSettings) -> Option<u32> {
+        let plan = r.plan();
         if !plan.read_values.is_empty() {
             return plan
                 .read_values
@@ -99,23 +101,25 @@ impl Simulator {
                 .map(u32::from);
         }
         let mut candidates: Vec<f64> = plan.labels().iter().map(|l| f64::from(l.code)).collect();
-        candidates.extend(r.def.min);
-        candidates.extend(r.def.max);
-        for (option, o) in &r.def.by_variant {
-            if settings.has_variant(&self.drive, option) {
-                candidates.extend(o.min);
-                candidates.extend(o.max);
+        let (min, max) = r.limits();
+        candidates.extend(min);
+        candidates.extend(max);
+        for option in r.variant_options() {
+            if settings.has_variant(self.map.ir(), option) {
+                let (min, max) = r.limits_for(option);
+                candidates.extend(min);
+                candidates.extend(max);
             }
         }
         candidates.sort_by(|a, b| a.abs().total_cmp(&b.abs()).then(a.total_cmp(b)));
         candidates.into_iter().find_map(|v| {
-            let raw = codec::encode(&self.drive, r, v, settings).ok()?;
+            let raw = codec::encode(self.map.ir(), r.ir(), v, settings).ok()?;
             self.allows(r, raw, settings).then_some(raw)
         })
     }
 }
 
 /// The map says the manual's list of codes is incomplete (`unknown: values`).
-fn values_unknown(r: &Register) -> bool {
-    r.def.unknown.iter().any(|u| u.what == UnknownItem::Values)
+fn values_unknown(r: RegisterRef<'_>) -> bool {
+    r.unknown().iter().any(|u| u.what == UnknownItem::Values)
 }

@@ -29,7 +29,7 @@ impl Simulator {
                 continue;
             };
             if let Some(slot) = map.get(&address) {
-                let plan = self.drive.register_plan(&self.drive.registers[slot.index]);
+                let plan = self.reg(slot.index).plan();
                 if !plan.functions.allows(function) {
                     return Err(plan.functions.refused_with);
                 }

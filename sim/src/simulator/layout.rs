@@ -72,20 +72,20 @@ impl Simulator {
     /// and the generated code use.
     pub(super) fn layout(&self, tcp: bool) -> Layout {
         let settings = self.settings();
-        let view = settings.view(&self.drive);
+        let view = settings.view(self.map.ir());
         let here = if tcp {
             TransportKind::Tcp
         } else {
             TransportKind::Rtu
         };
         let mut layout = Layout::default();
-        for (i, r) in self.drive.registers.iter().enumerate() {
-            let plan = self.drive.register_plan(r);
+        for (i, r) in self.map.registers().enumerate() {
+            let plan = r.plan();
             if !plan.transports.contains(here) {
                 continue;
             }
             let address = plan.address_for(&view, here);
-            let space = if r.broadcast {
+            let space = if r.broadcast_only() {
                 &mut layout.broadcast
             } else {
                 match plan.info.table {
@@ -106,8 +106,8 @@ impl Simulator {
     }
 
     pub(super) fn in_gap(&self, address: u16) -> bool {
-        self.drive
-            .gaps
+        self.map
+            .gaps()
             .iter()
             .filter_map(|g| g.addresses)
             .any(|[lo, hi]| (lo..=hi).contains(&address))

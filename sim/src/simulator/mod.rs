@@ -21,7 +21,7 @@ use std::time::Duration;
 
 use drivemap_live::codec::{self, Value};
 use drivemap_live::{LiveSettings, leak_profile};
-use drivemap_map::ir::{Drive, Register};
+use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::profile::{Profile, TransportKind};
 
 use crate::clock::Clock;
@@ -44,7 +44,7 @@ use state::TickCache;
 /// [`Simulator::set_clock`] gives it another.
 #[derive(Debug, Clone)]
 pub struct Simulator {
-    drive: Arc<Drive>,
+    map: Arc<Map>,
     profile: &'static Profile,
     slave: u8,
     index: HashMap<String, usize>,
@@ -89,53 +89,49 @@ pub struct Simulator {
 impl Simulator {
     /// Starts a simulated drive: registers at the map's defaults (then plausible values for role
     /// registers without one, then the options' power-on values), the model stopped.
-    pub fn new(drive: Drive, options: SimOptions) -> Result<Simulator, SimError> {
-        let drive = Arc::new(drive);
-        let profile = leak_profile(&drive);
-        let index: HashMap<String, usize> = drive
-            .registers
-            .iter()
-            .enumerate()
-            .map(|(i, r)| (r.def.id.clone(), i))
+    pub fn new(map: Map, options: SimOptions) -> Result<Simulator, SimError> {
+        let map = Arc::new(map);
+        let profile = leak_profile(map.ir());
+        let index: HashMap<String, usize> = map
+            .registers()
+            .map(|r| (r.id().to_owned(), r.index()))
             .collect();
         for (axis, option) in &options.variants {
-            let ok = drive
-                .variants
+            let ok = map
+                .variants()
                 .iter()
                 .any(|a| a.id == *axis && a.options.iter().any(|o| o.id == *option));
             if !ok {
                 return Err(SimError::Variant {
-                    drive: drive.meta.id.clone(),
+                    drive: map.id().to_owned(),
                     axis: axis.clone(),
                     option: option.clone(),
                     known: known_list(
-                        drive.variants.iter().flat_map(|a| {
+                        map.variants().iter().flat_map(|a| {
                             a.options.iter().map(move |o| format!("{}={}", a.id, o.id))
                         }),
                     ),
                 });
             }
         }
-        let (resolved, externals) = Simulator::resolve_roles(&drive, &options)?;
-        let sa = &drive.protocol.slave_address;
+        let (resolved, externals) = Simulator::resolve_roles(&map, &options)?;
+        let sa = &map.protocol().slave_address;
         // A range the manual does not print is the Modbus 1..=247.
         let (min, max) = sa.range();
         let slave = options.slave.or(sa.default).unwrap_or(1);
         if !(min..=max).contains(&slave) {
             return Err(SimError::Slave {
-                drive: drive.meta.id.clone(),
+                drive: map.id().to_owned(),
                 slave,
                 min,
                 max,
             });
         }
-        let ids = |list: Vec<&Register>| -> Vec<usize> {
-            list.iter()
-                .filter_map(|r| index.get(r.id()).copied())
-                .collect()
+        let ids = |list: Vec<RegisterRef<'_>>| -> Vec<usize> {
+            list.iter().map(RegisterRef::index).collect()
         };
-        let selectors = ids(drive.selectors());
-        let references = ids(drive.references());
+        let selectors = ids(map.selectors());
+        let references = ids(map.references());
         let commands = profile
             .commands
             .iter()
@@ -147,12 +143,13 @@ impl Simulator {
                 count: 0,
             })
             .collect();
+        let count = map.registers().len();
         let mut sim = Simulator {
-            raw: vec![0; drive.registers.len()],
-            last_written: vec![None; drive.registers.len()],
-            executed: vec![0; drive.registers.len()],
+            raw: vec![0; count],
+            last_written: vec![None; count],
+            executed: vec![0; count],
             plan: ExceptionPlan::from_exceptions(profile.exceptions),
-            drive,
+            map,
             profile,
             slave,
             index,
@@ -174,7 +171,7 @@ impl Simulator {
             indexed: crate::indexed::IndexedBank::default(),
             stored: Vec::new(),
         };
-        sim.indexed = crate::indexed::IndexedBank::new(sim.drive.plan().indexed);
+        sim.indexed = crate::indexed::IndexedBank::new(sim.map.plan().indexed);
         sim.cache.inputs = sim.tick_inputs();
         sim.cache.seen = vec![0; sim.cache.inputs.len()];
         sim.cache.stale = true;
@@ -233,8 +230,15 @@ impl Simulator {
     }
 
     /// The map.
-    pub fn drive(&self) -> &Drive {
-        &self.drive
+    pub fn drive(&self) -> &Map {
+        &self.map
+    }
+
+    /// Register `i` of the map (map order): `i` comes from the map itself.
+    pub(super) fn reg(&self, i: usize) -> RegisterRef<'_> {
+        self.map
+            .register_at(i)
+            .expect("a register index taken from the same map")
     }
 
     /// The runtime profile built from the map (the same a client of this drive uses).
@@ -263,7 +267,7 @@ impl Simulator {
     }
 
     pub(super) fn index_of(&self, name: &str) -> Result<usize, SimError> {
-        let r = drivemap_live::lookup::find(&self.drive, name)?;
+        let r = drivemap_live::lookup::find(self.map.ir(), name)?;
         Ok(self.index[r.id()])
     }
 
@@ -291,8 +295,8 @@ impl Simulator {
     /// A register's value decoded by the map under the drive's own settings.
     pub fn value(&self, name: &str) -> Result<Value, SimError> {
         let i = self.index_of(name)?;
-        let r = &self.drive.registers[i];
-        codec::decode(&self.drive, r, self.raw[i], &self.settings()).map_err(|error| {
+        let r = self.reg(i);
+        codec::decode(self.map.ir(), r.ir(), self.raw[i], &self.settings()).map_err(|error| {
             SimError::Value {
                 register: r.id().into(),
                 value: f64::from(self.raw[i]),
@@ -339,21 +343,22 @@ impl Simulator {
         // Selectors first: a reference's conversion may depend on one. `absorb` converts each
         // word by the plan, as the generated `Settings::absorb` does.
         for &i in self.selectors.iter().chain(&self.references) {
-            let r = &self.drive.registers[i];
-            s.absorb(&self.drive, r.def.address, self.raw[i] as u16);
+            let r = self.reg(i);
+            s.absorb(self.map.ir(), r.address(), self.raw[i] as u16);
         }
         s
     }
 
     pub(super) fn set_index(&mut self, i: usize, value: f64) -> Result<(), SimError> {
-        let r = &self.drive.registers[i];
-        let raw = codec::encode(&self.drive, r, value, &self.settings()).map_err(|error| {
-            SimError::Value {
-                register: r.id().into(),
-                value,
-                error,
-            }
-        })?;
+        let r = self.reg(i);
+        let raw =
+            codec::encode(self.map.ir(), r.ir(), value, &self.settings()).map_err(|error| {
+                SimError::Value {
+                    register: r.id().into(),
+                    value,
+                    error,
+                }
+            })?;
         self.raw[i] = raw;
         Ok(())
     }

@@ -4,7 +4,7 @@
 
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::{self, Value};
-use drivemap_map::ir::Register;
+use drivemap_map::RegisterRef;
 use drivemap_runtime::profile::{CommandKind, TransportKind};
 use drivemap_runtime::{Table, ValueError, pdu};
 
@@ -36,8 +36,8 @@ impl Simulator {
 
     /// Whether the generated `encode` of this register would produce `raw`: decode it, encode
     /// the value back. Conversions that need a setting the drive cannot supply are accepted.
-    pub(super) fn accepts(&self, r: &Register, raw: u32, settings: &LiveSettings) -> bool {
-        let value = match codec::decode_written(&self.drive, r, raw, settings) {
+    pub(super) fn accepts(&self, r: RegisterRef<'_>, raw: u32, settings: &LiveSettings) -> bool {
+        let value = match codec::decode_written(self.map.ir(), r.ir(), raw, settings) {
             Ok(Value::Bits { .. }) => f64::from(raw),
             Ok(v) => match v.as_f64() {
                 Some(v) => v,
@@ -45,7 +45,7 @@ impl Simulator {
             },
             Err(_) => return true,
         };
-        match codec::encode(&self.drive, r, value, settings) {
+        match codec::encode(self.map.ir(), r.ir(), value, settings) {
             Ok(_) => true,
             Err(
                 ValueError::OutOfRange { .. }
@@ -150,7 +150,7 @@ impl Simulator {
                     {
                         return Err(self.plan.illegal_address);
                     }
-                    let r = &self.drive.registers[i];
+                    let r = self.reg(i);
                     if !r.writable() {
                         return Err(self.plan.read_only);
                     }
@@ -184,7 +184,7 @@ impl Simulator {
         }
         for (k, &(comm, i, v)) in targets[..values.len()].iter().enumerate() {
             if let Some(i) = i {
-                let plan = self.drive.register_plan(&self.drive.registers[i]);
+                let plan = self.reg(i).plan();
                 // "When the same parameter value is entered continuously, the parameter is
                 // executed just once" (`004_c5cbf92472673495.txt:1111`).
                 let executes =

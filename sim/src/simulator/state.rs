@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use drivemap_live::{LiveSettings, codec};
-use drivemap_map::ir::{Drive, Register};
+use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::WriteRestriction;
 use drivemap_runtime::profile::TransportKind;
 
@@ -51,17 +51,14 @@ impl Simulator {
     /// The map's roles, resolved, and the external quantities: the options', else plausible
     /// values ([`Plausible`]).
     pub(super) fn resolve_roles(
-        drive: &Drive,
+        map: &Map,
         options: &SimOptions,
     ) -> Result<(Option<Arc<Resolved>>, Externals), SimError> {
         use drivemap_runtime::core::Role;
         use drivemap_runtime::core::roles::Target;
-        let known_externals: Vec<String> = drive
-            .externals()
-            .iter()
-            .map(|q| q.external.clone())
-            .collect();
-        let max_external = drive
+        let known_externals: Vec<String> =
+            map.externals().iter().map(|q| q.external.clone()).collect();
+        let max_external = map
             .plan()
             .roles
             .of(Role::MaxFrequency)
@@ -83,7 +80,7 @@ impl Simulator {
         for (name, v) in &options.externals {
             if !known_externals.contains(name) {
                 return Err(SimError::External {
-                    drive: drive.meta.id.clone(),
+                    drive: map.id().to_owned(),
                     name: name.clone(),
                     known: known_list(known_externals.clone()),
                 });
@@ -92,7 +89,7 @@ impl Simulator {
         }
         let resolved = match options.roles {
             RolesChoice::FromMap => {
-                roles::resolve(drive, &|name: &str| externals.get(name).copied()).map(Arc::new)
+                roles::resolve(map, &|name: &str| externals.get(name).copied()).map(Arc::new)
             }
             RolesChoice::NoModel => None,
         };
@@ -144,8 +141,8 @@ impl Simulator {
     }
 
     /// Whether the drive's state allows writing `r` now.
-    pub(super) fn may_write_now(&self, r: &Register) -> bool {
-        match self.drive.register_plan(r).restriction {
+    pub(super) fn may_write_now(&self, r: RegisterRef<'_>) -> bool {
+        match r.plan().restriction {
             WriteRestriction::None => true,
             WriteRestriction::Stopped => !self.running(),
             WriteRestriction::PrgMode => match self.model.mode {
@@ -156,7 +153,7 @@ impl Simulator {
     }
 
     pub(super) fn decode_f64(&self, i: usize, settings: &LiveSettings) -> Option<f64> {
-        codec::decode(&self.drive, &self.drive.registers[i], self.raw[i], settings)
+        codec::decode(self.map.ir(), self.reg(i).ir(), self.raw[i], settings)
             .ok()
             .and_then(|v| v.as_f64())
     }
@@ -274,24 +271,25 @@ impl Simulator {
             let Some(&code) = p.field.on.first() else {
                 continue;
             };
-            let r = &self.drive.registers[p.register];
-            let plan = self.drive.register_plan(r);
+            let map = Arc::clone(&self.map);
+            let r = map.register_at(p.register).expect("an index of the map");
+            let plan = r.plan();
             self.raw[p.register] = u32::from(p.field.put(self.raw[p.register] as u16, code));
             let line = if p.field.width == 16 {
-                let param = r.def.param.as_deref().unwrap_or(r.id());
+                let param = r.shown();
                 match plan.label(code) {
                     Some(l) => format!("{param} = {code} (\"{}\")", l.name),
                     None => format!("{param} = {code}"),
                 }
             } else {
-                let field = r
-                    .def
-                    .fields
+                let fields = match plan.conversion {
+                    drivemap_runtime::core::plan::Conversion::Bits { fields, .. } => fields,
+                    _ => &[],
+                };
+                let field = fields
                     .iter()
-                    .find(|f| {
-                        drivemap_map::names::field_span(f) == Some((p.field.lsb, p.field.width))
-                    })
-                    .map_or("?", |f| f.id.as_str());
+                    .find(|f| (f.lsb, f.width) == (p.field.lsb, p.field.width))
+                    .map_or("?", |f| f.id);
                 format!("{}.{field} = {code}", r.id())
             };
             if !done.contains(&line) {
@@ -516,9 +514,9 @@ impl Simulator {
     /// Publishes a value the drive model computed (an output frequency while ramping): the drive
     /// shows the nearest step of the register, as a real monitor does.
     pub(super) fn store(&mut self, i: usize, value: f64, settings: &LiveSettings) {
-        let r = &self.drive.registers[i];
+        let r = self.reg(i);
         let nearest = drivemap_runtime::Rounding::Nearest;
-        if let Ok(raw) = codec::encode_with(&self.drive, r, value, settings, nearest) {
+        if let Ok(raw) = codec::encode_with(self.map.ir(), r.ir(), value, settings, nearest) {
             self.raw[i] = raw;
         }
     }
