@@ -25,7 +25,7 @@ pub fn read_by_name(
     addr: &str,
     names: &[String],
 ) -> Result<Vec<Reading>, Box<dyn Error>> {
-    let drive = drivemap_map::read_map(map, &Default::default())?;
+    let drive = drivemap_map::Loader::new().load(map)?;
     let regs = find_all(&drive, names)?;
     let mut session = Session::open(&drive, &Link::tcp(addr), LiveSettings::default())?;
     for warning in session.load_dependencies(&regs, &BTreeSet::new()) {
@@ -35,11 +35,11 @@ pub fn read_by_name(
     Ok(regs
         .iter()
         .zip(words)
-        .map(|(r, word)| {
+        .map(|(&r, word)| {
             let value = word
                 .map_err(Box::<dyn Error>::from)
                 .and_then(|raw| Ok(session.decode(r, raw)?.to_string()));
-            (r.def.id.clone(), value)
+            (r.id().to_owned(), value)
         })
         .collect())
 }

@@ -14,7 +14,7 @@
 use std::io;
 use std::time::Instant;
 
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 
@@ -41,29 +41,31 @@ impl DraftWrites {
 
 /// What a read through `drive` says when it is a draft: `kestrel-k20 is a draft map (made by
 /// drivemap import), not reviewed against its manual: values read may be misplaced or misscaled`.
-pub fn read_note(drive: &Drive) -> Option<String> {
-    let d = drive.draft.as_ref()?;
+pub fn read_note(drive: &Map) -> Option<String> {
+    let d = drive.draft()?;
     Some(format!(
         "{} is a draft map (made by {}), not reviewed against its manual: what is read through it may be misplaced or misscaled",
-        drive.meta.id, d.by
+        drive.id(),
+        d.by
     ))
 }
 
 /// Refuses a write through `drive` when it is a draft and `writes` is not
 /// [`DraftWrites::Allowed`]; `Ok(Some(note))` when it is a draft and allowed (the note to print
 /// with every write), `Ok(None)` for a reviewed map.
-pub fn check_write(drive: &Drive, writes: DraftWrites) -> Result<Option<String>, String> {
-    let Some(d) = drive.draft.as_ref() else {
+pub fn check_write(drive: &Map, writes: DraftWrites) -> Result<Option<String>, String> {
+    let Some(d) = drive.draft() else {
         return Ok(None);
     };
     match writes {
         DraftWrites::Refused => Err(format!(
             "{} is a draft map (made by {}), not reviewed against its manual: its addresses, scales and accesses may be wrong, so nothing is written through it unless --draft is given; nothing written",
-            drive.meta.id, d.by
+            drive.id(),
+            d.by
         )),
         DraftWrites::Allowed => Ok(Some(format!(
             "through draft map {} (--draft): not reviewed against its manual",
-            drive.meta.id
+            drive.id()
         ))),
     }
 }
@@ -71,16 +73,16 @@ pub fn check_write(drive: &Drive, writes: DraftWrites) -> Result<Option<String>,
 /// `transport`, refusing every write request unsent (function codes 05h, 06h, 0Fh, 10h, 16h,
 /// 17h) when `drive` is a draft and `writes` does not allow it; `transport` as it is otherwise.
 pub fn guard(
-    drive: &Drive,
+    drive: &Map,
     writes: DraftWrites,
     transport: Box<dyn Transport>,
 ) -> Box<dyn Transport> {
-    if drive.draft.is_none() || writes == DraftWrites::Allowed {
+    if drive.draft().is_none() || writes == DraftWrites::Allowed {
         return transport;
     }
     Box::new(Guarded {
         inner: transport,
-        drive: drive.meta.id.clone(),
+        drive: drive.id().to_owned(),
     })
 }
 

@@ -2,8 +2,8 @@
 //! the `drivemap read/write/poll` commands, and any program that talks to a drive by register
 //! name ([`session::Session`] over a [`link::Link`]; `examples/read_by_name.rs`).
 //!
-//! The generated modules and this crate agree by construction: both read the same validated IR
-//! ([`drivemap_map::ir`]) and convert with the same functions of
+//! The generated modules and this crate agree by construction: both read the same plan of a
+//! validated map ([`drivemap_map::Map::plan`]) and convert with the same functions of
 //! [`drivemap_runtime::scale`]; a test in `tests/` compares them register by register.
 
 #![warn(missing_docs, unreachable_pub)]

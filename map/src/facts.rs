@@ -29,7 +29,7 @@ mod protocol;
 /// conflicts, gaps, removed registers, roles, and a register's defaults, alternative addresses
 /// and unknowns.
 pub use crate::examples::{Byte, Direction, Example, Says, hex_text, parse_bytes};
-pub use crate::ir::Group;
+pub use crate::ir::{Group, SerialDefaults};
 pub use crate::model::{
     AddressAlternative, AddressFormat, Condition, Conflict, DefaultValue, DependentDefault,
     DisplayStep, Draft, DriveMeta, ExternalQuantity, Gap, Manual, Protocol, Reading, Removed,

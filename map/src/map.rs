@@ -161,6 +161,11 @@ impl Map {
             .collect()
     }
 
+    /// The serial line's defaults when a link gives none: baud, parity and character format.
+    pub fn serial_defaults(&self) -> facts::SerialDefaults {
+        self.drive.serial_defaults()
+    }
+
     /// Communication addresses a broadcast may write, sorted.
     pub fn broadcast_addresses(&self) -> Vec<u16> {
         self.drive.broadcast_addresses()
@@ -255,6 +260,17 @@ impl Map {
     /// start when no node is there.
     pub fn locate(&self, path: &str) -> Loc {
         self.drive.locate(&parse_path(path))
+    }
+
+    /// Where the value at a key path of the map (see [`Map::locate`]) starts, as opposed to its
+    /// key: the first character of a string, for a finding at a byte inside it; where its key
+    /// or the nearest written ancestor is when no value is there.
+    pub fn locate_value(&self, path: &str) -> Loc {
+        let path = parse_path(path);
+        self.drive
+            .tree
+            .at(&path)
+            .map_or_else(|| self.drive.locate(&path), |n| n.loc.clone())
     }
 
     /// A diagnostic at a key path of the map (see [`Map::locate`]), naming `register`.

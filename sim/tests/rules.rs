@@ -857,7 +857,7 @@ fn the_factory_setting_ignores_network_runs() {
             })
             .unwrap_or_else(|| panic!("{id}: a run command over RTU"));
         let row = &plan.registers[usize::from(run.row)];
-        let address = row.address_for(&sim.settings().view(d.ir()), TransportKind::Rtu);
+        let address = row.address_for(&sim.settings().view(&d), TransportKind::Rtu);
         let offsets = plan.profile.address_offsets;
         let pdu = |a: u16| offsets.pdu_address(a, TransportKind::Rtu).unwrap();
         let word = run.put(0, run.code(true));
@@ -883,7 +883,7 @@ fn the_factory_setting_ignores_network_runs() {
         };
         if f.width == 16 {
             let r = &plan.registers[usize::from(f.row)];
-            let a = r.address_for(&sim.settings().view(d.ir()), TransportKind::Rtu);
+            let a = r.address_for(&sim.settings().view(&d), TransportKind::Rtu);
             assert_eq!(
                 write(&mut sim, pdu(a), &[f.on[0]]),
                 Ok(()),

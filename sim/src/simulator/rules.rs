@@ -37,7 +37,7 @@ impl Simulator {
     /// Whether the generated `encode` of this register would produce `raw`: decode it, encode
     /// the value back. Conversions that need a setting the drive cannot supply are accepted.
     pub(super) fn accepts(&self, r: RegisterRef<'_>, raw: u32, settings: &LiveSettings) -> bool {
-        let value = match codec::decode_written(self.map.ir(), r.ir(), raw, settings) {
+        let value = match codec::decode_written(&self.map, r, raw, settings) {
             Ok(Value::Bits { .. }) => f64::from(raw),
             Ok(v) => match v.as_f64() {
                 Some(v) => v,
@@ -45,7 +45,7 @@ impl Simulator {
             },
             Err(_) => return true,
         };
-        match codec::encode(self.map.ir(), r.ir(), value, settings) {
+        match codec::encode(&self.map, r, value, settings) {
             Ok(_) => true,
             Err(
                 ValueError::OutOfRange { .. }
