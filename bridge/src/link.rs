@@ -21,9 +21,8 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use drivemap_live::codec::{self, Value};
 use drivemap_live::session::rows_on_link;
 use drivemap_live::{LiveSettings, lookup};
-use drivemap_map::Drive;
-use drivemap_map::describe;
-use drivemap_map::ir::Register;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::planner::Poller;
@@ -50,7 +49,7 @@ pub type Connect = Box<dyn FnMut() -> Result<Box<dyn Transport>, crate::ConnectE
 /// A drive on a link, as configured.
 pub struct DriveSpec {
     /// Its map (loaded once, kept for the life of the process).
-    pub drive: &'static Drive,
+    pub drive: &'static Map,
     /// Slave address.
     pub slave: u8,
     /// A name unique in the bridge, used in topics and labels (`yaskawa-v7-1`).
@@ -186,7 +185,7 @@ pub struct Polled {
     spec: DriveSpec,
     kind: TransportKind,
     settings: LiveSettings,
-    regs: Vec<&'static Register>,
+    regs: Vec<RegisterRef<'static>>,
     /// Indices in `regs` of what conversions and addresses depend on: selectors, then references.
     deps: Vec<usize>,
     /// The points published.
@@ -214,13 +213,13 @@ pub struct Polled {
 pub fn choose(
     spec: &DriveSpec,
     kind: TransportKind,
-) -> Result<(Vec<&'static Register>, Vec<usize>), crate::Error> {
+) -> Result<(Vec<RegisterRef<'static>>, Vec<usize>), crate::Error> {
     let drive = spec.drive;
-    let on = |r: &Register| drive.register_plan(r).transports.contains(kind);
-    let readable = |r: &Register| r.readable() && !r.broadcast && on(r);
-    let mut regs: Vec<&'static Register> = Vec::new();
-    let add = |r: &'static Register, regs: &mut Vec<&'static Register>| {
-        if !regs.iter().any(|x| x.def.id == r.def.id) {
+    let on = |r: RegisterRef<'_>| r.plan().transports.contains(kind);
+    let readable = |r: RegisterRef<'_>| r.readable() && !r.broadcast_only() && on(r);
+    let mut regs: Vec<RegisterRef<'static>> = Vec::new();
+    let add = |r: RegisterRef<'static>, regs: &mut Vec<RegisterRef<'static>>| {
+        if !regs.iter().any(|x| x.id() == r.id()) {
             regs.push(r);
         }
     };
@@ -230,7 +229,7 @@ pub fn choose(
                 add(r, &mut regs);
             }
         }
-        for r in &drive.registers {
+        for r in drive.registers() {
             if readable(r) && !r.writable() {
                 add(r, &mut regs);
             }
@@ -242,7 +241,7 @@ pub fn choose(
                 Ok(r) if readable(r) => add(r, &mut regs),
                 Ok(r) => errors.push(crate::RegisterProblem::Unreadable {
                     link: spec.name.clone(),
-                    register: describe::register(r),
+                    register: r.label(),
                 }),
                 Err(source) => errors.push(crate::RegisterProblem::NotFound {
                     link: spec.name.clone(),
@@ -267,11 +266,11 @@ pub fn choose(
         let Some(r) = drive.register_of_row(row) else {
             continue;
         };
-        if spec.fixed.contains(&r.def.id) || !readable(r) {
+        if spec.fixed.contains(r.id()) || !readable(r) {
             continue;
         }
         add(r, &mut regs);
-        if let Some(i) = regs.iter().position(|x| x.def.id == r.def.id)
+        if let Some(i) = regs.iter().position(|x| x.id() == r.id())
             && !deps.contains(&i)
         {
             deps.push(i);
@@ -291,12 +290,12 @@ pub fn choose(
 fn periods_of(
     spec: &DriveSpec,
     kind: TransportKind,
-    regs: &[&'static Register],
+    regs: &[RegisterRef<'static>],
     deps: &[usize],
 ) -> Result<Vec<Option<Duration>>, crate::Error> {
     let drive = spec.drive;
     let plan = drive.plan();
-    let roles_of = |r: &Register| -> Vec<Role> {
+    let roles_of = |r: RegisterRef<'_>| -> Vec<Role> {
         let row = u16::try_from(plan.order[r.index()]).ok();
         plan.roles
             .places
@@ -306,8 +305,8 @@ fn periods_of(
             .collect()
     };
     // Rank 0 register, 1 role, 2 group; the lowest rank that matches, the shortest period.
-    let rank = |what: &str, r: &Register| -> Option<u8> {
-        if lookup::find(drive, what).is_ok_and(|x| x.def.id == r.def.id) {
+    let rank = |what: &str, r: RegisterRef<'_>| -> Option<u8> {
+        if lookup::find(drive, what).is_ok_and(|x| x.id() == r.id()) {
             return Some(0);
         }
         let roles = roles_of(r);
@@ -318,13 +317,13 @@ fn periods_of(
             "status" => roles.iter().any(|r| r.kind() == RoleKind::Status),
             "monitors" => !r.writable(),
             "parameters" => r.writable(),
-            g => drive.group_of(r).id == g,
+            g => r.group().id == g,
         };
         group.then_some(2)
     };
     let mut errors = Vec::new();
     for (what, _) in &spec.periods {
-        if !regs.iter().any(|r| rank(what, r).is_some()) {
+        if !regs.iter().any(|r| rank(what, *r).is_some()) {
             errors.push(crate::RegisterProblem::NoPeriodTarget {
                 link: spec.name.clone(),
                 what: crate::log::quote(what),
@@ -344,7 +343,7 @@ fn periods_of(
             let matches: Vec<(u8, Duration)> = spec
                 .periods
                 .iter()
-                .filter_map(|(what, period)| Some((rank(what, r)?, *period)))
+                .filter_map(|(what, period)| Some((rank(what, *r)?, *period)))
                 .collect();
             let best = matches.iter().map(|(rank, _)| *rank).min()?;
             matches
@@ -387,7 +386,7 @@ impl Polled {
         let periods = periods_of(&spec, kind, &regs, &deps)?;
         let points = points::points(spec.drive, &regs, kind);
         let base: Labels = vec![
-            ("drive".into(), spec.drive.meta.id.clone()),
+            ("drive".into(), spec.drive.id().to_owned()),
             ("slave".into(), spec.slave.to_string()),
             ("name".into(), spec.name.clone()),
             ("link".into(), link.to_owned()),
@@ -427,7 +426,7 @@ impl Polled {
             deps: self
                 .deps
                 .iter()
-                .map(|&d| self.regs[d].def.id.clone())
+                .map(|&d| self.regs[d].id().to_owned())
                 .collect(),
             settings: self.settings.clone(),
             memory: None,
@@ -443,17 +442,16 @@ impl Polled {
     }
 
     /// The drive's map.
-    pub fn drive(&self) -> &'static Drive {
+    pub fn drive(&self) -> &'static Map {
         self.spec.drive
     }
 
-    fn address(&self, r: &Register) -> Result<u16, PollFailure> {
+    fn address(&self, r: RegisterRef<'_>) -> Result<u16, PollFailure> {
         let drive = self.spec.drive;
-        drive
-            .register_plan(r)
+        r.plan()
             .locate(&self.settings.view(drive), self.kind)
             .map_err(|e| PollFailure::AddressUnknown {
-                register: describe::register(r),
+                register: r.label(),
                 setting: e.setting,
             })
     }
@@ -469,11 +467,11 @@ impl Polled {
         let mut wanted: Vec<Vec<(Table, u16)>> = vec![Vec::new(); periods.len()];
         let mut slots = Vec::new();
         for (r, period) in self.regs.iter().zip(&self.periods) {
-            match self.address(r) {
+            match self.address(*r) {
                 Err(why) => slots.push(Err(why)),
                 Ok(address) => {
                     let c = periods.iter().position(|p| p == period).unwrap_or(0);
-                    let info = drive.register_plan(r).info;
+                    let info = r.plan().info;
                     wanted[c].push((info.table, address));
                     slots.push(Ok((c, wanted[c].len() - 1, info.width)));
                 }
@@ -606,7 +604,7 @@ impl Polled {
             for &d in &self.deps {
                 if let Ok(raw) = raws[d] {
                     let r = self.regs[d];
-                    settings.absorb(self.spec.drive, r.def.address, raw as u16);
+                    settings.absorb(self.spec.drive, r.address(), raw as u16);
                 }
             }
             if settings == self.settings || rounds >= 3 {

@@ -34,9 +34,9 @@ use std::time::{Duration, Instant};
 use drivemap_live::lookup;
 
 use crate::Refused;
-use drivemap_map::Drive;
-use drivemap_map::describe;
-use drivemap_map::ir::{Register, ValueKind};
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
+use drivemap_map::ir::ValueKind;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::Role;
 use rumqttc::v5::mqttbytes::QoS;
@@ -83,7 +83,7 @@ pub struct DriveInfo {
     /// Its name (topics).
     pub name: String,
     /// Its map.
-    pub drive: &'static Drive,
+    pub drive: &'static Map,
     /// Slave address.
     pub slave: u8,
     /// Its link's kind.
@@ -168,9 +168,9 @@ pub fn allowed(info: &DriveInfo, allow: &[String], action: &Action) -> Result<()
     let ok = match action {
         Action::Set { register } => {
             let r = lookup::find(info.drive, register)?;
-            has(&r.def.id)
-                || r.def.param.as_deref().is_some_and(has)
-                || has(&r.def.name)
+            has(r.id())
+                || r.param().is_some_and(has)
+                || has(r.name())
                 || points::register_role(info.drive, r, info.kind)
                     .is_some_and(|role| has(role.id()))
         }
@@ -248,7 +248,7 @@ impl Bucket {
 }
 
 fn device(info: &DriveInfo) -> Json {
-    let meta = &info.drive.meta;
+    let meta = &info.drive.meta();
     json!({
         "identifiers": [format!("drivemap_{}", sanitize(&info.name))],
         "name": info.name,
@@ -281,16 +281,16 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
         })
     };
     let writes = drivemap_live::draft::check_write(info.drive, info.draft).is_ok();
-    let allow_set = |r: &Register| {
+    let allow_set = |r: RegisterRef<'_>| {
         writes
             && r.writable()
-            && !r.broadcast
-            && info.drive.register_plan(r).transports.contains(info.kind)
+            && !r.broadcast_only()
+            && r.plan().transports.contains(info.kind)
             && allowed(
                 info,
                 &options.allow,
                 &Action::Set {
-                    register: r.def.id.clone(),
+                    register: r.id().to_owned(),
                 },
             )
             .is_ok()
@@ -327,7 +327,8 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             PointKind::Code => {
                 let options: Vec<String> = r
                     .map(|r| {
-                        r.def
+                        r.ir()
+                            .def
                             .values
                             .iter()
                             .map(|v| crate::link::option_text(v.value, Some(&v.id), Some(&v.name)))
@@ -367,17 +368,17 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
         ));
     }
     // Writable registers allowed but not polled: numbers and selects without a state topic.
-    for r in &info.drive.registers {
-        if !allow_set(r) || info.points.iter().any(|p| p.register == r.def.id) {
+    for r in info.drive.registers() {
+        if !allow_set(r) || info.points.iter().any(|p| p.register == r.id()) {
             continue;
         }
-        if !info.drive.register_plan(r).transports.contains(info.kind) {
+        if !r.plan().transports.contains(info.kind) {
             continue;
         }
-        let object = sanitize(&r.def.id);
-        let mut c = base(&object, &r.def.name);
-        c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.def.id));
-        let component = match r.kind() {
+        let object = sanitize(r.id());
+        let mut c = base(&object, r.name());
+        c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.id()));
+        let component = match r.ir().kind() {
             ValueKind::Enum(values) => {
                 let options: Vec<String> = values
                     .iter()
@@ -389,10 +390,10 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             }
             ValueKind::Bits(_) => continue,
             _ => {
-                if let Some(u) = &r.def.unit {
+                if let Some(u) = &r.ir().def.unit {
                     c["unit_of_measurement"] = json!(u);
                 }
-                if let Some(dc) = device_class(r.def.unit.as_deref()) {
+                if let Some(dc) = device_class(r.unit()) {
                     c["device_class"] = json!(dc);
                 }
                 let (min, max) = bounds(info.drive, r);
@@ -470,7 +471,7 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
 /// The step of a number register: its scale's factor where fixed, one count of a ratio scale
 /// (`equals / counts`, the `f64` nearest to it: 1/60 Hz for 3600 = 60.0 Hz), the finest of a
 /// selected scale's cases, 0.01 for a scale relative to another parameter, else 1.
-fn step(r: &Register) -> f64 {
+fn step(r: RegisterRef<'_>) -> f64 {
     use drivemap_map::model::Scale;
     fn of(s: &Scale) -> f64 {
         match s {
@@ -484,7 +485,7 @@ fn step(r: &Register) -> f64 {
                 .fold(f64::INFINITY, f64::min),
         }
     }
-    match &r.def.scale {
+    match &r.ir().def.scale {
         Some(s) => {
             let f = of(s);
             if f.is_finite() && f > 0.0 { f } else { 1.0 }
@@ -497,19 +498,20 @@ fn step(r: &Register) -> f64 {
 /// bridge checks the bounds in force when a value comes): its range, else the widest of its
 /// selected scale's cases, its maximum through another parameter at that parameter's maximum,
 /// else the raw word's range.
-fn bounds(drive: &Drive, r: &Register) -> (f64, f64) {
+fn bounds(drive: &Map, r: RegisterRef<'_>) -> (f64, f64) {
     use drivemap_map::model::{Reference, Scale};
-    let cases = match &r.def.scale {
+    let cases = match &r.ir().def.scale {
         Some(Scale::Selected(sel)) => sel.cases.as_slice(),
         _ => &[],
     };
-    let min = r.def.min.or_else(|| {
+    let min = r.ir().def.min.or_else(|| {
         cases
             .iter()
             .filter_map(|c| c.min)
             .fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.min(b))))
     });
     let max = r
+        .ir()
         .def
         .max
         .or_else(|| {
@@ -519,16 +521,16 @@ fn bounds(drive: &Drive, r: &Register) -> (f64, f64) {
                 .fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.max(b))))
         })
         .or_else(|| {
-            let l = r.def.max_relative.as_ref()?;
+            let l = r.ir().def.max_relative.as_ref()?;
             let Reference::Register(id) = &l.relative_to else {
                 return None;
             };
             let of = lookup::find(drive, id).ok()?;
-            Some(of.def.max? * l.percent / 100.0)
+            Some(of.ir().def.max? * l.percent / 100.0)
         });
-    let words = if r.def.pair.is_some() { 32 } else { 16 };
+    let words = if r.ir().def.pair.is_some() { 32 } else { 16 };
     let full = (2f64.powi(words) - 1.0) * step(r);
-    let (lo, hi) = if r.def.signed {
+    let (lo, hi) = if r.signed() {
         (-full / 2.0, full / 2.0)
     } else {
         (0.0, full)
@@ -781,7 +783,7 @@ pub fn accept(
         });
     }
     Ok(match &command.action {
-        Action::Set { register } => lookup::find(info.drive, register)?.def.id.clone(),
+        Action::Set { register } => lookup::find(info.drive, register)?.id().to_owned(),
         _ => String::new(),
     })
 }
@@ -872,8 +874,8 @@ pub fn tls_config(ca: &std::path::Path) -> Result<rumqttc::TlsConfiguration, cra
 }
 
 /// The register a name means on `drive`, for messages.
-pub fn describe_register(drive: &Drive, name: &str) -> String {
+pub fn describe_register(drive: &Map, name: &str) -> String {
     lookup::find(drive, name)
-        .map(describe::register)
+        .map(|r| r.label())
         .unwrap_or_else(|_| name.to_owned())
 }

@@ -1,8 +1,9 @@
 //! What the bridge publishes of a drive: its polled registers ("points"), each with the
 //! Prometheus metric it feeds and the Home Assistant entity it is, named from the map.
 
-use drivemap_map::Drive;
-use drivemap_map::ir::{Register, ValueKind};
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
+use drivemap_map::ir::ValueKind;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::{Role, RoleKind, Target};
 
@@ -113,7 +114,7 @@ pub struct Point {
 }
 
 /// The role a whole register plays (monitors and setpoints), if any, on `kind`.
-pub fn register_role(drive: &Drive, r: &Register, kind: TransportKind) -> Option<Role> {
+pub fn register_role(drive: &Map, r: RegisterRef<'_>, kind: TransportKind) -> Option<Role> {
     let plan = drive.plan();
     plan.roles.places.iter().find_map(|p| {
         let row = match p.target {
@@ -123,13 +124,13 @@ pub fn register_role(drive: &Drive, r: &Register, kind: TransportKind) -> Option
         (p.transports.contains(kind)
             && drive
                 .register_of_row(usize::from(row))
-                .is_some_and(|x| x.def.id == r.def.id))
+                .is_some_and(|x| x.id() == r.id()))
         .then_some(p.role)
     })
 }
 
 /// The status role of a field of `r`, if any, on `kind`.
-pub fn field_role(drive: &Drive, r: &Register, lsb: u8, kind: TransportKind) -> Option<Role> {
+pub fn field_role(drive: &Map, r: RegisterRef<'_>, lsb: u8, kind: TransportKind) -> Option<Role> {
     let plan = drive.plan();
     plan.roles.places.iter().find_map(|p| {
         let Target::Field(f) = p.target else {
@@ -140,15 +141,15 @@ pub fn field_role(drive: &Drive, r: &Register, lsb: u8, kind: TransportKind) -> 
             && f.lsb == lsb
             && drive
                 .register_of_row(usize::from(f.row))
-                .is_some_and(|x| x.def.id == r.def.id))
+                .is_some_and(|x| x.id() == r.id()))
         .then_some(p.role)
     })
 }
 
 /// The registers a drive's roles read or write on `kind` (fields' registers included).
-pub fn role_registers(drive: &Drive, kind: TransportKind) -> Vec<&Register> {
+pub fn role_registers(drive: &Map, kind: TransportKind) -> Vec<RegisterRef<'_>> {
     let plan = drive.plan();
-    let mut out: Vec<&Register> = Vec::new();
+    let mut out: Vec<RegisterRef<'_>> = Vec::new();
     for p in plan.roles.places {
         if !p.transports.contains(kind) {
             continue;
@@ -157,7 +158,7 @@ pub fn role_registers(drive: &Drive, kind: TransportKind) -> Vec<&Register> {
             .target
             .row()
             .and_then(|row| drive.register_of_row(usize::from(row)))
-            && !out.iter().any(|x| x.def.id == r.def.id)
+            && !out.iter().any(|x| x.id() == r.id())
         {
             out.push(r);
         }
@@ -175,15 +176,15 @@ pub fn field_span(f: &drivemap_map::model::Field) -> (u8, u8) {
 }
 
 /// The points of the polled registers `regs` of `drive` on `kind`.
-pub fn points(drive: &Drive, regs: &[&Register], kind: TransportKind) -> Vec<Point> {
+pub fn points(drive: &Map, regs: &[RegisterRef<'_>], kind: TransportKind) -> Vec<Point> {
     let mut out = Vec::new();
     for (slot, r) in regs.iter().enumerate() {
-        let param = r.def.param.clone().unwrap_or_default();
-        let role = register_role(drive, r, kind);
+        let param = r.param().map(str::to_owned).unwrap_or_default();
+        let role = register_role(drive, *r, kind);
         let base = |field: Option<String>, role: Option<Role>, name: String, kind: PointKind| {
             let object = match &field {
-                Some(f) => format!("{}_{}", sanitize(&r.def.id), sanitize(f)),
-                None => sanitize(&r.def.id),
+                Some(f) => format!("{}_{}", sanitize(r.id()), sanitize(f)),
+                None => sanitize(r.id()),
             };
             let metric = match (&kind, role) {
                 (PointKind::Number { .. }, Some(role)) => format!("drivemap_{}", role.id()),
@@ -198,41 +199,41 @@ pub fn points(drive: &Drive, regs: &[&Register], kind: TransportKind) -> Vec<Poi
             };
             Point {
                 slot,
-                register: r.def.id.clone(),
+                register: r.id().to_owned(),
                 param: param.clone(),
                 field,
                 role,
                 name,
-                unit: r.def.unit.clone(),
+                unit: r.unit().map(str::to_owned),
                 kind,
                 metric,
                 object,
             }
         };
-        match r.kind() {
+        match r.ir().kind() {
             ValueKind::Bits(fields) => {
                 for (index, f) in fields.iter().enumerate() {
                     let (lsb, width) = field_span(f);
                     let frole = if width == 1 {
-                        field_role(drive, r, lsb, kind)
+                        field_role(drive, *r, lsb, kind)
                     } else {
                         None
                     };
                     out.push(base(
                         Some(f.id.clone()),
                         frole,
-                        format!("{}: {}", r.def.name, f.name),
+                        format!("{}: {}", r.name(), f.name),
                         PointKind::Field { index, width },
                     ));
                 }
             }
-            ValueKind::Enum(_) => out.push(base(None, role, r.def.name.clone(), PointKind::Code)),
+            ValueKind::Enum(_) => out.push(base(None, role, r.name().to_owned(), PointKind::Code)),
             _ => out.push(base(
                 None,
                 role,
-                r.def.name.clone(),
+                r.name().to_owned(),
                 PointKind::Number {
-                    unit: metric_unit(r.def.unit.as_deref()),
+                    unit: metric_unit(r.unit()),
                 },
             )),
         }

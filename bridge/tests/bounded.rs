@@ -12,8 +12,7 @@ use drivemap_bridge::command::{Board, DEFAULT_DEADLINE};
 use drivemap_bridge::link::{self, Action, Command, Connect, DriveSpec, LinkSpec, Update};
 use drivemap_bridge::metrics::Metrics;
 use drivemap_bridge::points;
-use drivemap_map::Drive;
-use drivemap_map::validate::Context;
+use drivemap_map::Map;
 use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::profile::TransportKind;
@@ -23,14 +22,12 @@ use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 
 mod proxy;
 
-fn v7() -> &'static Drive {
+fn v7() -> &'static Map {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml");
-    Box::leak(Box::new(
-        drivemap_map::read_map(&path, &Context::default()).unwrap(),
-    ))
+    Box::leak(Box::new(drivemap_map::Loader::new().load(&path).unwrap()))
 }
 
-fn spec(drive: &'static Drive) -> DriveSpec {
+fn spec(drive: &'static Map) -> DriveSpec {
     let profile = drive.plan().profile;
     DriveSpec {
         drive,
@@ -57,7 +54,7 @@ fn connect_to(addr: String) -> Connect {
     })
 }
 
-fn metrics_for(drive: &'static Drive) -> Arc<Metrics> {
+fn metrics_for(drive: &'static Map) -> Arc<Metrics> {
     let s = spec(drive);
     let (regs, _) = link::choose(&s, TransportKind::RtuOverTcp).unwrap();
     let pts = points::points(drive, &regs, TransportKind::RtuOverTcp);
@@ -655,15 +652,7 @@ fn parameters_are_read_at_their_period_and_status_every_cycle() {
     stop.store(true, Ordering::Relaxed);
     task.join().unwrap();
     server.stop();
-    let at = |id: &str| {
-        drive
-            .registers
-            .iter()
-            .find(|r| r.def.id == id)
-            .unwrap()
-            .def
-            .address
-    };
+    let at = |id: &str| drive.register_by_id(id).unwrap().address();
     let covering = |a: u16| {
         reads
             .lock()

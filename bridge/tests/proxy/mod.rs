@@ -180,8 +180,8 @@ fn every_reply_goes_to_the_master_that_asked() {
         "max_output_frequency",
         "frequency_reference",
     ] {
-        let r = drive.registers.iter().find(|r| r.def.id == name).unwrap();
-        held.insert(r.def.address, p.raw(name) as u16);
+        let r = drive.register_by_id(name).unwrap();
+        held.insert(r.address(), p.raw(name) as u16);
     }
     let held = Arc::new(held);
     let addr = p.addr;
@@ -223,15 +223,7 @@ fn every_reply_goes_to_the_master_that_asked() {
 fn writes_are_checked_by_the_map_before_the_line() {
     let p = Proxied::start(options);
     let drive = v7();
-    let address = |name: &str| {
-        drive
-            .registers
-            .iter()
-            .find(|r| r.def.id == name)
-            .unwrap()
-            .def
-            .address
-    };
+    let address = |name: &str| drive.register_by_id(name).unwrap().address();
     let mut m = Master::connect(p.addr);
     let reference = address("frequency_reference");
     let max = p.raw("max_output_frequency");
