@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Args as ClapArgs;
-use drivemap_map::{Diagnostics, Drive, validate::Context};
+use drivemap_map::{Diagnostics, Map, validate::Context};
 
 include!(concat!(env!("OUT_DIR"), "/builtin_maps.rs"));
 
@@ -114,7 +114,7 @@ impl MapsDir {
 
     /// Reads, expands and validates the map of a drive id; `extends` is resolved by id the
     /// same way (the maps directory first, then the built-in maps).
-    pub fn load(&self, id: &str) -> Result<Drive, MapError> {
+    pub fn load(&self, id: &str) -> Result<Map, MapError> {
         match self.source_of(id)? {
             MapSource::File(p) => self.read(&p).map_err(|diagnostics| MapError::Invalid {
                 what: p.display().to_string(),
@@ -131,13 +131,14 @@ impl MapsDir {
     }
 
     /// Reads, expands and validates a built-in map (its base too is looked up by id).
-    pub fn read_builtin(&self, id: &str, text: &str) -> Result<Drive, Diagnostics> {
+    pub fn read_builtin(&self, id: &str, text: &str) -> Result<Map, Diagnostics> {
         drivemap_map::read_map_str_with(
             &format!("<built-in>/{id}.yaml"),
             text,
             &Context::default(),
             &|base| self.base_text(base),
         )
+        .map(Map::from_ir)
     }
 
     fn base_text(&self, id: &str) -> Option<(String, String)> {
@@ -152,7 +153,7 @@ impl MapsDir {
 
     /// Reads, expands and validates a map file. Its base (`extends`) is looked up beside it,
     /// else by id among the maps this finds (the built-in ones too).
-    pub fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
+    pub fn read(&self, path: &Path) -> Result<Map, Diagnostics> {
         self.read_cached(path, &drivemap_map::load::TreeCache::new())
     }
 
@@ -162,9 +163,9 @@ impl MapsDir {
         &self,
         path: &Path,
         cache: &drivemap_map::load::TreeCache,
-    ) -> Result<Drive, Diagnostics> {
+    ) -> Result<Map, Diagnostics> {
         let ctx = context_for(path);
-        let direct = drivemap_map::read_map_cached(path, &ctx, cache);
+        let direct = drivemap_map::read_map_cached(path, &ctx, cache).map(Map::from_ir);
         let base_missing = |d: &Diagnostics| {
             d.iter()
                 .any(|x| x.message.starts_with("base map `") && x.message.ends_with("not found"))
@@ -179,6 +180,7 @@ impl MapsDir {
         };
         let name = drivemap_map::load::display_name(path);
         drivemap_map::read_map_str_with(&name, &text, &ctx, &|base| self.base_text(base))
+            .map(Map::from_ir)
     }
 }
 
@@ -217,13 +219,13 @@ mod tests {
         assert_eq!(built, shipped);
         for id in &shipped {
             let drive = MapsDir::default().load(id).unwrap();
-            assert_eq!(&drive.meta.id, id);
+            assert_eq!(&drive.id(), id);
         }
         // yaskawa-j7 extends yaskawa-v7: the base is found among the built-in maps.
         let j7 = MapsDir::default().load("yaskawa-j7").unwrap();
         let from_file =
             drivemap_map::read_map(&dir.join("yaskawa-j7.yaml"), &Context::default()).unwrap();
-        assert_eq!(j7.registers.len(), from_file.registers.len());
+        assert_eq!(j7.registers().len(), from_file.registers.len());
     }
 
     #[test]
@@ -248,7 +250,7 @@ mod tests {
             dir.source_of("ptlk-tds-v8").unwrap(),
             MapSource::Builtin(_)
         ));
-        assert_eq!(dir.load("my-v7").unwrap().meta.id, "my-v7");
+        assert_eq!(dir.load("my-v7").unwrap().id(), "my-v7");
         // The built-in j7 extends the v7 of the directory.
         assert!(dir.load("yaskawa-j7").is_ok());
         // A j7 file alone in a directory extends the built-in v7.
@@ -258,7 +260,7 @@ mod tests {
         let j7 = MapsDir::default()
             .read(&lone.join("yaskawa-j7.yaml"))
             .unwrap();
-        assert_eq!(j7.meta.id, "yaskawa-j7");
+        assert_eq!(j7.id(), "yaskawa-j7");
         let e = MapsDir::default()
             .source_of("nope")
             .unwrap_err()

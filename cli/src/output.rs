@@ -36,7 +36,7 @@ macro_rules! outln {
 /// Prints, on standard error, a warning for each protocol fact of `facts` the command relies on
 /// although `drive`'s manual does not print it (`drivemap_live::unprinted::warnings`).
 pub fn warn_unprinted(
-    drive: &drivemap_map::Drive,
+    drive: &drivemap_map::Map,
     link: &drivemap_live::link::Link,
     facts: &[drivemap_runtime::core::ProtocolFact],
 ) {

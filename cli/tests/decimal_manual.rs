@@ -76,6 +76,7 @@ fn a_manual_with_no_rows_found_is_an_error_not_a_success() {
 #[test]
 fn read_by_register_number_and_parameter_number_against_the_simulator() {
     let map = drivemap_map::read_map(&fixture().join("zenith-z3.yaml"), &Context::default())
+        .map(drivemap_map::Map::from_ir)
         .expect("fixture map");
     let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
     slave.set_holding(45, 125); // P-01 acceleration time 12.5 s

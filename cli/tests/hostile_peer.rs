@@ -27,6 +27,7 @@ fn profile() -> &'static Profile {
         &repo().join("maps").join(format!("{DRIVE}.yaml")),
         &Context::default(),
     )
+    .map(drivemap_map::Map::from_ir)
     .expect("shipped map");
     drivemap_live::leak_profile(&map)
 }
@@ -213,6 +214,7 @@ fn read_never_prints_a_late_reply_as_another_registers_value() {
     use std::net::TcpListener;
 
     let map = drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
+        .map(drivemap_map::Map::from_ir)
         .expect("shipped map");
     let profile = drivemap_live::leak_profile(&map);
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();

@@ -23,6 +23,7 @@ fn read_and_write_name_an_entry_of_an_indexed_register() {
         &fixture().join("tarrow-tm44.yaml"),
         &Context::with_manuals(&fixture().join("manuals")),
     )
+    .map(drivemap_map::Map::from_ir)
     .unwrap_or_else(|d| panic!("{d}"));
     let plan = map.plan().clone();
     let mut slave =

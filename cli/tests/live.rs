@@ -23,7 +23,9 @@ struct Drive {
 impl Drive {
     fn start(id: &str, framing: Framing, setup: impl FnOnce(&mut SimulatedSlave)) -> Drive {
         let path = repo().join("maps").join(format!("{id}.yaml"));
-        let map = drivemap_map::read_map(&path, &Context::default()).expect("shipped map");
+        let map = drivemap_map::Loader::new()
+            .load(&path)
+            .expect("shipped map");
         let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
         setup(&mut slave);
         Drive::serve(slave, framing)
@@ -576,8 +578,9 @@ use common::{Framing, Sim, drivemap, repo, serve};
 fn serial_line_through_a_pseudo_terminal_pair() {
     use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport};
     let pty = PtyPair::new();
-    let map =
-        drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default()).unwrap();
+    let map = drivemap_map::read_map(&repo().join("maps/yaskawa-v7.yaml"), &Context::default())
+        .map(drivemap_map::Map::from_ir)
+        .unwrap();
     let profile = drivemap_live::leak_profile(&map);
     let mut link = SerialTransport::open(
         SerialOptions::new(pty.paths[1].as_str(), 19_200)
@@ -752,7 +755,8 @@ fn writing_one_field_keeps_the_others() {
 #[test]
 fn pairs_and_field_selected_decimals_of_another_vendor_at_slave_254() {
     let fixture = repo().join("tests/fixtures/acme-vf1");
-    let map = drivemap_map::read_map(&fixture.join("acme-vf1.yaml"), &Context::default())
+    let map = drivemap_map::Loader::new()
+        .load(&fixture.join("acme-vf1.yaml"))
         .expect("fixture map");
     let mut slave = SimulatedSlave::new(254, drivemap_live::leak_profile(&map));
     slave.set_holding(0x2200, 0x0001); // energy counter 0001E240h = 123456: 12345.6 kWh

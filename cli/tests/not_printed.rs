@@ -40,6 +40,7 @@ fn check_accepts_the_map_and_doc_says_each_fact_is_not_printed_with_its_reason()
 #[test]
 fn scan_warns_that_it_scans_the_modbus_range_and_finds_the_drive() {
     let drive = drivemap_map::read_map(&fixture().join("halden-h1.yaml"), &Context::default())
+        .map(drivemap_map::Map::from_ir)
         .unwrap_or_else(|d| panic!("{d}"));
     let sim = Simulator::new(drive, SimOptions::new().slave(200)).unwrap();
     let sim = drivemap_sim::shared(sim);

@@ -20,6 +20,7 @@ fn fixture() -> PathBuf {
 /// A simulated BF6 register file on loopback (RTU over TCP); its address and the shared slave.
 fn serve_bf6() -> (String, Arc<Mutex<SimulatedSlave>>) {
     let map = drivemap_map::read_map(&fixture().join("borealis-bf6.yaml"), &Context::default())
+        .map(drivemap_map::Map::from_ir)
         .expect("fixture map");
     serve(
         SimulatedSlave::new(1, drivemap_live::leak_profile(&map)),

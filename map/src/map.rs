@@ -37,6 +37,14 @@ impl Map {
         &self.drive
     }
 
+    /// A map from an expanded map that the loader's validation accepted (what
+    /// [`Map::into_ir`] gives back, or the transitional `read_map*` functions return), for
+    /// consumers that still load through them. Not part of the lasting API.
+    #[doc(hidden)]
+    pub fn from_ir(drive: Drive) -> Map {
+        Map { drive }
+    }
+
     /// The expanded map, owned (see [`Map::ir`]). Not part of the lasting API.
     #[doc(hidden)]
     pub fn into_ir(self) -> Drive {

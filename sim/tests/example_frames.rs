@@ -65,7 +65,7 @@ fn simulator(drive: &Drive, request: &Example, response: &Frame, req: &Request<'
             let (r, w) = register_at(drive, &settings, kind, comm, None, false)
                 .unwrap_or_else(|| panic!("{}: no register at {comm:04X}h", request.id));
             assert_eq!(w, 0, "{}: a 32-bit pair in a read example", request.id);
-            sim.set_raw(&r.id(), u32::from(word)).unwrap();
+            sim.set_raw(r.id(), u32::from(word)).unwrap();
         }
     }
     sim
@@ -73,7 +73,7 @@ fn simulator(drive: &Drive, request: &Example, response: &Frame, req: &Request<'
 
 #[test]
 fn every_map_s_simulator_answers_its_manual_s_examples_byte_for_byte() {
-    let ctx = drivemap_map::Loader::new().manuals(&root().join("../shared/manuals"));
+    let ctx = drivemap_map::Loader::new().manuals(root().join("../shared/manuals"));
     let mut ascii_pairs = 0;
     let mut report = Vec::new();
     let mut failures = Vec::new();

@@ -27,7 +27,7 @@ fn plan() -> &'static MapPlan {
     PLAN.get_or_init(|| {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/tarrow-tm44");
         let drive = drivemap_map::Loader::new()
-            .manuals(&dir.join("manuals"))
+            .manuals(dir.join("manuals"))
             .load(&dir.join("tarrow-tm44.yaml"))
             .unwrap_or_else(|d| panic!("{d}"));
         drive.plan().clone()

@@ -15,7 +15,7 @@ use drivemap_test_support::sim_link::{LinkFault, SimLink};
 fn drive() -> drivemap_map::Map {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/tarrow-tm44");
     drivemap_map::Loader::new()
-        .manuals(&dir.join("manuals"))
+        .manuals(dir.join("manuals"))
         .load(&dir.join("tarrow-tm44.yaml"))
         .unwrap_or_else(|d| panic!("{d}"))
 }

@@ -76,7 +76,7 @@ fn main() {
             let mut requests = 0u32;
             for r in &settings {
                 requests += 1;
-                s.read_raw(r).expect("one register");
+                s.read_raw(*r).expect("one register");
             }
             (planned, (requests, t.elapsed()))
         });

@@ -18,7 +18,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use drivemap_drives as drives;
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_map::model::{Access, TransportName};
 use drivemap_runtime::bus_time::{BusModel, Parity, SerialConfig};
 use drivemap_runtime::planner::{Poller, plan_contiguous, plan_cost};
@@ -33,7 +33,7 @@ pub use drivemap_test_support::rng::SplitMix;
 /// A shipped drive and its monitor registers.
 pub struct Monitors {
     pub id: String,
-    pub drive: Drive,
+    pub drive: Map,
     pub profile: &'static Profile,
     pub registers: &'static [RegisterPlan],
     /// Wanted monitor registers: (table, communication address), in address order per table.
@@ -62,15 +62,15 @@ fn generated(module: &str) -> Option<(&'static Profile, &'static [RegisterPlan])
 /// Every shipped drive (`drivemap_drives::DRIVES`) with its monitor registers.
 pub fn monitors() -> Vec<Monitors> {
     let maps_dir = crate::workspace().join("maps");
-    let ctx = drivemap_map::validate::Context::with_manuals(
-        &drivemap_map::default_manuals_dir(&maps_dir).unwrap_or_default(),
-    );
+    let loader = drivemap_map::Loader::new()
+        .manuals(drivemap_map::default_manuals_dir(&maps_dir).unwrap_or_default());
     let mut out = Vec::new();
     for &(id, module) in drives::DRIVES {
         let (profile, registers) = generated(module)
             .unwrap_or_else(|| panic!("module `{module}` of DRIVES is not listed in line_bench"));
         let path: PathBuf = maps_dir.join(format!("{id}.yaml"));
-        let drive = drivemap_map::read_map(&path, &ctx)
+        let drive = loader
+            .load(&path)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let loaded = drivemap_map::load::load(&path)
             .unwrap_or_else(|_| panic!("{}: cannot load", path.display()));
@@ -82,6 +82,7 @@ pub fn monitors() -> Vec<Monitors> {
             .map(|g| g.id.as_str())
             .collect();
         let mut wanted: Vec<(Table, u16)> = drive
+            .ir()
             .registers
             .iter()
             .filter(|r| {
@@ -90,7 +91,7 @@ pub fn monitors() -> Vec<Monitors> {
                     && r.transports
                         .as_ref()
                         .is_none_or(|t| t.contains(&TransportName::Rtu))
-                    && read_only.contains(&drive.groups[r.group].id.as_str())
+                    && read_only.contains(&drive.ir().groups[r.group].id.as_str())
             })
             .map(|r| (r.table, r.def.address))
             .collect();

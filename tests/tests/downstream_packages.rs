@@ -145,7 +145,9 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
     );
 
     let path = root().join("maps").join("yaskawa-v7.yaml");
-    let v7 = drivemap_map::read_map(&path, &Default::default()).expect("shipped map");
+    let v7 = drivemap_map::Loader::new()
+        .load(&path)
+        .expect("shipped map");
     let sim = Simulator::new(v7, SimOptions::new().network_source(TransportKind::Tcp)).unwrap();
     let sim = drivemap_sim::server::shared(sim);
     let server = TcpServer::spawn(sim.clone(), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();

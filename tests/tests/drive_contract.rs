@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_live::LiveSettings;
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::async_client::AsyncClient;
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::profile::TransportKind;
@@ -22,9 +22,10 @@ use drivemap_test_support::sim_link::{LinkFault, SimLink};
 mod command_profiles;
 mod paramset_faults;
 
-fn map(path: &str) -> Drive {
+fn map(path: &str) -> Map {
     let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
-    drivemap_map::read_map(path.as_ref(), &Default::default())
+    drivemap_map::Loader::new()
+        .load(path.as_ref())
         .unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
@@ -40,7 +41,7 @@ fn options(retries: u8) -> ClientOptions {
 
 /// A client over `kind` to a simulator of `drive`, the settings the simulator holds and its
 /// slave address.
-fn connect(drive: &Drive, kind: TransportKind, retries: u8) -> (Client<SimLink>, LiveSettings, u8) {
+fn connect(drive: &Map, kind: TransportKind, retries: u8) -> (Client<SimLink>, LiveSettings, u8) {
     let clock = ManualClock::new();
     // Installed for network control on the link (at the factory setting the drive ignores
     // network runs, and the trait refuses them: drive_trait::run_is_refused_at_the_factory_setting...).
@@ -344,7 +345,7 @@ struct Trace {
 }
 
 /// Plays `case` on a copy of `drive`'s simulator `template` (at power-on) over `kind`.
-fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -> Trace {
+fn play(drive: &Map, template: &Simulator, kind: TransportKind, case: &Case) -> Trace {
     let clock = ManualClock::new();
     let mut sim = template.clone();
     sim.set_clock(Arc::new(clock.clone()));
@@ -405,7 +406,7 @@ fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -
 /// Plays `case` as [`play`] does, through the async drive ([`AsyncVfd`] over an
 /// [`AsyncClient`] that owns its link) on `runtime`.
 fn play_async(
-    drive: &Drive,
+    drive: &Map,
     template: &Simulator,
     kind: TransportKind,
     case: &Case,
@@ -502,7 +503,7 @@ fn within_limits(
 }
 
 /// The invariants of the safety contract on one trace; `Err` says which failed and where.
-fn check(drive: &Drive, kind: TransportKind, trace: &Trace) -> Result<(), String> {
+fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> {
     use drivemap_runtime::core::roles::Target;
     let p = drive.plan();
     let profile = p.roles.profile.is_some();
@@ -639,7 +640,7 @@ fn hex(bytes: &[u8]) -> String {
 
 /// Every map of `maps/` (the directory, not a list: `DRIVEMAP_MAPS` when it was set for the
 /// build, as for the other per-map tests) and the acme-vf1 fixture.
-fn every_map() -> Vec<(String, Drive)> {
+fn every_map() -> Vec<(String, Map)> {
     let root = env!("CARGO_MANIFEST_DIR");
     let dir = option_env!("DRIVEMAP_MAPS").map_or_else(|| format!("{root}/../maps"), str::to_owned);
     let mut paths: Vec<std::path::PathBuf> = std::fs::read_dir(&dir)
@@ -649,12 +650,13 @@ fn every_map() -> Vec<(String, Drive)> {
         .collect();
     paths.sort();
     paths.push(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml").into());
-    let mut maps: Vec<(String, Drive)> = paths
+    let mut maps: Vec<(String, Map)> = paths
         .into_iter()
         .map(|p| {
-            let d = drivemap_map::read_map(&p, &Default::default())
+            let d = drivemap_map::Loader::new()
+                .load(&p)
                 .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-            (d.meta.id.clone(), d)
+            (d.id().to_owned(), d)
         })
         .collect();
     // The drives run through a command profile (a control-word state machine), with every
@@ -674,21 +676,22 @@ fn every_map() -> Vec<(String, Drive)> {
             })
             .collect::<Vec<_>>()
             .join("\n");
-        let d = drivemap_map::read_map_str(f, &fast, &Default::default())
+        let d = drivemap_map::Loader::new()
+            .load_str(f, &fast)
             .unwrap_or_else(|e| panic!("{f}: {e}"));
-        maps.push((d.meta.id.clone(), d));
+        maps.push((d.id().to_owned(), d));
     }
     maps
 }
 
 /// The links a map is driven over: RTU framing (RTU over TCP, which can reconnect) always,
 /// Modbus TCP where the map lists it.
-fn links(drive: &Drive) -> Vec<TransportKind> {
+fn links(drive: &Map) -> Vec<TransportKind> {
     let mut kinds = vec![TransportKind::RtuOverTcp];
     if drive
-        .protocol
+        .protocol()
         .transports
-        .contains(&drivemap_map::model::TransportName::Tcp)
+        .contains(&drivemap_map::facts::TransportName::Tcp)
     {
         kinds.push(TransportKind::Tcp);
     }
@@ -732,7 +735,7 @@ fn the_contract_holds_under_faults() {
     // And the constructs no shipped map has: roles that share a register.
     maps.push(("acme-vf1 (one ramp register)".into(), acme_one_ramp().0));
     maps.push(("acme-vf1 (run codes)".into(), acme_run_codes()));
-    let targets: Vec<(&str, &Drive, TransportKind)> = maps
+    let targets: Vec<(&str, &Map, TransportKind)> = maps
         .iter()
         .filter(|(_, d)| !d.plan().roles.is_empty())
         .flat_map(|(id, d)| links(d).into_iter().map(move |k| (id.as_str(), d, k)))
@@ -800,19 +803,20 @@ fn the_contract_holds_under_faults() {
 }
 
 /// The acme-vf1 fixture's map text, changed in memory: `from` replaced by `to`.
-fn acme_changed(from: &str, to: &str) -> (Drive, String) {
+fn acme_changed(from: &str, to: &str) -> (Map, String) {
     let root = env!("CARGO_MANIFEST_DIR");
     let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
     assert!(text.contains(from), "the fixture has {from}");
     let changed = text.replace(from, to);
-    let drive = drivemap_map::read_map_str("acme-vf1.yaml", &changed, &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("acme-vf1.yaml", &changed)
         .unwrap_or_else(|e| panic!("{e}"));
     (drive, changed)
 }
 
 /// acme-vf1 with one ramp register for both directions: its deceleration role moved onto the
 /// acceleration register, `shared_with` said once. Also the map's text.
-fn acme_one_ramp() -> (Drive, String) {
+fn acme_one_ramp() -> (Map, String) {
     acme_changed(
         r#"    - {register: deceleration_time, source: "acme-vf1.txt:21"}"#,
         r#"    - {register: acceleration_time, shared_with: accel_time, source: "acme-vf1.txt:20"}"#,
@@ -821,7 +825,7 @@ fn acme_one_ramp() -> (Drive, String) {
 
 /// acme-vf1 run by two codes of one field: 2 runs forward, 3 runs reverse, 1 stops
 /// (`run_forward` and `run_reverse` on the same bits, `shared_with` said once).
-fn acme_run_codes() -> Drive {
+fn acme_run_codes() -> Map {
     acme_changed(
         r#"  run:
     - {register: control_word, field: run_stop, on: run, off: stop, source: "acme-vf1.txt:16"}
@@ -849,14 +853,15 @@ fn one_ramp_register_takes_one_value() {
     assert_eq!(place(Role::AccelTime).shared_with, Some(Role::DecelTime));
     assert_eq!(place(Role::DecelTime).shared_with, Some(Role::AccelTime));
     // The reference document says so beside the register.
-    let doc = drivemap_review::reference::render(&drive, "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(drive.ir(), "acme-vf1.yaml");
     assert!(
         doc.contains("| `decel_time` | `acceleration_time` (one register with `accel_time`) |"),
         "{doc}"
     );
     // Without `shared_with` the map is refused.
     let unsaid = shared.replace("shared_with: accel_time, ", "");
-    let e = drivemap_map::read_map_str("acme-vf1.yaml", &unsaid, &Default::default())
+    let e = drivemap_map::Loader::new()
+        .load_str("acme-vf1.yaml", &unsaid)
         .unwrap_err()
         .to_string();
     assert!(e.contains("shared_with: accel_time"), "{e}");

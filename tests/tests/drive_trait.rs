@@ -18,13 +18,13 @@ use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 
 /// The map of a compiled drive, from the directory the drives crate was generated from
 /// (`DRIVEMAP_MAPS` when it was set for the build, else `maps/`).
-fn map(id: &str) -> drivemap_map::Drive {
+fn map(id: &str) -> drivemap_map::Map {
     let dir = option_env!("DRIVEMAP_MAPS").map_or_else(
         || format!("{}/../maps", env!("CARGO_MANIFEST_DIR")),
         str::to_owned,
     );
     let path = format!("{dir}/{id}.yaml");
-    drivemap_map::read_map(path.as_ref(), &Default::default()).unwrap()
+    drivemap_map::Loader::new().load(path.as_ref()).unwrap()
 }
 
 /// The generic part: what an application does with any drive. `wait` lets simulated time pass.

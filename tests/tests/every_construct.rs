@@ -26,8 +26,10 @@ fn fixture() -> PathBuf {
     drivemap_tests::workspace().join("tests/fixtures/acme-vf1/acme-vf1.yaml")
 }
 
-fn map() -> drivemap_map::Drive {
-    drivemap_map::read_map(&fixture(), &Context::default()).expect("fixture map")
+fn map() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(&fixture())
+        .expect("fixture map")
 }
 
 /// The exported register `id`.
@@ -44,7 +46,7 @@ fn exported(export: &serde_json::Value, id: &str) -> serde_json::Value {
 #[test]
 fn export_doc_and_diff_say_what_the_pairs_are() {
     let d = map();
-    let export = drivemap_map::export::export(&d);
+    let export = drivemap_map::export::export(d.ir());
     let register = |id: &str| exported(&export, id);
     let energy = register("energy_counter");
     assert_eq!(energy["words"], 2);
@@ -59,7 +61,7 @@ fn export_doc_and_diff_say_what_the_pairs_are() {
     );
     assert_eq!(export["protocol"]["slave_address"]["max"], 254);
 
-    let doc = drivemap_review::reference::render(&d, "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(d.ir(), "acme-vf1.yaml");
     assert!(
         doc.contains("| 2200h – 2201h (32-bit pair, high word first, `acme-vf1.txt:34`) |"),
         "{doc}"
@@ -85,7 +87,7 @@ fn export_doc_and_diff_say_what_the_pairs_are() {
     assert_ne!(single, swapped);
     let ctx = Context::default();
     let new = drivemap_map::read_map_str("acme-vf1.yaml", &single, &ctx).unwrap();
-    let diff = drivemap_review::diff::compare(&d, &new);
+    let diff = drivemap_review::diff::compare(d.ir(), &new);
     let widths: Vec<(&str, Option<&str>, Option<&str>)> = diff
         .changes
         .iter()
@@ -115,7 +117,7 @@ fn export_doc_and_diff_say_what_the_pairs_are() {
 struct Bench {
     server: TcpServer,
     client: Client<TcpTransport>,
-    map: drivemap_map::Drive,
+    map: drivemap_map::Map,
     sim: drivemap_sim::SharedSim,
 }
 
@@ -150,7 +152,7 @@ fn bench() -> Bench {
 #[test]
 fn the_simulator_serves_pairs_whole_and_the_client_reads_them_as_one_value() {
     let mut b = bench();
-    let rows = |id: &str| b.map.register_plan(b.map.find(id).unwrap());
+    let rows = |id: &str| b.map.register(id).unwrap().plan();
     assert_eq!(
         rows("energy_counter").info.width,
         Width::Pair(WordOrder::HighFirst)
@@ -165,12 +167,7 @@ fn the_simulator_serves_pairs_whole_and_the_client_reads_them_as_one_value() {
         "display_status",
         "motor_current",
     ];
-    let infos: Vec<_> = b
-        .map
-        .registers
-        .iter()
-        .map(|r| b.map.register_plan(r).info)
-        .collect();
+    let infos: Vec<_> = b.map.registers().map(|r| r.plan().info).collect();
     let wanted = ids
         .iter()
         .map(|id| (rows(id).info.table, rows(id).info.address));
@@ -189,7 +186,7 @@ fn the_simulator_serves_pairs_whole_and_the_client_reads_them_as_one_value() {
     settings.absorb(&b.map, 0x2300, raw(3) as u16);
     match drivemap_live::codec::decode(
         &b.map,
-        b.map.find("motor_current").unwrap(),
+        b.map.register("motor_current").unwrap(),
         raw(4),
         &settings,
     ) {
@@ -252,7 +249,7 @@ fn the_simulator_refuses_half_a_pair_from_a_master_without_the_map() {
 #[test]
 fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
     let d = map();
-    let export = drivemap_map::export::export(&d);
+    let export = drivemap_map::export::export(d.ir());
     let limits = &export["protocol"]["limits"];
     assert_eq!(limits["function_codes"]["source"], "acme-vf1.txt:7");
     assert_eq!(limits["max_read"]["source"], "acme-vf1.txt:8");
@@ -277,7 +274,7 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
         "signed"
     );
 
-    let doc = drivemap_review::reference::render(&d, "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(d.ir(), "acme-vf1.yaml");
     for expected in [
         "| Function codes | 03h, 06h, 10h | `acme-vf1.txt:7` |",
         "| Registers per request | at most 16 per read, 16 per write | `acme-vf1.txt:8` |",
@@ -301,8 +298,10 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
             "{value: 1, id: locked, name: Locked,",
             "{value: 2, id: locked, name: Locked,",
         );
-    let new = drivemap_map::read_map_str("acme-vf1.yaml", &changed, &Context::default()).unwrap();
-    let diff = drivemap_review::diff::compare(&d, &new);
+    let new = drivemap_map::Loader::new()
+        .load_str("acme-vf1.yaml", &changed)
+        .unwrap();
+    let diff = drivemap_review::diff::compare(d.ir(), new.ir());
     let kinds: Vec<ChangeKind> = diff
         .changes
         .iter()
@@ -318,7 +317,7 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
 
     // The simulator and the client over TCP at slave 254.
     let mut b = bench();
-    let plan = b.map.register_plan(b.map.find("keypad_password").unwrap());
+    let plan = b.map.register("keypad_password").unwrap().plan();
     let rule = plan.write_rule();
     let repeat = plan.repeat_needs_change.expect("the map's rule");
     b.sim.lock().unwrap().set_raw("keypad_password", 1).unwrap(); // locked
@@ -339,7 +338,7 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
     b.client.read_holding(254, 0x2011, &mut word).unwrap();
     match drivemap_live::codec::decode(
         &b.map,
-        b.map.find("keypad_password").unwrap(),
+        b.map.register("keypad_password").unwrap(),
         u32::from(word[0]),
         &LiveSettings::default(),
     ) {

@@ -7,8 +7,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_map::Drive;
-use drivemap_map::validate::Context;
+use drivemap_map::Map;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Client, ClientOptions, Error, Refusal, Table};
@@ -16,12 +15,14 @@ use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::SimLink;
 use proptest::prelude::*;
 
-fn map() -> Drive {
+fn map() -> Map {
     let path = drivemap_tests::workspace().join("tests/fixtures/halvard-hx2/halvard-hx2.yaml");
-    drivemap_map::read_map(&path, &Context::default()).expect("fixture map")
+    drivemap_map::Loader::new()
+        .load(&path)
+        .expect("fixture map")
 }
 
-fn client(drive: &Drive) -> Client<SimLink> {
+fn client(drive: &Map) -> Client<SimLink> {
     let sim = Simulator::new(
         drive.clone(),
         SimOptions::new().clock(Arc::new(ManualClock::new())),
@@ -53,7 +54,7 @@ fn request(frame: &[u8]) -> (u8, u16, u16) {
 
 /// Every frame on the wire used a function each register it covers accepts (per the map's
 /// lowered plan); the first violation otherwise.
-fn violation(drive: &Drive, link: &SimLink) -> Option<String> {
+fn violation(drive: &Map, link: &SimLink) -> Option<String> {
     for sent in &link.log {
         let (f, address, quantity) = request(&sent.frame);
         let table = if f == 0x04 {
@@ -62,8 +63,8 @@ fn violation(drive: &Drive, link: &SimLink) -> Option<String> {
             Table::Holding
         };
         for a in address..address.saturating_add(quantity) {
-            for r in &drive.registers {
-                let plan = drive.register_plan(r);
+            for r in drive.registers() {
+                let plan = r.plan();
                 if plan.info.table == table
                     && (plan.info.address..plan.info.address + plan.info.width.count()).contains(&a)
                     && !plan.functions.allows(f)
@@ -271,7 +272,7 @@ fn the_planner_reads_the_monitor_area_with_04h_only() {
 #[test]
 fn export_doc_diff_and_generated_code_show_the_functions() {
     let drive = map();
-    let export = drivemap_map::export::export(&drive);
+    let export = drivemap_map::export::export(drive.ir());
     let register = |id: &str| {
         export["registers"]
             .as_array()
@@ -292,7 +293,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
     );
     assert!(register("operation_command")["function_codes"].is_null());
 
-    let doc = drivemap_review::reference::render(&drive, "halvard-hx2.yaml");
+    let doc = drivemap_review::reference::render(drive.ir(), "halvard-hx2.yaml");
     assert!(doc.contains("functions 03h/10h only"), "{doc}");
     assert!(
         doc.contains(
@@ -303,7 +304,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
     );
 
     let code = drivemap_codegen::generate::drive_module(
-        &drive,
+        drive.ir(),
         &drivemap_codegen::generate::Options {
             runtime: "::drivemap_runtime".parse().unwrap(),
             source_name: "halvard-hx2.yaml".into(),
@@ -336,11 +337,12 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
     )
     .unwrap();
     let read = |t: &str| {
-        drivemap_map::read_map_str("halvard-hx2.yaml", t, &Context::default())
+        drivemap_map::Loader::new()
+            .load_str("halvard-hx2.yaml", t)
             .unwrap_or_else(|e| panic!("{e}"))
     };
     let kinds = |t: &str| -> Vec<(String, drivemap_review::diff::ChangeKind)> {
-        drivemap_review::diff::compare(&drive, &read(t))
+        drivemap_review::diff::compare(drive.ir(), read(t).ir())
             .changes
             .iter()
             .map(|c| (c.subject.clone(), c.kind))
@@ -373,7 +375,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
         "        function_codes: {codes: [0x03, 0x10], refused_with: 0x02, source: \"halvard-hx2.txt:11\"}\n",
         "",
     );
-    let diff = drivemap_review::diff::compare(&drive, &read(&dropped));
+    let diff = drivemap_review::diff::compare(drive.ir(), read(&dropped).ir());
     assert_eq!(diff.breaking(), 1, "{:?}", diff.changes);
 }
 
@@ -392,9 +394,9 @@ fn example_frames_are_checked_against_the_registers_functions() {
     )
     .unwrap();
     let refusal = text.find("  - id: frequency_with_06h_refused").unwrap();
-    let unrefused =
-        drivemap_map::read_map_str("halvard-hx2.yaml", &text[..refusal], &Context::default())
-            .unwrap();
+    let unrefused = drivemap_map::Loader::new()
+        .load_str("halvard-hx2.yaml", &text[..refusal])
+        .unwrap();
     let v = drivemap_live::examples::verify(&unrefused);
     let errors: Vec<String> = v.errors.iter().map(|e| e.to_string()).collect();
     assert_eq!(errors.len(), 1, "{errors:?}");

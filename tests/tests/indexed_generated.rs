@@ -62,6 +62,7 @@ fn a_typed_entry_handle_reads_and_writes_through_the_client() {
         &fixture().join("tarrow-tm44.yaml"),
         &Context::with_manuals(&fixture().join("manuals")),
     )
+    .map(drivemap_map::Map::from_ir)
     .unwrap_or_else(|d| panic!("{d}"));
     // The generated data is the plan the map lowers to.
     assert_eq!(tarrow_tm44::INDEXED, drive.plan().indexed);

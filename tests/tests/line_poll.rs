@@ -7,7 +7,6 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_drives::{ptlk_tds_v8 as tds, yaskawa_v7 as v7};
-use drivemap_map::validate::Context;
 use drivemap_runtime::plan::RegisterPlan;
 use drivemap_runtime::planner::{Poller, poll_line};
 use drivemap_runtime::profile::TransportKind;
@@ -18,7 +17,7 @@ use drivemap_sim::{Line, ManualClock, SimOptions, Simulator, TcpFraming, TcpServ
 
 fn sim(id: &str, slave: u8, clock: &ManualClock) -> Simulator {
     let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
-    let drive = drivemap_map::read_map(path.as_ref(), &Context::default()).unwrap();
+    let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     Simulator::new(
         drive,
         SimOptions::new()
@@ -100,7 +99,7 @@ fn one_cycle_polls_two_drives_of_one_line_each_with_its_own_map() {
                 u32::from(got),
                 sim.raw(r.info.id).unwrap(),
                 "{} {} at {:04X}h",
-                sim.drive().meta.id,
+                sim.drive().id(),
                 r.info.id,
                 r.info.address
             );

@@ -9,7 +9,6 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_map::validate::Context;
 use drivemap_runtime::core::{ProtocolFact, Stated};
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::{Client, Error, Refusal};
@@ -18,7 +17,7 @@ use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 const FIRST: u16 = 0x0100;
 const BLOCK: u16 = 130;
 
-fn map(max_write_line: Option<&str>) -> drivemap_map::Drive {
+fn map(max_write_line: Option<&str>) -> drivemap_map::Map {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/halden-h1/halden-h1.yaml");
     let mut text = std::fs::read_to_string(path).unwrap();
     if let Some(line) = max_write_line {
@@ -36,7 +35,8 @@ fn map(max_write_line: Option<&str>) -> drivemap_map::Drive {
             FIRST + i
         );
     }
-    drivemap_map::read_map_str("halden-h1.yaml", &text, &Context::default())
+    drivemap_map::Loader::new()
+        .load_str("halden-h1.yaml", &text)
         .unwrap_or_else(|d| panic!("{d}"))
 }
 
@@ -46,7 +46,7 @@ struct Bench {
     sim: drivemap_sim::SharedSim,
 }
 
-fn bench(map: drivemap_map::Drive) -> Bench {
+fn bench(map: drivemap_map::Map) -> Bench {
     let sim = Simulator::new(
         map.clone(),
         SimOptions::new()

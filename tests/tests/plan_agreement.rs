@@ -21,7 +21,6 @@ use drivemap_drives::runtime::plan::{Conversion, RegisterPlan};
 use drivemap_drives::runtime::{DriveSettings, Profile, SettingsView};
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::Value;
-use drivemap_map::ir;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 
@@ -150,7 +149,8 @@ fn agree<S: DriveSettings + SettingsView + Default>(
     profile: &Profile,
 ) {
     let path = maps_dir().join(format!("{id}.yaml"));
-    let live = drivemap_map::read_map(&path, &Default::default())
+    let live = drivemap_map::Loader::new()
+        .load(&path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let plan = live.plan();
 
@@ -175,10 +175,10 @@ fn agree<S: DriveSettings + SettingsView + Default>(
     );
 
     // 2. Settings and conversions agree on random settings, words and values.
-    let by_row: Vec<&ir::Register> = {
-        let mut rows = vec![None; live.registers.len()];
+    let by_row: Vec<drivemap_map::RegisterRef<'_>> = {
+        let mut rows = vec![None; live.registers().len()];
         for (m, &row) in plan.order.iter().enumerate() {
-            rows[row] = Some(&live.registers[m]);
+            rows[row] = live.register_at(m);
         }
         rows.into_iter().map(Option::unwrap).collect()
     };
@@ -233,7 +233,7 @@ fn agree<S: DriveSettings + SettingsView + Default>(
                 let g = generated_number(generated, raw, &view);
                 let l = live_number(
                     generated,
-                    drivemap_live::codec::decode(&live, r, raw, &named).map_err(|e| e.to_string()),
+                    drivemap_live::codec::decode(&live, *r, raw, &named).map_err(|e| e.to_string()),
                 );
                 prop_assert!(
                     same_number(&g, &l),
@@ -252,7 +252,7 @@ fn agree<S: DriveSettings + SettingsView + Default>(
             for &v in &values {
                 let g = generated.encode_number(v, &view).map_err(|e| e.to_string());
                 let l =
-                    drivemap_live::codec::encode(&live, r, v, &named).map_err(|e| e.to_string());
+                    drivemap_live::codec::encode(&live, *r, v, &named).map_err(|e| e.to_string());
                 prop_assert_eq!(
                     &g,
                     &l,

@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use drivemap_live::LiveSettings;
 use drivemap_live::View;
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::{Edge, Role, Roles, Target};
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
@@ -22,22 +22,23 @@ use drivemap_runtime::{Client, ClientOptions, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
-fn map(path: &str) -> Drive {
+fn map(path: &str) -> Map {
     let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
-    drivemap_map::read_map(path.as_ref(), &Default::default())
+    drivemap_map::Loader::new()
+        .load(path.as_ref())
         .unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
-fn acme() -> Drive {
+fn acme() -> Map {
     map("tests/fixtures/acme-vf1/acme-vf1.yaml")
 }
 
-fn brenner() -> Drive {
+fn brenner() -> Map {
     map("tests/fixtures/brenner-fx4/brenner-fx4.yaml")
 }
 
 /// A simulator of `drive` installed for network control on `kind`.
-fn simulator(drive: &Drive, kind: TransportKind) -> Simulator {
+fn simulator(drive: &Map, kind: TransportKind) -> Simulator {
     Simulator::new(
         drive.clone(),
         SimOptions::new()
@@ -66,7 +67,7 @@ struct Rig {
 }
 
 impl Rig {
-    fn new(drive: &Drive, sim: Simulator, kind: TransportKind, retries: u8) -> Rig {
+    fn new(drive: &Map, sim: Simulator, kind: TransportKind, retries: u8) -> Rig {
         let (settings, slave) = (sim.settings(), sim.slave());
         let client = Client::with_options(
             SimLink::new(kind, sim),
@@ -83,7 +84,7 @@ impl Rig {
     /// The drive trait on it, `drive`'s plan rows with `roles` (the plan's, or changed).
     fn vfd<'a>(
         &'a mut self,
-        drive: &'a Drive,
+        drive: &'a Map,
         roles: Roles,
     ) -> Vfd<View<'a>, &'a mut Client<SimLink>> {
         Vfd::from_plan(
@@ -169,7 +170,9 @@ fn a_setpoint_on_a_field_is_refused_where_read_modify_write_is_not_safe() {
     );
     assert_ne!(moved, text);
     // The status word is read-only: validation refuses a setpoint there.
-    let e = drivemap_map::read_map_str("acme-vf1.yaml", &moved, &Default::default()).unwrap_err();
+    let e = drivemap_map::Loader::new()
+        .load_str("acme-vf1.yaml", &moved)
+        .unwrap_err();
     assert!(
         e.to_string()
             .contains("role `frequency_reference` is written, but `status_word` is not writable"),
@@ -256,7 +259,7 @@ fn fault() -> impl proptest::strategy::Strategy<Value = Option<LinkFault>> {
 /// Plays `steps` on brenner-fx4 over RTU framing (over TCP: it reconnects) with `faults` on the
 /// link; returns a violation of the reset contract, if any.
 fn play(
-    drive: &Drive,
+    drive: &Map,
     roles: drivemap_runtime::roles::Roles,
     template: &Simulator,
     steps: &[Step],
@@ -400,7 +403,7 @@ fn a_command_field_is_written_from_the_roles_not_from_a_read_back() {
     let drive = map("maps/yaskawa-v7.yaml");
     let kind = TransportKind::Rtu;
     let mut rig = Rig::new(&drive, simulator(&drive, kind), kind, 0);
-    let command = drive.find("digital_input_command").unwrap();
+    let command = drive.register("digital_input_command").unwrap();
     let row = u16::try_from(drive.plan().order[command.index()]).unwrap();
     let bit = |id: &str| match &drive.plan().registers[usize::from(row)].conversion {
         drivemap_runtime::plan::Conversion::Bits { fields, .. } => {
@@ -427,7 +430,7 @@ fn a_command_field_is_written_from_the_roles_not_from_a_read_back() {
     let word = d.write_command_fields(row, s3, 0).unwrap();
     assert_eq!(word & (run | reset | s3), 0, "{word:04X}h");
     // A register without a command role is refused, not written.
-    let other = drive.find("n019").unwrap();
+    let other = drive.register("n019").unwrap();
     let other_row = u16::try_from(drive.plan().order[other.index()]).unwrap();
     assert!(!d.holds_command(other_row));
     assert!(matches!(

@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use clap::Args as ClapArgs;
 use drivemap_bridge::{DriveSpec, LinkSpec, mqtt};
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use serde::Deserialize;
 
 use crate::error::Error;
@@ -323,20 +323,20 @@ pub(crate) fn link(
     settings: &SettingsArgs,
     draft: bool,
     names: &mut BTreeSet<String>,
-    loaded: &mut BTreeMap<String, &'static Drive>,
+    loaded: &mut BTreeMap<String, &'static Map>,
 ) -> Result<LinkSpec, Error> {
     if drives.is_empty() {
         return Err("a link without drives: give --drive ID@SLAVE".into());
     }
     let mut specs = Vec::new();
-    let mut first: Option<&'static Drive> = None;
+    let mut first: Option<&'static Map> = None;
     for text in drives {
         let (id, slave) = drive_slave(text)?;
         // Each map is read once, however many drives use it (1,000 drives of five maps).
-        let drive: &'static Drive = match loaded.get(&id) {
+        let drive: &'static Map = match loaded.get(&id) {
             Some(d) => d,
             None => {
-                let d: &'static Drive = Box::leak(Box::new(dir.load(&id)?));
+                let d: &'static Map = Box::leak(Box::new(dir.load(&id)?));
                 loaded.insert(id.clone(), d);
                 d
             }
@@ -347,16 +347,16 @@ pub(crate) fn link(
         // The bridge reads what conversions depend on from the drive every cycle: a `--set`
         // of a register it can read would replace what the drive holds by what was assumed.
         for g in given.given.iter().filter(|g| !g.external) {
-            if let Some(r) = drive.registers.iter().find(|r| r.def.id == g.id)
+            if let Some(r) = drive.registers().find(|r| r.id() == g.id)
                 && r.readable()
-                && !r.broadcast
-                && drive.register_plan(r).transports.contains(args.kind())
+                && !r.broadcast_only()
+                && r.plan().transports.contains(args.kind())
             {
                 return Err(format!(
                     "--set {}={}: the bridge reads {} from the drive every cycle; --set is for what the drive does not give (an external quantity, a setting it cannot read on this link)",
                     drivemap_live::codec::shorten(&g.name),
                     drivemap_live::codec::shorten(&g.value),
-                    drivemap_map::describe::register(r)
+                    r.label()
                 )
                 .into());
             }

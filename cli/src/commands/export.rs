@@ -135,8 +135,8 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
             );
         }
         let json = match args.format {
-            Format::Facts => serde_json::to_value(drivemap_map::facts::facts(&drive))?,
-            _ => drivemap_map::export::export(&drive),
+            Format::Facts => serde_json::to_value(drivemap_map::facts::facts(drive.ir()))?,
+            _ => drivemap_map::export::export(drive.ir()),
         };
         outln!("{}", serde_json::to_string_pretty(&json)?);
         return Ok(ExitCode::SUCCESS);
@@ -148,7 +148,7 @@ pub fn run(args: Args) -> Result<ExitCode, Error> {
     }
     let given = args.settings.resolve(&drive)?;
     let regs = if args.all {
-        drive.registers.iter().filter(|r| r.readable()).collect()
+        drive.registers().filter(|r| r.readable()).collect()
     } else if args.registers.is_empty() {
         targets::default_registers(&drive)
     } else {

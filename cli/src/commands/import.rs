@@ -126,7 +126,7 @@ pub fn run(a: Args) -> Result<ExitCode, Error> {
     let out = match &a.merge {
         Some(map) => {
             let drive = a.dir.read(map).map_err(|d| format!("{d}"))?;
-            let known = drivemap_import::known::registers(&drive);
+            let known = drivemap_import::known::registers(drive.ir());
             drivemap_import::merge(&import, &known).render(&map.display().to_string())
         }
         None => import.yaml.clone(),

@@ -9,8 +9,8 @@
 //! [`Points::left_out`] with the reason, which every format prints: nothing is dropped silently.
 
 use drivemap_live::{LiveSettings, leak_profile};
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_runtime::bus_time::BusModel;
 use drivemap_runtime::plan::{Conversion, Field, Label, Scale};
 use drivemap_runtime::planner::Poller;
@@ -48,7 +48,7 @@ pub enum Meaning {
 /// One register as a tool reads it.
 #[derive(Debug, Clone)]
 pub struct Point<'d> {
-    pub reg: &'d Register,
+    pub reg: RegisterRef<'d>,
     /// Holding or input.
     pub table: Table,
     /// The PDU address on the link (the manual's address moved by the settings and the
@@ -66,16 +66,16 @@ pub struct Point<'d> {
 impl Point<'_> {
     /// The map's id of the register.
     pub fn id(&self) -> &str {
-        &self.reg.def.id
+        self.reg.id()
     }
 
     /// The printed name, with the parameter number when the manual gives one.
     pub fn label(&self) -> String {
-        match &self.reg.def.param {
-            Some(p) if !self.reg.def.name.contains(p.as_str()) => {
-                format!("{} ({p})", self.reg.def.name)
+        match self.reg.param() {
+            Some(p) if !self.reg.name().contains(p) => {
+                format!("{} ({p})", self.reg.name())
             }
-            _ => self.reg.def.name.clone(),
+            _ => self.reg.name().to_owned(),
         }
     }
 
@@ -115,7 +115,7 @@ pub enum Endpoint {
 /// The chosen registers of a drive on one link, ready for a tool.
 #[derive(Debug)]
 pub struct Points<'d> {
-    pub drive: &'d Drive,
+    pub drive: &'d Map,
     pub kind: TransportKind,
     pub endpoint: Endpoint,
     pub slave: u8,
@@ -129,7 +129,7 @@ pub struct Points<'d> {
     pub name: String,
     pub points: Vec<Point<'d>>,
     /// Registers asked for that no tool can read as the map means them, with the reason.
-    pub left_out: Vec<(&'d Register, String)>,
+    pub left_out: Vec<(RegisterRef<'d>, String)>,
     /// The planner's requests, ascending per table.
     pub reads: Vec<PlannedRead>,
     /// Modelled bus time of one cycle of `reads`, in microseconds.
@@ -152,9 +152,9 @@ fn split_host(addr: &str) -> Result<(String, u16), Error> {
 
 /// The registers exported when none are named: those the map's roles name and every
 /// read-only register (monitors and status words).
-pub fn default_registers(drive: &Drive) -> Vec<&Register> {
+pub fn default_registers(drive: &Map) -> Vec<RegisterRef<'_>> {
     let mut named: Vec<&str> = Vec::new();
-    for places in drive.roles.values() {
+    for places in drive.roles().values() {
         for p in places {
             if let Some(r) = &p.register {
                 named.push(r.as_str());
@@ -162,23 +162,17 @@ pub fn default_registers(drive: &Drive) -> Vec<&Register> {
         }
     }
     drive
-        .registers
-        .iter()
+        .registers()
         .filter(|r| r.readable())
-        .filter(|r| {
-            !r.writable()
-                || named
-                    .iter()
-                    .any(|n| r.def.id == *n || r.def.param.as_deref() == Some(n))
-        })
+        .filter(|r| !r.writable() || named.iter().any(|n| r.id() == *n || r.param() == Some(n)))
         .collect()
 }
 
 impl<'d> Points<'d> {
     /// Decides every register of `regs` on `link` under `settings` and plans their reads.
     pub fn build(
-        drive: &'d Drive,
-        regs: &[&'d Register],
+        drive: &'d Map,
+        regs: &[RegisterRef<'d>],
         link: &Link,
         settings: &LiveSettings,
         period_ms: u64,
@@ -223,8 +217,8 @@ impl<'d> Points<'d> {
         let mut left_out = Vec::new();
         let mut wanted = Vec::new();
         for &r in regs {
-            let plan = drive.register_plan(r);
-            let why = if r.broadcast {
+            let plan = r.plan();
+            let why = if r.broadcast_only() {
                 Some("broadcast-only: written to slave 0, never read".to_owned())
             } else if !r.readable() {
                 Some("write-only: the drive does not let it be read".to_owned())
@@ -333,9 +327,7 @@ impl<'d> Points<'d> {
         // The planner's reads over the registers this link can read at the addresses these
         // settings put them (a register whose address is not known is not bridged over).
         // Plans, not bare infos: the planner respects each register's `function_codes`.
-        let infos = rows_on_link(drive, kind, |r| {
-            drive.register_plan(r).locate(&view, kind).ok()
-        });
+        let infos = rows_on_link(drive, kind, |r| r.plan().locate(&view, kind).ok());
         let model = BusModel::new(profile, link.bus_line(drive));
         let poller = Poller::new(profile, &infos, wanted)
             .map_err(|e| e.to_string())?
@@ -376,7 +368,7 @@ impl<'d> Points<'d> {
             timeout_ms: options.timeout.as_millis() as u64,
             gap_ms: options.request_gap.as_micros().div_ceil(1000) as u64,
             period_ms,
-            name: name.unwrap_or(&drive.meta.id).to_owned(),
+            name: name.unwrap_or(drive.id()).to_owned(),
             points: placed,
             left_out,
             reads,
@@ -393,7 +385,7 @@ impl<'d> Points<'d> {
     pub fn left_out_lines(&self) -> Vec<String> {
         self.left_out
             .iter()
-            .map(|(r, why)| format!("left out {}: {why}", drivemap_map::describe::register(r)))
+            .map(|(r, why)| format!("left out {}: {why}", r.label()))
             .collect()
     }
 
@@ -401,9 +393,9 @@ impl<'d> Points<'d> {
     pub fn summary(&self) -> String {
         format!(
             "{} ({} {}) slave {} over {}: {} register(s) in {} planned read(s), {:.1} ms of bus time per cycle (drivemap's bus-time model); {} left out",
-            self.drive.meta.id,
-            self.drive.meta.vendor,
-            self.drive.meta.models.join(" / "),
+            self.drive.id(),
+            self.drive.meta().vendor,
+            self.drive.meta().models.join(" / "),
             self.slave,
             self.kind.name(),
             self.points.len(),

@@ -51,7 +51,7 @@ fn function_body(points: &Points, i: usize) -> String {
     let mut f = String::new();
     f.push_str(&format!(
         "// drivemap: {} slave {}, {} PDU {} x{}\n",
-        points.drive.meta.id,
+        points.drive.id(),
         points.slave,
         match read.table {
             Table::Holding => "holding",
@@ -66,7 +66,7 @@ fn function_body(points: &Points, i: usize) -> String {
         let o = usize::from(p.pdu - read.pdu);
         let value = decode(p, o);
         let mut extra = vec![
-            format!("drive: {}", js(&points.drive.meta.id)),
+            format!("drive: {}", js(points.drive.id())),
             format!("slave: {}", points.slave),
             format!("name: {}", js(&p.label())),
         ];

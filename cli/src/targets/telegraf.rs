@@ -165,7 +165,7 @@ pub fn render(points: &Points) -> String {
         }
         let _ = writeln!(out, "    ]");
         let _ = writeln!(out, "    [inputs.modbus.request.tags]");
-        let _ = writeln!(out, "      drive = {}", q(&points.drive.meta.id));
+        let _ = writeln!(out, "      drive = {}", q(points.drive.id()));
         let _ = writeln!(out, "      slave = \"{}\"", points.slave);
     }
     let _ = writeln!(out);

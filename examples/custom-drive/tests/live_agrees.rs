@@ -6,15 +6,12 @@ use std::path::Path;
 use custom_drive::mini_drive as md;
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::Value;
-use drivemap_map::validate::Context;
 use drivemap_runtime::{Bits, Code, Enumeration, Register, Writable};
 
-fn drive() -> drivemap_map::Drive {
-    drivemap_map::read_map(
-        Path::new("../../map/tests/fixtures/mini-drive.yaml"),
-        &Context::default(),
-    )
-    .unwrap()
+fn drive() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(Path::new("../../map/tests/fixtures/mini-drive.yaml"))
+        .unwrap()
 }
 
 /// The generated settings and the live settings for one combination.
@@ -52,9 +49,9 @@ const RAWS: [u32; 9] = [0, 1, 2, 3, 600, 4000, 30000, 0x8000, 0xFFFF];
 const VALUES: [f64; 10] = [-1.0, 0.0, 0.1, 1.0, 2.0, 50.0, 255.0, 300.0, 400.0, 600.5];
 
 fn quantity<R: Register<Settings = md::Settings, Value = f64> + Writable<Input = f64>>(
-    d: &drivemap_map::Drive,
+    d: &drivemap_map::Map,
 ) {
-    let r = d.find(R::ID).unwrap();
+    let r = d.register(R::ID).unwrap();
     for (g, l) in combos() {
         for raw in RAWS {
             let gen_v = R::decode(raw, &g);
@@ -94,11 +91,13 @@ fn read_only_quantities_decode_alike() {
     for (g, l) in combos() {
         for raw in RAWS {
             let a = md::OutputCurrent::decode(raw, &g).unwrap();
-            let b = drivemap_live::codec::decode(&d, d.find("output_current").unwrap(), raw, &l)
-                .unwrap();
+            let b =
+                drivemap_live::codec::decode(&d, d.register("output_current").unwrap(), raw, &l)
+                    .unwrap();
             assert_eq!(Some(a), b.as_f64());
             let a = md::Torque::decode(raw, &g).unwrap();
-            let b = drivemap_live::codec::decode(&d, d.find("torque").unwrap(), raw, &l).unwrap();
+            let b =
+                drivemap_live::codec::decode(&d, d.register("torque").unwrap(), raw, &l).unwrap();
             assert_eq!(Some(a), b.as_f64());
         }
     }
@@ -109,8 +108,8 @@ fn codes_and_bits_agree() {
     let d = drive();
     let l = LiveSettings::default();
     let g = md::Settings::new();
-    let units = d.find("frequency_units").unwrap();
-    let command = d.find("command").unwrap();
+    let units = d.register("frequency_units").unwrap();
+    let command = d.register("command").unwrap();
     for raw in RAWS {
         let a = md::FrequencyUnits::decode(raw, &g).unwrap();
         match drivemap_live::codec::decode(&d, units, raw, &l).unwrap() {

@@ -3,7 +3,7 @@
 //! the generated module carries it as data. The fault-injection property test
 //! (`the_contract_holds_under_faults`) plays every fixture of [`FIXTURES`] too.
 
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::Error;
 use drivemap_runtime::core::command_profile::{CommandProfile, PathKind};
 use drivemap_runtime::profile::TransportKind;
@@ -55,7 +55,7 @@ fn written<S: drivemap_runtime::SettingsView>(d: &mut Vfd<S, &mut Client<SimLink
     w
 }
 
-fn kestrel() -> Drive {
+fn kestrel() -> Map {
     map(FIXTURES[0])
 }
 
@@ -285,7 +285,8 @@ fn a_stop_path_through_a_run_transition_is_refused() {
         "  transitions:\n",
         "  paths:\n    stop: {via: [enable_operation], to: [ready_to_switch_on]}\n  transitions:\n",
     );
-    let e = drivemap_map::read_map_str("kestrel-kd4.yaml", &text, &Default::default())
+    let e = drivemap_map::Loader::new()
+        .load_str("kestrel-kd4.yaml", &text)
         .unwrap_err()
         .to_string();
     assert!(
@@ -327,7 +328,7 @@ fn every_profile_fixture_follows_its_machine() {
         for kind in super::links(&drive) {
             let (mut c, settings, slave) = connect(&drive, kind, 0);
             let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
-            let id = &drive.meta.id;
+            let id = &drive.id();
             let power_on = profile.state_id(profile.power_on);
             assert_eq!(d.profile_state().unwrap(), Some(power_on), "{id}");
             d.client()
@@ -406,7 +407,7 @@ fn active_fault_and_last_fault_are_two_roles() {
         let p = drive.plan();
         let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
         let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
-        let id = &drive.meta.id;
+        let id = &drive.id();
         assert!(d.supports(Role::LastFault), "{id}");
         assert_eq!(d.last_fault().unwrap().code, 0, "{id}");
         d.run().unwrap();
@@ -482,7 +483,8 @@ roles:
   running: [{register: status_a, on: run, source: "manual.txt:14"}]
   fault: [{register: status_a, on: trip, source: "manual.txt:14"}]
 "#;
-    let drive = drivemap_map::read_map_str("codes-as-states.yaml", text, &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("codes-as-states.yaml", text)
         .unwrap_or_else(|e| panic!("{e}"));
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
@@ -501,7 +503,8 @@ roles:
     let both = text
         .replace("on: run, source", "on: run, off: stop, source")
         .replace("on: trip, source", "on: trip, off: stop, source");
-    let e = drivemap_map::read_map_str("codes-as-states.yaml", &both, &Default::default())
+    let e = drivemap_map::Loader::new()
+        .load_str("codes-as-states.yaml", &both)
         .unwrap_err()
         .to_string();
     assert!(e.contains("cannot hold together"), "{e}");
@@ -515,7 +518,7 @@ roles:
 fn doc_export_and_diff_cover_the_profile() {
     use drivemap_review::diff::{ChangeKind, Severity, compare};
     let drive = kestrel();
-    let doc = drivemap_review::reference::render(&drive, "kestrel-kd4.yaml");
+    let doc = drivemap_review::reference::render(drive.ir(), "kestrel-kd4.yaml");
     assert!(doc.contains("## Command profile"), "{doc}");
     assert!(
         doc.contains("| `enable_operation` | 000Fh | FF70h | 0000h | `switched_on` | `operation_enabled` | 100 ms | `kestrel-kd4.txt:40` |"),
@@ -526,7 +529,7 @@ fn doc_export_and_diff_cover_the_profile() {
         "{doc}"
     );
     assert!(doc.contains("At power-on: `switch_on_disabled`"), "{doc}");
-    let export = drivemap_map::export::export(&drive);
+    let export = drivemap_map::export::export(drive.ir());
     assert_eq!(export["profile"]["standard"], "cia402");
     assert_eq!(
         export["profile"]["transitions"]["shutdown"]["source"],
@@ -534,11 +537,11 @@ fn doc_export_and_diff_cover_the_profile() {
     );
     let shipped = map("maps/yaskawa-v7.yaml");
     assert!(
-        !drivemap_review::reference::render(&shipped, "yaskawa-v7.yaml")
+        !drivemap_review::reference::render(shipped.ir(), "yaskawa-v7.yaml")
             .contains("Command profile")
     );
     assert!(
-        drivemap_map::export::export(&shipped)
+        drivemap_map::export::export(shipped.ir())
             .get("profile")
             .is_none()
     );
@@ -559,7 +562,7 @@ fn doc_export_and_diff_cover_the_profile() {
         r#"enable_operation: {limit_ms: 100, source: "kestrel-kd4.txt:40"}"#,
         r#"enable_operation: {limit_ms: 250, source: "kestrel-kd4.txt:40"}"#,
     );
-    let d = compare(&drive, &slower);
+    let d = compare(drive.ir(), &slower);
     let c: Vec<_> = d
         .changes
         .iter()
@@ -573,7 +576,7 @@ fn doc_export_and_diff_cover_the_profile() {
         r#"quick_stop_active: {source: "kestrel-kd4.txt:65"}"#,
         r#"quick_stop_active: {source: "kestrel-kd4.txt:54"}"#,
     );
-    let d = compare(&drive, &recited);
+    let d = compare(drive.ir(), &recited);
     let c: Vec<_> = d
         .changes
         .iter()
@@ -581,7 +584,7 @@ fn doc_export_and_diff_cover_the_profile() {
         .collect();
     assert_eq!(c.len(), 1, "{c:?}");
     assert_eq!(c[0].severity(), Severity::Compatible, "{c:?}");
-    let none = compare(&shipped, &drive);
+    let none = compare(shipped.ir(), drive.ir());
     assert!(
         none.changes
             .iter()
@@ -655,7 +658,8 @@ profile:
     quick_stop: {source: "fc.txt:19"}
     reset: {source: "fc.txt:20"}
 "#;
-    let drive = drivemap_map::read_map_str("fc-example.yaml", text, &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("fc-example.yaml", text)
         .unwrap_or_else(|e| panic!("{e}"));
     let p = drive.plan();
     for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
@@ -771,7 +775,8 @@ profile:
     coast: {via: [disable], to: [disabled, fault]}
     reset_fault: {via: [acknowledge], to: [disabled]}
 "#;
-    let drive = drivemap_map::read_map_str("two-bits.yaml", text, &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load_str("two-bits.yaml", text)
         .unwrap_or_else(|e| panic!("{e}"));
     let p = drive.plan();
     assert_eq!(p.roles.profile.unwrap().name, "own");

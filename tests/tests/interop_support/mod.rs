@@ -119,9 +119,10 @@ pub fn free_port() -> u16 {
 }
 
 /// A map by drive id.
-pub fn drive(id: &str) -> drivemap_map::Drive {
+pub fn drive(id: &str) -> drivemap_map::Map {
     let path = root().join("maps").join(format!("{id}.yaml"));
-    drivemap_map::read_map(&path, &Default::default())
+    drivemap_map::Loader::new()
+        .load(&path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 

@@ -23,7 +23,7 @@ use drivemap_live::LiveSettings;
 use drivemap_live::codec::{self, Value};
 use drivemap_live::paramset::{self, ParameterSet, RestoreReport};
 use drivemap_live::session::Session;
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::pdu::Request;
@@ -71,7 +71,7 @@ fn options() -> ClientOptions {
     }
 }
 
-fn session<'d>(drive: &'d Drive, link: &Shared, slave: u8) -> Session<'d> {
+fn session<'d>(drive: &'d Map, link: &Shared, slave: u8) -> Session<'d> {
     Session::over(
         drive,
         Box::new(link.clone()),
@@ -83,7 +83,7 @@ fn session<'d>(drive: &'d Drive, link: &Shared, slave: u8) -> Session<'d> {
 }
 
 /// Every external quantity of the map at 100, as the simulator has them ([`simulator`]).
-fn externals(drive: &Drive) -> LiveSettings {
+fn externals(drive: &Map) -> LiveSettings {
     let mut settings = LiveSettings::default();
     for q in drive.externals() {
         settings.references.insert(q.external.clone(), 100.0);
@@ -91,21 +91,21 @@ fn externals(drive: &Drive) -> LiveSettings {
     settings
 }
 
-fn maps() -> Vec<Drive> {
+fn maps() -> Vec<Map> {
     let dir = format!("{}/../maps", env!("CARGO_MANIFEST_DIR"));
-    let mut out: Vec<Drive> = drivemap_map::find_maps(dir.as_ref())
+    let mut out: Vec<Map> = drivemap_map::find_maps(dir.as_ref())
         .expect("maps/")
         .iter()
-        .map(|p| drivemap_map::read_map(p, &Default::default()).expect("shipped map"))
+        .map(|p| drivemap_map::Loader::new().load(p).expect("shipped map"))
         .collect();
-    out.sort_by(|a, b| a.meta.id.cmp(&b.meta.id));
+    out.sort_by(|a, b| a.id().cmp(b.id()));
     out
 }
 
-fn kinds(drive: &Drive) -> Vec<TransportKind> {
+fn kinds(drive: &Map) -> Vec<TransportKind> {
     let mut out = vec![TransportKind::RtuOverTcp];
     let tcp = drive
-        .protocol
+        .protocol()
         .transports
         .iter()
         .any(|t| format!("{t:?}").eq_ignore_ascii_case("tcp"));
@@ -116,7 +116,7 @@ fn kinds(drive: &Drive) -> Vec<TransportKind> {
 }
 
 /// Every external quantity at 100 (the TDS-V8's inverter rated current bounds Cn-09).
-fn simulator(drive: &Drive) -> Simulator {
+fn simulator(drive: &Map) -> Simulator {
     let mut o = SimOptions::new();
     for q in drive.externals() {
         o = o.external(&q.external, 100.0);
@@ -128,7 +128,7 @@ fn simulator(drive: &Drive) -> Simulator {
         && let Target::Field(f) = place.target
         && let Some(r) = drive.register_of_row(usize::from(f.row))
     {
-        sim.set_raw(&r.def.id, u32::from(f.code(true)) << f.lsb)
+        sim.set_raw(r.id(), u32::from(f.code(true)) << f.lsb)
             .unwrap();
     }
     sim
@@ -136,13 +136,13 @@ fn simulator(drive: &Drive) -> Simulator {
 
 /// A raw value of `r` other than `current` that the map accepts under `settings`.
 fn other_raw(
-    drive: &Drive,
-    r: &drivemap_map::ir::Register,
+    drive: &Map,
+    r: drivemap_map::RegisterRef<'_>,
     current: u32,
     settings: &LiveSettings,
     rng: &mut SplitMix,
 ) -> Option<u32> {
-    let plan = drive.register_plan(r);
+    let plan = r.plan();
     let mut raws: Vec<i64> = match plan.conversion {
         Conversion::Enum { values, .. } => values.iter().map(|v| i64::from(v.code)).collect(),
         Conversion::Bits { .. } => return None,
@@ -205,15 +205,15 @@ const LINK_WORDS: &[&str] = &[
 
 /// The source drive: `n` settings changed, the selectors among them first (so what they scale
 /// is chosen under the selected scale), each to a value the map accepts.
-fn source(drive: &Drive, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simulator {
+fn source(drive: &Map, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simulator {
     let mut sim = base.clone();
     let regs: Vec<_> = paramset::settings_of(drive)
         .into_iter()
         .filter(|r| {
-            let name = r.def.name.to_ascii_lowercase();
+            let name = r.name().to_ascii_lowercase();
             !LINK_WORDS
                 .iter()
-                .any(|w| r.def.id.contains(w) || name.contains(&w.replace('_', " ")))
+                .any(|w| r.id().contains(w) || name.contains(&w.replace('_', " ")))
         })
         .collect();
     if regs.is_empty() {
@@ -221,32 +221,34 @@ fn source(drive: &Drive, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simu
     }
     let depended: Vec<String> = regs
         .iter()
-        .flat_map(|r| paramset::depends_on(drive, r))
-        .map(|d| d.def.id.clone())
+        .flat_map(|r| paramset::depends_on(drive, *r))
+        .map(|d| d.id().to_owned())
         .collect();
     let mut chosen: Vec<usize> = (0..n)
         .map(|_| rng.below(regs.len() as u64) as usize)
         .collect();
     // Half the time, a setting others depend on and one that depends on it.
     if rng.chance(50)
-        && let Some(i) = regs.iter().position(|r| depended.contains(&r.def.id))
+        && let Some(i) = regs
+            .iter()
+            .position(|r| depended.iter().any(|d| d == r.id()))
     {
         chosen.push(i);
         if let Some(j) = regs.iter().position(|r| {
-            paramset::depends_on(drive, r)
+            paramset::depends_on(drive, *r)
                 .iter()
-                .any(|d| d.def.id == regs[i].def.id)
+                .any(|d| d.id() == regs[i].id())
         }) {
             chosen.push(j);
         }
     }
-    chosen.sort_by_key(|&i| !depended.contains(&regs[i].def.id));
+    chosen.sort_by_key(|&i| !depended.iter().any(|d| d == regs[i].id()));
     chosen.dedup();
     for i in chosen {
         let r = regs[i];
-        let current = sim.raw(&r.def.id).unwrap();
+        let current = sim.raw(r.id()).unwrap();
         if let Some(raw) = other_raw(drive, r, current, &sim.settings(), rng) {
-            sim.set_raw(&r.def.id, raw).unwrap();
+            sim.set_raw(r.id(), raw).unwrap();
         }
     }
     sim
@@ -255,7 +257,7 @@ fn source(drive: &Drive, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simu
 /// The frames of the log that wrote a register, with the settings before each: (register id,
 /// raw value, settings), for executed writes only.
 fn writes(
-    drive: &Drive,
+    drive: &Map,
     kind: TransportKind,
     link: &SimLink,
 ) -> Vec<(String, u32, Option<LiveSettings>)> {
@@ -288,16 +290,13 @@ fn writes(
         }
         let settings = s.settings.clone().unwrap_or_default();
         let view = settings.view(drive);
-        let r = drive.registers.iter().find(|r| {
-            drive
-                .register_plan(r)
-                .locate(&view, kind)
-                .is_ok_and(|a| a == address)
-        });
+        let r = drive
+            .registers()
+            .find(|r| r.plan().locate(&view, kind).is_ok_and(|a| a == address));
         if let Some(r) = r {
-            let width = drive.register_plan(r).info.width;
+            let width = r.plan().info.width;
             let raw = width.join(&words[..usize::from(width.count()).min(words.len())]);
-            out.push((r.def.id.clone(), raw, s.settings.clone()));
+            out.push((r.id().to_owned(), raw, s.settings.clone()));
         }
     }
     out
@@ -305,7 +304,7 @@ fn writes(
 
 /// What one restore run broke of the properties, one line each.
 fn violations(
-    drive: &Drive,
+    drive: &Map,
     kind: TransportKind,
     set: &ParameterSet,
     source: &Simulator,
@@ -321,7 +320,7 @@ fn violations(
             out.push(format!("{id}: written, not a setting of the set"));
             continue;
         }
-        let r = drive.registers.iter().find(|r| r.def.id == id).unwrap();
+        let r = drive.registers().find(|r| r.id() == id).unwrap();
         let settings = settings.unwrap_or_default();
         let then = codec::decode(drive, r, raw, &settings).map(|v| v.as_f64());
         let meant = codec::decode(drive, r, raw, &wanted).map(|v| v.as_f64());
@@ -331,7 +330,7 @@ fn violations(
             ));
         } else if let Ok(Some(v)) = then
             && matches!(
-                drive.register_plan(r).conversion,
+                r.plan().conversion,
                 Conversion::Decimal { .. }
                     | Conversion::Relative { .. }
                     | Conversion::Selected { .. }
@@ -396,7 +395,7 @@ enum Mutation {
 
 /// One restore of `set` over `link`, the report (`None`: refused, nothing written).
 fn restore(
-    drive: &Drive,
+    drive: &Map,
     link: &Shared,
     slave: u8,
     set: &ParameterSet,
@@ -409,7 +408,7 @@ fn restore(
         Ok(plan) => plan,
         Err(e) => {
             if std::env::var_os("PARAMSET_DEBUG").is_some() {
-                eprintln!("{}: refused: {e}", drive.meta.id);
+                eprintln!("{}: refused: {e}", drive.id());
             }
             return None;
         }
@@ -427,14 +426,14 @@ fn restore(
 }
 
 /// Saves `source` over a link of `kind`.
-fn save(drive: &Drive, kind: TransportKind, source: &Simulator) -> ParameterSet {
+fn save(drive: &Map, kind: TransportKind, source: &Simulator) -> ParameterSet {
     let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, source.clone()))));
     let mut s = session(drive, &link, source.slave());
     let report = paramset::save(&mut s, "2026-01-01T00:00:00Z").expect("save");
     assert!(
         report.set.unread.is_empty(),
         "{}: {:?}",
-        drive.meta.id,
+        drive.id(),
         report.set.unread
     );
     report.set
@@ -443,7 +442,7 @@ fn save(drive: &Drive, kind: TransportKind, source: &Simulator) -> ParameterSet 
 /// Runs the sweep of one set: an interrupted restore at every request with every fault, then a
 /// clean one. Returns the restores run and the violations found.
 fn sweep(
-    drive: &Drive,
+    drive: &Map,
     kind: TransportKind,
     target: &Simulator,
     source: &Simulator,
@@ -467,7 +466,7 @@ fn sweep(
             link.script(std::iter::repeat_n(Some(fault), attempts));
             let link = Shared(Rc::new(RefCell::new(link)));
             let first = restore(drive, &link, slave, set, mutation);
-            let what = format!("{} {kind:?} fault {fault:?} at request {at}", drive.meta.id);
+            let what = format!("{} {kind:?} fault {fault:?} at request {at}", drive.id());
             {
                 let l = link.0.borrow();
                 for v in violations(drive, kind, set, source, &l, first.as_ref()) {
@@ -537,7 +536,7 @@ fn interrupted_restores_report_exactly_and_converge_for_every_map() {
             }
             eprintln!(
                 "{} {kind:?}: {} interrupted restores in {:.1} s",
-                drive.meta.id,
+                drive.id(),
                 runs - before,
                 at.elapsed().as_secs_f64()
             );
@@ -557,7 +556,7 @@ fn interrupted_restores_report_exactly_and_converge_for_every_map() {
 fn the_sweep_fails_when_the_order_is_reversed_or_the_read_back_skipped() {
     let gpd = maps()
         .into_iter()
-        .find(|d| d.meta.id == "yaskawa-gpd515")
+        .find(|d| d.id() == "yaskawa-gpd515")
         .unwrap();
     let base = simulator(&gpd);
     let mut source = base.clone();
@@ -616,7 +615,7 @@ fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not()
         assert!(
             !equal(&set, &source, &base).is_empty(),
             "{}: the set differs",
-            drive.meta.id
+            drive.id()
         );
         for store in [true, false] {
             let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, base.clone()))));
@@ -624,26 +623,26 @@ fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not()
             let given = s.settings.clone();
             let validated = paramset::validate(&drive, &set, &given, false).unwrap();
             let mut plan = paramset::plan(&mut s, &validated).unwrap();
-            assert!(plan.store.is_some(), "{}: a store command", drive.meta.id);
+            assert!(plan.store.is_some(), "{}: a store command", drive.id());
             if !store {
                 plan.store = None;
             }
             let report = paramset::execute(&mut s, &plan, &mut |_| {});
-            assert!(report.complete(), "{}: {report:?}", drive.meta.id);
+            assert!(report.complete(), "{}: {report:?}", drive.id());
             let mut l = link.0.borrow_mut();
             assert!(
                 equal(&set, &source, &l.sim).is_empty(),
                 "{}: restored",
-                drive.meta.id
+                drive.id()
             );
-            assert_eq!(l.sim.persist_count(), u32::from(store), "{}", drive.meta.id);
+            assert_eq!(l.sim.persist_count(), u32::from(store), "{}", drive.id());
             l.sim.power_cycle();
             let lost = equal(&set, &source, &l.sim);
             assert_eq!(
                 lost.is_empty(),
                 store,
                 "{} (store command {}): after a power cycle {lost:?} differ",
-                drive.meta.id,
+                drive.id(),
                 if store { "run" } else { "skipped" }
             );
         }
@@ -663,13 +662,13 @@ fn save_reports_progress_group_by_group_at_no_cost_in_requests() {
         let mut seen = Vec::new();
         let report =
             paramset::save_with(&mut s, "", &mut |done, total| seen.push((done, total))).unwrap();
-        assert_eq!(report.set.settings.len(), n, "{}", drive.meta.id);
+        assert_eq!(report.set.settings.len(), n, "{}", drive.id());
         if n > 0 {
-            assert_eq!(seen.last(), Some(&(n, n)), "{}", drive.meta.id);
+            assert_eq!(seen.last(), Some(&(n, n)), "{}", drive.id());
             assert!(
                 seen.windows(2).all(|w| w[0].0 < w[1].0),
                 "{}: {seen:?}",
-                drive.meta.id
+                drive.id()
             );
         }
         // One plan over every setting.
@@ -681,7 +680,7 @@ fn save_reports_progress_group_by_group_at_no_cost_in_requests() {
         assert!(
             report.requests <= requests,
             "{}: {} requests group by group, {requests} in one plan",
-            drive.meta.id,
+            drive.id(),
             report.requests
         );
     }
