@@ -489,7 +489,7 @@ impl Link {
 }
 
 /// Baud rate, parity and stop bits of a serial line to `drive`: what is given, else the map's
-/// defaults ([`drivemap_map::ir::SerialDefaults`]: 9600, no parity unless the map says
+/// defaults ([`drivemap_map::facts::SerialDefaults`]: 9600, no parity unless the map says
 /// otherwise; the stop bits of the map's formats for the parity when they give only one, else
 /// 2 without parity where the map fixes 11-bit characters, else 1). For `read`/`write`/`poll`
 /// and for `simulate --serial`; whether the map lists the combination is checked when the port
