@@ -20,10 +20,9 @@ use drivemap_live::LiveSettings;
 use drivemap_live::codec;
 use drivemap_live::intern::intern;
 use drivemap_live::lookup;
-use drivemap_map::Drive;
-use drivemap_map::describe;
-use drivemap_map::ir::Register;
-use drivemap_map::lower::Quantity;
+use drivemap_map::Map;
+use drivemap_map::Quantity;
+use drivemap_map::RegisterRef;
 use drivemap_runtime::gate;
 use drivemap_runtime::plan::{Conversion, Dependency};
 use drivemap_runtime::profile::TransportKind;
@@ -40,7 +39,7 @@ pub struct Commander {
     pub index: usize,
     /// Its name (topics, logs).
     pub name: String,
-    pub(crate) drive: &'static Drive,
+    pub(crate) drive: &'static Map,
     pub(crate) slave: u8,
     pub(crate) options: ClientOptions,
     pub(crate) kind: TransportKind,
@@ -176,18 +175,18 @@ impl Commander {
         let r = lookup::find(drive, name)?;
         if value.is_empty() {
             return Err(CommandFailure::NoValue {
-                register: describe::register(r),
+                register: r.label(),
             });
         }
         let rule = gate::rule(profile, intern(r.id()))
             .and_then(|rule| gate::check_link(profile, kind, slave, rule).map(|()| rule))
             .map_err(|source| CommandFailure::Refused {
-                register: describe::register(r),
+                register: r.label(),
                 source,
             })?;
         // What its scale and limits depend on, read now (V7's reference against n011).
         let settings = self.settings_now(client, r)?;
-        let row = drive.register_plan(r);
+        let row = r.plan();
         let at = u16::try_from(drive.plan().order[r.index()]).ok();
         let command_register = drive
             .plan()
@@ -199,7 +198,7 @@ impl Commander {
             Some(input) => {
                 let Conversion::Bits { mask, .. } = row.conversion else {
                     return Err(CommandFailure::NoFields {
-                        register: describe::register(r),
+                        register: r.label(),
                     });
                 };
                 if command_register && let Some(at) = at {
@@ -241,7 +240,7 @@ impl Commander {
             words[..usize::from(rule.width.count())].iter().copied(),
         )
         .map_err(|source| CommandFailure::Refused {
-            register: describe::register(r),
+            register: r.label(),
             source,
         })?;
         let between = row.repeat_needs_change.map(|x| x.between);
@@ -260,7 +259,7 @@ impl Commander {
         if self.deps.iter().any(|d| d == r.id()) {
             self.replan = true;
         }
-        Ok(format!("wrote {} = {shown}", describe::register(r)))
+        Ok(format!("wrote {} = {shown}", r.label()))
     }
 
     /// Writes the fields `mask` of command register `r` (plan row `row`) through the drive
@@ -268,7 +267,7 @@ impl Commander {
     fn write_command_fields(
         &mut self,
         client: &mut LinkClient,
-        r: &Register,
+        r: RegisterRef<'_>,
         row: u16,
         mask: u16,
         value: u16,
@@ -294,24 +293,23 @@ impl Commander {
         let shown = codec::decode_written(drive, r, u32::from(word), &self.settings)
             .map(|v| v.to_string())
             .unwrap_or_else(|_| word.to_string());
-        Ok(format!("wrote {} = {shown}", describe::register(r)))
+        Ok(format!("wrote {} = {shown}", r.label()))
     }
 
-    fn address(&self, r: &Register) -> Result<u16, PollFailure> {
+    fn address(&self, r: RegisterRef<'_>) -> Result<u16, PollFailure> {
         self.address_with(r, &self.settings)
     }
 
     fn address_with(
         &self,
-        r: &Register,
+        r: RegisterRef<'_>,
         settings: &drivemap_live::LiveSettings,
     ) -> Result<u16, PollFailure> {
         let drive = self.drive;
-        drive
-            .register_plan(r)
+        r.plan()
             .locate(&settings.view(drive), self.kind)
             .map_err(|e| PollFailure::AddressUnknown {
-                register: describe::register(r),
+                register: r.label(),
                 setting: e.setting,
             })
     }
@@ -323,33 +321,31 @@ impl Commander {
     pub(crate) fn settings_now(
         &self,
         client: &mut LinkClient,
-        r: &Register,
+        r: RegisterRef<'_>,
     ) -> Result<drivemap_live::LiveSettings, CommandFailure> {
         let drive = self.drive;
         let plan = drive.plan();
         let mut settings = self.settings.clone();
         for _ in 0..3 {
             let mut rows = Vec::new();
-            drive
-                .register_plan(r)
-                .depends_on(&settings.view(drive), |dep| match dep {
-                    Dependency::Code(s) => {
-                        rows.extend(
-                            plan.settings
-                                .codes
-                                .get(usize::from(s.slot))
-                                .map(|c| c.register),
-                        );
+            r.plan().depends_on(&settings.view(drive), |dep| match dep {
+                Dependency::Code(s) => {
+                    rows.extend(
+                        plan.settings
+                            .codes
+                            .get(usize::from(s.slot))
+                            .map(|c| c.register),
+                    );
+                }
+                Dependency::Quantity(s) => {
+                    if let Some(Quantity::Register(row)) =
+                        plan.settings.quantities.get(usize::from(s.slot))
+                    {
+                        rows.push(*row);
                     }
-                    Dependency::Quantity(s) => {
-                        if let Some(Quantity::Register(row)) =
-                            plan.settings.quantities.get(usize::from(s.slot))
-                        {
-                            rows.push(*row);
-                        }
-                    }
-                });
-            if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency()
+                }
+            });
+            if let Some(Dependency::Quantity(s)) = r.plan().limit_dependency()
                 && let Some(Quantity::Register(row)) =
                     plan.settings.quantities.get(usize::from(s.slot))
             {
@@ -366,10 +362,10 @@ impl Commander {
                 let raw = self
                     .read_raw_with(client, dep, &settings)
                     .map_err(|source| CommandFailure::Dependency {
-                        register: describe::register(dep),
+                        register: dep.label(),
                         source: Box::new(source),
                     })?;
-                settings.absorb(drive, drive.register_plan(dep).info.address, raw as u16);
+                settings.absorb(drive, dep.address(), raw as u16);
             }
             if settings == before {
                 break;
@@ -378,18 +374,18 @@ impl Commander {
         Ok(settings)
     }
 
-    fn read_raw(&self, client: &mut LinkClient, r: &Register) -> Result<u32, PollFailure> {
+    fn read_raw(&self, client: &mut LinkClient, r: RegisterRef<'_>) -> Result<u32, PollFailure> {
         self.read_raw_with(client, r, &self.settings)
     }
 
     fn read_raw_with(
         &self,
         client: &mut LinkClient,
-        r: &Register,
+        r: RegisterRef<'_>,
         settings: &drivemap_live::LiveSettings,
     ) -> Result<u32, PollFailure> {
         let address = self.address_with(r, settings)?;
-        let info = self.drive.register_plan(r).info;
+        let info = r.plan().info;
         let mut w = [0u16; 2];
         let words = &mut w[..usize::from(info.width.count())];
         match info.table {

@@ -228,7 +228,7 @@ pub enum Refused {
 }
 
 /// A new connection of a link could not be made (what the link's `Connect` answers: the
-/// CLI's [`drivemap_live::LinkError`], a transport's I/O error).
+/// CLI's [`drivemap_live::link::LinkError`], a transport's I/O error).
 pub type ConnectError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Why a register of a polled drive cannot be read this cycle, or its reads not planned.
@@ -367,7 +367,7 @@ impl CommandFailure {
 pub enum ExportError {
     /// The drive does not have the link's transport.
     #[error(transparent)]
-    Link(#[from] drivemap_live::LinkError),
+    Link(#[from] drivemap_live::link::LinkError),
     /// No link given.
     #[error("give the link the tool connects to: --tcp, --gateway, --rtu-tcp or --serial")]
     NoLink,

@@ -19,7 +19,6 @@
 //! Modbus time-out detection, the ACN's Pr.12 lost-command mode) is what stops a motor when the
 //! bridge, the broker or the line is gone.
 #![doc = include_str!("../README.md")]
-
 #![warn(missing_docs, unreachable_pub)]
 
 pub mod command;
@@ -89,8 +88,8 @@ pub fn run(
                 points: pts,
                 draft: d.draft,
             });
-            if let Some(note) = drivemap_live::draft::read_note(d.drive.ir()) {
-                let writes = match drivemap_live::draft::check_write(d.drive.ir(), d.draft) {
+            if let Some(note) = drivemap_live::draft::read_note(d.drive) {
+                let writes = match drivemap_live::draft::check_write(d.drive, d.draft) {
                     Ok(_) => "its commands are written through it (--draft)",
                     Err(_) => "no command is written through it (give --draft to allow it)",
                 };

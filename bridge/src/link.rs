@@ -22,9 +22,8 @@ use drivemap_live::codec::{self, Value};
 use drivemap_live::session::rows_on_link;
 use drivemap_live::{LiveSettings, lookup};
 use drivemap_map::Map;
-use drivemap_map::describe;
-use drivemap_map::ir::Register;
-use drivemap_map::lower::Quantity;
+use drivemap_map::Quantity;
+use drivemap_map::RegisterRef;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
@@ -199,7 +198,7 @@ pub struct Polled {
     spec: DriveSpec,
     kind: TransportKind,
     settings: LiveSettings,
-    regs: Vec<&'static Register>,
+    regs: Vec<RegisterRef<'static>>,
     /// Indices in `regs` of what conversions and addresses depend on: selectors, then references.
     deps: Vec<usize>,
     /// The points published.
@@ -227,25 +226,23 @@ pub struct Polled {
 pub fn choose(
     spec: &DriveSpec,
     kind: TransportKind,
-) -> Result<(Vec<&'static Register>, Vec<usize>), crate::Error> {
-    let map = spec.drive;
-    let drive = map.ir();
-    let on = |r: &Register| drive.register_plan(r).transports.contains(kind);
-    let readable = |r: &Register| r.readable() && !r.broadcast && on(r);
-    let mut regs: Vec<&'static Register> = Vec::new();
-    let add = |r: &'static Register, regs: &mut Vec<&'static Register>| {
+) -> Result<(Vec<RegisterRef<'static>>, Vec<usize>), crate::Error> {
+    let drive = spec.drive;
+    let on = |r: RegisterRef<'_>| r.plan().transports.contains(kind);
+    let readable = |r: RegisterRef<'_>| r.readable() && !r.broadcast_only() && on(r);
+    let mut regs: Vec<RegisterRef<'static>> = Vec::new();
+    let add = |r: RegisterRef<'static>, regs: &mut Vec<RegisterRef<'static>>| {
         if !regs.iter().any(|x| x.id() == r.id()) {
             regs.push(r);
         }
     };
     if spec.registers.is_empty() {
-        for r in points::role_registers(map, kind) {
-            let r = r.ir();
+        for r in points::role_registers(drive, kind) {
             if readable(r) {
                 add(r, &mut regs);
             }
         }
-        for r in &drive.registers {
+        for r in drive.registers() {
             if readable(r) && !r.writable() {
                 add(r, &mut regs);
             }
@@ -257,7 +254,7 @@ pub fn choose(
                 Ok(r) if readable(r) => add(r, &mut regs),
                 Ok(r) => errors.push(crate::RegisterProblem::Unreadable {
                     link: spec.name.clone(),
-                    register: describe::register(r),
+                    register: r.label(),
                 }),
                 Err(source) => errors.push(crate::RegisterProblem::NotFound {
                     link: spec.name.clone(),
@@ -307,10 +304,6 @@ pub fn points_of(
     kind: TransportKind,
 ) -> Result<Vec<Point<'static>>, crate::Error> {
     let (regs, _) = choose(spec, kind)?;
-    let regs: Vec<_> = regs
-        .iter()
-        .filter_map(|r| spec.drive.register_at(r.index()))
-        .collect();
     Ok(points::polled(spec.drive, &regs, kind))
 }
 
@@ -320,12 +313,12 @@ pub fn points_of(
 fn periods_of(
     spec: &DriveSpec,
     kind: TransportKind,
-    regs: &[&'static Register],
+    regs: &[RegisterRef<'static>],
     deps: &[usize],
 ) -> Result<Vec<Option<Duration>>, crate::Error> {
-    let drive = spec.drive.ir();
+    let drive = spec.drive;
     let plan = drive.plan();
-    let roles_of = |r: &Register| -> Vec<Role> {
+    let roles_of = |r: RegisterRef<'_>| -> Vec<Role> {
         let row = u16::try_from(plan.order[r.index()]).ok();
         plan.roles
             .places
@@ -335,7 +328,7 @@ fn periods_of(
             .collect()
     };
     // Rank 0 register, 1 role, 2 group; the lowest rank that matches, the shortest period.
-    let rank = |what: &str, r: &Register| -> Option<u8> {
+    let rank = |what: &str, r: RegisterRef<'_>| -> Option<u8> {
         if lookup::find(drive, what).is_ok_and(|x| x.id() == r.id()) {
             return Some(0);
         }
@@ -347,13 +340,13 @@ fn periods_of(
             "status" => roles.iter().any(|r| r.kind() == RoleKind::Status),
             "monitors" => !r.writable(),
             "parameters" => r.writable(),
-            g => drive.group_of(r).id == g,
+            g => r.group().id == g,
         };
         group.then_some(2)
     };
     let mut errors = Vec::new();
     for (what, _) in &spec.periods {
-        if !regs.iter().any(|r| rank(what, r).is_some()) {
+        if !regs.iter().any(|r| rank(what, *r).is_some()) {
             errors.push(crate::RegisterProblem::NoPeriodTarget {
                 link: spec.name.clone(),
                 what: crate::log::quote(what),
@@ -373,7 +366,7 @@ fn periods_of(
             let matches: Vec<(u8, Duration)> = spec
                 .periods
                 .iter()
-                .filter_map(|(what, period)| Some((rank(what, r)?, *period)))
+                .filter_map(|(what, period)| Some((rank(what, *r)?, *period)))
                 .collect();
             let best = matches.iter().map(|(rank, _)| *rank).min()?;
             matches
@@ -414,11 +407,7 @@ impl Polled {
     ) -> Result<Polled, crate::Error> {
         let (regs, deps) = choose(&spec, kind)?;
         let periods = periods_of(&spec, kind, &regs, &deps)?;
-        let refs: Vec<_> = regs
-            .iter()
-            .filter_map(|r| spec.drive.register_at(r.index()))
-            .collect();
-        let points = points::polled(spec.drive, &refs, kind);
+        let points = points::polled(spec.drive, &regs, kind);
         let base: Labels = vec![
             ("drive".into(), spec.drive.id().to_owned()),
             ("slave".into(), spec.slave.to_string()),
@@ -452,7 +441,7 @@ impl Polled {
         Commander {
             index: self.index,
             name: self.spec.name.clone(),
-            drive: self.spec.drive.ir(),
+            drive: self.spec.drive,
             slave: self.spec.slave,
             options: self.spec.options,
             kind: self.kind,
@@ -466,7 +455,7 @@ impl Polled {
             memory: None,
             forget: true,
             replan: false,
-            draft: drivemap_live::draft::check_write(self.spec.drive.ir(), self.spec.draft),
+            draft: drivemap_live::draft::check_write(self.spec.drive, self.spec.draft),
         }
     }
 
@@ -480,19 +469,18 @@ impl Polled {
         self.spec.drive
     }
 
-    fn address(&self, r: &Register) -> Result<u16, PollFailure> {
-        let drive = self.spec.drive.ir();
-        drive
-            .register_plan(r)
+    fn address(&self, r: RegisterRef<'_>) -> Result<u16, PollFailure> {
+        let drive = self.spec.drive;
+        r.plan()
             .locate(&self.settings.view(drive), self.kind)
             .map_err(|e| PollFailure::AddressUnknown {
-                register: describe::register(r),
+                register: r.label(),
                 setting: e.setting,
             })
     }
 
     fn make_plan(&self, line: SerialConfig) -> Result<Plan, PollFailure> {
-        let drive = self.spec.drive.ir();
+        let drive = self.spec.drive;
         let kind = self.kind;
         // Plans, not bare infos: the planner respects each register's `function_codes`.
         let infos = rows_on_link(drive, kind, |r| self.address(r).ok());
@@ -502,11 +490,11 @@ impl Polled {
         let mut wanted: Vec<Vec<(Table, u16)>> = vec![Vec::new(); periods.len()];
         let mut slots = Vec::new();
         for (r, period) in self.regs.iter().zip(&self.periods) {
-            match self.address(r) {
+            match self.address(*r) {
                 Err(why) => slots.push(Err(why)),
                 Ok(address) => {
                     let c = periods.iter().position(|p| p == period).unwrap_or(0);
-                    let info = drive.register_plan(r).info;
+                    let info = r.plan().info;
                     wanted[c].push((info.table, address));
                     slots.push(Ok((c, wanted[c].len() - 1, info.width)));
                 }
@@ -639,11 +627,7 @@ impl Polled {
             for &d in &self.deps {
                 if let Ok(raw) = raws[d] {
                     let r = self.regs[d];
-                    settings.absorb(
-                        self.spec.drive.ir(),
-                        self.spec.drive.ir().register_plan(r).info.address,
-                        raw as u16,
-                    );
+                    settings.absorb(self.spec.drive, r.address(), raw as u16);
                 }
             }
             if settings == self.settings || rounds >= 3 {
@@ -677,7 +661,7 @@ impl Polled {
                 labels.push(("field".into(), f.to_owned()));
             }
             let value = match &raws[p.slot] {
-                Ok(raw) => codec::decode(self.spec.drive.ir(), r, *raw, &self.settings)
+                Ok(raw) => codec::decode(self.spec.drive, r, *raw, &self.settings)
                     .map_err(|e| ("value", e.to_string())),
                 Err((kind, why)) => Err((*kind, why.clone())),
             };

@@ -278,7 +278,7 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
             "device": device(info),
         })
     };
-    let writes = drivemap_live::draft::check_write(info.drive.ir(), info.draft).is_ok();
+    let writes = drivemap_live::draft::check_write(info.drive, info.draft).is_ok();
     let allow_set = |r: RegisterRef<'_>| {
         writes
             && r.writable()
@@ -683,7 +683,7 @@ pub fn accept(
         return Err(crate::Refused::Retained);
     }
     allowed(info, &options.allow, &command.action)?;
-    if let Err(why) = drivemap_live::draft::check_write(info.drive.ir(), info.draft) {
+    if let Err(why) = drivemap_live::draft::check_write(info.drive, info.draft) {
         return Err(crate::Refused::Draft { why });
     }
     let press = match &command.action {

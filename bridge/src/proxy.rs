@@ -29,7 +29,6 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use drivemap_live::codec;
-use drivemap_map::describe;
 use drivemap_runtime::pdu::{self, Request, Response, Words};
 use drivemap_runtime::roles::RoleKind;
 use drivemap_runtime::tcp;
@@ -435,10 +434,10 @@ impl LineSide {
             let at = address.wrapping_add(k as u16);
             // The register this word writes on this link to this slave (a broadcast register
             // may share its address).
-            let Some((i, r)) = drive.registers.iter().enumerate().find(|(_, r)| {
-                let rp = drive.register_plan(r);
+            let Some((i, r)) = drive.registers().enumerate().find(|(_, r)| {
+                let rp = r.plan();
                 r.writable()
-                    && !r.broadcast
+                    && !r.broadcast_only()
                     && rp.transports.contains(d.kind)
                     && rp.locate(&view, d.kind).ok() == Some(at)
             }) else {
@@ -461,7 +460,7 @@ impl LineSide {
                     ILLEGAL_FUNCTION,
                     format!(
                         "commands not allowed: {} holds command roles and {} is not in --allow-commands",
-                        describe::register(r),
+                        r.label(),
                         p.master.ip()
                     ),
                 );
@@ -470,7 +469,7 @@ impl LineSide {
             // now: a word the drive would take for another value, or above a limit in force,
             // never reaches the line.
             let quantity = matches!(
-                drive.register_plan(r).conversion,
+                r.plan().conversion,
                 drivemap_runtime::plan::Conversion::Decimal { .. }
                     | drivemap_runtime::plan::Conversion::Relative { .. }
                     | drivemap_runtime::plan::Conversion::Ratio { .. }

@@ -3,7 +3,7 @@
 
 use std::io;
 
-use drivemap_live::LinkError;
+use drivemap_live::link::LinkError;
 use drivemap_live::session::{
     ConversionError, ReadError, SessionError, SettingError, UnknownNames,
 };

@@ -135,7 +135,7 @@ pub fn main() -> ExitCode {
 /// 2 is the error's text.
 pub fn write_in_process(
     argv: &[&str],
-    drive: &drivemap_map::Drive,
+    drive: &drivemap_map::Map,
     profile: &'static drivemap_runtime::Profile,
 ) -> Result<ExitCode, String> {
     let cli = Cli::try_parse_from(argv).map_err(|e| e.to_string())?;

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Args as ClapArgs;
-use drivemap_map::{Diagnostics, Drive, Loader, Map, validate::Context};
+use drivemap_map::{Diagnostics, Loader, Map};
 
 include!(concat!(env!("OUT_DIR"), "/builtin_maps.rs"));
 
@@ -114,19 +114,14 @@ impl MapsDir {
 
     /// Reads, expands and validates the map of a drive id; `extends` is resolved by id the
     /// same way (the maps directory first, then the built-in maps).
-    pub(crate) fn load(&self, id: &str) -> Result<Drive, MapError> {
-        self.load_map(id).map(Map::into_ir)
-    }
-
-    /// [`MapsDir::load`], as the map API's [`Map`].
-    pub(crate) fn load_map(&self, id: &str) -> Result<Map, MapError> {
+    pub(crate) fn load(&self, id: &str) -> Result<Map, MapError> {
         match self.source_of(id)? {
-            MapSource::File(p) => self.read_map(&p).map_err(|diagnostics| MapError::Invalid {
+            MapSource::File(p) => self.read(&p).map_err(|diagnostics| MapError::Invalid {
                 what: p.display().to_string(),
                 diagnostics,
             }),
             MapSource::Builtin(text) => {
-                self.read_builtin_map(id, text)
+                self.read_builtin(id, text)
                     .map_err(|diagnostics| MapError::Invalid {
                         what: format!("built-in map {id}"),
                         diagnostics,
@@ -136,11 +131,7 @@ impl MapsDir {
     }
 
     /// Reads, expands and validates a built-in map (its base too is looked up by id).
-    pub(crate) fn read_builtin(&self, id: &str, text: &str) -> Result<Drive, Diagnostics> {
-        self.read_builtin_map(id, text).map(Map::into_ir)
-    }
-
-    fn read_builtin_map(&self, id: &str, text: &str) -> Result<Map, Diagnostics> {
+    pub(crate) fn read_builtin(&self, id: &str, text: &str) -> Result<Map, Diagnostics> {
         Loader::new()
             .bases(|base| self.base_text(base))
             .load_str(&format!("<built-in>/{id}.yaml"), text)
@@ -158,14 +149,21 @@ impl MapsDir {
 
     /// Reads, expands and validates a map file. Its base (`extends`) is looked up beside it,
     /// else by id among the maps this finds (the built-in ones too).
-    pub(crate) fn read(&self, path: &Path) -> Result<Drive, Diagnostics> {
-        self.read_map(path).map(Map::into_ir)
+    pub(crate) fn read(&self, path: &Path) -> Result<Map, Diagnostics> {
+        self.read_with(&self.loader(path), path)
     }
 
-    /// [`MapsDir::read`], as the map API's [`Map`].
-    pub(crate) fn read_map(&self, path: &Path) -> Result<Map, Diagnostics> {
-        let loader = || loader_for(path);
-        let direct = loader().load(path);
+    /// The loader [`MapsDir::read_with`] takes for `path`: the manuals near it, bases by id
+    /// among the maps this finds. Make it [`Loader::cached`] to read many maps of one
+    /// directory: each file is read once, however long its chains of `extends`.
+    pub(crate) fn loader(&self, path: &Path) -> Loader<'_> {
+        loader_for(path).bases(|base| self.base_text(base))
+    }
+
+    /// [`MapsDir::read`] with a loader of [`MapsDir::loader`] (a cached one shares the files
+    /// already read, a map's bases, between the maps it reads).
+    pub(crate) fn read_with(&self, loader: &Loader<'_>, path: &Path) -> Result<Map, Diagnostics> {
+        let direct = loader.load(path);
         let base_missing = |d: &Diagnostics| {
             d.iter()
                 .any(|x| x.message.starts_with("base map `") && x.message.ends_with("not found"))
@@ -179,34 +177,7 @@ impl MapsDir {
             return direct;
         };
         let name = drivemap_map::migrate::display_name(path);
-        loader()
-            .bases(|base| self.base_text(base))
-            .load_str(&name, &text)
-    }
-
-    /// Like [`MapsDir::read`], taking the files already read (a map's bases) from `cache`:
-    /// checking a directory reads each file once, however long its chains of `extends`.
-    pub(crate) fn read_cached(
-        &self,
-        path: &Path,
-        cache: &drivemap_map::load::TreeCache,
-    ) -> Result<Drive, Diagnostics> {
-        let ctx = context_for(path);
-        let direct = drivemap_map::read_map_cached(path, &ctx, cache);
-        let base_missing = |d: &Diagnostics| {
-            d.iter()
-                .any(|x| x.message.starts_with("base map `") && x.message.ends_with("not found"))
-        };
-        match &direct {
-            Err(d) if base_missing(d) => {}
-            _ => return direct,
-        }
-        // The base is not beside the file: look it up by id.
-        let Ok(text) = std::fs::read_to_string(path) else {
-            return direct;
-        };
-        let name = drivemap_map::load::display_name(path);
-        drivemap_map::read_map_str_with(&name, &text, &ctx, &|base| self.base_text(base))
+        loader.load_str(&name, &text)
     }
 }
 
@@ -218,15 +189,6 @@ pub(crate) fn loader_for(path: &Path) -> Loader<'static> {
 /// The directory of a map file, where its manuals are looked for.
 fn map_dir(path: &Path) -> &Path {
     path.parent().unwrap_or(Path::new("."))
-}
-
-/// Validation context for a map file: the manuals directory near it, if any.
-pub(crate) fn context_for(path: &Path) -> Context {
-    let dir = map_dir(path);
-    match drivemap_map::default_manuals_dir(dir) {
-        Some(m) => Context::with_manuals(&m),
-        None => Context::default(),
-    }
 }
 
 /// The manuals directory for a map file: `$DRIVEMAP_MANUALS`, else `shared/manuals` beside an
@@ -255,15 +217,12 @@ mod tests {
         assert_eq!(built, shipped);
         for id in &shipped {
             let drive = MapsDir::default().load(id).unwrap();
-            assert_eq!(&drive.meta.id, id);
+            assert_eq!(&drive.id(), id);
         }
         // yaskawa-j7 extends yaskawa-v7: the base is found among the built-in maps.
         let j7 = MapsDir::default().load("yaskawa-j7").unwrap();
-        let from_file = Loader::new()
-            .load(&dir.join("yaskawa-j7.yaml"))
-            .unwrap()
-            .into_ir();
-        assert_eq!(j7.registers.len(), from_file.registers.len());
+        let from_file = Loader::new().load(&dir.join("yaskawa-j7.yaml")).unwrap();
+        assert_eq!(j7.registers().len(), from_file.registers().len());
     }
 
     #[test]
@@ -288,7 +247,7 @@ mod tests {
             dir.source_of("ptlk-tds-v8").unwrap(),
             MapSource::Builtin(_)
         ));
-        assert_eq!(dir.load("my-v7").unwrap().meta.id, "my-v7");
+        assert_eq!(dir.load("my-v7").unwrap().id(), "my-v7");
         // The built-in j7 extends the v7 of the directory.
         assert!(dir.load("yaskawa-j7").is_ok());
         // A j7 file alone in a directory extends the built-in v7.
@@ -298,7 +257,7 @@ mod tests {
         let j7 = MapsDir::default()
             .read(&lone.join("yaskawa-j7.yaml"))
             .unwrap();
-        assert_eq!(j7.meta.id, "yaskawa-j7");
+        assert_eq!(j7.id(), "yaskawa-j7");
         let e = MapsDir::default()
             .source_of("nope")
             .unwrap_err()

@@ -36,8 +36,8 @@ macro_rules! outln {
 /// Prints, on standard error, a warning for each protocol fact of `facts` the command relies on
 /// although `drive`'s manual does not print it (`drivemap_live::unprinted::warnings`).
 pub(crate) fn warn_unprinted(
-    drive: &drivemap_map::Drive,
-    link: &drivemap_live::Link,
+    drive: &drivemap_map::Map,
+    link: &drivemap_live::link::Link,
     facts: &[drivemap_runtime::core::ProtocolFact],
 ) {
     for w in drivemap_live::unprinted::warnings(drive, link, facts, None) {

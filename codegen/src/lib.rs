@@ -8,7 +8,6 @@
 //! The map front end (model, loading, validation, lowering) is `drivemap-map`; this crate only
 //! prints.
 #![doc = include_str!("../README.md")]
-
 #![warn(unreachable_pub, missing_docs)]
 
 pub mod config;

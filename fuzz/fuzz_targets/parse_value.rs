@@ -44,5 +44,5 @@ fuzz_target!(|data: &[u8]| {
             settings.references.insert(q.id().to_owned(), f64::from(*pick) * 0.5);
         }
     }
-    let _ = drivemap_live::parse_value(drive, r, text, &settings);
+    let _ = drivemap_live::codec::parse_value(drive, r, text, &settings);
 });

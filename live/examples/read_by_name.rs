@@ -1,5 +1,5 @@
 //! Reads registers of a drive by name over Modbus TCP, decoded by its map: the
-//! [`drivemap_live::Session`] that `drivemap read` is built on, used by another program.
+//! [`drivemap_live::session::Session`] that `drivemap read` is built on, used by another program.
 //!
 //! ```text
 //! cargo run -p drivemap-live --example read_by_name -- maps/yaskawa-v7.yaml 192.168.1.10:502 n019 output_current
@@ -12,7 +12,9 @@ use std::collections::BTreeSet;
 use std::error::Error;
 use std::path::Path;
 
-use drivemap_live::{Link, LiveSettings, Session, find_all};
+use drivemap_live::LiveSettings;
+use drivemap_live::link::Link;
+use drivemap_live::session::{Session, find_all};
 
 /// A register's id and its decoded value, or why it has none.
 pub type Reading = (String, Result<String, Box<dyn Error>>);
@@ -23,7 +25,7 @@ pub fn read_by_name(
     addr: &str,
     names: &[String],
 ) -> Result<Vec<Reading>, Box<dyn Error>> {
-    let drive = drivemap_map::read_map(map, &Default::default())?;
+    let drive = drivemap_map::Loader::new().load(map)?;
     let regs = find_all(&drive, names)?;
     let mut session = Session::open(&drive, &Link::tcp(addr), LiveSettings::default())?;
     for warning in session.load_dependencies(&regs, &BTreeSet::new()) {
@@ -33,11 +35,11 @@ pub fn read_by_name(
     Ok(regs
         .iter()
         .zip(words)
-        .map(|(r, word)| {
+        .map(|(&r, word)| {
             let value = word
                 .map_err(Box::<dyn Error>::from)
                 .and_then(|raw| Ok(session.decode(r, raw)?.to_string()));
-            (r.def.id.clone(), value)
+            (r.id().to_owned(), value)
         })
         .collect())
 }

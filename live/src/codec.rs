@@ -1,13 +1,13 @@
 //! Raw words ↔ engineering values by the map, at run time.
 //!
-//! The same plan the generated code holds as `const` data ([`Drive::plan`], lowered once per
+//! The same plan the generated code holds as `const` data ([`Map::plan`], lowered once per
 //! map), converted by the same implementation ([`RegisterPlan::decode_number`] and its
 //! siblings in the vocabulary crate): this module only turns the results into values a tool
 //! prints and parses what a user types.
 
 use std::fmt;
 
-use drivemap_map::ir::{Drive, Register};
+use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::plan::{Conversion, Field, RegisterPlan};
 use drivemap_runtime::ratio::Fraction;
 use drivemap_runtime::{Rounding, ValueError};
@@ -24,28 +24,45 @@ pub enum Value {
     /// decimals: displayed by [`Fraction`]'s rule (the decimal when finite, else the fraction
     /// and six decimals), `None` for other scales.
     Quantity {
+        /// The value in `unit`.
         value: f64,
+        /// The unit as the manual prints it (empty for none).
         unit: String,
+        /// The decimals the scale in use resolves, for display.
         decimals: usize,
+        /// The exact value under a ratio scale; `None` for other scales.
         exact: Option<Fraction>,
     },
     /// An enumeration code and, when the manual lists it, its id and meaning.
     Code {
+        /// The code read.
         code: u16,
+        /// The code's id in the map, when the manual lists the code.
         id: Option<String>,
+        /// The code's meaning as the manual prints it, when listed.
         name: Option<String>,
     },
     /// Bit fields.
-    Bits { raw: u16, fields: Vec<FieldValue> },
+    Bits {
+        /// The whole word.
+        raw: u16,
+        /// Each field of the map, in the map's order.
+        fields: Vec<FieldValue>,
+    },
 }
 
 /// One field of a bit-field register.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FieldValue {
+    /// The field's id in the map.
     pub id: String,
+    /// The field's name as the manual prints it.
     pub name: String,
+    /// Its lowest bit.
     pub lsb: u8,
+    /// Its width in bits.
     pub width: u8,
+    /// Its value, shifted down to bit 0.
     pub value: u16,
     /// Meaning of a multi-bit field's code, when listed.
     pub label: Option<String>,
@@ -120,11 +137,11 @@ impl fmt::Display for Value {
 
 /// The plan of `r` and a view of `settings` in the plan's slots.
 fn planned<'a>(
-    drive: &'a Drive,
-    r: &Register,
+    drive: &'a Map,
+    r: RegisterRef<'_>,
     settings: &'a LiveSettings,
 ) -> (&'static RegisterPlan, View<'a>) {
-    (drive.register_plan(r), settings.view(drive))
+    (r.plan(), settings.view(drive))
 }
 
 fn field_values(fields: &[Field], raw: u16) -> Vec<FieldValue> {
@@ -153,12 +170,12 @@ fn field_values(fields: &[Field], raw: u16) -> Vec<FieldValue> {
 /// meaning differs from its write form (`read_values`, [`RegisterPlan::read_values`]) gives its
 /// read code and meaning; [`decode_written`] gives the write form of a value.
 pub fn decode(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     raw: u32,
     settings: &LiveSettings,
 ) -> Result<Value, ValueError> {
-    let plan = drive.register_plan(r);
+    let plan = r.plan();
     if !plan.read_values.is_empty() {
         // Read meanings are codes of one word (validation refuses them on a pair).
         let raw = raw as u16;
@@ -175,8 +192,8 @@ pub fn decode(
 /// Decodes a word as a write means it (the register's conversion): what `drivemap write`
 /// reports it wrote. The same as [`decode`] except for registers with `read_values`.
 pub fn decode_written(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     raw: u32,
     settings: &LiveSettings,
 ) -> Result<Value, ValueError> {
@@ -225,8 +242,8 @@ pub fn decode_written(
 /// words and bit fields), checking the range first, by the register's plan: the raw value (a
 /// pair's goes out as `plan.info.width.split(raw)`).
 pub fn encode(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     value: f64,
     settings: &LiveSettings,
 ) -> Result<u32, ValueError> {
@@ -237,8 +254,8 @@ pub fn encode(
 /// ([`Rounding::Exact`], as `encode`) or the nearest step ([`Rounding::Nearest`]); limits are
 /// checked on the value given.
 pub fn encode_with(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     value: f64,
     settings: &LiveSettings,
     rounding: Rounding,
@@ -303,7 +320,9 @@ fn parse_number(text: &str) -> Option<f64> {
 /// cover. Bits outside `mask` were not named.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FieldInput {
+    /// The bits the named fields set, in place in the word.
     pub value: u16,
+    /// The bits the named fields cover.
     pub mask: u16,
 }
 
@@ -311,11 +330,12 @@ pub struct FieldInput {
 /// meaning, `on`/`off`, `true`/`false`) for a bit-field register; `None` for a plain number,
 /// which is the whole word.
 pub fn field_input(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     text: &str,
 ) -> Result<Option<FieldInput>, InputError> {
-    match &drive.register_plan(r).conversion {
+    debug_assert!(std::ptr::eq(drive, r.map()), "a register of another map");
+    match &r.plan().conversion {
         Conversion::Bits { fields, .. } if parse_number(text).is_none() => {
             parse_fields(r, fields, text.trim()).map(Some)
         }
@@ -323,7 +343,11 @@ pub fn field_input(
     }
 }
 
-fn parse_fields(r: &Register, fields: &[Field], text: &str) -> Result<FieldInput, InputError> {
+fn parse_fields(
+    r: RegisterRef<'_>,
+    fields: &[Field],
+    text: &str,
+) -> Result<FieldInput, InputError> {
     let mut input = FieldInput { value: 0, mask: 0 };
     for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let (name, v) = part.split_once('=').unwrap_or((part, "1"));
@@ -388,8 +412,8 @@ fn parse_fields(r: &Register, fields: &[Field], text: &str) -> Result<FieldInput
 /// Parses a value as a user types it — `48`, `48.5 Hz`, an enumeration code, id or printed
 /// meaning, bit fields as `run,reverse` or `run=1,mode=2`, or a raw `0x0003` — and encodes it.
 pub fn parse_value(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     text: &str,
     settings: &LiveSettings,
 ) -> Result<u32, InputError> {
@@ -399,8 +423,8 @@ pub fn parse_value(
 /// [`parse_value`] with a choice for a number between two steps of the register (`--round`).
 /// An empty text is refused: it is no value.
 pub fn parse_value_with(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     text: &str,
     settings: &LiveSettings,
     rounding: Rounding,
@@ -409,7 +433,7 @@ pub fn parse_value_with(
     if text.is_empty() {
         return Err(InputError::Parse(format!("no value given for {}", r.id())));
     }
-    let plan = drive.register_plan(r);
+    let plan = r.plan();
     let value = match &plan.conversion {
         Conversion::Enum { values, .. } => {
             let lower = text.to_ascii_lowercase();

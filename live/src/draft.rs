@@ -6,15 +6,15 @@
 //! ([`DraftWrites::Allowed`]), and then every write says it went through a draft.
 //!
 //! The refusal is made twice: by each command before anything is sent (with a message naming
-//! the map), and by the link itself ([`Link::connect_as`](crate::Link::connect_as) wraps the
+//! the map), and by the link itself ([`Link::connect_as`](crate::link::Link::connect_as) wraps the
 //! transport of a draft's client in a guard that refuses every write function code unsent), so
-//! no path that reaches a drive through a [`Link`](crate::Link) writes through a draft by
+//! no path that reaches a drive through a [`Link`](crate::link::Link) writes through a draft by
 //! accident.
 
 use std::io;
 use std::time::Instant;
 
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 
@@ -41,29 +41,31 @@ impl DraftWrites {
 
 /// What a read through `drive` says when it is a draft: `kestrel-k20 is a draft map (made by
 /// drivemap import), not reviewed against its manual: values read may be misplaced or misscaled`.
-pub fn read_note(drive: &Drive) -> Option<String> {
-    let d = drive.draft.as_ref()?;
+pub fn read_note(drive: &Map) -> Option<String> {
+    let d = drive.draft()?;
     Some(format!(
         "{} is a draft map (made by {}), not reviewed against its manual: what is read through it may be misplaced or misscaled",
-        drive.meta.id, d.by
+        drive.id(),
+        d.by
     ))
 }
 
 /// Refuses a write through `drive` when it is a draft and `writes` is not
 /// [`DraftWrites::Allowed`]; `Ok(Some(note))` when it is a draft and allowed (the note to print
 /// with every write), `Ok(None)` for a reviewed map.
-pub fn check_write(drive: &Drive, writes: DraftWrites) -> Result<Option<String>, String> {
-    let Some(d) = drive.draft.as_ref() else {
+pub fn check_write(drive: &Map, writes: DraftWrites) -> Result<Option<String>, String> {
+    let Some(d) = drive.draft() else {
         return Ok(None);
     };
     match writes {
         DraftWrites::Refused => Err(format!(
             "{} is a draft map (made by {}), not reviewed against its manual: its addresses, scales and accesses may be wrong, so nothing is written through it unless --draft is given; nothing written",
-            drive.meta.id, d.by
+            drive.id(),
+            d.by
         )),
         DraftWrites::Allowed => Ok(Some(format!(
             "through draft map {} (--draft): not reviewed against its manual",
-            drive.meta.id
+            drive.id()
         ))),
     }
 }
@@ -71,16 +73,16 @@ pub fn check_write(drive: &Drive, writes: DraftWrites) -> Result<Option<String>,
 /// `transport`, refusing every write request unsent (function codes 05h, 06h, 0Fh, 10h, 16h,
 /// 17h) when `drive` is a draft and `writes` does not allow it; `transport` as it is otherwise.
 pub fn guard(
-    drive: &Drive,
+    drive: &Map,
     writes: DraftWrites,
     transport: Box<dyn Transport>,
 ) -> Box<dyn Transport> {
-    if drive.draft.is_none() || writes == DraftWrites::Allowed {
+    if drive.draft().is_none() || writes == DraftWrites::Allowed {
         return transport;
     }
     Box::new(Guarded {
         inner: transport,
-        drive: drive.meta.id.clone(),
+        drive: drive.id().to_owned(),
     })
 }
 
@@ -99,7 +101,7 @@ fn function_code(kind: TransportKind, frame: &[u8]) -> Option<u8> {
 }
 
 /// Whether a function code writes.
-pub fn writes(code: u8) -> bool {
+pub(crate) fn writes(code: u8) -> bool {
     matches!(code, 0x05 | 0x06 | 0x0F | 0x10 | 0x16 | 0x17)
 }
 

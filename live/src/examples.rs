@@ -17,11 +17,10 @@
 //! Each finding is located at the byte concerned: `file:line:col` of that byte in the
 //! `bytes:` text. `drivemap check` runs it on every map.
 
-use drivemap_map::diagnostic::{Diagnostic, Loc};
 use drivemap_map::examples::{Byte, Direction, Example, hex_text, locate_offset, parse_bytes};
-use drivemap_map::ir::{Drive, Register};
-use drivemap_map::model::TransportName;
-use drivemap_map::source::Path;
+use drivemap_map::facts::TransportName;
+use drivemap_map::{Diagnostic, Loc};
+use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::pdu::{self, Request, Response};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Table, ValueError, crc, tcp};
@@ -59,17 +58,17 @@ pub fn kind_of(e: &Example) -> TransportKind {
 }
 
 /// Settings for decoding examples: the map's defaults of the registers conversions depend on.
-pub fn default_settings(drive: &Drive) -> LiveSettings {
+pub(crate) fn default_settings(drive: &Map) -> LiveSettings {
     let mut settings = LiveSettings::default();
     let deps = LiveSettings::dependencies(drive);
-    for r in &drive.registers {
-        if !deps.contains(&r.def.address) {
+    for r in drive.registers() {
+        if !deps.contains(&r.address()) {
             continue;
         }
         if let Some(d) = r.default_value()
             && let Ok(raw) = codec::encode(drive, r, d, &settings)
         {
-            settings.absorb(drive, r.def.address, raw as u16);
+            settings.absorb(drive, r.address(), raw as u16);
         }
     }
     settings
@@ -77,13 +76,13 @@ pub fn default_settings(drive: &Drive) -> LiveSettings {
 
 /// `base` with the drive state an example assumes (`settings:`): a register's value (by id or
 /// parameter number) taken as if read from the drive, else an external quantity.
-pub fn with_settings(drive: &Drive, e: &Example, base: &LiveSettings) -> LiveSettings {
+pub fn with_settings(drive: &Map, e: &Example, base: &LiveSettings) -> LiveSettings {
     let mut settings = base.clone();
     for (name, &value) in &e.settings {
-        match drive.find(name) {
+        match drive.register(name) {
             Some(r) => {
                 if let Ok(raw) = codec::encode(drive, r, value, &settings) {
-                    settings.absorb(drive, r.def.address, raw as u16);
+                    settings.absorb(drive, r.address(), raw as u16);
                 }
             }
             None => {
@@ -97,20 +96,20 @@ pub fn with_settings(drive: &Drive, e: &Example, base: &LiveSettings) -> LiveSet
 /// The register at communication address `address` on `kind`, as the plan places it (the word
 /// of a 32-bit pair with its index), among broadcast registers when `broadcast`.
 pub fn register_at<'a>(
-    drive: &'a Drive,
+    drive: &'a Map,
     settings: &LiveSettings,
     kind: TransportKind,
     address: u16,
     table: Option<Table>,
     broadcast: bool,
-) -> Option<(&'a Register, u16)> {
+) -> Option<(RegisterRef<'a>, u16)> {
     let view = settings.view(drive);
     let find = |want_broadcast: bool| {
-        drive.registers.iter().find_map(|r| {
-            if r.broadcast != want_broadcast {
+        drive.registers().find_map(|r| {
+            if r.broadcast_only() != want_broadcast {
                 return None;
             }
-            let plan = drive.register_plan(r);
+            let plan = r.plan();
             if !plan.transports.contains(kind) || table.is_some_and(|t| plan.info.table != t) {
                 return None;
             }
@@ -316,9 +315,9 @@ impl Recorded {
 }
 
 /// Verifies every example of `drive`; the findings are located at the byte concerned.
-pub fn verify(drive: &Drive) -> Verified {
+pub fn verify(drive: &Map) -> Verified {
     let mut v = Verified::default();
-    for (i, (e, found)) in drive.examples.iter().zip(findings(drive)).enumerate() {
+    for (i, (e, found)) in drive.examples().iter().zip(findings(drive)).enumerate() {
         match (&e.conflict, found.is_empty()) {
             (None, true) => v.clean += 1,
             (None, false) => v.errors.extend(found.into_iter().map(|f| f.diagnostic)),
@@ -331,8 +330,8 @@ pub fn verify(drive: &Drive) -> Verified {
                     findings,
                 });
             }
-            (Some(topic), true) => v.errors.push(drive.error(
-                &Path::root().key("examples").index(i).key("conflict"),
+            (Some(topic), true) => v.errors.push(drive.error_at(
+                &format!("examples[{i}].conflict"),
                 None,
                 format!(
                     "example `{}` verifies against the codec and the map, but is marked as \
@@ -346,20 +345,16 @@ pub fn verify(drive: &Drive) -> Verified {
 }
 
 /// The findings of each example of `drive`, in order, marked or not.
-pub fn findings(drive: &Drive) -> Vec<Vec<Finding>> {
+pub(crate) fn findings(drive: &Map) -> Vec<Vec<Finding>> {
     let settings = default_settings(drive);
     let mut all = Vec::new();
-    for (i, e) in drive.examples.iter().enumerate() {
-        let path = Path::root().key("examples").index(i);
+    for (i, e) in drive.examples().iter().enumerate() {
+        let path = format!("examples[{i}]");
         let Ok(offsets) = parse_bytes(&e.bytes) else {
             all.push(Vec::new()); // the front end reports it
             continue;
         };
-        let bytes_loc = drive
-            .tree
-            .at(&path.key("bytes"))
-            .map(|n| n.loc.clone())
-            .unwrap_or_else(|| drive.locate(&path.key("bytes")));
+        let bytes_loc = drive.locate_value(&format!("{path}.bytes"));
         let settings = with_settings(drive, e, &settings);
         let v = Verifier {
             drive,
@@ -377,12 +372,12 @@ pub fn findings(drive: &Drive) -> Vec<Vec<Finding>> {
 }
 
 struct Verifier<'a> {
-    drive: &'a Drive,
+    drive: &'a Map,
     settings: &'a LiveSettings,
     example: &'a Example,
     offsets: &'a [Byte],
     bytes_loc: Loc,
-    path: Path,
+    path: String,
 }
 
 /// A function code in the manuals' notation.
@@ -416,7 +411,7 @@ impl Verifier<'_> {
 
     /// Whether an example of the map answers this request with an exception.
     fn refused(&self) -> bool {
-        self.drive.examples.iter().any(|x| {
+        self.drive.examples().iter().any(|x| {
             x.answers.as_deref() == Some(self.example.id.as_str())
                 && frame(x).is_ok_and(|f| f.bytes[f.pdu_start] & 0x80 != 0)
                 || x.answers.as_deref() == Some(self.example.id.as_str())
@@ -425,8 +420,8 @@ impl Verifier<'_> {
     }
 
     fn says_error(&self, out: &mut Vec<Finding>, key: &str, msg: String) {
-        let diagnostic = self.drive.error(
-            &self.path.key("says").key(key),
+        let diagnostic = self.drive.error_at(
+            &format!("{}.says.{key}", self.path),
             None,
             format!("example `{}`: {msg}", self.example.id),
         );
@@ -444,7 +439,7 @@ impl Verifier<'_> {
             Err((index, msg)) => return self.error(out, index, None, msg),
         };
         let function = f.bytes[f.pdu_start];
-        let allowed = &self.drive.protocol.function_codes.codes;
+        let allowed = &self.drive.protocol().function_codes.codes;
         if !allowed.contains(&(function & 0x7F)) {
             let list: Vec<String> = allowed.iter().map(|&c| fc(c)).collect();
             return self.error(
@@ -559,19 +554,19 @@ impl Verifier<'_> {
             else {
                 continue;
             };
-            let functions = self.drive.register_plan(r).functions;
+            let functions = r.plan().functions;
             if !functions.allows(function) {
                 let list: Vec<String> = functions.codes.iter().map(|&c| fc(c)).collect();
                 return self.error(
                     out,
                     f.pdu_start,
-                    Some(&r.def.id),
+                    Some(r.id()),
                     format!(
                         "function {} to {comm:04X}h: `{}` accepts only {} (`{}`), so the drive \
                          refuses it; if the manual prints the refusal, add its exception response \
                          (`answers: {}`, `says: {{exception: ..}}`)",
                         fc(function),
-                        r.def.id,
+                        r.id(),
                         list.join(", "),
                         functions.source,
                         self.example.id
@@ -645,20 +640,20 @@ impl Verifier<'_> {
             };
             if k == 0
                 && let Some(name) = named
-                && r.def.id != *name
+                && r.id() != *name
             {
                 self.error(
                     out,
                     address_byte,
-                    Some(&r.def.id),
+                    Some(r.id()),
                     format!(
                         "address {comm:04X}h is `{}`, the example says `{name}`",
-                        r.def.id
+                        r.id()
                     ),
                 );
             }
             let Some(&raw) = words.get(k) else { continue };
-            let plan = self.drive.register_plan(r);
+            let plan = r.plan();
             if plan.info.width.count() != 1 || word != 0 {
                 continue; // a pair's words are checked as one value only through the typed API
             }
@@ -677,7 +672,7 @@ impl Verifier<'_> {
                     self.error(
                         out,
                         byte,
-                        Some(&r.def.id),
+                        Some(r.id()),
                         format!("{raw:04X}h does not decode: {err}"),
                     );
                     continue;
@@ -693,8 +688,8 @@ impl Verifier<'_> {
                 self.error(
                     out,
                     byte,
-                    Some(&r.def.id),
-                    format!("`{}` is read-only in the map", r.def.id),
+                    Some(r.id()),
+                    format!("`{}` is read-only in the map", r.id()),
                 );
             }
             if writing {
@@ -712,7 +707,7 @@ impl Verifier<'_> {
                     self.error(
                         out,
                         byte,
-                        Some(&r.def.id),
+                        Some(r.id()),
                         format!("{raw:04X}h = {number} is refused by the map: {err}"),
                     );
                 }
@@ -723,7 +718,7 @@ impl Verifier<'_> {
                     self.error(
                         out,
                         byte,
-                        Some(&r.def.id),
+                        Some(r.id()),
                         format!(
                             "{raw:04X}h decodes to {number} by the map, the example says {stated}"
                         ),
@@ -760,7 +755,7 @@ impl Verifier<'_> {
                     ),
                 );
             };
-            let listed = &self.drive.protocol.exceptions;
+            let listed = &self.drive.protocol().exceptions;
             if !listed.is_empty() && !listed.iter().any(|x| x.code == code) {
                 self.error(
                     out,
@@ -787,7 +782,7 @@ impl Verifier<'_> {
             );
         }
         let Some(req_id) = &e.answers else { return };
-        let Some(req_ex) = self.drive.examples.iter().find(|x| x.id == *req_id) else {
+        let Some(req_ex) = self.drive.examples().iter().find(|x| x.id == *req_id) else {
             return; // the front end reports it
         };
         let Ok(rf) = frame(req_ex) else { return };

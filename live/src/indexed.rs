@@ -3,7 +3,7 @@
 //! client (index written, then the value read or written, verified where the index register is
 //! readable: `drivemap_runtime::indexed`).
 
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::core::indexed::EntryRef;
 
 use crate::session::Session;
@@ -17,11 +17,11 @@ fn norm(s: &str) -> String {
 
 /// The entry named `name`: its id, its parameter number as printed, or its printed name
 /// (case and punctuation ignored). `None` when no entry of the map has that name.
-pub fn find_entry(drive: &Drive, name: &str) -> Option<EntryRef> {
+pub fn find_entry(drive: &Map, name: &str) -> Option<EntryRef> {
     let plan = drive.plan();
     let wanted = norm(name);
-    for r in &drive.registers {
-        let Some(ix) = &r.def.indexed else { continue };
+    for r in drive.registers() {
+        let Some(ix) = r.indexed() else { continue };
         let Some(pair) = plan.indexed.iter().find(|p| p.register == r.id()) else {
             continue;
         };

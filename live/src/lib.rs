@@ -1,11 +1,12 @@
 //! A drive map at run time, for tools that load YAML instead of compiling it: the simulator,
 //! the `drivemap read/write/poll` commands, and any program that talks to a drive by register
-//! name ([`Session`] over a [`Link`]; `examples/read_by_name.rs`).
+//! name ([`session::Session`] over a [`link::Link`]; `examples/read_by_name.rs`).
 //!
-//! The generated modules and this crate agree by construction: both read the same validated IR
-//! ([`drivemap_map::ir`]) and convert with the same functions of
+//! The generated modules and this crate agree by construction: both read the same plan of a
+//! validated map ([`drivemap_map::Map::plan`]) and convert with the same functions of
 //! [`drivemap_runtime::scale`]; a test in `tests/` compares them register by register.
 #![doc = include_str!("../README.md")]
+#![warn(missing_docs, unreachable_pub)]
 
 pub mod codec;
 pub mod draft;
@@ -16,16 +17,11 @@ pub mod intern;
 pub mod link;
 pub mod lookup;
 pub mod paramset;
-pub mod profile;
+mod profile;
 pub mod session;
-pub mod settings;
+mod settings;
 pub mod silence;
 pub mod unprinted;
 
-pub use codec::{Value, decode, encode, parse_value};
-pub use link::{Link, LinkError, Parity};
-pub use lookup::{NotFound, find};
-pub use paramset::ParameterSet;
 pub use profile::leak_profile;
-pub use session::{ReadError, Session, SessionError, find_all};
-pub use settings::LiveSettings;
+pub use settings::{LiveSettings, View};

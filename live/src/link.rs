@@ -2,16 +2,15 @@
 //!
 //! [`Link`] is what the `drivemap` command's `--tcp`, `--gateway`, `--rtu-tcp`, `--serial`,
 //! `--ascii` and timing options give (with the `clap` feature it is those options); a program fills it in
-//! and opens a [`crate::Session`] on it.
+//! and opens a [`crate::session::Session`] on it.
 
 use std::time::Duration;
 
-use drivemap_map::Drive;
+use drivemap_map::Map;
 
 use crate::draft::DraftWrites;
 use drivemap_runtime::bus_time::SerialConfig;
-/// Parity of a serial line: the vocabulary crate's one definition (`none`, `even`, `odd`).
-pub use drivemap_runtime::profile::Parity;
+use drivemap_runtime::profile::Parity;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::ascii_over_tcp::AsciiOverTcpTransport;
@@ -238,9 +237,9 @@ impl Link {
     }
 
     /// The slave address to talk to.
-    pub fn slave(&self, drive: &Drive) -> u8 {
+    pub fn slave(&self, drive: &Map) -> u8 {
         self.slave
-            .or(drive.protocol.slave_address.default)
+            .or(drive.protocol().slave_address.default)
             .unwrap_or(1)
     }
 
@@ -265,25 +264,25 @@ impl Link {
 
     /// Data bits of the serial line: 8 on RTU; on ASCII as given, else the map's
     /// `serial.data_bits`.
-    pub fn data_bits(&self, drive: &Drive) -> u8 {
+    pub fn data_bits(&self, drive: &Map) -> u8 {
         if !self.ascii {
             return 8;
         }
         self.data_bits
-            .or(drive.protocol.serial.as_ref().map(|s| s.data_bits))
+            .or(drive.protocol().serial.as_ref().map(|s| s.data_bits))
             .unwrap_or(8)
     }
 
     /// Baud rate, parity and stop bits of the serial line: as given, else the map's defaults
     /// (9600, no parity); 2 stop bits without parity where the map fixes 11-bit characters.
-    pub fn line(&self, drive: &Drive) -> (u32, Parity, u8) {
+    pub fn line(&self, drive: &Map) -> (u32, Parity, u8) {
         serial_line(drive, self.baud, self.parity, self.stop_bits)
     }
 
     /// The line as the bus-time model of the runtime's read planner sees it (serial links; a
     /// TCP link is planned as the default 9600 baud line, which only the relative costs matter
     /// for).
-    pub fn bus_line(&self, drive: &Drive) -> SerialConfig {
+    pub fn bus_line(&self, drive: &Map) -> SerialConfig {
         if self.serial.is_none() && self.gateway.is_none() {
             return SerialConfig::default();
         }
@@ -292,7 +291,7 @@ impl Link {
 
     /// The serial line's baud rate and framing ([`Link::line`]) as the runtime counts bit
     /// and character times.
-    fn serial_config(&self, drive: &Drive) -> SerialConfig {
+    fn serial_config(&self, drive: &Map) -> SerialConfig {
         let (baud, parity, stop_bits) = self.line(drive);
         let mut config = SerialConfig::new(baud).parity(parity).stop_bits(stop_bits);
         config.data_bits = self.data_bits(drive);
@@ -307,7 +306,7 @@ impl Link {
     /// the serial line's request gap does not apply (the drive's network card keeps its own
     /// line), so none is kept unless given; through a gateway (`--gateway`) the drive is on a
     /// serial line and its timing applies.
-    pub fn client_options(&self, drive: &Drive, profile: &Profile) -> ClientOptions {
+    pub fn client_options(&self, drive: &Map, profile: &Profile) -> ClientOptions {
         let mut options = if self.kind().reaches_rtu_side() {
             ClientOptions::for_line(profile, self.serial_config(drive))
         } else {
@@ -330,9 +329,9 @@ impl Link {
     /// serial drive behind a Modbus TCP gateway is addressed on its RTU side, which `--gateway`
     /// does (Modbus TCP addressing would put every register of a drive with an RTU address
     /// offset one off).
-    pub fn check_transport(&self, drive: &Drive) -> Result<(), LinkError> {
-        use drivemap_map::model::TransportName;
-        let listed = &drive.protocol.transports;
+    pub fn check_transport(&self, drive: &Map) -> Result<(), LinkError> {
+        use drivemap_map::facts::TransportName;
+        let listed = &drive.protocol().transports;
         let transports = || {
             listed
                 .iter()
@@ -348,7 +347,7 @@ impl Link {
             }
             if !listed.contains(&TransportName::Ascii) {
                 return Err(LinkError::NoAscii {
-                    drive: drive.meta.id.clone(),
+                    drive: drive.id().to_owned(),
                     transports: transports(),
                 });
             }
@@ -363,21 +362,21 @@ impl Link {
             && !listed.contains(&TransportName::Rtu)
         {
             return Err(LinkError::NoRtu {
-                drive: drive.meta.id.clone(),
+                drive: drive.id().to_owned(),
                 transports: transports(),
             });
         }
         let Some(addr) = &self.tcp else {
             return Ok(());
         };
-        if drive.protocol.transports.contains(&TransportName::Tcp) {
+        if drive.protocol().transports.contains(&TransportName::Tcp) {
             return Ok(());
         }
         Err(LinkError::NoTcp {
-            drive: drive.meta.id.clone(),
+            drive: drive.id().to_owned(),
             addr: addr.clone(),
             transports: drive
-                .protocol
+                .protocol()
                 .transports
                 .iter()
                 .map(|t| t.word())
@@ -392,7 +391,7 @@ impl Link {
     /// through.
     pub fn connect(
         &self,
-        drive: &Drive,
+        drive: &Map,
         profile: &'static Profile,
     ) -> Result<(LiveClient, String), LinkError> {
         self.connect_as(drive, profile, DraftWrites::Refused)
@@ -402,7 +401,7 @@ impl Link {
     /// (the command line's `--draft`); a reviewed map's writes are not affected.
     pub fn connect_as(
         &self,
-        drive: &Drive,
+        drive: &Map,
         profile: &'static Profile,
         draft: DraftWrites,
     ) -> Result<(LiveClient, String), LinkError> {
@@ -490,13 +489,13 @@ impl Link {
 }
 
 /// Baud rate, parity and stop bits of a serial line to `drive`: what is given, else the map's
-/// defaults ([`drivemap_map::ir::SerialDefaults`]: 9600, no parity unless the map says
+/// defaults ([`drivemap_map::facts::SerialDefaults`]: 9600, no parity unless the map says
 /// otherwise; the stop bits of the map's formats for the parity when they give only one, else
 /// 2 without parity where the map fixes 11-bit characters, else 1). For `read`/`write`/`poll`
 /// and for `simulate --serial`; whether the map lists the combination is checked when the port
 /// is opened ([`SerialOptions::check_format`]).
 pub fn serial_line(
-    drive: &Drive,
+    drive: &Map,
     baud: Option<u32>,
     parity: Option<Parity>,
     stop_bits: Option<u8>,
@@ -543,7 +542,7 @@ mod tests {
     #[test]
     fn client_timing_defaults_come_from_the_map() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml");
-        let drive = drivemap_map::read_map(&path, &Default::default()).expect("the V7 map");
+        let drive = drivemap_map::Loader::new().load(&path).expect("the V7 map");
         let profile = crate::leak_profile(&drive);
         let gap = |a: &Link| a.client_options(&drive, profile).request_gap;
         assert_eq!(gap(&args("serial")), Duration::from_micros(12_500));

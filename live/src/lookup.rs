@@ -13,12 +13,14 @@
 
 use std::fmt;
 
-use drivemap_map::ir::{Drive, Register};
+use drivemap_map::{Map, RegisterRef};
 
 /// No register has that name.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct NotFound {
+    /// The name as given.
     pub name: String,
+    /// The id of the drive whose map was searched.
     pub drive: String,
     /// Nearest ids (with parameter numbers), best first.
     pub suggestions: Vec<String>,
@@ -73,7 +75,7 @@ fn norm(s: &str) -> String {
 }
 
 /// Levenshtein distance, for suggestions.
-pub fn distance(a: &str, b: &str) -> usize {
+pub(crate) fn distance(a: &str, b: &str) -> usize {
     let b: Vec<char> = b.chars().collect();
     let mut prev: Vec<usize> = (0..=b.len()).collect();
     for (i, ca) in a.chars().enumerate() {
@@ -178,18 +180,14 @@ pub enum ModiconReading {
 /// - the PDU address is turned into the map's address with the `protocol.addressing` offset of
 ///   each transport the map lists (serial side and Modbus TCP); where they differ (ACN: RTU
 ///   -1, TCP 0) the reference names two registers and is refused.
-pub fn modicon_reading(drive: &Drive, name: &str) -> Option<ModiconReading> {
-    use drivemap_map::model::{AddressFormat, TransportName};
+pub fn modicon_reading(drive: &Map, name: &str) -> Option<ModiconReading> {
+    use drivemap_map::facts::{AddressFormat, TransportName};
     let reference = modicon(name)?;
-    if drive.address_format == AddressFormat::Decimal {
-        let big = drive.registers.iter().any(|r| {
-            r.def.address >= 10_000
-                || r.def
-                    .address_alternatives
-                    .iter()
-                    .any(|a| a.address >= 10_000)
+    if drive.address_format() == AddressFormat::Decimal {
+        let big = drive.registers().any(|r| {
+            r.address() >= 10_000 || r.address_alternatives().iter().any(|a| a.address >= 10_000)
         }) || drive
-            .gaps
+            .gaps()
             .iter()
             .any(|g| g.addresses.is_some_and(|[_, hi]| hi >= 10_000));
         if big {
@@ -200,7 +198,7 @@ pub fn modicon_reading(drive: &Drive, name: &str) -> Option<ModiconReading> {
         }
     }
     let (rtu, tcp) = drive.address_offsets();
-    let listed = &drive.protocol.transports;
+    let listed = &drive.protocol().transports;
     let mut offsets: Vec<(&str, i32)> = Vec::new();
     if listed.iter().any(|t| t.is_serial()) {
         offsets.push(("the serial side", rtu));
@@ -237,8 +235,8 @@ pub fn modicon_reading(drive: &Drive, name: &str) -> Option<ModiconReading> {
 }
 
 /// The register a Modicon reference names in `drive`, or why none.
-fn by_reference<'a>(drive: &'a Drive, name: &str) -> Option<Result<&'a Register, String>> {
-    use drivemap_map::model::ModbusTable;
+fn by_reference<'a>(drive: &'a Map, name: &str) -> Option<Result<RegisterRef<'a>, String>> {
+    use drivemap_runtime::Table as ModbusTable;
     let (reference, address) = match modicon_reading(drive, name)? {
         ModiconReading::Address { reference, address } => (reference, address),
         ModiconReading::Refused(why) => return Some(Err(why)),
@@ -264,12 +262,12 @@ fn by_reference<'a>(drive: &'a Drive, name: &str) -> Option<Result<&'a Register,
         "input register"
     };
     Some(match at_address(drive, address) {
-        Some(r) if r.table == table => Ok(r),
+        Some(r) if r.plan().info.table == table => Ok(r),
         Some(r) => Err(format!(
             "as a Modicon reference it is {what} {}, and {} there is {} register",
             printed_number(drive, address),
-            r.def.id,
-            if r.table == ModbusTable::Holding {
+            r.id(),
+            if r.plan().info.table == ModbusTable::Holding {
                 "a holding"
             } else {
                 "an input"
@@ -284,55 +282,51 @@ fn by_reference<'a>(drive: &'a Drive, name: &str) -> Option<Result<&'a Register,
 }
 
 /// An address as the map prints it: decimal in a decimal map, else `2101H`.
-fn printed_number(drive: &Drive, address: u16) -> String {
-    match drive.address_format {
-        drivemap_map::model::AddressFormat::Decimal => address.to_string(),
-        drivemap_map::model::AddressFormat::Hex => format!("{address:04X}H"),
+fn printed_number(drive: &Map, address: u16) -> String {
+    match drive.address_format() {
+        drivemap_map::facts::AddressFormat::Decimal => address.to_string(),
+        drivemap_map::facts::AddressFormat::Hex => format!("{address:04X}H"),
     }
 }
 
 /// The register at `address` (its own address, an alternative, or the second word of a pair),
 /// among those found by name.
-fn at_address(drive: &Drive, address: u16) -> Option<&Register> {
-    let normal = drive.registers.iter().filter(|r| !r.broadcast);
-    normal
-        .clone()
-        .find(|r| r.def.address == address)
-        .or_else(|| {
-            normal.clone().find(|r| {
-                r.def
-                    .address_alternatives
-                    .iter()
-                    .any(|a| a.address == address)
-                    || (r.def.pair.is_some() && r.def.address.checked_add(1) == Some(address))
-            })
+fn at_address(drive: &Map, address: u16) -> Option<RegisterRef<'_>> {
+    let normal = || drive.registers().filter(|r| !r.broadcast_only());
+    normal().find(|r| r.address() == address).or_else(|| {
+        normal().find(|r| {
+            r.address_alternatives()
+                .iter()
+                .any(|a| a.address == address)
+                || (r.width() != drivemap_runtime::Width::Word
+                    && r.address().checked_add(1) == Some(address))
         })
+    })
 }
 
 /// How the manual prints a register's address: `2101H`, or its number in a decimal manual.
-fn printed_address(drive: &Drive, r: &Register) -> String {
-    match drive.address_format {
-        drivemap_map::model::AddressFormat::Decimal => r.def.address.to_string(),
-        drivemap_map::model::AddressFormat::Hex => format!("{:04X}H", r.def.address),
+fn printed_address(drive: &Map, r: RegisterRef<'_>) -> String {
+    match drive.address_format() {
+        drivemap_map::facts::AddressFormat::Decimal => r.address().to_string(),
+        drivemap_map::facts::AddressFormat::Hex => format!("{:04X}H", r.address()),
     }
 }
 
 /// Finds a register by id, parameter number, printed name (case and punctuation ignored), or
 /// address in the manual's notation. Broadcast-only registers are found by id only.
-pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> {
-    if let Some(r) = drive.registers.iter().find(|r| r.def.id == name) {
+pub fn find<'a>(drive: &'a Map, name: &str) -> Result<RegisterRef<'a>, NotFound> {
+    if let Some(r) = drive.registers().find(|r| r.id() == name) {
         return Ok(r);
     }
     let key = norm(name);
-    let normal = drive.registers.iter().filter(|r| !r.broadcast);
-    let hit = normal
-        .clone()
-        .find(|r| norm(&r.def.id) == key || r.def.param.as_deref().is_some_and(|p| norm(p) == key))
-        .or_else(|| normal.clone().find(|r| norm(&r.def.name) == key));
+    let normal = || drive.registers().filter(|r| !r.broadcast_only());
+    let hit = normal()
+        .find(|r| norm(r.id()) == key || r.param().is_some_and(|p| norm(p) == key))
+        .or_else(|| normal().find(|r| norm(r.name()) == key));
     if let Some(r) = hit {
         return Ok(r);
     }
-    let decimal = drive.address_format == drivemap_map::model::AddressFormat::Decimal;
+    let decimal = drive.address_format() == drivemap_map::facts::AddressFormat::Decimal;
     if let Some(r) = address_in(name, decimal).and_then(|a| at_address(drive, a)) {
         return Ok(r);
     }
@@ -342,7 +336,7 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
         Some(Err(why)) => {
             return Err(NotFound {
                 name: name.to_owned(),
-                drive: drive.meta.id.clone(),
+                drive: drive.id().to_owned(),
                 suggestions: Vec::new(),
                 gap: None,
                 reference: Some(why.into_boxed_str()),
@@ -352,7 +346,7 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
     }
     // An address the map records as a gap (reserved, illegible): said so, not suggested away.
     let gap = address_in(name, decimal).and_then(|a| {
-        drive.gaps.iter().find_map(|g| {
+        drive.gaps().iter().find_map(|g| {
             let [lo, hi] = g.addresses?;
             (lo..=hi).contains(&a).then(|| {
                 // The map's text, on one line, at most 120 characters.
@@ -372,7 +366,7 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
     if gap.is_some() {
         return Err(NotFound {
             name: name.to_owned(),
-            drive: drive.meta.id.clone(),
+            drive: drive.id().to_owned(),
             suggestions: Vec::new(),
             gap,
             reference: None,
@@ -383,21 +377,20 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
         .then(|| address_in(&format!("{}H", name.trim()), false))
         .flatten()
         .and_then(|a| at_address(drive, a))
-        .map(|r| format!("{} ({})", printed_address(drive, r), r.def.id));
+        .map(|r| format!("{} ({})", printed_address(drive, r), r.id()));
     let mut scored: Vec<(usize, String)> = drive
-        .registers
-        .iter()
+        .registers()
         .map(|r| {
-            let mut d = distance(&key, &norm(&r.def.id));
-            if let Some(p) = &r.def.param {
+            let mut d = distance(&key, &norm(r.id()));
+            if let Some(p) = r.param() {
                 d = d.min(distance(&key, &norm(p)));
             }
-            if !key.is_empty() && norm(&r.def.id).contains(&key) {
+            if !key.is_empty() && norm(r.id()).contains(&key) {
                 d = d.min(1);
             }
-            let shown = match &r.def.param {
-                Some(p) => format!("{} ({p})", r.def.id),
-                None => r.def.id.clone(),
+            let shown = match r.param() {
+                Some(p) => format!("{} ({p})", r.id()),
+                None => r.id().to_owned(),
             };
             (d, shown)
         })
@@ -406,7 +399,7 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
     let limit = (key.len() / 2).max(3);
     Err(NotFound {
         name: name.to_owned(),
-        drive: drive.meta.id.clone(),
+        drive: drive.id().to_owned(),
         gap: None,
         reference: None,
         suggestions: as_hex
@@ -426,15 +419,15 @@ pub fn find<'a>(drive: &'a Drive, name: &str) -> Result<&'a Register, NotFound> 
 mod tests {
     use super::*;
 
-    fn fixture(path: &str) -> Drive {
+    fn fixture(path: &str) -> Map {
         let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../tests/fixtures")
             .join(path);
-        drivemap_map::read_map(&p, &Default::default()).expect("fixture map")
+        drivemap_map::Loader::new().load(&p).expect("fixture map")
     }
 
-    fn id<'a>(drive: &'a Drive, name: &str) -> Result<&'a str, NotFound> {
-        find(drive, name).map(|r| r.def.id.as_str())
+    fn id<'a>(drive: &'a Map, name: &str) -> Result<&'a str, NotFound> {
+        find(drive, name).map(|r| r.id())
     }
 
     #[test]
@@ -521,12 +514,12 @@ mod tests {
         assert_eq!(id(&z3, "45"), Ok("acceleration_time"));
 
         // Offsets that differ per transport (RTU -1, TCP 0): two registers, refused.
-        let acn = drivemap_map::read_map(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../maps/automationdirect-acn.yaml"),
-            &Default::default(),
-        )
-        .expect("the ACN map");
+        let acn = drivemap_map::Loader::new()
+            .load(
+                &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("../maps/automationdirect-acn.yaml"),
+            )
+            .expect("the ACN map");
         let e = id(&acn, "44356").unwrap_err().to_string();
         assert!(
             e.contains("PDU address 1103h")
@@ -554,7 +547,8 @@ groups:
       - {id: low, name: Low, address: 23, source: "x.txt:1"}
       - {id: high, name: High, address: 40024, source: "x.txt:2"}
 "#;
-        let drive = drivemap_map::read_map_str("big-decimal.yaml", text, &Default::default())
+        let drive = drivemap_map::Loader::new()
+            .load_str("big-decimal.yaml", text)
             .expect("the map");
         // 40024 is the map's own number, not holding register 24 (PDU 23).
         assert_eq!(id(&drive, "40024"), Ok("high"));

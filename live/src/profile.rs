@@ -4,10 +4,10 @@
 //! The client takes `&'static Profile` (generated code has statics). The plan, profile included,
 //! is lowered once per loaded map and lives as long as the process.
 
-use drivemap_map::ir::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::profile::Profile;
 
 /// The runtime profile of `drive`, with `'static` lifetime (see the module docs).
-pub fn leak_profile(drive: &Drive) -> &'static Profile {
+pub fn leak_profile(drive: &Map) -> &'static Profile {
     drive.plan().profile
 }

@@ -2,14 +2,14 @@
 //! planned requests and decoded. The `drivemap` command's `read`, `write`, `poll`, `probe` and
 //! `scan` are built on [`Session`]; so can any program (`examples/read_by_name.rs`).
 //!
-//! A register is named at run time by a [`Register`] of the loaded map (found by name with
-//! [`find_all`] or [`crate::find`]); its row of the map's plan (`Drive::register_plan`) gives
+//! A register is named at run time by a [`RegisterRef`] of the loaded map (found by name with
+//! [`find_all`] or [`crate::lookup::find`]); its row of the map's plan ([`RegisterRef::plan`]) gives
 //! the address, width and conversion, the same the generated code prints.
 
 use std::collections::BTreeSet;
 
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::plan::Dependency;
@@ -150,7 +150,7 @@ pub struct Assumed {
 impl Assumed {
     /// The notes of the settings `r`'s conversion or limit uses, joined with `; ` (empty when
     /// none): `assuming P2000 = 50 Hz, given, not read`.
-    pub fn for_register(&self, drive: &Drive, r: &Register, settings: &LiveSettings) -> String {
+    pub fn for_register(&self, drive: &Map, r: RegisterRef<'_>, settings: &LiveSettings) -> String {
         let used = settings_used(drive, r, settings);
         self.notes
             .iter()
@@ -163,9 +163,9 @@ impl Assumed {
 
 /// The settings `r`'s conversion, address or limit uses under `settings`: register ids of
 /// selectors and references, names of external quantities.
-pub fn settings_used(drive: &Drive, r: &Register, settings: &LiveSettings) -> Vec<String> {
+pub fn settings_used(drive: &Map, r: RegisterRef<'_>, settings: &LiveSettings) -> Vec<String> {
     let plan = drive.plan();
-    let rp = drive.register_plan(r);
+    let rp = r.plan();
     let mut out: Vec<String> = Vec::new();
     let mut add = |d: Dependency| {
         let id = match d {
@@ -202,7 +202,7 @@ fn split_assignment(text: &str) -> Result<(&str, &str), SettingError> {
 
 impl SettingsArgs {
     /// Checks the options against the map and builds the settings.
-    pub fn resolve(&self, drive: &Drive) -> Result<Given, SettingError> {
+    pub fn resolve(&self, drive: &Map) -> Result<Given, SettingError> {
         let mut settings = LiveSettings::default();
         for v in &self.variants {
             let (axis, option) = match v.split_once('=') {
@@ -212,9 +212,9 @@ impl SettingsArgs {
                     None => ("", v.trim()),
                 },
             };
-            let Some(ax) = drive.variants.iter().find(|a| a.id == axis) else {
+            let Some(ax) = drive.variants().iter().find(|a| a.id == axis) else {
                 let known: Vec<String> = drive
-                    .variants
+                    .variants()
                     .iter()
                     .map(|a| {
                         let opts: Vec<&str> = a.options.iter().map(|o| o.id.as_str()).collect();
@@ -223,13 +223,13 @@ impl SettingsArgs {
                     .collect();
                 return Err(if known.is_empty() {
                     SettingError::NoVariants {
-                        drive: drive.meta.id.clone(),
+                        drive: drive.id().to_owned(),
                         given: codec::shorten(v),
                     }
                 } else {
                     SettingError::NoSuchVariant {
                         given: codec::shorten(v),
-                        drive: drive.meta.id.clone(),
+                        drive: drive.id().to_owned(),
                         known: known.join(", "),
                     }
                 });
@@ -273,15 +273,14 @@ impl SettingsArgs {
                 given: codec::shorten(s),
                 error,
             };
-            let is_selector = drive.selectors().iter().any(|x| x.def.id == r.def.id);
-            let is_reference = drive.references().iter().any(|x| x.def.id == r.def.id);
+            let is_selector = drive.selectors().iter().any(|x| x.id() == r.id());
+            let is_reference = drive.references().iter().any(|x| x.id() == r.id());
             if is_selector {
                 let code = codec::parse_value(drive, r, value, &settings).map_err(bad_value)?;
-                settings.selectors.insert(r.def.id.clone(), code as u16);
+                settings.selectors.insert(r.id().to_owned(), code as u16);
             }
             if is_reference {
-                let v = number(value, r.def.unit.as_deref().unwrap_or(""))
-                    .ok_or_else(|| not_a_number(None))?;
+                let v = number(value, r.unit().unwrap_or("")).ok_or_else(|| not_a_number(None))?;
                 // Checked as a write of the register would be: a value the drive cannot hold
                 // (P2000 = 5000 Hz where its range is 1-599) converts nothing.
                 match codec::encode(drive, r, v, &settings) {
@@ -293,7 +292,7 @@ impl SettingsArgs {
                     ) => {}
                     Err(e) => return Err(bad_value(InputError::Value(e))),
                 }
-                settings.references.insert(r.def.id.clone(), v);
+                settings.references.insert(r.id().to_owned(), v);
             }
             if !(is_selector || is_reference) {
                 // The drive's value of a register no conversion depends on: nothing here reads
@@ -311,9 +310,9 @@ impl SettingsArgs {
                     Err(e) => return Err(bad_value(e)),
                 }
             }
-            fixed.insert(r.def.id.clone());
+            fixed.insert(r.id().to_owned());
             given.push(GivenValue {
-                id: r.def.id.clone(),
+                id: r.id().to_owned(),
                 name: name.to_owned(),
                 value: value.to_owned(),
                 external: false,
@@ -329,14 +328,17 @@ impl SettingsArgs {
 
 /// The names whose `--set` matters to conversions: external quantities, selecting parameters
 /// and references (any register may be given).
-fn settable_hint(drive: &Drive) -> Option<String> {
+fn settable_hint(drive: &Map) -> Option<String> {
     let mut names: Vec<String> = drive
         .externals()
         .iter()
         .map(|q| q.external.clone())
         .collect();
     for r in drive.selectors().into_iter().chain(drive.references()) {
-        let n = r.def.param.clone().unwrap_or_else(|| r.def.id.clone());
+        let n = r
+            .param()
+            .map(str::to_owned)
+            .unwrap_or_else(|| r.id().to_owned());
         if !names.contains(&n) {
             names.push(n);
         }
@@ -357,9 +359,9 @@ fn number(text: &str, unit: &str) -> Option<f64> {
 /// Resolves register names (id, parameter number, printed name or address as the manual prints
 /// it); all unknown names are reported at once, each with the nearest names.
 pub fn find_all<'a>(
-    drive: &'a Drive,
+    drive: &'a Map,
     names: &[impl AsRef<str>],
-) -> Result<Vec<&'a Register>, UnknownNames> {
+) -> Result<Vec<RegisterRef<'a>>, UnknownNames> {
     let mut found = Vec::new();
     let mut errors = Vec::new();
     for n in names {
@@ -376,52 +378,49 @@ pub fn find_all<'a>(
 }
 
 /// The parameters that select a register's scale or address, as its plan lists them.
-pub fn selectors_of<'a>(drive: &'a Drive, r: &Register) -> Vec<&'a Register> {
+pub fn selectors_of<'a>(drive: &'a Map, r: RegisterRef<'_>) -> Vec<RegisterRef<'a>> {
     dependencies(drive, r, &LiveSettings::default(), true)
 }
 
 /// The registers a register's value is relative to under `settings`: for a selected scale, only
 /// the case the selector's known code picks (every case while it is unknown).
 pub fn references_of<'a>(
-    drive: &'a Drive,
-    r: &Register,
+    drive: &'a Map,
+    r: RegisterRef<'_>,
     settings: &LiveSettings,
-) -> Vec<&'a Register> {
+) -> Vec<RegisterRef<'a>> {
     dependencies(drive, r, settings, false)
 }
 
 /// The registers behind a register's settings dependencies (`RegisterPlan::depends_on`):
 /// selectors (`codes`) or reference registers; external quantities are not registers.
 fn dependencies<'a>(
-    drive: &'a Drive,
-    r: &Register,
+    drive: &'a Map,
+    r: RegisterRef<'_>,
     settings: &LiveSettings,
     codes: bool,
-) -> Vec<&'a Register> {
+) -> Vec<RegisterRef<'a>> {
     let plan = drive.plan();
     let mut rows = Vec::new();
-    drive
-        .register_plan(r)
-        .depends_on(&settings.view(drive), |d| match d {
-            Dependency::Code(s) if codes => rows.extend(
-                plan.settings
-                    .codes
-                    .get(usize::from(s.slot))
-                    .map(|c| c.register),
-            ),
-            Dependency::Quantity(s) if !codes => {
-                if let Some(Quantity::Register(row)) =
-                    plan.settings.quantities.get(usize::from(s.slot))
-                {
-                    rows.push(*row);
-                }
+    r.plan().depends_on(&settings.view(drive), |d| match d {
+        Dependency::Code(s) if codes => rows.extend(
+            plan.settings
+                .codes
+                .get(usize::from(s.slot))
+                .map(|c| c.register),
+        ),
+        Dependency::Quantity(s) if !codes => {
+            if let Some(Quantity::Register(row)) = plan.settings.quantities.get(usize::from(s.slot))
+            {
+                rows.push(*row);
             }
-            _ => {}
-        });
-    let mut out: Vec<&Register> = Vec::new();
+        }
+        _ => {}
+    });
+    let mut out: Vec<RegisterRef<'_>> = Vec::new();
     for row in rows {
         if let Some(d) = drive.register_of_row(row)
-            && !out.iter().any(|x| x.def.id == d.def.id)
+            && !out.iter().any(|x| x.id() == d.id())
         {
             out.push(d);
         }
@@ -430,8 +429,9 @@ fn dependencies<'a>(
 }
 
 /// Whether a register exists on a transport kind, as its plan says.
-pub fn on_transport(drive: &Drive, r: &Register, kind: TransportKind) -> bool {
-    drive.register_plan(r).transports.contains(kind)
+pub fn on_transport(drive: &Map, r: RegisterRef<'_>, kind: TransportKind) -> bool {
+    debug_assert!(std::ptr::eq(drive, r.map()), "a register of another map");
+    r.plan().transports.contains(kind)
 }
 
 /// The plan rows of `drive`'s registers on `kind`, each at the address `address` gives it on
@@ -439,16 +439,15 @@ pub fn on_transport(drive: &Drive, r: &Register, kind: TransportKind) -> bool {
 /// may bridge over, with the functions each register accepts (`function_codes`), which it
 /// respects. The session's and the bridge's plans both start from it.
 pub fn rows_on_link(
-    drive: &Drive,
+    drive: &Map,
     kind: TransportKind,
-    address: impl Fn(&Register) -> Option<u16>,
+    address: impl Fn(RegisterRef<'_>) -> Option<u16>,
 ) -> Vec<RegisterPlan> {
     drive
-        .registers
-        .iter()
-        .filter(|r| on_transport(drive, r, kind))
+        .registers()
+        .filter(|&r| on_transport(drive, r, kind))
         .filter_map(|r| {
-            let plan = drive.register_plan(r);
+            let plan = r.plan();
             Some(RegisterPlan {
                 info: RegisterInfo {
                     address: address(r)?,
@@ -463,18 +462,16 @@ pub fn rows_on_link(
 /// The communication address of a register under `settings` on `kind`: the plan's answer
 /// (`RegisterPlan::address_for`), the same the generated code and the simulator give.
 pub fn address_of(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     settings: &LiveSettings,
     kind: TransportKind,
 ) -> u16 {
-    drive
-        .register_plan(r)
-        .address_for(&settings.view(drive), kind)
+    r.plan().address_for(&settings.view(drive), kind)
 }
 
 /// A conversion error, with what to do about a missing setting.
-pub fn value_error(drive: &Drive, e: &ValueError) -> ConversionError {
+pub fn value_error(drive: &Map, e: &ValueError) -> ConversionError {
     let external = |setting: &str| {
         drive
             .externals()
@@ -496,7 +493,7 @@ pub fn value_error(drive: &Drive, e: &ValueError) -> ConversionError {
 
 /// A number as a message quotes it: as Rust prints it while that is short, in exponent form
 /// beyond (`1e308`, not a 309-digit number).
-pub fn compact(v: f64) -> String {
+pub(crate) fn compact(v: f64) -> String {
     let plain = format!("{v}");
     if plain.len() > 16 {
         format!("{v:e}")
@@ -718,7 +715,7 @@ pub struct Polling {
 /// A connected drive with its settings.
 pub struct Session<'d> {
     /// The drive's map.
-    pub drive: &'d Drive,
+    pub drive: &'d Map,
     /// The client over the chosen transport.
     pub client: LiveClient,
     /// The slave address talked to (0: broadcast).
@@ -737,14 +734,14 @@ pub struct Session<'d> {
 
 impl<'d> Session<'d> {
     /// Connects to the drive described by `drive`.
-    pub fn open(drive: &'d Drive, link: &Link, settings: LiveSettings) -> Result<Self, LinkError> {
+    pub fn open(drive: &'d Map, link: &Link, settings: LiveSettings) -> Result<Self, LinkError> {
         Self::open_with(drive, leak_profile(drive), link, settings)
     }
 
     /// [`Session::open`] with the drive's run-time profile already built (it is leaked: build
     /// it once per map).
     pub fn open_with(
-        drive: &'d Drive,
+        drive: &'d Map,
         profile: &'static Profile,
         link: &Link,
         settings: LiveSettings,
@@ -755,7 +752,7 @@ impl<'d> Session<'d> {
     /// [`Session::open_with`], with writes through a draft map (`draft:`) refused unsent or
     /// allowed as `draft` says ([`crate::draft`]); a reviewed map's writes are not affected.
     pub fn open_as(
-        drive: &'d Drive,
+        drive: &'d Map,
         profile: &'static Profile,
         link: &Link,
         settings: LiveSettings,
@@ -782,7 +779,7 @@ impl<'d> Session<'d> {
     /// program's own port): `slave` on a link of the transport's kind, `line` the serial
     /// line's speed for the planner's bus-time model, the client with `options`.
     pub fn over(
-        drive: &'d Drive,
+        drive: &'d Map,
         transport: Box<dyn drivemap_runtime::transport::Transport>,
         options: drivemap_runtime::ClientOptions,
         slave: u8,
@@ -807,19 +804,18 @@ impl<'d> Session<'d> {
 
     /// The address of `r` on this link under the current settings, or why it cannot be known
     /// (it moves with a setting that could not be read: nothing is sent to a guessed address).
-    pub fn address(&self, r: &Register) -> Result<u16, ReadError> {
-        self.drive
-            .register_plan(r)
+    pub fn address(&self, r: RegisterRef<'_>) -> Result<u16, ReadError> {
+        r.plan()
             .locate(&self.settings.view(self.drive), self.kind)
             .map_err(|e| ReadError::AddressUnknown {
-                register: describe::register(r),
+                register: r.label(),
                 setting: e.setting.to_string(),
             })
     }
 
     /// The address of `r` to show: [`Session::address`], or where the register is when the
     /// settings it moves with are at their defaults (never used for a request).
-    pub fn shown_address(&self, r: &Register) -> u16 {
+    pub fn shown_address(&self, r: RegisterRef<'_>) -> u16 {
         address_of(self.drive, r, &self.settings, self.kind)
     }
 
@@ -828,23 +824,24 @@ impl<'d> Session<'d> {
     /// scales need. Returns a warning per dependency that could not be read.
     pub fn load_dependencies(
         &mut self,
-        regs: &[&Register],
+        regs: &[RegisterRef<'_>],
         fixed: &BTreeSet<String>,
     ) -> Vec<String> {
         let drive = self.drive;
         // Registers that do not exist on this link need nothing.
-        let regs: Vec<&Register> = regs
+        let regs: Vec<RegisterRef<'_>> = regs
             .iter()
             .copied()
-            .filter(|r| on_transport(self.drive, r, self.kind))
+            .filter(|r| on_transport(self.drive, *r, self.kind))
             .collect();
         let mut warnings = Vec::new();
         let mut done: BTreeSet<String> = fixed.clone();
-        let selectors: Vec<&Register> = regs.iter().flat_map(|r| selectors_of(drive, r)).collect();
+        let selectors: Vec<RegisterRef<'_>> =
+            regs.iter().flat_map(|r| selectors_of(drive, *r)).collect();
         self.read_dependencies(&selectors, &mut done, &mut warnings, "conversions depend");
-        let references: Vec<&Register> = regs
+        let references: Vec<RegisterRef<'_>> = regs
             .iter()
-            .flat_map(|r| references_of(drive, r, &self.settings))
+            .flat_map(|r| references_of(drive, *r, &self.settings))
             .collect();
         self.read_dependencies(&references, &mut done, &mut warnings, "conversions depend");
         warnings
@@ -919,7 +916,7 @@ impl<'d> Session<'d> {
                     "`--set {}={}`: the drive holds {}, not {}: a --set value is checked against a drive that gives it (leave the --set out to use the drive's)",
                     g.name,
                     codec::shorten(&g.value),
-                    format_args!("{} = {held}", describe::register(r)),
+                    format_args!("{} = {held}", r.label()),
                     codec::shorten(&g.value)
                 ));
             }
@@ -931,15 +928,19 @@ impl<'d> Session<'d> {
     /// (`RegisterPlan::limit`: V7 n011 for the frequency reference), except what `fixed` gives:
     /// what a write checks before sending. Returns a warning per quantity that could not be
     /// read (the write is then refused, since its limit cannot be checked).
-    pub fn load_limits(&mut self, regs: &[&Register], fixed: &BTreeSet<String>) -> Vec<String> {
+    pub fn load_limits(
+        &mut self,
+        regs: &[RegisterRef<'_>],
+        fixed: &BTreeSet<String>,
+    ) -> Vec<String> {
         let drive = self.drive;
         let plan = drive.plan();
-        let mut deps: Vec<&Register> = Vec::new();
+        let mut deps: Vec<RegisterRef<'_>> = Vec::new();
         for r in regs {
-            if !on_transport(drive, r, self.kind) {
+            if !on_transport(drive, *r, self.kind) {
                 continue;
             }
-            if let Some(Dependency::Quantity(s)) = drive.register_plan(r).limit_dependency()
+            if let Some(Dependency::Quantity(s)) = r.plan().limit_dependency()
                 && let Some(Quantity::Register(row)) =
                     plan.settings.quantities.get(usize::from(s.slot))
                 && let Some(d) = drive.register_of_row(*row)
@@ -959,43 +960,40 @@ impl<'d> Session<'d> {
     /// warnings.
     fn read_dependencies(
         &mut self,
-        deps: &[&Register],
+        deps: &[RegisterRef<'_>],
         done: &mut BTreeSet<String>,
         warnings: &mut Vec<String>,
         what: &str,
     ) {
         for d in deps {
-            if !done.insert(d.def.id.clone()) {
+            if !done.insert(d.id().to_owned()) {
                 continue;
             }
-            if let Some(why) = self.unreadable(d) {
+            if let Some(why) = self.unreadable(*d) {
                 warnings.push(format!(
                     "{why}, and {what} on it; give it with --set {}=<value>",
-                    d.def.param.as_deref().unwrap_or(&d.def.id)
+                    d.param().unwrap_or(d.id())
                 ));
                 continue;
             }
-            match self.read_raw(d) {
+            match self.read_raw(*d) {
                 Ok(raw) => {
                     // Selectors and references are one-word registers (the map's validation).
-                    self.settings.absorb(self.drive, d.def.address, raw as u16);
+                    self.settings.absorb(self.drive, d.address(), raw as u16);
                 }
-                Err(e) => warnings.push(format!(
-                    "reading {}, which {what} on: {e}",
-                    describe::register(d)
-                )),
+                Err(e) => warnings.push(format!("reading {}, which {what} on: {e}", d.label())),
             }
         }
     }
 
     /// Reads the raw value of `r` at its address on this link: its word, or a 32-bit pair's
     /// two words in one request, joined in the map's order.
-    pub fn read_raw(&mut self, r: &Register) -> Result<u32, ReadError> {
+    pub fn read_raw(&mut self, r: RegisterRef<'_>) -> Result<u32, ReadError> {
         if let Some(why) = self.unreadable(r) {
             return Err(why.into());
         }
         let address = self.address(r)?;
-        let info = self.drive.register_plan(r).info;
+        let info = r.plan().info;
         let mut w = [0u16; 2];
         let words = &mut w[..usize::from(info.width.count())];
         self.read_into(info.table, address, words)
@@ -1016,15 +1014,15 @@ impl<'d> Session<'d> {
     }
 
     /// Why a register cannot be read on this link, if it cannot.
-    pub fn unreadable(&self, r: &Register) -> Option<Unreadable> {
-        if r.broadcast {
-            Some(Unreadable::BroadcastOnly(describe::register(r)))
+    pub fn unreadable(&self, r: RegisterRef<'_>) -> Option<Unreadable> {
+        if r.broadcast_only() {
+            Some(Unreadable::BroadcastOnly(r.label()))
         } else if !r.readable() {
-            Some(Unreadable::WriteOnly(describe::register(r)))
+            Some(Unreadable::WriteOnly(r.label()))
         } else if !on_transport(self.drive, r, self.kind) {
             Some(Unreadable::NotOnLink {
-                register: describe::register(r),
-                transports: describe::transports(self.drive.register_plan(r).transports),
+                register: r.label(),
+                transports: describe::transports(r.plan().transports),
                 link: self.kind.name(),
             })
         } else {
@@ -1035,19 +1033,19 @@ impl<'d> Session<'d> {
     /// Plans the reads of `regs` with the runtime's read planner: the requests that read them in
     /// the least bus time, bridging only addresses of readable registers of the map, at most
     /// `max_read` per request. Registers this link cannot read get their reason instead.
-    pub fn plan(&self, regs: &[&Register]) -> Result<Polling, SessionError> {
+    pub fn plan(&self, regs: &[RegisterRef<'_>]) -> Result<Polling, SessionError> {
         let drive = self.drive;
         let infos = rows_on_link(drive, self.kind, |r| self.address(r).ok());
         let mut wanted = Vec::new();
         let mut slots = Vec::new();
         for r in regs {
             match self
-                .unreadable(r)
-                .map_or_else(|| self.address(r), |why| Err(why.into()))
+                .unreadable(*r)
+                .map_or_else(|| self.address(*r), |why| Err(why.into()))
             {
                 Err(why) => slots.push(Err(why)),
                 Ok(address) => {
-                    let info = drive.register_plan(r).info;
+                    let info = r.plan().info;
                     wanted.push((info.table, address));
                     slots.push(Ok((wanted.len() - 1, info.width)));
                 }
@@ -1098,20 +1096,20 @@ impl<'d> Session<'d> {
     /// Reads the raw values of `regs` once, planned (see [`Session::plan`]).
     pub fn read_words(
         &mut self,
-        regs: &[&Register],
+        regs: &[RegisterRef<'_>],
     ) -> Result<Vec<Result<u32, ReadError>>, SessionError> {
         let mut plan = self.plan(regs)?;
         Ok(self.poll(&mut plan))
     }
 
     /// A raw value of `r` in hex as the manuals write it: four digits, eight for a pair.
-    pub fn raw_text(&self, r: &Register, raw: u32) -> String {
-        let digits = 4 * usize::from(self.drive.register_plan(r).info.width.count());
+    pub fn raw_text(&self, r: RegisterRef<'_>, raw: u32) -> String {
+        let digits = 4 * usize::from(r.plan().info.width.count());
         format!("{raw:0digits$X}h")
     }
 
     /// Decodes a raw value of `r`.
-    pub fn decode(&self, r: &Register, raw: u32) -> Result<Value, ConversionError> {
+    pub fn decode(&self, r: RegisterRef<'_>, raw: u32) -> Result<Value, ConversionError> {
         codec::decode(self.drive, r, raw, &self.settings).map_err(|e| value_error(self.drive, &e))
     }
 }

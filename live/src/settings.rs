@@ -3,8 +3,8 @@
 
 use std::collections::BTreeMap;
 
-use drivemap_map::ir::Drive;
-use drivemap_map::lower::{DrivePlan, Quantity};
+use drivemap_map::Map;
+use drivemap_map::{MapPlan, Quantity};
 use drivemap_runtime::SettingsView;
 
 /// Variant choices, selector codes, reference values and external quantities.
@@ -23,7 +23,7 @@ pub struct LiveSettings {
 /// [`LiveSettings`] answering the plan's slots, as generated `Settings` do.
 #[derive(Debug, Clone, Copy)]
 pub struct View<'a> {
-    plan: &'a DrivePlan,
+    plan: &'a MapPlan,
     settings: &'a LiveSettings,
 }
 
@@ -58,7 +58,7 @@ impl SettingsView for View<'_> {
 
 impl LiveSettings {
     /// These settings seen through `drive`'s plan.
-    pub fn view<'a>(&'a self, drive: &'a Drive) -> View<'a> {
+    pub fn view<'a>(&'a self, drive: &'a Map) -> View<'a> {
         View {
             plan: drive.plan(),
             settings: self,
@@ -66,10 +66,10 @@ impl LiveSettings {
     }
 
     /// The option chosen on `axis`, or the axis's base option.
-    pub fn variant<'a>(&'a self, drive: &'a Drive, axis: &str) -> Option<&'a str> {
+    pub fn variant<'a>(&'a self, drive: &'a Map, axis: &str) -> Option<&'a str> {
         self.variants.get(axis).map(String::as_str).or_else(|| {
             drive
-                .variants
+                .variants()
                 .iter()
                 .find(|a| a.id == axis)
                 .map(|a| a.options[0].id.as_str())
@@ -77,19 +77,19 @@ impl LiveSettings {
     }
 
     /// Whether `option` is the chosen option of its axis.
-    pub fn has_variant(&self, drive: &Drive, option: &str) -> bool {
+    pub fn has_variant(&self, drive: &Map, option: &str) -> bool {
         drive
             .variant_option(option)
             .is_some_and(|(axis, _)| self.variant(drive, &axis.id) == Some(option))
     }
 
     /// Addresses of the parameters conversions depend on, for a client to read.
-    pub fn dependencies(drive: &Drive) -> Vec<u16> {
+    pub fn dependencies(drive: &Map) -> Vec<u16> {
         drive.plan().dependencies()
     }
 
     /// Records a raw word read from one of the dependencies; returns whether it was used.
-    pub fn absorb(&mut self, drive: &Drive, address: u16, raw: u16) -> bool {
+    pub fn absorb(&mut self, drive: &Map, address: u16, raw: u16) -> bool {
         let plan = drive.plan();
         let mut used = false;
         for c in &plan.settings.codes {

@@ -3,27 +3,29 @@
 //! its place, so that an operator knows which settings rest on the Modbus defaults rather than
 //! on the manual.
 
-use drivemap_map::Drive;
-use drivemap_map::stated::why;
+use drivemap_map::Map;
 use drivemap_runtime::core::stated::{MODBUS_SLAVE_MAX, MODBUS_SLAVE_MIN, ProtocolFact};
 
-use crate::link::{Link, Parity};
+use crate::link::Link;
+use drivemap_runtime::profile::Parity;
 
 /// The warnings for `facts` that `drive`'s map marks not printed, as the command using `link`
 /// relies on them: the serial settings only on a serial line, and only those not given on the
 /// command line; a limit only where the Modbus one stands in for it; the slave range when
 /// `slaves_scanned` is the Modbus range the scan then tries.
 pub fn warnings(
-    drive: &Drive,
+    drive: &Map,
     link: &Link,
     facts: &[ProtocolFact],
     slaves_scanned: Option<&[u8]>,
 ) -> Vec<String> {
-    let p = &drive.protocol;
-    let id = &drive.meta.id;
+    let p = drive.protocol();
+    let id = &drive.id();
     let mut out = Vec::new();
     for &fact in facts {
-        let Some(u) = why(p, fact) else { continue };
+        let Some(u) = drive.not_printed_why(fact) else {
+            continue;
+        };
         let used = match fact {
             ProtocolFact::Serial => {
                 if link.serial.is_none() {

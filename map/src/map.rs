@@ -39,6 +39,14 @@ impl Map {
         &self.drive
     }
 
+    /// A map from an expanded map that the loader's validation accepted (what
+    /// [`Map::into_ir`] gives back, or the transitional `read_map*` functions return), for
+    /// consumers that still load through them. Not part of the lasting API.
+    #[doc(hidden)]
+    pub fn from_ir(drive: Drive) -> Map {
+        Map { drive }
+    }
+
     /// The expanded map, owned (see [`Map::ir`]). Not part of the lasting API.
     #[doc(hidden)]
     pub fn into_ir(self) -> Drive {
@@ -163,6 +171,11 @@ impl Map {
             .collect()
     }
 
+    /// The serial line's defaults when a link gives none: baud, parity and character format.
+    pub fn serial_defaults(&self) -> facts::SerialDefaults {
+        self.drive.serial_defaults()
+    }
+
     /// Communication addresses a broadcast may write, sorted.
     pub fn broadcast_addresses(&self) -> Vec<u16> {
         self.drive.broadcast_addresses()
@@ -256,11 +269,6 @@ impl Map {
         self.drive.profile.as_ref()
     }
 
-    /// The serial line's defaults: baud, parity, character bits, stop bits by format.
-    pub fn serial_defaults(&self) -> facts::SerialDefaults {
-        self.drive.serial_defaults()
-    }
-
     /// PDU address offsets (RTU, TCP).
     pub fn address_offsets(&self) -> (i32, i32) {
         self.drive.address_offsets()
@@ -285,6 +293,17 @@ impl Map {
     /// start when no node is there.
     pub fn locate(&self, path: &str) -> Loc {
         self.drive.locate(&parse_path(path))
+    }
+
+    /// Where the value at a key path of the map (see [`Map::locate`]) starts, as opposed to its
+    /// key: the first character of a string, for a finding at a byte inside it; where its key
+    /// or the nearest written ancestor is when no value is there.
+    pub fn locate_value(&self, path: &str) -> Loc {
+        let path = parse_path(path);
+        self.drive
+            .tree
+            .at(&path)
+            .map_or_else(|| self.drive.locate(&path), |n| n.loc.clone())
     }
 
     /// A diagnostic at a key path of the map (see [`Map::locate`]), naming `register`.

@@ -61,7 +61,7 @@ pub fn pascal_case(s: &str) -> String {
 }
 
 /// (lowest bit, width) of a field, if it is well formed.
-pub(crate) fn field_span(f: &Field) -> Option<(u8, u8)> {
+pub fn field_span(f: &Field) -> Option<(u8, u8)> {
     match (f.bit, f.bits) {
         (Some(b), None) if b <= 15 => Some((b, 1)),
         (None, Some([lo, hi])) if lo <= hi && hi <= 15 => Some((lo, hi - lo + 1)),

@@ -5,12 +5,8 @@
 //!
 //! All text about a map comes from `drivemap_map::describe`.
 #![doc = include_str!("../README.md")]
+#![warn(missing_docs, unreachable_pub)]
 
 pub mod diff;
 pub mod reference;
 pub mod review;
-
-pub(crate) use drivemap_map::Drive;
-#[cfg(test)]
-pub(crate) use drivemap_map::read_map_str;
-pub(crate) use drivemap_map::{describe, diagnostic, facts, ir, model, names, source, validate};

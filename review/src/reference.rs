@@ -9,10 +9,10 @@ use drivemap_core::rule::Transports;
 
 use drivemap_core::ConversionKind;
 
-use crate::describe;
-use crate::facts::{self, FactKey, RegisterFacts};
-use crate::ir::{Drive, Register, ValueKind};
-use crate::model::{Conflict, DefaultValue, Dependency, EnumValue};
+use drivemap_map::describe;
+use drivemap_map::facts::{self, FactKey, RegisterFacts};
+use drivemap_map::ir::{Drive, Register, ValueKind};
+use drivemap_map::model::{Conflict, DefaultValue, Dependency, EnumValue};
 
 /// Text safe inside a Markdown table cell.
 mod indexed;
@@ -300,9 +300,9 @@ fn roles(out: &mut String, drive: &Drive) {
                         " on {}",
                         list.iter()
                             .map(|t| match t {
-                                crate::model::TransportName::Rtu => "RTU links",
-                                crate::model::TransportName::Tcp => "Modbus TCP",
-                                crate::model::TransportName::Ascii => "ASCII links",
+                                drivemap_map::model::TransportName::Rtu => "RTU links",
+                                drivemap_map::model::TransportName::Tcp => "Modbus TCP",
+                                drivemap_map::model::TransportName::Ascii => "ASCII links",
                             })
                             .collect::<Vec<_>>()
                             .join(" and ")

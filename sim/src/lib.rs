@@ -43,7 +43,6 @@
 //! assert_eq!(sim.value("output_frequency").unwrap().as_f64(), Some(12.0));
 //! ```
 #![doc = include_str!("../README.md")]
-
 #![warn(unreachable_pub, missing_docs)]
 
 pub mod clock;

@@ -9,7 +9,7 @@ use std::io;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_live::Value;
+use drivemap_live::codec::Value;
 use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;

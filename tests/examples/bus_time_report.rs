@@ -6,7 +6,7 @@
 //! Run: `cargo run -p drivemap-tests --example bus_time_report [--release] [BAUD]`
 //!
 //! - **Drives**: every entry of `drivemap_drives::DRIVES`, with the generated `PROFILE` and
-//!   `REGISTERS` of its module; the map (`maps/<id>.yaml`, read with `drivemap_map::read_map`)
+//!   `REGISTERS` of its module; the map (`maps/<id>.yaml`, loaded with `drivemap_map::Loader`)
 //!   supplies what the generated code does not carry: groups, transports, the fixed character
 //!   length.
 //! - **Monitor registers**: the registers of the map's *monitor groups*, the groups whose every

@@ -11,8 +11,9 @@
 
 use std::time::Instant;
 
+use drivemap_live::LiveSettings;
 use drivemap_live::paramset;
-use drivemap_live::{LiveSettings, Session};
+use drivemap_live::session::Session;
 use drivemap_runtime::ClientOptions;
 use drivemap_runtime::transport::serial::SerialTransport;
 use drivemap_tests::line_bench;
@@ -39,7 +40,7 @@ fn main() {
         if !only.is_empty() && !only.contains(&m.id) {
             continue;
         }
-        let settings = paramset::settings_of(m.drive.ir());
+        let settings = paramset::settings_of(&m.drive);
         if settings.is_empty() {
             println!("| {} | 0 | 0 | - | 0 | - | - |", m.id);
             continue;
@@ -55,7 +56,7 @@ fn main() {
             ))
             .expect("the line's master side");
             let mut s = Session::over(
-                m.drive.ir(),
+                &m.drive,
                 Box::new(transport),
                 ClientOptions::for_line(m.profile, line),
                 slave,
@@ -75,7 +76,7 @@ fn main() {
             let mut requests = 0u32;
             for r in &settings {
                 requests += 1;
-                s.read_raw(r).expect("one register");
+                s.read_raw(*r).expect("one register");
             }
             (planned, (requests, t.elapsed()))
         });

@@ -18,7 +18,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use drivemap_drives as drives;
-use drivemap_map::Map as Drive;
+use drivemap_map::Map;
 use drivemap_map::facts::TransportName;
 use drivemap_runtime::bus_time::{BusModel, Parity, SerialConfig};
 use drivemap_runtime::core::Access;
@@ -34,7 +34,7 @@ pub use drivemap_test_support::rng::SplitMix;
 /// A shipped drive and its monitor registers.
 pub struct Monitors {
     pub id: String,
-    pub drive: Drive,
+    pub drive: Map,
     pub profile: &'static Profile,
     pub registers: &'static [RegisterPlan],
     /// Wanted monitor registers: (table, communication address), in address order per table.

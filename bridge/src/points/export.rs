@@ -8,7 +8,7 @@
 //! parameter selects and no `--set` fixed, an address that moves with a setting) is kept in
 //! [`Export::left_out`] with the reason, which every format prints: nothing is dropped silently.
 
-use drivemap_live::link::{Link, Parity};
+use drivemap_live::link::Link;
 use drivemap_live::session::{on_transport, rows_on_link, value_error};
 use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::{Map, RegisterRef};
@@ -16,7 +16,7 @@ use drivemap_runtime::Table;
 use drivemap_runtime::bus_time::BusModel;
 use drivemap_runtime::plan::{Conversion, Scale};
 use drivemap_runtime::planner::Poller;
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::profile::{Parity, TransportKind};
 
 use super::{At, Fixed, Meaning, Point};
 use crate::error::ExportError;
@@ -133,7 +133,7 @@ impl<'d> Export<'d> {
         period_ms: u64,
         name: Option<&str>,
     ) -> Result<Export<'d>, ExportError> {
-        link.check_transport(drive.ir())?;
+        link.check_transport(drive)?;
         let kind = link.kind();
         let endpoint = if let Some(a) = link.tcp.as_ref().or(link.gateway.as_ref()) {
             let (host, port) = split_host(a)?;
@@ -150,7 +150,7 @@ impl<'d> Export<'d> {
                 rtu_frames: true,
             }
         } else if let Some(path) = &link.serial {
-            let (baud, parity, stop_bits) = link.line(drive.ir());
+            let (baud, parity, stop_bits) = link.line(drive);
             Endpoint::Serial {
                 path: path.clone(),
                 baud,
@@ -160,9 +160,9 @@ impl<'d> Export<'d> {
         } else {
             return Err(ExportError::NoLink);
         };
-        let profile = leak_profile(drive.ir());
-        let options = link.client_options(drive.ir(), profile);
-        let view = settings.view(drive.ir());
+        let profile = leak_profile(drive);
+        let options = link.client_options(drive, profile);
+        let view = settings.view(drive);
         let offsets = profile.address_offsets;
 
         let mut points = Vec::new();
@@ -174,7 +174,7 @@ impl<'d> Export<'d> {
                 Some("broadcast-only: written to slave 0, never read".to_owned())
             } else if !r.readable() {
                 Some("write-only: the drive does not let it be read".to_owned())
-            } else if !on_transport(drive.ir(), r.ir(), kind) {
+            } else if !on_transport(drive, r, kind) {
                 Some(format!("does not exist on this link ({})", kind.name()))
             } else {
                 None
@@ -206,7 +206,7 @@ impl<'d> Export<'d> {
                         r,
                         format!(
                             "its scale depends on another parameter, which a tool does not read first ({})",
-                            value_error(drive.ir(), &e)
+                            value_error(drive, &e)
                         ),
                     ));
                     continue;
@@ -277,10 +277,8 @@ impl<'d> Export<'d> {
         // The planner's reads over the registers this link can read at the addresses these
         // settings put them (a register whose address is not known is not bridged over).
         // Plans, not bare infos: the planner respects each register's `function_codes`.
-        let infos = rows_on_link(drive.ir(), kind, |r| {
-            drive.ir().register_plan(r).locate(&view, kind).ok()
-        });
-        let model = BusModel::new(profile, link.bus_line(drive.ir()));
+        let infos = rows_on_link(drive, kind, |r| r.plan().locate(&view, kind).ok());
+        let model = BusModel::new(profile, link.bus_line(drive));
         let poller = Poller::new(profile, &infos, wanted)
             .map_err(ExportError::Plan)?
             .with_model(model);
@@ -320,7 +318,7 @@ impl<'d> Export<'d> {
             drive,
             kind,
             endpoint,
-            slave: link.slave(drive.ir()),
+            slave: link.slave(drive),
             timeout_ms: options.timeout.as_millis() as u64,
             gap_ms: options.request_gap.as_micros().div_ceil(1000) as u64,
             period_ms,

@@ -194,14 +194,7 @@ pub fn slug(text: &str) -> String {
 /// The register `name` means on `map`: an id, parameter number, printed name or address, as
 /// `drivemap read` and `write` take it (drivemap-live's lookup).
 pub fn find<'m>(map: &'m Map, name: &str) -> Result<RegisterRef<'m>, NotFound> {
-    let r = lookup::find(map.ir(), name)?;
-    map.register_at(r.index()).ok_or_else(|| NotFound {
-        name: name.to_owned(),
-        drive: map.id().to_owned(),
-        suggestions: Vec::new(),
-        gap: None,
-        reference: None,
-    })
+    lookup::find(map, name)
 }
 
 /// The role a whole register plays (monitors and setpoints), if any, on `kind`.

@@ -72,7 +72,7 @@ fn value(text: &str, name: &str) -> f64 {
 #[test]
 fn a_stuck_broker_side_never_holds_polling_back() {
     let drive = v7();
-    let sim = Simulator::new(drive.ir().clone(), SimOptions::new()).unwrap();
+    let sim = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
     let server = TcpServer::spawn(sim, "127.0.0.1:0", TcpFraming::RtuOverTcp, None).unwrap();
     let addr = server.local_addr().to_string();
     let metrics = metrics_for(drive);
@@ -198,7 +198,7 @@ impl Line {
     fn start(silent: u8, deadline: Duration) -> Line {
         let drive = v7();
         let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-        let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), options).unwrap());
+        let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
         let server = TcpServer::spawn(
             Arc::clone(&sim),
             "127.0.0.1:0",
@@ -399,7 +399,7 @@ fn a_run_sent_while_the_link_is_down_expires_and_never_starts_the_drive() {
     std::thread::sleep(Duration::from_millis(800));
     // The gateway comes up with the drive.
     let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-    let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), options).unwrap());
+    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
     let server = TcpServer::spawn(
         Arc::clone(&sim),
         format!("127.0.0.1:{port}"),
@@ -487,7 +487,7 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
             .unwrap()
     };
     let options = SimOptions::new().network_source(TransportKind::Rtu);
-    let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), options).unwrap());
+    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
     let server = SerialServer::spawn_on_line(
         Arc::clone(&sim),
         options_for(emulated.drive_path()),
@@ -613,7 +613,7 @@ fn parameters_are_read_at_their_period_and_status_every_cycle() {
             }
         })
     };
-    let sim = Simulator::new(drive.ir().clone(), SimOptions::new()).unwrap();
+    let sim = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
     let server = TcpServer::spawn(sim, "127.0.0.1:0", TcpFraming::RtuOverTcp, Some(log)).unwrap();
     let mut s = spec(drive);
     s.periods = vec![("parameters".into(), Duration::from_secs(2))];
@@ -729,7 +729,7 @@ fn late_relay(to: std::net::SocketAddr, late: Duration) -> std::net::SocketAddr 
 fn a_stop_gets_out_when_every_reply_is_late_and_cycles_run_back_to_back() {
     let drive = v7();
     let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-    let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), options).unwrap());
+    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
     let server = TcpServer::spawn(
         Arc::clone(&sim),
         "127.0.0.1:0",

@@ -13,13 +13,14 @@ use std::time::Duration;
 use clap::Args as ClapArgs;
 use drivemap_bridge::link::{DriveSpec, LinkSpec};
 use drivemap_bridge::mqtt;
-use drivemap_map::{Drive, Map};
+use drivemap_map::Map;
 use serde::Deserialize;
 
 use crate::error::Error;
-use crate::live::link::{Link as LinkArgs, Parity, ParityParser};
+use crate::live::link::{Link as LinkArgs, ParityParser};
 use crate::live::session::SettingsArgs;
 use crate::maps::MapsDir;
+use drivemap_runtime::profile::Parity;
 
 /// Arguments of `drivemap bridge`.
 #[derive(ClapArgs, Debug)]
@@ -329,26 +330,25 @@ pub(crate) fn link(
         return Err("a link without drives: give --drive ID@SLAVE".into());
     }
     let mut specs = Vec::new();
-    let mut first: Option<&'static Drive> = None;
+    let mut first: Option<&'static Map> = None;
     for text in drives {
         let (id, slave) = drive_slave(text)?;
         // Each map is read once, however many drives use it (1,000 drives of five maps).
-        let map: &'static Map = match loaded.get(&id) {
+        let drive: &'static Map = match loaded.get(&id) {
             Some(d) => d,
             None => {
-                let d: &'static Map = Box::leak(Box::new(dir.load_map(&id)?));
+                let d: &'static Map = Box::leak(Box::new(dir.load(&id)?));
                 loaded.insert(id.clone(), d);
                 d
             }
         };
-        let drive: &'static Drive = map.ir();
         args.check_transport(drive)?;
         first.get_or_insert(drive);
         let given = settings.resolve(drive)?;
         // The bridge reads what conversions depend on from the drive every cycle: a `--set`
         // of a register it can read would replace what the drive holds by what was assumed.
         for g in given.given.iter().filter(|g| !g.external) {
-            if let Some(r) = map.register_by_id(&g.id)
+            if let Some(r) = drive.register_by_id(&g.id)
                 && r.readable()
                 && !r.broadcast_only()
                 && r.plan().transports.contains(args.kind())
@@ -370,7 +370,7 @@ pub(crate) fn link(
             n += 1;
         }
         specs.push(DriveSpec {
-            drive: map,
+            drive,
             slave,
             name,
             options: args.client_options(drive, profile),

@@ -1,10 +1,11 @@
 //! `drivemap check <map>...`: validation, then review of every citation against the manuals.
 
+use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
-use drivemap_map::{Diagnostics, Drive};
+use drivemap_map::{Diagnostics, Loader, Map};
 use drivemap_review::review::{self, Manuals, Verdict};
 
 use crate::error::Error;
@@ -29,8 +30,8 @@ pub(crate) struct Args {
 /// Why some of a map's citations cannot be read against their manual, or `None` when every
 /// text manual the map names is at hand (manuals cited by page have no text to read, so a map
 /// citing only those needs no manuals directory).
-fn not_verified(dir: Option<&Path>, manuals: &Manuals, drive: &Drive) -> Option<String> {
-    drive.meta.text_manuals().next()?;
+fn not_verified(dir: Option<&Path>, manuals: &Manuals, drive: &Map) -> Option<String> {
+    drive.meta().text_manuals().next()?;
     let Some(dir) = dir else {
         return Some(
             "no manuals directory found (set DRIVEMAP_MANUALS, or put the manuals in \
@@ -47,13 +48,13 @@ fn not_verified(dir: Option<&Path>, manuals: &Manuals, drive: &Drive) -> Option<
         });
     }
     let missing: Vec<&str> = drive
-        .meta
+        .meta()
         .text_manuals()
         .filter(|f| manuals.lines(f).is_none())
         .collect();
     match missing.len() {
         0 => None,
-        n if n == drive.meta.text_manuals().count() => Some(format!(
+        n if n == drive.meta().text_manuals().count() => Some(format!(
             "none of the map's manuals ({}) is in {}",
             missing.join(", "),
             dir.display()
@@ -143,13 +144,23 @@ pub(crate) fn kinds_verified(checks: &[review::CitationCheck]) -> String {
 
 pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     // (name shown, map read, manuals directory for its citations)
-    type Checked = (String, Result<Drive, Diagnostics>, Option<PathBuf>);
-    // One cache for every file: a map's bases are read once, not once per variant.
-    let cache = drivemap_map::load::TreeCache::new();
+    type Checked = (String, Result<Map, Diagnostics>, Option<PathBuf>);
+    // One cached loader for the files of each directory: a map's bases are read once, not
+    // once per variant.
+    let loaders: RefCell<Vec<(PathBuf, Loader<'_>)>> = RefCell::new(Vec::new());
     let from_file = |f: &PathBuf| -> Checked {
+        let dir = f.parent().unwrap_or(Path::new(".")).to_path_buf();
+        let mut loaders = loaders.borrow_mut();
+        let i = match loaders.iter().position(|(d, _)| *d == dir) {
+            Some(i) => i,
+            None => {
+                loaders.push((dir, args.dir.loader(f).cached()));
+                loaders.len() - 1
+            }
+        };
         (
             f.display().to_string(),
-            args.dir.read_cached(f, &cache),
+            args.dir.read_with(&loaders[i].1, f),
             crate::maps::manuals_dir_for(f),
         )
     };
@@ -187,17 +198,14 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                 let mut summary = format!(
                     "{} ({}: {} registers",
                     file,
-                    drive.meta.id,
-                    drive.registers.len()
+                    drive.id(),
+                    drive.registers().len()
                 );
                 let mut map_errors = 0;
                 // A map in an earlier schema version is read by its meaning, with warnings;
                 // `--strict` wants it in the current one.
-                for w in &drive.warnings {
-                    let draft = drive
-                        .draft
-                        .as_ref()
-                        .is_some_and(|d| w.message == drivemap_map::ir::draft_warning(d));
+                for w in drive.warnings() {
+                    let draft = drive.draft_warning().is_some_and(|d| w.message == d);
                     if args.strict && draft {
                         // Not a schema matter: a reviewer's.
                         eprintln!(
@@ -211,11 +219,11 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                         eprintln!("{}", w.as_warning());
                     }
                 }
-                for w in review::protocol_warnings(drive) {
+                for w in review::protocol_warnings(drive.ir()) {
                     eprintln!("{w}");
                 }
                 // The manual's example frames against the codec and the map.
-                if !drive.examples.is_empty() {
+                if !drive.examples().is_empty() {
                     let found = drivemap_live::examples::verify(drive);
                     for d in &found.errors {
                         eprintln!("{d}");
@@ -226,14 +234,14 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                     }
                     map_errors += found.errors.len();
                     let marked = drive
-                        .examples
+                        .examples()
                         .iter()
                         .filter(|e| e.conflict.is_some())
                         .count();
                     summary.push_str(&format!(
                         "; example frames: {} of {} verified",
                         found.clean,
-                        drive.examples.len()
+                        drive.examples().len()
                     ));
                     if marked > 0 {
                         summary.push_str(&format!(", {marked} contradicting as recorded"));
@@ -241,7 +249,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                 }
                 let mut manuals = manuals_dir.as_deref().map(Manuals::new);
                 if let Some(m) = manuals.as_mut() {
-                    m.load_for(drive);
+                    m.load_for(drive.ir());
                 }
                 let why = not_verified(
                     manuals_dir.as_deref(),
@@ -254,7 +262,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                     );
                     map_errors += 1;
                 }
-                let text_manuals = drive.meta.text_manuals().next().is_some();
+                let text_manuals = drive.meta().text_manuals().next().is_some();
                 // A map citing only pages is reviewed with no text: its citations are counted.
                 let manuals = manuals
                     .filter(Manuals::any)
@@ -267,7 +275,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                     map_errors += 1;
                 }
                 if let Some(manuals) = manuals {
-                    let checks = review::verify_citations(drive, &manuals);
+                    let checks = review::verify_citations(drive.ir(), &manuals);
                     let counts = CitationCounts::of(&checks);
                     for w in checks.iter().filter_map(|c| c.warning()) {
                         if args.strict {

@@ -5,10 +5,10 @@
 use std::process::ExitCode;
 
 use clap::{Args as ClapArgs, ValueEnum};
-use drivemap_live::Link;
+use drivemap_live::link::Link;
 use drivemap_live::paramset::{self, Compared, ParameterSet, Side};
 use drivemap_live::session::{Session, SettingsArgs};
-use drivemap_map::Drive;
+use drivemap_map::Map;
 
 use crate::error::Error;
 use crate::live::output::now_rfc3339;
@@ -82,7 +82,7 @@ fn drive_side(side: &str) -> Option<Option<&str>> {
 
 /// One side's values.
 fn side(
-    drive: &Drive,
+    drive: &Map,
     text: &str,
     link: Option<&Link>,
     settings: &SettingsArgs,

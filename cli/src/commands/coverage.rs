@@ -45,7 +45,7 @@ pub(crate) fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<Covera
         )
     })?;
     let mut manuals = Manuals::new(&manuals_dir);
-    manuals.load_for(&drive);
+    manuals.load_for(drive.ir());
     if !manuals.any() {
         return Err(Error::Refused(format!(
             "{}: none of its manuals is in {}",
@@ -54,12 +54,12 @@ pub(crate) fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<Covera
         )));
     }
     // A variant map's base manuals are the base map's to cover.
-    let skip: Vec<String> = match &drive.meta.extends {
+    let skip: Vec<String> = match &drive.meta().extends {
         Some(base) => {
             let base_path = path.with_file_name(format!("{base}.yaml"));
             let base = dir.read(&base_path).map_err(|d| format!("{d}"))?;
             let own = own_manuals(path)?;
-            base.meta
+            base.meta()
                 .text_manuals()
                 .filter(|f| !own.iter().any(|o| o == f))
                 .map(str::to_owned)
@@ -67,11 +67,11 @@ pub(crate) fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<Covera
         }
         None => Vec::new(),
     };
-    let report = review::coverage(&drive, &manuals, &skip);
+    let report = review::coverage(drive.ir(), &manuals, &skip);
     if report.tables.is_empty() {
         // Nothing recognised is not "everything covered": say so, never report success.
         let read: Vec<&str> = drive
-            .meta
+            .meta()
             .text_manuals()
             .filter(|f| !skip.iter().any(|s| s == f) && manuals.lines(f).is_some())
             .collect();

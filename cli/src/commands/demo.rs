@@ -273,7 +273,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
     }
     let ascii = {
         use drivemap_map::facts::TransportName;
-        let listed = &drive.protocol.transports;
+        let listed = &drive.protocol().transports;
         if args.ascii && !listed.contains(&TransportName::Ascii) {
             return Err(CliError::Refused(format!(
                 "the map of {} does not list Modbus ASCII in protocol.transports: leave --ascii out",
@@ -304,8 +304,8 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
     let slave = sim.slave();
     let title = format!(
         "{} {}",
-        sim.drive().meta.vendor,
-        sim.drive().meta.models.join(" / ")
+        sim.drive().meta().vendor,
+        sim.drive().meta().models.join(" / ")
     );
     // The simulator's values of the map's external quantities, told to the client as an
     // application would (a nameplate, a drive setting).

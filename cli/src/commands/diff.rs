@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_review::diff::{self, DriveDiff, render};
 use drivemap_review::review::Manuals;
 
@@ -62,43 +62,41 @@ pub(crate) struct Args {
     pub(crate) dir: MapsDir,
 }
 
-fn read(path: &Path, manuals_near: &Path) -> Result<Drive, Error> {
+fn read(path: &Path, manuals_near: &Path) -> Result<Map, Error> {
     let drive = loader_for(manuals_near)
         .load(path)
-        .map_err(|d| format!("{d}"))?
-        .into_ir();
+        .map_err(|d| format!("{d}"))?;
     warn_schema(&drive, None);
     Ok(drive)
 }
 
 /// Prints what reading a map of an earlier schema version changed (the map is compared by its
 /// meaning all the same); `rename` shows a temporary directory as the revision it holds.
-fn warn_schema(drive: &Drive, rename: Option<(&Path, &str)>) {
+fn warn_schema(drive: &Map, rename: Option<(&Path, &str)>) {
     let show = |text: String| match rename {
         Some((tmp, shown)) => text.replace(&tmp.display().to_string(), shown),
         None => text,
     };
     // The file's warning says what changed; the values read so are listed by `check`.
-    if let Some(first) = drive.warnings.first() {
+    if let Some(first) = drive.warnings().first() {
         eprintln!("{}", show(first.as_warning()));
     }
-    if drive.warnings.len() > 1 {
+    if drive.warnings().len() > 1 {
         eprintln!(
             "{}: note: {} address(es) and code(s) of it are written in decimal; `drivemap check` \
              lists them",
-            show(drive.file.display().to_string()),
-            drive.warnings.len() - 1
+            show(drive.file().display().to_string()),
+            drive.warnings().len() - 1
         );
     }
 }
 
 /// Reads a map of revision `rev` written to the temporary directory `tmp`, naming it
 /// `rev:dir/name` in errors and warnings instead of the temporary path.
-fn read_at_rev(path: &Path, manuals_near: &Path, tmp: &Path, shown: &str) -> Result<Drive, Error> {
+fn read_at_rev(path: &Path, manuals_near: &Path, tmp: &Path, shown: &str) -> Result<Map, Error> {
     let drive = loader_for(manuals_near)
         .load(path)
-        .map_err(|d| format!("{d}").replace(&tmp.display().to_string(), shown))?
-        .into_ir();
+        .map_err(|d| format!("{d}").replace(&tmp.display().to_string(), shown))?;
     warn_schema(&drive, Some((tmp, shown)));
     Ok(drive)
 }
@@ -121,12 +119,11 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                 let drive = loader_for(new)
                     .any_file_name()
                     .load(path)
-                    .map_err(|d| format!("{d}"))?
-                    .into_ir();
+                    .map_err(|d| format!("{d}"))?;
                 warn_schema(&drive, None);
                 Ok::<_, String>(drive)
             };
-            vec![diff::compare(&read(old)?, &read(new)?)]
+            vec![diff::compare(read(old)?.ir(), read(new)?.ir())]
         }
     };
     let manuals = manuals_for(&args, &diffs);
@@ -224,9 +221,9 @@ fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, Error> {
     for name in names {
         let (old, new) = (then.path().join(&name), dir.join(&name));
         let diff = match (old.is_file(), new.is_file()) {
-            (true, true) => diff::compare(&old_read(&old)?, &read(&new, &near)?),
-            (false, true) => diff::added(&read(&new, &near)?),
-            (true, false) => diff::removed(&old_read(&old)?),
+            (true, true) => diff::compare(old_read(&old)?.ir(), read(&new, &near)?.ir()),
+            (false, true) => diff::added(read(&new, &near)?.ir()),
+            (true, false) => diff::removed(old_read(&old)?.ir()),
             (false, false) => {
                 return Err(Error::Refused(format!(
                     "{name} is neither in {} nor at revision {rev}",

@@ -65,7 +65,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     } else {
         file
     };
-    let text = reference::render(&drive, &name);
+    let text = reference::render(drive.ir(), &name);
     if let Some(docs) = &args.docs {
         return write_docs(docs, &path, &drive, &text, &args);
     }
@@ -75,7 +75,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
             eprintln!(
                 "wrote {}: {} registers, {} lines",
                 out.display(),
-                drive.registers.len(),
+                drive.registers().len(),
                 text.lines().count()
             );
         }
@@ -88,12 +88,12 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
 fn write_docs(
     docs: &std::path::Path,
     path: &std::path::Path,
-    drive: &drivemap_map::Drive,
+    drive: &drivemap_map::Map,
     reference: &str,
     args: &Args,
 ) -> Result<ExitCode, Error> {
     use crate::commands::coverage;
-    let id = &drive.meta.id;
+    let id = &drive.id();
     if !path.is_file() {
         return Err(Error::Refused(format!(
             "{}: not a file; the coverage document is made from the map's text beside its \
@@ -114,7 +114,7 @@ fn write_docs(
     outln!(
         "{}: {} registers, {} lines",
         refpath.display(),
-        drive.registers.len(),
+        drive.registers().len(),
         reference.lines().count()
     );
     let report = coverage::report_for(path, &args.dir)?;
@@ -122,8 +122,8 @@ fn write_docs(
     let old = std::fs::read_to_string(&covpath).unwrap_or_else(|_| {
         format!(
             "# Coverage: {} {} (`maps/{id}.yaml`)\n\n",
-            drive.meta.vendor,
-            drive.meta.models.join(" / ")
+            drive.meta().vendor,
+            drive.meta().models.join(" / ")
         )
     });
     let covpath = write(

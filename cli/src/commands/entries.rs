@@ -7,14 +7,14 @@ use std::process::ExitCode;
 
 use drivemap_live::indexed::find_entry;
 use drivemap_live::session::Session;
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::core::indexed::EntryRef;
 
 use crate::error::Error;
 use crate::live::Target;
 
 /// The names that are entries of indexed registers and not registers, and the others.
-pub(crate) fn split<'a>(drive: &Drive, names: &'a [String]) -> (Vec<&'a String>, Vec<EntryRef>) {
+pub(crate) fn split<'a>(drive: &Map, names: &'a [String]) -> (Vec<&'a String>, Vec<EntryRef>) {
     let mut registers = Vec::new();
     let mut entries = Vec::new();
     for n in names {
@@ -45,7 +45,7 @@ fn what(e: EntryRef) -> String {
 /// Reads `entries` (no register named with them) and prints one line each: id, value, unit and
 /// the pair it is reached through. Exits 1 when any failed.
 pub(crate) fn read(
-    drive: &Drive,
+    drive: &Map,
     target: &Target,
     registers: &[&String],
     entries: &[EntryRef],
@@ -81,7 +81,7 @@ pub(crate) fn read(
 
 /// Writes `entries` (entry, value text in engineering units; no register named with them).
 pub(crate) fn write(
-    drive: &Drive,
+    drive: &Map,
     target: &Target,
     registers: usize,
     entries: &[(EntryRef, String)],

@@ -10,8 +10,9 @@ use crate::error::Error;
 use crate::maps::MapsDir;
 use drivemap_bridge::points::export::{self, Export};
 use drivemap_bridge::points::{home_assistant, node_red, telegraf};
-use drivemap_live::link::{Link, Parity, ParityParser};
+use drivemap_live::link::{Link, ParityParser};
 use drivemap_live::session::{SettingsArgs, find_all};
+use drivemap_runtime::profile::Parity;
 
 /// What to write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -114,8 +115,8 @@ impl Args {
 
 pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let read = match (&args.file, &args.drive) {
-        (Some(f), _) => args.dir.read_map(f),
-        (None, Some(id)) => match args.dir.load_map(id) {
+        (Some(f), _) => args.dir.read(f),
+        (None, Some(id)) => match args.dir.load(id) {
             Ok(d) => Ok(d),
             Err(e) => return Err(e.into()),
         },
@@ -146,16 +147,13 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
             "give one link the tool connects to: --tcp HOST:PORT, --gateway HOST:PORT, --rtu-tcp HOST:PORT or --serial PATH".into(),
         );
     }
-    let given = args.settings.resolve(drive.ir())?;
+    let given = args.settings.resolve(&drive)?;
     let regs = if args.all {
         drive.registers().filter(|r| r.readable()).collect()
     } else if args.registers.is_empty() {
         export::default_registers(&drive)
     } else {
-        find_all(drive.ir(), &args.registers)?
-            .into_iter()
-            .filter_map(|r| drive.register_at(r.index()))
-            .collect()
+        find_all(&drive, &args.registers)?
     };
     let interval = args.interval.unwrap_or(Duration::from_secs(
         if args.format == Format::HomeAssistant {

@@ -5,8 +5,8 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use clap::Args as ClapArgs;
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 
 use crate::error::Error;
 use crate::live::Target;
@@ -38,33 +38,32 @@ pub(crate) struct Args {
     pub(crate) format: Format,
 }
 
-fn registers<'a>(drive: &'a Drive, args: &Args) -> Result<Vec<&'a Register>, Error> {
+fn registers<'a>(drive: &'a Map, args: &Args) -> Result<Vec<RegisterRef<'a>>, Error> {
     if !args.names.is_empty() {
         return Ok(find_all(drive, &args.names)?);
     }
     // Registers chosen for the user: those this link can read.
     let kind = args.target.link.kind();
-    let pollable = |r: &Register| r.readable() && !r.broadcast && on_transport(drive, r, kind);
-    let regs: Vec<&Register> = match &args.group {
+    let pollable =
+        |r: RegisterRef<'_>| r.readable() && !r.broadcast_only() && on_transport(drive, r, kind);
+    let regs: Vec<RegisterRef<'_>> = match &args.group {
         Some(id) => {
-            let Some(gi) = drive.groups.iter().position(|g| &g.id == id) else {
-                let ids: Vec<&str> = drive.groups.iter().map(|g| g.id.as_str()).collect();
+            let Some(gi) = drive.groups().iter().position(|g| &g.id == id) else {
+                let ids: Vec<&str> = drive.groups().iter().map(|g| g.id.as_str()).collect();
                 return Err(Error::Refused(format!(
                     "{} has no group `{id}`; groups: {}",
-                    drive.meta.id,
+                    drive.id(),
                     ids.join(", ")
                 )));
             };
             drive
-                .registers
-                .iter()
-                .filter(|r| r.group == gi && pollable(r))
+                .registers()
+                .filter(|r| std::ptr::eq(r.group(), &drive.groups()[gi]) && pollable(*r))
                 .collect()
         }
         None => drive
-            .registers
-            .iter()
-            .filter(|r| !r.writable() && pollable(r))
+            .registers()
+            .filter(|r| !r.writable() && pollable(*r))
             .collect(),
     };
     if regs.is_empty() {
@@ -99,7 +98,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let assumed = session.check_given(&given.given).map_err(Error::Refused)?;
     let mut notes: Vec<String> = Vec::new();
     for r in &regs {
-        let n = assumed.for_register(&drive, r, &session.settings);
+        let n = assumed.for_register(&drive, *r, &session.settings);
         if !n.is_empty() && !notes.contains(&n) {
             notes.push(n);
         }
@@ -126,7 +125,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
             let records: Vec<Reading> = regs
                 .iter()
                 .zip(&words)
-                .map(|(r, w)| Reading::of(&session, r, w, &time))
+                .map(|(r, w)| Reading::of(&session, *r, w, &time))
                 .collect();
             any_failed |= records.iter().any(|r| r.status != "ok");
             let mut out = std::io::stdout().lock();
@@ -149,7 +148,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         let rows: Vec<Row> = regs
             .iter()
             .zip(&words)
-            .map(|(r, w)| Row::of(&session, r, w, false))
+            .map(|(r, w)| Row::of(&session, *r, w, false))
             .collect();
         any_failed |= rows.iter().any(|r| r.failed);
         let changed: Vec<bool> = if tty && !previous.is_empty() {
@@ -163,7 +162,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         let reconnects = session.client.reconnects();
         let header = format!(
             "{} over {} — poll {n} at {:.1} s, every {} ms{}",
-            drive.meta.id,
+            drive.id(),
             session.link,
             started.elapsed().as_secs_f64(),
             args.interval.as_millis(),

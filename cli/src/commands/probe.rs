@@ -16,8 +16,8 @@ use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
 use drivemap_live::codec;
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_runtime::ValueError;
 use serde::Serialize;
 
@@ -115,22 +115,27 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     })
 }
 
-fn finding(session: &Session<'_>, r: &Register, kind: &'static str, detail: String) -> Finding {
+fn finding(
+    session: &Session<'_>,
+    r: RegisterRef<'_>,
+    kind: &'static str,
+    detail: String,
+) -> Finding {
     Finding {
         kind,
         register: r.id().to_owned(),
-        parameter: r.def.param.clone(),
+        parameter: r.param().map(str::to_owned),
         address: session.shown_address(r),
         address_text: address_text(session.drive, session.shown_address(r)),
         raw: None,
         exception: None,
         detail,
-        source: r.def.source.clone(),
+        source: r.source().map(str::to_owned),
     }
 }
 
 /// Reads the drive against its map and builds the report.
-pub(crate) fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error> {
+pub(crate) fn run_probe(drive: &Map, target: &Target) -> Result<Report, Error> {
     let given = target.settings.resolve(drive)?;
     crate::output::warn_unprinted(
         drive,
@@ -142,9 +147,9 @@ pub(crate) fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error>
     );
     let mut session = Session::open(drive, &target.link, given.settings)?;
     let mut unchecked = Vec::new();
-    let mut readable: Vec<&Register> = Vec::new();
-    for r in &drive.registers {
-        if r.broadcast {
+    let mut readable: Vec<RegisterRef<'_>> = Vec::new();
+    for r in drive.registers() {
+        if r.broadcast_only() {
             unchecked.push(finding(
                 &session,
                 r,
@@ -160,7 +165,7 @@ pub(crate) fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error>
                 "not_on_link",
                 format!(
                     "exists only on {}",
-                    describe::transports(session.drive.register_plan(r).transports)
+                    describe::transports(r.plan().transports)
                 ),
             ));
         } else {
@@ -194,14 +199,14 @@ pub(crate) fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error>
             let value = match role {
                 "scale selector" => session.settings.selectors.get(id).map(|c| c.to_string()),
                 _ => session.settings.references.get(id).map(|v| {
-                    format!("{v} {}", r.def.unit.as_deref().unwrap_or(""))
+                    format!("{v} {}", r.unit().unwrap_or(""))
                         .trim_end()
                         .to_owned()
                 }),
             };
             settings.push(Setting {
                 register: id.to_owned(),
-                parameter: r.def.param.clone(),
+                parameter: r.param().map(str::to_owned),
                 role,
                 origin: if given.fixed.contains(id) {
                     "given with --set"
@@ -261,23 +266,23 @@ pub(crate) fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error>
             Err(f) => {
                 if let Some(code) = f.exception {
                     checked += 1;
-                    let mut x = finding(&session, r, "refused", f.message.clone());
+                    let mut x = finding(&session, *r, "refused", f.message.clone());
                     x.exception = Some(code);
                     disagreements.push(x);
                 } else {
-                    unchecked.push(finding(&session, r, "no_reply", f.message.clone()));
+                    unchecked.push(finding(&session, *r, "no_reply", f.message.clone()));
                 }
             }
-            Ok(raw) => match check_value(drive, r, *raw, &session) {
+            Ok(raw) => match check_value(drive, *r, *raw, &session) {
                 Check::Agrees => checked += 1,
                 Check::Disagrees(kind, detail) => {
                     checked += 1;
-                    let mut x = finding(&session, r, kind, detail);
+                    let mut x = finding(&session, *r, kind, detail);
                     x.raw = Some(*raw);
                     disagreements.push(x);
                 }
                 Check::Unchecked(detail) => {
-                    let mut x = finding(&session, r, "not_converted", detail);
+                    let mut x = finding(&session, *r, "not_converted", detail);
                     x.raw = Some(*raw);
                     unchecked.push(x);
                 }
@@ -286,7 +291,7 @@ pub(crate) fn run_probe(drive: &Drive, target: &Target) -> Result<Report, Error>
     }
     Ok(Report {
         format: "drivemap-probe/1",
-        drive: drive.meta.id.clone(),
+        drive: drive.id().to_owned(),
         map_version: None,
         link: session.link.clone(),
         slave: session.slave,
@@ -310,8 +315,13 @@ pub(crate) enum Check {
 
 /// Whether a word read is a value the map allows: decoded and encoded back as a write would
 /// be (range under the selected scale and variant, listed codes), and no reserved bit set.
-pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Session<'_>) -> Check {
-    if let Conversion::Bits { mask, .. } = drive.register_plan(r).conversion {
+pub(crate) fn check_value(
+    drive: &Map,
+    r: RegisterRef<'_>,
+    raw: u32,
+    session: &Session<'_>,
+) -> Check {
+    if let Conversion::Bits { mask, .. } = r.plan().conversion {
         let reserved = raw & !u32::from(mask);
         return if reserved == 0 {
             Check::Agrees
@@ -320,12 +330,12 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Sessi
                 "reserved_bits",
                 format!(
                     "{raw:04X}h sets bit(s) {reserved:04X}h, which the map gives no field; map: {}",
-                    describe::register(r)
+                    r.label()
                 ),
             )
         };
     }
-    let plan = drive.register_plan(r);
+    let plan = r.plan();
     if !plan.read_values.is_empty() {
         // A word read means a read code (`read_values`), not a value a write would encode.
         if u16::try_from(raw)
@@ -366,8 +376,8 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Sessi
             ))
         }
         Err(ValueError::UnknownCode { .. }) => {
-            let listed: Vec<String> = drive
-                .register_plan(r)
+            let listed: Vec<String> = r
+                .plan()
                 .labels()
                 .iter()
                 .map(|l| l.code.to_string())
@@ -389,18 +399,17 @@ pub(crate) fn check_value(drive: &Drive, r: &Register, raw: u32, session: &Sessi
 
 /// Why the map's list of codes of `r` is incomplete, when it says so (`unknown: values`): a
 /// code it does not list is then not a disagreement.
-fn codes_incomplete(r: &Register) -> Option<&str> {
-    r.def
-        .unknown
+fn codes_incomplete(r: RegisterRef<'_>) -> Option<&str> {
+    r.unknown()
         .iter()
         .find(|u| u.what == drivemap_map::facts::UnknownItem::Values)
         .map(|u| u.reason.as_str())
 }
 
 /// What reading cannot check: gaps, unknown ranges, variant-specific ranges without a variant.
-fn not_checkable(drive: &Drive, readable: &[&Register], session: &Session<'_>) -> Vec<String> {
+fn not_checkable(drive: &Map, readable: &[RegisterRef<'_>], session: &Session<'_>) -> Vec<String> {
     let mut out = Vec::new();
-    for g in &drive.gaps {
+    for g in drive.gaps() {
         let at = match (&g.addresses, &g.params) {
             (Some([a, b]), _) => describe::address_span(*a, *b),
             (None, Some(p)) => p.clone(),
@@ -410,8 +419,12 @@ fn not_checkable(drive: &Drive, readable: &[&Register], session: &Session<'_>) -
     }
     let unknown_range: Vec<String> = readable
         .iter()
-        .filter(|r| r.range_unknown())
-        .map(|r| describe::register(r))
+        .filter(|r| {
+            r.unknown()
+                .iter()
+                .any(|u| u.what == drivemap_map::facts::UnknownItem::Range)
+        })
+        .map(|r| r.label())
         .collect();
     if !unknown_range.is_empty() {
         out.push(format!(
@@ -422,14 +435,12 @@ fn not_checkable(drive: &Drive, readable: &[&Register], session: &Session<'_>) -
     }
     let by_variant: BTreeSet<String> = readable
         .iter()
-        .filter(|r| !r.def.by_variant.is_empty())
+        .filter(|r| r.variant_options().next().is_some())
         .filter(|r| {
-            !r.def
-                .by_variant
-                .keys()
+            !r.variant_options()
                 .any(|k| session.settings.has_variant(drive, k))
         })
-        .map(|r| describe::register(r))
+        .map(|r| r.label())
         .collect();
     if !by_variant.is_empty() {
         out.push(format!(

@@ -50,7 +50,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let assumed = session.check_given(&given.given).map_err(Error::Refused)?;
     let mut notes: Vec<String> = Vec::new();
     for r in &regs {
-        let n = assumed.for_register(&drive, r, &session.settings);
+        let n = assumed.for_register(&drive, *r, &session.settings);
         if !n.is_empty() && !notes.contains(&n) {
             notes.push(n);
         }
@@ -68,7 +68,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         let records: Vec<Reading> = regs
             .iter()
             .zip(&words)
-            .map(|(r, w)| Reading::of(&session, r, w, &time))
+            .map(|(r, w)| Reading::of(&session, *r, w, &time))
             .collect();
         let mut out = std::io::stdout().lock();
         Emitter::new(args.format)
@@ -83,7 +83,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     let rows: Vec<Row> = regs
         .iter()
         .zip(&words)
-        .map(|(r, w)| Row::of(&session, r, w, true))
+        .map(|(r, w)| Row::of(&session, *r, w, true))
         .collect();
     out!("{}", table::render(&rows, &[]));
     Ok(if rows.iter().any(|r| r.failed) {

@@ -6,7 +6,6 @@ use std::process::ExitCode;
 use clap::Args as ClapArgs;
 use drivemap_live::paramset::{self, Progress, StoreOutcome};
 use drivemap_live::session::Session;
-use drivemap_map::describe;
 
 use crate::error::Error;
 use crate::live::Target;
@@ -58,7 +57,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         if plan.store.is_none() {
             return Err(Error::Refused(format!(
                 "{} has no store command (protocol.commands of kind persist)",
-                drive.meta.id
+                drive.id()
             )));
         }
     }
@@ -82,9 +81,9 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
             outln!(
                 "{:>4}. {}: {} -> {}",
                 i + 1,
-                describe::register(w.register),
+                w.register.label(),
                 w.from.as_deref().unwrap_or("(not read)"),
-                shown(&drive, w)
+                shown(w)
             );
         }
         if let Some(c) = plan.store {
@@ -150,17 +149,15 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     })
 }
 
-fn name(drive: &drivemap_map::Drive, id: &str) -> String {
+fn name(drive: &drivemap_map::Map, id: &str) -> String {
     drive
-        .registers
-        .iter()
-        .find(|r| r.id() == id)
-        .map_or_else(|| id.to_owned(), describe::register)
+        .register_by_id(id)
+        .map_or_else(|| id.to_owned(), |r| r.label())
 }
 
 /// The set's value with the register's unit.
-fn shown(drive: &drivemap_map::Drive, w: &paramset::Write<'_>) -> String {
-    let unit = drive.register_plan(w.register).unit;
+fn shown(w: &paramset::Write<'_>) -> String {
+    let unit = w.register.plan().unit;
     if unit.is_empty() || w.to.parse::<f64>().is_err() {
         w.to.clone()
     } else {

@@ -75,7 +75,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     eprintln!(
         "saved {} of {count} settings of {} at slave {} in {} requests, {:.1} s{}",
         report.set.settings.len(),
-        drive.meta.id,
+        drive.id(),
         report.set.slave,
         report.requests,
         started.elapsed().as_secs_f64(),

@@ -14,8 +14,8 @@ use std::time::{Duration, Instant};
 
 use clap::{ArgGroup, Args as ClapArgs};
 use drivemap_live::LiveSettings;
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_runtime::transport::serial::char_times;
 use drivemap_runtime::{Error, Profile};
 
@@ -26,8 +26,9 @@ use serde::Serialize;
 use super::probe::{Check, check_value};
 use crate::live::output::Format;
 use crate::maps::MapsDir;
-use drivemap_live::link::{Link, Parity, ParityParser};
+use drivemap_live::link::{Link, ParityParser};
 use drivemap_live::session::{Session, on_transport};
+use drivemap_runtime::profile::Parity;
 
 /// Monitor registers read per candidate map when identifying a slave.
 const MAX_IDENTIFY_REGISTERS: usize = 48;
@@ -235,7 +236,7 @@ struct Line {
     parity: Parity,
 }
 
-fn line_text(kind_serial: bool, line: Line, drive: &Drive, base: &Link) -> String {
+fn line_text(kind_serial: bool, line: Line, drive: &Map, base: &Link) -> String {
     if !kind_serial {
         return "-".into();
     }
@@ -282,7 +283,7 @@ fn request_gap(profiles: &[&Profile], baud: Option<u32>) -> Duration {
 
 /// The holding register readable in the most candidate maps on this link (lowest address on
 /// a tie), as a PDU address.
-fn probe_address(drives: &[Drive], base: &Link) -> u16 {
+fn probe_address(drives: &[Map], base: &Link) -> u16 {
     let kind = base.kind();
     let mut counts: std::collections::BTreeMap<u16, usize> = Default::default();
     for d in drives {
@@ -290,7 +291,7 @@ fn probe_address(drives: &[Drive], base: &Link) -> u16 {
         let profile = drivemap_live::leak_profile(d);
         let mut seen = std::collections::BTreeSet::new();
         for r in readable_monitors(d, kind, usize::MAX) {
-            if d.register_plan(r).info.table != drivemap_runtime::Table::Holding {
+            if r.plan().info.table != drivemap_runtime::Table::Holding {
                 continue;
             }
             let a = drivemap_live::session::address_of(d, r, &settings, kind);
@@ -311,22 +312,21 @@ fn probe_address(drives: &[Drive], base: &Link) -> u16 {
 
 /// Read-only registers this link can read, at most `max`.
 fn readable_monitors(
-    d: &Drive,
+    d: &Map,
     kind: drivemap_runtime::profile::TransportKind,
     max: usize,
-) -> Vec<&Register> {
-    d.registers
-        .iter()
-        .filter(|r| r.readable() && !r.writable() && !r.broadcast)
-        .filter(|r| on_transport(d, r, kind))
+) -> Vec<RegisterRef<'_>> {
+    d.registers()
+        .filter(|r| r.readable() && !r.writable() && !r.broadcast_only())
+        .filter(|&r| on_transport(d, r, kind))
         .take(max)
         .collect()
 }
 
 /// Reads a map's monitors from a slave and counts how the answers fit the map.
-fn identify(drive: &Drive, link: &Link) -> Candidate {
+fn identify(drive: &Map, link: &Link) -> Candidate {
     let mut c = Candidate {
-        drive: drive.meta.id.clone(),
+        drive: drive.id().to_owned(),
         tried: 0,
         consistent: 0,
         inconsistent: 0,
@@ -349,7 +349,7 @@ fn identify(drive: &Drive, link: &Link) -> Candidate {
     let (words, _) = session.poll_detailed(&mut plan);
     for (r, w) in regs.iter().zip(&words) {
         match w {
-            Ok(raw) => match check_value(drive, r, *raw, &session) {
+            Ok(raw) => match check_value(drive, *r, *raw, &session) {
                 Check::Agrees => c.consistent += 1,
                 Check::Disagrees(..) => c.inconsistent += 1,
                 Check::Unchecked(_) => c.unanswered += 1,
@@ -371,14 +371,14 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
     } else {
         args.drives.clone()
     };
-    let mut drives: Vec<Drive> = ids
+    let mut drives: Vec<Map> = ids
         .iter()
         .map(|id| args.dir.load(id))
         .collect::<Result<_, _>>()?;
     if args.ascii {
         // A drive whose map does not list ASCII would not read the frames.
         drives.retain(|d| {
-            d.protocol
+            d.protocol()
                 .transports
                 .contains(&drivemap_map::facts::TransportName::Ascii)
         });

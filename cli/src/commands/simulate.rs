@@ -12,9 +12,10 @@ use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use clap::{ArgGroup, Args as ClapArgs};
-use drivemap_live::link::{Parity, ParityParser, port_parity};
-use drivemap_map::Drive;
+use drivemap_live::link::{ParityParser, port_parity};
+use drivemap_map::Map;
 use drivemap_runtime::bus_time::SerialConfig;
+use drivemap_runtime::profile::Parity;
 use drivemap_runtime::transport::serial::{SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
@@ -123,7 +124,7 @@ pub(crate) struct Args {
 }
 
 /// The map of a drive id: under `--maps` when there, else built in.
-pub(crate) fn load_drive(dir: &MapsDir, id: &str) -> Result<Drive, Error> {
+pub(crate) fn load_drive(dir: &MapsDir, id: &str) -> Result<Map, Error> {
     Ok(dir.load(id)?)
 }
 
@@ -144,7 +145,7 @@ fn number(text: &str, v: &str) -> Result<f64, Error> {
 /// else the power-on value of the register `NAME` (an unknown register is refused when the
 /// simulator starts).
 pub(crate) fn options(
-    drive: &Drive,
+    drive: &Map,
     slave: Option<u8>,
     set: &[String],
     variant: &[String],
@@ -167,7 +168,7 @@ pub(crate) fn options(
             Err(e) => match drivemap_live::lookup::find(drive, &k) {
                 Ok(r)
                     if matches!(
-                        drive.register_plan(r).conversion,
+                        r.plan().conversion,
                         drivemap_runtime::plan::Conversion::Enum { .. }
                             | drivemap_runtime::plan::Conversion::Bits { .. }
                     ) =>
@@ -200,16 +201,17 @@ pub(crate) fn options(
 /// The values of the parameter set in `file` for a simulated `drive`, as power-on values in
 /// the order a restore writes them (what selects a scale first). A set of another map is
 /// refused, unless on a line of several drives, where it is for the drives of its map.
-fn restored_values(drive: &Drive, file: &str, line: bool) -> Result<Vec<(String, f64)>, Error> {
+fn restored_values(drive: &Map, file: &str, line: bool) -> Result<Vec<(String, f64)>, Error> {
     use drivemap_live::paramset;
     let set = super::compare::read_set(file)?;
-    if set.drive != drive.meta.id {
+    if set.drive != drive.id() {
         if line {
             return Ok(Vec::new());
         }
         return Err(Error::Refused(format!(
             "--restore {file}: a set of {}, not of {}",
-            set.drive, drive.meta.id
+            set.drive,
+            drive.id()
         )));
     }
     let given = drivemap_live::LiveSettings::default();
@@ -346,7 +348,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         // would (`read --tcp` refuses the same map).
         if let Some(addr) = &args.tcp
             && !drive
-                .protocol
+                .protocol()
                 .transports
                 .contains(&drivemap_map::facts::TransportName::Tcp)
         {
@@ -358,7 +360,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         // does not list ASCII alone (`read --ascii` refuses the same).
         {
             use drivemap_map::facts::TransportName;
-            let listed = &drive.protocol.transports;
+            let listed = &drive.protocol().transports;
             let words = || {
                 listed
                     .iter()
@@ -383,7 +385,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                 )));
             }
             if args.ascii && data_bits.is_none() {
-                data_bits = drive.protocol.serial.as_ref().map(|s| s.data_bits);
+                data_bits = drive.protocol().serial.as_ref().map(|s| s.data_bits);
             }
         }
         if let Some(note) = drivemap_live::draft::read_note(&drive) {
@@ -448,7 +450,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         } else {
             "no drive model: the map gives no `roles:`, so this is a register store"
         };
-        let (id, slave) = (&sim.drive().meta.id, sim.slave());
+        let (id, slave) = (&sim.drive().id(), sim.slave());
         described.push(format!("{id} at slave {slave}"));
         models.push(if several {
             format!("slave {slave}: {model}")

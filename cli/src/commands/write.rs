@@ -6,8 +6,8 @@ use std::process::ExitCode;
 use clap::Args as ClapArgs;
 use drivemap_live::codec::{self, InputError};
 use drivemap_live::intern::intern;
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_runtime::gate;
 use drivemap_runtime::roles::{RoleKind, Target as Place};
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
@@ -48,20 +48,20 @@ pub(crate) struct Args {
 /// The registers whose conversion, limit or address `r` takes part in, each with how: `scales
 /// frequency_setpoint`, `bounds tcp_frequency_reference`, `selects the scale of x`.
 pub(crate) fn dependants(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     settings: &drivemap_live::LiveSettings,
 ) -> Vec<String> {
     let mut out = Vec::new();
-    for x in &drive.registers {
+    for x in drive.registers() {
         if x.id() == r.id() {
             continue;
         }
         let all = drive.plan();
-        let bounds = match drive.register_plan(x).limit_dependency() {
+        let bounds = match x.plan().limit_dependency() {
             Some(drivemap_runtime::plan::Dependency::Quantity(s)) => matches!(
                 all.settings.quantities.get(usize::from(s.slot)),
-                Some(drivemap_map::lower::Quantity::Register(row))
+                Some(drivemap_map::Quantity::Register(row))
                     if all.registers[*row].info.id == r.id()
             ),
             _ => false,
@@ -86,16 +86,16 @@ pub(crate) fn dependants(
 }
 
 /// A refusal of the write gate, naming the register as the map prints it; nothing was sent.
-fn refused(r: &Register, e: &Refusal) -> String {
+fn refused(r: RegisterRef<'_>, e: &Refusal) -> String {
     let hint = match e {
         Refusal::BroadcastOnly { .. } => "; write it with --slave 0",
         Refusal::NotOnTransport { .. } => "; it is not on this link",
         _ => "",
     };
-    format!("{}: {e}{hint}; nothing written", describe::register(r))
+    format!("{}: {e}{hint}; nothing written", r.label())
 }
 
-fn input_error(drive: &Drive, e: &InputError) -> String {
+fn input_error(drive: &Map, e: &InputError) -> String {
     match e {
         InputError::Value(v) => value_error(drive, v).to_string(),
         InputError::Parse(m) => m.clone(),
@@ -110,9 +110,9 @@ fn input_error(drive: &Drive, e: &InputError) -> String {
 /// broadcast) gets the named fields and 0 elsewhere, and a warning says so. `None` when the
 /// value is not a field list (a number is the whole word).
 fn field_word(
-    drive: &Drive,
+    drive: &Map,
     session: &mut Session<'_>,
-    r: &Register,
+    r: RegisterRef<'_>,
     text: &str,
 ) -> Result<Option<u32>, Error> {
     let Some(input) = codec::field_input(drive, r, text).map_err(|e| input_error(drive, &e))?
@@ -121,7 +121,7 @@ fn field_word(
     };
     let Conversion::Bits {
         mask: fields_mask, ..
-    } = drive.register_plan(r).conversion
+    } = r.plan().conversion
     else {
         return Ok(None);
     };
@@ -141,18 +141,18 @@ fn field_word(
         );
         let word = vfd
             .command_fields_word(row, input.mask, input.value)
-            .map_err(|e| format!("{}: {e}; nothing written", describe::register(r)))?;
+            .map_err(|e| format!("{}: {e}; nothing written", r.label()))?;
         if session.slave == 0 || session.unreadable(r).is_some() {
             eprintln!(
                 "warning: {} cannot be read here, so the fields not named are released (0 where no command)",
-                describe::register(r)
+                r.label()
             );
         }
         word
     } else if session.slave == 0 || session.unreadable(r).is_some() {
         eprintln!(
             "warning: {} cannot be read here, so the fields not named are written as 0",
-            describe::register(r)
+            r.label()
         );
         input.value
     } else {
@@ -170,7 +170,7 @@ fn field_word(
 }
 
 /// Whether plan row `row` of `drive` holds a command role (run, direction, fault reset, ...).
-fn holds_command(drive: &Drive, row: u16) -> bool {
+fn holds_command(drive: &Map, row: u16) -> bool {
     drive.plan().roles.places.iter().any(|p| {
         p.role.kind() == RoleKind::Command && matches!(p.target, Place::Field(f) if f.row == row)
     })
@@ -179,8 +179,9 @@ fn holds_command(drive: &Drive, row: u16) -> bool {
 /// The warning for a number register whose range the manual does not print, directly or
 /// through another parameter (`max_relative`): only its word bounds what is sent. `None` for
 /// registers with a range, codes and bit fields.
-pub(crate) fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
-    let plan = drive.register_plan(r);
+pub(crate) fn no_printed_range(drive: &Map, r: RegisterRef<'_>) -> Option<String> {
+    debug_assert!(std::ptr::eq(drive, r.map()), "a register of another map");
+    let plan = r.plan();
     let number = matches!(
         plan.conversion,
         Conversion::Word { .. }
@@ -192,15 +193,14 @@ pub(crate) fn no_printed_range(drive: &Drive, r: &Register) -> Option<String> {
         return None;
     }
     let why = r
-        .def
-        .unknown
+        .unknown()
         .iter()
         .find(|u| u.what == drivemap_map::facts::UnknownItem::Range)
         .map(|u| format!(" ({})", u.reason))
         .unwrap_or_default();
     Some(format!(
         "the manual prints no range for {}{why}: only its {}-bit {} bounds the value sent",
-        describe::register(r),
+        r.label(),
         16 * plan.info.width.count(),
         if plan.info.width.count() > 1 {
             "value"
@@ -219,11 +219,11 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
 
 /// [`run`] with the map loaded and its run-time profile built.
 pub(crate) fn execute(
-    drive: &Drive,
+    drive: &Map,
     profile: &'static Profile,
     args: &Args,
 ) -> Result<ExitCode, Error> {
-    let mut pairs: Vec<(&Register, String)> = Vec::new();
+    let mut pairs: Vec<(RegisterRef<'_>, String)> = Vec::new();
     let mut entries = Vec::new();
     let mut errors = Vec::new();
     for a in &args.assignments {
@@ -239,7 +239,7 @@ pub(crate) fn execute(
             Ok(r) if value.trim().is_empty() => errors.push(format!(
                 "`{}`: no value given for {}; nothing written",
                 codec::shorten(a),
-                describe::register(r)
+                r.label()
             )),
             Ok(r) => pairs.push((r, value.trim().to_owned())),
             Err(e) => match drivemap_live::indexed::find_entry(drive, name.trim()) {
@@ -265,20 +265,20 @@ pub(crate) fn execute(
     for (r, _) in &pairs {
         gate::rule(profile, intern(r.id()))
             .and_then(|rule| gate::check_link(profile, kind, slave, rule))
-            .map_err(|e| refused(r, &e))?;
+            .map_err(|e| refused(*r, &e))?;
     }
     if let Some(id) = &args.persist
-        && !drive.protocol.commands.iter().any(|c| &c.id == id)
+        && !drive.protocol().commands.iter().any(|c| &c.id == id)
     {
         let known: Vec<&str> = drive
-            .protocol
+            .protocol()
             .commands
             .iter()
             .map(|c| c.id.as_str())
             .collect();
         return Err(Error::Refused(format!(
             "{} has no command `{}`; commands: {}; nothing written",
-            drive.meta.id,
+            drive.id(),
             codec::shorten(id),
             if known.is_empty() {
                 "none".to_owned()
@@ -296,7 +296,7 @@ pub(crate) fn execute(
     // Refuse what cannot be written before connecting; values that need settings from the
     // drive are checked once those are read.
     for (r, value) in &pairs {
-        match codec::parse_value_with(drive, r, value, &given.settings, rounding) {
+        match codec::parse_value_with(drive, *r, value, &given.settings, rounding) {
             Ok(_)
             | Err(InputError::Value(
                 ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. },
@@ -310,11 +310,11 @@ pub(crate) fn execute(
         }
     }
     for (r, _) in &pairs {
-        if let Some(w) = no_printed_range(drive, r) {
+        if let Some(w) = no_printed_range(drive, *r) {
             eprintln!("warning: {w}");
         }
     }
-    let regs: Vec<&Register> = pairs.iter().map(|(r, _)| *r).collect();
+    let regs: Vec<RegisterRef<'_>> = pairs.iter().map(|(r, _)| *r).collect();
     crate::output::warn_unprinted(
         drive,
         &args.target.link,
@@ -349,7 +349,7 @@ pub(crate) fn execute(
     }
     // A setting others depend on: named, and not changed under a running drive unless asked.
     for (r, _) in &pairs {
-        let deps = dependants(drive, r, &session.settings);
+        let deps = dependants(drive, *r, &session.settings);
         if deps.is_empty() {
             continue;
         }
@@ -374,22 +374,22 @@ pub(crate) fn execute(
         if running == Some(true) && !args.while_running {
             return Err(Error::Refused(format!(
                 "{}: the drive is running (its status shows `running`), and this setting {list}: changing it moves what the running drive does; give --while-running to change it anyway; nothing written",
-                describe::register(r)
+                r.label()
             )));
         }
         eprintln!("note: {} {list}: their meaning changes with it", r.id());
     }
     let mut raws = Vec::new();
     for (r, value) in &pairs {
-        let raw = match field_word(drive, &mut session, r, value)? {
+        let raw = match field_word(drive, &mut session, *r, value)? {
             Some(raw) => raw,
-            None => codec::parse_value_with(drive, r, value, &session.settings, rounding)
+            None => codec::parse_value_with(drive, *r, value, &session.settings, rounding)
                 .map_err(|e| format!("{}; nothing written", input_error(drive, &e)))?,
         };
         // Said in the report: the value sent is not the one given.
         let rounded = rounding == Rounding::Nearest
             && matches!(
-                codec::parse_value(drive, r, value, &session.settings),
+                codec::parse_value(drive, *r, value, &session.settings),
                 Err(InputError::Value(ValueError::NotAStep { .. }))
             );
         raws.push((raw, rounded.then(|| value.clone())));
@@ -398,7 +398,7 @@ pub(crate) fn execute(
     let mut writes = Vec::new();
     for ((r, _), (raw, rounded)) in pairs.iter().zip(raws) {
         let address = session
-            .address(r)
+            .address(*r)
             .map_err(|e| format!("{e}; nothing written"))?;
         let rule = gate::rule(profile, intern(r.id()))
             .and_then(|rule| {
@@ -413,7 +413,7 @@ pub(crate) fn execute(
                 )
                 .map(|()| rule)
             })
-            .map_err(|e| refused(r, &e))?;
+            .map_err(|e| refused(*r, &e))?;
         writes.push((*r, rule, address, raw, rounded));
     }
     for (r, rule, address, raw, rounded) in writes {
@@ -430,10 +430,7 @@ pub(crate) fn execute(
         // A register whose drive executes only a changed value gets its intermediate value
         // first (`Client::write_changed`, through the same gate), so writing the same value
         // twice executes it twice.
-        let between = drive
-            .register_plan(r)
-            .repeat_needs_change
-            .map(|x| x.between);
+        let between = r.plan().repeat_needs_change.map(|x| x.between);
         let result = match between {
             Some(between) => {
                 session
@@ -459,8 +456,8 @@ pub(crate) fn execute(
         };
         outln!(
             "wrote {} = {shown} ({raw:0digits$X}h) at {}{first}{through}{assuming}",
-            describe::register(r),
-            describe::address_as(drive.address_format, address)
+            r.label(),
+            describe::address_as(drive.address_format(), address)
         );
     }
     if let Some(id) = &args.persist {

@@ -8,7 +8,7 @@ pub(crate) mod table;
 pub(crate) use drivemap_live::{link, session};
 
 use clap::Args as ClapArgs;
-use drivemap_map::Drive;
+use drivemap_map::Map;
 
 use crate::error::Error;
 use crate::maps::MapsDir;
@@ -37,7 +37,7 @@ impl Target {
     /// (`--tcp` to a drive without Modbus TCP: [`link::Link::check_transport`]) before
     /// anything else is looked at.
     /// A draft map (`draft:`) is loaded with a note saying so on standard error.
-    pub(crate) fn load(&self) -> Result<Drive, Error> {
+    pub(crate) fn load(&self) -> Result<Map, Error> {
         let drive = self.dir.load(&self.drive)?;
         self.link.check_transport(&drive)?;
         if let Some(note) = drivemap_live::draft::read_note(&drive) {

@@ -29,9 +29,9 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use clap::ValueEnum;
 use drivemap_live::codec::Value;
-use drivemap_map::Drive;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_map::facts::AddressFormat;
-use drivemap_map::ir::Register;
 use serde::Serialize;
 
 use drivemap_live::session::{ReadError, Session};
@@ -94,18 +94,18 @@ impl Reading {
     /// The record of a register read as `word` (or its error) at `time`.
     pub(crate) fn of(
         session: &Session<'_>,
-        r: &Register,
+        r: RegisterRef<'_>,
         word: &Result<u32, ReadError>,
         time: &str,
     ) -> Reading {
         let address = session.shown_address(r);
         let mut rec = Reading {
             time: time.to_owned(),
-            drive: session.drive.meta.id.clone(),
+            drive: session.drive.id().to_owned(),
             slave: session.slave,
             register: r.id().to_owned(),
-            parameter: r.def.param.clone(),
-            name: r.def.name.clone(),
+            parameter: r.param().map(str::to_owned),
+            name: r.name().to_owned(),
             address,
             address_text: address_text(session.drive, address),
             pdu_address: pdu_address(session.drive, address, session.kind),
@@ -169,7 +169,7 @@ impl Reading {
 /// The PDU address `address` (the map's) goes on the wire as on a link of `kind`: the map's
 /// `protocol.addressing` offset for that transport applied; `None` outside 0 to 65535.
 pub(crate) fn pdu_address(
-    drive: &Drive,
+    drive: &Map,
     address: u16,
     kind: drivemap_runtime::profile::TransportKind,
 ) -> Option<u16> {
@@ -179,8 +179,8 @@ pub(crate) fn pdu_address(
 
 /// An address in the notation of the drive's manual: `0024h`, or the plain number in a manual
 /// that numbers its registers in decimal (`address_format: decimal`).
-pub(crate) fn address_text(drive: &Drive, address: u16) -> String {
-    match drive.address_format {
+pub(crate) fn address_text(drive: &Map, address: u16) -> String {
+    match drive.address_format() {
         AddressFormat::Decimal => address.to_string(),
         AddressFormat::Hex => describe::address(address),
     }

@@ -1,9 +1,8 @@
 //! Register values as an aligned terminal table.
 
-use drivemap_map::ir::Register;
+use drivemap_map::RegisterRef;
 
 use drivemap_live::session::{ReadError, Session, field_lines};
-use drivemap_map::describe;
 
 /// One register's line.
 #[derive(Debug, Clone, PartialEq)]
@@ -26,11 +25,11 @@ impl Row {
     /// The row of a register read as `word` (or its error).
     pub(crate) fn of(
         session: &Session<'_>,
-        r: &Register,
+        r: RegisterRef<'_>,
         word: &Result<u32, ReadError>,
         details: bool,
     ) -> Row {
-        let register = describe::register(r);
+        let register = r.label();
         let address = crate::live::output::address_text(session.drive, session.shown_address(r));
         match word {
             Err(e) => Row {

@@ -76,7 +76,6 @@ fn a_manual_with_no_rows_found_is_an_error_not_a_success() {
 fn read_by_register_number_and_parameter_number_against_the_simulator() {
     let map = drivemap_map::Loader::new()
         .load(&fixture().join("zenith-z3.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .expect("fixture map");
     let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
     slave.set_holding(45, 125); // P-01 acceleration time 12.5 s

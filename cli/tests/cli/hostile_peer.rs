@@ -24,7 +24,6 @@ const REGISTER: &str = "output_current";
 fn profile() -> &'static Profile {
     let map = drivemap_map::Loader::new()
         .load(&repo().join("maps").join(format!("{DRIVE}.yaml")))
-        .map(drivemap_map::Map::into_ir)
         .expect("shipped map");
     drivemap_live::leak_profile(&map)
 }
@@ -212,7 +211,6 @@ fn read_never_prints_a_late_reply_as_another_registers_value() {
 
     let map = drivemap_map::Loader::new()
         .load(&repo().join("maps/yaskawa-v7.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .expect("shipped map");
     let profile = drivemap_live::leak_profile(&map);
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();

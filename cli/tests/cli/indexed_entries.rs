@@ -21,7 +21,6 @@ fn read_and_write_name_an_entry_of_an_indexed_register() {
     let map = drivemap_map::Loader::new()
         .manuals(fixture().join("manuals"))
         .load(&fixture().join("tarrow-tm44.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|d| panic!("{d}"));
     let plan = map.plan().clone();
     let mut slave =

@@ -24,7 +24,6 @@ impl Drive {
         let path = repo().join("maps").join(format!("{id}.yaml"));
         let map = drivemap_map::Loader::new()
             .load(&path)
-            .map(drivemap_map::Map::into_ir)
             .expect("shipped map");
         let mut slave = SimulatedSlave::new(1, drivemap_live::leak_profile(&map));
         setup(&mut slave);
@@ -580,7 +579,6 @@ fn serial_line_through_a_pseudo_terminal_pair() {
     let pty = PtyPair::new();
     let map = drivemap_map::Loader::new()
         .load(&repo().join("maps/yaskawa-v7.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     let profile = drivemap_live::leak_profile(&map);
     let mut link = SerialTransport::open(
@@ -758,7 +756,6 @@ fn pairs_and_field_selected_decimals_of_another_vendor_at_slave_254() {
     let fixture = repo().join("tests/fixtures/acme-vf1");
     let map = drivemap_map::Loader::new()
         .load(&fixture.join("acme-vf1.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .expect("fixture map");
     let mut slave = SimulatedSlave::new(254, drivemap_live::leak_profile(&map));
     slave.set_holding(0x2200, 0x0001); // energy counter 0001E240h = 123456: 12345.6 kWh

@@ -40,7 +40,6 @@ fn check_accepts_the_map_and_doc_says_each_fact_is_not_printed_with_its_reason()
 fn scan_warns_that_it_scans_the_modbus_range_and_finds_the_drive() {
     let drive = drivemap_map::Loader::new()
         .load(&fixture().join("halden-h1.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|d| panic!("{d}"));
     let sim = Simulator::new(drive, SimOptions::new().slave(200)).unwrap();
     let sim = drivemap_sim::shared(sim);

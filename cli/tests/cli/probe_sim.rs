@@ -42,24 +42,21 @@ fn every_map_agrees_with_its_simulator(dir: &Path) -> Vec<String> {
     let mut failures = Vec::new();
     let mut summary = Vec::new();
     for path in &maps {
-        let drive = drivemap_map::Loader::new()
-            .load(path)
-            .map(drivemap_map::Map::into_ir)
-            .unwrap();
-        let id = drive.meta.id.clone();
+        let drive = drivemap_map::Loader::new().load(path).unwrap();
+        let id = drive.id().to_owned();
         ids.push(id.clone());
         let mut links: Vec<(&str, TcpFraming)> = vec![];
-        if drive.protocol.transports.contains(&TransportName::Rtu) {
+        if drive.protocol().transports.contains(&TransportName::Rtu) {
             links.push(("--rtu-tcp", TcpFraming::RtuOverTcp));
         }
-        if drive.protocol.transports.contains(&TransportName::Tcp) {
+        if drive.protocol().transports.contains(&TransportName::Tcp) {
             links.push(("--tcp", TcpFraming::ModbusTcp));
         }
         assert!(!links.is_empty(), "{id}: no transport");
         // The base variant, and each other option of every axis on its own: its own ranges
         // and defaults (V7 460 V class: n012 0.2-510.0 V, default 460.0).
         let mut variants: Vec<Option<(String, String)>> = vec![None];
-        for axis in &drive.variants {
+        for axis in drive.variants() {
             for option in axis.options.iter().skip(1) {
                 variants.push(Some((axis.id.clone(), option.id.clone())));
             }
@@ -160,10 +157,7 @@ fn every_profile_fixture_is_probed_checked_demoed_exported_and_diffed() {
         assert_eq!(numbers.get(1), Some(&0.0), "{id}: {last}\n{out}");
         assert!(out.contains("done in"), "{id}: {out}");
         // The table shows the state of the machine: where the run path ends while running.
-        let drive = drivemap_map::Loader::new()
-            .load(&dir.join(&file))
-            .map(drivemap_map::Map::into_ir)
-            .unwrap();
+        let drive = drivemap_map::Loader::new().load(&dir.join(&file)).unwrap();
         let profile = drive.plan().roles.profile.unwrap();
         let run = profile
             .path(drivemap_runtime::core::command_profile::PathKind::Run)

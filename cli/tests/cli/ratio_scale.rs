@@ -20,7 +20,6 @@ fn fixture() -> PathBuf {
 fn serve_bf6() -> (String, Arc<Mutex<SimulatedSlave>>) {
     let map = drivemap_map::Loader::new()
         .load(&fixture().join("borealis-bf6.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .expect("fixture map");
     serve(
         SimulatedSlave::new(1, drivemap_live::leak_profile(&map)),

@@ -19,10 +19,7 @@ use common::{Framing, drivemap, repo, serve};
 /// The drive simulator of a shipped map, with its drive model, on loopback Modbus TCP.
 fn simulator(id: &str) -> (Arc<Mutex<Simulator>>, TcpServer, String) {
     let path = repo().join(format!("maps/{id}.yaml"));
-    let drive = drivemap_map::Loader::new()
-        .load(&path)
-        .map(drivemap_map::Map::into_ir)
-        .unwrap();
+    let drive = drivemap_map::Loader::new().load(&path).unwrap();
     let sim = drivemap_sim::shared(Simulator::new(drive, SimOptions::new()).unwrap());
     let server =
         TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();
@@ -37,10 +34,7 @@ fn bare_slave(
     setup: impl FnOnce(&mut SimulatedSlave),
 ) -> (Arc<Mutex<SimulatedSlave>>, String) {
     let path = repo().join(format!("maps/{id}.yaml"));
-    let drive = drivemap_map::Loader::new()
-        .load(&path)
-        .map(drivemap_map::Map::into_ir)
-        .unwrap();
+    let drive = drivemap_map::Loader::new().load(&path).unwrap();
     let profile = drivemap_live::leak_profile(&drive);
     let mut slave = SimulatedSlave::new(1, profile);
     setup(&mut slave);
@@ -285,10 +279,7 @@ fn the_interpreted_codec_refuses_between_steps() {
     use drivemap_live::codec;
     use drivemap_runtime::{Rounding, ValueError};
     let path = repo().join("maps/yaskawa-v7.yaml");
-    let drive = drivemap_map::Loader::new()
-        .load(&path)
-        .map(drivemap_map::Map::into_ir)
-        .unwrap();
+    let drive = drivemap_map::Loader::new().load(&path).unwrap();
     let r = drivemap_live::lookup::find(&drive, "tcp_frequency_reference").unwrap();
     let mut settings = LiveSettings::default();
     settings

@@ -18,6 +18,7 @@
 //!
 //! `write_gate_repros_as_reported` runs the binary itself on the three cases of the report.
 
+use drivemap_map::{Map, RegisterRef};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -26,7 +27,7 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_map::facts::TransportName;
-use drivemap_map::ir::{Drive, Register, ValueKind};
+use drivemap_map::ir::ValueKind;
 use drivemap_map::validate::field_span;
 use drivemap_runtime::core::width::{Width, WordOrder};
 use drivemap_runtime::profile::{Profile, TransportKind};
@@ -136,15 +137,15 @@ impl Wire {
 /// now (`address_alternatives` chosen by a setting's code, the transport or the model variant,
 /// which is the base one here), from the IR: the first alternative whose condition holds, else
 /// its own address.
-fn selected_address(drive: &Drive, r: &Register, kind: TransportKind, wire: &Wire) -> i32 {
+fn selected_address(drive: &Map, r: RegisterRef<'_>, kind: TransportKind, wire: &Wire) -> i32 {
     let (rtu, tcp) = drive.address_offsets();
     let offset = if kind == TransportKind::Tcp { tcp } else { rtu };
-    for alt in &r.def.address_alternatives {
+    for alt in &r.ir().def.address_alternatives {
         let when = &alt.when;
         // The sweep writes as the base variant: the first option of every axis.
         let in_variant = when.variant.as_ref().is_none_or(|v| {
             drive
-                .variants
+                .variants()
                 .iter()
                 .any(|axis| axis.options.first().is_some_and(|o| o.id == *v))
         });
@@ -152,20 +153,22 @@ fn selected_address(drive: &Drive, r: &Register, kind: TransportKind, wire: &Wir
             .transport
             .is_none_or(|t| (t == TransportName::Tcp) == (kind == TransportKind::Tcp));
         let setting_holds = when.setting.as_deref().is_none_or(|s| {
-            let setting = drive.find(s).expect("the setting is a register of the map");
-            let pdu = i32::from(setting.def.address) + offset;
+            let setting = drive
+                .register(s)
+                .expect("the setting is a register of the map");
+            let pdu = i32::from(setting.address()) + offset;
             when.is.contains(&wire.holding(pdu as u16))
         });
         if in_variant && on_transport && setting_holds {
             return i32::from(alt.address);
         }
     }
-    i32::from(r.def.address)
+    i32::from(r.address())
 }
 
 /// `drivemap write` in-process: the arguments parsed by the binary's own parser.
 fn run_write(
-    drive: &Drive,
+    drive: &Map,
     profile: &'static Profile,
     wire: &Wire,
     slave: u8,
@@ -177,7 +180,7 @@ fn run_write(
         "drivemap",
         "write",
         "--drive",
-        &drive.meta.id,
+        drive.id(),
         "--maps",
         maps.to_str().unwrap(),
         wire.flag(),
@@ -203,13 +206,13 @@ fn run_write(
 
 /// The register's `transports` as written in the map (`rtu`, `tcp`): this oracle reads the
 /// map's text form, not the plan the gate is built from.
-fn on_transport(r: &Register, kind: TransportKind) -> bool {
+fn on_transport(r: RegisterRef<'_>, kind: TransportKind) -> bool {
     let name = if kind == TransportKind::Tcp {
         "tcp"
     } else {
         "rtu"
     };
-    r.transports.as_ref().is_none_or(|list| {
+    r.ir().transports.as_ref().is_none_or(|list| {
         serde_json::to_value(list)
             .ok()
             .and_then(|v| v.as_array().cloned())
@@ -218,8 +221,8 @@ fn on_transport(r: &Register, kind: TransportKind) -> bool {
 }
 
 /// The form of the register's `scale` as written: `factor`, `relative` or `selected`.
-fn scale_form(r: &Register) -> Option<&'static str> {
-    let v = serde_json::to_value(r.def.scale.as_ref()?).ok()?;
+fn scale_form(r: RegisterRef<'_>) -> Option<&'static str> {
+    let v = serde_json::to_value(r.ir().def.scale.as_ref()?).ok()?;
     Some(if v.get("selected_by").is_some() {
         "selected"
     } else if v.get("relative_to").is_some() {
@@ -232,8 +235,8 @@ fn scale_form(r: &Register) -> Option<&'static str> {
 /// Whether the map lets `r` be written to `slave` (0: broadcast) on `kind`, from the IR. A
 /// drive whose map lists no `tcp` transport has no Modbus TCP interface: `--tcp` reaches
 /// nothing of it (a serial drive behind a gateway is `--gateway`, its RTU side).
-fn allowed_on_link(drive: &Drive, r: &Register, kind: TransportKind, slave: u8) -> bool {
-    let has_tcp = serde_json::to_value(&drive.protocol.transports)
+fn allowed_on_link(drive: &Map, r: RegisterRef<'_>, kind: TransportKind, slave: u8) -> bool {
+    let has_tcp = serde_json::to_value(&drive.protocol().transports)
         .ok()
         .and_then(|v| v.as_array().cloned())
         .is_some_and(|names| names.iter().any(|n| n == "tcp"));
@@ -244,17 +247,17 @@ fn allowed_on_link(drive: &Drive, r: &Register, kind: TransportKind, slave: u8) 
         return false;
     }
     let commands = drive
-        .protocol
+        .protocol()
         .commands
         .iter()
         .flat_map(|c| c.writes.iter().map(|w| w.address));
-    if commands.clone().any(|a| a == r.def.address) {
+    if commands.clone().any(|a| a == r.address()) {
         return false; // ENTER/ACCEPT/save: only through --persist
     }
     if slave != 0 {
-        return !r.broadcast;
+        return !r.broadcast_only();
     }
-    let Some(b) = &drive.protocol.broadcast else {
+    let Some(b) = &drive.protocol().broadcast else {
         return false;
     };
     if b.unknown.is_some() {
@@ -265,25 +268,26 @@ fn allowed_on_link(drive: &Drive, r: &Register, kind: TransportKind, slave: u8) 
     let named = b
         .registers
         .iter()
-        .any(|n| drive.find(n).is_some_and(|x| x.def.id == r.def.id));
-    r.broadcast || named || drive.broadcast_addresses().is_empty()
+        .any(|n| drive.register(n).is_some_and(|x| x.id() == r.id()));
+    r.broadcast_only() || named || drive.broadcast_addresses().is_empty()
 }
 
 /// Whether a conversion of `r` needs a setting read from the drive (a selected or relative
 /// scale, an address chosen by a setting, limits per variant, a limit through another
 /// parameter or quantity).
-fn needs_settings(r: &Register) -> bool {
+fn needs_settings(r: RegisterRef<'_>) -> bool {
     matches!(scale_form(r), Some("selected" | "relative"))
-        || r.def
+        || r.ir()
+            .def
             .address_alternatives
             .iter()
             .any(|a| a.when.setting.is_some())
-        || !r.def.by_variant.is_empty()
-        || r.def.max_relative.is_some()
+        || !r.ir().def.by_variant.is_empty()
+        || r.ir().def.max_relative.is_some()
 }
 
-fn field_mask(r: &Register) -> Option<u16> {
-    match r.kind() {
+fn field_mask(r: RegisterRef<'_>) -> Option<u16> {
+    match r.ir().kind() {
         ValueKind::Bits(fields) => Some(
             fields
                 .iter()
@@ -298,8 +302,8 @@ fn field_mask(r: &Register) -> Option<u16> {
 /// allows for it on this link: one word at the register's address (or an alternative), or the
 /// two words of a 32-bit pair at it and the next address, the value in range either way.
 fn legal_arrival(
-    drive: &Drive,
-    r: &Register,
+    drive: &Map,
+    r: RegisterRef<'_>,
     kind: TransportKind,
     slave: u8,
     wire: &Wire,
@@ -342,7 +346,7 @@ fn legal_arrival(
         None => {
             let w = arrived[0].1;
             (
-                if r.def.signed {
+                if r.signed() {
                     i128::from(w as i16)
                 } else {
                     i128::from(w)
@@ -356,7 +360,7 @@ fn legal_arrival(
                 WordOrder::LowFirst => (second << 16) | first,
             };
             (
-                if r.def.signed {
+                if r.signed() {
                     i128::from(v as i32)
                 } else {
                     i128::from(v)
@@ -373,21 +377,21 @@ fn legal_arrival(
             unsigned & !u32::from(mask)
         ));
     }
-    let plain = matches!(r.kind(), ValueKind::Word | ValueKind::UnitQuantity)
-        || (matches!(r.kind(), ValueKind::Quantity(_)) && scale_form(r) == Some("factor"));
-    if plain && r.def.by_variant.is_empty() {
-        let factor = r.factor().expect("fixed factor");
-        if let Some(l) = r.raw_limits(factor, r.def.min, r.def.max)
+    let plain = matches!(r.ir().kind(), ValueKind::Word | ValueKind::UnitQuantity)
+        || (matches!(r.ir().kind(), ValueKind::Quantity(_)) && scale_form(r) == Some("factor"));
+    if plain && r.ir().def.by_variant.is_empty() {
+        let factor = r.ir().factor().expect("fixed factor");
+        if let Some(l) = r.ir().raw_limits(factor, r.ir().def.min, r.ir().def.max)
             && (raw < i128::from(l.min) || raw > i128::from(l.max))
         {
             return Err(format!("raw {raw} outside {} ..= {}", l.min, l.max));
         }
     }
-    if let ValueKind::Enum(values) = r.kind() {
+    if let ValueKind::Enum(values) = r.ir().kind() {
         let listed = values.iter().any(|v| u32::from(v.value) == unsigned);
-        let in_range = (r.def.min.is_some() || r.def.max.is_some())
-            && r.def.min.is_none_or(|m| f64::from(unsigned) >= m)
-            && r.def.max.is_none_or(|m| f64::from(unsigned) <= m);
+        let in_range = (r.ir().def.min.is_some() || r.ir().def.max.is_some())
+            && r.ir().def.min.is_none_or(|m| f64::from(unsigned) >= m)
+            && r.ir().def.max.is_none_or(|m| f64::from(unsigned) <= m);
         if !listed && !in_range {
             return Err(format!("code {unsigned} not listed"));
         }
@@ -396,14 +400,14 @@ fn legal_arrival(
 }
 
 /// The names the CLI accepts for `r` that resolve to it.
-fn names(drive: &Drive, r: &Register) -> Vec<String> {
-    let mut out = vec![r.def.id.clone()];
-    for n in [r.def.param.clone(), Some(r.def.name.clone())]
+fn names(drive: &Map, r: RegisterRef<'_>) -> Vec<String> {
+    let mut out = vec![r.id().to_owned()];
+    for n in [r.param().map(str::to_owned), Some(r.name().to_owned())]
         .into_iter()
         .flatten()
     {
         if !out.contains(&n)
-            && drivemap_live::lookup::find(drive, &n).is_ok_and(|x| x.def.id == r.def.id)
+            && drivemap_live::lookup::find(drive, &n).is_ok_and(|x| x.id() == r.id())
         {
             out.push(n);
         }
@@ -417,9 +421,9 @@ fn number(v: f64) -> String {
 
 /// Values in every form the CLI accepts: `(text, legal)`. Legal ones are in range for the base
 /// variant; illegal ones are out of range, unlisted codes or reserved bits.
-fn values(r: &Register) -> Vec<(String, bool)> {
-    let unit = r.def.unit.clone().unwrap_or_default();
-    match r.kind() {
+fn values(r: RegisterRef<'_>) -> Vec<(String, bool)> {
+    let unit = r.unit().map(str::to_owned).unwrap_or_default();
+    match r.ir().kind() {
         ValueKind::Bits(fields) => {
             let mask = field_mask(r).unwrap_or(0);
             let f = &fields[0];
@@ -443,7 +447,8 @@ fn values(r: &Register) -> Vec<(String, bool)> {
                 (format!("0x{:04X}", first.value), true),
             ];
             let unlisted = (0..=u16::MAX).rev().find(|c| {
-                !list.iter().any(|e| e.value == *c) && r.def.max.is_none_or(|m| f64::from(*c) > m)
+                !list.iter().any(|e| e.value == *c)
+                    && r.ir().def.max.is_none_or(|m| f64::from(*c) > m)
             });
             if let Some(c) = unlisted {
                 v.push((c.to_string(), false));
@@ -453,20 +458,22 @@ fn values(r: &Register) -> Vec<(String, bool)> {
         _ => {
             let legal = r
                 .default_value()
-                .filter(|d| r.def.min.is_none_or(|m| *d >= m) && r.def.max.is_none_or(|m| *d <= m))
-                .or(r.def.min)
+                .filter(|d| {
+                    r.ir().def.min.is_none_or(|m| *d >= m) && r.ir().def.max.is_none_or(|m| *d <= m)
+                })
+                .or(r.ir().def.min)
                 .unwrap_or(0.0);
             let mut v = vec![(number(legal), true)];
             if !unit.is_empty() {
                 v.push((format!("{} {unit}", number(legal)), true));
             }
-            if let (Some(max), Some(factor)) = (r.def.max, r.factor()) {
+            if let (Some(max), Some(factor)) = (r.ir().def.max, r.ir().factor()) {
                 let step = factor.mantissa as f64 / 10f64.powi(factor.exponent as i32);
                 v.push((number(max + 10.0 * step), false));
             }
-            if let (Some(min), Some(factor)) = (r.def.min, r.factor()) {
+            if let (Some(min), Some(factor)) = (r.ir().def.min, r.ir().factor()) {
                 let step = factor.mantissa as f64 / 10f64.powi(factor.exponent as i32);
-                if !r.def.signed && min - 10.0 * step < 0.0 {
+                if !r.signed() && min - 10.0 * step < 0.0 {
                     v.push((number(min - 10.0 * step), false));
                 }
             }
@@ -483,15 +490,12 @@ struct Tally {
 }
 
 fn sweep(path: &Path, kind: TransportKind) -> Tally {
-    let drive = drivemap_map::Loader::new()
-        .load(path)
-        .map(drivemap_map::Map::into_ir)
-        .expect("shipped map");
+    let drive = drivemap_map::Loader::new().load(path).expect("shipped map");
     let profile = drivemap_live::leak_profile(&drive);
     let wire = Wire::start(profile, kind);
     let mut tally = Tally::default();
     let mut failures = Vec::new();
-    for r in &drive.registers {
+    for r in drive.registers() {
         let names = names(&drive, r);
         for slave in [1u8, 0] {
             for (ni, name) in names.iter().enumerate() {
@@ -500,8 +504,7 @@ fn sweep(path: &Path, kind: TransportKind) -> Tally {
                     if ni > 0 && vi > 0 {
                         continue;
                     }
-                    let case =
-                        format!("{} {:?} slave {slave}: {name}={value}", drive.meta.id, kind);
+                    let case = format!("{} {:?} slave {slave}: {name}={value}", drive.id(), kind);
                     tally.cases += 1;
                     let before = wire.writes();
                     let result =
@@ -535,6 +538,7 @@ fn sweep(path: &Path, kind: TransportKind) -> Tally {
                         && allowed_on_link(&drive, r, kind, slave)
                         && !needs_settings(r)
                         && !r
+                            .ir()
                             .def
                             .address_alternatives
                             .iter()
@@ -566,8 +570,7 @@ fn sweep(path: &Path, kind: TransportKind) -> Tally {
     // A drive without Modbus TCP refuses every write over --tcp (none arrived, checked above);
     // every other sweep exercises both outcomes.
     let reachable = drive
-        .registers
-        .iter()
+        .registers()
         .any(|r| allowed_on_link(&drive, r, kind, 1));
     assert!(
         tally.refused > 0 && (tally.arrived > 0 || !reachable),
@@ -622,10 +625,7 @@ fn every_register_of_every_map_through_a_modbus_tcp_gateway() {
 #[test]
 fn write_gate_repros_as_reported() {
     let path = repo().join("maps/yaskawa-v7.yaml");
-    let drive = drivemap_map::Loader::new()
-        .load(&path)
-        .map(drivemap_map::Map::into_ir)
-        .unwrap();
+    let drive = drivemap_map::Loader::new().load(&path).unwrap();
     let profile = drivemap_live::leak_profile(&drive);
     let cases: [(TransportKind, &[&str], &str); 3] = [
         // The TCP option card's digital inputs over an RTU link: 0001h there is the run command.

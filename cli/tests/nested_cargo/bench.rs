@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_map::ir::ValueKind;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions};
 use drivemap_sim::{Line, SerialServer, SimOptions, Simulator, TcpFraming, TcpServer};
@@ -354,11 +354,11 @@ fn installed_anywhere_every_command_works_from_outside_the_repository() {
 
 /// A simulator holding, wherever its map gives no plain default, the least value the map
 /// allows (or its first listed code), as a configured drive would rather than 0.
-fn simulator(drive: Drive, slave: u8) -> Simulator {
-    let regs: Vec<_> = drive.registers.clone();
+fn simulator(drive: Map, slave: u8) -> Simulator {
+    let regs: Vec<_> = drive.ir().registers.clone();
     let mut sim = Simulator::new(drive, SimOptions::new().slave(slave)).unwrap();
     for r in regs.iter().filter(|r| r.readable() && !r.broadcast) {
-        let Ok(raw) = sim.raw(&r.def.id) else {
+        let Ok(raw) = sim.raw(r.id()) else {
             continue;
         };
         if raw != 0 {
@@ -372,7 +372,7 @@ fn simulator(drive: Drive, slave: u8) -> Simulator {
             _ => None,
         };
         if let Some(v) = least {
-            let _ = sim.set(&r.def.id, v);
+            let _ = sim.set(r.id(), v);
         }
     }
     sim
@@ -489,7 +489,6 @@ fn probe_reports_exactly_what_an_altered_drive_does_differently() {
     // Control: the shipped map served as it is agrees with itself.
     let shipped = drivemap_map::Loader::new()
         .load(&repo().join("maps/yaskawa-v7.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     let (code, out, err) = probe(simulator(shipped, 1), "json");
     assert_eq!(code, 0, "{out}{err}");
@@ -497,7 +496,6 @@ fn probe_reports_exactly_what_an_altered_drive_does_differently() {
 
     let altered = drivemap_map::Loader::new()
         .load_str("yaskawa-v7.yaml", &altered_v7())
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     let (code, out, err) = probe(simulator(altered.clone(), 1), "json");
     assert_eq!(code, 1, "{err}");
@@ -529,11 +527,9 @@ fn scan_finds_two_slaves_on_a_serial_line_and_names_their_maps() {
     let pty = pty_pair::PtyPair::new();
     let v7 = drivemap_map::Loader::new()
         .load(&repo().join("maps/yaskawa-v7.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     let tds = drivemap_map::Loader::new()
         .load(&repo().join("maps/ptlk-tds-v8.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     // Two simulated drives on one serial line (`drivemap_sim::Line`): the one addressed answers.
     let mut line = Line::new();

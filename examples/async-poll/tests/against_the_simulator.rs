@@ -11,7 +11,8 @@ use drivemap_sim::{SimOptions, Simulator};
 #[test]
 fn polls_the_drive_and_writes_the_reference() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../maps/yaskawa-v7.yaml");
-    let v7 = drivemap_map::read_map(path.as_ref(), &Default::default())
+    let v7 = drivemap_map::Loader::new()
+        .load(path.as_ref())
         .unwrap_or_else(|e| panic!("{path}: {e}"));
     let sim = Simulator::new(v7, SimOptions::new().network_source(TransportKind::Tcp)).unwrap();
     let sim = drivemap_sim::server::shared(sim);

@@ -1,8 +1,7 @@
 //! Comparing: two sets, a set and a drive (saved first), or either against the map's printed
 //! defaults.
 
-use drivemap_map::Drive;
-use drivemap_map::describe;
+use drivemap_map::Map;
 use drivemap_runtime::plan::Conversion;
 use drivemap_runtime::ratio::Fraction;
 
@@ -33,9 +32,9 @@ impl Side {
     /// The map's printed factory values under `variant` (axis id → option id; axes not given
     /// take their first option), for every setting; settings without a printed default are in
     /// the set's `unread`.
-    pub fn defaults(drive: &Drive, variant: &std::collections::BTreeMap<String, String>) -> Side {
+    pub fn defaults(drive: &Map, variant: &std::collections::BTreeMap<String, String>) -> Side {
         let mut chosen = std::collections::BTreeMap::new();
-        for a in &drive.variants {
+        for a in drive.variants() {
             let o = variant
                 .get(&a.id)
                 .cloned()
@@ -45,10 +44,10 @@ impl Side {
         let mut settings = Vec::new();
         let mut unread = Vec::new();
         for r in settings_of(drive) {
-            let param = r.def.param.clone();
+            let param = r.param().map(str::to_owned);
             match r.default_for(|o| chosen.values().any(|c| c == o)) {
                 Some(v) => {
-                    let plan = drive.register_plan(r);
+                    let plan = r.plan();
                     let code = match plan.conversion {
                         Conversion::Enum { .. } if v >= 0.0 && v <= f64::from(u16::MAX) => {
                             plan.label(v as u16).map(|l| l.id.to_owned())
@@ -56,14 +55,14 @@ impl Side {
                         _ => None,
                     };
                     settings.push(SavedSetting {
-                        id: r.def.id.clone(),
+                        id: r.id().to_owned(),
                         param,
                         value: format_number(v),
                         code,
                     });
                 }
                 None => unread.push(UnreadSetting {
-                    id: r.def.id.clone(),
+                    id: r.id().to_owned(),
                     param,
                     reason: "the manual prints no default".to_owned(),
                 }),
@@ -73,7 +72,7 @@ impl Side {
             label: "defaults".to_owned(),
             set: ParameterSet {
                 format: FORMAT.to_owned(),
-                drive: drive.meta.id.clone(),
+                drive: drive.id().to_owned(),
                 variant: chosen,
                 fingerprint: fingerprint(drive),
                 slave: 0,
@@ -149,11 +148,11 @@ fn same(a: &str, b: &str) -> bool {
 }
 
 /// A value with its unit, or a code with its meaning, as the manual says it.
-fn shown(drive: &Drive, id: &str, s: &SavedSetting) -> String {
+fn shown(drive: &Map, id: &str, s: &SavedSetting) -> String {
     let Some(r) = by_id(drive, id) else {
         return s.value.clone();
     };
-    let plan = drive.register_plan(r);
+    let plan = r.plan();
     match plan.conversion {
         Conversion::Enum { .. } => {
             let label = s.value.parse::<u16>().ok().and_then(|c| plan.label(c));
@@ -187,19 +186,19 @@ fn shown(drive: &Drive, id: &str, s: &SavedSetting) -> String {
 /// naming what differs, when the sides are of different maps or variants, unless
 /// `other_allowed`.
 pub fn compare(
-    drive: &Drive,
+    drive: &Map,
     left: &Side,
     right: &Side,
     other_allowed: bool,
 ) -> Result<Compared, String> {
     let mut mismatch = Vec::new();
     for side in [left, right] {
-        if side.set.drive != drive.meta.id {
+        if side.set.drive != drive.id() {
             mismatch.push(format!(
                 "{} is of map {}, not {}",
                 side.label,
                 super::quoted(&side.set.drive, 60),
-                drive.meta.id
+                drive.id()
             ));
         }
     }
@@ -235,7 +234,7 @@ pub fn compare(
             warnings.push(format!(
                 "{} was saved with another version of the {} map (fingerprint {}, this map {print}); compared by id",
                 side.label,
-                drive.meta.id,
+                drive.id(),
                 super::quoted(&side.set.fingerprint, 40)
             ));
         }
@@ -246,7 +245,7 @@ pub fn compare(
     // Every setting of the map, then ids of either side the map does not know.
     let mut ids: Vec<String> = settings_of(drive)
         .iter()
-        .map(|r| r.def.id.clone())
+        .map(|r| r.id().to_owned())
         .collect();
     for side in [left, right] {
         for s in &side.set.settings {
@@ -259,7 +258,7 @@ pub fn compare(
         let l = left.set.get(&id);
         let r = right.set.get(&id);
         let register = by_id(drive, &id);
-        let name = register.map_or_else(|| id.clone(), describe::register);
+        let name = register.map_or_else(|| id.clone(), |r| r.label());
         let why_missing = |side: &Side| -> String {
             side.set
                 .unread
@@ -275,7 +274,7 @@ pub fn compare(
             (None, Some(_)) if left.defaults => no_default.push(name),
             (a, b) => differences.push(Difference {
                 id: id.clone(),
-                param: register.and_then(|r| r.def.param.clone()),
+                param: register.and_then(|r| r.param().map(str::to_owned)),
                 name,
                 left: a.map(|s| shown(drive, &id, s)),
                 right: b.map(|s| shown(drive, &id, s)),
@@ -284,7 +283,7 @@ pub fn compare(
                     (_, None) => Some(why_missing(right)),
                     _ => None,
                 },
-                source: register.and_then(|r| r.def.source.clone()),
+                source: register.and_then(|r| r.source().map(str::to_owned)),
             }),
         }
     }

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use serde::{Deserialize, Serialize};
 
 use super::by_id;
@@ -76,14 +76,14 @@ pub struct UnreadSetting {
 mod value_text {
     use serde::{Deserialize, Deserializer, Serializer};
 
-    pub fn serialize<S: Serializer>(text: &str, s: S) -> Result<S::Ok, S::Error> {
+    pub(super) fn serialize<S: Serializer>(text: &str, s: S) -> Result<S::Ok, S::Error> {
         match text.parse::<f64>() {
             Ok(v) if v.is_finite() => s.serialize_f64(v),
             _ => s.serialize_str(text),
         }
     }
 
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
         #[derive(Deserialize)]
         #[serde(untagged)]
         enum Scalar {
@@ -171,7 +171,7 @@ impl ParameterSet {
     /// The set as YAML: the keys in a fixed order, one setting a line in the set's order (the
     /// map's, as [`super::save`] makes it), each followed by a comment with the setting's name
     /// and unit from `drive`.
-    pub fn to_yaml(&self, drive: &Drive) -> String {
+    pub fn to_yaml(&self, drive: &Map) -> String {
         let mut out = String::new();
         out.push_str(&format!(
             "# drivemap parameter set of {} at slave {}; values in the manual's units\n",
@@ -208,8 +208,8 @@ impl ParameterSet {
             }
             line.push('}');
             if let Some(r) = by_id(drive, &s.id) {
-                let unit = drive.register_plan(r).unit;
-                let mut note = comment(&r.def.name);
+                let unit = r.plan().unit;
+                let mut note = comment(r.name());
                 if !unit.is_empty() {
                     note.push_str(&format!(", {}", comment(unit)));
                 }

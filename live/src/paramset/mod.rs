@@ -1,5 +1,5 @@
 //! Parameter sets: a drive's settings saved to a file, compared, and restored or cloned to a
-//! drive, written against the map's plan and a live [`Session`](crate::Session).
+//! drive, written against the map's plan and a live [`Session`](crate::session::Session).
 //!
 //! - [`save`] reads every setting of the map (a readable and writable parameter with a
 //!   parameter number, not a command) with the runtime's read planner and returns a
@@ -23,8 +23,8 @@ mod save;
 
 use std::collections::BTreeSet;
 
-use drivemap_map::Drive;
-use drivemap_map::ir::Register;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_map::lower::Quantity;
 use drivemap_runtime::plan::Dependency;
 use drivemap_runtime::roles::RoleKind;
@@ -41,7 +41,7 @@ pub use save::{SaveReport, save, save_with};
 /// monitors, not write-only commands), carry a parameter number, are not broadcast-only, are
 /// not the place of a command role or the frequency reference (the run command is never part
 /// of a set), and are not written by one of the map's commands (ENTER, save).
-pub fn settings_of(drive: &Drive) -> Vec<&Register> {
+pub fn settings_of(drive: &Map) -> Vec<RegisterRef<'_>> {
     let plan = drive.plan();
     let mut commands: BTreeSet<usize> = BTreeSet::new();
     for place in plan.roles.places {
@@ -61,15 +61,14 @@ pub fn settings_of(drive: &Drive) -> Vec<&Register> {
         .flat_map(|c| c.writes.iter().map(|(a, _)| *a))
         .collect();
     drive
-        .registers
-        .iter()
+        .registers()
         .filter(|r| {
             r.readable()
                 && r.writable()
-                && !r.broadcast
-                && r.def.param.is_some()
+                && !r.broadcast_only()
+                && r.param().is_some()
                 && !commands.contains(&r.index())
-                && !command_addresses.contains(&r.def.address)
+                && !command_addresses.contains(&r.address())
         })
         .collect()
 }
@@ -77,11 +76,11 @@ pub fn settings_of(drive: &Drive) -> Vec<&Register> {
 /// The registers `r` depends on through the plan: the parameters that select its scale or
 /// address, the registers its scale is relative to (under every selector case), and the one
 /// its relative limit is stated through (a reference at most the maximum frequency).
-pub fn depends_on<'a>(drive: &'a Drive, r: &Register) -> Vec<&'a Register> {
+pub fn depends_on<'a>(drive: &'a Map, r: RegisterRef<'_>) -> Vec<RegisterRef<'a>> {
     let plan = drive.plan();
     let mut rows: Vec<usize> = Vec::new();
     let settings = crate::LiveSettings::default();
-    let register_plan = drive.register_plan(r);
+    let register_plan = r.plan();
     register_plan.depends_on(&settings.view(drive), |d| match d {
         Dependency::Code(s) => rows.extend(
             plan.settings
@@ -101,11 +100,11 @@ pub fn depends_on<'a>(drive: &'a Drive, r: &Register) -> Vec<&'a Register> {
     {
         rows.push(*row);
     }
-    let mut out: Vec<&Register> = Vec::new();
+    let mut out: Vec<RegisterRef<'_>> = Vec::new();
     for row in rows {
         if let Some(d) = drive.register_of_row(row)
-            && d.def.id != r.def.id
-            && !out.iter().any(|x| x.def.id == d.def.id)
+            && d.id() != r.id()
+            && !out.iter().any(|x| x.id() == d.id())
         {
             out.push(d);
         }
@@ -117,16 +116,16 @@ pub fn depends_on<'a>(drive: &'a Drive, r: &Register) -> Vec<&'a Register> {
 /// depends on ([`depends_on`]: a selector before what it scales or moves, a limit before what
 /// it bounds), otherwise in the map's order. Derived from the plan, never a list kept by hand;
 /// a dependency cycle (which validation refuses) keeps the map's order among its members.
-pub fn restore_order<'a>(drive: &Drive, regs: &[&'a Register]) -> Vec<&'a Register> {
+pub fn restore_order<'a>(drive: &Map, regs: &[RegisterRef<'a>]) -> Vec<RegisterRef<'a>> {
     let n = regs.len();
-    let position = |id: &str| regs.iter().position(|r| r.def.id == id);
+    let position = |id: &str| regs.iter().position(|r| r.id() == id);
     // before[i]: the members of `regs` that register i depends on.
     let before: Vec<Vec<usize>> = regs
         .iter()
         .map(|r| {
-            depends_on(drive, r)
+            depends_on(drive, *r)
                 .iter()
-                .filter_map(|d| position(&d.def.id))
+                .filter_map(|d| position(d.id()))
                 .collect()
         })
         .collect();
@@ -150,31 +149,25 @@ pub fn restore_order<'a>(drive: &Drive, regs: &[&'a Register]) -> Vec<&'a Regist
 /// of its settings (address, conversion, ranges, limits, restrictions), in the map's order.
 /// Two maps that read and write every setting alike have the same fingerprint; a set saved
 /// under another fingerprint is compared and restored by id all the same, with a warning.
-pub fn fingerprint(drive: &Drive) -> String {
-    // Computed once per loaded map: the plan's `Arc` names it while it lives.
-    type Cache = Vec<(std::sync::Weak<drivemap_map::lower::DrivePlan>, String)>;
+pub fn fingerprint(drive: &Map) -> String {
+    // Computed once per loaded map. The plan's run-time profile is leaked once per lowering
+    // and lives as long as the process, so its address names the loaded map for good.
+    type Cache = Vec<(usize, String)>;
     static CACHE: std::sync::Mutex<Cache> = std::sync::Mutex::new(Vec::new());
-    drive.plan();
-    let Some(plan) = drive.plan.get() else {
-        return compute_fingerprint(drive);
-    };
+    let key = std::ptr::from_ref(drive.plan().profile) as usize;
     let mut cache = match CACHE.lock() {
         Ok(c) => c,
         Err(poisoned) => poisoned.into_inner(),
     };
-    cache.retain(|(w, _)| w.strong_count() > 0);
-    if let Some((_, f)) = cache
-        .iter()
-        .find(|(w, _)| std::ptr::eq(w.as_ptr(), std::sync::Arc::as_ptr(plan)))
-    {
+    if let Some((_, f)) = cache.iter().find(|(k, _)| *k == key) {
         return f.clone();
     }
     let f = compute_fingerprint(drive);
-    cache.push((std::sync::Arc::downgrade(plan), f.clone()));
+    cache.push((key, f.clone()));
     f
 }
 
-fn compute_fingerprint(drive: &Drive) -> String {
+fn compute_fingerprint(drive: &Map) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     let mut feed = |bytes: &[u8]| {
         for b in bytes {
@@ -182,17 +175,17 @@ fn compute_fingerprint(drive: &Drive) -> String {
             hash = hash.wrapping_mul(0x0100_0000_01b3);
         }
     };
-    feed(drive.meta.id.as_bytes());
+    feed(drive.id().as_bytes());
     for r in settings_of(drive) {
-        feed(r.def.id.as_bytes());
-        feed(format!("{:?}", drive.register_plan(r)).as_bytes());
+        feed(r.id().as_bytes());
+        feed(format!("{:?}", r.plan()).as_bytes());
     }
     format!("fnv1a64:{hash:016x}")
 }
 
 /// A register of `drive` by its id exactly (a set names settings by id).
-fn by_id<'a>(drive: &'a Drive, id: &str) -> Option<&'a Register> {
-    drive.registers.iter().find(|r| r.def.id == id)
+fn by_id<'a>(drive: &'a Map, id: &str) -> Option<RegisterRef<'a>> {
+    drive.registers().find(|r| r.id() == id)
 }
 
 /// Text from a file or a drive shortened to `max` characters and escaped, for messages.

@@ -4,9 +4,8 @@
 
 use std::collections::BTreeSet;
 
-use drivemap_map::Drive;
-use drivemap_map::describe;
-use drivemap_map::ir::Register;
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_map::lower::Quantity;
 use drivemap_runtime::ValueError;
 use drivemap_runtime::gate::{self, WriteTarget};
@@ -28,7 +27,7 @@ use crate::session::{Session, SessionError, value_error};
 #[derive(Debug, Clone)]
 pub struct Validated<'d> {
     /// Each setting and its value text, in [`restore_order`].
-    pub entries: Vec<(&'d Register, String)>,
+    pub entries: Vec<(RegisterRef<'d>, String)>,
     /// The set's own selector codes and reference values, and its variant.
     pub settings: LiveSettings,
     /// What does not stop a restore but is worth saying (another fingerprint).
@@ -50,7 +49,7 @@ pub enum RestoreError {
 #[derive(Debug, Clone)]
 pub struct Write<'d> {
     /// The setting.
-    pub register: &'d Register,
+    pub register: RegisterRef<'d>,
     /// The value the drive holds, as read (`None`: it could not be read).
     pub from: Option<String>,
     /// The set's value.
@@ -75,7 +74,7 @@ pub struct RestorePlan<'d> {
     /// The writes, in [`restore_order`].
     pub writes: Vec<Write<'d>>,
     /// Settings that already hold the set's value.
-    pub unchanged: Vec<&'d Register>,
+    pub unchanged: Vec<RegisterRef<'d>>,
     /// The map's command that stores written values (ENTER, save), run once after the writes
     /// when they all went through; `None` when nothing is written (or the map has none).
     pub store: Option<&'static CommandInfo>,
@@ -156,7 +155,7 @@ pub enum Progress {
 /// The set's selector codes and the values of the registers scales and limits are relative
 /// to, from the set itself (an entry that is not a value of its register is left out: its own
 /// check reports it).
-fn set_settings(drive: &Drive, set: &ParameterSet, base: &LiveSettings) -> LiveSettings {
+fn set_settings(drive: &Map, set: &ParameterSet, base: &LiveSettings) -> LiveSettings {
     let mut settings = base.clone();
     for (a, o) in &set.variant {
         settings
@@ -165,19 +164,19 @@ fn set_settings(drive: &Drive, set: &ParameterSet, base: &LiveSettings) -> LiveS
             .or_insert_with(|| o.clone());
     }
     for r in drive.selectors() {
-        if let Some(s) = set.get(&r.def.id)
+        if let Some(s) = set.get(r.id())
             && let Ok(raw) = codec::parse_value(drive, r, &s.value, &settings)
         {
-            settings.selectors.insert(r.def.id.clone(), raw as u16);
+            settings.selectors.insert(r.id().to_owned(), raw as u16);
         }
     }
     for q in &drive.plan().settings.quantities {
         if let Quantity::Register(row) = q
             && let Some(r) = drive.register_of_row(*row)
-            && let Some(s) = set.get(&r.def.id)
+            && let Some(s) = set.get(r.id())
             && let Ok(v) = s.value.trim().parse::<f64>()
         {
-            settings.references.insert(r.def.id.clone(), v);
+            settings.references.insert(r.id().to_owned(), v);
         }
     }
     settings
@@ -189,18 +188,18 @@ fn set_settings(drive: &Drive, set: &ParameterSet, base: &LiveSettings) -> LiveS
 /// the set does not hold is checked against the drive's value by [`plan`]). `given` holds the
 /// link's variants and external quantities. All reasons are returned at once.
 pub fn validate<'d>(
-    drive: &'d Drive,
+    drive: &'d Map,
     set: &ParameterSet,
     given: &LiveSettings,
     other_allowed: bool,
 ) -> Result<Validated<'d>, RestoreError> {
     let mut reasons = Vec::new();
     let mut warnings = Vec::new();
-    if set.drive != drive.meta.id {
+    if set.drive != drive.id() {
         let what = format!(
             "the set is of map {}, the drive's is {}",
             super::quoted(&set.drive, 60),
-            drive.meta.id
+            drive.id()
         );
         if other_allowed {
             warnings.push(what);
@@ -209,11 +208,11 @@ pub fn validate<'d>(
         }
     }
     for (axis, option) in &set.variant {
-        match drive.variants.iter().find(|a| &a.id == axis) {
+        match drive.variants().iter().find(|a| &a.id == axis) {
             None => reasons.push(format!(
                 "variant {}: {} has no such variant axis",
                 super::quoted(axis, 40),
-                drive.meta.id
+                drive.id()
             )),
             Some(a) if !a.options.iter().any(|o| &o.id == option) => reasons.push(format!(
                 "variant {axis}={}: not an option of {axis}",
@@ -237,12 +236,12 @@ pub fn validate<'d>(
     if set.fingerprint != fingerprint(drive) {
         warnings.push(format!(
             "the set was saved with another version of the {} map (fingerprint {}); its values are checked against this one",
-            drive.meta.id,
+            drive.id(),
             super::quoted(&set.fingerprint, 40)
         ));
     }
     let settings_list = settings_of(drive);
-    let is_setting: BTreeSet<&str> = settings_list.iter().map(|r| r.def.id.as_str()).collect();
+    let is_setting: BTreeSet<&str> = settings_list.iter().map(|r| r.id()).collect();
     let settings = set_settings(drive, set, given);
     let mut seen = BTreeSet::new();
     let mut entries = Vec::new();
@@ -251,11 +250,11 @@ pub fn validate<'d>(
             reasons.push(format!(
                 "{}: not a register of {}",
                 super::quoted(&s.id, 60),
-                drive.meta.id
+                drive.id()
             ));
             continue;
         };
-        let name = describe::register(r);
+        let name = r.label();
         if !seen.insert(s.id.clone()) {
             reasons.push(format!("{name}: given twice"));
             continue;
@@ -265,7 +264,7 @@ pub fn validate<'d>(
                 "{name}: not a setting a set restores ({})",
                 if !r.writable() {
                     "read-only"
-                } else if r.def.param.is_none() {
+                } else if r.param().is_none() {
                     "a command register, not a parameter"
                 } else {
                     "a command, or the place of a command role"
@@ -274,7 +273,7 @@ pub fn validate<'d>(
             continue;
         }
         if let Some(code) = &s.code {
-            let plan = drive.register_plan(r);
+            let plan = r.plan();
             let listed = match plan.conversion {
                 Conversion::Enum { .. } => s
                     .value
@@ -312,14 +311,14 @@ pub fn validate<'d>(
     if !reasons.is_empty() {
         return Err(RestoreError::Refused(reasons));
     }
-    let regs: Vec<&Register> = entries.iter().map(|(r, _)| *r).collect();
+    let regs: Vec<RegisterRef<'_>> = entries.iter().map(|(r, _)| *r).collect();
     let order = restore_order(drive, &regs);
     let entries = order
         .into_iter()
         .filter_map(|r| {
             entries
                 .iter()
-                .find(|(e, _)| e.def.id == r.def.id)
+                .find(|(e, _)| e.id() == r.id())
                 .map(|(r, t)| (*r, t.clone()))
         })
         .collect();
@@ -350,7 +349,7 @@ fn status(session: &mut Session<'_>, role: Role) -> Result<bool, String> {
         };
         match session.read_raw(r) {
             Ok(word) => return Ok(f.holds(word as u16)),
-            Err(e) => why = format!("reading {}: {e}", describe::register(r)),
+            Err(e) => why = format!("reading {}: {e}", r.label()),
         }
     }
     Err(why)
@@ -366,16 +365,16 @@ pub fn plan<'d>(
     set: &Validated<'d>,
 ) -> Result<RestorePlan<'d>, RestoreError> {
     let drive = session.drive;
-    let mut regs: Vec<&Register> = set.entries.iter().map(|(r, _)| *r).collect();
+    let mut regs: Vec<RegisterRef<'_>> = set.entries.iter().map(|(r, _)| *r).collect();
     let count = regs.len();
     // What the set's settings depend on and the set does not hold (a selector of a scale, a
     // maximum): read with them, in the same planned requests, for the drive's value.
     for r in set
         .entries
         .iter()
-        .flat_map(|(r, _)| super::depends_on(drive, r))
+        .flat_map(|(r, _)| super::depends_on(drive, *r))
     {
-        if !regs.iter().any(|x| x.def.id == r.def.id) {
+        if !regs.iter().any(|x| x.id() == r.id()) {
             regs.push(r);
         }
     }
@@ -401,8 +400,8 @@ pub fn plan<'d>(
     let mut writes = Vec::new();
     let mut unchanged = Vec::new();
     for ((r, text), current) in set.entries.iter().zip(&words) {
-        let name = describe::register(r);
-        let raw = match codec::parse_value(drive, r, text, &settings) {
+        let name = r.label();
+        let raw = match codec::parse_value(drive, *r, text, &settings) {
             Ok(raw) => raw,
             Err(InputError::Value(e)) => {
                 reasons.push(format!("{name}: {}", value_error(drive, &e)));
@@ -418,12 +417,12 @@ pub fn plan<'d>(
             continue;
         }
         let from = current.as_ref().ok().map(|c| {
-            codec::decode(drive, r, *c, &drives)
+            codec::decode(drive, *r, *c, &drives)
                 .map(|v| v.to_string())
-                .unwrap_or_else(|_| session.raw_text(r, *c))
+                .unwrap_or_else(|_| session.raw_text(*r, *c))
         });
         writes.push(Write {
-            register: r,
+            register: *r,
             from,
             to: text.clone(),
             raw,
@@ -450,7 +449,7 @@ pub fn plan<'d>(
                 .map_err(|e| e.to_string())
             });
         if let Err(e) = checked {
-            reasons.push(format!("{}: {e}", describe::register(w.register)));
+            reasons.push(format!("{}: {e}", w.register.label()));
         }
     }
     session.settings = saved;
@@ -458,8 +457,8 @@ pub fn plan<'d>(
     let restricted = |what: WriteRestriction| {
         writes
             .iter()
-            .filter(|w| drive.register_plan(w.register).restriction == what)
-            .map(|w| describe::register(w.register))
+            .filter(|w| w.register.plan().restriction == what)
+            .map(|w| w.register.label())
             .collect::<Vec<_>>()
     };
     let stopped_only = restricted(WriteRestriction::Stopped);
@@ -510,7 +509,7 @@ pub fn plan<'d>(
 /// V7's ENTER, the ACN's and TDS-V8's save), if it has one. [`plan`] puts it in a plan with
 /// writes; a caller that wants the drive's values stored when nothing differs (the store of an
 /// earlier restore failed) sets [`RestorePlan::store`] to it.
-pub fn store_command(drive: &Drive) -> Option<&'static CommandInfo> {
+pub fn store_command(drive: &Map) -> Option<&'static CommandInfo> {
     drive
         .plan()
         .profile
@@ -533,7 +532,6 @@ pub fn execute<'d>(
     plan: &RestorePlan<'d>,
     progress: &mut dyn FnMut(&Progress),
 ) -> RestoreReport {
-    let drive = session.drive;
     let profile = session.client.profile();
     session.settings = plan.settings.clone();
     let mut sent: Vec<(&Write<'d>, Option<String>)> = Vec::new();
@@ -545,7 +543,7 @@ pub fn execute<'d>(
         let r = w.register;
         if failed {
             not_written.push(Skipped {
-                id: r.def.id.clone(),
+                id: r.id().to_owned(),
                 reason: "not reached: an earlier write failed".to_owned(),
             });
             continue;
@@ -553,17 +551,14 @@ pub fn execute<'d>(
         progress(&Progress::Writing {
             done: i,
             total,
-            id: r.def.id.clone(),
+            id: r.id().to_owned(),
         });
         let result = session
             .address(r)
             .map_err(|e| e.to_string())
             .and_then(|address| {
                 let rule = gate::rule(profile, intern(r.id())).map_err(|e| e.to_string())?;
-                let between = drive
-                    .register_plan(r)
-                    .repeat_needs_change
-                    .map(|x| x.between);
+                let between = r.plan().repeat_needs_change.map(|x| x.between);
                 requests += 1;
                 let done = match between {
                     Some(b) => session
@@ -590,7 +585,7 @@ pub fn execute<'d>(
             Err(e) => {
                 failed = true;
                 not_written.push(Skipped {
-                    id: r.def.id.clone(),
+                    id: r.id().to_owned(),
                     reason: e,
                 });
             }
@@ -616,7 +611,7 @@ pub fn execute<'d>(
     };
     // Read back, once more after a silence: what was written is worth a try.
     session.silence.rearm();
-    let regs: Vec<&Register> = sent.iter().map(|(w, _)| w.register).collect();
+    let regs: Vec<RegisterRef<'_>> = sent.iter().map(|(w, _)| w.register).collect();
     progress(&Progress::Verifying(regs.len()));
     let mut verified = Vec::new();
     let mut not_verified = Vec::new();
@@ -633,7 +628,7 @@ pub fn execute<'d>(
             Err(e) => vec![Err(e.to_string()); regs.len()],
         };
         for ((w, note), got) in sent.iter().zip(words) {
-            let id = w.register.def.id.clone();
+            let id = w.register.id().to_owned();
             match got {
                 Ok(raw) if raw == w.raw => verified.push(id),
                 Ok(raw) => not_verified.push(Skipped {

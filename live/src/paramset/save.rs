@@ -2,8 +2,7 @@
 
 use std::collections::BTreeMap;
 
-use drivemap_map::describe;
-use drivemap_map::ir::Register;
+use drivemap_map::RegisterRef;
 
 use super::file::{FORMAT, ParameterSet, SavedSetting, UnreadSetting};
 use super::{fingerprint, settings_of};
@@ -28,7 +27,7 @@ pub struct SaveReport {
 /// each register's raw value or why there is none, and the requests sent.
 pub(crate) fn read_all(
     session: &mut Session<'_>,
-    regs: &[&Register],
+    regs: &[RegisterRef<'_>],
 ) -> Result<(Vec<Result<u32, ReadError>>, u32), SessionError> {
     read_all_with(session, regs, false, &mut |_, _| {})
 }
@@ -38,7 +37,7 @@ pub(crate) fn read_all(
 /// to another's anyway, so this costs no request where groups lie apart).
 pub(crate) fn read_all_with(
     session: &mut Session<'_>,
-    regs: &[&Register],
+    regs: &[RegisterRef<'_>],
     by_group: bool,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Vec<Result<u32, ReadError>>, u32), SessionError> {
@@ -52,7 +51,7 @@ pub(crate) fn read_all_with(
             .collect();
         let chunks: Vec<&[usize]> = if by_group {
             wanted
-                .chunk_by(|&a, &b| regs[a].group == regs[b].group)
+                .chunk_by(|&a, &b| std::ptr::eq(regs[a].group(), regs[b].group()))
                 .collect()
         } else if wanted.is_empty() {
             Vec::new()
@@ -60,7 +59,7 @@ pub(crate) fn read_all_with(
             vec![&wanted[..]]
         };
         for chunk in chunks {
-            let these: Vec<&Register> = chunk.iter().map(|&i| regs[i]).collect();
+            let these: Vec<RegisterRef<'_>> = chunk.iter().map(|&i| regs[i]).collect();
             let mut plan = session.plan(&these)?;
             let (words, sent) = session.poll_counted(&mut plan);
             requests += sent;
@@ -69,7 +68,7 @@ pub(crate) fn read_all_with(
                     // Selectors and references are one-word registers.
                     session
                         .settings
-                        .absorb(drive, regs[i].def.address, *raw as u16);
+                        .absorb(drive, regs[i].address(), *raw as u16);
                 }
                 results[i] = Some(w);
             }
@@ -127,46 +126,46 @@ pub fn save_with(
     let mut unread = Vec::new();
     let mut warnings = Vec::new();
     for (r, w) in regs.iter().zip(words) {
-        let param = r.def.param.clone();
+        let param = r.param().map(str::to_owned);
         let decoded = w.map_err(|e| e.to_string()).and_then(|raw| {
             session
-                .decode(r, raw)
+                .decode(*r, raw)
                 .map(|v| (raw, v))
                 .map_err(|e| e.to_string())
         });
         match decoded {
             Ok((raw, value)) => {
                 let (text, code) = value_text(&value);
-                match codec::parse_value(drive, r, &text, &session.settings) {
+                match codec::parse_value(drive, *r, &text, &session.settings) {
                     Ok(back) if back == raw => {}
                     Ok(back) => warnings.push(format!(
                         "{}: the drive holds {}, which the map writes as {}",
-                        describe::register(r),
-                        session.raw_text(r, raw),
-                        session.raw_text(r, back)
+                        r.label(),
+                        session.raw_text(*r, raw),
+                        session.raw_text(*r, back)
                     )),
                     Err(e) => warnings.push(format!(
                         "{}: the drive holds {text} ({}), which restoring would refuse: {e}",
-                        describe::register(r),
-                        session.raw_text(r, raw)
+                        r.label(),
+                        session.raw_text(*r, raw)
                     )),
                 }
                 settings.push(SavedSetting {
-                    id: r.def.id.clone(),
+                    id: r.id().to_owned(),
                     param,
                     value: text,
                     code,
                 });
             }
             Err(reason) => unread.push(UnreadSetting {
-                id: r.def.id.clone(),
+                id: r.id().to_owned(),
                 param,
                 reason,
             }),
         }
     }
     let variant: BTreeMap<String, String> = drive
-        .variants
+        .variants()
         .iter()
         .filter_map(|a| {
             session
@@ -178,7 +177,7 @@ pub fn save_with(
     Ok(SaveReport {
         set: ParameterSet {
             format: FORMAT.to_owned(),
-            drive: drive.meta.id.clone(),
+            drive: drive.id().to_owned(),
             variant,
             fingerprint: fingerprint(drive),
             slave: session.slave,

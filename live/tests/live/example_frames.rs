@@ -7,7 +7,6 @@
 use std::path::{Path, PathBuf};
 
 use drivemap_live::examples::{self, Verified};
-use drivemap_map::validate::Context;
 use drivemap_runtime::crc;
 
 fn fixture() -> PathBuf {
@@ -28,8 +27,10 @@ fn verify(text: &str, name: &str) -> (PathBuf, Verified) {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("orbis-q5.yaml");
     std::fs::write(&path, text).unwrap();
-    let ctx = Context::with_manuals(&fixture().join("manuals"));
-    let drive = drivemap_map::read_map(&path, &ctx).unwrap_or_else(|e| panic!("{e}"));
+    let drive = drivemap_map::Loader::new()
+        .manuals(fixture().join("manuals"))
+        .load(&path)
+        .unwrap_or_else(|e| panic!("{e}"));
     let found = examples::verify(&drive);
     (path, found)
 }

@@ -2,11 +2,11 @@
 //! BF6's maximum frequency, "60.0 Hz = 3600"): a scale relative to it and a limit through it
 //! (`max_relative`) take its exact value once the settings hold the word read from the drive.
 
-use drivemap_live::{LiveSettings, Value};
-use drivemap_map::validate::Context;
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_runtime::ValueError;
 
-fn drive() -> drivemap_map::Drive {
+fn drive() -> drivemap_map::Map {
     let text = std::fs::read_to_string("../tests/fixtures/borealis-bf6/borealis-bf6.yaml").unwrap();
     let reference = "min: 0.0, max: 400.0, source: \"borealis-bf6.txt:11\"}";
     assert!(
@@ -22,7 +22,8 @@ fn drive() -> drivemap_map::Drive {
             "      - {id: output_current,",
             "      - {id: speed_percent, name: Speed, address: 0x0014, access: r, unit: Hz, scale: {relative_to: maximum_frequency, full_scale: 10000}, source: \"borealis-bf6.txt:13\"}\n      - {id: output_current,",
         );
-    drivemap_map::read_map_str("borealis-bf6.yaml", &text, &Context::default())
+    drivemap_map::Loader::new()
+        .load_str("borealis-bf6.yaml", &text)
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -32,18 +33,18 @@ fn a_ratio_register_is_a_reference() {
     let mut s = LiveSettings::default();
     // Maximum frequency 0022h reads 3599 counts: 3599/60 Hz.
     assert!(s.absorb(&d, 0x0022, 3599));
-    let speed = d.find("speed_percent").unwrap();
-    match drivemap_live::decode(&d, speed, 5000, &s) {
+    let speed = d.register("speed_percent").unwrap();
+    match drivemap_live::codec::decode(&d, speed, 5000, &s) {
         Ok(Value::Quantity { value, .. }) => assert_eq!(value, 3599.0 / 120.0),
         other => panic!("{other:?}"),
     }
-    let reference = d.find("frequency_reference").unwrap();
+    let reference = d.register("frequency_reference").unwrap();
     assert_eq!(
-        drivemap_live::encode(&d, reference, 3599.0 / 60.0, &s),
+        drivemap_live::codec::encode(&d, reference, 3599.0 / 60.0, &s),
         Ok(3599)
     );
     assert!(matches!(
-        drivemap_live::encode(&d, reference, 60.0, &s),
+        drivemap_live::codec::encode(&d, reference, 60.0, &s),
         Err(ValueError::AboveLimit { .. })
     ));
 }

@@ -16,7 +16,7 @@ fn v7_map() -> PathBuf {
 
 /// A simulated V7 on loopback Modbus TCP with n018 = 1 (times in 0.01 s) and n019 = 12.34 s.
 fn serve_v7() -> TcpServer {
-    let drive = drivemap_map::read_map(&v7_map(), &Default::default()).unwrap();
+    let drive = drivemap_map::Loader::new().load(&v7_map()).unwrap();
     let mut sim = Simulator::new(drive, SimOptions::new()).unwrap();
     sim.set("n018", 1.0).unwrap();
     sim.set("n019", 12.34).unwrap();
@@ -59,8 +59,10 @@ fn an_unknown_name_is_a_typed_error_with_the_nearest_names() {
 /// whichever client call made it.
 #[test]
 fn a_session_over_a_draft_writes_only_when_allowed() {
+    use drivemap_live::LiveSettings;
     use drivemap_live::draft::DraftWrites;
-    use drivemap_live::{Link, LiveSettings, Session};
+    use drivemap_live::link::Link;
+    use drivemap_live::session::Session;
     let dir = std::env::temp_dir().join(format!("drivemap-live-draft-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let text = std::fs::read_to_string(v7_map()).unwrap();
@@ -68,8 +70,8 @@ fn a_session_over_a_draft_writes_only_when_allowed() {
     assert_ne!(marked, text, "the V7 map states its schema");
     let path = dir.join("yaskawa-v7.yaml");
     std::fs::write(&path, marked).unwrap();
-    let drive = drivemap_map::read_map(&path, &Default::default()).unwrap();
-    assert!(drive.draft.is_some());
+    let drive = drivemap_map::Loader::new().load(&path).unwrap();
+    assert!(drive.draft().is_some());
     let sim = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
     let server = TcpServer::spawn(
         drivemap_sim::shared(sim),
@@ -79,7 +81,7 @@ fn a_session_over_a_draft_writes_only_when_allowed() {
     )
     .unwrap();
     let link = Link::tcp(server.local_addr().to_string());
-    let r = drivemap_live::find(&drive, "n019").unwrap();
+    let r = drivemap_live::lookup::find(&drive, "n019").unwrap();
     let profile = drivemap_live::leak_profile(&drive);
     let mut session = Session::open(&drive, &link, LiveSettings::default()).unwrap();
     let at = session.address(r).unwrap();

@@ -11,14 +11,14 @@ use crate::source::Path;
 use crate::validate::Context;
 
 /// Splits `file:line` (a line of a text manual).
-pub(super) fn parse_citation(s: &str) -> Option<(&str, usize)> {
+pub fn parse_citation(s: &str) -> Option<(&str, usize)> {
     let (file, line) = s.rsplit_once(':')?;
     let line: usize = line.trim().parse().ok()?;
     (!file.is_empty() && line > 0).then_some((file, line))
 }
 
 /// Splits `<manual id>:p<page>` (a page of a manual with no text at hand).
-pub(super) fn parse_page_citation(s: &str) -> Option<(&str, u32)> {
+pub fn parse_page_citation(s: &str) -> Option<(&str, u32)> {
     let (manual, page) = s.rsplit_once(':')?;
     let page = page.trim().strip_prefix('p')?;
     if !page.bytes().all(|b| b.is_ascii_digit()) {

@@ -25,7 +25,7 @@ mod manuals_declared;
 mod number_fields;
 mod numbers_finite;
 mod pairs_valid;
-pub(crate) mod protocol_stated;
+pub mod protocol_stated;
 mod protocol_valid;
 mod ratio_scales;
 mod read_values_valid;
@@ -39,6 +39,9 @@ mod timing_valid;
 mod value_kind_single;
 
 pub(crate) use crate::names::pascal_case;
+// Read by drivemap-review until it reads the `Map` alone (transitional, see the crate root).
+pub use crate::names::field_span;
+pub use citations_present::{parse_citation, parse_page_citation};
 pub(crate) use identifiers_valid::is_identifier;
 
 /// What validation may consult beyond the map itself.

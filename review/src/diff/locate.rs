@@ -1,9 +1,9 @@
 //! Where a change is in the new map: the line of the key that changed (the register's `scale`,
 //! `protocol.function_codes`), else of the register or section, for annotations on the map.
 
-use crate::diagnostic::Loc;
-use crate::ir::Drive;
-use crate::source::Path;
+use drivemap_map::Loc;
+use drivemap_map::ir::Drive;
+use drivemap_map::source::Path;
 
 use super::{Change, ChangeKind};
 

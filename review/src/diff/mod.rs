@@ -3,15 +3,15 @@
 //! decides about a register (access, table, transports, write restriction) is compared on the
 //! two [`drivemap_core::RegisterPlan`]s; what the manual prints (scales, limits, defaults, codes,
 //! fields, citations) on the validated IR. Both sides are written in the library's one wording
-//! ([`crate::describe`]), the wording of the rustdoc and of `drivemap doc`.
+//! ([`drivemap_map::describe`]), the wording of the rustdoc and of `drivemap doc`.
 //!
-//! [`classify`](mod@classify) says which kinds break applications built on the generated code;
+//! [`classify()`] says which kinds break applications built on the generated code;
 //! [`render`] prints the result for a terminal, as Markdown or as GitHub annotations. The
 //! comparisons themselves are in `protocol` (metadata, variants), `profile` (the protocol
 //! profile, row by row on the protocol facts) and `registers`. Fetching the old maps from a
 //! git revision is the command line's (`cli/src/git.rs`).
 
-pub mod classify;
+mod classify;
 mod indexed;
 mod locate;
 mod profile;
@@ -22,8 +22,8 @@ mod roles;
 #[cfg(test)]
 mod tests;
 
-use crate::describe;
-use crate::ir::Drive;
+use drivemap_map::describe;
+use drivemap_map::ir::Drive;
 use serde::Serialize;
 
 pub use classify::{ChangeKind, Severity, classify};
@@ -47,7 +47,7 @@ pub struct Change {
     pub new_source: Option<String>,
     /// Where the change is in the new map (a variant map's inherited register is in its base's
     /// file), for annotations; `None` when the new map does not have it.
-    pub at: Option<crate::diagnostic::Loc>,
+    pub at: Option<drivemap_map::Loc>,
     /// Address, for ordering register changes as the manual lists them.
     order: u32,
 }
@@ -149,7 +149,7 @@ pub fn added(new: &Drive) -> DriveDiff {
         HEAD,
     );
     for ch in &mut c.changes {
-        ch.at = Some(new.locate(&crate::source::Path::root().key("drive")));
+        ch.at = Some(new.locate(&drivemap_map::source::Path::root().key("drive")));
     }
     DriveDiff {
         drive: new.meta.id.clone(),
@@ -348,7 +348,7 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         |x| Some(x.source.clone()),
     );
     if old.draft != new.draft {
-        let text = |d: &Option<crate::model::Draft>| {
+        let text = |d: &Option<drivemap_map::model::Draft>| {
             Some(match d {
                 None => "not a draft".to_string(),
                 Some(d) => format!(
@@ -368,7 +368,7 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         );
     }
     if old.address_format != new.address_format {
-        let text = |f: crate::model::AddressFormat| Some(format!("{f:?}").to_lowercase());
+        let text = |f: drivemap_map::model::AddressFormat| Some(format!("{f:?}").to_lowercase());
         c.push(
             ChangeKind::DocumentationChanged,
             id,
@@ -386,7 +386,7 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
                 // Access, table, write restriction, transports and repeat rules of a group are
                 // its registers' defaults, and its broadcast flag their membership: compared on
                 // each register (an empty group's flag here).
-                let crate::ir::Group {
+                let drivemap_map::ir::Group {
                     id,
                     name,
                     table,

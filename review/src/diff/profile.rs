@@ -12,8 +12,8 @@ use drivemap_map::facts::{
 };
 
 use super::{ChangeKind, Collector, HEAD, Side};
-use crate::describe;
-use crate::ir::Drive;
+use drivemap_map::describe;
+use drivemap_map::ir::Drive;
 
 /// How a change of a key is reported.
 #[derive(Debug, Clone, Copy)]

@@ -1,14 +1,14 @@
 //! Differences outside the registers: drive metadata and variant axes (the protocol profile is
 //! `profile.rs`'s).
 
-use crate::ir::Drive;
+use drivemap_map::ir::Drive;
 
 use super::{ChangeKind, Collector, HEAD, same};
 
 pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
     let (a, b) = (&old.meta, &new.meta);
     let id = &b.id;
-    let crate::model::DriveMeta {
+    let drivemap_map::model::DriveMeta {
         id: _,
         extends: _,
         vendor: _,
@@ -36,7 +36,7 @@ pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
         parts.push("manuals");
     }
     if !parts.is_empty() {
-        let text = |m: &crate::model::DriveMeta| {
+        let text = |m: &drivemap_map::model::DriveMeta| {
             format!(
                 "{} {} ({} manual(s))",
                 m.vendor,
@@ -97,7 +97,7 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
                 );
             }
         }
-        let crate::model::VariantAxis {
+        let drivemap_map::model::VariantAxis {
             id: _,
             name: _,
             options: _,
@@ -107,7 +107,7 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
             docs.push("name".to_owned());
         }
         for o in &a.options {
-            let crate::model::VariantOption {
+            let drivemap_map::model::VariantOption {
                 id: _,
                 name: _,
                 source: _,
@@ -128,7 +128,7 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
                 }
             }
         }
-        let order = |x: &crate::model::VariantAxis| {
+        let order = |x: &drivemap_map::model::VariantAxis| {
             x.options.iter().map(|o| o.id.clone()).collect::<Vec<_>>()
         };
         let (oa, ob) = (order(a), order(b));

@@ -8,17 +8,17 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use crate::ir::{Drive, Register, ValueKind};
 use drivemap_core::RegisterPlan;
 use drivemap_core::register::{Access, WriteRestriction};
+use drivemap_map::ir::{Drive, Register, ValueKind};
 
-use crate::model::{EnumValue, Field, Scale};
-use crate::validate::field_span;
+use drivemap_map::model::{EnumValue, Field, Scale};
+use drivemap_map::validate::field_span;
 
 use super::{ChangeKind, Collector, Side, json, same};
-use crate::describe;
-use crate::facts::data::ScaleData;
-use crate::facts::{self, FactKey, RegisterFacts};
+use drivemap_map::describe;
+use drivemap_map::facts::data::ScaleData;
+use drivemap_map::facts::{self, FactKey, RegisterFacts};
 
 pub(super) fn registers(c: &mut Collector, old: &Drive, new: &Drive) {
     let mut pairs: Vec<(&Register, &Register)> = Vec::new();
@@ -182,7 +182,12 @@ impl<'a> Sides<'a> {
     }
 
     /// The map's text of both sides.
-    fn defs(&self) -> (&'a crate::model::Register, &'a crate::model::Register) {
+    fn defs(
+        &self,
+    ) -> (
+        &'a drivemap_map::model::Register,
+        &'a drivemap_map::model::Register,
+    ) {
         (&self.r.def, &self.n.def)
     }
 
@@ -309,7 +314,7 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
 fn every_key_compared(n: &Register) {
     let Register {
         def:
-            crate::model::Register {
+            drivemap_map::model::Register {
                 id: _,                   // matching, RegisterRenamed
                 param: _,                // param
                 name: _,                 // name
@@ -385,7 +390,7 @@ fn alternatives(s: &Sides) -> Row {
             alts.join("; ")
         }
     };
-    let addresses = |d: &crate::model::Register| {
+    let addresses = |d: &drivemap_map::model::Register| {
         d.address_alternatives
             .iter()
             .map(|x| json(&(x.address, &x.when)))
@@ -634,7 +639,8 @@ fn value_kind(s: &Sides) -> Row {
 
 fn unit(s: &Sides) -> Row {
     let (a, b) = s.defs();
-    let text = |d: &crate::model::Register| Some(d.unit.clone().unwrap_or_else(|| "none".into()));
+    let text =
+        |d: &drivemap_map::model::Register| Some(d.unit.clone().unwrap_or_else(|| "none".into()));
     (
         same_kind(s.r, s.n) && a.unit != b.unit,
         ChangeKind::UnitChanged,
@@ -870,7 +876,7 @@ fn variant_ranges(c: &mut Collector, s: &Sides) {
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
         let (oa, ob) = (a.by_variant.get(option), b.by_variant.get(option));
-        let overrides = |o: Option<&crate::model::VariantOverride>| {
+        let overrides = |o: Option<&drivemap_map::model::VariantOverride>| {
             o.map(|o| (o.min, o.max)).unwrap_or((None, None))
         };
         let ((mina, maxa), (minb, maxb)) = (overrides(oa), overrides(ob));
@@ -1007,7 +1013,7 @@ fn documentation(c: &mut Collector, s: &Sides) {
     if a.indirect != b.indirect {
         parts.push("indirect citation");
     }
-    let variant_docs = |d: &crate::model::Register| {
+    let variant_docs = |d: &drivemap_map::model::Register| {
         d.by_variant
             .iter()
             .map(|(k, o)| (k.clone(), json(&o.unknown)))
@@ -1033,7 +1039,7 @@ fn documentation(c: &mut Collector, s: &Sides) {
 
 fn pair_citation(c: &mut Collector, s: &Sides) {
     let (a, b) = s.defs();
-    let pair = |d: &crate::model::Register| d.pair.as_ref().and_then(|p| p.source.clone());
+    let pair = |d: &drivemap_map::model::Register| d.pair.as_ref().and_then(|p| p.source.clone());
     if s.r.width() == s.n.width() && pair(a) != pair(b) {
         s.cite(c, "word order", pair(a), pair(b));
     }
@@ -1071,9 +1077,9 @@ fn variant_citations(c: &mut Collector, s: &Sides) {
     let (a, b) = s.defs();
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
-        let source = |d: &crate::model::Register| {
+        let source = |d: &drivemap_map::model::Register| {
             d.by_variant.get(option).and_then(|o| {
-                let crate::model::VariantOverride {
+                let drivemap_map::model::VariantOverride {
                     min: _,
                     max: _,
                     default: _,

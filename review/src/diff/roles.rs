@@ -14,10 +14,10 @@
 
 use std::collections::BTreeSet;
 
-use crate::describe;
-use crate::ir::Drive;
-use crate::model::{CodeRef, Codes, RolePlace};
-use crate::names::field_span;
+use drivemap_map::describe;
+use drivemap_map::ir::Drive;
+use drivemap_map::model::{CodeRef, Codes, RolePlace};
+use drivemap_map::names::field_span;
 
 use super::{ChangeKind, Collector, HEAD};
 
@@ -88,7 +88,7 @@ impl Target {
     }
 
     /// The target as a change names it, its address in the map's notation (`format`).
-    fn text(&self, format: crate::model::AddressFormat) -> String {
+    fn text(&self, format: drivemap_map::model::AddressFormat) -> String {
         match self {
             Target::Register { id, address, .. } => {
                 format!("{id} ({})", describe::address_as(format, *address))
@@ -120,7 +120,7 @@ impl Target {
 struct Meaning {
     target: Target,
     /// The links the place holds on (`None`: every transport of the map).
-    transports: Option<Vec<crate::model::TransportName>>,
+    transports: Option<Vec<drivemap_map::model::TransportName>>,
     on: Vec<Option<u16>>,
     off: Option<u16>,
     /// How the drive acts on a command: "level", "edge" or "not printed".
@@ -130,7 +130,7 @@ struct Meaning {
     /// The role it shares its register or bits with, as the map says.
     shared_with: Option<String>,
     /// How the map prints addresses (for the text only; not a change of the role).
-    address_format: crate::model::AddressFormat,
+    address_format: drivemap_map::model::AddressFormat,
 }
 
 impl Meaning {
@@ -153,10 +153,10 @@ impl Meaning {
             indirect: _,
             notes: _,
         } = p;
-        let key = |r: &crate::ir::Register| {
+        let key = |r: &drivemap_map::ir::Register| {
             (
                 r.def.param.clone(),
-                r.table == crate::model::ModbusTable::Input,
+                r.table == drivemap_core::register::Table::Input,
                 r.broadcast,
             )
         };
@@ -253,9 +253,9 @@ impl Meaning {
             on,
             off,
             edge: match edge {
-                crate::model::EdgeSpec::Known(false) => "level",
-                crate::model::EdgeSpec::Known(true) => "edge",
-                crate::model::EdgeSpec::Unknown(_) => "not printed",
+                drivemap_map::model::EdgeSpec::Known(false) => "level",
+                drivemap_map::model::EdgeSpec::Known(true) => "edge",
+                drivemap_map::model::EdgeSpec::Unknown(_) => "not printed",
             },
             number: number.then(|| (*signed, scale.unwrap_or(1.0))),
             shared_with: shared_with.clone(),

@@ -4,7 +4,6 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::validate::Context;
 use serde::Deserialize;
 
 use super::registers::range_change;
@@ -84,12 +83,13 @@ impl std::fmt::Display for CaseError {
 
 /// Reads a version of the example map from memory (no temporary files).
 fn read(name: &str, text: &str) -> Result<Drive, CaseError> {
-    crate::read_map_str("example-drive.yaml", text, &Context::default()).map_err(|d| {
-        CaseError::Invalid {
+    drivemap_map::Loader::new()
+        .load_str("example-drive.yaml", text)
+        .map(drivemap_map::Map::into_ir)
+        .map_err(|d| CaseError::Invalid {
             side: name.to_owned(),
             diagnostics: d.to_string(),
-        }
-    })
+        })
 }
 
 fn kind_of(label: &str) -> Result<ChangeKind, CaseError> {

@@ -4,8 +4,8 @@
 
 use std::fmt::Write as _;
 
-use drivemap_map::Drive;
-use drivemap_map::model::Access;
+use drivemap_core::register::Access;
+use drivemap_map::ir::Drive;
 
 use super::{addr, cell, cite, code};
 

@@ -6,8 +6,8 @@
 
 use std::fmt::Write as _;
 
-use drivemap_map::Drive;
 use drivemap_map::command_profile::resolve;
+use drivemap_map::ir::Drive;
 
 use super::{cell, cite, code};
 

@@ -17,26 +17,32 @@ use super::Manuals;
 use super::matching::{
     AddressForms, Line, code_found, label_text, name_found, number_found, param_found,
 };
-use crate::diagnostic::Loc;
-use crate::ir::{Drive, Register};
-use crate::model::{EnumValue, Field};
-use crate::validate::{parse_citation, parse_page_citation};
+use drivemap_map::Loc;
 use drivemap_map::citations::{PlaceKind, citation_places};
+use drivemap_map::ir::{Drive, Register};
+use drivemap_map::model::{EnumValue, Field};
+use drivemap_map::validate::{parse_citation, parse_page_citation};
 
 /// What a citation is the citation of.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Item {
+    /// The register itself (its parameter number, address or name).
     Register,
     /// A code of the register or of one of its fields.
     Value {
+        /// The code.
         code: u16,
+        /// Its meaning as the map writes it.
         label: String,
     },
+    /// A bit field of the register.
     Field {
+        /// Its bit or bits (`3`, `4-5`).
         bit: String,
+        /// Its name as the map writes it.
         name: String,
     },
-    /// A citation outside the registers ([`super::others`]): of a role, a protocol item, a
+    /// A citation outside the registers ([`drivemap_map::others`]): of a role, a protocol item, a
     /// reading of a conflict, a gap.
     Other {
         /// `role`, `protocol`, `conflict` or `gap`.
@@ -56,7 +62,10 @@ pub enum Verdict {
     /// Marked indirect in the map, with this reason.
     Indirect(String),
     /// The line does not mention it. `row_of`: the register whose row the line is instead.
-    Unverified { row_of: Option<String> },
+    Unverified {
+        /// The register whose row the line is, when it is another's.
+        row_of: Option<String>,
+    },
     /// The manual is not at hand or the line does not exist.
     Unchecked,
     /// A page of a manual with no text at hand (`<id>:p<page>`): not verifiable by content.
@@ -66,8 +75,11 @@ pub enum Verdict {
 /// One citation and what review found.
 #[derive(Debug, Clone)]
 pub struct CitationCheck {
+    /// Where the citation is written in the map.
     pub loc: Loc,
+    /// The id of the register it belongs to (empty for a citation outside the registers).
     pub register: String,
+    /// What it cites.
     pub item: Item,
     /// `file:line`
     pub source: String,
@@ -75,10 +87,12 @@ pub struct CitationCheck {
     pub expected: String,
     /// The cited line, quoted.
     pub quote: Option<String>,
+    /// What review found.
     pub verdict: Verdict,
 }
 
 impl CitationCheck {
+    /// Whether the cited line or its row mentions the item.
     pub fn verified(&self) -> bool {
         matches!(self.verdict, Verdict::Verified | Verdict::VerifiedRow(_))
     }
@@ -164,9 +178,9 @@ impl Cache<'_> {
 const WINDOW: usize = 80;
 
 /// Checks every citation of a drive against the manuals: registers, values and fields, then
-/// roles, protocol items, readings of conflicts and gaps ([`super::others`]).
+/// roles, protocol items, readings of conflicts and gaps ([`drivemap_map::others`]).
 pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> {
-    let decimal = drive.address_format == crate::model::AddressFormat::Decimal;
+    let decimal = drive.address_format == drivemap_map::model::AddressFormat::Decimal;
     let offsets = drive
         .protocol
         .addressing
@@ -263,14 +277,14 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
             verdict,
         });
     }
-    for o in super::others::other_citations(drive) {
+    for o in drivemap_map::others::other_citations(drive) {
         let Some(source) = o.source else {
             continue;
         };
         let verdict = match &o.indirect {
             Some(reason) => Verdict::Indirect(reason.clone()),
             None => match &o.rule {
-                super::others::Rule::Register(i) => {
+                drivemap_map::others::Rule::Register(i) => {
                     register_verdict(drive, &keys, &by_file, &mut cache, *i, &source)
                 }
                 rule => near(manuals, &source, |l| {
@@ -421,7 +435,6 @@ fn crate_describe(r: &Register) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::validate::Context;
 
     const MANUAL: &str = "Table 1\n\
         0200H\tBn-01\tAcceleration time 1\t0.1s\n\
@@ -449,7 +462,10 @@ mod tests {
              \x20         - {{value: 2, id: network, name: Network, source: \"m.txt:5\"}}\n\
              \x20       source: \"m.txt:5\"\n"
         );
-        crate::read_map_str("t.yaml", &text, &Context::default()).unwrap()
+        drivemap_map::Loader::new()
+            .load_str("t.yaml", &text)
+            .map(drivemap_map::Map::into_ir)
+            .unwrap()
     }
 
     fn verdicts(drive: &Drive) -> Vec<(String, Verdict)> {
@@ -474,7 +490,10 @@ mod tests {
         };
         let manuals = Manuals::from_texts([("d.txt", "2001\tReference\tHz\n")]);
         let verdict = |format: &str| {
-            let drive = crate::read_map_str("t.yaml", &text(format), &Context::default()).unwrap();
+            let drive = drivemap_map::Loader::new()
+                .load_str("t.yaml", &text(format))
+                .map(drivemap_map::Map::into_ir)
+                .unwrap();
             verify_citations(&drive, &manuals)[0].verdict.clone()
         };
         assert_eq!(verdict("address_format: decimal\n"), Verdict::Verified);

@@ -13,14 +13,16 @@ use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 
 use super::Manuals;
 use super::citations::{Verdict, verify_citations};
-use crate::ir::Drive;
-use crate::validate::parse_citation;
 use drivemap_map::citations::citation_places;
+use drivemap_map::ir::Drive;
+use drivemap_map::validate::parse_citation;
 
 /// A row of a manual table no item of the map covers.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct UncitedRow {
+    /// The manual's file name.
     pub file: String,
+    /// The row's line in it, from 1.
     pub line: usize,
     /// The parameter number or address as printed.
     pub key: String,
@@ -31,8 +33,11 @@ pub struct UncitedRow {
 /// One table of a manual: a run of rows of a learnt shape.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct TableSummary {
+    /// The manual's file name.
     pub file: String,
+    /// The table's first row's line, from 1.
     pub first_line: usize,
+    /// The table's last row's line.
     pub last_line: usize,
     /// The map group citing most of its rows, if any.
     pub group: Option<String>,
@@ -50,8 +55,11 @@ pub struct TableSummary {
 /// What `drivemap coverage` reports for one map.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CoverageReport {
+    /// The drive's id.
     pub drive: String,
+    /// The tables found in the manuals, in file and line order.
     pub tables: Vec<TableSummary>,
+    /// The rows nothing covers, in file and line order.
     pub uncited: Vec<UncitedRow>,
     /// Manuals named by the map that are not at hand.
     pub missing_manuals: Vec<String>,
@@ -317,7 +325,7 @@ struct Known<'a> {
 
 impl<'a> Known<'a> {
     fn new(drive: &'a Drive, manuals: &Manuals) -> Self {
-        let decimal = drive.address_format == crate::model::AddressFormat::Decimal;
+        let decimal = drive.address_format == drivemap_map::model::AddressFormat::Decimal;
         let shapes: HashSet<String> = drive
             .registers
             .iter()

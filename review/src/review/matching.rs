@@ -8,7 +8,7 @@
 /// The ways an address is printed: `0x0200`, `0200H`, `200h`, `0h03E7`, bare `1E08` (ACN), and
 /// the PLC decimals `40000 + address + 1 + offset` for each transport offset of `addressing`.
 #[derive(Debug, Clone)]
-pub struct AddressForms {
+pub(crate) struct AddressForms {
     /// Upper-case hexadecimal forms with their boundary rule.
     hex: Vec<(String, Boundary)>,
     decimal: Vec<String>,
@@ -26,7 +26,7 @@ enum Boundary {
 }
 
 impl AddressForms {
-    pub fn new(address: u16, offsets: Option<(i32, i32)>) -> AddressForms {
+    pub(crate) fn new(address: u16, offsets: Option<(i32, i32)>) -> AddressForms {
         let h4 = format!("{address:04X}");
         let h = format!("{address:X}");
         let h3 = format!("{address:03X}");
@@ -61,18 +61,18 @@ impl AddressForms {
 
     /// Also finds the address printed as a decimal register number (`2001` for 07D1H), for a
     /// map with `address_format: decimal`.
-    pub fn with_decimal(mut self, address: u16) -> AddressForms {
+    pub(crate) fn with_decimal(mut self, address: u16) -> AddressForms {
         self.register_number = Some(address.to_string());
         self
     }
 
     /// The manual's preferred spelling, for messages.
-    pub fn display(address: u16) -> String {
+    pub(crate) fn display(address: u16) -> String {
         format!("{address:04X}h")
     }
 
     /// Whether `line` (see [`Line`]) prints the address.
-    pub fn found_in(&self, line: &Line) -> bool {
+    pub(crate) fn found_in(&self, line: &Line) -> bool {
         let texts = [line.upper.as_str(), line.ocr.as_str()];
         // The PLC decimals count only all together: with RTU and TCP numbering one apart, the
         // TCP number of one register is the RTU number of the next.
@@ -93,19 +93,19 @@ impl AddressForms {
 
 /// A manual line prepared for matching.
 #[derive(Debug, Clone)]
-pub struct Line {
+pub(crate) struct Line {
     /// Upper case.
-    pub upper: String,
+    pub(crate) upper: String,
     /// Upper case, with `O` and `Q` read as `0` inside hex-like words (`1EOA` → `1E0A`).
-    pub ocr: String,
+    pub(crate) ocr: String,
     /// Lower case, letters and digits only: names broken by OCR spaces still match.
-    pub squashed: String,
+    pub(crate) squashed: String,
     /// Lower-case words of letters and digits.
-    pub words: Vec<String>,
+    pub(crate) words: Vec<String>,
 }
 
 impl Line {
-    pub fn new(text: &str) -> Line {
+    pub(crate) fn new(text: &str) -> Line {
         let upper = text.to_uppercase();
         let ocr = ocr_hex(&upper);
         let squashed = text
@@ -176,7 +176,7 @@ fn find_bounded(text: &str, needle: &str, boundary: Boundary) -> bool {
 /// Whether `line` prints the parameter number: as printed, without its separators (`UF11`) or
 /// with a space for them; case-insensitive; not followed by a digit; preceded by no letter or
 /// digit, except an address's `h` glued before it (`31AhE4-03`).
-pub fn param_found(param: &str, line: &Line) -> bool {
+pub(crate) fn param_found(param: &str, line: &Line) -> bool {
     let p = param.trim().to_uppercase();
     if p.is_empty() {
         return false;
@@ -209,7 +209,7 @@ const STOP: &[&str] = &[
 
 /// The words of a printed name that identify it: letters and digits, no stop words, no lone
 /// digits.
-pub fn name_words(name: &str) -> Vec<String> {
+pub(crate) fn name_words(name: &str) -> Vec<String> {
     words(name)
         .into_iter()
         .filter(|w| !STOP.contains(&w.as_str()))
@@ -219,7 +219,7 @@ pub fn name_words(name: &str) -> Vec<String> {
 
 /// Whether the line prints a word (lower case): as a word of its own when short, anywhere in the
 /// squashed line when it has four letters or more (OCR spaces inside words).
-pub fn word_found(word: &str, line: &Line) -> bool {
+pub(crate) fn word_found(word: &str, line: &Line) -> bool {
     if word.chars().count() >= 4 {
         line.squashed.contains(word)
     } else {
@@ -229,7 +229,7 @@ pub fn word_found(word: &str, line: &Line) -> bool {
 
 /// Whether the line prints the name: two of its words (all of them when it has fewer), or the
 /// whole name with its spaces removed (`0.1 Hz` → `01hz`).
-pub fn name_found(name: &str, line: &Line) -> bool {
+pub(crate) fn name_found(name: &str, line: &Line) -> bool {
     let ws = name_words(name);
     let need = ws.len().min(2);
     if need > 0 && ws.iter().filter(|w| word_found(w, line)).count() >= need {
@@ -245,7 +245,7 @@ pub fn name_found(name: &str, line: &Line) -> bool {
 
 /// Whether the line prints a number as a word of its own (`3`, `03`, `3:`), or as `bit 3`,
 /// `b3`, `3h`, `0x3`, `1900h` (hexadecimal).
-pub fn number_found(n: u16, line: &Line) -> bool {
+pub(crate) fn number_found(n: u16, line: &Line) -> bool {
     let forms = [
         format!("b{n}"),
         format!("bit{n}"),
@@ -263,7 +263,7 @@ pub fn number_found(n: u16, line: &Line) -> bool {
 }
 
 /// The label without its parenthetical remarks (`2.2 kW (printed '22 kW')` → `2.2 kW`).
-pub fn label_text(label: &str) -> String {
+pub(crate) fn label_text(label: &str) -> String {
     let mut out = String::new();
     let mut depth = 0usize;
     for c in label.chars() {
@@ -286,7 +286,7 @@ pub fn label_text(label: &str) -> String {
 /// between letters (`0Digital Operator`, `PUF1M`), glued to the label's first word
 /// (`12400 bps` for code 1 "2400 bps"; `UV12A` for code 2 "UV1: ..."), inside a printed range
 /// (`25-39`, `0 to 15`), or carried by the label itself (`0010: ...` for code 2).
-pub fn code_found(code: u16, label: &str, line: &Line) -> bool {
+pub(crate) fn code_found(code: u16, label: &str, line: &Line) -> bool {
     if number_found(code, line) {
         return true;
     }

@@ -1,21 +1,21 @@
 //! Reviewing a map against its manuals: citations checked by what the cited line says
-//! ([`citations`](mod@citations)), manual rows no item cites ([`coverage`](mod@coverage)), the text of a cited line
+//! ([`verify_citations`]), manual rows no item cites ([`coverage()`]), the text of a cited line
 //! ([`Manuals::quote`]).
 //!
-//! Validation ([`crate::validate`]) decides whether a map can be built; review decides whether
+//! Validation ([`drivemap_map::validate`]) decides whether a map can be built; review decides whether
 //! it says what the manual says. Its findings are warnings (`drivemap check`, errors with
 //! `--strict`) and a coverage report (`drivemap coverage`); it needs the manuals' text.
 
-pub mod citations;
-pub mod coverage;
-pub mod matching;
-pub mod others;
+mod citations;
+mod coverage;
+mod matching;
+mod others;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use crate::diagnostic::Loc;
-use crate::validate::parse_citation;
+use drivemap_map::Loc;
+use drivemap_map::validate::parse_citation;
 
 pub use citations::{CitationCheck, Item, Verdict, verify_citations};
 pub use coverage::{CoverageReport, TableSummary, UncitedRow, coverage};
@@ -51,7 +51,7 @@ impl Manuals {
     }
 
     /// Reads the manuals a map names; the ones missing stay missing.
-    pub fn load_for(&mut self, drive: &crate::Drive) {
+    pub fn load_for(&mut self, drive: &drivemap_map::ir::Drive) {
         for file in drive.meta.text_manuals() {
             self.load(file);
         }
@@ -125,7 +125,7 @@ fn split_lines(text: &str) -> Vec<String> {
 /// the manual gives beyond the Modbus serial-line specification's unicast addresses 1-247 (ACN
 /// CM.01 1-250; some manuals print 01H-FEH). The map records the manual's range; the warning
 /// says what a standard master or gateway may do with 248-255.
-pub fn protocol_warnings(drive: &crate::Drive) -> Vec<Warning> {
+pub fn protocol_warnings(drive: &drivemap_map::ir::Drive) -> Vec<Warning> {
     let s = &drive.protocol.slave_address;
     // Numbers with neither a source nor an `unknown` (map/src/validate/protocol_stated.rs).
     let mut out: Vec<Warning> = drivemap_map::validate::protocol_stated::warnings(drive)
@@ -138,7 +138,7 @@ pub fn protocol_warnings(drive: &crate::Drive) -> Vec<Warning> {
         .collect();
     let (s_min, s_max) = s.range();
     if s.unknown.is_none() && s_max > 247 {
-        let path = crate::source::Path::root()
+        let path = drivemap_map::source::Path::root()
             .key("protocol")
             .key("slave_address")
             .key("max");
@@ -160,8 +160,11 @@ pub fn protocol_warnings(drive: &crate::Drive) -> Vec<Warning> {
 /// A warning of review: where, which register, what.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
 pub struct Warning {
+    /// Where in the map.
     pub loc: Loc,
+    /// The register's id, when the warning is about one.
     pub register: Option<String>,
+    /// What review found.
     pub message: String,
 }
 

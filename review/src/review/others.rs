@@ -4,13 +4,13 @@
 
 use drivemap_map::ir::Drive;
 use drivemap_map::model;
-pub use drivemap_map::others::{Other, Rule, other_citations};
+use drivemap_map::others::Rule;
 
 use super::matching::{AddressForms, Line, name_found, number_found, param_found, word_found};
 
 /// Whether the line shows what `rule` asks (`Register` is decided by the register check, not
 /// here).
-pub fn found(rule: &Rule, drive: &Drive, offsets: Option<(i32, i32)>, line: &Line) -> bool {
+pub(crate) fn found(rule: &Rule, drive: &Drive, offsets: Option<(i32, i32)>, line: &Line) -> bool {
     let decimal = drive.address_format == model::AddressFormat::Decimal;
     let forms = |a: u16| {
         let f = AddressForms::new(a, offsets);

@@ -3,7 +3,7 @@
 //! (breaking: `fault_code()` reads another place); a field made signed, a reset's edge made
 //! "not printed", and the reason of a not-printed edge changed each show, with their kind.
 
-use drivemap_map::Drive;
+use drivemap_map::ir::Drive;
 use drivemap_review::diff::{ChangeKind, compare};
 
 fn acme_text() -> String {
@@ -15,7 +15,9 @@ fn acme_text() -> String {
 }
 
 fn read(text: &str) -> Drive {
-    drivemap_map::read_map_str("acme-vf1.yaml", text, &Default::default())
+    drivemap_map::Loader::new()
+        .load_str("acme-vf1.yaml", text)
+        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -134,7 +136,9 @@ fn doc_and_export_show_a_number_field_and_an_unknown_edge() {
         env!("CARGO_MANIFEST_DIR"),
         "/../tests/fixtures/brenner-fx4/brenner-fx4.yaml"
     );
-    let drive = drivemap_map::read_map(path.as_ref(), &Default::default())
+    let drive = drivemap_map::Loader::new()
+        .load(path.as_ref())
+        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"));
     let doc = drivemap_review::reference::render(&drive, "brenner-fx4.yaml");
     let row = |role: &str| {

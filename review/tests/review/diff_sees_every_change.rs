@@ -19,9 +19,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use drivemap_map::Drive;
+use drivemap_map::ir::Drive;
 use drivemap_map::source::{Node, NodeKind, Seg};
-use drivemap_map::validate::{Context, parse_citation};
+use drivemap_map::validate::parse_citation;
 use drivemap_review::diff::compare;
 use serde_yaml::Value;
 
@@ -276,7 +276,6 @@ struct Counts {
 
 /// Mutates one map; returns its counts and the mutations the diff did not show.
 fn mutate_map(map: &Path) -> (Counts, Vec<String>) {
-    let ctx = Context::default();
     let mut missed = Vec::new();
     let dir = map.parent().unwrap().to_path_buf();
     let base = move |id: &str| {
@@ -287,8 +286,13 @@ fn mutate_map(map: &Path) -> (Counts, Vec<String>) {
     let name = map.file_name().unwrap().to_string_lossy().into_owned();
     let text = std::fs::read_to_string(map).unwrap();
     let file: Arc<str> = Arc::from(name.as_str());
-    let tree = drivemap_map::source::parse_map(&file, &text).unwrap().tree;
-    let read = |tree: Node| drivemap_map::read_map_tree_with(&name, tree, &ctx, &base);
+    let tree = drivemap_map::parse_map(&file, &text).unwrap();
+    let read = |tree: Node| {
+        drivemap_map::Loader::new()
+            .bases(&base)
+            .load_tree(&name, tree)
+            .map(drivemap_map::Map::into_ir)
+    };
     let original = read(tree.clone()).unwrap_or_else(|e| panic!("{name}: {e}"));
     let original_meaning = meaning(&original);
     assert!(

@@ -2,15 +2,16 @@
 //! (`tests/fixtures/tarrow-tm44`): an entry re-indexed, re-ranged, added or removed is an
 //! "indexed access changed" (breaking); a citation moved is a "citation changed".
 
-use drivemap_map::validate::Context;
 use drivemap_review::diff::{self, render};
 
 fn fixture() -> String {
     std::fs::read_to_string("../tests/fixtures/tarrow-tm44/tarrow-tm44.yaml").unwrap()
 }
 
-fn read(text: &str) -> drivemap_map::Drive {
-    drivemap_map::read_map_str("tarrow-tm44.yaml", text, &Context::default())
+fn read(text: &str) -> drivemap_map::ir::Drive {
+    drivemap_map::Loader::new()
+        .load_str("tarrow-tm44.yaml", text)
+        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"))
 }
 

@@ -2,10 +2,9 @@
 //! reasons as the two sides, and the change of working figure it brings on its own. The map is
 //! the fixture `tests/fixtures/halden-h1` (every protocol fact `unknown:`).
 
-use drivemap_map::validate::Context;
 use drivemap_review::diff::{ChangeKind, compare};
 
-fn halden(replace: &[(&str, &str)]) -> drivemap_map::Drive {
+fn halden(replace: &[(&str, &str)]) -> drivemap_map::ir::Drive {
     let mut text = std::fs::read_to_string("../tests/fixtures/halden-h1/halden-h1.yaml").unwrap();
     for (from, to) in replace {
         let line = text
@@ -15,7 +14,9 @@ fn halden(replace: &[(&str, &str)]) -> drivemap_map::Drive {
             .to_owned();
         text = text.replace(&line, to);
     }
-    drivemap_map::read_map_str("halden-h1.yaml", &text, &Context::default())
+    drivemap_map::Loader::new()
+        .load_str("halden-h1.yaml", &text)
+        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|d| panic!("{d}"))
 }
 

@@ -1,8 +1,6 @@
 //! Review's word on a map's notations: the protocol warnings of `drivemap check` and the Markdown
 //! reference's rendering of a decimal manual's addresses.
 
-use drivemap_map::validate::Context;
-
 fn mini_drive() -> String {
     std::fs::read_to_string("../map/tests/fixtures/mini-drive.yaml").unwrap()
 }
@@ -18,16 +16,14 @@ fn slave_ranges_are_recorded_as_the_manual_prints_them() {
         .expect("the fixture has a slave range");
     let indent = &line[..line.len() - line.trim_start().len()];
     let with = |range: &str| text.replace(line, &format!("{indent}slave_address: {range}"));
-    let drive = drivemap_map::read_map_str(
-        "mini-drive.yaml",
-        &with("{min: 1, max: 254}"),
-        &Context::default(),
-    )
-    .expect("01H-FEH is valid");
+    let drive = drivemap_map::Loader::new()
+        .load_str("mini-drive.yaml", &with("{min: 1, max: 254}"))
+        .map(drivemap_map::Map::into_ir)
+        .expect("01H-FEH is valid");
     assert_eq!(drive.protocol.slave_address.max, Some(254));
     // Not refused, but a word about the serial-line specification's 247, at the range.
     // (The fixture's uncited protocol numbers have warnings of their own: `protocol_stated`.)
-    let about_247 = |d: &drivemap_map::Drive| {
+    let about_247 = |d: &drivemap_map::ir::Drive| {
         drivemap_review::review::protocol_warnings(d)
             .into_iter()
             .filter(|w| w.message.contains("serial-line specification"))
@@ -41,19 +37,15 @@ fn slave_ranges_are_recorded_as_the_manual_prints_them() {
         w.contains("warning: slave addresses 248..=254 are the manual's, but the Modbus serial-line specification reserves 248-255"),
         "{w}"
     );
-    let standard = drivemap_map::read_map_str(
-        "mini-drive.yaml",
-        &with("{min: 1, max: 247}"),
-        &Context::default(),
-    )
-    .unwrap();
+    let standard = drivemap_map::Loader::new()
+        .load_str("mini-drive.yaml", &with("{min: 1, max: 247}"))
+        .map(drivemap_map::Map::into_ir)
+        .unwrap();
     assert!(about_247(&standard).is_empty());
-    let e = drivemap_map::read_map_str(
-        "mini-drive.yaml",
-        &with("{min: 0, max: 31}"),
-        &Context::default(),
-    )
-    .unwrap_err();
+    let e = drivemap_map::Loader::new()
+        .load_str("mini-drive.yaml", &with("{min: 0, max: 31}"))
+        .map(drivemap_map::Map::into_ir)
+        .unwrap_err();
     assert!(e.to_string().contains("0 is broadcast"), "{e}");
 }
 
@@ -68,9 +60,15 @@ fn the_reference_prints_addresses_in_the_manuals_notation() {
         "address_format: decimal\n{}",
         text.replace(first, "        address: 2001\n")
     );
-    let d = drivemap_map::read_map_str("mini-drive.yaml", &declared, &Context::default()).unwrap();
+    let d = drivemap_map::Loader::new()
+        .load_str("mini-drive.yaml", &declared)
+        .map(drivemap_map::Map::into_ir)
+        .unwrap();
     let doc = drivemap_review::reference::render(&d, "mini-drive.yaml");
     assert!(doc.contains("| 2001 (07D1h) |"), "{doc}");
-    let hex = drivemap_map::read_map_str("mini-drive.yaml", &text, &Context::default()).unwrap();
+    let hex = drivemap_map::Loader::new()
+        .load_str("mini-drive.yaml", &text)
+        .map(drivemap_map::Map::into_ir)
+        .unwrap();
     assert!(drivemap_review::reference::render(&hex, "mini-drive.yaml").contains("| 0001h |"));
 }

@@ -2,15 +2,16 @@
 //! Borealis BF6 (`tests/fixtures/borealis-bf6`): other counts or another value they equal is a
 //! scale change that names both ratios; a ratio replaced by a decimal factor is one too.
 
-use drivemap_map::validate::Context;
 use drivemap_review::diff::{self, render};
 
 fn fixture() -> String {
     std::fs::read_to_string("../tests/fixtures/borealis-bf6/borealis-bf6.yaml").unwrap()
 }
 
-fn read(text: &str) -> drivemap_map::Drive {
-    drivemap_map::read_map_str("borealis-bf6.yaml", text, &Context::default())
+fn read(text: &str) -> drivemap_map::ir::Drive {
+    drivemap_map::Loader::new()
+        .load_str("borealis-bf6.yaml", text)
+        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"))
 }
 

@@ -3,22 +3,22 @@
 //! `memory` group gives the rule to both of its registers; `password` reads as codes).
 
 use drivemap_core::plan::{Label, RepeatNeedsChange};
-use drivemap_map::lower;
-use drivemap_map::validate::Context;
 
 fn fixture() -> String {
     std::fs::read_to_string("../map/tests/fixtures/mini-drive.yaml").unwrap()
 }
 
-fn read(text: &str) -> drivemap_map::Drive {
-    drivemap_map::read_map_str("mini-drive.yaml", text, &Context::default())
+fn read(text: &str) -> drivemap_map::ir::Drive {
+    drivemap_map::Loader::new()
+        .load_str("mini-drive.yaml", text)
+        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]
 fn both_are_lowered_into_the_plan() {
     let drive = read(&fixture());
-    let plan = lower::lower(&drive);
+    let plan = drive.plan();
     let row = |id: &str| plan.register(id).unwrap_or_else(|| panic!("{id}"));
     let rule = Some(RepeatNeedsChange {
         between: 0,
@@ -63,7 +63,8 @@ fn the_intermediate_is_lowered_to_its_raw_word() {
             "        default: 60.0\n        repeat_needs_change: {between: 50.5, source: \"manual.txt:40\"}\n        source: \"manual.txt:40\"",
         );
     assert_ne!(text, fixture(), "the fixture's max_frequency moved");
-    let plan = lower::lower(&read(&text));
+    let drive = read(&text);
+    let plan = drive.plan();
     assert_eq!(
         plan.register("max_frequency").unwrap().repeat_needs_change,
         Some(RepeatNeedsChange {

@@ -13,7 +13,7 @@ use super::Simulator;
 
 impl Simulator {
     pub(super) fn default_of(&self, r: RegisterRef<'_>, settings: &LiveSettings) -> Option<f64> {
-        r.default_for(|option| settings.has_variant(self.map.ir(), option))
+        r.default_for(|option| settings.has_variant(&self.map, option))
     }
 
     /// Map defaults: selectors and references first (other registers' scales depend on them).
@@ -33,7 +33,7 @@ impl Simulator {
             for i in pass {
                 let r = map.register_at(i).expect("an index of the map");
                 if let Some(v) = self.default_of(r, &settings) {
-                    match codec::encode(self.map.ir(), r.ir(), v, &settings) {
+                    match codec::encode(&self.map, r, v, &settings) {
                         Ok(raw) => {
                             self.raw[i] = raw;
                             continue;
@@ -74,13 +74,13 @@ impl Simulator {
                 .and_then(|code| plan.read_label(code))
                 .is_some();
         }
-        let Ok(value) = codec::decode(self.map.ir(), r.ir(), raw, settings) else {
+        let Ok(value) = codec::decode(&self.map, r, raw, settings) else {
             return true;
         };
         let Some(number) = value.as_f64() else {
             return true;
         };
-        match codec::encode(self.map.ir(), r.ir(), number, settings) {
+        match codec::encode(&self.map, r, number, settings) {
             Ok(_) => true,
             Err(ValueError::UnknownCode { .. }) => values_unknown(r),
             Err(ValueError::MissingSetting { .. } | ValueError::LimitNotKnown { .. }) => true,
@@ -105,7 +105,7 @@ impl Simulator {
         candidates.extend(min);
         candidates.extend(max);
         for option in r.variant_options() {
-            if settings.has_variant(self.map.ir(), option) {
+            if settings.has_variant(&self.map, option) {
                 let (min, max) = r.limits_for(option);
                 candidates.extend(min);
                 candidates.extend(max);
@@ -113,7 +113,7 @@ impl Simulator {
         }
         candidates.sort_by(|a, b| a.abs().total_cmp(&b.abs()).then(a.total_cmp(b)));
         candidates.into_iter().find_map(|v| {
-            let raw = codec::encode(self.map.ir(), r.ir(), v, settings).ok()?;
+            let raw = codec::encode(&self.map, r, v, settings).ok()?;
             self.allows(r, raw, settings).then_some(raw)
         })
     }

@@ -72,7 +72,7 @@ impl Simulator {
     /// and the generated code use.
     pub(super) fn layout(&self, tcp: bool) -> Layout {
         let settings = self.settings();
-        let view = settings.view(self.map.ir());
+        let view = settings.view(&self.map);
         let here = if tcp {
             TransportKind::Tcp
         } else {

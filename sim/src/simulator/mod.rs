@@ -19,7 +19,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_live::{LiveSettings, Value, codec, leak_profile};
+use drivemap_live::codec::{self, Value};
+use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::profile::{Profile, TransportKind};
 
@@ -90,7 +91,7 @@ impl Simulator {
     /// registers without one, then the options' power-on values), the model stopped.
     pub fn new(map: Map, options: SimOptions) -> Result<Simulator, SimError> {
         let map = Arc::new(map);
-        let profile = leak_profile(map.ir());
+        let profile = leak_profile(&map);
         let index: HashMap<String, usize> = map
             .registers()
             .map(|r| (r.id().to_owned(), r.index()))
@@ -266,7 +267,7 @@ impl Simulator {
     }
 
     pub(super) fn index_of(&self, name: &str) -> Result<usize, SimError> {
-        let r = drivemap_live::find(self.map.ir(), name)?;
+        let r = drivemap_live::lookup::find(&self.map, name)?;
         Ok(self.index[r.id()])
     }
 
@@ -295,7 +296,7 @@ impl Simulator {
     pub fn value(&self, name: &str) -> Result<Value, SimError> {
         let i = self.index_of(name)?;
         let r = self.reg(i);
-        codec::decode(self.map.ir(), r.ir(), self.raw[i], &self.settings()).map_err(|error| {
+        codec::decode(&self.map, r, self.raw[i], &self.settings()).map_err(|error| {
             SimError::Value {
                 register: r.id().into(),
                 value: f64::from(self.raw[i]),
@@ -343,21 +344,20 @@ impl Simulator {
         // word by the plan, as the generated `Settings::absorb` does.
         for &i in self.selectors.iter().chain(&self.references) {
             let r = self.reg(i);
-            s.absorb(self.map.ir(), r.address(), self.raw[i] as u16);
+            s.absorb(&self.map, r.address(), self.raw[i] as u16);
         }
         s
     }
 
     pub(super) fn set_index(&mut self, i: usize, value: f64) -> Result<(), SimError> {
         let r = self.reg(i);
-        let raw =
-            codec::encode(self.map.ir(), r.ir(), value, &self.settings()).map_err(|error| {
-                SimError::Value {
-                    register: r.id().into(),
-                    value,
-                    error,
-                }
-            })?;
+        let raw = codec::encode(&self.map, r, value, &self.settings()).map_err(|error| {
+            SimError::Value {
+                register: r.id().into(),
+                value,
+                error,
+            }
+        })?;
         self.raw[i] = raw;
         Ok(())
     }

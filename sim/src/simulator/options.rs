@@ -105,7 +105,7 @@ impl SimOptions {
 pub enum SimError {
     /// No register by that name.
     #[error(transparent)]
-    NotFound(#[from] drivemap_live::NotFound),
+    NotFound(#[from] drivemap_live::lookup::NotFound),
     /// A value the register cannot hold.
     #[error("cannot set {register} to {value}: {error}")]
     Value {

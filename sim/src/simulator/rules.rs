@@ -2,7 +2,8 @@
 //! and gaps, values the generated `encode` would refuse, broadcast addresses, and the persist
 //! commands a sequence of writes completes.
 
-use drivemap_live::{LiveSettings, Value, codec};
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::{self, Value};
 use drivemap_map::RegisterRef;
 use drivemap_runtime::profile::{CommandKind, TransportKind};
 use drivemap_runtime::{Table, ValueError, pdu};
@@ -36,7 +37,7 @@ impl Simulator {
     /// Whether the generated `encode` of this register would produce `raw`: decode it, encode
     /// the value back. Conversions that need a setting the drive cannot supply are accepted.
     pub(super) fn accepts(&self, r: RegisterRef<'_>, raw: u32, settings: &LiveSettings) -> bool {
-        let value = match codec::decode_written(self.map.ir(), r.ir(), raw, settings) {
+        let value = match codec::decode_written(&self.map, r, raw, settings) {
             Ok(Value::Bits { .. }) => f64::from(raw),
             Ok(v) => match v.as_f64() {
                 Some(v) => v,
@@ -44,7 +45,7 @@ impl Simulator {
             },
             Err(_) => return true,
         };
-        match codec::encode(self.map.ir(), r.ir(), value, settings) {
+        match codec::encode(&self.map, r, value, settings) {
             Ok(_) => true,
             Err(
                 ValueError::OutOfRange { .. }

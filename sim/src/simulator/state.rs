@@ -153,7 +153,7 @@ impl Simulator {
     }
 
     pub(super) fn decode_f64(&self, i: usize, settings: &LiveSettings) -> Option<f64> {
-        codec::decode(self.map.ir(), self.reg(i).ir(), self.raw[i], settings)
+        codec::decode(&self.map, self.reg(i), self.raw[i], settings)
             .ok()
             .and_then(|v| v.as_f64())
     }
@@ -516,7 +516,7 @@ impl Simulator {
     pub(super) fn store(&mut self, i: usize, value: f64, settings: &LiveSettings) {
         let r = self.reg(i);
         let nearest = drivemap_runtime::Rounding::Nearest;
-        if let Ok(raw) = codec::encode_with(self.map.ir(), r.ir(), value, settings, nearest) {
+        if let Ok(raw) = codec::encode_with(&self.map, r, value, settings, nearest) {
             self.raw[i] = raw;
         }
     }

@@ -56,13 +56,13 @@ fn simulator(drive: &Drive, request: &Example, response: &Frame, req: &Request<'
         (pdu::decode_response(req, response.pdu()), req.address())
     {
         let kind = kind_of(request);
-        let settings = with_settings(drive.ir(), request, &sim.settings());
+        let settings = with_settings(drive, request, &sim.settings());
         let offsets = &drive.plan().profile.address_offsets;
         for (k, word) in words.iter().enumerate() {
             let comm = offsets
                 .communication_address(address + k as u16, kind)
                 .unwrap();
-            let (r, w) = register_at(drive.ir(), &settings, kind, comm, None, false)
+            let (r, w) = register_at(drive, &settings, kind, comm, None, false)
                 .unwrap_or_else(|| panic!("{}: no register at {comm:04X}h", request.id));
             assert_eq!(w, 0, "{}: a 32-bit pair in a read example", request.id);
             sim.set_raw(r.id(), u32::from(word)).unwrap();

@@ -779,7 +779,7 @@ fn acn_memory_control_executes_only_a_changed_value_and_reads_the_lock_state() {
     // A read is the lock state, not the password written.
     assert_eq!(read(&mut sim, lock, 1), Ok(vec![0]));
     match sim.value("lock_parameter_mode").unwrap() {
-        drivemap_live::Value::Code { code, name, .. } => {
+        drivemap_live::codec::Value::Code { code, name, .. } => {
             assert_eq!((code, name.as_deref()), (0, Some("Unlock")));
         }
         other => panic!("a read gives the read meaning: {other:?}"),
@@ -857,7 +857,7 @@ fn the_factory_setting_ignores_network_runs() {
             })
             .unwrap_or_else(|| panic!("{id}: a run command over RTU"));
         let row = &plan.registers[usize::from(run.row)];
-        let address = row.address_for(&sim.settings().view(d.ir()), TransportKind::Rtu);
+        let address = row.address_for(&sim.settings().view(&d), TransportKind::Rtu);
         let offsets = plan.profile.address_offsets;
         let pdu = |a: u16| offsets.pdu_address(a, TransportKind::Rtu).unwrap();
         let word = run.put(0, run.code(true));
@@ -883,7 +883,7 @@ fn the_factory_setting_ignores_network_runs() {
         };
         if f.width == 16 {
             let r = &plan.registers[usize::from(f.row)];
-            let a = r.address_for(&sim.settings().view(d.ir()), TransportKind::Rtu);
+            let a = r.address_for(&sim.settings().view(&d), TransportKind::Rtu);
             assert_eq!(
                 write(&mut sim, pdu(a), &[f.on[0]]),
                 Ok(()),

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_live::LiveSettings;
-use drivemap_map::Map as Drive;
+use drivemap_map::Map;
 use drivemap_runtime::async_client::AsyncClient;
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::profile::TransportKind;
@@ -22,7 +22,7 @@ use drivemap_test_support::sim_link::{LinkFault, SimLink};
 mod command_profiles;
 mod paramset_faults;
 
-fn map(path: &str) -> Drive {
+fn map(path: &str) -> Map {
     let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
     drivemap_map::Loader::new()
         .load(path.as_ref())
@@ -41,7 +41,7 @@ fn options(retries: u8) -> ClientOptions {
 
 /// A client over `kind` to a simulator of `drive`, the settings the simulator holds and its
 /// slave address.
-fn connect(drive: &Drive, kind: TransportKind, retries: u8) -> (Client<SimLink>, LiveSettings, u8) {
+fn connect(drive: &Map, kind: TransportKind, retries: u8) -> (Client<SimLink>, LiveSettings, u8) {
     let clock = ManualClock::new();
     // Installed for network control on the link (at the factory setting the drive ignores
     // network runs, and the trait refuses them: drive_trait::run_is_refused_at_the_factory_setting...).
@@ -87,7 +87,7 @@ fn a_stop_whose_replies_were_lost_stays_a_stop() {
     for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
         for (what, call) in calls {
             let (mut c, settings, slave) = connect(&v7, kind, 2);
-            let view = settings.view(v7.ir());
+            let view = settings.view(&v7);
             let p = v7.plan();
             let mut d = Vfd::from_plan(&mut c, slave, view, p.registers, p.roles);
             if !d.supports(Role::Reverse) && what.starts_with("set_direction") {
@@ -159,7 +159,7 @@ fn an_unknown_command_register_is_read_again_or_released() {
     let p = v7.plan();
     // Read back: the drive got reverse (the reply was lost) and shows an external fault bit.
     let (mut c, settings, slave) = connect(&v7, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(v7.ir()), p.registers, p.roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&v7), p.registers, p.roles);
     d.run().unwrap();
     d.client().transport().inject(LinkFault::LoseReply);
     assert!(d.set_direction(Direction::Reverse).is_err());
@@ -185,7 +185,7 @@ fn an_unknown_command_register_is_read_again_or_released() {
 
     // The read back fails too: the released state, with run as the last run() left it.
     let (mut c, settings, slave) = connect(&v7, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(v7.ir()), p.registers, p.roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&v7), p.registers, p.roles);
     d.run().unwrap();
     d.client().transport().inject(LinkFault::LoseReply);
     assert!(d.set_direction(Direction::Reverse).is_err());
@@ -214,7 +214,7 @@ fn an_unknown_command_register_is_read_again_or_released() {
     let gpd = map("maps/yaskawa-gpd515.yaml");
     let p = gpd.plan();
     let (mut c, settings, slave) = connect(&gpd, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(gpd.ir()), p.registers, p.roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&gpd), p.registers, p.roles);
     // The first run reads the command source b1-02 (once); stopped again, the drive is released.
     d.run().unwrap();
     d.stop().unwrap();
@@ -345,7 +345,7 @@ struct Trace {
 }
 
 /// Plays `case` on a copy of `drive`'s simulator `template` (at power-on) over `kind`.
-fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -> Trace {
+fn play(drive: &Map, template: &Simulator, kind: TransportKind, case: &Case) -> Trace {
     let clock = ManualClock::new();
     let mut sim = template.clone();
     sim.set_clock(Arc::new(clock.clone()));
@@ -356,13 +356,7 @@ fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -
     link.script(case.faults.iter().copied());
     let p = drive.plan();
     let mut c = Client::with_options(link, p.profile, options(case.retries));
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(drive), p.registers, p.roles);
     let mut trace = Trace {
         steps: Vec::new(),
         run_command: Vec::new(),
@@ -412,7 +406,7 @@ fn play(drive: &Drive, template: &Simulator, kind: TransportKind, case: &Case) -
 /// Plays `case` as [`play`] does, through the async drive ([`AsyncVfd`] over an
 /// [`AsyncClient`] that owns its link) on `runtime`.
 fn play_async(
-    drive: &Drive,
+    drive: &Map,
     template: &Simulator,
     kind: TransportKind,
     case: &Case,
@@ -429,7 +423,7 @@ fn play_async(
     let p = drive.plan();
     let c = AsyncClient::with_options(link, p.profile, options(case.retries));
     // The drive owns its client.
-    let mut d = AsyncVfd::from_plan(c, slave, settings.view(drive.ir()), p.registers, p.roles);
+    let mut d = AsyncVfd::from_plan(c, slave, settings.view(drive), p.registers, p.roles);
     let mut trace = Trace {
         steps: Vec::new(),
         run_command: Vec::new(),
@@ -509,7 +503,7 @@ fn within_limits(
 }
 
 /// The invariants of the safety contract on one trace; `Err` says which failed and where.
-fn check(drive: &Drive, kind: TransportKind, trace: &Trace) -> Result<(), String> {
+fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> {
     use drivemap_runtime::core::roles::Target;
     let p = drive.plan();
     let profile = p.roles.profile.is_some();
@@ -552,7 +546,7 @@ fn check(drive: &Drive, kind: TransportKind, trace: &Trace) -> Result<(), String
             return Err(format!("step {t} ({step:?}): a broadcast {frame}"));
         }
         let settings = sent.settings.as_ref().expect("recorded");
-        let view = settings.view(drive.ir());
+        let view = settings.view(drive);
         let mut at = 0usize;
         while at < words.len() {
             let pdu = address.wrapping_add(at as u16);
@@ -646,7 +640,7 @@ fn hex(bytes: &[u8]) -> String {
 
 /// Every map of `maps/` (the directory, not a list, as for the other per-map tests) and the
 /// acme-vf1 fixture.
-fn every_map() -> Vec<(String, Drive)> {
+fn every_map() -> Vec<(String, Map)> {
     let root = env!("CARGO_MANIFEST_DIR");
     let dir = format!("{root}/../maps");
     let mut paths: Vec<std::path::PathBuf> = std::fs::read_dir(&dir)
@@ -656,7 +650,7 @@ fn every_map() -> Vec<(String, Drive)> {
         .collect();
     paths.sort();
     paths.push(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml").into());
-    let mut maps: Vec<(String, Drive)> = paths
+    let mut maps: Vec<(String, Map)> = paths
         .into_iter()
         .map(|p| {
             let d = drivemap_map::Loader::new()
@@ -692,12 +686,12 @@ fn every_map() -> Vec<(String, Drive)> {
 
 /// The links a map is driven over: RTU framing (RTU over TCP, which can reconnect) always,
 /// Modbus TCP where the map lists it.
-fn links(drive: &Drive) -> Vec<TransportKind> {
+fn links(drive: &Map) -> Vec<TransportKind> {
     let mut kinds = vec![TransportKind::RtuOverTcp];
     if drive
         .protocol()
         .transports
-        .contains(&drivemap_map::model::TransportName::Tcp)
+        .contains(&drivemap_map::facts::TransportName::Tcp)
     {
         kinds.push(TransportKind::Tcp);
     }
@@ -741,7 +735,7 @@ fn the_contract_holds_under_faults() {
     // And the constructs no shipped map has: roles that share a register.
     maps.push(("acme-vf1 (one ramp register)".into(), acme_one_ramp().0));
     maps.push(("acme-vf1 (run codes)".into(), acme_run_codes()));
-    let targets: Vec<(&str, &Drive, TransportKind)> = maps
+    let targets: Vec<(&str, &Map, TransportKind)> = maps
         .iter()
         .filter(|(_, d)| !d.plan().roles.is_empty())
         .flat_map(|(id, d)| links(d).into_iter().map(move |k| (id.as_str(), d, k)))
@@ -809,7 +803,7 @@ fn the_contract_holds_under_faults() {
 }
 
 /// The acme-vf1 fixture's map text, changed in memory: `from` replaced by `to`.
-fn acme_changed(from: &str, to: &str) -> (Drive, String) {
+fn acme_changed(from: &str, to: &str) -> (Map, String) {
     let root = env!("CARGO_MANIFEST_DIR");
     let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
     assert!(text.contains(from), "the fixture has {from}");
@@ -822,7 +816,7 @@ fn acme_changed(from: &str, to: &str) -> (Drive, String) {
 
 /// acme-vf1 with one ramp register for both directions: its deceleration role moved onto the
 /// acceleration register, `shared_with` said once. Also the map's text.
-fn acme_one_ramp() -> (Drive, String) {
+fn acme_one_ramp() -> (Map, String) {
     acme_changed(
         r#"    - {register: deceleration_time, source: "acme-vf1.txt:21"}"#,
         r#"    - {register: acceleration_time, shared_with: accel_time, source: "acme-vf1.txt:20"}"#,
@@ -831,7 +825,7 @@ fn acme_one_ramp() -> (Drive, String) {
 
 /// acme-vf1 run by two codes of one field: 2 runs forward, 3 runs reverse, 1 stops
 /// (`run_forward` and `run_reverse` on the same bits, `shared_with` said once).
-fn acme_run_codes() -> Drive {
+fn acme_run_codes() -> Map {
     acme_changed(
         r#"  run:
     - {register: control_word, field: run_stop, on: run, off: stop, source: "acme-vf1.txt:16"}
@@ -873,13 +867,7 @@ fn one_ramp_register_takes_one_value() {
     assert!(e.contains("shared_with: accel_time"), "{e}");
 
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     match d.set_ramp(2.0, 1.0) {
         Err(Error::Refused(e @ drivemap_runtime::Refusal::SharedRegister { .. })) => {
             let message = e.to_string();
@@ -914,7 +902,7 @@ fn the_limit_check_refuses_what_the_map_does_not_allow() {
     let v7 = map("maps/yaskawa-v7.yaml");
     let sim = Simulator::new(v7.clone(), SimOptions::new()).unwrap();
     let settings = sim.settings();
-    let view = settings.view(v7.ir());
+    let view = settings.view(&v7);
     let p = v7.plan();
     let row = |id: &str| p.registers.iter().find(|r| r.info.id == id).unwrap();
     for id in ["frequency_reference", "tcp_frequency_reference"] {
@@ -947,13 +935,7 @@ fn command_roles_sharing_bits_get_the_one_set() {
     let drive = acme_run_codes();
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     let run_code = |d: &mut Vfd<_, &mut Client<SimLink>>| {
         d.client().transport().sim.raw("control_word").unwrap() & 0x0003
     };

@@ -13,7 +13,8 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_live::{LiveSettings, Value};
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_review::diff::ChangeKind;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::transport::tcp::TcpTransport;
@@ -138,7 +139,7 @@ fn bench() -> Bench {
         TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();
     let link =
         TcpTransport::connect(server.local_addr().to_string(), Duration::from_secs(2)).unwrap();
-    let client = Client::new(link, drivemap_live::leak_profile(map.ir()));
+    let client = Client::new(link, drivemap_live::leak_profile(&map));
     Bench {
         server,
         client,
@@ -181,10 +182,10 @@ fn the_simulator_serves_pairs_whole_and_the_client_reads_them_as_one_value() {
     assert_eq!(rows("motor_speed").decode_number(raw(2), &()), Ok(-1234.5));
     // The current's decimals follow the display status's high byte.
     let mut settings = LiveSettings::default();
-    settings.absorb(b.map.ir(), 0x2300, raw(3) as u16);
-    match drivemap_live::decode(
-        b.map.ir(),
-        b.map.register("motor_current").unwrap().ir(),
+    settings.absorb(&b.map, 0x2300, raw(3) as u16);
+    match drivemap_live::codec::decode(
+        &b.map,
+        b.map.register("motor_current").unwrap(),
         raw(4),
         &settings,
     ) {
@@ -334,9 +335,9 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
     drop(sim);
     let mut word = [0u16; 1];
     b.client.read_holding(254, 0x2011, &mut word).unwrap();
-    match drivemap_live::decode(
-        b.map.ir(),
-        b.map.register("keypad_password").unwrap().ir(),
+    match drivemap_live::codec::decode(
+        &b.map,
+        b.map.register("keypad_password").unwrap(),
         u32::from(word[0]),
         &LiveSettings::default(),
     ) {

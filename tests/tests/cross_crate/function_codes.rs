@@ -7,7 +7,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_map::Map as Drive;
+use drivemap_map::Map;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Client, ClientOptions, Error, Refusal, Table};
@@ -15,14 +15,14 @@ use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::SimLink;
 use proptest::prelude::*;
 
-fn map() -> Drive {
+fn map() -> Map {
     let path = drivemap_tests::workspace().join("tests/fixtures/halvard-hx2/halvard-hx2.yaml");
     drivemap_map::Loader::new()
         .load(&path)
         .expect("fixture map")
 }
 
-fn client(drive: &Drive) -> Client<SimLink> {
+fn client(drive: &Map) -> Client<SimLink> {
     let sim = Simulator::new(
         drive.clone(),
         SimOptions::new().clock(Arc::new(ManualClock::new())),
@@ -54,7 +54,7 @@ fn request(frame: &[u8]) -> (u8, u16, u16) {
 
 /// Every frame on the wire used a function each register it covers accepts (per the map's
 /// lowered plan); the first violation otherwise.
-fn violation(drive: &Drive, link: &SimLink) -> Option<String> {
+fn violation(drive: &Map, link: &SimLink) -> Option<String> {
     for sent in &link.log {
         let (f, address, quantity) = request(&sent.frame);
         let table = if f == 0x04 {
@@ -375,7 +375,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
         "        function_codes: {codes: [0x03, 0x10], refused_with: 0x02, source: \"halvard-hx2.txt:11\"}\n",
         "",
     );
-    let diff = drivemap_review::diff::compare(drive.ir(), (read(&dropped)).ir());
+    let diff = drivemap_review::diff::compare(drive.ir(), read(&dropped).ir());
     assert_eq!(diff.breaking(), 1, "{:?}", diff.changes);
 }
 
@@ -385,7 +385,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
 #[test]
 fn example_frames_are_checked_against_the_registers_functions() {
     let drive = map();
-    let v = drivemap_live::examples::verify(drive.ir());
+    let v = drivemap_live::examples::verify(&drive);
     assert!(v.errors.is_empty(), "{:?}", v.errors);
     assert_eq!(v.clean, 4);
 
@@ -397,7 +397,7 @@ fn example_frames_are_checked_against_the_registers_functions() {
     let unrefused = drivemap_map::Loader::new()
         .load_str("halvard-hx2.yaml", &text[..refusal])
         .unwrap();
-    let v = drivemap_live::examples::verify(unrefused.ir());
+    let v = drivemap_live::examples::verify(&unrefused);
     let errors: Vec<String> = v.errors.iter().map(|e| e.to_string()).collect();
     assert_eq!(errors.len(), 1, "{errors:?}");
     assert!(

@@ -59,7 +59,7 @@ fn bench(map: drivemap_map::Map) -> Bench {
         TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();
     let link =
         TcpTransport::connect(server.local_addr().to_string(), Duration::from_secs(2)).unwrap();
-    let client = Client::new(link, drivemap_live::leak_profile(map.ir()));
+    let client = Client::new(link, drivemap_live::leak_profile(&map));
     Bench {
         server,
         client,

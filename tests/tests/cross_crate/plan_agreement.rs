@@ -19,7 +19,8 @@ use std::path::PathBuf;
 
 use drivemap_drives::runtime::plan::{Conversion, RegisterPlan};
 use drivemap_drives::runtime::{DriveSettings, Profile, SettingsView};
-use drivemap_live::{LiveSettings, Value};
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_map::RegisterRef;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -166,7 +167,7 @@ fn agree<S: DriveSettings + SettingsView + Default>(
     assert_eq!(*profile, *plan.profile, "{id}: profile differs");
     assert_eq!(
         S::DEPENDENCIES,
-        LiveSettings::dependencies(live.ir()).as_slice(),
+        LiveSettings::dependencies(&live).as_slice(),
         "{id}: settings dependencies"
     );
 
@@ -204,7 +205,7 @@ fn agree<S: DriveSettings + SettingsView + Default>(
         }
         for (&address, &raw) in S::DEPENDENCIES.iter().zip(&case.dependencies) {
             let a = typed.absorb(address, raw);
-            let b = named.absorb(live.ir(), address, raw);
+            let b = named.absorb(&live, address, raw);
             prop_assert_eq!(a, b, "{}: absorb({:#06x}, {})", id, address, raw);
         }
         let external_values: Vec<Option<f64>> = externals
@@ -228,8 +229,7 @@ fn agree<S: DriveSettings + SettingsView + Default>(
                 let g = generated_number(generated, raw, &view);
                 let l = live_number(
                     generated,
-                    drivemap_live::decode(live.ir(), r.ir(), raw, &named)
-                        .map_err(|e| e.to_string()),
+                    drivemap_live::codec::decode(&live, *r, raw, &named).map_err(|e| e.to_string()),
                 );
                 prop_assert!(
                     same_number(&g, &l),
@@ -248,7 +248,7 @@ fn agree<S: DriveSettings + SettingsView + Default>(
             for &v in &values {
                 let g = generated.encode_number(v, &view).map_err(|e| e.to_string());
                 let l =
-                    drivemap_live::encode(live.ir(), r.ir(), v, &named).map_err(|e| e.to_string());
+                    drivemap_live::codec::encode(&live, *r, v, &named).map_err(|e| e.to_string());
                 prop_assert_eq!(
                     &g,
                     &l,

@@ -13,8 +13,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_live::LiveSettings;
-use drivemap_live::settings::View;
-use drivemap_map::Map as Drive;
+use drivemap_live::View;
+use drivemap_map::Map;
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::{Edge, Role, Roles, Target};
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
@@ -22,23 +22,23 @@ use drivemap_runtime::{Client, ClientOptions, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
-fn map(path: &str) -> Drive {
+fn map(path: &str) -> Map {
     let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
     drivemap_map::Loader::new()
         .load(path.as_ref())
         .unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
-fn acme() -> Drive {
+fn acme() -> Map {
     map("tests/fixtures/acme-vf1/acme-vf1.yaml")
 }
 
-fn brenner() -> Drive {
+fn brenner() -> Map {
     map("tests/fixtures/brenner-fx4/brenner-fx4.yaml")
 }
 
 /// A simulator of `drive` installed for network control on `kind`.
-fn simulator(drive: &Drive, kind: TransportKind) -> Simulator {
+fn simulator(drive: &Map, kind: TransportKind) -> Simulator {
     Simulator::new(
         drive.clone(),
         SimOptions::new()
@@ -67,7 +67,7 @@ struct Rig {
 }
 
 impl Rig {
-    fn new(drive: &Drive, sim: Simulator, kind: TransportKind, retries: u8) -> Rig {
+    fn new(drive: &Map, sim: Simulator, kind: TransportKind, retries: u8) -> Rig {
         let (settings, slave) = (sim.settings(), sim.slave());
         let client = Client::with_options(
             SimLink::new(kind, sim),
@@ -84,13 +84,13 @@ impl Rig {
     /// The drive trait on it, `drive`'s plan rows with `roles` (the plan's, or changed).
     fn vfd<'a>(
         &'a mut self,
-        drive: &'a Drive,
+        drive: &'a Map,
         roles: Roles,
     ) -> Vfd<View<'a>, &'a mut Client<SimLink>> {
         Vfd::from_plan(
             &mut self.client,
             self.slave,
-            self.settings.view(drive.ir()),
+            self.settings.view(drive),
             drive.plan().registers,
             roles,
         )
@@ -259,7 +259,7 @@ fn fault() -> impl proptest::strategy::Strategy<Value = Option<LinkFault>> {
 /// Plays `steps` on brenner-fx4 over RTU framing (over TCP: it reconnects) with `faults` on the
 /// link; returns a violation of the reset contract, if any.
 fn play(
-    drive: &Drive,
+    drive: &Map,
     roles: drivemap_runtime::roles::Roles,
     template: &Simulator,
     steps: &[Step],

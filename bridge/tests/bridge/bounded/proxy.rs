@@ -31,7 +31,7 @@ impl Proxied {
     fn start(options: impl FnOnce(SocketAddr) -> ProxyOptions) -> Proxied {
         let drive = v7();
         let sim_options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-        let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), sim_options).unwrap());
+        let sim = drivemap_sim::shared(Simulator::new(drive.clone(), sim_options).unwrap());
         let server = TcpServer::spawn(
             Arc::clone(&sim),
             "127.0.0.1:0",
@@ -287,7 +287,7 @@ fn four_masters_share_a_9600_baud_line_fairly() {
             .line(profile, serial::Parity::None, Some(serial::StopBits::One))
             .unwrap()
     };
-    let sim = drivemap_sim::shared(Simulator::new(drive.ir().clone(), SimOptions::new()).unwrap());
+    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), SimOptions::new()).unwrap());
     let server = SerialServer::spawn_on_line(
         Arc::clone(&sim),
         options_for(emulated.drive_path()),

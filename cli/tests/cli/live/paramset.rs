@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use drivemap_live::codec::{self, Value};
 use drivemap_live::paramset;
-use drivemap_map::Drive;
+use drivemap_map::Map;
 use drivemap_runtime::plan::Conversion;
 use drivemap_sim::{SimOptions, Simulator};
 
@@ -57,16 +57,13 @@ sys.exit(1 if bad else 0)
     );
 }
 
-fn maps() -> Vec<(String, Drive)> {
-    let mut out: Vec<(String, Drive)> = drivemap_map::find_maps(&shipped_maps())
+fn maps() -> Vec<(String, Map)> {
+    let mut out: Vec<(String, Map)> = drivemap_map::find_maps(&shipped_maps())
         .expect("maps/ lists")
         .into_iter()
         .map(|p| {
-            let d = drivemap_map::Loader::new()
-                .load(&p)
-                .map(drivemap_map::Map::into_ir)
-                .expect("shipped map");
-            (d.meta.id.clone(), d)
+            let d = drivemap_map::Loader::new().load(&p).expect("shipped map");
+            (d.id().to_owned(), d)
         })
         .collect();
     out.sort_by(|a, b| a.0.cmp(&b.0));
@@ -76,7 +73,7 @@ fn maps() -> Vec<(String, Drive)> {
 
 /// `--set NAME=100` for every external quantity of the map: the simulator and the commands are
 /// told the same.
-fn externals(drive: &Drive) -> Vec<String> {
+fn externals(drive: &Map) -> Vec<String> {
     drive
         .externals()
         .iter()
@@ -110,27 +107,27 @@ const LINK_WORDS: &[&str] = &[
 /// Up to `n` settings of the map (spread over it) that depend on no other and that no other
 /// depends on, each with a value other than the simulator's that the map accepts, as the
 /// manual's value text.
-fn changes(drive: &Drive, sim: &Simulator, n: usize) -> Vec<(String, String)> {
+fn changes(drive: &Map, sim: &Simulator, n: usize) -> Vec<(String, String)> {
     let settings = sim.settings();
     let regs = paramset::settings_of(drive);
     let depended: Vec<String> = regs
         .iter()
-        .flat_map(|r| paramset::depends_on(drive, r))
-        .map(|d| d.def.id.clone())
+        .flat_map(|r| paramset::depends_on(drive, *r))
+        .map(|d| d.id().to_owned())
         .collect();
     let mut candidates = Vec::new();
     for r in &regs {
-        let id = &r.def.id;
-        let name = r.def.name.to_ascii_lowercase();
+        let id = r.id();
+        let name = r.name().to_ascii_lowercase();
         if LINK_WORDS
             .iter()
             .any(|w| id.contains(w) || name.contains(&w.replace('_', " ")))
-            || depended.contains(id)
-            || !paramset::depends_on(drive, r).is_empty()
+            || depended.iter().any(|d| d == id)
+            || !paramset::depends_on(drive, *r).is_empty()
         {
             continue;
         }
-        let plan = drive.register_plan(r);
+        let plan = r.plan();
         let current = sim.raw(id).expect("a register of the simulator");
         let raws: Vec<i64> = match plan.conversion {
             Conversion::Enum { values, .. } => values.iter().map(|v| i64::from(v.code)).collect(),
@@ -145,7 +142,7 @@ fn changes(drive: &Drive, sim: &Simulator, n: usize) -> Vec<(String, String)> {
             if raw == current {
                 return None;
             }
-            let text = match codec::decode(drive, r, raw, &settings).ok()? {
+            let text = match codec::decode(drive, *r, raw, &settings).ok()? {
                 Value::Quantity {
                     value,
                     decimals,
@@ -156,10 +153,10 @@ fn changes(drive: &Drive, sim: &Simulator, n: usize) -> Vec<(String, String)> {
                 Value::Code { code, .. } => code.to_string(),
                 _ => return None,
             };
-            (codec::parse_value(drive, r, &text, &settings).ok()? == raw).then_some(text)
+            (codec::parse_value(drive, *r, &text, &settings).ok()? == raw).then_some(text)
         });
         if let Some(text) = pick {
-            candidates.push((id.clone(), text));
+            candidates.push((id.to_owned(), text));
         }
     }
     if candidates.len() <= n {
@@ -171,10 +168,10 @@ fn changes(drive: &Drive, sim: &Simulator, n: usize) -> Vec<(String, String)> {
 
 /// The links a map's drive is simulated on: RTU frames over TCP always, Modbus TCP where the
 /// map lists it.
-fn links(drive: &Drive) -> Vec<(&'static str, &'static str)> {
+fn links(drive: &Map) -> Vec<(&'static str, &'static str)> {
     let mut out = vec![("--rtu-tcp", "0")];
     let tcp = drive
-        .protocol
+        .protocol()
         .transports
         .iter()
         .any(|t| format!("{t:?}").eq_ignore_ascii_case("tcp"));
@@ -567,7 +564,6 @@ fn a_set_of_another_map_or_a_broken_file_is_refused_naming_where() {
     let tds = scratch.0.join("tds.yaml");
     let v7 = drivemap_map::Loader::new()
         .load(&shipped_maps().join("yaskawa-v7.yaml"))
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     std::fs::write(&tds, set.to_yaml(&v7)).unwrap();
     let (code, _, err) = drivemap(&[

@@ -6,10 +6,11 @@
 //!
 //! Property tests (proptest) over every map of `maps/` (the directory is read, no list) and the
 //! drafts `drivemap import` makes of the import fixtures' manuals, through the CLI's own write
-//! command in-process (and, for drafts, a `drivemap_live::Session`'s client) against a simulated
+//! command in-process (and, for drafts, a `drivemap_live::session::Session`'s client) against a simulated
 //! drive that records every write; and the
 //! reproductions of the report through the binary, each asserting what reached the drive.
 
+use drivemap_map::{Map, RegisterRef};
 use std::collections::BTreeSet;
 
 use drivemap_live::LiveSettings;
@@ -26,7 +27,7 @@ use crate::common::{Framing, Scratch, serve};
 /// assignment.
 fn write_in(
     maps: &Path,
-    drive: &Drive,
+    drive: &Map,
     profile: &'static Profile,
     wire: &Wire,
     extra: &[&str],
@@ -36,7 +37,7 @@ fn write_in(
         "drivemap",
         "write",
         "--drive",
-        &drive.meta.id,
+        &drive.id(),
         "--maps",
         maps.to_str().unwrap(),
         wire.flag(),
@@ -116,9 +117,8 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
     for p in &paths {
         let drive = drivemap_map::Loader::new()
             .load(p)
-            .map(drivemap_map::Map::into_ir)
             .unwrap_or_else(|e| panic!("{}: {e:?}", p.display()));
-        assert!(drive.draft.is_some(), "{} is a draft", p.display());
+        assert!(drive.draft().is_some(), "{} is a draft", p.display());
         let profile = drivemap_live::leak_profile(&drive);
         let wire = Wire::start(profile, KIND);
         loaded.push((drive, profile, wire));
@@ -133,10 +133,12 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
     runner
         .run(&strategy, |(m, ri, vi)| {
             let (drive, profile, wire) = &loaded[m.index(loaded.len())];
-            let r = &drive.registers[ri.index(drive.registers.len())];
+            let r = drive
+                .register_at(ri.index(drive.registers().len()))
+                .unwrap();
             let values = values(r);
             let (value, _) = &values[vi.index(values.len())];
-            let assignment = format!("{}={value}", r.def.id);
+            let assignment = format!("{}={value}", r.id());
             let before = wire.writes();
             let result = write_in(&scratch.0, drive, profile, wire, &[], &assignment);
             wire.settle();
@@ -144,20 +146,17 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
             prop_assert!(
                 arrived.is_empty(),
                 "{} {assignment}: {arrived:?} reached the wire through a draft",
-                drive.meta.id
+                drive.id()
             );
-            prop_assert!(
-                result.is_err(),
-                "{} {assignment}: {result:?}",
-                drive.meta.id
-            );
+            prop_assert!(result.is_err(), "{} {assignment}: {result:?}", drive.id());
             // The library's path: a session over the draft, a write request made through its
             // client directly, is refused at the link.
             // (The simulated drive is locked while it serves a connection: counted before.)
             let before = wire.writes();
-            let link = drivemap_live::Link::rtu_over_tcp(wire.addr.clone());
-            let mut session = drivemap_live::Session::open(drive, &link, LiveSettings::default())
-                .expect("the simulated drive is there");
+            let link = drivemap_live::link::Link::rtu_over_tcp(wire.addr.clone());
+            let mut session =
+                drivemap_live::session::Session::open(drive, &link, LiveSettings::default())
+                    .expect("the simulated drive is there");
             if let Ok(at) = session.address(r) {
                 sessions.set(sessions.get() + 1);
                 let result = session.client.write_registers(1, at, &[1]);
@@ -167,8 +166,8 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
                 prop_assert!(
                     arrived.is_empty(),
                     "{} {}: the session's write {arrived:?} reached the wire",
-                    drive.meta.id,
-                    r.def.id
+                    drive.id(),
+                    r.id()
                 );
                 prop_assert!(result.is_err());
             }
@@ -180,8 +179,10 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
     // read-only: refused, nothing sent. The import fixtures' drafts have such rows.
     let mut checked = 0;
     for (drive, profile, wire) in &loaded {
-        for r in &drive.registers {
-            if r.access != drivemap_runtime::core::Access::Read || !on_transport(r, KIND) {
+        for r in drive.registers() {
+            if r.plan().info.access != drivemap_runtime::core::Access::Read
+                || !on_transport(r, KIND)
+            {
                 continue;
             }
             let Some((value, _)) = values(r).into_iter().next() else {
@@ -194,18 +195,18 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
                 profile,
                 wire,
                 &["--draft"],
-                &format!("{}={value}", r.def.id),
+                &format!("{}={value}", r.id()),
             );
             wire.settle();
             assert_eq!(
                 wire.writes(),
                 before,
                 "{} {}: read-only",
-                drive.meta.id,
-                r.def.id
+                drive.id(),
+                r.id()
             );
-            assert!(result.is_err(), "{} {}", drive.meta.id, r.def.id);
-            if r.def.access.is_none() {
+            assert!(result.is_err(), "{} {}", drive.id(), r.id());
+            if r.ir().def.access.is_none() {
                 checked += 1;
             }
         }
@@ -214,7 +215,7 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
 }
 
 /// The command fields of plan row `row`, with their roles.
-fn command_fields(drive: &Drive, row: u16) -> Vec<(Role, FieldRole)> {
+fn command_fields(drive: &Map, row: u16) -> Vec<(Role, FieldRole)> {
     drive
         .plan()
         .roles
@@ -229,7 +230,7 @@ fn command_fields(drive: &Drive, row: u16) -> Vec<(Role, FieldRole)> {
 
 /// The PDU address of plan row `row` on `KIND` (an RTU link: the map's RTU address offset
 /// applies) at the drive's default settings.
-fn pdu(drive: &Drive, row: u16) -> Option<u16> {
+fn pdu(drive: &Map, row: u16) -> Option<u16> {
     let settings = LiveSettings::default();
     let at = drive.plan().registers[usize::from(row)]
         .locate(&settings.view(drive), KIND)
@@ -252,10 +253,7 @@ fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
     // (drive, profile, wire, command register, field ids writable that are no run or reset)
     let mut cases = Vec::new();
     for path in maps_in(&maps) {
-        let drive = drivemap_map::Loader::new()
-            .load(&path)
-            .map(drivemap_map::Map::into_ir)
-            .unwrap();
+        let drive = drivemap_map::Loader::new().load(&path).unwrap();
         let profile = drivemap_live::leak_profile(&drive);
         let rows: BTreeSet<u16> = drive
             .plan()
@@ -281,7 +279,7 @@ fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
                     runs(*role) || *role == Role::FaultReset || f.edge.needs_release_first()
                 })
                 .fold(0, |m, (_, f)| m | f.mask());
-            let ValueKind::Bits(fields) = r.kind() else {
+            let ValueKind::Bits(fields) = r.ir().kind() else {
                 continue;
             };
             let free: Vec<(String, u16)> = fields
@@ -355,7 +353,7 @@ fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
             }
             let shows_running = running && status.is_some_and(|f| f.row != *row);
             let before = wire.writes();
-            let assignment = format!("{}={field}={}", r.def.id, u8::from(on));
+            let assignment = format!("{}={field}={}", r.id(), u8::from(on));
             let result = write_in(&repo().join("maps"), drive, profile, wire, &[], &assignment);
             wire.settle();
             let arrived = wire.writes_since(before);
@@ -367,7 +365,7 @@ fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
             prop_assert!(
                 words.len() == 1,
                 "{} {assignment}: {result:?}, arrived {arrived:?}",
-                drive.meta.id
+                drive.id()
             );
             let word = words[0];
             prop_assert_eq!(word & field_mask, if on { *field_mask } else { 0 });
@@ -378,7 +376,7 @@ fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
                         sent,
                         f.code(false),
                         "{} {}: {:?} sent set in {:04X}h (drive held {:04X}h)",
-                        drive.meta.id,
+                        drive.id(),
                         assignment,
                         role,
                         word,
@@ -389,7 +387,7 @@ fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
                         sent,
                         f.code(false),
                         "{} {}: {:?} sent to a stopped drive in {:04X}h (it held {:04X}h)",
-                        drive.meta.id,
+                        drive.id(),
                         assignment,
                         role,
                         word,
@@ -404,7 +402,7 @@ fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
         .unwrap();
 }
 
-fn field_mask_of(r: &Register) -> u16 {
+fn field_mask_of(r: RegisterRef<'_>) -> u16 {
     field_mask(r).unwrap_or(0xFFFF)
 }
 
@@ -417,32 +415,29 @@ fn no_set_value_outside_its_range_or_against_the_drive_is_used() {
     let maps = repo().join("maps");
     let mut cases = Vec::new();
     for path in maps_in(&maps) {
-        let drive = drivemap_map::Loader::new()
-            .load(&path)
-            .map(drivemap_map::Map::into_ir)
-            .unwrap();
+        let drive = drivemap_map::Loader::new().load(&path).unwrap();
         let profile = drivemap_live::leak_profile(&drive);
         let mut pairs = Vec::new();
         let settings = LiveSettings::default();
-        let mut sources: Vec<&Register> = drive.references();
+        let mut sources: Vec<RegisterRef<'_>> = drive.references();
         sources.extend(drive.selectors());
         for s in sources {
-            if !s.readable() || !on_transport(s, KIND) || s.broadcast {
+            if !s.readable() || !on_transport(s, KIND) || s.broadcast_only() {
                 continue;
             }
             let users: Vec<String> = drive
-                .registers
-                .iter()
-                .filter(|x| {
-                    x.def.id != s.def.id
+                .registers()
+                .filter(|&x| {
+                    x.id() != s.id()
                         && allowed_on_link(&drive, x, KIND, 1)
                         && drivemap_live::session::settings_used(&drive, x, &settings)
-                            .contains(&s.def.id)
+                            .iter()
+                            .any(|u| u == s.id())
                 })
-                .map(|x| x.def.id.clone())
+                .map(|x| x.id().to_owned())
                 .collect();
             if !users.is_empty() {
-                pairs.push((s.def.id.clone(), users));
+                pairs.push((s.id().to_owned(), users));
             }
         }
         if !pairs.is_empty() {
@@ -468,20 +463,20 @@ fn no_set_value_outside_its_range_or_against_the_drive_is_used() {
         .run(&strategy, |(m, si, ui, hi, given, same)| {
             let (drive, profile, wire, pairs) = &cases[m.index(cases.len())];
             let (sid, users) = &pairs[si.index(pairs.len())];
-            let s = drive.find(sid).unwrap();
-            let u = drive.find(&users[ui.index(users.len())]).unwrap();
+            let s = drive.register(sid).unwrap();
+            let u = drive.register(&users[ui.index(users.len())]).unwrap();
             let settings = LiveSettings::default();
-            let plan = drive.register_plan(s);
+            let plan = s.plan();
             let at = u16::try_from(
                 i32::from(plan.locate(&settings.view(drive), KIND).unwrap())
                     + drive.address_offsets().0,
             )
             .unwrap();
             // What the drive holds: a value of the register (its range, or its codes).
-            let (lo, hi_v) = (s.def.min.unwrap_or(0.0), s.def.max.unwrap_or(100.0));
-            let held_text = match s.kind() {
+            let (lo, hi_v) = (s.ir().def.min.unwrap_or(0.0), s.ir().def.max.unwrap_or(100.0));
+            let held_text = match s.ir().kind() {
                 ValueKind::Enum(list) => list[hi.index(list.len())].value.to_string(),
-                _ => number(s.def.min.unwrap_or(0.0).max(lo)),
+                _ => number(s.ir().def.min.unwrap_or(0.0).max(lo)),
             };
             let held = drivemap_live::codec::parse_value(drive, s, &held_text, &settings)
                 .expect("a value of the setting") as u16;
@@ -498,14 +493,14 @@ fn no_set_value_outside_its_range_or_against_the_drive_is_used() {
                 .map(|(v, _)| v)
                 .unwrap_or_else(|| "0".into());
             let before = wire.writes();
-            let set = format!("{}={given_text}", s.def.id);
+            let set = format!("{}={given_text}", s.id());
             let result = write_in(
                 &repo().join("maps"),
                 drive,
                 profile,
                 wire,
                 &["--set", &set],
-                &format!("{}={value}", u.def.id),
+                &format!("{}={value}", u.id()),
             );
             wire.settle();
             let arrived = wire.writes_since(before);
@@ -521,8 +516,8 @@ fn no_set_value_outside_its_range_or_against_the_drive_is_used() {
                 prop_assert!(
                     arrived.is_empty(),
                     "{}: --set {set} (the drive holds {held_text}) {}={value}: {arrived:?} arrived ({result:?})",
-                    drive.meta.id,
-                    u.def.id
+                    drive.id(),
+                    u.id()
                 );
             }
             Ok(())
@@ -541,10 +536,7 @@ fn repro_a_draft_map_is_not_written_without_draft() {
         .iter()
         .find(|p| p.ends_with("kestrel-k20.yaml"))
         .expect("the kestrel draft");
-    let drive = drivemap_map::Loader::new()
-        .load(k20)
-        .map(drivemap_map::Map::into_ir)
-        .unwrap();
+    let drive = drivemap_map::Loader::new().load(k20).unwrap();
     let profile = drivemap_live::leak_profile(&drive);
     let (addr, slave) = serve(
         drivemap_sim::slave::SimulatedSlave::new(1, profile),
@@ -552,7 +544,7 @@ fn repro_a_draft_map_is_not_written_without_draft() {
     );
     let maps = scratch.0.to_str().unwrap();
     let r = drive
-        .find("frequency_reference")
+        .register("frequency_reference")
         .expect("the draft's reference");
     let writable = r.writable();
     let base = [
@@ -600,7 +592,6 @@ fn repro_a_draft_map_is_not_written_without_draft() {
 fn shipped(id: &str) -> &'static Profile {
     let drive = drivemap_map::Loader::new()
         .load(&repo().join(format!("maps/{id}.yaml")))
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     drivemap_live::leak_profile(&drive)
 }

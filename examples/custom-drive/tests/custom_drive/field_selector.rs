@@ -5,20 +5,18 @@
 use std::path::Path;
 
 use custom_drive::field_selector as fs;
-use drivemap_live::{LiveSettings, Value};
-use drivemap_map::validate::Context;
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_runtime::{DriveSettings, Register};
 
-fn drive() -> drivemap_map::Drive {
-    drivemap_map::read_map(
-        Path::new("../../map/tests/fixtures/field-selector.yaml"),
-        &Context::default(),
-    )
-    .unwrap()
+fn drive() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(Path::new("../../map/tests/fixtures/field-selector.yaml"))
+        .unwrap()
 }
 
-fn live_number(d: &drivemap_map::Drive, id: &str, raw: u32, l: &LiveSettings) -> f64 {
-    match drivemap_live::decode(d, d.find(id).unwrap(), raw, l) {
+fn live_number(d: &drivemap_map::Map, id: &str, raw: u32, l: &LiveSettings) -> f64 {
+    match drivemap_live::codec::decode(d, d.register(id).unwrap(), raw, l) {
         Ok(Value::Quantity { value, .. }) => value,
         other => panic!("{id} {raw}: {other:?}"),
     }
@@ -62,7 +60,8 @@ fn generated_and_live_follow_the_high_byte_of_the_status_word() {
     let mut l = LiveSettings::default();
     l.absorb(&d, 0x0010, 0x0900);
     let generated = fs::OutputCurrent::decode(1234, &g).unwrap_err();
-    let live = drivemap_live::decode(&d, d.find("output_current").unwrap(), 1234, &l).unwrap_err();
+    let live = drivemap_live::codec::decode(&d, d.register("output_current").unwrap(), 1234, &l)
+        .unwrap_err();
     assert_eq!(generated, live);
     assert!(
         generated

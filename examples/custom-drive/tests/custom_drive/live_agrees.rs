@@ -4,16 +4,14 @@
 use std::path::Path;
 
 use custom_drive::mini_drive as md;
-use drivemap_live::{LiveSettings, Value};
-use drivemap_map::validate::Context;
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_runtime::{Bits, Code, Enumeration, Register, Writable};
 
-fn drive() -> drivemap_map::Drive {
-    drivemap_map::read_map(
-        Path::new("../../map/tests/fixtures/mini-drive.yaml"),
-        &Context::default(),
-    )
-    .unwrap()
+fn drive() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(Path::new("../../map/tests/fixtures/mini-drive.yaml"))
+        .unwrap()
 }
 
 /// The generated settings and the live settings for one combination.
@@ -51,13 +49,13 @@ const RAWS: [u32; 9] = [0, 1, 2, 3, 600, 4000, 30000, 0x8000, 0xFFFF];
 const VALUES: [f64; 10] = [-1.0, 0.0, 0.1, 1.0, 2.0, 50.0, 255.0, 300.0, 400.0, 600.5];
 
 fn quantity<R: Register<Settings = md::Settings, Value = f64> + Writable<Input = f64>>(
-    d: &drivemap_map::Drive,
+    d: &drivemap_map::Map,
 ) {
-    let r = d.find(R::ID).unwrap();
+    let r = d.register(R::ID).unwrap();
     for (g, l) in combos() {
         for raw in RAWS {
             let gen_v = R::decode(raw, &g);
-            let live_v = drivemap_live::decode(d, r, raw, &l);
+            let live_v = drivemap_live::codec::decode(d, r, raw, &l);
             match (gen_v, live_v) {
                 (Ok(a), Ok(Value::Quantity { value, .. })) => {
                     assert_eq!(a, value, "{} decode {raw}", R::ID)
@@ -69,7 +67,7 @@ fn quantity<R: Register<Settings = md::Settings, Value = f64> + Writable<Input =
         for v in VALUES {
             assert_eq!(
                 R::encode(&v, &g),
-                drivemap_live::encode(d, r, v, &l),
+                drivemap_live::codec::encode(d, r, v, &l),
                 "{} encode {v} under {g:?}",
                 R::ID
             );
@@ -93,10 +91,13 @@ fn read_only_quantities_decode_alike() {
     for (g, l) in combos() {
         for raw in RAWS {
             let a = md::OutputCurrent::decode(raw, &g).unwrap();
-            let b = drivemap_live::decode(&d, d.find("output_current").unwrap(), raw, &l).unwrap();
+            let b =
+                drivemap_live::codec::decode(&d, d.register("output_current").unwrap(), raw, &l)
+                    .unwrap();
             assert_eq!(Some(a), b.as_f64());
             let a = md::Torque::decode(raw, &g).unwrap();
-            let b = drivemap_live::decode(&d, d.find("torque").unwrap(), raw, &l).unwrap();
+            let b =
+                drivemap_live::codec::decode(&d, d.register("torque").unwrap(), raw, &l).unwrap();
             assert_eq!(Some(a), b.as_f64());
         }
     }
@@ -107,11 +108,11 @@ fn codes_and_bits_agree() {
     let d = drive();
     let l = LiveSettings::default();
     let g = md::Settings::new();
-    let units = d.find("frequency_units").unwrap();
-    let command = d.find("command").unwrap();
+    let units = d.register("frequency_units").unwrap();
+    let command = d.register("command").unwrap();
     for raw in RAWS {
         let a = md::FrequencyUnits::decode(raw, &g).unwrap();
-        match drivemap_live::decode(&d, units, raw, &l).unwrap() {
+        match drivemap_live::codec::decode(&d, units, raw, &l).unwrap() {
             Value::Code { code, name, .. } => {
                 assert_eq!(a.code(), code);
                 assert_eq!(a.name().map(str::to_owned), name);
@@ -120,19 +121,19 @@ fn codes_and_bits_agree() {
         }
         assert_eq!(
             md::FrequencyUnits::encode(&a, &g).ok(),
-            drivemap_live::encode(&d, units, f64::from(raw), &l).ok(),
+            drivemap_live::codec::encode(&d, units, f64::from(raw), &l).ok(),
             "code {raw}"
         );
         let bits = md::Command::decode(raw, &g).unwrap();
-        match drivemap_live::decode(&d, command, raw, &l).unwrap() {
+        match drivemap_live::codec::decode(&d, command, raw, &l).unwrap() {
             Value::Bits { raw: live_raw, .. } => assert_eq!(bits.bits(), live_raw),
             other => panic!("{other:?}"),
         }
     }
     // Reserved bits cannot be written through the live codec either.
-    assert!(drivemap_live::encode(&d, command, 0x0004 as f64, &l).is_err());
+    assert!(drivemap_live::codec::encode(&d, command, 0x0004 as f64, &l).is_err());
     assert_eq!(
-        drivemap_live::parse_value(&d, command, "run,mode=remote", &l),
+        drivemap_live::codec::parse_value(&d, command, "run,mode=remote", &l),
         Ok(0x0021)
     );
 }

@@ -5,16 +5,14 @@
 use std::path::Path;
 
 use custom_drive::acme_vf1 as acme;
-use drivemap_live::{LiveSettings, Value};
-use drivemap_map::validate::Context;
+use drivemap_live::LiveSettings;
+use drivemap_live::codec::Value;
 use drivemap_runtime::{Register, Width, WordOrder, Writable};
 
-fn drive() -> drivemap_map::Drive {
-    drivemap_map::read_map(
-        Path::new("../../tests/fixtures/acme-vf1/acme-vf1.yaml"),
-        &Context::default(),
-    )
-    .unwrap()
+fn drive() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load(Path::new("../../tests/fixtures/acme-vf1/acme-vf1.yaml"))
+        .unwrap()
 }
 
 const RAWS: [u32; 8] = [
@@ -28,9 +26,9 @@ const RAWS: [u32; 8] = [
     0xFFFF_FFFF,
 ];
 
-fn live_number(d: &drivemap_map::Drive, id: &str, raw: u32) -> Result<f64, String> {
-    let r = d.find(id).unwrap();
-    match drivemap_live::decode(d, r, raw, &LiveSettings::default()) {
+fn live_number(d: &drivemap_map::Map, id: &str, raw: u32) -> Result<f64, String> {
+    let r = d.register(id).unwrap();
+    match drivemap_live::codec::decode(d, r, raw, &LiveSettings::default()) {
         Ok(Value::Quantity { value, .. }) => Ok(value),
         Ok(Value::Word(w)) => Ok(w as f64),
         Ok(other) => Err(format!("{other:?}")),
@@ -38,7 +36,7 @@ fn live_number(d: &drivemap_map::Drive, id: &str, raw: u32) -> Result<f64, Strin
     }
 }
 
-fn agree<R: Register<Settings = acme::Settings, Value = f64>>(d: &drivemap_map::Drive) {
+fn agree<R: Register<Settings = acme::Settings, Value = f64>>(d: &drivemap_map::Map) {
     let s = acme::Settings::default();
     for raw in RAWS {
         assert_eq!(
@@ -70,7 +68,7 @@ fn generated_and_interpreted_pairs_agree() {
     let counter: u32 = acme::PulseCounter::decode(0xFFFF_FFFF, &s).unwrap();
     assert_eq!(counter, u32::MAX);
     // Encoding: the range is the 32-bit value's, the same refusals on both sides.
-    let position = d.find("position_setpoint").unwrap();
+    let position = d.register("position_setpoint").unwrap();
     for v in [
         -1_000_001.0,
         -123_456.0,
@@ -85,7 +83,7 @@ fn generated_and_interpreted_pairs_agree() {
             format!("{:?}", acme::PositionSetpoint::encode(&v, &s)),
             format!(
                 "{:?}",
-                drivemap_live::encode(&d, position, v, &LiveSettings::default())
+                drivemap_live::codec::encode(&d, position, v, &LiveSettings::default())
             ),
             "{v}"
         );

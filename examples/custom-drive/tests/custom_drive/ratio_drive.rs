@@ -16,12 +16,10 @@ use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, DrivePlan, Error, Register, ValueError, Writable};
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 
-fn map() -> drivemap_map::Drive {
-    drivemap_map::read_map(
-        "../../tests/fixtures/borealis-bf6/borealis-bf6.yaml".as_ref(),
-        &Default::default(),
-    )
-    .unwrap()
+fn map() -> drivemap_map::Map {
+    drivemap_map::Loader::new()
+        .load("../../tests/fixtures/borealis-bf6/borealis-bf6.yaml".as_ref())
+        .unwrap()
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! the generated module carries it as data. The fault-injection property test
 //! (`the_contract_holds_under_faults`) plays every fixture of [`FIXTURES`] too.
 
-use drivemap_map::Map as Drive;
+use drivemap_map::Map;
 use drivemap_runtime::Error;
 use drivemap_runtime::core::command_profile::{CommandProfile, PathKind};
 use drivemap_runtime::profile::TransportKind;
@@ -56,7 +56,7 @@ fn written<S: drivemap_runtime::SettingsView>(d: &mut Vfd<S, &mut Client<SimLink
     w
 }
 
-fn kestrel() -> Drive {
+fn kestrel() -> Map {
     map(FIXTURES[0])
 }
 
@@ -69,13 +69,7 @@ fn run_and_stops_walk_the_machine_from_power_on() {
     let p = drive.plan();
     for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
         let (mut c, settings, slave) = connect(&drive, kind, 0);
-        let mut d = Vfd::from_plan(
-            &mut c,
-            slave,
-            settings.view(drive.ir()),
-            p.registers,
-            p.roles,
-        );
+        let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
         assert!(d.supports(Role::Run) && d.supports(Role::FaultReset));
         assert_eq!(d.profile_state().unwrap(), Some("switch_on_disabled"));
         d.set_reference(30.0).unwrap();
@@ -151,13 +145,7 @@ fn a_trip_needs_the_acknowledge_edge_in_the_fault_state() {
     let drive = kestrel();
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     d.reset_fault().unwrap();
     assert_eq!(written(&mut d), [] as [u16; 0], "no fault: nothing written");
     d.run().unwrap();
@@ -221,7 +209,7 @@ fn a_refused_transition_times_out_naming_the_state() {
         ..p.roles
     };
     let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(drive.ir()), p.registers, roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, roles);
     let started = std::time::Instant::now();
     let e = d.run().unwrap_err();
     let waited = started.elapsed();
@@ -280,7 +268,7 @@ fn a_stop_path_through_a_run_transition_is_refused() {
         ..p.roles
     };
     let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
-    let mut d = Vfd::from_plan(&mut c, slave, settings.view(drive.ir()), p.registers, roles);
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, roles);
     d.client().write_register(slave, 0x6040, 0x0006).unwrap();
     d.client().write_register(slave, 0x6040, 0x0007).unwrap();
     written(&mut d);
@@ -341,13 +329,7 @@ fn every_profile_fixture_follows_its_machine() {
         let control = p.registers[usize::from(profile.control)].info.address;
         for kind in super::links(&drive) {
             let (mut c, settings, slave) = connect(&drive, kind, 0);
-            let mut d = Vfd::from_plan(
-                &mut c,
-                slave,
-                settings.view(drive.ir()),
-                p.registers,
-                p.roles,
-            );
+            let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
             let id = &drive.id();
             let power_on = profile.state_id(profile.power_on);
             assert_eq!(d.profile_state().unwrap(), Some(power_on), "{id}");
@@ -402,13 +384,7 @@ fn profidrive_keeps_the_direction_bit_through_the_machine() {
     let drive = map(FIXTURES[1]);
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     d.set_reference(25.0).unwrap();
     written(&mut d);
     d.run().unwrap();
@@ -435,13 +411,7 @@ fn active_fault_and_last_fault_are_two_roles() {
         let drive = map(file);
         let p = drive.plan();
         let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-        let mut d = Vfd::from_plan(
-            &mut c,
-            slave,
-            settings.view(drive.ir()),
-            p.registers,
-            p.roles,
-        );
+        let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
         let id = &drive.id();
         assert!(d.supports(Role::LastFault), "{id}");
         assert_eq!(d.last_fault().unwrap().code, 0, "{id}");
@@ -461,13 +431,7 @@ fn active_fault_and_last_fault_are_two_roles() {
     let drive = kestrel();
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     assert!(matches!(
         d.last_fault(),
         Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. }))
@@ -529,13 +493,7 @@ roles:
         .unwrap_or_else(|e| panic!("{e}"));
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     assert_eq!(d.status().unwrap().running, Some(false));
     d.set_reference(30.0).unwrap();
     d.run().unwrap();
@@ -704,13 +662,7 @@ profile:
     let p = drive.plan();
     for kind in [TransportKind::RtuOverTcp, TransportKind::Tcp] {
         let (mut c, settings, slave) = connect(&drive, kind, 0);
-        let mut d = Vfd::from_plan(
-            &mut c,
-            slave,
-            settings.view(drive.ir()),
-            p.registers,
-            p.roles,
-        );
+        let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
         assert_eq!(d.profile_state().unwrap(), Some("stopped"));
         d.set_reference(10.0).unwrap();
         d.set_direction(drivemap_runtime::vfd::Direction::Reverse)
@@ -745,13 +697,7 @@ fn a_field_write_never_asks_the_machine_to_run() {
     let p = drive.plan();
     let stw1 = p.roles.profile.unwrap().control;
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     d.client().write_register(slave, 0x0063, 0x047E).unwrap();
     match d.command_fields_word(stw1, 0x000F, 0x000F) {
         Err(Error::Refused(drivemap_runtime::Refusal::FieldNotWritable { role, .. })) => {
@@ -837,13 +783,7 @@ profile:
     assert_eq!(c.transport().sim.profile_state(), Some("disabled"));
     assert!(!c.transport().sim.state().unwrap().run_command);
     c.write_register(slave, 0x0010, 0x0000).unwrap();
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     written(&mut d);
     d.run().unwrap();
     assert_eq!(written(&mut d), [0x0002, 0x0003]);
@@ -866,13 +806,7 @@ fn an_interlock_refuses_the_way_to_running_and_run_says_where_it_stopped() {
     let drive = kestrel();
     let p = drive.plan();
     let (mut c, settings, slave) = connect(&drive, TransportKind::Tcp, 0);
-    let mut d = Vfd::from_plan(
-        &mut c,
-        slave,
-        settings.view(drive.ir()),
-        p.registers,
-        p.roles,
-    );
+    let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     d.client().transport().sim.set_interlock(true);
     match d.run() {
         Err(Error::StateMachine { state, why, .. }) => {

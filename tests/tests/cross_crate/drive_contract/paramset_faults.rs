@@ -19,10 +19,11 @@ use std::io;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use drivemap_live::LiveSettings;
 use drivemap_live::codec::{self, Value};
 use drivemap_live::paramset::{self, ParameterSet, RestoreReport};
-use drivemap_live::{LiveSettings, Session};
-use drivemap_map::{Map as Drive, RegisterRef};
+use drivemap_live::session::Session;
+use drivemap_map::Map;
 use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::pdu::Request;
@@ -70,9 +71,9 @@ fn options() -> ClientOptions {
     }
 }
 
-fn session<'d>(drive: &'d Drive, link: &Shared, slave: u8) -> Session<'d> {
+fn session<'d>(drive: &'d Map, link: &Shared, slave: u8) -> Session<'d> {
     Session::over(
-        drive.ir(),
+        drive,
         Box::new(link.clone()),
         options(),
         slave,
@@ -82,7 +83,7 @@ fn session<'d>(drive: &'d Drive, link: &Shared, slave: u8) -> Session<'d> {
 }
 
 /// Every external quantity of the map at 100, as the simulator has them ([`simulator`]).
-fn externals(drive: &Drive) -> LiveSettings {
+fn externals(drive: &Map) -> LiveSettings {
     let mut settings = LiveSettings::default();
     for q in drive.externals() {
         settings.references.insert(q.external.clone(), 100.0);
@@ -90,9 +91,9 @@ fn externals(drive: &Drive) -> LiveSettings {
     settings
 }
 
-fn maps() -> Vec<Drive> {
+fn maps() -> Vec<Map> {
     let dir = format!("{}/../maps", env!("CARGO_MANIFEST_DIR"));
-    let mut out: Vec<Drive> = drivemap_map::find_maps(dir.as_ref())
+    let mut out: Vec<Map> = drivemap_map::find_maps(dir.as_ref())
         .expect("maps/")
         .iter()
         .map(|p| drivemap_map::Loader::new().load(p).expect("shipped map"))
@@ -101,7 +102,7 @@ fn maps() -> Vec<Drive> {
     out
 }
 
-fn kinds(drive: &Drive) -> Vec<TransportKind> {
+fn kinds(drive: &Map) -> Vec<TransportKind> {
     let mut out = vec![TransportKind::RtuOverTcp];
     let tcp = drive
         .protocol()
@@ -115,7 +116,7 @@ fn kinds(drive: &Drive) -> Vec<TransportKind> {
 }
 
 /// Every external quantity at 100 (the TDS-V8's inverter rated current bounds Cn-09).
-fn simulator(drive: &Drive) -> Simulator {
+fn simulator(drive: &Map) -> Simulator {
     let mut o = SimOptions::new();
     for q in drive.externals() {
         o = o.external(&q.external, 100.0);
@@ -135,8 +136,8 @@ fn simulator(drive: &Drive) -> Simulator {
 
 /// A raw value of `r` other than `current` that the map accepts under `settings`.
 fn other_raw(
-    drive: &Drive,
-    r: RegisterRef<'_>,
+    drive: &Map,
+    r: drivemap_map::RegisterRef<'_>,
     current: u32,
     settings: &LiveSettings,
     rng: &mut SplitMix,
@@ -164,7 +165,7 @@ fn other_raw(
         if raw == current {
             return None;
         }
-        let text = match codec::decode(drive.ir(), r.ir(), raw, settings).ok()? {
+        let text = match codec::decode(drive, r, raw, settings).ok()? {
             Value::Quantity {
                 value,
                 decimals,
@@ -175,7 +176,7 @@ fn other_raw(
             Value::Code { code, .. } => code.to_string(),
             _ => return None,
         };
-        (codec::parse_value(drive.ir(), r.ir(), &text, settings).ok()? == raw).then_some(raw)
+        (codec::parse_value(drive, r, &text, settings).ok()? == raw).then_some(raw)
     })
 }
 
@@ -204,11 +205,10 @@ const LINK_WORDS: &[&str] = &[
 
 /// The source drive: `n` settings changed, the selectors among them first (so what they scale
 /// is chosen under the selected scale), each to a value the map accepts.
-fn source(drive: &Drive, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simulator {
+fn source(drive: &Map, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simulator {
     let mut sim = base.clone();
-    let regs: Vec<RegisterRef<'_>> = paramset::settings_of(drive.ir())
+    let regs: Vec<_> = paramset::settings_of(drive)
         .into_iter()
-        .filter_map(|r| drive.register_by_id(r.id()))
         .filter(|r| {
             let name = r.name().to_ascii_lowercase();
             !LINK_WORDS
@@ -221,7 +221,7 @@ fn source(drive: &Drive, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simu
     }
     let depended: Vec<String> = regs
         .iter()
-        .flat_map(|r| paramset::depends_on(drive.ir(), r.ir()))
+        .flat_map(|r| paramset::depends_on(drive, *r))
         .map(|d| d.id().to_owned())
         .collect();
     let mut chosen: Vec<usize> = (0..n)
@@ -235,7 +235,7 @@ fn source(drive: &Drive, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simu
     {
         chosen.push(i);
         if let Some(j) = regs.iter().position(|r| {
-            paramset::depends_on(drive.ir(), r.ir())
+            paramset::depends_on(drive, *r)
                 .iter()
                 .any(|d| d.id() == regs[i].id())
         }) {
@@ -257,7 +257,7 @@ fn source(drive: &Drive, base: &Simulator, n: usize, rng: &mut SplitMix) -> Simu
 /// The frames of the log that wrote a register, with the settings before each: (register id,
 /// raw value, settings), for executed writes only.
 fn writes(
-    drive: &Drive,
+    drive: &Map,
     kind: TransportKind,
     link: &SimLink,
 ) -> Vec<(String, u32, Option<LiveSettings>)> {
@@ -289,7 +289,7 @@ fn writes(
             continue;
         }
         let settings = s.settings.clone().unwrap_or_default();
-        let view = settings.view(drive.ir());
+        let view = settings.view(drive);
         let r = drive
             .registers()
             .find(|r| r.plan().locate(&view, kind).is_ok_and(|a| a == address));
@@ -304,7 +304,7 @@ fn writes(
 
 /// What one restore run broke of the properties, one line each.
 fn violations(
-    drive: &Drive,
+    drive: &Map,
     kind: TransportKind,
     set: &ParameterSet,
     source: &Simulator,
@@ -322,8 +322,8 @@ fn violations(
         }
         let r = drive.registers().find(|r| r.id() == id).unwrap();
         let settings = settings.unwrap_or_default();
-        let then = codec::decode(drive.ir(), r.ir(), raw, &settings).map(|v| v.as_f64());
-        let meant = codec::decode(drive.ir(), r.ir(), raw, &wanted).map(|v| v.as_f64());
+        let then = codec::decode(drive, r, raw, &settings).map(|v| v.as_f64());
+        let meant = codec::decode(drive, r, raw, &wanted).map(|v| v.as_f64());
         if then != meant {
             out.push(format!(
                 "{id}: {raw} meant {then:?} when written, the set's value is {meant:?}"
@@ -335,7 +335,7 @@ fn violations(
                     | Conversion::Relative { .. }
                     | Conversion::Selected { .. }
             )
-            && let Err(e) = codec::encode(drive.ir(), r.ir(), v, &settings)
+            && let Err(e) = codec::encode(drive, r, v, &settings)
         {
             out.push(format!(
                 "{id}: {v} outside the limits in force when written: {e}"
@@ -395,7 +395,7 @@ enum Mutation {
 
 /// One restore of `set` over `link`, the report (`None`: refused, nothing written).
 fn restore(
-    drive: &Drive,
+    drive: &Map,
     link: &Shared,
     slave: u8,
     set: &ParameterSet,
@@ -403,7 +403,7 @@ fn restore(
 ) -> Option<RestoreReport> {
     let mut s = session(drive, link, slave);
     let given = s.settings.clone();
-    let validated = paramset::validate(drive.ir(), set, &given, false).expect("the set validates");
+    let validated = paramset::validate(drive, set, &given, false).expect("the set validates");
     let mut plan = match paramset::plan(&mut s, &validated) {
         Ok(plan) => plan,
         Err(e) => {
@@ -426,7 +426,7 @@ fn restore(
 }
 
 /// Saves `source` over a link of `kind`.
-fn save(drive: &Drive, kind: TransportKind, source: &Simulator) -> ParameterSet {
+fn save(drive: &Map, kind: TransportKind, source: &Simulator) -> ParameterSet {
     let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, source.clone()))));
     let mut s = session(drive, &link, source.slave());
     let report = paramset::save(&mut s, "2026-01-01T00:00:00Z").expect("save");
@@ -442,7 +442,7 @@ fn save(drive: &Drive, kind: TransportKind, source: &Simulator) -> ParameterSet 
 /// Runs the sweep of one set: an interrupted restore at every request with every fault, then a
 /// clean one. Returns the restores run and the violations found.
 fn sweep(
-    drive: &Drive,
+    drive: &Map,
     kind: TransportKind,
     target: &Simulator,
     source: &Simulator,
@@ -605,7 +605,7 @@ fn part(
 fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not() {
     let mut rng = SplitMix(1);
     for drive in maps() {
-        if paramset::settings_of(drive.ir()).is_empty() {
+        if paramset::settings_of(&drive).is_empty() {
             continue;
         }
         let base = simulator(&drive);
@@ -621,7 +621,7 @@ fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not()
             let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, base.clone()))));
             let mut s = session(&drive, &link, base.slave());
             let given = s.settings.clone();
-            let validated = paramset::validate(drive.ir(), &set, &given, false).unwrap();
+            let validated = paramset::validate(&drive, &set, &given, false).unwrap();
             let mut plan = paramset::plan(&mut s, &validated).unwrap();
             assert!(plan.store.is_some(), "{}: a store command", drive.id());
             if !store {
@@ -655,7 +655,7 @@ fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not()
 fn save_reports_progress_group_by_group_at_no_cost_in_requests() {
     for drive in maps() {
         let sim = simulator(&drive);
-        let n = paramset::settings_of(drive.ir()).len();
+        let n = paramset::settings_of(&drive).len();
         let kind = TransportKind::RtuOverTcp;
         let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, sim.clone()))));
         let mut s = session(&drive, &link, sim.slave());
@@ -674,7 +674,7 @@ fn save_reports_progress_group_by_group_at_no_cost_in_requests() {
         // One plan over every setting.
         let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, sim.clone()))));
         let mut s = session(&drive, &link, sim.slave());
-        let regs = paramset::settings_of(drive.ir());
+        let regs = paramset::settings_of(&drive);
         let mut plan = s.plan(&regs).unwrap();
         let (_, requests) = s.poll_counted(&mut plan);
         assert!(
