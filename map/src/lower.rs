@@ -1,4 +1,4 @@
-//! Lowering: a validated [`Drive`] → a [`DrivePlan`], where everything a register means is
+//! Lowering: a validated [`Drive`] → a [`MapPlan`], where everything a register means is
 //! decided once — its conversion with the raw range for every variant and selector case, its
 //! addresses under each setting, variant and transport, its access, table, transports and
 //! broadcast use, the settings it depends on — and the drive's runtime [`Profile`].

@@ -3,7 +3,7 @@
 //! with the manual line that prints it — or marked `unknown: "<why>"` when the manual prints
 //! none (`maps/README.md`, "Facts the manual does not print").
 //!
-//! [`check`] refuses what cannot be read one way: a fact that is neither given nor `unknown`,
+//! `check` refuses what cannot be read one way: a fact that is neither given nor `unknown`,
 //! an `unknown` with an empty reason, or an `unknown` with figures beside it (which would the
 //! tools use?). [`warnings`] reports, without refusing, a number given with no citation of its
 //! own or of its block (a plain `max_read: 16`): such maps load, as they always did, but

@@ -127,7 +127,7 @@ enum Illegal {
     NotAStep,
     #[error("outside its word")]
     OutsideWord,
-    /// `of` is empty for the base limits, else " of variant <k>".
+    /// `of` is empty for the base limits, else " of variant `<k>`".
     #[error("outside the range{of} {min}..={max}")]
     OutsideRange {
         of: String,
