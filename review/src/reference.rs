@@ -9,10 +9,11 @@ use drivemap_core::rule::Transports;
 
 use drivemap_core::ConversionKind;
 
+use drivemap_map::Map;
 use drivemap_map::describe;
 use drivemap_map::facts::{self, FactKey, RegisterFacts};
+use drivemap_map::facts::{Conflict, DefaultValue, Dependency, EnumValue};
 use drivemap_map::ir::{Drive, Register, ValueKind};
-use drivemap_map::model::{Conflict, DefaultValue, Dependency, EnumValue};
 
 /// Text safe inside a Markdown table cell.
 mod indexed;
@@ -46,7 +47,8 @@ fn join_cells(parts: &[String]) -> String {
 
 /// Renders the Markdown reference of `drive`. `file_name` is how the map file is named in the
 /// header (a stable name, not a machine-specific path).
-pub fn render(drive: &Drive, file_name: &str) -> String {
+pub fn render(map: &Map, file_name: &str) -> String {
+    let drive = map.ir();
     let mut out = String::new();
     header(&mut out, drive, file_name);
     variants(&mut out, drive);
@@ -300,9 +302,9 @@ fn roles(out: &mut String, drive: &Drive) {
                         " on {}",
                         list.iter()
                             .map(|t| match t {
-                                drivemap_map::model::TransportName::Rtu => "RTU links",
-                                drivemap_map::model::TransportName::Tcp => "Modbus TCP",
-                                drivemap_map::model::TransportName::Ascii => "ASCII links",
+                                drivemap_map::facts::TransportName::Rtu => "RTU links",
+                                drivemap_map::facts::TransportName::Tcp => "Modbus TCP",
+                                drivemap_map::facts::TransportName::Ascii => "ASCII links",
                             })
                             .collect::<Vec<_>>()
                             .join(" and ")

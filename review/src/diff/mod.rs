@@ -22,6 +22,7 @@ mod roles;
 #[cfg(test)]
 mod tests;
 
+use drivemap_map::Map;
 use drivemap_map::describe;
 use drivemap_map::ir::Drive;
 use serde::Serialize;
@@ -133,7 +134,8 @@ pub(crate) fn json<T: Serialize>(a: &T) -> String {
 }
 
 /// A drive that exists only on one side.
-pub fn added(new: &Drive) -> DriveDiff {
+pub fn added(new: &Map) -> DriveDiff {
+    let new = new.ir();
     let mut c = Collector {
         changes: Vec::new(),
     };
@@ -158,7 +160,8 @@ pub fn added(new: &Drive) -> DriveDiff {
 }
 
 /// A drive that exists only on the old side.
-pub fn removed(old: &Drive) -> DriveDiff {
+pub fn removed(old: &Map) -> DriveDiff {
+    let old = old.ir();
     let mut c = Collector {
         changes: Vec::new(),
     };
@@ -184,7 +187,8 @@ pub fn removed(old: &Drive) -> DriveDiff {
 /// Every part of a map is compared. The parts are named here field by field, with no `..`, as
 /// are the fields of each part in the function that compares it: a part or key added to the
 /// schema fails to compile until the diff compares it (or says here why it is not a part).
-pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
+pub fn compare(old: &Map, new: &Map) -> DriveDiff {
+    let (old, new) = (old.ir(), new.ir());
     let mut c = Collector {
         changes: Vec::new(),
     };
@@ -348,7 +352,7 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         |x| Some(x.source.clone()),
     );
     if old.draft != new.draft {
-        let text = |d: &Option<drivemap_map::model::Draft>| {
+        let text = |d: &Option<drivemap_map::facts::Draft>| {
             Some(match d {
                 None => "not a draft".to_string(),
                 Some(d) => format!(
@@ -368,7 +372,7 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         );
     }
     if old.address_format != new.address_format {
-        let text = |f: drivemap_map::model::AddressFormat| Some(format!("{f:?}").to_lowercase());
+        let text = |f: drivemap_map::facts::AddressFormat| Some(format!("{f:?}").to_lowercase());
         c.push(
             ChangeKind::DocumentationChanged,
             id,
@@ -386,7 +390,7 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
                 // Access, table, write restriction, transports and repeat rules of a group are
                 // its registers' defaults, and its broadcast flag their membership: compared on
                 // each register (an empty group's flag here).
-                let drivemap_map::ir::Group {
+                let drivemap_map::facts::Group {
                     id,
                     name,
                     table,

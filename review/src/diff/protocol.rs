@@ -8,7 +8,7 @@ use super::{ChangeKind, Collector, HEAD, same};
 pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
     let (a, b) = (&old.meta, &new.meta);
     let id = &b.id;
-    let drivemap_map::model::DriveMeta {
+    let drivemap_map::facts::DriveMeta {
         id: _,
         extends: _,
         vendor: _,
@@ -36,7 +36,7 @@ pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
         parts.push("manuals");
     }
     if !parts.is_empty() {
-        let text = |m: &drivemap_map::model::DriveMeta| {
+        let text = |m: &drivemap_map::facts::DriveMeta| {
             format!(
                 "{} {} ({} manual(s))",
                 m.vendor,
@@ -97,7 +97,7 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
                 );
             }
         }
-        let drivemap_map::model::VariantAxis {
+        let drivemap_map::facts::VariantAxis {
             id: _,
             name: _,
             options: _,
@@ -107,7 +107,7 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
             docs.push("name".to_owned());
         }
         for o in &a.options {
-            let drivemap_map::model::VariantOption {
+            let drivemap_map::facts::VariantOption {
                 id: _,
                 name: _,
                 source: _,
@@ -128,7 +128,7 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
                 }
             }
         }
-        let order = |x: &drivemap_map::model::VariantAxis| {
+        let order = |x: &drivemap_map::facts::VariantAxis| {
             x.options.iter().map(|o| o.id.clone()).collect::<Vec<_>>()
         };
         let (oa, ob) = (order(a), order(b));

@@ -15,9 +15,9 @@
 use std::collections::BTreeSet;
 
 use drivemap_map::describe;
+use drivemap_map::facts::field_span;
+use drivemap_map::facts::{CodeRef, Codes, RolePlace};
 use drivemap_map::ir::Drive;
-use drivemap_map::model::{CodeRef, Codes, RolePlace};
-use drivemap_map::names::field_span;
 
 use super::{ChangeKind, Collector, HEAD};
 
@@ -88,7 +88,7 @@ impl Target {
     }
 
     /// The target as a change names it, its address in the map's notation (`format`).
-    fn text(&self, format: drivemap_map::model::AddressFormat) -> String {
+    fn text(&self, format: drivemap_map::facts::AddressFormat) -> String {
         match self {
             Target::Register { id, address, .. } => {
                 format!("{id} ({})", describe::address_as(format, *address))
@@ -120,7 +120,7 @@ impl Target {
 struct Meaning {
     target: Target,
     /// The links the place holds on (`None`: every transport of the map).
-    transports: Option<Vec<drivemap_map::model::TransportName>>,
+    transports: Option<Vec<drivemap_map::facts::TransportName>>,
     on: Vec<Option<u16>>,
     off: Option<u16>,
     /// How the drive acts on a command: "level", "edge" or "not printed".
@@ -130,7 +130,7 @@ struct Meaning {
     /// The role it shares its register or bits with, as the map says.
     shared_with: Option<String>,
     /// How the map prints addresses (for the text only; not a change of the role).
-    address_format: drivemap_map::model::AddressFormat,
+    address_format: drivemap_map::facts::AddressFormat,
 }
 
 impl Meaning {
@@ -253,9 +253,9 @@ impl Meaning {
             on,
             off,
             edge: match edge {
-                drivemap_map::model::EdgeSpec::Known(false) => "level",
-                drivemap_map::model::EdgeSpec::Known(true) => "edge",
-                drivemap_map::model::EdgeSpec::Unknown(_) => "not printed",
+                drivemap_map::facts::EdgeSpec::Known(false) => "level",
+                drivemap_map::facts::EdgeSpec::Known(true) => "edge",
+                drivemap_map::facts::EdgeSpec::Unknown(_) => "not printed",
             },
             number: number.then(|| (*signed, scale.unwrap_or(1.0))),
             shared_with: shared_with.clone(),

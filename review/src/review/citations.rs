@@ -17,11 +17,11 @@ use super::Manuals;
 use super::matching::{
     AddressForms, Line, code_found, label_text, name_found, number_found, param_found,
 };
-use drivemap_map::Loc;
 use drivemap_map::citations::{PlaceKind, citation_places};
+use drivemap_map::facts::{BitField as Field, EnumValue};
+use drivemap_map::facts::{parse_citation, parse_page_citation};
 use drivemap_map::ir::{Drive, Register};
-use drivemap_map::model::{EnumValue, Field};
-use drivemap_map::validate::{parse_citation, parse_page_citation};
+use drivemap_map::{Loc, Map};
 
 /// What a citation is the citation of.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -179,8 +179,9 @@ const WINDOW: usize = 80;
 
 /// Checks every citation of a drive against the manuals: registers, values and fields, then
 /// roles, protocol items, readings of conflicts and gaps ([`drivemap_map::others`]).
-pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> {
-    let decimal = drive.address_format == drivemap_map::model::AddressFormat::Decimal;
+pub fn verify_citations(map: &Map, manuals: &Manuals) -> Vec<CitationCheck> {
+    let drive = map.ir();
+    let decimal = drive.address_format == drivemap_map::facts::AddressFormat::Decimal;
     let offsets = drive
         .protocol
         .addressing
@@ -442,7 +443,7 @@ mod tests {
         \n\
         0202H\tBn-03\tRun source\t0: Operator 1: Terminals\n";
 
-    fn map(accel: usize, decel: usize, indirect: &str) -> Drive {
+    fn map(accel: usize, decel: usize, indirect: &str) -> Map {
         let text = format!(
             "drive: {{id: t, vendor: T, models: [T], manuals: [{{file: m.txt, title: M}}]}}\n\
              protocol: {{transports: [rtu], function_codes: [0x03, 0x06], max_read: 1, max_write: 1, slave_address: {{min: 1, max: 31}}}}\n\
@@ -464,11 +465,10 @@ mod tests {
         );
         drivemap_map::Loader::new()
             .load_str("t.yaml", &text)
-            .map(drivemap_map::Map::into_ir)
             .unwrap()
     }
 
-    fn verdicts(drive: &Drive) -> Vec<(String, Verdict)> {
+    fn verdicts(drive: &Map) -> Vec<(String, Verdict)> {
         let manuals = Manuals::from_texts([("m.txt", MANUAL)]);
         verify_citations(drive, &manuals)
             .into_iter()
@@ -492,7 +492,6 @@ mod tests {
         let verdict = |format: &str| {
             let drive = drivemap_map::Loader::new()
                 .load_str("t.yaml", &text(format))
-                .map(drivemap_map::Map::into_ir)
                 .unwrap();
             verify_citations(&drive, &manuals)[0].verdict.clone()
         };

@@ -13,9 +13,10 @@ use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 
 use super::Manuals;
 use super::citations::{Verdict, verify_citations};
+use drivemap_map::Map;
 use drivemap_map::citations::citation_places;
+use drivemap_map::facts::parse_citation;
 use drivemap_map::ir::Drive;
-use drivemap_map::validate::parse_citation;
 
 /// A row of a manual table no item of the map covers.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -324,15 +325,16 @@ struct Known<'a> {
 }
 
 impl<'a> Known<'a> {
-    fn new(drive: &'a Drive, manuals: &Manuals) -> Self {
-        let decimal = drive.address_format == drivemap_map::model::AddressFormat::Decimal;
+    fn new(map: &'a Map, manuals: &Manuals) -> Self {
+        let drive = map.ir();
+        let decimal = drive.address_format == drivemap_map::facts::AddressFormat::Decimal;
         let shapes: HashSet<String> = drive
             .registers
             .iter()
             .filter_map(|r| r.def.param.as_deref())
             .map(shape)
             .collect();
-        let learnt = learn_shapes(drive, manuals, &shapes, decimal);
+        let learnt = learn_shapes(map, manuals, &shapes, decimal);
         Known {
             drive,
             decimal,
@@ -368,13 +370,13 @@ impl<'a> Known<'a> {
 /// Row shapes per manual, from the registers' citations that verify by themselves: the shape of
 /// each cited line (unless neither word is classed), counted.
 fn learn_shapes(
-    drive: &Drive,
+    map: &Map,
     manuals: &Manuals,
     shapes: &HashSet<String>,
     decimal: bool,
 ) -> HashMap<String, BTreeMap<(Class, Class), usize>> {
     let mut learnt: HashMap<String, BTreeMap<(Class, Class), usize>> = HashMap::new();
-    for c in verify_citations(drive, manuals).iter().filter(|c| {
+    for c in verify_citations(map, manuals).iter().filter(|c| {
         matches!(c.item, super::Item::Register) && matches!(c.verdict, Verdict::Verified)
     }) {
         let Some((file, n)) = parse_citation(&c.source) else {
@@ -398,8 +400,9 @@ fn learn_shapes(
 /// Learns the row shapes from the registers' verified citations and lists the rows of each
 /// cited manual (but those in `skip`: a variant map's base manuals, covered by the base's
 /// report), the tables they form, and the rows nothing covers.
-pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageReport {
-    let known = Known::new(drive, manuals);
+pub fn coverage(map: &Map, manuals: &Manuals, skip: &[String]) -> CoverageReport {
+    let drive = map.ir();
+    let known = Known::new(map, manuals);
     let mut report = CoverageReport {
         drive: drive.meta.id.clone(),
         tables: Vec::new(),

@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use drivemap_map::ir::Drive;
+use drivemap_map::Map;
 use drivemap_map::source::{Node, NodeKind, Seg};
 use drivemap_map::validate::parse_citation;
 use drivemap_review::diff::compare;
@@ -53,7 +53,8 @@ fn maps() -> Vec<PathBuf> {
 /// What a map says, as one comparable text: every part of the IR but where it was read from,
 /// registers with their effective defaults (the keys that only restate a group's default
 /// cleared).
-fn meaning(d: &Drive) -> String {
+fn meaning(d: &Map) -> String {
+    let d = d.ir();
     let registers: Vec<serde_json::Value> = d
         .registers
         .iter()
@@ -291,7 +292,6 @@ fn mutate_map(map: &Path) -> (Counts, Vec<String>) {
         drivemap_map::Loader::new()
             .bases(&base)
             .load_tree(&name, tree)
-            .map(drivemap_map::Map::into_ir)
     };
     let original = read(tree.clone()).unwrap_or_else(|e| panic!("{name}: {e}"));
     let original_meaning = meaning(&original);
