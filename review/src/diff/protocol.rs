@@ -1,12 +1,12 @@
 //! Differences outside the registers: drive metadata and variant axes (the protocol profile is
 //! `profile.rs`'s).
 
-use drivemap_map::ir::Drive;
+use drivemap_map::Map;
 
 use super::{ChangeKind, Collector, HEAD, same};
 
-pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
-    let (a, b) = (&old.meta, &new.meta);
+pub(super) fn meta(c: &mut Collector, old: &Map, new: &Map) {
+    let (a, b) = (old.meta(), new.meta());
     let id = &b.id;
     let drivemap_map::facts::DriveMeta {
         id: _,
@@ -55,10 +55,10 @@ pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
     }
 }
 
-pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
+pub(super) fn variants(c: &mut Collector, old: &Map, new: &Map) {
     let subject = "variants";
-    for a in &old.variants {
-        let Some(b) = new.variants.iter().find(|b| b.id == a.id) else {
+    for a in old.variants() {
+        let Some(b) = new.variants().iter().find(|b| b.id == a.id) else {
             let opts: Vec<&str> = a.options.iter().map(|o| o.id.as_str()).collect();
             c.push(
                 ChangeKind::VariantAxisRemoved,
@@ -164,8 +164,8 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
             );
         }
     }
-    for b in &new.variants {
-        if !old.variants.iter().any(|a| a.id == b.id) {
+    for b in new.variants() {
+        if !old.variants().iter().any(|a| a.id == b.id) {
             let opts: Vec<&str> = b.options.iter().map(|o| o.id.as_str()).collect();
             c.push(
                 ChangeKind::VariantAxisAdded,
