@@ -166,7 +166,7 @@ fn manuals_for(args: &Args, diffs: &[DriveDiff]) -> Option<Manuals> {
     let mut manuals = Manuals::new(&dir);
     for c in diffs.iter().flat_map(|d| d.changes.iter()) {
         for s in [&c.old_source, &c.new_source].into_iter().flatten() {
-            if let Some((file, _)) = drivemap_map::validate::parse_citation(s) {
+            if let Some((file, _)) = drivemap_map::facts::parse_citation(s) {
                 manuals.load(file);
             }
         }

@@ -2,7 +2,7 @@
 //! ([`verify_citations`]), manual rows no item cites ([`coverage()`]), the text of a cited line
 //! ([`Manuals::quote`]).
 //!
-//! Validation ([`drivemap_map::validate`]) decides whether a map can be built; review decides whether
+//! Validation (`drivemap_map`'s checks) decides whether a map can be built; review decides whether
 //! it says what the manual says. Its findings are warnings (`drivemap check`, errors with
 //! `--strict`) and a coverage report (`drivemap coverage`); it needs the manuals' text.
 

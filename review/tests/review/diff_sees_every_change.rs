@@ -20,10 +20,26 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use drivemap_map::Map;
-use drivemap_map::source::{Node, NodeKind, Seg};
-use drivemap_map::validate::parse_citation;
+use drivemap_map::facts::parse_citation;
+use drivemap_map::{Tree as Node, TreeKind as NodeKind};
 use drivemap_review::diff::compare;
 use serde_yaml::Value;
+
+/// One step of a path into the map's tree: a key of a mapping or an item of a list.
+#[derive(Debug, Clone)]
+enum Seg {
+    Key(String),
+    Index(usize),
+}
+
+/// The tree's own path for `path`.
+fn tree_path(path: &[Seg]) -> drivemap_map::TreePath {
+    path.iter()
+        .fold(drivemap_map::TreePath::root(), |p, s| match s {
+            Seg::Key(k) => p.key(k),
+            Seg::Index(i) => p.index(*i),
+        })
+}
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -231,7 +247,7 @@ fn abstract_path(path: &[Seg]) -> String {
 }
 
 fn show(path: &[Seg]) -> String {
-    drivemap_map::source::Path(path.to_vec()).to_string()
+    tree_path(path).to_string()
 }
 
 /// `tree` with `m` applied at `path`; `None` when the path is not there.
@@ -322,11 +338,7 @@ fn mutate_map(map: &Path) -> (Counts, Vec<String>) {
         let (path, key, scalar) = &all[i];
         let mut mutations = vec![Mutation::Delete];
         if *scalar {
-            let NodeKind::Scalar(v) = &tree
-                .at(&drivemap_map::source::Path(path.clone()))
-                .unwrap()
-                .kind
-            else {
+            let NodeKind::Scalar(v) = &tree.at(&tree_path(path)).unwrap().kind else {
                 unreachable!()
             };
             if let Some(v) = changed(key, v) {
