@@ -1,7 +1,7 @@
 //! The intermediate representation: the model with group defaults applied, blocks expanded and
 //! every register located, plus the lookups that validation, emission and tools share.
 //!
-//! [`expand`] builds it from a loaded map; [`crate::validate`] checks it; once it is valid, the
+//! `expand` builds it from a loaded map; `validate` checks it; once it is valid, the
 //! accessors here (value kind, raw ranges, references) cannot fail on well-formed input and the
 //! generator, the exporter and the simulator all read the same answers.
 
@@ -48,7 +48,7 @@ pub struct Drive {
     /// The drive plan, lowered on first use ([`Drive::plan`]).
     pub plan: OnceLock<Arc<MapPlan>>,
     /// What reading a file of the map in an earlier schema version changed
-    /// ([`crate::schema`]): printed by `check`, `diff` and the build, never an error.
+    /// (`schema`): printed by `check`, `diff` and the build, never an error.
     pub warnings: Vec<Diagnostic>,
     /// The map's `draft:` mark: it loads and checks (with a warning), the generator refuses it.
     pub draft: Option<model::Draft>,
@@ -94,7 +94,7 @@ pub struct Register {
     pub repeat_needs_change: Option<(model::RepeatNeedsChange, Path)>,
     /// The register's `function_codes`, else its group's, with where it is written.
     pub function_codes: Option<(model::RegisterFunctions, Path)>,
-    /// Its place in [`Drive::registers`], given by [`expand`] (only this crate can make a
+    /// Its place in [`Drive::registers`], given by `expand` (only this crate can make a
     /// [`RegisterIndex`]): the handle the plan lookups ([`Drive::register_plan`], lowering)
     /// index by.
     pub index: RegisterIndex,
@@ -273,7 +273,7 @@ impl Drive {
         self.registers.get(m)
     }
 
-    /// The plan of register `r` of this drive, by the place [`expand`] gave it (constant time:
+    /// The plan of register `r` of this drive, by the place `expand` gave it (constant time:
     /// the simulator asks for every word it serves).
     ///
     /// # Panics
@@ -565,7 +565,7 @@ pub(crate) fn module_name(id: &str) -> String {
 }
 
 /// Builds the IR from a loaded map. Errors are only those of block expansion; everything else
-/// is left to [`crate::validate`].
+/// is left to `validate`.
 pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
     let model = &map.model;
     let mut errors = Vec::new();
