@@ -9,8 +9,8 @@
 use std::collections::BTreeSet;
 
 use drivemap_map::Map;
+use drivemap_map::Quantity;
 use drivemap_map::RegisterRef;
-use drivemap_map::lower::Quantity;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::plan::Dependency;
 use drivemap_runtime::plan::RegisterPlan;

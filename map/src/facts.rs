@@ -31,12 +31,14 @@ mod protocol;
 pub use crate::examples::{Byte, Direction, Example, Says, hex_text, parse_bytes};
 pub use crate::ir::{Group, SerialDefaults};
 pub use crate::model::{
-    AddressAlternative, AddressFormat, Condition, Conflict, DefaultValue, DependentDefault,
-    DisplayStep, Draft, DriveMeta, EnumValue, ExternalQuantity, Field as BitField, Gap, Manual,
-    Parity, Protocol, Reading, Removed, RolePlace, TransportName, Unknown, UnknownItem,
-    VariantAxis, VariantOption,
+    AddressAlternative, AddressFormat, CodeRef, Codes, Condition, Conflict, DefaultValue,
+    Dependency, DependentDefault, DisplayStep, Draft, DriveMeta, EdgeSpec, EnumValue,
+    ExternalQuantity, Field as BitField, Gap, Manual, Parity, Protocol, Reading, Removed,
+    RolePlace, TransportName, Unknown, UnknownItem, VariantAxis, VariantOption, VariantOverride,
 };
 pub use crate::stated::Unprinted;
+/// Citations and bit fields as written: `file:line`, `<manual id>:p<page>`, a field's span.
+pub use crate::validate::{field_span, parse_citation, parse_page_citation};
 pub use data::RegisterData;
 pub use input::InputBounds;
 pub use protocol::{

@@ -1,7 +1,7 @@
 //! The intermediate representation: the model with group defaults applied, blocks expanded and
 //! every register located, plus the lookups that validation, emission and tools share.
 //!
-//! `expand` builds it from a loaded map; [`crate::validate`] checks it; once it is valid, the
+//! `expand` builds it from a loaded map; `validate` checks it; once it is valid, the
 //! accessors here (value kind, raw ranges, references) cannot fail on well-formed input and the
 //! generator, the exporter and the simulator all read the same answers.
 
@@ -273,7 +273,7 @@ impl Drive {
         self.registers.get(m)
     }
 
-    /// The plan of register `r` of this drive, by the place [`expand`] gave it (constant time:
+    /// The plan of register `r` of this drive, by the place `expand` gave it (constant time:
     /// the simulator asks for every word it serves).
     ///
     /// # Panics
@@ -565,7 +565,7 @@ pub(crate) fn module_name(id: &str) -> String {
 }
 
 /// Builds the IR from a loaded map. Errors are only those of block expansion; everything else
-/// is left to [`crate::validate`].
+/// is left to `validate`.
 pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
     let model = &map.model;
     let mut errors = Vec::new();

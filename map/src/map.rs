@@ -306,6 +306,33 @@ impl Map {
             .map_or_else(|| self.drive.locate(&path), |n| n.loc.clone())
     }
 
+    /// Where a path of the map's tree ([`crate::TreePath`], as a citation place or another
+    /// citation carries it) is written.
+    pub fn locate_tree_path(&self, path: &crate::TreePath) -> Loc {
+        self.drive.locate(path)
+    }
+
+    // ---- citations ----------------------------------------------------------------------
+
+    /// Every place of the map that cites a manual (registers, values, fields, protocol items,
+    /// roles, conflicts, gaps), in map order.
+    #[doc(hidden)]
+    pub fn citation_places(&self) -> Vec<crate::citations::CitationPlace<'_>> {
+        crate::citations::citation_places(&self.drive)
+    }
+
+    /// The citations outside the registers, each with what its line is expected to show.
+    #[doc(hidden)]
+    pub fn other_citations(&self) -> Vec<crate::others::Other> {
+        crate::others::other_citations(&self.drive)
+    }
+
+    /// What the line of an other citation is expected to show, for messages.
+    #[doc(hidden)]
+    pub fn expected(&self, rule: &crate::others::Rule) -> String {
+        rule.expected(&self.drive)
+    }
+
     /// A diagnostic at a key path of the map (see [`Map::locate`]), naming `register`.
     pub fn error_at(
         &self,

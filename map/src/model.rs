@@ -2,7 +2,7 @@
 //!
 //! Every struct rejects unknown keys, so a misspelt key is an error with its location rather than
 //! a silently ignored line. `maps/README.md` documents each construct with an example; this file
-//! is its precise definition. Semantic checks live in [`crate::validate`]; the checked form the
+//! is its precise definition. Semantic checks live in `validate`; the checked form the
 //! generator consumes is [`crate::ir`].
 
 use std::collections::BTreeMap;
@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub(crate) struct MapFile {
     /// The schema version the file is written in (`schema: 2`); a file without it is read as
-    /// schema 1. Each file of a variant map is read in its own version ([`crate::schema`]).
+    /// schema 1. Each file of a variant map is read in its own version (`schema`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub schema: Option<u32>,
     /// How the manual numbers its registers: `hex` (the default: addresses are written `0x2001`

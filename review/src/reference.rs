@@ -9,10 +9,11 @@ use drivemap_core::rule::Transports;
 
 use drivemap_core::ConversionKind;
 
+use drivemap_map::Map;
+use drivemap_map::RegisterRef;
 use drivemap_map::describe;
-use drivemap_map::facts::{self, FactKey, RegisterFacts};
-use drivemap_map::ir::{Drive, Register, ValueKind};
-use drivemap_map::model::{Conflict, DefaultValue, Dependency, EnumValue};
+use drivemap_map::facts::{Conflict, DefaultValue, Dependency, EnumValue};
+use drivemap_map::facts::{FactKey, RegisterFacts};
 
 /// Text safe inside a Markdown table cell.
 mod indexed;
@@ -46,7 +47,7 @@ fn join_cells(parts: &[String]) -> String {
 
 /// Renders the Markdown reference of `drive`. `file_name` is how the map file is named in the
 /// header (a stable name, not a machine-specific path).
-pub fn render(drive: &Drive, file_name: &str) -> String {
+pub fn render(drive: &Map, file_name: &str) -> String {
     let mut out = String::new();
     header(&mut out, drive, file_name);
     variants(&mut out, drive);
@@ -67,8 +68,8 @@ pub fn render(drive: &Drive, file_name: &str) -> String {
     out
 }
 
-fn header(out: &mut String, drive: &Drive, file_name: &str) {
-    let m = &drive.meta;
+fn header(out: &mut String, drive: &Map, file_name: &str) {
+    let m = drive.meta();
     let _ = writeln!(
         out,
         "# {} {} — `{}`\n",
@@ -98,13 +99,13 @@ fn header(out: &mut String, drive: &Drive, file_name: &str) {
     let _ = writeln!(
         out,
         "\n{} in {}.\n",
-        plural(drive.registers.len(), "register"),
-        plural(drive.groups.len(), "group")
+        plural(drive.registers().len(), "register"),
+        plural(drive.groups().len(), "group")
     );
 }
 
-fn variants(out: &mut String, drive: &Drive) {
-    if drive.variants.is_empty() {
+fn variants(out: &mut String, drive: &Map) {
+    if drive.variants().is_empty() {
         return;
     }
     let _ = writeln!(out, "## Variants\n");
@@ -114,7 +115,7 @@ fn variants(out: &mut String, drive: &Drive) {
          unless a row names another option.\n"
     );
     let _ = writeln!(out, "| Axis | Option | Name | Source |\n|---|---|---|---|");
-    for axis in &drive.variants {
+    for axis in drive.variants() {
         for (i, o) in axis.options.iter().enumerate() {
             let axis_cell = if i == 0 {
                 format!("{} ({})", code(&axis.id), cell(&axis.name))
@@ -137,8 +138,8 @@ fn variants(out: &mut String, drive: &Drive) {
 /// The protocol profile: the rows of the protocol facts that stand alone (a limit is shown
 /// inside registers per request, a timing figure inside the timing), then the exception codes
 /// and the commands.
-fn protocol(out: &mut String, drive: &Drive) {
-    let p = facts::protocol(drive);
+fn protocol(out: &mut String, drive: &Map) {
+    let p = drive.protocol_facts();
     let _ = writeln!(out, "## Protocol profile\n");
     let _ = writeln!(out, "| Item | Value | Source |\n|---|---|---|");
     for r in p.wholes() {
@@ -182,7 +183,7 @@ fn protocol(out: &mut String, drive: &Drive) {
 
 /// The roles, from the plan: what plays each standard part of a drive (the drive trait, the
 /// simulator and the demo use exactly these).
-fn roles(out: &mut String, drive: &Drive) {
+fn roles(out: &mut String, drive: &Map) {
     use drivemap_core::plan::Conversion;
     use drivemap_core::roles::Target;
     let plan = drive.plan();
@@ -292,7 +293,7 @@ fn roles(out: &mut String, drive: &Drive) {
     }
     let _ = writeln!(out);
     // Source roles the manual does not print: the trait cannot check them.
-    for (id, places) in &drive.roles {
+    for (id, places) in drive.roles() {
         for p in places {
             if let Some(why) = &p.unknown {
                 let links = match p.transports.as_deref() {
@@ -300,9 +301,9 @@ fn roles(out: &mut String, drive: &Drive) {
                         " on {}",
                         list.iter()
                             .map(|t| match t {
-                                drivemap_map::model::TransportName::Rtu => "RTU links",
-                                drivemap_map::model::TransportName::Tcp => "Modbus TCP",
-                                drivemap_map::model::TransportName::Ascii => "ASCII links",
+                                drivemap_map::facts::TransportName::Rtu => "RTU links",
+                                drivemap_map::facts::TransportName::Tcp => "Modbus TCP",
+                                drivemap_map::facts::TransportName::Ascii => "ASCII links",
                             })
                             .collect::<Vec<_>>()
                             .join(" and ")
@@ -322,18 +323,18 @@ fn roles(out: &mut String, drive: &Drive) {
 
 /// An address as the manual prints it: hex (`2001h`), or for a manual that numbers registers in
 /// decimal (`address_format: decimal`) the decimal number with its hex (`2001 (07D1h)`).
-fn addr(drive: &Drive, a: u16) -> String {
-    facts::manual_address(drive, a)
+fn addr(drive: &Map, a: u16) -> String {
+    drive.manual_address(a)
 }
 
 /// Two addresses as the manual prints them (see [`addr`]).
-fn span(drive: &Drive, first: u16, last: u16) -> String {
+fn span(drive: &Map, first: u16, last: u16) -> String {
     format!("{} – {}", addr(drive, first), addr(drive, last))
 }
 
 /// The address cell: the address as the manual prints it, a pair's span and its cited width
 /// row, and each alternative address with the condition of its row.
-fn address_cell(drive: &Drive, f: &RegisterFacts) -> String {
+fn address_cell(drive: &Map, f: &RegisterFacts) -> String {
     let mut parts = vec![match f.get(FactKey::Width) {
         None => addr(drive, f.address),
         Some(width) => {
@@ -464,10 +465,13 @@ fn default_cell(f: &RegisterFacts) -> String {
     join_cells(&parts)
 }
 
-fn registers(out: &mut String, drive: &Drive) {
+fn registers(out: &mut String, drive: &Map) {
     let _ = writeln!(out, "## Registers\n");
-    for (gi, g) in drive.groups.iter().enumerate() {
-        let members: Vec<&Register> = drive.registers.iter().filter(|r| r.group == gi).collect();
+    for g in drive.groups() {
+        let members: Vec<RegisterRef> = drive
+            .registers()
+            .filter(|r| std::ptr::eq(r.group(), g))
+            .collect();
         let _ = writeln!(out, "### {} (`{}`)\n", g.name, g.id);
         let mut intro = Vec::new();
         if let Some(t) = &g.table {
@@ -489,10 +493,8 @@ fn registers(out: &mut String, drive: &Drive) {
             "| Address | Param | Name | Id | Access | Unit | Scale | Range | Default | Source |\n\
              |---|---|---|---|---|---|---|---|---|---|"
         );
-        let members: Vec<(&Register, RegisterFacts)> = members
-            .into_iter()
-            .map(|r| (r, facts::register(drive, r)))
-            .collect();
+        let members: Vec<(RegisterRef, RegisterFacts)> =
+            members.into_iter().map(|r| (r, r.facts())).collect();
         for (_, f) in &members {
             let _ = writeln!(
                 out,
@@ -511,7 +513,7 @@ fn registers(out: &mut String, drive: &Drive) {
         }
         out.push('\n');
         for (r, f) in &members {
-            details(out, drive, r, f);
+            details(out, drive, *r, f);
         }
     }
 }
@@ -532,20 +534,17 @@ fn enum_rows(out: &mut String, values: &[EnumValue]) {
 }
 
 /// Codes, bit fields and selected scales of a register, under its group's table.
-fn details(out: &mut String, drive: &Drive, r: &Register, f: &RegisterFacts) {
-    let d = &r.def;
+fn details(out: &mut String, drive: &Map, r: RegisterRef, f: &RegisterFacts) {
     let title = format!(
         "#### {} {} — {}",
-        addr(drive, d.address),
-        describe::register(r),
-        d.name.replace('\n', " ")
+        addr(drive, r.address()),
+        r.label(),
+        r.name().replace('\n', " ")
     );
-    match r.kind() {
-        ValueKind::Enum(values) => {
-            let _ = writeln!(out, "{title}\n");
-            enum_rows(out, values);
-        }
-        ValueKind::Bits(fields) => {
+    // Bit fields when the register has any, else codes when it has any (the plan's kind).
+    let (fields, values) = (r.fields(), r.values());
+    match () {
+        _ if !fields.is_empty() => {
             let _ = writeln!(out, "{title}\n");
             let _ = writeln!(
                 out,
@@ -570,6 +569,10 @@ fn details(out: &mut String, drive: &Drive, r: &Register, f: &RegisterFacts) {
             }
             out.push('\n');
         }
+        _ if !values.is_empty() => {
+            let _ = writeln!(out, "{title}\n");
+            enum_rows(out, values);
+        }
         _ if f.selector.is_some() => {
             let _ = writeln!(out, "{title}\n");
             let _ = writeln!(
@@ -591,15 +594,15 @@ fn details(out: &mut String, drive: &Drive, r: &Register, f: &RegisterFacts) {
         }
         _ => {}
     }
-    let shown = matches!(r.kind(), ValueKind::Enum(_) | ValueKind::Bits(_)) || f.selector.is_some();
+    let shown = !fields.is_empty() || !values.is_empty() || f.selector.is_some();
     let mut more = String::new();
-    if !d.read_values.is_empty() {
+    if !r.read_values().is_empty() {
         let _ = writeln!(
             more,
             "Read and written with different meanings: a write takes the word (range in the \
              table above); a read means:\n"
         );
-        enum_rows(&mut more, &d.read_values);
+        enum_rows(&mut more, r.read_values());
     }
     if let Some(rule) = f.get(FactKey::RepeatNeedsChange) {
         let _ = writeln!(
@@ -625,9 +628,9 @@ fn details(out: &mut String, drive: &Drive, r: &Register, f: &RegisterFacts) {
     }
 }
 
-fn notes(out: &mut String, drive: &Drive) {
+fn notes(out: &mut String, drive: &Map) {
     let mut body = String::new();
-    let p = facts::protocol(drive);
+    let p = drive.protocol_facts();
     if !p.notes.is_empty() || !p.timing_notes.is_empty() {
         let _ = writeln!(body, "### Protocol\n");
         for n in p.notes.iter().chain(&p.timing_notes) {
@@ -636,7 +639,7 @@ fn notes(out: &mut String, drive: &Drive) {
         body.push('\n');
     }
     let mut groups = String::new();
-    for g in &drive.groups {
+    for g in drive.groups() {
         for n in &g.notes {
             let _ = writeln!(groups, "- {} (`{}`): {}", g.name, g.id, one_line(n));
         }
@@ -645,14 +648,13 @@ fn notes(out: &mut String, drive: &Drive) {
         let _ = writeln!(body, "### Groups\n\n{groups}");
     }
     let mut regs = String::new();
-    let view = facts::facts(drive);
-    for (r, f) in drive.registers.iter().zip(&view.registers) {
-        let d = &r.def;
-        let who = format!("{} {}", addr(drive, d.address), describe::register(r));
-        for n in &d.notes {
+    let view = drive.facts();
+    for (r, f) in drive.registers().zip(&view.registers) {
+        let who = format!("{} {}", addr(drive, r.address()), r.label());
+        for n in r.notes() {
             let _ = writeln!(regs, "- {who}: {}", one_line(n));
         }
-        for f in &d.fields {
+        for f in r.fields() {
             for n in &f.notes {
                 let _ = writeln!(regs, "- {who}, field `{}`: {}", f.id, one_line(n));
             }
@@ -698,14 +700,14 @@ fn conflict(out: &mut String, c: &Conflict, who: Option<&str>) {
     );
 }
 
-fn conflicts(out: &mut String, drive: &Drive) {
+fn conflicts(out: &mut String, drive: &Map) {
     let mut body = String::new();
-    for c in &drive.conflicts {
+    for c in drive.conflicts() {
         conflict(&mut body, c, None);
     }
-    for r in &drive.registers {
-        let who = format!("{} {}", addr(drive, r.def.address), describe::register(r));
-        for c in &r.def.conflicts {
+    for r in drive.registers() {
+        let who = format!("{} {}", addr(drive, r.address()), r.label());
+        for c in r.conflicts() {
             conflict(&mut body, c, Some(&who));
         }
     }
@@ -719,8 +721,8 @@ fn conflicts(out: &mut String, drive: &Drive) {
 }
 
 /// The manual's example frames, as printed, with what each says (verified by `check`).
-fn examples(out: &mut String, drive: &Drive) {
-    if drive.examples.is_empty() {
+fn examples(out: &mut String, drive: &Map) {
+    if drive.examples().is_empty() {
         return;
     }
     let _ = writeln!(
@@ -730,7 +732,7 @@ fn examples(out: &mut String, drive: &Drive) {
          addresses, values, the answer to its request).\n\n\
          | Example | Frame | Bytes | Says | Source |\n|---|---|---|---|---|"
     );
-    for e in &drive.examples {
+    for e in drive.examples() {
         let mut frame = format!("{} {}", e.transport, e.direction.as_str());
         if let Some(a) = &e.answers {
             frame.push_str(&format!(" to `{a}`"));
@@ -763,11 +765,11 @@ fn examples(out: &mut String, drive: &Drive) {
     out.push('\n');
 }
 
-fn unknowns(out: &mut String, drive: &Drive) {
+fn unknowns(out: &mut String, drive: &Map) {
     let mut body = String::new();
-    let view = facts::facts(drive);
-    for (r, f) in drive.registers.iter().zip(&view.registers) {
-        let who = format!("{} {}", addr(drive, f.address), describe::register(r));
+    let view = drive.facts();
+    for (r, f) in drive.registers().zip(&view.registers) {
+        let who = format!("{} {}", addr(drive, f.address), r.label());
         for u in &f.unknowns {
             let _ = writeln!(body, "- {who}, {}: {}", u.what, one_line(&u.reason));
         }
@@ -800,15 +802,15 @@ fn unknowns(out: &mut String, drive: &Drive) {
     }
 }
 
-fn gaps(out: &mut String, drive: &Drive) {
-    if drive.gaps.is_empty() {
+fn gaps(out: &mut String, drive: &Map) {
+    if drive.gaps().is_empty() {
         return;
     }
     let _ = writeln!(
         out,
         "## Gaps\n\n| Addresses | Parameters | Description | Source |\n|---|---|---|---|"
     );
-    for g in &drive.gaps {
+    for g in drive.gaps() {
         let addresses = g
             .addresses
             .map(|[a, b]| describe::address_span(a, b))
@@ -824,16 +826,16 @@ fn gaps(out: &mut String, drive: &Drive) {
     out.push('\n');
 }
 
-fn removed(out: &mut String, drive: &Drive) {
-    if drive.removed.is_empty() {
+fn removed(out: &mut String, drive: &Map) {
+    if drive.removed().is_empty() {
         return;
     }
-    let base = drive.meta.extends.as_deref().unwrap_or("the base map");
+    let base = drive.meta().extends.as_deref().unwrap_or("the base map");
     let _ = writeln!(
         out,
         "## Registers of `{base}` this drive lacks\n\n| Register | Reason | Source |\n|---|---|---|"
     );
-    for r in &drive.removed {
+    for r in drive.removed() {
         let _ = writeln!(
             out,
             "| {} | {} | {} |",

@@ -219,7 +219,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                         eprintln!("{}", w.as_warning());
                     }
                 }
-                for w in review::protocol_warnings(drive.ir()) {
+                for w in review::protocol_warnings(drive) {
                     eprintln!("{w}");
                 }
                 // The manual's example frames against the codec and the map.
@@ -249,7 +249,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                 }
                 let mut manuals = manuals_dir.as_deref().map(Manuals::new);
                 if let Some(m) = manuals.as_mut() {
-                    m.load_for(drive.ir());
+                    m.load_for(drive);
                 }
                 let why = not_verified(
                     manuals_dir.as_deref(),
@@ -275,7 +275,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                     map_errors += 1;
                 }
                 if let Some(manuals) = manuals {
-                    let checks = review::verify_citations(drive.ir(), &manuals);
+                    let checks = review::verify_citations(drive, &manuals);
                     let counts = CitationCounts::of(&checks);
                     for w in checks.iter().filter_map(|c| c.warning()) {
                         if args.strict {

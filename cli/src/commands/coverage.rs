@@ -45,7 +45,7 @@ pub(crate) fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<Covera
         )
     })?;
     let mut manuals = Manuals::new(&manuals_dir);
-    manuals.load_for(drive.ir());
+    manuals.load_for(&drive);
     if !manuals.any() {
         return Err(Error::Refused(format!(
             "{}: none of its manuals is in {}",
@@ -67,7 +67,7 @@ pub(crate) fn report_for(path: &std::path::Path, dir: &MapsDir) -> Result<Covera
         }
         None => Vec::new(),
     };
-    let report = review::coverage(drive.ir(), &manuals, &skip);
+    let report = review::coverage(&drive, &manuals, &skip);
     if report.tables.is_empty() {
         // Nothing recognised is not "everything covered": say so, never report success.
         let read: Vec<&str> = drive

@@ -123,7 +123,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
                 warn_schema(&drive, None);
                 Ok::<_, String>(drive)
             };
-            vec![diff::compare(read(old)?.ir(), read(new)?.ir())]
+            vec![diff::compare(&read(old)?, &read(new)?)]
         }
     };
     let manuals = manuals_for(&args, &diffs);
@@ -166,7 +166,7 @@ fn manuals_for(args: &Args, diffs: &[DriveDiff]) -> Option<Manuals> {
     let mut manuals = Manuals::new(&dir);
     for c in diffs.iter().flat_map(|d| d.changes.iter()) {
         for s in [&c.old_source, &c.new_source].into_iter().flatten() {
-            if let Some((file, _)) = drivemap_map::validate::parse_citation(s) {
+            if let Some((file, _)) = drivemap_map::facts::parse_citation(s) {
                 manuals.load(file);
             }
         }
@@ -221,9 +221,9 @@ fn from_git(args: &Args, rev: &str) -> Result<Vec<DriveDiff>, Error> {
     for name in names {
         let (old, new) = (then.path().join(&name), dir.join(&name));
         let diff = match (old.is_file(), new.is_file()) {
-            (true, true) => diff::compare(old_read(&old)?.ir(), read(&new, &near)?.ir()),
-            (false, true) => diff::added(read(&new, &near)?.ir()),
-            (true, false) => diff::removed(old_read(&old)?.ir()),
+            (true, true) => diff::compare(&old_read(&old)?, &read(&new, &near)?),
+            (false, true) => diff::added(&read(&new, &near)?),
+            (true, false) => diff::removed(&old_read(&old)?),
             (false, false) => {
                 return Err(Error::Refused(format!(
                     "{name} is neither in {} nor at revision {rev}",

@@ -65,7 +65,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     } else {
         file
     };
-    let text = reference::render(drive.ir(), &name);
+    let text = reference::render(&drive, &name);
     if let Some(docs) = &args.docs {
         return write_docs(docs, &path, &drive, &text, &args);
     }

@@ -27,8 +27,8 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_map::facts::TransportName;
+use drivemap_map::facts::field_span;
 use drivemap_map::ir::ValueKind;
-use drivemap_map::validate::field_span;
 use drivemap_runtime::core::width::{Width, WordOrder};
 use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;

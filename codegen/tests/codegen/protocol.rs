@@ -30,7 +30,7 @@ fn a_frame_gap_in_ms_is_lowered_into_the_profile_timing() {
         .unwrap();
     assert_eq!(plain.plan().profile.timing.frame_gap_us, None);
     // The reference's timing row states it with its citation.
-    let md = drivemap_review::reference::render(drive.ir(), "mini-drive.yaml");
+    let md = drivemap_review::reference::render(&drive, "mini-drive.yaml");
     assert!(
         md.contains("frame gap 3.5 characters, at least 10 ms (`manual.txt:17`)"),
         "{md}"
@@ -58,7 +58,7 @@ fn a_limit_not_printed_keeps_its_value_and_says_why() {
         .unwrap();
     let plan = drive.plan();
     assert_eq!((plan.profile.max_read, plan.profile.max_write), (8, 4));
-    let md = drivemap_review::reference::render(drive.ir(), "mini-drive.yaml");
+    let md = drivemap_review::reference::render(&drive, "mini-drive.yaml");
     assert!(
         md.contains(
             "at most 8 per read, 4 per write. max_read 8 not printed: no limit printed; 8 is its own frame (`manual.txt:18`). max_write (`manual.txt:19`)"
@@ -95,7 +95,7 @@ fn a_limit_not_printed_keeps_its_value_and_says_why() {
         plan.profile.max_read_stated(),
         drivemap_core::stated::Stated::NotPrinted("not printed")
     );
-    let md = drivemap_review::reference::render(drive.ir(), "mini-drive.yaml");
+    let md = drivemap_review::reference::render(&drive, "mini-drive.yaml");
     assert!(
         md.contains(
             "at most 125 per read, 8 per write. max_read not printed in the manual: not printed; used instead: the Modbus limit (125)"
@@ -133,7 +133,7 @@ fn function_codes_carry_their_citation_or_why_they_are_not_printed() {
     );
     let plan = drive.plan();
     assert_eq!(plan.profile.function_codes, &[0x03, 0x06, 0x08, 0x10]);
-    let md = drivemap_review::reference::render(drive.ir(), "mini-drive.yaml");
+    let md = drivemap_review::reference::render(&drive, "mini-drive.yaml");
     assert!(
         md.contains(
             "| Function codes | 03h, 06h, 08h, 10h. List not printed: no list printed; the codes of its examples | `manual.txt:9` |"
@@ -162,7 +162,7 @@ fn function_codes_carry_their_citation_or_why_they_are_not_printed() {
             &with("{codes: [0x03, 0x06, 0x08, 0x10], source: \"manual.txt:9\"}"),
         )
         .unwrap();
-    let md = drivemap_review::reference::render(cited.ir(), "mini-drive.yaml");
+    let md = drivemap_review::reference::render(&cited, "mini-drive.yaml");
     assert!(
         md.contains("| Function codes | 03h, 06h, 08h, 10h | `manual.txt:9` |"),
         "{md}"
@@ -234,7 +234,7 @@ fn a_broadcast_whose_rules_are_not_printed_is_lowered_as_such() {
     let b = plain.plan().profile.broadcast.unwrap();
     assert_eq!((b.functions, b.not_printed), (&[0x06u8, 0x10][..], None));
 
-    let md = drivemap_review::reference::render(drive.ir(), "mini-drive.yaml");
+    let md = drivemap_review::reference::render(&drive, "mini-drive.yaml");
     assert!(
         md.contains(
             "| Broadcast | broadcast exists, rules not printed: slave 0 is broadcast; no functions or registers printed. The runtime sends no broadcast to this drive. | `manual.txt:11` |"
@@ -309,7 +309,7 @@ fn serial_formats_chosen_by_a_parameter_reach_the_profile() {
         None
     );
 
-    let md = drivemap_review::reference::render(drive.ir(), "mini-drive.yaml");
+    let md = drivemap_review::reference::render(&drive, "mini-drive.yaml");
     assert!(
         md.contains(
             "parity none, even; only the formats response_delay selects: 0 = 8N2, 1 = 8E1, 2 = 7E1 (`manual.txt:17`) | `manual.txt:16` |"

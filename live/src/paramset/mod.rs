@@ -24,8 +24,8 @@ mod save;
 use std::collections::BTreeSet;
 
 use drivemap_map::Map;
+use drivemap_map::Quantity;
 use drivemap_map::RegisterRef;
-use drivemap_map::lower::Quantity;
 use drivemap_runtime::plan::Dependency;
 use drivemap_runtime::roles::RoleKind;
 

@@ -5,8 +5,8 @@
 use std::collections::BTreeSet;
 
 use drivemap_map::Map;
+use drivemap_map::Quantity;
 use drivemap_map::RegisterRef;
-use drivemap_map::lower::Quantity;
 use drivemap_runtime::ValueError;
 use drivemap_runtime::gate::{self, WriteTarget};
 use drivemap_runtime::plan::Conversion;

@@ -25,7 +25,7 @@ mod manuals_declared;
 mod number_fields;
 mod numbers_finite;
 mod pairs_valid;
-pub mod protocol_stated;
+pub(crate) mod protocol_stated;
 mod protocol_valid;
 mod ratio_scales;
 mod read_values_valid;

@@ -191,7 +191,7 @@ pub(crate) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
 /// Numbers given without a citation of their own or of their block (`timing.source` covers
 /// the timing figures): each is reported, to be cited or marked `unknown`. A warning, not an
 /// error, so that maps written before the rule still load.
-pub fn warnings(drive: &Drive) -> Vec<Diagnostic> {
+pub(crate) fn warnings(drive: &Drive) -> Vec<Diagnostic> {
     let p = &drive.protocol;
     let pp = Path::root().key("protocol");
     let mut out = Vec::new();

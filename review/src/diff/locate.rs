@@ -1,9 +1,7 @@
 //! Where a change is in the new map: the line of the key that changed (the register's `scale`,
 //! `protocol.function_codes`), else of the register or section, for annotations on the map.
 
-use drivemap_map::Loc;
-use drivemap_map::ir::Drive;
-use drivemap_map::source::Path;
+use drivemap_map::{Loc, Map};
 
 use super::{Change, ChangeKind};
 
@@ -37,36 +35,34 @@ fn register_key(kind: ChangeKind) -> Option<&'static str> {
     })
 }
 
-/// The path of the map section a change of this kind concerns, when it is not a register's.
-fn section(kind: ChangeKind, what: &str) -> Path {
+/// The key path ([`Map::locate`]) of the map section a change of this kind concerns, when it is
+/// not a register's.
+fn section(kind: ChangeKind, what: &str) -> String {
     use ChangeKind::*;
-    let root = Path::root();
-    let protocol = root.key("protocol");
+    let protocol = |key: &str| format!("protocol.{key}");
     match kind {
-        DriveAdded | DriveRemoved | DriveMetaChanged => root.key("drive"),
+        DriveAdded | DriveRemoved | DriveMetaChanged => "drive".into(),
         VariantAxisAdded | VariantAxisRemoved | VariantOptionAdded | VariantOptionRemoved
-        | VariantBaseChanged => root.key("variants"),
-        TransportAdded | TransportRemoved => protocol.key("transports"),
-        FunctionCodeAdded | FunctionCodeRemoved => protocol.key("function_codes"),
-        MaxRequestRaised | MaxRequestLowered => protocol.key(if what.contains("write") {
+        | VariantBaseChanged => "variants".into(),
+        TransportAdded | TransportRemoved => protocol("transports"),
+        FunctionCodeAdded | FunctionCodeRemoved => protocol("function_codes"),
+        MaxRequestRaised | MaxRequestLowered => protocol(if what.contains("write") {
             "max_write"
         } else {
             "max_read"
         }),
-        SlaveRangeWidened | SlaveRangeNarrowed => protocol.key("slave_address"),
-        BroadcastExtended | BroadcastRestricted => protocol.key("broadcast"),
-        ExceptionAdded | ExceptionRemoved | ExceptionReworded => protocol.key("exceptions"),
-        CommandAdded | CommandRemoved | CommandChanged | CommandReworded => {
-            protocol.key("commands")
-        }
-        AddressingChanged => protocol.key("addressing"),
-        TimingChanged => protocol.key("timing"),
-        LineSettingsChanged => protocol.key("serial"),
+        SlaveRangeWidened | SlaveRangeNarrowed => protocol("slave_address"),
+        BroadcastExtended | BroadcastRestricted => protocol("broadcast"),
+        ExceptionAdded | ExceptionRemoved | ExceptionReworded => protocol("exceptions"),
+        CommandAdded | CommandRemoved | CommandChanged | CommandReworded => protocol("commands"),
+        AddressingChanged => protocol("addressing"),
+        TimingChanged => protocol("timing"),
+        LineSettingsChanged => protocol("serial"),
         RoleAdded | RoleRemoved | RoleRepointed | RoleCodesChanged => role(what),
-        DocumentationChanged if what.starts_with("conflict ") => root.key("conflicts"),
-        DocumentationChanged if what.starts_with("gap ") => root.key("gaps"),
-        DocumentationChanged if what.starts_with("removed register ") => root.key("removed"),
-        DocumentationChanged if what == "groups" => root.key("groups"),
+        DocumentationChanged if what.starts_with("conflict ") => "conflicts".into(),
+        DocumentationChanged if what.starts_with("gap ") => "gaps".into(),
+        DocumentationChanged if what.starts_with("removed register ") => "removed".into(),
+        DocumentationChanged if what == "groups" => "groups".into(),
         // `slave_address: not printed`, `timing.frame_gap: not printed`.
         DocumentationChanged
             if what.ends_with(": not printed")
@@ -75,41 +71,38 @@ fn section(kind: ChangeKind, what: &str) -> Path {
                 )
                 .is_some() =>
         {
-            what.trim_end_matches(": not printed")
-                .split('.')
-                .fold(protocol, |p, k| p.key(k))
+            protocol(what.trim_end_matches(": not printed"))
         }
-        _ => root,
+        _ => String::new(),
     }
 }
 
 /// The path of a role named at the start of a change's `what` (`run`, `run place 2`).
-fn role(what: &str) -> Path {
+fn role(what: &str) -> String {
     let id = what.split([' ', ':']).next().unwrap_or_default();
-    Path::root().key("roles").key(id)
+    format!("roles.{id}")
 }
 
 /// Where `change` is in the new map, if the new map has it.
-pub(crate) fn at(change: &Change, old: &Drive, new: &Drive) -> Option<Loc> {
+pub(crate) fn at(change: &Change, old: &Map, new: &Map) -> Option<Loc> {
     if change.subject == "roles" {
         return Some(new.locate(&role(&change.what)));
     }
     let id = change.subject.split(' ').next().unwrap_or_default();
-    if let Some(r) = new.registers.iter().find(|r| r.def.id == id) {
-        let path = match register_key(change.kind) {
-            Some(key) => r.key_path(key),
-            None => r.path.clone(),
-        };
-        return Some(new.locate(&path));
+    if let Some(r) = new.register_by_id(id) {
+        return Some(match register_key(change.kind) {
+            Some(key) => r.key_location(key),
+            None => r.location(),
+        });
     }
-    if let Some(r) = old.registers.iter().find(|r| r.def.id == id) {
+    if let Some(r) = old.register_by_id(id) {
         // Gone from the new map: the group that held it, if the new map still has it.
-        let group = &old.group_of(r).id;
+        let group = &r.group().id;
         return new
-            .groups
+            .groups()
             .iter()
-            .find(|g| &g.id == group)
-            .map(|g| new.locate(&g.path));
+            .position(|g| &g.id == group)
+            .map(|i| new.locate(&format!("groups[{i}]")));
     }
     Some(new.locate(&section(change.kind, &change.what)))
 }

@@ -22,6 +22,7 @@ mod roles;
 #[cfg(test)]
 mod tests;
 
+use drivemap_map::Map;
 use drivemap_map::describe;
 use drivemap_map::ir::Drive;
 use serde::Serialize;
@@ -133,48 +134,48 @@ pub(crate) fn json<T: Serialize>(a: &T) -> String {
 }
 
 /// A drive that exists only on one side.
-pub fn added(new: &Drive) -> DriveDiff {
+pub fn added(new: &Map) -> DriveDiff {
     let mut c = Collector {
         changes: Vec::new(),
     };
     c.push(
         ChangeKind::DriveAdded,
-        &new.meta.id,
+        new.id(),
         "",
         (None, None),
         (
-            Some(format!("{} registers", new.registers.len())),
-            new.protocol.source.clone(),
+            Some(format!("{} registers", new.registers().len())),
+            new.protocol().source.clone(),
         ),
         HEAD,
     );
     for ch in &mut c.changes {
-        ch.at = Some(new.locate(&drivemap_map::source::Path::root().key("drive")));
+        ch.at = Some(new.locate("drive"));
     }
     DriveDiff {
-        drive: new.meta.id.clone(),
+        drive: new.id().to_owned(),
         changes: c.changes,
     }
 }
 
 /// A drive that exists only on the old side.
-pub fn removed(old: &Drive) -> DriveDiff {
+pub fn removed(old: &Map) -> DriveDiff {
     let mut c = Collector {
         changes: Vec::new(),
     };
     c.push(
         ChangeKind::DriveRemoved,
-        &old.meta.id,
+        old.id(),
         "",
         (
-            Some(format!("{} registers", old.registers.len())),
-            old.protocol.source.clone(),
+            Some(format!("{} registers", old.registers().len())),
+            old.protocol().source.clone(),
         ),
         (None, None),
         HEAD,
     );
     DriveDiff {
-        drive: old.meta.id.clone(),
+        drive: old.id().to_owned(),
         changes: c.changes,
     }
 }
@@ -184,7 +185,9 @@ pub fn removed(old: &Drive) -> DriveDiff {
 /// Every part of a map is compared. The parts are named here field by field, with no `..`, as
 /// are the fields of each part in the function that compares it: a part or key added to the
 /// schema fails to compile until the diff compares it (or says here why it is not a part).
-pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
+pub fn compare(old: &Map, new: &Map) -> DriveDiff {
+    let maps = (old, new);
+    let (old, new) = (old.ir(), new.ir());
     let mut c = Collector {
         changes: Vec::new(),
     };
@@ -208,16 +211,16 @@ pub fn compare(old: &Drive, new: &Drive) -> DriveDiff {
         draft: _,          // map_documentation
         examples: _,       // map_documentation, example by example
     } = new;
-    protocol::meta(&mut c, old, new);
-    protocol::variants(&mut c, old, new);
-    profile::protocol(&mut c, old, new);
-    roles::roles(&mut c, old, new);
-    roles::command_profile(&mut c, old, new);
+    protocol::meta(&mut c, maps.0, maps.1);
+    protocol::variants(&mut c, maps.0, maps.1);
+    profile::protocol(&mut c, maps.0, maps.1);
+    roles::roles(&mut c, maps.0, maps.1);
+    roles::command_profile(&mut c, maps.0, maps.1);
     registers::registers(&mut c, old, new);
-    map_documentation(&mut c, old, new);
+    map_documentation(&mut c, maps.0, maps.1);
     c.changes.sort_by_key(|ch| ch.order);
     for ch in &mut c.changes {
-        ch.at = locate::at(ch, old, new);
+        ch.at = locate::at(ch, maps.0, maps.1);
     }
     DriveDiff {
         drive: new.meta.id.clone(),
@@ -292,8 +295,8 @@ fn keyed<T: Serialize>(
     }
 }
 
-fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
-    let id = &new.meta.id;
+fn map_documentation(c: &mut Collector, old: &Map, new: &Map) {
+    let id = new.id();
     let count = |n: usize, what: &str| Some(format!("{n} {what}"));
     let counts = |a: usize, b: usize, what: &str| {
         if a == b {
@@ -307,8 +310,8 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         c,
         id,
         "conflict",
-        &old.conflicts,
-        &new.conflicts,
+        old.conflicts(),
+        new.conflicts(),
         |x| format!("\"{}\"", x.topic),
         |x| format!("chosen: {}", x.chosen),
         |x| x.readings.first().map(|r| r.source.clone()),
@@ -317,8 +320,8 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         c,
         id,
         "gap",
-        &old.gaps,
-        &new.gaps,
+        old.gaps(),
+        new.gaps(),
         |x| match (x.addresses, &x.params) {
             (Some([a, b]), _) => describe::address_span(a, b),
             (None, Some(p)) => p.clone(),
@@ -331,8 +334,8 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         c,
         id,
         "removed register",
-        &old.removed,
-        &new.removed,
+        old.removed(),
+        new.removed(),
         |x| format!("`{}`", x.id),
         |x| x.reason.clone(),
         |x| Some(x.source.clone()),
@@ -341,14 +344,14 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
         c,
         id,
         "example frame",
-        &old.examples,
-        &new.examples,
+        old.examples(),
+        new.examples(),
         |x| format!("`{}`", x.id),
         |x| x.summary(),
         |x| Some(x.source.clone()),
     );
-    if old.draft != new.draft {
-        let text = |d: &Option<drivemap_map::model::Draft>| {
+    if old.draft() != new.draft() {
+        let text = |d: Option<&drivemap_map::facts::Draft>| {
             Some(match d {
                 None => "not a draft".to_string(),
                 Some(d) => format!(
@@ -362,31 +365,30 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
             ChangeKind::DocumentationChanged,
             id,
             "draft mark",
-            (text(&old.draft), None),
-            (text(&new.draft), None),
+            (text(old.draft()), None),
+            (text(new.draft()), None),
             TAIL,
         );
     }
-    if old.address_format != new.address_format {
-        let text = |f: drivemap_map::model::AddressFormat| Some(format!("{f:?}").to_lowercase());
+    if old.address_format() != new.address_format() {
+        let text = |f: drivemap_map::facts::AddressFormat| Some(format!("{f:?}").to_lowercase());
         c.push(
             ChangeKind::DocumentationChanged,
             id,
             "address format",
-            (text(old.address_format), None),
-            (text(new.address_format), None),
+            (text(old.address_format()), None),
+            (text(new.address_format()), None),
             TAIL,
         );
     }
-    let group_docs = |d: &Drive| {
-        d.groups
+    let group_docs = |d: &Map| {
+        d.groups()
             .iter()
-            .enumerate()
-            .map(|(gi, g)| {
+            .map(|g| {
                 // Access, table, write restriction, transports and repeat rules of a group are
                 // its registers' defaults, and its broadcast flag their membership: compared on
                 // each register (an empty group's flag here).
-                let drivemap_map::ir::Group {
+                let drivemap_map::facts::Group {
                     id,
                     name,
                     table,
@@ -395,7 +397,7 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
                     notes,
                     path: _,
                 } = g;
-                let empty = !d.registers.iter().any(|r| r.group == gi);
+                let empty = !d.registers().any(|r| std::ptr::eq(r.group(), g));
                 json(&(id, name, table, source, *broadcast && empty, notes))
             })
             .collect::<Vec<_>>()
@@ -406,11 +408,11 @@ fn map_documentation(c: &mut Collector, old: &Drive, new: &Drive) {
             id,
             "groups",
             (
-                counts(old.groups.len(), new.groups.len(), "group(s)").0,
+                counts(old.groups().len(), new.groups().len(), "group(s)").0,
                 None,
             ),
             (
-                counts(old.groups.len(), new.groups.len(), "group(s)").1,
+                counts(old.groups().len(), new.groups().len(), "group(s)").1,
                 None,
             ),
             TAIL,

@@ -8,12 +8,12 @@
 use std::collections::BTreeSet;
 
 use drivemap_map::facts::{
-    self, CommandFacts, ExceptionFacts, Figure, ProtocolFacts, ProtocolKey as K, ProtocolRow,
+    CommandFacts, ExceptionFacts, Figure, ProtocolFacts, ProtocolKey as K, ProtocolRow,
 };
 
 use super::{ChangeKind, Collector, HEAD, Side};
+use drivemap_map::Map;
 use drivemap_map::describe;
-use drivemap_map::ir::Drive;
 
 /// How a change of a key is reported.
 #[derive(Debug, Clone, Copy)]
@@ -132,10 +132,10 @@ fn push(c: &mut Collector, kind: ChangeKind, what: &str, old: Side, new: Side) {
     c.push(kind, "protocol", what, old, new, HEAD);
 }
 
-pub(super) fn protocol(c: &mut Collector, old: &Drive, new: &Drive) {
+pub(super) fn protocol(c: &mut Collector, old: &Map, new: &Map) {
     let p = Pair {
-        a: facts::protocol(old),
-        b: facts::protocol(new),
+        a: old.protocol_facts(),
+        b: new.protocol_facts(),
     };
     for step in STEPS {
         match step {

@@ -1,14 +1,14 @@
 //! Differences outside the registers: drive metadata and variant axes (the protocol profile is
 //! `profile.rs`'s).
 
-use drivemap_map::ir::Drive;
+use drivemap_map::Map;
 
 use super::{ChangeKind, Collector, HEAD, same};
 
-pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
-    let (a, b) = (&old.meta, &new.meta);
+pub(super) fn meta(c: &mut Collector, old: &Map, new: &Map) {
+    let (a, b) = (old.meta(), new.meta());
     let id = &b.id;
-    let drivemap_map::model::DriveMeta {
+    let drivemap_map::facts::DriveMeta {
         id: _,
         extends: _,
         vendor: _,
@@ -36,7 +36,7 @@ pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
         parts.push("manuals");
     }
     if !parts.is_empty() {
-        let text = |m: &drivemap_map::model::DriveMeta| {
+        let text = |m: &drivemap_map::facts::DriveMeta| {
             format!(
                 "{} {} ({} manual(s))",
                 m.vendor,
@@ -55,10 +55,10 @@ pub(super) fn meta(c: &mut Collector, old: &Drive, new: &Drive) {
     }
 }
 
-pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
+pub(super) fn variants(c: &mut Collector, old: &Map, new: &Map) {
     let subject = "variants";
-    for a in &old.variants {
-        let Some(b) = new.variants.iter().find(|b| b.id == a.id) else {
+    for a in old.variants() {
+        let Some(b) = new.variants().iter().find(|b| b.id == a.id) else {
             let opts: Vec<&str> = a.options.iter().map(|o| o.id.as_str()).collect();
             c.push(
                 ChangeKind::VariantAxisRemoved,
@@ -97,7 +97,7 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
                 );
             }
         }
-        let drivemap_map::model::VariantAxis {
+        let drivemap_map::facts::VariantAxis {
             id: _,
             name: _,
             options: _,
@@ -107,7 +107,7 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
             docs.push("name".to_owned());
         }
         for o in &a.options {
-            let drivemap_map::model::VariantOption {
+            let drivemap_map::facts::VariantOption {
                 id: _,
                 name: _,
                 source: _,
@@ -128,7 +128,7 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
                 }
             }
         }
-        let order = |x: &drivemap_map::model::VariantAxis| {
+        let order = |x: &drivemap_map::facts::VariantAxis| {
             x.options.iter().map(|o| o.id.clone()).collect::<Vec<_>>()
         };
         let (oa, ob) = (order(a), order(b));
@@ -164,8 +164,8 @@ pub(super) fn variants(c: &mut Collector, old: &Drive, new: &Drive) {
             );
         }
     }
-    for b in &new.variants {
-        if !old.variants.iter().any(|a| a.id == b.id) {
+    for b in new.variants() {
+        if !old.variants().iter().any(|a| a.id == b.id) {
             let opts: Vec<&str> = b.options.iter().map(|o| o.id.as_str()).collect();
             c.push(
                 ChangeKind::VariantAxisAdded,

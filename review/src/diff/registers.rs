@@ -12,8 +12,8 @@ use drivemap_core::RegisterPlan;
 use drivemap_core::register::{Access, WriteRestriction};
 use drivemap_map::ir::{Drive, Register, ValueKind};
 
+use drivemap_map::facts::field_span;
 use drivemap_map::model::{EnumValue, Field, Scale};
-use drivemap_map::validate::field_span;
 
 use super::{ChangeKind, Collector, Side, json, same};
 use drivemap_map::describe;
@@ -876,7 +876,7 @@ fn variant_ranges(c: &mut Collector, s: &Sides) {
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
         let (oa, ob) = (a.by_variant.get(option), b.by_variant.get(option));
-        let overrides = |o: Option<&drivemap_map::model::VariantOverride>| {
+        let overrides = |o: Option<&drivemap_map::facts::VariantOverride>| {
             o.map(|o| (o.min, o.max)).unwrap_or((None, None))
         };
         let ((mina, maxa), (minb, maxb)) = (overrides(oa), overrides(ob));
@@ -1079,7 +1079,7 @@ fn variant_citations(c: &mut Collector, s: &Sides) {
     for option in options {
         let source = |d: &drivemap_map::model::Register| {
             d.by_variant.get(option).and_then(|o| {
-                let drivemap_map::model::VariantOverride {
+                let drivemap_map::facts::VariantOverride {
                     min: _,
                     max: _,
                     default: _,

@@ -15,9 +15,9 @@
 use std::collections::BTreeSet;
 
 use drivemap_map::describe;
-use drivemap_map::ir::Drive;
-use drivemap_map::model::{CodeRef, Codes, RolePlace};
-use drivemap_map::names::field_span;
+use drivemap_map::facts::field_span;
+use drivemap_map::facts::{CodeRef, Codes, RolePlace};
+use drivemap_map::{Map, RegisterRef};
 
 use super::{ChangeKind, Collector, HEAD};
 
@@ -88,7 +88,7 @@ impl Target {
     }
 
     /// The target as a change names it, its address in the map's notation (`format`).
-    fn text(&self, format: drivemap_map::model::AddressFormat) -> String {
+    fn text(&self, format: drivemap_map::facts::AddressFormat) -> String {
         match self {
             Target::Register { id, address, .. } => {
                 format!("{id} ({})", describe::address_as(format, *address))
@@ -120,7 +120,7 @@ impl Target {
 struct Meaning {
     target: Target,
     /// The links the place holds on (`None`: every transport of the map).
-    transports: Option<Vec<drivemap_map::model::TransportName>>,
+    transports: Option<Vec<drivemap_map::facts::TransportName>>,
     on: Vec<Option<u16>>,
     off: Option<u16>,
     /// How the drive acts on a command: "level", "edge" or "not printed".
@@ -130,11 +130,11 @@ struct Meaning {
     /// The role it shares its register or bits with, as the map says.
     shared_with: Option<String>,
     /// How the map prints addresses (for the text only; not a change of the role).
-    address_format: drivemap_map::model::AddressFormat,
+    address_format: drivemap_map::facts::AddressFormat,
 }
 
 impl Meaning {
-    fn of(drive: &Drive, id: &str, p: &RolePlace) -> Meaning {
+    fn of(drive: &Map, id: &str, p: &RolePlace) -> Meaning {
         // Every key of a place is read here or below: a new key fails to compile until the diff
         // compares it.
         let RolePlace {
@@ -153,28 +153,28 @@ impl Meaning {
             indirect: _,
             notes: _,
         } = p;
-        let key = |r: &drivemap_map::ir::Register| {
+        let key = |r: RegisterRef| {
             (
-                r.def.param.clone(),
-                r.table == drivemap_core::register::Table::Input,
-                r.broadcast,
+                r.param().map(str::to_owned),
+                r.plan().info.table == drivemap_core::register::Table::Input,
+                r.broadcast_only(),
             )
         };
         let target = match (register, external) {
             (_, Some(name)) => Target::External(name.clone()),
-            (Some(name), None) => match drive.find(name) {
+            (Some(name), None) => match drive.register(name) {
                 None => Target::Unresolved(name.clone()),
                 Some(r) => match field {
                     None => Target::Register {
-                        id: r.def.id.clone(),
-                        address: r.def.address,
+                        id: r.id().to_owned(),
+                        address: r.address(),
                         param: key(r),
                     },
                     Some(fid) => {
-                        let f = r.def.fields.iter().find(|f| f.id == *fid);
+                        let f = r.fields().iter().find(|f| f.id == *fid);
                         Target::Field {
-                            register: r.def.id.clone(),
-                            address: r.def.address,
+                            register: r.id().to_owned(),
+                            address: r.address(),
                             param: key(r),
                             field: fid.clone(),
                             span: f.and_then(field_span),
@@ -187,20 +187,14 @@ impl Meaning {
         };
         // Codes by id: the field's values, or the register's own (a source role's `on: rs485`).
         let values: Vec<(String, u16)> =
-            match (register.as_deref().and_then(|n| drive.find(n)), field) {
+            match (register.as_deref().and_then(|n| drive.register(n)), field) {
                 (Some(r), Some(fid)) => r
-                    .def
-                    .fields
+                    .fields()
                     .iter()
                     .find(|f| f.id == *fid)
                     .map(|f| f.values.iter().map(|v| (v.id.clone(), v.value)).collect())
                     .unwrap_or_default(),
-                (Some(r), None) => r
-                    .def
-                    .values
-                    .iter()
-                    .map(|v| (v.id.clone(), v.value))
-                    .collect(),
+                (Some(r), None) => r.values().iter().map(|v| (v.id.clone(), v.value)).collect(),
                 _ => Vec::new(),
             };
         let code = |c: &CodeRef| match c {
@@ -253,13 +247,13 @@ impl Meaning {
             on,
             off,
             edge: match edge {
-                drivemap_map::model::EdgeSpec::Known(false) => "level",
-                drivemap_map::model::EdgeSpec::Known(true) => "edge",
-                drivemap_map::model::EdgeSpec::Unknown(_) => "not printed",
+                drivemap_map::facts::EdgeSpec::Known(false) => "level",
+                drivemap_map::facts::EdgeSpec::Known(true) => "edge",
+                drivemap_map::facts::EdgeSpec::Unknown(_) => "not printed",
             },
             number: number.then(|| (*signed, scale.unwrap_or(1.0))),
             shared_with: shared_with.clone(),
-            address_format: drive.address_format,
+            address_format: drive.address_format(),
         }
     }
 
@@ -315,7 +309,7 @@ impl Meaning {
     }
 }
 
-fn places_text(drive: &Drive, id: &str, places: &[RolePlace]) -> String {
+fn places_text(drive: &Map, id: &str, places: &[RolePlace]) -> String {
     places
         .iter()
         .map(|p| Meaning::of(drive, id, p).text())
@@ -346,13 +340,13 @@ fn spelling(p: &RolePlace) -> Spelling<'_> {
     )
 }
 
-pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
+pub(super) fn roles(c: &mut Collector, old: &Map, new: &Map) {
     let subject = "roles";
-    let ids: BTreeSet<&String> = old.roles.keys().chain(new.roles.keys()).collect();
+    let ids: BTreeSet<&String> = old.roles().keys().chain(new.roles().keys()).collect();
     for id in ids {
         let empty = Vec::new();
-        let a = old.roles.get(id).unwrap_or(&empty);
-        let b = new.roles.get(id).unwrap_or(&empty);
+        let a = old.roles().get(id).unwrap_or(&empty);
+        let b = new.roles().get(id).unwrap_or(&empty);
         match (a.is_empty(), b.is_empty()) {
             (true, true) => continue,
             (false, true) => {
@@ -461,11 +455,11 @@ pub(super) fn roles(c: &mut Collector, old: &Drive, new: &Drive) {
 /// control or status register, a state's mask or value, a transition's word, kept bits, edge,
 /// states or time limit, a path or the power-on state changed, is breaking (the drive trait
 /// walks them); a citation is documentation.
-pub(super) fn command_profile(c: &mut Collector, old: &Drive, new: &Drive) {
+pub(super) fn command_profile(c: &mut Collector, old: &Map, new: &Map) {
     use drivemap_map::command_profile::resolve;
     let subject = "profile";
-    let text = |d: &Drive| {
-        d.profile.as_ref().map(|p| {
+    let text = |d: &Map| {
+        d.profile().map(|p| {
             let r = resolve(p);
             format!(
                 "{} (control {}, status {})",
@@ -475,7 +469,7 @@ pub(super) fn command_profile(c: &mut Collector, old: &Drive, new: &Drive) {
             )
         })
     };
-    let (a, b) = match (&old.profile, &new.profile) {
+    let (a, b) = match (old.profile(), new.profile()) {
         (None, None) => return,
         (Some(a), None) => {
             c.push(

@@ -82,10 +82,9 @@ impl std::fmt::Display for CaseError {
 }
 
 /// Reads a version of the example map from memory (no temporary files).
-fn read(name: &str, text: &str) -> Result<Drive, CaseError> {
+fn read(name: &str, text: &str) -> Result<Map, CaseError> {
     drivemap_map::Loader::new()
         .load_str("example-drive.yaml", text)
-        .map(drivemap_map::Map::into_ir)
         .map_err(|d| CaseError::Invalid {
             side: name.to_owned(),
             diagnostics: d.to_string(),

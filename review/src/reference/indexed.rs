@@ -5,34 +5,33 @@
 use std::fmt::Write as _;
 
 use drivemap_core::register::Access;
-use drivemap_map::ir::Drive;
+use drivemap_map::Map;
 
 use super::{addr, cell, cite, code};
 
-pub(super) fn section(out: &mut String, drive: &Drive) {
+pub(super) fn section(out: &mut String, drive: &Map) {
     let pairs: Vec<_> = drive
-        .registers
-        .iter()
-        .filter_map(|r| Some((r, r.def.indexed.as_ref()?)))
+        .registers()
+        .filter_map(|r| Some((r, r.indexed()?)))
         .collect();
     if pairs.is_empty() {
         return;
     }
     let _ = writeln!(out, "## Indexed access\n");
     for (r, ix) in pairs {
-        let index = drive.find(&ix.by);
+        let index = drive.register(&ix.by);
         let index_at = index
-            .map(|i| format!(" ({})", addr(drive, i.def.address)))
+            .map(|i| format!(" ({})", addr(drive, i.address())))
             .unwrap_or_default();
         let _ = writeln!(
             out,
             "### {} {} — {}\n\nWrite the entry's index to {}{index_at}, then read or write {} ({}): the client's `read_entry`/`write_entry` do both in one call. Source: {}.\n",
-            addr(drive, r.def.address),
+            addr(drive, r.address()),
             code(r.id()),
-            cell(&r.def.name),
+            cell(r.name()),
             code(&ix.by),
             code(r.id()),
-            addr(drive, r.def.address),
+            addr(drive, r.address()),
             cite(Some(&ix.source)),
         );
         if !ix.entries.is_empty() {
@@ -43,7 +42,7 @@ pub(super) fn section(out: &mut String, drive: &Drive) {
             for e in &ix.entries {
                 let range =
                     drivemap_map::describe::range(e.min, e.max, e.unit.as_deref().unwrap_or(""));
-                let access = match e.access_under(r) {
+                let access = match e.access.unwrap_or(r.plan().info.access) {
                     Access::Read => "R",
                     Access::Write => "W",
                     Access::ReadWrite => "R/W",

@@ -6,13 +6,13 @@
 
 use std::fmt::Write as _;
 
+use drivemap_map::Map;
 use drivemap_map::command_profile::resolve;
-use drivemap_map::ir::Drive;
 
 use super::{cell, cite, code};
 
-pub(super) fn section(out: &mut String, drive: &Drive) {
-    let Some(spec) = &drive.profile else {
+pub(super) fn section(out: &mut String, drive: &Map) {
+    let Some(spec) = drive.profile() else {
         return;
     };
     let p = resolve(spec);

@@ -17,11 +17,10 @@ use super::Manuals;
 use super::matching::{
     AddressForms, Line, code_found, label_text, name_found, number_found, param_found,
 };
-use drivemap_map::Loc;
-use drivemap_map::citations::{PlaceKind, citation_places};
-use drivemap_map::ir::{Drive, Register};
-use drivemap_map::model::{EnumValue, Field};
-use drivemap_map::validate::{parse_citation, parse_page_citation};
+use drivemap_map::citations::PlaceKind;
+use drivemap_map::facts::{BitField as Field, EnumValue};
+use drivemap_map::facts::{parse_citation, parse_page_citation};
+use drivemap_map::{Loc, Map, RegisterRef};
 
 /// What a citation is the citation of.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -133,20 +132,19 @@ struct Keys {
 }
 
 impl Keys {
-    fn of(r: &Register, offsets: Option<(i32, i32)>, decimal: bool) -> Keys {
+    fn of(r: RegisterRef, offsets: Option<(i32, i32)>, decimal: bool) -> Keys {
         let forms = |address: u16| {
             let f = AddressForms::new(address, offsets);
             if decimal { f.with_decimal(address) } else { f }
         };
         Keys {
-            forms: forms(r.def.address),
+            forms: forms(r.address()),
             alternatives: r
-                .def
-                .address_alternatives
+                .address_alternatives()
                 .iter()
                 .map(|a| forms(a.address))
                 .collect(),
-            param: r.def.param.clone(),
+            param: r.param().map(str::to_owned),
         }
     }
 
@@ -179,22 +177,21 @@ const WINDOW: usize = 80;
 
 /// Checks every citation of a drive against the manuals: registers, values and fields, then
 /// roles, protocol items, readings of conflicts and gaps ([`drivemap_map::others`]).
-pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> {
-    let decimal = drive.address_format == drivemap_map::model::AddressFormat::Decimal;
-    let offsets = drive
-        .protocol
+pub fn verify_citations(map: &Map, manuals: &Manuals) -> Vec<CitationCheck> {
+    let decimal = map.address_format() == drivemap_map::facts::AddressFormat::Decimal;
+    let offsets = map
+        .protocol()
         .addressing
         .as_ref()
         .map(|a| (a.rtu_offset, a.tcp_offset));
-    let keys: Vec<Keys> = drive
-        .registers
-        .iter()
+    let keys: Vec<Keys> = map
+        .registers()
         .map(|r| Keys::of(r, offsets, decimal))
         .collect();
     // Registers by manual, sorted by cited line, to find the neighbours of a line.
     let mut by_file: HashMap<&str, Vec<(usize, usize)>> = HashMap::new();
-    for (i, r) in drive.registers.iter().enumerate() {
-        if let Some((file, line)) = r.def.source.as_deref().and_then(parse_citation) {
+    for (i, r) in map.registers().enumerate() {
+        if let Some((file, line)) = r.source().and_then(parse_citation) {
             by_file.entry(file).or_default().push((line, i));
         }
     }
@@ -208,11 +205,13 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
     let mut out = Vec::new();
     // The registers' own citations, from the one list of citation places: each register's row,
     // its values, its read values, each field with its values.
-    for place in citation_places(drive) {
+    for place in map.citation_places() {
         let (Some(i), Some(src)) = (place.register, place.source) else {
             continue;
         };
-        let r = &drive.registers[i];
+        let Some(r) = map.register_at(i) else {
+            continue;
+        };
         let value = |v: &EnumValue| {
             let verdict = match &v.indirect {
                 Some(reason) => Verdict::Indirect(reason.clone()),
@@ -230,22 +229,22 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
         let (item, expected, verdict) = match place.kind {
             PlaceKind::Register => {
                 let mut expected = Vec::new();
-                if let Some(p) = &r.def.param {
-                    expected.push(p.clone());
+                if let Some(p) = r.param() {
+                    expected.push(p.to_owned());
                 }
-                expected.push(AddressForms::display(r.def.address));
-                expected.push(format!("\"{}\"", r.def.name));
-                let verdict = match &r.def.indirect {
-                    Some(reason) => Verdict::Indirect(reason.clone()),
-                    None => register_verdict(drive, &keys, &by_file, &mut cache, i, src),
+                expected.push(AddressForms::display(r.address()));
+                expected.push(format!("\"{}\"", r.name()));
+                let verdict = match r.indirect() {
+                    Some(reason) => Verdict::Indirect(reason.to_owned()),
+                    None => register_verdict(map, &keys, &by_file, &mut cache, i, src),
                 };
                 (Item::Register, expected.join(", "), verdict)
             }
-            PlaceKind::Value(vi) => value(&r.def.values[vi]),
-            PlaceKind::ReadValue(vi) => value(&r.def.read_values[vi]),
-            PlaceKind::FieldValue { field, value: vi } => value(&r.def.fields[field].values[vi]),
+            PlaceKind::Value(vi) => value(&r.values()[vi]),
+            PlaceKind::ReadValue(vi) => value(&r.read_values()[vi]),
+            PlaceKind::FieldValue { field, value: vi } => value(&r.fields()[field].values[vi]),
             PlaceKind::Field(fi) => {
-                let f = &r.def.fields[fi];
+                let f = &r.fields()[fi];
                 let verdict = match &f.indirect {
                     Some(reason) => Verdict::Indirect(reason.clone()),
                     None => near(manuals, src, |l| field_found(f, l)),
@@ -268,8 +267,8 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
             _ => continue,
         };
         out.push(CitationCheck {
-            loc: drive.locate(&place.path),
-            register: r.def.id.clone(),
+            loc: map.locate_tree_path(&place.path),
+            register: r.id().to_owned(),
             item,
             source: src.to_owned(),
             expected,
@@ -277,7 +276,7 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
             verdict,
         });
     }
-    for o in drivemap_map::others::other_citations(drive) {
+    for o in map.other_citations() {
         let Some(source) = o.source else {
             continue;
         };
@@ -285,17 +284,17 @@ pub fn verify_citations(drive: &Drive, manuals: &Manuals) -> Vec<CitationCheck> 
             Some(reason) => Verdict::Indirect(reason.clone()),
             None => match &o.rule {
                 drivemap_map::others::Rule::Register(i) => {
-                    register_verdict(drive, &keys, &by_file, &mut cache, *i, &source)
+                    register_verdict(map, &keys, &by_file, &mut cache, *i, &source)
                 }
                 rule => near(manuals, &source, |l| {
-                    super::others::found(rule, drive, offsets, l)
+                    super::others::found(rule, map, offsets, l)
                 }),
             },
         };
         out.push(CitationCheck {
-            loc: drive.locate(&o.path),
+            loc: map.locate_tree_path(&o.path),
             register: String::new(),
-            expected: o.rule.expected(drive),
+            expected: map.expected(&o.rule),
             quote: manuals.quote(&source),
             item: Item::Other {
                 kind: o.kind,
@@ -354,7 +353,7 @@ fn near(manuals: &Manuals, source: &str, found: impl Fn(&Line) -> bool) -> Verdi
 }
 
 fn register_verdict(
-    drive: &Drive,
+    map: &Map,
     keys: &[Keys],
     by_file: &HashMap<&str, Vec<(usize, usize)>>,
     cache: &mut Cache<'_>,
@@ -367,7 +366,9 @@ fn register_verdict(
     let Some((file, n)) = parse_citation(source) else {
         return Verdict::Unchecked;
     };
-    let r = &drive.registers[i];
+    let Some(r) = map.register_at(i) else {
+        return Verdict::Unchecked;
+    };
     let neighbours: Vec<usize> = by_file
         .get(file)
         .map(|list| {
@@ -377,7 +378,10 @@ fn register_verdict(
             let mut near: Vec<(usize, usize)> = list[lo..hi]
                 .iter()
                 .filter(|&&(_, j)| j != i)
-                .filter(|&&(_, j)| drive.registers[j].def.address != r.def.address)
+                .filter(|&&(_, j)| {
+                    map.register_at(j)
+                        .is_some_and(|o| o.address() != r.address())
+                })
                 .map(|&(l, j)| (l.abs_diff(n), j))
                 .collect();
             near.sort_unstable();
@@ -393,7 +397,7 @@ fn register_verdict(
             return (true, None);
         }
         let other = other_row(line);
-        (other.is_none() && name_found(&r.def.name, line), other)
+        (other.is_none() && name_found(r.name(), line), other)
     };
     let Some(line) = cache.get(file, n) else {
         return Verdict::Unchecked;
@@ -409,7 +413,7 @@ fn register_verdict(
     }
     if let Some(j) = other {
         return Verdict::Unverified {
-            row_of: Some(crate_describe(&drive.registers[j])),
+            row_of: map.register_at(j).map(|o| o.label()),
         };
     }
     for m in [n.saturating_sub(1), n + 1] {
@@ -425,13 +429,6 @@ fn register_verdict(
     Verdict::Unverified { row_of: None }
 }
 
-fn crate_describe(r: &Register) -> String {
-    match &r.def.param {
-        Some(p) => format!("{} ({p})", r.def.id),
-        None => r.def.id.clone(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -442,7 +439,7 @@ mod tests {
         \n\
         0202H\tBn-03\tRun source\t0: Operator 1: Terminals\n";
 
-    fn map(accel: usize, decel: usize, indirect: &str) -> Drive {
+    fn map(accel: usize, decel: usize, indirect: &str) -> Map {
         let text = format!(
             "drive: {{id: t, vendor: T, models: [T], manuals: [{{file: m.txt, title: M}}]}}\n\
              protocol: {{transports: [rtu], function_codes: [0x03, 0x06], max_read: 1, max_write: 1, slave_address: {{min: 1, max: 31}}}}\n\
@@ -464,11 +461,10 @@ mod tests {
         );
         drivemap_map::Loader::new()
             .load_str("t.yaml", &text)
-            .map(drivemap_map::Map::into_ir)
             .unwrap()
     }
 
-    fn verdicts(drive: &Drive) -> Vec<(String, Verdict)> {
+    fn verdicts(drive: &Map) -> Vec<(String, Verdict)> {
         let manuals = Manuals::from_texts([("m.txt", MANUAL)]);
         verify_citations(drive, &manuals)
             .into_iter()
@@ -492,7 +488,6 @@ mod tests {
         let verdict = |format: &str| {
             let drive = drivemap_map::Loader::new()
                 .load_str("t.yaml", &text(format))
-                .map(drivemap_map::Map::into_ir)
                 .unwrap();
             verify_citations(&drive, &manuals)[0].verdict.clone()
         };

@@ -13,9 +13,8 @@ use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 
 use super::Manuals;
 use super::citations::{Verdict, verify_citations};
-use drivemap_map::citations::citation_places;
-use drivemap_map::ir::Drive;
-use drivemap_map::validate::parse_citation;
+use drivemap_map::Map;
+use drivemap_map::facts::parse_citation;
 
 /// A row of a manual table no item of the map covers.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -269,8 +268,8 @@ fn norm_param(p: &str) -> String {
 }
 
 /// The lines every citation of the map points at ([`citation_places`]).
-fn all_citations(drive: &Drive) -> HashSet<(String, usize)> {
-    citation_places(drive)
+fn all_citations(map: &Map) -> HashSet<(String, usize)> {
+    map.citation_places()
         .into_iter()
         .filter_map(|p| p.source.and_then(parse_citation))
         .map(|(f, l)| (f.to_owned(), l))
@@ -305,7 +304,7 @@ fn gap_covers_param(text: &str, param: &str) -> bool {
 
 /// What the map says that the manuals' rows are compared with.
 struct Known<'a> {
-    drive: &'a Drive,
+    map: &'a Map,
     decimal: bool,
     /// The shapes of the map's parameter numbers.
     shapes: HashSet<String>,
@@ -324,41 +323,41 @@ struct Known<'a> {
 }
 
 impl<'a> Known<'a> {
-    fn new(drive: &'a Drive, manuals: &Manuals) -> Self {
-        let decimal = drive.address_format == drivemap_map::model::AddressFormat::Decimal;
-        let shapes: HashSet<String> = drive
-            .registers
-            .iter()
-            .filter_map(|r| r.def.param.as_deref())
+    fn new(map: &'a Map, manuals: &Manuals) -> Self {
+        let decimal = map.address_format() == drivemap_map::facts::AddressFormat::Decimal;
+        let shapes: HashSet<String> = map
+            .registers()
+            .filter_map(|r| r.param())
             .map(shape)
             .collect();
-        let learnt = learn_shapes(drive, manuals, &shapes, decimal);
+        let learnt = learn_shapes(map, manuals, &shapes, decimal);
+        // A register's group by its place in the map's groups.
+        let group_index = |r: drivemap_map::RegisterRef| {
+            map.groups().iter().position(|g| std::ptr::eq(g, r.group()))
+        };
         Known {
-            drive,
+            map,
             decimal,
             shapes,
             learnt,
-            cited: all_citations(drive),
-            params: drive
-                .registers
-                .iter()
-                .filter_map(|r| r.def.param.as_deref().map(norm_param))
+            cited: all_citations(map),
+            params: map
+                .registers()
+                .filter_map(|r| r.param().map(norm_param))
                 .collect(),
-            addresses: drive
-                .registers
-                .iter()
+            addresses: map
+                .registers()
                 .flat_map(|r| {
-                    std::iter::once(r.def.address)
-                        .chain(r.def.address_alternatives.iter().map(|a| a.address))
+                    std::iter::once(r.address())
+                        .chain(r.address_alternatives().iter().map(|a| a.address))
                 })
                 .collect(),
-            removed: drive.removed.iter().map(|r| norm_param(&r.id)).collect(),
-            group_of_line: drive
-                .registers
-                .iter()
+            removed: map.removed().iter().map(|r| norm_param(&r.id)).collect(),
+            group_of_line: map
+                .registers()
                 .filter_map(|r| {
-                    let (f, l) = r.def.source.as_deref().and_then(parse_citation)?;
-                    Some(((f.to_owned(), l), r.group))
+                    let (f, l) = r.source().and_then(parse_citation)?;
+                    Some(((f.to_owned(), l), group_index(r)?))
                 })
                 .collect(),
         }
@@ -368,13 +367,13 @@ impl<'a> Known<'a> {
 /// Row shapes per manual, from the registers' citations that verify by themselves: the shape of
 /// each cited line (unless neither word is classed), counted.
 fn learn_shapes(
-    drive: &Drive,
+    map: &Map,
     manuals: &Manuals,
     shapes: &HashSet<String>,
     decimal: bool,
 ) -> HashMap<String, BTreeMap<(Class, Class), usize>> {
     let mut learnt: HashMap<String, BTreeMap<(Class, Class), usize>> = HashMap::new();
-    for c in verify_citations(drive, manuals).iter().filter(|c| {
+    for c in verify_citations(map, manuals).iter().filter(|c| {
         matches!(c.item, super::Item::Register) && matches!(c.verdict, Verdict::Verified)
     }) {
         let Some((file, n)) = parse_citation(&c.source) else {
@@ -398,15 +397,15 @@ fn learn_shapes(
 /// Learns the row shapes from the registers' verified citations and lists the rows of each
 /// cited manual (but those in `skip`: a variant map's base manuals, covered by the base's
 /// report), the tables they form, and the rows nothing covers.
-pub fn coverage(drive: &Drive, manuals: &Manuals, skip: &[String]) -> CoverageReport {
-    let known = Known::new(drive, manuals);
+pub fn coverage(map: &Map, manuals: &Manuals, skip: &[String]) -> CoverageReport {
+    let known = Known::new(map, manuals);
     let mut report = CoverageReport {
-        drive: drive.meta.id.clone(),
+        drive: map.id().to_owned(),
         tables: Vec::new(),
         uncited: Vec::new(),
         missing_manuals: Vec::new(),
     };
-    let mut files: Vec<&str> = drive.meta.text_manuals().collect();
+    let mut files: Vec<&str> = map.meta().text_manuals().collect();
     files.dedup();
     for file in files.into_iter().filter(|f| !skip.iter().any(|s| s == f)) {
         match manuals.lines(file) {
@@ -453,7 +452,7 @@ fn manual(known: &Known<'_>, file: &str, lines: &[String], report: &mut Coverage
             .as_ref()
             .is_some_and(|t| table_ends(t, row.n, group_here, last_group))
         {
-            finish(known.drive, table.take(), &mut report.tables);
+            finish(known.map, table.take(), &mut report.tables);
         }
         let (t, groups) =
             table.get_or_insert_with(|| (TableSummary::starting(file, row.n), BTreeMap::new()));
@@ -466,7 +465,7 @@ fn manual(known: &Known<'_>, file: &str, lines: &[String], report: &mut Coverage
             count(known, &row, t, param, address, &mut report.uncited);
         }
     }
-    finish(known.drive, table.take(), &mut report.tables);
+    finish(known.map, table.take(), &mut report.tables);
 }
 
 impl TableSummary {
@@ -500,12 +499,13 @@ fn table_ends(
 
 /// Closes a table: named after the group citing most of its rows (the first such group on a
 /// tie), and added to `out`.
-fn finish(drive: &Drive, table: Option<Open>, out: &mut Vec<TableSummary>) {
+fn finish(map: &Map, table: Option<Open>, out: &mut Vec<TableSummary>) {
     if let Some((mut t, groups)) = table {
         t.group = groups
             .iter()
             .max_by_key(|(g, n)| (**n, std::cmp::Reverse(**g)))
-            .map(|(g, _)| drive.groups[*g].name.clone());
+            .and_then(|(g, _)| map.groups().get(*g))
+            .map(|g| g.name.clone());
         out.push(t);
     }
 }
@@ -571,7 +571,7 @@ const GAPS: &[Gap] = &[
 
 /// A `gaps` entry covers the address or names the parameter.
 fn gaps_entry(known: &Known<'_>, _: &Row<'_>, (param, address): Key<'_>) -> bool {
-    known.drive.gaps.iter().any(|g| {
+    known.map.gaps().iter().any(|g| {
         address.is_some_and(|a| g.addresses.is_some_and(|[lo, hi]| (lo..=hi).contains(&a)))
             || param.is_some_and(|p| g.params.as_deref().is_some_and(|t| gap_covers_param(t, p)))
     })
@@ -584,7 +584,7 @@ fn removed_param(known: &Known<'_>, _: &Row<'_>, (param, _): Key<'_>) -> bool {
 
 /// A removed register's citation is on the row (which may span the lines around the address).
 fn removed_citation(known: &Known<'_>, row: &Row<'_>, _: Key<'_>) -> bool {
-    known.drive.removed.iter().any(|r| {
+    known.map.removed().iter().any(|r| {
         parse_citation(&r.source)
             .is_some_and(|(f, l)| f == row.file && l + 1 >= row.n && l <= row.n + 1)
     })

@@ -2,7 +2,7 @@
 //! ([`verify_citations`]), manual rows no item cites ([`coverage()`]), the text of a cited line
 //! ([`Manuals::quote`]).
 //!
-//! Validation ([`drivemap_map::validate`]) decides whether a map can be built; review decides whether
+//! Validation (`drivemap_map`'s checks) decides whether a map can be built; review decides whether
 //! it says what the manual says. Its findings are warnings (`drivemap check`, errors with
 //! `--strict`) and a coverage report (`drivemap coverage`); it needs the manuals' text.
 
@@ -15,7 +15,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use drivemap_map::Loc;
-use drivemap_map::validate::parse_citation;
+use drivemap_map::facts::parse_citation;
 
 pub use citations::{CitationCheck, Item, Verdict, verify_citations};
 pub use coverage::{CoverageReport, TableSummary, UncitedRow, coverage};
@@ -51,8 +51,8 @@ impl Manuals {
     }
 
     /// Reads the manuals a map names; the ones missing stay missing.
-    pub fn load_for(&mut self, drive: &drivemap_map::ir::Drive) {
-        for file in drive.meta.text_manuals() {
+    pub fn load_for(&mut self, map: &drivemap_map::Map) {
+        for file in map.meta().text_manuals() {
             self.load(file);
         }
     }
@@ -125,10 +125,11 @@ fn split_lines(text: &str) -> Vec<String> {
 /// the manual gives beyond the Modbus serial-line specification's unicast addresses 1-247 (ACN
 /// CM.01 1-250; some manuals print 01H-FEH). The map records the manual's range; the warning
 /// says what a standard master or gateway may do with 248-255.
-pub fn protocol_warnings(drive: &drivemap_map::ir::Drive) -> Vec<Warning> {
-    let s = &drive.protocol.slave_address;
+pub fn protocol_warnings(map: &drivemap_map::Map) -> Vec<Warning> {
+    let s = &map.protocol().slave_address;
     // Numbers with neither a source nor an `unknown` (map/src/validate/protocol_stated.rs).
-    let mut out: Vec<Warning> = drivemap_map::validate::protocol_stated::warnings(drive)
+    let mut out: Vec<Warning> = map
+        .protocol_warnings()
         .into_iter()
         .map(|d| Warning {
             loc: d.loc,
@@ -138,13 +139,9 @@ pub fn protocol_warnings(drive: &drivemap_map::ir::Drive) -> Vec<Warning> {
         .collect();
     let (s_min, s_max) = s.range();
     if s.unknown.is_none() && s_max > 247 {
-        let path = drivemap_map::source::Path::root()
-            .key("protocol")
-            .key("slave_address")
-            .key("max");
         let above = if s_min > 247 { s_min } else { 248 };
         out.push(Warning {
-            loc: drive.locate(&path),
+            loc: map.locate("protocol.slave_address.max"),
             register: None,
             message: format!(
                 "slave addresses {above}..={} are the manual's, but the Modbus serial-line \

@@ -2,16 +2,16 @@
 //! items, readings of conflicts, gaps) against the manual's line: whether the line shows what
 //! each [`Rule`] asks.
 
-use drivemap_map::ir::Drive;
-use drivemap_map::model;
+use drivemap_map::Map;
+use drivemap_map::facts::AddressFormat;
 use drivemap_map::others::Rule;
 
 use super::matching::{AddressForms, Line, name_found, number_found, param_found, word_found};
 
 /// Whether the line shows what `rule` asks (`Register` is decided by the register check, not
 /// here).
-pub(crate) fn found(rule: &Rule, drive: &Drive, offsets: Option<(i32, i32)>, line: &Line) -> bool {
-    let decimal = drive.address_format == model::AddressFormat::Decimal;
+pub(crate) fn found(rule: &Rule, map: &Map, offsets: Option<(i32, i32)>, line: &Line) -> bool {
+    let decimal = map.address_format() == AddressFormat::Decimal;
     let forms = |a: u16| {
         let f = AddressForms::new(a, offsets);
         if decimal { f.with_decimal(a) } else { f }
@@ -23,16 +23,20 @@ pub(crate) fn found(rule: &Rule, drive: &Drive, offsets: Option<(i32, i32)>, lin
             field,
             codes,
         } => {
-            let r = &drive.registers[*register].def;
-            let f = &r.fields[*field];
+            let Some(r) = map.register_at(*register) else {
+                return false;
+            };
+            let Some(f) = r.fields().get(*field) else {
+                return false;
+            };
             super::citations::field_found(f, line)
                 || f.values
                     .iter()
                     .filter(|v| codes.contains(&v.value))
                     .any(|v| super::citations::value_found(v, line))
-                || r.param.as_deref().is_some_and(|p| param_found(p, line))
-                || forms(r.address).found_in(line)
-                || name_found(&r.name, line)
+                || r.param().is_some_and(|p| param_found(p, line))
+                || forms(r.address()).found_in(line)
+                || name_found(r.name(), line)
         }
         Rule::Any {
             words,
@@ -43,11 +47,14 @@ pub(crate) fn found(rule: &Rule, drive: &Drive, offsets: Option<(i32, i32)>, lin
             names,
             registers,
         } => {
-            registers.iter().any(|i| {
-                let r = &drive.registers[*i].def;
-                r.param.as_deref().is_some_and(|p| param_found(p, line))
-                    || forms(r.address).found_in(line)
-            }) || words.iter().any(|w| word_found(w, line))
+            registers
+                .iter()
+                .filter_map(|i| map.register_at(*i))
+                .any(|r| {
+                    r.param().is_some_and(|p| param_found(p, line))
+                        || forms(r.address()).found_in(line)
+                })
+                || words.iter().any(|w| word_found(w, line))
                 || params.iter().any(|p| param_found(p, line))
                 || numbers.iter().any(|n| decimal_found(n, line))
                 || codes.iter().any(|c| number_found(*c, line))

@@ -3,7 +3,7 @@
 //! (breaking: `fault_code()` reads another place); a field made signed, a reset's edge made
 //! "not printed", and the reason of a not-printed edge changed each show, with their kind.
 
-use drivemap_map::ir::Drive;
+use drivemap_map::Map;
 use drivemap_review::diff::{ChangeKind, compare};
 
 fn acme_text() -> String {
@@ -14,10 +14,9 @@ fn acme_text() -> String {
     .unwrap()
 }
 
-fn read(text: &str) -> Drive {
+fn read(text: &str) -> Map {
     drivemap_map::Loader::new()
         .load_str("acme-vf1.yaml", text)
-        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -28,7 +27,7 @@ fn changed(text: &str, from: &str, to: &str) -> String {
 }
 
 /// The changes of the `roles` subject, as (kind, what, old, new).
-fn role_changes(old: &Drive, new: &Drive) -> Vec<(ChangeKind, String, String, String)> {
+fn role_changes(old: &Map, new: &Map) -> Vec<(ChangeKind, String, String, String)> {
     compare(old, new)
         .changes
         .into_iter()
@@ -138,7 +137,6 @@ fn doc_and_export_show_a_number_field_and_an_unknown_edge() {
     );
     let drive = drivemap_map::Loader::new()
         .load(path.as_ref())
-        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"));
     let doc = drivemap_review::reference::render(&drive, "brenner-fx4.yaml");
     let row = |role: &str| {
@@ -157,7 +155,7 @@ fn doc_and_export_show_a_number_field_and_an_unknown_edge() {
         "{}",
         row("fault_reset")
     );
-    let json = drivemap_map::export::export(&drive);
+    let json = drive.export();
     let roles = &json["roles"];
     assert_eq!(roles["fault_code"][0]["signed"], true, "{roles}");
     assert_eq!(roles["fault_code"][0]["field"], "last_event", "{roles}");

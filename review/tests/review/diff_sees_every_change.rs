@@ -19,11 +19,27 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use drivemap_map::ir::Drive;
-use drivemap_map::source::{Node, NodeKind, Seg};
-use drivemap_map::validate::parse_citation;
+use drivemap_map::Map;
+use drivemap_map::facts::parse_citation;
+use drivemap_map::{Tree as Node, TreeKind as NodeKind};
 use drivemap_review::diff::compare;
 use serde_yaml::Value;
+
+/// One step of a path into the map's tree: a key of a mapping or an item of a list.
+#[derive(Debug, Clone)]
+enum Seg {
+    Key(String),
+    Index(usize),
+}
+
+/// The tree's own path for `path`.
+fn tree_path(path: &[Seg]) -> drivemap_map::TreePath {
+    path.iter()
+        .fold(drivemap_map::TreePath::root(), |p, s| match s {
+            Seg::Key(k) => p.key(k),
+            Seg::Index(i) => p.index(*i),
+        })
+}
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -53,7 +69,8 @@ fn maps() -> Vec<PathBuf> {
 /// What a map says, as one comparable text: every part of the IR but where it was read from,
 /// registers with their effective defaults (the keys that only restate a group's default
 /// cleared).
-fn meaning(d: &Drive) -> String {
+fn meaning(d: &Map) -> String {
+    let d = d.ir();
     let registers: Vec<serde_json::Value> = d
         .registers
         .iter()
@@ -230,7 +247,7 @@ fn abstract_path(path: &[Seg]) -> String {
 }
 
 fn show(path: &[Seg]) -> String {
-    drivemap_map::source::Path(path.to_vec()).to_string()
+    tree_path(path).to_string()
 }
 
 /// `tree` with `m` applied at `path`; `None` when the path is not there.
@@ -291,7 +308,6 @@ fn mutate_map(map: &Path) -> (Counts, Vec<String>) {
         drivemap_map::Loader::new()
             .bases(&base)
             .load_tree(&name, tree)
-            .map(drivemap_map::Map::into_ir)
     };
     let original = read(tree.clone()).unwrap_or_else(|e| panic!("{name}: {e}"));
     let original_meaning = meaning(&original);
@@ -322,11 +338,7 @@ fn mutate_map(map: &Path) -> (Counts, Vec<String>) {
         let (path, key, scalar) = &all[i];
         let mut mutations = vec![Mutation::Delete];
         if *scalar {
-            let NodeKind::Scalar(v) = &tree
-                .at(&drivemap_map::source::Path(path.clone()))
-                .unwrap()
-                .kind
-            else {
+            let NodeKind::Scalar(v) = &tree.at(&tree_path(path)).unwrap().kind else {
                 unreachable!()
             };
             if let Some(v) = changed(key, v) {

@@ -8,10 +8,9 @@ fn fixture() -> String {
     std::fs::read_to_string("../tests/fixtures/tarrow-tm44/tarrow-tm44.yaml").unwrap()
 }
 
-fn read(text: &str) -> drivemap_map::ir::Drive {
+fn read(text: &str) -> drivemap_map::Map {
     drivemap_map::Loader::new()
         .load_str("tarrow-tm44.yaml", text)
-        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -75,7 +74,7 @@ fn a_citation_moved_is_a_citation_change() {
 #[test]
 fn export_and_doc_show_the_pair_and_its_entries() {
     let drive = read(&fixture());
-    let export = drivemap_map::export::export(&drive);
+    let export = drive.export();
     let pair = &export["indexed"][0];
     assert_eq!(pair["register"], "parameter_value");
     assert_eq!(pair["value_address"], 45);
@@ -122,9 +121,6 @@ fn export_and_doc_show_the_pair_and_its_entries() {
         .map(|l| format!("{l}\n"))
         .collect();
     let drive = read(&plain);
-    assert_eq!(
-        drivemap_map::export::export(&drive)["indexed"],
-        serde_json::json!([])
-    );
+    assert_eq!(drive.export()["indexed"], serde_json::json!([]));
     assert!(!drivemap_review::reference::render(&drive, "x.yaml").contains("Indexed access"));
 }

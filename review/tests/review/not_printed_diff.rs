@@ -4,7 +4,7 @@
 
 use drivemap_review::diff::{ChangeKind, compare};
 
-fn halden(replace: &[(&str, &str)]) -> drivemap_map::ir::Drive {
+fn halden(replace: &[(&str, &str)]) -> drivemap_map::Map {
     let mut text = std::fs::read_to_string("../tests/fixtures/halden-h1/halden-h1.yaml").unwrap();
     for (from, to) in replace {
         let line = text
@@ -16,7 +16,6 @@ fn halden(replace: &[(&str, &str)]) -> drivemap_map::ir::Drive {
     }
     drivemap_map::Loader::new()
         .load_str("halden-h1.yaml", &text)
-        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|d| panic!("{d}"))
 }
 

@@ -18,12 +18,11 @@ fn slave_ranges_are_recorded_as_the_manual_prints_them() {
     let with = |range: &str| text.replace(line, &format!("{indent}slave_address: {range}"));
     let drive = drivemap_map::Loader::new()
         .load_str("mini-drive.yaml", &with("{min: 1, max: 254}"))
-        .map(drivemap_map::Map::into_ir)
         .expect("01H-FEH is valid");
-    assert_eq!(drive.protocol.slave_address.max, Some(254));
+    assert_eq!(drive.protocol().slave_address.max, Some(254));
     // Not refused, but a word about the serial-line specification's 247, at the range.
     // (The fixture's uncited protocol numbers have warnings of their own: `protocol_stated`.)
-    let about_247 = |d: &drivemap_map::ir::Drive| {
+    let about_247 = |d: &drivemap_map::Map| {
         drivemap_review::review::protocol_warnings(d)
             .into_iter()
             .filter(|w| w.message.contains("serial-line specification"))
@@ -39,12 +38,10 @@ fn slave_ranges_are_recorded_as_the_manual_prints_them() {
     );
     let standard = drivemap_map::Loader::new()
         .load_str("mini-drive.yaml", &with("{min: 1, max: 247}"))
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     assert!(about_247(&standard).is_empty());
     let e = drivemap_map::Loader::new()
         .load_str("mini-drive.yaml", &with("{min: 0, max: 31}"))
-        .map(drivemap_map::Map::into_ir)
         .unwrap_err();
     assert!(e.to_string().contains("0 is broadcast"), "{e}");
 }
@@ -62,13 +59,11 @@ fn the_reference_prints_addresses_in_the_manuals_notation() {
     );
     let d = drivemap_map::Loader::new()
         .load_str("mini-drive.yaml", &declared)
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     let doc = drivemap_review::reference::render(&d, "mini-drive.yaml");
     assert!(doc.contains("| 2001 (07D1h) |"), "{doc}");
     let hex = drivemap_map::Loader::new()
         .load_str("mini-drive.yaml", &text)
-        .map(drivemap_map::Map::into_ir)
         .unwrap();
     assert!(drivemap_review::reference::render(&hex, "mini-drive.yaml").contains("| 0001h |"));
 }

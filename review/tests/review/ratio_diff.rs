@@ -8,10 +8,9 @@ fn fixture() -> String {
     std::fs::read_to_string("../tests/fixtures/borealis-bf6/borealis-bf6.yaml").unwrap()
 }
 
-fn read(text: &str) -> drivemap_map::ir::Drive {
+fn read(text: &str) -> drivemap_map::Map {
     drivemap_map::Loader::new()
         .load_str("borealis-bf6.yaml", text)
-        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"))
 }
 

@@ -8,10 +8,9 @@ fn fixture() -> String {
     std::fs::read_to_string("../map/tests/fixtures/mini-drive.yaml").unwrap()
 }
 
-fn read(text: &str) -> drivemap_map::ir::Drive {
+fn read(text: &str) -> drivemap_map::Map {
     drivemap_map::Loader::new()
         .load_str("mini-drive.yaml", text)
-        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -90,7 +89,7 @@ fn the_reference_and_the_export_show_both() {
         md.contains("Repeat needs a change: a value is executed only when it differs from the previous write, so 0 is written before any other value (`manual.txt:50`)."),
         "{md}"
     );
-    let json = drivemap_map::export::export(&drive);
+    let json = drive.export();
     let regs = json["registers"].as_array().unwrap();
     let password = regs.iter().find(|r| r["id"] == "password").unwrap();
     assert_eq!(password["read_values"][1]["name"], "Locked");

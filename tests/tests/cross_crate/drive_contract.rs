@@ -853,7 +853,7 @@ fn one_ramp_register_takes_one_value() {
     assert_eq!(place(Role::AccelTime).shared_with, Some(Role::DecelTime));
     assert_eq!(place(Role::DecelTime).shared_with, Some(Role::AccelTime));
     // The reference document says so beside the register.
-    let doc = drivemap_review::reference::render(drive.ir(), "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(&drive, "acme-vf1.yaml");
     assert!(
         doc.contains("| `decel_time` | `acceleration_time` (one register with `accel_time`) |"),
         "{doc}"

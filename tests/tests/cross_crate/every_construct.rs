@@ -60,7 +60,7 @@ fn export_doc_and_diff_say_what_the_pairs_are() {
     );
     assert_eq!(export["protocol"]["slave_address"]["max"], 254);
 
-    let doc = drivemap_review::reference::render(d.ir(), "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(&d, "acme-vf1.yaml");
     assert!(
         doc.contains("| 2200h – 2201h (32-bit pair, high word first, `acme-vf1.txt:34`) |"),
         "{doc}"
@@ -86,7 +86,7 @@ fn export_doc_and_diff_say_what_the_pairs_are() {
     assert_ne!(single, swapped);
     let ctx = drivemap_map::Loader::new();
     let new = ctx.load_str("acme-vf1.yaml", &single).unwrap();
-    let diff = drivemap_review::diff::compare(d.ir(), new.ir());
+    let diff = drivemap_review::diff::compare(&d, &new);
     let widths: Vec<(&str, Option<&str>, Option<&str>)> = diff
         .changes
         .iter()
@@ -273,7 +273,7 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
         "signed"
     );
 
-    let doc = drivemap_review::reference::render(d.ir(), "acme-vf1.yaml");
+    let doc = drivemap_review::reference::render(&d, "acme-vf1.yaml");
     for expected in [
         "| Function codes | 03h, 06h, 10h | `acme-vf1.txt:7` |",
         "| Registers per request | at most 16 per read, 16 per write | `acme-vf1.txt:8` |",
@@ -300,7 +300,7 @@ fn limits_broadcast_formats_read_meanings_and_repeats_through_every_tool() {
     let new = drivemap_map::Loader::new()
         .load_str("acme-vf1.yaml", &changed)
         .unwrap();
-    let diff = drivemap_review::diff::compare(d.ir(), new.ir());
+    let diff = drivemap_review::diff::compare(&d, &new);
     let kinds: Vec<ChangeKind> = diff
         .changes
         .iter()

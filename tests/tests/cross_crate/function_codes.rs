@@ -293,7 +293,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
     );
     assert!(register("operation_command")["function_codes"].is_null());
 
-    let doc = drivemap_review::reference::render(drive.ir(), "halvard-hx2.yaml");
+    let doc = drivemap_review::reference::render(&drive, "halvard-hx2.yaml");
     assert!(doc.contains("functions 03h/10h only"), "{doc}");
     assert!(
         doc.contains(
@@ -342,7 +342,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
             .unwrap_or_else(|e| panic!("{e}"))
     };
     let kinds = |t: &str| -> Vec<(String, drivemap_review::diff::ChangeKind)> {
-        drivemap_review::diff::compare(drive.ir(), read(t).ir())
+        drivemap_review::diff::compare(&drive, &read(t))
             .changes
             .iter()
             .map(|c| (c.subject.clone(), c.kind))
@@ -375,7 +375,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
         "        function_codes: {codes: [0x03, 0x10], refused_with: 0x02, source: \"halvard-hx2.txt:11\"}\n",
         "",
     );
-    let diff = drivemap_review::diff::compare(drive.ir(), read(&dropped).ir());
+    let diff = drivemap_review::diff::compare(&drive, &read(&dropped));
     assert_eq!(diff.breaking(), 1, "{:?}", diff.changes);
 }
 

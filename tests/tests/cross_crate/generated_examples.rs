@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use drivemap_drives::{automationdirect_acn, ptlk_tds_v8, yaskawa_gpd515, yaskawa_j7, yaskawa_v7};
+use drivemap_map::facts::TransportName;
 use drivemap_map::facts::parse_bytes;
-use drivemap_map::model::TransportName;
 use drivemap_runtime::crc;
 
 /// A generated module's `examples::ALL`.

@@ -167,7 +167,7 @@ fn export_doc_and_generated_code_show_every_kind() {
     for path in maps() {
         let drive = read(&path);
         let export = drive.export();
-        let doc = drivemap_review::reference::render(drive.ir(), "map.yaml");
+        let doc = drivemap_review::reference::render(&drive, "map.yaml");
         let code = drivemap_codegen::Config::new()
             .map(&path)
             .generate()
@@ -237,7 +237,10 @@ fn the_diff_shows_every_kind() {
         old.plan = Default::default();
         let mut none = old.clone();
         none.registers.clear();
-        let diff = drivemap_review::diff::compare(&old, &none);
+        let diff = drivemap_review::diff::compare(
+            &drivemap_map::Map::from_ir(old),
+            &drivemap_map::Map::from_ir(none),
+        );
         for (kind, list) in by_kind(&drive) {
             for (i, f) in list {
                 let r = drive.register_at(i).expect("an index of the map");

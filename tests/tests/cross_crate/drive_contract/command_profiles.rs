@@ -523,7 +523,7 @@ roles:
 fn doc_export_and_diff_cover_the_profile() {
     use drivemap_review::diff::{ChangeKind, Severity, compare};
     let drive = kestrel();
-    let doc = drivemap_review::reference::render(drive.ir(), "kestrel-kd4.yaml");
+    let doc = drivemap_review::reference::render(&drive, "kestrel-kd4.yaml");
     assert!(doc.contains("## Command profile"), "{doc}");
     assert!(
         doc.contains("| `enable_operation` | 000Fh | FF70h | 0000h | `switched_on` | `operation_enabled` | 100 ms | `kestrel-kd4.txt:40` |"),
@@ -542,7 +542,7 @@ fn doc_export_and_diff_cover_the_profile() {
     );
     let shipped = map("maps/yaskawa-v7.yaml");
     assert!(
-        !drivemap_review::reference::render(shipped.ir(), "yaskawa-v7.yaml")
+        !drivemap_review::reference::render(&shipped, "yaskawa-v7.yaml")
             .contains("Command profile")
     );
     assert!(shipped.export().get("profile").is_none());
@@ -560,7 +560,7 @@ fn doc_export_and_diff_cover_the_profile() {
         r#"enable_operation: {limit_ms: 100, source: "kestrel-kd4.txt:40"}"#,
         r#"enable_operation: {limit_ms: 250, source: "kestrel-kd4.txt:40"}"#,
     );
-    let d = compare(drive.ir(), slower.ir());
+    let d = compare(&drive, &slower);
     let c: Vec<_> = d
         .changes
         .iter()
@@ -574,7 +574,7 @@ fn doc_export_and_diff_cover_the_profile() {
         r#"quick_stop_active: {source: "kestrel-kd4.txt:65"}"#,
         r#"quick_stop_active: {source: "kestrel-kd4.txt:54"}"#,
     );
-    let d = compare(drive.ir(), recited.ir());
+    let d = compare(&drive, &recited);
     let c: Vec<_> = d
         .changes
         .iter()
@@ -582,7 +582,7 @@ fn doc_export_and_diff_cover_the_profile() {
         .collect();
     assert_eq!(c.len(), 1, "{c:?}");
     assert_eq!(c[0].severity(), Severity::Compatible, "{c:?}");
-    let none = compare(shipped.ir(), drive.ir());
+    let none = compare(&shipped, &drive);
     assert!(
         none.changes
             .iter()
