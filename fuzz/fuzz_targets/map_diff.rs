@@ -4,7 +4,7 @@
 #![no_main]
 
 use drivemap_review::diff;
-use drivemap_map::validate::Context;
+use drivemap_map::Loader;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
@@ -14,10 +14,10 @@ fuzz_target!(|data: &[u8]| {
     let Some((old, new)) = text.split_once("#---8<---\n") else {
         return;
     };
-    let ctx = Context::default();
+    let loader = Loader::new();
     let (Ok(old), Ok(new)) = (
-        drivemap_map::read_map_str("old.yaml", old, &ctx),
-        drivemap_map::read_map_str("new.yaml", new, &ctx),
+        loader.load_str("old.yaml", old),
+        loader.load_str("new.yaml", new),
     ) else {
         return;
     };

@@ -2,15 +2,15 @@
 //! overflow the stack or run away (libFuzzer's -rss_limit_mb and -timeout catch the latter).
 #![no_main]
 
-use drivemap_map::validate::Context;
+use drivemap_map::Loader;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    if let Ok(drive) = drivemap_map::read_map_str("fuzz.yaml", text, &Context::default()) {
-        let json = drivemap_map::export::export(&drive);
+    if let Ok(drive) = Loader::new().load_str("fuzz.yaml", text) {
+        let json = drive.export();
         serde_json::to_string(&json).expect("export serializes");
         // A map that validates has only finite timing: serde_json writes a non-finite f64 as
         // null, which is how `frame_gap_chars: .inf` used to leave `export`.

@@ -5,19 +5,18 @@
 
 use std::sync::LazyLock;
 
-use drivemap_map::ir::Drive;
-use drivemap_map::validate::Context;
+use drivemap_map::{Loader, Map};
 use drivemap_live::LiveSettings;
 use libfuzzer_sys::fuzz_target;
 
-static DRIVES: LazyLock<Vec<Drive>> = LazyLock::new(|| {
+static DRIVES: LazyLock<Vec<Map>> = LazyLock::new(|| {
     [
         ("ptlk-tds-v8.yaml", include_str!("../../maps/ptlk-tds-v8.yaml")),
         ("yaskawa-v7.yaml", include_str!("../../maps/yaskawa-v7.yaml")),
     ]
     .iter()
     .map(|(name, text)| {
-        drivemap_map::read_map_str(name, text, &Context::default()).expect("shipped map")
+        Loader::new().load_str(name, text).expect("shipped map")
     })
     .collect()
 });
@@ -30,10 +29,12 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let drive = &DRIVES[usize::from(*knobs & 1)];
-    let r = &drive.registers[usize::from(*pick) * drive.registers.len() / 256];
+    let Some(r) = drive.register_at(usize::from(*pick) * drive.registers().len() / 256) else {
+        return;
+    };
     let mut settings = LiveSettings::default();
     if knobs & 2 != 0 {
-        for axis in &drive.variants {
+        for axis in drive.variants() {
             let option = &axis.options[usize::from(*knobs >> 4) % axis.options.len()];
             settings.variants.insert(axis.id.clone(), option.id.clone());
         }

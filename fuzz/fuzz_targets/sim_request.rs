@@ -31,7 +31,8 @@ fn sims() -> &'static Sims {
             .iter()
             .map(|id| {
                 let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
-                let drive = drivemap_map::read_map(path.as_ref(), &Default::default())
+                let drive = drivemap_map::Loader::new()
+                    .load(path.as_ref())
                     .expect("shipped map");
                 let sim = Simulator::new(drive, SimOptions::new().clock(Arc::new(clock.clone())))
                     .expect("simulator of a shipped map");
