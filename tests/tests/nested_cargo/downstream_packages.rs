@@ -122,6 +122,12 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
         dir.join("app").join("src").join("main.rs"),
     )
     .unwrap();
+    // The example's crate docs are its README (`#![doc = include_str!("../README.md")]`).
+    std::fs::copy(
+        root().join("examples/async-poll/README.md"),
+        dir.join("app").join("README.md"),
+    )
+    .unwrap();
     // The workspace's lock file: the same versions of the registry crates, all in the local
     // cache, so the build needs no network.
     std::fs::copy(
