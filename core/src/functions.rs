@@ -10,6 +10,14 @@
 //! allows, the read planner never bridges a read over a register that refuses the read function,
 //! and the simulator answers such a request with [`Functions::refused_with`].
 
+/// Read coils.
+pub const READ_COILS: u8 = 0x01;
+/// Read discrete inputs.
+pub const READ_DISCRETE_INPUTS: u8 = 0x02;
+/// Write single coil (FF00h on, 0000h off).
+pub const WRITE_COIL: u8 = 0x05;
+/// Write multiple coils.
+pub const WRITE_COILS: u8 = 0x0F;
 /// Read holding registers.
 pub const READ_HOLDING: u8 = 0x03;
 /// Read input registers.

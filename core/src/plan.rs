@@ -631,6 +631,7 @@ impl RegisterPlan {
             },
             width: self.info.width,
             functions: self.functions,
+            table: self.info.table,
         }
     }
 
@@ -1047,6 +1048,17 @@ macro_rules! plain_value {
     )*};
 }
 plain_value!(u16, i16, u32, i32);
+
+/// A coil or discrete input: its raw value is 1 (on) or 0 (off); any other raw value read is
+/// taken as on, as the Modbus bit it stands for.
+impl Value for bool {
+    fn decode(raw: u32, _: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
+        Ok(raw != 0)
+    }
+    fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u32, ValueError> {
+        plan.encode_word(i64::from(*self), settings)
+    }
+}
 
 /// Enumeration and bit-field types: their word is their code (one register only).
 impl<T: crate::register::Code> Value for T {

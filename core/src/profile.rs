@@ -430,6 +430,11 @@ pub struct Profile {
     pub max_read: u16,
     /// Maximum registers per write (10h); the Modbus 123 when the manual prints none.
     pub max_write: u16,
+    /// Maximum coils or discrete inputs per read (01h/02h); the Modbus 2000 when the manual
+    /// prints none or the drive has no coils.
+    pub max_read_bits: u16,
+    /// Maximum coils per write (0Fh); the Modbus 1968 when the manual prints none.
+    pub max_write_bits: u16,
     /// Valid slave addresses (excluding broadcast 0); the Modbus 1-247 when the manual prints
     /// no range.
     pub slave_min: u8,
@@ -466,6 +471,8 @@ impl Profile {
         function_codes: &[0x03, 0x04, 0x06, 0x08, 0x10],
         max_read: 125,
         max_write: 123,
+        max_read_bits: crate::stated::MODBUS_MAX_READ_BITS,
+        max_write_bits: crate::stated::MODBUS_MAX_WRITE_BITS,
         slave_min: 1,
         slave_max: 247,
         broadcast: Some(BroadcastInfo::new(&[0x06, 0x10], &[])),
@@ -488,6 +495,25 @@ impl Profile {
     /// Modbus 123 then).
     pub fn max_write_stated(&self) -> Stated<u16> {
         self.stated(ProtocolFact::MaxWrite, self.max_write)
+    }
+
+    /// Coils or discrete inputs per read (01h/02h), or why the manual prints no limit.
+    pub fn max_read_bits_stated(&self) -> Stated<u16> {
+        self.stated(ProtocolFact::MaxReadBits, self.max_read_bits)
+    }
+
+    /// Coils per write (0Fh), or why the manual prints no limit.
+    pub fn max_write_bits_stated(&self) -> Stated<u16> {
+        self.stated(ProtocolFact::MaxWriteBits, self.max_write_bits)
+    }
+
+    /// The most items one read of `table` may take: registers (03h/04h) or bits (01h/02h).
+    pub fn max_read_of(&self, table: crate::register::Table) -> u16 {
+        if table.is_bits() {
+            self.max_read_bits
+        } else {
+            self.max_read
+        }
     }
 
     /// Registers per read, or why the manual prints no limit.

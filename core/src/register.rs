@@ -14,7 +14,10 @@ use crate::rule::WriteRule;
 use crate::scale::{Rounding, ValueError};
 use crate::width::Width;
 
-/// Which Modbus table a register lives in (a map's `table`: `holding`, `input`).
+/// Which Modbus table (address space) a register lives in (a map's `modbus_table`: `holding`,
+/// `input`, `coil`, `discrete_input`). Coils and discrete inputs are one bit each: their raw
+/// value is 0 or 1, and their addresses are another space than the registers' (coil 0001h and
+/// holding register 0001h are two things).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(
     feature = "serde",
@@ -26,14 +29,79 @@ pub enum Table {
     Holding,
     /// Input registers: read with 04h.
     Input,
+    /// Coils: one bit each, read with 01h, written with 05h (FF00h on, 0000h off) and 0Fh.
+    Coil,
+    /// Discrete inputs: one bit each, read with 02h; never written.
+    DiscreteInput,
 }
 
 impl Table {
+    /// Every table, registers first.
+    pub const ALL: [Table; 4] = [
+        Table::Holding,
+        Table::Input,
+        Table::Coil,
+        Table::DiscreteInput,
+    ];
+
     /// The function code that reads this table.
     pub const fn read_function(self) -> u8 {
         match self {
             Table::Holding => 0x03,
             Table::Input => 0x04,
+            Table::Coil => 0x01,
+            Table::DiscreteInput => 0x02,
+        }
+    }
+
+    /// Whether the table holds bits (coils, discrete inputs) rather than 16-bit registers.
+    pub const fn is_bits(self) -> bool {
+        matches!(self, Table::Coil | Table::DiscreteInput)
+    }
+
+    /// Whether the Modbus table can be written at all (holding registers and coils).
+    pub const fn writable(self) -> bool {
+        matches!(self, Table::Holding | Table::Coil)
+    }
+
+    /// The functions that write this table: one item (06h, 05h) and several (10h, 0Fh); `None`
+    /// for the read-only tables.
+    pub const fn write_functions(self) -> Option<(u8, u8)> {
+        match self {
+            Table::Holding => Some((0x06, 0x10)),
+            Table::Coil => Some((0x05, 0x0F)),
+            Table::Input | Table::DiscreteInput => None,
+        }
+    }
+
+    /// The table's name as the map writes it (`holding`, `input`, `coil`, `discrete_input`).
+    pub const fn key(self) -> &'static str {
+        match self {
+            Table::Holding => "holding",
+            Table::Input => "input",
+            Table::Coil => "coil",
+            Table::DiscreteInput => "discrete_input",
+        }
+    }
+
+    /// What one item of the table is called (`holding register`, `coil`, ...).
+    pub const fn item(self) -> &'static str {
+        match self {
+            Table::Holding => "holding register",
+            Table::Input => "input register",
+            Table::Coil => "coil",
+            Table::DiscreteInput => "discrete input",
+        }
+    }
+
+    /// The table of the function `function` reads or writes, if it reads or writes one.
+    pub const fn of_function(function: u8) -> Option<Table> {
+        match function {
+            0x03 | 0x06 | 0x10 => Some(Table::Holding),
+            0x04 => Some(Table::Input),
+            0x01 | 0x05 | 0x0F => Some(Table::Coil),
+            0x02 => Some(Table::DiscreteInput),
+            _ => None,
         }
     }
 }

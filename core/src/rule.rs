@@ -3,7 +3,7 @@
 
 use crate::functions::Functions;
 use crate::profile::TransportKind;
-use crate::register::Access;
+use crate::register::{Access, Table};
 use crate::scale::RawRange;
 use crate::width::{Width, WordOrder};
 
@@ -86,6 +86,10 @@ pub struct WriteRule {
     /// drive): the gate refuses a write with another, and a single word goes out with 06h or
     /// 10h as the register allows.
     pub functions: Functions,
+    /// The table (address space) the register is in: holding registers are written with
+    /// 06h/10h, coils with 05h/0Fh, and an address of one space never matches a rule of the
+    /// other.
+    pub table: Table,
 }
 
 impl WriteRule {
@@ -103,6 +107,7 @@ impl WriteRule {
             reserved: 0,
             width: Width::Word,
             functions: Functions::ANY,
+            table: Table::Holding,
         }
     }
 
@@ -137,6 +142,11 @@ impl WriteRule {
     /// The rule for a register that accepts only `functions`.
     pub const fn functions(self, functions: Functions) -> WriteRule {
         WriteRule { functions, ..self }
+    }
+
+    /// The rule for a register of `table` (a coil: raw values 0 and 1).
+    pub const fn in_table(self, table: Table) -> WriteRule {
+        WriteRule { table, ..self }
     }
 
     /// The rule for a 32-bit pair whose words go in `order`.

@@ -14,6 +14,10 @@
 pub const MODBUS_MAX_READ: u16 = 125;
 /// The largest write the Modbus application protocol allows (10h): 123 registers.
 pub const MODBUS_MAX_WRITE: u16 = 123;
+/// The most coils or discrete inputs one read may take (01h/02h): 2000.
+pub const MODBUS_MAX_READ_BITS: u16 = 2000;
+/// The most coils one write may take (0Fh): 1968.
+pub const MODBUS_MAX_WRITE_BITS: u16 = 1968;
 /// The lowest unicast slave address of the Modbus serial line.
 pub const MODBUS_SLAVE_MIN: u8 = 1;
 /// The highest unicast slave address of the Modbus serial line.
@@ -29,6 +33,10 @@ pub enum ProtocolFact {
     MaxRead,
     /// `max_write`: registers per write.
     MaxWrite,
+    /// `max_read_bits`: coils or discrete inputs per read (01h/02h).
+    MaxReadBits,
+    /// `max_write_bits`: coils per write (0Fh).
+    MaxWriteBits,
     /// `slave_address`: the range of slave addresses.
     SlaveAddress,
     /// `broadcast`: the rules of a broadcast (slave 0).
@@ -51,10 +59,12 @@ pub enum ProtocolFact {
 
 impl ProtocolFact {
     /// Every fact, in the order maps and reports list them.
-    pub const ALL: [ProtocolFact; 12] = [
+    pub const ALL: [ProtocolFact; 14] = [
         ProtocolFact::FunctionCodes,
         ProtocolFact::MaxRead,
         ProtocolFact::MaxWrite,
+        ProtocolFact::MaxReadBits,
+        ProtocolFact::MaxWriteBits,
         ProtocolFact::SlaveAddress,
         ProtocolFact::Broadcast,
         ProtocolFact::Exceptions,
@@ -72,6 +82,8 @@ impl ProtocolFact {
             ProtocolFact::FunctionCodes => "function_codes",
             ProtocolFact::MaxRead => "max_read",
             ProtocolFact::MaxWrite => "max_write",
+            ProtocolFact::MaxReadBits => "max_read_bits",
+            ProtocolFact::MaxWriteBits => "max_write_bits",
             ProtocolFact::SlaveAddress => "slave_address",
             ProtocolFact::Broadcast => "broadcast",
             ProtocolFact::Exceptions => "exceptions",
@@ -95,6 +107,8 @@ impl ProtocolFact {
             ProtocolFact::FunctionCodes => "function codes",
             ProtocolFact::MaxRead => "registers per read",
             ProtocolFact::MaxWrite => "registers per write",
+            ProtocolFact::MaxReadBits => "coils or discrete inputs per read",
+            ProtocolFact::MaxWriteBits => "coils per write",
             ProtocolFact::SlaveAddress => "slave-address range",
             ProtocolFact::Broadcast => "broadcast rules",
             ProtocolFact::Exceptions => "exception codes",
@@ -113,6 +127,8 @@ impl ProtocolFact {
             ProtocolFact::FunctionCodes => "the map's working list",
             ProtocolFact::MaxRead => "125 registers, the Modbus limit",
             ProtocolFact::MaxWrite => "123 registers, the Modbus limit",
+            ProtocolFact::MaxReadBits => "2000 bits, the Modbus limit",
+            ProtocolFact::MaxWriteBits => "1968 coils, the Modbus limit",
             ProtocolFact::SlaveAddress => "1-247, the Modbus unicast range",
             ProtocolFact::Broadcast => "no broadcast is sent",
             ProtocolFact::Exceptions => "the standard Modbus exception names",

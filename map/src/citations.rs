@@ -389,6 +389,8 @@ fn protocol<'a>(drive: &'a Drive, w: &mut Walk<'a>) {
         function_codes: _,
         max_read: _,
         max_write: _,
+        max_read_bits: _,
+        max_write_bits: _,
         slave_address,
         broadcast,
         exceptions,
@@ -471,6 +473,8 @@ fn protocol_figures<'a>(drive: &'a Drive, w: &mut Walk<'a>) {
         function_codes,
         max_read,
         max_write,
+        max_read_bits,
+        max_write_bits,
         timing,
         serial,
         ..
@@ -526,7 +530,13 @@ fn protocol_figures<'a>(drive: &'a Drive, w: &mut Walk<'a>) {
         function_codes.source.as_deref(),
         Reason::Unknown(function_codes.unknown.as_deref()),
     );
-    for (key, l) in [("max_read", max_read), ("max_write", max_write)] {
+    let bits = [
+        ("max_read_bits", max_read_bits.as_ref()),
+        ("max_write_bits", max_write_bits.as_ref()),
+    ];
+    let limits = [("max_read", Some(max_read)), ("max_write", Some(max_write))];
+    for (key, l) in limits.into_iter().chain(bits) {
+        let Some(l) = l else { continue };
         w.at(
             PlaceKind::Limit(key),
             at.key(key),

@@ -108,6 +108,19 @@ pub fn per_request(max_read: u16, max_write: u16) -> String {
     format!("at most {max_read} per read, {max_write} per write")
 }
 
+/// The coils and discrete inputs one request may carry, for the limits a map states: `at most
+/// 32 per read (01h/02h), 16 per write (0Fh)`.
+pub fn bits_per_request(max_read: Option<u16>, max_write: Option<u16>) -> String {
+    let parts: Vec<String> = [
+        max_read.map(|n| format!("{n} per read (01h/02h)")),
+        max_write.map(|n| format!("{n} per write (0Fh)")),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    format!("at most {}", parts.join(", "))
+}
+
 /// What a limit's map entry says beyond its number: `. max_read 8 not printed: <why>
 /// (`file:line`)`, `. max_read (`file:line`)`, or nothing for a plain number; without the
 /// citation when `with_source` is false (the caller gives it elsewhere).
@@ -138,12 +151,14 @@ pub fn not_printed(why: &str, fallback: &str) -> String {
     )
 }
 
-/// The Modbus limit standing in for an unprinted `max_read` (125) or `max_write` (123).
+/// The Modbus limit standing in for an unprinted `max_read` (125), `max_write` (123),
+/// `max_read_bits` (2000) or `max_write_bits` (1968).
 fn fallback_limit(name: &str) -> u16 {
-    if name == "max_read" {
-        drivemap_core::stated::MODBUS_MAX_READ
-    } else {
-        drivemap_core::stated::MODBUS_MAX_WRITE
+    match name {
+        "max_read" => drivemap_core::stated::MODBUS_MAX_READ,
+        "max_read_bits" => drivemap_core::stated::MODBUS_MAX_READ_BITS,
+        "max_write_bits" => drivemap_core::stated::MODBUS_MAX_WRITE_BITS,
+        _ => drivemap_core::stated::MODBUS_MAX_WRITE,
     }
 }
 
@@ -167,6 +182,8 @@ pub fn table(t: Table) -> &'static str {
     match t {
         Table::Holding => "holding",
         Table::Input => "input",
+        Table::Coil => "coil",
+        Table::DiscreteInput => "discrete input",
     }
 }
 

@@ -205,6 +205,8 @@ fn table_name(t: drivemap_core::register::Table) -> &'static str {
     match t {
         drivemap_core::register::Table::Holding => "holding",
         drivemap_core::register::Table::Input => "input",
+        drivemap_core::register::Table::Coil => "coil",
+        drivemap_core::register::Table::DiscreteInput => "discrete_input",
     }
 }
 

@@ -149,6 +149,7 @@ pub fn lower(drive: &Drive, registers: &'static [RegisterPlan]) -> &'static [Ind
                     width: Width::Word,
                     // Written to the value register: its functions.
                     functions: value_plan.functions,
+                    table: value_plan.info.table,
                 },
                 source: text(&e.source),
             });

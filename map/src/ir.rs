@@ -143,8 +143,12 @@ impl Register {
         }
     }
 
-    /// The whole range of the register's word or pair, signed or not.
+    /// The whole range of the register's word or pair, signed or not; 0 ..= 1 for a coil or a
+    /// discrete input (one bit).
     pub fn full_limits(&self) -> RawRange {
+        if self.table.is_bits() {
+            return RawRange { min: 0, max: 1 };
+        }
         self.width().range(self.def.signed)
     }
 
@@ -599,18 +603,24 @@ pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                 },
             };
             for def in instances {
+                let table = def
+                    .modbus_table
+                    .or(g.modbus_table)
+                    .unwrap_or(ModbusTable::Holding);
                 registers.push(Register {
                     // A draft's rows were not read against the manual: an access nobody
-                    // wrote is read-only there, read-write only in a reviewed map.
-                    access: def.access.or(g.access).unwrap_or(if model.draft.is_some() {
-                        Access::Read
-                    } else {
-                        Access::ReadWrite
-                    }),
-                    table: def
-                        .modbus_table
-                        .or(g.modbus_table)
-                        .unwrap_or(ModbusTable::Holding),
+                    // wrote is read-only there, read-write only in a reviewed map. A coil or
+                    // discrete input without an access is read-only in every map: writing a
+                    // coil runs, reverses or trips a drive, so it is written only where the
+                    // map says so.
+                    access: def.access.or(g.access).unwrap_or(
+                        if model.draft.is_some() || table.is_bits() {
+                            Access::Read
+                        } else {
+                            Access::ReadWrite
+                        },
+                    ),
+                    table,
                     write_restriction: def
                         .write_restriction
                         .or(g.write_restriction)

@@ -285,6 +285,37 @@ fn role_target(
     }
     let r = drive.find(p.register.as_deref()?)?;
     let row = position[r.index()] as u16;
+    if r.table.is_bits()
+        && p.field.is_none()
+        && matches!(role.kind(), RoleKind::Command | RoleKind::Status)
+    {
+        // A coil or discrete input is one bit: the place is its bit 0, on at 1 unless the map
+        // says `on: 0` (a coil whose 1 means forward, for the reverse role).
+        let code = |c: &model::CodeRef| match c {
+            model::CodeRef::Number(n) => Some(*n),
+            model::CodeRef::Id(_) => None,
+        };
+        let on: Vec<u16> = match &p.on {
+            Some(codes) => codes.list().into_iter().filter_map(code).collect(),
+            None => vec![1],
+        };
+        let off = match &p.off {
+            Some(c) => code(c),
+            None => Some(if on == [0] { 1 } else { 0 }),
+        };
+        return Some(Target::Field(FieldRole {
+            row,
+            lsb: 0,
+            width: 1,
+            on: leak(on),
+            off,
+            edge: match &p.edge {
+                model::EdgeSpec::Known(false) => Edge::Level,
+                model::EdgeSpec::Known(true) => Edge::Edge,
+                model::EdgeSpec::Unknown(u) => Edge::NotPrinted(text(&u.unknown)),
+            },
+        }));
+    }
     let Some(field_id) = &p.field else {
         if role.kind() == RoleKind::Status {
             // Codes of the whole register (an inverter status register: 3 run, 2 stop).
@@ -906,6 +937,8 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
         function_codes: leak(p.function_codes.codes.clone()),
         max_read: p.max_read(),
         max_write: p.max_write(),
+        max_read_bits: p.max_read_bits(),
+        max_write_bits: p.max_write_bits(),
         slave_min: p.slave_address.range().0,
         slave_max: p.slave_address.range().1,
         broadcast: p.broadcast.as_ref().map(|b| match &b.unknown {

@@ -322,6 +322,13 @@ pub struct Protocol {
     pub max_read: Limit,
     /// Maximum registers per write (10h).
     pub max_write: Limit,
+    /// Maximum coils or discrete inputs per read (01h/02h): stated (cited or `unknown`) by a
+    /// map with coils or discrete inputs; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_read_bits: Option<Limit>,
+    /// Maximum coils per write (0Fh): stated by a map with writable coils; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_write_bits: Option<Limit>,
     /// The slave addresses the drive answers to.
     pub slave_address: SlaveAddress,
     /// Broadcast writes (slave 0), when the drive takes them.
@@ -760,7 +767,7 @@ pub struct RepeatNeedsChange {
 
 /// `r`, `w`, `rw`: the vocabulary crate's access.
 pub(crate) use drivemap_core::register::Access;
-/// `holding`, `input`: the vocabulary crate's table.
+/// `holding`, `input`, `coil`, `discrete_input`: the vocabulary crate's table.
 pub(crate) use drivemap_core::register::Table as ModbusTable;
 /// When the drive accepts a write (`none`, `stopped`, `prg_mode`): the vocabulary crate's.
 pub(crate) use drivemap_core::register::WriteRestriction;
@@ -1547,5 +1554,23 @@ impl Protocol {
     pub fn max_write(&self) -> u16 {
         self.max_write
             .working(drivemap_core::stated::MODBUS_MAX_WRITE)
+    }
+
+    /// Coils or discrete inputs per read the tools use: the map's, else the Modbus 2000.
+    pub fn max_read_bits(&self) -> u16 {
+        self.max_read_bits
+            .as_ref()
+            .map_or(drivemap_core::stated::MODBUS_MAX_READ_BITS, |l| {
+                l.working(drivemap_core::stated::MODBUS_MAX_READ_BITS)
+            })
+    }
+
+    /// Coils per write the tools use: the map's, else the Modbus 1968.
+    pub fn max_write_bits(&self) -> u16 {
+        self.max_write_bits
+            .as_ref()
+            .map_or(drivemap_core::stated::MODBUS_MAX_WRITE_BITS, |l| {
+                l.working(drivemap_core::stated::MODBUS_MAX_WRITE_BITS)
+            })
     }
 }

@@ -454,11 +454,15 @@ fn protocol_rule(drive: &Drive, kind: PlaceKind<'_>) -> Option<(String, Rule)> {
             }
         }
         PlaceKind::Limit(key) => {
-            let l = if key == "max_read" {
-                &p.max_read
-            } else {
-                &p.max_write
+            let l = match key {
+                "max_read" => &p.max_read,
+                "max_read_bits" => p.max_read_bits.as_ref()?,
+                "max_write_bits" => p.max_write_bits.as_ref()?,
+                _ => &p.max_write,
             };
+            if key.ends_with("_bits") {
+                rule = rule.words(&["coils", "coil", "inputs", "bits"]);
+            }
             what = format!("`{key}`");
             if let Some(v) = l.value {
                 rule = rule.number(v);

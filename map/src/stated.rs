@@ -42,6 +42,14 @@ pub(crate) fn unprinted(p: &Protocol) -> Vec<Unprinted> {
         &p.max_write.unknown,
         &p.max_write.source,
     ));
+    for (fact, l) in [
+        (ProtocolFact::MaxReadBits, &p.max_read_bits),
+        (ProtocolFact::MaxWriteBits, &p.max_write_bits),
+    ] {
+        if let Some(l) = l {
+            out.extend(one(fact, &l.unknown, &l.source));
+        }
+    }
     let s = &p.slave_address;
     out.extend(one(ProtocolFact::SlaveAddress, &s.unknown, &s.source));
     if let Some(b) = &p.broadcast {

@@ -68,6 +68,7 @@ fn entry(e: &Entry, rt: &TokenStream) -> TokenStream {
                 reserved: 0,
                 width: #rt::core::width::Width::Word,
                 functions: #functions,
+                table: #rt::core::register::Table::Holding,
             },
             source: #source,
         }
@@ -87,6 +88,8 @@ pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
         let table = match p.table {
             Table::Holding => quote!(#rt::core::register::Table::Holding),
             Table::Input => quote!(#rt::core::register::Table::Input),
+            Table::Coil => quote!(#rt::core::register::Table::Coil),
+            Table::DiscreteInput => quote!(#rt::core::register::Table::DiscreteInput),
         };
         let readable = p.index_readable;
         let (min, max) = (

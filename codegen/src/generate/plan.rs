@@ -539,6 +539,8 @@ pub(super) fn row(r: &RegisterPlan) -> String {
             match i.table {
                 Table::Holding => "Table::Holding",
                 Table::Input => "Table::Input",
+                Table::Coil => "Table::Coil",
+                Table::DiscreteInput => "Table::DiscreteInput",
             }
         ));
     }

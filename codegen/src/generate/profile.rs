@@ -16,6 +16,8 @@ pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
     let fcs = p.function_codes.iter().map(|f| hex2(*f));
     let max_read = proc_macro2::Literal::u16_unsuffixed(p.max_read);
     let max_write = proc_macro2::Literal::u16_unsuffixed(p.max_write);
+    let max_read_bits = proc_macro2::Literal::u16_unsuffixed(p.max_read_bits);
+    let max_write_bits = proc_macro2::Literal::u16_unsuffixed(p.max_write_bits);
     let slave_min = proc_macro2::Literal::u8_unsuffixed(p.slave_min);
     let slave_max = proc_macro2::Literal::u8_unsuffixed(p.slave_max);
     let broadcast = match &p.broadcast {
@@ -104,6 +106,8 @@ pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
             function_codes: &[#(#fcs),*],
             max_read: #max_read,
             max_write: #max_write,
+            max_read_bits: #max_read_bits,
+            max_write_bits: #max_write_bits,
             slave_min: #slave_min,
             slave_max: #slave_max,
             broadcast: #broadcast,

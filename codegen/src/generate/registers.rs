@@ -40,6 +40,10 @@ pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream
 fn value(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> (TokenStream, TokenStream) {
     let row = Literal::usize_unsuffixed(index);
     let plan = r.plan();
+    if plan.info.table.is_bits() {
+        // A coil or discrete input: on or off.
+        return (quote!(bool), quote!());
+    }
     match plan.conversion {
         Conversion::Word { signed, .. } => match (plan.info.width.count() == 2, signed) {
             (false, true) => (quote!(i16), quote!()),

@@ -179,12 +179,12 @@ fn function_codes_carry_their_citation_or_why_they_are_not_printed() {
     let e = drivemap_map::Loader::new()
         .load_str(
             "mini-drive.yaml",
-            &with("{codes: [0x03, 0x05, 0x06, 0x08, 0x10], source: \"manual.txt:9\"}"),
+            &with("{codes: [0x03, 0x17, 0x06, 0x08, 0x10], source: \"manual.txt:9\"}"),
         )
         .unwrap_err();
     let e = e.to_string();
     assert!(
-        e.contains("mini-drive.yaml:16:34: error: function 05h is not one drivemap speaks"),
+        e.contains("mini-drive.yaml:16:34: error: function 17h is not one drivemap speaks"),
         "{e}"
     );
     let e = drivemap_map::Loader::new()

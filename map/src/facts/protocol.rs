@@ -11,7 +11,9 @@
 
 use serde::Serialize;
 
-use drivemap_core::stated::{MODBUS_MAX_READ, MODBUS_MAX_WRITE, ProtocolFact};
+use drivemap_core::stated::{
+    MODBUS_MAX_READ, MODBUS_MAX_READ_BITS, MODBUS_MAX_WRITE, MODBUS_MAX_WRITE_BITS, ProtocolFact,
+};
 
 use crate::describe::{self, num};
 use crate::ir::Drive;
@@ -31,6 +33,13 @@ pub enum ProtocolKey {
     MaxRead,
     /// Registers per write (10h): the working number.
     MaxWrite,
+    /// Coils and discrete inputs per request, read and write together (a map with coils or
+    /// discrete inputs).
+    BitsPerRequest,
+    /// Coils or discrete inputs per read (01h/02h): the working number.
+    MaxReadBits,
+    /// Coils per write (0Fh): the working number.
+    MaxWriteBits,
     /// The slave-address range, its default and the parameter that sets it.
     SlaveAddress,
     /// What slave 0 executes without reply.
@@ -59,12 +68,15 @@ pub enum ProtocolKey {
 
 impl ProtocolKey {
     /// Every key, in the order the rows are listed.
-    pub const ALL: [ProtocolKey; 17] = [
+    pub const ALL: [ProtocolKey; 20] = [
         ProtocolKey::Transports,
         ProtocolKey::FunctionCodes,
         ProtocolKey::RegistersPerRequest,
         ProtocolKey::MaxRead,
         ProtocolKey::MaxWrite,
+        ProtocolKey::BitsPerRequest,
+        ProtocolKey::MaxReadBits,
+        ProtocolKey::MaxWriteBits,
         ProtocolKey::SlaveAddress,
         ProtocolKey::Broadcast,
         ProtocolKey::Addressing,
@@ -87,6 +99,9 @@ impl ProtocolKey {
             ProtocolKey::RegistersPerRequest => "Registers per request",
             ProtocolKey::MaxRead => "Registers per read",
             ProtocolKey::MaxWrite => "Registers per write",
+            ProtocolKey::BitsPerRequest => "Coils and discrete inputs per request",
+            ProtocolKey::MaxReadBits => "Coils or discrete inputs per read",
+            ProtocolKey::MaxWriteBits => "Coils per write",
             ProtocolKey::SlaveAddress => "Slave address",
             ProtocolKey::Broadcast => "Broadcast",
             ProtocolKey::Addressing => "Addressing",
@@ -107,6 +122,9 @@ impl ProtocolKey {
     pub const fn part_of(self) -> Option<ProtocolKey> {
         match self {
             ProtocolKey::MaxRead | ProtocolKey::MaxWrite => Some(ProtocolKey::RegistersPerRequest),
+            ProtocolKey::MaxReadBits | ProtocolKey::MaxWriteBits => {
+                Some(ProtocolKey::BitsPerRequest)
+            }
             ProtocolKey::FrameGap
             | ProtocolKey::InterCharTimeout
             | ProtocolKey::ResponseTime
@@ -122,6 +140,8 @@ impl ProtocolKey {
             ProtocolKey::FunctionCodes => ProtocolFact::FunctionCodes,
             ProtocolKey::MaxRead => ProtocolFact::MaxRead,
             ProtocolKey::MaxWrite => ProtocolFact::MaxWrite,
+            ProtocolKey::MaxReadBits => ProtocolFact::MaxReadBits,
+            ProtocolKey::MaxWriteBits => ProtocolFact::MaxWriteBits,
             ProtocolKey::SlaveAddress => ProtocolFact::SlaveAddress,
             ProtocolKey::Broadcast => ProtocolFact::Broadcast,
             ProtocolKey::Exceptions => ProtocolFact::Exceptions,
@@ -133,6 +153,7 @@ impl ProtocolKey {
             ProtocolKey::RequestGap => ProtocolFact::RequestGap,
             ProtocolKey::Transports
             | ProtocolKey::RegistersPerRequest
+            | ProtocolKey::BitsPerRequest
             | ProtocolKey::ResponseDelay
             | ProtocolKey::Addressing
             | ProtocolKey::Eeprom => return None,
@@ -325,6 +346,8 @@ pub fn protocol(drive: &Drive) -> ProtocolFacts {
         function_codes: _, // function_codes()
         max_read: _,       // per_request()
         max_write: _,      // per_request()
+        max_read_bits: _,  // bits_per_request()
+        max_write_bits: _, // bits_per_request()
         slave_address: _,  // slave_address()
         broadcast: _,      // broadcast()
         exceptions: _,     // the `Exceptions` row, `exceptions`
@@ -340,6 +363,7 @@ pub fn protocol(drive: &Drive) -> ProtocolFacts {
     let timing = p.timing.as_ref();
     let mut rows = vec![transports(p), function_codes(p)];
     rows.extend(per_request(p));
+    rows.extend(bits_per_request(p).into_iter().flatten());
     rows.push(slave_address(&p.slave_address));
     rows.extend(p.broadcast.as_ref().map(|b| broadcast(drive, b)));
     rows.extend(p.addressing.as_ref().map(addressing));
@@ -452,6 +476,59 @@ fn per_request(p: &Protocol) -> [ProtocolRow; 3] {
     );
     let [read, write] = limits.map(|(key, _, l, modbus)| limit(key, l, modbus));
     [whole, read, write]
+}
+
+/// Coils and discrete inputs per request, as [`per_request`] gives registers: the whole row, then
+/// each limit the map states; nothing for a map that states neither (a map without coils).
+fn bits_per_request(p: &Protocol) -> Option<Vec<ProtocolRow>> {
+    if p.max_read_bits.is_none() && p.max_write_bits.is_none() {
+        return None;
+    }
+    let limits: Vec<(ProtocolKey, &str, &Limit, u16)> = [
+        (
+            ProtocolKey::MaxReadBits,
+            "max_read_bits",
+            p.max_read_bits.as_ref(),
+            MODBUS_MAX_READ_BITS,
+        ),
+        (
+            ProtocolKey::MaxWriteBits,
+            "max_write_bits",
+            p.max_write_bits.as_ref(),
+            MODBUS_MAX_WRITE_BITS,
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(k, n, l, m)| Some((k, n, l?, m)))
+    .collect();
+    let mut sources: Vec<&str> = limits
+        .iter()
+        .filter_map(|l| l.2.source.as_deref())
+        .collect();
+    sources.dedup();
+    let column = match sources[..] {
+        [one] => Some(one),
+        _ => None,
+    };
+    let mut text = describe::bits_per_request(
+        p.max_read_bits.as_ref().map(|_| p.max_read_bits()),
+        p.max_write_bits.as_ref().map(|_| p.max_write_bits()),
+    );
+    for (_, name, l, _) in &limits {
+        text += &describe::limit_citation(name, l, column.is_none());
+    }
+    let mut rows = vec![row(
+        ProtocolKey::BitsPerRequest,
+        text,
+        Figure::Words,
+        column,
+    )];
+    rows.extend(
+        limits
+            .into_iter()
+            .map(|(key, _, l, modbus)| limit(key, l, modbus)),
+    );
+    Some(rows)
 }
 
 fn limit(key: ProtocolKey, l: &Limit, modbus: u16) -> ProtocolRow {

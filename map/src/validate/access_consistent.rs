@@ -1,6 +1,7 @@
 //! Access agrees with the rest: write restrictions only on writable registers, input registers
-//! read-only, broadcast registers write-only, and the drive has the function codes the access
-//! needs.
+//! and discrete inputs read-only, broadcast registers write-only, and the drive has the function
+//! codes the access needs (03h/04h/01h/02h to read its table, 06h or 10h to write a register,
+//! 05h or 0Fh to write a coil).
 
 use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
@@ -27,6 +28,13 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 "input registers (04h) are read-only",
             ));
         }
+        if r.table == ModbusTable::DiscreteInput && r.writable() {
+            out.push(drive.error(
+                &r.key_path("access"),
+                rid,
+                "discrete inputs (02h) are read-only",
+            ));
+        }
         if r.broadcast && r.access != Access::Write {
             out.push(drive.error(
                 &r.key_path("access"),
@@ -35,20 +43,27 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             ));
         }
         if r.readable() && !r.broadcast {
-            let needed = match r.table {
-                ModbusTable::Holding => 0x03,
-                ModbusTable::Input => 0x04,
-            };
+            let needed = r.table.read_function();
             if !fc.contains(&needed) {
                 out.push(drive.error(
                     &r.path,
                     rid,
                     format!(
-                        "readable {} register, but the protocol lacks function {needed:02X}h",
-                        if needed == 3 { "holding" } else { "input" }
+                        "readable {}, but the protocol lacks function {needed:02X}h",
+                        r.table.item()
                     ),
                 ));
             }
+        }
+        if r.table == ModbusTable::Coil {
+            if r.writable() && !fc.contains(&0x05) && !fc.contains(&0x0F) {
+                out.push(drive.error(
+                    &r.path,
+                    rid,
+                    "writable coil, but the protocol has neither 05h nor 0Fh",
+                ));
+            }
+            continue;
         }
         if r.writable() && !fc.contains(&0x06) && !fc.contains(&0x10) {
             out.push(drive.error(

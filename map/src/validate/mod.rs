@@ -12,6 +12,7 @@ use crate::ir::Drive;
 mod access_consistent;
 mod addresses_non_overlapping;
 mod bit_fields_valid;
+mod bits_valid;
 mod citations_present;
 mod conflicts_recorded;
 mod enum_codes_fit;
@@ -83,6 +84,7 @@ pub(crate) fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     addresses_non_overlapping::check(drive, &mut out);
     pairs_valid::check(drive, &mut out);
     bit_fields_valid::check(drive, &mut out);
+    bits_valid::check(drive, &mut out);
     enum_codes_fit::check(drive, &mut out);
     limits_consistent::check(drive, &mut out);
     ratio_scales::check(drive, &mut out);

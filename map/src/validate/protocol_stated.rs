@@ -48,12 +48,56 @@ fn interval(drive: &Drive, out: &mut Vec<Diagnostic>, i: &Interval, at: Path) {
     }
 }
 
+/// The bit limits: stated by a map that has the tables they are about (coils or discrete
+/// inputs to read, writable coils with 0Fh to write), each given or `unknown` like any limit;
+/// refused on a map without such registers, where they would say nothing.
+fn bit_limits(drive: &Drive, out: &mut Vec<Diagnostic>) {
+    let p = &drive.protocol;
+    let pp = Path::root().key("protocol");
+    let first = |pred: &dyn Fn(&crate::ir::Register) -> bool| {
+        drive.registers.iter().find(|r| pred(r)).map(|r| r.id())
+    };
+    let read = first(&|r| r.table.is_bits() && r.readable());
+    let write = if p.function_codes.codes.contains(&0x0F) {
+        first(&|r| r.table == crate::model::ModbusTable::Coil && r.writable())
+    } else {
+        None
+    };
+    for (key, limit, needed, what) in [
+        (
+            "max_read_bits",
+            &p.max_read_bits,
+            read,
+            "the coils or discrete inputs one 01h/02h request may read",
+        ),
+        (
+            "max_write_bits",
+            &p.max_write_bits,
+            write,
+            "the coils one 0Fh request may write",
+        ),
+    ] {
+        match (limit, needed) {
+            (Some(l), _) => self::limit(drive, out, l, key),
+            (None, Some(id)) => out.push(drive.error(
+                &pp,
+                Some(id),
+                format!(
+                    "`{id}` makes the drive's map need `protocol.{key}`, {what}: give it with its citation (`{{value: N, source: \"file:line\"}}`) or say why the manual prints none (`{{unknown: \"<why>\"}}`)"
+                ),
+            )),
+            (None, None) => {}
+        }
+    }
+}
+
 /// Refuses a fact neither given nor `unknown`, an empty reason, or figures beside `unknown`.
 pub(crate) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let p = &drive.protocol;
     let pp = Path::root().key("protocol");
     limit(drive, out, &p.max_read, "max_read");
     limit(drive, out, &p.max_write, "max_write");
+    bit_limits(drive, out);
 
     let s = &p.slave_address;
     let sp = pp.key("slave_address");
@@ -195,7 +239,16 @@ pub(crate) fn warnings(drive: &Drive) -> Vec<Diagnostic> {
     let p = &drive.protocol;
     let pp = Path::root().key("protocol");
     let mut out = Vec::new();
-    for (key, l) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
+    let bits = [
+        ("max_read_bits", p.max_read_bits.as_ref()),
+        ("max_write_bits", p.max_write_bits.as_ref()),
+    ];
+    let limits = [
+        ("max_read", Some(&p.max_read)),
+        ("max_write", Some(&p.max_write)),
+    ];
+    for (key, l) in limits.into_iter().chain(bits) {
+        let Some(l) = l else { continue };
         if let (Some(v), false) = (l.value, l.stated()) {
             out.push(drive.error(
                 &pp.key(key),

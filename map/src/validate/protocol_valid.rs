@@ -7,7 +7,7 @@ use crate::diagnostic::Diagnostic;
 use crate::ir::Drive;
 use crate::source::Path;
 
-const KNOWN: &[u8] = &[0x03, 0x04, 0x06, 0x08, 0x10];
+const KNOWN: &[u8] = &[0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x08, 0x0F, 0x10];
 
 /// One rule of the profile: reads `drive.protocol` (found at `protocol`) and appends its
 /// findings.
@@ -78,7 +78,9 @@ fn function_codes(drive: &Drive, pp: &Path, out: &mut Vec<Diagnostic>) {
             out.push(drive.error(
                 &fcp.index(i),
                 None,
-                format!("function {f:02X}h is not one drivemap speaks (03h, 04h, 06h, 08h, 10h)"),
+                format!(
+                    "function {f:02X}h is not one drivemap speaks (01h, 02h, 03h, 04h, 05h, 06h, 08h, 0Fh, 10h)"
+                ),
             ));
         }
         if fcs[..i].contains(f) {
@@ -91,9 +93,20 @@ fn function_codes(drive: &Drive, pp: &Path, out: &mut Vec<Diagnostic>) {
     }
 }
 
-/// `max_read` and `max_write` within what a Modbus request can carry.
+/// `max_read`, `max_write`, `max_read_bits` and `max_write_bits` within what a Modbus request
+/// can carry.
 fn request_sizes(drive: &Drive, pp: &Path, out: &mut Vec<Diagnostic>) {
     let p = &drive.protocol;
+    for (name, limit, max) in [
+        ("max_read_bits", &p.max_read_bits, 2000),
+        ("max_write_bits", &p.max_write_bits, 1968),
+    ] {
+        if let Some(v) = limit.as_ref().and_then(|l| l.value)
+            && !(1..=max).contains(&v)
+        {
+            out.push(drive.error(&pp.key(name), None, format!("{name} {v} must be 1..={max}")));
+        }
+    }
     if let Some(v) = p.max_read.value
         && !(1..=125).contains(&v)
     {
@@ -187,12 +200,12 @@ fn broadcast(drive: &Drive, pp: &Path, out: &mut Vec<Diagnostic>) {
         None => {}
     }
     for (i, f) in b.functions.iter().enumerate() {
-        if !matches!(f, 0x06 | 0x10) || !p.function_codes.codes.contains(f) {
+        if !matches!(f, 0x05 | 0x06 | 0x0F | 0x10) || !p.function_codes.codes.contains(f) {
             out.push(drive.error(
                 &bp.key("functions").index(i),
                 None,
                 format!(
-                    "broadcast function {f:02X}h must be a write (06h/10h) the drive implements"
+                    "broadcast function {f:02X}h must be a write (06h/10h, or 05h/0Fh for coils) the drive implements"
                 ),
             ));
         }
@@ -202,7 +215,16 @@ fn broadcast(drive: &Drive, pp: &Path, out: &mut Vec<Diagnostic>) {
 /// A request size marked unknown gives its reason.
 fn request_size_reasons(drive: &Drive, pp: &Path, out: &mut Vec<Diagnostic>) {
     let p = &drive.protocol;
-    for (name, limit) in [("max_read", &p.max_read), ("max_write", &p.max_write)] {
+    let bits = [
+        ("max_read_bits", p.max_read_bits.as_ref()),
+        ("max_write_bits", p.max_write_bits.as_ref()),
+    ];
+    let limits = [
+        ("max_read", Some(&p.max_read)),
+        ("max_write", Some(&p.max_write)),
+    ];
+    for (name, limit) in limits.into_iter().chain(bits) {
+        let Some(limit) = limit else { continue };
         if limit.unknown.as_ref().is_some_and(|r| r.trim().is_empty()) {
             out.push(drive.error(
                 &pp.key(name).key("unknown"),

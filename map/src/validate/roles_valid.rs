@@ -280,6 +280,10 @@ impl Check<'_> {
                         ),
                     );
                 }
+                if register.table.is_bits() {
+                    self.bit(role, p, register, path);
+                    return;
+                }
                 let Some(field_id) = &p.field else {
                     if !command && p.on.is_some() {
                         // Codes of a whole register (an inverter status register: 2 stop,
@@ -348,6 +352,49 @@ impl Check<'_> {
                     None => self.number(role, register, path),
                 }
             }
+        }
+    }
+
+    /// A command or status role on a coil or discrete input: the bit itself, on at 1 unless
+    /// `on: 0` says otherwise (and `off` the other code); no `field`.
+    fn bit(&mut self, role: Role, p: &RolePlace, register: &Register, path: &Path) {
+        let id = role.id();
+        let rid = Some(register.id());
+        if p.field.is_some() {
+            self.error(
+                &path.key("field"),
+                rid,
+                format!(
+                    "role `{id}`: `{}` is a {}, one bit: it has no fields; name the register alone",
+                    register.id(),
+                    register.table.item()
+                ),
+            );
+        }
+        let mut codes = Vec::new();
+        let on_codes = p.on.iter().flat_map(|c| c.list()).map(|c| ("on", c));
+        let off_code = p.off.iter().map(|c| ("off", c));
+        for (key, c) in on_codes.chain(off_code) {
+            match c {
+                CodeRef::Number(n) if *n <= 1 => codes.push((key, *n)),
+                _ => self.error(
+                    &path.key(key),
+                    rid,
+                    format!(
+                        "role `{id}`: `{}` is a {}, whose codes are 1 (on) and 0 (off); write `{key}: 0` or `{key}: 1`",
+                        register.id(),
+                        register.table.item()
+                    ),
+                ),
+            }
+        }
+        let on: Vec<u16> = codes.iter().filter(|c| c.0 == "on").map(|c| c.1).collect();
+        if on.len() > 1 || codes.iter().any(|c| c.0 == "off" && on.contains(&c.1)) {
+            self.error(
+                path,
+                rid,
+                format!("role `{id}`: `on` and `off` of a bit are one code each, and not the same"),
+            );
         }
     }
 

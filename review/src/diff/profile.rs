@@ -46,7 +46,9 @@ fn rule(key: K) -> Rule {
     match key {
         K::Transports => Rule::Members(C::TransportRemoved, C::TransportAdded),
         K::FunctionCodes => Rule::Set(C::FunctionCodeRemoved, C::FunctionCodeAdded),
-        K::MaxRead | K::MaxWrite => Rule::Count(C::MaxRequestLowered, C::MaxRequestRaised),
+        K::MaxRead | K::MaxWrite | K::MaxReadBits | K::MaxWriteBits => {
+            Rule::Count(C::MaxRequestLowered, C::MaxRequestRaised)
+        }
         K::SlaveAddress => Rule::Range(C::SlaveRangeNarrowed, C::SlaveRangeWidened),
         K::Broadcast => Rule::Broadcast(C::BroadcastRestricted, C::BroadcastExtended),
         K::Addressing => Rule::Offsets(C::AddressingChanged),
@@ -56,6 +58,7 @@ fn rule(key: K) -> Rule {
         // The whole of the two limits; the timing's figures are in its entry; the exception
         // list is compared code by code and its reason with the other reasons.
         K::RegistersPerRequest
+        | K::BitsPerRequest
         | K::FrameGap
         | K::InterCharTimeout
         | K::ResponseTime
@@ -80,11 +83,13 @@ enum Step {
 }
 
 /// The comparison, step by step.
-const STEPS: [Step; 15] = [
+const STEPS: [Step; 17] = [
     Step::Row(K::Transports, "transports"),
     Step::Row(K::FunctionCodes, "function codes"),
     Step::Row(K::MaxRead, "max_read"),
     Step::Row(K::MaxWrite, "max_write"),
+    Step::Row(K::MaxReadBits, "max_read_bits"),
+    Step::Row(K::MaxWriteBits, "max_write_bits"),
     Step::Row(K::SlaveAddress, "slave address"),
     Step::NotPrinted,
     Step::Row(K::Broadcast, "broadcast"),
