@@ -28,7 +28,7 @@ use drivemap_runtime::plan::{Conversion, Dependency};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::RoleKind;
 use drivemap_runtime::vfd::{Memory, VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{ClientOptions, Rounding, Table};
+use drivemap_runtime::{ClientOptions, Rounding};
 
 use crate::link::{Action, Command, LinkClient};
 use crate::{CommandFailure, PollFailure};
@@ -388,10 +388,7 @@ impl Commander {
         let info = r.plan().info;
         let mut w = [0u16; 2];
         let words = &mut w[..usize::from(info.width.count())];
-        match info.table {
-            Table::Holding => client.read_holding(self.slave, address, words),
-            Table::Input => client.read_input(self.slave, address, words),
-        }?;
+        client.read_table(self.slave, info.table, address, words)?;
         Ok(info.width.join(words))
     }
 }

@@ -726,6 +726,10 @@ impl Polled {
                         )
                     }
                 }
+                (Meaning::Bit, v) => {
+                    let on = v.as_f64().is_some_and(|x| x != 0.0);
+                    (f64::from(u8::from(on)), None, u8::from(on).to_string())
+                }
                 (_, v) => (v.as_f64().unwrap_or(f64::NAN), None, v.to_string()),
             };
             match info {

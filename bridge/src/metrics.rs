@@ -128,6 +128,10 @@ impl Metrics {
                 (Meaning::Field { .. }, _) => {
                     "a multi-bit field's code and meaning (value 1; labels code, meaning)".into()
                 }
+                (Meaning::Bit, Some(r)) => {
+                    format!("role {} of the drive's map, a coil or discrete input (0/1)", r.id())
+                }
+                (Meaning::Bit, None) => format!("a {} without a role (0/1)", p.table().item()),
             };
             let unit = (!suffix.is_empty()).then(|| match suffix.as_str() {
                 "seconds" => Unit::Seconds,

@@ -345,6 +345,24 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 "binary_sensor"
             }
             Meaning::Field { .. } | Meaning::Bits(_) => "sensor",
+            Meaning::Bit => {
+                c["payload_on"] = json!("1");
+                c["payload_off"] = json!("0");
+                match p.role {
+                    Some(Role::Fault | Role::Alarm) => c["device_class"] = json!("problem"),
+                    Some(Role::Running) => c["device_class"] = json!("running"),
+                    _ => {}
+                }
+                if writable {
+                    // A coil the bridge may set: a switch, its state the coil read back.
+                    c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, p.id()));
+                    c["state_on"] = json!("1");
+                    c["state_off"] = json!("0");
+                    "switch"
+                } else {
+                    "binary_sensor"
+                }
+            }
         };
         out.push((
             format!(

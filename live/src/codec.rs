@@ -42,6 +42,8 @@ pub enum Value {
         /// The code's meaning as the manual prints it, when listed.
         name: Option<String>,
     },
+    /// A coil or discrete input: on or off.
+    Bit(bool),
     /// Bit fields.
     Bits {
         /// The whole word.
@@ -76,6 +78,7 @@ impl Value {
             Value::Quantity { value, .. } => Some(*value),
             Value::Code { code, .. } => Some(f64::from(*code)),
             Value::Bits { raw, .. } => Some(f64::from(*raw)),
+            Value::Bit(on) => Some(f64::from(u8::from(*on))),
         }
     }
 }
@@ -84,6 +87,8 @@ impl fmt::Display for Value {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Value::Word(w) => write!(f, "{w}"),
+            Value::Bit(true) => f.write_str("1 (on)"),
+            Value::Bit(false) => f.write_str("0 (off)"),
             Value::Quantity {
                 exact: Some(exact),
                 unit,
@@ -198,6 +203,9 @@ pub fn decode_written(
     settings: &LiveSettings,
 ) -> Result<Value, ValueError> {
     let (plan, view) = planned(drive, r, settings);
+    if plan.info.table.is_bits() {
+        return Ok(Value::Bit(raw != 0));
+    }
     match &plan.conversion {
         Conversion::Word { .. } => Ok(Value::Word(plan.int(raw))),
         Conversion::Enum { .. } => {
@@ -434,6 +442,21 @@ pub fn parse_value_with(
         return Err(InputError::Parse(format!("no value given for {}", r.id())));
     }
     let plan = r.plan();
+    if plan.info.table.is_bits() {
+        let on = match text.to_ascii_lowercase().as_str() {
+            "1" | "on" | "true" => 1.0,
+            "0" | "off" | "false" => 0.0,
+            _ => {
+                return Err(InputError::Parse(format!(
+                    "`{}` is not a state of {}, a {}: write on or off (1 or 0)",
+                    shorten(text),
+                    r.id(),
+                    plan.info.table.item()
+                )));
+            }
+        };
+        return encode_with(drive, r, on, settings, rounding).map_err(InputError::Value);
+    }
     let value = match &plan.conversion {
         Conversion::Enum { values, .. } => {
             let lower = text.to_ascii_lowercase();

@@ -1007,10 +1007,7 @@ impl<'d> Session<'d> {
         address: u16,
         out: &mut [u16],
     ) -> Result<(), drivemap_runtime::Error> {
-        match table {
-            Table::Holding => self.client.read_holding(self.slave, address, out),
-            Table::Input => self.client.read_input(self.slave, address, out),
-        }
+        self.client.read_table(self.slave, table, address, out)
     }
 
     /// Why a register cannot be read on this link, if it cannot.

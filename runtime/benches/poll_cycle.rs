@@ -32,6 +32,8 @@ static PROFILE: Profile = Profile {
     function_codes: &[0x03, 0x06, 0x08, 0x10],
     max_read: 8,
     max_write: 16,
+    max_read_bits: drivemap_runtime::core::stated::MODBUS_MAX_READ_BITS,
+    max_write_bits: drivemap_runtime::core::stated::MODBUS_MAX_WRITE_BITS,
     ..Profile::GENERIC
 };
 

@@ -483,6 +483,60 @@ impl<T: AsyncTransport> AsyncClient<T> {
         self.session().read_input(slave, address, out).await
     }
 
+    /// As [`Client::read_table`](crate::client::Client::read_table).
+    pub async fn read_table(
+        &mut self,
+        slave: u8,
+        table: drivemap_core::register::Table,
+        address: u16,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        self.session().read_table(slave, table, address, out).await
+    }
+
+    /// As [`Client::read_coils`](crate::client::Client::read_coils).
+    pub async fn read_coils(
+        &mut self,
+        slave: u8,
+        address: u16,
+        out: &mut [bool],
+    ) -> Result<(), Error> {
+        use drivemap_core::register::Table;
+        self.session()
+            .read_bits(slave, Table::Coil, address, out)
+            .await
+    }
+
+    /// As [`Client::read_discrete_inputs`](crate::client::Client::read_discrete_inputs).
+    pub async fn read_discrete_inputs(
+        &mut self,
+        slave: u8,
+        address: u16,
+        out: &mut [bool],
+    ) -> Result<(), Error> {
+        use drivemap_core::register::Table;
+        self.session()
+            .read_bits(slave, Table::DiscreteInput, address, out)
+            .await
+    }
+
+    /// As [`Client::write_coil`](crate::client::Client::write_coil).
+    pub async fn write_coil(&mut self, slave: u8, address: u16, value: bool) -> Result<(), Error> {
+        self.session()
+            .write_coil(slave, crate::gate::WriteTarget::Addresses, address, value)
+            .await
+    }
+
+    /// As [`Client::write_coils`](crate::client::Client::write_coils).
+    pub async fn write_coils(
+        &mut self,
+        slave: u8,
+        address: u16,
+        values: &[bool],
+    ) -> Result<(), Error> {
+        self.session().write_coils(slave, address, values).await
+    }
+
     /// As [`Client::write_register`](crate::client::Client::write_register).
     pub async fn write_register(
         &mut self,

@@ -184,6 +184,8 @@ pub const fn request_bytes(function: u8, quantity: u16) -> Option<u32> {
         | function::WRITE_SINGLE
         | function::LOOP_BACK => Some(8),
         function::WRITE_MULTIPLE => Some(9 + 2 * quantity as u32),
+        function::READ_COILS | function::READ_DISCRETE_INPUTS | function::WRITE_COIL => Some(8),
+        function::WRITE_COILS => Some(9 + (quantity as u32).div_ceil(8)),
         _ => None,
     }
 }
@@ -192,7 +194,14 @@ pub const fn request_bytes(function: u8, quantity: u16) -> Option<u32> {
 pub const fn response_bytes(function: u8, quantity: u16) -> Option<u32> {
     match function {
         function::READ_HOLDING | function::READ_INPUT => Some(5 + 2 * quantity as u32),
-        function::WRITE_SINGLE | function::LOOP_BACK | function::WRITE_MULTIPLE => Some(8),
+        function::READ_COILS | function::READ_DISCRETE_INPUTS => {
+            Some(5 + (quantity as u32).div_ceil(8))
+        }
+        function::WRITE_SINGLE
+        | function::LOOP_BACK
+        | function::WRITE_MULTIPLE
+        | function::WRITE_COIL
+        | function::WRITE_COILS => Some(8),
         _ => None,
     }
 }
@@ -353,6 +362,23 @@ impl BusModel {
     /// A read of `quantity` registers.
     pub fn read(&self, quantity: u16) -> Duration {
         Duration::from_nanos(self.read_ns(quantity))
+    }
+
+    /// A read of `quantity` coils or discrete inputs (01h/02h), in nanoseconds: eight states a
+    /// byte in the reply.
+    pub fn read_bits_ns(&self, quantity: u16) -> u64 {
+        self.transaction(8, Some(5 + u32::from(quantity).div_ceil(8)))
+            .total_ns()
+    }
+
+    /// A read of `quantity` items of `table`, in nanoseconds: [`BusModel::read_ns`] for
+    /// registers, [`BusModel::read_bits_ns`] for coils and discrete inputs.
+    pub fn read_ns_of(&self, table: drivemap_core::register::Table, quantity: u16) -> u64 {
+        if table.is_bits() {
+            self.read_bits_ns(quantity)
+        } else {
+            self.read_ns(quantity)
+        }
     }
 }
 

@@ -437,6 +437,8 @@ impl Core {
         let max = match f {
             function::READ_HOLDING | function::READ_INPUT => Some(p.max_read),
             function::WRITE_MULTIPLE => Some(p.max_write),
+            function::READ_COILS | function::READ_DISCRETE_INPUTS => Some(p.max_read_bits),
+            function::WRITE_COILS => Some(p.max_write_bits),
             _ => None,
         };
         if let Some(max) = max {
@@ -444,11 +446,20 @@ impl Core {
                 return Err(Refusal::NoRegisters { function: f });
             }
             if quantity > usize::from(max) {
-                return Err(Refusal::TooManyRegisters {
-                    drive: p.drive_id,
-                    function: f,
-                    quantity,
-                    max,
+                return Err(if request.is_bits() {
+                    Refusal::TooManyBits {
+                        drive: p.drive_id,
+                        function: f,
+                        quantity,
+                        max,
+                    }
+                } else {
+                    Refusal::TooManyRegisters {
+                        drive: p.drive_id,
+                        function: f,
+                        quantity,
+                        max,
+                    }
                 });
             }
         }
@@ -481,12 +492,20 @@ impl Core {
             }
         }
         if let (Purpose::Write(target), Some(a)) = (purpose, address) {
+            use drivemap_core::register::Table;
+            let k = self.kind;
             match &request {
                 Request::WriteSingle { value, .. } => {
-                    gate::check(p, self.kind, slave, target, a, [*value])?
+                    gate::check_in(p, k, slave, target, Table::Holding, a, [*value])?
                 }
                 Request::WriteMultiple { values, .. } => {
-                    gate::check(p, self.kind, slave, target, a, values.iter())?
+                    gate::check_in(p, k, slave, target, Table::Holding, a, values.iter())?
+                }
+                Request::WriteCoil { value, .. } => {
+                    gate::check_coils(p, k, slave, target, a, [*value])?
+                }
+                Request::WriteCoils { values, .. } => {
+                    gate::check_coils(p, k, slave, target, a, values.iter())?
                 }
                 _ => {}
             }
@@ -528,10 +547,27 @@ impl Core {
                 address: pdu_address.unwrap_or(0),
                 values,
             },
+            Request::ReadCoils { quantity, .. } => Request::ReadCoils {
+                address: pdu_address.unwrap_or(0),
+                quantity,
+            },
+            Request::ReadDiscreteInputs { quantity, .. } => Request::ReadDiscreteInputs {
+                address: pdu_address.unwrap_or(0),
+                quantity,
+            },
+            Request::WriteCoil { value, .. } => Request::WriteCoil {
+                address: pdu_address.unwrap_or(0),
+                value,
+            },
+            Request::WriteCoils { values, .. } => Request::WriteCoils {
+                address: pdu_address.unwrap_or(0),
+                values,
+            },
             r @ Request::LoopBack { .. } => r,
         };
         let value = match request {
             Request::WriteSingle { value, .. } => Some(value),
+            Request::WriteCoil { value, .. } => Some(if value { crate::pdu::COIL_ON } else { 0 }),
             Request::LoopBack { data } => Some(data),
             _ => None,
         };
@@ -564,7 +600,10 @@ impl Core {
         if !b.functions.contains(&f) {
             return Err(Refusal::BroadcastFunction { drive, function: f });
         }
+        // The listed addresses are the registers' and the coils' a broadcast may write: a
+        // coil's is checked with its rule's broadcast use by the gate, in the coils' space.
         if !b.addresses.is_empty()
+            && !request.is_bits()
             && let Some(a) = request.address()
         {
             for i in 0..request.quantity() {
@@ -657,6 +696,10 @@ impl Core {
                 words.copy_to(out);
                 Ok(())
             }
+            Ok(Response::Bits(bits)) => {
+                bits.copy_to(out);
+                Ok(())
+            }
             Ok(Response::Exception { function, code }) => Err(Error::Exception {
                 sent: checked.sent,
                 exception: Exception::new(self.profile, function, code),
@@ -727,6 +770,31 @@ impl Core {
             Request::WriteMultiple {
                 address,
                 values: Words::Native(value),
+            }
+        }
+    }
+}
+
+impl Core {
+    /// One coil at `address` as a request: 05h, or 0Fh with one coil where the drive lacks 05h
+    /// or the coil accepts only 0Fh ([`gate::single_coil_function`]).
+    pub(crate) fn single_coil<'a>(
+        &self,
+        target: WriteTarget<'_>,
+        address: u16,
+        value: &'a [bool; 1],
+    ) -> Request<'a> {
+        if gate::single_coil_function(self.profile, self.kind, target, address)
+            == function::WRITE_COIL
+        {
+            Request::WriteCoil {
+                address,
+                value: value[0],
+            }
+        } else {
+            Request::WriteCoils {
+                address,
+                values: crate::pdu::BitValues::Native(value),
             }
         }
     }
@@ -961,6 +1029,8 @@ pub(crate) fn read_request(table: Table, address: u16, quantity: usize) -> Reque
     match table {
         Table::Holding => Request::ReadHolding { address, quantity },
         Table::Input => Request::ReadInput { address, quantity },
+        Table::Coil => Request::ReadCoils { address, quantity },
+        Table::DiscreteInput => Request::ReadDiscreteInputs { address, quantity },
     }
 }
 
@@ -974,6 +1044,11 @@ pub(crate) fn io_error(checked: &Checked<'_>, source: std::io::Error) -> Error {
 /// Largest number of words a typed multi-register call handles in one request (8 registers,
 /// each of which may be a 32-bit pair).
 pub const MAX_SET: usize = 16;
+
+/// Most coil or discrete-input states one request of [`Client::read_coils`] and
+/// [`Client::read_discrete_inputs`] asks for (fewer where the drive's `max_read_bits` is
+/// lower): longer reads go out as several requests.
+pub const MAX_BITS_CHUNK: usize = 256;
 
 /// A client's link and protocol state, borrowed for one call: the requests and their
 /// transactions, written once for the blocking [`Client`] (over [`Blocking`], run by
@@ -1123,7 +1198,9 @@ impl<W: Wire> Session<'_, W> {
         self.read_table(slave, Table::Input, address, out).await
     }
 
-    async fn read_table(
+    /// [`Client::read_table`]: registers' words, or coils' and discrete inputs' states as 1
+    /// and 0.
+    pub(crate) async fn read_table(
         &mut self,
         slave: u8,
         table: Table,
@@ -1136,6 +1213,72 @@ impl<W: Wire> Session<'_, W> {
             read_request(table, address, out.len()),
             out,
             Purpose::Read,
+            retries,
+        )
+        .await
+    }
+
+    /// [`Client::read_coils`] and [`Client::read_discrete_inputs`]: the states of `out.len()`
+    /// bits of `table` from `address`, read in requests of at most [`MAX_BITS_CHUNK`] states
+    /// (and the drive's limit).
+    pub(crate) async fn read_bits(
+        &mut self,
+        slave: u8,
+        table: Table,
+        address: u16,
+        out: &mut [bool],
+    ) -> Result<(), Error> {
+        if out.is_empty() {
+            // Refused as a request for nothing, as a read of no registers is.
+            return self.read_table(slave, table, address, &mut []).await;
+        }
+        let mut words = [0u16; MAX_BITS_CHUNK];
+        let max = usize::from(self.core.profile.max_read_bits.max(1)).min(MAX_BITS_CHUNK);
+        let quantity = out.len();
+        for (i, chunk) in out.chunks_mut(max).enumerate() {
+            let at = u16::try_from(usize::from(address) + i * max)
+                .map_err(|_| Refusal::AddressOverflow { address, quantity })?;
+            let words = &mut words[..chunk.len()];
+            self.read_table(slave, table, at, words).await?;
+            for (o, w) in chunk.iter_mut().zip(words.iter()) {
+                *o = *w != 0;
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Client::write_coil`].
+    pub(crate) async fn write_coil(
+        &mut self,
+        slave: u8,
+        target: WriteTarget<'_>,
+        address: u16,
+        value: bool,
+    ) -> Result<(), Error> {
+        let value = [value];
+        let request = self.core.single_coil(target, address, &value);
+        let retries = self.core.options.retries;
+        self.transact(slave, request, &mut [], Purpose::Write(target), retries)
+            .await
+    }
+
+    /// [`Client::write_coils`].
+    pub(crate) async fn write_coils(
+        &mut self,
+        slave: u8,
+        address: u16,
+        values: &[bool],
+    ) -> Result<(), Error> {
+        let request = Request::WriteCoils {
+            address,
+            values: crate::pdu::BitValues::Native(values),
+        };
+        let retries = self.core.options.retries;
+        self.transact(
+            slave,
+            request,
+            &mut [],
+            Purpose::Write(WriteTarget::Addresses),
             retries,
         )
         .await
@@ -1160,6 +1303,22 @@ impl<W: Wire> Session<'_, W> {
         address: u16,
         raw: u32,
     ) -> Result<(), Error> {
+        if rule.table.is_bits() {
+            // A coil: 05h (or 0Fh where the coil takes only that), raw 1 on and 0 off; the
+            // gate refuses any other raw value with the rule's range.
+            let target = WriteTarget::Rule(rule);
+            if raw > 1 {
+                crate::gate::check(
+                    self.core.profile,
+                    self.core.kind,
+                    slave,
+                    target,
+                    address,
+                    [raw as u16],
+                )?;
+            }
+            return self.write_coil(slave, target, address, raw != 0).await;
+        }
         match rule.width {
             drivemap_core::width::Width::Word => {
                 self.write_single(slave, WriteTarget::Rule(rule), address, raw as u16)
@@ -1520,6 +1679,56 @@ impl<T: Transport> Client<T> {
     /// Reads consecutive input registers (04h).
     pub fn read_input(&mut self, slave: u8, address: u16, out: &mut [u16]) -> Result<(), Error> {
         block_on(self.session().read_input(slave, address, out))
+    }
+
+    /// Reads `out.len()` consecutive items of `table` in one request: registers' words (03h,
+    /// 04h), or coils' and discrete inputs' states as 1 (on) and 0 (off) (01h, 02h) — the raw
+    /// values a register's plan decodes. At most the drive's `max_read` registers or
+    /// `max_read_bits` states.
+    pub fn read_table(
+        &mut self,
+        slave: u8,
+        table: Table,
+        address: u16,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        block_on(self.session().read_table(slave, table, address, out))
+    }
+
+    /// Reads consecutive coils (01h) from communication address `address` into `out`, in as
+    /// few requests as the drive's `max_read_bits` allows.
+    pub fn read_coils(&mut self, slave: u8, address: u16, out: &mut [bool]) -> Result<(), Error> {
+        block_on(self.session().read_bits(slave, Table::Coil, address, out))
+    }
+
+    /// Reads consecutive discrete inputs (02h), as [`Client::read_coils`].
+    pub fn read_discrete_inputs(
+        &mut self,
+        slave: u8,
+        address: u16,
+        out: &mut [bool],
+    ) -> Result<(), Error> {
+        block_on(
+            self.session()
+                .read_bits(slave, Table::DiscreteInput, address, out),
+        )
+    }
+
+    /// Writes one coil by communication address: 05h with FF00h (on) or 0000h (off), or 0Fh
+    /// with one coil where the drive lacks 05h or the coil accepts only 0Fh. Slave 0
+    /// broadcasts. The address must hold a writable coil of the profile's write table on this
+    /// link ([`gate::check_coils`]).
+    pub fn write_coil(&mut self, slave: u8, address: u16, value: bool) -> Result<(), Error> {
+        block_on(
+            self.session()
+                .write_coil(slave, WriteTarget::Addresses, address, value),
+        )
+    }
+
+    /// Writes consecutive coils (0Fh) from communication address `address`, in one request
+    /// (at most the drive's `max_write_bits`); every address must hold a writable coil.
+    pub fn write_coils(&mut self, slave: u8, address: u16, values: &[bool]) -> Result<(), Error> {
+        block_on(self.session().write_coils(slave, address, values))
     }
 
     /// Writes one register by communication address (06h, or 10h where the drive lacks 06h or

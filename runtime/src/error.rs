@@ -78,6 +78,52 @@ pub enum Refusal {
         /// The most the drive accepts in one request.
         max: u16,
     },
+    /// More coils or discrete inputs than the drive accepts in one request (01h, 02h, 0Fh).
+    #[error(
+        "{drive} accepts at most {max} coils or inputs per {function:02X}h request; {quantity} asked"
+    )]
+    TooManyBits {
+        /// The drive's map id.
+        drive: &'static str,
+        /// The function code.
+        function: u8,
+        /// The coils or inputs asked for.
+        quantity: usize,
+        /// The most the drive accepts in one request.
+        max: u16,
+    },
+    /// A write of one table's register sent as another table's: a coil's rule with a register
+    /// function, or a register's with a coil function (coil 0001h and holding register 0001h
+    /// are two things).
+    #[error(
+        "{register} is a {}, so it is not written as a {}",
+        table.item(),
+        requested.item()
+    )]
+    WrongTable {
+        /// The register's id.
+        register: &'static str,
+        /// The table it is in.
+        table: drivemap_core::register::Table,
+        /// The table the request writes.
+        requested: drivemap_core::register::Table,
+    },
+    /// A raw coil write (05h/0Fh) to an address where the map has no writable coil on this
+    /// link.
+    #[error(
+        "{drive} has no writable coil at {address:04X}h on {transport:?}{}",
+        if *broadcast { " for a broadcast" } else { "" }
+    )]
+    NoWritableCoil {
+        /// The drive's map id.
+        drive: &'static str,
+        /// The communication address written.
+        address: u16,
+        /// The client's transport kind.
+        transport: drivemap_core::profile::TransportKind,
+        /// Whether the write is a broadcast (slave 0).
+        broadcast: bool,
+    },
     /// A request for zero registers.
     #[error("{function:02X}h request for no registers")]
     NoRegisters {

@@ -23,6 +23,10 @@
 //! - a word outside every range the map gives the register, or with reserved bits set
 //!   ([`Refusal::RawOutOfRange`], [`Refusal::ReservedBits`]).
 //!
+//! - a write to one table by another table's rule or function (a coil's rule sent as a
+//!   register write, a raw coil write where the map has no coil): coils and registers are two
+//!   address spaces ([`Refusal::WrongTable`], [`Refusal::NoWritableCoil`]);
+//!
 //! - a function the register does not accept, where the map restricts its functions
 //!   (`function_codes`: [`Refusal::FunctionNotAccepted`], checked by `check_function` on
 //!   every address a request covers).
@@ -45,6 +49,7 @@ use crate::rtu;
 use drivemap_core::profile::{Profile, TransportKind};
 // A second path to the write rules (`drivemap_runtime::core::rule` is the documented one),
 // kept for code that names it.
+use drivemap_core::register::Table;
 #[doc(hidden)]
 pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
 use drivemap_core::width::Width;
@@ -65,11 +70,47 @@ pub enum WriteTarget<'a> {
 /// `kind` against the map. Nothing is sent; see the module documentation for what is refused.
 /// A 32-bit pair is checked as one value, and only whole: a write that covers one of its words
 /// without the other is refused ([`Refusal::SplitPair`]).
+///
+/// The table is the rule's for [`WriteTarget::Rule`] (a coil's rule: `words` are its raw
+/// values, 1 on and 0 off), holding registers for [`WriteTarget::Addresses`]; a raw coil write
+/// is checked by [`check_coils`].
 pub fn check(
     profile: &Profile,
     kind: TransportKind,
     slave: u8,
     target: WriteTarget<'_>,
+    address: u16,
+    words: impl IntoIterator<Item = u16>,
+) -> Result<(), Refusal> {
+    let table = match target {
+        WriteTarget::Rule(rule) => rule.table,
+        WriteTarget::Addresses => Table::Holding,
+    };
+    check_in(profile, kind, slave, target, table, address, words)
+}
+
+/// [`check`] for a write of coils (05h, 0Fh) from communication address `address`: a rule's
+/// register must be a coil, and a raw write must find a writable coil of the map at each
+/// address ([`Refusal::NoWritableCoil`]).
+pub fn check_coils(
+    profile: &Profile,
+    kind: TransportKind,
+    slave: u8,
+    target: WriteTarget<'_>,
+    address: u16,
+    states: impl IntoIterator<Item = bool>,
+) -> Result<(), Refusal> {
+    let words = states.into_iter().map(u16::from);
+    check_in(profile, kind, slave, target, Table::Coil, address, words)
+}
+
+/// The write of `words` into `table`.
+pub(crate) fn check_in(
+    profile: &Profile,
+    kind: TransportKind,
+    slave: u8,
+    target: WriteTarget<'_>,
+    table: Table,
     address: u16,
     words: impl IntoIterator<Item = u16>,
 ) -> Result<(), Refusal> {
@@ -79,10 +120,19 @@ pub fn check(
     while let Some(word) = words.next() {
         let used = match target {
             WriteTarget::Rule(rule) => {
+                if rule.table != table {
+                    return Err(Refusal::WrongTable {
+                        register: rule.register,
+                        table: rule.table,
+                        requested: table,
+                    });
+                }
                 check_rule(profile, kind, slave, rule, at, word, words.peek())?
             }
             WriteTarget::Addresses if profile.writes.is_empty() => 1,
-            WriteTarget::Addresses => check_address(profile, kind, slave, at, word, words.peek())?,
+            WriteTarget::Addresses => {
+                check_address(profile, kind, slave, table, at, word, words.peek())?
+            }
         };
         if used == 2 {
             words.next();
@@ -131,13 +181,15 @@ fn check_address(
     profile: &Profile,
     kind: TransportKind,
     slave: u8,
+    table: Table,
     address: u16,
     word: u16,
     next: Option<&u16>,
 ) -> Result<u16, Refusal> {
     let mut first_refusal = None;
     for rule in profile.writes.iter().filter(|r| {
-        r.word_index(address).is_some()
+        r.table == table
+            && r.word_index(address).is_some()
             && r.transports.contains(kind)
             && space(profile, slave, r).is_ok()
     }) {
@@ -148,11 +200,20 @@ fn check_address(
             }
         }
     }
-    Err(first_refusal.unwrap_or(Refusal::NoWritableRegister {
-        drive: profile.drive_id,
-        address,
-        transport: kind,
-        broadcast: slave == rtu::BROADCAST,
+    Err(first_refusal.unwrap_or(if table == Table::Coil {
+        Refusal::NoWritableCoil {
+            drive: profile.drive_id,
+            address,
+            transport: kind,
+            broadcast: slave == rtu::BROADCAST,
+        }
+    } else {
+        Refusal::NoWritableRegister {
+            drive: profile.drive_id,
+            address,
+            transport: kind,
+            broadcast: slave == rtu::BROADCAST,
+        }
     }))
 }
 
@@ -224,24 +285,28 @@ fn check_rule(
     Ok(rule.width.count())
 }
 
-/// The rules of registers that cover `address` for this target on `kind`.
+/// The rules of registers that cover `address` for this target on `kind`, in the table
+/// `function` writes (holding registers for a function that writes none).
 fn covering<'p>(
     profile: &'p Profile,
     kind: TransportKind,
     target: WriteTarget<'p>,
     address: u16,
+    function: u8,
 ) -> impl Iterator<Item = &'p WriteRule> {
     let rules: &'p [WriteRule] = match target {
         WriteTarget::Rule(rule) => core::slice::from_ref(rule),
         WriteTarget::Addresses => profile.writes,
     };
-    rules
-        .iter()
-        .filter(move |r| r.word_index(address).is_some() && r.transports.contains(kind))
+    let table = Table::of_function(function).unwrap_or(Table::Holding);
+    rules.iter().filter(move |r| {
+        r.table == table && r.word_index(address).is_some() && r.transports.contains(kind)
+    })
 }
 
 /// Whether the register at `address` accepts `function`: true where no rule covers it or one
-/// that covers it accepts the function (a register that moves may have several).
+/// that covers it accepts the function (a register that moves may have several). A coil
+/// function looks at coils, a register function at registers.
 pub fn accepts(
     profile: &Profile,
     kind: TransportKind,
@@ -249,7 +314,7 @@ pub fn accepts(
     address: u16,
     function: u8,
 ) -> bool {
-    let mut rules = covering(profile, kind, target, address).peekable();
+    let mut rules = covering(profile, kind, target, address, function).peekable();
     rules.peek().is_none() || rules.any(|r| r.functions.allows(function))
 }
 
@@ -271,6 +336,23 @@ pub(crate) fn single_write_function(
     }
 }
 
+/// The function one coil written at `address` goes out with: 05h, unless the drive lacks it
+/// or the coil refuses it while accepting 0Fh.
+pub(crate) fn single_coil_function(
+    profile: &Profile,
+    kind: TransportKind,
+    target: WriteTarget<'_>,
+    address: u16,
+) -> u8 {
+    use crate::pdu::function::{WRITE_COIL, WRITE_COILS};
+    let usable = |f| profile.supports(f) && accepts(profile, kind, target, address, f);
+    if usable(WRITE_COIL) || !usable(WRITE_COILS) {
+        WRITE_COIL
+    } else {
+        WRITE_COILS
+    }
+}
+
 /// Refuses a write with `function` over `quantity` registers from `address` when a register
 /// it covers does not accept that function ([`Refusal::FunctionNotAccepted`]). Nothing is
 /// split: see the module documentation.
@@ -289,7 +371,7 @@ pub(crate) fn check_function(
         if accepts(profile, kind, target, at, function) {
             continue;
         }
-        if let Some(rule) = covering(profile, kind, target, at).next() {
+        if let Some(rule) = covering(profile, kind, target, at, function).next() {
             return Err(Refusal::FunctionNotAccepted {
                 register: rule.register,
                 address: at,

@@ -1,15 +1,24 @@
-//! Protocol data units (function code + data) of the five functions these drives implement, with
-//! no I/O and no heap: requests are encoded into caller buffers and responses are decoded as views
-//! of the received bytes.
+//! Protocol data units (function code + data) of the functions these drives implement — the
+//! register functions 03h, 04h, 06h, 10h, the loop-back 08h, and the bit functions 01h, 02h,
+//! 05h, 0Fh of coils and discrete inputs — with no I/O and no heap: requests are encoded into
+//! caller buffers and responses are decoded as views of the received bytes.
 //!
 //! Every response is checked against the request that it answers: function echo, byte count,
-//! address and quantity echo (10h), address and value echo (06h), sub-function and data echo
-//! (08h). A response that fails any check is a [`FrameError`], never a value.
+//! address and quantity echo (10h, 0Fh), address and value echo (06h, 05h), sub-function and
+//! data echo (08h). A response that fails any check is a [`FrameError`], never a value.
 
 use ::core::fmt;
 
 /// Function codes.
 pub mod function {
+    /// Read coils.
+    pub const READ_COILS: u8 = 0x01;
+    /// Read discrete inputs.
+    pub const READ_DISCRETE_INPUTS: u8 = 0x02;
+    /// Write single coil: FF00h turns it on, 0000h off.
+    pub const WRITE_COIL: u8 = 0x05;
+    /// Write multiple coils.
+    pub const WRITE_COILS: u8 = 0x0F;
     /// Read holding registers.
     pub const READ_HOLDING: u8 = 0x03;
     /// Read input registers.
@@ -30,6 +39,104 @@ pub const MAX_PDU: usize = 253;
 pub const MAX_READ: u16 = 125;
 /// Most registers one 10h request may write (Modbus specification).
 pub const MAX_WRITE: u16 = 123;
+/// Most coils or discrete inputs one 01h/02h request may read (Modbus specification).
+pub const MAX_READ_BITS: u16 = 2000;
+/// Most coils one 0Fh request may write (Modbus specification).
+pub const MAX_WRITE_BITS: u16 = 1968;
+/// The word 05h writes to turn a coil on (0000h turns it off).
+pub const COIL_ON: u16 = 0xFF00;
+
+/// A sequence of coil or discrete-input states: either values to send, or the packed bytes as
+/// received (the first bit in the lowest bit of the first byte) with their count. Comparing two
+/// `BitValues` compares the states.
+#[derive(Clone, Copy)]
+pub enum BitValues<'a> {
+    /// States in memory.
+    Native(&'a [bool]),
+    /// Packed bytes on the wire, and how many bits of them are states (the rest is padding).
+    Wire {
+        /// The packed bytes: bit `i` is bit `i % 8` of byte `i / 8`.
+        bytes: &'a [u8],
+        /// Number of states.
+        count: usize,
+    },
+}
+
+impl<'a> BitValues<'a> {
+    /// Number of states.
+    pub fn len(&self) -> usize {
+        match self {
+            BitValues::Native(b) => b.len(),
+            BitValues::Wire { count, .. } => *count,
+        }
+    }
+
+    /// Whether there are no states.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The state at `index`.
+    pub fn get(&self, index: usize) -> Option<bool> {
+        match self {
+            BitValues::Native(b) => b.get(index).copied(),
+            BitValues::Wire { bytes, count } => {
+                if index >= *count {
+                    return None;
+                }
+                Some(bytes.get(index / 8)? >> (index % 8) & 1 == 1)
+            }
+        }
+    }
+
+    /// The states in order.
+    pub fn iter(&self) -> impl Iterator<Item = bool> + 'a {
+        let bits = *self;
+        (0..bits.len()).filter_map(move |i| bits.get(i))
+    }
+
+    /// Bytes the packed states take on the wire.
+    pub fn byte_count(&self) -> usize {
+        self.len().div_ceil(8)
+    }
+
+    /// Copies the states into `out` as words, 1 for on and 0 for off (the raw value of a coil);
+    /// returns how many were copied (the shorter length).
+    pub fn copy_to(&self, out: &mut [u16]) -> usize {
+        let n = self.len().min(out.len());
+        for (i, slot) in out.iter_mut().take(n).enumerate() {
+            *slot = u16::from(self.get(i).unwrap_or(false));
+        }
+        n
+    }
+
+    fn write_packed(&self, out: &mut [u8]) {
+        for b in out.iter_mut() {
+            *b = 0;
+        }
+        for (i, on) in self.iter().enumerate() {
+            if on {
+                out[i / 8] |= 1 << (i % 8);
+            }
+        }
+    }
+}
+
+impl PartialEq for BitValues<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        self.len() == other.len() && self.iter().eq(other.iter())
+    }
+}
+
+impl Eq for BitValues<'_> {}
+
+impl fmt::Debug for BitValues<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list()
+            .entries(self.iter().map(|b| u8::from(b)))
+            .finish()
+    }
+}
 
 /// A sequence of 16-bit register words: either native words to send, or big-endian bytes as
 /// received. Comparing two `Words` compares the register values.
@@ -145,6 +252,34 @@ pub enum Request<'a> {
         /// The values, in address order.
         values: Words<'a>,
     },
+    /// 01h: read `quantity` coils from `address`.
+    ReadCoils {
+        /// The PDU address of the first coil.
+        address: u16,
+        /// The number of coils.
+        quantity: u16,
+    },
+    /// 02h: read `quantity` discrete inputs from `address`.
+    ReadDiscreteInputs {
+        /// The PDU address of the first input.
+        address: u16,
+        /// The number of inputs.
+        quantity: u16,
+    },
+    /// 05h: write one coil (FF00h on, 0000h off on the wire).
+    WriteCoil {
+        /// The coil's PDU address.
+        address: u16,
+        /// On (`true`) or off.
+        value: bool,
+    },
+    /// 0Fh: write consecutive coils from `address`.
+    WriteCoils {
+        /// The PDU address of the first coil.
+        address: u16,
+        /// The states, in address order.
+        values: BitValues<'a>,
+    },
 }
 
 /// Why a request cannot be encoded.
@@ -188,7 +323,22 @@ impl Request<'_> {
             Request::WriteSingle { .. } => function::WRITE_SINGLE,
             Request::LoopBack { .. } => function::LOOP_BACK,
             Request::WriteMultiple { .. } => function::WRITE_MULTIPLE,
+            Request::ReadCoils { .. } => function::READ_COILS,
+            Request::ReadDiscreteInputs { .. } => function::READ_DISCRETE_INPUTS,
+            Request::WriteCoil { .. } => function::WRITE_COIL,
+            Request::WriteCoils { .. } => function::WRITE_COILS,
         }
+    }
+
+    /// Whether the request reads or writes coils or discrete inputs (01h, 02h, 05h, 0Fh).
+    pub fn is_bits(&self) -> bool {
+        matches!(
+            self,
+            Request::ReadCoils { .. }
+                | Request::ReadDiscreteInputs { .. }
+                | Request::WriteCoil { .. }
+                | Request::WriteCoils { .. }
+        )
     }
 
     /// First register address, if the function addresses registers.
@@ -197,28 +347,37 @@ impl Request<'_> {
             Request::ReadHolding { address, .. }
             | Request::ReadInput { address, .. }
             | Request::WriteSingle { address, .. }
-            | Request::WriteMultiple { address, .. } => Some(address),
+            | Request::WriteMultiple { address, .. }
+            | Request::ReadCoils { address, .. }
+            | Request::ReadDiscreteInputs { address, .. }
+            | Request::WriteCoil { address, .. }
+            | Request::WriteCoils { address, .. } => Some(address),
             Request::LoopBack { .. } => None,
         }
     }
 
-    /// Number of registers read or written (0 for loop-back).
+    /// Number of registers, coils or inputs read or written (0 for loop-back).
     pub fn quantity(&self) -> usize {
         match self {
-            Request::ReadHolding { quantity, .. } | Request::ReadInput { quantity, .. } => {
-                usize::from(*quantity)
-            }
-            Request::WriteSingle { .. } => 1,
+            Request::ReadHolding { quantity, .. }
+            | Request::ReadInput { quantity, .. }
+            | Request::ReadCoils { quantity, .. }
+            | Request::ReadDiscreteInputs { quantity, .. } => usize::from(*quantity),
+            Request::WriteSingle { .. } | Request::WriteCoil { .. } => 1,
             Request::LoopBack { .. } => 0,
             Request::WriteMultiple { values, .. } => values.len(),
+            Request::WriteCoils { values, .. } => values.len(),
         }
     }
 
-    /// Whether the request reads (03h/04h).
+    /// Whether the request reads (03h/04h, 01h/02h).
     pub fn is_read(&self) -> bool {
         matches!(
             self,
-            Request::ReadHolding { .. } | Request::ReadInput { .. }
+            Request::ReadHolding { .. }
+                | Request::ReadInput { .. }
+                | Request::ReadCoils { .. }
+                | Request::ReadDiscreteInputs { .. }
         )
     }
 
@@ -226,6 +385,7 @@ impl Request<'_> {
     pub fn pdu_len(&self) -> usize {
         match self {
             Request::WriteMultiple { values, .. } => 6 + 2 * values.len(),
+            Request::WriteCoils { values, .. } => 6 + values.byte_count(),
             _ => 5,
         }
     }
@@ -235,6 +395,9 @@ impl Request<'_> {
         match self {
             Request::ReadHolding { quantity, .. } | Request::ReadInput { quantity, .. } => {
                 2 + 2 * usize::from(*quantity)
+            }
+            Request::ReadCoils { quantity, .. } | Request::ReadDiscreteInputs { quantity, .. } => {
+                2 + usize::from(*quantity).div_ceil(8)
             }
             _ => 5,
         }
@@ -246,8 +409,14 @@ impl Request<'_> {
             Request::ReadHolding { quantity, .. } | Request::ReadInput { quantity, .. } => {
                 (MAX_READ, usize::from(*quantity))
             }
+            Request::ReadCoils { quantity, .. } | Request::ReadDiscreteInputs { quantity, .. } => {
+                (MAX_READ_BITS, usize::from(*quantity))
+            }
             Request::WriteMultiple { values, .. } => (MAX_WRITE, values.len()),
-            Request::WriteSingle { .. } | Request::LoopBack { .. } => return Ok(()),
+            Request::WriteCoils { values, .. } => (MAX_WRITE_BITS, values.len()),
+            Request::WriteSingle { .. } | Request::WriteCoil { .. } | Request::LoopBack { .. } => {
+                return Ok(());
+            }
         };
         if quantity == 0 || quantity > usize::from(max) {
             return Err(RequestError::Quantity {
@@ -276,9 +445,21 @@ impl Request<'_> {
         out[0] = self.function();
         match *self {
             Request::ReadHolding { address, quantity }
-            | Request::ReadInput { address, quantity } => {
+            | Request::ReadInput { address, quantity }
+            | Request::ReadCoils { address, quantity }
+            | Request::ReadDiscreteInputs { address, quantity } => {
                 put(out, 1, address);
                 put(out, 3, quantity);
+            }
+            Request::WriteCoil { address, value } => {
+                put(out, 1, address);
+                put(out, 3, if value { COIL_ON } else { 0 });
+            }
+            Request::WriteCoils { address, values } => {
+                put(out, 1, address);
+                put(out, 3, values.len() as u16);
+                out[5] = values.byte_count() as u8;
+                values.write_packed(&mut out[6..len]);
             }
             Request::WriteSingle { address, value } => {
                 put(out, 1, address);
@@ -332,6 +513,22 @@ pub enum Response<'a> {
         /// The number of registers written.
         quantity: u16,
     },
+    /// 01h/02h: the coils or discrete inputs read.
+    Bits(BitValues<'a>),
+    /// 05h: the echo of the written coil.
+    WriteCoil {
+        /// The coil's PDU address.
+        address: u16,
+        /// On or off.
+        value: bool,
+    },
+    /// 0Fh: the echo of the start address and quantity.
+    WriteCoils {
+        /// The PDU address of the first coil.
+        address: u16,
+        /// The number of coils written.
+        quantity: u16,
+    },
     /// An exception response: the request's function and the drive's own code.
     Exception {
         /// The request's function code.
@@ -346,6 +543,7 @@ impl Response<'_> {
     pub fn pdu_len(&self) -> usize {
         match self {
             Response::Registers(w) => 2 + 2 * w.len(),
+            Response::Bits(b) => 2 + b.byte_count(),
             Response::Exception { .. } => 2,
             _ => 5,
         }
@@ -365,6 +563,18 @@ impl Response<'_> {
             Response::Registers(words) => {
                 out[1] = (2 * words.len()) as u8;
                 words.write_be(&mut out[2..len]);
+            }
+            Response::Bits(bits) => {
+                out[1] = bits.byte_count() as u8;
+                bits.write_packed(&mut out[2..len]);
+            }
+            Response::WriteCoil { address, value } => {
+                put(out, 1, address);
+                put(out, 3, if value { COIL_ON } else { 0 });
+            }
+            Response::WriteCoils { address, quantity } => {
+                put(out, 1, address);
+                put(out, 3, quantity);
             }
             Response::WriteSingle { address, value } => {
                 put(out, 1, address);
@@ -495,10 +705,15 @@ pub fn response_pdu_len(pdu: &[u8]) -> Result<Option<usize>, FrameError> {
         return Ok(Some(2));
     }
     match f {
-        function::READ_HOLDING | function::READ_INPUT => {
-            Ok(pdu.get(1).map(|&count| 2 + usize::from(count)))
-        }
-        function::WRITE_SINGLE | function::LOOP_BACK | function::WRITE_MULTIPLE => Ok(Some(5)),
+        function::READ_HOLDING
+        | function::READ_INPUT
+        | function::READ_COILS
+        | function::READ_DISCRETE_INPUTS => Ok(pdu.get(1).map(|&count| 2 + usize::from(count))),
+        function::WRITE_SINGLE
+        | function::LOOP_BACK
+        | function::WRITE_MULTIPLE
+        | function::WRITE_COIL
+        | function::WRITE_COILS => Ok(Some(5)),
         other => Err(FrameError::UnknownFunction(other)),
     }
 }
@@ -512,8 +727,13 @@ pub fn request_pdu_len(pdu: &[u8]) -> Result<Option<usize>, FrameError> {
         function::READ_HOLDING
         | function::READ_INPUT
         | function::WRITE_SINGLE
-        | function::LOOP_BACK => Ok(Some(5)),
-        function::WRITE_MULTIPLE => Ok(pdu.get(5).map(|&count| 6 + usize::from(count))),
+        | function::LOOP_BACK
+        | function::READ_COILS
+        | function::READ_DISCRETE_INPUTS
+        | function::WRITE_COIL => Ok(Some(5)),
+        function::WRITE_MULTIPLE | function::WRITE_COILS => {
+            Ok(pdu.get(5).map(|&count| 6 + usize::from(count)))
+        }
         other => Err(FrameError::UnknownFunction(other)),
     }
 }
@@ -568,6 +788,54 @@ pub fn decode_response<'a>(
                 });
             }
             Ok(Response::Registers(Words::Wire(&pdu[2..])))
+        }
+        Request::ReadCoils { quantity, .. } | Request::ReadDiscreteInputs { quantity, .. } => {
+            let expected = usize::from(quantity).div_ceil(8);
+            let count = usize::from(*pdu.get(1).ok_or(FrameError::Length {
+                expected: 2 + expected,
+                got: pdu.len(),
+            })?);
+            if count != expected {
+                return Err(FrameError::ByteCount {
+                    expected,
+                    got: count,
+                });
+            }
+            if pdu.len() != 2 + count {
+                return Err(FrameError::Length {
+                    expected: 2 + count,
+                    got: pdu.len(),
+                });
+            }
+            Ok(Response::Bits(BitValues::Wire {
+                bytes: &pdu[2..],
+                count: usize::from(quantity),
+            }))
+        }
+        Request::WriteCoil { address, value } => {
+            let (a, v) = two_words(pdu)?;
+            echo(address, a, if value { COIL_ON } else { 0 }, v)?;
+            Ok(Response::WriteCoil { address: a, value })
+        }
+        Request::WriteCoils { address, values } => {
+            let (a, q) = two_words(pdu)?;
+            if a != address {
+                return Err(FrameError::AddressEcho {
+                    expected: address,
+                    got: a,
+                });
+            }
+            let quantity = values.len() as u16;
+            if q != quantity {
+                return Err(FrameError::QuantityEcho {
+                    expected: quantity,
+                    got: q,
+                });
+            }
+            Ok(Response::WriteCoils {
+                address: a,
+                quantity: q,
+            })
         }
         Request::WriteSingle { address, value } => {
             let (a, v) = two_words(pdu)?;
@@ -643,10 +911,12 @@ fn echo(address: u16, got_address: u16, value: u16, got_value: u16) -> Result<()
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum RequestDecodeError {
-    /// The function is not one of 03h, 04h, 06h, 08h, 10h: answer exception 01h.
+    /// The function is not one of 01h, 02h, 03h, 04h, 05h, 06h, 08h, 0Fh, 10h: answer exception
+    /// 01h.
     #[error("function {0:02X}h not implemented")]
     Function(u8),
-    /// A malformed request: answer exception 03h.
+    /// A malformed request (and a 05h with a value other than FF00h or 0000h): answer
+    /// exception 03h.
     #[error("malformed {0:02X}h request")]
     Malformed(u8),
     /// Loop-back with a sub-function other than 0000h: answer exception 01h.
@@ -665,9 +935,28 @@ pub fn decode_request(pdu: &[u8]) -> Result<Request<'_>, RequestDecodeError> {
         function::READ_HOLDING
         | function::READ_INPUT
         | function::WRITE_SINGLE
-        | function::LOOP_BACK => {
+        | function::LOOP_BACK
+        | function::READ_COILS
+        | function::READ_DISCRETE_INPUTS
+        | function::WRITE_COIL => {
             let (a, b) = two_words(pdu).map_err(|_| malformed)?;
             match f {
+                function::READ_COILS => Request::ReadCoils {
+                    address: a,
+                    quantity: b,
+                },
+                function::READ_DISCRETE_INPUTS => Request::ReadDiscreteInputs {
+                    address: a,
+                    quantity: b,
+                },
+                function::WRITE_COIL => Request::WriteCoil {
+                    address: a,
+                    value: match b {
+                        COIL_ON => true,
+                        0 => false,
+                        _ => return Err(malformed),
+                    },
+                },
                 function::READ_HOLDING => Request::ReadHolding {
                     address: a,
                     quantity: b,
@@ -694,6 +983,21 @@ pub fn decode_request(pdu: &[u8]) -> Result<Request<'_>, RequestDecodeError> {
             Request::WriteMultiple {
                 address,
                 values: Words::Wire(&pdu[6..]),
+            }
+        }
+        function::WRITE_COILS => {
+            let address = word(pdu, 1).ok_or(malformed)?;
+            let quantity = word(pdu, 3).ok_or(malformed)?;
+            let count = usize::from(*pdu.get(5).ok_or(malformed)?);
+            if count != usize::from(quantity).div_ceil(8) || pdu.len() != 6 + count {
+                return Err(malformed);
+            }
+            Request::WriteCoils {
+                address,
+                values: BitValues::Wire {
+                    bytes: &pdu[6..],
+                    count: usize::from(quantity),
+                },
             }
         }
         other => return Err(RequestDecodeError::Function(other)),

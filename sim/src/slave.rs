@@ -7,7 +7,7 @@ use std::io;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use drivemap_runtime::pdu::{self, Request, Response, Words, function};
+use drivemap_runtime::pdu::{self, BitValues, Request, Response, Words, function};
 use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::rtu;
 use drivemap_runtime::transport::Transport;
@@ -22,13 +22,16 @@ pub struct SimulatedSlave {
     profile: &'static Profile,
     holding: Vec<u16>,
     input: Vec<u16>,
+    coils: Vec<bool>,
+    discrete_inputs: Vec<bool>,
     faults: Vec<(u16, u8)>,
     /// Requests executed (broadcasts included), for tests.
     pub executed: u32,
     /// Register writes executed, for tests.
     pub writes: Vec<(u16, u16)>,
-    /// Reads executed (first address, quantity), for tests: `None` (the default) records
-    /// nothing, so a long-running slave does not grow; set `Some(Vec::new())` to record.
+    /// Reads executed (first address, quantity; registers, coils or discrete inputs), for
+    /// tests: `None` (the default) records nothing, so a long-running slave does not grow; set
+    /// `Some(Vec::new())` to record.
     pub reads: Option<Vec<(u16, u16)>>,
     /// Index/value register pairs served as the drive does ([`SimulatedSlave::with_indexed`]).
     pub indexed: crate::indexed::IndexedBank,
@@ -42,6 +45,8 @@ impl SimulatedSlave {
             profile,
             holding: vec![0; 0x1_0000],
             input: vec![0; 0x1_0000],
+            coils: vec![false; 0x1_0000],
+            discrete_inputs: vec![false; 0x1_0000],
             faults: Vec::new(),
             executed: 0,
             writes: Vec::new(),
@@ -77,6 +82,21 @@ impl SimulatedSlave {
         self.input[usize::from(address)] = value;
     }
 
+    /// Sets a coil.
+    pub fn set_coil(&mut self, address: u16, on: bool) {
+        self.coils[usize::from(address)] = on;
+    }
+
+    /// A coil.
+    pub fn coil(&self, address: u16) -> bool {
+        self.coils[usize::from(address)]
+    }
+
+    /// Sets a discrete input.
+    pub fn set_discrete_input(&mut self, address: u16, on: bool) {
+        self.discrete_inputs[usize::from(address)] = on;
+    }
+
     /// Makes any request touching `address` answer exception `code`.
     pub fn fail_at(&mut self, address: u16, code: u8) {
         self.faults.push((address, code));
@@ -105,11 +125,17 @@ impl SimulatedSlave {
         let exception = |code| Response::Exception { function: f, code };
         let p = self.profile;
         let mut words = [0u16; pdu::MAX_READ as usize];
+        let mut bits = [false; pdu::MAX_READ_BITS as usize];
+        let max = match f {
+            function::READ_HOLDING | function::READ_INPUT => usize::from(p.max_read),
+            function::WRITE_MULTIPLE => usize::from(p.max_write),
+            function::READ_COILS | function::READ_DISCRETE_INPUTS => usize::from(p.max_read_bits),
+            function::WRITE_COILS => usize::from(p.max_write_bits),
+            _ => usize::MAX,
+        };
         let response = if !p.supports(f) {
             exception(0x01)
-        } else if (request.is_read() && request.quantity() > usize::from(p.max_read))
-            || (f == function::WRITE_MULTIPLE && request.quantity() > usize::from(p.max_write))
-        {
+        } else if request.quantity() > max {
             exception(0x03)
         } else if let Some(code) = self.fault(request) {
             exception(code)
@@ -156,6 +182,36 @@ impl SimulatedSlave {
                         self.writes.push((a, v));
                     }
                     Response::WriteMultiple {
+                        address,
+                        quantity: values.len() as u16,
+                    }
+                }
+                Request::ReadCoils { address, quantity }
+                | Request::ReadDiscreteInputs { address, quantity } => {
+                    let table = if f == function::READ_COILS {
+                        &self.coils
+                    } else {
+                        &self.discrete_inputs
+                    };
+                    let (a, q) = (usize::from(address), usize::from(quantity));
+                    bits[..q].copy_from_slice(&table[a..a + q]);
+                    if let Some(reads) = &mut self.reads {
+                        reads.push((address, quantity));
+                    }
+                    Response::Bits(BitValues::Native(&bits[..q]))
+                }
+                Request::WriteCoil { address, value } => {
+                    self.coils[usize::from(address)] = value;
+                    self.writes.push((address, u16::from(value)));
+                    Response::WriteCoil { address, value }
+                }
+                Request::WriteCoils { address, values } => {
+                    for (i, v) in values.iter().enumerate() {
+                        let a = address.wrapping_add(i as u16);
+                        self.coils[usize::from(a)] = v;
+                        self.writes.push((a, u16::from(v)));
+                    }
+                    Response::WriteCoils {
                         address,
                         quantity: values.len() as u16,
                     }

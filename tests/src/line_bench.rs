@@ -363,16 +363,25 @@ pub fn contiguous_model_ns(m: &Monitors, line: SerialConfig, set: &[(Table, u16)
 /// One read by tokio-modbus, within 2 s; whether it got the registers.
 async fn read(ctx: &mut tokio_modbus::client::Context, t: Table, a: u16, q: u16) -> bool {
     use tokio_modbus::client::Reader;
-    let call = async {
-        match t {
-            Table::Holding => ctx.read_holding_registers(a, q).await,
-            Table::Input => ctx.read_input_registers(a, q).await,
-        }
-    };
-    matches!(
-        tokio::time::timeout(Duration::from_secs(2), call).await,
-        Ok(Ok(Ok(_)))
-    )
+    let within = Duration::from_secs(2);
+    match t {
+        Table::Holding => matches!(
+            tokio::time::timeout(within, ctx.read_holding_registers(a, q)).await,
+            Ok(Ok(Ok(_)))
+        ),
+        Table::Input => matches!(
+            tokio::time::timeout(within, ctx.read_input_registers(a, q)).await,
+            Ok(Ok(Ok(_)))
+        ),
+        Table::Coil => matches!(
+            tokio::time::timeout(within, ctx.read_coils(a, q)).await,
+            Ok(Ok(Ok(_)))
+        ),
+        Table::DiscreteInput => matches!(
+            tokio::time::timeout(within, ctx.read_discrete_inputs(a, q)).await,
+            Ok(Ok(Ok(_)))
+        ),
+    }
 }
 
 /// Polls each of `sets` once with tokio-modbus's RTU client over tokio-serial, one request per

@@ -74,6 +74,8 @@ fn sensor(out: &mut String, points: &Export, p: &Point, name: &str) {
         match p.table() {
             Table::Holding => "holding",
             Table::Input => "input",
+            Table::Coil => "coil",
+            Table::DiscreteInput => "discrete_input",
         }
     );
     let _ = writeln!(out, "        data_type: {data_type}");
@@ -100,7 +102,52 @@ fn sensor(out: &mut String, points: &Export, p: &Point, name: &str) {
                 let _ = writeln!(out, "        unit_of_measurement: {}", q(unit(p.unit())));
             }
         }
-        Meaning::Number(None) | Meaning::Code(_) | Meaning::Bits(_) | Meaning::Field { .. } => {}
+        Meaning::Number(None)
+        | Meaning::Code(_)
+        | Meaning::Bits(_)
+        | Meaning::Field { .. }
+        | Meaning::Bit => {}
+    }
+    let _ = writeln!(
+        out,
+        "        scan_interval: {}",
+        points.period_ms.div_ceil(1000).max(1)
+    );
+}
+
+/// A coil or discrete input as a `binary_sensors:` entry (read only: a coil is written through
+/// drivemap, whose drive trait keeps the run contract, not from a switch beside it).
+fn binary_sensor(out: &mut String, points: &Export, p: &Point, name: &str) {
+    let _ = writeln!(out, "      - name: {}", q(name));
+    let _ = writeln!(
+        out,
+        "        unique_id: {}",
+        q(&slug(&format!(
+            "{} {} {}",
+            points.name,
+            points.slave,
+            p.id()
+        )))
+    );
+    let _ = writeln!(out, "        slave: {}", points.slave);
+    let _ = writeln!(out, "        address: {}", p.pdu());
+    let _ = writeln!(
+        out,
+        "        input_type: {}",
+        if p.table() == Table::Coil {
+            "coil"
+        } else {
+            "discrete_input"
+        }
+    );
+    match p.role {
+        Some(super::Role::Fault | super::Role::Alarm) => {
+            let _ = writeln!(out, "        device_class: problem");
+        }
+        Some(super::Role::Running) => {
+            let _ = writeln!(out, "        device_class: running");
+        }
+        _ => {}
     }
     let _ = writeln!(
         out,
@@ -205,12 +252,21 @@ pub fn render(points: &Export) -> String {
     if points.gap_ms > 0 {
         let _ = writeln!(out, "    message_wait_milliseconds: {}", points.gap_ms);
     }
+    let (bits, sensors): (Vec<_>, Vec<_>) = sensors
+        .into_iter()
+        .partition(|(p, _)| matches!(p.meaning, Meaning::Bit));
     if sensors.is_empty() {
         let _ = writeln!(out, "    sensors: []");
     } else {
         let _ = writeln!(out, "    sensors:");
         for (p, name) in &sensors {
             sensor(&mut out, points, p, name);
+        }
+    }
+    if !bits.is_empty() {
+        let _ = writeln!(out, "    binary_sensors:");
+        for (p, name) in &bits {
+            binary_sensor(&mut out, points, p, name);
         }
     }
     out

@@ -16,7 +16,8 @@ use drivemap_live::lookup::{self, NotFound};
 use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::plan::{Conversion, Field, Label, RegisterPlan};
 use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::{Role, RoleKind, Target};
+pub(crate) use drivemap_runtime::roles::Role;
+use drivemap_runtime::roles::{RoleKind, Target};
 use drivemap_runtime::{Table, Width, WordOrder};
 
 pub mod export;
@@ -39,6 +40,8 @@ pub enum Meaning {
     Code(&'static [Label]),
     /// A bit-field register read as its word; its fields.
     Bits(&'static [Field]),
+    /// A coil or discrete input: on (1) or off (0).
+    Bit,
     /// One field of a bit-field register, the `index`th of its fields.
     Field {
         /// Its position among the register's fields.
@@ -132,7 +135,7 @@ impl<'d> Point<'d> {
         self.plan.unit
     }
 
-    /// Holding or input.
+    /// Holding or input registers, coils or discrete inputs.
     pub fn table(&self) -> Table {
         self.plan.info.table
     }
@@ -221,6 +224,18 @@ pub fn field_role(map: &Map, r: RegisterRef<'_>, lsb: u8, kind: TransportKind) -
     })
 }
 
+/// The role a coil or discrete input plays (a command or a status, on its one bit), if any, on
+/// `kind`.
+pub fn bit_role(map: &Map, r: RegisterRef<'_>, kind: TransportKind) -> Option<Role> {
+    map.plan().roles.places.iter().find_map(|p| {
+        let Target::Field(f) = p.target else {
+            return None;
+        };
+        (p.transports.contains(kind) && f.width == 1 && usize::from(f.row) == r.row())
+            .then_some(p.role)
+    })
+}
+
 /// The registers a drive's roles read or write on `kind` (fields' registers included).
 pub fn role_registers(map: &Map, kind: TransportKind) -> Vec<RegisterRef<'_>> {
     let mut out: Vec<RegisterRef<'_>> = Vec::new();
@@ -255,6 +270,10 @@ pub fn polled<'d>(map: &'d Map, regs: &[RegisterRef<'d>], kind: TransportKind) -
             meaning,
             at: None,
         };
+        if plan.info.table.is_bits() {
+            out.push(point(bit_role(map, r, kind), Meaning::Bit));
+            continue;
+        }
         match plan.conversion {
             Conversion::Bits { fields, .. } => {
                 for (index, field) in fields.iter().enumerate() {

@@ -27,6 +27,10 @@ fn js(text: &str) -> String {
 
 /// The JavaScript expression of point `p`'s value from the read's words `w`, `p` at offset `o`.
 fn decode(p: &Point, o: usize) -> String {
+    if matches!(p.meaning, Meaning::Bit) {
+        // node-red-contrib-modbus gives coils and inputs as booleans.
+        return format!("(w[{o}] ? 1 : 0)");
+    }
     let raw = match (p.width().count(), p.signed(), p.low_first()) {
         (1, false, _) => format!("w[{o}]"),
         (1, true, _) => format!("((w[{o}] << 16) >> 16)"),
@@ -54,10 +58,7 @@ fn function_body(points: &Export, i: usize) -> String {
         "// drivemap: {} slave {}, {} PDU {} x{}\n",
         points.drive.id(),
         points.slave,
-        match read.table {
-            Table::Holding => "holding",
-            Table::Input => "input",
-        },
+        read.table.key(),
         read.pdu,
         read.quantity
     ));
@@ -222,7 +223,7 @@ pub fn render(points: &Export) -> Value {
             "z": tab,
             "name": format!(
                 "{} {}..{}",
-                match read.table { Table::Holding => "holding", Table::Input => "input" },
+                read.table.key(),
                 read.pdu,
                 u32::from(read.pdu) + u32::from(read.quantity) - 1
             ),
@@ -234,6 +235,8 @@ pub fn render(points: &Export) -> Value {
             "dataType": match read.table {
                 Table::Holding => "HoldingRegister",
                 Table::Input => "InputRegister",
+                Table::Coil => "Coil",
+                Table::DiscreteInput => "Input",
             },
             "adr": read.pdu.to_string(),
             "quantity": read.quantity.to_string(),

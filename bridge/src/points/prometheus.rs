@@ -53,7 +53,8 @@ impl Point<'_> {
 
     /// The Prometheus metric family (without the unit suffix, which [`MetricUnit`] adds): the
     /// role's (`drivemap_output_frequency`), else one per kind of value (`drivemap_register`,
-    /// `drivemap_code_info`, `drivemap_bit`, `drivemap_field_info`).
+    /// `drivemap_code_info`, `drivemap_bit`, `drivemap_field_info`, `drivemap_coil`,
+    /// `drivemap_discrete_input`).
     pub fn metric(&self) -> String {
         let role = self.role;
         match (&self.meaning, role) {
@@ -68,6 +69,8 @@ impl Point<'_> {
             }
             (Meaning::Field { field, .. }, None) if field.width == 1 => "drivemap_bit".to_owned(),
             (Meaning::Field { .. }, _) => "drivemap_field_info".to_owned(),
+            (Meaning::Bit, Some(role)) => format!("drivemap_{}", role.id()),
+            (Meaning::Bit, None) => format!("drivemap_{}", self.table().key()),
         }
     }
 

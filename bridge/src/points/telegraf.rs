@@ -106,29 +106,42 @@ pub fn render(points: &Export) -> String {
         let _ = writeln!(out);
         let _ = writeln!(
             out,
-            "  # planned read {}: {} PDU {}..{} ({} register(s))",
+            "  # planned read {}: {} PDU {}..{} ({} {})",
             i + 1,
             match read.table {
                 Table::Holding => "holding (03h)",
                 Table::Input => "input (04h)",
+                Table::Coil => "coil (01h)",
+                Table::DiscreteInput => "discrete input (02h)",
             },
             read.pdu,
             u32::from(read.pdu) + u32::from(read.quantity) - 1,
-            read.quantity
+            read.quantity,
+            if read.table.is_bits() {
+                "bit(s)"
+            } else {
+                "register(s)"
+            }
         );
+        let bits = read.table.is_bits();
         let _ = writeln!(out, "  [[inputs.modbus.request]]");
         let _ = writeln!(out, "    slave_id = {}", points.slave);
-        let _ = writeln!(
-            out,
-            "    byte_order = \"{}\"",
-            if low_first { "CDAB" } else { "ABCD" }
-        );
+        if !bits {
+            // Coils and discrete inputs have no byte order.
+            let _ = writeln!(
+                out,
+                "    byte_order = \"{}\"",
+                if low_first { "CDAB" } else { "ABCD" }
+            );
+        }
         let _ = writeln!(
             out,
             "    register = \"{}\"",
             match read.table {
                 Table::Holding => "holding",
                 Table::Input => "input",
+                Table::Coil => "coil",
+                Table::DiscreteInput => "discrete",
             }
         );
         let _ = writeln!(out, "    measurement = \"drivemap\"");
@@ -138,6 +151,23 @@ pub fn render(points: &Export) -> String {
         let mut address = u32::from(read.pdu);
         while address < end {
             match members.iter().find(|p| u32::from(p.pdu()) == address) {
+                Some(p) if bits => {
+                    // A coil or discrete input: Telegraf gives 1 or 0 (no type, no scale).
+                    let _ = writeln!(
+                        out,
+                        "      {{ address = {address}, name = {} }},  # {}",
+                        q(p.id()),
+                        p.label()
+                    );
+                    address += 1;
+                }
+                None if bits => {
+                    let _ = writeln!(
+                        out,
+                        "      {{ address = {address}, name = \"unread_{address}\", omit = true }},"
+                    );
+                    address += 1;
+                }
                 Some(p) => {
                     let bits = p.width().count() * 16;
                     let ty = format!("{}INT{bits}", if p.signed() { "" } else { "U" });

@@ -40,7 +40,7 @@ pub use save::{SaveReport, save, save_with};
 /// The settings of `drive`, in the map's order: registers that are read and written (not
 /// monitors, not write-only commands), carry a parameter number, are not broadcast-only, are
 /// not the place of a command role or the frequency reference (the run command is never part
-/// of a set), and are not written by one of the map's commands (ENTER, save).
+/// of a set), are not coils, and are not written by one of the map's commands (ENTER, save).
 pub fn settings_of(drive: &Map) -> Vec<RegisterRef<'_>> {
     let plan = drive.plan();
     let mut commands: BTreeSet<usize> = BTreeSet::new();
@@ -67,6 +67,9 @@ pub fn settings_of(drive: &Map) -> Vec<RegisterRef<'_>> {
                 && r.writable()
                 && !r.broadcast_only()
                 && r.param().is_some()
+                // A coil is a command or a state of the drive (run, trip, jog), not a
+                // parameter: a set never writes one back.
+                && !r.plan().info.table.is_bits()
                 && !commands.contains(&r.index())
                 && !command_addresses.contains(&r.address())
         })

@@ -102,6 +102,7 @@ pub(crate) fn value_text(value: &Value) -> (String, Option<String>) {
         } => (format!("{value:.decimals$}"), None),
         Value::Code { code, id, .. } => (code.to_string(), id.clone()),
         Value::Bits { raw, .. } => (raw.to_string(), None),
+        Value::Bit(on) => (u8::from(*on).to_string(), None),
     }
 }
 

@@ -127,13 +127,11 @@ impl ReadableSet {
     ///
     /// A register whose map restricts its functions (`function_codes`) to a list without the
     /// table's read function (03h holding, 04h input) is left out too: no read is planned over
-    /// it, so the drive never sees a read function the register refuses. The two tables are
-    /// planned apart, so 03h and 04h registers are never read in one request.
+    /// it, so the drive never sees a read function the register refuses. The tables are
+    /// planned apart, so 03h and 04h registers (and 01h coils and 02h discrete inputs) are
+    /// never read in one request.
     pub fn from_registers<R: PlannedRegister>(registers: &[R], table: Table) -> ReadableSet {
-        let read = match table {
-            Table::Holding => pdu::function::READ_HOLDING,
-            Table::Input => pdu::function::READ_INPUT,
-        };
+        let read = table.read_function();
         let readable = || {
             registers
                 .iter()
@@ -282,7 +280,7 @@ fn sorted_unique(wanted: &[u16]) -> Vec<u16> {
     w
 }
 
-/// The requests that read every address of `wanted` (one table, any order, duplicates allowed)
+/// The requests that read every address of `wanted` (one table of registers, any order, duplicates allowed)
 /// in the least total `cost`, reading only addresses of `readable`, at most `max_read` (and at
 /// most 125, the Modbus limit) per request. A wanted 32-bit pair of `readable` is read whole: its
 /// second word is added and no request boundary falls between its words. `cost(q)` is the cost of one request for `q`
@@ -298,6 +296,19 @@ pub fn plan_reads(
     plan_table(Table::Holding, wanted, readable, max_read, cost)
 }
 
+/// [`plan_reads`] in `table`: for coils and discrete inputs `max_read` is the drive's
+/// `max_read_bits` (at most 2000, the Modbus limit) and `cost` the cost of reading `q` of them
+/// ([`BusModel::read_bits_ns`](crate::bus_time::BusModel::read_bits_ns)).
+pub fn plan_reads_in(
+    table: Table,
+    wanted: &[u16],
+    readable: &ReadableSet,
+    max_read: u16,
+    cost: impl Fn(u16) -> u64,
+) -> Result<Vec<Read>, PlanError> {
+    plan_table(table, wanted, readable, max_read, cost)
+}
+
 pub(super) fn plan_table(
     table: Table,
     wanted: &[u16],
@@ -305,7 +316,12 @@ pub(super) fn plan_table(
     max_read: u16,
     cost: impl Fn(u16) -> u64,
 ) -> Result<Vec<Read>, PlanError> {
-    let max_read = max_read.min(pdu::MAX_READ);
+    let cap = if table.is_bits() {
+        pdu::MAX_READ_BITS
+    } else {
+        pdu::MAX_READ
+    };
+    let max_read = max_read.min(cap);
     if max_read == 0 {
         return Err(PlanError::NoReadQuantity);
     }

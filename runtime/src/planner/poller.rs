@@ -177,8 +177,9 @@ enum Slot {
 pub struct Poller {
     profile: &'static Profile,
     model: BusModel,
-    /// Readable addresses per table (holding, input), minus what was learned.
-    readable: [ReadableSet; 2],
+    /// Readable addresses per table (holding, input, coil, discrete input), minus what was
+    /// learned.
+    readable: [ReadableSet; 4],
     learned: Vec<(Table, u16, Learned)>,
     wanted: Vec<(Table, u16)>,
     plan: Vec<Planned>,
@@ -195,6 +196,8 @@ fn table_index(table: Table) -> usize {
     match table {
         Table::Holding => 0,
         Table::Input => 1,
+        Table::Coil => 2,
+        Table::DiscreteInput => 3,
     }
 }
 
@@ -213,10 +216,7 @@ impl Poller {
         let mut poller = Poller {
             profile,
             model: BusModel::new(profile, SerialConfig::default()),
-            readable: [
-                ReadableSet::from_registers(registers, Table::Holding),
-                ReadableSet::from_registers(registers, Table::Input),
-            ],
+            readable: Table::ALL.map(|t| ReadableSet::from_registers(registers, t)),
             learned: Vec::new(),
             wanted: wanted.into_iter().collect(),
             plan: Vec::new(),
@@ -276,7 +276,7 @@ impl Poller {
     pub fn plan_ns(&self) -> u64 {
         self.plan
             .iter()
-            .map(|p| self.model.read_ns(p.read.quantity))
+            .map(|p| self.model.read_ns_of(p.table, p.read.quantity))
             .sum()
     }
 
@@ -313,9 +313,9 @@ impl Poller {
 
     fn make_plan(&mut self) -> Result<(), PlanError> {
         let model = self.model;
-        let max_read = self.profile.max_read;
         let mut plan = Vec::new();
-        for table in [Table::Holding, Table::Input] {
+        for table in Table::ALL {
+            let max_read = self.profile.max_read_of(table);
             let mut merged = Vec::new();
             let mut alone = Vec::new();
             for &(t, a) in &self.wanted {
@@ -333,7 +333,7 @@ impl Poller {
                 &merged,
                 &self.readable[table_index(table)],
                 max_read,
-                |q| model.read_ns(q),
+                |q| model.read_ns_of(table, q),
             )?;
             // Read alone, but a pair still in one request.
             let set = &self.readable[table_index(table)];
@@ -427,7 +427,7 @@ impl Poller {
             let q = usize::from(p.read.quantity);
             let words = &mut self.words[p.first_word..p.first_word + q];
             stats.requests += 1;
-            stats.bus_ns += self.model.read_ns(p.read.quantity);
+            stats.bus_ns += self.model.read_ns_of(p.table, p.read.quantity);
             let result = read(client, slave, p.table, p.read.address, words);
             let (from, to) = p.members;
             match result {
@@ -543,7 +543,8 @@ impl Poller {
                 .collect()
         };
         let mut refused = false;
-        let mut words = [0u16; pdu::MAX_READ as usize];
+        // Only after a refusal: a coil read may be longer than a register read's 125.
+        let mut words = vec![0u16; usize::from(failed.quantity)];
         for part in parts {
             let (Some(&first), Some(&last)) = (part.first(), part.last()) else {
                 continue;
@@ -554,7 +555,7 @@ impl Poller {
             };
             let q = usize::from(read_part.quantity);
             stats.requests += 1;
-            stats.bus_ns += self.model.read_ns(read_part.quantity);
+            stats.bus_ns += self.model.read_ns_of(table, read_part.quantity);
             match read(client, slave, table, first, &mut words[..q]) {
                 Ok(()) => {
                     for &a in part {
@@ -650,7 +651,12 @@ impl Poller {
     /// `addresses` (sorted, unique) cut into runs of consecutive addresses of at most
     /// `max_read`, never between the words of a pair: index ranges.
     fn runs_whole(&self, table: Table, addresses: &[u16]) -> Vec<(usize, usize)> {
-        let max = usize::from(self.profile.max_read.clamp(2, pdu::MAX_READ));
+        let cap = if table.is_bits() {
+            pdu::MAX_READ_BITS
+        } else {
+            pdu::MAX_READ
+        };
+        let max = usize::from(self.profile.max_read_of(table).clamp(2, cap));
         let n = addresses.len();
         let mut runs = Vec::new();
         let (mut start, mut i) = (0, 0);
@@ -682,8 +688,5 @@ fn read<T: Transport>(
     address: u16,
     out: &mut [u16],
 ) -> Result<(), Error> {
-    match table {
-        Table::Holding => client.read_holding(slave, address, out),
-        Table::Input => client.read_input(slave, address, out),
-    }
+    client.read_table(slave, table, address, out)
 }

@@ -6,7 +6,7 @@
 
 use drivemap_core::command_profile::{CommandProfile, Path, PathKind, Transition};
 use drivemap_core::plan::{Conversion, RegisterPlan};
-use drivemap_core::register::{DriveSettings, Table};
+use drivemap_core::register::DriveSettings;
 use drivemap_core::roles::{FieldRole, NumberField, Place, Role, RoleKind, Target};
 use drivemap_core::rule::Broadcast;
 use drivemap_core::{Roles, Rounding, SettingsView, ValueError};
@@ -296,18 +296,9 @@ impl<'a, S: SettingsView, W: Wire> Machine<'a, S, W> {
         let address = r.locate(&self.state.settings, self.state.kind)?;
         let mut raw = [0u16; 2];
         let words = &mut raw[..usize::from(r.info.width.count())];
-        match r.info.table {
-            Table::Input => {
-                self.session
-                    .read_input(self.state.slave, address, words)
-                    .await?
-            }
-            Table::Holding => {
-                self.session
-                    .read_holding(self.state.slave, address, words)
-                    .await?
-            }
-        }
+        self.session
+            .read_table(self.state.slave, r.info.table, address, words)
+            .await?;
         Ok(r.info.width.join(words))
     }
 

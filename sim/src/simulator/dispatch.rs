@@ -3,7 +3,9 @@
 
 use std::fmt;
 
-use drivemap_runtime::pdu::{self, Request, RequestDecodeError, Response, Words, function};
+use drivemap_runtime::pdu::{
+    self, BitValues, Request, RequestDecodeError, Response, Words, function,
+};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{Table, rtu, tcp};
 
@@ -206,7 +208,8 @@ impl Simulator {
         }
         let f = request.function();
         let mut words = [0u16; pdu::MAX_READ as usize];
-        let response = match self.execute(kind, request, &mut words) {
+        let mut bits = [false; pdu::MAX_READ_BITS as usize];
+        let response = match self.execute(kind, request, &mut words, &mut bits) {
             Ok(r) => {
                 record.outcome = Outcome::Ok;
                 r
@@ -228,19 +231,31 @@ impl Simulator {
             return false;
         }
         self.tick();
-        let mut values = [0u16; pdu::MAX_WRITE as usize];
-        let (address, n) = match *request {
+        let mut values = [0u16; pdu::MAX_WRITE_BITS as usize];
+        let (table, address, n) = match *request {
             Request::WriteSingle { address, value } => {
                 values[0] = value;
-                (address, 1)
+                (Table::Holding, address, 1)
             }
-            Request::WriteMultiple { address, values: v } => (address, v.copy_to(&mut values)),
+            Request::WriteMultiple { address, values: v } => {
+                (Table::Holding, address, v.copy_to(&mut values))
+            }
+            Request::WriteCoil { address, value } => {
+                values[0] = u16::from(value);
+                (Table::Coil, address, 1)
+            }
+            Request::WriteCoils { address, values: v } => {
+                (Table::Coil, address, v.copy_to(&mut values))
+            }
             _ => return false,
         };
-        if f == function::WRITE_MULTIPLE && n > usize::from(self.profile.max_write) {
+        if (f == function::WRITE_MULTIPLE && n > usize::from(self.profile.max_write))
+            || (f == function::WRITE_COILS && n > usize::from(self.profile.max_write_bits))
+        {
             return false;
         }
-        self.write(kind, address, &values[..n], true).is_ok()
+        self.write_in(kind, table, address, &values[..n], true)
+            .is_ok()
     }
 
     pub(super) fn execute<'w>(
@@ -248,6 +263,7 @@ impl Simulator {
         kind: TransportKind,
         request: &Request<'_>,
         words: &'w mut [u16; pdu::MAX_READ as usize],
+        bits: &'w mut [bool; pdu::MAX_READ_BITS as usize],
     ) -> Result<Response<'w>, u8> {
         self.tick();
         let f = request.function();
@@ -287,6 +303,39 @@ impl Simulator {
                 let n = values.copy_to(&mut buf);
                 self.write(kind, address, &buf[..n], false)?;
                 Ok(Response::WriteMultiple {
+                    address,
+                    quantity: n as u16,
+                })
+            }
+            Request::ReadCoils { address, quantity }
+            | Request::ReadDiscreteInputs { address, quantity } => {
+                let q = usize::from(quantity);
+                if q == 0 || q > usize::from(self.profile.max_read_bits) || q > bits.len() {
+                    return Err(self.plan.illegal_quantity);
+                }
+                let table = if f == function::READ_COILS {
+                    Table::Coil
+                } else {
+                    Table::DiscreteInput
+                };
+                for (k, b) in bits.iter_mut().take(q).enumerate() {
+                    *b = self.read_one(kind, table, u32::from(address) + k as u32, k == 0)? != 0;
+                }
+                Ok(Response::Bits(BitValues::Native(&bits[..q])))
+            }
+            Request::WriteCoil { address, value } => {
+                self.write_in(kind, Table::Coil, address, &[u16::from(value)], false)?;
+                Ok(Response::WriteCoil { address, value })
+            }
+            Request::WriteCoils { address, values } => {
+                let q = values.len();
+                if q == 0 || q > usize::from(self.profile.max_write_bits) {
+                    return Err(self.plan.illegal_quantity);
+                }
+                let mut buf = [0u16; pdu::MAX_WRITE_BITS as usize];
+                let n = values.copy_to(&mut buf);
+                self.write_in(kind, Table::Coil, address, &buf[..n], false)?;
+                Ok(Response::WriteCoils {
                     address,
                     quantity: n as u16,
                 })

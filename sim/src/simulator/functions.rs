@@ -3,7 +3,6 @@
 //! (01h illegal function unless the map says 02h illegal data address), as the manual's drive
 //! answers it, before anything is read or written.
 
-use drivemap_runtime::pdu::function;
 use drivemap_runtime::profile::TransportKind;
 
 use super::Simulator;
@@ -20,10 +19,9 @@ impl Simulator {
         quantity: usize,
     ) -> Result<(), u8> {
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
-        let map = match function {
-            function::READ_INPUT => &layout.input,
-            _ => &layout.holding,
-        };
+        let table = drivemap_runtime::Table::of_function(function)
+            .unwrap_or(drivemap_runtime::Table::Holding);
+        let map = layout.of(table);
         for k in 0..quantity {
             let Ok(address) = self.communication_address(kind, u32::from(pdu) + k as u32) else {
                 continue;

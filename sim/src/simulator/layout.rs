@@ -48,7 +48,21 @@ pub(super) type AddressMap = HashMap<u16, Slot, BuildHasherDefault<AddressHasher
 pub(super) struct Layout {
     pub(super) holding: AddressMap,
     pub(super) input: AddressMap,
+    pub(super) coil: AddressMap,
+    pub(super) discrete_input: AddressMap,
     pub(super) broadcast: AddressMap,
+}
+
+impl Layout {
+    /// The addresses of `table` (the broadcast-only registers are apart).
+    pub(super) fn of(&self, table: Table) -> &AddressMap {
+        match table {
+            Table::Holding => &self.holding,
+            Table::Input => &self.input,
+            Table::Coil => &self.coil,
+            Table::DiscreteInput => &self.discrete_input,
+        }
+    }
 }
 
 impl Simulator {
@@ -57,13 +71,19 @@ impl Simulator {
     pub fn address_of(&self, name: &str, kind: TransportKind) -> Option<u16> {
         let i = self.index_of(name).ok()?;
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
-        [&layout.holding, &layout.input, &layout.broadcast]
-            .iter()
-            .find_map(|m| {
-                m.iter()
-                    .find(|(_, s)| s.index == i && s.word == 0)
-                    .map(|(a, _)| *a)
-            })
+        [
+            &layout.holding,
+            &layout.input,
+            &layout.coil,
+            &layout.discrete_input,
+            &layout.broadcast,
+        ]
+        .iter()
+        .find_map(|m| {
+            m.iter()
+                .find(|(_, s)| s.index == i && s.word == 0)
+                .map(|(a, _)| *a)
+        })
     }
 
     /// Where each register lies on this link, as the plan places it: registers that do not exist
@@ -91,6 +111,8 @@ impl Simulator {
                 match plan.info.table {
                     Table::Holding => &mut layout.holding,
                     Table::Input => &mut layout.input,
+                    Table::Coil => &mut layout.coil,
+                    Table::DiscreteInput => &mut layout.discrete_input,
                 }
             };
             for word in 0..plan.info.width.count() {

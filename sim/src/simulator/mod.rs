@@ -84,6 +84,9 @@ pub struct Simulator {
     /// raw value at power-on, replaced by the values in force whenever a persist command of the
     /// map (ENTER, save) completes. Written values not stored are lost.
     stored: Vec<u32>,
+    /// The checked writes of one request, before any is executed: kept from request to request
+    /// (room for the longest coil write) so that a write allocates nothing.
+    write_targets: Vec<(u16, Option<usize>, u32)>,
 }
 
 impl Simulator {
@@ -170,6 +173,7 @@ impl Simulator {
             cache: TickCache::default(),
             indexed: crate::indexed::IndexedBank::default(),
             stored: Vec::new(),
+            write_targets: Vec::with_capacity(usize::from(drivemap_runtime::pdu::MAX_WRITE_BITS)),
         };
         sim.indexed = crate::indexed::IndexedBank::new(sim.map.plan().indexed);
         sim.cache.inputs = sim.tick_inputs();

@@ -74,10 +74,7 @@ impl Simulator {
     ) -> Result<u16, u8> {
         let address = self.communication_address(kind, pdu)?;
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
-        let map = match table {
-            Table::Holding => &layout.holding,
-            Table::Input => &layout.input,
-        };
+        let map = layout.of(table);
         let word = |a: u16| {
             layout
                 .holding
@@ -103,19 +100,49 @@ impl Simulator {
         values: &[u16],
         broadcast: bool,
     ) -> Result<(), u8> {
+        self.write_in(kind, Table::Holding, address, values, broadcast)
+    }
+
+    /// [`Simulator::write`] into `table`: holding registers (06h, 10h) or coils (05h, 0Fh, the
+    /// values 1 on and 0 off).
+    pub(super) fn write_in(
+        &mut self,
+        kind: TransportKind,
+        table: Table,
+        address: u16,
+        values: &[u16],
+        broadcast: bool,
+    ) -> Result<(), u8> {
+        // The checked writes go to a buffer kept from write to write: no allocation per request.
+        let mut targets = std::mem::take(&mut self.write_targets);
+        let result = self.write_checked(kind, table, address, values, broadcast, &mut targets);
+        self.write_targets = targets;
+        result
+    }
+
+    fn write_checked(
+        &mut self,
+        kind: TransportKind,
+        table: Table,
+        address: u16,
+        values: &[u16],
+        broadcast: bool,
+        targets: &mut Vec<(u16, Option<usize>, u32)>,
+    ) -> Result<(), u8> {
         self.refresh_settings();
         let settings = &self.cache.settings;
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
-        let broadcast_space = broadcast && !layout.broadcast.is_empty();
+        let broadcast_space = broadcast && table == Table::Holding && !layout.broadcast.is_empty();
         let allowed = self
             .profile
             .broadcast
             .map(|b| b.addresses)
             .unwrap_or_default();
-        let mut targets = [(0u16, None, 0u32); pdu::MAX_WRITE as usize];
-        if values.len() > targets.len() {
+        if values.len() > usize::from(pdu::MAX_WRITE_BITS) {
             return Err(self.plan.illegal_quantity);
         }
+        targets.clear();
+        targets.resize(values.len(), (0, None, 0));
         let mut pair_second = false;
         for (k, &word) in values.iter().enumerate() {
             if std::mem::take(&mut pair_second) {
@@ -125,7 +152,7 @@ impl Simulator {
             let found = if broadcast_space {
                 layout.broadcast.get(&comm)
             } else {
-                layout.holding.get(&comm)
+                layout.of(table).get(&comm)
             };
             match found {
                 Some(&super::layout::Slot {
@@ -143,14 +170,18 @@ impl Simulator {
                         }
                         _ => return Err(self.plan.illegal_address),
                     };
+                    let r = self.reg(i);
+                    // The listed addresses are of registers and coils alike: a coil's own
+                    // broadcast use decides where a coil and a register share one.
                     if broadcast
                         && !broadcast_space
                         && !allowed.is_empty()
-                        && !allowed.contains(&comm)
+                        && (!allowed.contains(&comm)
+                            || (table == Table::Coil
+                                && r.plan().broadcast == drivemap_runtime::Broadcast::No))
                     {
                         return Err(self.plan.illegal_address);
                     }
-                    let r = self.reg(i);
                     if !r.writable() {
                         return Err(self.plan.read_only);
                     }
@@ -164,11 +195,16 @@ impl Simulator {
                             .get(&a)
                             .map_or(0, |s| s.width.split(raw[s.index])[usize::from(s.word)])
                     };
-                    match self.indexed.check(comm, v as u16, word) {
-                        crate::indexed::WriteCheck::ReadOnly => return Err(self.plan.read_only),
-                        crate::indexed::WriteCheck::OutOfRange => {
-                            return Err(self.plan.out_of_range);
-                        }
+                    match table {
+                        Table::Holding => match self.indexed.check(comm, v as u16, word) {
+                            crate::indexed::WriteCheck::ReadOnly => {
+                                return Err(self.plan.read_only);
+                            }
+                            crate::indexed::WriteCheck::OutOfRange => {
+                                return Err(self.plan.out_of_range);
+                            }
+                            _ => {}
+                        },
                         _ => {}
                     }
                     if !self.accepts(r, v, settings) {
@@ -176,7 +212,7 @@ impl Simulator {
                     }
                     targets[k] = (comm, Some(i), v);
                 }
-                None if !broadcast && word == 0 && self.in_gap(comm) => {
+                None if !broadcast && word == 0 && table == Table::Holding && self.in_gap(comm) => {
                     targets[k] = (comm, None, 0)
                 }
                 None => return Err(self.plan.illegal_address),
@@ -194,12 +230,14 @@ impl Simulator {
                 // write does to the lock state depends on a password the simulator lacks.
                 let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
                 let raw = &self.raw;
-                self.indexed.store(comm, v as u16, |a| {
-                    layout
-                        .holding
-                        .get(&a)
-                        .map_or(0, |s| s.width.split(raw[s.index])[usize::from(s.word)])
-                });
+                if table == Table::Holding {
+                    self.indexed.store(comm, v as u16, |a| {
+                        layout
+                            .holding
+                            .get(&a)
+                            .map_or(0, |s| s.width.split(raw[s.index])[usize::from(s.word)])
+                    });
+                }
                 if plan.read_values.is_empty() {
                     let before = self.raw[i];
                     self.raw[i] = v;
@@ -211,7 +249,9 @@ impl Simulator {
                     self.executed[i] += 1;
                 }
             }
-            self.track_commands(comm, values[k]);
+            if table == Table::Holding {
+                self.track_commands(comm, values[k]);
+            }
         }
         self.tick();
         Ok(())

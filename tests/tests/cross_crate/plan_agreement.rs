@@ -68,6 +68,7 @@ fn live_number(plan: &RegisterPlan, value: Result<Value, String>) -> Result<f64,
         Value::Word(i) => i as f64,
         Value::Quantity { value, .. } => value,
         Value::Code { code, .. } => f64::from(code),
+        Value::Bit(on) => f64::from(u8::from(on)),
         Value::Bits { raw, .. } => match plan.conversion {
             Conversion::Bits { mask, .. } => f64::from(raw & mask),
             _ => {
@@ -86,6 +87,10 @@ fn generated_number(
     raw: u32,
     settings: &impl SettingsView,
 ) -> Result<f64, String> {
+    if plan.info.table.is_bits() {
+        // A coil or discrete input: the generated `bool` is `raw != 0`.
+        return Ok(f64::from(u8::from(raw != 0)));
+    }
     match plan.conversion {
         Conversion::Enum { .. } => Ok(f64::from(raw as u16)),
         Conversion::Bits { mask, .. } => Ok(f64::from(raw as u16 & mask)),
