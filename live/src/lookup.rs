@@ -244,34 +244,38 @@ fn by_reference<'a>(drive: &'a Map, name: &str) -> Option<Result<RegisterRef<'a>
     let table = match reference.table {
         ReferenceTable::Holding => ModbusTable::Holding,
         ReferenceTable::Input => ModbusTable::Input,
-        ReferenceTable::Coil | ReferenceTable::DiscreteInput => {
-            return Some(Err(format!(
-                "`{}` is a Modicon reference to a {}, and this map holds registers only",
-                name.trim(),
-                if reference.table == ReferenceTable::Coil {
-                    "coil"
-                } else {
-                    "discrete input"
-                }
-            )));
-        }
+        ReferenceTable::Coil => ModbusTable::Coil,
+        ReferenceTable::DiscreteInput => ModbusTable::DiscreteInput,
     };
-    let what = if table == ModbusTable::Holding {
-        "holding register"
-    } else {
-        "input register"
-    };
-    Some(match at_address(drive, address) {
+    if table.is_bits() && !drive.registers().any(|r| r.plan().info.table == table) {
+        return Some(Err(format!(
+            "`{}` is a Modicon reference to a {}, and this map has none",
+            name.trim(),
+            table.item()
+        )));
+    }
+    let what = table.item();
+    // Where the table has none, the register of the other register table there is named (an
+    // input register for a holding reference); coils and discrete inputs are their own spaces.
+    let found = at_address_in(drive, address, Some(table)).or_else(|| {
+        let other = match table {
+            ModbusTable::Holding => ModbusTable::Input,
+            ModbusTable::Input => ModbusTable::Holding,
+            ModbusTable::Coil | ModbusTable::DiscreteInput => return None,
+        };
+        at_address_in(drive, address, Some(other))
+    });
+    Some(match found {
         Some(r) if r.plan().info.table == table => Ok(r),
         Some(r) => Err(format!(
-            "as a Modicon reference it is {what} {}, and {} there is {} register",
+            "as a Modicon reference it is {what} {}, and {} there is {} {}",
             printed_number(drive, address),
             r.id(),
-            if r.plan().info.table == ModbusTable::Holding {
-                "a holding"
-            } else {
-                "an input"
-            }
+            match r.plan().info.table {
+                ModbusTable::Input => "an",
+                _ => "a",
+            },
+            r.plan().info.table.item()
         )),
         None => Err(format!(
             "as a Modicon reference it is {what} {} (PDU address {:04X}h), where the map has no register",
@@ -279,6 +283,23 @@ fn by_reference<'a>(drive: &'a Map, name: &str) -> Option<Result<RegisterRef<'a>
             reference.pdu
         )),
     })
+}
+
+/// The Modicon reference of `r` on the map's serial side (`00001` for coil 0001h with no
+/// offset), or its id where the offset puts it below 1.
+fn modicon_of(drive: &Map, r: RegisterRef<'_>) -> String {
+    let digit = match r.plan().info.table {
+        drivemap_runtime::Table::Coil => 0,
+        drivemap_runtime::Table::DiscreteInput => 1,
+        drivemap_runtime::Table::Input => 3,
+        drivemap_runtime::Table::Holding => 4,
+    };
+    let (rtu, _) = drive.address_offsets();
+    match u32::try_from(i64::from(r.address()) + i64::from(rtu) + 1) {
+        Ok(n) if (1..=9999).contains(&n) => format!("{digit}{n:04}"),
+        Ok(n) if (1..=65536).contains(&n) => format!("{digit}{n:05}"),
+        _ => r.id().to_owned(),
+    }
 }
 
 /// An address as the map prints it: decimal in a decimal map, else `2101H`.
@@ -292,7 +313,21 @@ fn printed_number(drive: &Map, address: u16) -> String {
 /// The register at `address` (its own address, an alternative, or the second word of a pair),
 /// among those found by name.
 fn at_address(drive: &Map, address: u16) -> Option<RegisterRef<'_>> {
-    let normal = || drive.registers().filter(|r| !r.broadcast_only());
+    at_address_in(drive, address, None)
+}
+
+/// [`at_address`] in one table (`None`: any).
+fn at_address_in(
+    drive: &Map,
+    address: u16,
+    table: Option<drivemap_runtime::Table>,
+) -> Option<RegisterRef<'_>> {
+    let normal = || {
+        drive
+            .registers()
+            .filter(|r| !r.broadcast_only())
+            .filter(move |r| table.is_none_or(|t| r.plan().info.table == t))
+    };
     normal().find(|r| r.address() == address).or_else(|| {
         normal().find(|r| {
             r.address_alternatives()
@@ -327,7 +362,41 @@ pub fn find<'a>(drive: &'a Map, name: &str) -> Result<RegisterRef<'a>, NotFound>
         return Ok(r);
     }
     let decimal = drive.address_format() == drivemap_map::facts::AddressFormat::Decimal;
-    if let Some(r) = address_in(name, decimal).and_then(|a| at_address(drive, a)) {
+    if let Some(a) = address_in(name, decimal)
+        && let Some(r) = at_address(drive, a)
+    {
+        // An address several tables hold (coil 0001h, discrete input 0001h, holding register
+        // 0001h) names none of them: the user says which.
+        let others: Vec<RegisterRef<'_>> = drivemap_runtime::Table::ALL
+            .into_iter()
+            .filter_map(|t| at_address_in(drive, a, Some(t)))
+            .collect();
+        if others.len() > 1 {
+            let each: Vec<String> = others
+                .iter()
+                .map(|o| {
+                    format!(
+                        "{} {} ({})",
+                        o.plan().info.table.item(),
+                        o.id(),
+                        modicon_of(drive, *o)
+                    )
+                })
+                .collect();
+            return Err(NotFound {
+                name: name.to_owned(),
+                drive: drive.id().to_owned(),
+                suggestions: Vec::new(),
+                gap: None,
+                reference: Some(
+                    format!(
+                        "the address is that of {}: name one by id or Modicon reference",
+                        each.join(", ")
+                    )
+                    .into_boxed_str(),
+                ),
+            });
+        }
         return Ok(r);
     }
     // A Modicon reference (40024), where the map reads it so.

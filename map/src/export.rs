@@ -303,6 +303,15 @@ fn protocol(view: &ProtocolFacts) -> Value {
         "timing": entry(view, ProtocolKey::Timing),
         "serial": entry(view, ProtocolKey::Serial),
     });
+    // Coils and discrete inputs per request: only in a map that states them (one with coils).
+    for (name, key) in [
+        ("max_read_bits", ProtocolKey::MaxReadBits),
+        ("max_write_bits", ProtocolKey::MaxWriteBits),
+    ] {
+        if view.get(key).is_some() {
+            out[name] = count(view, key);
+        }
+    }
     if let Some(b) = broadcast_not_printed(view) {
         out["broadcast"] = b;
     }
@@ -341,6 +350,17 @@ fn limits(view: &ProtocolFacts) -> serde_json::Map<String, Value> {
             limits.insert(
                 name.into(),
                 json!({"value": count(view, l.key), "source": l.citation, "not_printed": why(l)}),
+            );
+        }
+    }
+    for (name, key) in [
+        ("max_read_bits", ProtocolKey::MaxReadBits),
+        ("max_write_bits", ProtocolKey::MaxWriteBits),
+    ] {
+        if let Some(l) = view.get(key).filter(stated) {
+            limits.insert(
+                name.into(),
+                json!({"value": count(view, key), "source": l.citation, "not_printed": why(l)}),
             );
         }
     }

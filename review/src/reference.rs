@@ -369,8 +369,11 @@ fn access_cell(f: &RegisterFacts) -> String {
         .map(|a| a.value.clone())
         .into_iter()
         .collect();
-    if d.table == Table::Input {
-        parts.push("input table (04h)".into());
+    match d.table {
+        Table::Input => parts.push("input table (04h)".into()),
+        Table::Coil => parts.push("coil (01h/05h/0Fh)".into()),
+        Table::DiscreteInput => parts.push("discrete input (02h)".into()),
+        Table::Holding => {}
     }
     if let Some(w) = f.get(FactKey::WriteRestriction)
         && d.access.writable()
@@ -399,6 +402,9 @@ fn access_cell(f: &RegisterFacts) -> String {
 /// The scale cell: the facts' scale row, or what stands for one (codes and bits are listed
 /// below the table, a selected scale's cases too).
 fn scale_cell(f: &RegisterFacts) -> String {
+    if f.data.table.is_bits() {
+        return "1 on, 0 off".into();
+    }
     if let Some(s) = f.get(FactKey::SelectedBy) {
         return format!("{} (below)", cell(&s.value));
     }

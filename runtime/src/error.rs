@@ -33,7 +33,10 @@ impl fmt::Display for Sent {
         let what = match self.function {
             function::READ_HOLDING => "read",
             function::READ_INPUT => "read of input",
+            function::READ_COILS => "read of coil",
+            function::READ_DISCRETE_INPUTS => "read of discrete input",
             function::WRITE_SINGLE | function::WRITE_MULTIPLE => "write",
+            function::WRITE_COIL | function::WRITE_COILS => "write of coil",
             function::LOOP_BACK => "loop-back",
             _ => "request",
         };

@@ -113,7 +113,8 @@ impl Checker<'_> {
 }
 
 pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
-    for r in &drive.registers {
+    // A coil's or discrete input's keys of a word and its default are `bits_valid`'s.
+    for r in drive.registers.iter().filter(|r| !r.table.is_bits()) {
         let mut c = Checker { drive, r, out };
         let d = &r.def;
         match r.kind() {

@@ -63,17 +63,19 @@ fn bit_limits(drive: &Drive, out: &mut Vec<Diagnostic>) {
     } else {
         None
     };
-    for (key, limit, needed, what) in [
+    for (key, limit, needed, why, what) in [
         (
             "max_read_bits",
             &p.max_read_bits,
             read,
+            "is a readable coil or discrete input",
             "the coils or discrete inputs one 01h/02h request may read",
         ),
         (
             "max_write_bits",
             &p.max_write_bits,
             write,
+            "is a writable coil and the drive has 0Fh",
             "the coils one 0Fh request may write",
         ),
     ] {
@@ -83,7 +85,7 @@ fn bit_limits(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 &pp,
                 Some(id),
                 format!(
-                    "`{id}` makes the drive's map need `protocol.{key}`, {what}: give it with its citation (`{{value: N, source: \"file:line\"}}`) or say why the manual prints none (`{{unknown: \"<why>\"}}`)"
+                    "`{id}` {why}: state `protocol.{key}`, {what}, with its citation (`{{value: N, source: \"file:line\"}}`) or why the manual prints none (`{{unknown: \"<why>\"}}`)"
                 ),
             )),
             (None, None) => {}

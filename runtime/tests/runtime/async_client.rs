@@ -255,3 +255,58 @@ fn async_client_new_applies_the_profile_timing() {
     );
     assert_eq!(generic.options().request_gap, Duration::ZERO);
 }
+
+/// Coils and discrete inputs through the async client: the one implementation the blocking
+/// client has (reads split at `max_read_bits`, 05h/0Fh through the gate in the coils' space),
+/// over RTU and Modbus TCP framing.
+#[test]
+fn async_client_reads_and_writes_coils() {
+    use drivemap_runtime::{Table, WriteRule};
+    static WRITES: [WriteRule; 2] = [
+        WriteRule::rw("run", 0x0010, 0, 1).in_table(Table::Coil),
+        WriteRule::rw("jog", 0x0011, 0, 1).in_table(Table::Coil),
+    ];
+    static COILS: drivemap_runtime::Profile = drivemap_runtime::Profile {
+        function_codes: &[0x01, 0x02, 0x05, 0x0F],
+        max_read_bits: 16,
+        writes: &WRITES,
+        ..drivemap_runtime::Profile::GENERIC
+    };
+    runtime().block_on(async {
+        for kind in [TransportKind::Rtu, TransportKind::Tcp] {
+            let mut slave = SimulatedSlave::new(1, &COILS);
+            slave.set_discrete_input(0x0021, true);
+            slave.reads = Some(Vec::new());
+            let (a, b) = tokio::io::duplex(1024);
+            let server = tokio::spawn(serve(b, kind, slave));
+            let mut c =
+                AsyncClient::with_options(AsyncStreamTransport::new(a, kind), &COILS, strict());
+            c.write_coil(1, 0x0010, true).await.unwrap();
+            c.write_coils(1, 0x0010, &[true, true]).await.unwrap();
+            let mut coils = [false; 20];
+            c.read_coils(1, 0x0000, &mut coils).await.unwrap();
+            let on: Vec<usize> = (0..20).filter(|&i| coils[i]).collect();
+            assert_eq!(on, [16, 17], "{kind:?}");
+            let mut inputs = [false; 2];
+            c.read_discrete_inputs(1, 0x0020, &mut inputs)
+                .await
+                .unwrap();
+            assert_eq!(inputs, [false, true], "{kind:?}");
+            // No coil of the map at 0012h: refused before anything is sent.
+            let e = c.write_coil(1, 0x0012, true).await.unwrap_err();
+            assert!(
+                matches!(e, Error::Refused(Refusal::NoWritableCoil { .. })),
+                "{kind:?}: {e}"
+            );
+            drop(c);
+            let slave = server.await.unwrap();
+            // 20 coils at 16 per request: two reads, then the inputs.
+            assert_eq!(
+                slave.reads.as_deref(),
+                Some(&[(0x0000, 16), (0x0010, 4), (0x0020, 2)][..]),
+                "{kind:?}"
+            );
+            assert_eq!(slave.writes, [(0x0010, 1), (0x0010, 1), (0x0011, 1)]);
+        }
+    });
+}

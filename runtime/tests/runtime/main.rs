@@ -7,6 +7,7 @@ use support::common;
 
 mod async_client;
 mod client;
+mod coils;
 mod faults;
 mod gate;
 mod guarantees_tcp;

@@ -14,7 +14,7 @@ use drivemap_runtime::roles::Role;
 use drivemap_runtime::vfd::{
     AsyncVariableFrequencyDrive, AsyncVfd, Direction, VariableFrequencyDrive, Vfd,
 };
-use drivemap_runtime::{Client, ClientOptions, Error};
+use drivemap_runtime::{Client, ClientOptions, Error, Table};
 use drivemap_sim::framing::{self, Decoded};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
@@ -534,12 +534,18 @@ fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> 
         let Decoded::Request { origin, request } = framing::decode(kind, &sent.frame) else {
             return Err(format!("step {t} ({step:?}): undecodable frame {frame}"));
         };
-        let (address, words): (u16, Vec<u16>) = match request {
-            Request::WriteSingle { address, value } => (address, vec![value]),
+        let (table, address, words): (Table, u16, Vec<u16>) = match request {
+            Request::WriteSingle { address, value } => (Table::Holding, address, vec![value]),
             Request::WriteMultiple { address, values } => (
+                Table::Holding,
                 address,
                 (0..values.len()).filter_map(|i| values.get(i)).collect(),
             ),
+            // A coil: its raw value is 1 (on) or 0 (off).
+            Request::WriteCoil { address, value } => (Table::Coil, address, vec![value.into()]),
+            Request::WriteCoils { address, values } => {
+                (Table::Coil, address, values.iter().map(u16::from).collect())
+            }
             _ => continue,
         };
         if origin.slave() == 0 {
@@ -555,7 +561,8 @@ fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> 
                 .iter()
                 .enumerate()
                 .filter(|(_, r)| {
-                    r.transports.contains(kind)
+                    r.info.table == table
+                        && r.transports.contains(kind)
                         && r.broadcast != drivemap_runtime::Broadcast::Only
                         && p.profile
                             .address_offsets
@@ -681,6 +688,12 @@ fn every_map() -> Vec<(String, Map)> {
             .unwrap_or_else(|e| panic!("{f}: {e}"));
         maps.push((d.id().to_owned(), d));
     }
+    // A drive run through coils (run, direction, trip reset) and read through discrete inputs.
+    let coils = format!("{root}/fixtures/tindra-tc4/tindra-tc4.yaml");
+    let d = drivemap_map::Loader::new()
+        .load(coils.as_ref())
+        .unwrap_or_else(|e| panic!("{coils}: {e}"));
+    maps.push((d.id().to_owned(), d));
     maps
 }
 
