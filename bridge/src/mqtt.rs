@@ -386,6 +386,13 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
         let mut c = base(&object, r.name());
         c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.id()));
         let component = match plan.conversion {
+            // A coil: a switch whose state is what it was told (the coil is not polled).
+            _ if plan.info.table.is_bits() => {
+                c["payload_on"] = json!("1");
+                c["payload_off"] = json!("0");
+                c["optimistic"] = json!(true);
+                "switch"
+            }
             Conversion::Enum { .. } => {
                 c["options"] = json!(select_options(plan));
                 c["optimistic"] = json!(true);

@@ -14,7 +14,7 @@
 //! | unknown or write-only register | (02h on every drive) | 02h |
 //! | bad quantity, malformed request | (03h on every drive) | 03h |
 //! | value out of range | limit, range, data setting, data value, invalid data | 03h |
-//! | write to a read-only register | write protect, write-in mode/error, write failure, write mode, disabled (not the range code) | 02h |
+//! | write to a read-only register | write protect, write-in mode/error, write failure, write mode, disabled, read-only (not the range code) | 02h |
 //! | write refused in this state (running, DRV mode) | the same | 03h |
 //!
 //! The fallbacks are choices where a manual is silent: a read-only register written is "not a
@@ -56,6 +56,7 @@ const WRITE_WORDS: &[&str] = &[
     "write mode",
     "write-mode",
     "disabled",
+    "read-only",
 ];
 
 fn find(exceptions: &[ExceptionInfo], words: &[&str], except: Option<u8>) -> Option<u8> {

@@ -28,17 +28,17 @@ for path in sys.argv[1:]:
     warnings.clear()
     with open(path, encoding="utf-8") as f:
         conf = yaml.safe_load(f)
-    given = sum(len(h.get("sensors", [])) for h in conf["modbus"])
+    given = sum(len(h.get("sensors", [])) + len(h.get("binary_sensors", [])) for h in conf["modbus"])
     try:
         out = CONFIG_SCHEMA(conf)
     except Exception as e:  # voluptuous.Invalid and its kin
         print(f"{path}: REFUSED by Home Assistant {__version__}: {e}")
         failed = True
         continue
-    kept = sum(len(h.get("sensors", [])) for h in out["modbus"])
+    kept = sum(len(h.get("sensors", [])) + len(h.get("binary_sensors", [])) for h in out["modbus"])
     for w in warnings:
         print(f"{path}: warning: {w}")
     ok = not warnings and kept == given
     failed |= not ok
-    print(f"{path}: {'ok' if ok else 'NOT OK'}: Home Assistant {__version__} keeps {kept} of {given} sensors")
+    print(f"{path}: {'ok' if ok else 'NOT OK'}: Home Assistant {__version__} keeps {kept} of {given} sensors and binary sensors")
 sys.exit(1 if failed else 0)

@@ -201,6 +201,7 @@ impl<'d> Export<'d> {
                 continue;
             };
             let meaning = match (&plan.conversion, plan.scale(&view)) {
+                _ if plan.info.table.is_bits() => Meaning::Bit,
                 (_, Some(Err(e))) => {
                     left_out.push((
                         r,
@@ -266,7 +267,11 @@ impl<'d> Export<'d> {
                     register: r,
                     plan,
                     slot: points.len(),
-                    role: super::register_role(drive, r, kind),
+                    role: if plan.info.table.is_bits() {
+                        super::bit_role(drive, r, kind)
+                    } else {
+                        super::register_role(drive, r, kind)
+                    },
                     meaning,
                     at: Some(At { pdu, read: 0 }),
                 },

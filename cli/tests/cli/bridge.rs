@@ -240,6 +240,19 @@ fn check_ha_entity(component: &str, c: &Json) {
                 "{c}"
             );
         }
+        "switch" => {
+            // A coil: on and off as the bridge publishes and takes them.
+            assert!(c["command_topic"].is_string(), "{c}");
+            assert_eq!(
+                (c["payload_on"].as_str(), c["payload_off"].as_str()),
+                (Some("1"), Some("0")),
+                "{c}"
+            );
+            assert!(
+                c["state_topic"].is_string() || c["optimistic"] == true,
+                "{c}"
+            );
+        }
         other => panic!("unexpected component {other}"),
     }
 }
@@ -667,4 +680,170 @@ fn mqtt_with_password_and_tls() {
         &[&good, &broker],
         || (read_number(V7, 1, p7, "frequency_reference") == Some(42.0)).then_some(()),
     );
+}
+
+/// A drive run through coils and read through discrete inputs (`tests/fixtures/tindra-tc4`)
+/// behind the bridge: Home Assistant discovery makes its discrete inputs and coils binary
+/// sensors (a coil allowed to be set a switch), their states are `1`/`0`, a coil is set through
+/// MQTT, the drive trait's run and stop go through the run coil, and the metrics endpoint gives
+/// each coil and input in its role's family (`drivemap_running`, `drivemap_run`), 0 or 1.
+#[test]
+fn a_coil_drive_on_mqtt_and_the_metrics_endpoint() {
+    let dir = scratch("coils");
+    let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/fixtures/tindra-tc4")
+        .canonicalize()
+        .unwrap();
+    let maps = fixture.to_string_lossy().into_owned();
+    let env = [("DRIVEMAP_MAPS", maps.as_str())];
+    let line = free_port();
+    let addr = format!("127.0.0.1:{line}");
+    let sim = Proc::spawn(
+        "simulate",
+        drivemap(),
+        &[
+            "simulate",
+            "--drive",
+            "tindra-tc4@1",
+            "--rtu-tcp",
+            &addr,
+            "--network-source",
+            "--time-scale",
+            "50",
+            "--quiet",
+        ],
+        dir.join("simulate.log"),
+        &env,
+    );
+    wait_for(Duration::from_secs(30), "the simulator", &[&sim], || {
+        listening(line).then_some(())
+    });
+    let (broker, port) = mosquitto(&dir, "mosquitto", "allow_anonymous true");
+    let metrics = free_port();
+    let url = format!("mqtt://127.0.0.1:{port}");
+    let maddr = format!("127.0.0.1:{metrics}");
+    let b = Proc::spawn(
+        "bridge",
+        drivemap(),
+        &[
+            "bridge",
+            "--drive",
+            "tindra-tc4@1",
+            "--rtu-tcp",
+            &addr,
+            "--period",
+            "200ms",
+            "--mqtt",
+            &url,
+            "--metrics",
+            &maddr,
+            "--allow-writes",
+            "multi_speed_1,run,stop,frequency_reference",
+        ],
+        dir.join("bridge.log"),
+        &env,
+    );
+    let logs = [&b, &broker, &sim];
+    let root = "drivemap/tindra-tc4-1";
+    let state = |object: &str| {
+        subscribe(port, &format!("{root}/{object}"), 1, &[])
+            .into_iter()
+            .map(|(_, v)| v)
+            .next_back()
+    };
+    wait_for(
+        Duration::from_secs(30),
+        "the ready input's state",
+        &logs,
+        || (state("inverter_ready").as_deref() == Some("1")).then_some(()),
+    );
+    let discovery = subscribe(port, "homeassistant/#", 2, &[]);
+    for (topic, payload) in &discovery {
+        let component = topic.split('/').nth(1).unwrap();
+        check_ha_entity(component, &serde_json::from_str(payload).unwrap());
+    }
+    let node = "drivemap_tindra_tc4_1";
+    let running = config(
+        &discovery,
+        &format!("homeassistant/binary_sensor/{node}/operation_status/config"),
+    );
+    assert_eq!(running["device_class"], "running");
+    assert_eq!(running["state_topic"], format!("{root}/operation_status"));
+    let fault = config(
+        &discovery,
+        &format!("homeassistant/binary_sensor/{node}/alarm_signal/config"),
+    );
+    assert_eq!(fault["device_class"], "problem");
+    // The run coil is polled (its role) and not allowed to be set: a binary sensor.
+    config(
+        &discovery,
+        &format!("homeassistant/binary_sensor/{node}/operation_command/config"),
+    );
+    let speed = config(
+        &discovery,
+        &format!("homeassistant/switch/{node}/multi_speed_1/config"),
+    );
+    assert_eq!(speed["command_topic"], format!("{root}/set/multi_speed_1"));
+    // A coil set through MQTT.
+    let (ok, text) = publish(port, &format!("{root}/set/multi_speed_1"), "1", &[]);
+    assert!(ok, "{text}");
+    let coil = |id: &str| {
+        let out = std::process::Command::new(drivemap())
+            .args(["read", "--drive", "tindra-tc4", "--rtu-tcp", &addr, id])
+            .args(["--format", "json"])
+            .env("DRIVEMAP_MAPS", &maps)
+            .output()
+            .unwrap();
+        let v: Json = serde_json::from_slice(&out.stdout).ok()?;
+        v[0]["value"].as_f64()
+    };
+    wait_for(Duration::from_secs(10), "the coil set", &logs, || {
+        (coil("multi_speed_1") == Some(1.0)).then_some(())
+    });
+    // The trait's run through the run coil; the operation status input follows.
+    let (ok, _) = publish(port, &format!("{root}/set/frequency_reference"), "20", &[]);
+    assert!(ok);
+    std::thread::sleep(Duration::from_millis(500));
+    let (ok, _) = publish(port, &format!("{root}/command/run"), "PRESS", &[]);
+    assert!(ok);
+    wait_for(Duration::from_secs(20), "the drive to run", &logs, || {
+        (state("operation_status").as_deref() == Some("1")).then_some(())
+    });
+    assert_eq!(coil("operation_command"), Some(1.0));
+    let body = wait_for(Duration::from_secs(10), "/metrics", &logs, || {
+        http_get(metrics, "/metrics")
+            .filter(|(s, body)| *s == 200 && body.contains("drivemap_running{"))
+            .map(|(_, body)| body)
+    });
+    let sample = |family: &str, register: &str| {
+        body.lines()
+            .find(|l| {
+                l.starts_with(&format!("{family}{{"))
+                    && l.contains(&format!("register=\"{register}\""))
+            })
+            .and_then(|l| l.rsplit(' ').next())
+            .map(str::to_owned)
+    };
+    assert_eq!(
+        sample("drivemap_running", "operation_status").as_deref(),
+        Some("1.0"),
+        "{body}"
+    );
+    assert_eq!(
+        sample("drivemap_ready", "inverter_ready").as_deref(),
+        Some("1.0"),
+        "{body}"
+    );
+    // The run coil is the run role's family: 1 while running.
+    assert_eq!(
+        sample("drivemap_run", "operation_command").as_deref(),
+        Some("1.0"),
+        "{body}"
+    );
+    std::thread::sleep(Duration::from_millis(1100));
+    let (ok, _) = publish(port, &format!("{root}/command/stop"), "PRESS", &[]);
+    assert!(ok);
+    wait_for(Duration::from_secs(20), "the drive to stop", &logs, || {
+        (coil("operation_command") == Some(0.0)).then_some(())
+    });
 }

@@ -118,6 +118,13 @@ fn home_assistant_export_passes_home_assistants_own_modbus_schema() {
 /// Telegraf's request-style schema as its documentation gives it (sample_general_begin.conf,
 /// sample_request.conf, sample_general_end.conf).
 fn check_telegraf(text: &str, what: &str, max_read: i64) -> Vec<String> {
+    check_telegraf_with_bits(text, what, max_read, 2000)
+}
+
+/// [`check_telegraf`] where coil and discrete-input requests (`register = "coil"` or
+/// `"discrete"`: no byte order, fields of one bit with no type or scale) read at most
+/// `max_bits`.
+fn check_telegraf_with_bits(text: &str, what: &str, max_read: i64, max_bits: i64) -> Vec<String> {
     let doc: toml::Table = text
         .parse()
         .unwrap_or_else(|e| panic!("{what}: {e}\n{text}"));
@@ -199,14 +206,23 @@ fn check_telegraf(text: &str, what: &str, max_read: i64) -> Vec<String> {
                 "{what}: request key {k}"
             );
         }
+        let register = r["register"].as_str().unwrap();
         assert!(
-            ["ABCD", "CDAB"].contains(&r["byte_order"].as_str().unwrap()),
+            ["holding", "input", "coil", "discrete"].contains(&register),
             "{what}"
         );
-        assert!(
-            ["holding", "input"].contains(&r["register"].as_str().unwrap()),
-            "{what}"
-        );
+        let bits = ["coil", "discrete"].contains(&register);
+        if bits {
+            assert!(
+                r.get("byte_order").is_none(),
+                "{what}: a byte order on {register}"
+            );
+        } else {
+            assert!(
+                ["ABCD", "CDAB"].contains(&r["byte_order"].as_str().unwrap()),
+                "{what}"
+            );
+        }
         assert_eq!(r["optimization"].as_str(), Some("none"), "{what}");
         let fields = r["fields"].as_array().unwrap();
         // The fields tile one contiguous request: each starts where the previous one ends.
@@ -214,14 +230,20 @@ fn check_telegraf(text: &str, what: &str, max_read: i64) -> Vec<String> {
         let mut first = 0;
         for f in fields {
             let f = f.as_table().unwrap();
+            let keys: &[&str] = if bits {
+                &["address", "name", "omit"]
+            } else {
+                &["address", "name", "type", "scale", "omit"]
+            };
             for k in f.keys() {
-                assert!(
-                    ["address", "name", "type", "scale", "omit"].contains(&k.as_str()),
-                    "{what}: field key {k}"
-                );
+                assert!(keys.contains(&k.as_str()), "{what}: field key {k}");
             }
             let address = f["address"].as_integer().unwrap();
-            let ty = f["type"].as_str().unwrap();
+            let ty = if bits {
+                "UINT16"
+            } else {
+                f["type"].as_str().unwrap()
+            };
             let width = match ty {
                 "INT16" | "UINT16" => 1,
                 "INT32" | "UINT32" => 2,
@@ -239,8 +261,9 @@ fn check_telegraf(text: &str, what: &str, max_read: i64) -> Vec<String> {
             }
         }
         let span = next.unwrap() - first;
+        let max = if bits { max_bits } else { max_read };
         assert!(
-            span >= 1 && span <= max_read,
+            span >= 1 && span <= max,
             "{what}: {span} registers in one request"
         );
     }
@@ -592,4 +615,141 @@ fn values_read_as_home_assistant_and_telegraf_read_them_equal_drivemap_reads() {
     );
     // The ACN behind a Modbus TCP gateway: RTU addressing, one below the printed addresses.
     values_agree("automationdirect-acn", "--gateway", "--gateway", &[]);
+}
+
+/// The coil fixture (`tests/fixtures/tindra-tc4`) in every format: Home Assistant binary
+/// sensors of `input_type: coil` and `discrete_input` (checked by Home Assistant's own schema,
+/// none dropped), Telegraf `coil` and `discrete` requests of the planned reads (one bit per
+/// field, within the map's 32 per read), Node-RED `Coil` and `Input` reads, each table in reads
+/// of its own.
+#[test]
+fn the_coil_fixture_exports_coils_and_discrete_inputs_in_every_format() {
+    let dir = repo().join("tests/fixtures/tindra-tc4");
+    let export = |format: &str, link: [&str; 2]| {
+        let (code, out, err) = common::drivemap_fixture(
+            &dir,
+            &[
+                "export",
+                "--drive",
+                "tindra-tc4",
+                "--all",
+                link[0],
+                link[1],
+                "--format",
+                format,
+            ],
+        );
+        assert_eq!(code, 0, "{format}: {err}");
+        out
+    };
+    let python = repo().join("target/ha-venv/bin/python");
+    assert!(
+        python.is_file(),
+        "{} is missing: run tests/interop/install.sh (Home Assistant's modbus schema)",
+        python.display()
+    );
+    let tmp = std::env::temp_dir().join(format!("drivemap-ha-coils-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let mut files = Vec::new();
+    for link in [["--tcp", "192.0.2.10:502"], ["--serial", "/dev/ttyUSB0"]] {
+        let ha = export("home-assistant", link);
+        assert!(ha.contains("    binary_sensors:"), "{ha}");
+        let entry = |id: &str| {
+            let start = ha
+                .find(&format!("unique_id: \"tindra_tc4_1_{id}\""))
+                .unwrap_or_else(|| panic!("{id}: {ha}"));
+            ha[start..]
+                .split("      - name:")
+                .next()
+                .unwrap()
+                .to_owned()
+        };
+        let run = entry("operation_command");
+        assert!(
+            run.contains("address: 0\n") && run.contains("input_type: coil"),
+            "{run}"
+        );
+        let running = entry("operation_status");
+        assert!(
+            running.contains("address: 0\n")
+                && running.contains("input_type: discrete_input")
+                && running.contains("device_class: running"),
+            "{running}"
+        );
+        assert!(
+            entry("alarm_signal").contains("device_class: problem"),
+            "{ha}"
+        );
+        // The registers stay sensors.
+        let sensors = ha.split("    binary_sensors:").next().unwrap();
+        assert!(
+            sensors.contains("tindra_tc4_1_output_frequency_monitor"),
+            "{ha}"
+        );
+        let f = tmp.join(format!("tindra_{}.yaml", link[0].trim_start_matches('-')));
+        std::fs::write(&f, &ha).unwrap();
+        files.push(f);
+
+        let toml = export("telegraf", link);
+        let names = check_telegraf_with_bits(&toml, "tindra-tc4", 8, 32);
+        assert!(
+            names.iter().any(|n| n == "operation_command")
+                && names.iter().any(|n| n == "operation_status")
+                && names.iter().any(|n| n == "output_frequency_monitor"),
+            "{names:?}"
+        );
+        assert!(toml.contains("register = \"coil\""), "{toml}");
+        assert!(toml.contains("register = \"discrete\""), "{toml}");
+        assert!(
+            toml.contains("{ address = 0, name = \"operation_command\" },  # Operation command"),
+            "{toml}"
+        );
+
+        let nr: Vec<Value> = serde_json::from_str(&export("node-red", link)).unwrap();
+        let reads: Vec<(&str, &str)> = nr
+            .iter()
+            .filter(|n| n["type"] == "modbus-read")
+            .map(|n| {
+                (
+                    n["dataType"].as_str().unwrap(),
+                    n["quantity"].as_str().unwrap(),
+                )
+            })
+            .collect();
+        // The coils in two reads (the reserved 0005h is not bridged: the drive answers 02h
+        // for it), the seven inputs in one, the registers in theirs.
+        assert_eq!(
+            reads.iter().filter(|r| **r == ("Coil", "4")).count(),
+            2,
+            "{reads:?}"
+        );
+        assert!(reads.contains(&("Input", "7")), "{reads:?}");
+        assert!(reads.iter().any(|r| r.0 == "HoldingRegister"), "{reads:?}");
+        let code: String = nr
+            .iter()
+            .filter(|n| n["type"] == "function")
+            .map(|n| n["func"].as_str().unwrap())
+            .collect();
+        assert!(
+            code.contains("put(\"operation_status\", (w[0] ? 1 : 0)"),
+            "{code}"
+        );
+    }
+    let out = Command::new(&python)
+        .arg(repo().join("tests/interop/ha_check_modbus.py"))
+        .args(&files)
+        .output()
+        .expect("run Home Assistant's schema check");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "Home Assistant refused the coil export:\n{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        text.lines().filter(|l| l.contains(": ok: ")).count(),
+        files.len(),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&tmp);
 }

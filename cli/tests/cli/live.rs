@@ -3,6 +3,7 @@
 //! Addresses in the slave are PDU addresses, so the map's per-transport offsets are checked too.
 
 use crate::common;
+mod coils;
 mod paramset;
 
 use std::net::{TcpListener, TcpStream};

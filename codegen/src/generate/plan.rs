@@ -34,6 +34,16 @@ pub(super) fn module(plan: &MapPlan) -> String {
         let _ = writeln!(rows, "        /* {i} */ {},", row(r));
     }
     let roles = roles(plan);
+    // A name used as a type or path of its own: followed by ` {`, `::` or `(`, and not itself a
+    // variant of another path (`Target::Field(` uses `Target`, not the type `Field`).
+    let names_it = |text: &str, used: &str| {
+        text.match_indices(used).any(|(i, _)| {
+            !text[..i]
+                .chars()
+                .next_back()
+                .is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':')
+        })
+    };
     let used = |names: &[&'static str]| -> String {
         let found: Vec<&str> = names
             .iter()
@@ -41,7 +51,7 @@ pub(super) fn module(plan: &MapPlan) -> String {
             .filter(|n| {
                 [" {", "::", "("].iter().any(|end| {
                     let used = format!("{n}{end}");
-                    rows.contains(&used) || roles.contains(&used)
+                    names_it(&rows, &used) || names_it(&roles, &used)
                 })
             })
             .collect();

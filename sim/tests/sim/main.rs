@@ -2,6 +2,7 @@
 //! (`tests/sim/<module>.rs`), as cargo and ripgrep do: the dependency tree is linked
 //! once, not once per test file.
 
+mod coils;
 mod example_frames;
 mod indexed_faults;
 mod indexed_sim;

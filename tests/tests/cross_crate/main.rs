@@ -9,6 +9,7 @@ use support::interop_support;
 
 mod acn_address_columns;
 mod automationdirect_acn;
+mod coils;
 mod drive_contract;
 mod drive_trait;
 mod every_construct;

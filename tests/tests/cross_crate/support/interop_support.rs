@@ -135,8 +135,14 @@ pub struct Sim {
 
 impl Sim {
     pub fn new(id: &str, options: SimOptions) -> Sim {
+        Sim::of(drive(id), options)
+    }
+
+    /// A simulator of `map` (a fixture's, say) on a manual clock.
+    pub fn of(map: drivemap_map::Map, options: SimOptions) -> Sim {
         let clock = ManualClock::new();
-        let sim = Simulator::new(drive(id), options.clock(Arc::new(clock.clone())))
+        let id = map.id().to_owned();
+        let sim = Simulator::new(map, options.clock(Arc::new(clock.clone())))
             .unwrap_or_else(|e| panic!("{id}: {e}"));
         Sim {
             sim: drivemap_sim::shared(sim),
