@@ -62,6 +62,16 @@ pub(super) fn module(drive: &Map) -> String {
         describe::per_request(drive.protocol().max_read(), drive.protocol().max_write()),
         describe::functions(&drive.protocol().function_codes.codes)
     );
+    let p = drive.protocol();
+    if p.max_read_bits.is_some() || p.max_write_bits.is_some() {
+        s += &format!(
+            " Coils and discrete inputs: {}.",
+            describe::bits_per_request(
+                p.max_read_bits.as_ref().map(|_| p.max_read_bits()),
+                p.max_write_bits.as_ref().map(|_| p.max_write_bits()),
+            )
+        );
+    }
     // The protocol facts the manual does not print (`PROFILE.not_printed`), each with what the
     // runtime uses in its place.
     let unprinted = drive.not_printed();
@@ -101,6 +111,10 @@ pub(super) fn register(r: RegisterRef<'_>) -> String {
                 .unwrap_or_default()
         ),
     }];
+    if f.data.table.is_bits() {
+        // A coil or discrete input: its table and its states (`bool`: on is 1).
+        summary.push(format!("{} (1 on, 0 off)", f.data.table.item()));
+    }
     for row in &f.rows {
         match row.key {
             FactKey::Access | FactKey::Broadcast => summary.push(row.value.clone()),

@@ -2,6 +2,7 @@
 //! (`tests/review/<module>.rs`), as cargo and ripgrep do: the dependency tree is linked
 //! once, not once per test file.
 
+mod coils_diff;
 mod diff_roles_in_fields;
 mod diff_sees_every_change;
 mod indexed_diff;
