@@ -248,8 +248,13 @@ fn by_reference<'a>(drive: &'a Map, name: &str) -> Option<Result<RegisterRef<'a>
         ReferenceTable::DiscreteInput => ModbusTable::DiscreteInput,
     };
     if table.is_bits() && !drive.registers().any(|r| r.plan().info.table == table) {
+        let none = if drive.registers().any(|r| r.plan().info.table.is_bits()) {
+            "has none"
+        } else {
+            "holds registers only"
+        };
         return Some(Err(format!(
-            "`{}` is a Modicon reference to a {}, and this map has none",
+            "`{}` is a Modicon reference to a {}, and this map {none}",
             name.trim(),
             table.item()
         )));

@@ -877,11 +877,18 @@ mod tests {
         let read = [0x01, 0x03, 0x00, 0x20, 0x00, 0x01, 0x85, 0xC0];
         assert_eq!(rtu_frame(&read), Ok(Some(8)));
         assert_eq!(rtu_frame(&read[..5]), Ok(None));
-        // 01h (read coils) is not a drive function but has the usual 8-byte shape.
+        // 01h (read coils) is found by its length, as 03h is.
         let mut coils = [0x01, 0x01, 0x00, 0x00, 0x00, 0x01, 0, 0];
         let c = crc::crc_bytes(&coils[..6]);
         coils[6..].copy_from_slice(&c);
         assert_eq!(rtu_frame(&coils), Ok(Some(8)));
-        assert_eq!(rtu_frame(&coils[..7]), Err(()));
+        assert_eq!(rtu_frame(&coils[..7]), Ok(None));
+        // 41h (a user-defined function) is no drive function but has the usual 8-byte shape:
+        // found by its CRC.
+        let mut other = [0x01, 0x41, 0x00, 0x00, 0x00, 0x01, 0, 0];
+        let c = crc::crc_bytes(&other[..6]);
+        other[6..].copy_from_slice(&c);
+        assert_eq!(rtu_frame(&other), Ok(Some(8)));
+        assert_eq!(rtu_frame(&other[..7]), Err(()));
     }
 }

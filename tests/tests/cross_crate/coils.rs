@@ -141,3 +141,20 @@ fn the_drive_trait_runs_and_stops_the_drive_through_its_run_coil() {
         let _ = TripReset::ADDRESS;
     }
 }
+
+/// At the factory setting (A002 = 02, the operator panel) the drive ignores network commands:
+/// the trait refuses `run()` with what to set, sends nothing to the run coil, and `stop()` is
+/// never refused — it clears the run coil.
+#[test]
+fn run_is_refused_at_the_factory_setting_and_stop_never_is() {
+    let clock = ManualClock::new();
+    let sim = Simulator::new(map(), SimOptions::new().clock(Arc::new(clock))).unwrap();
+    let mut c = Client::new(SimLink::new(TransportKind::Rtu, sim), &tindra_tc4::PROFILE);
+    let mut d = Vfd::new::<Drive>(&mut c, 1, Settings::default());
+    let e = d.run().unwrap_err();
+    assert!(e.to_string().contains("A002"), "{e}");
+    let sent = writes(d.client());
+    assert!(sent.iter().all(|w| w.1 != 0x0000), "{sent:?}");
+    d.stop().unwrap();
+    assert_eq!(writes(d.client()), [(0x05, 0x0000, 0)]);
+}
