@@ -2,7 +2,7 @@
 //! decodes as the answer to the request.
 #![no_main]
 
-use drivemap_runtime::pdu::{self, Request, Response, Words};
+use drivemap_runtime::pdu::{self, BitValues, Request, Response, Words};
 use drivemap_runtime::reply::{Framing, ReplyBuffer};
 use drivemap_runtime::{rtu, tcp};
 use libfuzzer_sys::fuzz_target;
@@ -14,15 +14,24 @@ fuzz_target!(|data: &[u8]| {
     };
     let address = u16::from_be_bytes([*a_hi, *a_lo]);
     let values = [0x0001u16, 0x0258, 0x1234, 0xFFFF];
+    let states = [true, false, true, true, false, false, true, false, true, true];
     let quantity = u16::from(q % 126);
-    let request = match sel % 5 {
+    let request = match sel % 9 {
         0 => Request::ReadHolding { address, quantity },
         1 => Request::ReadInput { address, quantity },
         2 => Request::WriteSingle { address, value: u16::from(*q) },
         3 => Request::LoopBack { data: address },
-        _ => Request::WriteMultiple {
+        4 => Request::WriteMultiple {
             address,
             values: Words::Native(&values[..usize::from(q % 5)]),
+        },
+        // Coils and discrete inputs: up to 255 states per read (32 bytes of reply).
+        5 => Request::ReadCoils { address, quantity: u16::from(*q) },
+        6 => Request::ReadDiscreteInputs { address, quantity: u16::from(*q) },
+        7 => Request::WriteCoil { address, value: q & 1 == 1 },
+        _ => Request::WriteCoils {
+            address,
+            values: BitValues::Native(&states[..usize::from(q % 11)]),
         },
     };
     let framing = if sel & 0x80 == 0 {
@@ -59,6 +68,7 @@ fuzz_target!(|data: &[u8]| {
                 // What scan locates must decode, and a read must carry the quantity asked.
                 match decoded {
                     Ok(Response::Registers(words)) => assert_eq!(words.len(), request.quantity()),
+                    Ok(Response::Bits(bits)) => assert_eq!(bits.len(), request.quantity()),
                     Ok(_) => {}
                     Err(e) => panic!("scan located a frame that does not decode: {e}"),
                 }

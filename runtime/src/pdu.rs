@@ -132,9 +132,7 @@ impl Eq for BitValues<'_> {}
 
 impl fmt::Debug for BitValues<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_list()
-            .entries(self.iter().map(|b| u8::from(b)))
-            .finish()
+        f.debug_list().entries(self.iter().map(u8::from)).finish()
     }
 }
 

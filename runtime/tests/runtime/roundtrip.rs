@@ -1,10 +1,11 @@
-//! Property tests: for every function code, requests and responses survive encoding and
+//! Property tests: for every function code (the coils' 01h, 02h, 05h and 0Fh too), requests and
+//! responses survive encoding and
 //! decoding in both framings; any single damaged byte in an RTU frame is rejected; a reply cut
 //! into arbitrary pieces behind arbitrary noise is still found. Modbus ASCII: the same
 //! round trips, any single damaged character rejected, and no byte input makes the decoder or
 //! the frame assembler panic or hold more than one frame.
 
-use drivemap_runtime::pdu::{Request, Response, Words};
+use drivemap_runtime::pdu::{BitValues, Request, Response, Words};
 use drivemap_runtime::reply::{Framing, ReplyBuffer};
 use drivemap_runtime::{ascii, rtu, tcp};
 use proptest::prelude::*;
@@ -31,6 +32,19 @@ enum Case {
         which: u8,
         code: u8,
     },
+    ReadBits {
+        discrete: bool,
+        address: u16,
+        states: Vec<bool>,
+    },
+    WriteCoil {
+        address: u16,
+        value: bool,
+    },
+    WriteCoils {
+        address: u16,
+        states: Vec<bool>,
+    },
 }
 
 fn case() -> impl Strategy<Value = Case> {
@@ -50,7 +64,24 @@ fn case() -> impl Strategy<Value = Case> {
         any::<u16>().prop_map(|data| Case::LoopBack { data }),
         (0u16..=0xFF00, prop::collection::vec(any::<u16>(), 1..=123))
             .prop_map(|(address, values)| Case::WriteMultiple { address, values }),
-        (0u8..5, 1u8..=0x7F).prop_map(|(which, code)| Case::Exception { which, code }),
+        (0u8..9, 1u8..=0x7F).prop_map(|(which, code)| Case::Exception { which, code }),
+        (
+            any::<bool>(),
+            0u16..=0xF800,
+            prop::collection::vec(any::<bool>(), 1..=2000)
+        )
+            .prop_map(|(discrete, address, states)| Case::ReadBits {
+                discrete,
+                address,
+                states
+            }),
+        (any::<u16>(), any::<bool>())
+            .prop_map(|(address, value)| Case::WriteCoil { address, value }),
+        (
+            0u16..=0xF800,
+            prop::collection::vec(any::<bool>(), 1..=1968)
+        )
+            .prop_map(|(address, states)| Case::WriteCoils { address, states }),
     ]
 }
 
@@ -109,9 +140,25 @@ fn parts(case: &Case) -> (Request<'_>, Response<'_>) {
                     value: 0,
                 },
                 3 => Request::LoopBack { data: 0 },
-                _ => Request::WriteMultiple {
+                4 => Request::WriteMultiple {
                     address: 0,
                     values: Words::Native(&[0]),
+                },
+                5 => Request::ReadCoils {
+                    address: 0,
+                    quantity: 1,
+                },
+                6 => Request::ReadDiscreteInputs {
+                    address: 0,
+                    quantity: 1,
+                },
+                7 => Request::WriteCoil {
+                    address: 0,
+                    value: true,
+                },
+                _ => Request::WriteCoils {
+                    address: 0,
+                    values: BitValues::Native(&[true]),
                 },
             };
             let function = request.function();
@@ -123,6 +170,39 @@ fn parts(case: &Case) -> (Request<'_>, Response<'_>) {
                 },
             )
         }
+        Case::ReadBits {
+            discrete,
+            address,
+            states,
+        } => {
+            let (address, quantity) = (*address, states.len() as u16);
+            let request = if *discrete {
+                Request::ReadDiscreteInputs { address, quantity }
+            } else {
+                Request::ReadCoils { address, quantity }
+            };
+            (request, Response::Bits(BitValues::Native(states)))
+        }
+        Case::WriteCoil { address, value } => (
+            Request::WriteCoil {
+                address: *address,
+                value: *value,
+            },
+            Response::WriteCoil {
+                address: *address,
+                value: *value,
+            },
+        ),
+        Case::WriteCoils { address, states } => (
+            Request::WriteCoils {
+                address: *address,
+                values: BitValues::Native(states),
+            },
+            Response::WriteCoils {
+                address: *address,
+                quantity: states.len() as u16,
+            },
+        ),
     }
 }
 

@@ -195,8 +195,9 @@ impl Simulator {
                             .get(&a)
                             .map_or(0, |s| s.width.split(raw[s.index])[usize::from(s.word)])
                     };
-                    match table {
-                        Table::Holding => match self.indexed.check(comm, v as u16, word) {
+                    // Index/value pairs are holding registers.
+                    if table == Table::Holding {
+                        match self.indexed.check(comm, v as u16, word) {
                             crate::indexed::WriteCheck::ReadOnly => {
                                 return Err(self.plan.read_only);
                             }
@@ -204,8 +205,7 @@ impl Simulator {
                                 return Err(self.plan.out_of_range);
                             }
                             _ => {}
-                        },
-                        _ => {}
+                        }
                     }
                     if !self.accepts(r, v, settings) {
                         return Err(self.plan.out_of_range);
