@@ -33,9 +33,9 @@ use std::time::{Duration, Instant};
 
 use crate::Refused;
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Conversion, RegisterPlan};
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::Role;
+use drivemap_runtime::core::plan::{Conversion, RegisterPlan};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::roles::Role;
 use rumqttc::v5::mqttbytes::QoS;
 use rumqttc::v5::mqttbytes::v5::{Filter, LastWill, Packet, RetainForwardRule};
 use rumqttc::v5::{AsyncClient, ConnectionError, Event, EventLoop, MqttOptions};

@@ -29,8 +29,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use drivemap_live::codec;
+use drivemap_runtime::core::roles::RoleKind;
 use drivemap_runtime::pdu::{self, Request, Response, Words};
-use drivemap_runtime::roles::RoleKind;
 use drivemap_runtime::tcp;
 use drivemap_runtime::{Error as LineError, Refusal};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
@@ -470,10 +470,10 @@ impl LineSide {
             // never reaches the line.
             let quantity = matches!(
                 r.plan().conversion,
-                drivemap_runtime::plan::Conversion::Decimal { .. }
-                    | drivemap_runtime::plan::Conversion::Relative { .. }
-                    | drivemap_runtime::plan::Conversion::Ratio { .. }
-                    | drivemap_runtime::plan::Conversion::Selected { .. }
+                drivemap_runtime::core::plan::Conversion::Decimal { .. }
+                    | drivemap_runtime::core::plan::Conversion::Relative { .. }
+                    | drivemap_runtime::core::plan::Conversion::Ratio { .. }
+                    | drivemap_runtime::core::plan::Conversion::Selected { .. }
             );
             if !quantity {
                 continue; // codes, fields and words: the gate's checks of the word

@@ -428,7 +428,7 @@ pub const fn writable_count(plans: &[RegisterPlan]) -> usize {
 }
 
 /// The write rules of the writable rows of `plans`, in order: a profile's write table
-/// ([`crate::Profile::writes`]) derived from the drive's plan, evaluated at compile time
+/// ([`crate::profile::Profile::writes`]) derived from the drive's plan, evaluated at compile time
 /// (`static WRITES: [WriteRule; writable_count(REGISTERS)] = write_rules(REGISTERS)`). `N` must
 /// be [`writable_count`]; any other length is refused (a compile error in a constant).
 pub const fn write_rules<const N: usize>(plans: &[RegisterPlan]) -> [WriteRule; N] {

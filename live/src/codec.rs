@@ -8,9 +8,9 @@
 use std::fmt;
 
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Conversion, Field, RegisterPlan};
-use drivemap_runtime::ratio::Fraction;
-use drivemap_runtime::{Rounding, ValueError};
+use drivemap_runtime::core::plan::{Conversion, Field, RegisterPlan};
+use drivemap_runtime::core::ratio::Fraction;
+use drivemap_runtime::core::scale::{Rounding, ValueError};
 
 use crate::settings::{LiveSettings, View};
 

@@ -236,7 +236,7 @@ pub fn modicon_reading(drive: &Map, name: &str) -> Option<ModiconReading> {
 
 /// The register a Modicon reference names in `drive`, or why none.
 fn by_reference<'a>(drive: &'a Map, name: &str) -> Option<Result<RegisterRef<'a>, String>> {
-    use drivemap_runtime::Table as ModbusTable;
+    use drivemap_runtime::core::register::Table as ModbusTable;
     let (reference, address) = match modicon_reading(drive, name)? {
         ModiconReading::Address { reference, address } => (reference, address),
         ModiconReading::Refused(why) => return Some(Err(why)),
@@ -298,7 +298,7 @@ fn at_address(drive: &Map, address: u16) -> Option<RegisterRef<'_>> {
             r.address_alternatives()
                 .iter()
                 .any(|a| a.address == address)
-                || (r.width() != drivemap_runtime::Width::Word
+                || (r.width() != drivemap_runtime::core::width::Width::Word
                     && r.address().checked_add(1) == Some(address))
         })
     })

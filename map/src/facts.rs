@@ -15,7 +15,7 @@
 
 use serde::Serialize;
 
-use drivemap_core::ConversionKind;
+use drivemap_core::kind::ConversionKind;
 
 pub mod data;
 
@@ -295,7 +295,7 @@ fn rows(drive: &Drive, r: &Register) -> Vec<Fact> {
         None => describe::address(d.address),
         Some(_) => describe::address_span(d.address, d.address.wrapping_add(1)),
     };
-    let restricted = plan.restriction != drivemap_core::WriteRestriction::None;
+    let restricted = plan.restriction != drivemap_core::register::WriteRestriction::None;
     let table = [
         Some(Fact::new(K::Address, address, None)),
         (d.pair.as_ref())

@@ -43,10 +43,7 @@
 use crate::error::Refusal;
 use crate::rtu;
 use drivemap_core::profile::{Profile, TransportKind};
-// A second path to the write rules (`drivemap_runtime::core::rule` is the documented one),
-// kept for code that names it.
-#[doc(hidden)]
-pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
+use drivemap_core::rule::{Broadcast, WriteRule};
 use drivemap_core::width::Width;
 
 /// What a write is addressed to.

@@ -12,11 +12,11 @@ use drivemap_live::link::Link;
 use drivemap_live::session::{on_transport, rows_on_link, value_error};
 use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::Table;
 use drivemap_runtime::bus_time::BusModel;
-use drivemap_runtime::plan::{Conversion, Scale};
+use drivemap_runtime::core::plan::{Conversion, Scale};
+use drivemap_runtime::core::profile::{Parity, TransportKind};
+use drivemap_runtime::core::register::Table;
 use drivemap_runtime::planner::Poller;
-use drivemap_runtime::profile::{Parity, TransportKind};
 
 use super::{At, Fixed, Meaning, Point};
 use crate::error::ExportError;

@@ -14,10 +14,11 @@
 
 use drivemap_live::lookup::{self, NotFound};
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Conversion, Field, Label, RegisterPlan};
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::{Role, RoleKind, Target};
-use drivemap_runtime::{Table, Width, WordOrder};
+use drivemap_runtime::core::plan::{Conversion, Field, Label, RegisterPlan};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Table;
+use drivemap_runtime::core::roles::{Role, RoleKind, Target};
+use drivemap_runtime::core::width::{Width, WordOrder};
 
 pub mod export;
 pub mod home_assistant;

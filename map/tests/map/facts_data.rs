@@ -81,7 +81,7 @@ fn every_typed_value_says_what_its_worded_row_says() {
             assert_eq!(f.get(FactKey::Broadcast).is_some(), d.broadcast, "{at}");
             assert_eq!(
                 value(&f, FactKey::WriteRestriction),
-                (d.write_restriction != drivemap_core::WriteRestriction::None)
+                (d.write_restriction != drivemap_core::register::WriteRestriction::None)
                     .then(|| describe::write_restriction(d.write_restriction)),
                 "{at}"
             );

@@ -7,9 +7,9 @@ use crate::common;
 use std::time::{Duration, Instant};
 
 use drivemap_runtime::async_client::{AsyncClient, AsyncStreamTransport, BlockingTransport};
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::pdu::FrameError;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::reply::Discard;
 use drivemap_runtime::{ascii, rtu, tcp};
 use drivemap_sim::fault::{Fault, FaultyLink};
@@ -218,15 +218,16 @@ fn inject_into(c: &mut AsyncClient<BlockingTransport<FaultyLink>>, fault: Fault)
 #[test]
 fn async_client_new_applies_the_profile_timing() {
     use drivemap_runtime::ClientOptions;
-    use drivemap_runtime::profile::Timing;
-    static TIMED: drivemap_runtime::Profile = drivemap_runtime::Profile {
-        timing: Timing {
-            request_gap_bits: Some(24),
-            request_gap_us: Some(10_000),
-            ..Timing::MODBUS
-        },
-        ..drivemap_runtime::Profile::GENERIC
-    };
+    use drivemap_runtime::core::profile::Timing;
+    static TIMED: drivemap_runtime::core::profile::Profile =
+        drivemap_runtime::core::profile::Profile {
+            timing: Timing {
+                request_gap_bits: Some(24),
+                request_gap_us: Some(10_000),
+                ..Timing::MODBUS
+            },
+            ..drivemap_runtime::core::profile::Profile::GENERIC
+        };
     let gap = Duration::from_micros(12_500); // 24 bits at 9600 baud + 10 ms
     for kind in [
         TransportKind::Rtu,

@@ -3,8 +3,8 @@
 //! (01h illegal function unless the map says 02h illegal data address), as the manual's drive
 //! answers it, before anything is read or written.
 
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::function;
-use drivemap_runtime::profile::TransportKind;
 
 use super::Simulator;
 

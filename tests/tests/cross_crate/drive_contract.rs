@@ -8,9 +8,9 @@ use std::time::Duration;
 use drivemap_live::LiveSettings;
 use drivemap_map::Map;
 use drivemap_runtime::async_client::AsyncClient;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::roles::Role;
 use drivemap_runtime::pdu::Request;
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::Role;
 use drivemap_runtime::vfd::{
     AsyncVariableFrequencyDrive, AsyncVfd, Direction, VariableFrequencyDrive, Vfd,
 };
@@ -479,9 +479,9 @@ fn link_runs(link: &SimLink) -> bool {
 /// own conversion accepts it (its ranges, codes and reserved bits in force) and gives it back
 /// unchanged.
 fn within_limits(
-    r: &drivemap_runtime::RegisterPlan,
+    r: &drivemap_runtime::core::plan::RegisterPlan,
     raw: u32,
-    settings: &impl drivemap_runtime::SettingsView,
+    settings: &impl drivemap_runtime::core::plan::SettingsView,
 ) -> Result<(), String> {
     use drivemap_runtime::core::plan::Conversion;
     let again = match r.conversion {
@@ -556,7 +556,7 @@ fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> 
                 .enumerate()
                 .filter(|(_, r)| {
                     r.transports.contains(kind)
-                        && r.broadcast != drivemap_runtime::Broadcast::Only
+                        && r.broadcast != drivemap_runtime::core::rule::Broadcast::Only
                         && p.profile
                             .address_offsets
                             .pdu_address(r.address_for(&view, kind), kind)
