@@ -8,7 +8,7 @@
 //! is framed. A tool can call [`check`] itself to refuse early; the client calls it again anyway.
 //!
 //! What the map allows for one register is a [`WriteRule`]: generated as
-//! [`Writable::RULE`](crate::Writable::RULE) for every writable register and collected in
+//! [`Writable::RULE`](drivemap_core::register::Writable::RULE) for every writable register and collected in
 //! [`Profile::writes`](drivemap_core::profile::Profile::writes). The gate refuses
 //! - a register that is read-only ([`Refusal::ReadOnly`]);
 //! - a register the map lists for other transports only ([`Refusal::NotOnTransport`]): the V7's
@@ -36,7 +36,7 @@
 //!
 //! The raw range of a rule is the envelope of the register's ranges over every model variant
 //! and every case of a selected scale. The exact range for the settings in force is checked when
-//! a value is encoded ([`Writable::encode`](crate::Writable::encode), or the run-time codec), so
+//! a value is encoded ([`Writable::encode`](drivemap_core::register::Writable::encode), or the run-time codec), so
 //! a value is checked twice and the gate alone never lets through a word the map allows for no
 //! setting at all.
 
