@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 
 use crate::Refused;
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{RegisterPlan, ValueShape};
+use drivemap_runtime::core::plan::{RegisterPlan, ValueShape};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::Role;
 use rumqttc::v5::mqttbytes::QoS;

@@ -29,8 +29,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use drivemap_live::codec;
+use drivemap_runtime::core::plan::ValueShape;
 use drivemap_runtime::pdu::{self, Request, Response, Words};
-use drivemap_runtime::plan::ValueShape;
 use drivemap_runtime::roles::RoleKind;
 use drivemap_runtime::tcp;
 use drivemap_runtime::{Error as LineError, Refusal};

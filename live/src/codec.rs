@@ -8,7 +8,7 @@
 use std::fmt;
 
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Conversion, Field, RegisterPlan, ValueShape};
+use drivemap_runtime::core::plan::{Conversion, Field, RegisterPlan, ValueShape};
 use drivemap_runtime::ratio::Fraction;
 use drivemap_runtime::{Rounding, ValueError};
 

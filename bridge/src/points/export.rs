@@ -14,7 +14,7 @@ use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::Table;
 use drivemap_runtime::bus_time::BusModel;
-use drivemap_runtime::plan::{RegisterPlan, SettingsView, ValueShape};
+use drivemap_runtime::core::plan::{RegisterPlan, SettingsView, ValueShape};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::{Parity, TransportKind};
 
@@ -406,9 +406,9 @@ fn given(plan: &RegisterPlan, settings: &impl SettingsView) -> String {
 
 #[cfg(test)]
 mod tests {
-    use drivemap_runtime::plan::{Case, CaseScale, Conversion, Ranges, Relative, Setting};
-    use drivemap_runtime::register::RegisterInfo;
-    use drivemap_runtime::scale::{Decimal, RawRange};
+    use drivemap_runtime::core::plan::{Case, CaseScale, Conversion, Ranges, Relative, Setting};
+    use drivemap_runtime::core::register::RegisterInfo;
+    use drivemap_runtime::core::scale::{Decimal, RawRange};
 
     use super::*;
 

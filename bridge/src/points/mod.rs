@@ -14,7 +14,7 @@
 
 use drivemap_live::lookup::{self, NotFound};
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Field, Label, RegisterPlan, ValueShape};
+use drivemap_runtime::core::plan::{Field, Label, RegisterPlan, ValueShape};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::{Role, RoleKind, Target};
 use drivemap_runtime::{Table, Width, WordOrder};
