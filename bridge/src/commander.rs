@@ -23,12 +23,13 @@ use drivemap_live::lookup;
 use drivemap_map::Map;
 use drivemap_map::Quantity;
 use drivemap_map::RegisterRef;
+use drivemap_runtime::ClientOptions;
+use drivemap_runtime::core::plan::{Conversion, Dependency};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::roles::RoleKind;
+use drivemap_runtime::core::scale::Rounding;
 use drivemap_runtime::gate;
-use drivemap_runtime::plan::{Conversion, Dependency};
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::RoleKind;
 use drivemap_runtime::vfd::{Memory, VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{ClientOptions, Rounding};
 
 use crate::link::{Action, Command, LinkClient};
 use crate::{CommandFailure, PollFailure};

@@ -299,7 +299,7 @@ pub enum CommandFailure {
     },
     /// The value does not convert.
     #[error(transparent)]
-    Value(#[from] drivemap_runtime::ValueError),
+    Value(#[from] drivemap_runtime::core::scale::ValueError),
     /// The register's address is not known yet.
     #[error(transparent)]
     Address(PollFailure),

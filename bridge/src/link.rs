@@ -25,11 +25,13 @@ use drivemap_map::Map;
 use drivemap_map::Quantity;
 use drivemap_map::RegisterRef;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Table;
+use drivemap_runtime::core::roles::{Role, RoleKind};
+use drivemap_runtime::core::width::Width;
 use drivemap_runtime::planner::Poller;
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::{Role, RoleKind};
 use drivemap_runtime::transport::Transport;
-use drivemap_runtime::{Client, ClientOptions, Error, Table, Width};
+use drivemap_runtime::{Client, ClientOptions, Error};
 
 use crate::command::{Board, Intent, Next};
 use crate::commander::Commander;

@@ -33,9 +33,9 @@ use std::time::{Duration, Instant};
 
 use crate::Refused;
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Conversion, RegisterPlan};
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::Role;
+use drivemap_runtime::core::plan::{RegisterPlan, ValueShape};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::roles::Role;
 use rumqttc::v5::mqttbytes::QoS;
 use rumqttc::v5::mqttbytes::v5::{Filter, LastWill, Packet, RetainForwardRule};
 use rumqttc::v5::{AsyncClient, ConnectionError, Event, EventLoop, MqttOptions};
@@ -385,7 +385,7 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
         let object = slug(r.id());
         let mut c = base(&object, r.name());
         c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.id()));
-        let component = match plan.conversion {
+        let component = match plan.conversion.shape() {
             // A coil: a switch whose state is what it was told (the coil is not polled).
             _ if plan.info.table.is_bits() => {
                 c["payload_on"] = json!("1");
@@ -393,17 +393,13 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 c["optimistic"] = json!(true);
                 "switch"
             }
-            Conversion::Enum { .. } => {
+            ValueShape::Codes(_) => {
                 c["options"] = json!(select_options(plan));
                 c["optimistic"] = json!(true);
                 "select"
             }
-            Conversion::Bits { .. } => continue,
-            Conversion::Word { .. }
-            | Conversion::Decimal { .. }
-            | Conversion::Relative { .. }
-            | Conversion::Ratio { .. }
-            | Conversion::Selected { .. } => {
+            ValueShape::Bits { .. } => continue,
+            ValueShape::Word { .. } | ValueShape::Number => {
                 if !plan.unit.is_empty() {
                     c["unit_of_measurement"] = json!(unit(plan.unit));
                 }
@@ -484,12 +480,12 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
 
 /// The options of a select: an enumeration's codes as the bridge publishes them.
 fn select_options(plan: &RegisterPlan) -> Vec<String> {
-    match plan.conversion {
-        Conversion::Enum { values, .. } => values
+    match plan.conversion.shape() {
+        ValueShape::Codes(values) => values
             .iter()
             .map(|v| crate::link::option_text(v.code, Some(v.id), Some(v.name)))
             .collect(),
-        _ => Vec::new(),
+        ValueShape::Word { .. } | ValueShape::Number | ValueShape::Bits { .. } => Vec::new(),
     }
 }
 

@@ -136,7 +136,7 @@ pub fn main() -> ExitCode {
 pub fn write_in_process(
     argv: &[&str],
     drive: &drivemap_map::Map,
-    profile: &'static drivemap_runtime::Profile,
+    profile: &'static drivemap_runtime::core::profile::Profile,
 ) -> Result<ExitCode, String> {
     let cli = Cli::try_parse_from(argv).map_err(|e| e.to_string())?;
     let Command::Write(args) = cli.command else {

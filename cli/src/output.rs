@@ -38,7 +38,7 @@ macro_rules! outln {
 pub(crate) fn warn_unprinted(
     drive: &drivemap_map::Map,
     link: &drivemap_live::link::Link,
-    facts: &[drivemap_runtime::core::ProtocolFact],
+    facts: &[drivemap_runtime::core::stated::ProtocolFact],
 ) {
     for w in drivemap_live::unprinted::warnings(drive, link, facts, None) {
         eprintln!("{w}");

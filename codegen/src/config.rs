@@ -22,7 +22,9 @@
 //! Files are written only when their content changed, and `cargo:rerun-if-changed` is printed
 //! for every map and map directory, so adding a YAML file to the directory adds a module with
 //! no other edit. The generated code refers to the runtime as `::drivemap_runtime` unless told
-//! otherwise ([`Config::runtime_crate`]); the crate must depend on it.
+//! otherwise ([`Config::runtime_crate`]); the crate must depend on it. It names the vocabulary
+//! through the runtime's one path to it (`use ::drivemap_runtime::core as rt;`, then
+//! `rt::plan::RegisterPlan`).
 
 use std::fmt;
 use std::path::{Path, PathBuf};

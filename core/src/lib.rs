@@ -30,33 +30,3 @@ pub mod rule;
 pub mod scale;
 pub mod stated;
 pub mod width;
-
-// Second paths to the items most code names, not documented: each item has one documented
-// path, in its module. They stay for the code that names them (the generated drive modules, whose
-// text is kept byte for byte, and most crates of the workspace).
-#[doc(hidden)]
-pub use command_profile::CommandProfile;
-#[doc(hidden)]
-pub use functions::Functions;
-#[doc(hidden)]
-pub use kind::ConversionKind;
-#[doc(hidden)]
-pub use plan::{RegisterPlan, SettingsView, Value};
-#[doc(hidden)]
-pub use profile::Profile;
-#[doc(hidden)]
-pub use register::{
-    Access, BitRegister, Bits, Code, DrivePlan, DriveSettings, Enumeration, ReadOnly, ReadWrite,
-    ReadWriteAs, Readable, Reg, Register, RegisterInfo, Table, Writable, WriteOnly,
-    WriteRestriction,
-};
-#[doc(hidden)]
-pub use roles::{Role, Roles};
-#[doc(hidden)]
-pub use rule::{Broadcast, Transports, WriteRule};
-#[doc(hidden)]
-pub use scale::{Rounding, ValueError};
-#[doc(hidden)]
-pub use stated::{NotPrinted, ProtocolFact, Stated};
-#[doc(hidden)]
-pub use width::{Width, WordOrder};

@@ -6,10 +6,7 @@
 //! manual's communication addresses to PDU addresses per transport.
 
 use crate::rule::WriteRule;
-// A second path to the stated facts ([`crate::stated`] is the documented one), kept for the
-// generated drive modules, which name them here.
-#[doc(hidden)]
-pub use crate::stated::{NotPrinted, ProtocolFact, Stated};
+use crate::stated::{NotPrinted, ProtocolFact, Stated};
 
 /// How a transport frames Modbus PDUs. Address offsets and some rules differ per kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

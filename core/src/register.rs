@@ -461,12 +461,12 @@ pub trait DrivePlan {
     /// Every register's plan, sorted by address (broadcast-only registers last).
     const REGISTERS: &'static [RegisterPlan];
     /// What the drive accepts on the wire.
-    const PROFILE: &'static crate::Profile;
+    const PROFILE: &'static crate::profile::Profile;
     /// Which registers and fields play the standard parts of a drive ([`Roles::NONE`] when the
     /// map gives none).
     ///
-    /// [`Roles::NONE`]: crate::Roles::NONE
-    const ROLES: crate::Roles;
+    /// [`Roles::NONE`]: crate::roles::Roles::NONE
+    const ROLES: crate::roles::Roles;
 }
 
 /// Access marker of a register the manual makes read-only.

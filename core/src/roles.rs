@@ -397,7 +397,7 @@ pub enum Target {
     /// An external quantity of the map (a setting the application supplies, such as a maximum
     /// frequency with no register): its quantity slot in the drive's settings.
     External {
-        /// Quantity slot ([`SettingsView::quantity`](crate::SettingsView::quantity)).
+        /// Quantity slot ([`SettingsView::quantity`](crate::plan::SettingsView::quantity)).
         slot: u8,
         /// The quantity's name in the map.
         name: &'static str,

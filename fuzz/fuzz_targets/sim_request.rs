@@ -5,7 +5,7 @@
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
 
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::{crc, tcp};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use libfuzzer_sys::fuzz_target;

@@ -4,7 +4,7 @@
 
 use std::time::{Duration, Instant};
 
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_sim::server::{FrameLimits, Framer, Next};
 use libfuzzer_sys::fuzz_target;
 

@@ -15,7 +15,7 @@ use std::io;
 use std::time::Instant;
 
 use drivemap_map::Map;
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 
 /// Whether writes may go through a draft map.

@@ -21,9 +21,11 @@ use drivemap_map::examples::{Byte, Direction, Example, hex_text, locate_offset, 
 use drivemap_map::facts::TransportName;
 use drivemap_map::{Diagnostic, Loc};
 use drivemap_map::{Map, RegisterRef};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Table;
+use drivemap_runtime::core::scale::ValueError;
 use drivemap_runtime::pdu::{self, Request, Response};
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Table, ValueError, crc, tcp};
+use drivemap_runtime::{crc, tcp};
 
 use crate::codec;
 use crate::settings::LiveSettings;

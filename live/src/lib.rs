@@ -4,7 +4,7 @@
 //!
 //! The generated modules and this crate agree by construction: both read the same plan of a
 //! validated map ([`drivemap_map::Map::plan`]) and convert with the same functions of
-//! [`drivemap_runtime::scale`]; a test in `tests/` compares them register by register.
+//! [`drivemap_runtime::core::scale`]; a test in `tests/` compares them register by register.
 #![doc = include_str!("../README.md")]
 #![warn(missing_docs, unreachable_pub)]
 

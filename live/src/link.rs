@@ -10,8 +10,9 @@ use drivemap_map::Map;
 
 use crate::draft::DraftWrites;
 use drivemap_runtime::bus_time::SerialConfig;
-use drivemap_runtime::profile::Parity;
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::Parity;
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::ascii_over_tcp::AsciiOverTcpTransport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
@@ -19,7 +20,7 @@ use drivemap_runtime::transport::serial::{
     Parity as PortParity, SerialOptions, SerialTransport, StopBits,
 };
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, ClientOptions, Profile};
+use drivemap_runtime::{Client, ClientOptions};
 
 /// `--parity none|even|odd` as a clap value parser for [`Parity`] (the vocabulary crate has
 /// no clap): the possible values are listed in `--help` and a wrong one is refused naming them.

@@ -236,7 +236,7 @@ pub fn modicon_reading(drive: &Map, name: &str) -> Option<ModiconReading> {
 
 /// The register a Modicon reference names in `drive`, or why none.
 fn by_reference<'a>(drive: &'a Map, name: &str) -> Option<Result<RegisterRef<'a>, String>> {
-    use drivemap_runtime::Table as ModbusTable;
+    use drivemap_runtime::core::register::Table as ModbusTable;
     let (reference, address) = match modicon_reading(drive, name)? {
         ModiconReading::Address { reference, address } => (reference, address),
         ModiconReading::Refused(why) => return Some(Err(why)),
@@ -294,10 +294,10 @@ fn by_reference<'a>(drive: &'a Map, name: &str) -> Option<Result<RegisterRef<'a>
 /// offset), or its id where the offset puts it below 1.
 fn modicon_of(drive: &Map, r: RegisterRef<'_>) -> String {
     let digit = match r.plan().info.table {
-        drivemap_runtime::Table::Coil => 0,
-        drivemap_runtime::Table::DiscreteInput => 1,
-        drivemap_runtime::Table::Input => 3,
-        drivemap_runtime::Table::Holding => 4,
+        drivemap_runtime::core::register::Table::Coil => 0,
+        drivemap_runtime::core::register::Table::DiscreteInput => 1,
+        drivemap_runtime::core::register::Table::Input => 3,
+        drivemap_runtime::core::register::Table::Holding => 4,
     };
     let (rtu, _) = drive.address_offsets();
     match u32::try_from(i64::from(r.address()) + i64::from(rtu) + 1) {
@@ -325,7 +325,7 @@ fn at_address(drive: &Map, address: u16) -> Option<RegisterRef<'_>> {
 fn at_address_in(
     drive: &Map,
     address: u16,
-    table: Option<drivemap_runtime::Table>,
+    table: Option<drivemap_runtime::core::register::Table>,
 ) -> Option<RegisterRef<'_>> {
     let normal = || {
         drive
@@ -338,7 +338,7 @@ fn at_address_in(
             r.address_alternatives()
                 .iter()
                 .any(|a| a.address == address)
-                || (r.width() != drivemap_runtime::Width::Word
+                || (r.width() != drivemap_runtime::core::width::Width::Word
                     && r.address().checked_add(1) == Some(address))
         })
     })
@@ -372,7 +372,7 @@ pub fn find<'a>(drive: &'a Map, name: &str) -> Result<RegisterRef<'a>, NotFound>
     {
         // An address several tables hold (coil 0001h, discrete input 0001h, holding register
         // 0001h) names none of them: the user says which.
-        let others: Vec<RegisterRef<'_>> = drivemap_runtime::Table::ALL
+        let others: Vec<RegisterRef<'_>> = drivemap_runtime::core::register::Table::ALL
             .into_iter()
             .filter_map(|t| at_address_in(drive, a, Some(t)))
             .collect();

@@ -5,7 +5,7 @@
 //! is lowered once per loaded map and lives as long as the process.
 
 use drivemap_map::Map;
-use drivemap_runtime::profile::Profile;
+use drivemap_runtime::core::profile::Profile;
 
 /// The runtime profile of `drive`, with `'static` lifetime (see the module docs).
 pub fn leak_profile(drive: &Map) -> &'static Profile {

@@ -12,11 +12,14 @@ use drivemap_map::Map;
 use drivemap_map::Quantity;
 use drivemap_map::RegisterRef;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
-use drivemap_runtime::plan::Dependency;
-use drivemap_runtime::plan::RegisterPlan;
+use drivemap_runtime::core::plan::Dependency;
+use drivemap_runtime::core::plan::RegisterPlan;
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::{RegisterInfo, Table};
+use drivemap_runtime::core::scale::ValueError;
+use drivemap_runtime::core::width::Width;
 use drivemap_runtime::planner::Poller;
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Profile, RegisterInfo, Table, ValueError, Width};
 
 use crate::codec::{self, InputError, Value};
 use crate::draft::DraftWrites;
@@ -298,7 +301,7 @@ impl SettingsArgs {
                 // The drive's value of a register no conversion depends on: nothing here reads
                 // it in place of the drive, but it must be a value of the register (as
                 // `simulate --set` takes it), so a mistyped value is not passed over.
-                use drivemap_runtime::ValueError as V;
+                use drivemap_runtime::core::scale::ValueError as V;
                 match codec::parse_value(drive, r, value, &settings) {
                     Ok(_)
                     | Err(codec::InputError::Value(
@@ -902,7 +905,7 @@ impl<'d> Session<'d> {
                 r,
                 &g.value,
                 &self.settings,
-                drivemap_runtime::Rounding::Nearest,
+                drivemap_runtime::core::scale::Rounding::Nearest,
             ) else {
                 assumed.notes.push(assume(""));
                 continue;

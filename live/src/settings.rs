@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use drivemap_map::Map;
 use drivemap_map::{MapPlan, Quantity};
-use drivemap_runtime::SettingsView;
+use drivemap_runtime::core::plan::SettingsView;
 
 /// Variant choices, selector codes, reference values and external quantities.
 #[derive(Debug, Clone, Default, PartialEq)]

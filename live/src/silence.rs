@@ -14,7 +14,7 @@ use std::io;
 use std::rc::Rc;
 use std::time::Instant;
 
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 
 /// What the guard has seen; shared between the transport wrapper and the session.

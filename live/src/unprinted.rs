@@ -7,7 +7,7 @@ use drivemap_map::Map;
 use drivemap_runtime::core::stated::{MODBUS_SLAVE_MAX, MODBUS_SLAVE_MIN, ProtocolFact};
 
 use crate::link::Link;
-use drivemap_runtime::profile::Parity;
+use drivemap_runtime::core::profile::Parity;
 
 /// The warnings for `facts` that `drive`'s map marks not printed, as the command using `link`
 /// relies on them: the serial settings only on a serial line, and only those not given on the

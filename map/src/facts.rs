@@ -10,12 +10,13 @@
 //! The protocol has its part ([`protocol()`], [`ProtocolFacts`]): one [`ProtocolRow`] per fact,
 //! which `drivemap doc` prints and `drivemap diff` compares key by key.
 //!
-//! A new kind of scale adds one [`ConversionKind`] in the vocabulary crate and one arm in
-//! [`scale_row`]: every printer that reads the view shows it (`tests/tests/cross_crate/scale_kinds.rs`).
+//! A new kind of scale adds one [`ConversionKind`] in the vocabulary crate and its typed form
+//! in [`data::ScaleData`], which words it ([`scale_row`] reads it): every printer that reads
+//! the view shows it (`tests/tests/cross_crate/scale_kinds.rs`).
 
 use serde::Serialize;
 
-use drivemap_core::ConversionKind;
+use drivemap_core::kind::ConversionKind;
 
 pub mod data;
 
@@ -258,29 +259,17 @@ pub fn facts(drive: &Drive) -> DriveFacts {
 }
 
 /// The scale row of a register, by the kind of its value: a fixed scale (a unit without a
-/// scale is factor 1), or who selects it; none for words, codes and bits.
+/// scale is factor 1), or who selects it ([`data::ScaleData`] decides which); none for words,
+/// codes and bits.
 pub fn scale_row(drive: &Drive, r: &Register) -> Option<Fact> {
     let unit = r.def.unit.as_deref().unwrap_or("");
-    match r.kind() {
-        ValueKind::Quantity(Scale::Selected(sel)) => Some(Fact::new(
-            FactKey::SelectedBy,
-            describe::selected_by(drive, &sel.selected_by),
-            None,
-        )),
-        ValueKind::Quantity(scale @ (Scale::Factor(_) | Scale::Relative(_) | Scale::Ratio(_))) => {
-            Some(Fact::new(
-                FactKey::Scale,
-                describe::scale(drive, scale, unit),
-                None,
-            ))
-        }
-        ValueKind::UnitQuantity => Some(Fact::new(
-            FactKey::Scale,
-            describe::scale(drive, &Scale::Factor(1.0), unit),
-            None,
-        )),
-        ValueKind::Word | ValueKind::Enum(_) | ValueKind::Bits(_) => None,
-    }
+    let scale = match r.kind() {
+        ValueKind::Quantity(scale) => data::scale_of(drive, scale),
+        ValueKind::UnitQuantity => data::ScaleData::Factor(1.0),
+        ValueKind::Word | ValueKind::Enum(_) | ValueKind::Bits(_) => return None,
+    };
+    let (key, value) = scale.row(unit)?;
+    Some(Fact::new(key, value, None))
 }
 
 /// The rows of a register, in the order printers show them: one entry per key, absent where
@@ -295,7 +284,7 @@ fn rows(drive: &Drive, r: &Register) -> Vec<Fact> {
         None => describe::address(d.address),
         Some(_) => describe::address_span(d.address, d.address.wrapping_add(1)),
     };
-    let restricted = plan.restriction != drivemap_core::WriteRestriction::None;
+    let restricted = plan.restriction != drivemap_core::register::WriteRestriction::None;
     let table = [
         Some(Fact::new(K::Address, address, None)),
         (d.pair.as_ref())

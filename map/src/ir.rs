@@ -284,7 +284,7 @@ impl Drive {
     /// When `r` is not a register of this drive (a register of another map, or of this map
     /// expanded separately, with another id at its place): a caller's mistake, never the data's —
     /// [`Drive::plan_of`] finds another map's register by id. There is no fallback row.
-    pub fn register_plan(&self, r: &Register) -> &'static drivemap_core::RegisterPlan {
+    pub fn register_plan(&self, r: &Register) -> &'static drivemap_core::plan::RegisterPlan {
         let plan = self.plan();
         let index = r.index();
         match self.registers.get(index) {
@@ -298,7 +298,7 @@ impl Drive {
 
     /// The plan of the register `id` of this drive (a register id, not a parameter number), if
     /// there is one.
-    pub fn plan_of(&self, id: &str) -> Option<&'static drivemap_core::RegisterPlan> {
+    pub fn plan_of(&self, id: &str) -> Option<&'static drivemap_core::plan::RegisterPlan> {
         let plan = self.plan();
         let index = self.registers.iter().position(|x| x.def.id == id)?;
         Some(&plan.registers[plan.order[index]])

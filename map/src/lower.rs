@@ -985,7 +985,7 @@ fn profile(drive: &Drive, registers: &'static [RegisterPlan]) -> Profile {
         not_printed: leak(
             crate::stated::unprinted(p)
                 .into_iter()
-                .map(|u| drivemap_core::NotPrinted {
+                .map(|u| drivemap_core::stated::NotPrinted {
                     fact: u.fact,
                     why: text(&u.why),
                     source: u.source.as_deref().map(text),

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use drivemap_core::ConversionKind;
+use drivemap_core::kind::ConversionKind;
 use drivemap_core::plan::RegisterPlan;
 use drivemap_core::width::Width;
 
@@ -205,7 +205,10 @@ impl Map {
     }
 
     /// Why `fact` is not printed, if the map says so.
-    pub fn not_printed_why(&self, fact: drivemap_core::ProtocolFact) -> Option<facts::Unprinted> {
+    pub fn not_printed_why(
+        &self,
+        fact: drivemap_core::stated::ProtocolFact,
+    ) -> Option<facts::Unprinted> {
         crate::stated::why(&self.drive.protocol, fact)
     }
 
@@ -221,7 +224,7 @@ impl Map {
     }
 
     /// The access a group states for its registers (`access:` of the group), if it does.
-    pub fn group_access(&self, group: &facts::Group) -> Option<drivemap_core::Access> {
+    pub fn group_access(&self, group: &facts::Group) -> Option<drivemap_core::register::Access> {
         let node = self.drive.tree.at(&group.path.key("access"))?;
         serde_yaml::from_value(node.to_value()).ok()
     }
@@ -490,12 +493,12 @@ impl<'m> RegisterRef<'m> {
 
     /// The access the register's own row states; `None` where it takes its group's (or the
     /// default, read-only).
-    pub fn access_written(&self) -> Option<drivemap_core::Access> {
+    pub fn access_written(&self) -> Option<drivemap_core::register::Access> {
         self.reg.def.access
     }
 
     /// The access its group states for its registers (`access:` of the group), if it does.
-    pub fn group_access(&self) -> Option<drivemap_core::Access> {
+    pub fn group_access(&self) -> Option<drivemap_core::register::Access> {
         self.map.group_access(self.map.drive.group_of(self.reg))
     }
 

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use drivemap_core::register::Table;
 use drivemap_core::rule::Transports;
 
-use drivemap_core::ConversionKind;
+use drivemap_core::kind::ConversionKind;
 
 use drivemap_map::Map;
 use drivemap_map::RegisterRef;

@@ -28,7 +28,7 @@ use std::time::{Duration, Instant};
 
 use drivemap_runtime::async_client::{AsyncClient, AsyncTcpTransport};
 use drivemap_runtime::client::{Client, ClientOptions};
-use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::core::profile::{Profile, TransportKind};
 use drivemap_runtime::transport::tcp::TcpTransport;
 
 #[global_allocator]

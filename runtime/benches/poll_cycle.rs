@@ -18,10 +18,11 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use drivemap_runtime::Client;
 use drivemap_runtime::client::ClientOptions;
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::register::{Access, RegisterInfo, Table};
 use drivemap_runtime::planner::{Poller, ReadableSet, plan_contiguous, plan_reads, plan_single};
-use drivemap_runtime::profile::Profile;
-use drivemap_runtime::{Access, Client, RegisterInfo, Table};
 use drivemap_sim::slave::SimulatedSlave;
 
 #[global_allocator]
@@ -48,7 +49,7 @@ fn registers() -> Vec<RegisterInfo> {
             address,
             access: Access::Read,
             table: Table::Holding,
-            width: drivemap_runtime::Width::Word,
+            width: drivemap_runtime::core::width::Width::Word,
             broadcast_only: false,
             source: "",
         })

@@ -16,11 +16,11 @@ use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use drivemap_runtime::client::{Client, ClientOptions};
+use drivemap_runtime::core::profile::{Profile, TransportKind};
+use drivemap_runtime::core::scale::{Decimal, decode_decimal};
 use drivemap_runtime::pdu::{Request, Response, Words};
-use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::reply::{Framing, ReplyBuffer};
 use drivemap_runtime::rtu;
-use drivemap_runtime::scale::{Decimal, decode_decimal};
 use drivemap_runtime::transport::Transport;
 
 #[global_allocator]

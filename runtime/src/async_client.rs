@@ -13,7 +13,6 @@ use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt, ReadBuf};
 
 use crate::client::{ClientOptions, Core, Session};
 use crate::error::Error;
-use crate::gate::WriteRule;
 use crate::persist::PersistBudget;
 use crate::reply::Discarded;
 use crate::transport::{DISCARD_BUDGET, Transport};
@@ -21,6 +20,7 @@ use crate::typed::{ReadSet, WriteSet};
 use crate::wire::Tokio;
 use drivemap_core::profile::{Profile, TransportKind};
 use drivemap_core::register::{BitRegister, Bits, DriveSettings, Readable, Writable};
+use drivemap_core::rule::WriteRule;
 
 /// A link for the [`AsyncClient`]; see [`Transport`] for the meaning of each method.
 // The futures are not promised `Send` (the lint's concern): the client is driven on one task

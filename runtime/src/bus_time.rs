@@ -49,12 +49,7 @@ use std::time::Duration;
 
 use crate::error::Refusal;
 use crate::pdu::function;
-use drivemap_core::profile::Profile;
-
-// A second path to the parity of a serial line (`drivemap_runtime::core::profile::Parity` is the
-// documented one), kept for code that names it.
-#[doc(hidden)]
-pub use drivemap_core::profile::Parity;
+use drivemap_core::profile::{Parity, Profile};
 
 /// The settings of a serial line that decide the length of a character.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

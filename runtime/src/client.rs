@@ -27,7 +27,7 @@ use crate::ascii;
 use crate::bus_time::{BusModel, SerialConfig};
 use crate::error::{Error, Refusal, Sent};
 use crate::exception::Exception;
-use crate::gate::{self, WriteRule, WriteTarget};
+use crate::gate::{self, WriteTarget};
 use crate::pdu::{FrameError, Request, Response, Words, function};
 use crate::persist::PersistBudget;
 use crate::reply::{Discard, Discarded, Framing, ReplyBuffer};
@@ -37,6 +37,7 @@ use crate::wire::{Blocking, Wire, block_on};
 use crate::{rtu, tcp};
 use drivemap_core::profile::{CommandInfo, CommandKind, Profile, TransportKind};
 use drivemap_core::register::{BitRegister, Bits, DriveSettings, Readable, Table, Writable};
+use drivemap_core::rule::WriteRule;
 
 /// Per-client settings (not part of a drive's profile).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -1908,8 +1909,8 @@ impl<T: Transport> Client<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bus_time::Parity;
     use crate::bus_time::tests::v7;
+    use drivemap_core::profile::Parity;
 
     #[test]
     fn options_for_a_profile_keep_its_timing() {

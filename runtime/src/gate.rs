@@ -8,7 +8,7 @@
 //! is framed. A tool can call [`check`] itself to refuse early; the client calls it again anyway.
 //!
 //! What the map allows for one register is a [`WriteRule`]: generated as
-//! [`Writable::RULE`](crate::Writable::RULE) for every writable register and collected in
+//! [`Writable::RULE`](drivemap_core::register::Writable::RULE) for every writable register and collected in
 //! [`Profile::writes`](drivemap_core::profile::Profile::writes). The gate refuses
 //! - a register that is read-only ([`Refusal::ReadOnly`]);
 //! - a register the map lists for other transports only ([`Refusal::NotOnTransport`]): the V7's
@@ -40,18 +40,15 @@
 //!
 //! The raw range of a rule is the envelope of the register's ranges over every model variant
 //! and every case of a selected scale. The exact range for the settings in force is checked when
-//! a value is encoded ([`Writable::encode`](crate::Writable::encode), or the run-time codec), so
+//! a value is encoded ([`Writable::encode`](drivemap_core::register::Writable::encode), or the run-time codec), so
 //! a value is checked twice and the gate alone never lets through a word the map allows for no
 //! setting at all.
 
 use crate::error::Refusal;
 use crate::rtu;
 use drivemap_core::profile::{Profile, TransportKind};
-// A second path to the write rules (`drivemap_runtime::core::rule` is the documented one),
-// kept for code that names it.
 use drivemap_core::register::Table;
-#[doc(hidden)]
-pub use drivemap_core::rule::{Broadcast, Transports, WriteRule};
+use drivemap_core::rule::{Broadcast, WriteRule};
 use drivemap_core::width::Width;
 
 /// What a write is addressed to.

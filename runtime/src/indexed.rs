@@ -22,9 +22,10 @@ use drivemap_core::indexed::{EntryRef, Indexed};
 
 use crate::client::{Client, Session};
 use crate::error::{Error, Refusal};
-use crate::gate::{WriteRule, WriteTarget};
+use crate::gate::WriteTarget;
 use crate::transport::Transport;
 use crate::wire::{Wire, block_on};
+use drivemap_core::rule::WriteRule;
 
 /// Indexed access, one implementation for the blocking and the async client.
 impl<W: Wire> Session<'_, W> {

@@ -112,9 +112,11 @@
 use std::fmt;
 
 use drivemap_core::plan::RegisterPlan;
+use drivemap_core::plan::SettingsView;
 use drivemap_core::register::{DrivePlan, DriveSettings};
 use drivemap_core::roles::Role;
-use drivemap_core::{Roles, Rounding, SettingsView};
+use drivemap_core::roles::Roles;
+use drivemap_core::scale::Rounding;
 
 #[cfg(feature = "tokio")]
 use crate::async_client::{AsyncClient, AsyncTransport};

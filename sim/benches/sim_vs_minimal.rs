@@ -21,8 +21,8 @@ use std::sync::{Arc, Barrier, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::Request;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::tcp;
 use drivemap_sim::{SimOptions, Simulator, SystemClock, TcpFraming, TcpServer};
 

@@ -22,7 +22,7 @@
 //! Retrieval / Writing"); a write refused because of the drive's state is a value the drive cannot
 //! take now (03h). `sim/README.md` lists the resulting codes per drive.
 
-use drivemap_runtime::profile::ExceptionInfo;
+use drivemap_runtime::core::profile::ExceptionInfo;
 
 /// The exception code for each rule.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

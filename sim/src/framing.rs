@@ -5,8 +5,8 @@
 //! [`tcp::encode_response`]. No CRC and no MBAP header is written by hand. Nothing here
 //! allocates.
 
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::{Request, RequestDecodeError, Response, function};
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{rtu, tcp};
 
 /// Where a request frame came from: what its reply must echo.

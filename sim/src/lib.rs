@@ -24,7 +24,7 @@
 //! `encode_response`), and every link is read by one serve loop ([`server`]).
 //!
 //! For the runtime's own tests, benches and doctests, [`slave::SimulatedSlave`] is a bare drive
-//! built from a [`Profile`](drivemap_runtime::Profile) alone (plain register memory, no map),
+//! built from a [`Profile`](drivemap_runtime::core::profile::Profile) alone (plain register memory, no map),
 //! and [`fault::FaultyLink`] an in-memory link to one that damages replies on request.
 //!
 //! ```

@@ -11,7 +11,7 @@
 //!
 //! ```
 //! use drivemap_sim::{Line, SimOptions, Simulator};
-//! use drivemap_runtime::profile::TransportKind;
+//! use drivemap_runtime::core::profile::TransportKind;
 //!
 //! let maps = concat!(env!("CARGO_MANIFEST_DIR"), "/../maps/");
 //! let v7 = drivemap_map::Loader::new().load(format!("{maps}yaskawa-v7.yaml").as_ref())?;
@@ -30,7 +30,7 @@
 
 use std::fmt;
 
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::{rtu, tcp};
 
 use crate::server::{SharedSim, lock, shared};

@@ -10,9 +10,9 @@
 
 use drivemap_map::Map;
 use drivemap_runtime::core::command_profile::{CommandProfile, PathKind, Transition};
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::roles::{FieldRole, NumberField, Role, RoleKind, Target};
 use drivemap_runtime::core::rule::Transports;
-use drivemap_runtime::profile::TransportKind;
 
 /// What the drive model is doing, as status fields report it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]

@@ -7,8 +7,8 @@ use std::io;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
+use drivemap_runtime::core::profile::{Profile, TransportKind};
 use drivemap_runtime::pdu::{self, BitValues, Request, Response, Words, function};
-use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::rtu;
 use drivemap_runtime::transport::Transport;
 

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use drivemap_live::codec::Value;
 use drivemap_runtime::bus_time::SerialConfig;
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 
 use crate::Simulator;

@@ -12,7 +12,7 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::core::profile::{Profile, TransportKind};
 use drivemap_runtime::{rtu, tcp};
 use drivemap_sim::slave::SimulatedSlave;
 

@@ -5,7 +5,7 @@
 use std::io;
 use std::time::Instant;
 
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_sim::slave::SimulatedSlave;
 

@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use drivemap_runtime::profile::Profile;
+use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{ascii, rtu, tcp};
 use drivemap_sim::slave::SimulatedSlave;

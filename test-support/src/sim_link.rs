@@ -18,8 +18,8 @@ use std::time::{Duration, Instant};
 
 use drivemap_live::LiveSettings;
 use drivemap_runtime::async_client::AsyncTransport;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::Response;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::tcp;
 use drivemap_runtime::transport::Transport;
 use drivemap_sim::Simulator;

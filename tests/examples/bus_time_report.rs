@@ -25,11 +25,13 @@ use drivemap_drives as drives;
 use drivemap_map::RegisterRef;
 use drivemap_map::facts::TransportName;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
-use drivemap_runtime::core::Access;
+use drivemap_runtime::core::plan::RegisterPlan;
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::register::Access;
+use drivemap_runtime::core::register::Table;
 use drivemap_runtime::planner::{
     Read, ReadableSet, plan_contiguous, plan_cost, plan_reads, plan_single,
 };
-use drivemap_runtime::{Profile, RegisterPlan, Table};
 use drivemap_test_support::rng::SplitMix;
 
 /// The generated profile and register table of a module of `drivemap_drives`.

@@ -8,7 +8,7 @@
 
 use std::fmt::Write;
 
-use drivemap_runtime::Table;
+use drivemap_runtime::core::register::Table;
 
 use super::export::{Endpoint, Export, write_point_caveats};
 use super::{Meaning, Point, slug};

@@ -14,11 +14,12 @@
 
 use drivemap_live::lookup::{self, NotFound};
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Conversion, Field, Label, RegisterPlan};
-use drivemap_runtime::profile::TransportKind;
-pub(crate) use drivemap_runtime::roles::Role;
-use drivemap_runtime::roles::{RoleKind, Target};
-use drivemap_runtime::{Table, Width, WordOrder};
+use drivemap_runtime::core::plan::{Field, Label, RegisterPlan, ValueShape};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Table;
+pub(crate) use drivemap_runtime::core::roles::Role;
+use drivemap_runtime::core::roles::{RoleKind, Target};
+use drivemap_runtime::core::width::{Width, WordOrder};
 
 pub mod export;
 pub mod home_assistant;
@@ -274,8 +275,8 @@ pub fn polled<'d>(map: &'d Map, regs: &[RegisterRef<'d>], kind: TransportKind) -
             out.push(point(bit_role(map, r, kind), Meaning::Bit));
             continue;
         }
-        match plan.conversion {
-            Conversion::Bits { fields, .. } => {
+        match plan.conversion.shape() {
+            ValueShape::Bits { fields, .. } => {
                 for (index, field) in fields.iter().enumerate() {
                     let role = if field.width == 1 {
                         field_role(map, r, field.lsb, kind)
@@ -285,16 +286,13 @@ pub fn polled<'d>(map: &'d Map, regs: &[RegisterRef<'d>], kind: TransportKind) -
                     out.push(point(role, Meaning::Field { index, field }));
                 }
             }
-            Conversion::Enum { values, .. } => {
+            ValueShape::Codes(values) => {
                 out.push(point(register_role(map, r, kind), Meaning::Code(values)));
             }
-            Conversion::Word { .. } => {
+            ValueShape::Word { .. } => {
                 out.push(point(register_role(map, r, kind), Meaning::Word));
             }
-            Conversion::Decimal { .. }
-            | Conversion::Relative { .. }
-            | Conversion::Ratio { .. }
-            | Conversion::Selected { .. } => {
+            ValueShape::Number => {
                 out.push(point(register_role(map, r, kind), Meaning::Number(None)));
             }
         }

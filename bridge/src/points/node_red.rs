@@ -4,7 +4,7 @@
 //! message per register (`topic` the register id, `payload` the value) and keeps the latest
 //! values in the flow context; a `comment` node says what was left out and why.
 
-use drivemap_runtime::Table;
+use drivemap_runtime::core::register::Table;
 use serde_json::{Value, json};
 
 use super::export::{Endpoint, Export};

@@ -4,7 +4,7 @@
 
 use std::fmt::Write;
 
-use drivemap_runtime::Table;
+use drivemap_runtime::core::register::Table;
 
 use super::Meaning;
 use super::export::{Endpoint, Export, write_point_caveats};

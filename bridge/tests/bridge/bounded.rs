@@ -14,7 +14,7 @@ use drivemap_bridge::metrics::Metrics;
 use drivemap_map::{Loader, Map};
 use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};

@@ -20,7 +20,7 @@ use crate::error::Error;
 use crate::live::link::{Link as LinkArgs, ParityParser};
 use crate::live::session::SettingsArgs;
 use crate::maps::MapsDir;
-use drivemap_runtime::profile::Parity;
+use drivemap_runtime::core::profile::Parity;
 
 /// Arguments of `drivemap bridge`.
 #[derive(ClapArgs, Debug)]

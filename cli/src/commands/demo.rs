@@ -14,7 +14,7 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use clap::Args as ClapArgs;
-use drivemap_runtime::roles::Role;
+use drivemap_runtime::core::roles::Role;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::ascii_over_tcp::AsciiOverTcpTransport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
@@ -285,13 +285,13 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
     };
     let (kind, framing, words) = if ascii {
         (
-            drivemap_runtime::profile::TransportKind::AsciiOverTcp,
+            drivemap_runtime::core::profile::TransportKind::AsciiOverTcp,
             TcpFraming::AsciiOverTcp,
             "Modbus ASCII frames over TCP",
         )
     } else {
         (
-            drivemap_runtime::profile::TransportKind::RtuOverTcp,
+            drivemap_runtime::core::profile::TransportKind::RtuOverTcp,
             TcpFraming::RtuOverTcp,
             "RTU frames over TCP",
         )

@@ -12,7 +12,7 @@ use drivemap_bridge::points::export::{self, Export};
 use drivemap_bridge::points::{home_assistant, node_red, telegraf};
 use drivemap_live::link::{Link, ParityParser};
 use drivemap_live::session::{SettingsArgs, find_all};
-use drivemap_runtime::profile::Parity;
+use drivemap_runtime::core::profile::Parity;
 
 /// What to write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -9,7 +9,7 @@
 //! bits set; the scale selectors and references read first; and what it could not check.
 //! Exit status: 0 when everything read agrees, 1 when anything disagrees, 2 on an error.
 
-use drivemap_runtime::plan::Conversion;
+use drivemap_runtime::core::plan::Conversion;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -18,7 +18,7 @@ use clap::Args as ClapArgs;
 use drivemap_live::codec;
 use drivemap_map::Map;
 use drivemap_map::RegisterRef;
-use drivemap_runtime::ValueError;
+use drivemap_runtime::core::scale::ValueError;
 use serde::Serialize;
 
 use crate::error::Error;
@@ -141,8 +141,8 @@ pub(crate) fn run_probe(drive: &Map, target: &Target) -> Result<Report, Error> {
         drive,
         &target.link,
         &[
-            drivemap_runtime::core::ProtocolFact::Serial,
-            drivemap_runtime::core::ProtocolFact::MaxRead,
+            drivemap_runtime::core::stated::ProtocolFact::Serial,
+            drivemap_runtime::core::stated::ProtocolFact::MaxRead,
         ],
     );
     let mut session = Session::open(drive, &target.link, given.settings)?;

@@ -38,8 +38,8 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         &drive,
         &args.target.link,
         &[
-            drivemap_runtime::core::ProtocolFact::Serial,
-            drivemap_runtime::core::ProtocolFact::MaxRead,
+            drivemap_runtime::core::stated::ProtocolFact::Serial,
+            drivemap_runtime::core::stated::ProtocolFact::MaxRead,
         ],
     );
     let mut session = Session::open(&drive, &args.target.link, given.settings)?;

@@ -16,8 +16,9 @@ use clap::{ArgGroup, Args as ClapArgs};
 use drivemap_live::LiveSettings;
 use drivemap_map::Map;
 use drivemap_map::RegisterRef;
+use drivemap_runtime::Error;
+use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::transport::serial::char_times;
-use drivemap_runtime::{Error, Profile};
 
 use crate::error::Error as CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -28,7 +29,7 @@ use crate::live::output::Format;
 use crate::maps::MapsDir;
 use drivemap_live::link::{Link, ParityParser};
 use drivemap_live::session::{Session, on_transport};
-use drivemap_runtime::profile::Parity;
+use drivemap_runtime::core::profile::Parity;
 
 /// Monitor registers read per candidate map when identifying a slave.
 const MAX_IDENTIFY_REGISTERS: usize = 48;
@@ -291,7 +292,7 @@ fn probe_address(drives: &[Map], base: &Link) -> u16 {
         let profile = drivemap_live::leak_profile(d);
         let mut seen = std::collections::BTreeSet::new();
         for r in readable_monitors(d, kind, usize::MAX) {
-            if r.plan().info.table != drivemap_runtime::Table::Holding {
+            if r.plan().info.table != drivemap_runtime::core::register::Table::Holding {
                 continue;
             }
             let a = drivemap_live::session::address_of(d, r, &settings, kind);
@@ -313,7 +314,7 @@ fn probe_address(drives: &[Map], base: &Link) -> u16 {
 /// Read-only registers this link can read, at most `max`.
 fn readable_monitors(
     d: &Map,
-    kind: drivemap_runtime::profile::TransportKind,
+    kind: drivemap_runtime::core::profile::TransportKind,
     max: usize,
 ) -> Vec<RegisterRef<'_>> {
     d.registers()
@@ -414,8 +415,8 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
             d,
             &base,
             &[
-                drivemap_runtime::core::ProtocolFact::SlaveAddress,
-                drivemap_runtime::core::ProtocolFact::Serial,
+                drivemap_runtime::core::stated::ProtocolFact::SlaveAddress,
+                drivemap_runtime::core::stated::ProtocolFact::Serial,
             ],
             Some(&args.slaves.0),
         ) {

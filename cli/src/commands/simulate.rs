@@ -15,7 +15,7 @@ use clap::{ArgGroup, Args as ClapArgs};
 use drivemap_live::link::{ParityParser, port_parity};
 use drivemap_map::Map;
 use drivemap_runtime::bus_time::SerialConfig;
-use drivemap_runtime::profile::Parity;
+use drivemap_runtime::core::profile::Parity;
 use drivemap_runtime::transport::serial::{SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
@@ -169,8 +169,8 @@ pub(crate) fn options(
                 Ok(r)
                     if matches!(
                         r.plan().conversion,
-                        drivemap_runtime::plan::Conversion::Enum { .. }
-                            | drivemap_runtime::plan::Conversion::Bits { .. }
+                        drivemap_runtime::core::plan::Conversion::Enum { .. }
+                            | drivemap_runtime::core::plan::Conversion::Bits { .. }
                     ) =>
                 {
                     drivemap_live::codec::parse_value(
@@ -224,7 +224,8 @@ fn restored_values(drive: &Map, file: &str, line: bool) -> Result<Vec<(String, f
             .parse::<f64>()
             .ok()
             .or_else(|| {
-                drivemap_runtime::ratio::Fraction::parse(text).map(|f| f.num as f64 / f.den as f64)
+                drivemap_runtime::core::ratio::Fraction::parse(text)
+                    .map(|f| f.num as f64 / f.den as f64)
             })
             .ok_or_else(|| {
                 Error::Refused(format!(
@@ -325,11 +326,11 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
         ));
     }
     let kind = if args.tcp.is_some() {
-        drivemap_runtime::profile::TransportKind::Tcp
+        drivemap_runtime::core::profile::TransportKind::Tcp
     } else if args.ascii {
-        drivemap_runtime::profile::TransportKind::Ascii
+        drivemap_runtime::core::profile::TransportKind::Ascii
     } else {
-        drivemap_runtime::profile::TransportKind::Rtu
+        drivemap_runtime::core::profile::TransportKind::Rtu
     };
     let mut data_bits = args.data_bits;
     let mut line = Line::new();

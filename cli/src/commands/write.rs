@@ -1,6 +1,6 @@
 //! `drivemap write --drive <id> <register>=<value>... (--tcp | --rtu-tcp | --serial) ...`
 
-use drivemap_runtime::plan::Conversion;
+use drivemap_runtime::core::plan::Conversion;
 use std::process::ExitCode;
 
 use clap::Args as ClapArgs;
@@ -8,10 +8,12 @@ use drivemap_live::codec::{self, InputError};
 use drivemap_live::intern::intern;
 use drivemap_map::Map;
 use drivemap_map::RegisterRef;
+use drivemap_runtime::Refusal;
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::roles::{RoleKind, Target as Place};
+use drivemap_runtime::core::scale::{Rounding, ValueError};
 use drivemap_runtime::gate;
-use drivemap_runtime::roles::{RoleKind, Target as Place};
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Profile, Refusal, Rounding, ValueError};
 
 use crate::error::Error;
 use crate::live::Target;
@@ -59,7 +61,7 @@ pub(crate) fn dependants(
         }
         let all = drive.plan();
         let bounds = match x.plan().limit_dependency() {
-            Some(drivemap_runtime::plan::Dependency::Quantity(s)) => matches!(
+            Some(drivemap_runtime::core::plan::Dependency::Quantity(s)) => matches!(
                 all.settings.quantities.get(usize::from(s.slot)),
                 Some(drivemap_map::Quantity::Register(row))
                     if all.registers[*row].info.id == r.id()
@@ -319,8 +321,8 @@ pub(crate) fn execute(
         drive,
         &args.target.link,
         &[
-            drivemap_runtime::core::ProtocolFact::Serial,
-            drivemap_runtime::core::ProtocolFact::MaxWrite,
+            drivemap_runtime::core::stated::ProtocolFact::Serial,
+            drivemap_runtime::core::stated::ProtocolFact::MaxWrite,
         ],
     );
     let mut session = Session::open_as(
@@ -365,7 +367,7 @@ pub(crate) fn execute(
                 plan.registers,
                 plan.roles,
             );
-            if vfd.supports(drivemap_runtime::roles::Role::Running) {
+            if vfd.supports(drivemap_runtime::core::roles::Role::Running) {
                 vfd.status().ok().and_then(|s| s.running)
             } else {
                 None

@@ -171,10 +171,10 @@ impl Reading {
 pub(crate) fn pdu_address(
     drive: &Map,
     address: u16,
-    kind: drivemap_runtime::profile::TransportKind,
+    kind: drivemap_runtime::core::profile::TransportKind,
 ) -> Option<u16> {
     let (rtu, tcp) = drive.address_offsets();
-    drivemap_runtime::profile::AddressOffsets { rtu, tcp }.pdu_address(address, kind)
+    drivemap_runtime::core::profile::AddressOffsets { rtu, tcp }.pdu_address(address, kind)
 }
 
 /// An address in the notation of the drive's manual: `0024h`, or the plain number in a manual

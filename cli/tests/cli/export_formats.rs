@@ -20,7 +20,7 @@ use std::process::Command;
 use std::time::Duration;
 
 use drivemap_runtime::Client;
-use drivemap_runtime::Profile;
+use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use serde_json::Value;
 

@@ -10,7 +10,7 @@ use drivemap_test_support::hostile_peer;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::core::profile::{Profile, TransportKind};
 
 use hostile_peer::{HostilePeer, Script};
 

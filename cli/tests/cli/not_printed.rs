@@ -160,7 +160,7 @@ fn export_writes_the_unknowns_and_its_schema_names_every_fact() {
     .unwrap();
     let keys =
         &schema["properties"]["protocol"]["properties"]["not_printed"]["propertyNames"]["enum"];
-    let want: Vec<&str> = drivemap_runtime::core::ProtocolFact::ALL
+    let want: Vec<&str> = drivemap_runtime::core::stated::ProtocolFact::ALL
         .iter()
         .map(|f| f.key())
         .collect();

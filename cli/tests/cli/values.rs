@@ -277,7 +277,7 @@ fn a_value_between_steps_is_refused_unless_rounded() {
 fn the_interpreted_codec_refuses_between_steps() {
     use drivemap_live::LiveSettings;
     use drivemap_live::codec;
-    use drivemap_runtime::{Rounding, ValueError};
+    use drivemap_runtime::core::scale::{Rounding, ValueError};
     let path = repo().join("maps/yaskawa-v7.yaml");
     let drive = drivemap_map::Loader::new().load(&path).unwrap();
     let r = drivemap_live::lookup::find(&drive, "tcp_frequency_reference").unwrap();

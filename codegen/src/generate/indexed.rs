@@ -11,9 +11,9 @@ use drivemap_map::MapPlan;
 
 fn access(a: Access, rt: &TokenStream) -> TokenStream {
     match a {
-        Access::Read => quote!(#rt::core::register::Access::Read),
-        Access::Write => quote!(#rt::core::register::Access::Write),
-        Access::ReadWrite => quote!(#rt::core::register::Access::ReadWrite),
+        Access::Read => quote!(#rt::register::Access::Read),
+        Access::Write => quote!(#rt::register::Access::Write),
+        Access::ReadWrite => quote!(#rt::register::Access::ReadWrite),
     }
 }
 
@@ -43,32 +43,32 @@ fn entry(e: &Entry, rt: &TokenStream) -> TokenStream {
     let functions = if f.restricted() {
         let codes = f.codes.iter().map(|c| Literal::u8_unsuffixed(*c));
         let (refused, fsource) = (Literal::u8_unsuffixed(f.refused_with), f.source);
-        quote!(#rt::core::functions::Functions::only(&[#(#codes),*], #refused, #fsource))
+        quote!(#rt::functions::Functions::only(&[#(#codes),*], #refused, #fsource))
     } else {
-        quote!(#rt::core::functions::Functions::ANY)
+        quote!(#rt::functions::Functions::ANY)
     };
     quote! {
-        #rt::core::indexed::Entry {
+        #rt::indexed::Entry {
             id: #id,
             name: #name,
             index: #index,
             unit: #unit,
             signed: #signed,
-            scale: #rt::core::scale::Decimal { mantissa: #mantissa, exponent: #exponent },
-            range: #rt::core::scale::RawRange { min: #min, max: #max },
+            scale: #rt::scale::Decimal { mantissa: #mantissa, exponent: #exponent },
+            range: #rt::scale::RawRange { min: #min, max: #max },
             access: #acc,
-            rule: #rt::core::rule::WriteRule {
+            rule: #rt::rule::WriteRule {
                 register: #id,
                 access: #acc,
-                broadcast: #rt::core::rule::Broadcast::No,
-                transports: #rt::core::rule::Transports { rtu: #rtu, tcp: #tcp },
+                broadcast: #rt::rule::Broadcast::No,
+                transports: #rt::rule::Transports { rtu: #rtu, tcp: #tcp },
                 address: #address,
                 also_at: &[],
-                raw: #rt::core::scale::RawRange { min: #min, max: #max },
+                raw: #rt::scale::RawRange { min: #min, max: #max },
                 reserved: 0,
-                width: #rt::core::width::Width::Word,
+                width: #rt::width::Width::Word,
                 functions: #functions,
-                table: #rt::core::register::Table::Holding,
+                table: #rt::register::Table::Holding,
             },
             source: #source,
         }
@@ -86,10 +86,10 @@ pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
         let (value_address, index_address) =
             (super::hex(p.value_address), super::hex(p.index_address));
         let table = match p.table {
-            Table::Holding => quote!(#rt::core::register::Table::Holding),
-            Table::Input => quote!(#rt::core::register::Table::Input),
-            Table::Coil => quote!(#rt::core::register::Table::Coil),
-            Table::DiscreteInput => quote!(#rt::core::register::Table::DiscreteInput),
+            Table::Holding => quote!(#rt::register::Table::Holding),
+            Table::Input => quote!(#rt::register::Table::Input),
+            Table::Coil => quote!(#rt::register::Table::Coil),
+            Table::DiscreteInput => quote!(#rt::register::Table::DiscreteInput),
         };
         let readable = p.index_readable;
         let (min, max) = (
@@ -98,14 +98,14 @@ pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
         );
         let unknown = opt_str(p.unknown);
         quote! {
-            #rt::core::indexed::Indexed {
+            #rt::indexed::Indexed {
                 register: #register,
                 value_address: #value_address,
                 table: #table,
                 index_register: #index_register,
                 index_address: #index_address,
                 index_readable: #readable,
-                index_range: #rt::core::scale::RawRange { min: #min, max: #max },
+                index_range: #rt::scale::RawRange { min: #min, max: #max },
                 entries: &[#(#entries),*],
                 unknown: #unknown,
                 source: #source,
@@ -133,7 +133,7 @@ pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
             let (i, k) = (Literal::usize_unsuffixed(i), Literal::usize_unsuffixed(k));
             quote! {
                 #[doc = #doc]
-                pub const #name: #rt::core::indexed::EntryRef = #rt::core::indexed::EntryRef {
+                pub const #name: #rt::indexed::EntryRef = #rt::indexed::EntryRef {
                     pair: &super::INDEXED[#i],
                     entry: &super::INDEXED[#i].entries[#k],
                 };
@@ -144,7 +144,7 @@ pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
         /// Index/value register pairs (`indexed:` in the map): each value register shows the
         /// entry whose index is written to its index register. The clients' `read_entry` and
         /// `write_entry` take an entry's handle from [`entries`].
-        pub const INDEXED: &[#rt::core::indexed::Indexed] = &[#(#pairs),*];
+        pub const INDEXED: &[#rt::indexed::Indexed] = &[#(#pairs),*];
 
         /// A typed handle for each entry of an indexed register the manual lists.
         pub mod entries {

@@ -5,8 +5,8 @@
 use proc_macro2::{Ident, Literal, TokenStream};
 use quote::{format_ident, quote};
 
-use drivemap_core::Access;
 use drivemap_core::plan::Conversion;
+use drivemap_core::register::Access;
 use drivemap_map::{Map, MapPlan};
 
 mod bitfields;
@@ -67,7 +67,10 @@ pub fn drive_module(drive: &Map, options: &Options) -> Result<String, Unparsable
         drive: drive.id().to_owned(),
         source,
     })?;
-    let body = bit_fields(&space_items(&prettyplease::unparse(&file)), drive);
+    let body = bit_fields(
+        &writes_static(&space_items(&prettyplease::unparse(&file))),
+        drive,
+    );
     // Printed as text (one row per register); not parsed back here, which took longer than
     // printing it (0.7 s of the build script's 2.7 s in a release build): the compile of the
     // generated crate, and the snapshot test of the fixture module, check it.
@@ -101,6 +104,18 @@ fn bit_fields(code: &str, drive: &Map) -> String {
         }
     }
     out
+}
+
+/// The profile's write table as rustfmt lays it out, broken after `=`: prettyplease keeps the
+/// type and the call on one line, longer than [`LINE_WIDTH`].
+fn writes_static(code: &str) -> String {
+    const DECLARATION: &str =
+        "static WRITES: [rt::rule::WriteRule; rt::plan::writable_count(plan::REGISTERS)] =";
+    code.replacen(
+        &format!("{DECLARATION} rt::plan::write_rules(\n    plan::REGISTERS,\n);\n"),
+        &format!("{DECLARATION}\n    rt::plan::write_rules(plan::REGISTERS);\n"),
+        1,
+    )
 }
 
 /// prettyplease prints top-level items back to back; a blank line between them reads better.
@@ -144,7 +159,7 @@ fn drive_tokens(drive: &Map, plan: &MapPlan, options: &Options) -> TokenStream {
     {
         used.push(ident("WriteOnly"));
     }
-    let markers = quote!(use rt::{#(#used),*};);
+    let markers = quote!(use rt::register::{#(#used),*};);
     let profile = profile::emit(plan, rt);
     let settings = settings::emit(drive, plan, rt);
     let registers = registers::emit(drive, plan, rt);
@@ -152,7 +167,7 @@ fn drive_tokens(drive: &Map, plan: &MapPlan, options: &Options) -> TokenStream {
     let examples = examples::emit(drive);
     quote! {
 
-        use #runtime as rt;
+        use #runtime::core as rt;
         #markers
 
         #profile

@@ -67,6 +67,7 @@ pub(super) fn module(plan: &MapPlan) -> String {
          pub mod plan {\n",
     );
     for (path, names) in [
+        ("rt::functions", &["Functions"][..]),
         (
             "rt::plan",
             &[
@@ -78,6 +79,7 @@ pub(super) fn module(plan: &MapPlan) -> String {
                 "Label",
                 "Move",
                 "Ranges",
+                "RegisterPlan",
                 "Relative",
                 "RelativeLimit",
                 "RepeatNeedsChange",
@@ -86,7 +88,10 @@ pub(super) fn module(plan: &MapPlan) -> String {
             ][..],
         ),
         ("rt::ratio", &["Ratio"][..]),
-        ("rt::scale", &["Decimal", "RawRange"][..]),
+        (
+            "rt::register",
+            &["Access", "RegisterInfo", "Table", "WriteRestriction"][..],
+        ),
         (
             "rt::roles",
             &[
@@ -98,28 +103,16 @@ pub(super) fn module(plan: &MapPlan) -> String {
                 "Target",
             ][..],
         ),
-        (
-            "rt",
-            &[
-                "Access",
-                "Broadcast",
-                "Functions",
-                "RegisterInfo",
-                "RegisterPlan",
-                "Table",
-                "Transports",
-                "Width",
-                "WordOrder",
-                "WriteRestriction",
-            ][..],
-        ),
+        ("rt::rule", &["Broadcast", "Transports"][..]),
+        ("rt::scale", &["Decimal", "RawRange"][..]),
+        ("rt::width", &["Width", "WordOrder"][..]),
     ] {
         let names = used(names);
         if !names.is_empty() {
             let _ = writeln!(out, "    use super::{path}::{names};");
         }
     }
-    out.push_str("\n    /// Every register's plan.\n    pub const REGISTERS: &[super::rt::RegisterPlan] = &[\n");
+    out.push_str("\n    /// Every register's plan.\n    pub const REGISTERS: &[super::rt::plan::RegisterPlan] = &[\n");
     out.push_str(&rows);
     out.push_str("    ];\n");
     out.push_str(&roles);
@@ -193,11 +186,13 @@ fn roles(plan: &MapPlan) -> String {
         "\n    /// Which registers and fields play the standard parts of a drive (the map's `roles`).\n",
     );
     if plan.roles.is_empty() {
-        out.push_str("    pub const ROLES: super::rt::Roles = super::rt::Roles::NONE;\n");
+        out.push_str(
+            "    pub const ROLES: super::rt::roles::Roles = super::rt::roles::Roles::NONE;\n",
+        );
         return out;
     }
     out.push_str(
-        "    pub const ROLES: super::rt::Roles = super::rt::Roles {\n        places: &[\n",
+        "    pub const ROLES: super::rt::roles::Roles = super::rt::roles::Roles {\n        places: &[\n",
     );
     for p in plan.roles.places {
         let target = match p.target {
@@ -264,7 +259,7 @@ fn command_profile(plan: &MapPlan) -> String {
     let Some(p) = plan.roles.profile else {
         return "        profile: None,\n".into();
     };
-    let cp = "super::rt::core::command_profile";
+    let cp = "super::rt::command_profile";
     let id = |row: u16| plan.registers[usize::from(row)].info.id;
     let mut out = format!(
         "        profile: Some(&{cp}::CommandProfile {{\n            name: {},\n            /* {} */ control: {},\n            /* {} */ status: {},\n            states: &[\n",

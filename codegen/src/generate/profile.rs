@@ -97,11 +97,11 @@ pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
             Some(s) => quote!(Some(#s)),
             None => quote!(None),
         };
-        quote!(#rt::profile::NotPrinted { fact: #rt::profile::ProtocolFact::#fact, why: #why, source: #source })
+        quote!(#rt::stated::NotPrinted { fact: #rt::stated::ProtocolFact::#fact, why: #why, source: #source })
     });
     quote! {
         /// The protocol profile: what the drive accepts on the wire, per its manual.
-        pub static PROFILE: #rt::Profile = #rt::Profile {
+        pub static PROFILE: #rt::profile::Profile = #rt::profile::Profile {
             drive_id: #id,
             function_codes: &[#(#fcs),*],
             max_read: #max_read,
@@ -134,7 +134,7 @@ pub(super) fn emit(plan: &MapPlan, rt: &TokenStream) -> TokenStream {
         };
 
         /// The write rule of every writable register, derived from the plan in order.
-        static WRITES: [#rt::WriteRule; #rt::plan::writable_count(plan::REGISTERS)] =
+        static WRITES: [#rt::rule::WriteRule; #rt::plan::writable_count(plan::REGISTERS)] =
             #rt::plan::write_rules(plan::REGISTERS);
     }
 }

@@ -7,8 +7,8 @@ use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 
 use super::{bitfields, docs, enums, ident};
-use drivemap_core::Access;
-use drivemap_core::plan::Conversion;
+use drivemap_core::plan::ValueShape;
+use drivemap_core::register::Access;
 use drivemap_map::{Map, MapPlan, RegisterRef};
 
 pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream {
@@ -18,19 +18,19 @@ pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream
         .map(|(r, &index)| register(r, index, rt));
     quote! {
         /// This drive: its settings and the plan of its registers, for the generic register
-        /// type [`rt::Reg`].
+        /// type [`rt::register::Reg`].
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
         pub struct Drive;
 
-        impl #rt::DrivePlan for Drive {
+        impl #rt::register::DrivePlan for Drive {
             type Settings = Settings;
-            const REGISTERS: &'static [#rt::RegisterPlan] = plan::REGISTERS;
-            const PROFILE: &'static #rt::Profile = &PROFILE;
-            const ROLES: #rt::Roles = plan::ROLES;
+            const REGISTERS: &'static [#rt::plan::RegisterPlan] = plan::REGISTERS;
+            const PROFILE: &'static #rt::profile::Profile = &PROFILE;
+            const ROLES: #rt::roles::Roles = plan::ROLES;
         }
 
         /// Every register of the map, by address (broadcast-only registers last).
-        pub static REGISTERS: &[#rt::RegisterPlan] = plan::REGISTERS;
+        pub static REGISTERS: &[#rt::plan::RegisterPlan] = plan::REGISTERS;
 
         #(#items)*
     }
@@ -44,18 +44,15 @@ fn value(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> (TokenStream, To
         // A coil or discrete input: on or off.
         return (quote!(bool), quote!());
     }
-    match plan.conversion {
-        Conversion::Word { signed, .. } => match (plan.info.width.count() == 2, signed) {
+    match plan.conversion.shape() {
+        ValueShape::Word { signed } => match (plan.info.width.count() == 2, signed) {
             (false, true) => (quote!(i16), quote!()),
             (false, false) => (quote!(u16), quote!()),
             (true, true) => (quote!(i32), quote!()),
             (true, false) => (quote!(u32), quote!()),
         },
-        Conversion::Decimal { .. }
-        | Conversion::Relative { .. }
-        | Conversion::Ratio { .. }
-        | Conversion::Selected { .. } => (quote!(f64), quote!()),
-        Conversion::Enum { .. } => {
+        ValueShape::Number => (quote!(f64), quote!()),
+        ValueShape::Codes(_) => {
             let ty = ident(&r.value_enum_name());
             let what = match r.param() {
                 Some(p) => format!("{p} {}", r.name()),
@@ -65,7 +62,7 @@ fn value(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> (TokenStream, To
             let extra = enums::emit(&ty, r.values(), &what, labels, rt);
             (quote!(#ty), extra)
         }
-        Conversion::Bits { .. } => {
+        ValueShape::Bits { .. } => {
             let ty = ident(&r.bits_type_name());
             (quote!(#ty), bitfields::emit(r, index, rt))
         }
@@ -95,7 +92,7 @@ fn register(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> TokenStream {
         };
         let labels = quote!(plan::REGISTERS[#row].read_values);
         let read = enums::emit(&ty, r.read_values(), &what, labels, rt);
-        access = quote!(#rt::ReadWriteAs<#value>);
+        access = quote!(#rt::register::ReadWriteAs<#value>);
         value = quote!(#ty);
         extra = quote!(#extra #read);
     }

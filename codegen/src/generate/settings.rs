@@ -99,7 +99,7 @@ pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream
             }
         }
 
-        impl #rt::DriveSettings for Settings {
+        impl #rt::register::DriveSettings for Settings {
             const DEPENDENCIES: &'static [u16] = &[#(#deps),*];
 
             fn absorb(&mut self, address: u16, raw: u16) -> bool {
@@ -109,7 +109,7 @@ pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream
             #set_external
         }
 
-        impl #rt::SettingsView for Settings {
+        impl #rt::plan::SettingsView for Settings {
             #code
             #quantity
             #variant
@@ -197,11 +197,11 @@ fn code_slot(
             parts.fields.push(quote!(#doc pub #field: Option<#ty>,));
             parts.absorb.push((
                 addr,
-                quote!(self.#field = Some(<#ty as #rt::Code>::from_code(raw))),
+                quote!(self.#field = Some(<#ty as #rt::register::Code>::from_code(raw))),
             ));
             parts
                 .code
-                .push(quote!(#slot => self.#field.map(|v| #rt::Code::code(&v)),));
+                .push(quote!(#slot => self.#field.map(|v| #rt::register::Code::code(&v)),));
         }
         _ => {
             parts.fields.push(quote!(#doc pub #field: Option<u16>,));
@@ -230,7 +230,7 @@ fn quantity_slot(
             if selector_fields.iter().any(|s| s == reference.id()) {
                 // Also a selector: its code is the quantity.
                 parts.quantity.push(
-                    quote!(#slot_lit => #rt::SettingsView::code(self, #slot_lit).map(f64::from),),
+                    quote!(#slot_lit => #rt::plan::SettingsView::code(self, #slot_lit).map(f64::from),),
                 );
                 return;
             }

@@ -3,10 +3,11 @@
 
 use std::collections::HashSet;
 
-use drivemap_core::plan::{Conversion, Label, Ranges, writable_count, write_rules};
+use drivemap_core::plan::{Conversion, Label, Ranges, RegisterPlan, writable_count, write_rules};
 use drivemap_core::register::{Access, Code, Enumeration, RegisterInfo, Table};
+use drivemap_core::rule::WriteRule;
 use drivemap_core::scale::RawRange;
-use drivemap_core::{RegisterPlan, Width, WriteRule};
+use drivemap_core::width::Width;
 
 /// An enumeration as the generator prints one.
 #[derive(Debug, Clone, Copy)]

@@ -16,7 +16,7 @@ use std::time::Duration;
 
 use drivemap_drives::yaskawa_v7 as v7;
 use drivemap_runtime::async_client::{AsyncClient, AsyncTcpTransport};
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::vfd::{AsyncVariableFrequencyDrive, AsyncVfd};
 
 const USAGE: &str = "usage: async-poll HOST:PORT [SLAVE] [HZ] [POLLS]";

@@ -2,7 +2,7 @@
 
 use std::process::Command;
 
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_sim::server::{TcpFraming, TcpServer};
 use drivemap_sim::{SimOptions, Simulator};
 

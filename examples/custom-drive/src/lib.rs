@@ -4,7 +4,7 @@
 //!
 //! ```
 //! use custom_drive::mini_drive as md;
-//! use drivemap_runtime::{Register, Writable};
+//! use drivemap_runtime::core::register::{Register, Writable};
 //!
 //! let settings = md::Settings { frequency_units: Some(md::FrequencyUnitsValue::HundredthHz), ..Default::default() };
 //! assert_eq!(md::FrequencyReference::encode(&50.0, &settings), Ok(5000));

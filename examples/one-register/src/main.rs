@@ -11,7 +11,7 @@ mod generated {
     include!(concat!(env!("OUT_DIR"), "/drivemap.rs"));
 }
 
-use drivemap_runtime::Register;
+use drivemap_runtime::core::register::Register;
 use generated::yaskawa_v7 as v7;
 
 fn main() {

@@ -2,8 +2,8 @@
 //! defaults.
 
 use drivemap_map::Map;
-use drivemap_runtime::plan::Conversion;
-use drivemap_runtime::ratio::Fraction;
+use drivemap_runtime::core::plan::Conversion;
+use drivemap_runtime::core::ratio::Fraction;
 
 use super::file::{FORMAT, ParameterSet, SavedSetting, UnreadSetting};
 use super::{by_id, fingerprint, settings_of};

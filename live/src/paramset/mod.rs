@@ -26,8 +26,8 @@ use std::collections::BTreeSet;
 use drivemap_map::Map;
 use drivemap_map::Quantity;
 use drivemap_map::RegisterRef;
-use drivemap_runtime::plan::Dependency;
-use drivemap_runtime::roles::RoleKind;
+use drivemap_runtime::core::plan::Dependency;
+use drivemap_runtime::core::roles::RoleKind;
 
 pub use compare::{Compared, Difference, Side, compare};
 pub use file::{FORMAT, FileError, MAX_FILE, ParameterSet, SavedSetting, UnreadSetting};
@@ -46,7 +46,7 @@ pub fn settings_of(drive: &Map) -> Vec<RegisterRef<'_>> {
     let mut commands: BTreeSet<usize> = BTreeSet::new();
     for place in plan.roles.places {
         let command = matches!(place.role.kind(), RoleKind::Command)
-            || place.role == drivemap_runtime::roles::Role::FrequencyReference;
+            || place.role == drivemap_runtime::core::roles::Role::FrequencyReference;
         if command
             && let Some(row) = place.target.row()
             && let Some(r) = drive.register_of_row(usize::from(row))

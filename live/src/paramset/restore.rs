@@ -7,12 +7,12 @@ use std::collections::BTreeSet;
 use drivemap_map::Map;
 use drivemap_map::Quantity;
 use drivemap_map::RegisterRef;
-use drivemap_runtime::ValueError;
+use drivemap_runtime::core::plan::Conversion;
+use drivemap_runtime::core::profile::{CommandInfo, CommandKind};
+use drivemap_runtime::core::register::WriteRestriction;
+use drivemap_runtime::core::roles::{Role, Target};
+use drivemap_runtime::core::scale::ValueError;
 use drivemap_runtime::gate::{self, WriteTarget};
-use drivemap_runtime::plan::Conversion;
-use drivemap_runtime::profile::{CommandInfo, CommandKind};
-use drivemap_runtime::register::WriteRestriction;
-use drivemap_runtime::roles::{Role, Target};
 
 use super::file::ParameterSet;
 use super::save::read_all;

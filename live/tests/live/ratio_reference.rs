@@ -4,7 +4,7 @@
 
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::Value;
-use drivemap_runtime::ValueError;
+use drivemap_runtime::core::scale::ValueError;
 
 fn drive() -> drivemap_map::Map {
     let text = std::fs::read_to_string("../tests/fixtures/borealis-bf6/borealis-bf6.yaml").unwrap();

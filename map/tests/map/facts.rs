@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use drivemap_core::ConversionKind;
+use drivemap_core::kind::ConversionKind;
 use drivemap_map::facts::{self, FactKey, Figure, ProtocolKey, RegisterFacts};
 
 fn acme() -> drivemap_map::Map {

@@ -1,7 +1,7 @@
 //! Semantic diff of two maps (`drivemap diff`): compares the old and the new map and lists
 //! every change with its kind, both sides and the citation of each side. What the lowering pass
 //! decides about a register (access, table, transports, write restriction) is compared on the
-//! two [`drivemap_core::RegisterPlan`]s; what the manual prints (scales, limits, defaults, codes,
+//! two [`drivemap_core::plan::RegisterPlan`]s; what the manual prints (scales, limits, defaults, codes,
 //! fields, citations) on the validated IR. Both sides are written in the library's one wording
 //! ([`drivemap_map::describe`]), the wording of the rustdoc and of `drivemap doc`.
 //!

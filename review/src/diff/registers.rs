@@ -8,7 +8,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use drivemap_core::RegisterPlan;
+use drivemap_core::plan::RegisterPlan;
 use drivemap_core::register::{Access, WriteRestriction};
 use drivemap_map::ir::{Drive, Register, ValueKind};
 

@@ -131,8 +131,11 @@ enum Slot {
 ///
 /// ```
 /// use drivemap_runtime::planner::Poller;
-/// use drivemap_runtime::{Access, Client, Profile, RegisterInfo, Table, Width};
-/// # use drivemap_runtime::{profile::TransportKind, transport::Transport};
+/// use drivemap_runtime::Client;
+/// use drivemap_runtime::core::profile::Profile;
+/// use drivemap_runtime::core::register::{Access, RegisterInfo, Table};
+/// use drivemap_runtime::core::width::Width;
+/// # use drivemap_runtime::{core::profile::TransportKind, transport::Transport};
 /// use drivemap_sim::slave::SimulatedSlave; // a bare simulated drive (dev-dependency)
 /// # struct Link(SimulatedSlave, Vec<u8>);
 /// # impl Transport for Link {

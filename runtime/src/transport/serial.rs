@@ -236,11 +236,11 @@ impl SerialOptions {
 }
 
 /// The vocabulary crate's parity for the `serialport` crate's.
-pub(crate) fn bus_parity(parity: Parity) -> crate::bus_time::Parity {
+pub(crate) fn bus_parity(parity: Parity) -> drivemap_core::profile::Parity {
     match parity {
-        Parity::None => crate::bus_time::Parity::None,
-        Parity::Even => crate::bus_time::Parity::Even,
-        Parity::Odd => crate::bus_time::Parity::Odd,
+        Parity::None => drivemap_core::profile::Parity::None,
+        Parity::Even => drivemap_core::profile::Parity::Even,
+        Parity::Odd => drivemap_core::profile::Parity::Odd,
     }
 }
 
@@ -649,10 +649,11 @@ mod tests {
             .line(&p, Parity::None, None)
             .unwrap();
         assert_eq!(o.stop_bits, StopBits::Two);
-        let c = SerialConfig::for_profile(&p, 9600, crate::bus_time::Parity::None, None).unwrap();
+        let c = SerialConfig::for_profile(&p, 9600, drivemap_core::profile::Parity::None, None)
+            .unwrap();
         assert_eq!((c.stop_bits, c.bits_per_char()), (2, 11));
         assert!(matches!(
-            SerialConfig::for_profile(&p, 9600, crate::bus_time::Parity::Odd, None),
+            SerialConfig::for_profile(&p, 9600, drivemap_core::profile::Parity::Odd, None),
             Err(Refusal::SerialFormat(_))
         ));
     }

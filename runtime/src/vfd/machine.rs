@@ -5,11 +5,13 @@
 //! contract](super#safety-contract).
 
 use drivemap_core::command_profile::{CommandProfile, Path, PathKind, Transition};
+use drivemap_core::plan::SettingsView;
 use drivemap_core::plan::{Conversion, RegisterPlan};
 use drivemap_core::register::DriveSettings;
+use drivemap_core::roles::Roles;
 use drivemap_core::roles::{FieldRole, NumberField, Place, Role, RoleKind, Target};
 use drivemap_core::rule::Broadcast;
-use drivemap_core::{Roles, Rounding, SettingsView, ValueError};
+use drivemap_core::scale::{Rounding, ValueError};
 
 use super::{Direction, FaultCode, Memory, Status};
 use crate::client::Session;

@@ -7,9 +7,9 @@ use crate::common;
 use std::time::{Duration, Instant};
 
 use drivemap_runtime::async_client::{AsyncClient, AsyncStreamTransport, BlockingTransport};
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::pdu::FrameError;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::reply::Discard;
 use drivemap_runtime::{ascii, rtu, tcp};
 use drivemap_sim::fault::{Fault, FaultyLink};
@@ -218,15 +218,16 @@ fn inject_into(c: &mut AsyncClient<BlockingTransport<FaultyLink>>, fault: Fault)
 #[test]
 fn async_client_new_applies_the_profile_timing() {
     use drivemap_runtime::ClientOptions;
-    use drivemap_runtime::profile::Timing;
-    static TIMED: drivemap_runtime::Profile = drivemap_runtime::Profile {
-        timing: Timing {
-            request_gap_bits: Some(24),
-            request_gap_us: Some(10_000),
-            ..Timing::MODBUS
-        },
-        ..drivemap_runtime::Profile::GENERIC
-    };
+    use drivemap_runtime::core::profile::Timing;
+    static TIMED: drivemap_runtime::core::profile::Profile =
+        drivemap_runtime::core::profile::Profile {
+            timing: Timing {
+                request_gap_bits: Some(24),
+                request_gap_us: Some(10_000),
+                ..Timing::MODBUS
+            },
+            ..drivemap_runtime::core::profile::Profile::GENERIC
+        };
     let gap = Duration::from_micros(12_500); // 24 bits at 9600 baud + 10 ms
     for kind in [
         TransportKind::Rtu,
@@ -261,16 +262,18 @@ fn async_client_new_applies_the_profile_timing() {
 /// over RTU and Modbus TCP framing.
 #[test]
 fn async_client_reads_and_writes_coils() {
-    use drivemap_runtime::{Table, WriteRule};
+    use drivemap_runtime::core::profile::Profile;
+    use drivemap_runtime::core::register::Table;
+    use drivemap_runtime::core::rule::WriteRule;
     static WRITES: [WriteRule; 2] = [
         WriteRule::rw("run", 0x0010, 0, 1).in_table(Table::Coil),
         WriteRule::rw("jog", 0x0011, 0, 1).in_table(Table::Coil),
     ];
-    static COILS: drivemap_runtime::Profile = drivemap_runtime::Profile {
+    static COILS: Profile = Profile {
         function_codes: &[0x01, 0x02, 0x05, 0x0F],
         max_read_bits: 16,
         writes: &WRITES,
-        ..drivemap_runtime::Profile::GENERIC
+        ..Profile::GENERIC
     };
     runtime().block_on(async {
         for kind in [TransportKind::Rtu, TransportKind::Tcp] {

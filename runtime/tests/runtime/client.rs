@@ -5,12 +5,14 @@ use crate::common;
 
 use std::time::{Duration, Instant};
 
-use drivemap_runtime::WriteRule;
 use drivemap_runtime::client::{Client, ClientOptions};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::{
+    BitRegister, Bits, Code, Readable, Register, Table, Writable,
+};
+use drivemap_runtime::core::rule::WriteRule;
+use drivemap_runtime::core::scale::{self, Decimal, RawRange, ValueError};
 use drivemap_runtime::error::{Error, Refusal};
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::register::{BitRegister, Bits, Code, Readable, Register, Table, Writable};
-use drivemap_runtime::scale::{self, Decimal, RawRange, ValueError};
 use drivemap_sim::fault::{Fault, FaultyLink};
 use drivemap_sim::slave::SimulatedSlave;
 
@@ -487,15 +489,15 @@ fn busy_exception_from_the_profile() {
 
 /// A drive whose manual asks the master for 24 bit times + 10 ms after each reply (as the
 /// V7/J7's, `003_8bcf5d50afb8e230.txt:284`) and answers within 24 bits + 10 ms.
-static TIMED: drivemap_runtime::Profile = drivemap_runtime::Profile {
-    timing: drivemap_runtime::profile::Timing {
+static TIMED: drivemap_runtime::core::profile::Profile = drivemap_runtime::core::profile::Profile {
+    timing: drivemap_runtime::core::profile::Timing {
         request_gap_bits: Some(24),
         request_gap_us: Some(10_000),
         response_delay_bits: Some(24),
         response_delay_us: Some(10_000),
-        ..drivemap_runtime::profile::Timing::MODBUS
+        ..drivemap_runtime::core::profile::Timing::MODBUS
     },
-    ..drivemap_runtime::Profile::GENERIC
+    ..drivemap_runtime::core::profile::Profile::GENERIC
 };
 
 /// `Client::new(link, &PROFILE)`, the README's first example, keeps the drive's timing (issue

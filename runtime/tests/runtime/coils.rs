@@ -4,14 +4,17 @@
 //! 100 coils in the fewest requests the drive's `max_read_bits` allows and never puts two tables
 //! in one request.
 
+use drivemap_runtime::Client;
+use drivemap_runtime::core::profile::{BroadcastInfo, Profile};
+use drivemap_runtime::core::register::{Access, RegisterInfo, Table};
+use drivemap_runtime::core::rule::{Broadcast, WriteRule};
+use drivemap_runtime::core::width::Width;
 use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::pdu::{
     self, BitValues, FrameError, Request, RequestDecodeError, RequestError, Response,
     decode_request, decode_response,
 };
 use drivemap_runtime::planner::Poller;
-use drivemap_runtime::profile::{BroadcastInfo, Profile};
-use drivemap_runtime::{Access, Client, RegisterInfo, Table, Width, WriteRule};
 use drivemap_sim::slave::SimulatedSlave;
 use drivemap_test_support::instant_link::InstantLink;
 
@@ -24,8 +27,8 @@ static WRITES: [WriteRule; 100] = {
         all[i].address = i as u16;
         i += 1;
     }
-    all[0] = all[0].broadcast(drivemap_runtime::Broadcast::Also);
-    all[1] = all[1].broadcast(drivemap_runtime::Broadcast::Also);
+    all[0] = all[0].broadcast(Broadcast::Also);
+    all[1] = all[1].broadcast(Broadcast::Also);
     all
 };
 
@@ -246,7 +249,7 @@ fn the_gate_keeps_coils_and_registers_apart() {
     let rule = &WRITES[7];
     let e = drivemap_runtime::gate::check(
         &PROFILE,
-        drivemap_runtime::profile::TransportKind::Rtu,
+        drivemap_runtime::core::profile::TransportKind::Rtu,
         1,
         drivemap_runtime::gate::WriteTarget::Rule(rule),
         0x0007,

@@ -7,9 +7,9 @@ use std::thread;
 use std::time::Duration;
 
 use drivemap_runtime::client::{Client, ClientOptions};
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::error::Error;
 use drivemap_runtime::pdu::FrameError;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::reply::Discard;
 use drivemap_sim::fault::{Fault, FaultyLink};
 use drivemap_sim::slave::SimulatedSlave;

@@ -9,10 +9,11 @@
 use crate::common;
 
 use drivemap_runtime::client::Client;
+use drivemap_runtime::core::profile::{Profile, TransportKind};
+use drivemap_runtime::core::rule::{Broadcast, Transports, WriteRule};
+use drivemap_runtime::core::width::WordOrder;
 use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::gate::{self, WriteTarget};
-use drivemap_runtime::profile::{Profile, TransportKind};
-use drivemap_runtime::{Broadcast, Transports, WordOrder, WriteRule};
 use drivemap_sim::fault::FaultyLink;
 use drivemap_sim::slave::SimulatedSlave;
 
@@ -318,7 +319,7 @@ fn half_a_pair_and_a_pair_out_of_range_are_refused_before_sending() {
 #[test]
 fn a_broadcast_whose_rules_are_not_printed_is_never_sent() {
     static UNPRINTED: Profile = Profile {
-        broadcast: Some(drivemap_runtime::profile::BroadcastInfo::not_printed(
+        broadcast: Some(drivemap_runtime::core::profile::BroadcastInfo::not_printed(
             "slave 0 is named broadcast; no functions or registers printed",
         )),
         writes: &[FREQUENCY, N001],
@@ -370,7 +371,10 @@ fn a_broadcast_whose_rules_are_not_printed_is_never_sent() {
     assert_eq!(c.transport().slave.holding(0x0002), 6000);
     // Known rules: the same broadcast goes out.
     static PRINTED: Profile = Profile {
-        broadcast: Some(drivemap_runtime::profile::BroadcastInfo::new(&[0x06], &[])),
+        broadcast: Some(drivemap_runtime::core::profile::BroadcastInfo::new(
+            &[0x06],
+            &[],
+        )),
         ..UNPRINTED
     };
     assert!(

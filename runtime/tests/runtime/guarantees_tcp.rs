@@ -23,9 +23,9 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_runtime::client::{Client, ClientOptions};
+use drivemap_runtime::core::profile::{Profile, TransportKind};
 use drivemap_runtime::error::Error;
 use drivemap_runtime::pdu::{Response, Words, function};
-use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::reply::Discarded;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;

@@ -8,15 +8,15 @@ use crate::common;
 
 use std::time::Duration;
 
-use drivemap_runtime::Profile;
 use drivemap_runtime::async_client::{AsyncClient, BlockingTransport};
 use drivemap_runtime::client::ClientOptions;
 use drivemap_runtime::core::indexed::{Entry, EntryRef, Indexed};
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::register::{Access, Table};
+use drivemap_runtime::core::rule::WriteRule;
 use drivemap_runtime::core::scale::{Decimal, RawRange};
 use drivemap_runtime::error::Error;
-use drivemap_runtime::gate::WriteRule;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_sim::fault::{Fault, FaultyLink};
 use drivemap_sim::slave::SimulatedSlave;
 

@@ -12,8 +12,8 @@
 use std::time::{Duration, Instant};
 
 use drivemap_runtime::client::{Client, ClientOptions};
+use drivemap_runtime::core::profile::{Profile, TransportKind};
 use drivemap_runtime::error::Error;
-use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;

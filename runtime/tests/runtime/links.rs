@@ -8,7 +8,7 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_runtime::client::Client;
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::memory::MemoryTransport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
@@ -16,7 +16,7 @@ use drivemap_sim::slave::SimulatedSlave;
 
 use common::{ACN, V7, strict};
 
-fn drive(profile: &'static drivemap_runtime::Profile) -> SimulatedSlave {
+fn drive(profile: &'static drivemap_runtime::core::profile::Profile) -> SimulatedSlave {
     let mut slave = SimulatedSlave::new(1, profile);
     slave.set_holding(0x0020, 0x1770);
     slave.set_input(0x02FF, 0x0006);

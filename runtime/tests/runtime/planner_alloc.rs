@@ -4,9 +4,10 @@
 use drivemap_test_support::alloc_count::{self, Counting};
 use drivemap_test_support::instant_link::InstantLink;
 
+use drivemap_runtime::Client;
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::register::{Access, RegisterInfo, Table};
 use drivemap_runtime::planner::Poller;
-use drivemap_runtime::profile::Profile;
-use drivemap_runtime::{Access, Client, RegisterInfo, Table};
 use drivemap_sim::slave::SimulatedSlave;
 
 #[global_allocator]
@@ -29,7 +30,7 @@ static REGISTERS: &[RegisterInfo] = &{
         address: 0,
         access: Access::Read,
         table: Table::Holding,
-        width: drivemap_runtime::Width::Word,
+        width: drivemap_runtime::core::width::Width::Word,
         broadcast_only: false,
         source: "",
     }; 40];

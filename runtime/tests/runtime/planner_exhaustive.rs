@@ -11,9 +11,10 @@
 //!
 //! The cases come from a fixed-seed generator, so every run checks the same cases.
 
-use drivemap_runtime::bus_time::{BusModel, Parity, SerialConfig};
+use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::core::profile::Parity;
+use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::planner::{ReadableSet, plan_contiguous, plan_cost, plan_reads, plan_single};
-use drivemap_runtime::profile::Profile;
 use drivemap_test_support::rng::SplitMix;
 
 struct Case {

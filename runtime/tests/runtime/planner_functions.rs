@@ -2,12 +2,13 @@
 //! `RegisterPlan::functions`): a register that refuses its table's read function is never read,
 //! alone or bridged over, and holding (03h) and input (04h) registers never share a request.
 
-use drivemap_runtime::Functions;
-use drivemap_runtime::plan::{Conversion, Ranges, RegisterPlan};
+use drivemap_runtime::core::functions::Functions;
+use drivemap_runtime::core::plan::{Conversion, Ranges, RegisterPlan};
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::register::{Access, RegisterInfo, Table};
+use drivemap_runtime::core::scale::RawRange;
+use drivemap_runtime::core::width::Width;
 use drivemap_runtime::planner::{PlanError, Poller, Read, ReadableSet};
-use drivemap_runtime::profile::Profile;
-use drivemap_runtime::scale::RawRange;
-use drivemap_runtime::{Access, RegisterInfo, Table, Width};
 
 static PROFILE: Profile = Profile {
     drive_id: "test-drive",

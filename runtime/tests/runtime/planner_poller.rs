@@ -4,11 +4,13 @@
 use std::io;
 use std::time::Instant;
 
+use drivemap_runtime::Client;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::core::profile::{Profile, TransportKind};
+use drivemap_runtime::core::register::{Access, Readable, Register, RegisterInfo, Table};
+use drivemap_runtime::core::scale::ValueError;
 use drivemap_runtime::planner::{Learned, PlanError, PolledError, Poller, Read, wanted};
-use drivemap_runtime::profile::{Profile, TransportKind};
 use drivemap_runtime::transport::Transport;
-use drivemap_runtime::{Access, Client, Readable, Register, RegisterInfo, Table, ValueError};
 use drivemap_sim::slave::SimulatedSlave;
 
 /// A link to a simulated drive that answers each request as it is sent.
@@ -55,7 +57,7 @@ const fn info(address: u16, access: Access, table: Table) -> RegisterInfo {
         address,
         access,
         table,
-        width: drivemap_runtime::Width::Word,
+        width: drivemap_runtime::core::width::Width::Word,
         broadcast_only: false,
         source: "",
     }
@@ -301,13 +303,13 @@ fn typed_values_of_generated_registers() {
 static V7_LIKE: Profile = Profile {
     drive_id: "yaskawa-v7",
     max_read: 125,
-    timing: drivemap_runtime::profile::Timing {
+    timing: drivemap_runtime::core::profile::Timing {
         response_delay_bits: Some(24),
         response_delay_param: Some("n156"),
         response_delay_param_default_us: Some(10_000),
         request_gap_bits: Some(24),
         request_gap_us: Some(10_000),
-        ..drivemap_runtime::profile::Timing::MODBUS
+        ..drivemap_runtime::core::profile::Timing::MODBUS
     },
     ..Profile::GENERIC
 };
@@ -355,12 +357,16 @@ fn the_model_decides_whether_a_hole_is_bridged() {
 static PAIRS: &[RegisterInfo] = &[
     info(0x40, Access::Read, Table::Holding),
     RegisterInfo {
-        width: drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::HighFirst),
+        width: drivemap_runtime::core::width::Width::Pair(
+            drivemap_runtime::core::width::WordOrder::HighFirst,
+        ),
         ..info(0x41, Access::Read, Table::Holding)
     },
     info(0x43, Access::Read, Table::Holding),
     RegisterInfo {
-        width: drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::LowFirst),
+        width: drivemap_runtime::core::width::Width::Pair(
+            drivemap_runtime::core::width::WordOrder::LowFirst,
+        ),
         ..info(0x44, Access::Read, Table::Holding)
     },
 ];
@@ -422,8 +428,12 @@ fn a_pair_is_never_split_by_the_plan_and_reads_as_one_value() {
     );
     let mut c = pair_client(&TWO);
     p.poll(&mut c, 1);
-    let high_first = drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::HighFirst);
-    let low_first = drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::LowFirst);
+    let high_first = drivemap_runtime::core::width::Width::Pair(
+        drivemap_runtime::core::width::WordOrder::HighFirst,
+    );
+    let low_first = drivemap_runtime::core::width::Width::Pair(
+        drivemap_runtime::core::width::WordOrder::LowFirst,
+    );
     assert_eq!(p.raw(1, high_first).unwrap().unwrap(), 0x0141_0142);
     assert_eq!(p.raw(3, low_first).unwrap().unwrap(), 0x0145_0144);
     assert!(!split_a_pair(&c.transport().requests, 0x41));
@@ -456,7 +466,9 @@ fn splitting_a_refused_request_keeps_pairs_whole() {
     assert!(requests.len() > 1, "{requests:?}");
     assert!(!split_a_pair(requests, 0x41), "{requests:?}");
     assert!(!split_a_pair(requests, 0x44), "{requests:?}");
-    let high_first = drivemap_runtime::Width::Pair(drivemap_runtime::WordOrder::HighFirst);
+    let high_first = drivemap_runtime::core::width::Width::Pair(
+        drivemap_runtime::core::width::WordOrder::HighFirst,
+    );
     assert_eq!(p.raw(1, high_first).unwrap().unwrap(), 0x0141_0142);
     assert!(p.value(2).unwrap().is_err(), "0043h got its own error");
     // Next cycle: 0043h is read alone, the pairs still whole.

@@ -118,7 +118,7 @@ fn stale_bytes_on_the_line_are_flushed_before_the_request() {
 /// through the same, the same requests as over RTU.
 #[test]
 fn client_talks_ascii_at_seven_data_bits_over_a_pseudo_terminal_pair() {
-    use drivemap_runtime::profile::TransportKind;
+    use drivemap_runtime::core::profile::TransportKind;
     let ascii = |path: &str| options(path).ascii(7).expect("7 data bits");
     let pty = PtyPair::new();
     let mut drive_end = SerialTransport::open(ascii(&pty.paths[1])).expect("the drive's end");

@@ -5,8 +5,8 @@
 use drivemap_live::{LiveSettings, codec};
 use drivemap_map::RegisterRef;
 use drivemap_map::facts::UnknownItem;
-use drivemap_runtime::ValueError;
-use drivemap_runtime::plan::Conversion;
+use drivemap_runtime::core::plan::Conversion;
+use drivemap_runtime::core::scale::ValueError;
 use std::sync::Arc;
 
 use super::Simulator;

@@ -3,11 +3,12 @@
 
 use std::fmt;
 
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Table;
 use drivemap_runtime::pdu::{
     self, BitValues, Request, RequestDecodeError, Response, Words, function,
 };
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Table, rtu, tcp};
+use drivemap_runtime::{rtu, tcp};
 
 use crate::framing::{self, Decoded, Origin};
 

@@ -3,7 +3,7 @@
 //! (01h illegal function unless the map says 02h illegal data address), as the manual's drive
 //! answers it, before anything is read or written.
 
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 
 use super::Simulator;
 
@@ -19,8 +19,8 @@ impl Simulator {
         quantity: usize,
     ) -> Result<(), u8> {
         let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
-        let table = drivemap_runtime::Table::of_function(function)
-            .unwrap_or(drivemap_runtime::Table::Holding);
+        let table = drivemap_runtime::core::register::Table::of_function(function)
+            .unwrap_or(drivemap_runtime::core::register::Table::Holding);
         let map = layout.of(table);
         for k in 0..quantity {
             let Ok(address) = self.communication_address(kind, u32::from(pdu) + k as u32) else {

@@ -3,8 +3,9 @@
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Table, Width};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Table;
+use drivemap_runtime::core::width::Width;
 
 use super::Simulator;
 

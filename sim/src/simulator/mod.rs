@@ -22,7 +22,7 @@ use std::time::Duration;
 use drivemap_live::codec::{self, Value};
 use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::core::profile::{Profile, TransportKind};
 
 use crate::clock::Clock;
 use crate::exceptions::ExceptionPlan;

@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use drivemap_runtime::ValueError;
+use drivemap_runtime::core::scale::ValueError;
 
 use crate::clock::{Clock, SystemClock};
 
@@ -33,7 +33,7 @@ pub struct SimOptions {
     /// the network on this link, as an installer would set them (one parameter may select only
     /// one link: V7 n003 = 2 for RTU, 3 for TCP); `None`: they start at the manual's factory
     /// setting, and the drive ignores network run commands and references.
-    pub network_source: Option<drivemap_runtime::profile::TransportKind>,
+    pub network_source: Option<drivemap_runtime::core::profile::TransportKind>,
 }
 
 impl Default for SimOptions {
@@ -88,7 +88,10 @@ impl SimOptions {
 
     /// Powers on with the network selected as the source of run commands and the reference on
     /// link `kind` ([`SimOptions::network_source`](SimOptions#structfield.network_source)).
-    pub fn network_source(mut self, kind: drivemap_runtime::profile::TransportKind) -> SimOptions {
+    pub fn network_source(
+        mut self,
+        kind: drivemap_runtime::core::profile::TransportKind,
+    ) -> SimOptions {
         self.network_source = Some(kind);
         self
     }

@@ -5,8 +5,10 @@
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::{self, Value};
 use drivemap_map::RegisterRef;
-use drivemap_runtime::profile::{CommandKind, TransportKind};
-use drivemap_runtime::{Table, ValueError, pdu};
+use drivemap_runtime::core::profile::{CommandKind, TransportKind};
+use drivemap_runtime::core::register::Table;
+use drivemap_runtime::core::scale::ValueError;
+use drivemap_runtime::pdu;
 
 use super::Simulator;
 
@@ -178,7 +180,8 @@ impl Simulator {
                         && !allowed.is_empty()
                         && (!allowed.contains(&comm)
                             || (table == Table::Coil
-                                && r.plan().broadcast == drivemap_runtime::Broadcast::No))
+                                && r.plan().broadcast
+                                    == drivemap_runtime::core::rule::Broadcast::No))
                     {
                         return Err(self.plan.illegal_address);
                     }

@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use drivemap_live::{LiveSettings, codec};
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::WriteRestriction;
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::WriteRestriction;
 
 use crate::model::{DriveState, Model};
 use crate::roles::{self, Follow, Plausible, Resolved, Source};
@@ -54,7 +54,7 @@ impl Simulator {
         map: &Map,
         options: &SimOptions,
     ) -> Result<(Option<Arc<Resolved>>, Externals), SimError> {
-        use drivemap_runtime::core::Role;
+        use drivemap_runtime::core::roles::Role;
         use drivemap_runtime::core::roles::Target;
         let known_externals: Vec<String> =
             map.externals().iter().map(|q| q.external.clone()).collect();
@@ -309,7 +309,7 @@ impl Simulator {
         let Some(roles) = self.roles.clone() else {
             return;
         };
-        use drivemap_runtime::core::Role;
+        use drivemap_runtime::core::roles::Role;
         let from_network = |places: &[roles::SourcePlace], raw: &[u32]| {
             via.is_none_or(|k| roles::network_selected(places, raw, k))
         };
@@ -515,7 +515,7 @@ impl Simulator {
     /// shows the nearest step of the register, as a real monitor does.
     pub(super) fn store(&mut self, i: usize, value: f64, settings: &LiveSettings) {
         let r = self.reg(i);
-        let nearest = drivemap_runtime::Rounding::Nearest;
+        let nearest = drivemap_runtime::core::scale::Rounding::Nearest;
         if let Ok(raw) = codec::encode_with(&self.map, r, value, settings, nearest) {
             self.raw[i] = raw;
         }

@@ -7,8 +7,8 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::{BitValues, Request};
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{crc, rtu, tcp};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
 

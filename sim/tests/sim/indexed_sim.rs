@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::core::indexed::EntryRef;
-use drivemap_runtime::profile::{Profile, TransportKind};
+use drivemap_runtime::core::profile::{Profile, TransportKind};
 use drivemap_sim::{SimOptions, Simulator};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
 

@@ -3,8 +3,8 @@
 //! "a simple upper/lower limit error occurred with control data", 003_8bcf5d50afb8e230.txt:739),
 //! and the reference is not taken.
 
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::Request;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{rtu, tcp};
 use drivemap_sim::{SimOptions, Simulator};
 

@@ -6,8 +6,8 @@ use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::Duration;
 
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::Request;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::{Client, rtu, tcp};
 use drivemap_sim::server::lock;

@@ -14,8 +14,8 @@ fn allocations() -> usize {
 
 use std::sync::Arc;
 
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::Request;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{rtu, tcp};
 use drivemap_sim::{ManualClock, Outcome, SimOptions, Simulator};
 

@@ -5,9 +5,9 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::crc;
 use drivemap_runtime::pdu::{Request, Words};
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::{rtu, tcp};
 use drivemap_sim::{ManualClock, Outcome, RolesChoice, SimOptions, Simulator};
 
@@ -849,7 +849,7 @@ fn the_factory_setting_ignores_network_runs() {
                 Target::Field(f)
                     if plan.registers[usize::from(f.row)].transports.rtu
                         && plan.registers[usize::from(f.row)].broadcast
-                            != drivemap_runtime::Broadcast::Only =>
+                            != drivemap_runtime::core::rule::Broadcast::Only =>
                 {
                     Some(f)
                 }

@@ -8,9 +8,11 @@
 //! on), rustc would stop with "found duplicate lang item `panic_impl`" (E0152).
 #![no_std]
 
+use drivemap_drives::runtime::core::profile::TransportKind;
+use drivemap_drives::runtime::core::register::{Register, Writable};
+use drivemap_drives::runtime::core::scale::ValueError;
 use drivemap_drives::runtime::pdu::Request;
-use drivemap_drives::runtime::profile::TransportKind;
-use drivemap_drives::runtime::{Register, ValueError, Writable, rtu};
+use drivemap_drives::runtime::rtu;
 use drivemap_drives::yaskawa_v7 as v7;
 
 /// Why no frame was made.

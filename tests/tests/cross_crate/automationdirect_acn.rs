@@ -5,9 +5,10 @@
 
 use drivemap_drives::automationdirect_acn as acn;
 use drivemap_drives::runtime::client::Client;
+use drivemap_drives::runtime::core::profile::TransportKind;
+use drivemap_drives::runtime::core::register::{Register, Writable};
 use drivemap_drives::runtime::pdu::{Request, Response, Words};
-use drivemap_drives::runtime::profile::TransportKind;
-use drivemap_drives::runtime::{Register, Writable, crc, rtu, tcp};
+use drivemap_drives::runtime::{crc, rtu, tcp};
 use drivemap_sim::fault::FaultyLink;
 use drivemap_sim::slave::SimulatedSlave;
 
@@ -214,7 +215,7 @@ fn operation_command_examples() {
 /// value is entered continuously, the parameter is executed just once" (:1111-1115).
 #[test]
 fn lock_parameter_mode_writes_a_password_after_zero_and_reads_the_lock_state() {
-    use drivemap_drives::runtime::plan::RepeatNeedsChange;
+    use drivemap_drives::runtime::core::plan::RepeatNeedsChange;
     assert_eq!(
         <acn::LockParameterMode as Writable>::REPEAT_NEEDS_CHANGE,
         Some(RepeatNeedsChange {
@@ -261,12 +262,12 @@ fn lock_parameter_mode_writes_a_password_after_zero_and_reads_the_lock_state() {
 /// intermediate: a value the rule refuses sends nothing at all.
 #[test]
 fn a_refused_value_sends_no_intermediate() {
-    use drivemap_drives::runtime::WriteRule;
+    use drivemap_drives::runtime::core::rule::WriteRule;
     let link = FaultyLink::new(TransportKind::Rtu, SimulatedSlave::new(1, &acn::PROFILE));
     let mut client = Client::new(link, &acn::PROFILE);
     // The map's rule with a narrower raw range, as a tool interpreting another map would pass.
     let rule = WriteRule {
-        raw: drivemap_drives::runtime::scale::RawRange { min: 0, max: 100 },
+        raw: drivemap_drives::runtime::core::scale::RawRange { min: 0, max: 100 },
         ..<acn::LockParameterMode as Writable>::RULE
     };
     let e = client.write_changed(1, &rule, 0x03E8, 0, 244).unwrap_err();

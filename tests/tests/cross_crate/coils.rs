@@ -6,11 +6,12 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::{Register, Table};
 use drivemap_runtime::pdu::Request;
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, ClientOptions, Register, Table};
+use drivemap_runtime::{Client, ClientOptions};
 use drivemap_sim::framing::{self, Decoded};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::SimLink;
@@ -21,9 +22,7 @@ mod tindra_tc4 {
     include!(concat!(env!("OUT_DIR"), "/tindra_tc4.rs"));
 }
 
-use tindra_tc4::{
-    Drive, InverterReady, MultiSpeed1, OperationCommand, OperationStatus, Settings, TripReset,
-};
+use tindra_tc4::{Drive, InverterReady, MultiSpeed1, OperationCommand, OperationStatus, Settings};
 
 fn map() -> drivemap_map::Map {
     let path = format!(
@@ -138,7 +137,6 @@ fn the_drive_trait_runs_and_stops_the_drive_through_its_run_coil() {
         // The coil was never set (the trait knows what it told the drive): set, then release.
         assert_eq!(reset, [1, 0], "{kind:?}: set, release");
         assert_eq!(d.status().unwrap().fault, Some(false));
-        let _ = TripReset::ADDRESS;
     }
 }
 

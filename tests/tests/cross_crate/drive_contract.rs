@@ -8,13 +8,14 @@ use std::time::Duration;
 use drivemap_live::LiveSettings;
 use drivemap_map::Map;
 use drivemap_runtime::async_client::AsyncClient;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Table;
+use drivemap_runtime::core::roles::Role;
 use drivemap_runtime::pdu::Request;
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::Role;
 use drivemap_runtime::vfd::{
     AsyncVariableFrequencyDrive, AsyncVfd, Direction, VariableFrequencyDrive, Vfd,
 };
-use drivemap_runtime::{Client, ClientOptions, Error, Table};
+use drivemap_runtime::{Client, ClientOptions, Error};
 use drivemap_sim::framing::{self, Decoded};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
@@ -479,9 +480,9 @@ fn link_runs(link: &SimLink) -> bool {
 /// own conversion accepts it (its ranges, codes and reserved bits in force) and gives it back
 /// unchanged.
 fn within_limits(
-    r: &drivemap_runtime::RegisterPlan,
+    r: &drivemap_runtime::core::plan::RegisterPlan,
     raw: u32,
-    settings: &impl drivemap_runtime::SettingsView,
+    settings: &impl drivemap_runtime::core::plan::SettingsView,
 ) -> Result<(), String> {
     use drivemap_runtime::core::plan::Conversion;
     let again = match r.conversion {
@@ -563,7 +564,7 @@ fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> 
                 .filter(|(_, r)| {
                     r.info.table == table
                         && r.transports.contains(kind)
-                        && r.broadcast != drivemap_runtime::Broadcast::Only
+                        && r.broadcast != drivemap_runtime::core::rule::Broadcast::Only
                         && p.profile
                             .address_offsets
                             .pdu_address(r.address_for(&view, kind), kind)

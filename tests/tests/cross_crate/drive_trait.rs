@@ -7,13 +7,15 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::Role;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::{DrivePlan, DriveSettings};
+use drivemap_runtime::core::roles::Role;
+use drivemap_runtime::core::scale::ValueError;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, DrivePlan, DriveSettings, Error, Refusal, ValueError};
+use drivemap_runtime::{Client, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 
 /// The map of a compiled drive, from `maps/`, which the drives crate is generated from.
@@ -182,7 +184,8 @@ fn on<D: DrivePlan>(kind: TransportKind) -> bool {
     D::ROLES.of(Role::FrequencyReference).any(|p| {
         p.target.row().is_some_and(|row| {
             let r = &D::REGISTERS[usize::from(row)];
-            r.transports.contains(kind) && r.broadcast != drivemap_runtime::Broadcast::Only
+            r.transports.contains(kind)
+                && r.broadcast != drivemap_runtime::core::rule::Broadcast::Only
         })
     })
 }
@@ -311,7 +314,7 @@ fn a_command_that_failed_is_not_resent_by_the_next() {
     let mut slave = SimulatedSlave::new(1, &tds::PROFILE);
     // Sn-04 = 2: run commands from the RS-485 port.
     slave.set_holding(
-        <tds::RunSource as drivemap_runtime::Register>::address(
+        <tds::RunSource as drivemap_runtime::core::register::Register>::address(
             &tds::Settings::default(),
             TransportKind::Rtu,
         )
@@ -321,7 +324,7 @@ fn a_command_that_failed_is_not_resent_by_the_next() {
     let link = FaultyLink::new(TransportKind::Rtu, slave);
     let mut c = Client::with_options(link, &tds::PROFILE, options);
     let mut d = Vfd::new::<tds::Drive>(&mut c, 1, tds::Settings::default());
-    let address = <tds::OperationCommand as drivemap_runtime::Register>::address(
+    let address = <tds::OperationCommand as drivemap_runtime::core::register::Register>::address(
         &tds::Settings::default(),
         TransportKind::Rtu,
     )
@@ -365,12 +368,12 @@ fn a_command_that_failed_is_not_resent_by_the_next() {
 fn source_place<D: DrivePlan>(
     role: Role,
     kind: TransportKind,
-) -> Option<drivemap_runtime::roles::FieldRole> {
+) -> Option<drivemap_runtime::core::roles::FieldRole> {
     D::ROLES
         .of(role)
         .find(|p| p.transports.contains(kind))
         .and_then(|p| match p.target {
-            drivemap_runtime::roles::Target::Field(f) => Some(f),
+            drivemap_runtime::core::roles::Target::Field(f) => Some(f),
             _ => None,
         })
 }
@@ -460,10 +463,10 @@ fn run_is_refused_at_the_factory_setting_and_works_after_setting_the_source() {
             .of(Role::Run)
             .chain(D::ROLES.of(Role::RunForward))
             .find_map(|p| match p.target {
-                drivemap_runtime::roles::Target::Field(f)
+                drivemap_runtime::core::roles::Target::Field(f)
                     if D::REGISTERS[usize::from(f.row)].transports.contains(kind)
                         && D::REGISTERS[usize::from(f.row)].broadcast
-                            != drivemap_runtime::Broadcast::Only =>
+                            != drivemap_runtime::core::rule::Broadcast::Only =>
                 {
                     Some(f)
                 }

@@ -16,9 +16,11 @@ use std::time::Duration;
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::Value;
 use drivemap_review::diff::ChangeKind;
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::width::{Width, WordOrder};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, Error, Profile, Refusal, Width, WordOrder};
+use drivemap_runtime::{Client, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 
 fn fixture() -> PathBuf {
@@ -203,7 +205,7 @@ fn the_simulator_serves_pairs_whole_and_the_client_reads_them_as_one_value() {
     assert_eq!(held.as_f64(), Some(-123_456.0));
     assert!(matches!(
         position.encode_number(1_000_001.0, &()),
-        Err(drivemap_runtime::ValueError::OutOfRange { .. })
+        Err(drivemap_runtime::core::scale::ValueError::OutOfRange { .. })
     ));
     // Half of it is refused by the gate before anything is sent.
     match b.client.write_register(254, 0x2205, 1) {

@@ -8,9 +8,10 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_map::Map;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Table;
 use drivemap_runtime::planner::Poller;
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Client, ClientOptions, Error, Refusal, Table};
+use drivemap_runtime::{Client, ClientOptions, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
 use drivemap_test_support::sim_link::SimLink;
 use proptest::prelude::*;

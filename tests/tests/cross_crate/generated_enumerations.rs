@@ -5,7 +5,7 @@
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
 
-use drivemap_drives::runtime::{Code, Enumeration};
+use drivemap_drives::runtime::core::register::{Code, Enumeration};
 use drivemap_drives::{ptlk_tds_v8 as v8, yaskawa_v7 as v7};
 
 fn hash<T: Hash>(v: &T) -> u64 {

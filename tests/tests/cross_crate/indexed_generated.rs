@@ -7,7 +7,7 @@
 use std::time::Duration;
 
 use drivemap_runtime::client::{Client, ClientOptions};
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_sim::{SimOptions, Simulator};
 use drivemap_test_support::sim_link::SimLink;
 
@@ -40,7 +40,7 @@ fn every_listed_entry_has_a_documented_handle() {
         "TOTAL_RUNNING_HOURS",
     ] {
         assert!(
-            code.contains(&format!("pub const {id}: rt::core::indexed::EntryRef")),
+            code.contains(&format!("pub const {id}: rt::indexed::EntryRef")),
             "{id}: {code}"
         );
     }

@@ -10,11 +10,12 @@ use crate::interop_support;
 use std::process::Command;
 use std::time::Duration;
 
+use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::error::Error;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::serial::{SerialOptions, SerialTransport};
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, ClientOptions, Profile};
+use drivemap_runtime::{Client, ClientOptions};
 use interop_support::{PtyPair, free_port, python, script, start_ready};
 
 fn client<T: Transport>(link: T) -> Client<T> {

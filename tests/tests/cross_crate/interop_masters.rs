@@ -16,7 +16,7 @@ use crate::interop_support;
 use std::process::Command;
 use std::time::Duration;
 
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions};
 use drivemap_sim::{Outcome, SerialServer, SimOptions, TcpFraming, TcpServer};
 use interop_support::{PtyPair, Sim, python, require_tool, run_with_limit, script};

@@ -15,12 +15,14 @@ use drivemap_drives::{
     automationdirect_acn as acn, ptlk_tds_v8 as tds, yaskawa_gpd515 as gpd, yaskawa_j7 as j7,
     yaskawa_v7 as v7,
 };
+use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::DriveSettings;
 use drivemap_runtime::error::{Error, Refusal};
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, ClientOptions, DriveSettings, Profile};
+use drivemap_runtime::{Client, ClientOptions};
 use drivemap_sim::{SimOptions, TcpFraming, TcpServer};
 use interop_support::Sim;
 
@@ -139,7 +141,7 @@ fn v7_run_and_stop<T: Transport>(c: &mut Client<T>, sim: &Sim, s: &v7::Settings,
             Error::Refused(drivemap_runtime::Refusal::NotOnTransport { .. })
         ));
         let mut raw = [0u16; 1];
-        let address = <v7::TcpStatusWord as drivemap_runtime::Register>::ADDRESS;
+        let address = <v7::TcpStatusWord as drivemap_runtime::core::register::Register>::ADDRESS;
         assert_eq!(
             code(c.read_holding(1, address, &mut raw).unwrap_err()),
             0x02

@@ -7,11 +7,13 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_drives::{ptlk_tds_v8 as tds, yaskawa_v7 as v7};
-use drivemap_runtime::plan::RegisterPlan;
+use drivemap_runtime::Client;
+use drivemap_runtime::core::plan::RegisterPlan;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Table;
+use drivemap_runtime::core::width::Width;
 use drivemap_runtime::planner::{Poller, poll_line};
-use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
-use drivemap_runtime::{Client, Table, Width};
 use drivemap_sim::server::lock;
 use drivemap_sim::{Line, ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 

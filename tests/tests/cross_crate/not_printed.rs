@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivemap_runtime::core::{ProtocolFact, Stated};
+use drivemap_runtime::core::stated::{ProtocolFact, Stated};
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::{Client, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};

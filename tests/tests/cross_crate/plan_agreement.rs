@@ -17,8 +17,10 @@
 use std::cell::RefCell;
 use std::path::PathBuf;
 
-use drivemap_drives::runtime::plan::{Conversion, RegisterPlan};
-use drivemap_drives::runtime::{DriveSettings, Profile, SettingsView};
+use drivemap_drives::runtime::core::plan::SettingsView;
+use drivemap_drives::runtime::core::plan::{Conversion, RegisterPlan};
+use drivemap_drives::runtime::core::profile::Profile;
+use drivemap_drives::runtime::core::register::DriveSettings;
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::Value;
 use drivemap_map::RegisterRef;

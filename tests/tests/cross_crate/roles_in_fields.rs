@@ -15,8 +15,8 @@ use std::time::Duration;
 use drivemap_live::LiveSettings;
 use drivemap_live::View;
 use drivemap_map::Map;
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::{Edge, Role, Roles, Target};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::roles::{Edge, Role, Roles, Target};
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
 use drivemap_runtime::{Client, ClientOptions, Error, Refusal};
 use drivemap_sim::{ManualClock, SimOptions, Simulator};
@@ -189,7 +189,7 @@ fn a_setpoint_on_a_field_is_refused_where_read_modify_write_is_not_safe() {
     let mut places: Vec<_> = plan.roles.places.to_vec();
     for p in &mut places {
         if p.role == Role::FrequencyReference {
-            p.target = Target::NumberField(drivemap_runtime::roles::NumberField {
+            p.target = Target::NumberField(drivemap_runtime::core::roles::NumberField {
                 row: control,
                 lsb: 8,
                 width: 8,
@@ -260,7 +260,7 @@ fn fault() -> impl proptest::strategy::Strategy<Value = Option<LinkFault>> {
 /// link; returns a violation of the reset contract, if any.
 fn play(
     drive: &Map,
-    roles: drivemap_runtime::roles::Roles,
+    roles: drivemap_runtime::core::roles::Roles,
     template: &Simulator,
     steps: &[Step],
     faults: &[Option<LinkFault>],
@@ -361,13 +361,15 @@ fn a_reset_of_unknown_edge_acts_under_faults() {
         .places
         .iter()
         .map(|p| match p.target {
-            Target::Field(f) if p.role == Role::FaultReset => drivemap_runtime::roles::Place {
-                target: Target::Field(drivemap_runtime::roles::FieldRole {
-                    edge: Edge::Level,
-                    ..f
-                }),
-                ..*p
-            },
+            Target::Field(f) if p.role == Role::FaultReset => {
+                drivemap_runtime::core::roles::Place {
+                    target: Target::Field(drivemap_runtime::core::roles::FieldRole {
+                        edge: Edge::Level,
+                        ..f
+                    }),
+                    ..*p
+                }
+            }
             _ => *p,
         })
         .collect();
@@ -406,7 +408,7 @@ fn a_command_field_is_written_from_the_roles_not_from_a_read_back() {
     let command = drive.register("digital_input_command").unwrap();
     let row = u16::try_from(command.row()).unwrap();
     let bit = |id: &str| match &drive.plan().registers[usize::from(row)].conversion {
-        drivemap_runtime::plan::Conversion::Bits { fields, .. } => {
+        drivemap_runtime::core::plan::Conversion::Bits { fields, .. } => {
             fields.iter().find(|f| f.id == id).unwrap().mask()
         }
         _ => unreachable!("a bit-field register"),

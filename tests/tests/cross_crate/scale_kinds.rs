@@ -1,4 +1,4 @@
-//! Every kind of conversion (`drivemap_core::ConversionKind::ALL`; the scale kinds among them)
+//! Every kind of conversion (`drivemap_core::kind::ConversionKind::ALL`; the scale kinds among them)
 //! is used by a map of `maps/` or a fixture, and every printer shows it: the JSON export, the
 //! Markdown reference of `drivemap doc`, the semantic diff, the wording of `describe` (through
 //! the facts view) and the generated code (its rustdoc and its plan rows).
@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use drivemap_map::facts::{FactKey, RegisterFacts};
 use drivemap_map::{Map, RegisterRef, describe};
-use drivemap_runtime::core::ConversionKind;
+use drivemap_runtime::core::kind::ConversionKind;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")

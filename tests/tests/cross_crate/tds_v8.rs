@@ -2,8 +2,10 @@
 //! (`002_661580cce154f322.txt`, section 9, lines 641-828).
 
 use drivemap_drives::ptlk_tds_v8 as tds;
+use drivemap_runtime::core::register::{Bits, Register, Writable};
+use drivemap_runtime::core::scale::ValueError;
 use drivemap_runtime::pdu::{Request, Words};
-use drivemap_runtime::{Bits, Register, ValueError, Writable, rtu};
+use drivemap_runtime::rtu;
 
 fn settings() -> tds::Settings {
     // Cn-02 (max output frequency) = 60.0 Hz: 100 % = 30000 counts.
@@ -33,7 +35,7 @@ fn frequency_command_is_relative_to_cn_02() {
     ));
     // The map reads Cn-02 itself when asked (0301h, 0.1 Hz).
     let mut read = tds::Settings::new();
-    assert!(drivemap_runtime::DriveSettings::absorb(
+    assert!(drivemap_runtime::core::register::DriveSettings::absorb(
         &mut read, 0x0301, 600
     ));
     assert_eq!(read.max_output_frequency, Some(60.0));
@@ -144,14 +146,18 @@ fn profile_matches_the_manual() {
         .iter()
         .find(|c| c.writes == [(0x0500, 0)])
         .expect("EEPROM save command");
-    assert_eq!(save.kind, drivemap_runtime::profile::CommandKind::Persist);
+    assert_eq!(
+        save.kind,
+        drivemap_runtime::core::profile::CommandKind::Persist
+    );
 }
 
 #[test]
 fn client_loads_settings_then_writes_in_hz() {
-    use drivemap_runtime::profile::TransportKind;
+    use drivemap_runtime::Client;
+    use drivemap_runtime::core::profile::TransportKind;
+    use drivemap_runtime::core::register::DriveSettings;
     use drivemap_runtime::transport::memory::MemoryTransport;
-    use drivemap_runtime::{Client, DriveSettings};
     use drivemap_sim::slave::SimulatedSlave;
     use std::time::{Duration, Instant};
 

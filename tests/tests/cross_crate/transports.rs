@@ -3,9 +3,10 @@
 //! registers (Table 4.5) share addresses with different layouts (`000_032dced3a1e91a75.txt:851`).
 
 use drivemap_drives::yaskawa_v7 as v7;
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::Register;
 use drivemap_runtime::transport::memory::MemoryTransport;
-use drivemap_runtime::{Client, Error, Refusal, Register};
+use drivemap_runtime::{Client, Error, Refusal};
 
 #[test]
 fn rtu_command_register_is_refused_over_modbus_tcp() {

@@ -6,11 +6,13 @@
 //! addressed at 2" for the 03h example, line 517; "at 1" for 08h and 10h, lines 665 and 781), and
 //! with those addresses every printed CRC verifies. CRC-16: init FFFFh, poly A001h, low byte first.
 
+use drivemap_drives::runtime::core::profile::{CommandKind, TransportKind};
+use drivemap_drives::runtime::core::register::{Register, Writable};
+use drivemap_drives::runtime::core::scale::ValueError;
 use drivemap_drives::runtime::pdu::{Request, Response, Words};
-use drivemap_drives::runtime::profile::{CommandKind, TransportKind};
-use drivemap_drives::runtime::{Register, ValueError, Writable, crc, rtu};
+use drivemap_drives::runtime::{crc, rtu};
 use drivemap_drives::yaskawa_gpd515 as gpd;
-use drivemap_runtime::Enumeration;
+use drivemap_runtime::core::register::Enumeration;
 
 /// Settings of a drive whose flash is 1024 or later with o2-09 = 1 (Chapter 6 layout: operation
 /// command at 01h, frequency reference at 02h) and, for the current scale, a drive rating.

@@ -7,8 +7,10 @@
 //! "Upper"; it is the low byte, and with that reading every printed CRC checks except 003's
 //! loop-back fault response.
 
+use drivemap_drives::runtime::core::register::{Register, Writable};
+use drivemap_drives::runtime::core::scale::ValueError;
 use drivemap_drives::runtime::pdu::{Request, Response, Words};
-use drivemap_drives::runtime::{Register, ValueError, Writable, rtu};
+use drivemap_drives::runtime::rtu;
 use drivemap_drives::{yaskawa_j7 as j7, yaskawa_v7 as v7};
 
 type Unit = v7::ModbusFrequencyReferenceUnitSelectionValue;
@@ -448,7 +450,7 @@ fn frequency_reference_is_bounded_by_n011() {
 /// to the value given. The typed API, the client and the drive trait.
 #[test]
 fn a_value_between_steps_is_refused_unless_rounding_is_asked_for() {
-    use drivemap_drives::runtime::Rounding;
+    use drivemap_drives::runtime::core::scale::Rounding;
     use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
     use drivemap_runtime::{Client, Error};
     use drivemap_sim::{FaultyLink, SimulatedSlave};
@@ -501,7 +503,10 @@ fn a_value_between_steps_is_refused_unless_rounding_is_asked_for() {
     slave.set_holding(0x010B, 600); // n011 = 60.0 Hz
     slave.set_holding(0x0103, 2); // n003: run commands from Modbus RTU
     slave.set_holding(0x0104, 6); // n004: reference from Modbus RTU
-    let link = FaultyLink::new(drivemap_drives::runtime::profile::TransportKind::Rtu, slave);
+    let link = FaultyLink::new(
+        drivemap_drives::runtime::core::profile::TransportKind::Rtu,
+        slave,
+    );
     let mut c = Client::new(link, &v7::PROFILE);
     assert!(matches!(
         c.write::<v7::FrequencyReference>(2, &35.75, &s),
@@ -573,7 +578,7 @@ fn j7_frequency_unit_follows_n69_and_its_reserved_bits_stay_zero() {
 /// digital inputs (Table 4.5, :1403). The typed API writes each only where it exists.
 #[test]
 fn typed_writes_reach_0001h_only_as_the_register_of_that_link() {
-    use drivemap_drives::runtime::profile::TransportKind;
+    use drivemap_drives::runtime::core::profile::TransportKind;
     use drivemap_drives::runtime::{Client, ClientOptions, Error, Refusal};
     use drivemap_sim::fault::FaultyLink;
     use drivemap_sim::slave::SimulatedSlave;
@@ -654,7 +659,7 @@ struct Stamped {
 }
 
 impl drivemap_drives::runtime::transport::Transport for Stamped {
-    fn kind(&self) -> drivemap_drives::runtime::profile::TransportKind {
+    fn kind(&self) -> drivemap_drives::runtime::core::profile::TransportKind {
         self.link.kind()
     }
     fn send(&mut self, frame: &[u8]) -> std::io::Result<()> {
@@ -676,7 +681,7 @@ impl drivemap_drives::runtime::transport::Transport for Stamped {
 /// transport: from the last byte of the first reply to the second request.
 #[test]
 fn two_requests_to_a_v7_keep_the_manuals_request_gap() {
-    use drivemap_drives::runtime::profile::TransportKind;
+    use drivemap_drives::runtime::core::profile::TransportKind;
     use drivemap_drives::runtime::transport::memory::MemoryTransport;
     use drivemap_drives::runtime::{Client, ClientOptions};
     use drivemap_sim::slave::SimulatedSlave;

@@ -14,7 +14,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_sim::server::{TcpFraming, TcpServer};
 use drivemap_sim::{SimOptions, Simulator};
 

@@ -11,7 +11,7 @@ use drivemap_bridge::command::{Board, DEFAULT_DEADLINE};
 use drivemap_bridge::link::{self, LinkSpec};
 use drivemap_bridge::proxy::{self, Cidr, ProxyOptions};
 use drivemap_runtime::bus_time::SerialConfig;
-use drivemap_runtime::profile::TransportKind;
+use drivemap_runtime::core::profile::TransportKind;
 use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
 use drivemap_test_support::rng::SplitMix;
 

@@ -25,7 +25,8 @@ impl Coils {
         let sim = drivemap_sim::shared(
             Simulator::new(
                 map,
-                SimOptions::new().network_source(drivemap_runtime::profile::TransportKind::Tcp),
+                SimOptions::new()
+                    .network_source(drivemap_runtime::core::profile::TransportKind::Tcp),
             )
             .unwrap(),
         );

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use drivemap_live::codec::{self, Value};
 use drivemap_live::paramset;
 use drivemap_map::Map;
-use drivemap_runtime::plan::Conversion;
+use drivemap_runtime::core::plan::Conversion;
 use drivemap_sim::{SimOptions, Simulator};
 
 use crate::common::{Scratch, Sim, drivemap, repo, shipped_maps};

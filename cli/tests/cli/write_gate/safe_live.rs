@@ -15,7 +15,7 @@ use std::collections::BTreeSet;
 
 use drivemap_live::LiveSettings;
 use drivemap_runtime::core::roles::FieldRole;
-use drivemap_runtime::roles::{Role, RoleKind, Target as Place};
+use drivemap_runtime::core::roles::{Role, RoleKind, Target as Place};
 use proptest::prelude::*;
 use proptest::sample::Index;
 use proptest::test_runner::{Config, TestRunner};
@@ -180,7 +180,7 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
     let mut checked = 0;
     for (drive, profile, wire) in &loaded {
         for r in drive.registers() {
-            if r.plan().info.access != drivemap_runtime::core::Access::Read
+            if r.plan().info.access != drivemap_runtime::core::register::Access::Read
                 || !on_transport(r, KIND)
             {
                 continue;
@@ -509,7 +509,7 @@ fn no_set_value_outside_its_range_or_against_the_drive_is_used() {
                 s,
                 &given_text,
                 &settings,
-                drivemap_runtime::Rounding::Nearest,
+                drivemap_runtime::core::scale::Rounding::Nearest,
             )
             .is_ok_and(|raw| raw == u32::from(held));
             if !agrees {

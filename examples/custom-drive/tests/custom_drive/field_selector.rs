@@ -7,7 +7,7 @@ use std::path::Path;
 use custom_drive::field_selector as fs;
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::Value;
-use drivemap_runtime::{DriveSettings, Register};
+use drivemap_runtime::core::register::{DriveSettings, Register};
 
 fn drive() -> drivemap_map::Map {
     drivemap_map::Loader::new()

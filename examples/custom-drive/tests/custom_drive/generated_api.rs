@@ -1,8 +1,11 @@
 //! Behaviour of every construct the generator emits, through the fixture map.
 
 use custom_drive::mini_drive as md;
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::{Bits, Code, DriveSettings, Enumeration, Register, ValueError, Writable};
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::register::{
+    Bits, Code, DriveSettings, Enumeration, Register, Writable,
+};
+use drivemap_runtime::core::scale::ValueError;
 
 #[test]
 fn bit_fields_keep_reserved_bits_zero() {
@@ -165,7 +168,7 @@ fn profile_and_register_table() {
     assert_eq!(md::REGISTERS.len(), 17);
     assert_eq!(
         <md::MaxFrequency as Writable>::WRITE_RESTRICTION,
-        drivemap_runtime::WriteRestriction::Stopped
+        drivemap_runtime::core::register::WriteRestriction::Stopped
     );
     assert_eq!(md::FrequencyUnitsValue::ALL.len(), 3);
     let _ = md::FrequencyUnitsValue::TenthHz.code();
@@ -176,8 +179,8 @@ fn profile_and_register_table() {
 /// shows `Client::write` sending the intermediate value first).
 #[test]
 fn read_meanings_and_repeated_values() {
-    use drivemap_runtime::Readable;
-    use drivemap_runtime::plan::RepeatNeedsChange;
+    use drivemap_runtime::core::plan::RepeatNeedsChange;
+    use drivemap_runtime::core::register::Readable;
     fn readable<R: Readable>() {}
     readable::<md::Password>();
     let s = md::Settings::new();

@@ -6,7 +6,7 @@ use std::path::Path;
 use custom_drive::mini_drive as md;
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::Value;
-use drivemap_runtime::{Bits, Code, Enumeration, Register, Writable};
+use drivemap_runtime::core::register::{Bits, Code, Enumeration, Register, Writable};
 
 fn drive() -> drivemap_map::Map {
     drivemap_map::Loader::new()

@@ -7,7 +7,8 @@ use std::path::Path;
 use custom_drive::acme_vf1 as acme;
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::Value;
-use drivemap_runtime::{Register, Width, WordOrder, Writable};
+use drivemap_runtime::core::register::{Register, Writable};
+use drivemap_runtime::core::width::{Width, WordOrder};
 
 fn drive() -> drivemap_map::Map {
     drivemap_map::Loader::new()

@@ -8,12 +8,14 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use custom_drive::borealis_bf6 as bf6;
-use drivemap_runtime::plan::Conversion;
-use drivemap_runtime::ratio::Ratio;
-use drivemap_runtime::scale::Decimal;
+use drivemap_runtime::core::plan::Conversion;
+use drivemap_runtime::core::ratio::Ratio;
+use drivemap_runtime::core::register::{DrivePlan, Register, Writable};
+use drivemap_runtime::core::scale::Decimal;
+use drivemap_runtime::core::scale::ValueError;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, DrivePlan, Error, Register, ValueError, Writable};
+use drivemap_runtime::{Client, Error};
 use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
 
 fn map() -> drivemap_map::Map {

@@ -5,7 +5,7 @@
 use std::time::Duration;
 
 use drivemap_runtime::client::ClientOptions;
-use drivemap_runtime::profile::{
+use drivemap_runtime::core::profile::{
     AddressOffsets, BroadcastInfo, CommandInfo, CommandKind, ExceptionInfo, Profile, Timing,
 };
 

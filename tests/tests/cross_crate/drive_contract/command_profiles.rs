@@ -6,8 +6,8 @@
 use drivemap_map::Map;
 use drivemap_runtime::Error;
 use drivemap_runtime::core::command_profile::{CommandProfile, PathKind};
-use drivemap_runtime::profile::TransportKind;
-use drivemap_runtime::roles::Role;
+use drivemap_runtime::core::profile::TransportKind;
+use drivemap_runtime::core::roles::Role;
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
 
 use drivemap_runtime::Client;
@@ -33,7 +33,9 @@ pub(super) const FIXTURES: &[&str] = &[
 
 /// The words written (06h / 10h, the first word) since the log was last cleared, on either
 /// framing.
-fn written<S: drivemap_runtime::SettingsView>(d: &mut Vfd<S, &mut Client<SimLink>>) -> Vec<u16> {
+fn written<S: drivemap_runtime::core::plan::SettingsView>(
+    d: &mut Vfd<S, &mut Client<SimLink>>,
+) -> Vec<u16> {
     let kind = drivemap_runtime::transport::Transport::kind(d.client().transport());
     let w: Vec<u16> = d
         .client()
@@ -204,7 +206,7 @@ fn a_refused_transition_times_out_naming_the_state() {
         transitions: Box::leak(transitions.into_boxed_slice()),
         ..*real
     }));
-    let roles = drivemap_runtime::Roles {
+    let roles = drivemap_runtime::core::roles::Roles {
         profile: Some(changed),
         ..p.roles
     };
@@ -263,7 +265,7 @@ fn a_stop_path_through_a_run_transition_is_refused() {
         paths: Box::leak(paths.into_boxed_slice()),
         ..*real
     }));
-    let roles = drivemap_runtime::Roles {
+    let roles = drivemap_runtime::core::roles::Roles {
         profile: Some(changed),
         ..p.roles
     };
