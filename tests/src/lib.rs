@@ -24,25 +24,28 @@ pub fn workspace() -> PathBuf {
         .to_path_buf()
 }
 
-/// The target directory every nested build of the tests shares: `target/nested`. One
-/// directory, and the workspace's profiles on every build ([`nested_cargo`]), so the registry
-/// crates compile once for all of them, and `scripts/test` has one directory to remove after.
+/// The target directory of every nested build of the tests: the workspace's own (`target`, or
+/// `CARGO_TARGET_DIR` as cargo gave it). With the workspace's profiles on every nested build
+/// ([`nested_cargo`]), a registry crate the workspace compiled with the same features is not
+/// compiled again; cargo holds its lock on the directory while it builds, not while the tests
+/// run.
 pub fn nested_target() -> PathBuf {
-    workspace().join("target").join("nested")
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| workspace().join("target"))
 }
 
-/// `cargo` for a build inside a test: `CARGO_TARGET_DIR` is [`nested_target`], `RUSTFLAGS` is
-/// removed, and the workspace's `[profile.*]` settings are passed as `--config` options, so an
-/// application outside the workspace (which has no profiles of its own) compiles the registry
-/// crates as the workspace copy does. Add the subcommand and its arguments.
+/// `cargo` for a build inside a test: `CARGO_TARGET_DIR` is [`nested_target`], and the
+/// workspace's `[profile.*]` settings are passed as `--config` options (but for those the
+/// environment sets, `CARGO_PROFILE_DEV_DEBUG` say, which the nested cargo inherits), so an
+/// application outside the workspace, which has no profiles of its own, compiles the registry
+/// crates as the workspace does. Add the subcommand and its arguments.
 pub fn nested_cargo() -> Command {
     let mut cargo = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
     for setting in workspace_profiles() {
         cargo.arg("--config").arg(setting);
     }
-    cargo
-        .env("CARGO_TARGET_DIR", nested_target())
-        .env_remove("RUSTFLAGS");
+    cargo.env("CARGO_TARGET_DIR", nested_target());
     cargo
 }
 
@@ -61,7 +64,12 @@ fn workspace_profiles() -> Vec<String> {
         } else if let (Some(table), Some((key, value))) = (table, line.split_once('='))
             && !line.starts_with('#')
         {
-            settings.push(format!("{table}.{}={}", key.trim(), value.trim()));
+            let key = format!("{table}.{}", key.trim());
+            // Cargo's name for it in the environment, which takes precedence over the manifest.
+            let variable = format!("CARGO_{}", key.to_uppercase().replace(['.', '-'], "_"));
+            if std::env::var_os(variable).is_none() {
+                settings.push(format!("{key}={}", value.trim()));
+            }
         }
     }
     assert!(
@@ -95,7 +103,7 @@ pub fn hold_nested_target() -> MutexGuard<'static, ()> {
 /// maps) generate from the maps they carry and from nothing in the environment, so building
 /// against a new map means building a tree that holds it.
 ///
-/// The copy is one directory, `target/nested/workspace` (build it with [`nested_cargo`]),
+/// The copy is one directory, `target/workspace-copy` (build it with [`nested_cargo`]),
 /// brought up to date on each call: a file is written
 /// only when its content differs and a file the checkout no longer has is removed, so cargo
 /// rebuilds only what changed since the last build. Everything but `target` directories and
@@ -105,7 +113,7 @@ pub fn hold_nested_target() -> MutexGuard<'static, ()> {
 pub fn workspace_with_map(map: &Path) -> (MutexGuard<'static, ()>, PathBuf) {
     let guard = hold_nested_target();
     let root = workspace();
-    let copy = nested_target().join("workspace");
+    let copy = workspace().join("target").join("workspace-copy");
     let name = map.file_name().expect("a map file");
     let added = copy.join("maps").join(name);
     sync(&root, &copy, &|p| p == added).expect("copying the workspace");

@@ -7,7 +7,7 @@
 //! the async drive trait (`AsyncVfd`), polls, stops, and reads the reference back. Then it
 //! builds every package, libraries and binaries, as one workspace of the unpacked tarballs:
 //! `scripts/test` packages with `--no-verify` and leaves that verification to this test (one
-//! build in the shared `target/nested` instead of one per package in `target/debug`).
+//! build, in the workspace's target directory with its profiles, instead of one per package).
 //!
 //! The application's source is `examples/async-poll/src/main.rs`, copied: the example of the
 //! repository is what a user would write. `drivemap-drives` generates its module from the
@@ -148,7 +148,7 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
         dir.join("app").join("Cargo.lock"),
     )
     .unwrap();
-    // The target directory of every nested build (`nested_target`), kept between runs.
+    // The target directory of every nested build: the workspace's (`nested_target`).
     let target = drivemap_tests::nested_target();
     run(
         drivemap_tests::nested_cargo()

@@ -10,7 +10,7 @@
 //!   trait (`tests/fixtures/any-drive-app/main.rs`, which names no register and no drive) ramps
 //!   it to the reference and stops it.
 //!
-//! Builds share `target/nested` and the copy of the workspace with
+//! Builds share the workspace's target directory and the copy of the workspace with
 //! `new_map_becomes_module.rs` (`drivemap_tests::workspace_with_map`, `nested_cargo`).
 
 use std::io::{BufRead, BufReader};
