@@ -224,7 +224,7 @@ pub fn kind(plan: &RegisterPlan) -> &'static str {
 }
 
 /// A register as a user names it: id, and the parameter number when printed.
-pub fn register(r: &Register) -> String {
+pub(crate) fn register(r: &Register) -> String {
     match &r.def.param {
         Some(p) => format!("{} ({p})", r.def.id),
         None => r.def.id.clone(),
@@ -233,7 +233,7 @@ pub fn register(r: &Register) -> String {
 
 /// A register named in a map (a selector, a reference): its parameter number when printed,
 /// else its id; the name as given when no register has it.
-pub fn setting(drive: &Drive, name: &str) -> String {
+pub(crate) fn setting(drive: &Drive, name: &str) -> String {
     drive
         .selector(name)
         .map(|s| s.prose())
@@ -242,7 +242,7 @@ pub fn setting(drive: &Drive, name: &str) -> String {
 
 /// The register or quantity a relative scale refers to: `Cn-02 (Max output frequency)`, or an
 /// external quantity's description and unit.
-pub fn reference(drive: &Drive, r: &Reference) -> String {
+pub(crate) fn reference(drive: &Drive, r: &Reference) -> String {
     match r {
         Reference::Register(name) => match drive.find(name) {
             Some(t) => format!("{} ({})", setting(drive, name), t.def.name),
@@ -254,7 +254,7 @@ pub fn reference(drive: &Drive, r: &Reference) -> String {
 
 /// A scale in engineering units: `0.01 Hz` (per count), `30000 = 100 % of Cn-02 (…)`, or a
 /// selected scale with its cases (`selected by C6-01: 0 → 0.01 Hz; 1 → 0.1 Hz`).
-pub fn scale(drive: &Drive, s: &Scale, unit: &str) -> String {
+pub(crate) fn scale(drive: &Drive, s: &Scale, unit: &str) -> String {
     match s {
         Scale::Factor(f) => format!("{} {unit}", num(*f)).trim_end().to_owned(),
         Scale::Relative(rel) => format!(
@@ -279,7 +279,7 @@ pub fn scale(drive: &Drive, s: &Scale, unit: &str) -> String {
 }
 
 /// A ratio scale: `3600 = 60 Hz (1/60 (≈0.016667) Hz per count, exact)`.
-pub fn ratio(s: &crate::model::RatioScale, unit: &str) -> String {
+pub(crate) fn ratio(s: &crate::model::RatioScale, unit: &str) -> String {
     let unit = if unit.is_empty() {
         String::new()
     } else {
@@ -292,7 +292,7 @@ pub fn ratio(s: &crate::model::RatioScale, unit: &str) -> String {
 }
 
 /// Who selects a scale: `selected by C6-01`.
-pub fn selected_by(drive: &Drive, selector: &str) -> String {
+pub(crate) fn selected_by(drive: &Drive, selector: &str) -> String {
     format!("selected by {}", setting(drive, selector))
 }
 
@@ -318,7 +318,7 @@ pub fn range(min: Option<f64>, max: Option<f64>, unit: &str) -> String {
 }
 
 /// A limit through another quantity: `at most 100 % of n011 (003_...:102)`.
-pub fn relative_limit(drive: &crate::ir::Drive, l: &crate::model::RelativeLimit) -> String {
+pub(crate) fn relative_limit(drive: &crate::ir::Drive, l: &crate::model::RelativeLimit) -> String {
     let of = match &l.relative_to {
         crate::model::Reference::Register(name) => setting(drive, name),
         crate::model::Reference::External(q) => format!("{} (external)", q.external),

@@ -39,31 +39,20 @@ mod names;
 mod source;
 mod validate;
 
-// Transitional, not an API (issue 41): drivemap-review's register diff and a few test oracles
-// (the command line's write gate, the bench, this crate's own tests) still read the expanded
-// map and its model; they go private once those read the `Map` alone. Hidden from the docs;
-// nothing outside this workspace may name them.
-#[doc(hidden)]
-pub mod ir;
-#[doc(hidden)]
-pub mod model;
+// The expanded map, its model and the map's own records: private. A consumer reads them
+// through `Map`, `RegisterRef` and the facts view, which re-exports the records' types.
+mod citations;
+mod command_profile;
+mod examples;
+mod indexed;
+mod ir;
+mod model;
+mod others;
 
 pub mod describe;
 pub mod export;
 pub mod facts;
 pub mod migrate;
-
-// Read by `drivemap-review` and `drivemap-live` until they read the facts view alone.
-#[doc(hidden)]
-pub mod citations;
-#[doc(hidden)]
-pub mod command_profile;
-#[doc(hidden)]
-pub mod examples;
-#[doc(hidden)]
-pub mod indexed;
-#[doc(hidden)]
-pub mod others;
 
 pub use diagnostic::{Diagnostic, Diagnostics, Loc};
 pub use loader::{
