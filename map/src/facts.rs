@@ -30,7 +30,6 @@ pub mod data;
 
 use crate::describe;
 use crate::ir::{Drive, Register, ValueKind};
-use crate::model::Scale;
 
 mod input;
 mod protocol;
@@ -38,7 +37,9 @@ mod written;
 /// The map's own records, as it writes them: who the drive is, its protocol, groups, variants,
 /// conflicts, gaps, removed registers, roles, the command profile, the example frames, and a
 /// register's scale, limits, defaults, codes, fields, alternative addresses and unknowns.
-pub use crate::command_profile::{PathSpec, PowerOnSpec, ProfileSpec, StateSpec, TransitionSpec};
+pub use crate::command_profile::{
+    PathSpec, PowerOnSpec, ProfileSpec, StateSpec, TransitionSpec, Word as ProfileWord,
+};
 pub use crate::examples::{Byte, Direction, Example, Says, hex_text, parse_bytes};
 pub use crate::indexed::{Entry as IndexedEntry, Indexed};
 pub use crate::ir::{Group, SerialDefaults};
@@ -47,7 +48,7 @@ pub use crate::model::{
     Dependency, DependentDefault, DisplayStep, Draft, DriveMeta, EdgeSpec, EnumValue,
     ExternalQuantity, Field as BitField, Gap, Manual, Pair, Parity, Protocol, RatioScale, Reading,
     Reference, RegisterFunctions, RelativeLimit, RelativeScale, Removed, RepeatNeedsChange,
-    RolePlace, ScaleCase, SelectedScale, TransportName, Unknown, UnknownItem, VariantAxis,
+    RolePlace, Scale, ScaleCase, SelectedScale, TransportName, Unknown, UnknownItem, VariantAxis,
     VariantOption, VariantOverride,
 };
 pub use crate::stated::Unprinted;
