@@ -17,8 +17,8 @@
 //! Each finding is located at the byte concerned: `file:line:col` of that byte in the
 //! `bytes:` text. `drivemap check` runs it on every map.
 
-use drivemap_map::facts::{Byte, Direction, Example, hex_text, parse_bytes};
 use drivemap_map::facts::TransportName;
+use drivemap_map::facts::{Byte, Direction, Example, hex_text, parse_bytes};
 use drivemap_map::{Diagnostic, Loc};
 use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::pdu::{self, Request, Response};

@@ -34,6 +34,10 @@ use crate::ir::{Drive, Register, ValueKind};
 mod input;
 mod protocol;
 mod written;
+/// Every place of a map that cites a manual ([`Map::citation_places`](crate::Map::citation_places)),
+/// and the citations outside the registers' rows with what their lines must show
+/// ([`Map::other_citations`](crate::Map::other_citations)).
+pub use crate::citations::{CitationPlace, PlaceKind, Reason as CitationReason};
 /// The map's own records, as it writes them: who the drive is, its protocol, groups, variants,
 /// conflicts, gaps, removed registers, roles, the command profile, the example frames, and a
 /// register's scale, limits, defaults, codes, fields, alternative addresses and unknowns.
@@ -51,22 +55,18 @@ pub use crate::model::{
     RolePlace, Scale, ScaleCase, SelectedScale, TransportName, Unknown, UnknownItem, VariantAxis,
     VariantOption, VariantOverride,
 };
-pub use crate::stated::Unprinted;
-/// Every place of a map that cites a manual ([`Map::citation_places`](crate::Map::citation_places)),
-/// and the citations outside the registers' rows with what their lines must show
-/// ([`Map::other_citations`](crate::Map::other_citations)).
-pub use crate::citations::{CitationPlace, PlaceKind, Reason as CitationReason};
 pub use crate::others::{Other as OtherCitation, Rule as CitationRule};
+pub use crate::stated::Unprinted;
 /// Citations and bit fields as written: `file:line`, `<manual id>:p<page>`, a field's span.
 pub use crate::validate::{field_span, parse_citation, parse_page_citation};
 pub use data::RegisterData;
-pub use written::{WrittenMap, WrittenRegister};
 pub use input::InputBounds;
 pub use protocol::{
     CommandFacts, ExceptionFacts, Figure, NotPrinted, ProtocolData, ProtocolFacts, ProtocolKey,
     ProtocolRow,
 };
 pub(crate) use protocol::{manual_address, protocol};
+pub use written::{WrittenMap, WrittenRegister};
 
 /// What a row of a register's facts says.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

@@ -462,7 +462,10 @@ impl Drive {
     }
 
     /// The variant axis and option for an option id.
-    pub(crate) fn variant_option(&self, option: &str) -> Option<(&VariantAxis, &model::VariantOption)> {
+    pub(crate) fn variant_option(
+        &self,
+        option: &str,
+    ) -> Option<(&VariantAxis, &model::VariantOption)> {
         self.variants
             .iter()
             .find_map(|a| a.options.iter().find(|o| o.id == option).map(|o| (a, o)))

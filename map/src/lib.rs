@@ -9,7 +9,9 @@
 //!   the wire, decided once, in the vocabulary crate's types that generated code prints;
 //! - the facts view ([`facts`], [`Map::facts`], [`RegisterRef::facts`]): what the map says of
 //!   each register and of the protocol, as rows of label, value and citation and as typed values,
-//!   and the map's own records (groups, variants, conflicts, gaps);
+//!   and the map's own records (groups, variants, conflicts, gaps), in the types the map writes
+//!   them in; [`Map::written`] and [`RegisterRef::written`] name every key of the map and of
+//!   each register (what `drivemap diff` compares);
 //! - locations ([`RegisterRef::location`], [`Map::locate`]) for diagnostics of a tool's own;
 //! - [`export`] (`drivemap export`), and [`migrate`] for files of an older schema.
 //!

@@ -504,8 +504,7 @@ fn values(r: RegisterRef<'_>) -> Vec<(String, bool)> {
                 (format!("0x{:04X}", first.value), true),
             ];
             let unlisted = (0..=u16::MAX).rev().find(|c| {
-                !list.iter().any(|e| e.value == *c)
-                    && w.max.is_none_or(|m| f64::from(*c) > m)
+                !list.iter().any(|e| e.value == *c) && w.max.is_none_or(|m| f64::from(*c) > m)
             });
             if let Some(c) = unlisted {
                 v.push((c.to_string(), false));

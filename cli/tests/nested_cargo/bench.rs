@@ -360,7 +360,11 @@ fn simulator(drive: Map, slave: u8) -> Simulator {
         .registers()
         .filter(|r| r.readable() && !r.broadcast_only())
         .map(|r| {
-            let codes = if r.fields().is_empty() { r.values() } else { &[] };
+            let codes = if r.fields().is_empty() {
+                r.values()
+            } else {
+                &[]
+            };
             let least = match (codes, r.limits().0) {
                 (values, _) if !values.is_empty() && !values.iter().any(|v| v.value == 0) => {
                     values.first().map(|v| f64::from(v.value))

@@ -39,7 +39,12 @@ fn every_register_finds_its_own_row() {
             assert!(drive.register_at(i) == Some(r));
             assert!(drive.register_of_row(r.row()) == Some(r));
             let by_id = drive.register_by_id(r.id()).expect("by id");
-            assert!(std::ptr::eq(row, by_id.plan()), "{}: {}", drive.id(), r.id());
+            assert!(
+                std::ptr::eq(row, by_id.plan()),
+                "{}: {}",
+                drive.id(),
+                r.id()
+            );
         }
         assert!(drive.register_by_id("no_such_register").is_none());
     }

@@ -17,10 +17,10 @@ use drivemap_map::facts::field_span;
 use drivemap_map::facts::{BitField as Field, EnumValue, Scale, VariantOverride, WrittenRegister};
 
 use super::{ChangeKind, Collector, Side, json, same};
+use drivemap_map::Map;
 use drivemap_map::describe;
 use drivemap_map::facts::data::ScaleData;
 use drivemap_map::facts::{FactKey, RegisterFacts};
-use drivemap_map::Map;
 
 /// A register's citation, owned.
 fn source(r: RegisterRef<'_>) -> Option<String> {
@@ -879,9 +879,8 @@ fn variant_ranges(c: &mut Collector, s: &Sides) {
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
         let (oa, ob) = (a.by_variant.get(option), b.by_variant.get(option));
-        let overrides = |o: Option<&VariantOverride>| {
-            o.map(|o| (o.min, o.max)).unwrap_or((None, None))
-        };
+        let overrides =
+            |o: Option<&VariantOverride>| o.map(|o| (o.min, o.max)).unwrap_or((None, None));
         let ((mina, maxa), (minb, maxb)) = (overrides(oa), overrides(ob));
         // Bounds neither side overrides follow the base, reported by `range`.
         let (ea, eb) = (r.limits_for(option), n.limits_for(option));

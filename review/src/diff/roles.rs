@@ -577,9 +577,7 @@ pub(super) fn command_profile(c: &mut Collector, old: &Map, new: &Map) {
             y.and_then(|t| t.source.clone()),
         );
     }
-    let path = |p: &PathSpec| {
-        format!("via {} to {}", p.via.join(", "), p.to.join(", "))
-    };
+    let path = |p: &PathSpec| format!("via {} to {}", p.via.join(", "), p.to.join(", "));
     let ids: BTreeSet<&String> = a.paths.keys().chain(b.paths.keys()).collect();
     for id in ids {
         entry(

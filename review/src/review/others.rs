@@ -10,7 +10,12 @@ use super::matching::{AddressForms, Line, name_found, number_found, param_found,
 
 /// Whether the line shows what `rule` asks (`Register` is decided by the register check, not
 /// here).
-pub(crate) fn found(rule: &CitationRule, map: &Map, offsets: Option<(i32, i32)>, line: &Line) -> bool {
+pub(crate) fn found(
+    rule: &CitationRule,
+    map: &Map,
+    offsets: Option<(i32, i32)>,
+    line: &Line,
+) -> bool {
     let decimal = map.address_format() == AddressFormat::Decimal;
     let forms = |a: u16| {
         let f = AddressForms::new(a, offsets);
