@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 
 use crate::Refused;
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Conversion, RegisterPlan};
+use drivemap_runtime::core::plan::{RegisterPlan, ValueShape};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::Role;
 use rumqttc::v5::mqttbytes::QoS;
@@ -367,18 +367,14 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
         let object = slug(r.id());
         let mut c = base(&object, r.name());
         c["command_topic"] = json!(format!("{root}/{}/set/{}", info.name, r.id()));
-        let component = match plan.conversion {
-            Conversion::Enum { .. } => {
+        let component = match plan.conversion.shape() {
+            ValueShape::Codes(_) => {
                 c["options"] = json!(select_options(plan));
                 c["optimistic"] = json!(true);
                 "select"
             }
-            Conversion::Bits { .. } => continue,
-            Conversion::Word { .. }
-            | Conversion::Decimal { .. }
-            | Conversion::Relative { .. }
-            | Conversion::Ratio { .. }
-            | Conversion::Selected { .. } => {
+            ValueShape::Bits { .. } => continue,
+            ValueShape::Word { .. } | ValueShape::Number => {
                 if !plan.unit.is_empty() {
                     c["unit_of_measurement"] = json!(unit(plan.unit));
                 }
@@ -459,12 +455,12 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
 
 /// The options of a select: an enumeration's codes as the bridge publishes them.
 fn select_options(plan: &RegisterPlan) -> Vec<String> {
-    match plan.conversion {
-        Conversion::Enum { values, .. } => values
+    match plan.conversion.shape() {
+        ValueShape::Codes(values) => values
             .iter()
             .map(|v| crate::link::option_text(v.code, Some(v.id), Some(v.name)))
             .collect(),
-        _ => Vec::new(),
+        ValueShape::Word { .. } | ValueShape::Number | ValueShape::Bits { .. } => Vec::new(),
     }
 }
 

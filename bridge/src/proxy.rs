@@ -29,6 +29,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use drivemap_live::codec;
+use drivemap_runtime::core::plan::ValueShape;
 use drivemap_runtime::pdu::{self, Request, Response, Words};
 use drivemap_runtime::roles::RoleKind;
 use drivemap_runtime::tcp;
@@ -468,13 +469,7 @@ impl LineSide {
             // Its scale and its limits through other parameters, with those parameters read
             // now: a word the drive would take for another value, or above a limit in force,
             // never reaches the line.
-            let quantity = matches!(
-                r.plan().conversion,
-                drivemap_runtime::plan::Conversion::Decimal { .. }
-                    | drivemap_runtime::plan::Conversion::Relative { .. }
-                    | drivemap_runtime::plan::Conversion::Ratio { .. }
-                    | drivemap_runtime::plan::Conversion::Selected { .. }
-            );
+            let quantity = r.plan().conversion.shape() == ValueShape::Number;
             if !quantity {
                 continue; // codes, fields and words: the gate's checks of the word
             }

@@ -71,13 +71,13 @@ impl ConversionKind {
     /// Whether the kind scales a word to an engineering value (a *scale kind*: decimal,
     /// relative, ratio, selected), as opposed to a plain word, codes or bits.
     pub const fn is_scale(self) -> bool {
-        matches!(
-            self,
+        match self {
             ConversionKind::Decimal
-                | ConversionKind::Relative
-                | ConversionKind::Ratio
-                | ConversionKind::Selected
-        )
+            | ConversionKind::Relative
+            | ConversionKind::Ratio
+            | ConversionKind::Selected => true,
+            ConversionKind::Word | ConversionKind::Enum | ConversionKind::Bits => false,
+        }
     }
 }
 

@@ -136,6 +136,15 @@ pub enum Dependency {
     Quantity(Setting),
 }
 
+impl Dependency {
+    /// The setting depended on, a code's or a quantity's.
+    pub const fn setting(self) -> Setting {
+        match self {
+            Dependency::Code(s) | Dependency::Quantity(s) => s,
+        }
+    }
+}
+
 /// A setting a conversion or an address depends on: its slot in the drive's settings and the
 /// name errors give it (the parameter number when printed).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -224,6 +233,73 @@ impl Conversion {
         signed: false,
         range: Ranges::fixed(RawRange::word(false)),
     };
+
+    /// What the value is to a front end, decided here for every kind: a front end (the value
+    /// type of a generated register, the run-time codec, an export, the bridge) matches on the
+    /// [`ValueShape`] and reads a number's scale through [`RegisterPlan::scale`], so a new kind
+    /// of scale is a number everywhere once it has its arm here.
+    pub const fn shape(&self) -> ValueShape {
+        match *self {
+            Conversion::Word { signed, .. } => ValueShape::Word { signed },
+            Conversion::Decimal { .. }
+            | Conversion::Relative { .. }
+            | Conversion::Ratio { .. }
+            | Conversion::Selected { .. } => ValueShape::Number,
+            Conversion::Enum { values, .. } => ValueShape::Codes(values),
+            Conversion::Bits { mask, fields } => ValueShape::Bits { mask, fields },
+        }
+    }
+
+    /// Calls `each` with every setting the conversion reads: the selecting parameter of a
+    /// selected scale ([`Dependency::Code`]) and the quantity a relative scale, or the case of
+    /// a selected scale that `settings` choose, refers to ([`Dependency::Quantity`]; every
+    /// case's while the selector's code is unknown), in that order.
+    pub fn depends_on(&self, settings: &impl SettingsView, mut each: impl FnMut(Dependency)) {
+        match self {
+            Conversion::Relative { relative, .. } => each(Dependency::Quantity(relative.reference)),
+            Conversion::Selected {
+                selector, cases, ..
+            } => {
+                each(Dependency::Code(*selector));
+                let code = settings.code(selector.slot);
+                for case in cases.iter() {
+                    if let (CaseScale::Relative(r), true) =
+                        (&case.scale, code.is_none_or(|c| case.codes.contains(&c)))
+                    {
+                        each(Dependency::Quantity(r.reference));
+                    }
+                }
+            }
+            Conversion::Word { .. }
+            | Conversion::Decimal { .. }
+            | Conversion::Ratio { .. }
+            | Conversion::Enum { .. }
+            | Conversion::Bits { .. } => {}
+        }
+    }
+}
+
+/// What a register's value is to a front end, whatever its [`Conversion`]
+/// ([`Conversion::shape`]): a plain word, a number in the register's unit (every kind of
+/// scale), codes, or bit fields.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ValueShape {
+    /// A plain word or pair, read as an integer.
+    Word {
+        /// Whether it is two's complement.
+        signed: bool,
+    },
+    /// A number in the register's unit: its scale in force is [`RegisterPlan::scale`].
+    Number,
+    /// An enumeration: its listed codes.
+    Codes(&'static [Label]),
+    /// Bit fields.
+    Bits {
+        /// The bits of the fields (the others are reserved).
+        mask: u16,
+        /// The fields.
+        fields: &'static [Field],
+    },
 }
 
 /// A relative scale: `full_scale` raw counts are 100 % of the quantity in `reference`.
@@ -413,6 +489,31 @@ impl Scale {
             Scale::Ratio { ratio, .. } => ratio.step().decimal_digits().unwrap_or(6) as usize,
         }
     }
+
+    /// One raw count in the register's unit, as the nearest `f64` (0.01 Hz; 1/60 Hz for a
+    /// ratio of 3600 = 60.0 Hz; the reference's value / `full_scale` for a relative scale):
+    /// the factor a tool that scales words by multiplying uses.
+    pub fn step(&self) -> f64 {
+        match self {
+            Scale::Decimal { scale, .. } => scale.decode(1),
+            Scale::Relative {
+                full_scale,
+                reference,
+                ..
+            } => reference / full_scale,
+            Scale::Ratio { ratio, .. } => ratio.decode(1),
+        }
+    }
+
+    /// The exact value of the raw integer `int` where [`Scale::decimals`] digits do not carry
+    /// it: a ratio's, kept as a fraction (`3599/60` Hz). `None` for a decimal scale, which its
+    /// digits show exactly, and a relative one, whose reference is a float.
+    pub fn exact(&self, int: i64) -> Option<Fraction> {
+        match self {
+            Scale::Ratio { ratio, .. } => Some(ratio.exact(int)),
+            Scale::Decimal { .. } | Scale::Relative { .. } => None,
+        }
+    }
 }
 
 /// How many rows of `plans` are writable: the length of their [`write_rules`].
@@ -591,23 +692,7 @@ impl RegisterPlan {
     /// ([`Dependency::Quantity`]). For a selected scale only the case `settings` choose counts
     /// (every case while the selector's code is unknown). A setting may be reported twice.
     pub fn depends_on(&self, settings: &impl SettingsView, mut each: impl FnMut(Dependency)) {
-        match &self.conversion {
-            Conversion::Relative { relative, .. } => each(Dependency::Quantity(relative.reference)),
-            Conversion::Selected {
-                selector, cases, ..
-            } => {
-                each(Dependency::Code(*selector));
-                let code = settings.code(selector.slot);
-                for case in cases.iter() {
-                    if let (CaseScale::Relative(r), true) =
-                        (&case.scale, code.is_none_or(|c| case.codes.contains(&c)))
-                    {
-                        each(Dependency::Quantity(r.reference));
-                    }
-                }
-            }
-            _ => {}
-        }
+        self.conversion.depends_on(settings, &mut each);
         for m in self.moves {
             if let Condition::Setting { selector, .. } = m.when {
                 each(Dependency::Code(selector));
@@ -689,7 +774,9 @@ impl RegisterPlan {
             Conversion::Selected {
                 selector, cases, ..
             } => self.case(*selector, cases, settings),
-            _ => return None,
+            Conversion::Word { .. } | Conversion::Enum { .. } | Conversion::Bits { .. } => {
+                return None;
+            }
         })
     }
 
@@ -923,7 +1010,10 @@ impl RegisterPlan {
                     }),
                 };
             }
-            _ => return self.encode_number(raw as f64, settings),
+            Conversion::Decimal { .. }
+            | Conversion::Relative { .. }
+            | Conversion::Ratio { .. }
+            | Conversion::Selected { .. } => return self.encode_number(raw as f64, settings),
         };
         scale::encode_int(self.info.id, self.unit, raw, range).map(|i| self.info.width.from_int(i))
     }

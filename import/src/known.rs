@@ -2,7 +2,6 @@
 
 use drivemap_map::Map;
 use drivemap_map::facts::DefaultValue;
-use drivemap_map::facts::data::ScaleData;
 
 use crate::compare::Known;
 
@@ -18,15 +17,7 @@ pub fn registers(drive: &Map) -> Vec<Known> {
                 address: r.address(),
                 name: r.name().to_owned(),
                 unit: r.unit().map(str::to_owned),
-                scale: match r.scale() {
-                    None | Some(ScaleData::None) => Ok(None),
-                    Some(ScaleData::Factor(f)) => Ok(Some(f)),
-                    Some(ScaleData::Relative { .. }) => Err("a relative scale"),
-                    Some(ScaleData::Ratio { .. }) => Err("a ratio scale"),
-                    Some(ScaleData::Selected { .. }) => {
-                        Err("a scale selected by another parameter")
-                    }
-                },
+                scale: r.scale().map_or(Ok(None), |s| s.factor()),
                 min,
                 max,
                 default: match r.default() {

@@ -8,7 +8,7 @@
 use std::fmt;
 
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Conversion, Field, RegisterPlan};
+use drivemap_runtime::core::plan::{Conversion, Field, RegisterPlan, ValueShape};
 use drivemap_runtime::ratio::Fraction;
 use drivemap_runtime::{Rounding, ValueError};
 
@@ -198,9 +198,9 @@ pub fn decode_written(
     settings: &LiveSettings,
 ) -> Result<Value, ValueError> {
     let (plan, view) = planned(drive, r, settings);
-    match &plan.conversion {
-        Conversion::Word { .. } => Ok(Value::Word(plan.int(raw))),
-        Conversion::Enum { .. } => {
+    match plan.conversion.shape() {
+        ValueShape::Word { .. } => Ok(Value::Word(plan.int(raw))),
+        ValueShape::Codes(_) => {
             let raw = raw as u16;
             let label = plan.label(raw);
             Ok(Value::Code {
@@ -209,30 +209,20 @@ pub fn decode_written(
                 name: label.map(|l| l.name.to_owned()),
             })
         }
-        Conversion::Bits { mask, fields } => {
+        ValueShape::Bits { mask, fields } => {
             let raw = raw as u16 & mask;
             Ok(Value::Bits {
                 raw,
                 fields: field_values(fields, raw),
             })
         }
-        Conversion::Decimal { .. }
-        | Conversion::Relative { .. }
-        | Conversion::Ratio { .. }
-        | Conversion::Selected { .. } => {
-            let decimals = match plan.scale(&view) {
-                Some(Ok(s)) => s.decimals(),
-                Some(Err(e)) => return Err(e),
-                None => 0,
-            };
+        ValueShape::Number => {
+            let scale = plan.scale(&view).transpose()?;
             Ok(Value::Quantity {
                 value: plan.decode_number(raw, &view)?,
                 unit: plan.unit.to_owned(),
-                decimals,
-                exact: match plan.conversion {
-                    Conversion::Ratio { .. } => plan.decode_exact(raw, &view)?,
-                    _ => None,
-                },
+                decimals: scale.map_or(0, |s| s.decimals()),
+                exact: scale.and_then(|s| s.exact(plan.int(raw))),
             })
         }
     }

@@ -11,17 +11,19 @@
 //!
 //! A register's facts are worded here once, into the facts view ([`crate::facts`]); printers
 //! read a register's rows there rather than calling these functions on the map (see
-//! `map/README.md` for the few that still word a register themselves, and why).
+//! `map/README.md` for the few that still word a register themselves, and why). A scale is
+//! worded by kind where its kind is decided, on its typed form
+//! ([`ScaleData::describe`](crate::facts::data::ScaleData::describe)); the scale of a register
+//! ([`RegisterRef::scale_text`](crate::RegisterRef::scale_text)) and [`kind`] read it and the
+//! plan's [`ValueShape`] without matching on the kind.
 
-use drivemap_core::plan::{Conversion, RegisterPlan};
+use drivemap_core::plan::{RegisterPlan, ValueShape};
 use drivemap_core::register::{Access, Table, WriteRestriction};
 use drivemap_core::rule::Transports;
 use drivemap_core::width::{Width, WordOrder};
 
 use crate::ir::{Drive, Register};
-use crate::model::{
-    Condition, DefaultValue, Dependency, DisplayStep, Field, Reference, Scale, UnknownItem,
-};
+use crate::model::{Condition, DefaultValue, Dependency, DisplayStep, Field, Scale, UnknownItem};
 use crate::names::field_span;
 /// `accel_time_1` → `AccelTime1`: how generated code names map items.
 pub use crate::names::pascal_case;
@@ -201,25 +203,15 @@ pub fn width(w: Width) -> String {
 /// What kind of value a register holds.
 pub fn kind(plan: &RegisterPlan) -> &'static str {
     let pair = plan.info.width != Width::Word;
-    match plan.conversion {
-        Conversion::Word { signed: true, .. } if pair => "signed 32-bit pair",
-        Conversion::Word { .. } if pair => "32-bit pair",
-        Conversion::Word { signed: true, .. } => "signed word",
-        Conversion::Word { .. } => "word",
-        Conversion::Decimal { .. }
-        | Conversion::Relative { .. }
-        | Conversion::Ratio { .. }
-        | Conversion::Selected { .. }
-            if pair =>
-        {
-            "32-bit quantity"
-        }
-        Conversion::Decimal { .. }
-        | Conversion::Relative { .. }
-        | Conversion::Ratio { .. }
-        | Conversion::Selected { .. } => "quantity",
-        Conversion::Enum { .. } => "enumeration",
-        Conversion::Bits { .. } => "bit fields",
+    match plan.conversion.shape() {
+        ValueShape::Word { signed: true } if pair => "signed 32-bit pair",
+        ValueShape::Word { .. } if pair => "32-bit pair",
+        ValueShape::Word { signed: true } => "signed word",
+        ValueShape::Word { .. } => "word",
+        ValueShape::Number if pair => "32-bit quantity",
+        ValueShape::Number => "quantity",
+        ValueShape::Codes(_) => "enumeration",
+        ValueShape::Bits { .. } => "bit fields",
     }
 }
 
@@ -240,42 +232,11 @@ pub(crate) fn setting(drive: &Drive, name: &str) -> String {
         .unwrap_or_else(|| name.to_owned())
 }
 
-/// The register or quantity a relative scale refers to: `Cn-02 (Max output frequency)`, or an
-/// external quantity's description and unit.
-pub(crate) fn reference(drive: &Drive, r: &Reference) -> String {
-    match r {
-        Reference::Register(name) => match drive.find(name) {
-            Some(t) => format!("{} ({})", setting(drive, name), t.def.name),
-            None => name.clone(),
-        },
-        Reference::External(q) => format!("{} ({}, external)", q.description, q.unit),
-    }
-}
-
 /// A scale in engineering units: `0.01 Hz` (per count), `30000 = 100 % of Cn-02 (…)`, or a
-/// selected scale with its cases (`selected by C6-01: 0 → 0.01 Hz; 1 → 0.1 Hz`).
+/// selected scale with its cases (`selected by C6-01: 0 → 0.01 Hz; 1 → 0.1 Hz`). The wording
+/// of each kind is its typed form's ([`ScaleData::describe`](crate::facts::data::ScaleData::describe)).
 pub(crate) fn scale(drive: &Drive, s: &Scale, unit: &str) -> String {
-    match s {
-        Scale::Factor(f) => format!("{} {unit}", num(*f)).trim_end().to_owned(),
-        Scale::Relative(rel) => format!(
-            "{} = 100 % of {}",
-            num(rel.full_scale),
-            reference(drive, &rel.relative_to)
-        ),
-        Scale::Ratio(rs) => ratio(rs, unit),
-        Scale::Selected(sel) => {
-            let cases: Vec<String> = sel
-                .cases
-                .iter()
-                .map(|c| format!("{} → {}", codes(&c.when), scale(drive, &c.scale, unit)))
-                .collect();
-            format!(
-                "{}: {}",
-                selected_by(drive, &sel.selected_by),
-                cases.join("; ")
-            )
-        }
-    }
+    crate::facts::data::scale_of(drive, s).describe(unit)
 }
 
 /// A ratio scale: `3600 = 60 Hz (1/60 (≈0.016667) Hz per count, exact)`.
@@ -289,11 +250,6 @@ pub(crate) fn ratio(s: &crate::model::RatioScale, unit: &str) -> String {
         Some(r) => format!("{r}{unit} ({}{unit} per count, exact)", r.step()),
         None => format!("{} = {}{unit}", s.counts, num(s.equals)),
     }
-}
-
-/// Who selects a scale: `selected by C6-01`.
-pub(crate) fn selected_by(drive: &Drive, selector: &str) -> String {
-    format!("selected by {}", setting(drive, selector))
 }
 
 /// Selector codes: `0`, `1, 2`.

@@ -22,7 +22,7 @@
 
 use serde_json::{Value, json};
 
-use crate::facts::data::{Quantity, ScaleData};
+use crate::facts::data::Quantity;
 use drivemap_core::stated::ProtocolFact;
 
 use crate::facts::{self, Figure, ProtocolFacts, ProtocolKey, ProtocolRow, RegisterFacts};
@@ -41,48 +41,6 @@ fn labels(list: &[drivemap_core::plan::Label]) -> Value {
     )
 }
 
-/// A register by its shown name (`"Cn-02"`), or an external quantity.
-fn shown(q: &Quantity) -> Value {
-    match q {
-        Quantity::Register { shown, .. } => json!(shown),
-        Quantity::External { external, unit } => json!({"external": external, "unit": unit}),
-    }
-}
-
-/// A case's scale: a factor, `{"relative_to", "full_scale"}`, a ratio; null for a selection.
-fn scale_json(scale: &ScaleData) -> Value {
-    match scale {
-        ScaleData::Factor(f) => json!(f),
-        ScaleData::Relative {
-            reference,
-            full_scale,
-        } => json!({"relative_to": shown(reference), "full_scale": full_scale}),
-        ScaleData::Ratio { .. } => ratio_json(scale),
-        ScaleData::Selected { .. } | ScaleData::None => Value::Null,
-    }
-}
-
-/// A ratio scale: `{"counts": 3600, "equals": 60.0, "step": "1/60"}` (the exact value of one
-/// count as a fraction or a finite decimal).
-fn ratio_json(scale: &ScaleData) -> Value {
-    let ScaleData::Ratio {
-        counts,
-        equals,
-        step,
-    } = scale
-    else {
-        return Value::Null;
-    };
-    let step = step.map(|s| {
-        if s.is_decimal() {
-            s.to_string()
-        } else {
-            format!("{}/{}", s.num, s.den)
-        }
-    });
-    json!({"counts": counts, "equals": equals, "step": step})
-}
-
 fn default_json(d: &Option<DefaultValue>) -> (Value, Value) {
     match d {
         Some(DefaultValue::Value(v)) => (json!(v), Value::Null),
@@ -94,36 +52,10 @@ fn default_json(d: &Option<DefaultValue>) -> (Value, Value) {
     }
 }
 
-/// The scale columns of a register: `scale` (a fixed factor or ratio), `scale_selected_by`,
-/// `scale_relative_to` and `scale_cases`, each null where it does not apply.
-fn scale_columns(scale: &ScaleData) -> (Value, Value, Value, Value) {
-    match scale {
-        ScaleData::Factor(x) => (json!(x), Value::Null, Value::Null, Value::Null),
-        ScaleData::Relative {
-            reference,
-            full_scale,
-        } => (
-            Value::Null,
-            Value::Null,
-            json!({"reference": shown(reference), "full_scale": full_scale}),
-            Value::Null,
-        ),
-        ScaleData::Ratio { .. } => (ratio_json(scale), Value::Null, Value::Null, Value::Null),
-        ScaleData::Selected { selector, cases } => {
-            let cases = cases
-                .iter()
-                .map(|c| json!({"when": c.when, "scale": scale_json(&c.scale), "min": c.min, "max": c.max}))
-                .collect::<Vec<_>>();
-            (Value::Null, json!(selector), Value::Null, json!(cases))
-        }
-        ScaleData::None => (Value::Null, Value::Null, Value::Null, Value::Null),
-    }
-}
-
 /// The export's object of one register: a mapping of its facts' data.
 fn register(f: &RegisterFacts) -> Value {
     let d = &f.data;
-    let (scale, selected_by, relative_to, cases) = scale_columns(&d.scale);
+    let [scale, selected_by, relative_to, cases] = d.scale.export_columns();
     let fields: Vec<Value> = d
         .fields
         .iter()
@@ -182,7 +114,7 @@ fn register(f: &RegisterFacts) -> Value {
             // As the map names it (`n011`), not as shown.
             "relative_to": match &l.relative_to {
                 Quantity::Register { name, .. } => json!(name),
-                q @ Quantity::External { .. } => shown(q),
+                q @ Quantity::External { .. } => q.shown_json(),
             },
             "percent": l.percent,
             "source": l.source,

@@ -18,9 +18,9 @@
 //! cites a manual. [`WrittenMap`] and [`WrittenRegister`] name every key of a map and of a
 //! register in them, for a tool that compares two maps (`drivemap diff`).
 //!
-//! A new kind of scale adds one [`ConversionKind`] in the vocabulary crate and one arm in
-//! `scale_row` (this module): every printer that reads the view shows it
-//! (`tests/tests/cross_crate/scale_kinds.rs`).
+//! A new kind of scale adds one [`ConversionKind`] in the vocabulary crate and its typed form
+//! in [`data::ScaleData`], which words it (`scale_row`, this module, reads it): every printer
+//! that reads the view shows it (`tests/tests/cross_crate/scale_kinds.rs`).
 
 use serde::Serialize;
 
@@ -280,29 +280,17 @@ pub(crate) fn facts(drive: &Drive) -> DriveFacts {
 }
 
 /// The scale row of a register, by the kind of its value: a fixed scale (a unit without a
-/// scale is factor 1), or who selects it; none for words, codes and bits.
+/// scale is factor 1), or who selects it ([`data::ScaleData`] decides which); none for words,
+/// codes and bits.
 pub(crate) fn scale_row(drive: &Drive, r: &Register) -> Option<Fact> {
     let unit = r.def.unit.as_deref().unwrap_or("");
-    match r.kind() {
-        ValueKind::Quantity(Scale::Selected(sel)) => Some(Fact::new(
-            FactKey::SelectedBy,
-            describe::selected_by(drive, &sel.selected_by),
-            None,
-        )),
-        ValueKind::Quantity(scale @ (Scale::Factor(_) | Scale::Relative(_) | Scale::Ratio(_))) => {
-            Some(Fact::new(
-                FactKey::Scale,
-                describe::scale(drive, scale, unit),
-                None,
-            ))
-        }
-        ValueKind::UnitQuantity => Some(Fact::new(
-            FactKey::Scale,
-            describe::scale(drive, &Scale::Factor(1.0), unit),
-            None,
-        )),
-        ValueKind::Word | ValueKind::Enum(_) | ValueKind::Bits(_) => None,
-    }
+    let scale = match r.kind() {
+        ValueKind::Quantity(scale) => data::scale_of(drive, scale),
+        ValueKind::UnitQuantity => data::ScaleData::Factor(1.0),
+        ValueKind::Word | ValueKind::Enum(_) | ValueKind::Bits(_) => return None,
+    };
+    let (key, value) = scale.row(unit)?;
+    Some(Fact::new(key, value, None))
 }
 
 /// The rows of a register, in the order printers show them: one entry per key, absent where

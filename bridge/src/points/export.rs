@@ -14,7 +14,7 @@ use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::Table;
 use drivemap_runtime::bus_time::BusModel;
-use drivemap_runtime::plan::{Conversion, Scale};
+use drivemap_runtime::core::plan::{RegisterPlan, SettingsView, ValueShape};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::profile::{Parity, TransportKind};
 
@@ -200,8 +200,8 @@ impl<'d> Export<'d> {
                 left_out.push((r, "its address is outside 0..=FFFFh on this link".into()));
                 continue;
             };
-            let meaning = match (&plan.conversion, plan.scale(&view)) {
-                (_, Some(Err(e))) => {
+            let meaning = match plan.scale(&view) {
+                Some(Err(e)) => {
                     left_out.push((
                         r,
                         format!(
@@ -211,54 +211,23 @@ impl<'d> Export<'d> {
                     ));
                     continue;
                 }
-                (conversion, Some(Ok(scale))) => {
-                    let given = match conversion {
-                        Conversion::Selected { selector, .. } => {
-                            let mut g = format!("{} as given with --set", selector.label);
-                            if let Scale::Relative { label, .. } = scale
-                                && label != selector.label
-                            {
-                                g = format!("{g}, and {label}");
-                            }
-                            g
-                        }
-                        Conversion::Relative { relative, .. } => {
-                            format!("{} as given with --set", relative.reference.label)
-                        }
-                        // No setting given by hand: every kind named, so a new one is decided
-                        // here (the compiler asks).
-                        Conversion::Word { .. }
-                        | Conversion::Decimal { .. }
-                        | Conversion::Ratio { .. }
-                        | Conversion::Enum { .. }
-                        | Conversion::Bits { .. } => String::new(),
-                    };
-                    let factor = match scale {
-                        Scale::Decimal { scale, .. } => scale.decode(1),
-                        Scale::Relative {
-                            full_scale,
-                            reference,
-                            ..
-                        } => reference / full_scale,
-                        // One count of a ratio scale as the nearest `f64` (1/60 Hz for 3600 =
-                        // 60.0 Hz); the target shows `decimals` of it (six when not a decimal).
-                        Scale::Ratio { ratio, .. } => ratio.decode(1),
-                    };
-                    Meaning::Number(Some(Fixed {
-                        factor,
-                        precision: scale.decimals(),
-                        given,
-                    }))
-                }
-                (Conversion::Enum { values, .. }, None) => {
-                    Meaning::Code(if plan.read_values.is_empty() {
+                Some(Ok(scale)) => Meaning::Number(Some(Fixed {
+                    // One count as the nearest `f64` (1/60 Hz for a ratio of 3600 = 60.0 Hz);
+                    // the target shows `decimals` of it (six when not a decimal).
+                    factor: scale.step(),
+                    precision: scale.decimals(),
+                    given: given(plan, &view),
+                })),
+                None => match plan.conversion.shape() {
+                    ValueShape::Codes(values) => Meaning::Code(if plan.read_values.is_empty() {
                         values
                     } else {
                         plan.read_values
-                    })
-                }
-                (Conversion::Bits { fields, .. }, None) => Meaning::Bits(fields),
-                (_, None) => Meaning::Word,
+                    }),
+                    ValueShape::Bits { fields, .. } => Meaning::Bits(fields),
+                    // A number always has a scale (`RegisterPlan::scale`).
+                    ValueShape::Word { .. } | ValueShape::Number => Meaning::Word,
+                },
             };
             wanted.push((plan.info.table, address));
             points.push((
@@ -411,5 +380,120 @@ pub fn meanings_text(p: &Point) -> Option<String> {
                 .join(", ")
         )),
         _ => None,
+    }
+}
+
+/// The settings a fixed scale was fixed with, as the formats note them: `n152 as given with
+/// --set`, `, and n011` for the quantity the selected case refers to; empty where the scale
+/// reads no setting.
+fn given(plan: &RegisterPlan, settings: &impl SettingsView) -> String {
+    let mut labels: Vec<&str> = Vec::new();
+    plan.conversion.depends_on(settings, |d| {
+        let label = d.setting().label;
+        if !labels.contains(&label) {
+            labels.push(label);
+        }
+    });
+    let Some((first, rest)) = labels.split_first() else {
+        return String::new();
+    };
+    let mut given = format!("{first} as given with --set");
+    for label in rest {
+        given = format!("{given}, and {label}");
+    }
+    given
+}
+
+#[cfg(test)]
+mod tests {
+    use drivemap_runtime::core::plan::{Case, CaseScale, Conversion, Ranges, Relative, Setting};
+    use drivemap_runtime::core::register::RegisterInfo;
+    use drivemap_runtime::core::scale::{Decimal, RawRange};
+
+    use super::*;
+
+    const SELECTOR: Setting = Setting {
+        slot: 0,
+        label: "n152",
+    };
+
+    fn plan(conversion: Conversion) -> RegisterPlan {
+        let info = RegisterInfo {
+            id: "current",
+            name: "Current",
+            ..RegisterInfo::DEFAULT
+        };
+        RegisterPlan::new(info, "A", conversion, RawRange::word(false))
+    }
+
+    struct Code(u16);
+
+    impl SettingsView for Code {
+        fn code(&self, _: u8) -> Option<u16> {
+            Some(self.0)
+        }
+        fn quantity(&self, _: u8) -> Option<f64> {
+            Some(50.0)
+        }
+        fn variant(&self, _: u8) -> u8 {
+            0
+        }
+    }
+
+    /// The settings a fixed scale names: the selector, then the quantity of the case in force
+    /// when it is another setting; the reference of a relative scale; none for a decimal.
+    #[test]
+    fn a_fixed_scale_names_the_settings_given() {
+        let relative = |label| {
+            CaseScale::Relative(Relative {
+                full_scale: 30000.0,
+                reference: Setting { slot: 1, label },
+            })
+        };
+        let cases: &'static [Case] = Box::leak(Box::new([
+            Case {
+                codes: &[0],
+                scale: CaseScale::Decimal {
+                    scale: Decimal::new(1, 1),
+                    range: RawRange::word(false),
+                },
+            },
+            Case {
+                codes: &[1],
+                scale: relative("n011"),
+            },
+            Case {
+                codes: &[2],
+                scale: relative("n152"),
+            },
+        ]));
+        let selected = plan(Conversion::Selected {
+            signed: false,
+            selector: SELECTOR,
+            cases,
+        });
+        assert_eq!(given(&selected, &Code(0)), "n152 as given with --set");
+        assert_eq!(
+            given(&selected, &Code(1)),
+            "n152 as given with --set, and n011"
+        );
+        assert_eq!(given(&selected, &Code(2)), "n152 as given with --set");
+        let relative = plan(Conversion::Relative {
+            signed: false,
+            relative: Relative {
+                full_scale: 30000.0,
+                reference: Setting {
+                    slot: 1,
+                    label: "Cn-02",
+                },
+            },
+        });
+        assert_eq!(given(&relative, &Code(0)), "Cn-02 as given with --set");
+        let decimal = plan(Conversion::Decimal {
+            signed: false,
+            scale: Decimal::new(1, 2),
+            range: Ranges::fixed(RawRange::word(false)),
+        });
+        assert_eq!(given(&decimal, &Code(0)), "");
     }
 }

@@ -14,7 +14,7 @@
 
 use drivemap_live::lookup::{self, NotFound};
 use drivemap_map::{Map, RegisterRef};
-use drivemap_runtime::plan::{Conversion, Field, Label, RegisterPlan};
+use drivemap_runtime::core::plan::{Field, Label, RegisterPlan, ValueShape};
 use drivemap_runtime::profile::TransportKind;
 use drivemap_runtime::roles::{Role, RoleKind, Target};
 use drivemap_runtime::{Table, Width, WordOrder};
@@ -255,8 +255,8 @@ pub fn polled<'d>(map: &'d Map, regs: &[RegisterRef<'d>], kind: TransportKind) -
             meaning,
             at: None,
         };
-        match plan.conversion {
-            Conversion::Bits { fields, .. } => {
+        match plan.conversion.shape() {
+            ValueShape::Bits { fields, .. } => {
                 for (index, field) in fields.iter().enumerate() {
                     let role = if field.width == 1 {
                         field_role(map, r, field.lsb, kind)
@@ -266,16 +266,13 @@ pub fn polled<'d>(map: &'d Map, regs: &[RegisterRef<'d>], kind: TransportKind) -
                     out.push(point(role, Meaning::Field { index, field }));
                 }
             }
-            Conversion::Enum { values, .. } => {
+            ValueShape::Codes(values) => {
                 out.push(point(register_role(map, r, kind), Meaning::Code(values)));
             }
-            Conversion::Word { .. } => {
+            ValueShape::Word { .. } => {
                 out.push(point(register_role(map, r, kind), Meaning::Word));
             }
-            Conversion::Decimal { .. }
-            | Conversion::Relative { .. }
-            | Conversion::Ratio { .. }
-            | Conversion::Selected { .. } => {
+            ValueShape::Number => {
                 out.push(point(register_role(map, r, kind), Meaning::Number(None)));
             }
         }

@@ -8,7 +8,7 @@ use quote::quote;
 
 use super::{bitfields, docs, enums, ident};
 use drivemap_core::Access;
-use drivemap_core::plan::Conversion;
+use drivemap_core::plan::ValueShape;
 use drivemap_map::{Map, MapPlan, RegisterRef};
 
 pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream {
@@ -40,18 +40,15 @@ pub(super) fn emit(drive: &Map, plan: &MapPlan, rt: &TokenStream) -> TokenStream
 fn value(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> (TokenStream, TokenStream) {
     let row = Literal::usize_unsuffixed(index);
     let plan = r.plan();
-    match plan.conversion {
-        Conversion::Word { signed, .. } => match (plan.info.width.count() == 2, signed) {
+    match plan.conversion.shape() {
+        ValueShape::Word { signed } => match (plan.info.width.count() == 2, signed) {
             (false, true) => (quote!(i16), quote!()),
             (false, false) => (quote!(u16), quote!()),
             (true, true) => (quote!(i32), quote!()),
             (true, false) => (quote!(u32), quote!()),
         },
-        Conversion::Decimal { .. }
-        | Conversion::Relative { .. }
-        | Conversion::Ratio { .. }
-        | Conversion::Selected { .. } => (quote!(f64), quote!()),
-        Conversion::Enum { .. } => {
+        ValueShape::Number => (quote!(f64), quote!()),
+        ValueShape::Codes(_) => {
             let ty = ident(&r.value_enum_name());
             let what = match r.param() {
                 Some(p) => format!("{p} {}", r.name()),
@@ -61,7 +58,7 @@ fn value(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> (TokenStream, To
             let extra = enums::emit(&ty, r.values(), &what, labels, rt);
             (quote!(#ty), extra)
         }
-        Conversion::Bits { .. } => {
+        ValueShape::Bits { .. } => {
             let ty = ident(&r.bits_type_name());
             (quote!(#ty), bitfields::emit(r, index, rt))
         }

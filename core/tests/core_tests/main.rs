@@ -5,3 +5,4 @@
 mod exact_values;
 mod generated_shapes;
 mod ratio_exact;
+mod value_shape;

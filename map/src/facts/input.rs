@@ -2,8 +2,9 @@
 //! an input box of any front end): decided here once, from the map, so no consumer derives
 //! them from a scale of its own.
 
+use super::data::ScaleData;
 use crate::ir::{Drive, Register};
-use crate::model::{Reference, Scale};
+use crate::model::Reference;
 
 /// The widest bounds the manual gives a number register and the finest step of its value;
 /// a front end checks the bounds in force when a value comes (the write gate does).
@@ -14,9 +15,9 @@ pub struct InputBounds {
     /// Its maximum, else the highest of its selected scale's cases, else its maximum through
     /// another parameter at that parameter's maximum, else the raw word's.
     pub max: f64,
-    /// Its scale's factor where fixed, one count of a ratio scale (`equals / counts`, the
-    /// `f64` nearest to it: 1/60 Hz for 3600 = 60.0 Hz), the finest of a selected scale's
-    /// cases, [`InputBounds::RELATIVE_STEP`] for a scale relative to another quantity, else 1.
+    /// Its scale's finest step ([`ScaleData::step`]: the factor where fixed, one count of a
+    /// ratio scale, the finest of a selected scale's cases, [`InputBounds::RELATIVE_STEP`] for
+    /// a scale relative to another quantity), else 1.
     pub step: f64,
 }
 
@@ -26,11 +27,17 @@ impl InputBounds {
     pub const RELATIVE_STEP: f64 = 0.01;
 
     pub(crate) fn of(drive: &Drive, r: &Register) -> InputBounds {
-        let step = step(r);
-        let cases = match &r.def.scale {
-            Some(Scale::Selected(sel)) => sel.cases.as_slice(),
-            _ => &[],
-        };
+        let scale = r
+            .def
+            .scale
+            .as_ref()
+            .map(|s| super::data::scale_of(drive, s));
+        let step = scale
+            .as_ref()
+            .map(ScaleData::step)
+            .filter(|f| f.is_finite() && *f > 0.0)
+            .unwrap_or(1.0);
+        let cases = scale.as_ref().map_or(&[][..], ScaleData::cases);
         let min = r.def.min.or_else(|| {
             cases
                 .iter()
@@ -66,27 +73,5 @@ impl InputBounds {
             max: max.unwrap_or(hi),
             step,
         }
-    }
-}
-
-fn step(r: &Register) -> f64 {
-    fn of(s: &Scale) -> f64 {
-        match s {
-            Scale::Factor(f) => *f,
-            Scale::Relative(_) => InputBounds::RELATIVE_STEP,
-            Scale::Ratio(q) => q.equals / f64::from(q.counts),
-            Scale::Selected(sel) => sel
-                .cases
-                .iter()
-                .map(|c| of(&c.scale))
-                .fold(f64::INFINITY, f64::min),
-        }
-    }
-    match &r.def.scale {
-        Some(s) => {
-            let f = of(s);
-            if f.is_finite() && f > 0.0 { f } else { 1.0 }
-        }
-        None => 1.0,
     }
 }

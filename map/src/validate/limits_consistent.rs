@@ -2,8 +2,9 @@
 //! that fits the word, for the base variant, every variant override and every selected case.
 
 use crate::diagnostic::Diagnostic;
+use crate::facts::data::{CaseData, Limits, scale_of};
 use crate::ir::{Drive, Register, ValueKind};
-use crate::model::{DefaultValue, Scale};
+use crate::model::DefaultValue;
 use crate::source::Path;
 use drivemap_core::scale::{Decimal, raw_of};
 
@@ -110,6 +111,72 @@ impl Checker<'_> {
             }
         }
     }
+
+    /// `min`, `max` and `default` of the base variant and of every variant override, each a
+    /// whole number of increments of `factor` inside the word.
+    fn increments(&mut self, factor: Decimal) {
+        let (r, d) = (self.r, &self.r.def);
+        self.set(d.min, d.max, d.default.as_ref(), factor, &r.path, "");
+        for (k, o) in &d.by_variant {
+            let (min, max) = r.limits_for(k);
+            let label = format!("{k} ");
+            self.set(
+                min,
+                max,
+                o.default.as_ref(),
+                factor,
+                &r.key_path("by_variant").key(k),
+                &label,
+            );
+        }
+    }
+
+    /// A positive decimal factor, or an error at `path`.
+    fn factor(&mut self, f: f64, path: Path) -> Option<Decimal> {
+        match Decimal::from_f64(f) {
+            Some(dec) if dec.is_positive() => Some(dec),
+            _ => {
+                self.err(path, format!("scale {f} must be a positive decimal"));
+                None
+            }
+        }
+    }
+
+    fn full_scale(&mut self, full_scale: f64, path: Path) {
+        if !full_scale.is_finite() || full_scale <= 0.0 {
+            self.err(path, format!("full_scale {full_scale} must be positive"));
+        }
+    }
+
+    /// The cases of a selected scale, each by its own scale's rule.
+    fn cases(&mut self, cases: &[CaseData]) {
+        for (ci, case) in cases.iter().enumerate() {
+            let cp = self.r.key_path("scale").key("cases").index(ci);
+            match case.scale.limits() {
+                Some(Limits::Increments(f)) => {
+                    if let Some(dec) = self.factor(f, cp.key("scale")) {
+                        let label = format!("case {:?} ", case.when);
+                        self.set(case.min, case.max, None, dec, &cp, &label);
+                    }
+                }
+                Some(Limits::Share { full_scale }) => {
+                    if case.min.is_some() || case.max.is_some() {
+                        self.err(
+                            cp.key("min"),
+                            "limits of a relative case are not supported; note them".into(),
+                        );
+                    }
+                    self.full_scale(full_scale, cp.key("scale").key("full_scale"));
+                }
+                // Refused by `ratio_scales`.
+                Some(Limits::OwnPass) | None => {}
+                Some(Limits::Cases(_)) => self.err(
+                    cp.key("scale"),
+                    "a selected case cannot select again".into(),
+                ),
+            }
+        }
+    }
 }
 
 pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
@@ -117,92 +184,32 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         let mut c = Checker { drive, r, out };
         let d = &r.def;
         match r.kind() {
-            ValueKind::Word | ValueKind::UnitQuantity | ValueKind::Quantity(Scale::Factor(_)) => {
-                let factor = match &d.scale {
-                    Some(Scale::Factor(f)) => match Decimal::from_f64(*f) {
-                        Some(dec) if dec.is_positive() => dec,
-                        _ => {
-                            c.err(
-                                r.key_path("scale"),
-                                format!("scale {f} must be a positive decimal"),
-                            );
-                            continue;
-                        }
-                    },
-                    _ => Decimal::ONE,
-                };
-                c.set(d.min, d.max, d.default.as_ref(), factor, &r.path, "");
-                for (k, o) in &d.by_variant {
-                    let (min, max) = r.limits_for(k);
-                    let label = format!("{k} ");
-                    c.set(
-                        min,
-                        max,
-                        o.default.as_ref(),
-                        factor,
-                        &r.key_path("by_variant").key(k),
-                        &label,
-                    );
-                }
-            }
-            ValueKind::Quantity(Scale::Relative(rel)) => {
-                c.no_limits("the manual states relative values as a fraction of another quantity; record limits in a note");
-                if !rel.full_scale.is_finite() || rel.full_scale <= 0.0 {
-                    c.err(
-                        r.key_path("scale").key("full_scale"),
-                        format!("full_scale {} must be positive", rel.full_scale),
-                    );
-                }
-                if let Some(DefaultValue::Value(_)) = &d.default {
-                    c.err(
-                        r.key_path("default"),
-                        "a relative value has no default in engineering units; note it instead"
-                            .into(),
-                    );
-                }
-            }
-            // Checked by `ratio_scales`.
-            ValueKind::Quantity(Scale::Ratio(_)) => {}
-            ValueKind::Quantity(Scale::Selected(sel)) => {
-                c.no_limits(
-                    "the scale is selected by another parameter; give `min`/`max` in each case",
-                );
-                for (ci, case) in sel.cases.iter().enumerate() {
-                    let cp = r.key_path("scale").key("cases").index(ci);
-                    match &case.scale {
-                        Scale::Factor(f) => match Decimal::from_f64(*f) {
-                            Some(dec) if dec.is_positive() => {
-                                let label = format!("case {:?} ", case.when);
-                                c.set(case.min, case.max, None, dec, &cp, &label);
-                            }
-                            _ => c.err(
-                                cp.key("scale"),
-                                format!("scale {f} must be a positive decimal"),
-                            ),
-                        },
-                        Scale::Relative(rel) => {
-                            if case.min.is_some() || case.max.is_some() {
-                                c.err(
-                                    cp.key("min"),
-                                    "limits of a relative case are not supported; note them".into(),
-                                );
-                            }
-                            if !rel.full_scale.is_finite() || rel.full_scale <= 0.0 {
-                                c.err(
-                                    cp.key("scale").key("full_scale"),
-                                    format!("full_scale {} must be positive", rel.full_scale),
-                                );
-                            }
-                        }
-                        // Refused by `ratio_scales`.
-                        Scale::Ratio(_) => {}
-                        Scale::Selected(_) => c.err(
-                            cp.key("scale"),
-                            "a selected case cannot select again".into(),
-                        ),
+            ValueKind::Word | ValueKind::UnitQuantity => c.increments(Decimal::ONE),
+            ValueKind::Quantity(scale) => match scale_of(drive, scale).limits() {
+                Some(Limits::Increments(f)) => match c.factor(f, r.key_path("scale")) {
+                    Some(factor) => c.increments(factor),
+                    None => continue,
+                },
+                Some(Limits::Share { full_scale }) => {
+                    c.no_limits("the manual states relative values as a fraction of another quantity; record limits in a note");
+                    c.full_scale(full_scale, r.key_path("scale").key("full_scale"));
+                    if let Some(DefaultValue::Value(_)) = &d.default {
+                        c.err(
+                            r.key_path("default"),
+                            "a relative value has no default in engineering units; note it instead"
+                                .into(),
+                        );
                     }
                 }
-            }
+                // Checked by `ratio_scales`.
+                Some(Limits::OwnPass) | None => {}
+                Some(Limits::Cases(cases)) => {
+                    c.no_limits(
+                        "the scale is selected by another parameter; give `min`/`max` in each case",
+                    );
+                    c.cases(cases);
+                }
+            },
             ValueKind::Enum(values) => {
                 // A partial enumeration: the manual prints a range of codes but names only some.
                 let one = Decimal::ONE;

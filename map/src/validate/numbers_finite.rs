@@ -6,6 +6,7 @@ use crate::diagnostic::Diagnostic;
 use crate::ir::{Drive, Register};
 use crate::model::{DefaultValue, Interval, Scale};
 use crate::source::Path;
+use serde_yaml::Value;
 
 /// The largest timing figure in milliseconds: one minute. Drives answer in milliseconds;
 /// anything near this is a typo, and it keeps every derived `Duration` far from overflow.
@@ -62,19 +63,38 @@ fn interval(drive: &Drive, out: &mut Vec<Diagnostic>, i: &Interval, path: Path) 
     }
 }
 
+/// Every number a scale is written with, whatever its kind (a factor, `full_scale`, `equals`,
+/// a selected case's scale and limits), read off the scale's serialized form: a kind of scale
+/// adds no code here.
 fn scale(drive: &Drive, out: &mut Vec<Diagnostic>, reg: &str, s: &Scale, path: Path) {
-    match s {
-        Scale::Factor(f) => finite(drive, out, Some(reg), *f, path),
-        Scale::Relative(r) => finite(drive, out, Some(reg), r.full_scale, path.key("full_scale")),
-        Scale::Ratio(r) => finite(drive, out, Some(reg), r.equals, path.key("equals")),
-        Scale::Selected(sel) => {
-            for (i, case) in sel.cases.iter().enumerate() {
-                let cp = path.key("cases").index(i);
-                // Nesting is bounded by the map's nesting depth (source::MAX_DEPTH).
-                scale(drive, out, reg, &case.scale, cp.key("scale"));
-                limits(drive, out, reg, case.min, case.max, None, &cp);
+    // Serializing a map's scale cannot fail (no map keys but strings, no custom serializer).
+    if let Ok(value) = serde_yaml::to_value(s) {
+        numbers(drive, out, reg, &value, path);
+    }
+}
+
+fn numbers(drive: &Drive, out: &mut Vec<Diagnostic>, reg: &str, v: &Value, path: Path) {
+    match v {
+        Value::Number(n) => {
+            if let Some(f) = n.as_f64() {
+                finite(drive, out, Some(reg), f, path);
             }
         }
+        // Nesting is bounded by the map's nesting depth (source::MAX_DEPTH).
+        Value::Sequence(items) => {
+            for (i, item) in items.iter().enumerate() {
+                numbers(drive, out, reg, item, path.index(i));
+            }
+        }
+        Value::Mapping(entries) => {
+            for (key, item) in entries {
+                if let Some(key) = key.as_str() {
+                    numbers(drive, out, reg, item, path.key(key));
+                }
+            }
+        }
+        Value::Tagged(tagged) => numbers(drive, out, reg, &tagged.value, path),
+        Value::Null | Value::Bool(_) | Value::String(_) => {}
     }
 }
 

@@ -120,22 +120,27 @@ fn every_typed_value_says_what_its_worded_row_says() {
                 .map(|a| describe::address(a.address))
                 .collect();
             assert_eq!(alternatives, typed, "{at}");
-            match &d.scale {
-                ScaleData::Selected { cases, .. } => {
-                    assert!(f.get(FactKey::SelectedBy).is_some(), "{at}");
-                    let codes: Vec<String> =
-                        cases.iter().map(|c| describe::codes(&c.when)).collect();
-                    let worded: Vec<String> = f.cases.iter().map(|c| c.codes.clone()).collect();
-                    assert_eq!(codes, worded, "{at}");
-                }
-                ScaleData::None => {
-                    assert!(f.get(FactKey::Scale).is_none(), "{at}");
-                    assert!(f.get(FactKey::SelectedBy).is_none(), "{at}");
-                }
-                ScaleData::Factor(_) | ScaleData::Relative { .. } | ScaleData::Ratio { .. } => {
-                    assert!(
-                        f.get(FactKey::Scale).is_some() || d.unit.is_none(),
-                        "{at}: a scaled value has a scale row"
+            // By what the typed scale says, not by its kind: a new kind needs no arm here.
+            let cases = d.scale.cases();
+            if !cases.is_empty() {
+                assert!(f.get(FactKey::SelectedBy).is_some(), "{at}");
+                let codes: Vec<String> = cases.iter().map(|c| describe::codes(&c.when)).collect();
+                let worded: Vec<String> = f.cases.iter().map(|c| c.codes.clone()).collect();
+                assert_eq!(codes, worded, "{at}");
+            } else if d.scale == ScaleData::None {
+                assert!(f.get(FactKey::Scale).is_none(), "{at}");
+                assert!(f.get(FactKey::SelectedBy).is_none(), "{at}");
+            } else {
+                assert!(
+                    f.get(FactKey::Scale).is_some() || d.unit.is_none(),
+                    "{at}: a scaled value has a scale row"
+                );
+                let unit = d.unit.as_deref().unwrap_or("");
+                if let Some(row) = f.get(FactKey::Scale) {
+                    assert_eq!(
+                        row.value,
+                        d.scale.describe(unit),
+                        "{at}: worded by its kind"
                     );
                 }
             }
@@ -209,7 +214,10 @@ fn the_export_is_the_views_registers_in_address_order() {
     assert_eq!(json["word_order"], "high_first");
     assert_eq!(json["word_order_source"], "acme-vf1.txt:34");
     let current = view.iter().find(|f| f.id == "motor_current").unwrap();
-    let ScaleData::Selected { selector, cases } = &current.data.scale else {
+    let ScaleData::Selected {
+        selector, cases, ..
+    } = &current.data.scale
+    else {
         panic!("motor_current: {:?}", current.data.scale)
     };
     let json = export["registers"]
