@@ -9,9 +9,9 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use drivemap_core::register::{Access, WriteRestriction};
 use drivemap_core::kind::ConversionKind;
 use drivemap_core::plan::RegisterPlan;
+use drivemap_core::register::{Access, WriteRestriction};
 use drivemap_map::RegisterRef;
 
 use drivemap_map::facts::field_span;
