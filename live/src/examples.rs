@@ -17,8 +17,8 @@
 //! Each finding is located at the byte concerned: `file:line:col` of that byte in the
 //! `bytes:` text. `drivemap check` runs it on every map.
 
-use drivemap_map::examples::{Byte, Direction, Example, hex_text, locate_offset, parse_bytes};
 use drivemap_map::facts::TransportName;
+use drivemap_map::facts::{Byte, Direction, Example, hex_text, parse_bytes};
 use drivemap_map::{Diagnostic, Loc};
 use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::core::profile::TransportKind;
@@ -390,7 +390,7 @@ fn fc(f: u8) -> String {
 impl Verifier<'_> {
     fn at(&self, index: usize) -> Loc {
         let b = self.offsets[index.min(self.offsets.len() - 1)];
-        locate_offset(&self.bytes_loc, b.offset)
+        self.bytes_loc.at_offset(b.offset)
     }
 
     fn error(&self, out: &mut Vec<Finding>, index: usize, register: Option<&str>, msg: String) {

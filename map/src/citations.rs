@@ -55,18 +55,33 @@ pub enum PlaceKind<'a> {
     /// `protocol.<key>.source` (`max_read`, `max_write`).
     Limit(&'static str),
     /// `variants[axis].options[option].source`.
-    VariantOption { axis: usize, option: usize },
+    VariantOption {
+        /// The axis's place in `variants`.
+        axis: usize,
+        /// The option's place in its axis's `options`.
+        option: usize,
+    },
     /// `groups[i].source`.
     Group(usize),
     /// `roles.<role>[i].source`.
-    Role { role: &'a str, index: usize },
+    Role {
+        /// The role's id.
+        role: &'a str,
+        /// The place's index in the role's list.
+        index: usize,
+    },
     /// `gaps[i].source`.
     Gap(usize),
     /// `removed[i].source`.
     Removed(usize),
     /// A reading of a conflict: `conflicts[c].readings[r].source` of the map, or of the
     /// register's `conflicts` when [`CitationPlace::register`] is set.
-    ConflictReading { conflict: usize, reading: usize },
+    ConflictReading {
+        /// The conflict's index in its list.
+        conflict: usize,
+        /// The reading's index in the conflict's `readings`.
+        reading: usize,
+    },
     /// A register's row (`source` of the register; required).
     Register,
     /// The register's `values[i]`.
@@ -76,7 +91,12 @@ pub enum PlaceKind<'a> {
     /// The register's `fields[i]`.
     Field(usize),
     /// The register's `fields[field].values[value]`.
-    FieldValue { field: usize, value: usize },
+    FieldValue {
+        /// The field's index in the register's `fields`.
+        field: usize,
+        /// The value's index in the field's `values`.
+        value: usize,
+    },
     /// The register's `pair`.
     Pair,
     /// The register's `repeat_needs_change` (or its group's).
@@ -100,7 +120,13 @@ pub enum PlaceKind<'a> {
     /// `profile.source` (the drive uses the profile: `part` "profile"),
     /// `profile.power_on_source` ("power on"), `profile.states.<id>.source` ("state") or
     /// `profile.transitions.<id>.source` ("transition").
-    Profile { part: &'static str, id: &'a str },
+    Profile {
+        /// `profile`, `power on`, `state` or `transition`.
+        part: &'static str,
+        /// The state's or transition's id; the power-on state's id; `profile` for the
+        /// profile's own.
+        id: &'a str,
+    },
 }
 
 impl PlaceKind<'_> {
@@ -216,6 +242,7 @@ impl<'a> Reason<'a> {
 /// One place of a map that carries (or, for a register's row, must carry) a `source:` citation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CitationPlace<'a> {
+    /// What the place is the citation of.
     pub kind: PlaceKind<'a>,
     /// Where the `source` key is (or belongs, when it is missing).
     pub path: Path,
@@ -268,7 +295,7 @@ fn indirect(r: &Option<String>) -> Reason<'_> {
 }
 
 /// Every citation place of the map, in the order described in the module documentation.
-pub fn citation_places(drive: &Drive) -> Vec<CitationPlace<'_>> {
+pub(crate) fn citation_places(drive: &Drive) -> Vec<CitationPlace<'_>> {
     let mut w = Walk { out: Vec::new() };
     protocol(drive, &mut w);
     let root = Path::root();

@@ -90,6 +90,7 @@ pub struct ProfileSpec {
     /// The paths, by kind (`run`, `stop`, `coast`, `quick_stop`, `reset_fault`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub paths: BTreeMap<String, PathSpec>,
+    /// The map's notes on the profile.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
@@ -109,8 +110,10 @@ pub struct PowerOnSpec {
 #[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct StateSpec {
+    /// The status-word bits that decide the state.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mask: Option<Word>,
+    /// What those bits show in the state.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub value: Option<Word>,
     /// The manual line that prints the state's bits.
@@ -122,6 +125,7 @@ pub struct StateSpec {
 #[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct TransitionSpec {
+    /// The control word that takes the transition.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub word: Option<Word>,
     /// Bits the master keeps from its own composition (a direction bit): default none.
@@ -130,8 +134,10 @@ pub struct TransitionSpec {
     /// Bits the drive acts on when they rise (fault acknowledge): default none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub edge: Option<Word>,
+    /// The states it is taken from (by id).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub from: Option<Vec<String>>,
+    /// The state it leads to (by id).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub to: Option<String>,
     /// How long the drive may take to show `to` (ms).
@@ -146,12 +152,14 @@ pub struct TransitionSpec {
 #[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct PathSpec {
+    /// The transitions, in order of preference (by id).
     pub via: Vec<String>,
+    /// The states that end the path (by id).
     pub to: Vec<String>,
 }
 
 /// The standard definitions: (id, YAML).
-pub const STANDARDS: &[(&str, &str)] = &[
+pub(crate) const STANDARDS: &[(&str, &str)] = &[
     ("cia402", include_str!("../profiles/cia402.yaml")),
     ("profidrive", include_str!("../profiles/profidrive.yaml")),
     ("abb_drives", include_str!("../profiles/abb_drives.yaml")),
@@ -159,15 +167,24 @@ pub const STANDARDS: &[(&str, &str)] = &[
 ];
 
 /// The standard definition `id`, parsed.
-pub fn standard(id: &str) -> Option<ProfileSpec> {
+pub(crate) fn standard(id: &str) -> Option<ProfileSpec> {
     let (_, text) = STANDARDS.iter().find(|(k, _)| *k == id)?;
     serde_yaml::from_str(text).ok()
+}
+
+impl ProfileSpec {
+    /// The profile with the standard it names merged under it: the map's entries override the
+    /// definition's, key by key; an unknown standard leaves the map's own entries (`check`
+    /// reports it).
+    pub fn resolved(&self) -> ProfileSpec {
+        resolve(self)
+    }
 }
 
 /// The map's profile with the standard it names merged under it: the map's entries override
 /// the definition's, key by key. An unknown standard leaves the map's own entries (`check`
 /// reports it).
-pub fn resolve(spec: &ProfileSpec) -> ProfileSpec {
+pub(crate) fn resolve(spec: &ProfileSpec) -> ProfileSpec {
     let Some(mut out) = spec.standard.as_deref().and_then(standard) else {
         return spec.clone();
     };
@@ -211,7 +228,7 @@ fn index(map: &BTreeMap<String, impl Sized>, id: &str) -> Option<u8> {
 /// transition complete and cited, no status word that shows two states, transitions and paths
 /// naming states and transitions that exist, a run path, and no stop, coast, quick stop or
 /// reset path through a run transition.
-pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
+pub(crate) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
     let Some(spec) = &drive.profile else {
         return;
     };
@@ -424,7 +441,7 @@ pub fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
 
 /// The plan's command profile of a validated drive; `None` without `profile:` or when it does
 /// not resolve (validation has reported it).
-pub fn lower(drive: &Drive, row_of: &dyn Fn(&str) -> Option<u16>) -> Option<CommandProfile> {
+pub(crate) fn lower(drive: &Drive, row_of: &dyn Fn(&str) -> Option<u16>) -> Option<CommandProfile> {
     let spec = drive.profile.as_ref()?;
     let p = resolve(spec);
     let leak_str = |s: &str| -> &'static str { Box::leak(s.to_owned().into_boxed_str()) };

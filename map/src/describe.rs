@@ -13,8 +13,9 @@
 //! read a register's rows there rather than calling these functions on the map (see
 //! `map/README.md` for the few that still word a register themselves, and why). A scale is
 //! worded by kind where its kind is decided, on its typed form
-//! ([`ScaleData::describe`](crate::facts::data::ScaleData::describe)); [`scale`] and
-//! [`kind`] read it and the plan's [`ValueShape`] without matching on the kind.
+//! ([`ScaleData::describe`](crate::facts::data::ScaleData::describe)); the scale of a register
+//! ([`RegisterRef::scale_text`](crate::RegisterRef::scale_text)) and [`kind`] read it and the
+//! plan's [`ValueShape`] without matching on the kind.
 
 use drivemap_core::plan::{RegisterPlan, ValueShape};
 use drivemap_core::register::{Access, Table, WriteRestriction};
@@ -22,9 +23,7 @@ use drivemap_core::rule::Transports;
 use drivemap_core::width::{Width, WordOrder};
 
 use crate::ir::{Drive, Register};
-use crate::model::{
-    Condition, DefaultValue, Dependency, DisplayStep, Field, Reference, Scale, UnknownItem,
-};
+use crate::model::{Condition, DefaultValue, Dependency, DisplayStep, Field, Scale, UnknownItem};
 use crate::names::field_span;
 /// `accel_time_1` → `AccelTime1`: how generated code names map items.
 pub use crate::names::pascal_case;
@@ -234,7 +233,7 @@ pub fn kind(plan: &RegisterPlan) -> &'static str {
 }
 
 /// A register as a user names it: id, and the parameter number when printed.
-pub fn register(r: &Register) -> String {
+pub(crate) fn register(r: &Register) -> String {
     match &r.def.param {
         Some(p) => format!("{} ({p})", r.def.id),
         None => r.def.id.clone(),
@@ -243,28 +242,22 @@ pub fn register(r: &Register) -> String {
 
 /// A register named in a map (a selector, a reference): its parameter number when printed,
 /// else its id; the name as given when no register has it.
-pub fn setting(drive: &Drive, name: &str) -> String {
+pub(crate) fn setting(drive: &Drive, name: &str) -> String {
     drive
         .selector(name)
         .map(|s| s.prose())
         .unwrap_or_else(|| name.to_owned())
 }
 
-/// The register or quantity a relative scale refers to: `Cn-02 (Max output frequency)`, or an
-/// external quantity's description and unit.
-pub fn reference(drive: &Drive, r: &Reference) -> String {
-    crate::facts::data::quantity(drive, r).describe()
-}
-
 /// A scale in engineering units: `0.01 Hz` (per count), `30000 = 100 % of Cn-02 (…)`, or a
 /// selected scale with its cases (`selected by C6-01: 0 → 0.01 Hz; 1 → 0.1 Hz`). The wording
 /// of each kind is its typed form's ([`ScaleData::describe`](crate::facts::data::ScaleData::describe)).
-pub fn scale(drive: &Drive, s: &Scale, unit: &str) -> String {
+pub(crate) fn scale(drive: &Drive, s: &Scale, unit: &str) -> String {
     crate::facts::data::scale_of(drive, s).describe(unit)
 }
 
 /// A ratio scale: `3600 = 60 Hz (1/60 (≈0.016667) Hz per count, exact)`.
-pub fn ratio(s: &crate::model::RatioScale, unit: &str) -> String {
+pub(crate) fn ratio(s: &crate::model::RatioScale, unit: &str) -> String {
     let unit = if unit.is_empty() {
         String::new()
     } else {
@@ -274,11 +267,6 @@ pub fn ratio(s: &crate::model::RatioScale, unit: &str) -> String {
         Some(r) => format!("{r}{unit} ({}{unit} per count, exact)", r.step()),
         None => format!("{} = {}{unit}", s.counts, num(s.equals)),
     }
-}
-
-/// Who selects a scale: `selected by C6-01`.
-pub fn selected_by(drive: &Drive, selector: &str) -> String {
-    format!("selected by {}", setting(drive, selector))
 }
 
 /// Selector codes: `0`, `1, 2`.
@@ -303,7 +291,7 @@ pub fn range(min: Option<f64>, max: Option<f64>, unit: &str) -> String {
 }
 
 /// A limit through another quantity: `at most 100 % of n011 (003_...:102)`.
-pub fn relative_limit(drive: &crate::ir::Drive, l: &crate::model::RelativeLimit) -> String {
+pub(crate) fn relative_limit(drive: &crate::ir::Drive, l: &crate::model::RelativeLimit) -> String {
     let of = match &l.relative_to {
         crate::model::Reference::Register(name) => setting(drive, name),
         crate::model::Reference::External(q) => format!("{} (external)", q.external),

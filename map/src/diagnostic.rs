@@ -19,6 +19,13 @@ impl Loc {
     pub fn new(file: Arc<str>, line: usize, col: usize) -> Self {
         Loc { file, line, col }
     }
+
+    /// Where the character at `offset` of a one-line scalar written here lies: this column,
+    /// moved past an opening quote when the file shows one here (a byte of an example frame's
+    /// `bytes`).
+    pub fn at_offset(&self, offset: usize) -> Loc {
+        crate::examples::locate_offset(self, offset)
+    }
 }
 
 impl fmt::Display for Loc {

@@ -118,11 +118,14 @@ impl Says {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Direction {
+    /// From the master to the drive.
     Request,
+    /// From the drive to the master.
     Response,
 }
 
 impl Direction {
+    /// `request` or `response`, as the map writes it.
     pub fn as_str(self) -> &'static str {
         match self {
             Direction::Request => "request",
@@ -154,7 +157,9 @@ pub struct Says {
 /// One byte of an example's `bytes` text: its value and its character offset in the text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Byte {
+    /// The byte.
     pub value: u8,
+    /// Where its text starts in the `bytes` text, in characters.
     pub offset: usize,
 }
 
@@ -194,7 +199,7 @@ pub fn parse_bytes(text: &str) -> Result<Vec<Byte>, (usize, String)> {
 }
 
 /// Splits an example's citation: `file:line` or `file:first-last` into (file, first, last).
-pub fn parse_range_citation(s: &str) -> Option<(&str, usize, usize)> {
+pub(crate) fn parse_range_citation(s: &str) -> Option<(&str, usize, usize)> {
     let (file, lines) = s.rsplit_once(':')?;
     let (first, last) = match lines.split_once('-') {
         Some((a, b)) => (a.trim().parse().ok()?, b.trim().parse().ok()?),
@@ -208,7 +213,7 @@ pub fn parse_range_citation(s: &str) -> Option<(&str, usize, usize)> {
 
 /// Where the character at `offset` of a one-line scalar written at `at` lies: the scalar's
 /// column, moved past an opening quote when the file shows one there.
-pub fn locate_offset(at: &Loc, offset: usize) -> Loc {
+pub(crate) fn locate_offset(at: &Loc, offset: usize) -> Loc {
     let quoted = std::fs::read_to_string(&*at.file)
         .ok()
         .and_then(|text| {

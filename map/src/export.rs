@@ -156,7 +156,7 @@ fn example_json(e: &crate::examples::Example) -> Value {
 }
 
 /// The export of one drive.
-pub fn export(drive: &Drive) -> Value {
+pub(crate) fn export(drive: &Drive) -> Value {
     let view = facts::facts(drive);
     let mut regs: Vec<&RegisterFacts> = view.registers.iter().collect();
     regs.sort_by_key(|f| (f.data.broadcast, f.address));

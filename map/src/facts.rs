@@ -5,14 +5,22 @@
 //! Values are worded by [`describe`] (a scale as `0.01 Hz`, a range as `0 ..= 400 Hz`), so a
 //! printer only chooses which rows it shows and how it frames them: the rustdoc of generated
 //! items (`drivemap-codegen`'s `generate/docs.rs`) reads [`RegisterFacts`] alone. The view is
-//! [`serde::Serialize`], so a tool can take it as JSON ([`facts`] gives a drive's).
+//! [`serde::Serialize`], so a tool can take it as JSON ([`Map::facts`](crate::Map::facts)
+//! gives a drive's, [`RegisterRef::facts`](crate::RegisterRef::facts) a register's).
 //!
-//! The protocol has its part ([`protocol()`], [`ProtocolFacts`]): one [`ProtocolRow`] per fact,
-//! which `drivemap doc` prints and `drivemap diff` compares key by key.
+//! The protocol has its part ([`Map::protocol_facts`](crate::Map::protocol_facts),
+//! [`ProtocolFacts`]): one [`ProtocolRow`] per fact, which `drivemap doc` prints and
+//! `drivemap diff` compares key by key.
+//!
+//! Beside the worded view, the map's own records keep the types the map writes them in: who
+//! the drive is, its protocol, groups, variants, roles, command profile and example frames, a
+//! register's scale, limits, codes and fields with their citations, and every place that
+//! cites a manual. [`WrittenMap`] and [`WrittenRegister`] name every key of a map and of a
+//! register in them, for a tool that compares two maps (`drivemap diff`).
 //!
 //! A new kind of scale adds one [`ConversionKind`] in the vocabulary crate and its typed form
-//! in [`data::ScaleData`], which words it ([`scale_row`] reads it): every printer that reads
-//! the view shows it (`tests/tests/cross_crate/scale_kinds.rs`).
+//! in [`data::ScaleData`], which words it (`scale_row`, this module, reads it): every printer
+//! that reads the view shows it (`tests/tests/cross_crate/scale_kinds.rs`).
 
 use serde::Serialize;
 
@@ -22,21 +30,32 @@ pub mod data;
 
 use crate::describe;
 use crate::ir::{Drive, Register, ValueKind};
-use crate::model::Scale;
 
 mod input;
 mod protocol;
+mod written;
+/// Every place of a map that cites a manual ([`Map::citation_places`](crate::Map::citation_places)),
+/// and the citations outside the registers' rows with what their lines must show
+/// ([`Map::other_citations`](crate::Map::other_citations)).
+pub use crate::citations::{CitationPlace, PlaceKind, Reason as CitationReason};
 /// The map's own records, as it writes them: who the drive is, its protocol, groups, variants,
-/// conflicts, gaps, removed registers, roles, and a register's defaults, alternative addresses
-/// and unknowns.
+/// conflicts, gaps, removed registers, roles, the command profile, the example frames, and a
+/// register's scale, limits, defaults, codes, fields, alternative addresses and unknowns.
+pub use crate::command_profile::{
+    PathSpec, PowerOnSpec, ProfileSpec, StateSpec, TransitionSpec, Word as ProfileWord,
+};
 pub use crate::examples::{Byte, Direction, Example, Says, hex_text, parse_bytes};
+pub use crate::indexed::{Entry as IndexedEntry, Indexed};
 pub use crate::ir::{Group, SerialDefaults};
 pub use crate::model::{
     AddressAlternative, AddressFormat, CodeRef, Codes, Condition, Conflict, DefaultValue,
     Dependency, DependentDefault, DisplayStep, Draft, DriveMeta, EdgeSpec, EnumValue,
-    ExternalQuantity, Field as BitField, Gap, Manual, Parity, Protocol, Reading, Removed,
-    RolePlace, TransportName, Unknown, UnknownItem, VariantAxis, VariantOption, VariantOverride,
+    ExternalQuantity, Field as BitField, Gap, Manual, Pair, Parity, Protocol, RatioScale, Reading,
+    Reference, RegisterFunctions, RelativeLimit, RelativeScale, Removed, RepeatNeedsChange,
+    RolePlace, Scale, ScaleCase, SelectedScale, TransportName, Unknown, UnknownItem, VariantAxis,
+    VariantOption, VariantOverride,
 };
+pub use crate::others::{Other as OtherCitation, Rule as CitationRule};
 pub use crate::stated::Unprinted;
 /// Citations and bit fields as written: `file:line`, `<manual id>:p<page>`, a field's span.
 pub use crate::validate::{field_span, parse_citation, parse_page_citation};
@@ -44,8 +63,10 @@ pub use data::RegisterData;
 pub use input::InputBounds;
 pub use protocol::{
     CommandFacts, ExceptionFacts, Figure, NotPrinted, ProtocolData, ProtocolFacts, ProtocolKey,
-    ProtocolRow, manual_address, protocol,
+    ProtocolRow,
 };
+pub(crate) use protocol::{manual_address, protocol};
+pub use written::{WrittenMap, WrittenRegister};
 
 /// What a row of a register's facts says.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -250,7 +271,7 @@ pub struct DriveFacts {
 }
 
 /// The facts of every register of a drive.
-pub fn facts(drive: &Drive) -> DriveFacts {
+pub(crate) fn facts(drive: &Drive) -> DriveFacts {
     DriveFacts {
         drive: drive.meta.id.clone(),
         registers: drive.registers.iter().map(|r| register(drive, r)).collect(),
@@ -261,7 +282,7 @@ pub fn facts(drive: &Drive) -> DriveFacts {
 /// The scale row of a register, by the kind of its value: a fixed scale (a unit without a
 /// scale is factor 1), or who selects it ([`data::ScaleData`] decides which); none for words,
 /// codes and bits.
-pub fn scale_row(drive: &Drive, r: &Register) -> Option<Fact> {
+pub(crate) fn scale_row(drive: &Drive, r: &Register) -> Option<Fact> {
     let unit = r.def.unit.as_deref().unwrap_or("");
     let scale = match r.kind() {
         ValueKind::Quantity(scale) => data::scale_of(drive, scale),
@@ -386,7 +407,7 @@ fn variants(drive: &Drive, r: &Register) -> Vec<VariantFacts> {
 
 /// The facts of one register of `drive` (a register of another map is a caller's mistake and
 /// panics, as `Drive::register_plan` does).
-pub fn register(drive: &Drive, r: &Register) -> RegisterFacts {
+pub(crate) fn register(drive: &Drive, r: &Register) -> RegisterFacts {
     let d = &r.def;
     RegisterFacts {
         row: drive.plan().order[r.index()],

@@ -43,11 +43,13 @@ pub struct Entry {
     pub param: Option<String>,
     /// Name as printed.
     pub name: String,
+    /// The unit as printed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unit: Option<String>,
     /// Decimal factor: engineering = raw × scale (default 1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale: Option<f64>,
+    /// A signed word.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub signed: bool,
     /// Lower limit in engineering units.
@@ -61,19 +63,20 @@ pub struct Entry {
     pub access: Option<Access>,
     /// `file:line` of its row in the manual.
     pub source: String,
+    /// The map's notes on it.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
 
 impl Entry {
     /// Its decimal factor (`None`: not a decimal).
-    pub fn factor(&self) -> Option<Decimal> {
+    pub(crate) fn factor(&self) -> Option<Decimal> {
         Decimal::from_f64(self.scale.unwrap_or(1.0))
     }
 
     /// Its raw limits (missing limits are the word's own); `None` when a limit is not a whole
     /// number of its steps or the scale is not a decimal.
-    pub fn raw_limits(&self) -> Option<(i128, i128)> {
+    pub(crate) fn raw_limits(&self) -> Option<(i128, i128)> {
         let factor = self.factor()?;
         let word = RawRange::word(self.signed);
         let min = match self.min {
@@ -88,7 +91,7 @@ impl Entry {
     }
 
     /// Its access: as written, else the value register's.
-    pub fn access_under(&self, register: &Register) -> Access {
+    pub(crate) fn access_under(&self, register: &Register) -> Access {
         self.access.unwrap_or(register.access)
     }
 }
@@ -104,7 +107,7 @@ fn text(s: &str) -> &'static str {
 /// Lowers every `indexed:` of a validated drive, in map order; `registers` is the lowered table.
 /// Pairs whose index register does not resolve and entries whose scale or limits do not convert
 /// are left out: validation has reported them.
-pub fn lower(drive: &Drive, registers: &'static [RegisterPlan]) -> &'static [IndexedPlan] {
+pub(crate) fn lower(drive: &Drive, registers: &'static [RegisterPlan]) -> &'static [IndexedPlan] {
     let mut out = Vec::new();
     for r in &drive.registers {
         let Some(ix) = &r.def.indexed else { continue };
@@ -173,7 +176,7 @@ pub fn lower(drive: &Drive, registers: &'static [RegisterPlan]) -> &'static [Ind
 /// The export of every index/value pair (`drivemap export`'s `indexed`): per pair the value
 /// and index registers (ids, addresses), whether the index is read back, the index range, the
 /// citation, the `unknown` reason and the entries, each with its engineering and raw limits.
-pub fn export(drive: &Drive) -> serde_json::Value {
+pub(crate) fn export(drive: &Drive) -> serde_json::Value {
     use serde_json::json;
     let plan = drive.plan();
     let pairs: Vec<serde_json::Value> = drive

@@ -22,7 +22,7 @@ use drivemap_core::width::Width;
 
 /// A drive map, expanded and located.
 #[derive(Debug, Clone)]
-pub struct Drive {
+pub(crate) struct Drive {
     pub meta: model::DriveMeta,
     /// How the manual numbers registers (`address_format`; hex unless the map says decimal).
     pub address_format: model::AddressFormat,
@@ -56,8 +56,8 @@ pub struct Drive {
     pub examples: Vec<crate::examples::Example>,
 }
 
-#[derive(Debug, Clone)]
 /// A group of registers as the manual groups them.
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Group {
     /// The group id.
     pub id: String,
@@ -72,12 +72,13 @@ pub struct Group {
     /// The group's notes.
     pub notes: Vec<String>,
     /// Where the group is written.
+    #[serde(skip)]
     pub path: Path,
 }
 
 /// One register (blocks already expanded), with group defaults applied.
 #[derive(Debug, Clone)]
-pub struct Register {
+pub(crate) struct Register {
     /// The register as written, with `repeat` placeholders substituted and `repeat` removed.
     pub def: model::Register,
     pub access: Access,
@@ -103,18 +104,11 @@ pub struct Register {
 /// A register's place in [`Drive::registers`] (map order). Made only when a map is expanded,
 /// so a lookup by it needs no search and has no row to fall back to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct RegisterIndex(usize);
-
-impl RegisterIndex {
-    /// The index into [`Drive::registers`].
-    pub fn get(self) -> usize {
-        self.0
-    }
-}
+pub(crate) struct RegisterIndex(usize);
 
 /// What a register's word means.
 #[derive(Debug, Clone, Copy)]
-pub enum ValueKind<'a> {
+pub(crate) enum ValueKind<'a> {
     /// A plain `u16` / `i16`.
     Word,
     /// An engineering value: `f64` in `unit`.
@@ -126,17 +120,17 @@ pub enum ValueKind<'a> {
 }
 
 impl Register {
-    pub fn id(&self) -> &str {
+    pub(crate) fn id(&self) -> &str {
         &self.def.id
     }
 
     /// Its place in [`Drive::registers`] (map order), given when the map was expanded.
-    pub fn index(&self) -> usize {
+    pub(crate) fn index(&self) -> usize {
         self.index.0
     }
 
     /// One register, or a 32-bit pair in the map's word order.
-    pub fn width(&self) -> Width {
+    pub(crate) fn width(&self) -> Width {
         match &self.def.pair {
             None => Width::Word,
             Some(p) => Width::Pair(p.order),
@@ -145,14 +139,14 @@ impl Register {
 
     /// The whole range of the register's word or pair, signed or not; 0 ..= 1 for a coil or a
     /// discrete input (one bit).
-    pub fn full_limits(&self) -> RawRange {
+    pub(crate) fn full_limits(&self) -> RawRange {
         if self.table.is_bits() {
             return RawRange { min: 0, max: 1 };
         }
         self.width().range(self.def.signed)
     }
 
-    pub fn kind(&self) -> ValueKind<'_> {
+    pub(crate) fn kind(&self) -> ValueKind<'_> {
         if !self.def.fields.is_empty() {
             ValueKind::Bits(&self.def.fields)
         } else if !self.def.values.is_empty() {
@@ -166,16 +160,16 @@ impl Register {
         }
     }
 
-    pub fn readable(&self) -> bool {
+    pub(crate) fn readable(&self) -> bool {
         matches!(self.access, Access::Read | Access::ReadWrite)
     }
 
-    pub fn writable(&self) -> bool {
+    pub(crate) fn writable(&self) -> bool {
         matches!(self.access, Access::Write | Access::ReadWrite)
     }
 
     /// The decimal factor of a fixed-scale register (scale 1 for unit quantities and words).
-    pub fn factor(&self) -> Option<Decimal> {
+    pub(crate) fn factor(&self) -> Option<Decimal> {
         match self.kind() {
             ValueKind::Quantity(Scale::Factor(f)) => Decimal::from_f64(*f),
             ValueKind::Quantity(_) => None,
@@ -186,7 +180,7 @@ impl Register {
     /// Raw limits for given engineering limits at a fixed decimal factor; missing limits are
     /// the word's own. `None` when a limit is not a whole number of increments (or beyond
     /// `i64`, far outside any word: validation reports both).
-    pub fn raw_limits(
+    pub(crate) fn raw_limits(
         &self,
         factor: Decimal,
         min: Option<f64>,
@@ -206,12 +200,12 @@ impl Register {
     }
 
     /// Limits of the base variant in engineering units.
-    pub fn limits(&self) -> (Option<f64>, Option<f64>) {
+    pub(crate) fn limits(&self) -> (Option<f64>, Option<f64>) {
         (self.def.min, self.def.max)
     }
 
     /// Limits for a variant option: its override where given, else the base.
-    pub fn limits_for(&self, option: &str) -> (Option<f64>, Option<f64>) {
+    pub(crate) fn limits_for(&self, option: &str) -> (Option<f64>, Option<f64>) {
         match self.def.by_variant.get(option) {
             Some(o) => (o.min.or(self.def.min), o.max.or(self.def.max)),
             None => (self.def.min, self.def.max),
@@ -219,7 +213,7 @@ impl Register {
     }
 
     /// The base variant's default as a number, if the manual prints one.
-    pub fn default_value(&self) -> Option<f64> {
+    pub(crate) fn default_value(&self) -> Option<f64> {
         match &self.def.default {
             Some(DefaultValue::Value(v)) => Some(*v),
             _ => None,
@@ -229,7 +223,7 @@ impl Register {
     /// The printed numeric default for the first variant option `chosen` accepts that overrides
     /// it (`by_variant.<option>.default`), else the base default; `None` where the default is
     /// not a number (it depends on another setting) or not printed.
-    pub fn default_for(&self, chosen: impl Fn(&str) -> bool) -> Option<f64> {
+    pub(crate) fn default_for(&self, chosen: impl Fn(&str) -> bool) -> Option<f64> {
         let by_variant = self
             .def
             .by_variant
@@ -243,7 +237,7 @@ impl Register {
     }
 
     /// Location of a key of this register.
-    pub fn key_path(&self, key: &str) -> Path {
+    pub(crate) fn key_path(&self, key: &str) -> Path {
         self.path.key(key)
     }
 }
@@ -255,7 +249,7 @@ impl Drive {
     /// # Panics
     /// When the drive does not lower: a [`crate::Map`] is lowered when it is loaded, so only
     /// the crate's own passes ask a drive that may not, through [`Drive::try_plan`].
-    pub fn plan(&self) -> &MapPlan {
+    pub(crate) fn plan(&self) -> &MapPlan {
         match self.try_plan() {
             Ok(plan) => plan,
             Err(errors) => panic!("{} does not lower: {errors:?}", self.meta.id),
@@ -263,7 +257,7 @@ impl Drive {
     }
 
     /// The plan, lowered on first use, or why the drive does not lower.
-    pub fn try_plan(&self) -> Result<&MapPlan, Vec<Diagnostic>> {
+    pub(crate) fn try_plan(&self) -> Result<&MapPlan, Vec<Diagnostic>> {
         if let Some(plan) = self.plan.get() {
             return Ok(plan);
         }
@@ -272,7 +266,7 @@ impl Drive {
     }
 
     /// The register of row `row` of the plan (`plan().registers[row]`).
-    pub fn register_of_row(&self, row: usize) -> Option<&Register> {
+    pub(crate) fn register_of_row(&self, row: usize) -> Option<&Register> {
         let m = self.plan().order.iter().position(|&r| r == row)?;
         self.registers.get(m)
     }
@@ -283,34 +277,27 @@ impl Drive {
     /// # Panics
     /// When `r` is not a register of this drive (a register of another map, or of this map
     /// expanded separately, with another id at its place): a caller's mistake, never the data's —
-    /// [`Drive::plan_of`] finds another map's register by id. There is no fallback row.
-    pub fn register_plan(&self, r: &Register) -> &'static drivemap_core::plan::RegisterPlan {
+    /// [`crate::Map::register_by_id`] finds another map's register by id. There is no fallback
+    /// row.
+    pub(crate) fn register_plan(&self, r: &Register) -> &'static drivemap_core::plan::RegisterPlan {
         let plan = self.plan();
         let index = r.index();
         match self.registers.get(index) {
             Some(own) if own.def.id == r.def.id => &plan.registers[plan.order[index]],
             _ => panic!(
-                "register {} (#{index}) is not a register of {}: look another map's register up by id (Drive::plan_of)",
+                "register {} (#{index}) is not a register of {}: look another map's register up by id (Map::register_by_id)",
                 r.def.id, self.meta.id
             ),
         }
     }
 
-    /// The plan of the register `id` of this drive (a register id, not a parameter number), if
-    /// there is one.
-    pub fn plan_of(&self, id: &str) -> Option<&'static drivemap_core::plan::RegisterPlan> {
-        let plan = self.plan();
-        let index = self.registers.iter().position(|x| x.def.id == id)?;
-        Some(&plan.registers[plan.order[index]])
-    }
-
     /// Locates a path in the merged tree.
-    pub fn locate(&self, path: &Path) -> Loc {
+    pub(crate) fn locate(&self, path: &Path) -> Loc {
         self.tree.locate(path)
     }
 
     /// A diagnostic at `path`, naming `register`.
-    pub fn error(
+    pub(crate) fn error(
         &self,
         path: &Path,
         register: Option<&str>,
@@ -320,7 +307,7 @@ impl Drive {
     }
 
     /// A register by id, or else by parameter number as printed.
-    pub fn find(&self, name: &str) -> Option<&Register> {
+    pub(crate) fn find(&self, name: &str) -> Option<&Register> {
         self.registers
             .iter()
             .find(|r| r.def.id == name)
@@ -335,7 +322,7 @@ impl Drive {
     /// number, or `<register>.<field>`, a field of a bit-field register. A whole name that is a
     /// register wins (parameter numbers such as `UF.11` contain dots); otherwise the name is
     /// split at its last dot.
-    pub fn selector(&self, name: &str) -> Option<SelectorRef<'_>> {
+    pub(crate) fn selector(&self, name: &str) -> Option<SelectorRef<'_>> {
         if let Some(register) = self.find(name) {
             return Some(SelectorRef {
                 register,
@@ -354,7 +341,7 @@ impl Drive {
     /// The code slots of the drive's settings: every distinct selector (a register, or a field
     /// of one) that a scale or an address condition names, in first-use order. Names that do not
     /// resolve are left out (validation reports them).
-    pub fn selector_slots(&self) -> Vec<SelectorRef<'_>> {
+    pub(crate) fn selector_slots(&self) -> Vec<SelectorRef<'_>> {
         let mut out: Vec<SelectorRef<'_>> = Vec::new();
         for name in self.selector_names() {
             if let Some(s) = self.selector(name)
@@ -383,7 +370,7 @@ impl Drive {
 
     /// The registers whose values (or a field of whose values) select scales or addresses, in
     /// first-use order, each once.
-    pub fn selectors(&self) -> Vec<&Register> {
+    pub(crate) fn selectors(&self) -> Vec<&Register> {
         let mut out: Vec<&Register> = Vec::new();
         for s in self.selector_slots() {
             if !out.iter().any(|r| r.def.id == s.register.def.id) {
@@ -394,7 +381,7 @@ impl Drive {
     }
 
     /// The registers other registers are scaled relative to, in first-use order.
-    pub fn references(&self) -> Vec<&Register> {
+    pub(crate) fn references(&self) -> Vec<&Register> {
         let mut names = Vec::new();
         for r in &self.registers {
             for scale in scales_of(r) {
@@ -414,7 +401,7 @@ impl Drive {
     }
 
     /// External quantities (not registers) that relative scales refer to, by name.
-    pub fn externals(&self) -> Vec<&model::ExternalQuantity> {
+    pub(crate) fn externals(&self) -> Vec<&model::ExternalQuantity> {
         let mut seen = BTreeSet::new();
         let mut out = Vec::new();
         for r in &self.registers {
@@ -451,7 +438,7 @@ impl Drive {
 
     /// Communication addresses a broadcast may write: the protocol's broadcast registers and
     /// every register of a broadcast group, sorted.
-    pub fn broadcast_addresses(&self) -> Vec<u16> {
+    pub(crate) fn broadcast_addresses(&self) -> Vec<u16> {
         let named = self
             .protocol
             .broadcast
@@ -470,7 +457,7 @@ impl Drive {
     }
 
     /// PDU address offsets (RTU, TCP).
-    pub fn address_offsets(&self) -> (i32, i32) {
+    pub(crate) fn address_offsets(&self) -> (i32, i32) {
         self.protocol
             .addressing
             .as_ref()
@@ -479,14 +466,17 @@ impl Drive {
     }
 
     /// The variant axis and option for an option id.
-    pub fn variant_option(&self, option: &str) -> Option<(&VariantAxis, &model::VariantOption)> {
+    pub(crate) fn variant_option(
+        &self,
+        option: &str,
+    ) -> Option<(&VariantAxis, &model::VariantOption)> {
         self.variants
             .iter()
             .find_map(|a| a.options.iter().find(|o| o.id == option).map(|o| (a, o)))
     }
 
     /// The group of a register.
-    pub fn group_of(&self, r: &Register) -> &Group {
+    pub(crate) fn group_of(&self, r: &Register) -> &Group {
         &self.groups[r.group]
     }
 }
@@ -502,7 +492,7 @@ pub(crate) fn scales_of(r: &Register) -> Vec<&Scale> {
 
 /// A selector resolved: a register, or one field of a bit-field register.
 #[derive(Debug, Clone, Copy)]
-pub struct SelectorRef<'a> {
+pub(crate) struct SelectorRef<'a> {
     pub register: &'a Register,
     /// The field whose code selects, when the selector names one (`status.decimals`).
     pub field: Option<&'a Field>,
@@ -510,14 +500,14 @@ pub struct SelectorRef<'a> {
 
 impl SelectorRef<'_> {
     /// Whether both name the same register and field.
-    pub fn same(&self, other: &SelectorRef<'_>) -> bool {
+    pub(crate) fn same(&self, other: &SelectorRef<'_>) -> bool {
         self.register.def.id == other.register.def.id
             && self.field.map(|f| &f.id) == other.field.map(|f| &f.id)
     }
 
     /// The name the plan's code slot gives it (errors, exports): the register's parameter number
     /// (else its id), with `.<field>` for a field.
-    pub fn label(&self) -> String {
+    pub(crate) fn label(&self) -> String {
         let r = &self.register.def;
         let name = r.param.clone().unwrap_or_else(|| r.id.clone());
         match self.field {
@@ -528,7 +518,7 @@ impl SelectorRef<'_> {
 
     /// How documentation names it, after "scale selected by": `n152`, or
     /// `field current_decimals (bits 8-15) of status_word`.
-    pub fn prose(&self) -> String {
+    pub(crate) fn prose(&self) -> String {
         let r = &self.register.def;
         let name = r.param.clone().unwrap_or_else(|| r.id.clone());
         match (self.field, self.field.and_then(crate::names::field_span)) {
@@ -542,7 +532,7 @@ impl SelectorRef<'_> {
     }
 
     /// The largest code the selector can hold: the field's all-ones value, or `u16::MAX`.
-    pub fn max_code(&self) -> u16 {
+    pub(crate) fn max_code(&self) -> u16 {
         match self.field.and_then(crate::names::field_span) {
             Some((_, width)) if width < 16 => (1u16 << width) - 1,
             _ => u16::MAX,
@@ -551,7 +541,7 @@ impl SelectorRef<'_> {
 
     /// The codes the selector lists, if it lists any: an enumeration's values or a multi-bit
     /// field's values.
-    pub fn listed(&self) -> Option<&[EnumValue]> {
+    pub(crate) fn listed(&self) -> Option<&[EnumValue]> {
         let values = match self.field {
             Some(f) => f.values.as_slice(),
             None => match self.register.kind() {
@@ -894,7 +884,7 @@ impl SerialDefaults {
 impl Drive {
     /// The character formats of `serial.formats`, in the runtime's words (a case without
     /// `data_bits` has the line's); empty when the map lists none.
-    pub fn serial_format_list(&self) -> Vec<drivemap_core::profile::SerialFormat> {
+    pub(crate) fn serial_format_list(&self) -> Vec<drivemap_core::profile::SerialFormat> {
         use drivemap_core::profile::SerialFormat;
         let Some(serial) = self.protocol.serial.as_ref() else {
             return Vec::new();
@@ -915,7 +905,7 @@ impl Drive {
     }
 
     /// The serial line's defaults (see [`SerialDefaults`]).
-    pub fn serial_defaults(&self) -> SerialDefaults {
+    pub(crate) fn serial_defaults(&self) -> SerialDefaults {
         let serial = self.protocol.serial.as_ref();
         SerialDefaults {
             baud: serial.and_then(|s| s.default_baud).unwrap_or(9600),
@@ -929,17 +919,6 @@ impl Drive {
                 Parity::ALL.map(|p| only_stop_bits(&list, p))
             },
         }
-    }
-}
-
-impl Register {
-    /// Whether the manual leaves the register's range unknown (outside any variant), so that
-    /// a value read cannot be range-checked.
-    pub fn range_unknown(&self) -> bool {
-        self.def
-            .unknown
-            .iter()
-            .any(|u| u.what == model::UnknownItem::Range)
     }
 }
 
@@ -958,5 +937,60 @@ mod tests {
         assert!(substitute("x{q}", 1, None).is_err());
         assert!(substitute("x{p}", 1, None).is_err());
         assert_eq!(shift_line("a.txt:10", 3).unwrap(), "a.txt:13");
+    }
+
+    /// Every map of `maps/` and a variant map, loaded.
+    fn maps() -> Vec<crate::Map> {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut paths = crate::find_maps(&root.join("../maps")).expect("maps/");
+        paths.push(root.join("tests/fixtures/variants/child-drive.yaml"));
+        assert!(paths.len() > 5, "{paths:?}");
+        (paths.iter())
+            .map(|p| {
+                crate::Loader::new()
+                    .load(p)
+                    .unwrap_or_else(|d| panic!("{d}"))
+            })
+            .collect()
+    }
+
+    /// A register names its plan row by the place expansion gave it (`Register::index`): every
+    /// register of every map finds its own row, also when copied.
+    #[test]
+    fn every_register_finds_its_own_row() {
+        for map in maps() {
+            let drive = map.drive();
+            let plan = drive.plan();
+            for (i, r) in drive.registers.iter().enumerate() {
+                assert_eq!(r.index(), i, "{}: {}", drive.meta.id, r.id());
+                let row = drive.register_plan(r);
+                assert_eq!(row.info.id, r.id(), "{}", drive.meta.id);
+                assert!(std::ptr::eq(row, &plan.registers[plan.order[i]]));
+                // A copy of the register is still this drive's register.
+                assert!(std::ptr::eq(drive.register_plan(&r.clone()), row));
+            }
+        }
+    }
+
+    /// The old lookup fell back to row 0 for a register it could not place; now a register of
+    /// another map is refused by name.
+    #[test]
+    fn another_maps_register_has_no_row_here() {
+        let maps = maps();
+        let (a, b) = (maps[0].drive(), maps[1].drive());
+        let foreign = (b.registers.iter())
+            .find(|r| !a.registers.iter().any(|x| x.id() == r.id()))
+            .expect("a register of the second map that the first lacks");
+        let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            a.register_plan(foreign).info.id
+        }));
+        let message = match caught {
+            Ok(id) => panic!("{} answered row {id} for {}", a.meta.id, foreign.id()),
+            Err(e) => e.downcast_ref::<String>().cloned().unwrap_or_default(),
+        };
+        assert!(
+            message.contains(foreign.id()) && message.contains(&a.meta.id),
+            "{message}"
+        );
     }
 }

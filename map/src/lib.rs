@@ -9,7 +9,9 @@
 //!   the wire, decided once, in the vocabulary crate's types that generated code prints;
 //! - the facts view ([`facts`], [`Map::facts`], [`RegisterRef::facts`]): what the map says of
 //!   each register and of the protocol, as rows of label, value and citation and as typed values,
-//!   and the map's own records (groups, variants, conflicts, gaps);
+//!   and the map's own records (groups, variants, conflicts, gaps), in the types the map writes
+//!   them in; [`Map::written`] and [`RegisterRef::written`] name every key of the map and of
+//!   each register (what `drivemap diff` compares);
 //! - locations ([`RegisterRef::location`], [`Map::locate`]) for diagnostics of a tool's own;
 //! - [`export`] (`drivemap export`), and [`migrate`] for files of an older schema.
 //!
@@ -39,31 +41,20 @@ mod names;
 mod source;
 mod validate;
 
-// Transitional, not an API (issue 41): drivemap-review's register diff and a few test oracles
-// (the command line's write gate, the bench, this crate's own tests) still read the expanded
-// map and its model; they go private once those read the `Map` alone. Hidden from the docs;
-// nothing outside this workspace may name them.
-#[doc(hidden)]
-pub mod ir;
-#[doc(hidden)]
-pub mod model;
+// The expanded map, its model and the map's own records: private. A consumer reads them
+// through `Map`, `RegisterRef` and the facts view, which re-exports the records' types.
+mod citations;
+mod command_profile;
+mod examples;
+mod indexed;
+mod ir;
+mod model;
+mod others;
 
 pub mod describe;
 pub mod export;
 pub mod facts;
 pub mod migrate;
-
-// Read by `drivemap-review` and `drivemap-live` until they read the facts view alone.
-#[doc(hidden)]
-pub mod citations;
-#[doc(hidden)]
-pub mod command_profile;
-#[doc(hidden)]
-pub mod examples;
-#[doc(hidden)]
-pub mod indexed;
-#[doc(hidden)]
-pub mod others;
 
 pub use diagnostic::{Diagnostic, Diagnostics, Loc};
 pub use loader::{

@@ -46,7 +46,8 @@ pub struct MapPlan {
     pub profile: &'static Profile,
     /// Which registers and fields play the standard parts of a drive.
     pub roles: Roles,
-    /// Index/value register pairs and their entries ([`crate::indexed`]).
+    /// Index/value register pairs and their entries (the map's `indexed:`,
+    /// [`RegisterRef::indexed`](crate::RegisterRef::indexed)).
     pub indexed: &'static [drivemap_core::indexed::Indexed],
 }
 

@@ -21,7 +21,6 @@ pub struct Map {
 }
 
 impl Map {
-    /// A map when validation found nothing, else the findings.
     /// A map when validation found nothing and the drive lowers (the last pass), else the
     /// findings.
     pub(crate) fn checked(drive: Drive, errors: Vec<Diagnostic>) -> Result<Map, Diagnostics> {
@@ -32,25 +31,9 @@ impl Map {
         Ok(Map { drive })
     }
 
-    /// The expanded map this value holds, for the crate's own passes and for consumers that
-    /// have not moved onto [`Map`]'s accessors yet. Not part of the lasting API.
-    #[doc(hidden)]
-    pub fn ir(&self) -> &Drive {
+    /// The expanded map, for this crate's own views.
+    pub(crate) fn drive(&self) -> &Drive {
         &self.drive
-    }
-
-    /// A map from an expanded map that the loader's validation accepted (what
-    /// [`Map::into_ir`] gives back, or the transitional `read_map*` functions return), for
-    /// consumers that still load through them. Not part of the lasting API.
-    #[doc(hidden)]
-    pub fn from_ir(drive: Drive) -> Map {
-        Map { drive }
-    }
-
-    /// The expanded map, owned (see [`Map::ir`]). Not part of the lasting API.
-    #[doc(hidden)]
-    pub fn into_ir(self) -> Drive {
-        self.drive
     }
 
     // ---- who the drive is -------------------------------------------------------------
@@ -258,7 +241,7 @@ impl Map {
     }
 
     /// The example frames the manual prints.
-    pub fn examples(&self) -> &[crate::examples::Example] {
+    pub fn examples(&self) -> &[facts::Example] {
         &self.drive.examples
     }
 
@@ -267,8 +250,9 @@ impl Map {
         &self.drive.roles
     }
 
-    /// The command profile as written (`profile:`), if any.
-    pub fn profile(&self) -> Option<&crate::command_profile::ProfileSpec> {
+    /// The command profile as written (`profile:`), if any; [`facts::ProfileSpec::resolved`]
+    /// merges it under the standard it names.
+    pub fn profile(&self) -> Option<&facts::ProfileSpec> {
         self.drive.profile.as_ref()
     }
 
@@ -289,7 +273,19 @@ impl Map {
         crate::describe::setting(&self.drive, name)
     }
 
+    /// Every part of the map as it writes it, each register's keys with them
+    /// ([`facts::WrittenMap`]): what a comparison of two maps reads to miss none.
+    pub fn written(&self) -> facts::WrittenMap<'_> {
+        facts::WrittenMap::of(self)
+    }
+
     // ---- locations ----------------------------------------------------------------------
+
+    /// The YAML tree the map was read from, every node located (a variant map merged onto its
+    /// base).
+    pub fn tree(&self) -> &crate::Tree {
+        &self.drive.tree
+    }
 
     /// Where a key path of the map (`protocol.timing`, `groups[0].registers[1].scale`,
     /// written with `.` between keys and `[i]` for items) is written; the map's own file
@@ -318,21 +314,18 @@ impl Map {
     // ---- citations ----------------------------------------------------------------------
 
     /// Every place of the map that cites a manual (registers, values, fields, protocol items,
-    /// roles, conflicts, gaps), in map order.
-    #[doc(hidden)]
-    pub fn citation_places(&self) -> Vec<crate::citations::CitationPlace<'_>> {
+    /// roles, conflicts, gaps), in map order: the one list the citation checks read.
+    pub fn citation_places(&self) -> Vec<facts::CitationPlace<'_>> {
         crate::citations::citation_places(&self.drive)
     }
 
-    /// The citations outside the registers, each with what its line is expected to show.
-    #[doc(hidden)]
-    pub fn other_citations(&self) -> Vec<crate::others::Other> {
+    /// The citations outside the registers' rows, each with what its line is expected to show.
+    pub fn other_citations(&self) -> Vec<facts::OtherCitation> {
         crate::others::other_citations(&self.drive)
     }
 
     /// What the line of an other citation is expected to show, for messages.
-    #[doc(hidden)]
-    pub fn expected(&self, rule: &crate::others::Rule) -> String {
+    pub fn expected(&self, rule: &facts::CitationRule) -> String {
         rule.expected(&self.drive)
     }
 
@@ -378,13 +371,6 @@ impl PartialEq for RegisterRef<'_> {
 }
 
 impl<'m> RegisterRef<'m> {
-    /// The expanded register, for consumers not moved onto the accessors yet. Not part of
-    /// the lasting API.
-    #[doc(hidden)]
-    pub fn ir(&self) -> &'m ir::Register {
-        self.reg
-    }
-
     /// The map it belongs to.
     pub fn map(&self) -> &'m Map {
         self.map
@@ -469,6 +455,12 @@ impl<'m> RegisterRef<'m> {
     /// The same facts as typed values.
     pub fn data(&self) -> facts::RegisterData {
         facts::RegisterData::of(&self.map.drive, self.reg)
+    }
+
+    /// Every key of the register as the map writes it, with what it takes from its group
+    /// ([`facts::WrittenRegister`]): what a comparison of two registers reads to miss none.
+    pub fn written(&self) -> facts::WrittenRegister<'m> {
+        facts::WrittenRegister::of(&self.map.drive, self.reg)
     }
 
     /// One register, or a 32-bit pair in the map's word order.
@@ -559,7 +551,7 @@ impl<'m> RegisterRef<'m> {
     }
 
     /// Indexed access: the entries an index register selects, when it has them.
-    pub fn indexed(&self) -> Option<&'m crate::indexed::Indexed> {
+    pub fn indexed(&self) -> Option<&'m facts::Indexed> {
         self.reg.def.indexed.as_ref()
     }
 
@@ -567,6 +559,14 @@ impl<'m> RegisterRef<'m> {
     /// conversion takes a unit without a scale as factor 1).
     pub fn scale(&self) -> Option<facts::data::ScaleData> {
         (self.reg.def.scale.as_ref()).map(|s| facts::data::scale_of(&self.map.drive, s))
+    }
+
+    /// The scale the map writes in one line, as [`describe`](crate::describe) words it (a
+    /// selected scale with its cases: `selected by n152: 0 → 0.1 Hz; 1 → 0.01 Hz`); `None` where
+    /// it writes none.
+    pub fn scale_text(&self) -> Option<String> {
+        let unit = self.reg.def.unit.as_deref().unwrap_or("");
+        (self.reg.def.scale.as_ref()).map(|s| crate::describe::scale(&self.map.drive, s, unit))
     }
 
     /// Enumeration codes as written, with their citations (the plan's are

@@ -168,7 +168,9 @@ impl EdgeSpec {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum CodeRef {
+    /// The code as a number.
     Number(u16),
+    /// The `id` of one of the field's `values`.
     Id(String),
 }
 
@@ -176,7 +178,9 @@ pub enum CodeRef {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum Codes {
+    /// One code.
     One(CodeRef),
+    /// A list of codes.
     Many(Vec<CodeRef>),
 }
 
@@ -775,7 +779,7 @@ pub(crate) use drivemap_core::register::WriteRestriction;
 /// One register (one 16-bit word, or a 32-bit pair with `pair`), or a block of them with `repeat`.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub struct Register {
+pub(crate) struct Register {
     /// snake_case identifier; becomes the generated type name in PascalCase.
     pub id: String,
     /// Parameter number exactly as printed (`Bn-01`, `n019`, `CM.03`).
@@ -919,6 +923,8 @@ pub struct RelativeLimit {
     pub source: String,
 }
 
+/// A relative scale: `full_scale` raw = 100 % of another register or quantity ("30000 = 100 %
+/// of Cn-02").
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RelativeScale {
@@ -929,10 +935,13 @@ pub struct RelativeScale {
     pub full_scale: f64,
 }
 
+/// What a relative scale or limit refers to.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(untagged)]
 pub enum Reference {
+    /// A register of the drive, by id or parameter number.
     Register(String),
+    /// A quantity the application supplies.
     External(ExternalQuantity),
 }
 
@@ -948,14 +957,17 @@ pub struct ExternalQuantity {
     pub description: String,
 }
 
+/// A scale chosen by the setting of another parameter (or a field of it).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SelectedScale {
     /// A register id or parameter number whose value selects the case.
     pub selected_by: String,
+    /// The cases, in the map's order.
     pub cases: Vec<ScaleCase>,
 }
 
+/// One case of a selected scale.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScaleCase {
@@ -963,11 +975,13 @@ pub struct ScaleCase {
     pub when: Vec<u16>,
     /// A factor or a relative scale (not another selection).
     pub scale: Scale,
-    /// Limits in engineering units under this case (base variant).
+    /// The lower limit in engineering units under this case (base variant).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min: Option<f64>,
+    /// The upper limit in engineering units under this case (base variant).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max: Option<f64>,
+    /// `file:line` of the case's row in the manual.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
 }
@@ -993,6 +1007,7 @@ pub struct DependentDefault {
     pub note: Option<String>,
 }
 
+/// What a default depends on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Dependency {
@@ -1008,18 +1023,23 @@ pub enum Dependency {
     Unknown,
 }
 
+/// What one variant option overrides of a register (`by_variant.<option>`).
 #[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct VariantOverride {
+    /// The option's lower limit (the base's where it gives none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min: Option<f64>,
+    /// The option's upper limit (the base's where it gives none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max: Option<f64>,
+    /// The option's default (the base's where it gives none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub default: Option<DefaultValue>,
     /// What the manual leaves unknown for this variant only.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub unknown: Vec<Unknown>,
+    /// `file:line` of the option's row in the manual.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
 }
@@ -1140,7 +1160,7 @@ pub struct DisplayStep {
 /// `{n:02}` pads to two digits. Addresses advance by `address_step`, citations by `line_step`.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub struct Repeat {
+pub(crate) struct Repeat {
     pub count: u16,
     #[serde(default = "one_u16")]
     pub start: u16,

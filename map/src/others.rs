@@ -22,17 +22,24 @@ pub enum Rule {
     /// A role at a field: the field's bit or name, one of the role's codes with its label, or
     /// the field's register (its address, parameter number or name).
     Field {
+        /// The register (an index into `Map::registers`).
         register: usize,
+        /// The field (an index into the register's `fields`).
         field: usize,
         /// The role's codes (`on`, `off`) as numbers.
         codes: Vec<u16>,
     },
     /// Any of these words (lower case), parameter numbers, numbers, or addresses.
     Any {
+        /// Words (lower case).
         words: Vec<String>,
+        /// Parameter numbers as printed.
         params: Vec<String>,
+        /// Numbers as written (`3.5`, `100000`).
         numbers: Vec<String>,
+        /// Codes, as numbers.
         codes: Vec<u16>,
+        /// Communication addresses, in any notation the manual uses.
         addresses: Vec<u16>,
         /// Names of which two words (or all, for a shorter name) must be printed.
         names: Vec<String>,
@@ -107,7 +114,7 @@ impl Rule {
     }
 
     /// What the line is expected to show, for messages.
-    pub fn expected(&self, drive: &Drive) -> String {
+    pub(crate) fn expected(&self, drive: &Drive) -> String {
         match self {
             Rule::Register(i) => {
                 let r = &drive.registers[*i].def;
@@ -173,6 +180,7 @@ pub struct Other {
     /// Whether the reason is an `indirect` key (validated: it needs a reason and a citation),
     /// rather than a limit's `unknown`.
     pub indirect_key: bool,
+    /// What its line must show.
     pub rule: Rule,
 }
 
@@ -212,7 +220,7 @@ const TIMING_WORDS: &[&str] = &[
 /// quantity and register function-code lists), with what its line must mention: the places of
 /// [`citation_places`] outside the registers' own rows, values and fields, each read by
 /// `rule_of`, in that order of kinds.
-pub fn other_citations(drive: &Drive) -> Vec<Other> {
+pub(crate) fn other_citations(drive: &Drive) -> Vec<Other> {
     let mut out: Vec<(u8, Other)> = Vec::new();
     let mut functions_seen = HashSet::new();
     for place in citation_places(drive) {

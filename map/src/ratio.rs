@@ -34,7 +34,7 @@ pub(crate) fn count_of(ratio: Ratio, value: f64) -> Option<i64> {
 impl Register {
     /// Raw limits for engineering limits with a ratio scale; missing limits are the word's own.
     /// `None` when a limit is not a whole number of counts.
-    pub fn ratio_limits(
+    pub(crate) fn ratio_limits(
         &self,
         ratio: Ratio,
         min: Option<f64>,

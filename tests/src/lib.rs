@@ -3,6 +3,7 @@
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 #[cfg(unix)]
@@ -23,6 +24,61 @@ pub fn workspace() -> PathBuf {
         .to_path_buf()
 }
 
+/// The target directory of every nested build of the tests: the workspace's own (`target`, or
+/// `CARGO_TARGET_DIR` as cargo gave it). With the workspace's profiles on every nested build
+/// ([`nested_cargo`]), a registry crate the workspace compiled with the same features is not
+/// compiled again; cargo holds its lock on the directory while it builds, not while the tests
+/// run.
+pub fn nested_target() -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| workspace().join("target"))
+}
+
+/// `cargo` for a build inside a test: `CARGO_TARGET_DIR` is [`nested_target`], and the
+/// workspace's `[profile.*]` settings are passed as `--config` options (but for those the
+/// environment sets, `CARGO_PROFILE_DEV_DEBUG` say, which the nested cargo inherits), so an
+/// application outside the workspace, which has no profiles of its own, compiles the registry
+/// crates as the workspace does. Add the subcommand and its arguments.
+pub fn nested_cargo() -> Command {
+    let mut cargo = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
+    for setting in workspace_profiles() {
+        cargo.arg("--config").arg(setting);
+    }
+    cargo.env("CARGO_TARGET_DIR", nested_target());
+    cargo
+}
+
+/// The workspace `Cargo.toml`'s profile settings as `--config` values:
+/// `[profile.dev.package."*"]` and `opt-level = 1` give `profile.dev.package."*".opt-level=1`.
+fn workspace_profiles() -> Vec<String> {
+    let manifest =
+        std::fs::read_to_string(workspace().join("Cargo.toml")).expect("the workspace manifest");
+    let mut table: Option<&str> = None;
+    let mut settings = Vec::new();
+    for line in manifest.lines().map(str::trim) {
+        if let Some(header) = line.strip_prefix('[') {
+            table = header
+                .strip_suffix(']')
+                .filter(|name| name.starts_with("profile."));
+        } else if let (Some(table), Some((key, value))) = (table, line.split_once('='))
+            && !line.starts_with('#')
+        {
+            let key = format!("{table}.{}", key.trim());
+            // Cargo's name for it in the environment, which takes precedence over the manifest.
+            let variable = format!("CARGO_{}", key.to_uppercase().replace(['.', '-'], "_"));
+            if std::env::var_os(variable).is_none() {
+                settings.push(format!("{key}={}", value.trim()));
+            }
+        }
+    }
+    assert!(
+        settings.iter().any(|s| s.starts_with("profile.dev.")),
+        "the workspace's Cargo.toml sets no [profile.dev]"
+    );
+    settings
+}
+
 /// A directory for an application crate outside the workspace: `<dir>/src`, and the
 /// workspace's `Cargo.lock` (so an offline build needs nothing new). Returns `<dir>`.
 pub fn app_dir(dir: &Path) -> PathBuf {
@@ -31,25 +87,33 @@ pub fn app_dir(dir: &Path) -> PathBuf {
     dir.to_path_buf()
 }
 
-/// The one copy of the workspace that [`workspace_with_map`] keeps, and the lock its users take
-/// turns with.
-static COPY: Mutex<()> = Mutex::new(());
+/// The lock the users of [`nested_target`] take turns with (see [`hold_nested_target`]).
+static NESTED: Mutex<()> = Mutex::new(());
+
+/// Keeps the other tests of this process out of [`nested_target`] until the guard is dropped:
+/// builds there write the same binaries (the `drivemap` of the workspace copy and of the
+/// packaged crates), so a test holds the directory from its build to its last use of what it
+/// built.
+pub fn hold_nested_target() -> MutexGuard<'static, ()> {
+    NESTED.lock().unwrap_or_else(PoisonError::into_inner)
+}
 
 /// A copy of this checkout with one map file added to its `maps/`: what a contributor has after
 /// dropping a YAML file into `maps/`. The drives crate (and the `drivemap` binary's built-in
 /// maps) generate from the maps they carry and from nothing in the environment, so building
 /// against a new map means building a tree that holds it.
 ///
-/// The copy is one directory, `target/new-map-probe/workspace` (build it with
-/// `CARGO_TARGET_DIR=target/new-map-probe`), brought up to date on each call: a file is written
+/// The copy is one directory, `target/workspace-copy` (build it with [`nested_cargo`]),
+/// brought up to date on each call: a file is written
 /// only when its content differs and a file the checkout no longer has is removed, so cargo
 /// rebuilds only what changed since the last build. Everything but `target` directories and
 /// dot-files is copied; symbolic links (`drives/maps`, `cli/maps`) stay links. The guard
-/// returned keeps the other tests of this process out of the copy until it is dropped.
+/// returned ([`hold_nested_target`]) keeps the other tests of this process out of the copy and
+/// of the target directory until it is dropped.
 pub fn workspace_with_map(map: &Path) -> (MutexGuard<'static, ()>, PathBuf) {
-    let guard = COPY.lock().unwrap_or_else(PoisonError::into_inner);
+    let guard = hold_nested_target();
     let root = workspace();
-    let copy = root.join("target/new-map-probe/workspace");
+    let copy = workspace().join("target").join("workspace-copy");
     let name = map.file_name().expect("a map file");
     let added = copy.join("maps").join(name);
     sync(&root, &copy, &|p| p == added).expect("copying the workspace");

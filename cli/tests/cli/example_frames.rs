@@ -93,17 +93,16 @@ fn check_verifies_every_example_of_the_shipped_maps() {
     for path in paths {
         let drive = drivemap_map::Loader::new()
             .load(&path)
-            .map(drivemap_map::Map::into_ir)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let id = &drive.meta.id;
+        let id = drive.id();
         let line = out
             .lines()
             .find(|l| l.contains(&format!("({id}:")))
             .unwrap_or_else(|| panic!("{id} not checked: {out}"));
         assert!(line.starts_with("ok "), "{line}");
-        let total = drive.examples.len();
+        let total = drive.examples().len();
         let recorded = drive
-            .examples
+            .examples()
             .iter()
             .filter(|e| e.conflict.is_some())
             .count();
@@ -131,7 +130,7 @@ fn check_verifies_every_example_of_the_shipped_maps() {
             })
             .collect();
         assert_eq!(warnings.len(), recorded, "{id}: {warnings:#?}");
-        for e in drive.examples.iter().filter(|e| e.conflict.is_some()) {
+        for e in drive.examples().iter().filter(|e| e.conflict.is_some()) {
             let topic = e.conflict.as_deref().unwrap();
             assert!(
                 warnings

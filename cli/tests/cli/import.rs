@@ -221,13 +221,11 @@ fn merge_says_how_many_rows_it_read_before_anything_agrees() {
 fn registers_of(yaml: &str, id: &str) -> Vec<String> {
     let drive = drivemap_map::Loader::new()
         .load_str(&format!("{id}.yaml"), yaml)
-        .map(drivemap_map::Map::into_ir)
         .unwrap_or_else(|e| panic!("{e}\n{yaml}"));
     drive
-        .registers
-        .iter()
+        .registers()
         .map(|r| {
-            let d = &r.def;
+            let d = r.written();
             format!(
                 "{} {:?} {} {:?} {:?} {:?} {:?} {:?} {:?} {} {:?} {:?}",
                 d.address,
@@ -238,9 +236,9 @@ fn registers_of(yaml: &str, id: &str) -> Vec<String> {
                 d.min,
                 d.max,
                 d.default,
-                r.access,
+                d.access,
                 d.signed,
-                d.pair.as_ref().map(|p| p.order),
+                d.pair.map(|p| p.order),
                 d.values
                     .iter()
                     .map(|v| (v.value, v.name.clone()))

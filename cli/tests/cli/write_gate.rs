@@ -7,7 +7,8 @@
 //! to slave 1 and to slave 0 (broadcast), over Modbus TCP and RTU over TCP, through the CLI's own
 //! write command in-process (the same code as the binary; one map load per map instead of one
 //! per case). A simulated drive that executes every write it receives records what arrived; each
-//! arrival is checked against the map by rules written here from the IR, not by the gate, and
+//! arrival is checked against the map by rules written here from the map's keys as it writes
+//! them (`RegisterRef::written`, not the plan the gate is built from), not by the gate, and
 //! so is each refusal: a write the map allows on that link and that needs no setting from the
 //! drive must arrive, exactly once. The rules cover every construct the schema documents: a
 //! 32-bit pair arrives as its two words at its address and the next, its 32-bit value in range;
@@ -26,10 +27,10 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_map::facts::TransportName;
 use drivemap_map::facts::field_span;
-use drivemap_map::ir::ValueKind;
+use drivemap_map::facts::{BitField, EnumValue, Scale, TransportName};
 use drivemap_runtime::core::profile::{Profile, TransportKind};
+use drivemap_runtime::core::scale::{Decimal, RawRange, raw_of};
 use drivemap_runtime::core::width::{Width, WordOrder};
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
@@ -133,14 +134,69 @@ impl Wire {
     }
 }
 
+/// What a register's word means as the map writes it: bit fields, else codes, else a scale,
+/// else a unit, else a plain word.
+enum ValueKind<'m> {
+    Word,
+    Quantity(&'m Scale),
+    UnitQuantity,
+    Enum(&'m [EnumValue]),
+    Bits(&'m [BitField]),
+}
+
+fn value_kind<'m>(r: RegisterRef<'m>) -> ValueKind<'m> {
+    let w = r.written();
+    if !w.fields.is_empty() {
+        ValueKind::Bits(w.fields)
+    } else if !w.values.is_empty() {
+        ValueKind::Enum(w.values)
+    } else if let Some(scale) = w.scale {
+        ValueKind::Quantity(scale)
+    } else if w.unit.is_some() {
+        ValueKind::UnitQuantity
+    } else {
+        ValueKind::Word
+    }
+}
+
+/// The decimal factor of a fixed-scale register as written (1 for unit quantities and words).
+fn factor(r: RegisterRef<'_>) -> Option<Decimal> {
+    match value_kind(r) {
+        ValueKind::Quantity(Scale::Factor(f)) => Decimal::from_f64(*f),
+        ValueKind::Quantity(_) => None,
+        _ => Some(Decimal::ONE),
+    }
+}
+
+/// Raw limits for engineering limits at a fixed decimal factor; missing limits are the word's
+/// own. `None` when a limit is not a whole number of increments.
+fn raw_limits(
+    r: RegisterRef<'_>,
+    factor: Decimal,
+    min: Option<f64>,
+    max: Option<f64>,
+) -> Option<RawRange> {
+    let word = r.width().range(r.signed());
+    let raw = |m: f64| raw_of(m, factor).and_then(|r| i64::try_from(r).ok());
+    let min = match min {
+        Some(m) => raw(m)?,
+        None => word.min,
+    };
+    let max = match max {
+        Some(m) => raw(m)?,
+        None => word.max,
+    };
+    Some(RawRange { min, max })
+}
+
 /// The address at which the map puts `r` on this link, given the settings the drive holds
 /// now (`address_alternatives` chosen by a setting's code, the transport or the model variant,
-/// which is the base one here), from the IR: the first alternative whose condition holds, else
-/// its own address.
+/// which is the base one here), as the map writes them: the first alternative whose condition
+/// holds, else its own address.
 fn selected_address(drive: &Map, r: RegisterRef<'_>, kind: TransportKind, wire: &Wire) -> i32 {
     let (rtu, tcp) = drive.address_offsets();
     let offset = if kind == TransportKind::Tcp { tcp } else { rtu };
-    for alt in &r.ir().def.address_alternatives {
+    for alt in r.address_alternatives() {
         let when = &alt.when;
         // The sweep writes as the base variant: the first option of every axis.
         let in_variant = when.variant.as_ref().is_none_or(|v| {
@@ -212,7 +268,7 @@ fn on_transport(r: RegisterRef<'_>, kind: TransportKind) -> bool {
     } else {
         "rtu"
     };
-    r.ir().transports.as_ref().is_none_or(|list| {
+    r.written().transports.is_none_or(|list| {
         serde_json::to_value(list)
             .ok()
             .and_then(|v| v.as_array().cloned())
@@ -222,7 +278,7 @@ fn on_transport(r: RegisterRef<'_>, kind: TransportKind) -> bool {
 
 /// The form of the register's `scale` as written: `factor`, `relative` or `selected`.
 fn scale_form(r: RegisterRef<'_>) -> Option<&'static str> {
-    let v = serde_json::to_value(r.ir().def.scale.as_ref()?).ok()?;
+    let v = serde_json::to_value(r.written().scale?).ok()?;
     Some(if v.get("selected_by").is_some() {
         "selected"
     } else if v.get("relative_to").is_some() {
@@ -232,7 +288,7 @@ fn scale_form(r: RegisterRef<'_>) -> Option<&'static str> {
     })
 }
 
-/// Whether the map lets `r` be written to `slave` (0: broadcast) on `kind`, from the IR. A
+/// Whether the map lets `r` be written to `slave` (0: broadcast) on `kind`, as it writes it. A
 /// drive whose map lists no `tcp` transport has no Modbus TCP interface: `--tcp` reaches
 /// nothing of it (a serial drive behind a gateway is `--gateway`, its RTU side).
 fn allowed_on_link(drive: &Map, r: RegisterRef<'_>, kind: TransportKind, slave: u8) -> bool {
@@ -276,18 +332,17 @@ fn allowed_on_link(drive: &Map, r: RegisterRef<'_>, kind: TransportKind, slave: 
 /// scale, an address chosen by a setting, limits per variant, a limit through another
 /// parameter or quantity).
 fn needs_settings(r: RegisterRef<'_>) -> bool {
+    let w = r.written();
     matches!(scale_form(r), Some("selected" | "relative"))
-        || r.ir()
-            .def
-            .address_alternatives
+        || w.address_alternatives
             .iter()
             .any(|a| a.when.setting.is_some())
-        || !r.ir().def.by_variant.is_empty()
-        || r.ir().def.max_relative.is_some()
+        || !w.by_variant.is_empty()
+        || w.max_relative.is_some()
 }
 
 fn field_mask(r: RegisterRef<'_>) -> Option<u16> {
-    match r.ir().kind() {
+    match value_kind(r) {
         ValueKind::Bits(fields) => Some(
             fields
                 .iter()
@@ -377,21 +432,22 @@ fn legal_arrival(
             unsigned & !u32::from(mask)
         ));
     }
-    let plain = matches!(r.ir().kind(), ValueKind::Word | ValueKind::UnitQuantity)
-        || (matches!(r.ir().kind(), ValueKind::Quantity(_)) && scale_form(r) == Some("factor"));
-    if plain && r.ir().def.by_variant.is_empty() {
-        let factor = r.ir().factor().expect("fixed factor");
-        if let Some(l) = r.ir().raw_limits(factor, r.ir().def.min, r.ir().def.max)
+    let w = r.written();
+    let plain = matches!(value_kind(r), ValueKind::Word | ValueKind::UnitQuantity)
+        || (matches!(value_kind(r), ValueKind::Quantity(_)) && scale_form(r) == Some("factor"));
+    if plain && w.by_variant.is_empty() {
+        let factor = factor(r).expect("fixed factor");
+        if let Some(l) = raw_limits(r, factor, w.min, w.max)
             && (raw < i128::from(l.min) || raw > i128::from(l.max))
         {
             return Err(format!("raw {raw} outside {} ..= {}", l.min, l.max));
         }
     }
-    if let ValueKind::Enum(values) = r.ir().kind() {
+    if let ValueKind::Enum(values) = value_kind(r) {
         let listed = values.iter().any(|v| u32::from(v.value) == unsigned);
-        let in_range = (r.ir().def.min.is_some() || r.ir().def.max.is_some())
-            && r.ir().def.min.is_none_or(|m| f64::from(unsigned) >= m)
-            && r.ir().def.max.is_none_or(|m| f64::from(unsigned) <= m);
+        let in_range = (w.min.is_some() || w.max.is_some())
+            && w.min.is_none_or(|m| f64::from(unsigned) >= m)
+            && w.max.is_none_or(|m| f64::from(unsigned) <= m);
         if !listed && !in_range {
             return Err(format!("code {unsigned} not listed"));
         }
@@ -423,7 +479,8 @@ fn number(v: f64) -> String {
 /// variant; illegal ones are out of range, unlisted codes or reserved bits.
 fn values(r: RegisterRef<'_>) -> Vec<(String, bool)> {
     let unit = r.unit().map(str::to_owned).unwrap_or_default();
-    match r.ir().kind() {
+    let w = r.written();
+    match value_kind(r) {
         ValueKind::Bits(fields) => {
             let mask = field_mask(r).unwrap_or(0);
             let f = &fields[0];
@@ -447,8 +504,7 @@ fn values(r: RegisterRef<'_>) -> Vec<(String, bool)> {
                 (format!("0x{:04X}", first.value), true),
             ];
             let unlisted = (0..=u16::MAX).rev().find(|c| {
-                !list.iter().any(|e| e.value == *c)
-                    && r.ir().def.max.is_none_or(|m| f64::from(*c) > m)
+                !list.iter().any(|e| e.value == *c) && w.max.is_none_or(|m| f64::from(*c) > m)
             });
             if let Some(c) = unlisted {
                 v.push((c.to_string(), false));
@@ -458,20 +514,18 @@ fn values(r: RegisterRef<'_>) -> Vec<(String, bool)> {
         _ => {
             let legal = r
                 .default_value()
-                .filter(|d| {
-                    r.ir().def.min.is_none_or(|m| *d >= m) && r.ir().def.max.is_none_or(|m| *d <= m)
-                })
-                .or(r.ir().def.min)
+                .filter(|d| w.min.is_none_or(|m| *d >= m) && w.max.is_none_or(|m| *d <= m))
+                .or(w.min)
                 .unwrap_or(0.0);
             let mut v = vec![(number(legal), true)];
             if !unit.is_empty() {
                 v.push((format!("{} {unit}", number(legal)), true));
             }
-            if let (Some(max), Some(factor)) = (r.ir().def.max, r.ir().factor()) {
+            if let (Some(max), Some(factor)) = (w.max, factor(r)) {
                 let step = factor.mantissa as f64 / 10f64.powi(factor.exponent as i32);
                 v.push((number(max + 10.0 * step), false));
             }
-            if let (Some(min), Some(factor)) = (r.ir().def.min, r.ir().factor()) {
+            if let (Some(min), Some(factor)) = (w.min, factor(r)) {
                 let step = factor.mantissa as f64 / 10f64.powi(factor.exponent as i32);
                 if !r.signed() && min - 10.0 * step < 0.0 {
                     v.push((number(min - 10.0 * step), false));
@@ -538,9 +592,7 @@ fn sweep(path: &Path, kind: TransportKind) -> Tally {
                         && allowed_on_link(&drive, r, kind, slave)
                         && !needs_settings(r)
                         && !r
-                            .ir()
-                            .def
-                            .address_alternatives
+                            .address_alternatives()
                             .iter()
                             .any(|a| a.when.variant.is_some() || a.when.transport.is_some());
                     if must_arrive && !sent {

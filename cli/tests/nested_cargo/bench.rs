@@ -9,7 +9,6 @@ use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use drivemap_map::Map;
-use drivemap_map::ir::ValueKind;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions};
 use drivemap_sim::{Line, SerialServer, SimOptions, Simulator, TcpFraming, TcpServer};
 
@@ -355,24 +354,37 @@ fn installed_anywhere_every_command_works_from_outside_the_repository() {
 /// A simulator holding, wherever its map gives no plain default, the least value the map
 /// allows (or its first listed code), as a configured drive would rather than 0.
 fn simulator(drive: Map, slave: u8) -> Simulator {
-    let regs: Vec<_> = drive.ir().registers.clone();
+    // Each readable register's least value the map allows, by id: an enumeration's first code
+    // where 0 is not one of them, else a lower limit above 0.
+    let least: Vec<(String, Option<f64>)> = drive
+        .registers()
+        .filter(|r| r.readable() && !r.broadcast_only())
+        .map(|r| {
+            let codes = if r.fields().is_empty() {
+                r.values()
+            } else {
+                &[]
+            };
+            let least = match (codes, r.limits().0) {
+                (values, _) if !values.is_empty() && !values.iter().any(|v| v.value == 0) => {
+                    values.first().map(|v| f64::from(v.value))
+                }
+                (_, Some(m)) if m > 0.0 => Some(m),
+                _ => None,
+            };
+            (r.id().to_owned(), least)
+        })
+        .collect();
     let mut sim = Simulator::new(drive, SimOptions::new().slave(slave)).unwrap();
-    for r in regs.iter().filter(|r| r.readable() && !r.broadcast) {
-        let Ok(raw) = sim.raw(r.id()) else {
+    for (id, least) in least {
+        let Ok(raw) = sim.raw(&id) else {
             continue;
         };
         if raw != 0 {
             continue;
         }
-        let least = match (r.kind(), r.def.min) {
-            (ValueKind::Enum(values), _) if !values.iter().any(|v| v.value == 0) => {
-                values.first().map(|v| f64::from(v.value))
-            }
-            (_, Some(m)) if m > 0.0 => Some(m),
-            _ => None,
-        };
         if let Some(v) = least {
-            let _ = sim.set(r.id(), v);
+            let _ = sim.set(&id, v);
         }
     }
     sim

@@ -42,7 +42,7 @@ fn rtu(hex: &str) -> String {
         .map(|b| u8::from_str_radix(b, 16).unwrap())
         .collect();
     bytes.extend(crc::crc_bytes(&bytes));
-    drivemap_map::examples::hex_text(&bytes)
+    drivemap_map::facts::hex_text(&bytes)
 }
 
 fn errors(v: &Verified) -> Vec<String> {

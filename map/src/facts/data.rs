@@ -213,7 +213,7 @@ pub struct LimitData {
 
 impl RegisterData {
     /// The typed facts of a register of `drive`.
-    pub fn of(drive: &Drive, r: &Register) -> RegisterData {
+    pub(crate) fn of(drive: &Drive, r: &Register) -> RegisterData {
         let d = &r.def;
         let plan = drive.register_plan(r);
         let (values, fields): (&'static [Label], &'static [Field]) = match plan.conversion {

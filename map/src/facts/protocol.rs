@@ -337,7 +337,7 @@ impl ProtocolRow {
 }
 
 /// The protocol facts of `drive`.
-pub fn protocol(drive: &Drive) -> ProtocolFacts {
+pub(crate) fn protocol(drive: &Drive) -> ProtocolFacts {
     let p = &drive.protocol;
     // Every key of the protocol is in the view (and so in `drivemap doc` and `drivemap diff`,
     // which read it): a key added to the schema fails to compile here until it is.
@@ -786,7 +786,7 @@ fn command(drive: &Drive, c: &model::Command) -> CommandFacts {
 }
 
 /// An address as the manual prints it: `0200h`, or `512 (0200h)` in a decimal manual.
-pub fn manual_address(drive: &Drive, a: u16) -> String {
+pub(crate) fn manual_address(drive: &Drive, a: u16) -> String {
     match drive.address_format {
         model::AddressFormat::Hex => describe::address(a),
         model::AddressFormat::Decimal => format!("{a} ({})", describe::address(a)),

@@ -1,4 +1,4 @@
-//! The one list of citation places (`drivemap_map::citations`) holds every `source:` key a map
+//! The one list of citation places (`Map::citation_places`) holds every `source:` key a map
 //! writes: for every shipped map and every fixture, the `source` keys of the merged YAML tree
 //! are exactly the places of the list that carry a citation, at the same path and with the same
 //! text. A `source` key the list leaves out (a new construct, a forgotten place) fails here, and
@@ -7,7 +7,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-use drivemap_map::citations::{PlaceKind, citation_places};
+use drivemap_map::facts::PlaceKind;
 use drivemap_map::{Tree as Node, TreeKind as NodeKind, TreePath as YamlPath};
 
 /// Every scalar under a `source` key of the tree, by path.
@@ -65,8 +65,8 @@ fn every_source_key_of_every_map_and_fixture_is_a_citation_place() {
             .load(file)
             .unwrap_or_else(|d| panic!("{}: {d}", file.display()));
         let mut written = BTreeMap::new();
-        tree_sources(&drive.ir().tree, &YamlPath::root(), &mut written);
-        let places = citation_places(drive.ir());
+        tree_sources(drive.tree(), &YamlPath::root(), &mut written);
+        let places = drive.citation_places();
         let mut listed: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
         for p in &places {
             kinds_seen.insert(p.kind.name());

@@ -3,12 +3,12 @@
 //! the `unknown` reason) is an "indexed access changed"; a change of citations or notes only is
 //! a "citation changed".
 
-use drivemap_map::indexed::{Entry, Indexed};
+use drivemap_map::facts::{Indexed, IndexedEntry};
 
 use super::classify::ChangeKind;
 
 /// One line per entry: what it means, without its citation or notes.
-fn entry(e: &Entry) -> String {
+fn entry(e: &IndexedEntry) -> String {
     let mut s = format!("{} {} ({})", e.index, e.id, e.name);
     if let Some(p) = &e.param {
         s += &format!(" {p}");

@@ -2,7 +2,7 @@
 //! every change with its kind, both sides and the citation of each side. What the lowering pass
 //! decides about a register (access, table, transports, write restriction) is compared on the
 //! two [`drivemap_core::plan::RegisterPlan`]s; what the manual prints (scales, limits, defaults, codes,
-//! fields, citations) on the validated IR. Both sides are written in the library's one wording
+//! fields, citations) on the map as it writes it ([`Map::written`], the facts view). Both sides are written in the library's one wording
 //! ([`drivemap_map::describe`]), the wording of the rustdoc and of `drivemap doc`.
 //!
 //! [`classify()`] says which kinds break applications built on the generated code;
@@ -24,7 +24,7 @@ mod tests;
 
 use drivemap_map::Map;
 use drivemap_map::describe;
-use drivemap_map::ir::Drive;
+use drivemap_map::facts::WrittenMap;
 use serde::Serialize;
 
 pub use classify::{ChangeKind, Severity, classify};
@@ -183,18 +183,17 @@ pub fn removed(old: &Map) -> DriveDiff {
 /// Compares two versions of a drive's map.
 ///
 /// Every part of a map is compared. The parts are named here field by field, with no `..`, as
-/// are the fields of each part in the function that compares it: a part or key added to the
+/// are the keys of each register in the function that compares them: the map front end names
+/// every part and key of the schema in [`WrittenMap`] and
+/// [`WrittenRegister`](drivemap_map::facts::WrittenRegister), so a part or key added to the
 /// schema fails to compile until the diff compares it (or says here why it is not a part).
 pub fn compare(old: &Map, new: &Map) -> DriveDiff {
-    let maps = (old, new);
-    let (old, new) = (old.ir(), new.ir());
     let mut c = Collector {
         changes: Vec::new(),
     };
-    let Drive {
+    let WrittenMap {
         meta: _,           // protocol::meta
         address_format: _, // map_documentation
-        module: _,         // derived from meta.id
         variants: _,       // protocol::variants
         protocol: _,       // profile::protocol, on the protocol facts
         groups: _,         // map_documentation (registers carry the group defaults)
@@ -204,26 +203,22 @@ pub fn compare(old: &Map, new: &Map) -> DriveDiff {
         removed: _,        // map_documentation, entry by entry
         roles: _,          // roles::roles
         profile: _,        // roles::command_profile
-        file: _,           // where the map was read, not what it says
-        tree: _,           // the same map as text, for locating changes
-        plan: _,           // derived from the parts above
-        warnings: _,       // how an earlier schema version was read, not what the map says
         draft: _,          // map_documentation
         examples: _,       // map_documentation, example by example
-    } = new;
-    protocol::meta(&mut c, maps.0, maps.1);
-    protocol::variants(&mut c, maps.0, maps.1);
-    profile::protocol(&mut c, maps.0, maps.1);
-    roles::roles(&mut c, maps.0, maps.1);
-    roles::command_profile(&mut c, maps.0, maps.1);
+    } = new.written();
+    protocol::meta(&mut c, old, new);
+    protocol::variants(&mut c, old, new);
+    profile::protocol(&mut c, old, new);
+    roles::roles(&mut c, old, new);
+    roles::command_profile(&mut c, old, new);
     registers::registers(&mut c, old, new);
-    map_documentation(&mut c, maps.0, maps.1);
+    map_documentation(&mut c, old, new);
     c.changes.sort_by_key(|ch| ch.order);
     for ch in &mut c.changes {
-        ch.at = locate::at(ch, maps.0, maps.1);
+        ch.at = locate::at(ch, old, new);
     }
     DriveDiff {
-        drive: new.meta.id.clone(),
+        drive: new.id().to_owned(),
         changes: c.changes,
     }
 }

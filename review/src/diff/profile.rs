@@ -1,5 +1,5 @@
 //! Differences of the protocol profile, on the protocol facts of both sides
-//! ([`drivemap_map::facts::protocol`]): the rows are compared key by key, as [`STEPS`] lists
+//! ([`drivemap_map::Map::protocol_facts`]): the rows are compared key by key, as [`STEPS`] lists
 //! them, each by the [`Rule`] its key has ([`rule`]): which [`ChangeKind`] a change of the key
 //! is (its direction deciding between the narrowing and the widening kind, whose safety
 //! wording is [`super::classify`]'s), and what else of the row is reported (a changed

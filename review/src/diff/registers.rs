@@ -4,55 +4,67 @@
 //! compared one by one (enumeration codes, bit fields, scale and range per variant and per
 //! selected case, defaults, documentation, citations).
 //! Access, table, write restriction and transports are compared on the lowered plans
-//! ([`Drive::register_plan`]): what the generated code and the write gate act on.
+//! ([`RegisterRef::plan`]): what the generated code and the write gate act on; the rest on
+//! the register's keys as the map writes them ([`RegisterRef::written`]) and its facts.
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use drivemap_core::kind::ConversionKind;
 use drivemap_core::plan::RegisterPlan;
 use drivemap_core::register::{Access, WriteRestriction};
-use drivemap_map::ir::{Drive, Register, ValueKind};
+use drivemap_map::RegisterRef;
 
 use drivemap_map::facts::field_span;
-use drivemap_map::model::{EnumValue, Field, Scale};
+use drivemap_map::facts::{BitField as Field, EnumValue, Scale, VariantOverride, WrittenRegister};
 
 use super::{ChangeKind, Collector, Side, json, same};
+use drivemap_map::Map;
 use drivemap_map::describe;
 use drivemap_map::facts::data::ScaleData;
-use drivemap_map::facts::{self, FactKey, RegisterFacts};
+use drivemap_map::facts::{FactKey, RegisterFacts};
 
-pub(super) fn registers(c: &mut Collector, old: &Drive, new: &Drive) {
-    let mut pairs: Vec<(&Register, &Register)> = Vec::new();
-    let mut old_left: Vec<&Register> = Vec::new();
-    for r in &old.registers {
-        match new.registers.iter().find(|n| n.def.id == r.def.id) {
+/// A register's citation, owned.
+fn source(r: RegisterRef<'_>) -> Option<String> {
+    r.source().map(str::to_owned)
+}
+
+/// Where a register's changes sort: its address.
+fn order(r: RegisterRef<'_>) -> u32 {
+    u32::from(r.address()) + 1
+}
+
+pub(super) fn registers(c: &mut Collector, old: &Map, new: &Map) {
+    let mut pairs: Vec<(RegisterRef, RegisterRef)> = Vec::new();
+    let mut old_left: Vec<RegisterRef> = Vec::new();
+    for r in old.registers() {
+        match new.register_by_id(r.id()) {
             Some(n) => pairs.push((r, n)),
             None => old_left.push(r),
         }
     }
-    let mut new_left: Vec<&Register> = new
-        .registers
-        .iter()
-        .filter(|n| !old.registers.iter().any(|r| r.def.id == n.def.id))
+    let mut new_left: Vec<RegisterRef> = new
+        .registers()
+        .filter(|n| old.register_by_id(n.id()).is_none())
         .collect();
     // Renamed: same address and parameter number (and table), another id.
     let mut removed = Vec::new();
     for r in old_left {
         let hit = new_left.iter().position(|n| {
-            n.def.address == r.def.address
-                && n.def.param == r.def.param
-                && n.table == r.table
-                && n.broadcast == r.broadcast
+            n.address() == r.address()
+                && n.param() == r.param()
+                && n.written().table == r.written().table
+                && n.broadcast_only() == r.broadcast_only()
         });
         match hit {
             Some(i) => {
                 let n = new_left.remove(i);
                 c.push(
                     ChangeKind::RegisterRenamed,
-                    &describe::register(n),
+                    &n.label(),
                     "",
-                    (Some(r.def.id.clone()), r.def.source.clone()),
-                    (Some(n.def.id.clone()), n.def.source.clone()),
-                    u32::from(n.def.address) + 1,
+                    (Some(r.id().to_owned()), source(r)),
+                    (Some(n.id().to_owned()), source(n)),
+                    order(n),
                 );
                 pairs.push((r, n));
             }
@@ -62,48 +74,45 @@ pub(super) fn registers(c: &mut Collector, old: &Drive, new: &Drive) {
     for r in removed {
         c.push(
             ChangeKind::RegisterRemoved,
-            &describe::register(r),
+            &r.label(),
             "",
-            (Some(summary(old, r)), r.def.source.clone()),
+            (Some(summary(r)), source(r)),
             (None, None),
-            u32::from(r.def.address) + 1,
+            order(r),
         );
     }
     for n in new_left {
         c.push(
             ChangeKind::RegisterAdded,
-            &describe::register(n),
+            &n.label(),
             "",
             (None, None),
-            (Some(summary(new, n)), n.def.source.clone()),
-            u32::from(n.def.address) + 1,
+            (Some(summary(n)), source(n)),
+            order(n),
         );
     }
     for (r, n) in pairs {
-        register(c, old, r, new, n);
+        register(c, r, n);
     }
 }
 
 /// A one-line description of a register: its facts' name, access, unit and range, the
 /// plan's kind and the map's scale in one line (a selected scale with its cases).
-fn summary(drive: &Drive, r: &Register) -> String {
-    let f = facts::register(drive, r);
-    let plan = drive.register_plan(r);
+fn summary(r: RegisterRef<'_>) -> String {
+    let f = r.facts();
+    let plan = r.plan();
     let access = f.get(FactKey::Access).map_or("", |x| x.value.as_str());
     let mut s = format!(
         "{} {} at {}, {access}",
         f.name,
         describe::kind(plan),
-        describe::address_as(drive.address_format, f.address),
+        describe::address_as(r.map().address_format(), f.address),
     );
     if let Some(u) = &f.data.unit {
         s += &format!(", {u}");
     }
-    if let Some(sc) = &r.def.scale {
-        s += &format!(
-            ", scale {}",
-            describe::scale(drive, sc, f.data.unit.as_deref().unwrap_or(""))
-        );
+    if let Some(sc) = r.scale_text() {
+        s += &format!(", scale {sc}");
     }
     if let Some(range) = f.get(FactKey::Range) {
         s += &format!(", {}", range.value);
@@ -111,17 +120,23 @@ fn summary(drive: &Drive, r: &Register) -> String {
     s
 }
 
-fn same_kind(a: &Register, b: &Register) -> bool {
-    matches!(
-        (a.kind(), b.kind()),
-        (ValueKind::Word, ValueKind::Word)
-            | (
-                ValueKind::Quantity(_) | ValueKind::UnitQuantity,
-                ValueKind::Quantity(_) | ValueKind::UnitQuantity
-            )
-            | (ValueKind::Enum(_), ValueKind::Enum(_))
-            | (ValueKind::Bits(_), ValueKind::Bits(_))
-    )
+/// The kind of value a conversion converts to: a word, a quantity (whatever its scale), codes
+/// or bits. The parts of a value (unit, scale, codes, fields) are compared only between values
+/// of one kind.
+fn kind_of_value(k: ConversionKind) -> u8 {
+    match k {
+        ConversionKind::Word => 0,
+        ConversionKind::Decimal
+        | ConversionKind::Relative
+        | ConversionKind::Ratio
+        | ConversionKind::Selected => 1,
+        ConversionKind::Enum => 2,
+        ConversionKind::Bits => 3,
+    }
+}
+
+fn same_kind(a: RegisterRef<'_>, b: RegisterRef<'_>) -> bool {
+    kind_of_value(a.kind()) == kind_of_value(b.kind())
 }
 
 fn can(a: Access) -> (bool, bool) {
@@ -138,10 +153,11 @@ fn strictness(w: WriteRestriction) -> u8 {
 
 /// The two sides of a register compared, and what every aspect reads of them.
 struct Sides<'a> {
-    old: &'a Drive,
-    new: &'a Drive,
-    r: &'a Register,
-    n: &'a Register,
+    r: RegisterRef<'a>,
+    n: RegisterRef<'a>,
+    /// Every key of both sides as the maps write them.
+    wa: WrittenRegister<'a>,
+    wb: WrittenRegister<'a>,
     /// The lowered plans: what the generated code and the write gate act on.
     pr: &'static RegisterPlan,
     pn: &'static RegisterPlan,
@@ -157,38 +173,33 @@ struct Sides<'a> {
 }
 
 impl<'a> Sides<'a> {
-    fn new(old: &'a Drive, r: &'a Register, new: &'a Drive, n: &'a Register) -> Sides<'a> {
+    fn new(r: RegisterRef<'a>, n: RegisterRef<'a>) -> Sides<'a> {
         Sides {
-            old,
-            new,
             r,
             n,
-            pr: old.register_plan(r),
-            pn: new.register_plan(n),
-            fa: facts::register(old, r),
-            fb: facts::register(new, n),
-            subject: describe::register(n),
-            order: u32::from(n.def.address) + 1,
-            src: (r.def.source.clone(), n.def.source.clone()),
+            wa: r.written(),
+            wb: n.written(),
+            pr: r.plan(),
+            pn: n.plan(),
+            fa: r.facts(),
+            fb: n.facts(),
+            subject: n.label(),
+            order: order(n),
+            src: (source(r), source(n)),
         }
     }
 
     /// The unit of both sides, empty for none.
     fn units(&self) -> (&'a str, &'a str) {
         (
-            self.r.def.unit.as_deref().unwrap_or(""),
-            self.n.def.unit.as_deref().unwrap_or(""),
+            self.wa.unit.unwrap_or_default(),
+            self.wb.unit.unwrap_or_default(),
         )
     }
 
     /// The map's text of both sides.
-    fn defs(
-        &self,
-    ) -> (
-        &'a drivemap_map::model::Register,
-        &'a drivemap_map::model::Register,
-    ) {
-        (&self.r.def, &self.n.def)
+    fn defs(&self) -> (&WrittenRegister<'a>, &WrittenRegister<'a>) {
+        (&self.wa, &self.wb)
     }
 
     /// A change of the register's part `what`, cited by the register's citations.
@@ -293,9 +304,9 @@ const ASPECTS: &[Aspect] = {
     ]
 };
 
-fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Register) {
-    every_key_compared(n);
-    let s = Sides::new(old, r, new, n);
+fn register(c: &mut Collector, r: RegisterRef<'_>, n: RegisterRef<'_>) {
+    let s = Sides::new(r, n);
+    every_key_compared(&s.wb);
     for aspect in ASPECTS {
         match aspect {
             Aspect::Row(row) => {
@@ -309,54 +320,43 @@ fn register(c: &mut Collector, old: &Drive, r: &Register, new: &Drive, n: &Regis
     }
 }
 
-/// Names every key of a register, and what the IR adds to it, with the aspect that compares
-/// it: a key added to the schema fails to compile here until it is compared.
-fn every_key_compared(n: &Register) {
-    let Register {
-        def:
-            drivemap_map::model::Register {
-                id: _,                   // matching, RegisterRenamed
-                param: _,                // param
-                name: _,                 // name
-                address: _,              // moved
-                access: _,               // access, on the plan (with the group's default)
-                modbus_table: _,         // table, on the plan
-                unit: _,                 // unit
-                scale: _,                // scale
-                signed: _,               // signedness
-                pair: _,                 // width, pair_citation
-                min: _,                  // range, variant_ranges
-                max: _,                  // range, variant_ranges
-                max_relative: _,         // relative_limit
-                default: _,              // defaults
-                by_variant: _, // variant_ranges, defaults, documentation, variant_citations
-                address_alternatives: _, // alternatives
-                values: _,     // codes
-                fields: _,     // fields
-                read_values: _, // read_meaning, read_codes
-                repeat_needs_change: _, // on the IR register (with the group's)
-                indexed: _,    // indexed (indexed.rs)
-                function_codes: _, // on the IR register (with the group's)
-                write_restriction: _, // write_restriction, on the plan
-                transports: _, // transports, on the plan
-                display_steps: _, // documentation
-                repeat: _,     // expanded by the IR: one register per instance
-                source: _,     // citation
-                indirect: _,   // documentation
-                notes: _,      // documentation
-                conflicts: _,  // documentation
-                unknown: _,    // documentation
-            },
-        access: _,              // on the plan
-        table: _,               // on the plan
-        write_restriction: _,   // on the plan
-        transports: _,          // on the plan
-        broadcast: _,           // broadcast
-        group: _,               // group
-        path: _,                // where it is written
-        repeat_needs_change: _, // repeat_needs_change, repeat_citation
-        function_codes: _,      // function_codes, function_codes_citation
-        index: _,               // its place in the map's list, not a property
+/// Names every key of a register as the map writes it ([`WrittenRegister`], which names every
+/// key of the schema's register in turn) with the aspect that compares it: a key added to the
+/// schema fails to compile here until it is compared.
+fn every_key_compared(n: &WrittenRegister<'_>) {
+    let WrittenRegister {
+        id: _,                   // matching, RegisterRenamed
+        param: _,                // param
+        name: _,                 // name
+        address: _,              // moved
+        access: _,               // access, on the plan
+        table: _,                // table, on the plan
+        unit: _,                 // unit
+        scale: _,                // scale
+        signed: _,               // signedness
+        pair: _,                 // width, pair_citation
+        min: _,                  // range, variant_ranges
+        max: _,                  // range, variant_ranges
+        default: _,              // defaults
+        by_variant: _,           // variant_ranges, defaults, documentation, variant_citations
+        max_relative: _,         // relative_limit
+        address_alternatives: _, // alternatives
+        values: _,               // codes
+        fields: _,               // fields
+        read_values: _,          // read_meaning, read_codes
+        repeat_needs_change: _,  // repeat_needs_change, repeat_citation
+        indexed: _,              // indexed (indexed.rs)
+        function_codes: _,       // function_codes, function_codes_citation
+        write_restriction: _,    // write_restriction, on the plan
+        transports: _,           // transports, on the plan
+        display_steps: _,        // documentation
+        source: _,               // citation
+        indirect: _,             // documentation
+        notes: _,                // documentation
+        conflicts: _,            // documentation
+        unknown: _,              // documentation
+        broadcast: _,            // broadcast
+        group: _,                // group
     } = n;
 }
 
@@ -366,8 +366,8 @@ fn moved(s: &Sides) -> Row {
         a.address != b.address,
         ChangeKind::RegisterMoved,
         "",
-        Some(describe::address_as(s.old.address_format, a.address)),
-        Some(describe::address_as(s.new.address_format, b.address)),
+        Some(describe::address_as(s.r.map().address_format(), a.address)),
+        Some(describe::address_as(s.n.map().address_format(), b.address)),
     )
 }
 
@@ -390,7 +390,7 @@ fn alternatives(s: &Sides) -> Row {
             alts.join("; ")
         }
     };
-    let addresses = |d: &drivemap_map::model::Register| {
+    let addresses = |d: &WrittenRegister| {
         d.address_alternatives
             .iter()
             .map(|x| json(&(x.address, &x.when)))
@@ -443,18 +443,18 @@ fn table(s: &Sides) -> Row {
 }
 
 fn group(s: &Sides) -> Row {
-    let (ga, gb) = (&s.old.group_of(s.r).id, &s.new.group_of(s.n).id);
+    let (ga, gb) = (s.wa.group, s.wb.group);
     (
         ga != gb,
         ChangeKind::GroupChanged,
         "group",
-        Some(ga.clone()),
-        Some(gb.clone()),
+        Some(ga.to_owned()),
+        Some(gb.to_owned()),
     )
 }
 
 fn broadcast(s: &Sides) -> Row {
-    let text = |r: &Register| {
+    let text = |r: &WrittenRegister| {
         Some(
             if r.broadcast {
                 "broadcast only"
@@ -465,11 +465,11 @@ fn broadcast(s: &Sides) -> Row {
         )
     };
     (
-        s.r.broadcast != s.n.broadcast,
+        s.wa.broadcast != s.wb.broadcast,
         ChangeKind::BroadcastMembershipChanged,
         "broadcast",
-        text(s.r),
-        text(s.n),
+        text(&s.wa),
+        text(&s.wb),
     )
 }
 
@@ -521,7 +521,7 @@ fn repeat_needs_change(s: &Sides) -> Row {
 
 fn indexed(s: &Sides) -> Row {
     let (a, b) = s.defs();
-    match super::indexed::change(a.indexed.as_ref(), b.indexed.as_ref()) {
+    match super::indexed::change(a.indexed, b.indexed) {
         Some((kind, x, y)) => (true, kind, "indexed access", x, y),
         None => (
             false,
@@ -534,14 +534,10 @@ fn indexed(s: &Sides) -> Row {
 }
 
 fn function_codes(s: &Sides) -> Row {
-    let codes = |x: &Register| {
-        x.function_codes
-            .as_ref()
-            .map(|(f, _)| (f.codes.clone(), f.refusal()))
-    };
+    let codes = |x: &WrittenRegister| x.function_codes.map(|f| (f.codes.clone(), f.refusal()));
     let (x, y) = s.facts(FactKey::FunctionCodes, "every function of the drive");
     (
-        codes(s.r) != codes(s.n),
+        codes(&s.wa) != codes(&s.wb),
         ChangeKind::FunctionCodesChanged,
         "function codes",
         x,
@@ -568,8 +564,8 @@ fn read_codes(c: &mut Collector, s: &Sides) {
             c,
             &s.subject,
             "read ",
-            &a.read_values,
-            &b.read_values,
+            a.read_values,
+            b.read_values,
             s.src.clone(),
             s.order,
         );
@@ -632,15 +628,14 @@ fn value_kind(s: &Sides) -> Row {
         differs,
         ChangeKind::ValueKindChanged,
         "value kind",
-        differs.then(|| summary(s.old, s.r)),
-        differs.then(|| summary(s.new, s.n)),
+        differs.then(|| summary(s.r)),
+        differs.then(|| summary(s.n)),
     )
 }
 
 fn unit(s: &Sides) -> Row {
     let (a, b) = s.defs();
-    let text =
-        |d: &drivemap_map::model::Register| Some(d.unit.clone().unwrap_or_else(|| "none".into()));
+    let text = |d: &WrittenRegister| Some(d.unit.unwrap_or("none").to_owned());
     (
         same_kind(s.r, s.n) && a.unit != b.unit,
         ChangeKind::UnitChanged,
@@ -652,15 +647,30 @@ fn unit(s: &Sides) -> Row {
 
 /// The codes of two enumerations, code by code.
 fn codes(c: &mut Collector, s: &Sides) {
-    if let (ValueKind::Enum(x), ValueKind::Enum(y)) = (s.r.kind(), s.n.kind()) {
-        enum_codes(c, &s.subject, "", x, y, s.src.clone(), s.order);
+    if (s.r.kind(), s.n.kind()) == (ConversionKind::Enum, ConversionKind::Enum) {
+        enum_codes(
+            c,
+            &s.subject,
+            "",
+            s.wa.values,
+            s.wb.values,
+            s.src.clone(),
+            s.order,
+        );
     }
 }
 
 /// The fields of two bit sets, field by field.
 fn fields(c: &mut Collector, s: &Sides) {
-    if let (ValueKind::Bits(x), ValueKind::Bits(y)) = (s.r.kind(), s.n.kind()) {
-        bit_fields(c, &s.subject, x, y, s.src.clone(), s.order);
+    if (s.r.kind(), s.n.kind()) == (ConversionKind::Bits, ConversionKind::Bits) {
+        bit_fields(
+            c,
+            &s.subject,
+            s.wa.fields,
+            s.wb.fields,
+            s.src.clone(),
+            s.order,
+        );
     }
 }
 
@@ -678,9 +688,8 @@ fn citation(s: &Sides) -> Row {
 /// Scale per selector code; `None` as key for a fixed scale.
 type Cases<'a> = BTreeMap<Option<u16>, (&'a Scale, Option<f64>, Option<f64>, Option<String>)>;
 
-fn cases<'a>(r: &'a Register) -> Option<(Option<&'a str>, Cases<'a>)> {
-    let d = &r.def;
-    match &d.scale {
+fn cases<'a>(d: &WrittenRegister<'a>) -> Option<(Option<&'a str>, Cases<'a>)> {
+    match d.scale {
         None => None,
         Some(Scale::Selected(sel)) => {
             let mut m = Cases::new();
@@ -696,7 +705,7 @@ fn cases<'a>(r: &'a Register) -> Option<(Option<&'a str>, Cases<'a>)> {
         }
         Some(s) => {
             let mut m = Cases::new();
-            m.insert(None, (s, d.min, d.max, d.source.clone()));
+            m.insert(None, (s, d.min, d.max, d.source.map(str::to_owned)));
             Some((None, m))
         }
     }
@@ -715,27 +724,22 @@ fn case_scales(f: &RegisterFacts) -> BTreeMap<u16, &str> {
 /// The scale, per selector code when both sides select it by the same parameter (each case
 /// as the facts word it); between values of one kind only.
 fn scale(c: &mut Collector, s: &Sides) {
-    let (r, n) = (s.r, s.n);
-    let (a, b) = (&r.def.scale, &n.def.scale);
-    if !same_kind(r, n) || same(a, b) {
+    let (a, b) = (s.wa.scale, s.wb.scale);
+    if !same_kind(s.r, s.n) || same(&a, &b) {
         return;
     }
-    if let (Some((Some(sa), ca)), Some((Some(sb), cb))) = (cases(r), cases(n))
+    if let (Some((Some(sa), ca)), Some((Some(sb), cb))) = (cases(&s.wa), cases(&s.wb))
         && sa == sb
     {
         return scale_cases(c, s, &ca, &cb);
     }
-    let text = |d: &Drive, x: &Option<Scale>, unit: &str| match x {
-        None => "none".to_owned(),
-        Some(x) => describe::scale(d, x, unit),
-    };
-    let units = s.units();
+    let text = |r: RegisterRef| r.scale_text().unwrap_or_else(|| "none".to_owned());
     s.push(
         c,
         ChangeKind::ScaleChanged,
         "scale",
-        Some(text(s.old, a, units.0)),
-        Some(text(s.new, b, units.1)),
+        Some(text(s.r)),
+        Some(text(s.n)),
     );
 }
 
@@ -876,9 +880,8 @@ fn variant_ranges(c: &mut Collector, s: &Sides) {
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
         let (oa, ob) = (a.by_variant.get(option), b.by_variant.get(option));
-        let overrides = |o: Option<&drivemap_map::facts::VariantOverride>| {
-            o.map(|o| (o.min, o.max)).unwrap_or((None, None))
-        };
+        let overrides =
+            |o: Option<&VariantOverride>| o.map(|o| (o.min, o.max)).unwrap_or((None, None));
         let ((mina, maxa), (minb, maxb)) = (overrides(oa), overrides(ob));
         // Bounds neither side overrides follow the base, reported by `range`.
         let (ea, eb) = (r.limits_for(option), n.limits_for(option));
@@ -914,7 +917,7 @@ fn variant_ranges(c: &mut Collector, s: &Sides) {
 /// The range of each code of a scale both sides select by the same parameter.
 fn case_ranges(c: &mut Collector, s: &Sides) {
     let src = &s.src;
-    let (Some((Some(sa), ca)), Some((Some(sb), cb))) = (cases(s.r), cases(s.n)) else {
+    let (Some((Some(sa), ca)), Some((Some(sb), cb))) = (cases(&s.wa), cases(&s.wb)) else {
         return;
     };
     if sa != sb {
@@ -949,7 +952,7 @@ fn default_text(d: Option<&str>) -> String {
 fn defaults(c: &mut Collector, s: &Sides) {
     let (subject, order) = (s.subject.as_str(), s.order);
     let (a, b) = s.defs();
-    let src = (a.source.clone(), b.source.clone());
+    let src = (a.source.map(str::to_owned), b.source.map(str::to_owned));
     let base = |f: &RegisterFacts| default_text(f.get(FactKey::Default).map(|x| x.value.as_str()));
     if !same(&a.default, &b.default) {
         c.push(
@@ -996,7 +999,7 @@ fn defaults(c: &mut Collector, s: &Sides) {
 fn documentation(c: &mut Collector, s: &Sides) {
     let (subject, order) = (s.subject.as_str(), s.order);
     let (a, b) = s.defs();
-    let src = (a.source.clone(), b.source.clone());
+    let src = (a.source.map(str::to_owned), b.source.map(str::to_owned));
     let mut parts = Vec::new();
     if a.notes != b.notes {
         parts.push("notes");
@@ -1013,7 +1016,7 @@ fn documentation(c: &mut Collector, s: &Sides) {
     if a.indirect != b.indirect {
         parts.push("indirect citation");
     }
-    let variant_docs = |d: &drivemap_map::model::Register| {
+    let variant_docs = |d: &WrittenRegister| {
         d.by_variant
             .iter()
             .map(|(k, o)| (k.clone(), json(&o.unknown)))
@@ -1039,19 +1042,18 @@ fn documentation(c: &mut Collector, s: &Sides) {
 
 fn pair_citation(c: &mut Collector, s: &Sides) {
     let (a, b) = s.defs();
-    let pair = |d: &drivemap_map::model::Register| d.pair.as_ref().and_then(|p| p.source.clone());
+    let pair = |d: &WrittenRegister| d.pair.and_then(|p| p.source.clone());
     if s.r.width() == s.n.width() && pair(a) != pair(b) {
         s.cite(c, "word order", pair(a), pair(b));
     }
 }
 
 fn repeat_citation(c: &mut Collector, s: &Sides) {
-    let repeat = |x: &Register| {
+    let repeat = |x: &WrittenRegister| {
         x.repeat_needs_change
-            .as_ref()
-            .map(|(rule, _)| (rule.between.to_bits(), rule.source.clone()))
+            .map(|rule| (rule.between.to_bits(), rule.source.clone()))
     };
-    if let (Some((x, xs)), Some((y, ys))) = (repeat(s.r), repeat(s.n))
+    if let (Some((x, xs)), Some((y, ys))) = (repeat(&s.wa), repeat(&s.wb))
         && x == y
         && xs != ys
     {
@@ -1060,12 +1062,11 @@ fn repeat_citation(c: &mut Collector, s: &Sides) {
 }
 
 fn function_codes_citation(c: &mut Collector, s: &Sides) {
-    let functions = |x: &Register| {
+    let functions = |x: &WrittenRegister| {
         x.function_codes
-            .as_ref()
-            .map(|(f, _)| ((f.codes.clone(), f.refusal()), f.source.clone()))
+            .map(|f| ((f.codes.clone(), f.refusal()), f.source.clone()))
     };
-    if let (Some((x, xs)), Some((y, ys))) = (functions(s.r), functions(s.n))
+    if let (Some((x, xs)), Some((y, ys))) = (functions(&s.wa), functions(&s.wb))
         && x == y
         && xs != ys
     {
@@ -1077,9 +1078,9 @@ fn variant_citations(c: &mut Collector, s: &Sides) {
     let (a, b) = s.defs();
     let options: BTreeSet<&String> = a.by_variant.keys().chain(b.by_variant.keys()).collect();
     for option in options {
-        let source = |d: &drivemap_map::model::Register| {
+        let source = |d: &WrittenRegister| {
             d.by_variant.get(option).and_then(|o| {
-                let drivemap_map::facts::VariantOverride {
+                let VariantOverride {
                     min: _,
                     max: _,
                     default: _,

@@ -456,11 +456,11 @@ pub(super) fn roles(c: &mut Collector, old: &Map, new: &Map) {
 /// states or time limit, a path or the power-on state changed, is breaking (the drive trait
 /// walks them); a citation is documentation.
 pub(super) fn command_profile(c: &mut Collector, old: &Map, new: &Map) {
-    use drivemap_map::command_profile::resolve;
+    use drivemap_map::facts::{PathSpec, StateSpec, TransitionSpec};
     let subject = "profile";
     let text = |d: &Map| {
         d.profile().map(|p| {
-            let r = resolve(p);
+            let r = p.resolved();
             format!(
                 "{} (control {}, status {})",
                 r.standard.as_deref().unwrap_or("own"),
@@ -493,7 +493,7 @@ pub(super) fn command_profile(c: &mut Collector, old: &Map, new: &Map) {
             );
             return;
         }
-        (Some(a), Some(b)) => (resolve(a), resolve(b)),
+        (Some(a), Some(b)) => (a.resolved(), b.resolved()),
     };
     let mut entry = |what: String,
                      x: Option<String>,
@@ -537,7 +537,7 @@ pub(super) fn command_profile(c: &mut Collector, old: &Map, new: &Map) {
         a.source.clone(),
         b.source.clone(),
     );
-    let state = |s: &drivemap_map::command_profile::StateSpec| {
+    let state = |s: &StateSpec| {
         format!(
             "mask {:#06X} value {:#06X}",
             s.mask.map_or(0, |w| w.0),
@@ -555,7 +555,7 @@ pub(super) fn command_profile(c: &mut Collector, old: &Map, new: &Map) {
             y.and_then(|s| s.source.clone()),
         );
     }
-    let transition = |t: &drivemap_map::command_profile::TransitionSpec| {
+    let transition = |t: &TransitionSpec| {
         format!(
             "word {:#06X} keep {:#06X} edge {:#06X} from {} to {} within {} ms",
             t.word.map_or(0, |w| w.0),
@@ -577,9 +577,7 @@ pub(super) fn command_profile(c: &mut Collector, old: &Map, new: &Map) {
             y.and_then(|t| t.source.clone()),
         );
     }
-    let path = |p: &drivemap_map::command_profile::PathSpec| {
-        format!("via {} to {}", p.via.join(", "), p.to.join(", "))
-    };
+    let path = |p: &PathSpec| format!("via {} to {}", p.via.join(", "), p.to.join(", "));
     let ids: BTreeSet<&String> = a.paths.keys().chain(b.paths.keys()).collect();
     for id in ids {
         entry(

@@ -7,7 +7,6 @@
 use std::fmt::Write as _;
 
 use drivemap_map::Map;
-use drivemap_map::command_profile::resolve;
 
 use super::{cell, cite, code};
 
@@ -15,7 +14,7 @@ pub(super) fn section(out: &mut String, drive: &Map) {
     let Some(spec) = drive.profile() else {
         return;
     };
-    let p = resolve(spec);
+    let p = spec.resolved();
     let standard = match (&p.standard, &p.name) {
         (Some(s), Some(n)) => format!("{} ({})", code(s), cell(n)),
         (Some(s), None) => code(s),

@@ -17,7 +17,7 @@ use super::Manuals;
 use super::matching::{
     AddressForms, Line, code_found, label_text, name_found, number_found, param_found,
 };
-use drivemap_map::citations::PlaceKind;
+use drivemap_map::facts::PlaceKind;
 use drivemap_map::facts::{BitField as Field, EnumValue};
 use drivemap_map::facts::{parse_citation, parse_page_citation};
 use drivemap_map::{Loc, Map, RegisterRef};
@@ -41,7 +41,7 @@ pub enum Item {
         /// Its name as the map writes it.
         name: String,
     },
-    /// A citation outside the registers ([`drivemap_map::others`]): of a role, a protocol item, a
+    /// A citation outside the registers ([`Map::other_citations`]): of a role, a protocol item, a
     /// reading of a conflict, a gap.
     Other {
         /// `role`, `protocol`, `conflict` or `gap`.
@@ -176,7 +176,7 @@ impl Cache<'_> {
 const WINDOW: usize = 80;
 
 /// Checks every citation of a drive against the manuals: registers, values and fields, then
-/// roles, protocol items, readings of conflicts and gaps ([`drivemap_map::others`]).
+/// roles, protocol items, readings of conflicts and gaps ([`Map::other_citations`]).
 pub fn verify_citations(map: &Map, manuals: &Manuals) -> Vec<CitationCheck> {
     let decimal = map.address_format() == drivemap_map::facts::AddressFormat::Decimal;
     let offsets = map
@@ -283,7 +283,7 @@ pub fn verify_citations(map: &Map, manuals: &Manuals) -> Vec<CitationCheck> {
         let verdict = match &o.indirect {
             Some(reason) => Verdict::Indirect(reason.clone()),
             None => match &o.rule {
-                drivemap_map::others::Rule::Register(i) => {
+                drivemap_map::facts::CitationRule::Register(i) => {
                     register_verdict(map, &keys, &by_file, &mut cache, *i, &source)
                 }
                 rule => near(manuals, &source, |l| {

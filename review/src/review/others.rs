@@ -1,24 +1,29 @@
-//! Reading the citations outside the registers ([`drivemap_map::others`]: roles, protocol
+//! Reading the citations outside the registers ([`Map::other_citations`]: roles, protocol
 //! items, readings of conflicts, gaps) against the manual's line: whether the line shows what
-//! each [`Rule`] asks.
+//! each [`CitationRule`] asks.
 
 use drivemap_map::Map;
 use drivemap_map::facts::AddressFormat;
-use drivemap_map::others::Rule;
+use drivemap_map::facts::CitationRule;
 
 use super::matching::{AddressForms, Line, name_found, number_found, param_found, word_found};
 
 /// Whether the line shows what `rule` asks (`Register` is decided by the register check, not
 /// here).
-pub(crate) fn found(rule: &Rule, map: &Map, offsets: Option<(i32, i32)>, line: &Line) -> bool {
+pub(crate) fn found(
+    rule: &CitationRule,
+    map: &Map,
+    offsets: Option<(i32, i32)>,
+    line: &Line,
+) -> bool {
     let decimal = map.address_format() == AddressFormat::Decimal;
     let forms = |a: u16| {
         let f = AddressForms::new(a, offsets);
         if decimal { f.with_decimal(a) } else { f }
     };
     match rule {
-        Rule::Register(_) => false,
-        Rule::Field {
+        CitationRule::Register(_) => false,
+        CitationRule::Field {
             register,
             field,
             codes,
@@ -38,7 +43,7 @@ pub(crate) fn found(rule: &Rule, map: &Map, offsets: Option<(i32, i32)>, line: &
                 || forms(r.address()).found_in(line)
                 || name_found(r.name(), line)
         }
-        Rule::Any {
+        CitationRule::Any {
             words,
             params,
             numbers,

@@ -5,10 +5,10 @@
 //! and list item deleted — and every mutation that validation accepts and that changes what the
 //! map says must show in the diff, in both directions.
 //!
-//! "What the map says" is the expanded map (the IR) with each register's effective access,
-//! table, write restriction, transports, repeat rule and function codes: deleting `access: rw` from a register
-//! whose group gives `rw`, or a variant's `min` equal to the base's, says nothing new, and is
-//! counted apart as a no-op.
+//! "What the map says" is the map as it writes it (`Map::written`: the expanded map, every key
+//! named) with each register's effective access, table, write restriction, transports, repeat
+//! rule and function codes: deleting `access: rw` from a register whose group gives `rw`, or a
+//! variant's `min` equal to the base's, says nothing new, and is counted apart as a no-op.
 //!
 //! Every key path is mutated: each path with its list indices taken out (`groups[].registers[]
 //! .scale`, `roles.run[].field`, `protocol.exceptions[].code`) at its first occurrence, and
@@ -66,68 +66,28 @@ fn maps() -> Vec<PathBuf> {
     out
 }
 
-/// What a map says, as one comparable text: every part of the IR but where it was read from,
-/// registers with their effective defaults (the keys that only restate a group's default
-/// cleared).
+/// What a map says, as one comparable text: every part and every register key as the map
+/// writes it ([`Map::written`], which names every field of the expanded map and of the
+/// schema's register), registers with the keys they take from their group applied, and a
+/// variant's limit or default that restates the base's left out.
 fn meaning(d: &Map) -> String {
-    let d = d.ir();
-    let registers: Vec<serde_json::Value> = d
-        .registers
-        .iter()
-        .map(|r| {
-            let mut def = r.def.clone();
-            // A variant's limit or default that restates the base's says nothing new.
-            for o in def.by_variant.values_mut() {
-                if o.min == r.def.min {
-                    o.min = None;
-                }
-                if o.max == r.def.max {
-                    o.max = None;
-                }
-                if serde_json::to_value(&o.default).ok()
-                    == serde_json::to_value(&r.def.default).ok()
-                {
-                    o.default = None;
+    let mut written = serde_json::to_value(d.written()).expect("the written map as JSON");
+    for r in written["registers"].as_array_mut().expect("registers") {
+        let base = r.clone();
+        let Some(by_variant) = r.get_mut("by_variant").and_then(|v| v.as_object_mut()) else {
+            continue;
+        };
+        // A variant's limit or default that restates the base's says nothing new.
+        for o in by_variant.values_mut() {
+            let o = o.as_object_mut().expect("a variant override");
+            for key in ["min", "max", "default"] {
+                if o.get(key).is_some_and(|v| Some(v) == base.get(key)) {
+                    o.remove(key);
                 }
             }
-            def.access = None;
-            def.modbus_table = None;
-            def.write_restriction = None;
-            def.transports = None;
-            def.repeat_needs_change = None;
-            def.function_codes = None;
-            serde_json::json!([
-                def,
-                r.access,
-                r.table,
-                r.write_restriction,
-                r.transports,
-                r.broadcast,
-                d.groups[r.group].id,
-                r.repeat_needs_change.as_ref().map(|x| &x.0),
-                r.function_codes.as_ref().map(|x| &x.0),
-            ])
-        })
-        .collect();
-    let groups: Vec<serde_json::Value> = d
-        .groups
-        .iter()
-        .map(|g| serde_json::json!([g.id, g.name, g.table, g.source, g.broadcast, g.notes]))
-        .collect();
-    serde_json::json!({
-        "meta": d.meta,
-        "address_format": d.address_format,
-        "variants": d.variants,
-        "protocol": d.protocol,
-        "groups": groups,
-        "registers": registers,
-        "conflicts": d.conflicts,
-        "gaps": d.gaps,
-        "removed": d.removed,
-        "roles": d.roles,
-        "examples": d.examples,
-    })
-    .to_string()
+        }
+    }
+    written.to_string()
 }
 
 /// One edit of a tree.

@@ -4,7 +4,10 @@
 //! for `drivemap-drives` (the V7 alone) and `drivemap-runtime` (tokio) by version from
 //! crates.io, with `[patch.crates-io]` pointing at the unpacked packages, builds it offline and
 //! runs it against a simulated V7: it writes the frequency reference and runs the drive through
-//! the async drive trait (`AsyncVfd`), polls, stops, and reads the reference back.
+//! the async drive trait (`AsyncVfd`), polls, stops, and reads the reference back. Then it
+//! builds every package, libraries and binaries, as one workspace of the unpacked tarballs:
+//! `scripts/test` packages with `--no-verify` and leaves that verification to this test (one
+//! build, in the workspace's target directory with its profiles, instead of one per package).
 //!
 //! The application's source is `examples/async-poll/src/main.rs`, copied: the example of the
 //! repository is what a user would write. `drivemap-drives` generates its module from the
@@ -53,6 +56,7 @@ fn run(cmd: &mut Command, what: &str) -> String {
 
 #[test]
 fn an_application_built_only_from_the_packages_drives_the_simulator() {
+    let _nested = drivemap_tests::hold_nested_target();
     let packages = root().join("target").join("package");
     for name in NEEDED {
         let file = packages.join(format!("{name}-{VERSION}.crate"));
@@ -69,6 +73,7 @@ fn an_application_built_only_from_the_packages_drives_the_simulator() {
     std::fs::create_dir_all(dir.join("packages")).unwrap();
     std::fs::create_dir_all(dir.join("app").join("src")).unwrap();
     let mut patches = String::new();
+    let mut members = Vec::new();
     for entry in std::fs::read_dir(&packages).unwrap() {
         let path = entry.unwrap().path();
         let Some(file) = path.file_name().and_then(|f| f.to_str()) else {
@@ -89,7 +94,15 @@ fn an_application_built_only_from_the_packages_drives_the_simulator() {
             .strip_suffix(&format!("-{VERSION}"))
             .expect("a package of this version");
         patches += &format!("{name} = {{ path = \"../packages/{stem}\" }}\n");
+        members.push(stem.to_owned());
     }
+    members.sort();
+    let missing: Vec<&str> = NEEDED
+        .iter()
+        .copied()
+        .filter(|name| !members.contains(&format!("{name}-{VERSION}")))
+        .collect();
+    assert!(missing.is_empty(), "not packaged: {missing:?}");
     // The packaged drives crate carries the maps, the same as maps/.
     let packaged = dir
         .join("packages")
@@ -135,17 +148,38 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
         dir.join("app").join("Cargo.lock"),
     )
     .unwrap();
-    // A target directory kept between runs (the registry crates compile once), in the
-    // workspace's target/.
-    let target = root().join("target").join("downstream");
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    // The target directory of every nested build: the workspace's (`nested_target`).
+    let target = drivemap_tests::nested_target();
     run(
-        Command::new(&cargo)
+        drivemap_tests::nested_cargo()
             .args(["build", "--offline", "--quiet"])
-            .current_dir(dir.join("app"))
-            .env("CARGO_TARGET_DIR", &target)
-            .env_remove("RUSTFLAGS"),
+            .current_dir(dir.join("app")),
         "cargo build of the downstream application",
+    );
+
+    // Every published package builds from its tarball alone, library and binaries (what
+    // `cargo package`'s verification would do, which `scripts/test` leaves to this test:
+    // `--no-verify`): the unpacked packages as one workspace, patched to each other.
+    let quoted: Vec<String> = members.iter().map(|m| format!("\"{m}\"")).collect();
+    std::fs::write(
+        dir.join("packages").join("Cargo.toml"),
+        format!(
+            "[workspace]\nresolver = \"3\"\nmembers = [{}]\n\n[patch.crates-io]\n{}",
+            quoted.join(", "),
+            patches.replace("../packages/", "")
+        ),
+    )
+    .unwrap();
+    std::fs::copy(
+        root().join("Cargo.lock"),
+        dir.join("packages").join("Cargo.lock"),
+    )
+    .unwrap();
+    run(
+        drivemap_tests::nested_cargo()
+            .args(["build", "--workspace", "--offline", "--quiet"])
+            .current_dir(dir.join("packages")),
+        "cargo build of every package from its tarball",
     );
 
     let path = root().join("maps").join("yaskawa-v7.yaml");

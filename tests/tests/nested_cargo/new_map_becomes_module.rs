@@ -5,7 +5,6 @@
 //! `Cargo.toml` declares it (rustc warns until then), and then it is selected alone.
 
 use std::path::Path;
-use std::process::Command;
 
 use drivemap_tests::{workspace, workspace_with_map};
 
@@ -13,7 +12,6 @@ use drivemap_tests::{workspace, workspace_with_map};
 /// `features` (Cargo's `default-features = false` when given) and whose `main` prints the module
 /// `module`'s drive id and `DRIVES`; returns what it printed and what the build said.
 fn run_app(app: &Path, drives: &Path, features: Option<&str>, module: &str) -> (String, String) {
-    let root = workspace();
     let drives = drives.display().to_string();
     let dependency = match features {
         None => format!("{{ path = {drives:?} }}"),
@@ -34,13 +32,12 @@ fn run_app(app: &Path, drives: &Path, features: Option<&str>, module: &str) -> (
         ),
     )
     .unwrap();
-    let out = Command::new(env!("CARGO"))
+    let out = drivemap_tests::nested_cargo()
         .args(["run", "--quiet", "--offline", "--manifest-path"])
         .arg(app.join("Cargo.toml"))
-        .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
         .env(
             "DRIVEMAP_MANUALS",
-            root.join("target/new-map-probe/no-manuals"),
+            drivemap_tests::nested_target().join("no-manuals"),
         )
         .output()
         .expect("cargo runs");
@@ -128,13 +125,12 @@ fn a_broken_map_fails_the_build_with_every_error_as_check_prints_it() {
         .expect_err("the map is broken")
         .to_string();
     assert!(expected.ends_with("4 errors"), "{expected}");
-    let out = Command::new(env!("CARGO"))
+    let out = drivemap_tests::nested_cargo()
         .args(["build", "--quiet", "--offline", "-p", "drivemap-drives"])
         .current_dir(&copy)
-        .env("CARGO_TARGET_DIR", root.join("target/new-map-probe"))
         .env(
             "DRIVEMAP_MANUALS",
-            root.join("target/new-map-probe/no-manuals"),
+            drivemap_tests::nested_target().join("no-manuals"),
         )
         .output()
         .expect("cargo runs");

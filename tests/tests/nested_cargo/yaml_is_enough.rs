@@ -10,8 +10,8 @@
 //!   trait (`tests/fixtures/any-drive-app/main.rs`, which names no register and no drive) ramps
 //!   it to the reference and stops it.
 //!
-//! Builds share `target/new-map-probe` and the copy of the workspace with
-//! `new_map_becomes_module.rs` (`drivemap_tests::workspace_with_map`).
+//! Builds share the workspace's target directory and the copy of the workspace with
+//! `new_map_becomes_module.rs` (`drivemap_tests::workspace_with_map`, `nested_cargo`).
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -24,14 +24,13 @@ fn fixture() -> PathBuf {
 }
 
 fn target() -> PathBuf {
-    workspace().join("target/new-map-probe")
+    drivemap_tests::nested_target()
 }
 
 fn cargo(args: &[&str], workspace: &Path) -> std::process::Output {
-    Command::new(env!("CARGO"))
+    drivemap_tests::nested_cargo()
         .args(args)
         .current_dir(workspace)
-        .env("CARGO_TARGET_DIR", target())
         .env("DRIVEMAP_MANUALS", fixture().join("manuals"))
         .output()
         .expect("cargo runs")
@@ -60,9 +59,7 @@ impl Drop for Child {
 #[test]
 fn a_drive_of_another_vendor_needs_only_its_yaml() {
     let root = workspace();
-    let tmp = root
-        .join("target/new-map-probe")
-        .join(format!("yaml-is-enough-{}", std::process::id()));
+    let tmp = target().join(format!("yaml-is-enough-{}", std::process::id()));
     let app = drivemap_tests::app_dir(&tmp.join("app"));
     let (_copy, copy) = drivemap_tests::workspace_with_map(&fixture().join("acme-vf1.yaml"));
     // The maps of the copy: the shipped ones and the new one.

@@ -206,7 +206,7 @@ fn no_write_reaches_the_wire_through_a_draft_without_draft() {
                 r.id()
             );
             assert!(result.is_err(), "{} {}", drive.id(), r.id());
-            if r.ir().def.access.is_none() {
+            if r.access_written().is_none() {
                 checked += 1;
             }
         }
@@ -279,7 +279,7 @@ fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
                     runs(*role) || *role == Role::FaultReset || f.edge.needs_release_first()
                 })
                 .fold(0, |m, (_, f)| m | f.mask());
-            let ValueKind::Bits(fields) = r.ir().kind() else {
+            let ValueKind::Bits(fields) = value_kind(r) else {
                 continue;
             };
             let free: Vec<(String, u16)> = fields
@@ -473,10 +473,11 @@ fn no_set_value_outside_its_range_or_against_the_drive_is_used() {
             )
             .unwrap();
             // What the drive holds: a value of the register (its range, or its codes).
-            let (lo, hi_v) = (s.ir().def.min.unwrap_or(0.0), s.ir().def.max.unwrap_or(100.0));
-            let held_text = match s.ir().kind() {
+            let (min, max) = s.limits();
+            let (lo, hi_v) = (min.unwrap_or(0.0), max.unwrap_or(100.0));
+            let held_text = match value_kind(s) {
                 ValueKind::Enum(list) => list[hi.index(list.len())].value.to_string(),
-                _ => number(s.ir().def.min.unwrap_or(0.0).max(lo)),
+                _ => number(min.unwrap_or(0.0).max(lo)),
             };
             let held = drivemap_live::codec::parse_value(drive, s, &held_text, &settings)
                 .expect("a value of the setting") as u16;
