@@ -941,9 +941,9 @@ mod tests {
 
     /// Every map of `maps/` and a variant map, loaded.
     fn maps() -> Vec<crate::Map> {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let mut paths = crate::find_maps(&root.join("../maps")).expect("maps/");
-        paths.push(root.join("tests/fixtures/variants/child-drive.yaml"));
+        use drivemap_test_support::paths as at;
+        let mut paths = crate::find_maps(&at::maps()).expect("maps/");
+        paths.push(at::fixture("crafted/maps/variants/child-drive.yaml"));
         assert!(paths.len() > 5, "{paths:?}");
         (paths.iter())
             .map(|p| {

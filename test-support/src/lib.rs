@@ -13,15 +13,25 @@
 //!   in all, for the tests and benches that promise none per request;
 //! - [`instant_link::InstantLink`]: an in-memory RTU link on which a simulated slave answers
 //!   inside `send` (no thread, no clock), for those benches and tests;
-//! - [`rng::SplitMix`]: SplitMix64, to draw test cases and reproducible subsets.
+//! - [`rng::SplitMix`]: SplitMix64, to draw test cases and reproducible subsets;
+//! - [`paths`]: where the workspace's files are (the fixtures of `tests/fixtures/`, the shipped
+//!   maps of `maps/`, the docs), the one place a test learns the repository's layout.
+//!
+//! The links and peers need the runtime and the simulator: they are behind the `links` feature,
+//! so that a crate whose tests only need [`paths`] builds nothing else for them.
 #![doc = include_str!("../README.md")]
 
 pub mod alloc_count;
+#[cfg(feature = "links")]
 pub mod hostile_peer;
+#[cfg(feature = "links")]
 pub mod instant_link;
+#[cfg(feature = "links")]
 pub mod late_slave;
-#[cfg(unix)]
+#[cfg(all(unix, feature = "links"))]
 pub mod line;
+pub mod paths;
 pub mod pty_pair;
 pub mod rng;
+#[cfg(feature = "links")]
 pub mod sim_link;

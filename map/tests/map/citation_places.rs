@@ -4,8 +4,10 @@
 //! text. A `source` key the list leaves out (a new construct, a forgotten place) fails here, and
 //! so would every check that reads the list instead of walking the model.
 
+use drivemap_test_support::paths;
+
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use drivemap_map::facts::PlaceKind;
 use drivemap_map::{Tree as Node, TreeKind as NodeKind, TreePath as YamlPath};
@@ -36,10 +38,8 @@ fn tree_sources(node: &Node, at: &YamlPath, out: &mut BTreeMap<String, String>) 
 }
 
 fn corpus() -> Vec<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let mut files = drivemap_map::find_maps(&root.join("maps")).unwrap();
-    let fixtures = root.join("tests/fixtures");
-    for dir in std::fs::read_dir(&fixtures).unwrap() {
+    let mut files = drivemap_map::find_maps(&paths::maps()).unwrap();
+    for dir in std::fs::read_dir(paths::fixtures()).unwrap() {
         let dir = dir.unwrap().path();
         if dir.is_dir() {
             files.extend(drivemap_map::find_maps(&dir).unwrap());
@@ -49,7 +49,7 @@ fn corpus() -> Vec<PathBuf> {
             }
         }
     }
-    let variants = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/variants");
+    let variants = paths::fixture("crafted/maps/variants");
     files.extend(drivemap_map::find_maps(&variants).unwrap());
     files.sort();
     files

@@ -1,14 +1,16 @@
 //! The facts view (`drivemap_map::facts`): one row per fact of a register, worded once and
 //! cited, in the plan's row order, serializable for tools.
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
+use std::path::PathBuf;
 
 use drivemap_core::kind::ConversionKind;
 use drivemap_map::facts::{self, FactKey, Figure, ProtocolKey, RegisterFacts};
 
 fn acme() -> drivemap_map::Map {
     drivemap_map::Loader::new()
-        .load(Path::new("../tests/fixtures/acme-vf1/acme-vf1.yaml"))
+        .load(&paths::fixture("acme-vf1/acme-vf1.yaml"))
         .unwrap_or_else(|d| panic!("{d}"))
 }
 
@@ -129,9 +131,9 @@ fn the_view_serializes_with_kind_names_and_labels() {
     assert_eq!(energy["rows"][1]["citation"], "acme-vf1.txt:34");
 }
 
-fn read(path: &str) -> drivemap_map::Map {
+fn read(path: PathBuf) -> drivemap_map::Map {
     drivemap_map::Loader::new()
-        .load(Path::new(path))
+        .load(&path)
         .unwrap_or_else(|d| panic!("{d}"))
 }
 
@@ -142,7 +144,7 @@ fn keys(p: &facts::ProtocolFacts) -> Vec<ProtocolKey> {
 #[test]
 fn the_protocol_is_one_row_per_fact_with_its_figure_and_citation() {
     use ProtocolKey as K;
-    let v7 = read("../maps/yaskawa-v7.yaml");
+    let v7 = read(paths::shipped_map("yaskawa-v7"));
     let p = v7.protocol_facts();
     assert_eq!(
         keys(&p),
@@ -245,7 +247,7 @@ fn the_protocol_is_one_row_per_fact_with_its_figure_and_citation() {
 #[test]
 fn a_fact_the_manual_does_not_print_says_why_and_what_is_used_instead() {
     use ProtocolKey as K;
-    let halden = read("../tests/fixtures/halden-h1/halden-h1.yaml");
+    let halden = read(paths::fixture("halden-h1/halden-h1.yaml"));
     let p = halden.protocol_facts();
     let not_printed = |k| {
         let r = p.get(k).unwrap_or_else(|| panic!("no {k:?} row"));

@@ -2,6 +2,8 @@
 //! values beside each worded row say the same thing as the row, taken from the plan where the
 //! plan decides, and the export's registers are the view's, in the export's order.
 
+use drivemap_test_support::paths;
+
 use std::path::{Path, PathBuf};
 
 use drivemap_core::width::{Width, WordOrder};
@@ -11,8 +13,8 @@ use drivemap_map::facts::{FactKey, RegisterFacts};
 
 /// Every map of the repository and every fixture map (each a different vendor's constructs).
 fn maps() -> Vec<PathBuf> {
-    let mut out = drivemap_map::find_maps(Path::new("../maps")).unwrap();
-    for dir in std::fs::read_dir("../tests/fixtures").unwrap() {
+    let mut out = drivemap_map::find_maps(&paths::maps()).unwrap();
+    for dir in std::fs::read_dir(paths::fixtures()).unwrap() {
         let dir = dir.unwrap().path();
         if dir.is_dir() {
             out.extend(drivemap_map::find_maps(&dir).unwrap());
@@ -187,7 +189,7 @@ fn codes_and_fields_from_the_plan_are_the_maps() {
 /// view's typed values.
 #[test]
 fn the_export_is_the_views_registers_in_address_order() {
-    let drive = read(Path::new("../tests/fixtures/acme-vf1/acme-vf1.yaml"));
+    let drive = read(&paths::fixture("acme-vf1/acme-vf1.yaml"));
     let mut view = drive.facts().registers;
     view.sort_by_key(|f| (f.data.broadcast, f.address));
     let export = drive.export();
@@ -233,7 +235,7 @@ fn the_export_is_the_views_registers_in_address_order() {
 /// A relative scale names its reference as a user does; a relative limit as the map does.
 #[test]
 fn a_reference_is_shown_by_parameter_and_a_limit_keeps_the_maps_name() {
-    let drive = read(Path::new("../maps/ptlk-tds-v8.yaml"));
+    let drive = read(&paths::shipped_map("ptlk-tds-v8"));
     let view = drive.facts().registers;
     let reference = view.iter().find(|f| f.id == "frequency_command").unwrap();
     let ScaleData::Relative {

@@ -2,13 +2,14 @@
 //! register 44 selects, register 45 carries the value) and lowered once into the plan. The
 //! refusals of `validate::indexed_valid` are in `tests/ui/indexed-*`.
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
 
 use drivemap_core::register::{Access, Table};
 use drivemap_core::scale::{Decimal, RawRange};
 
 fn drive() -> drivemap_map::Map {
-    let dir = Path::new("../tests/fixtures/tarrow-tm44");
+    let dir = &paths::fixture("tarrow-tm44");
     drivemap_map::Loader::new()
         .manuals(dir.join("manuals"))
         .load(&dir.join("tarrow-tm44.yaml"))
@@ -69,7 +70,7 @@ fn the_pair_and_its_entries_are_lowered_into_the_plan() {
 
 #[test]
 fn a_pair_without_a_printed_list_keeps_its_reason() {
-    let text = std::fs::read_to_string("../tests/fixtures/tarrow-tm44/tarrow-tm44.yaml").unwrap();
+    let text = std::fs::read_to_string(paths::fixture("tarrow-tm44/tarrow-tm44.yaml")).unwrap();
     let start = text.find("          entries:").unwrap();
     let end = text.find("          unknown:").unwrap();
     let text = format!("{}{}", &text[..start], &text[end..])

@@ -2,14 +2,18 @@
 //! refuses or warns about, and what the lowered profile and the export carry in their place.
 //! The fixture `tests/fixtures/halden-h1` is a fictional drive whose manual prints none of them.
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
+use std::path::PathBuf;
 
 use drivemap_core::stated::{ProtocolFact, Stated};
 
-const HALDEN: &str = "../tests/fixtures/halden-h1/halden-h1.yaml";
+fn halden() -> PathBuf {
+    paths::fixture("halden-h1/halden-h1.yaml")
+}
 
 fn halden_text() -> String {
-    std::fs::read_to_string(HALDEN).unwrap()
+    std::fs::read_to_string(halden()).unwrap()
 }
 
 fn read(text: &str) -> Result<drivemap_map::Map, String> {
@@ -41,7 +45,7 @@ fn with_line(key: &str, line: &str) -> String {
 #[test]
 fn a_map_whose_manual_prints_no_protocol_fact_loads_with_the_modbus_figures_in_the_profile() {
     let drive = drivemap_map::Loader::new()
-        .load(Path::new(HALDEN))
+        .load(&halden())
         .unwrap_or_else(|d| panic!("{d}"));
     assert!(
         drive.protocol_warnings().is_empty(),
@@ -85,7 +89,7 @@ fn a_map_whose_manual_prints_no_protocol_fact_loads_with_the_modbus_figures_in_t
 #[test]
 fn printed_facts_stay_printed_in_the_profile() {
     let drive = drivemap_map::Loader::new()
-        .load(Path::new("../maps/ptlk-tds-v8.yaml"))
+        .load(&paths::shipped_map("ptlk-tds-v8"))
         .unwrap_or_else(|d| panic!("{d}"));
     let p = drive.plan().profile;
     assert!(p.not_printed.is_empty(), "{:?}", p.not_printed);
@@ -96,7 +100,7 @@ fn printed_facts_stay_printed_in_the_profile() {
 /// Each shipped map: no protocol number without a source or an `unknown`.
 #[test]
 fn the_shipped_maps_cite_or_mark_every_protocol_number() {
-    for entry in std::fs::read_dir("../maps").unwrap() {
+    for entry in std::fs::read_dir(paths::maps()).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_none_or(|e| e != "yaml") {
             continue;
@@ -193,7 +197,7 @@ fn a_fact_neither_given_nor_unknown_or_both_is_refused_where_it_is() {
 
 #[test]
 fn export_writes_each_unprinted_fact_explicitly() {
-    let drive = drivemap_map::Loader::new().load(Path::new(HALDEN)).unwrap();
+    let drive = drivemap_map::Loader::new().load(&halden()).unwrap();
     let out = drive.export();
     let p = &out["protocol"];
     assert_eq!(p["max_read"], 125);
@@ -230,7 +234,7 @@ fn export_writes_each_unprinted_fact_explicitly() {
     );
     // A map printing everything writes no `not_printed`.
     let tds = drivemap_map::Loader::new()
-        .load(Path::new("../maps/ptlk-tds-v8.yaml"))
+        .load(&paths::shipped_map("ptlk-tds-v8"))
         .unwrap();
     assert!(tds.export()["protocol"].get("not_printed").is_none());
 }
@@ -238,7 +242,7 @@ fn export_writes_each_unprinted_fact_explicitly() {
 /// The map round-trips: each `unknown` form serializes as it was written.
 #[test]
 fn unknown_forms_serialize_as_written() {
-    let drive = drivemap_map::Loader::new().load(Path::new(HALDEN)).unwrap();
+    let drive = drivemap_map::Loader::new().load(&halden()).unwrap();
     let yaml = serde_yaml::to_string(&drive.protocol()).unwrap();
     for part in [
         "max_read:\n  unknown: the note prints no register count for function 03H",

@@ -2,27 +2,28 @@
 //! register of every map finds its own row, by id, by place or by row alike, and a register
 //! that is not the drive's finds no row there (`None` by id) — never row 0.
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
+use std::path::{Path, PathBuf};
 
 use drivemap_map::Map as Drive;
 
-fn load(path: &str) -> Drive {
+fn load(path: &Path) -> Drive {
     drivemap_map::Loader::new()
-        .load(Path::new(path))
+        .load(path)
         .unwrap_or_else(|d| panic!("{d}"))
 }
 
 fn maps() -> Vec<Drive> {
-    let mut paths: Vec<String> = std::fs::read_dir("../maps")
+    let mut files: Vec<PathBuf> = std::fs::read_dir(paths::maps())
         .expect("maps/")
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "yaml"))
-        .map(|p| p.display().to_string())
         .collect();
-    paths.sort();
-    paths.push("tests/fixtures/variants/child-drive.yaml".into());
-    assert!(paths.len() > 5, "{paths:?}");
-    paths.iter().map(|p| load(p)).collect()
+    files.sort();
+    files.push(paths::fixture("crafted/maps/variants/child-drive.yaml"));
+    assert!(files.len() > 5, "{files:?}");
+    files.iter().map(|p| load(p)).collect()
 }
 
 #[test]

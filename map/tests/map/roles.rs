@@ -1,15 +1,16 @@
-//! Roles are lowered to plan rows, bit positions and codes: `tests/fixtures/roles-drive.yaml`
+//! Roles are lowered to plan rows, bit positions and codes: `tests/fixtures/crafted/maps/roles-drive.yaml`
 //! read, validated and lowered, and every place of its `MapPlan::roles` checked. The errors of
 //! `validate::roles_valid` are in `tests/ui/e46-*` .. `e56-*`.
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
 
 use drivemap_core::roles::{Edge, FieldRole, NumberField, Role, Target};
 use drivemap_map::MapPlan;
 
 fn drive() -> drivemap_map::Map {
     drivemap_map::Loader::new()
-        .load(Path::new("tests/fixtures/roles-drive.yaml"))
+        .load(&paths::fixture("crafted/maps/roles-drive.yaml"))
         .unwrap_or_else(|d| panic!("{d}"))
 }
 
@@ -145,7 +146,7 @@ fn every_role_of_the_fixture_lowers_to_its_place() {
 #[test]
 fn a_fault_code_in_a_byte_lowers_to_a_number_field() {
     let drive = drivemap_map::Loader::new()
-        .load(Path::new("../tests/fixtures/acme-vf1/acme-vf1.yaml"))
+        .load(&paths::fixture("acme-vf1/acme-vf1.yaml"))
         .unwrap_or_else(|d| panic!("{d}"));
     let plan = drive.plan();
     assert_eq!(
@@ -167,7 +168,7 @@ fn a_fault_code_in_a_byte_lowers_to_a_number_field() {
 /// written.
 #[test]
 fn a_signed_scaled_field_and_an_unknown_edge_lower_as_written() {
-    let text = std::fs::read_to_string("../tests/fixtures/acme-vf1/acme-vf1.yaml").unwrap();
+    let text = std::fs::read_to_string(paths::fixture("acme-vf1/acme-vf1.yaml")).unwrap();
     let text = text
         .replace(
             "{register: status_word, field: active_fault, source",

@@ -1,20 +1,22 @@
 //! The map's serial defaults as the command line's link and the simulator read them
 //! (`Drive::serial_defaults`), without the serde model.
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
+use std::path::PathBuf;
 
 use drivemap_map::facts::{Parity, SerialDefaults};
 
-fn defaults(map: &str) -> SerialDefaults {
+fn defaults(map: PathBuf) -> SerialDefaults {
     let ctx = drivemap_map::Loader::new();
-    ctx.load(Path::new(map))
+    ctx.load(&map)
         .unwrap_or_else(|d| panic!("{d}"))
         .serial_defaults()
 }
 
 #[test]
 fn tds_v8_fixes_eleven_bit_characters_so_no_parity_means_two_stop_bits() {
-    let d = defaults("../maps/ptlk-tds-v8.yaml");
+    let d = defaults(paths::shipped_map("ptlk-tds-v8"));
     assert_eq!(
         d,
         SerialDefaults {
@@ -30,7 +32,7 @@ fn tds_v8_fixes_eleven_bit_characters_so_no_parity_means_two_stop_bits() {
 
 #[test]
 fn v7_defaults_come_from_the_map_with_one_stop_bit() {
-    let d = defaults("../maps/yaskawa-v7.yaml");
+    let d = defaults(paths::shipped_map("yaskawa-v7"));
     assert_eq!((d.baud, d.parity, d.char_bits), (9600, Parity::None, None));
     assert_eq!(d.stop_bits(false), 1);
 }
@@ -39,7 +41,7 @@ fn v7_defaults_come_from_the_map_with_one_stop_bit() {
 /// 1 stop bit only; no parity has two formats, so the usual 1 stays the default.
 #[test]
 fn acn_formats_give_the_stop_bits_of_a_parity() {
-    let d = defaults("../maps/automationdirect-acn.yaml");
+    let d = defaults(paths::shipped_map("automationdirect-acn"));
     assert_eq!(d.format_stop_bits, [None, Some(1), Some(1)]);
     assert_eq!(d.stop_bits_for(Parity::Even), 1);
     assert_eq!(d.stop_bits_for(Parity::None), 1);

@@ -1,13 +1,14 @@
-//! Malformed maps and the errors they must produce: `tests/ui/<name>.yaml` beside
-//! `tests/ui/<name>.stderr`. Run with `DRIVEMAP_BLESS=1` to rewrite the expected files after an
+//! Malformed maps and the errors they must produce: `tests/fixtures/crafted/errors/<name>.yaml`
+//! beside `<name>.stderr`, the paths in it written from the workspace root. Run with `DRIVEMAP_BLESS=1` to rewrite the expected files after an
 //! intended change, then review the diff.
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
 
 #[test]
 fn malformed_maps_report_their_errors() {
-    let dir = Path::new("tests/ui");
-    let maps = drivemap_map::find_maps(dir).expect("tests/ui exists");
+    let dir = &paths::fixture("crafted/errors");
+    let maps = drivemap_map::find_maps(dir).expect("tests/fixtures/crafted/errors exists");
     assert!(
         maps.len() >= 20,
         "expected at least 20 malformed maps, found {}",
@@ -21,6 +22,8 @@ fn malformed_maps_report_their_errors() {
             Ok(_) => format!("{} unexpectedly passed validation\n", map.display()),
             Err(diags) => format!("{diags}\n"),
         };
+        // Where the repository is checked out is not part of the expected output.
+        let actual = actual.replace(&format!("{}/", paths::workspace().display()), "");
         if bless {
             std::fs::write(&expected_path, &actual).unwrap();
             continue;
@@ -41,7 +44,7 @@ fn malformed_maps_report_their_errors() {
 /// `address_format: decimal`, and then `address: 2001` is register 2001 (07D1H).
 #[test]
 fn addresses_are_read_in_the_manuals_notation() {
-    let text = std::fs::read_to_string("tests/fixtures/mini-drive.yaml").unwrap();
+    let text = std::fs::read_to_string(paths::fixture("crafted/maps/mini-drive.yaml")).unwrap();
     let first = "        address: 0x0001\n";
     assert!(text.contains(first), "the fixture's first register moved");
     let read = |text: &str| {

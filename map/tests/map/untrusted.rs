@@ -2,6 +2,8 @@
 //! quadratic time, whatever its text. Huge inputs are generated here rather than committed.
 //! Time bounds are generous "does not hang" limits for a debug build, not performance figures.
 
+use drivemap_test_support::paths;
+
 use std::time::{Duration, Instant};
 
 use drivemap_map::{
@@ -169,7 +171,7 @@ fn a_second_document_is_an_error_at_its_line() {
 
 #[test]
 fn every_shipped_map_is_within_the_limits() {
-    for map in drivemap_map::find_maps(std::path::Path::new("../maps")).unwrap() {
+    for map in drivemap_map::find_maps(&paths::maps()).unwrap() {
         let len = std::fs::metadata(&map).unwrap().len() as usize;
         assert!(len * 4 < MAX_MAP_BYTES, "{} is {len} bytes", map.display());
         drivemap_map::Loader::new()

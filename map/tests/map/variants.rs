@@ -1,11 +1,12 @@
 //! A variant map inherits its base and overrides it (`drive.extends`).
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
 
 #[test]
 fn variant_inherits_overrides_and_removes() {
     let child = drivemap_map::Loader::new()
-        .load(Path::new("tests/fixtures/variants/child-drive.yaml"))
+        .load(&paths::fixture("crafted/maps/variants/child-drive.yaml"))
         .unwrap_or_else(|d| panic!("{d}"));
     assert_eq!(child.id(), "child-drive");
     assert_eq!(child.meta().extends.as_deref(), Some("base-drive"));
@@ -53,11 +54,11 @@ fn removing_an_unknown_register_is_an_error() {
     let dir = std::env::temp_dir().join(format!("drivemap-variant-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::copy(
-        "tests/fixtures/variants/base-drive.yaml",
+        paths::fixture("crafted/maps/variants/base-drive.yaml"),
         dir.join("base-drive.yaml"),
     )
     .unwrap();
-    let child = std::fs::read_to_string("tests/fixtures/variants/child-drive.yaml")
+    let child = std::fs::read_to_string(paths::fixture("crafted/maps/variants/child-drive.yaml"))
         .unwrap()
         .replace("{id: extra,", "{id: no_such_register,");
     std::fs::write(dir.join("child-drive.yaml"), child).unwrap();
@@ -81,7 +82,7 @@ fn a_chain_of_variants_reads_each_file_once() {
     let dir = std::env::temp_dir().join(format!("drivemap-chain-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let base = std::fs::read_to_string("tests/fixtures/mini-drive.yaml")
+    let base = std::fs::read_to_string(paths::fixture("crafted/maps/mini-drive.yaml"))
         .unwrap()
         .replace("id: mini-drive", "id: c0000");
     std::fs::write(dir.join("c0000.yaml"), base).unwrap();
