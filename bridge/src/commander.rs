@@ -23,7 +23,7 @@ use drivemap_live::lookup;
 use drivemap_map::Map;
 use drivemap_map::Quantity;
 use drivemap_map::RegisterRef;
-use drivemap_runtime::ClientOptions;
+use drivemap_runtime::client::ClientOptions;
 use drivemap_runtime::core::plan::{Conversion, Dependency};
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::roles::RoleKind;

@@ -248,7 +248,7 @@ pub enum PollFailure {
     Plan(#[from] drivemap_runtime::planner::PlanError),
     /// The read failed on the wire.
     #[error(transparent)]
-    Read(#[from] drivemap_runtime::Error),
+    Read(#[from] drivemap_runtime::error::Error),
 }
 
 /// Why a command through the bridge wrote nothing (published on the drive's `error` topic).
@@ -270,7 +270,7 @@ pub enum CommandFailure {
         /// The register, described.
         register: String,
         /// The gate's refusal.
-        source: drivemap_runtime::Refusal,
+        source: drivemap_runtime::error::Refusal,
     },
     /// The parameter its limit depends on could not be read.
     #[error("reading {register}, which the limit depends on: {source}")]
@@ -305,7 +305,7 @@ pub enum CommandFailure {
     Address(PollFailure),
     /// The drive or the line failed the write or the drive command.
     #[error(transparent)]
-    Drive(#[from] drivemap_runtime::Error),
+    Drive(#[from] drivemap_runtime::error::Error),
     /// The command names a drive index the link does not poll.
     #[error("no such drive on this link")]
     NoSuchDrive,
@@ -346,7 +346,7 @@ impl CommandFailure {
     /// Whether a stop that failed this way is worth sending again: the line or the drive did
     /// not answer (a refusal of the gate or the drive's exception is final).
     pub fn retryable(&self) -> bool {
-        use drivemap_runtime::Error as E;
+        use drivemap_runtime::error::Error as E;
         match self {
             CommandFailure::Drive(e) => {
                 !matches!(e, E::Refused(_) | E::Value(_) | E::Exception { .. })

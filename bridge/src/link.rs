@@ -31,7 +31,7 @@ use drivemap_runtime::core::roles::{Role, RoleKind};
 use drivemap_runtime::core::width::Width;
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::transport::Transport;
-use drivemap_runtime::{Client, ClientOptions, Error};
+use drivemap_runtime::{client::Client, client::ClientOptions, error::Error};
 
 use crate::command::{Board, Intent, Next};
 use crate::commander::Commander;

@@ -33,7 +33,7 @@ use drivemap_runtime::core::plan::ValueShape;
 use drivemap_runtime::core::roles::RoleKind;
 use drivemap_runtime::pdu::{self, Request, Response, Words};
 use drivemap_runtime::tcp;
-use drivemap_runtime::{Error as LineError, Refusal};
+use drivemap_runtime::{error::Error as LineError, error::Refusal};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::{Semaphore, oneshot};

@@ -207,7 +207,7 @@ mod tests {
 
     #[test]
     fn every_shipped_map_is_built_in_and_loads_without_files() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps");
+        let dir = drivemap_test_support::paths::maps();
         let shipped: Vec<String> = drivemap_map::find_maps(&dir)
             .unwrap()
             .iter()

@@ -10,10 +10,12 @@
 #![doc = include_str!("../README.md")]
 #![warn(unreachable_pub, missing_docs)]
 
-pub mod config;
+mod config;
 pub mod generate;
 
 pub(crate) use drivemap_map::{Diagnostic, describe, facts};
 pub(crate) use drivemap_map::{default_manuals_dir, find_maps};
 
+// The build-script API, one path per item: `config` is private and its five items are the
+// crate's (as `prost_build::Config` is).
 pub use config::{Code, Config, Error, Generated, Module};

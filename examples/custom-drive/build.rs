@@ -9,8 +9,8 @@
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // A map with an error: `?` prints the report `drivemap check` prints, file:line:col.
     drivemap_codegen::Config::new()
-        .map("../../map/tests/fixtures/mini-drive.yaml")
-        .map("../../map/tests/fixtures/field-selector.yaml")
+        .map("../../tests/fixtures/crafted/maps/mini-drive.yaml")
+        .map("../../tests/fixtures/crafted/maps/field-selector.yaml")
         .map("../../tests/fixtures/acme-vf1/acme-vf1.yaml")
         .map("../../tests/fixtures/borealis-bf6/borealis-bf6.yaml")
         .compile()?;

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::{crc, tcp};
-use drivemap_sim::{ManualClock, SimOptions, Simulator};
+use drivemap_sim::{clock::ManualClock, SimOptions, Simulator};
 use libfuzzer_sys::fuzz_target;
 
 const MAPS: [&str; 5] = [

@@ -21,7 +21,7 @@ pub mod text;
 
 use std::collections::BTreeMap;
 
-pub use row::{Code, Notation, Row, Unread};
+use row::{Notation, Row, Unread};
 
 /// What was read from one manual.
 #[derive(Debug, Clone)]

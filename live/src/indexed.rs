@@ -40,7 +40,7 @@ pub fn find_entry(drive: &Map, name: &str) -> Option<EntryRef> {
 impl Session<'_> {
     /// Reads `entry` as its engineering value (the index written, then the value read, in one
     /// call of the client).
-    pub fn read_entry(&mut self, entry: EntryRef) -> Result<f64, drivemap_runtime::Error> {
+    pub fn read_entry(&mut self, entry: EntryRef) -> Result<f64, drivemap_runtime::error::Error> {
         self.client.read_entry(self.slave, entry)
     }
 
@@ -50,7 +50,7 @@ impl Session<'_> {
         &mut self,
         entry: EntryRef,
         value: f64,
-    ) -> Result<(), drivemap_runtime::Error> {
+    ) -> Result<(), drivemap_runtime::error::Error> {
         self.client.write_entry(self.slave, entry, value)
     }
 }

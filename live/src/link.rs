@@ -20,7 +20,7 @@ use drivemap_runtime::transport::serial::{
     Parity as PortParity, SerialOptions, SerialTransport, StopBits,
 };
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, ClientOptions};
+use drivemap_runtime::{client::Client, client::ClientOptions};
 
 /// `--parity none|even|odd` as a clap value parser for [`Parity`] (the vocabulary crate has
 /// no clap): the possible values are listed in `--help` and a wrong one is refused naming them.
@@ -116,7 +116,7 @@ pub enum LinkError {
     Ascii(String),
     /// The serial format is not one the map lists.
     #[error(transparent)]
-    Format(#[from] drivemap_runtime::Refusal),
+    Format(#[from] drivemap_runtime::error::Refusal),
     /// No transport was given.
     #[error("give --tcp, --gateway, --rtu-tcp or --serial")]
     NoTransport,
@@ -542,7 +542,7 @@ mod tests {
     /// RTU links, follows `--baud`, and `--request-gap`/`--timeout` override it.
     #[test]
     fn client_timing_defaults_come_from_the_map() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml");
+        let path = drivemap_test_support::paths::shipped_map("yaskawa-v7");
         let drive = drivemap_map::Loader::new().load(&path).expect("the V7 map");
         let profile = crate::leak_profile(&drive);
         let gap = |a: &Link| a.client_options(&drive, profile).request_gap;

@@ -494,9 +494,7 @@ mod tests {
     use super::*;
 
     fn fixture(path: &str) -> Map {
-        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../tests/fixtures")
-            .join(path);
+        let p = drivemap_test_support::paths::fixture(path);
         drivemap_map::Loader::new().load(&p).expect("fixture map")
     }
 
@@ -589,10 +587,9 @@ mod tests {
 
         // Offsets that differ per transport (RTU -1, TCP 0): two registers, refused.
         let acn = drivemap_map::Loader::new()
-            .load(
-                &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                    .join("../maps/automationdirect-acn.yaml"),
-            )
+            .load(&drivemap_test_support::paths::shipped_map(
+                "automationdirect-acn",
+            ))
             .expect("the ACN map");
         let e = id(&acn, "44356").unwrap_err().to_string();
         assert!(

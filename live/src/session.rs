@@ -28,7 +28,7 @@ use crate::lookup::NotFound;
 use crate::silence::SilenceGuard;
 use crate::{LiveSettings, leak_profile, lookup};
 use drivemap_map::describe;
-use drivemap_runtime::Client;
+use drivemap_runtime::client::Client;
 
 /// What conversions depend on, as the user gives it (the command line's `--variant` and
 /// `--set`).
@@ -655,7 +655,7 @@ pub enum ReadError {
 }
 
 impl ReadError {
-    fn bus(e: &drivemap_runtime::Error) -> ReadError {
+    fn bus(e: &drivemap_runtime::error::Error) -> ReadError {
         ReadError::Bus {
             message: e.to_string(),
             exception: e.exception().map(|x| x.code),
@@ -784,7 +784,7 @@ impl<'d> Session<'d> {
     pub fn over(
         drive: &'d Map,
         transport: Box<dyn drivemap_runtime::transport::Transport>,
-        options: drivemap_runtime::ClientOptions,
+        options: drivemap_runtime::client::ClientOptions,
         slave: u8,
         line: SerialConfig,
         settings: LiveSettings,
@@ -1009,7 +1009,7 @@ impl<'d> Session<'d> {
         table: Table,
         address: u16,
         out: &mut [u16],
-    ) -> Result<(), drivemap_runtime::Error> {
+    ) -> Result<(), drivemap_runtime::error::Error> {
         self.client.read_table(self.slave, table, address, out)
     }
 

@@ -18,12 +18,12 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use drivemap_runtime::Client;
+use drivemap_runtime::client::Client;
 use drivemap_runtime::client::ClientOptions;
 use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::core::register::{Access, RegisterInfo, Table};
 use drivemap_runtime::planner::{Poller, ReadableSet, plan_contiguous, plan_reads, plan_single};
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;

@@ -422,7 +422,7 @@ impl<T: AsyncTransport> AsyncClient<T> {
     }
 
     /// Talks to another drive on the same link from now on, keeping the link's state, as
-    /// [`Client::switch_drive`](crate::Client::switch_drive) does.
+    /// [`Client::switch_drive`](crate::client::Client::switch_drive) does.
     pub fn switch_drive(&mut self, profile: &'static Profile, options: ClientOptions) {
         self.core.profile = profile;
         self.core.options = options;

@@ -306,7 +306,7 @@ impl BusModel {
     }
 
     /// The least time between a reply and the next request that the manual asks of the master,
-    /// beyond the frame gap: what to give [`ClientOptions::request_gap`](crate::ClientOptions).
+    /// beyond the frame gap: what to give [`ClientOptions::request_gap`](crate::client::ClientOptions).
     pub fn master_request_gap(&self) -> Duration {
         let master = self.serial.bits_ns(f64::from(self.request_gap_bits))
             + f64::from(self.request_gap_us) * 1e3;

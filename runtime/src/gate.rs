@@ -1,8 +1,8 @@
 //! The one gate before the wire for writes.
 //!
-//! Every write a client sends — typed ([`Client::write`](crate::Client::write)), by rule from a
-//! map interpreted at run time ([`Client::write_rule`](crate::Client::write_rule)), by raw
-//! address ([`Client::write_register`](crate::Client::write_register)), from the blocking or the
+//! Every write a client sends — typed ([`Client::write`](crate::client::Client::write)), by rule from a
+//! map interpreted at run time ([`Client::write_rule`](crate::client::Client::write_rule)), by raw
+//! address ([`Client::write_register`](crate::client::Client::write_register)), from the blocking or the
 //! async client — is checked by [`check`] after the protocol checks of the profile (function,
 //! slave range, quantity, broadcast function and addresses, command registers) and before a byte
 //! is framed. A tool can call [`check`] itself to refuse early; the client calls it again anyway.

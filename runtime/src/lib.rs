@@ -70,13 +70,6 @@ pub mod vfd;
 #[cfg(feature = "std")]
 mod wire;
 
-// The front door: the client and its errors (a re-export of the crate's own items, documented
-// once, in their modules).
-#[cfg(feature = "std")]
-pub use client::{Client, ClientOptions, Reconnect};
-#[cfg(feature = "std")]
-pub use error::{Error, Refusal};
-
 /// The vocabulary crate: registers, plans, conversions, write rules, profiles and roles, the one
 /// path to them through the runtime (generated drive modules name it so).
 pub use drivemap_core as core;

@@ -6,7 +6,7 @@
 //!
 //! ```
 //! use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive};
-//! use drivemap_runtime::Error;
+//! use drivemap_runtime::error::Error;
 //!
 //! /// Runs the drive at `hz` in `direction` and returns the output frequency it reports.
 //! fn start(drive: &mut impl VariableFrequencyDrive, hz: f64, direction: Direction) -> Result<f64, Error> {

@@ -13,6 +13,8 @@
 //! scheduler's placement of threads on the two cores (which moved single rounds at 1 connection
 //! by up to ±30 %) is out of the figure. Left unset, threads go where the scheduler puts them.
 
+use drivemap_test_support::paths;
+
 use drivemap_test_support::alloc_count::{self, Counting};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -24,7 +26,9 @@ use std::time::{Duration, Instant};
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::tcp;
-use drivemap_sim::{SimOptions, Simulator, SystemClock, TcpFraming, TcpServer};
+use drivemap_sim::{
+    SimOptions, Simulator, clock::SystemClock, server::TcpFraming, server::TcpServer,
+};
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -148,7 +152,7 @@ fn env<T: std::str::FromStr>(name: &str, default: T) -> T {
 }
 
 fn simulator() -> Simulator {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../maps/ptlk-tds-v8.yaml");
+    let path = paths::shipped_map("ptlk-tds-v8");
     let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     Simulator::new(drive, SimOptions::new().clock(Arc::new(SystemClock::new()))).unwrap()
 }
@@ -213,7 +217,7 @@ fn main() {
     let handle_allocs = (alloc_count::all_threads() - before) as f64 / f64::from(calls);
 
     let server = TcpServer::spawn(
-        drivemap_sim::shared(sim),
+        drivemap_sim::server::shared(sim),
         "127.0.0.1:0",
         TcpFraming::ModbusTcp,
         None,

@@ -10,7 +10,7 @@ use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{ascii, rtu, tcp};
 
-use crate::slave::SimulatedSlave;
+use crate::SimulatedSlave;
 
 /// What happens to the reply to the next request.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -1,7 +1,7 @@
 //! Indexed access served as the drive does (`indexed:` in the map, lowered to
 //! [`drivemap_map::MapPlan::indexed`]): the value register shows, and accepts, the
 //! value of the entry whose index the index register holds. Used by the map-driven
-//! [`crate::Simulator`] and by the bare [`crate::slave::SimulatedSlave`].
+//! [`crate::Simulator`] and by the bare [`crate::SimulatedSlave`].
 
 use std::collections::BTreeMap;
 

@@ -18,7 +18,7 @@
 //! its command registers make the status fields show running and the output frequency ramp
 //! towards the reference at the accel/decel time's rate, converted through
 //! the map's scales (including relative and selected scales, whose settings come from the
-//! simulator's own registers). Time comes from a [`Clock`], so tests are deterministic.
+//! simulator's own registers). Time comes from a [`clock::Clock`], so tests are deterministic.
 //!
 //! Every reply any drive of this crate sends is framed by [`framing`] (the runtime's
 //! `encode_response`), and every link is read by one serve loop ([`server`]).
@@ -30,7 +30,7 @@
 //! ```
 //! use std::sync::Arc;
 //! use std::time::Duration;
-//! use drivemap_sim::{ManualClock, SimOptions, Simulator};
+//! use drivemap_sim::{clock::ManualClock, SimOptions, Simulator};
 //!
 //! let maps = concat!(env!("CARGO_MANIFEST_DIR"), "/../maps/ptlk-tds-v8.yaml");
 //! let drive = drivemap_map::Loader::new().load(maps.as_ref()).unwrap();
@@ -45,34 +45,27 @@
 #![doc = include_str!("../README.md")]
 #![warn(unreachable_pub, missing_docs)]
 
+// One path per item: a module of one or two items is private and its items are the crate's
+// (documented where they are defined); a module of more keeps its path, with no second one.
 pub mod clock;
-pub mod exceptions;
-pub mod fault;
+mod exceptions;
+mod fault;
 pub mod framing;
 pub mod indexed;
-pub mod line;
-pub mod model;
+mod line;
+mod model;
 pub mod roles;
 pub mod server;
-pub mod simulator;
-pub mod slave;
+mod simulator;
+mod slave;
 #[cfg(feature = "serial")]
 pub mod timed;
 
-pub use clock::{Clock, ManualClock, SystemClock};
 pub use exceptions::ExceptionPlan;
 pub use fault::{Fault, FaultyLink};
 pub use line::{Line, SlaveTaken};
 pub use model::DriveState;
-pub use roles::{Mode, Plausible};
-pub use server::{
-    FrameLimits, ServerOptions, SharedSim, TcpFraming, TcpServer, serve_link, serve_link_with,
-    shared,
-};
 pub use simulator::{
     Handled, Outcome, RequestRecord, RolesChoice, SimError, SimOptions, Simulator, Stats,
 };
-pub use slave::SimulatedSlave;
-
-#[cfg(feature = "serial")]
-pub use server::SerialServer;
+pub use slave::{SERVE_LIMITS, SimulatedSlave};

@@ -34,7 +34,7 @@ use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::{rtu, tcp};
 
 use crate::server::{SharedSim, lock, shared};
-use crate::simulator::{Handled, Outcome, RequestRecord, Simulator};
+use crate::{Handled, Outcome, RequestRecord, Simulator};
 
 /// Simulated drives sharing one link, at distinct slave addresses. Cloning a line shares its
 /// drives (each is a [`SharedSim`]).

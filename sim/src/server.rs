@@ -25,8 +25,8 @@ use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::{ascii, crc, rtu, tcp};
 
-use crate::line::Line;
-use crate::simulator::{Outcome, RequestRecord, Simulator};
+use crate::Line;
+use crate::{Outcome, RequestRecord, Simulator};
 
 /// A simulator shared between connections.
 pub type SharedSim = Arc<Mutex<Simulator>>;
@@ -341,7 +341,7 @@ pub(crate) struct Answer {
 }
 
 /// The one serve loop of this crate, behind [`serve_link_with`], [`TcpServer`],
-/// [`SerialServer`](crate::SerialServer) and [`SimulatedSlave::serve`]: reads `link` in waits
+/// [`SerialServer`](crate::server::SerialServer) and [`SimulatedSlave::serve`]: reads `link` in waits
 /// of at most `POLL`, cuts the bytes into frames with a [`Framer`] (its byte budget, silence
 /// and frame deadline), hands each frame to `answer` with an output buffer of
 /// [`tcp::MAX_FRAME`] bytes and sends the reply it wrote. Ends, with the number of replies sent,

@@ -14,8 +14,8 @@ use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 
+use crate::Line;
 use crate::Simulator;
-use crate::line::Line;
 use crate::server::lock;
 
 /// How the simulated drive keeps time on its serial line.

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 
 use drivemap_runtime::core::profile::{Profile, TransportKind};
 use drivemap_runtime::{rtu, tcp};
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 /// Longest a connection is served.
 pub const LIFETIME: Duration = Duration::from_secs(20);

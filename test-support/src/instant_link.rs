@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 /// The simulated drive answers each request as it is sent; `recv` hands the reply over.
 pub struct InstantLink {

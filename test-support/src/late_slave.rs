@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{ascii, rtu, tcp};
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 /// Slave 1 of `profile` whose holding and input register `a` hold `a` (0..64).
 pub fn numbered(profile: &'static Profile) -> SimulatedSlave {

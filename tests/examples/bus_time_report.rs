@@ -18,8 +18,9 @@
 //! - **Line**: 9600 baud, 8N1 (10-bit characters), or the drive's fixed character (TDS-V8: 11
 //!   bits); the response-delay parameters at their manual defaults.
 
+use drivemap_test_support::paths;
+
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 use drivemap_drives as drives;
 use drivemap_map::RegisterRef;
@@ -123,7 +124,7 @@ fn main() {
         .nth(1)
         .map(|b| b.parse().expect("BAUD must be a number"))
         .unwrap_or(9600);
-    let maps_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps");
+    let maps_dir = paths::maps();
     let ctx = drivemap_map::Loader::new().default_manuals(&maps_dir);
     let mut rows = Vec::new();
     let mut notes = Vec::new();

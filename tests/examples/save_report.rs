@@ -14,7 +14,7 @@ use std::time::Instant;
 use drivemap_live::LiveSettings;
 use drivemap_live::paramset;
 use drivemap_live::session::Session;
-use drivemap_runtime::ClientOptions;
+use drivemap_runtime::client::ClientOptions;
 use drivemap_runtime::transport::serial::SerialTransport;
 use drivemap_tests::line_bench;
 

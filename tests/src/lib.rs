@@ -1,6 +1,8 @@
 //! Shared test helpers of the cross-crate tests.
 #![doc = include_str!("../README.md")]
 
+use drivemap_test_support::paths;
+
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -18,10 +20,7 @@ pub struct RootReadme;
 
 /// The workspace root.
 pub fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("tests/ sits in the workspace")
-        .to_path_buf()
+    paths::workspace().to_path_buf()
 }
 
 /// The target directory of every nested build of the tests: the workspace's own (`target`, or

@@ -29,9 +29,9 @@ use drivemap_runtime::core::register::Access;
 use drivemap_runtime::core::register::Table;
 use drivemap_runtime::planner::{Poller, plan_contiguous, plan_cost};
 use drivemap_runtime::transport::serial::{self, SerialOptions, SerialTransport};
-use drivemap_runtime::{Client, ClientOptions};
+use drivemap_runtime::{client::Client, client::ClientOptions};
 use drivemap_sim::timed::DriveLine;
-use drivemap_sim::{SerialServer, SimOptions, Simulator};
+use drivemap_sim::{SimOptions, Simulator, server::SerialServer};
 use drivemap_test_support::line::{EmulatedLine, LineReport, Violation, analyse};
 pub use drivemap_test_support::rng::SplitMix;
 
@@ -218,7 +218,7 @@ pub fn drive_on_line(
         .map_err(|e| io::Error::other(e.to_string()))?;
     let slave = sim.slave();
     let server = SerialServer::spawn_on_line(
-        drivemap_sim::shared(sim),
+        drivemap_sim::server::shared(sim),
         serial_options(emulated.drive_path(), m.profile, line),
         None,
         Some(DriveLine {

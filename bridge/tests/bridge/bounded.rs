@@ -3,7 +3,8 @@
 //! their period), a link that cannot be reached is tried again without end and without
 //! blocking its stop, and a link stops within a cycle of being told to.
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -12,17 +13,17 @@ use drivemap_bridge::command::{Board, DEFAULT_DEADLINE};
 use drivemap_bridge::link::{self, Action, Command, Connect, DriveSpec, LinkSpec, Update};
 use drivemap_bridge::metrics::Metrics;
 use drivemap_map::{Loader, Map};
-use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
+use drivemap_runtime::client::ClientOptions;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
-use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{SimOptions, Simulator, server::TcpFraming, server::TcpServer};
 
 mod proxy;
 
 fn v7() -> &'static Map {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml");
+    let path = paths::shipped_map("yaskawa-v7");
     Box::leak(Box::new(Loader::new().load(&path).unwrap()))
 }
 
@@ -187,7 +188,7 @@ fn an_unreachable_link_is_retried_and_still_stops() {
 /// A link of a simulated V7 (slave 1) and `silent` drives that never answer (slaves 2, ...), its commands
 /// taken from `board`: the link thread, the shared simulator, the server.
 struct Line {
-    sim: drivemap_sim::SharedSim,
+    sim: drivemap_sim::server::SharedSim,
     server: Option<TcpServer>,
     board: Arc<Board>,
     stop: Arc<AtomicBool>,
@@ -198,7 +199,7 @@ impl Line {
     fn start(silent: u8, deadline: Duration) -> Line {
         let drive = v7();
         let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-        let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+        let sim = drivemap_sim::server::shared(Simulator::new(drive.clone(), options).unwrap());
         let server = TcpServer::spawn(
             Arc::clone(&sim),
             "127.0.0.1:0",
@@ -399,7 +400,7 @@ fn a_run_sent_while_the_link_is_down_expires_and_never_starts_the_drive() {
     std::thread::sleep(Duration::from_millis(800));
     // The gateway comes up with the drive.
     let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+    let sim = drivemap_sim::server::shared(Simulator::new(drive.clone(), options).unwrap());
     let server = TcpServer::spawn(
         Arc::clone(&sim),
         format!("127.0.0.1:{port}"),
@@ -473,7 +474,7 @@ fn a_set_of_a_command_field_is_kept_by_run_and_stop() {
 #[test]
 fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
     use drivemap_runtime::transport::serial::{self, SerialOptions, SerialTransport};
-    use drivemap_sim::SerialServer;
+    use drivemap_sim::server::SerialServer;
     use drivemap_sim::timed::DriveLine;
     use drivemap_test_support::line::EmulatedLine;
 
@@ -487,7 +488,7 @@ fn a_stop_on_a_9600_baud_line_waits_at_most_one_request() {
             .unwrap()
     };
     let options = SimOptions::new().network_source(TransportKind::Rtu);
-    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+    let sim = drivemap_sim::server::shared(Simulator::new(drive.clone(), options).unwrap());
     let server = SerialServer::spawn_on_line(
         Arc::clone(&sim),
         options_for(emulated.drive_path()),
@@ -566,7 +567,7 @@ fn spawn_link(
 /// how long each stop took to reach the drive, sorted.
 fn stop_latencies(
     board: &Board,
-    sim: &drivemap_sim::SharedSim,
+    sim: &drivemap_sim::server::SharedSim,
     runs: u64,
     spacing: Duration,
 ) -> Vec<Duration> {
@@ -729,7 +730,7 @@ fn late_relay(to: std::net::SocketAddr, late: Duration) -> std::net::SocketAddr 
 fn a_stop_gets_out_when_every_reply_is_late_and_cycles_run_back_to_back() {
     let drive = v7();
     let options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), options).unwrap());
+    let sim = drivemap_sim::server::shared(Simulator::new(drive.clone(), options).unwrap());
     let server = TcpServer::spawn(
         Arc::clone(&sim),
         "127.0.0.1:0",

@@ -19,10 +19,10 @@ use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::ascii_over_tcp::AsciiOverTcpTransport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, ClientOptions, Error};
+use drivemap_runtime::{client::Client, client::ClientOptions, error::Error};
 
 use crate::error::Error as CliError;
-use drivemap_sim::{Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{Simulator, server::TcpFraming, server::TcpServer};
 
 use crate::maps::MapsDir;
 
@@ -91,7 +91,7 @@ fn row(t: f64, status: &str, values: [Result<f64, Error>; 4]) {
 /// A reading the drive lacks is `Err(NoRole)`; any other error ends the demo.
 fn optional(v: Result<f64, Error>) -> Result<Result<f64, Error>, CliError> {
     match v {
-        Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. })) | Ok(_) => Ok(v),
+        Err(Error::Refused(drivemap_runtime::error::Refusal::NoRole { .. })) | Ok(_) => Ok(v),
         Err(e) => Err(CliError::Refused(format!("reading the drive: {e}"))),
     }
 }
@@ -311,7 +311,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, CliError> {
     // application would (a nameplate, a drive setting).
     let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
     let drive = sim.drive().clone();
-    let shared = drivemap_sim::shared(sim);
+    let shared = drivemap_sim::server::shared(sim);
     let server = TcpServer::spawn(shared.clone(), "127.0.0.1:0", framing, None)
         .map_err(|e| format!("cannot start the simulator on loopback: {e}"))?;
     let addr = server.local_addr();

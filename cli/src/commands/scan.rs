@@ -16,8 +16,8 @@ use clap::{ArgGroup, Args as ClapArgs};
 use drivemap_live::LiveSettings;
 use drivemap_map::Map;
 use drivemap_map::RegisterRef;
-use drivemap_runtime::Error;
 use drivemap_runtime::core::profile::Profile;
+use drivemap_runtime::error::Error;
 use drivemap_runtime::transport::serial::char_times;
 
 use crate::error::Error as CliError;

@@ -19,7 +19,8 @@ use drivemap_runtime::core::profile::Parity;
 use drivemap_runtime::transport::serial::{SerialOptions, StopBits};
 use drivemap_sim::server::Logger;
 use drivemap_sim::{
-    Line, RequestRecord, SerialServer, SimOptions, Simulator, SystemClock, TcpFraming, TcpServer,
+    Line, RequestRecord, SimOptions, Simulator, clock::SystemClock, server::SerialServer,
+    server::TcpFraming, server::TcpServer,
 };
 
 use crate::error::Error;

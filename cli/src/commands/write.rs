@@ -8,10 +8,10 @@ use drivemap_live::codec::{self, InputError};
 use drivemap_live::intern::intern;
 use drivemap_map::Map;
 use drivemap_map::RegisterRef;
-use drivemap_runtime::Refusal;
 use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::core::roles::{RoleKind, Target as Place};
 use drivemap_runtime::core::scale::{Rounding, ValueError};
+use drivemap_runtime::error::Refusal;
 use drivemap_runtime::gate;
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
 
@@ -443,7 +443,9 @@ pub(crate) fn execute(
         };
         match result {
             Ok(()) => {}
-            Err(drivemap_runtime::Error::Refused(e)) => return Err(Error::Refused(refused(r, &e))),
+            Err(drivemap_runtime::error::Error::Refused(e)) => {
+                return Err(Error::Refused(refused(r, &e)));
+            }
             Err(e) => {
                 eprintln!("drivemap: {e}");
                 return Ok(ExitCode::FAILURE);

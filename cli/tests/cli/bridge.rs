@@ -3,6 +3,8 @@
 //! test starts simulated drives (`drivemap simulate`), the bridge and the tool on loopback, and
 //! fails, never skips, when a tool is missing (`tests/interop/install.sh` installs them).
 
+use drivemap_test_support::paths;
+
 mod bridge_contract;
 mod bridge_proxy;
 use crate::bridge_support;
@@ -690,10 +692,7 @@ fn mqtt_with_password_and_tls() {
 #[test]
 fn a_coil_drive_on_mqtt_and_the_metrics_endpoint() {
     let dir = scratch("coils");
-    let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/fixtures/tindra-tc4")
-        .canonicalize()
-        .unwrap();
+    let fixture = paths::fixture("tindra-tc4").canonicalize().unwrap();
     let maps = fixture.to_string_lossy().into_owned();
     let env = [("DRIVEMAP_MAPS", maps.as_str())];
     let line = free_port();

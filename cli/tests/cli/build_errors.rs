@@ -6,7 +6,8 @@ use crate::common;
 
 use std::path::Path;
 
-use common::{command, repo};
+use common::command;
+use drivemap_test_support::paths;
 
 /// `drivemap check`'s error lines for `map` (stderr, without its closing summary).
 fn check_lines(map: &Path) -> Vec<String> {
@@ -25,7 +26,7 @@ fn check_lines(map: &Path) -> Vec<String> {
 
 #[test]
 fn a_bad_map_fails_the_build_with_checks_report() {
-    let dir = repo().join("codegen/tests/ui");
+    let dir = paths::fixture("crafted/errors");
     let out = std::env::temp_dir().join(format!("drivemap-build-errors-{}", std::process::id()));
     let mut seen = 0;
     for name in [
@@ -34,6 +35,8 @@ fn a_bad_map_fails_the_build_with_checks_report() {
         "e01-yaml-syntax.yaml",
     ] {
         let map = dir.join(name);
+        // A missing file would compare two "cannot read" reports.
+        assert!(map.is_file(), "{} is missing", map.display());
         let expected = check_lines(&map);
         assert!(!expected.is_empty(), "{name}: check printed no error line");
         let e = drivemap_codegen::Config::new()

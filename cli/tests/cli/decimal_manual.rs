@@ -5,16 +5,18 @@
 //! number (`read P-01`), the hex of its number (`read 2DH`) or its Modicon reference
 //! (`read 40046`) against a simulated drive, and shows its address as printed (`45`).
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::path::PathBuf;
 
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
-use common::{Framing, drivemap_fixture, repo, serve};
+use common::{Framing, drivemap_fixture, serve};
 
 fn fixture() -> PathBuf {
-    repo().join("tests/fixtures/zenith-z3")
+    paths::fixture("zenith-z3")
 }
 
 #[test]

@@ -1,6 +1,8 @@
 //! `drivemap diff` end to end: golden output in both formats, exit codes, a scale edit of a
 //! shipped map, and `--git` with a variant map whose base changed.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::path::Path;
@@ -15,8 +17,7 @@ fn edit(text: &str, from: &str, to: &str) -> String {
 
 /// The fixture map with one change of several kinds.
 fn fixture_pair(s: &Scratch) -> (String, String) {
-    let base =
-        std::fs::read_to_string(repo().join("cli/tests/fixtures/example-drive.yaml")).unwrap();
+    let base = std::fs::read_to_string(paths::fixture("crafted/cli/example-drive.yaml")).unwrap();
     let mut new = edit(&base, "scale: 0.1, min: 50.0", "scale: 0.01, min: 50.0");
     new = edit(
         &new,
@@ -64,8 +65,7 @@ fn golden_text_and_markdown() {
 #[test]
 fn compatible_only_exits_0_and_identical_maps_report_no_changes() {
     let s = Scratch::new("diff-compatible");
-    let base =
-        std::fs::read_to_string(repo().join("cli/tests/fixtures/example-drive.yaml")).unwrap();
+    let base = std::fs::read_to_string(paths::fixture("crafted/cli/example-drive.yaml")).unwrap();
     let new = edit(&base, "max: 510.0", "max: 520.0");
     for dir in ["old", "new"] {
         std::fs::create_dir_all(s.0.join(dir)).unwrap();
@@ -136,7 +136,7 @@ fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
     let maps = s.0.join("maps");
     std::fs::create_dir_all(&maps).unwrap();
     for m in ["yaskawa-v7.yaml", "yaskawa-j7.yaml", "ptlk-tds-v8.yaml"] {
-        std::fs::copy(repo().join("maps").join(m), maps.join(m)).unwrap();
+        std::fs::copy(paths::maps().join(m), maps.join(m)).unwrap();
     }
     git(&s.0, &["init", "-q"]);
     git(&s.0, &["add", "."]);
@@ -152,7 +152,7 @@ fn git_revision_with_a_variant_map_reads_its_base_from_the_same_revision() {
     .unwrap();
     std::fs::remove_file(maps.join("ptlk-tds-v8.yaml")).unwrap();
     std::fs::copy(
-        repo().join("cli/tests/fixtures/example-drive.yaml"),
+        paths::fixture("crafted/cli/example-drive.yaml"),
         maps.join("example-drive.yaml"),
     )
     .unwrap();
@@ -246,8 +246,7 @@ fn kinds_table_lists_every_kind() {
 #[test]
 fn roles_removed_or_re_pointed_are_breaking_in_every_format_with_their_lines_quoted() {
     let s = Scratch::new("diff-roles");
-    let base =
-        std::fs::read_to_string(repo().join("cli/tests/fixtures/example-drive.yaml")).unwrap();
+    let base = std::fs::read_to_string(paths::fixture("crafted/cli/example-drive.yaml")).unwrap();
     let roles = "roles:\n  run:\n    - {register: command, field: run, source: \"manual.txt:20\"}\n  \
                  reverse:\n    - {register: command, field: reverse, source: \"manual.txt:20\"}\n  \
                  running:\n    - {register: status, field: running, source: \"manual.txt:33\"}\ngaps:";
@@ -269,7 +268,7 @@ fn roles_removed_or_re_pointed_are_breaking_in_every_format_with_their_lines_quo
     );
     std::fs::write(s.0.join("old.yaml"), old).unwrap();
     std::fs::write(s.0.join("new.yaml"), new).unwrap();
-    let manuals = repo().join("cli/tests/fixtures/manuals");
+    let manuals = paths::fixture("crafted/cli/manuals");
     let run = |format: &str| {
         let out = common::command()
             .args(["diff", "--format", format, "old.yaml", "new.yaml"])

@@ -14,7 +14,7 @@ fn drivemap(args: &[&str]) -> (i32, String, String) {
 
 #[test]
 fn fixture_reference_golden() {
-    let (code, out, err) = drivemap(&["doc", "cli/tests/fixtures/example-drive.yaml"]);
+    let (code, out, err) = drivemap(&["doc", "tests/fixtures/crafted/cli/example-drive.yaml"]);
     assert_eq!(code, 0, "{err}");
     insta::assert_snapshot!("example_drive_doc", out);
 }

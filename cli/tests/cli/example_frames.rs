@@ -3,6 +3,8 @@
 //! misprints one CRC, and every shipped map), a wrong CRC not recorded in `conflicts:` fails the
 //! check at its byte, and `export`, `doc` and `diff` show the examples.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::path::{Path, PathBuf};
@@ -10,7 +12,7 @@ use std::path::{Path, PathBuf};
 use common::{command, repo, run};
 
 fn fixture() -> PathBuf {
-    repo().join("tests/fixtures/orbis-q5")
+    paths::fixture("orbis-q5")
 }
 
 fn drivemap(args: &[&str], manuals: &Path) -> (i32, String, String) {
@@ -76,7 +78,7 @@ fn an_unrecorded_wrong_crc_fails_check_at_its_byte() {
 /// added to `maps/` is covered with no edit here.
 #[test]
 fn check_verifies_every_example_of_the_shipped_maps() {
-    let maps = repo().join("maps");
+    let maps = paths::maps();
     let (code, out, err) = drivemap(
         &["check", "--maps", maps.to_str().unwrap()],
         &repo().join("../shared/manuals"),

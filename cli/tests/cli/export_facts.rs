@@ -2,11 +2,13 @@
 //! row, conversion kind and rows of label, value and citation — the same words the rustdoc,
 //! `drivemap doc` and `drivemap diff` print.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use serde_json::Value;
 
-use common::{drivemap_builtin, repo};
+use common::drivemap_builtin;
 
 fn register<'a>(facts: &'a Value, id: &str) -> &'a Value {
     facts["registers"]
@@ -28,7 +30,7 @@ fn row<'a>(r: &'a Value, key: &str) -> &'a Value {
 
 #[test]
 fn the_facts_of_a_map_are_rows_with_their_citations() {
-    let map = repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml");
+    let map = paths::fixture("acme-vf1/acme-vf1.yaml");
     let (code, out, err) =
         drivemap_builtin(&["export", "--format", "facts", map.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
@@ -72,7 +74,7 @@ fn the_facts_of_a_map_are_rows_with_their_citations() {
 
 #[test]
 fn facts_refuse_poller_options_like_the_json_export() {
-    let map = repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml");
+    let map = paths::fixture("acme-vf1/acme-vf1.yaml");
     let (code, _, err) = drivemap_builtin(&[
         "export",
         "--format",

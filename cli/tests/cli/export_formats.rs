@@ -13,13 +13,15 @@
 //! - nothing is left out silently: every register asked for is an entity, a field, a decoded
 //!   message, or named in a "left out" comment with its reason.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::collections::BTreeMap;
 use std::process::Command;
 use std::time::Duration;
 
-use drivemap_runtime::Client;
+use drivemap_runtime::client::Client;
 use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use serde_json::Value;
@@ -34,7 +36,7 @@ fn export(args: &[&str]) -> String {
 
 /// The shipped maps.
 fn maps() -> Vec<String> {
-    let mut ids: Vec<String> = std::fs::read_dir(repo().join("maps"))
+    let mut ids: Vec<String> = std::fs::read_dir(paths::maps())
         .unwrap()
         .filter_map(|e| {
             let name = e.ok()?.file_name().into_string().ok()?;
@@ -624,7 +626,7 @@ fn values_read_as_home_assistant_and_telegraf_read_them_equal_drivemap_reads() {
 /// of its own.
 #[test]
 fn the_coil_fixture_exports_coils_and_discrete_inputs_in_every_format() {
-    let dir = repo().join("tests/fixtures/tindra-tc4");
+    let dir = paths::fixture("tindra-tc4");
     let export = |format: &str, link: [&str; 2]| {
         let (code, out, err) = common::drivemap_fixture(
             &dir,

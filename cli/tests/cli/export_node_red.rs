@@ -4,6 +4,8 @@
 //! every node of the flow with a type that loaded without error, and the flow's reads of a
 //! `drivemap simulate` drive give the values `drivemap read` gives for the same registers.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::io::{Read, Write};
@@ -174,7 +176,7 @@ fn the_coil_flow_reads_coils_and_discrete_inputs_in_node_red() {
         "Node-RED is missing under {}: run tests/interop/install.sh",
         node_red_dir().display()
     );
-    let dir = repo().join("tests/fixtures/tindra-tc4");
+    let dir = paths::fixture("tindra-tc4");
     let maps = dir.to_string_lossy().into_owned();
     let with_maps = |args: &[&str]| {
         let out = command()

@@ -4,6 +4,8 @@
 //! refused, naming `--gateway`. Through the binary, against `drivemap simulate --gateway`. An
 //! ASCII-only drive (`tests/fixtures/quill-q2`) reached over ASCII frames, RTU refused to it.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::net::TcpListener;
@@ -161,7 +163,7 @@ fn gateway_has_the_rtu_registers_of_a_drive_with_both_transports() {
 
 /// The fictional Quill Q2 (`tests/fixtures/quill-q2`) speaks Modbus ASCII only, 7E1.
 fn quill() -> std::path::PathBuf {
-    common::repo().join("tests/fixtures/quill-q2")
+    paths::fixture("quill-q2")
 }
 
 /// `drivemap simulate` of the Quill Q2 with `args`, its maps from the fixture.

@@ -3,6 +3,8 @@
 //! (per request) with an error that says what happened; `poll` must come back after the server
 //! restarts. A subprocess still running past its bound is killed and the test fails.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use drivemap_test_support::hostile_peer;
@@ -23,7 +25,7 @@ const REGISTER: &str = "output_current";
 
 fn profile() -> &'static Profile {
     let map = drivemap_map::Loader::new()
-        .load(&repo().join("maps").join(format!("{DRIVE}.yaml")))
+        .load(&paths::maps().join(format!("{DRIVE}.yaml")))
         .expect("shipped map");
     drivemap_live::leak_profile(&map)
 }
@@ -205,7 +207,7 @@ fn poll_reconnects_after_the_server_restarts() {
 #[test]
 fn read_never_prints_a_late_reply_as_another_registers_value() {
     use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
-    use drivemap_sim::slave::SimulatedSlave;
+    use drivemap_sim::SimulatedSlave;
     use drivemap_test_support::late_slave::serve_late;
     use std::net::TcpListener;
 

@@ -2,6 +2,8 @@
 //! `drivemap check --require-manuals` accepts as a draft (every citation verified by content),
 //! the report, and `--merge` against a map with a register missing and a default changed.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::path::PathBuf;
@@ -11,10 +13,7 @@ use common::{command, repo};
 
 fn drivemap() -> Command {
     let mut c = command();
-    c.env(
-        "DRIVEMAP_MANUALS",
-        repo().join("tests/fixtures/import/manuals"),
-    );
+    c.env("DRIVEMAP_MANUALS", paths::fixture("import/manuals"));
     c
 }
 
@@ -30,7 +29,7 @@ fn a_draft_checks_as_a_draft_with_every_citation_verified() {
     let dir = tmp("draft");
     let draft = dir.join("kestrel-k20.yaml");
     let report = dir.join("report.md");
-    let manual = repo().join("tests/fixtures/import/manuals/kestrel-k20.txt");
+    let manual = paths::fixture("import/manuals/kestrel-k20.txt");
     let out = drivemap()
         .args(["import", "--manual"])
         .arg(&manual)
@@ -83,8 +82,7 @@ fn a_draft_checks_as_a_draft_with_every_citation_verified() {
 #[test]
 fn merge_proposes_what_the_map_lacks_and_names_what_disagrees() {
     let dir = tmp("merge");
-    let truth =
-        std::fs::read_to_string(repo().join("tests/fixtures/import/orion-od5.yaml")).unwrap();
+    let truth = std::fs::read_to_string(paths::fixture("import/orion-od5.yaml")).unwrap();
     // A map that lacks P2.04 and says 70.00 Hz where the manual prints a 60.00 default.
     let map: String = truth
         .lines()
@@ -96,7 +94,7 @@ fn merge_proposes_what_the_map_lacks_and_names_what_disagrees() {
     std::fs::write(&path, map).unwrap();
     let out = drivemap()
         .args(["import", "--manual"])
-        .arg(repo().join("tests/fixtures/import/manuals/orion-od5.txt"))
+        .arg(paths::fixture("import/manuals/orion-od5.txt"))
         .arg("--merge")
         .arg(&path)
         .output()
@@ -127,7 +125,7 @@ fn merge_proposes_what_the_map_lacks_and_names_what_disagrees() {
 #[test]
 fn columns_name_the_table_the_report_could_not_read() {
     let dir = tmp("columns");
-    let manual = repo().join("tests/fixtures/import/manuals/vesper-vs2.txt");
+    let manual = paths::fixture("import/manuals/vesper-vs2.txt");
     let report = dir.join("report.md");
     let out = drivemap()
         .args(["import", "--manual"])
@@ -200,7 +198,7 @@ fn merge_says_how_many_rows_it_read_before_anything_agrees() {
         .args(["import", "--manual"])
         .arg(&manual)
         .arg("--merge")
-        .arg(repo().join("tests/fixtures/import/orion-od5.yaml"))
+        .arg(paths::fixture("import/orion-od5.yaml"))
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
@@ -277,7 +275,7 @@ fn a_pdf_manual_imports_like_its_text() {
         "tarn-t35",
         "meridian-m4",
     ] {
-        let text = repo().join(format!("tests/fixtures/import/manuals/{id}.txt"));
+        let text = paths::fixture(format!("import/manuals/{id}.txt"));
         let pdf = dir.join(format!("{id}.pdf"));
         let out = Command::new(&python)
             .args(["-c", WRITE_PDF])

@@ -4,16 +4,18 @@
 //! request, to check the drive still shows index 1), against a simulated drive that serves the
 //! pair.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::path::PathBuf;
 
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
-use common::{Framing, drivemap_fixture, repo, serve};
+use common::{Framing, drivemap_fixture, serve};
 
 fn fixture() -> PathBuf {
-    repo().join("tests/fixtures/tarrow-tm44")
+    paths::fixture("tarrow-tm44")
 }
 
 #[test]

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
 use drivemap_runtime::transport::serial::{SerialOptions, SerialTransport};
-use drivemap_runtime::{Client, ClientOptions};
+use drivemap_runtime::{client::Client, client::ClientOptions};
 use drivemap_test_support::pty_pair::PtyPair;
 
 use common::command;

@@ -2,6 +2,8 @@
 //! or RTU frames over TCP) to a `SimulatedSlave` of the runtime served in a thread of the test.
 //! Addresses in the slave are PDU addresses, so the map's per-transport offsets are checked too.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 mod coils;
 mod paramset;
@@ -11,7 +13,7 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 /// A simulated drive listening on loopback.
 struct Drive {
@@ -22,7 +24,7 @@ struct Drive {
 
 impl Drive {
     fn start(id: &str, framing: Framing, setup: impl FnOnce(&mut SimulatedSlave)) -> Drive {
-        let path = repo().join("maps").join(format!("{id}.yaml"));
+        let path = paths::maps().join(format!("{id}.yaml"));
         let map = drivemap_map::Loader::new()
             .load(&path)
             .expect("shipped map");
@@ -754,7 +756,7 @@ fn writing_one_field_keeps_the_others() {
 /// register, read and written at slave 254 through the tool.
 #[test]
 fn pairs_and_field_selected_decimals_of_another_vendor_at_slave_254() {
-    let fixture = repo().join("tests/fixtures/acme-vf1");
+    let fixture = paths::fixture("acme-vf1");
     let map = drivemap_map::Loader::new()
         .load(&fixture.join("acme-vf1.yaml"))
         .expect("fixture map");

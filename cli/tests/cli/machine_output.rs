@@ -5,6 +5,8 @@
 //! The CSV headers are the schemas' property lists, so a column added in one place and not the
 //! other fails here. The drive is `drivemap simulate` at slave 7 behind a Modbus TCP gateway.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::io::Write;
@@ -343,7 +345,7 @@ fn probe_and_scan_reports_match_their_schemas_and_their_csv_names_drive_and_slav
 #[test]
 fn every_shipped_map_exports_to_the_export_schema() {
     let mut docs = Vec::new();
-    for path in drivemap_map::find_maps(&repo().join("maps")).unwrap() {
+    for path in drivemap_map::find_maps(&paths::maps()).unwrap() {
         let (code, out, err) = drivemap(&["export", path.to_str().unwrap()]);
         assert_eq!(code, 0, "{}: {err}", path.display());
         let doc = json(&out);
@@ -354,7 +356,7 @@ fn every_shipped_map_exports_to_the_export_schema() {
     assert!(docs.len() >= 5);
     // And a map whose manual prints no protocol fact: `protocol.not_printed` and the facts'
     // `not_printed` reasons (tests/fixtures/halden-h1).
-    let halden = repo().join("tests/fixtures/halden-h1/halden-h1.yaml");
+    let halden = paths::fixture("halden-h1/halden-h1.yaml");
     let (code, out, err) = drivemap(&["export", halden.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     let doc = json(&out);

@@ -5,17 +5,19 @@
 //! uses, and `export` writes the unknowns explicitly (validated against
 //! `docs/schema/export.schema.json` by `machine_output.rs`).
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
-use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{SimOptions, Simulator, server::TcpFraming, server::TcpServer};
 
-use common::{drivemap_fixture, repo};
+use common::drivemap_fixture;
 
 fn fixture() -> PathBuf {
-    repo().join("tests/fixtures/halden-h1")
+    paths::fixture("halden-h1")
 }
 
 #[test]
@@ -42,7 +44,7 @@ fn scan_warns_that_it_scans_the_modbus_range_and_finds_the_drive() {
         .load(&fixture().join("halden-h1.yaml"))
         .unwrap_or_else(|d| panic!("{d}"));
     let sim = Simulator::new(drive, SimOptions::new().slave(200)).unwrap();
-    let sim = drivemap_sim::shared(sim);
+    let sim = drivemap_sim::server::shared(sim);
     let server =
         TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::Gateway, None).unwrap();
     let addr = server.local_addr().to_string();
@@ -152,10 +154,8 @@ fn export_writes_the_unknowns_and_its_schema_names_every_fact() {
     assert_eq!(doc["protocol"]["slave_address"]["max"], 247);
     // The schema's `not_printed` names exactly the facts a map can mark.
     let schema: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/schema/export.schema.json"),
-        )
-        .unwrap(),
+        &std::fs::read_to_string(paths::workspace().join("docs/schema/export.schema.json"))
+            .unwrap(),
     )
     .unwrap();
     let keys =

@@ -4,19 +4,19 @@
 //! 0 disagreements, on every transport the map offers and under every variant option. The maps
 //! are read from the directory, not from a list.
 
+use drivemap_test_support::paths;
+
 use std::path::{Path, PathBuf};
 
 use drivemap_map::facts::TransportName;
-use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{SimOptions, Simulator, server::TcpFraming, server::TcpServer};
 
 use crate::common;
 use crate::new_map;
 
-use common::repo;
-
 #[test]
 fn probe_of_every_shipped_map_against_its_own_simulator_agrees() {
-    let ids = every_map_agrees_with_its_simulator(&repo().join("maps"));
+    let ids = every_map_agrees_with_its_simulator(&paths::maps());
     assert!(ids.len() >= 5, "{ids:?}");
 }
 
@@ -127,7 +127,7 @@ const PROFILE_FIXTURES: &[&str] = &["kestrel-kd4", "norrland-nv20", "oskar-ax3",
 #[test]
 fn every_profile_fixture_is_probed_checked_demoed_exported_and_diffed() {
     for id in PROFILE_FIXTURES {
-        let dir = repo().join("tests/fixtures").join(id);
+        let dir = paths::fixtures().join(id);
         let ids = every_map_agrees_with_its_simulator(&dir);
         assert_eq!(ids, [id.to_string()]);
         let file = format!("{id}.yaml");
@@ -181,7 +181,7 @@ fn every_profile_fixture_is_probed_checked_demoed_exported_and_diffed() {
 #[test]
 fn the_coil_fixture_is_probed_checked_demoed_exported_and_diffed() {
     let id = "tindra-tc4";
-    let dir = repo().join("tests/fixtures").join(id);
+    let dir = paths::fixtures().join(id);
     let ids = every_map_agrees_with_its_simulator(&dir);
     assert_eq!(ids, [id.to_string()]);
     let file = format!("{id}.yaml");

@@ -3,17 +3,19 @@
 //! and six decimals), `write` sends a value that is a whole number of counts as that count and
 //! refuses any other, naming the two nearest legal values, before anything reaches the wire.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
-use common::{Framing, drivemap_fixture, repo, serve};
+use common::{Framing, drivemap_fixture, serve};
 
 fn fixture() -> PathBuf {
-    repo().join("tests/fixtures/borealis-bf6")
+    paths::fixture("borealis-bf6")
 }
 
 /// A simulated BF6 register file on loopback (RTU over TCP); its address and the shared slave.

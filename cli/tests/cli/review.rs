@@ -2,6 +2,8 @@
 //! (`drivemap coverage`), the manual's words in `drivemap diff` (Markdown and GitHub
 //! annotations). The fixture map `fixtures/example-drive.yaml` cites `fixtures/manuals/manual.txt`.
 
+use drivemap_test_support::paths;
+
 use crate::common;
 use crate::new_map;
 
@@ -10,7 +12,7 @@ use std::path::{Path, PathBuf};
 use common::{Scratch, command, repo, run};
 
 fn fixture_manuals() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/manuals")
+    paths::fixture("crafted/cli/manuals")
 }
 
 /// Runs drivemap in `dir`; `manuals` sets `DRIVEMAP_MANUALS`.
@@ -29,7 +31,7 @@ fn edit(text: &str, from: &str, to: &str) -> String {
 }
 
 fn fixture() -> String {
-    std::fs::read_to_string(repo().join("cli/tests/fixtures/example-drive.yaml")).unwrap()
+    std::fs::read_to_string(paths::fixture("crafted/cli/example-drive.yaml")).unwrap()
 }
 
 const MAX_VOLTAGE_SOURCE: &str = "        source: \"manual.txt:41\"\n      - id: frequency_units";
@@ -39,12 +41,16 @@ fn the_fixture_map_verifies_against_its_manual() {
     let (code, out, err) = drivemap(
         &repo(),
         Some(&fixture_manuals()),
-        &["check", "--strict", "cli/tests/fixtures/example-drive.yaml"],
+        &[
+            "check",
+            "--strict",
+            "tests/fixtures/crafted/cli/example-drive.yaml",
+        ],
     );
     assert_eq!((code, err.as_str()), (0, ""), "{out}");
     assert_eq!(
         out,
-        "ok   cli/tests/fixtures/example-drive.yaml (example-drive: 19 registers; \
+        "ok   tests/fixtures/crafted/cli/example-drive.yaml (example-drive: 19 registers; \
          protocol 13 of 13, conflicts 4 of 4, gaps 1 of 1 verified; \
          citations: 47 of 47 verified, 0 indirect, 0 unverified)\n"
     );
@@ -474,7 +480,7 @@ fn check_says_when_citations_are_not_verified_and_require_manuals_fails() {
 }
 
 fn paged_fixture() -> String {
-    std::fs::read_to_string(repo().join("cli/tests/fixtures/paged-manual.yaml")).unwrap()
+    std::fs::read_to_string(paths::fixture("crafted/cli/paged-manual.yaml")).unwrap()
 }
 
 /// A manual with no text at hand (`id`, `document`, `url`) is cited by page, `acme-um:p42`:
@@ -489,13 +495,13 @@ fn page_citations_are_counted_not_verified_by_content() {
             "check",
             "--strict",
             "--require-manuals",
-            "cli/tests/fixtures/paged-manual.yaml",
+            "tests/fixtures/crafted/cli/paged-manual.yaml",
         ],
     );
     assert_eq!((code, err.as_str()), (0, ""), "{out}");
     assert_eq!(
         out,
-        "ok   cli/tests/fixtures/paged-manual.yaml (paged-manual: 2 registers; \
+        "ok   tests/fixtures/crafted/cli/paged-manual.yaml (paged-manual: 2 registers; \
          protocol 2 of 2 verified; citations: 4 of 7 verified, 0 indirect, 0 unverified, \
          3 page citations (not verifiable by content))\n"
     );
@@ -552,7 +558,7 @@ fn page_citations_name_a_declared_manual_and_the_export_describes_it() {
     let (code, out, err) = drivemap(
         &repo(),
         None,
-        &["export", "cli/tests/fixtures/paged-manual.yaml"],
+        &["export", "tests/fixtures/crafted/cli/paged-manual.yaml"],
     );
     assert_eq!(code, 0, "{err}");
     let json: serde_json::Value = serde_json::from_str(&out).unwrap();
@@ -600,9 +606,8 @@ fn check_of_an_empty_maps_directory_is_an_error() {
 #[test]
 fn a_role_protocol_conflict_or_gap_citing_an_unrelated_line_fails_strict() {
     let s = Scratch::new("review-others");
-    let manuals = repo().join("tests/fixtures/acme-vf1/manuals");
-    let map =
-        std::fs::read_to_string(repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
+    let manuals = paths::fixture("acme-vf1/manuals");
+    let map = std::fs::read_to_string(paths::fixture("acme-vf1/acme-vf1.yaml")).unwrap();
     let title = "ACME VF-1 VARIABLE FREQUENCY DRIVE - MODBUS COMMUNICATION MANUAL";
     let role = "{register: control_word, field: run_stop, on: run, off: stop, source: \"acme-vf1.txt:16\"}";
     let slave = "slave_address: {min: 1, max: 254, default: 1, source: \"acme-vf1.txt:5\"}";
@@ -754,9 +759,8 @@ fn a_role_protocol_conflict_or_gap_citing_an_unrelated_line_fails_strict() {
 #[test]
 fn a_limit_through_another_quantity_citing_an_unrelated_line_fails_strict() {
     let s = Scratch::new("review-limit");
-    let manuals = repo().join("tests/fixtures/acme-vf1/manuals");
-    let map =
-        std::fs::read_to_string(repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
+    let manuals = paths::fixture("acme-vf1/manuals");
+    let map = std::fs::read_to_string(paths::fixture("acme-vf1/acme-vf1.yaml")).unwrap();
     let row = "        address: 0x2001\n";
     let with = |line: u32| {
         edit(

@@ -6,6 +6,8 @@
 //! have been written in schema 1 (before the hex-only rule of commit abfacec): decimal addresses
 //! and codes, and the manual's "41H" mistyped as `code: 41` (41 decimal = 29H).
 
+use drivemap_test_support::paths;
+
 use crate::common;
 
 use std::path::{Path, PathBuf};
@@ -14,18 +16,18 @@ use std::process::Command;
 use common::{Scratch, command, repo, run};
 
 fn old_map() -> PathBuf {
-    repo().join("tests/fixtures/acme-vf1/schema-1/acme-vf1.yaml")
+    paths::fixture("acme-vf1/schema-1/acme-vf1.yaml")
 }
 
 fn new_map() -> PathBuf {
-    repo().join("tests/fixtures/acme-vf1/acme-vf1.yaml")
+    paths::fixture("acme-vf1/acme-vf1.yaml")
 }
 
 fn drivemap(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    run(command().args(args).current_dir(dir).env(
-        "DRIVEMAP_MANUALS",
-        repo().join("tests/fixtures/acme-vf1/manuals"),
-    ))
+    run(command()
+        .args(args)
+        .current_dir(dir)
+        .env("DRIVEMAP_MANUALS", paths::fixture("acme-vf1/manuals")))
 }
 
 fn s(p: &Path) -> &str {

@@ -11,8 +11,8 @@ use crate::common;
 
 use std::sync::{Arc, Mutex};
 
-use drivemap_sim::slave::SimulatedSlave;
-use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::SimulatedSlave;
+use drivemap_sim::{SimOptions, Simulator, server::TcpFraming, server::TcpServer};
 
 use common::{Framing, drivemap, repo, serve};
 
@@ -20,7 +20,7 @@ use common::{Framing, drivemap, repo, serve};
 fn simulator(id: &str) -> (Arc<Mutex<Simulator>>, TcpServer, String) {
     let path = repo().join(format!("maps/{id}.yaml"));
     let drive = drivemap_map::Loader::new().load(&path).unwrap();
-    let sim = drivemap_sim::shared(Simulator::new(drive, SimOptions::new()).unwrap());
+    let sim = drivemap_sim::server::shared(Simulator::new(drive, SimOptions::new()).unwrap());
     let server =
         TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();
     let addr = server.local_addr().to_string();

@@ -19,6 +19,8 @@
 //!
 //! `write_gate_repros_as_reported` runs the binary itself on the three cases of the report.
 
+use drivemap_test_support::paths;
+
 use drivemap_map::{Map, RegisterRef};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
@@ -34,7 +36,7 @@ use drivemap_runtime::core::scale::{Decimal, RawRange, raw_of};
 use drivemap_runtime::core::width::{Width, WordOrder};
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 use crate::common;
 use crate::new_map;
@@ -230,7 +232,7 @@ fn run_write(
     slave: u8,
     assignment: &str,
 ) -> Result<ExitCode, String> {
-    let maps = repo().join("maps");
+    let maps = paths::maps();
     let slave = slave.to_string();
     let argv = [
         "drivemap",
@@ -647,13 +649,13 @@ fn sweep_all(dir: &Path, kind: TransportKind) {
 
 #[test]
 fn every_register_of_every_map_over_modbus_tcp() {
-    assert!(maps_in(&repo().join("maps")).len() >= 5, "the shipped maps");
-    sweep_all(&repo().join("maps"), TransportKind::Tcp);
+    assert!(maps_in(&paths::maps()).len() >= 5, "the shipped maps");
+    sweep_all(&paths::maps(), TransportKind::Tcp);
 }
 
 #[test]
 fn every_register_of_every_map_over_rtu_over_tcp() {
-    sweep_all(&repo().join("maps"), TransportKind::RtuOverTcp);
+    sweep_all(&paths::maps(), TransportKind::RtuOverTcp);
 }
 
 /// A map added to `maps/` is swept by the same code with no edit (here the fixture drive,
@@ -669,7 +671,7 @@ fn a_new_map_is_swept_with_no_test_edit() {
 /// registers.
 #[test]
 fn every_register_of_every_map_through_a_modbus_tcp_gateway() {
-    sweep_all(&repo().join("maps"), TransportKind::TcpGateway);
+    sweep_all(&paths::maps(), TransportKind::TcpGateway);
 }
 
 /// The three writes of the report, with the binary: each is refused before connecting and
@@ -712,7 +714,7 @@ fn write_gate_repros_as_reported() {
         let out = common::command()
             .args(&all)
             .arg("--maps")
-            .arg(repo().join("maps"))
+            .arg(paths::maps())
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);

@@ -3,6 +3,8 @@
 //! a deliberately altered map; `scan` over a socat pseudo-terminal pair with a line of two
 //! simulated drives; JSON and CSV outputs read back with Python's `json` and `csv`.
 
+use drivemap_test_support::paths;
+
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -10,15 +12,14 @@ use std::time::{Duration, Instant};
 
 use drivemap_map::Map;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions};
-use drivemap_sim::{Line, SerialServer, SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{
+    Line, SimOptions, Simulator, server::SerialServer, server::TcpFraming, server::TcpServer,
+};
 
 use drivemap_test_support::pty_pair;
 
 fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .canonicalize()
-        .unwrap()
+    paths::workspace().to_path_buf()
 }
 
 /// An empty directory outside the repository, removed on drop.
@@ -85,7 +86,7 @@ fn python(script: &str, input: &str) -> String {
 }
 
 fn shipped() -> Vec<String> {
-    drivemap_map::find_maps(&repo().join("maps"))
+    drivemap_map::find_maps(&paths::maps())
         .unwrap()
         .iter()
         .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
@@ -391,7 +392,7 @@ fn simulator(drive: Map, slave: u8) -> Simulator {
 }
 
 fn map_text(id: &str) -> String {
-    std::fs::read_to_string(repo().join("maps").join(format!("{id}.yaml"))).unwrap()
+    std::fs::read_to_string(paths::maps().join(format!("{id}.yaml"))).unwrap()
 }
 
 /// The yaskawa-v7 map with three deliberate differences: n001 removed; n002 with a code 3 the
@@ -468,7 +469,7 @@ fn write_hex(value: &mut serde_yaml::Value, hex: bool) {
 /// Serves `sim` on Modbus TCP and runs `drivemap probe` with the shipped map against it.
 fn probe(sim: Simulator, format: &str) -> (i32, String, String) {
     let server = TcpServer::spawn(
-        drivemap_sim::shared(sim),
+        drivemap_sim::server::shared(sim),
         "127.0.0.1:0",
         TcpFraming::ModbusTcp,
         None,

@@ -1,7 +1,7 @@
 //! A scale selected by a field of another register (`selected_by: <register>.<field>`): the
 //! fixture's two current monitors take their decimals from the high byte of status word 0010h.
 
-use std::path::Path;
+use drivemap_test_support::paths;
 
 use drivemap_codegen::generate::{Options, drive_module};
 use drivemap_core::plan::{Conversion, SettingsView};
@@ -10,7 +10,7 @@ use drivemap_map::MapPlan as DrivePlan;
 
 fn fixture() -> drivemap_map::Map {
     drivemap_map::Loader::new()
-        .load(Path::new("../map/tests/fixtures/field-selector.yaml"))
+        .load(&paths::fixture("crafted/maps/field-selector.yaml"))
         .unwrap_or_else(|d| panic!("{d}"))
 }
 
@@ -163,7 +163,7 @@ fn docs_and_export_name_the_field() {
 /// The same form in an address alternative's condition: a 1-bit field moves a register.
 #[test]
 fn a_field_moves_a_register() {
-    let text = std::fs::read_to_string("../map/tests/fixtures/field-selector.yaml").unwrap();
+    let text = std::fs::read_to_string(paths::fixture("crafted/maps/field-selector.yaml")).unwrap();
     let cited = "        source: \"manual.txt:23\"\n";
     assert_eq!(text.matches(cited).count(), 1);
     let moved = text.replace(

@@ -1,12 +1,12 @@
 //! Golden output: the generated module and the export of a small map using every construct.
 
-use std::path::Path;
+use drivemap_test_support::paths;
 
 use drivemap_codegen::generate::{Options, drive_module};
 
 fn fixture() -> drivemap_map::Map {
     drivemap_map::Loader::new()
-        .load(Path::new("../map/tests/fixtures/mini-drive.yaml"))
+        .load(&paths::fixture("crafted/maps/mini-drive.yaml"))
         .unwrap_or_else(|d| panic!("{d}"))
 }
 
@@ -35,7 +35,7 @@ fn config_writes_only_when_changed() {
     let _ = std::fs::remove_dir_all(&out);
     let mut config = drivemap_codegen::Config::new();
     config
-        .map("../map/tests/fixtures/mini-drive.yaml")
+        .map(paths::fixture("crafted/maps/mini-drive.yaml"))
         .out_dir(&out)
         .cargo_directives(false);
     let first = config.compile().unwrap();
@@ -74,8 +74,8 @@ fn generate_returns_the_code_compile_writes_without_writing() {
     let _ = std::fs::remove_dir_all(&out);
     let mut config = drivemap_codegen::Config::new();
     config
-        .map("../map/tests/fixtures/mini-drive.yaml")
-        .map("../map/tests/fixtures/field-selector.yaml")
+        .map(paths::fixture("crafted/maps/mini-drive.yaml"))
+        .map(paths::fixture("crafted/maps/field-selector.yaml"))
         .out_dir(&out)
         .cargo_directives(false);
     let code = config.generate().unwrap();
@@ -97,7 +97,9 @@ fn generate_returns_the_code_compile_writes_without_writing() {
     std::fs::remove_dir_all(&out).unwrap();
     // A map that does not validate is refused by both, naming the file.
     let mut bad = drivemap_codegen::Config::new();
-    bad.map("../map/tests/ui/e05-overlapping-addresses.yaml");
+    bad.map(paths::fixture(
+        "crafted/errors/e05-overlapping-addresses.yaml",
+    ));
     let e = bad.generate().unwrap_err().to_string();
     assert!(e.contains("e05-overlapping-addresses.yaml:"), "{e}");
 }
@@ -107,9 +109,9 @@ fn generate_returns_the_code_compile_writes_without_writing() {
 /// the register number of a manual numbering registers in decimal).
 #[test]
 fn rustdoc_search_finds_a_register_by_the_manuals_words() {
-    let module = |path: &str| {
+    let module = |path: std::path::PathBuf| {
         let drive = drivemap_map::Loader::new()
-            .load(Path::new(path))
+            .load(&path)
             .unwrap_or_else(|d| panic!("{d}"));
         let options = Options {
             runtime: "::drivemap_runtime".parse().unwrap(),
@@ -117,7 +119,7 @@ fn rustdoc_search_finds_a_register_by_the_manuals_words() {
         };
         drive_module(&drive, &options).unwrap()
     };
-    let tds = module("../maps/ptlk-tds-v8.yaml");
+    let tds = module(paths::shipped_map("ptlk-tds-v8"));
     assert!(
         tds.contains(
             "#[doc(alias(\"max_output_frequency\", \"Cn-02\", \"0301H\", \"0x0301\"))]\npub type MaxOutputFrequency ="
@@ -125,7 +127,7 @@ fn rustdoc_search_finds_a_register_by_the_manuals_words() {
         "{}",
         &tds[tds.find("pub type MaxOutputFrequency").unwrap_or(0).saturating_sub(400)..][..600]
     );
-    let z3 = module("../tests/fixtures/zenith-z3/zenith-z3.yaml");
+    let z3 = module(paths::fixture("zenith-z3/zenith-z3.yaml"));
     assert!(
         z3.contains(
             "#[doc(alias(\"acceleration_time\", \"P-01\", \"45\"))]\npub type AccelerationTime ="

@@ -3,7 +3,7 @@
 //! prose in rustdoc) or a line holding one string literal and nothing that could go on another
 //! line (`name: "…",`). Plan rows used to be single lines of up to 3,231 characters.
 
-use std::path::Path;
+use drivemap_test_support::paths;
 
 /// Whether a long line is one the printer cannot break: a comment or doc attribute, or one
 /// `key: "literal"` (with at most a closing `}`, `)` or `,` after it).
@@ -43,7 +43,7 @@ fn unbreakable(line: &str) -> bool {
 #[test]
 fn no_generated_line_is_longer_than_the_width_but_a_string_or_a_comment() {
     let mut config = drivemap_codegen::Config::new();
-    let maps = drivemap_map::find_maps(Path::new("../maps")).unwrap();
+    let maps = drivemap_map::find_maps(&paths::maps()).unwrap();
     assert!(maps.len() >= 5, "{maps:?}");
     for map in &maps {
         config.map(map);

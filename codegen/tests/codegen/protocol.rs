@@ -2,8 +2,10 @@
 //! (`timing.frame_gap: {ms: ..}`), carried through lowering into `core::profile::Timing` and
 //! into the Markdown reference.
 
+use drivemap_test_support::paths;
+
 fn fixture() -> String {
-    std::fs::read_to_string("../map/tests/fixtures/mini-drive.yaml").unwrap()
+    std::fs::read_to_string(paths::fixture("crafted/maps/mini-drive.yaml")).unwrap()
 }
 
 fn with_frame_gap(text: &str) -> String {

@@ -2,14 +2,14 @@
 //! the manual does not print (the brenner-fx4 fixture): both are in the generated constants, and
 //! the module is the same plan the map lowers to (the `drive_trait` tests run compiled drives).
 
-use std::path::Path;
+use drivemap_test_support::paths;
 
 use drivemap_codegen::generate::{Options, drive_module};
 
 #[test]
 fn a_number_field_and_an_unknown_edge_are_generated() {
     let drive = drivemap_map::Loader::new()
-        .load(Path::new("../tests/fixtures/brenner-fx4/brenner-fx4.yaml"))
+        .load(&paths::fixture("brenner-fx4/brenner-fx4.yaml"))
         .unwrap_or_else(|d| panic!("{d}"));
     let options = Options {
         runtime: "::drivemap_runtime".parse().unwrap(),

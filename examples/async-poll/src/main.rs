@@ -35,7 +35,11 @@ fn arg<T: std::str::FromStr>(given: Option<String>, default: T, what: &str) -> R
 type Drive = AsyncVfd<v7::Settings, AsyncClient<AsyncTcpTransport>>;
 
 /// Writes the reference, runs, polls `polls` times, stops; the reference the drive holds.
-async fn control(mut drive: Drive, hz: f64, polls: u32) -> Result<f64, drivemap_runtime::Error> {
+async fn control(
+    mut drive: Drive,
+    hz: f64,
+    polls: u32,
+) -> Result<f64, drivemap_runtime::error::Error> {
     drive.set_reference(hz).await?;
     drive.run().await?;
     let mut every = tokio::time::interval(Duration::from_millis(100));

@@ -1,5 +1,7 @@
 //! The example against a simulated V7 served over Modbus TCP on loopback.
 
+use drivemap_test_support::paths;
+
 use std::process::Command;
 
 use drivemap_runtime::core::profile::TransportKind;
@@ -10,10 +12,10 @@ use drivemap_sim::{SimOptions, Simulator};
 /// reference it was given and its run command is off again, and the example printed each poll.
 #[test]
 fn polls_the_drive_and_writes_the_reference() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../maps/yaskawa-v7.yaml");
+    let path = paths::shipped_map("yaskawa-v7");
     let v7 = drivemap_map::Loader::new()
-        .load(path.as_ref())
-        .unwrap_or_else(|e| panic!("{path}: {e}"));
+        .load(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let sim = Simulator::new(v7, SimOptions::new().network_source(TransportKind::Tcp)).unwrap();
     let sim = drivemap_sim::server::shared(sim);
     let server = TcpServer::spawn(sim.clone(), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();

@@ -1,6 +1,6 @@
 // The client's errors are `#[non_exhaustive]`: a match outside the runtime needs a `_` arm, so
 // that a new kind of error is not a breaking change for the application.
-use drivemap_runtime::Error;
+use drivemap_runtime::error::Error;
 
 fn describe(e: &Error) -> &'static str {
     match e {

@@ -1,7 +1,7 @@
 // A register read and written with different meanings takes its write form (a word): the value
 // a read gives (the read enumeration) must not compile as a write.
 use custom_drive::mini_drive as md;
-use drivemap_runtime::{Client, core::profile::TransportKind, transport::memory::MemoryTransport};
+use drivemap_runtime::{client::Client, core::profile::TransportKind, transport::memory::MemoryTransport};
 
 fn main() {
     let (link, _drive) = MemoryTransport::pair(TransportKind::Rtu);

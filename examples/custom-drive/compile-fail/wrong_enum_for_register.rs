@@ -1,6 +1,6 @@
 // A value of another register's enumeration must not compile.
 use custom_drive::mini_drive as md;
-use drivemap_runtime::{Client, core::profile::TransportKind, transport::memory::MemoryTransport};
+use drivemap_runtime::{client::Client, core::profile::TransportKind, transport::memory::MemoryTransport};
 
 fn main() {
     let (link, _drive) = MemoryTransport::pair(TransportKind::Rtu);

@@ -2,16 +2,18 @@
 //! use, against maps of them transcribed by hand (`tests/fixtures/import/`): every row found
 //! with every field right, codes and bits included, nothing else proposed, and the draft checks.
 
+use drivemap_test_support::paths;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use drivemap_import::columns::{Role, parse_roles};
 use drivemap_import::{Manual, compare, import, import_with, known, row::row_shaped};
 use drivemap_map::{Map as Drive, RegisterRef};
 
 fn fixtures() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/import")
+    paths::fixture("import")
 }
 
 /// A fixture: the hand-written map, its manual, and what the map's `# import:` comments say
@@ -370,7 +372,7 @@ fn every_catalogue_fixture_is_read_to_its_map() {
         }
     }
     print!("{table}");
-    let doc_path = fixtures().join("../../../docs/import.md");
+    let doc_path = paths::workspace().join("docs/import.md");
     let doc = std::fs::read_to_string(&doc_path).unwrap();
     let (Some(b), Some(e)) = (doc.find(BEGIN), doc.find(END)) else {
         panic!(

@@ -4,9 +4,10 @@
 //! The table in `docs/import.md` is this test's output (`DRIVEMAP_UPDATE_DOCS=1` rewrites it);
 //! the figures may not fall below the floors recorded here.
 
+use drivemap_test_support::paths;
+
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
-use std::path::Path;
 
 use drivemap_import::{compare, known, read_manual};
 
@@ -25,7 +26,7 @@ const END: &str = "<!-- END figures -->";
 
 #[test]
 fn the_seed_manuals_figures_do_not_regress() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let root = paths::workspace().to_path_buf();
     let maps_dir = root.join("maps");
     let manuals = drivemap_map::default_manuals_dir(&maps_dir).unwrap_or_else(|| {
         panic!(

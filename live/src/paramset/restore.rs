@@ -520,7 +520,7 @@ pub fn store_command(drive: &Map) -> Option<&'static CommandInfo> {
 
 /// Whether a failed write may have reached the drive: a request sent whose reply did not come
 /// (a refusal by the gate, or an exception the drive answered with, did not write).
-fn maybe_written(e: &drivemap_runtime::Error) -> bool {
+fn maybe_written(e: &drivemap_runtime::error::Error) -> bool {
     !e.is_refusal() && e.exception().is_none()
 }
 

@@ -4,13 +4,15 @@
 //! Each way an example can contradict the codec or the map is injected into a copy of the map
 //! and must be reported at the byte concerned; any single corrupted byte of any example is found.
 
-use std::path::{Path, PathBuf};
+use drivemap_test_support::paths;
+
+use std::path::PathBuf;
 
 use drivemap_live::examples::{self, Verified};
 use drivemap_runtime::crc;
 
 fn fixture() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/orbis-q5")
+    paths::fixture("orbis-q5")
 }
 
 fn original() -> String {

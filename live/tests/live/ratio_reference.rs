@@ -2,12 +2,14 @@
 //! BF6's maximum frequency, "60.0 Hz = 3600"): a scale relative to it and a limit through it
 //! (`max_relative`) take its exact value once the settings hold the word read from the drive.
 
+use drivemap_test_support::paths;
+
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::Value;
 use drivemap_runtime::core::scale::ValueError;
 
 fn drive() -> drivemap_map::Map {
-    let text = std::fs::read_to_string("../tests/fixtures/borealis-bf6/borealis-bf6.yaml").unwrap();
+    let text = std::fs::read_to_string(paths::fixture("borealis-bf6/borealis-bf6.yaml")).unwrap();
     let reference = "min: 0.0, max: 400.0, source: \"borealis-bf6.txt:11\"}";
     assert!(
         text.contains(reference),

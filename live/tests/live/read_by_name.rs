@@ -1,17 +1,19 @@
 //! The example program `examples/read_by_name.rs` reads registers by name from a simulated
 //! drive through the library's `Session`, the scale selector first.
 
+use drivemap_test_support::paths;
+
 use std::path::PathBuf;
 
 use drivemap_live::session::UnknownNames;
-use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{SimOptions, Simulator, server::TcpFraming, server::TcpServer};
 
 #[path = "../../examples/read_by_name.rs"]
 #[allow(dead_code)] // the example's `main` is the program's; the test calls `read_by_name`
 mod example;
 
 fn v7_map() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml")
+    paths::shipped_map("yaskawa-v7")
 }
 
 /// A simulated V7 on loopback Modbus TCP with n018 = 1 (times in 0.01 s) and n019 = 12.34 s.
@@ -20,7 +22,7 @@ fn serve_v7() -> TcpServer {
     let mut sim = Simulator::new(drive, SimOptions::new()).unwrap();
     sim.set("n018", 1.0).unwrap();
     sim.set("n019", 12.34).unwrap();
-    let shared = drivemap_sim::shared(sim);
+    let shared = drivemap_sim::server::shared(sim);
     TcpServer::spawn(shared, "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap()
 }
 
@@ -74,7 +76,7 @@ fn a_session_over_a_draft_writes_only_when_allowed() {
     assert!(drive.draft().is_some());
     let sim = Simulator::new(drive.clone(), SimOptions::new()).unwrap();
     let server = TcpServer::spawn(
-        drivemap_sim::shared(sim),
+        drivemap_sim::server::shared(sim),
         "127.0.0.1:0",
         TcpFraming::ModbusTcp,
         None,

@@ -1,9 +1,8 @@
 //! Indexed access (`indexed:`) read from the fictional Tarrow TM-44 (`tests/fixtures/tarrow-tm44`,
 //! register 44 selects, register 45 carries the value) and lowered once into the plan. The
-//! refusals of `validate::indexed_valid` are in `tests/ui/indexed-*`.
+//! refusals of `validate::indexed_valid` are in `tests/fixtures/crafted/errors/indexed-*`.
 
 use drivemap_test_support::paths;
-
 
 use drivemap_core::register::{Access, Table};
 use drivemap_core::scale::{Decimal, RawRange};

@@ -1,9 +1,8 @@
 //! Roles are lowered to plan rows, bit positions and codes: `tests/fixtures/crafted/maps/roles-drive.yaml`
 //! read, validated and lowered, and every place of its `MapPlan::roles` checked. The errors of
-//! `validate::roles_valid` are in `tests/ui/e46-*` .. `e56-*`.
+//! `validate::roles_valid` are in `tests/fixtures/crafted/errors/e46-*` .. `e56-*`.
 
 use drivemap_test_support::paths;
-
 
 use drivemap_core::roles::{Edge, FieldRole, NumberField, Role, Target};
 use drivemap_map::MapPlan;

@@ -4,7 +4,6 @@
 
 use drivemap_test_support::paths;
 
-
 #[test]
 fn malformed_maps_report_their_errors() {
     let dir = &paths::fixture("crafted/errors");

@@ -2,7 +2,6 @@
 
 use drivemap_test_support::paths;
 
-
 #[test]
 fn variant_inherits_overrides_and_removes() {
     let child = drivemap_map::Loader::new()

@@ -1,8 +1,10 @@
-//! The classifier over crafted before/after maps: `review/tests/fixtures/diff/<case>.yaml`
-//! lists text edits to `cli/tests/fixtures/example-drive.yaml` (the map of the command line's
+//! The classifier over crafted before/after maps: `tests/fixtures/crafted/diff/<case>.yaml`
+//! lists text edits to `tests/fixtures/crafted/cli/example-drive.yaml` (the map of the command line's
 //! golden tests) and the change kinds they must produce, no more and no fewer.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
+
+use drivemap_test_support::paths;
 
 use serde::Deserialize;
 
@@ -31,12 +33,11 @@ struct Edit {
 }
 
 fn fixtures() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
+    paths::fixture("crafted")
 }
 
 fn base() -> String {
-    let cli = Path::new(env!("CARGO_MANIFEST_DIR")).join("../cli/tests/fixtures");
-    std::fs::read_to_string(cli.join("example-drive.yaml")).unwrap()
+    std::fs::read_to_string(paths::fixture("crafted/cli/example-drive.yaml")).unwrap()
 }
 
 /// Why a case failed, said in the test's failure message.

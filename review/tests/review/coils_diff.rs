@@ -4,12 +4,14 @@
 //! every citation of the coil and input rows is verified by content and every row of the coil
 //! and input tables is covered.
 
+use drivemap_test_support::paths;
+
 use drivemap_review::diff::{ChangeKind, compare};
 
-const FILE: &str = "../tests/fixtures/tindra-tc4/tindra-tc4.yaml";
+const FILE: &str = "tindra-tc4/tindra-tc4.yaml";
 
 fn tindra(replace: &[(&str, &str)]) -> drivemap_map::Map {
-    let mut text = std::fs::read_to_string(FILE).unwrap();
+    let mut text = std::fs::read_to_string(paths::fixture(FILE)).unwrap();
     for (from, to) in replace {
         assert!(text.contains(from), "no {from}");
         text = text.replace(from, to);
@@ -94,7 +96,7 @@ fn doc_shows_a_coils_table_and_its_states() {
 fn coil_rows_are_verified_and_covered() {
     use drivemap_review::review::{Manuals, coverage, verify_citations};
     let drive = tindra(&[]);
-    let mut manuals = Manuals::new("../tests/fixtures/tindra-tc4/manuals".as_ref());
+    let mut manuals = Manuals::new(paths::fixture("tindra-tc4/manuals").as_ref());
     manuals.load_for(&drive);
     let checks = verify_citations(&drive, &manuals);
     let unverified: Vec<_> = checks.iter().filter(|c| !c.verified()).collect();

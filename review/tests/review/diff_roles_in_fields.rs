@@ -3,15 +3,13 @@
 //! (breaking: `fault_code()` reads another place); a field made signed, a reset's edge made
 //! "not printed", and the reason of a not-printed edge changed each show, with their kind.
 
+use drivemap_test_support::paths;
+
 use drivemap_map::Map;
 use drivemap_review::diff::{ChangeKind, compare};
 
 fn acme_text() -> String {
-    std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../tests/fixtures/acme-vf1/acme-vf1.yaml"
-    ))
-    .unwrap()
+    std::fs::read_to_string(paths::fixture("acme-vf1/acme-vf1.yaml")).unwrap()
 }
 
 fn read(text: &str) -> Map {
@@ -131,10 +129,7 @@ fn signed_scale_and_edge_changes_show() {
 /// print as "not printed" with the reason; `export` carries both keys as written.
 #[test]
 fn doc_and_export_show_a_number_field_and_an_unknown_edge() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../tests/fixtures/brenner-fx4/brenner-fx4.yaml"
-    );
+    let path = paths::fixture("brenner-fx4/brenner-fx4.yaml");
     let drive = drivemap_map::Loader::new()
         .load(path.as_ref())
         .unwrap_or_else(|e| panic!("{e}"));

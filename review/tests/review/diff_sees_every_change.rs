@@ -15,6 +15,8 @@
 //! outside `groups` also at its last, so the run stays short on a map of 1,300 registers (each
 //! mutation reads and validates the whole map).
 
+use drivemap_test_support::paths;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -42,12 +44,12 @@ fn tree_path(path: &[Seg]) -> drivemap_map::TreePath {
 }
 
 fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    paths::workspace().to_path_buf()
 }
 
 /// The maps mutated: every map of `maps/`, then the fixture maps.
 fn maps() -> Vec<PathBuf> {
-    let mut out = drivemap_map::find_maps(&root().join("maps")).unwrap();
+    let mut out = drivemap_map::find_maps(&paths::maps()).unwrap();
     assert!(out.len() >= 5, "maps/ holds {} maps", out.len());
     for dir in [
         "tests/fixtures/acme-vf1",
@@ -57,9 +59,9 @@ fn maps() -> Vec<PathBuf> {
         "tests/fixtures/brenner-fx4",
         "tests/fixtures/halden-h1",
         "tests/fixtures/borealis-bf6",
-        "map/tests/fixtures",
-        "map/tests/fixtures/variants",
-        "cli/tests/fixtures",
+        "tests/fixtures/crafted/maps",
+        "tests/fixtures/crafted/maps/variants",
+        "tests/fixtures/crafted/cli",
     ] {
         out.extend(drivemap_map::find_maps(&root().join(dir)).unwrap());
     }

@@ -2,10 +2,12 @@
 //! (`tests/fixtures/tarrow-tm44`): an entry re-indexed, re-ranged, added or removed is an
 //! "indexed access changed" (breaking); a citation moved is a "citation changed".
 
+use drivemap_test_support::paths;
+
 use drivemap_review::diff::{self, render};
 
 fn fixture() -> String {
-    std::fs::read_to_string("../tests/fixtures/tarrow-tm44/tarrow-tm44.yaml").unwrap()
+    std::fs::read_to_string(paths::fixture("tarrow-tm44/tarrow-tm44.yaml")).unwrap()
 }
 
 fn read(text: &str) -> drivemap_map::Map {

@@ -2,10 +2,12 @@
 //! reasons as the two sides, and the change of working figure it brings on its own. The map is
 //! the fixture `tests/fixtures/halden-h1` (every protocol fact `unknown:`).
 
+use drivemap_test_support::paths;
+
 use drivemap_review::diff::{ChangeKind, compare};
 
 fn halden(replace: &[(&str, &str)]) -> drivemap_map::Map {
-    let mut text = std::fs::read_to_string("../tests/fixtures/halden-h1/halden-h1.yaml").unwrap();
+    let mut text = std::fs::read_to_string(paths::fixture("halden-h1/halden-h1.yaml")).unwrap();
     for (from, to) in replace {
         let line = text
             .lines()

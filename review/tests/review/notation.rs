@@ -1,8 +1,10 @@
 //! Review's word on a map's notations: the protocol warnings of `drivemap check` and the Markdown
 //! reference's rendering of a decimal manual's addresses.
 
+use drivemap_test_support::paths;
+
 fn mini_drive() -> String {
-    std::fs::read_to_string("../map/tests/fixtures/mini-drive.yaml").unwrap()
+    std::fs::read_to_string(paths::fixture("crafted/maps/mini-drive.yaml")).unwrap()
 }
 
 /// The slave range is the manual's: 01H-FEH is recorded as printed (not refused for exceeding the

@@ -2,10 +2,12 @@
 //! Borealis BF6 (`tests/fixtures/borealis-bf6`): other counts or another value they equal is a
 //! scale change that names both ratios; a ratio replaced by a decimal factor is one too.
 
+use drivemap_test_support::paths;
+
 use drivemap_review::diff::{self, render};
 
 fn fixture() -> String {
-    std::fs::read_to_string("../tests/fixtures/borealis-bf6/borealis-bf6.yaml").unwrap()
+    std::fs::read_to_string(paths::fixture("borealis-bf6/borealis-bf6.yaml")).unwrap()
 }
 
 fn read(text: &str) -> drivemap_map::Map {

@@ -2,10 +2,12 @@
 //! lowering into the plan, the Markdown reference and the export, on the fixture map (its
 //! `memory` group gives the rule to both of its registers; `password` reads as codes).
 
+use drivemap_test_support::paths;
+
 use drivemap_core::plan::{Label, RepeatNeedsChange};
 
 fn fixture() -> String {
-    std::fs::read_to_string("../map/tests/fixtures/mini-drive.yaml").unwrap()
+    std::fs::read_to_string(paths::fixture("crafted/maps/mini-drive.yaml")).unwrap()
 }
 
 fn read(text: &str) -> drivemap_map::Map {

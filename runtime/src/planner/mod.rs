@@ -33,7 +33,7 @@
 //! ## At run time
 //!
 //! [`Poller`] keeps a plan for a fixed set of wanted registers and executes it with a
-//! [`Client`](crate::Client). When a request that bridges or merges several registers is answered with
+//! [`Client`](crate::client::Client). When a request that bridges or merges several registers is answered with
 //! exception 02h (invalid address) or 21h, it is split: the wanted registers are read without
 //! bridging, halving on further exceptions, so each wanted register gets its own value or its own
 //! error. The poller remembers what it learned (a wanted register that fails alone; the bridged

@@ -79,17 +79,17 @@ impl fmt::Display for PolledError<'_> {
 /// ([`ClientOptions::for_link`]) and the client's retries, reconnection and EEPROM budget as
 /// they were. Returns the cycle's statistics summed; each poller holds its drive's values.
 ///
-/// [`ClientOptions::for_link`]: crate::ClientOptions::for_link
+/// [`ClientOptions::for_link`]: crate::client::ClientOptions::for_link
 pub fn poll_line<T: Transport>(client: &mut Client<T>, drives: &mut [(u8, Poller)]) -> CycleStats {
     let kind = client.transport().kind();
     let mut total = CycleStats::default();
     for (slave, poller) in drives.iter_mut() {
         let mine = *client.options();
-        let options = crate::ClientOptions {
+        let options = crate::client::ClientOptions {
             retries: mine.retries,
             reconnect: mine.reconnect,
             eeprom_writes_per_hour: mine.eeprom_writes_per_hour,
-            ..crate::ClientOptions::for_link(poller.profile, kind)
+            ..crate::client::ClientOptions::for_link(poller.profile, kind)
         };
         client.switch_drive(poller.profile, options);
         let s = poller.poll(client, *slave);
@@ -131,12 +131,12 @@ enum Slot {
 ///
 /// ```
 /// use drivemap_runtime::planner::Poller;
-/// use drivemap_runtime::Client;
+/// use drivemap_runtime::client::Client;
 /// use drivemap_runtime::core::profile::Profile;
 /// use drivemap_runtime::core::register::{Access, RegisterInfo, Table};
 /// use drivemap_runtime::core::width::Width;
 /// # use drivemap_runtime::{core::profile::TransportKind, transport::Transport};
-/// use drivemap_sim::slave::SimulatedSlave; // a bare simulated drive (dev-dependency)
+/// use drivemap_sim::SimulatedSlave; // a bare simulated drive (dev-dependency)
 /// # struct Link(SimulatedSlave, Vec<u8>);
 /// # impl Transport for Link {
 /// #     fn kind(&self) -> TransportKind { TransportKind::Rtu }

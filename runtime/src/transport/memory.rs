@@ -21,7 +21,7 @@ impl Pipe {
 }
 
 /// One end of an in-memory link. Bytes sent on one end are received on the other, in order,
-/// with no loss and no timing: `drivemap_sim::fault::FaultyLink` adds faults.
+/// with no loss and no timing: `drivemap_sim::FaultyLink` adds faults.
 pub struct MemoryTransport {
     kind: TransportKind,
     incoming: Arc<Pipe>,

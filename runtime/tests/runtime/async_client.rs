@@ -12,8 +12,8 @@ use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::pdu::FrameError;
 use drivemap_runtime::reply::Discard;
 use drivemap_runtime::{ascii, rtu, tcp};
-use drivemap_sim::fault::{Fault, FaultyLink};
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
+use drivemap_sim::{Fault, FaultyLink};
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 
 use common::{V7, strict};
@@ -217,7 +217,7 @@ fn inject_into(c: &mut AsyncClient<BlockingTransport<FaultyLink>>, fault: Fault)
 /// drive's own Modbus TCP interface; `ClientOptions::generic()` is the explicit opt-out.
 #[test]
 fn async_client_new_applies_the_profile_timing() {
-    use drivemap_runtime::ClientOptions;
+    use drivemap_runtime::client::ClientOptions;
     use drivemap_runtime::core::profile::Timing;
     static TIMED: drivemap_runtime::core::profile::Profile =
         drivemap_runtime::core::profile::Profile {

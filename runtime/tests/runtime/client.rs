@@ -13,8 +13,8 @@ use drivemap_runtime::core::register::{
 use drivemap_runtime::core::rule::WriteRule;
 use drivemap_runtime::core::scale::{self, Decimal, RawRange, ValueError};
 use drivemap_runtime::error::{Error, Refusal};
-use drivemap_sim::fault::{Fault, FaultyLink};
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
+use drivemap_sim::{Fault, FaultyLink};
 
 use common::{ACN, J7, V7, strict};
 

@@ -4,7 +4,7 @@
 //! 100 coils in the fewest requests the drive's `max_read_bits` allows and never puts two tables
 //! in one request.
 
-use drivemap_runtime::Client;
+use drivemap_runtime::client::Client;
 use drivemap_runtime::core::profile::{BroadcastInfo, Profile};
 use drivemap_runtime::core::register::{Access, RegisterInfo, Table};
 use drivemap_runtime::core::rule::{Broadcast, WriteRule};
@@ -15,7 +15,7 @@ use drivemap_runtime::pdu::{
     decode_request, decode_response,
 };
 use drivemap_runtime::planner::Poller;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 use drivemap_test_support::instant_link::InstantLink;
 
 /// Coils 0000h-0063h writable (0000h and 0001h also by broadcast), 0064h read-only; the

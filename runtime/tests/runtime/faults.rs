@@ -11,8 +11,8 @@ use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::error::Error;
 use drivemap_runtime::pdu::FrameError;
 use drivemap_runtime::reply::Discard;
-use drivemap_sim::fault::{Fault, FaultyLink};
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
+use drivemap_sim::{Fault, FaultyLink};
 
 use common::{V7, strict};
 

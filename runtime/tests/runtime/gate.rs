@@ -14,8 +14,8 @@ use drivemap_runtime::core::rule::{Broadcast, Transports, WriteRule};
 use drivemap_runtime::core::width::WordOrder;
 use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::gate::{self, WriteTarget};
-use drivemap_sim::fault::FaultyLink;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::FaultyLink;
+use drivemap_sim::SimulatedSlave;
 
 const RUN_COMMAND: WriteRule = WriteRule::rw("operation_command", 0x0001, 0, 65535)
     .on(Transports::RTU)

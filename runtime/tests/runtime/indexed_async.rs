@@ -17,8 +17,8 @@ use drivemap_runtime::core::register::{Access, Table};
 use drivemap_runtime::core::rule::WriteRule;
 use drivemap_runtime::core::scale::{Decimal, RawRange};
 use drivemap_runtime::error::Error;
-use drivemap_sim::fault::{Fault, FaultyLink};
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
+use drivemap_sim::{Fault, FaultyLink};
 
 static WRITES: [WriteRule; 2] = [
     WriteRule::rw("parameter_index", 0x0040, 1, 40),

@@ -12,7 +12,7 @@ use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::memory::MemoryTransport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 use common::{ACN, V7, strict};
 

@@ -17,13 +17,13 @@
 
 use crate::common;
 
-use drivemap_runtime::Client;
+use drivemap_runtime::client::Client;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::crc;
 use drivemap_runtime::pdu::{FrameError, Request, Response, Words};
 use drivemap_runtime::rtu;
-use drivemap_sim::fault::FaultyLink;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::FaultyLink;
+use drivemap_sim::SimulatedSlave;
 
 use common::{ACN, strict};
 

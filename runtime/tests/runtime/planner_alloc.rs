@@ -4,11 +4,11 @@
 use drivemap_test_support::alloc_count::{self, Counting};
 use drivemap_test_support::instant_link::InstantLink;
 
-use drivemap_runtime::Client;
+use drivemap_runtime::client::Client;
 use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::core::register::{Access, RegisterInfo, Table};
 use drivemap_runtime::planner::Poller;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;

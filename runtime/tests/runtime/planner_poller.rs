@@ -4,14 +4,14 @@
 use std::io;
 use std::time::Instant;
 
-use drivemap_runtime::Client;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::client::Client;
 use drivemap_runtime::core::profile::{Profile, TransportKind};
 use drivemap_runtime::core::register::{Access, Readable, Register, RegisterInfo, Table};
 use drivemap_runtime::core::scale::ValueError;
 use drivemap_runtime::planner::{Learned, PlanError, PolledError, Poller, Read, wanted};
 use drivemap_runtime::transport::Transport;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 /// A link to a simulated drive that answers each request as it is sent.
 struct Link {

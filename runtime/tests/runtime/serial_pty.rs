@@ -13,7 +13,7 @@ use drivemap_runtime::client::{Client, ClientOptions};
 use drivemap_runtime::error::Error;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions, SerialTransport};
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 use common::V7;
 

@@ -24,8 +24,8 @@ use drivemap_live::{LiveSettings, leak_profile};
 use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::core::profile::{Profile, TransportKind};
 
+use crate::ExceptionPlan;
 use crate::clock::Clock;
-use crate::exceptions::ExceptionPlan;
 use crate::model::Model;
 use crate::roles::Resolved;
 

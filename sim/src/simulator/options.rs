@@ -19,8 +19,8 @@ pub struct SimOptions {
     /// External quantities (drive rating...); one not given is [`Plausible::EXTERNAL`], or
     /// [`Plausible::MAX_FREQUENCY`] for the maximum frequency.
     ///
-    /// [`Plausible::EXTERNAL`]: crate::Plausible::EXTERNAL
-    /// [`Plausible::MAX_FREQUENCY`]: crate::Plausible::MAX_FREQUENCY
+    /// [`Plausible::EXTERNAL`]: crate::roles::Plausible::EXTERNAL
+    /// [`Plausible::MAX_FREQUENCY`]: crate::roles::Plausible::MAX_FREQUENCY
     pub externals: BTreeMap<String, f64>,
     /// Power-on values, applied last: register id, parameter number or name → engineering
     /// value (a code for enumerations, the raw word for bit fields and plain words).

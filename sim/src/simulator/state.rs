@@ -9,7 +9,8 @@ use drivemap_map::{Map, RegisterRef};
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::register::WriteRestriction;
 
-use crate::model::{DriveState, Model};
+use crate::DriveState;
+use crate::model::Model;
 use crate::roles::{self, Follow, Plausible, Resolved, Source};
 
 use super::options::known_list;

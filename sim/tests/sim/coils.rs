@@ -4,20 +4,19 @@
 //! FF00h/0000h, 21h a read-only coil written), its broadcast rules (05h to the run and direction
 //! coils only), and the drive model run and stopped through its run coil.
 
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::{BitValues, Request};
 use drivemap_runtime::{crc, rtu, tcp};
-use drivemap_sim::{ManualClock, SimOptions, Simulator};
+use drivemap_sim::{SimOptions, Simulator, clock::ManualClock};
 
 fn text() -> String {
-    let path = format!(
-        "{}/../tests/fixtures/tindra-tc4/tindra-tc4.yaml",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
+    let path = paths::fixture("tindra-tc4/tindra-tc4.yaml");
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 fn start_text(text: &str) -> (Simulator, ManualClock) {

@@ -11,7 +11,9 @@
 //! address and PDU, and its CRC against the codec's; a request so marked is not fed (the map
 //! records that the drive as mapped does not take it).
 
-use std::path::{Path, PathBuf};
+use drivemap_test_support::paths;
+
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use drivemap_live::examples::{Frame, frame, kind_of, register_at, with_settings};
@@ -19,17 +21,17 @@ use drivemap_map::Map as Drive;
 use drivemap_map::facts::{Direction, Example};
 use drivemap_runtime::pdu::{self, Request, Response};
 use drivemap_runtime::{crc, tcp};
-use drivemap_sim::{ManualClock, RolesChoice, SimOptions, Simulator};
+use drivemap_sim::{RolesChoice, SimOptions, Simulator, clock::ManualClock};
 
 fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    paths::workspace().to_path_buf()
 }
 
 fn maps() -> Vec<PathBuf> {
-    let mut out = drivemap_map::find_maps(&root().join("maps")).unwrap();
+    let mut out = drivemap_map::find_maps(&paths::maps()).unwrap();
     assert!(out.len() >= 5, "maps/ holds {} maps", out.len());
-    out.push(root().join("tests/fixtures/orbis-q5/orbis-q5.yaml"));
-    out.push(root().join("tests/fixtures/quill-q2/quill-q2.yaml"));
+    out.push(paths::fixture("orbis-q5/orbis-q5.yaml"));
+    out.push(paths::fixture("quill-q2/quill-q2.yaml"));
     out
 }
 
@@ -155,7 +157,7 @@ fn every_map_s_simulator_answers_its_manual_s_examples_byte_for_byte() {
             pairs += 1;
         }
         report.push(format!("{}: {pairs}", drive.id()));
-        if path.starts_with(root().join("maps")) {
+        if path.starts_with(paths::maps()) {
             assert!(
                 pairs > 0,
                 "{}: no request/response example pair",

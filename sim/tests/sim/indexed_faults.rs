@@ -7,8 +7,9 @@
 //! property runs on the client's `read_entry`/`write_entry`, and the same scenario is shown to
 //! break a naive strategy that writes the index only when it believes another entry is selected.
 
+use drivemap_test_support::paths;
+
 use std::io;
-use std::path::Path;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
@@ -18,14 +19,14 @@ use drivemap_runtime::core::indexed::{EntryRef, Indexed};
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::error::Error;
 use drivemap_runtime::transport::Transport;
-use drivemap_sim::fault::{Fault, FaultyLink};
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
+use drivemap_sim::{Fault, FaultyLink};
 use proptest::prelude::*;
 
 fn plan() -> &'static MapPlan {
     static PLAN: OnceLock<MapPlan> = OnceLock::new();
     PLAN.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/tarrow-tm44");
+        let dir = paths::fixture("tarrow-tm44");
         let drive = drivemap_map::Loader::new()
             .manuals(dir.join("manuals"))
             .load(&dir.join("tarrow-tm44.yaml"))

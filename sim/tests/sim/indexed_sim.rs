@@ -3,7 +3,8 @@
 //! value, and an entry's access and range are enforced by the simulated drive itself. The drive
 //! is the fictional Tarrow TM-44 (`tests/fixtures/tarrow-tm44`).
 
-use std::path::Path;
+use drivemap_test_support::paths;
+
 use std::time::Duration;
 
 use drivemap_runtime::client::{Client, ClientOptions};
@@ -13,7 +14,7 @@ use drivemap_sim::{SimOptions, Simulator};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
 fn drive() -> drivemap_map::Map {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/tarrow-tm44");
+    let dir = paths::fixture("tarrow-tm44");
     drivemap_map::Loader::new()
         .manuals(dir.join("manuals"))
         .load(&dir.join("tarrow-tm44.yaml"))

@@ -3,13 +3,15 @@
 //! "a simple upper/lower limit error occurred with control data", 003_8bcf5d50afb8e230.txt:739),
 //! and the reference is not taken.
 
+use drivemap_test_support::paths;
+
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::{rtu, tcp};
 use drivemap_sim::{SimOptions, Simulator};
 
 fn v7() -> Simulator {
-    let path = format!("{}/../maps/yaskawa-v7.yaml", env!("CARGO_MANIFEST_DIR"));
+    let path = paths::shipped_map("yaskawa-v7");
     let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     Simulator::new(drive, SimOptions::new()).unwrap()
 }

@@ -2,6 +2,8 @@
 //! gateway: the drive at a frame's address answers it, a broadcast is executed by every drive
 //! whose map allows it and answered by none, a frame for an address no drive has gets silence.
 
+use drivemap_test_support::paths;
+
 use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::Duration;
@@ -9,12 +11,12 @@ use std::time::Duration;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, rtu, tcp};
+use drivemap_runtime::{client::Client, rtu, tcp};
 use drivemap_sim::server::lock;
-use drivemap_sim::{Line, Outcome, SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{Line, Outcome, SimOptions, Simulator, server::TcpFraming, server::TcpServer};
 
 fn sim(id: &str, slave: u8) -> Simulator {
-    let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
+    let path = paths::shipped_map(id);
     let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     Simulator::new(drive, SimOptions::new().slave(slave)).unwrap()
 }

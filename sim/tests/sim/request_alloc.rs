@@ -3,6 +3,8 @@
 //! a global allocator that counts the allocations of the current thread (the project's way, as
 //! in `runtime/tests/runtime/planner_alloc.rs`).
 
+use drivemap_test_support::paths;
+
 use drivemap_test_support::alloc_count::{self, Counting};
 
 #[global_allocator]
@@ -17,24 +19,24 @@ use std::sync::Arc;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::{rtu, tcp};
-use drivemap_sim::{ManualClock, Outcome, SimOptions, Simulator};
+use drivemap_sim::{Outcome, SimOptions, Simulator, clock::ManualClock};
 
 /// Every map in `maps/` by id (the directory is read: a new map is covered with no edit here).
 fn drives() -> Vec<String> {
-    let dir = format!("{}/../maps", env!("CARGO_MANIFEST_DIR"));
+    let dir = paths::maps();
     let mut ids: Vec<String> = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("{dir}: {e}"))
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "yaml"))
         .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
         .collect();
     ids.sort();
-    assert!(!ids.is_empty(), "no maps in {dir}");
+    assert!(!ids.is_empty(), "no maps in {}", dir.display());
     ids
 }
 
 fn start(id: &str) -> Simulator {
-    let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
+    let path = paths::shipped_map(id);
     let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     let clock = ManualClock::new();
     Simulator::new(drive, SimOptions::new().clock(Arc::new(clock))).unwrap()

@@ -2,6 +2,8 @@
 //! rule with the drive's own exception code, silence where the manuals prescribe it, broadcast,
 //! persist commands, and the drive model through the maps' scales.
 
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -9,24 +11,24 @@ use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::crc;
 use drivemap_runtime::pdu::{Request, Words};
 use drivemap_runtime::{rtu, tcp};
-use drivemap_sim::{ManualClock, Outcome, RolesChoice, SimOptions, Simulator};
+use drivemap_sim::{Outcome, RolesChoice, SimOptions, Simulator, clock::ManualClock};
 
 /// Every map in `maps/` by id (the directory is read: a new map is covered with no edit here).
 fn drives() -> Vec<String> {
-    let dir = format!("{}/../maps", env!("CARGO_MANIFEST_DIR"));
+    let dir = paths::maps();
     let mut ids: Vec<String> = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("{dir}: {e}"))
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "yaml"))
         .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
         .collect();
     ids.sort();
-    assert!(!ids.is_empty(), "no maps in {dir}");
+    assert!(!ids.is_empty(), "no maps in {}", dir.display());
     ids
 }
 
 fn drive(id: &str) -> drivemap_map::Map {
-    let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
+    let path = paths::shipped_map(id);
     drivemap_map::Loader::new()
         .load(path.as_ref())
         .unwrap_or_else(|e| panic!("{id}: {e}"))
@@ -594,10 +596,7 @@ fn acn_offsets_save_sequence_and_codes() {
 
 /// The fictional drive of `tests/fixtures/acme-vf1/` (not a shipped map), with a manual clock.
 fn acme() -> (Simulator, ManualClock) {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../tests/fixtures/acme-vf1/acme-vf1.yaml"
-    );
+    let path = paths::fixture("acme-vf1/acme-vf1.yaml");
     let clock = ManualClock::new();
     let sim = Simulator::new(
         drivemap_map::Loader::new().load(path.as_ref()).unwrap(),

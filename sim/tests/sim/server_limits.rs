@@ -2,24 +2,29 @@
 //! per-frame deadline, and a well-behaved master still served while connections flood in and
 //! slowloris peers trickle bytes. Loopback only; every loop bounded in count and time.
 
+use drivemap_test_support::paths;
+
 use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::sync::Arc;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use drivemap_sim::{ManualClock, ServerOptions, SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{
+    SimOptions, Simulator, clock::ManualClock, server::ServerOptions, server::TcpFraming,
+    server::TcpServer,
+};
 
 /// Generous bound for anything the server must do "soon".
 const SOON: Duration = Duration::from_secs(10);
 
 fn server(framing: TcpFraming, options: ServerOptions) -> TcpServer {
-    let path = format!("{}/../maps/ptlk-tds-v8.yaml", env!("CARGO_MANIFEST_DIR"));
+    let path = paths::shipped_map("ptlk-tds-v8");
     let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     let clock = ManualClock::new();
     let sim = Simulator::new(drive, SimOptions::new().clock(Arc::new(clock))).unwrap();
     TcpServer::spawn_with(
-        drivemap_sim::shared(sim),
+        drivemap_sim::server::shared(sim),
         "127.0.0.1:0",
         framing,
         None,

@@ -7,7 +7,7 @@
 //! `chosen` starts with the address the map uses; the test lists every disagreement that is not
 //! recorded, and every recorded one that no longer disagrees.
 
-use std::path::PathBuf;
+use drivemap_test_support::paths;
 
 use drivemap_map::{Tree, TreeKind};
 
@@ -60,7 +60,7 @@ fn number(node: Option<&Tree>) -> Option<u64> {
 }
 
 fn map() -> MapFile {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps/automationdirect-acn.yaml");
+    let path = paths::shipped_map("automationdirect-acn");
     let name = path.display().to_string();
     let yaml = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
     let tree = drivemap_map::parse_map(&name, &yaml)

@@ -9,8 +9,8 @@ use drivemap_drives::runtime::core::profile::TransportKind;
 use drivemap_drives::runtime::core::register::{Register, Writable};
 use drivemap_drives::runtime::pdu::{Request, Response, Words};
 use drivemap_drives::runtime::{crc, rtu, tcp};
-use drivemap_sim::fault::FaultyLink;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::FaultyLink;
+use drivemap_sim::SimulatedSlave;
 
 /// Request printed at 004_c5cbf92472673495.txt:616: station 01, function 10h, starting address
 /// 0x1102 ("0x1103-1"), 2 registers, 4 bytes, 0x0032 (Acc 5.0 s), 0x0064 (Dec 10.0 s), CRC

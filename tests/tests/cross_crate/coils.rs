@@ -3,6 +3,8 @@
 //! 05h (FF00h on, 0000h off), and the drive trait runs, reverses, stops and resets the drive
 //! through its coils, reading its state from discrete inputs, against the simulated drive.
 
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -11,9 +13,9 @@ use drivemap_runtime::core::register::{Register, Table};
 use drivemap_runtime::pdu::Request;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, ClientOptions};
+use drivemap_runtime::{client::Client, client::ClientOptions};
 use drivemap_sim::framing::{self, Decoded};
-use drivemap_sim::{ManualClock, SimOptions, Simulator};
+use drivemap_sim::{SimOptions, Simulator, clock::ManualClock};
 use drivemap_test_support::sim_link::SimLink;
 
 // The generated module of the coil fixture (`build.rs`), compiled with this runtime.
@@ -25,13 +27,10 @@ mod tindra_tc4 {
 use tindra_tc4::{Drive, InverterReady, MultiSpeed1, OperationCommand, OperationStatus, Settings};
 
 fn map() -> drivemap_map::Map {
-    let path = format!(
-        "{}/fixtures/tindra-tc4/tindra-tc4.yaml",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let path = paths::fixture("tindra-tc4/tindra-tc4.yaml");
     drivemap_map::Loader::new()
-        .load(path.as_ref())
-        .unwrap_or_else(|e| panic!("{path}: {e}"))
+        .load(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 fn client(kind: TransportKind) -> (Client<SimLink>, ManualClock) {

@@ -2,6 +2,8 @@
 //! by a test against a drive simulated from its map, with faults injected at the transport
 //! ([`SimLink`]): replies lost, late, refused, connections reset.
 
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -15,19 +17,19 @@ use drivemap_runtime::pdu::Request;
 use drivemap_runtime::vfd::{
     AsyncVariableFrequencyDrive, AsyncVfd, Direction, VariableFrequencyDrive, Vfd,
 };
-use drivemap_runtime::{Client, ClientOptions, Error};
+use drivemap_runtime::{client::Client, client::ClientOptions, error::Error};
 use drivemap_sim::framing::{self, Decoded};
-use drivemap_sim::{ManualClock, SimOptions, Simulator};
+use drivemap_sim::{SimOptions, Simulator, clock::ManualClock};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
 mod command_profiles;
 mod paramset_faults;
 
 fn map(path: &str) -> Map {
-    let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
+    let path = paths::workspace().join(path);
     drivemap_map::Loader::new()
-        .load(path.as_ref())
-        .unwrap_or_else(|e| panic!("{path}: {e}"))
+        .load(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// Options that make a lost reply cheap: the link answers at once or never.
@@ -649,16 +651,15 @@ fn hex(bytes: &[u8]) -> String {
 /// Every map of `maps/` (the directory, not a list, as for the other per-map tests) and the
 /// acme-vf1 fixture.
 fn every_map() -> Vec<(String, Map)> {
-    let root = env!("CARGO_MANIFEST_DIR");
-    let dir = format!("{root}/../maps");
-    let mut paths: Vec<std::path::PathBuf> = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("{dir}: {e}"))
+    let dir = paths::maps();
+    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "yaml"))
         .collect();
-    paths.sort();
-    paths.push(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml").into());
-    let mut maps: Vec<(String, Map)> = paths
+    files.sort();
+    files.push(paths::fixture("acme-vf1/acme-vf1.yaml"));
+    let mut maps: Vec<(String, Map)> = files
         .into_iter()
         .map(|p| {
             let d = drivemap_map::Loader::new()
@@ -671,7 +672,7 @@ fn every_map() -> Vec<(String, Map)> {
     // transition's time limit cut to 3 ms: a transition the drive refuses (an interlock) is
     // waited out in real time.
     for f in command_profiles::FIXTURES {
-        let text = std::fs::read_to_string(format!("{root}/../{f}")).unwrap();
+        let text = std::fs::read_to_string(paths::workspace().join(f)).unwrap();
         let fast = text
             .lines()
             .map(|l| match l.find("limit_ms: ") {
@@ -690,10 +691,10 @@ fn every_map() -> Vec<(String, Map)> {
         maps.push((d.id().to_owned(), d));
     }
     // A drive run through coils (run, direction, trip reset) and read through discrete inputs.
-    let coils = format!("{root}/fixtures/tindra-tc4/tindra-tc4.yaml");
+    let coils = paths::fixture("tindra-tc4/tindra-tc4.yaml");
     let d = drivemap_map::Loader::new()
-        .load(coils.as_ref())
-        .unwrap_or_else(|e| panic!("{coils}: {e}"));
+        .load(&coils)
+        .unwrap_or_else(|e| panic!("{}: {e}", coils.display()));
     maps.push((d.id().to_owned(), d));
     maps
 }
@@ -818,8 +819,7 @@ fn the_contract_holds_under_faults() {
 
 /// The acme-vf1 fixture's map text, changed in memory: `from` replaced by `to`.
 fn acme_changed(from: &str, to: &str) -> (Map, String) {
-    let root = env!("CARGO_MANIFEST_DIR");
-    let text = std::fs::read_to_string(format!("{root}/fixtures/acme-vf1/acme-vf1.yaml")).unwrap();
+    let text = std::fs::read_to_string(paths::fixture("acme-vf1/acme-vf1.yaml")).unwrap();
     assert!(text.contains(from), "the fixture has {from}");
     let changed = text.replace(from, to);
     let drive = drivemap_map::Loader::new()
@@ -883,7 +883,7 @@ fn one_ramp_register_takes_one_value() {
     let (mut c, settings, slave) = connect(&drive, TransportKind::RtuOverTcp, 0);
     let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     match d.set_ramp(2.0, 1.0) {
-        Err(Error::Refused(e @ drivemap_runtime::Refusal::SharedRegister { .. })) => {
+        Err(Error::Refused(e @ drivemap_runtime::error::Refusal::SharedRegister { .. })) => {
             let message = e.to_string();
             assert!(
                 message.contains("accel_time and decel_time are one register (acceleration_time)")

@@ -4,6 +4,8 @@
 //! reference, reverses it where the map can, stops it, and gets a clear refusal for a role the map
 //! lacks. Time is a manual clock: the ramps are exact, not timed.
 
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -15,12 +17,14 @@ use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
 use drivemap_runtime::vfd::{Direction, VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, Error, Refusal};
-use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_runtime::{client::Client, error::Error, error::Refusal};
+use drivemap_sim::{
+    SimOptions, Simulator, clock::ManualClock, server::TcpFraming, server::TcpServer,
+};
 
 /// The map of a compiled drive, from `maps/`, which the drives crate is generated from.
 fn map(id: &str) -> drivemap_map::Map {
-    let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
+    let path = paths::shipped_map(id);
     drivemap_map::Loader::new().load(path.as_ref()).unwrap()
 }
 
@@ -96,7 +100,7 @@ where
     assert!(sim.has_model(), "{id}: its map gives roles");
     let slave = sim.slave();
     let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
-    let shared = drivemap_sim::shared(sim);
+    let shared = drivemap_sim::server::shared(sim);
     let framing = match kind {
         TransportKind::Tcp => TcpFraming::ModbusTcp,
         _ => TcpFraming::RtuOverTcp,
@@ -243,7 +247,7 @@ fn a_trip_is_seen_and_reset_through_the_trait() {
         .unwrap();
         let slave = sim.slave();
         let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
-        let shared = drivemap_sim::shared(sim);
+        let shared = drivemap_sim::server::shared(sim);
         let server =
             TcpServer::spawn(shared.clone(), "127.0.0.1:0", TcpFraming::RtuOverTcp, None).unwrap();
         let link =
@@ -303,7 +307,7 @@ fn a_trip_is_seen_and_reset_through_the_trait() {
 #[test]
 fn a_command_that_failed_is_not_resent_by_the_next() {
     use drivemap_drives::ptlk_tds_v8 as tds;
-    use drivemap_runtime::ClientOptions;
+    use drivemap_runtime::client::ClientOptions;
     use drivemap_sim::{Fault, FaultyLink, SimulatedSlave};
 
     let options = ClientOptions {
@@ -400,7 +404,7 @@ fn run_is_refused_at_the_factory_setting_and_works_after_setting_the_source() {
             Simulator::new(map(id), SimOptions::new().clock(Arc::new(clock.clone()))).unwrap();
         let slave = sim.slave();
         let externals: Vec<(String, f64)> = sim.externals().clone().into_iter().collect();
-        let shared = drivemap_sim::shared(sim);
+        let shared = drivemap_sim::server::shared(sim);
         let framing = match kind {
             TransportKind::Tcp => TcpFraming::ModbusTcp,
             _ => TcpFraming::RtuOverTcp,

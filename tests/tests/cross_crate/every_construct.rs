@@ -9,6 +9,8 @@
 //! socket; `yaml_is_enough.rs` compiles its generated module and runs the demo on it, and
 //! `cli/tests/cli/live.rs` reads and writes its pairs with the tool.
 
+use drivemap_test_support::paths;
+
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
@@ -20,11 +22,13 @@ use drivemap_runtime::core::profile::Profile;
 use drivemap_runtime::core::width::{Width, WordOrder};
 use drivemap_runtime::planner::Poller;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, Error, Refusal};
-use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_runtime::{client::Client, error::Error, error::Refusal};
+use drivemap_sim::{
+    SimOptions, Simulator, clock::ManualClock, server::TcpFraming, server::TcpServer,
+};
 
 fn fixture() -> PathBuf {
-    drivemap_tests::workspace().join("tests/fixtures/acme-vf1/acme-vf1.yaml")
+    paths::fixture("acme-vf1/acme-vf1.yaml")
 }
 
 fn map() -> drivemap_map::Map {
@@ -119,7 +123,7 @@ struct Bench {
     server: TcpServer,
     client: Client<TcpTransport>,
     map: drivemap_map::Map,
-    sim: drivemap_sim::SharedSim,
+    sim: drivemap_sim::server::SharedSim,
 }
 
 fn bench() -> Bench {
@@ -136,7 +140,7 @@ fn bench() -> Bench {
     sim.set("motor_speed", -1234.5).unwrap();
     sim.set_raw("display_status", 0x0200).unwrap(); // two decimals
     sim.set_raw("motor_current", 1234).unwrap();
-    let sim = drivemap_sim::shared(sim);
+    let sim = drivemap_sim::server::shared(sim);
     let server =
         TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();
     let link =

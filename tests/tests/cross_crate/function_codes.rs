@@ -4,6 +4,8 @@
 //! with 04h only. The client's write gate, against the simulator of the same map, through a
 //! link that records every frame on the wire.
 
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -11,13 +13,13 @@ use drivemap_map::Map;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::register::Table;
 use drivemap_runtime::planner::Poller;
-use drivemap_runtime::{Client, ClientOptions, Error, Refusal};
-use drivemap_sim::{ManualClock, SimOptions, Simulator};
+use drivemap_runtime::{client::Client, client::ClientOptions, error::Error, error::Refusal};
+use drivemap_sim::{SimOptions, Simulator, clock::ManualClock};
 use drivemap_test_support::sim_link::SimLink;
 use proptest::prelude::*;
 
 fn map() -> Map {
-    let path = drivemap_tests::workspace().join("tests/fixtures/halvard-hx2/halvard-hx2.yaml");
+    let path = paths::fixture("halvard-hx2/halvard-hx2.yaml");
     drivemap_map::Loader::new()
         .load(&path)
         .expect("fixture map")
@@ -333,10 +335,7 @@ fn export_doc_diff_and_generated_code_show_the_functions() {
     );
 
     // diff: a changed list is breaking; a moved citation alone is a citation change.
-    let text = std::fs::read_to_string(
-        drivemap_tests::workspace().join("tests/fixtures/halvard-hx2/halvard-hx2.yaml"),
-    )
-    .unwrap();
+    let text = std::fs::read_to_string(paths::fixture("halvard-hx2/halvard-hx2.yaml")).unwrap();
     let read = |t: &str| {
         drivemap_map::Loader::new()
             .load_str("halvard-hx2.yaml", t)
@@ -390,10 +389,7 @@ fn example_frames_are_checked_against_the_registers_functions() {
     assert!(v.errors.is_empty(), "{:?}", v.errors);
     assert_eq!(v.clean, 4);
 
-    let text = std::fs::read_to_string(
-        drivemap_tests::workspace().join("tests/fixtures/halvard-hx2/halvard-hx2.yaml"),
-    )
-    .unwrap();
+    let text = std::fs::read_to_string(paths::fixture("halvard-hx2/halvard-hx2.yaml")).unwrap();
     let refusal = text.find("  - id: frequency_with_06h_refused").unwrap();
     let unrefused = drivemap_map::Loader::new()
         .load_str("halvard-hx2.yaml", &text[..refusal])

@@ -2,7 +2,7 @@
 //! per example, byte for byte as the map writes them, and `ALL` in the map's order; an RTU
 //! request example's CRC checks with the runtime's codec unless the map records it as wrong.
 
-use std::path::Path;
+use drivemap_test_support::paths;
 
 use drivemap_drives::{automationdirect_acn, ptlk_tds_v8, yaskawa_gpd515, yaskawa_j7, yaskawa_v7};
 use drivemap_map::facts::TransportName;
@@ -13,7 +13,7 @@ use drivemap_runtime::crc;
 type Frames = &'static [(&'static str, &'static [u8])];
 
 fn map_examples(id: &str) -> Vec<(String, Vec<u8>, bool, bool)> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../maps/{id}.yaml"));
+    let path = paths::shipped_map(id);
     let drive = drivemap_map::Loader::new().load(&path).unwrap();
     drive
         .examples()

@@ -15,7 +15,7 @@ use drivemap_runtime::error::Error;
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::serial::{SerialOptions, SerialTransport};
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, ClientOptions};
+use drivemap_runtime::{client::Client, client::ClientOptions};
 use interop_support::{PtyPair, free_port, python, script, start_ready};
 
 fn client<T: Transport>(link: T) -> Client<T> {

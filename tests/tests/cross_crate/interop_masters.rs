@@ -11,6 +11,8 @@
 //! manual clock; every request it handles is recorded. A missing peer fails the test with the
 //! install step (tests/interop/install.sh).
 
+use drivemap_test_support::paths;
+
 use crate::interop_support;
 
 use std::process::Command;
@@ -18,7 +20,9 @@ use std::time::Duration;
 
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::transport::serial::{Parity, SerialOptions};
-use drivemap_sim::{Outcome, SerialServer, SimOptions, TcpFraming, TcpServer};
+use drivemap_sim::{
+    Outcome, SimOptions, server::SerialServer, server::TcpFraming, server::TcpServer,
+};
 use interop_support::{PtyPair, Sim, python, require_tool, run_with_limit, script};
 use serde_json::Value;
 
@@ -354,7 +358,7 @@ fn mbpoll_master_over_rtu_on_a_pty_pair() {
 
 /// The simulated coil drive (`tests/fixtures/tindra-tc4`), its network selected on `link`.
 fn tindra(link: TransportKind) -> Sim {
-    let path = interop_support::root().join("tests/fixtures/tindra-tc4/tindra-tc4.yaml");
+    let path = paths::fixture("tindra-tc4/tindra-tc4.yaml");
     let map = drivemap_map::Loader::new()
         .load(&path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));

@@ -22,8 +22,8 @@ use drivemap_runtime::error::{Error, Refusal};
 use drivemap_runtime::transport::Transport;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, ClientOptions};
-use drivemap_sim::{SimOptions, TcpFraming, TcpServer};
+use drivemap_runtime::{client::Client, client::ClientOptions};
+use drivemap_sim::{SimOptions, server::TcpFraming, server::TcpServer};
 use interop_support::Sim;
 
 fn serve(sim: &Sim, framing: TcpFraming) -> TcpServer {
@@ -138,7 +138,7 @@ fn v7_run_and_stop<T: Transport>(c: &mut Client<T>, sim: &Sim, s: &v7::Settings,
         // here before sending, and the drive would answer a raw read of its address with 02h.
         assert!(matches!(
             c.read::<v7::TcpStatusWord>(1, s).unwrap_err(),
-            Error::Refused(drivemap_runtime::Refusal::NotOnTransport { .. })
+            Error::Refused(drivemap_runtime::error::Refusal::NotOnTransport { .. })
         ));
         let mut raw = [0u16; 1];
         let address = <v7::TcpStatusWord as drivemap_runtime::core::register::Register>::ADDRESS;

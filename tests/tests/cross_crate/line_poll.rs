@@ -3,11 +3,13 @@
 //! own planned poller, polled by `planner::poll_line` through one client that switches to
 //! each drive's profile and timing in turn. Every wanted word comes back equal to its drive's.
 
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_drives::{ptlk_tds_v8 as tds, yaskawa_v7 as v7};
-use drivemap_runtime::Client;
+use drivemap_runtime::client::Client;
 use drivemap_runtime::core::plan::RegisterPlan;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::register::Table;
@@ -15,10 +17,12 @@ use drivemap_runtime::core::width::Width;
 use drivemap_runtime::planner::{Poller, poll_line};
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_sim::server::lock;
-use drivemap_sim::{Line, ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{
+    Line, SimOptions, Simulator, clock::ManualClock, server::TcpFraming, server::TcpServer,
+};
 
 fn sim(id: &str, slave: u8, clock: &ManualClock) -> Simulator {
-    let path = format!("{}/../maps/{id}.yaml", env!("CARGO_MANIFEST_DIR"));
+    let path = paths::shipped_map(id);
     let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
     Simulator::new(
         drive,
@@ -125,7 +129,7 @@ fn one_cycle_polls_two_drives_of_one_line_each_with_its_own_map() {
 #[test]
 fn a_client_switched_to_another_drive_takes_its_profile() {
     use drivemap_runtime::async_client::{AsyncClient, AsyncTcpTransport};
-    use drivemap_runtime::{ClientOptions, Refusal};
+    use drivemap_runtime::{client::ClientOptions, error::Refusal};
     let clock = ManualClock::new();
     let mut line = Line::new();
     line.add(sim("yaskawa-v7", 1, &clock)).unwrap();
@@ -138,10 +142,10 @@ fn a_client_switched_to_another_drive_takes_its_profile() {
         })
         .collect();
     let server = TcpServer::spawn(line, "127.0.0.1:0", TcpFraming::RtuOverTcp, None).unwrap();
-    let refused = |e: drivemap_runtime::Error| {
+    let refused = |e: drivemap_runtime::error::Error| {
         matches!(
             e,
-            drivemap_runtime::Error::Refused(Refusal::TooManyRegisters { .. })
+            drivemap_runtime::error::Error::Refused(Refusal::TooManyRegisters { .. })
         )
     };
     let tds_options = ClientOptions::for_link(&tds::PROFILE, TransportKind::RtuOverTcp);

@@ -7,8 +7,8 @@
 
 #![cfg(unix)]
 
-use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::{BusModel, SerialConfig};
+use drivemap_runtime::client::ClientOptions;
 use drivemap_test_support::line::{Char, Direction, Violation, analyse};
 use drivemap_tests::line_bench;
 use proptest::prelude::*;

@@ -5,20 +5,23 @@
 //! (fictional manual printing no protocol figure), with 130 plain holding registers appended so
 //! that a long write has registers to land on.
 
-use std::path::PathBuf;
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
 use drivemap_runtime::core::stated::{ProtocolFact, Stated};
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_runtime::{Client, Error, Refusal};
-use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_runtime::{client::Client, error::Error, error::Refusal};
+use drivemap_sim::{
+    SimOptions, Simulator, clock::ManualClock, server::TcpFraming, server::TcpServer,
+};
 
 const FIRST: u16 = 0x0100;
 const BLOCK: u16 = 130;
 
 fn map(max_write_line: Option<&str>) -> drivemap_map::Map {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/halden-h1/halden-h1.yaml");
+    let path = paths::fixture("halden-h1/halden-h1.yaml");
     let mut text = std::fs::read_to_string(path).unwrap();
     if let Some(line) = max_write_line {
         let old = text
@@ -43,7 +46,7 @@ fn map(max_write_line: Option<&str>) -> drivemap_map::Map {
 struct Bench {
     server: TcpServer,
     client: Client<TcpTransport>,
-    sim: drivemap_sim::SharedSim,
+    sim: drivemap_sim::server::SharedSim,
 }
 
 fn bench(map: drivemap_map::Map) -> Bench {
@@ -54,7 +57,7 @@ fn bench(map: drivemap_map::Map) -> Bench {
             .clock(Arc::new(ManualClock::new())),
     )
     .unwrap();
-    let sim = drivemap_sim::shared(sim);
+    let sim = drivemap_sim::server::shared(sim);
     let server =
         TcpServer::spawn(Arc::clone(&sim), "127.0.0.1:0", TcpFraming::ModbusTcp, None).unwrap();
     let link =

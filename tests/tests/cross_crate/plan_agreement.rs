@@ -14,6 +14,8 @@
 //! The drives come from the generated `for_each_drive!` list, and every `maps/*.yaml` must be in
 //! it, so a new map is covered with no edit here.
 
+use drivemap_test_support::paths;
+
 use std::cell::RefCell;
 use std::path::PathBuf;
 
@@ -29,7 +31,7 @@ use proptest::test_runner::{Config, TestRunner};
 
 /// The maps the drives crate is generated from: `maps/`.
 fn maps_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../maps")
+    paths::maps()
 }
 
 /// The generated settings seen with the variants and external quantities this case chose

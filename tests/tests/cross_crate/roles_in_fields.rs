@@ -9,6 +9,8 @@
 //!   stricter reading), and under lost, late and refused replies and reconnects every
 //!   `reset_fault()` that succeeds has cleared the trip and left the reset bit released.
 
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -18,15 +20,15 @@ use drivemap_map::Map;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::roles::{Edge, Role, Roles, Target};
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, ClientOptions, Error, Refusal};
-use drivemap_sim::{ManualClock, SimOptions, Simulator};
+use drivemap_runtime::{client::Client, client::ClientOptions, error::Error, error::Refusal};
+use drivemap_sim::{SimOptions, Simulator, clock::ManualClock};
 use drivemap_test_support::sim_link::{LinkFault, SimLink};
 
 fn map(path: &str) -> Map {
-    let path = format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"));
+    let path = paths::workspace().join(path);
     drivemap_map::Loader::new()
-        .load(path.as_ref())
-        .unwrap_or_else(|e| panic!("{path}: {e}"))
+        .load(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 fn acme() -> Map {
@@ -159,11 +161,7 @@ fn a_signed_fault_byte_reads_as_a_negative_value() {
 /// before anything is sent.
 #[test]
 fn a_setpoint_on_a_field_is_refused_where_read_modify_write_is_not_safe() {
-    let text = std::fs::read_to_string(format!(
-        "{}/../tests/fixtures/acme-vf1/acme-vf1.yaml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
+    let text = std::fs::read_to_string(paths::fixture("acme-vf1/acme-vf1.yaml")).unwrap();
     let moved = text.replace(
         r#"    - {register: speed_reference, source: "acme-vf1.txt:19"}"#,
         r#"    - {register: status_word, field: active_fault, scale: 1, source: "acme-vf1.txt:19"}"#,

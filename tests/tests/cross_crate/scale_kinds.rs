@@ -9,6 +9,8 @@
 //! `tests/fixtures/` (else [`every_kind_is_used_by_a_map`] fails). See `core/README.md`,
 //! "Adding a new kind of scale".
 
+use drivemap_test_support::paths;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -16,15 +18,11 @@ use drivemap_map::facts::{FactKey, RegisterFacts};
 use drivemap_map::{Map, RegisterRef, describe};
 use drivemap_runtime::core::kind::ConversionKind;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
 /// Every map of `maps/` and of each fixture directory `tests/fixtures/<drive>/` (read, so a new
 /// fixture counts with no edit here).
 fn maps() -> Vec<PathBuf> {
-    let mut out = drivemap_map::find_maps(&root().join("maps")).unwrap();
-    let mut dirs: Vec<PathBuf> = std::fs::read_dir(root().join("tests/fixtures"))
+    let mut out = drivemap_map::find_maps(&paths::maps()).unwrap();
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(paths::fixtures())
         .unwrap()
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.is_dir())

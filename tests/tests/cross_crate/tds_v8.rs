@@ -154,11 +154,11 @@ fn profile_matches_the_manual() {
 
 #[test]
 fn client_loads_settings_then_writes_in_hz() {
-    use drivemap_runtime::Client;
+    use drivemap_runtime::client::Client;
     use drivemap_runtime::core::profile::TransportKind;
     use drivemap_runtime::core::register::DriveSettings;
     use drivemap_runtime::transport::memory::MemoryTransport;
-    use drivemap_sim::slave::SimulatedSlave;
+    use drivemap_sim::SimulatedSlave;
     use std::time::{Duration, Instant};
 
     let (master, mut link) = MemoryTransport::pair(TransportKind::Rtu);

@@ -6,7 +6,7 @@ use drivemap_drives::yaskawa_v7 as v7;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::register::Register;
 use drivemap_runtime::transport::memory::MemoryTransport;
-use drivemap_runtime::{Client, Error, Refusal};
+use drivemap_runtime::{client::Client, error::Error, error::Refusal};
 
 #[test]
 fn rtu_command_register_is_refused_over_modbus_tcp() {

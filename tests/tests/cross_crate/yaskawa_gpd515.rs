@@ -451,7 +451,7 @@ fn d4_02_is_at_290h() {
 #[test]
 fn an_unknown_o2_09_sends_nothing() {
     use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
-    use drivemap_runtime::{Client, ClientOptions, Error, Refusal};
+    use drivemap_runtime::{client::Client, client::ClientOptions, error::Error, error::Refusal};
     use drivemap_sim::{FaultyLink, SimulatedSlave};
     use std::time::Duration;
 

@@ -452,7 +452,7 @@ fn frequency_reference_is_bounded_by_n011() {
 fn a_value_between_steps_is_refused_unless_rounding_is_asked_for() {
     use drivemap_drives::runtime::core::scale::Rounding;
     use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
-    use drivemap_runtime::{Client, Error};
+    use drivemap_runtime::{client::Client, error::Error};
     use drivemap_sim::{FaultyLink, SimulatedSlave};
     type Unit = v7::ModbusFrequencyReferenceUnitSelectionValue;
     type Time = v7::AccelDecelTimeUnitSelectionValue;
@@ -579,9 +579,11 @@ fn j7_frequency_unit_follows_n69_and_its_reserved_bits_stay_zero() {
 #[test]
 fn typed_writes_reach_0001h_only_as_the_register_of_that_link() {
     use drivemap_drives::runtime::core::profile::TransportKind;
-    use drivemap_drives::runtime::{Client, ClientOptions, Error, Refusal};
-    use drivemap_sim::fault::FaultyLink;
-    use drivemap_sim::slave::SimulatedSlave;
+    use drivemap_drives::runtime::{
+        client::Client, client::ClientOptions, error::Error, error::Refusal,
+    };
+    use drivemap_sim::FaultyLink;
+    use drivemap_sim::SimulatedSlave;
 
     let s = settings(Unit::Unit01Hz, 60.0);
     let client = |kind| {
@@ -683,8 +685,8 @@ impl drivemap_drives::runtime::transport::Transport for Stamped {
 fn two_requests_to_a_v7_keep_the_manuals_request_gap() {
     use drivemap_drives::runtime::core::profile::TransportKind;
     use drivemap_drives::runtime::transport::memory::MemoryTransport;
-    use drivemap_drives::runtime::{Client, ClientOptions};
-    use drivemap_sim::slave::SimulatedSlave;
+    use drivemap_drives::runtime::{client::Client, client::ClientOptions};
+    use drivemap_sim::SimulatedSlave;
     use std::time::{Duration, Instant};
 
     let manual_gap = Duration::from_micros(2_500) + Duration::from_millis(10);

@@ -3,12 +3,14 @@
 //! `proc-macro2`, `prettyplease`). `serde` and `thiserror` derive through `syn` at compile
 //! time, as procedural macros; what a crate links is its tree without proc-macro edges.
 
+use drivemap_test_support::paths;
+
 use std::path::Path;
 use std::process::Command;
 
 /// Crate names in `cargo tree -p <package> -e <edges>` of the workspace, one per line.
 fn tree(package: &str, edges: &str) -> Vec<String> {
-    let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("../Cargo.toml");
+    let manifest = paths::workspace().join("Cargo.toml");
     let out = Command::new(env!("CARGO"))
         .args([
             "tree",

@@ -14,6 +14,8 @@
 //! maps its package carries (`drives/maps` links to `maps/`), so this also proves the packaged
 //! crate builds from its tarball alone.
 
+use drivemap_test_support::paths;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -22,10 +24,7 @@ use drivemap_sim::server::{TcpFraming, TcpServer};
 use drivemap_sim::{SimOptions, Simulator};
 
 fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("tests/ has a parent")
-        .to_path_buf()
+    paths::workspace().to_path_buf()
 }
 
 const VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -111,7 +110,7 @@ fn an_application_built_only_from_the_packages_drives_the_simulator() {
         .join("yaskawa-v7.yaml");
     assert_eq!(
         std::fs::read_to_string(&packaged).expect("drivemap-drives carries maps/yaskawa-v7.yaml"),
-        std::fs::read_to_string(root().join("maps").join("yaskawa-v7.yaml")).unwrap(),
+        std::fs::read_to_string(paths::maps().join("yaskawa-v7.yaml")).unwrap(),
         "the packaged map differs from maps/: run `cargo package --workspace` again"
     );
     let manifest = format!(
@@ -182,7 +181,7 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
         "cargo build of every package from its tarball",
     );
 
-    let path = root().join("maps").join("yaskawa-v7.yaml");
+    let path = paths::maps().join("yaskawa-v7.yaml");
     let v7 = drivemap_map::Loader::new()
         .load(&path)
         .expect("shipped map");

@@ -4,6 +4,8 @@
 //! drive's module alone; the new map has no feature until a line in the drives crate's
 //! `Cargo.toml` declares it (rustc warns until then), and then it is selected alone.
 
+use drivemap_test_support::paths;
+
 use std::path::Path;
 
 use drivemap_tests::{workspace, workspace_with_map};
@@ -55,7 +57,7 @@ fn a_new_yaml_file_becomes_a_module() {
     let tmp = std::env::temp_dir().join(format!("drivemap-new-map-{}", std::process::id()));
     let app = drivemap_tests::app_dir(&tmp.join("app"));
     // The new drive: nothing else in the repository mentions it.
-    let (_copy, copy) = workspace_with_map(&root.join("map/tests/fixtures/mini-drive.yaml"));
+    let (_copy, copy) = workspace_with_map(&paths::fixture("crafted/maps/mini-drive.yaml"));
     let drives = copy.join("drives");
 
     let (stdout, said) = run_app(&app, &drives, None, "mini_drive");
@@ -112,7 +114,7 @@ fn a_new_yaml_file_becomes_a_module() {
 fn a_broken_map_fails_the_build_with_every_error_as_check_prints_it() {
     let root = workspace();
     // Four errors in one file: decimal addresses in a register, an alternative, a command, a gap.
-    let broken = root.join("map/tests/ui/e41-decimal-address.yaml");
+    let broken = paths::fixture("crafted/errors/e41-decimal-address.yaml");
     let (_copy, copy) = workspace_with_map(&broken);
     // As the build names it: through `drives/maps`, resolved.
     let map = copy

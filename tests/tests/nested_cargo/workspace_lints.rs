@@ -3,14 +3,13 @@
 //! a lint wholesale, and every `allow` attribute left in the sources says why, in a comment on
 //! its line or right above it.
 
+use drivemap_test_support::paths;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("tests/ has a parent")
-        .to_path_buf()
+    paths::workspace().to_path_buf()
 }
 
 fn read(path: &Path) -> String {

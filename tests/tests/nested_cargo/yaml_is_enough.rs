@@ -13,6 +13,8 @@
 //! Builds share the workspace's target directory and the copy of the workspace with
 //! `new_map_becomes_module.rs` (`drivemap_tests::workspace_with_map`, `nested_cargo`).
 
+use drivemap_test_support::paths;
+
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -20,7 +22,7 @@ use std::process::{Command, Stdio};
 use drivemap_tests::workspace;
 
 fn fixture() -> PathBuf {
-    workspace().join("tests/fixtures/acme-vf1")
+    paths::fixture("acme-vf1")
 }
 
 fn target() -> PathBuf {

@@ -12,14 +12,14 @@ use drivemap_bridge::link::{self, LinkSpec};
 use drivemap_bridge::proxy::{self, Cidr, ProxyOptions};
 use drivemap_runtime::bus_time::SerialConfig;
 use drivemap_runtime::core::profile::TransportKind;
-use drivemap_sim::{SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{SimOptions, Simulator, server::TcpFraming, server::TcpServer};
 use drivemap_test_support::rng::SplitMix;
 
 use super::{connect_to, metrics_for, spec, v7};
 
 /// A proxy in front of a simulated V7 (slave 1) on an RTU-over-TCP line.
 struct Proxied {
-    sim: drivemap_sim::SharedSim,
+    sim: drivemap_sim::server::SharedSim,
     addr: SocketAddr,
     stop: Arc<AtomicBool>,
     link: Option<std::thread::JoinHandle<()>>,
@@ -31,7 +31,7 @@ impl Proxied {
     fn start(options: impl FnOnce(SocketAddr) -> ProxyOptions) -> Proxied {
         let drive = v7();
         let sim_options = SimOptions::new().network_source(TransportKind::RtuOverTcp);
-        let sim = drivemap_sim::shared(Simulator::new(drive.clone(), sim_options).unwrap());
+        let sim = drivemap_sim::server::shared(Simulator::new(drive.clone(), sim_options).unwrap());
         let server = TcpServer::spawn(
             Arc::clone(&sim),
             "127.0.0.1:0",
@@ -270,11 +270,11 @@ fn writes_are_checked_by_the_map_before_the_line() {
 #[cfg(unix)]
 #[test]
 fn four_masters_share_a_9600_baud_line_fairly() {
-    use drivemap_runtime::ClientOptions;
     use drivemap_runtime::bus_time::BusModel;
+    use drivemap_runtime::client::ClientOptions;
     use drivemap_runtime::transport::Transport;
     use drivemap_runtime::transport::serial::{self, SerialOptions, SerialTransport};
-    use drivemap_sim::SerialServer;
+    use drivemap_sim::server::SerialServer;
     use drivemap_sim::timed::DriveLine;
     use drivemap_test_support::line::{EmulatedLine, analyse};
 
@@ -287,7 +287,8 @@ fn four_masters_share_a_9600_baud_line_fairly() {
             .line(profile, serial::Parity::None, Some(serial::StopBits::One))
             .unwrap()
     };
-    let sim = drivemap_sim::shared(Simulator::new(drive.clone(), SimOptions::new()).unwrap());
+    let sim =
+        drivemap_sim::server::shared(Simulator::new(drive.clone(), SimOptions::new()).unwrap());
     let server = SerialServer::spawn_on_line(
         Arc::clone(&sim),
         options_for(emulated.drive_path()),

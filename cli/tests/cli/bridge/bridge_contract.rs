@@ -14,6 +14,8 @@
 //! - untrusted text in logs is escaped and shortened; credentials in `--mqtt`, wildcard topic
 //!   roots and a rate of `inf` are refused.
 
+use drivemap_test_support::paths;
+
 use std::time::{Duration, Instant};
 
 use crate::bridge_support::*;
@@ -448,10 +450,7 @@ fn a_draft_map_is_read_and_never_written_without_draft() {
     let dir = scratch("draft");
     let maps = dir.join("maps");
     std::fs::create_dir_all(&maps).unwrap();
-    let v7 = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/yaskawa-v7.yaml"),
-    )
-    .unwrap();
+    let v7 = std::fs::read_to_string(paths::shipped_map("yaskawa-v7")).unwrap();
     let draft = v7.replacen(
         "\nschema: 2\n",
         "\nschema: 2\ndraft:\n  by: a test (the V7 map marked as a draft)\n",

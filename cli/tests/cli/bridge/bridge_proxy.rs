@@ -2,6 +2,8 @@
 //! at once in front of a simulated V7, what reached the drive read from the simulator's request
 //! log (`slave   1  06h  0002h x1    ok`).
 
+use drivemap_test_support::paths;
+
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::Duration;
@@ -11,8 +13,7 @@ use crate::bridge_support::*;
 const V7: &str = "yaskawa-v7";
 
 fn python() -> PathBuf {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
+    let p = paths::workspace()
         .join("target")
         .join("interop-venv")
         .join("bin")
@@ -154,7 +155,7 @@ print(json.dumps({"asked": 40, "bad": bad}))
 #[test]
 fn an_ascii_line_behind_the_proxy_and_the_bridge() {
     let dir = scratch("ascii");
-    let maps = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/quill-q2");
+    let maps = paths::fixture("quill-q2");
     let maps = maps.to_str().unwrap();
     let line = free_port();
     let line_addr = format!("127.0.0.1:{line}");

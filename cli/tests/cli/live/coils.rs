@@ -4,9 +4,13 @@
 //! `on`/`off`, `1`/`0` with 05h; an address two tables share is named by neither; a discrete input
 //! is never written.
 
+use drivemap_test_support::paths;
+
 use std::path::PathBuf;
 
-use drivemap_sim::{SharedSim, SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_sim::{
+    SimOptions, Simulator, server::SharedSim, server::TcpFraming, server::TcpServer,
+};
 
 use crate::common;
 
@@ -18,11 +22,11 @@ struct Coils {
 
 impl Coils {
     fn start() -> Coils {
-        let dir = common::repo().join("tests/fixtures/tindra-tc4");
+        let dir = paths::fixture("tindra-tc4");
         let map = drivemap_map::Loader::new()
             .load(&dir.join("tindra-tc4.yaml"))
             .unwrap();
-        let sim = drivemap_sim::shared(
+        let sim = drivemap_sim::server::shared(
             Simulator::new(
                 map,
                 SimOptions::new()

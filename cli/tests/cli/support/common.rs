@@ -5,6 +5,7 @@
 // Each test binary compiles this module and uses only the helpers it needs.
 #![allow(dead_code)]
 
+use drivemap_test_support::paths;
 use std::io::{BufRead, BufReader, Read};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
@@ -15,16 +16,16 @@ use std::time::{Duration, Instant};
 
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::transport::tcp::TcpTransport;
-use drivemap_sim::slave::SimulatedSlave;
+use drivemap_sim::SimulatedSlave;
 
 /// The workspace root.
 pub fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    paths::workspace().to_path_buf()
 }
 
 /// The shipped maps (`maps/`).
 pub fn shipped_maps() -> PathBuf {
-    repo().join("maps")
+    paths::maps()
 }
 
 /// The built `drivemap`, not inheriting `DRIVEMAP_MAPS` or `DRIVEMAP_MANUALS` from the test's

@@ -10,6 +10,8 @@
 //! drive that records every write; and the
 //! reproductions of the report through the binary, each asserting what reached the drive.
 
+use drivemap_test_support::paths;
+
 use drivemap_map::{Map, RegisterRef};
 use std::collections::BTreeSet;
 
@@ -63,7 +65,7 @@ fn write_in(
 /// Every map of `maps/` copied into `dir` with a `draft:` mark, and the drafts `drivemap import`
 /// writes of the import fixtures' manuals (`tests/fixtures/import/manuals/*.txt`).
 fn drafts(dir: &Path) -> Vec<PathBuf> {
-    for path in maps_in(&repo().join("maps")) {
+    for path in maps_in(&paths::maps()) {
         let text = std::fs::read_to_string(&path).unwrap();
         let mut out = String::new();
         let mut marked = false;
@@ -78,7 +80,7 @@ fn drafts(dir: &Path) -> Vec<PathBuf> {
         assert!(marked, "{}: no schema line to mark after", path.display());
         std::fs::write(dir.join(path.file_name().unwrap()), out).unwrap();
     }
-    let manuals = repo().join("tests/fixtures/import/manuals");
+    let manuals = paths::fixture("import/manuals");
     let mut n = 0;
     for entry in std::fs::read_dir(&manuals).unwrap() {
         let manual = entry.unwrap().path();
@@ -249,7 +251,7 @@ fn runs(role: Role) -> bool {
 /// out with its run and reset bits.
 #[test]
 fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
-    let maps = repo().join("maps");
+    let maps = paths::maps();
     // (drive, profile, wire, command register, field ids writable that are no run or reset)
     let mut cases = Vec::new();
     for path in maps_in(&maps) {
@@ -354,7 +356,7 @@ fn a_field_write_carries_no_run_or_reset_bit_it_did_not_ask_for() {
             let shows_running = running && status.is_some_and(|f| f.row != *row);
             let before = wire.writes();
             let assignment = format!("{}={field}={}", r.id(), u8::from(on));
-            let result = write_in(&repo().join("maps"), drive, profile, wire, &[], &assignment);
+            let result = write_in(&paths::maps(), drive, profile, wire, &[], &assignment);
             wire.settle();
             let arrived = wire.writes_since(before);
             let words: Vec<u16> = arrived
@@ -412,7 +414,7 @@ fn field_mask_of(r: RegisterRef<'_>) -> u16 {
 /// the drive's sends nothing. On the old code the given value was used as it was.
 #[test]
 fn no_set_value_outside_its_range_or_against_the_drive_is_used() {
-    let maps = repo().join("maps");
+    let maps = paths::maps();
     let mut cases = Vec::new();
     for path in maps_in(&maps) {
         let drive = drivemap_map::Loader::new().load(&path).unwrap();
@@ -496,7 +498,7 @@ fn no_set_value_outside_its_range_or_against_the_drive_is_used() {
             let before = wire.writes();
             let set = format!("{}={given_text}", s.id());
             let result = write_in(
-                &repo().join("maps"),
+                &paths::maps(),
                 drive,
                 profile,
                 wire,
@@ -540,7 +542,7 @@ fn repro_a_draft_map_is_not_written_without_draft() {
     let drive = drivemap_map::Loader::new().load(k20).unwrap();
     let profile = drivemap_live::leak_profile(&drive);
     let (addr, slave) = serve(
-        drivemap_sim::slave::SimulatedSlave::new(1, profile),
+        drivemap_sim::SimulatedSlave::new(1, profile),
         Framing::RtuOverTcp,
     );
     let maps = scratch.0.to_str().unwrap();
@@ -619,7 +621,7 @@ fn write_bin(id: &str, framing: Framing, addr: &str, args: &[&str]) -> (i32, Str
 /// with it says it was assumed.
 #[test]
 fn repro_set_values_are_checked_and_disclosed() {
-    let mut slave = drivemap_sim::slave::SimulatedSlave::new(1, shipped("yaskawa-v7"));
+    let mut slave = drivemap_sim::SimulatedSlave::new(1, shipped("yaskawa-v7"));
     slave.set_holding(0x010B, 600); // n011 = 60.0 Hz
     let (addr, slave) = serve(slave, Framing::Tcp);
     let (code, _, err) = write_bin(
@@ -660,7 +662,7 @@ fn repro_set_values_are_checked_and_disclosed() {
     assert_eq!(slave.lock().unwrap().writes, vec![(0x0002, 400)]);
 
     let (addr, slave) = serve(
-        drivemap_sim::slave::SimulatedSlave::new(1, shipped("ptlk-tds-v8")),
+        drivemap_sim::SimulatedSlave::new(1, shipped("ptlk-tds-v8")),
         Framing::RtuOverTcp,
     );
     let (code, out, err) = write_bin(
@@ -702,7 +704,7 @@ fn repro_set_values_are_checked_and_disclosed() {
 /// drive (0305h shows operating forward) the run is kept, the reset still released.
 #[test]
 fn repro_a_field_write_does_not_resend_run_or_reset() {
-    let mut slave = drivemap_sim::slave::SimulatedSlave::new(1, shipped("automationdirect-acn"));
+    let mut slave = drivemap_sim::SimulatedSlave::new(1, shipped("automationdirect-acn"));
     slave.set_holding(0x0381, 0x0007); // PDU = 0382h - 1 on RTU
     slave.set_holding(0x0304, 0x0000); // stopped
     let (addr, slave) = serve(slave, Framing::RtuOverTcp);
@@ -748,7 +750,7 @@ fn repro_a_field_write_does_not_resend_run_or_reset() {
 /// is sent with a note naming the dependants.
 #[test]
 fn repro_a_setting_others_depend_on_is_not_changed_under_a_running_drive() {
-    let mut slave = drivemap_sim::slave::SimulatedSlave::new(1, shipped("yaskawa-v7"));
+    let mut slave = drivemap_sim::SimulatedSlave::new(1, shipped("yaskawa-v7"));
     slave.set_holding(0x010B, 600);
     slave.set_holding(0x0020, 0x0001); // status signal 1: during run
     let (addr, slave) = serve(slave, Framing::RtuOverTcp);
@@ -862,7 +864,7 @@ fn demo_refuses_a_draft_and_takes_set() {
 /// written, and nothing was. A `read --set` the drive contradicts is refused too.
 #[test]
 fn values_are_taken_as_typed() {
-    let mut slave = drivemap_sim::slave::SimulatedSlave::new(1, shipped("yaskawa-v7"));
+    let mut slave = drivemap_sim::SimulatedSlave::new(1, shipped("yaskawa-v7"));
     slave.set_holding(0x010B, 600);
     let (addr, slave) = serve(slave, Framing::RtuOverTcp);
     let cases: [(&str, &str); 5] = [
@@ -948,10 +950,7 @@ fn check_strict_on_a_draft_says_to_review_it() {
     let (code, _, err) = common::run(
         common::command()
             .args(["check", "--strict", k20.to_str().unwrap()])
-            .env(
-                "DRIVEMAP_MANUALS",
-                repo().join("tests/fixtures/import/manuals"),
-            ),
+            .env("DRIVEMAP_MANUALS", paths::fixture("import/manuals")),
     );
     assert_ne!(code, 0, "{err}");
     assert!(err.contains("a draft (made by drivemap import)"), "{err}");

@@ -2,7 +2,7 @@
 //! interpreter's `LiveSettings` absorb the same status word and then decode the same monitor word
 //! alike, and differently when the field changes.
 
-use std::path::Path;
+use drivemap_test_support::paths;
 
 use custom_drive::field_selector as fs;
 use drivemap_live::LiveSettings;
@@ -11,7 +11,7 @@ use drivemap_runtime::core::register::{DriveSettings, Register};
 
 fn drive() -> drivemap_map::Map {
     drivemap_map::Loader::new()
-        .load(Path::new("../../map/tests/fixtures/field-selector.yaml"))
+        .load(&paths::fixture("crafted/maps/field-selector.yaml"))
         .unwrap()
 }
 

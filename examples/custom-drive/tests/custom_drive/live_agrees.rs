@@ -1,7 +1,7 @@
 //! The run-time codec (`drivemap-live`, used by the CLI and the simulator) and the generated
 //! code agree on every register kind of the fixture map, under every setting it depends on.
 
-use std::path::Path;
+use drivemap_test_support::paths;
 
 use custom_drive::mini_drive as md;
 use drivemap_live::LiveSettings;
@@ -10,7 +10,7 @@ use drivemap_runtime::core::register::{Bits, Code, Enumeration, Register, Writab
 
 fn drive() -> drivemap_map::Map {
     drivemap_map::Loader::new()
-        .load(Path::new("../../map/tests/fixtures/mini-drive.yaml"))
+        .load(&paths::fixture("crafted/maps/mini-drive.yaml"))
         .unwrap()
 }
 

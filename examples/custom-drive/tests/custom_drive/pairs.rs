@@ -2,7 +2,7 @@
 //! generated types are `f64` for scaled pairs and `u32` for a plain one, and the generated code
 //! and the run-time interpreter decode and encode every raw value alike, in both word orders.
 
-use std::path::Path;
+use drivemap_test_support::paths;
 
 use custom_drive::acme_vf1 as acme;
 use drivemap_live::LiveSettings;
@@ -12,7 +12,7 @@ use drivemap_runtime::core::width::{Width, WordOrder};
 
 fn drive() -> drivemap_map::Map {
     drivemap_map::Loader::new()
-        .load(Path::new("../../tests/fixtures/acme-vf1/acme-vf1.yaml"))
+        .load(&paths::fixture("acme-vf1/acme-vf1.yaml"))
         .unwrap()
 }
 

@@ -4,6 +4,8 @@
 //! exactly (also one that is no decimal, 3599/60 Hz), one between two counts is refused before
 //! anything is written, and the generated plan holds the ratio.
 
+use drivemap_test_support::paths;
+
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -15,12 +17,14 @@ use drivemap_runtime::core::scale::Decimal;
 use drivemap_runtime::core::scale::ValueError;
 use drivemap_runtime::transport::rtu_over_tcp::RtuOverTcpTransport;
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
-use drivemap_runtime::{Client, Error};
-use drivemap_sim::{ManualClock, SimOptions, Simulator, TcpFraming, TcpServer};
+use drivemap_runtime::{client::Client, error::Error};
+use drivemap_sim::{
+    SimOptions, Simulator, clock::ManualClock, server::TcpFraming, server::TcpServer,
+};
 
 fn map() -> drivemap_map::Map {
     drivemap_map::Loader::new()
-        .load("../../tests/fixtures/borealis-bf6/borealis-bf6.yaml".as_ref())
+        .load(paths::fixture("borealis-bf6/borealis-bf6.yaml").as_ref())
         .unwrap()
 }
 
@@ -55,7 +59,7 @@ fn frequency_set_and_read_back_exactly_through_the_drive_trait() {
     assert!(sim.has_model(), "its map gives roles");
     let slave = sim.slave();
     let server = TcpServer::spawn(
-        drivemap_sim::shared(sim),
+        drivemap_sim::server::shared(sim),
         "127.0.0.1:0",
         TcpFraming::RtuOverTcp,
         None,

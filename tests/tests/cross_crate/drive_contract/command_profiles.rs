@@ -3,14 +3,16 @@
 //! the generated module carries it as data. The fault-injection property test
 //! (`the_contract_holds_under_faults`) plays every fixture of [`FIXTURES`] too.
 
+use drivemap_test_support::paths;
+
 use drivemap_map::Map;
-use drivemap_runtime::Error;
 use drivemap_runtime::core::command_profile::{CommandProfile, PathKind};
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::roles::Role;
+use drivemap_runtime::error::Error;
 use drivemap_runtime::vfd::{VariableFrequencyDrive, Vfd};
 
-use drivemap_runtime::Client;
+use drivemap_runtime::client::Client;
 use drivemap_runtime::pdu::Request;
 use drivemap_sim::framing::{self, Decoded};
 use drivemap_test_support::sim_link::SimLink;
@@ -278,11 +280,7 @@ fn a_stop_path_through_a_run_transition_is_refused() {
     assert!(!written(&mut d).contains(&0x000F));
     assert!(!run_command(d.client()));
     // And the map that says so is refused with where.
-    let text = std::fs::read_to_string(format!(
-        "{}/../{}",
-        env!("CARGO_MANIFEST_DIR"),
-        FIXTURES[0]
-    ))
+    let text = std::fs::read_to_string(paths::workspace().join(FIXTURES[0]))
     .unwrap()
     .replace(
         "  transitions:\n",
@@ -436,7 +434,9 @@ fn active_fault_and_last_fault_are_two_roles() {
     let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     assert!(matches!(
         d.last_fault(),
-        Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. }))
+        Err(Error::Refused(
+            drivemap_runtime::error::Refusal::NoRole { .. }
+        ))
     ));
 }
 
@@ -549,9 +549,7 @@ fn doc_export_and_diff_cover_the_profile() {
     );
     assert!(shipped.export().get("profile").is_none());
 
-    let text =
-        std::fs::read_to_string(format!("{}/../{}", env!("CARGO_MANIFEST_DIR"), FIXTURES[0]))
-            .unwrap();
+    let text = std::fs::read_to_string(paths::workspace().join(FIXTURES[0])).unwrap();
     let changed = |from: &str, to: &str| {
         assert!(text.contains(from), "{from}");
         drivemap_map::Loader::new()
@@ -702,7 +700,9 @@ fn a_field_write_never_asks_the_machine_to_run() {
     let mut d = Vfd::from_plan(&mut c, slave, settings.view(&drive), p.registers, p.roles);
     d.client().write_register(slave, 0x0063, 0x047E).unwrap();
     match d.command_fields_word(stw1, 0x000F, 0x000F) {
-        Err(Error::Refused(drivemap_runtime::Refusal::FieldNotWritable { role, .. })) => {
+        Err(Error::Refused(drivemap_runtime::error::Refusal::FieldNotWritable {
+            role, ..
+        })) => {
             assert_eq!(role, "run")
         }
         other => panic!("{other:?}"),
@@ -795,7 +795,9 @@ profile:
     assert!(!run_command(d.client()));
     assert!(matches!(
         d.quick_stop(),
-        Err(Error::Refused(drivemap_runtime::Refusal::NoRole { .. }))
+        Err(Error::Refused(
+            drivemap_runtime::error::Refusal::NoRole { .. }
+        ))
     ));
 }
 

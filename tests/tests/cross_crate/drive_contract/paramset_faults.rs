@@ -14,6 +14,8 @@
 //! the drive equal to the set. The checks are shown to fail when the writes are reversed or the
 //! read-back skipped.
 
+use drivemap_test_support::paths;
+
 use std::cell::RefCell;
 use std::io;
 use std::rc::Rc;
@@ -24,8 +26,8 @@ use drivemap_live::codec::{self, Value};
 use drivemap_live::paramset::{self, ParameterSet, RestoreReport};
 use drivemap_live::session::Session;
 use drivemap_map::Map;
-use drivemap_runtime::ClientOptions;
 use drivemap_runtime::bus_time::SerialConfig;
+use drivemap_runtime::client::ClientOptions;
 use drivemap_runtime::core::plan::Conversion;
 use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::roles::{Role, Target};
@@ -92,7 +94,7 @@ fn externals(drive: &Map) -> LiveSettings {
 }
 
 fn maps() -> Vec<Map> {
-    let dir = format!("{}/../maps", env!("CARGO_MANIFEST_DIR"));
+    let dir = paths::maps();
     let mut out: Vec<Map> = drivemap_map::find_maps(dir.as_ref())
         .expect("maps/")
         .iter()

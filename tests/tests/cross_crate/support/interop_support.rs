@@ -1,17 +1,20 @@
 //! Shared by the interop tests: the third-party peers (found or the test fails naming the
 //! install step), a socat pseudo-terminal pair, simulators served in-process with a request log.
+
 // Each test binary compiles this module and uses only the helpers it needs.
 #![allow(dead_code)]
 
+use drivemap_test_support::paths;
+
 use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
 use drivemap_sim::server::Logger;
-use drivemap_sim::{ManualClock, RequestRecord, SharedSim, SimOptions, Simulator};
+use drivemap_sim::{RequestRecord, SimOptions, Simulator, clock::ManualClock, server::SharedSim};
 
 /// How to install every peer; printed when one is missing.
 pub const INSTALL: &str = "run tests/interop/install.sh (as root it does: apt-get install -y mbpoll socat; \
@@ -19,10 +22,7 @@ pub const INSTALL: &str = "run tests/interop/install.sh (as root it does: apt-ge
 
 /// The workspace root.
 pub fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("tests/ has a parent")
-        .to_path_buf()
+    paths::workspace().to_path_buf()
 }
 
 /// A script under tests/interop/.
@@ -120,7 +120,7 @@ pub fn free_port() -> u16 {
 
 /// A map by drive id.
 pub fn drive(id: &str) -> drivemap_map::Map {
-    let path = root().join("maps").join(format!("{id}.yaml"));
+    let path = paths::maps().join(format!("{id}.yaml"));
     drivemap_map::Loader::new()
         .load(&path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -145,7 +145,7 @@ impl Sim {
         let sim = Simulator::new(map, options.clock(Arc::new(clock.clone())))
             .unwrap_or_else(|e| panic!("{id}: {e}"));
         Sim {
-            sim: drivemap_sim::shared(sim),
+            sim: drivemap_sim::server::shared(sim),
             clock,
             records: Arc::new(Mutex::new(Vec::new())),
         }
