@@ -5,7 +5,6 @@
 
 use drivemap_test_support::paths;
 
-use std::path::Path;
 use std::process::Command;
 
 /// Crate names in `cargo tree -p <package> -e <edges>` of the workspace, one per line.

@@ -20,7 +20,7 @@
 
 use drivemap_test_support::paths;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 use drivemap_runtime::core::profile::TransportKind;

@@ -112,7 +112,6 @@ fn a_new_yaml_file_becomes_a_module() {
 /// or the first error alone.
 #[test]
 fn a_broken_map_fails_the_build_with_every_error_as_check_prints_it() {
-    let root = workspace();
     // Four errors in one file: decimal addresses in a register, an alternative, a command, a gap.
     let broken = paths::fixture("crafted/errors/e41-decimal-address.yaml");
     let (_copy, copy) = workspace_with_map(&broken);
