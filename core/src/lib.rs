@@ -11,7 +11,7 @@
 //! [`plan::RegisterPlan::decode_number`] and its siblings.
 #![doc = include_str!("../README.md")]
 #![no_std]
-#![deny(missing_docs, unreachable_pub)]
+#![deny(missing_docs, unreachable_pub, unnameable_types)]
 
 #[cfg(test)]
 extern crate std;

@@ -48,12 +48,14 @@ pub use crate::examples::{Byte, Direction, Example, Says, hex_text, parse_bytes}
 pub use crate::indexed::{Entry as IndexedEntry, Indexed};
 pub use crate::ir::{Group, SerialDefaults};
 pub use crate::model::{
-    AddressAlternative, AddressFormat, CodeRef, Codes, Condition, Conflict, DefaultValue,
-    Dependency, DependentDefault, DisplayStep, Draft, DriveMeta, EdgeSpec, EnumValue,
-    ExternalQuantity, Field as BitField, Gap, Manual, Pair, Parity, Protocol, RatioScale, Reading,
-    Reference, RegisterFunctions, RelativeLimit, RelativeScale, Removed, RepeatNeedsChange,
-    RolePlace, Scale, ScaleCase, SelectedScale, TransportName, Unknown, UnknownItem, VariantAxis,
-    VariantOption, VariantOverride,
+    AddressAlternative, AddressFormat, Addressing, Broadcast, CodeRef, Codes, Command,
+    CommandWrite, Condition, Conflict, DefaultValue, Dependency, DependentDefault, DisplayStep,
+    Draft, DriveMeta, EdgeSpec, EdgeUnknown, Eeprom, EnumValue, ExceptionCode, Exceptions,
+    ExternalQuantity, Field as BitField, FunctionCodes, Gap, Interval, Limit, Manual, Pair, Parity,
+    Protocol, RatioScale, Reading, Reference, RegisterFunctions, RelativeLimit, RelativeScale,
+    Removed, RepeatNeedsChange, RolePlace, Scale, ScaleCase, SelectedScale, Serial,
+    SerialFormatCase, SerialFormats, SlaveAddress, Timing, TransportName, Unknown, UnknownItem,
+    VariantAxis, VariantOption, VariantOverride,
 };
 pub use crate::others::{Other as OtherCitation, Rule as CitationRule};
 pub use crate::stated::Unprinted;

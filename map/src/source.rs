@@ -37,14 +37,14 @@ pub enum NodeKind {
 
 /// One step of a path into a tree.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub enum Seg {
+pub(crate) enum Seg {
     Key(String),
     Index(usize),
 }
 
 /// A path from the root of a map to a node (`groups[2].registers[5].scale`).
 #[derive(Debug, Clone, Default, PartialEq, Eq, Hash)]
-pub struct Path(pub Vec<Seg>);
+pub struct Path(pub(crate) Vec<Seg>);
 
 impl Path {
     /// The root of a map.

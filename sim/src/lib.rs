@@ -43,7 +43,7 @@
 //! assert_eq!(sim.value("output_frequency").unwrap().as_f64(), Some(12.0));
 //! ```
 #![doc = include_str!("../README.md")]
-#![warn(unreachable_pub, missing_docs)]
+#![warn(unreachable_pub, missing_docs, unnameable_types)]
 
 pub mod clock;
 pub mod exceptions;
