@@ -398,7 +398,8 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 c["optimistic"] = json!(true);
                 "select"
             }
-            ValueShape::Bits { .. } => continue,
+            // Text is read-only: nothing to command.
+            ValueShape::Bits { .. } | ValueShape::Text { .. } => continue,
             ValueShape::Word { .. } | ValueShape::Number => {
                 if !plan.unit.is_empty() {
                     c["unit_of_measurement"] = json!(unit(plan.unit));
@@ -485,7 +486,10 @@ fn select_options(plan: &RegisterPlan) -> Vec<String> {
             .iter()
             .map(|v| crate::link::option_text(v.code, Some(v.id), Some(v.name)))
             .collect(),
-        ValueShape::Word { .. } | ValueShape::Number | ValueShape::Bits { .. } => Vec::new(),
+        ValueShape::Word { .. }
+        | ValueShape::Number
+        | ValueShape::Bits { .. }
+        | ValueShape::Text { .. } => Vec::new(),
     }
 }
 

@@ -1111,6 +1111,16 @@ pub trait Value: Sized {
         plan: &RegisterPlan,
         settings: &impl SettingsView,
     ) -> Result<Self, ValueError>;
+    /// The value of the words read from the drive (all [`crate::width::Width::count`] of
+    /// them): a number's joined in the map's order ([`crate::width::Width::join`]), a text's
+    /// decoded by [`crate::text`]. What the clients call.
+    fn decode_words(
+        words: &[u16],
+        plan: &RegisterPlan,
+        settings: &impl SettingsView,
+    ) -> Result<Self, ValueError> {
+        Self::decode(plan.info.width.join(words), plan, settings)
+    }
     /// The raw value for the value, checked against the plan.
     fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u32, ValueError>;
     /// [`Value::encode`] with a choice for a number between two steps of the register; codes,
@@ -1189,5 +1199,33 @@ impl<T: crate::register::Code> Value for T {
             Some(code).filter(|c| plan.code_allowed(*c)),
             i64::from(code),
         )
+    }
+}
+
+/// Text read from a string register (`string:` in the map): `N` = 2 × its registers. Decoded
+/// from all its words in the map's byte order, padding dropped; never a number, never written
+/// (the map refuses a writable string; [`Value::encode`] refuses too).
+impl<const N: usize> Value for crate::text::Text<N> {
+    fn decode(_: u32, plan: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
+        Err(ValueError::Text {
+            register: plan.info.id,
+        })
+    }
+    fn decode_words(
+        words: &[u16],
+        plan: &RegisterPlan,
+        _: &impl SettingsView,
+    ) -> Result<Self, ValueError> {
+        match plan.conversion {
+            Conversion::Text { order } => Ok(crate::text::Text::decode(words, order)),
+            _ => Err(ValueError::Text {
+                register: plan.info.id,
+            }),
+        }
+    }
+    fn encode(&self, plan: &RegisterPlan, _: &impl SettingsView) -> Result<u32, ValueError> {
+        Err(ValueError::Text {
+            register: plan.info.id,
+        })
     }
 }

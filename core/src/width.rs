@@ -37,6 +37,10 @@ pub enum WordOrder {
 }
 
 impl Width {
+    /// The most registers one value takes: one read request's (Modbus 03h/04h read at most
+    /// 125). A map's string is bounded by its `max_read`, below this.
+    pub const MAX_WORDS: usize = 125;
+
     /// The number of registers.
     pub const fn count(self) -> u16 {
         match self {

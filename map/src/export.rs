@@ -74,7 +74,7 @@ fn register(f: &RegisterFacts) -> Value {
         })
         .collect();
     let word_order = match d.width {
-        drivemap_core::width::Width::Word => None,
+        drivemap_core::width::Width::Word | drivemap_core::width::Width::Text(_) => None,
         drivemap_core::width::Width::Pair(order) => Some(order),
     };
     json!({

@@ -295,6 +295,8 @@ pub fn polled<'d>(map: &'d Map, regs: &[RegisterRef<'d>], kind: TransportKind) -
             ValueShape::Number => {
                 out.push(point(register_role(map, r, kind), Meaning::Number(None)));
             }
+            // The bridge publishes numbers, codes and bits; a string is not bridged (yet).
+            ValueShape::Text { .. } => {}
         }
     }
     out

@@ -282,7 +282,7 @@ fn scale_data(drive: &Drive, r: &Register) -> ScaleData {
     match r.kind() {
         ValueKind::Quantity(scale) => scale_of(drive, scale),
         ValueKind::Word | ValueKind::UnitQuantity => ScaleData::Factor(1.0),
-        ValueKind::Enum(_) | ValueKind::Bits(_) => ScaleData::None,
+        ValueKind::Enum(_) | ValueKind::Bits(_) | ValueKind::Text(_) => ScaleData::None,
     }
 }
 
