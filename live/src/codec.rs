@@ -108,7 +108,10 @@ impl fmt::Display for Value {
         match self {
             Value::Text(bytes) => {
                 f.write_str("\"")?;
-                drivemap_runtime::core::text::write_escaped(f, &bytes[..bytes.len().min(TEXT_SHOWN)])?;
+                drivemap_runtime::core::text::write_escaped(
+                    f,
+                    &bytes[..bytes.len().min(TEXT_SHOWN)],
+                )?;
                 f.write_str("\"")?;
                 if bytes.len() > TEXT_SHOWN {
                     f.write_str("…")?;

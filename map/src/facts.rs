@@ -52,8 +52,8 @@ pub use crate::model::{
     Dependency, DependentDefault, DisplayStep, Draft, DriveMeta, EdgeSpec, EnumValue,
     ExternalQuantity, Field as BitField, Gap, Manual, Pair, Parity, Protocol, RatioScale, Reading,
     Reference, RegisterFunctions, RelativeLimit, RelativeScale, Removed, RepeatNeedsChange,
-    RolePlace, Scale, ScaleCase, SelectedScale, StringText, TransportName, Unknown, UnknownItem, VariantAxis,
-    VariantOption, VariantOverride,
+    RolePlace, Scale, ScaleCase, SelectedScale, StringText, TransportName, Unknown, UnknownItem,
+    VariantAxis, VariantOption, VariantOverride,
 };
 pub use crate::others::{Other as OtherCitation, Rule as CitationRule};
 pub use crate::stated::Unprinted;

@@ -614,12 +614,12 @@ pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                         .access
                         .or(g.access.filter(|_| def.string.is_none()))
                         .unwrap_or(
-                        if model.draft.is_some() || table.is_bits() || def.string.is_some() {
-                            Access::Read
-                        } else {
-                            Access::ReadWrite
-                        },
-                    ),
+                            if model.draft.is_some() || table.is_bits() || def.string.is_some() {
+                                Access::Read
+                            } else {
+                                Access::ReadWrite
+                            },
+                        ),
                     table,
                     write_restriction: def
                         .write_restriction

@@ -1326,11 +1326,11 @@ impl<W: Wire> Session<'_, W> {
                     .await
             }
             // Validation refuses a writable string; the gate refuses a write of text.
-            drivemap_core::width::Width::Text(_) => Err(Error::Refused(
-                crate::error::Refusal::Text {
+            drivemap_core::width::Width::Text(_) => {
+                Err(Error::Refused(crate::error::Refusal::Text {
                     register: rule.register,
-                },
-            )),
+                }))
+            }
             drivemap_core::width::Width::Pair(_) => {
                 let words = rule.width.split(raw);
                 let request = Request::WriteMultiple {
@@ -1425,7 +1425,8 @@ impl<W: Wire> Session<'_, W> {
         // A pair's two words, or a string's (a map bounds it by `max_read`; a plan written by
         // hand beyond one request's 125 words is read up to those).
         let mut raw = [0u16; drivemap_core::width::Width::MAX_WORDS];
-        let raw = &mut raw[..usize::from(R::WIDTH.count()).min(drivemap_core::width::Width::MAX_WORDS)];
+        let raw =
+            &mut raw[..usize::from(R::WIDTH.count()).min(drivemap_core::width::Width::MAX_WORDS)];
         self.read_table(slave, R::TABLE, address, raw).await?;
         Ok(R::decode_words(raw, settings)?)
     }

@@ -19,9 +19,9 @@ use drivemap_core::register::{Access, Table, WriteRestriction};
 
 use super::{
     AddressAlternative, AddressFormat, BitField, Conflict, DefaultValue, DisplayStep, Draft,
-    DriveMeta, EnumValue, Example, Gap, Group, Indexed, Pair, ProfileSpec, StringText, Protocol,
-    RegisterFunctions, RelativeLimit, Removed, RepeatNeedsChange, RolePlace, Scale, TransportName,
-    Unknown, VariantAxis, VariantOverride,
+    DriveMeta, EnumValue, Example, Gap, Group, Indexed, Pair, ProfileSpec, Protocol,
+    RegisterFunctions, RelativeLimit, Removed, RepeatNeedsChange, RolePlace, Scale, StringText,
+    TransportName, Unknown, VariantAxis, VariantOverride,
 };
 use crate::ir::{Drive, Register};
 use crate::map::Map;

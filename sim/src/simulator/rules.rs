@@ -192,12 +192,7 @@ impl Simulator {
                         return Err(self.plan.refused_now);
                     }
                     let (raw, texts) = (&self.raw, &self.texts);
-                    let word = |a: u16| {
-                        layout
-                            .holding
-                            .get(&a)
-                            .map_or(0, |s| s.word(raw, texts))
-                    };
+                    let word = |a: u16| layout.holding.get(&a).map_or(0, |s| s.word(raw, texts));
                     // Index/value pairs are holding registers.
                     if table == Table::Holding {
                         match self.indexed.check(comm, v as u16, word) {
@@ -235,10 +230,7 @@ impl Simulator {
                 let (raw, texts) = (&self.raw, &self.texts);
                 if table == Table::Holding {
                     self.indexed.store(comm, v as u16, |a| {
-                        layout
-                            .holding
-                            .get(&a)
-                            .map_or(0, |s| s.word(raw, texts))
+                        layout.holding.get(&a).map_or(0, |s| s.word(raw, texts))
                     });
                 }
                 if plan.read_values.is_empty() {
