@@ -344,7 +344,8 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 }
                 "binary_sensor"
             }
-            Meaning::Field { .. } | Meaning::Bits(_) => "sensor",
+            // Text is not bridged (`points::polled` leaves strings out); a sensor if it were.
+            Meaning::Field { .. } | Meaning::Bits(_) | Meaning::Text(_) => "sensor",
             Meaning::Bit => {
                 c["payload_on"] = json!("1");
                 c["payload_off"] = json!("0");

@@ -226,14 +226,7 @@ impl<'d> Export<'d> {
                         plan.read_values
                     }),
                     ValueShape::Bits { fields, .. } => Meaning::Bits(fields),
-                    ValueShape::Text { .. } => {
-                        left_out.push((
-                            r,
-                            "it holds text (`string:`), which this export does not describe yet"
-                                .into(),
-                        ));
-                        continue;
-                    }
+                    ValueShape::Text { order } => Meaning::Text(order),
                     // A number always has a scale (`RegisterPlan::scale`).
                     ValueShape::Word { .. } | ValueShape::Number => Meaning::Word,
                 },
