@@ -305,26 +305,28 @@ fn home_assistant_reads_a_string_as_text_and_node_red_decodes_it() {
         serial.contains("data_type: string\n        count: 6\n        swap: byte\n"),
         "{serial}"
     );
-    // Home Assistant's own schema, where the interop tools are installed
-    // (tests/interop/install.sh; `home_assistant_export_passes_home_assistants_own_modbus_schema`
-    // requires them).
+    // Home Assistant's own schema (tests/interop/install.sh, as
+    // `home_assistant_export_passes_home_assistants_own_modbus_schema` requires).
     let python = repo().join("target/ha-venv/bin/python");
-    if python.is_file() {
-        let s = Scratch::new("strings-ha");
-        let file = s.0.join("lumen-lx2.yaml");
-        std::fs::write(&file, &ha).unwrap();
-        let out = std::process::Command::new(&python)
-            .arg(repo().join("tests/interop/ha_check_modbus.py"))
-            .arg(&file)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}{}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
+    assert!(
+        python.is_file(),
+        "{} is missing: run tests/interop/install.sh",
+        python.display()
+    );
+    let s = Scratch::new("strings-ha");
+    let file = s.0.join("lumen-lx2.yaml");
+    std::fs::write(&file, &ha).unwrap();
+    let out = std::process::Command::new(&python)
+        .arg(repo().join("tests/interop/ha_check_modbus.py"))
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
 
     let (code, flow, err) = drivemap_fixture(
         &fixture(),
