@@ -191,7 +191,10 @@ fn a_write_to_a_string_is_refused_before_the_wire() {
     let sim = simulate();
     let (code, _, err) = live(&sim.addr, "--tcp", &["write", "model_name=X"]);
     assert_ne!(code, 0);
-    assert!(err.contains("model_name"), "{err}");
+    assert!(
+        err.contains("model_name is read-only; nothing written"),
+        "{err}"
+    );
     let (_, out, _) = live(&sim.addr, "--tcp", &["read", "model_name"]);
     assert!(row(&out, "model_name").contains("\"LX2-0750-E\""), "{out}");
 }

@@ -95,3 +95,31 @@ fn a_set_reads_a_string_beside_other_registers_in_one_request() {
     let f: f64 = c.read::<FrequencyCommand>(1, &Settings::default()).unwrap();
     assert_eq!(f, 0.0);
 }
+
+#[test]
+fn a_write_into_a_string_is_refused_before_the_wire() {
+    let mut c = client();
+    for address in [0x2100, 0x2103, 0x2107] {
+        assert!(
+            c.write_register(1, address, 0x4141).is_err(),
+            "{address:04X}h"
+        );
+        assert!(
+            c.write_registers(1, address, &[0x4141]).is_err(),
+            "{address:04X}h"
+        );
+    }
+    let rule = lumen_lx2::REGISTERS
+        .iter()
+        .find(|r| r.info.id == "model_name")
+        .unwrap()
+        .write_rule();
+    assert!(c.write_rule(1, &rule, 0x2103, 0x4141).is_err());
+    assert!(
+        c.transport().log.is_empty(),
+        "nothing was sent: {:?}",
+        c.transport().log.len()
+    );
+    let model: Text<16> = c.read::<ModelName>(1, &Settings::default()).unwrap();
+    assert_eq!(model.as_str(), Some("LX2-0750-E"));
+}
