@@ -10,6 +10,7 @@ use drivemap_runtime::core::register::Register;
 use drivemap_runtime::core::text::Text;
 use drivemap_runtime::core::width::Width;
 use drivemap_runtime::pdu::Request;
+use drivemap_runtime::transport::Transport;
 use drivemap_runtime::{Client, ClientOptions};
 use drivemap_sim::framing::{self, Decoded};
 use drivemap_sim::{SimOptions, Simulator};
