@@ -238,7 +238,7 @@ impl Commander {
             slave,
             gate::WriteTarget::Rule(rule),
             address,
-            words[..usize::from(rule.width.count())].iter().copied(),
+            words.iter().take(usize::from(rule.width.count())).copied(),
         )
         .map_err(|source| CommandFailure::Refused {
             register: r.label(),

@@ -29,4 +29,5 @@ pub mod roles;
 pub mod rule;
 pub mod scale;
 pub mod stated;
+pub mod text;
 pub mod width;

@@ -6,7 +6,7 @@
 //! [`find_all`] or [`crate::lookup::find`]); its row of the map's plan ([`RegisterRef::plan`]) gives
 //! the address, width and conversion, the same the generated code prints.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
 use drivemap_map::Map;
 use drivemap_map::Quantity;
@@ -712,7 +712,7 @@ pub struct Polling {
     poller: Poller,
     /// Per register asked for: its index among the planned registers and its width, or why it
     /// is not read.
-    slots: Vec<Result<(usize, Width), ReadError>>,
+    slots: Vec<Result<(usize, Width, &'static str), ReadError>>,
 }
 
 /// A connected drive with its settings.
@@ -733,6 +733,10 @@ pub struct Session<'d> {
     pub silence: SilenceGuard,
     /// The serial line, for the planner's bus-time model.
     line: SerialConfig,
+    /// The words of each string register (`string:`, by id) as last read: a string is not a
+    /// number, so its raw value in [`Session::poll`] is its first word and [`Session::decode`]
+    /// decodes the words kept here.
+    texts: BTreeMap<&'static str, Vec<u16>>,
 }
 
 impl<'d> Session<'d> {
@@ -775,6 +779,7 @@ impl<'d> Session<'d> {
             settings,
             link: text,
             line: link.bus_line(drive),
+            texts: BTreeMap::new(),
         })
     }
 
@@ -802,6 +807,7 @@ impl<'d> Session<'d> {
             settings,
             link: format!("{} link", kind.name()),
             line,
+            texts: BTreeMap::new(),
         }
     }
 
@@ -997,11 +1003,14 @@ impl<'d> Session<'d> {
         }
         let address = self.address(r)?;
         let info = r.plan().info;
-        let mut w = [0u16; 2];
-        let words = &mut w[..usize::from(info.width.count())];
-        self.read_into(info.table, address, words)
+        let mut words = vec![0u16; usize::from(info.width.count())];
+        self.read_into(info.table, address, &mut words)
             .map_err(|e| ReadError::bus(&e))?;
-        Ok(info.width.join(words))
+        let raw = info.width.join(&words);
+        if let Width::Text(_) = info.width {
+            self.texts.insert(info.id, words);
+        }
+        Ok(raw)
     }
 
     fn read_into(
@@ -1047,7 +1056,7 @@ impl<'d> Session<'d> {
                 Ok(address) => {
                     let info = r.plan().info;
                     wanted.push((info.table, address));
-                    slots.push(Ok((wanted.len() - 1, info.width)));
+                    slots.push(Ok((wanted.len() - 1, info.width, info.id)));
                 }
             }
         }
@@ -1073,8 +1082,16 @@ impl<'d> Session<'d> {
             .iter()
             .map(|slot| match slot {
                 Err(why) => Err(why.clone()),
-                Ok((i, width)) => match plan.poller.raw(*i, *width) {
-                    Some(Ok(w)) => Ok(w),
+                Ok((i, width, id)) => match plan.poller.raw(*i, *width) {
+                    Some(Ok(w)) => {
+                        if let Width::Text(n) = *width {
+                            let mut words = vec![0u16; usize::from(n)];
+                            if let Some(Ok(())) = plan.poller.words(*i, &mut words) {
+                                self.texts.insert(id, words);
+                            }
+                        }
+                        Ok(w)
+                    }
                     Some(Err(e)) => Err(ReadError::bus(e)),
                     None => Err(ReadError::NotRead),
                 },
@@ -1103,13 +1120,26 @@ impl<'d> Session<'d> {
     }
 
     /// A raw value of `r` in hex as the manuals write it: four digits, eight for a pair.
+    /// A string's: its words as last read, four digits each (`4C58 322D …h`, the first eight).
     pub fn raw_text(&self, r: RegisterRef<'_>, raw: u32) -> String {
-        let digits = 4 * usize::from(r.plan().info.width.count());
+        let info = r.plan().info;
+        if let (Width::Text(_), Some(words)) = (info.width, self.texts.get(info.id)) {
+            let shown: Vec<String> = words.iter().take(8).map(|w| format!("{w:04X}")).collect();
+            let more = if words.len() > 8 { " …" } else { "" };
+            return format!("{}{more}h", shown.join(" "));
+        }
+        let digits = 4 * usize::from(info.width.count());
         format!("{raw:0digits$X}h")
     }
 
-    /// Decodes a raw value of `r`.
+    /// Decodes a raw value of `r`; a string's from its words as last read
+    /// ([`Session::read_raw`], [`Session::poll`]).
     pub fn decode(&self, r: RegisterRef<'_>, raw: u32) -> Result<Value, ConversionError> {
+        let plan = r.plan();
+        if let Width::Text(_) = plan.info.width {
+            let words = self.texts.get(plan.info.id).map_or(&[][..], Vec::as_slice);
+            return codec::decode_text(plan, words).map_err(|e| value_error(self.drive, &e));
+        }
         codec::decode(self.drive, r, raw, &self.settings).map_err(|e| value_error(self.drive, &e))
     }
 }

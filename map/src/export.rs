@@ -74,10 +74,10 @@ fn register(f: &RegisterFacts) -> Value {
         })
         .collect();
     let word_order = match d.width {
-        drivemap_core::width::Width::Word => None,
+        drivemap_core::width::Width::Word | drivemap_core::width::Width::Text(_) => None,
         drivemap_core::width::Width::Pair(order) => Some(order),
     };
-    json!({
+    let mut entry = json!({
         "id": f.id,
         "param": f.param,
         "name": f.name,
@@ -130,7 +130,20 @@ fn register(f: &RegisterFacts) -> Value {
         "notes": f.notes,
         "conflicts": d.conflicts,
         "unknown": d.unknown,
-    })
+    });
+    // Only a string has the key, so the export of a map without strings is as it was.
+    if let (Some(t), Some(obj)) = (&d.string, entry.as_object_mut()) {
+        obj.insert(
+            "string".into(),
+            json!({
+                "registers": t.registers,
+                "byte_order": t.byte_order.name(),
+                "example": t.example,
+                "source": t.source,
+            }),
+        );
+    }
+    entry
 }
 
 fn table_name(t: drivemap_core::register::Table) -> &'static str {

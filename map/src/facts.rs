@@ -54,8 +54,8 @@ pub use crate::model::{
     ExternalQuantity, Field as BitField, FunctionCodes, Gap, Interval, Limit, Manual, Pair, Parity,
     Protocol, RatioScale, Reading, Reference, RegisterFunctions, RelativeLimit, RelativeScale,
     Removed, RepeatNeedsChange, RolePlace, Scale, ScaleCase, SelectedScale, Serial,
-    SerialFormatCase, SerialFormats, SlaveAddress, Timing, TransportName, Unknown, UnknownItem,
-    VariantAxis, VariantOption, VariantOverride,
+    SerialFormatCase, SerialFormats, SlaveAddress, StringText, Timing, TransportName, Unknown,
+    UnknownItem, VariantAxis, VariantOption, VariantOverride,
 };
 pub use crate::others::{Other as OtherCitation, Rule as CitationRule};
 pub use crate::stated::Unprinted;
@@ -289,7 +289,9 @@ pub(crate) fn scale_row(drive: &Drive, r: &Register) -> Option<Fact> {
     let scale = match r.kind() {
         ValueKind::Quantity(scale) => data::scale_of(drive, scale),
         ValueKind::UnitQuantity => data::ScaleData::Factor(1.0),
-        ValueKind::Word | ValueKind::Enum(_) | ValueKind::Bits(_) => return None,
+        ValueKind::Word | ValueKind::Enum(_) | ValueKind::Bits(_) | ValueKind::Text(_) => {
+            return None;
+        }
     };
     let (key, value) = scale.row(unit)?;
     Some(Fact::new(key, value, None))
@@ -303,15 +305,20 @@ fn rows(drive: &Drive, r: &Register) -> Vec<Fact> {
     let plan = drive.register_plan(r);
     let unit = d.unit.as_deref().unwrap_or("");
     let range = describe::range(d.min, d.max, unit);
-    let address = match &d.pair {
-        None => describe::address(d.address),
-        Some(_) => describe::address_span(d.address, d.address.wrapping_add(1)),
+    let address = match r.width().count() {
+        1 => describe::address(d.address),
+        n => describe::address_span(d.address, d.address.wrapping_add(n - 1)),
     };
     let restricted = plan.restriction != drivemap_core::register::WriteRestriction::None;
     let table = [
         Some(Fact::new(K::Address, address, None)),
         (d.pair.as_ref())
-            .map(|p| Fact::new(K::Width, describe::width(r.width()), p.source.as_deref())),
+            .map(|p| Fact::new(K::Width, describe::width(r.width()), p.source.as_deref()))
+            .or_else(|| {
+                let t = d.string.as_ref()?;
+                let text = describe::text(t.registers, t.byte_order, t.example.as_deref());
+                Some(Fact::new(K::Width, text, t.source.as_deref()))
+            }),
         Some(Fact::new(
             K::Access,
             describe::access(plan.info.access),

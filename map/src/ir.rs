@@ -117,6 +117,8 @@ pub(crate) enum ValueKind<'a> {
     UnitQuantity,
     Enum(&'a [EnumValue]),
     Bits(&'a [Field]),
+    /// Text over [`Register::width`] registers.
+    Text(&'a crate::model::StringText),
 }
 
 impl Register {
@@ -131,9 +133,10 @@ impl Register {
 
     /// One register, or a 32-bit pair in the map's word order.
     pub(crate) fn width(&self) -> Width {
-        match &self.def.pair {
-            None => Width::Word,
-            Some(p) => Width::Pair(p.order),
+        match (&self.def.pair, &self.def.string) {
+            (_, Some(t)) => Width::Text(t.registers),
+            (None, None) => Width::Word,
+            (Some(p), None) => Width::Pair(p.order),
         }
     }
 
@@ -147,7 +150,9 @@ impl Register {
     }
 
     pub(crate) fn kind(&self) -> ValueKind<'_> {
-        if !self.def.fields.is_empty() {
+        if let Some(text) = &self.def.string {
+            ValueKind::Text(text)
+        } else if !self.def.fields.is_empty() {
             ValueKind::Bits(&self.def.fields)
         } else if !self.def.values.is_empty() {
             ValueKind::Enum(&self.def.values)
@@ -607,13 +612,18 @@ pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                     // discrete input without an access is read-only in every map: writing a
                     // coil runs, reverses or trips a drive, so it is written only where the
                     // map says so.
-                    access: def.access.or(g.access).unwrap_or(
-                        if model.draft.is_some() || table.is_bits() {
-                            Access::Read
-                        } else {
-                            Access::ReadWrite
-                        },
-                    ),
+                    // A string (text) is read-only unless the register itself says otherwise
+                    // (refused by `strings_valid`): its group's access is that of its numbers.
+                    access: def
+                        .access
+                        .or(g.access.filter(|_| def.string.is_none()))
+                        .unwrap_or(
+                            if model.draft.is_some() || table.is_bits() || def.string.is_some() {
+                                Access::Read
+                            } else {
+                                Access::ReadWrite
+                            },
+                        ),
                     table,
                     write_restriction: def
                         .write_restriction

@@ -652,6 +652,9 @@ impl Lowering<'_> {
                     cases: leak(cases),
                 }
             }
+            ValueKind::Text(text) => Conversion::Text {
+                order: text.byte_order,
+            },
             ValueKind::Enum(values) => Conversion::Enum {
                 values: labels(values),
                 unlisted: match (r.def.min, r.def.max) {
@@ -812,7 +815,9 @@ fn envelope(conversion: &Conversion, word: RawRange) -> RawRange {
         Conversion::Word { range, .. }
         | Conversion::Decimal { range, .. }
         | Conversion::Ratio { range, .. } => all(range, &mut ranges),
-        Conversion::Relative { .. } | Conversion::Bits { .. } => ranges.push(word),
+        Conversion::Relative { .. } | Conversion::Bits { .. } | Conversion::Text { .. } => {
+            ranges.push(word)
+        }
         Conversion::Enum { values, unlisted } => {
             ranges.extend(values.iter().map(|v| RawRange {
                 min: i64::from(v.code),

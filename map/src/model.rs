@@ -850,6 +850,10 @@ pub(crate) struct Register {
     /// read in one request, written whole with 10h. Absent: one 16-bit register.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pair: Option<Pair>,
+    /// Text in this register and the ones after it (`{registers: 8, byte_order: high_first,
+    /// source: ..}`): read whole in one request, two characters per register. Absent: a number.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub string: Option<StringText>,
     /// Lower limit in engineering units, for the base variant.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min: Option<f64>,
@@ -929,6 +933,29 @@ pub struct Pair {
 
 /// Which half of a 32-bit pair comes first (at the lower address).
 pub(crate) use drivemap_core::width::WordOrder;
+
+/// Text held in consecutive registers, two characters each (model names, serial numbers,
+/// firmware versions).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct StringText {
+    /// How many registers the text takes, from the register's address on.
+    pub registers: u8,
+    /// Which byte of each register holds the earlier character.
+    pub byte_order: ByteOrder,
+    /// An example of the text as the manual prints it (`"Q2-0400"`): what the simulator
+    /// serves; cited by `source` (or the register's row). Absent: the simulator serves its
+    /// documented placeholder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub example: Option<String>,
+    /// `file:line` where the manual states the byte order or the example, when not on the
+    /// register's row.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+/// Which byte of a register holds the earlier character: the vocabulary crate's.
+pub(crate) use drivemap_core::text::ByteOrder;
 
 /// How a raw word becomes an engineering value.
 #[derive(Debug, Clone, Deserialize, Serialize)]

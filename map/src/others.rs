@@ -360,6 +360,7 @@ fn rule_of(drive: &Drive, place: &CitationPlace<'_>) -> Option<(u8, &'static str
         | PlaceKind::Field(_)
         | PlaceKind::FieldValue { .. }
         | PlaceKind::Pair
+        | PlaceKind::Text
         | PlaceKind::RepeatNeedsChange
         | PlaceKind::ByVariant(_)
         | PlaceKind::AddressAlternative(_)

@@ -332,15 +332,19 @@ fn span(drive: &Map, first: u16, last: u16) -> String {
     format!("{} – {}", addr(drive, first), addr(drive, last))
 }
 
-/// The address cell: the address as the manual prints it, a pair's span and its cited width
-/// row, and each alternative address with the condition of its row.
+/// The address cell: the address as the manual prints it, a pair's or string's span and its
+/// cited width row, and each alternative address with the condition of its row.
 fn address_cell(drive: &Map, f: &RegisterFacts) -> String {
     let mut parts = vec![match f.get(FactKey::Width) {
         None => addr(drive, f.address),
         Some(width) => {
             let pair = format!(
                 "{} ({}",
-                span(drive, f.address, f.address.wrapping_add(1)),
+                span(
+                    drive,
+                    f.address,
+                    f.address.wrapping_add(f.data.width.count().max(1) - 1)
+                ),
                 width.value
             );
             match &width.citation {

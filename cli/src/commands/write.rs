@@ -411,7 +411,7 @@ pub(crate) fn execute(
                     slave,
                     gate::WriteTarget::Rule(rule),
                     address,
-                    words[..usize::from(rule.width.count())].iter().copied(),
+                    words.iter().take(usize::from(rule.width.count())).copied(),
                 )
                 .map(|()| rule)
             })

@@ -444,7 +444,7 @@ pub fn plan<'d>(
                     session.slave,
                     WriteTarget::Rule(rule),
                     address,
-                    words[..usize::from(rule.width.count())].iter().copied(),
+                    words.iter().take(usize::from(rule.width.count())).copied(),
                 )
                 .map_err(|e| e.to_string())
             });

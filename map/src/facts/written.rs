@@ -20,8 +20,8 @@ use drivemap_core::register::{Access, Table, WriteRestriction};
 use super::{
     AddressAlternative, AddressFormat, BitField, Conflict, DefaultValue, DisplayStep, Draft,
     DriveMeta, EnumValue, Example, Gap, Group, Indexed, Pair, ProfileSpec, Protocol,
-    RegisterFunctions, RelativeLimit, Removed, RepeatNeedsChange, RolePlace, Scale, TransportName,
-    Unknown, VariantAxis, VariantOverride,
+    RegisterFunctions, RelativeLimit, Removed, RepeatNeedsChange, RolePlace, Scale, StringText,
+    TransportName, Unknown, VariantAxis, VariantOverride,
 };
 use crate::ir::{Drive, Register};
 use crate::map::Map;
@@ -138,6 +138,9 @@ pub struct WrittenRegister<'m> {
     pub signed: bool,
     /// A 32-bit pair's word order and its citation (`pair:`).
     pub pair: Option<&'m Pair>,
+    /// Text over consecutive registers: their number, byte order, example and citation
+    /// (`string:`).
+    pub string: Option<&'m StringText>,
     /// The base variant's lower limit in engineering units.
     pub min: Option<f64>,
     /// The base variant's upper limit in engineering units.
@@ -211,6 +214,7 @@ impl<'m> WrittenRegister<'m> {
             scale,
             signed,
             pair,
+            string,
             min,
             max,
             max_relative,
@@ -244,6 +248,7 @@ impl<'m> WrittenRegister<'m> {
             scale: scale.as_ref(),
             signed: *signed,
             pair: pair.as_ref(),
+            string: string.as_ref(),
             min: *min,
             max: *max,
             default: default.as_ref(),

@@ -251,6 +251,8 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                     }
                 }
             }
+            // `min`, `max` and `default` on text are refused by `strings_valid`.
+            ValueKind::Text(_) => {}
             ValueKind::Bits(_) => {
                 c.no_limits("a bit-field register has no range");
                 if let Some(DefaultValue::Value(v)) = &d.default

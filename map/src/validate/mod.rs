@@ -36,6 +36,7 @@ mod repeat_needs_change_valid;
 mod roles_valid;
 mod serial_valid;
 mod status_codes;
+mod strings_valid;
 mod timing_valid;
 mod value_kind_single;
 
@@ -83,6 +84,7 @@ pub(crate) fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     value_kind_single::check(drive, &mut out);
     addresses_non_overlapping::check(drive, &mut out);
     pairs_valid::check(drive, &mut out);
+    strings_valid::check(drive, &mut out);
     bit_fields_valid::check(drive, &mut out);
     bits_valid::check(drive, &mut out);
     enum_codes_fit::check(drive, &mut out);

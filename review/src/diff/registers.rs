@@ -132,6 +132,7 @@ fn kind_of_value(k: ConversionKind) -> u8 {
         | ConversionKind::Selected => 1,
         ConversionKind::Enum => 2,
         ConversionKind::Bits => 3,
+        ConversionKind::Text => 4,
     }
 }
 
@@ -335,6 +336,7 @@ fn every_key_compared(n: &WrittenRegister<'_>) {
         scale: _,                // scale
         signed: _,               // signedness
         pair: _,                 // width, pair_citation
+        string: _,               // width (registers, byte order), pair_citation, documentation
         min: _,                  // range, variant_ranges
         max: _,                  // range, variant_ranges
         default: _,              // defaults
@@ -610,13 +612,22 @@ fn signedness(s: &Sides) -> Row {
     )
 }
 
+/// The registers a value takes and their order: a pair's word order, a string's length and
+/// byte order (`text layout`); either change is breaking (another value on the wire).
 fn width(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    let layout = |d: &WrittenRegister, r: RegisterRef<'_>| match d.string {
+        Some(t) => describe::text(t.registers, t.byte_order, None),
+        None => describe::width(r.width()),
+    };
+    let text = a.string.is_some() || b.string.is_some();
+    let (la, lb) = (layout(a, s.r), layout(b, s.n));
     (
-        s.r.width() != s.n.width(),
+        la != lb,
         ChangeKind::WidthChanged,
-        "width",
-        Some(describe::width(s.r.width())),
-        Some(describe::width(s.n.width())),
+        if text { "text layout" } else { "width" },
+        Some(la),
+        Some(lb),
     )
 }
 
@@ -1016,6 +1027,9 @@ fn documentation(c: &mut Collector, s: &Sides) {
     if a.indirect != b.indirect {
         parts.push("indirect citation");
     }
+    if a.string.map(|t| &t.example) != b.string.map(|t| &t.example) {
+        parts.push("text example");
+    }
     let variant_docs = |d: &WrittenRegister| {
         d.by_variant
             .iter()
@@ -1045,6 +1059,10 @@ fn pair_citation(c: &mut Collector, s: &Sides) {
     let pair = |d: &WrittenRegister| d.pair.and_then(|p| p.source.clone());
     if s.r.width() == s.n.width() && pair(a) != pair(b) {
         s.cite(c, "word order", pair(a), pair(b));
+    }
+    let text = |d: &WrittenRegister| d.string.and_then(|t| t.source.clone());
+    if s.r.width() == s.n.width() && text(a) != text(b) {
+        s.cite(c, "text layout", text(a), text(b));
     }
 }
 

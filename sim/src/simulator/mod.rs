@@ -50,6 +50,9 @@ pub struct Simulator {
     index: HashMap<String, usize>,
     /// Each register's raw value: its word, or a 32-bit pair's value.
     raw: Vec<u32>,
+    /// Each string register's words (`string:`; empty for other registers): the manual's
+    /// example, or the simulator's placeholder ([`defaults::PLACEHOLDER`]). Read-only.
+    texts: Vec<Vec<u16>>,
     /// The last value a master wrote to each register (none since power-on), to tell a changed
     /// value from a repeated one (`repeat_needs_change`), and for registers whose reads mean
     /// something else (`read_values`), whose `raw` value is the read state.
@@ -149,6 +152,7 @@ impl Simulator {
         let count = map.registers().len();
         let mut sim = Simulator {
             raw: vec![0; count],
+            texts: map.registers().map(defaults::text_words).collect(),
             last_written: vec![None; count],
             executed: vec![0; count],
             plan: ExceptionPlan::from_exceptions(profile.exceptions),
