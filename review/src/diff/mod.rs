@@ -61,6 +61,11 @@ impl Change {
 
     /// Why it is classified so.
     pub fn reason(&self) -> &'static str {
+        if self.kind == ChangeKind::TableChanged
+            && let Some(reason) = classify::table_reason(self.old.as_deref(), self.new.as_deref())
+        {
+            return reason;
+        }
         classify(self.kind).1
     }
 }

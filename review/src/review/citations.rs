@@ -138,7 +138,7 @@ impl Keys {
             if decimal { f.with_decimal(address) } else { f }
         };
         Keys {
-            forms: forms(r.address()),
+            forms: forms(r.address()).with_reference(r.modicon()),
             alternatives: r
                 .address_alternatives()
                 .iter()
