@@ -79,10 +79,7 @@ mod tests {
         assert_eq!(m("400024"), m("40024"));
         assert_eq!(m("30002").map(|r| r.table), Some(Table::Input));
         assert_eq!(m("00001").map(|r| (r.table, r.pdu)), Some((Table::Coil, 0)));
-        assert_eq!(
-            m("10001").map(|r| r.table),
-            Some(Table::DiscreteInput)
-        );
+        assert_eq!(m("10001").map(|r| r.table), Some(Table::DiscreteInput));
         assert_eq!(m("465536").map(|r| r.pdu), Some(65535));
         for bad in ["40000", "465537", "20001", "4001", "4000001", "4x001", ""] {
             assert_eq!(m(bad), None, "{bad}");

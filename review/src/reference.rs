@@ -336,7 +336,11 @@ fn span(drive: &Map, first: u16, last: u16) -> String {
 /// row, and each alternative address with the condition of its row.
 fn address_cell(drive: &Map, f: &RegisterFacts) -> String {
     let mut parts = vec![match f.get(FactKey::Width) {
-        None => addr(drive, f.address),
+        None => match f.get(FactKey::Reference) {
+            // The Modicon reference the map records, beside the address as the manual prints.
+            Some(reference) => format!("{}, Modicon {}", addr(drive, f.address), reference.value),
+            None => addr(drive, f.address),
+        },
         Some(width) => {
             let pair = format!(
                 "{} ({}",
@@ -819,7 +823,7 @@ fn gaps(out: &mut String, drive: &Map) {
     for g in drive.gaps() {
         let addresses = g
             .addresses
-            .map(|[a, b]| describe::address_span(a, b))
+            .map(|[a, b]| span(drive, a, b))
             .unwrap_or_default();
         let _ = writeln!(
             out,

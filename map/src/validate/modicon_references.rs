@@ -71,14 +71,13 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             .collect();
         let address_of_reference = i32::from(reference.pdu) - sides[0].1;
         err(format!(
-            "`reference: {text}` is PDU address {} ({} would be {}), but `{}` is at {}: {}; fix `address`, the reference or `protocol.addressing`",
+            "`reference: {text}` is PDU address {}, which the map's addressing makes {}, but `{}` is {} ({}); fix `address`, the reference or `protocol.addressing`",
             describe::address(reference.pdu),
-            reference.table.item(),
             u16::try_from(address_of_reference)
-                .map_or_else(|_| "below the map's first address".to_owned(), own),
+                .map_or_else(|_| "no address of the map".to_owned(), own),
             r.id(),
             own(r.def.address),
-            readings.join(", "),
+            readings.join("; "),
         ));
     }
 }
@@ -92,11 +91,7 @@ fn article(item: &str) -> &'static str {
 }
 
 /// The reference of `address` in `table` with `offset`, if it has one.
-fn expected(
-    table: drivemap_core::register::Table,
-    address: u16,
-    offset: i32,
-) -> Option<String> {
+fn expected(table: drivemap_core::register::Table, address: u16, offset: i32) -> Option<String> {
     let pdu = u16::try_from(i32::from(address) + offset).ok()?;
     Some(Modicon::text(table, pdu))
 }

@@ -65,7 +65,10 @@ impl AddressForms {
 
     /// Also finds the Modicon reference the map records for the register (`40024`, and
     /// `400024`), printed beside the drive's own number.
-    pub(crate) fn with_reference(mut self, reference: Option<drivemap_map::modicon::Modicon>) -> AddressForms {
+    pub(crate) fn with_reference(
+        mut self,
+        reference: Option<drivemap_map::modicon::Modicon>,
+    ) -> AddressForms {
         if let Some(m) = reference {
             let five = drivemap_map::modicon::Modicon::text(m.table, m.pdu);
             let digit = drivemap_map::modicon::digit(m.table);
