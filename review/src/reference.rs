@@ -823,7 +823,12 @@ fn gaps(out: &mut String, drive: &Map) {
     for g in drive.gaps() {
         let addresses = g
             .addresses
-            .map(|[a, b]| span(drive, a, b))
+            .map(|[a, b]| match drive.address_format() {
+                drivemap_map::facts::AddressFormat::Hex => describe::address_span(a, b),
+                // In the map's notation: `1008 (03F0h)`, a range as two.
+                drivemap_map::facts::AddressFormat::Decimal if a == b => addr(drive, a),
+                drivemap_map::facts::AddressFormat::Decimal => span(drive, a, b),
+            })
             .unwrap_or_default();
         let _ = writeln!(
             out,

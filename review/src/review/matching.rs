@@ -87,11 +87,6 @@ impl AddressForms {
         self
     }
 
-    /// The manual's preferred spelling, for messages.
-    pub(crate) fn display(address: u16) -> String {
-        format!("{address:04X}h")
-    }
-
     /// Whether `line` (see [`Line`]) prints the address.
     pub(crate) fn found_in(&self, line: &Line) -> bool {
         let texts = [line.upper.as_str(), line.ocr.as_str()];
