@@ -1,9 +1,10 @@
 //! A manual that prints a Modicon column beside the drive's own register number (the fictional
 //! Vesna V2 of `tests/fixtures/vesna-v2/`: `0 40001 WDOG TIME`, and an input table that prints
 //! the reference first, `30002 1 OUTPUT FREQUENCY`). The map records the printed reference
-//! (`reference: 40024`); `check` holds it to the address, the table and `protocol.addressing`
-//! and finds the rows by it; `coverage` counts rows keyed by it; the tool reads a register by it;
-//! `doc`, `export` and the generated code show it; `diff` reports it changed.
+//! (`reference: 40024`) and names registers by it (its roles); `check` holds it to the address,
+//! the table and `protocol.addressing` and finds the rows by it; `coverage` counts rows keyed by
+//! it; the tool reads a register by it; `doc`, `export` and the generated code show it; `diff`
+//! reports it changed.
 
 use crate::common;
 
@@ -57,7 +58,7 @@ fn the_fixture_checks_with_every_citation_verified() {
     let (code, out, err) = check(&fixture().join("vesna-v2.yaml"));
     assert_eq!(code, 0, "{out}{err}");
     assert!(
-        out.contains("citations: 21 of 21 verified, 0 indirect, 0 unverified"),
+        out.contains("citations: 23 of 23 verified, 0 indirect, 0 unverified"),
         "{out}"
     );
 }
@@ -241,6 +242,12 @@ fn doc_export_and_generated_code_show_the_reference() {
     let (code, doc, err) = drivemap_fixture(&fixture(), &["doc", "vesna-v2.yaml"]);
     assert_eq!(code, 0, "{err}");
     assert!(doc.contains("| 23 (0017h), Modicon 40024 |"), "{doc}");
+    // The roles name their registers by reference (`register: "30002"`, `"400003"`).
+    assert!(
+        doc.contains("| `frequency_reference` | `frequency_setpoint` |")
+            && doc.contains("| `output_frequency` | `output_frequency` |"),
+        "{doc}"
+    );
     // The gap in the map's notation, not in hex.
     assert!(doc.contains("| 4 (0004h) – 9 (0009h) |"), "{doc}");
     let (code, json, err) = drivemap_fixture(&fixture(), &["export", "vesna-v2.yaml"]);
