@@ -322,8 +322,10 @@ fn map_documentation(c: &mut Collector, old: &Map, new: &Map) {
         "gap",
         old.gaps(),
         new.gaps(),
+        // In the new map's notation (`4 – 9` in a decimal-numbered map), the same for both
+        // sides: the text is also the key the gaps are matched by.
         |x| match (x.addresses, &x.params) {
-            (Some([a, b]), _) => describe::address_span(a, b),
+            (Some([a, b]), _) => describe::address_span_as(new.address_format(), a, b),
             (None, Some(p)) => p.clone(),
             (None, None) => x.description.clone(),
         },
