@@ -366,6 +366,13 @@ pub fn find<'a>(drive: &'a Map, name: &str) -> Result<RegisterRef<'a>, NotFound>
     if let Some(r) = hit {
         return Ok(r);
     }
+    // The Modicon reference a register records (`reference: 40024`), as the manual prints it
+    // beside the register: that register, whatever the offsets would make of it.
+    if let Some(m) = drivemap_map::modicon::Modicon::parse(name)
+        && let Some(r) = normal().find(|r| r.modicon() == Some(m))
+    {
+        return Ok(r);
+    }
     let decimal = drive.address_format() == drivemap_map::facts::AddressFormat::Decimal;
     if let Some(a) = address_in(name, decimal)
         && let Some(r) = at_address(drive, a)

@@ -106,6 +106,16 @@ pub fn address_span(first: u16, last: u16) -> String {
     }
 }
 
+/// A span of addresses in the notation the map gives its addresses ([`address_as`]): `45 – 48`
+/// in a map that numbers registers in decimal, else [`address_span`]'s `002Dh – 0030h`.
+pub fn address_span_as(format: crate::model::AddressFormat, first: u16, last: u16) -> String {
+    match format {
+        crate::model::AddressFormat::Hex => address_span(first, last),
+        crate::model::AddressFormat::Decimal if first == last => first.to_string(),
+        crate::model::AddressFormat::Decimal => format!("{first} – {last}"),
+    }
+}
+
 /// The registers one request may carry: `at most 16 per read, 16 per write`.
 pub fn per_request(max_read: u16, max_write: u16) -> String {
     format!("at most {max_read} per read, {max_write} per write")

@@ -25,7 +25,7 @@ use serde_json::{Value, json};
 use crate::facts::data::Quantity;
 use drivemap_core::stated::ProtocolFact;
 
-use crate::facts::{self, Figure, ProtocolFacts, ProtocolKey, ProtocolRow, RegisterFacts};
+use crate::facts::{self, FactKey, Figure, ProtocolFacts, ProtocolKey, ProtocolRow, RegisterFacts};
 use crate::ir::Drive;
 use crate::model::DefaultValue;
 
@@ -77,7 +77,7 @@ fn register(f: &RegisterFacts) -> Value {
         drivemap_core::width::Width::Word | drivemap_core::width::Width::Text(_) => None,
         drivemap_core::width::Width::Pair(order) => Some(order),
     };
-    let mut entry = json!({
+    let mut out = json!({
         "id": f.id,
         "param": f.param,
         "name": f.name,
@@ -132,7 +132,7 @@ fn register(f: &RegisterFacts) -> Value {
         "unknown": d.unknown,
     });
     // Only a string has the key, so the export of a map without strings is as it was.
-    if let (Some(t), Some(obj)) = (&d.string, entry.as_object_mut()) {
+    if let (Some(t), Some(obj)) = (&d.string, out.as_object_mut()) {
         obj.insert(
             "string".into(),
             json!({
@@ -143,7 +143,12 @@ fn register(f: &RegisterFacts) -> Value {
             }),
         );
     }
-    entry
+    // The Modicon reference the manual prints beside the register, after its address, only
+    // where the map records one (`reference:`).
+    if let (Some(reference), Value::Object(o)) = (f.get(FactKey::Reference), &mut out) {
+        o.shift_insert(4, "reference".to_owned(), json!(reference.value));
+    }
+    out
 }
 
 fn table_name(t: drivemap_core::register::Table) -> &'static str {

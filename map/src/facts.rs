@@ -76,6 +76,9 @@ pub use written::{WrittenMap, WrittenRegister};
 pub enum FactKey {
     /// Where the register is: `0200h`, or a pair's span `0200h – 0201h`.
     Address,
+    /// The Modicon reference the manual prints beside the register (`reference:`), as printed:
+    /// `40024`. Only where the map records one.
+    Reference,
     /// A 32-bit pair's width and word order (`32-bit pair, high word first`), cited.
     Width,
     /// Access from the plan: `read/write`.
@@ -113,6 +116,7 @@ impl FactKey {
     pub const fn label(self) -> &'static str {
         match self {
             FactKey::Address => "address",
+            FactKey::Reference => "Modicon reference",
             FactKey::Width => "width",
             FactKey::Access => "access",
             FactKey::Broadcast => "broadcast",
@@ -305,13 +309,23 @@ fn rows(drive: &Drive, r: &Register) -> Vec<Fact> {
     let plan = drive.register_plan(r);
     let unit = d.unit.as_deref().unwrap_or("");
     let range = describe::range(d.min, d.max, unit);
-    let address = match r.width().count() {
-        1 => describe::address(d.address),
-        n => describe::address_span(d.address, d.address.wrapping_add(n - 1)),
+    // In the notation the map gives its addresses: `0200h`, or `45 (002Dh)` in a map that
+    // numbers its registers in decimal; a pair's or a string's span from its first to its last
+    // word.
+    let address = match (r.width().count(), drive.address_format) {
+        (1, _) => manual_address(drive, d.address),
+        (n, AddressFormat::Hex) => describe::address_span(d.address, d.address.wrapping_add(n - 1)),
+        (n, AddressFormat::Decimal) => format!(
+            "{} – {} ({})",
+            d.address,
+            d.address.wrapping_add(n - 1),
+            describe::address_span(d.address, d.address.wrapping_add(n - 1))
+        ),
     };
     let restricted = plan.restriction != drivemap_core::register::WriteRestriction::None;
     let table = [
         Some(Fact::new(K::Address, address, None)),
+        (d.reference.as_deref()).map(|t| Fact::new(K::Reference, t, None)),
         (d.pair.as_ref())
             .map(|p| Fact::new(K::Width, describe::width(r.width()), p.source.as_deref()))
             .or_else(|| {
@@ -355,7 +369,7 @@ fn rows(drive: &Drive, r: &Register) -> Vec<Fact> {
         when: Some(describe::condition(&alt.when)),
         ..Fact::new(
             K::AlternativeAddress,
-            describe::address(alt.address),
+            manual_address(drive, alt.address),
             Some(&alt.source),
         )
     });

@@ -315,7 +315,8 @@ impl Drive {
         Diagnostic::new(self.locate(path), register, message)
     }
 
-    /// A register by id, or else by parameter number as printed.
+    /// A register by id, or else by parameter number as printed, or else by the Modicon
+    /// reference it records (`reference: 40024`, named `40024` or `400024`).
     pub(crate) fn find(&self, name: &str) -> Option<&Register> {
         self.registers
             .iter()
@@ -324,6 +325,16 @@ impl Drive {
                 self.registers
                     .iter()
                     .find(|r| r.def.param.as_deref() == Some(name))
+            })
+            .or_else(|| {
+                let m = crate::modicon::Modicon::parse(name)?;
+                self.registers.iter().find(|r| {
+                    r.def
+                        .reference
+                        .as_deref()
+                        .and_then(crate::modicon::Modicon::parse)
+                        == Some(m)
+                })
             })
     }
 

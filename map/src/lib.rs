@@ -55,6 +55,7 @@ pub mod describe;
 pub mod export;
 pub mod facts;
 pub mod migrate;
+pub mod modicon;
 
 pub use diagnostic::{Diagnostic, Diagnostics, Loc};
 pub use loader::{

@@ -407,6 +407,18 @@ impl<'m> RegisterRef<'m> {
         self.reg.def.address
     }
 
+    /// The Modicon reference the manual prints beside the register (`reference:`), as printed
+    /// (`40024`, a coil's `00001`).
+    pub fn reference(&self) -> Option<&'m str> {
+        self.reg.def.reference.as_deref()
+    }
+
+    /// The Modicon reference the map records for the register, read
+    /// ([`crate::modicon::Modicon::parse`]); `None` when it records none (or `check` refuses it).
+    pub fn modicon(&self) -> Option<crate::modicon::Modicon> {
+        self.reference().and_then(crate::modicon::Modicon::parse)
+    }
+
     /// The unit as the manual prints it.
     pub fn unit(&self) -> Option<&'m str> {
         self.reg.def.unit.as_deref()

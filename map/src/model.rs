@@ -834,6 +834,11 @@ pub(crate) struct Register {
     pub name: String,
     /// Communication address as the manual prints it.
     pub address: u16,
+    /// The Modicon reference the manual prints beside the register's own number (`40001`, a
+    /// coil's `00001`), its digits as printed ([`crate::modicon`]): held to `address`, the
+    /// register's table and `protocol.addressing`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub access: Option<Access>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

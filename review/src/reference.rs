@@ -336,7 +336,11 @@ fn span(drive: &Map, first: u16, last: u16) -> String {
 /// cited width row, and each alternative address with the condition of its row.
 fn address_cell(drive: &Map, f: &RegisterFacts) -> String {
     let mut parts = vec![match f.get(FactKey::Width) {
-        None => addr(drive, f.address),
+        None => match f.get(FactKey::Reference) {
+            // The Modicon reference the map records, beside the address as the manual prints.
+            Some(reference) => format!("{}, Modicon {}", addr(drive, f.address), reference.value),
+            None => addr(drive, f.address),
+        },
         Some(width) => {
             let pair = format!(
                 "{} ({}",
@@ -823,7 +827,12 @@ fn gaps(out: &mut String, drive: &Map) {
     for g in drive.gaps() {
         let addresses = g
             .addresses
-            .map(|[a, b]| describe::address_span(a, b))
+            .map(|[a, b]| match drive.address_format() {
+                drivemap_map::facts::AddressFormat::Hex => describe::address_span(a, b),
+                // In the map's notation: `1008 (03F0h)`, a range as two.
+                drivemap_map::facts::AddressFormat::Decimal if a == b => addr(drive, a),
+                drivemap_map::facts::AddressFormat::Decimal => span(drive, a, b),
+            })
             .unwrap_or_default();
         let _ = writeln!(
             out,

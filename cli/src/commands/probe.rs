@@ -418,7 +418,7 @@ fn not_checkable(drive: &Map, readable: &[RegisterRef<'_>], session: &Session<'_
     let mut out = Vec::new();
     for g in drive.gaps() {
         let at = match (&g.addresses, &g.params) {
-            (Some([a, b]), _) => describe::address_span(*a, *b),
+            (Some([a, b]), _) => describe::address_span_as(drive.address_format(), *a, *b),
             (None, Some(p)) => p.clone(),
             (None, None) => String::new(),
         };

@@ -26,6 +26,7 @@ mod line;
 mod line_speed;
 mod live;
 mod machine_output;
+mod modicon_column;
 mod not_printed;
 mod probe_sim;
 mod ratio_scale;

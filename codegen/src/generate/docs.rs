@@ -111,6 +111,10 @@ pub(super) fn register(r: RegisterRef<'_>) -> String {
                 .unwrap_or_default()
         ),
     }];
+    if let Some(reference) = f.get(FactKey::Reference) {
+        // Only where the map records the reference the manual prints.
+        summary.push(format!("Modicon reference `{}`", reference.value));
+    }
     if f.data.table.is_bits() {
         // A coil or discrete input: its table and its states (`bool`: on is 1).
         summary.push(format!("{} (1 on, 0 off)", f.data.table.item()));
@@ -251,7 +255,8 @@ fn capitalized(s: &str) -> String {
 
 /// What rustdoc search finds a register by besides its type's name (`#[doc(alias)]`): its id,
 /// its parameter number as printed (`Cn-02`, `n011`) and its address in the manual's notation
-/// (`2101H` and `0x2101`, or the register number of a manual numbering them in decimal).
+/// (`2101H` and `0x2101`, or the register number of a manual numbering them in decimal), and
+/// the Modicon reference the map records (`reference: 40024`).
 pub(super) fn aliases(r: RegisterRef<'_>, type_name: &str) -> Vec<String> {
     let mut out = vec![r.id().to_owned()];
     out.extend(r.param().map(str::to_owned));
@@ -266,6 +271,8 @@ pub(super) fn aliases(r: RegisterRef<'_>, type_name: &str) -> Vec<String> {
             }
         }
     }
+    // The Modicon reference the manual prints beside it (`40024`), where the map records one.
+    out.extend(r.reference().map(str::to_owned));
     // rustdoc refuses an alias that is empty, the item's own name, has quotes, tabs or line
     // breaks, or starts or ends with a space.
     let mut seen = std::collections::HashSet::new();

@@ -126,6 +126,8 @@ pub struct WrittenRegister<'m> {
     pub name: &'m str,
     /// The communication address as the manual prints it.
     pub address: u16,
+    /// The Modicon reference the manual prints beside it (`reference:`), as printed.
+    pub reference: Option<&'m str>,
     /// Its access: its own, else its group's, else read-only.
     pub access: Access,
     /// Its Modbus table: its own, else its group's, else holding registers.
@@ -208,6 +210,7 @@ impl<'m> WrittenRegister<'m> {
             param,
             name,
             address,
+            reference,
             access: _,       // in `access`, with its group's
             modbus_table: _, // in `table`, with its group's
             unit,
@@ -242,6 +245,7 @@ impl<'m> WrittenRegister<'m> {
             param: param.as_deref(),
             name,
             address: *address,
+            reference: reference.as_deref(),
             access: *access,
             table: *table,
             unit: unit.as_deref(),

@@ -23,6 +23,7 @@ mod identifiers_valid;
 mod indexed_valid;
 mod limits_consistent;
 mod manuals_declared;
+mod modicon_references;
 mod number_fields;
 mod numbers_finite;
 mod pairs_valid;
@@ -85,6 +86,7 @@ pub(crate) fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     addresses_non_overlapping::check(drive, &mut out);
     pairs_valid::check(drive, &mut out);
     strings_valid::check(drive, &mut out);
+    modicon_references::check(drive, &mut out);
     bit_fields_valid::check(drive, &mut out);
     bits_valid::check(drive, &mut out);
     enum_codes_fit::check(drive, &mut out);

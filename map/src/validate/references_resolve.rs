@@ -427,7 +427,7 @@ fn command_writes(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 out.push(drive.error(
                     &proto.key("commands").index(ci).key("writes").index(wi).key("address"),
                     None,
-                    format!("command `{}` writes {:04X}h, which no writable register of the map describes", c.id, w.address),
+                    format!("command `{}` writes {}, which no writable register of the map describes", c.id, crate::facts::manual_address(drive, w.address)),
                 ));
             }
         }

@@ -273,6 +273,7 @@ const ASPECTS: &[Aspect] = {
         Row(alternatives),
         Row(name),
         Row(param),
+        Row(reference),
         Row(table),
         Row(group),
         Row(broadcast),
@@ -330,6 +331,7 @@ fn every_key_compared(n: &WrittenRegister<'_>) {
         param: _,                // param
         name: _,                 // name
         address: _,              // moved
+        reference: _,            // reference
         access: _,               // access, on the plan
         table: _,                // table, on the plan
         unit: _,                 // unit
@@ -430,6 +432,19 @@ fn param(s: &Sides) -> Row {
         "",
         s.fa.param.clone(),
         s.fb.param.clone(),
+    )
+}
+
+/// The Modicon reference the manual prints beside the register (`reference:`): what `check`
+/// holds to the address, rustdoc's alias and the look-up by reference.
+fn reference(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    (
+        a.reference != b.reference,
+        ChangeKind::DocumentationChanged,
+        "Modicon reference",
+        Some(a.reference.unwrap_or("none").to_owned()),
+        Some(b.reference.unwrap_or("none").to_owned()),
     )
 }
 

@@ -138,7 +138,7 @@ impl Keys {
             if decimal { f.with_decimal(address) } else { f }
         };
         Keys {
-            forms: forms(r.address()),
+            forms: forms(r.address()).with_reference(r.modicon()),
             alternatives: r
                 .address_alternatives()
                 .iter()
@@ -232,7 +232,13 @@ pub fn verify_citations(map: &Map, manuals: &Manuals) -> Vec<CitationCheck> {
                 if let Some(p) = r.param() {
                     expected.push(p.to_owned());
                 }
-                expected.push(AddressForms::display(r.address()));
+                // In the map's notation (`45` in a decimal-numbered map), and the Modicon
+                // reference it records.
+                expected.push(drivemap_map::describe::address_as(
+                    map.address_format(),
+                    r.address(),
+                ));
+                expected.extend(r.reference().map(str::to_owned));
                 expected.push(format!("\"{}\"", r.name()));
                 let verdict = match r.indirect() {
                     Some(reason) => Verdict::Indirect(reason.to_owned()),
