@@ -386,7 +386,13 @@ pub(crate) fn execute(
         let raw = match field_word(drive, &mut session, *r, value)? {
             Some(raw) => raw,
             None => codec::parse_value_with(drive, *r, value, &session.settings, rounding)
-                .map_err(|e| format!("{}; nothing written", input_error(drive, &e)))?,
+                .map_err(|e| {
+                    // A range a parameter's code selects: which code, and that it was read.
+                    let case = drivemap_live::session::selected_range(drive, *r, &session.settings)
+                        .map(|c| format!(" ({c})"))
+                        .unwrap_or_default();
+                    format!("{}{case}; nothing written", input_error(drive, &e))
+                })?,
         };
         // Said in the report: the value sent is not the one given.
         let rounded = rounding == Rounding::Nearest
@@ -433,6 +439,11 @@ pub(crate) fn execute(
         // first (`Client::write_changed`, through the same gate), so writing the same value
         // twice executes it twice.
         let between = r.plan().repeat_needs_change.map(|x| x.between);
+        // The parameters that select its scale or range, read again now: the value was
+        // converted and checked for the codes read before, and is not sent under another.
+        session
+            .confirm_selectors(r)
+            .map_err(|e| Error::Refused(format!("{e}; nothing written")))?;
         let result = match between {
             Some(between) => {
                 session

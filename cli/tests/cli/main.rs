@@ -31,5 +31,6 @@ mod probe_sim;
 mod ratio_scale;
 mod review;
 mod schema;
+mod selected_range;
 mod values;
 mod write_gate;

@@ -132,7 +132,8 @@ pub struct WrittenRegister<'m> {
     pub table: Table,
     /// The unit as the manual prints it.
     pub unit: Option<&'m str>,
-    /// The scale as written (`scale:`).
+    /// The scale as written (`scale:`); a range chosen by a setting (`limits: {selected_by}`)
+    /// is the selected scale it is expanded into, each case the register's own factor.
     pub scale: Option<&'m Scale>,
     /// A signed word or pair.
     pub signed: bool,
@@ -198,7 +199,8 @@ impl<'m> WrittenRegister<'m> {
             path: _, // where it is written (`RegisterRef::location`), not what it says
             repeat_needs_change,
             function_codes,
-            index: _, // its place in the map's list, not a property
+            limits_form: _, // where its cases are written, not what they say
+            index: _,       // its place in the map's list, not a property
         } = r;
         let model::Register {
             id,
@@ -214,6 +216,7 @@ impl<'m> WrittenRegister<'m> {
             min,
             max,
             max_relative,
+            limits: _, // expanded into `scale` (`ir::selected_limits`)
             default,
             by_variant,
             address_alternatives,

@@ -9,6 +9,7 @@ mod indexed;
 mod not_printed;
 mod register_index;
 mod roles;
+mod selected_limits;
 mod serial_defaults;
 mod ui;
 mod untrusted;
