@@ -369,7 +369,17 @@ pub fn find_all<'a>(
     let mut errors = Vec::new();
     for n in names {
         match lookup::find(drive, n.as_ref()) {
-            Ok(r) => found.push(r),
+            // A BICO register's write parameter names no value to read.
+            Ok(r) => match lookup::wrong_side(r, n.as_ref(), false) {
+                None => found.push(r),
+                Some(why) => errors.push(lookup::NotFound {
+                    name: n.as_ref().to_owned(),
+                    drive: drive.id().to_owned(),
+                    suggestions: Vec::new(),
+                    gap: None,
+                    reference: Some(why.into_boxed_str()),
+                }),
+            },
             Err(e) => errors.push(e),
         }
     }

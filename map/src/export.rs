@@ -77,7 +77,7 @@ fn register(f: &RegisterFacts) -> Value {
         drivemap_core::width::Width::Word => None,
         drivemap_core::width::Width::Pair(order) => Some(order),
     };
-    json!({
+    let mut out = json!({
         "id": f.id,
         "param": f.param,
         "name": f.name,
@@ -130,7 +130,21 @@ fn register(f: &RegisterFacts) -> Value {
         "notes": f.notes,
         "conflicts": d.conflicts,
         "unknown": d.unknown,
-    })
+    });
+    // Only on a register read from another parameter than the one written (BICO), after
+    // `param`: every other register's export is as before.
+    if let (Some(p), Some(o)) = (&f.read_param, out.as_object_mut()) {
+        let mut with = serde_json::Map::with_capacity(o.len() + 1);
+        for (k, v) in std::mem::take(o) {
+            let after_param = k == "param";
+            with.insert(k, v);
+            if after_param {
+                with.insert("read_param".to_owned(), json!(p));
+            }
+        }
+        *o = with;
+    }
+    out
 }
 
 fn table_name(t: drivemap_core::register::Table) -> &'static str {

@@ -325,7 +325,8 @@ impl Drive {
         Diagnostic::new(self.locate(path), register, message)
     }
 
-    /// A register by id, or else by parameter number as printed.
+    /// A register by id, or else by parameter number as printed (the one a write sets, then
+    /// the one a read returns where they differ: `read_param`).
     pub(crate) fn find(&self, name: &str) -> Option<&Register> {
         self.registers
             .iter()
@@ -334,6 +335,11 @@ impl Drive {
                 self.registers
                     .iter()
                     .find(|r| r.def.param.as_deref() == Some(name))
+            })
+            .or_else(|| {
+                self.registers
+                    .iter()
+                    .find(|r| r.def.read_param.as_deref() == Some(name))
             })
     }
 

@@ -782,9 +782,14 @@ pub(crate) use drivemap_core::register::WriteRestriction;
 pub(crate) struct Register {
     /// snake_case identifier; becomes the generated type name in PascalCase.
     pub id: String,
-    /// Parameter number exactly as printed (`Bn-01`, `n019`, `CM.03`).
+    /// Parameter number exactly as printed (`Bn-01`, `n019`, `CM.03`); with `read_param`, the
+    /// parameter a write sets.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub param: Option<String>,
+    /// The parameter a read returns when it is not `param` (Siemens BICO: read r0055 bit 8,
+    /// write P2200), exactly as printed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub read_param: Option<String>,
     /// Name as printed.
     pub name: String,
     /// Communication address as the manual prints it.

@@ -151,6 +151,12 @@ fn field_word(
             );
         }
         word
+    } else if let Some(read) = r.read_param() {
+        eprintln!(
+            "warning: a read of {} returns {read}, not the parameter written, so the fields not named are written as 0",
+            r.label()
+        );
+        input.value
     } else if session.slave == 0 || session.unreadable(r).is_some() {
         eprintln!(
             "warning: {} cannot be read here, so the fields not named are written as 0",
@@ -243,7 +249,11 @@ pub(crate) fn execute(
                 codec::shorten(a),
                 r.label()
             )),
-            Ok(r) => pairs.push((r, value.trim().to_owned())),
+            // A BICO register's read parameter names no value to write.
+            Ok(r) => match drivemap_live::lookup::wrong_side(r, name.trim(), true) {
+                None => pairs.push((r, value.trim().to_owned())),
+                Some(why) => errors.push(format!("{why}; nothing written")),
+            },
             Err(e) => match drivemap_live::indexed::find_entry(drive, name.trim()) {
                 Some(entry) => entries.push((entry, value.trim().to_owned())),
                 None => errors.push(e.to_string()),

@@ -8,6 +8,7 @@ mod support;
 use support::{bridge_support, common, new_map};
 
 mod arguments;
+mod bico;
 mod bridge;
 mod build_errors;
 mod decimal_manual;

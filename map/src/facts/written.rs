@@ -120,8 +120,10 @@ impl<'m> WrittenMap<'m> {
 pub struct WrittenRegister<'m> {
     /// The register id (snake_case).
     pub id: &'m str,
-    /// The parameter number exactly as printed.
+    /// The parameter number exactly as printed (with `read_param`, the one a write sets).
     pub param: Option<&'m str>,
+    /// The parameter a read returns, when it is not `param` (`read_param:`).
+    pub read_param: Option<&'m str>,
     /// The name as printed.
     pub name: &'m str,
     /// The communication address as the manual prints it.
@@ -205,6 +207,7 @@ impl<'m> WrittenRegister<'m> {
         let model::Register {
             id,
             param,
+            read_param,
             name,
             address,
             access: _,       // in `access`, with its group's
@@ -239,6 +242,7 @@ impl<'m> WrittenRegister<'m> {
         WrittenRegister {
             id,
             param: param.as_deref(),
+            read_param: read_param.as_deref(),
             name,
             address: *address,
             access: *access,

@@ -7,6 +7,7 @@ mod facts;
 mod facts_data;
 mod indexed;
 mod not_printed;
+mod read_param;
 mod register_index;
 mod roles;
 mod selected_limits;

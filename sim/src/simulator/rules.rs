@@ -241,7 +241,10 @@ impl Simulator {
                             .map_or(0, |s| s.width.split(raw[s.index])[usize::from(s.word)])
                     });
                 }
-                if plan.read_values.is_empty() {
+                // A register whose reads mean something else (`read_values`) or return another
+                // parameter than the one written (`read_param`, BICO) keeps its read state: the
+                // write is recorded (`last_written`), what reads give is set by hand.
+                if plan.read_values.is_empty() && plan.read_param.is_none() {
                     let before = self.raw[i];
                     self.raw[i] = v;
                     if executes {
