@@ -302,7 +302,11 @@ impl Drive {
         let plan = self.plan();
         let index = r.index();
         match self.registers.get(index) {
-            Some(own) if own.def.id == r.def.id => &plan.registers[plan.order[index]],
+            // The same row (a `RegisterRef` of this map) without comparing ids; an equal row of
+            // a clone of this map by its id.
+            Some(own) if std::ptr::eq(own, r) || own.def.id == r.def.id => {
+                &plan.registers[plan.order[index]]
+            }
             _ => panic!(
                 "register {} (#{index}) is not a register of {}: look another map's register up by id (Map::register_by_id)",
                 r.def.id, self.meta.id

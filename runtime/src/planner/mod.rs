@@ -335,18 +335,25 @@ pub(super) fn plan_table(
                 .ok_or(PlanError::NotReadable { table, address })?,
         );
     }
-    // cost[q] for q in 1..=max_read, asked once each.
-    let costs: Vec<u64> = (0..=max_read)
+    // The longest request any wanted address allows: its readable run, at most `max_read`. No
+    // request is longer, so no cost beyond it is asked (a map without coils plans its empty
+    // coil table with no cost at all, not 2000 of them).
+    let room_of = |(start, end): (u16, u16)| {
+        (u32::from(end) - u32::from(start) + 1).min(u32::from(max_read)) as u16
+    };
+    let longest = runs.iter().map(|&r| room_of(r)).max().unwrap_or(0);
+    // cost[q] for q in 1..=longest, asked once each.
+    let costs: Vec<u64> = (0..=longest)
         .map(|q| if q == 0 { 0 } else { cost(q) })
         .collect();
     // eff[U][span] = (min cost[L] for L in span..=U, the least such L), built per U on demand.
-    let mut eff: Vec<Vec<(u64, u16)>> = vec![Vec::new(); usize::from(max_read) + 1];
+    let mut eff: Vec<Vec<(u64, u16)>> = vec![Vec::new(); usize::from(longest) + 1];
     let mut best = vec![u64::MAX; k + 1];
     let mut choice = vec![(0usize, 0u16); k + 1];
     best[0] = 0;
     for j in 0..k {
-        let (start, end) = runs[j];
-        let room = (u32::from(end) - u32::from(start) + 1).min(u32::from(max_read)) as u16;
+        let (start, _) = runs[j];
+        let room = room_of(runs[j]);
         let table_u = &mut eff[usize::from(room)];
         if table_u.is_empty() {
             table_u.resize(usize::from(room) + 1, (u64::MAX, 0));

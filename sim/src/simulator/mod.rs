@@ -272,6 +272,10 @@ impl Simulator {
     }
 
     pub(super) fn index_of(&self, name: &str) -> Result<usize, SimError> {
+        // An id is found first by `lookup::find` too; the other names go through it.
+        if let Some(&i) = self.index.get(name) {
+            return Ok(i);
+        }
         let r = drivemap_live::lookup::find(&self.map, name)?;
         Ok(self.index[r.id()])
     }

@@ -5,9 +5,13 @@
 //! crates.io, with `[patch.crates-io]` pointing at the unpacked packages, builds it offline and
 //! runs it against a simulated V7: it writes the frequency reference and runs the drive through
 //! the async drive trait (`AsyncVfd`), polls, stops, and reads the reference back. Then it
-//! builds every package, libraries and binaries, as one workspace of the unpacked tarballs:
+//! checks every package, libraries and binaries, as one workspace of the unpacked tarballs:
 //! `scripts/test` packages with `--no-verify` and leaves that verification to this test (one
-//! build, in the workspace's target directory with its profiles, instead of one per package).
+//! `cargo check`, in the workspace's target directory with its profiles, instead of one build
+//! per package). A check runs every build script and reads every source and `include_str!`
+//! file of the tarball, which is what a package can lack; the code generation and linking a
+//! build adds cannot fail for what a tarball holds (and the application above is built and
+//! run).
 //!
 //! The application's source is `examples/async-poll/src/main.rs`, copied: the example of the
 //! repository is what a user would write. `drivemap-drives` generates its module from the
@@ -157,9 +161,9 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
         "cargo build of the downstream application",
     );
 
-    // Every published package builds from its tarball alone, library and binaries (what
-    // `cargo package`'s verification would do, which `scripts/test` leaves to this test:
-    // `--no-verify`): the unpacked packages as one workspace, patched to each other.
+    // Every published package compiles from its tarball alone, library and binaries (what
+    // `cargo package`'s verification would find missing, which `scripts/test` leaves to this
+    // test: `--no-verify`): the unpacked packages as one workspace, patched to each other.
     let quoted: Vec<String> = members.iter().map(|m| format!("\"{m}\"")).collect();
     std::fs::write(
         dir.join("packages").join("Cargo.toml"),
@@ -177,9 +181,9 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
     .unwrap();
     run(
         drivemap_tests::nested_cargo()
-            .args(["build", "--workspace", "--offline", "--quiet"])
+            .args(["check", "--workspace", "--offline", "--quiet"])
             .current_dir(dir.join("packages")),
-        "cargo build of every package from its tarball",
+        "cargo check of every package from its tarball",
     );
 
     let path = root().join("maps").join("yaskawa-v7.yaml");
