@@ -45,6 +45,14 @@ pub struct RegisterPlan {
     /// a password is written, 0 Unlock / 1 Lock is read); empty for other registers. The
     /// write side is [`RegisterPlan::conversion`].
     pub read_values: &'static [Label],
+    /// The parameter a read returns when it is not the one a write sets (Siemens BICO: a
+    /// register read from r0055 bit 8 and written to P2200; [`RegisterInfo::param`] is the
+    /// write side): a written value is not what the next read gives, so nothing verifies a
+    /// write by reading it back, and parameter sets leave the register out. `None` for other
+    /// registers.
+    ///
+    /// [`RegisterInfo::param`]: crate::register::RegisterInfo::param
+    pub read_param: Option<&'static str>,
     /// An upper limit the manual states through another parameter or quantity (a reference
     /// at most the maximum output frequency n011), checked by [`RegisterPlan::encode_number`]
     /// on the value given, with that quantity's value from the settings.
@@ -585,6 +593,7 @@ impl RegisterPlan {
             also_at: &[],
             repeat_needs_change: None,
             read_values: &[],
+            read_param: None,
             limit: None,
             functions: Functions::ANY,
         }
@@ -650,6 +659,15 @@ impl RegisterPlan {
     pub const fn read_as(self, read_values: &'static [Label]) -> RegisterPlan {
         RegisterPlan {
             read_values,
+            ..self
+        }
+    }
+
+    /// The plan of a register whose reads return parameter `param` while writes set its own
+    /// ([`RegisterPlan::read_param`]).
+    pub const fn read_from(self, param: &'static str) -> RegisterPlan {
+        RegisterPlan {
+            read_param: Some(param),
             ..self
         }
     }

@@ -369,7 +369,17 @@ pub fn find_all<'a>(
     let mut errors = Vec::new();
     for n in names {
         match lookup::find(drive, n.as_ref()) {
-            Ok(r) => found.push(r),
+            // A BICO register's write parameter names no value to read.
+            Ok(r) => match lookup::wrong_side(r, n.as_ref(), false) {
+                None => found.push(r),
+                Some(why) => errors.push(lookup::NotFound {
+                    name: n.as_ref().to_owned(),
+                    drive: drive.id().to_owned(),
+                    suggestions: Vec::new(),
+                    gap: None,
+                    reference: Some(why.into_boxed_str()),
+                }),
+            },
             Err(e) => errors.push(e),
         }
     }
@@ -471,6 +481,36 @@ pub fn address_of(
     kind: TransportKind,
 ) -> u16 {
     r.plan().address_for(&settings.view(drive), kind)
+}
+
+/// For a register whose range a parameter's code selects (a selected scale, or `limits:
+/// {selected_by}`), the selector and the code in force: `P1300 = 20 (Sensorless vector
+/// control) selects this range`, or that the code is not known; `None` for other registers.
+pub fn selected_range(drive: &Map, r: RegisterRef<'_>, settings: &LiveSettings) -> Option<String> {
+    let plan = drive.plan();
+    let drivemap_runtime::core::plan::Conversion::Selected { selector, .. } = r.plan().conversion
+    else {
+        return None;
+    };
+    let s = plan.settings.codes.get(usize::from(selector.slot))?;
+    let reg = drive.register_of_row(s.register)?;
+    Some(
+        match drivemap_runtime::core::plan::SettingsView::code(&settings.view(drive), selector.slot)
+        {
+            Some(code) => {
+                let meaning = reg
+                    .plan()
+                    .label(code)
+                    .map(|l| format!(" ({})", l.name))
+                    .unwrap_or_default();
+                format!("{} = {code}{meaning} selects this range", selector.label)
+            }
+            None => format!(
+                "{} is not known, so the range in force is not",
+                selector.label
+            ),
+        },
+    )
 }
 
 /// A conversion error, with what to do about a missing setting.
@@ -963,6 +1003,49 @@ impl<'d> Session<'d> {
         // the drive's value now, and reading twice costs one request.
         self.read_dependencies(&deps, &mut done, &mut warnings, "the write's limit depends");
         warnings
+    }
+
+    /// Reads again, just before a write of `r`, every parameter that selects its scale, range
+    /// or address and was read from the drive, and refuses the write when one now shows
+    /// another word than the one the value was converted with (another master changed the
+    /// control mode in between, or this command wrote it first), or cannot be read now: the
+    /// value would be checked against the range of a case no longer in force. A selector given
+    /// with `--set` and not readable here is the user's, and is not read.
+    pub fn confirm_selectors(&mut self, r: RegisterRef<'_>) -> Result<(), String> {
+        let drive = self.drive;
+        for s in selectors_of(drive, r) {
+            let Some(&before) = self.settings.selectors.get(s.id()) else {
+                continue;
+            };
+            if self.unreadable(s).is_some() || self.slave == 0 {
+                continue;
+            }
+            let now = self.read_raw(s).map_err(|e| {
+                format!(
+                    "{}: reading {} again before writing: {e}; its value was converted with {} = {before}, which cannot be confirmed",
+                    r.label(),
+                    s.label(),
+                    s.label()
+                )
+            })? as u16;
+            if now != before {
+                let word = |w: u16| {
+                    self.decode(s, u32::from(w))
+                        .map(|v| v.to_string())
+                        .unwrap_or_else(|_| w.to_string())
+                };
+                return Err(format!(
+                    "{}: {} changed from {} to {} since it was read: the value was converted and checked for {} = {}",
+                    r.label(),
+                    s.label(),
+                    word(before),
+                    word(now),
+                    s.label(),
+                    word(before)
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Reads `deps` into the settings; `what` depends on them ("conversions depend") for the

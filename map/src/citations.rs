@@ -738,7 +738,7 @@ fn register_keys<'a>(drive: &'a Drive, ri: usize, w: &mut Walk<'a>) {
         for (ci, c) in sel.cases.iter().enumerate() {
             at(
                 PlaceKind::ScaleCase(ci),
-                r.key_path("scale").key("cases").index(ci),
+                r.cases_path().index(ci),
                 c.source.as_deref(),
                 Reason::None,
             );

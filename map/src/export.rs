@@ -148,6 +148,19 @@ fn register(f: &RegisterFacts) -> Value {
     if let (Some(reference), Value::Object(o)) = (f.get(FactKey::Reference), &mut out) {
         o.shift_insert(4, "reference".to_owned(), json!(reference.value));
     }
+    // Only on a register read from another parameter than the one written (BICO), after
+    // `param`: every other register's export is as before.
+    if let (Some(p), Some(o)) = (&f.read_param, out.as_object_mut()) {
+        let mut with = serde_json::Map::with_capacity(o.len() + 1);
+        for (k, v) in std::mem::take(o) {
+            let after_param = k == "param";
+            with.insert(k, v);
+            if after_param {
+                with.insert("read_param".to_owned(), json!(p));
+            }
+        }
+        *o = with;
+    }
     out
 }
 

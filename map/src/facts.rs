@@ -105,6 +105,9 @@ pub enum FactKey {
     FunctionCodes,
     /// What a read means when it differs from a write: `0 Unlock, 1 Lock`.
     ReadValues,
+    /// The parameter a read returns when it is not the one a write sets: `r0055.8 (writes
+    /// set P2200)`.
+    ReadParam,
     /// An alternative address (`0201h`), cited; its condition in [`Fact::when`].
     AlternativeAddress,
     /// How the keypad shows a finer value.
@@ -129,6 +132,7 @@ impl FactKey {
             FactKey::RepeatNeedsChange => "repeat needs change",
             FactKey::FunctionCodes => "function codes",
             FactKey::ReadValues => "read meaning",
+            FactKey::ReadParam => "read from",
             FactKey::AlternativeAddress => "alternative address",
             FactKey::DisplaySteps => "display steps",
         }
@@ -221,8 +225,11 @@ pub struct RegisterFacts {
     pub row: usize,
     /// The register id.
     pub id: String,
-    /// The parameter number as printed.
+    /// The parameter number as printed (with `read_param`, the one a write sets).
     pub param: Option<String>,
+    /// The parameter a read returns, when it is not `param` (Siemens BICO).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub read_param: Option<String>,
     /// The name as printed.
     pub name: String,
     /// The communication address as the manual prints it.
@@ -338,6 +345,13 @@ fn rows(drive: &Drive, r: &Register) -> Vec<Fact> {
             describe::access(plan.info.access),
             None,
         )),
+        (d.read_param.as_ref()).map(|p| {
+            let text = match &d.param {
+                Some(w) => format!("{p} (writes set {w}; a write does not show in a read)"),
+                None => p.clone(),
+            };
+            Fact::new(K::ReadParam, text, None)
+        }),
         (r.broadcast).then(|| Fact::new(K::Broadcast, "broadcast only (slave 0)", None)),
         (d.unit.clone()).map(|u| Fact::new(K::Unit, u, None)),
         scale_row(drive, r),
@@ -436,6 +450,7 @@ pub(crate) fn register(drive: &Drive, r: &Register) -> RegisterFacts {
         row: drive.plan().order[r.index()],
         id: d.id.clone(),
         param: d.param.clone(),
+        read_param: d.read_param.clone(),
         name: d.name.clone(),
         address: d.address,
         kind: ConversionKind::of(&drive.register_plan(r).conversion),

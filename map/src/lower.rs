@@ -742,6 +742,7 @@ impl Lowering<'_> {
                 }
             }),
             read_values: labels(&d.read_values),
+            read_param: d.read_param.as_deref().map(text),
             limit: d.max_relative.as_ref().map(|l| RelativeLimit {
                 reference: self.reference(r, "max_relative", &l.relative_to),
                 percent: l.percent,

@@ -386,6 +386,12 @@ impl<'m> RegisterRef<'m> {
         self.reg.def.param.as_deref()
     }
 
+    /// The parameter a read returns when it is not [`RegisterRef::param`], which is then the
+    /// one a write sets (Siemens BICO: read r0055.8, write P2200).
+    pub fn read_param(&self) -> Option<&'m str> {
+        self.reg.def.read_param.as_deref()
+    }
+
     /// The name as printed.
     pub fn name(&self) -> &'m str {
         &self.reg.def.name

@@ -827,9 +827,14 @@ pub(crate) use drivemap_core::register::WriteRestriction;
 pub(crate) struct Register {
     /// snake_case identifier; becomes the generated type name in PascalCase.
     pub id: String,
-    /// Parameter number exactly as printed (`Bn-01`, `n019`, `CM.03`).
+    /// Parameter number exactly as printed (`Bn-01`, `n019`, `CM.03`); with `read_param`, the
+    /// parameter a write sets.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub param: Option<String>,
+    /// The parameter a read returns when it is not `param` (Siemens BICO: read r0055 bit 8,
+    /// write P2200), exactly as printed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub read_param: Option<String>,
     /// Name as printed.
     pub name: String,
     /// Communication address as the manual prints it.
@@ -874,6 +879,12 @@ pub(crate) struct Register {
     /// reference at most 100 % of the maximum output frequency n011), with its citation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_relative: Option<RelativeLimit>,
+    /// Limits chosen by another parameter's code while the scale stays fixed ("10.0-400.0 %
+    /// under V/f, 10.0-150.0 % under vector control"): `{selected_by: .., cases: [..]}`.
+    /// Expanded into a selected scale whose cases all carry the register's own `scale`
+    /// ([`crate::ir::expand`]): one mechanism decides both.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limits: Option<SelectedLimits>,
     /// Addresses the register moves to under some condition.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub address_alternatives: Vec<AddressAlternative>,
@@ -1052,6 +1063,34 @@ pub struct ScaleCase {
     pub when: Vec<u16>,
     /// A factor or a relative scale (not another selection).
     pub scale: Scale,
+    /// The lower limit in engineering units under this case (base variant).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    /// The upper limit in engineering units under this case (base variant).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+    /// `file:line` of the case's row in the manual.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+/// `limits: {selected_by: .., cases: [..]}`: a register's range chosen by another parameter's
+/// code, its scale fixed.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SelectedLimits {
+    /// A register id or parameter number (or `<register>.<field>`) whose code selects the case.
+    pub selected_by: String,
+    /// The cases, in the map's order.
+    pub cases: Vec<LimitCase>,
+}
+
+/// One case of [`SelectedLimits`]: the selector's codes and the range under them.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LimitCase {
+    /// The selector's codes for which this case applies.
+    pub when: Vec<u16>,
     /// The lower limit in engineering units under this case (base variant).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min: Option<f64>,

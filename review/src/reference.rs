@@ -514,7 +514,10 @@ fn registers(out: &mut String, drive: &Map) {
                 out,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 address_cell(drive, f),
-                cell(f.param.as_deref().unwrap_or("")),
+                cell(&match (&f.param, &f.read_param) {
+                    (Some(w), Some(r)) => format!("{r} (read) / {w} (write)"),
+                    (p, _) => p.clone().unwrap_or_default(),
+                }),
                 cell(&f.name),
                 code(&f.id),
                 access_cell(f),

@@ -8,6 +8,7 @@ mod support;
 use support::{bridge_support, common, new_map};
 
 mod arguments;
+mod bico;
 mod bridge;
 mod build_errors;
 mod decimal_manual;
@@ -32,6 +33,7 @@ mod probe_sim;
 mod ratio_scale;
 mod review;
 mod schema;
+mod selected_range;
 mod strings;
 mod values;
 mod write_gate;

@@ -94,9 +94,10 @@ pub(super) fn module(drive: &Map) -> String {
 /// prints the identity rows, the paragraphs below the others.
 pub(super) fn register(r: RegisterRef<'_>) -> String {
     let f = r.facts();
-    let title = match &f.param {
-        Some(p) => format!("**{p} — {}**", f.name),
-        None => format!("**{}**", f.name),
+    let title = match (&f.param, &f.read_param) {
+        (Some(w), Some(r)) => format!("**{r} (read) / {w} (write) — {}**", f.name),
+        (Some(p), None) | (None, Some(p)) => format!("**{p} — {}**", f.name),
+        (None, None) => format!("**{}**", f.name),
     };
     let address = f.get(FactKey::Address).map(|a| a.value.as_str());
     let mut summary = vec![match f.get(FactKey::Width) {
@@ -172,6 +173,11 @@ pub(super) fn register(r: RegisterRef<'_>) -> String {
             )),
             FactKey::FunctionCodes => items.push(format!(
                 "Function codes: {}. The write gate refuses any other function on this register.",
+                row.value
+            )),
+            FactKey::ReadParam => items.push(format!(
+                "Read from another parameter than the one written: a read returns {}. A write is \
+                 never verified by reading it back, and parameter sets leave the register out.",
                 row.value
             )),
             FactKey::ReadValues => items.push(format!(
@@ -260,6 +266,7 @@ fn capitalized(s: &str) -> String {
 pub(super) fn aliases(r: RegisterRef<'_>, type_name: &str) -> Vec<String> {
     let mut out = vec![r.id().to_owned()];
     out.extend(r.param().map(str::to_owned));
+    out.extend(r.read_param().map(str::to_owned));
     let addresses =
         std::iter::once(r.address()).chain(r.address_alternatives().iter().map(|a| a.address));
     for a in addresses {

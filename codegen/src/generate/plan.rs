@@ -642,6 +642,9 @@ pub(super) fn row(r: &RegisterPlan) -> String {
             block(r.read_values, ROW_INDENT, |l, _| label(l))
         );
     }
+    if let Some(p) = r.read_param {
+        let _ = write!(s, ".read_from({})", string(p));
+    }
     if let Some(l) = &r.limit {
         let _ = write!(
             s,

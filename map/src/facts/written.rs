@@ -120,8 +120,10 @@ impl<'m> WrittenMap<'m> {
 pub struct WrittenRegister<'m> {
     /// The register id (snake_case).
     pub id: &'m str,
-    /// The parameter number exactly as printed.
+    /// The parameter number exactly as printed (with `read_param`, the one a write sets).
     pub param: Option<&'m str>,
+    /// The parameter a read returns, when it is not `param` (`read_param:`).
+    pub read_param: Option<&'m str>,
     /// The name as printed.
     pub name: &'m str,
     /// The communication address as the manual prints it.
@@ -134,7 +136,8 @@ pub struct WrittenRegister<'m> {
     pub table: Table,
     /// The unit as the manual prints it.
     pub unit: Option<&'m str>,
-    /// The scale as written (`scale:`).
+    /// The scale as written (`scale:`); a range chosen by a setting (`limits: {selected_by}`)
+    /// is the selected scale it is expanded into, each case the register's own factor.
     pub scale: Option<&'m Scale>,
     /// A signed word or pair.
     pub signed: bool,
@@ -203,11 +206,13 @@ impl<'m> WrittenRegister<'m> {
             path: _, // where it is written (`RegisterRef::location`), not what it says
             repeat_needs_change,
             function_codes,
-            index: _, // its place in the map's list, not a property
+            limits_form: _, // where its cases are written, not what they say
+            index: _,       // its place in the map's list, not a property
         } = r;
         let model::Register {
             id,
             param,
+            read_param,
             name,
             address,
             reference,
@@ -221,6 +226,7 @@ impl<'m> WrittenRegister<'m> {
             min,
             max,
             max_relative,
+            limits: _, // expanded into `scale` (`ir::selected_limits`)
             default,
             by_variant,
             address_alternatives,
@@ -243,6 +249,7 @@ impl<'m> WrittenRegister<'m> {
         WrittenRegister {
             id,
             param: param.as_deref(),
+            read_param: read_param.as_deref(),
             name,
             address: *address,
             reference: reference.as_deref(),

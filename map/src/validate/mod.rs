@@ -30,6 +30,7 @@ mod pairs_valid;
 pub(crate) mod protocol_stated;
 mod protocol_valid;
 mod ratio_scales;
+mod read_param_valid;
 mod read_values_valid;
 mod references_resolve;
 mod relative_limits_valid;
@@ -104,6 +105,7 @@ pub(crate) fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     function_codes_valid::check(drive, &mut out);
     relative_limits_valid::check(drive, &mut out);
     read_values_valid::check(drive, &mut out);
+    read_param_valid::check(drive, &mut out);
     numbers_finite::check(drive, &mut out);
     conflicts_recorded::check(drive, &mut out);
     indexed_valid::check(drive, &mut out);

@@ -285,6 +285,7 @@ const ASPECTS: &[Aspect] = {
         Row(relative_limit),
         Parts(read_codes),
         Row(read_meaning),
+        Row(read_param),
         Row(transports),
         Row(signedness),
         Row(width),
@@ -329,6 +330,7 @@ fn every_key_compared(n: &WrittenRegister<'_>) {
     let WrittenRegister {
         id: _,                   // matching, RegisterRenamed
         param: _,                // param
+        read_param: _,           // read_param
         name: _,                 // name
         address: _,              // moved
         reference: _,            // reference
@@ -445,6 +447,19 @@ fn reference(s: &Sides) -> Row {
         "Modicon reference",
         Some(a.reference.unwrap_or("none").to_owned()),
         Some(b.reference.unwrap_or("none").to_owned()),
+    )
+}
+
+/// The parameter a read returns, when not the one a write sets (BICO): a read of the register
+/// means another parameter, so readers of it are broken (breaking, as a read meaning changed).
+fn read_param(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    (
+        a.read_param != b.read_param,
+        ChangeKind::ReadMeaningChanged,
+        "read parameter",
+        s.fa.read_param.clone(),
+        s.fb.read_param.clone(),
     )
 }
 

@@ -129,6 +129,7 @@ struct Keys {
     forms: AddressForms,
     alternatives: Vec<AddressForms>,
     param: Option<String>,
+    read_param: Option<String>,
 }
 
 impl Keys {
@@ -145,12 +146,17 @@ impl Keys {
                 .map(|a| forms(a.address))
                 .collect(),
             param: r.param().map(str::to_owned),
+            read_param: r.read_param().map(str::to_owned),
         }
     }
 
     /// The line prints the register's parameter number or one of its addresses.
     fn strong(&self, line: &Line) -> bool {
         self.param.as_deref().is_some_and(|p| param_found(p, line))
+            || self
+                .read_param
+                .as_deref()
+                .is_some_and(|p| param_found(p, line))
             || self.forms.found_in(line)
             || self.alternatives.iter().any(|f| f.found_in(line))
     }
@@ -230,6 +236,9 @@ pub fn verify_citations(map: &Map, manuals: &Manuals) -> Vec<CitationCheck> {
             PlaceKind::Register => {
                 let mut expected = Vec::new();
                 if let Some(p) = r.param() {
+                    expected.push(p.to_owned());
+                }
+                if let Some(p) = r.read_param() {
                     expected.push(p.to_owned());
                 }
                 // In the map's notation (`45` in a decimal-numbered map), and the Modicon

@@ -384,7 +384,7 @@ impl<'a> Known<'a> {
         let decimal = map.address_format() == drivemap_map::facts::AddressFormat::Decimal;
         let shapes: HashSet<String> = map
             .registers()
-            .filter_map(|r| r.param())
+            .flat_map(|r| r.param().into_iter().chain(r.read_param()))
             .map(shape)
             .collect();
         let learnt = learn_shapes(map, manuals, &shapes, decimal);
@@ -400,7 +400,8 @@ impl<'a> Known<'a> {
             cited: all_citations(map),
             params: map
                 .registers()
-                .filter_map(|r| r.param().map(norm_param))
+                .flat_map(|r| r.param().into_iter().chain(r.read_param()))
+                .map(norm_param)
                 .collect(),
             addresses: map
                 .registers()

@@ -40,6 +40,7 @@ pub(crate) fn found(
                     .filter(|v| codes.contains(&v.value))
                     .any(|v| super::citations::value_found(v, line))
                 || r.param().is_some_and(|p| param_found(p, line))
+                || r.read_param().is_some_and(|p| param_found(p, line))
                 || forms(r.address())
                     .with_reference(r.modicon())
                     .found_in(line)

@@ -106,6 +106,14 @@ impl Simulator {
         let (min, max) = r.limits();
         candidates.extend(min);
         candidates.extend(max);
+        // The limits of a selected scale's cases (a range a mode parameter selects): the
+        // case in force is among them.
+        if let Some(drivemap_map::facts::Scale::Selected(sel)) = r.written().scale {
+            for c in &sel.cases {
+                candidates.extend(c.min);
+                candidates.extend(c.max);
+            }
+        }
         for option in r.variant_options() {
             if settings.has_variant(&self.map, option) {
                 let (min, max) = r.limits_for(option);

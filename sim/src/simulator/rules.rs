@@ -233,7 +233,10 @@ impl Simulator {
                         layout.holding.get(&a).map_or(0, |s| s.word(raw, texts))
                     });
                 }
-                if plan.read_values.is_empty() {
+                // A register whose reads mean something else (`read_values`) or return another
+                // parameter than the one written (`read_param`, BICO) keeps its read state: the
+                // write is recorded (`last_written`), what reads give is set by hand.
+                if plan.read_values.is_empty() && plan.read_param.is_none() {
                     let before = self.raw[i];
                     self.raw[i] = v;
                     if executes {
