@@ -35,11 +35,11 @@ use crate::link::{Action, Command, LinkClient};
 use crate::{CommandFailure, PollFailure};
 
 /// Carries out one drive's commands (see the [module](self)).
-pub struct Commander {
+pub(crate) struct Commander {
     /// The drive's index in the bridge.
-    pub index: usize,
+    pub(crate) index: usize,
     /// Its name (topics, logs).
-    pub name: String,
+    pub(crate) name: String,
     pub(crate) drive: &'static Map,
     pub(crate) slave: u8,
     pub(crate) options: ClientOptions,
@@ -63,20 +63,20 @@ pub struct Commander {
 
 impl Commander {
     /// Takes the settings the link's last poll of the drive read.
-    pub fn update_settings(&mut self, settings: &LiveSettings) {
+    pub(crate) fn update_settings(&mut self, settings: &LiveSettings) {
         if &self.settings != settings {
             self.settings = settings.clone();
         }
     }
 
     /// Whether a command wrote what the drive's polled reads depend on (cleared by the call).
-    pub fn take_replan(&mut self) -> bool {
+    pub(crate) fn take_replan(&mut self) -> bool {
         std::mem::take(&mut self.replan)
     }
 
     /// Carries out `command`: the drive trait's calls (run, stop, reference, fault reset) or a
     /// register write through the write gate. Returns what was done, or why nothing was.
-    pub fn execute(
+    pub(crate) fn execute(
         &mut self,
         client: &mut LinkClient,
         command: &Command,
@@ -238,7 +238,7 @@ impl Commander {
             slave,
             gate::WriteTarget::Rule(rule),
             address,
-            words[..usize::from(rule.width.count())].iter().copied(),
+            words.iter().take(usize::from(rule.width.count())).copied(),
         )
         .map_err(|source| CommandFailure::Refused {
             register: r.label(),

@@ -19,7 +19,7 @@
 //! Modbus time-out detection, the ACN's Pr.12 lost-command mode) is what stops a motor when the
 //! bridge, the broker or the line is gone.
 #![doc = include_str!("../README.md")]
-#![warn(missing_docs, unreachable_pub)]
+#![warn(missing_docs, unreachable_pub, unnameable_types)]
 
 pub mod command;
 mod commander;

@@ -439,7 +439,7 @@ impl Polled {
     }
 
     /// What carries out this drive's commands: the same map, slave, timing and settings.
-    pub fn commander(&self) -> Commander {
+    pub(crate) fn commander(&self) -> Commander {
         Commander {
             index: self.index,
             name: self.spec.name.clone(),

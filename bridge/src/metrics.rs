@@ -132,6 +132,8 @@ impl Metrics {
                     format!("role {} of the drive's map, a coil or discrete input (0/1)", r.id())
                 }
                 (Meaning::Bit, None) => format!("a {} without a role (0/1)", p.table().item()),
+                // Not bridged: `points::polled` leaves strings out.
+                (Meaning::Text(_), _) => "a string register (not bridged)".into(),
             };
             let unit = (!suffix.is_empty()).then(|| match suffix.as_str() {
                 "seconds" => Unit::Seconds,

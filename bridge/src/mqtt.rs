@@ -344,7 +344,8 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 }
                 "binary_sensor"
             }
-            Meaning::Field { .. } | Meaning::Bits(_) => "sensor",
+            // Text is not bridged (`points::polled` leaves strings out); a sensor if it were.
+            Meaning::Field { .. } | Meaning::Bits(_) | Meaning::Text(_) => "sensor",
             Meaning::Bit => {
                 c["payload_on"] = json!("1");
                 c["payload_off"] = json!("0");
@@ -398,7 +399,8 @@ pub fn discovery(options: &Options, info: &DriveInfo) -> Vec<(String, Json)> {
                 c["optimistic"] = json!(true);
                 "select"
             }
-            ValueShape::Bits { .. } => continue,
+            // Text is read-only: nothing to command.
+            ValueShape::Bits { .. } | ValueShape::Text { .. } => continue,
             ValueShape::Word { .. } | ValueShape::Number => {
                 if !plan.unit.is_empty() {
                     c["unit_of_measurement"] = json!(unit(plan.unit));
@@ -485,7 +487,10 @@ fn select_options(plan: &RegisterPlan) -> Vec<String> {
             .iter()
             .map(|v| crate::link::option_text(v.code, Some(v.id), Some(v.name)))
             .collect(),
-        ValueShape::Word { .. } | ValueShape::Number | ValueShape::Bits { .. } => Vec::new(),
+        ValueShape::Word { .. }
+        | ValueShape::Number
+        | ValueShape::Bits { .. }
+        | ValueShape::Text { .. } => Vec::new(),
     }
 }
 

@@ -255,7 +255,7 @@ impl LineSide {
     }
 
     /// Carries out `p` on the line for the drive it names and answers its master.
-    pub fn serve(&mut self, p: Pending, client: &mut LinkClient, drives: &mut [Commander]) {
+    pub(crate) fn serve(&mut self, p: Pending, client: &mut LinkClient, drives: &mut [Commander]) {
         let function = p.pdu.first().copied().unwrap_or(0);
         let master = p.master;
         let (reply, refused) = if p.received.elapsed() > self.options.timeout {

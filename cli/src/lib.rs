@@ -8,7 +8,7 @@
 //! the map each time. Every other test drives the binary, as users do. The commands' modules
 //! are private; nothing here is an API.
 
-#![warn(missing_docs, unreachable_pub)]
+#![warn(missing_docs, unreachable_pub, unnameable_types)]
 #![doc = include_str!("../README.md")]
 
 use std::process::ExitCode;

@@ -8,7 +8,7 @@
 //! The map front end (model, loading, validation, lowering) is `drivemap-map`; this crate only
 //! prints.
 #![doc = include_str!("../README.md")]
-#![warn(unreachable_pub, missing_docs)]
+#![warn(unreachable_pub, missing_docs, unnameable_types)]
 
 mod config;
 pub mod generate;

@@ -52,6 +52,8 @@ kinds! {
     Enum => "enum",
     /// [`Conversion::Bits`]: bit fields.
     Bits => "bits",
+    /// [`Conversion::Text`]: text, two characters per register.
+    Text => "text",
 }
 
 impl ConversionKind {
@@ -65,6 +67,7 @@ impl ConversionKind {
             Conversion::Selected { .. } => ConversionKind::Selected,
             Conversion::Enum { .. } => ConversionKind::Enum,
             Conversion::Bits { .. } => ConversionKind::Bits,
+            Conversion::Text { .. } => ConversionKind::Text,
         }
     }
 
@@ -76,7 +79,10 @@ impl ConversionKind {
             | ConversionKind::Relative
             | ConversionKind::Ratio
             | ConversionKind::Selected => true,
-            ConversionKind::Word | ConversionKind::Enum | ConversionKind::Bits => false,
+            ConversionKind::Word
+            | ConversionKind::Enum
+            | ConversionKind::Bits
+            | ConversionKind::Text => false,
         }
     }
 }

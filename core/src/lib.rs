@@ -11,7 +11,7 @@
 //! [`plan::RegisterPlan::decode_number`] and its siblings.
 #![doc = include_str!("../README.md")]
 #![no_std]
-#![deny(missing_docs, unreachable_pub)]
+#![deny(missing_docs, unreachable_pub, unnameable_types)]
 
 #[cfg(test)]
 extern crate std;
@@ -29,4 +29,5 @@ pub mod roles;
 pub mod rule;
 pub mod scale;
 pub mod stated;
+pub mod text;
 pub mod width;

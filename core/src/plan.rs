@@ -15,6 +15,7 @@ use crate::ratio::{self, Fraction, Ratio};
 use crate::register::{RegisterInfo, WriteRestriction};
 use crate::rule::{Broadcast, Transports, WriteRule};
 use crate::scale::{self, Decimal, RawRange, Rounding, ValueError};
+use crate::text::ByteOrder;
 
 /// One register of a drive, fully decided.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,6 +45,14 @@ pub struct RegisterPlan {
     /// a password is written, 0 Unlock / 1 Lock is read); empty for other registers. The
     /// write side is [`RegisterPlan::conversion`].
     pub read_values: &'static [Label],
+    /// The parameter a read returns when it is not the one a write sets (Siemens BICO: a
+    /// register read from r0055 bit 8 and written to P2200; [`RegisterInfo::param`] is the
+    /// write side): a written value is not what the next read gives, so nothing verifies a
+    /// write by reading it back, and parameter sets leave the register out. `None` for other
+    /// registers.
+    ///
+    /// [`RegisterInfo::param`]: crate::register::RegisterInfo::param
+    pub read_param: Option<&'static str>,
     /// An upper limit the manual states through another parameter or quantity (a reference
     /// at most the maximum output frequency n011), checked by [`RegisterPlan::encode_number`]
     /// on the value given, with that quantity's value from the settings.
@@ -224,6 +233,12 @@ pub enum Conversion {
         /// The fields, each with its bits.
         fields: &'static [Field],
     },
+    /// Text, two characters per register, over the registers of [`RegisterInfo::width`]
+    /// ([`crate::width::Width::Text`]); decoded by [`crate::text`], never as a number.
+    Text {
+        /// Which byte of each register holds the earlier character.
+        order: ByteOrder,
+    },
 }
 
 impl Conversion {
@@ -247,6 +262,7 @@ impl Conversion {
             | Conversion::Selected { .. } => ValueShape::Number,
             Conversion::Enum { values, .. } => ValueShape::Codes(values),
             Conversion::Bits { mask, fields } => ValueShape::Bits { mask, fields },
+            Conversion::Text { order } => ValueShape::Text { order },
         }
     }
 
@@ -274,14 +290,15 @@ impl Conversion {
             | Conversion::Decimal { .. }
             | Conversion::Ratio { .. }
             | Conversion::Enum { .. }
-            | Conversion::Bits { .. } => {}
+            | Conversion::Bits { .. }
+            | Conversion::Text { .. } => {}
         }
     }
 }
 
 /// What a register's value is to a front end, whatever its [`Conversion`]
 /// ([`Conversion::shape`]): a plain word, a number in the register's unit (every kind of
-/// scale), codes, or bit fields.
+/// scale), codes, bit fields, or text.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ValueShape {
     /// A plain word or pair, read as an integer.
@@ -299,6 +316,12 @@ pub enum ValueShape {
         mask: u16,
         /// The fields.
         fields: &'static [Field],
+    },
+    /// Text over the register's width ([`crate::width::Width::Text`]), decoded by
+    /// [`crate::text`]: not a number.
+    Text {
+        /// Which byte of each register holds the earlier character.
+        order: ByteOrder,
     },
 }
 
@@ -570,6 +593,7 @@ impl RegisterPlan {
             also_at: &[],
             repeat_needs_change: None,
             read_values: &[],
+            read_param: None,
             limit: None,
             functions: Functions::ANY,
         }
@@ -635,6 +659,15 @@ impl RegisterPlan {
     pub const fn read_as(self, read_values: &'static [Label]) -> RegisterPlan {
         RegisterPlan {
             read_values,
+            ..self
+        }
+    }
+
+    /// The plan of a register whose reads return parameter `param` while writes set its own
+    /// ([`RegisterPlan::read_param`]).
+    pub const fn read_from(self, param: &'static str) -> RegisterPlan {
+        RegisterPlan {
+            read_param: Some(param),
             ..self
         }
     }
@@ -738,7 +771,7 @@ impl RegisterPlan {
             | Conversion::Relative { signed, .. }
             | Conversion::Ratio { signed, .. }
             | Conversion::Selected { signed, .. } => signed,
-            Conversion::Enum { .. } | Conversion::Bits { .. } => false,
+            Conversion::Enum { .. } | Conversion::Bits { .. } | Conversion::Text { .. } => false,
         }
     }
 
@@ -775,7 +808,10 @@ impl RegisterPlan {
             Conversion::Selected {
                 selector, cases, ..
             } => self.case(*selector, cases, settings),
-            Conversion::Word { .. } | Conversion::Enum { .. } | Conversion::Bits { .. } => {
+            Conversion::Word { .. }
+            | Conversion::Enum { .. }
+            | Conversion::Bits { .. }
+            | Conversion::Text { .. } => {
                 return None;
             }
         })
@@ -806,6 +842,11 @@ impl RegisterPlan {
 
     /// The engineering value of a raw value (a word, or a pair joined) of a quantity register.
     pub fn decode_number(&self, raw: u32, settings: &impl SettingsView) -> Result<f64, ValueError> {
+        if let Conversion::Text { .. } = self.conversion {
+            return Err(ValueError::Text {
+                register: self.info.id,
+            });
+        }
         let int = self.int(raw);
         match self.scale(settings) {
             Some(Ok(Scale::Decimal { scale, .. })) => Ok(scale.decode(int)),
@@ -999,6 +1040,11 @@ impl RegisterPlan {
         let range = match &self.conversion {
             Conversion::Word { range, .. } => range.select(settings),
             Conversion::Enum { .. } => return self.encode_code(u16::try_from(raw).ok(), raw),
+            Conversion::Text { .. } => {
+                return Err(ValueError::Text {
+                    register: self.info.id,
+                });
+            }
             Conversion::Bits { mask, .. } => {
                 return match u16::try_from(raw) {
                     Ok(word) if word & !mask == 0 => Ok(u32::from(word)),
@@ -1083,6 +1129,16 @@ pub trait Value: Sized {
         plan: &RegisterPlan,
         settings: &impl SettingsView,
     ) -> Result<Self, ValueError>;
+    /// The value of the words read from the drive (all [`crate::width::Width::count`] of
+    /// them): a number's joined in the map's order ([`crate::width::Width::join`]), a text's
+    /// decoded by [`crate::text`]. What the clients call.
+    fn decode_words(
+        words: &[u16],
+        plan: &RegisterPlan,
+        settings: &impl SettingsView,
+    ) -> Result<Self, ValueError> {
+        Self::decode(plan.info.width.join(words), plan, settings)
+    }
     /// The raw value for the value, checked against the plan.
     fn encode(&self, plan: &RegisterPlan, settings: &impl SettingsView) -> Result<u32, ValueError>;
     /// [`Value::encode`] with a choice for a number between two steps of the register; codes,
@@ -1161,5 +1217,33 @@ impl<T: crate::register::Code> Value for T {
             Some(code).filter(|c| plan.code_allowed(*c)),
             i64::from(code),
         )
+    }
+}
+
+/// Text read from a string register (`string:` in the map): `N` = 2 × its registers. Decoded
+/// from all its words in the map's byte order, padding dropped; never a number, never written
+/// (the map refuses a writable string; [`Value::encode`] refuses too).
+impl<const N: usize> Value for crate::text::Text<N> {
+    fn decode(_: u32, plan: &RegisterPlan, _: &impl SettingsView) -> Result<Self, ValueError> {
+        Err(ValueError::Text {
+            register: plan.info.id,
+        })
+    }
+    fn decode_words(
+        words: &[u16],
+        plan: &RegisterPlan,
+        _: &impl SettingsView,
+    ) -> Result<Self, ValueError> {
+        match plan.conversion {
+            Conversion::Text { order } => Ok(crate::text::Text::decode(words, order)),
+            _ => Err(ValueError::Text {
+                register: plan.info.id,
+            }),
+        }
+    }
+    fn encode(&self, plan: &RegisterPlan, _: &impl SettingsView) -> Result<u32, ValueError> {
+        Err(ValueError::Text {
+            register: plan.info.id,
+        })
     }
 }

@@ -152,6 +152,13 @@ pub trait Register {
     /// conversion needs a setting that `settings` does not hold. A one-word register takes its
     /// word widened: `R::decode(word.into(), &settings)`.
     fn decode(raw: u32, settings: &Self::Settings) -> Result<Self::Value, ValueError>;
+
+    /// Decodes the words read from the drive, all [`Register::WIDTH`] of them in wire order:
+    /// [`Register::decode`] of them joined for a number, the text of a string register
+    /// ([`crate::text`]). What the clients call.
+    fn decode_words(words: &[u16], settings: &Self::Settings) -> Result<Self::Value, ValueError> {
+        Self::decode(Self::WIDTH.join(words), settings)
+    }
 }
 
 /// A register the drive lets you read.
@@ -544,6 +551,10 @@ impl<D: DrivePlan, V: Value, A, const I: usize> Register for Reg<D, V, A, I> {
 
     fn decode(raw: u32, settings: &D::Settings) -> Result<V, ValueError> {
         V::decode(raw, Self::PLAN, settings)
+    }
+
+    fn decode_words(words: &[u16], settings: &D::Settings) -> Result<V, ValueError> {
+        V::decode_words(words, Self::PLAN, settings)
     }
 }
 

@@ -165,13 +165,14 @@ impl WriteRule {
 
 impl WriteRule {
     /// Where `address` falls in the register: `Some(0)` for its first (or only) word, `Some(1)`
-    /// for the second word of a pair, `None` outside it.
+    /// for the second word of a pair, `Some(i)` for a string's word `i`, `None` outside it.
     pub fn word_index(&self, address: u16) -> Option<u16> {
         if self.occupies(address) {
             return Some(0);
         }
         match self.width {
             Width::Pair(_) if self.occupies(address.wrapping_sub(1)) => Some(1),
+            Width::Text(n) => (1..u16::from(n)).find(|&i| self.occupies(address.wrapping_sub(i))),
             _ => None,
         }
     }

@@ -19,6 +19,12 @@ use crate::width::Width;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ValueError {
+    /// The register holds text ([`crate::text`]): it has no number to give or take.
+    #[error("{register} holds text, not a number")]
+    Text {
+        /// The register's id.
+        register: &'static str,
+    },
     /// The value lies outside the register's range for the drive's variant.
     #[error("{register}: {value} {unit} is out of range {min} ..= {max} {unit}")]
     OutOfRange {

@@ -14,6 +14,11 @@ pub enum Width {
     Word,
     /// Two consecutive registers holding one 32-bit value.
     Pair(WordOrder),
+    /// This many consecutive registers (1 or more) holding text, two characters each
+    /// ([`crate::text`]): read whole in one request, never joined into a number. Its
+    /// integer view ([`Width::join`], [`Width::range`]) is its first word's, which nothing
+    /// decodes: a text is decoded from all its words by [`crate::text::decode`].
+    Text(u8),
 }
 
 /// Which half of a 32-bit value sits at the lower address (a map's `pair.order`:
@@ -32,11 +37,16 @@ pub enum WordOrder {
 }
 
 impl Width {
+    /// The most registers one value takes: one read request's (Modbus 03h/04h read at most
+    /// 125). A map's string is bounded by its `max_read`, below this.
+    pub const MAX_WORDS: usize = 125;
+
     /// The number of registers.
     pub const fn count(self) -> u16 {
         match self {
             Width::Word => 1,
             Width::Pair(_) => 2,
+            Width::Text(n) => n as u16,
         }
     }
 
@@ -48,7 +58,7 @@ impl Width {
     /// The whole range of the value, signed (two's complement) or unsigned.
     pub const fn range(self, signed: bool) -> RawRange {
         match (self, signed) {
-            (Width::Word, _) => RawRange::word(signed),
+            (Width::Word | Width::Text(_), _) => RawRange::word(signed),
             (Width::Pair(_), true) => RawRange::new(i32::MIN as i64, i32::MAX as i64),
             (Width::Pair(_), false) => RawRange::new(0, u32::MAX as i64),
         }
@@ -57,8 +67,8 @@ impl Width {
     /// The integer a raw value stands for, signed or unsigned at this width.
     pub const fn to_int(self, raw: u32, signed: bool) -> i64 {
         match (self, signed) {
-            (Width::Word, true) => raw as u16 as i16 as i64,
-            (Width::Word, false) => raw as u16 as i64,
+            (Width::Word | Width::Text(_), true) => raw as u16 as i16 as i64,
+            (Width::Word | Width::Text(_), false) => raw as u16 as i64,
             (Width::Pair(_), true) => raw as i32 as i64,
             (Width::Pair(_), false) => raw as i64,
         }
@@ -67,7 +77,7 @@ impl Width {
     /// The raw value of an integer already checked against a range of this width.
     pub const fn from_int(self, int: i64) -> u32 {
         match self {
-            Width::Word => int as u16 as u32,
+            Width::Word | Width::Text(_) => int as u16 as u32,
             Width::Pair(_) => int as u32,
         }
     }
@@ -76,7 +86,7 @@ impl Width {
     pub fn join(self, words: &[u16]) -> u32 {
         let word = |i: usize| u32::from(words.get(i).copied().unwrap_or(0));
         match self {
-            Width::Word => word(0),
+            Width::Word | Width::Text(_) => word(0),
             Width::Pair(WordOrder::HighFirst) => (word(0) << 16) | word(1),
             Width::Pair(WordOrder::LowFirst) => (word(1) << 16) | word(0),
         }
@@ -86,7 +96,7 @@ impl Width {
     pub const fn split(self, raw: u32) -> [u16; 2] {
         let (high, low) = ((raw >> 16) as u16, raw as u16);
         match self {
-            Width::Word => [low, 0],
+            Width::Word | Width::Text(_) => [low, 0],
             Width::Pair(WordOrder::HighFirst) => [high, low],
             Width::Pair(WordOrder::LowFirst) => [low, high],
         }

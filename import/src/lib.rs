@@ -7,7 +7,7 @@
 //! every register citing the line it came from; [`compare`] sets rows against an existing map
 //! (`drivemap import --merge`, and the figures in `docs/import.md`).
 #![doc = include_str!("../README.md")]
-#![warn(unreachable_pub, missing_docs)]
+#![warn(unreachable_pub, missing_docs, unnameable_types)]
 
 pub mod columns;
 pub mod compare;

@@ -51,7 +51,14 @@ pub enum Value {
         /// Each field of the map, in the map's order.
         fields: Vec<FieldValue>,
     },
+    /// Text from a string register (`string:`), as read, padding dropped: untrusted bytes,
+    /// shown quoted, escaped and shortened ([`Value::text`] for the whole text, escaped).
+    Text(Vec<u8>),
 }
+
+/// The most characters of a text [`Value`]'s `Display` shows (a table cell, a log line); the
+/// rest is cut and marked `…`.
+pub const TEXT_SHOWN: usize = 64;
 
 /// One field of a bit-field register.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,13 +86,38 @@ impl Value {
             Value::Code { code, .. } => Some(f64::from(*code)),
             Value::Bits { raw, .. } => Some(f64::from(*raw)),
             Value::Bit(on) => Some(f64::from(u8::from(*on))),
+            Value::Text(_) => None,
         }
+    }
+
+    /// The whole text of a string, every byte that is not printable ASCII escaped (`\xNN`;
+    /// `\\` and `\"` for a backslash and a quote), unquoted: what a record carries. `None`
+    /// for other values.
+    pub fn text(&self) -> Option<String> {
+        let Value::Text(bytes) = self else {
+            return None;
+        };
+        let mut out = String::new();
+        let _ = drivemap_runtime::core::text::write_escaped(&mut out, bytes);
+        Some(out)
     }
 }
 
 impl fmt::Display for Value {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            Value::Text(bytes) => {
+                f.write_str("\"")?;
+                drivemap_runtime::core::text::write_escaped(
+                    f,
+                    &bytes[..bytes.len().min(TEXT_SHOWN)],
+                )?;
+                f.write_str("\"")?;
+                if bytes.len() > TEXT_SHOWN {
+                    f.write_str("…")?;
+                }
+                Ok(())
+            }
             Value::Word(w) => write!(f, "{w}"),
             Value::Bit(true) => f.write_str("1 (on)"),
             Value::Bit(false) => f.write_str("0 (off)"),
@@ -170,6 +202,20 @@ fn field_values(fields: &[Field], raw: u16) -> Vec<FieldValue> {
         .collect()
 }
 
+/// Decodes the words read from a string register (`string:`, all its registers) in the map's
+/// byte order, trailing NUL and space padding dropped; an error for any other register.
+pub fn decode_text(plan: &RegisterPlan, words: &[u16]) -> Result<Value, ValueError> {
+    let Conversion::Text { order } = plan.conversion else {
+        return Err(ValueError::Text {
+            register: plan.info.id,
+        });
+    };
+    let mut bytes = vec![0u8; 2 * words.len()];
+    let len = drivemap_runtime::core::text::decode(words, order, &mut bytes);
+    bytes.truncate(len);
+    Ok(Value::Text(bytes))
+}
+
 /// Decodes a raw value read from the drive (its word, or a 32-bit pair's words joined in the
 /// map's order: `plan.info.width.join(words)`), by the register's plan. A register whose read
 /// meaning differs from its write form (`read_values`, [`RegisterPlan::read_values`]) gives its
@@ -207,6 +253,10 @@ pub fn decode_written(
         return Ok(Value::Bit(raw != 0));
     }
     match plan.conversion.shape() {
+        // A string's value is its words' ([`decode_text`]), not one raw number.
+        ValueShape::Text { .. } => Err(ValueError::Text {
+            register: plan.info.id,
+        }),
         ValueShape::Word { .. } => Ok(Value::Word(plan.int(raw))),
         ValueShape::Codes(_) => {
             let raw = raw as u16;

@@ -6,7 +6,7 @@
 //! validated map ([`drivemap_map::Map::plan`]) and convert with the same functions of
 //! [`drivemap_runtime::core::scale`]; a test in `tests/` compares them register by register.
 #![doc = include_str!("../README.md")]
-#![warn(missing_docs, unreachable_pub)]
+#![warn(missing_docs, unreachable_pub, unnameable_types)]
 
 pub mod codec;
 pub mod draft;

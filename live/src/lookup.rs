@@ -352,6 +352,34 @@ fn printed_address(drive: &Map, r: RegisterRef<'_>) -> String {
     }
 }
 
+/// For a register read from one parameter and written to another (`read_param`, Siemens BICO:
+/// read r0055.8, write P2200), why `name` cannot be used to read it (`writing` false: the name
+/// is the parameter a write sets) or to write it (`writing` true: the name is the parameter a
+/// read returns), naming the other; `None` for every other name and register.
+pub fn wrong_side(r: RegisterRef<'_>, name: &str, writing: bool) -> Option<String> {
+    let (read, write) = (r.read_param()?, r.param()?);
+    let key = norm(name);
+    if norm(r.id()) == key {
+        return None;
+    }
+    let at = printed_address(r.map(), r);
+    if writing && norm(read) == key {
+        Some(format!(
+            "{read} is what a read of {} ({at}) returns; a write there sets {write}: write `{write}=<value>` (or `{}=<value>`)",
+            r.id(),
+            r.id()
+        ))
+    } else if !writing && norm(write) == key {
+        Some(format!(
+            "{write} is the parameter a write of {} ({at}) sets; a read there returns {read}, not {write}: read `{read}` (or `{}`)",
+            r.id(),
+            r.id()
+        ))
+    } else {
+        None
+    }
+}
+
 /// Finds a register by id, parameter number, printed name (case and punctuation ignored), or
 /// address in the manual's notation. Broadcast-only registers are found by id only.
 pub fn find<'a>(drive: &'a Map, name: &str) -> Result<RegisterRef<'a>, NotFound> {
@@ -361,9 +389,20 @@ pub fn find<'a>(drive: &'a Map, name: &str) -> Result<RegisterRef<'a>, NotFound>
     let key = norm(name);
     let normal = || drive.registers().filter(|r| !r.broadcast_only());
     let hit = normal()
-        .find(|r| norm(r.id()) == key || r.param().is_some_and(|p| norm(p) == key))
+        .find(|r| {
+            norm(r.id()) == key
+                || r.param().is_some_and(|p| norm(p) == key)
+                || r.read_param().is_some_and(|p| norm(p) == key)
+        })
         .or_else(|| normal().find(|r| norm(r.name()) == key));
     if let Some(r) = hit {
+        return Ok(r);
+    }
+    // The Modicon reference a register records (`reference: 40024`), as the manual prints it
+    // beside the register: that register, whatever the offsets would make of it.
+    if let Some(m) = drivemap_map::modicon::Modicon::parse(name)
+        && let Some(r) = normal().find(|r| r.modicon() == Some(m))
+    {
         return Ok(r);
     }
     let decimal = drive.address_format() == drivemap_map::facts::AddressFormat::Decimal;

@@ -6,7 +6,7 @@
 //! [`find_all`] or [`crate::lookup::find`]); its row of the map's plan ([`RegisterRef::plan`]) gives
 //! the address, width and conversion, the same the generated code prints.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
 use drivemap_map::Map;
 use drivemap_map::Quantity;
@@ -369,7 +369,17 @@ pub fn find_all<'a>(
     let mut errors = Vec::new();
     for n in names {
         match lookup::find(drive, n.as_ref()) {
-            Ok(r) => found.push(r),
+            // A BICO register's write parameter names no value to read.
+            Ok(r) => match lookup::wrong_side(r, n.as_ref(), false) {
+                None => found.push(r),
+                Some(why) => errors.push(lookup::NotFound {
+                    name: n.as_ref().to_owned(),
+                    drive: drive.id().to_owned(),
+                    suggestions: Vec::new(),
+                    gap: None,
+                    reference: Some(why.into_boxed_str()),
+                }),
+            },
             Err(e) => errors.push(e),
         }
     }
@@ -471,6 +481,36 @@ pub fn address_of(
     kind: TransportKind,
 ) -> u16 {
     r.plan().address_for(&settings.view(drive), kind)
+}
+
+/// For a register whose range a parameter's code selects (a selected scale, or `limits:
+/// {selected_by}`), the selector and the code in force: `P1300 = 20 (Sensorless vector
+/// control) selects this range`, or that the code is not known; `None` for other registers.
+pub fn selected_range(drive: &Map, r: RegisterRef<'_>, settings: &LiveSettings) -> Option<String> {
+    let plan = drive.plan();
+    let drivemap_runtime::core::plan::Conversion::Selected { selector, .. } = r.plan().conversion
+    else {
+        return None;
+    };
+    let s = plan.settings.codes.get(usize::from(selector.slot))?;
+    let reg = drive.register_of_row(s.register)?;
+    Some(
+        match drivemap_runtime::core::plan::SettingsView::code(&settings.view(drive), selector.slot)
+        {
+            Some(code) => {
+                let meaning = reg
+                    .plan()
+                    .label(code)
+                    .map(|l| format!(" ({})", l.name))
+                    .unwrap_or_default();
+                format!("{} = {code}{meaning} selects this range", selector.label)
+            }
+            None => format!(
+                "{} is not known, so the range in force is not",
+                selector.label
+            ),
+        },
+    )
 }
 
 /// A conversion error, with what to do about a missing setting.
@@ -712,7 +752,7 @@ pub struct Polling {
     poller: Poller,
     /// Per register asked for: its index among the planned registers and its width, or why it
     /// is not read.
-    slots: Vec<Result<(usize, Width), ReadError>>,
+    slots: Vec<Result<(usize, Width, &'static str), ReadError>>,
 }
 
 /// A connected drive with its settings.
@@ -733,6 +773,10 @@ pub struct Session<'d> {
     pub silence: SilenceGuard,
     /// The serial line, for the planner's bus-time model.
     line: SerialConfig,
+    /// The words of each string register (`string:`, by id) as last read: a string is not a
+    /// number, so its raw value in [`Session::poll`] is its first word and [`Session::decode`]
+    /// decodes the words kept here.
+    texts: BTreeMap<&'static str, Vec<u16>>,
 }
 
 impl<'d> Session<'d> {
@@ -775,6 +819,7 @@ impl<'d> Session<'d> {
             settings,
             link: text,
             line: link.bus_line(drive),
+            texts: BTreeMap::new(),
         })
     }
 
@@ -802,6 +847,7 @@ impl<'d> Session<'d> {
             settings,
             link: format!("{} link", kind.name()),
             line,
+            texts: BTreeMap::new(),
         }
     }
 
@@ -959,6 +1005,49 @@ impl<'d> Session<'d> {
         warnings
     }
 
+    /// Reads again, just before a write of `r`, every parameter that selects its scale, range
+    /// or address and was read from the drive, and refuses the write when one now shows
+    /// another word than the one the value was converted with (another master changed the
+    /// control mode in between, or this command wrote it first), or cannot be read now: the
+    /// value would be checked against the range of a case no longer in force. A selector given
+    /// with `--set` and not readable here is the user's, and is not read.
+    pub fn confirm_selectors(&mut self, r: RegisterRef<'_>) -> Result<(), String> {
+        let drive = self.drive;
+        for s in selectors_of(drive, r) {
+            let Some(&before) = self.settings.selectors.get(s.id()) else {
+                continue;
+            };
+            if self.unreadable(s).is_some() || self.slave == 0 {
+                continue;
+            }
+            let now = self.read_raw(s).map_err(|e| {
+                format!(
+                    "{}: reading {} again before writing: {e}; its value was converted with {} = {before}, which cannot be confirmed",
+                    r.label(),
+                    s.label(),
+                    s.label()
+                )
+            })? as u16;
+            if now != before {
+                let word = |w: u16| {
+                    self.decode(s, u32::from(w))
+                        .map(|v| v.to_string())
+                        .unwrap_or_else(|_| w.to_string())
+                };
+                return Err(format!(
+                    "{}: {} changed from {} to {} since it was read: the value was converted and checked for {} = {}",
+                    r.label(),
+                    s.label(),
+                    word(before),
+                    word(now),
+                    s.label(),
+                    word(before)
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Reads `deps` into the settings; `what` depends on them ("conversions depend") for the
     /// warnings.
     fn read_dependencies(
@@ -997,11 +1086,14 @@ impl<'d> Session<'d> {
         }
         let address = self.address(r)?;
         let info = r.plan().info;
-        let mut w = [0u16; 2];
-        let words = &mut w[..usize::from(info.width.count())];
-        self.read_into(info.table, address, words)
+        let mut words = vec![0u16; usize::from(info.width.count())];
+        self.read_into(info.table, address, &mut words)
             .map_err(|e| ReadError::bus(&e))?;
-        Ok(info.width.join(words))
+        let raw = info.width.join(&words);
+        if let Width::Text(_) = info.width {
+            self.texts.insert(info.id, words);
+        }
+        Ok(raw)
     }
 
     fn read_into(
@@ -1047,7 +1139,7 @@ impl<'d> Session<'d> {
                 Ok(address) => {
                     let info = r.plan().info;
                     wanted.push((info.table, address));
-                    slots.push(Ok((wanted.len() - 1, info.width)));
+                    slots.push(Ok((wanted.len() - 1, info.width, info.id)));
                 }
             }
         }
@@ -1073,8 +1165,16 @@ impl<'d> Session<'d> {
             .iter()
             .map(|slot| match slot {
                 Err(why) => Err(why.clone()),
-                Ok((i, width)) => match plan.poller.raw(*i, *width) {
-                    Some(Ok(w)) => Ok(w),
+                Ok((i, width, id)) => match plan.poller.raw(*i, *width) {
+                    Some(Ok(w)) => {
+                        if let Width::Text(n) = *width {
+                            let mut words = vec![0u16; usize::from(n)];
+                            if let Some(Ok(())) = plan.poller.words(*i, &mut words) {
+                                self.texts.insert(id, words);
+                            }
+                        }
+                        Ok(w)
+                    }
                     Some(Err(e)) => Err(ReadError::bus(e)),
                     None => Err(ReadError::NotRead),
                 },
@@ -1103,13 +1203,26 @@ impl<'d> Session<'d> {
     }
 
     /// A raw value of `r` in hex as the manuals write it: four digits, eight for a pair.
+    /// A string's: its words as last read, four digits each (`4C58 322D …h`, the first eight).
     pub fn raw_text(&self, r: RegisterRef<'_>, raw: u32) -> String {
-        let digits = 4 * usize::from(r.plan().info.width.count());
+        let info = r.plan().info;
+        if let (Width::Text(_), Some(words)) = (info.width, self.texts.get(info.id)) {
+            let shown: Vec<String> = words.iter().take(8).map(|w| format!("{w:04X}")).collect();
+            let more = if words.len() > 8 { " …" } else { "" };
+            return format!("{}{more}h", shown.join(" "));
+        }
+        let digits = 4 * usize::from(info.width.count());
         format!("{raw:0digits$X}h")
     }
 
-    /// Decodes a raw value of `r`.
+    /// Decodes a raw value of `r`; a string's from its words as last read
+    /// ([`Session::read_raw`], [`Session::poll`]).
     pub fn decode(&self, r: RegisterRef<'_>, raw: u32) -> Result<Value, ConversionError> {
+        let plan = r.plan();
+        if let Width::Text(_) = plan.info.width {
+            let words = self.texts.get(plan.info.id).map_or(&[][..], Vec::as_slice);
+            return codec::decode_text(plan, words).map_err(|e| value_error(self.drive, &e));
+        }
         codec::decode(self.drive, r, raw, &self.settings).map_err(|e| value_error(self.drive, &e))
     }
 }

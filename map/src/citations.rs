@@ -99,6 +99,8 @@ pub enum PlaceKind<'a> {
     },
     /// The register's `pair`.
     Pair,
+    /// The register's `string` (its byte order and example).
+    Text,
     /// The register's `repeat_needs_change` (or its group's).
     RepeatNeedsChange,
     /// The register's `function_codes` (or its group's).
@@ -161,6 +163,7 @@ impl PlaceKind<'_> {
             PlaceKind::Field(_) => "field",
             PlaceKind::FieldValue { .. } => "field value",
             PlaceKind::Pair => "pair",
+            PlaceKind::Text => "string",
             PlaceKind::RepeatNeedsChange => "repeat needs change",
             PlaceKind::RegisterFunctions => "register function codes",
             PlaceKind::RelativeLimit => "relative limit",
@@ -203,6 +206,7 @@ impl PlaceKind<'_> {
         "field",
         "field value",
         "pair",
+        "string",
         "repeat needs change",
         "register function codes",
         "relative limit",
@@ -657,7 +661,7 @@ fn register<'a>(drive: &'a Drive, ri: usize, w: &mut Walk<'a>) {
     register_keys(drive, ri, w);
 }
 
-/// A register's other cited keys (continues [`register`]): pair, rules, limits, variants,
+/// A register's other cited keys (continues [`register`]): pair, string, rules, limits, variants,
 /// alternatives, scale cases, indexed entries, conflicts.
 fn register_keys<'a>(drive: &'a Drive, ri: usize, w: &mut Walk<'a>) {
     let r = &drive.registers[ri];
@@ -679,6 +683,14 @@ fn register_keys<'a>(drive: &'a Drive, ri: usize, w: &mut Walk<'a>) {
             PlaceKind::Pair,
             r.key_path("pair"),
             pair.source.as_deref(),
+            Reason::None,
+        );
+    }
+    if let Some(text) = &d.string {
+        at(
+            PlaceKind::Text,
+            r.key_path("string"),
+            text.source.as_deref(),
             Reason::None,
         );
     }
@@ -726,7 +738,7 @@ fn register_keys<'a>(drive: &'a Drive, ri: usize, w: &mut Walk<'a>) {
         for (ci, c) in sel.cases.iter().enumerate() {
             at(
                 PlaceKind::ScaleCase(ci),
-                r.key_path("scale").key("cases").index(ci),
+                r.cases_path().index(ci),
                 c.source.as_deref(),
                 Reason::None,
             );

@@ -20,6 +20,7 @@
 use drivemap_core::plan::{RegisterPlan, ValueShape};
 use drivemap_core::register::{Access, Table, WriteRestriction};
 use drivemap_core::rule::Transports;
+use drivemap_core::text::ByteOrder;
 use drivemap_core::width::{Width, WordOrder};
 
 use crate::ir::{Drive, Register};
@@ -102,6 +103,16 @@ pub fn address_span(first: u16, last: u16) -> String {
         address(first)
     } else {
         format!("{} – {}", address(first), address(last))
+    }
+}
+
+/// A span of addresses in the notation the map gives its addresses ([`address_as`]): `45 – 48`
+/// in a map that numbers registers in decimal, else [`address_span`]'s `002Dh – 0030h`.
+pub fn address_span_as(format: crate::model::AddressFormat, first: u16, last: u16) -> String {
+    match format {
+        crate::model::AddressFormat::Hex => address_span(first, last),
+        crate::model::AddressFormat::Decimal if first == last => first.to_string(),
+        crate::model::AddressFormat::Decimal => format!("{first} – {last}"),
     }
 }
 
@@ -214,7 +225,24 @@ pub fn width(w: Width) -> String {
         Width::Word => "one register".into(),
         Width::Pair(WordOrder::HighFirst) => "32-bit pair, high word first".into(),
         Width::Pair(WordOrder::LowFirst) => "32-bit pair, low word first".into(),
+        Width::Text(n) => format!("text in {n} registers ({} characters)", 2 * u16::from(n)),
     }
+}
+
+/// A string register's layout: `text in 8 registers (16 characters), high byte first`, and
+/// the manual's example when the map gives one (escaped: `example "Q2-0400"`).
+pub fn text(registers: u8, order: ByteOrder, example: Option<&str>) -> String {
+    let order = match order {
+        ByteOrder::HighFirst => "high byte first",
+        ByteOrder::LowFirst => "low byte first",
+    };
+    let mut out = format!("{}, {order}", width(Width::Text(registers)));
+    if let Some(e) = example {
+        out.push_str(", example \"");
+        let _ = drivemap_core::text::write_escaped(&mut out, e.as_bytes());
+        out.push('"');
+    }
+    out
 }
 
 /// What kind of value a register holds.
@@ -229,6 +257,7 @@ pub fn kind(plan: &RegisterPlan) -> &'static str {
         ValueShape::Number => "quantity",
         ValueShape::Codes(_) => "enumeration",
         ValueShape::Bits { .. } => "bit fields",
+        ValueShape::Text { .. } => "text",
     }
 }
 

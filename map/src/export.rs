@@ -25,7 +25,7 @@ use serde_json::{Value, json};
 use crate::facts::data::Quantity;
 use drivemap_core::stated::ProtocolFact;
 
-use crate::facts::{self, Figure, ProtocolFacts, ProtocolKey, ProtocolRow, RegisterFacts};
+use crate::facts::{self, FactKey, Figure, ProtocolFacts, ProtocolKey, ProtocolRow, RegisterFacts};
 use crate::ir::Drive;
 use crate::model::DefaultValue;
 
@@ -74,10 +74,10 @@ fn register(f: &RegisterFacts) -> Value {
         })
         .collect();
     let word_order = match d.width {
-        drivemap_core::width::Width::Word => None,
+        drivemap_core::width::Width::Word | drivemap_core::width::Width::Text(_) => None,
         drivemap_core::width::Width::Pair(order) => Some(order),
     };
-    json!({
+    let mut out = json!({
         "id": f.id,
         "param": f.param,
         "name": f.name,
@@ -130,7 +130,38 @@ fn register(f: &RegisterFacts) -> Value {
         "notes": f.notes,
         "conflicts": d.conflicts,
         "unknown": d.unknown,
-    })
+    });
+    // Only a string has the key, so the export of a map without strings is as it was.
+    if let (Some(t), Some(obj)) = (&d.string, out.as_object_mut()) {
+        obj.insert(
+            "string".into(),
+            json!({
+                "registers": t.registers,
+                "byte_order": t.byte_order.name(),
+                "example": t.example,
+                "source": t.source,
+            }),
+        );
+    }
+    // The Modicon reference the manual prints beside the register, after its address, only
+    // where the map records one (`reference:`).
+    if let (Some(reference), Value::Object(o)) = (f.get(FactKey::Reference), &mut out) {
+        o.shift_insert(4, "reference".to_owned(), json!(reference.value));
+    }
+    // Only on a register read from another parameter than the one written (BICO), after
+    // `param`: every other register's export is as before.
+    if let (Some(p), Some(o)) = (&f.read_param, out.as_object_mut()) {
+        let mut with = serde_json::Map::with_capacity(o.len() + 1);
+        for (k, v) in std::mem::take(o) {
+            let after_param = k == "param";
+            with.insert(k, v);
+            if after_param {
+                with.insert("read_param".to_owned(), json!(p));
+            }
+        }
+        *o = with;
+    }
+    out
 }
 
 fn table_name(t: drivemap_core::register::Table) -> &'static str {

@@ -48,12 +48,14 @@ pub use crate::examples::{Byte, Direction, Example, Says, hex_text, parse_bytes}
 pub use crate::indexed::{Entry as IndexedEntry, Indexed};
 pub use crate::ir::{Group, SerialDefaults};
 pub use crate::model::{
-    AddressAlternative, AddressFormat, CodeRef, Codes, Condition, Conflict, DefaultValue,
-    Dependency, DependentDefault, DisplayStep, Draft, DriveMeta, EdgeSpec, EnumValue,
-    ExternalQuantity, Field as BitField, Gap, Manual, Pair, Parity, Protocol, RatioScale, Reading,
-    Reference, RegisterFunctions, RelativeLimit, RelativeScale, Removed, RepeatNeedsChange,
-    RolePlace, Scale, ScaleCase, SelectedScale, TransportName, Unknown, UnknownItem, VariantAxis,
-    VariantOption, VariantOverride,
+    AddressAlternative, AddressFormat, Addressing, Broadcast, CodeRef, Codes, Command,
+    CommandWrite, Condition, Conflict, DefaultValue, Dependency, DependentDefault, DisplayStep,
+    Draft, DriveMeta, EdgeSpec, EdgeUnknown, Eeprom, EnumValue, ExceptionCode, Exceptions,
+    ExternalQuantity, Field as BitField, FunctionCodes, Gap, Interval, Limit, Manual, Pair, Parity,
+    Protocol, RatioScale, Reading, Reference, RegisterFunctions, RelativeLimit, RelativeScale,
+    Removed, RepeatNeedsChange, RolePlace, Scale, ScaleCase, SelectedScale, Serial,
+    SerialFormatCase, SerialFormats, SlaveAddress, StringText, Timing, TransportName, Unknown,
+    UnknownItem, VariantAxis, VariantOption, VariantOverride,
 };
 pub use crate::others::{Other as OtherCitation, Rule as CitationRule};
 pub use crate::stated::Unprinted;
@@ -74,6 +76,9 @@ pub use written::{WrittenMap, WrittenRegister};
 pub enum FactKey {
     /// Where the register is: `0200h`, or a pair's span `0200h – 0201h`.
     Address,
+    /// The Modicon reference the manual prints beside the register (`reference:`), as printed:
+    /// `40024`. Only where the map records one.
+    Reference,
     /// A 32-bit pair's width and word order (`32-bit pair, high word first`), cited.
     Width,
     /// Access from the plan: `read/write`.
@@ -100,6 +105,9 @@ pub enum FactKey {
     FunctionCodes,
     /// What a read means when it differs from a write: `0 Unlock, 1 Lock`.
     ReadValues,
+    /// The parameter a read returns when it is not the one a write sets: `r0055.8 (writes
+    /// set P2200)`.
+    ReadParam,
     /// An alternative address (`0201h`), cited; its condition in [`Fact::when`].
     AlternativeAddress,
     /// How the keypad shows a finer value.
@@ -111,6 +119,7 @@ impl FactKey {
     pub const fn label(self) -> &'static str {
         match self {
             FactKey::Address => "address",
+            FactKey::Reference => "Modicon reference",
             FactKey::Width => "width",
             FactKey::Access => "access",
             FactKey::Broadcast => "broadcast",
@@ -123,6 +132,7 @@ impl FactKey {
             FactKey::RepeatNeedsChange => "repeat needs change",
             FactKey::FunctionCodes => "function codes",
             FactKey::ReadValues => "read meaning",
+            FactKey::ReadParam => "read from",
             FactKey::AlternativeAddress => "alternative address",
             FactKey::DisplaySteps => "display steps",
         }
@@ -215,8 +225,11 @@ pub struct RegisterFacts {
     pub row: usize,
     /// The register id.
     pub id: String,
-    /// The parameter number as printed.
+    /// The parameter number as printed (with `read_param`, the one a write sets).
     pub param: Option<String>,
+    /// The parameter a read returns, when it is not `param` (Siemens BICO).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub read_param: Option<String>,
     /// The name as printed.
     pub name: String,
     /// The communication address as the manual prints it.
@@ -287,7 +300,9 @@ pub(crate) fn scale_row(drive: &Drive, r: &Register) -> Option<Fact> {
     let scale = match r.kind() {
         ValueKind::Quantity(scale) => data::scale_of(drive, scale),
         ValueKind::UnitQuantity => data::ScaleData::Factor(1.0),
-        ValueKind::Word | ValueKind::Enum(_) | ValueKind::Bits(_) => return None,
+        ValueKind::Word | ValueKind::Enum(_) | ValueKind::Bits(_) | ValueKind::Text(_) => {
+            return None;
+        }
     };
     let (key, value) = scale.row(unit)?;
     Some(Fact::new(key, value, None))
@@ -301,20 +316,42 @@ fn rows(drive: &Drive, r: &Register) -> Vec<Fact> {
     let plan = drive.register_plan(r);
     let unit = d.unit.as_deref().unwrap_or("");
     let range = describe::range(d.min, d.max, unit);
-    let address = match &d.pair {
-        None => describe::address(d.address),
-        Some(_) => describe::address_span(d.address, d.address.wrapping_add(1)),
+    // In the notation the map gives its addresses: `0200h`, or `45 (002Dh)` in a map that
+    // numbers its registers in decimal; a pair's or a string's span from its first to its last
+    // word.
+    let address = match (r.width().count(), drive.address_format) {
+        (1, _) => manual_address(drive, d.address),
+        (n, AddressFormat::Hex) => describe::address_span(d.address, d.address.wrapping_add(n - 1)),
+        (n, AddressFormat::Decimal) => format!(
+            "{} – {} ({})",
+            d.address,
+            d.address.wrapping_add(n - 1),
+            describe::address_span(d.address, d.address.wrapping_add(n - 1))
+        ),
     };
     let restricted = plan.restriction != drivemap_core::register::WriteRestriction::None;
     let table = [
         Some(Fact::new(K::Address, address, None)),
+        (d.reference.as_deref()).map(|t| Fact::new(K::Reference, t, None)),
         (d.pair.as_ref())
-            .map(|p| Fact::new(K::Width, describe::width(r.width()), p.source.as_deref())),
+            .map(|p| Fact::new(K::Width, describe::width(r.width()), p.source.as_deref()))
+            .or_else(|| {
+                let t = d.string.as_ref()?;
+                let text = describe::text(t.registers, t.byte_order, t.example.as_deref());
+                Some(Fact::new(K::Width, text, t.source.as_deref()))
+            }),
         Some(Fact::new(
             K::Access,
             describe::access(plan.info.access),
             None,
         )),
+        (d.read_param.as_ref()).map(|p| {
+            let text = match &d.param {
+                Some(w) => format!("{p} (writes set {w}; a write does not show in a read)"),
+                None => p.clone(),
+            };
+            Fact::new(K::ReadParam, text, None)
+        }),
         (r.broadcast).then(|| Fact::new(K::Broadcast, "broadcast only (slave 0)", None)),
         (d.unit.clone()).map(|u| Fact::new(K::Unit, u, None)),
         scale_row(drive, r),
@@ -346,7 +383,7 @@ fn rows(drive: &Drive, r: &Register) -> Vec<Fact> {
         when: Some(describe::condition(&alt.when)),
         ..Fact::new(
             K::AlternativeAddress,
-            describe::address(alt.address),
+            manual_address(drive, alt.address),
             Some(&alt.source),
         )
     });
@@ -413,6 +450,7 @@ pub(crate) fn register(drive: &Drive, r: &Register) -> RegisterFacts {
         row: drive.plan().order[r.index()],
         id: d.id.clone(),
         param: d.param.clone(),
+        read_param: d.read_param.clone(),
         name: d.name.clone(),
         address: d.address,
         kind: ConversionKind::of(&drive.register_plan(r).conversion),

@@ -95,6 +95,9 @@ pub(crate) struct Register {
     pub repeat_needs_change: Option<(model::RepeatNeedsChange, Path)>,
     /// The register's `function_codes`, else its group's, with where it is written.
     pub function_codes: Option<(model::RegisterFunctions, Path)>,
+    /// Its selected scale was written as `limits: {selected_by, cases}` (its cases are located
+    /// there: [`Register::cases_path`]).
+    pub limits_form: bool,
     /// Its place in [`Drive::registers`], given by `expand` (only this crate can make a
     /// [`RegisterIndex`]): the handle the plan lookups ([`Drive::register_plan`], lowering)
     /// index by.
@@ -117,6 +120,8 @@ pub(crate) enum ValueKind<'a> {
     UnitQuantity,
     Enum(&'a [EnumValue]),
     Bits(&'a [Field]),
+    /// Text over [`Register::width`] registers.
+    Text(&'a crate::model::StringText),
 }
 
 impl Register {
@@ -131,9 +136,10 @@ impl Register {
 
     /// One register, or a 32-bit pair in the map's word order.
     pub(crate) fn width(&self) -> Width {
-        match &self.def.pair {
-            None => Width::Word,
-            Some(p) => Width::Pair(p.order),
+        match (&self.def.pair, &self.def.string) {
+            (_, Some(t)) => Width::Text(t.registers),
+            (None, None) => Width::Word,
+            (Some(p), None) => Width::Pair(p.order),
         }
     }
 
@@ -147,7 +153,9 @@ impl Register {
     }
 
     pub(crate) fn kind(&self) -> ValueKind<'_> {
-        if !self.def.fields.is_empty() {
+        if let Some(text) = &self.def.string {
+            ValueKind::Text(text)
+        } else if !self.def.fields.is_empty() {
             ValueKind::Bits(&self.def.fields)
         } else if !self.def.values.is_empty() {
             ValueKind::Enum(&self.def.values)
@@ -240,6 +248,22 @@ impl Register {
     pub(crate) fn key_path(&self, key: &str) -> Path {
         self.path.key(key)
     }
+
+    /// Where the cases of its selected scale are written: `scale.cases`, or `limits.cases`
+    /// for a range chosen by a setting ([`Register::limits_form`]).
+    pub(crate) fn cases_path(&self) -> Path {
+        if self.limits_form {
+            self.path.key("limits").key("cases")
+        } else {
+            self.path.key("scale").key("cases")
+        }
+    }
+
+    /// Where its selected scale is written: `scale`, or `limits` ([`Register::cases_path`]).
+    pub(crate) fn selection_path(&self) -> Path {
+        self.path
+            .key(if self.limits_form { "limits" } else { "scale" })
+    }
 }
 
 impl Drive {
@@ -310,7 +334,9 @@ impl Drive {
         Diagnostic::new(self.locate(path), register, message)
     }
 
-    /// A register by id, or else by parameter number as printed.
+    /// A register by id, or else by parameter number as printed (the one a write sets, then
+    /// the one a read returns where they differ: `read_param`), or else by the Modicon
+    /// reference it records (`reference: 40024`, named `40024` or `400024`).
     pub(crate) fn find(&self, name: &str) -> Option<&Register> {
         self.registers
             .iter()
@@ -319,6 +345,21 @@ impl Drive {
                 self.registers
                     .iter()
                     .find(|r| r.def.param.as_deref() == Some(name))
+            })
+            .or_else(|| {
+                self.registers
+                    .iter()
+                    .find(|r| r.def.read_param.as_deref() == Some(name))
+            })
+            .or_else(|| {
+                let m = crate::modicon::Modicon::parse(name)?;
+                self.registers.iter().find(|r| {
+                    r.def
+                        .reference
+                        .as_deref()
+                        .and_then(crate::modicon::Modicon::parse)
+                        == Some(m)
+                })
             })
     }
 
@@ -562,8 +603,86 @@ pub(crate) fn module_name(id: &str) -> String {
     id.replace(['-', '.'], "_")
 }
 
-/// Builds the IR from a loaded map. Errors are only those of block expansion; everything else
-/// is left to `validate`.
+/// Why a register's `limits: {selected_by}` cannot be expanded: the key to point at and what to
+/// write instead.
+struct LimitsError {
+    key: &'static str,
+    message: String,
+}
+
+/// Expands `limits: {selected_by, cases}` into the selected scale it means: each case the
+/// register's own decimal `scale` (1 without one) and the case's `min`/`max`, so the plan, the
+/// write gate, the simulator, parameter-set ordering and every report treat a range chosen by a
+/// setting exactly as a scale chosen by one (there is one mechanism). `limits` is taken off the
+/// definition once expanded. Refused: beside a `scale` that is not a decimal factor, beside
+/// codes or bit fields, or beside limits of its own (`min`/`max`, or a variant's) that would
+/// say a second range.
+fn selected_limits(def: &mut model::Register) -> Result<(), LimitsError> {
+    let Some(limits) = def.limits.take() else {
+        return Ok(());
+    };
+    let fail = |key, message: String| Err(LimitsError { key, message });
+    let factor = match &def.scale {
+        None if def.unit.is_none() => {
+            return fail(
+                "limits",
+                "`limits: {selected_by: ..}` is the range of a quantity: give the register its `unit` (and its `scale` when not 1)".to_owned(),
+            );
+        }
+        None => 1.0,
+        Some(Scale::Factor(f)) => *f,
+        Some(_) => {
+            return fail(
+                "limits",
+                "`limits: {selected_by: ..}` needs a fixed decimal `scale`; a scale chosen by a setting carries its limits in its cases (`scale: {selected_by: .., cases: [{when: .., scale: .., min: .., max: ..}]}`)".to_owned(),
+            );
+        }
+    };
+    if !def.values.is_empty() || !def.fields.is_empty() {
+        return fail(
+            "limits",
+            "`limits: {selected_by: ..}` is the range of a quantity, not of codes or bit fields"
+                .to_owned(),
+        );
+    }
+    if def.min.is_some() || def.max.is_some() {
+        return fail(
+            if def.min.is_some() { "min" } else { "max" },
+            "`min`/`max` beside `limits: {selected_by: ..}`: which range applies? give each case its `min` and `max` instead".to_owned(),
+        );
+    }
+    if let Some((v, _)) = def
+        .by_variant
+        .iter()
+        .find(|(_, o)| o.min.is_some() || o.max.is_some())
+    {
+        return fail(
+            "by_variant",
+            format!(
+                "`by_variant.{v}` gives limits beside `limits: {{selected_by: ..}}`: ranges chosen both by a variant and by a setting are not expressible; give each case its range"
+            ),
+        );
+    }
+    def.scale = Some(Scale::Selected(model::SelectedScale {
+        selected_by: limits.selected_by,
+        cases: limits
+            .cases
+            .into_iter()
+            .map(|c| model::ScaleCase {
+                when: c.when,
+                scale: Scale::Factor(factor),
+                min: c.min,
+                max: c.max,
+                source: c.source,
+            })
+            .collect(),
+    }));
+    Ok(())
+}
+
+/// Builds the IR from a loaded map. Errors are those of block expansion and of a
+/// `limits: {selected_by}` that cannot be expanded ([`selected_limits`]); everything else is
+/// left to `validate`.
 pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
     let model = &map.model;
     let mut errors = Vec::new();
@@ -596,7 +715,16 @@ pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                     }
                 },
             };
-            for def in instances {
+            for mut def in instances {
+                let limits_form = def.limits.is_some();
+                if let Err(e) = selected_limits(&mut def) {
+                    errors.push(Diagnostic::new(
+                        map.locate(&path.key(e.key)),
+                        Some(&r.id),
+                        e.message,
+                    ));
+                    continue;
+                }
                 let table = def
                     .modbus_table
                     .or(g.modbus_table)
@@ -607,13 +735,18 @@ pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                     // discrete input without an access is read-only in every map: writing a
                     // coil runs, reverses or trips a drive, so it is written only where the
                     // map says so.
-                    access: def.access.or(g.access).unwrap_or(
-                        if model.draft.is_some() || table.is_bits() {
-                            Access::Read
-                        } else {
-                            Access::ReadWrite
-                        },
-                    ),
+                    // A string (text) is read-only unless the register itself says otherwise
+                    // (refused by `strings_valid`): its group's access is that of its numbers.
+                    access: def
+                        .access
+                        .or(g.access.filter(|_| def.string.is_none()))
+                        .unwrap_or(
+                            if model.draft.is_some() || table.is_bits() || def.string.is_some() {
+                                Access::Read
+                            } else {
+                                Access::ReadWrite
+                            },
+                        ),
                     table,
                     write_restriction: def
                         .write_restriction
@@ -633,6 +766,7 @@ pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                         (None, None) => None,
                     },
                     path: path.clone(),
+                    limits_form,
                     def,
                     index: RegisterIndex(registers.len()),
                 });

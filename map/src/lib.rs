@@ -22,7 +22,7 @@
 //! This crate has no code generator in it (no `syn`, `quote`, `prettyplease`): the run-time tools
 //! (`drivemap-live`, `drivemap-sim`, the `drivemap` command line) read maps through it alone.
 #![doc = include_str!("../README.md")]
-#![warn(unreachable_pub, missing_docs)]
+#![warn(unreachable_pub, missing_docs, unnameable_types)]
 
 // The map as written and its expansion, checks and lowering: private. What a consumer reads is
 // the `Map` a `Loader` gives, its plan (`MapPlan`) and its facts view (`facts`).
@@ -55,6 +55,7 @@ pub mod describe;
 pub mod export;
 pub mod facts;
 pub mod migrate;
+pub mod modicon;
 
 pub use diagnostic::{Diagnostic, Diagnostics, Loc};
 pub use loader::{

@@ -652,6 +652,9 @@ impl Lowering<'_> {
                     cases: leak(cases),
                 }
             }
+            ValueKind::Text(text) => Conversion::Text {
+                order: text.byte_order,
+            },
             ValueKind::Enum(values) => Conversion::Enum {
                 values: labels(values),
                 unlisted: match (r.def.min, r.def.max) {
@@ -739,6 +742,7 @@ impl Lowering<'_> {
                 }
             }),
             read_values: labels(&d.read_values),
+            read_param: d.read_param.as_deref().map(text),
             limit: d.max_relative.as_ref().map(|l| RelativeLimit {
                 reference: self.reference(r, "max_relative", &l.relative_to),
                 percent: l.percent,
@@ -812,7 +816,9 @@ fn envelope(conversion: &Conversion, word: RawRange) -> RawRange {
         Conversion::Word { range, .. }
         | Conversion::Decimal { range, .. }
         | Conversion::Ratio { range, .. } => all(range, &mut ranges),
-        Conversion::Relative { .. } | Conversion::Bits { .. } => ranges.push(word),
+        Conversion::Relative { .. } | Conversion::Bits { .. } | Conversion::Text { .. } => {
+            ranges.push(word)
+        }
         Conversion::Enum { values, unlisted } => {
             ranges.extend(values.iter().map(|v| RawRange {
                 min: i64::from(v.code),

@@ -386,6 +386,12 @@ impl<'m> RegisterRef<'m> {
         self.reg.def.param.as_deref()
     }
 
+    /// The parameter a read returns when it is not [`RegisterRef::param`], which is then the
+    /// one a write sets (Siemens BICO: read r0055.8, write P2200).
+    pub fn read_param(&self) -> Option<&'m str> {
+        self.reg.def.read_param.as_deref()
+    }
+
     /// The name as printed.
     pub fn name(&self) -> &'m str {
         &self.reg.def.name
@@ -405,6 +411,18 @@ impl<'m> RegisterRef<'m> {
     /// The communication address as the manual prints it (the plan's `info.address`).
     pub fn address(&self) -> u16 {
         self.reg.def.address
+    }
+
+    /// The Modicon reference the manual prints beside the register (`reference:`), as printed
+    /// (`40024`, a coil's `00001`).
+    pub fn reference(&self) -> Option<&'m str> {
+        self.reg.def.reference.as_deref()
+    }
+
+    /// The Modicon reference the map records for the register, read
+    /// ([`crate::modicon::Modicon::parse`]); `None` when it records none (or `check` refuses it).
+    pub fn modicon(&self) -> Option<crate::modicon::Modicon> {
+        self.reference().and_then(crate::modicon::Modicon::parse)
     }
 
     /// The unit as the manual prints it.

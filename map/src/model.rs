@@ -410,6 +410,8 @@ impl std::fmt::Display for TransportName {
     }
 }
 
+/// `protocol.slave_address`: the range of slave addresses the drive accepts, its factory
+/// default and the parameter that sets it, as the manual prints them.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SlaveAddress {
@@ -423,11 +425,13 @@ pub struct SlaveAddress {
     /// the Modbus unicast range 1-247 then, and say so.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unknown: Option<String>,
+    /// The factory setting, where the manual prints one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub default: Option<u8>,
     /// Parameter that sets it (`Sn-36`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub param: Option<String>,
+    /// Where the manual says it (`file:line`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
@@ -436,6 +440,7 @@ pub struct SlaveAddress {
     pub indirect: Option<String>,
 }
 
+/// `protocol.broadcast`: what the drive executes when a request is addressed to slave 0.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Broadcast {
@@ -451,6 +456,7 @@ pub struct Broadcast {
     /// `functions` and `registers` are not given, and the runtime sends no broadcast at all.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unknown: Option<String>,
+    /// Where the manual says it (`file:line`).
     pub source: String,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
@@ -458,13 +464,18 @@ pub struct Broadcast {
     pub indirect: Option<String>,
 }
 
+/// One exception code of `protocol.exceptions`, as the manual prints it.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExceptionCode {
+    /// The code in the exception reply's data byte.
     pub code: u8,
+    /// Its name as the manual prints it (`Illegal data address`).
     pub name: String,
+    /// What the manual says it means, if more than the name.
     #[serde(default)]
     pub description: String,
+    /// Where the manual says it (`file:line`).
     pub source: String,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
@@ -476,14 +487,20 @@ pub struct ExceptionCode {
 /// non-volatile memory; wears the EEPROM): the vocabulary crate's.
 pub(crate) use drivemap_core::profile::CommandKind;
 
+/// One of `protocol.commands`: a command the drive executes on a write (the V7's ENTER, which
+/// stores written parameters), with the writes that give it.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Command {
+    /// Its id in the map (`enter`).
     pub id: String,
+    /// Its name as the manual prints it.
     pub name: String,
+    /// `accept` or `persist` (stores into non-volatile memory).
     pub kind: CommandKind,
     /// Writes in order.
     pub writes: Vec<CommandWrite>,
+    /// Where the manual says it (`file:line`).
     pub source: String,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
@@ -491,18 +508,23 @@ pub struct Command {
     pub indirect: Option<String>,
 }
 
+/// One write of a [`Command`]: a word to a register.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CommandWrite {
+    /// The register's address as the manual numbers it.
     pub address: u16,
+    /// The word written.
     pub value: u16,
 }
 
+/// `protocol.eeprom`: the non-volatile memory's endurance, as the manual prints it.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Eeprom {
     /// Writes the manual says the memory endures.
     pub endurance: u32,
+    /// Where the manual says it (`file:line`).
     pub source: String,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
@@ -510,6 +532,8 @@ pub struct Eeprom {
     pub indirect: Option<String>,
 }
 
+/// `protocol.addressing`: how the manual's register numbers become the addresses in requests,
+/// per transport.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Addressing {
@@ -519,7 +543,9 @@ pub struct Addressing {
     /// PDU address = manual address + `tcp_offset` on Modbus TCP.
     #[serde(default)]
     pub tcp_offset: i32,
+    /// The manual's own words on it (`RTU PLC address 40000+hex`).
     pub description: String,
+    /// Where the manual says it (`file:line`).
     pub source: String,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
@@ -527,6 +553,7 @@ pub struct Addressing {
     pub indirect: Option<String>,
 }
 
+/// `protocol.timing`: the silences and delays of the serial line, as the manual prints them.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Timing {
@@ -560,12 +587,14 @@ pub struct Timing {
     /// 24 bits + 10 ms).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub request_gap: Option<Interval>,
+    /// Where the manual says it (`file:line`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub indirect: Option<String>,
+    /// What the transcriber notes about the timing.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
@@ -592,16 +621,20 @@ impl Timing {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Interval {
+    /// Milliseconds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ms: Option<f64>,
+    /// Bit times at the line's baud rate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bits: Option<u32>,
+    /// Character times at the line's baud rate and format.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chars: Option<f64>,
     /// The manual prints no such interval: why (`response_time: {unknown: "<why>"}`); no
     /// `ms`, `bits` or `chars` then.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unknown: Option<String>,
+    /// Where the manual says it (`file:line`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
@@ -610,6 +643,7 @@ pub struct Interval {
     pub indirect: Option<String>,
 }
 
+/// `protocol.serial`: the serial line's settings the drive offers, as the manual prints them.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Serial {
@@ -617,16 +651,22 @@ pub struct Serial {
     /// rates, parities or formats are given then; `source` only where the manual says so.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unknown: Option<String>,
+    /// The baud rates the drive offers.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub baud_rates: Vec<u32>,
+    /// The factory setting among them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub default_baud: Option<u32>,
+    /// The parities the drive offers.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub parities: Vec<Parity>,
+    /// The factory setting among them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub default_parity: Option<Parity>,
+    /// Data bits per character (8 when not given).
     #[serde(default = "default_data_bits")]
     pub data_bits: u8,
+    /// Stop bits per character (1 when not given).
     #[serde(default = "default_stop_bits")]
     pub stop_bits: u8,
     /// Bits per character on the wire when the manual fixes it regardless of parity (TDS-V8:
@@ -654,7 +694,9 @@ pub struct Serial {
 pub struct SerialFormats {
     /// The parameter (register id or parameter number) whose code selects the format.
     pub selected_by: String,
+    /// Each format with the code that selects it.
     pub cases: Vec<SerialFormatCase>,
+    /// Where the manual says it (`file:line`).
     pub source: String,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
     /// reason is required. Review does not check such a citation by content.
@@ -671,8 +713,11 @@ pub struct SerialFormatCase {
     /// Data bits; the line's `data_bits` when not given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub data_bits: Option<u8>,
+    /// The format's parity.
     pub parity: Parity,
+    /// The format's stop bits.
     pub stop_bits: u8,
+    /// Where the manual says it (`file:line`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
     /// The citation is deliberately indirect (the line does not mention the item itself); the
@@ -782,13 +827,23 @@ pub(crate) use drivemap_core::register::WriteRestriction;
 pub(crate) struct Register {
     /// snake_case identifier; becomes the generated type name in PascalCase.
     pub id: String,
-    /// Parameter number exactly as printed (`Bn-01`, `n019`, `CM.03`).
+    /// Parameter number exactly as printed (`Bn-01`, `n019`, `CM.03`); with `read_param`, the
+    /// parameter a write sets.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub param: Option<String>,
+    /// The parameter a read returns when it is not `param` (Siemens BICO: read r0055 bit 8,
+    /// write P2200), exactly as printed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub read_param: Option<String>,
     /// Name as printed.
     pub name: String,
     /// Communication address as the manual prints it.
     pub address: u16,
+    /// The Modicon reference the manual prints beside the register's own number (`40001`, a
+    /// coil's `00001`), its digits as printed ([`crate::modicon`]): held to `address`, the
+    /// register's table and `protocol.addressing`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub access: Option<Access>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -805,6 +860,10 @@ pub(crate) struct Register {
     /// read in one request, written whole with 10h. Absent: one 16-bit register.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pair: Option<Pair>,
+    /// Text in this register and the ones after it (`{registers: 8, byte_order: high_first,
+    /// source: ..}`): read whole in one request, two characters per register. Absent: a number.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub string: Option<StringText>,
     /// Lower limit in engineering units, for the base variant.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min: Option<f64>,
@@ -820,6 +879,12 @@ pub(crate) struct Register {
     /// reference at most 100 % of the maximum output frequency n011), with its citation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_relative: Option<RelativeLimit>,
+    /// Limits chosen by another parameter's code while the scale stays fixed ("10.0-400.0 %
+    /// under V/f, 10.0-150.0 % under vector control"): `{selected_by: .., cases: [..]}`.
+    /// Expanded into a selected scale whose cases all carry the register's own `scale`
+    /// ([`crate::ir::expand`]): one mechanism decides both.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limits: Option<SelectedLimits>,
     /// Addresses the register moves to under some condition.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub address_alternatives: Vec<AddressAlternative>,
@@ -884,6 +949,29 @@ pub struct Pair {
 
 /// Which half of a 32-bit pair comes first (at the lower address).
 pub(crate) use drivemap_core::width::WordOrder;
+
+/// Text held in consecutive registers, two characters each (model names, serial numbers,
+/// firmware versions).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct StringText {
+    /// How many registers the text takes, from the register's address on.
+    pub registers: u8,
+    /// Which byte of each register holds the earlier character.
+    pub byte_order: ByteOrder,
+    /// An example of the text as the manual prints it (`"Q2-0400"`): what the simulator
+    /// serves; cited by `source` (or the register's row). Absent: the simulator serves its
+    /// documented placeholder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub example: Option<String>,
+    /// `file:line` where the manual states the byte order or the example, when not on the
+    /// register's row.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+/// Which byte of a register holds the earlier character: the vocabulary crate's.
+pub(crate) use drivemap_core::text::ByteOrder;
 
 /// How a raw word becomes an engineering value.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -975,6 +1063,34 @@ pub struct ScaleCase {
     pub when: Vec<u16>,
     /// A factor or a relative scale (not another selection).
     pub scale: Scale,
+    /// The lower limit in engineering units under this case (base variant).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    /// The upper limit in engineering units under this case (base variant).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+    /// `file:line` of the case's row in the manual.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+/// `limits: {selected_by: .., cases: [..]}`: a register's range chosen by another parameter's
+/// code, its scale fixed.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SelectedLimits {
+    /// A register id or parameter number (or `<register>.<field>`) whose code selects the case.
+    pub selected_by: String,
+    /// The cases, in the map's order.
+    pub cases: Vec<LimitCase>,
+}
+
+/// One case of [`SelectedLimits`]: the selector's codes and the range under them.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LimitCase {
+    /// The selector's codes for which this case applies.
+    pub when: Vec<u16>,
     /// The lower limit in engineering units under this case (base variant).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min: Option<f64>,
@@ -1277,6 +1393,7 @@ pub struct Removed {
 pub struct Limit {
     /// The number, when the map gives one.
     pub value: Option<u16>,
+    /// Where the manual says it (`file:line`).
     pub source: Option<String>,
     /// Why the manual prints no such limit and where `value` comes from.
     pub unknown: Option<String>,
@@ -1366,7 +1483,9 @@ impl Serialize for Limit {
 /// "<why>", source: ...}`). `codes` is always required: the runtime refuses any other function.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct FunctionCodes {
+    /// The function codes, in the map's order.
     pub codes: Vec<u8>,
+    /// Where the manual says it (`file:line`).
     pub source: Option<String>,
     /// Why the manual prints no list of function codes and where `codes` come from.
     pub unknown: Option<String>,
@@ -1453,6 +1572,7 @@ impl Serialize for FunctionCodes {
 /// Reads as the list ([`std::ops::Deref`]).
 #[derive(Debug, Clone, Default)]
 pub struct Exceptions {
+    /// The codes the manual prints (empty with `unknown`).
     pub list: Vec<ExceptionCode>,
     /// Why the manual prints no exception list.
     pub unknown: Option<String>,

@@ -119,7 +119,8 @@ impl Rule {
             Rule::Register(i) => {
                 let r = &drive.registers[*i].def;
                 let mut e: Vec<String> = r.param.iter().cloned().collect();
-                e.push(format!("{:04X}h", r.address));
+                e.push(crate::describe::address_as(drive.address_format, r.address));
+                e.extend(r.reference.iter().cloned());
                 e.push(format!("\"{}\"", r.name));
                 format!("register {}", e.join(", "))
             }
@@ -148,11 +149,16 @@ impl Rule {
                 for i in registers {
                     let r = &drive.registers[*i].def;
                     e.extend(r.param.iter().cloned());
-                    e.push(format!("{:04X}h", r.address));
+                    e.push(crate::describe::address_as(drive.address_format, r.address));
+                    e.extend(r.reference.iter().cloned());
                 }
                 e.extend(names.iter().map(|n| format!("\"{n}\"")));
                 e.extend(params.iter().cloned());
-                e.extend(addresses.iter().map(|a| format!("{a:04X}h")));
+                e.extend(
+                    addresses
+                        .iter()
+                        .map(|a| crate::describe::address_as(drive.address_format, *a)),
+                );
                 e.extend(codes.iter().map(|c| format!("{c:02X}h")));
                 e.extend(numbers.iter().cloned());
                 e.extend(words.iter().map(|w| format!("`{w}`")));
@@ -360,6 +366,7 @@ fn rule_of(drive: &Drive, place: &CitationPlace<'_>) -> Option<(u8, &'static str
         | PlaceKind::Field(_)
         | PlaceKind::FieldValue { .. }
         | PlaceKind::Pair
+        | PlaceKind::Text
         | PlaceKind::RepeatNeedsChange
         | PlaceKind::ByVariant(_)
         | PlaceKind::AddressAlternative(_)

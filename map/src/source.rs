@@ -37,14 +37,14 @@ pub enum NodeKind {
 
 /// One step of a path into a tree.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub enum Seg {
+pub(crate) enum Seg {
     Key(String),
     Index(usize),
 }
 
 /// A path from the root of a map to a node (`groups[2].registers[5].scale`).
 #[derive(Debug, Clone, Default, PartialEq, Eq, Hash)]
-pub struct Path(pub Vec<Seg>);
+pub struct Path(pub(crate) Vec<Seg>);
 
 impl Path {
     /// The root of a map.
@@ -335,6 +335,10 @@ impl Builder<'_> {
                     .and_then(|slot| crate::hex::literal(&text, slot));
                 let value = if let Some(value) = hex {
                     value
+                } else if self.digits_as_printed() {
+                    // A Modicon reference keeps its digits: YAML would read the coil `00017`
+                    // as 17 and lose the table digit.
+                    Value::String(text.to_string())
                 } else if style == ScalarStyle::Plain {
                     // Let yaml_serde resolve plain scalars (ints incl. 0x.., floats, bools, null).
                     serde_yaml::from_str::<Value>(&text)
@@ -480,6 +484,18 @@ impl Builder<'_> {
             }
             _ => Ok(()),
         }
+    }
+
+    /// Whether the scalar about to be pushed is a register's `reference:` (a Modicon reference,
+    /// kept as its printed digits; see [`crate::modicon`]).
+    fn digits_as_printed(&self) -> bool {
+        matches!(
+            self.stack.last(),
+            Some(Frame::Map {
+                pending_key: Some((key, _)),
+                ..
+            }) if key == "reference"
+        )
     }
 
     /// Whether the scalar about to be pushed is a value whose number the manuals print in hex

@@ -5,7 +5,7 @@
 //!
 //! All text about a map comes from `drivemap_map::describe`.
 #![doc = include_str!("../README.md")]
-#![warn(missing_docs, unreachable_pub)]
+#![warn(missing_docs, unreachable_pub, unnameable_types)]
 
 pub mod diff;
 pub mod reference;

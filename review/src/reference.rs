@@ -332,15 +332,23 @@ fn span(drive: &Map, first: u16, last: u16) -> String {
     format!("{} – {}", addr(drive, first), addr(drive, last))
 }
 
-/// The address cell: the address as the manual prints it, a pair's span and its cited width
-/// row, and each alternative address with the condition of its row.
+/// The address cell: the address as the manual prints it, a pair's or string's span and its
+/// cited width row, and each alternative address with the condition of its row.
 fn address_cell(drive: &Map, f: &RegisterFacts) -> String {
     let mut parts = vec![match f.get(FactKey::Width) {
-        None => addr(drive, f.address),
+        None => match f.get(FactKey::Reference) {
+            // The Modicon reference the map records, beside the address as the manual prints.
+            Some(reference) => format!("{}, Modicon {}", addr(drive, f.address), reference.value),
+            None => addr(drive, f.address),
+        },
         Some(width) => {
             let pair = format!(
                 "{} ({}",
-                span(drive, f.address, f.address.wrapping_add(1)),
+                span(
+                    drive,
+                    f.address,
+                    f.address.wrapping_add(f.data.width.count().max(1) - 1)
+                ),
                 width.value
             );
             match &width.citation {
@@ -506,7 +514,10 @@ fn registers(out: &mut String, drive: &Map) {
                 out,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 address_cell(drive, f),
-                cell(f.param.as_deref().unwrap_or("")),
+                cell(&match (&f.param, &f.read_param) {
+                    (Some(w), Some(r)) => format!("{r} (read) / {w} (write)"),
+                    (p, _) => p.clone().unwrap_or_default(),
+                }),
                 cell(&f.name),
                 code(&f.id),
                 access_cell(f),
@@ -819,7 +830,12 @@ fn gaps(out: &mut String, drive: &Map) {
     for g in drive.gaps() {
         let addresses = g
             .addresses
-            .map(|[a, b]| describe::address_span(a, b))
+            .map(|[a, b]| match drive.address_format() {
+                drivemap_map::facts::AddressFormat::Hex => describe::address_span(a, b),
+                // In the map's notation: `1008 (03F0h)`, a range as two.
+                drivemap_map::facts::AddressFormat::Decimal if a == b => addr(drive, a),
+                drivemap_map::facts::AddressFormat::Decimal => span(drive, a, b),
+            })
             .unwrap_or_default();
         let _ = writeln!(
             out,

@@ -1325,6 +1325,12 @@ impl<W: Wire> Session<'_, W> {
                 self.write_single(slave, WriteTarget::Rule(rule), address, raw as u16)
                     .await
             }
+            // Validation refuses a writable string; the gate refuses a write of text.
+            drivemap_core::width::Width::Text(_) => {
+                Err(Error::Refused(crate::error::Refusal::Text {
+                    register: rule.register,
+                }))
+            }
             drivemap_core::width::Width::Pair(_) => {
                 let words = rule.width.split(raw);
                 let request = Request::WriteMultiple {
@@ -1416,10 +1422,13 @@ impl<W: Wire> Session<'_, W> {
     ) -> Result<R::Value, Error> {
         self.core.on_transport::<R>()?;
         let address = R::address(settings, self.core.kind)?;
-        let mut raw = [0u16; 2];
-        let raw = &mut raw[..usize::from(R::WIDTH.count())];
+        // A pair's two words, or a string's (a map bounds it by `max_read`; a plan written by
+        // hand beyond one request's 125 words is read up to those).
+        let mut raw = [0u16; drivemap_core::width::Width::MAX_WORDS];
+        let raw =
+            &mut raw[..usize::from(R::WIDTH.count()).min(drivemap_core::width::Width::MAX_WORDS)];
         self.read_table(slave, R::TABLE, address, raw).await?;
-        Ok(R::decode(R::WIDTH.join(raw), settings)?)
+        Ok(R::decode_words(raw, settings)?)
     }
 
     /// [`Client::write`].
@@ -1471,7 +1480,7 @@ impl<W: Wire> Session<'_, W> {
         if raw != between {
             let target = WriteTarget::Rule(rule);
             let words = rule.width.split(raw);
-            let words = words[..usize::from(rule.width.count())].iter().copied();
+            let words = words.iter().take(usize::from(rule.width.count())).copied();
             crate::gate::check(
                 self.core.profile,
                 self.core.kind,

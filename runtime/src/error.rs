@@ -408,6 +408,12 @@ pub enum Refusal {
         /// The address the write starts at.
         address: u16,
     },
+    /// A write to a string (text in registers): text is read-only (`string:` in the map).
+    #[error("{register} holds text, which is read-only: it is not written")]
+    Text {
+        /// The register's id.
+        register: &'static str,
+    },
     /// A register written at an address it does not occupy.
     #[error("{register} is not at {address:04X}h")]
     NotAtAddress {

@@ -262,6 +262,7 @@ fn check_rule(
         (Width::Word, _, _) => u32::from(word),
         (Width::Pair(_), Some(0), Some(&second)) => rule.width.join(&[word, second]),
         (Width::Pair(_), _, _) => return Err(Refusal::SplitPair { register, address }),
+        (Width::Text(_), _, _) => return Err(Refusal::Text { register }),
     };
     let reserved = (raw as u16) & rule.reserved;
     if reserved != 0 {

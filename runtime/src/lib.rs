@@ -28,7 +28,7 @@
 //! crate must agree on every variant of it, and a new one is a new plan format.
 #![doc = include_str!("../README.md")]
 #![cfg_attr(not(feature = "std"), no_std)]
-#![deny(missing_docs, unreachable_pub)]
+#![deny(missing_docs, unreachable_pub, unnameable_types)]
 // docs.rs documents every feature (`[package.metadata.docs.rs]`), each item marked with the
 // feature it needs.
 #![cfg_attr(docsrs, feature(doc_cfg))]

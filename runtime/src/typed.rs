@@ -70,19 +70,19 @@ fn check_next<R: Register>(
     Ok(())
 }
 
-/// The raw value of the next member of a set from the front of `rest` (its words joined in the
-/// map's order), taking them off.
-fn take(rest: &mut &[u16], width: Width) -> u32 {
+/// The words of the next member of a set from the front of `rest`, taking them off.
+fn take<'a>(rest: &mut &'a [u16], width: Width) -> &'a [u16] {
     let n = usize::from(width.count()).min(rest.len());
     let (these, after) = rest.split_at(n);
     *rest = after;
-    width.join(these)
+    these
 }
 
 /// Puts the raw value of the next member of a set into the next words of `slots`, in the map's
 /// order.
 fn put<'a>(slots: &mut impl Iterator<Item = &'a mut u16>, width: Width, raw: u32) {
-    for word in &width.split(raw)[..usize::from(width.count())] {
+    // A string is never written (the gate refuses it): at most a pair's two words here.
+    for word in width.split(raw).iter().take(usize::from(width.count())) {
         if let Some(slot) = slots.next() {
             *slot = *word;
         }
@@ -123,8 +123,8 @@ macro_rules! register_set {
             fn decode(raw: &[u16], settings: &Self::Settings) -> Result<Self::Values, ValueError> {
                 let mut rest = raw;
                 Ok((
-                    $first::decode(take(&mut rest, $first::WIDTH), settings)?,
-                    $($rest::decode(take(&mut rest, $rest::WIDTH), settings)?,)*
+                    $first::decode_words(take(&mut rest, $first::WIDTH), settings)?,
+                    $($rest::decode_words(take(&mut rest, $rest::WIDTH), settings)?,)*
                 ))
             }
         }

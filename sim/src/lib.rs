@@ -43,7 +43,7 @@
 //! assert_eq!(sim.value("output_frequency").unwrap().as_f64(), Some(12.0));
 //! ```
 #![doc = include_str!("../README.md")]
-#![warn(unreachable_pub, missing_docs)]
+#![warn(unreachable_pub, missing_docs, unnameable_types)]
 
 // One path per item: a module of one or two items is private and its items are the crate's
 // (documented where they are defined); a module of more keeps its path, with no second one.

@@ -226,6 +226,7 @@ impl<'d> Export<'d> {
                         plan.read_values
                     }),
                     ValueShape::Bits { fields, .. } => Meaning::Bits(fields),
+                    ValueShape::Text { order } => Meaning::Text(order),
                     // A number always has a scale (`RegisterPlan::scale`).
                     ValueShape::Word { .. } | ValueShape::Number => Meaning::Word,
                 },

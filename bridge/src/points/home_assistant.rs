@@ -54,7 +54,11 @@ fn number(v: f64) -> String {
 
 fn sensor(out: &mut String, points: &Export, p: &Point, name: &str) {
     let bits = p.width().count() * 16;
-    let data_type = format!("{}int{bits}", if p.signed() { "" } else { "u" });
+    let data_type = match p.meaning {
+        // Text: Home Assistant reads `count` registers, high byte first unless `swap: byte`.
+        Meaning::Text(_) => "string".to_owned(),
+        _ => format!("{}int{bits}", if p.signed() { "" } else { "u" }),
+    };
     let _ = writeln!(out, "      - name: {}", q(name));
     let _ = writeln!(
         out,
@@ -79,6 +83,13 @@ fn sensor(out: &mut String, points: &Export, p: &Point, name: &str) {
         }
     );
     let _ = writeln!(out, "        data_type: {data_type}");
+    if let Meaning::Text(order) = p.meaning {
+        let _ = writeln!(out, "        count: {}", p.width().count());
+        if order == drivemap_runtime::core::text::ByteOrder::LowFirst {
+            // The first character in the low byte: Home Assistant swaps each register's bytes.
+            let _ = writeln!(out, "        swap: byte");
+        }
+    }
     if p.low_first() {
         // The low word at the lower address: Home Assistant swaps the words.
         let _ = writeln!(out, "        swap: word");
@@ -103,6 +114,7 @@ fn sensor(out: &mut String, points: &Export, p: &Point, name: &str) {
             }
         }
         Meaning::Number(None)
+        | Meaning::Text(_)
         | Meaning::Code(_)
         | Meaning::Bits(_)
         | Meaning::Field { .. }

@@ -43,6 +43,9 @@ pub enum Meaning {
     Bits(&'static [Field]),
     /// A coil or discrete input: on (1) or off (0).
     Bit,
+    /// Text over the point's registers (`string:`), two characters each, in this byte order:
+    /// exported where the target describes text (Home Assistant's `data_type: string`).
+    Text(drivemap_runtime::core::text::ByteOrder),
     /// One field of a bit-field register, the `index`th of its fields.
     Field {
         /// Its position among the register's fields.
@@ -295,6 +298,8 @@ pub fn polled<'d>(map: &'d Map, regs: &[RegisterRef<'d>], kind: TransportKind) -
             ValueShape::Number => {
                 out.push(point(register_role(map, r, kind), Meaning::Number(None)));
             }
+            // The bridge publishes numbers, codes and bits; a string is not bridged (yet).
+            ValueShape::Text { .. } => {}
         }
     }
     out

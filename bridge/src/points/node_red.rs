@@ -31,6 +31,19 @@ fn decode(p: &Point, o: usize) -> String {
         // node-red-contrib-modbus gives coils and inputs as booleans.
         return format!("(w[{o}] ? 1 : 0)");
     }
+    if let Meaning::Text(order) = p.meaning {
+        // Two characters per register in the map's byte order, trailing NUL and space padding
+        // dropped (as `drivemap read`; the payload is the text as read, not escaped).
+        let (first, second) = match order {
+            drivemap_runtime::core::text::ByteOrder::HighFirst => ("x >> 8", "x & 255"),
+            drivemap_runtime::core::text::ByteOrder::LowFirst => ("x & 255", "x >> 8"),
+        };
+        let n = usize::from(p.width().count());
+        return format!(
+            "w.slice({o}, {}).map(x => String.fromCharCode({first}, {second})).join('').replace(/[\\0 ]+$/, '')",
+            o + n
+        );
+    }
     let raw = match (p.width().count(), p.signed(), p.low_first()) {
         (1, false, _) => format!("w[{o}]"),
         (1, true, _) => format!("((w[{o}] << 16) >> 16)"),

@@ -71,6 +71,8 @@ impl Point<'_> {
             (Meaning::Field { .. }, _) => "drivemap_field_info".to_owned(),
             (Meaning::Bit, Some(role)) => format!("drivemap_{}", role.id()),
             (Meaning::Bit, None) => format!("drivemap_{}", self.table().key()),
+            // Not bridged: `points::polled` leaves strings out.
+            (Meaning::Text(_), _) => "drivemap_text_info".to_owned(),
         }
     }
 

@@ -168,6 +168,24 @@ pub fn render(points: &Export) -> String {
                     );
                     address += 1;
                 }
+                Some(p) if matches!(p.meaning, Meaning::Text(_)) => {
+                    // Text: the request style's fields are numbers; the string's registers are
+                    // read with the request (one planned read) and omitted.
+                    for k in 0..u32::from(p.width().count()) {
+                        let _ = writeln!(
+                            out,
+                            "      {{ address = {}, name = \"unread_{}\", type = \"UINT16\", omit = true }},{}",
+                            address + k,
+                            address + k,
+                            if k == 0 {
+                                format!("  # {}: text, left out of Telegraf's fields", p.label())
+                            } else {
+                                String::new()
+                            }
+                        );
+                    }
+                    address += u32::from(p.width().count());
+                }
                 Some(p) => {
                     let bits = p.width().count() * 16;
                     let ty = format!("{}INT{bits}", if p.signed() { "" } else { "U" });

@@ -64,6 +64,9 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
+    for (_, why) in paramset::left_out(&drive) {
+        eprintln!("note: {why}");
+    }
     let text = report.set.to_yaml(&drive);
     match &args.output {
         Some(path) => std::fs::write(path, &text).map_err(|source| Error::Io {

@@ -151,6 +151,12 @@ fn field_word(
             );
         }
         word
+    } else if let Some(read) = r.read_param() {
+        eprintln!(
+            "warning: a read of {} returns {read}, not the parameter written, so the fields not named are written as 0",
+            r.label()
+        );
+        input.value
     } else if session.slave == 0 || session.unreadable(r).is_some() {
         eprintln!(
             "warning: {} cannot be read here, so the fields not named are written as 0",
@@ -243,7 +249,11 @@ pub(crate) fn execute(
                 codec::shorten(a),
                 r.label()
             )),
-            Ok(r) => pairs.push((r, value.trim().to_owned())),
+            // A BICO register's read parameter names no value to write.
+            Ok(r) => match drivemap_live::lookup::wrong_side(r, name.trim(), true) {
+                None => pairs.push((r, value.trim().to_owned())),
+                Some(why) => errors.push(format!("{why}; nothing written")),
+            },
             Err(e) => match drivemap_live::indexed::find_entry(drive, name.trim()) {
                 Some(entry) => entries.push((entry, value.trim().to_owned())),
                 None => errors.push(e.to_string()),
@@ -386,7 +396,13 @@ pub(crate) fn execute(
         let raw = match field_word(drive, &mut session, *r, value)? {
             Some(raw) => raw,
             None => codec::parse_value_with(drive, *r, value, &session.settings, rounding)
-                .map_err(|e| format!("{}; nothing written", input_error(drive, &e)))?,
+                .map_err(|e| {
+                    // A range a parameter's code selects: which code, and that it was read.
+                    let case = drivemap_live::session::selected_range(drive, *r, &session.settings)
+                        .map(|c| format!(" ({c})"))
+                        .unwrap_or_default();
+                    format!("{}{case}; nothing written", input_error(drive, &e))
+                })?,
         };
         // Said in the report: the value sent is not the one given.
         let rounded = rounding == Rounding::Nearest
@@ -411,7 +427,7 @@ pub(crate) fn execute(
                     slave,
                     gate::WriteTarget::Rule(rule),
                     address,
-                    words[..usize::from(rule.width.count())].iter().copied(),
+                    words.iter().take(usize::from(rule.width.count())).copied(),
                 )
                 .map(|()| rule)
             })
@@ -433,6 +449,11 @@ pub(crate) fn execute(
         // first (`Client::write_changed`, through the same gate), so writing the same value
         // twice executes it twice.
         let between = r.plan().repeat_needs_change.map(|x| x.between);
+        // The parameters that select its scale or range, read again now: the value was
+        // converted and checked for the codes read before, and is not sent under another.
+        session
+            .confirm_selectors(r)
+            .map_err(|e| Error::Refused(format!("{e}; nothing written")))?;
         let result = match between {
             Some(between) => {
                 session

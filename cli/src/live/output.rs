@@ -127,6 +127,12 @@ impl Reading {
                         rec.status = "ok";
                         rec.value = v.as_f64();
                         rec.text = Some(v.to_string());
+                        if let Some(text) = v.text() {
+                            // A string: the whole text, escaped, unquoted (the record's own
+                            // quoting holds it); its first word alone is no raw value.
+                            rec.text = Some(text);
+                            rec.raw = None;
+                        }
                         match &v {
                             Value::Quantity { unit, .. } if !unit.is_empty() => {
                                 rec.unit = Some(unit.clone())

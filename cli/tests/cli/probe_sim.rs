@@ -31,7 +31,7 @@ fn a_new_map_agrees_with_its_own_simulator_with_no_test_edit() {
 
 /// Probes every map of `dir` against its own simulator, on every transport and variant
 /// option; panics listing every disagreement. The drive ids probed.
-fn every_map_agrees_with_its_simulator(dir: &Path) -> Vec<String> {
+pub(crate) fn every_map_agrees_with_its_simulator(dir: &Path) -> Vec<String> {
     let mut maps: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())

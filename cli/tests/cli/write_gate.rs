@@ -372,6 +372,7 @@ fn legal_arrival(
     let order = match r.width() {
         Width::Word => None,
         Width::Pair(order) => Some(order),
+        Width::Text(_) => return Err("a string (text) is never written".into()),
     };
     let words = if order.is_some() { 2 } else { 1 };
     if arrived.len() != words {

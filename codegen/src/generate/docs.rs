@@ -94,9 +94,10 @@ pub(super) fn module(drive: &Map) -> String {
 /// prints the identity rows, the paragraphs below the others.
 pub(super) fn register(r: RegisterRef<'_>) -> String {
     let f = r.facts();
-    let title = match &f.param {
-        Some(p) => format!("**{p} — {}**", f.name),
-        None => format!("**{}**", f.name),
+    let title = match (&f.param, &f.read_param) {
+        (Some(w), Some(r)) => format!("**{r} (read) / {w} (write) — {}**", f.name),
+        (Some(p), None) | (None, Some(p)) => format!("**{p} — {}**", f.name),
+        (None, None) => format!("**{}**", f.name),
     };
     let address = f.get(FactKey::Address).map(|a| a.value.as_str());
     let mut summary = vec![match f.get(FactKey::Width) {
@@ -111,6 +112,10 @@ pub(super) fn register(r: RegisterRef<'_>) -> String {
                 .unwrap_or_default()
         ),
     }];
+    if let Some(reference) = f.get(FactKey::Reference) {
+        // Only where the map records the reference the manual prints.
+        summary.push(format!("Modicon reference `{}`", reference.value));
+    }
     if f.data.table.is_bits() {
         // A coil or discrete input: its table and its states (`bool`: on is 1).
         summary.push(format!("{} (1 on, 0 off)", f.data.table.item()));
@@ -168,6 +173,11 @@ pub(super) fn register(r: RegisterRef<'_>) -> String {
             )),
             FactKey::FunctionCodes => items.push(format!(
                 "Function codes: {}. The write gate refuses any other function on this register.",
+                row.value
+            )),
+            FactKey::ReadParam => items.push(format!(
+                "Read from another parameter than the one written: a read returns {}. A write is \
+                 never verified by reading it back, and parameter sets leave the register out.",
                 row.value
             )),
             FactKey::ReadValues => items.push(format!(
@@ -251,10 +261,12 @@ fn capitalized(s: &str) -> String {
 
 /// What rustdoc search finds a register by besides its type's name (`#[doc(alias)]`): its id,
 /// its parameter number as printed (`Cn-02`, `n011`) and its address in the manual's notation
-/// (`2101H` and `0x2101`, or the register number of a manual numbering them in decimal).
+/// (`2101H` and `0x2101`, or the register number of a manual numbering them in decimal), and
+/// the Modicon reference the map records (`reference: 40024`).
 pub(super) fn aliases(r: RegisterRef<'_>, type_name: &str) -> Vec<String> {
     let mut out = vec![r.id().to_owned()];
     out.extend(r.param().map(str::to_owned));
+    out.extend(r.read_param().map(str::to_owned));
     let addresses =
         std::iter::once(r.address()).chain(r.address_alternatives().iter().map(|a| a.address));
     for a in addresses {
@@ -266,6 +278,8 @@ pub(super) fn aliases(r: RegisterRef<'_>, type_name: &str) -> Vec<String> {
             }
         }
     }
+    // The Modicon reference the manual prints beside it (`40024`), where the map records one.
+    out.extend(r.reference().map(str::to_owned));
     // rustdoc refuses an alias that is empty, the item's own name, has quotes, tabs or line
     // breaks, or starts or ends with a space.
     let mut seen = std::collections::HashSet::new();

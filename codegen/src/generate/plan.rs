@@ -23,6 +23,7 @@ use drivemap_core::register::{Access, RegisterInfo, Table, WriteRestriction};
 use drivemap_core::roles::{Edge, Target};
 use drivemap_core::rule::{Broadcast, Transports};
 use drivemap_core::scale::{Decimal, RawRange};
+use drivemap_core::text::ByteOrder;
 use drivemap_core::width::{Width, WordOrder};
 
 use drivemap_map::MapPlan;
@@ -105,6 +106,7 @@ pub(super) fn module(plan: &MapPlan) -> String {
         ),
         ("rt::rule", &["Broadcast", "Transports"][..]),
         ("rt::scale", &["Decimal", "RawRange"][..]),
+        ("rt::text", &["ByteOrder"][..]),
         ("rt::width", &["Width", "WordOrder"][..]),
     ] {
         let names = used(names);
@@ -435,6 +437,13 @@ fn case(c: &Case) -> String {
 
 fn conversion(c: &Conversion, indent: usize) -> String {
     match c {
+        Conversion::Text { order } => format!(
+            "Conversion::Text {{ order: ByteOrder::{} }}",
+            match order {
+                ByteOrder::HighFirst => "HighFirst",
+                ByteOrder::LowFirst => "LowFirst",
+            }
+        ),
         Conversion::Word { signed, range: r } => {
             format!(
                 "Conversion::Word {{ signed: {signed}, range: {} }}",
@@ -553,9 +562,10 @@ pub(super) fn row(r: &RegisterPlan) -> String {
         info.push(format!(
             "width: {}",
             match i.width {
-                Width::Word => "Width::Word",
-                Width::Pair(WordOrder::HighFirst) => "Width::Pair(WordOrder::HighFirst)",
-                Width::Pair(WordOrder::LowFirst) => "Width::Pair(WordOrder::LowFirst)",
+                Width::Word => "Width::Word".to_owned(),
+                Width::Pair(WordOrder::HighFirst) => "Width::Pair(WordOrder::HighFirst)".into(),
+                Width::Pair(WordOrder::LowFirst) => "Width::Pair(WordOrder::LowFirst)".into(),
+                Width::Text(n) => format!("Width::Text({n})"),
             }
         ));
     }
@@ -631,6 +641,9 @@ pub(super) fn row(r: &RegisterPlan) -> String {
             ".read_as({})",
             block(r.read_values, ROW_INDENT, |l, _| label(l))
         );
+    }
+    if let Some(p) = r.read_param {
+        let _ = write!(s, ".read_from({})", string(p));
     }
     if let Some(l) = &r.limit {
         let _ = write!(

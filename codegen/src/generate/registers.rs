@@ -52,6 +52,11 @@ fn value(r: RegisterRef<'_>, index: usize, rt: &TokenStream) -> (TokenStream, To
             (true, false) => (quote!(u32), quote!()),
         },
         ValueShape::Number => (quote!(f64), quote!()),
+        // Text: two characters per register, decoded from all of them in one read.
+        ValueShape::Text { .. } => {
+            let chars = Literal::usize_unsuffixed(2 * usize::from(plan.info.width.count()));
+            (quote!(#rt::text::Text<#chars>), quote!())
+        }
         ValueShape::Codes(_) => {
             let ty = ident(&r.value_enum_name());
             let what = match r.param() {

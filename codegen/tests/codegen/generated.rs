@@ -134,4 +134,19 @@ fn rustdoc_search_finds_a_register_by_the_manuals_words() {
         ),
         "{z3}"
     );
+    // A register read from one parameter and written to another (BICO): both numbers, the
+    // read one named in its documentation, and its plan row says so (`read_from`).
+    let lg7 = module(paths::fixture("lindgren-lg7/lindgren-lg7.yaml"));
+    assert!(
+        lg7.contains(
+            "#[doc(alias(\"fixed_frequency_bit_0\", \"P2200\", \"r0055.8\", \"0200H\", \"0x0200\"))]\npub type FixedFrequencyBit0 ="
+        ),
+        "{}",
+        &lg7[lg7.find("pub type FixedFrequencyBit0").unwrap_or(0).saturating_sub(900)..][..1000]
+    );
+    assert!(
+        lg7.contains("**r0055.8 (read) / P2200 (write) — Fixed frequency bit 0**"),
+        "{lg7}"
+    );
+    assert!(lg7.contains(".read_from(\"r0055.8\")"), "{lg7}");
 }

@@ -5,4 +5,5 @@
 mod exact_values;
 mod generated_shapes;
 mod ratio_exact;
+mod text;
 mod value_shape;

@@ -12,6 +12,7 @@ use drivemap_core::plan::{
 use drivemap_core::ratio::Ratio;
 use drivemap_core::register::{Access, RegisterInfo};
 use drivemap_core::scale::{Decimal, RawRange};
+use drivemap_core::text::ByteOrder;
 use proptest::prelude::*;
 
 const SELECTOR: Setting = Setting {
@@ -54,7 +55,7 @@ const CASES: &[Case] = &[
 
 /// One conversion of each kind there is today (a fixed list, not a match on the kinds: a new
 /// kind's own arms are checked by `tests/tests/cross_crate/scale_kinds.rs` through the maps).
-fn conversions(signed: bool) -> [Conversion; 7] {
+fn conversions(signed: bool) -> [Conversion; 8] {
     let range = Ranges::fixed(RawRange::word(signed));
     [
         Conversion::Word { signed, range },
@@ -87,6 +88,9 @@ fn conversions(signed: bool) -> [Conversion; 7] {
         Conversion::Bits {
             mask: 1,
             fields: FIELDS,
+        },
+        Conversion::Text {
+            order: ByteOrder::LowFirst,
         },
     ]
 }
@@ -150,6 +154,15 @@ fn every_kind_has_the_shape_its_conversion_has() {
                     assert_eq!(kind, ConversionKind::Enum);
                     assert_eq!(values, p.labels());
                     assert!(p.scale(&known).is_none());
+                }
+                ValueShape::Text { order } => {
+                    assert_eq!(kind, ConversionKind::Text);
+                    assert_eq!(order, ByteOrder::LowFirst);
+                    assert!(p.scale(&known).is_none());
+                    assert!(!p.signed());
+                    // Text is not a number either way.
+                    assert!(p.decode_number(0x4142, &known).is_err());
+                    assert!(p.encode_word(0x4142, &known).is_err());
                 }
                 ValueShape::Bits { mask, fields } => {
                     assert_eq!(kind, ConversionKind::Bits);

@@ -40,7 +40,8 @@ pub use save::{SaveReport, save, save_with};
 /// The settings of `drive`, in the map's order: registers that are read and written (not
 /// monitors, not write-only commands), carry a parameter number, are not broadcast-only, are
 /// not the place of a command role or the frequency reference (the run command is never part
-/// of a set), are not coils, and are not written by one of the map's commands (ENTER, save).
+/// of a set), are not coils, are not written by one of the map's commands (ENTER, save), and
+/// are not read from another parameter than the one written ([`left_out`]).
 pub fn settings_of(drive: &Map) -> Vec<RegisterRef<'_>> {
     let plan = drive.plan();
     let mut commands: BTreeSet<usize> = BTreeSet::new();
@@ -70,8 +71,33 @@ pub fn settings_of(drive: &Map) -> Vec<RegisterRef<'_>> {
                 // A coil is a command or a state of the drive (run, trip, jog), not a
                 // parameter: a set never writes one back.
                 && !r.plan().info.table.is_bits()
+                // Read from another parameter than the one written (BICO): the value saved
+                // would not be the value restored, nor a restore's read-back its write.
+                && r.read_param().is_none()
                 && !commands.contains(&r.index())
                 && !command_addresses.contains(&r.address())
+        })
+        .collect()
+}
+
+/// The read-and-written registers with a parameter number that parameter sets leave out for a
+/// reason a user would not guess, each with the reason: those read from another parameter than
+/// the one written (`read_param`, Siemens BICO: a read of 0200h returns r0055.8, a write sets
+/// P2200), whose saved value would be r0055.8's and be written to P2200 on restore, and whose
+/// restore could not be verified by reading it back.
+pub fn left_out(drive: &Map) -> Vec<(RegisterRef<'_>, String)> {
+    drive
+        .registers()
+        .filter(|r| r.readable() && r.writable())
+        .filter_map(|r| {
+            let (read, write) = (r.read_param()?, r.param()?);
+            Some((
+                r,
+                format!(
+                    "{} is left out of parameter sets: a read returns {read}, a write sets {write} (a saved {read} is no value for {write}, and a restore could not be checked by reading it back)",
+                    r.label()
+                ),
+            ))
         })
         .collect()
 }

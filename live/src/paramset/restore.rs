@@ -266,6 +266,8 @@ pub fn validate<'d>(
                     "read-only"
                 } else if r.param().is_none() {
                     "a command register, not a parameter"
+                } else if r.read_param().is_some() {
+                    "a read returns another parameter than the one a write sets (`read_param`), so neither its saved value nor a read-back means the value written"
                 } else {
                     "a command, or the place of a command role"
                 }
@@ -444,7 +446,7 @@ pub fn plan<'d>(
                     session.slave,
                     WriteTarget::Rule(rule),
                     address,
-                    words[..usize::from(rule.width.count())].iter().copied(),
+                    words.iter().take(usize::from(rule.width.count())).copied(),
                 )
                 .map_err(|e| e.to_string())
             });

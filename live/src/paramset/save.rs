@@ -103,6 +103,8 @@ pub(crate) fn value_text(value: &Value) -> (String, Option<String>) {
         Value::Code { code, id, .. } => (code.to_string(), id.clone()),
         Value::Bits { raw, .. } => (raw.to_string(), None),
         Value::Bit(on) => (u8::from(*on).to_string(), None),
+        // Strings are read-only, so never settings; escaped should one be shown.
+        Value::Text(_) => (value.text().unwrap_or_default(), None),
     }
 }
 

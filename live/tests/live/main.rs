@@ -5,3 +5,4 @@
 mod example_frames;
 mod ratio_reference;
 mod read_by_name;
+mod selected_limits;

@@ -44,6 +44,9 @@ pub struct RegisterData {
     pub width: Width,
     /// Where the manual states a pair's word order, when not on the register's row.
     pub word_order_source: Option<String>,
+    /// A string's registers, byte order, example and citation (`string:`); `None` for a
+    /// number, codes or bits.
+    pub string: Option<crate::model::StringText>,
     /// Only reachable as a broadcast (slave 0) write.
     pub broadcast: bool,
     /// When the drive accepts a write, from the plan.
@@ -226,6 +229,7 @@ impl RegisterData {
             table: plan.info.table,
             width: plan.info.width,
             word_order_source: d.pair.as_ref().and_then(|p| p.source.clone()),
+            string: d.string.clone(),
             broadcast: r.broadcast,
             write_restriction: plan.restriction,
             transports: r.transports.clone(),
@@ -282,7 +286,7 @@ fn scale_data(drive: &Drive, r: &Register) -> ScaleData {
     match r.kind() {
         ValueKind::Quantity(scale) => scale_of(drive, scale),
         ValueKind::Word | ValueKind::UnitQuantity => ScaleData::Factor(1.0),
-        ValueKind::Enum(_) | ValueKind::Bits(_) => ScaleData::None,
+        ValueKind::Enum(_) | ValueKind::Bits(_) | ValueKind::Text(_) => ScaleData::None,
     }
 }
 

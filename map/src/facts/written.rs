@@ -20,8 +20,8 @@ use drivemap_core::register::{Access, Table, WriteRestriction};
 use super::{
     AddressAlternative, AddressFormat, BitField, Conflict, DefaultValue, DisplayStep, Draft,
     DriveMeta, EnumValue, Example, Gap, Group, Indexed, Pair, ProfileSpec, Protocol,
-    RegisterFunctions, RelativeLimit, Removed, RepeatNeedsChange, RolePlace, Scale, TransportName,
-    Unknown, VariantAxis, VariantOverride,
+    RegisterFunctions, RelativeLimit, Removed, RepeatNeedsChange, RolePlace, Scale, StringText,
+    TransportName, Unknown, VariantAxis, VariantOverride,
 };
 use crate::ir::{Drive, Register};
 use crate::map::Map;
@@ -120,24 +120,32 @@ impl<'m> WrittenMap<'m> {
 pub struct WrittenRegister<'m> {
     /// The register id (snake_case).
     pub id: &'m str,
-    /// The parameter number exactly as printed.
+    /// The parameter number exactly as printed (with `read_param`, the one a write sets).
     pub param: Option<&'m str>,
+    /// The parameter a read returns, when it is not `param` (`read_param:`).
+    pub read_param: Option<&'m str>,
     /// The name as printed.
     pub name: &'m str,
     /// The communication address as the manual prints it.
     pub address: u16,
+    /// The Modicon reference the manual prints beside it (`reference:`), as printed.
+    pub reference: Option<&'m str>,
     /// Its access: its own, else its group's, else read-only.
     pub access: Access,
     /// Its Modbus table: its own, else its group's, else holding registers.
     pub table: Table,
     /// The unit as the manual prints it.
     pub unit: Option<&'m str>,
-    /// The scale as written (`scale:`).
+    /// The scale as written (`scale:`); a range chosen by a setting (`limits: {selected_by}`)
+    /// is the selected scale it is expanded into, each case the register's own factor.
     pub scale: Option<&'m Scale>,
     /// A signed word or pair.
     pub signed: bool,
     /// A 32-bit pair's word order and its citation (`pair:`).
     pub pair: Option<&'m Pair>,
+    /// Text over consecutive registers: their number, byte order, example and citation
+    /// (`string:`).
+    pub string: Option<&'m StringText>,
     /// The base variant's lower limit in engineering units.
     pub min: Option<f64>,
     /// The base variant's upper limit in engineering units.
@@ -198,22 +206,27 @@ impl<'m> WrittenRegister<'m> {
             path: _, // where it is written (`RegisterRef::location`), not what it says
             repeat_needs_change,
             function_codes,
-            index: _, // its place in the map's list, not a property
+            limits_form: _, // where its cases are written, not what they say
+            index: _,       // its place in the map's list, not a property
         } = r;
         let model::Register {
             id,
             param,
+            read_param,
             name,
             address,
+            reference,
             access: _,       // in `access`, with its group's
             modbus_table: _, // in `table`, with its group's
             unit,
             scale,
             signed,
             pair,
+            string,
             min,
             max,
             max_relative,
+            limits: _, // expanded into `scale` (`ir::selected_limits`)
             default,
             by_variant,
             address_alternatives,
@@ -236,14 +249,17 @@ impl<'m> WrittenRegister<'m> {
         WrittenRegister {
             id,
             param: param.as_deref(),
+            read_param: read_param.as_deref(),
             name,
             address: *address,
+            reference: reference.as_deref(),
             access: *access,
             table: *table,
             unit: unit.as_deref(),
             scale: scale.as_ref(),
             signed: *signed,
             pair: pair.as_ref(),
+            string: string.as_ref(),
             min: *min,
             max: *max,
             default: default.as_ref(),

@@ -26,8 +26,8 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 &r.key_path("address"),
                 Some(r.id()),
                 format!(
-                    "address {:04X}h is already used by `{}` (line {}); two registers cannot share an address in one space — choose one reading and record the other in `conflicts`",
-                    r.def.address,
+                    "address {} is already used by `{}` (line {}); two registers cannot share an address in one space — choose one reading and record the other in `conflicts`",
+                    crate::facts::manual_address(drive, r.def.address),
                     first.id(),
                     at.line
                 ),

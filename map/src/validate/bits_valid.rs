@@ -96,7 +96,7 @@ fn settings_are_words(drive: &Drive, out: &mut Vec<Diagnostic>) {
         let rid = Some(r.id());
         match &r.def.scale {
             Some(Scale::Selected(s)) => refuse(
-                r.key_path("scale").key("selected_by"),
+                r.selection_path().key("selected_by"),
                 rid,
                 &s.selected_by,
                 "a scale selector",

@@ -59,7 +59,11 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             out.push(drive.error(
                 &gp.key("addresses"),
                 None,
-                format!("gap {lo:04X}h..{hi:04X}h runs backwards"),
+                format!(
+                    "gap {}..{} runs backwards",
+                    crate::facts::manual_address(drive, lo),
+                    crate::facts::manual_address(drive, hi)
+                ),
             ));
         }
         if g.description.trim().is_empty() {

@@ -50,7 +50,7 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 ));
             } else if let Some(other) = drive.registers.iter().find(|x| x.id() == e.id) {
                 let (address, line) = (
-                    crate::describe::address(other.def.address),
+                    crate::facts::manual_address(drive, other.def.address),
                     drive.locate(&other.path).line,
                 );
                 refusals.push(("id", format!("entry id `{}` is the id of register {address} (line {line}): entries and registers are looked up by the same names", e.id)));

@@ -151,7 +151,7 @@ impl Checker<'_> {
     /// The cases of a selected scale, each by its own scale's rule.
     fn cases(&mut self, cases: &[CaseData]) {
         for (ci, case) in cases.iter().enumerate() {
-            let cp = self.r.key_path("scale").key("cases").index(ci);
+            let cp = self.r.cases_path().index(ci);
             match case.scale.limits() {
                 Some(Limits::Increments(f)) => {
                     if let Some(dec) = self.factor(f, cp.key("scale")) {
@@ -251,6 +251,8 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
                     }
                 }
             }
+            // `min`, `max` and `default` on text are refused by `strings_valid`.
+            ValueKind::Text(_) => {}
             ValueKind::Bits(_) => {
                 c.no_limits("a bit-field register has no range");
                 if let Some(DefaultValue::Value(v)) = &d.default

@@ -56,10 +56,13 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
             .find(|o| o.def.address == second && shares_space(o, r))
         {
             let at = drive.locate(&other.path);
+            let shown = |a: u16| crate::describe::address_as(drive.address_format, a);
             err(format!(
-                "`{}` is a pair at {:04X}h-{second:04X}h, but {second:04X}h is `{}` (line {}): a pair takes both addresses",
+                "`{}` is a pair at {}-{}, but {} is `{}` (line {}): a pair takes both addresses",
                 r.id(),
-                r.def.address,
+                shown(r.def.address),
+                shown(second),
+                shown(second),
                 other.id(),
                 at.line
             ));

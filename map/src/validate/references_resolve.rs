@@ -242,7 +242,7 @@ fn scale(drive: &Drive, r: &Register, out: &mut Vec<Diagnostic>) {
 /// `Settings` field), and its cases are there, each with codes the selector has, once.
 fn selected_scale(drive: &Drive, r: &Register, sel: &SelectedScale, out: &mut Vec<Diagnostic>) {
     let rid = Some(r.id());
-    let sp = r.key_path("scale");
+    let sp = r.selection_path();
     let by = sp.key("selected_by");
     let selector = selector(drive, out, &sel.selected_by, &by, rid, "selected_by");
     if let Some(SelectorRef {
@@ -283,7 +283,7 @@ fn selected_case(
     out: &mut Vec<Diagnostic>,
 ) {
     let case = &sel.cases[ci];
-    let cp = r.key_path("scale").key("cases").index(ci);
+    let cp = r.cases_path().index(ci);
     let rid = Some(r.id());
     let wp = cp.key("when");
     if case.when.is_empty() {
@@ -427,7 +427,7 @@ fn command_writes(drive: &Drive, out: &mut Vec<Diagnostic>) {
                 out.push(drive.error(
                     &proto.key("commands").index(ci).key("writes").index(wi).key("address"),
                     None,
-                    format!("command `{}` writes {:04X}h, which no writable register of the map describes", c.id, w.address),
+                    format!("command `{}` writes {}, which no writable register of the map describes", c.id, crate::facts::manual_address(drive, w.address)),
                 ));
             }
         }

@@ -73,6 +73,8 @@ fn legal(r: &Register, v: f64) -> Result<(), Illegal> {
                 Ok(())
             }
         }
+        // Refused on text by `strings_valid`; no number is legal.
+        ValueKind::Text(_) => Err(Illegal::NotAWord),
         ValueKind::Quantity(_) | ValueKind::UnitQuantity | ValueKind::Word => {
             let Some(factor) = r.factor() else {
                 return if v == 0.0 {

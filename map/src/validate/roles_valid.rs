@@ -661,7 +661,17 @@ impl Check<'_> {
     fn number(&mut self, role: Role, r: &Register, path: &Path) {
         let Some(unit) = role.unit() else {
             // The fault code: a code register or a plain word.
-            if matches!(r.kind(), ValueKind::Bits(_)) {
+            if let ValueKind::Text(_) = r.kind() {
+                self.error(
+                    path,
+                    Some(r.id()),
+                    format!(
+                        "role `{}` is a code; `{}` is text: no role reads text",
+                        role.id(),
+                        r.id()
+                    ),
+                );
+            } else if matches!(r.kind(), ValueKind::Bits(_)) {
                 self.error(
                     path,
                     Some(r.id()),

@@ -79,6 +79,16 @@ fn every_typed_value_says_what_its_worded_row_says() {
                         "{at}"
                     );
                 }
+                Width::Text(n) => {
+                    let t = d.string.as_ref().expect("a string's typed layout");
+                    assert_eq!(t.registers, n, "{at}");
+                    assert_eq!(
+                        value(&f, FactKey::Width).map(str::to_owned),
+                        Some(describe::text(n, t.byte_order, t.example.as_deref())),
+                        "{at}"
+                    );
+                    assert_eq!(citation(&f, FactKey::Width), t.source.as_deref(), "{at}");
+                }
             }
             assert_eq!(f.get(FactKey::Broadcast).is_some(), d.broadcast, "{at}");
             assert_eq!(

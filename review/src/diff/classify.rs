@@ -338,6 +338,40 @@ impl ChangeKind {
     }
 }
 
+/// The reason of a [`ChangeKind::TableChanged`] between two tables as `describe::table` names
+/// them (`holding`, `coil`), naming their read functions; `None` for holding ↔ input, whose
+/// reason is [`classify`]'s, and for a side that is not a table.
+pub(crate) fn table_reason(old: Option<&str>, new: Option<&str>) -> Option<&'static str> {
+    macro_rules! reads {
+        ($a:literal, $b:literal) => {
+            concat!(
+                "reads use another function code and table (",
+                $a,
+                " → ",
+                $b,
+                "); the generated type's value changes between a word and a bit"
+            )
+        };
+    }
+    Some(match (old?, new?) {
+        ("holding", "coil") => reads!("03h holding registers", "01h coils"),
+        ("holding", "discrete input") => reads!("03h holding registers", "02h discrete inputs"),
+        ("input", "coil") => reads!("04h input registers", "01h coils"),
+        ("input", "discrete input") => reads!("04h input registers", "02h discrete inputs"),
+        ("coil", "holding") => reads!("01h coils", "03h holding registers"),
+        ("coil", "input") => reads!("01h coils", "04h input registers"),
+        ("discrete input", "holding") => reads!("02h discrete inputs", "03h holding registers"),
+        ("discrete input", "input") => reads!("02h discrete inputs", "04h input registers"),
+        ("coil", "discrete input") => {
+            "reads use another function code and table (01h coils → 02h discrete inputs)"
+        }
+        ("discrete input", "coil") => {
+            "reads use another function code and table (02h discrete inputs → 01h coils)"
+        }
+        _ => return None,
+    })
+}
+
 /// The severity of a change kind and the reason, in terms of the generated code.
 pub fn classify(kind: ChangeKind) -> (Severity, &'static str) {
     use ChangeKind::*;

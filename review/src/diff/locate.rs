@@ -90,7 +90,11 @@ pub(crate) fn at(change: &Change, old: &Map, new: &Map) -> Option<Loc> {
     }
     let id = change.subject.split(' ').next().unwrap_or_default();
     if let Some(r) = new.register_by_id(id) {
-        return Some(match register_key(change.kind) {
+        let key = match change.kind {
+            ChangeKind::WidthChanged if change.what == "text layout" => Some("string"),
+            kind => register_key(kind),
+        };
+        return Some(match key {
             Some(key) => r.key_location(key),
             None => r.location(),
         });

@@ -61,6 +61,11 @@ impl Change {
 
     /// Why it is classified so.
     pub fn reason(&self) -> &'static str {
+        if self.kind == ChangeKind::TableChanged
+            && let Some(reason) = classify::table_reason(self.old.as_deref(), self.new.as_deref())
+        {
+            return reason;
+        }
         classify(self.kind).1
     }
 }
@@ -317,8 +322,10 @@ fn map_documentation(c: &mut Collector, old: &Map, new: &Map) {
         "gap",
         old.gaps(),
         new.gaps(),
+        // In the new map's notation (`4 – 9` in a decimal-numbered map), the same for both
+        // sides: the text is also the key the gaps are matched by.
         |x| match (x.addresses, &x.params) {
-            (Some([a, b]), _) => describe::address_span(a, b),
+            (Some([a, b]), _) => describe::address_span_as(new.address_format(), a, b),
             (None, Some(p)) => p.clone(),
             (None, None) => x.description.clone(),
         },

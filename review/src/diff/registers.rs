@@ -132,6 +132,7 @@ fn kind_of_value(k: ConversionKind) -> u8 {
         | ConversionKind::Selected => 1,
         ConversionKind::Enum => 2,
         ConversionKind::Bits => 3,
+        ConversionKind::Text => 4,
     }
 }
 
@@ -272,6 +273,7 @@ const ASPECTS: &[Aspect] = {
         Row(alternatives),
         Row(name),
         Row(param),
+        Row(reference),
         Row(table),
         Row(group),
         Row(broadcast),
@@ -283,6 +285,7 @@ const ASPECTS: &[Aspect] = {
         Row(relative_limit),
         Parts(read_codes),
         Row(read_meaning),
+        Row(read_param),
         Row(transports),
         Row(signedness),
         Row(width),
@@ -327,14 +330,17 @@ fn every_key_compared(n: &WrittenRegister<'_>) {
     let WrittenRegister {
         id: _,                   // matching, RegisterRenamed
         param: _,                // param
+        read_param: _,           // read_param
         name: _,                 // name
         address: _,              // moved
+        reference: _,            // reference
         access: _,               // access, on the plan
         table: _,                // table, on the plan
         unit: _,                 // unit
         scale: _,                // scale
         signed: _,               // signedness
         pair: _,                 // width, pair_citation
+        string: _,               // width (registers, byte order), pair_citation, documentation
         min: _,                  // range, variant_ranges
         max: _,                  // range, variant_ranges
         default: _,              // defaults
@@ -428,6 +434,32 @@ fn param(s: &Sides) -> Row {
         "",
         s.fa.param.clone(),
         s.fb.param.clone(),
+    )
+}
+
+/// The Modicon reference the manual prints beside the register (`reference:`): what `check`
+/// holds to the address, rustdoc's alias and the look-up by reference.
+fn reference(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    (
+        a.reference != b.reference,
+        ChangeKind::DocumentationChanged,
+        "Modicon reference",
+        Some(a.reference.unwrap_or("none").to_owned()),
+        Some(b.reference.unwrap_or("none").to_owned()),
+    )
+}
+
+/// The parameter a read returns, when not the one a write sets (BICO): a read of the register
+/// means another parameter, so readers of it are broken (breaking, as a read meaning changed).
+fn read_param(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    (
+        a.read_param != b.read_param,
+        ChangeKind::ReadMeaningChanged,
+        "read parameter",
+        s.fa.read_param.clone(),
+        s.fb.read_param.clone(),
     )
 }
 
@@ -610,13 +642,22 @@ fn signedness(s: &Sides) -> Row {
     )
 }
 
+/// The registers a value takes and their order: a pair's word order, a string's length and
+/// byte order (`text layout`); either change is breaking (another value on the wire).
 fn width(s: &Sides) -> Row {
+    let (a, b) = s.defs();
+    let layout = |d: &WrittenRegister, r: RegisterRef<'_>| match d.string {
+        Some(t) => describe::text(t.registers, t.byte_order, None),
+        None => describe::width(r.width()),
+    };
+    let text = a.string.is_some() || b.string.is_some();
+    let (la, lb) = (layout(a, s.r), layout(b, s.n));
     (
-        s.r.width() != s.n.width(),
+        la != lb,
         ChangeKind::WidthChanged,
-        "width",
-        Some(describe::width(s.r.width())),
-        Some(describe::width(s.n.width())),
+        if text { "text layout" } else { "width" },
+        Some(la),
+        Some(lb),
     )
 }
 
@@ -1016,6 +1057,9 @@ fn documentation(c: &mut Collector, s: &Sides) {
     if a.indirect != b.indirect {
         parts.push("indirect citation");
     }
+    if a.string.map(|t| &t.example) != b.string.map(|t| &t.example) {
+        parts.push("text example");
+    }
     let variant_docs = |d: &WrittenRegister| {
         d.by_variant
             .iter()
@@ -1045,6 +1089,10 @@ fn pair_citation(c: &mut Collector, s: &Sides) {
     let pair = |d: &WrittenRegister| d.pair.and_then(|p| p.source.clone());
     if s.r.width() == s.n.width() && pair(a) != pair(b) {
         s.cite(c, "word order", pair(a), pair(b));
+    }
+    let text = |d: &WrittenRegister| d.string.and_then(|t| t.source.clone());
+    if s.r.width() == s.n.width() && text(a) != text(b) {
+        s.cite(c, "text layout", text(a), text(b));
     }
 }
 

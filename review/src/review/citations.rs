@@ -129,6 +129,7 @@ struct Keys {
     forms: AddressForms,
     alternatives: Vec<AddressForms>,
     param: Option<String>,
+    read_param: Option<String>,
 }
 
 impl Keys {
@@ -138,19 +139,24 @@ impl Keys {
             if decimal { f.with_decimal(address) } else { f }
         };
         Keys {
-            forms: forms(r.address()),
+            forms: forms(r.address()).with_reference(r.modicon()),
             alternatives: r
                 .address_alternatives()
                 .iter()
                 .map(|a| forms(a.address))
                 .collect(),
             param: r.param().map(str::to_owned),
+            read_param: r.read_param().map(str::to_owned),
         }
     }
 
     /// The line prints the register's parameter number or one of its addresses.
     fn strong(&self, line: &Line) -> bool {
         self.param.as_deref().is_some_and(|p| param_found(p, line))
+            || self
+                .read_param
+                .as_deref()
+                .is_some_and(|p| param_found(p, line))
             || self.forms.found_in(line)
             || self.alternatives.iter().any(|f| f.found_in(line))
     }
@@ -232,7 +238,16 @@ pub fn verify_citations(map: &Map, manuals: &Manuals) -> Vec<CitationCheck> {
                 if let Some(p) = r.param() {
                     expected.push(p.to_owned());
                 }
-                expected.push(AddressForms::display(r.address()));
+                if let Some(p) = r.read_param() {
+                    expected.push(p.to_owned());
+                }
+                // In the map's notation (`45` in a decimal-numbered map), and the Modicon
+                // reference it records.
+                expected.push(drivemap_map::describe::address_as(
+                    map.address_format(),
+                    r.address(),
+                ));
+                expected.extend(r.reference().map(str::to_owned));
                 expected.push(format!("\"{}\"", r.name()));
                 let verdict = match r.indirect() {
                     Some(reason) => Verdict::Indirect(reason.to_owned()),

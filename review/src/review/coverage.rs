@@ -188,15 +188,26 @@ fn line_shape(line: &str, shapes: &HashSet<String>, decimal: bool) -> (Class, Cl
 
 /// The row keys of a line: each parameter number with the address after it (or the only
 /// address of the line), or the address alone.
+///
+/// A word that is a Modicon reference the map records (`references`: its printed spellings with
+/// the register's address) is not an address of its own: the row is the register's, keyed by the
+/// drive's own number printed beside it, or by the register's address when the row prints only
+/// the reference.
 fn row_keys(
     line: &str,
     shapes: &HashSet<String>,
     decimal: bool,
+    references: &Printed,
 ) -> Vec<(Option<String>, Option<u16>)> {
     let mut keys: Vec<(Option<String>, Option<u16>)> = Vec::new();
     let mut addresses = Vec::new();
+    let mut referenced = Vec::new();
     let words: Vec<&str> = line.split_whitespace().collect();
     for (i, w) in words.iter().enumerate() {
+        if let Some(a) = references.address(w) {
+            referenced.extend(a);
+            continue;
+        }
         if let Some((a, rest)) = address_prefix(w, decimal) {
             addresses.push(a);
             if let Some(last) = keys.last_mut()
@@ -217,6 +228,9 @@ fn row_keys(
                 keys.push((Some(p.to_owned()), None));
             }
         }
+    }
+    if addresses.is_empty() {
+        addresses = referenced;
     }
     if keys.is_empty() {
         return addresses
@@ -302,6 +316,47 @@ fn gap_covers_param(text: &str, param: &str) -> bool {
         .any(|w| norm_param(w) == p)
 }
 
+/// The Modicon references of a map that records them (`reference:`): a word that is one is the
+/// reference column of a row, not an address of its own.
+#[derive(Debug, Default)]
+struct Printed {
+    /// Each recorded reference, in its five- and six-digit spellings, with the register's
+    /// address.
+    recorded: HashMap<String, u16>,
+    /// The serial side's addressing offset, when the map records any reference: another word of
+    /// a reference's shape is read through it (a row the map leaves out).
+    offset: Option<i32>,
+}
+
+impl Printed {
+    fn of(map: &Map) -> Printed {
+        let recorded: HashMap<String, u16> = map
+            .registers()
+            .filter_map(|r| Some((r.modicon()?, r.address())))
+            .flat_map(|(m, a)| {
+                let digit = drivemap_map::modicon::digit(m.table);
+                let six = format!("{digit}{:05}", u32::from(m.pdu) + 1);
+                [
+                    (drivemap_map::modicon::Modicon::text(m.table, m.pdu), a),
+                    (six, a),
+                ]
+            })
+            .collect();
+        let offset = (!recorded.is_empty()).then(|| map.address_offsets().0);
+        Printed { recorded, offset }
+    }
+
+    /// Whether `word` is a reference, and the address of the map it names (if any).
+    fn address(&self, word: &str) -> Option<Option<u16>> {
+        if let Some(&a) = self.recorded.get(word) {
+            return Some(Some(a));
+        }
+        let offset = self.offset?;
+        let m = drivemap_map::modicon::Modicon::parse(word)?;
+        Some(u16::try_from(i32::from(m.pdu) - offset).ok())
+    }
+}
+
 /// What the map says that the manuals' rows are compared with.
 struct Known<'a> {
     map: &'a Map,
@@ -316,6 +371,8 @@ struct Known<'a> {
     params: HashSet<String>,
     /// The registers' addresses, alternatives included.
     addresses: HashSet<u16>,
+    /// The Modicon references the registers record (`reference:`).
+    references: Printed,
     /// The `removed` entries' ids (normalised).
     removed: HashSet<String>,
     /// The group citing each line, for naming tables.
@@ -327,7 +384,7 @@ impl<'a> Known<'a> {
         let decimal = map.address_format() == drivemap_map::facts::AddressFormat::Decimal;
         let shapes: HashSet<String> = map
             .registers()
-            .filter_map(|r| r.param())
+            .flat_map(|r| r.param().into_iter().chain(r.read_param()))
             .map(shape)
             .collect();
         let learnt = learn_shapes(map, manuals, &shapes, decimal);
@@ -343,7 +400,8 @@ impl<'a> Known<'a> {
             cited: all_citations(map),
             params: map
                 .registers()
-                .filter_map(|r| r.param().map(norm_param))
+                .flat_map(|r| r.param().into_iter().chain(r.read_param()))
+                .map(norm_param)
                 .collect(),
             addresses: map
                 .registers()
@@ -352,6 +410,7 @@ impl<'a> Known<'a> {
                         .chain(r.address_alternatives().iter().map(|a| a.address))
                 })
                 .collect(),
+            references: Printed::of(map),
             removed: map.removed().iter().map(|r| norm_param(&r.id)).collect(),
             group_of_line: map
                 .registers()
@@ -436,7 +495,7 @@ fn manual(known: &Known<'_>, file: &str, lines: &[String], report: &mut Coverage
         if !keep.contains(&line_shape(text, &known.shapes, known.decimal)) {
             continue;
         }
-        let keys = row_keys(text, &known.shapes, known.decimal);
+        let keys = row_keys(text, &known.shapes, known.decimal, &known.references);
         if keys.is_empty() {
             continue;
         }
@@ -544,9 +603,10 @@ fn count(
         uncited.push(UncitedRow {
             file: row.file.to_owned(),
             line: row.n,
+            // An address in the map's notation: `45` in a decimal-numbered map.
             key: param.unwrap_or_else(|| {
                 address
-                    .map(super::matching::AddressForms::display)
+                    .map(|a| drivemap_map::describe::address_as(known.map.address_format(), a))
                     .unwrap_or_default()
             }),
             text: super::quote_text(row.text),
@@ -631,7 +691,8 @@ mod tests {
             row_keys(
                 "UF.8 1E08 47688 47689 UF.53 1E35 47733 47734",
                 &shapes,
-                false
+                false,
+                &Printed::default()
             ),
             vec![
                 (Some("UF.8".to_owned()), Some(0x1E08)),
@@ -639,11 +700,16 @@ mod tests {
             ]
         );
         assert_eq!(
-            row_keys("0200H\tBn-01\tAcceleration time 1", &shapes, false),
+            row_keys(
+                "0200H\tBn-01\tAcceleration time 1",
+                &shapes,
+                false,
+                &Printed::default()
+            ),
             vec![(Some("Bn-01".to_owned()), Some(0x0200))]
         );
         assert_eq!(
-            row_keys("0020H\tStatus", &shapes, false),
+            row_keys("0020H\tStatus", &shapes, false, &Printed::default()),
             vec![(None, Some(0x0020))]
         );
         assert!(gap_covers_param("U1-15 .. U1-18", "U1-16"));

@@ -15,6 +15,9 @@ pub(crate) struct AddressForms {
     /// The register number in decimal, for a manual that numbers registers so
     /// (`address_format: decimal`).
     register_number: Option<String>,
+    /// The Modicon reference the map records for the register (`reference: 40024`), in its
+    /// five- and six-digit spellings: found on its own, as the register number is.
+    references: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -56,7 +59,25 @@ impl AddressForms {
             hex,
             decimal,
             register_number: None,
+            references: Vec::new(),
         }
+    }
+
+    /// Also finds the Modicon reference the map records for the register (`40024`, and
+    /// `400024`), printed beside the drive's own number.
+    pub(crate) fn with_reference(
+        mut self,
+        reference: Option<drivemap_map::modicon::Modicon>,
+    ) -> AddressForms {
+        if let Some(m) = reference {
+            let five = drivemap_map::modicon::Modicon::text(m.table, m.pdu);
+            let digit = drivemap_map::modicon::digit(m.table);
+            self.references = vec![format!("{digit}{:05}", u32::from(m.pdu) + 1)];
+            if five.len() == 5 {
+                self.references.push(five);
+            }
+        }
+        self
     }
 
     /// Also finds the address printed as a decimal register number (`2001` for 07D1H), for a
@@ -64,11 +85,6 @@ impl AddressForms {
     pub(crate) fn with_decimal(mut self, address: u16) -> AddressForms {
         self.register_number = Some(address.to_string());
         self
-    }
-
-    /// The manual's preferred spelling, for messages.
-    pub(crate) fn display(address: u16) -> String {
-        format!("{address:04X}h")
     }
 
     /// Whether `line` (see [`Line`]) prints the address.
@@ -82,6 +98,10 @@ impl AddressForms {
                     .register_number
                     .as_ref()
                     .is_some_and(|d| find_bounded(t, d, Boundary::Word))
+                || self
+                    .references
+                    .iter()
+                    .any(|d| find_bounded(t, d, Boundary::Word))
                 || (!self.decimal.is_empty()
                     && self
                         .decimal

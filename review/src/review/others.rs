@@ -40,7 +40,10 @@ pub(crate) fn found(
                     .filter(|v| codes.contains(&v.value))
                     .any(|v| super::citations::value_found(v, line))
                 || r.param().is_some_and(|p| param_found(p, line))
-                || forms(r.address()).found_in(line)
+                || r.read_param().is_some_and(|p| param_found(p, line))
+                || forms(r.address())
+                    .with_reference(r.modicon())
+                    .found_in(line)
                 || name_found(r.name(), line)
         }
         CitationRule::Any {
@@ -57,7 +60,9 @@ pub(crate) fn found(
                 .filter_map(|i| map.register_at(*i))
                 .any(|r| {
                     r.param().is_some_and(|p| param_found(p, line))
-                        || forms(r.address()).found_in(line)
+                        || forms(r.address())
+                            .with_reference(r.modicon())
+                            .found_in(line)
                 })
                 || words.iter().any(|w| word_found(w, line))
                 || params.iter().any(|p| param_found(p, line))

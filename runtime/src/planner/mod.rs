@@ -100,8 +100,9 @@ pub struct ReadableSet {
     run_start: Vec<u32>,
     /// For each address, the index of the last address of its run.
     run_end: Vec<u32>,
-    /// Second addresses of 32-bit pairs, sorted: a request may not begin there while the
-    /// pair's first word is read too (see [`ReadableSet::pair_second`]).
+    /// Second addresses of 32-bit pairs, and every later address of a string (text in
+    /// several registers), sorted: a request may not begin there while the word before is read
+    /// too (see [`ReadableSet::pair_second`]).
     pair_seconds: Vec<u16>,
 }
 
@@ -143,29 +144,32 @@ impl ReadableSet {
             readable().flat_map(|r| (0..r.width.count()).filter_map(|i| r.address.checked_add(i))),
         );
         set.pair_seconds = readable()
-            .filter(|r| r.width.count() == 2)
-            .filter_map(|r| r.address.checked_add(1))
+            .flat_map(|r| (1..r.width.count()).filter_map(|i| r.address.checked_add(i)))
             .collect();
         set.pair_seconds.sort_unstable();
         set.pair_seconds.dedup();
         set
     }
 
-    /// Whether `address` is the second word of a 32-bit pair: a read of the pair's first word
-    /// must take it in the same request.
+    /// Whether `address` is the second word of a 32-bit pair, or a later word of a string: a
+    /// read of the word before must take it in the same request.
     pub fn pair_second(&self, address: u16) -> bool {
         self.pair_seconds.binary_search(&address).is_ok()
     }
 
-    /// `wanted` with the second word of every wanted pair added (sorted, unique).
+    /// `wanted` with the second word of every wanted pair, and every later word of a wanted
+    /// string, added (sorted, unique).
     pub fn whole_pairs(&self, wanted: &[u16]) -> Vec<u16> {
         let mut w = sorted_unique(wanted);
-        let seconds: Vec<u16> = w
-            .iter()
-            .filter_map(|a| a.checked_add(1))
-            .filter(|a| self.pair_second(*a))
-            .collect();
-        w.extend(seconds);
+        let mut rest = Vec::new();
+        for &a in &w {
+            let mut next = a.checked_add(1);
+            while let Some(n) = next.filter(|n| self.pair_second(*n)) {
+                rest.push(n);
+                next = n.checked_add(1);
+            }
+        }
+        w.extend(rest);
         sorted_unique(&w)
     }
 

@@ -230,14 +230,16 @@ impl Poller {
             kind: TransportKind::Rtu,
             replan: false,
         };
-        // A wanted 32-bit pair is read whole: its second word is wanted too (after the
-        // caller's entries, so their indices stay).
-        let seconds: Vec<(Table, u16)> = poller
-            .wanted
-            .iter()
-            .filter_map(|&(t, a)| Some((t, a.checked_add(1)?)))
-            .filter(|&(t, a)| poller.readable[table_index(t)].pair_second(a))
-            .collect();
+        // A wanted 32-bit pair is read whole: its second word is wanted too, and so is every
+        // later word of a wanted string (after the caller's entries, so their indices stay).
+        let mut seconds: Vec<(Table, u16)> = Vec::new();
+        for &(t, a) in &poller.wanted {
+            let mut next = a.checked_add(1);
+            while let Some(n) = next.filter(|&n| poller.readable[table_index(t)].pair_second(n)) {
+                seconds.push((t, n));
+                next = n.checked_add(1);
+            }
+        }
         for second in seconds {
             if !poller.wanted.contains(&second) {
                 poller.wanted.push(second);
@@ -605,12 +607,27 @@ impl Poller {
             Err(e) => return Some(Err(e)),
         };
         Some(match width {
-            Width::Word => Ok(u32::from(first)),
+            // A string's words are read by [`Poller::words`]; its first word stands here.
+            Width::Word | Width::Text(_) => Ok(u32::from(first)),
             Width::Pair(_) => match self.get(table, address.wrapping_add(1))? {
                 Ok(second) => Ok(width.join(&[first, second])),
                 Err(e) => Err(e),
             },
         })
+    }
+
+    /// The words of the last poll from the `index`-th wanted address on, one per slot of
+    /// `out` (a string's: the planner reads them in one request): `None` before the first poll,
+    /// the error of the first that failed.
+    pub fn words(&self, index: usize, out: &mut [u16]) -> Option<Result<(), &Error>> {
+        let (table, address) = *self.wanted.get(index)?;
+        for (i, word) in out.iter_mut().enumerate() {
+            match self.get(table, address.wrapping_add(i as u16))? {
+                Ok(w) => *word = w,
+                Err(e) => return Some(Err(e)),
+            }
+        }
+        Some(Ok(()))
     }
 
     /// The outcome of the last poll for the register at `address` of `table`, if wanted.
@@ -629,7 +646,8 @@ impl Poller {
             Ok(a) => a,
             Err(e) => return Some(Err(PolledError::Address(e))),
         };
-        let mut words = [0u16; 2];
+        let mut words = [0u16; Width::MAX_WORDS];
+        let words = &mut words[..usize::from(R::WIDTH.count()).min(Width::MAX_WORDS)];
         for (i, word) in words
             .iter_mut()
             .enumerate()
@@ -640,7 +658,7 @@ impl Poller {
                 Err(e) => return Some(Err(PolledError::Read(e))),
             }
         }
-        Some(R::decode(R::WIDTH.join(&words), settings).map_err(PolledError::Value))
+        Some(R::decode_words(words, settings).map_err(PolledError::Value))
     }
 
     /// Whether a boundary before `addresses[at]` falls between the words of a pair.

@@ -382,7 +382,7 @@ impl<'a, S: SettingsView, W: Wire> Machine<'a, S, W> {
         let r = self.row(f.row);
         let why = if !r.info.access.readable() || !r.transports.contains(self.state.kind) {
             Some("the register cannot be read on this link, so the rest of its word is unknown")
-        } else if !r.read_values.is_empty() {
+        } else if !r.read_values.is_empty() || r.read_param.is_some() {
             Some(
                 "the register reads back other values than are written, so the rest of its word cannot be kept",
             )
@@ -539,6 +539,7 @@ impl<'a, S: SettingsView, W: Wire> Machine<'a, S, W> {
         let r = self.row(row);
         let readable = r.info.access.readable()
             && r.read_values.is_empty()
+            && r.read_param.is_none()
             && r.transports.contains(self.state.kind)
             && r.broadcast != Broadcast::Only
             && self.state.slave != 0;
@@ -575,6 +576,7 @@ impl<'a, S: SettingsView, W: Wire> Machine<'a, S, W> {
         };
         let readable = r.info.access.readable()
             && r.read_values.is_empty()
+            && r.read_param.is_none()
             && r.transports.contains(self.state.kind)
             && r.broadcast != Broadcast::Only
             && self.state.slave != 0;

@@ -477,3 +477,102 @@ fn splitting_a_refused_request_keeps_pairs_whole() {
     assert!(!split_a_pair(&c.transport().requests, 0x41));
     assert!(!split_a_pair(&c.transport().requests, 0x44));
 }
+
+/// 0040h a word, 0041h.. a string of `n` registers, then words up to 004Fh.
+fn string_infos(n: u8) -> Vec<RegisterInfo> {
+    let mut out = vec![
+        info(0x40, Access::Read, Table::Holding),
+        RegisterInfo {
+            width: drivemap_runtime::core::width::Width::Text(n),
+            ..info(0x41, Access::Read, Table::Holding)
+        },
+    ];
+    out.extend((0x41 + u16::from(n)..=0x4F).map(|a| info(a, Access::Read, Table::Holding)));
+    out
+}
+
+/// Whether a request reads some registers of the string at `first` (`n` of them) but not all.
+fn cuts(requests: &[(u8, u16, u16)], first: u16, n: u16) -> bool {
+    requests.iter().any(|&(_, a, q)| {
+        let covered = (first..first + n)
+            .filter(|x| (a..a + q).contains(x))
+            .count();
+        covered != 0 && covered != usize::from(n)
+    })
+}
+
+fn string_client(profile: &'static Profile) -> Client<Link> {
+    let mut drive = SimulatedSlave::new(1, profile);
+    for a in 0x40..=0x4F {
+        drive.set_holding(a, 0x4100 + a);
+    }
+    Client::new(
+        Link {
+            drive,
+            reply: Vec::new(),
+            requests: Vec::new(),
+        },
+        profile,
+    )
+}
+
+#[test]
+fn a_string_is_read_whole_even_when_a_merged_request_is_refused() {
+    let infos = string_infos(6);
+    let mut c = string_client(&PROFILE);
+    // 0047h refuses: the merged request 0040h-0047h is split, without cutting the string.
+    c.transport().drive.fail_at(0x47, 0x02);
+    let mut p = Poller::new(&PROFILE, &infos, holding(&[0x40, 0x41, 0x47])).unwrap();
+    assert_eq!(plan(&p), vec![(Table::Holding, read(0x40, 8))]);
+    p.poll(&mut c, 1);
+    assert!(
+        !cuts(&c.transport().requests, 0x41, 6),
+        "{:?}",
+        c.transport().requests
+    );
+    let mut words = [0u16; 6];
+    assert!(p.words(1, &mut words).unwrap().is_ok());
+    assert_eq!(words, [0x4141, 0x4142, 0x4143, 0x4144, 0x4145, 0x4146]);
+    let text = drivemap_runtime::core::text::Text::<12>::decode(
+        &words,
+        drivemap_runtime::core::text::ByteOrder::HighFirst,
+    );
+    assert_eq!(text.as_str(), Some("AAABACADAEAF"));
+    assert!(p.get(Table::Holding, 0x47).unwrap().is_err());
+}
+
+proptest::proptest! {
+    /// Whatever the drive's `max_read` and the string's length, the plan reads the string in one
+    /// request of all its registers (or refuses to plan when it cannot), and every word of it
+    /// arrives as the drive holds it.
+    #[test]
+    fn a_string_is_never_cut_by_the_plan(
+        max_read in 1u16..=12,
+        n in 1u8..=10,
+        others in proptest::collection::vec(0x40u16..=0x4F, 0..6),
+    ) {
+        let profile: &'static Profile = Box::leak(Box::new(Profile {
+            drive_id: "test-drive",
+            max_read,
+            ..Profile::GENERIC
+        }));
+        let infos = string_infos(n);
+        let last = 0x41 + u16::from(n) - 1;
+        let mut wanted = vec![0x41];
+        wanted.extend(others.into_iter().filter(|a| *a == 0x40 || *a > last));
+        match Poller::new(profile, &infos, holding(&wanted)) {
+            Err(e) => proptest::prop_assert!(u16::from(n) > max_read, "{e:?}"),
+            Ok(mut p) => {
+                proptest::prop_assert!(u16::from(n) <= max_read);
+                let mut c = string_client(profile);
+                p.poll(&mut c, 1);
+                let requests = c.transport().requests.clone();
+                proptest::prop_assert!(!cuts(&requests, 0x41, u16::from(n)), "{requests:?}");
+                let mut words = vec![0u16; usize::from(n)];
+                proptest::prop_assert!(p.words(0, &mut words).unwrap().is_ok());
+                let held: Vec<u16> = (0x41..=last).map(|a| 0x4100 + a).collect();
+                proptest::prop_assert_eq!(words, held);
+            }
+        }
+    }
+}

@@ -7,6 +7,8 @@ use drivemap_map::RegisterRef;
 use drivemap_map::facts::UnknownItem;
 use drivemap_runtime::core::plan::Conversion;
 use drivemap_runtime::core::scale::ValueError;
+use drivemap_runtime::core::text;
+use drivemap_runtime::core::width::Width;
 use std::sync::Arc;
 
 use super::Simulator;
@@ -104,6 +106,14 @@ impl Simulator {
         let (min, max) = r.limits();
         candidates.extend(min);
         candidates.extend(max);
+        // The limits of a selected scale's cases (a range a mode parameter selects): the
+        // case in force is among them.
+        if let Some(drivemap_map::facts::Scale::Selected(sel)) = r.written().scale {
+            for c in &sel.cases {
+                candidates.extend(c.min);
+                candidates.extend(c.max);
+            }
+        }
         for option in r.variant_options() {
             if settings.has_variant(&self.map, option) {
                 let (min, max) = r.limits_for(option);
@@ -122,4 +132,27 @@ impl Simulator {
 /// The map says the manual's list of codes is incomplete (`unknown: values`).
 fn values_unknown(r: RegisterRef<'_>) -> bool {
     r.unknown().iter().any(|u| u.what == UnknownItem::Values)
+}
+
+/// What the simulator serves in a string register whose map gives no `string.example`: this
+/// text, cut to the register's length. A placeholder of the simulator's, never the manual's.
+pub(super) const PLACEHOLDER: &str = "DRIVEMAP-SIM";
+
+/// The words a string register holds in the simulator: the manual's example as the map gives it
+/// (`string.example`, checked printable and fitting by `drivemap check`), else
+/// [`PLACEHOLDER`], padded with NUL, in the map's byte order; none for other registers.
+pub(super) fn text_words(r: RegisterRef<'_>) -> Vec<u16> {
+    let plan = r.plan();
+    let (Width::Text(n), Conversion::Text { order }) = (plan.info.width, plan.conversion) else {
+        return Vec::new();
+    };
+    let mut words = vec![0u16; usize::from(n)];
+    let example = r.written().string.and_then(|t| t.example.as_deref());
+    let text = example.unwrap_or(&PLACEHOLDER[..PLACEHOLDER.len().min(2 * usize::from(n))]);
+    if text::encode(text.as_bytes(), order, &mut words).is_err() {
+        // An example `check` refuses: the placeholder, which fits.
+        let fit = &PLACEHOLDER[..PLACEHOLDER.len().min(2 * usize::from(n))];
+        let _ = text::encode(fit.as_bytes(), order, &mut words);
+    }
+    words
 }

@@ -42,6 +42,22 @@ pub(super) struct Slot {
     pub(super) width: Width,
 }
 
+impl Slot {
+    /// The word the slot's register holds here: its word, a pair's half, or a string's
+    /// characters (`texts`, by register).
+    pub(super) fn word(&self, raw: &[u32], texts: &[Vec<u16>]) -> u16 {
+        let w = usize::from(self.word);
+        match self.width {
+            Width::Text(_) => texts
+                .get(self.index)
+                .and_then(|t| t.get(w))
+                .copied()
+                .unwrap_or(0),
+            width => width.split(raw[self.index]).get(w).copied().unwrap_or(0),
+        }
+    }
+}
+
 /// Communication address → what lies there.
 pub(super) type AddressMap = HashMap<u16, Slot, BuildHasherDefault<AddressHasher>>;
 

@@ -50,9 +50,13 @@ pub struct Simulator {
     index: HashMap<String, usize>,
     /// Each register's raw value: its word, or a 32-bit pair's value.
     raw: Vec<u32>,
+    /// Each string register's words (`string:`; empty for other registers): the manual's
+    /// example, or the simulator's placeholder ([`defaults::PLACEHOLDER`]). Read-only.
+    texts: Vec<Vec<u16>>,
     /// The last value a master wrote to each register (none since power-on), to tell a changed
     /// value from a repeated one (`repeat_needs_change`), and for registers whose reads mean
-    /// something else (`read_values`), whose `raw` value is the read state.
+    /// something else (`read_values`) or return another parameter (`read_param`), whose `raw`
+    /// value is the read state.
     last_written: Vec<Option<u32>>,
     /// Writes the drive executed, per register: every accepted write, except that a register
     /// with `repeat_needs_change` executes only a value that differs from the previous write.
@@ -149,6 +153,7 @@ impl Simulator {
         let count = map.registers().len();
         let mut sim = Simulator {
             raw: vec![0; count],
+            texts: map.registers().map(defaults::text_words).collect(),
             last_written: vec![None; count],
             executed: vec![0; count],
             plan: ExceptionPlan::from_exceptions(profile.exceptions),
@@ -295,7 +300,9 @@ impl Simulator {
     /// The last raw value a master wrote to this register since power-on. For a register whose
     /// reads mean something else (`read_values`) this is the only trace of a write: the
     /// simulator does not know the drive's password, so a write does not change what reads
-    /// give (set that with [`Simulator::set_raw`]).
+    /// give (set that with [`Simulator::set_raw`]). Likewise for a register read from another
+    /// parameter than the one written (`read_param`, BICO: a write sets P2200, a read returns
+    /// the status bit r0055.8, which the simulated drive does not derive from it).
     pub fn last_written(&self, name: &str) -> Result<Option<u32>, SimError> {
         Ok(self.last_written[self.index_of(name)?])
     }

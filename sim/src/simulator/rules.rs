@@ -81,13 +81,13 @@ impl Simulator {
             layout
                 .holding
                 .get(&a)
-                .map_or(0, |s| s.width.split(self.raw[s.index])[usize::from(s.word)])
+                .map_or(0, |s| s.word(&self.raw, &self.texts))
         };
         match map.get(&address) {
             Some(_) if table == Table::Holding && self.indexed.shown(address, word).is_some() => {
                 Ok(self.indexed.shown(address, word).unwrap_or(0))
             }
-            Some(s) if s.readable => Ok(s.width.split(self.raw[s.index])[usize::from(s.word)]),
+            Some(s) if s.readable => Ok(s.word(&self.raw, &self.texts)),
             Some(_) => Err(self.plan.illegal_address),
             None if !first || (table == Table::Holding && self.in_gap(address)) => Ok(0),
             None => Err(self.plan.illegal_address),
@@ -191,13 +191,8 @@ impl Simulator {
                     if !self.may_write_now(r) {
                         return Err(self.plan.refused_now);
                     }
-                    let raw = &self.raw;
-                    let word = |a: u16| {
-                        layout
-                            .holding
-                            .get(&a)
-                            .map_or(0, |s| s.width.split(raw[s.index])[usize::from(s.word)])
-                    };
+                    let (raw, texts) = (&self.raw, &self.texts);
+                    let word = |a: u16| layout.holding.get(&a).map_or(0, |s| s.word(raw, texts));
                     // Index/value pairs are holding registers.
                     if table == Table::Holding {
                         match self.indexed.check(comm, v as u16, word) {
@@ -232,16 +227,16 @@ impl Simulator {
                 // A register read with other meanings keeps its read word: what a password
                 // write does to the lock state depends on a password the simulator lacks.
                 let layout = &self.layouts[usize::from(kind == TransportKind::Tcp)];
-                let raw = &self.raw;
+                let (raw, texts) = (&self.raw, &self.texts);
                 if table == Table::Holding {
                     self.indexed.store(comm, v as u16, |a| {
-                        layout
-                            .holding
-                            .get(&a)
-                            .map_or(0, |s| s.width.split(raw[s.index])[usize::from(s.word)])
+                        layout.holding.get(&a).map_or(0, |s| s.word(raw, texts))
                     });
                 }
-                if plan.read_values.is_empty() {
+                // A register whose reads mean something else (`read_values`) or return another
+                // parameter than the one written (`read_param`, BICO) keeps its read state: the
+                // write is recorded (`last_written`), what reads give is set by hand.
+                if plan.read_values.is_empty() && plan.read_param.is_none() {
                     let before = self.raw[i];
                     self.raw[i] = v;
                     if executes {

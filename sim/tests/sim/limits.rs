@@ -49,3 +49,33 @@ fn a_reference_above_n011_is_refused_by_the_simulated_drive() {
     assert_eq!(write(&mut sim, 0x0002, 550), Some(0x21));
     assert_eq!(write(&mut sim, 0x0002, 500), None);
 }
+
+/// A range a mode parameter selects (`limits: {selected_by: P1300}`, the fictional
+/// `tests/fixtures/lindgren-lg7`): the simulated drive refuses, with 03h "the value is outside
+/// the range in force", a word outside the range of the case its own P1300 selects, and keeps
+/// the value; a master that does not use drivemap meets the same rule as `drivemap write`.
+#[test]
+fn a_range_selected_by_the_control_mode_is_kept_by_the_simulated_drive() {
+    let path = paths::fixture("lindgren-lg7/lindgren-lg7.yaml");
+    let drive = drivemap_map::Loader::new().load(path.as_ref()).unwrap();
+    let mut sim = Simulator::new(drive, SimOptions::new()).unwrap();
+    // P1300 = 0 (V/f): P0640 10.0 ..= 400.0 % (0.1 %: 100 ..= 4000).
+    assert_eq!(sim.raw("control_mode").unwrap(), 0);
+    assert_eq!(write(&mut sim, 0x0101, 2000), None);
+    assert_eq!(write(&mut sim, 0x0101, 4001), Some(0x03));
+    assert_eq!(sim.raw("motor_overload_factor").unwrap(), 2000);
+    // P1300 = 20 (vector): 10.0 ..= 150.0 %, the scale unchanged.
+    assert_eq!(write(&mut sim, 0x0100, 20), None);
+    assert_eq!(write(&mut sim, 0x0101, 1501), Some(0x03));
+    assert_eq!(write(&mut sim, 0x0101, 2000), Some(0x03));
+    assert_eq!(write(&mut sim, 0x0101, 1500), None);
+    assert_eq!(
+        sim.value("motor_overload_factor").unwrap().as_f64(),
+        Some(150.0)
+    );
+    // Back to V/f: the wider range again.
+    assert_eq!(write(&mut sim, 0x0100, 1), None);
+    assert_eq!(write(&mut sim, 0x0101, 4000), None);
+    // A code P1300 does not list is refused: no case without a range is reached by a write.
+    assert_eq!(write(&mut sim, 0x0100, 7), Some(0x03));
+}

@@ -899,3 +899,42 @@ fn the_factory_setting_ignores_network_runs() {
         );
     }
 }
+
+/// The string fixture (`tests/fixtures/lumen-lx2`): the simulator serves each string's example
+/// in its byte order, NUL-padded, and answers a write to any of a string's registers with the
+/// drive's exception, leaving the text as it was.
+#[test]
+fn strings_are_served_from_the_example_and_never_written() {
+    let path = paths::fixture("lumen-lx2/lumen-lx2.yaml");
+    let mut sim = Simulator::new(
+        drivemap_map::Loader::new().load(path.as_ref()).unwrap(),
+        SimOptions::new().network_source(TransportKind::Rtu),
+    )
+    .unwrap();
+    let model = read(&mut sim, 0x2100, 12).unwrap();
+    assert_eq!(
+        model,
+        [
+            0x4C58, 0x322D, 0x3037, 0x3530, 0x2D45, 0, 0, 0, 0x5631, 0x2E30, 0x3400, 0
+        ]
+    );
+    // Input registers, low byte first: "SN" is 4E53h.
+    let slave = sim.slave();
+    let reply = request(
+        &mut sim,
+        slave,
+        Request::ReadInput {
+            address: 0x3000,
+            quantity: 6,
+        },
+    )
+    .unwrap();
+    assert_eq!(&reply[3..7], &[0x4E, 0x53, 0x34, 0x32], "{reply:02X?}");
+    for address in [0x2100, 0x2103, 0x2107] {
+        assert!(
+            write(&mut sim, address, &[0x4141]).is_err(),
+            "{address:04X}h"
+        );
+    }
+    assert_eq!(read(&mut sim, 0x2100, 8).unwrap(), model[..8]);
+}

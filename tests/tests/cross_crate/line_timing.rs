@@ -246,5 +246,8 @@ fn a_client_that_keeps_no_request_gap_is_caught_on_the_line() {
         measured.requests,
         measured.violations
     );
-    assert!(measured.ratio() < 1.0, "faster than the rules allow");
+    // Not asserted: that the cycle is shorter than the model's. It is on an idle machine (the
+    // rules' silences left out), but a wall-clock figure; on a loaded one the scheduler adds
+    // the time back, and the test failed so (CI, load average 12) with every early request
+    // caught. What the line shows, frame by frame, is the claim; speed is docs/performance.md's.
 }

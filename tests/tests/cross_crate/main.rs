@@ -26,6 +26,7 @@ mod not_printed;
 mod plan_agreement;
 mod roles_in_fields;
 mod scale_kinds;
+mod strings;
 mod tds_v8;
 mod transports;
 mod yaskawa_gpd515;

@@ -73,6 +73,8 @@ fn live_number(plan: &RegisterPlan, value: Result<Value, String>) -> Result<f64,
         Value::Quantity { value, .. } => value,
         Value::Code { code, .. } => f64::from(code),
         Value::Bit(on) => f64::from(u8::from(on)),
+        // `codec::decode` of one raw value refuses a string, so this is never reached.
+        Value::Text(_) => return Err(format!("{}: text from one raw value", plan.info.id)),
         Value::Bits { raw, .. } => match plan.conversion {
             Conversion::Bits { mask, .. } => f64::from(raw & mask),
             _ => {

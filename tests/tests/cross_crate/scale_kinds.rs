@@ -124,6 +124,19 @@ fn expected(kind: ConversionKind, r: RegisterRef<'_>, f: &RegisterFacts) -> Expe
             text: r.fields()[0].id.clone(),
             diff: vec![named.clone()],
         },
+        ConversionKind::Text => {
+            let text = scale_row(FactKey::Width);
+            assert!(text.starts_with("text in "), "{}: {text}", f.id);
+            Expected {
+                export: |e| {
+                    e["string"]["registers"].as_u64() == e["words"].as_u64()
+                        && e["string"]["byte_order"].is_string()
+                        && e["scale"].is_null()
+                },
+                text,
+                diff: vec![named.clone()],
+            }
+        }
     }
 }
 
