@@ -777,6 +777,10 @@ pub struct Session<'d> {
     /// number, so its raw value in [`Session::poll`] is its first word and [`Session::decode`]
     /// decodes the words kept here.
     texts: BTreeMap<&'static str, Vec<u16>>,
+    /// The ids of `--set` values [`Session::check_given`] could not compare with the drive (a
+    /// read that failed): the user's, assumed, and not read again before a write
+    /// ([`Session::confirm_selectors`]).
+    assumed: BTreeSet<String>,
 }
 
 impl<'d> Session<'d> {
@@ -820,6 +824,7 @@ impl<'d> Session<'d> {
             link: text,
             line: link.bus_line(drive),
             texts: BTreeMap::new(),
+            assumed: BTreeSet::new(),
         })
     }
 
@@ -848,6 +853,7 @@ impl<'d> Session<'d> {
             link: format!("{} link", kind.name()),
             line,
             texts: BTreeMap::new(),
+            assumed: BTreeSet::new(),
         }
     }
 
@@ -941,6 +947,7 @@ impl<'d> Session<'d> {
                 Ok(raw) => raw,
                 Err(e) => {
                     assumed.notes.push(assume(&format!(" (reading it: {e})")));
+                    self.assumed.insert(r.id().to_owned());
                     continue;
                 }
             };
@@ -1010,14 +1017,15 @@ impl<'d> Session<'d> {
     /// another word than the one the value was converted with (another master changed the
     /// control mode in between, or this command wrote it first), or cannot be read now: the
     /// value would be checked against the range of a case no longer in force. A selector given
-    /// with `--set` and not readable here is the user's, and is not read.
+    /// with `--set` and not readable here, or whose read failed when [`Session::check_given`]
+    /// compared it, is the user's, and is not read.
     pub fn confirm_selectors(&mut self, r: RegisterRef<'_>) -> Result<(), String> {
         let drive = self.drive;
         for s in selectors_of(drive, r) {
             let Some(&before) = self.settings.selectors.get(s.id()) else {
                 continue;
             };
-            if self.unreadable(s).is_some() || self.slave == 0 {
+            if self.unreadable(s).is_some() || self.slave == 0 || self.assumed.contains(s.id()) {
                 continue;
             }
             let now = self.read_raw(s).map_err(|e| {
