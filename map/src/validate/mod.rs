@@ -116,3 +116,24 @@ pub(crate) fn validate(drive: &Drive, ctx: &Context) -> Vec<Diagnostic> {
     }
     out
 }
+
+/// Whether `a` and `b` are in one address space: the same table, both broadcast or neither, and
+/// a transport in common (a register on no listed transport is on all).
+fn shares_space(a: &crate::ir::Register, b: &crate::ir::Register) -> bool {
+    let transports = match (&a.transports, &b.transports) {
+        (Some(x), Some(y)) => x.iter().any(|t| y.contains(t)),
+        _ => true,
+    };
+    a.broadcast == b.broadcast && a.table == b.table && transports
+}
+
+/// The ids of the registers read as settings: scale and address selectors, and the quantities
+/// limits and scales are relative to.
+fn settings_read(drive: &crate::ir::Drive) -> Vec<&str> {
+    drive
+        .selectors()
+        .iter()
+        .chain(drive.references().iter())
+        .map(|r| r.id())
+        .collect()
+}

@@ -3,26 +3,13 @@
 //! request, and no conversion or address depends on it.
 
 use crate::diagnostic::Diagnostic;
-use crate::ir::{Drive, Register};
+use crate::ir::Drive;
 
 /// 10h, the only function that writes both words of a pair in one request.
 const WRITE_MULTIPLE: u8 = 0x10;
 
-fn shares_space(a: &Register, b: &Register) -> bool {
-    let transports = match (&a.transports, &b.transports) {
-        (Some(x), Some(y)) => x.iter().any(|t| y.contains(t)),
-        _ => true,
-    };
-    a.broadcast == b.broadcast && a.table == b.table && transports
-}
-
 pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
-    let depended_on: Vec<&str> = drive
-        .selectors()
-        .iter()
-        .chain(drive.references().iter())
-        .map(|r| r.id())
-        .collect();
+    let depended_on = super::settings_read(drive);
     for r in drive.registers.iter().filter(|r| r.def.pair.is_some()) {
         let path = r.key_path("pair");
         let mut err = |message: String| out.push(drive.error(&path, Some(r.id()), message));
@@ -53,7 +40,7 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         if let Some(other) = drive
             .registers
             .iter()
-            .find(|o| o.def.address == second && shares_space(o, r))
+            .find(|o| o.def.address == second && super::shares_space(o, r))
         {
             let at = drive.locate(&other.path);
             let shown = |a: u16| crate::describe::address_as(drive.address_format, a);

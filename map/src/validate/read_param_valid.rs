@@ -9,12 +9,7 @@ use crate::ir::Drive;
 use crate::model::{Access, ModbusTable};
 
 pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
-    let settings: Vec<&str> = drive
-        .selectors()
-        .iter()
-        .chain(drive.references().iter())
-        .map(|r| r.id())
-        .collect();
+    let settings = super::settings_read(drive);
     for r in &drive.registers {
         let Some(read) = &r.def.read_param else {
             continue;

@@ -8,23 +8,10 @@ use drivemap_core::register::Access;
 use drivemap_core::text;
 
 use crate::diagnostic::Diagnostic;
-use crate::ir::{Drive, Register};
-
-fn shares_space(a: &Register, b: &Register) -> bool {
-    let transports = match (&a.transports, &b.transports) {
-        (Some(x), Some(y)) => x.iter().any(|t| y.contains(t)),
-        _ => true,
-    };
-    a.broadcast == b.broadcast && a.table == b.table && transports
-}
+use crate::ir::Drive;
 
 pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
-    let depended_on: Vec<&str> = drive
-        .selectors()
-        .iter()
-        .chain(drive.references().iter())
-        .map(|r| r.id())
-        .collect();
+    let depended_on = super::settings_read(drive);
     for r in &drive.registers {
         let Some(t) = &r.def.string else { continue };
         let d = &r.def;
@@ -138,7 +125,7 @@ pub(super) fn check(drive: &Drive, out: &mut Vec<Diagnostic>) {
         };
         if let Some(other) = drive.registers.iter().find(|o| {
             o.index() != r.index()
-                && shares_space(o, r)
+                && super::shares_space(o, r)
                 && o.def.address > d.address
                 && o.def.address <= last
         }) {
