@@ -7,6 +7,7 @@
 //! the address, width and conversion, the same the generated code prints.
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::sync::{Arc, Mutex};
 
 use drivemap_map::Map;
 use drivemap_map::Quantity;
@@ -19,7 +20,7 @@ use drivemap_runtime::core::profile::TransportKind;
 use drivemap_runtime::core::register::{RegisterInfo, Table};
 use drivemap_runtime::core::scale::ValueError;
 use drivemap_runtime::core::width::Width;
-use drivemap_runtime::planner::Poller;
+use drivemap_runtime::planner::{Poller, ReadableSet};
 
 use crate::codec::{self, InputError, Value};
 use crate::draft::DraftWrites;
@@ -1134,8 +1135,7 @@ impl<'d> Session<'d> {
     /// the least bus time, bridging only addresses of readable registers of the map, at most
     /// `max_read` per request. Registers this link cannot read get their reason instead.
     pub fn plan(&self, regs: &[RegisterRef<'_>]) -> Result<Polling, SessionError> {
-        let drive = self.drive;
-        let infos = rows_on_link(drive, self.kind, |r| self.address(r).ok());
+        let readable = self.readable_on_link();
         let mut wanted = Vec::new();
         let mut slots = Vec::new();
         for r in regs {
@@ -1152,9 +1152,83 @@ impl<'d> Session<'d> {
             }
         }
         let profile = self.client.profile();
-        let poller =
-            Poller::new(profile, &infos, wanted)?.with_model(BusModel::new(profile, self.line));
+        let poller = Poller::over(
+            profile,
+            (*readable).clone(),
+            wanted,
+            BusModel::new(profile, self.line),
+        )?;
         Ok(Polling { poller, slots })
+    }
+
+    /// The readable addresses of the map's registers on this link, by table
+    /// ([`ReadableSet::tables`] of [`rows_on_link`] at the session's addresses): what every plan
+    /// of the session bridges over. Built once per map, link and addresses in force (the
+    /// addresses of the registers that move with a setting), and kept for the process: a
+    /// restore plans several reads, each over the whole map.
+    fn readable_on_link(&self) -> Arc<[ReadableSet; 4]> {
+        /// Readable sets of one map on one link, by the addresses of its moving registers.
+        struct OnLink {
+            /// The plan's rows, leaked once per lowering: their address names the loaded map
+            /// for good.
+            rows: usize,
+            kind: TransportKind,
+            /// The registers on the link whose address moves with a setting or variant.
+            moving: Vec<&'static RegisterPlan>,
+            /// The sets per addresses of `moving` (`None`: not known), newest last.
+            sets: Vec<(Vec<Option<u16>>, Arc<[ReadableSet; 4]>)>,
+        }
+        /// Maps and links kept, and address sets kept per map and link (oldest dropped).
+        const MAPS: usize = 64;
+        const ADDRESSINGS: usize = 16;
+        static CACHE: Mutex<Vec<OnLink>> = Mutex::new(Vec::new());
+        let drive = self.drive;
+        let rows = drive.plan().registers.as_ptr() as usize;
+        let mut cache = match CACHE.lock() {
+            Ok(c) => c,
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        let at = match cache
+            .iter()
+            .position(|c| c.rows == rows && c.kind == self.kind)
+        {
+            Some(i) => i,
+            None => {
+                if cache.len() >= MAPS {
+                    cache.remove(0);
+                }
+                let moving = drive
+                    .registers()
+                    .filter(|&r| on_transport(drive, r, self.kind))
+                    .map(|r| r.plan())
+                    .filter(|p| !p.moves.is_empty())
+                    .collect();
+                cache.push(OnLink {
+                    rows,
+                    kind: self.kind,
+                    moving,
+                    sets: Vec::new(),
+                });
+                cache.len() - 1
+            }
+        };
+        let entry = &mut cache[at];
+        let view = self.settings.view(drive);
+        let addresses: Vec<Option<u16>> = entry
+            .moving
+            .iter()
+            .map(|p| p.locate(&view, self.kind).ok())
+            .collect();
+        if let Some((_, sets)) = entry.sets.iter().find(|(a, _)| *a == addresses) {
+            return Arc::clone(sets);
+        }
+        let infos = rows_on_link(drive, self.kind, |r| self.address(r).ok());
+        let sets = Arc::new(ReadableSet::tables(&infos));
+        if entry.sets.len() >= ADDRESSINGS {
+            entry.sets.remove(0);
+        }
+        entry.sets.push((addresses, Arc::clone(&sets)));
+        sets
     }
 
     /// Reads every register of a plan once; returns the raw value (a word, or a pair's words

@@ -241,7 +241,8 @@ pub fn validate<'d>(
         ));
     }
     let settings_list = settings_of(drive);
-    let is_setting: BTreeSet<&str> = settings_list.iter().map(|r| r.id()).collect();
+    // By index: `by_id` below gives the register of an entry's id (ids are unique in a map).
+    let is_setting: BTreeSet<usize> = settings_list.iter().map(|r| r.index()).collect();
     let settings = set_settings(drive, set, given);
     let mut seen = BTreeSet::new();
     let mut entries = Vec::new();
@@ -259,7 +260,7 @@ pub fn validate<'d>(
             reasons.push(format!("{name}: given twice"));
             continue;
         }
-        if !is_setting.contains(s.id.as_str()) {
+        if !is_setting.contains(&r.index()) {
             reasons.push(format!(
                 "{name}: not a setting a set restores ({})",
                 if !r.writable() {

@@ -151,6 +151,12 @@ impl ReadableSet {
         set
     }
 
+    /// [`ReadableSet::from_registers`] of every table, in the order of [`Table::ALL`]
+    /// (holding, input, coil, discrete input): what a [`Poller`] plans over.
+    pub fn tables<R: PlannedRegister>(registers: &[R]) -> [ReadableSet; 4] {
+        Table::ALL.map(|t| ReadableSet::from_registers(registers, t))
+    }
+
     /// Whether `address` is the second word of a 32-bit pair, or a later word of a string: a
     /// read of the word before must take it in the same request.
     pub fn pair_second(&self, address: u16) -> bool {

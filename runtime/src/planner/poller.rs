@@ -216,10 +216,27 @@ impl Poller {
         registers: &[R],
         wanted: impl IntoIterator<Item = (Table, u16)>,
     ) -> Result<Poller, PlanError> {
+        Poller::over(
+            profile,
+            ReadableSet::tables(registers),
+            wanted,
+            BusModel::new(profile, SerialConfig::default()),
+        )
+    }
+
+    /// [`Poller::new`] over readable sets already built ([`ReadableSet::tables`] of the
+    /// register table; a caller that plans many reads over one table builds them once), planned
+    /// for `model` ([`Poller::with_model`] without planning twice).
+    pub fn over(
+        profile: &'static Profile,
+        readable: [ReadableSet; 4],
+        wanted: impl IntoIterator<Item = (Table, u16)>,
+        model: BusModel,
+    ) -> Result<Poller, PlanError> {
         let mut poller = Poller {
             profile,
-            model: BusModel::new(profile, SerialConfig::default()),
-            readable: Table::ALL.map(|t| ReadableSet::from_registers(registers, t)),
+            model,
+            readable,
             learned: Vec::new(),
             wanted: wanted.into_iter().collect(),
             plan: Vec::new(),

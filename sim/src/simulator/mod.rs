@@ -47,7 +47,8 @@ pub struct Simulator {
     map: Arc<Map>,
     profile: &'static Profile,
     slave: u8,
-    index: HashMap<String, usize>,
+    /// Each register's index by id (the map's, shared by clones).
+    index: Arc<HashMap<String, usize>>,
     /// Each register's raw value: its word, or a 32-bit pair's value.
     raw: Vec<u32>,
     /// Each string register's words (`string:`; empty for other registers): the manual's
@@ -99,10 +100,11 @@ impl Simulator {
     pub fn new(map: Map, options: SimOptions) -> Result<Simulator, SimError> {
         let map = Arc::new(map);
         let profile = leak_profile(&map);
-        let index: HashMap<String, usize> = map
-            .registers()
-            .map(|r| (r.id().to_owned(), r.index()))
-            .collect();
+        let index: Arc<HashMap<String, usize>> = Arc::new(
+            map.registers()
+                .map(|r| (r.id().to_owned(), r.index()))
+                .collect(),
+        );
         for (axis, option) in &options.variants {
             let ok = map
                 .variants()

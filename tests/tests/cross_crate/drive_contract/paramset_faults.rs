@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 
 use drivemap_live::LiveSettings;
 use drivemap_live::codec::{self, Value};
-use drivemap_live::paramset::{self, ParameterSet, RestoreReport};
+use drivemap_live::paramset::{self, ParameterSet, RestoreReport, Validated};
 use drivemap_live::session::Session;
 use drivemap_map::Map;
 use drivemap_runtime::bus_time::SerialConfig;
@@ -73,14 +73,15 @@ fn options() -> ClientOptions {
     }
 }
 
-fn session<'d>(drive: &'d Map, link: &Shared, slave: u8) -> Session<'d> {
+/// A new session (as each `drivemap restore` opens one) given `externals` ([`externals`]).
+fn session<'d>(drive: &'d Map, link: &Shared, slave: u8, externals: &LiveSettings) -> Session<'d> {
     Session::over(
         drive,
         Box::new(link.clone()),
         options(),
         slave,
         SerialConfig::default(),
-        externals(drive),
+        externals.clone(),
     )
 }
 
@@ -395,18 +396,24 @@ enum Mutation {
     Unverified,
 }
 
-/// One restore of `set` over `link`, the report (`None`: refused, nothing written).
+/// A set validated against its map as a new session with `externals` validates it (what
+/// `drivemap restore` does first; it sends nothing, so a sweep validates each set once).
+fn validated<'d>(drive: &'d Map, set: &ParameterSet, externals: &LiveSettings) -> Validated<'d> {
+    paramset::validate(drive, set, externals, false).expect("the set validates")
+}
+
+/// One restore of the `validated` set over `link` in a new session, the report (`None`:
+/// refused, nothing written).
 fn restore(
     drive: &Map,
     link: &Shared,
     slave: u8,
-    set: &ParameterSet,
+    validated: &Validated<'_>,
+    externals: &LiveSettings,
     mutation: Mutation,
 ) -> Option<RestoreReport> {
-    let mut s = session(drive, link, slave);
-    let given = s.settings.clone();
-    let validated = paramset::validate(drive, set, &given, false).expect("the set validates");
-    let mut plan = match paramset::plan(&mut s, &validated) {
+    let mut s = session(drive, link, slave, externals);
+    let mut plan = match paramset::plan(&mut s, validated) {
         Ok(plan) => plan,
         Err(e) => {
             if std::env::var_os("PARAMSET_DEBUG").is_some() {
@@ -430,7 +437,7 @@ fn restore(
 /// Saves `source` over a link of `kind`.
 fn save(drive: &Map, kind: TransportKind, source: &Simulator) -> ParameterSet {
     let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, source.clone()))));
-    let mut s = session(drive, &link, source.slave());
+    let mut s = session(drive, &link, source.slave(), &externals(drive));
     let report = paramset::save(&mut s, "2026-01-01T00:00:00Z").expect("save");
     assert!(
         report.set.unread.is_empty(),
@@ -452,9 +459,11 @@ fn sweep(
     mutation: Mutation,
 ) -> (usize, Vec<String>) {
     let slave = target.slave();
+    let externals = externals(drive);
+    let validated = validated(drive, set, &externals);
     // The requests of a whole restore.
     let clean = Shared(Rc::new(RefCell::new(SimLink::new(kind, target.clone()))));
-    restore(drive, &clean, slave, set, Mutation::None);
+    restore(drive, &clean, slave, &validated, &externals, Mutation::None);
     let requests = clean.0.borrow().log.len();
     let mut runs = 0;
     let mut found = Vec::new();
@@ -467,7 +476,7 @@ fn sweep(
             link.script(std::iter::repeat_n(None, at));
             link.script(std::iter::repeat_n(Some(fault), attempts));
             let link = Shared(Rc::new(RefCell::new(link)));
-            let first = restore(drive, &link, slave, set, mutation);
+            let first = restore(drive, &link, slave, &validated, &externals, mutation);
             let what = format!("{} {kind:?} fault {fault:?} at request {at}", drive.id());
             {
                 let l = link.0.borrow();
@@ -485,7 +494,7 @@ fn sweep(
                 l.log.clear();
                 l.clear_script();
             }
-            let second = restore(drive, &link, slave, set, mutation);
+            let second = restore(drive, &link, slave, &validated, &externals, mutation);
             let l = link.0.borrow();
             match &second {
                 Some(r) if r.complete() => {}
@@ -621,7 +630,7 @@ fn a_restore_survives_a_power_cycle_and_one_without_its_store_command_does_not()
         );
         for store in [true, false] {
             let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, base.clone()))));
-            let mut s = session(&drive, &link, base.slave());
+            let mut s = session(&drive, &link, base.slave(), &externals(&drive));
             let given = s.settings.clone();
             let validated = paramset::validate(&drive, &set, &given, false).unwrap();
             let mut plan = paramset::plan(&mut s, &validated).unwrap();
@@ -660,7 +669,7 @@ fn save_reports_progress_group_by_group_at_no_cost_in_requests() {
         let n = paramset::settings_of(&drive).len();
         let kind = TransportKind::RtuOverTcp;
         let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, sim.clone()))));
-        let mut s = session(&drive, &link, sim.slave());
+        let mut s = session(&drive, &link, sim.slave(), &externals(&drive));
         let mut seen = Vec::new();
         let report =
             paramset::save_with(&mut s, "", &mut |done, total| seen.push((done, total))).unwrap();
@@ -675,7 +684,7 @@ fn save_reports_progress_group_by_group_at_no_cost_in_requests() {
         }
         // One plan over every setting.
         let link = Shared(Rc::new(RefCell::new(SimLink::new(kind, sim.clone()))));
-        let mut s = session(&drive, &link, sim.slave());
+        let mut s = session(&drive, &link, sim.slave(), &externals(&drive));
         let regs = paramset::settings_of(&drive);
         let mut plan = s.plan(&regs).unwrap();
         let (_, requests) = s.poll_counted(&mut plan);
