@@ -505,8 +505,60 @@ fn within_limits(
     }
 }
 
+/// The rows of a map a write over one link may land on, by table and PDU address: those whose
+/// address never moves, looked up; those that move with a setting, variant or transport, to
+/// locate under the settings in force at each frame. Built once per map and link.
+struct Rows {
+    fixed: std::collections::HashMap<(Table, u16), Vec<usize>>,
+    moving: Vec<usize>,
+}
+
+impl Rows {
+    fn new(drive: &Map, kind: TransportKind) -> Rows {
+        let p = drive.plan();
+        let mut fixed: std::collections::HashMap<(Table, u16), Vec<usize>> = Default::default();
+        let mut moving = Vec::new();
+        for (i, r) in p.registers.iter().enumerate() {
+            if !r.transports.contains(kind)
+                || r.broadcast == drivemap_runtime::core::rule::Broadcast::Only
+            {
+                continue;
+            }
+            if !r.moves.is_empty() {
+                moving.push(i);
+            } else if let Some(pdu) = p.profile.address_offsets.pdu_address(r.info.address, kind) {
+                fixed.entry((r.info.table, pdu)).or_default().push(i);
+            }
+        }
+        Rows { fixed, moving }
+    }
+
+    /// The rows of `table` at `pdu` on the link under `view`, in the plan's order.
+    fn at(
+        &self,
+        drive: &Map,
+        kind: TransportKind,
+        table: Table,
+        pdu: u16,
+        view: &impl drivemap_runtime::core::plan::SettingsView,
+    ) -> Vec<usize> {
+        let p = drive.plan();
+        let mut rows: Vec<usize> = self.fixed.get(&(table, pdu)).cloned().unwrap_or_default();
+        rows.extend(self.moving.iter().copied().filter(|&i| {
+            let r = &p.registers[i];
+            r.info.table == table
+                && p.profile
+                    .address_offsets
+                    .pdu_address(r.address_for(view, kind), kind)
+                    == Some(pdu)
+        }));
+        rows.sort_unstable();
+        rows
+    }
+}
+
 /// The invariants of the safety contract on one trace; `Err` says which failed and where.
-fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> {
+fn check(drive: &Map, kind: TransportKind, rows: &Rows, trace: &Trace) -> Result<(), String> {
     use drivemap_runtime::core::roles::Target;
     let p = drive.plan();
     let profile = p.roles.profile.is_some();
@@ -533,7 +585,8 @@ fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> 
     for sent in &trace.log {
         let t = sent.tag as usize;
         let step = &trace.steps[t].0;
-        let frame = hex(&sent.frame);
+        // For messages only: made when one is.
+        let frame = Hex(&sent.frame);
         let Decoded::Request { origin, request } = framing::decode(kind, &sent.frame) else {
             return Err(format!("step {t} ({step:?}): undecodable frame {frame}"));
         };
@@ -559,21 +612,7 @@ fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> 
         let mut at = 0usize;
         while at < words.len() {
             let pdu = address.wrapping_add(at as u16);
-            let rows: Vec<usize> = p
-                .registers
-                .iter()
-                .enumerate()
-                .filter(|(_, r)| {
-                    r.info.table == table
-                        && r.transports.contains(kind)
-                        && r.broadcast != drivemap_runtime::core::rule::Broadcast::Only
-                        && p.profile
-                            .address_offsets
-                            .pdu_address(r.address_for(&view, kind), kind)
-                            == Some(pdu)
-                })
-                .map(|(i, _)| i)
-                .collect();
+            let rows = rows.at(drive, kind, table, pdu, &view);
             let [row] = rows[..] else {
                 return Err(format!(
                     "step {t} ({step:?}): {frame} writes {pdu:04X}h, where {} registers of the map are",
@@ -645,7 +684,16 @@ fn check(drive: &Map, kind: TransportKind, trace: &Trace) -> Result<(), String> 
 }
 
 fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02X}")).collect()
+    Hex(bytes).to_string()
+}
+
+/// Bytes in hex, written when displayed.
+struct Hex<'a>(&'a [u8]);
+
+impl std::fmt::Display for Hex<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.iter().try_for_each(|b| write!(f, "{b:02X}"))
+    }
 }
 
 /// Every map of `maps/` (the directory, not a list, as for the other per-map tests) and the
@@ -780,13 +828,14 @@ fn the_contract_holds_under_faults() {
                         .build()
                         .unwrap();
                     let asynchronous = shard < ASYNC_SHARDS;
+                    let rows = Rows::new(drive, kind);
                     let result = runner.run(&case(), |case| {
                         let trace = if asynchronous {
                             play_async(drive, &template, kind, &case, &runtime)
                         } else {
                             play(drive, &template, kind, &case)
                         };
-                        check(drive, kind, &trace).map_err(TestCaseError::fail)
+                        check(drive, kind, &rows, &trace).map_err(TestCaseError::fail)
                     });
                     let which = if asynchronous {
                         "the async drive"
