@@ -1167,6 +1167,8 @@ impl<'d> Session<'d> {
     /// addresses of the registers that move with a setting), and kept for the process: a
     /// restore plans several reads, each over the whole map.
     fn readable_on_link(&self) -> Arc<[ReadableSet; 4]> {
+        /// The readable sets of every table ([`ReadableSet::tables`]).
+        type Sets = Arc<[ReadableSet; 4]>;
         /// Readable sets of one map on one link, by the addresses of its moving registers.
         struct OnLink {
             /// The plan's rows, leaked once per lowering: their address names the loaded map
@@ -1176,7 +1178,7 @@ impl<'d> Session<'d> {
             /// The registers on the link whose address moves with a setting or variant.
             moving: Vec<&'static RegisterPlan>,
             /// The sets per addresses of `moving` (`None`: not known), newest last.
-            sets: Vec<(Vec<Option<u16>>, Arc<[ReadableSet; 4]>)>,
+            sets: Vec<(Vec<Option<u16>>, Sets)>,
         }
         /// Maps and links kept, and address sets kept per map and link (oldest dropped).
         const MAPS: usize = 64;
