@@ -138,7 +138,20 @@ pub fn write_in_process(
     drive: &drivemap_map::Map,
     profile: &'static drivemap_runtime::core::profile::Profile,
 ) -> Result<ExitCode, String> {
-    let cli = Cli::try_parse_from(argv).map_err(|e| e.to_string())?;
+    // The parser built once per thread and reused: building clap's whole command tree cost
+    // more than the write itself (a sweep runs thousands). Parsing is `Cli::try_parse_from`'s.
+    thread_local! {
+        static PARSER: std::cell::RefCell<Option<clap::Command>> =
+            const { std::cell::RefCell::new(None) };
+    }
+    let cli = PARSER.with(|parser| {
+        use clap::{CommandFactory, FromArgMatches};
+        let mut parser = parser.borrow_mut();
+        let cmd = parser.get_or_insert_with(Cli::command);
+        let mut matches = cmd.try_get_matches_from_mut(argv)?;
+        Cli::from_arg_matches_mut(&mut matches).map_err(|e| e.format(cmd))
+    });
+    let cli = cli.map_err(|e| e.to_string())?;
     let Command::Write(args) = cli.command else {
         return Err("not a `drivemap write` command line".to_owned());
     };

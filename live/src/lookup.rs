@@ -68,10 +68,19 @@ impl fmt::Display for NotFound {
 impl std::error::Error for NotFound {}
 
 fn norm(s: &str) -> String {
+    normalized(s).collect()
+}
+
+/// The characters of [`norm`]`(s)`, without building the string.
+fn normalized(s: &str) -> impl Iterator<Item = char> + '_ {
     s.chars()
         .filter(|c| c.is_ascii_alphanumeric())
         .map(|c| c.to_ascii_lowercase())
-        .collect()
+}
+
+/// `norm(s) == key`, without allocating (a lookup compares every register's names).
+fn norm_is(s: &str, key: &str) -> bool {
+    normalized(s).eq(key.chars())
 }
 
 /// Levenshtein distance, for suggestions.
@@ -390,11 +399,11 @@ pub fn find<'a>(drive: &'a Map, name: &str) -> Result<RegisterRef<'a>, NotFound>
     let normal = || drive.registers().filter(|r| !r.broadcast_only());
     let hit = normal()
         .find(|r| {
-            norm(r.id()) == key
-                || r.param().is_some_and(|p| norm(p) == key)
-                || r.read_param().is_some_and(|p| norm(p) == key)
+            norm_is(r.id(), &key)
+                || r.param().is_some_and(|p| norm_is(p, &key))
+                || r.read_param().is_some_and(|p| norm_is(p, &key))
         })
-        .or_else(|| normal().find(|r| norm(r.name()) == key));
+        .or_else(|| normal().find(|r| norm_is(r.name(), &key)));
     if let Some(r) = hit {
         return Ok(r);
     }
