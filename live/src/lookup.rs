@@ -78,9 +78,13 @@ fn normalized(s: &str) -> impl Iterator<Item = char> + '_ {
         .map(|c| c.to_ascii_lowercase())
 }
 
-/// `norm(s) == key`, without allocating (a lookup compares every register's names).
+/// `norm(s) == key`, without allocating (a lookup compares every register's names). Bytes
+/// suffice: [`norm`] keeps ASCII only, and no byte of a longer UTF-8 character is ASCII.
 fn norm_is(s: &str, key: &str) -> bool {
-    normalized(s).eq(key.chars())
+    s.bytes()
+        .filter(u8::is_ascii_alphanumeric)
+        .map(|b| b.to_ascii_lowercase())
+        .eq(key.bytes())
 }
 
 /// Levenshtein distance, for suggestions.
