@@ -92,7 +92,8 @@ static NESTED: Mutex<()> = Mutex::new(());
 /// Keeps the other tests of this process out of [`nested_target`] until the guard is dropped:
 /// builds there write the same binaries (the `drivemap` of the workspace copy and of the
 /// packaged crates), so a test holds the directory from its build to its last use of what it
-/// built.
+/// built. Under nextest each test is a process of its own: there the `nested-target` test group
+/// of `.config/nextest.toml` runs these tests one at a time.
 pub fn hold_nested_target() -> MutexGuard<'static, ()> {
     NESTED.lock().unwrap_or_else(PoisonError::into_inner)
 }

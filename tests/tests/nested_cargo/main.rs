@@ -3,7 +3,9 @@
 //! workspace. Slow and holding cargo's locks, they are not in the default `cargo test` (`test =
 //! false` in Cargo.toml): `scripts/test` runs them once, after the other tests, with the same
 //! binaries of the cli and custom-drive crates:
-//! `cargo test --workspace --all-features --test nested_cargo`.
+//! `cargo nextest run --workspace --all-features --test nested_cargo` (`.config/nextest.toml`
+//! runs the ones that build in the workspace's target directory one at a time; `cargo test`
+//! with the same arguments runs them too).
 
 mod crate_graph;
 mod downstream_packages;
