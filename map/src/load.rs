@@ -287,8 +287,10 @@ fn group_errors(tree: &Node, group: &Node, path: &Path, errors: &mut Vec<Diagnos
         errors.extend(deserialize_at::<crate::model::Group>(tree, group, path).err());
         return;
     };
-    let mut shell = entries.clone();
-    for (key, _, value) in shell.iter_mut() {
+    // The group without its registers (each deserialized on its own): the registers are not
+    // copied into the shell.
+    let mut shell = Vec::with_capacity(entries.len());
+    for (key, loc, value) in entries {
         if key == "registers"
             && let NodeKind::Seq(regs) = &value.kind
         {
@@ -296,7 +298,13 @@ fn group_errors(tree: &Node, group: &Node, path: &Path, errors: &mut Vec<Diagnos
                 let rp = path.key("registers").index(ri);
                 errors.extend(deserialize_at::<crate::model::Register>(tree, reg, &rp).err());
             }
-            value.kind = NodeKind::Seq(Vec::new());
+            let empty = Node {
+                loc: value.loc.clone(),
+                kind: NodeKind::Seq(Vec::new()),
+            };
+            shell.push((key.clone(), loc.clone(), empty));
+        } else {
+            shell.push((key.clone(), loc.clone(), value.clone()));
         }
     }
     let shell = Node {
