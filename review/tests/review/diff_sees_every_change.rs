@@ -104,7 +104,8 @@ fn meaning(d: &Map) -> serde_json::Value {
 /// Whether two meanings are the same text: the values equal (quick to refuse, the common
 /// case) and written the same (the text also tells key order and `-0.0` from `0.0` apart).
 fn same_meaning(a: &serde_json::Value, b: &serde_json::Value) -> bool {
-    a == b && a.to_string() == b.to_string()
+    let text = |v| serde_json::to_string(v).expect("a meaning as text");
+    a == b && text(a) == text(b)
 }
 
 /// One edit of a tree.
