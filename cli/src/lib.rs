@@ -1,12 +1,15 @@
 //! The `drivemap` command: check, export, document and diff drive maps; simulate a drive; read,
 //! write and poll live drives by register name.
 //!
-//! A library for one reason only, and with two items: `src/main.rs` is [`main`], and
+//! A library for one reason only, and with three items: `src/main.rs` is [`main`],
 //! [`write_in_process`] runs `drivemap write` in-process for the write-gate sweeps
 //! (`tests/cli/write_gate.rs`, `tests/cli/safe_live`), which write every register of every map in every
 //! name and value form, thousands of cases per map: a process per case would load and validate
-//! the map each time. Every other test drives the binary, as users do. The commands' modules
-//! are private; nothing here is an API.
+//! the map each time; and [`export_in_process`] runs `drivemap export` for the export sweeps
+//! (`tests/cli/export_formats.rs`: every map on every link in every format), loading each map
+//! once. Both parse the command line with the binary's parser and run its command's code; the
+//! sweeps compare a case of each format with the binary's output. Every other test drives the
+//! binary, as users do. The commands' modules are private; nothing here is an API.
 
 #![warn(missing_docs, unreachable_pub, unnameable_types)]
 #![doc = include_str!("../README.md")]
@@ -129,6 +132,24 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Parses a command line with the binary's own parser (`Cli::try_parse_from`'s parse), built
+/// once per thread and reused: building clap's whole command tree costs more than a write
+/// (a sweep runs thousands). A command line clap refuses is its message (`error: ...`).
+fn parse_in_process(argv: &[&str]) -> Result<Command, String> {
+    thread_local! {
+        static PARSER: std::cell::RefCell<Option<clap::Command>> =
+            const { std::cell::RefCell::new(None) };
+    }
+    let cli = PARSER.with(|parser| {
+        use clap::{CommandFactory, FromArgMatches};
+        let mut parser = parser.borrow_mut();
+        let cmd = parser.get_or_insert_with(Cli::command);
+        let mut matches = cmd.try_get_matches_from_mut(argv)?;
+        Cli::from_arg_matches_mut(&mut matches).map_err(|e| e.format(cmd))
+    });
+    cli.map(|cli| cli.command).map_err(|e| e.to_string())
+}
+
 /// `drivemap write` in-process on a map already loaded: `argv` is the command line (`drivemap
 /// write --drive <id> --tcp <addr> ... <register>=<value>`), `drive` and `profile` the map it
 /// names, read once by the caller. What the binary prints on standard error before exit status
@@ -138,9 +159,40 @@ pub fn write_in_process(
     drive: &drivemap_map::Map,
     profile: &'static drivemap_runtime::core::profile::Profile,
 ) -> Result<ExitCode, String> {
-    let cli = Cli::try_parse_from(argv).map_err(|e| e.to_string())?;
-    let Command::Write(args) = cli.command else {
+    let Command::Write(args) = parse_in_process(argv)? else {
         return Err("not a `drivemap write` command line".to_owned());
     };
     commands::write::execute(drive, profile, &args).map_err(|e| e.to_string())
+}
+
+/// `drivemap export` in-process: `argv` is the command line (`drivemap export --drive <id>
+/// --format home-assistant --tcp <addr> ...`); the result is what the binary writes on
+/// standard output (exit status 0), or the text of its error (a map that does not validate,
+/// refused arguments). The map is loaded as the binary loads it, once per thread for each
+/// distinct way of naming it (file or id, and `--maps`): the export sweeps export every map on
+/// every link in every format.
+pub fn export_in_process(argv: &[&str]) -> Result<String, String> {
+    type Loaded = std::collections::HashMap<String, std::rc::Rc<drivemap_map::Map>>;
+    thread_local! {
+        static LOADED: std::cell::RefCell<Loaded> = std::cell::RefCell::new(Loaded::new());
+    }
+    let Command::Export(args) = parse_in_process(argv)? else {
+        return Err("not a `drivemap export` command line".to_owned());
+    };
+    let key = format!("{:?} {:?} {:?}", args.file, args.drive, args.dir.maps);
+    let cached = LOADED.with(|l| l.borrow().get(&key).cloned());
+    let drive = match cached {
+        Some(drive) => drive,
+        None => {
+            let drive = match commands::export::load(&args).map_err(|e| e.to_string())? {
+                Ok(drive) => std::rc::Rc::new(drive),
+                Err(diags) => return Err(diags.to_string()),
+            };
+            LOADED.with(|l| l.borrow_mut().insert(key, drive.clone()));
+            drive
+        }
+    };
+    commands::export::render(&drive, &args)
+        .map(|(text, _)| text)
+        .map_err(|e| e.to_string())
 }

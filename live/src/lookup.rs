@@ -68,10 +68,28 @@ impl fmt::Display for NotFound {
 impl std::error::Error for NotFound {}
 
 fn norm(s: &str) -> String {
+    normalized(s).collect()
+}
+
+/// The characters of [`norm`]`(s)`, without building the string.
+fn normalized(s: &str) -> impl Iterator<Item = char> + '_ {
     s.chars()
         .filter(|c| c.is_ascii_alphanumeric())
         .map(|c| c.to_ascii_lowercase())
-        .collect()
+}
+
+/// `norm(s) == key`, without allocating (a lookup compares every register's names). Bytes
+/// suffice: [`norm`] keeps ASCII only, and no byte of a longer UTF-8 character is ASCII.
+fn norm_is(s: &str, key: &str) -> bool {
+    let key = key.as_bytes();
+    let mut at = 0;
+    for b in s.bytes().filter(u8::is_ascii_alphanumeric) {
+        if key.get(at) != Some(&b.to_ascii_lowercase()) {
+            return false;
+        }
+        at += 1;
+    }
+    at == key.len()
 }
 
 /// Levenshtein distance, for suggestions.
@@ -390,11 +408,11 @@ pub fn find<'a>(drive: &'a Map, name: &str) -> Result<RegisterRef<'a>, NotFound>
     let normal = || drive.registers().filter(|r| !r.broadcast_only());
     let hit = normal()
         .find(|r| {
-            norm(r.id()) == key
-                || r.param().is_some_and(|p| norm(p) == key)
-                || r.read_param().is_some_and(|p| norm(p) == key)
+            norm_is(r.id(), &key)
+                || r.param().is_some_and(|p| norm_is(p, &key))
+                || r.read_param().is_some_and(|p| norm_is(p, &key))
         })
-        .or_else(|| normal().find(|r| norm(r.name()) == key));
+        .or_else(|| normal().find(|r| norm_is(r.name(), &key)));
     if let Some(r) = hit {
         return Ok(r);
     }
@@ -539,6 +557,37 @@ mod tests {
 
     fn id<'a>(drive: &'a Map, name: &str) -> Result<&'a str, NotFound> {
         find(drive, name).map(|r| r.id())
+    }
+
+    /// The allocation-free comparison the lookup uses is `norm(s) == norm(name)`, for every
+    /// pair of texts of up to three characters from letters of both cases, a digit,
+    /// punctuation and a non-ASCII letter.
+    #[test]
+    fn norm_is_is_comparing_the_normalized_strings() {
+        let alphabet = ['a', 'B', 'b', '1', '-', ' ', 'é'];
+        let mut texts = vec![String::new()];
+        for len in 1..=3 {
+            let shorter: Vec<String> = texts
+                .iter()
+                .filter(|t| t.chars().count() == len - 1)
+                .cloned()
+                .collect();
+            for t in shorter {
+                for c in alphabet {
+                    texts.push(format!("{t}{c}"));
+                }
+            }
+        }
+        assert_eq!(texts.len(), 1 + 7 + 49 + 343);
+        for s in &texts {
+            for name in &texts {
+                assert_eq!(
+                    norm_is(s, &norm(name)),
+                    norm(s) == norm(name),
+                    "{s:?} {name:?}"
+                );
+            }
+        }
     }
 
     #[test]

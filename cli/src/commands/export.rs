@@ -12,6 +12,7 @@ use drivemap_bridge::points::export::{self, Export};
 use drivemap_bridge::points::{home_assistant, node_red, telegraf};
 use drivemap_live::link::{Link, ParityParser};
 use drivemap_live::session::{SettingsArgs, find_all};
+use drivemap_map::{Diagnostics, Map};
 use drivemap_runtime::core::profile::Parity;
 
 /// What to write.
@@ -114,21 +115,34 @@ impl Args {
 }
 
 pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
-    let read = match (&args.file, &args.drive) {
-        (Some(f), _) => args.dir.read(f),
-        (None, Some(id)) => match args.dir.load(id) {
-            Ok(d) => Ok(d),
-            Err(e) => return Err(e.into()),
-        },
-        (None, None) => return Err(Error::Refused("give a map file or --drive <id>".into())),
-    };
-    let drive = match read {
+    let drive = match load(&args)? {
         Ok(drive) => drive,
         Err(diags) => {
             eprintln!("{diags}");
             return Ok(ExitCode::FAILURE);
         }
     };
+    let (text, left_out) = render(&drive, &args)?;
+    out!("{text}");
+    for line in left_out {
+        eprintln!("drivemap: {line}");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The map the arguments name: the file, or the drive by id (built in or under `--maps`);
+/// `Ok(Err(_))` when it does not validate.
+pub(crate) fn load(args: &Args) -> Result<Result<Map, Diagnostics>, Error> {
+    match (&args.file, &args.drive) {
+        (Some(f), _) => Ok(args.dir.read(f)),
+        (None, Some(id)) => Ok(Ok(args.dir.load(id)?)),
+        (None, None) => Err(Error::Refused("give a map file or --drive <id>".into())),
+    }
+}
+
+/// What `drivemap export` writes of `drive` (loaded by [`load`]) on standard output, and the
+/// registers left out, one line each, that it says on standard error.
+pub(crate) fn render(drive: &Map, args: &Args) -> Result<(String, Vec<String>), Error> {
     if matches!(args.format, Format::Json | Format::Facts) {
         if args.link_given() > 0 || !args.registers.is_empty() || args.all {
             return Err(
@@ -139,21 +153,23 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
             Format::Facts => serde_json::to_value(drive.facts())?,
             _ => drive.export(),
         };
-        outln!("{}", serde_json::to_string_pretty(&json)?);
-        return Ok(ExitCode::SUCCESS);
+        return Ok((
+            format!("{}\n", serde_json::to_string_pretty(&json)?),
+            Vec::new(),
+        ));
     }
     if args.link_given() != 1 {
         return Err(
             "give one link the tool connects to: --tcp HOST:PORT, --gateway HOST:PORT, --rtu-tcp HOST:PORT or --serial PATH".into(),
         );
     }
-    let given = args.settings.resolve(&drive)?;
+    let given = args.settings.resolve(drive)?;
     let regs = if args.all {
         drive.registers().filter(|r| r.readable()).collect()
     } else if args.registers.is_empty() {
-        export::default_registers(&drive)
+        export::default_registers(drive)
     } else {
-        find_all(&drive, &args.registers)?
+        find_all(drive, &args.registers)?
     };
     let interval = args.interval.unwrap_or(Duration::from_secs(
         if args.format == Format::HomeAssistant {
@@ -164,7 +180,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
     ));
     let period_ms = u64::try_from(interval.as_millis()).unwrap_or(u64::MAX);
     let points = Export::build(
-        &drive,
+        drive,
         &regs,
         &args.link(),
         &given.settings,
@@ -178,11 +194,7 @@ pub(crate) fn run(args: Args) -> Result<ExitCode, Error> {
             serde_json::to_string_pretty(&node_red::render(&points)).map_err(|e| e.to_string())?
                 + "\n"
         }
-        Format::Json | Format::Facts => return Ok(ExitCode::SUCCESS),
+        Format::Json | Format::Facts => return Ok((String::new(), Vec::new())),
     };
-    out!("{text}");
-    for line in points.left_out_lines() {
-        eprintln!("drivemap: {line}");
-    }
-    Ok(ExitCode::SUCCESS)
+    Ok((text, points.left_out_lines()))
 }

@@ -55,11 +55,25 @@ pub(crate) fn dependants(
     settings: &drivemap_live::LiveSettings,
 ) -> Vec<String> {
     let mut out = Vec::new();
+    // Only a setting (a code slot's register or a quantity) is another's dependency: any
+    // other register has none, and is not searched for (a write sweep writes thousands).
+    let all = drive.plan();
+    let is_setting = all
+        .settings
+        .codes
+        .iter()
+        .any(|c| all.registers[c.register].info.id == r.id())
+        || all.settings.quantities.iter().any(|q| match q {
+            drivemap_map::Quantity::Register(row) => all.registers[*row].info.id == r.id(),
+            drivemap_map::Quantity::External { id, .. } => id == r.id(),
+        });
+    if !is_setting {
+        return out;
+    }
     for x in drive.registers() {
         if x.id() == r.id() {
             continue;
         }
-        let all = drive.plan();
         let bounds = match x.plan().limit_dependency() {
             Some(drivemap_runtime::core::plan::Dependency::Quantity(s)) => matches!(
                 all.settings.quantities.get(usize::from(s.slot)),

@@ -17,7 +17,7 @@ use drivemap_test_support::paths;
 
 use crate::common;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::process::Command;
 use std::time::Duration;
 
@@ -28,10 +28,85 @@ use serde_json::Value;
 
 use common::{Sim, command, drivemap_builtin, repo};
 
+/// `drivemap export ARGS` of the built-in maps, in-process (`drivemap_cli::export_in_process`:
+/// the binary's parser and export code, each map loaded once): the sweeps below export every map
+/// on every link in every format. `the_in_process_export_is_the_binarys` compares it with the
+/// binary's output.
 fn export(args: &[&str]) -> String {
-    let (code, out, err) = drivemap_builtin(&[&["export"][..], args].concat());
-    assert_eq!(code, 0, "drivemap export {args:?}: {err}");
-    out
+    drivemap_cli::export_in_process(&[&["drivemap", "export"][..], args].concat())
+        .unwrap_or_else(|e| panic!("drivemap export {args:?}: {e}"))
+}
+
+/// The in-process export is the binary's, byte for byte: every format, a map with every kind of
+/// register left out (a scale another parameter selects, registers of another link) and with
+/// `--set`, and the largest map.
+#[test]
+fn the_in_process_export_is_the_binarys() {
+    let cases: [&[&str]; 7] = [
+        &["--drive", "yaskawa-v7"],
+        &["--drive", "yaskawa-v7", "--format", "facts"],
+        &[
+            "--drive",
+            "yaskawa-v7",
+            "--all",
+            "--tcp",
+            "192.0.2.12:502",
+            "--format",
+            "home-assistant",
+        ],
+        &[
+            "--drive",
+            "yaskawa-v7",
+            "--all",
+            "--rtu-tcp",
+            "192.0.2.11:4001",
+            "--format",
+            "telegraf",
+        ],
+        &[
+            "--drive",
+            "yaskawa-v7",
+            "--set",
+            "n152=1",
+            "--gateway",
+            "192.0.2.10:502",
+            "--format",
+            "node-red",
+        ],
+        &[
+            "--drive",
+            "automationdirect-acn",
+            "--all",
+            "--serial",
+            "/dev/ttyUSB0",
+            "--format",
+            "home-assistant",
+        ],
+        &[
+            "--drive",
+            "automationdirect-acn",
+            "--all",
+            "--gateway",
+            "192.0.2.10:502",
+            "--format",
+            "node-red",
+        ],
+    ];
+    for args in cases {
+        let (code, out, err) = drivemap_builtin(&[&["export"][..], args].concat());
+        assert_eq!(code, 0, "drivemap export {args:?}: {err}");
+        assert!(!out.is_empty(), "{args:?}");
+        assert_eq!(export(args), out, "drivemap export {args:?}");
+    }
+    // A refusal is the binary's too.
+    let args = ["--drive", "yaskawa-v7", "--format", "telegraf"];
+    let (code, _, err) = drivemap_builtin(&[&["export"][..], &args[..]].concat());
+    let e = drivemap_cli::export_in_process(&[&["drivemap", "export"][..], &args[..]].concat())
+        .unwrap_err();
+    assert_eq!(
+        (code, err.trim_end()),
+        (2, format!("drivemap: {e}").as_str())
+    );
 }
 
 /// The shipped maps.
@@ -55,7 +130,7 @@ fn links(id: &str) -> Vec<[&'static str; 2]> {
         ["--rtu-tcp", "192.0.2.11:4001"],
         ["--serial", "/dev/ttyUSB0"],
     ];
-    let (_, json, _) = drivemap_builtin(&["export", "--drive", id]);
+    let json = export(&["--drive", id]);
     let map: Value = serde_json::from_str(&json).unwrap();
     if map["protocol"]["transports"]
         .as_array()
@@ -275,7 +350,7 @@ fn check_telegraf_with_bits(text: &str, what: &str, max_read: i64, max_bits: i64
 #[test]
 fn telegraf_export_follows_the_documented_request_schema_one_request_per_planned_read() {
     for id in maps() {
-        let (_, json, _) = drivemap_builtin(&["export", "--drive", &id]);
+        let json = export(&["--drive", &id]);
         let map: Value = serde_json::from_str(&json).unwrap();
         let max_read = map["protocol"]["max_read"].as_i64().unwrap_or(125).min(125);
         for link in links(&id) {
@@ -311,7 +386,7 @@ fn telegraf_export_follows_the_documented_request_schema_one_request_per_planned
 #[test]
 fn every_register_asked_for_is_exported_or_named_with_the_reason() {
     for id in maps() {
-        let (_, json, _) = drivemap_builtin(&["export", "--drive", &id]);
+        let json = export(&["--drive", &id]);
         let map: Value = serde_json::from_str(&json).unwrap();
         let readable: Vec<String> = map["registers"]
             .as_array()
@@ -339,24 +414,51 @@ fn every_register_asked_for_is_exported_or_named_with_the_reason() {
                 .map(|n| n["func"].as_str().unwrap())
                 .collect();
             let slave = link_slave(&ha);
+            // What each text exports and leaves out, read once (a text is searched for every
+            // register of the map): the quoted names after `open` up to `close`, and the lines
+            // (`# ` stripped) that say `left out ...: <reason>`.
+            let quoted = |text: &str, open: &str, close: &str| -> BTreeSet<String> {
+                text.split(open)
+                    .skip(1)
+                    .filter_map(|rest| {
+                        let (name, _) = rest.split_once('"')?;
+                        rest[name.len()..]
+                            .starts_with(close)
+                            .then(|| name.to_owned())
+                    })
+                    .collect()
+            };
+            let left_out = |text: &str| -> Vec<String> {
+                text.lines()
+                    .filter(|l| l.contains(": "))
+                    .filter_map(|l| l.trim_start_matches("# ").strip_prefix("left out "))
+                    .map(str::to_owned)
+                    .collect()
+            };
+            let (ha_ids, ha_left) = (quoted(&ha, "unique_id: \"", "\""), left_out(&ha));
+            let (tg_names, tg_left) = (quoted(&tg, "name = \"", "\", type"), left_out(&tg));
+            let (nr_puts, nr_left) = (quoted(&code, "put(\"", "\","), left_out(&comment));
+            let why = |left: &[String], r: &str| left.iter().any(|l| l.starts_with(r));
             let mut left = 0;
             for r in &readable {
-                let why = |text: &str| {
-                    text.lines().any(|l| {
-                        l.trim_start_matches("# ")
-                            .starts_with(&format!("left out {r}"))
-                            && l.contains(": ")
-                    })
-                };
-                let in_ha = ha.contains(&format!(
-                    "unique_id: \"{}_{slave}_{r}\"",
-                    id.replace('-', "_")
-                ));
-                assert!(in_ha ^ why(&ha), "{id} {}: {r} in Home Assistant", link[0]);
-                let in_tg = tg.contains(&format!("name = \"{r}\", type"));
-                assert!(in_tg ^ why(&tg), "{id} {}: {r} in Telegraf", link[0]);
-                let in_nr = code.contains(&format!("put(\"{r}\","));
-                assert!(in_nr ^ why(&comment), "{id} {}: {r} in Node-RED", link[0]);
+                let in_ha = ha_ids.contains(&format!("{}_{slave}_{r}", id.replace('-', "_")));
+                assert!(
+                    in_ha ^ why(&ha_left, r),
+                    "{id} {}: {r} in Home Assistant",
+                    link[0]
+                );
+                let in_tg = tg_names.contains(r);
+                assert!(
+                    in_tg ^ why(&tg_left, r),
+                    "{id} {}: {r} in Telegraf",
+                    link[0]
+                );
+                let in_nr = nr_puts.contains(r);
+                assert!(
+                    in_nr ^ why(&nr_left, r),
+                    "{id} {}: {r} in Node-RED",
+                    link[0]
+                );
                 left += usize::from(!in_nr);
             }
             // The reasons are real ones: a map-wide sweep leaves out only what a tool cannot

@@ -25,7 +25,7 @@ use drivemap_map::{Map, RegisterRef};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -54,8 +54,9 @@ struct Wire {
     addr: String,
     kind: TransportKind,
     slave: Arc<Mutex<SimulatedSlave>>,
-    /// Client ports of the connections served to their end, in order of arrival.
-    served: Arc<Mutex<Vec<u16>>>,
+    /// Client ports of the connections served to their end, in order of arrival; notified at
+    /// each.
+    served: Arc<(Mutex<Vec<u16>>, Condvar)>,
 }
 
 impl Wire {
@@ -64,7 +65,7 @@ impl Wire {
         let listener = TcpListener::bind("127.0.0.1:0").unwrap();
         let addr = listener.local_addr().unwrap().to_string();
         let shared = Arc::clone(&slave);
-        let served = Arc::new(Mutex::new(Vec::new()));
+        let served = Arc::new((Mutex::new(Vec::new()), Condvar::new()));
         let done = Arc::clone(&served);
         thread::spawn(move || {
             for stream in listener.incoming() {
@@ -86,7 +87,8 @@ impl Wire {
                     ),
                 };
                 drop(s);
-                done.lock().unwrap().push(port);
+                done.0.lock().unwrap().push(port);
+                done.1.notify_all();
             }
         });
         Wire {
@@ -105,12 +107,12 @@ impl Wire {
         let port = barrier.local_addr().unwrap().port();
         drop(barrier);
         let deadline = Instant::now() + Duration::from_secs(10);
-        while !self.served.lock().unwrap().contains(&port) {
-            assert!(
-                Instant::now() < deadline,
-                "the simulated drive stopped serving"
-            );
-            thread::sleep(Duration::from_millis(1));
+        let (served, done) = &*self.served;
+        let mut served = served.lock().unwrap();
+        while !served.contains(&port) {
+            let left = deadline.saturating_duration_since(Instant::now());
+            assert!(!left.is_zero(), "the simulated drive stopped serving");
+            served = done.wait_timeout(served, left).unwrap().0;
         }
     }
 

@@ -44,6 +44,10 @@ fn write_in(
         maps.to_str().unwrap(),
         wire.flag(),
         &wire.addr,
+        // The simulated drive answers as slave 1 whatever the map's factory address (GPD 515:
+        // 31), so that every map's case reaches a drive that answers.
+        "--slave",
+        "1",
         "--timeout",
         "500ms",
         "--retries",
