@@ -683,12 +683,19 @@ fn selected_limits(def: &mut model::Register) -> Result<(), LimitsError> {
 /// Builds the IR from a loaded map. Errors are those of block expansion and of a
 /// `limits: {selected_by}` that cannot be expanded ([`selected_limits`]); everything else is
 /// left to `validate`.
-pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
-    let model = &map.model;
+/// Takes the loaded map by value: its model's parts and its tree move into the drive.
+pub(crate) fn expand(map: LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
+    let LoadedMap {
+        path: file,
+        mut model,
+        tree,
+        warnings: read_warnings,
+    } = map;
+    let draft = model.draft.is_some();
     let mut errors = Vec::new();
     let mut groups = Vec::new();
     let mut registers = Vec::new();
-    for (gi, g) in model.groups.iter().enumerate() {
+    for (gi, g) in model.groups.iter_mut().enumerate() {
         let gpath = Path::root().key("groups").index(gi);
         groups.push(Group {
             id: g.id.clone(),
@@ -699,28 +706,28 @@ pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
             notes: g.notes.clone(),
             path: gpath.clone(),
         });
-        for (ri, r) in g.registers.iter().enumerate() {
+        for (ri, r) in std::mem::take(&mut g.registers).into_iter().enumerate() {
             let path = gpath.key("registers").index(ri);
-            let instances = match &r.repeat {
-                None => vec![r.clone()],
-                Some(rep) => match expand_block(r, rep) {
-                    Ok(list) => list,
-                    Err(e) => {
-                        errors.push(Diagnostic::new(
-                            map.locate(&path.key("repeat")),
-                            Some(&r.id),
-                            e.to_string(),
-                        ));
-                        continue;
-                    }
-                },
+            // The id as written (a block's template), for the block's errors.
+            let written_id = r.id.clone();
+            let instances = match r.repeat.as_ref().map(|rep| expand_block(&r, rep)) {
+                None => vec![r],
+                Some(Ok(list)) => list,
+                Some(Err(e)) => {
+                    errors.push(Diagnostic::new(
+                        tree.locate(&path.key("repeat")),
+                        Some(&r.id),
+                        e.to_string(),
+                    ));
+                    continue;
+                }
             };
             for mut def in instances {
                 let limits_form = def.limits.is_some();
                 if let Err(e) = selected_limits(&mut def) {
                     errors.push(Diagnostic::new(
-                        map.locate(&path.key(e.key)),
-                        Some(&r.id),
+                        tree.locate(&path.key(e.key)),
+                        Some(&written_id),
                         e.message,
                     ));
                     continue;
@@ -740,13 +747,11 @@ pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
                     access: def
                         .access
                         .or(g.access.filter(|_| def.string.is_none()))
-                        .unwrap_or(
-                            if model.draft.is_some() || table.is_bits() || def.string.is_some() {
-                                Access::Read
-                            } else {
-                                Access::ReadWrite
-                            },
-                        ),
+                        .unwrap_or(if draft || table.is_bits() || def.string.is_some() {
+                            Access::Read
+                        } else {
+                            Access::ReadWrite
+                        }),
                     table,
                     write_restriction: def
                         .write_restriction
@@ -776,35 +781,36 @@ pub(crate) fn expand(map: &LoadedMap) -> Result<Drive, Vec<Diagnostic>> {
     if !errors.is_empty() {
         return Err(errors);
     }
+    let warnings = {
+        let mut w = read_warnings;
+        if let Some(d) = &model.draft {
+            w.push(Diagnostic::new(
+                tree.locate(&crate::source::Path::root().key("draft")),
+                None,
+                draft_warning(d),
+            ));
+        }
+        w
+    };
     Ok(Drive {
         module: module_name(&model.drive.id),
-        meta: model.drive.clone(),
+        meta: model.drive,
         address_format: model.address_format.unwrap_or(model::AddressFormat::Hex),
-        variants: model.variants.clone(),
-        protocol: model.protocol.clone(),
+        variants: model.variants,
+        protocol: model.protocol,
         groups,
         registers,
-        conflicts: model.conflicts.clone(),
-        gaps: model.gaps.clone(),
-        removed: model.removed.clone(),
-        roles: model.roles.clone(),
-        profile: model.profile.clone(),
-        file: map.path.clone(),
-        tree: map.tree.clone(),
+        conflicts: model.conflicts,
+        gaps: model.gaps,
+        removed: model.removed,
+        roles: model.roles,
+        profile: model.profile,
+        file,
+        tree,
         plan: OnceLock::new(),
-        warnings: {
-            let mut w = map.warnings.clone();
-            if let Some(d) = &model.draft {
-                w.push(Diagnostic::new(
-                    map.tree.locate(&crate::source::Path::root().key("draft")),
-                    None,
-                    draft_warning(d),
-                ));
-            }
-            w
-        },
-        draft: model.draft.clone(),
-        examples: model.examples.clone(),
+        warnings,
+        draft: model.draft,
+        examples: model.examples,
     })
 }
 

@@ -34,13 +34,6 @@ pub(crate) struct LoadedMap {
     pub warnings: Vec<Diagnostic>,
 }
 
-impl LoadedMap {
-    /// The location of a path in the (merged) map.
-    pub(crate) fn locate(&self, path: &Path) -> Loc {
-        self.tree.locate(path)
-    }
-}
-
 /// How a file is named in diagnostics: relative to the current directory when possible.
 pub(crate) fn display_name(path: &FsPath) -> Arc<str> {
     let shown = std::env::current_dir()
@@ -60,6 +53,10 @@ type Merged = Result<(Node, Vec<Diagnostic>), Vec<Diagnostic>>;
 #[derive(Debug, Default)]
 pub(crate) struct TreeCache {
     trees: RefCell<HashMap<PathBuf, Merged>>,
+    /// The merged trees of base maps found through a [`BaseResolver`] (maps read from text or
+    /// from a tree), by drive id: a tool that reads many edits of one variant map parses its
+    /// base once.
+    bases: RefCell<HashMap<String, Merged>>,
     read: Cell<usize>,
 }
 
@@ -290,8 +287,10 @@ fn group_errors(tree: &Node, group: &Node, path: &Path, errors: &mut Vec<Diagnos
         errors.extend(deserialize_at::<crate::model::Group>(tree, group, path).err());
         return;
     };
-    let mut shell = entries.clone();
-    for (key, _, value) in shell.iter_mut() {
+    // The group without its registers (each deserialized on its own): the registers are not
+    // copied into the shell.
+    let mut shell = Vec::with_capacity(entries.len());
+    for (key, loc, value) in entries {
         if key == "registers"
             && let NodeKind::Seq(regs) = &value.kind
         {
@@ -299,7 +298,13 @@ fn group_errors(tree: &Node, group: &Node, path: &Path, errors: &mut Vec<Diagnos
                 let rp = path.key("registers").index(ri);
                 errors.extend(deserialize_at::<crate::model::Register>(tree, reg, &rp).err());
             }
-            value.kind = NodeKind::Seq(Vec::new());
+            let empty = Node {
+                loc: value.loc.clone(),
+                kind: NodeKind::Seq(Vec::new()),
+            };
+            shell.push((key.clone(), loc.clone(), empty));
+        } else {
+            shell.push((key.clone(), loc.clone(), value.clone()));
         }
     }
     let shell = Node {
@@ -642,13 +647,20 @@ fn load_tree_str(
 
 /// Like [`load_str_with`] for a map already parsed ([`source::parse_map`]): for tools that edit
 /// a map's tree before reading it (the diff's mutation test edits every value of a map).
+///
+/// With `cache`, the merged tree of the base map is taken from it when this cache resolved
+/// the same drive id before (`base` is taken to give the same text for an id every time).
 pub(crate) fn load_tree_with(
     name: &str,
     tree: Node,
     base: &BaseResolver<'_>,
+    cache: Option<&TreeCache>,
 ) -> Result<LoadedMap, Vec<Diagnostic>> {
     let mut warnings = Vec::new();
-    let tree = extend_tree(tree, base, &mut Vec::new(), &mut warnings)?;
+    let tree = match cache {
+        Some(cache) => extend_tree_cached(tree, base, cache, &mut warnings)?,
+        None => extend_tree(tree, base, &mut Vec::new(), &mut warnings)?,
+    };
     let model = deserialize(&tree)?;
     Ok(LoadedMap {
         path: PathBuf::from(name),
@@ -658,15 +670,11 @@ pub(crate) fn load_tree_with(
     })
 }
 
-/// A parsed map merged onto its base when it `extends` one (found through `base`).
-fn extend_tree(
-    tree: Node,
-    base: &BaseResolver<'_>,
-    chain: &mut Vec<String>,
-    warnings: &mut Vec<Diagnostic>,
-) -> Result<Node, Vec<Diagnostic>> {
+/// The id of the base map `tree` extends (`None` when it extends none), or why `extends` is
+/// not an id.
+fn extends_id(tree: &Node) -> Result<Option<(&String, &Loc)>, Vec<Diagnostic>> {
     let Some(extends) = tree.get("drive").and_then(|d| d.get("extends")) else {
-        return Ok(tree);
+        return Ok(None);
     };
     let NodeKind::Scalar(Value::String(base_id)) = &extends.kind else {
         return Err(vec![Diagnostic::new(
@@ -675,19 +683,74 @@ fn extend_tree(
             "`drive.extends` must name the base drive's id",
         )]);
     };
+    Ok(Some((base_id, &extends.loc)))
+}
+
+/// [`extend_tree`] for a map read on its own (no chain above it), taking the base's merged
+/// tree and warnings from `cache` when the base's id was resolved through it before: exactly
+/// what [`extend_tree`] would give, since the base's tree depends only on its id and `base`.
+fn extend_tree_cached(
+    tree: Node,
+    base: &BaseResolver<'_>,
+    cache: &TreeCache,
+    warnings: &mut Vec<Diagnostic>,
+) -> Result<Node, Vec<Diagnostic>> {
+    let Some((base_id, loc)) = extends_id(&tree)? else {
+        return Ok(tree);
+    };
+    let cached = cache.bases.borrow().get(base_id).cloned();
+    let merged = match cached {
+        Some(merged) => merged,
+        None => {
+            let Some((base_name, base_text)) = base(base_id) else {
+                // Not cached: the error points at this map's `extends`.
+                return Err(vec![not_found(loc, base_id)]);
+            };
+            cache.read.set(cache.read.get() + 1);
+            let mut base_warnings = Vec::new();
+            let merged = load_tree_str(
+                &base_name,
+                &base_text,
+                base,
+                &mut vec![base_id.clone()],
+                &mut base_warnings,
+            )
+            .map(|t| (t, base_warnings));
+            cache
+                .bases
+                .borrow_mut()
+                .insert(base_id.clone(), merged.clone());
+            merged
+        }
+    };
+    let (base_tree, base_warnings) = merged?;
+    warnings.extend(base_warnings);
+    merge_variant(base_tree, tree)
+}
+
+fn not_found(loc: &Loc, base_id: &str) -> Diagnostic {
+    Diagnostic::new(loc.clone(), None, format!("base map `{base_id}` not found"))
+}
+
+/// A parsed map merged onto its base when it `extends` one (found through `base`).
+fn extend_tree(
+    tree: Node,
+    base: &BaseResolver<'_>,
+    chain: &mut Vec<String>,
+    warnings: &mut Vec<Diagnostic>,
+) -> Result<Node, Vec<Diagnostic>> {
+    let Some((base_id, loc)) = extends_id(&tree)? else {
+        return Ok(tree);
+    };
     if chain.iter().any(|c| c == base_id) || chain.len() > 16 {
         return Err(vec![Diagnostic::new(
-            extends.loc.clone(),
+            loc.clone(),
             None,
             format!("`extends: {base_id}` makes a cycle of variant maps"),
         )]);
     }
     let Some((base_name, base_text)) = base(base_id) else {
-        return Err(vec![Diagnostic::new(
-            extends.loc.clone(),
-            None,
-            format!("base map `{base_id}` not found"),
-        )]);
+        return Err(vec![not_found(loc, base_id)]);
     };
     chain.push(base_id.clone());
     let base_tree = load_tree_str(&base_name, &base_text, base, chain, warnings)?;

@@ -75,7 +75,8 @@ impl<'a> Loader<'a> {
     }
 
     /// Shares the trees of map files already read (and their bases) between the maps this
-    /// loader reads: reading every map of a directory reads each file once.
+    /// loader reads: reading every map of a directory reads each file once. The bases that
+    /// [`Loader::load_tree`] finds through [`Loader::bases`] are kept too, by drive id.
     pub fn cached(mut self) -> Loader<'a> {
         self.cache = Some(TreeCache::new());
         self
@@ -109,13 +110,13 @@ impl<'a> Loader<'a> {
         }
         .map_err(Diagnostics::from)?;
         if self.any_file_name {
-            let mut drive = crate::ir::expand(&loaded).map_err(Diagnostics::from)?;
+            let mut drive = crate::ir::expand(loaded).map_err(Diagnostics::from)?;
             drive.file = path.with_file_name(format!("{}.yaml", drive.meta.id));
             let errors = crate::validate::validate(&drive, &self.ctx);
             drive.file = PathBuf::from(path);
             return Map::checked(drive, errors);
         }
-        self.finish(&loaded)
+        self.finish(loaded)
     }
 
     /// Reads a map held in memory, named `name` in diagnostics; `extends` is resolved through
@@ -126,22 +127,25 @@ impl<'a> Loader<'a> {
             None => load::load_str(name, text),
         }
         .map_err(Diagnostics::from)?;
-        self.finish(&loaded)
+        self.finish(loaded)
     }
 
     /// Reads a map already parsed into a [`Tree`](crate::Tree) ([`parse_map`](crate::parse_map)):
-    /// for tools that edit a map's tree before reading it.
+    /// for tools that edit a map's tree before reading it. With [`Loader::cached`], the base a
+    /// map extends is read through [`Loader::bases`] and parsed once for all the trees this
+    /// loader reads (the base's text is taken to stay the same).
     pub fn load_tree(&self, name: &str, tree: Node) -> Result<Map, Diagnostics> {
         let none = |_: &str| None;
         let bases: &Bases<'_> = match &self.bases {
             Some(b) => b.as_ref(),
             None => &none,
         };
-        let loaded = load::load_tree_with(name, tree, bases).map_err(Diagnostics::from)?;
-        self.finish(&loaded)
+        let loaded = load::load_tree_with(name, tree, bases, self.cache.as_ref())
+            .map_err(Diagnostics::from)?;
+        self.finish(loaded)
     }
 
-    fn finish(&self, loaded: &LoadedMap) -> Result<Map, Diagnostics> {
+    fn finish(&self, loaded: LoadedMap) -> Result<Map, Diagnostics> {
         let drive = crate::ir::expand(loaded).map_err(Diagnostics::from)?;
         let errors = crate::validate::validate(&drive, &self.ctx);
         Map::checked(drive, errors)

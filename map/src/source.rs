@@ -137,7 +137,7 @@ impl Node {
             NodeKind::Scalar(v) => v.clone(),
             NodeKind::Seq(items) => Value::Sequence(items.iter().map(Node::to_value).collect()),
             NodeKind::Map(entries) => {
-                let mut m = Mapping::new();
+                let mut m = Mapping::with_capacity(entries.len());
                 for (k, _, v) in entries {
                     m.insert(Value::String(k.clone()), v.to_value());
                 }

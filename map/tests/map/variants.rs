@@ -142,3 +142,86 @@ fn a_cycle_of_variants_is_still_refused() {
     assert_eq!(loader.files_read(), 2);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A cached loader reading many trees of one variant map (a tool editing the map) asks for
+/// the base's text and parses it once, and reads every tree as an uncached loader does: the
+/// same map, the same warnings, the same errors (a base not found is asked for again).
+#[test]
+fn a_cached_loader_parses_a_base_once_for_every_tree_it_reads() {
+    let dir = paths::fixture("crafted/maps/variants");
+    let text = std::fs::read_to_string(dir.join("child-drive.yaml")).unwrap();
+    let asked = std::cell::Cell::new(0);
+    let bases = |id: &str| {
+        asked.set(asked.get() + 1);
+        let path = dir.join(format!("{id}.yaml"));
+        Some((
+            path.display().to_string(),
+            std::fs::read_to_string(path).ok()?,
+        ))
+    };
+    let tree = drivemap_map::parse_map("child-drive.yaml", &text).unwrap();
+    // An edit of the child: its `max_read` moved by one.
+    let edited = drivemap_map::parse_map(
+        "child-drive.yaml",
+        &text.replace("max_read: 16", "max_read: 17"),
+    )
+    .unwrap();
+    let said = |m: &drivemap_map::Map| {
+        let warnings: Vec<String> = m.warnings().iter().map(ToString::to_string).collect();
+        (serde_json::to_string(&m.written()).unwrap(), warnings)
+    };
+    let cached = drivemap_map::Loader::new().cached().bases(bases);
+    let mut read = Vec::new();
+    for t in [&tree, &edited, &tree] {
+        let once = cached
+            .load_tree("child-drive.yaml", t.clone())
+            .unwrap_or_else(|d| panic!("{d}"));
+        let fresh = drivemap_map::Loader::new()
+            .bases(|id: &str| {
+                let path = dir.join(format!("{id}.yaml"));
+                Some((
+                    path.display().to_string(),
+                    std::fs::read_to_string(path).ok()?,
+                ))
+            })
+            .load_tree("child-drive.yaml", t.clone())
+            .unwrap_or_else(|d| panic!("{d}"));
+        assert_eq!(said(&once), said(&fresh));
+        assert!(once.registers().any(|r| r.id() == "delay"));
+        read.push(once.protocol().max_read());
+    }
+    assert_eq!(read, [16, 17, 16], "each tree is read, the base shared");
+    assert_eq!(asked.get(), 1, "the base's text is asked for once");
+    assert_eq!(cached.files_read(), 1);
+
+    // A base the resolver does not know is not kept: asked for (and refused) every time.
+    let missing = drivemap_map::Loader::new().cached().bases(|_: &str| None);
+    for _ in 0..2 {
+        let e = missing
+            .load_tree("child-drive.yaml", tree.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("base map `base-drive` not found"), "{e}");
+    }
+    // A base that extends the map back is a cycle, cached or not.
+    let back = |_: &str| {
+        Some((
+            "base-drive.yaml".to_owned(),
+            "drive:\n  id: base-drive\n  extends: child-drive\n".to_owned(),
+        ))
+    };
+    let fresh = drivemap_map::Loader::new()
+        .bases(back)
+        .load_tree("child-drive.yaml", tree.clone())
+        .unwrap_err()
+        .to_string();
+    let cached = drivemap_map::Loader::new().cached().bases(back);
+    for _ in 0..2 {
+        let e = cached
+            .load_tree("child-drive.yaml", tree.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("makes a cycle of variant maps"), "{e}");
+        assert_eq!(e, fresh);
+    }
+}

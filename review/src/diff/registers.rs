@@ -7,7 +7,7 @@
 //! ([`RegisterRef::plan`]): what the generated code and the write gate act on; the rest on
 //! the register's keys as the map writes them ([`RegisterRef::written`]) and its facts.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use drivemap_core::kind::ConversionKind;
 use drivemap_core::plan::RegisterPlan;
@@ -33,18 +33,28 @@ fn order(r: RegisterRef<'_>) -> u32 {
     u32::from(r.address()) + 1
 }
 
+/// The registers of a map by id (the first of an id, as [`Map::register_by_id`] finds it).
+fn by_id(map: &Map) -> HashMap<&str, RegisterRef<'_>> {
+    let mut out = HashMap::new();
+    for r in map.registers() {
+        out.entry(r.id()).or_insert(r);
+    }
+    out
+}
+
 pub(super) fn registers(c: &mut Collector, old: &Map, new: &Map) {
+    let (old_ids, new_ids) = (by_id(old), by_id(new));
     let mut pairs: Vec<(RegisterRef, RegisterRef)> = Vec::new();
     let mut old_left: Vec<RegisterRef> = Vec::new();
     for r in old.registers() {
-        match new.register_by_id(r.id()) {
-            Some(n) => pairs.push((r, n)),
+        match new_ids.get(r.id()) {
+            Some(&n) => pairs.push((r, n)),
             None => old_left.push(r),
         }
     }
     let mut new_left: Vec<RegisterRef> = new
         .registers()
-        .filter(|n| old.register_by_id(n.id()).is_none())
+        .filter(|n| !old_ids.contains_key(n.id()))
         .collect();
     // Renamed: same address and parameter number (and table), another id.
     let mut removed = Vec::new();
