@@ -23,29 +23,48 @@ pub fn workspace() -> PathBuf {
     paths::workspace().to_path_buf()
 }
 
-/// The target directory of every nested build of the tests: the workspace's own (`target`, or
-/// `CARGO_TARGET_DIR` as cargo gave it). With the workspace's profiles on every nested build
-/// ([`nested_cargo`]), a registry crate the workspace compiled with the same features is not
-/// compiled again; cargo holds its lock on the directory while it builds, not while the tests
-/// run.
-pub fn nested_target() -> PathBuf {
-    std::env::var_os("CARGO_TARGET_DIR")
+/// The workspace's own target directory (`target`, or `CARGO_TARGET_DIR` as cargo gave it),
+/// where its build keeps what it compiled (`CARGO_BUILD_BUILD_DIR` when that is set).
+fn workspace_build_dir() -> PathBuf {
+    std::env::var_os("CARGO_BUILD_BUILD_DIR")
+        .or_else(|| std::env::var_os("CARGO_TARGET_DIR"))
         .map(PathBuf::from)
         .unwrap_or_else(|| workspace().join("target"))
 }
 
-/// `cargo` for a build inside a test: `CARGO_TARGET_DIR` is [`nested_target`], and the
-/// workspace's `[profile.*]` settings are passed as `--config` options (but for those the
-/// environment sets, `CARGO_PROFILE_DEV_DEBUG` say, which the nested cargo inherits), so an
-/// application outside the workspace, which has no profiles of its own, compiles the registry
-/// crates as the workspace does. Add the subcommand and its arguments.
+/// Where the nested builds of the tests put what they make (their programs, `debug/<name>`):
+/// `nested` in the workspace's target directory. What they compile on the way is kept with
+/// the workspace's own build ([`nested_cargo`]: cargo's build directory), so a registry crate
+/// the workspace compiled with the same features is not compiled again; their programs do not
+/// replace the workspace's (`target/debug/drivemap`, which other tests run while these build).
+pub fn nested_target() -> PathBuf {
+    workspace_build_dir().join("nested")
+}
+
+/// `cargo` for a build inside a test, at a lower priority than the tests beside it (`nice`: a
+/// build is background work, and tests that time a line share the processor with it). Its
+/// programs go to [`nested_target`], what it compiles to the workspace's build directory
+/// (`CARGO_BUILD_BUILD_DIR`), and the workspace's `[profile.*]` settings are passed as
+/// `--config` options (but for those the environment sets, `CARGO_PROFILE_DEV_DEBUG` say, which
+/// the nested cargo inherits), so an application outside the workspace, which has no profiles
+/// of its own, compiles the registry crates as the workspace does. Add the subcommand and its
+/// arguments.
 pub fn nested_cargo() -> Command {
-    let mut cargo = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let mut command = if cfg!(unix) {
+        let mut nice = Command::new("nice");
+        nice.args(["-n", "10"]).arg(cargo);
+        nice
+    } else {
+        Command::new(cargo)
+    };
     for setting in workspace_profiles() {
-        cargo.arg("--config").arg(setting);
+        command.arg("--config").arg(setting);
     }
-    cargo.env("CARGO_TARGET_DIR", nested_target());
-    cargo
+    command
+        .env("CARGO_TARGET_DIR", nested_target())
+        .env("CARGO_BUILD_BUILD_DIR", workspace_build_dir());
+    command
 }
 
 /// The workspace `Cargo.toml`'s profile settings as `--config` values:

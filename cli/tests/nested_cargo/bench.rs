@@ -136,13 +136,19 @@ impl Drop for SimProcess {
 fn installed_anywhere_every_command_works_from_outside_the_repository() {
     let root = TempDir::new("install-root");
     let work = TempDir::new("install-work");
-    // Reuse the workspace's build: the install is a link step, not a rebuild.
-    let target = std::env::var_os("CARGO_TARGET_DIR")
+    // What the workspace's build compiled with the same features is reused (cargo's build
+    // directory); the installed program's own build goes to `nested` beside it, so it does not
+    // replace the workspace's `target/debug/drivemap`, which other tests run meanwhile. At a
+    // lower priority than the tests beside it (`nice`).
+    let build_dir = std::env::var_os("CARGO_BUILD_BUILD_DIR")
+        .or_else(|| std::env::var_os("CARGO_TARGET_DIR"))
         .map(PathBuf::from)
         .unwrap_or_else(|| repo().join("target"));
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let started = Instant::now();
-    let out = Command::new(cargo)
+    let out = Command::new("nice")
+        .args(["-n", "10"])
+        .arg(cargo)
         .args([
             "install",
             "--path",
@@ -154,7 +160,8 @@ fn installed_anywhere_every_command_works_from_outside_the_repository() {
         ])
         .arg(&root.0)
         .current_dir(repo())
-        .env("CARGO_TARGET_DIR", &target)
+        .env("CARGO_TARGET_DIR", build_dir.join("nested"))
+        .env("CARGO_BUILD_BUILD_DIR", &build_dir)
         .output()
         .unwrap();
     let (code, _, err) = outcome(out);
