@@ -2,7 +2,8 @@
 //! (`tests/custom_drive/<module>.rs`), as cargo and ripgrep do: the dependency tree is linked
 //! once, not once per test file.
 //! The tests that run cargo themselves are in `tests/nested_cargo/` (`test = false`), which
-//! `scripts/test` runs once: `cargo test --workspace --all-features --test nested_cargo`.
+//! `scripts/test` runs once beside the other tests (alone: `cargo test --workspace --all-features
+//! --test nested_cargo`).
 
 mod field_selector;
 mod generated_api;

@@ -1,8 +1,8 @@
 //! The tests that run cargo themselves: trybuild compiles the illegal accesses of
-//! `compile-fail/`. Not in the default `cargo test` (`test = false` in Cargo.toml): `scripts/test`
-//! runs them once, with the same binaries of the tests and cli crates:
+//! `compile-fail/`. Not in the default `cargo test` (`test = false` in Cargo.toml):
+//! `scripts/test` runs them once, beside the other tests; alone:
 //! `cargo nextest run --workspace --all-features --test nested_cargo` (`.config/nextest.toml`
-//! runs the ones that build in the workspace's target directory one at a time; `cargo test`
-//! with the same arguments runs them too).
+//! runs the ones that build in the workspace's build directory one at a time; `cargo test` with
+//! the same arguments runs them too).
 
 mod compile_fail;
