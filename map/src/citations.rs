@@ -266,11 +266,11 @@ pub struct CitationPlace<'a> {
 impl CitationPlace<'_> {
     /// The item the `source` key belongs to (the path without its last key).
     pub fn item_path(&self) -> Path {
-        let mut p = self.path.clone();
-        if matches!(p.0.last(), Some(Seg::Key(k)) if k == "source") {
-            p.0.pop();
+        if matches!(self.path.last(), Some(Seg::Key(k)) if k == "source") {
+            self.path.parent()
+        } else {
+            self.path.clone()
         }
-        p
     }
 }
 

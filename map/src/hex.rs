@@ -157,7 +157,7 @@ pub(crate) fn resolve(tree: &mut Node, version: u32) -> Resolved {
         Some(NodeKind::Scalar(Value::String(s))) if s == "decimal"
     );
     let mut marked = Vec::new();
-    collect(tree, &mut Path::root(), &mut marked);
+    collect(tree, &Path::root(), &mut marked);
     let mut out = Resolved::default();
     for (path, slot, text) in marked {
         let mut decided = decide(&text, slot, decimal);
@@ -201,7 +201,7 @@ pub(crate) fn resolve(tree: &mut Node, version: u32) -> Resolved {
     out
 }
 
-fn collect(node: &Node, path: &mut Path, out: &mut Vec<(Path, Slot, String)>) {
+fn collect(node: &Node, path: &Path, out: &mut Vec<(Path, Slot, String)>) {
     match &node.kind {
         NodeKind::Scalar(Value::Tagged(t)) => {
             if let (Some(slot), Value::String(text)) = (Slot::from_tag(&t.tag), &t.value) {
@@ -211,23 +211,19 @@ fn collect(node: &Node, path: &mut Path, out: &mut Vec<(Path, Slot, String)>) {
         NodeKind::Scalar(_) => {}
         NodeKind::Seq(items) => {
             for (i, item) in items.iter().enumerate() {
-                path.0.push(Seg::Index(i));
-                collect(item, path, out);
-                path.0.pop();
+                collect(item, &path.index(i), out);
             }
         }
         NodeKind::Map(entries) => {
             for (k, _, v) in entries {
-                path.0.push(Seg::Key(k.clone()));
-                collect(v, path, out);
-                path.0.pop();
+                collect(v, &path.key(k), out);
             }
         }
     }
 }
 
 fn node_mut<'a>(mut node: &'a mut Node, path: &Path) -> Option<&'a mut Node> {
-    for seg in &path.0 {
+    for seg in path.segs() {
         node = match (seg, &mut node.kind) {
             (Seg::Key(k), NodeKind::Map(entries)) => {
                 &mut entries.iter_mut().find(|(key, _, _)| key == k)?.2

@@ -337,7 +337,7 @@ fn deserialize_at<T: serde::de::DeserializeOwned>(
             .unwrap_or_else(|| tree.locate(&path));
         let written = tree.at(&path).map(Node::to_value);
         let message = crate::hints::explain(&message, written.as_ref());
-        let shown = if path.0.is_empty() {
+        let shown = if path.is_root() {
             message
         } else {
             format!("{path}: {message}")
@@ -353,13 +353,12 @@ fn unknown_field(message: &str) -> Option<&str> {
 
 /// The id of the register a path points into, if any.
 pub(crate) fn register_at(tree: &Node, path: &Path) -> Option<String> {
-    let pos = path
-        .0
+    let segs = path.segs();
+    let pos = segs
         .iter()
-        .position(|s| *s == Seg::Key("registers".into()))?;
-    let reg_path = Path(path.0[..(pos + 2).min(path.0.len())].to_vec());
+        .position(|s| matches!(s, Seg::Key(k) if k == "registers"))?;
     let mut node = tree;
-    for seg in &reg_path.0 {
+    for seg in &segs[..(pos + 2).min(segs.len())] {
         node = match (seg, &node.kind) {
             (Seg::Key(k), _) => node.get(k)?,
             (Seg::Index(i), NodeKind::Seq(items)) => items.get(*i)?,

@@ -43,33 +43,103 @@ pub(crate) enum Seg {
 }
 
 /// A path from the root of a map to a node (`groups[2].registers[5].scale`).
-#[derive(Debug, Clone, Default, PartialEq, Eq, Hash)]
-pub struct Path(pub(crate) Vec<Seg>);
+///
+/// A path shares the path it extends: [`Path::key`] and [`Path::index`] add one step, and a
+/// clone is a count. Validation keeps a path for every item it may report on, and reports on
+/// few of them.
+#[derive(Clone, Default)]
+pub struct Path(Option<Arc<Step>>);
+
+/// The last step of a path and the path before it.
+struct Step {
+    parent: Path,
+    seg: Seg,
+}
 
 impl Path {
     /// The root of a map.
     pub fn root() -> Self {
-        Path(Vec::new())
+        Path(None)
     }
 
     /// This path, then mapping key `key`.
     pub fn key(&self, key: &str) -> Path {
-        let mut p = self.clone();
-        p.0.push(Seg::Key(key.to_owned()));
-        p
+        self.then(Seg::Key(key.to_owned()))
     }
 
     /// This path, then sequence item `index`.
     pub fn index(&self, index: usize) -> Path {
-        let mut p = self.clone();
-        p.0.push(Seg::Index(index));
-        p
+        self.then(Seg::Index(index))
+    }
+
+    fn then(&self, seg: Seg) -> Path {
+        Path(Some(Arc::new(Step {
+            parent: self.clone(),
+            seg,
+        })))
+    }
+
+    /// Whether this is the root (no step).
+    pub(crate) fn is_root(&self) -> bool {
+        self.0.is_none()
+    }
+
+    /// The last step, if any.
+    pub(crate) fn last(&self) -> Option<&Seg> {
+        self.0.as_ref().map(|step| &step.seg)
+    }
+
+    /// The path without its last step (the root's is the root).
+    pub(crate) fn parent(&self) -> Path {
+        self.0
+            .as_ref()
+            .map_or_else(Path::root, |step| step.parent.clone())
+    }
+
+    /// The steps from the root.
+    pub(crate) fn segs(&self) -> Vec<&Seg> {
+        let mut segs = Vec::new();
+        let mut at = self;
+        while let Some(step) = &at.0 {
+            segs.push(&step.seg);
+            at = &step.parent;
+        }
+        segs.reverse();
+        segs
+    }
+}
+
+impl PartialEq for Path {
+    fn eq(&self, other: &Self) -> bool {
+        let (mut a, mut b) = (self, other);
+        loop {
+            match (&a.0, &b.0) {
+                (None, None) => return true,
+                (Some(x), Some(y)) if Arc::ptr_eq(x, y) => return true,
+                (Some(x), Some(y)) if x.seg == y.seg => (a, b) = (&x.parent, &y.parent),
+                _ => return false,
+            }
+        }
+    }
+}
+
+impl Eq for Path {}
+
+impl std::hash::Hash for Path {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.segs().hash(state);
+    }
+}
+
+impl fmt::Debug for Path {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_tuple("Path").field(&self.segs()).finish()
     }
 }
 
 impl fmt::Display for Path {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for (i, seg) in self.0.iter().enumerate() {
+        for (i, seg) in self.segs().into_iter().enumerate() {
             match seg {
                 Seg::Key(k) if i == 0 => write!(f, "{k}")?,
                 Seg::Key(k) => write!(f, ".{k}")?,
@@ -92,7 +162,7 @@ impl Node {
     /// The node at `path`, if there is one.
     pub fn at(&self, path: &Path) -> Option<&Node> {
         let mut node = self;
-        for seg in &path.0 {
+        for seg in path.segs() {
             node = match (seg, &node.kind) {
                 (Seg::Key(k), _) => node.get(k)?,
                 (Seg::Index(i), NodeKind::Seq(items)) => items.get(*i)?,
@@ -107,7 +177,7 @@ impl Node {
     pub fn locate(&self, path: &Path) -> Loc {
         let mut node = self;
         let mut loc = self.loc.clone();
-        for seg in &path.0 {
+        for seg in path.segs() {
             match (seg, &node.kind) {
                 (Seg::Key(k), NodeKind::Map(entries)) => {
                     match entries.iter().find(|(key, _, _)| key == k) {
