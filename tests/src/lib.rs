@@ -24,8 +24,9 @@ pub fn workspace() -> PathBuf {
 }
 
 /// The workspace's own target directory (`target`, or `CARGO_TARGET_DIR` as cargo gave it),
-/// where its build keeps what it compiled (`CARGO_BUILD_BUILD_DIR` when that is set).
-fn workspace_build_dir() -> PathBuf {
+/// where its build keeps what it compiled (`CARGO_BUILD_BUILD_DIR` when that is set) and, when
+/// no build directory is set apart, its programs (`debug/drivemap`).
+pub fn workspace_build_dir() -> PathBuf {
     std::env::var_os("CARGO_BUILD_BUILD_DIR")
         .or_else(|| std::env::var_os("CARGO_TARGET_DIR"))
         .map(PathBuf::from)

@@ -67,6 +67,16 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
     // The maps of the copy: the shipped ones and the new one.
     let maps = copy.join("maps");
 
+    // The workspace's own tool, which other tests run while this one builds: the copy's build
+    // leaves it alone (its programs go to `target/nested`).
+    let ours = drivemap_tests::workspace_build_dir().join("debug/drivemap");
+    let stamp = |p: &Path| {
+        std::fs::metadata(p)
+            .ok()
+            .map(|m| (m.len(), m.modified().ok()))
+    };
+    let ours_before = stamp(&ours);
+
     // The tool, built with the new map among its drives.
     ok(
         &cargo(
@@ -84,6 +94,13 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
         "building drivemap with the new map",
     );
     let drivemap = target().join("debug/drivemap");
+    assert_ne!(drivemap, ours);
+    assert_eq!(
+        stamp(&ours),
+        ours_before,
+        "building the copy's tool rewrote {}",
+        ours.display()
+    );
     let tool = |args: &[&str]| {
         Command::new(&drivemap)
             .args(args)
