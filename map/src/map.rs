@@ -87,6 +87,12 @@ impl Map {
     // ---- the plan ---------------------------------------------------------------------
 
     /// What every register means, decided once (lowered on first use).
+    ///
+    /// The plan's tables are `'static`, as generated code's are: lowering leaks them, and they
+    /// stay in memory until the process ends, whether the `Map` is kept or dropped (measured:
+    /// 0.2 MB per load of `yaskawa-v7`, 206 registers; 0.5 MB of `automationdirect-acn`, 762).
+    /// Lower each map once and keep it: a program that loads maps again and again (a service
+    /// taking maps from its users) grows with every load.
     pub fn plan(&self) -> &MapPlan {
         self.drive.plan()
     }

@@ -14,6 +14,7 @@
 //! - [`instant_link::InstantLink`]: an in-memory RTU link on which a simulated slave answers
 //!   inside `send` (no thread, no clock), for those benches and tests;
 //! - [`rng::SplitMix`]: SplitMix64, to draw test cases and reproducible subsets;
+//! - [`cargo`]: cargo for a build inside a test, which leaves the workspace's build fresh;
 //! - [`paths`]: where the workspace's files are (the fixtures of `tests/fixtures/`, the shipped
 //!   maps of `maps/`, the docs), the one place a test learns the repository's layout.
 //!
@@ -22,6 +23,7 @@
 #![doc = include_str!("../README.md")]
 
 pub mod alloc_count;
+pub mod cargo;
 #[cfg(feature = "links")]
 pub mod hostile_peer;
 #[cfg(feature = "links")]

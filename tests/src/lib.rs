@@ -23,48 +23,17 @@ pub fn workspace() -> PathBuf {
     paths::workspace().to_path_buf()
 }
 
-/// The workspace's own target directory (`target`, or `CARGO_TARGET_DIR` as cargo gave it),
-/// where its build keeps what it compiled (`CARGO_BUILD_BUILD_DIR` when that is set) and, when
-/// no build directory is set apart, its programs (`debug/drivemap`).
-pub fn workspace_build_dir() -> PathBuf {
-    std::env::var_os("CARGO_BUILD_BUILD_DIR")
-        .or_else(|| std::env::var_os("CARGO_TARGET_DIR"))
-        .map(PathBuf::from)
-        .unwrap_or_else(|| workspace().join("target"))
-}
-
-/// Where the nested builds of the tests put what they make (their programs, `debug/<name>`):
-/// `nested` in the workspace's target directory. What they compile on the way is kept with
-/// the workspace's own build ([`nested_cargo`]: cargo's build directory), so a registry crate
-/// the workspace compiled with the same features is not compiled again; their programs do not
-/// replace the workspace's (`target/debug/drivemap`, which other tests run while these build).
-pub fn nested_target() -> PathBuf {
-    workspace_build_dir().join("nested")
-}
-
-/// `cargo` for a build inside a test, at a lower priority than the tests beside it (`nice`: a
-/// build is background work, and tests that time a line share the processor with it). Its
-/// programs go to [`nested_target`], what it compiles to the workspace's build directory
-/// (`CARGO_BUILD_BUILD_DIR`), and the workspace's `[profile.*]` settings are passed as
-/// `--config` options (but for those the environment sets, `CARGO_PROFILE_DEV_DEBUG` say, which
-/// the nested cargo inherits), so an application outside the workspace, which has no profiles
-/// of its own, compiles the registry crates as the workspace does. Add the subcommand and its
-/// arguments.
+/// `cargo` for a build inside a test ([`drivemap_test_support::cargo::command`]: at a lower
+/// priority, its programs in [`nested_target`](drivemap_test_support::cargo::nested_target), what it compiles in the workspace's build
+/// directory), with the workspace's `[profile.*]` settings passed as `--config` options (but for
+/// those the environment sets, `CARGO_PROFILE_DEV_DEBUG` say, which the nested cargo inherits),
+/// so an application outside the workspace, which has no profiles of its own, compiles the
+/// registry crates as the workspace does. Add the subcommand and its arguments.
 pub fn nested_cargo() -> Command {
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let mut command = if cfg!(unix) {
-        let mut nice = Command::new("nice");
-        nice.args(["-n", "10"]).arg(cargo);
-        nice
-    } else {
-        Command::new(cargo)
-    };
+    let mut command = drivemap_test_support::cargo::command();
     for setting in workspace_profiles() {
         command.arg("--config").arg(setting);
     }
-    command
-        .env("CARGO_TARGET_DIR", nested_target())
-        .env("CARGO_BUILD_BUILD_DIR", workspace_build_dir());
     command
 }
 
@@ -106,10 +75,10 @@ pub fn app_dir(dir: &Path) -> PathBuf {
     dir.to_path_buf()
 }
 
-/// The lock the users of [`nested_target`] take turns with (see [`hold_nested_target`]).
+/// The lock the users of [`nested_target`](drivemap_test_support::cargo::nested_target) take turns with (see [`hold_nested_target`]).
 static NESTED: Mutex<()> = Mutex::new(());
 
-/// Keeps the other tests of this process out of [`nested_target`] until the guard is dropped:
+/// Keeps the other tests of this process out of [`nested_target`](drivemap_test_support::cargo::nested_target) until the guard is dropped:
 /// builds there write the same binaries (the `drivemap` of the workspace copy and of the
 /// packaged crates), so a test holds the directory from its build to its last use of what it
 /// built. Under nextest each test is a process of its own: there the `nested-target` test group

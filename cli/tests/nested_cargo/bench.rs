@@ -136,19 +136,11 @@ impl Drop for SimProcess {
 fn installed_anywhere_every_command_works_from_outside_the_repository() {
     let root = TempDir::new("install-root");
     let work = TempDir::new("install-work");
-    // What the workspace's build compiled with the same features is reused (cargo's build
-    // directory); the installed program's own build goes to `nested` beside it, so it does not
-    // replace the workspace's `target/debug/drivemap`, which other tests run meanwhile. At a
-    // lower priority than the tests beside it (`nice`).
-    let build_dir = std::env::var_os("CARGO_BUILD_BUILD_DIR")
-        .or_else(|| std::env::var_os("CARGO_TARGET_DIR"))
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("target"));
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    // What the workspace's build compiled with the same features is reused; the installed
+    // program's own build goes to `target/nested`, so it does not replace the workspace's
+    // `target/debug/drivemap`, which other tests run meanwhile (`cargo::command`).
     let started = Instant::now();
-    let out = Command::new("nice")
-        .args(["-n", "10"])
-        .arg(cargo)
+    let out = drivemap_test_support::cargo::command()
         .args([
             "install",
             "--path",
@@ -160,8 +152,6 @@ fn installed_anywhere_every_command_works_from_outside_the_repository() {
         ])
         .arg(&root.0)
         .current_dir(repo())
-        .env("CARGO_TARGET_DIR", build_dir.join("nested"))
-        .env("CARGO_BUILD_BUILD_DIR", &build_dir)
         .output()
         .unwrap();
     let (code, _, err) = outcome(out);

@@ -151,8 +151,8 @@ tokio = {{ version = "1", features = ["rt", "macros", "time", "net"] }}
         dir.join("app").join("Cargo.lock"),
     )
     .unwrap();
-    // The target directory of every nested build: the workspace's (`nested_target`).
-    let target = drivemap_tests::nested_target();
+    // Where the nested builds put their programs (`nested_target`).
+    let target = drivemap_test_support::cargo::nested_target();
     run(
         drivemap_tests::nested_cargo()
             .args(["build", "--offline", "--quiet"])

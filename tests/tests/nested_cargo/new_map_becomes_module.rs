@@ -39,7 +39,7 @@ fn run_app(app: &Path, drives: &Path, features: Option<&str>, module: &str) -> (
         .arg(app.join("Cargo.toml"))
         .env(
             "DRIVEMAP_MANUALS",
-            drivemap_tests::nested_target().join("no-manuals"),
+            drivemap_test_support::cargo::nested_target().join("no-manuals"),
         )
         .output()
         .expect("cargo runs");
@@ -131,7 +131,7 @@ fn a_broken_map_fails_the_build_with_every_error_as_check_prints_it() {
         .current_dir(&copy)
         .env(
             "DRIVEMAP_MANUALS",
-            drivemap_tests::nested_target().join("no-manuals"),
+            drivemap_test_support::cargo::nested_target().join("no-manuals"),
         )
         .output()
         .expect("cargo runs");

@@ -26,7 +26,7 @@ fn fixture() -> PathBuf {
 }
 
 fn target() -> PathBuf {
-    drivemap_tests::nested_target()
+    drivemap_test_support::cargo::nested_target()
 }
 
 fn cargo(args: &[&str], workspace: &Path) -> std::process::Output {
@@ -69,7 +69,7 @@ fn a_drive_of_another_vendor_needs_only_its_yaml() {
 
     // The workspace's own tool, which other tests run while this one builds: the copy's build
     // leaves it alone (its programs go to `target/nested`).
-    let ours = drivemap_tests::workspace_build_dir().join("debug/drivemap");
+    let ours = drivemap_test_support::cargo::workspace_build_dir().join("debug/drivemap");
     let stamp = |p: &Path| {
         std::fs::metadata(p)
             .ok()
