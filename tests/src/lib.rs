@@ -24,11 +24,13 @@ pub fn workspace() -> PathBuf {
 }
 
 /// `cargo` for a build inside a test ([`drivemap_test_support::cargo::command`]: at a lower
-/// priority, its programs in [`nested_target`](drivemap_test_support::cargo::nested_target), what it compiles in the workspace's build
+/// priority, its programs in [`nested_target`], what it compiles in the workspace's build
 /// directory), with the workspace's `[profile.*]` settings passed as `--config` options (but for
 /// those the environment sets, `CARGO_PROFILE_DEV_DEBUG` say, which the nested cargo inherits),
 /// so an application outside the workspace, which has no profiles of its own, compiles the
 /// registry crates as the workspace does. Add the subcommand and its arguments.
+///
+/// [`nested_target`]: drivemap_test_support::cargo::nested_target
 pub fn nested_cargo() -> Command {
     let mut command = drivemap_test_support::cargo::command();
     for setting in workspace_profiles() {
@@ -75,14 +77,18 @@ pub fn app_dir(dir: &Path) -> PathBuf {
     dir.to_path_buf()
 }
 
-/// The lock the users of [`nested_target`](drivemap_test_support::cargo::nested_target) take turns with (see [`hold_nested_target`]).
+/// The lock the users of [`nested_target`] take turns with (see [`hold_nested_target`]).
+///
+/// [`nested_target`]: drivemap_test_support::cargo::nested_target
 static NESTED: Mutex<()> = Mutex::new(());
 
-/// Keeps the other tests of this process out of [`nested_target`](drivemap_test_support::cargo::nested_target) until the guard is dropped:
+/// Keeps the other tests of this process out of [`nested_target`] until the guard is dropped:
 /// builds there write the same binaries (the `drivemap` of the workspace copy and of the
 /// packaged crates), so a test holds the directory from its build to its last use of what it
 /// built. Under nextest each test is a process of its own: there the `nested-target` test group
 /// of `.config/nextest.toml` runs these tests one at a time.
+///
+/// [`nested_target`]: drivemap_test_support::cargo::nested_target
 pub fn hold_nested_target() -> MutexGuard<'static, ()> {
     NESTED.lock().unwrap_or_else(PoisonError::into_inner)
 }
